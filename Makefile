@@ -1,0 +1,157 @@
+# trajd - one non-recursive Makefile.
+#
+#   make            build everything into $(BUILD)
+#   make run        install missing Debian packages, build, run the demo
+#   make check      install missing Debian packages, build, run every test
+#                   (unit, oracle, replay, daemon, CAN on a UML kernel, Modbus,
+#                   then the C tests again under ASan+UBSan)
+#   make bench      benchmarks, printing tables
+#   make fuzz       libFuzzer targets, FUZZ_SECONDS each
+#   make install    PREFIX, DESTDIR respected
+#
+# Files are found by name, so adding a module or a test needs no edit here:
+#   lib/*.c                      -> $(BUILD)/libtrajd.a (pure: no I/O)
+#   daemon/*.c except programs   -> $(BUILD)/libtrajdaemon.a
+#   daemon/<program>.c           -> $(BUILD)/bin/<program>
+#   tests/test_*.c               -> cmocka test binaries
+#   tests/test_*.py, test_*.sh   -> run by tests/run.sh
+#   tests/bench_*.c, bench_*.sh  -> make bench
+#   tests/fuzz_*.c               -> make fuzz
+
+CC ?= cc
+CFLAGS ?= -O2 -g
+PREFIX ?= /usr/local
+DESTDIR ?=
+BUILD ?= build
+FUZZ_SECONDS ?= 30
+PYTHON ?= /usr/bin/python3
+
+PROGRAMS := trajd trajreplay trajsurf
+
+WARN := -Wall -Wextra -Wshadow -Wfloat-equal -Wstrict-prototypes \
+        -Wmissing-prototypes -Wpointer-arith -Wformat=2 -Wvla -Wundef
+# pkg-config is expanded lazily (=), so it is read after 'make deps' installed it.
+PKGS := libmodbus libsystemd inih expat
+PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
+PKG_LIBS = $(shell pkg-config --libs $(PKGS) 2>/dev/null)
+TRAJD_CPPFLAGS = -Ilib -Idaemon -D_GNU_SOURCE $(PKG_CFLAGS) $(CPPFLAGS)
+TRAJD_CFLAGS = -std=c11 $(WARN) $(CFLAGS) -MMD -MP
+LDLIBS_DAEMON = $(PKG_LIBS) -lm -lpthread
+LDLIBS_TEST = -lcmocka -lgsl -lgslcblas $(LDLIBS_DAEMON)
+
+LIB_SRC := $(wildcard lib/*.c)
+DAEMON_MAINS := $(wildcard $(PROGRAMS:%=daemon/%.c))
+DAEMON_SRC := $(filter-out $(DAEMON_MAINS),$(wildcard daemon/*.c))
+TEST_SRC := $(wildcard tests/test_*.c)
+BENCH_SRC := $(wildcard tests/bench_*.c)
+FUZZ_SRC := $(wildcard tests/fuzz_*.c)
+
+LIB_OBJ := $(LIB_SRC:%.c=$(BUILD)/%.o)
+PIC_OBJ := $(LIB_SRC:%.c=$(BUILD)/pic/%.o)
+DAEMON_OBJ := $(DAEMON_SRC:%.c=$(BUILD)/%.o)
+BINS := $(DAEMON_MAINS:daemon/%.c=$(BUILD)/bin/%)
+TESTS := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
+BENCHES := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
+
+.PHONY: all run check check-build test test-asan bench fuzz install deps deps-run clean
+.DELETE_ON_ERROR:
+.SECONDARY:
+
+all: $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/libtrajdaemon.a $(BINS) $(TESTS) $(BENCHES)
+
+$(BUILD)/%.o: %.c
+	@mkdir -p $(@D)
+	$(CC) $(TRAJD_CPPFLAGS) $(TRAJD_CFLAGS) -c -o $@ $<
+
+$(BUILD)/pic/%.o: %.c
+	@mkdir -p $(@D)
+	$(CC) $(TRAJD_CPPFLAGS) $(TRAJD_CFLAGS) -fPIC -c -o $@ $<
+
+$(BUILD)/libtrajd.a: $(LIB_OBJ)
+	@rm -f $@
+	$(AR) rcs $@ $^
+
+# For the Python oracle tests (ctypes).
+$(BUILD)/libtrajd.so: $(PIC_OBJ)
+	$(CC) -shared -o $@ $^ -lm
+
+$(BUILD)/libtrajdaemon.a: $(DAEMON_OBJ)
+	@rm -f $@
+	$(AR) rcs $@ $^
+
+$(BUILD)/bin/%: $(BUILD)/daemon/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.a
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_DAEMON)
+
+$(BUILD)/tests/%: $(BUILD)/tests/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.a
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_TEST)
+
+# ---- Debian packages ---------------------------------------------------
+DEPS_BUILD := gcc make pkg-config libc6-dev libmodbus-dev libsystemd-dev libinih-dev libexpat1-dev
+DEPS_TEST := libcmocka-dev libgsl-dev python3 python3-scipy python3-numpy mbpoll \
+             python3-pymodbus python3-serial can-utils python3-can python3-canmatrix \
+             user-mode-linux busybox-static socat iproute2 clang libclang-rt-14-dev \
+             systemd valgrind
+
+deps-run:
+	@sh tests/deps.sh $(DEPS_BUILD)
+
+deps:
+	@sh tests/deps.sh $(DEPS_BUILD) $(DEPS_TEST)
+
+# ---- the two commands ----------------------------------------------------
+run: deps-run
+	@$(MAKE) --no-print-directory $(BUILD)/bin/trajd
+	$(BUILD)/bin/trajd -f -c config/demo.conf
+
+check: deps
+	@$(MAKE) --no-print-directory check-build
+	@BUILD=$(abspath $(BUILD)) PYTHON=$(PYTHON) sh tests/run.sh
+	@$(MAKE) --no-print-directory test-asan
+
+check-build: all
+
+test: all
+	@BUILD=$(abspath $(BUILD)) PYTHON=$(PYTHON) sh tests/run.sh
+
+# The C unit tests again under AddressSanitizer + UndefinedBehaviorSanitizer.
+SAN := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
+test-asan:
+	@$(MAKE) --no-print-directory BUILD=$(BUILD)/asan CFLAGS="-O1 -g $(SAN)" \
+		LDFLAGS="$(SAN)" $(TESTS:$(BUILD)/%=$(BUILD)/asan/%) $(BINS:$(BUILD)/%=$(BUILD)/asan/%)
+	@BUILD=$(abspath $(BUILD)/asan) ONLY=c sh tests/run.sh
+
+bench: all
+	@for b in $(BENCHES); do echo "== $$b"; $$b || exit 1; done
+	@for b in $(wildcard tests/bench_*.sh); do echo "== $$b"; BUILD=$(abspath $(BUILD)) sh $$b || exit 1; done
+
+# ---- libFuzzer (clang) ------------------------------------------------------
+FUZZ_CC := clang
+FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer-no-link,address,undefined
+FUZZ_BINS := $(FUZZ_SRC:tests/%.c=$(BUILD)/fuzz/%)
+$(BUILD)/fuzz/obj/%.o: %.c
+	@mkdir -p $(@D)
+	$(FUZZ_CC) $(TRAJD_CPPFLAGS) -std=c11 $(FUZZ_FLAGS) -MMD -MP -c -o $@ $<
+$(BUILD)/fuzz/%: $(BUILD)/fuzz/obj/tests/%.o $(LIB_SRC:%.c=$(BUILD)/fuzz/obj/%.o) $(DAEMON_SRC:%.c=$(BUILD)/fuzz/obj/%.o)
+	$(FUZZ_CC) -fsanitize=fuzzer,address,undefined -o $@ $^ $(LDLIBS_DAEMON)
+fuzz: deps
+	@$(MAKE) --no-print-directory $(FUZZ_BINS)
+	@for f in $(FUZZ_BINS); do n=$$(basename $$f); mkdir -p $(BUILD)/fuzz/corpus/$$n; \
+		echo "== $$n ($(FUZZ_SECONDS) s)"; \
+		$$f -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 $(BUILD)/fuzz/corpus/$$n \
+			$$( [ -d tests/corpus/$$n ] && echo tests/corpus/$$n ) > $(BUILD)/fuzz/$$n.log 2>&1; rc=$$?; \
+		grep -E 'stat::number_of_executed_units|stat::peak_rss_mb|ERROR|SUMMARY' $(BUILD)/fuzz/$$n.log; \
+		[ $$rc -eq 0 ] || { echo "$$n: finding, see $(BUILD)/fuzz/$$n.log"; exit 1; }; done
+
+# ---- install ----------------------------------------------------------------
+install: $(BINS)
+	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)/etc/trajd $(DESTDIR)$(PREFIX)/lib/systemd/system
+	install -m 755 $(BINS) $(DESTDIR)$(PREFIX)/bin/
+	test -e $(DESTDIR)/etc/trajd/trajd.conf || install -m 644 config/trajd.conf $(DESTDIR)/etc/trajd/trajd.conf
+	install -m 644 $(wildcard systemd/*.service systemd/*.socket) $(DESTDIR)$(PREFIX)/lib/systemd/system/
+
+clean:
+	rm -rf $(BUILD)
+
+-include $(shell find $(BUILD) -name '*.d' 2>/dev/null)
