@@ -68,6 +68,7 @@ typedef struct obj {
     engine_setpoint_t sp;           /* setpoint of the last tick (zero before the first) */
     engine_status_t status;         /* engine status after the last tick */
     obj_src_stats_t src[OBJ_SRC_COUNT];
+    int stopping;                   /* the daemon is stopping: obj_push refuses */
     void *tstate[CFG_TRANSPORTS_MAX]; /* free slot per transport (by index) for its per-object state */
 } obj_t;
 
@@ -155,7 +156,8 @@ int core_start(core_t *c);
 void core_stop(core_t *c);
 
 /* 1 when stopping and every object is at rest or the stop timeout passed,
- * or when exit_when_done is set and every input is done and object finished. */
+ * or when exit_when_done is set and every input is done and object finished.
+ * The tick checks it and then calls loop_stop(loop, 0), so loop_run returns 0. */
 int core_done(const core_t *c);
 
 /* Close transports (in reverse order), free engines and the core. NULL is a no-op. */

@@ -74,8 +74,9 @@ typedef struct transport {
     int (*obj_key)(void *ocfg, const cfg_kv_t *kv, char *why, size_t whylen);
     void (*obj_cfg_fini)(void *ocfg);
 
-    /* Whole-config rules, after every key was parsed.  0 or -CFG_EVALUE with why. */
-    int (*check)(const cfg_t *cfg, char *why, size_t whylen);
+    /* Whole-config rules, after every key was parsed (and the place to finish
+     * the blocks, e.g. load a file named by a key).  0 or -CFG_EVALUE with why. */
+    int (*check)(cfg_t *cfg, char *why, size_t whylen);
 
     /* Runtime.  open returns 0 or a negative code (-errno or the transport's own)
      * with a message in why; *state is then passed to every other callback. */

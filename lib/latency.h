@@ -54,7 +54,7 @@ void lat_merge(lat_hist_t *dst, const lat_hist_t *src);
  */
 uint64_t lat_quantile(const lat_hist_t *h, double q);
 
-/* p50, p99, p99.9, max, mean in one pass over the buckets' owner. Values above UINT32_MAX saturate. */
+/* p50, p99, p99.9, max and mean of h. Values above UINT32_MAX saturate. */
 void lat_summarize(const lat_hist_t *h, lat_summary_t *s);
 
 /* Bucket index of a value and the [lo, hi] range of values it holds (for tests). */
