@@ -665,8 +665,11 @@ static void check_all(parse_t *p)
         if (!tr->check || !cfg_uses(c, tr))
             continue;
         why[0] = 0;
-        if (tr->check(c, why, sizeof why) < 0) {
-            fail(p, CFG_EVALUE, c->tline[t], "[%s]: %s", tr->name, why[0] ? why : "invalid");
+        int line = c->tline[t];
+        int rc = tr->check(c, &line, why, sizeof why);
+        if (rc < 0) {
+            fail(p, rc == -CFG_EMISSING ? CFG_EMISSING : CFG_EVALUE, line, "[%s]: %s",
+                 tr->name, why[0] ? why : "invalid");
             return;
         }
     }

@@ -51,7 +51,7 @@ static int stdout_obj_key(void *ocfg, const cfg_kv_t *kv, char *why, size_t wl)
     return -CFG_EUNKNOWN;
 }
 
-static int csv_check(cfg_t *cfg, char *why, size_t wl)
+static int csv_check(cfg_t *cfg, int *line, char *why, size_t wl)
 {
     int ti = transport_index(&csv_transport);
     for (unsigned i = 0; i < cfg->nobj; i++) {
@@ -59,8 +59,8 @@ static int csv_check(cfg_t *cfg, char *why, size_t wl)
             continue;
         const csvout_obj_cfg_t *a = cfg->obj[i].tcfg[ti];
         if (!a->path[0]) {
-            snprintf(why, wl, "object '%s' (line %d): csv.path is missing", cfg->obj[i].name,
-                     cfg->obj[i].line);
+            *line = cfg->obj[i].line;
+            snprintf(why, wl, "object '%s': csv.path is missing", cfg->obj[i].name);
             return -CFG_EMISSING;
         }
         for (unsigned j = 0; j < i; j++) {
@@ -68,6 +68,7 @@ static int csv_check(cfg_t *cfg, char *why, size_t wl)
                 continue;
             const csvout_obj_cfg_t *b = cfg->obj[j].tcfg[ti];
             if (strcmp(a->path, b->path) == 0) {
+                *line = cfg->obj[i].line;
                 snprintf(why, wl, "objects '%s' and '%s' write the same csv.path %s",
                          cfg->obj[j].name, cfg->obj[i].name, a->path);
                 return -CFG_EVALUE;

@@ -44,7 +44,7 @@ static void obj_fini(void *ocfg)
 }
 
 /* Load every replayed object's track, so a bad file rejects the config. */
-static int check(cfg_t *cfg, char *why, size_t wl)
+static int check(cfg_t *cfg, int *line, char *why, size_t wl)
 {
     for (unsigned i = 0; i < cfg->nobj; i++) {
         cfg_obj_t *o = &cfg->obj[i];
@@ -52,21 +52,23 @@ static int check(cfg_t *cfg, char *why, size_t wl)
             continue;
         replayin_obj_cfg_t *r = o->tcfg[transport_index(&replay_transport)];
         if (!r->path[0]) {
-            snprintf(why, wl, "object '%s' (line %d): replay.track is missing", o->name,
-                     o->line);
+            *line = o->line;
+            snprintf(why, wl, "object '%s': replay.track is missing", o->name);
             return -CFG_EMISSING;
         }
         if (r->loaded)
             continue;
         char err[512];
         if (track_load(r->path, r->format, &r->trk, err, sizeof err) < 0) {
-            snprintf(why, wl, "object '%s' replay.track (line %d): %s", o->name, r->line, err);
+            *line = r->line;
+            snprintf(why, wl, "object '%s' replay.track: %s", o->name, err);
             return -CFG_EVALUE;
         }
         r->loaded = 1;
         if (r->trk.n == 0) {
-            snprintf(why, wl, "object '%s' replay.track (line %d): %s has no waypoints",
-                     o->name, r->line, r->path);
+            *line = r->line;
+            snprintf(why, wl, "object '%s' replay.track: %s has no waypoints", o->name,
+                     r->path);
             return -CFG_EVALUE;
         }
     }

@@ -76,6 +76,8 @@ static void on_second(loop_t *l, uint64_t exp, void *ctx)
 {
     trajd_t *d = ctx;
     (void)l;
+    if (!d->core)
+        return; /* a failed reload is ending the loop */
     d->seconds += exp;
     core_stats_roll(d->core);
     double iv = d->cfg->daemon.status_interval_s;

@@ -75,8 +75,11 @@ typedef struct transport {
     void (*obj_cfg_fini)(void *ocfg);
 
     /* Whole-config rules, after every key was parsed (and the place to finish
-     * the blocks, e.g. load a file named by a key).  0 or -CFG_EVALUE with why. */
-    int (*check)(cfg_t *cfg, char *why, size_t whylen);
+     * the blocks, e.g. load a file named by a key).  0, or -CFG_EVALUE /
+     * -CFG_EMISSING with why and *line set to the line to report (it starts
+     * at the line of the [T] section, 0 if absent; remember a key's
+     * cfg_kv_t.line in your block to point at the key). */
+    int (*check)(cfg_t *cfg, int *line, char *why, size_t whylen);
 
     /* Runtime.  open returns 0 or a negative code (-errno or the transport's own)
      * with a message in why; *state is then passed to every other callback. */
