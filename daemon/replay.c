@@ -49,6 +49,8 @@ int replay_feed(replay_t *r, engine_t *e, int64_t now_ns)
             break;
         }
         r->last_rc = rc;
+        if (r->results)
+            r->results[r->next] = rc;
         if (rc == ENGINE_DUPLICATE)
             r->duplicates++;
         else if (rc < 0)

@@ -36,9 +36,12 @@ typedef struct {
     uint64_t refused;     /* waypoints the engine rejected (bad data) */
     uint64_t duplicates;  /* waypoints the engine dropped as exact duplicates */
     int last_rc;          /* engine_push result of the last waypoint offered */
+    int *results;         /* optional, caller-owned, trk->n entries (NULL = none):
+                             engine_push result of each waypoint once taken */
 } replay_t;
 
-/* Start replaying trk (not copied: it must outlive r) with waypoint 0 due at start_ns. */
+/* Start replaying trk (not copied: it must outlive r) with waypoint 0 due at
+ * start_ns.  results is NULL; set it afterwards to record each outcome. */
 void replay_init(replay_t *r, const track_t *trk, int64_t start_ns);
 
 /*
