@@ -131,6 +131,36 @@ static int parse_num(const char *s, double *v, int *empty)
     return 0;
 }
 
+/* A field as it may appear in a message: printable ASCII, other bytes as
+ * \xHH, cut at SHOW_MAX characters ("..." appended), so that garbage in a
+ * file cannot put control characters or invalid UTF-8 on a terminal. */
+#define SHOW_MAX 40
+typedef struct {
+    char s[SHOW_MAX * 4 + 4];
+} shown_t;
+
+static shown_t show(const char *f)
+{
+    shown_t o;
+    size_t j = 0;
+    for (size_t i = 0; f[i]; i++) {
+        if (i == SHOW_MAX) {
+            memcpy(o.s + j, "...", 3);
+            j += 3;
+            break;
+        }
+        unsigned char c = (unsigned char)f[i];
+        if (c >= 0x20 && c < 0x7f) {
+            o.s[j++] = (char)c;
+        } else {
+            snprintf(o.s + j, 5, "\\x%02x", c);
+            j += 4;
+        }
+    }
+    o.s[j] = '\0';
+    return o;
+}
+
 /* ---- CSV ----------------------------------------------------------------- */
 
 enum { COL_T, COL_X, COL_Y, COL_Z, COL_LAT, COL_LON, COL_ALT, COL_COUNT };
@@ -316,26 +346,27 @@ static int parse_csv(loader_t *L, const char *buf, size_t len,
         double t, va, vb, vc = NAN;
         int empty;
         if (parse_num(field[col[COL_T]], &t, NULL) || !isfinite(t)) {
-            if (bad(L, lineno, "time '%s' is not a finite number", field[col[COL_T]]))
+            if (bad(L, lineno, "time '%s' is not a finite number",
+                    show(field[col[COL_T]]).s))
                 return -1;
             continue;
         }
         if (parse_num(field[col[a]], &va, NULL) || !isfinite(va)) {
             if (bad(L, lineno, "%s '%s' is not a finite number",
-                    geographic ? "latitude" : "x", field[col[a]]))
+                    geographic ? "latitude" : "x", show(field[col[a]]).s))
                 return -1;
             continue;
         }
         if (parse_num(field[col[b]], &vb, NULL) || !isfinite(vb)) {
             if (bad(L, lineno, "%s '%s' is not a finite number",
-                    geographic ? "longitude" : "y", field[col[b]]))
+                    geographic ? "longitude" : "y", show(field[col[b]]).s))
                 return -1;
             continue;
         }
         if (col[c3] >= 0 && col[c3] < nf) {
             if (parse_num(field[col[c3]], &vc, &empty) || isinf(vc)) {
                 if (bad(L, lineno, "%s '%s' is not a number",
-                        geographic ? "altitude" : "z", field[col[c3]]))
+                        geographic ? "altitude" : "z", show(field[col[c3]]).s))
                     return -1;
                 continue;
             }
@@ -529,7 +560,7 @@ static void XMLCALL gpx_start(void *ud, const XML_Char *name, const XML_Char **a
     if (parse_num(slat, &g->lat, NULL) || parse_num(slon, &g->lon, NULL)) {
         g->bad_pt = 1;
         if (bad(g->L, g->pt_line, "trkpt lat '%s' or lon '%s' is not a number",
-                slat, slon))
+                show(slat).s, show(slon).s))
             gpx_stop(g);
         return;
     }
@@ -568,14 +599,14 @@ static void XMLCALL gpx_end(void *ud, const XML_Char *name)
                 int empty;
                 if (parse_num(g->text, &g->ele, &empty) || isinf(g->ele)) {
                     g->bad_pt = 1;
-                    if (bad(g->L, line, "<ele> '%s' is not a number", g->text))
+                    if (bad(g->L, line, "<ele> '%s' is not a number", show(g->text).s))
                         gpx_stop(g);
                 }
             } else {
                 if (track_parse_iso8601(g->text, &g->sec, &g->frac)) {
                     g->bad_pt = 1;
                     if (bad(g->L, line, "<time> '%s' is not an ISO 8601 date-time",
-                            g->text))
+                            show(g->text).s))
                         gpx_stop(g);
                 } else {
                     g->have_time = 1;
