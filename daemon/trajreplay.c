@@ -142,7 +142,6 @@ static const char *reason_name(int e)
     case ENGINE_EBACKWARDS: return "backwards";
     case ENGINE_ESAMETIME: return "same_time";
     case ENGINE_ESPEED: return "speed";
-    case ENGINE_EFULL: return "full";
     case ENGINE_ECONFIG: return "config";
     case ENGINE_ENOMEM: return "nomem";
     case ENGINE_ESTATE: return "state";
@@ -308,18 +307,25 @@ static int64_t mono_ns(void)
     return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
 }
 
+/* One "summary: name value" line each, so scripts can read them.  rejected
+ * counts bad data only: ENGINE_EFULL refusals are flow control, retried by
+ * the replay, and shown as full_retries. */
 static void print_summary(const track_t *trk, const replay_t *r, const engine_status_t *st,
                           double max_v, double max_a, uint64_t ticks)
 {
+    uint64_t rejected = 0;
+    for (int e = 1; e < ENGINE_ERROR_COUNT; e++)
+        if (e != ENGINE_EFULL)
+            rejected += st->rejected_by[e];
     fprintf(stderr,
             "summary: waypoints %zu\n"
             "summary: skipped_lines %zu\n"
             "summary: accepted %" PRIu64 "\n"
             "summary: duplicates %" PRIu64 "\n"
             "summary: rejected %" PRIu64 "\n",
-            trk->n, trk->skipped, st->accepted, st->duplicates, st->rejected);
+            trk->n, trk->skipped, st->accepted, st->duplicates, rejected);
     for (int e = 1; e < ENGINE_ERROR_COUNT; e++)
-        if (reason_name(e))
+        if (e != ENGINE_EFULL && reason_name(e))
             fprintf(stderr, "summary: rejected_%s %" PRIu64 "\n", reason_name(e),
                     st->rejected_by[e]);
     fprintf(stderr,

@@ -151,18 +151,28 @@ def common_checks(sp, label, period_ns):
     if check(len(dt) > 0, f"{label}: nothing streamed"):
         err = np.max(np.abs(dt - period_ns * 1e-9))
         check(err < TOL_GRID_S, f"{label}: track time off the grid by {err:g} s")
-    # Velocity continuity: between ticks, |dv| per axis is at most the
-    # period times the larger |a| at either end (a is linear within a cubic
-    # piece and continuous across pieces for a C2 curve); 1% + 1e-9 m/s for
+    # Velocity continuity: a is continuous and piecewise linear in time for
+    # a C2 cubic, so over one tick |dv| = |integral of a| <= h * max |a| on
+    # the interval.  max |a| is the larger end value, plus at most how far a
+    # runs past it before turning at a knot inside the interval: bounded by
+    # the change of a over one tick next to it (the slack term).  A hold row
+    # (finished) reports a = 0, which the slack term covers too.  A genuine
+    # velocity jump does not shrink with h and fails this.  1% + 1e-9 m/s for
     # rounding and a junction's ~0.268^(O/2) mismatch.
     h = period_ns * 1e-9
     dv = np.abs(np.diff(sp["vel"], axis=0))
     amax = np.maximum(np.abs(sp["acc"][1:]), np.abs(sp["acc"][:-1]))
-    excess = dv - (h * amax * 1.01 + 1e-9)
+    da = np.abs(np.diff(sp["acc"], axis=0))
+    pad = np.pad(da, ((1, 1), (0, 0)))
+    slack = np.maximum(np.maximum(pad[:-2], pad[1:-1]), pad[2:])
+    allowed = h * (amax + slack) * 1.01 + 1e-9
+    excess = dv - allowed
     worst = int(np.argmax(np.max(excess, axis=1)))
     check(np.max(excess) <= 0,
           f"{label}: velocity jump at row {worst + 1}: dv={dv[worst]}, allowed "
-          f"{h * amax[worst]}, states {sp['state'][worst]} -> {sp['state'][worst + 1]}")
+          f"{allowed[worst]}, states {sp['state'][worst]} -> {sp['state'][worst + 1]}")
+    ratio = np.max(dv / allowed)
+    print(f"{label}: velocity steps at most {ratio:.2f} of the continuity bound")
     check(sp["state"][-1] == "finished", f"{label}: last state {sp['state'][-1]}")
     check(np.all(sp["vel"][-1] == 0.0), f"{label}: not at rest at the end")
     return streaming
