@@ -92,7 +92,7 @@ DEPS_BUILD := gcc make pkg-config libc6-dev libmodbus-dev libsystemd-dev libinih
 DEPS_TEST := libcmocka-dev libgsl-dev python3 python3-scipy python3-numpy mbpoll \
              python3-pymodbus python3-serial can-utils python3-can python3-canmatrix \
              user-mode-linux busybox-static socat iproute2 clang libclang-rt-14-dev \
-             systemd valgrind
+             systemd valgrind python3-pyproj
 
 deps-run:
 	@sh tests/deps.sh $(DEPS_BUILD)
