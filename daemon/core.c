@@ -57,7 +57,7 @@ obj_t *core_obj_find(core_t *c, const char *name)
     return NULL;
 }
 
-static void tick(core_priv_t *p, uint64_t k, int64_t wake_ns)
+static void tick(core_priv_t *p, uint64_t k, int64_t late_ns)
 {
     core_t *c = &p->pub;
     int64_t now_ns = (int64_t)k * c->period_ns;
@@ -89,7 +89,6 @@ static void tick(core_priv_t *p, uint64_t k, int64_t wake_ns)
 
     stats_t *s = c->stats;
     s->ticks++;
-    int64_t late_ns = wake_ns - (p->wall_base_ns + (int64_t)k * p->wall_period_ns);
     uint64_t late_us = late_ns > 0 ? (uint64_t)(late_ns / 1000) : 0;
     lat_add(&s->late_hist, late_us);
     lat_add(&s->late_recent_hist, late_us);
@@ -108,11 +107,14 @@ static void on_clock(loop_t *l, int fd, uint32_t events, void *ctx)
     int64_t wake_ns = core_mono_ns();
     if (read(fd, &n, sizeof n) != (ssize_t)sizeof n || n == 0)
         return; /* EAGAIN: spurious wake-up */
-    /* n deadlines passed since the last read: serve only the latest. */
+    /* n deadlines passed since the last read: serve only the latest.
+     * Lateness is counted from the oldest one, the deadline we were due to
+     * serve, so a skip shows in the histogram as lateness >= one period. */
+    int64_t late_ns = wake_ns - (p->wall_base_ns + (int64_t)p->next_k * p->wall_period_ns);
     uint64_t k = p->next_k + n - 1;
     p->pub.stats->missed_ticks += n - 1;
     p->next_k = k + 1;
-    tick(p, k, wake_ns);
+    tick(p, k, late_ns);
 }
 
 int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **out, char *why,
@@ -280,12 +282,12 @@ int core_summary(const core_t *c, char *buf, size_t len)
     int64_t up_s = (core_mono_ns() - s->start_mono_ns) / 1000000000;
     size_t n = 0;
     int m = snprintf(buf, len,
-                     "up %lld s%s, ticks %llu, missed %llu, overruns %llu, late p50/p99/max "
-                     "%u/%u/%u us",
+                     "up %lld s%s, ticks %llu, missed %llu, overruns %llu, late p50/p99/p99.9/max "
+                     "%u/%u/%u/%u us",
                      (long long)up_s, c->stopping ? " (stopping)" : "",
                      (unsigned long long)s->ticks, (unsigned long long)s->missed_ticks,
                      (unsigned long long)s->overruns, s->late.p50_us, s->late.p99_us,
-                     s->late.max_us);
+                     s->late.p999_us, s->late.max_us);
     if (m < 0)
         return m;
     n = (size_t)m < len ? (size_t)m : len;

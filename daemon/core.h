@@ -17,7 +17,8 @@
  *        o->status refreshed (engine_status)
  *   3. for each object, for each of its outputs: output->setpoint(state, o, &o->sp)
  *   4. for each open transport: cycle(state, core, now_ns)
- *   5. lateness (wake-up time - deadline) goes into the histogram; an
+ *   5. lateness (wake-up time - the oldest deadline not yet served, so a
+ *      skip counts as lateness >= one period) goes into the histogram; an
  *      overrun is counted if the work ended after the next deadline.
  * All of it runs in the one loop thread: a transport's fd callbacks and the
  * tick never run at the same time, so a callback sees o->sp and o->status of

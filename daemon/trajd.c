@@ -336,8 +336,9 @@ int main(int argc, char **argv)
         log_msg(LOG_ERR, "event loop: %s", strerror(-rc));
         rc = EX_OSERR;
     }
-    {
+    if (d.core) {
         char line[1024];
+        core_stats_roll(d.core);
         core_summary(d.core, line, sizeof line);
         log_msg(LOG_INFO, "exit: %s", line);
     }
