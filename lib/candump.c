@@ -155,8 +155,24 @@ int candump_parse_line(const char *s, candump_line_t *out)
             p++;
         s = p;
     }
-    /* candump -l may append " T"/" R" (direction) in newer versions: not in 2020.11; reject. */
-    return candump_parse_frame(s, &out->frame);
+    /* Newer can-utils and python-can append a direction field " R" / " T": drop it. */
+    char fr[8 + 3 + 2 * CANPROTO_MAX_DLEN + 2 + 16];
+    size_t k = 0;
+    while (s[k] && s[k] != ' ' && s[k] != '\t' && s[k] != '\n' && s[k] != '\r') {
+        if (k + 1 >= sizeof fr)
+            return -CANDUMP_ESYNTAX;
+        fr[k] = s[k];
+        k++;
+    }
+    fr[k] = '\0';
+    const char *rest = s + k;
+    while (*rest == ' ' || *rest == '\t')
+        rest++;
+    if ((*rest == 'R' || *rest == 'T') && at_end(rest + 1))
+        rest++;
+    if (!at_end(rest))
+        return -CANDUMP_ESYNTAX;
+    return candump_parse_frame(fr, &out->frame);
 }
 
 static const char hexd[] = "0123456789ABCDEF";
