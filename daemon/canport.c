@@ -281,7 +281,7 @@ static void count_drop(canport_obj_t *o, int rc)
     o->flags_since |= CANPROTO_ST_TX_DROP;
     if (!is_full(rc))
         o->flags_since |= CANPROTO_ST_BUS_DOWN;
-    o->last_err = is_full(rc) ? CANPROTO_STERR_TX_DROPPED : CANPROTO_STERR_BUS_DOWN;
+    event(o, is_full(rc) ? CANPROTO_STERR_TX_DROPPED : CANPROTO_STERR_BUS_DOWN);
 }
 
 static void send_status(canport_t *p, canport_obj_t *o, int64_t now_ns)
@@ -327,7 +327,7 @@ void canport_cycle(canport_t *p, int64_t now_ns, int64_t late_ns)
             if (p->obj[i].set && p->obj[i].have_sp) {
                 p->obj[i].st.dropped_late++;
                 p->obj[i].flags_since |= CANPROTO_ST_TX_DROP;
-                p->obj[i].last_err = CANPROTO_STERR_TX_DROPPED;
+                event(&p->obj[i], CANPROTO_STERR_TX_DROPPED);
             }
         goto out;
     }
