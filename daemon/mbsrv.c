@@ -517,6 +517,13 @@ static void client_read(mbsrv_t *s, client_t *c)
         size_t total = 6 + length;
         if (c->len < total)
             return;
+        if (c->buf[7] & 0x80) {
+            /* 128..255 is the exception range, not a function: no valid
+             * answer exists (libmodbus would wrap fc + 0x80 to a request code). */
+            s->st.dropped++;
+            client_close(s, c);
+            return;
+        }
         modbus_set_socket(s->tcp, c->fd);
         int rc = serve(s, s->tcp, c->buf, (int)total, c->buf + 7, total - 7);
         modbus_set_socket(s->tcp, -1);
@@ -604,7 +611,7 @@ static int rtu_crc_ok(const uint8_t *f, size_t len)
 
 static void rtu_frame(mbsrv_t *s, const uint8_t *f, size_t len)
 {
-    if (f[0] != s->unit_id)     /* another slave's, or a broadcast: not ours */
+    if (f[0] != s->unit_id || (f[1] & 0x80)) /* not ours, broadcast, or no function */
         return;
     serve(s, s->rtu, f, (int)len, f + 1, len - 3);
 }
