@@ -2,13 +2,14 @@
 #include "svg.h"
 
 #include <errno.h>
+#include <stdint.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 typedef struct {
     double x_m, y_m, t_s, speed_m_s;
-    unsigned track;
+    int64_t now_ns;
 } sample_t;
 
 typedef struct {
@@ -98,7 +99,7 @@ int svg_plot_setpoint(svg_plot_t *p, const engine_setpoint_t *sp)
                     sp->vel_m_s[2] * sp->vel_m_s[2]);
     if (!isfinite(sp->pos_m[0]) || !isfinite(sp->pos_m[1]) || !isfinite(sp->t_s) || !isfinite(v))
         return 0;
-    sample_t s = {sp->pos_m[0], sp->pos_m[1], sp->t_s, v, sp->track};
+    sample_t s = {sp->pos_m[0], sp->pos_m[1], sp->t_s, v, sp->now_ns};
     p->last = s;
     p->have_last = 1;
     p->last_kept = 0;
@@ -241,7 +242,21 @@ static const sample_t *sample(const svg_plot_t *p, size_t i)
     return i < p->n ? &p->s[i] : &p->last;
 }
 
-/* One <path> per trajectory (a new track number starts a new subpath). */
+/* Where the speed line must not join two samples: track time went back, or
+ * ran ahead faster than the clock (the start of a new trajectory after a
+ * gap: the time in between is not motion).  Track time standing still
+ * (a hold, a transfer) is drawn: it shows as a vertical stroke at that time.
+ * The plan view is never broken: the setpoints are continuous motion (the
+ * engine moves to a new trajectory's start by a transfer, it never jumps),
+ * and it draws exactly what was streamed. */
+#define SPEED_BREAK_FACTOR 1.5
+static int speed_break(const sample_t *a, const sample_t *b)
+{
+    double dt_s = b->t_s - a->t_s;
+    double dnow_s = (double)(b->now_ns - a->now_ns) * 1e-9;
+    return dt_s < 0 || dt_s > SPEED_BREAK_FACTOR * dnow_s + 1e-9;
+}
+
 static void draw_path(FILE *f, const svg_plot_t *p, const axis_t *ax, const axis_t *ay,
                       int speed, const char *id, const char *color)
 {
@@ -250,7 +265,7 @@ static void draw_path(FILE *f, const svg_plot_t *p, const axis_t *ax, const axis
             "stroke-linejoin=\"round\" d=\"", id, color);
     for (size_t i = 0; i < n; i++) {
         const sample_t *s = sample(p, i);
-        int move = i == 0 || s->track != sample(p, i - 1)->track;
+        int move = i == 0 || (speed && speed_break(sample(p, i - 1), s));
         double px = ax_map(ax, speed ? s->t_s : s->x_m);
         double py = ax_map(ay, speed ? s->speed_m_s : s->y_m);
         fprintf(f, "%s%.1f %.1f", move ? (i ? " M" : "M") : " L", px, py);

@@ -11,7 +11,10 @@
  * at most max_points curve vertices.  Limit: a speed spike shorter than the
  * stride can fall between kept samples; the CSV output has every setpoint.
  * The very last setpoint is always drawn.  Setpoints in state WAITING (no
- * motion yet) are not drawn.  Waypoints are all kept; above
+ * motion yet) are not drawn.  The plan view draws the setpoints as one
+ * unbroken line (what was streamed, transfers between trajectories
+ * included); the speed line is broken where track time jumps ahead of the
+ * clock (a new trajectory after a gap) or goes back.  Waypoints are all kept; above
  * SVG_WAYPOINTS_DRAWN only every k-th is drawn.
  */
 #ifndef TRAJD_SVG_H
