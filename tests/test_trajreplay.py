@@ -351,13 +351,41 @@ def test_errors(tmp):
         check(p.returncode == 3 and "write error" in p.stderr, f"/dev/full: {p.returncode} {p.stderr!r}")
 
 
+def test_progress(tmp):
+    """Given stderr on a terminal (a pty) and --progress-after 0 (so the
+    result does not depend on the machine's speed), then progress lines
+    start with '\\r' and the line is cleared at the end."""
+    import pty
+    master, slave = pty.openpty()
+    out = os.path.join(tmp, "progress.csv")
+    p = subprocess.Popen([TRAJREPLAY, "--progress-after", "0", "-o", out, FIGURE8], stderr=slave,
+                         stdout=subprocess.DEVNULL)
+    os.close(slave)
+    chunks = []
+    while True:
+        try:
+            b = os.read(master, 4096)
+        except OSError:  # EIO: the child closed the pty
+            break
+        if not b:
+            break
+        chunks.append(b)
+    rc = p.wait(timeout=120)
+    os.close(master)
+    text = b"".join(chunks)
+    check(rc == 0, f"progress run: exit {rc}")
+    check(b"\rtrajreplay: " in text and b"waypoints, track time" in text,
+          f"no progress line on a terminal: {text[:200]!r}")
+    check(text.endswith(b"\r\x1b[K"), f"progress line not cleared: {text[-40:]!r}")
+
+
 def main():
     if not os.access(TRAJREPLAY, os.X_OK):
         print(f"{TRAJREPLAY} not built")
         return 1
     with tempfile.TemporaryDirectory(prefix="trajreplay-test-") as tmp:
         for test in (test_errors, test_gpx_equals_csv, test_svg, test_counts_real_and_injected,
-                     test_spline_agreement):
+                     test_spline_agreement, test_progress):
             print(f"== {test.__name__}")
             test(tmp)
     print(f"test_trajreplay.py: {len(failures)} failure(s)")
