@@ -136,7 +136,8 @@ static const char *const param_names[] = {"uniform", "time"};
 static const char *const ends_names[] = {"held", "multiple", "natural", "clamped", "rest"};
 static const char *const method_names[] = {"bspline", "cubic", "smooth"};
 
-/* Short names of the rejection reasons, indexed by engine_error. */
+/* Short names of the reasons a waypoint can be refused for bad data
+ * (NULL for codes engine_push does not return for data). */
 static const char *reason_name(int e)
 {
     switch (e) {
@@ -145,9 +146,6 @@ static const char *reason_name(int e)
     case ENGINE_EBACKWARDS: return "backwards";
     case ENGINE_ESAMETIME: return "same_time";
     case ENGINE_ESPEED: return "speed";
-    case ENGINE_ECONFIG: return "config";
-    case ENGINE_ENOMEM: return "nomem";
-    case ENGINE_ESTATE: return "state";
     case ENGINE_ENUMERIC: return "numeric";
     default: return NULL;
     }
