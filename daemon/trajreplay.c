@@ -459,6 +459,8 @@ int main(int argc, char **argv)
             if (st.buffered == 0 && ++tail > TAIL_TICKS)
                 break;
         }
+        if ((k & 1023) == 0 && ferror(out))
+            break; /* a full disk: stop now, reported below */
         if (progress && (k & 1023) == 0) {
             int64_t t = mono_ns();
             if (t - t_start >= (int64_t)o.progress_after_ms * 1000000 &&
