@@ -90,9 +90,10 @@ static void XMLCALL on_end(void *ud, const XML_Char *name)
 }
 
 /* Given waypoints (one rejected) and setpoints over two trajectories with a
- * 300 s gap in track time, when written, then expat parses the document and
+ * 300 s gap in track time and one underrun, when written, then expat parses the document and
  * finds the svg root, the title (with '&' escaped), the curve as one line,
- * the speed line broken at the gap, a dot per accepted waypoint, the axes
+ * the speed line broken at the gap, a dot per accepted waypoint, the
+ * underrun marked and counted, the axes
  * of both panels and their labels. */
 static void test_document_well_formed(void **state)
 {
@@ -104,6 +105,8 @@ static void test_document_well_formed(void **state)
     assert_int_equal(svg_plot_waypoint(p, NAN, 1, 1), 0); /* ignored */
     for (uint64_t i = 0; i < 5000; i++) {
         engine_setpoint_t sp = setpoint(i, i < 2500 ? 1 : 2, i < 2500 ? 0 : 300);
+        if (i >= 1000 && i < 1010) /* one underrun of 10 ticks */
+            sp.state = ENGINE_STATE_UNDERRUN;
         svg_plot_setpoint(p, &sp);
     }
     engine_setpoint_t waiting = setpoint(0, 0, 0);
@@ -137,6 +140,9 @@ static void test_document_well_formed(void **state)
     assert_non_null(strstr(c.ids, "speed-axes "));
     assert_non_null(strstr(c.ids, "waypoints "));
     assert_non_null(strstr(c.ids, "rejected "));
+    assert_non_null(strstr(c.ids, "underruns "));
+    assert_non_null(strstr(c.ids, "underruns-t "));
+    assert_non_null(strstr(buf, ">underrun (1)</text>"));
     assert_int_equal(c.curve_moves, 1);
     assert_int_equal(c.speed_moves, 2);
     assert_non_null(strstr(buf, "a &amp; b &lt;c&gt;"));

@@ -300,7 +300,8 @@ def test_svg(tmp):
     ns = "{http://www.w3.org/2000/svg}"
     check(root.tag == ns + "svg", f"root {root.tag}")
     ids = {e.get("id") for e in root.iter() if e.get("id")}
-    for want in ("curve", "speed", "waypoints", "plan-axes", "speed-axes", "legend"):
+    for want in ("curve", "speed", "waypoints", "rejected", "underruns", "plan-axes", "speed-axes",
+                 "legend"):
         check(want in ids, f"svg: no element id={want}")
     dots = root.find(f".//{ns}g[@id='waypoints']").findall(f"{ns}circle")
     check(len(dots) == 1786, f"svg: {len(dots)} waypoint dots")
@@ -381,7 +382,11 @@ def test_progress(tmp):
     result does not depend on the machine's speed), then progress lines
     start with '\\r' and the line is cleared at the end."""
     import pty
-    master, slave = pty.openpty()
+    try:
+        master, slave = pty.openpty()
+    except OSError as e:  # no pseudo-terminals in this environment: nothing to test
+        print(f"test_progress: skipped, no pty ({e})")
+        return
     out = os.path.join(tmp, "progress.csv")
     p = subprocess.Popen([TRAJREPLAY, "--progress-after", "0", "-o", out, FIGURE8], stderr=slave,
                          stdout=subprocess.DEVNULL)
