@@ -34,6 +34,7 @@ typedef struct {
     int kind;
     int first;            /* first entry of its trajectory */
     double t1_s;          /* segment end (absolute track time); END: rest time */
+    uint64_t node;        /* SEG: index of its first node in the trajectory */
     fdiff_seg_t seg;      /* END: c[k][0] is the rest position, t0_s = t1_s */
 } qent_t;
 
@@ -65,6 +66,7 @@ struct engine {
     /* ---- the queue ---- */
     qent_t *q;
     size_t qcap, qhead, qlen;
+    size_t qends;         /* END entries in the queue */
 
     /* ---- output ---- */
     int mode;
@@ -100,6 +102,13 @@ struct engine {
 #define ENGINE_SAME_POS_M 1e-9
 /* |t| above this is absurd for a track clock (about 31700 years). */
 #define ENGINE_T_ABS_MAX_S 1e12
+/*
+ * Waypoints of slack at the start beyond what the steady state needs: the
+ * output starts this much later, so input whose intervals vary (a missed
+ * fix, jitter) by up to this many waypoint intervals over a lookahead window
+ * does not underrun.
+ */
+#define ENGINE_START_SLACK_WP 2u
 /* Capacity accepted at most (memory is sized from it). */
 #define ENGINE_CAPACITY_MAX (1u << 22)
 
@@ -154,25 +163,55 @@ static int uses_pstar(const engine_config_t *cfg)
            cfg->param == ENGINE_PARAM_UNIFORM;
 }
 
-unsigned engine_lookahead(const engine_config_t *cfg)
+/* largest lookahead over segments j in [j0, j1) for start offset delta */
+static unsigned scan_lookahead(unsigned f, unsigned o, unsigned delta, unsigned need,
+                               uint64_t j0, uint64_t j1)
 {
-    unsigned f = cfg->fragment, o = cfg->overlap, best = 0;
-    unsigned need = uses_pstar(cfg) ? 3 : 2; /* x[j + need - 1] final for segment j */
+    unsigned best = 0;
     uint64_t j, n;
 
-    if (f < ENGINE_FRAGMENT_MIN || f > ENGINE_FRAGMENT_MAX || o < 2 || o % 2 ||
-        o >= f)
-        return 0;
     /* Row r is pushed when node r+1 arrives; segment j (waypoint j to j+1)
-     * is built once frag_final_after(rows pushed) covers it.  Steady state
-     * repeats every S segments: scan a few periods past the start. */
-    for (j = 0; j < 4u * f; j++) {
-        for (n = j + 1; frag_final_after(f, o, n - 1) < j + need; n++)
+     * is built once frag_final_after(rows pushed) reaches x[j + need - 1]. */
+    for (j = j0; j < j1; j++) {
+        for (n = j + 1; frag_final_after(f, o, delta, n - 1) < j + need; n++)
             ;
         if (n - (j + 1) > best)
             best = (unsigned)(n - (j + 1));
     }
     return best;
+}
+
+static int config_sizes_ok(const engine_config_t *cfg)
+{
+    return cfg->fragment >= ENGINE_FRAGMENT_MIN && cfg->fragment <= ENGINE_FRAGMENT_MAX &&
+           cfg->overlap >= 2 && cfg->overlap % 2 == 0 && cfg->overlap < cfg->fragment;
+}
+
+/*
+ * Start offset of the fragment grid: the first fragment is cut short so that
+ * the wait before the first segment is the steady-state lookahead (about
+ * S + O/2) plus ENGINE_START_SLACK_WP instead of F - 1, never beyond S - 1
+ * (see frag.h).
+ */
+static unsigned frag_delta(const engine_config_t *cfg)
+{
+    unsigned f = cfg->fragment, o = cfg->overlap, s = f - o;
+    unsigned need = uses_pstar(cfg) ? 3 : 2; /* x[j + need - 1] final for segment j */
+    unsigned steady = scan_lookahead(f, o, 0, need, 2u * f, 2u * f + 2u * s);
+    unsigned want = steady + ENGINE_START_SLACK_WP;
+    unsigned d = f - 1 > want ? f - 1 - want : 0;
+
+    return d < s ? d : s - 1;
+}
+
+unsigned engine_lookahead(const engine_config_t *cfg)
+{
+    unsigned f = cfg->fragment, o = cfg->overlap;
+
+    if (!config_sizes_ok(cfg))
+        return 0;
+    /* start and steady state: a few periods past the start cover both */
+    return scan_lookahead(f, o, frag_delta(cfg), uses_pstar(cfg) ? 3 : 2, 0, 4u * f);
 }
 
 int engine_config_check(const engine_config_t *cfg, const char **why)
@@ -249,7 +288,7 @@ engine_t *engine_new(const engine_config_t *cfg, int *err)
     e->ring = ring;
     e->node_t = calloc(ring, sizeof(double));
     e->node_r = calloc(ring * AX, sizeof(double));
-    e->fw = frag_new(cfg->fragment, cfg->overlap, ring);
+    e->fw = frag_new(cfg->fragment, cfg->overlap, frag_delta(cfg), ring);
     /* each accepted waypoint yields at most one segment, each trajectory
      * one END: twice the capacity always fits */
     e->qcap = 2 * (size_t)cfg->capacity + 8;
@@ -314,13 +353,14 @@ static qent_t *q_push(engine_t *e)
     return q;
 }
 
-static void queue_segment(engine_t *e, const fdiff_seg_t *seg)
+static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
 {
     qent_t *q = q_push(e);
 
     if (!q)
         return;
     q->kind = QE_SEG;
+    q->node = node;
     q->seg = *seg;
     q->t1_s = seg->t0_s + seg->dur_s;
     e->in_emitted = 1;
@@ -336,6 +376,7 @@ static void queue_end(engine_t *e)
     if (!q)
         return;
     q->kind = QE_END;
+    e->qends++;
     memset(&q->seg, 0, sizeof(q->seg));
     q->t1_s = e->in_emitted ? e->end_t : e->last_t;
     q->seg.t0_s = q->t1_s;
@@ -404,7 +445,7 @@ static void build_segments(engine_t *e)
             cubic_segment(nr(e, j), nr(e, j + 1), frag_x(e->fw, j),
                           frag_x(e->fw, j + 1), hpar(e, j), nt(e, j), dur, &seg);
         }
-        queue_segment(e, &seg);
+        queue_segment(e, &seg, j);
     }
 }
 
@@ -589,6 +630,7 @@ void engine_clear(engine_t *e)
     frag_reset(e->fw);
     e->qhead = 0;
     e->qlen = 0;
+    e->qends = 0;
     e->finished = 0;
     e->underrun = 0;
     if (e->mode != OUT_HOLD) {
@@ -616,6 +658,8 @@ static qent_t *q_head(engine_t *e)
 
 static void q_pop(engine_t *e)
 {
+    if (e->q[e->qhead].kind == QE_END)
+        e->qends--;
     e->qhead = (e->qhead + 1) % e->qcap;
     e->qlen--;
 }
@@ -783,6 +827,13 @@ static void step_once(engine_t *e)
         }
         for (;;) {
             qent_t *h = q_head(e);
+            /* Out of an underrun only once the lookahead is buffered again
+             * beyond the next segment, as at the start (or the end is in
+             * sight): resuming on the first segment back would leave no
+             * margin and underrun again at the next late waypoint. */
+            if (h && e->underrun && e->qends == 0 && h->kind == QE_SEG &&
+                e->nodes < h->node + 2 + e->lookahead)
+                h = NULL;
             if (!h) {
                 /* waypoints late: hold, keep n; resume exactly here */
                 if (!e->underrun)

@@ -148,17 +148,18 @@ static void test_cubic_vs_gsl(void **state)
 static void test_frag_bookkeeping(void **state)
 {
     (void)state;
-    frag_t *fw = frag_new(16, 8, 64);
+    frag_t *fw = frag_new(16, 8, 3, 64);
     frag_row_t row = {1, 4, 1, {0, 0, 0}};
     double pin[3] = {0, 0, 0};
 
     assert_non_null(fw);
-    assert_null(frag_new(16, 7, 64));
-    assert_null(frag_new(16, 16, 64));
+    assert_null(frag_new(16, 7, 0, 64));
+    assert_null(frag_new(16, 16, 0, 64));
+    assert_null(frag_new(16, 8, 8, 64)); /* offset must stay below S */
     for (uint64_t r = 0; r < 200; r++) {
         row.d[0] = 6.0 * sin(0.1 * (double)r);
         assert_int_equal(frag_push(fw, &row, pin), 0);
-        assert_int_equal(fw->final_rows, frag_final_after(16, 8, r));
+        assert_int_equal(fw->final_rows, frag_final_after(16, 8, 3, r));
     }
     row.c = 0;
     assert_int_equal(frag_finish(fw, &row), 0);
