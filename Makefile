@@ -50,14 +50,14 @@ LIB_OBJ := $(LIB_SRC:%.c=$(BUILD)/%.o)
 PIC_OBJ := $(LIB_SRC:%.c=$(BUILD)/pic/%.o)
 DAEMON_OBJ := $(DAEMON_SRC:%.c=$(BUILD)/%.o)
 BINS := $(DAEMON_MAINS:daemon/%.c=$(BUILD)/bin/%)
-TESTS := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
+TEST_BINS := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
 BENCHES := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
 
 .PHONY: all run check check-build test test-asan bench fuzz install deps deps-run clean
 .DELETE_ON_ERROR:
 .SECONDARY:
 
-all: $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/libtrajdaemon.a $(BINS) $(TESTS) $(BENCHES)
+all: $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/libtrajdaemon.a $(BINS) $(TEST_BINS) $(BENCHES)
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(@D)
@@ -90,9 +90,9 @@ $(BUILD)/tests/%: $(BUILD)/tests/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.
 # ---- Debian packages ---------------------------------------------------
 DEPS_BUILD := gcc make pkg-config libc6-dev libmodbus-dev libsystemd-dev libinih-dev libexpat1-dev
 DEPS_TEST := libcmocka-dev libgsl-dev python3 python3-scipy python3-numpy mbpoll \
-             python3-pymodbus python3-serial can-utils python3-can python3-canmatrix \
+             python3-pymodbus python3-serial python3-serial-asyncio can-utils python3-can python3-canmatrix \
              user-mode-linux busybox-static socat iproute2 clang libclang-rt-14-dev \
-             systemd valgrind
+             systemd valgrind python3-pyproj
 
 deps-run:
 	@sh tests/deps.sh $(DEPS_BUILD)
@@ -119,7 +119,7 @@ test: all
 SAN := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 test-asan:
 	@$(MAKE) --no-print-directory BUILD=$(BUILD)/asan CFLAGS="-O1 -g $(SAN)" \
-		LDFLAGS="$(SAN)" $(TESTS:$(BUILD)/%=$(BUILD)/asan/%) $(BINS:$(BUILD)/%=$(BUILD)/asan/%)
+		LDFLAGS="$(SAN)" $(TEST_BINS:$(BUILD)/%=$(BUILD)/asan/%) $(BINS:$(BUILD)/%=$(BUILD)/asan/%)
 	@BUILD=$(abspath $(BUILD)/asan) ONLY=c sh tests/run.sh
 
 bench: all
@@ -146,10 +146,17 @@ fuzz: deps
 
 # ---- install ----------------------------------------------------------------
 install: $(BINS)
-	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)/etc/trajd $(DESTDIR)$(PREFIX)/lib/systemd/system
+	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)/etc/trajd $(DESTDIR)$(PREFIX)/lib/systemd/system \
+		$(DESTDIR)$(PREFIX)/share/trajd/tracks
 	install -m 755 $(BINS) $(DESTDIR)$(PREFIX)/bin/
-	test -e $(DESTDIR)/etc/trajd/trajd.conf || install -m 644 config/trajd.conf $(DESTDIR)/etc/trajd/trajd.conf
-	install -m 644 $(wildcard systemd/*.service systemd/*.socket) $(DESTDIR)$(PREFIX)/lib/systemd/system/
+	install -m 644 tests/data/n2k_furuno_figure8_src52.csv tests/data/ATTRIBUTION.md \
+		$(DESTDIR)$(PREFIX)/share/trajd/tracks/
+	test -e $(DESTDIR)/etc/trajd/trajd.conf || { \
+		sed 's|^replay.track = .*|replay.track = $(PREFIX)/share/trajd/tracks/n2k_furuno_figure8_src52.csv|' \
+			config/trajd.conf > $(DESTDIR)/etc/trajd/trajd.conf && chmod 644 $(DESTDIR)/etc/trajd/trajd.conf; }
+	for u in $(wildcard systemd/*.service systemd/*.socket); do \
+		sed 's|@BINDIR@|$(PREFIX)/bin|g' $$u > $(DESTDIR)$(PREFIX)/lib/systemd/system/$$(basename $$u) && \
+		chmod 644 $(DESTDIR)$(PREFIX)/lib/systemd/system/$$(basename $$u) || exit 1; done
 
 clean:
 	rm -rf $(BUILD)
