@@ -102,13 +102,6 @@ struct engine {
 #define ENGINE_SAME_POS_M 1e-9
 /* |t| above this is absurd for a track clock (about 31700 years). */
 #define ENGINE_T_ABS_MAX_S 1e12
-/*
- * Waypoints of slack at the start beyond what the steady state needs: the
- * output starts this much later, so input whose intervals vary (a missed
- * fix, jitter) by up to this many waypoint intervals over a lookahead window
- * does not underrun.
- */
-#define ENGINE_START_SLACK_WP 2u
 /* Capacity accepted at most (memory is sized from it). */
 #define ENGINE_CAPACITY_MAX (1u << 22)
 
@@ -155,6 +148,7 @@ void engine_config_default(engine_config_t *cfg)
     cfg->max_abs_m = 1e7;
     cfg->max_speed_m_s = 100.0;
     cfg->max_segment_s = 60.0;
+    cfg->start_slack = 8;
 }
 
 static int uses_pstar(const engine_config_t *cfg)
@@ -187,18 +181,26 @@ static int config_sizes_ok(const engine_config_t *cfg)
            cfg->overlap >= 2 && cfg->overlap % 2 == 0 && cfg->overlap < cfg->fragment;
 }
 
-/*
- * Start offset of the fragment grid: the first fragment is cut short so that
- * the wait before the first segment is the steady-state lookahead (about
- * S + O/2) plus ENGINE_START_SLACK_WP instead of F - 1, never beyond S - 1
- * (see frag.h).
- */
-static unsigned frag_delta(const engine_config_t *cfg)
+/* most waypoints beyond a segment the solver needs, far from the start */
+static unsigned steady_lookahead(const engine_config_t *cfg)
 {
     unsigned f = cfg->fragment, o = cfg->overlap, s = f - o;
     unsigned need = uses_pstar(cfg) ? 3 : 2; /* x[j + need - 1] final for segment j */
-    unsigned steady = scan_lookahead(f, o, 0, need, 2u * f, 2u * f + 2u * s);
-    unsigned want = steady + ENGINE_START_SLACK_WP;
+
+    /* the pattern repeats every S segments */
+    return scan_lookahead(f, o, 0, need, 2u * f, 2u * f + 2u * s);
+}
+
+/*
+ * Start offset of the fragment grid: the first fragment is cut short so that
+ * its first segment is final no later than the output wants to start
+ * (steady-state lookahead + start_slack) instead of after F - 1 waypoints;
+ * never beyond S - 1 (see frag.h).
+ */
+static unsigned frag_delta(const engine_config_t *cfg)
+{
+    unsigned f = cfg->fragment, s = f - cfg->overlap;
+    unsigned want = steady_lookahead(cfg) + cfg->start_slack;
     unsigned d = f - 1 > want ? f - 1 - want : 0;
 
     return d < s ? d : s - 1;
@@ -206,12 +208,15 @@ static unsigned frag_delta(const engine_config_t *cfg)
 
 unsigned engine_lookahead(const engine_config_t *cfg)
 {
-    unsigned f = cfg->fragment, o = cfg->overlap;
+    unsigned f = cfg->fragment, o = cfg->overlap, la, want;
 
-    if (!config_sizes_ok(cfg))
+    if (!config_sizes_ok(cfg) || cfg->start_slack > ENGINE_FRAGMENT_MAX)
         return 0;
-    /* start and steady state: a few periods past the start cover both */
-    return scan_lookahead(f, o, frag_delta(cfg), uses_pstar(cfg) ? 3 : 2, 0, 4u * f);
+    /* what the solver needs, from the start on (a few periods cover it) ... */
+    la = scan_lookahead(f, o, frag_delta(cfg), uses_pstar(cfg) ? 3 : 2, 0, 4u * f);
+    /* ... and what the output waits for */
+    want = steady_lookahead(cfg) + cfg->start_slack;
+    return la > want ? la : want;
 }
 
 int engine_config_check(const engine_config_t *cfg, const char **why)
@@ -245,6 +250,8 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
         w = "max_speed_m_s: must be 0 (no limit) or positive and finite";
     else if (!(cfg->max_segment_s >= 0) || !isfinite(cfg->max_segment_s))
         w = "max_segment_s: must be 0 or positive and finite";
+    else if (cfg->start_slack > ENGINE_FRAGMENT_MAX)
+        w = "start_slack: at most ENGINE_FRAGMENT_MAX waypoints";
     else if (cfg->ends == ENGINE_ENDS_CLAMPED &&
              !(isfinite(cfg->start_vel_m_s[0]) && isfinite(cfg->start_vel_m_s[1]) &&
                isfinite(cfg->start_vel_m_s[2]) && isfinite(cfg->end_vel_m_s[0]) &&
@@ -664,6 +671,15 @@ static void q_pop(engine_t *e)
     e->qlen--;
 }
 
+/*
+ * The output may start (or resume after an underrun) on the segment h only
+ * once the lookahead is buffered beyond it, or its trajectory is closed.
+ */
+static int enough_ahead(const engine_t *e, const qent_t *h)
+{
+    return e->qends > 0 || h->kind != QE_SEG || e->nodes >= h->node + 2 + e->lookahead;
+}
+
 static void hold_here(engine_t *e)
 {
     for (int k = 0; k < AX; k++)
@@ -782,7 +798,7 @@ static void step_once(engine_t *e)
     switch (e->mode) {
     case OUT_HOLD: {
         qent_t *h = q_head(e);
-        if (!h || !h->first) {
+        if (!h || !h->first || !enough_ahead(e, h)) {
             hold_here(e);
             break;
         }
@@ -831,8 +847,7 @@ static void step_once(engine_t *e)
              * beyond the next segment, as at the start (or the end is in
              * sight): resuming on the first segment back would leave no
              * margin and underrun again at the next late waypoint. */
-            if (h && e->underrun && e->qends == 0 && h->kind == QE_SEG &&
-                e->nodes < h->node + 2 + e->lookahead)
+            if (h && e->underrun && !enough_ahead(e, h))
                 h = NULL;
             if (!h) {
                 /* waypoints late: hold, keep n; resume exactly here */

@@ -128,7 +128,8 @@ typedef struct {
                                2 <= O < F.  Default 16: error against one global
                                solve ~rho^(O/2) = 2.7e-5 of the curvature scale
                                (measured 4e-7 .. 7e-7 of a random walk's extent),
-                               lookahead 26 waypoints; see README for the table */
+                               lookahead 32 waypoints with start_slack 8;
+                               see README for the table */
     int64_t period_ns;      /* output period.  Default 10 ms (100 Hz) */
     unsigned capacity;      /* waypoints buffered at most (>= lookahead + fragment
                                + 8).  Default 4096: 68 min at 1 Hz; ~0.9 MB */
@@ -144,6 +145,15 @@ typedef struct {
                                (informational: the stepper re-seeds every
                                FDIFF_RESEED_STEPS, so drift does not grow with
                                the segment).  Default 60 s (= max_gap_s) */
+    unsigned start_slack;   /* waypoints buffered beyond what the solver needs
+                               before the output starts, and again before it
+                               resumes after an underrun: absorbs irregular
+                               input timing (a missed fix, jitter, a pause) of
+                               up to this many waypoint intervals over a
+                               lookahead window.  Adds to engine_lookahead.
+                               Default 8 (measured: no underrun replaying the
+                               irregular gpxgo_visnjan track with F=64/O=32;
+                               2 were enough for the regular 5 Hz figure-8) */
 } engine_config_t;
 
 /* Fill cfg with working defaults (each one commented above; documented in
@@ -278,7 +288,7 @@ void engine_status(const engine_t *e, engine_status_t *st);
  * segment's end that must have arrived before it is final.  The output waits
  * for it at the start (and after an underrun), so the delay between receiving
  * a waypoint and passing through it is about (lookahead + 1) waypoint
- * intervals.  About S + O/2 + 2 (S = F - O), at most F - 1; 0 if F, O invalid.
+ * intervals.  About S + O/2 + start_slack (S = F - O); 0 if F, O invalid.
  */
 unsigned engine_lookahead(const engine_config_t *cfg);
 
