@@ -63,6 +63,7 @@ static void tick(core_priv_t *p, uint64_t k, int64_t wake_ns)
     int64_t now_ns = (int64_t)k * c->period_ns;
     c->now_ns = now_ns;
     c->cycle = k;
+    c->late_ns = wake_ns - (p->wall_base_ns + (int64_t)k * p->wall_period_ns);
 
     if (!c->stopping)
         for (unsigned i = 0; i < c->nobj; i++) {

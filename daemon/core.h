@@ -125,6 +125,7 @@ typedef struct core {
     int64_t period_ns;              /* engine time per tick */
     int64_t now_ns;                 /* engine time of the last tick */
     uint64_t cycle;                 /* index k of the last tick's deadline */
+    int64_t late_ns;                /* how late the last tick woke up (wall ns; CAN drops late cycles) */
     int stopping;                   /* SIGTERM received: bringing objects to rest */
     stats_t *stats;                 /* survives reloads */
     void *tstate[CFG_TRANSPORTS_MAX]; /* each open transport's state (NULL if not open) */
