@@ -195,6 +195,7 @@ static int null_up(const void *io) { (void)io; return 1; }
 static int null_push(void *ctx, const engine_waypoint_t *wp) { (void)ctx; (void)wp; return 0; }
 static void null_status(void *ctx, engine_status_t *st) { (void)ctx; memset(st, 0, sizeof *st); }
 
+/* period_ns: wall-clock period (engine period / speed): lateness is wall time. */
 static void port_config(const can_cfg_t *c, int64_t period_ns, canport_config_t *pc)
 {
     canport_config_default(pc);
@@ -215,7 +216,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
     if (!n)
         return 0;
     canport_config_t pc;
-    port_config(c, cfg->daemon.period_ns, &pc);
+    port_config(c, (int64_t)llround((double)cfg->daemon.period_ns / cfg->daemon.speed), &pc);
     canport_io_t io = { null_send, null_recv, NULL, null_up };
     canport_hooks_t hk = { null_push, NULL, null_status };
     canport_t *p = canport_new(&pc, &io, NULL, n);
@@ -456,7 +457,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
         return 0;
     }
     canport_config_t pc;
-    port_config(cfg, c->period_ns, &pc);
+    port_config(cfg, (int64_t)llround((double)c->period_ns / c->cfg->daemon.speed), &pc);
     canport_io_t io = { io_send, io_recv, io_maintain, io_is_up };
     s->port = canport_new(&pc, &io, s, s->n);
     if (!s->port) {
