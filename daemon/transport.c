@@ -3,6 +3,7 @@
 
 #include <string.h>
 
+#include "can.h"
 #include "csvout.h"
 #include "replayin.h"
 
@@ -10,6 +11,7 @@ const transport_t *const transport_table[] = {
     &replay_transport,  /* input: logged track replayed on engine time */
     &csv_transport,     /* output: setpoints to a CSV file per object */
     &stdout_transport,  /* output: setpoints of every object to stdout */
+    &can_transport,     /* input and output: SocketCAN or a candump log */
     NULL,
 };
 
