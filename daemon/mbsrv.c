@@ -526,6 +526,8 @@ static int apply_write(mbsrv_t *s, const mbmap_write_t *w)
     int r;
     if (w->kind == MBMAP_WRITE_WAYPOINT) {
         r = s->hooks.waypoint ? s->hooks.waypoint(s->hooks.ctx, w->object, &w->wp) : -ENGINE_ESTATE;
+        if (r == MBSRV_HOOK_EADDRESS)
+            return -MBMAP_EADDRESS;
         if (r == 0) {
             /* Sequence numbers are the sender's: a jump forward means waypoints
              * it sent never reached us (0 = not numbered). */
@@ -543,6 +545,8 @@ static int apply_write(mbsrv_t *s, const mbmap_write_t *w)
     if (w->command == MBMAP_CMD_CLEAR)
         s->last_seq[w->object] = 0;
     r = s->hooks.command ? s->hooks.command(s->hooks.ctx, w->object, w->command) : -ENGINE_ESTATE;
+    if (r == MBSRV_HOOK_EADDRESS)
+        return -MBMAP_EADDRESS;
     return mbmap_from_engine(r);
 }
 

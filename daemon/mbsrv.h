@@ -78,8 +78,10 @@ typedef struct {
  * What a write does: the daemon applies it to the object's engine.
  * waypoint: engine_push semantics, returns 0, ENGINE_DUPLICATE or a negated
  * engine_error.  command: MBMAP_CMD_*, returns 0 or a negated engine_error.
- * A NULL hook refuses the write with exception 03.
+ * Either may return MBSRV_HOOK_EADDRESS: not writable for this object
+ * (answered with exception 02).  A NULL hook refuses the write with 03.
  */
+#define MBSRV_HOOK_EADDRESS (-1000)
 typedef struct {
     int (*waypoint)(void *ctx, unsigned object, const engine_waypoint_t *wp);
     int (*command)(void *ctx, unsigned object, unsigned command);
