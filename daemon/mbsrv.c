@@ -48,6 +48,7 @@ struct mbsrv {
     mbsrv_hooks_t hooks;
     int ep, lfd, hkfd, rtufd, silfd;
     int port;
+    int from_systemd;
     modbus_t *tcp;
     modbus_t *rtu;
     modbus_mapping_t *map;
@@ -318,6 +319,7 @@ static int tcp_listen(mbsrv_t *s, const mbsrv_config_t *cfg, char *err, size_t e
 
     if (cfg->systemd_socket && (fd = systemd_listener()) >= 0) {
         s->lfd = fd;
+        s->from_systemd = 1;
         goto bound;
     }
     snprintf(port, sizeof port, "%d", cfg->tcp_port);
@@ -443,7 +445,8 @@ mbsrv_t *mbsrv_new(const mbsrv_config_t *cfg, const mbsrv_hooks_t *hooks, char *
         msg(err, errlen, "modbus: timer: %s", strerror(errno));
         goto fail;
     }
-    if (cfg->tcp_address[0] && tcp_listen(s, cfg, err, errlen) < 0)
+    if ((cfg->tcp_address[0] || (cfg->systemd_socket && systemd_listener() >= 0)) &&
+        tcp_listen(s, cfg, err, errlen) < 0)
         goto fail;
     if (cfg->rtu_device[0] && rtu_open(s, cfg, err, errlen) < 0)
         goto fail;
@@ -506,6 +509,11 @@ int mbsrv_fd(const mbsrv_t *s)
 int mbsrv_tcp_port(const mbsrv_t *s)
 {
     return s->port;
+}
+
+int mbsrv_tcp_from_systemd(const mbsrv_t *s)
+{
+    return s->from_systemd;
 }
 
 uint32_t mbsrv_generation(const mbsrv_t *s)

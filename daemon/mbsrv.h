@@ -137,6 +137,9 @@ int mbsrv_fd(const mbsrv_t *s);
 /* The TCP port listened on (after tcp_port 0), or -1 without TCP. */
 int mbsrv_tcp_port(const mbsrv_t *s);
 
+/* 1 if the listening socket came from systemd (sd_listen_fds), else 0. */
+int mbsrv_tcp_from_systemd(const mbsrv_t *s);
+
 /*
  * Handle what is ready: accept, read, answer, time out idle clients, RTU
  * silence.  Never blocks; at most MBSRV_EVENTS_PER_CALL events.  Returns 0,

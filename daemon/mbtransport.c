@@ -142,10 +142,12 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
         free(t);
         return rc;
     }
-    if (mc.tcp_address[0])
-        log_msg(LOG_INFO, "modbus: TCP on %s port %d%s, writes %s", mc.tcp_address,
-                mbsrv_tcp_port(t->srv), mc.systemd_socket ? " (or the systemd socket)" : "",
-                mc.writes_enabled ? "on" : "off");
+    if (mbsrv_tcp_from_systemd(t->srv))
+        log_msg(LOG_INFO, "modbus: TCP on the systemd socket, port %d, writes %s",
+                mbsrv_tcp_port(t->srv), mc.writes_enabled ? "on" : "off");
+    else if (mc.tcp_address[0])
+        log_msg(LOG_INFO, "modbus: TCP on %s port %d, writes %s", mc.tcp_address,
+                mbsrv_tcp_port(t->srv), mc.writes_enabled ? "on" : "off");
     if (mc.rtu_device[0])
         log_msg(LOG_INFO, "modbus: RTU on %s %d %c%d%d unit %d", mc.rtu_device, mc.rtu_baud,
                 mc.rtu_parity, mc.rtu_data_bits, mc.rtu_stop_bits, mc.unit_id);

@@ -17,6 +17,7 @@ import csv
 import math
 import os
 import signal
+import socket
 import struct
 import subprocess
 import sys
@@ -54,30 +55,18 @@ class Trajd:
             f.write(conf_text)
         self.p = subprocess.Popen([TRAJD, "-f", "-c", self.conf], stdin=subprocess.DEVNULL,
                                   stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        self.log = []
-        self.port = None
-        deadline = time.monotonic() + mbsim.WAIT_S
-        import select
-        while self.port is None and time.monotonic() < deadline:
-            r, _, _ = select.select([self.p.stderr], [], [], deadline - time.monotonic())
-            if not r:
-                break
-            line = self.p.stderr.readline()
-            if not line:
-                break
-            self.log.append(line)
-            if "modbus: TCP on" in line:
-                self.port = int(line.split(" port ")[1].split(",")[0])
-        if self.port is None:
+        self.lines = mbsim.Lines(self.p.stderr)
+        line = self.lines.wait_for("modbus: TCP on")
+        if line is None:
             self.p.kill()
-            raise RuntimeError("trajd did not report its Modbus port: %s" % "".join(self.log))
-        self.drain = threading.Thread(target=lambda: self.log.extend(self.p.stderr), daemon=True)
-        self.drain.start()
+            raise RuntimeError("trajd did not report its Modbus port: %s" % "".join(self.lines.all))
+        self.port = int(line.split(" port ")[1].split(",")[0])
 
     def stop(self):
         self.p.send_signal(signal.SIGTERM)
         rc = self.p.wait(timeout=mbsim.WAIT_S + 10)
-        self.drain.join(mbsim.WAIT_S)
+        self.lines.wait_for("\0", 0.5)    # collect what is left for messages
+        self.log = self.lines.all
         return rc
 
 
@@ -270,6 +259,40 @@ csv.path = %s/fed.csv
                 checked += 1
             self.assertGreater(checked, 10)
             self.assertEqual(torn, 0)
+
+
+class SocketActivationTest(unittest.TestCase):
+    def test_systemd_socket(self):
+        # Given systemd-socket-activate holding a listening socket on a free
+        # port (as trajd.socket does for 502) and [modbus] port = 0, when a
+        # client connects, then trajd is started with the socket (LISTEN_FDS),
+        # says so, and answers on that port rather than binding its own.
+        probe = socket.socket()
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+        probe.close()
+        with tempfile.TemporaryDirectory() as tmp:
+            conf = os.path.join(tmp, "sa.conf")
+            with open(conf, "w") as f:
+                f.write("[daemon]\nrate_hz = 100\nstatus_interval_s = 0\n[modbus]\nport = 0\n"
+                        "[object.boat]\ninput = replay\nreplay.track = %s\noutput = stdout\n" % TRACK)
+            p = subprocess.Popen(["systemd-socket-activate", "-l", "127.0.0.1:%d" % port,
+                                  TRAJD, "-f", "-c", conf], stdout=subprocess.DEVNULL,
+                                 stderr=subprocess.PIPE, text=True)
+            try:
+                lines = mbsim.Lines(p.stderr)
+                # Wait (bounded) until it listens, by its own log line.
+                self.assertIsNotNone(lines.wait_for("Listening on"), "did not listen")
+                s = mbsim.connect(port)
+                r = mbsim.read_input(s, 0, 3)
+                self.assertEqual(r[0], M["MBMAP_MAGIC"])
+                s.close()
+                log = lines.wait_for("modbus: TCP")
+                self.assertIsNotNone(log, "no modbus log line: %s" % lines.all)
+                self.assertIn("systemd socket, port %d" % port, log)
+            finally:
+                p.send_signal(signal.SIGTERM)
+                self.assertEqual(p.wait(timeout=mbsim.WAIT_S + 10), 0)
 
 
 class ConfigTest(unittest.TestCase):
