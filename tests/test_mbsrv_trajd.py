@@ -295,6 +295,55 @@ class SocketActivationTest(unittest.TestCase):
                 self.assertEqual(p.wait(timeout=mbsim.WAIT_S + 10), 0)
 
 
+class RtuTrajdTest(unittest.TestCase):
+    def test_rtu_from_config(self):
+        # Given a socat pty pair and trajd with rtu_device on one end at
+        # 19200 8E1 unit 5 (from [modbus]), when mbpoll -m rtu with those
+        # settings reads the daemon block on the other end, then it is
+        # answered; with unit 6 it is not.
+        socat = subprocess.Popen(["socat", "-d", "-d", "pty,raw,echo=0", "pty,raw,echo=0"],
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        try:
+            lines = mbsim.Lines(socat.stderr)
+            ttys = []
+            for _ in range(2):
+                line = lines.wait_for("PTY is ")
+                self.assertIsNotNone(line, "socat did not open a pty pair")
+                ttys.append(line.split("PTY is ")[1].strip())
+            with tempfile.TemporaryDirectory() as tmp:
+                d = Trajd("""
+[daemon]
+rate_hz = 100
+status_interval_s = 0
+[modbus]
+port = 0
+systemd_socket = no
+rtu_device = %s
+rtu_baud = 19200
+rtu_parity = even
+unit_id = 5
+[object.boat]
+input = replay
+replay.track = %s
+output = stdout
+""" % (ttys[0], TRACK), tmp)
+                try:
+                    rtu = ["mbpoll", "-m", "rtu", "-b", "19200", "-P", "even", "-0", "-1",
+                           "-r", "0", "-c", "3", "-t", "3"]
+                    out = subprocess.run(rtu + ["-a", "5", "-o", "1", ttys[1]], capture_output=True,
+                                         text=True, timeout=mbsim.WAIT_S)
+                    vals = [x.split("\t")[1] for x in out.stdout.splitlines() if x.startswith("[")]
+                    self.assertEqual(vals, ["29764", "1", "1"], out.stdout + out.stderr)
+                    out = subprocess.run(rtu + ["-a", "6", "-o", "0.3", ttys[1]], capture_output=True,
+                                         text=True, timeout=mbsim.WAIT_S)
+                    self.assertNotEqual(out.returncode, 0, out.stdout)
+                finally:
+                    self.assertEqual(d.stop(), 0, "".join(d.log))
+        finally:
+            socat.terminate()
+            socat.wait(timeout=mbsim.WAIT_S)
+
+
 class ConfigTest(unittest.TestCase):
     def test_input_modbus_needs_writes(self):
         # Given an object with input = modbus and writes off, when checked,
