@@ -63,6 +63,7 @@ static void tick(core_priv_t *p, uint64_t k, int64_t late_ns)
     int64_t now_ns = c->t0_ns + (int64_t)k * c->period_ns;
     c->now_ns = now_ns;
     c->cycle = k;
+    c->late_ns = late_ns;
 
     if (!c->stopping)
         for (unsigned i = 0; i < c->nobj; i++) {
