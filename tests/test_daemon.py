@@ -242,6 +242,71 @@ class TestCommandLine(unittest.TestCase):
                 d.close()
 
 
+class TestBackground(unittest.TestCase):
+    def test_detaches_once_ready(self):
+        """Without -f: the command returns 0 once the daemon is ready, the
+        daemon (another process, found from the notify datagram's sender
+        credentials, as systemd finds it) runs on and finishes the replay."""
+        with tempfile.TemporaryDirectory() as tmp:
+            track = os.path.join(tmp, "fig8.csv")
+            with open(N2K) as f:
+                write(track, "".join(f.readlines()[:52]))  # 10 s of the real track
+            conf = os.path.join(tmp, "t.conf")
+            write(conf, "[daemon]\nspeed = 10\nexit_when_done = yes\nstatus_interval_s = 0\n"
+                        "[object.b]\ninput = replay\nreplay.track = fig8.csv\noutput = csv\n"
+                        "csv.path = out.csv\n")
+            sock_path = os.path.join(tmp, "notify.sock")
+            sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+            sock.bind(sock_path)
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_PASSCRED, 1)
+            env = dict(os.environ, NOTIFY_SOCKET=sock_path)
+            try:
+                # (output to files: a pipe would make run() wait for the daemon's end)
+                with open(os.path.join(tmp, "err.txt"), "w") as ef:
+                    r = subprocess.run([TRAJD, "-c", conf], env=env, stdout=subprocess.DEVNULL,
+                                       stderr=ef, timeout=START_TIMEOUT_S)
+                self.assertEqual(r.returncode, 0)
+                sock.settimeout(EVENT_TIMEOUT_S)
+                pid = None
+                while pid is None:
+                    data, anc, _, _ = sock.recvmsg(4096, socket.CMSG_SPACE(12))
+                    if b"READY=1" in data:
+                        for lvl, typ, cd in anc:
+                            if lvl == socket.SOL_SOCKET and typ == socket.SCM_CREDENTIALS:
+                                pid = int.from_bytes(cd[0:4], sys.byteorder)
+                self.assertTrue(pid > 0)
+                # the daemon is not the process that returned; it ends by itself
+                def alive():
+                    try:
+                        with open("/proc/%d/stat" % pid) as f:
+                            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+                    except FileNotFoundError:
+                        return False
+                self.assertTrue(alive())  # still running after the command returned
+                end = time.monotonic() + 30
+                while time.monotonic() < end and alive():
+                    sock.settimeout(0.2)
+                    try:
+                        sock.recv(4096)
+                    except socket.timeout:
+                        pass
+                if alive():
+                    os.kill(pid, signal.SIGKILL)
+                    self.fail("detached trajd did not finish")
+                with open(os.path.join(tmp, "out.csv")) as f:
+                    last = f.read().splitlines()[-1].split(",")
+                self.assertEqual(last[12], "finished")
+                # a config that cannot open makes the command itself fail
+                write(conf, "[object.b]\ninput = replay\nreplay.track = fig8.csv\noutput = csv\n"
+                            "csv.path = no/such/dir/out.csv\n")
+                r = subprocess.run([TRAJD, "-c", conf], env=env, capture_output=True, text=True,
+                                   timeout=START_TIMEOUT_S)
+                self.assertNotEqual(r.returncode, 0)
+                self.assertIn("no/such/dir", r.stderr)
+            finally:
+                sock.close()
+
+
 class TestRunning(unittest.TestCase):
     def setUp(self):
         self.tmpd = tempfile.TemporaryDirectory()
