@@ -461,62 +461,88 @@ class TestRunning(unittest.TestCase):
 
 @unittest.skipUnless(os.access(TRAJREPLAY, os.X_OK), "trajreplay not built in this tree")
 class TestReplayMatchesTrajreplay(unittest.TestCase):
+    def compare(self, name, dl, rl, missed):
+        """Every row trajd wrote for object name equals trajreplay's row for
+        that tick, byte for byte (apart from the skip flag and counter after
+        a deadline trajd missed on this shared machine)."""
+        self.assertEqual(dl[0], rl[0])  # header
+        ref_by_t = {l.split(",", 2)[1]: l.split(",", 1)[1] for l in rl[1:]}
+        compared = 0
+        skipped_seen = False
+        prev_ns = -PERIOD_NS
+        rows = [l for l in dl[1:] if l.startswith(name + ",")]
+        for l in rows:
+            rest = l.split(",", 1)[1]
+            t = rest.split(",", 1)[0]
+            # a tick trajd skipped: from here on the engine's cycle counter
+            # (ticks answered) and skip flag differ from trajreplay's
+            if int(t) - prev_ns != PERIOD_NS:
+                skipped_seen = True
+            prev_ns = int(t)
+            if t not in ref_by_t:
+                continue  # trajd ran on past trajreplay's last tick
+            a, b = rest.split(","), ref_by_t[t].split(",")
+            if not skipped_seen:
+                self.assertEqual(rest, ref_by_t[t], "%s tick %s" % (name, t))
+            else:  # numbers and state unchanged by skipping
+                self.assertEqual(a[:12], b[:12], "%s tick %s" % (name, t))
+            compared += 1
+        self.assertGreater(compared, 0.9 * (len(rl) - 1) if missed == 0 else 100)
+        # and trajd reached the end of the track, as trajreplay did.
+        self.assertEqual(rows[-1].split(",")[12], "finished")
+        return compared
+
     def test_identical_output(self):
         with tempfile.TemporaryDirectory() as tmp:
-            # Given the first 301 rows of the real 5 Hz figure-eight (60 s),
-            track = os.path.join(tmp, "fig8.csv")
+            # Given two objects with their own tracks, engine settings and
+            # outputs: 'track', the first 60 s of the real 5 Hz figure-eight,
+            # default engine, to a CSV file; 'walk', the first 80 s of the
+            # irregularly sampled Visnjan walk (1-20 s between points), with
+            # the Hoang B-spline, F=16/O=8, natural ends, to stdout;
+            fig8 = os.path.join(tmp, "fig8.csv")
             with open(N2K) as f:
-                write(track, "".join(f.readlines()[:302]))
+                write(fig8, "".join(f.readlines()[:302]))
+            walk = os.path.join(tmp, "walk.csv")
+            with open(os.path.join(REPO, "tests", "data", "gpxgo_visnjan.csv")) as f:
+                lines = f.readlines()
+            write(walk, "".join([lines[0]] + [l for l in lines[1:] if float(l.split(",")[0]) <= 80]))
             conf = os.path.join(tmp, "t.conf")
-            out = os.path.join(tmp, "d.csv")
-            # replayed by trajd 20x faster than real time with the default
-            # engine settings, to a CSV file, exiting when done,
+            # replayed by trajd 20x faster than real time, exiting when done,
             write(conf, "[daemon]\nrate_hz = 100\nspeed = 20\nexit_when_done = yes\n"
-                        "status_interval_s = 0\n[object.track]\ninput = replay\n"
-                        "replay.track = fig8.csv\noutput = csv\ncsv.path = d.csv\n")
+                        "status_interval_s = 0\n"
+                        "[object.track]\ninput = replay\nreplay.track = fig8.csv\n"
+                        "output = csv\ncsv.path = d.csv\n"
+                        "[object.walk]\ninput = replay\nreplay.track = walk.csv\n"
+                        "output = stdout\nmethod = bspline\nparam = uniform\nends = natural\n"
+                        "fragment = 16\noverlap = 8\n")
             d = Daemon(tmp, conf)
             try:
                 self.assertEqual(d.wait(120), 0, d.stderr())
+                stdout_lines = d.lines_until_eof()
                 summary = d.stderr()
             finally:
                 d.close()
-            # and by trajreplay on the same file at the same rate,
-            ref = os.path.join(tmp, "r.csv")
-            r = subprocess.run([TRAJREPLAY, "--rate", "100", "--object", "track", "-q", "-o", ref, track],
-                               capture_output=True, text=True, timeout=120)
-            self.assertEqual(r.returncode, 0, r.stderr)
-            with open(out) as f:
-                dl = f.read().splitlines()
-            with open(ref) as f:
-                rl = f.read().splitlines()
-            # then the header is the same and every row trajd wrote is the
-            # row trajreplay wrote for that tick, byte for byte (apart from
-            # the object name column, and from the skip flag and counter if
-            # trajd missed deadlines on this shared machine).
-            self.assertEqual(dl[0], rl[0])
-            ref_by_t = {l.split(",", 2)[1]: l.split(",", 1)[1] for l in rl[1:]}
             missed = int(summary.split("missed ")[-1].split(",")[0])
-            compared = 0
-            skipped_seen = False
-            for l in dl[1:]:
-                obj, rest = l.split(",", 1)
-                self.assertEqual(obj, "track")
-                t = rest.split(",", 1)[0]
-                if t not in ref_by_t:
-                    continue  # trajd ran on past trajreplay's last tick
-                a, b = rest.split(","), ref_by_t[t].split(",")
-                if missed == 0 or not skipped_seen:
-                    flags_a = int(a[12])
-                    if flags_a & 0x04:
-                        skipped_seen = True
-                if missed == 0 or not skipped_seen:
-                    self.assertEqual(rest, ref_by_t[t], "tick %s" % t)
-                else:  # numbers unchanged by skipping; state too
-                    self.assertEqual(a[:12], b[:12], "tick %s" % t)
-                compared += 1
-            self.assertGreater(compared, 0.9 * (len(rl) - 1) if missed == 0 else 100)
-            # and trajd reached the end of the track, as trajreplay did.
-            self.assertEqual(dl[-1].split(",")[12], "finished")
+            # and by trajreplay on the same files with the same settings,
+            refs = {}
+            for name, track, opts in (
+                    ("track", fig8, []),
+                    ("walk", walk, ["--method", "bspline", "--param", "uniform", "--ends", "natural",
+                                    "--fragment", "16", "--overlap", "8"])):
+                ref = os.path.join(tmp, name + ".ref.csv")
+                r = subprocess.run([TRAJREPLAY, "--rate", "100", "--object", name, "-q", "-o", ref]
+                                   + opts + [track], capture_output=True, text=True, timeout=120)
+                self.assertEqual(r.returncode, 0, r.stderr)
+                with open(ref) as f:
+                    refs[name] = f.read().splitlines()
+            # then each object's rows are trajreplay's rows.
+            with open(os.path.join(tmp, "d.csv")) as f:
+                n1 = self.compare("track", f.read().splitlines(), refs["track"], missed)
+            n2 = self.compare("walk", stdout_lines, refs["walk"], missed)
+            print("replay == trajreplay: %d + %d rows compared, %d deadlines missed"
+                  % (n1, n2, missed), file=sys.stderr)
+            # and the two objects' settings really differ (not one curve twice)
+            self.assertNotEqual(refs["track"][-1].split(",")[3], refs["walk"][-1].split(",")[3])
 
 
 if __name__ == "__main__":
