@@ -415,6 +415,34 @@ class TestRunning(unittest.TestCase):
         finally:
             d.close()
 
+    def test_realtime_options(self):
+        # Given [realtime] fifo_priority, mlockall and cpu_affinity, then the
+        # kernel reports them for the process (/proc), or, without the
+        # privilege, trajd warns and runs on.
+        write(self.conf, self.config("boat", extra_daemon="[realtime]\nfifo_priority = 10\n"
+                                                          "mlockall = yes\ncpu_affinity = 0\n"))
+        d = Daemon(self.tmp, self.conf)
+        try:
+            d.msg(lambda f: f.get("READY") == "1", START_TIMEOUT_S)
+            d.line(lambda l: l.startswith("boat,"))  # a tick ran after the settings
+            with open("/proc/%d/stat" % d.p.pid) as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            # fields[0] is field 3 (state): rt_priority is field 40, policy 41
+            rt_priority, policy = int(fields[37]), int(fields[38])
+            with open("/proc/%d/status" % d.p.pid) as f:
+                status = dict(l.split(":", 1) for l in f.read().splitlines() if ":" in l)
+            if os.geteuid() == 0:
+                self.assertEqual(policy, 1)  # SCHED_FIFO
+                self.assertEqual(rt_priority, 10)
+                self.assertGreater(int(status["VmLck"].split()[0]), 0)
+                self.assertEqual(status["Cpus_allowed_list"].strip(), "0")
+            else:
+                d.err_line(lambda l: "realtime settings not applied" in l)
+            d.p.send_signal(signal.SIGTERM)
+            self.assertEqual(d.wait(10), 0)
+        finally:
+            d.close()
+
     def test_second_signal_exits_at_once(self):
         # stop_timeout_s large: only the second signal can end it quickly.
         write(self.conf, self.config("boat").replace("stop_timeout_s = 5", "stop_timeout_s = 600"))
