@@ -131,7 +131,10 @@ typedef struct core {
                                      * reload, continues the previous core's clock) */
     int64_t now_ns;                 /* engine time of the last tick: t0_ns + cycle * period_ns */
     uint64_t cycle;                 /* index k of the last tick's deadline (0 after a reload) */
-    int64_t late_ns;                /* how late the last tick woke up (wall ns; CAN drops late cycles) */
+    int64_t late_ns;                /* how late the last tick woke up after the deadline it
+                                     * serves (the newest, after a skip), wall ns: how stale
+                                     * its setpoint is (CAN drops late cycles).  The stats
+                                     * histogram counts from the oldest missed deadline. */
     int stopping;                   /* SIGTERM received: bringing objects to rest */
     stats_t *stats;                 /* survives reloads */
     void *tstate[CFG_TRANSPORTS_MAX]; /* each open transport's state (NULL if not open) */
