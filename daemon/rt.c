@@ -25,6 +25,8 @@ int rt_apply(const cfg_rt_t *rt, char *why, size_t whylen)
         RT_FAIL("cpu_affinity");
     if (rt->mlockall && mlockall(MCL_CURRENT | MCL_FUTURE) < 0)
         RT_FAIL("mlockall");
+    if (!rt->mlockall)
+        munlockall(); /* a reload that turns it off; a no-op if never locked */
     struct sched_param sp = {.sched_priority = rt->fifo_priority};
     if (rt->fifo_priority > 0) {
         if (sched_setscheduler(0, SCHED_FIFO | SCHED_RESET_ON_FORK, &sp) < 0)
