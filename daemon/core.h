@@ -5,9 +5,10 @@
  *
  * One tick (the output clock: a timerfd on CLOCK_MONOTONIC, absolute
  * deadlines, so the rate does not drift).  Deadline k is at wall time
- * start + k * period_ns / speed and at ENGINE time now_ns = k * period_ns
- * (engine time starts at 0 when the objects are created, so a replay matches
- * trajreplay's virtual clock exactly).  When the timerfd reports n > 1
+ * start + k * period_ns / speed and at ENGINE time now_ns = t0_ns + k *
+ * period_ns (t0_ns = 0 at start, so a replay matches trajreplay's virtual
+ * clock exactly; after a reload engine time continues where the previous
+ * core left off, see core_open).  When the timerfd reports n > 1
  * expirations (the daemon was late), the n - 1 older deadlines are skipped
  * and counted in stats.missed_ticks; one tick runs for the latest deadline
  * (never a burst of stale ticks).  Then, in this order:
