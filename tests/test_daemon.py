@@ -443,6 +443,31 @@ class TestRunning(unittest.TestCase):
         finally:
             d.close()
 
+    def test_reload_that_cannot_open_falls_back(self):
+        # Given a new config that parses but cannot open (its CSV directory
+        # does not exist), when SIGHUP, then the reload is refused after the
+        # old transports were closed: the old configuration is reopened and
+        # streams again (a fresh header, then its object's rows).
+        write(self.conf, self.config("boat"))
+        d = Daemon(self.tmp, self.conf)
+        try:
+            d.msg(lambda f: f.get("READY") == "1", START_TIMEOUT_S)
+            d.line(lambda l: l.startswith("boat,"))
+            write(self.conf, self.config("boat").replace(
+                "output = stdout", "output = csv\ncsv.path = no/such/dir/x.csv"))
+            d.p.send_signal(signal.SIGHUP)
+            f, seen = d.msg(lambda f: f.get("READY") == "1")
+            self.assertIn("reload refused", f.get("STATUS", ""))
+            self.assertIn("no/such/dir", f.get("STATUS", ""))
+            d.err_line(lambda l: "reopening the old configuration" in l)
+            d.line(lambda l: l.startswith("object,"))   # stdout reopened
+            d.line(lambda l: l.startswith("boat,"))
+            self.assertIsNone(d.p.poll())
+            d.p.send_signal(signal.SIGTERM)
+            self.assertEqual(d.wait(10), 0)
+        finally:
+            d.close()
+
     def test_second_signal_exits_at_once(self):
         # stop_timeout_s large: only the second signal can end it quickly.
         write(self.conf, self.config("boat").replace("stop_timeout_s = 5", "stop_timeout_s = 600"))
