@@ -51,7 +51,7 @@ def xyz_track(path, n, dt_s, speed_m_s=2.0, radius_m=50.0):
 class Daemon:
     """trajd with a notify socket, stdout/stderr read by threads into queues."""
 
-    def __init__(self, tmp, conf, watchdog_usec=None):
+    def __init__(self, tmp, conf, watchdog_usec=None, wrapper=()):
         self.tmp = tmp
         self.sock_path = os.path.join(tmp, "notify-%d.sock" % id(self))
         self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
@@ -61,7 +61,7 @@ class Daemon:
         env.pop("WATCHDOG_USEC", None)
         if watchdog_usec:
             env["WATCHDOG_USEC"] = str(watchdog_usec)
-        self.p = subprocess.Popen([TRAJD, "-f", "-c", conf], stdout=subprocess.PIPE,
+        self.p = subprocess.Popen(list(wrapper) + [TRAJD, "-f", "-c", conf], stdout=subprocess.PIPE,
                                   stderr=subprocess.PIPE, env=env, text=True)
         self.out = queue.Queue()
         self.err = queue.Queue()
@@ -510,6 +510,44 @@ class TestRunning(unittest.TestCase):
             self.assertEqual(d.wait(10), 0)
         finally:
             d.close()
+
+
+class TestReloadUnderValgrind(unittest.TestCase):
+    def test_reloads_leak_nothing(self):
+        """Given trajd under valgrind memcheck, when it is reloaded with an
+        unchanged object (carried over), a renamed one, a broken file and a
+        file that cannot open (fallback), and stopped, then it exits 0 with
+        no memcheck error and nothing in use at exit."""
+        with tempfile.TemporaryDirectory() as tmp:
+            xyz_track(os.path.join(tmp, "circle.csv"), 600, 0.1)
+            conf = os.path.join(tmp, "trajd.conf")
+            base = ("[daemon]\nstatus_interval_s = 1\nstop_timeout_s = 1\n[object.%s]\ninput = replay\n"
+                    "replay.track = circle.csv\noutput = stdout\n%s")
+            write(conf, base % ("boat", ""))
+            d = Daemon(tmp, conf, wrapper=["valgrind", "--error-exitcode=9", "--leak-check=full",
+                                           "--log-file=%s/vg.log" % tmp])
+            try:
+                d.msg(lambda f: f.get("READY") == "1", 60)
+                for name, extra in (("boat", "max_gap_s = 60\n"), ("other", ""),
+                                    ("other", "fragment = x\n"),
+                                    ("other", "output = csv\ncsv.path = no/such/x.csv\n")):
+                    text = base % (name, extra)
+                    if "csv.path" in extra:
+                        text = text.replace("output = stdout\n", "")
+                    write(conf, text)
+                    d.p.send_signal(signal.SIGHUP)
+                    d.msg(lambda f: f.get("READY") == "1", 60)
+                d.line(lambda l: l.startswith("other,"), 30)
+                d.p.send_signal(signal.SIGTERM)
+                rc = d.wait(60)
+            finally:
+                d.close()
+            with open(os.path.join(tmp, "vg.log")) as f:
+                vg = f.read()
+            print(vg[-600:], file=sys.stderr)
+            self.assertEqual(rc, 0, vg)
+            self.assertIn("in use at exit: 0 bytes in 0 blocks", vg)
+            self.assertIn("ERROR SUMMARY: 0 errors", vg)
 
 
 @unittest.skipUnless(os.access(TRAJREPLAY, os.X_OK), "trajreplay not built in this tree")
