@@ -166,9 +166,12 @@ static unsigned scan_lookahead(unsigned f, unsigned o, unsigned delta, unsigned 
 
     /* Row r is pushed when node r+1 arrives; segment j (waypoint j to j+1)
      * is built once frag_final_after(rows pushed) reaches x[j + need - 1]. */
-    for (j = j0; j < j1; j++) {
-        for (n = j + 1; frag_final_after(f, o, delta, n - 1) < j + need; n++)
-            ;
+    /* n(j) never decreases with j: carry it over (O(F) per scan, not O(F^2)) */
+    for (j = j0, n = j0 + 1; j < j1; j++) {
+        if (n < j + 1)
+            n = j + 1;
+        while (frag_final_after(f, o, delta, n - 1) < j + need)
+            n++;
         if (n - (j + 1) > best)
             best = (unsigned)(n - (j + 1));
     }

@@ -216,6 +216,10 @@ static void test_stream_underrun_finish(void **state)
             transitions++;
             last_state = (int)sp.state;
         }
+        if (sp.state == ENGINE_STATE_STREAMING && prev.state == ENGINE_STATE_STREAMING) {
+            /* track time on the period grid: one period per streaming tick */
+            assert_true(fabs(sp.t_s - prev.t_s - 0.01) < 1e-12);
+        }
         if (sp.state == ENGINE_STATE_STREAMING) {
             double p[3];
             fdiff_eval_curve(segs, nseg, &sp.t_s, 1, p, NULL, NULL);
