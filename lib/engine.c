@@ -537,7 +537,7 @@ end:
     return rc;
 }
 
-static void open_input(engine_t *e, const engine_waypoint_t *wp)
+static void open_input(engine_t *e)
 {
     frag_reset(e->fw);
     e->in_open = 1;
@@ -547,7 +547,6 @@ static void open_input(engine_t *e, const engine_waypoint_t *wp)
     e->in_first_pending = 1;
     e->st.tracks++;
     e->finished = 0;
-    (void)wp;
 }
 
 static int reject(engine_t *e, int code)
@@ -599,7 +598,7 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
         close_input(e);
     }
     if (!e->in_open)
-        open_input(e, wp);
+        open_input(e);
     e->last_t = wp->t_s;
     memcpy(e->last_r, wp->pos_m, sizeof(e->last_r));
     rc = add_node(e, wp->t_s, wp->pos_m);

@@ -49,7 +49,7 @@
  *       at every waypoint whose neighbouring intervals differ (measured on
  *       gpxgo_visnjan: up to 9.0 m/s on a walk).
  *   (b) ENGINE_PARAM_TIME     knots at the timestamps: C2 in physical time
- *       (jumps only from the fragment junctions, 3.6e-4 m/s on the same track
+ *       (jumps only from the fragment junctions, 1.5e-4 m/s on the same track
  *       with F=32, O=16).  The default, because motion controllers follow
  *       velocity and acceleration, and real tracks are irregular.
  * METHOD_BSPLINE with PARAM_TIME is the non-uniform cubic B-spline
