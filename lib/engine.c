@@ -166,12 +166,9 @@ static unsigned scan_lookahead(unsigned f, unsigned o, unsigned delta, unsigned 
 
     /* Row r is pushed when node r+1 arrives; segment j (waypoint j to j+1)
      * is built once frag_final_after(rows pushed) reaches x[j + need - 1]. */
-    /* n(j) never decreases with j: carry it over (O(F) per scan, not O(F^2)) */
-    for (j = j0, n = j0 + 1; j < j1; j++) {
-        if (n < j + 1)
-            n = j + 1;
-        while (frag_final_after(f, o, delta, n - 1) < j + need)
-            n++;
+    for (j = j0; j < j1; j++) {
+        for (n = j + 1; frag_final_after(f, o, delta, n - 1) < j + need; n++)
+            ;
         if (n - (j + 1) > best)
             best = (unsigned)(n - (j + 1));
     }
@@ -537,7 +534,7 @@ end:
     return rc;
 }
 
-static void open_input(engine_t *e)
+static void open_input(engine_t *e, const engine_waypoint_t *wp)
 {
     frag_reset(e->fw);
     e->in_open = 1;
@@ -547,6 +544,7 @@ static void open_input(engine_t *e)
     e->in_first_pending = 1;
     e->st.tracks++;
     e->finished = 0;
+    (void)wp;
 }
 
 static int reject(engine_t *e, int code)
@@ -598,7 +596,7 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
         close_input(e);
     }
     if (!e->in_open)
-        open_input(e);
+        open_input(e, wp);
     e->last_t = wp->t_s;
     memcpy(e->last_r, wp->pos_m, sizeof(e->last_r));
     rc = add_node(e, wp->t_s, wp->pos_m);
