@@ -929,6 +929,18 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     sp->track = e->out_track;
 }
 
+/* 1 if further steps cannot change anything until new input arrives. */
+static int stalled(engine_t *e)
+{
+    qent_t *h = q_head(e);
+
+    if (e->mode == OUT_HOLD)
+        return !h || !h->first || !enough_ahead(e, h);
+    if (e->mode == OUT_STREAM && e->underrun)
+        return !h || !enough_ahead(e, h);
+    return 0;
+}
+
 int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
     int64_t k = 1, i;
@@ -949,8 +961,19 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     }
     e->have_now = 1;
     e->last_now = now_ns;
-    for (i = 0; i < k; i++)
+    for (i = 0; i < k; i++) {
         step_once(e);
+        if (i + 1 < k && stalled(e)) {
+            /* Nothing can change before the next push: the remaining steps
+             * are identical holds.  Count them instead of looping (a clock
+             * jump of hours must not cost hours of steps). */
+            int64_t rest = k - 1 - i;
+            e->cycle += (uint32_t)rest;
+            if (e->mode == OUT_STREAM)
+                e->st.underrun_ticks += (uint64_t)rest;
+            break;
+        }
+    }
     if (k > 1) {
         e->st.skipped_ticks += (uint64_t)(k - 1);
         e->flags_pending |= ENGINE_SP_SKIPPED;

@@ -298,6 +298,13 @@ static void test_skipped_ticks_identical(void **state)
     assert_int_equal(st.skipped_ticks, 2 * (6000 / 3 - 1) + 0);
     /* a tick going backwards is refused and repeats the last setpoint */
     assert_int_equal(engine_tick(b, 0, &sb), -ENGINE_ESTATE);
+    /* a clock jump of ~11.6 days at rest costs nothing and counts the ticks */
+    uint32_t cyc = sa.cycle;
+    assert_int_equal(sa.state, ENGINE_STATE_FINISHED);
+    assert_int_equal(engine_tick(a, 5999 * PERIOD_NS + 100000000LL * PERIOD_NS, &sa), 0);
+    assert_int_equal(sa.cycle, (uint32_t)(cyc + 100000000u));
+    assert_int_equal(sa.state, ENGINE_STATE_FINISHED);
+    assert_true(sa.flags & ENGINE_SP_SKIPPED);
     engine_free(a);
     engine_free(b);
 }
