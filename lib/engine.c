@@ -103,7 +103,7 @@ struct engine {
 /* |t| above this is absurd for a track clock (about 31700 years). */
 #define ENGINE_T_ABS_MAX_S 1e12
 /* Capacity accepted at most (memory is sized from it). */
-#define ENGINE_CAPACITY_MAX (1u << 22)
+#define ENGINE_CAPACITY_MAX (1u << 20)
 
 const char *engine_strerror(int err)
 {
@@ -260,7 +260,7 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
     if (!w) {
         la = engine_lookahead(cfg);
         if (cfg->capacity < la + cfg->fragment + 8 || cfg->capacity > ENGINE_CAPACITY_MAX)
-            w = "capacity: must be at least lookahead + fragment + 8 and at most 2^22";
+            w = "capacity: must be at least lookahead + fragment + 8 and at most 2^20";
     }
     if (why)
         *why = w;

@@ -131,8 +131,9 @@ typedef struct {
                                lookahead 32 waypoints with start_slack 8;
                                see README for the table */
     int64_t period_ns;      /* output period.  Default 10 ms (100 Hz) */
-    unsigned capacity;      /* waypoints buffered at most (>= lookahead + fragment
-                               + 8).  Default 4096: 68 min at 1 Hz; ~0.9 MB */
+    unsigned capacity;      /* waypoints buffered at most (lookahead + fragment
+                               + 8 .. 2^20; about 272 bytes each).  Default
+                               4096: 68 min at 1 Hz, 1.1 MB */
     double max_gap_s;       /* a longer interval ends the trajectory at rest and
                                starts a new one.  Default 60 s */
     double max_abs_m;       /* |coordinate| above this is rejected.  Default 1e7 m
@@ -221,6 +222,8 @@ typedef struct {
     uint64_t setpoints;             /* ticks answered */
 } engine_status_t;
 
+/* One engine per moving object; not thread-safe: push, tick and the commands
+ * of one engine must come from one thread (or be serialised by the caller). */
 typedef struct engine engine_t;
 
 /*

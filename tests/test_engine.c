@@ -404,8 +404,9 @@ static void test_full_and_retry(void **state)
                 break;
             circle_wp(&w, next, 0.2);
             int rc = engine_push(e, &w);
+            engine_status(e, &st);
+            assert_int_equal(st.buffered + st.free, c.capacity);
             if (rc == -ENGINE_EFULL) {
-                engine_status(e, &st);
                 assert_int_equal(st.free, 0);
                 fulls++;
                 break;
