@@ -346,6 +346,9 @@ def test_real_tracks():
         check(missag < 1e-9 * ext, "%s (a) global: every waypoint hit, %.1e" % (name, missag / ext))
         check(missa < 1e-4 * ext, "%s (a) F=32/O=16: waypoints missed by at most %.1e of extent (%.2e m)"
               % (name, missa / ext, missa))
+        a48 = engine_curve(BSPLINE, UNIFORM, NATURAL, 48, 24, t, xyz)
+        miss48 = max(np.abs(seg_start(a48) - xyz[:-1]).max(), np.abs(seg_end(a48) - xyz[1:]).max())
+        check(miss48 < 1e-9 * ext, "%s (a) F=48/O=24: every waypoint hit, %.1e of extent" % (name, miss48 / ext))
         print("     measured %s: velocity jump at joins, (a) uniform: max %.3g median %.3g m/s;"
               " (b) time knots: max %.3g m/s; vmax %.3g m/s"
               % (name, ja.max(), np.median(ja), jb.max(), vmax))
