@@ -103,7 +103,7 @@ struct engine {
 /* |t| above this is absurd for a track clock (about 31700 years). */
 #define ENGINE_T_ABS_MAX_S 1e12
 /* Capacity accepted at most (memory is sized from it). */
-#define ENGINE_CAPACITY_MAX (1u << 22)
+#define ENGINE_CAPACITY_MAX (1u << 20)
 
 const char *engine_strerror(int err)
 {
@@ -260,7 +260,7 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
     if (!w) {
         la = engine_lookahead(cfg);
         if (cfg->capacity < la + cfg->fragment + 8 || cfg->capacity > ENGINE_CAPACITY_MAX)
-            w = "capacity: must be at least lookahead + fragment + 8 and at most 2^22";
+            w = "capacity: must be at least lookahead + fragment + 8 and at most 2^20";
     }
     if (why)
         *why = w;
@@ -929,6 +929,18 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     sp->track = e->out_track;
 }
 
+/* 1 if further steps cannot change anything until new input arrives. */
+static int stalled(engine_t *e)
+{
+    qent_t *h = q_head(e);
+
+    if (e->mode == OUT_HOLD)
+        return !h || !h->first || !enough_ahead(e, h);
+    if (e->mode == OUT_STREAM && e->underrun)
+        return !h || !enough_ahead(e, h);
+    return 0;
+}
+
 int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
     int64_t k = 1, i;
@@ -949,8 +961,19 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     }
     e->have_now = 1;
     e->last_now = now_ns;
-    for (i = 0; i < k; i++)
+    for (i = 0; i < k; i++) {
         step_once(e);
+        if (i + 1 < k && stalled(e)) {
+            /* Nothing can change before the next push: the remaining steps
+             * are identical holds.  Count them instead of looping (a clock
+             * jump of hours must not cost hours of steps). */
+            int64_t rest = k - 1 - i;
+            e->cycle += (uint32_t)rest;
+            if (e->mode == OUT_STREAM)
+                e->st.underrun_ticks += (uint64_t)rest;
+            break;
+        }
+    }
     if (k > 1) {
         e->st.skipped_ticks += (uint64_t)(k - 1);
         e->flags_pending |= ENGINE_SP_SKIPPED;

@@ -49,7 +49,7 @@
  *       at every waypoint whose neighbouring intervals differ (measured on
  *       gpxgo_visnjan: up to 9.0 m/s on a walk).
  *   (b) ENGINE_PARAM_TIME     knots at the timestamps: C2 in physical time
- *       (jumps only from the fragment junctions, 3.6e-4 m/s on the same track
+ *       (jumps only from the fragment junctions, 1.5e-4 m/s on the same track
  *       with F=32, O=16).  The default, because motion controllers follow
  *       velocity and acceleration, and real tracks are irregular.
  * METHOD_BSPLINE with PARAM_TIME is the non-uniform cubic B-spline
@@ -131,8 +131,9 @@ typedef struct {
                                lookahead 32 waypoints with start_slack 8;
                                see README for the table */
     int64_t period_ns;      /* output period.  Default 10 ms (100 Hz) */
-    unsigned capacity;      /* waypoints buffered at most (>= lookahead + fragment
-                               + 8).  Default 4096: 68 min at 1 Hz; ~0.9 MB */
+    unsigned capacity;      /* waypoints buffered at most (lookahead + fragment
+                               + 8 .. 2^20; about 272 bytes each).  Default
+                               4096: 68 min at 1 Hz, 1.1 MB */
     double max_gap_s;       /* a longer interval ends the trajectory at rest and
                                starts a new one.  Default 60 s */
     double max_abs_m;       /* |coordinate| above this is rejected.  Default 1e7 m
@@ -221,6 +222,8 @@ typedef struct {
     uint64_t setpoints;             /* ticks answered */
 } engine_status_t;
 
+/* One engine per moving object; not thread-safe: push, tick and the commands
+ * of one engine must come from one thread (or be serialised by the caller). */
 typedef struct engine engine_t;
 
 /*
