@@ -90,9 +90,9 @@ $(BUILD)/tests/%: $(BUILD)/tests/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.
 # ---- Debian packages ---------------------------------------------------
 DEPS_BUILD := gcc make pkg-config libc6-dev libmodbus-dev libsystemd-dev libinih-dev libexpat1-dev
 DEPS_TEST := libcmocka-dev libgsl-dev python3 python3-scipy python3-numpy mbpoll \
-             python3-pymodbus python3-serial can-utils python3-can python3-canmatrix \
+             python3-pymodbus python3-serial python3-serial-asyncio can-utils python3-can python3-canmatrix \
              user-mode-linux busybox-static socat iproute2 clang libclang-rt-14-dev \
-             systemd valgrind
+             systemd valgrind python3-pyproj
 
 deps-run:
 	@sh tests/deps.sh $(DEPS_BUILD)
@@ -146,10 +146,17 @@ fuzz: deps
 
 # ---- install ----------------------------------------------------------------
 install: $(BINS)
-	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)/etc/trajd $(DESTDIR)$(PREFIX)/lib/systemd/system
+	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)/etc/trajd $(DESTDIR)$(PREFIX)/lib/systemd/system \
+		$(DESTDIR)$(PREFIX)/share/trajd/tracks
 	install -m 755 $(BINS) $(DESTDIR)$(PREFIX)/bin/
-	test -e $(DESTDIR)/etc/trajd/trajd.conf || install -m 644 config/trajd.conf $(DESTDIR)/etc/trajd/trajd.conf
-	install -m 644 $(wildcard systemd/*.service systemd/*.socket) $(DESTDIR)$(PREFIX)/lib/systemd/system/
+	install -m 644 tests/data/n2k_furuno_figure8_src52.csv tests/data/ATTRIBUTION.md \
+		$(DESTDIR)$(PREFIX)/share/trajd/tracks/
+	test -e $(DESTDIR)/etc/trajd/trajd.conf || { \
+		sed 's|^replay.track = .*|replay.track = $(PREFIX)/share/trajd/tracks/n2k_furuno_figure8_src52.csv|' \
+			config/trajd.conf > $(DESTDIR)/etc/trajd/trajd.conf && chmod 644 $(DESTDIR)/etc/trajd/trajd.conf; }
+	for u in $(wildcard systemd/*.service systemd/*.socket); do \
+		sed 's|@BINDIR@|$(PREFIX)/bin|g' $$u > $(DESTDIR)$(PREFIX)/lib/systemd/system/$$(basename $$u) && \
+		chmod 644 $(DESTDIR)$(PREFIX)/lib/systemd/system/$$(basename $$u) || exit 1; done
 
 clean:
 	rm -rf $(BUILD)

@@ -28,6 +28,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "fdiff.h"
+
 #define ENGINE_AXES 3
 
 /* Limits on the configuration (checked by engine_config_check). */
@@ -118,6 +120,7 @@ typedef enum {
 #define ENGINE_SP_HOLD      0x01u /* position held (waiting, underrun, finished) */
 #define ENGINE_SP_NEW_TRACK 0x02u /* first setpoint of a new trajectory (after a gap or clear) */
 #define ENGINE_SP_SKIPPED   0x04u /* ticks were skipped before this one */
+#define ENGINE_SP_TRANSFER  0x08u /* rest-to-rest transfer to a new trajectory's start */
 
 typedef struct {
     int64_t now_ns;                 /* the tick this setpoint is for (as passed in) */
@@ -197,5 +200,28 @@ unsigned engine_lookahead(const engine_config_t *cfg);
 
 /* Name of a state, "waiting", "streaming", "underrun", "finished". */
 const char *engine_state_name(engine_state_t s);
+
+/*
+ * Offline: the curve the engine streams for a whole track, built by the same
+ * code as engine_push/engine_finish (the queue drained after every push), as
+ * cubic segments in absolute track time (see fdiff.h).  For tests, benches
+ * and tools; allocates an engine (not for a periodic path).
+ * Waypoints the engine refuses are skipped as engine_push would.
+ * Returns 0, -ENGINE_ECONFIG (bad cfg, or more than max_seg segments),
+ * -ENGINE_ENOMEM.  *nseg receives the number of segments written.
+ */
+int engine_curve(const engine_config_t *cfg, const engine_waypoint_t *wp,
+                 size_t n, fdiff_seg_t *seg, size_t max_seg, size_t *nseg);
+
+/*
+ * engine_curve with flat arguments, for Python ctypes: the default
+ * configuration with method, param, ends, fragment, overlap given,
+ * max_speed_m_s = 0 and max_gap_s = 1e9 (one trajectory).  t_s: n times,
+ * xyz: n x 3; seg_out: max_seg x 14 doubles (t0_s, dur_s, then c[axis][0..3]
+ * for x, y, z).  Returns the number of segments, or a negated engine_error.
+ */
+long engine_curve_flat(int method, int param, int ends, unsigned fragment,
+                       unsigned overlap, size_t n, const double *t_s,
+                       const double *xyz, double *seg_out, size_t max_seg);
 
 #endif

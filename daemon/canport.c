@@ -1,0 +1,413 @@
+/* canport.c - the CAN side of trajd (see canport.h). */
+#include "canport.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define CANPORT_RX_BATCH 256  /* frames handled per canport_rx call: do not starve the loop */
+
+typedef struct {
+    int set;
+    canproto_ids_t ids;
+    canport_hooks_t hooks;
+    void *ctx;
+    canproto_slot_t slots[CANPORT_RX_SLOTS];
+    canproto_rx_t rx;
+    engine_setpoint_t sp;
+    int have_sp;
+    int status_due;
+    int64_t last_status_ns;
+    int sent_status;
+    uint8_t flags_since;       /* CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP since last STATUS */
+    uint8_t last_err;
+    canport_obj_stats_t st;
+} canport_obj_t;
+
+struct canport {
+    canport_config_t cfg;
+    canport_io_t io;
+    void *io_ctx;
+    unsigned nobj;
+    canport_obj_t *obj;
+    canproto_ids_t *ids;       /* copy of each object's ids, contiguous (bus load) */
+    uint8_t sync_counter;
+    canport_stats_t st;
+};
+
+void canport_config_default(canport_config_t *c)
+{
+    memset(c, 0, sizeof *c);
+    c->sync = 0;
+    c->sync_id = CANPROTO_ID_SYNC_DEFAULT;
+    c->sync_overflow = 0;
+    c->status_period_ns = 100000000LL;
+    c->max_late_ns = 0;
+}
+
+canport_t *canport_new(const canport_config_t *cfg, const canport_io_t *io, void *io_ctx,
+                       unsigned nobj)
+{
+    if (!cfg || !io || !io->send || !io->recv || !io->is_up || nobj == 0 ||
+        cfg->sync_id > CANPROTO_SFF_MASK || cfg->sync_overflow == 1 || cfg->sync_overflow > 240)
+        return NULL;
+    canport_t *p = calloc(1, sizeof *p);
+    if (!p)
+        return NULL;
+    p->obj = calloc(nobj, sizeof *p->obj);
+    p->ids = calloc(nobj, sizeof *p->ids);
+    if (!p->obj || !p->ids) {
+        canport_free(p);
+        return NULL;
+    }
+    p->cfg = *cfg;
+    p->io = *io;
+    p->io_ctx = io_ctx;
+    p->nobj = nobj;
+    for (unsigned i = 0; i < nobj; i++)
+        canproto_rx_init(&p->obj[i].rx, p->obj[i].slots, CANPORT_RX_SLOTS);
+    return p;
+}
+
+void canport_free(canport_t *p)
+{
+    if (!p)
+        return;
+    free(p->obj);
+    free(p->ids);
+    free(p);
+}
+
+/* Every id object i uses (same order as canproto's own check). */
+static unsigned obj_ids(const canproto_ids_t *ids, uint32_t out[16])
+{
+    unsigned n = canproto_ids_rx(ids, out, 16);
+    if (ids->own)
+        out[n++] = ids->fd ? ids->setpoint_fd_id : ids->setpoint_id;
+    out[n++] = ids->status_id;
+    if (ids->cia402)
+        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+            if (ids->cia402_cob_id[a])
+                out[n++] = ids->cia402_cob_id[a];
+    return n;
+}
+
+int canport_set_object(canport_t *p, unsigned i, const canproto_ids_t *ids,
+                       const canport_hooks_t *hooks, void *ctx)
+{
+    uint32_t mine[16], other[16];
+    if (i >= p->nobj || !hooks || !hooks->push || !hooks->status)
+        return -CANPROTO_EID;
+    if (canproto_ids_check(ids, NULL) < 0)
+        return -CANPROTO_ECONFIG;
+    unsigned n = obj_ids(ids, mine);
+    for (unsigned k = 0; k < n; k++)
+        if (p->cfg.sync && mine[k] == p->cfg.sync_id)
+            return -CANPROTO_ECONFIG;
+    for (unsigned j = 0; j < p->nobj; j++) {
+        if (j == i || !p->obj[j].set)
+            continue;
+        unsigned m = obj_ids(&p->obj[j].ids, other);
+        for (unsigned k = 0; k < n; k++)
+            for (unsigned l = 0; l < m; l++)
+                if (mine[k] == other[l])
+                    return -CANPROTO_ECONFIG;
+    }
+    canport_obj_t *o = &p->obj[i];
+    o->set = 1;
+    o->ids = *ids;
+    o->hooks = *hooks;
+    o->ctx = ctx;
+    p->ids[i] = *ids;
+    return 0;
+}
+
+unsigned canport_rx_ids(const canport_t *p, uint32_t *out, unsigned max)
+{
+    unsigned n = 0;
+    for (unsigned i = 0; i < p->nobj; i++) {
+        uint32_t ids[4];
+        if (!p->obj[i].set)
+            continue;
+        unsigned k = canproto_ids_rx(&p->obj[i].ids, ids, 4);
+        for (unsigned j = 0; j < k; j++, n++)
+            if (n < max)
+                out[n] = ids[j];
+    }
+    return n;
+}
+
+static void event(canport_obj_t *o, uint8_t err)
+{
+    o->last_err = err;
+    o->status_due = 1;
+}
+
+static void handle_waypoint(canport_obj_t *o, canproto_rx_out_t *out)
+{
+    int rc = o->hooks.push(o->ctx, &out->wp);
+    if (rc == -ENGINE_EFULL) {
+        /* not consumed: the sender sees last_seq stay and repeats it */
+        o->st.waypoints_full++;
+        event(o, ENGINE_EFULL);
+        return;
+    }
+    canproto_rx_consume(&o->rx, out);
+    if (out->lost_before)
+        event(o, CANPROTO_STERR_LOST);
+    if (rc == 0) {
+        o->st.waypoints_accepted++;
+    } else if (rc == ENGINE_DUPLICATE) {
+        o->st.engine_duplicates++;
+    } else {
+        o->st.waypoints_rejected++;
+        event(o, (uint8_t)(rc < 0 ? -rc : rc));
+    }
+}
+
+static void handle_command(canport_obj_t *o, canproto_cmd_t cmd)
+{
+    if (o->hooks.command)
+        o->hooks.command(o->ctx, cmd);
+    if (cmd == CANPROTO_CMD_CLEAR)
+        canproto_rx_restart(&o->rx);
+    if (cmd == CANPROTO_CMD_RESET_COUNTERS) {
+        memset(&o->st, 0, sizeof o->st);
+        memset(&o->rx.st, 0, sizeof o->rx.st);
+        o->last_err = CANPROTO_STERR_OK;
+    }
+    o->status_due = 1;
+}
+
+static void dispatch(canport_t *p, const canproto_frame_t *f)
+{
+    if (!(f->flags & CANPROTO_F_EFF)) {
+        for (unsigned i = 0; i < p->nobj; i++) {
+            canport_obj_t *o = &p->obj[i];
+            int is_fd;
+            if (!o->set)
+                continue;
+            if (f->id == o->ids.waypoint_id)
+                is_fd = 0;
+            else if (o->ids.fd && f->id == o->ids.waypoint_fd_id)
+                is_fd = 1;
+            else
+                continue;
+            canproto_rx_out_t out;
+            uint64_t ooo = o->rx.st.out_of_order;
+            int rc = canproto_rx_frame(&o->rx, f, is_fd, &out);
+            if (rc < 0)
+                event(o, CANPROTO_STERR_MALFORMED);
+            else if (rc == CANPROTO_RX_WAYPOINT)
+                handle_waypoint(o, &out);
+            else if (rc == CANPROTO_RX_COMMAND)
+                handle_command(o, out.cmd);
+            if (o->rx.st.out_of_order != ooo)
+                event(o, CANPROTO_STERR_OUT_OF_ORDER);
+            return;
+        }
+    }
+    p->st.rx_foreign++;
+}
+
+int canport_rx(canport_t *p, int64_t now_ns)
+{
+    canproto_frame_t f;
+    int n = 0;
+    while (n < CANPORT_RX_BATCH) {
+        int rc = p->io.recv(p->io_ctx, now_ns, &f);
+        if (rc == 0)
+            break;
+        if (rc < 0) {
+            p->st.rx_errors++;
+            return n ? n : rc;
+        }
+        p->st.rx_frames++;
+        dispatch(p, &f);
+        n++;
+    }
+    return n;
+}
+
+void canport_setpoint(canport_t *p, unsigned i, const engine_setpoint_t *sp)
+{
+    if (i >= p->nobj)
+        return;
+    p->obj[i].sp = *sp;
+    p->obj[i].have_sp = 1;
+}
+
+static int is_full(int rc)
+{
+    return rc == -ENOBUFS || rc == -EAGAIN;
+}
+
+/* Send object o's frames for this cycle; 0 or the first failure. */
+static int send_setpoint(canport_t *p, canport_obj_t *o)
+{
+    canproto_frame_t f[ENGINE_AXES + CANPROTO_CIA402_AXES];
+    unsigned n = 0;
+    int clamped = 0, rc;
+
+    if (o->ids.own) {
+        if (o->ids.fd)
+            rc = canproto_encode_setpoint_fd(o->ids.setpoint_fd_id, o->ids.brs, &o->sp, &f[n++]);
+        else {
+            rc = canproto_encode_setpoint(o->ids.setpoint_id, &o->sp, &f[n]);
+            n += ENGINE_AXES;
+        }
+        clamped |= rc == CANPROTO_CLAMPED;
+    }
+    if (o->ids.cia402)
+        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+            if (o->ids.cia402_cob_id[a]) {
+                rc = canproto_encode_cia402(&o->ids, a, o->sp.pos_m[a], &f[n++]);
+                clamped |= rc == CANPROTO_CLAMPED;
+            }
+    if (clamped)
+        o->st.tx_clamped++;
+    for (unsigned k = 0; k < n; k++)
+        if ((rc = p->io.send(p->io_ctx, &f[k])) < 0)
+            return rc;
+    return 0;
+}
+
+static void count_drop(canport_obj_t *o, int rc)
+{
+    if (is_full(rc))
+        o->st.dropped_full++;
+    else
+        o->st.dropped_down++;
+    o->flags_since |= CANPROTO_ST_TX_DROP;
+    if (!is_full(rc))
+        o->flags_since |= CANPROTO_ST_BUS_DOWN;
+    event(o, is_full(rc) ? CANPROTO_STERR_TX_DROPPED : CANPROTO_STERR_BUS_DOWN);
+}
+
+static void send_status(canport_t *p, canport_obj_t *o, int64_t now_ns)
+{
+    engine_status_t es;
+    canproto_status_t st;
+    canproto_frame_t f;
+
+    memset(&es, 0, sizeof es);
+    o->hooks.status(o->ctx, &es);
+    memset(&st, 0, sizeof st);
+    st.state = (uint8_t)es.state;
+    st.flags = o->flags_since;
+    st.last_seq = es.last_seq;
+    st.free = es.free;
+    st.lost = (uint32_t)o->rx.st.lost;
+    st.rejected = (uint32_t)(o->st.waypoints_rejected + o->st.waypoints_full);
+    st.malformed = (uint32_t)o->rx.st.malformed;
+    st.dropped = (uint32_t)(o->st.dropped_late + o->st.dropped_full + o->st.dropped_down);
+    st.last_err = o->last_err;
+    canproto_encode_status(o->ids.status_id, &st, &f);
+    if (p->io.send(p->io_ctx, &f) == 0) {
+        o->st.status_sent++;
+        o->flags_since = 0;
+        o->status_due = 0;
+        o->last_status_ns = now_ns;
+        o->sent_status = 1;
+    }
+}
+
+void canport_cycle(canport_t *p, int64_t now_ns, int64_t late_ns)
+{
+    p->st.cycles++;
+    if (!p->io.is_up(p->io_ctx)) {
+        p->st.down_cycles++;
+        for (unsigned i = 0; i < p->nobj; i++)
+            if (p->obj[i].set && p->obj[i].have_sp)
+                count_drop(&p->obj[i], -ENETDOWN);
+        goto out;
+    }
+    if (p->cfg.max_late_ns > 0 && late_ns > p->cfg.max_late_ns) {
+        for (unsigned i = 0; i < p->nobj; i++)
+            if (p->obj[i].set && p->obj[i].have_sp) {
+                p->obj[i].st.dropped_late++;
+                p->obj[i].flags_since |= CANPROTO_ST_TX_DROP;
+                event(&p->obj[i], CANPROTO_STERR_TX_DROPPED);
+            }
+        goto out;
+    }
+    if (p->cfg.sync) {
+        canproto_frame_t f;
+        uint8_t c = 0;
+        if (p->cfg.sync_overflow) {
+            /* CiA 301: the counter runs 1..overflow */
+            p->sync_counter = p->sync_counter >= p->cfg.sync_overflow ? 1 : p->sync_counter + 1;
+            c = p->sync_counter;
+        }
+        canproto_encode_sync(p->cfg.sync_id, c, &f);
+        if (p->io.send(p->io_ctx, &f) == 0)
+            p->st.sync_sent++;
+    }
+    for (unsigned i = 0; i < p->nobj; i++) {
+        canport_obj_t *o = &p->obj[i];
+        if (!o->set || !o->have_sp)
+            continue;
+        int rc = send_setpoint(p, o);
+        if (rc < 0)
+            count_drop(o, rc);
+        else
+            o->st.setpoints_sent++;
+    }
+    for (unsigned i = 0; i < p->nobj; i++) {
+        canport_obj_t *o = &p->obj[i];
+        if (!o->set)
+            continue;
+        if (o->status_due || !o->sent_status ||
+            (p->cfg.status_period_ns > 0 && now_ns - o->last_status_ns >= p->cfg.status_period_ns))
+            if (p->io.is_up(p->io_ctx))
+                send_status(p, o, now_ns);
+    }
+out:
+    for (unsigned i = 0; i < p->nobj; i++)
+        p->obj[i].have_sp = 0;
+}
+
+int canport_maintain(canport_t *p, int64_t now_ns)
+{
+    if (!p->io.maintain)
+        return 0;
+    int up = p->io.maintain(p->io_ctx, now_ns);
+    if (up > 0)
+        p->st.reopens++;
+    return up > 0;
+}
+
+void canport_stats(const canport_t *p, canport_stats_t *st)
+{
+    *st = p->st;
+}
+
+void canport_obj_stats(const canport_t *p, unsigned i, canport_obj_stats_t *st)
+{
+    memset(st, 0, sizeof *st);
+    if (i >= p->nobj)
+        return;
+    *st = p->obj[i].st;
+    st->rx = p->obj[i].rx.st;
+}
+
+void canport_reset_counters(canport_t *p)
+{
+    memset(&p->st, 0, sizeof p->st);
+    for (unsigned i = 0; i < p->nobj; i++) {
+        memset(&p->obj[i].st, 0, sizeof p->obj[i].st);
+        memset(&p->obj[i].rx.st, 0, sizeof p->obj[i].rx.st);
+    }
+}
+
+double canport_busload(const canport_t *p, double rate_hz, double waypoint_hz, double bitrate,
+                       double data_bitrate)
+{
+    canproto_traffic_t tr = {
+        .rate_hz = rate_hz,
+        .status_hz = p->cfg.status_period_ns > 0 ? 1e9 / (double)p->cfg.status_period_ns : 0,
+        .waypoint_hz = waypoint_hz,
+    };
+    return canproto_busload(p->ids, p->nobj, p->cfg.sync, p->cfg.sync_overflow ? 1 : 0, &tr,
+                            bitrate, data_bitrate);
+}

@@ -1,0 +1,831 @@
+/*
+ * cfg.c - parse and check trajd's INI configuration (see cfg.h).
+ *
+ * libinih does the INI syntax; this file reads the lines for it (so it knows
+ * the line number of everything, including section headers and sections
+ * with no keys, which inih never reports) and stops at the first error.
+ */
+#include "cfg.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <ini.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <syslog.h>
+
+#include "log.h"
+#include "transport.h"
+
+/* inih reads a line into a buffer of INI_MAX_LINE bytes; longer lines would be
+ * split and misparsed silently, so they are refused. */
+#define CFG_LINE_MAX INI_MAX_LINE
+
+static const char *const cfg_errors[] = {
+    [CFG_OK] = "ok",
+    [CFG_EUNKNOWN] = "unknown section or key",
+    [CFG_EVALUE] = "bad value",
+    [CFG_EMISSING] = "missing key or section",
+    [CFG_EIO] = "cannot read the file",
+    [CFG_ENOMEM] = "out of memory",
+    [CFG_ESYNTAX] = "syntax error",
+    [CFG_EDUP] = "given twice",
+};
+
+const char *cfg_strerror(int err)
+{
+    if (err < 0)
+        err = -err;
+    if (err >= CFG_ERROR_COUNT)
+        return "unknown error";
+    return cfg_errors[err];
+}
+
+/* ---- value helpers ---------------------------------------------------- */
+
+static int why_set(char *why, size_t whylen, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static int why_set(char *why, size_t whylen, const char *fmt, ...)
+{
+    if (why && whylen) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(why, whylen, fmt, ap);
+        va_end(ap);
+    }
+    return -CFG_EVALUE;
+}
+
+int cfg_get_double(const cfg_kv_t *kv, double lo, double hi, double *out, char *why,
+                   size_t whylen)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(kv->value, &end);
+    if (end == kv->value || *end || errno == ERANGE || !isfinite(v) || v < lo || v > hi)
+        return why_set(why, whylen, "expected a number in [%g, %g], got '%s'", lo, hi,
+                       kv->value);
+    *out = v;
+    return 0;
+}
+
+int cfg_get_int(const cfg_kv_t *kv, long long lo, long long hi, long long *out, char *why,
+                size_t whylen)
+{
+    char *end;
+    errno = 0;
+    const char *s = kv->value;
+    int base = (s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) ? 16 : 10;
+    long long v = strtoll(s, &end, base);
+    if (end == s || *end || errno == ERANGE || v < lo || v > hi)
+        return why_set(why, whylen, "expected an integer in [%lld, %lld], got '%s'", lo, hi,
+                       kv->value);
+    *out = v;
+    return 0;
+}
+
+int cfg_get_bool(const cfg_kv_t *kv, int *out, char *why, size_t whylen)
+{
+    static const char *const yes[] = {"yes", "true", "on", "1", NULL};
+    static const char *const no[] = {"no", "false", "off", "0", NULL};
+    for (int i = 0; yes[i]; i++) {
+        if (strcasecmp(kv->value, yes[i]) == 0) {
+            *out = 1;
+            return 0;
+        }
+        if (strcasecmp(kv->value, no[i]) == 0) {
+            *out = 0;
+            return 0;
+        }
+    }
+    return why_set(why, whylen, "expected yes or no, got '%s'", kv->value);
+}
+
+int cfg_get_enum(const cfg_kv_t *kv, const char *const *names, int *out, char *why,
+                 size_t whylen)
+{
+    char list[160] = "";
+    for (int i = 0; names[i]; i++) {
+        if (strcmp(kv->value, names[i]) == 0) {
+            *out = i;
+            return 0;
+        }
+        size_t n = strlen(list);
+        snprintf(list + n, sizeof list - n, "%s%s", i ? ", " : "", names[i]);
+    }
+    return why_set(why, whylen, "expected one of %s, got '%s'", list, kv->value);
+}
+
+int cfg_get_path(const cfg_kv_t *kv, char *out, size_t outlen, char *why, size_t whylen)
+{
+    int n;
+    if (!kv->value[0])
+        return why_set(why, whylen, "empty path");
+    if (kv->value[0] == '/' || !kv->dir || !kv->dir[0])
+        n = snprintf(out, outlen, "%s", kv->value);
+    else
+        n = snprintf(out, outlen, "%s/%s", kv->dir, kv->value);
+    if (n < 0 || (size_t)n >= outlen)
+        return why_set(why, whylen, "path too long");
+    return 0;
+}
+
+/* ---- parser state ---------------------------------------------------- */
+
+enum sec_kind { SEC_NONE, SEC_DAEMON, SEC_RT, SEC_OBJ, SEC_TRANSPORT };
+
+typedef struct {
+    char key[96]; /* "section\nkey" */
+} seen_t;
+
+typedef struct {
+    cfg_t *c;
+    const char *text; /* in-memory source (cfg_load_string) */
+    size_t pos;
+    FILE *fp;         /* file source (cfg_load) */
+    int line;         /* lines read so far */
+    /* current section */
+    enum sec_kind kind;
+    int sec_index;    /* object index or transport index */
+    char sec_name[64];
+    int sec_line;
+    /* per-object: first line of a "T." key, by transport, to report keys for
+     * transports the object does not use */
+    int tkey_line[CFG_OBJECTS_MAX][CFG_TRANSPORTS_MAX];
+    int rate_line;
+    /* duplicates */
+    seen_t *seen;
+    size_t nseen, capseen;
+    /* first error */
+    int err;
+    int err_line;
+    char msg[CFG_WHY_MAX + 128];
+} parse_t;
+
+static void fail(parse_t *p, int code, int line, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static void fail(parse_t *p, int code, int line, const char *fmt, ...)
+{
+    if (p->err)
+        return; /* keep the first */
+    p->err = code;
+    p->err_line = line;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(p->msg, sizeof p->msg, fmt, ap);
+    va_end(ap);
+}
+
+/* Returns 1 if (section, key) was already seen, else records it. */
+static int seen_before(parse_t *p, const char *section, const char *key)
+{
+    char k[96];
+    snprintf(k, sizeof k, "%s\n%s", section, key);
+    for (size_t i = 0; i < p->nseen; i++)
+        if (strcmp(p->seen[i].key, k) == 0)
+            return 1;
+    if (p->nseen == p->capseen) {
+        size_t cap = p->capseen ? p->capseen * 2 : 32;
+        seen_t *s = realloc(p->seen, cap * sizeof *s);
+        if (!s)
+            return 0; /* cannot record: duplicate detection degrades, parsing goes on */
+        p->seen = s;
+        p->capseen = cap;
+    }
+    snprintf(p->seen[p->nseen++].key, sizeof p->seen[0].key, "%s", k);
+    return 0;
+}
+
+static int valid_name(const char *s)
+{
+    size_t n = strlen(s);
+    if (n == 0 || n >= CFG_NAME_MAX)
+        return 0;
+    for (size_t i = 0; i < n; i++)
+        if (!isalnum((unsigned char)s[i]) && s[i] != '_' && s[i] != '-')
+            return 0;
+    return 1;
+}
+
+static int alloc_block(void **slot, size_t size, void (*dflt)(void *))
+{
+    if (!size)
+        return 0;
+    *slot = calloc(1, size);
+    if (!*slot)
+        return -CFG_ENOMEM;
+    if (dflt)
+        dflt(*slot);
+    return 0;
+}
+
+/* A "[name]" line was read at p->line. */
+static void begin_section(parse_t *p, const char *name)
+{
+    cfg_t *c = p->c;
+    snprintf(p->sec_name, sizeof p->sec_name, "%s", name);
+    p->sec_line = p->line;
+    p->kind = SEC_NONE;
+    if (seen_before(p, "", name)) {
+        fail(p, CFG_EDUP, p->line, "[%s]: section given twice", name);
+        return;
+    }
+    if (strcmp(name, "daemon") == 0) {
+        p->kind = SEC_DAEMON;
+    } else if (strcmp(name, "realtime") == 0) {
+        p->kind = SEC_RT;
+    } else if (strncmp(name, "object.", 7) == 0) {
+        const char *on = name + 7;
+        if (!valid_name(on)) {
+            fail(p, CFG_EVALUE, p->line,
+                 "[%s]: object name must be 1-%d characters of A-Z a-z 0-9 _ -", name,
+                 CFG_NAME_MAX - 1);
+            return;
+        }
+        if (c->nobj == CFG_OBJECTS_MAX) {
+            fail(p, CFG_EVALUE, p->line, "[%s]: more than %d objects", name,
+                 CFG_OBJECTS_MAX);
+            return;
+        }
+        cfg_obj_t *o = &c->obj[c->nobj];
+        memset(o, 0, sizeof *o);
+        snprintf(o->name, sizeof o->name, "%s", on);
+        o->line = p->line;
+        engine_config_default(&o->engine);
+        for (unsigned t = 0; transport_table[t]; t++)
+            if (alloc_block(&o->tcfg[t], transport_table[t]->obj_cfg_size,
+                            transport_table[t]->obj_cfg_default) < 0) {
+                fail(p, CFG_ENOMEM, p->line, "out of memory");
+                return;
+            }
+        p->sec_index = (int)c->nobj++;
+        p->kind = SEC_OBJ;
+    } else {
+        const transport_t *t = transport_find(name);
+        if (!t || !t->cfg_key) {
+            fail(p, CFG_EUNKNOWN, p->line,
+                 "unknown section [%s] (expected [daemon], [realtime], [object.NAME] or a "
+                 "transport's section)",
+                 name);
+            return;
+        }
+        p->sec_index = transport_index(t);
+        c->tline[p->sec_index] = p->line;
+        p->kind = SEC_TRANSPORT;
+    }
+}
+
+/* inih's reader: one line per call; spots section headers and long lines. */
+static char *reader(char *str, int num, void *stream)
+{
+    parse_t *p = stream;
+    if (p->err)
+        return NULL; /* stop at the first error */
+    size_t n = 0;
+    if (p->fp) {
+        if (!fgets(str, num, p->fp))
+            return NULL;
+        n = strlen(str);
+    } else {
+        if (!p->text[p->pos])
+            return NULL;
+        while (n + 1 < (size_t)num && p->text[p->pos]) {
+            char ch = p->text[p->pos++];
+            str[n++] = ch;
+            if (ch == '\n')
+                break;
+        }
+        str[n] = 0;
+    }
+    p->line++;
+    int at_eof = p->fp ? feof(p->fp) : !p->text[p->pos];
+    if (n && str[n - 1] != '\n' && !at_eof) {
+        fail(p, CFG_ESYNTAX, p->line, "line longer than %d characters", CFG_LINE_MAX - 2);
+        return NULL;
+    }
+    /* section header? (inih accepts "[name]" with optional spaces around) */
+    const char *s = str;
+    while (isspace((unsigned char)*s))
+        s++;
+    if (*s == '[') {
+        const char *e = strchr(s, ']');
+        if (e) {
+            char name[64];
+            const char *a = s + 1;
+            while (a < e && isspace((unsigned char)*a))
+                a++;
+            const char *b = e;
+            while (b > a && isspace((unsigned char)b[-1]))
+                b--;
+            size_t len = (size_t)(b - a);
+            if (len >= sizeof name) {
+                fail(p, CFG_EVALUE, p->line, "section name too long");
+                return NULL;
+            }
+            memcpy(name, a, len);
+            name[len] = 0;
+            begin_section(p, name);
+        }
+    }
+    return str;
+}
+
+static const char *const method_names[] = {"bspline", "cubic", "smooth", NULL};
+static const char *const param_names[] = {"uniform", "time", NULL};
+static const char *const ends_names[] = {"held", "multiple", "natural", "clamped", "rest", NULL};
+
+/* "x,y,z" into three finite numbers. */
+static int get_vec3(const cfg_kv_t *kv, double v[ENGINE_AXES], char *why, size_t whylen)
+{
+    const char *s = kv->value;
+    for (int i = 0; i < ENGINE_AXES; i++) {
+        char *end;
+        errno = 0;
+        v[i] = strtod(s, &end);
+        if (end == s || errno == ERANGE || !isfinite(v[i]))
+            return why_set(why, whylen, "expected three numbers x,y,z, got '%s'", kv->value);
+        while (isspace((unsigned char)*end))
+            end++;
+        if (i < ENGINE_AXES - 1) {
+            if (*end != ',')
+                return why_set(why, whylen, "expected three numbers x,y,z, got '%s'",
+                               kv->value);
+            s = end + 1;
+        } else if (*end) {
+            return why_set(why, whylen, "expected three numbers x,y,z, got '%s'", kv->value);
+        }
+    }
+    return 0;
+}
+
+/* "0,2-3" into a cpu_set_t. */
+static int get_cpus(const cfg_kv_t *kv, cpu_set_t *set, char *why, size_t whylen)
+{
+    CPU_ZERO(set);
+    const char *s = kv->value;
+    int any = 0;
+    while (*s) {
+        char *end;
+        long a = strtol(s, &end, 10), b;
+        if (end == s || a < 0 || a >= CPU_SETSIZE)
+            goto bad;
+        b = a;
+        s = end;
+        if (*s == '-') {
+            b = strtol(s + 1, &end, 10);
+            if (end == s + 1 || b < a || b >= CPU_SETSIZE)
+                goto bad;
+            s = end;
+        }
+        for (long i = a; i <= b; i++)
+            CPU_SET((int)i, set);
+        any = 1;
+        while (isspace((unsigned char)*s))
+            s++;
+        if (*s == ',')
+            s++;
+        else if (*s)
+            goto bad;
+        while (isspace((unsigned char)*s))
+            s++;
+    }
+    if (any)
+        return 0;
+bad:
+    return why_set(why, whylen, "expected a CPU list like 1 or 0,2-3, got '%s'", kv->value);
+}
+
+static int key_daemon(cfg_t *c, parse_t *p, const cfg_kv_t *kv, char *why, size_t wl)
+{
+    cfg_daemon_t *d = &c->daemon;
+    int rc;
+    if (strcmp(kv->key, "rate_hz") == 0) {
+        /* the engine's period limits, as a rate */
+        rc = cfg_get_double(kv, 1e9 / (double)ENGINE_PERIOD_NS_MAX,
+                            1e9 / (double)ENGINE_PERIOD_NS_MIN, &d->rate_hz, why, wl);
+        p->rate_line = kv->line;
+        return rc;
+    }
+    if (strcmp(kv->key, "speed") == 0)
+        return cfg_get_double(kv, 0.001, 1000, &d->speed, why, wl);
+    if (strcmp(kv->key, "status_interval_s") == 0)
+        return cfg_get_double(kv, 0, 86400, &d->status_interval_s, why, wl);
+    if (strcmp(kv->key, "stop_timeout_s") == 0)
+        return cfg_get_double(kv, 0, 3600, &d->stop_timeout_s, why, wl);
+    if (strcmp(kv->key, "exit_when_done") == 0)
+        return cfg_get_bool(kv, &d->exit_when_done, why, wl);
+    if (strcmp(kv->key, "log_level") == 0) {
+        static const char *const lv[] = {"err", "warning", "notice", "info", "debug", NULL};
+        static const int lvv[] = {LOG_ERR, LOG_WARNING, LOG_NOTICE, LOG_INFO, LOG_DEBUG};
+        int i;
+        rc = cfg_get_enum(kv, lv, &i, why, wl);
+        if (rc == 0)
+            d->log_level = lvv[i];
+        return rc;
+    }
+    return -CFG_EUNKNOWN;
+}
+
+static int key_rt(cfg_t *c, const cfg_kv_t *kv, char *why, size_t wl)
+{
+    long long ll;
+    if (strcmp(kv->key, "fifo_priority") == 0) {
+        int rc = cfg_get_int(kv, 0, 99, &ll, why, wl);
+        if (rc == 0)
+            c->rt.fifo_priority = (int)ll;
+        return rc;
+    }
+    if (strcmp(kv->key, "mlockall") == 0)
+        return cfg_get_bool(kv, &c->rt.mlockall, why, wl);
+    if (strcmp(kv->key, "cpu_affinity") == 0) {
+        if (!kv->value[0]) {
+            c->rt.affinity_set = 0;
+            return 0;
+        }
+        int rc = get_cpus(kv, &c->rt.affinity, why, wl);
+        if (rc == 0)
+            c->rt.affinity_set = 1;
+        return rc;
+    }
+    return -CFG_EUNKNOWN;
+}
+
+static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size_t wl)
+{
+    engine_config_t *e = &o->engine;
+    long long ll;
+    int i, rc;
+    const char *dot = strchr(kv->key, '.');
+    if (dot) { /* "T.key": transport T's */
+        char tname[32];
+        size_t n = (size_t)(dot - kv->key);
+        if (n >= sizeof tname)
+            return -CFG_EUNKNOWN;
+        memcpy(tname, kv->key, n);
+        tname[n] = 0;
+        const transport_t *t = transport_find(tname);
+        if (!t || !t->obj_key)
+            return -CFG_EUNKNOWN;
+        int ti = transport_index(t);
+        cfg_kv_t sub = *kv;
+        sub.key = dot + 1;
+        if (!p->tkey_line[p->sec_index][ti])
+            p->tkey_line[p->sec_index][ti] = kv->line;
+        return t->obj_key(o->tcfg[ti], &sub, why, wl);
+    }
+    if (strcmp(kv->key, "input") == 0) {
+        const transport_t *t = transport_find(kv->value);
+        if (!t || !(t->roles & TRANSPORT_INPUT)) {
+            char list[160] = "";
+            for (unsigned k = 0; transport_table[k]; k++)
+                if (transport_table[k]->roles & TRANSPORT_INPUT) {
+                    size_t m = strlen(list);
+                    snprintf(list + m, sizeof list - m, "%s%s", m ? ", " : "",
+                             transport_table[k]->name);
+                }
+            return why_set(why, wl, "expected one of %s, got '%s'", list, kv->value);
+        }
+        o->input = t;
+        return 0;
+    }
+    if (strcmp(kv->key, "output") == 0) {
+        char buf[CFG_LINE_MAX];
+        snprintf(buf, sizeof buf, "%s", kv->value);
+        o->noutput = 0;
+        for (char *save = NULL, *tok = strtok_r(buf, ", \t", &save); tok;
+             tok = strtok_r(NULL, ", \t", &save)) {
+            const transport_t *t = transport_find(tok);
+            if (!t || !(t->roles & TRANSPORT_OUTPUT)) {
+                char list[160] = "";
+                for (unsigned k = 0; transport_table[k]; k++)
+                    if (transport_table[k]->roles & TRANSPORT_OUTPUT) {
+                        size_t m = strlen(list);
+                        snprintf(list + m, sizeof list - m, "%s%s", m ? ", " : "",
+                                 transport_table[k]->name);
+                    }
+                return why_set(why, wl, "unknown output '%s' (outputs: %s)", tok, list);
+            }
+            for (unsigned k = 0; k < o->noutput; k++)
+                if (o->output[k] == t)
+                    return why_set(why, wl, "output '%s' listed twice", tok);
+            if (o->noutput == CFG_OUTPUTS_MAX)
+                return why_set(why, wl, "more than %d outputs", CFG_OUTPUTS_MAX);
+            o->output[o->noutput++] = t;
+        }
+        if (!o->noutput)
+            return why_set(why, wl, "expected at least one output");
+        return 0;
+    }
+    if (strcmp(kv->key, "method") == 0) {
+        rc = cfg_get_enum(kv, method_names, &i, why, wl);
+        if (rc == 0)
+            e->method = (engine_method_t)i;
+        return rc;
+    }
+    if (strcmp(kv->key, "param") == 0) {
+        rc = cfg_get_enum(kv, param_names, &i, why, wl);
+        if (rc == 0)
+            e->param = (engine_param_t)i;
+        return rc;
+    }
+    if (strcmp(kv->key, "ends") == 0) {
+        rc = cfg_get_enum(kv, ends_names, &i, why, wl);
+        if (rc == 0)
+            e->ends = (engine_ends_t)i;
+        return rc;
+    }
+    if (strcmp(kv->key, "start_vel_m_s") == 0)
+        return get_vec3(kv, e->start_vel_m_s, why, wl);
+    if (strcmp(kv->key, "end_vel_m_s") == 0)
+        return get_vec3(kv, e->end_vel_m_s, why, wl);
+    if (strcmp(kv->key, "fragment") == 0) {
+        rc = cfg_get_int(kv, ENGINE_FRAGMENT_MIN, ENGINE_FRAGMENT_MAX, &ll, why, wl);
+        if (rc == 0)
+            e->fragment = (unsigned)ll;
+        return rc;
+    }
+    if (strcmp(kv->key, "overlap") == 0) {
+        rc = cfg_get_int(kv, 0, ENGINE_FRAGMENT_MAX - 1, &ll, why, wl);
+        if (rc == 0)
+            e->overlap = (unsigned)ll;
+        return rc;
+    }
+    if (strcmp(kv->key, "capacity") == 0) {
+        rc = cfg_get_int(kv, 1, 1 << 20, &ll, why, wl);
+        if (rc == 0)
+            e->capacity = (unsigned)ll;
+        return rc;
+    }
+    if (strcmp(kv->key, "max_gap_s") == 0)
+        return cfg_get_double(kv, 1e-6, 1e9, &e->max_gap_s, why, wl);
+    if (strcmp(kv->key, "max_abs_m") == 0)
+        return cfg_get_double(kv, 1e-6, 1e12, &e->max_abs_m, why, wl);
+    if (strcmp(kv->key, "max_speed_m_s") == 0)
+        return cfg_get_double(kv, 0, 1e9, &e->max_speed_m_s, why, wl);
+    if (strcmp(kv->key, "max_segment_s") == 0)
+        return cfg_get_double(kv, 1e-6, 1e9, &e->max_segment_s, why, wl);
+    return -CFG_EUNKNOWN;
+}
+
+/* inih's handler: one "key = value". */
+static int handler(void *user, const char *section, const char *name, const char *value)
+{
+    parse_t *p = user;
+    cfg_t *c = p->c;
+    if (p->err)
+        return 0;
+    (void)section; /* == p->sec_name: the reader saw the header */
+    cfg_kv_t kv = {.file = c->path, .dir = c->dir, .section = p->sec_name, .key = name,
+                   .value = value, .line = p->line, .object = NULL};
+    char why[CFG_WHY_MAX] = "";
+    int rc;
+    if (p->kind == SEC_NONE && !p->sec_name[0]) {
+        fail(p, CFG_ESYNTAX, p->line, "%s: key before any [section]", name);
+        return 0;
+    }
+    if (seen_before(p, p->sec_name, name)) {
+        fail(p, CFG_EDUP, p->line, "[%s] %s: given twice", p->sec_name, name);
+        return 0;
+    }
+    switch (p->kind) {
+    case SEC_DAEMON:
+        rc = key_daemon(c, p, &kv, why, sizeof why);
+        break;
+    case SEC_RT:
+        rc = key_rt(c, &kv, why, sizeof why);
+        break;
+    case SEC_OBJ:
+        kv.object = c->obj[p->sec_index].name;
+        rc = key_obj(p, &c->obj[p->sec_index], &kv, why, sizeof why);
+        break;
+    case SEC_TRANSPORT: {
+        const transport_t *t = transport_table[p->sec_index];
+        rc = t->cfg_key(c->tcfg[p->sec_index], &kv, why, sizeof why);
+        break;
+    }
+    default:
+        return 0; /* the section itself was already reported */
+    }
+    if (rc == -CFG_EUNKNOWN)
+        fail(p, CFG_EUNKNOWN, p->line, "[%s] %s: unknown key", p->sec_name, name);
+    else if (rc < 0)
+        fail(p, -rc, p->line, "[%s] %s: %s", p->sec_name, name,
+             why[0] ? why : cfg_strerror(rc));
+    return rc == 0;
+}
+
+/* Rules that need the whole file. */
+static void check_all(parse_t *p)
+{
+    cfg_t *c = p->c;
+    char why[CFG_WHY_MAX];
+    if (p->err)
+        return;
+    c->daemon.period_ns = (int64_t)llround(1e9 / c->daemon.rate_hz);
+    if (c->nobj == 0) {
+        fail(p, CFG_EMISSING, 0, "no [object.NAME] section: nothing to do");
+        return;
+    }
+    for (unsigned i = 0; i < c->nobj; i++) {
+        cfg_obj_t *o = &c->obj[i];
+        for (unsigned j = 0; j < i; j++)
+            if (strcmp(c->obj[j].name, o->name) == 0) {
+                fail(p, CFG_EDUP, o->line, "[object.%s]: object given twice", o->name);
+                return;
+            }
+        if (!o->input) {
+            fail(p, CFG_EMISSING, o->line, "[object.%s]: 'input' is missing", o->name);
+            return;
+        }
+        if (!o->noutput) {
+            fail(p, CFG_EMISSING, o->line, "[object.%s]: 'output' is missing", o->name);
+            return;
+        }
+        for (unsigned t = 0; transport_table[t]; t++)
+            if (p->tkey_line[i][t] && !cfg_obj_uses(o, transport_table[t])) {
+                fail(p, CFG_EVALUE, p->tkey_line[i][t],
+                     "[object.%s] %s.*: keys for transport '%s', which this object does not "
+                     "use (input or output)",
+                     o->name, transport_table[t]->name, transport_table[t]->name);
+                return;
+            }
+        o->engine.period_ns = c->daemon.period_ns;
+        const char *ewhy = NULL;
+        if (engine_config_check(&o->engine, &ewhy) < 0) {
+            fail(p, CFG_EVALUE, o->line, "[object.%s]: engine settings: %s", o->name,
+                 ewhy ? ewhy : "invalid");
+            return;
+        }
+    }
+    for (unsigned t = 0; transport_table[t]; t++) {
+        const transport_t *tr = transport_table[t];
+        if (!tr->check || !cfg_uses(c, tr))
+            continue;
+        why[0] = 0;
+        int line = c->tline[t];
+        int rc = tr->check(c, &line, why, sizeof why);
+        if (rc < 0) {
+            fail(p, rc == -CFG_EMISSING ? CFG_EMISSING : CFG_EVALUE, line, "[%s]: %s",
+                 tr->name, why[0] ? why : "invalid");
+            return;
+        }
+    }
+}
+
+static void defaults(cfg_t *c)
+{
+    c->daemon.rate_hz = 100;
+    c->daemon.speed = 1.0;
+    c->daemon.status_interval_s = 10;
+    c->daemon.stop_timeout_s = 5;
+    c->daemon.exit_when_done = 0;
+    c->daemon.log_level = LOG_INFO;
+}
+
+static int parse(parse_t *p, const char *name, const char *dir, cfg_t **out, char *err,
+                 size_t errlen)
+{
+    cfg_t *c = calloc(1, sizeof *c);
+    int rc = 0;
+    if (!c) {
+        snprintf(err, errlen, "%s: out of memory", name);
+        return -CFG_ENOMEM;
+    }
+    p->c = c;
+    snprintf(c->path, sizeof c->path, "%s", name);
+    snprintf(c->dir, sizeof c->dir, "%s", dir);
+    defaults(c);
+    for (unsigned t = 0; transport_table[t]; t++)
+        if (alloc_block(&c->tcfg[t], transport_table[t]->cfg_size,
+                        transport_table[t]->cfg_default) < 0) {
+            snprintf(err, errlen, "%s: out of memory", name);
+            cfg_free(c);
+            return -CFG_ENOMEM;
+        }
+    int line = ini_parse_stream(reader, p, handler, p);
+    if (line > 0 && !p->err)
+        fail(p, CFG_ESYNTAX, line, "syntax error (expected [section] or key = value)");
+    else if (line > 0 && line < p->err_line && p->err != CFG_ESYNTAX) {
+        /* inih found a syntax error on an earlier line than ours */
+        p->err = 0;
+        fail(p, CFG_ESYNTAX, line, "syntax error (expected [section] or key = value)");
+    }
+    check_all(p);
+    free(p->seen);
+    if (p->err) {
+        if (p->err_line > 0)
+            snprintf(err, errlen, "%s:%d: %s", name, p->err_line, p->msg);
+        else
+            snprintf(err, errlen, "%s: %s", name, p->msg);
+        rc = -p->err;
+        cfg_free(c);
+        *out = NULL;
+        return rc;
+    }
+    *out = c;
+    return 0;
+}
+
+int cfg_load_string(const char *text, const char *name, const char *dir, cfg_t **out,
+                    char *err, size_t errlen)
+{
+    parse_t *p = calloc(1, sizeof *p);
+    if (!p) {
+        snprintf(err, errlen, "%s: out of memory", name);
+        return -CFG_ENOMEM;
+    }
+    p->text = text;
+    int rc = parse(p, name, dir ? dir : ".", out, err, errlen);
+    free(p);
+    return rc;
+}
+
+int cfg_load(const char *path, cfg_t **out, char *err, size_t errlen)
+{
+    *out = NULL;
+    FILE *fp = fopen(path, "r");
+    if (!fp) {
+        snprintf(err, errlen, "%s: %s", path, strerror(errno));
+        return -CFG_EIO;
+    }
+    char dir[PATH_MAX];
+    const char *slash = strrchr(path, '/');
+    if (!slash)
+        snprintf(dir, sizeof dir, ".");
+    else if (slash == path)
+        snprintf(dir, sizeof dir, "/");
+    else
+        snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    parse_t *p = calloc(1, sizeof *p);
+    if (!p) {
+        fclose(fp);
+        snprintf(err, errlen, "%s: out of memory", path);
+        return -CFG_ENOMEM;
+    }
+    p->fp = fp;
+    int rc = parse(p, path, dir, out, err, errlen);
+    if (rc == 0 && ferror(fp)) {
+        snprintf(err, errlen, "%s: read error", path);
+        cfg_free(*out);
+        *out = NULL;
+        rc = -CFG_EIO;
+    }
+    fclose(fp);
+    free(p);
+    return rc;
+}
+
+void cfg_free(cfg_t *c)
+{
+    if (!c)
+        return;
+    for (unsigned t = 0; transport_table[t]; t++) {
+        const transport_t *tr = transport_table[t];
+        /* obj[nobj] may hold blocks of a section that failed half-way */
+        unsigned n = c->nobj < CFG_OBJECTS_MAX ? c->nobj + 1 : c->nobj;
+        for (unsigned i = 0; i < n; i++) {
+            if (c->obj[i].tcfg[t] && tr->obj_cfg_fini)
+                tr->obj_cfg_fini(c->obj[i].tcfg[t]);
+            free(c->obj[i].tcfg[t]);
+        }
+        if (c->tcfg[t] && tr->cfg_fini)
+            tr->cfg_fini(c->tcfg[t]);
+        free(c->tcfg[t]);
+    }
+    free(c);
+}
+
+const void *cfg_transport(const cfg_t *c, const transport_t *t)
+{
+    int i = transport_index(t);
+    return i < 0 ? NULL : c->tcfg[i];
+}
+
+const void *cfg_obj_transport(const cfg_obj_t *o, const transport_t *t)
+{
+    int i = transport_index(t);
+    return i < 0 ? NULL : o->tcfg[i];
+}
+
+int cfg_obj_uses(const cfg_obj_t *o, const transport_t *t)
+{
+    int r = o->input == t ? 1 : 0;
+    for (unsigned k = 0; k < o->noutput; k++)
+        if (o->output[k] == t)
+            r |= 2;
+    return r;
+}
+
+int cfg_uses(const cfg_t *c, const transport_t *t)
+{
+    int i = transport_index(t);
+    if (i >= 0 && c->tline[i])
+        return 1;
+    for (unsigned k = 0; k < c->nobj; k++)
+        if (cfg_obj_uses(&c->obj[k], t))
+            return 1;
+    return 0;
+}

@@ -1,0 +1,157 @@
+/*
+ * cfg.h - trajd's configuration file (INI, parsed by libinih), checked as a
+ * whole before anything is opened, so a bad file (at start, at SIGHUP, or with
+ * `trajd --check-config FILE`) is rejected with "file:line: message" and
+ * changes nothing.  Every key is documented, with its default and unit, in
+ * config/trajd.conf.
+ *
+ * Sections:
+ *   [daemon]        rate, replay speed, status line, stop policy, logging (core)
+ *   [realtime]      SCHED_FIFO priority, mlockall, CPU affinity (core)
+ *   [object.NAME]   one moving object: its engine settings, input = <transport>,
+ *                   output = <transport>[, <transport> ...]; keys "T.key" belong
+ *                   to transport T (e.g. replay.track, csv.path, can.rx_id)
+ *   [T]             daemon-wide settings of transport T (e.g. [can], [modbus])
+ *
+ * How a transport adds its keys (see transport.h): it declares, in its
+ * transport_t, the size of a daemon-wide config block and of a per-object
+ * block, a function that fills defaults, and a key function that parses one
+ * key into the block.  The parser here routes [T] keys and "T.key" object
+ * keys to T's key function, and reports whatever it answers with file:line.
+ * Nothing in this file needs editing for a new transport.
+ *
+ * Errors (negated in return values): see enum cfg_error.
+ */
+#ifndef TRAJD_CFG_H
+#define TRAJD_CFG_H
+
+#include <limits.h>
+#include <sched.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "engine.h"
+
+#define CFG_OBJECTS_MAX 32     /* objects per daemon */
+#define CFG_NAME_MAX 32        /* object name, with its NUL ([A-Za-z0-9_-]) */
+#define CFG_OUTPUTS_MAX 4      /* outputs per object */
+#define CFG_TRANSPORTS_MAX 16  /* transports in transport_table */
+#define CFG_WHY_MAX 256        /* room for a key function's message */
+
+enum cfg_error {
+    CFG_OK = 0,
+    CFG_EUNKNOWN = 1,   /* unknown section or key */
+    CFG_EVALUE = 2,     /* bad value (why says which rule) */
+    CFG_EMISSING = 3,   /* a required key or section is missing */
+    CFG_EIO = 4,        /* cannot open or read the file */
+    CFG_ENOMEM = 5,     /* out of memory */
+    CFG_ESYNTAX = 6,    /* not INI (no '=', unterminated section, line too long) */
+    CFG_EDUP = 7,       /* key or section given twice */
+    CFG_ERROR_COUNT
+};
+
+/* Text for a cfg_error (positive or negated). */
+const char *cfg_strerror(int err);
+
+struct transport;
+
+/* One "key = value" line, as handed to a transport's key function. */
+typedef struct {
+    const char *file;     /* config file path, for messages */
+    const char *dir;      /* its directory: relative paths are resolved against it */
+    const char *section;  /* "can", "object.boat", ... */
+    const char *object;   /* object name for [object.NAME] keys, else NULL */
+    const char *key;      /* key without the "T." prefix */
+    const char *value;    /* value, trimmed, inline ';' comment removed */
+    int line;             /* 1-based line number */
+} cfg_kv_t;
+
+/* [daemon] */
+typedef struct {
+    double rate_hz;             /* output rate shared by all objects */
+    int64_t period_ns;          /* 1e9 / rate_hz, rounded */
+    double speed;               /* engine time per wall-clock time (replay speed) */
+    double status_interval_s;   /* status line period, 0 = never */
+    double stop_timeout_s;      /* SIGTERM: longest wait for objects to come to rest */
+    int exit_when_done;         /* exit 0 once every input is done and every object is finished */
+    int log_level;              /* LOG_ERR .. LOG_DEBUG */
+} cfg_daemon_t;
+
+/* [realtime] (all off by default) */
+typedef struct {
+    int fifo_priority;          /* 0 = SCHED_OTHER, 1..99 = SCHED_FIFO priority */
+    int mlockall;               /* lock current and future pages */
+    int affinity_set;           /* 1 if cpu_affinity was given */
+    cpu_set_t affinity;         /* CPUs the daemon may run on */
+} cfg_rt_t;
+
+/* [object.NAME] */
+typedef struct {
+    char name[CFG_NAME_MAX];
+    int line;                                   /* line of its section header */
+    engine_config_t engine;                     /* period_ns = daemon.period_ns */
+    const struct transport *input;              /* required */
+    const struct transport *output[CFG_OUTPUTS_MAX];
+    unsigned noutput;                           /* >= 1 */
+    void *tcfg[CFG_TRANSPORTS_MAX];             /* per-object block of each transport, by index */
+} cfg_obj_t;
+
+typedef struct cfg {
+    char path[PATH_MAX];
+    char dir[PATH_MAX];
+    cfg_daemon_t daemon;
+    cfg_rt_t rt;
+    cfg_obj_t obj[CFG_OBJECTS_MAX];
+    unsigned nobj;                              /* >= 1 */
+    void *tcfg[CFG_TRANSPORTS_MAX];             /* daemon-wide block of each transport, by index */
+    int tline[CFG_TRANSPORTS_MAX];              /* line of its [T] section, 0 if absent */
+} cfg_t;
+
+/*
+ * Read and check path.  On success *out is a new cfg_t (release with
+ * cfg_free) and 0 is returned.  On failure returns a negated cfg_error, *out
+ * is NULL and err holds "path:line: [section] key: message" (the first
+ * error found; line 0 is left out for whole-file errors).
+ */
+int cfg_load(const char *path, cfg_t **out, char *err, size_t errlen);
+
+/* The same from text in memory; name is used in messages, dir for relative paths. */
+int cfg_load_string(const char *text, const char *name, const char *dir, cfg_t **out,
+                    char *err, size_t errlen);
+
+/* Release (the transports' blocks too, via their cfg_fini/obj_cfg_fini).  NULL is a no-op. */
+void cfg_free(cfg_t *c);
+
+/* Daemon-wide block of transport t (its defaults if [t] was absent). */
+const void *cfg_transport(const cfg_t *c, const struct transport *t);
+
+/* Per-object block of transport t for object o (its defaults if no "t." key was given). */
+const void *cfg_obj_transport(const cfg_obj_t *o, const struct transport *t);
+
+/* 1 if t is some object's input or output, or its [t] section is present. */
+int cfg_uses(const cfg_t *c, const struct transport *t);
+
+/* 1 if object o has t as input, 2 as output, 3 both, 0 neither. */
+int cfg_obj_uses(const cfg_obj_t *o, const struct transport *t);
+
+/* ---- value helpers for key functions: 0, or -CFG_EVALUE with why filled ---- */
+
+/* Finite decimal number in [lo, hi]. */
+int cfg_get_double(const cfg_kv_t *kv, double lo, double hi, double *out, char *why,
+                   size_t whylen);
+
+/* Integer (decimal, or 0x hex) in [lo, hi]. */
+int cfg_get_int(const cfg_kv_t *kv, long long lo, long long hi, long long *out, char *why,
+                size_t whylen);
+
+/* yes/no, true/false, on/off, 1/0. */
+int cfg_get_bool(const cfg_kv_t *kv, int *out, char *why, size_t whylen);
+
+/* One of names[] (NULL-terminated); *out is its index. */
+int cfg_get_enum(const cfg_kv_t *kv, const char *const *names, int *out, char *why,
+                 size_t whylen);
+
+/* A path, made absolute against kv->dir if relative (not checked for existence). */
+int cfg_get_path(const cfg_kv_t *kv, char *out, size_t outlen, char *why, size_t whylen);
+
+#endif

@@ -1,0 +1,307 @@
+/* core.c - objects, output clock, tick, stop policy (see core.h). */
+#include "core.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/timerfd.h>
+#include <time.h>
+#include <unistd.h>
+
+/* Private part of the core, after the public struct. */
+typedef struct {
+    core_t pub;
+    int clock_fd;
+    int64_t wall_base_ns;     /* CLOCK_MONOTONIC of deadline 0 */
+    int64_t wall_period_ns;   /* period_ns / speed, whole ns */
+    uint64_t next_k;          /* index of the next deadline not yet served */
+    int64_t stop_deadline_ns; /* CLOCK_MONOTONIC after which stopping gives up */
+    uint64_t ticks_at_stop;
+    int opened[CFG_TRANSPORTS_MAX];
+} core_priv_t;
+
+int64_t core_mono_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
+}
+
+int obj_push(obj_t *o, obj_source_t src, const engine_waypoint_t *wp)
+{
+    obj_src_stats_t *st = &o->src[src < OBJ_SRC_COUNT ? src : 0];
+    st->offered++;
+    if (o->stopping) {
+        st->refused++;
+        return -ENGINE_ESTATE;
+    }
+    int rc = engine_push(o->engine, wp);
+    if (rc == 0)
+        st->accepted++;
+    else if (rc == ENGINE_DUPLICATE)
+        st->duplicates++;
+    else if (rc == -ENGINE_EFULL)
+        st->full++;
+    else
+        st->rejected++;
+    return rc;
+}
+
+obj_t *core_obj_find(core_t *c, const char *name)
+{
+    for (unsigned i = 0; i < c->nobj; i++)
+        if (strcmp(c->obj[i].name, name) == 0)
+            return &c->obj[i];
+    return NULL;
+}
+
+static void tick(core_priv_t *p, uint64_t k, int64_t wake_ns)
+{
+    core_t *c = &p->pub;
+    int64_t now_ns = (int64_t)k * c->period_ns;
+    c->now_ns = now_ns;
+    c->cycle = k;
+
+    if (!c->stopping)
+        for (unsigned i = 0; i < c->nobj; i++) {
+            obj_t *o = &c->obj[i];
+            if (o->cfg->input->pre_tick)
+                o->cfg->input->pre_tick(c->tstate[transport_index(o->cfg->input)], o, now_ns);
+        }
+    for (unsigned i = 0; i < c->nobj; i++) {
+        obj_t *o = &c->obj[i];
+        engine_tick(o->engine, now_ns, &o->sp);
+        engine_status(o->engine, &o->status);
+    }
+    for (unsigned i = 0; i < c->nobj; i++) {
+        obj_t *o = &c->obj[i];
+        for (unsigned j = 0; j < o->cfg->noutput; j++) {
+            const transport_t *t = o->cfg->output[j];
+            if (t->setpoint)
+                t->setpoint(c->tstate[transport_index(t)], o, &o->sp);
+        }
+    }
+    for (unsigned t = 0; transport_table[t]; t++)
+        if (p->opened[t] && transport_table[t]->cycle)
+            transport_table[t]->cycle(c->tstate[t], c, now_ns);
+
+    stats_t *s = c->stats;
+    s->ticks++;
+    int64_t late_ns = wake_ns - (p->wall_base_ns + (int64_t)k * p->wall_period_ns);
+    uint64_t late_us = late_ns > 0 ? (uint64_t)(late_ns / 1000) : 0;
+    lat_add(&s->late_hist, late_us);
+    lat_add(&s->late_recent_hist, late_us);
+    if (core_mono_ns() > p->wall_base_ns + (int64_t)(k + 1) * p->wall_period_ns)
+        s->overruns++;
+    if (core_done(c))
+        loop_stop(c->loop, 0);
+}
+
+static void on_clock(loop_t *l, int fd, uint32_t events, void *ctx)
+{
+    core_priv_t *p = ctx;
+    uint64_t n = 0;
+    (void)l;
+    (void)events;
+    int64_t wake_ns = core_mono_ns();
+    if (read(fd, &n, sizeof n) != (ssize_t)sizeof n || n == 0)
+        return; /* EAGAIN: spurious wake-up */
+    /* n deadlines passed since the last read: serve only the latest. */
+    uint64_t k = p->next_k + n - 1;
+    p->pub.stats->missed_ticks += n - 1;
+    p->next_k = k + 1;
+    tick(p, k, wake_ns);
+}
+
+int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **out, char *why,
+              size_t whylen)
+{
+    core_priv_t *p = calloc(1, sizeof *p);
+    int rc;
+    *out = NULL;
+    if (!p) {
+        snprintf(why, whylen, "out of memory");
+        return -ENOMEM;
+    }
+    core_t *c = &p->pub;
+    p->clock_fd = -1;
+    c->loop = loop;
+    c->cfg = cfg;
+    c->stats = stats;
+    c->period_ns = cfg->daemon.period_ns;
+    c->nobj = cfg->nobj;
+    c->obj = calloc(cfg->nobj, sizeof *c->obj);
+    if (!c->obj) {
+        snprintf(why, whylen, "out of memory");
+        rc = -ENOMEM;
+        goto fail;
+    }
+    for (unsigned i = 0; i < cfg->nobj; i++) {
+        obj_t *o = &c->obj[i];
+        int err = 0;
+        snprintf(o->name, sizeof o->name, "%s", cfg->obj[i].name);
+        o->index = i;
+        o->cfg = &cfg->obj[i];
+        o->engine = engine_new(&cfg->obj[i].engine, &err);
+        if (!o->engine) {
+            snprintf(why, whylen, "object '%s': engine: %s", o->name, engine_strerror(err));
+            rc = -ENOMEM;
+            goto fail;
+        }
+        engine_status(o->engine, &o->status);
+    }
+    for (unsigned t = 0; transport_table[t]; t++) {
+        const transport_t *tr = transport_table[t];
+        if (!cfg_uses(cfg, tr) || !tr->open)
+            continue;
+        char w[256] = "";
+        rc = tr->open(c, &c->tstate[t], w, sizeof w);
+        if (rc < 0) {
+            snprintf(why, whylen, "%s: %s", tr->name, w[0] ? w : strerror(-rc));
+            goto fail;
+        }
+        p->opened[t] = 1;
+    }
+    *out = c;
+    return 0;
+fail:
+    core_close(c);
+    return rc;
+}
+
+int core_start(core_t *c)
+{
+    core_priv_t *p = (core_priv_t *)c;
+    double speed = c->cfg->daemon.speed;
+    p->wall_period_ns = (int64_t)llround((double)c->period_ns / speed);
+    if (p->wall_period_ns < 1)
+        p->wall_period_ns = 1;
+    p->clock_fd = timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
+    if (p->clock_fd < 0)
+        return -errno;
+    p->wall_base_ns = core_mono_ns() + p->wall_period_ns;
+    p->next_k = 0;
+    struct itimerspec its = {
+        .it_value = {.tv_sec = p->wall_base_ns / 1000000000,
+                     .tv_nsec = p->wall_base_ns % 1000000000},
+        .it_interval = {.tv_sec = p->wall_period_ns / 1000000000,
+                        .tv_nsec = p->wall_period_ns % 1000000000},
+    };
+    int rc = 0;
+    if (timerfd_settime(p->clock_fd, TFD_TIMER_ABSTIME, &its, NULL) < 0)
+        rc = -errno;
+    else
+        rc = loop_add(c->loop, p->clock_fd, EPOLLIN, on_clock, p);
+    if (rc < 0) {
+        close(p->clock_fd);
+        p->clock_fd = -1;
+    }
+    return rc;
+}
+
+void core_stop(core_t *c)
+{
+    core_priv_t *p = (core_priv_t *)c;
+    if (c->stopping)
+        return;
+    c->stopping = 1;
+    p->stop_deadline_ns = core_mono_ns() + (int64_t)llround(c->cfg->daemon.stop_timeout_s * 1e9);
+    p->ticks_at_stop = c->stats->ticks;
+    for (unsigned i = 0; i < c->nobj; i++) {
+        c->obj[i].stopping = 1;
+        engine_stop(c->obj[i].engine);
+    }
+    for (unsigned t = 0; transport_table[t]; t++)
+        if (p->opened[t] && transport_table[t]->stop)
+            transport_table[t]->stop(c->tstate[t], c);
+}
+
+int core_done(const core_t *c)
+{
+    const core_priv_t *p = (const core_priv_t *)c;
+    if (c->stopping) {
+        if (core_mono_ns() >= p->stop_deadline_ns)
+            return 1;
+        /* engine_stop takes effect at the next tick: judge states after it */
+        if (c->stats->ticks < p->ticks_at_stop + 2 && p->clock_fd >= 0)
+            return 0;
+        for (unsigned i = 0; i < c->nobj; i++) {
+            engine_state_t s = c->obj[i].status.state;
+            if (s != ENGINE_STATE_FINISHED && s != ENGINE_STATE_WAITING)
+                return 0;
+        }
+        return 1;
+    }
+    if (!c->cfg->daemon.exit_when_done)
+        return 0;
+    for (unsigned i = 0; i < c->nobj; i++) {
+        const obj_t *o = &c->obj[i];
+        const transport_t *in = o->cfg->input;
+        if (!in->input_done || !in->input_done(c->tstate[transport_index(in)], o))
+            return 0;
+        if (o->status.state != ENGINE_STATE_FINISHED)
+            return 0;
+    }
+    return 1;
+}
+
+void core_close(core_t *c)
+{
+    if (!c)
+        return;
+    core_priv_t *p = (core_priv_t *)c;
+    if (p->clock_fd >= 0) {
+        loop_del(c->loop, p->clock_fd);
+        close(p->clock_fd);
+    }
+    for (int t = (int)transport_count() - 1; t >= 0; t--)
+        if (p->opened[t] && transport_table[t]->close)
+            transport_table[t]->close(c->tstate[t], c);
+    if (c->obj)
+        for (unsigned i = 0; i < c->nobj; i++)
+            engine_free(c->obj[i].engine);
+    free(c->obj);
+    free(p);
+}
+
+void core_stats_roll(core_t *c)
+{
+    stats_t *s = c->stats;
+    lat_summarize(&s->late_hist, &s->late);
+    lat_summarize(&s->late_recent_hist, &s->late_recent);
+    lat_reset(&s->late_recent_hist);
+}
+
+int core_summary(const core_t *c, char *buf, size_t len)
+{
+    const stats_t *s = c->stats;
+    int64_t up_s = (core_mono_ns() - s->start_mono_ns) / 1000000000;
+    size_t n = 0;
+    int m = snprintf(buf, len,
+                     "up %lld s%s, ticks %llu, missed %llu, overruns %llu, late p50/p99/max "
+                     "%u/%u/%u us",
+                     (long long)up_s, c->stopping ? " (stopping)" : "",
+                     (unsigned long long)s->ticks, (unsigned long long)s->missed_ticks,
+                     (unsigned long long)s->overruns, s->late.p50_us, s->late.p99_us,
+                     s->late.max_us);
+    if (m < 0)
+        return m;
+    n = (size_t)m < len ? (size_t)m : len;
+    if (s->out_dropped && n < len) {
+        m = snprintf(buf + n, len - n, ", out dropped %llu",
+                     (unsigned long long)s->out_dropped);
+        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+    }
+    for (unsigned i = 0; i < c->nobj && n < len; i++) {
+        const obj_t *o = &c->obj[i];
+        m = snprintf(buf + n, len - n, "; %s %s t=%.1f s, wp %llu ok %llu rejected, %llu underruns",
+                     o->name, engine_state_name(o->status.state), o->sp.t_s,
+                     (unsigned long long)o->status.accepted,
+                     (unsigned long long)o->status.rejected,
+                     (unsigned long long)o->status.underruns);
+        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+    }
+    return (int)n;
+}

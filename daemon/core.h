@@ -1,0 +1,172 @@
+/*
+ * core.h - the daemon's core: the moving objects, the output clock and the
+ * daemon-wide statistics, as seen by the transports (CAN, Modbus, replay,
+ * csv) and by trajd.c, which only wires things together.
+ *
+ * One tick (the output clock: a timerfd on CLOCK_MONOTONIC, absolute
+ * deadlines, so the rate does not drift).  Deadline k is at wall time
+ * start + k * period_ns / speed and at ENGINE time now_ns = k * period_ns
+ * (engine time starts at 0 when the objects are created, so a replay matches
+ * trajreplay's virtual clock exactly).  When the timerfd reports n > 1
+ * expirations (the daemon was late), the n - 1 older deadlines are skipped
+ * and counted in stats.missed_ticks; one tick runs for the latest deadline
+ * (never a burst of stale ticks).  Then, in this order:
+ *   1. for each object (in config order) whose input has pre_tick, unless stopping:
+ *        input->pre_tick(state, o, now_ns)
+ *   2. for each object: engine_tick(o->engine, now_ns, &o->sp);
+ *        o->status refreshed (engine_status)
+ *   3. for each object, for each of its outputs: output->setpoint(state, o, &o->sp)
+ *   4. for each open transport: cycle(state, core, now_ns)
+ *   5. lateness (wake-up time - deadline) goes into the histogram; an
+ *      overrun is counted if the work ended after the next deadline.
+ * All of it runs in the one loop thread: a transport's fd callbacks and the
+ * tick never run at the same time, so a callback sees o->sp and o->status of
+ * the last complete tick (a consistent snapshot) without locking.
+ *
+ * Stop policy (SIGTERM/SIGINT, core_stop): inputs stop (no pre_tick,
+ * obj_push refuses with -ENGINE_ESTATE), every engine gets engine_stop() so
+ * it runs on to its last buffered waypoint and rests there (FINISHED), the
+ * outputs keep streaming meanwhile; the daemon exits 0 when every object is
+ * FINISHED or WAITING (nothing to finish), or after [daemon] stop_timeout_s,
+ * whichever comes first.  A second signal exits at once (still 0).
+ */
+#ifndef TRAJD_CORE_H
+#define TRAJD_CORE_H
+
+#include <stdint.h>
+
+#include "cfg.h"
+#include "engine.h"
+#include "latency.h"
+#include "loop.h"
+#include "transport.h"
+
+/* Where a waypoint came from (per-source counters in obj_t). */
+typedef enum {
+    OBJ_SRC_REPLAY = 0,
+    OBJ_SRC_CAN = 1,
+    OBJ_SRC_MODBUS = 2,
+    OBJ_SRC_COUNT
+} obj_source_t;
+
+/* Counters of waypoints offered by one source. */
+typedef struct {
+    uint64_t offered;       /* obj_push calls */
+    uint64_t accepted;      /* engine_push returned 0 */
+    uint64_t duplicates;    /* ENGINE_DUPLICATE */
+    uint64_t full;          /* -ENGINE_EFULL (sender must retry: flow control) */
+    uint64_t rejected;      /* any other error (bad data), see o->status.rejected_by */
+    uint64_t refused;       /* daemon stopping */
+} obj_src_stats_t;
+
+/* One moving object. */
+typedef struct obj {
+    char name[CFG_NAME_MAX];
+    unsigned index;                 /* 0-based, config order */
+    const cfg_obj_t *cfg;           /* its [object.NAME] section (engine settings, transport blocks) */
+    engine_t *engine;
+    engine_setpoint_t sp;           /* setpoint of the last tick (zero before the first) */
+    engine_status_t status;         /* engine status after the last tick */
+    obj_src_stats_t src[OBJ_SRC_COUNT];
+    int stopping;                   /* the daemon is stopping: obj_push refuses */
+    void *tstate[CFG_TRANSPORTS_MAX]; /* free slot per transport (by index) for its per-object state */
+} obj_t;
+
+/*
+ * Offer a waypoint to o's engine, counted under src.  For event-driven inputs
+ * (CAN frames, Modbus writes), from their fd callbacks.  Returns what
+ * engine_push returns (0, ENGINE_DUPLICATE, -ENGINE_*), or -ENGINE_ESTATE
+ * while the daemon is stopping.
+ */
+int obj_push(obj_t *o, obj_source_t src, const engine_waypoint_t *wp);
+
+/* CAN bus state as published to Modbus (values follow linux/can/netlink.h, plus DOWN). */
+typedef enum {
+    STATS_CAN_UNUSED = 0,
+    STATS_CAN_ERROR_ACTIVE = 1,
+    STATS_CAN_ERROR_WARNING = 2,
+    STATS_CAN_ERROR_PASSIVE = 3,
+    STATS_CAN_BUS_OFF = 4,
+    STATS_CAN_DOWN = 5,            /* interface down or gone; reopening */
+} stats_can_state_t;
+
+/* Daemon-wide statistics.  The core fills the tick part; transports fill theirs. */
+typedef struct {
+    int64_t start_mono_ns;          /* CLOCK_MONOTONIC at start (uptime = now - this) */
+    uint64_t ticks;                 /* ticks run */
+    uint64_t missed_ticks;          /* deadlines skipped (timerfd expirations - 1, summed) */
+    uint64_t overruns;              /* ticks whose work ended after the next deadline */
+    uint64_t reloads;               /* successful SIGHUP reloads */
+    uint64_t reload_failures;       /* refused reloads (old config kept) */
+    lat_hist_t late_hist;           /* lateness since start / reset, us */
+    lat_hist_t late_recent_hist;    /* lateness in the current 1 s window */
+    lat_summary_t late;             /* summary of late_hist, refreshed every second */
+    lat_summary_t late_recent;      /* summary of the last complete 1 s window */
+    struct {                        /* filled by the CAN transport */
+        stats_can_state_t state;
+        uint32_t load_permille;     /* worst-case bus load of the configured traffic, 0.1 % */
+        uint64_t tx_frames, rx_frames;
+        uint64_t tx_dropped;        /* late or ENOBUFS */
+        uint64_t rx_bad;            /* malformed or unknown */
+    } can;
+    struct {                        /* filled by the Modbus transport */
+        uint32_t clients;
+        uint64_t requests, exceptions;
+    } modbus;
+    uint64_t out_dropped;           /* setpoint lines dropped by csv/stdout (blocked writer) */
+} stats_t;
+
+/* The daemon core. Fields are read-only for transports except stats.can/.modbus/.out_dropped. */
+typedef struct core {
+    loop_t *loop;                   /* the event loop: loop_add your fds here */
+    const cfg_t *cfg;               /* the running configuration */
+    obj_t *obj;                     /* nobj objects, config order */
+    unsigned nobj;
+    int64_t period_ns;              /* engine time per tick */
+    int64_t now_ns;                 /* engine time of the last tick */
+    uint64_t cycle;                 /* index k of the last tick's deadline */
+    int stopping;                   /* SIGTERM received: bringing objects to rest */
+    stats_t *stats;                 /* survives reloads */
+    void *tstate[CFG_TRANSPORTS_MAX]; /* each open transport's state (NULL if not open) */
+} core_t;
+
+/* Object by name, or NULL. */
+obj_t *core_obj_find(core_t *c, const char *name);
+
+/* Monotonic clock in ns (CLOCK_MONOTONIC). */
+int64_t core_mono_ns(void);
+
+/* ---- lifecycle, for trajd.c and the tests ---- */
+
+/*
+ * Create the objects and engines of cfg and open every transport cfg uses.
+ * Does not start the clock.  On failure returns a negative code with a
+ * message in why, and nothing is left open.  cfg and stats must outlive the core.
+ */
+int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **out, char *why,
+              size_t whylen);
+
+/* Arm the output clock: first deadline one period from now. Returns 0 or -errno. */
+int core_start(core_t *c);
+
+/*
+ * Begin the stop policy above.  Calls each transport's stop.  Idempotent.
+ * core_done() then reports when the daemon may exit.
+ */
+void core_stop(core_t *c);
+
+/* 1 when stopping and every object is at rest or the stop timeout passed,
+ * or when exit_when_done is set and every input is done and object finished.
+ * The tick checks it and then calls loop_stop(loop, 0), so loop_run returns 0. */
+int core_done(const core_t *c);
+
+/* Close transports (in reverse order), free engines and the core. NULL is a no-op. */
+void core_close(core_t *c);
+
+/* One-line summary ("12 s, 3 objects: boat streaming ..., late p99 40 us ..."). */
+int core_summary(const core_t *c, char *buf, size_t len);
+
+/* Refresh stats->late / late_recent (called every second by trajd). */
+void core_stats_roll(core_t *c);
+
+#endif

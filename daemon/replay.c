@@ -1,0 +1,71 @@
+/* replay.c - feed a track into an engine by engine time.  See replay.h. */
+#include "replay.h"
+
+#include <math.h>
+#include <string.h>
+
+void replay_init(replay_t *r, const track_t *trk, int64_t start_ns)
+{
+    memset(r, 0, sizeof *r);
+    r->trk = trk;
+    r->start_ns = start_ns;
+}
+
+static int64_t due_ns(const replay_t *r, size_t i)
+{
+    double dt_s = r->trk->wp[i].t_s - r->trk->wp[0].t_s;
+    /* NaN fails both comparisons: offered at once.  Backward steps are due
+     * before start_ns: offered at once as well. */
+    if (!(dt_s > -REPLAY_T_MAX_S && dt_s < REPLAY_T_MAX_S))
+        return INT64_MIN;
+    int64_t d = (int64_t)llround(dt_s * 1e9);
+    /* |d| <= 1e18 and start_ns is a clock near 0 or a monotonic time
+     * (< 2^62): clamp instead of overflowing if it is not. */
+    if (d > 0 && r->start_ns > INT64_MAX - d)
+        return INT64_MAX;
+    if (d < 0 && r->start_ns < INT64_MIN - d)
+        return INT64_MIN;
+    return r->start_ns + d;
+}
+
+int64_t replay_next_due_ns(const replay_t *r)
+{
+    if (!r->trk || r->next >= r->trk->n)
+        return INT64_MAX;
+    return due_ns(r, r->next);
+}
+
+int replay_feed(replay_t *r, engine_t *e, int64_t now_ns)
+{
+    int taken = 0;
+    if (!r->trk)
+        return 0;
+    while (r->next < r->trk->n) {
+        if (due_ns(r, r->next) > now_ns)
+            break;
+        int rc = engine_push(e, &r->trk->wp[r->next]);
+        if (rc == -ENGINE_EFULL) {
+            r->retries++;
+            break;
+        }
+        r->last_rc = rc;
+        if (r->results)
+            r->results[r->next] = rc;
+        if (rc == ENGINE_DUPLICATE)
+            r->duplicates++;
+        else if (rc < 0)
+            r->refused++;
+        r->next++;
+        taken++;
+    }
+    if (r->next >= r->trk->n && !r->finished) {
+        (void)engine_finish(e);
+        r->finished = 1;
+    }
+    return taken;
+}
+
+int replay_done(const replay_t *r)
+{
+    return r->finished;
+}

@@ -1,0 +1,352 @@
+/*
+ * trajd.c - the daemon's main: command line, signals, systemd notify,
+ * reload.  Everything else is in core.c and the transports; this file only
+ * wires them together.
+ *
+ * Signals (signalfd, in the loop):
+ *   SIGHUP           re-read the config; a bad one is refused, the old keeps running
+ *   SIGTERM, SIGINT  stop policy of core.h (bring objects to rest, exit 0);
+ *                    a second one exits at once (0)
+ * systemd (sd_notify; no-ops without NOTIFY_SOCKET):
+ *   READY=1 once every input and output is open and the clock runs;
+ *   RELOADING=1 ... READY=1 around a reload; STOPPING=1 at SIGTERM;
+ *   WATCHDOG=1 from a loop timer at half of WATCHDOG_USEC;
+ *   STATUS=<the status line> every [daemon] status_interval_s.
+ */
+#include <errno.h>
+#include <getopt.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/signalfd.h>
+#include <sys/wait.h>
+#include <sysexits.h>
+#include <systemd/sd-daemon.h>
+#include <unistd.h>
+
+#include "cfg.h"
+#include "core.h"
+#include "log.h"
+#include "loop.h"
+#include "rt.h"
+
+#ifndef TRAJD_VERSION
+#define TRAJD_VERSION "0.1"
+#endif
+#define TRAJD_DEFAULT_CONF "/etc/trajd/trajd.conf"
+
+typedef struct {
+    const char *conf_path;
+    loop_t *loop;
+    cfg_t *cfg;
+    core_t *core;
+    stats_t stats;
+    int sig_fd;
+    int status_fd;        /* 1 s housekeeping timer */
+    int watchdog_fd;
+    uint64_t seconds;     /* housekeeping ticks */
+    int signals_seen;     /* SIGTERM/SIGINT count */
+    int ready_fd;         /* background mode: pipe to the waiting parent, else -1 */
+} trajd_t;
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: trajd [-f] [-c FILE]\n"
+            "       trajd --check-config FILE\n"
+            "Real-time trajectory interpolation daemon.\n"
+            "  -c, --config FILE     configuration (default " TRAJD_DEFAULT_CONF ")\n"
+            "  -f, --foreground      stay in the foreground (as under systemd);\n"
+            "                        without it trajd detaches once it is ready\n"
+            "      --check-config FILE  check FILE, print the first error as file:line, exit\n"
+            "  -V, --version         print the version\n"
+            "  -h, --help            this text\n"
+            "Signals: SIGHUP reloads the config, SIGTERM/SIGINT bring objects to rest and exit.\n");
+}
+
+static void notify_status(trajd_t *d)
+{
+    char line[1024];
+    core_summary(d->core, line, sizeof line);
+    sd_notifyf(0, "STATUS=%s", line);
+}
+
+static void on_second(loop_t *l, uint64_t exp, void *ctx)
+{
+    trajd_t *d = ctx;
+    (void)l;
+    if (!d->core)
+        return; /* a failed reload is ending the loop */
+    d->seconds += exp;
+    core_stats_roll(d->core);
+    double iv = d->cfg->daemon.status_interval_s;
+    if (iv > 0) {
+        uint64_t every = iv < 1 ? 1 : (uint64_t)iv;
+        if (d->seconds % every < exp) {
+            char line[1024];
+            core_summary(d->core, line, sizeof line);
+            log_msg(LOG_INFO, "status: %s", line);
+            sd_notifyf(0, "STATUS=%s", line);
+        }
+    }
+    if (d->core->stopping && core_done(d->core))
+        loop_stop(d->loop, 0); /* stop timeout passed while no tick ran */
+}
+
+static void on_watchdog(loop_t *l, uint64_t exp, void *ctx)
+{
+    (void)l;
+    (void)exp;
+    (void)ctx;
+    sd_notify(0, "WATCHDOG=1");
+}
+
+static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
+{
+    char rtwhy[256];
+    int rc = core_open(d->loop, cfg, &d->stats, &d->core, why, wl);
+    if (rc < 0)
+        return rc;
+    rc = core_start(d->core);
+    if (rc < 0) {
+        snprintf(why, wl, "output clock: %s", strerror(-rc));
+        core_close(d->core);
+        d->core = NULL;
+        return rc;
+    }
+    log_set_level(cfg->daemon.log_level);
+    if (rt_apply(&cfg->rt, rtwhy, sizeof rtwhy) < 0)
+        log_msg(LOG_WARNING, "realtime settings not applied (running without them): %s",
+                rtwhy);
+    return 0;
+}
+
+static void reload(trajd_t *d)
+{
+    char err[1024];
+    cfg_t *nc = NULL;
+    if (d->core->stopping)
+        return;
+    sd_notifyf(0, "RELOADING=1\nMONOTONIC_USEC=%llu",
+               (unsigned long long)(core_mono_ns() / 1000));
+    log_msg(LOG_NOTICE, "SIGHUP: reloading %s", d->conf_path);
+    if (cfg_load(d->conf_path, &nc, err, sizeof err) < 0) {
+        d->stats.reload_failures++;
+        log_msg(LOG_ERR, "reload refused, still running the old configuration: %s", err);
+        sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
+        return;
+    }
+    /* Transports may hold exclusive resources (a TCP port): close the old set
+     * before opening the new one; if the new one cannot open, reopen the old. */
+    core_close(d->core);
+    d->core = NULL;
+    if (start_core(d, nc, err, sizeof err) < 0) {
+        char err2[1024];
+        d->stats.reload_failures++;
+        log_msg(LOG_ERR, "reload refused (cannot open): %s; reopening the old configuration",
+                err);
+        cfg_free(nc);
+        if (start_core(d, d->cfg, err2, sizeof err2) < 0) {
+            log_msg(LOG_CRIT, "cannot reopen the old configuration either: %s", err2);
+            loop_stop(d->loop, EX_SOFTWARE);
+            return;
+        }
+        sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
+        return;
+    }
+    cfg_free(d->cfg);
+    d->cfg = nc;
+    d->stats.reloads++;
+    log_msg(LOG_NOTICE, "reloaded: %u object(s)", nc->nobj);
+    sd_notify(0, "READY=1");
+    notify_status(d);
+}
+
+static void on_signal(loop_t *l, int fd, uint32_t events, void *ctx)
+{
+    trajd_t *d = ctx;
+    struct signalfd_siginfo si;
+    (void)events;
+    while (read(fd, &si, sizeof si) == (ssize_t)sizeof si) {
+        switch (si.ssi_signo) {
+        case SIGHUP:
+            reload(d);
+            break;
+        case SIGTERM:
+        case SIGINT:
+            if (++d->signals_seen > 1) {
+                log_msg(LOG_NOTICE, "second %s: exiting now", strsignal((int)si.ssi_signo));
+                loop_stop(l, 0);
+                return;
+            }
+            log_msg(LOG_NOTICE, "%s: bringing objects to rest (at most %.1f s)",
+                    strsignal((int)si.ssi_signo), d->cfg->daemon.stop_timeout_s);
+            sd_notify(0, "STOPPING=1");
+            core_stop(d->core);
+            break;
+        default:
+            break;
+        }
+    }
+}
+
+/* Background mode: the parent waits until the child is ready (or failed). */
+static int detach(trajd_t *d)
+{
+    int fds[2];
+    if (pipe(fds) < 0)
+        return -errno;
+    pid_t pid = fork();
+    if (pid < 0)
+        return -errno;
+    if (pid > 0) {
+        char code = 1;
+        close(fds[1]);
+        if (read(fds[0], &code, 1) != 1) {
+            int st;
+            waitpid(pid, &st, 0);
+            _exit(WIFEXITED(st) ? WEXITSTATUS(st) : 1);
+        }
+        _exit(code);
+    }
+    close(fds[0]);
+    setsid();
+    d->ready_fd = fds[1];
+    return 0;
+}
+
+static void report_ready(trajd_t *d, char code)
+{
+    if (d->ready_fd >= 0) {
+        ssize_t w = write(d->ready_fd, &code, 1);
+        (void)w;
+        close(d->ready_fd);
+        d->ready_fd = -1;
+    }
+}
+
+int main(int argc, char **argv)
+{
+    static const struct option opts[] = {
+        {"config", required_argument, NULL, 'c'},
+        {"foreground", no_argument, NULL, 'f'},
+        {"check-config", required_argument, NULL, 'C'},
+        {"version", no_argument, NULL, 'V'},
+        {"help", no_argument, NULL, 'h'},
+        {NULL, 0, NULL, 0},
+    };
+    trajd_t d = {.conf_path = TRAJD_DEFAULT_CONF, .sig_fd = -1, .status_fd = -1,
+                 .watchdog_fd = -1, .ready_fd = -1};
+    int foreground = 0, c, rc = 0;
+    const char *check = NULL;
+    char err[1024];
+
+    while ((c = getopt_long(argc, argv, "c:fVh", opts, NULL)) != -1) {
+        switch (c) {
+        case 'c':
+            d.conf_path = optarg;
+            break;
+        case 'f':
+            foreground = 1;
+            break;
+        case 'C':
+            check = optarg;
+            break;
+        case 'V':
+            printf("trajd %s\n", TRAJD_VERSION);
+            return 0;
+        case 'h':
+            usage(stdout);
+            return 0;
+        default:
+            usage(stderr);
+            return EX_USAGE;
+        }
+    }
+    if (optind < argc) {
+        fprintf(stderr, "trajd: unexpected argument '%s'\n", argv[optind]);
+        usage(stderr);
+        return EX_USAGE;
+    }
+    if (check) {
+        cfg_t *cfg;
+        if (cfg_load(check, &cfg, err, sizeof err) < 0) {
+            fprintf(stderr, "%s\n", err);
+            return EX_CONFIG;
+        }
+        printf("%s: ok, %u object(s):", check, cfg->nobj);
+        for (unsigned i = 0; i < cfg->nobj; i++)
+            printf(" %s", cfg->obj[i].name);
+        printf("\n");
+        cfg_free(cfg);
+        return 0;
+    }
+
+    if (cfg_load(d.conf_path, &d.cfg, err, sizeof err) < 0) {
+        log_msg(LOG_ERR, "%s", err);
+        return EX_CONFIG;
+    }
+    log_set_level(d.cfg->daemon.log_level);
+    if (!foreground && detach(&d) < 0) {
+        log_msg(LOG_ERR, "cannot detach: %s", strerror(errno));
+        return EX_OSERR;
+    }
+
+    /* A reader that goes away must not kill us: EPIPE is counted as a drop. */
+    signal(SIGPIPE, SIG_IGN);
+    sigset_t mask;
+    sigemptyset(&mask);
+    sigaddset(&mask, SIGHUP);
+    sigaddset(&mask, SIGTERM);
+    sigaddset(&mask, SIGINT);
+    sigprocmask(SIG_BLOCK, &mask, NULL);
+
+    int e = 0;
+    d.loop = loop_new(&e);
+    if (!d.loop) {
+        log_msg(LOG_ERR, "event loop: %s", strerror(-e));
+        rc = EX_OSERR;
+        goto out;
+    }
+    d.sig_fd = signalfd(-1, &mask, SFD_NONBLOCK | SFD_CLOEXEC);
+    if (d.sig_fd < 0 || loop_add(d.loop, d.sig_fd, EPOLLIN, on_signal, &d) < 0) {
+        log_msg(LOG_ERR, "signalfd: %s", strerror(errno));
+        rc = EX_OSERR;
+        goto out;
+    }
+    d.stats.start_mono_ns = core_mono_ns();
+    if (start_core(&d, d.cfg, err, sizeof err) < 0) {
+        log_msg(LOG_ERR, "cannot start: %s", err);
+        rc = EX_UNAVAILABLE;
+        goto out;
+    }
+    d.status_fd = loop_timer_add(d.loop, 1000000000, on_second, &d);
+    uint64_t wd_usec = 0;
+    if (sd_watchdog_enabled(0, &wd_usec) > 0 && wd_usec > 0)
+        d.watchdog_fd = loop_timer_add(d.loop, (int64_t)wd_usec * 1000 / 2, on_watchdog, &d);
+    log_msg(LOG_INFO, "started: %u object(s) at %.6g Hz, speed %.6g, config %s",
+            d.cfg->nobj, d.cfg->daemon.rate_hz, d.cfg->daemon.speed, d.conf_path);
+    sd_notify(0, "READY=1");
+    notify_status(&d);
+    report_ready(&d, 0);
+
+    rc = loop_run(d.loop);
+    if (rc < 0) {
+        log_msg(LOG_ERR, "event loop: %s", strerror(-rc));
+        rc = EX_OSERR;
+    }
+    {
+        char line[1024];
+        core_summary(d.core, line, sizeof line);
+        log_msg(LOG_INFO, "exit: %s", line);
+    }
+out:
+    report_ready(&d, (char)(rc ? rc : EX_SOFTWARE));
+    core_close(d.core);
+    if (d.sig_fd >= 0)
+        close(d.sig_fd);
+    loop_free(d.loop);
+    cfg_free(d.cfg);
+    return rc;
+}

@@ -1,0 +1,38 @@
+/* transport.c - the table of transports (see transport.h).  Add yours here. */
+#include "transport.h"
+
+#include <string.h>
+
+#include "csvout.h"
+#include "replayin.h"
+
+const transport_t *const transport_table[] = {
+    &replay_transport,  /* input: logged track replayed on engine time */
+    &csv_transport,     /* output: setpoints to a CSV file per object */
+    &stdout_transport,  /* output: setpoints of every object to stdout */
+    NULL,
+};
+
+unsigned transport_count(void)
+{
+    unsigned n = 0;
+    while (transport_table[n])
+        n++;
+    return n;
+}
+
+const transport_t *transport_find(const char *name)
+{
+    for (unsigned i = 0; transport_table[i]; i++)
+        if (strcmp(transport_table[i]->name, name) == 0)
+            return transport_table[i];
+    return NULL;
+}
+
+int transport_index(const transport_t *t)
+{
+    for (unsigned i = 0; transport_table[i]; i++)
+        if (transport_table[i] == t)
+            return (int)i;
+    return -1;
+}

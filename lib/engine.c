@@ -1,0 +1,999 @@
+/*
+ * engine.c - waypoints in, fixed-rate setpoints out; see engine.h.
+ *
+ * Two halves joined by a queue of finished segments:
+ *
+ *   input  (engine_push / engine_finish): validates a waypoint, appends it as
+ *          a node, pushes the row that node completes into the fragment
+ *          window (frag.h), and turns every segment whose control values are
+ *          all final into a cubic per axis (fdiff_seg_t), queued.  A closed
+ *          trajectory queues an END entry (where it rests).
+ *   output (engine_tick): walks the queued cubics with the forward-difference
+ *          stepper (fdiff.h) on the period grid; waits, underruns, transfers
+ *          to a new trajectory's start, finishes.
+ *
+ * All memory is taken in engine_new; push, tick, finish, clear never allocate.
+ */
+#include "engine.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cubic.h"
+#include "fdiff.h"
+#include "frag.h"
+#include "hoang.h"
+
+#define AX ENGINE_AXES
+
+enum { QE_SEG = 0, QE_END = 1 };
+
+/* One queued entry: a segment to stream, or the rest point ending a trajectory. */
+typedef struct {
+    int kind;
+    int first;            /* first entry of its trajectory */
+    double t1_s;          /* segment end (absolute track time); END: rest time */
+    fdiff_seg_t seg;      /* END: c[k][0] is the rest position, t0_s = t1_s */
+} qent_t;
+
+enum { OUT_HOLD = 0, OUT_XFER = 1, OUT_STREAM = 2 };
+
+struct engine {
+    engine_config_t cfg;
+    unsigned lookahead;
+    int pstar;            /* unknowns are Hoang control points (BSPLINE + UNIFORM) */
+    int held;             /* HELD or MULTIPLE: first and last segments not emitted */
+    int mult;             /* MULTIPLE: end points entered three times */
+    double period_s;
+
+    /* ---- input: the trajectory being received ---- */
+    int in_open;
+    uint64_t nodes;       /* nodes of the current trajectory (copies included) */
+    uint64_t seg_next;    /* next segment index to build */
+    size_t ring;          /* nodes kept */
+    double *node_t;       /* ring */
+    double *node_r;       /* ring x AX */
+    frag_t *fw;
+    int in_emitted;       /* a segment of this trajectory was queued */
+    int in_first_pending; /* the next queued entry is the trajectory's first */
+    double last_t;        /* last accepted waypoint of the current trajectory */
+    double last_r[AX];
+    double end_r[AX];     /* end of the last queued segment */
+    double end_t;
+
+    /* ---- the queue ---- */
+    qent_t *q;
+    size_t qcap, qhead, qlen;
+
+    /* ---- output ---- */
+    int mode;
+    int moved;            /* the output position means something (a trajectory was started) */
+    int finished;         /* the last trajectory ran to its end */
+    int underrun;
+    qent_t cur;           /* segment (or transfer) being stepped */
+    double cur_t0, cur_t1; /* its start and end relative to base */
+    fdiff_t fd;
+    int64_t n;            /* ticks since base */
+    int64_t seg_n0;       /* tick at which cur was seeded */
+    double origin_t;      /* absolute track time of tick 0 of the trajectory */
+    double pos[AX], vel[AX], acc[AX];
+    double out_t;         /* track time of the output */
+    uint32_t out_track;
+    uint32_t cycle;
+    uint32_t flags_pending;
+    int have_now;
+    int64_t last_now;
+    engine_setpoint_t last_sp;
+
+    engine_status_t st;
+};
+
+/* Rest-to-rest transfer: shortest duration, and the speed used when no max_speed_m_s. */
+#define ENGINE_TRANSFER_MIN_S 1.0
+#define ENGINE_TRANSFER_SPEED_M_S 10.0
+/* Output and curve start closer than this need no transfer (metres). */
+#define ENGINE_TRANSFER_TOL_M 1e-9
+/* Timestamps closer than this are "the same time" (seconds). */
+#define ENGINE_SAME_TIME_S 1e-9
+/* Positions closer than this at the same time are a duplicate (metres). */
+#define ENGINE_SAME_POS_M 1e-9
+/* |t| above this is absurd for a track clock (about 31700 years). */
+#define ENGINE_T_ABS_MAX_S 1e12
+/* Capacity accepted at most (memory is sized from it). */
+#define ENGINE_CAPACITY_MAX (1u << 22)
+
+const char *engine_strerror(int err)
+{
+    switch (err < 0 ? -err : err) {
+    case ENGINE_OK: return "success";
+    case ENGINE_ENOTFINITE: return "time or coordinate is NaN or infinite";
+    case ENGINE_ERANGE: return "coordinate above max_abs_m or time absurd";
+    case ENGINE_EBACKWARDS: return "timestamp earlier than the previous waypoint";
+    case ENGINE_ESAMETIME: return "same timestamp as the previous waypoint, different position";
+    case ENGINE_ESPEED: return "implied speed from the previous waypoint above max_speed_m_s";
+    case ENGINE_EFULL: return "waypoint buffer full: retry later";
+    case ENGINE_ECONFIG: return "invalid engine configuration";
+    case ENGINE_ENOMEM: return "out of memory";
+    case ENGINE_ESTATE: return "call not valid in this state";
+    case ENGINE_ENUMERIC: return "solver failed (singular system)";
+    default: return "unknown engine error";
+    }
+}
+
+const char *engine_state_name(engine_state_t s)
+{
+    switch (s) {
+    case ENGINE_STATE_WAITING: return "waiting";
+    case ENGINE_STATE_STREAMING: return "streaming";
+    case ENGINE_STATE_UNDERRUN: return "underrun";
+    case ENGINE_STATE_FINISHED: return "finished";
+    default: return "unknown";
+    }
+}
+
+void engine_config_default(engine_config_t *cfg)
+{
+    memset(cfg, 0, sizeof(*cfg));
+    cfg->method = ENGINE_METHOD_CUBIC;
+    cfg->param = ENGINE_PARAM_TIME;
+    cfg->ends = ENGINE_ENDS_REST;
+    cfg->fragment = 32;
+    cfg->overlap = 16;
+    cfg->period_ns = 10000000;
+    cfg->capacity = 4096;
+    cfg->max_gap_s = 60.0;
+    cfg->max_abs_m = 1e7;
+    cfg->max_speed_m_s = 100.0;
+    cfg->max_segment_s = 60.0;
+}
+
+static int uses_pstar(const engine_config_t *cfg)
+{
+    return cfg->method == ENGINE_METHOD_BSPLINE &&
+           cfg->param == ENGINE_PARAM_UNIFORM;
+}
+
+unsigned engine_lookahead(const engine_config_t *cfg)
+{
+    unsigned f = cfg->fragment, o = cfg->overlap, best = 0;
+    unsigned need = uses_pstar(cfg) ? 3 : 2; /* x[j + need - 1] final for segment j */
+    uint64_t j, n;
+
+    if (f < ENGINE_FRAGMENT_MIN || f > ENGINE_FRAGMENT_MAX || o < 2 || o % 2 ||
+        o >= f)
+        return 0;
+    /* Row r is pushed when node r+1 arrives; segment j (waypoint j to j+1)
+     * is built once frag_final_after(rows pushed) covers it.  Steady state
+     * repeats every S segments: scan a few periods past the start. */
+    for (j = 0; j < 4u * f; j++) {
+        for (n = j + 1; frag_final_after(f, o, n - 1) < j + need; n++)
+            ;
+        if (n - (j + 1) > best)
+            best = (unsigned)(n - (j + 1));
+    }
+    return best;
+}
+
+int engine_config_check(const engine_config_t *cfg, const char **why)
+{
+    const char *w = NULL;
+    unsigned la;
+
+    if (cfg->method == ENGINE_METHOD_SMOOTH)
+        w = "method: smooth (least squares) is not built into the engine yet";
+    else if (cfg->method != ENGINE_METHOD_BSPLINE && cfg->method != ENGINE_METHOD_CUBIC)
+        w = "method: unknown";
+    else if (cfg->param != ENGINE_PARAM_UNIFORM && cfg->param != ENGINE_PARAM_TIME)
+        w = "param: unknown";
+    else if ((unsigned)cfg->ends > ENGINE_ENDS_REST)
+        w = "ends: unknown";
+    else if ((cfg->ends == ENGINE_ENDS_HELD || cfg->ends == ENGINE_ENDS_MULTIPLE) &&
+             !uses_pstar(cfg))
+        w = "ends: held and multiple are the paper's B-spline control-polygon ends: "
+            "they need method bspline with param uniform";
+    else if (cfg->fragment < ENGINE_FRAGMENT_MIN || cfg->fragment > ENGINE_FRAGMENT_MAX)
+        w = "fragment: must be within ENGINE_FRAGMENT_MIN..ENGINE_FRAGMENT_MAX";
+    else if (cfg->overlap < 2 || cfg->overlap % 2 || cfg->overlap >= cfg->fragment)
+        w = "overlap: must be even, at least 2 and below fragment";
+    else if (cfg->period_ns < ENGINE_PERIOD_NS_MIN || cfg->period_ns > ENGINE_PERIOD_NS_MAX)
+        w = "period_ns: must be within ENGINE_PERIOD_NS_MIN..ENGINE_PERIOD_NS_MAX";
+    else if (!(cfg->max_gap_s > 0) || !isfinite(cfg->max_gap_s))
+        w = "max_gap_s: must be positive and finite";
+    else if (!(cfg->max_abs_m > 0) || !isfinite(cfg->max_abs_m))
+        w = "max_abs_m: must be positive and finite";
+    else if (!(cfg->max_speed_m_s >= 0) || !isfinite(cfg->max_speed_m_s))
+        w = "max_speed_m_s: must be 0 (no limit) or positive and finite";
+    else if (!(cfg->max_segment_s >= 0) || !isfinite(cfg->max_segment_s))
+        w = "max_segment_s: must be 0 or positive and finite";
+    else if (cfg->ends == ENGINE_ENDS_CLAMPED &&
+             !(isfinite(cfg->start_vel_m_s[0]) && isfinite(cfg->start_vel_m_s[1]) &&
+               isfinite(cfg->start_vel_m_s[2]) && isfinite(cfg->end_vel_m_s[0]) &&
+               isfinite(cfg->end_vel_m_s[1]) && isfinite(cfg->end_vel_m_s[2])))
+        w = "start_vel_m_s/end_vel_m_s: must be finite";
+    if (!w) {
+        la = engine_lookahead(cfg);
+        if (cfg->capacity < la + cfg->fragment + 8 || cfg->capacity > ENGINE_CAPACITY_MAX)
+            w = "capacity: must be at least lookahead + fragment + 8 and at most 2^22";
+    }
+    if (why)
+        *why = w;
+    return w ? -ENGINE_ECONFIG : 0;
+}
+
+/* ------------------------------------------------------------------------ */
+
+engine_t *engine_new(const engine_config_t *cfg, int *err)
+{
+    engine_t *e;
+    size_t ring = 16;
+
+    if (engine_config_check(cfg, NULL) < 0) {
+        if (err)
+            *err = ENGINE_ECONFIG;
+        return NULL;
+    }
+    e = calloc(1, sizeof(*e));
+    if (!e)
+        goto nomem;
+    e->cfg = *cfg;
+    e->lookahead = engine_lookahead(cfg);
+    e->pstar = uses_pstar(cfg);
+    e->held = cfg->ends == ENGINE_ENDS_HELD || cfg->ends == ENGINE_ENDS_MULTIPLE;
+    e->mult = cfg->ends == ENGINE_ENDS_MULTIPLE;
+    e->period_s = (double)cfg->period_ns * 1e-9;
+    /* nodes from the oldest unbuilt segment (lags the newest by the lookahead
+     * plus the copies of MULTIPLE) to the newest, with margin */
+    while (ring < 2 * ((size_t)cfg->fragment + e->lookahead) + 16)
+        ring *= 2;
+    e->ring = ring;
+    e->node_t = calloc(ring, sizeof(double));
+    e->node_r = calloc(ring * AX, sizeof(double));
+    e->fw = frag_new(cfg->fragment, cfg->overlap, ring);
+    /* each accepted waypoint yields at most one segment, each trajectory
+     * one END: twice the capacity always fits */
+    e->qcap = 2 * (size_t)cfg->capacity + 8;
+    e->q = calloc(e->qcap, sizeof(qent_t));
+    if (!e->node_t || !e->node_r || !e->fw || !e->q)
+        goto nomem;
+    e->st.lookahead = e->lookahead;
+    if (err)
+        *err = 0;
+    return e;
+nomem:
+    engine_free(e);
+    if (err)
+        *err = ENGINE_ENOMEM;
+    return NULL;
+}
+
+void engine_free(engine_t *e)
+{
+    if (!e)
+        return;
+    free(e->node_t);
+    free(e->node_r);
+    frag_free(e->fw);
+    free(e->q);
+    free(e);
+}
+
+/* ---- input side ---------------------------------------------------------- */
+
+static double *nr(engine_t *e, uint64_t j)
+{
+    return e->node_r + (size_t)(j % e->ring) * AX;
+}
+
+static double nt(const engine_t *e, uint64_t j)
+{
+    return e->node_t[j % e->ring];
+}
+
+/* parameter step of interval j (M form) */
+static double hpar(const engine_t *e, uint64_t j)
+{
+    return e->cfg.param == ENGINE_PARAM_TIME ? nt(e, j + 1) - nt(e, j) : 1.0;
+}
+
+static size_t buffered(const engine_t *e)
+{
+    return e->qlen + (size_t)(e->nodes - e->seg_next);
+}
+
+static qent_t *q_push(engine_t *e)
+{
+    qent_t *q;
+
+    if (e->qlen == e->qcap)
+        return NULL; /* cannot happen: see qcap */
+    q = &e->q[(e->qhead + e->qlen) % e->qcap];
+    e->qlen++;
+    q->first = e->in_first_pending;
+    e->in_first_pending = 0;
+    return q;
+}
+
+static void queue_segment(engine_t *e, const fdiff_seg_t *seg)
+{
+    qent_t *q = q_push(e);
+
+    if (!q)
+        return;
+    q->kind = QE_SEG;
+    q->seg = *seg;
+    q->t1_s = seg->t0_s + seg->dur_s;
+    e->in_emitted = 1;
+    e->end_t = q->t1_s;
+    for (int k = 0; k < AX; k++)
+        e->end_r[k] = seg->c[k][0] + seg->c[k][1] + seg->c[k][2] + seg->c[k][3];
+}
+
+static void queue_end(engine_t *e)
+{
+    qent_t *q = q_push(e);
+
+    if (!q)
+        return;
+    q->kind = QE_END;
+    memset(&q->seg, 0, sizeof(q->seg));
+    q->t1_s = e->in_emitted ? e->end_t : e->last_t;
+    q->seg.t0_s = q->t1_s;
+    for (int k = 0; k < AX; k++)
+        q->seg.c[k][0] = e->in_emitted ? e->end_r[k] : e->last_r[k];
+}
+
+/* end velocities in the unknowns' parameter (dk/du for P*, dk/ds for M) */
+static void end_vel_param(const engine_t *e, int at_end, double *v)
+{
+    const double *src = at_end ? e->cfg.end_vel_m_s : e->cfg.start_vel_m_s;
+    uint64_t j = at_end ? e->nodes - 2 : 0;
+    double dur = nt(e, j + 1) - nt(e, j);
+    double scale = e->pstar ? dur : dur / hpar(e, j);
+
+    for (int k = 0; k < AX; k++)
+        v[k] = src[k] * scale;
+}
+
+/* Build and queue every segment whose control values are final. */
+static void build_segments(engine_t *e)
+{
+    uint64_t fin = e->fw->final_rows, last = e->nodes - 1;
+    int closed = e->fw->done;
+
+    for (;;) {
+        uint64_t j = e->seg_next;
+        fdiff_seg_t seg;
+        double dur;
+
+        if (j + 1 >= e->nodes)
+            break;
+        if (e->pstar) {
+            if (!(j + 3 <= fin || (closed && j + 2 == fin && j + 1 == last)))
+                break;
+        } else if (j + 2 > fin) {
+            break;
+        }
+        e->seg_next = j + 1;
+        dur = nt(e, j + 1) - nt(e, j);
+        if (!(dur > 0))
+            continue; /* between copies of one point (MULTIPLE): a loop, never motion */
+        if (e->held && (j == 0 || (closed && j + 1 == last)))
+            continue; /* held ends: not part of the curve */
+        if (e->pstar) {
+            double g0[AX], g1[AX], v[AX];
+            const double *p0, *p3;
+            if (j == 0) {
+                end_vel_param(e, 0, v);
+                hoang_ghost_start(e->cfg.ends, frag_x(e->fw, 0), frag_x(e->fw, 1), v, g0);
+                p0 = g0;
+            } else {
+                p0 = frag_x(e->fw, j - 1);
+            }
+            if (j + 1 == last) {
+                end_vel_param(e, 1, v);
+                hoang_ghost_end(e->cfg.ends, frag_x(e->fw, last - 1),
+                                frag_x(e->fw, last), v, g1);
+                p3 = g1;
+            } else {
+                p3 = frag_x(e->fw, j + 2);
+            }
+            hoang_segment(p0, frag_x(e->fw, j), frag_x(e->fw, j + 1), p3,
+                          nt(e, j), dur, &seg);
+        } else {
+            cubic_segment(nr(e, j), nr(e, j + 1), frag_x(e->fw, j),
+                          frag_x(e->fw, j + 1), hpar(e, j), nt(e, j), dur, &seg);
+        }
+        queue_segment(e, &seg);
+    }
+}
+
+static const double zero3[AX] = {0, 0, 0};
+
+/* Append a node; push the row it completes (row nodes-1 before it). */
+static int add_node(engine_t *e, double t, const double *r)
+{
+    uint64_t j = e->nodes;
+    frag_row_t row;
+    int rc = 0;
+
+    e->node_t[j % e->ring] = t;
+    memcpy(nr(e, j), r, sizeof(double) * AX);
+    e->nodes = j + 1;
+    if (j >= 1) {
+        uint64_t i = j - 1; /* the row now complete */
+        if (e->pstar) {
+            if (i == 0) {
+                double v[AX];
+                end_vel_param(e, 0, v);
+                hoang_row_start(e->cfg.ends == ENGINE_ENDS_MULTIPLE ? ENGINE_ENDS_HELD
+                                                                    : e->cfg.ends,
+                                nr(e, 0), v, &row);
+            } else {
+                hoang_row_interior(nr(e, i), &row);
+            }
+            rc = frag_push(e->fw, &row, nr(e, i));
+        } else {
+            if (i == 0) {
+                double v[AX];
+                end_vel_param(e, 0, v);
+                cubic_row_start(e->cfg.ends, hpar(e, 0), nr(e, 0), nr(e, 1), v, &row);
+            } else {
+                cubic_row_interior(hpar(e, i - 1), hpar(e, i), nr(e, i - 1), nr(e, i),
+                                   nr(e, i + 1), &row);
+            }
+            rc = frag_push(e->fw, &row, zero3);
+        }
+        if (rc < 0)
+            return -ENGINE_ENUMERIC;
+        build_segments(e);
+    }
+    return 0;
+}
+
+/* Close the input trajectory: end row, last segments, END entry. */
+static int close_input(engine_t *e)
+{
+    frag_row_t row;
+    int rc = 0;
+
+    if (!e->in_open)
+        return 0;
+    e->in_open = 0;
+    if (e->mult) {
+        /* the last point twice more (it is in already once) */
+        double r[AX];
+        memcpy(r, e->last_r, sizeof(r));
+        if ((rc = add_node(e, e->last_t, r)) < 0 || (rc = add_node(e, e->last_t, r)) < 0)
+            goto end;
+    }
+    if (e->nodes >= 2) {
+        uint64_t l = e->nodes - 1;
+        double v[AX];
+        end_vel_param(e, 1, v);
+        if (e->pstar)
+            hoang_row_end(e->mult ? ENGINE_ENDS_HELD : e->cfg.ends, nr(e, l), v, &row);
+        else
+            cubic_row_end(e->cfg.ends, hpar(e, l - 1), nr(e, l - 1), nr(e, l), v, &row);
+        if (frag_finish(e->fw, &row) < 0)
+            rc = -ENGINE_ENUMERIC;
+        else
+            build_segments(e);
+    }
+end:
+    e->seg_next = e->nodes; /* nothing pending any more */
+    queue_end(e);
+    return rc;
+}
+
+static void open_input(engine_t *e, const engine_waypoint_t *wp)
+{
+    frag_reset(e->fw);
+    e->in_open = 1;
+    e->nodes = 0;
+    e->seg_next = 0;
+    e->in_emitted = 0;
+    e->in_first_pending = 1;
+    e->st.tracks++;
+    e->finished = 0;
+    (void)wp;
+}
+
+static int reject(engine_t *e, int code)
+{
+    e->st.rejected++;
+    e->st.rejected_by[code]++;
+    return -code;
+}
+
+int engine_push(engine_t *e, const engine_waypoint_t *wp)
+{
+    int gap = 0, rc;
+    double dist = 0;
+
+    for (int k = 0; k < AX; k++)
+        if (!isfinite(wp->pos_m[k]))
+            return reject(e, ENGINE_ENOTFINITE);
+    if (!isfinite(wp->t_s))
+        return reject(e, ENGINE_ENOTFINITE);
+    for (int k = 0; k < AX; k++)
+        if (fabs(wp->pos_m[k]) > e->cfg.max_abs_m)
+            return reject(e, ENGINE_ERANGE);
+    if (fabs(wp->t_s) > ENGINE_T_ABS_MAX_S)
+        return reject(e, ENGINE_ERANGE);
+    if (e->in_open) {
+        double dt = wp->t_s - e->last_t;
+        for (int k = 0; k < AX; k++)
+            dist += (wp->pos_m[k] - e->last_r[k]) * (wp->pos_m[k] - e->last_r[k]);
+        dist = sqrt(dist);
+        if (dt < -ENGINE_SAME_TIME_S)
+            return reject(e, ENGINE_EBACKWARDS);
+        if (dt <= ENGINE_SAME_TIME_S) {
+            if (dist <= ENGINE_SAME_POS_M) {
+                e->st.duplicates++;
+                return ENGINE_DUPLICATE;
+            }
+            return reject(e, ENGINE_ESAMETIME);
+        }
+        if (dt > e->cfg.max_gap_s)
+            gap = 1;
+        else if (e->cfg.max_speed_m_s > 0 && dist > e->cfg.max_speed_m_s * dt)
+            return reject(e, ENGINE_ESPEED);
+    }
+    /* room for this waypoint (and for the copies MULTIPLE adds) */
+    if (buffered(e) + 1 + (e->mult ? 4 : 0) > e->cfg.capacity)
+        return reject(e, ENGINE_EFULL);
+    if (gap) {
+        e->st.gaps++;
+        close_input(e);
+    }
+    if (!e->in_open)
+        open_input(e, wp);
+    e->last_t = wp->t_s;
+    memcpy(e->last_r, wp->pos_m, sizeof(e->last_r));
+    rc = add_node(e, wp->t_s, wp->pos_m);
+    if (rc == 0 && e->mult && e->nodes == 1) {
+        /* the first point twice more */
+        if ((rc = add_node(e, wp->t_s, wp->pos_m)) == 0)
+            rc = add_node(e, wp->t_s, wp->pos_m);
+    }
+    if (rc < 0) {
+        /* cannot happen with finite data (diagonally dominant systems);
+         * end the trajectory with what is queued rather than stream garbage */
+        e->in_open = 0;
+        e->seg_next = e->nodes;
+        queue_end(e);
+        return reject(e, -rc);
+    }
+    e->st.accepted++;
+    e->st.last_seq = wp->seq;
+    return 0;
+}
+
+int engine_finish(engine_t *e)
+{
+    int rc = close_input(e);
+    return rc < 0 ? rc : 0;
+}
+
+int engine_stop(engine_t *e)
+{
+    return engine_finish(e);
+}
+
+void engine_clear(engine_t *e)
+{
+    e->in_open = 0;
+    e->nodes = 0;
+    e->seg_next = 0;
+    frag_reset(e->fw);
+    e->qhead = 0;
+    e->qlen = 0;
+    e->finished = 0;
+    e->underrun = 0;
+    if (e->mode != OUT_HOLD) {
+        e->mode = OUT_HOLD;
+        for (int k = 0; k < AX; k++)
+            e->vel[k] = e->acc[k] = 0.0;
+    }
+}
+
+void engine_reset_counters(engine_t *e)
+{
+    uint32_t last_seq = e->st.last_seq;
+
+    memset(&e->st, 0, sizeof(e->st));
+    e->st.last_seq = last_seq;
+    e->st.lookahead = e->lookahead;
+}
+
+/* ---- output side --------------------------------------------------------- */
+
+static qent_t *q_head(engine_t *e)
+{
+    return e->qlen ? &e->q[e->qhead] : NULL;
+}
+
+static void q_pop(engine_t *e)
+{
+    e->qhead = (e->qhead + 1) % e->qcap;
+    e->qlen--;
+}
+
+static void hold_here(engine_t *e)
+{
+    for (int k = 0; k < AX; k++)
+        e->vel[k] = e->acc[k] = 0.0;
+}
+
+static double tick_time(const engine_t *e, int64_t n)
+{
+    return (double)(n * e->cfg.period_ns) * 1e-9;
+}
+
+static void out_eval(engine_t *e)
+{
+    fdiff_get(&e->fd, e->pos, e->vel, e->acc);
+}
+
+/* Seed cur at tick n (relative time tau in [cur_t0, cur_t1)). */
+static void seed_cur(engine_t *e, int64_t n)
+{
+    double tau = tick_time(e, n);
+    double u0 = (tau - e->cur_t0) / e->cur.seg.dur_s;
+    fdiff_seed(&e->fd, &e->cur.seg, u0, e->period_s / e->cur.seg.dur_s);
+}
+
+/* Make the queue head (a SEG) the current segment, relative to origin_t. */
+static void take_segment(engine_t *e)
+{
+    e->cur = *q_head(e);
+    q_pop(e);
+    e->cur_t0 = e->cur.seg.t0_s - e->origin_t;
+    e->cur_t1 = e->cur.t1_s - e->origin_t;
+}
+
+/* Begin streaming the trajectory at the queue head (tick 0 of it). */
+static void start_trajectory(engine_t *e, int new_flag)
+{
+    qent_t *h = q_head(e);
+
+    if (new_flag) {
+        e->out_track++;
+        e->flags_pending |= ENGINE_SP_NEW_TRACK;
+    }
+    e->moved = 1;
+    e->underrun = 0;
+    if (h->kind == QE_END) {
+        /* a trajectory with no segment: rest on its point */
+        for (int k = 0; k < AX; k++)
+            e->pos[k] = h->seg.c[k][0];
+        e->out_t = h->t1_s;
+        q_pop(e);
+        hold_here(e);
+        e->mode = OUT_HOLD;
+        e->finished = 1;
+        return;
+    }
+    e->origin_t = h->seg.t0_s;
+    take_segment(e);
+    e->n = 0;
+    e->seg_n0 = 0;
+    seed_cur(e, 0);
+    out_eval(e);
+    e->out_t = e->origin_t;
+    e->mode = OUT_STREAM;
+}
+
+/* Start a transfer from the output position to target. */
+static void start_transfer(engine_t *e, const double *target)
+{
+    double dist = 0, v, dur;
+    int64_t k;
+
+    for (int i = 0; i < AX; i++)
+        dist += (target[i] - e->pos[i]) * (target[i] - e->pos[i]);
+    dist = sqrt(dist);
+    v = e->cfg.max_speed_m_s > 0 ? e->cfg.max_speed_m_s : ENGINE_TRANSFER_SPEED_M_S;
+    /* smoothstep 3u^2 - 2u^3 peaks at 1.5 x the mean speed */
+    dur = 1.5 * dist / v;
+    if (dur < ENGINE_TRANSFER_MIN_S)
+        dur = ENGINE_TRANSFER_MIN_S;
+    k = (int64_t)ceil(dur / e->period_s);
+    memset(&e->cur, 0, sizeof(e->cur));
+    e->cur.kind = QE_SEG;
+    e->cur.seg.t0_s = 0;
+    e->cur.seg.dur_s = (double)k * e->period_s;
+    for (int i = 0; i < AX; i++) {
+        double d = target[i] - e->pos[i];
+        e->cur.seg.c[i][0] = e->pos[i];
+        e->cur.seg.c[i][1] = 0.0;
+        e->cur.seg.c[i][2] = 3.0 * d;
+        e->cur.seg.c[i][3] = -2.0 * d;
+    }
+    e->cur_t0 = 0;
+    e->cur_t1 = e->cur.seg.dur_s;
+    e->n = 0;
+    e->seg_n0 = 0;
+    e->out_track++;
+    e->flags_pending |= ENGINE_SP_NEW_TRACK;
+    e->mode = OUT_XFER;
+    seed_cur(e, 0);
+}
+
+/* One forward step of cur (with a re-seed at deterministic ticks). */
+static void step_cur(engine_t *e, int64_t n)
+{
+    if ((uint64_t)(n - e->seg_n0) % FDIFF_RESEED_STEPS == 0)
+        seed_cur(e, n);
+    else
+        fdiff_step(&e->fd);
+    out_eval(e);
+}
+
+/* One tick of the output state machine. */
+static void step_once(engine_t *e)
+{
+    e->cycle++;
+    switch (e->mode) {
+    case OUT_HOLD: {
+        qent_t *h = q_head(e);
+        if (!h || !h->first) {
+            hold_here(e);
+            break;
+        }
+        if (!e->moved) {
+            /* nothing was ever output: the position takes the start */
+            for (int k = 0; k < AX; k++)
+                e->pos[k] = h->seg.c[k][0];
+        }
+        double d2 = 0;
+        for (int k = 0; k < AX; k++)
+            d2 += (h->seg.c[k][0] - e->pos[k]) * (h->seg.c[k][0] - e->pos[k]);
+        if (sqrt(d2) > ENGINE_TRANSFER_TOL_M) {
+            double target[AX];
+            for (int k = 0; k < AX; k++)
+                target[k] = h->seg.c[k][0];
+            start_transfer(e, target);
+            step_cur(e, ++e->n);
+        } else {
+            start_trajectory(e, 1);
+        }
+        break;
+    }
+    case OUT_XFER: {
+        int64_t n = e->n + 1;
+        if (tick_time(e, n) >= e->cur_t1) {
+            start_trajectory(e, 0); /* the transfer ends exactly on its start */
+        } else {
+            e->n = n;
+            step_cur(e, n);
+        }
+        break;
+    }
+    case OUT_STREAM: {
+        int64_t n = e->n + 1;
+        double tau = tick_time(e, n);
+        if (tau < e->cur_t1) {
+            e->n = n;
+            step_cur(e, n);
+            e->out_t = e->origin_t + tau;
+            e->underrun = 0;
+            break;
+        }
+        for (;;) {
+            qent_t *h = q_head(e);
+            if (!h) {
+                /* waypoints late: hold, keep n; resume exactly here */
+                if (!e->underrun)
+                    e->st.underruns++;
+                e->underrun = 1;
+                e->st.underrun_ticks++;
+                hold_here(e);
+                return;
+            }
+            if (h->kind == QE_END) {
+                for (int k = 0; k < AX; k++)
+                    e->pos[k] = h->seg.c[k][0];
+                e->out_t = h->t1_s;
+                q_pop(e);
+                hold_here(e);
+                e->mode = OUT_HOLD;
+                e->finished = 1;
+                e->underrun = 0;
+                return;
+            }
+            take_segment(e);
+            if (tau < e->cur_t1)
+                break;
+            /* shorter than a period: no tick falls in it */
+        }
+        e->n = n;
+        e->seg_n0 = n;
+        seed_cur(e, n);
+        out_eval(e);
+        e->out_t = e->origin_t + tau;
+        e->underrun = 0;
+        break;
+    }
+    }
+}
+
+static engine_state_t out_state(const engine_t *e)
+{
+    if (e->mode == OUT_STREAM)
+        return e->underrun ? ENGINE_STATE_UNDERRUN : ENGINE_STATE_STREAMING;
+    if (e->mode == OUT_XFER)
+        return ENGINE_STATE_STREAMING;
+    if (e->in_open || e->qlen)
+        return ENGINE_STATE_WAITING;
+    return e->finished ? ENGINE_STATE_FINISHED : ENGINE_STATE_WAITING;
+}
+
+static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    engine_state_t s = out_state(e);
+
+    sp->now_ns = now_ns;
+    /* before any trajectory the position is the first waypoint, if any */
+    if (!e->moved && e->mode == OUT_HOLD) {
+        qent_t *h = q_head(e);
+        if (h)
+            for (int k = 0; k < AX; k++)
+                e->pos[k] = h->seg.c[k][0];
+        else if (e->in_open)
+            memcpy(e->pos, nr(e, 0), sizeof(e->pos));
+        if (h)
+            e->out_t = h->seg.t0_s;
+        else if (e->in_open)
+            e->out_t = nt(e, 0);
+    }
+    sp->t_s = e->out_t;
+    memcpy(sp->pos_m, e->pos, sizeof(sp->pos_m));
+    memcpy(sp->vel_m_s, e->vel, sizeof(sp->vel_m_s));
+    memcpy(sp->acc_m_s2, e->acc, sizeof(sp->acc_m_s2));
+    sp->state = s;
+    sp->flags = e->flags_pending;
+    e->flags_pending = 0;
+    if (s != ENGINE_STATE_STREAMING)
+        sp->flags |= ENGINE_SP_HOLD;
+    if (e->mode == OUT_XFER)
+        sp->flags |= ENGINE_SP_TRANSFER;
+    sp->cycle = e->cycle;
+    sp->track = e->out_track;
+}
+
+int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    int64_t k = 1, i;
+
+    if (e->have_now) {
+        if (now_ns < e->last_now) {
+            *sp = e->last_sp;
+            return -ENGINE_ESTATE;
+        }
+        /* ticks on the period grid since the last call (rounded) */
+        k = (now_ns - e->last_now + e->cfg.period_ns / 2) / e->cfg.period_ns;
+        if (k == 0) {
+            *sp = e->last_sp;
+            sp->now_ns = now_ns;
+            e->st.setpoints++;
+            return 0;
+        }
+    }
+    e->have_now = 1;
+    e->last_now = now_ns;
+    for (i = 0; i < k; i++)
+        step_once(e);
+    if (k > 1) {
+        e->st.skipped_ticks += (uint64_t)(k - 1);
+        e->flags_pending |= ENGINE_SP_SKIPPED;
+    }
+    fill_sp(e, now_ns, sp);
+    e->st.setpoints++;
+    e->last_sp = *sp;
+    return 0;
+}
+
+void engine_status(const engine_t *e, engine_status_t *st)
+{
+    size_t b = buffered(e);
+
+    *st = e->st;
+    st->state = out_state(e);
+    st->buffered = (uint32_t)b;
+    st->free = b >= e->cfg.capacity ? 0 : (uint32_t)(e->cfg.capacity - b);
+    st->lookahead = e->lookahead;
+    st->ahead_s = 0;
+    if (e->qlen) {
+        const qent_t *tail = &e->q[(e->qhead + e->qlen - 1) % e->qcap];
+        double ahead = tail->t1_s - e->out_t;
+        st->ahead_s = ahead > 0 ? ahead : 0;
+    }
+}
+
+/* ---- offline ------------------------------------------------------------- */
+
+int engine_curve(const engine_config_t *cfg, const engine_waypoint_t *wp,
+                 size_t n, fdiff_seg_t *seg, size_t max_seg, size_t *nseg)
+{
+    int err = 0, rc = 0;
+    engine_t *e = engine_new(cfg, &err);
+    size_t i, out = 0;
+
+
+    *nseg = 0;
+    if (!e)
+        return -err;
+    for (i = 0; i <= n; i++) {
+        if (i < n) {
+            rc = engine_push(e, &wp[i]);
+            if (rc == -ENGINE_EFULL) {
+                rc = -ENGINE_ENUMERIC; /* cannot happen: the queue is drained below */
+                break;
+            }
+        } else {
+            engine_finish(e);
+        }
+        while (e->qlen) {
+            qent_t *h = q_head(e);
+            if (h->kind == QE_SEG) {
+                if (out == max_seg) {
+                    rc = -ENGINE_ECONFIG;
+                    goto out;
+                }
+                seg[out++] = h->seg;
+            }
+            q_pop(e);
+        }
+    }
+    rc = 0;
+out:
+    *nseg = out;
+    engine_free(e);
+    return rc;
+}
+
+long engine_curve_flat(int method, int param, int ends, unsigned fragment,
+                       unsigned overlap, size_t n, const double *t_s,
+                       const double *xyz, double *seg_out, size_t max_seg)
+{
+    engine_config_t cfg;
+    engine_waypoint_t *wp;
+    fdiff_seg_t *segs;
+    size_t i, nseg = 0;
+    int rc;
+
+    engine_config_default(&cfg);
+    cfg.method = (engine_method_t)method;
+    cfg.param = (engine_param_t)param;
+    cfg.ends = (engine_ends_t)ends;
+    cfg.fragment = fragment;
+    cfg.overlap = overlap;
+    cfg.max_speed_m_s = 0;
+    cfg.max_gap_s = 1e9;
+    wp = calloc(n ? n : 1, sizeof(*wp));
+    segs = calloc(max_seg ? max_seg : 1, sizeof(*segs));
+    if (!wp || !segs) {
+        free(wp);
+        free(segs);
+        return -ENGINE_ENOMEM;
+    }
+    for (i = 0; i < n; i++) {
+        wp[i].t_s = t_s[i];
+        for (int k = 0; k < AX; k++)
+            wp[i].pos_m[k] = xyz[i * AX + k];
+    }
+    rc = engine_curve(&cfg, wp, n, segs, max_seg, &nseg);
+    for (i = 0; i < nseg; i++) {
+        double *o = seg_out + i * 14;
+        o[0] = segs[i].t0_s;
+        o[1] = segs[i].dur_s;
+        for (int k = 0; k < AX; k++)
+            for (int m = 0; m < 4; m++)
+                o[2 + k * 4 + m] = segs[i].c[k][m];
+    }
+    free(wp);
+    free(segs);
+    return rc < 0 ? rc : (long)nseg;
+}

@@ -1,0 +1,87 @@
+/* geo.c - WGS84 geodetic -> ECEF -> local ENU.  See geo.h. */
+#include "geo.h"
+
+#include <math.h>
+
+#define DEG_TO_RAD (3.14159265358979323846 / 180.0)
+
+const char *geo_strerror(int err)
+{
+    switch (err < 0 ? -err : err) {
+    case GEO_OK: return "success";
+    case GEO_ENOTFINITE: return "latitude, longitude or height is not a finite number";
+    case GEO_ELAT: return "latitude outside [-90, 90] degrees";
+    case GEO_ELON: return "longitude outside [-360, 360] degrees";
+    case GEO_EALT: return "height outside [-12000, 1000000] metres";
+    default: return "unknown geo error";
+    }
+}
+
+int geo_check(double lat_deg, double lon_deg, double alt_m)
+{
+    if (!isfinite(lat_deg) || !isfinite(lon_deg) || !isfinite(alt_m))
+        return -GEO_ENOTFINITE;
+    if (lat_deg < -90.0 || lat_deg > 90.0)
+        return -GEO_ELAT;
+    if (lon_deg < -360.0 || lon_deg > 360.0)
+        return -GEO_ELON;
+    if (alt_m < GEO_ALT_MIN_M || alt_m > GEO_ALT_MAX_M)
+        return -GEO_EALT;
+    return 0;
+}
+
+int geo_to_ecef(double lat_deg, double lon_deg, double alt_m, double ecef_m[3])
+{
+    int rc = geo_check(lat_deg, lon_deg, alt_m);
+    if (rc)
+        return rc;
+    const double f = 1.0 / GEO_WGS84_INV_F;
+    const double e2 = f * (2.0 - f); /* first eccentricity squared */
+    double sl = sin(lat_deg * DEG_TO_RAD), cl = cos(lat_deg * DEG_TO_RAD);
+    double so = sin(lon_deg * DEG_TO_RAD), co = cos(lon_deg * DEG_TO_RAD);
+    /* Prime-vertical radius of curvature.  1 - e2*sl^2 >= 1 - e2 > 0.99,
+     * so the square root and the division are always well defined. */
+    double n_m = GEO_WGS84_A_M / sqrt(1.0 - e2 * sl * sl);
+    ecef_m[0] = (n_m + alt_m) * cl * co;
+    ecef_m[1] = (n_m + alt_m) * cl * so;
+    ecef_m[2] = (n_m * (1.0 - e2) + alt_m) * sl;
+    return 0;
+}
+
+int geo_enu_init(double lat0_deg, double lon0_deg, double alt0_m, geo_enu_t *frame)
+{
+    double ecef[3];
+    int rc = geo_to_ecef(lat0_deg, lon0_deg, alt0_m, ecef);
+    if (rc)
+        return rc;
+    frame->lat0_deg = lat0_deg;
+    frame->lon0_deg = lon0_deg;
+    frame->alt0_m = alt0_m;
+    frame->ecef0_m[0] = ecef[0];
+    frame->ecef0_m[1] = ecef[1];
+    frame->ecef0_m[2] = ecef[2];
+    frame->sin_lat = sin(lat0_deg * DEG_TO_RAD);
+    frame->cos_lat = cos(lat0_deg * DEG_TO_RAD);
+    frame->sin_lon = sin(lon0_deg * DEG_TO_RAD);
+    frame->cos_lon = cos(lon0_deg * DEG_TO_RAD);
+    return 0;
+}
+
+int geo_to_enu(const geo_enu_t *frame, double lat_deg, double lon_deg,
+               double alt_m, double enu_m[3])
+{
+    double p[3];
+    int rc = geo_to_ecef(lat_deg, lon_deg, alt_m, p);
+    if (rc)
+        return rc;
+    double dx = p[0] - frame->ecef0_m[0];
+    double dy = p[1] - frame->ecef0_m[1];
+    double dz = p[2] - frame->ecef0_m[2];
+    const double sl = frame->sin_lat, cl = frame->cos_lat;
+    const double so = frame->sin_lon, co = frame->cos_lon;
+    /* Rows of the ECEF -> ENU rotation: east, north, up unit vectors. */
+    enu_m[0] = -so * dx + co * dy;
+    enu_m[1] = -sl * co * dx - sl * so * dy + cl * dz;
+    enu_m[2] = cl * co * dx + cl * so * dy + sl * dz;
+    return 0;
+}

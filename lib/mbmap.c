@@ -1,0 +1,360 @@
+/* mbmap.c - see mbmap.h. */
+#include "mbmap.h"
+
+#include <math.h>
+#include <string.h>
+
+const char *mbmap_strerror(int err)
+{
+    switch (err < 0 ? -err : err) {
+    case MBMAP_OK: return "ok";
+    case MBMAP_EFUNCTION: return "illegal function (not served, or writes disabled)";
+    case MBMAP_EADDRESS: return "illegal data address (outside the map, or a partial block)";
+    case MBMAP_EVALUE: return "illegal data value (count, length, NaN, command, refused waypoint)";
+    case MBMAP_EBUSY: return "server busy (waypoint buffer full, retry later)";
+    default: return "unknown mbmap error";
+    }
+}
+
+/* ---- words ------------------------------------------------------------- */
+
+void mbmap_put_u32(uint16_t *r, uint32_t v)
+{
+    r[0] = (uint16_t)(v >> 16);
+    r[1] = (uint16_t)(v & 0xffffu);
+}
+
+uint32_t mbmap_get_u32(const uint16_t *r)
+{
+    return ((uint32_t)r[0] << 16) | r[1];
+}
+
+void mbmap_put_f32(uint16_t *r, float v)
+{
+    uint32_t u;
+    memcpy(&u, &v, sizeof u);
+    mbmap_put_u32(r, u);
+}
+
+float mbmap_get_f32(const uint16_t *r)
+{
+    uint32_t u = mbmap_get_u32(r);
+    float v;
+    memcpy(&v, &u, sizeof v);
+    return v;
+}
+
+void mbmap_put_f64(uint16_t *r, double v)
+{
+    uint64_t u;
+    memcpy(&u, &v, sizeof u);
+    for (int i = 0; i < 4; i++)
+        r[i] = (uint16_t)(u >> (48 - 16 * i));
+}
+
+double mbmap_get_f64(const uint16_t *r)
+{
+    uint64_t u = 0;
+    double v;
+    for (int i = 0; i < 4; i++)
+        u = (u << 16) | r[i];
+    memcpy(&v, &u, sizeof v);
+    return v;
+}
+
+/* Counters are 64-bit in the daemon; the map carries their low 32 bits. */
+static uint32_t lo32(uint64_t v)
+{
+    return (uint32_t)(v & 0xffffffffu);
+}
+
+/* ---- encode ------------------------------------------------------------ */
+
+void mbmap_encode_daemon(uint16_t *regs, const mbmap_daemon_t *d)
+{
+    memset(regs, 0, MBMAP_BLOCK * sizeof *regs);
+    regs[MBMAP_D_MAGIC] = MBMAP_MAGIC;
+    regs[MBMAP_D_VERSION] = MBMAP_VERSION;
+    regs[MBMAP_D_OBJECTS] = d->objects;
+    regs[MBMAP_D_WRITES] = d->writes_enabled ? 1 : 0;
+    mbmap_put_u32(regs + MBMAP_D_GEN, d->generation);
+    mbmap_put_u32(regs + MBMAP_D_UPTIME_S, lo32(d->uptime_s));
+    mbmap_put_u32(regs + MBMAP_D_PERIOD_US, d->period_us);
+    mbmap_put_u32(regs + MBMAP_D_LATE_P50_US, d->late_p50_us);
+    mbmap_put_u32(regs + MBMAP_D_LATE_P99_US, d->late_p99_us);
+    mbmap_put_u32(regs + MBMAP_D_LATE_MAX_US, d->late_max_us);
+    mbmap_put_u32(regs + MBMAP_D_MISSED_TICKS, lo32(d->missed_ticks));
+    regs[MBMAP_D_CAN_STATE] = d->can_state;
+    regs[MBMAP_D_CAN_LOAD] = d->can_load_permille;
+    mbmap_put_u32(regs + MBMAP_D_MB_REQUESTS, lo32(d->mb_requests));
+    mbmap_put_u32(regs + MBMAP_D_MB_EXCEPTIONS, lo32(d->mb_exceptions));
+    mbmap_put_u32(regs + MBMAP_D_MB_REFUSED, lo32(d->mb_refused));
+    regs[MBMAP_D_MB_CLIENTS] = d->mb_clients;
+    mbmap_put_u32(regs + MBMAP_D_GEN_TAIL, d->generation);
+}
+
+int mbmap_encode_object(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_object_t *o)
+{
+    if (k >= MBMAP_MAX_OBJECTS)
+        return -MBMAP_EADDRESS;
+    uint16_t *b = regs + MBMAP_OBJ_BASE(k);
+    memset(b, 0, MBMAP_BLOCK * sizeof *b);
+    mbmap_put_u32(b + MBMAP_O_GEN, gen);
+    b[MBMAP_O_STATE] = (uint16_t)o->sp.state;
+    b[MBMAP_O_FLAGS] = (uint16_t)(o->sp.flags & 0xffffu);
+    mbmap_put_u32(b + MBMAP_O_CYCLE, o->sp.cycle);
+    mbmap_put_u32(b + MBMAP_O_TRACK, o->sp.track);
+    mbmap_put_u32(b + MBMAP_O_BUFFERED, o->st.buffered);
+    mbmap_put_u32(b + MBMAP_O_FREE, o->st.free);
+    mbmap_put_u32(b + MBMAP_O_LOOKAHEAD, o->st.lookahead);
+    mbmap_put_f32(b + MBMAP_O_AHEAD_S, (float)o->st.ahead_s);
+    mbmap_put_u32(b + MBMAP_O_LAST_SEQ, o->st.last_seq);
+    mbmap_put_f64(b + MBMAP_O_T_S, o->sp.t_s);
+    for (int a = 0; a < ENGINE_AXES; a++) {
+        mbmap_put_f32(b + MBMAP_O_POS + 2 * a, (float)o->sp.pos_m[a]);
+        mbmap_put_f32(b + MBMAP_O_VEL + 2 * a, (float)o->sp.vel_m_s[a]);
+        mbmap_put_f32(b + MBMAP_O_ACC + 2 * a, (float)o->sp.acc_m_s2[a]);
+    }
+    mbmap_put_u32(b + MBMAP_O_ACCEPTED, lo32(o->st.accepted));
+    mbmap_put_u32(b + MBMAP_O_REJECTED, lo32(o->st.rejected));
+    mbmap_put_u32(b + MBMAP_O_LOST, lo32(o->lost));
+    mbmap_put_u32(b + MBMAP_O_UNDERRUNS, lo32(o->st.underruns));
+    mbmap_put_u32(b + MBMAP_O_MISSED_TICKS, lo32(o->st.skipped_ticks));
+    mbmap_put_u32(b + MBMAP_O_DUPLICATES, lo32(o->st.duplicates));
+    mbmap_put_u32(b + MBMAP_O_MB_REJECTED, lo32(o->mb_rejected));
+    mbmap_put_u32(b + MBMAP_O_LATE_P99_US, o->late_p99_us);
+    mbmap_put_u32(b + MBMAP_O_LATE_MAX_US, o->late_max_us);
+    b[MBMAP_O_CAN_STATE] = o->can_state;
+    b[MBMAP_O_CAN_LOAD] = o->can_load_permille;
+    mbmap_put_u32(b + MBMAP_O_UPTIME_S, lo32(o->uptime_s));
+    mbmap_put_u32(b + MBMAP_O_GEN_TAIL, gen);
+    return 0;
+}
+
+/* ---- requests ---------------------------------------------------------- */
+
+static unsigned be16(const uint8_t *p)
+{
+    return ((unsigned)p[0] << 8) | p[1];
+}
+
+int mbmap_check_request(unsigned n, int writes_enabled, const uint8_t *pdu, size_t len)
+{
+    if (len < 1)
+        return -MBMAP_EVALUE;
+    unsigned regs = n > MBMAP_MAX_OBJECTS ? MBMAP_REGS(MBMAP_MAX_OBJECTS) : MBMAP_REGS(n);
+    unsigned addr, count;
+
+    switch (pdu[0]) {
+    case MBMAP_FC_READ_HOLDING:
+    case MBMAP_FC_READ_INPUT:
+        if (len != 5)
+            return -MBMAP_EVALUE;
+        addr = be16(pdu + 1);
+        count = be16(pdu + 3);
+        if (count < 1 || count > MBMAP_MAX_READ)
+            return -MBMAP_EVALUE;
+        break;
+    case MBMAP_FC_WRITE_SINGLE:
+        if (!writes_enabled)
+            return -MBMAP_EFUNCTION;
+        if (len != 5)
+            return -MBMAP_EVALUE;
+        addr = be16(pdu + 1);
+        count = 1;
+        break;
+    case MBMAP_FC_WRITE_MULTIPLE:
+        if (!writes_enabled)
+            return -MBMAP_EFUNCTION;
+        if (len < 6)
+            return -MBMAP_EVALUE;
+        addr = be16(pdu + 1);
+        count = be16(pdu + 3);
+        if (count < 1 || count > MBMAP_MAX_WRITE || pdu[5] != 2 * count ||
+            len != 6 + 2 * (size_t)count)
+            return -MBMAP_EVALUE;
+        break;
+    default:
+        return -MBMAP_EFUNCTION;
+    }
+    if (addr + count > regs)
+        return -MBMAP_EADDRESS;
+    return 0;
+}
+
+int mbmap_decode_write(unsigned n, const uint8_t *pdu, size_t len, mbmap_write_t *out)
+{
+    int rc = mbmap_check_request(n, 1, pdu, len);
+    if (rc < 0)
+        return rc;
+    if (pdu[0] != MBMAP_FC_WRITE_SINGLE && pdu[0] != MBMAP_FC_WRITE_MULTIPLE)
+        return -MBMAP_EFUNCTION;
+
+    unsigned addr = be16(pdu + 1);
+    unsigned count = pdu[0] == MBMAP_FC_WRITE_SINGLE ? 1 : be16(pdu + 3);
+    const uint8_t *val = pdu[0] == MBMAP_FC_WRITE_SINGLE ? pdu + 3 : pdu + 6;
+
+    /* The daemon block (below MBMAP_OBJ_BASE(0)) is read-only. */
+    if (addr < MBMAP_OBJ_BASE(0))
+        return -MBMAP_EADDRESS;
+    unsigned k = addr / MBMAP_BLOCK - 1;
+    unsigned off = addr % MBMAP_BLOCK;
+    if (k >= n)
+        return -MBMAP_EADDRESS;
+
+    memset(out, 0, sizeof *out);
+    out->object = k;
+    if (off == MBMAP_H_COMMAND && count == 1) {
+        unsigned cmd = be16(val);
+        if (cmd < MBMAP_CMD_START || cmd > MBMAP_CMD_RESET_COUNTERS)
+            return -MBMAP_EVALUE;
+        out->kind = MBMAP_WRITE_COMMAND;
+        out->command = cmd;
+        return 0;
+    }
+    if (off == MBMAP_H_WP && count == MBMAP_H_WP_COUNT) {
+        uint16_t r[MBMAP_H_WP_COUNT];
+        for (unsigned i = 0; i < MBMAP_H_WP_COUNT; i++)
+            r[i] = (uint16_t)be16(val + 2 * i);
+        out->kind = MBMAP_WRITE_WAYPOINT;
+        out->wp.seq = mbmap_get_u32(r + (MBMAP_H_WP_SEQ - MBMAP_H_WP));
+        out->wp.t_s = mbmap_get_f64(r + (MBMAP_H_WP_T_S - MBMAP_H_WP));
+        if (!isfinite(out->wp.t_s))
+            return -MBMAP_EVALUE;
+        for (int a = 0; a < ENGINE_AXES; a++) {
+            out->wp.pos_m[a] = mbmap_get_f64(r + (MBMAP_H_WP_POS - MBMAP_H_WP) + 4 * a);
+            if (!isfinite(out->wp.pos_m[a]))
+                return -MBMAP_EVALUE;
+        }
+        return 0;
+    }
+    return -MBMAP_EADDRESS;
+}
+
+int mbmap_from_engine(int engine_result)
+{
+    if (engine_result >= 0)
+        return 0;
+    return engine_result == -ENGINE_EFULL ? -MBMAP_EBUSY : -MBMAP_EVALUE;
+}
+
+/* ---- RTU framing ------------------------------------------------------- */
+
+uint16_t mbmap_crc16(const uint8_t *buf, size_t len)
+{
+    uint16_t crc = 0xffffu;
+    for (size_t i = 0; i < len; i++) {
+        crc ^= buf[i];
+        for (int b = 0; b < 8; b++)
+            crc = (crc & 1u) ? (uint16_t)((crc >> 1) ^ 0xa001u) : (uint16_t)(crc >> 1);
+    }
+    return crc;
+}
+
+int mbmap_rtu_frame_len(const uint8_t *buf, size_t len)
+{
+    if (len < 2)
+        return 0;
+    switch (buf[1]) {
+    case 0x01: case 0x02: case 0x03: case 0x04: case 0x05: case 0x06:
+        return 8;                           /* addr fc a a n n crc crc */
+    case 0x0f: case 0x10:
+        if (len < 7)
+            return 0;
+        return 9 + buf[6];                  /* addr fc a a n n bc data crc crc */
+    case 0x17:
+        if (len < 11)
+            return 0;
+        return 13 + buf[10];
+    case 0x07: case 0x0b: case 0x0c: case 0x11:
+        return 4;                           /* addr fc crc crc */
+    default:
+        return -1;
+    }
+}
+
+/* ---- documentation ----------------------------------------------------- */
+
+#define F(tab, off, cnt, ty, name, unit, doc) { tab, off, cnt, ty, name, unit, doc }
+#define ID "input daemon"
+#define IO "input object"
+#define HO "holding object"
+
+static const mbmap_field_t fields[] = {
+    F(ID, MBMAP_D_MAGIC, 1, MBMAP_T_U16, "magic", "", "0x7444, identifies trajd"),
+    F(ID, MBMAP_D_VERSION, 1, MBMAP_T_U16, "version", "", "register map version"),
+    F(ID, MBMAP_D_OBJECTS, 1, MBMAP_T_U16, "objects", "", "number of objects"),
+    F(ID, MBMAP_D_WRITES, 1, MBMAP_T_U16, "writes_enabled", "", "1 if holding registers accept writes"),
+    F(ID, MBMAP_D_GEN, 2, MBMAP_T_U32, "generation", "", "snapshot generation, +1 per tick"),
+    F(ID, MBMAP_D_UPTIME_S, 2, MBMAP_T_U32, "uptime", "s", "since the daemon started"),
+    F(ID, MBMAP_D_PERIOD_US, 2, MBMAP_T_U32, "period", "us", "output period"),
+    F(ID, MBMAP_D_LATE_P50_US, 2, MBMAP_T_U32, "lateness_p50", "us", "tick lateness, median"),
+    F(ID, MBMAP_D_LATE_P99_US, 2, MBMAP_T_U32, "lateness_p99", "us", "tick lateness, 99th percentile"),
+    F(ID, MBMAP_D_LATE_MAX_US, 2, MBMAP_T_U32, "lateness_max", "us", "tick lateness, maximum"),
+    F(ID, MBMAP_D_MISSED_TICKS, 2, MBMAP_T_U32, "missed_ticks", "", "timer expirations missed by the loop"),
+    F(ID, MBMAP_D_CAN_STATE, 1, MBMAP_T_U16, "can_state", "", "0 none, 1 active, 2 warning, 3 passive, 4 bus-off, 5 down"),
+    F(ID, MBMAP_D_CAN_LOAD, 1, MBMAP_T_U16, "can_load", "0.1 %", "CAN bus load"),
+    F(ID, MBMAP_D_MB_REQUESTS, 2, MBMAP_T_U32, "mb_requests", "", "Modbus requests answered"),
+    F(ID, MBMAP_D_MB_EXCEPTIONS, 2, MBMAP_T_U32, "mb_exceptions", "", "exception responses sent"),
+    F(ID, MBMAP_D_MB_REFUSED, 2, MBMAP_T_U32, "mb_refused", "", "connections refused (allow-list, max clients)"),
+    F(ID, MBMAP_D_MB_CLIENTS, 1, MBMAP_T_U16, "mb_clients", "", "TCP clients connected"),
+    F(ID, MBMAP_D_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "", "copy of generation (whole-block reads)"),
+
+    F(IO, MBMAP_O_GEN, 2, MBMAP_T_U32, "generation", "", "snapshot generation of this block"),
+    F(IO, MBMAP_O_STATE, 1, MBMAP_T_U16, "state", "", "0 waiting, 1 streaming, 2 underrun, 3 finished"),
+    F(IO, MBMAP_O_FLAGS, 1, MBMAP_T_U16, "flags", "", "bit 0 hold, bit 1 new track, bit 2 ticks skipped"),
+    F(IO, MBMAP_O_CYCLE, 2, MBMAP_T_U32, "cycle", "", "setpoint tick counter"),
+    F(IO, MBMAP_O_TRACK, 2, MBMAP_T_U32, "track", "", "trajectory number"),
+    F(IO, MBMAP_O_BUFFERED, 2, MBMAP_T_U32, "buffered", "", "waypoints buffered"),
+    F(IO, MBMAP_O_FREE, 2, MBMAP_T_U32, "free", "", "waypoints that can still be written"),
+    F(IO, MBMAP_O_LOOKAHEAD, 2, MBMAP_T_U32, "lookahead_needed", "", "waypoints of lookahead needed to stream"),
+    F(IO, MBMAP_O_AHEAD_S, 2, MBMAP_T_F32, "lookahead_available", "s", "track time buffered ahead of the output"),
+    F(IO, MBMAP_O_LAST_SEQ, 2, MBMAP_T_U32, "last_seq", "", "sequence number of the last accepted waypoint"),
+    F(IO, MBMAP_O_T_S, 4, MBMAP_T_F64, "t", "s", "track time of the setpoint"),
+    F(IO, MBMAP_O_POS + 0, 2, MBMAP_T_F32, "x", "m", "position"),
+    F(IO, MBMAP_O_POS + 2, 2, MBMAP_T_F32, "y", "m", "position"),
+    F(IO, MBMAP_O_POS + 4, 2, MBMAP_T_F32, "z", "m", "position"),
+    F(IO, MBMAP_O_VEL + 0, 2, MBMAP_T_F32, "vx", "m/s", "velocity"),
+    F(IO, MBMAP_O_VEL + 2, 2, MBMAP_T_F32, "vy", "m/s", "velocity"),
+    F(IO, MBMAP_O_VEL + 4, 2, MBMAP_T_F32, "vz", "m/s", "velocity"),
+    F(IO, MBMAP_O_ACC + 0, 2, MBMAP_T_F32, "ax", "m/s2", "acceleration"),
+    F(IO, MBMAP_O_ACC + 2, 2, MBMAP_T_F32, "ay", "m/s2", "acceleration"),
+    F(IO, MBMAP_O_ACC + 4, 2, MBMAP_T_F32, "az", "m/s2", "acceleration"),
+    F(IO, MBMAP_O_ACCEPTED, 2, MBMAP_T_U32, "accepted", "", "waypoints accepted"),
+    F(IO, MBMAP_O_REJECTED, 2, MBMAP_T_U32, "rejected", "", "waypoints rejected by the engine"),
+    F(IO, MBMAP_O_LOST, 2, MBMAP_T_U32, "lost", "", "waypoints lost (sequence gaps)"),
+    F(IO, MBMAP_O_UNDERRUNS, 2, MBMAP_T_U32, "underruns", "", "transitions into underrun"),
+    F(IO, MBMAP_O_MISSED_TICKS, 2, MBMAP_T_U32, "missed_ticks", "", "ticks stepped over"),
+    F(IO, MBMAP_O_DUPLICATES, 2, MBMAP_T_U32, "duplicates", "", "exact duplicate waypoints dropped"),
+    F(IO, MBMAP_O_MB_REJECTED, 2, MBMAP_T_U32, "mb_rejected", "", "Modbus writes refused with exception 03"),
+    F(IO, MBMAP_O_LATE_P99_US, 2, MBMAP_T_U32, "lateness_p99", "us", "tick lateness, 99th percentile"),
+    F(IO, MBMAP_O_LATE_MAX_US, 2, MBMAP_T_U32, "lateness_max", "us", "tick lateness, maximum"),
+    F(IO, MBMAP_O_CAN_STATE, 1, MBMAP_T_U16, "can_state", "", "as can_state of the daemon block, for this object's bus"),
+    F(IO, MBMAP_O_CAN_LOAD, 1, MBMAP_T_U16, "can_load", "0.1 %", "this object's CAN bus load"),
+    F(IO, MBMAP_O_UPTIME_S, 2, MBMAP_T_U32, "uptime", "s", "since the daemon started"),
+    F(IO, MBMAP_O_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "", "copy of generation (whole-block reads)"),
+
+    F(HO, MBMAP_H_COMMAND, 1, MBMAP_T_U16, "command", "", "1 start, 2 stop to rest, 3 clear, 4 reset counters"),
+    F(HO, MBMAP_H_WP_SEQ, 2, MBMAP_T_U32, "wp_seq", "", "waypoint sequence number"),
+    F(HO, MBMAP_H_WP_T_S, 4, MBMAP_T_F64, "wp_t", "s", "waypoint time"),
+    F(HO, MBMAP_H_WP_POS + 0, 4, MBMAP_T_F64, "wp_x", "m", "waypoint position"),
+    F(HO, MBMAP_H_WP_POS + 4, 4, MBMAP_T_F64, "wp_y", "m", "waypoint position"),
+    F(HO, MBMAP_H_WP_POS + 8, 4, MBMAP_T_F64, "wp_z", "m", "waypoint position; the 18 registers 10..27 go in one FC 16"),
+};
+
+const mbmap_field_t *mbmap_fields(size_t *n)
+{
+    *n = sizeof fields / sizeof fields[0];
+    return fields;
+}
+
+const char *mbmap_type_name(mbmap_type_t t)
+{
+    switch (t) {
+    case MBMAP_T_U16: return "u16";
+    case MBMAP_T_U32: return "u32";
+    case MBMAP_T_F32: return "f32";
+    case MBMAP_T_F64: return "f64";
+    default: return "?";
+    }
+}

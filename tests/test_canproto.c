@@ -1,0 +1,358 @@
+/* test_canproto.c - CAN codec: reassembly state machine, malformed frames,
+ * clamping, bus-load arithmetic against published worst-case frame lengths.
+ * (Bit-level layouts are cross-checked against canmatrix in test_canproto.py.) */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <string.h>
+
+#include "canproto.h"
+
+#define ID 0x680u
+#define FDID 0x690u
+/* Waypoint fields are 1 us / 1 um per bit: a decoded value is within half a bit. */
+#define WP_T_TOL 0.5e-6
+#define WP_POS_TOL 0.5e-6
+
+static canproto_slot_t slots[2];
+static canproto_rx_t rx;
+
+static int setup(void **state)
+{
+    (void)state;
+    canproto_rx_init(&rx, slots, 2);
+    return 0;
+}
+
+static engine_waypoint_t wpt(uint32_t seq, double t, double x, double y, double z)
+{
+    engine_waypoint_t w = { .t_s = t, .pos_m = { x, y, z }, .seq = seq };
+    return w;
+}
+
+/* Feed all four frames of w (in the given order); return the last result. */
+static int feed(const engine_waypoint_t *w, const int order[4], canproto_rx_out_t *out)
+{
+    canproto_frame_t f[4];
+    int rc = 0;
+    assert_true(canproto_encode_waypoint(ID, w, f) >= 0);
+    for (int k = 0; k < 4; k++)
+        rc = canproto_rx_frame(&rx, &f[order ? order[k] : k], 0, out);
+    return rc;
+}
+
+/* Given a waypoint sent as four frames in scrambled order, when reassembled,
+ * then it comes out once, on the fourth frame, with its values. */
+static void test_reassembly_any_order(void **state)
+{
+    (void)state;
+    engine_waypoint_t w = wpt(7, 12.345678, -1234.567891, 0.000001, 98765.4321);
+    canproto_frame_t f[4];
+    canproto_rx_out_t out;
+    const int order[4] = { 2, 0, 3, 1 };
+    assert_int_equal(canproto_encode_waypoint(ID, &w, f), 0);
+    for (int k = 0; k < 3; k++)
+        assert_int_equal(canproto_rx_frame(&rx, &f[order[k]], 0, &out), CANPROTO_RX_NONE);
+    assert_int_equal(canproto_rx_frame(&rx, &f[order[3]], 0, &out), CANPROTO_RX_WAYPOINT);
+    assert_true(fabs(out.wp.t_s - w.t_s) <= WP_T_TOL);
+    for (int a = 0; a < 3; a++)
+        assert_true(fabs(out.wp.pos_m[a] - w.pos_m[a]) <= WP_POS_TOL);
+    assert_int_equal(out.wp.seq, 7);
+    assert_int_equal(out.lost_before, 0);
+}
+
+/* Given waypoints 1,2 consumed, when 5 arrives, then 2 are counted lost; and
+ * when 5 comes again it is a duplicate, and 4 (late) is out of order. */
+static void test_gaps_duplicates_out_of_order(void **state)
+{
+    (void)state;
+    canproto_rx_out_t out;
+    for (uint32_t s = 1; s <= 2; s++) {
+        engine_waypoint_t w = wpt(s, s, 0, 0, 0);
+        assert_int_equal(feed(&w, NULL, &out), CANPROTO_RX_WAYPOINT);
+        canproto_rx_consume(&rx, &out);
+    }
+    engine_waypoint_t w5 = wpt(5, 5, 1, 2, 3);
+    assert_int_equal(feed(&w5, NULL, &out), CANPROTO_RX_WAYPOINT);
+    assert_int_equal(out.lost_before, 2);
+    canproto_rx_consume(&rx, &out);
+    assert_int_equal(rx.st.lost, 2);
+    assert_int_equal(feed(&w5, NULL, &out), CANPROTO_RX_NONE);
+    assert_int_equal(rx.st.duplicates, 4); /* four frames, each a duplicate */
+    engine_waypoint_t w4 = wpt(4, 4, 0, 0, 0);
+    assert_int_equal(feed(&w4, NULL, &out), CANPROTO_RX_NONE);
+    assert_int_equal(rx.st.out_of_order, 4);
+    assert_int_equal(rx.st.completed, 3);
+}
+
+/* Given a waypoint not consumed (the engine said EFULL), when the sender
+ * repeats it, then it is reassembled again (flow control can retry). */
+static void test_not_consumed_can_be_repeated(void **state)
+{
+    (void)state;
+    canproto_rx_out_t out;
+    engine_waypoint_t w = wpt(9, 1, 0, 0, 0);
+    assert_int_equal(feed(&w, NULL, &out), CANPROTO_RX_WAYPOINT);
+    assert_int_equal(feed(&w, NULL, &out), CANPROTO_RX_WAYPOINT);
+    canproto_rx_consume(&rx, &out);
+    assert_int_equal(feed(&w, NULL, &out), CANPROTO_RX_NONE);
+}
+
+/* Given the 8-bit sequence wrapping 255 -> 0, when waypoints continue, then the
+ * extended sequence keeps counting and nothing is lost. */
+static void test_sequence_wraps(void **state)
+{
+    (void)state;
+    canproto_rx_out_t out;
+    uint32_t expect = 250;
+    for (uint32_t s = 250; s < 262; s++) {
+        engine_waypoint_t w = wpt(s & 0xFF, s, 0, 0, 0);
+        assert_int_equal(feed(&w, NULL, &out), CANPROTO_RX_WAYPOINT);
+        assert_int_equal(out.wp.seq, expect++);
+        canproto_rx_consume(&rx, &out);
+    }
+    assert_int_equal(rx.st.lost, 0);
+}
+
+/* Given two slots, when the frames of three waypoints interleave, then the
+ * oldest partial one is abandoned (incomplete) and later counted lost. */
+static void test_slot_eviction(void **state)
+{
+    (void)state;
+    canproto_rx_out_t out;
+    canproto_frame_t a[4], b[4], c[4];
+    engine_waypoint_t wa = wpt(1, 1, 0, 0, 0), wb = wpt(2, 2, 0, 0, 0), wc = wpt(3, 3, 0, 0, 0);
+    canproto_encode_waypoint(ID, &wa, a);
+    canproto_encode_waypoint(ID, &wb, b);
+    canproto_encode_waypoint(ID, &wc, c);
+    /* seed history: consume a waypoint 0 */
+    engine_waypoint_t w0 = wpt(0, 0, 0, 0, 0);
+    assert_int_equal(feed(&w0, NULL, &out), CANPROTO_RX_WAYPOINT);
+    canproto_rx_consume(&rx, &out);
+    canproto_rx_frame(&rx, &a[0], 0, &out);
+    canproto_rx_frame(&rx, &b[0], 0, &out);
+    canproto_rx_frame(&rx, &c[0], 0, &out); /* evicts a */
+    assert_int_equal(rx.st.incomplete, 1);
+    for (int k = 1; k < 3; k++)
+        canproto_rx_frame(&rx, &b[k], 0, &out);
+    assert_int_equal(canproto_rx_frame(&rx, &b[3], 0, &out), CANPROTO_RX_WAYPOINT);
+    assert_int_equal(out.lost_before, 1);
+    canproto_rx_consume(&rx, &out);
+    for (int k = 1; k < 3; k++)
+        canproto_rx_frame(&rx, &c[k], 0, &out);
+    assert_int_equal(canproto_rx_frame(&rx, &c[3], 0, &out), CANPROTO_RX_WAYPOINT);
+    assert_int_equal(out.lost_before, 0);
+}
+
+/* Given malformed frames (wrong DLC, FD on the classic id, unknown mux, n/a
+ * marker, bad command, RTR, EFF), when offered, then each is refused with its
+ * error, counted, and no state changes. */
+static void test_malformed(void **state)
+{
+    (void)state;
+    canproto_rx_out_t out;
+    canproto_frame_t f[4], g;
+    engine_waypoint_t w = wpt(3, 1, 2, 3, 4);
+    canproto_encode_waypoint(ID, &w, f);
+
+    g = f[0]; g.len = 7;
+    assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_ELEN);
+    g = f[0]; g.flags |= CANPROTO_F_FD;
+    assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_ELEN);
+    g = f[0]; g.flags |= CANPROTO_F_RTR;
+    assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_ELEN);
+    g = f[0]; g.flags |= CANPROTO_F_EFF;
+    assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_ELEN);
+    g = f[0]; g.data[0] = 9;
+    assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_EMUX);
+    g = f[1]; memset(&g.data[2], 0, 6); g.data[7] = 0x80; /* int48 min: n/a */
+    assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_EVALUE);
+    canproto_encode_command(ID, CANPROTO_CMD_STOP, &g); g.data[2] = 77;
+    assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_EVALUE);
+    canproto_encode_command(ID, CANPROTO_CMD_STOP, &g); g.data[5] = 1;
+    assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_EVALUE);
+    /* classic frame on the FD id */
+    assert_int_equal(canproto_rx_frame(&rx, &f[0], 1, &out), -CANPROTO_ELEN);
+    assert_int_equal(rx.st.malformed, 9);
+    assert_int_equal(rx.st.malformed_by[CANPROTO_ELEN], 5);
+    assert_int_equal(rx.st.malformed_by[CANPROTO_EMUX], 1);
+    assert_int_equal(rx.st.malformed_by[CANPROTO_EVALUE], 3);
+    /* nothing was half-assembled by the bad frames */
+    assert_int_equal(feed(&w, NULL, &out), CANPROTO_RX_WAYPOINT);
+    assert_int_equal(rx.st.duplicates, 0);
+}
+
+/* Given a command frame, then it decodes as that command. */
+static void test_command(void **state)
+{
+    (void)state;
+    canproto_frame_t g;
+    canproto_rx_out_t out;
+    assert_int_equal(canproto_encode_command(ID, CANPROTO_CMD_CLEAR, &g), 0);
+    assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), CANPROTO_RX_COMMAND);
+    assert_int_equal(out.cmd, CANPROTO_CMD_CLEAR);
+    assert_int_equal(canproto_encode_command(ID, (canproto_cmd_t)0, &g), -CANPROTO_EVALUE);
+}
+
+/* Given an FD waypoint, then one frame gives the whole waypoint; reserved bytes
+ * and a wrong length are refused. */
+static void test_fd_waypoint(void **state)
+{
+    (void)state;
+    canproto_frame_t g, h;
+    canproto_rx_out_t out;
+    engine_waypoint_t w = wpt(200, 3600.5, 5300.25, -7.125, 1e-6);
+    assert_int_equal(canproto_encode_waypoint_fd(FDID, &w, &g), 0);
+    assert_int_equal(g.len, 32);
+    assert_true(g.flags & CANPROTO_F_FD);
+    assert_int_equal(canproto_rx_frame(&rx, &g, 1, &out), CANPROTO_RX_WAYPOINT);
+    for (int a = 0; a < 3; a++)
+        assert_true(fabs(out.wp.pos_m[a] - w.pos_m[a]) <= WP_POS_TOL);
+    assert_true(fabs(out.wp.t_s - w.t_s) <= WP_T_TOL);
+    h = g; h.data[30] = 1;
+    assert_int_equal(canproto_rx_frame(&rx, &h, 1, &out), -CANPROTO_EVALUE);
+    h = g; h.len = 24;
+    assert_int_equal(canproto_rx_frame(&rx, &h, 1, &out), -CANPROTO_ELEN);
+    h = g; h.data[0] = 4;
+    assert_int_equal(canproto_rx_frame(&rx, &h, 1, &out), -CANPROTO_EMUX);
+}
+
+/* Given out-of-range and NaN values, then encoders clamp and say so; a NaN
+ * waypoint is refused (a sender must not send it). */
+static void test_clamping(void **state)
+{
+    (void)state;
+    engine_setpoint_t sp;
+    canproto_frame_t f[3];
+    canproto_setpoint_t d;
+    memset(&sp, 0, sizeof sp);
+    sp.pos_m[0] = 1e6;       /* > 214 km */
+    sp.vel_m_s[1] = -40;     /* < -32.768 m/s */
+    sp.pos_m[2] = NAN;
+    assert_int_equal(canproto_encode_setpoint(0x6A0, &sp, f), CANPROTO_CLAMPED);
+    assert_int_equal(canproto_decode_setpoint(&f[0], &d), 0);
+    assert_true(fabs(d.pos_m[0] - INT32_MAX * CANPROTO_SP_POS_M_PER_BIT) < 1e-9);
+    assert_int_equal(canproto_decode_setpoint(&f[1], &d), 0);
+    assert_true(fabs(d.vel_m_s[1] - INT16_MIN * CANPROTO_SP_VEL_M_S_PER_BIT) < 1e-12);
+    assert_int_equal(canproto_decode_setpoint(&f[2], &d), 0);
+    assert_true(fabs(d.pos_m[2]) < 1e-12);
+    canproto_frame_t g[4];
+    engine_waypoint_t w = wpt(1, NAN, 0, 0, 0);
+    assert_int_equal(canproto_encode_waypoint(ID, &w, g), -CANPROTO_EVALUE);
+    w = wpt(1, -1, 0, 0, 0);
+    assert_int_equal(canproto_encode_waypoint(ID, &w, g), CANPROTO_CLAMPED);
+}
+
+/* Worst-case classic frame lengths, from Davis et al. 2007 (Table / eq. 2):
+ * 11-bit ids: 135 bits for 8 data bytes, 55 for 0 (incl. 3-bit IFS);
+ * 29-bit ids: 160 bits for 8 bytes, 80 for 0. */
+static void test_classic_frame_bits(void **state)
+{
+    (void)state;
+    /* tolerance: exact integers computed in double */
+    assert_true(fabs(canproto_frame_bits(8, 0, 0, 0, 500e3, 0) - 135) < 1e-9);
+    assert_true(fabs(canproto_frame_bits(0, 0, 0, 0, 500e3, 0) - 55) < 1e-9);
+    assert_true(fabs(canproto_frame_bits(8, 0, 0, 1, 500e3, 0) - 160) < 1e-9);
+    assert_true(fabs(canproto_frame_bits(0, 0, 0, 1, 500e3, 0) - 80) < 1e-9);
+    /* 135 bits at 500 kbit/s = 270 us */
+    assert_true(fabs(canproto_frame_time_s(8, 0, 0, 0, 500e3, 0) - 270e-6) < 1e-12);
+    assert_true(canproto_frame_time_s(9, 0, 0, 0, 500e3, 0) < 0);
+    assert_true(canproto_frame_time_s(33, 1, 0, 0, 500e3, 0) < 0);
+}
+
+/* CAN FD: without BRS the whole frame is at the nominal rate; count the fields
+ * by hand from ISO 11898-1:2015 for 64 bytes, 11-bit id:
+ *  arbitration 17 + 4 stuff, data 5+512 + 129 stuff, stuff count 4 + CRC21 +
+ *  7 fixed stuff, tail 13  = 712 bits.  With BRS 500k/2M: (17+4+13)/500k +
+ *  (517+129+4+21+7)/2M = 68 us + 339 us. */
+static void test_fd_frame_time(void **state)
+{
+    (void)state;
+    assert_true(fabs(canproto_frame_bits(64, 1, 0, 0, 500e3, 0) - 712) < 1e-9);
+    assert_true(fabs(canproto_frame_time_s(64, 1, 1, 0, 500e3, 2e6) - (68e-6 + 339e-6)) < 1e-12);
+    /* FD with BRS is shorter than FD without, which is longer than classic 8 bytes */
+    assert_true(canproto_frame_time_s(8, 1, 1, 0, 500e3, 2e6) <
+                canproto_frame_time_s(8, 1, 0, 0, 500e3, 0));
+}
+
+/* Given one object at 1 kHz with classic own frames, no SYNC, no status, no
+ * input, then the load is 3 frames x 135 bits x 1000 / bitrate. */
+static void test_busload(void **state)
+{
+    (void)state;
+    canproto_ids_t ids;
+    canproto_ids_default(&ids, 0);
+    canproto_traffic_t tr = { .rate_hz = 1000, .status_hz = 0, .waypoint_hz = 0 };
+    double l = canproto_busload(&ids, 1, 0, 0, &tr, 500e3, 0);
+    assert_true(fabs(l - 3 * 135 * 1000 / 500e3) < 1e-12);
+    /* SYNC (55 bits) and 10 Hz status (135 bits) and 10 waypoints/s (4 x 135) */
+    tr.status_hz = 10;
+    tr.waypoint_hz = 10;
+    l = canproto_busload(&ids, 1, 1, 0, &tr, 1e6, 0);
+    assert_true(fabs(l - (1000.0 * (3 * 135 + 55) + 10 * 135 + 10 * 4 * 135) / 1e6) < 1e-12);
+    assert_true(canproto_busload(&ids, 1, 0, 0, &tr, 0, 0) < 0);
+}
+
+/* Ids: defaults are valid; a clash or a 29-bit id is refused; rx ids listed. */
+static void test_ids(void **state)
+{
+    (void)state;
+    canproto_ids_t ids;
+    uint32_t rxids[4];
+    const char *why = NULL;
+    canproto_ids_default(&ids, 3);
+    assert_int_equal(canproto_ids_check(&ids, &why), 0);
+    assert_int_equal(ids.waypoint_id, 0x683);
+    assert_int_equal(canproto_ids_rx(&ids, rxids, 4), 1);
+    ids.fd = 1;
+    assert_int_equal(canproto_ids_rx(&ids, rxids, 4), 2);
+    assert_int_equal(rxids[1], 0x693);
+    ids.status_id = ids.waypoint_id;
+    assert_int_equal(canproto_ids_check(&ids, &why), -CANPROTO_ECONFIG);
+    assert_non_null(why);
+    canproto_ids_default(&ids, 0);
+    ids.setpoint_id = 0x800;
+    assert_int_equal(canproto_ids_check(&ids, &why), -CANPROTO_ECONFIG);
+    canproto_ids_default(&ids, 0);
+    ids.cia402 = 1;
+    ids.cia402_counts_per_m = NAN;
+    assert_int_equal(canproto_ids_check(&ids, &why), -CANPROTO_ECONFIG);
+}
+
+/* The DBC writer reports the length it needs and fills a big enough buffer. */
+static void test_dbc_length(void **state)
+{
+    (void)state;
+    static char buf[16384];
+    int n = canproto_dbc(NULL, 0);
+    assert_true(n > 100 && n < (int)sizeof buf);
+    assert_int_equal(canproto_dbc(buf, sizeof buf), n);
+    assert_int_equal((int)strlen(buf), n);
+    assert_int_equal(canproto_dbc(buf, 10), n);
+    assert_int_equal((int)strlen(buf), 9);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup(test_reassembly_any_order, setup),
+        cmocka_unit_test_setup(test_gaps_duplicates_out_of_order, setup),
+        cmocka_unit_test_setup(test_not_consumed_can_be_repeated, setup),
+        cmocka_unit_test_setup(test_sequence_wraps, setup),
+        cmocka_unit_test_setup(test_slot_eviction, setup),
+        cmocka_unit_test_setup(test_malformed, setup),
+        cmocka_unit_test_setup(test_command, setup),
+        cmocka_unit_test_setup(test_fd_waypoint, setup),
+        cmocka_unit_test(test_clamping),
+        cmocka_unit_test(test_classic_frame_bits),
+        cmocka_unit_test(test_fd_frame_time),
+        cmocka_unit_test(test_busload),
+        cmocka_unit_test(test_ids),
+        cmocka_unit_test(test_dbc_length),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,155 @@
+/* test_latency.c - lateness histogram against an exact reference: the samples
+ * kept, sorted with qsort, and the nearest-rank quantile read off directly. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdlib.h>
+
+#include "latency.h"
+
+#define NSAMP 20000
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Exact nearest-rank quantile of sorted v[0..n-1]. */
+static uint64_t exact_q(const uint64_t *v, size_t n, double q)
+{
+    size_t rank = (size_t)ceil(q * (double)n);
+    if (rank < 1)
+        rank = 1;
+    return v[rank - 1];
+}
+
+static uint64_t rnd(uint64_t *s)
+{
+    *s ^= *s << 13;
+    *s ^= *s >> 7;
+    *s ^= *s << 17;
+    return *s;
+}
+
+/* Given bucket indices 0 .. LAT_BUCKETS-1, when their ranges are read back,
+ * then they tile the values without gap or overlap and lat_bucket_of agrees. */
+static void test_buckets_tile(void **state)
+{
+    (void)state;
+    uint64_t prev_hi = 0;
+    for (unsigned b = 0; b < LAT_BUCKETS; b++) {
+        uint64_t lo, hi;
+        lat_bucket_range(b, &lo, &hi);
+        if (b)
+            assert_int_equal(lo, prev_hi + 1);
+        else
+            assert_int_equal(lo, 0);
+        assert_true(hi >= lo);
+        assert_int_equal(lat_bucket_of(lo), b);
+        if (b < LAT_BUCKETS - 1)
+            assert_int_equal(lat_bucket_of(hi), b);
+        /* relative width bound above the linear range */
+        if (b >= LAT_LINEAR_US && b < LAT_BUCKETS - 1)
+            assert_true((double)(hi - lo + 1) <= (double)lo / LAT_SUB + 1e-9);
+        prev_hi = hi;
+    }
+    assert_int_equal(lat_bucket_of(UINT64_MAX), LAT_BUCKETS - 1);
+}
+
+/* Given 20000 samples mixing a tight core (0-200 us), a tail (1-50 ms) and a
+ * few huge outliers, when summarised, then p50/p99/p99.9 are never below the
+ * exact quantile and above it by at most one bucket width (0 below 1024 us,
+ * <= 1/LAT_SUB relative above), and max and mean are exact. */
+static void test_quantiles_match_sorted(void **state)
+{
+    (void)state;
+    static uint64_t v[NSAMP];
+    static lat_hist_t h;
+    uint64_t s = 88172645463325252ull, sum = 0;
+    lat_reset(&h);
+    for (int i = 0; i < NSAMP; i++) {
+        uint64_t r = rnd(&s) % 1000;
+        if (r < 980)
+            v[i] = rnd(&s) % 200;
+        else if (r < 998)
+            v[i] = 1000 + rnd(&s) % 49000;
+        else
+            v[i] = rnd(&s) % 200000000; /* beyond LAT_MAX_US too */
+        lat_add(&h, v[i]);
+        sum += v[i];
+    }
+    qsort(v, NSAMP, sizeof v[0], cmp_u64);
+    const double qs[] = {0.0, 0.01, 0.5, 0.9, 0.98, 0.99, 0.995, 0.999, 1.0};
+    for (size_t k = 0; k < sizeof qs / sizeof qs[0]; k++) {
+        uint64_t ex = exact_q(v, NSAMP, qs[k]), got = lat_quantile(&h, qs[k]);
+        if (qs[k] <= 0) { /* lower edge of the first bucket: <= the minimum */
+            assert_true(got <= v[0]);
+            continue;
+        }
+        assert_true(got >= ex);
+        if (ex < LAT_LINEAR_US)
+            assert_int_equal(got, ex);
+        else if (ex < LAT_MAX_US)
+            assert_true((double)got <= (double)ex * (1.0 + 1.0 / LAT_SUB) + 1);
+        else
+            assert_true(got <= v[NSAMP - 1]);
+    }
+    lat_summary_t sm;
+    lat_summarize(&h, &sm);
+    assert_int_equal(sm.count, NSAMP);
+    assert_int_equal(sm.max_us, v[NSAMP - 1] > UINT32_MAX ? UINT32_MAX : v[NSAMP - 1]);
+    assert_int_equal(sm.mean_us, sum / NSAMP);
+    assert_int_equal(sm.p50_us, exact_q(v, NSAMP, 0.5)); /* in the 1 us range */
+}
+
+/* Given two histograms, when merged, then the quantiles equal those of one
+ * histogram fed with all samples. */
+static void test_merge(void **state)
+{
+    (void)state;
+    static lat_hist_t a, b, all;
+    uint64_t s = 12345;
+    lat_reset(&a);
+    lat_reset(&b);
+    lat_reset(&all);
+    for (int i = 0; i < 5000; i++) {
+        uint64_t x = rnd(&s) % 5000;
+        lat_add(i & 1 ? &a : &b, x);
+        lat_add(&all, x);
+    }
+    lat_merge(&a, &b);
+    for (double q = 0.05; q < 1.0; q += 0.05)
+        assert_int_equal(lat_quantile(&a, q), lat_quantile(&all, q));
+    assert_int_equal(a.max_us, all.max_us);
+    assert_int_equal(a.count, all.count);
+}
+
+/* Given an empty histogram, then every number is 0. */
+static void test_empty(void **state)
+{
+    (void)state;
+    static lat_hist_t h;
+    lat_summary_t sm;
+    lat_reset(&h);
+    lat_summarize(&h, &sm);
+    assert_int_equal(sm.count, 0);
+    assert_int_equal(sm.p99_us, 0);
+    assert_int_equal(sm.max_us, 0);
+    assert_int_equal(lat_quantile(&h, 0.5), 0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_buckets_tile),
+        cmocka_unit_test(test_quantiles_match_sorted),
+        cmocka_unit_test(test_merge),
+        cmocka_unit_test(test_empty),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

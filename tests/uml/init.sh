@@ -1,0 +1,43 @@
+#!/bin/sh
+# PID 1 of the user-mode-linux guest used by tests/test_can_uml.sh.
+# Kernel command line words (no spaces in values):
+#   trajd_dir=<dir>     writable hostfs directory (results, logs)
+#   trajd_script=<sh>   scenario script to run (with sh), cwd = the source tree
+#   trajd_src=<dir>     the source tree (read-only through hostfs)
+#   trajd_timeout=<s>   guest-side timeout for the script (shorter than the host's)
+# Writes <dir>/rc with the script's exit code, then powers off.  linux.uml itself
+# always exits 0, so the host reads the verdict from that file.
+PATH=/usr/sbin:/usr/bin:/sbin:/bin
+export PATH
+mount -t proc proc /proc 2>/dev/null
+dir=; script=; src=; tmo=40
+for w in $(cat /proc/cmdline); do
+    case "$w" in
+        trajd_dir=*) dir=${w#trajd_dir=} ;;
+        trajd_script=*) script=${w#trajd_script=} ;;
+        trajd_src=*) src=${w#trajd_src=} ;;
+        trajd_timeout=*) tmo=${w#trajd_timeout=} ;;
+    esac
+done
+mount -t sysfs sys /sys 2>/dev/null
+grep -q ' /dev ' /proc/mounts || mount -t devtmpfs dev /dev 2>/dev/null
+mkdir -p /dev/pts /dev/shm
+mount -t devpts devpts /dev/pts 2>/dev/null
+for m in /tmp /run /dev/shm; do mount -t tmpfs tmpfs $m 2>/dev/null; done
+mount -t hostfs -o "$dir" none "$dir"
+{
+    echo "guest: $(uname -r)"
+    k=/usr/lib/uml/modules/$(uname -r)/kernel
+    for mod in net/can/can.ko net/can/can-raw.ko drivers/net/can/dev/can-dev.ko drivers/net/can/vcan.ko; do
+        busybox insmod "$k/$mod" || echo "guest: insmod $mod failed"
+    done
+    ip link set lo up
+    ip link add dev vcan0 type vcan && ip link set vcan0 mtu 72 up
+    cd "$src" || exit 1
+    rc=0
+    timeout -k 2 "$tmo" sh "$script" "$dir" || rc=$?
+    echo "guest: script exit $rc"
+    echo $rc > "$dir/rc"
+} > "$dir/guest.log" 2>&1
+sync
+busybox poweroff -f
