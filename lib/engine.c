@@ -24,6 +24,7 @@
 #include "fdiff.h"
 #include "frag.h"
 #include "hoang.h"
+#include "lsq.h"
 
 #define AX ENGINE_AXES
 
@@ -45,6 +46,10 @@ struct engine {
     int pstar;            /* unknowns are Hoang control points (BSPLINE + UNIFORM) */
     int held;             /* HELD or MULTIPLE: first and last segments not emitted */
     int mult;             /* MULTIPLE: end points entered three times */
+    int smooth;           /* SMOOTH: waypoints pass through the lsq smoother first */
+    lsq_smooth_t sm;
+    double *sm_mem;
+    double first_r[AX];   /* first waypoint of the current trajectory */
     double period_s;
 
     /* ---- input: the trajectory being received ---- */
@@ -146,6 +151,8 @@ void engine_config_default(engine_config_t *cfg)
     cfg->max_abs_m = 1e7;
     cfg->max_speed_m_s = 100.0;
     cfg->max_segment_s = 60.0;
+    cfg->smooth_window = 24;
+    cfg->smooth_ctrl = 6;
 }
 
 static int uses_pstar(const engine_config_t *cfg)
@@ -158,6 +165,8 @@ unsigned engine_lookahead(const engine_config_t *cfg)
 {
     unsigned f = cfg->fragment, o = cfg->overlap, best = 0;
     unsigned need = uses_pstar(cfg) ? 3 : 2; /* x[j + need - 1] final for segment j */
+    /* SMOOTH: node j exists once waypoint j + delay is in */
+    unsigned extra = cfg->method == ENGINE_METHOD_SMOOTH ? lsq_smooth_delay(cfg->smooth_window) : 0;
     uint64_t j, n;
 
     if (f < ENGINE_FRAGMENT_MIN || f > ENGINE_FRAGMENT_MAX || o < 2 || o % 2 ||
@@ -172,7 +181,7 @@ unsigned engine_lookahead(const engine_config_t *cfg)
         if (n - (j + 1) > best)
             best = (unsigned)(n - (j + 1));
     }
-    return best;
+    return best + extra;
 }
 
 int engine_config_check(const engine_config_t *cfg, const char **why)
@@ -180,10 +189,15 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
     const char *w = NULL;
     unsigned la;
 
-    if (cfg->method == ENGINE_METHOD_SMOOTH)
-        w = "method: smooth (least squares) is not built into the engine yet";
-    else if (cfg->method != ENGINE_METHOD_BSPLINE && cfg->method != ENGINE_METHOD_CUBIC)
+    if (cfg->method != ENGINE_METHOD_BSPLINE && cfg->method != ENGINE_METHOD_CUBIC &&
+        cfg->method != ENGINE_METHOD_SMOOTH)
         w = "method: unknown";
+    else if (cfg->method == ENGINE_METHOD_SMOOTH &&
+             (cfg->smooth_window < 4 || cfg->smooth_window > ENGINE_SMOOTH_WINDOW_MAX))
+        w = "smooth_window: must be within 4..ENGINE_SMOOTH_WINDOW_MAX";
+    else if (cfg->method == ENGINE_METHOD_SMOOTH &&
+             (cfg->smooth_ctrl < 4 || cfg->smooth_ctrl > cfg->smooth_window))
+        w = "smooth_ctrl: must be at least 4 and at most smooth_window";
     else if (cfg->param != ENGINE_PARAM_UNIFORM && cfg->param != ENGINE_PARAM_TIME)
         w = "param: unknown";
     else if ((unsigned)cfg->ends > ENGINE_ENDS_REST)
@@ -241,6 +255,14 @@ engine_t *engine_new(const engine_config_t *cfg, int *err)
     e->pstar = uses_pstar(cfg);
     e->held = cfg->ends == ENGINE_ENDS_HELD || cfg->ends == ENGINE_ENDS_MULTIPLE;
     e->mult = cfg->ends == ENGINE_ENDS_MULTIPLE;
+    e->smooth = cfg->method == ENGINE_METHOD_SMOOTH;
+    if (e->smooth) {
+        e->sm_mem = calloc(lsq_smooth_mem_len(cfg->smooth_window, cfg->smooth_ctrl, AX),
+                           sizeof(double));
+        if (!e->sm_mem ||
+            lsq_smooth_init(&e->sm, cfg->smooth_window, cfg->smooth_ctrl, AX, e->sm_mem) < 0)
+            goto nomem;
+    }
     e->period_s = (double)cfg->period_ns * 1e-9;
     /* nodes from the oldest unbuilt segment (lags the newest by the lookahead
      * plus the copies of MULTIPLE) to the newest, with margin */
@@ -275,6 +297,7 @@ void engine_free(engine_t *e)
     free(e->node_r);
     frag_free(e->fw);
     free(e->q);
+    free(e->sm_mem);
     free(e);
 }
 
@@ -298,7 +321,8 @@ static double hpar(const engine_t *e, uint64_t j)
 
 static size_t buffered(const engine_t *e)
 {
-    return e->qlen + (size_t)(e->nodes - e->seg_next);
+    return e->qlen + (size_t)(e->nodes - e->seg_next) +
+           (e->smooth ? (size_t)lsq_smooth_pending(&e->sm) : 0);
 }
 
 static qent_t *q_push(engine_t *e)
@@ -451,6 +475,18 @@ static int add_node(engine_t *e, double t, const double *r)
     return 0;
 }
 
+/* SMOOTH: turn every smoothed waypoint that is ready into a node. */
+static int drain_smoother(engine_t *e)
+{
+    double t, r[AX];
+    int rc;
+
+    while (lsq_smooth_pop(&e->sm, &t, r) == 1)
+        if ((rc = add_node(e, t, r)) < 0)
+            return rc;
+    return 0;
+}
+
 /* Close the input trajectory: end row, last segments, END entry. */
 static int close_input(engine_t *e)
 {
@@ -460,6 +496,11 @@ static int close_input(engine_t *e)
     if (!e->in_open)
         return 0;
     e->in_open = 0;
+    if (e->smooth) {
+        lsq_smooth_finish(&e->sm);
+        if ((rc = drain_smoother(e)) < 0)
+            goto end;
+    }
     if (e->mult) {
         /* the last point twice more (it is in already once) */
         double r[AX];
@@ -496,7 +537,9 @@ static void open_input(engine_t *e, const engine_waypoint_t *wp)
     e->in_first_pending = 1;
     e->st.tracks++;
     e->finished = 0;
-    (void)wp;
+    memcpy(e->first_r, wp->pos_m, sizeof(e->first_r));
+    if (e->smooth)
+        lsq_smooth_reset(&e->sm);
 }
 
 static int reject(engine_t *e, int code)
@@ -551,7 +594,12 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
         open_input(e, wp);
     e->last_t = wp->t_s;
     memcpy(e->last_r, wp->pos_m, sizeof(e->last_r));
-    rc = add_node(e, wp->t_s, wp->pos_m);
+    if (e->smooth) {
+        lsq_smooth_push(&e->sm, wp->t_s, wp->pos_m);
+        rc = drain_smoother(e);
+    } else {
+        rc = add_node(e, wp->t_s, wp->pos_m);
+    }
     if (rc == 0 && e->mult && e->nodes == 1) {
         /* the first point twice more */
         if ((rc = add_node(e, wp->t_s, wp->pos_m)) == 0)
@@ -587,6 +635,8 @@ void engine_clear(engine_t *e)
     e->nodes = 0;
     e->seg_next = 0;
     frag_reset(e->fw);
+    if (e->smooth)
+        lsq_smooth_reset(&e->sm);
     e->qhead = 0;
     e->qlen = 0;
     e->finished = 0;
@@ -841,11 +891,13 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
         if (h)
             for (int k = 0; k < AX; k++)
                 e->pos[k] = h->seg.c[k][0];
-        else if (e->in_open)
+        else if (e->in_open && e->nodes)
             memcpy(e->pos, nr(e, 0), sizeof(e->pos));
+        else if (e->in_open) /* SMOOTH: no node yet, the first waypoint as received */
+            memcpy(e->pos, e->first_r, sizeof(e->pos));
         if (h)
             e->out_t = h->seg.t0_s;
-        else if (e->in_open)
+        else if (e->in_open && e->nodes)
             e->out_t = nt(e, 0);
     }
     sp->t_s = e->out_t;

@@ -78,6 +78,17 @@ typedef enum {
     ENGINE_METHOD_SMOOTH = 2,  /* least-squares B-spline over the window (not exact) */
 } engine_method_t;
 
+/*
+ * ENGINE_METHOD_SMOOTH (lib/lsq.h, lsq_smooth_*): each waypoint's position
+ * is replaced by the value, at its own time, of the least-squares cubic
+ * B-spline with smooth_ctrl control points fitted to the smooth_window
+ * waypoints around it; the smoothed waypoints then go through the CUBIC
+ * path (fragments, end condition, forward differences) unchanged.  The
+ * curve no longer passes through the waypoints; it adds smooth_window/2
+ * waypoints of lookahead.  For noisy positions (a GNSS fix standing still).
+ */
+#define ENGINE_SMOOTH_WINDOW_MAX 1024
+
 typedef struct {
     engine_method_t method;
     engine_param_t param;
@@ -92,6 +103,8 @@ typedef struct {
     double max_abs_m;       /* |coordinate| above this is rejected */
     double max_speed_m_s;   /* implied speed above this is rejected (0 = no limit) */
     double max_segment_s;   /* longest segment the stepper is tested for (drift bound) */
+    unsigned smooth_window; /* SMOOTH only: waypoints per local fit, 4 .. ENGINE_SMOOTH_WINDOW_MAX */
+    unsigned smooth_ctrl;   /* SMOOTH only: control points per fit, 4 .. smooth_window */
 } engine_config_t;
 
 /* Fill cfg with working defaults (documented in config/trajd.conf). */
