@@ -12,6 +12,7 @@ import numpy as np
 
 BUILD = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "build"))
 TRAJREPLAY = os.path.join(BUILD, "bin", "trajreplay")
+TRAJD = os.path.join(BUILD, "bin", "trajd")
 
 PATH = """# a test path
 start 0 0 0
@@ -96,6 +97,24 @@ class TestPathReplay(unittest.TestCase):
                    "-o", os.devnull, self.path)
         self.assertEqual(r.returncode, 2, r.stderr)
         self.assertIn("smooth_ctrl", r.stderr)
+
+    def test_daemon_config_smooth_and_path(self):
+        # Given a trajd config whose object replays a .path file with
+        # method smooth, then --check-config accepts it; with more control
+        # points than the window it is refused, naming the rule.
+        conf = os.path.join(self.dir.name, "a.conf")
+        text = ("[daemon]\nrate_hz = 100\n[object.robot]\ninput = replay\n"
+                "replay.track = loop.path\nreplay.format = path\noutput = stdout\n"
+                "method = smooth\nsmooth_window = 12\nsmooth_ctrl = %d\n")
+        with open(conf, "w") as f:
+            f.write(text % 5)
+        r = subprocess.run([TRAJD, "--check-config", conf], capture_output=True, text=True, timeout=30)
+        self.assertEqual(r.returncode, 0, r.stderr + r.stdout)
+        with open(conf, "w") as f:
+            f.write(text % 30)
+        r = subprocess.run([TRAJD, "--check-config", conf], capture_output=True, text=True, timeout=30)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("smooth_ctrl", r.stderr + r.stdout)
 
 
 if __name__ == "__main__":
