@@ -165,9 +165,11 @@ unsigned engine_lookahead(const engine_config_t *cfg)
 {
     unsigned f = cfg->fragment, o = cfg->overlap, best = 0;
     unsigned need = uses_pstar(cfg) ? 3 : 2; /* x[j + need - 1] final for segment j */
-    /* SMOOTH: node j exists once waypoint j + delay is in */
-    unsigned extra = cfg->method == ENGINE_METHOD_SMOOTH ? lsq_smooth_delay(cfg->smooth_window) : 0;
-    uint64_t j, n;
+    /* SMOOTH: node n exists once waypoint max(n + delay, window - 1) is in */
+    int sm = cfg->method == ENGINE_METHOD_SMOOTH;
+    uint64_t extra = sm ? lsq_smooth_delay(cfg->smooth_window) : 0;
+    uint64_t first = sm && cfg->smooth_window ? cfg->smooth_window - 1u : 0;
+    uint64_t j, n, raw;
 
     if (f < ENGINE_FRAGMENT_MIN || f > ENGINE_FRAGMENT_MAX || o < 2 || o % 2 ||
         o >= f)
@@ -178,10 +180,11 @@ unsigned engine_lookahead(const engine_config_t *cfg)
     for (j = 0; j < 4u * f; j++) {
         for (n = j + 1; frag_final_after(f, o, n - 1) < j + need; n++)
             ;
-        if (n - (j + 1) > best)
-            best = (unsigned)(n - (j + 1));
+        raw = n + extra > first ? n + extra : first;
+        if (raw - (j + 1) > best)
+            best = (unsigned)(raw - (j + 1));
     }
-    return best + extra;
+    return best;
 }
 
 int engine_config_check(const engine_config_t *cfg, const char **why)
