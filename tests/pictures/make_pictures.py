@@ -295,6 +295,39 @@ def pic_path():
     s.save("path.svg")
 
 
+def pic_engine_smooth():
+    """trajreplay on a real phone track (tests/data/gpxgo_visnjan.csv): cubic vs smooth."""
+    data = os.path.join(HERE, "..", "data", "gpxgo_visnjan.csv")
+    runs = {}
+    for m in ("cubic", "smooth"):
+        out = os.path.join(BUILD, "picture_visnjan_%s.csv" % m)
+        subprocess.run([os.path.join(BUILD, "bin", "trajreplay"), "-q", "--rate", "10", "--method", m,
+                        "-o", out, data], check=True)
+        d = np.genfromtxt(out, delimiter=",", names=True, dtype=None, encoding=None)
+        runs[m] = d
+        v = np.hypot(d["vx_m_s"], d["vy_m_s"])
+        a = np.hypot(d["ax_m_s2"], d["ay_m_s2"])
+        print("visnjan %s: path %.0f m, p99 speed %.2f m/s, p99 acceleration %.2f m/s^2, max %.2f" % (
+            m, np.hypot(np.diff(d["x_m"]), np.diff(d["y_m"])).sum(), np.percentile(v, 99),
+            np.percentile(a, 99), a.max()))
+    # the fixes, converted like trajreplay does: take them from the cubic run's
+    # waypoint times (the curve passes through them), first 400 s
+    t0, t1 = 0.0, 400.0
+    s = Svg("Real phone track (Visnjan walk, first 400 s): trajreplay --method cubic vs smooth")
+    for m, col, w in (("cubic", COLOURS[1], 1.0), ("smooth", COLOURS[0], 2.0)):
+        d = runs[m]
+        sel = (d["t_s"] >= t0) & (d["t_s"] <= t1)
+        s.line(np.c_[d["x_m"][sel], d["y_m"][sel]], col, w,
+               "method %s%s" % (m, " (exact through every fix)" if m == "cubic" else
+                                " (window 24, 6 control points)"))
+    fx = np.genfromtxt(data, delimiter=",", names=True)
+    d = runs["cubic"]
+    ts = fx["t_s"][(fx["t_s"] >= t0) & (fx["t_s"] <= t1)]
+    pts = np.c_[np.interp(ts, d["t_s"], d["x_m"]), np.interp(ts, d["t_s"], d["y_m"])]
+    s.dots(pts, "black", 2.2, "fixes (phone GPS, 1-41 s apart)", hollow=True)
+    s.save("engine_smooth.svg")
+
+
 def pic_surface():
     rows = []
     for r in range(9):
@@ -315,4 +348,5 @@ if __name__ == "__main__":
     pic_cspline()
     pic_lsq()
     pic_path()
+    pic_engine_smooth()
     pic_surface()
