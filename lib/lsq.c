@@ -285,7 +285,9 @@ int lsq_smooth_pop(lsq_smooth_t *s, double *t, double *r)
     if (j >= n || (!s->finished && n - 1 < need))
         return 0;
     start = j >= before ? j - before : 0;
-    if (s->finished && n >= W && start > n - W)
+    if (s->finished && n < W)
+        start = 0; /* a short track: every fit takes all of it */
+    else if (s->finished && start > n - W)
         start = n - W;
     m = (size_t)((start + W < n ? start + W : n) - start);
     tj = s->t[j % W];

@@ -63,8 +63,7 @@ def reference_smooth(t, r, W, C_):
             out[j] = r[j]
             continue
         start = max(j - before, 0)
-        if n >= W:
-            start = min(start, n - W)
+        start = min(start, n - W) if n >= W else 0
         end = min(start + W, n)
         m = end - start
         nc = min(C_, m)
@@ -107,7 +106,7 @@ class TestSmoother(unittest.TestCase):
         # when point max(j + W/2, W - 1) has been pushed (or at finish).
         rng = np.random.default_rng(11)
         t, _, r = noisy_track(rng, 90)
-        for W, C_ in ((24, 6), (9, 4), (16, 16), (40, 7)):
+        for W, C_ in ((24, 6), (9, 4), (16, 16), (40, 7), (120, 9)):  # 120 > track: one fit
             out, s = self.run_smoother(t, r, W, C_)
             self.assertEqual(len(out), len(t))
             ref = reference_smooth(t, r, W, C_)
