@@ -35,6 +35,7 @@ typedef struct {
     int kind;
     int first;            /* first entry of its trajectory */
     double t1_s;          /* segment end (absolute track time); END: rest time */
+    uint64_t node;        /* SEG: index of its first node in the trajectory */
     fdiff_seg_t seg;      /* END: c[k][0] is the rest position, t0_s = t1_s */
 } qent_t;
 
@@ -70,6 +71,7 @@ struct engine {
     /* ---- the queue ---- */
     qent_t *q;
     size_t qcap, qhead, qlen;
+    size_t qends;         /* END entries in the queue */
 
     /* ---- output ---- */
     int mode;
@@ -151,6 +153,7 @@ void engine_config_default(engine_config_t *cfg)
     cfg->max_abs_m = 1e7;
     cfg->max_speed_m_s = 100.0;
     cfg->max_segment_s = 60.0;
+    cfg->start_slack = 8;
     cfg->smooth_window = 24;
     cfg->smooth_ctrl = 6;
 }
@@ -161,30 +164,77 @@ static int uses_pstar(const engine_config_t *cfg)
            cfg->param == ENGINE_PARAM_UNIFORM;
 }
 
-unsigned engine_lookahead(const engine_config_t *cfg)
+/*
+ * largest lookahead over segments j in [j0, j1) for start offset delta, in
+ * waypoints received.  SMOOTH (toolkit): node n exists once waypoint
+ * max(n + extra, first) is in (extra = smooth_window/2, first =
+ * smooth_window - 1); otherwise extra = first = 0 and nodes are waypoints.
+ */
+static unsigned scan_lookahead(unsigned f, unsigned o, unsigned delta, unsigned need,
+                               uint64_t j0, uint64_t j1, uint64_t extra, uint64_t first)
 {
-    unsigned f = cfg->fragment, o = cfg->overlap, best = 0;
-    unsigned need = uses_pstar(cfg) ? 3 : 2; /* x[j + need - 1] final for segment j */
-    /* SMOOTH: node n exists once waypoint max(n + delay, window - 1) is in */
-    int sm = cfg->method == ENGINE_METHOD_SMOOTH;
-    uint64_t extra = sm ? lsq_smooth_delay(cfg->smooth_window) : 0;
-    uint64_t first = sm && cfg->smooth_window ? cfg->smooth_window - 1u : 0;
+    unsigned best = 0;
     uint64_t j, n, raw;
 
-    if (f < ENGINE_FRAGMENT_MIN || f > ENGINE_FRAGMENT_MAX || o < 2 || o % 2 ||
-        o >= f)
-        return 0;
     /* Row r is pushed when node r+1 arrives; segment j (waypoint j to j+1)
-     * is built once frag_final_after(rows pushed) covers it.  Steady state
-     * repeats every S segments: scan a few periods past the start. */
-    for (j = 0; j < 4u * f; j++) {
-        for (n = j + 1; frag_final_after(f, o, n - 1) < j + need; n++)
+     * is built once frag_final_after(rows pushed) reaches x[j + need - 1]. */
+    for (j = j0; j < j1; j++) {
+        for (n = j + 1; frag_final_after(f, o, delta, n - 1) < j + need; n++)
             ;
         raw = n + extra > first ? n + extra : first;
         if (raw - (j + 1) > best)
             best = (unsigned)(raw - (j + 1));
     }
     return best;
+}
+
+static int config_sizes_ok(const engine_config_t *cfg)
+{
+    return cfg->fragment >= ENGINE_FRAGMENT_MIN && cfg->fragment <= ENGINE_FRAGMENT_MAX &&
+           cfg->overlap >= 2 && cfg->overlap % 2 == 0 && cfg->overlap < cfg->fragment;
+}
+
+/* most waypoints beyond a segment the solver needs, far from the start */
+static unsigned steady_lookahead(const engine_config_t *cfg)
+{
+    unsigned f = cfg->fragment, o = cfg->overlap, s = f - o;
+    unsigned need = uses_pstar(cfg) ? 3 : 2; /* x[j + need - 1] final for segment j */
+
+    /* the pattern repeats every S segments */
+    return scan_lookahead(f, o, 0, need, 2u * f, 2u * f + 2u * s, 0, 0);
+}
+
+/*
+ * Start offset of the fragment grid: the first fragment is cut short so that
+ * its first segment is final no later than the output wants to start
+ * (steady-state lookahead + start_slack) instead of after F - 1 waypoints;
+ * never beyond S - 1 (see frag.h).
+ */
+static unsigned frag_delta(const engine_config_t *cfg)
+{
+    unsigned f = cfg->fragment, s = f - cfg->overlap;
+    unsigned want = steady_lookahead(cfg) + cfg->start_slack;
+    unsigned d = f - 1 > want ? f - 1 - want : 0;
+
+    return d < s ? d : s - 1;
+}
+
+unsigned engine_lookahead(const engine_config_t *cfg)
+{
+    unsigned f = cfg->fragment, o = cfg->overlap, la, want;
+    /* SMOOTH: the smoother holds smooth_window/2 waypoints back (lsq.h) */
+    int sm = cfg->method == ENGINE_METHOD_SMOOTH && cfg->smooth_window >= 1;
+    unsigned extra = sm ? lsq_smooth_delay(cfg->smooth_window) : 0;
+    unsigned first = sm ? cfg->smooth_window - 1 : 0;
+
+    if (!config_sizes_ok(cfg) || cfg->start_slack > ENGINE_FRAGMENT_MAX)
+        return 0;
+    /* what the solver needs, from the start on (a few periods cover it) ... */
+    la = scan_lookahead(f, o, frag_delta(cfg), uses_pstar(cfg) ? 3 : 2, 0, 4u * f,
+                        extra, first);
+    /* ... and what the output waits for */
+    want = steady_lookahead(cfg) + extra + cfg->start_slack;
+    return la > want ? la : want;
 }
 
 int engine_config_check(const engine_config_t *cfg, const char **why)
@@ -223,6 +273,8 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
         w = "max_speed_m_s: must be 0 (no limit) or positive and finite";
     else if (!(cfg->max_segment_s >= 0) || !isfinite(cfg->max_segment_s))
         w = "max_segment_s: must be 0 or positive and finite";
+    else if (cfg->start_slack > ENGINE_FRAGMENT_MAX)
+        w = "start_slack: at most ENGINE_FRAGMENT_MAX waypoints";
     else if (cfg->ends == ENGINE_ENDS_CLAMPED &&
              !(isfinite(cfg->start_vel_m_s[0]) && isfinite(cfg->start_vel_m_s[1]) &&
                isfinite(cfg->start_vel_m_s[2]) && isfinite(cfg->end_vel_m_s[0]) &&
@@ -274,7 +326,7 @@ engine_t *engine_new(const engine_config_t *cfg, int *err)
     e->ring = ring;
     e->node_t = calloc(ring, sizeof(double));
     e->node_r = calloc(ring * AX, sizeof(double));
-    e->fw = frag_new(cfg->fragment, cfg->overlap, ring);
+    e->fw = frag_new(cfg->fragment, cfg->overlap, frag_delta(cfg), ring);
     /* each accepted waypoint yields at most one segment, each trajectory
      * one END: twice the capacity always fits */
     e->qcap = 2 * (size_t)cfg->capacity + 8;
@@ -341,13 +393,14 @@ static qent_t *q_push(engine_t *e)
     return q;
 }
 
-static void queue_segment(engine_t *e, const fdiff_seg_t *seg)
+static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
 {
     qent_t *q = q_push(e);
 
     if (!q)
         return;
     q->kind = QE_SEG;
+    q->node = node;
     q->seg = *seg;
     q->t1_s = seg->t0_s + seg->dur_s;
     e->in_emitted = 1;
@@ -363,6 +416,7 @@ static void queue_end(engine_t *e)
     if (!q)
         return;
     q->kind = QE_END;
+    e->qends++;
     memset(&q->seg, 0, sizeof(q->seg));
     q->t1_s = e->in_emitted ? e->end_t : e->last_t;
     q->seg.t0_s = q->t1_s;
@@ -431,7 +485,7 @@ static void build_segments(engine_t *e)
             cubic_segment(nr(e, j), nr(e, j + 1), frag_x(e->fw, j),
                           frag_x(e->fw, j + 1), hpar(e, j), nt(e, j), dur, &seg);
         }
-        queue_segment(e, &seg);
+        queue_segment(e, &seg, j);
     }
 }
 
@@ -642,6 +696,7 @@ void engine_clear(engine_t *e)
         lsq_smooth_reset(&e->sm);
     e->qhead = 0;
     e->qlen = 0;
+    e->qends = 0;
     e->finished = 0;
     e->underrun = 0;
     if (e->mode != OUT_HOLD) {
@@ -669,8 +724,22 @@ static qent_t *q_head(engine_t *e)
 
 static void q_pop(engine_t *e)
 {
+    if (e->q[e->qhead].kind == QE_END)
+        e->qends--;
     e->qhead = (e->qhead + 1) % e->qcap;
     e->qlen--;
+}
+
+/*
+ * The output may start (or resume after an underrun) on the segment h only
+ * once the lookahead is buffered beyond it, or its trajectory is closed.
+ */
+static int enough_ahead(const engine_t *e, const qent_t *h)
+{
+    /* waypoints received: nodes, plus those the smoother still holds (SMOOTH) */
+    uint64_t in = e->nodes + (e->smooth ? lsq_smooth_pending(&e->sm) : 0);
+
+    return e->qends > 0 || h->kind != QE_SEG || in >= h->node + 2 + e->lookahead;
 }
 
 static void hold_here(engine_t *e)
@@ -791,7 +860,7 @@ static void step_once(engine_t *e)
     switch (e->mode) {
     case OUT_HOLD: {
         qent_t *h = q_head(e);
-        if (!h || !h->first) {
+        if (!h || !h->first || !enough_ahead(e, h)) {
             hold_here(e);
             break;
         }
@@ -836,6 +905,12 @@ static void step_once(engine_t *e)
         }
         for (;;) {
             qent_t *h = q_head(e);
+            /* Out of an underrun only once the lookahead is buffered again
+             * beyond the next segment, as at the start (or the end is in
+             * sight): resuming on the first segment back would leave no
+             * margin and underrun again at the next late waypoint. */
+            if (h && e->underrun && !enough_ahead(e, h))
+                h = NULL;
             if (!h) {
                 /* waypoints late: hold, keep n; resume exactly here */
                 if (!e->underrun)

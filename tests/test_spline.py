@@ -158,7 +158,7 @@ def test_hoang_held_vs_banded_bspline():
     tq = samples(t[1], t[-2], t)
     s_param = np.interp(tq, t, np.arange(n))      # segment j mapped onto [t_j, t_j+1]
     for name, segs in (("hoang_curve", hoang_curve(t, xyz, HELD)),
-                       ("engine F=64", engine_curve(BSPLINE, UNIFORM, HELD, 64, 16, t, xyz))):
+                       ("engine F=1024", engine_curve(BSPLINE, UNIFORM, HELD, 1024, 16, t, xyz))):
         check(len(segs) == n - 3, "%s held: N-3 segments (%d)" % (name, len(segs)))
         err = np.abs(evaluate(segs, tq) - ref(s_param)).max() / ext
         check(err < TOL_ORACLE_REL, "%s held vs solve_banded+BSpline: %.1e of extent" % (name, err))
@@ -195,7 +195,7 @@ def test_hoang_multiple_vs_banded_bspline():
     # real segment j (R(j)->R(j+1)) is extended segment j+2
     s_param = np.interp(tq, t, np.arange(n)) + 2.0
     for name, segs in (("hoang_curve", hoang_curve(t, xyz, MULTIPLE)),
-                       ("engine F=64", engine_curve(BSPLINE, UNIFORM, MULTIPLE, 64, 16, t, xyz))):
+                       ("engine F=1024", engine_curve(BSPLINE, UNIFORM, MULTIPLE, 1024, 16, t, xyz))):
         check(len(segs) == n - 1, "%s multiple: N-1 segments, loops dropped (%d)" % (name, len(segs)))
         check(bool(np.all(segs[:, 1] > 0)), "%s multiple: every emitted segment has a duration" % name)
         err = np.abs(evaluate(segs, tq) - ref(s_param)).max() / ext
@@ -216,8 +216,8 @@ def test_uniform_natural_clamped():
     nat = make_interp_spline(np.arange(n), xyz, k=3, bc_type="natural")(s_param)
     for name, segs in (("hoang natural", hoang_curve(t, xyz, NATURAL)),
                        ("cubic uniform natural", cubic_curve(t, xyz, UNIFORM, NATURAL)),
-                       ("engine bspline/uniform/natural", engine_curve(BSPLINE, UNIFORM, NATURAL, 64, 16, t, xyz)),
-                       ("engine cubic/uniform/natural", engine_curve(CUBIC, UNIFORM, NATURAL, 64, 16, t, xyz))):
+                       ("engine bspline/uniform/natural", engine_curve(BSPLINE, UNIFORM, NATURAL, 1024, 16, t, xyz)),
+                       ("engine cubic/uniform/natural", engine_curve(CUBIC, UNIFORM, NATURAL, 1024, 16, t, xyz))):
         err = np.abs(evaluate(segs, tq) - nat).max() / ext
         check(err < TOL_ORACLE_REL, "%s vs make_interp_spline(index, natural): %.1e" % (name, err))
     v0 = np.array([1.0, -2.0, 0.5])
@@ -245,9 +245,9 @@ def test_time_knots():
     rest = CubicSpline(t, xyz, bc_type="clamped")
     bsp = make_interp_spline(t, xyz, k=3, bc_type="natural")
     cases = (("cubic_curve natural", cubic_curve(t, xyz, TIME, NATURAL), nat),
-             ("engine cubic/time/natural", engine_curve(CUBIC, TIME, NATURAL, 64, 16, t, xyz), nat),
-             ("engine cubic/time/rest", engine_curve(CUBIC, TIME, REST, 64, 16, t, xyz), rest),
-             ("engine bspline/time/natural", engine_curve(BSPLINE, TIME, NATURAL, 64, 16, t, xyz), bsp))
+             ("engine cubic/time/natural", engine_curve(CUBIC, TIME, NATURAL, 1024, 16, t, xyz), nat),
+             ("engine cubic/time/rest", engine_curve(CUBIC, TIME, REST, 1024, 16, t, xyz), rest),
+             ("engine bspline/time/natural", engine_curve(BSPLINE, TIME, NATURAL, 1024, 16, t, xyz), bsp))
     for name, segs, ref in cases:
         for der in (0, 1, 2):
             err = np.abs(evaluate(segs, tq, der) - ref(tq, der)).max() / ext
