@@ -117,8 +117,12 @@ int canlog_recv(canlog_t *l, int64_t now_ns, canproto_frame_t *f)
     l->now_ns = now_ns;
     if (l->next >= l->n)
         return 0;
-    /* due = start + (ts_k - ts_0) us; compare without overflow for sane logs */
-    int64_t due = l->start_ns + (l->rec[l->next].ts_us - l->rec[0].ts_us) * 1000;
+    /* due = start + (ts_k - ts_0) us; candump_parse_line bounds ts_us below
+     * 1e18, so the difference fits, and the product is checked */
+    int64_t d_us = l->rec[l->next].ts_us - l->rec[0].ts_us;
+    int64_t due = d_us <= 0 ? l->start_ns /* stamped before the first: due with it */
+                : d_us > (INT64_MAX / 2 - l->start_ns) / 1000 ? INT64_MAX
+                : l->start_ns + d_us * 1000;
     if (due > now_ns)
         return 0;
     *f = l->rec[l->next++].f;

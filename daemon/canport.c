@@ -21,6 +21,7 @@ typedef struct {
     int sent_status;
     uint8_t flags_since;       /* CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP since last STATUS */
     uint8_t last_err;
+    int last_state;            /* engine state in the last STATUS (-1: none yet) */
     canport_obj_stats_t st;
 } canport_obj_t;
 
@@ -64,8 +65,10 @@ canport_t *canport_new(const canport_config_t *cfg, const canport_io_t *io, void
     p->io = *io;
     p->io_ctx = io_ctx;
     p->nobj = nobj;
-    for (unsigned i = 0; i < nobj; i++)
+    for (unsigned i = 0; i < nobj; i++) {
         canproto_rx_init(&p->obj[i].rx, p->obj[i].slots, CANPORT_RX_SLOTS);
+        p->obj[i].last_state = -1;
+    }
     return p;
 }
 
@@ -284,14 +287,13 @@ static void count_drop(canport_obj_t *o, int rc)
     event(o, is_full(rc) ? CANPROTO_STERR_TX_DROPPED : CANPROTO_STERR_BUS_DOWN);
 }
 
-static void send_status(canport_t *p, canport_obj_t *o, int64_t now_ns)
+static void send_status(canport_t *p, canport_obj_t *o, const engine_status_t *es_in,
+                        int64_t now_ns)
 {
-    engine_status_t es;
+    const engine_status_t es = *es_in;
     canproto_status_t st;
     canproto_frame_t f;
 
-    memset(&es, 0, sizeof es);
-    o->hooks.status(o->ctx, &es);
     memset(&st, 0, sizeof st);
     st.state = (uint8_t)es.state;
     st.flags = o->flags_since;
@@ -309,6 +311,7 @@ static void send_status(canport_t *p, canport_obj_t *o, int64_t now_ns)
         o->status_due = 0;
         o->last_status_ns = now_ns;
         o->sent_status = 1;
+        o->last_state = (int)es.state;
     }
 }
 
@@ -357,10 +360,14 @@ void canport_cycle(canport_t *p, int64_t now_ns, int64_t late_ns)
         canport_obj_t *o = &p->obj[i];
         if (!o->set)
             continue;
-        if (o->status_due || !o->sent_status ||
+        engine_status_t es;
+        memset(&es, 0, sizeof es);
+        o->hooks.status(o->ctx, &es);
+        /* a change of state is reported at once (e.g. FINISHED, UNDERRUN) */
+        if (o->status_due || !o->sent_status || (int)es.state != o->last_state ||
             (p->cfg.status_period_ns > 0 && now_ns - o->last_status_ns >= p->cfg.status_period_ns))
             if (p->io.is_up(p->io_ctx))
-                send_status(p, o, now_ns);
+                send_status(p, o, &es, now_ns);
     }
 out:
     for (unsigned i = 0; i < p->nobj; i++)

@@ -17,7 +17,8 @@
  *      CiA 402 RPDOs (a CSP drive applies the target received after SYNC k at
  *      SYNC k + 1: one cycle of latency, the CiA 402 norm);
  *   3. STATUS frames that are due (every status_period_ns, or at once after a
- *      rejection, a loss or a malformed frame, at most one per object per cycle).
+ *      rejection, a loss, a malformed frame or a change of engine state, at
+ *      most one per object per cycle).
  * A frame the transport cannot take (queue full, interface down) is dropped
  * and counted; the rest of that object's frames this cycle are not attempted
  * (the setpoint is dropped whole).  Nothing is kept for later: after a fault

@@ -120,12 +120,12 @@ int candump_parse_line(const char *s, candump_line_t *out)
         const char *p = s + 1;
         int64_t sec = 0, usec = 0;
         unsigned nd = 0;
-        while (*p >= '0' && *p <= '9' && nd < 18) {
+        while (*p >= '0' && *p <= '9' && nd < 12) { /* 12 digits: no overflow below */
             sec = sec * 10 + (*p++ - '0');
             nd++;
         }
         if (!nd || *p++ != '.')
-            return -CANDUMP_ESYNTAX;
+            return -CANDUMP_ESYNTAX; /* also more than 12 digits of seconds */
         nd = 0;
         while (*p >= '0' && *p <= '9') {
             if (nd < 6)
@@ -200,6 +200,8 @@ int candump_format_frame(char *buf, size_t len, const canproto_frame_t *f)
             dlen = CANPROTO_MAX_DLEN;
     } else if (f->flags & CANPROTO_F_RTR) {
         tmp[n++] = 'R';
+        if (f->len && f->len <= CANPROTO_CLASSIC_DLEN) /* can-utils: "123#R3" */
+            tmp[n++] = hexd[f->len];
         dlen = 0;
     } else if (dlen > CANPROTO_CLASSIC_DLEN) {
         dlen = CANPROTO_CLASSIC_DLEN;

@@ -419,9 +419,13 @@ static void fill_out(const canproto_rx_t *rx, uint8_t seq8, uint64_t t_us,
                      const int64_t pos_um[ENGINE_AXES], canproto_rx_out_t *out)
 {
     memset(out, 0, sizeof *out);
-    out->wp.t_s = (double)t_us * CANPROTO_WP_T_S_PER_BIT;
+    /* Divide by the exact 1e6 rather than multiply by the inexact 1e-6: the
+     * result is then the correctly rounded value of the decimal number, the
+     * same double strtod gives for a track file with 6 decimals, so CAN input
+     * and a replayed file drive the engine bit-identically. */
+    out->wp.t_s = (double)t_us / CANPROTO_WP_BITS_PER_S;
     for (unsigned a = 0; a < ENGINE_AXES; a++)
-        out->wp.pos_m[a] = (double)pos_um[a] * CANPROTO_WP_POS_M_PER_BIT;
+        out->wp.pos_m[a] = (double)pos_um[a] / CANPROTO_WP_BITS_PER_M;
     if (rx->have_last) {
         int d = seq_ahead(rx, seq8); /* > 0: seq_old() ruled the rest out */
         out->wp.seq = rx->last_seq + (uint32_t)d;

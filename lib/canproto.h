@@ -122,6 +122,8 @@ typedef enum {
 /* Scalings: physical value = raw * scale. */
 #define CANPROTO_WP_T_S_PER_BIT 1e-6      /* uint48 */
 #define CANPROTO_WP_POS_M_PER_BIT 1e-6    /* int48 */
+#define CANPROTO_WP_BITS_PER_S 1e6        /* the same scalings as exact divisors */
+#define CANPROTO_WP_BITS_PER_M 1e6
 #define CANPROTO_SP_POS_M_PER_BIT 1e-4    /* int32 */
 #define CANPROTO_SP_VEL_M_S_PER_BIT 1e-3  /* int16, classic */
 #define CANPROTO_SPFD_VEL_M_S_PER_BIT 1e-6 /* int32, FD */

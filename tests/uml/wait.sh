@@ -5,7 +5,8 @@
 wait_rx() {
     i=0
     while [ $i -lt 250 ]; do
-        grep -q "$1" /proc/net/can/rcvlist_all 2>/dev/null && return 0
+        # an entry line "   vcan0     000    00000000 ..." (not "(vcan0: no entry)")
+        grep -Eq "^ +$1 +[0-9a-f]+ " /proc/net/can/rcvlist_all 2>/dev/null && return 0
         i=$((i + 1)); sleep 0.02
     done
     echo "wait_rx: no receiver on $1" >&2; return 1

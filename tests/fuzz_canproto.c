@@ -1,0 +1,107 @@
+/* fuzz_canproto.c - libFuzzer target: the frame decoder and the waypoint
+ * reassembly state machine, and the candump line parser.
+ *
+ * Input: byte 0 selects the slot count (1..4); then a sequence of records
+ * [flags, id_lo, len, data...]: each becomes one frame offered to the
+ * reassembler (classic or FD id), and the same bytes as text go to
+ * candump_parse_line.  Invariants checked (abort on violation):
+ *  - a completed waypoint has finite values within the field ranges;
+ *  - the counters add up: every frame is counted once as malformed, or
+ *    reaches the sequence logic;
+ *  - extended sequence numbers of consumed waypoints strictly increase;
+ *  - decode(encode(sp)) round-trips setpoints within half a bit.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "candump.h"
+#include "canproto.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    canproto_slot_t slots[4];
+    canproto_rx_t rx;
+    if (size < 1)
+        return 0;
+    unsigned nslots = 1 + (data[0] & 3);
+    canproto_rx_init(&rx, slots, nslots);
+    size_t i = 1;
+    uint64_t frames = 0;
+    int have = 0;
+    uint32_t last = 0;
+    while (i + 3 <= size) {
+        canproto_frame_t f;
+        memset(&f, 0, sizeof f);
+        uint8_t fl = data[i];
+        f.flags = fl & 0x3F;
+        int is_fd = (fl >> 6) & 1;
+        f.id = is_fd ? 0x690 : 0x680;
+        f.len = data[i + 2] % (CANPROTO_MAX_DLEN + 1);
+        i += 3;
+        size_t n = f.len;
+        if (n > size - i)
+            n = size - i;
+        memcpy(f.data, data + i, n);
+        i += n;
+        canproto_rx_out_t out;
+        int rc = canproto_rx_frame(&rx, &f, is_fd, &out);
+        frames++;
+        if (rc == CANPROTO_RX_WAYPOINT) {
+            if (!isfinite(out.wp.t_s) || out.wp.t_s < 0 || out.wp.t_s > 3e8)
+                abort();
+            for (int a = 0; a < ENGINE_AXES; a++)
+                if (!isfinite(out.wp.pos_m[a]) || fabs(out.wp.pos_m[a]) > 1.5e8)
+                    abort();
+            if (have && (int32_t)(out.wp.seq - last) <= 0)
+                abort();
+            /* consume most of them, leave some (as after EFULL) */
+            if (!(fl & 0x80)) {
+                canproto_rx_consume(&rx, &out);
+                have = 1;
+                last = out.wp.seq;
+            }
+        } else if (rc < 0 && (rc < -CANPROTO_EID)) {
+            abort(); /* the reassembler only reports frame errors */
+        }
+    }
+    if (rx.st.frames != frames)
+        abort();
+
+    /* the candump parser on the raw bytes as a line */
+    char line[300];
+    size_t n = size < sizeof line - 1 ? size : sizeof line - 1;
+    memcpy(line, data, n);
+    line[n] = '\0';
+    candump_line_t cl;
+    if (candump_parse_line(line, &cl) == 0) {
+        char back[256];
+        if (candump_format_frame(back, sizeof back, &cl.frame) < 0)
+            abort();
+        canproto_frame_t g;
+        if (candump_parse_frame(back, &g) != 0 || g.id != cl.frame.id || g.len != cl.frame.len ||
+            memcmp(g.data, cl.frame.data, g.len))
+            abort();
+    }
+
+    /* setpoint round trip on bytes read as doubles */
+    if (size >= 8 * 6) {
+        engine_setpoint_t sp;
+        memset(&sp, 0, sizeof sp);
+        memcpy(sp.pos_m, data, sizeof sp.pos_m);
+        memcpy(sp.vel_m_s, data + 24, sizeof sp.vel_m_s);
+        canproto_frame_t f3[3];
+        canproto_setpoint_t d;
+        int rc = canproto_encode_setpoint(0x6A0, &sp, f3);
+        for (int a = 0; a < 3; a++) {
+            if (canproto_decode_setpoint(&f3[a], &d) != 0)
+                abort();
+            if (rc == 0 && fabs(d.pos_m[a] - sp.pos_m[a]) > 0.5e-4 * (1 + 1e-9))
+                abort();
+        }
+    }
+    return 0;
+}

@@ -1,0 +1,116 @@
+#!/bin/sh
+# Guest scenarios with trajd on vcan0 (see tests/test_can_uml.sh, which
+# prepares $out/wp.log and checks the captures afterwards).  Each phase writes
+# a marker "$out/ok.<phase>" when its in-guest check passed.
+out=$1
+. tests/uml/wait.sh
+. "$out/env"   # BUILD
+set -u
+fail() { echo "FAIL: $*"; [ -n "${tp:-}" ] && kill "$tp" 2>/dev/null; exit 1; }
+status_re() { # STATUS frame with byte0 matching $1 (two hex digits, regex)
+    echo " 6C0#$1"
+}
+
+cat > "$out/trajd.conf" <<CONF
+[daemon]
+rate_hz = 100
+speed = 10
+status_interval_s = 0
+stop_timeout_s = 1
+[can]
+interface = vcan0
+fd = yes
+sync = yes
+status_period_ms = 100
+bitrate = 1000000
+[object.boat]
+input = can
+output = can
+can.cia402 = yes
+can.cia402_counts_per_m = 10000
+CONF
+
+# ---- B: stream a track from canplayer, capture with candump --------------
+timeout 60 candump -r 8000000 -D -L vcan0 > "$out/cap.log" & cp=$!
+wait_rx vcan0 || fail "candump not ready"
+"$BUILD/bin/trajd" -f -c "$out/trajd.conf" 2> "$out/trajd.err" & tp=$!
+wait_grep "$out/cap.log" " 6C0#" || fail "no STATUS from trajd"
+cat /proc/net/can/rcvlist_sff > "$out/rcvlist_sff.txt"
+cat /proc/net/can/rcvlist_all > "$out/rcvlist_all.txt"
+canplayer -I "$out/wp.log" vcan0=can0 || fail "canplayer"
+# FINISH was the last frame: wait for STATUS state finished (3), no flags
+wait_grep "$out/cap.log" "$(status_re 03)" 500 || fail "never finished"
+kill -0 $tp || fail "trajd died"
+touch "$out/ok.stream"
+
+# ---- C1: interface down and up --------------------------------------------
+n1=$(grep -c ' 6A0#' "$out/cap.log")
+echo "down at $(cat /proc/uptime)" > "$out/down.txt"
+ip link set vcan0 down
+sleep 0.3   # the outage itself (not a wait for an event)
+ip link set vcan0 up
+echo "up at $(cat /proc/uptime)" >> "$out/down.txt"
+i=0; while [ $i -lt 250 ] && [ "$(grep -c ' 6A0#' "$out/cap.log")" -lt $((n1 + 60)) ]; do i=$((i+1)); sleep 0.02; done
+[ "$(grep -c ' 6A0#' "$out/cap.log")" -ge $((n1 + 60)) ] || fail "no setpoints after up"
+kill -0 $tp || fail "trajd died after down/up"
+# STATUS reports the outage: bus-down flag (0x10) with tx-drop (0x20), finished
+wait_grep "$out/cap.log" "$(status_re 33)" || fail "no STATUS with bus-down flag"
+kill $cp; wait $cp 2>/dev/null
+touch "$out/ok.downup"
+
+# ---- C2: interface removed and re-created (new ifindex) --------------------
+ip link del vcan0
+sleep 0.3   # the outage itself
+ip link add dev vcan0 type vcan && ip link set vcan0 mtu 72 up
+timeout 30 candump -r 8000000 -D -L vcan0 > "$out/cap2.log" & cp=$!
+wait_rx vcan0 || fail "candump 2 not ready"
+wait_grep "$out/cap2.log" " 6A0#" || fail "trajd did not reopen the new vcan0"
+wait_grep "$out/cap2.log" "$(status_re 33)" || fail "no STATUS with bus-down after removal"
+kill -0 $tp || fail "trajd died after removal"
+kill $cp; wait $cp 2>/dev/null
+touch "$out/ok.removed"
+
+# ---- D: TX queue full: a slow qdisc makes write() fail with ENOBUFS --------
+busybox insmod /usr/lib/uml/modules/$(uname -r)/kernel/net/sched/sch_tbf.ko 2>/dev/null
+tc qdisc add dev vcan0 root tbf rate 8kbit burst 256 limit 128 || fail "tc tbf"
+timeout 30 candump -r 8000000 -D -L vcan0 > "$out/cap3.log" & cp=$!
+wait_rx vcan0 || fail "candump 3 not ready"
+# a STATUS with the tx-drop flag (0x2x) gets through the slow queue
+wait_grep "$out/cap3.log" "$(status_re 2.)" 500 || fail "no STATUS reporting dropped setpoints"
+tc qdisc del dev vcan0 root
+kill -0 $tp || fail "trajd died under ENOBUFS"
+kill $cp; wait $cp 2>/dev/null
+touch "$out/ok.enobufs"
+
+# ---- E: malformed frames are counted in STATUS ------------------------------
+timeout 30 candump -r 8000000 -D -L vcan0 > "$out/cap4.log" & cp=$!
+wait_rx vcan0 || fail "candump 4 not ready"
+cansend vcan0 680#0011
+cansend vcan0 680#0911000000000000
+# STATUS byte 5 = malformed frames = 2 (bytes 0..4 = 10 hex digits before it)
+wait_grep "$out/cap4.log" " 6C0#[0-9A-F]\{10\}02" || fail "malformed frames not reported"
+kill $cp; wait $cp 2>/dev/null
+touch "$out/ok.malformed"
+
+# ---- stop: SIGTERM, trajd exits 0 -------------------------------------------
+kill -TERM $tp
+wait $tp; rc=$?
+[ $rc -eq 0 ] || fail "trajd exit code $rc"
+tp=
+touch "$out/ok.stop"
+
+# ---- F: frames per second trajd emits on vcan0 (measured, not asserted) -----
+{
+    printf '[daemon]\nrate_hz = 10000\nspeed = 1\nstatus_interval_s = 0\nstop_timeout_s = 1\n'
+    printf '[can]\ninterface = vcan0\nmax_load_percent = 0\nsync = yes\n'
+    for i in 0 1 2 3 4 5 6 7; do printf '[object.o%d]\ninput = can\noutput = can\n' $i; done
+} > "$out/fast.conf"
+timeout 30 candump -r 8000000 -D -L vcan0 > "$out/cap5.log" & cp=$!
+wait_rx vcan0 || fail "candump 5 not ready"
+tx0=$(cat /sys/class/net/vcan0/statistics/tx_packets); t0=$(cut -d' ' -f1 /proc/uptime)
+timeout -s TERM 3 "$BUILD/bin/trajd" -f -c "$out/fast.conf" 2> "$out/fast.err"
+tx1=$(cat /sys/class/net/vcan0/statistics/tx_packets); t1=$(cut -d' ' -f1 /proc/uptime)
+kill $cp; wait $cp 2>/dev/null
+# the kernel's count of frames sent on vcan0 (only trajd sends now), over the run
+echo "$tx0 $tx1 $t0 $t1" > "$out/fast.txt"
+echo "all guest phases passed"
