@@ -484,7 +484,10 @@ void mbsrv_free(mbsrv_t *s)
         modbus_close(s->rtu);
         modbus_free(s->rtu);
     }
-    if (s->lfd >= 0)
+    /* A socket passed by systemd stays open for the life of the process: a
+     * reload (free + new) finds it again with sd_listen_fds, and clients
+     * connecting meanwhile wait in its backlog. */
+    if (s->lfd >= 0 && !s->from_systemd)
         close(s->lfd);
     if (s->hkfd >= 0)
         close(s->hkfd);

@@ -16,6 +16,7 @@ typedef struct {
     mbsrv_t *srv;
     mbmap_object_t *objs;       /* nobj, rewritten every tick (taken at open) */
     unsigned nobj;
+    int rtu_down_logged;
 } mbt_t;
 
 static void cfg_default(void *cfg)
@@ -106,6 +107,12 @@ static void on_ready(loop_t *l, int fd, uint32_t events, void *ctx)
     int rc = mbsrv_process(t->srv);
     if (rc < 0)
         log_msg(LOG_ERR, "modbus: %s", strerror(-rc));
+    mbsrv_stats_t ms;
+    mbsrv_stats(t->srv, &ms);
+    if (ms.rtu_down && !t->rtu_down_logged) {
+        t->rtu_down_logged = 1;
+        log_msg(LOG_ERR, "modbus: RTU line failed; not reopened until a reload");
+    }
 }
 
 static int open_(core_t *c, void **state, char *why, size_t wl)

@@ -240,8 +240,14 @@ csv.path = %s/fed.csv
             self.assertEqual(missing[:5], [])
             diff = [(r["t_s"], c) for r in fed for c in cols if float(r[c]) != float(ref[r["t_s"]][c])]
             self.assertEqual(diff[:5], [])
-            # Rows may be missing only where ticks were skipped (loaded machine).
-            self.assertGreater(len(fed), 0.8 * len(ref), (len(fed), len(ref)))
+            # Rows may be missing where ticks were skipped (a loaded machine, or
+            # ASan), so coverage is asked loosely: a good share of the rows,
+            # spread from the start to the end of the track.
+            self.assertGreater(len(fed), len(ref) // 3, (len(fed), len(ref)))
+            t_ref = sorted(float(t) for t in ref)
+            t_fed = sorted(float(r["t_s"]) for r in fed)
+            self.assertLess(t_fed[0] - t_ref[0], 0.1 * (t_ref[-1] - t_ref[0]))
+            self.assertLess(t_ref[-1] - t_fed[-1], 0.1 * (t_ref[-1] - t_ref[0]))
 
             # And every Modbus read while streaming is one tick of trajreplay's
             # rows: t as f64 names the row, x,y,z,vx.. are its values in f32.
