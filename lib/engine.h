@@ -116,6 +116,17 @@ typedef enum {
     ENGINE_METHOD_SMOOTH = 2,  /* least-squares B-spline over the window (not exact) */
 } engine_method_t;
 
+/*
+ * ENGINE_METHOD_SMOOTH (lib/lsq.h, lsq_smooth_*): each waypoint's position
+ * is replaced by the value, at its own time, of the least-squares cubic
+ * B-spline with smooth_ctrl control points fitted to the smooth_window
+ * waypoints around it; the smoothed waypoints then go through the CUBIC
+ * path (fragments, end condition, forward differences) unchanged.  The
+ * curve no longer passes through the waypoints; it adds smooth_window/2
+ * waypoints of lookahead.  For noisy positions (a GNSS fix standing still).
+ */
+#define ENGINE_SMOOTH_WINDOW_MAX 1024
+
 typedef struct {
     engine_method_t method; /* default CUBIC (see (b) above) */
     engine_param_t param;   /* default TIME: C2 in physical time, see above */
@@ -155,6 +166,10 @@ typedef struct {
                                Default 8 (measured: no underrun replaying the
                                irregular gpxgo_visnjan track with F=64/O=32;
                                2 were enough for the regular 5 Hz figure-8) */
+    unsigned smooth_window; /* SMOOTH only: waypoints per local least-squares fit,
+                               4 .. ENGINE_SMOOTH_WINDOW_MAX.  Default 24 */
+    unsigned smooth_ctrl;   /* SMOOTH only: control points per fit,
+                               4 .. smooth_window.  Default 6 */
 } engine_config_t;
 
 /* Fill cfg with working defaults (each one commented above; documented in
@@ -164,8 +179,8 @@ void engine_config_default(engine_config_t *cfg);
 /*
  * Check a configuration.  Returns 0 or -ENGINE_ECONFIG; if why is not NULL
  * it receives a static string naming the offending field and the rule (NULL
- * when valid).  Refused: METHOD_SMOOTH (least squares is not built into the
- * engine yet: the toolkit provides it separately), HELD or MULTIPLE with
+ * when valid).  Refused: METHOD_SMOOTH with smooth_window or smooth_ctrl
+ * out of range, HELD or MULTIPLE with
  * anything but BSPLINE + UNIFORM (they are the paper's ends of the
  * control polygon, meaningless in the second-derivative form), F, O, period
  * or capacity out of range, non-finite or non-positive limits.

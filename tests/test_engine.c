@@ -79,8 +79,9 @@ static double curve_vmax(const fdiff_seg_t *s, size_t n)
     return vmax;
 }
 
-/* Given defaults, then they pass the check; SMOOTH, HELD with the cubic
- * form, a bad overlap and a tiny capacity are refused with a reason. */
+/* Given defaults, then they pass the check; SMOOTH with more control points
+ * than its window, HELD with the cubic form, a bad overlap and a tiny
+ * capacity are refused with a reason. */
 static void test_config(void **state)
 {
     (void)state;
@@ -92,6 +93,8 @@ static void test_config(void **state)
     assert_int_equal(engine_config_check(&c, &why), 0);
     assert_null(why);
     c.method = ENGINE_METHOD_SMOOTH;
+    assert_int_equal(engine_config_check(&c, &why), 0); /* toolkit: lib/lsq.h */
+    c.smooth_ctrl = c.smooth_window + 1;
     assert_int_equal(engine_config_check(&c, &why), -ENGINE_ECONFIG);
     assert_non_null(strstr(why, "smooth"));
     assert_null(engine_new(&c, &err));
