@@ -72,9 +72,12 @@ static void usage(FILE *f)
         "  --start-vel VX,VY,VZ start velocity for --ends clamped, m/s (default 0,0,0)\n"
         "  --end-vel VX,VY,VZ   end velocity for --ends clamped, m/s (default 0,0,0)\n"
         "  --method M           bspline | cubic | smooth\n"
+        "  --smooth-window W    smooth: waypoints per least-squares fit (default 24)\n"
+        "  --smooth-ctrl C      smooth: control points per fit (default 6)\n"
         "  --max-gap S          a longer interval ends the trajectory and starts a new one\n"
         "  --max-speed M_S      reject waypoints implying a higher speed (0 = no limit)\n"
-        "  --format F           auto | xyz | latlon | gpx (default auto)\n"
+        "  --format F           auto | xyz | latlon | gpx | path (default auto;\n"
+        "                       path: lines and arcs, lib/path.h, auto for *.path)\n"
         "  --skip-bad           skip and count malformed lines instead of failing\n"
         "  --object NAME        value of the object column (default \"replay\")\n"
         "  -o, --output FILE    setpoint CSV (default stdout; \"-\" = stdout)\n"
@@ -152,7 +155,7 @@ static const char *reason_name(int e)
 }
 
 enum {
-    OPT_RATE = 256, OPT_FRAGMENT, OPT_OVERLAP, OPT_PARAM, OPT_ENDS, OPT_METHOD, OPT_FORMAT,
+    OPT_RATE = 256, OPT_FRAGMENT, OPT_OVERLAP, OPT_PARAM, OPT_ENDS, OPT_METHOD, OPT_SMOOTH_WINDOW, OPT_SMOOTH_CTRL, OPT_FORMAT,
     OPT_SVG, OPT_SUMMARY, OPT_MAX_GAP, OPT_MAX_SPEED, OPT_SKIP_BAD, OPT_OBJECT,
     OPT_START_VEL, OPT_END_VEL, OPT_PROGRESS_AFTER,
 };
@@ -167,6 +170,8 @@ static int parse_args(int argc, char **argv, opts_t *o)
         {"param", required_argument, NULL, OPT_PARAM},
         {"ends", required_argument, NULL, OPT_ENDS},
         {"method", required_argument, NULL, OPT_METHOD},
+        {"smooth-window", required_argument, NULL, OPT_SMOOTH_WINDOW},
+        {"smooth-ctrl", required_argument, NULL, OPT_SMOOTH_CTRL},
         {"format", required_argument, NULL, OPT_FORMAT},
         {"svg", required_argument, NULL, OPT_SVG},
         {"summary", no_argument, NULL, OPT_SUMMARY},
@@ -233,9 +238,18 @@ static int parse_args(int argc, char **argv, opts_t *o)
             }
             o->cfg.method = (engine_method_t)k;
             break;
+        case OPT_SMOOTH_WINDOW:
+        case OPT_SMOOTH_CTRL:
+            if (parse_uint(optarg, c == OPT_SMOOTH_WINDOW ? &o->cfg.smooth_window
+                                                          : &o->cfg.smooth_ctrl)) {
+                fprintf(stderr, "trajreplay: --%s: '%s' is not a count\n",
+                        c == OPT_SMOOTH_WINDOW ? "smooth-window" : "smooth-ctrl", optarg);
+                return EXIT_USAGE;
+            }
+            break;
         case OPT_FORMAT:
             if (track_format_parse(optarg, &o->format)) {
-                fprintf(stderr, "trajreplay: --format: '%s' is not auto, xyz, latlon or gpx\n",
+                fprintf(stderr, "trajreplay: --format: '%s' is not auto, xyz, latlon, gpx or path\n",
                         optarg);
                 return EXIT_USAGE;
             }

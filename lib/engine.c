@@ -24,6 +24,7 @@
 #include "fdiff.h"
 #include "frag.h"
 #include "hoang.h"
+#include "lsq.h"
 
 #define AX ENGINE_AXES
 
@@ -46,6 +47,10 @@ struct engine {
     int pstar;            /* unknowns are Hoang control points (BSPLINE + UNIFORM) */
     int held;             /* HELD or MULTIPLE: first and last segments not emitted */
     int mult;             /* MULTIPLE: end points entered three times */
+    int smooth;           /* SMOOTH: waypoints pass through the lsq smoother first */
+    lsq_smooth_t sm;
+    double *sm_mem;
+    double first_r[AX];   /* first waypoint of the current trajectory */
     double period_s;
 
     /* ---- input: the trajectory being received ---- */
@@ -103,7 +108,7 @@ struct engine {
 /* |t| above this is absurd for a track clock (about 31700 years). */
 #define ENGINE_T_ABS_MAX_S 1e12
 /* Capacity accepted at most (memory is sized from it). */
-#define ENGINE_CAPACITY_MAX (1u << 22)
+#define ENGINE_CAPACITY_MAX (1u << 20)
 
 const char *engine_strerror(int err)
 {
@@ -149,6 +154,8 @@ void engine_config_default(engine_config_t *cfg)
     cfg->max_speed_m_s = 100.0;
     cfg->max_segment_s = 60.0;
     cfg->start_slack = 8;
+    cfg->smooth_window = 24;
+    cfg->smooth_ctrl = 6;
 }
 
 static int uses_pstar(const engine_config_t *cfg)
@@ -157,20 +164,26 @@ static int uses_pstar(const engine_config_t *cfg)
            cfg->param == ENGINE_PARAM_UNIFORM;
 }
 
-/* largest lookahead over segments j in [j0, j1) for start offset delta */
+/*
+ * largest lookahead over segments j in [j0, j1) for start offset delta, in
+ * waypoints received.  SMOOTH (toolkit): node n exists once waypoint
+ * max(n + extra, first) is in (extra = smooth_window/2, first =
+ * smooth_window - 1); otherwise extra = first = 0 and nodes are waypoints.
+ */
 static unsigned scan_lookahead(unsigned f, unsigned o, unsigned delta, unsigned need,
-                               uint64_t j0, uint64_t j1)
+                               uint64_t j0, uint64_t j1, uint64_t extra, uint64_t first)
 {
     unsigned best = 0;
-    uint64_t j, n;
+    uint64_t j, n, raw;
 
     /* Row r is pushed when node r+1 arrives; segment j (waypoint j to j+1)
      * is built once frag_final_after(rows pushed) reaches x[j + need - 1]. */
     for (j = j0; j < j1; j++) {
         for (n = j + 1; frag_final_after(f, o, delta, n - 1) < j + need; n++)
             ;
-        if (n - (j + 1) > best)
-            best = (unsigned)(n - (j + 1));
+        raw = n + extra > first ? n + extra : first;
+        if (raw - (j + 1) > best)
+            best = (unsigned)(raw - (j + 1));
     }
     return best;
 }
@@ -188,7 +201,7 @@ static unsigned steady_lookahead(const engine_config_t *cfg)
     unsigned need = uses_pstar(cfg) ? 3 : 2; /* x[j + need - 1] final for segment j */
 
     /* the pattern repeats every S segments */
-    return scan_lookahead(f, o, 0, need, 2u * f, 2u * f + 2u * s);
+    return scan_lookahead(f, o, 0, need, 2u * f, 2u * f + 2u * s, 0, 0);
 }
 
 /*
@@ -209,13 +222,18 @@ static unsigned frag_delta(const engine_config_t *cfg)
 unsigned engine_lookahead(const engine_config_t *cfg)
 {
     unsigned f = cfg->fragment, o = cfg->overlap, la, want;
+    /* SMOOTH: the smoother holds smooth_window/2 waypoints back (lsq.h) */
+    int sm = cfg->method == ENGINE_METHOD_SMOOTH && cfg->smooth_window >= 1;
+    unsigned extra = sm ? lsq_smooth_delay(cfg->smooth_window) : 0;
+    unsigned first = sm ? cfg->smooth_window - 1 : 0;
 
     if (!config_sizes_ok(cfg) || cfg->start_slack > ENGINE_FRAGMENT_MAX)
         return 0;
     /* what the solver needs, from the start on (a few periods cover it) ... */
-    la = scan_lookahead(f, o, frag_delta(cfg), uses_pstar(cfg) ? 3 : 2, 0, 4u * f);
+    la = scan_lookahead(f, o, frag_delta(cfg), uses_pstar(cfg) ? 3 : 2, 0, 4u * f,
+                        extra, first);
     /* ... and what the output waits for */
-    want = steady_lookahead(cfg) + cfg->start_slack;
+    want = steady_lookahead(cfg) + extra + cfg->start_slack;
     return la > want ? la : want;
 }
 
@@ -224,10 +242,15 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
     const char *w = NULL;
     unsigned la;
 
-    if (cfg->method == ENGINE_METHOD_SMOOTH)
-        w = "method: smooth (least squares) is not built into the engine yet";
-    else if (cfg->method != ENGINE_METHOD_BSPLINE && cfg->method != ENGINE_METHOD_CUBIC)
+    if (cfg->method != ENGINE_METHOD_BSPLINE && cfg->method != ENGINE_METHOD_CUBIC &&
+        cfg->method != ENGINE_METHOD_SMOOTH)
         w = "method: unknown";
+    else if (cfg->method == ENGINE_METHOD_SMOOTH &&
+             (cfg->smooth_window < 4 || cfg->smooth_window > ENGINE_SMOOTH_WINDOW_MAX))
+        w = "smooth_window: must be within 4..ENGINE_SMOOTH_WINDOW_MAX";
+    else if (cfg->method == ENGINE_METHOD_SMOOTH &&
+             (cfg->smooth_ctrl < 4 || cfg->smooth_ctrl > cfg->smooth_window))
+        w = "smooth_ctrl: must be at least 4 and at most smooth_window";
     else if (cfg->param != ENGINE_PARAM_UNIFORM && cfg->param != ENGINE_PARAM_TIME)
         w = "param: unknown";
     else if ((unsigned)cfg->ends > ENGINE_ENDS_REST)
@@ -260,7 +283,7 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
     if (!w) {
         la = engine_lookahead(cfg);
         if (cfg->capacity < la + cfg->fragment + 8 || cfg->capacity > ENGINE_CAPACITY_MAX)
-            w = "capacity: must be at least lookahead + fragment + 8 and at most 2^22";
+            w = "capacity: must be at least lookahead + fragment + 8 and at most 2^20";
     }
     if (why)
         *why = w;
@@ -287,6 +310,14 @@ engine_t *engine_new(const engine_config_t *cfg, int *err)
     e->pstar = uses_pstar(cfg);
     e->held = cfg->ends == ENGINE_ENDS_HELD || cfg->ends == ENGINE_ENDS_MULTIPLE;
     e->mult = cfg->ends == ENGINE_ENDS_MULTIPLE;
+    e->smooth = cfg->method == ENGINE_METHOD_SMOOTH;
+    if (e->smooth) {
+        e->sm_mem = calloc(lsq_smooth_mem_len(cfg->smooth_window, cfg->smooth_ctrl, AX),
+                           sizeof(double));
+        if (!e->sm_mem ||
+            lsq_smooth_init(&e->sm, cfg->smooth_window, cfg->smooth_ctrl, AX, e->sm_mem) < 0)
+            goto nomem;
+    }
     e->period_s = (double)cfg->period_ns * 1e-9;
     /* nodes from the oldest unbuilt segment (lags the newest by the lookahead
      * plus the copies of MULTIPLE) to the newest, with margin */
@@ -321,6 +352,7 @@ void engine_free(engine_t *e)
     free(e->node_r);
     frag_free(e->fw);
     free(e->q);
+    free(e->sm_mem);
     free(e);
 }
 
@@ -344,7 +376,8 @@ static double hpar(const engine_t *e, uint64_t j)
 
 static size_t buffered(const engine_t *e)
 {
-    return e->qlen + (size_t)(e->nodes - e->seg_next);
+    return e->qlen + (size_t)(e->nodes - e->seg_next) +
+           (e->smooth ? (size_t)lsq_smooth_pending(&e->sm) : 0);
 }
 
 static qent_t *q_push(engine_t *e)
@@ -499,6 +532,18 @@ static int add_node(engine_t *e, double t, const double *r)
     return 0;
 }
 
+/* SMOOTH: turn every smoothed waypoint that is ready into a node. */
+static int drain_smoother(engine_t *e)
+{
+    double t, r[AX];
+    int rc;
+
+    while (lsq_smooth_pop(&e->sm, &t, r) == 1)
+        if ((rc = add_node(e, t, r)) < 0)
+            return rc;
+    return 0;
+}
+
 /* Close the input trajectory: end row, last segments, END entry. */
 static int close_input(engine_t *e)
 {
@@ -508,6 +553,11 @@ static int close_input(engine_t *e)
     if (!e->in_open)
         return 0;
     e->in_open = 0;
+    if (e->smooth) {
+        lsq_smooth_finish(&e->sm);
+        if ((rc = drain_smoother(e)) < 0)
+            goto end;
+    }
     if (e->mult) {
         /* the last point twice more (it is in already once) */
         double r[AX];
@@ -544,7 +594,9 @@ static void open_input(engine_t *e, const engine_waypoint_t *wp)
     e->in_first_pending = 1;
     e->st.tracks++;
     e->finished = 0;
-    (void)wp;
+    memcpy(e->first_r, wp->pos_m, sizeof(e->first_r));
+    if (e->smooth)
+        lsq_smooth_reset(&e->sm);
 }
 
 static int reject(engine_t *e, int code)
@@ -599,7 +651,12 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
         open_input(e, wp);
     e->last_t = wp->t_s;
     memcpy(e->last_r, wp->pos_m, sizeof(e->last_r));
-    rc = add_node(e, wp->t_s, wp->pos_m);
+    if (e->smooth) {
+        lsq_smooth_push(&e->sm, wp->t_s, wp->pos_m);
+        rc = drain_smoother(e);
+    } else {
+        rc = add_node(e, wp->t_s, wp->pos_m);
+    }
     if (rc == 0 && e->mult && e->nodes == 1) {
         /* the first point twice more */
         if ((rc = add_node(e, wp->t_s, wp->pos_m)) == 0)
@@ -635,6 +692,8 @@ void engine_clear(engine_t *e)
     e->nodes = 0;
     e->seg_next = 0;
     frag_reset(e->fw);
+    if (e->smooth)
+        lsq_smooth_reset(&e->sm);
     e->qhead = 0;
     e->qlen = 0;
     e->qends = 0;
@@ -677,7 +736,10 @@ static void q_pop(engine_t *e)
  */
 static int enough_ahead(const engine_t *e, const qent_t *h)
 {
-    return e->qends > 0 || h->kind != QE_SEG || e->nodes >= h->node + 2 + e->lookahead;
+    /* waypoints received: nodes, plus those the smoother still holds (SMOOTH) */
+    uint64_t in = e->nodes + (e->smooth ? lsq_smooth_pending(&e->sm) : 0);
+
+    return e->qends > 0 || h->kind != QE_SEG || in >= h->node + 2 + e->lookahead;
 }
 
 static void hold_here(engine_t *e)
@@ -907,11 +969,13 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
         if (h)
             for (int k = 0; k < AX; k++)
                 e->pos[k] = h->seg.c[k][0];
-        else if (e->in_open)
+        else if (e->in_open && e->nodes)
             memcpy(e->pos, nr(e, 0), sizeof(e->pos));
+        else if (e->in_open) /* SMOOTH: no node yet, the first waypoint as received */
+            memcpy(e->pos, e->first_r, sizeof(e->pos));
         if (h)
             e->out_t = h->seg.t0_s;
-        else if (e->in_open)
+        else if (e->in_open && e->nodes)
             e->out_t = nt(e, 0);
     }
     sp->t_s = e->out_t;
@@ -927,6 +991,18 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
         sp->flags |= ENGINE_SP_TRANSFER;
     sp->cycle = e->cycle;
     sp->track = e->out_track;
+}
+
+/* 1 if further steps cannot change anything until new input arrives. */
+static int stalled(engine_t *e)
+{
+    qent_t *h = q_head(e);
+
+    if (e->mode == OUT_HOLD)
+        return !h || !h->first || !enough_ahead(e, h);
+    if (e->mode == OUT_STREAM && e->underrun)
+        return !h || !enough_ahead(e, h);
+    return 0;
 }
 
 int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
@@ -949,8 +1025,19 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     }
     e->have_now = 1;
     e->last_now = now_ns;
-    for (i = 0; i < k; i++)
+    for (i = 0; i < k; i++) {
         step_once(e);
+        if (i + 1 < k && stalled(e)) {
+            /* Nothing can change before the next push: the remaining steps
+             * are identical holds.  Count them instead of looping (a clock
+             * jump of hours must not cost hours of steps). */
+            int64_t rest = k - 1 - i;
+            e->cycle += (uint32_t)rest;
+            if (e->mode == OUT_STREAM)
+                e->st.underrun_ticks += (uint64_t)rest;
+            break;
+        }
+    }
     if (k > 1) {
         e->st.skipped_ticks += (uint64_t)(k - 1);
         e->flags_pending |= ENGINE_SP_SKIPPED;

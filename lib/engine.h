@@ -49,7 +49,7 @@
  *       at every waypoint whose neighbouring intervals differ (measured on
  *       gpxgo_visnjan: up to 9.0 m/s on a walk).
  *   (b) ENGINE_PARAM_TIME     knots at the timestamps: C2 in physical time
- *       (jumps only from the fragment junctions, 3.6e-4 m/s on the same track
+ *       (jumps only from the fragment junctions, 1.5e-4 m/s on the same track
  *       with F=32, O=16).  The default, because motion controllers follow
  *       velocity and acceleration, and real tracks are irregular.
  * METHOD_BSPLINE with PARAM_TIME is the non-uniform cubic B-spline
@@ -116,6 +116,17 @@ typedef enum {
     ENGINE_METHOD_SMOOTH = 2,  /* least-squares B-spline over the window (not exact) */
 } engine_method_t;
 
+/*
+ * ENGINE_METHOD_SMOOTH (lib/lsq.h, lsq_smooth_*): each waypoint's position
+ * is replaced by the value, at its own time, of the least-squares cubic
+ * B-spline with smooth_ctrl control points fitted to the smooth_window
+ * waypoints around it; the smoothed waypoints then go through the CUBIC
+ * path (fragments, end condition, forward differences) unchanged.  The
+ * curve no longer passes through the waypoints; it adds smooth_window/2
+ * waypoints of lookahead.  For noisy positions (a GNSS fix standing still).
+ */
+#define ENGINE_SMOOTH_WINDOW_MAX 1024
+
 typedef struct {
     engine_method_t method; /* default CUBIC (see (b) above) */
     engine_param_t param;   /* default TIME: C2 in physical time, see above */
@@ -131,8 +142,9 @@ typedef struct {
                                lookahead 32 waypoints with start_slack 8;
                                see README for the table */
     int64_t period_ns;      /* output period.  Default 10 ms (100 Hz) */
-    unsigned capacity;      /* waypoints buffered at most (>= lookahead + fragment
-                               + 8).  Default 4096: 68 min at 1 Hz; ~0.9 MB */
+    unsigned capacity;      /* waypoints buffered at most (lookahead + fragment
+                               + 8 .. 2^20; about 272 bytes each).  Default
+                               4096: 68 min at 1 Hz, 1.1 MB */
     double max_gap_s;       /* a longer interval ends the trajectory at rest and
                                starts a new one.  Default 60 s */
     double max_abs_m;       /* |coordinate| above this is rejected.  Default 1e7 m
@@ -154,6 +166,10 @@ typedef struct {
                                Default 8 (measured: no underrun replaying the
                                irregular gpxgo_visnjan track with F=64/O=32;
                                2 were enough for the regular 5 Hz figure-8) */
+    unsigned smooth_window; /* SMOOTH only: waypoints per local least-squares fit,
+                               4 .. ENGINE_SMOOTH_WINDOW_MAX.  Default 24 */
+    unsigned smooth_ctrl;   /* SMOOTH only: control points per fit,
+                               4 .. smooth_window.  Default 6 */
 } engine_config_t;
 
 /* Fill cfg with working defaults (each one commented above; documented in
@@ -163,8 +179,8 @@ void engine_config_default(engine_config_t *cfg);
 /*
  * Check a configuration.  Returns 0 or -ENGINE_ECONFIG; if why is not NULL
  * it receives a static string naming the offending field and the rule (NULL
- * when valid).  Refused: METHOD_SMOOTH (least squares is not built into the
- * engine yet: the toolkit provides it separately), HELD or MULTIPLE with
+ * when valid).  Refused: METHOD_SMOOTH with smooth_window or smooth_ctrl
+ * out of range, HELD or MULTIPLE with
  * anything but BSPLINE + UNIFORM (they are the paper's ends of the
  * control polygon, meaningless in the second-derivative form), F, O, period
  * or capacity out of range, non-finite or non-positive limits.
@@ -221,6 +237,8 @@ typedef struct {
     uint64_t setpoints;             /* ticks answered */
 } engine_status_t;
 
+/* One engine per moving object; not thread-safe: push, tick and the commands
+ * of one engine must come from one thread (or be serialised by the caller). */
 typedef struct engine engine_t;
 
 /*

@@ -79,8 +79,9 @@ static double curve_vmax(const fdiff_seg_t *s, size_t n)
     return vmax;
 }
 
-/* Given defaults, then they pass the check; SMOOTH, HELD with the cubic
- * form, a bad overlap and a tiny capacity are refused with a reason. */
+/* Given defaults, then they pass the check; SMOOTH with more control points
+ * than its window, HELD with the cubic form, a bad overlap and a tiny
+ * capacity are refused with a reason. */
 static void test_config(void **state)
 {
     (void)state;
@@ -92,6 +93,8 @@ static void test_config(void **state)
     assert_int_equal(engine_config_check(&c, &why), 0);
     assert_null(why);
     c.method = ENGINE_METHOD_SMOOTH;
+    assert_int_equal(engine_config_check(&c, &why), 0); /* toolkit: lib/lsq.h */
+    c.smooth_ctrl = c.smooth_window + 1;
     assert_int_equal(engine_config_check(&c, &why), -ENGINE_ECONFIG);
     assert_non_null(strstr(why, "smooth"));
     assert_null(engine_new(&c, &err));
@@ -216,6 +219,10 @@ static void test_stream_underrun_finish(void **state)
             transitions++;
             last_state = (int)sp.state;
         }
+        if (sp.state == ENGINE_STATE_STREAMING && prev.state == ENGINE_STATE_STREAMING) {
+            /* track time on the period grid: one period per streaming tick */
+            assert_true(fabs(sp.t_s - prev.t_s - 0.01) < 1e-12);
+        }
         if (sp.state == ENGINE_STATE_STREAMING) {
             double p[3];
             fdiff_eval_curve(segs, nseg, &sp.t_s, 1, p, NULL, NULL);
@@ -294,6 +301,13 @@ static void test_skipped_ticks_identical(void **state)
     assert_int_equal(st.skipped_ticks, 2 * (6000 / 3 - 1) + 0);
     /* a tick going backwards is refused and repeats the last setpoint */
     assert_int_equal(engine_tick(b, 0, &sb), -ENGINE_ESTATE);
+    /* a clock jump of ~11.6 days at rest costs nothing and counts the ticks */
+    uint32_t cyc = sa.cycle;
+    assert_int_equal(sa.state, ENGINE_STATE_FINISHED);
+    assert_int_equal(engine_tick(a, 5999 * PERIOD_NS + 100000000LL * PERIOD_NS, &sa), 0);
+    assert_int_equal(sa.cycle, (uint32_t)(cyc + 100000000u));
+    assert_int_equal(sa.state, ENGINE_STATE_FINISHED);
+    assert_true(sa.flags & ENGINE_SP_SKIPPED);
     engine_free(a);
     engine_free(b);
 }
@@ -393,8 +407,9 @@ static void test_full_and_retry(void **state)
                 break;
             circle_wp(&w, next, 0.2);
             int rc = engine_push(e, &w);
+            engine_status(e, &st);
+            assert_int_equal(st.buffered + st.free, c.capacity);
             if (rc == -ENGINE_EFULL) {
-                engine_status(e, &st);
                 assert_int_equal(st.free, 0);
                 fulls++;
                 break;
@@ -587,6 +602,84 @@ static void test_ends(void **state)
     engine_free(e);
 }
 
+
+/* Given every method, parameterisation and end condition the engine accepts,
+ * when a track is streamed on time (irregular intervals), then every
+ * streaming setpoint equals Horner on the offline curve at its own time, no
+ * tick moves more than the curve's top speed allows, nothing is NaN, and
+ * the output comes to rest on the curve's end (held: R(N-2)). */
+static void test_all_configs_stream(void **state)
+{
+    (void)state;
+    enum { N = 70 };
+    static const int combos[][3] = {
+        {ENGINE_METHOD_BSPLINE, ENGINE_PARAM_UNIFORM, ENGINE_ENDS_HELD},
+        {ENGINE_METHOD_BSPLINE, ENGINE_PARAM_UNIFORM, ENGINE_ENDS_MULTIPLE},
+        {ENGINE_METHOD_BSPLINE, ENGINE_PARAM_UNIFORM, ENGINE_ENDS_NATURAL},
+        {ENGINE_METHOD_BSPLINE, ENGINE_PARAM_UNIFORM, ENGINE_ENDS_CLAMPED},
+        {ENGINE_METHOD_BSPLINE, ENGINE_PARAM_UNIFORM, ENGINE_ENDS_REST},
+        {ENGINE_METHOD_BSPLINE, ENGINE_PARAM_TIME, ENGINE_ENDS_NATURAL},
+        {ENGINE_METHOD_CUBIC, ENGINE_PARAM_UNIFORM, ENGINE_ENDS_CLAMPED},
+        {ENGINE_METHOD_CUBIC, ENGINE_PARAM_TIME, ENGINE_ENDS_REST},
+    };
+    engine_waypoint_t wp[N];
+    static fdiff_seg_t segs[N + 8];
+
+    for (int i = 0; i < N; i++) {
+        circle_wp(&wp[i], i, 1.0);
+        if (i)
+            wp[i].t_s = wp[i - 1].t_s + 0.6 + 0.3 * (i % 4);
+    }
+    for (size_t m = 0; m < sizeof(combos) / sizeof(combos[0]); m++) {
+        engine_config_t c;
+        size_t nseg = 0;
+        engine_config_default(&c);
+        c.method = (engine_method_t)combos[m][0];
+        c.param = (engine_param_t)combos[m][1];
+        c.ends = (engine_ends_t)combos[m][2];
+        c.fragment = 16;
+        c.overlap = 8;
+        c.start_vel_m_s[0] = 1.0;
+        c.end_vel_m_s[2] = -0.5;
+        assert_int_equal(engine_curve(&c, wp, N, segs, N + 8, &nseg), 0);
+        double vmax = curve_vmax(segs, nseg), end[3];
+        fdiff_eval(&segs[nseg - 1], 1.0, end, NULL, NULL);
+        engine_t *e = mk(&c);
+        engine_setpoint_t sp, prev = {0};
+        int next = 0, streamed = 0;
+        double maxerr = 0, maxstep = 0;
+        for (int64_t k = 0; k < 20000; k++) {
+            while (next < N && wp[next].t_s <= (double)(k * PERIOD_NS) * 1e-9) {
+                assert_int_equal(engine_push(e, &wp[next]), 0);
+                if (++next == N)
+                    engine_finish(e);
+            }
+            assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+            assert_true(finite_sp(&sp));
+            if (sp.state == ENGINE_STATE_STREAMING) {
+                double p[3];
+                fdiff_eval_curve(segs, nseg, &sp.t_s, 1, p, NULL, NULL);
+                if (dist3(p, sp.pos_m) > maxerr)
+                    maxerr = dist3(p, sp.pos_m);
+                streamed++;
+            }
+            if (k > 0 && prev.track == 1 && sp.track == 1 && dist3(prev.pos_m, sp.pos_m) > maxstep)
+                maxstep = dist3(prev.pos_m, sp.pos_m);
+            prev = sp;
+            if (sp.state == ENGINE_STATE_FINISHED)
+                break;
+        }
+        print_message("config %zu: %d streamed, max |sp - Horner| %.1e m, max step %.4f m "
+                      "(vmax * period %.4f)\n", m, streamed, maxerr, maxstep, vmax * 0.01);
+        assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+        assert_true(streamed > 1000);
+        assert_true(maxerr < TOL_HORNER_M);
+        assert_true(maxstep <= vmax * 0.01 * STEP_SLACK);
+        assert_true(dist3(sp.pos_m, end) < 1e-9);
+        engine_free(e);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -598,6 +691,7 @@ int main(void)
         cmocka_unit_test(test_full_and_retry),
         cmocka_unit_test(test_gap_transfer_clear),
         cmocka_unit_test(test_ends),
+        cmocka_unit_test(test_all_configs_stream),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -248,6 +248,13 @@ def test_time_knots():
              ("engine cubic/time/natural", engine_curve(CUBIC, TIME, NATURAL, 1024, 16, t, xyz), nat),
              ("engine cubic/time/rest", engine_curve(CUBIC, TIME, REST, 1024, 16, t, xyz), rest),
              ("engine bspline/time/natural", engine_curve(BSPLINE, TIME, NATURAL, 1024, 16, t, xyz), bsp))
+    v0 = np.array([2.0, -1.0, 0.25])
+    v1 = np.array([0.0, 3.0, -1.5])
+    clamped = CubicSpline(t, xyz, bc_type=((1, v0), (1, v1)))
+    bclamped = make_interp_spline(t, xyz, k=3, bc_type=([(1, v0)], [(1, v1)]))
+    cases += (("cubic_curve time clamped", cubic_curve(t, xyz, TIME, CLAMPED, v0, v1), clamped),
+              ("cubic_curve time clamped vs make_interp_spline", cubic_curve(t, xyz, TIME, CLAMPED, v0, v1),
+               bclamped))
     for name, segs, ref in cases:
         for der in (0, 1, 2):
             err = np.abs(evaluate(segs, tq, der) - ref(tq, der)).max() / ext
@@ -339,6 +346,9 @@ def test_real_tracks():
         check(missag < 1e-9 * ext, "%s (a) global: every waypoint hit, %.1e" % (name, missag / ext))
         check(missa < 1e-4 * ext, "%s (a) F=32/O=16: waypoints missed by at most %.1e of extent (%.2e m)"
               % (name, missa / ext, missa))
+        a48 = engine_curve(BSPLINE, UNIFORM, NATURAL, 48, 24, t, xyz)
+        miss48 = max(np.abs(seg_start(a48) - xyz[:-1]).max(), np.abs(seg_end(a48) - xyz[1:]).max())
+        check(miss48 < 1e-9 * ext, "%s (a) F=48/O=24: every waypoint hit, %.1e of extent" % (name, miss48 / ext))
         print("     measured %s: velocity jump at joins, (a) uniform: max %.3g median %.3g m/s;"
               " (b) time knots: max %.3g m/s; vmax %.3g m/s"
               % (name, ja.max(), np.median(ja), jb.max(), vmax))
