@@ -51,7 +51,7 @@ def xyz_track(path, n, dt_s, speed_m_s=2.0, radius_m=50.0):
 class Daemon:
     """trajd with a notify socket, stdout/stderr read by threads into queues."""
 
-    def __init__(self, tmp, conf, watchdog_usec=None, wrapper=()):
+    def __init__(self, tmp, conf, watchdog_usec=None, wrapper=(), read_stdout=True):
         self.tmp = tmp
         self.sock_path = os.path.join(tmp, "notify-%d.sock" % id(self))
         self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
@@ -68,6 +68,8 @@ class Daemon:
         self.notes = queue.Queue()
         self.err_lines = []
         for stream, q in ((self.p.stdout, self.out), (self.p.stderr, self.err)):
+            if stream is self.p.stdout and not read_stdout:
+                continue  # a reader that never reads
             threading.Thread(target=self._pump, args=(stream, q), daemon=True).start()
         # Read the notify socket all the time, as systemd does: sd_notify()
         # blocks when a datagram socket's queue is full.
@@ -464,6 +466,28 @@ class TestRunning(unittest.TestCase):
             d.line(lambda l: l.startswith("boat,"))
             self.assertIsNone(d.p.poll())
             d.p.send_signal(signal.SIGTERM)
+            self.assertEqual(d.wait(10), 0)
+        finally:
+            d.close()
+
+    def test_stalled_reader_does_not_stall_the_tick(self):
+        # Given 4 objects at 1 kHz writing to a stdout pipe nobody reads,
+        # then the pipe and trajd's buffer fill, lines are dropped and
+        # counted ("out dropped"), and the clock keeps ticking (the tick count
+        # in STATUS grows by about the rate between two status lines).
+        objs = "".join("[object.o%d]\ninput = replay\nreplay.track = circle.csv\noutput = stdout\n" % i
+                       for i in range(4))
+        write(self.conf, "[daemon]\nrate_hz = 1000\nstatus_interval_s = 1\nstop_timeout_s = 0\n" + objs)
+        d = Daemon(self.tmp, self.conf, read_stdout=False)
+        ticks = lambda f: int(f["STATUS"].split("ticks ")[1].split(",")[0])
+        try:
+            d.msg(lambda f: f.get("READY") == "1", START_TIMEOUT_S)
+            f1, _ = d.msg(lambda f: "out dropped" in f.get("STATUS", ""), 15)
+            f2, _ = d.msg(lambda f: "STATUS" in f and "up " in f["STATUS"], 5)
+            # one status second apart: >= half the rate, allowing for a loaded machine
+            self.assertGreater(ticks(f2) - ticks(f1), 500, (f1, f2))
+            d.p.send_signal(signal.SIGTERM)
+            # exits although the reader never reads (bounded drain at close)
             self.assertEqual(d.wait(10), 0)
         finally:
             d.close()
