@@ -147,6 +147,7 @@ typedef struct {
     size_t pos;
     FILE *fp;         /* file source (cfg_load) */
     int line;         /* lines read so far */
+    int indented;     /* the line just read starts with blanks (inih: a continuation) */
     /* current section */
     enum sec_kind kind;
     int sec_index;    /* object index or transport index */
@@ -306,6 +307,7 @@ static char *reader(char *str, int num, void *stream)
         fail(p, CFG_ESYNTAX, p->line, "line longer than %d characters", CFG_LINE_MAX - 2);
         return NULL;
     }
+    p->indented = str[0] == ' ' || str[0] == '\t';
     /* section header? (inih accepts "[name]" with optional spaces around) */
     const char *s = str;
     while (isspace((unsigned char)*s))
@@ -596,6 +598,12 @@ static int handler(void *user, const char *section, const char *name, const char
     int rc;
     if (p->kind == SEC_NONE && !p->sec_name[0]) {
         fail(p, CFG_ESYNTAX, p->line, "%s: key before any [section]", name);
+        return 0;
+    }
+    if (p->indented) {
+        fail(p, CFG_ESYNTAX, p->line,
+             "%s: indented line (INI reads it as part of the previous value): do not indent keys",
+             name);
         return 0;
     }
     if (seen_before(p, p->sec_name, name)) {
