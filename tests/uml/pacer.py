@@ -37,7 +37,9 @@ def main():
     log = []
     while time.monotonic() < deadline:
         m = bus.recv(timeout=0.5)
-        if m is None:
+        # python-can binds before it sets the filter: frames of other ids can
+        # slip in during that window, so check the id here too
+        if m is None or m.arbitration_id != 0x6C0 or len(m.data) != 8:
             continue
         d = m.data
         state, seq8, free, lost, rejected = d[0] & 7, d[1], d[2], d[3], d[4]
