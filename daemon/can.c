@@ -81,7 +81,7 @@ static int cfg_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
     if (!strcmp(k, "data_bitrate"))
         return cfg_get_double(kv, 10e3, 12e6, &c->data_bitrate, why, wl);
     if (!strcmp(k, "max_load_percent"))
-        return cfg_get_double(kv, 1, 100, &c->max_load_percent, why, wl);
+        return cfg_get_double(kv, 0, 100, &c->max_load_percent, why, wl); /* 0: no check (vcan) */
     if (!strcmp(k, "waypoint_hz"))
         return cfg_get_double(kv, 0, 10000, &c->waypoint_hz, why, wl);
     if (!strcmp(k, "sync"))
@@ -245,7 +245,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
             rc = -CFG_EVALUE;
         }
     }
-    if (!rc) {
+    if (!rc && c->max_load_percent > 0) {
         double load = canport_busload(p, cfg->daemon.rate_hz, c->waypoint_hz, c->bitrate,
                                       c->data_bitrate);
         if (!(load >= 0) || load * 100 > c->max_load_percent) {
