@@ -567,6 +567,18 @@ static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size
         return cfg_get_double(kv, 0, 1e9, &e->max_speed_m_s, why, wl);
     if (strcmp(kv->key, "max_segment_s") == 0)
         return cfg_get_double(kv, 1e-6, 1e9, &e->max_segment_s, why, wl);
+    if (strcmp(kv->key, "smooth_window") == 0) {
+        rc = cfg_get_int(kv, 4, ENGINE_SMOOTH_WINDOW_MAX, &ll, why, wl);
+        if (rc == 0)
+            e->smooth_window = (unsigned)ll;
+        return rc;
+    }
+    if (strcmp(kv->key, "smooth_ctrl") == 0) {
+        rc = cfg_get_int(kv, 4, ENGINE_SMOOTH_WINDOW_MAX, &ll, why, wl);
+        if (rc == 0)
+            e->smooth_ctrl = (unsigned)ll;
+        return rc;
+    }
     return -CFG_EUNKNOWN;
 }
 

@@ -57,13 +57,13 @@ obj_t *core_obj_find(core_t *c, const char *name)
     return NULL;
 }
 
-static void tick(core_priv_t *p, uint64_t k, int64_t wake_ns)
+static void tick(core_priv_t *p, uint64_t k, int64_t late_ns)
 {
     core_t *c = &p->pub;
-    int64_t now_ns = (int64_t)k * c->period_ns;
+    int64_t now_ns = c->t0_ns + (int64_t)k * c->period_ns;
     c->now_ns = now_ns;
     c->cycle = k;
-    c->late_ns = wake_ns - (p->wall_base_ns + (int64_t)k * p->wall_period_ns);
+    c->late_ns = late_ns;
 
     if (!c->stopping)
         for (unsigned i = 0; i < c->nobj; i++) {
@@ -90,7 +90,6 @@ static void tick(core_priv_t *p, uint64_t k, int64_t wake_ns)
 
     stats_t *s = c->stats;
     s->ticks++;
-    int64_t late_ns = wake_ns - (p->wall_base_ns + (int64_t)k * p->wall_period_ns);
     uint64_t late_us = late_ns > 0 ? (uint64_t)(late_ns / 1000) : 0;
     lat_add(&s->late_hist, late_us);
     lat_add(&s->late_recent_hist, late_us);
@@ -109,16 +108,51 @@ static void on_clock(loop_t *l, int fd, uint32_t events, void *ctx)
     int64_t wake_ns = core_mono_ns();
     if (read(fd, &n, sizeof n) != (ssize_t)sizeof n || n == 0)
         return; /* EAGAIN: spurious wake-up */
-    /* n deadlines passed since the last read: serve only the latest. */
+    /* n deadlines passed since the last read: serve only the latest.
+     * Lateness is counted from the oldest one, the deadline we were due to
+     * serve, so a skip shows in the histogram as lateness >= one period. */
+    int64_t late_ns = wake_ns - (p->wall_base_ns + (int64_t)p->next_k * p->wall_period_ns);
     uint64_t k = p->next_k + n - 1;
     p->pub.stats->missed_ticks += n - 1;
     p->next_k = k + 1;
-    tick(p, k, wake_ns);
+    tick(p, k, late_ns);
 }
 
-int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **out, char *why,
-              size_t whylen)
+/* Exact equality of two engine configurations (doubles compared bitwise). */
+static int engine_cfg_same(const engine_config_t *a, const engine_config_t *b)
 {
+    return a->method == b->method && a->param == b->param && a->ends == b->ends &&
+           memcmp(a->start_vel_m_s, b->start_vel_m_s, sizeof a->start_vel_m_s) == 0 &&
+           memcmp(a->end_vel_m_s, b->end_vel_m_s, sizeof a->end_vel_m_s) == 0 &&
+           a->fragment == b->fragment && a->overlap == b->overlap &&
+           a->period_ns == b->period_ns && a->capacity == b->capacity &&
+           memcmp(&a->max_gap_s, &b->max_gap_s, sizeof a->max_gap_s) == 0 &&
+           memcmp(&a->max_abs_m, &b->max_abs_m, sizeof a->max_abs_m) == 0 &&
+           memcmp(&a->max_speed_m_s, &b->max_speed_m_s, sizeof a->max_speed_m_s) == 0 &&
+           memcmp(&a->max_segment_s, &b->max_segment_s, sizeof a->max_segment_s) == 0;
+}
+
+/* The object of prev that o (in the new config) may take over, or NULL. */
+static obj_t *carry_source(core_t *prev, const cfg_obj_t *o)
+{
+    if (!prev || prev->stopping)
+        return NULL;
+    obj_t *q = core_obj_find(prev, o->name);
+    if (!q || !q->engine || q->cfg->input != o->input ||
+        !engine_cfg_same(&q->cfg->engine, &o->engine))
+        return NULL;
+    const transport_t *in = o->input;
+    const void *a = cfg_obj_transport(q->cfg, in), *b = cfg_obj_transport(o, in);
+    if (in->obj_cfg_same ? !in->obj_cfg_same(a, b)
+                         : (in->obj_cfg_size && memcmp(a, b, in->obj_cfg_size) != 0))
+        return NULL;
+    return q;
+}
+
+int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, core_t **out,
+              char *why, size_t whylen)
+{
+    core_t *prev = prevp ? *prevp : NULL;
     core_priv_t *p = calloc(1, sizeof *p);
     int rc;
     *out = NULL;
@@ -132,6 +166,10 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **out, char
     c->cfg = cfg;
     c->stats = stats;
     c->period_ns = cfg->daemon.period_ns;
+    /* engine time goes on from the previous core: carried engines never see
+     * it go backwards */
+    c->t0_ns = prev ? prev->now_ns + prev->period_ns : 0;
+    c->now_ns = c->t0_ns;
     c->nobj = cfg->nobj;
     c->obj = calloc(cfg->nobj, sizeof *c->obj);
     if (!c->obj) {
@@ -139,12 +177,16 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **out, char
         rc = -ENOMEM;
         goto fail;
     }
+    /* 1. new engines (may fail: prev is still untouched) */
     for (unsigned i = 0; i < cfg->nobj; i++) {
         obj_t *o = &c->obj[i];
         int err = 0;
         snprintf(o->name, sizeof o->name, "%s", cfg->obj[i].name);
         o->index = i;
         o->cfg = &cfg->obj[i];
+        o->born_ns = c->t0_ns;
+        if (carry_source(prev, o->cfg))
+            continue;
         o->engine = engine_new(&cfg->obj[i].engine, &err);
         if (!o->engine) {
             snprintf(why, whylen, "object '%s': engine: %s", o->name, engine_strerror(err));
@@ -153,6 +195,24 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **out, char
         }
         engine_status(o->engine, &o->status);
     }
+    /* 2. carry engines over (cannot fail), then the old core goes */
+    for (unsigned i = 0; i < cfg->nobj; i++) {
+        obj_t *o = &c->obj[i], *q = carry_source(prev, o->cfg);
+        if (!q)
+            continue;
+        o->engine = q->engine;
+        q->engine = NULL;
+        o->sp = q->sp;
+        o->status = q->status;
+        memcpy(o->src, q->src, sizeof o->src);
+        o->born_ns = q->born_ns;
+        o->carried = 1;
+    }
+    if (prev) {
+        core_close(prev);
+        *prevp = NULL;
+    }
+    /* 3. transports */
     for (unsigned t = 0; transport_table[t]; t++) {
         const transport_t *tr = transport_table[t];
         if (!cfg_uses(cfg, tr) || !tr->open)
@@ -281,12 +341,12 @@ int core_summary(const core_t *c, char *buf, size_t len)
     int64_t up_s = (core_mono_ns() - s->start_mono_ns) / 1000000000;
     size_t n = 0;
     int m = snprintf(buf, len,
-                     "up %lld s%s, ticks %llu, missed %llu, overruns %llu, late p50/p99/max "
-                     "%u/%u/%u us",
+                     "up %lld s%s, ticks %llu, missed %llu, overruns %llu, late p50/p99/p99.9/max "
+                     "%u/%u/%u/%u us",
                      (long long)up_s, c->stopping ? " (stopping)" : "",
                      (unsigned long long)s->ticks, (unsigned long long)s->missed_ticks,
                      (unsigned long long)s->overruns, s->late.p50_us, s->late.p99_us,
-                     s->late.max_us);
+                     s->late.p999_us, s->late.max_us);
     if (m < 0)
         return m;
     n = (size_t)m < len ? (size_t)m : len;

@@ -17,7 +17,8 @@
  *        o->status refreshed (engine_status)
  *   3. for each object, for each of its outputs: output->setpoint(state, o, &o->sp)
  *   4. for each open transport: cycle(state, core, now_ns)
- *   5. lateness (wake-up time - deadline) goes into the histogram; an
+ *   5. lateness (wake-up time - the oldest deadline not yet served, so a
+ *      skip counts as lateness >= one period) goes into the histogram; an
  *      overrun is counted if the work ended after the next deadline.
  * All of it runs in the one loop thread: a transport's fd callbacks and the
  * tick never run at the same time, so a callback sees o->sp and o->status of
@@ -69,6 +70,9 @@ typedef struct obj {
     engine_status_t status;         /* engine status after the last tick */
     obj_src_stats_t src[OBJ_SRC_COUNT];
     int stopping;                   /* the daemon is stopping: obj_push refuses */
+    int carried;                    /* 1 if engine (and counters) were carried over a reload */
+    int64_t born_ns;                /* engine time when its engine was created (0 at start;
+                                     * kept when carried): replay due times count from here */
     void *tstate[CFG_TRANSPORTS_MAX]; /* free slot per transport (by index) for its per-object state */
 } obj_t;
 
@@ -123,8 +127,10 @@ typedef struct core {
     obj_t *obj;                     /* nobj objects, config order */
     unsigned nobj;
     int64_t period_ns;              /* engine time per tick */
-    int64_t now_ns;                 /* engine time of the last tick */
-    uint64_t cycle;                 /* index k of the last tick's deadline */
+    int64_t t0_ns;                  /* engine time of deadline 0 (0 at start; after a
+                                     * reload, continues the previous core's clock) */
+    int64_t now_ns;                 /* engine time of the last tick: t0_ns + cycle * period_ns */
+    uint64_t cycle;                 /* index k of the last tick's deadline (0 after a reload) */
     int64_t late_ns;                /* how late the last tick woke up (wall ns; CAN drops late cycles) */
     int stopping;                   /* SIGTERM received: bringing objects to rest */
     stats_t *stats;                 /* survives reloads */
@@ -141,11 +147,25 @@ int64_t core_mono_ns(void);
 
 /*
  * Create the objects and engines of cfg and open every transport cfg uses.
- * Does not start the clock.  On failure returns a negative code with a
- * message in why, and nothing is left open.  cfg and stats must outlive the core.
+ * Does not start the clock.  cfg and stats must outlive the core.
+ *
+ * Reload: *prev is the running core being replaced (or prev / *prev NULL at
+ * start).  An object of *prev is CARRIED OVER when the new config has an
+ * object of the same name with the same engine settings, the same input and
+ * the same input keys: the new object takes its engine (position, buffered
+ * waypoints, trajectory, counters), so a reload does not interrupt its motion;
+ * engine time continues from *prev's clock.  Other objects start afresh
+ * (WAITING).  After the new engines exist, *prev's transports are closed and
+ * *prev is freed and set to NULL (a transport may hold an exclusive resource,
+ * a TCP port, that the new one needs); then the new transports open.
+ *
+ * Returns 0, or a negative code with a message in why and nothing of the new
+ * core left open.  If *prev is still non-NULL after a failure, the old core
+ * was not touched and keeps running; if it is NULL, it is gone (and engines
+ * carried from it are lost): the caller reopens a config from scratch.
  */
-int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **out, char *why,
-              size_t whylen);
+int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prev, core_t **out,
+              char *why, size_t whylen);
 
 /* Arm the output clock: first deadline one period from now. Returns 0 or -errno. */
 int core_start(core_t *c);

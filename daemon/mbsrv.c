@@ -48,6 +48,7 @@ struct mbsrv {
     mbsrv_hooks_t hooks;
     int ep, lfd, hkfd, rtufd, silfd;
     int port;
+    int from_systemd;
     modbus_t *tcp;
     modbus_t *rtu;
     modbus_mapping_t *map;
@@ -202,7 +203,7 @@ static int allowed(const mbsrv_t *s, const struct sockaddr_storage *ss)
 void mbsrv_config_default(mbsrv_config_t *cfg)
 {
     memset(cfg, 0, sizeof *cfg);
-    cfg->tcp_address = MBSRV_DEFAULT_ADDRESS;
+    snprintf(cfg->tcp_address, sizeof cfg->tcp_address, "%s", MBSRV_DEFAULT_ADDRESS);
     cfg->tcp_port = MBSRV_DEFAULT_PORT;
     cfg->systemd_socket = 1;
     cfg->rtu_baud = 9600;
@@ -213,6 +214,88 @@ void mbsrv_config_default(mbsrv_config_t *cfg)
     cfg->max_clients = MBSRV_DEFAULT_MAX_CLIENTS;
     cfg->idle_timeout_ms = MBSRV_DEFAULT_IDLE_MS;
     cfg->n_objects = 1;
+}
+
+static int parse_bool(const char *v, int *out)
+{
+    if (!strcmp(v, "yes") || !strcmp(v, "true") || !strcmp(v, "1") || !strcmp(v, "on"))
+        return *out = 1, 0;
+    if (!strcmp(v, "no") || !strcmp(v, "false") || !strcmp(v, "0") || !strcmp(v, "off"))
+        return *out = 0, 0;
+    return -EINVAL;
+}
+
+static int parse_uint(const char *v, long lo, long hi, long *out)
+{
+    char *end;
+    errno = 0;
+    long x = strtol(v, &end, 10);
+    if (errno || end == v || *end || x < lo || x > hi)
+        return -EINVAL;
+    *out = x;
+    return 0;
+}
+
+static int copy_str(char *dst, size_t len, const char *v)
+{
+    if (strlen(v) >= len)
+        return -EINVAL;
+    memcpy(dst, v, strlen(v) + 1);
+    return 0;
+}
+
+int mbsrv_config_set(mbsrv_config_t *cfg, const char *key, const char *value, char *err,
+                     size_t errlen)
+{
+    long x = 0;
+    int rc = 0;
+    if (!strcmp(key, "enabled"))
+        rc = parse_bool(value, &cfg->enabled);
+    else if (!strcmp(key, "writes"))
+        rc = parse_bool(value, &cfg->writes_enabled);
+    else if (!strcmp(key, "systemd_socket"))
+        rc = parse_bool(value, &cfg->systemd_socket);
+    else if (!strcmp(key, "address"))
+        rc = copy_str(cfg->tcp_address, sizeof cfg->tcp_address, value);
+    else if (!strcmp(key, "rtu_device"))
+        rc = copy_str(cfg->rtu_device, sizeof cfg->rtu_device, value);
+    else if (!strcmp(key, "allow")) {
+        rc = copy_str(cfg->allow, sizeof cfg->allow, value);
+        if (rc == 0 && mbsrv_allow_check(value, err, errlen) < 0)
+            return -EINVAL;
+    } else if (!strcmp(key, "port")) {
+        if ((rc = parse_uint(value, 0, 65535, &x)) == 0)
+            cfg->tcp_port = (int)x;
+    } else if (!strcmp(key, "rtu_baud")) {
+        if ((rc = parse_uint(value, 50, 4000000, &x)) == 0)
+            cfg->rtu_baud = (int)x;
+    } else if (!strcmp(key, "rtu_data_bits")) {
+        if ((rc = parse_uint(value, 7, 8, &x)) == 0)
+            cfg->rtu_data_bits = (int)x;
+    } else if (!strcmp(key, "rtu_stop_bits")) {
+        if ((rc = parse_uint(value, 1, 2, &x)) == 0)
+            cfg->rtu_stop_bits = (int)x;
+    } else if (!strcmp(key, "unit_id")) {
+        if ((rc = parse_uint(value, 1, 247, &x)) == 0)
+            cfg->unit_id = (int)x;
+    } else if (!strcmp(key, "max_clients")) {
+        if ((rc = parse_uint(value, 1, MBSRV_MAX_CLIENTS_LIMIT, &x)) == 0)
+            cfg->max_clients = (unsigned)x;
+    } else if (!strcmp(key, "idle_timeout_ms")) {
+        if ((rc = parse_uint(value, 0, 86400000, &x)) == 0)
+            cfg->idle_timeout_ms = (unsigned)x;
+    } else if (!strcmp(key, "rtu_parity")) {
+        if (!strcmp(value, "N") || !strcmp(value, "none")) cfg->rtu_parity = 'N';
+        else if (!strcmp(value, "E") || !strcmp(value, "even")) cfg->rtu_parity = 'E';
+        else if (!strcmp(value, "O") || !strcmp(value, "odd")) cfg->rtu_parity = 'O';
+        else rc = -EINVAL;
+    } else {
+        msg(err, errlen, "modbus: unknown key '%s'", key);
+        return -ENOENT;
+    }
+    if (rc < 0)
+        msg(err, errlen, "modbus: bad value '%s' for %s", value, key);
+    return rc;
 }
 
 static int systemd_listener(void)
@@ -236,6 +319,7 @@ static int tcp_listen(mbsrv_t *s, const mbsrv_config_t *cfg, char *err, size_t e
 
     if (cfg->systemd_socket && (fd = systemd_listener()) >= 0) {
         s->lfd = fd;
+        s->from_systemd = 1;
         goto bound;
     }
     snprintf(port, sizeof port, "%d", cfg->tcp_port);
@@ -361,9 +445,10 @@ mbsrv_t *mbsrv_new(const mbsrv_config_t *cfg, const mbsrv_hooks_t *hooks, char *
         msg(err, errlen, "modbus: timer: %s", strerror(errno));
         goto fail;
     }
-    if (cfg->tcp_address && *cfg->tcp_address && tcp_listen(s, cfg, err, errlen) < 0)
+    if ((cfg->tcp_address[0] || (cfg->systemd_socket && systemd_listener() >= 0)) &&
+        tcp_listen(s, cfg, err, errlen) < 0)
         goto fail;
-    if (cfg->rtu_device && *cfg->rtu_device && rtu_open(s, cfg, err, errlen) < 0)
+    if (cfg->rtu_device[0] && rtu_open(s, cfg, err, errlen) < 0)
         goto fail;
     /* The image before the first tick: magic, version, object count. */
     mbmap_daemon_t d = { .objects = (uint16_t)s->n_objects,
@@ -399,7 +484,10 @@ void mbsrv_free(mbsrv_t *s)
         modbus_close(s->rtu);
         modbus_free(s->rtu);
     }
-    if (s->lfd >= 0)
+    /* A socket passed by systemd stays open for the life of the process: a
+     * reload (free + new) finds it again with sd_listen_fds, and clients
+     * connecting meanwhile wait in its backlog. */
+    if (s->lfd >= 0 && !s->from_systemd)
         close(s->lfd);
     if (s->hkfd >= 0)
         close(s->hkfd);
@@ -426,6 +514,11 @@ int mbsrv_tcp_port(const mbsrv_t *s)
     return s->port;
 }
 
+int mbsrv_tcp_from_systemd(const mbsrv_t *s)
+{
+    return s->from_systemd;
+}
+
 uint32_t mbsrv_generation(const mbsrv_t *s)
 {
     return s->gen;
@@ -444,6 +537,8 @@ static int apply_write(mbsrv_t *s, const mbmap_write_t *w)
     int r;
     if (w->kind == MBMAP_WRITE_WAYPOINT) {
         r = s->hooks.waypoint ? s->hooks.waypoint(s->hooks.ctx, w->object, &w->wp) : -ENGINE_ESTATE;
+        if (r == MBSRV_HOOK_EADDRESS)
+            return -MBMAP_EADDRESS;
         if (r == 0) {
             /* Sequence numbers are the sender's: a jump forward means waypoints
              * it sent never reached us (0 = not numbered). */
@@ -461,6 +556,8 @@ static int apply_write(mbsrv_t *s, const mbmap_write_t *w)
     if (w->command == MBMAP_CMD_CLEAR)
         s->last_seq[w->object] = 0;
     r = s->hooks.command ? s->hooks.command(s->hooks.ctx, w->object, w->command) : -ENGINE_ESTATE;
+    if (r == MBSRV_HOOK_EADDRESS)
+        return -MBMAP_EADDRESS;
     return mbmap_from_engine(r);
 }
 
@@ -683,6 +780,9 @@ int mbsrv_process(mbsrv_t *s)
     int n = epoll_wait(s->ep, ev, MBSRV_EVENTS_PER_CALL, 0);
     if (n < 0)
         return errno == EINTR ? 0 : -errno;
+    if (n == 0)
+        return 0;
+    int64_t t0 = now_ns();
     for (int i = 0; i < n; i++) {
         unsigned t = (unsigned)(ev[i].data.u64 >> 32);
         unsigned idx = (unsigned)(ev[i].data.u64 & 0xffffffffu);
@@ -698,6 +798,11 @@ int mbsrv_process(mbsrv_t *s)
         default: break;
         }
     }
+    uint64_t dt = (uint64_t)(now_ns() - t0);
+    s->st.process_calls++;
+    s->st.process_total_ns += dt;
+    if (dt > s->st.process_max_ns)
+        s->st.process_max_ns = dt;
     return 0;
 }
 

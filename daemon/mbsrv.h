@@ -44,21 +44,22 @@
 #define MBSRV_DEFAULT_MAX_CLIENTS 16
 #define MBSRV_MAX_CLIENTS_LIMIT 1024
 #define MBSRV_DEFAULT_IDLE_MS 60000
-#define MBSRV_EVENTS_PER_CALL 32
+#define MBSRV_EVENTS_PER_CALL 8
 #define MBSRV_RTU_SILENCE_MS 20
 #define MBSRV_ALLOW_MAX 32          /* entries in the allow-list */
 #define MBSRV_HOUSEKEEPING_MS 100   /* idle-timeout resolution */
 
 typedef struct {
-    /* TCP: tcp_address NULL or "" disables TCP.  tcp_port 0 picks a free
+    int enabled;                /* [modbus] enabled: the daemon starts a server only if 1 */
+    /* TCP: tcp_address "" disables TCP.  tcp_port 0 picks a free
      * port (read it back with mbsrv_tcp_port; used by the tests). */
-    const char *tcp_address;
+    char tcp_address[64];
     int tcp_port;
     /* 1: if systemd passed a listening stream socket (sd_listen_fds), use the
      * first one instead of binding (so port 502 needs no privilege). */
     int systemd_socket;
-    /* RTU: rtu_device NULL or "" disables RTU. */
-    const char *rtu_device;
+    /* RTU: rtu_device "" disables RTU. */
+    char rtu_device[256];
     int rtu_baud;
     char rtu_parity;            /* 'N', 'E', 'O' */
     int rtu_data_bits;
@@ -66,8 +67,8 @@ typedef struct {
     int unit_id;                /* RTU slave address 1..247 (TCP answers any) */
     int writes_enabled;         /* 0: FC 06/16 answered with exception 01 */
     /* Comma- or space-separated CIDR list ("127.0.0.1/32, ::1, 10.0.0.0/8");
-     * NULL or "" allows every client. */
-    const char *allow;
+     * "" allows every client. */
+    char allow[512];
     unsigned max_clients;       /* TCP clients at once; more are accepted and closed */
     unsigned idle_timeout_ms;   /* close a TCP client silent this long (0 = never) */
     unsigned n_objects;         /* 1..MBMAP_MAX_OBJECTS */
@@ -77,8 +78,10 @@ typedef struct {
  * What a write does: the daemon applies it to the object's engine.
  * waypoint: engine_push semantics, returns 0, ENGINE_DUPLICATE or a negated
  * engine_error.  command: MBMAP_CMD_*, returns 0 or a negated engine_error.
- * A NULL hook refuses the write with exception 03.
+ * Either may return MBSRV_HOOK_EADDRESS: not writable for this object
+ * (answered with exception 02).  A NULL hook refuses the write with 03.
  */
+#define MBSRV_HOOK_EADDRESS (-1000)
 typedef struct {
     int (*waypoint)(void *ctx, unsigned object, const engine_waypoint_t *wp);
     int (*command)(void *ctx, unsigned object, unsigned command);
@@ -93,13 +96,29 @@ typedef struct {
     uint64_t rtu_crc_errors;
     int rtu_down;               /* 1 once the serial line failed (not reopened) */
     unsigned clients;           /* TCP clients connected now */
+    uint64_t process_calls;     /* mbsrv_process calls that handled events */
+    uint64_t process_max_ns;    /* longest mbsrv_process call: the most a tick can wait on Modbus */
+    uint64_t process_total_ns;  /* time spent in mbsrv_process, for the mean */
 } mbsrv_stats_t;
 
 typedef struct mbsrv mbsrv_t;
 
-/* Defaults: 127.0.0.1:1502, no RTU (9600 8N1, unit 1 when set), writes off,
- * no allow-list, MBSRV_DEFAULT_MAX_CLIENTS, MBSRV_DEFAULT_IDLE_MS, 1 object. */
+/* Defaults: not enabled, 127.0.0.1:1502, systemd socket if passed, no RTU
+ * (9600 8N1, unit 1 when set), writes off, no allow-list,
+ * MBSRV_DEFAULT_MAX_CLIENTS, MBSRV_DEFAULT_IDLE_MS, 1 object. */
 void mbsrv_config_default(mbsrv_config_t *cfg);
+
+/*
+ * Set one key of the [modbus] config section (the daemon's ini handler calls
+ * this for each key of the section; n_objects is the daemon's to set).
+ * Keys: enabled, address, port, systemd_socket, rtu_device, rtu_baud,
+ * rtu_parity (N|E|O|none|even|odd), rtu_data_bits, rtu_stop_bits, unit_id,
+ * writes, allow, max_clients, idle_timeout_ms.  Booleans: yes/no/true/false/1/0.
+ * Returns 0, -ENOENT for an unknown key, -EINVAL for a bad value (with the
+ * reason in err if not NULL).
+ */
+int mbsrv_config_set(mbsrv_config_t *cfg, const char *key, const char *value, char *err,
+                     size_t errlen);
 
 /*
  * Open the listening socket and/or the serial port and allocate everything
@@ -117,6 +136,9 @@ int mbsrv_fd(const mbsrv_t *s);
 
 /* The TCP port listened on (after tcp_port 0), or -1 without TCP. */
 int mbsrv_tcp_port(const mbsrv_t *s);
+
+/* 1 if the listening socket came from systemd (sd_listen_fds), else 0. */
+int mbsrv_tcp_from_systemd(const mbsrv_t *s);
 
 /*
  * Handle what is ready: accept, read, answer, time out idle clients, RTU

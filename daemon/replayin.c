@@ -24,7 +24,7 @@ static int obj_key(void *ocfg, const cfg_kv_t *kv, char *why, size_t wl)
         return cfg_get_path(kv, r->path, sizeof r->path, why, wl);
     }
     if (strcmp(kv->key, "format") == 0) {
-        static const char *const names[] = {"auto", "xyz", "latlon", "gpx", NULL};
+        static const char *const names[] = {"auto", "xyz", "latlon", "gpx", "path", NULL};
         int i, rc = cfg_get_enum(kv, names, &i, why, wl);
         if (rc == 0 && track_format_parse(kv->value, &r->format) < 0)
             rc = -CFG_EVALUE; /* the two lists disagree: track.h wins */
@@ -33,6 +33,14 @@ static int obj_key(void *ocfg, const cfg_kv_t *kv, char *why, size_t wl)
     if (strcmp(kv->key, "start_s") == 0)
         return cfg_get_double(kv, 0, 1e6, &r->start_s, why, wl);
     return -CFG_EUNKNOWN;
+}
+
+/* Same input: same file, format and start (the loaded rows follow from these). */
+static int obj_same(const void *a, const void *b)
+{
+    const replayin_obj_cfg_t *x = a, *y = b;
+    return strcmp(x->path, y->path) == 0 && x->format == y->format &&
+           memcmp(&x->start_s, &y->start_s, sizeof x->start_s) == 0;
 }
 
 static void obj_fini(void *ocfg)
@@ -96,7 +104,20 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
         if (o->cfg->input != &replay_transport)
             continue;
         const replayin_obj_cfg_t *rc = cfg_obj_transport(o->cfg, &replay_transport);
-        replay_init(&s->r[i], &rc->trk, (int64_t)llround(rc->start_s * 1e9));
+        replay_t *r = &s->r[i];
+        replay_init(r, &rc->trk, o->born_ns + (int64_t)llround(rc->start_s * 1e9));
+        if (o->carried && o->status.accepted > 0) {
+            /* Reload with the engine kept: resume after the row it accepted
+             * last (rows carry their 1-based row number as seq).  Limit: rows
+             * after it that were refused as bad data are offered again. */
+            for (size_t k = 0; k < rc->trk.n; k++)
+                if (rc->trk.wp[k].seq == o->status.last_seq) {
+                    r->next = k + 1;
+                    break;
+                }
+            if (r->next >= rc->trk.n)
+                r->finished = 1; /* the old replay called engine_finish already */
+        }
         o->tstate[transport_index(&replay_transport)] = &s->r[i];
     }
     *state = s;
@@ -142,6 +163,7 @@ const transport_t replay_transport = {
     .obj_cfg_default = obj_default,
     .obj_key = obj_key,
     .obj_cfg_fini = obj_fini,
+    .obj_cfg_same = obj_same,
     .check = check,
     .open = open_,
     .pre_tick = pre_tick,

@@ -2,13 +2,14 @@
 #include "svg.h"
 
 #include <errno.h>
+#include <stdint.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 typedef struct {
     double x_m, y_m, t_s, speed_m_s;
-    unsigned track;
+    int64_t now_ns;
 } sample_t;
 
 typedef struct {
@@ -28,6 +29,9 @@ struct svg_plot {
     int last_kept;        /* last was also appended to s */
     wpt_t *w;
     size_t nw, capw;
+    sample_t ev[SVG_UNDERRUNS_DRAWN]; /* where underruns began (never decimated) */
+    size_t nev, ev_total;
+    engine_state_t prev_state;
 };
 
 /* Page layout, pixels. */
@@ -92,13 +96,20 @@ int svg_plot_waypoint(svg_plot_t *p, double x_m, double y_m, int accepted)
 
 int svg_plot_setpoint(svg_plot_t *p, const engine_setpoint_t *sp)
 {
+    engine_state_t prev = p->prev_state;
+    p->prev_state = sp->state;
     if (sp->state == ENGINE_STATE_WAITING)
         return 0;
     double v = sqrt(sp->vel_m_s[0] * sp->vel_m_s[0] + sp->vel_m_s[1] * sp->vel_m_s[1] +
                     sp->vel_m_s[2] * sp->vel_m_s[2]);
     if (!isfinite(sp->pos_m[0]) || !isfinite(sp->pos_m[1]) || !isfinite(sp->t_s) || !isfinite(v))
         return 0;
-    sample_t s = {sp->pos_m[0], sp->pos_m[1], sp->t_s, v, sp->track};
+    sample_t s = {sp->pos_m[0], sp->pos_m[1], sp->t_s, v, sp->now_ns};
+    if (sp->state == ENGINE_STATE_UNDERRUN && prev != ENGINE_STATE_UNDERRUN) {
+        if (p->nev < SVG_UNDERRUNS_DRAWN)
+            p->ev[p->nev++] = s;
+        p->ev_total++;
+    }
     p->last = s;
     p->have_last = 1;
     p->last_kept = 0;
@@ -241,7 +252,21 @@ static const sample_t *sample(const svg_plot_t *p, size_t i)
     return i < p->n ? &p->s[i] : &p->last;
 }
 
-/* One <path> per trajectory (a new track number starts a new subpath). */
+/* Where the speed line must not join two samples: track time went back, or
+ * ran ahead faster than the clock (the start of a new trajectory after a
+ * gap: the time in between is not motion).  Track time standing still
+ * (a hold, a transfer) is drawn: it shows as a vertical stroke at that time.
+ * The plan view is never broken: the setpoints are continuous motion (the
+ * engine moves to a new trajectory's start by a transfer, it never jumps),
+ * and it draws exactly what was streamed. */
+#define SPEED_BREAK_FACTOR 1.5
+static int speed_break(const sample_t *a, const sample_t *b)
+{
+    double dt_s = b->t_s - a->t_s;
+    double dnow_s = (double)(b->now_ns - a->now_ns) * 1e-9;
+    return dt_s < 0 || dt_s > SPEED_BREAK_FACTOR * dnow_s + 1e-9;
+}
+
 static void draw_path(FILE *f, const svg_plot_t *p, const axis_t *ax, const axis_t *ay,
                       int speed, const char *id, const char *color)
 {
@@ -250,12 +275,26 @@ static void draw_path(FILE *f, const svg_plot_t *p, const axis_t *ax, const axis
             "stroke-linejoin=\"round\" d=\"", id, color);
     for (size_t i = 0; i < n; i++) {
         const sample_t *s = sample(p, i);
-        int move = i == 0 || s->track != sample(p, i - 1)->track;
+        int move = i == 0 || (speed && speed_break(sample(p, i - 1), s));
         double px = ax_map(ax, speed ? s->t_s : s->x_m);
         double py = ax_map(ay, speed ? s->speed_m_s : s->y_m);
         fprintf(f, "%s%.1f %.1f", move ? (i ? " M" : "M") : " L", px, py);
     }
     fputs("\"/>\n", f);
+}
+
+/* A triangle where each underrun began (plan: at the held position;
+ * speed panel: on the time axis). */
+static void draw_events(FILE *f, const svg_plot_t *p, const axis_t *ax, const axis_t *ay,
+                        int speed)
+{
+    fprintf(f, "<g id=\"%s\" fill=\"#9467bd\">", speed ? "underruns-t" : "underruns");
+    for (size_t i = 0; i < p->nev; i++) {
+        double x = ax_map(ax, speed ? p->ev[i].t_s : p->ev[i].x_m);
+        double y = speed ? ay->p0 : ax_map(ay, p->ev[i].y_m);
+        fprintf(f, "<path d=\"M%.1f %.1f l5 10 h-10 z\"/>", x, y - (speed ? 10 : 5));
+    }
+    fputs("</g>\n", f);
 }
 
 int svg_plot_write(const svg_plot_t *p, FILE *f, const char *title)
@@ -309,9 +348,12 @@ int svg_plot_write(const svg_plot_t *p, FILE *f, const char *title)
             "<line x1=\"%.1f\" y1=\"38\" x2=\"%.1f\" y2=\"38\" stroke=\"#d62728\" stroke-width=\"2\"/>"
             "<text x=\"%.1f\" y=\"42\">setpoints</text>"
             "<path d=\"M%.1f 35 l6 6 m0 -6 l-6 6\" stroke=\"#ff7f0e\" stroke-width=\"2\"/>"
-            "<text x=\"%.1f\" y=\"42\">rejected</text></g>\n",
+            "<text x=\"%.1f\" y=\"42\">rejected</text>"
+            "<path d=\"M%.1f 34 l4 8 h-8 z\" fill=\"#9467bd\"/>"
+            "<text x=\"%.1f\" y=\"42\">underrun (%zu)</text></g>\n",
             MARGIN_L + 4, MARGIN_L + 12, p->nw, MARGIN_L + 160, MARGIN_L + 180,
-            MARGIN_L + 186, MARGIN_L + 270, MARGIN_L + 282);
+            MARGIN_L + 186, MARGIN_L + 270, MARGIN_L + 282, MARGIN_L + 360, MARGIN_L + 370,
+            p->ev_total);
 
     char lx[64], ly[64];
     snprintf(lx, sizeof lx, "%s (m)", p->geographic ? "east" : "x");
@@ -333,10 +375,12 @@ int svg_plot_write(const svg_plot_t *p, FILE *f, const char *title)
                     ax_map(&py, p->w[i].y_m) - 3);
     fputs("</g>\n", f);
     draw_path(f, p, &px, &py, 0, "curve", "#d62728");
+    draw_events(f, p, &px, &py, 0);
     fputs("</g>\n", f);
 
     draw_axes(f, &st, &sv, "track time t (s)", "speed |v| (m/s)", "speed");
     draw_path(f, p, &st, &sv, 1, "speed", "#2ca02c");
+    draw_events(f, p, &st, &sv, 1);
     fputs("</svg>\n", f);
     return ferror(f) ? -EIO : 0;
 }

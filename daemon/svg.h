@@ -11,7 +11,12 @@
  * at most max_points curve vertices.  Limit: a speed spike shorter than the
  * stride can fall between kept samples; the CSV output has every setpoint.
  * The very last setpoint is always drawn.  Setpoints in state WAITING (no
- * motion yet) are not drawn.  Waypoints are all kept; above
+ * motion yet) are not drawn.  The plan view draws the setpoints as one
+ * unbroken line (what was streamed, transfers between trajectories
+ * included); the speed line is broken where track time jumps ahead of the
+ * clock (a new trajectory after a gap) or goes back.  Where an underrun
+ * began (waypoints late: the output holds) a purple triangle marks the
+ * place in the plan view and the time on the speed axis.  Waypoints are all kept; above
  * SVG_WAYPOINTS_DRAWN only every k-th is drawn.
  */
 #ifndef TRAJD_SVG_H
@@ -24,6 +29,7 @@
 #define SVG_POINTS_DEFAULT 4000  /* curve vertices kept (the file stays ~300 kB) */
 #define SVG_POINTS_MIN 16
 #define SVG_WAYPOINTS_DRAWN 5000 /* at most this many waypoint dots */
+#define SVG_UNDERRUNS_DRAWN 256  /* underrun marks drawn (all are counted in the legend) */
 
 typedef struct svg_plot svg_plot_t;
 

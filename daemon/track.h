@@ -35,6 +35,13 @@
  * required (ISO 8601, fractional seconds allowed, 'Z' or a +hh:mm offset;
  * no offset = UTC as GPX specifies).  t is relative to the first point.
  * <wpt> and <rtept> are ignored.
+ *
+ * Path (lib/path.h, added by the toolkit): lines "start x y z [t]", "speed
+ * v", "step s", "line x y z", "arc cx cy r a0 a1", "circle cx cy r a0
+ * ccw|cw", "wait s"; expanded into timed waypoints in metres (arc points
+ * exactly on the circle).  A bad line is an error "path:line: what" (never
+ * skipped: a path is a program, not a log).  line[] holds the line of the
+ * element that produced each waypoint.
  */
 #ifndef TRAJD_TRACK_H
 #define TRAJD_TRACK_H
@@ -48,6 +55,7 @@ typedef enum {
     TRACK_FMT_XYZ,       /* CSV t,x,y,z in seconds and metres */
     TRACK_FMT_LATLON,    /* CSV t,lat,lon[,alt] in seconds, degrees, metres */
     TRACK_FMT_GPX,       /* GPX 1.0/1.1 trkpt with <time> (and <ele>) */
+    TRACK_FMT_PATH,      /* a path of lines and arcs (lib/path.h text form; AUTO: extension .path) */
 } track_format_t;
 
 /* track_load_opts flags */

@@ -102,12 +102,15 @@ static void on_watchdog(loop_t *l, uint64_t exp, void *ctx)
     sd_notify(0, "WATCHDOG=1");
 }
 
+/* Open cfg (replacing d->core if there is one, see core_open) and start its clock. */
 static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
 {
     char rtwhy[256];
-    int rc = core_open(d->loop, cfg, &d->stats, &d->core, why, wl);
+    core_t *nc = NULL;
+    int rc = core_open(d->loop, cfg, &d->stats, &d->core, &nc, why, wl);
     if (rc < 0)
         return rc;
+    d->core = nc;
     rc = core_start(d->core);
     if (rc < 0) {
         snprintf(why, wl, "output clock: %s", strerror(-rc));
@@ -137,16 +140,21 @@ static void reload(trajd_t *d)
         sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
         return;
     }
-    /* Transports may hold exclusive resources (a TCP port): close the old set
-     * before opening the new one; if the new one cannot open, reopen the old. */
-    core_close(d->core);
-    d->core = NULL;
+    /* core_open carries unchanged objects over, closes the old transports
+     * (they may hold a TCP port the new ones need), then opens the new ones.
+     * If that fails, the old configuration is reopened (from scratch if the
+     * old core was already closed). */
     if (start_core(d, nc, err, sizeof err) < 0) {
         char err2[1024];
         d->stats.reload_failures++;
+        cfg_free(nc);
+        if (d->core) { /* failed before touching the old core: it still runs */
+            log_msg(LOG_ERR, "reload refused: %s", err);
+            sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
+            return;
+        }
         log_msg(LOG_ERR, "reload refused (cannot open): %s; reopening the old configuration",
                 err);
-        cfg_free(nc);
         if (start_core(d, d->cfg, err2, sizeof err2) < 0) {
             log_msg(LOG_CRIT, "cannot reopen the old configuration either: %s", err2);
             loop_stop(d->loop, EX_SOFTWARE);
@@ -158,7 +166,11 @@ static void reload(trajd_t *d)
     cfg_free(d->cfg);
     d->cfg = nc;
     d->stats.reloads++;
-    log_msg(LOG_NOTICE, "reloaded: %u object(s)", nc->nobj);
+    unsigned kept = 0;
+    for (unsigned i = 0; i < d->core->nobj; i++)
+        kept += (unsigned)d->core->obj[i].carried;
+    log_msg(LOG_NOTICE, "reloaded: %u object(s), %u carried over without interruption",
+            nc->nobj, kept);
     sd_notify(0, "READY=1");
     notify_status(d);
 }
@@ -336,8 +348,9 @@ int main(int argc, char **argv)
         log_msg(LOG_ERR, "event loop: %s", strerror(-rc));
         rc = EX_OSERR;
     }
-    {
+    if (d.core) {
         char line[1024];
+        core_stats_roll(d.core);
         core_summary(d.core, line, sizeof line);
         log_msg(LOG_INFO, "exit: %s", line);
     }

@@ -38,8 +38,9 @@ enum { EXIT_INPUT = 1, EXIT_USAGE = 2, EXIT_OUTPUT = 3, EXIT_ENGINE = 4 };
  * the start-up lookahead, gap transfers and the final run-out many times
  * over; reaching it means the engine never finished. */
 #define RUN_BOUND_EXTRA_S 3600.0
-/* Progress line: only after this long, and at most this often. */
-#define PROGRESS_AFTER_NS 500000000LL
+/* Progress line (stderr a terminal only): from PROGRESS_AFTER_MS into the
+ * run (--progress-after), at most every PROGRESS_EVERY_NS. */
+#define PROGRESS_AFTER_MS 500
 #define PROGRESS_EVERY_NS 250000000LL
 
 typedef struct {
@@ -51,6 +52,7 @@ typedef struct {
     unsigned load_flags;
     int summary;
     int quiet;
+    unsigned progress_after_ms;
     double rate_hz;
     engine_config_t cfg;
 } opts_t;
@@ -70,15 +72,19 @@ static void usage(FILE *f)
         "  --start-vel VX,VY,VZ start velocity for --ends clamped, m/s (default 0,0,0)\n"
         "  --end-vel VX,VY,VZ   end velocity for --ends clamped, m/s (default 0,0,0)\n"
         "  --method M           bspline | cubic | smooth\n"
+        "  --smooth-window W    smooth: waypoints per least-squares fit (default 24)\n"
+        "  --smooth-ctrl C      smooth: control points per fit (default 6)\n"
         "  --max-gap S          a longer interval ends the trajectory and starts a new one\n"
         "  --max-speed M_S      reject waypoints implying a higher speed (0 = no limit)\n"
-        "  --format F           auto | xyz | latlon | gpx (default auto)\n"
+        "  --format F           auto | xyz | latlon | gpx | path (default auto;\n"
+        "                       path: lines and arcs, lib/path.h, auto for *.path)\n"
         "  --skip-bad           skip and count malformed lines instead of failing\n"
         "  --object NAME        value of the object column (default \"replay\")\n"
         "  -o, --output FILE    setpoint CSV (default stdout; \"-\" = stdout)\n"
         "  --svg FILE           draw waypoints, curve and speed profile\n"
         "  --summary            counters on stderr at the end\n"
         "  -q, --quiet          no progress line\n"
+        "  --progress-after MS  progress line (stderr a terminal only) after MS ms (default 500)\n"
         "  -h, --help           this text\n"
         "  -V, --version        version\n"
         "\n"
@@ -133,7 +139,8 @@ static const char *const param_names[] = {"uniform", "time"};
 static const char *const ends_names[] = {"held", "multiple", "natural", "clamped", "rest"};
 static const char *const method_names[] = {"bspline", "cubic", "smooth"};
 
-/* Short names of the rejection reasons, indexed by engine_error. */
+/* Short names of the reasons a waypoint can be refused for bad data
+ * (NULL for codes engine_push does not return for data). */
 static const char *reason_name(int e)
 {
     switch (e) {
@@ -142,18 +149,15 @@ static const char *reason_name(int e)
     case ENGINE_EBACKWARDS: return "backwards";
     case ENGINE_ESAMETIME: return "same_time";
     case ENGINE_ESPEED: return "speed";
-    case ENGINE_ECONFIG: return "config";
-    case ENGINE_ENOMEM: return "nomem";
-    case ENGINE_ESTATE: return "state";
     case ENGINE_ENUMERIC: return "numeric";
     default: return NULL;
     }
 }
 
 enum {
-    OPT_RATE = 256, OPT_FRAGMENT, OPT_OVERLAP, OPT_PARAM, OPT_ENDS, OPT_METHOD, OPT_FORMAT,
+    OPT_RATE = 256, OPT_FRAGMENT, OPT_OVERLAP, OPT_PARAM, OPT_ENDS, OPT_METHOD, OPT_SMOOTH_WINDOW, OPT_SMOOTH_CTRL, OPT_FORMAT,
     OPT_SVG, OPT_SUMMARY, OPT_MAX_GAP, OPT_MAX_SPEED, OPT_SKIP_BAD, OPT_OBJECT,
-    OPT_START_VEL, OPT_END_VEL,
+    OPT_START_VEL, OPT_END_VEL, OPT_PROGRESS_AFTER,
 };
 
 /* Returns -1 to go on, else an exit status. */
@@ -166,6 +170,8 @@ static int parse_args(int argc, char **argv, opts_t *o)
         {"param", required_argument, NULL, OPT_PARAM},
         {"ends", required_argument, NULL, OPT_ENDS},
         {"method", required_argument, NULL, OPT_METHOD},
+        {"smooth-window", required_argument, NULL, OPT_SMOOTH_WINDOW},
+        {"smooth-ctrl", required_argument, NULL, OPT_SMOOTH_CTRL},
         {"format", required_argument, NULL, OPT_FORMAT},
         {"svg", required_argument, NULL, OPT_SVG},
         {"summary", no_argument, NULL, OPT_SUMMARY},
@@ -175,6 +181,7 @@ static int parse_args(int argc, char **argv, opts_t *o)
         {"object", required_argument, NULL, OPT_OBJECT},
         {"start-vel", required_argument, NULL, OPT_START_VEL},
         {"end-vel", required_argument, NULL, OPT_END_VEL},
+        {"progress-after", required_argument, NULL, OPT_PROGRESS_AFTER},
         {"output", required_argument, NULL, 'o'},
         {"quiet", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
@@ -185,6 +192,7 @@ static int parse_args(int argc, char **argv, opts_t *o)
     memset(o, 0, sizeof *o);
     engine_config_default(&o->cfg);
     o->rate_hz = 100.0;
+    o->progress_after_ms = PROGRESS_AFTER_MS;
     o->object = "replay";
     opterr = 0;
     while ((c = getopt_long(argc, argv, ":o:qhV", lopts, NULL)) != -1) {
@@ -230,9 +238,18 @@ static int parse_args(int argc, char **argv, opts_t *o)
             }
             o->cfg.method = (engine_method_t)k;
             break;
+        case OPT_SMOOTH_WINDOW:
+        case OPT_SMOOTH_CTRL:
+            if (parse_uint(optarg, c == OPT_SMOOTH_WINDOW ? &o->cfg.smooth_window
+                                                          : &o->cfg.smooth_ctrl)) {
+                fprintf(stderr, "trajreplay: --%s: '%s' is not a count\n",
+                        c == OPT_SMOOTH_WINDOW ? "smooth-window" : "smooth-ctrl", optarg);
+                return EXIT_USAGE;
+            }
+            break;
         case OPT_FORMAT:
             if (track_format_parse(optarg, &o->format)) {
-                fprintf(stderr, "trajreplay: --format: '%s' is not auto, xyz, latlon or gpx\n",
+                fprintf(stderr, "trajreplay: --format: '%s' is not auto, xyz, latlon, gpx or path\n",
                         optarg);
                 return EXIT_USAGE;
             }
@@ -260,6 +277,12 @@ static int parse_args(int argc, char **argv, opts_t *o)
             if (parse_vec3(optarg, c == OPT_START_VEL ? o->cfg.start_vel_m_s : o->cfg.end_vel_m_s)) {
                 fprintf(stderr, "trajreplay: --%s: '%s' is not VX,VY,VZ in m/s\n",
                         c == OPT_START_VEL ? "start-vel" : "end-vel", optarg);
+                return EXIT_USAGE;
+            }
+            break;
+        case OPT_PROGRESS_AFTER:
+            if (parse_uint(optarg, &o->progress_after_ms)) {
+                fprintf(stderr, "trajreplay: --progress-after: '%s' is not milliseconds\n", optarg);
                 return EXIT_USAGE;
             }
             break;
@@ -450,11 +473,14 @@ int main(int argc, char **argv)
             if (st.buffered == 0 && ++tail > TAIL_TICKS)
                 break;
         }
+        if ((k & 1023) == 0 && ferror(out))
+            break; /* a full disk: stop now, reported below */
         if (progress && (k & 1023) == 0) {
             int64_t t = mono_ns();
-            if (t - t_start > PROGRESS_AFTER_NS && t - t_shown > PROGRESS_EVERY_NS) {
+            if (t - t_start >= (int64_t)o.progress_after_ms * 1000000 &&
+                (!shown || t - t_shown > PROGRESS_EVERY_NS)) {
                 fprintf(stderr, "\rtrajreplay: %zu/%zu waypoints, track time %.1f/%.1f s, "
-                        "%" PRIu64 " setpoints", r.next, trk.n, sp.t_s - trk.wp[0].t_s, span_s,
+                        "%" PRIu64 " setpoints\033[K", r.next, trk.n, sp.t_s - trk.wp[0].t_s, span_s,
                         written);
                 t_shown = t;
                 shown = 1;

@@ -5,6 +5,7 @@
 
 #include "can.h"
 #include "csvout.h"
+#include "mbtransport.h"
 #include "replayin.h"
 
 const transport_t *const transport_table[] = {
@@ -12,6 +13,7 @@ const transport_t *const transport_table[] = {
     &csv_transport,     /* output: setpoints to a CSV file per object */
     &stdout_transport,  /* output: setpoints of every object to stdout */
     &can_transport,     /* input and output: SocketCAN or a candump log */
+    &modbus_transport,  /* input (waypoint block) and service (status, commands): Modbus TCP/RTU */
     NULL,
 };
 

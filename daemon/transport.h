@@ -26,7 +26,9 @@
  * cfg_uses() says so (an object uses it, or its [T] section is present).
  *   open      after every object's engine exists and before READY=1: open
  *             sockets/files, loop_add() fds to c->loop.  Failure -> trajd does
- *             not start (or a reload is rolled back).
+ *             not start (or a reload is rolled back).  An object with
+ *             o->carried set kept its engine over a reload: an input resumes
+ *             where it was (replay: after the row the engine accepted last).
  *   pre_tick  for each object whose INPUT is this transport, just before its
  *             engine_tick: feed waypoints that are due by engine time (replay).
  *             Event-driven inputs (CAN frames, Modbus writes) do not need it:
@@ -73,6 +75,10 @@ typedef struct transport {
     void (*obj_cfg_default)(void *ocfg);
     int (*obj_key)(void *ocfg, const cfg_kv_t *kv, char *why, size_t whylen);
     void (*obj_cfg_fini)(void *ocfg);
+    /* 1 if two per-object blocks configure the same input (decides whether an
+     * object is carried over a reload, see core_open).  NULL: memcmp of
+     * obj_cfg_size bytes (fine for plain data; blocks are zeroed first). */
+    int (*obj_cfg_same)(const void *a, const void *b);
 
     /* Whole-config rules, after every key was parsed (and the place to finish
      * the blocks, e.g. load a file named by a key).  0, or -CFG_EVALUE /

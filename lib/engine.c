@@ -24,6 +24,7 @@
 #include "fdiff.h"
 #include "frag.h"
 #include "hoang.h"
+#include "lsq.h"
 
 #define AX ENGINE_AXES
 
@@ -34,6 +35,7 @@ typedef struct {
     int kind;
     int first;            /* first entry of its trajectory */
     double t1_s;          /* segment end (absolute track time); END: rest time */
+    uint64_t node;        /* SEG: index of its first node in the trajectory */
     fdiff_seg_t seg;      /* END: c[k][0] is the rest position, t0_s = t1_s */
 } qent_t;
 
@@ -45,6 +47,10 @@ struct engine {
     int pstar;            /* unknowns are Hoang control points (BSPLINE + UNIFORM) */
     int held;             /* HELD or MULTIPLE: first and last segments not emitted */
     int mult;             /* MULTIPLE: end points entered three times */
+    int smooth;           /* SMOOTH: waypoints pass through the lsq smoother first */
+    lsq_smooth_t sm;
+    double *sm_mem;
+    double first_r[AX];   /* first waypoint of the current trajectory */
     double period_s;
 
     /* ---- input: the trajectory being received ---- */
@@ -65,6 +71,7 @@ struct engine {
     /* ---- the queue ---- */
     qent_t *q;
     size_t qcap, qhead, qlen;
+    size_t qends;         /* END entries in the queue */
 
     /* ---- output ---- */
     int mode;
@@ -101,7 +108,7 @@ struct engine {
 /* |t| above this is absurd for a track clock (about 31700 years). */
 #define ENGINE_T_ABS_MAX_S 1e12
 /* Capacity accepted at most (memory is sized from it). */
-#define ENGINE_CAPACITY_MAX (1u << 22)
+#define ENGINE_CAPACITY_MAX (1u << 20)
 
 const char *engine_strerror(int err)
 {
@@ -146,6 +153,9 @@ void engine_config_default(engine_config_t *cfg)
     cfg->max_abs_m = 1e7;
     cfg->max_speed_m_s = 100.0;
     cfg->max_segment_s = 60.0;
+    cfg->start_slack = 8;
+    cfg->smooth_window = 24;
+    cfg->smooth_ctrl = 6;
 }
 
 static int uses_pstar(const engine_config_t *cfg)
@@ -154,25 +164,77 @@ static int uses_pstar(const engine_config_t *cfg)
            cfg->param == ENGINE_PARAM_UNIFORM;
 }
 
-unsigned engine_lookahead(const engine_config_t *cfg)
+/*
+ * largest lookahead over segments j in [j0, j1) for start offset delta, in
+ * waypoints received.  SMOOTH (toolkit): node n exists once waypoint
+ * max(n + extra, first) is in (extra = smooth_window/2, first =
+ * smooth_window - 1); otherwise extra = first = 0 and nodes are waypoints.
+ */
+static unsigned scan_lookahead(unsigned f, unsigned o, unsigned delta, unsigned need,
+                               uint64_t j0, uint64_t j1, uint64_t extra, uint64_t first)
 {
-    unsigned f = cfg->fragment, o = cfg->overlap, best = 0;
-    unsigned need = uses_pstar(cfg) ? 3 : 2; /* x[j + need - 1] final for segment j */
-    uint64_t j, n;
+    unsigned best = 0;
+    uint64_t j, n, raw;
 
-    if (f < ENGINE_FRAGMENT_MIN || f > ENGINE_FRAGMENT_MAX || o < 2 || o % 2 ||
-        o >= f)
-        return 0;
     /* Row r is pushed when node r+1 arrives; segment j (waypoint j to j+1)
-     * is built once frag_final_after(rows pushed) covers it.  Steady state
-     * repeats every S segments: scan a few periods past the start. */
-    for (j = 0; j < 4u * f; j++) {
-        for (n = j + 1; frag_final_after(f, o, n - 1) < j + need; n++)
+     * is built once frag_final_after(rows pushed) reaches x[j + need - 1]. */
+    for (j = j0; j < j1; j++) {
+        for (n = j + 1; frag_final_after(f, o, delta, n - 1) < j + need; n++)
             ;
-        if (n - (j + 1) > best)
-            best = (unsigned)(n - (j + 1));
+        raw = n + extra > first ? n + extra : first;
+        if (raw - (j + 1) > best)
+            best = (unsigned)(raw - (j + 1));
     }
     return best;
+}
+
+static int config_sizes_ok(const engine_config_t *cfg)
+{
+    return cfg->fragment >= ENGINE_FRAGMENT_MIN && cfg->fragment <= ENGINE_FRAGMENT_MAX &&
+           cfg->overlap >= 2 && cfg->overlap % 2 == 0 && cfg->overlap < cfg->fragment;
+}
+
+/* most waypoints beyond a segment the solver needs, far from the start */
+static unsigned steady_lookahead(const engine_config_t *cfg)
+{
+    unsigned f = cfg->fragment, o = cfg->overlap, s = f - o;
+    unsigned need = uses_pstar(cfg) ? 3 : 2; /* x[j + need - 1] final for segment j */
+
+    /* the pattern repeats every S segments */
+    return scan_lookahead(f, o, 0, need, 2u * f, 2u * f + 2u * s, 0, 0);
+}
+
+/*
+ * Start offset of the fragment grid: the first fragment is cut short so that
+ * its first segment is final no later than the output wants to start
+ * (steady-state lookahead + start_slack) instead of after F - 1 waypoints;
+ * never beyond S - 1 (see frag.h).
+ */
+static unsigned frag_delta(const engine_config_t *cfg)
+{
+    unsigned f = cfg->fragment, s = f - cfg->overlap;
+    unsigned want = steady_lookahead(cfg) + cfg->start_slack;
+    unsigned d = f - 1 > want ? f - 1 - want : 0;
+
+    return d < s ? d : s - 1;
+}
+
+unsigned engine_lookahead(const engine_config_t *cfg)
+{
+    unsigned f = cfg->fragment, o = cfg->overlap, la, want;
+    /* SMOOTH: the smoother holds smooth_window/2 waypoints back (lsq.h) */
+    int sm = cfg->method == ENGINE_METHOD_SMOOTH && cfg->smooth_window >= 1;
+    unsigned extra = sm ? lsq_smooth_delay(cfg->smooth_window) : 0;
+    unsigned first = sm ? cfg->smooth_window - 1 : 0;
+
+    if (!config_sizes_ok(cfg) || cfg->start_slack > ENGINE_FRAGMENT_MAX)
+        return 0;
+    /* what the solver needs, from the start on (a few periods cover it) ... */
+    la = scan_lookahead(f, o, frag_delta(cfg), uses_pstar(cfg) ? 3 : 2, 0, 4u * f,
+                        extra, first);
+    /* ... and what the output waits for */
+    want = steady_lookahead(cfg) + extra + cfg->start_slack;
+    return la > want ? la : want;
 }
 
 int engine_config_check(const engine_config_t *cfg, const char **why)
@@ -180,10 +242,15 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
     const char *w = NULL;
     unsigned la;
 
-    if (cfg->method == ENGINE_METHOD_SMOOTH)
-        w = "method: smooth (least squares) is not built into the engine yet";
-    else if (cfg->method != ENGINE_METHOD_BSPLINE && cfg->method != ENGINE_METHOD_CUBIC)
+    if (cfg->method != ENGINE_METHOD_BSPLINE && cfg->method != ENGINE_METHOD_CUBIC &&
+        cfg->method != ENGINE_METHOD_SMOOTH)
         w = "method: unknown";
+    else if (cfg->method == ENGINE_METHOD_SMOOTH &&
+             (cfg->smooth_window < 4 || cfg->smooth_window > ENGINE_SMOOTH_WINDOW_MAX))
+        w = "smooth_window: must be within 4..ENGINE_SMOOTH_WINDOW_MAX";
+    else if (cfg->method == ENGINE_METHOD_SMOOTH &&
+             (cfg->smooth_ctrl < 4 || cfg->smooth_ctrl > cfg->smooth_window))
+        w = "smooth_ctrl: must be at least 4 and at most smooth_window";
     else if (cfg->param != ENGINE_PARAM_UNIFORM && cfg->param != ENGINE_PARAM_TIME)
         w = "param: unknown";
     else if ((unsigned)cfg->ends > ENGINE_ENDS_REST)
@@ -206,6 +273,8 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
         w = "max_speed_m_s: must be 0 (no limit) or positive and finite";
     else if (!(cfg->max_segment_s >= 0) || !isfinite(cfg->max_segment_s))
         w = "max_segment_s: must be 0 or positive and finite";
+    else if (cfg->start_slack > ENGINE_FRAGMENT_MAX)
+        w = "start_slack: at most ENGINE_FRAGMENT_MAX waypoints";
     else if (cfg->ends == ENGINE_ENDS_CLAMPED &&
              !(isfinite(cfg->start_vel_m_s[0]) && isfinite(cfg->start_vel_m_s[1]) &&
                isfinite(cfg->start_vel_m_s[2]) && isfinite(cfg->end_vel_m_s[0]) &&
@@ -214,7 +283,7 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
     if (!w) {
         la = engine_lookahead(cfg);
         if (cfg->capacity < la + cfg->fragment + 8 || cfg->capacity > ENGINE_CAPACITY_MAX)
-            w = "capacity: must be at least lookahead + fragment + 8 and at most 2^22";
+            w = "capacity: must be at least lookahead + fragment + 8 and at most 2^20";
     }
     if (why)
         *why = w;
@@ -241,6 +310,14 @@ engine_t *engine_new(const engine_config_t *cfg, int *err)
     e->pstar = uses_pstar(cfg);
     e->held = cfg->ends == ENGINE_ENDS_HELD || cfg->ends == ENGINE_ENDS_MULTIPLE;
     e->mult = cfg->ends == ENGINE_ENDS_MULTIPLE;
+    e->smooth = cfg->method == ENGINE_METHOD_SMOOTH;
+    if (e->smooth) {
+        e->sm_mem = calloc(lsq_smooth_mem_len(cfg->smooth_window, cfg->smooth_ctrl, AX),
+                           sizeof(double));
+        if (!e->sm_mem ||
+            lsq_smooth_init(&e->sm, cfg->smooth_window, cfg->smooth_ctrl, AX, e->sm_mem) < 0)
+            goto nomem;
+    }
     e->period_s = (double)cfg->period_ns * 1e-9;
     /* nodes from the oldest unbuilt segment (lags the newest by the lookahead
      * plus the copies of MULTIPLE) to the newest, with margin */
@@ -249,7 +326,7 @@ engine_t *engine_new(const engine_config_t *cfg, int *err)
     e->ring = ring;
     e->node_t = calloc(ring, sizeof(double));
     e->node_r = calloc(ring * AX, sizeof(double));
-    e->fw = frag_new(cfg->fragment, cfg->overlap, ring);
+    e->fw = frag_new(cfg->fragment, cfg->overlap, frag_delta(cfg), ring);
     /* each accepted waypoint yields at most one segment, each trajectory
      * one END: twice the capacity always fits */
     e->qcap = 2 * (size_t)cfg->capacity + 8;
@@ -275,6 +352,7 @@ void engine_free(engine_t *e)
     free(e->node_r);
     frag_free(e->fw);
     free(e->q);
+    free(e->sm_mem);
     free(e);
 }
 
@@ -298,7 +376,8 @@ static double hpar(const engine_t *e, uint64_t j)
 
 static size_t buffered(const engine_t *e)
 {
-    return e->qlen + (size_t)(e->nodes - e->seg_next);
+    return e->qlen + (size_t)(e->nodes - e->seg_next) +
+           (e->smooth ? (size_t)lsq_smooth_pending(&e->sm) : 0);
 }
 
 static qent_t *q_push(engine_t *e)
@@ -314,13 +393,14 @@ static qent_t *q_push(engine_t *e)
     return q;
 }
 
-static void queue_segment(engine_t *e, const fdiff_seg_t *seg)
+static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
 {
     qent_t *q = q_push(e);
 
     if (!q)
         return;
     q->kind = QE_SEG;
+    q->node = node;
     q->seg = *seg;
     q->t1_s = seg->t0_s + seg->dur_s;
     e->in_emitted = 1;
@@ -336,6 +416,7 @@ static void queue_end(engine_t *e)
     if (!q)
         return;
     q->kind = QE_END;
+    e->qends++;
     memset(&q->seg, 0, sizeof(q->seg));
     q->t1_s = e->in_emitted ? e->end_t : e->last_t;
     q->seg.t0_s = q->t1_s;
@@ -404,7 +485,7 @@ static void build_segments(engine_t *e)
             cubic_segment(nr(e, j), nr(e, j + 1), frag_x(e->fw, j),
                           frag_x(e->fw, j + 1), hpar(e, j), nt(e, j), dur, &seg);
         }
-        queue_segment(e, &seg);
+        queue_segment(e, &seg, j);
     }
 }
 
@@ -451,6 +532,18 @@ static int add_node(engine_t *e, double t, const double *r)
     return 0;
 }
 
+/* SMOOTH: turn every smoothed waypoint that is ready into a node. */
+static int drain_smoother(engine_t *e)
+{
+    double t, r[AX];
+    int rc;
+
+    while (lsq_smooth_pop(&e->sm, &t, r) == 1)
+        if ((rc = add_node(e, t, r)) < 0)
+            return rc;
+    return 0;
+}
+
 /* Close the input trajectory: end row, last segments, END entry. */
 static int close_input(engine_t *e)
 {
@@ -460,6 +553,11 @@ static int close_input(engine_t *e)
     if (!e->in_open)
         return 0;
     e->in_open = 0;
+    if (e->smooth) {
+        lsq_smooth_finish(&e->sm);
+        if ((rc = drain_smoother(e)) < 0)
+            goto end;
+    }
     if (e->mult) {
         /* the last point twice more (it is in already once) */
         double r[AX];
@@ -496,7 +594,9 @@ static void open_input(engine_t *e, const engine_waypoint_t *wp)
     e->in_first_pending = 1;
     e->st.tracks++;
     e->finished = 0;
-    (void)wp;
+    memcpy(e->first_r, wp->pos_m, sizeof(e->first_r));
+    if (e->smooth)
+        lsq_smooth_reset(&e->sm);
 }
 
 static int reject(engine_t *e, int code)
@@ -551,7 +651,12 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
         open_input(e, wp);
     e->last_t = wp->t_s;
     memcpy(e->last_r, wp->pos_m, sizeof(e->last_r));
-    rc = add_node(e, wp->t_s, wp->pos_m);
+    if (e->smooth) {
+        lsq_smooth_push(&e->sm, wp->t_s, wp->pos_m);
+        rc = drain_smoother(e);
+    } else {
+        rc = add_node(e, wp->t_s, wp->pos_m);
+    }
     if (rc == 0 && e->mult && e->nodes == 1) {
         /* the first point twice more */
         if ((rc = add_node(e, wp->t_s, wp->pos_m)) == 0)
@@ -587,8 +692,11 @@ void engine_clear(engine_t *e)
     e->nodes = 0;
     e->seg_next = 0;
     frag_reset(e->fw);
+    if (e->smooth)
+        lsq_smooth_reset(&e->sm);
     e->qhead = 0;
     e->qlen = 0;
+    e->qends = 0;
     e->finished = 0;
     e->underrun = 0;
     if (e->mode != OUT_HOLD) {
@@ -616,8 +724,22 @@ static qent_t *q_head(engine_t *e)
 
 static void q_pop(engine_t *e)
 {
+    if (e->q[e->qhead].kind == QE_END)
+        e->qends--;
     e->qhead = (e->qhead + 1) % e->qcap;
     e->qlen--;
+}
+
+/*
+ * The output may start (or resume after an underrun) on the segment h only
+ * once the lookahead is buffered beyond it, or its trajectory is closed.
+ */
+static int enough_ahead(const engine_t *e, const qent_t *h)
+{
+    /* waypoints received: nodes, plus those the smoother still holds (SMOOTH) */
+    uint64_t in = e->nodes + (e->smooth ? lsq_smooth_pending(&e->sm) : 0);
+
+    return e->qends > 0 || h->kind != QE_SEG || in >= h->node + 2 + e->lookahead;
 }
 
 static void hold_here(engine_t *e)
@@ -738,7 +860,7 @@ static void step_once(engine_t *e)
     switch (e->mode) {
     case OUT_HOLD: {
         qent_t *h = q_head(e);
-        if (!h || !h->first) {
+        if (!h || !h->first || !enough_ahead(e, h)) {
             hold_here(e);
             break;
         }
@@ -783,6 +905,12 @@ static void step_once(engine_t *e)
         }
         for (;;) {
             qent_t *h = q_head(e);
+            /* Out of an underrun only once the lookahead is buffered again
+             * beyond the next segment, as at the start (or the end is in
+             * sight): resuming on the first segment back would leave no
+             * margin and underrun again at the next late waypoint. */
+            if (h && e->underrun && !enough_ahead(e, h))
+                h = NULL;
             if (!h) {
                 /* waypoints late: hold, keep n; resume exactly here */
                 if (!e->underrun)
@@ -841,11 +969,13 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
         if (h)
             for (int k = 0; k < AX; k++)
                 e->pos[k] = h->seg.c[k][0];
-        else if (e->in_open)
+        else if (e->in_open && e->nodes)
             memcpy(e->pos, nr(e, 0), sizeof(e->pos));
+        else if (e->in_open) /* SMOOTH: no node yet, the first waypoint as received */
+            memcpy(e->pos, e->first_r, sizeof(e->pos));
         if (h)
             e->out_t = h->seg.t0_s;
-        else if (e->in_open)
+        else if (e->in_open && e->nodes)
             e->out_t = nt(e, 0);
     }
     sp->t_s = e->out_t;
@@ -861,6 +991,18 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
         sp->flags |= ENGINE_SP_TRANSFER;
     sp->cycle = e->cycle;
     sp->track = e->out_track;
+}
+
+/* 1 if further steps cannot change anything until new input arrives. */
+static int stalled(engine_t *e)
+{
+    qent_t *h = q_head(e);
+
+    if (e->mode == OUT_HOLD)
+        return !h || !h->first || !enough_ahead(e, h);
+    if (e->mode == OUT_STREAM && e->underrun)
+        return !h || !enough_ahead(e, h);
+    return 0;
 }
 
 int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
@@ -883,8 +1025,19 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     }
     e->have_now = 1;
     e->last_now = now_ns;
-    for (i = 0; i < k; i++)
+    for (i = 0; i < k; i++) {
         step_once(e);
+        if (i + 1 < k && stalled(e)) {
+            /* Nothing can change before the next push: the remaining steps
+             * are identical holds.  Count them instead of looping (a clock
+             * jump of hours must not cost hours of steps). */
+            int64_t rest = k - 1 - i;
+            e->cycle += (uint32_t)rest;
+            if (e->mode == OUT_STREAM)
+                e->st.underrun_ticks += (uint64_t)rest;
+            break;
+        }
+    }
     if (k > 1) {
         e->st.skipped_ticks += (uint64_t)(k - 1);
         e->flags_pending |= ENGINE_SP_SKIPPED;

@@ -3,12 +3,12 @@
 
 #include <stdlib.h>
 
-frag_t *frag_new(unsigned f, unsigned o, size_t ring)
+frag_t *frag_new(unsigned f, unsigned o, unsigned delta, size_t ring)
 {
     frag_t *fw;
     size_t i, per_slot, total;
 
-    if (f < 4 || o < 2 || o % 2 || o >= f || ring < f)
+    if (f < 4 || o < 2 || o % 2 || o >= f || ring < f || delta >= f - o)
         return NULL;
     fw = calloc(1, sizeof(*fw));
     if (!fw)
@@ -16,6 +16,7 @@ frag_t *frag_new(unsigned f, unsigned o, size_t ring)
     fw->f = f;
     fw->o = o;
     fw->s = f - o;
+    fw->delta = delta;
     /* Fragment k is open from row kS to row kS+F-1: at most ceil(F/S)
      * fragments hold a row, one more may be opening on it. */
     fw->nslots = (f + fw->s - 1) / fw->s + 1;
@@ -67,6 +68,17 @@ static frag_slot_t *slot_of(frag_t *fw, uint64_t k)
     return &fw->slot[k % fw->nslots];
 }
 
+/* first and last row of fragment k (fragment 0 is cut at row 0) */
+static uint64_t frag_first(const frag_t *fw, uint64_t k)
+{
+    return k == 0 ? 0 : k * fw->s - fw->delta;
+}
+
+static uint64_t frag_last(const frag_t *fw, uint64_t k)
+{
+    return k * fw->s + fw->f - 1 - fw->delta;
+}
+
 static void put_x(frag_t *fw, uint64_t j, const double *v)
 {
     double *dst = fw->x + (size_t)(j % fw->ring) * FRAG_AXES;
@@ -78,12 +90,12 @@ static void put_x(frag_t *fw, uint64_t j, const double *v)
  * Back-substitute fragment k (its rows are all in) and make its share of x
  * final.  Returns 0 or a negated tridiag_error.
  */
-static int solve_fragment(frag_t *fw, uint64_t k)
+static int solve_fragment(frag_t *fw, uint64_t k, int to_end)
 {
     frag_slot_t *sl = slot_of(fw, k);
     uint64_t first = sl->first, last = first + sl->sw.n - 1;
-    uint64_t jprev = first + fw->o / 2;             /* J(k-1) */
-    uint64_t jk = first + fw->f - fw->o / 2;        /* J(k) */
+    uint64_t jprev = k * fw->s - fw->delta + fw->o / 2;       /* J(k-1), k > 0 */
+    uint64_t jk = (k + 1) * fw->s - fw->delta + fw->o / 2;    /* J(k) */
     uint64_t j, lo = 0;
     int rc, m;
 
@@ -102,7 +114,7 @@ static int solve_fragment(frag_t *fw, uint64_t k)
         put_x(fw, jprev, avg);
         lo = jprev + 1;
     }
-    if (jk <= last) {
+    if (jk <= last && !to_end) {
         for (j = lo; j < jk; j++)
             put_x(fw, j, fw->xs + (size_t)(j - first) * FRAG_AXES);
         for (m = 0; m < FRAG_AXES; m++)
@@ -128,18 +140,18 @@ int frag_push(frag_t *fw, const frag_row_t *row, const double *pin)
         frag_slot_t *sl = slot_of(fw, k);
         if (!sl->open)
             continue;
-        if (r == sl->first + fw->f - 1) {
+        if (r == frag_last(fw, k)) {
             /* artificial end: pinned */
             rc = tridiag_sweep_push(&sl->sw, 0.0, 1.0, 0.0, pin);
             if (rc == 0)
-                rc = solve_fragment(fw, k);
+                rc = solve_fragment(fw, k, 0);
         } else {
             rc = tridiag_sweep_push(&sl->sw, row->a, row->b, row->c, row->d);
         }
         if (rc < 0)
             return rc;
     }
-    if (r % fw->s == 0) {
+    if (r == frag_first(fw, fw->next_frag)) {
         frag_slot_t *sl = slot_of(fw, fw->next_frag);
         if (sl->open)
             return -TRIDIAG_ESIZE; /* cannot happen with nslots as sized */
@@ -176,36 +188,42 @@ int frag_finish(frag_t *fw, const frag_row_t *row)
         if (rc < 0)
             return rc;
     } else {
-        /* a fragment starting on the last row would hold nothing of its own */
-        for (k = fw->next_solve; k < fw->next_frag; k++) {
-            frag_slot_t *sl = slot_of(fw, k);
-            if (!sl->open)
-                continue;
-            rc = tridiag_sweep_push(&sl->sw, row->a, row->b, 0.0, row->d);
-            if (rc < 0)
-                return rc;
-        }
+        /* The oldest open fragment takes the true end row and covers every
+         * row up to it: its only artificial end is gone, so near the end it
+         * is better than the younger ones (pinned O/2 rows before their
+         * junction), and the true end condition holds exactly.  The younger
+         * open fragments are dropped. */
+        for (k = fw->next_solve; k < fw->next_frag && !slot_of(fw, k)->open; k++)
+            ;
+        if (k == fw->next_frag)
+            return -TRIDIAG_ESIZE; /* cannot happen: some fragment holds row r-1 */
+        rc = tridiag_sweep_push(&slot_of(fw, k)->sw, row->a, row->b, 0.0, row->d);
+        if (rc < 0)
+            return rc;
     }
     for (k = fw->next_solve; k < fw->next_frag; k++) {
         if (!slot_of(fw, k)->open)
             continue;
-        rc = solve_fragment(fw, k);
+        rc = solve_fragment(fw, k, 1);
         if (rc < 0)
             return rc;
+        break;
     }
+    for (; k < fw->next_frag; k++)
+        slot_of(fw, k)->open = 0;
     fw->rows = r + 1;
     fw->done = 1;
     return 0;
 }
 
-uint64_t frag_final_after(unsigned f, unsigned o, uint64_t r)
+uint64_t frag_final_after(unsigned f, unsigned o, unsigned delta, uint64_t r)
 {
     unsigned s = f - o;
     uint64_t k;
 
-    /* the newest fragment solved: largest k with kS + F - 1 <= r */
-    if (r + 1 < f)
+    /* the newest fragment solved: largest k with kS + F - 1 - delta <= r */
+    if (r + 1 + delta < f)
         return 0;
-    k = (r + 1 - f) / s;
-    return k * s + f - o / 2;
+    k = (r + 1 + delta - f) / s;
+    return (k + 1) * s - delta + o / 2;
 }

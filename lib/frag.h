@@ -3,16 +3,19 @@
  *
  * One tridiagonal system per coordinate, rows arriving one at a time (one per
  * node), is solved in fragments of F rows overlapping by O (S = F - O):
- * fragment k holds rows [kS, kS + F - 1].  Each fragment's forward sweep
+ * fragment k holds rows [kS - D, kS - D + F - 1], fragment 0 cut at row 0
+ * (so it has F - D rows and ends, and is solved, D rows earlier: the start
+ * offset D < S shortens the wait before the first segment to what the steady
+ * state needs anyway; D = 0 is the plain grid).  Each fragment's forward sweep
  * advances one row per pushed row; when its last row is in, it is
  * back-substituted (F rows) and its values become final:
  *
  *   x[j] from fragment k           for J(k-1) < j < J(k)
  *   x[J(k)] = (x_k[J(k)] + x_{k+1}[J(k)]) / 2   the junction, averaged
  *
- * with J(k) = (k+1) S + O/2, the middle of the overlap of k and k+1.  A
- * fragment's artificial ends (row kS for k > 0, row kS + F - 1 unless it is
- * the true end) are "pinned" rows x = pin (the caller's natural end value);
+ * with J(k) = (k+1) S - D + O/2, the middle of the overlap of k and k+1 (O/2
+ * rows from k+1's first row, O/2 - 1 from k's last).  A fragment's artificial
+ * ends (its first row for k > 0, its last unless it is the true end) are "pinned" rows x = pin (the caller's natural end value);
  * their error decays by about 2 - sqrt(3) = 0.268 per row inward, so the
  * value taken at the junction, O/2 rows from either fragment's end, is off by
  * about 0.268^(O/2) of the local curvature scale.
@@ -46,6 +49,7 @@ typedef struct {
 
 typedef struct {
     unsigned f, o, s;     /* F, O, S = F - O */
+    unsigned delta;       /* D: start offset of the fragment grid */
     unsigned nslots;      /* fragments open at once at most */
     size_t ring;          /* rows of x kept */
     uint64_t rows;        /* rows pushed so far (the next row's number) */
@@ -61,10 +65,10 @@ typedef struct {
 } frag_t;
 
 /*
- * Allocate a window for F, O (O even, 2 <= O < F) keeping ring final rows
- * (ring >= F).  Returns NULL on bad sizes or no memory.
+ * Allocate a window for F, O (O even, 2 <= O < F), start offset D < F - O,
+ * keeping ring final rows (ring >= F).  Returns NULL on bad sizes or no memory.
  */
-frag_t *frag_new(unsigned f, unsigned o, size_t ring);
+frag_t *frag_new(unsigned f, unsigned o, unsigned delta, size_t ring);
 
 /* Free; NULL is a no-op. */
 void frag_free(frag_t *fw);
@@ -83,7 +87,10 @@ int frag_push(frag_t *fw, const frag_row_t *row, const double *pin);
 
 /*
  * Push the last row (the true end condition: c ignored) and close: every
- * value up to it becomes final.  Returns 0 or a negated tridiag_error.
+ * value up to it becomes final.  The oldest open fragment takes the end row
+ * and covers everything from its junction to the end (its only artificial
+ * end is gone); younger open fragments are dropped.
+ * Returns 0 or a negated tridiag_error.
  */
 int frag_finish(frag_t *fw, const frag_row_t *row);
 
@@ -95,8 +102,8 @@ static inline const double *frag_x(const frag_t *fw, uint64_t j)
 
 /*
  * Rows of delay: after row r is pushed, every row below
- * frag_final_after(f, o, r) is final.  Used to derive the lookahead.
+ * frag_final_after(f, o, delta, r) is final.  Used to derive the lookahead.
  */
-uint64_t frag_final_after(unsigned f, unsigned o, uint64_t r);
+uint64_t frag_final_after(unsigned f, unsigned o, unsigned delta, uint64_t r);
 
 #endif

@@ -196,3 +196,124 @@ int lsq_fit(size_t m, size_t dim, const double *u, const double *pts,
         band_solve(A, q, lo, hi, ctrl, dim, c);
     return 0;
 }
+
+/* ---- streaming smoother ---------------------------------------------------- */
+
+#define SMOOTH_ORDER 4u
+
+size_t lsq_smooth_mem_len(unsigned window, unsigned ctrl, size_t dim)
+{
+    return (size_t)window * (2 + 2 * dim) + (ctrl + SMOOTH_ORDER) + ctrl * dim +
+           lsq_work_len(ctrl, SMOOTH_ORDER, dim);
+}
+
+unsigned lsq_smooth_delay(unsigned window)
+{
+    return window / 2;
+}
+
+int lsq_smooth_init(lsq_smooth_t *s, unsigned window, unsigned ctrl, size_t dim,
+                    double *mem)
+{
+    if (ctrl < SMOOTH_ORDER || ctrl > window || window > LSQ_SMOOTH_WINDOW_MAX ||
+        dim < 1 || dim > LSQ_SMOOTH_DIM_MAX)
+        return -LSQ_ESIZE;
+    memset(s, 0, sizeof *s);
+    s->window = window;
+    s->ctrl = ctrl;
+    s->delay = lsq_smooth_delay(window);
+    s->dim = dim;
+    s->t = mem;
+    s->r = s->t + window;
+    s->u = s->r + (size_t)window * dim;
+    s->pts = s->u + window;
+    s->knots = s->pts + (size_t)window * dim;
+    s->cp = s->knots + ctrl + SMOOTH_ORDER;
+    s->work = s->cp + (size_t)ctrl * dim;
+    return 0;
+}
+
+void lsq_smooth_reset(lsq_smooth_t *s)
+{
+    s->n_in = 0;
+    s->n_out = 0;
+    s->finished = 0;
+}
+
+int lsq_smooth_push(lsq_smooth_t *s, double t, const double *r)
+{
+    size_t k = (size_t)(s->n_in % s->window);
+
+    s->t[k] = t;
+    memcpy(s->r + k * s->dim, r, s->dim * sizeof *r);
+    s->n_in++;
+    return 0;
+}
+
+void lsq_smooth_finish(lsq_smooth_t *s)
+{
+    s->finished = 1;
+}
+
+/* Fit the window [start, start+m) with nc control points and evaluate at u_j. */
+static int smooth_fit(lsq_smooth_t *s, size_t m, unsigned nc, double uj, double *r)
+{
+    bspline_t b;
+    int rc;
+
+    if (lsq_knots(nc, SMOOTH_ORDER, 0.0, s->u[m - 1], s->knots) < 0)
+        return -1;
+    rc = lsq_fit(m, s->dim, s->u, s->pts, SMOOTH_ORDER, nc, s->knots, 0, s->cp, s->work);
+    if (rc < 0)
+        return rc;
+    b.order = SMOOTH_ORDER;
+    b.n_ctrl = nc;
+    b.dim = s->dim;
+    b.knots = s->knots;
+    b.ctrl = s->cp;
+    return bspline_eval(&b, uj, r) < 0 ? -1 : 0;
+}
+
+int lsq_smooth_pop(lsq_smooth_t *s, double *t, double *r)
+{
+    uint64_t j = s->n_out, n = s->n_in, start, before = s->window - 1 - s->delay;
+    uint64_t need = j + s->delay > s->window - 1 ? j + s->delay : s->window - 1;
+    size_t m, i, W = s->window, dim = s->dim;
+    const double *tj_r;
+    double tj;
+
+    if (j >= n || (!s->finished && n - 1 < need))
+        return 0;
+    start = j >= before ? j - before : 0;
+    if (s->finished && n < W)
+        start = 0; /* a short track: every fit takes all of it */
+    else if (s->finished && start > n - W)
+        start = n - W;
+    m = (size_t)((start + W < n ? start + W : n) - start);
+    tj = s->t[j % W];
+    tj_r = s->r + (size_t)(j % W) * dim;
+    *t = tj;
+    s->n_out = j + 1;
+    if (m < SMOOTH_ORDER) {
+        memcpy(r, tj_r, dim * sizeof *r);
+        return 1;
+    }
+    for (i = 0; i < m; i++) {
+        size_t k = (size_t)((start + i) % W);
+        /* times relative to the window's first: keeps knot arithmetic exact
+         * for epoch-sized timestamps */
+        s->u[i] = s->t[k] - s->t[start % W];
+        memcpy(s->pts + i * dim, s->r + k * dim, dim * sizeof *r);
+    }
+    {
+        unsigned nc = s->ctrl < m ? s->ctrl : (unsigned)m;
+        double uj = tj - s->t[start % W];
+        if (smooth_fit(s, m, nc, uj, r) == 0)
+            return 1;
+        s->fallbacks++;
+        if (nc > SMOOTH_ORDER && smooth_fit(s, m, SMOOTH_ORDER, uj, r) == 0)
+            return 1;
+    }
+    memcpy(r, tj_r, dim * sizeof *r);
+    return 1;
+}

@@ -34,6 +34,7 @@
 #define TRAJD_LSQ_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 enum lsq_error {
     LSQ_OK = 0,
@@ -84,5 +85,71 @@ int lsq_knots(size_t n_ctrl, unsigned order, double u0, double u1, double *knots
 int lsq_fit(size_t m, size_t dim, const double *u, const double *pts,
             unsigned order, size_t n_ctrl, const double *knots, unsigned flags,
             double *ctrl, double *work);
+
+/*
+ * Streaming smoother: each point j is replaced by the value at t_j of the
+ * least-squares cubic B-spline (order 4, `ctrl` control points on clamped
+ * uniform knots over the window's time span) fitted to the `window` points
+ * around it: j - (window-1-delay) .. j + delay, delay = window/2, shifted
+ * inward at the ends of the track so every fit has `window` points (or all
+ * of them if the track is shorter).  Timestamps are kept; only positions
+ * change.  Point j is ready once point j + delay has been pushed (or at
+ * finish): that is the smoother's added lookahead.
+ *
+ * When a window's data leave a knot span empty (a time gap), the fit is
+ * retried with 4 control points (one cubic over the window), and if that
+ * fails too the raw point is passed through; both are counted in
+ * `fallbacks`.  A track of fewer than 4 points is passed through unchanged.
+ *
+ * Memory: lsq_smooth_mem_len() doubles from the caller; nothing allocated.
+ */
+#define LSQ_SMOOTH_DIM_MAX 3
+#define LSQ_SMOOTH_WINDOW_MAX 1024
+
+typedef struct {
+    unsigned window, ctrl, delay;
+    size_t dim;
+    uint64_t n_in;        /* points pushed */
+    uint64_t n_out;       /* smoothed points popped */
+    int finished;
+    uint64_t fallbacks;   /* fits refused: fewer control points or raw value used */
+    double *t, *r;        /* ring of the last `window` points */
+    double *u, *pts, *knots, *cp, *work; /* fit scratch */
+} lsq_smooth_t;
+
+/* Doubles of memory for lsq_smooth_init. */
+size_t lsq_smooth_mem_len(unsigned window, unsigned ctrl, size_t dim);
+
+/* Points of lookahead the smoother adds: window/2. */
+unsigned lsq_smooth_delay(unsigned window);
+
+/*
+ * Attach memory and empty.  Requires 4 <= ctrl <= window <= LSQ_SMOOTH_WINDOW_MAX
+ * and 1 <= dim <= LSQ_SMOOTH_DIM_MAX.  Returns 0, -LSQ_ESIZE.
+ */
+int lsq_smooth_init(lsq_smooth_t *s, unsigned window, unsigned ctrl, size_t dim,
+                    double *mem);
+
+/* Forget all points (a new track); keep the memory and settings. */
+void lsq_smooth_reset(lsq_smooth_t *s);
+
+/* Add a point (times must increase; the engine checks).  Returns 0. */
+int lsq_smooth_push(lsq_smooth_t *s, double t, const double *r);
+
+/* No more points: the remaining ones become ready. */
+void lsq_smooth_finish(lsq_smooth_t *s);
+
+/*
+ * Take the next smoothed point if it is ready: returns 1 with *t and r
+ * (dim values) set, or 0 if none is ready.  Points come out in order, one
+ * per point pushed.
+ */
+int lsq_smooth_pop(lsq_smooth_t *s, double *t, double *r);
+
+/* Points pushed and not yet popped. */
+static inline uint64_t lsq_smooth_pending(const lsq_smooth_t *s)
+{
+    return s->n_in - s->n_out;
+}
 
 #endif

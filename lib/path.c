@@ -25,6 +25,7 @@ const char *path_strerror(int err)
     case PATH_ERANGE: return "path: value out of range (speed, step, radius, sweep)";
     case PATH_ENOSTART: return "path: element before 'start'";
     case PATH_EFULL: return "path: more waypoints than fit";
+    case PATH_ETWICE: return "path: 'start' given twice";
     default: return "unknown path error";
     }
 }
@@ -238,6 +239,10 @@ int path_expand(const path_elem_t *el, size_t nel, engine_waypoint_t *out,
         case PATH_NONE:
             break;
         case PATH_START:
+            if (w.started) {
+                rc = -PATH_ETWICE;
+                break;
+            }
             w.started = 1;
             emit(&w, el[i].xyz_m, el[i].t_s);
             break;

@@ -5,7 +5,7 @@
  * line ('#' starts a comment; angles in degrees, lengths in metres,
  * times in seconds):
  *
- *   start X Y Z [T]        first waypoint (time T, default 0)
+ *   start X Y Z [T]        first waypoint (time T, default 0); exactly once
  *   speed V                speed for the elements that follow (m/s, > 0; default 1)
  *   step S                 waypoint spacing in time (s, > 0; default 1)
  *   line X Y Z             straight line to (X, Y, Z)
@@ -38,6 +38,7 @@ enum path_error {
     PATH_ERANGE = 2,   /* speed/step/radius <= 0, sweep 0 or above 360, not finite */
     PATH_ENOSTART = 3, /* a moving element before any 'start' */
     PATH_EFULL = 4,    /* more waypoints than the caller's capacity */
+    PATH_ETWICE = 5,   /* a second 'start' (time would run backwards) */
 };
 
 /* Longest line path_parse_line accepts (characters). */
@@ -76,7 +77,7 @@ int path_parse_line(const char *line, path_elem_t *el);
  * Expand elements into waypoints (seq = 1, 2, ...).  With out == NULL only
  * counts.  *n_out receives the number of waypoints (also on -PATH_EFULL:
  * the number that would be needed).
- * Returns 0, -PATH_ENOSTART, -PATH_ERANGE, -PATH_EFULL.
+ * Returns 0, -PATH_ENOSTART, -PATH_ETWICE, -PATH_ERANGE, -PATH_EFULL.
  */
 int path_expand(const path_elem_t *el, size_t nel, engine_waypoint_t *out,
                 size_t cap, size_t *n_out);

@@ -39,7 +39,7 @@ int tridiag_sweep_push(tridiag_sweep_t *s, double a, double b, double c,
                        const double *d)
 {
     size_t i = s->n, k, m = s->nrhs;
-    double piv;
+    double piv, inv;
 
     if (i >= s->cap)
         return -TRIDIAG_ESIZE;
@@ -51,10 +51,12 @@ int tridiag_sweep_push(tridiag_sweep_t *s, double a, double b, double c,
     }
     if (!pivot_ok(piv, a, b, c))
         return -TRIDIAG_ESINGULAR;
-    s->cp[i] = c / piv;
+    /* one division per row, whatever the number of right-hand sides */
+    inv = 1.0 / piv;
+    s->cp[i] = c * inv;
     for (k = 0; k < m; k++) {
         double prev = i ? s->dp[(i - 1) * m + k] : 0.0;
-        s->dp[i * m + k] = (d[k] - a * prev) / piv;
+        s->dp[i * m + k] = (d[k] - a * prev) * inv;
     }
     s->n = i + 1;
     return 0;

@@ -263,6 +263,25 @@ int main(void)
         gsl_vector_free(Bv); gsl_multifit_linear_free(mw); gsl_bspline_free(w2);
     }
 
+    /* ---- streaming smoother (engine method smooth), window 24, 6 control points ---- */
+    {
+        static double mem[4096], tt, rr[3];
+        lsq_smooth_t sm;
+        size_t nout = 0;
+        if (lsq_smooth_mem_len(24, 6, 3) <= 4096 && lsq_smooth_init(&sm, 24, 6, 3, mem) == 0) {
+            t0 = now_s();
+            for (i = 0; i < 20000; i++) {
+                double r3[3] = {urand(&seed), urand(&seed), 0.1 * i};
+                lsq_smooth_push(&sm, (double)i, r3);
+                while (lsq_smooth_pop(&sm, &tt, rr) == 1) {
+                    sink += rr[0];
+                    nout++;
+                }
+            }
+            row("lsq_smooth (window 24, 6 ctrl), per waypoint", (now_s() - t0) / nout * 1e9, NULL, 0);
+        }
+    }
+
     /* ---- surface ---- */
     {
         enum { GM = 30, GN = 40, ST = 32 };

@@ -86,7 +86,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (!srv) {
         mbsrv_config_t cfg;
         mbsrv_config_default(&cfg);
-        cfg.tcp_address = NULL;
+        cfg.tcp_address[0] = 0;
         cfg.writes_enabled = 1;
         cfg.n_objects = NOBJ;
         cfg.max_clients = 2;

@@ -74,6 +74,38 @@ class Server:
         return stats
 
 
+class Lines:
+    """Lines of a text stream, read by a thread, waited for with a bound
+    (select() on a buffered text pipe would miss lines already buffered)."""
+
+    def __init__(self, stream):
+        import queue
+        self.q = queue.Queue()
+        self.all = []
+        self.t = threading.Thread(target=self._run, args=(stream,), daemon=True)
+        self.t.start()
+
+    def _run(self, stream):
+        for line in stream:
+            self.q.put(line)
+        self.q.put(None)
+
+    def wait_for(self, text, timeout=WAIT_S):
+        """The first line containing text, or None at EOF or after timeout s."""
+        import queue
+        end = time.monotonic() + timeout
+        while True:
+            try:
+                line = self.q.get(timeout=max(0.0, end - time.monotonic()))
+            except queue.Empty:
+                return None
+            if line is None:
+                return None
+            self.all.append(line)
+            if text in line:
+                return line
+
+
 # ---- raw Modbus/TCP ----------------------------------------------------------
 
 def connect(port):

@@ -194,6 +194,32 @@ static void test_documented_conf(void **state)
     int rc = cfg_load_string(text, "trajd.conf(uncommented)", "config", &c, err, sizeof err);
     if (rc)
         fail_msg("%s", err);
+    /* and the documented defaults are the real ones: the engine's
+     * engine_config_default() and the parser's own for [daemon]/[realtime] */
+    engine_config_t e;
+    engine_config_default(&e);
+    const engine_config_t *d = &c->obj[0].engine;
+    assert_int_equal(d->method, e.method);
+    assert_int_equal(d->param, e.param);
+    assert_int_equal(d->ends, e.ends);
+    assert_int_equal(d->fragment, e.fragment);
+    assert_int_equal(d->overlap, e.overlap);
+    assert_int_equal(d->capacity, e.capacity);
+    assert_memory_equal(&d->max_gap_s, &e.max_gap_s, sizeof(double));
+    assert_memory_equal(&d->max_abs_m, &e.max_abs_m, sizeof(double));
+    assert_memory_equal(&d->max_speed_m_s, &e.max_speed_m_s, sizeof(double));
+    assert_memory_equal(&d->max_segment_s, &e.max_segment_s, sizeof(double));
+    assert_memory_equal(d->start_vel_m_s, e.start_vel_m_s, sizeof e.start_vel_m_s);
+    cfg_t *m = load_ok(OBJ); /* nothing set: the parser's defaults */
+    assert_memory_equal(&c->daemon.rate_hz, &m->daemon.rate_hz, sizeof(double));
+    assert_memory_equal(&c->daemon.speed, &m->daemon.speed, sizeof(double));
+    assert_memory_equal(&c->daemon.status_interval_s, &m->daemon.status_interval_s,
+                        sizeof(double));
+    assert_memory_equal(&c->daemon.stop_timeout_s, &m->daemon.stop_timeout_s, sizeof(double));
+    assert_int_equal(c->daemon.log_level, m->daemon.log_level);
+    assert_int_equal(c->rt.fifo_priority, m->rt.fifo_priority);
+    assert_int_equal(c->rt.mlockall, m->rt.mlockall);
+    cfg_free(m);
     cfg_free(c);
     rc = cfg_load("config/trajd.conf", &c, err, sizeof err);
     if (rc)

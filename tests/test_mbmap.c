@@ -43,7 +43,8 @@ static void test_word_order(void **state)
     assert_true(exact(modbus_get_float_abcd(r), 1234.5678f)); /* exact: same bits */
     mbmap_put_u32(r, 0x12345678u);
     assert_int_equal(r[0], 0x1234);
-    assert_int_equal((uint32_t)MODBUS_GET_INT32_FROM_INT16(r, 0), 0x12345678u);
+    uint32_t w[2] = { r[0], r[1] };        /* widened: see read_field */
+    assert_int_equal((uint32_t)MODBUS_GET_INT32_FROM_INT16(w, 0), 0x12345678u);
     mbmap_put_f64(r, 1.0);                    /* binary64 0x3FF0000000000000 */
     assert_int_equal(r[0], 0x3FF0);
     assert_int_equal(r[1] | r[2] | r[3], 0);
@@ -73,7 +74,12 @@ static double read_field(const uint16_t *block, const mbmap_field_t *f)
     const uint16_t *r = block + f->offset;
     switch (f->type) {
     case MBMAP_T_U16: return r[0];
-    case MBMAP_T_U32: return (uint32_t)MODBUS_GET_INT32_FROM_INT16(r, 0);
+    case MBMAP_T_U32: {
+        /* libmodbus's macro shifts its element type: widen first, or a
+         * uint16_t promoted to int overflows (UBSan). */
+        uint32_t w[2] = { r[0], r[1] };
+        return (uint32_t)MODBUS_GET_INT32_FROM_INT16(w, 0);
+    }
     case MBMAP_T_F32: return modbus_get_float_abcd(r);
     case MBMAP_T_F64: return mbmap_get_f64(r);
     }

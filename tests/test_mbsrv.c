@@ -191,15 +191,16 @@ static harness_t *harness_new(const hopts_t *o, int with_tcp)
     char err[256];
     mbsrv_config_t cfg;
     mbsrv_config_default(&cfg);
-    cfg.tcp_address = with_tcp ? "127.0.0.1" : NULL;
+    if (!with_tcp)
+        cfg.tcp_address[0] = 0;
     cfg.tcp_port = o->port;
     cfg.systemd_socket = 0;
-    cfg.rtu_device = o->rtu;
+    snprintf(cfg.rtu_device, sizeof cfg.rtu_device, "%s", o->rtu ? o->rtu : "");
     cfg.unit_id = o->unit;
     cfg.writes_enabled = o->writes;
     cfg.max_clients = o->max_clients;
     cfg.idle_timeout_ms = o->idle_ms;
-    cfg.allow = o->allow;
+    snprintf(cfg.allow, sizeof cfg.allow, "%s", o->allow ? o->allow : "");
     cfg.n_objects = o->objects;
     h->n = o->objects;
     h->period_ns = o->period_ns;
@@ -295,11 +296,14 @@ static int serve_main(int argc, char **argv)
     mbsrv_stats_t st;
     mbsrv_stats(h->srv, &st);
     printf("STATS requests=%llu exceptions=%llu refused=%llu dropped=%llu crc_errors=%llu "
-           "ticks=%llu missed=%llu late_p50_us=%u late_p99_us=%u late_max_us=%u\n",
+           "ticks=%llu missed=%llu late_p50_us=%u late_p99_us=%u late_max_us=%u "
+           "process_max_us=%llu process_mean_ns=%llu\n",
            (unsigned long long)st.requests, (unsigned long long)st.exceptions,
            (unsigned long long)st.refused, (unsigned long long)st.dropped,
            (unsigned long long)st.rtu_crc_errors, (unsigned long long)h->ticks,
-           (unsigned long long)h->missed, percentile(h, 0.5), percentile(h, 0.99), h->late_max_us);
+           (unsigned long long)h->missed, percentile(h, 0.5), percentile(h, 0.99), h->late_max_us,
+           (unsigned long long)(st.process_max_ns / 1000),
+           (unsigned long long)(st.process_calls ? st.process_total_ns / st.process_calls : 0));
     harness_free(h);
     return 0;
 }

@@ -160,7 +160,7 @@ class RawTest(unittest.TestCase):
             mbsim.adu(1, b"\x04", length=0),
             mbsim.adu(1, b"\x04", length=1),
             mbsim.adu(1, b"\x04" * 300, length=300),
-            os.urandom(64) + b"\xff\xff\xff\xff\xff\xff\xff",
+            bytes(range(64)) + b"\xff" * 7,          # protocol id 0x0203
         ]
         for raw in bad:
             s = mbsim.connect(self.srv.port)

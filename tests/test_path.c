@@ -116,6 +116,13 @@ static void test_parse_errors(void **state)
     assert_int_equal(path_parse_line("circle 0 0 1 0 up", &el), -PATH_ESYNTAX);
     assert_int_equal(path_parse_line("line 1 2 3", &el), 0);
     assert_int_equal(path_expand(&el, 1, NULL, 0, NULL), -PATH_ENOSTART);
+    {
+        path_elem_t two[3];
+        assert_int_equal(path_parse_line("start 0 0 0", &two[0]), 0);
+        assert_int_equal(path_parse_line("line 5 0 0", &two[1]), 0);
+        assert_int_equal(path_parse_line("start 0 0 0", &two[2]), 0);
+        assert_int_equal(path_expand(two, 3, NULL, 0, NULL), -PATH_ETWICE);
+    }
     assert_non_null(path_strerror(-PATH_EFULL));
 }
 

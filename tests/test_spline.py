@@ -158,7 +158,7 @@ def test_hoang_held_vs_banded_bspline():
     tq = samples(t[1], t[-2], t)
     s_param = np.interp(tq, t, np.arange(n))      # segment j mapped onto [t_j, t_j+1]
     for name, segs in (("hoang_curve", hoang_curve(t, xyz, HELD)),
-                       ("engine F=64", engine_curve(BSPLINE, UNIFORM, HELD, 64, 16, t, xyz))):
+                       ("engine F=1024", engine_curve(BSPLINE, UNIFORM, HELD, 1024, 16, t, xyz))):
         check(len(segs) == n - 3, "%s held: N-3 segments (%d)" % (name, len(segs)))
         err = np.abs(evaluate(segs, tq) - ref(s_param)).max() / ext
         check(err < TOL_ORACLE_REL, "%s held vs solve_banded+BSpline: %.1e of extent" % (name, err))
@@ -195,7 +195,7 @@ def test_hoang_multiple_vs_banded_bspline():
     # real segment j (R(j)->R(j+1)) is extended segment j+2
     s_param = np.interp(tq, t, np.arange(n)) + 2.0
     for name, segs in (("hoang_curve", hoang_curve(t, xyz, MULTIPLE)),
-                       ("engine F=64", engine_curve(BSPLINE, UNIFORM, MULTIPLE, 64, 16, t, xyz))):
+                       ("engine F=1024", engine_curve(BSPLINE, UNIFORM, MULTIPLE, 1024, 16, t, xyz))):
         check(len(segs) == n - 1, "%s multiple: N-1 segments, loops dropped (%d)" % (name, len(segs)))
         check(bool(np.all(segs[:, 1] > 0)), "%s multiple: every emitted segment has a duration" % name)
         err = np.abs(evaluate(segs, tq) - ref(s_param)).max() / ext
@@ -216,8 +216,8 @@ def test_uniform_natural_clamped():
     nat = make_interp_spline(np.arange(n), xyz, k=3, bc_type="natural")(s_param)
     for name, segs in (("hoang natural", hoang_curve(t, xyz, NATURAL)),
                        ("cubic uniform natural", cubic_curve(t, xyz, UNIFORM, NATURAL)),
-                       ("engine bspline/uniform/natural", engine_curve(BSPLINE, UNIFORM, NATURAL, 64, 16, t, xyz)),
-                       ("engine cubic/uniform/natural", engine_curve(CUBIC, UNIFORM, NATURAL, 64, 16, t, xyz))):
+                       ("engine bspline/uniform/natural", engine_curve(BSPLINE, UNIFORM, NATURAL, 1024, 16, t, xyz)),
+                       ("engine cubic/uniform/natural", engine_curve(CUBIC, UNIFORM, NATURAL, 1024, 16, t, xyz))):
         err = np.abs(evaluate(segs, tq) - nat).max() / ext
         check(err < TOL_ORACLE_REL, "%s vs make_interp_spline(index, natural): %.1e" % (name, err))
     v0 = np.array([1.0, -2.0, 0.5])
@@ -245,9 +245,16 @@ def test_time_knots():
     rest = CubicSpline(t, xyz, bc_type="clamped")
     bsp = make_interp_spline(t, xyz, k=3, bc_type="natural")
     cases = (("cubic_curve natural", cubic_curve(t, xyz, TIME, NATURAL), nat),
-             ("engine cubic/time/natural", engine_curve(CUBIC, TIME, NATURAL, 64, 16, t, xyz), nat),
-             ("engine cubic/time/rest", engine_curve(CUBIC, TIME, REST, 64, 16, t, xyz), rest),
-             ("engine bspline/time/natural", engine_curve(BSPLINE, TIME, NATURAL, 64, 16, t, xyz), bsp))
+             ("engine cubic/time/natural", engine_curve(CUBIC, TIME, NATURAL, 1024, 16, t, xyz), nat),
+             ("engine cubic/time/rest", engine_curve(CUBIC, TIME, REST, 1024, 16, t, xyz), rest),
+             ("engine bspline/time/natural", engine_curve(BSPLINE, TIME, NATURAL, 1024, 16, t, xyz), bsp))
+    v0 = np.array([2.0, -1.0, 0.25])
+    v1 = np.array([0.0, 3.0, -1.5])
+    clamped = CubicSpline(t, xyz, bc_type=((1, v0), (1, v1)))
+    bclamped = make_interp_spline(t, xyz, k=3, bc_type=([(1, v0)], [(1, v1)]))
+    cases += (("cubic_curve time clamped", cubic_curve(t, xyz, TIME, CLAMPED, v0, v1), clamped),
+              ("cubic_curve time clamped vs make_interp_spline", cubic_curve(t, xyz, TIME, CLAMPED, v0, v1),
+               bclamped))
     for name, segs, ref in cases:
         for der in (0, 1, 2):
             err = np.abs(evaluate(segs, tq, der) - ref(tq, der)).max() / ext
@@ -339,6 +346,9 @@ def test_real_tracks():
         check(missag < 1e-9 * ext, "%s (a) global: every waypoint hit, %.1e" % (name, missag / ext))
         check(missa < 1e-4 * ext, "%s (a) F=32/O=16: waypoints missed by at most %.1e of extent (%.2e m)"
               % (name, missa / ext, missa))
+        a48 = engine_curve(BSPLINE, UNIFORM, NATURAL, 48, 24, t, xyz)
+        miss48 = max(np.abs(seg_start(a48) - xyz[:-1]).max(), np.abs(seg_end(a48) - xyz[1:]).max())
+        check(miss48 < 1e-9 * ext, "%s (a) F=48/O=24: every waypoint hit, %.1e of extent" % (name, miss48 / ext))
         print("     measured %s: velocity jump at joins, (a) uniform: max %.3g median %.3g m/s;"
               " (b) time knots: max %.3g m/s; vmax %.3g m/s"
               % (name, ja.max(), np.median(ja), jb.max(), vmax))

@@ -15,11 +15,13 @@
 
 #include "svg.h"
 
-static engine_setpoint_t setpoint(uint64_t i, unsigned track)
+/* Tick i at 10 ms; track time from the clock, plus jump_s (a gap). */
+static engine_setpoint_t setpoint(uint64_t i, unsigned track, double jump_s)
 {
     engine_setpoint_t sp;
     memset(&sp, 0, sizeof sp);
-    sp.t_s = (double)i * 0.01;
+    sp.now_ns = (int64_t)i * 10000000;
+    sp.t_s = (double)i * 0.01 + jump_s;
     sp.pos_m[0] = cos(sp.t_s) * 100;
     sp.pos_m[1] = sin(sp.t_s) * 50;
     sp.vel_m_s[0] = -sin(sp.t_s) * 100;
@@ -37,7 +39,7 @@ static void test_decimation_bounded(void **state)
     svg_plot_t *p = svg_plot_new(100, 0);
     assert_non_null(p);
     for (uint64_t i = 0; i < 1000000; i++) {
-        engine_setpoint_t sp = setpoint(i, 1);
+        engine_setpoint_t sp = setpoint(i, 1, 0);
         assert_int_equal(svg_plot_setpoint(p, &sp), 0);
         assert_true(svg_plot_kept(p) <= 100);
     }
@@ -51,8 +53,7 @@ static void test_decimation_bounded(void **state)
 typedef struct {
     int svg, title, paths, circles, texts, legend, depth_max, depth;
     char ids[512];
-    char curve_d_start[8];
-    size_t curve_moves;
+    size_t curve_moves, speed_moves;
 } counts_t;
 
 static void XMLCALL on_start(void *ud, const XML_Char *name, const XML_Char **attr)
@@ -74,11 +75,12 @@ static void XMLCALL on_start(void *ud, const XML_Char *name, const XML_Char **at
         strcat(c->ids, id);
         strcat(c->ids, " ");
     }
-    if (id && strcmp(id, "curve") == 0 && d) {
-        snprintf(c->curve_d_start, sizeof c->curve_d_start, "%s", d);
+    if (id && d && strcmp(id, "curve") == 0)
         for (const char *s = d; *s; s++)
             c->curve_moves += *s == 'M';
-    }
+    if (id && d && strcmp(id, "speed") == 0)
+        for (const char *s = d; *s; s++)
+            c->speed_moves += *s == 'M';
 }
 
 static void XMLCALL on_end(void *ud, const XML_Char *name)
@@ -87,10 +89,12 @@ static void XMLCALL on_end(void *ud, const XML_Char *name)
     ((counts_t *)ud)->depth--;
 }
 
-/* Given waypoints (one rejected) and setpoints over two trajectories, when
- * written, then expat parses the document and finds the svg root, the
- * title (with '&' escaped), the curve with one subpath per trajectory, a
- * dot per accepted waypoint, the axes of both panels and their labels. */
+/* Given waypoints (one rejected) and setpoints over two trajectories with a
+ * 300 s gap in track time and one underrun, when written, then expat parses the document and
+ * finds the svg root, the title (with '&' escaped), the curve as one line,
+ * the speed line broken at the gap, a dot per accepted waypoint, the
+ * underrun marked and counted, the axes
+ * of both panels and their labels. */
 static void test_document_well_formed(void **state)
 {
     (void)state;
@@ -100,10 +104,12 @@ static void test_document_well_formed(void **state)
         assert_int_equal(svg_plot_waypoint(p, i * 10.0, i * 5.0, i != 7), 0);
     assert_int_equal(svg_plot_waypoint(p, NAN, 1, 1), 0); /* ignored */
     for (uint64_t i = 0; i < 5000; i++) {
-        engine_setpoint_t sp = setpoint(i, i < 2500 ? 1 : 2);
+        engine_setpoint_t sp = setpoint(i, i < 2500 ? 1 : 2, i < 2500 ? 0 : 300);
+        if (i >= 1000 && i < 1010) /* one underrun of 10 ticks */
+            sp.state = ENGINE_STATE_UNDERRUN;
         svg_plot_setpoint(p, &sp);
     }
-    engine_setpoint_t waiting = setpoint(0, 0);
+    engine_setpoint_t waiting = setpoint(0, 0, 0);
     waiting.state = ENGINE_STATE_WAITING;
     waiting.pos_m[0] = 1e9; /* would ruin the scale if it were drawn */
     svg_plot_setpoint(p, &waiting);
@@ -134,7 +140,11 @@ static void test_document_well_formed(void **state)
     assert_non_null(strstr(c.ids, "speed-axes "));
     assert_non_null(strstr(c.ids, "waypoints "));
     assert_non_null(strstr(c.ids, "rejected "));
-    assert_int_equal(c.curve_moves, 2); /* two trajectories */
+    assert_non_null(strstr(c.ids, "underruns "));
+    assert_non_null(strstr(c.ids, "underruns-t "));
+    assert_non_null(strstr(buf, ">underrun (1)</text>"));
+    assert_int_equal(c.curve_moves, 1);
+    assert_int_equal(c.speed_moves, 2);
     assert_non_null(strstr(buf, "a &amp; b &lt;c&gt;"));
     assert_non_null(strstr(buf, ">east (m)</text>"));
     assert_non_null(strstr(buf, ">north (m)</text>"));
@@ -156,7 +166,7 @@ static void test_degenerate(void **state)
         svg_plot_t *p = svg_plot_new(16, 0);
         if (k) {
             svg_plot_waypoint(p, 5, 5, 1);
-            engine_setpoint_t sp = setpoint(0, 1);
+            engine_setpoint_t sp = setpoint(0, 1, 0);
             sp.pos_m[0] = sp.pos_m[1] = 5;
             sp.vel_m_s[0] = sp.vel_m_s[1] = 0;
             svg_plot_setpoint(p, &sp);

@@ -1,0 +1,307 @@
+/*
+ * bench_engine.c - prints the engine's numbers (README "## The engine").
+ *
+ *  1. ns per waypoint (engine_push: validation + incremental fragment solve +
+ *     segment building) and ns per 3-axis setpoint (engine_tick) for tracks
+ *     of 1e3 .. 1e6 waypoints: both should be flat in the length.
+ *  2. side by side: the paper's global approach (re-solve all control points
+ *     on every new waypoint, capped at 1e4 waypoints: it is O(N^2)) and GSL's
+ *     gsl_spline_init on the whole track (3 axes).
+ *  3. error against one global solve and lookahead for several (F, O).
+ *  4. heap allocations inside push/tick after setup, counted by wrapping
+ *     malloc/calloc/realloc/free (forwarded to glibc's __libc_* functions).
+ *
+ * Numbers only, no assertions (timings on a shared machine are noisy).
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <gsl/gsl_spline.h>
+
+#include "cubic.h"
+#include "engine.h"
+#include "fdiff.h"
+#include "hoang.h"
+
+/* ---- allocation counter ---------------------------------------------------- */
+extern void *__libc_malloc(size_t);
+extern void *__libc_calloc(size_t, size_t);
+extern void *__libc_realloc(void *, size_t);
+extern void __libc_free(void *);
+static int counting;
+static unsigned long allocs;
+
+void *malloc(size_t n);
+void *calloc(size_t n, size_t m);
+void *realloc(void *p, size_t n);
+void free(void *p);
+
+void *malloc(size_t n)
+{
+    if (counting)
+        allocs++;
+    return __libc_malloc(n);
+}
+
+void *calloc(size_t n, size_t m)
+{
+    if (counting)
+        allocs++;
+    return __libc_calloc(n, m);
+}
+
+void *realloc(void *p, size_t n)
+{
+    if (counting)
+        allocs++;
+    return __libc_realloc(p, n);
+}
+
+void free(void *p)
+{
+    if (counting && p)
+        allocs++;
+    __libc_free(p);
+}
+
+/* ---------------------------------------------------------------------------- */
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
+}
+
+static void walk_wp(engine_waypoint_t *w, long i, double dt, unsigned *seed, double *pos)
+{
+    for (int k = 0; k < 3; k++) {
+        *seed = *seed * 1103515245u + 12345u;
+        pos[k] += ((double)((*seed >> 8) % 2001) - 1000.0) * 0.001;
+    }
+    w->t_s = (double)i * dt;
+    memcpy(w->pos_m, pos, sizeof(w->pos_m));
+    w->seq = (uint32_t)i;
+}
+
+/* push N waypoints (batches of 1000, timed) and tick until drained (timed) */
+static void bench_stream(long n, double *ns_wp, double *ns_sp, unsigned long *alloc_count)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    engine_t *e = engine_new(&c, NULL);
+    engine_waypoint_t w = {0};
+    engine_setpoint_t sp;
+    double pos[3] = {0, 0, 0}, t_push = 0, t_tick = 0;
+    unsigned seed = 1;
+    long i = 0, ticks = 0;
+    int64_t k = 0;
+    const double dt = 0.1; /* 10 ticks of 10 ms per segment */
+
+    counting = 1;
+    allocs = 0;
+    while (i < n) {
+        double t0 = now_s();
+        long stop = i + 1000 < n ? i + 1000 : n;
+        for (; i < stop; i++) {
+            walk_wp(&w, i, dt, &seed, pos);
+            engine_push(e, &w);
+        }
+        if (i == n)
+            engine_finish(e);
+        double t1 = now_s();
+        t_push += t1 - t0;
+        /* tick until the output is within 100 waypoints of the input (or done) */
+        for (;;) {
+            engine_tick(e, k++ * c.period_ns, &sp);
+            ticks++;
+            if (sp.state == ENGINE_STATE_FINISHED)
+                break;
+            if (i < n && sp.t_s > (double)(i - 100) * dt)
+                break;
+        }
+        t_tick += now_s() - t1;
+    }
+    counting = 0;
+    *ns_wp = t_push * 1e9 / (double)n;
+    *ns_sp = t_tick * 1e9 / (double)ticks;
+    *alloc_count = allocs;
+    engine_free(e);
+}
+
+static void bench_global(long n, double *ns_paper, double *ns_gsl)
+{
+    double *r = __libc_malloc(sizeof(double) * 3 * (size_t)n);
+    double *p = __libc_malloc(sizeof(double) * 3 * (size_t)n);
+    double *scr = __libc_malloc(sizeof(double) * 4 * (size_t)n);
+    double *t = __libc_malloc(sizeof(double) * (size_t)n);
+    double *y = __libc_malloc(sizeof(double) * (size_t)n);
+    double pos[3] = {0, 0, 0};
+    engine_waypoint_t w;
+    unsigned seed = 2;
+    long i, cap = n < 10000 ? n : 10000;
+
+    for (i = 0; i < n; i++) {
+        walk_wp(&w, i, 0.1, &seed, pos);
+        memcpy(r + 3 * i, w.pos_m, sizeof(w.pos_m));
+        t[i] = w.t_s;
+    }
+    /* the paper: every new waypoint re-solves the whole system so far */
+    double t0 = now_s();
+    for (i = 2; i <= cap; i++)
+        hoang_solve((size_t)i, r, ENGINE_ENDS_HELD, NULL, NULL, p, scr);
+    *ns_paper = (now_s() - t0) * 1e9 / (double)cap;
+    /* GSL: one natural cubic spline per axis on the whole track */
+    t0 = now_s();
+    for (int k = 0; k < 3; k++) {
+        gsl_spline *sp = gsl_spline_alloc(gsl_interp_cspline, (size_t)n);
+        for (i = 0; i < n; i++)
+            y[i] = r[3 * i + k];
+        gsl_spline_init(sp, t, y, (size_t)n);
+        gsl_spline_free(sp);
+    }
+    *ns_gsl = (now_s() - t0) * 1e9 / (double)n;
+    __libc_free(r);
+    __libc_free(p);
+    __libc_free(scr);
+    __libc_free(t);
+    __libc_free(y);
+}
+
+/* max |streamed - global| over dense samples, relative to the extent */
+static double frag_error(const engine_waypoint_t *wp, size_t n, engine_method_t m,
+                         engine_param_t pa, engine_ends_t en, unsigned f, unsigned o,
+                         double *abs_m)
+{
+    engine_config_t c;
+    fdiff_seg_t *g = __libc_malloc(sizeof(fdiff_seg_t) * (n + 8));
+    fdiff_seg_t *s = __libc_malloc(sizeof(fdiff_seg_t) * (n + 8));
+    size_t ng = 0, ns = 0;
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300}, ext = 0, err = 0;
+
+    engine_config_default(&c);
+    c.method = m;
+    c.param = pa;
+    c.ends = en;
+    c.max_speed_m_s = 0;
+    c.max_gap_s = 1e9;
+    c.fragment = ENGINE_FRAGMENT_MAX; /* one fragment for n < 1024: the global solve */
+    c.overlap = 16;
+    engine_curve(&c, wp, n, g, n + 8, &ng);
+    c.fragment = f;
+    c.overlap = o;
+    c.capacity = 4096;
+    engine_curve(&c, wp, n, s, n + 8, &ns);
+    for (size_t i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++) {
+            if (wp[i].pos_m[k] < lo[k]) lo[k] = wp[i].pos_m[k];
+            if (wp[i].pos_m[k] > hi[k]) hi[k] = wp[i].pos_m[k];
+        }
+    for (int k = 0; k < 3; k++)
+        if (hi[k] - lo[k] > ext)
+            ext = hi[k] - lo[k];
+    for (size_t i = 0; i < ng && i < ns; i++)
+        for (int j = 0; j <= 20; j++) {
+            double a[3], b[3];
+            fdiff_eval(&g[i], j / 20.0, a, NULL, NULL);
+            fdiff_eval(&s[i], j / 20.0, b, NULL, NULL);
+            for (int k = 0; k < 3; k++)
+                if (fabs(a[k] - b[k]) > err)
+                    err = fabs(a[k] - b[k]);
+        }
+    __libc_free(g);
+    __libc_free(s);
+    *abs_m = err;
+    return err / ext;
+}
+
+static size_t load_figure8(engine_waypoint_t *wp, size_t max)
+{
+    FILE *f = fopen("tests/data/n2k_furuno_figure8_src52.csv", "r");
+    char line[256];
+    size_t n = 0;
+    double lat0 = 0, lon0 = 0, last = -1e300;
+
+    if (!f)
+        return 0;
+    if (!fgets(line, sizeof(line), f)) {
+        fclose(f);
+        return 0;
+    }
+    while (n < max && fgets(line, sizeof(line), f)) {
+        double t, lat, lon;
+        if (sscanf(line, "%lf,%lf,%lf", &t, &lat, &lon) != 3 || !(t > last + 1e-9))
+            continue;
+        if (n == 0) {
+            lat0 = lat;
+            lon0 = lon;
+        }
+        /* test-only equirectangular projection about the first point */
+        wp[n].t_s = t;
+        wp[n].pos_m[0] = (lon - lon0) * M_PI / 180.0 * cos(lat0 * M_PI / 180.0) * 6371008.8;
+        wp[n].pos_m[1] = (lat - lat0) * M_PI / 180.0 * 6371008.8;
+        wp[n].pos_m[2] = 0;
+        last = t;
+        n++;
+    }
+    fclose(f);
+    return n;
+}
+
+int main(void)
+{
+    static const long lengths[] = {1000, 10000, 100000, 1000000};
+    static const unsigned fo[][2] = {{8, 4}, {16, 4}, {16, 8}, {24, 12}, {32, 8}, {32, 16},
+                                     {48, 24}, {64, 32}, {32, 30}};
+    engine_config_t c;
+
+    engine_config_default(&c);
+    printf("engine defaults: method cubic, param time, ends rest, F=%u O=%u, period %lld ns\n\n",
+           c.fragment, c.overlap, (long long)c.period_ns);
+    printf("| waypoints | ns/waypoint (push+solve) | ns/setpoint (3 axes) | heap allocs in push/tick | "
+           "paper global re-solve ns/waypoint | GSL cspline init ns/waypoint |\n");
+    printf("|---|---|---|---|---|---|\n");
+    for (size_t i = 0; i < sizeof(lengths) / sizeof(lengths[0]); i++) {
+        double wp_ns, sp_ns, paper_ns, gsl_ns;
+        unsigned long al;
+        bench_stream(lengths[i], &wp_ns, &sp_ns, &al);
+        bench_global(lengths[i], &paper_ns, &gsl_ns);
+        printf("| %ld | %.0f | %.1f | %lu | %.0f%s | %.0f |\n", lengths[i], wp_ns, sp_ns, al,
+               paper_ns, lengths[i] > 10000 ? " (first 1e4 only)" : "", gsl_ns);
+    }
+
+    /* accuracy and lookahead */
+    enum { NW = 1000 };
+    static engine_waypoint_t walk[NW], fig8[2000];
+    double pos[3] = {0, 0, 0};
+    unsigned seed = 3;
+    for (long i = 0; i < NW; i++) {
+        walk_wp(&walk[i], i, 1.0, &seed, pos);
+        walk[i].t_s += 0.5 * sin((double)i); /* irregular: 0.0 .. 2.0 s steps */
+    }
+    size_t n8 = load_figure8(fig8, 1000); /* fragment 0 of F=1024 covers 1000: global */
+    printf("\nerror of the streamed curve against one global solve (max over dense samples)\n");
+    printf("random walk: 1000 waypoints, irregular times; figure8: first %zu fixes of "
+           "n2k_furuno_figure8_src52 (5 Hz)\n\n", n8);
+    printf("| F | O | lookahead (waypoints) | latency at 1 Hz / 5 Hz | walk (b) rel. extent | "
+           "walk (a) rel. extent | figure8 (b) metres | rho^(O/2) |\n");
+    printf("|---|---|---|---|---|---|---|---|\n");
+    for (size_t i = 0; i < sizeof(fo) / sizeof(fo[0]); i++) {
+        double ab, aa, a8;
+        c.fragment = fo[i][0];
+        c.overlap = fo[i][1];
+        unsigned la = engine_lookahead(&c);
+        double eb = frag_error(walk, NW, ENGINE_METHOD_CUBIC, ENGINE_PARAM_TIME, ENGINE_ENDS_REST,
+                               fo[i][0], fo[i][1], &ab);
+        double ea = frag_error(walk, NW, ENGINE_METHOD_BSPLINE, ENGINE_PARAM_UNIFORM,
+                               ENGINE_ENDS_NATURAL, fo[i][0], fo[i][1], &aa);
+        double e8 = n8 ? (frag_error(fig8, n8, ENGINE_METHOD_CUBIC, ENGINE_PARAM_TIME,
+                                     ENGINE_ENDS_REST, fo[i][0], fo[i][1], &a8), a8) : NAN;
+        printf("| %u | %u | %u | %u s / %.1f s | %.1e | %.1e | %.1e | %.1e |\n", fo[i][0], fo[i][1],
+               la, la, la / 5.0, eb, ea, e8, pow(2 - sqrt(3), fo[i][1] / 2.0));
+    }
+    return 0;
+}

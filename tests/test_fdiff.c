@@ -1,0 +1,200 @@
+/*
+ * test_fdiff.c - forward differences against Horner; the time-knot cubic
+ * against GSL's natural cubic spline; the fragment window's bookkeeping.
+ */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_spline.h>
+
+#include "cubic.h"
+#include "engine.h"
+#include "fdiff.h"
+#include "frag.h"
+
+/* The longest segment the engine may stream: max_gap_s (60 s by default)
+ * at the fastest rate (ENGINE_PERIOD_NS_MIN, 10 kHz): 600000 steps. */
+#define LONGEST_STEPS (60LL * 1000000000LL / ENGINE_PERIOD_NS_MIN)
+
+/*
+ * Worst-case drift of n forward steps: every addition rounds by at most
+ * eps/2 of its result, and the rounding of d1 (d2) feeds n (n^2/2) later
+ * additions of f; with |d1| ~ |c|/n, |d2| ~ |c|/n^2 each term is ~ n eps |c|
+ * summed: bound n * eps * (|c0| + |c1| + |c2| + |c3|) (times 2 for margin).
+ * A stepper that lost its phase or seeded wrongly would be off by ~|c|/n,
+ * far above it.
+ */
+static double drift_bound(const fdiff_seg_t *s, int k, long long n)
+{
+    double m = fabs(s->c[k][0]) + fabs(s->c[k][1]) + fabs(s->c[k][2]) + fabs(s->c[k][3]);
+    return 2.0 * (double)n * DBL_EPSILON * m;
+}
+
+/* Given the longest segment at the fastest rate with coefficients up to
+ * max_abs_m (1e7 m), when stepped 600000 times without re-seeding, then
+ * position, velocity and acceleration stay within the worst-case drift bound
+ * of Horner; the measured drift is printed. */
+static void test_drift_longest_segment(void **state)
+{
+    (void)state;
+    fdiff_seg_t s = {0, 60.0, {{1000, -30, 50, -20}, {-5e6, 300, -200, 100}, {1e7, 5, -3, 2}}};
+    long long n = LONGEST_STEPS;
+    double du = 1.0 / (double)n, worst[3] = {0}, worstv = 0, worsta = 0;
+    fdiff_t fd;
+
+    fdiff_seed(&fd, &s, 0.0, du);
+    for (long long i = 0; i <= n; i++) {
+        double p[3], v[3], a[3], P[3], V[3], A[3];
+        if (i % 997 == 0 || i == n) { /* Horner on a sample: keeps the test fast */
+            fdiff_get(&fd, p, v, a);
+            fdiff_eval(&s, (double)i * du, P, V, A);
+            for (int k = 0; k < 3; k++) {
+                double e = fabs(p[k] - P[k]);
+                if (e > worst[k])
+                    worst[k] = e;
+                assert_true(e <= drift_bound(&s, k, n));
+                if (fabs(v[k] - V[k]) > worstv)
+                    worstv = fabs(v[k] - V[k]);
+                if (fabs(a[k] - A[k]) > worsta)
+                    worsta = fabs(a[k] - A[k]);
+            }
+        }
+        fdiff_step(&fd);
+    }
+    /* velocity and acceleration are lower-degree: (n eps |c| / dur) bounds them */
+    assert_true(worstv <= 2.0 * (double)n * DBL_EPSILON * 1e7 / 60.0);
+    assert_true(worsta <= 2.0 * (double)n * DBL_EPSILON * 1e7 / 3600.0);
+    print_message("drift over %lld steps: pos %.2e %.2e %.2e m (|c0| 1e3, 5e6, 1e7), "
+                  "vel %.2e m/s, acc %.2e m/s2; engine re-seeds every %u steps\n",
+                  n, worst[0], worst[1], worst[2], worstv, worsta, FDIFF_RESEED_STEPS);
+}
+
+/* Given a seed at a fractional phase u0, then the stepper's k-th point is
+ * the cubic at u0 + k du (the phase the engine carries across boundaries). */
+static void test_seed_phase(void **state)
+{
+    (void)state;
+    fdiff_seg_t s = {2.0, 0.37, {{1, 2, -3, 4}, {0, -1, 0.5, 0.25}, {3, 0, 0, 1}}};
+    fdiff_t fd;
+    double u0 = 0.123456789, du = 0.01 / 0.37;
+
+    fdiff_seed(&fd, &s, u0, du);
+    for (int i = 0; i < 30; i++) {
+        double p[3], v[3], a[3], P[3], V[3], A[3];
+        fdiff_get(&fd, p, v, a);
+        fdiff_eval(&s, u0 + i * du, P, V, A);
+        for (int k = 0; k < 3; k++) {
+            assert_true(fabs(p[k] - P[k]) < 1e-13);
+            assert_true(fabs(v[k] - V[k]) < 1e-12);
+            assert_true(fabs(a[k] - A[k]) < 1e-11);
+        }
+        fdiff_step(&fd);
+    }
+}
+
+/* Given an irregular track, when cubic_curve (knots at the timestamps,
+ * natural) and GSL's gsl_interp_cspline are evaluated, then they agree. */
+static void test_cubic_vs_gsl(void **state)
+{
+    (void)state;
+    enum { N = 80 };
+    double t[N], y[3][N], r[N * 3];
+    fdiff_seg_t segs[N];
+    size_t nseg;
+    unsigned seed = 99;
+
+    for (int i = 0; i < N; i++) {
+        seed = seed * 1103515245u + 12345u;
+        t[i] = i ? t[i - 1] + 0.2 + ((seed >> 8) % 1000) * 0.003 : 0.0;
+        for (int k = 0; k < 3; k++) {
+            seed = seed * 1103515245u + 12345u;
+            y[k][i] = (i ? y[k][i - 1] : 0) + ((double)((seed >> 8) % 2001) - 1000) * 0.01;
+            r[i * 3 + k] = y[k][i];
+        }
+    }
+    assert_int_equal(cubic_curve(N, t, r, ENGINE_PARAM_TIME, ENGINE_ENDS_NATURAL, NULL, NULL,
+                                 segs, N, &nseg), 0);
+    assert_int_equal(nseg, N - 1);
+    for (int k = 0; k < 3; k++) {
+        gsl_interp_accel *acc = gsl_interp_accel_alloc();
+        gsl_spline *sp = gsl_spline_alloc(gsl_interp_cspline, N);
+        assert_int_equal(gsl_spline_init(sp, t, y[k], N), GSL_SUCCESS);
+        for (int j = 0; j <= 5000; j++) {
+            double tq = t[0] + (t[N - 1] - t[0]) * j / 5000.0, p[3], v[3], a[3];
+            fdiff_eval_curve(segs, nseg, &tq, 1, p, v, a);
+            /* both O(1) flops per point from equally conditioned systems:
+             * 1e-11 of values of order 10-100 */
+            assert_true(fabs(p[k] - gsl_spline_eval(sp, tq, acc)) < 1e-11);
+            assert_true(fabs(v[k] - gsl_spline_eval_deriv(sp, tq, acc)) < 1e-10);
+            assert_true(fabs(a[k] - gsl_spline_eval_deriv2(sp, tq, acc)) < 1e-9);
+        }
+        gsl_spline_free(sp);
+        gsl_interp_accel_free(acc);
+    }
+}
+
+/* Given a window and a 1-4-1 system with pinned artificial ends, then the
+ * final count follows frag_final_after, values are final in order, and a
+ * system shorter than a fragment equals the whole solve exactly. */
+static void test_frag_bookkeeping(void **state)
+{
+    (void)state;
+    frag_t *fw = frag_new(16, 8, 3, 64);
+    frag_row_t row = {1, 4, 1, {0, 0, 0}};
+    double pin[3] = {0, 0, 0};
+
+    assert_non_null(fw);
+    assert_null(frag_new(16, 7, 0, 64));
+    assert_null(frag_new(16, 16, 0, 64));
+    assert_null(frag_new(16, 8, 8, 64)); /* offset must stay below S */
+    for (uint64_t r = 0; r < 200; r++) {
+        row.d[0] = 6.0 * sin(0.1 * (double)r);
+        assert_int_equal(frag_push(fw, &row, pin), 0);
+        assert_int_equal(fw->final_rows, frag_final_after(16, 8, 3, r));
+    }
+    row.c = 0;
+    assert_int_equal(frag_finish(fw, &row), 0);
+    assert_int_equal(fw->final_rows, 201);
+    assert_int_equal(frag_push(fw, &row, pin), -TRIDIAG_ESIZE); /* closed */
+
+    /* 10 rows < F: one fragment, true ends: equals tridiag_solve bit for bit */
+    double a[10], b[10], c[10], d[30], x[30], scr[10];
+    frag_reset(fw);
+    for (int i = 0; i < 10; i++) {
+        a[i] = i ? 1 : 0;
+        b[i] = 4;
+        c[i] = i < 9 ? 1 : 0;
+        for (int k = 0; k < 3; k++)
+            d[i * 3 + k] = cos(i + k);
+        frag_row_t rw = {a[i], b[i], c[i], {d[i * 3], d[i * 3 + 1], d[i * 3 + 2]}};
+        if (i < 9)
+            assert_int_equal(frag_push(fw, &rw, pin), 0);
+        else
+            assert_int_equal(frag_finish(fw, &rw), 0);
+    }
+    assert_int_equal(tridiag_solve(10, 3, a, b, c, d, x, scr), 0);
+    for (int i = 0; i < 10; i++)
+        assert_memory_equal(frag_x(fw, (uint64_t)i), &x[i * 3], 3 * sizeof(double));
+    frag_free(fw);
+    frag_free(NULL);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_drift_longest_segment),
+        cmocka_unit_test(test_seed_phase),
+        cmocka_unit_test(test_cubic_vs_gsl),
+        cmocka_unit_test(test_frag_bookkeeping),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
