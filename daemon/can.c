@@ -505,6 +505,11 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
         rc = 0;
         sync_fd(s);
     }
+    double load = canport_busload(s->port, c->cfg->daemon.rate_hz, cfg->waypoint_hz, cfg->bitrate,
+                                  cfg->data_bitrate);
+    c->stats->can.load_permille = load > 0 ? (uint32_t)llround(load * 1000) : 0;
+    log_msg(LOG_INFO, "can: %u object(s) on %s, worst-case bus load %.1f %% at %g bit/s",
+            s->n, s->log ? "candump logs" : cfg->interface, load * 100, cfg->bitrate);
     s->was_up = io_is_up(s);
     s->timer_fd = loop_timer_add(c->loop, CAN_MAINTAIN_NS, on_timer, s);
     if (s->timer_fd < 0) {
