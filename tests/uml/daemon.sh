@@ -28,6 +28,11 @@ input = can
 output = can
 can.cia402 = yes
 can.cia402_counts_per_m = 10000
+[object.fdboat]
+input = can
+output = can
+can.fd = yes
+can.brs = yes
 CONF
 
 # ---- B: stream a track from canplayer, capture with candump --------------
@@ -40,6 +45,7 @@ cat /proc/net/can/rcvlist_all > "$out/rcvlist_all.txt"
 canplayer -I "$out/wp.log" vcan0=can0 || fail "canplayer"
 # FINISH was the last frame: wait for STATUS state finished (3), no flags
 wait_grep "$out/cap.log" "$(status_re 03)" 500 || fail "never finished"
+wait_grep "$out/cap.log" " 6C1#03" 500 || fail "FD object never finished"
 kill -0 $tp || fail "trajd died"
 touch "$out/ok.stream"
 
