@@ -378,7 +378,7 @@ static void publish_stats(can_state_t *s)
     for (unsigned i = 0; i < s->n; i++) {
         canport_obj_stats_t os;
         canport_obj_stats(s->port, i, &os);
-        dropped += os.dropped_late + os.dropped_full + os.dropped_down;
+        dropped += os.dropped_late + os.dropped_full + os.dropped_down + os.dropped_error;
         bad += os.rx.malformed;
     }
     st->can.tx_dropped = dropped;
