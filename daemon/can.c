@@ -81,7 +81,7 @@ static int cfg_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
     if (!strcmp(k, "data_bitrate"))
         return cfg_get_double(kv, 10e3, 12e6, &c->data_bitrate, why, wl);
     if (!strcmp(k, "max_load_percent"))
-        return cfg_get_double(kv, 1, 100, &c->max_load_percent, why, wl);
+        return cfg_get_double(kv, 0, 100, &c->max_load_percent, why, wl); /* 0: no check (vcan) */
     if (!strcmp(k, "waypoint_hz"))
         return cfg_get_double(kv, 0, 10000, &c->waypoint_hz, why, wl);
     if (!strcmp(k, "sync"))
@@ -245,7 +245,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
             rc = -CFG_EVALUE;
         }
     }
-    if (!rc) {
+    if (!rc && c->max_load_percent > 0) {
         double load = canport_busload(p, cfg->daemon.rate_hz, c->waypoint_hz, c->bitrate,
                                       c->data_bitrate);
         if (!(load >= 0) || load * 100 > c->max_load_percent) {
@@ -378,7 +378,7 @@ static void publish_stats(can_state_t *s)
     for (unsigned i = 0; i < s->n; i++) {
         canport_obj_stats_t os;
         canport_obj_stats(s->port, i, &os);
-        dropped += os.dropped_late + os.dropped_full + os.dropped_down;
+        dropped += os.dropped_late + os.dropped_full + os.dropped_down + os.dropped_error;
         bad += os.rx.malformed;
     }
     st->can.tx_dropped = dropped;
@@ -505,6 +505,11 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
         rc = 0;
         sync_fd(s);
     }
+    double load = canport_busload(s->port, c->cfg->daemon.rate_hz, cfg->waypoint_hz, cfg->bitrate,
+                                  cfg->data_bitrate);
+    c->stats->can.load_permille = load > 0 ? (uint32_t)llround(load * 1000) : 0;
+    log_msg(LOG_INFO, "can: %u object(s) on %s, worst-case bus load %.1f %% at %g bit/s",
+            s->n, s->log ? "candump logs" : cfg->interface, load * 100, cfg->bitrate);
     s->was_up = io_is_up(s);
     s->timer_fd = loop_timer_add(c->loop, CAN_MAINTAIN_NS, on_timer, s);
     if (s->timer_fd < 0) {

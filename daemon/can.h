@@ -11,7 +11,7 @@
  *   fd = no                     CAN FD on the socket (needed by any object with can.fd)
  *   bitrate = 500000            nominal bit rate, bit/s (bus-load check)
  *   data_bitrate = 2000000      CAN FD data-phase bit rate, bit/s (bus-load check)
- *   max_load_percent = 70       refuse a config whose worst-case bus load is above
+ *   max_load_percent = 70       refuse a config whose worst-case bus load is above (0: no check)
  *   waypoint_hz = 10            expected waypoints per second per object (bus-load check)
  *   sync = no, sync_id = 0x080, sync_overflow = 0    SYNC frame per cycle (CiA 301)
  *   status_period_ms = 100      STATUS frame period per object (also sent on events)

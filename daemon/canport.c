@@ -275,16 +275,25 @@ static int send_setpoint(canport_t *p, canport_obj_t *o)
     return 0;
 }
 
+static int is_down(int rc)
+{
+    return rc == -ENETDOWN || rc == -ENODEV || rc == -ENXIO || rc == -ENETUNREACH;
+}
+
 static void count_drop(canport_obj_t *o, int rc)
 {
+    o->flags_since |= CANPROTO_ST_TX_DROP;
+    if (is_down(rc)) {
+        o->st.dropped_down++;
+        o->flags_since |= CANPROTO_ST_BUS_DOWN;
+        event(o, CANPROTO_STERR_BUS_DOWN);
+        return;
+    }
     if (is_full(rc))
         o->st.dropped_full++;
     else
-        o->st.dropped_down++;
-    o->flags_since |= CANPROTO_ST_TX_DROP;
-    if (!is_full(rc))
-        o->flags_since |= CANPROTO_ST_BUS_DOWN;
-    event(o, is_full(rc) ? CANPROTO_STERR_TX_DROPPED : CANPROTO_STERR_BUS_DOWN);
+        o->st.dropped_error++; /* e.g. EINVAL: FD frame on a classic-MTU interface */
+    event(o, CANPROTO_STERR_TX_DROPPED);
 }
 
 static void send_status(canport_t *p, canport_obj_t *o, const engine_status_t *es_in,
@@ -302,7 +311,8 @@ static void send_status(canport_t *p, canport_obj_t *o, const engine_status_t *e
     st.lost = (uint32_t)o->rx.st.lost;
     st.rejected = (uint32_t)(o->st.waypoints_rejected + o->st.waypoints_full);
     st.malformed = (uint32_t)o->rx.st.malformed;
-    st.dropped = (uint32_t)(o->st.dropped_late + o->st.dropped_full + o->st.dropped_down);
+    st.dropped = (uint32_t)(o->st.dropped_late + o->st.dropped_full + o->st.dropped_down +
+                            o->st.dropped_error);
     st.last_err = o->last_err;
     canproto_encode_status(o->ids.status_id, &st, &f);
     if (p->io.send(p->io_ctx, &f) == 0) {

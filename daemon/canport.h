@@ -72,6 +72,7 @@ typedef struct {
     uint64_t dropped_late;     /* cycles not sent: caller late */
     uint64_t dropped_full;     /* cycles not (wholly) sent: ENOBUFS / EAGAIN */
     uint64_t dropped_down;     /* cycles not sent: interface down */
+    uint64_t dropped_error;    /* cycles not sent: other write error (EINVAL: FD on a classic MTU) */
     uint64_t tx_clamped;       /* setpoints with a value clamped to its field */
     uint64_t status_sent;
     uint64_t waypoints_accepted;

@@ -87,12 +87,14 @@ def fmt_frame(can_id, data, is_fd):
     return "%03X%s%s" % (can_id, "##0" if is_fd else "#", data.hex().upper())
 
 
-def write_wplog(xyz, out, fd=False, foreign=None, iface="can0", time_scale=1.0):
+def write_wplog(xyz, out, fd=False, foreign=None, iface="can0", time_scale=1.0, also_fd_obj=None):
     """Waypoint frames of track xyz as a candump -l log stamped at each t (plus
     a FINISH command after the last), with comment lines on top and, if
     foreign is a capture, its first frames interleaved (not our ids).
     time_scale: stamps are t / time_scale (canplayer replays wall time, trajd
-    runs at speed = time_scale); the frames still carry t."""
+    runs at speed = time_scale); the frames still carry t.
+    also_fd_obj: object number n whose FD waypoint frames (0x690+n) carry the
+    same track too, interleaved."""
     db = load_db()
     rows = read_xyz(xyz)
     foreign_lines = []
@@ -103,12 +105,18 @@ def write_wplog(xyz, out, fd=False, foreign=None, iface="can0", time_scale=1.0):
         fh.write("# waypoints of %s as trajd CAN frames (canmatrix from config/trajd.dbc)\n" % xyz)
         fh.write("#\n")
         for i, (t, x, y, z) in enumerate(rows):
-            for can_id, data, is_fd in waypoint_frames(db, i + 1, t, x, y, z, fd):
+            frames = waypoint_frames(db, i + 1, t, x, y, z, fd)
+            if also_fd_obj is not None:
+                frames += waypoint_frames(db, i + 1, t, x, y, z, True, wpfd_id=0x690 + also_fd_obj)
+            for can_id, data, is_fd in frames:
                 fh.write("(%.6f) %s %s\n" % (float(t) / time_scale, iface, fmt_frame(can_id, data, is_fd)))
             if i < len(foreign_lines):
                 fh.write("(%.6f) %s %s\n" % (float(t) / time_scale, iface, foreign_lines[i]))
         fh.write("(%.6f) %s %s\n" % (float(rows[-1][0]) / time_scale, iface,
                                       fmt_frame(*command_frame(db, 1))))
+        if also_fd_obj is not None:
+            fh.write("(%.6f) %s %s\n" % (float(rows[-1][0]) / time_scale, iface,
+                                          fmt_frame(*command_frame(db, 1, 0x680 + also_fd_obj))))
     return len(rows), min(len(rows), len(foreign_lines))
 
 
@@ -263,6 +271,16 @@ def uml_check(run, xyz, ref1k):
     fin = [c for c in whole if c["t"] >= finished_at][:1]
     assert fin and abs(fin[0]["x"] - float(last_wp[1])) <= 0.5e-4 + 1e-9 and \
         abs(fin[0]["y"] - float(last_wp[2])) <= 0.5e-4 + 1e-9, (fin, last_wp)
+    # object 1 streams the same track as FD frames (0x691 in, 0x6B1 out)
+    fdrows = decode_fd_setpoints(os.path.join(run, "cap.log"), sp_id=0x6B1)
+    fd_pts = [(r["x"], r["y"]) for t, r in sorted(fdrows.items()) if t / 1e9 <= finished_at]
+    assert len(fd_pts) > 0.5 * len(pts), (len(fd_pts), len(pts))
+    fd_worst = 0.0
+    for (px, py) in fd_pts:
+        P = np.array([px, py])
+        tt = np.clip(((P - A) * AB).sum(1) / L2, 0, 1)
+        fd_worst = max(fd_worst, np.sqrt((((A + AB * tt[:, None]) - P) ** 2).sum(1)).min())
+    assert fd_worst <= 0.71e-4 + 1e-5, fd_worst
     # down/up: the outage is the largest gap between cycles; right after it,
     # cycles come at the normal pace (no burst of stale ones)
     ts = [c["t"] for c in cycles]
@@ -272,19 +290,21 @@ def uml_check(run, xyz, ref1k):
     after = [t for t in ts[gi + 1:] if t - ts[gi + 1] < 0.010]
     # 10 ms at 1 kHz wall = 10 cycles; guest timing is loose, a burst would be far more
     assert len(after) <= 15, len(after)
-    # the kernel holds exactly our receive filter for trajd: 0x680 (no FD input)
+    # the kernel holds exactly our receive filters for trajd: the waypoint ids
+    # of object 0 (classic) and object 1 (classic and FD)
     with open(os.path.join(run, "rcvlist_sff.txt")) as fh:
         sff = fh.read()
     ids = sorted({int(w, 16) for line in sff.splitlines() for w in line.split()[1:2]
                   if line.strip().startswith("vcan0") and len(w) == 3})
-    assert ids == [0x680], (ids, sff)
+    assert ids == [0x680, 0x681, 0x691], (ids, sff)
     # throughput of the last phase
     fast = _log_frames(os.path.join(run, "cap5.log"))
     span = fast[-1].timestamp - fast[0].timestamp if len(fast) > 1 else 0
     fps = len(fast) / span if span > 0 else 0
     with open(os.path.join(run, "fast.txt")) as fh:
         tx0, tx1, t0, t1 = (float(v) for v in fh.read().split())
-    return {"kernel_tx_fps": (tx1 - tx0) / (t1 - t0), "cycles": len(cycles), "on_curve_worst_m": worst, "outage_s": g,
+    return {"kernel_tx_fps": (tx1 - tx0) / (t1 - t0), "cycles": len(cycles),
+            "fd_on_curve_worst_m": fd_worst, "on_curve_worst_m": worst, "outage_s": g,
             "cycles_10ms_after_up": len(after), "whole_cycles": len(whole),
             "fast_frames": len(fast), "fast_fps": fps}
 
@@ -298,7 +318,8 @@ if __name__ == "__main__":
         foreign = sys.argv[sys.argv.index("--foreign") + 1] if "--foreign" in sys.argv else None
         iface = sys.argv[sys.argv.index("--iface") + 1] if "--iface" in sys.argv else "can0"
         scale = float(sys.argv[sys.argv.index("--time-scale") + 1]) if "--time-scale" in sys.argv else 1.0
-        print(write_wplog(sys.argv[2], sys.argv[3], fd, foreign, iface, scale))
+        also = int(sys.argv[sys.argv.index("--also-fd-obj") + 1]) if "--also-fd-obj" in sys.argv else None
+        print(write_wplog(sys.argv[2], sys.argv[3], fd, foreign, iface, scale, also))
     elif cmd == "uml-check":
         r = uml_check(sys.argv[2], sys.argv[3], sys.argv[4])
         print("uml: " + ", ".join("%s %s" % (k, ("%.3g" % v) if isinstance(v, float) else v)

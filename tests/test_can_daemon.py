@@ -34,13 +34,13 @@ SPEED = 30             # engine time per wall time: ~1 s per run
 RUN_TIMEOUT_S = 30
 
 
-def conf(d, extra_can="", extra_obj=""):
+def conf(d, extra_can="", extra_obj="", output="can"):
     path = os.path.join(d, "t.conf")
     with open(path, "w") as fh:
         fh.write("[daemon]\nrate_hz = %d\nspeed = %d\nexit_when_done = yes\n"
                  "stop_timeout_s = 1\nstatus_interval_s = 0\n"
                  "[can]\nlog_in = wp.log\nlog_out = sp.log\nlog_ifname = vcan0\n%s"
-                 "[object.boat]\ninput = can\noutput = can\n%s" % (RATE_HZ, SPEED, extra_can, extra_obj))
+                 "[object.boat]\ninput = can\noutput = %s\n%s" % (RATE_HZ, SPEED, extra_can, output, extra_obj))
     return path
 
 
@@ -79,9 +79,23 @@ class CanDaemon(unittest.TestCase):
         d = self.sub("classic")
         n, nforeign = ct.write_wplog(self.xyz, os.path.join(d, "wp.log"), foreign=CAPTURE)
         self.assertGreater(nforeign, 0)
-        p = run_trajd(conf(d, "sync = yes\n"))
+        # the daemon also logs what it sent, as CSV, from the same tick
+        p = run_trajd(conf(d, "sync = yes\n", "csv.path = sp.csv\n", output="can, csv"))
         self.assertEqual(p.returncode, 0, p.stderr)
         log = os.path.join(d, "sp.log")
+        # canmatrix decodes the captured frames to the values the daemon logged
+        logged = ct.read_replay(os.path.join(d, "sp.csv"))
+        rows, _ = ct.decode_setpoints(log)
+        # cycles woken too late are not sent on CAN (counted), but are logged
+        self.assertTrue(set(rows) <= set(logged))
+        self.assertGreater(len(rows), 0.9 * len(logged))
+        for now_ns, r in rows.items():
+            e = logged[now_ns]
+            for ax in "xyz":
+                self.assertLessEqual(abs(r[ax] - float(e[ax + "_m"])), ct.SP_POS_TOL)
+                self.assertLessEqual(abs(r["v" + ax] - float(e["v%s_m_s" % ax])), ct.SP_VEL_TOL)
+            self.assertEqual(r["cycle8"], int(e["cycle"]) & 0xFF)
+            self.assertEqual(ct.STATES[r["state"]], e["state"])
         count, worst = ct.compare(log, self.ref, min_rows=len(self.refrows) // 2)
         print("classic: %d setpoints compared, worst %.3g m" % (count, worst), file=sys.stderr)
         rows, others = ct.decode_setpoints(log)

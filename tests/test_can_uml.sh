@@ -17,7 +17,7 @@ SPEED=10     # the guest's trajd runs at speed 10 (tests/uml/daemon.sh)
 echo "BUILD=$BUILD" > "$run/env"
 # The track: 100 waypoints (20 s) of the figure eight, sent in 2 s of wall time.
 $PY tests/cantools_trajd.py xyz tests/data/n2k_furuno_figure8_src52.csv "$run/track.csv" 100 || exit 1
-$PY tests/cantools_trajd.py wplog "$run/track.csv" "$run/wp.log" --time-scale $SPEED > /dev/null || exit 1
+$PY tests/cantools_trajd.py wplog "$run/track.csv" "$run/wp.log" --time-scale $SPEED --also-fd-obj 1 > /dev/null || exit 1
 "$BUILD/bin/trajreplay" --rate 1000 -q -o "$run/ref1k.csv" "$run/track.csv" || exit 1
 
 start=$(date +%s.%N)

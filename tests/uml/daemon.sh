@@ -28,6 +28,11 @@ input = can
 output = can
 can.cia402 = yes
 can.cia402_counts_per_m = 10000
+[object.fdboat]
+input = can
+output = can
+can.fd = yes
+can.brs = yes
 CONF
 
 # ---- B: stream a track from canplayer, capture with candump --------------
@@ -40,6 +45,7 @@ cat /proc/net/can/rcvlist_all > "$out/rcvlist_all.txt"
 canplayer -I "$out/wp.log" vcan0=can0 || fail "canplayer"
 # FINISH was the last frame: wait for STATUS state finished (3), no flags
 wait_grep "$out/cap.log" "$(status_re 03)" 500 || fail "never finished"
+wait_grep "$out/cap.log" " 6C1#03" 500 || fail "FD object never finished"
 kill -0 $tp || fail "trajd died"
 touch "$out/ok.stream"
 
@@ -59,11 +65,12 @@ kill $cp; wait $cp 2>/dev/null
 touch "$out/ok.downup"
 
 # ---- C2: interface removed and re-created (new ifindex) --------------------
+# candump on "any" survives the removal and sees the new vcan0 at once
+timeout 30 candump -r 8000000 -D -L any > "$out/cap2.log" & cp=$!
+wait_rx any || fail "candump 2 not ready"
 ip link del vcan0
 sleep 0.3   # the outage itself
 ip link add dev vcan0 type vcan && ip link set vcan0 mtu 72 up
-timeout 30 candump -r 8000000 -D -L vcan0 > "$out/cap2.log" & cp=$!
-wait_rx vcan0 || fail "candump 2 not ready"
 wait_grep "$out/cap2.log" " 6A0#" || fail "trajd did not reopen the new vcan0"
 wait_grep "$out/cap2.log" "$(status_re 33)" || fail "no STATUS with bus-down after removal"
 kill -0 $tp || fail "trajd died after removal"
@@ -98,6 +105,30 @@ wait $tp; rc=$?
 [ $rc -eq 0 ] || fail "trajd exit code $rc"
 tp=
 touch "$out/ok.stop"
+
+# ---- G: flow control: a sender paced by STATUS fills a small buffer -------
+cat > "$out/pace.conf" <<CONF
+[daemon]
+rate_hz = 100
+speed = 10
+status_interval_s = 0
+stop_timeout_s = 1
+[can]
+interface = vcan0
+status_period_ms = 100
+[object.boat]
+input = can
+output = can
+capacity = 40
+fragment = 8
+overlap = 4
+CONF
+"$BUILD/bin/trajd" -f -c "$out/pace.conf" 2> "$out/pace.err" & tp=$!
+/usr/bin/python3 tests/uml/pacer.py "$out/track.csv" "$out" || fail "paced sender (see pacer.txt)"
+kill -TERM $tp; wait $tp; rc=$?
+[ $rc -eq 0 ] || fail "trajd (pace) exit code $rc"
+tp=
+touch "$out/ok.flow"
 
 # ---- F: frames per second trajd emits on vcan0 (measured, not asserted) -----
 {
