@@ -209,6 +209,10 @@ static void test_documented_conf(void **state)
     assert_memory_equal(&d->max_abs_m, &e.max_abs_m, sizeof(double));
     assert_memory_equal(&d->max_speed_m_s, &e.max_speed_m_s, sizeof(double));
     assert_memory_equal(&d->max_segment_s, &e.max_segment_s, sizeof(double));
+    assert_memory_equal(&d->max_accel_m_s2, &e.max_accel_m_s2, sizeof(double));
+    assert_int_equal(d->start_slack, e.start_slack);
+    assert_int_equal(d->smooth_window, e.smooth_window);
+    assert_int_equal(d->smooth_ctrl, e.smooth_ctrl);
     assert_memory_equal(d->start_vel_m_s, e.start_vel_m_s, sizeof e.start_vel_m_s);
     cfg_t *m = load_ok(OBJ); /* nothing set: the parser's defaults */
     assert_memory_equal(&c->daemon.rate_hz, &m->daemon.rate_hz, sizeof(double));

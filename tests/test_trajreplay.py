@@ -111,11 +111,12 @@ def replay(track, extra, tmp, name="out"):
     return read_setpoints(out), summary, p
 
 
-def expected_counts(t, pos, max_gap_s):
+def expected_counts(t, pos, max_gap_s, enu=None, max_accel=0.0):
     """Duplicates, rejections and gaps by lib/engine.h's rules, applied here:
-    compared with the last *accepted* waypoint."""
-    dup = back = same = gaps = 0
-    last = None
+    compared with the last *accepted* waypoint (and, for the acceleration
+    rule, the one accepted before it in the same trajectory, on enu)."""
+    dup = back = same = gaps = accel = 0
+    last = prev = None
     for i in range(len(t)):
         if last is not None:
             if t[i] < t[last]:
@@ -129,8 +130,16 @@ def expected_counts(t, pos, max_gap_s):
                 continue
             if t[i] - t[last] > max_gap_s:
                 gaps += 1
-        last = i
-    return dup, back, same, gaps, last
+                last, prev = i, None
+                continue
+            if max_accel > 0 and prev is not None:
+                v1 = (enu[last] - enu[prev]) / (t[last] - t[prev])
+                v2 = (enu[i] - enu[last]) / (t[i] - t[last])
+                if np.linalg.norm(2 * (v2 - v1) / (t[i] - t[prev])) > max_accel:
+                    accel += 1
+                    continue
+        last, prev = i, last
+    return dup, back, same, gaps, accel, last
 
 
 def common_checks(sp, label, period_ns):
@@ -207,8 +216,11 @@ def test_spline_agreement(tmp):
                 ("cubic", "clamped", FRAG_F, FRAG_O), ("cubic", "rest", 32, 16)]
         for method, ends, f, o in runs:
             label = f"{os.path.basename(path)} {method} {ends} F={f} O={o}"
+            # --max-accel 0: every waypoint in, so the reference is the
+            # spline through all of them (the filter is tested below)
             args = ["--rate", str(rate), "--param", "time", "--ends", ends, "--method", method,
-                    "--fragment", str(f), "--overlap", str(o), "--max-gap", "1000"]
+                    "--fragment", str(f), "--overlap", str(o), "--max-gap", "1000",
+                    "--max-accel", "0"]
             if ends == "clamped":
                 args += ["--start-vel", "%r,%r,%r" % v0, "--end-vel", "%r,%r,%r" % v1]
                 cs = CubicSpline(t, enu, bc_type=((1, np.array(v0)), (1, np.array(v1))))
@@ -259,14 +271,17 @@ def test_counts_real_and_injected(tmp):
         enu = enu_pyproj(lat, lon, alt)
         # Identical text -> identical doubles, so exact comparisons are right.
         pos_key = np.stack([lat, lon, np.nan_to_num(alt, nan=-1e300)], axis=1)
-        dup, back, same, gaps, last = expected_counts(t, pos_key, max_gap)
+        # the engine's default max_accel_m_s2 (lib/engine.h), applied here on pyproj's ENU
+        dup, back, same, gaps, accel, last = expected_counts(t, pos_key, max_gap, enu, 30.0)
         sp, s, _ = replay(path, ["--rate", "10", "--max-gap", str(max_gap)], tmp, "counts")
         got = (s.get("duplicates"), s.get("rejected_backwards"), s.get("rejected_same_time"),
-               s.get("gaps"))
-        print(f"{label}: duplicates/backwards/same_time/gaps expected {(dup, back, same, gaps)}, "
+               s.get("gaps"), s.get("rejected_accel"))
+        want = (dup, back, same, gaps, accel)
+        print(f"{label}: duplicates/backwards/same_time/gaps/accel expected {want}, "
               f"--summary {got}")
-        check(got == (dup, back, same, gaps), f"{label}: counts {got} != {(dup, back, same, gaps)}")
-        check(s.get("accepted") == len(t) - dup - back - same, f"{label}: accepted {s.get('accepted')}")
+        check(got == want, f"{label}: counts {got} != {want}")
+        check(s.get("accepted") == len(t) - dup - back - same - accel,
+              f"{label}: accepted {s.get('accepted')}")
         check(s.get("setpoints") == len(sp["now_ns"]), f"{label}: setpoints count")
         check(all(np.isfinite(sp["pos"]).ravel()), f"{label}: NaN")
         check(sp["state"][-1] == "finished", f"{label}: last state {sp['state'][-1]}")
@@ -303,8 +318,12 @@ def test_svg(tmp):
     for want in ("curve", "speed", "waypoints", "rejected", "underruns", "plan-axes", "speed-axes",
                  "legend"):
         check(want in ids, f"svg: no element id={want}")
+    # one dot per accepted waypoint, one cross per rejected one (the two
+    # jittered fixes at t = 135.120 and 135.201 s, see test_counts_real_and_injected)
     dots = root.find(f".//{ns}g[@id='waypoints']").findall(f"{ns}circle")
-    check(len(dots) == 1786, f"svg: {len(dots)} waypoint dots")
+    crosses = root.find(f".//{ns}g[@id='rejected']").findall(f"{ns}path")
+    check(len(dots) == 1784 and len(crosses) == 2,
+          f"svg: {len(dots)} waypoint dots, {len(crosses)} rejected crosses")
     texts = {e.text for e in root.iter(ns + "text")}
     for want in ("east (m)", "north (m)", "track time t (s)", "speed |v| (m/s)"):
         check(want in texts, f"svg: no label {want!r}")
