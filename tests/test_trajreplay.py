@@ -289,6 +289,53 @@ def test_counts_real_and_injected(tmp):
               f"{label}: does not end on the last accepted waypoint")
 
 
+# lib/engine.h's default max_accel_m_s2.
+MAX_ACCEL_DEFAULT = 30.0
+
+
+def test_jitter_figure8(tmp):
+    """Given the figure-8 boat log, whose only intervals far below its median
+    (0.2 s) are the late burst around t = 135 s (134.600 -> 135.096 -> 135.120
+    -> 135.201 s: fixes 24 and 81 ms apart, positions evenly spaced), when
+    replayed with the defaults at 100 Hz, then exactly those two short-interval
+    waypoints are rejected (rejected_accel 2, accepted 1784), the setpoints
+    follow scipy's CubicSpline (rest ends) through the waypoints kept to the
+    fragment bound, and away from the rest start and stop (2 s) the
+    acceleration per axis stays within 3 * max_accel_m_s2: the max principle
+    of the C2 second-derivative system (at its largest |M_i|,
+    |M_i| (h1 + h2) <= 3 |a_implied| (h1 + h2), and every accepted triple has
+    |a_implied| <= max_accel_m_s2).  The spline through all waypoints breaks
+    that bound by far (the test can fail)."""
+    t, lat, lon, alt = read_track(FIGURE8)
+    enu = enu_pyproj(lat, lon, alt)
+    dt = np.diff(t)
+    short = np.where(dt < 0.5 * np.median(dt))[0] + 1   # waypoint after a short interval
+    check(len(short) == 2 and abs(t[short[0]] - 135.120) < 1e-9,
+          f"figure-8 short intervals at {t[short]} (the log changed?)")
+    kept = np.setdiff1d(np.arange(len(t)), short)
+    sp, s, _ = replay(FIGURE8, [], tmp, "jitter")
+    check(s.get("rejected_accel") == len(short) and s.get("rejected") == len(short),
+          f"figure-8: rejected_accel {s.get('rejected_accel')}, rejected {s.get('rejected')}")
+    check(s.get("accepted") == len(kept), f"figure-8: accepted {s.get('accepted')}")
+    streaming = np.array([x == "streaming" for x in sp["state"]])
+    tol = 100 * 0.268 ** (16 / 2)   # default F=32, O=16
+    err = spline_errors(sp, CubicSpline(t[kept], enu[kept], bc_type="clamped"), streaming)
+    for k, v in err.items():
+        check(v <= tol, f"figure-8 jitter: {k} differs from the kept-waypoint CubicSpline by {v:g}")
+    inner = streaming & (sp["t_s"] > t[0] + 2) & (sp["t_s"] < t[-1] - 2)
+    a_axis = np.max(np.abs(sp["acc"][inner]))
+    win = inner & (np.abs(sp["t_s"] - 135.1) < 5)
+    a_win = np.max(np.linalg.norm(sp["acc"][win], axis=1))
+    ts = np.arange(t[0] + 2, t[-1] - 2, 0.01)
+    raw = np.max(np.abs(CubicSpline(t, enu, bc_type="clamped")(ts, 2)))
+    print(f"figure-8 jitter: streamed max |a| per axis {a_axis:.1f} m/s^2 (|a| {a_win:.1f} "
+          f"within 5 s of t=135), spline through every waypoint {raw:.1f}; bound "
+          f"{3 * MAX_ACCEL_DEFAULT:.0f}; vs kept-waypoint spline "
+          + ", ".join(f"{k} {v:.2g}" for k, v in err.items()))
+    check(a_axis <= 3 * MAX_ACCEL_DEFAULT, f"figure-8: acceleration {a_axis:g} m/s^2 per axis")
+    check(raw > 3 * MAX_ACCEL_DEFAULT, f"figure-8: the raw spline peaks at only {raw:g}")
+
+
 def test_gpx_equals_csv(tmp):
     """Given visnjan as GPX and as CSV, when replayed, then byte-identical output."""
     a = os.path.join(tmp, "a.csv")
@@ -434,7 +481,7 @@ def main():
         return 1
     with tempfile.TemporaryDirectory(prefix="trajreplay-test-") as tmp:
         for test in (test_errors, test_gpx_equals_csv, test_svg, test_counts_real_and_injected,
-                     test_spline_agreement, test_progress):
+                     test_spline_agreement, test_jitter_figure8, test_progress):
             print(f"== {test.__name__}")
             test(tmp)
     print(f"test_trajreplay.py: {len(failures)} failure(s)")
