@@ -88,6 +88,7 @@ static void test_values(void **state)
                        "output = csv, stdout\ncsv.path = out.csv\nmethod = bspline\n"
                        "param = uniform\nends = clamped\nstart_vel_m_s = 1, -2,3e-1\n"
                        "fragment = 32\noverlap = 16\nmax_gap_s = 7.5\n"
+                       "max_accel_m_s2 = 12.5\nstart_slack = 3\n"
                        "[object.b]\ninput = replay\nreplay.track = " TRACK "\n"
                        "replay.start_s = 2\noutput = stdout\n");
     assert_int_equal(c->daemon.period_ns, 1000000);
@@ -110,6 +111,8 @@ static void test_values(void **state)
     assert_true(o->engine.start_vel_m_s[1] > -2.0001 && o->engine.start_vel_m_s[1] < -1.9999);
     assert_true(o->engine.start_vel_m_s[2] > 0.2999 && o->engine.start_vel_m_s[2] < 0.3001);
     assert_int_equal(o->engine.fragment, 32);
+    assert_true(o->engine.max_accel_m_s2 > 12.4999 && o->engine.max_accel_m_s2 < 12.5001);
+    assert_int_equal(o->engine.start_slack, 3);
     assert_int_equal(o->engine.overlap, 16);
     const csvout_obj_cfg_t *cs = cfg_obj_transport(o, &csv_transport);
     assert_string_equal(cs->path, "./out.csv"); /* relative to the config's directory */
@@ -132,6 +135,8 @@ static void test_errors(void **state)
     load_bad("[daemon]\nthis is not ini\n" OBJ, CFG_ESYNTAX, 2, "syntax");
     load_bad("[daemon]\n\n\n" OBJ "fragment = 4.5\n", CFG_EVALUE, 8, "fragment");
     load_bad(OBJ "method = spline\n", CFG_EVALUE, 5, "bspline, cubic, smooth");
+    load_bad(OBJ "max_accel_m_s2 = -1\n", CFG_EVALUE, 5, "max_accel_m_s2");
+    load_bad(OBJ "start_slack = 2000\n", CFG_EVALUE, 5, "start_slack");
     load_bad(OBJ "start_vel_m_s = 1,2\n", CFG_EVALUE, 5, "three numbers");
     load_bad("[realtime]\nfifo_priority = 100\n" OBJ, CFG_EVALUE, 2, "[0, 99]");
     load_bad("[realtime]\ncpu_affinity = 1-\n" OBJ, CFG_EVALUE, 2, "CPU list");
