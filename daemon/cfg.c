@@ -567,6 +567,14 @@ static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size
         return cfg_get_double(kv, 1e-6, 1e12, &e->max_abs_m, why, wl);
     if (strcmp(kv->key, "max_speed_m_s") == 0)
         return cfg_get_double(kv, 0, 1e9, &e->max_speed_m_s, why, wl);
+    if (strcmp(kv->key, "max_accel_m_s2") == 0)
+        return cfg_get_double(kv, 0, 1e9, &e->max_accel_m_s2, why, wl);
+    if (strcmp(kv->key, "start_slack") == 0) {
+        rc = cfg_get_int(kv, 0, ENGINE_FRAGMENT_MAX, &ll, why, wl);
+        if (rc == 0)
+            e->start_slack = (unsigned)ll;
+        return rc;
+    }
     if (strcmp(kv->key, "max_segment_s") == 0)
         return cfg_get_double(kv, 1e-6, 1e9, &e->max_segment_s, why, wl);
     if (strcmp(kv->key, "smooth_window") == 0) {

@@ -131,7 +131,10 @@ static int engine_cfg_same(const engine_config_t *a, const engine_config_t *b)
            memcmp(&a->max_gap_s, &b->max_gap_s, sizeof a->max_gap_s) == 0 &&
            memcmp(&a->max_abs_m, &b->max_abs_m, sizeof a->max_abs_m) == 0 &&
            memcmp(&a->max_speed_m_s, &b->max_speed_m_s, sizeof a->max_speed_m_s) == 0 &&
-           memcmp(&a->max_segment_s, &b->max_segment_s, sizeof a->max_segment_s) == 0;
+           memcmp(&a->max_segment_s, &b->max_segment_s, sizeof a->max_segment_s) == 0 &&
+           memcmp(&a->max_accel_m_s2, &b->max_accel_m_s2, sizeof a->max_accel_m_s2) == 0 &&
+           a->start_slack == b->start_slack && a->smooth_window == b->smooth_window &&
+           a->smooth_ctrl == b->smooth_ctrl;
 }
 
 /* The object of prev that o (in the new config) may take over, or NULL. */
