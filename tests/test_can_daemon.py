@@ -248,6 +248,25 @@ class CanDaemon(unittest.TestCase):
         p = subprocess.run([TRAJD, "--check-config", path], capture_output=True, text=True, timeout=10)
         self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
 
+    # Given a kernel without CAN (this host), when trajd is told to use a
+    # SocketCAN interface, then it refuses to start with the reason, instead
+    # of running in a DOWN state that could never come up.
+    def test_no_can_in_kernel(self):
+        import socket
+        try:
+            socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW).close()
+            self.skipTest("this kernel has CAN (covered by test_can_uml.sh)")
+        except OSError:
+            pass
+        d = self.sub("nocan")
+        path = os.path.join(d, "s.conf")
+        with open(path, "w") as fh:
+            fh.write("[daemon]\nrate_hz = 100\n[can]\ninterface = vcan0\n"
+                     "[object.o0]\ninput = can\noutput = can\n")
+        p = subprocess.run([TRAJD, "-f", "-c", path], capture_output=True, text=True, timeout=10)
+        self.assertNotEqual(p.returncode, 0)
+        self.assertIn("cannot open a CAN socket", p.stderr)
+
 
 if __name__ == "__main__":
     unittest.main()
