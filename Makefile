@@ -88,11 +88,14 @@ $(BUILD)/tests/%: $(BUILD)/tests/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.
 	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_TEST)
 
 # ---- Debian packages ---------------------------------------------------
+# Everything beyond a minimal Debian 12 (debootstrap --variant=minbase, which has
+# neither make nor procps): procps gives /bin/kill, which the units' ExecReload
+# names and `systemd-analyze verify` (tests/test_systemd.sh) requires to exist.
 DEPS_BUILD := gcc make pkg-config libc6-dev libmodbus-dev libsystemd-dev libinih-dev libexpat1-dev
 DEPS_TEST := libcmocka-dev libgsl-dev python3 python3-scipy python3-numpy mbpoll \
              python3-pymodbus python3-serial python3-serial-asyncio can-utils python3-can python3-canmatrix \
              user-mode-linux busybox-static socat iproute2 clang libclang-rt-14-dev \
-             systemd valgrind python3-pyproj
+             systemd procps valgrind python3-pyproj
 
 deps-run:
 	@sh tests/deps.sh $(DEPS_BUILD)

@@ -147,6 +147,7 @@ typedef struct {
     size_t pos;
     FILE *fp;         /* file source (cfg_load) */
     int line;         /* lines read so far */
+    int indented;     /* the line just read starts with blanks (inih: a continuation) */
     /* current section */
     enum sec_kind kind;
     int sec_index;    /* object index or transport index */
@@ -306,6 +307,7 @@ static char *reader(char *str, int num, void *stream)
         fail(p, CFG_ESYNTAX, p->line, "line longer than %d characters", CFG_LINE_MAX - 2);
         return NULL;
     }
+    p->indented = str[0] == ' ' || str[0] == '\t';
     /* section header? (inih accepts "[name]" with optional spaces around) */
     const char *s = str;
     while (isspace((unsigned char)*s))
@@ -565,6 +567,14 @@ static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size
         return cfg_get_double(kv, 1e-6, 1e12, &e->max_abs_m, why, wl);
     if (strcmp(kv->key, "max_speed_m_s") == 0)
         return cfg_get_double(kv, 0, 1e9, &e->max_speed_m_s, why, wl);
+    if (strcmp(kv->key, "max_accel_m_s2") == 0)
+        return cfg_get_double(kv, 0, 1e9, &e->max_accel_m_s2, why, wl);
+    if (strcmp(kv->key, "start_slack") == 0) {
+        rc = cfg_get_int(kv, 0, ENGINE_FRAGMENT_MAX, &ll, why, wl);
+        if (rc == 0)
+            e->start_slack = (unsigned)ll;
+        return rc;
+    }
     if (strcmp(kv->key, "max_segment_s") == 0)
         return cfg_get_double(kv, 1e-6, 1e9, &e->max_segment_s, why, wl);
     if (strcmp(kv->key, "smooth_window") == 0) {
@@ -596,6 +606,12 @@ static int handler(void *user, const char *section, const char *name, const char
     int rc;
     if (p->kind == SEC_NONE && !p->sec_name[0]) {
         fail(p, CFG_ESYNTAX, p->line, "%s: key before any [section]", name);
+        return 0;
+    }
+    if (p->indented) {
+        fail(p, CFG_ESYNTAX, p->line,
+             "%s: indented line (INI reads it as part of the previous value): do not indent keys",
+             name);
         return 0;
     }
     if (seen_before(p, p->sec_name, name)) {

@@ -57,13 +57,15 @@ obj_t *core_obj_find(core_t *c, const char *name)
     return NULL;
 }
 
-static void tick(core_priv_t *p, uint64_t k, int64_t late_ns)
+static void tick(core_priv_t *p, uint64_t k, int64_t wake_ns, int64_t late_ns)
 {
     core_t *c = &p->pub;
     int64_t now_ns = c->t0_ns + (int64_t)k * c->period_ns;
     c->now_ns = now_ns;
     c->cycle = k;
-    c->late_ns = late_ns;
+    /* for transports: lateness against the deadline this tick serves (the
+     * newest), i.e. how stale its setpoint is when sent */
+    c->late_ns = wake_ns - (p->wall_base_ns + (int64_t)k * p->wall_period_ns);
 
     if (!c->stopping)
         for (unsigned i = 0; i < c->nobj; i++) {
@@ -115,7 +117,7 @@ static void on_clock(loop_t *l, int fd, uint32_t events, void *ctx)
     uint64_t k = p->next_k + n - 1;
     p->pub.stats->missed_ticks += n - 1;
     p->next_k = k + 1;
-    tick(p, k, late_ns);
+    tick(p, k, wake_ns, late_ns);
 }
 
 /* Exact equality of two engine configurations (doubles compared bitwise). */
@@ -129,7 +131,10 @@ static int engine_cfg_same(const engine_config_t *a, const engine_config_t *b)
            memcmp(&a->max_gap_s, &b->max_gap_s, sizeof a->max_gap_s) == 0 &&
            memcmp(&a->max_abs_m, &b->max_abs_m, sizeof a->max_abs_m) == 0 &&
            memcmp(&a->max_speed_m_s, &b->max_speed_m_s, sizeof a->max_speed_m_s) == 0 &&
-           memcmp(&a->max_segment_s, &b->max_segment_s, sizeof a->max_segment_s) == 0;
+           memcmp(&a->max_segment_s, &b->max_segment_s, sizeof a->max_segment_s) == 0 &&
+           memcmp(&a->max_accel_m_s2, &b->max_accel_m_s2, sizeof a->max_accel_m_s2) == 0 &&
+           a->start_slack == b->start_slack && a->smooth_window == b->smooth_window &&
+           a->smooth_ctrl == b->smooth_ctrl;
 }
 
 /* The object of prev that o (in the new config) may take over, or NULL. */

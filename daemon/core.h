@@ -5,9 +5,10 @@
  *
  * One tick (the output clock: a timerfd on CLOCK_MONOTONIC, absolute
  * deadlines, so the rate does not drift).  Deadline k is at wall time
- * start + k * period_ns / speed and at ENGINE time now_ns = k * period_ns
- * (engine time starts at 0 when the objects are created, so a replay matches
- * trajreplay's virtual clock exactly).  When the timerfd reports n > 1
+ * start + k * period_ns / speed and at ENGINE time now_ns = t0_ns + k *
+ * period_ns (t0_ns = 0 at start, so a replay matches trajreplay's virtual
+ * clock exactly; after a reload engine time continues where the previous
+ * core left off, see core_open).  When the timerfd reports n > 1
  * expirations (the daemon was late), the n - 1 older deadlines are skipped
  * and counted in stats.missed_ticks; one tick runs for the latest deadline
  * (never a burst of stale ticks).  Then, in this order:
@@ -131,7 +132,10 @@ typedef struct core {
                                      * reload, continues the previous core's clock) */
     int64_t now_ns;                 /* engine time of the last tick: t0_ns + cycle * period_ns */
     uint64_t cycle;                 /* index k of the last tick's deadline (0 after a reload) */
-    int64_t late_ns;                /* how late the last tick woke up (wall ns; CAN drops late cycles) */
+    int64_t late_ns;                /* how late the last tick woke up after the deadline it
+                                     * serves (the newest, after a skip), wall ns: how stale
+                                     * its setpoint is (CAN drops late cycles).  The stats
+                                     * histogram counts from the oldest missed deadline. */
     int stopping;                   /* SIGTERM received: bringing objects to rest */
     stats_t *stats;                 /* survives reloads */
     void *tstate[CFG_TRANSPORTS_MAX]; /* each open transport's state (NULL if not open) */

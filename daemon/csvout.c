@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <poll.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -108,19 +109,25 @@ static void put(csvout_t *st, stream_t *s, const char *line, int n)
     s->len += (size_t)n;
 }
 
-/* Blocking write of everything left (at close: bounded by the buffer size). */
+/* At close: write what is left, waiting at most CSVOUT_DRAIN_MS for a slow
+ * reader (a reader that never reads must not keep trajd from exiting). */
+#define CSVOUT_DRAIN_MS 1000
 static void drain(stream_t *s)
 {
     if (s->fd < 0)
         return;
-    int fl = fcntl(s->fd, F_GETFL);
-    if (fl >= 0 && (fl & O_NONBLOCK))
-        fcntl(s->fd, F_SETFL, fl & ~O_NONBLOCK);
-    flush(s);
+    int64_t end_ms = core_mono_ns() / 1000000 + CSVOUT_DRAIN_MS;
+    for (;;) {
+        flush(s);
+        int64_t left_ms = end_ms - core_mono_ns() / 1000000;
+        if (!s->len || left_ms <= 0)
+            break;
+        struct pollfd pfd = {.fd = s->fd, .events = POLLOUT};
+        if (poll(&pfd, 1, (int)left_ms) <= 0 || (pfd.revents & (POLLERR | POLLHUP)))
+            break;
+    }
     if (s->restore_flags >= 0)
         fcntl(s->fd, F_SETFL, s->restore_flags);
-    else if (fl >= 0)
-        fcntl(s->fd, F_SETFL, fl);
 }
 
 static int stream_init(stream_t *s, int fd, int own)

@@ -21,10 +21,19 @@ int rt_apply(const cfg_rt_t *rt, char *why, size_t whylen)
         if (m > 0)                                                                        \
             n = (size_t)m < whylen - n ? n + (size_t)m : whylen - 1;                      \
     } while (0)
+    /* the CPUs allowed at start: what a reload without cpu_affinity goes back to */
+    static cpu_set_t initial;
+    static int have_initial;
+    if (!have_initial)
+        have_initial = sched_getaffinity(0, sizeof initial, &initial) == 0 ? 1 : -1;
     if (rt->affinity_set && sched_setaffinity(0, sizeof rt->affinity, &rt->affinity) < 0)
         RT_FAIL("cpu_affinity");
+    if (!rt->affinity_set && have_initial > 0)
+        sched_setaffinity(0, sizeof initial, &initial);
     if (rt->mlockall && mlockall(MCL_CURRENT | MCL_FUTURE) < 0)
         RT_FAIL("mlockall");
+    if (!rt->mlockall)
+        munlockall(); /* a reload that turns it off; a no-op if never locked */
     struct sched_param sp = {.sched_priority = rt->fifo_priority};
     if (rt->fifo_priority > 0) {
         if (sched_setscheduler(0, SCHED_FIFO | SCHED_RESET_ON_FORK, &sp) < 0)

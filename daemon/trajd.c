@@ -129,7 +129,7 @@ static void reload(trajd_t *d)
 {
     char err[1024];
     cfg_t *nc = NULL;
-    if (d->core->stopping)
+    if (!d->core || d->core->stopping)
         return;
     sd_notifyf(0, "RELOADING=1\nMONOTONIC_USEC=%llu",
                (unsigned long long)(core_mono_ns() / 1000));
@@ -181,6 +181,8 @@ static void on_signal(loop_t *l, int fd, uint32_t events, void *ctx)
     struct signalfd_siginfo si;
     (void)events;
     while (read(fd, &si, sizeof si) == (ssize_t)sizeof si) {
+        if (!d->core)
+            return; /* a failed reload is ending the loop */
         switch (si.ssi_signo) {
         case SIGHUP:
             reload(d);

@@ -76,6 +76,8 @@ static void usage(FILE *f)
         "  --smooth-ctrl C      smooth: control points per fit (default 6)\n"
         "  --max-gap S          a longer interval ends the trajectory and starts a new one\n"
         "  --max-speed M_S      reject waypoints implying a higher speed (0 = no limit)\n"
+        "  --max-accel M_S2     reject waypoints implying a higher acceleration from the\n"
+        "                       two before (timestamp jitter; default 30, 0 = no limit)\n"
         "  --format F           auto | xyz | latlon | gpx | path (default auto;\n"
         "                       path: lines and arcs, lib/path.h, auto for *.path)\n"
         "  --skip-bad           skip and count malformed lines instead of failing\n"
@@ -150,13 +152,14 @@ static const char *reason_name(int e)
     case ENGINE_ESAMETIME: return "same_time";
     case ENGINE_ESPEED: return "speed";
     case ENGINE_ENUMERIC: return "numeric";
+    case ENGINE_EACCEL: return "accel";
     default: return NULL;
     }
 }
 
 enum {
     OPT_RATE = 256, OPT_FRAGMENT, OPT_OVERLAP, OPT_PARAM, OPT_ENDS, OPT_METHOD, OPT_SMOOTH_WINDOW, OPT_SMOOTH_CTRL, OPT_FORMAT,
-    OPT_SVG, OPT_SUMMARY, OPT_MAX_GAP, OPT_MAX_SPEED, OPT_SKIP_BAD, OPT_OBJECT,
+    OPT_SVG, OPT_SUMMARY, OPT_MAX_GAP, OPT_MAX_SPEED, OPT_MAX_ACCEL, OPT_SKIP_BAD, OPT_OBJECT,
     OPT_START_VEL, OPT_END_VEL, OPT_PROGRESS_AFTER,
 };
 
@@ -177,6 +180,7 @@ static int parse_args(int argc, char **argv, opts_t *o)
         {"summary", no_argument, NULL, OPT_SUMMARY},
         {"max-gap", required_argument, NULL, OPT_MAX_GAP},
         {"max-speed", required_argument, NULL, OPT_MAX_SPEED},
+        {"max-accel", required_argument, NULL, OPT_MAX_ACCEL},
         {"skip-bad", no_argument, NULL, OPT_SKIP_BAD},
         {"object", required_argument, NULL, OPT_OBJECT},
         {"start-vel", required_argument, NULL, OPT_START_VEL},
@@ -268,6 +272,14 @@ static int parse_args(int argc, char **argv, opts_t *o)
         case OPT_MAX_SPEED:
             if (parse_double(optarg, &o->cfg.max_speed_m_s) || o->cfg.max_speed_m_s < 0) {
                 fprintf(stderr, "trajreplay: --max-speed: '%s' is not a speed >= 0 in m/s\n",
+                        optarg);
+                return EXIT_USAGE;
+            }
+            break;
+        case OPT_MAX_ACCEL:
+            if (parse_double(optarg, &o->cfg.max_accel_m_s2) || o->cfg.max_accel_m_s2 < 0) {
+                fprintf(stderr,
+                        "trajreplay: --max-accel: '%s' is not an acceleration >= 0 in m/s^2\n",
                         optarg);
                 return EXIT_USAGE;
             }

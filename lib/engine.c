@@ -65,6 +65,9 @@ struct engine {
     int in_first_pending; /* the next queued entry is the trajectory's first */
     double last_t;        /* last accepted waypoint of the current trajectory */
     double last_r[AX];
+    int have_prev;        /* prev_t/prev_r hold the waypoint before last (same trajectory) */
+    double prev_t;        /* for the acceleration check */
+    double prev_r[AX];
     double end_r[AX];     /* end of the last queued segment */
     double end_t;
 
@@ -124,6 +127,7 @@ const char *engine_strerror(int err)
     case ENGINE_ENOMEM: return "out of memory";
     case ENGINE_ESTATE: return "call not valid in this state";
     case ENGINE_ENUMERIC: return "solver failed (singular system)";
+    case ENGINE_EACCEL: return "implied acceleration from the previous two waypoints above max_accel_m_s2";
     default: return "unknown engine error";
     }
 }
@@ -152,6 +156,7 @@ void engine_config_default(engine_config_t *cfg)
     cfg->max_gap_s = 60.0;
     cfg->max_abs_m = 1e7;
     cfg->max_speed_m_s = 100.0;
+    cfg->max_accel_m_s2 = 30.0;
     cfg->max_segment_s = 60.0;
     cfg->start_slack = 8;
     cfg->smooth_window = 24;
@@ -271,6 +276,8 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
         w = "max_abs_m: must be positive and finite";
     else if (!(cfg->max_speed_m_s >= 0) || !isfinite(cfg->max_speed_m_s))
         w = "max_speed_m_s: must be 0 (no limit) or positive and finite";
+    else if (!(cfg->max_accel_m_s2 >= 0) || !isfinite(cfg->max_accel_m_s2))
+        w = "max_accel_m_s2: must be 0 (no limit) or positive and finite";
     else if (!(cfg->max_segment_s >= 0) || !isfinite(cfg->max_segment_s))
         w = "max_segment_s: must be 0 or positive and finite";
     else if (cfg->start_slack > ENGINE_FRAGMENT_MAX)
@@ -599,6 +606,28 @@ static void open_input(engine_t *e, const engine_waypoint_t *wp)
         lsq_smooth_reset(&e->sm);
 }
 
+/*
+ * Acceleration implied by the previous two waypoints and this one (dt after
+ * the last): the change of mean velocity over the two intervals divided by
+ * half their sum, i.e. the second divided difference times 2.  It is what
+ * the C2 curve through the three has to produce somewhere near the middle
+ * one, whatever the end conditions; a timestamp off by a fraction of the
+ * interval makes it large because both intervals around the bad stamp are
+ * divided into the same distances.  O(1), no state beyond the two.
+ */
+static double implied_accel(const engine_t *e, const engine_waypoint_t *wp, double dt)
+{
+    double d1 = e->last_t - e->prev_t, a2 = 0;
+
+    for (int k = 0; k < AX; k++) {
+        double v1 = (e->last_r[k] - e->prev_r[k]) / d1;
+        double v2 = (wp->pos_m[k] - e->last_r[k]) / dt;
+        double a = 2.0 * (v2 - v1) / (d1 + dt);
+        a2 += a * a;
+    }
+    return sqrt(a2);
+}
+
 static int reject(engine_t *e, int code)
 {
     e->st.rejected++;
@@ -639,6 +668,9 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
             gap = 1;
         else if (e->cfg.max_speed_m_s > 0 && dist > e->cfg.max_speed_m_s * dt)
             return reject(e, ENGINE_ESPEED);
+        else if (e->cfg.max_accel_m_s2 > 0 && e->have_prev &&
+                 implied_accel(e, wp, dt) > e->cfg.max_accel_m_s2)
+            return reject(e, ENGINE_EACCEL);
     }
     /* room for this waypoint (and for the copies MULTIPLE adds) */
     if (buffered(e) + 1 + (e->mult ? 4 : 0) > e->cfg.capacity)
@@ -647,8 +679,14 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
         e->st.gaps++;
         close_input(e);
     }
-    if (!e->in_open)
+    if (!e->in_open) {
         open_input(e, wp);
+        e->have_prev = 0;
+    } else {
+        e->have_prev = 1;
+        e->prev_t = e->last_t;
+        memcpy(e->prev_r, e->last_r, sizeof(e->prev_r));
+    }
     e->last_t = wp->t_s;
     memcpy(e->last_r, wp->pos_m, sizeof(e->last_r));
     if (e->smooth) {
@@ -1124,6 +1162,7 @@ long engine_curve_flat(int method, int param, int ends, unsigned fragment,
     cfg.fragment = fragment;
     cfg.overlap = overlap;
     cfg.max_speed_m_s = 0;
+    cfg.max_accel_m_s2 = 0;
     cfg.max_gap_s = 1e9;
     wp = calloc(n ? n : 1, sizeof(*wp));
     segs = calloc(max_seg ? max_seg : 1, sizeof(*segs));

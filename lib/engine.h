@@ -88,6 +88,7 @@ enum engine_error {
     ENGINE_ENOMEM = 8,      /* engine_new could not allocate */
     ENGINE_ESTATE = 9,      /* call not valid in this state */
     ENGINE_ENUMERIC = 10,   /* solver failed (singular system); waypoint rejected */
+    ENGINE_EACCEL = 11,     /* implied acceleration from the last two waypoints above max_accel_m_s2 */
     ENGINE_ERROR_COUNT
 };
 
@@ -153,6 +154,20 @@ typedef struct {
                                limit); also the transfer speed.  Default 100 m/s:
                                generous for ground and sea vehicles, rejects GPS
                                jumps of kilometres between fixes */
+    double max_accel_m_s2;  /* implied acceleration above this is rejected (0 =
+                               no limit): the change of mean velocity over the
+                               last two intervals, 2 |v2 - v1| / (dt1 + dt2).
+                               Catches timestamp jitter (a fix stamped late or
+                               early by a fraction of the interval), which the
+                               curve, forced through every waypoint at its
+                               time, would turn into an acceleration spike.
+                               Default 30 m/s^2 (3 g: generous for ground and
+                               sea vehicles; measured on the real tracks: legit
+                               samples reach 11.4 at 5 Hz, the figure-8's
+                               jittered ones 117 and 44; see README "Jitter
+                               and outliers").  Position noise alone implies
+                               ~4 noise / dt^2: raise it for noisy fixes at
+                               10 Hz and more */
     double max_segment_s;   /* longest segment the stepper is tested for
                                (informational: the stepper re-seeds every
                                FDIFF_RESEED_STEPS, so drift does not grow with
@@ -260,6 +275,15 @@ void engine_free(engine_t *e);
  *   -ENGINE_EBACKWARDS  earlier than the previous waypoint of the trajectory
  *   -ENGINE_ESAMETIME   same time as the previous one, different position
  *   -ENGINE_ESPEED      distance / interval from the previous one > max_speed_m_s
+ *   -ENGINE_EACCEL      with the two previous waypoints of the trajectory
+ *                       (r0, r1 at t0, t1), the implied acceleration
+ *                       2 |(r - r1)/(t - t1) - (r1 - r0)/(t1 - t0)| / (t - t0)
+ *                       > max_accel_m_s2 (timestamp jitter, position jump).
+ *                       Checked against accepted waypoints only, so after a
+ *                       bad waypoint was accepted good ones can be refused
+ *                       too, for at most about 2 |dv| / max_accel_m_s2
+ *                       seconds (the implied acceleration falls as the
+ *                       interval grows)
  *   -ENGINE_EFULL       capacity waypoints buffered: offer it again later
  *                       (flow control: nothing accepted is ever dropped)
  *   -ENGINE_ENUMERIC    the solver refused (cannot happen with finite data:
@@ -267,8 +291,9 @@ void engine_free(engine_t *e);
  *                       is ended where it was
  * A time gap above max_gap_s ends the current trajectory at rest on its
  * last waypoint and starts a new one with this waypoint (no speed check
- * across a gap).  Speed and time checks are against the previous waypoint
- * of the same trajectory only.
+ * across a gap).  Speed, acceleration and time checks are against the
+ * previous waypoints of the same trajectory only (the acceleration check
+ * needs two of them: not on a trajectory's first two waypoints).
  */
 int engine_push(engine_t *e, const engine_waypoint_t *wp);
 
@@ -328,7 +353,8 @@ int engine_curve(const engine_config_t *cfg, const engine_waypoint_t *wp,
 /*
  * engine_curve with flat arguments, for Python ctypes: the default
  * configuration with method, param, ends, fragment, overlap given,
- * max_speed_m_s = 0 and max_gap_s = 1e9 (one trajectory).  t_s: n times,
+ * max_speed_m_s = 0, max_accel_m_s2 = 0 (every waypoint kept) and
+ * max_gap_s = 1e9 (one trajectory).  t_s: n times,
  * xyz: n x 3; seg_out: max_seg x 14 doubles (t0_s, dur_s, then c[axis][0..3]
  * for x, y, z).  Returns the number of segments, or a negated engine_error.
  */

@@ -187,6 +187,7 @@ static double frag_error(const engine_waypoint_t *wp, size_t n, engine_method_t 
     c.param = pa;
     c.ends = en;
     c.max_speed_m_s = 0;
+    c.max_accel_m_s2 = 0;
     c.max_gap_s = 1e9;
     c.fragment = ENGINE_FRAGMENT_MAX; /* one fragment for n < 1024: the global solve */
     c.overlap = 16;

@@ -88,6 +88,7 @@ static void test_values(void **state)
                        "output = csv, stdout\ncsv.path = out.csv\nmethod = bspline\n"
                        "param = uniform\nends = clamped\nstart_vel_m_s = 1, -2,3e-1\n"
                        "fragment = 32\noverlap = 16\nmax_gap_s = 7.5\n"
+                       "max_accel_m_s2 = 12.5\nstart_slack = 3\n"
                        "[object.b]\ninput = replay\nreplay.track = " TRACK "\n"
                        "replay.start_s = 2\noutput = stdout\n");
     assert_int_equal(c->daemon.period_ns, 1000000);
@@ -110,6 +111,8 @@ static void test_values(void **state)
     assert_true(o->engine.start_vel_m_s[1] > -2.0001 && o->engine.start_vel_m_s[1] < -1.9999);
     assert_true(o->engine.start_vel_m_s[2] > 0.2999 && o->engine.start_vel_m_s[2] < 0.3001);
     assert_int_equal(o->engine.fragment, 32);
+    assert_true(o->engine.max_accel_m_s2 > 12.4999 && o->engine.max_accel_m_s2 < 12.5001);
+    assert_int_equal(o->engine.start_slack, 3);
     assert_int_equal(o->engine.overlap, 16);
     const csvout_obj_cfg_t *cs = cfg_obj_transport(o, &csv_transport);
     assert_string_equal(cs->path, "./out.csv"); /* relative to the config's directory */
@@ -130,8 +133,11 @@ static void test_errors(void **state)
     load_bad(OBJ "[object.boat]\n", CFG_EDUP, 5, "section given twice");
     load_bad("rate_hz = 100\n" OBJ, CFG_ESYNTAX, 1, "before any");
     load_bad("[daemon]\nthis is not ini\n" OBJ, CFG_ESYNTAX, 2, "syntax");
+    load_bad("[daemon]\nrate_hz = 100\n  speed = 2\n" OBJ, CFG_ESYNTAX, 3, "do not indent");
     load_bad("[daemon]\n\n\n" OBJ "fragment = 4.5\n", CFG_EVALUE, 8, "fragment");
     load_bad(OBJ "method = spline\n", CFG_EVALUE, 5, "bspline, cubic, smooth");
+    load_bad(OBJ "max_accel_m_s2 = -1\n", CFG_EVALUE, 5, "max_accel_m_s2");
+    load_bad(OBJ "start_slack = 2000\n", CFG_EVALUE, 5, "start_slack");
     load_bad(OBJ "start_vel_m_s = 1,2\n", CFG_EVALUE, 5, "three numbers");
     load_bad("[realtime]\nfifo_priority = 100\n" OBJ, CFG_EVALUE, 2, "[0, 99]");
     load_bad("[realtime]\ncpu_affinity = 1-\n" OBJ, CFG_EVALUE, 2, "CPU list");
@@ -209,6 +215,10 @@ static void test_documented_conf(void **state)
     assert_memory_equal(&d->max_abs_m, &e.max_abs_m, sizeof(double));
     assert_memory_equal(&d->max_speed_m_s, &e.max_speed_m_s, sizeof(double));
     assert_memory_equal(&d->max_segment_s, &e.max_segment_s, sizeof(double));
+    assert_memory_equal(&d->max_accel_m_s2, &e.max_accel_m_s2, sizeof(double));
+    assert_int_equal(d->start_slack, e.start_slack);
+    assert_int_equal(d->smooth_window, e.smooth_window);
+    assert_int_equal(d->smooth_ctrl, e.smooth_ctrl);
     assert_memory_equal(d->start_vel_m_s, e.start_vel_m_s, sizeof e.start_vel_m_s);
     cfg_t *m = load_ok(OBJ); /* nothing set: the parser's defaults */
     assert_memory_equal(&c->daemon.rate_hz, &m->daemon.rate_hz, sizeof(double));

@@ -51,7 +51,7 @@ def xyz_track(path, n, dt_s, speed_m_s=2.0, radius_m=50.0):
 class Daemon:
     """trajd with a notify socket, stdout/stderr read by threads into queues."""
 
-    def __init__(self, tmp, conf, watchdog_usec=None):
+    def __init__(self, tmp, conf, watchdog_usec=None, wrapper=(), read_stdout=True):
         self.tmp = tmp
         self.sock_path = os.path.join(tmp, "notify-%d.sock" % id(self))
         self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
@@ -61,13 +61,15 @@ class Daemon:
         env.pop("WATCHDOG_USEC", None)
         if watchdog_usec:
             env["WATCHDOG_USEC"] = str(watchdog_usec)
-        self.p = subprocess.Popen([TRAJD, "-f", "-c", conf], stdout=subprocess.PIPE,
+        self.p = subprocess.Popen(list(wrapper) + [TRAJD, "-f", "-c", conf], stdout=subprocess.PIPE,
                                   stderr=subprocess.PIPE, env=env, text=True)
         self.out = queue.Queue()
         self.err = queue.Queue()
         self.notes = queue.Queue()
         self.err_lines = []
         for stream, q in ((self.p.stdout, self.out), (self.p.stderr, self.err)):
+            if stream is self.p.stdout and not read_stdout:
+                continue  # a reader that never reads
             threading.Thread(target=self._pump, args=(stream, q), daemon=True).start()
         # Read the notify socket all the time, as systemd does: sd_notify()
         # blocks when a datagram socket's queue is full.
@@ -242,6 +244,71 @@ class TestCommandLine(unittest.TestCase):
                 d.close()
 
 
+class TestBackground(unittest.TestCase):
+    def test_detaches_once_ready(self):
+        """Without -f: the command returns 0 once the daemon is ready, the
+        daemon (another process, found from the notify datagram's sender
+        credentials, as systemd finds it) runs on and finishes the replay."""
+        with tempfile.TemporaryDirectory() as tmp:
+            track = os.path.join(tmp, "fig8.csv")
+            with open(N2K) as f:
+                write(track, "".join(f.readlines()[:52]))  # 10 s of the real track
+            conf = os.path.join(tmp, "t.conf")
+            write(conf, "[daemon]\nspeed = 10\nexit_when_done = yes\nstatus_interval_s = 0\n"
+                        "[object.b]\ninput = replay\nreplay.track = fig8.csv\noutput = csv\n"
+                        "csv.path = out.csv\n")
+            sock_path = os.path.join(tmp, "notify.sock")
+            sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+            sock.bind(sock_path)
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_PASSCRED, 1)
+            env = dict(os.environ, NOTIFY_SOCKET=sock_path)
+            try:
+                # (output to files: a pipe would make run() wait for the daemon's end)
+                with open(os.path.join(tmp, "err.txt"), "w") as ef:
+                    r = subprocess.run([TRAJD, "-c", conf], env=env, stdout=subprocess.DEVNULL,
+                                       stderr=ef, timeout=START_TIMEOUT_S)
+                self.assertEqual(r.returncode, 0)
+                sock.settimeout(EVENT_TIMEOUT_S)
+                pid = None
+                while pid is None:
+                    data, anc, _, _ = sock.recvmsg(4096, socket.CMSG_SPACE(12))
+                    if b"READY=1" in data:
+                        for lvl, typ, cd in anc:
+                            if lvl == socket.SOL_SOCKET and typ == socket.SCM_CREDENTIALS:
+                                pid = int.from_bytes(cd[0:4], sys.byteorder)
+                self.assertTrue(pid > 0)
+                # the daemon is not the process that returned; it ends by itself
+                def alive():
+                    try:
+                        with open("/proc/%d/stat" % pid) as f:
+                            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+                    except FileNotFoundError:
+                        return False
+                self.assertTrue(alive())  # still running after the command returned
+                end = time.monotonic() + 30
+                while time.monotonic() < end and alive():
+                    sock.settimeout(0.2)
+                    try:
+                        sock.recv(4096)
+                    except socket.timeout:
+                        pass
+                if alive():
+                    os.kill(pid, signal.SIGKILL)
+                    self.fail("detached trajd did not finish")
+                with open(os.path.join(tmp, "out.csv")) as f:
+                    last = f.read().splitlines()[-1].split(",")
+                self.assertEqual(last[12], "finished")
+                # a config that cannot open makes the command itself fail
+                write(conf, "[object.b]\ninput = replay\nreplay.track = fig8.csv\noutput = csv\n"
+                            "csv.path = no/such/dir/out.csv\n")
+                r = subprocess.run([TRAJD, "-c", conf], env=env, capture_output=True, text=True,
+                                   timeout=START_TIMEOUT_S)
+                self.assertNotEqual(r.returncode, 0)
+                self.assertIn("no/such/dir", r.stderr)
+            finally:
+                sock.close()
+
+
 class TestRunning(unittest.TestCase):
     def setUp(self):
         self.tmpd = tempfile.TemporaryDirectory()
@@ -350,6 +417,81 @@ class TestRunning(unittest.TestCase):
         finally:
             d.close()
 
+    def test_realtime_options(self):
+        # Given [realtime] fifo_priority, mlockall and cpu_affinity, then the
+        # kernel reports them for the process (/proc), or, without the
+        # privilege, trajd warns and runs on.
+        write(self.conf, self.config("boat", extra_daemon="[realtime]\nfifo_priority = 10\n"
+                                                          "mlockall = yes\ncpu_affinity = 0\n"))
+        d = Daemon(self.tmp, self.conf)
+        try:
+            d.msg(lambda f: f.get("READY") == "1", START_TIMEOUT_S)
+            d.line(lambda l: l.startswith("boat,"))  # a tick ran after the settings
+            with open("/proc/%d/stat" % d.p.pid) as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            # fields[0] is field 3 (state): rt_priority is field 40, policy 41
+            rt_priority, policy = int(fields[37]), int(fields[38])
+            with open("/proc/%d/status" % d.p.pid) as f:
+                status = dict(l.split(":", 1) for l in f.read().splitlines() if ":" in l)
+            if os.geteuid() == 0:
+                self.assertEqual(policy, 1)  # SCHED_FIFO
+                self.assertEqual(rt_priority, 10)
+                self.assertGreater(int(status["VmLck"].split()[0]), 0)
+                self.assertEqual(status["Cpus_allowed_list"].strip(), "0")
+            else:
+                d.err_line(lambda l: "realtime settings not applied" in l)
+            d.p.send_signal(signal.SIGTERM)
+            self.assertEqual(d.wait(10), 0)
+        finally:
+            d.close()
+
+    def test_reload_that_cannot_open_falls_back(self):
+        # Given a new config that parses but cannot open (its CSV directory
+        # does not exist), when SIGHUP, then the reload is refused after the
+        # old transports were closed: the old configuration is reopened and
+        # streams again (a fresh header, then its object's rows).
+        write(self.conf, self.config("boat"))
+        d = Daemon(self.tmp, self.conf)
+        try:
+            d.msg(lambda f: f.get("READY") == "1", START_TIMEOUT_S)
+            d.line(lambda l: l.startswith("boat,"))
+            write(self.conf, self.config("boat").replace(
+                "output = stdout", "output = csv\ncsv.path = no/such/dir/x.csv"))
+            d.p.send_signal(signal.SIGHUP)
+            f, seen = d.msg(lambda f: f.get("READY") == "1")
+            self.assertIn("reload refused", f.get("STATUS", ""))
+            self.assertIn("no/such/dir", f.get("STATUS", ""))
+            d.err_line(lambda l: "reopening the old configuration" in l)
+            d.line(lambda l: l.startswith("object,"))   # stdout reopened
+            d.line(lambda l: l.startswith("boat,"))
+            self.assertIsNone(d.p.poll())
+            d.p.send_signal(signal.SIGTERM)
+            self.assertEqual(d.wait(10), 0)
+        finally:
+            d.close()
+
+    def test_stalled_reader_does_not_stall_the_tick(self):
+        # Given 4 objects at 1 kHz writing to a stdout pipe nobody reads,
+        # then the pipe and trajd's buffer fill, lines are dropped and
+        # counted ("out dropped"), and the clock keeps ticking (the tick count
+        # in STATUS grows by about the rate between two status lines).
+        objs = "".join("[object.o%d]\ninput = replay\nreplay.track = circle.csv\noutput = stdout\n" % i
+                       for i in range(4))
+        write(self.conf, "[daemon]\nrate_hz = 1000\nstatus_interval_s = 1\nstop_timeout_s = 0\n" + objs)
+        d = Daemon(self.tmp, self.conf, read_stdout=False)
+        ticks = lambda f: int(f["STATUS"].split("ticks ")[1].split(",")[0])
+        try:
+            d.msg(lambda f: f.get("READY") == "1", START_TIMEOUT_S)
+            f1, _ = d.msg(lambda f: "out dropped" in f.get("STATUS", ""), 15)
+            f2, _ = d.msg(lambda f: "STATUS" in f and "up " in f["STATUS"], 5)
+            # one status second apart: >= half the rate, allowing for a loaded machine
+            self.assertGreater(ticks(f2) - ticks(f1), 500, (f1, f2))
+            d.p.send_signal(signal.SIGTERM)
+            # exits although the reader never reads (bounded drain at close)
+            self.assertEqual(d.wait(10), 0)
+        finally:
+            d.close()
+
     def test_second_signal_exits_at_once(self):
         # stop_timeout_s large: only the second signal can end it quickly.
         write(self.conf, self.config("boat").replace("stop_timeout_s = 5", "stop_timeout_s = 600"))
@@ -394,64 +536,128 @@ class TestRunning(unittest.TestCase):
             d.close()
 
 
+class TestReloadUnderValgrind(unittest.TestCase):
+    def test_reloads_leak_nothing(self):
+        """Given trajd under valgrind memcheck, when it is reloaded with an
+        unchanged object (carried over), a renamed one, a broken file and a
+        file that cannot open (fallback), and stopped, then it exits 0 with
+        no memcheck error and nothing in use at exit."""
+        with tempfile.TemporaryDirectory() as tmp:
+            xyz_track(os.path.join(tmp, "circle.csv"), 600, 0.1)
+            conf = os.path.join(tmp, "trajd.conf")
+            base = ("[daemon]\nstatus_interval_s = 1\nstop_timeout_s = 1\n[object.%s]\ninput = replay\n"
+                    "replay.track = circle.csv\noutput = stdout\n%s")
+            write(conf, base % ("boat", ""))
+            d = Daemon(tmp, conf, wrapper=["valgrind", "--error-exitcode=9", "--leak-check=full",
+                                           "--log-file=%s/vg.log" % tmp])
+            try:
+                d.msg(lambda f: f.get("READY") == "1", 60)
+                for name, extra in (("boat", "max_gap_s = 60\n"), ("other", ""),
+                                    ("other", "fragment = x\n"),
+                                    ("other", "output = csv\ncsv.path = no/such/x.csv\n")):
+                    text = base % (name, extra)
+                    if "csv.path" in extra:
+                        text = text.replace("output = stdout\n", "")
+                    write(conf, text)
+                    d.p.send_signal(signal.SIGHUP)
+                    d.msg(lambda f: f.get("READY") == "1", 60)
+                d.line(lambda l: l.startswith("other,"), 30)
+                d.p.send_signal(signal.SIGTERM)
+                rc = d.wait(60)
+            finally:
+                d.close()
+            with open(os.path.join(tmp, "vg.log")) as f:
+                vg = f.read()
+            print(vg[-600:], file=sys.stderr)
+            self.assertEqual(rc, 0, vg)
+            self.assertIn("in use at exit: 0 bytes in 0 blocks", vg)
+            self.assertIn("ERROR SUMMARY: 0 errors", vg)
+
+
 @unittest.skipUnless(os.access(TRAJREPLAY, os.X_OK), "trajreplay not built in this tree")
 class TestReplayMatchesTrajreplay(unittest.TestCase):
+    def compare(self, name, dl, rl, missed):
+        """Every row trajd wrote for object name equals trajreplay's row for
+        that tick, byte for byte (apart from the skip flag and counter after
+        a deadline trajd missed on this shared machine)."""
+        self.assertEqual(dl[0], rl[0])  # header
+        ref_by_t = {l.split(",", 2)[1]: l.split(",", 1)[1] for l in rl[1:]}
+        compared = 0
+        skipped_seen = False
+        prev_ns = -PERIOD_NS
+        rows = [l for l in dl[1:] if l.startswith(name + ",")]
+        for l in rows:
+            rest = l.split(",", 1)[1]
+            t = rest.split(",", 1)[0]
+            # a tick trajd skipped: from here on the engine's cycle counter
+            # (ticks answered) and skip flag differ from trajreplay's
+            if int(t) - prev_ns != PERIOD_NS:
+                skipped_seen = True
+            prev_ns = int(t)
+            if t not in ref_by_t:
+                continue  # trajd ran on past trajreplay's last tick
+            a, b = rest.split(","), ref_by_t[t].split(",")
+            if not skipped_seen:
+                self.assertEqual(rest, ref_by_t[t], "%s tick %s" % (name, t))
+            else:  # numbers and state unchanged by skipping
+                self.assertEqual(a[:12], b[:12], "%s tick %s" % (name, t))
+            compared += 1
+        self.assertGreater(compared, 0.9 * (len(rl) - 1) if missed == 0 else 100)
+        # and trajd reached the end of the track, as trajreplay did.
+        self.assertEqual(rows[-1].split(",")[12], "finished")
+        return compared
+
     def test_identical_output(self):
         with tempfile.TemporaryDirectory() as tmp:
-            # Given the first 301 rows of the real 5 Hz figure-eight (60 s),
-            track = os.path.join(tmp, "fig8.csv")
+            # Given two objects with their own tracks, engine settings and
+            # outputs: 'track', the first 60 s of the real 5 Hz figure-eight,
+            # default engine, to a CSV file; 'walk', the first 80 s of the
+            # irregularly sampled Visnjan walk (1-20 s between points), with
+            # the Hoang B-spline, F=16/O=8, natural ends, to stdout;
+            fig8 = os.path.join(tmp, "fig8.csv")
             with open(N2K) as f:
-                write(track, "".join(f.readlines()[:302]))
+                write(fig8, "".join(f.readlines()[:302]))
+            walk = os.path.join(tmp, "walk.csv")
+            with open(os.path.join(REPO, "tests", "data", "gpxgo_visnjan.csv")) as f:
+                lines = f.readlines()
+            write(walk, "".join([lines[0]] + [l for l in lines[1:] if float(l.split(",")[0]) <= 80]))
             conf = os.path.join(tmp, "t.conf")
-            out = os.path.join(tmp, "d.csv")
-            # replayed by trajd 20x faster than real time with the default
-            # engine settings, to a CSV file, exiting when done,
+            # replayed by trajd 20x faster than real time, exiting when done,
             write(conf, "[daemon]\nrate_hz = 100\nspeed = 20\nexit_when_done = yes\n"
-                        "status_interval_s = 0\n[object.track]\ninput = replay\n"
-                        "replay.track = fig8.csv\noutput = csv\ncsv.path = d.csv\n")
+                        "status_interval_s = 0\n"
+                        "[object.track]\ninput = replay\nreplay.track = fig8.csv\n"
+                        "output = csv\ncsv.path = d.csv\n"
+                        "[object.walk]\ninput = replay\nreplay.track = walk.csv\n"
+                        "output = stdout\nmethod = bspline\nparam = uniform\nends = natural\n"
+                        "fragment = 16\noverlap = 8\n")
             d = Daemon(tmp, conf)
             try:
                 self.assertEqual(d.wait(120), 0, d.stderr())
+                stdout_lines = d.lines_until_eof()
                 summary = d.stderr()
             finally:
                 d.close()
-            # and by trajreplay on the same file at the same rate,
-            ref = os.path.join(tmp, "r.csv")
-            r = subprocess.run([TRAJREPLAY, "--rate", "100", "--object", "track", "-q", "-o", ref, track],
-                               capture_output=True, text=True, timeout=120)
-            self.assertEqual(r.returncode, 0, r.stderr)
-            with open(out) as f:
-                dl = f.read().splitlines()
-            with open(ref) as f:
-                rl = f.read().splitlines()
-            # then the header is the same and every row trajd wrote is the
-            # row trajreplay wrote for that tick, byte for byte (apart from
-            # the object name column, and from the skip flag and counter if
-            # trajd missed deadlines on this shared machine).
-            self.assertEqual(dl[0], rl[0])
-            ref_by_t = {l.split(",", 2)[1]: l.split(",", 1)[1] for l in rl[1:]}
             missed = int(summary.split("missed ")[-1].split(",")[0])
-            compared = 0
-            skipped_seen = False
-            for l in dl[1:]:
-                obj, rest = l.split(",", 1)
-                self.assertEqual(obj, "track")
-                t = rest.split(",", 1)[0]
-                if t not in ref_by_t:
-                    continue  # trajd ran on past trajreplay's last tick
-                a, b = rest.split(","), ref_by_t[t].split(",")
-                if missed == 0 or not skipped_seen:
-                    flags_a = int(a[12])
-                    if flags_a & 0x04:
-                        skipped_seen = True
-                if missed == 0 or not skipped_seen:
-                    self.assertEqual(rest, ref_by_t[t], "tick %s" % t)
-                else:  # numbers unchanged by skipping; state too
-                    self.assertEqual(a[:12], b[:12], "tick %s" % t)
-                compared += 1
-            self.assertGreater(compared, 0.9 * (len(rl) - 1) if missed == 0 else 100)
-            # and trajd reached the end of the track, as trajreplay did.
-            self.assertEqual(dl[-1].split(",")[12], "finished")
+            # and by trajreplay on the same files with the same settings,
+            refs = {}
+            for name, track, opts in (
+                    ("track", fig8, []),
+                    ("walk", walk, ["--method", "bspline", "--param", "uniform", "--ends", "natural",
+                                    "--fragment", "16", "--overlap", "8"])):
+                ref = os.path.join(tmp, name + ".ref.csv")
+                r = subprocess.run([TRAJREPLAY, "--rate", "100", "--object", name, "-q", "-o", ref]
+                                   + opts + [track], capture_output=True, text=True, timeout=120)
+                self.assertEqual(r.returncode, 0, r.stderr)
+                with open(ref) as f:
+                    refs[name] = f.read().splitlines()
+            # then each object's rows are trajreplay's rows.
+            with open(os.path.join(tmp, "d.csv")) as f:
+                n1 = self.compare("track", f.read().splitlines(), refs["track"], missed)
+            n2 = self.compare("walk", stdout_lines, refs["walk"], missed)
+            print("replay == trajreplay: %d + %d rows compared, %d deadlines missed"
+                  % (n1, n2, missed), file=sys.stderr)
+            # and the two objects' settings really differ (not one curve twice)
+            self.assertNotEqual(refs["track"][-1].split(",")[3], refs["walk"][-1].split(",")[3])
 
 
 if __name__ == "__main__":

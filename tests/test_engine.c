@@ -680,6 +680,172 @@ static void test_all_configs_stream(void **state)
     }
 }
 
+/* A boat at 4 m/s sampled at 5 Hz with a late burst as in the real
+ * n2k_furuno_figure8 log around t = 135 s: waypoint J stamped 0.296 s late,
+ * J+1 0.120 s late (24 ms after J), J+2 on time but only 0.105 s after J.
+ * Positions are on time (evenly spaced): only the stamps are off. */
+enum { JIT_N = 400, JIT_J = 200 };
+static void jitter_wp(engine_waypoint_t *w, int i)
+{
+    double t = 0.2 * i;
+    memset(w, 0, sizeof(*w));
+    w->t_s = t + (i == JIT_J ? 0.296 : i == JIT_J + 1 ? 0.120 : i == JIT_J + 2 ? 0.001 : 0.0);
+    w->pos_m[0] = 4.0 * t;
+    w->pos_m[1] = 5.0 * sin(0.2 * t); /* gentle weave: 0.2 m/s^2 at most */
+    w->seq = (uint32_t)i + 1;
+}
+
+/* Largest |acceleration| per axis of a curve, by Horner every 1 ms within
+ * [t_lo, t_hi] (and overall, into *all_max). */
+static double curve_amax_axis(const fdiff_seg_t *s, size_t n, double t_lo, double t_hi,
+                              double *all_max)
+{
+    double m = 0, am = 0;
+    for (size_t i = 0; i < n; i++)
+        for (int j = 0; j <= 1000; j++) {
+            double a[3], t = s[i].t0_s + s[i].dur_s * j / 1000.0;
+            fdiff_eval(&s[i], j / 1000.0, NULL, NULL, a);
+            for (int k = 0; k < 3; k++) {
+                if (fabs(a[k]) > am)
+                    am = fabs(a[k]);
+                if (t >= t_lo && t <= t_hi && fabs(a[k]) > m)
+                    m = fabs(a[k]);
+            }
+        }
+    if (all_max)
+        *all_max = am;
+    return m;
+}
+
+/*
+ * Given the default configuration and a track with the real log's late
+ * burst, when pushed, then J (whose lateness cannot be seen yet) is
+ * accepted, J+1 and J+2 are refused with ENGINE_EACCEL and counted, J+3 on
+ * is accepted; when streamed, every setpoint equals (Horner) the curve
+ * through the waypoints kept as if the two had never been sent (the rest of
+ * the curve is unaffected: same nodes, same solve), no tick jumps, and away
+ * from the REST start and stop the acceleration per axis stays within
+ * 3 * max_accel_m_s2 - the max principle of the diagonally dominant
+ * second-derivative system: at its largest |M_i|,
+ * |M_i| (h1 + h2) <= 6 |second difference| = 3 |a_implied| (h1 + h2).
+ * Without the check the same track peaks far above that bound (the test
+ * discriminates), and a gap restarts the check (two waypoints of a new
+ * trajectory are never tested against the old one).
+ */
+static void test_jitter_rejected(void **state)
+{
+    (void)state;
+    engine_config_t c, c0;
+    static engine_waypoint_t wp[JIT_N], kept[JIT_N];
+    static fdiff_seg_t segs[JIT_N + 8], segs_all[JIT_N + 8];
+    size_t nseg = 0, nall = 0, nk = 0;
+    engine_status_t st;
+    engine_setpoint_t sp, prev;
+    double maxerr = 0, maxaerr = 0, maxstep = 0, maxdv = 0, amax_stream = 0;
+
+    engine_config_default(&c);
+    assert_true(c.max_accel_m_s2 > 0);
+    engine_t *e = mk(&c);
+    for (int i = 0; i < JIT_N; i++) {
+        jitter_wp(&wp[i], i);
+        int rc = engine_push(e, &wp[i]);
+        if (i == JIT_J + 1 || i == JIT_J + 2) {
+            assert_int_equal(rc, -ENGINE_EACCEL);
+        } else {
+            assert_int_equal(rc, 0);
+            kept[nk++] = wp[i];
+        }
+    }
+    assert_int_equal(engine_finish(e), 0);
+    engine_status(e, &st);
+    assert_int_equal(st.accepted, JIT_N - 2);
+    assert_int_equal(st.rejected, 2);
+    assert_int_equal(st.rejected_by[ENGINE_EACCEL], 2);
+    assert_int_equal(st.last_seq, JIT_N);
+    assert_non_null(strstr(engine_strerror(-ENGINE_EACCEL), "max_accel_m_s2"));
+
+    /* the reference: the kept waypoints with no check at all */
+    c0 = c;
+    c0.max_accel_m_s2 = 0;
+    assert_int_equal(engine_curve(&c0, kept, nk, segs, JIT_N + 8, &nseg), 0);
+    assert_int_equal(nseg, nk - 1);
+    double vmax = curve_vmax(segs, nseg), amax_all;
+    /* REST pulls the first and last segments from/to standstill (4 m/s in
+     * 0.2 s); its influence decays by rho = 0.27 per waypoint: 10 waypoints
+     * (2 s) leave < 1e-5 of it. */
+    double t_lo = kept[0].t_s + 2.0, t_hi = kept[nk - 1].t_s - 2.0;
+    double amax_ref = curve_amax_axis(segs, nseg, t_lo, t_hi, &amax_all);
+
+    memset(&prev, 0, sizeof prev);
+    for (int64_t k = 0; k < 100000; k++) {
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+        assert_true(finite_sp(&sp));
+        if (sp.state == ENGINE_STATE_STREAMING) {
+            double p[3], a[3];
+            fdiff_eval_curve(segs, nseg, &sp.t_s, 1, p, NULL, a);
+            maxerr = fmax(maxerr, dist3(p, sp.pos_m));
+            maxaerr = fmax(maxaerr, dist3(a, sp.acc_m_s2));
+            if (sp.t_s >= t_lo && sp.t_s <= t_hi)
+                for (int ax = 0; ax < 3; ax++)
+                    amax_stream = fmax(amax_stream, fabs(sp.acc_m_s2[ax]));
+        }
+        if (k > 0) {
+            maxstep = fmax(maxstep, dist3(prev.pos_m, sp.pos_m));
+            maxdv = fmax(maxdv, dist3(prev.vel_m_s, sp.vel_m_s));
+        }
+        prev = sp;
+        if (sp.state == ENGINE_STATE_FINISHED)
+            break;
+    }
+    assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+    assert_true(maxerr < TOL_HORNER_M);
+    assert_true(maxaerr < 1e-6); /* m/s^2: same stepper drift, two derivatives down */
+    assert_true(maxstep <= vmax * 0.01 * STEP_SLACK);
+    /* velocity changes by at most |a| * period per axis (sqrt 3 for the norm) */
+    assert_true(maxdv <= sqrt(3.0) * amax_all * 0.01 * STEP_SLACK);
+    engine_free(e);
+
+    /* without the check: all 400 in, and the spike the check prevents */
+    assert_int_equal(engine_curve(&c0, wp, JIT_N, segs_all, JIT_N + 8, &nall), 0);
+    assert_int_equal(nall, JIT_N - 1);
+    double amax_nocheck = curve_amax_axis(segs_all, nall, t_lo, t_hi, NULL);
+    print_message("jitter: max |a| per axis (interior) %.1f m/s^2 streamed, %.1f curve, "
+                  "%.1f without the check; bound 3 * %.0f; max |sp - Horner| %.1e m\n",
+                  amax_stream, amax_ref, amax_nocheck, c.max_accel_m_s2, maxerr);
+    assert_true(amax_ref <= 3 * c.max_accel_m_s2);
+    assert_true(amax_stream <= 3 * c.max_accel_m_s2);
+    assert_true(amax_nocheck > 3 * c.max_accel_m_s2);
+
+    /* a gap restarts it: a fast new trajectory is not judged by the old one */
+    e = mk(&c);
+    engine_waypoint_t g = {.t_s = 0, .pos_m = {0, 0, 0}};
+    assert_int_equal(engine_push(e, &g), 0);
+    g.t_s = 1; g.pos_m[0] = 1;
+    assert_int_equal(engine_push(e, &g), 0);
+    g.t_s = 2; g.pos_m[0] = 2;
+    assert_int_equal(engine_push(e, &g), 0);
+    g.t_s = 2 + c.max_gap_s + 1; g.pos_m[0] = 500;  /* new trajectory */
+    assert_int_equal(engine_push(e, &g), 0);
+    g.t_s += 1; g.pos_m[0] += 50;                   /* 50 m/s at once: no triple yet */
+    assert_int_equal(engine_push(e, &g), 0);
+    g.t_s += 1; g.pos_m[0] += 10;                   /* 50 -> 10 m/s in 1 s: 40 m/s^2 */
+    assert_int_equal(engine_push(e, &g), -ENGINE_EACCEL);
+    g.t_s += 1; g.pos_m[0] += 40;                   /* 50 -> 25 m/s over 2 + 1 s: 16.7 */
+    assert_int_equal(engine_push(e, &g), 0);
+    engine_status(e, &st);
+    assert_int_equal(st.gaps, 1);
+    assert_int_equal(st.rejected_by[ENGINE_EACCEL], 1);
+    engine_free(e);
+
+    /* 0 switches it off; negative or non-finite is refused */
+    c.max_accel_m_s2 = -1;
+    assert_int_equal(engine_config_check(&c, NULL), -ENGINE_ECONFIG);
+    c.max_accel_m_s2 = NAN;
+    assert_int_equal(engine_config_check(&c, NULL), -ENGINE_ECONFIG);
+    c.max_accel_m_s2 = 0;
+    assert_int_equal(engine_config_check(&c, NULL), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -688,6 +854,7 @@ int main(void)
         cmocka_unit_test(test_stream_underrun_finish),
         cmocka_unit_test(test_skipped_ticks_identical),
         cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_jitter_rejected),
         cmocka_unit_test(test_full_and_retry),
         cmocka_unit_test(test_gap_transfer_clear),
         cmocka_unit_test(test_ends),

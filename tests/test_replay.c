@@ -77,6 +77,7 @@ static void test_efull_retried(void **state)
     engine_config_default(&cfg);
     cfg.fragment = 8;
     cfg.overlap = 4;
+    cfg.max_accel_m_s2 = 0; /* the made-up track turns at 80 m/s^2: keep every waypoint */
     /* The smallest capacity engine_config_check accepts (its rule is the
      * engine's business: search up from lookahead + fragment). */
     const char *why = NULL;

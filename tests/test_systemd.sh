@@ -45,10 +45,13 @@ tail -n 1 "$dest/etc/trajd/trajd.conf" | grep -q "edited by the operator" || fai
 
 # systemd-analyze verify: on copies whose binary paths point inside DESTDIR.
 mkdir -p "$tmp/units"
-for u in "$dest$PREFIX/lib/systemd/system/"*.service; do
-    sed "s|$PREFIX/bin/|$dest$PREFIX/bin/|g" "$u" > "$tmp/units/$(basename "$u")"
+for u in systemd/*.service systemd/*.socket; do
+    [ -f "$u" ] || continue
+    i="$dest$PREFIX/lib/systemd/system/$(basename "$u")"
+    [ -f "$i" ] || fail "$(basename "$u") not installed"
+    sed "s|$PREFIX/bin/|$dest$PREFIX/bin/|g" "$i" > "$tmp/units/$(basename "$u")"
 done
-(cd "$tmp/units" && systemd-analyze verify ./trajd.service ./trajd@.service) > "$tmp/verify.log" 2>&1 \
+(cd "$tmp/units" && systemd-analyze verify $(ls -1 | grep -E "\.(service|socket)$" | sed "s|^|./|")) > "$tmp/verify.log" 2>&1 \
     || { cat "$tmp/verify.log"; fail "systemd-analyze verify"; }
 if [ -s "$tmp/verify.log" ]; then cat "$tmp/verify.log"; fail "systemd-analyze verify printed warnings"; fi
 # the template, instantiated

@@ -111,11 +111,12 @@ def replay(track, extra, tmp, name="out"):
     return read_setpoints(out), summary, p
 
 
-def expected_counts(t, pos, max_gap_s):
+def expected_counts(t, pos, max_gap_s, enu=None, max_accel=0.0):
     """Duplicates, rejections and gaps by lib/engine.h's rules, applied here:
-    compared with the last *accepted* waypoint."""
-    dup = back = same = gaps = 0
-    last = None
+    compared with the last *accepted* waypoint (and, for the acceleration
+    rule, the one accepted before it in the same trajectory, on enu)."""
+    dup = back = same = gaps = accel = 0
+    last = prev = None
     for i in range(len(t)):
         if last is not None:
             if t[i] < t[last]:
@@ -129,8 +130,16 @@ def expected_counts(t, pos, max_gap_s):
                 continue
             if t[i] - t[last] > max_gap_s:
                 gaps += 1
-        last = i
-    return dup, back, same, gaps, last
+                last, prev = i, None
+                continue
+            if max_accel > 0 and prev is not None:
+                v1 = (enu[last] - enu[prev]) / (t[last] - t[prev])
+                v2 = (enu[i] - enu[last]) / (t[i] - t[last])
+                if np.linalg.norm(2 * (v2 - v1) / (t[i] - t[prev])) > max_accel:
+                    accel += 1
+                    continue
+        last, prev = i, last
+    return dup, back, same, gaps, accel, last
 
 
 def common_checks(sp, label, period_ns):
@@ -207,8 +216,11 @@ def test_spline_agreement(tmp):
                 ("cubic", "clamped", FRAG_F, FRAG_O), ("cubic", "rest", 32, 16)]
         for method, ends, f, o in runs:
             label = f"{os.path.basename(path)} {method} {ends} F={f} O={o}"
+            # --max-accel 0: every waypoint in, so the reference is the
+            # spline through all of them (the filter is tested below)
             args = ["--rate", str(rate), "--param", "time", "--ends", ends, "--method", method,
-                    "--fragment", str(f), "--overlap", str(o), "--max-gap", "1000"]
+                    "--fragment", str(f), "--overlap", str(o), "--max-gap", "1000",
+                    "--max-accel", "0"]
             if ends == "clamped":
                 args += ["--start-vel", "%r,%r,%r" % v0, "--end-vel", "%r,%r,%r" % v1]
                 cs = CubicSpline(t, enu, bc_type=((1, np.array(v0)), (1, np.array(v1))))
@@ -259,19 +271,69 @@ def test_counts_real_and_injected(tmp):
         enu = enu_pyproj(lat, lon, alt)
         # Identical text -> identical doubles, so exact comparisons are right.
         pos_key = np.stack([lat, lon, np.nan_to_num(alt, nan=-1e300)], axis=1)
-        dup, back, same, gaps, last = expected_counts(t, pos_key, max_gap)
+        # the engine's default max_accel_m_s2 (lib/engine.h), applied here on pyproj's ENU
+        dup, back, same, gaps, accel, last = expected_counts(t, pos_key, max_gap, enu, 30.0)
         sp, s, _ = replay(path, ["--rate", "10", "--max-gap", str(max_gap)], tmp, "counts")
         got = (s.get("duplicates"), s.get("rejected_backwards"), s.get("rejected_same_time"),
-               s.get("gaps"))
-        print(f"{label}: duplicates/backwards/same_time/gaps expected {(dup, back, same, gaps)}, "
+               s.get("gaps"), s.get("rejected_accel"))
+        want = (dup, back, same, gaps, accel)
+        print(f"{label}: duplicates/backwards/same_time/gaps/accel expected {want}, "
               f"--summary {got}")
-        check(got == (dup, back, same, gaps), f"{label}: counts {got} != {(dup, back, same, gaps)}")
-        check(s.get("accepted") == len(t) - dup - back - same, f"{label}: accepted {s.get('accepted')}")
+        check(got == want, f"{label}: counts {got} != {want}")
+        check(s.get("accepted") == len(t) - dup - back - same - accel,
+              f"{label}: accepted {s.get('accepted')}")
         check(s.get("setpoints") == len(sp["now_ns"]), f"{label}: setpoints count")
         check(all(np.isfinite(sp["pos"]).ravel()), f"{label}: NaN")
         check(sp["state"][-1] == "finished", f"{label}: last state {sp['state'][-1]}")
         check(np.max(np.abs(sp["pos"][-1] - enu[last])) < 1e-6,
               f"{label}: does not end on the last accepted waypoint")
+
+
+# lib/engine.h's default max_accel_m_s2.
+MAX_ACCEL_DEFAULT = 30.0
+
+
+def test_jitter_figure8(tmp):
+    """Given the figure-8 boat log, whose only intervals far below its median
+    (0.2 s) are the late burst around t = 135 s (134.600 -> 135.096 -> 135.120
+    -> 135.201 s: fixes 24 and 81 ms apart, positions evenly spaced), when
+    replayed with the defaults at 100 Hz, then exactly those two short-interval
+    waypoints are rejected (rejected_accel 2, accepted 1784), the setpoints
+    follow scipy's CubicSpline (rest ends) through the waypoints kept to the
+    fragment bound, and away from the rest start and stop (2 s) the
+    acceleration per axis stays within 3 * max_accel_m_s2: the max principle
+    of the C2 second-derivative system (at its largest |M_i|,
+    |M_i| (h1 + h2) <= 3 |a_implied| (h1 + h2), and every accepted triple has
+    |a_implied| <= max_accel_m_s2).  The spline through all waypoints breaks
+    that bound by far (the test can fail)."""
+    t, lat, lon, alt = read_track(FIGURE8)
+    enu = enu_pyproj(lat, lon, alt)
+    dt = np.diff(t)
+    short = np.where(dt < 0.5 * np.median(dt))[0] + 1   # waypoint after a short interval
+    check(len(short) == 2 and abs(t[short[0]] - 135.120) < 1e-9,
+          f"figure-8 short intervals at {t[short]} (the log changed?)")
+    kept = np.setdiff1d(np.arange(len(t)), short)
+    sp, s, _ = replay(FIGURE8, [], tmp, "jitter")
+    check(s.get("rejected_accel") == len(short) and s.get("rejected") == len(short),
+          f"figure-8: rejected_accel {s.get('rejected_accel')}, rejected {s.get('rejected')}")
+    check(s.get("accepted") == len(kept), f"figure-8: accepted {s.get('accepted')}")
+    streaming = np.array([x == "streaming" for x in sp["state"]])
+    tol = 100 * 0.268 ** (16 / 2)   # default F=32, O=16
+    err = spline_errors(sp, CubicSpline(t[kept], enu[kept], bc_type="clamped"), streaming)
+    for k, v in err.items():
+        check(v <= tol, f"figure-8 jitter: {k} differs from the kept-waypoint CubicSpline by {v:g}")
+    inner = streaming & (sp["t_s"] > t[0] + 2) & (sp["t_s"] < t[-1] - 2)
+    a_axis = np.max(np.abs(sp["acc"][inner]))
+    win = inner & (np.abs(sp["t_s"] - 135.1) < 5)
+    a_win = np.max(np.linalg.norm(sp["acc"][win], axis=1))
+    ts = np.arange(t[0] + 2, t[-1] - 2, 0.01)
+    raw = np.max(np.abs(CubicSpline(t, enu, bc_type="clamped")(ts, 2)))
+    print(f"figure-8 jitter: streamed max |a| per axis {a_axis:.1f} m/s^2 (|a| {a_win:.1f} "
+          f"within 5 s of t=135), spline through every waypoint {raw:.1f}; bound "
+          f"{3 * MAX_ACCEL_DEFAULT:.0f}; vs kept-waypoint spline "
+          + ", ".join(f"{k} {v:.2g}" for k, v in err.items()))
+    check(a_axis <= 3 * MAX_ACCEL_DEFAULT, f"figure-8: acceleration {a_axis:g} m/s^2 per axis")
+    check(raw > 3 * MAX_ACCEL_DEFAULT, f"figure-8: the raw spline peaks at only {raw:g}")
 
 
 def test_gpx_equals_csv(tmp):
@@ -303,8 +365,12 @@ def test_svg(tmp):
     for want in ("curve", "speed", "waypoints", "rejected", "underruns", "plan-axes", "speed-axes",
                  "legend"):
         check(want in ids, f"svg: no element id={want}")
+    # one dot per accepted waypoint, one cross per rejected one (the two
+    # jittered fixes at t = 135.120 and 135.201 s, see test_counts_real_and_injected)
     dots = root.find(f".//{ns}g[@id='waypoints']").findall(f"{ns}circle")
-    check(len(dots) == 1786, f"svg: {len(dots)} waypoint dots")
+    crosses = root.find(f".//{ns}g[@id='rejected']").findall(f"{ns}path")
+    check(len(dots) == 1784 and len(crosses) == 2,
+          f"svg: {len(dots)} waypoint dots, {len(crosses)} rejected crosses")
     texts = {e.text for e in root.iter(ns + "text")}
     for want in ("east (m)", "north (m)", "track time t (s)", "speed |v| (m/s)"):
         check(want in texts, f"svg: no label {want!r}")
@@ -415,7 +481,7 @@ def main():
         return 1
     with tempfile.TemporaryDirectory(prefix="trajreplay-test-") as tmp:
         for test in (test_errors, test_gpx_equals_csv, test_svg, test_counts_real_and_injected,
-                     test_spline_agreement, test_progress):
+                     test_spline_agreement, test_jitter_figure8, test_progress):
             print(f"== {test.__name__}")
             test(tmp)
     print(f"test_trajreplay.py: {len(failures)} failure(s)")
