@@ -424,8 +424,25 @@ static void close_(void *state, core_t *c)
         loop_del(s->c->loop, s->sock_fd);
     if (s->timer_fd > 0)
         loop_timer_del(s->c->loop, s->timer_fd);
-    if (s->port)
+    if (s->port) {
         publish_stats(s);
+        for (unsigned k = 0; k < s->n; k++) {
+            canport_obj_stats_t os;
+            canport_obj_stats(s->port, k, &os);
+            log_msg(LOG_INFO,
+                    "can: %s: setpoints sent %llu, dropped late %llu / queue full %llu / down %llu"
+                    " / error %llu; waypoints %llu accepted, %llu rejected, %llu full, %llu lost,"
+                    " %llu duplicate frames, %llu out of order, %llu malformed frames",
+                    s->objs[k]->name, (unsigned long long)os.setpoints_sent,
+                    (unsigned long long)os.dropped_late, (unsigned long long)os.dropped_full,
+                    (unsigned long long)os.dropped_down, (unsigned long long)os.dropped_error,
+                    (unsigned long long)os.waypoints_accepted,
+                    (unsigned long long)os.waypoints_rejected,
+                    (unsigned long long)os.waypoints_full, (unsigned long long)os.rx.lost,
+                    (unsigned long long)os.rx.duplicates, (unsigned long long)os.rx.out_of_order,
+                    (unsigned long long)os.rx.malformed);
+        }
+    }
     canport_free(s->port);
     canbus_free(s->bus);
     canlog_close(s->log);

@@ -75,14 +75,16 @@ int canbus_open(canbus_t *b)
         b->sock = -1;
     }
     b->state = CANBUS_DOWN;
-    unsigned idx = if_nametoindex(b->ifname);
-    if (!idx) {
-        rc = -ENODEV;
-        goto out;
-    }
+    /* the socket first: a kernel without CAN (EAFNOSUPPORT) must be told
+     * apart from an interface that is merely missing for now (ENODEV) */
     s = socket(PF_CAN, SOCK_RAW | SOCK_NONBLOCK | SOCK_CLOEXEC, CAN_RAW);
     if (s < 0) {
         rc = -errno;
+        goto out;
+    }
+    unsigned idx = if_nametoindex(b->ifname);
+    if (!idx) {
+        rc = -ENODEV;
         goto out;
     }
     /* bind() succeeds on a down interface: ask whether it is up first */

@@ -130,6 +130,21 @@ kill -TERM $tp; wait $tp; rc=$?
 tp=
 touch "$out/ok.flow"
 
+# ---- H: started before its interface exists: runs DOWN, streams once it appears
+sed 's/^interface = vcan0$/interface = vcan1/' "$out/pace.conf" > "$out/late.conf"
+timeout 30 candump -r 8000000 -D -L any > "$out/cap6.log" & cp=$!
+wait_rx any || fail "candump 6 not ready"
+"$BUILD/bin/trajd" -f -c "$out/late.conf" 2> "$out/late.err" & tp=$!
+wait_grep "$out/late.err" "vcan1: No such device" || fail "trajd did not report the missing interface"
+kill -0 $tp || fail "trajd exited without its interface"
+ip link add dev vcan1 type vcan && ip link set vcan1 up
+wait_grep "$out/cap6.log" " vcan1 6A0#" || fail "no setpoints once vcan1 appeared"
+kill -TERM $tp; wait $tp; rc=$?
+[ $rc -eq 0 ] || fail "trajd (late interface) exit code $rc"
+tp=
+kill $cp; wait $cp 2>/dev/null
+touch "$out/ok.late_iface"
+
 # ---- F: frames per second trajd emits on vcan0 (measured, not asserted) -----
 {
     printf '[daemon]\nrate_hz = 10000\nspeed = 1\nstatus_interval_s = 0\nstop_timeout_s = 1\n'
