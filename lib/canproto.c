@@ -760,7 +760,7 @@ int canproto_dbc(char *buf, size_t len)
          "CM_ \"trajd CAN protocol, generated from lib/canproto.h by canproto_dbc(); ids are "
          "the defaults of object 0 (object n: + n), RPDOs for CiA 402 nodes 1..3.\";\n"
          "CM_ SG_ %u WP_Command \"1 finish, 2 stop, 3 clear, 4 reset counters\";\n"
-         "CM_ SG_ %u ST_LastErr \"1..10 engine_error of the last rejected waypoint, 0x40 "
+         "CM_ SG_ %u ST_LastErr \"1..11 engine_error of the last rejected waypoint, 0x40 "
          "malformed, 0x41 lost, 0x42 out of order, 0x43 setpoints dropped, 0x44 bus down\";\n",
          CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_STATUS_BASE);
     emit(buf, len, &pos,
