@@ -102,8 +102,7 @@ void canproto_ids_default(canproto_ids_t *ids, unsigned n)
     ids->cia402_controlword_value = 0x000F;
 }
 
-/* The ids this object uses, in a fixed order; returns the count. */
-static unsigned ids_in_use(const canproto_ids_t *ids, uint32_t out[16])
+unsigned canproto_ids_in_use(const canproto_ids_t *ids, uint32_t out[CANPROTO_IDS_MAX])
 {
     unsigned n = 0;
     out[n++] = ids->waypoint_id;
@@ -121,8 +120,8 @@ static unsigned ids_in_use(const canproto_ids_t *ids, uint32_t out[16])
 
 int canproto_ids_check(const canproto_ids_t *ids, const char **why)
 {
-    uint32_t use[16];
-    unsigned n = ids_in_use(ids, use);
+    uint32_t use[CANPROTO_IDS_MAX];
+    unsigned n = canproto_ids_in_use(ids, use);
     const char *w = NULL;
 
     for (unsigned i = 0; i < n && !w; i++) {
