@@ -239,7 +239,9 @@ class TestCommandLine(unittest.TestCase):
                 while not d.notes.empty():
                     msgs.append(d.notes.get_nowait())
                 self.assertFalse(any("READY=1" in m for m in msgs), msgs)
-                self.assertIn("no/such/dir", d.stderr())
+                # wait for the line (bounded, up to EOF): after exit the
+                # reader thread may not have queued stderr yet
+                d.err_line(lambda l: "no/such/dir" in l)
             finally:
                 d.close()
 
