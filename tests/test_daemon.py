@@ -538,6 +538,16 @@ class TestRunning(unittest.TestCase):
             # served before the stop took effect).
             f, _ = d.msg(lambda f: "STATUS" in f and "missed" in f["STATUS"]
                          and int(f["STATUS"].split("missed ")[1].split(",")[0]) >= 20, 5)
+            # and an overrun is work that ended after the NEXT deadline
+            # (core.h): the freeze makes at most a few, a shared machine a
+            # few more, never half of the ticks (counting against the tick's
+            # own deadline, which has always passed when it runs, would make
+            # every tick one).
+            st = f["STATUS"]
+            ticks = int(st.split("ticks ")[1].split(",")[0])
+            overruns = int(st.split("overruns ")[1].split(",")[0])
+            self.assertGreater(ticks, 50, st)
+            self.assertLess(overruns, ticks // 2, st)
             d.p.send_signal(signal.SIGTERM)
             self.assertEqual(d.wait(10), 0)
         finally:
