@@ -125,7 +125,8 @@ test-asan:
 		LDFLAGS="$(SAN)" $(TEST_BINS:$(BUILD)/%=$(BUILD)/asan/%) $(BINS:$(BUILD)/%=$(BUILD)/asan/%)
 	@BUILD=$(abspath $(BUILD)/asan) ONLY=c sh tests/run.sh
 
-bench: all
+bench: deps
+	@$(MAKE) --no-print-directory all
 	@for b in $(BENCHES); do echo "== $$b"; $$b || exit 1; done
 	@for b in $(wildcard tests/bench_*.sh); do echo "== $$b"; BUILD=$(abspath $(BUILD)) sh $$b || exit 1; done
 

@@ -81,36 +81,22 @@ void canport_free(canport_t *p)
     free(p);
 }
 
-/* Every id object i uses (same order as canproto's own check). */
-static unsigned obj_ids(const canproto_ids_t *ids, uint32_t out[16])
-{
-    unsigned n = canproto_ids_rx(ids, out, 16);
-    if (ids->own)
-        out[n++] = ids->fd ? ids->setpoint_fd_id : ids->setpoint_id;
-    out[n++] = ids->status_id;
-    if (ids->cia402)
-        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
-            if (ids->cia402_cob_id[a])
-                out[n++] = ids->cia402_cob_id[a];
-    return n;
-}
-
 int canport_set_object(canport_t *p, unsigned i, const canproto_ids_t *ids,
                        const canport_hooks_t *hooks, void *ctx)
 {
-    uint32_t mine[16], other[16];
+    uint32_t mine[CANPROTO_IDS_MAX], other[CANPROTO_IDS_MAX];
     if (i >= p->nobj || !hooks || !hooks->push || !hooks->status)
         return -CANPROTO_EID;
     if (canproto_ids_check(ids, NULL) < 0)
         return -CANPROTO_ECONFIG;
-    unsigned n = obj_ids(ids, mine);
+    unsigned n = canproto_ids_in_use(ids, mine);
     for (unsigned k = 0; k < n; k++)
         if (p->cfg.sync && mine[k] == p->cfg.sync_id)
             return -CANPROTO_ECONFIG;
     for (unsigned j = 0; j < p->nobj; j++) {
         if (j == i || !p->obj[j].set)
             continue;
-        unsigned m = obj_ids(&p->obj[j].ids, other);
+        unsigned m = canproto_ids_in_use(&p->obj[j].ids, other);
         for (unsigned k = 0; k < n; k++)
             for (unsigned l = 0; l < m; l++)
                 if (mine[k] == other[l])

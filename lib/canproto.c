@@ -102,8 +102,7 @@ void canproto_ids_default(canproto_ids_t *ids, unsigned n)
     ids->cia402_controlword_value = 0x000F;
 }
 
-/* The ids this object uses, in a fixed order; returns the count. */
-static unsigned ids_in_use(const canproto_ids_t *ids, uint32_t out[16])
+unsigned canproto_ids_in_use(const canproto_ids_t *ids, uint32_t out[CANPROTO_IDS_MAX])
 {
     unsigned n = 0;
     out[n++] = ids->waypoint_id;
@@ -121,8 +120,8 @@ static unsigned ids_in_use(const canproto_ids_t *ids, uint32_t out[16])
 
 int canproto_ids_check(const canproto_ids_t *ids, const char **why)
 {
-    uint32_t use[16];
-    unsigned n = ids_in_use(ids, use);
+    uint32_t use[CANPROTO_IDS_MAX];
+    unsigned n = canproto_ids_in_use(ids, use);
     const char *w = NULL;
 
     for (unsigned i = 0; i < n && !w; i++) {
@@ -760,7 +759,7 @@ int canproto_dbc(char *buf, size_t len)
          "CM_ \"trajd CAN protocol, generated from lib/canproto.h by canproto_dbc(); ids are "
          "the defaults of object 0 (object n: + n), RPDOs for CiA 402 nodes 1..3.\";\n"
          "CM_ SG_ %u WP_Command \"1 finish, 2 stop, 3 clear, 4 reset counters\";\n"
-         "CM_ SG_ %u ST_LastErr \"1..10 engine_error of the last rejected waypoint, 0x40 "
+         "CM_ SG_ %u ST_LastErr \"1..11 engine_error of the last rejected waypoint, 0x40 "
          "malformed, 0x41 lost, 0x42 out of order, 0x43 setpoints dropped, 0x44 bus down\";\n",
          CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_STATUS_BASE);
     emit(buf, len, &pos,

@@ -205,6 +205,15 @@ void canproto_ids_default(canproto_ids_t *ids, unsigned n);
  */
 int canproto_ids_check(const canproto_ids_t *ids, const char **why);
 
+/* Most ids one object can use: 2 waypoint, 1 setpoint, 1 status, 3 CiA 402. */
+#define CANPROTO_IDS_MAX 16
+
+/*
+ * Every id this object uses (waypoint, setpoint, status, CiA 402 RPDOs), in
+ * a fixed order, for clash checks.  out holds CANPROTO_IDS_MAX; returns the count.
+ */
+unsigned canproto_ids_in_use(const canproto_ids_t *ids, uint32_t out[CANPROTO_IDS_MAX]);
+
 /*
  * The ids a receiver must let through for this object (waypoint ids in use).
  * Writes at most max ids into out; returns how many there are.

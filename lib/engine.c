@@ -786,6 +786,19 @@ static void hold_here(engine_t *e)
         e->vel[k] = e->acc[k] = 0.0;
 }
 
+/* The queue head is a trajectory's end marker: rest on its point, FINISHED. */
+static void rest_at_end(engine_t *e, const qent_t *h)
+{
+    for (int k = 0; k < AX; k++)
+        e->pos[k] = h->seg.c[k][0];
+    e->out_t = h->t1_s;
+    q_pop(e);
+    hold_here(e);
+    e->mode = OUT_HOLD;
+    e->finished = 1;
+    e->underrun = 0;
+}
+
 static double tick_time(const engine_t *e, int64_t n)
 {
     return (double)(n * e->cfg.period_ns) * 1e-9;
@@ -826,13 +839,7 @@ static void start_trajectory(engine_t *e, int new_flag)
     e->underrun = 0;
     if (h->kind == QE_END) {
         /* a trajectory with no segment: rest on its point */
-        for (int k = 0; k < AX; k++)
-            e->pos[k] = h->seg.c[k][0];
-        e->out_t = h->t1_s;
-        q_pop(e);
-        hold_here(e);
-        e->mode = OUT_HOLD;
-        e->finished = 1;
+        rest_at_end(e, h);
         return;
     }
     e->origin_t = h->seg.t0_s;
@@ -959,14 +966,7 @@ static void step_once(engine_t *e)
                 return;
             }
             if (h->kind == QE_END) {
-                for (int k = 0; k < AX; k++)
-                    e->pos[k] = h->seg.c[k][0];
-                e->out_t = h->t1_s;
-                q_pop(e);
-                hold_here(e);
-                e->mode = OUT_HOLD;
-                e->finished = 1;
-                e->underrun = 0;
+                rest_at_end(e, h);
                 return;
             }
             take_segment(e);

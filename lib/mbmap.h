@@ -64,7 +64,7 @@
 #define MBMAP_D_VERSION 1            /* u16 MBMAP_VERSION */
 #define MBMAP_D_OBJECTS 2            /* u16 number of objects */
 #define MBMAP_D_WRITES 3             /* u16 1 if writes are enabled */
-#define MBMAP_D_GEN 4                /* u32 snapshot generation (+1 per tick) */
+#define MBMAP_D_GEN 4                /* u32 snapshot generation (+1 per tick; 0 = none published yet, all values 0) */
 #define MBMAP_D_UPTIME_S 6           /* u32 */
 #define MBMAP_D_PERIOD_US 8          /* u32 output period */
 #define MBMAP_D_LATE_P50_US 10       /* u32 tick lateness */

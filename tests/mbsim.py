@@ -52,6 +52,20 @@ class Server:
             self.p.kill()
             raise RuntimeError("server did not start: %r %s" % (line, self.p.stderr.read()))
         self.port = int(m.group(1))
+        self.wait_published()
+
+    def wait_published(self):
+        """Wait (bounded) for the first snapshot: generation 0 means no tick
+        has been published yet and every value still reads 0, so a check of
+        tick values against it would race the server's first tick."""
+        s = connect(self.port)
+        try:
+            deadline = time.monotonic() + WAIT_S
+            while u32(read_input(s, M["MBMAP_D_GEN"], 2), 0) == 0:
+                if time.monotonic() > deadline:
+                    raise RuntimeError("no snapshot published within %.0f s" % WAIT_S)
+        finally:
+            s.close()
 
     def _line(self, timeout):
         r, _, _ = select.select([self.p.stdout], [], [], timeout)

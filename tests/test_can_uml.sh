@@ -20,9 +20,14 @@ $PY tests/cantools_trajd.py xyz tests/data/n2k_furuno_figure8_src52.csv "$run/tr
 $PY tests/cantools_trajd.py wplog "$run/track.csv" "$run/wp.log" --time-scale $SPEED --also-fd-obj 1 > /dev/null || exit 1
 "$BUILD/bin/trajreplay" --rate 1000 -q -o "$run/ref1k.csv" "$run/track.csv" || exit 1
 
+# UML keeps its pid file and mconsole socket in uml_dir, by default ~/.uml: without
+# HOME (env -i, some service managers) it panics at boot.  A short temporary path
+# (the socket's name must fit in 108 bytes), removed afterwards.
+umldir=$(mktemp -d) || exit 1
+trap 'rm -rf "$umldir"' EXIT
 start_ms=$(( $(date +%s%N) / 1000000 ))
 # Host timeout > guest timeout, so a hung scenario still leaves a verdict file.
-timeout -k 5 100 linux.uml mem=256M rootfstype=hostfs rootflags=/ ro quiet loglevel=1 \
+timeout -k 5 100 linux.uml uml_dir="$umldir" mem=256M rootfstype=hostfs rootflags=/ ro quiet loglevel=1 \
     init="$PWD/tests/uml/init.sh" trajd_dir="$run" trajd_script=tests/uml/all.sh \
     trajd_src="$PWD" trajd_timeout=80 con=null con0=null,fd:1 < /dev/null > "$run/console.log" 2>&1
 # (shell arithmetic: bc is not on a minimal Debian)
