@@ -240,6 +240,25 @@ static void test_clamping(void **state)
     assert_true(fabs(d.vel_m_s[1] - INT16_MIN * CANPROTO_SP_VEL_M_S_PER_BIT) < 1e-12);
     assert_int_equal(canproto_decode_setpoint(&f[2], &d), 0);
     assert_true(fabs(d.pos_m[2]) < 1e-12);
+    /* each cause alone says so (together, one missing would be hidden):
+     * in range -> 0; NaN -> sent as 0, flagged; +inf -> the maximum, flagged */
+    memset(&sp, 0, sizeof sp);
+    sp.pos_m[1] = 12.5;
+    assert_int_equal(canproto_encode_setpoint(0x6A0, &sp, f), 0);
+    sp.pos_m[1] = NAN;
+    assert_int_equal(canproto_encode_setpoint(0x6A0, &sp, f), CANPROTO_CLAMPED);
+    assert_int_equal(canproto_decode_setpoint(&f[1], &d), 0);
+    assert_true(fabs(d.pos_m[1]) <= 0.0);
+    memset(&sp, 0, sizeof sp);
+    sp.vel_m_s[0] = INFINITY;
+    assert_int_equal(canproto_encode_setpoint(0x6A0, &sp, f), CANPROTO_CLAMPED);
+    assert_int_equal(canproto_decode_setpoint(&f[0], &d), 0);
+    assert_true(fabs(d.vel_m_s[0] - INT16_MAX * CANPROTO_SP_VEL_M_S_PER_BIT) < 1e-12);
+    canproto_frame_t fd;
+    memset(&sp, 0, sizeof sp);
+    assert_int_equal(canproto_encode_setpoint_fd(0x6B0, 0, &sp, &fd), 0);
+    sp.vel_m_s[2] = NAN;
+    assert_int_equal(canproto_encode_setpoint_fd(0x6B0, 0, &sp, &fd), CANPROTO_CLAMPED);
     canproto_frame_t g[4];
     engine_waypoint_t w = wpt(1, NAN, 0, 0, 0);
     assert_int_equal(canproto_encode_waypoint(ID, &w, g), -CANPROTO_EVALUE);
@@ -336,6 +355,43 @@ static void test_dbc_length(void **state)
     assert_int_equal((int)strlen(buf), 9);
 }
 
+/* Given a waypoint reassembled but not yet consumed (the engine said EFULL),
+ * when the sender starts repeating it (a partial slot for the same seq) and
+ * the first copy is then consumed, then that partial is dropped at once
+ * (counted incomplete: it can never be used), freeing its slot, so the next
+ * two waypoints interleaved frame by frame both come through without an
+ * eviction. */
+static void test_consume_drops_partial_of_same_seq(void **state)
+{
+    (void)state;
+    canproto_rx_out_t out, first;
+    canproto_frame_t f9[4], f10[4], f11[4];
+    engine_waypoint_t w9 = wpt(9, 9, 1, 2, 3), w10 = wpt(10, 10, 4, 5, 6),
+                      w11 = wpt(11, 11, 7, 8, 9);
+    assert_int_equal(canproto_encode_waypoint(ID, &w9, f9), 0);
+    assert_int_equal(canproto_encode_waypoint(ID, &w10, f10), 0);
+    assert_int_equal(canproto_encode_waypoint(ID, &w11, f11), 0);
+    for (int k = 0; k < 3; k++)
+        assert_int_equal(canproto_rx_frame(&rx, &f9[k], 0, &first), CANPROTO_RX_NONE);
+    assert_int_equal(canproto_rx_frame(&rx, &f9[3], 0, &first), CANPROTO_RX_WAYPOINT);
+    /* the repeat has begun: two of its four frames are in */
+    assert_int_equal(canproto_rx_frame(&rx, &f9[0], 0, &out), CANPROTO_RX_NONE);
+    assert_int_equal(canproto_rx_frame(&rx, &f9[1], 0, &out), CANPROTO_RX_NONE);
+    canproto_rx_consume(&rx, &first);
+    assert_int_equal(rx.st.incomplete, 1);
+    for (int k = 0; k < 3; k++) {
+        assert_int_equal(canproto_rx_frame(&rx, &f10[k], 0, &out), CANPROTO_RX_NONE);
+        assert_int_equal(canproto_rx_frame(&rx, &f11[k], 0, &out), CANPROTO_RX_NONE);
+    }
+    assert_int_equal(canproto_rx_frame(&rx, &f10[3], 0, &out), CANPROTO_RX_WAYPOINT);
+    assert_int_equal(out.wp.seq, 10);
+    canproto_rx_consume(&rx, &out);
+    assert_int_equal(canproto_rx_frame(&rx, &f11[3], 0, &out), CANPROTO_RX_WAYPOINT);
+    assert_int_equal(out.wp.seq, 11);
+    assert_int_equal(out.lost_before, 0);
+    assert_int_equal(rx.st.incomplete, 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -344,6 +400,7 @@ int main(void)
         cmocka_unit_test_setup(test_not_consumed_can_be_repeated, setup),
         cmocka_unit_test_setup(test_sequence_wraps, setup),
         cmocka_unit_test_setup(test_slot_eviction, setup),
+        cmocka_unit_test_setup(test_consume_drops_partial_of_same_seq, setup),
         cmocka_unit_test_setup(test_malformed, setup),
         cmocka_unit_test_setup(test_command, setup),
         cmocka_unit_test_setup(test_fd_waypoint, setup),

@@ -13,6 +13,7 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include <float.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -333,6 +334,8 @@ static void test_bad_input(void **state)
     assert_int_equal(engine_push(e, &b), -ENGINE_ENOTFINITE);
     b = w; b.t_s = 11; b.pos_m[0] = 2e7;
     assert_int_equal(engine_push(e, &b), -ENGINE_ERANGE);
+    b = w; b.t_s = 11; b.pos_m[2] = -2e7; /* |coordinate|: negative too */
+    assert_int_equal(engine_push(e, &b), -ENGINE_ERANGE);
     b = w; b.t_s = 1e13;
     assert_int_equal(engine_push(e, &b), -ENGINE_ERANGE);
     b = w; b.t_s = 9;
@@ -348,9 +351,9 @@ static void test_bad_input(void **state)
     engine_status(e, &st);
     assert_int_equal(st.accepted, 2);
     assert_int_equal(st.duplicates, 1);
-    assert_int_equal(st.rejected, 7);
+    assert_int_equal(st.rejected, 8);
     assert_int_equal(st.rejected_by[ENGINE_ENOTFINITE], 2);
-    assert_int_equal(st.rejected_by[ENGINE_ERANGE], 2);
+    assert_int_equal(st.rejected_by[ENGINE_ERANGE], 3);
     assert_int_equal(st.rejected_by[ENGINE_EBACKWARDS], 1);
     assert_int_equal(st.rejected_by[ENGINE_ESAMETIME], 1);
     assert_int_equal(st.rejected_by[ENGINE_ESPEED], 1);
@@ -846,6 +849,127 @@ static void test_jitter_rejected(void **state)
     assert_int_equal(engine_config_check(&c, NULL), 0);
 }
 
+/* The longest segment the engine streams (just under max_gap_s) at the
+ * fastest rate, far from the origin: 590000 ticks in one segment.  fdiff.h:
+ * the engine re-seeds the stepper at deterministic ticks, every
+ * FDIFF_RESEED_STEPS after the segment's start, so (a) at those ticks the
+ * setpoint is the closed-form value, i.e. Horner at the same u to a few ulps
+ * (u is computed the same way: the track starts at t = 0), and (b) between
+ * them no setpoint drifts from Horner by more than the worst case of that
+ * many steps, 2 n eps sum|c| with n = FDIFF_RESEED_STEPS (test_fdiff.c
+ * derives it).  Without re-seeding the drift grows with the step count
+ * (measured: 1.7e-8 m by tick 3000, 2e-7 m at the end, against (a)'s
+ * tolerance of 4 ulps of sum|c| = 4.4e-9 m). */
+#define TOL_RESEED_ULPS 4.0 /* the same formula at the same u, a few roundings */
+static void test_long_segment_reseeded(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_waypoint_t wp[2];
+    fdiff_seg_t segs[4];
+    size_t nseg = 0;
+    engine_setpoint_t sp;
+    double worst = 0, bound;
+
+    engine_config_default(&c);
+    c.period_ns = ENGINE_PERIOD_NS_MIN;
+    memset(wp, 0, sizeof wp);
+    wp[0].pos_m[0] = 3e6; wp[0].pos_m[1] = -4e6; wp[0].pos_m[2] = 5e6;
+    wp[1].t_s = 59.0;
+    wp[1].pos_m[0] = 3e6 + 900; wp[1].pos_m[1] = -4e6 - 700; wp[1].pos_m[2] = 5e6 + 300;
+    assert_int_equal(engine_curve(&c, wp, 2, segs, 4, &nseg), 0);
+    assert_int_equal(nseg, 1);
+    double m = 0;
+    for (int k = 0; k < 3; k++)
+        m = fmax(m, fabs(segs[0].c[k][0]) + fabs(segs[0].c[k][1]) + fabs(segs[0].c[k][2]) +
+                    fabs(segs[0].c[k][3]));
+    bound = 2.0 * FDIFF_RESEED_STEPS * DBL_EPSILON * m;
+
+    engine_t *e = mk(&c);
+    assert_int_equal(engine_push(e, &wp[0]), 0);
+    assert_int_equal(engine_push(e, &wp[1]), 0);
+    assert_int_equal(engine_finish(e), 0);
+    long long ticks = 0;
+    for (int64_t k = 0; k < 700000; k++) {
+        assert_int_equal(engine_tick(e, k * c.period_ns, &sp), 0);
+        if (sp.state == ENGINE_STATE_STREAMING) {
+            double p[3];
+            fdiff_eval_curve(segs, nseg, &sp.t_s, 1, p, NULL, NULL);
+            double err = dist3(p, sp.pos_m);
+            worst = fmax(worst, err);
+            if (ticks % FDIFF_RESEED_STEPS == 0 && err > TOL_RESEED_ULPS * DBL_EPSILON * m)
+                fail_msg("tick %lld of the segment (a re-seed) is %.3g m off Horner", ticks, err);
+            ticks++;
+        }
+        if (sp.state == ENGINE_STATE_FINISHED)
+            break;
+    }
+    assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+    assert_true(ticks > 500000);
+    print_message("one segment of %lld ticks at 10 kHz: drift %.2e m (bound %.2e m)\n", ticks,
+                  worst, bound);
+    assert_true(worst <= bound);
+    engine_free(e);
+}
+
+/* Given a stream that ran dry (UNDERRUN, holding where segment j starts),
+ * when waypoints then trickle in one per tick, then the output resumes
+ * exactly when the lookahead is buffered again beyond segment j (j + 2 +
+ * lookahead waypoints in, as at the start: test_lookahead_is_real), not as
+ * soon as segment j itself is solved, which would leave no margin and
+ * underrun again at the next late waypoint (engine.h: start_slack and
+ * engine_lookahead); and it resumes exactly where it stopped, on the curve. */
+static void test_underrun_resumes_with_lookahead(void **state)
+{
+    (void)state;
+    for (int m = 0; m < 2; m++) {
+        engine_config_t c;
+        engine_waypoint_t w;
+        engine_setpoint_t sp, prev;
+        memset(&sp, 0, sizeof sp);
+        engine_config_default(&c);
+        if (m) {
+            c.method = ENGINE_METHOD_BSPLINE;
+            c.param = ENGINE_PARAM_UNIFORM;
+            c.ends = ENGINE_ENDS_NATURAL;
+            c.fragment = 16;
+            c.overlap = 8;
+        }
+        engine_t *e = mk(&c);
+        unsigned la = engine_lookahead(&c);
+        int pushed = 0;
+        int64_t k = 0;
+        /* a burst of 40 waypoints (1 s apart), streamed until it runs dry */
+        for (; pushed < 40; pushed++) {
+            circle_wp(&w, pushed, 1.0);
+            assert_int_equal(engine_push(e, &w), 0);
+        }
+        do {
+            prev = sp;
+            assert_int_equal(engine_tick(e, k++ * PERIOD_NS, &sp), 0);
+        } while (sp.state != ENGINE_STATE_UNDERRUN && k < 100000);
+        assert_int_equal(sp.state, ENGINE_STATE_UNDERRUN);
+        /* the last streamed tick is one period before node j's time (= j s) */
+        int j = (int)ceil(prev.t_s);
+        assert_true(fabs(prev.t_s - (j - 0.01)) < 1e-9);
+        assert_true(j + 2 + (int)la > pushed);
+        while (sp.state == ENGINE_STATE_UNDERRUN) {
+            circle_wp(&w, pushed, 1.0);
+            assert_int_equal(engine_push(e, &w), 0);
+            pushed++;
+            assert_int_equal(engine_tick(e, k++ * PERIOD_NS, &sp), 0);
+            assert_true(pushed < 200);
+        }
+        assert_int_equal(sp.state, ENGINE_STATE_STREAMING);
+        assert_int_equal(pushed, j + 2 + (int)la);
+        /* resumed at node j's time, on node j (the curve passes through it) */
+        assert_true(fabs(sp.t_s - j) < 1e-9);
+        circle_wp(&w, j, 1.0);
+        assert_true(dist3(sp.pos_m, w.pos_m) < 1e-9);
+        engine_free(e);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -859,6 +983,8 @@ int main(void)
         cmocka_unit_test(test_gap_transfer_clear),
         cmocka_unit_test(test_ends),
         cmocka_unit_test(test_all_configs_stream),
+        cmocka_unit_test(test_long_segment_reseeded),
+        cmocka_unit_test(test_underrun_resumes_with_lookahead),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include <gsl/gsl_errno.h>
+#include <gsl/gsl_linalg.h>
 #include <gsl/gsl_spline.h>
 
 #include "cubic.h"
@@ -188,6 +189,147 @@ static void test_frag_bookkeeping(void **state)
     frag_free(NULL);
 }
 
+/*
+ * Independent reference for the window's values: each fragment's own
+ * system (its rows, an artificial start row x = pin at its first row when it
+ * is not fragment 0, an artificial end row x = pin at its last) solved by
+ * GSL's tridiagonal solver, assembled by the rule of MATH.md section 3 and
+ * frag.h: fragment k owns the rows after junction J(k-1) up to before J(k),
+ * x at each junction is the MEAN of the two fragments that share it, and at
+ * the end the oldest open fragment takes the true end row and owns every row
+ * to the end.  J(k) = (k+1)S - delta + O/2.
+ */
+#define FRAG_REF_ROWS 97
+static void frag_ref(unsigned f, unsigned o, unsigned delta, size_t n, const double *a,
+                     const double *b, const double *c, const double *d, const double *pin,
+                     double *x, double *split)
+{
+    unsigned s = f - o;
+    double junction[3] = {0, 0, 0};
+
+    *split = 0;
+    for (size_t k = 0;; k++) {
+        size_t first = k == 0 ? 0 : k * s - delta, last = k * s + f - 1 - delta;
+        int to_end = last > n - 2; /* not closed by frag_push: takes the true end */
+        size_t hi = to_end ? n - 1 : last, m = hi - first + 1;
+        gsl_vector *dg = gsl_vector_alloc(m), *up = gsl_vector_alloc(m - 1),
+                   *lo = gsl_vector_alloc(m - 1), *rhs = gsl_vector_alloc(m),
+                   *sol = gsl_vector_alloc(m);
+        size_t jprev = k * s - delta + o / 2, jk = (k + 1) * s - delta + o / 2;
+        for (int ax = 0; ax < 3; ax++) {
+            for (size_t i = 0; i < m; i++) {
+                size_t r = first + i;
+                int art_start = k > 0 && i == 0, art_end = !to_end && r == last;
+                gsl_vector_set(dg, i, art_start || art_end ? 1.0 : b[r]);
+                gsl_vector_set(rhs, i, art_start || art_end ? pin[r * 3 + ax] : d[r * 3 + ax]);
+                if (i + 1 < m)
+                    gsl_vector_set(up, i, art_start ? 0.0 : c[r]);
+                if (i > 0)
+                    gsl_vector_set(lo, i - 1, art_end ? 0.0 : a[r]);
+            }
+            assert_int_equal(gsl_linalg_solve_tridiag(dg, up, lo, rhs, sol), GSL_SUCCESS);
+            size_t from = k == 0 ? 0 : jprev, to = to_end ? n : jk;
+            for (size_t r = from; r < to; r++)
+                x[r * 3 + ax] = gsl_vector_get(sol, r - first);
+            if (k > 0) {
+                double mine = gsl_vector_get(sol, jprev - first);
+                x[jprev * 3 + ax] = 0.5 * (junction[ax] + mine);
+                if (fabs(junction[ax] - mine) > *split)
+                    *split = fabs(junction[ax] - mine);
+            }
+            if (!to_end)
+                junction[ax] = gsl_vector_get(sol, jk - first);
+        }
+        gsl_vector_free(dg);
+        gsl_vector_free(up);
+        gsl_vector_free(lo);
+        gsl_vector_free(rhs);
+        gsl_vector_free(sol);
+        if (to_end)
+            break;
+    }
+}
+
+/* The values of a multi-fragment window equal the reference above (GSL per
+ * fragment, junctions averaged), for a few (F, O, delta) and a length that
+ * ends anywhere in a fragment.  Pins far from the true solution make each
+ * fragment's error at a junction large (~0.268^(O/2) of the scale, >= 1e-2
+ * here), so taking one fragment's value instead of the mean, a share one row
+ * off, or a pin ignored is seen; the tolerance covers only two different
+ * Thomas orderings of the same system (both backward stable on this
+ * diagonally dominant system: 4e-16 relative measured). */
+#define TOL_FRAG_REL 1e-12
+static void test_frag_values_vs_gsl(void **state)
+{
+    (void)state;
+    static const unsigned cfgs[][3] = {{8, 4, 2}, {16, 8, 3}, {12, 2, 0}, {10, 6, 3}};
+    double a[FRAG_REF_ROWS], b[FRAG_REF_ROWS], c[FRAG_REF_ROWS], d[FRAG_REF_ROWS * 3],
+        pin[FRAG_REF_ROWS * 3], want[FRAG_REF_ROWS * 3], worst_rel = 0, least_split = INFINITY;
+
+    for (size_t ci = 0; ci < sizeof cfgs / sizeof cfgs[0]; ci++)
+        for (size_t n = 40; n <= FRAG_REF_ROWS; n += 19) {
+            unsigned f = cfgs[ci][0], o = cfgs[ci][1], delta = cfgs[ci][2];
+            frag_t *fw = frag_new(f, o, delta, 128);
+            double scale = 0, maxerr = 0, split = 0;
+            assert_non_null(fw);
+            for (size_t r = 0; r < n; r++) {
+                /* a time-knot cubic's rows: h, 2(h0+h1), h1 with uneven h */
+                double h0 = 1.0 + 0.5 * sin(0.7 * (double)r), h1 = 1.0 + 0.5 * sin(0.7 * (double)(r + 1));
+                a[r] = r ? h0 : 0.0;
+                b[r] = 2.0 * (h0 + h1);
+                c[r] = r + 1 < n ? h1 : 0.0;
+                for (int k = 0; k < 3; k++) {
+                    d[r * 3 + k] = 6.0 * cos(0.3 * (double)r + k) + (double)k;
+                    pin[r * 3 + k] = 0.25 * (double)k - 2.0; /* deliberately wrong */
+                }
+                frag_row_t row = {a[r], b[r], c[r], {d[r * 3], d[r * 3 + 1], d[r * 3 + 2]}};
+                if (r + 1 < n)
+                    assert_int_equal(frag_push(fw, &row, &pin[r * 3]), 0);
+                else
+                    assert_int_equal(frag_finish(fw, &row), 0);
+            }
+            assert_int_equal(fw->final_rows, n);
+            frag_ref(f, o, delta, n, a, b, c, d, pin, want, &split);
+            for (size_t i = 0; i < n * 3; i++)
+                if (fabs(want[i]) > scale)
+                    scale = fabs(want[i]);
+            for (size_t r = 0; r < n; r++)
+                for (int k = 0; k < 3; k++) {
+                    double e = fabs(frag_x(fw, r)[k] - want[r * 3 + k]);
+                    if (e > maxerr)
+                        maxerr = e;
+                }
+            /* the test has teeth: two fragments disagree at some junction by
+             * far more than the tolerance, so their mean is not either one */
+            assert_true(split > 1e6 * TOL_FRAG_REL * scale);
+            if (maxerr > TOL_FRAG_REL * scale)
+                fail_msg("F=%u O=%u delta=%u n=%zu: frag_x off the per-fragment reference by "
+                         "%.3g (scale %.3g)", f, o, delta, n, maxerr, scale);
+            worst_rel = fmax(worst_rel, maxerr / scale);
+            least_split = fmin(least_split, split / scale);
+            frag_free(fw);
+        }
+    print_message("window vs per-fragment GSL: worst %.1e relative; fragments split at a "
+                  "junction by >= %.1e relative\n", worst_rel, least_split);
+}
+
+/* Given a curve with a gap (two trajectories: fdiff.h allows gaps), when it
+ * is evaluated exactly at the second segment's start, then that segment is
+ * used (t is in [t0, t0 + dur]), not the first one's end across the gap;
+ * and at each segment's start/end the constant term / the sum of terms. */
+static void test_eval_curve_at_segment_start(void **state)
+{
+    (void)state;
+    fdiff_seg_t s[2] = {{0.0, 1.0, {{1, 0, 0, 0}, {2, 0, 0, 0}, {3, 0, 0, 0}}},
+                        {2.0, 1.0, {{5, 1, 0, 0}, {6, 0, 1, 0}, {7, 0, 0, 1}}}};
+    const double t[4] = {0.0, 1.0, 2.0, 3.0};
+    double p[12];
+    fdiff_eval_curve(s, 2, t, 4, p, NULL, NULL);
+    const double want[12] = {1, 2, 3, 1, 2, 3, 5, 6, 7, 6, 7, 8};
+    for (int i = 0; i < 12; i++)
+        assert_true(fabs(p[i] - want[i]) <= 0.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -195,6 +337,8 @@ int main(void)
         cmocka_unit_test(test_seed_phase),
         cmocka_unit_test(test_cubic_vs_gsl),
         cmocka_unit_test(test_frag_bookkeeping),
+        cmocka_unit_test(test_frag_values_vs_gsl),
+        cmocka_unit_test(test_eval_curve_at_segment_start),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

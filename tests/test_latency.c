@@ -143,11 +143,44 @@ static void test_empty(void **state)
     assert_int_equal(lat_quantile(&h, 0.5), 0);
 }
 
+/* Given small sample counts, where q * n is not a whole number (20000
+ * samples above hide that: every q there gives an integer rank), then the
+ * quantile is the nearest-rank one, rank ceil(q n), exactly (values in the
+ * 1 us linear range): p99 of 10 samples is the largest, p50 of 7 the 4th. */
+static void test_quantile_rank_rounds_up(void **state)
+{
+    (void)state;
+    static const size_t ns[] = {1, 2, 3, 7, 10, 13, 99, 101};
+    static const double qs[] = {0.1, 0.25, 0.5, 0.9, 0.95, 0.99, 0.999, 1.0};
+    uint64_t s = 2463534242ull;
+    for (size_t i = 0; i < sizeof ns / sizeof ns[0]; i++) {
+        uint64_t v[128];
+        lat_hist_t h;
+        lat_reset(&h);
+        for (size_t j = 0; j < ns[i]; j++) {
+            v[j] = rnd(&s) % LAT_LINEAR_US;
+            lat_add(&h, v[j]);
+        }
+        qsort(v, ns[i], sizeof v[0], cmp_u64);
+        for (size_t k = 0; k < sizeof qs / sizeof qs[0]; k++)
+            assert_int_equal(lat_quantile(&h, qs[k]), exact_q(v, ns[i], qs[k]));
+    }
+    /* the cases spelled out: 10 distinct samples 0..9 */
+    lat_hist_t h10;
+    lat_reset(&h10);
+    for (uint64_t j = 0; j < 10; j++)
+        lat_add(&h10, j);
+    assert_int_equal(lat_quantile(&h10, 0.99), 9);
+    assert_int_equal(lat_quantile(&h10, 0.5), 4);
+    assert_int_equal(lat_quantile(&h10, 0.55), 5);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_buckets_tile),
         cmocka_unit_test(test_quantiles_match_sorted),
+        cmocka_unit_test(test_quantile_rank_rounds_up),
         cmocka_unit_test(test_merge),
         cmocka_unit_test(test_empty),
     };

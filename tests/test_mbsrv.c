@@ -290,6 +290,14 @@ static int serve_main(int argc, char **argv)
     struct epoll_event ev = { .events = EPOLLIN };
     ev.data.u32 = 4; epoll_ctl(h->ep, EPOLL_CTL_ADD, h->sigfd, &ev);
     ev.data.u32 = 4; epoll_ctl(h->ep, EPOLL_CTL_ADD, 0, &ev); /* stdin closed: stop */
+    /* Publish the first tick before announcing the port: a client that
+     * connects at once must read a tick's snapshot, not the all-zero map of
+     * generation 0 that no tick wrote (the Python clients check every block
+     * against the synthetic values; under load they lost that race).  Bounded:
+     * the 1 kHz timer fires within a millisecond, a second is plenty. */
+    struct pollfd first = { .fd = h->tfd, .events = POLLIN };
+    while (mbsrv_generation(h->srv) == 0 && poll(&first, 1, 1000) > 0)
+        harness_tick(h);
     printf("PORT %d\n", mbsrv_tcp_port(h->srv));
     fflush(stdout);
     harness_run(h);

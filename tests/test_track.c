@@ -372,9 +372,14 @@ static void test_iso8601(void **state)
     assert_int_equal(s, 1408726132);
     assert_int_equal(track_parse_iso8601("2014-08-22T14:18:52-02:30", &s, &fr), 0);
     assert_int_equal(s, 1408726132);
+    /* Gregorian leap rule's 400-year case: 2000 is leap (GNU date -d and
+     * Python's calendar.timegm give 951825600), 1900 is not */
+    assert_int_equal(track_parse_iso8601("2000-02-29T12:00:00Z", &s, &fr), 0);
+    assert_int_equal(s, 951825600);
     const char *bad[] = {"", "2014-08-22", "2014-13-01T00:00:00Z", "2014-02-30T00:00:00Z",
-                         "2019-02-29T00:00:00Z", "2014-08-22T25:00:00Z", "2014-08-22T16:48:52.Z",
-                         "2014-08-22T16:48:52Zjunk", "20140822T164852Z", "2014-08-22T16:48"};
+                         "2019-02-29T00:00:00Z", "1900-02-29T00:00:00Z", "2014-08-22T25:00:00Z",
+                         "2014-08-22T16:48:52.Z", "2014-08-22T16:48:52Zjunk", "20140822T164852Z",
+                         "2014-08-22T16:48"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
         assert_int_equal(track_parse_iso8601(bad[i], &s, &fr), -1);
 
