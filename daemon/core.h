@@ -70,6 +70,8 @@ typedef struct obj {
     engine_setpoint_t sp;           /* setpoint of the last tick (zero before the first) */
     engine_status_t status;         /* engine status after the last tick */
     obj_src_stats_t src[OBJ_SRC_COUNT];
+    uint64_t skipped_ticks;         /* missed deadlines this object was stepped through with
+                                     * no output (added into status.skipped_ticks) */
     int stopping;                   /* the daemon is stopping: obj_push refuses */
     int carried;                    /* 1 if engine (and counters) were carried over a reload */
     int64_t born_ns;                /* engine time when its engine was created (0 at start;
@@ -84,6 +86,9 @@ typedef struct obj {
  * while the daemon is stopping.
  */
 int obj_push(obj_t *o, obj_source_t src, const engine_waypoint_t *wp);
+
+/* Reset o's counters: the engine's and the daemon's own (the reset command). */
+void obj_reset_counters(obj_t *o);
 
 /* CAN bus state as published to Modbus (values follow linux/can/netlink.h, plus DOWN). */
 typedef enum {

@@ -93,7 +93,7 @@ static int hook_command(void *ctx, unsigned k, unsigned cmd)
         engine_clear(o->engine);
         return 0;
     case MBMAP_CMD_RESET_COUNTERS:
-        engine_reset_counters(o->engine);
+        obj_reset_counters(o);
         return 0;
     default:
         return -ENGINE_ESTATE;
