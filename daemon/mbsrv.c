@@ -7,6 +7,7 @@
 #include <modbus.h>
 #include <netdb.h>
 #include <netinet/in.h>
+#include <poll.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -658,6 +659,23 @@ int mbsrv_adopt(mbsrv_t *s, int fd)
     return client_add(s, fd);
 }
 
+/*
+ * At the client limit, free the slots of clients that have already hung up
+ * but whose close this loop has not read yet (a client that disconnects and
+ * reconnects at once would otherwise be refused for its own old slot).
+ * Only runs at the limit: O(max_clients) zero-timeout polls.
+ */
+static void reap_hung_up(mbsrv_t *s)
+{
+    for (unsigned i = 0; i < s->max_clients; i++) {
+        client_t *c = &s->clients[i];
+        struct pollfd p = { .fd = c->fd, .events = POLLRDHUP };
+        if (c->fd >= 0 && poll(&p, 1, 0) > 0 &&
+            (p.revents & (POLLRDHUP | POLLHUP | POLLERR | POLLNVAL)))
+            client_close(s, c);
+    }
+}
+
 static void do_accept(mbsrv_t *s)
 {
     for (int i = 0; i < ACCEPTS_PER_EVENT; i++) {
@@ -666,6 +684,8 @@ static void do_accept(mbsrv_t *s)
         int fd = accept4(s->lfd, (struct sockaddr *)&ss, &sl, SOCK_NONBLOCK | SOCK_CLOEXEC);
         if (fd < 0)
             return;             /* EAGAIN, or a connection reset before accept */
+        if (allowed(s, &ss) && s->st.clients >= s->max_clients)
+            reap_hung_up(s);
         if (!allowed(s, &ss) || s->st.clients >= s->max_clients) {
             s->st.refused++;
             close(fd);
