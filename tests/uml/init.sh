@@ -24,6 +24,12 @@ grep -q ' /dev ' /proc/mounts || mount -t devtmpfs dev /dev 2>/dev/null
 mkdir -p /dev/pts /dev/shm
 mount -t devpts devpts /dev/pts 2>/dev/null
 for m in /tmp /run /dev/shm; do mount -t tmpfs tmpfs $m 2>/dev/null; done
+# A tree under /tmp or /run (where a CI clone may well be) is hidden by those
+# tmpfs mounts: bring it back through hostfs at the same path.
+if [ ! -d "$src/tests/uml" ]; then
+    mkdir -p "$src" && mount -t hostfs -o "$src" none "$src"
+fi
+mkdir -p "$dir"
 mount -t hostfs -o "$dir" none "$dir"
 {
     echo "guest: $(uname -r)"
