@@ -137,12 +137,10 @@ def samples(t0, t1, t, m=2000):
 
 
 # ---------------------------------------------------------------------------
-def test_hoang_held_vs_banded_bspline():
-    """Given a random track, when solved with the paper's held ends (hoang_curve
-    and the engine with one fragment), then the curve equals scipy's BSpline on
-    the control points from solve_banded, over R(1)..R(N-2)."""
-    t, xyz = random_track(1, 40)
-    n = len(t)
+def held_control_points(r):
+    """The paper's control points with held ends, by scipy's banded solver:
+    P(0) = R(0), P(N-1) = R(N-1), P(i-1) + 4 P(i) + P(i+1) = 6 R(i) inside."""
+    n = len(r)
     ab = np.zeros((3, n))
     ab[0, 1:] = 1.0
     ab[1, :] = 4.0
@@ -150,9 +148,18 @@ def test_hoang_held_vs_banded_bspline():
     ab[1, 0] = ab[1, -1] = 1.0
     ab[0, 1] = 0.0
     ab[2, -2] = 0.0
-    rhs = 6.0 * xyz
-    rhs[0], rhs[-1] = xyz[0], xyz[-1]
-    p = solve_banded((1, 1), ab, rhs)
+    rhs = 6.0 * r
+    rhs[0], rhs[-1] = r[0], r[-1]
+    return solve_banded((1, 1), ab, rhs)
+
+
+def test_hoang_held_vs_banded_bspline():
+    """Given a random track, when solved with the paper's held ends (hoang_curve
+    and the engine with one fragment), then the curve equals scipy's BSpline on
+    the control points from solve_banded, over R(1)..R(N-2)."""
+    t, xyz = random_track(1, 40)
+    n = len(t)
+    p = held_control_points(xyz)
     ref = BSpline(np.arange(n + 4) - 2.0, p, 3)   # segment s driven by P(s-1..s+2)
     ext = np.ptp(xyz, axis=0).max()
     tq = samples(t[1], t[-2], t)
@@ -179,16 +186,7 @@ def test_hoang_multiple_vs_banded_bspline():
     ext_idx = [0, 0, 0] + list(range(1, n - 1)) + [n - 1] * 3
     r = xyz[ext_idx]
     m = len(r)
-    ab = np.zeros((3, m))
-    ab[0, 1:] = 1.0
-    ab[1, :] = 4.0
-    ab[2, :-1] = 1.0
-    ab[1, 0] = ab[1, -1] = 1.0
-    ab[0, 1] = 0.0
-    ab[2, -2] = 0.0
-    rhs = 6.0 * r
-    rhs[0], rhs[-1] = r[0], r[-1]
-    p = solve_banded((1, 1), ab, rhs)
+    p = held_control_points(r)
     ref = BSpline(np.arange(m + 4) - 2.0, p, 3)
     ext = np.ptp(xyz, axis=0).max()
     tq = samples(t[0], t[-1], t)
