@@ -13,49 +13,7 @@ import unittest
 import numpy as np
 from scipy.interpolate import BSpline, CubicSpline, make_lsq_spline
 
-BUILD = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "build"))
-lib = C.CDLL(os.path.join(BUILD, "libtrajd.so"))
-dp = C.POINTER(C.c_double)
-
-
-def ptr(a):
-    return a.ctypes.data_as(dp)
-
-
-class Bspline(C.Structure):
-    _fields_ = [("order", C.c_uint), ("n_ctrl", C.c_size_t), ("dim", C.c_size_t),
-                ("knots", dp), ("ctrl", dp)]
-
-
-class Cspline(C.Structure):
-    _fields_ = [("n", C.c_size_t), ("dim", C.c_size_t), ("t", dp), ("p", dp),
-                ("s", dp), ("periodic", C.c_int)]
-
-
-class Surf(C.Structure):
-    _fields_ = [("m", C.c_size_t), ("n", C.c_size_t), ("dim", C.c_size_t), ("ctrl", dp)]
-
-
-lib.bspline_check.argtypes = [C.POINTER(Bspline)]
-lib.bspline_eval.argtypes = [C.POINTER(Bspline), C.c_double, dp]
-lib.bspline_eval_derivs.argtypes = [C.POINTER(Bspline), C.c_double, C.c_uint, dp]
-lib.cspline_solve.argtypes = [C.c_size_t, C.c_size_t, dp, dp, C.c_int, dp, dp, dp, dp,
-                              C.POINTER(Cspline)]
-lib.cspline_scratch_len.restype = C.c_size_t
-lib.cspline_scratch_len.argtypes = [C.c_size_t, C.c_size_t]
-lib.cspline_params.argtypes = [C.c_size_t, C.c_size_t, dp, C.c_int, dp]
-lib.cspline_eval.argtypes = [C.POINTER(Cspline), C.c_double, C.c_uint, dp]
-lib.lsq_work_len.restype = C.c_size_t
-lib.lsq_work_len.argtypes = [C.c_size_t, C.c_uint, C.c_size_t]
-lib.lsq_chord_params.argtypes = [C.c_size_t, C.c_size_t, dp, dp]
-lib.lsq_knots.argtypes = [C.c_size_t, C.c_uint, C.c_double, C.c_double, dp]
-lib.lsq_fit.argtypes = [C.c_size_t, C.c_size_t, dp, dp, C.c_uint, C.c_size_t, dp,
-                        C.c_uint, dp, dp]
-lib.surf_scratch_len.restype = C.c_size_t
-lib.surf_scratch_len.argtypes = [C.c_size_t, C.c_size_t, C.c_size_t]
-lib.surf_interpolate.argtypes = [C.c_size_t, C.c_size_t, C.c_size_t, dp, dp, dp,
-                                 C.POINTER(Surf)]
-lib.surf_eval.argtypes = [C.POINTER(Surf), C.c_double, C.c_double, C.c_uint, dp]
+from toolkit_ctypes import BUILD, Bspline, Cspline, Surf, dp, lib, ptr  # noqa: F401
 
 NATURAL, CURVATURE, CLAMPED, PERIODIC = 0, 1, 2, 3
 UNIFORM, CHORD, GIVEN = 0, 1, 2
