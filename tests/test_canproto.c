@@ -219,6 +219,15 @@ static void test_fd_waypoint(void **state)
     assert_int_equal(canproto_rx_frame(&rx, &h, 1, &out), -CANPROTO_ELEN);
     h = g; h.data[0] = 4;
     assert_int_equal(canproto_rx_frame(&rx, &h, 1, &out), -CANPROTO_EMUX);
+    /* the int48 n/a marker (0x800000000000, little-endian) in any axis is
+     * refused, as in the classic frames, never decoded as -140737 km */
+    for (int a = 0; a < 3; a++) {
+        h = g;
+        memset(&h.data[8 + 6 * a], 0, 6);
+        h.data[8 + 6 * a + 5] = 0x80;
+        assert_int_equal(canproto_rx_frame(&rx, &h, 1, &out), -CANPROTO_EVALUE);
+    }
+    assert_int_equal(rx.st.malformed_by[CANPROTO_EVALUE], 4);
 }
 
 /* Given out-of-range and NaN values, then encoders clamp and say so; a NaN

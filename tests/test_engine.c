@@ -970,6 +970,51 @@ static void test_underrun_resumes_with_lookahead(void **state)
     }
 }
 
+/* Given a caller whose clock jitters around the period grid (each now_ns
+ * within +-24 % of a period of its scheduled tick, so two calls are 0.52 to
+ * 1.48 periods apart), then every call is one tick (engine.c: periods since
+ * the last call, rounded), never a repeat or a
+ * skip: the setpoints are bitwise those of an engine ticked exactly on the
+ * grid, apart from now_ns, and no SKIPPED flag is raised.  (Truncating would
+ * turn every early call into a repeated setpoint and the next into a skip.) */
+static void test_jittered_clock_rounds_to_ticks(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_waypoint_t w;
+    engine_setpoint_t sa, sb;
+    engine_config_default(&c);
+    engine_t *a = mk(&c), *b = mk(&c);
+    for (int i = 0; i < 60; i++) {
+        circle_wp(&w, i, 0.5);
+        assert_int_equal(engine_push(a, &w), 0);
+        assert_int_equal(engine_push(b, &w), 0);
+    }
+    engine_finish(a);
+    engine_finish(b);
+    unsigned s = 777;
+    int streamed = 0;
+    for (int64_t k = 0; k < 4000; k++) {
+        s = s * 1103515245u + 12345u;
+        int64_t jitter = (int64_t)((s >> 8) % 481) - 240; /* -240..240 of 1000 */
+        assert_int_equal(engine_tick(a, k * PERIOD_NS, &sa), 0);
+        assert_int_equal(engine_tick(b, k * PERIOD_NS + jitter * PERIOD_NS / 1000, &sb), 0);
+        assert_memory_equal(sa.pos_m, sb.pos_m, sizeof sa.pos_m);
+        assert_memory_equal(sa.vel_m_s, sb.vel_m_s, sizeof sa.vel_m_s);
+        assert_memory_equal(&sa.t_s, &sb.t_s, sizeof sa.t_s);
+        assert_int_equal(sa.cycle, sb.cycle);
+        assert_int_equal(sa.state, sb.state);
+        assert_false(sb.flags & ENGINE_SP_SKIPPED);
+        streamed += sb.state == ENGINE_STATE_STREAMING;
+    }
+    assert_true(streamed > 2000);
+    engine_status_t st;
+    engine_status(b, &st);
+    assert_int_equal(st.skipped_ticks, 0);
+    engine_free(a);
+    engine_free(b);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -985,6 +1030,7 @@ int main(void)
         cmocka_unit_test(test_all_configs_stream),
         cmocka_unit_test(test_long_segment_reseeded),
         cmocka_unit_test(test_underrun_resumes_with_lookahead),
+        cmocka_unit_test(test_jittered_clock_rounds_to_ticks),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -108,7 +108,9 @@ static void test_quantiles_match_sorted(void **state)
 }
 
 /* Given two histograms, when merged, then the quantiles equal those of one
- * histogram fed with all samples. */
+ * histogram fed with all samples; so do the maximum, the count and the sum,
+ * whichever side holds the largest sample (the merged-into side, or the
+ * other: an outlier is added to b only). */
 static void test_merge(void **state)
 {
     (void)state;
@@ -122,11 +124,15 @@ static void test_merge(void **state)
         lat_add(i & 1 ? &a : &b, x);
         lat_add(&all, x);
     }
+    lat_add(&b, 123456);
+    lat_add(&all, 123456);
     lat_merge(&a, &b);
     for (double q = 0.05; q < 1.0; q += 0.05)
         assert_int_equal(lat_quantile(&a, q), lat_quantile(&all, q));
     assert_int_equal(a.max_us, all.max_us);
+    assert_int_equal(a.max_us, 123456);
     assert_int_equal(a.count, all.count);
+    assert_int_equal(a.sum_us, all.sum_us);
 }
 
 /* Given an empty histogram, then every number is 0. */
