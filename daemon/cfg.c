@@ -253,7 +253,8 @@ static void begin_section(parse_t *p, const char *name)
         }
         cfg_obj_t *o = &c->obj[c->nobj];
         memset(o, 0, sizeof *o);
-        snprintf(o->name, sizeof o->name, "%s", on);
+        /* valid_name() bounded it: strlen(on) < CFG_NAME_MAX = sizeof o->name */
+        memcpy(o->name, on, strlen(on) + 1);
         o->line = p->line;
         engine_config_default(&o->engine);
         for (unsigned t = 0; transport_table[t]; t++)
@@ -455,6 +456,18 @@ static int key_rt(cfg_t *c, const cfg_kv_t *kv, char *why, size_t wl)
     return -CFG_EUNKNOWN;
 }
 
+
+/* "replay, csv, ..." : the names of the transports that have role, for messages. */
+static void transport_names(unsigned role, char *list, size_t len)
+{
+    list[0] = '\0';
+    for (unsigned k = 0; transport_table[k]; k++)
+        if (transport_table[k]->roles & role) {
+            size_t m = strlen(list);
+            snprintf(list + m, len - m, "%s%s", m ? ", " : "", transport_table[k]->name);
+        }
+}
+
 static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size_t wl)
 {
     engine_config_t *e = &o->engine;
@@ -481,13 +494,8 @@ static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size
     if (strcmp(kv->key, "input") == 0) {
         const transport_t *t = transport_find(kv->value);
         if (!t || !(t->roles & TRANSPORT_INPUT)) {
-            char list[160] = "";
-            for (unsigned k = 0; transport_table[k]; k++)
-                if (transport_table[k]->roles & TRANSPORT_INPUT) {
-                    size_t m = strlen(list);
-                    snprintf(list + m, sizeof list - m, "%s%s", m ? ", " : "",
-                             transport_table[k]->name);
-                }
+            char list[160];
+            transport_names(TRANSPORT_INPUT, list, sizeof list);
             return why_set(why, wl, "expected one of %s, got '%s'", list, kv->value);
         }
         o->input = t;
@@ -501,13 +509,8 @@ static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size
              tok = strtok_r(NULL, ", \t", &save)) {
             const transport_t *t = transport_find(tok);
             if (!t || !(t->roles & TRANSPORT_OUTPUT)) {
-                char list[160] = "";
-                for (unsigned k = 0; transport_table[k]; k++)
-                    if (transport_table[k]->roles & TRANSPORT_OUTPUT) {
-                        size_t m = strlen(list);
-                        snprintf(list + m, sizeof list - m, "%s%s", m ? ", " : "",
-                                 transport_table[k]->name);
-                    }
+                char list[160];
+                transport_names(TRANSPORT_OUTPUT, list, sizeof list);
                 return why_set(why, wl, "unknown output '%s' (outputs: %s)", tok, list);
             }
             for (unsigned k = 0; k < o->noutput; k++)
