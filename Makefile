@@ -10,13 +10,15 @@
 #   make install    PREFIX, DESTDIR respected
 #
 # Files are found by name, so adding a module or a test needs no edit here:
-#   lib/*.c                      -> $(BUILD)/libtrajd.a (pure: no I/O)
-#   daemon/*.c except programs   -> $(BUILD)/libtrajdaemon.a
+#   lib/<family>/*.c             -> $(BUILD)/libtrajd.a (pure: no I/O)
+#   daemon/<family>/*.c          -> $(BUILD)/libtrajdaemon.a
 #   daemon/<program>.c           -> $(BUILD)/bin/<program>
-#   tests/test_*.c               -> cmocka test binaries
-#   tests/test_*.py, test_*.sh   -> run by tests/run.sh
-#   tests/bench_*.c, bench_*.sh  -> make bench
-#   tests/fuzz_*.c               -> make fuzz
+#   tests/unit/test_*.c          -> cmocka test binaries $(BUILD)/tests/test_*
+#   tests/*/test_*.py, test_*.sh -> run by tests/run.sh
+#   tests/bench/bench_*.c, .sh   -> make bench
+#   tests/fuzz/fuzz_*.c          -> make fuzz
+# Every folder holding headers is on the include path, so a header is named
+# by its file name alone (#include "engine.h").
 
 CC ?= cc
 CFLAGS ?= -O2 -g
@@ -34,24 +36,25 @@ WARN := -Wall -Wextra -Wshadow -Wfloat-equal -Wstrict-prototypes \
 PKGS := libmodbus libsystemd inih expat
 PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
 PKG_LIBS = $(shell pkg-config --libs $(PKGS) 2>/dev/null)
-TRAJD_CPPFLAGS = -Ilib -Idaemon -D_GNU_SOURCE $(PKG_CFLAGS) $(CPPFLAGS)
+INC_DIRS := lib $(sort $(dir $(wildcard lib/*/*.h daemon/*/*.h))) tests/helpers
+TRAJD_CPPFLAGS = $(INC_DIRS:%=-I%) -D_GNU_SOURCE $(PKG_CFLAGS) $(CPPFLAGS)
 TRAJD_CFLAGS = -std=c11 $(WARN) $(CFLAGS) -MMD -MP
 LDLIBS_DAEMON = $(PKG_LIBS) -lm -lpthread
 LDLIBS_TEST = -lcmocka -lgsl -lgslcblas $(LDLIBS_DAEMON)
 
-LIB_SRC := $(wildcard lib/*.c)
+LIB_SRC := $(wildcard lib/*.c lib/*/*.c)
 DAEMON_MAINS := $(wildcard $(PROGRAMS:%=daemon/%.c))
-DAEMON_SRC := $(filter-out $(DAEMON_MAINS),$(wildcard daemon/*.c))
-TEST_SRC := $(wildcard tests/test_*.c)
-BENCH_SRC := $(wildcard tests/bench_*.c)
-FUZZ_SRC := $(wildcard tests/fuzz_*.c)
+DAEMON_SRC := $(wildcard daemon/*/*.c)
+TEST_SRC := $(wildcard tests/unit/test_*.c)
+BENCH_SRC := $(wildcard tests/bench/bench_*.c)
+FUZZ_SRC := $(wildcard tests/fuzz/fuzz_*.c)
 
 LIB_OBJ := $(LIB_SRC:%.c=$(BUILD)/%.o)
 PIC_OBJ := $(LIB_SRC:%.c=$(BUILD)/pic/%.o)
 DAEMON_OBJ := $(DAEMON_SRC:%.c=$(BUILD)/%.o)
 BINS := $(DAEMON_MAINS:daemon/%.c=$(BUILD)/bin/%)
-TEST_BINS := $(TEST_SRC:tests/%.c=$(BUILD)/tests/%)
-BENCHES := $(BENCH_SRC:tests/%.c=$(BUILD)/tests/%)
+TEST_BINS := $(TEST_SRC:tests/unit/%.c=$(BUILD)/tests/%)
+BENCHES := $(BENCH_SRC:tests/bench/%.c=$(BUILD)/tests/%)
 
 .PHONY: all run check check-build test test-asan bench fuzz install deps deps-run clean
 .DELETE_ON_ERROR:
@@ -83,14 +86,18 @@ $(BUILD)/bin/%: $(BUILD)/daemon/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_DAEMON)
 
-$(BUILD)/tests/%: $(BUILD)/tests/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.a
+$(TEST_BINS): $(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.a
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_TEST)
+
+$(BENCHES): $(BUILD)/tests/%: $(BUILD)/tests/bench/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_TEST)
 
 # ---- Debian packages ---------------------------------------------------
 # Everything beyond a minimal Debian 12 (debootstrap --variant=minbase, which has
 # neither make nor procps): procps gives /bin/kill, which the units' ExecReload
-# names and `systemd-analyze verify` (tests/test_systemd.sh) requires to exist.
+# names and `systemd-analyze verify` (tests/e2e/test_systemd.sh) requires to exist.
 DEPS_BUILD := gcc make pkg-config libc6-dev libmodbus-dev libsystemd-dev libinih-dev libexpat1-dev
 DEPS_TEST := libcmocka-dev libgsl-dev python3 python3-scipy python3-numpy mbpoll \
              python3-pymodbus python3-serial python3-serial-asyncio can-utils python3-can python3-canmatrix \
@@ -128,23 +135,23 @@ test-asan:
 bench: deps
 	@$(MAKE) --no-print-directory all
 	@for b in $(BENCHES); do echo "== $$b"; $$b || exit 1; done
-	@for b in $(wildcard tests/bench_*.sh); do echo "== $$b"; BUILD=$(abspath $(BUILD)) sh $$b || exit 1; done
+	@for b in $(wildcard tests/bench/bench_*.sh); do echo "== $$b"; BUILD=$(abspath $(BUILD)) sh $$b || exit 1; done
 
 # ---- libFuzzer (clang) ------------------------------------------------------
 FUZZ_CC := clang
 FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer-no-link,address,undefined
-FUZZ_BINS := $(FUZZ_SRC:tests/%.c=$(BUILD)/fuzz/%)
+FUZZ_BINS := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/fuzz/%)
 $(BUILD)/fuzz/obj/%.o: %.c
 	@mkdir -p $(@D)
 	$(FUZZ_CC) $(TRAJD_CPPFLAGS) -std=c11 $(FUZZ_FLAGS) -MMD -MP -c -o $@ $<
-$(BUILD)/fuzz/%: $(BUILD)/fuzz/obj/tests/%.o $(LIB_SRC:%.c=$(BUILD)/fuzz/obj/%.o) $(DAEMON_SRC:%.c=$(BUILD)/fuzz/obj/%.o)
+$(BUILD)/fuzz/%: $(BUILD)/fuzz/obj/tests/fuzz/%.o $(LIB_SRC:%.c=$(BUILD)/fuzz/obj/%.o) $(DAEMON_SRC:%.c=$(BUILD)/fuzz/obj/%.o)
 	$(FUZZ_CC) -fsanitize=fuzzer,address,undefined -o $@ $^ $(LDLIBS_DAEMON)
 fuzz: deps
 	@$(MAKE) --no-print-directory $(FUZZ_BINS)
 	@for f in $(FUZZ_BINS); do n=$$(basename $$f); mkdir -p $(BUILD)/fuzz/corpus/$$n; \
 		echo "== $$n ($(FUZZ_SECONDS) s)"; \
 		$$f -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 $(BUILD)/fuzz/corpus/$$n \
-			$$( [ -d tests/corpus/$$n ] && echo tests/corpus/$$n ) > $(BUILD)/fuzz/$$n.log 2>&1; rc=$$?; \
+			$$( [ -d tests/fuzz/corpus/$$n ] && echo tests/fuzz/corpus/$$n ) > $(BUILD)/fuzz/$$n.log 2>&1; rc=$$?; \
 		grep -E 'stat::number_of_executed_units|stat::peak_rss_mb|ERROR|SUMMARY' $(BUILD)/fuzz/$$n.log; \
 		[ $$rc -eq 0 ] || { echo "$$n: finding, see $(BUILD)/fuzz/$$n.log"; exit 1; }; done
 

@@ -1,6 +1,6 @@
 /*
  * trajreplay - replay a logged track through the engine on a virtual clock
- * and write the setpoints the daemon would stream (daemon/spcsv.h format).
+ * and write the setpoints the daemon would stream (daemon/csv/csv_format.h format).
  *
  * Tick k is at engine time now_ns = k * period_ns; for every tick,
  * replay_feed(now) then engine_tick(now), exactly as the daemon does, so the
@@ -23,7 +23,7 @@
 
 #include "engine.h"
 #include "replay.h"
-#include "spcsv.h"
+#include "csv_format.h"
 #include "svg.h"
 #include "track.h"
 
@@ -79,7 +79,7 @@ static void usage(FILE *f)
         "  --max-accel M_S2     reject waypoints implying a higher acceleration from the\n"
         "                       two before (timestamp jitter; default 30, 0 = no limit)\n"
         "  --format F           auto | xyz | latlon | gpx | path (default auto;\n"
-        "                       path: lines and arcs, lib/path.h, auto for *.path)\n"
+        "                       path: lines and arcs, lib/spline/path.h, auto for *.path)\n"
         "  --skip-bad           skip and count malformed lines instead of failing\n"
         "  --object NAME        value of the object column (default \"replay\")\n"
         "  -o, --output FILE    setpoint CSV (default stdout; \"-\" = stdout)\n"
@@ -324,12 +324,12 @@ static int parse_args(int argc, char **argv, opts_t *o)
         return EXIT_USAGE;
     }
     o->cfg.period_ns = llround(period);
-    char line[SPCSV_LINE_MAX];
+    char line[CSV_FORMAT_LINE_MAX];
     engine_setpoint_t probe;
     memset(&probe, 0, sizeof probe);
-    if (spcsv_format(line, sizeof line, o->object, &probe) < 0) {
+    if (csv_format_format(line, sizeof line, o->object, &probe) < 0) {
         fprintf(stderr, "trajreplay: --object: at most %d characters, no comma, quote or "
-                "control character\n", SPCSV_OBJECT_MAX);
+                "control character\n", CSV_FORMAT_OBJECT_MAX);
         return EXIT_USAGE;
     }
     return -1;
@@ -431,8 +431,8 @@ int main(int argc, char **argv)
     }
     setvbuf(out, outbuf, _IOFBF, sizeof outbuf);
 
-    char line[SPCSV_LINE_MAX];
-    int len = spcsv_header(line, sizeof line);
+    char line[CSV_FORMAT_LINE_MAX];
+    int len = csv_format_header(line, sizeof line);
     fwrite(line, 1, (size_t)len, out);
 
     replay_t r;
@@ -464,7 +464,7 @@ int main(int argc, char **argv)
         engine_setpoint_t sp;
         replay_feed(&r, e, now);
         (void)engine_tick(e, now, &sp);
-        len = spcsv_format(line, sizeof line, o.object, &sp);
+        len = csv_format_format(line, sizeof line, o.object, &sp);
         if (len > 0)
             fwrite(line, 1, (size_t)len, out);
         written++;

@@ -12,7 +12,7 @@
  *   samples CSV "u,v,x,y,z" on N steps per grid cell in each direction
  *     (u, v in grid units, so grid point (i, j) is the sample u = i, v = j,
  *     and the surface passes through it exactly), computed by forward
- *     differences (lib/surf); "-" or no -o: stdout;
+ *     differences (lib/spline/surf); "-" or no -o: stdout;
  *   picture (-s): an SVG wireframe in isometric projection, heights
  *     multiplied by ZSCALE, the grid points drawn as dots.
  * Exit status 0, 1 on bad input (message "file:line: what" on stderr), 2 on usage.

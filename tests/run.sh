@@ -35,8 +35,8 @@ for t in "$BUILD"/tests/test_*; do
     run_one "$(basename "$t")" "$t"
 done
 if [ "$ONLY" != c ]; then
-    for t in tests/test_*.py; do [ -f "$t" ] && run_one "$(basename "$t")" "$PYTHON" "$t"; done
-    for t in tests/test_*.sh; do [ -f "$t" ] && run_one "$(basename "$t")" bash "$t"; done
+    for t in tests/*/test_*.py; do [ -f "$t" ] && run_one "$(basename "$t")" "$PYTHON" "$t"; done
+    for t in tests/*/test_*.sh; do [ -f "$t" ] && run_one "$(basename "$t")" bash "$t"; done
 fi
 [ -n "$failures" ] && echo "failed:$failures"
 echo "check: $passed passed, $failed failed"

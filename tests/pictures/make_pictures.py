@@ -16,7 +16,7 @@ import sys
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(os.path.dirname(HERE), "helpers"))
 from toolkit_ctypes import (BUILD, Bspline, Cspline, Nurbs, PathElem, Waypoint,  # noqa: E402,F401
                             dp, lib, ptr)
 

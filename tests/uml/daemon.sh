@@ -1,5 +1,5 @@
 #!/bin/sh
-# Guest scenarios with trajd on vcan0 (see tests/test_can_uml.sh, which
+# Guest scenarios with trajd on vcan0 (see tests/e2e/test_can_uml.sh, which
 # prepares $out/wp.log and checks the captures afterwards).  Each phase writes
 # a marker "$out/ok.<phase>" when its in-guest check passed.
 out=$1

@@ -1,5 +1,5 @@
 #!/bin/sh
-# PID 1 of the user-mode-linux guest used by tests/test_can_uml.sh.
+# PID 1 of the user-mode-linux guest used by tests/e2e/test_can_uml.sh.
 # Kernel command line words (no spaces in values):
 #   trajd_dir=<dir>     writable hostfs directory (results, logs)
 #   trajd_script=<sh>   scenario script to run (with sh), cwd = the source tree

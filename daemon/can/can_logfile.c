@@ -1,0 +1,165 @@
+/* can_logfile.c - candump-log transport (see can_logfile.h). */
+#include "can_logfile.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "candump.h"
+
+typedef struct {
+    int64_t ts_us;
+    canproto_frame_t f;
+} can_logfile_rec_t;
+
+struct can_logfile {
+    can_logfile_rec_t *rec;
+    size_t n, cap, next;
+    int64_t start_ns;
+    int64_t now_ns;
+    FILE *out;
+    int out_is_stdout;
+    char ifname[CANDUMP_IFNAME_MAX + 1];
+    can_logfile_stats_t st;
+};
+
+static int load(can_logfile_t *l, const char *path, char *err, size_t errlen)
+{
+    FILE *fp = fopen(path, "r");
+    char line[512];
+    int lineno = 0;
+    if (!fp) {
+        snprintf(err, errlen, "%s: %s", path, strerror(errno));
+        return -1;
+    }
+    while (fgets(line, sizeof line, fp)) {
+        candump_line_t cl;
+        lineno++;
+        l->st.lines++;
+        int rc = candump_parse_line(line, &cl);
+        if (rc == -CANDUMP_ESKIP) {
+            l->st.comments++;
+            continue;
+        }
+        if (rc < 0) {
+            l->st.bad_lines++;
+            if (!l->st.first_bad_line)
+                l->st.first_bad_line = lineno;
+            continue;
+        }
+        if (l->n == l->cap) {
+            size_t cap = l->cap ? 2 * l->cap : 256;
+            can_logfile_rec_t *r = realloc(l->rec, cap * sizeof *r);
+            if (!r) {
+                snprintf(err, errlen, "%s: out of memory", path);
+                fclose(fp);
+                return -1;
+            }
+            l->rec = r;
+            l->cap = cap;
+        }
+        l->rec[l->n].ts_us = cl.ts_us;
+        l->rec[l->n].f = cl.frame;
+        l->n++;
+    }
+    int bad = ferror(fp);
+    fclose(fp);
+    if (bad) {
+        snprintf(err, errlen, "%s: read error", path);
+        return -1;
+    }
+    l->st.frames_in = l->n;
+    return 0;
+}
+
+can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const char *ifname,
+                      int64_t start_ns, char *err, size_t errlen)
+{
+    can_logfile_t *l = calloc(1, sizeof *l);
+    if (!l) {
+        snprintf(err, errlen, "out of memory");
+        return NULL;
+    }
+    l->start_ns = start_ns;
+    snprintf(l->ifname, sizeof l->ifname, "%s", ifname && *ifname ? ifname : "can0");
+    if (in_path && load(l, in_path, err, errlen) < 0)
+        goto fail;
+    if (out_path) {
+        if (!strcmp(out_path, "-")) {
+            l->out = stdout;
+            l->out_is_stdout = 1;
+        } else if (!(l->out = fopen(out_path, "w"))) {
+            snprintf(err, errlen, "%s: %s", out_path, strerror(errno));
+            goto fail;
+        }
+    }
+    return l;
+fail:
+    can_logfile_close(l);
+    return NULL;
+}
+
+void can_logfile_close(can_logfile_t *l)
+{
+    if (!l)
+        return;
+    if (l->out) {
+        fflush(l->out);
+        if (!l->out_is_stdout)
+            fclose(l->out);
+    }
+    free(l->rec);
+    free(l);
+}
+
+int can_logfile_recv(can_logfile_t *l, int64_t now_ns, canproto_frame_t *f)
+{
+    l->now_ns = now_ns;
+    if (l->next >= l->n)
+        return 0;
+    /* due = start + (ts_k - ts_0) us; candump_parse_line bounds ts_us below
+     * 1e18, so the difference fits, and the product is checked */
+    int64_t d_us = l->rec[l->next].ts_us - l->rec[0].ts_us;
+    int64_t due = d_us <= 0 ? l->start_ns /* stamped before the first: due with it */
+                : d_us > (INT64_MAX / 2 - l->start_ns) / 1000 ? INT64_MAX
+                : l->start_ns + d_us * 1000;
+    if (due > now_ns)
+        return 0;
+    *f = l->rec[l->next++].f;
+    return 1;
+}
+
+void can_logfile_set_time(can_logfile_t *l, int64_t now_ns)
+{
+    l->now_ns = now_ns;
+}
+
+int can_logfile_send(can_logfile_t *l, const canproto_frame_t *f)
+{
+    char buf[256];
+    if (!l->out)
+        return 0;
+    int n = candump_format_line(buf, sizeof buf, l->now_ns / 1000, l->ifname, f);
+    if (n < 0 || fwrite(buf, 1, (size_t)n, l->out) != (size_t)n) {
+        l->st.write_errors++;
+        return -EIO;
+    }
+    l->st.frames_out++;
+    return 0;
+}
+
+int can_logfile_done(const can_logfile_t *l)
+{
+    return l->next >= l->n;
+}
+
+void can_logfile_flush(can_logfile_t *l)
+{
+    if (l->out && fflush(l->out) != 0)
+        l->st.write_errors++;
+}
+
+void can_logfile_stats(const can_logfile_t *l, can_logfile_stats_t *st)
+{
+    *st = l->st;
+}

@@ -1,0 +1,62 @@
+/*
+ * can_logfile.h - candump-log transport: waypoint frames are read from a candump
+ * log (`candump -l` / `-L` text, '#' comment lines skipped) and replayed on
+ * the engine's clock; frames sent are written as a candump -L log whose
+ * timestamps are engine time.  The same codec as on a socket is exercised
+ * without a kernel, and logged bus traffic can be replayed.
+ *
+ * Input timing: frame k is due at engine time start_ns + (ts_k - ts_0); the
+ * whole file is read at can_logfile_open (never in the tick).  Frames with ids
+ * that are not ours are delivered too: can_port counts them as foreign.
+ */
+#ifndef TRAJD_CANLOG_H
+#define TRAJD_CANLOG_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include "canproto.h"
+
+typedef struct {
+    uint64_t lines;           /* lines read */
+    uint64_t comments;        /* '#' and blank lines skipped */
+    uint64_t bad_lines;       /* lines that are not candump frames (skipped) */
+    int first_bad_line;       /* line number of the first, 0 if none */
+    uint64_t frames_in;       /* frames loaded */
+    uint64_t frames_out;      /* frames written */
+    uint64_t write_errors;
+} can_logfile_stats_t;
+
+typedef struct can_logfile can_logfile_t;
+
+/*
+ * Open.  in_path: candump log to replay (NULL: no input); out_path: file to
+ * write (NULL: no output; "-" = stdout).  ifname: interface name written in
+ * output lines.  start_ns: engine time at which the first input frame is due.
+ * Returns NULL with a message in err on failure (file missing, unreadable).
+ */
+can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const char *ifname,
+                      int64_t start_ns, char *err, size_t errlen);
+
+/* Flush and close; NULL is a no-op. */
+void can_logfile_close(can_logfile_t *l);
+
+/* Next input frame due at or before now_ns: 1 (in f), 0 (none yet or no more). */
+int can_logfile_recv(can_logfile_t *l, int64_t now_ns, canproto_frame_t *f);
+
+/* Write f as a log line stamped with the last now_ns given to can_logfile_recv /
+ * can_logfile_set_time.  Returns 0 or -EIO. */
+int can_logfile_send(can_logfile_t *l, const canproto_frame_t *f);
+
+/* Set the time stamped on output lines (engine time, ns). */
+void can_logfile_set_time(can_logfile_t *l, int64_t now_ns);
+
+/* 1 once every input frame was delivered (or there is no input). */
+int can_logfile_done(const can_logfile_t *l);
+
+/* Flush the output (once per cycle). */
+void can_logfile_flush(can_logfile_t *l);
+
+void can_logfile_stats(const can_logfile_t *l, can_logfile_stats_t *st);
+
+#endif

@@ -1,0 +1,416 @@
+/* can_port.c - the CAN side of trajd (see can_port.h). */
+#include "can_port.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define CAN_PORT_RX_BATCH 256  /* frames handled per can_port_rx call: do not starve the loop */
+
+typedef struct {
+    int set;
+    canproto_ids_t ids;
+    can_port_hooks_t hooks;
+    void *ctx;
+    canproto_slot_t slots[CAN_PORT_RX_SLOTS];
+    canproto_rx_t rx;
+    engine_setpoint_t sp;
+    int have_sp;
+    int status_due;
+    int64_t last_status_ns;
+    int sent_status;
+    uint8_t flags_since;       /* CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP since last STATUS */
+    uint8_t last_err;
+    int last_state;            /* engine state in the last STATUS (-1: none yet) */
+    can_port_obj_stats_t st;
+} can_port_obj_t;
+
+struct can_port {
+    can_port_config_t cfg;
+    can_port_io_t io;
+    void *io_ctx;
+    unsigned nobj;
+    can_port_obj_t *obj;
+    canproto_ids_t *ids;       /* copy of each object's ids, contiguous (bus load) */
+    uint8_t sync_counter;
+    can_port_stats_t st;
+};
+
+void can_port_config_default(can_port_config_t *c)
+{
+    memset(c, 0, sizeof *c);
+    c->sync = 0;
+    c->sync_id = CANPROTO_ID_SYNC_DEFAULT;
+    c->sync_overflow = 0;
+    c->status_period_ns = 100000000LL;
+    c->max_late_ns = 0;
+}
+
+can_port_t *can_port_new(const can_port_config_t *cfg, const can_port_io_t *io, void *io_ctx,
+                       unsigned nobj)
+{
+    if (!cfg || !io || !io->send || !io->recv || !io->is_up || nobj == 0 ||
+        cfg->sync_id > CANPROTO_SFF_MASK || cfg->sync_overflow == 1 || cfg->sync_overflow > 240)
+        return NULL;
+    can_port_t *p = calloc(1, sizeof *p);
+    if (!p)
+        return NULL;
+    p->obj = calloc(nobj, sizeof *p->obj);
+    p->ids = calloc(nobj, sizeof *p->ids);
+    if (!p->obj || !p->ids) {
+        can_port_free(p);
+        return NULL;
+    }
+    p->cfg = *cfg;
+    p->io = *io;
+    p->io_ctx = io_ctx;
+    p->nobj = nobj;
+    for (unsigned i = 0; i < nobj; i++) {
+        canproto_rx_init(&p->obj[i].rx, p->obj[i].slots, CAN_PORT_RX_SLOTS);
+        p->obj[i].last_state = -1;
+    }
+    return p;
+}
+
+void can_port_free(can_port_t *p)
+{
+    if (!p)
+        return;
+    free(p->obj);
+    free(p->ids);
+    free(p);
+}
+
+int can_port_set_object(can_port_t *p, unsigned i, const canproto_ids_t *ids,
+                       const can_port_hooks_t *hooks, void *ctx)
+{
+    uint32_t mine[CANPROTO_IDS_MAX], other[CANPROTO_IDS_MAX];
+    if (i >= p->nobj || !hooks || !hooks->push || !hooks->status)
+        return -CANPROTO_EID;
+    if (canproto_ids_check(ids, NULL) < 0)
+        return -CANPROTO_ECONFIG;
+    unsigned n = canproto_ids_in_use(ids, mine);
+    for (unsigned k = 0; k < n; k++)
+        if (p->cfg.sync && mine[k] == p->cfg.sync_id)
+            return -CANPROTO_ECONFIG;
+    for (unsigned j = 0; j < p->nobj; j++) {
+        if (j == i || !p->obj[j].set)
+            continue;
+        unsigned m = canproto_ids_in_use(&p->obj[j].ids, other);
+        for (unsigned k = 0; k < n; k++)
+            for (unsigned l = 0; l < m; l++)
+                if (mine[k] == other[l])
+                    return -CANPROTO_ECONFIG;
+    }
+    can_port_obj_t *o = &p->obj[i];
+    o->set = 1;
+    o->ids = *ids;
+    o->hooks = *hooks;
+    o->ctx = ctx;
+    p->ids[i] = *ids;
+    return 0;
+}
+
+unsigned can_port_rx_ids(const can_port_t *p, uint32_t *out, unsigned max)
+{
+    unsigned n = 0;
+    for (unsigned i = 0; i < p->nobj; i++) {
+        uint32_t ids[4];
+        if (!p->obj[i].set)
+            continue;
+        unsigned k = canproto_ids_rx(&p->obj[i].ids, ids, 4);
+        for (unsigned j = 0; j < k; j++, n++)
+            if (n < max)
+                out[n] = ids[j];
+    }
+    return n;
+}
+
+static void event(can_port_obj_t *o, uint8_t err)
+{
+    o->last_err = err;
+    o->status_due = 1;
+}
+
+static void handle_waypoint(can_port_obj_t *o, canproto_rx_out_t *out)
+{
+    int rc = o->hooks.push(o->ctx, &out->wp);
+    if (rc == -ENGINE_EFULL) {
+        /* not consumed: the sender sees last_seq stay and repeats it */
+        o->st.waypoints_full++;
+        event(o, ENGINE_EFULL);
+        return;
+    }
+    canproto_rx_consume(&o->rx, out);
+    if (out->lost_before)
+        event(o, CANPROTO_STERR_LOST);
+    if (rc == 0) {
+        o->st.waypoints_accepted++;
+    } else if (rc == ENGINE_DUPLICATE) {
+        o->st.engine_duplicates++;
+    } else {
+        o->st.waypoints_rejected++;
+        event(o, (uint8_t)(rc < 0 ? -rc : rc));
+    }
+}
+
+static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd)
+{
+    if (o->hooks.command)
+        o->hooks.command(o->ctx, cmd);
+    if (cmd == CANPROTO_CMD_CLEAR)
+        canproto_rx_restart(&o->rx);
+    if (cmd == CANPROTO_CMD_RESET_COUNTERS) {
+        memset(&o->st, 0, sizeof o->st);
+        memset(&o->rx.st, 0, sizeof o->rx.st);
+        o->last_err = CANPROTO_STERR_OK;
+    }
+    o->status_due = 1;
+}
+
+static void dispatch(can_port_t *p, const canproto_frame_t *f)
+{
+    if (!(f->flags & CANPROTO_F_EFF)) {
+        for (unsigned i = 0; i < p->nobj; i++) {
+            can_port_obj_t *o = &p->obj[i];
+            int is_fd;
+            if (!o->set)
+                continue;
+            if (f->id == o->ids.waypoint_id)
+                is_fd = 0;
+            else if (o->ids.fd && f->id == o->ids.waypoint_fd_id)
+                is_fd = 1;
+            else
+                continue;
+            canproto_rx_out_t out;
+            uint64_t ooo = o->rx.st.out_of_order;
+            int rc = canproto_rx_frame(&o->rx, f, is_fd, &out);
+            if (rc < 0)
+                event(o, CANPROTO_STERR_MALFORMED);
+            else if (rc == CANPROTO_RX_WAYPOINT)
+                handle_waypoint(o, &out);
+            else if (rc == CANPROTO_RX_COMMAND)
+                handle_command(o, out.cmd);
+            if (o->rx.st.out_of_order != ooo)
+                event(o, CANPROTO_STERR_OUT_OF_ORDER);
+            return;
+        }
+    }
+    p->st.rx_foreign++;
+}
+
+int can_port_rx(can_port_t *p, int64_t now_ns)
+{
+    canproto_frame_t f;
+    int n = 0;
+    while (n < CAN_PORT_RX_BATCH) {
+        int rc = p->io.recv(p->io_ctx, now_ns, &f);
+        if (rc == 0)
+            break;
+        if (rc < 0) {
+            p->st.rx_errors++;
+            return n ? n : rc;
+        }
+        p->st.rx_frames++;
+        dispatch(p, &f);
+        n++;
+    }
+    return n;
+}
+
+void can_port_setpoint(can_port_t *p, unsigned i, const engine_setpoint_t *sp)
+{
+    if (i >= p->nobj)
+        return;
+    p->obj[i].sp = *sp;
+    p->obj[i].have_sp = 1;
+}
+
+static int is_full(int rc)
+{
+    return rc == -ENOBUFS || rc == -EAGAIN;
+}
+
+/* Send object o's frames for this cycle; 0 or the first failure. */
+static int send_setpoint(can_port_t *p, can_port_obj_t *o)
+{
+    canproto_frame_t f[ENGINE_AXES + CANPROTO_CIA402_AXES];
+    unsigned n = 0;
+    int clamped = 0, rc;
+
+    if (o->ids.own) {
+        if (o->ids.fd)
+            rc = canproto_encode_setpoint_fd(o->ids.setpoint_fd_id, o->ids.brs, &o->sp, &f[n++]);
+        else {
+            rc = canproto_encode_setpoint(o->ids.setpoint_id, &o->sp, &f[n]);
+            n += ENGINE_AXES;
+        }
+        clamped |= rc == CANPROTO_CLAMPED;
+    }
+    if (o->ids.cia402)
+        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+            if (o->ids.cia402_cob_id[a]) {
+                rc = canproto_encode_cia402(&o->ids, a, o->sp.pos_m[a], &f[n++]);
+                clamped |= rc == CANPROTO_CLAMPED;
+            }
+    if (clamped)
+        o->st.tx_clamped++;
+    for (unsigned k = 0; k < n; k++)
+        if ((rc = p->io.send(p->io_ctx, &f[k])) < 0)
+            return rc;
+    return 0;
+}
+
+static int is_down(int rc)
+{
+    return rc == -ENETDOWN || rc == -ENODEV || rc == -ENXIO || rc == -ENETUNREACH;
+}
+
+static void count_drop(can_port_obj_t *o, int rc)
+{
+    o->flags_since |= CANPROTO_ST_TX_DROP;
+    if (is_down(rc)) {
+        o->st.dropped_down++;
+        o->flags_since |= CANPROTO_ST_BUS_DOWN;
+        event(o, CANPROTO_STERR_BUS_DOWN);
+        return;
+    }
+    if (is_full(rc))
+        o->st.dropped_full++;
+    else
+        o->st.dropped_error++; /* e.g. EINVAL: FD frame on a classic-MTU interface */
+    event(o, CANPROTO_STERR_TX_DROPPED);
+}
+
+static void send_status(can_port_t *p, can_port_obj_t *o, const engine_status_t *es_in,
+                        int64_t now_ns)
+{
+    const engine_status_t es = *es_in;
+    canproto_status_t st;
+    canproto_frame_t f;
+
+    memset(&st, 0, sizeof st);
+    st.state = (uint8_t)es.state;
+    st.flags = o->flags_since;
+    st.last_seq = es.last_seq;
+    st.free = es.free;
+    st.lost = (uint32_t)o->rx.st.lost;
+    st.rejected = (uint32_t)(o->st.waypoints_rejected + o->st.waypoints_full);
+    st.malformed = (uint32_t)o->rx.st.malformed;
+    st.dropped = (uint32_t)(o->st.dropped_late + o->st.dropped_full + o->st.dropped_down +
+                            o->st.dropped_error);
+    st.last_err = o->last_err;
+    canproto_encode_status(o->ids.status_id, &st, &f);
+    if (p->io.send(p->io_ctx, &f) == 0) {
+        o->st.status_sent++;
+        o->flags_since = 0;
+        o->status_due = 0;
+        o->last_status_ns = now_ns;
+        o->sent_status = 1;
+        o->last_state = (int)es.state;
+    }
+}
+
+void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
+{
+    p->st.cycles++;
+    if (!p->io.is_up(p->io_ctx)) {
+        p->st.down_cycles++;
+        for (unsigned i = 0; i < p->nobj; i++)
+            if (p->obj[i].set && p->obj[i].have_sp)
+                count_drop(&p->obj[i], -ENETDOWN);
+        goto out;
+    }
+    if (p->cfg.max_late_ns > 0 && late_ns > p->cfg.max_late_ns) {
+        for (unsigned i = 0; i < p->nobj; i++)
+            if (p->obj[i].set && p->obj[i].have_sp) {
+                p->obj[i].st.dropped_late++;
+                p->obj[i].flags_since |= CANPROTO_ST_TX_DROP;
+                event(&p->obj[i], CANPROTO_STERR_TX_DROPPED);
+            }
+        goto out;
+    }
+    if (p->cfg.sync) {
+        canproto_frame_t f;
+        uint8_t c = 0;
+        if (p->cfg.sync_overflow) {
+            /* CiA 301: the counter runs 1..overflow */
+            p->sync_counter = p->sync_counter >= p->cfg.sync_overflow ? 1 : p->sync_counter + 1;
+            c = p->sync_counter;
+        }
+        canproto_encode_sync(p->cfg.sync_id, c, &f);
+        if (p->io.send(p->io_ctx, &f) == 0)
+            p->st.sync_sent++;
+    }
+    for (unsigned i = 0; i < p->nobj; i++) {
+        can_port_obj_t *o = &p->obj[i];
+        if (!o->set || !o->have_sp)
+            continue;
+        int rc = send_setpoint(p, o);
+        if (rc < 0)
+            count_drop(o, rc);
+        else
+            o->st.setpoints_sent++;
+    }
+    for (unsigned i = 0; i < p->nobj; i++) {
+        can_port_obj_t *o = &p->obj[i];
+        if (!o->set)
+            continue;
+        engine_status_t es;
+        memset(&es, 0, sizeof es);
+        o->hooks.status(o->ctx, &es);
+        /* a change of state is reported at once (e.g. FINISHED, UNDERRUN) */
+        if (o->status_due || !o->sent_status || (int)es.state != o->last_state ||
+            (p->cfg.status_period_ns > 0 && now_ns - o->last_status_ns >= p->cfg.status_period_ns))
+            if (p->io.is_up(p->io_ctx))
+                send_status(p, o, &es, now_ns);
+    }
+out:
+    for (unsigned i = 0; i < p->nobj; i++)
+        p->obj[i].have_sp = 0;
+}
+
+int can_port_maintain(can_port_t *p, int64_t now_ns)
+{
+    if (!p->io.maintain)
+        return 0;
+    int up = p->io.maintain(p->io_ctx, now_ns);
+    if (up > 0)
+        p->st.reopens++;
+    return up > 0;
+}
+
+void can_port_stats(const can_port_t *p, can_port_stats_t *st)
+{
+    *st = p->st;
+}
+
+void can_port_obj_stats(const can_port_t *p, unsigned i, can_port_obj_stats_t *st)
+{
+    memset(st, 0, sizeof *st);
+    if (i >= p->nobj)
+        return;
+    *st = p->obj[i].st;
+    st->rx = p->obj[i].rx.st;
+}
+
+void can_port_reset_counters(can_port_t *p)
+{
+    memset(&p->st, 0, sizeof p->st);
+    for (unsigned i = 0; i < p->nobj; i++) {
+        memset(&p->obj[i].st, 0, sizeof p->obj[i].st);
+        memset(&p->obj[i].rx.st, 0, sizeof p->obj[i].rx.st);
+    }
+}
+
+double can_port_busload(const can_port_t *p, double rate_hz, double waypoint_hz, double bitrate,
+                       double data_bitrate)
+{
+    canproto_traffic_t tr = {
+        .rate_hz = rate_hz,
+        .status_hz = p->cfg.status_period_ns > 0 ? 1e9 / (double)p->cfg.status_period_ns : 0,
+        .waypoint_hz = waypoint_hz,
+    };
+    return canproto_busload(p->ids, p->nobj, p->cfg.sync, p->cfg.sync_overflow ? 1 : 0, &tr,
+                            bitrate, data_bitrate);
+}

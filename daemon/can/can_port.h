@@ -1,0 +1,146 @@
+/*
+ * can_port.h - the CAN side of trajd, independent of the daemon's core: objects
+ * (ids, waypoint reassembly, counters) on one transport (SocketCAN or a
+ * candump log), waypoints in through hooks, setpoints out once per cycle.
+ *
+ * Seams (CANopenNode style: the protocol logic never touches the OS):
+ *  - can_port_io_t: send / recv / maintain of a transport (can_socket.h, can_logfile.h,
+ *    or a fake in the tests);
+ *  - can_port_hooks_t: what to do with a waypoint or command for an object
+ *    (the daemon calls obj_push / engine_*; tests use fakes).
+ *
+ * Per cycle (can_port_cycle, called once per tick after every object's
+ * setpoint was handed over with can_port_setpoint):
+ *   1. if the caller was later than max_late_ns for this cycle: nothing is
+ *      sent, every object's setpoint counts as dropped (late);
+ *   2. SYNC (if enabled), then per object its own SETPOINT frame(s) and its
+ *      CiA 402 RPDOs (a CSP drive applies the target received after SYNC k at
+ *      SYNC k + 1: one cycle of latency, the CiA 402 norm);
+ *   3. STATUS frames that are due (every status_period_ns, or at once after a
+ *      rejection, a loss, a malformed frame or a change of engine state, at
+ *      most one per object per cycle).
+ * A frame the transport cannot take (queue full, interface down) is dropped
+ * and counted; the rest of that object's frames this cycle are not attempted
+ * (the setpoint is dropped whole).  Nothing is kept for later: after a fault
+ * the next cycle sends the current setpoint, never a backlog.
+ *
+ * Not thread-safe: one loop thread calls everything.  No allocation after
+ * can_port_new.
+ */
+#ifndef TRAJD_CANPORT_H
+#define TRAJD_CANPORT_H
+
+#include <stdint.h>
+#include "canproto.h"
+#include "engine.h"
+
+/* Slots per object for interleaved waypoint frames (see canproto_rx_init). */
+#define CAN_PORT_RX_SLOTS 2
+
+typedef struct {
+    /* 0, or -errno: -ENOBUFS/-EAGAIN = full, -ENETDOWN/-ENODEV/-ENXIO = down. */
+    int (*send)(void *io, const canproto_frame_t *f);
+    /* 1 = a frame in f, 0 = none now, -errno. now_ns: engine time (log replay). */
+    int (*recv)(void *io, int64_t now_ns, canproto_frame_t *f);
+    /* Reopen if down; 1 if the transport came up now. May be NULL. */
+    int (*maintain)(void *io, int64_t now_ns);
+    /* 1 if usable now. */
+    int (*is_up)(const void *io);
+} can_port_io_t;
+
+typedef struct {
+    /* Offer a waypoint; returns what engine_push returns. */
+    int (*push)(void *ctx, const engine_waypoint_t *wp);
+    /* A command frame arrived. */
+    void (*command)(void *ctx, canproto_cmd_t cmd);
+    /* Current engine status (state, last_seq, free). */
+    void (*status)(void *ctx, engine_status_t *st);
+} can_port_hooks_t;
+
+typedef struct {
+    int sync;                  /* send a SYNC frame each cycle */
+    uint32_t sync_id;          /* default 0x080 */
+    uint8_t sync_overflow;     /* 0: SYNC with DLC 0; 2..240: DLC 1, counter 1..overflow */
+    int64_t status_period_ns;  /* STATUS period, default 100 ms; 0 = only on events */
+    int64_t max_late_ns;       /* cycle later than this is not sent; <= 0 = never drop */
+} can_port_config_t;
+
+void can_port_config_default(can_port_config_t *c);
+
+typedef struct {
+    uint64_t setpoints_sent;   /* cycles whose frames all went out */
+    uint64_t dropped_late;     /* cycles not sent: caller late */
+    uint64_t dropped_full;     /* cycles not (wholly) sent: ENOBUFS / EAGAIN */
+    uint64_t dropped_down;     /* cycles not sent: interface down */
+    uint64_t dropped_error;    /* cycles not sent: other write error (EINVAL: FD on a classic MTU) */
+    uint64_t tx_clamped;       /* setpoints with a value clamped to its field */
+    uint64_t status_sent;
+    uint64_t waypoints_accepted;
+    uint64_t waypoints_rejected;   /* engine refused (not EFULL) */
+    uint64_t waypoints_full;       /* engine EFULL: not consumed, sender must repeat */
+    uint64_t engine_duplicates;
+    canproto_rx_stats_t rx;    /* reassembly counters */
+} can_port_obj_stats_t;
+
+typedef struct {
+    uint64_t rx_frames;
+    uint64_t rx_foreign;       /* frames with an id no object uses (log input; filters stop them on a socket) */
+    uint64_t rx_errors;
+    uint64_t sync_sent;
+    uint64_t cycles;
+    uint64_t down_cycles;      /* cycles during which the transport was down */
+    uint64_t reopens;
+} can_port_stats_t;
+
+typedef struct can_port can_port_t;
+
+/* Allocate for nobj objects (>= 1).  Returns NULL on bad arguments / no memory. */
+can_port_t *can_port_new(const can_port_config_t *cfg, const can_port_io_t *io, void *io_ctx,
+                       unsigned nobj);
+
+/* Free; NULL is a no-op.  Does not close the transport. */
+void can_port_free(can_port_t *p);
+
+/*
+ * Set object i's ids and hooks.  Returns 0, -CANPROTO_ECONFIG (ids invalid or
+ * clashing with another object's), or -CANPROTO_EID (i out of range).
+ */
+int can_port_set_object(can_port_t *p, unsigned i, const canproto_ids_t *ids,
+                       const can_port_hooks_t *hooks, void *ctx);
+
+/*
+ * The ids to receive over all objects (for CAN_RAW_FILTER).  Writes at most
+ * max, returns how many there are.
+ */
+unsigned can_port_rx_ids(const can_port_t *p, uint32_t *out, unsigned max);
+
+/* Read and handle every frame available now.  Returns frames handled or -errno. */
+int can_port_rx(can_port_t *p, int64_t now_ns);
+
+/* Hand over object i's setpoint for this cycle (copied). */
+void can_port_setpoint(can_port_t *p, unsigned i, const engine_setpoint_t *sp);
+
+/*
+ * Send this cycle (see the top of this file).  now_ns: engine time of the
+ * tick; late_ns: how late the caller woke for it (0 if unknown).
+ */
+void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns);
+
+/* Housekeeping (reopen a down transport).  Returns 1 if it came up now. */
+int can_port_maintain(can_port_t *p, int64_t now_ns);
+
+void can_port_stats(const can_port_t *p, can_port_stats_t *st);
+void can_port_obj_stats(const can_port_t *p, unsigned i, can_port_obj_stats_t *st);
+
+/* Reset every counter (CAN command RESET_COUNTERS does it for its object). */
+void can_port_reset_counters(can_port_t *p);
+
+/*
+ * Worst-case bus load of this port's configuration: rate_hz setpoint
+ * cycles, status as configured, waypoint_hz expected waypoints per object.
+ * Returns the load (0..1+), or a negative value for invalid bitrates.
+ */
+double can_port_busload(const can_port_t *p, double rate_hz, double waypoint_hz, double bitrate,
+                       double data_bitrate);
+
+#endif

@@ -1,0 +1,604 @@
+/* can_transport.c - the "can" transport (see can.h). */
+#include "can_transport.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "can_socket.h"
+#include "can_logfile.h"
+#include "can_port.h"
+#include "core.h"
+#include "log.h"
+
+#define CAN_MAINTAIN_NS 100000000LL  /* housekeeping: reopen, counters to stats */
+
+enum {
+    GIVEN_WP = 1u << 0, GIVEN_WPFD = 1u << 1, GIVEN_SP = 1u << 2, GIVEN_SPFD = 1u << 3,
+    GIVEN_ST = 1u << 4, GIVEN_COB = 1u << 5, /* << axis */
+};
+
+static void cfg_default(void *p)
+{
+    can_cfg_t *c = p;
+    snprintf(c->interface, sizeof c->interface, "can0");
+    snprintf(c->log_ifname, sizeof c->log_ifname, "can0");
+    c->bitrate = 500000;
+    c->data_bitrate = 2000000;
+    c->max_load_percent = 70;
+    c->waypoint_hz = 10;
+    c->sync_id = CANPROTO_ID_SYNC_DEFAULT;
+    c->status_period_ms = 100;
+    c->max_late_ms = -1;
+}
+
+static int get_id(const cfg_kv_t *kv, uint32_t *out, char *why, size_t wl)
+{
+    long long v;
+    int rc = cfg_get_int(kv, 0, CANPROTO_SFF_MASK, &v, why, wl);
+    if (rc == 0)
+        *out = (uint32_t)v;
+    return rc;
+}
+
+static int get_str(const cfg_kv_t *kv, char *out, size_t len, char *why, size_t wl)
+{
+    if (!kv->value[0] || strlen(kv->value) >= len) {
+        snprintf(why, wl, "must be 1..%zu characters", len - 1);
+        return -CFG_EVALUE;
+    }
+    snprintf(out, len, "%s", kv->value);
+    return 0;
+}
+
+static int cfg_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
+{
+    can_cfg_t *c = p;
+    const char *k = kv->key;
+    long long v;
+    int rc;
+    if (!strcmp(k, "interface"))
+        return get_str(kv, c->interface, 16, why, wl);
+    if (!strcmp(k, "log_in")) {
+        c->line_log_in = kv->line;
+        return cfg_get_path(kv, c->log_in, sizeof c->log_in, why, wl);
+    }
+    if (!strcmp(k, "log_out")) {
+        if (!strcmp(kv->value, "-")) {
+            snprintf(c->log_out, sizeof c->log_out, "-");
+            return 0;
+        }
+        return cfg_get_path(kv, c->log_out, sizeof c->log_out, why, wl);
+    }
+    if (!strcmp(k, "log_ifname"))
+        return get_str(kv, c->log_ifname, sizeof c->log_ifname, why, wl);
+    if (!strcmp(k, "fd"))
+        return cfg_get_bool(kv, &c->fd, why, wl);
+    if (!strcmp(k, "bitrate"))
+        return cfg_get_double(kv, 10e3, 1e6, &c->bitrate, why, wl);
+    if (!strcmp(k, "data_bitrate"))
+        return cfg_get_double(kv, 10e3, 12e6, &c->data_bitrate, why, wl);
+    if (!strcmp(k, "max_load_percent"))
+        return cfg_get_double(kv, 0, 100, &c->max_load_percent, why, wl); /* 0: no check (vcan) */
+    if (!strcmp(k, "waypoint_hz"))
+        return cfg_get_double(kv, 0, 10000, &c->waypoint_hz, why, wl);
+    if (!strcmp(k, "sync"))
+        return cfg_get_bool(kv, &c->sync, why, wl);
+    if (!strcmp(k, "sync_id"))
+        return get_id(kv, &c->sync_id, why, wl);
+    if (!strcmp(k, "sync_overflow")) {
+        if ((rc = cfg_get_int(kv, 0, 240, &v, why, wl)) == 0 && v == 1) {
+            snprintf(why, wl, "must be 0 (no counter) or 2..240 (CiA 301)");
+            return -CFG_EVALUE;
+        }
+        c->sync_overflow = (unsigned)v;
+        return rc;
+    }
+    if (!strcmp(k, "status_period_ms"))
+        return cfg_get_double(kv, 0, 60000, &c->status_period_ms, why, wl);
+    if (!strcmp(k, "max_late_ms"))
+        return cfg_get_double(kv, -1, 1000, &c->max_late_ms, why, wl);
+    return -CFG_EUNKNOWN;
+}
+
+static void obj_default(void *p)
+{
+    can_obj_cfg_t *oc = p;
+    memset(oc, 0, sizeof *oc);
+    oc->index = -1;
+    canproto_ids_default(&oc->ids, 0);
+}
+
+static int obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
+{
+    can_obj_cfg_t *oc = p;
+    canproto_ids_t *ids = &oc->ids;
+    const char *k = kv->key;
+    long long v;
+    int rc;
+    static const struct {
+        const char *key;
+        size_t off;
+        unsigned bit;
+    } idkeys[] = {
+        { "waypoint_id", offsetof(canproto_ids_t, waypoint_id), GIVEN_WP },
+        { "waypoint_fd_id", offsetof(canproto_ids_t, waypoint_fd_id), GIVEN_WPFD },
+        { "setpoint_id", offsetof(canproto_ids_t, setpoint_id), GIVEN_SP },
+        { "setpoint_fd_id", offsetof(canproto_ids_t, setpoint_fd_id), GIVEN_SPFD },
+        { "status_id", offsetof(canproto_ids_t, status_id), GIVEN_ST },
+    };
+    for (size_t i = 0; i < sizeof idkeys / sizeof idkeys[0]; i++)
+        if (!strcmp(k, idkeys[i].key)) {
+            oc->given |= idkeys[i].bit;
+            return get_id(kv, (uint32_t *)(void *)((char *)ids + idkeys[i].off), why, wl);
+        }
+    for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
+        char name[32];
+        snprintf(name, sizeof name, "cia402_cob_%c", "xyz"[a]);
+        if (!strcmp(k, name)) {
+            oc->given |= GIVEN_COB << a;
+            return get_id(kv, &ids->cia402_cob_id[a], why, wl);
+        }
+    }
+    if (!strcmp(k, "index")) {
+        rc = cfg_get_int(kv, 0, 15, &v, why, wl);
+        oc->index = (int)v;
+        return rc;
+    }
+    if (!strcmp(k, "fd"))
+        return cfg_get_bool(kv, &ids->fd, why, wl);
+    if (!strcmp(k, "brs"))
+        return cfg_get_bool(kv, &ids->brs, why, wl);
+    if (!strcmp(k, "own"))
+        return cfg_get_bool(kv, &ids->own, why, wl);
+    if (!strcmp(k, "cia402"))
+        return cfg_get_bool(kv, &ids->cia402, why, wl);
+    if (!strcmp(k, "cia402_counts_per_m"))
+        return cfg_get_double(kv, 1e-3, 1e9, &ids->cia402_counts_per_m, why, wl);
+    if (!strcmp(k, "cia402_controlword"))
+        return cfg_get_bool(kv, &ids->cia402_controlword, why, wl);
+    return -CFG_EUNKNOWN;
+}
+
+void can_obj_ids(const can_obj_cfg_t *oc, unsigned obj_index, canproto_ids_t *ids)
+{
+    canproto_ids_default(ids, oc->index >= 0 ? (unsigned)oc->index : obj_index);
+    const canproto_ids_t *g = &oc->ids;
+    if (oc->given & GIVEN_WP) ids->waypoint_id = g->waypoint_id;
+    if (oc->given & GIVEN_WPFD) ids->waypoint_fd_id = g->waypoint_fd_id;
+    if (oc->given & GIVEN_SP) ids->setpoint_id = g->setpoint_id;
+    if (oc->given & GIVEN_SPFD) ids->setpoint_fd_id = g->setpoint_fd_id;
+    if (oc->given & GIVEN_ST) ids->status_id = g->status_id;
+    for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+        if (oc->given & (GIVEN_COB << a))
+            ids->cia402_cob_id[a] = g->cia402_cob_id[a];
+    ids->fd = g->fd;
+    ids->brs = g->brs;
+    ids->own = g->own;
+    ids->cia402 = g->cia402;
+    ids->cia402_counts_per_m = g->cia402_counts_per_m;
+    ids->cia402_controlword = g->cia402_controlword;
+}
+
+/* ---- config check: ids, clashes, bus load ---- */
+
+static int uses_can(const cfg_obj_t *o)
+{
+    return cfg_obj_uses(o, &can_transport) != 0;
+}
+
+static int null_send(void *io, const canproto_frame_t *f) { (void)io; (void)f; return 0; }
+static int null_recv(void *io, int64_t t, canproto_frame_t *f) { (void)io; (void)t; (void)f; return 0; }
+static int null_up(const void *io) { (void)io; return 1; }
+static int null_push(void *ctx, const engine_waypoint_t *wp) { (void)ctx; (void)wp; return 0; }
+static void null_status(void *ctx, engine_status_t *st) { (void)ctx; memset(st, 0, sizeof *st); }
+
+/* period_ns: wall-clock period (engine period / speed): lateness is wall time. */
+static void port_config(const can_cfg_t *c, int64_t period_ns, can_port_config_t *pc)
+{
+    can_port_config_default(pc);
+    pc->sync = c->sync;
+    pc->sync_id = c->sync_id;
+    pc->sync_overflow = (uint8_t)c->sync_overflow;
+    pc->status_period_ns = (int64_t)llround(c->status_period_ms * 1e6);
+    pc->max_late_ns = c->max_late_ms < 0 ? period_ns / 2 : (int64_t)llround(c->max_late_ms * 1e6);
+}
+
+static int check(cfg_t *cfg, int *line, char *why, size_t wl)
+{
+    const can_cfg_t *c = cfg_transport(cfg, &can_transport);
+    unsigned n = 0, idx[CFG_OBJECTS_MAX];
+    for (unsigned i = 0; i < cfg->nobj; i++)
+        if (uses_can(&cfg->obj[i]))
+            idx[n++] = i;
+    if (!n)
+        return 0;
+    can_port_config_t pc;
+    port_config(c, (int64_t)llround((double)cfg->daemon.period_ns / cfg->daemon.speed), &pc);
+    can_port_io_t io = { null_send, null_recv, NULL, null_up };
+    can_port_hooks_t hk = { null_push, NULL, null_status };
+    can_port_t *p = can_port_new(&pc, &io, NULL, n);
+    if (!p) {
+        snprintf(why, wl, "[can] sync settings invalid or out of memory");
+        return -CFG_EVALUE;
+    }
+    int rc = 0;
+    for (unsigned k = 0; k < n && !rc; k++) {
+        const cfg_obj_t *o = &cfg->obj[idx[k]];
+        canproto_ids_t ids;
+        const char *rule = NULL;
+        can_obj_ids(cfg_obj_transport(o, &can_transport), idx[k], &ids);
+        if (canproto_ids_check(&ids, &rule) < 0) {
+            *line = o->line;
+            snprintf(why, wl, "object '%s': %s", o->name, rule);
+            rc = -CFG_EVALUE;
+        } else if (ids.fd && !c->fd && !c->log_out[0] && !c->log_in[0]) {
+            *line = o->line;
+            snprintf(why, wl, "object '%s': can.fd = yes needs [can] fd = yes", o->name);
+            rc = -CFG_EVALUE;
+        } else if (can_port_set_object(p, k, &ids, &hk, NULL) < 0) {
+            *line = o->line;
+            snprintf(why, wl, "object '%s': a CAN id is used twice (by another object or the SYNC)",
+                     o->name);
+            rc = -CFG_EVALUE;
+        }
+    }
+    if (!rc && c->max_load_percent > 0) {
+        double load = can_port_busload(p, cfg->daemon.rate_hz, c->waypoint_hz, c->bitrate,
+                                      c->data_bitrate);
+        if (!(load >= 0) || load * 100 > c->max_load_percent) {
+            snprintf(why, wl,
+                     "CAN bus load %.1f %% (worst case with bit stuffing: %u object(s) at %g Hz, "
+                     "%g waypoints/s each, %g bit/s) is above max_load_percent = %g: lower "
+                     "rate_hz, send fewer frames (can.fd, can.own = no), or raise the bitrate",
+                     load * 100, n, cfg->daemon.rate_hz, c->waypoint_hz, c->bitrate,
+                     c->max_load_percent);
+            rc = -CFG_EVALUE;
+        }
+    }
+    can_port_free(p);
+    return rc;
+}
+
+/* ---- runtime ---- */
+
+typedef struct {
+    core_t *c;
+    const can_cfg_t *cfg;
+    can_socket_t *bus;
+    can_logfile_t *log;
+    can_port_t *port;
+    int sock_fd;            /* registered in the loop, -1 if none */
+    int timer_fd;
+    unsigned n;
+    obj_t *objs[CFG_OBJECTS_MAX];   /* can_port index -> object */
+    int port_index[CFG_OBJECTS_MAX]; /* object index -> can_port index or -1 */
+    int is_input[CFG_OBJECTS_MAX];
+    uint64_t rx_tick;       /* last tick whose pre_tick drained the input */
+    int drained;
+    int was_up;
+} can_state_t;
+
+static int hk_push(void *ctx, const engine_waypoint_t *wp)
+{
+    obj_t *o = ctx;
+    return obj_push(o, OBJ_SRC_CAN, wp);
+}
+
+static void hk_command(void *ctx, canproto_cmd_t cmd)
+{
+    obj_t *o = ctx;
+    switch (cmd) {
+    case CANPROTO_CMD_FINISH: engine_finish(o->engine); break;
+    case CANPROTO_CMD_STOP: engine_stop(o->engine); break;
+    case CANPROTO_CMD_CLEAR: engine_clear(o->engine); break;
+    case CANPROTO_CMD_RESET_COUNTERS: obj_reset_counters(o); break;
+    default: break;
+    }
+}
+
+static void hk_status(void *ctx, engine_status_t *st)
+{
+    obj_t *o = ctx;
+    engine_status(o->engine, st);
+}
+
+/* Objects that are not CAN inputs must not get waypoints from the bus. */
+static int hk_push_refuse(void *ctx, const engine_waypoint_t *wp)
+{
+    (void)ctx;
+    (void)wp;
+    return -ENGINE_ESTATE;
+}
+
+static int io_send(void *io, const canproto_frame_t *f)
+{
+    can_state_t *s = io;
+    return s->bus ? can_socket_send(s->bus, f) : can_logfile_send(s->log, f);
+}
+
+static int io_recv(void *io, int64_t now_ns, canproto_frame_t *f)
+{
+    can_state_t *s = io;
+    if (s->bus) {
+        int rc = can_socket_recv(s->bus, f);
+        return rc;
+    }
+    return can_logfile_recv(s->log, now_ns, f);
+}
+
+static int io_maintain(void *io, int64_t now_ns)
+{
+    can_state_t *s = io;
+    return s->bus ? can_socket_maintain(s->bus, now_ns) : 0;
+}
+
+static int io_is_up(const void *io)
+{
+    const can_state_t *s = io;
+    return s->bus ? can_socket_state(s->bus) == CAN_SOCKET_UP : 1;
+}
+
+static void on_readable(loop_t *l, int fd, uint32_t ev, void *ctx);
+
+/* Keep the loop registration in step with the socket (it changes on reopen). */
+static void sync_fd(can_state_t *s)
+{
+    int fd = s->bus ? can_socket_fd(s->bus) : -1;
+    if (fd == s->sock_fd)
+        return;
+    if (s->sock_fd >= 0)
+        loop_del(s->c->loop, s->sock_fd);
+    s->sock_fd = -1;
+    if (fd >= 0 && loop_add(s->c->loop, fd, EPOLLIN, on_readable, s) == 0)
+        s->sock_fd = fd;
+}
+
+static void publish_stats(can_state_t *s)
+{
+    stats_t *st = s->c->stats;
+    can_port_stats_t ps;
+    can_port_stats(s->port, &ps);
+    int up = io_is_up(s);
+    st->can.state = up ? STATS_CAN_ERROR_ACTIVE : STATS_CAN_DOWN;
+    if (s->bus) {
+        can_socket_stats_t bs;
+        can_socket_stats(s->bus, &bs);
+        st->can.tx_frames = bs.tx_frames;
+        st->can.rx_frames = bs.rx_frames;
+    } else {
+        can_logfile_stats_t ls;
+        can_logfile_stats(s->log, &ls);
+        st->can.tx_frames = ls.frames_out;
+        st->can.rx_frames = ps.rx_frames;
+    }
+    uint64_t dropped = 0, bad = ps.rx_foreign;
+    for (unsigned i = 0; i < s->n; i++) {
+        can_port_obj_stats_t os;
+        can_port_obj_stats(s->port, i, &os);
+        dropped += os.dropped_late + os.dropped_full + os.dropped_down + os.dropped_error;
+        bad += os.rx.malformed;
+    }
+    st->can.tx_dropped = dropped;
+    st->can.rx_bad = bad;
+}
+
+static void on_readable(loop_t *l, int fd, uint32_t ev, void *ctx)
+{
+    can_state_t *s = ctx;
+    (void)l;
+    (void)fd;
+    (void)ev;
+    can_port_rx(s->port, s->c->now_ns);
+    sync_fd(s); /* the socket may have gone DOWN (EPOLLERR -> ENETDOWN) */
+}
+
+static void on_timer(loop_t *l, uint64_t exp, void *ctx)
+{
+    can_state_t *s = ctx;
+    (void)l;
+    (void)exp;
+    if (can_port_maintain(s->port, core_mono_ns()))
+        log_msg(LOG_NOTICE, "can: %s is up again, streaming resumes", s->cfg->interface);
+    sync_fd(s);
+    int up = io_is_up(s);
+    if (s->was_up && !up) {
+        can_socket_stats_t bs;
+        can_socket_stats(s->bus, &bs);
+        log_msg(LOG_WARNING, "can: %s is down (%s): setpoints dropped, reopening",
+                s->cfg->interface, strerror(bs.last_errno));
+    }
+    s->was_up = up;
+    publish_stats(s);
+}
+
+static void close_(void *state, core_t *c)
+{
+    can_state_t *s = state;
+    (void)c;
+    if (!s)
+        return;
+    if (s->sock_fd >= 0)
+        loop_del(s->c->loop, s->sock_fd);
+    if (s->timer_fd > 0)
+        loop_timer_del(s->c->loop, s->timer_fd);
+    if (s->port) {
+        publish_stats(s);
+        for (unsigned k = 0; k < s->n; k++) {
+            can_port_obj_stats_t os;
+            can_port_obj_stats(s->port, k, &os);
+            log_msg(LOG_INFO,
+                    "can: %s: setpoints sent %llu, dropped late %llu / queue full %llu / down %llu"
+                    " / error %llu; waypoints %llu accepted, %llu rejected, %llu full, %llu lost,"
+                    " %llu duplicate frames, %llu out of order, %llu malformed frames",
+                    s->objs[k]->name, (unsigned long long)os.setpoints_sent,
+                    (unsigned long long)os.dropped_late, (unsigned long long)os.dropped_full,
+                    (unsigned long long)os.dropped_down, (unsigned long long)os.dropped_error,
+                    (unsigned long long)os.waypoints_accepted,
+                    (unsigned long long)os.waypoints_rejected,
+                    (unsigned long long)os.waypoints_full, (unsigned long long)os.rx.lost,
+                    (unsigned long long)os.rx.duplicates, (unsigned long long)os.rx.out_of_order,
+                    (unsigned long long)os.rx.malformed);
+        }
+    }
+    can_port_free(s->port);
+    can_socket_free(s->bus);
+    can_logfile_close(s->log);
+    free(s);
+}
+
+static int open_(core_t *c, void **state, char *why, size_t wl)
+{
+    const can_cfg_t *cfg = cfg_transport(c->cfg, &can_transport);
+    can_state_t *s = calloc(1, sizeof *s);
+    int rc = 0;
+    if (!s) {
+        snprintf(why, wl, "out of memory");
+        return -ENOMEM;
+    }
+    s->c = c;
+    s->cfg = cfg;
+    s->sock_fd = -1;
+    for (unsigned i = 0; i < c->nobj; i++) {
+        s->port_index[i] = -1;
+        if (!uses_can(c->obj[i].cfg))
+            continue;
+        s->port_index[i] = (int)s->n;
+        s->is_input[s->n] = c->obj[i].cfg->input == &can_transport;
+        s->objs[s->n++] = &c->obj[i];
+    }
+    if (!s->n) {
+        *state = s; /* [can] present but no object uses it: nothing to do */
+        return 0;
+    }
+    can_port_config_t pc;
+    port_config(cfg, (int64_t)llround((double)c->period_ns / c->cfg->daemon.speed), &pc);
+    can_port_io_t io = { io_send, io_recv, io_maintain, io_is_up };
+    s->port = can_port_new(&pc, &io, s, s->n);
+    if (!s->port) {
+        snprintf(why, wl, "can: out of memory");
+        rc = -ENOMEM;
+        goto fail;
+    }
+    uint32_t rx_ids[CAN_SOCKET_MAX_FILTERS];
+    unsigned nrx = 0;
+    for (unsigned k = 0; k < s->n; k++) {
+        canproto_ids_t ids;
+        can_obj_ids(cfg_obj_transport(s->objs[k]->cfg, &can_transport), s->objs[k]->index, &ids);
+        can_port_hooks_t hk = { s->is_input[k] ? hk_push : hk_push_refuse, hk_command, hk_status };
+        if (can_port_set_object(s->port, k, &ids, &hk, s->objs[k]) < 0) {
+            snprintf(why, wl, "can: object '%s': invalid or clashing ids", s->objs[k]->name);
+            rc = -EINVAL;
+            goto fail;
+        }
+        if (s->is_input[k])
+            if (nrx + 2 <= CAN_SOCKET_MAX_FILTERS) /* 32 objects x 2 ids at most: always fits */
+                nrx += canproto_ids_rx(&ids, rx_ids + nrx, CAN_SOCKET_MAX_FILTERS - nrx);
+    }
+    if (cfg->log_in[0] || cfg->log_out[0]) {
+        s->log = can_logfile_open(cfg->log_in[0] ? cfg->log_in : NULL,
+                             cfg->log_out[0] ? cfg->log_out : NULL, cfg->log_ifname, 0, why, wl);
+        if (!s->log) {
+            rc = -EIO;
+            goto fail;
+        }
+    } else {
+        s->bus = can_socket_new(cfg->interface, cfg->fd, rx_ids, nrx);
+        if (!s->bus) {
+            snprintf(why, wl, "can: bad interface name '%s'", cfg->interface);
+            rc = -EINVAL;
+            goto fail;
+        }
+        rc = can_socket_open(s->bus);
+        if (rc == -EAFNOSUPPORT || rc == -EPERM || rc == -EACCES) {
+            snprintf(why, wl, "can: cannot open a CAN socket: %s", strerror(-rc));
+            goto fail;
+        }
+        if (rc < 0) /* missing or down: run DOWN and keep reopening */
+            log_msg(LOG_WARNING, "can: %s: %s; setpoints dropped until it is up", cfg->interface,
+                    strerror(-rc));
+        rc = 0;
+        sync_fd(s);
+    }
+    double load = can_port_busload(s->port, c->cfg->daemon.rate_hz, cfg->waypoint_hz, cfg->bitrate,
+                                  cfg->data_bitrate);
+    c->stats->can.load_permille = load > 0 ? (uint32_t)llround(load * 1000) : 0;
+    log_msg(LOG_INFO, "can: %u object(s) on %s, worst-case bus load %.1f %% at %g bit/s",
+            s->n, s->log ? "candump logs" : cfg->interface, load * 100, cfg->bitrate);
+    s->was_up = io_is_up(s);
+    s->timer_fd = loop_timer_add(c->loop, CAN_MAINTAIN_NS, on_timer, s);
+    if (s->timer_fd < 0) {
+        rc = s->timer_fd;
+        snprintf(why, wl, "can: timer: %s", strerror(-rc));
+        goto fail;
+    }
+    for (unsigned k = 0; k < s->n; k++)
+        s->objs[k]->tstate[transport_index(&can_transport)] = s;
+    *state = s;
+    return 0;
+fail:
+    close_(s, c);
+    return rc ? rc : -EINVAL;
+}
+
+static void pre_tick(void *state, obj_t *o, int64_t now_ns)
+{
+    can_state_t *s = state;
+    (void)o;
+    /* once per tick: frames due by now (log input), or anything the socket has */
+    if (s->drained && s->rx_tick == s->c->cycle)
+        return;
+    s->drained = 1;
+    s->rx_tick = s->c->cycle;
+    if (s->port) {
+        can_port_rx(s->port, now_ns);
+        sync_fd(s);
+    }
+}
+
+static void setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
+{
+    can_state_t *s = state;
+    if (s->port && s->port_index[o->index] >= 0)
+        can_port_setpoint(s->port, (unsigned)s->port_index[o->index], sp);
+}
+
+static void cycle(void *state, core_t *c, int64_t now_ns)
+{
+    can_state_t *s = state;
+    if (!s->port)
+        return;
+    if (s->log)
+        can_logfile_set_time(s->log, now_ns);
+    can_port_cycle(s->port, now_ns, c->late_ns);
+    if (s->log)
+        can_logfile_flush(s->log);
+}
+
+static int input_done(void *state, const obj_t *o)
+{
+    const can_state_t *s = state;
+    (void)o;
+    /* a log input is done once every frame was delivered; a bus never is */
+    return s->log && s->cfg->log_in[0] && can_logfile_done(s->log);
+}
+
+const transport_t can_transport = {
+    .name = "can",
+    .roles = TRANSPORT_INPUT | TRANSPORT_OUTPUT,
+    .cfg_size = sizeof(can_cfg_t),
+    .cfg_default = cfg_default,
+    .cfg_key = cfg_key,
+    .obj_cfg_size = sizeof(can_obj_cfg_t),
+    .obj_cfg_default = obj_default,
+    .obj_key = obj_key,
+    .check = check,
+    .open = open_,
+    .pre_tick = pre_tick,
+    .setpoint = setpoint,
+    .cycle = cycle,
+    .close = close_,
+    .input_done = input_done,
+};

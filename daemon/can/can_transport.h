@@ -1,0 +1,65 @@
+/*
+ * can.h - the "can" transport of trajd: waypoints in and setpoints out over
+ * SocketCAN (daemon/can/can_socket.h) or a candump log (daemon/can/can_logfile.h), with the
+ * frames of lib/proto/canproto.h, driven by daemon/can/can_port.h.
+ *
+ * [can] keys (documented with defaults in config/trajd.conf):
+ *   interface = can0            SocketCAN interface (ignored with log_in/log_out)
+ *   log_in = FILE               read waypoint frames from a candump log instead of a socket
+ *   log_out = FILE | -          write frames as a candump -L log instead of a socket
+ *   log_ifname = can0           interface name written in log_out lines
+ *   fd = no                     CAN FD on the socket (needed by any object with can.fd)
+ *   bitrate = 500000            nominal bit rate, bit/s (bus-load check)
+ *   data_bitrate = 2000000      CAN FD data-phase bit rate, bit/s (bus-load check)
+ *   max_load_percent = 70       refuse a config whose worst-case bus load is above (0: no check)
+ *   waypoint_hz = 10            expected waypoints per second per object (bus-load check)
+ *   sync = no, sync_id = 0x080, sync_overflow = 0    SYNC frame per cycle (CiA 301)
+ *   status_period_ms = 100      STATUS frame period per object (also sent on events)
+ *   max_late_ms = -1            a cycle woken later than this is not sent (-1: half a period, 0: never)
+ * [object.NAME] keys:
+ *   can.index = <object index>  n for the default ids (0x680+n ...)
+ *   can.waypoint_id, can.waypoint_fd_id, can.setpoint_id, can.setpoint_fd_id, can.status_id
+ *   can.fd = no, can.brs = no, can.own = yes
+ *   can.cia402 = no, can.cia402_cob_x / _y / _z (0 = axis not sent),
+ *   can.cia402_counts_per_m = 10000, can.cia402_controlword = no
+ */
+#ifndef TRAJD_CAN_TRANSPORT_H
+#define TRAJD_CAN_TRANSPORT_H
+
+#include <limits.h>
+#include "canproto.h"
+#include "transport.h"
+
+typedef struct {
+    char interface[32];
+    char log_in[PATH_MAX];
+    char log_out[PATH_MAX];
+    char log_ifname[16];
+    int fd;
+    double bitrate;
+    double data_bitrate;
+    double max_load_percent;
+    double waypoint_hz;
+    int sync;
+    uint32_t sync_id;
+    unsigned sync_overflow;
+    double status_period_ms;
+    double max_late_ms;
+    int line_log_in;
+} can_cfg_t;
+
+typedef struct {
+    int index;                  /* -1 = the object's index */
+    canproto_ids_t ids;
+    unsigned given;             /* bit per id key given explicitly */
+} can_obj_cfg_t;
+
+extern const transport_t can_transport;
+
+/*
+ * The ids of object o (defaults for its can.index, then the keys given).
+ * For the tests and the bus-load message.
+ */
+void can_obj_ids(const can_obj_cfg_t *oc, unsigned obj_index, canproto_ids_t *ids);
+
+#endif

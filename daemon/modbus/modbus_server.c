@@ -1,0 +1,848 @@
+/* modbus_server.c - see modbus_server.h. */
+#include "modbus_server.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <modbus.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/epoll.h>
+#include <sys/socket.h>
+#include <sys/timerfd.h>
+#include <systemd/sd-daemon.h>
+#include <time.h>
+#include <unistd.h>
+
+/* Two whole TCP ADUs: a client may pipeline a second request behind the first. */
+#define CLIENT_BUF (2 * MBMAP_TCP_ADU_MAX)
+#define RTU_BUF (2 * MBMAP_RTU_ADU_MAX)
+#define LISTEN_BACKLOG 128
+#define ACCEPTS_PER_EVENT 16
+
+enum tag { TAG_LISTEN = 1, TAG_HOUSEKEEPING, TAG_RTU, TAG_SILENCE, TAG_CLIENT };
+
+typedef struct {
+    int family;             /* AF_INET or AF_INET6 */
+    uint8_t addr[16];
+    unsigned prefix;
+} allow_t;
+
+typedef struct {
+    int fd;                 /* -1: free slot */
+    size_t len;
+    int64_t last_ns;
+    uint8_t buf[CLIENT_BUF];
+} client_t;
+
+struct modbus_server {
+    unsigned n_objects;
+    int writes_enabled;
+    unsigned max_clients;
+    int64_t idle_ns;
+    int unit_id;
+    modbus_server_hooks_t hooks;
+    int ep, lfd, hkfd, rtufd, silfd;
+    int port;
+    int from_systemd;
+    modbus_t *tcp;
+    modbus_t *rtu;
+    modbus_mapping_t *map;
+    client_t *clients;
+    allow_t allow[MODBUS_SERVER_ALLOW_MAX];
+    unsigned n_allow;
+    uint8_t rtu_buf[RTU_BUF];
+    size_t rtu_len;
+    int rtu_discard;        /* drop bytes until the line is silent */
+    uint32_t gen;
+    uint64_t *mb_rejected;  /* per object */
+    uint64_t *lost;         /* per object, sequence gaps of Modbus waypoints */
+    uint32_t *last_seq;     /* per object, of the last waypoint accepted over Modbus */
+    modbus_server_stats_t st;
+};
+
+static int64_t now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
+}
+
+static void msg(char *err, size_t len, const char *fmt, ...)
+{
+    if (!err || !len)
+        return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, len, fmt, ap);
+    va_end(ap);
+}
+
+static uint64_t tag(enum tag t, unsigned idx)
+{
+    return ((uint64_t)t << 32) | idx;
+}
+
+static int set_nonblock(int fd)
+{
+    int fl = fcntl(fd, F_GETFL);
+    if (fl < 0 || fcntl(fd, F_SETFL, fl | O_NONBLOCK) < 0)
+        return -errno;
+    return 0;
+}
+
+static int ep_add(int ep, int fd, uint64_t data)
+{
+    struct epoll_event ev = { .events = EPOLLIN, .data.u64 = data };
+    return epoll_ctl(ep, EPOLL_CTL_ADD, fd, &ev) < 0 ? -errno : 0;
+}
+
+/* ---- allow-list ---------------------------------------------------------- */
+
+static int allow_parse(const char *list, allow_t *out, unsigned max, char *err, size_t errlen)
+{
+    unsigned n = 0;
+    const char *p = list;
+    if (!list)
+        return 0;
+    while (*p) {
+        char tok[80], *slash;
+        size_t l = strcspn(p, ", \t");
+        if (l == 0) {
+            p++;
+            continue;
+        }
+        if (l >= sizeof tok || n >= max) {
+            msg(err, errlen, "allow: entry too long or more than %u entries", max);
+            return -EINVAL;
+        }
+        memcpy(tok, p, l);
+        tok[l] = 0;
+        p += l;
+        allow_t a = { 0 };
+        unsigned maxp;
+        slash = strchr(tok, '/');
+        if (slash)
+            *slash = 0;
+        if (inet_pton(AF_INET, tok, a.addr) == 1) {
+            a.family = AF_INET;
+            maxp = 32;
+        } else if (inet_pton(AF_INET6, tok, a.addr) == 1) {
+            a.family = AF_INET6;
+            maxp = 128;
+        } else {
+            msg(err, errlen, "allow: '%s' is not an IPv4 or IPv6 address", tok);
+            return -EINVAL;
+        }
+        a.prefix = maxp;
+        if (slash) {
+            char *end;
+            long pl = strtol(slash + 1, &end, 10);
+            if (*end || end == slash + 1 || pl < 0 || pl > (long)maxp) {
+                msg(err, errlen, "allow: bad prefix length '/%s'", slash + 1);
+                return -EINVAL;
+            }
+            a.prefix = (unsigned)pl;
+        }
+        out[n++] = a;
+    }
+    return (int)n;
+}
+
+int modbus_server_allow_check(const char *allow, char *err, size_t errlen)
+{
+    allow_t tmp[MODBUS_SERVER_ALLOW_MAX];
+    return allow_parse(allow, tmp, MODBUS_SERVER_ALLOW_MAX, err, errlen);
+}
+
+static int prefix_match(const uint8_t *a, const uint8_t *b, unsigned bits)
+{
+    unsigned full = bits / 8, rest = bits % 8;
+    if (memcmp(a, b, full))
+        return 0;
+    if (!rest)
+        return 1;
+    uint8_t mask = (uint8_t)(0xffu << (8 - rest));
+    return (a[full] & mask) == (b[full] & mask);
+}
+
+static int allowed(const modbus_server_t *s, const struct sockaddr_storage *ss)
+{
+    uint8_t a4[4], a6[16];
+    int has4 = 0, has6 = 0;
+    if (!s->n_allow)
+        return 1;
+    if (ss->ss_family == AF_INET) {
+        memcpy(a4, &((const struct sockaddr_in *)ss)->sin_addr, 4);
+        has4 = 1;
+    } else if (ss->ss_family == AF_INET6) {
+        const struct in6_addr *in6 = &((const struct sockaddr_in6 *)ss)->sin6_addr;
+        memcpy(a6, in6, 16);
+        has6 = 1;
+        if (IN6_IS_ADDR_V4MAPPED(in6)) {
+            memcpy(a4, a6 + 12, 4);
+            has4 = 1;
+        }
+    }
+    for (unsigned i = 0; i < s->n_allow; i++) {
+        const allow_t *e = &s->allow[i];
+        if (e->family == AF_INET && has4 && prefix_match(e->addr, a4, e->prefix))
+            return 1;
+        if (e->family == AF_INET6 && has6 && prefix_match(e->addr, a6, e->prefix))
+            return 1;
+    }
+    return 0;
+}
+
+/* ---- set-up ---------------------------------------------------------------- */
+
+void modbus_server_config_default(modbus_server_config_t *cfg)
+{
+    memset(cfg, 0, sizeof *cfg);
+    snprintf(cfg->tcp_address, sizeof cfg->tcp_address, "%s", MODBUS_SERVER_DEFAULT_ADDRESS);
+    cfg->tcp_port = MODBUS_SERVER_DEFAULT_PORT;
+    cfg->systemd_socket = 1;
+    cfg->rtu_baud = 9600;
+    cfg->rtu_parity = 'N';
+    cfg->rtu_data_bits = 8;
+    cfg->rtu_stop_bits = 1;
+    cfg->unit_id = 1;
+    cfg->max_clients = MODBUS_SERVER_DEFAULT_MAX_CLIENTS;
+    cfg->idle_timeout_ms = MODBUS_SERVER_DEFAULT_IDLE_MS;
+    cfg->n_objects = 1;
+}
+
+static int parse_bool(const char *v, int *out)
+{
+    if (!strcmp(v, "yes") || !strcmp(v, "true") || !strcmp(v, "1") || !strcmp(v, "on"))
+        return *out = 1, 0;
+    if (!strcmp(v, "no") || !strcmp(v, "false") || !strcmp(v, "0") || !strcmp(v, "off"))
+        return *out = 0, 0;
+    return -EINVAL;
+}
+
+static int parse_uint(const char *v, long lo, long hi, long *out)
+{
+    char *end;
+    errno = 0;
+    long x = strtol(v, &end, 10);
+    if (errno || end == v || *end || x < lo || x > hi)
+        return -EINVAL;
+    *out = x;
+    return 0;
+}
+
+static int copy_str(char *dst, size_t len, const char *v)
+{
+    if (strlen(v) >= len)
+        return -EINVAL;
+    memcpy(dst, v, strlen(v) + 1);
+    return 0;
+}
+
+int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const char *value, char *err,
+                     size_t errlen)
+{
+    long x = 0;
+    int rc = 0;
+    if (!strcmp(key, "enabled"))
+        rc = parse_bool(value, &cfg->enabled);
+    else if (!strcmp(key, "writes"))
+        rc = parse_bool(value, &cfg->writes_enabled);
+    else if (!strcmp(key, "systemd_socket"))
+        rc = parse_bool(value, &cfg->systemd_socket);
+    else if (!strcmp(key, "address"))
+        rc = copy_str(cfg->tcp_address, sizeof cfg->tcp_address, value);
+    else if (!strcmp(key, "rtu_device"))
+        rc = copy_str(cfg->rtu_device, sizeof cfg->rtu_device, value);
+    else if (!strcmp(key, "allow")) {
+        rc = copy_str(cfg->allow, sizeof cfg->allow, value);
+        if (rc == 0 && modbus_server_allow_check(value, err, errlen) < 0)
+            return -EINVAL;
+    } else if (!strcmp(key, "port")) {
+        if ((rc = parse_uint(value, 0, 65535, &x)) == 0)
+            cfg->tcp_port = (int)x;
+    } else if (!strcmp(key, "rtu_baud")) {
+        if ((rc = parse_uint(value, 50, 4000000, &x)) == 0)
+            cfg->rtu_baud = (int)x;
+    } else if (!strcmp(key, "rtu_data_bits")) {
+        if ((rc = parse_uint(value, 7, 8, &x)) == 0)
+            cfg->rtu_data_bits = (int)x;
+    } else if (!strcmp(key, "rtu_stop_bits")) {
+        if ((rc = parse_uint(value, 1, 2, &x)) == 0)
+            cfg->rtu_stop_bits = (int)x;
+    } else if (!strcmp(key, "unit_id")) {
+        if ((rc = parse_uint(value, 1, 247, &x)) == 0)
+            cfg->unit_id = (int)x;
+    } else if (!strcmp(key, "max_clients")) {
+        if ((rc = parse_uint(value, 1, MODBUS_SERVER_MAX_CLIENTS_LIMIT, &x)) == 0)
+            cfg->max_clients = (unsigned)x;
+    } else if (!strcmp(key, "idle_timeout_ms")) {
+        if ((rc = parse_uint(value, 0, 86400000, &x)) == 0)
+            cfg->idle_timeout_ms = (unsigned)x;
+    } else if (!strcmp(key, "rtu_parity")) {
+        if (!strcmp(value, "N") || !strcmp(value, "none")) cfg->rtu_parity = 'N';
+        else if (!strcmp(value, "E") || !strcmp(value, "even")) cfg->rtu_parity = 'E';
+        else if (!strcmp(value, "O") || !strcmp(value, "odd")) cfg->rtu_parity = 'O';
+        else rc = -EINVAL;
+    } else {
+        msg(err, errlen, "modbus: unknown key '%s'", key);
+        return -ENOENT;
+    }
+    if (rc < 0)
+        msg(err, errlen, "modbus: bad value '%s' for %s", value, key);
+    return rc;
+}
+
+static int systemd_listener(void)
+{
+    int n = sd_listen_fds(0);
+    for (int i = 0; i < n; i++) {
+        int fd = SD_LISTEN_FDS_START + i;
+        if (sd_is_socket(fd, AF_UNSPEC, SOCK_STREAM, 1) > 0)
+            return fd;
+    }
+    return -1;
+}
+
+static int tcp_listen(modbus_server_t *s, const modbus_server_config_t *cfg, char *err, size_t errlen)
+{
+    struct addrinfo hints = { .ai_family = AF_UNSPEC, .ai_socktype = SOCK_STREAM,
+                              .ai_flags = AI_PASSIVE | AI_NUMERICSERV | AI_NUMERICHOST };
+    struct addrinfo *res = NULL;
+    char port[16];
+    int fd = -1, rc, one = 1;
+
+    if (cfg->systemd_socket && (fd = systemd_listener()) >= 0) {
+        s->lfd = fd;
+        s->from_systemd = 1;
+        goto bound;
+    }
+    snprintf(port, sizeof port, "%d", cfg->tcp_port);
+    rc = getaddrinfo(cfg->tcp_address, port, &hints, &res);
+    if (rc) {
+        msg(err, errlen, "modbus: address %s: %s", cfg->tcp_address, gai_strerror(rc));
+        return -EINVAL;
+    }
+    fd = socket(res->ai_family, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    if (fd < 0 || setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) < 0 ||
+        bind(fd, res->ai_addr, res->ai_addrlen) < 0 || listen(fd, LISTEN_BACKLOG) < 0) {
+        rc = -errno;
+        msg(err, errlen, "modbus: listen on %s port %d: %s", cfg->tcp_address, cfg->tcp_port,
+            strerror(errno));
+        if (fd >= 0)
+            close(fd);
+        freeaddrinfo(res);
+        return rc;
+    }
+    freeaddrinfo(res);
+    s->lfd = fd;
+bound:;
+    struct sockaddr_storage ss;
+    socklen_t sl = sizeof ss;
+    if (getsockname(s->lfd, (struct sockaddr *)&ss, &sl) == 0)
+        s->port = ntohs(ss.ss_family == AF_INET6 ? ((struct sockaddr_in6 *)&ss)->sin6_port
+                                                  : ((struct sockaddr_in *)&ss)->sin_port);
+    if ((rc = set_nonblock(s->lfd)) < 0 || (rc = ep_add(s->ep, s->lfd, tag(TAG_LISTEN, 0))) < 0) {
+        msg(err, errlen, "modbus: listening socket: %s", strerror(-rc));
+        return rc;
+    }
+    /* Only used to build and send replies on a client's socket (modbus_set_socket). */
+    s->tcp = modbus_new_tcp(NULL, 0);
+    if (!s->tcp) {
+        msg(err, errlen, "modbus: modbus_new_tcp: %s", modbus_strerror(errno));
+        return -ENOMEM;
+    }
+    return 0;
+}
+
+static int rtu_open(modbus_server_t *s, const modbus_server_config_t *cfg, char *err, size_t errlen)
+{
+    int rc;
+    if (cfg->unit_id < 1 || cfg->unit_id > 247) {
+        msg(err, errlen, "modbus: unit_id %d outside 1..247", cfg->unit_id);
+        return -EINVAL;
+    }
+    s->rtu = modbus_new_rtu(cfg->rtu_device, cfg->rtu_baud, cfg->rtu_parity,
+                            cfg->rtu_data_bits, cfg->rtu_stop_bits);
+    if (!s->rtu || modbus_set_slave(s->rtu, cfg->unit_id) < 0 || modbus_connect(s->rtu) < 0) {
+        rc = -errno;
+        msg(err, errlen, "modbus: RTU %s: %s", cfg->rtu_device, modbus_strerror(errno));
+        return rc ? rc : -EINVAL;
+    }
+    s->rtufd = modbus_get_socket(s->rtu);
+    s->silfd = timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
+    if (s->silfd < 0 || (rc = set_nonblock(s->rtufd)) < 0 ||
+        (rc = ep_add(s->ep, s->rtufd, tag(TAG_RTU, 0))) < 0 ||
+        (rc = ep_add(s->ep, s->silfd, tag(TAG_SILENCE, 0))) < 0) {
+        rc = -errno;
+        msg(err, errlen, "modbus: RTU %s: %s", cfg->rtu_device, strerror(errno));
+        return rc;
+    }
+    return 0;
+}
+
+modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg, const modbus_server_hooks_t *hooks, char *err,
+                   size_t errlen)
+{
+    modbus_server_t *s = calloc(1, sizeof *s);
+    int rc;
+    if (!s) {
+        msg(err, errlen, "modbus: out of memory");
+        return NULL;
+    }
+    s->ep = s->lfd = s->hkfd = s->rtufd = s->silfd = -1;
+    s->port = -1;
+    if (cfg->n_objects < 1 || cfg->n_objects > MBMAP_MAX_OBJECTS) {
+        msg(err, errlen, "modbus: %u objects, the map holds 1..%d", cfg->n_objects,
+            MBMAP_MAX_OBJECTS);
+        goto fail;
+    }
+    if (cfg->max_clients < 1 || cfg->max_clients > MODBUS_SERVER_MAX_CLIENTS_LIMIT) {
+        msg(err, errlen, "modbus: max_clients %u outside 1..%d", cfg->max_clients,
+            MODBUS_SERVER_MAX_CLIENTS_LIMIT);
+        goto fail;
+    }
+    rc = allow_parse(cfg->allow, s->allow, MODBUS_SERVER_ALLOW_MAX, err, errlen);
+    if (rc < 0)
+        goto fail;
+    s->n_allow = (unsigned)rc;
+    s->n_objects = cfg->n_objects;
+    s->writes_enabled = cfg->writes_enabled;
+    s->max_clients = cfg->max_clients;
+    s->idle_ns = (int64_t)cfg->idle_timeout_ms * 1000000;
+    s->unit_id = cfg->unit_id;
+    if (hooks)
+        s->hooks = *hooks;
+
+    s->clients = calloc(s->max_clients, sizeof *s->clients);
+    s->mb_rejected = calloc(s->n_objects, sizeof *s->mb_rejected);
+    s->lost = calloc(s->n_objects, sizeof *s->lost);
+    s->last_seq = calloc(s->n_objects, sizeof *s->last_seq);
+    s->map = modbus_mapping_new(0, 0, (int)MBMAP_REGS(s->n_objects), (int)MBMAP_REGS(s->n_objects));
+    if (!s->clients || !s->mb_rejected || !s->lost || !s->last_seq || !s->map) {
+        msg(err, errlen, "modbus: out of memory");
+        goto fail;
+    }
+    for (unsigned i = 0; i < s->max_clients; i++)
+        s->clients[i].fd = -1;
+
+    s->ep = epoll_create1(EPOLL_CLOEXEC);
+    s->hkfd = timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
+    if (s->ep < 0 || s->hkfd < 0) {
+        msg(err, errlen, "modbus: epoll/timerfd: %s", strerror(errno));
+        goto fail;
+    }
+    struct itimerspec hk = {
+        .it_interval = { 0, MODBUS_SERVER_HOUSEKEEPING_MS * 1000000L },
+        .it_value = { 0, MODBUS_SERVER_HOUSEKEEPING_MS * 1000000L },
+    };
+    if (timerfd_settime(s->hkfd, 0, &hk, NULL) < 0 || ep_add(s->ep, s->hkfd, tag(TAG_HOUSEKEEPING, 0)) < 0) {
+        msg(err, errlen, "modbus: timer: %s", strerror(errno));
+        goto fail;
+    }
+    if ((cfg->tcp_address[0] || (cfg->systemd_socket && systemd_listener() >= 0)) &&
+        tcp_listen(s, cfg, err, errlen) < 0)
+        goto fail;
+    if (cfg->rtu_device[0] && rtu_open(s, cfg, err, errlen) < 0)
+        goto fail;
+    /* The image before the first tick: magic, version, object count. */
+    mbmap_daemon_t d = { .objects = (uint16_t)s->n_objects,
+                         .writes_enabled = (uint16_t)(s->writes_enabled != 0) };
+    mbmap_encode_daemon(s->map->tab_input_registers, &d);
+    return s;
+fail:
+    modbus_server_free(s);
+    return NULL;
+}
+
+static void client_close(modbus_server_t *s, client_t *c)
+{
+    if (c->fd < 0)
+        return;
+    epoll_ctl(s->ep, EPOLL_CTL_DEL, c->fd, NULL);
+    close(c->fd);
+    c->fd = -1;
+    c->len = 0;
+    s->st.clients--;
+}
+
+void modbus_server_free(modbus_server_t *s)
+{
+    if (!s)
+        return;
+    if (s->clients)
+        for (unsigned i = 0; i < s->max_clients; i++)
+            client_close(s, &s->clients[i]);
+    if (s->tcp)
+        modbus_free(s->tcp);        /* never connected: its socket is not ours */
+    if (s->rtu) {
+        modbus_close(s->rtu);
+        modbus_free(s->rtu);
+    }
+    /* A socket passed by systemd stays open for the life of the process: a
+     * reload (free + new) finds it again with sd_listen_fds, and clients
+     * connecting meanwhile wait in its backlog. */
+    if (s->lfd >= 0 && !s->from_systemd)
+        close(s->lfd);
+    if (s->hkfd >= 0)
+        close(s->hkfd);
+    if (s->silfd >= 0)
+        close(s->silfd);
+    if (s->ep >= 0)
+        close(s->ep);
+    if (s->map)
+        modbus_mapping_free(s->map);
+    free(s->clients);
+    free(s->mb_rejected);
+    free(s->lost);
+    free(s->last_seq);
+    free(s);
+}
+
+int modbus_server_fd(const modbus_server_t *s)
+{
+    return s->ep;
+}
+
+int modbus_server_tcp_port(const modbus_server_t *s)
+{
+    return s->port;
+}
+
+int modbus_server_tcp_from_systemd(const modbus_server_t *s)
+{
+    return s->from_systemd;
+}
+
+uint32_t modbus_server_generation(const modbus_server_t *s)
+{
+    return s->gen;
+}
+
+void modbus_server_stats(const modbus_server_t *s, modbus_server_stats_t *st)
+{
+    *st = s->st;
+}
+
+/* ---- requests ------------------------------------------------------------- */
+
+/* Apply a validated write; returns 0 or -MBMAP_E*. */
+static int apply_write(modbus_server_t *s, const mbmap_write_t *w)
+{
+    int r;
+    if (w->kind == MBMAP_WRITE_WAYPOINT) {
+        r = s->hooks.waypoint ? s->hooks.waypoint(s->hooks.ctx, w->object, &w->wp) : -ENGINE_ESTATE;
+        if (r == MODBUS_SERVER_HOOK_EADDRESS)
+            return -MBMAP_EADDRESS;
+        if (r == 0) {
+            /* Sequence numbers are the sender's: a jump forward means waypoints
+             * it sent never reached us (0 = not numbered). */
+            uint32_t last = s->last_seq[w->object];
+            if (last && w->wp.seq > last + 1)
+                s->lost[w->object] += w->wp.seq - last - 1;
+            s->last_seq[w->object] = w->wp.seq;
+        }
+        return mbmap_from_engine(r);
+    }
+    if (w->command == MBMAP_CMD_RESET_COUNTERS) {
+        s->mb_rejected[w->object] = 0;
+        s->lost[w->object] = 0;
+    }
+    if (w->command == MBMAP_CMD_CLEAR)
+        s->last_seq[w->object] = 0;
+    r = s->hooks.command ? s->hooks.command(s->hooks.ctx, w->object, w->command) : -ENGINE_ESTATE;
+    if (r == MODBUS_SERVER_HOOK_EADDRESS)
+        return -MBMAP_EADDRESS;
+    return mbmap_from_engine(r);
+}
+
+/*
+ * Answer one whole request.  req/req_len is the ADU as libmodbus expects it
+ * (MBAP or address first, no CRC checked here), pdu/pdu_len its PDU.
+ * Returns what libmodbus returned (< 0: the peer could not be written to).
+ */
+static int serve(modbus_server_t *s, modbus_t *ctx, const uint8_t *req, int req_len,
+                 const uint8_t *pdu, size_t pdu_len)
+{
+    int rc = mbmap_check_request(s->n_objects, s->writes_enabled, pdu, pdu_len);
+    if (rc == 0 && (pdu[0] == MBMAP_FC_WRITE_SINGLE || pdu[0] == MBMAP_FC_WRITE_MULTIPLE)) {
+        mbmap_write_t w;
+        memset(&w, 0, sizeof w);
+        w.object = s->n_objects;
+        rc = mbmap_decode_write(s->n_objects, pdu, pdu_len, &w);
+        if (rc == 0)
+            rc = apply_write(s, &w);
+        if (rc == -MBMAP_EVALUE && w.object < s->n_objects)
+            s->mb_rejected[w.object]++;
+    }
+    s->st.requests++;
+    if (rc < 0) {
+        s->st.exceptions++;
+        return modbus_reply_exception(ctx, req, (unsigned)-rc);
+    }
+    /* Validated above, so libmodbus takes none of its error paths (some of
+     * which sleep for the response timeout and flush the socket). */
+    return modbus_reply(ctx, req, req_len, s->map);
+}
+
+static void client_read(modbus_server_t *s, client_t *c)
+{
+    ssize_t n = recv(c->fd, c->buf + c->len, sizeof c->buf - c->len, MSG_DONTWAIT);
+    if (n == 0 || (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR)) {
+        client_close(s, c);
+        return;
+    }
+    if (n < 0)
+        return;
+    c->len += (size_t)n;
+    c->last_ns = now_ns();
+    /* MBAP: transaction id (2), protocol id (2) = 0, length (2) = unit + PDU. */
+    while (c->len >= 7) {
+        unsigned proto = ((unsigned)c->buf[2] << 8) | c->buf[3];
+        unsigned length = ((unsigned)c->buf[4] << 8) | c->buf[5];
+        if (proto != 0 || length < 2 || length > 1 + MBMAP_PDU_MAX) {
+            /* A byte stream with no frame boundary we can trust: drop it. */
+            s->st.dropped++;
+            client_close(s, c);
+            return;
+        }
+        size_t total = 6 + length;
+        if (c->len < total)
+            return;
+        if (c->buf[7] & 0x80) {
+            /* 128..255 is the exception range, not a function: no valid
+             * answer exists (libmodbus would wrap fc + 0x80 to a request code). */
+            s->st.dropped++;
+            client_close(s, c);
+            return;
+        }
+        modbus_set_socket(s->tcp, c->fd);
+        int rc = serve(s, s->tcp, c->buf, (int)total, c->buf + 7, total - 7);
+        modbus_set_socket(s->tcp, -1);
+        if (rc < 0) {           /* peer not reading its answers: let it go */
+            s->st.dropped++;
+            client_close(s, c);
+            return;
+        }
+        memmove(c->buf, c->buf + total, c->len - total);
+        c->len -= total;
+    }
+}
+
+static int client_add(modbus_server_t *s, int fd)
+{
+    for (unsigned i = 0; i < s->max_clients; i++) {
+        client_t *c = &s->clients[i];
+        if (c->fd >= 0)
+            continue;
+        if (set_nonblock(fd) < 0 || ep_add(s->ep, fd, tag(TAG_CLIENT, i)) < 0)
+            break;
+        c->fd = fd;
+        c->len = 0;
+        c->last_ns = now_ns();
+        s->st.clients++;
+        return 0;
+    }
+    s->st.refused++;
+    close(fd);
+    return -EMFILE;
+}
+
+int modbus_server_adopt(modbus_server_t *s, int fd)
+{
+    return client_add(s, fd);
+}
+
+/*
+ * At the client limit, free the slots of clients that have already hung up
+ * but whose close this loop has not read yet (a client that disconnects and
+ * reconnects at once would otherwise be refused for its own old slot).
+ * Only runs at the limit: O(max_clients) zero-timeout polls.
+ */
+static void reap_hung_up(modbus_server_t *s)
+{
+    for (unsigned i = 0; i < s->max_clients; i++) {
+        client_t *c = &s->clients[i];
+        struct pollfd p = { .fd = c->fd, .events = POLLRDHUP };
+        if (c->fd >= 0 && poll(&p, 1, 0) > 0 &&
+            (p.revents & (POLLRDHUP | POLLHUP | POLLERR | POLLNVAL)))
+            client_close(s, c);
+    }
+}
+
+static void do_accept(modbus_server_t *s)
+{
+    for (int i = 0; i < ACCEPTS_PER_EVENT; i++) {
+        struct sockaddr_storage ss;
+        socklen_t sl = sizeof ss;
+        int fd = accept4(s->lfd, (struct sockaddr *)&ss, &sl, SOCK_NONBLOCK | SOCK_CLOEXEC);
+        if (fd < 0)
+            return;             /* EAGAIN, or a connection reset before accept */
+        if (allowed(s, &ss) && s->st.clients >= s->max_clients)
+            reap_hung_up(s);
+        if (!allowed(s, &ss) || s->st.clients >= s->max_clients) {
+            s->st.refused++;
+            close(fd);
+            continue;
+        }
+        client_add(s, fd);
+    }
+}
+
+static void housekeeping(modbus_server_t *s)
+{
+    uint64_t exp;
+    if (read(s->hkfd, &exp, sizeof exp) < 0)
+        return;
+    if (s->idle_ns <= 0)
+        return;
+    int64_t now = now_ns();
+    for (unsigned i = 0; i < s->max_clients; i++) {
+        client_t *c = &s->clients[i];
+        if (c->fd >= 0 && now - c->last_ns > s->idle_ns) {
+            s->st.dropped++;
+            client_close(s, c);
+        }
+    }
+}
+
+/* ---- RTU ---------------------------------------------------------------- */
+
+static void rtu_arm_silence(modbus_server_t *s)
+{
+    struct itimerspec t = { .it_value = { 0, MODBUS_SERVER_RTU_SILENCE_MS * 1000000L } };
+    timerfd_settime(s->silfd, 0, &t, NULL);
+}
+
+static int rtu_crc_ok(const uint8_t *f, size_t len)
+{
+    uint16_t crc = mbmap_crc16(f, len - 2);
+    return f[len - 2] == (crc & 0xffu) && f[len - 1] == (crc >> 8);
+}
+
+static void rtu_frame(modbus_server_t *s, const uint8_t *f, size_t len)
+{
+    if (f[0] != s->unit_id || (f[1] & 0x80)) /* not ours, broadcast, or no function */
+        return;
+    serve(s, s->rtu, f, (int)len, f + 1, len - 3);
+}
+
+static void rtu_read(modbus_server_t *s)
+{
+    ssize_t n = read(s->rtufd, s->rtu_buf + s->rtu_len, sizeof s->rtu_buf - s->rtu_len);
+    if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR))
+        return;
+    if (n <= 0) {
+        /* The line is gone (pty peer closed, USB adapter unplugged): stop
+         * watching it rather than spin on EPOLLHUP.  Not reopened (a limit). */
+        epoll_ctl(s->ep, EPOLL_CTL_DEL, s->rtufd, NULL);
+        s->st.rtu_down = 1;
+        return;
+    }
+    rtu_arm_silence(s);
+    if (s->rtu_discard) {
+        s->rtu_len = 0;
+        return;
+    }
+    s->rtu_len += (size_t)n;
+    for (;;) {
+        int fl = mbmap_rtu_frame_len(s->rtu_buf, s->rtu_len);
+        if (fl == 0 || (fl < 0 && s->rtu_len < sizeof s->rtu_buf))
+            return;             /* more bytes, or the silence, will tell */
+        if (fl < 0 || fl > MBMAP_RTU_ADU_MAX) {
+            s->rtu_discard = 1;
+            s->rtu_len = 0;
+            return;
+        }
+        if (s->rtu_len < (size_t)fl)
+            return;
+        if (rtu_crc_ok(s->rtu_buf, (size_t)fl)) {
+            rtu_frame(s, s->rtu_buf, (size_t)fl);
+        } else {
+            /* Frame boundary unknown from here on: resynchronise at silence. */
+            s->st.rtu_crc_errors++;
+            s->rtu_discard = 1;
+            s->rtu_len = 0;
+            return;
+        }
+        memmove(s->rtu_buf, s->rtu_buf + fl, s->rtu_len - (size_t)fl);
+        s->rtu_len -= (size_t)fl;
+    }
+}
+
+static void rtu_silence(modbus_server_t *s)
+{
+    uint64_t exp;
+    if (read(s->silfd, &exp, sizeof exp) < 0)
+        return;
+    /* A frame of a function we cannot size is delimited by this silence:
+     * if it is whole and ours, it gets its exception 01. */
+    if (!s->rtu_discard && s->rtu_len >= 4 && mbmap_rtu_frame_len(s->rtu_buf, s->rtu_len) < 0 &&
+        rtu_crc_ok(s->rtu_buf, s->rtu_len))
+        rtu_frame(s, s->rtu_buf, s->rtu_len);
+    else if (s->rtu_len && !s->rtu_discard)
+        s->st.rtu_crc_errors++;
+    s->rtu_len = 0;
+    s->rtu_discard = 0;
+}
+
+/* ---- loop ----------------------------------------------------------------- */
+
+int modbus_server_process(modbus_server_t *s)
+{
+    struct epoll_event ev[MODBUS_SERVER_EVENTS_PER_CALL];
+    int n = epoll_wait(s->ep, ev, MODBUS_SERVER_EVENTS_PER_CALL, 0);
+    if (n < 0)
+        return errno == EINTR ? 0 : -errno;
+    if (n == 0)
+        return 0;
+    int64_t t0 = now_ns();
+    for (int i = 0; i < n; i++) {
+        unsigned t = (unsigned)(ev[i].data.u64 >> 32);
+        unsigned idx = (unsigned)(ev[i].data.u64 & 0xffffffffu);
+        switch (t) {
+        case TAG_LISTEN: do_accept(s); break;
+        case TAG_HOUSEKEEPING: housekeeping(s); break;
+        case TAG_RTU: rtu_read(s); break;
+        case TAG_SILENCE: rtu_silence(s); break;
+        case TAG_CLIENT:
+            if (idx < s->max_clients && s->clients[idx].fd >= 0)
+                client_read(s, &s->clients[idx]);
+            break;
+        default: break;
+        }
+    }
+    uint64_t dt = (uint64_t)(now_ns() - t0);
+    s->st.process_calls++;
+    s->st.process_total_ns += dt;
+    if (dt > s->st.process_max_ns)
+        s->st.process_max_ns = dt;
+    return 0;
+}
+
+void modbus_server_publish(modbus_server_t *s, const mbmap_daemon_t *d, const mbmap_object_t *objs)
+{
+    uint16_t *ir = s->map->tab_input_registers;
+    mbmap_daemon_t dd = *d;
+    s->gen++;
+    dd.generation = s->gen;
+    dd.objects = (uint16_t)s->n_objects;
+    dd.writes_enabled = (uint16_t)(s->writes_enabled != 0);
+    dd.mb_requests = s->st.requests;
+    dd.mb_exceptions = s->st.exceptions;
+    dd.mb_refused = s->st.refused;
+    dd.mb_clients = (uint16_t)s->st.clients;
+    mbmap_encode_daemon(ir, &dd);
+    for (unsigned k = 0; k < s->n_objects; k++) {
+        mbmap_object_t o = objs[k];
+        o.mb_rejected = s->mb_rejected[k];
+        o.lost += s->lost[k];
+        mbmap_encode_object(ir, k, s->gen, &o);
+    }
+}

@@ -1,0 +1,178 @@
+/*
+ * modbus_server.h - trajd's Modbus server (libmodbus), TCP and RTU, inside the
+ * daemon's one event loop.  The register map is lib/proto/mbmap.h.
+ *
+ * Loop integration: the server keeps its sockets, serial port and timers in
+ * an epoll set of its own and exposes that set as ONE file descriptor
+ * (modbus_server_fd).  The daemon adds it to its loop for EPOLLIN and calls
+ * modbus_server_process() when it is readable.  Each call handles at most
+ * MODBUS_SERVER_EVENTS_PER_CALL events and never blocks (non-blocking sockets, whole
+ * requests assembled in per-client buffers, framing by the MBAP length or the
+ * RTU function code), so a tick due meanwhile waits at most one bounded
+ * batch (measured in tests/bench/bench_modbus_server_load.py).
+ *
+ * Requests are answered by libmodbus (modbus_reply / modbus_reply_exception
+ * on a modbus_mapping_t) after mbmap_check_request / mbmap_decode_write have
+ * validated them; libmodbus is used for the reply path only, never for
+ * receiving, because modbus_receive() blocks until a request is whole.
+ *
+ * Snapshot: the daemon's per-cycle hook calls modbus_server_publish() once per tick;
+ * it rewrites the input registers in place.  Requests and publishing run in
+ * the same thread, one after the other, so one request is always answered
+ * from one tick's image (never torn); see the generation registers in mbmap.h.
+ *
+ * RTU: bytes are read as they come (non-blocking); a request is complete when
+ * as many bytes as its function code implies have arrived and its CRC checks.
+ * Function codes whose length cannot be known from the header, and garbage,
+ * are delimited by line silence: MODBUS_SERVER_RTU_SILENCE_MS (at least 3.5
+ * characters) after the last byte the buffer is examined and dropped.  The
+ * trade-off: no thread and no lock, at the cost of resynchronising only at a
+ * silence after a corrupted frame (the client's retry is then answered).
+ * Requests to another unit id are skipped; broadcasts (unit 0) are ignored
+ * (a write must be acknowledged to be trusted).
+ */
+#ifndef TRAJD_MBSRV_H
+#define TRAJD_MBSRV_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include "engine.h"
+#include "mbmap.h"
+
+#define MODBUS_SERVER_DEFAULT_ADDRESS "127.0.0.1"
+#define MODBUS_SERVER_DEFAULT_PORT 1502
+#define MODBUS_SERVER_DEFAULT_MAX_CLIENTS 16
+#define MODBUS_SERVER_MAX_CLIENTS_LIMIT 1024
+#define MODBUS_SERVER_DEFAULT_IDLE_MS 60000
+#define MODBUS_SERVER_EVENTS_PER_CALL 8
+#define MODBUS_SERVER_RTU_SILENCE_MS 20
+#define MODBUS_SERVER_ALLOW_MAX 32          /* entries in the allow-list */
+#define MODBUS_SERVER_HOUSEKEEPING_MS 100   /* idle-timeout resolution */
+
+typedef struct {
+    int enabled;                /* [modbus] enabled: the daemon starts a server only if 1 */
+    /* TCP: tcp_address "" disables TCP.  tcp_port 0 picks a free
+     * port (read it back with modbus_server_tcp_port; used by the tests). */
+    char tcp_address[64];
+    int tcp_port;
+    /* 1: if systemd passed a listening stream socket (sd_listen_fds), use the
+     * first one instead of binding (so port 502 needs no privilege). */
+    int systemd_socket;
+    /* RTU: rtu_device "" disables RTU. */
+    char rtu_device[256];
+    int rtu_baud;
+    char rtu_parity;            /* 'N', 'E', 'O' */
+    int rtu_data_bits;
+    int rtu_stop_bits;
+    int unit_id;                /* RTU slave address 1..247 (TCP answers any) */
+    int writes_enabled;         /* 0: FC 06/16 answered with exception 01 */
+    /* Comma- or space-separated CIDR list ("127.0.0.1/32, ::1, 10.0.0.0/8");
+     * "" allows every client. */
+    char allow[512];
+    unsigned max_clients;       /* TCP clients at once; more are accepted and closed */
+    unsigned idle_timeout_ms;   /* close a TCP client silent this long (0 = never) */
+    unsigned n_objects;         /* 1..MBMAP_MAX_OBJECTS */
+} modbus_server_config_t;
+
+/*
+ * What a write does: the daemon applies it to the object's engine.
+ * waypoint: engine_push semantics, returns 0, ENGINE_DUPLICATE or a negated
+ * engine_error.  command: MBMAP_CMD_*, returns 0 or a negated engine_error.
+ * Either may return MODBUS_SERVER_HOOK_EADDRESS: not writable for this object
+ * (answered with exception 02).  A NULL hook refuses the write with 03.
+ */
+#define MODBUS_SERVER_HOOK_EADDRESS (-1000)
+typedef struct {
+    int (*waypoint)(void *ctx, unsigned object, const engine_waypoint_t *wp);
+    int (*command)(void *ctx, unsigned object, unsigned command);
+    void *ctx;
+} modbus_server_hooks_t;
+
+typedef struct {
+    uint64_t requests;          /* answered (normal or exception) */
+    uint64_t exceptions;
+    uint64_t refused;           /* connections refused: allow-list or max_clients */
+    uint64_t dropped;           /* connections closed for bad framing or idleness */
+    uint64_t rtu_crc_errors;
+    int rtu_down;               /* 1 once the serial line failed (not reopened) */
+    unsigned clients;           /* TCP clients connected now */
+    uint64_t process_calls;     /* modbus_server_process calls that handled events */
+    uint64_t process_max_ns;    /* longest modbus_server_process call: the most a tick can wait on Modbus */
+    uint64_t process_total_ns;  /* time spent in modbus_server_process, for the mean */
+} modbus_server_stats_t;
+
+typedef struct modbus_server modbus_server_t;
+
+/* Defaults: not enabled, 127.0.0.1:1502, systemd socket if passed, no RTU
+ * (9600 8N1, unit 1 when set), writes off, no allow-list,
+ * MODBUS_SERVER_DEFAULT_MAX_CLIENTS, MODBUS_SERVER_DEFAULT_IDLE_MS, 1 object. */
+void modbus_server_config_default(modbus_server_config_t *cfg);
+
+/*
+ * Set one key of the [modbus] config section (the daemon's ini handler calls
+ * this for each key of the section; n_objects is the daemon's to set).
+ * Keys: enabled, address, port, systemd_socket, rtu_device, rtu_baud,
+ * rtu_parity (N|E|O|none|even|odd), rtu_data_bits, rtu_stop_bits, unit_id,
+ * writes, allow, max_clients, idle_timeout_ms.  Booleans: yes/no/true/false/1/0.
+ * Returns 0, -ENOENT for an unknown key, -EINVAL for a bad value (with the
+ * reason in err if not NULL).
+ */
+int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const char *value, char *err,
+                     size_t errlen);
+
+/*
+ * Open the listening socket and/or the serial port and allocate everything
+ * the server will use (no allocation afterwards).  hooks may be NULL (writes
+ * refused).  Returns NULL on failure with a message in err (if not NULL).
+ */
+modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg, const modbus_server_hooks_t *hooks, char *err,
+                   size_t errlen);
+
+/* Close everything; NULL is a no-op. */
+void modbus_server_free(modbus_server_t *s);
+
+/* The one descriptor to watch for EPOLLIN in the daemon's loop. */
+int modbus_server_fd(const modbus_server_t *s);
+
+/* The TCP port listened on (after tcp_port 0), or -1 without TCP. */
+int modbus_server_tcp_port(const modbus_server_t *s);
+
+/* 1 if the listening socket came from systemd (sd_listen_fds), else 0. */
+int modbus_server_tcp_from_systemd(const modbus_server_t *s);
+
+/*
+ * Handle what is ready: accept, read, answer, time out idle clients, RTU
+ * silence.  Never blocks; at most MODBUS_SERVER_EVENTS_PER_CALL events.  Returns 0,
+ * or -errno if the server's own epoll set failed (clients' errors are
+ * handled by closing them, never returned).
+ */
+int modbus_server_process(modbus_server_t *s);
+
+/*
+ * Publish a tick's snapshot: generation +1, daemon block and every object's
+ * block rewritten.  d and objs[0..n_objects-1] are the daemon's view; the
+ * server fills its own fields (Modbus counters, clients, writes_enabled,
+ * objects, per-object mb_rejected and lost by sequence gaps of Modbus
+ * waypoints, added to objs[k].lost).  No allocation, no system call.
+ */
+void modbus_server_publish(modbus_server_t *s, const mbmap_daemon_t *d, const mbmap_object_t *objs);
+
+/* The generation of the last publish (0 before the first). */
+uint32_t modbus_server_generation(const modbus_server_t *s);
+
+void modbus_server_stats(const modbus_server_t *s, modbus_server_stats_t *st);
+
+/*
+ * Serve an already connected stream socket as a TCP client (the fuzz target
+ * and tests use a socketpair).  Takes ownership of fd.  Returns 0, or -EMFILE
+ * when max_clients are connected (fd closed).
+ */
+int modbus_server_adopt(modbus_server_t *s, int fd);
+
+/*
+ * Parse an allow-list (see modbus_server_config_t.allow) to check it at config load.
+ * Returns the number of entries, or -EINVAL with the offending entry in err.
+ */
+int modbus_server_allow_check(const char *allow, char *err, size_t errlen);
+
+#endif

@@ -1,0 +1,224 @@
+/* modbus_transport.c - the Modbus transport (see modbus_transport.h). */
+#include "modbus_transport.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core.h"
+#include "log.h"
+#include "mbmap.h"
+#include "modbus_server.h"
+
+typedef struct {
+    core_t *core;
+    modbus_server_t *srv;
+    mbmap_object_t *objs;       /* nobj, rewritten every tick (taken at open) */
+    unsigned nobj;
+    int rtu_down_logged;
+} mbt_t;
+
+static void cfg_default(void *cfg)
+{
+    modbus_server_config_t *m = cfg;
+    modbus_server_config_default(m);
+    m->enabled = 1;             /* a [modbus] section or an input = modbus turns it on */
+}
+
+static int cfg_key(void *cfg, const cfg_kv_t *kv, char *why, size_t wl)
+{
+    int rc = modbus_server_config_set(cfg, kv->key, kv->value, why, wl);
+    if (rc == -ENOENT)
+        return -CFG_EUNKNOWN;
+    return rc < 0 ? -CFG_EVALUE : 0;
+}
+
+static int check(cfg_t *cfg, int *line, char *why, size_t wl)
+{
+    const modbus_server_config_t *m = cfg_transport(cfg, &modbus_transport);
+    if (cfg->nobj > MBMAP_MAX_OBJECTS) {
+        snprintf(why, wl, "modbus: %u objects, the register map holds %d", cfg->nobj,
+                 MBMAP_MAX_OBJECTS);
+        return -CFG_EVALUE;
+    }
+    for (unsigned i = 0; i < cfg->nobj; i++) {
+        if (cfg->obj[i].input != &modbus_transport)
+            continue;
+        if (!m->enabled || !m->writes_enabled) {
+            *line = cfg->obj[i].line;
+            snprintf(why, wl, "object '%s' has input = modbus but [modbus] %s", cfg->obj[i].name,
+                     m->enabled ? "writes = no (waypoints could never be written)" : "enabled = no");
+            return -CFG_EVALUE;
+        }
+    }
+    if (m->enabled && !m->tcp_address[0] && !m->rtu_device[0]) {
+        snprintf(why, wl, "modbus: neither address (TCP) nor rtu_device (RTU) is set");
+        return -CFG_EVALUE;
+    }
+    return 0;
+}
+
+static int hook_waypoint(void *ctx, unsigned k, const engine_waypoint_t *wp)
+{
+    mbt_t *t = ctx;
+    if (k >= t->nobj)
+        return MODBUS_SERVER_HOOK_EADDRESS;
+    obj_t *o = &t->core->obj[k];
+    if (o->cfg->input != &modbus_transport)
+        return MODBUS_SERVER_HOOK_EADDRESS;
+    return obj_push(o, OBJ_SRC_MODBUS, wp);
+}
+
+static int hook_command(void *ctx, unsigned k, unsigned cmd)
+{
+    mbt_t *t = ctx;
+    if (k >= t->nobj)
+        return MODBUS_SERVER_HOOK_EADDRESS;
+    obj_t *o = &t->core->obj[k];
+    if (o->stopping || t->core->stopping)
+        return -ENGINE_ESTATE;
+    engine_status_t st;
+    switch (cmd) {
+    case MBMAP_CMD_START:
+        engine_status(o->engine, &st);
+        if (st.state != ENGINE_STATE_WAITING)
+            return 0;
+        if (st.buffered == 0)
+            return -ENGINE_ESTATE;
+        return engine_finish(o->engine);
+    case MBMAP_CMD_STOP:
+        return engine_stop(o->engine);
+    case MBMAP_CMD_CLEAR:
+        engine_clear(o->engine);
+        return 0;
+    case MBMAP_CMD_RESET_COUNTERS:
+        obj_reset_counters(o);
+        return 0;
+    default:
+        return -ENGINE_ESTATE;
+    }
+}
+
+static void on_ready(loop_t *l, int fd, uint32_t events, void *ctx)
+{
+    (void)l; (void)fd; (void)events;
+    mbt_t *t = ctx;
+    int rc = modbus_server_process(t->srv);
+    if (rc < 0)
+        log_msg(LOG_ERR, "modbus: %s", strerror(-rc));
+    modbus_server_stats_t ms;
+    modbus_server_stats(t->srv, &ms);
+    if (ms.rtu_down && !t->rtu_down_logged) {
+        t->rtu_down_logged = 1;
+        log_msg(LOG_ERR, "modbus: RTU line failed; not reopened until a reload");
+    }
+}
+
+static int open_(core_t *c, void **state, char *why, size_t wl)
+{
+    const modbus_server_config_t *m = cfg_transport(c->cfg, &modbus_transport);
+    *state = NULL;
+    if (!m->enabled)
+        return 0;
+    mbt_t *t = calloc(1, sizeof *t);
+    if (!t) {
+        snprintf(why, wl, "modbus: out of memory");
+        return -ENOMEM;
+    }
+    t->core = c;
+    t->nobj = c->nobj;
+    t->objs = calloc(c->nobj, sizeof *t->objs);
+    modbus_server_config_t mc = *m;
+    mc.n_objects = c->nobj;
+    modbus_server_hooks_t hooks = { hook_waypoint, hook_command, t };
+    if (t->objs)
+        t->srv = modbus_server_new(&mc, &hooks, why, wl);
+    else
+        snprintf(why, wl, "modbus: out of memory");
+    if (!t->srv) {
+        free(t->objs);
+        free(t);
+        return -EIO;
+    }
+    int rc = loop_add(c->loop, modbus_server_fd(t->srv), EPOLLIN, on_ready, t);
+    if (rc < 0) {
+        snprintf(why, wl, "modbus: loop_add: %s", strerror(-rc));
+        modbus_server_free(t->srv);
+        free(t->objs);
+        free(t);
+        return rc;
+    }
+    if (modbus_server_tcp_from_systemd(t->srv))
+        log_msg(LOG_INFO, "modbus: TCP on the systemd socket, port %d, writes %s",
+                modbus_server_tcp_port(t->srv), mc.writes_enabled ? "on" : "off");
+    else if (mc.tcp_address[0])
+        log_msg(LOG_INFO, "modbus: TCP on %s port %d, writes %s", mc.tcp_address,
+                modbus_server_tcp_port(t->srv), mc.writes_enabled ? "on" : "off");
+    if (mc.rtu_device[0])
+        log_msg(LOG_INFO, "modbus: RTU on %s %d %c%d%d unit %d", mc.rtu_device, mc.rtu_baud,
+                mc.rtu_parity, mc.rtu_data_bits, mc.rtu_stop_bits, mc.unit_id);
+    *state = t;
+    return 0;
+}
+
+/* In the tick: no allocation, no blocking call, no logging. */
+static void cycle(void *state, core_t *c, int64_t now_ns)
+{
+    (void)now_ns;
+    mbt_t *t = state;
+    if (!t)
+        return;
+    const stats_t *s = c->stats;
+    uint64_t up_s = (uint64_t)((core_mono_ns() - s->start_mono_ns) / 1000000000);
+    mbmap_daemon_t d;
+    memset(&d, 0, sizeof d);
+    d.uptime_s = up_s;
+    d.period_us = (uint32_t)(c->period_ns / 1000);
+    d.late_p50_us = s->late.p50_us;
+    d.late_p99_us = s->late.p99_us;
+    d.late_max_us = s->late.max_us;
+    d.missed_ticks = s->missed_ticks;
+    d.can_state = (uint16_t)s->can.state;
+    d.can_load_permille = (uint16_t)(s->can.load_permille > 0xffff ? 0xffff : s->can.load_permille);
+    for (unsigned k = 0; k < t->nobj; k++) {
+        mbmap_object_t *o = &t->objs[k];
+        o->sp = c->obj[k].sp;
+        o->st = c->obj[k].status;
+        o->lost = 0;            /* sequence gaps are counted by the inputs that number waypoints */
+        o->late_p99_us = d.late_p99_us;
+        o->late_max_us = d.late_max_us;
+        o->can_state = d.can_state;
+        o->can_load_permille = d.can_load_permille;
+        o->uptime_s = up_s;
+    }
+    modbus_server_publish(t->srv, &d, t->objs);
+    modbus_server_stats_t ms;
+    modbus_server_stats(t->srv, &ms);
+    c->stats->modbus.clients = ms.clients;
+    c->stats->modbus.requests = ms.requests;
+    c->stats->modbus.exceptions = ms.exceptions;
+}
+
+static void close_(void *state, core_t *c)
+{
+    mbt_t *t = state;
+    if (!t)
+        return;
+    loop_del(c->loop, modbus_server_fd(t->srv));
+    modbus_server_free(t->srv);
+    free(t->objs);
+    free(t);
+}
+
+const transport_t modbus_transport = {
+    .name = "modbus",
+    .roles = TRANSPORT_INPUT | TRANSPORT_SERVICE,
+    .cfg_size = sizeof(modbus_server_config_t),
+    .cfg_default = cfg_default,
+    .cfg_key = cfg_key,
+    .check = check,
+    .open = open_,
+    .cycle = cycle,
+    .close = close_,
+};

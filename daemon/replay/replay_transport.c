@@ -1,0 +1,172 @@
+/* replay_transport.c - replay input transport (see replay_transport.h). */
+#include "replay_transport.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core.h"
+#include "replay.h"
+
+static void obj_default(void *ocfg)
+{
+    replay_transport_obj_cfg_t *r = ocfg;
+    r->format = TRACK_FMT_AUTO;
+    r->start_s = 0;
+}
+
+static int obj_key(void *ocfg, const cfg_kv_t *kv, char *why, size_t wl)
+{
+    replay_transport_obj_cfg_t *r = ocfg;
+    if (strcmp(kv->key, "track") == 0) {
+        r->line = kv->line;
+        return cfg_get_path(kv, r->path, sizeof r->path, why, wl);
+    }
+    if (strcmp(kv->key, "format") == 0) {
+        static const char *const names[] = {"auto", "xyz", "latlon", "gpx", "path", NULL};
+        int i, rc = cfg_get_enum(kv, names, &i, why, wl);
+        if (rc == 0 && track_format_parse(kv->value, &r->format) < 0)
+            rc = -CFG_EVALUE; /* the two lists disagree: track.h wins */
+        return rc;
+    }
+    if (strcmp(kv->key, "start_s") == 0)
+        return cfg_get_double(kv, 0, 1e6, &r->start_s, why, wl);
+    return -CFG_EUNKNOWN;
+}
+
+/* Same input: same file, format and start (the loaded rows follow from these). */
+static int obj_same(const void *a, const void *b)
+{
+    const replay_transport_obj_cfg_t *x = a, *y = b;
+    return strcmp(x->path, y->path) == 0 && x->format == y->format &&
+           memcmp(&x->start_s, &y->start_s, sizeof x->start_s) == 0;
+}
+
+static void obj_fini(void *ocfg)
+{
+    replay_transport_obj_cfg_t *r = ocfg;
+    if (r->loaded)
+        track_free(&r->trk);
+    r->loaded = 0;
+}
+
+/* Load every replayed object's track, so a bad file rejects the config. */
+static int check(cfg_t *cfg, int *line, char *why, size_t wl)
+{
+    for (unsigned i = 0; i < cfg->nobj; i++) {
+        cfg_obj_t *o = &cfg->obj[i];
+        if (o->input != &replay_transport)
+            continue;
+        replay_transport_obj_cfg_t *r = o->tcfg[transport_index(&replay_transport)];
+        if (!r->path[0]) {
+            *line = o->line;
+            snprintf(why, wl, "object '%s': replay.track is missing", o->name);
+            return -CFG_EMISSING;
+        }
+        if (r->loaded)
+            continue;
+        char err[512];
+        if (track_load(r->path, r->format, &r->trk, err, sizeof err) < 0) {
+            *line = r->line;
+            snprintf(why, wl, "object '%s' replay.track: %s", o->name, err);
+            return -CFG_EVALUE;
+        }
+        r->loaded = 1;
+        if (r->trk.n == 0) {
+            *line = r->line;
+            snprintf(why, wl, "object '%s' replay.track: %s has no waypoints", o->name,
+                     r->path);
+            return -CFG_EVALUE;
+        }
+    }
+    return 0;
+}
+
+typedef struct {
+    replay_t *r;   /* per object index (NULL if not replayed) */
+    unsigned n;
+} replay_transport_t;
+
+static int open_(core_t *c, void **state, char *why, size_t wl)
+{
+    replay_transport_t *s = calloc(1, sizeof *s);
+    if (s)
+        s->r = calloc(c->nobj, sizeof *s->r);
+    if (!s || !s->r) {
+        free(s);
+        snprintf(why, wl, "out of memory");
+        return -12; /* -ENOMEM */
+    }
+    s->n = c->nobj;
+    for (unsigned i = 0; i < c->nobj; i++) {
+        obj_t *o = &c->obj[i];
+        if (o->cfg->input != &replay_transport)
+            continue;
+        const replay_transport_obj_cfg_t *rc = cfg_obj_transport(o->cfg, &replay_transport);
+        replay_t *r = &s->r[i];
+        replay_init(r, &rc->trk, o->born_ns + (int64_t)llround(rc->start_s * 1e9));
+        if (o->carried && o->status.accepted > 0) {
+            /* Reload with the engine kept: resume after the row it accepted
+             * last (rows carry their 1-based row number as seq).  Limit: rows
+             * after it that were refused as bad data are offered again. */
+            for (size_t k = 0; k < rc->trk.n; k++)
+                if (rc->trk.wp[k].seq == o->status.last_seq) {
+                    r->next = k + 1;
+                    break;
+                }
+            if (r->next >= rc->trk.n)
+                r->finished = 1; /* the old replay called engine_finish already */
+        }
+        o->tstate[transport_index(&replay_transport)] = &s->r[i];
+    }
+    *state = s;
+    return 0;
+}
+
+static void pre_tick(void *state, obj_t *o, int64_t now_ns)
+{
+    replay_transport_t *s = state;
+    replay_t *r = &s->r[o->index];
+    size_t before = r->next;
+    uint64_t refused = r->refused, retries = r->retries;
+    int n = replay_feed(r, o->engine, now_ns);
+    /* Count under the replay source as obj_push would (replay_feed talks to
+     * the engine directly, so it can keep its EFULL retry semantics). */
+    obj_src_stats_t *st = &o->src[OBJ_SRC_REPLAY];
+    st->offered += n > 0 ? (uint64_t)n : 0;
+    st->full += r->retries - retries;
+    st->rejected += r->refused - refused;
+    st->accepted += (r->next - before) - (r->refused - refused);
+}
+
+static int input_done(void *state, const obj_t *o)
+{
+    replay_transport_t *s = state;
+    return replay_done(&s->r[o->index]);
+}
+
+static void close_(void *state, core_t *c)
+{
+    replay_transport_t *s = state;
+    (void)c;
+    if (!s)
+        return;
+    free(s->r);
+    free(s);
+}
+
+const transport_t replay_transport = {
+    .name = "replay",
+    .roles = TRANSPORT_INPUT,
+    .obj_cfg_size = sizeof(replay_transport_obj_cfg_t),
+    .obj_cfg_default = obj_default,
+    .obj_key = obj_key,
+    .obj_cfg_fini = obj_fini,
+    .obj_cfg_same = obj_same,
+    .check = check,
+    .open = open_,
+    .pre_tick = pre_tick,
+    .close = close_,
+    .input_done = input_done,
+};

@@ -1,0 +1,123 @@
+/*
+ * track.h - load a logged track into memory (CSV t,x,y,z; CSV t,lat,lon,alt
+ * converted to local east/north/up metres about the first point; GPX).
+ * Used by trajreplay and by the daemon's replay input.  Loading happens at
+ * start-up or reload, never in the tick.
+ *
+ * Rows are kept as recorded (duplicates, backward steps): it is the engine's
+ * job to reject or drop them, and to count them.  What the loader itself
+ * refuses is what cannot be a waypoint at all: text that is not a number, a
+ * missing column, NaN or infinite time or horizontal coordinate, a latitude
+ * or longitude out of range.  By default such a line is an error
+ * "path:line: what"; with TRACK_SKIP_BAD it is skipped and counted instead
+ * (real logs have the odd corrupt line; skipping keeps the rest usable, and
+ * the count and the first message say what was lost).
+ *
+ * CSV: comma-separated; blank lines and lines starting with '#' are skipped;
+ * '\r' before '\n' is ignored; no quoting.  The first other line is a header
+ * naming the columns (case-insensitive, surrounding spaces ignored):
+ *   time      t, t_s, time, time_s                        (seconds)
+ *   metric    x, x_m, east_m / y, y_m, north_m / z, z_m, up_m   (metres; z optional)
+ *   geographic lat, lat_deg, latitude / lon, lon_deg, lng, longitude /
+ *             alt, alt_m, ele, altitude                  (degrees, metres; alt optional)
+ * Extra columns are ignored.  With an explicit format (XYZ or LATLON) and a
+ * first line made of numbers, the columns are taken by position instead:
+ * t,x,y[,z] or t,lat,lon[,alt].  Times are kept as written.
+ *
+ * Altitude / z: NaN, an empty field or a missing column give z = 0 ("0 up").
+ * Geographic rows are converted on the WGS84 ellipsoid (lib/util/geo.h) to east,
+ * north, up about the first row; a row without altitude gets its east/north
+ * at the origin's altitude and up = 0.  If the first row has no altitude the
+ * origin altitude is 0 m.
+ *
+ * GPX 1.0/1.1 (parsed with expat): every <trkpt lat lon> of every <trk>, in
+ * document order, several <trkseg> kept in order; <ele> optional; <time>
+ * required (ISO 8601, fractional seconds allowed, 'Z' or a +hh:mm offset;
+ * no offset = UTC as GPX specifies).  t is relative to the first point.
+ * <wpt> and <rtept> are ignored.
+ *
+ * Path (lib/spline/path.h, added by the toolkit): lines "start x y z [t]", "speed
+ * v", "step s", "line x y z", "arc cx cy r a0 a1", "circle cx cy r a0
+ * ccw|cw", "wait s"; expanded into timed waypoints in metres (arc points
+ * exactly on the circle).  A bad line is an error "path:line: what" (never
+ * skipped: a path is a program, not a log).  line[] holds the line of the
+ * element that produced each waypoint.
+ */
+#ifndef TRAJD_TRACK_H
+#define TRAJD_TRACK_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include "engine.h"
+
+typedef enum {
+    TRACK_FMT_AUTO = 0,  /* from the extension (.gpx) or a leading '<', else the CSV header */
+    TRACK_FMT_XYZ,       /* CSV t,x,y,z in seconds and metres */
+    TRACK_FMT_LATLON,    /* CSV t,lat,lon[,alt] in seconds, degrees, metres */
+    TRACK_FMT_GPX,       /* GPX 1.0/1.1 trkpt with <time> (and <ele>) */
+    TRACK_FMT_PATH,      /* a path of lines and arcs (lib/spline/path.h text form; AUTO: extension .path) */
+} track_format_t;
+
+/* track_load_opts flags */
+#define TRACK_SKIP_BAD 0x1u  /* skip and count bad lines instead of failing */
+
+/* Largest file accepted (the whole file is read into memory). */
+#define TRACK_FILE_MAX_BYTES (1024L * 1024L * 1024L)
+/* Longest CSV line accepted, bytes. */
+#define TRACK_LINE_MAX 4096
+
+typedef struct {
+    size_t n;                 /* waypoints */
+    engine_waypoint_t *wp;    /* n waypoints, seq = 1-based row number */
+    uint32_t *line;           /* n source line numbers (CSV line, or line of <trkpt>) */
+    track_format_t format;    /* the format actually read (never AUTO) */
+    int geographic;           /* 1 if converted from lat/lon */
+    double lat0_deg, lon0_deg, alt0_m; /* ENU origin (first point) when geographic */
+    size_t skipped;           /* bad lines skipped (TRACK_SKIP_BAD) */
+    size_t segments;          /* GPX <trkseg> elements seen (0 for CSV) */
+} track_t;
+
+/*
+ * Load path.  Returns 0, or -1 with a message "path:line: what" in err
+ * (err may be NULL; errlen 0 is fine).  On success trk owns memory to
+ * release with track_free; on failure trk is zeroed.
+ * A track with no waypoint is an error ("no waypoints").
+ */
+int track_load(const char *path, track_format_t fmt, track_t *trk, char *err,
+               size_t errlen);
+
+/*
+ * As track_load, with flags (TRACK_SKIP_BAD).  When lines were skipped,
+ * trk->skipped counts them and err holds the message of the first one
+ * even though the call succeeded.
+ */
+int track_load_opts(const char *path, track_format_t fmt, unsigned flags,
+                    track_t *trk, char *err, size_t errlen);
+
+/*
+ * Parse a track held in memory (buf need not be NUL-terminated; NUL bytes
+ * are an error).  name is used in messages and, with TRACK_FMT_AUTO, for
+ * the .gpx extension.  Same results as track_load_opts.
+ */
+int track_parse(const char *name, const char *buf, size_t len,
+                track_format_t fmt, unsigned flags, track_t *trk, char *err,
+                size_t errlen);
+
+/* Release; safe on a zeroed or already freed track. */
+void track_free(track_t *trk);
+
+/* Parse "auto", "xyz", "latlon", "gpx"; returns -1 if unknown. */
+int track_format_parse(const char *s, track_format_t *fmt);
+
+/* Name of a format ("auto", "xyz", "latlon", "gpx"). */
+const char *track_format_name(track_format_t fmt);
+
+/*
+ * Parse an ISO 8601 UTC date-time as used by GPX ("2014-08-22T16:48:52Z",
+ * "2014-08-22T16:48:52.25Z", "...+02:00").  On success returns 0 with whole
+ * seconds since 1970-01-01T00:00:00Z in *sec and the fraction in [0,1) in
+ * *frac (kept apart so differences stay exact).  Returns -1 if malformed.
+ */
+int track_parse_iso8601(const char *s, int64_t *sec, double *frac);
+
+#endif

@@ -1,0 +1,299 @@
+/*
+ * engine.h - one moving object's trajectory engine: waypoints in, fixed-rate
+ * setpoints out.  Pure: no clock, no I/O, no allocation after engine_new().
+ *
+ * Waypoints (time + position) are pushed as they arrive.  The engine keeps a
+ * sliding window of fragments of F waypoints overlapping by O, solves each
+ * fragment incrementally (forward sweep per waypoint, back substitution when
+ * the fragment is complete), averages control values at the junction in the
+ * middle of each overlap, and turns each finished segment into a cubic per
+ * axis that the forward-difference stepper walks at the output period.
+ *
+ * Time is passed in: engine_tick(e, now_ns, &sp).  now_ns is the caller's
+ * monotonic clock at the *scheduled* tick (not the wake-up time), so two
+ * callers that tick at the same instants get bit-identical setpoints (this is
+ * what lets trajreplay and the daemon agree exactly).  If ticks were skipped,
+ * the next call steps over them (each step is the same three additions, so
+ * skipping never changes the numbers, it only drops rows).
+ *
+ * Track time and the caller's clock: streaming starts once the lookahead is
+ * buffered; from then on track time advances one period per tick while the
+ * segments needed are solved.  When they are not (waypoints late) the engine
+ * holds the last position (UNDERRUN, vel = acc = 0), and resumes from that
+ * exact point once the lookahead is buffered again: the track is delayed,
+ * never jumped.  Setpoint times are t(first) + n * period exactly (n counted
+ * in integers), segments are entered at the fractional phase left over.
+ *
+ * States: WAITING (nothing yet, or a trajectory buffering its lookahead;
+ * holding: position 0 before any waypoint, then the first waypoint),
+ * STREAMING (moving, including a transfer), UNDERRUN, FINISHED (the last
+ * trajectory ran to its end and rests on it; pushing again starts a new one).
+ *
+ * Trajectories, gaps and transfers.  A trajectory is the waypoints between
+ * two ends: engine_finish/engine_stop, engine_clear, or a gap (an interval
+ * above max_gap_s).  A gap ends the current trajectory exactly as
+ * engine_finish does (the configured end condition on its last waypoint; the
+ * default REST stops there at rest) and the waypoint after the gap starts a
+ * new one.  Setpoints never jump: when a new trajectory starts where the
+ * output does not stand (after a gap, a clear, or with HELD ends), the output
+ * first moves there with a rest-to-rest smoothstep k(u) = A + (B-A)(3u^2-2u^3)
+ * lasting max(1 s, 1.5 * distance / max_speed_m_s) (10 m/s if no limit),
+ * rounded up to whole periods (flags TRANSFER; the first setpoint of every
+ * trajectory carries NEW_TRACK and track + 1).  Before any motion at all
+ * the output simply takes the first trajectory's start (no transfer).
+ * Waypoint times may restart (e.g. from 0) with each new trajectory.
+ *
+ * Method and parameterisation (see hoang.h, cubic.h, README "The engine"):
+ *   (a) ENGINE_PARAM_UNIFORM  the paper: uniform B-spline, each segment
+ *       mapped linearly onto its own time interval.  Physical velocity jumps
+ *       at every waypoint whose neighbouring intervals differ (measured on
+ *       gpxgo_visnjan: up to 9.0 m/s on a walk).
+ *   (b) ENGINE_PARAM_TIME     knots at the timestamps: C2 in physical time
+ *       (jumps only from the fragment junctions, 1.5e-4 m/s on the same track
+ *       with F=32, O=16).  The default, because motion controllers follow
+ *       velocity and acceleration, and real tracks are irregular.
+ * METHOD_BSPLINE with PARAM_TIME is the non-uniform cubic B-spline
+ * interpolant on the timestamps, which is the same curve as METHOD_CUBIC with
+ * PARAM_TIME (unique C2 interpolant); it is computed in the second-derivative
+ * form and checked against scipy's B-spline interpolant in test_spline.py.
+ * (a) with fragments hits a waypoint exactly only where the stencil stays in
+ * one fragment; near the junctions it misses by ~rho^(O/2) (rho = 2 - sqrt 3);
+ * (b) hits every waypoint exactly by construction.
+ */
+#ifndef TRAJD_ENGINE_H
+#define TRAJD_ENGINE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "fdiff.h"
+#include "motion.h"
+
+
+/* Limits on the configuration (checked by engine_config_check). */
+#define ENGINE_FRAGMENT_MIN 4
+#define ENGINE_FRAGMENT_MAX 1024
+#define ENGINE_PERIOD_NS_MIN 100000LL        /* 10 kHz */
+#define ENGINE_PERIOD_NS_MAX 1000000000LL    /* 1 Hz */
+
+
+
+
+typedef enum {
+    ENGINE_PARAM_UNIFORM = 0, /* (a) the paper: uniform B-spline, each segment mapped onto its time interval */
+    ENGINE_PARAM_TIME = 1,    /* (b) knots at the timestamps: C2 in physical time */
+} engine_param_t;
+
+typedef enum {
+    ENGINE_ENDS_HELD = 0,     /* the paper: P*(0)=R(0), P*(N-1)=R(N-1); curve spans R(1)..R(N-2) */
+    ENGINE_ENDS_MULTIPLE = 1, /* the paper: end points repeated twice more; loop segments never emitted */
+    ENGINE_ENDS_NATURAL = 2,  /* zero second derivative at the ends */
+    ENGINE_ENDS_CLAMPED = 3,  /* given start/end velocity (start_vel_m_s, end_vel_m_s) */
+    ENGINE_ENDS_REST = 4,     /* start and stop at rest: clamped with zero velocity */
+} engine_ends_t;
+
+typedef enum {
+    ENGINE_METHOD_BSPLINE = 0, /* exact interpolation, Hoang control points */
+    ENGINE_METHOD_CUBIC = 1,   /* exact interpolation, second-derivative system (seed 002) */
+    ENGINE_METHOD_SMOOTH = 2,  /* least-squares B-spline over the window (not exact) */
+} engine_method_t;
+
+/*
+ * ENGINE_METHOD_SMOOTH (lib/spline/lsq.h, lsq_smooth_*): each waypoint's position
+ * is replaced by the value, at its own time, of the least-squares cubic
+ * B-spline with smooth_ctrl control points fitted to the smooth_window
+ * waypoints around it; the smoothed waypoints then go through the CUBIC
+ * path (fragments, end condition, forward differences) unchanged.  The
+ * curve no longer passes through the waypoints; it adds smooth_window/2
+ * waypoints of lookahead.  For noisy positions (a GNSS fix standing still).
+ */
+#define ENGINE_SMOOTH_WINDOW_MAX 1024
+
+typedef struct {
+    engine_method_t method; /* default CUBIC (see (b) above) */
+    engine_param_t param;   /* default TIME: C2 in physical time, see above */
+    engine_ends_t ends;     /* default REST: start and stop with zero velocity,
+                               no velocity step when the output starts or stops */
+    double start_vel_m_s[ENGINE_AXES]; /* ENGINE_ENDS_CLAMPED only (default 0) */
+    double end_vel_m_s[ENGINE_AXES];   /* ENGINE_ENDS_CLAMPED only (default 0) */
+    unsigned fragment;      /* F: waypoints per fragment.  Default 32 */
+    unsigned overlap;       /* O: waypoints shared by consecutive fragments, even,
+                               2 <= O < F.  Default 16: error against one global
+                               solve ~rho^(O/2) = 2.7e-5 of the curvature scale
+                               (measured 4e-7 .. 7e-7 of a random walk's extent),
+                               lookahead 32 waypoints with start_slack 8;
+                               see README for the table */
+    int64_t period_ns;      /* output period.  Default 10 ms (100 Hz) */
+    unsigned capacity;      /* waypoints buffered at most (lookahead + fragment
+                               + 8 .. 2^20; about 272 bytes each).  Default
+                               4096: 68 min at 1 Hz, 1.1 MB */
+    double max_gap_s;       /* a longer interval ends the trajectory at rest and
+                               starts a new one.  Default 60 s */
+    double max_abs_m;       /* |coordinate| above this is rejected.  Default 1e7 m
+                               (beyond the Earth's radius from any ENU origin) */
+    double max_speed_m_s;   /* implied speed above this is rejected (0 = no
+                               limit); also the transfer speed.  Default 100 m/s:
+                               generous for ground and sea vehicles, rejects GPS
+                               jumps of kilometres between fixes */
+    double max_accel_m_s2;  /* implied acceleration above this is rejected (0 =
+                               no limit): the change of mean velocity over the
+                               last two intervals, 2 |v2 - v1| / (dt1 + dt2).
+                               Catches timestamp jitter (a fix stamped late or
+                               early by a fraction of the interval), which the
+                               curve, forced through every waypoint at its
+                               time, would turn into an acceleration spike.
+                               Default 30 m/s^2 (3 g: generous for ground and
+                               sea vehicles; measured on the real tracks: legit
+                               samples reach 11.4 at 5 Hz, the figure-8's
+                               jittered ones 117 and 44; see README "Jitter
+                               and outliers").  Position noise alone implies
+                               ~4 noise / dt^2: raise it for noisy fixes at
+                               10 Hz and more */
+    double max_segment_s;   /* longest segment the stepper is tested for
+                               (informational: the stepper re-seeds every
+                               FDIFF_RESEED_STEPS, so drift does not grow with
+                               the segment).  Default 60 s (= max_gap_s) */
+    unsigned start_slack;   /* waypoints buffered beyond what the solver needs
+                               before the output starts, and again before it
+                               resumes after an underrun: absorbs irregular
+                               input timing (a missed fix, jitter, a pause) of
+                               up to this many waypoint intervals over a
+                               lookahead window.  Adds to engine_lookahead.
+                               Default 8 (measured: no underrun replaying the
+                               irregular gpxgo_visnjan track with F=64/O=32;
+                               2 were enough for the regular 5 Hz figure-8) */
+    unsigned smooth_window; /* SMOOTH only: waypoints per local least-squares fit,
+                               4 .. ENGINE_SMOOTH_WINDOW_MAX.  Default 24 */
+    unsigned smooth_ctrl;   /* SMOOTH only: control points per fit,
+                               4 .. smooth_window.  Default 6 */
+} engine_config_t;
+
+/* Fill cfg with working defaults (each one commented above; documented in
+ * config/trajd.conf). */
+void engine_config_default(engine_config_t *cfg);
+
+/*
+ * Check a configuration.  Returns 0 or -ENGINE_ECONFIG; if why is not NULL
+ * it receives a static string naming the offending field and the rule (NULL
+ * when valid).  Refused: METHOD_SMOOTH with smooth_window or smooth_ctrl
+ * out of range, HELD or MULTIPLE with
+ * anything but BSPLINE + UNIFORM (they are the paper's ends of the
+ * control polygon, meaningless in the second-derivative form), F, O, period
+ * or capacity out of range, non-finite or non-positive limits.
+ */
+int engine_config_check(const engine_config_t *cfg, const char **why);
+
+
+
+
+
+
+/* One engine per moving object; not thread-safe: push, tick and the commands
+ * of one engine must come from one thread (or be serialised by the caller). */
+typedef struct engine engine_t;
+
+/*
+ * Allocate an engine for cfg (all memory it will ever use is taken here).
+ * err (may be NULL) receives 0, ENGINE_ECONFIG or ENGINE_ENOMEM.
+ */
+engine_t *engine_new(const engine_config_t *cfg, int *err);
+
+/* Free; NULL is a no-op. */
+void engine_free(engine_t *e);
+
+/*
+ * Offer a waypoint.  Returns 0 (accepted), ENGINE_DUPLICATE (same time, to
+ * 1 ns, and position, to 1 nm, as the previous one: dropped, counted), or a
+ * negated engine_error (rejected, counted in status.rejected_by, nothing
+ * changed):
+ *   -ENGINE_ENOTFINITE  NaN or infinite time or coordinate
+ *   -ENGINE_ERANGE      |coordinate| > max_abs_m, or |t_s| > 1e12 s
+ *   -ENGINE_EBACKWARDS  earlier than the previous waypoint of the trajectory
+ *   -ENGINE_ESAMETIME   same time as the previous one, different position
+ *   -ENGINE_ESPEED      distance / interval from the previous one > max_speed_m_s
+ *   -ENGINE_EACCEL      with the two previous waypoints of the trajectory
+ *                       (r0, r1 at t0, t1), the implied acceleration
+ *                       2 |(r - r1)/(t - t1) - (r1 - r0)/(t1 - t0)| / (t - t0)
+ *                       > max_accel_m_s2 (timestamp jitter, position jump).
+ *                       Checked against accepted waypoints only, so after a
+ *                       bad waypoint was accepted good ones can be refused
+ *                       too, for at most about 2 |dv| / max_accel_m_s2
+ *                       seconds (the implied acceleration falls as the
+ *                       interval grows)
+ *   -ENGINE_EFULL       capacity waypoints buffered: offer it again later
+ *                       (flow control: nothing accepted is ever dropped)
+ *   -ENGINE_ENUMERIC    the solver refused (cannot happen with finite data:
+ *                       the systems are diagonally dominant); the trajectory
+ *                       is ended where it was
+ * A time gap above max_gap_s ends the current trajectory at rest on its
+ * last waypoint and starts a new one with this waypoint (no speed check
+ * across a gap).  Speed, acceleration and time checks are against the
+ * previous waypoints of the same trajectory only (the acceleration check
+ * needs two of them: not on a trajectory's first two waypoints).
+ */
+int engine_push(engine_t *e, const engine_waypoint_t *wp);
+
+/*
+ * End of input for the current trajectory: the last fragment is closed with
+ * the configured end condition and the output runs to the last waypoint and
+ * stops there (FINISHED).  Pushing again afterwards starts a new trajectory.
+ * Returns 0 (also when there is nothing to finish), or -ENGINE_ENUMERIC.
+ */
+int engine_finish(engine_t *e);
+
+/*
+ * Produce the setpoint for now_ns (the scheduled tick).  Never allocates,
+ * never fails on data: bad waypoints were refused at push.  Returns 0, or
+ * -ENGINE_ESTATE if now_ns went backwards (sp then repeats the last setpoint).
+ */
+int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
+
+/* Commands (Modbus holding registers, CAN, the daemon on SIGTERM). */
+/* Drop every buffered waypoint and segment; the output holds exactly where it
+ * stands (vel = acc = 0), WAITING; the next waypoint starts a new trajectory,
+ * reached by a transfer. */
+void engine_clear(engine_t *e);
+/* As engine_finish: run to the last waypoint received and rest there. */
+int engine_stop(engine_t *e);
+/* Zero every counter of engine_status (state and last_seq are kept). */
+void engine_reset_counters(engine_t *e);
+
+/* Snapshot of state and counters. */
+void engine_status(const engine_t *e, engine_status_t *st);
+
+/*
+ * Waypoints of lookahead this configuration needs (depends on F, O and
+ * whether the unknowns are control points): the most waypoints beyond a
+ * segment's end that must have arrived before it is final.  The output waits
+ * for it at the start (and after an underrun), so the delay between receiving
+ * a waypoint and passing through it is about (lookahead + 1) waypoint
+ * intervals.  About S + O/2 + start_slack (S = F - O); 0 if F, O invalid.
+ */
+unsigned engine_lookahead(const engine_config_t *cfg);
+
+
+/*
+ * Offline: the curve the engine streams for a whole track, built by the same
+ * code as engine_push/engine_finish (the queue drained after every push), as
+ * cubic segments in absolute track time (see fdiff.h).  For tests, benches
+ * and tools; allocates an engine (not for a periodic path).
+ * Waypoints the engine refuses are skipped as engine_push would.
+ * Returns 0, -ENGINE_ECONFIG (bad cfg, or more than max_seg segments),
+ * -ENGINE_ENOMEM.  *nseg receives the number of segments written.
+ */
+int engine_curve(const engine_config_t *cfg, const engine_waypoint_t *wp,
+                 size_t n, fdiff_seg_t *seg, size_t max_seg, size_t *nseg);
+
+/*
+ * engine_curve with flat arguments, for Python ctypes: the default
+ * configuration with method, param, ends, fragment, overlap given,
+ * max_speed_m_s = 0, max_accel_m_s2 = 0 (every waypoint kept) and
+ * max_gap_s = 1e9 (one trajectory).  t_s: n times,
+ * xyz: n x 3; seg_out: max_seg x 14 doubles (t0_s, dur_s, then c[axis][0..3]
+ * for x, y, z).  Returns the number of segments, or a negated engine_error.
+ */
+long engine_curve_flat(int method, int param, int ends, unsigned fragment,
+                       unsigned overlap, size_t n, const double *t_s,
+                       const double *xyz, double *seg_out, size_t max_seg);
+
+#endif

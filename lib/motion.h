@@ -1,0 +1,92 @@
+/*
+ * motion.h - the types every part of trajd shares: a waypoint in, a setpoint
+ * out, the engine's state and counters, and the error codes that explain a
+ * refused waypoint.  The streaming engine (lib/engine/), the protocol codecs
+ * (lib/proto/) and the path toolkit (lib/spline/path.h) include this header
+ * rather than each other, so a codec never depends on the engine for a struct.
+ * The names keep the engine_ prefix: they are the engine's interface types.
+ */
+#ifndef TRAJD_MOTION_H
+#define TRAJD_MOTION_H
+
+#include <stdint.h>
+
+/* Linear axes of every waypoint and setpoint: x, y, z. */
+#define ENGINE_AXES 3
+
+enum engine_error {
+    ENGINE_OK = 0,
+    ENGINE_ENOTFINITE = 1,  /* NaN or infinite time or coordinate */
+    ENGINE_ERANGE = 2,      /* |coordinate| above max_abs_m or |t| absurd */
+    ENGINE_EBACKWARDS = 3,  /* timestamp earlier than the previous waypoint */
+    ENGINE_ESAMETIME = 4,   /* same timestamp, different position */
+    ENGINE_ESPEED = 5,      /* implied speed from the previous waypoint above max_speed_m_s */
+    ENGINE_EFULL = 6,       /* waypoint buffer full: sender must wait (flow control) */
+    ENGINE_ECONFIG = 7,     /* invalid configuration */
+    ENGINE_ENOMEM = 8,      /* engine_new could not allocate */
+    ENGINE_ESTATE = 9,      /* call not valid in this state */
+    ENGINE_ENUMERIC = 10,   /* solver failed (singular system); waypoint rejected */
+    ENGINE_EACCEL = 11,     /* implied acceleration from the last two waypoints above max_accel_m_s2 */
+    ENGINE_ERROR_COUNT
+};
+
+/* Non-error outcome of engine_push: an exact duplicate was dropped. */
+#define ENGINE_DUPLICATE 1
+
+/* Human-readable text for an engine_error (positive or negated). */
+const char *engine_strerror(int err);
+
+typedef struct {
+    double t_s;                  /* waypoint time, seconds, sender's track clock */
+    double pos_m[ENGINE_AXES];   /* x, y, z (east, north, up for geographic input), metres */
+    uint32_t seq;                /* transport sequence number (0 if none) */
+} engine_waypoint_t;
+
+typedef enum {
+    ENGINE_STATE_WAITING = 0,   /* no trajectory yet, or lookahead not yet buffered; holding */
+    ENGINE_STATE_STREAMING = 1, /* moving along the curve */
+    ENGINE_STATE_UNDERRUN = 2,  /* waypoints late: holding the last setpoint */
+    ENGINE_STATE_FINISHED = 3,  /* end of track reached, at rest on the last waypoint */
+} engine_state_t;
+
+/* Name of a state, "waiting", "streaming", "underrun", "finished". */
+const char *engine_state_name(engine_state_t s);
+
+/* Setpoint flags. */
+#define ENGINE_SP_HOLD      0x01u /* position held (waiting, underrun, finished) */
+#define ENGINE_SP_NEW_TRACK 0x02u /* first setpoint of a new trajectory (after a gap or clear) */
+#define ENGINE_SP_SKIPPED   0x04u /* ticks were skipped before this one */
+#define ENGINE_SP_TRANSFER  0x08u /* rest-to-rest transfer to a new trajectory's start */
+
+typedef struct {
+    int64_t now_ns;                 /* the tick this setpoint is for (as passed in) */
+    double t_s;                     /* track time of the setpoint (sender's clock) */
+    double pos_m[ENGINE_AXES];
+    double vel_m_s[ENGINE_AXES];
+    double acc_m_s2[ENGINE_AXES];
+    engine_state_t state;
+    uint32_t flags;                 /* ENGINE_SP_* */
+    uint32_t cycle;                 /* tick counter, wraps */
+    uint32_t track;                 /* trajectory number, +1 at each new trajectory */
+} engine_setpoint_t;
+
+typedef struct {
+    engine_state_t state;
+    uint32_t last_seq;              /* seq of the last accepted waypoint */
+    uint32_t buffered;              /* waypoints held, not yet passed by the output */
+    uint32_t free;                  /* waypoints that can still be pushed */
+    uint32_t lookahead;             /* waypoints needed ahead of the output (from F, O) */
+    double ahead_s;                 /* track time buffered ahead of the output */
+    uint64_t accepted;
+    uint64_t duplicates;
+    uint64_t rejected;              /* sum of rejected_by[] */
+    uint64_t rejected_by[ENGINE_ERROR_COUNT]; /* per engine_error */
+    uint64_t underruns;             /* transitions into UNDERRUN */
+    uint64_t underrun_ticks;        /* ticks spent in UNDERRUN */
+    uint64_t skipped_ticks;         /* ticks stepped over (caller late) */
+    uint64_t gaps;                  /* trajectories ended by a gap */
+    uint64_t tracks;                /* trajectories started */
+    uint64_t setpoints;             /* ticks answered */
+} engine_status_t;
+
+#endif

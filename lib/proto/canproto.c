@@ -1,0 +1,779 @@
+/* canproto.c - trajd's CAN frames (see canproto.h for the layouts). */
+#include "canproto.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+static const char *const canproto_errors[CANPROTO_ERROR_COUNT] = {
+    [CANPROTO_OK] = "ok",
+    [CANPROTO_ELEN] = "wrong frame length or kind for this id",
+    [CANPROTO_EMUX] = "unknown multiplexer value",
+    [CANPROTO_EVALUE] = "forbidden field value",
+    [CANPROTO_EID] = "not one of our ids",
+    [CANPROTO_ECONFIG] = "invalid CAN id or profile configuration",
+};
+
+const char *canproto_strerror(int err)
+{
+    if (err < 0)
+        err = -err;
+    if (err >= CANPROTO_ERROR_COUNT)
+        return "unknown canproto error";
+    return canproto_errors[err];
+}
+
+int canproto_fd_len_valid(unsigned len)
+{
+    return len <= 8 || len == 12 || len == 16 || len == 20 || len == 24 ||
+           len == 32 || len == 48 || len == 64;
+}
+
+/* ---- little-endian fields ---------------------------------------------------- */
+
+static void put_le(uint8_t *p, unsigned nbytes, uint64_t v)
+{
+    for (unsigned i = 0; i < nbytes; i++)
+        p[i] = (uint8_t)(v >> (8 * i));
+}
+
+static uint64_t get_le(const uint8_t *p, unsigned nbytes)
+{
+    uint64_t v = 0;
+    for (unsigned i = 0; i < nbytes; i++)
+        v |= (uint64_t)p[i] << (8 * i);
+    return v;
+}
+
+/* Sign-extend the low nbits of v. */
+static int64_t sext(uint64_t v, unsigned nbits)
+{
+    uint64_t m = 1ull << (nbits - 1);
+    v &= (m << 1) - 1;
+    return (int64_t)((v ^ m) - m);
+}
+
+/*
+ * round(x / scale) clamped to [lo, hi].  *clamped is set if x was out of range
+ * or not finite (NaN is sent as 0: a setpoint frame must still go out).
+ */
+static int64_t quantize(double x, double scale, int64_t lo, int64_t hi, int *clamped)
+{
+    if (!isfinite(x)) {
+        *clamped = 1;
+        return isnan(x) ? 0 : (x > 0 ? hi : lo);
+    }
+    double r = nearbyint(x / scale);
+    /* Compare in double: lo/hi are at most 2^48 in magnitude here, exact in a double. */
+    if (r < (double)lo) {
+        *clamped = 1;
+        return lo;
+    }
+    if (r > (double)hi) {
+        *clamped = 1;
+        return hi;
+    }
+    return (int64_t)r;
+}
+
+static void frame_init(canproto_frame_t *f, uint32_t id, unsigned len, uint8_t flags)
+{
+    memset(f, 0, sizeof *f);
+    f->id = id;
+    f->len = (uint8_t)len;
+    f->flags = flags;
+}
+
+/* ---- ids ----------------------------------------------------------------------- */
+
+void canproto_ids_default(canproto_ids_t *ids, unsigned n)
+{
+    memset(ids, 0, sizeof *ids);
+    ids->waypoint_id = CANPROTO_ID_WAYPOINT_BASE + n;
+    ids->waypoint_fd_id = CANPROTO_ID_WAYPOINT_FD_BASE + n;
+    ids->setpoint_id = CANPROTO_ID_SETPOINT_BASE + n;
+    ids->setpoint_fd_id = CANPROTO_ID_SETPOINT_FD_BASE + n;
+    ids->status_id = CANPROTO_ID_STATUS_BASE + n;
+    ids->own = 1;
+    for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+        ids->cia402_cob_id[a] = CANPROTO_CIA402_RPDO1_BASE + 1 + CANPROTO_CIA402_AXES * n + a;
+    ids->cia402_counts_per_m = 10000.0; /* 0.1 mm per increment */
+    ids->cia402_controlword_value = 0x000F;
+}
+
+unsigned canproto_ids_in_use(const canproto_ids_t *ids, uint32_t out[CANPROTO_IDS_MAX])
+{
+    unsigned n = 0;
+    out[n++] = ids->waypoint_id;
+    if (ids->fd)
+        out[n++] = ids->waypoint_fd_id;
+    if (ids->own)
+        out[n++] = ids->fd ? ids->setpoint_fd_id : ids->setpoint_id;
+    out[n++] = ids->status_id;
+    if (ids->cia402)
+        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+            if (ids->cia402_cob_id[a])
+                out[n++] = ids->cia402_cob_id[a];
+    return n;
+}
+
+int canproto_ids_check(const canproto_ids_t *ids, const char **why)
+{
+    uint32_t use[CANPROTO_IDS_MAX];
+    unsigned n = canproto_ids_in_use(ids, use);
+    const char *w = NULL;
+
+    for (unsigned i = 0; i < n && !w; i++) {
+        if (use[i] > CANPROTO_SFF_MASK)
+            w = "CAN ids must be 11-bit (0..0x7FF)";
+        for (unsigned j = 0; j < i && !w; j++)
+            if (use[i] == use[j])
+                w = "an object uses the same CAN id twice";
+    }
+    if (!w && ids->cia402) {
+        /* > 0 and finite; also excludes NaN, for which both comparisons fail */
+        if (!(ids->cia402_counts_per_m > 0 && ids->cia402_counts_per_m < 1e12))
+            w = "cia402 counts per metre must be > 0 and finite";
+        unsigned any = 0;
+        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+            any |= ids->cia402_cob_id[a] != 0;
+        if (!w && !any)
+            w = "cia402 enabled but no axis has a COB-id";
+    }
+    if (!w && !ids->own && !ids->cia402)
+        w = "an object must send its own setpoints, CiA 402 RPDOs, or both";
+    if (why)
+        *why = w;
+    return w ? -CANPROTO_ECONFIG : 0;
+}
+
+unsigned canproto_ids_rx(const canproto_ids_t *ids, uint32_t *out, unsigned max)
+{
+    unsigned n = 0;
+    if (n < max)
+        out[n] = ids->waypoint_id;
+    n++;
+    if (ids->fd) {
+        if (n < max)
+            out[n] = ids->waypoint_fd_id;
+        n++;
+    }
+    return n;
+}
+
+/* ---- encoders --------------------------------------------------------------------- */
+
+/* t and position raw values; returns 0, CANPROTO_CLAMPED or -CANPROTO_EVALUE. */
+static int waypoint_raw(const engine_waypoint_t *wp, uint64_t *t_us, int64_t pos_um[ENGINE_AXES])
+{
+    int clamped = 0;
+    if (!isfinite(wp->t_s))
+        return -CANPROTO_EVALUE;
+    for (unsigned a = 0; a < ENGINE_AXES; a++)
+        if (!isfinite(wp->pos_m[a]))
+            return -CANPROTO_EVALUE;
+    *t_us = (uint64_t)quantize(wp->t_s, CANPROTO_WP_T_S_PER_BIT, 0, CANPROTO_U48_MAX, &clamped);
+    for (unsigned a = 0; a < ENGINE_AXES; a++)
+        /* I48_MIN is the "not available" marker: never produce it */
+        pos_um[a] = quantize(wp->pos_m[a], CANPROTO_WP_POS_M_PER_BIT, CANPROTO_I48_MIN + 1,
+                             CANPROTO_I48_MAX, &clamped);
+    return clamped ? CANPROTO_CLAMPED : 0;
+}
+
+int canproto_encode_waypoint(uint32_t id, const engine_waypoint_t *wp,
+                             canproto_frame_t out[CANPROTO_WP_PARTS])
+{
+    uint64_t t_us;
+    int64_t pos[ENGINE_AXES];
+    int rc = waypoint_raw(wp, &t_us, pos);
+    if (rc < 0)
+        return rc;
+    for (unsigned k = 0; k < CANPROTO_WP_PARTS; k++) {
+        frame_init(&out[k], id, CANPROTO_WP_DLEN, 0);
+        out[k].data[0] = (uint8_t)k; /* CANPROTO_MUX_TIME + k */
+        out[k].data[1] = (uint8_t)wp->seq;
+        put_le(&out[k].data[2], 6, k == 0 ? t_us : (uint64_t)pos[k - 1]);
+    }
+    return rc;
+}
+
+int canproto_encode_waypoint_fd(uint32_t id, const engine_waypoint_t *wp, canproto_frame_t *out)
+{
+    uint64_t t_us;
+    int64_t pos[ENGINE_AXES];
+    int rc = waypoint_raw(wp, &t_us, pos);
+    if (rc < 0)
+        return rc;
+    frame_init(out, id, CANPROTO_WP_FD_DLEN, CANPROTO_F_FD);
+    out->data[0] = CANPROTO_MUX_FD_WAYPOINT;
+    out->data[1] = (uint8_t)wp->seq;
+    put_le(&out->data[2], 6, t_us);
+    for (unsigned a = 0; a < ENGINE_AXES; a++)
+        put_le(&out->data[8 + 6 * a], 6, (uint64_t)pos[a]);
+    return rc;
+}
+
+int canproto_encode_command(uint32_t id, canproto_cmd_t cmd, canproto_frame_t *out)
+{
+    if (cmd < CANPROTO_CMD_FINISH || cmd >= CANPROTO_CMD_COUNT)
+        return -CANPROTO_EVALUE;
+    frame_init(out, id, CANPROTO_WP_DLEN, 0);
+    out->data[0] = CANPROTO_MUX_COMMAND;
+    out->data[2] = (uint8_t)cmd;
+    return 0;
+}
+
+static uint8_t sp_state(const engine_setpoint_t *sp)
+{
+    return (uint8_t)((unsigned)sp->state & 0x7u);
+}
+
+int canproto_encode_setpoint(uint32_t id, const engine_setpoint_t *sp,
+                             canproto_frame_t out[ENGINE_AXES])
+{
+    int clamped = 0;
+    for (unsigned a = 0; a < ENGINE_AXES; a++) {
+        canproto_frame_t *f = &out[a];
+        frame_init(f, id, CANPROTO_SP_DLEN, 0);
+        f->data[0] = (uint8_t)(a | (unsigned)sp_state(sp) << CANPROTO_SP_STATE_SHIFT |
+                               ((sp->flags & ENGINE_SP_HOLD) ? CANPROTO_SP_HOLD : 0));
+        f->data[1] = (uint8_t)sp->cycle;
+        put_le(&f->data[2], 4, (uint64_t)quantize(sp->pos_m[a], CANPROTO_SP_POS_M_PER_BIT,
+                                                  INT32_MIN, INT32_MAX, &clamped));
+        put_le(&f->data[6], 2, (uint64_t)quantize(sp->vel_m_s[a], CANPROTO_SP_VEL_M_S_PER_BIT,
+                                                  INT16_MIN, INT16_MAX, &clamped));
+    }
+    return clamped ? CANPROTO_CLAMPED : 0;
+}
+
+int canproto_encode_setpoint_fd(uint32_t id, int brs, const engine_setpoint_t *sp,
+                                canproto_frame_t *out)
+{
+    int clamped = 0;
+    frame_init(out, id, CANPROTO_SP_FD_DLEN, CANPROTO_F_FD | (brs ? CANPROTO_F_BRS : 0));
+    put_le(&out->data[0], 4, sp->cycle);
+    for (unsigned a = 0; a < ENGINE_AXES; a++) {
+        put_le(&out->data[4 + 4 * a], 4,
+               (uint64_t)quantize(sp->pos_m[a], CANPROTO_SP_POS_M_PER_BIT, INT32_MIN,
+                                  INT32_MAX, &clamped));
+        put_le(&out->data[16 + 4 * a], 4,
+               (uint64_t)quantize(sp->vel_m_s[a], CANPROTO_SPFD_VEL_M_S_PER_BIT, INT32_MIN,
+                                  INT32_MAX, &clamped));
+    }
+    out->data[28] = sp_state(sp);
+    out->data[29] = (uint8_t)sp->flags;
+    put_le(&out->data[30], 2, sp->track);
+    return clamped ? CANPROTO_CLAMPED : 0;
+}
+
+void canproto_encode_sync(uint32_t id, uint8_t counter, canproto_frame_t *out)
+{
+    frame_init(out, id, counter ? 1 : 0, 0);
+    out->data[0] = counter;
+}
+
+int canproto_encode_cia402(const canproto_ids_t *ids, unsigned axis, double pos_m,
+                           canproto_frame_t *out)
+{
+    int clamped = 0;
+    if (axis >= CANPROTO_CIA402_AXES || !ids->cia402_cob_id[axis])
+        return -CANPROTO_ECONFIG;
+    int64_t inc = quantize(pos_m * ids->cia402_counts_per_m, 1.0, INT32_MIN, INT32_MAX, &clamped);
+    if (ids->cia402_controlword) {
+        frame_init(out, ids->cia402_cob_id[axis], 6, 0);
+        put_le(&out->data[0], 2, ids->cia402_controlword_value);
+        put_le(&out->data[2], 4, (uint64_t)inc);
+    } else {
+        frame_init(out, ids->cia402_cob_id[axis], 4, 0);
+        put_le(&out->data[0], 4, (uint64_t)inc);
+    }
+    return clamped ? CANPROTO_CLAMPED : 0;
+}
+
+static uint8_t sat8(uint32_t v)
+{
+    return v > 255 ? 255 : (uint8_t)v;
+}
+
+void canproto_encode_status(uint32_t id, const canproto_status_t *st, canproto_frame_t *out)
+{
+    frame_init(out, id, CANPROTO_STATUS_DLEN, 0);
+    out->data[0] = (uint8_t)((st->state & CANPROTO_ST_STATE_MASK) |
+                             (st->flags & (CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP)));
+    out->data[1] = (uint8_t)st->last_seq;
+    out->data[2] = sat8(st->free);
+    out->data[3] = (uint8_t)st->lost;
+    out->data[4] = (uint8_t)st->rejected;
+    out->data[5] = (uint8_t)st->malformed;
+    out->data[6] = (uint8_t)st->dropped;
+    out->data[7] = st->last_err;
+}
+
+/* ---- decoders ------------------------------------------------------------------------ */
+
+int canproto_decode_setpoint(const canproto_frame_t *f, canproto_setpoint_t *out)
+{
+    memset(out, 0, sizeof *out);
+    if (f->flags & (CANPROTO_F_RTR | CANPROTO_F_ERR | CANPROTO_F_EFF))
+        return -CANPROTO_ELEN;
+    if (f->flags & CANPROTO_F_FD) {
+        if (f->len != CANPROTO_SP_FD_DLEN)
+            return -CANPROTO_ELEN;
+        out->cycle = (uint32_t)get_le(&f->data[0], 4);
+        for (unsigned a = 0; a < ENGINE_AXES; a++) {
+            out->pos_m[a] = (double)sext(get_le(&f->data[4 + 4 * a], 4), 32) *
+                            CANPROTO_SP_POS_M_PER_BIT;
+            out->vel_m_s[a] = (double)sext(get_le(&f->data[16 + 4 * a], 4), 32) *
+                              CANPROTO_SPFD_VEL_M_S_PER_BIT;
+        }
+        out->state = f->data[28];
+        out->flags = f->data[29];
+        out->track = (uint16_t)get_le(&f->data[30], 2);
+        return out->state > ENGINE_STATE_FINISHED ? -CANPROTO_EVALUE : 0;
+    }
+    if (f->len != CANPROTO_SP_DLEN)
+        return -CANPROTO_ELEN;
+    unsigned axis = f->data[0] & CANPROTO_SP_AXIS_MASK;
+    if (axis >= ENGINE_AXES || (f->data[0] & 0x0Cu))
+        return -CANPROTO_EVALUE;
+    out->axis = axis;
+    out->state = (uint8_t)((f->data[0] & CANPROTO_SP_STATE_MASK) >> CANPROTO_SP_STATE_SHIFT);
+    out->flags = (f->data[0] & CANPROTO_SP_HOLD) ? ENGINE_SP_HOLD : 0;
+    out->cycle = f->data[1];
+    out->pos_m[axis] = (double)sext(get_le(&f->data[2], 4), 32) * CANPROTO_SP_POS_M_PER_BIT;
+    out->vel_m_s[axis] = (double)sext(get_le(&f->data[6], 2), 16) * CANPROTO_SP_VEL_M_S_PER_BIT;
+    return out->state > ENGINE_STATE_FINISHED ? -CANPROTO_EVALUE : 0;
+}
+
+int canproto_decode_status(const canproto_frame_t *f, canproto_status_t *out)
+{
+    memset(out, 0, sizeof *out);
+    if (f->len != CANPROTO_STATUS_DLEN || (f->flags & (CANPROTO_F_RTR | CANPROTO_F_ERR | CANPROTO_F_EFF)))
+        return -CANPROTO_ELEN;
+    out->state = f->data[0] & CANPROTO_ST_STATE_MASK;
+    out->flags = f->data[0] & (CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP);
+    out->last_seq = f->data[1];
+    out->free = f->data[2];
+    out->lost = f->data[3];
+    out->rejected = f->data[4];
+    out->malformed = f->data[5];
+    out->dropped = f->data[6];
+    out->last_err = f->data[7];
+    return 0;
+}
+
+/* ---- reassembly ------------------------------------------------------------------------- */
+
+void canproto_rx_init(canproto_rx_t *rx, canproto_slot_t *slots, unsigned nslots)
+{
+    memset(rx, 0, sizeof *rx);
+    rx->slots = slots;
+    rx->nslots = nslots;
+    canproto_rx_restart(rx);
+}
+
+void canproto_rx_restart(canproto_rx_t *rx)
+{
+    for (unsigned i = 0; i < rx->nslots; i++)
+        memset(&rx->slots[i], 0, sizeof rx->slots[i]);
+    rx->have_last = 0;
+    rx->last_seq = 0;
+}
+
+static int malformed(canproto_rx_t *rx, int err)
+{
+    rx->st.malformed++;
+    rx->st.malformed_by[err]++;
+    return -err;
+}
+
+/* Signed distance of seq8 ahead of the last consumed waypoint (-128..127). */
+static int seq_ahead(const canproto_rx_t *rx, uint8_t seq8)
+{
+    return (int)(int8_t)(uint8_t)(seq8 - (uint8_t)rx->last_seq);
+}
+
+/*
+ * Duplicate or stale (only with a sequence history)?  Counts and returns 1
+ * if the frame is to be ignored.
+ */
+static int seq_old(canproto_rx_t *rx, uint8_t seq8)
+{
+    if (!rx->have_last)
+        return 0;
+    int d = seq_ahead(rx, seq8);
+    if (d == 0) {
+        rx->st.duplicates++;
+        return 1;
+    }
+    if (d < 0) {
+        rx->st.out_of_order++;
+        return 1;
+    }
+    return 0;
+}
+
+static void fill_out(const canproto_rx_t *rx, uint8_t seq8, uint64_t t_us,
+                     const int64_t pos_um[ENGINE_AXES], canproto_rx_out_t *out)
+{
+    memset(out, 0, sizeof *out);
+    /* Divide by the exact 1e6 rather than multiply by the inexact 1e-6: the
+     * result is then the correctly rounded value of the decimal number, the
+     * same double strtod gives for a track file with 6 decimals, so CAN input
+     * and a replayed file drive the engine bit-identically. */
+    out->wp.t_s = (double)t_us / CANPROTO_WP_BITS_PER_S;
+    for (unsigned a = 0; a < ENGINE_AXES; a++)
+        out->wp.pos_m[a] = (double)pos_um[a] / CANPROTO_WP_BITS_PER_M;
+    if (rx->have_last) {
+        int d = seq_ahead(rx, seq8); /* > 0: seq_old() ruled the rest out */
+        out->wp.seq = rx->last_seq + (uint32_t)d;
+        out->lost_before = (uint32_t)(d - 1);
+    } else {
+        out->wp.seq = seq8;
+    }
+}
+
+static canproto_slot_t *slot_for(canproto_rx_t *rx, uint8_t seq8)
+{
+    canproto_slot_t *free_slot = NULL, *oldest = NULL;
+    for (unsigned i = 0; i < rx->nslots; i++) {
+        canproto_slot_t *s = &rx->slots[i];
+        if (s->used && s->seq8 == seq8)
+            return s;
+        if (!s->used && !free_slot)
+            free_slot = s;
+        /* oldest = the one opened first: lowest arrival stamp */
+        if (s->used && (!oldest || s->stamp < oldest->stamp))
+            oldest = s;
+    }
+    canproto_slot_t *s = free_slot;
+    if (!s) {
+        /* every slot holds a partial waypoint: abandon the oldest */
+        rx->st.incomplete++;
+        s = oldest;
+    }
+    memset(s, 0, sizeof *s);
+    s->used = 1;
+    s->seq8 = seq8;
+    s->stamp = ++rx->stamp;
+    return s;
+}
+
+int canproto_rx_frame(canproto_rx_t *rx, const canproto_frame_t *f, int is_fd_id,
+                      canproto_rx_out_t *out)
+{
+    rx->st.frames++;
+    if (f->flags & (CANPROTO_F_RTR | CANPROTO_F_ERR | CANPROTO_F_EFF))
+        return malformed(rx, CANPROTO_ELEN);
+
+    if (is_fd_id) {
+        if (!(f->flags & CANPROTO_F_FD) || f->len != CANPROTO_WP_FD_DLEN)
+            return malformed(rx, CANPROTO_ELEN);
+        if (f->data[0] != CANPROTO_MUX_FD_WAYPOINT)
+            return malformed(rx, CANPROTO_EMUX);
+        for (unsigned i = 26; i < CANPROTO_WP_FD_DLEN; i++)
+            if (f->data[i])
+                return malformed(rx, CANPROTO_EVALUE);
+        int64_t pos[ENGINE_AXES];
+        for (unsigned a = 0; a < ENGINE_AXES; a++) {
+            pos[a] = sext(get_le(&f->data[8 + 6 * a], 6), 48);
+            if (pos[a] == CANPROTO_I48_MIN)
+                return malformed(rx, CANPROTO_EVALUE);
+        }
+        uint8_t seq8 = f->data[1];
+        if (seq_old(rx, seq8))
+            return CANPROTO_RX_NONE;
+        fill_out(rx, seq8, get_le(&f->data[2], 6), pos, out);
+        rx->st.completed++;
+        return CANPROTO_RX_WAYPOINT;
+    }
+
+    if ((f->flags & CANPROTO_F_FD) || f->len != CANPROTO_WP_DLEN)
+        return malformed(rx, CANPROTO_ELEN);
+    unsigned mux = f->data[0];
+    if (mux == CANPROTO_MUX_COMMAND) {
+        unsigned cmd = f->data[2];
+        if (cmd < CANPROTO_CMD_FINISH || cmd >= CANPROTO_CMD_COUNT)
+            return malformed(rx, CANPROTO_EVALUE);
+        for (unsigned i = 3; i < CANPROTO_WP_DLEN; i++)
+            if (f->data[i])
+                return malformed(rx, CANPROTO_EVALUE);
+        memset(out, 0, sizeof *out);
+        out->cmd = (canproto_cmd_t)cmd;
+        rx->st.commands++;
+        return CANPROTO_RX_COMMAND;
+    }
+    if (mux > CANPROTO_MUX_Z)
+        return malformed(rx, CANPROTO_EMUX);
+    uint64_t raw = get_le(&f->data[2], 6);
+    if (mux != CANPROTO_MUX_TIME && sext(raw, 48) == CANPROTO_I48_MIN)
+        return malformed(rx, CANPROTO_EVALUE);
+
+    uint8_t seq8 = f->data[1];
+    if (seq_old(rx, seq8))
+        return CANPROTO_RX_NONE;
+    canproto_slot_t *s = slot_for(rx, seq8);
+    unsigned bit = 1u << mux;
+    if (s->have & bit)
+        rx->st.duplicates++; /* the same part twice: the later one wins */
+    s->have |= (uint8_t)bit;
+    if (mux == CANPROTO_MUX_TIME)
+        s->t_us = raw;
+    else
+        s->pos_um[mux - 1] = sext(raw, 48);
+    if (s->have != (1u << CANPROTO_WP_PARTS) - 1)
+        return CANPROTO_RX_NONE;
+    fill_out(rx, seq8, s->t_us, s->pos_um, out);
+    memset(s, 0, sizeof *s);
+    rx->st.completed++;
+    return CANPROTO_RX_WAYPOINT;
+}
+
+void canproto_rx_consume(canproto_rx_t *rx, const canproto_rx_out_t *out)
+{
+    rx->st.lost += out->lost_before;
+    rx->last_seq = out->wp.seq;
+    rx->have_last = 1;
+    /* partial waypoints at or behind the consumed one can never be used now */
+    for (unsigned i = 0; i < rx->nslots; i++) {
+        canproto_slot_t *s = &rx->slots[i];
+        if (s->used && seq_ahead(rx, s->seq8) <= 0) {
+            rx->st.incomplete++;
+            memset(s, 0, sizeof *s);
+        }
+    }
+}
+
+/* ---- bus load ----------------------------------------------------------------------------- */
+
+double canproto_frame_time_s(unsigned len, int fd, int brs, int eff, double bitrate,
+                             double data_bitrate)
+{
+    if (!(bitrate > 0) || (fd && brs && !(data_bitrate > 0)))
+        return -1;
+    if (fd ? !canproto_fd_len_valid(len) : len > 8)
+        return -1;
+    if (!fd) {
+        unsigned g = eff ? 54 : 34; /* bits exposed to stuffing before the data */
+        unsigned bits = 8 * len + g + 13 + (g + 8 * len - 1) / 4;
+        return bits / bitrate;
+    }
+    /* Arbitration phase: SOF, id, RRS/SRR, IDE, (id ext, RRS), FDF, res, BRS. */
+    unsigned arb = eff ? 36 : 17;
+    unsigned arb_stuff = (arb - 1) / 4;
+    /* Data phase: ESI, DLC, data with dynamic stuffing; stuff count and CRC
+     * with fixed stuff bits (one before the stuff count, one every 4 bits). */
+    unsigned dyn = 5 + 8 * len;
+    unsigned crc = len <= 16 ? 17 : 21;
+    unsigned fsb = len <= 16 ? 6 : 7;
+    unsigned data_bits = dyn + dyn / 4 + 4 + crc + fsb;
+    unsigned tail = 13; /* CRC delimiter, ACK, ACK delimiter, EOF 7, IFS 3 */
+    double data_rate = (brs && data_bitrate > 0) ? data_bitrate : bitrate;
+    return (arb + arb_stuff + tail) / bitrate + data_bits / data_rate;
+}
+
+double canproto_frame_bits(unsigned len, int fd, int brs, int eff, double bitrate,
+                           double data_bitrate)
+{
+    double t = canproto_frame_time_s(len, fd, brs, eff, bitrate, data_bitrate);
+    return t < 0 ? t : t * bitrate;
+}
+
+double canproto_busload(const canproto_ids_t *ids, unsigned nobj, int sync, unsigned sync_dlen,
+                        const canproto_traffic_t *tr, double bitrate, double data_bitrate)
+{
+    double busy_s = 0, t;
+    if (!(bitrate > 0) || !(tr->rate_hz >= 0) || !(tr->status_hz >= 0) ||
+        !(tr->waypoint_hz >= 0) || sync_dlen > 1)
+        return -1;
+    if (sync) {
+        if ((t = canproto_frame_time_s(sync_dlen, 0, 0, 0, bitrate, 0)) < 0)
+            return -1;
+        busy_s += tr->rate_hz * t;
+    }
+    for (unsigned i = 0; i < nobj; i++) {
+        const canproto_ids_t *o = &ids[i];
+        int brs = o->fd && o->brs;
+        if (o->own) {
+            t = o->fd ? canproto_frame_time_s(CANPROTO_SP_FD_DLEN, 1, brs, 0, bitrate, data_bitrate)
+                      : ENGINE_AXES * canproto_frame_time_s(CANPROTO_SP_DLEN, 0, 0, 0, bitrate, 0);
+            if (t < 0)
+                return -1;
+            busy_s += tr->rate_hz * t;
+        }
+        if (o->cia402)
+            for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+                if (o->cia402_cob_id[a])
+                    busy_s += tr->rate_hz *
+                              canproto_frame_time_s(o->cia402_controlword ? 6 : 4, 0, 0, 0,
+                                                    bitrate, 0);
+        busy_s += tr->status_hz * canproto_frame_time_s(CANPROTO_STATUS_DLEN, 0, 0, 0, bitrate, 0);
+        t = o->fd ? canproto_frame_time_s(CANPROTO_WP_FD_DLEN, 1, brs, 0, bitrate, data_bitrate)
+                  : CANPROTO_WP_PARTS * canproto_frame_time_s(CANPROTO_WP_DLEN, 0, 0, 0, bitrate, 0);
+        if (t < 0)
+            return -1;
+        busy_s += tr->waypoint_hz * t;
+    }
+    return busy_s;
+}
+
+/* ---- description tables ------------------------------------------------------------------ */
+
+/* Range of a raw field in physical units. */
+#define U_MAX(bits) ((double)((1ull << (bits)) - 1))
+#define S_MIN(bits) (-(double)(1ull << ((bits) - 1)))
+#define S_MAX(bits) ((double)((1ull << ((bits) - 1)) - 1))
+#define SIG_U(name, mux, start, bits, factor, unit) \
+    { name, mux, start, bits, 0, factor, 0, 0, U_MAX(bits) * (factor), unit }
+#define SIG_S(name, mux, start, bits, factor, unit) \
+    { name, mux, start, bits, 1, factor, 0, S_MIN(bits) * (factor), S_MAX(bits) * (factor), unit }
+
+static const canproto_signal_t sig_wp[] = {
+    SIG_U("WP_Mux", -2, 0, 8, 1, ""),
+    SIG_U("WP_Seq", -1, 8, 8, 1, ""),
+    SIG_U("WP_Time", CANPROTO_MUX_TIME, 16, 48, CANPROTO_WP_T_S_PER_BIT, "s"),
+    SIG_S("WP_X", CANPROTO_MUX_X, 16, 48, CANPROTO_WP_POS_M_PER_BIT, "m"),
+    SIG_S("WP_Y", CANPROTO_MUX_Y, 16, 48, CANPROTO_WP_POS_M_PER_BIT, "m"),
+    SIG_S("WP_Z", CANPROTO_MUX_Z, 16, 48, CANPROTO_WP_POS_M_PER_BIT, "m"),
+    SIG_U("WP_Command", CANPROTO_MUX_COMMAND, 16, 8, 1, ""),
+};
+static const canproto_signal_t sig_wpfd[] = {
+    SIG_U("WPFD_Mux", -1, 0, 8, 1, ""),
+    SIG_U("WPFD_Seq", -1, 8, 8, 1, ""),
+    SIG_U("WPFD_Time", -1, 16, 48, CANPROTO_WP_T_S_PER_BIT, "s"),
+    SIG_S("WPFD_X", -1, 64, 48, CANPROTO_WP_POS_M_PER_BIT, "m"),
+    SIG_S("WPFD_Y", -1, 112, 48, CANPROTO_WP_POS_M_PER_BIT, "m"),
+    SIG_S("WPFD_Z", -1, 160, 48, CANPROTO_WP_POS_M_PER_BIT, "m"),
+};
+static const canproto_signal_t sig_sp[] = {
+    SIG_U("SP_Axis", -2, 0, 2, 1, ""),
+    SIG_U("SP_State", -1, 4, 3, 1, ""),
+    SIG_U("SP_Hold", -1, 7, 1, 1, ""),
+    SIG_U("SP_Cycle", -1, 8, 8, 1, ""),
+    SIG_S("SP_X_Pos", 0, 16, 32, CANPROTO_SP_POS_M_PER_BIT, "m"),
+    SIG_S("SP_X_Vel", 0, 48, 16, CANPROTO_SP_VEL_M_S_PER_BIT, "m/s"),
+    SIG_S("SP_Y_Pos", 1, 16, 32, CANPROTO_SP_POS_M_PER_BIT, "m"),
+    SIG_S("SP_Y_Vel", 1, 48, 16, CANPROTO_SP_VEL_M_S_PER_BIT, "m/s"),
+    SIG_S("SP_Z_Pos", 2, 16, 32, CANPROTO_SP_POS_M_PER_BIT, "m"),
+    SIG_S("SP_Z_Vel", 2, 48, 16, CANPROTO_SP_VEL_M_S_PER_BIT, "m/s"),
+};
+static const canproto_signal_t sig_spfd[] = {
+    SIG_U("SPFD_Cycle", -1, 0, 32, 1, ""),
+    SIG_S("SPFD_X", -1, 32, 32, CANPROTO_SP_POS_M_PER_BIT, "m"),
+    SIG_S("SPFD_Y", -1, 64, 32, CANPROTO_SP_POS_M_PER_BIT, "m"),
+    SIG_S("SPFD_Z", -1, 96, 32, CANPROTO_SP_POS_M_PER_BIT, "m"),
+    SIG_S("SPFD_VX", -1, 128, 32, CANPROTO_SPFD_VEL_M_S_PER_BIT, "m/s"),
+    SIG_S("SPFD_VY", -1, 160, 32, CANPROTO_SPFD_VEL_M_S_PER_BIT, "m/s"),
+    SIG_S("SPFD_VZ", -1, 192, 32, CANPROTO_SPFD_VEL_M_S_PER_BIT, "m/s"),
+    SIG_U("SPFD_State", -1, 224, 8, 1, ""),
+    SIG_U("SPFD_Flags", -1, 232, 8, 1, ""),
+    SIG_U("SPFD_Track", -1, 240, 16, 1, ""),
+};
+static const canproto_signal_t sig_st[] = {
+    SIG_U("ST_State", -1, 0, 3, 1, ""),
+    SIG_U("ST_BusDown", -1, 4, 1, 1, ""),
+    SIG_U("ST_TxDrop", -1, 5, 1, 1, ""),
+    SIG_U("ST_LastSeq", -1, 8, 8, 1, ""),
+    SIG_U("ST_Free", -1, 16, 8, 1, ""),
+    SIG_U("ST_Lost", -1, 24, 8, 1, ""),
+    SIG_U("ST_Rejected", -1, 32, 8, 1, ""),
+    SIG_U("ST_Malformed", -1, 40, 8, 1, ""),
+    SIG_U("ST_Dropped", -1, 48, 8, 1, ""),
+    SIG_U("ST_LastErr", -1, 56, 8, 1, ""),
+};
+static const canproto_signal_t sig_rpdo[] = {
+    SIG_S("Target_Position_607A", -1, 0, 32, 1, "inc"),
+};
+
+static const canproto_message_t canproto_msgs[] = {
+    { "TRAJD_WAYPOINT", CANPROTO_ID_WAYPOINT_BASE, CANPROTO_WP_DLEN, 0, "SENDER", sig_wp,
+      sizeof sig_wp / sizeof sig_wp[0] },
+    { "TRAJD_WAYPOINT_FD", CANPROTO_ID_WAYPOINT_FD_BASE, CANPROTO_WP_FD_DLEN, 1, "SENDER",
+      sig_wpfd, sizeof sig_wpfd / sizeof sig_wpfd[0] },
+    { "TRAJD_SETPOINT", CANPROTO_ID_SETPOINT_BASE, CANPROTO_SP_DLEN, 0, "TRAJD", sig_sp,
+      sizeof sig_sp / sizeof sig_sp[0] },
+    { "TRAJD_SETPOINT_FD", CANPROTO_ID_SETPOINT_FD_BASE, CANPROTO_SP_FD_DLEN, 1, "TRAJD",
+      sig_spfd, sizeof sig_spfd / sizeof sig_spfd[0] },
+    { "TRAJD_STATUS", CANPROTO_ID_STATUS_BASE, CANPROTO_STATUS_DLEN, 0, "TRAJD", sig_st,
+      sizeof sig_st / sizeof sig_st[0] },
+    { "SYNC", CANPROTO_ID_SYNC_DEFAULT, 0, 0, "TRAJD", NULL, 0 },
+    { "RPDO1_NODE1", CANPROTO_CIA402_RPDO1_BASE + 1, 4, 0, "TRAJD", sig_rpdo, 1 },
+    { "RPDO1_NODE2", CANPROTO_CIA402_RPDO1_BASE + 2, 4, 0, "TRAJD", sig_rpdo, 1 },
+    { "RPDO1_NODE3", CANPROTO_CIA402_RPDO1_BASE + 3, 4, 0, "TRAJD", sig_rpdo, 1 },
+};
+
+const canproto_message_t *canproto_messages(unsigned *count)
+{
+    *count = sizeof canproto_msgs / sizeof canproto_msgs[0];
+    return canproto_msgs;
+}
+
+/* snprintf into buf at *pos, tracking the length needed even when it does not fit. */
+#if defined(__GNUC__)
+__attribute__((format(printf, 4, 5)))
+#endif
+static void emit(char *buf, size_t len, size_t *pos, const char *fmt, ...);
+
+static void emit(char *buf, size_t len, size_t *pos, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(*pos < len ? buf + *pos : NULL, *pos < len ? len - *pos : 0, fmt, ap);
+    va_end(ap);
+    if (n > 0)
+        *pos += (size_t)n;
+}
+
+int canproto_dbc(char *buf, size_t len)
+{
+    size_t pos = 0;
+    unsigned n;
+    const canproto_message_t *m = canproto_messages(&n);
+
+    if (len)
+        buf[0] = '\0';
+    emit(buf, len, &pos,
+         "VERSION \"trajd\"\n\n"
+         "NS_ :\n\tCM_\n\tBA_DEF_\n\tBA_\n\tBA_DEF_DEF_\n\tVAL_\n\n"
+         "BS_:\n\n"
+         "BU_: TRAJD SENDER\n\n");
+    for (unsigned i = 0; i < n; i++) {
+        emit(buf, len, &pos, "BO_ %u %s: %u %s\n", (unsigned)m[i].id, m[i].name, m[i].dlen,
+             m[i].sender);
+        for (unsigned k = 0; k < m[i].nsignals; k++) {
+            const canproto_signal_t *s = &m[i].signals[k];
+            char mux[16] = "";
+            if (s->mux == -2)
+                snprintf(mux, sizeof mux, " M");
+            else if (s->mux >= 0)
+                snprintf(mux, sizeof mux, " m%d", s->mux);
+            emit(buf, len, &pos, " SG_ %s%s : %u|%u@1%c (%.15g,%.15g) [%.15g|%.15g] \"%s\" %s\n",
+                 s->name, mux, s->start_bit, s->bits, s->is_signed ? '-' : '+', s->factor,
+                 s->offset, s->min, s->max, s->unit,
+                 strcmp(m[i].sender, "TRAJD") ? "TRAJD" : "SENDER");
+        }
+        emit(buf, len, &pos, "\n");
+    }
+    emit(buf, len, &pos,
+         "CM_ \"trajd CAN protocol, generated from lib/proto/canproto.h by canproto_dbc(); ids are "
+         "the defaults of object 0 (object n: + n), RPDOs for CiA 402 nodes 1..3.\";\n"
+         "CM_ SG_ %u WP_Command \"1 finish, 2 stop, 3 clear, 4 reset counters\";\n"
+         "CM_ SG_ %u ST_LastErr \"1..11 engine_error of the last rejected waypoint, 0x40 "
+         "malformed, 0x41 lost, 0x42 out of order, 0x43 setpoints dropped, 0x44 bus down\";\n",
+         CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_STATUS_BASE);
+    emit(buf, len, &pos,
+         "BA_DEF_ BO_ \"VFrameFormat\" ENUM \"StandardCAN\",\"ExtendedCAN\",\"reserved\","
+         "\"J1939PG\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\","
+         "\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"StandardCAN_FD\","
+         "\"ExtendedCAN_FD\";\n"
+         "BA_DEF_DEF_ \"VFrameFormat\" \"StandardCAN\";\n");
+    for (unsigned i = 0; i < n; i++)
+        if (m[i].fd)
+            emit(buf, len, &pos, "BA_ \"VFrameFormat\" BO_ %u 14;\n", (unsigned)m[i].id);
+    emit(buf, len, &pos,
+         "VAL_ %u SP_State 0 \"waiting\" 1 \"streaming\" 2 \"underrun\" 3 \"finished\" ;\n"
+         "VAL_ %u ST_State 0 \"waiting\" 1 \"streaming\" 2 \"underrun\" 3 \"finished\" ;\n",
+         CANPROTO_ID_SETPOINT_BASE, CANPROTO_ID_STATUS_BASE);
+    return pos > (size_t)INT32_MAX ? -1 : (int)pos;
+}

@@ -1,0 +1,443 @@
+/*
+ * canproto.h - trajd's CAN frames: every id, layout and scaling in one place,
+ * encode/decode, waypoint reassembly, and bus-load arithmetic.
+ *
+ * Pure: no sockets, no clock, no allocation (reassembly slots are the
+ * caller's).  The daemon's SocketCAN and candump-log transports move
+ * canproto_frame_t; config/trajd.dbc is generated from the tables below by
+ * `trajdbc` and a test checks that the checked-in file is that output.
+ *
+ * All multi-byte fields are little-endian (Intel byte order in the DBC).
+ *
+ * Frames per object (ids are per object and configurable; defaults for object
+ * n, 0 <= n < 16, sit in 0x680..0x6CF, a range the CANopen predefined
+ * connection set leaves unused, so trajd can share a bus with CiA 402 drives):
+ *
+ *  WAYPOINT (in, classic, DLC 8, default 0x680+n), multiplexed by byte 0:
+ *    byte 0       mux: 0 TIME, 1 X, 2 Y, 3 Z, 4 COMMAND
+ *    byte 1       seq: waypoint sequence number, low 8 bits
+ *    bytes 2..7   TIME: t, uint48, 1 us per bit (sender's track clock)
+ *                 X/Y/Z: position, int48, 1 um per bit
+ *                 COMMAND: byte 2 = canproto_cmd_t, bytes 3..7 zero
+ *    A waypoint is the four frames TIME, X, Y, Z with the same seq, in any
+ *    order; it is complete when the fourth arrives.
+ *  WAYPOINT_FD (in, CAN FD, length 32, default 0x690+n): one whole waypoint
+ *    byte 0 mux 5, byte 1 seq, 2..7 t (uint48 us), 8..13 x, 14..19 y,
+ *    20..25 z (int48 um), 26..31 zero.
+ *  SETPOINT (out, classic, DLC 8, default 0x6A0+n), 3 frames per cycle:
+ *    byte 0       bits 0..1 axis (0 x, 1 y, 2 z), bits 4..6 engine state,
+ *                 bit 7 HOLD
+ *    byte 1       cycle counter, low 8 bits
+ *    bytes 2..5   position, int32, 0.1 mm per bit (+-214 km)
+ *    bytes 6..7   velocity, int16, 1 mm/s per bit (+-32.767 m/s)
+ *  SETPOINT_FD (out, CAN FD, length 32, default 0x6B0+n), 1 frame per cycle:
+ *    0..3 cycle uint32; 4..7 x, 8..11 y, 12..15 z (int32, 0.1 mm);
+ *    16..19 vx, 20..23 vy, 24..27 vz (int32, 1 um/s); 28 state; 29 flags
+ *    (ENGINE_SP_*); 30..31 track number, uint16.
+ *  STATUS (out, classic, DLC 8, default 0x6C0+n), every status period and
+ *    at once after a rejection or a loss:
+ *    0 state (bits 0..2 engine state, bit 4 bus DOWN seen since last status,
+ *      bit 5 TX dropped since last status), 1 last accepted seq (low 8 bits),
+ *    2 free waypoint slots (saturated at 255), 3 lost waypoints (sequence
+ *    gaps), 4 rejected waypoints, 5 malformed frames, 6 dropped setpoints
+ *    (late or TX queue full), 7 last error code (canproto_status_err_t).
+ *    Counters 3..6 are modulo 256: a sender watches them change.
+ *  SYNC (out, default 0x080, DLC 0, or DLC 1 with a counter 1..overflow as
+ *    CiA 301 allows), once per cycle before the setpoints, optional.
+ *  CiA 402 RPDO (out, one per axis, COB-ids configured, e.g. 0x200+node):
+ *    target position 0x607A:00 int32 in drive increments (counts per metre
+ *    configured), optionally preceded by controlword 0x6040:00 uint16.
+ *
+ * Values that do not fit a field are clamped to its range and counted
+ * (canproto_encode_* return CANPROTO_CLAMPED).
+ */
+#ifndef TRAJD_CANPROTO_H
+#define TRAJD_CANPROTO_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include "motion.h"
+
+/* ---- frames ------------------------------------------------------------ */
+
+#define CANPROTO_MAX_DLEN 64     /* CAN FD payload */
+#define CANPROTO_CLASSIC_DLEN 8
+
+/* canproto_frame_t.flags */
+#define CANPROTO_F_EFF 0x01u     /* 29-bit identifier */
+#define CANPROTO_F_RTR 0x02u     /* remote request (classic only) */
+#define CANPROTO_F_ERR 0x04u     /* error frame (from the kernel) */
+#define CANPROTO_F_FD  0x08u     /* CAN FD frame */
+#define CANPROTO_F_BRS 0x10u     /* FD bit-rate switch */
+#define CANPROTO_F_ESI 0x20u     /* FD error state indicator */
+
+#define CANPROTO_SFF_MASK 0x7FFu
+#define CANPROTO_EFF_MASK 0x1FFFFFFFu
+
+/* One frame, independent of <linux/can.h> (the daemon converts). */
+typedef struct {
+    uint32_t id;                      /* 11 or 29 bits, no flag bits */
+    uint8_t len;                      /* payload bytes, 0..8 or a CAN FD length */
+    uint8_t flags;                    /* CANPROTO_F_* */
+    uint8_t data[CANPROTO_MAX_DLEN];
+} canproto_frame_t;
+
+/* ---- ids and layouts ------------------------------------------------------ */
+
+#define CANPROTO_OBJECTS_DEFAULT_MAX 16
+#define CANPROTO_ID_WAYPOINT_BASE    0x680u
+#define CANPROTO_ID_WAYPOINT_FD_BASE 0x690u
+#define CANPROTO_ID_SETPOINT_BASE    0x6A0u
+#define CANPROTO_ID_SETPOINT_FD_BASE 0x6B0u
+#define CANPROTO_ID_STATUS_BASE      0x6C0u
+#define CANPROTO_ID_SYNC_DEFAULT     0x080u
+#define CANPROTO_CIA402_RPDO1_BASE   0x200u  /* CiA 301 RPDO1 = 0x200 + node-id */
+
+#define CANPROTO_WP_DLEN 8
+#define CANPROTO_WP_FD_DLEN 32
+#define CANPROTO_SP_DLEN 8
+#define CANPROTO_SP_FD_DLEN 32
+#define CANPROTO_STATUS_DLEN 8
+
+/* Waypoint multiplexer values (byte 0). */
+enum canproto_mux {
+    CANPROTO_MUX_TIME = 0,
+    CANPROTO_MUX_X = 1,
+    CANPROTO_MUX_Y = 2,
+    CANPROTO_MUX_Z = 3,
+    CANPROTO_MUX_COMMAND = 4,
+    CANPROTO_MUX_FD_WAYPOINT = 5,
+};
+#define CANPROTO_WP_PARTS 4          /* TIME, X, Y, Z */
+
+/* Commands (WAYPOINT frame, mux COMMAND, byte 2). */
+typedef enum {
+    CANPROTO_CMD_FINISH = 1,         /* end of input: run to the last waypoint (engine_finish) */
+    CANPROTO_CMD_STOP = 2,           /* engine_stop */
+    CANPROTO_CMD_CLEAR = 3,          /* engine_clear; sequence numbering restarts */
+    CANPROTO_CMD_RESET_COUNTERS = 4, /* engine and CAN counters to zero */
+    CANPROTO_CMD_COUNT
+} canproto_cmd_t;
+
+/* Scalings: physical value = raw * scale. */
+#define CANPROTO_WP_T_S_PER_BIT 1e-6      /* uint48 */
+#define CANPROTO_WP_POS_M_PER_BIT 1e-6    /* int48 */
+#define CANPROTO_WP_BITS_PER_S 1e6        /* the same scalings as exact divisors */
+#define CANPROTO_WP_BITS_PER_M 1e6
+#define CANPROTO_SP_POS_M_PER_BIT 1e-4    /* int32 */
+#define CANPROTO_SP_VEL_M_S_PER_BIT 1e-3  /* int16, classic */
+#define CANPROTO_SPFD_VEL_M_S_PER_BIT 1e-6 /* int32, FD */
+
+#define CANPROTO_U48_MAX 0xFFFFFFFFFFFFLL
+#define CANPROTO_I48_MAX 0x7FFFFFFFFFFFLL
+#define CANPROTO_I48_MIN (-CANPROTO_I48_MAX - 1)
+/* Raw int48 position INT48_MIN means "not available" and is refused. */
+
+/* SETPOINT byte 0 */
+#define CANPROTO_SP_AXIS_MASK 0x03u
+#define CANPROTO_SP_STATE_SHIFT 4
+#define CANPROTO_SP_STATE_MASK 0x70u
+#define CANPROTO_SP_HOLD 0x80u
+
+/* STATUS byte 0 */
+#define CANPROTO_ST_STATE_MASK 0x07u
+#define CANPROTO_ST_BUS_DOWN 0x10u
+#define CANPROTO_ST_TX_DROP 0x20u
+
+/* STATUS byte 7: the last thing that went wrong. */
+typedef enum {
+    CANPROTO_STERR_OK = 0,
+    /* 1..ENGINE_ERROR_COUNT-1: engine_error of the last rejected waypoint */
+    CANPROTO_STERR_MALFORMED = 0x40,    /* last malformed frame (see counters) */
+    CANPROTO_STERR_LOST = 0x41,         /* a sequence gap was seen */
+    CANPROTO_STERR_OUT_OF_ORDER = 0x42, /* a waypoint older than the last one arrived */
+    CANPROTO_STERR_TX_DROPPED = 0x43,   /* setpoints dropped (late or queue full) */
+    CANPROTO_STERR_BUS_DOWN = 0x44,     /* the interface went down */
+} canproto_status_err_t;
+
+/* ---- errors ------------------------------------------------------------------ */
+
+enum canproto_error {
+    CANPROTO_OK = 0,
+    CANPROTO_ELEN = 1,      /* wrong length or frame kind (FD/classic/RTR/EFF) for the id */
+    CANPROTO_EMUX = 2,      /* unknown multiplexer value */
+    CANPROTO_EVALUE = 3,    /* a field holds a forbidden value (reserved bits, n/a marker, unknown command) */
+    CANPROTO_EID = 4,       /* not one of our ids */
+    CANPROTO_ECONFIG = 5,   /* invalid id or profile configuration */
+    CANPROTO_ERROR_COUNT
+};
+
+/* Positive, non-error outcome of an encoder: some value was clamped to its field. */
+#define CANPROTO_CLAMPED 1
+
+/* Text for a canproto_error (positive or negated). */
+const char *canproto_strerror(int err);
+
+/* Valid CAN FD payload length? (0..8, 12, 16, 20, 24, 32, 48, 64) */
+int canproto_fd_len_valid(unsigned len);
+
+/* ---- per-object id configuration ------------------------------------------------- */
+
+#define CANPROTO_CIA402_AXES ENGINE_AXES
+
+typedef struct {
+    uint32_t waypoint_id;       /* classic waypoint frames in */
+    uint32_t waypoint_fd_id;    /* FD waypoint frames in (used if fd) */
+    uint32_t setpoint_id;       /* classic setpoints out */
+    uint32_t setpoint_fd_id;    /* FD setpoints out (used if fd) */
+    uint32_t status_id;
+    int fd;                     /* 1: FD setpoints out and FD waypoints in */
+    int brs;                    /* 1: FD frames with bit-rate switch */
+    int own;                    /* 1: send trajd's own setpoint frames */
+    int cia402;                 /* 1: send CiA 402 RPDOs */
+    uint32_t cia402_cob_id[CANPROTO_CIA402_AXES]; /* 0 = axis not sent */
+    double cia402_counts_per_m; /* target position increments per metre (> 0) */
+    int cia402_controlword;     /* 1: RPDO = controlword (2 bytes) + target (4 bytes) */
+    uint16_t cia402_controlword_value; /* default 0x000F: enable operation */
+} canproto_ids_t;
+
+/* Defaults for object n (0-based): the bases above + n, own frames, no FD, no CiA 402. */
+void canproto_ids_default(canproto_ids_t *ids, unsigned n);
+
+/*
+ * Check one object's ids: all 11-bit, pairwise distinct among those in use.
+ * Returns 0 or -CANPROTO_ECONFIG (why, if not NULL, names the rule).
+ */
+int canproto_ids_check(const canproto_ids_t *ids, const char **why);
+
+/* Most ids one object can use: 2 waypoint, 1 setpoint, 1 status, 3 CiA 402. */
+#define CANPROTO_IDS_MAX 16
+
+/*
+ * Every id this object uses (waypoint, setpoint, status, CiA 402 RPDOs), in
+ * a fixed order, for clash checks.  out holds CANPROTO_IDS_MAX; returns the count.
+ */
+unsigned canproto_ids_in_use(const canproto_ids_t *ids, uint32_t out[CANPROTO_IDS_MAX]);
+
+/*
+ * The ids a receiver must let through for this object (waypoint ids in use).
+ * Writes at most max ids into out; returns how many there are.
+ */
+unsigned canproto_ids_rx(const canproto_ids_t *ids, uint32_t *out, unsigned max);
+
+/* ---- encoders (sender side and tests; the daemon uses the setpoint ones) ------------ */
+
+/*
+ * Encode waypoint wp as the four classic frames TIME, X, Y, Z (out[4]) on id,
+ * with seq = wp->seq & 0xFF.  Returns 0, CANPROTO_CLAMPED (t < 0 or a value out
+ * of range was clamped), or -CANPROTO_EVALUE (NaN/inf).
+ */
+int canproto_encode_waypoint(uint32_t id, const engine_waypoint_t *wp,
+                             canproto_frame_t out[CANPROTO_WP_PARTS]);
+
+/* Same, as one CAN FD frame.  Same returns. */
+int canproto_encode_waypoint_fd(uint32_t id, const engine_waypoint_t *wp,
+                                canproto_frame_t *out);
+
+/* A COMMAND frame on the waypoint id.  Returns 0 or -CANPROTO_EVALUE. */
+int canproto_encode_command(uint32_t id, canproto_cmd_t cmd, canproto_frame_t *out);
+
+/*
+ * The three classic SETPOINT frames of sp (out[3]).  NaN is sent as 0 and
+ * counted like a clamp.  Returns 0 or CANPROTO_CLAMPED.
+ */
+int canproto_encode_setpoint(uint32_t id, const engine_setpoint_t *sp,
+                             canproto_frame_t out[ENGINE_AXES]);
+
+/* The one FD SETPOINT frame of sp.  Returns 0 or CANPROTO_CLAMPED. */
+int canproto_encode_setpoint_fd(uint32_t id, int brs, const engine_setpoint_t *sp,
+                                canproto_frame_t *out);
+
+/* SYNC frame: DLC 0 if counter == 0, else DLC 1 with the counter. */
+void canproto_encode_sync(uint32_t id, uint8_t counter, canproto_frame_t *out);
+
+/*
+ * CiA 402 RPDO for one axis: 0x607A target position = round(pos_m *
+ * counts_per_m), clamped to int32.  Returns 0, CANPROTO_CLAMPED, or
+ * -CANPROTO_ECONFIG (axis not configured).
+ */
+int canproto_encode_cia402(const canproto_ids_t *ids, unsigned axis, double pos_m,
+                           canproto_frame_t *out);
+
+/* STATUS frame contents. */
+typedef struct {
+    uint8_t state;          /* engine_state_t */
+    uint8_t flags;          /* CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP */
+    uint32_t last_seq;
+    uint32_t free;
+    uint32_t lost;
+    uint32_t rejected;
+    uint32_t malformed;
+    uint32_t dropped;
+    uint8_t last_err;       /* canproto_status_err_t or engine_error */
+} canproto_status_t;
+
+void canproto_encode_status(uint32_t id, const canproto_status_t *st, canproto_frame_t *out);
+
+/* ---- decoders ------------------------------------------------------------------ */
+
+/* One decoded SETPOINT frame (classic: one axis; FD: all). */
+typedef struct {
+    unsigned axis;          /* classic only */
+    uint32_t cycle;         /* classic: low 8 bits */
+    uint8_t state;
+    uint8_t flags;          /* classic: ENGINE_SP_HOLD only */
+    uint16_t track;         /* FD only */
+    double pos_m[ENGINE_AXES];   /* classic: [axis] only */
+    double vel_m_s[ENGINE_AXES];
+} canproto_setpoint_t;
+
+/* Decode a classic or FD SETPOINT frame.  Returns 0, -CANPROTO_ELEN, -CANPROTO_EVALUE. */
+int canproto_decode_setpoint(const canproto_frame_t *f, canproto_setpoint_t *out);
+
+/* Decode a STATUS frame.  Returns 0 or -CANPROTO_ELEN. */
+int canproto_decode_status(const canproto_frame_t *f, canproto_status_t *out);
+
+/* ---- waypoint reassembly ------------------------------------------------------------ */
+
+typedef struct {
+    int used;
+    uint8_t seq8;
+    uint8_t have;           /* bit per part (1 << mux) */
+    uint64_t t_us;
+    int64_t pos_um[ENGINE_AXES];
+    uint32_t stamp;         /* order in which slots were opened (oldest is evicted) */
+} canproto_slot_t;
+
+typedef struct {
+    uint64_t frames;        /* frames offered */
+    uint64_t malformed;     /* sum of malformed_by */
+    uint64_t malformed_by[CANPROTO_ERROR_COUNT];
+    uint64_t completed;     /* waypoints reassembled and handed out */
+    uint64_t lost;          /* waypoints never handed out (sequence gaps) */
+    uint64_t duplicates;    /* frames or waypoints already handed out, ignored */
+    uint64_t out_of_order;  /* frames of a waypoint older than the last handed out, dropped */
+    uint64_t incomplete;    /* partial waypoints abandoned (also counted in lost) */
+    uint64_t commands;
+} canproto_rx_stats_t;
+
+typedef struct {
+    canproto_slot_t *slots;  /* caller's */
+    unsigned nslots;
+    int have_last;           /* a waypoint was consumed since init/restart */
+    uint32_t last_seq;       /* extended sequence number of the last consumed waypoint */
+    uint32_t stamp;
+    canproto_rx_stats_t st;
+} canproto_rx_t;
+
+/* What canproto_rx_frame produced. */
+typedef enum {
+    CANPROTO_RX_NONE = 0,      /* frame absorbed (part of a waypoint, duplicate, stale) */
+    CANPROTO_RX_WAYPOINT = 1,  /* a complete waypoint is in out->wp (not yet consumed) */
+    CANPROTO_RX_COMMAND = 2,   /* out->cmd */
+} canproto_rx_kind_t;
+
+typedef struct {
+    engine_waypoint_t wp;      /* wp.seq: extended 32-bit sequence number */
+    canproto_cmd_t cmd;
+    uint32_t lost_before;      /* waypoints missing between the last consumed one and this */
+} canproto_rx_out_t;
+
+/*
+ * Attach nslots caller-owned slots (>= 1; 2 tolerates the frames of two
+ * consecutive waypoints interleaving) and start with no sequence history.
+ */
+void canproto_rx_init(canproto_rx_t *rx, canproto_slot_t *slots, unsigned nslots);
+
+/* Forget partial waypoints and the sequence history (CLEAR); counters kept. */
+void canproto_rx_restart(canproto_rx_t *rx);
+
+/*
+ * Offer one frame received on a waypoint id (is_fd_id: it came on the FD
+ * waypoint id).  Sequence numbers are 8 bits on the wire; a waypoint whose
+ * seq is 1..127 ahead of the last consumed one is new (a gap of k counts k
+ * lost when it is consumed), 0 behind is a duplicate, 1..128 behind is out of
+ * order.  A completed waypoint is NOT consumed yet: the caller offers it to
+ * the engine and calls canproto_rx_consume() unless the engine answered
+ * EFULL, so the sender can repeat it after reading STATUS.
+ * Returns a canproto_rx_kind_t, or a negated canproto_error for a malformed
+ * frame (counted, nothing else changed).
+ */
+int canproto_rx_frame(canproto_rx_t *rx, const canproto_frame_t *f, int is_fd_id,
+                      canproto_rx_out_t *out);
+
+/* Mark the waypoint out->wp (from canproto_rx_frame) as consumed: counts its gap. */
+void canproto_rx_consume(canproto_rx_t *rx, const canproto_rx_out_t *out);
+
+/* ---- bus load ------------------------------------------------------------------ */
+
+/*
+ * Worst-case length of one frame on the wire, in seconds, including the
+ * worst-case bit stuffing and the 3-bit interframe space.
+ *  classic: 8n + 47 + floor((34 + 8n - 1)/4) bits for 11-bit ids, 8n + 67 +
+ *    floor((54 + 8n - 1)/4) for 29-bit ids (Davis, Burns, Bril, Lukkien 2007,
+ *    "CAN schedulability analysis: refuted, revisited and revised", eq. 2-3);
+ *  FD: arbitration phase (SOF..BRS, 17 or 36 bits, dynamic stuffing),
+ *    data phase at data_bitrate if BRS (ESI, DLC, data with dynamic stuffing,
+ *    stuff count + CRC17/21 with fixed stuff bits), tail at the nominal rate
+ *    (CRC delimiter, ACK, ACK delimiter, EOF, IFS: 13 bits).  ISO 11898-1:2015.
+ * len must be a valid length for the kind; bitrates > 0 (data_bitrate only
+ * used with FD + BRS).  Returns a negative value for invalid arguments.
+ */
+double canproto_frame_time_s(unsigned len, int fd, int brs, int eff,
+                             double bitrate, double data_bitrate);
+
+/* Worst-case bits at the nominal rate equivalent: frame_time_s * bitrate. */
+double canproto_frame_bits(unsigned len, int fd, int brs, int eff, double bitrate,
+                           double data_bitrate);
+
+/* Traffic trajd puts on the bus for one object (output) plus its expected input. */
+typedef struct {
+    double rate_hz;              /* setpoint cycles per second */
+    double status_hz;            /* STATUS frames per second */
+    double waypoint_hz;          /* expected waypoints per second in (from the sender) */
+} canproto_traffic_t;
+
+/*
+ * Worst-case bus time per second (the load, 0..1+) of nobj objects with ids
+ * (an array of nobj), with a SYNC of sync_dlen bytes per cycle if sync is set.
+ * Returns the load, or a negative value for invalid arguments.
+ */
+double canproto_busload(const canproto_ids_t *ids, unsigned nobj, int sync,
+                        unsigned sync_dlen, const canproto_traffic_t *tr,
+                        double bitrate, double data_bitrate);
+
+/* ---- description tables (DBC generation, docs, tests) ----------------------------- */
+
+typedef struct {
+    const char *name;       /* DBC signal name */
+    int mux;                /* -1: not multiplexed, -2: the multiplexer, >= 0: mux value */
+    unsigned start_bit;     /* Intel (little-endian) start bit */
+    unsigned bits;
+    int is_signed;
+    double factor;
+    double offset;
+    double min, max;
+    const char *unit;
+} canproto_signal_t;
+
+typedef struct {
+    const char *name;       /* DBC message name */
+    uint32_t id;            /* default id for object 0 */
+    unsigned dlen;
+    int fd;
+    const char *sender;
+    const canproto_signal_t *signals;
+    unsigned nsignals;
+} canproto_message_t;
+
+/*
+ * The messages of object 0 with default ids: WAYPOINT, WAYPOINT_FD, SETPOINT,
+ * SETPOINT_FD, STATUS, SYNC and the CiA 402 RPDOs of nodes 1..3 (target
+ * position only, in increments).
+ */
+const canproto_message_t *canproto_messages(unsigned *count);
+
+/*
+ * Write config/trajd.dbc (the DBC text for canproto_messages()) into buf.
+ * Returns the length it needs (like snprintf: the text is complete if the
+ * return is < len).
+ */
+int canproto_dbc(char *buf, size_t len);
+
+#endif

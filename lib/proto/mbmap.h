@@ -1,0 +1,266 @@
+/*
+ * mbmap.h - trajd's Modbus register map: the single source of every address,
+ * type, scaling and word order.  Pure: encodes a status snapshot into a
+ * register image, validates requests and decodes holding-register writes into
+ * commands and waypoints, with the Modbus exception code to answer.  No I/O.
+ * The README table is generated from mbmap_fields() (tests/e2e/test_mbmap_readme.sh
+ * fails if the two differ).
+ *
+ * Addresses are the 0-based addresses carried in the PDU (mbpoll: use -0, or
+ * add 1).  Objects are selected by BLOCK OFFSET, not by unit id: the daemon
+ * block is at 0, object k (0-based, in config order) at MBMAP_OBJ_BASE(k) =
+ * 100 * (k + 1), both in the input and in the holding registers.  Why: an RTU
+ * line gives the daemon one slave address (unit ids 248..255 are reserved and
+ * 0 is broadcast, so unit ids would cap the objects and collide with other
+ * slaves on the bus), many TCP gateways and SCADA tools rewrite or ignore the
+ * unit id, and one address space works the same over TCP and RTU.  Over TCP
+ * any unit id is answered; over RTU only the configured one.
+ *
+ * Types and word order ("ABCD", big-endian words, most significant first):
+ *   u16  one register;
+ *   u32  two registers, high word first (counters are the low 32 bits of the
+ *        daemon's 64-bit counters: they wrap);
+ *   f32  IEEE-754 binary32, high word first (libmodbus modbus_get_float_abcd,
+ *        mbpoll -B -t 3:float, pymodbus Endian.Big byte and word order);
+ *   f64  IEEE-754 binary64, four registers, most significant first
+ *        (track time, and the waypoint input so a track is fed exactly).
+ *
+ * Consistency: the daemon rewrites the whole image once per tick, between
+ * requests (one thread, one loop); a request is answered from one image, so
+ * one read never mixes two ticks.  Every block starts with the snapshot
+ * generation (GEN) and ends with a copy of it (GEN_TAIL): a read of a whole
+ * block with GEN == GEN_TAIL is from one tick (the tests check this).
+ */
+#ifndef TRAJD_MBMAP_H
+#define TRAJD_MBMAP_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include "motion.h"
+
+#define MBMAP_VERSION 1
+#define MBMAP_MAGIC 0x7444u          /* "tD": register 0, to recognise trajd */
+#define MBMAP_MAX_OBJECTS 64
+#define MBMAP_BLOCK 100              /* registers per block */
+#define MBMAP_OBJ_BASE(k) (MBMAP_BLOCK * (1u + (unsigned)(k)))
+/* Registers in each table (input and holding) for n objects. */
+#define MBMAP_REGS(n) (MBMAP_BLOCK * (1u + (unsigned)(n)))
+
+/* Modbus protocol limits (Modbus Application Protocol V1.1b3, 6.3, 6.4, 6.12). */
+#define MBMAP_MAX_READ 125           /* registers per read (FC 03, 04) */
+#define MBMAP_MAX_WRITE 123          /* registers per write multiple (FC 16) */
+#define MBMAP_PDU_MAX 253            /* function code + data */
+#define MBMAP_TCP_ADU_MAX 260        /* MBAP (7) + PDU */
+#define MBMAP_RTU_ADU_MAX 256        /* address + PDU + CRC */
+
+/* Function codes served; every other one is answered with exception 01. */
+#define MBMAP_FC_READ_HOLDING 0x03
+#define MBMAP_FC_READ_INPUT 0x04
+#define MBMAP_FC_WRITE_SINGLE 0x06
+#define MBMAP_FC_WRITE_MULTIPLE 0x10
+
+/* ---- daemon block, input registers (absolute addresses) ---------------- */
+#define MBMAP_D_MAGIC 0              /* u16 MBMAP_MAGIC */
+#define MBMAP_D_VERSION 1            /* u16 MBMAP_VERSION */
+#define MBMAP_D_OBJECTS 2            /* u16 number of objects */
+#define MBMAP_D_WRITES 3             /* u16 1 if writes are enabled */
+#define MBMAP_D_GEN 4                /* u32 snapshot generation (+1 per tick; 0 = none published yet, all values 0) */
+#define MBMAP_D_UPTIME_S 6           /* u32 */
+#define MBMAP_D_PERIOD_US 8          /* u32 output period */
+#define MBMAP_D_LATE_P50_US 10       /* u32 tick lateness */
+#define MBMAP_D_LATE_P99_US 12       /* u32 */
+#define MBMAP_D_LATE_MAX_US 14       /* u32 */
+#define MBMAP_D_MISSED_TICKS 16      /* u32 timer expirations missed by the loop */
+#define MBMAP_D_CAN_STATE 18         /* u16 MBMAP_CAN_* */
+#define MBMAP_D_CAN_LOAD 19          /* u16 bus load, 0.1 % */
+#define MBMAP_D_MB_REQUESTS 20       /* u32 Modbus requests answered */
+#define MBMAP_D_MB_EXCEPTIONS 22     /* u32 exception responses sent */
+#define MBMAP_D_MB_REFUSED 24        /* u32 connections refused (allow-list, max clients) */
+#define MBMAP_D_MB_CLIENTS 26        /* u16 TCP clients connected now */
+#define MBMAP_D_GEN_TAIL 98          /* u32 copy of GEN */
+
+/* ---- object block, input registers (offset from MBMAP_OBJ_BASE(k)) ------ */
+#define MBMAP_O_GEN 0                /* u32 snapshot generation */
+#define MBMAP_O_STATE 2              /* u16 engine_state_t */
+#define MBMAP_O_FLAGS 3              /* u16 ENGINE_SP_* of the setpoint */
+#define MBMAP_O_CYCLE 4              /* u32 setpoint tick counter */
+#define MBMAP_O_TRACK 6              /* u32 trajectory number */
+#define MBMAP_O_BUFFERED 8           /* u32 waypoints buffered */
+#define MBMAP_O_FREE 10              /* u32 waypoints that can still be written */
+#define MBMAP_O_LOOKAHEAD 12         /* u32 waypoints of lookahead needed */
+#define MBMAP_O_AHEAD_S 14           /* f32 lookahead available, s of track time */
+#define MBMAP_O_LAST_SEQ 16          /* u32 sequence number of the last accepted waypoint */
+#define MBMAP_O_T_S 18               /* f64 track time of the setpoint, s */
+#define MBMAP_O_POS 22               /* f32 x3 position, m */
+#define MBMAP_O_VEL 28               /* f32 x3 velocity, m/s */
+#define MBMAP_O_ACC 34               /* f32 x3 acceleration, m/s^2 */
+#define MBMAP_O_ACCEPTED 40          /* u32 waypoints accepted */
+#define MBMAP_O_REJECTED 42          /* u32 waypoints rejected by the engine (all inputs) */
+#define MBMAP_O_LOST 44              /* u32 waypoints lost (gaps in sequence numbers) */
+#define MBMAP_O_UNDERRUNS 46         /* u32 transitions into underrun */
+#define MBMAP_O_MISSED_TICKS 48      /* u32 ticks stepped over */
+#define MBMAP_O_DUPLICATES 50        /* u32 exact duplicates dropped */
+#define MBMAP_O_MB_REJECTED 52       /* u32 Modbus writes refused with exception 03 */
+#define MBMAP_O_LATE_P99_US 54       /* u32 tick lateness (the daemon's loop) */
+#define MBMAP_O_LATE_MAX_US 56       /* u32 */
+#define MBMAP_O_CAN_STATE 58         /* u16 MBMAP_CAN_* of the object's bus */
+#define MBMAP_O_CAN_LOAD 59          /* u16 bus load, 0.1 % */
+#define MBMAP_O_UPTIME_S 60          /* u32 */
+#define MBMAP_O_GEN_TAIL 98          /* u32 copy of GEN */
+
+/* ---- object block, holding registers (offset from MBMAP_OBJ_BASE(k)) ---- */
+#define MBMAP_H_COMMAND 0            /* u16 write MBMAP_CMD_* (FC 06 or FC 16 of 1) */
+#define MBMAP_H_WP 10                /* first register of the waypoint block */
+#define MBMAP_H_WP_SEQ 10            /* u32 sequence number */
+#define MBMAP_H_WP_T_S 12            /* f64 time, s */
+#define MBMAP_H_WP_POS 16            /* f64 x3 x, y, z, m */
+#define MBMAP_H_WP_COUNT 18          /* the block is written whole, by one FC 16 */
+
+/* Commands (holding register MBMAP_H_COMMAND). */
+#define MBMAP_CMD_START 1            /* start now with what is buffered (see README) */
+#define MBMAP_CMD_STOP 2             /* run to the last waypoint and rest (engine_stop) */
+#define MBMAP_CMD_CLEAR 3            /* drop waypoints, hold where it is (engine_clear) */
+#define MBMAP_CMD_RESET_COUNTERS 4   /* engine_reset_counters + Modbus counters */
+
+/* CAN bus state (MBMAP_D_CAN_STATE, MBMAP_O_CAN_STATE). */
+#define MBMAP_CAN_NONE 0             /* no CAN on this object / daemon */
+#define MBMAP_CAN_ACTIVE 1           /* error-active */
+#define MBMAP_CAN_WARNING 2
+#define MBMAP_CAN_PASSIVE 3
+#define MBMAP_CAN_BUS_OFF 4
+#define MBMAP_CAN_DOWN 5             /* interface down */
+
+/*
+ * Errors.  The values are the Modbus exception codes to answer, so that
+ * -err is what goes on the wire.
+ */
+enum mbmap_error {
+    MBMAP_OK = 0,
+    MBMAP_EFUNCTION = 1,  /* illegal function: not served, or writes disabled */
+    MBMAP_EADDRESS = 2,   /* illegal data address: outside the map or a partial block */
+    MBMAP_EVALUE = 3,     /* illegal data value: bad count/length, NaN, unknown command,
+                             waypoint refused by the engine */
+    MBMAP_EBUSY = 6,      /* server busy: waypoint buffer full, retry later */
+};
+
+/* Text for an mbmap_error (positive or negated). */
+const char *mbmap_strerror(int err);
+
+/* ---- snapshot --------------------------------------------------------- */
+
+typedef struct {
+    uint32_t generation;
+    uint16_t objects;
+    uint16_t writes_enabled;
+    uint64_t uptime_s;
+    uint32_t period_us;
+    uint32_t late_p50_us, late_p99_us, late_max_us;
+    uint64_t missed_ticks;
+    uint16_t can_state, can_load_permille;
+    uint64_t mb_requests, mb_exceptions, mb_refused;
+    uint16_t mb_clients;
+} mbmap_daemon_t;
+
+typedef struct {
+    engine_setpoint_t sp;       /* the setpoint of this tick */
+    engine_status_t st;         /* the engine's status after this tick */
+    uint64_t lost;
+    uint64_t mb_rejected;
+    uint32_t late_p99_us, late_max_us;
+    uint16_t can_state, can_load_permille;
+    uint64_t uptime_s;
+} mbmap_object_t;
+
+/* Write the daemon block into regs[0 .. MBMAP_BLOCK-1]. */
+void mbmap_encode_daemon(uint16_t *regs, const mbmap_daemon_t *d);
+
+/*
+ * Write object k's block into regs (the whole input table, MBMAP_REGS(n)
+ * registers), stamped with generation gen.  Returns 0, or -MBMAP_EADDRESS if
+ * k >= MBMAP_MAX_OBJECTS (nothing written).
+ */
+int mbmap_encode_object(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_object_t *o);
+
+/* Word helpers (ABCD).  Exposed for the tests and the daemon. */
+void mbmap_put_u32(uint16_t *r, uint32_t v);
+void mbmap_put_f32(uint16_t *r, float v);
+void mbmap_put_f64(uint16_t *r, double v);
+uint32_t mbmap_get_u32(const uint16_t *r);
+float mbmap_get_f32(const uint16_t *r);
+double mbmap_get_f64(const uint16_t *r);
+
+/* ---- requests ------------------------------------------------------------ */
+
+/*
+ * Check a request PDU (function code + data, no MBAP/address/CRC) against the
+ * map for n objects, in the order the standard gives (function, then count
+ * and length, then address).  writes_enabled 0 refuses FC 06 and 16.
+ * Returns 0 if the request may be answered (reads: by modbus_reply on the
+ * mapping; writes: after mbmap_decode_write), or -MBMAP_EFUNCTION,
+ * -MBMAP_EVALUE (count 0 or above the limit, byte count or PDU length
+ * inconsistent), -MBMAP_EADDRESS (range outside the table).
+ * A PDU shorter than 1 byte returns -MBMAP_EVALUE.
+ */
+int mbmap_check_request(unsigned n, int writes_enabled, const uint8_t *pdu, size_t len);
+
+typedef enum { MBMAP_WRITE_COMMAND = 1, MBMAP_WRITE_WAYPOINT = 2 } mbmap_write_kind_t;
+
+typedef struct {
+    mbmap_write_kind_t kind;
+    unsigned object;            /* 0-based */
+    unsigned command;           /* MBMAP_CMD_*, for MBMAP_WRITE_COMMAND */
+    engine_waypoint_t wp;       /* for MBMAP_WRITE_WAYPOINT */
+} mbmap_write_t;
+
+/*
+ * Decode a write PDU that passed mbmap_check_request (FC 06 or 16) into one
+ * command or one waypoint.  Writable: MBMAP_H_COMMAND of an object (one
+ * register) and the waypoint block of an object (exactly MBMAP_H_WP ..
+ * +MBMAP_H_WP_COUNT-1 in one FC 16, so it is applied whole or not at all).
+ * Returns 0, -MBMAP_EADDRESS (anything else, including a part of the
+ * waypoint block or a write spanning two fields), -MBMAP_EVALUE (unknown
+ * command; NaN or infinite time or coordinate), -MBMAP_EFUNCTION (not a
+ * write).  Time order and ranges are the engine's to check (engine_push).
+ */
+int mbmap_decode_write(unsigned n, const uint8_t *pdu, size_t len, mbmap_write_t *out);
+
+/* The exception for an engine_push / command result (negated engine_error):
+ * ENGINE_EFULL -> -MBMAP_EBUSY, any other error -> -MBMAP_EVALUE, 0 and
+ * ENGINE_DUPLICATE -> 0. */
+int mbmap_from_engine(int engine_result);
+
+/* ---- RTU framing ------------------------------------------------------- */
+
+/* CRC-16/MODBUS (poly 0xA001 reflected, init 0xFFFF) of buf. */
+uint16_t mbmap_crc16(const uint8_t *buf, size_t len);
+
+/*
+ * Length of the RTU request frame at the start of buf (address, PDU, CRC),
+ * from its function code: > 0 the frame length (may exceed len: wait for
+ * more), 0 not enough bytes yet to tell, -1 a function code whose request
+ * length cannot be known from its header (the caller delimits it by line
+ * silence instead).
+ */
+int mbmap_rtu_frame_len(const uint8_t *buf, size_t len);
+
+/* ---- documentation ------------------------------------------------------ */
+
+typedef enum { MBMAP_T_U16 = 1, MBMAP_T_U32 = 2, MBMAP_T_F32 = 3, MBMAP_T_F64 = 4 } mbmap_type_t;
+
+typedef struct {
+    const char *table;      /* "input daemon", "input object", "holding object" */
+    uint16_t offset;        /* absolute for the daemon block, else from MBMAP_OBJ_BASE(k) */
+    uint16_t count;         /* registers */
+    mbmap_type_t type;
+    const char *name;
+    const char *unit;
+    const char *doc;
+} mbmap_field_t;
+
+/* The map as a table (for the README and the tests); *n receives its length. */
+const mbmap_field_t *mbmap_fields(size_t *n);
+
+/* Name of a type: "u16", "u32", "f32", "f64". */
+const char *mbmap_type_name(mbmap_type_t t);
+
+#endif

@@ -1,0 +1,272 @@
+"""trajd's CAN transport end to end on the host, through the candump-log
+transport (the same codec and can_port as on a socket, no kernel needed):
+
+- a real track (figure eight, NMEA 2000 GNSS) is turned into waypoint frames
+  by canmatrix from config/trajd.dbc (not by our encoder), written as a
+  candump log with comment lines and foreign 29-bit frames from a real
+  capture interleaved; trajd replays it and writes its frames as a candump log;
+- the setpoints are decoded by python-can + canmatrix and must equal
+  trajreplay's output on the same track (within the 0.1 mm field resolution),
+  in the classic layout, the FD layout and the CiA 402 RPDO layout;
+- faults in the input (gap, duplicate, wrong length, unknown multiplexer) are
+  reported in the STATUS frames and the trajectory carries on;
+- a configuration above the bus-load limit is refused with a clear message,
+  and the limit agrees with an independent computation of frame lengths.
+"""
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+import cantools_trajd as ct  # noqa: E402
+
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+BUILD = os.environ.get("BUILD", os.path.join(ROOT, "build"))
+TRAJD = os.path.join(BUILD, "bin", "trajd")
+TRAJREPLAY = os.path.join(BUILD, "bin", "trajreplay")
+TRACK = os.path.join(ROOT, "tests", "data", "n2k_furuno_figure8_src52.csv")
+CAPTURE = os.path.join(ROOT, "tests", "data", "canboat_candumpSample3.log")
+NPOINTS = 150          # 30 s of track: enough turns, a short run
+RATE_HZ = 100
+SPEED = 30             # engine time per wall time: ~1 s per run
+RUN_TIMEOUT_S = 30
+
+
+def conf(d, extra_can="", extra_obj="", output="can"):
+    path = os.path.join(d, "t.conf")
+    with open(path, "w") as fh:
+        fh.write("[daemon]\nrate_hz = %d\nspeed = %d\nexit_when_done = yes\n"
+                 "stop_timeout_s = 1\nstatus_interval_s = 0\n"
+                 "[can]\nlog_in = wp.log\nlog_out = sp.log\nlog_ifname = vcan0\n"
+                 # never drop late cycles here: at speed 30 the wall period is 333 us
+                 # and a loaded machine (ASan, other jobs) would drop many (tested in test_can_port)
+                 "max_late_ms = 0\n%s"
+                 "[object.boat]\ninput = can\noutput = %s\n%s" % (RATE_HZ, SPEED, extra_can, output, extra_obj))
+    return path
+
+
+def run_trajd(path):
+    p = subprocess.run([TRAJD, "-f", "-c", path], cwd=os.path.dirname(path),
+                       capture_output=True, text=True, timeout=RUN_TIMEOUT_S)
+    return p
+
+
+class CanDaemon(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.TemporaryDirectory()
+        cls.d = cls.tmp.name
+        cls.xyz = os.path.join(cls.d, "track.csv")
+        ct.to_xyz(TRACK, cls.xyz, NPOINTS)
+        cls.ref = os.path.join(cls.d, "ref.csv")
+        subprocess.run([TRAJREPLAY, "--rate", str(RATE_HZ), "-q", "-o", cls.ref, cls.xyz],
+                       check=True, timeout=RUN_TIMEOUT_S)
+        cls.refrows = ct.read_replay(cls.ref)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.tmp.cleanup()
+
+    def sub(self, name):
+        d = os.path.join(self.d, name)
+        os.makedirs(d, exist_ok=True)
+        return d
+
+    def reference(self, d):
+        """The daemon's own CSV log (now_ns -> row) and, for each of its ticks,
+        trajreplay's row at the same TRACK time.  Matching by track time, not
+        by tick: when trajd skips a late tick, a waypoint due in it reaches the
+        engine one tick later than in trajreplay, which can delay the start of
+        streaming by a tick; the curve and the track-time grid are the same."""
+        logged = ct.read_replay(os.path.join(d, "sp.csv"))
+        by_t = {}
+        for _, r in sorted(self.refrows.items()):
+            by_t.setdefault(round(float(r["t_s"]) * 1e9), r)
+        ref = {now: by_t[round(float(r["t_s"]) * 1e9)] for now, r in logged.items()
+               if round(float(r["t_s"]) * 1e9) in by_t}
+        self.assertGreater(len(ref), 0.95 * len(logged))
+        for now, e in ref.items():  # the daemon's log against trajreplay (doubles, %.17g)
+            for ax in "xyz":
+                self.assertLessEqual(abs(float(logged[now][ax + "_m"]) - float(e[ax + "_m"])), 1e-9)
+        return logged, ref
+
+    # Given the track as classic waypoint frames with foreign frames and
+    # comments, when trajd replays them with SYNC on, then every setpoint
+    # equals trajreplay's, each cycle starts with SYNC, and the last STATUS
+    # says finished, nothing lost, rejected or malformed.
+    def test_classic_matches_trajreplay(self):
+        d = self.sub("classic")
+        n, nforeign = ct.write_wplog(self.xyz, os.path.join(d, "wp.log"), foreign=CAPTURE)
+        self.assertGreater(nforeign, 0)
+        # the daemon also logs what it sent, as CSV, from the same tick
+        p = run_trajd(conf(d, "sync = yes\n", "csv.path = sp.csv\n", output="can, csv"))
+        self.assertEqual(p.returncode, 0, p.stderr)
+        log = os.path.join(d, "sp.log")
+        # canmatrix decodes the captured frames to the values the daemon logged
+        logged = ct.read_replay(os.path.join(d, "sp.csv"))
+        rows, _ = ct.decode_setpoints(log)
+        # with max_late_ms = 0 every tick goes out on CAN and into the CSV
+        self.assertEqual(sorted(rows), sorted(logged))
+        for now_ns, r in rows.items():
+            e = logged[now_ns]
+            for ax in "xyz":
+                self.assertLessEqual(abs(r[ax] - float(e[ax + "_m"])), ct.SP_POS_TOL)
+                self.assertLessEqual(abs(r["v" + ax] - float(e["v%s_m_s" % ax])), ct.SP_VEL_TOL)
+            self.assertEqual(r["cycle8"], int(e["cycle"]) & 0xFF)
+            self.assertEqual(ct.STATES[r["state"]], e["state"])
+        _, ref = self.reference(d)
+        worst = 0.0
+        for now_ns, r in rows.items():
+            if now_ns in ref:
+                for ax in "xyz":
+                    err = abs(r[ax] - float(ref[now_ns][ax + "_m"]))
+                    self.assertLessEqual(err, ct.SP_POS_TOL)
+                    worst = max(worst, err)
+        print("classic: %d setpoints, worst |can - trajreplay| %.3g m" % (len(rows), worst),
+              file=sys.stderr)
+        rows, others = ct.decode_setpoints(log)
+        self.assertEqual(others.get(0x080), len(rows))  # one SYNC per cycle sent
+        with open(log) as fh:
+            lines = fh.read().splitlines()
+        for i, line in enumerate(lines):
+            if " 6A0#" in line and line.split()[2][4:6] == "00":  # axis 0 frame of a cycle
+                self.assertIn(" 080#", lines[i - 1])
+        st = ct.decode_by_id(log, 0x6C0)
+        last = st[-1][1]
+        self.assertEqual(int(last["ST_State"]), 3)  # finished
+        self.assertEqual(int(last["ST_LastSeq"]), n & 0xFF)
+        self.assertEqual((last["ST_Lost"], last["ST_Rejected"], last["ST_Malformed"]), (0, 0, 0))
+
+    # Given FD waypoints and an FD object, then the FD setpoints equal
+    # trajreplay's too (velocity at 1 um/s), and the cycle counter is whole.
+    def test_fd_matches_trajreplay(self):
+        d = self.sub("fd")
+        ct.write_wplog(self.xyz, os.path.join(d, "wp.log"), fd=True)
+        p = run_trajd(conf(d, "fd = yes\n", "can.fd = yes\ncan.brs = yes\ncsv.path = sp.csv\n",
+                           output="can, csv"))
+        self.assertEqual(p.returncode, 0, p.stderr)
+        rows = ct.decode_fd_setpoints(os.path.join(d, "sp.log"))
+        logged, ref = self.reference(d)
+        self.assertEqual(sorted(rows), sorted(logged))
+        prev = -1
+        for now_ns, r in sorted(rows.items()):
+            for e, tol in ((logged[now_ns], 0.0), (ref.get(now_ns), 1e-9)):
+                if e is None:
+                    continue
+                for ax in "xyz":
+                    self.assertLessEqual(abs(r[ax] - float(e[ax + "_m"])), ct.SP_POS_TOL + tol)
+                    self.assertLessEqual(abs(r["v" + ax] - float(e["v%s_m_s" % ax])), 0.5e-6 + 1e-9)
+            self.assertEqual(r["cycle"], int(logged[now_ns]["cycle"]))
+            self.assertGreater(r["cycle"], prev)
+            prev = r["cycle"]
+
+    # Given the CiA 402 profile (own frames off), then each axis' RPDO holds
+    # 0x607A = round(position x counts_per_m) of trajreplay's position.
+    def test_cia402_rpdo(self):
+        d = self.sub("cia402")
+        ct.write_wplog(self.xyz, os.path.join(d, "wp.log"))
+        p = run_trajd(conf(d, "sync = yes\n", "can.own = no\ncan.cia402 = yes\n"
+                                              "can.cia402_counts_per_m = 1000\ncsv.path = sp.csv\n",
+                           output="can, csv"))
+        self.assertEqual(p.returncode, 0, p.stderr)
+        log = os.path.join(d, "sp.log")
+        logged, ref = self.reference(d)
+        for a, (ax, cob) in enumerate(zip("xyz", (0x201, 0x202, 0x203))):
+            frames = ct.decode_by_id(log, cob)
+            self.assertEqual(len(frames), len(logged))
+            for now_ns, sig in frames:
+                for e in (logged[now_ns], ref.get(now_ns)):
+                    if e is None:
+                        continue
+                    exp = float(e[ax + "_m"]) * 1000
+                    # rounding to the nearest increment: within half an increment
+                    # (+1e-6 for a tie decided differently by double rounding)
+                    self.assertLessEqual(abs(sig["Target_Position_607A"] - exp), 0.5 + 1e-6)
+        rows, others = ct.decode_setpoints(log)
+        self.assertEqual(rows, {})  # own frames off
+        self.assertGreater(others.get(0x080, 0), 0)
+
+    # Given faults in the input: waypoint 50 missing (gap), 60 sent twice, a
+    # short frame and an unknown multiplexer, then STATUS reports 1 lost and 2
+    # malformed, the duplicate changes nothing, and the object still finishes.
+    def test_faults_reported(self):
+        d = self.sub("faults")
+        wp = os.path.join(d, "wp.log")
+        ct.write_wplog(self.xyz, wp)
+        with open(wp) as fh:
+            lines = fh.read().splitlines()
+        out = []
+        for line in lines:
+            f = line.split()[-1] if not line.startswith("#") else ""
+            if f.startswith("680#") and int(f[6:8], 16) == 50 and f[4:6] != "04":
+                continue  # drop waypoint 50
+            out.append(line)
+            if f.startswith("680#") and int(f[6:8], 16) == 60 and f[4:6] == "03":
+                ts = line.split()[0]
+                out += [l for l in lines if l.startswith(ts) and "680#" in l]  # 60 again
+                out.append("%s vcan0 680#0011" % ts)            # wrong length
+                out.append("%s vcan0 680#0911000000000000" % ts)  # unknown mux
+        with open(wp, "w") as fh:
+            fh.write("\n".join(out) + "\n")
+        p = run_trajd(conf(d))
+        self.assertEqual(p.returncode, 0, p.stderr)
+        st = ct.decode_by_id(os.path.join(d, "sp.log"), 0x6C0)
+        last = st[-1][1]
+        self.assertEqual(int(last["ST_Lost"]), 1)
+        self.assertEqual(int(last["ST_Malformed"]), 2)
+        self.assertEqual(int(last["ST_Rejected"]), 0)
+        self.assertEqual(int(last["ST_State"]), 3)
+        # the loss was reported at once: some STATUS carries last_err LOST (0x41)
+        self.assertIn(0x41, [int(s["ST_LastErr"]) for _, s in st])
+
+    # Given 4 objects at 1 kHz with own frames and CiA 402 RPDOs at 500 kbit/s,
+    # then --check-config refuses with the computed load, which agrees with
+    # frame lengths computed here from Davis et al. 2007 (eq. 2).
+    def test_busload_refused(self):
+        d = self.sub("load")
+        def bits(n):  # worst-case classic 11-bit frame, with IFS
+            return 8 * n + 47 + (34 + 8 * n - 1) // 4
+        objs = "".join("[object.o%d]\ninput = can\noutput = can\ncan.cia402 = yes\n" % i
+                       for i in range(4))
+        path = os.path.join(d, "load.conf")
+        with open(path, "w") as fh:
+            fh.write("[daemon]\nrate_hz = 1000\n[can]\ninterface = vcan0\nsync = yes\n"
+                     "bitrate = 500000\nwaypoint_hz = 10\nstatus_period_ms = 100\n" + objs)
+        per_s = 1000 * (bits(0) + 4 * (3 * bits(8) + 3 * bits(4))) + 4 * (10 * bits(8) + 10 * 4 * bits(8))
+        expect = per_s / 500000 * 100
+        p = subprocess.run([TRAJD, "--check-config", path], capture_output=True, text=True, timeout=10)
+        self.assertNotEqual(p.returncode, 0)
+        msg = p.stdout + p.stderr
+        self.assertIn("CAN bus load %.1f %%" % expect, msg)
+        self.assertIn("max_load_percent = 70", msg)
+        # and one object at 100 Hz, classic, is well below: accepted
+        with open(path, "w") as fh:
+            fh.write("[daemon]\nrate_hz = 100\n[can]\ninterface = vcan0\n"
+                     "[object.o0]\ninput = can\noutput = can\n")
+        p = subprocess.run([TRAJD, "--check-config", path], capture_output=True, text=True, timeout=10)
+        self.assertEqual(p.returncode, 0, p.stdout + p.stderr)
+
+    # Given a kernel without CAN (this host), when trajd is told to use a
+    # SocketCAN interface, then it refuses to start with the reason, instead
+    # of running in a DOWN state that could never come up.
+    def test_no_can_in_kernel(self):
+        import socket
+        try:
+            socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW).close()
+            self.skipTest("this kernel has CAN (covered by test_can_uml.sh)")
+        except OSError:
+            pass
+        d = self.sub("nocan")
+        path = os.path.join(d, "s.conf")
+        with open(path, "w") as fh:
+            fh.write("[daemon]\nrate_hz = 100\n[can]\ninterface = vcan0\n"
+                     "[object.o0]\ninput = can\noutput = can\n")
+        p = subprocess.run([TRAJD, "-f", "-c", path], capture_output=True, text=True, timeout=10)
+        self.assertNotEqual(p.returncode, 0)
+        self.assertIn("cannot open a CAN socket", p.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main()

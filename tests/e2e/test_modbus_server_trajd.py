@@ -1,0 +1,376 @@
+"""test_modbus_server_trajd.py - Modbus in the running daemon, with independent clients.
+
+1. mbpoll reads trajd's registers (magic, objects, period; a replayed boat's
+   position/velocity/acceleration as floats with -B) and the floats are a row
+   of trajd's own CSV output rounded to float32; mbpoll writes a command
+   (clear) and the state register follows.
+2. pymodbus feeds a whole real track (the NMEA 2000 figure eight, converted
+   to x,y,z) through the waypoint block, pacing itself on exception 06, then
+   writes stop; the setpoints trajd streams for that object (CSV output) are
+   those of `trajreplay` on the same x,y,z file (row for row by track time,
+   bit for bit), and every block read over Modbus during the feed is one of
+   trajreplay's rows rounded to float32 (no torn read).
+3. Configuration errors: input = modbus without writes is refused by
+   trajd --check-config with file:line.
+"""
+import csv
+import math
+import os
+import signal
+import socket
+import struct
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+import mbsim  # noqa: E402
+from mbsim import M, obj_base  # noqa: E402
+
+from pymodbus.client import ModbusTcpClient  # noqa: E402
+from pymodbus.constants import Endian  # noqa: E402
+from pymodbus.payload import BinaryPayloadBuilder  # noqa: E402
+
+TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
+TRAJREPLAY = os.path.join(mbsim.BUILD, "bin", "trajreplay")
+TRACK = os.path.join(mbsim.ROOT, "tests", "data", "n2k_furuno_figure8_src52.csv")
+FEED_RATE_HZ = 10      # output rate for the feed test
+FEED_SPEED = 50        # engine time per wall time: the 357 s track streams in ~7 s
+FEED_WAIT_S = 60       # bound on the whole feed + stream
+
+
+def f32(x):
+    return struct.unpack(">f", struct.pack(">f", x))[0]
+
+
+class Trajd:
+    """trajd -f on a config; port from its log line; stopped by pid (SIGTERM)."""
+
+    def __init__(self, conf_text, tmp):
+        self.conf = os.path.join(tmp, "trajd.conf")
+        with open(self.conf, "w") as f:
+            f.write(conf_text)
+        self.p = subprocess.Popen([TRAJD, "-f", "-c", self.conf], stdin=subprocess.DEVNULL,
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        self.lines = mbsim.Lines(self.p.stderr)
+        line = self.lines.wait_for("modbus: TCP on")
+        if line is None:
+            self.p.kill()
+            raise RuntimeError("trajd did not report its Modbus port: %s" % "".join(self.lines.all))
+        self.port = int(line.split(" port ")[1].split(",")[0])
+
+    def stop(self):
+        self.p.send_signal(signal.SIGTERM)
+        rc = self.p.wait(timeout=mbsim.WAIT_S + 10)
+        self.lines.wait_for("\0", 0.5)    # collect what is left for messages
+        self.log = self.lines.all
+        return rc
+
+
+def read_csv(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def mbpoll(port, *args, write=()):
+    out = subprocess.run(["mbpoll", "-m", "tcp", "-p", str(port), "-a", "1", "-0", "-1"]
+                         + list(args) + ["127.0.0.1"] + [str(w) for w in write],
+                         capture_output=True, text=True,
+                         timeout=mbsim.WAIT_S)
+    vals = [line.split("\t")[1] for line in out.stdout.splitlines()
+            if line.startswith("[") and "\t" in line]
+    return out.returncode, vals, out.stdout + out.stderr
+
+
+class MbpollTrajdTest(unittest.TestCase):
+    def test_mbpoll_reads_and_commands(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            d = Trajd("""
+[daemon]
+rate_hz = 100
+speed = 10
+status_interval_s = 0
+[modbus]
+port = 0
+writes = yes
+systemd_socket = no
+[object.boat]
+input = replay
+replay.track = %s
+output = csv
+csv.path = %s/boat.csv
+""" % (TRACK, tmp), tmp)
+            try:
+                # Given trajd replaying the boat, when mbpoll reads the daemon
+                # block, then magic, version, 1 object and a 10000 us period.
+                rc, v, out = mbpoll(d.port, "-r", "0", "-c", "3", "-t", "3")
+                self.assertEqual(v, ["29764", "1", "1"], out)
+                rc, v, out = mbpoll(d.port, "-r", str(M["MBMAP_D_PERIOD_US"]), "-t", "3:int", "-B")
+                self.assertEqual(v, ["10000"], out)
+                # Wait (bounded) until the boat streams, by its state register.
+                base = obj_base(0)
+                for _ in range(200):
+                    rc, v, out = mbpoll(d.port, "-r", str(base + M["MBMAP_O_STATE"]), "-t", "3")
+                    if v == ["1"]:
+                        break
+                self.assertEqual(v, ["1"], out)
+                # When mbpoll reads x,y,z,vx,vy,vz,ax,ay,az in one request with -B,
+                # then they are one row of trajd's CSV rounded to float32.
+                rc, v, out = mbpoll(d.port, "-r", str(base + M["MBMAP_O_POS"]), "-c", "9",
+                                    "-t", "3:float", "-B")
+                self.assertEqual(len(v), 9, out)
+                got = [float(x) for x in v]
+                # Clear it (mbpoll writes holding register 100 = 3), and the
+                # state register shows waiting.
+                rc, _, out = mbpoll(d.port, "-r", str(base + M["MBMAP_H_COMMAND"]), "-t", "4",
+                                    write=[M["MBMAP_CMD_CLEAR"]])
+                self.assertEqual(rc, 0, out)
+                rc, v, out = mbpoll(d.port, "-r", str(base + M["MBMAP_O_STATE"]), "-t", "3")
+                self.assertEqual(v, ["0"], out)
+            finally:
+                self.assertEqual(d.stop(), 0, "".join(d.log))
+            rows = read_csv(os.path.join(tmp, "boat.csv"))
+            cols = ["x_m", "y_m", "z_m", "vx_m_s", "vy_m_s", "vz_m_s", "ax_m_s2", "ay_m_s2", "az_m_s2"]
+            # mbpoll prints floats with 6 significant digits (%g): the match
+            # is within that printing, relative 5e-6 (and 1e-30 absolute).
+            def close(a, b):
+                return abs(a - b) <= 5e-6 * max(abs(a), abs(b)) + 1e-30
+            match = [r for r in rows if all(close(f32(float(r[c])), g) for c, g in zip(cols, got))]
+            self.assertTrue(match, "mbpoll floats %s are no CSV row" % got)
+
+
+class FeedTest(unittest.TestCase):
+    def test_pymodbus_feed_matches_trajreplay(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            # The track as x,y,z (a local flat projection; any one will do as
+            # long as trajreplay and the feed read the same numbers).
+            xyz = os.path.join(tmp, "track.csv")
+            wps = []
+            with open(TRACK) as f, open(xyz, "w") as o:
+                o.write("t,x,y,z\n")
+                rd = csv.DictReader(f)
+                lat0 = lon0 = None
+                for r in rd:
+                    lat, lon = float(r["lat_deg"]), float(r["lon_deg"])
+                    if lat0 is None:
+                        lat0, lon0 = lat, lon
+                    x = (lon - lon0) * 111320.0 * math.cos(math.radians(lat0))
+                    y = (lat - lat0) * 110540.0
+                    line = "%.17g,%.17g,%.17g,0\n" % (float(r["t_s"]), x, y)
+                    o.write(line)
+                    wps.append(tuple(float(v) for v in line.split(",")))
+            ref_path = os.path.join(tmp, "ref.csv")
+            subprocess.run([TRAJREPLAY, "--rate", str(FEED_RATE_HZ), "-q", "-o", ref_path, xyz],
+                           check=True, timeout=60)
+            ref = {r["t_s"]: r for r in read_csv(ref_path) if r["state"] in ("1", "streaming")}
+            self.assertGreater(len(ref), 1000)
+
+            d = Trajd("""
+[daemon]
+rate_hz = %d
+speed = %d
+status_interval_s = 0
+[modbus]
+port = 0
+writes = yes
+systemd_socket = no
+[object.fed]
+input = modbus
+; a small buffer, so the feed meets flow control (exception 06) and must pace itself
+capacity = 100
+output = csv
+csv.path = %s/fed.csv
+""" % (FEED_RATE_HZ, FEED_SPEED, tmp), tmp)
+            reads = []
+            try:
+                c = ModbusTcpClient("127.0.0.1", port=d.port, timeout=mbsim.WAIT_S)
+                self.assertTrue(c.connect())
+                base = obj_base(0)
+                busy = refused = 0
+                deadline = time.monotonic() + FEED_WAIT_S
+                for i, (t, x, y, z) in enumerate(wps):
+                    b = BinaryPayloadBuilder(byteorder=Endian.Big, wordorder=Endian.Big)
+                    b.add_32bit_uint(i + 1)
+                    for v in (t, x, y, z):
+                        b.add_64bit_float(v)
+                    regs = b.to_registers()
+                    while True:
+                        self.assertLess(time.monotonic(), deadline, "feed too slow")
+                        rq = c.write_registers(base + M["MBMAP_H_WP"], regs, slave=1)
+                        if not rq.isError():
+                            break
+                        if rq.exception_code == 6:       # buffer full: wait a tick, retry
+                            busy += 1
+                            rr = c.read_input_registers(base, mbsim.BLOCK, slave=1)
+                            reads.append(rr.registers)
+                            continue
+                        self.assertEqual(rq.exception_code, 3, rq)
+                        refused += 1                    # the engine refused it, as in trajreplay
+                        break
+                    if i % 10 == 0:
+                        reads.append(c.read_input_registers(base, mbsim.BLOCK, slave=1).registers)
+                rq = c.write_register(base + M["MBMAP_H_COMMAND"], M["MBMAP_CMD_STOP"], slave=1)
+                self.assertFalse(rq.isError(), rq)
+                # Wait (bounded) for the object to finish, reading blocks meanwhile
+                # (one per new generation is enough: keep the first of each).
+                last_gen = None
+                while time.monotonic() < deadline:
+                    r = c.read_input_registers(base, mbsim.BLOCK, slave=1).registers
+                    if mbsim.u32(r, 0) != last_gen:
+                        reads.append(r)
+                        last_gen = mbsim.u32(r, 0)
+                    if r[M["MBMAP_O_STATE"]] == 3:
+                        break
+                self.assertEqual(r[M["MBMAP_O_STATE"]], 3, "not finished")
+                c.close()
+            finally:
+                self.assertEqual(d.stop(), 0, "".join(d.log))
+            print("fed %d waypoints, %d busy retries, %d refused, %d Modbus block reads"
+                  % (len(wps), busy, refused, len(reads)))
+            self.assertGreater(busy, 0)     # flow control was exercised
+
+            # Then every streaming row trajd wrote is trajreplay's row at the
+            # same track time, bit for bit (same engine, same pushes).
+            fed = [r for r in read_csv(os.path.join(tmp, "fed.csv")) if r["state"] in ("1", "streaming")]
+            cols = ["x_m", "y_m", "z_m", "vx_m_s", "vy_m_s", "vz_m_s", "ax_m_s2", "ay_m_s2", "az_m_s2"]
+            missing = [r["t_s"] for r in fed if r["t_s"] not in ref]
+            self.assertEqual(missing[:5], [])
+            diff = [(r["t_s"], c) for r in fed for c in cols if float(r[c]) != float(ref[r["t_s"]][c])]
+            self.assertEqual(diff[:5], [])
+            # Rows may be missing where ticks were skipped (a loaded machine, or
+            # ASan), so coverage is asked loosely: a good share of the rows,
+            # spread from the start to the end of the track.
+            self.assertGreater(len(fed), len(ref) // 3, (len(fed), len(ref)))
+            t_ref = sorted(float(t) for t in ref)
+            t_fed = sorted(float(r["t_s"]) for r in fed)
+            self.assertLess(t_fed[0] - t_ref[0], 0.1 * (t_ref[-1] - t_ref[0]))
+            self.assertLess(t_ref[-1] - t_fed[-1], 0.1 * (t_ref[-1] - t_ref[0]))
+
+            # And every Modbus read while streaming is one tick of trajreplay's
+            # rows: t as f64 names the row, x,y,z,vx.. are its values in f32.
+            by_t = {float(k): v for k, v in ref.items()}
+            torn = checked = 0
+            for r in reads:
+                if r[M["MBMAP_O_STATE"]] != 1:
+                    continue
+                self.assertEqual(mbsim.u32(r, M["MBMAP_O_GEN"]), mbsim.u32(r, M["MBMAP_O_GEN_TAIL"]))
+                row = by_t.get(mbsim.f64(r, M["MBMAP_O_T_S"]))
+                self.assertIsNotNone(row, mbsim.f64(r, M["MBMAP_O_T_S"]))
+                got = [mbsim.f32(r, M["MBMAP_O_POS"] + 2 * i) for i in range(9)]
+                want = [f32(float(row[c])) for c in cols]
+                torn += got != want
+                checked += 1
+            self.assertGreater(checked, 10)
+            self.assertEqual(torn, 0)
+
+
+class SocketActivationTest(unittest.TestCase):
+    def test_systemd_socket(self):
+        # Given systemd-socket-activate holding a listening socket on a free
+        # port (as trajd.socket does for 502) and [modbus] port = 0, when a
+        # client connects, then trajd is started with the socket (LISTEN_FDS),
+        # says so, and answers on that port rather than binding its own.
+        probe = socket.socket()
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+        probe.close()
+        with tempfile.TemporaryDirectory() as tmp:
+            conf = os.path.join(tmp, "sa.conf")
+            with open(conf, "w") as f:
+                f.write("[daemon]\nrate_hz = 100\nstatus_interval_s = 0\n[modbus]\nport = 0\n"
+                        "[object.boat]\ninput = replay\nreplay.track = %s\noutput = stdout\n" % TRACK)
+            p = subprocess.Popen(["systemd-socket-activate", "-l", "127.0.0.1:%d" % port,
+                                  TRAJD, "-f", "-c", conf], stdout=subprocess.DEVNULL,
+                                 stderr=subprocess.PIPE, text=True)
+            try:
+                lines = mbsim.Lines(p.stderr)
+                # Wait (bounded) until it listens, by its own log line.
+                self.assertIsNotNone(lines.wait_for("Listening on"), "did not listen")
+                s = mbsim.connect(port)
+                r = mbsim.read_input(s, 0, 3)
+                self.assertEqual(r[0], M["MBMAP_MAGIC"])
+                s.close()
+                log = lines.wait_for("modbus: TCP")
+                self.assertIsNotNone(log, "no modbus log line: %s" % lines.all)
+                self.assertIn("systemd socket, port %d" % port, log)
+            finally:
+                p.send_signal(signal.SIGTERM)
+                self.assertEqual(p.wait(timeout=mbsim.WAIT_S + 10), 0)
+
+
+class RtuTrajdTest(unittest.TestCase):
+    def test_rtu_from_config(self):
+        # Given a socat pty pair and trajd with rtu_device on one end at
+        # 19200 8E1 unit 5 (from [modbus]), when mbpoll -m rtu with those
+        # settings reads the daemon block on the other end, then it is
+        # answered; with unit 6 it is not.
+        socat = subprocess.Popen(["socat", "-d", "-d", "pty,raw,echo=0", "pty,raw,echo=0"],
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        try:
+            lines = mbsim.Lines(socat.stderr)
+            ttys = []
+            for _ in range(2):
+                line = lines.wait_for("PTY is ")
+                self.assertIsNotNone(line, "socat did not open a pty pair")
+                ttys.append(line.split("PTY is ")[1].strip())
+            with tempfile.TemporaryDirectory() as tmp:
+                d = Trajd("""
+[daemon]
+rate_hz = 100
+status_interval_s = 0
+[modbus]
+port = 0
+systemd_socket = no
+rtu_device = %s
+rtu_baud = 19200
+rtu_parity = even
+unit_id = 5
+[object.boat]
+input = replay
+replay.track = %s
+output = stdout
+""" % (ttys[0], TRACK), tmp)
+                try:
+                    rtu = ["mbpoll", "-m", "rtu", "-b", "19200", "-P", "even", "-0", "-1",
+                           "-r", "0", "-c", "3", "-t", "3"]
+                    out = subprocess.run(rtu + ["-a", "5", "-o", "1", ttys[1]], capture_output=True,
+                                         text=True, timeout=mbsim.WAIT_S)
+                    vals = [x.split("\t")[1] for x in out.stdout.splitlines() if x.startswith("[")]
+                    self.assertEqual(vals, ["29764", "1", "1"], out.stdout + out.stderr)
+                    out = subprocess.run(rtu + ["-a", "6", "-o", "0.3", ttys[1]], capture_output=True,
+                                         text=True, timeout=mbsim.WAIT_S)
+                    self.assertNotEqual(out.returncode, 0, out.stdout)
+                finally:
+                    self.assertEqual(d.stop(), 0, "".join(d.log))
+        finally:
+            socat.terminate()
+            socat.wait(timeout=mbsim.WAIT_S)
+
+
+class ConfigTest(unittest.TestCase):
+    def test_input_modbus_needs_writes(self):
+        # Given an object with input = modbus and writes off, when checked,
+        # then trajd refuses the file and names the object's line.
+        with tempfile.TemporaryDirectory() as tmp:
+            conf = os.path.join(tmp, "bad.conf")
+            with open(conf, "w") as f:
+                f.write("[modbus]\nport = 1502\n\n[object.fed]\ninput = modbus\noutput = stdout\n")
+            out = subprocess.run([TRAJD, "--check-config", conf], capture_output=True, text=True,
+                                 timeout=mbsim.WAIT_S)
+            self.assertNotEqual(out.returncode, 0)
+            self.assertIn("bad.conf:4", out.stdout + out.stderr)
+            self.assertIn("writes", out.stdout + out.stderr)
+            with open(conf, "w") as f:
+                f.write("[modbus]\nallow = 10.0.0.0/40\n\n[object.a]\ninput = replay\n"
+                        "replay.track = %s\noutput = stdout\n" % TRACK)
+            out = subprocess.run([TRAJD, "--check-config", conf], capture_output=True, text=True,
+                                 timeout=mbsim.WAIT_S)
+            self.assertNotEqual(out.returncode, 0)
+            self.assertIn("bad.conf:2", out.stdout + out.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)

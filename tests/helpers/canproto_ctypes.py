@@ -1,0 +1,98 @@
+"""ctypes view of lib/proto/canproto.h and lib/proto/candump.h (used by the CAN tests).
+
+Only the layouts of the structs the tests pass across are mirrored here;
+test_canproto.py checks sizes it can observe (frame length) and everything
+else is cross-checked by value against canmatrix / python-can.
+"""
+import ctypes
+import os
+
+AXES = 3
+F_EFF, F_RTR, F_ERR, F_FD, F_BRS, F_ESI = 0x01, 0x02, 0x04, 0x08, 0x10, 0x20
+
+
+class Frame(ctypes.Structure):
+    _fields_ = [("id", ctypes.c_uint32), ("len", ctypes.c_uint8), ("flags", ctypes.c_uint8),
+                ("data", ctypes.c_uint8 * 64)]
+
+    def payload(self):
+        return bytes(self.data[: self.len])
+
+
+class Waypoint(ctypes.Structure):
+    _fields_ = [("t_s", ctypes.c_double), ("pos_m", ctypes.c_double * AXES),
+                ("seq", ctypes.c_uint32)]
+
+
+class Setpoint(ctypes.Structure):
+    _fields_ = [("now_ns", ctypes.c_int64), ("t_s", ctypes.c_double),
+                ("pos_m", ctypes.c_double * AXES), ("vel_m_s", ctypes.c_double * AXES),
+                ("acc_m_s2", ctypes.c_double * AXES), ("state", ctypes.c_int),
+                ("flags", ctypes.c_uint32), ("cycle", ctypes.c_uint32),
+                ("track", ctypes.c_uint32)]
+
+
+class RxOut(ctypes.Structure):
+    _fields_ = [("wp", Waypoint), ("cmd", ctypes.c_int), ("lost_before", ctypes.c_uint32)]
+
+
+class Ids(ctypes.Structure):
+    _fields_ = [("waypoint_id", ctypes.c_uint32), ("waypoint_fd_id", ctypes.c_uint32),
+                ("setpoint_id", ctypes.c_uint32), ("setpoint_fd_id", ctypes.c_uint32),
+                ("status_id", ctypes.c_uint32), ("fd", ctypes.c_int), ("brs", ctypes.c_int),
+                ("own", ctypes.c_int), ("cia402", ctypes.c_int),
+                ("cia402_cob_id", ctypes.c_uint32 * AXES),
+                ("cia402_counts_per_m", ctypes.c_double), ("cia402_controlword", ctypes.c_int),
+                ("cia402_controlword_value", ctypes.c_uint16)]
+
+
+class Status(ctypes.Structure):
+    _fields_ = [("state", ctypes.c_uint8), ("flags", ctypes.c_uint8),
+                ("last_seq", ctypes.c_uint32), ("free", ctypes.c_uint32),
+                ("lost", ctypes.c_uint32), ("rejected", ctypes.c_uint32),
+                ("malformed", ctypes.c_uint32), ("dropped", ctypes.c_uint32),
+                ("last_err", ctypes.c_uint8)]
+
+
+def load():
+    build = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
+    lib = ctypes.CDLL(os.path.join(build, "libtrajd.so"))
+    P = ctypes.POINTER
+    lib.canproto_dbc.argtypes = [ctypes.c_char_p, ctypes.c_size_t]
+    lib.canproto_encode_waypoint.argtypes = [ctypes.c_uint32, P(Waypoint), P(Frame)]
+    lib.canproto_encode_waypoint_fd.argtypes = [ctypes.c_uint32, P(Waypoint), P(Frame)]
+    lib.canproto_encode_setpoint.argtypes = [ctypes.c_uint32, P(Setpoint), P(Frame)]
+    lib.canproto_encode_setpoint_fd.argtypes = [ctypes.c_uint32, ctypes.c_int, P(Setpoint),
+                                                P(Frame)]
+    lib.canproto_encode_status.argtypes = [ctypes.c_uint32, P(Status), P(Frame)]
+    lib.canproto_encode_cia402.argtypes = [P(Ids), ctypes.c_uint, ctypes.c_double, P(Frame)]
+    lib.canproto_ids_default.argtypes = [P(Ids), ctypes.c_uint]
+    lib.canproto_rx_init.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint]
+    lib.canproto_rx_frame.argtypes = [ctypes.c_void_p, P(Frame), ctypes.c_int, P(RxOut)]
+    lib.canproto_rx_consume.argtypes = [ctypes.c_void_p, P(RxOut)]
+    lib.candump_parse_line.argtypes = [ctypes.c_char_p, ctypes.c_void_p]
+    lib.candump_format_line.argtypes = [ctypes.c_char_p, ctypes.c_size_t, ctypes.c_int64,
+                                        ctypes.c_char_p, P(Frame)]
+    return lib
+
+
+class CandumpLine(ctypes.Structure):
+    _fields_ = [("ts_us", ctypes.c_int64), ("ifname", ctypes.c_char * 16), ("frame", Frame)]
+
+
+class Rx:
+    """A reassembler on buffers big enough for canproto_rx_t and its slots."""
+
+    def __init__(self, lib, nslots=2):
+        self.lib = lib
+        self.mem = ctypes.create_string_buffer(4096)
+        self.slots = ctypes.create_string_buffer(64 * nslots)
+        lib.canproto_rx_init(self.mem, self.slots, nslots)
+
+    def frame(self, f, is_fd_id=0):
+        out = RxOut()
+        rc = self.lib.canproto_rx_frame(self.mem, ctypes.byref(f), is_fd_id, ctypes.byref(out))
+        return rc, out
+
+    def consume(self, out):
+        self.lib.canproto_rx_consume(self.mem, ctypes.byref(out))

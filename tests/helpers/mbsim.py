@@ -1,0 +1,246 @@
+"""mbsim.py - helpers for the Modbus tests: start/stop the server harness
+(test_modbus_server --serve) or trajd, raw Modbus/TCP frames, the synthetic snapshot
+check, and the load generator.  Register numbers are read from lib/proto/mbmap.h
+(the single source), never retyped here.
+
+Everything waits for an event with a bounded timeout; nothing sleeps and hopes.
+"""
+import os
+import re
+import select
+import socket
+import struct
+import subprocess
+import threading
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+BUILD = os.environ.get("BUILD", os.path.join(ROOT, "build"))
+WAIT_S = 5.0   # bound on every wait for a line, a socket, an answer
+
+
+def mbmap_constants():
+    """#define MBMAP_* numbers from lib/proto/mbmap.h (simple integer ones only)."""
+    out = {}
+    with open(os.path.join(ROOT, "lib", "proto", "mbmap.h")) as f:
+        for line in f:
+            m = re.match(r"#define (MBMAP_\w+) (0x[0-9a-fA-F]+|\d+)u?\b", line)
+            if m:
+                out[m.group(1)] = int(m.group(2), 0)
+    return out
+
+
+M = mbmap_constants()
+BLOCK = M["MBMAP_BLOCK"]
+
+
+def obj_base(k):
+    return BLOCK * (1 + k)
+
+
+class Server:
+    """The harness (default) or any command that prints 'PORT <n>' when ready."""
+
+    def __init__(self, args=(), cmd=None):
+        self.cmd = cmd or [os.path.join(BUILD, "tests", "test_modbus_server"), "--serve"]
+        self.p = subprocess.Popen(self.cmd + list(args), stdin=subprocess.PIPE,
+                                  stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        line = self._line(WAIT_S)
+        m = re.match(r"PORT (-?\d+)", line or "")
+        if not m:
+            self.p.kill()
+            raise RuntimeError("server did not start: %r %s" % (line, self.p.stderr.read()))
+        self.port = int(m.group(1))
+        self.wait_published()
+
+    def wait_published(self):
+        """Wait (bounded) for the first snapshot: generation 0 means no tick
+        has been published yet and every value still reads 0, so a check of
+        tick values against it would race the server's first tick."""
+        s = connect(self.port)
+        try:
+            deadline = time.monotonic() + WAIT_S
+            while u32(read_input(s, M["MBMAP_D_GEN"], 2), 0) == 0:
+                if time.monotonic() > deadline:
+                    raise RuntimeError("no snapshot published within %.0f s" % WAIT_S)
+        finally:
+            s.close()
+
+    def _line(self, timeout):
+        r, _, _ = select.select([self.p.stdout], [], [], timeout)
+        return self.p.stdout.readline() if r else None
+
+    def alive(self):
+        return self.p.poll() is None
+
+    def stop(self):
+        """Close stdin (the harness stops on EOF), wait, return the STATS dict."""
+        self.p.stdin.close()
+        self.p.wait(timeout=WAIT_S)
+        out, err = self.p.stdout.read(), self.p.stderr.read()
+        stats = {}
+        for line in out.splitlines():
+            if line.startswith("STATS "):
+                stats = {k: int(v) for k, v in (kv.split("=") for kv in line.split()[1:])}
+        if self.p.returncode != 0:
+            raise RuntimeError("server exited %d: %s" % (self.p.returncode, err))
+        return stats
+
+
+class Lines:
+    """Lines of a text stream, read by a thread, waited for with a bound
+    (select() on a buffered text pipe would miss lines already buffered)."""
+
+    def __init__(self, stream):
+        import queue
+        self.q = queue.Queue()
+        self.all = []
+        self.t = threading.Thread(target=self._run, args=(stream,), daemon=True)
+        self.t.start()
+
+    def _run(self, stream):
+        for line in stream:
+            self.q.put(line)
+        self.q.put(None)
+
+    def wait_for(self, text, timeout=WAIT_S):
+        """The first line containing text, or None at EOF or after timeout s."""
+        import queue
+        end = time.monotonic() + timeout
+        while True:
+            try:
+                line = self.q.get(timeout=max(0.0, end - time.monotonic()))
+            except queue.Empty:
+                return None
+            if line is None:
+                return None
+            self.all.append(line)
+            if text in line:
+                return line
+
+
+# ---- raw Modbus/TCP ----------------------------------------------------------
+
+def connect(port):
+    s = socket.create_connection(("127.0.0.1", port), timeout=WAIT_S)
+    s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    return s
+
+
+def adu(tid, pdu, unit=1, proto=0, length=None):
+    if length is None:
+        length = len(pdu) + 1
+    return struct.pack(">HHHB", tid, proto, length, unit) + pdu
+
+
+def recv_exact(s, n):
+    buf = b""
+    while len(buf) < n:
+        chunk = s.recv(n - len(buf))
+        if not chunk:
+            raise ConnectionError("closed after %d of %d bytes" % (len(buf), n))
+        buf += chunk
+    return buf
+
+
+def transact(s, pdu, tid=1, unit=1):
+    """Send one request, return the response PDU (tid checked)."""
+    s.sendall(adu(tid, pdu, unit))
+    hdr = recv_exact(s, 7)
+    rtid, proto, length, _ = struct.unpack(">HHHB", hdr)
+    assert rtid == tid and proto == 0, (rtid, proto)
+    return recv_exact(s, length - 1)
+
+
+def read_input(s, addr, count, tid=1):
+    pdu = transact(s, struct.pack(">BHH", 4, addr, count), tid)
+    if pdu[0] != 4 or pdu[1] != 2 * count:
+        raise IOError("exception %r" % pdu)
+    return list(struct.unpack(">%dH" % count, pdu[2:]))
+
+
+def closed_within(s, timeout):
+    """True if the peer closed s (EOF or reset) within timeout seconds."""
+    s.settimeout(timeout)
+    try:
+        return s.recv(300) == b""
+    except socket.timeout:
+        return False
+    except OSError:
+        return True
+
+
+# ---- values --------------------------------------------------------------------
+
+def u32(r, i):
+    return (r[i] << 16) | r[i + 1]
+
+
+def f32(r, i):
+    return struct.unpack(">f", struct.pack(">HH", r[i], r[i + 1]))[0]
+
+
+def f64(r, i):
+    return struct.unpack(">d", struct.pack(">HHHH", *r[i:i + 4]))[0]
+
+
+def f32_round(x):
+    return struct.unpack(">f", struct.pack(">f", x))[0]
+
+
+def check_synthetic_block(r, k):
+    """A whole object block of the harness: one tick, or the reason it is not.
+    See tests/unit/test_modbus_server.c for the synthetic values."""
+    g = u32(r, M["MBMAP_O_GEN"])
+    if u32(r, M["MBMAP_O_GEN_TAIL"]) != g:
+        return "generation head %d tail %d" % (g, u32(r, M["MBMAP_O_GEN_TAIL"]))
+    c = u32(r, M["MBMAP_O_CYCLE"])
+    if c != g:
+        return "cycle %d in generation %d" % (c, g)
+    if f64(r, M["MBMAP_O_T_S"]) != c * 0.001:
+        return "t %r at cycle %d" % (f64(r, M["MBMAP_O_T_S"]), c)
+    for a in range(3):
+        if f32(r, M["MBMAP_O_POS"] + 2 * a) != f32_round(c + 1000.0 * k + 0.25 * a):
+            return "pos[%d] %r at cycle %d" % (a, f32(r, M["MBMAP_O_POS"] + 2 * a), c)
+        if f32(r, M["MBMAP_O_VEL"] + 2 * a) != f32_round(-(c + a)):
+            return "vel[%d] at cycle %d" % (a, c)
+        if f32(r, M["MBMAP_O_ACC"] + 2 * a) != f32_round(2.0 * c + k):
+            return "acc[%d] at cycle %d" % (a, c)
+    return None
+
+
+# ---- load ------------------------------------------------------------------------
+
+def load(port, clients, seconds, objects, check=check_synthetic_block):
+    """clients threads, each reading whole object blocks back to back for
+    seconds.  Returns (requests, torn list, per-client answered counts, errors)."""
+    stop_at = time.monotonic() + seconds
+    counts = [0] * clients
+    torn = []
+    errors = []
+    start = threading.Barrier(clients)
+
+    def worker(i):
+        try:
+            s = connect(port)
+            start.wait(WAIT_S)
+            tid = 0
+            while time.monotonic() < stop_at:
+                k = (i + tid) % objects
+                tid = (tid + 1) & 0xffff
+                r = read_input(s, obj_base(k), BLOCK, tid)
+                why = check(r, k)
+                if why:
+                    torn.append(why)
+                counts[i] += 1
+            s.close()
+        except Exception as e:  # noqa: BLE001 - reported, the test fails on it
+            errors.append("client %d: %r" % (i, e))
+
+    th = [threading.Thread(target=worker, args=(i,)) for i in range(clients)]
+    for t in th:
+        t.start()
+    for t in th:
+        t.join(seconds + 2 * WAIT_S)
+    return sum(counts), torn, counts, errors

@@ -1,0 +1,492 @@
+"""test_trajreplay.py - end to end: $BUILD/bin/trajreplay on the real tracks.
+
+Independent references:
+  * positions: scipy.interpolate.CubicSpline through the waypoints, with
+    east/north/up computed here by pyproj (PROJ's cart + topocentric), not
+    by our lib/util/geo;
+  * counts (duplicates, backward steps, same-time rows, gaps): counted here
+    from the file by the rules of lib/engine/engine.h;
+  * the SVG: parsed by xml.etree.
+Run with /usr/bin/python3 (Debian scipy, numpy, pyproj).
+"""
+import csv
+import math
+import os
+import random
+import subprocess
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pyproj
+from scipy.interpolate import CubicSpline
+
+BUILD = os.environ.get("BUILD", os.path.abspath("build"))
+TRAJREPLAY = os.path.join(BUILD, "bin", "trajreplay")
+DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data")
+VISNJAN_CSV = os.path.join(DATA, "gpxgo_visnjan.csv")
+VISNJAN_GPX = os.path.join(DATA, "gpxgo_visnjan.gpx")
+CERKNICA = os.path.join(DATA, "gpxpy_cerknicko-jezero.csv")
+FIGURE8 = os.path.join(DATA, "n2k_furuno_figure8_src52.csv")
+
+# The fragment bound (MATH.md section 3): with the junction average, the
+# solved values differ from one global solve by about 0.268^(O/2) relative
+# to the track's scale.  With F=64, O=32 that is 7e-10.  Position, velocity
+# and acceleration are linear in those values, so each is compared relative
+# to its own largest value with a factor 100 of margin:
+# tol = 100 * 0.268^(O/2) (7e-8 for O=32, 2.7e-3 for O=16).
+FRAG_F, FRAG_O = 64, 32
+
+# Grid: now_ns is an exact integer; track time advances one period per
+# streaming tick.  If the engine accumulates t by additions, the rounding
+# after n ticks is at most n * ulp(t) ~ 1e6 * 4.5e-13 s for t < 4096 s.
+TOL_GRID_S = 1e-6
+
+failures = []
+
+
+def check(cond, msg):
+    if not cond:
+        failures.append(msg)
+        print("FAIL:", msg)
+    return cond
+
+
+def run(args, **kw):
+    return subprocess.run([TRAJREPLAY] + args, capture_output=True, text=True, errors="replace", timeout=120, **kw)
+
+
+def read_setpoints(path):
+    """Columns of the csv_format output as numpy arrays (+ state strings)."""
+    with open(path) as f:
+        header = f.readline().rstrip("\n").split(",")
+        rows = [line.rstrip("\n").split(",") for line in f]
+    assert header == ["object", "now_ns", "t_s", "x_m", "y_m", "z_m", "vx_m_s", "vy_m_s",
+                      "vz_m_s", "ax_m_s2", "ay_m_s2", "az_m_s2", "state", "flags", "cycle",
+                      "track"], header
+    cols = {}
+    cols["now_ns"] = np.array([int(r[1]) for r in rows], dtype=np.int64)
+    for i, name in enumerate(header[2:12], start=2):
+        cols[name] = np.array([float(r[i]) for r in rows])
+    cols["state"] = [r[12] for r in rows]
+    cols["flags"] = np.array([int(r[13]) for r in rows])
+    cols["track"] = np.array([int(r[15]) for r in rows])
+    cols["pos"] = np.stack([cols["x_m"], cols["y_m"], cols["z_m"]], axis=1)
+    cols["vel"] = np.stack([cols["vx_m_s"], cols["vy_m_s"], cols["vz_m_s"]], axis=1)
+    cols["acc"] = np.stack([cols["ax_m_s2"], cols["ay_m_s2"], cols["az_m_s2"]], axis=1)
+    return cols
+
+
+def read_track(path):
+    """t, lat, lon, alt as recorded in tests/data/*.csv."""
+    with open(path) as f:
+        r = list(csv.DictReader(f))
+    return (np.array([float(x["t_s"]) for x in r]), np.array([float(x["lat_deg"]) for x in r]),
+            np.array([float(x["lon_deg"]) for x in r]), np.array([float(x["alt_m"]) for x in r]))
+
+
+def enu_pyproj(lat, lon, alt):
+    """East/north/up about the first point by PROJ; NaN altitude -> up 0 and
+    east/north at the origin's altitude (trajreplay's documented rule)."""
+    h0 = 0.0 if math.isnan(alt[0]) else float(alt[0])
+    tr = pyproj.Transformer.from_pipeline(
+        "+proj=pipeline +step +proj=axisswap +order=2,1 "
+        "+step +proj=unitconvert +xy_in=deg +xy_out=rad +step +proj=cart +ellps=WGS84 "
+        f"+step +proj=topocentric +ellps=WGS84 +lat_0={lat[0]!r} +lon_0={lon[0]!r} +h_0={h0!r}")
+    no_alt = np.isnan(alt)
+    e, n, u = tr.transform(lat, lon, np.where(no_alt, h0, alt))
+    return np.stack([e, n, np.where(no_alt, 0.0, u)], axis=1)
+
+
+def replay(track, extra, tmp, name="out"):
+    out = os.path.join(tmp, name + ".csv")
+    p = run(["--summary", "-o", out] + extra + [track])
+    check(p.returncode == 0, f"{os.path.basename(track)} {extra}: exit {p.returncode}: {p.stderr}")
+    summary = {}
+    for line in p.stderr.splitlines():
+        if line.startswith("summary: "):
+            k, v = line[len("summary: "):].split(" ", 1)
+            summary[k] = float(v)
+    return read_setpoints(out), summary, p
+
+
+def expected_counts(t, pos, max_gap_s, enu=None, max_accel=0.0):
+    """Duplicates, rejections and gaps by lib/engine/engine.h's rules, applied here:
+    compared with the last *accepted* waypoint (and, for the acceleration
+    rule, the one accepted before it in the same trajectory, on enu)."""
+    dup = back = same = gaps = accel = 0
+    last = prev = None
+    for i in range(len(t)):
+        if last is not None:
+            if t[i] < t[last]:
+                back += 1
+                continue
+            if t[i] == t[last]:
+                if np.array_equal(pos[i], pos[last]):
+                    dup += 1
+                else:
+                    same += 1
+                continue
+            if t[i] - t[last] > max_gap_s:
+                gaps += 1
+                last, prev = i, None
+                continue
+            if max_accel > 0 and prev is not None:
+                v1 = (enu[last] - enu[prev]) / (t[last] - t[prev])
+                v2 = (enu[i] - enu[last]) / (t[i] - t[last])
+                if np.linalg.norm(2 * (v2 - v1) / (t[i] - t[prev])) > max_accel:
+                    accel += 1
+                    continue
+        last, prev = i, last
+    return dup, back, same, gaps, accel, last
+
+
+def common_checks(sp, label, period_ns):
+    """No NaN; exact tick grid; track time on the grid while streaming;
+    velocity continuous; ends finished."""
+    n = len(sp["now_ns"])
+    check(n > 0, f"{label}: no setpoints")
+    for name in ("pos", "vel", "acc", "t_s"):
+        check(np.all(np.isfinite(sp[name])), f"{label}: non-finite {name}")
+    # Given the virtual clock, then row k is tick k exactly (integers).
+    check(np.array_equal(sp["now_ns"], np.arange(n, dtype=np.int64) * period_ns),
+          f"{label}: now_ns not k * period")
+    # Track time: consecutive streaming rows of one trajectory one period apart.
+    streaming = np.array([s == "streaming" for s in sp["state"]])
+    both = streaming[1:] & streaming[:-1] & (sp["track"][1:] == sp["track"][:-1])
+    dt = np.diff(sp["t_s"])[both]
+    if check(len(dt) > 0, f"{label}: nothing streamed"):
+        err = np.max(np.abs(dt - period_ns * 1e-9))
+        check(err < TOL_GRID_S, f"{label}: track time off the grid by {err:g} s")
+    # Velocity continuity: a is continuous and piecewise linear in time for
+    # a C2 cubic, so over one tick |dv| = |integral of a| <= h * max |a| on
+    # the interval.  max |a| is the larger end value, plus at most how far a
+    # runs past it before turning at a knot inside the interval: bounded by
+    # the change of a over one tick next to it (the slack term).  A hold row
+    # (finished) reports a = 0, which the slack term covers too.  A genuine
+    # velocity jump does not shrink with h and fails this.  1% + 1e-9 m/s for
+    # rounding and a junction's ~0.268^(O/2) mismatch.
+    h = period_ns * 1e-9
+    dv = np.abs(np.diff(sp["vel"], axis=0))
+    amax = np.maximum(np.abs(sp["acc"][1:]), np.abs(sp["acc"][:-1]))
+    da = np.abs(np.diff(sp["acc"], axis=0))
+    pad = np.pad(da, ((1, 1), (0, 0)))
+    slack = np.maximum(np.maximum(pad[:-2], pad[1:-1]), pad[2:])
+    allowed = h * (amax + slack) * 1.01 + 1e-9
+    excess = dv - allowed
+    worst = int(np.argmax(np.max(excess, axis=1)))
+    check(np.max(excess) <= 0,
+          f"{label}: velocity jump at row {worst + 1}: dv={dv[worst]}, allowed "
+          f"{allowed[worst]}, states {sp['state'][worst]} -> {sp['state'][worst + 1]}")
+    ratio = np.max(dv / allowed)
+    print(f"{label}: velocity steps at most {ratio:.2f} of the continuity bound")
+    check(sp["state"][-1] == "finished", f"{label}: last state {sp['state'][-1]}")
+    check(np.all(sp["vel"][-1] == 0.0), f"{label}: not at rest at the end")
+    return streaming
+
+
+def spline_errors(sp, cs, streaming):
+    """Largest |engine - CubicSpline| of position, velocity, acceleration on
+    the streamed rows, each relative to the largest |value| of the reference."""
+    ts = sp["t_s"][streaming]
+    out = {}
+    for name, d in (("pos", 0), ("vel", 1), ("acc", 2)):
+        ref = cs(ts, d)
+        out[name] = float(np.max(np.abs(sp[name][streaming] - ref)) / max(np.max(np.abs(ref)), 1e-300))
+    return out
+
+
+def test_spline_agreement(tmp):
+    """Given visnjan and figure8 replayed with knots at the timestamps, when
+    compared with scipy's CubicSpline through pyproj's ENU waypoints with the
+    same end condition (rest: first derivative 0; clamped: the given
+    velocities), then position, velocity and acceleration on every streamed
+    row agree to the fragment bound, relative to the largest value of each;
+    with F=64, O=32 the whole run also passes the common checks (grid,
+    continuity, ends at rest on the last waypoint).  The default F=32, O=16
+    is checked for agreement only: on visnjan its lookahead underruns at the
+    41 s gap, and an underrun holds (velocity to 0 at once, by the engine's
+    design)."""
+    v0, v1 = (1.0, -2.0, 0.5), (-0.5, 0.25, 0.0)
+    for path, rate in ((VISNJAN_CSV, 20), (FIGURE8, 50)):
+        t, lat, lon, alt = read_track(path)
+        enu = enu_pyproj(lat, lon, alt)
+        runs = [("cubic", "rest", FRAG_F, FRAG_O), ("bspline", "rest", FRAG_F, FRAG_O),
+                ("cubic", "clamped", FRAG_F, FRAG_O), ("cubic", "rest", 32, 16)]
+        for method, ends, f, o in runs:
+            label = f"{os.path.basename(path)} {method} {ends} F={f} O={o}"
+            # --max-accel 0: every waypoint in, so the reference is the
+            # spline through all of them (the filter is tested below)
+            args = ["--rate", str(rate), "--param", "time", "--ends", ends, "--method", method,
+                    "--fragment", str(f), "--overlap", str(o), "--max-gap", "1000",
+                    "--max-accel", "0"]
+            if ends == "clamped":
+                args += ["--start-vel", "%r,%r,%r" % v0, "--end-vel", "%r,%r,%r" % v1]
+                cs = CubicSpline(t, enu, bc_type=((1, np.array(v0)), (1, np.array(v1))))
+            else:
+                cs = CubicSpline(t, enu, bc_type="clamped")
+            sp, summary, _ = replay(path, args, tmp)
+            streaming = np.array([s == "streaming" for s in sp["state"]])
+            if ends == "rest" and (f, o) == (FRAG_F, FRAG_O):
+                common_checks(sp, label, round(1e9 / rate))
+            tol = 100 * 0.268 ** (o / 2)
+            err = spline_errors(sp, cs, streaming)
+            print(f"{label}: {int(streaming.sum())} streamed; relative to CubicSpline: "
+                  + ", ".join(f"{k} {v:.2g}" for k, v in err.items()) + f" (bound {tol:.2g})")
+            for k, v in err.items():
+                check(v <= tol, f"{label}: {k} differs from CubicSpline by {v:g} relative")
+            check(np.max(np.abs(sp["pos"][-1] - enu[-1])) < 1e-6,
+                  f"{label}: last setpoint {sp['pos'][-1]} is not the last waypoint {enu[-1]}")
+            check(abs(sp["t_s"][-1] - t[-1]) < 1e-9, f"{label}: ends at t={sp['t_s'][-1]}")
+            check(sp["state"][-1] == "finished", f"{label}: last state {sp['state'][-1]}")
+            check(summary.get("accepted") == len(t), f"{label}: accepted {summary.get('accepted')}")
+
+
+def test_counts_real_and_injected(tmp):
+    """Given the real tracks (and visnjan with duplicates, backward steps and
+    same-time rows injected), when replayed with --summary, then duplicates,
+    rejections by reason and gaps are exactly what this test counts in the
+    file."""
+    rnd = random.Random(5)
+    t, lat, lon, alt = read_track(VISNJAN_CSV)
+    rows = list(zip(t, lat, lon, alt))
+    noisy = []
+    for i, r in enumerate(rows):
+        noisy.append(r)
+        if i > 0 and rnd.random() < 0.06:
+            noisy.append(r)                                  # exact duplicate
+        if i > 2 and rnd.random() < 0.04:
+            noisy.append((r[0] - 2.5,) + r[1:])              # backward step
+        if i > 0 and rnd.random() < 0.03:
+            noisy.append((r[0], r[1] + 1e-5, r[2], r[3]))    # same time, moved
+    injected = os.path.join(tmp, "visnjan_noisy.csv")
+    with open(injected, "w") as f:
+        f.write("t_s,lat_deg,lon_deg,alt_m\n")
+        for r in noisy:
+            f.write(f"{r[0]:.6f},{r[1]:.9f},{r[2]:.9f},{r[3]:.9f}\n")
+    for path, max_gap in ((VISNJAN_CSV, 60), (CERKNICA, 60), (FIGURE8, 60), (injected, 30)):
+        label = os.path.basename(path)
+        t, lat, lon, alt = read_track(path)
+        enu = enu_pyproj(lat, lon, alt)
+        # Identical text -> identical doubles, so exact comparisons are right.
+        pos_key = np.stack([lat, lon, np.nan_to_num(alt, nan=-1e300)], axis=1)
+        # the engine's default max_accel_m_s2 (lib/engine/engine.h), applied here on pyproj's ENU
+        dup, back, same, gaps, accel, last = expected_counts(t, pos_key, max_gap, enu, 30.0)
+        sp, s, _ = replay(path, ["--rate", "10", "--max-gap", str(max_gap)], tmp, "counts")
+        got = (s.get("duplicates"), s.get("rejected_backwards"), s.get("rejected_same_time"),
+               s.get("gaps"), s.get("rejected_accel"))
+        want = (dup, back, same, gaps, accel)
+        print(f"{label}: duplicates/backwards/same_time/gaps/accel expected {want}, "
+              f"--summary {got}")
+        check(got == want, f"{label}: counts {got} != {want}")
+        check(s.get("accepted") == len(t) - dup - back - same - accel,
+              f"{label}: accepted {s.get('accepted')}")
+        check(s.get("setpoints") == len(sp["now_ns"]), f"{label}: setpoints count")
+        check(all(np.isfinite(sp["pos"]).ravel()), f"{label}: NaN")
+        check(sp["state"][-1] == "finished", f"{label}: last state {sp['state'][-1]}")
+        check(np.max(np.abs(sp["pos"][-1] - enu[last])) < 1e-6,
+              f"{label}: does not end on the last accepted waypoint")
+
+
+# lib/engine/engine.h's default max_accel_m_s2.
+MAX_ACCEL_DEFAULT = 30.0
+
+
+def test_jitter_figure8(tmp):
+    """Given the figure-8 boat log, whose only intervals far below its median
+    (0.2 s) are the late burst around t = 135 s (134.600 -> 135.096 -> 135.120
+    -> 135.201 s: fixes 24 and 81 ms apart, positions evenly spaced), when
+    replayed with the defaults at 100 Hz, then exactly those two short-interval
+    waypoints are rejected (rejected_accel 2, accepted 1784), the setpoints
+    follow scipy's CubicSpline (rest ends) through the waypoints kept to the
+    fragment bound, and away from the rest start and stop (2 s) the
+    acceleration per axis stays within 3 * max_accel_m_s2: the max principle
+    of the C2 second-derivative system (at its largest |M_i|,
+    |M_i| (h1 + h2) <= 3 |a_implied| (h1 + h2), and every accepted triple has
+    |a_implied| <= max_accel_m_s2).  The spline through all waypoints breaks
+    that bound by far (the test can fail)."""
+    t, lat, lon, alt = read_track(FIGURE8)
+    enu = enu_pyproj(lat, lon, alt)
+    dt = np.diff(t)
+    short = np.where(dt < 0.5 * np.median(dt))[0] + 1   # waypoint after a short interval
+    check(len(short) == 2 and abs(t[short[0]] - 135.120) < 1e-9,
+          f"figure-8 short intervals at {t[short]} (the log changed?)")
+    kept = np.setdiff1d(np.arange(len(t)), short)
+    sp, s, _ = replay(FIGURE8, [], tmp, "jitter")
+    check(s.get("rejected_accel") == len(short) and s.get("rejected") == len(short),
+          f"figure-8: rejected_accel {s.get('rejected_accel')}, rejected {s.get('rejected')}")
+    check(s.get("accepted") == len(kept), f"figure-8: accepted {s.get('accepted')}")
+    streaming = np.array([x == "streaming" for x in sp["state"]])
+    tol = 100 * 0.268 ** (16 / 2)   # default F=32, O=16
+    err = spline_errors(sp, CubicSpline(t[kept], enu[kept], bc_type="clamped"), streaming)
+    for k, v in err.items():
+        check(v <= tol, f"figure-8 jitter: {k} differs from the kept-waypoint CubicSpline by {v:g}")
+    inner = streaming & (sp["t_s"] > t[0] + 2) & (sp["t_s"] < t[-1] - 2)
+    a_axis = np.max(np.abs(sp["acc"][inner]))
+    win = inner & (np.abs(sp["t_s"] - 135.1) < 5)
+    a_win = np.max(np.linalg.norm(sp["acc"][win], axis=1))
+    ts = np.arange(t[0] + 2, t[-1] - 2, 0.01)
+    raw = np.max(np.abs(CubicSpline(t, enu, bc_type="clamped")(ts, 2)))
+    print(f"figure-8 jitter: streamed max |a| per axis {a_axis:.1f} m/s^2 (|a| {a_win:.1f} "
+          f"within 5 s of t=135), spline through every waypoint {raw:.1f}; bound "
+          f"{3 * MAX_ACCEL_DEFAULT:.0f}; vs kept-waypoint spline "
+          + ", ".join(f"{k} {v:.2g}" for k, v in err.items()))
+    check(a_axis <= 3 * MAX_ACCEL_DEFAULT, f"figure-8: acceleration {a_axis:g} m/s^2 per axis")
+    check(raw > 3 * MAX_ACCEL_DEFAULT, f"figure-8: the raw spline peaks at only {raw:g}")
+
+
+def test_gpx_equals_csv(tmp):
+    """Given visnjan as GPX and as CSV, when replayed, then byte-identical output."""
+    a = os.path.join(tmp, "a.csv")
+    b = os.path.join(tmp, "b.csv")
+    pa = run(["--rate", "10", "-o", a, VISNJAN_CSV])
+    pb = run(["--rate", "10", "-o", b, VISNJAN_GPX])
+    check(pa.returncode == 0 and pb.returncode == 0, f"exit {pa.returncode} {pb.returncode}")
+    with open(a, "rb") as fa, open(b, "rb") as fb:
+        check(fa.read() == fb.read(), "GPX and CSV replays differ")
+    # stdout is the same bytes as -o.
+    pc = subprocess.run([TRAJREPLAY, "--rate", "10", VISNJAN_CSV], capture_output=True, timeout=60)
+    with open(a, "rb") as fa:
+        check(pc.stdout == fa.read(), "stdout differs from -o")
+    check(b"\r" not in pc.stderr, "progress line written although stderr is not a terminal")
+
+
+def test_svg(tmp):
+    """Given --svg, then a well-formed SVG with both panels, the curve, one
+    dot per waypoint and axis labels with units."""
+    svg = os.path.join(tmp, "f8.svg")
+    p = run(["--rate", "50", "--svg", svg, "-o", os.path.join(tmp, "f8.csv"), FIGURE8])
+    check(p.returncode == 0, f"--svg exit {p.returncode}: {p.stderr}")
+    root = ET.parse(svg).getroot()
+    ns = "{http://www.w3.org/2000/svg}"
+    check(root.tag == ns + "svg", f"root {root.tag}")
+    ids = {e.get("id") for e in root.iter() if e.get("id")}
+    for want in ("curve", "speed", "waypoints", "rejected", "underruns", "plan-axes", "speed-axes",
+                 "legend"):
+        check(want in ids, f"svg: no element id={want}")
+    # one dot per accepted waypoint, one cross per rejected one (the two
+    # jittered fixes at t = 135.120 and 135.201 s, see test_counts_real_and_injected)
+    dots = root.find(f".//{ns}g[@id='waypoints']").findall(f"{ns}circle")
+    crosses = root.find(f".//{ns}g[@id='rejected']").findall(f"{ns}path")
+    check(len(dots) == 1784 and len(crosses) == 2,
+          f"svg: {len(dots)} waypoint dots, {len(crosses)} rejected crosses")
+    texts = {e.text for e in root.iter(ns + "text")}
+    for want in ("east (m)", "north (m)", "track time t (s)", "speed |v| (m/s)"):
+        check(want in texts, f"svg: no label {want!r}")
+    curve = root.find(f".//{ns}path[@id='curve']").get("d")
+    vertices = curve.count("L") + curve.count("M")
+    check(100 < vertices <= 4001, f"svg: curve has {vertices} vertices")
+    check(os.path.getsize(svg) < 400000, f"svg: {os.path.getsize(svg)} bytes")
+
+
+def test_errors(tmp):
+    """Given bad files and bad options, then clear messages and exit codes,
+    never a crash (a signal would give a negative return code)."""
+    missing = run([os.path.join(tmp, "nope.csv")])
+    check(missing.returncode == 1 and "nope.csv: No such file or directory" in missing.stderr,
+          f"missing file: {missing.returncode} {missing.stderr!r}")
+    with open(VISNJAN_GPX, "rb") as f:
+        gpx = f.read()
+    with open(VISNJAN_CSV, "rb") as f:
+        text = f.read()
+    rnd = random.Random(11)
+    cases = []
+    for k in range(12):  # truncated at random places
+        cut = rnd.randrange(1, len(gpx) - 10)
+        cases.append(("cut%d.gpx" % k, gpx[:cut]))
+        cut = rnd.randrange(1, len(text))
+        cases.append(("cut%d.csv" % k, text[:cut]))
+    for k in range(8):  # garbage: random bytes, and the CSV with bytes flipped
+        cases.append(("junk%d.csv" % k, bytes(rnd.randrange(256) for _ in range(rnd.randrange(2000)))))
+        b = bytearray(text)
+        for _ in range(20):
+            b[rnd.randrange(len(b))] = rnd.randrange(256)
+        cases.append(("flip%d.csv" % k, bytes(b)))
+    cases.append(("empty.csv", b""))
+    cases.append(("bad.csv", b"t,x,y\n0,0,0\n1,abc,2\n"))
+    for name, data in cases:
+        path = os.path.join(tmp, name)
+        with open(path, "wb") as f:
+            f.write(data)
+        p = run(["--rate", "10", "-o", os.path.join(tmp, "junk_out.csv"), path])
+        check(p.returncode in (0, 1), f"{name}: exit {p.returncode}: {p.stderr[-300:]!r}")
+        if p.returncode == 1:
+            check(p.stderr.startswith("trajreplay: " + path), f"{name}: message {p.stderr!r}")
+    bad = run(["-o", os.path.join(tmp, "x.csv"), os.path.join(tmp, "bad.csv")])
+    check(bad.returncode == 1 and f"{tmp}/bad.csv:3: x 'abc' is not a finite number" in bad.stderr,
+          f"bad line: {bad.stderr!r}")
+    skip = run(["--skip-bad", "--summary", "-o", os.path.join(tmp, "x.csv"), os.path.join(tmp, "bad.csv")])
+    check(skip.returncode == 0 and "summary: skipped_lines 1" in skip.stderr
+          and "bad.csv:3:" in skip.stderr, f"--skip-bad: {skip.returncode} {skip.stderr!r}")
+    for args, frag in ((["--rate", "0", VISNJAN_CSV], "--rate"),
+                       (["--rate", "1e9", VISNJAN_CSV], "--rate"),
+                       (["--param", "linear", VISNJAN_CSV], "--param"),
+                       (["--ends", "loose", VISNJAN_CSV], "--ends"),
+                       (["--fragment", "x", VISNJAN_CSV], "--fragment"),
+                       (["--start-vel", "1,2", VISNJAN_CSV], "--start-vel"),
+                       (["--object", "a,b", VISNJAN_CSV], "--object"),
+                       (["--bogus", VISNJAN_CSV], "unknown option"),
+                       (["--rate"], "needs a value"),
+                       ([], "no track file"),
+                       (["--fragment", "8", "--overlap", "8", VISNJAN_CSV], "invalid engine configuration")):
+        p = run(args)
+        check(p.returncode == 2 and frag in p.stderr, f"{args}: {p.returncode} {p.stderr!r}")
+    p = run(["-o", "/nonexistent/dir/out.csv", VISNJAN_CSV])
+    check(p.returncode == 3 and "/nonexistent/dir/out.csv" in p.stderr, f"unwritable -o: {p.stderr!r}")
+    h = run(["--help"])
+    check(h.returncode == 0 and "--fragment" in h.stdout and "--svg" in h.stdout, "--help")
+    v = run(["--version"])
+    check(v.returncode == 0 and v.stdout.startswith("trajreplay "), "--version")
+    if os.path.exists("/dev/full"):
+        p = run(["-o", "/dev/full", VISNJAN_CSV])
+        check(p.returncode == 3 and "write error" in p.stderr, f"/dev/full: {p.returncode} {p.stderr!r}")
+
+
+def test_progress(tmp):
+    """Given stderr on a terminal (a pty) and --progress-after 0 (so the
+    result does not depend on the machine's speed), then progress lines
+    start with '\\r' and the line is cleared at the end."""
+    import pty
+    try:
+        master, slave = pty.openpty()
+    except OSError as e:  # no pseudo-terminals in this environment: nothing to test
+        print(f"test_progress: skipped, no pty ({e})")
+        return
+    out = os.path.join(tmp, "progress.csv")
+    p = subprocess.Popen([TRAJREPLAY, "--progress-after", "0", "-o", out, FIGURE8], stderr=slave,
+                         stdout=subprocess.DEVNULL)
+    os.close(slave)
+    chunks = []
+    while True:
+        try:
+            b = os.read(master, 4096)
+        except OSError:  # EIO: the child closed the pty
+            break
+        if not b:
+            break
+        chunks.append(b)
+    rc = p.wait(timeout=120)
+    os.close(master)
+    text = b"".join(chunks)
+    check(rc == 0, f"progress run: exit {rc}")
+    check(b"\rtrajreplay: " in text and b"waypoints, track time" in text,
+          f"no progress line on a terminal: {text[:200]!r}")
+    check(text.endswith(b"\r\x1b[K"), f"progress line not cleared: {text[-40:]!r}")
+
+
+def main():
+    if not os.access(TRAJREPLAY, os.X_OK):
+        print(f"{TRAJREPLAY} not built")
+        return 1
+    with tempfile.TemporaryDirectory(prefix="trajreplay-test-") as tmp:
+        for test in (test_errors, test_gpx_equals_csv, test_svg, test_counts_real_and_injected,
+                     test_spline_agreement, test_jitter_figure8, test_progress):
+            print(f"== {test.__name__}")
+            test(tmp)
+    print(f"test_trajreplay.py: {len(failures)} failure(s)")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,455 @@
+/* test_can_port.c - the CAN side's behaviour under faults, on a fake transport
+ * and a fake engine: queue full, interface down and back, late cycles,
+ * flow control (EFULL), malformed/foreign frames, SYNC, status events; and
+ * the candump-log transport on the real capture in tests/data. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "candump.h"
+#include "can_logfile.h"
+#include "can_port.h"
+
+/* ---- fake transport ---- */
+#define FAKE_MAX 4096
+typedef struct {
+    canproto_frame_t in[FAKE_MAX];
+    unsigned nin, next;
+    canproto_frame_t out[FAKE_MAX];
+    unsigned nout;
+    int up;
+    int fail_with;      /* send returns this (negative) while set */
+    int reopen_ok;
+} fake_io_t;
+
+static int fake_send(void *io, const canproto_frame_t *f)
+{
+    fake_io_t *x = io;
+    if (!x->up)
+        return -ENETDOWN;
+    if (x->fail_with)
+        return x->fail_with;
+    assert_true(x->nout < FAKE_MAX);
+    x->out[x->nout++] = *f;
+    return 0;
+}
+
+static int fake_recv(void *io, int64_t now_ns, canproto_frame_t *f)
+{
+    (void)now_ns;
+    fake_io_t *x = io;
+    if (x->next >= x->nin)
+        return 0;
+    *f = x->in[x->next++];
+    return 1;
+}
+
+static int fake_maintain(void *io, int64_t now_ns)
+{
+    (void)now_ns;
+    fake_io_t *x = io;
+    if (!x->up && x->reopen_ok) {
+        x->up = 1;
+        return 1;
+    }
+    return 0;
+}
+
+static int fake_is_up(const void *io)
+{
+    return ((const fake_io_t *)io)->up;
+}
+
+static const can_port_io_t fake_ops = { fake_send, fake_recv, fake_maintain, fake_is_up };
+
+/* ---- fake engine ---- */
+typedef struct {
+    engine_waypoint_t got[256];
+    unsigned n;
+    int answer;          /* what push returns */
+    unsigned cmds[8];
+    unsigned ncmd;
+    uint32_t free_slots;
+} fake_engine_t;
+
+static int fe_push(void *ctx, const engine_waypoint_t *wp)
+{
+    fake_engine_t *e = ctx;
+    if (e->answer == 0 && e->n < 256)
+        e->got[e->n++] = *wp;
+    return e->answer;
+}
+
+static void fe_command(void *ctx, canproto_cmd_t cmd)
+{
+    fake_engine_t *e = ctx;
+    if (e->ncmd < 8)
+        e->cmds[e->ncmd++] = cmd;
+}
+
+static void fe_status(void *ctx, engine_status_t *st)
+{
+    fake_engine_t *e = ctx;
+    st->state = ENGINE_STATE_STREAMING;
+    st->last_seq = e->n ? e->got[e->n - 1].seq : 0;
+    st->free = e->free_slots;
+}
+
+static const can_port_hooks_t fe_hooks = { fe_push, fe_command, fe_status };
+
+static fake_io_t io;
+static fake_engine_t eng;
+static can_port_t *port;
+
+static int setup(void **state)
+{
+    (void)state;
+    can_port_config_t cfg;
+    canproto_ids_t ids;
+    memset(&io, 0, sizeof io);
+    memset(&eng, 0, sizeof eng);
+    io.up = 1;
+    eng.free_slots = 40;
+    can_port_config_default(&cfg);
+    cfg.sync = 1;
+    cfg.sync_overflow = 3;
+    cfg.status_period_ns = 0; /* status only on events (and the first) */
+    cfg.max_late_ns = 500000;
+    port = can_port_new(&cfg, &fake_ops, &io, 1);
+    assert_non_null(port);
+    canproto_ids_default(&ids, 0);
+    assert_int_equal(can_port_set_object(port, 0, &ids, &fe_hooks, &eng), 0);
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    can_port_free(port);
+    return 0;
+}
+
+static engine_setpoint_t sp_at(uint32_t cycle, double x)
+{
+    engine_setpoint_t sp;
+    memset(&sp, 0, sizeof sp);
+    sp.cycle = cycle;
+    sp.pos_m[0] = x;
+    sp.state = ENGINE_STATE_STREAMING;
+    return sp;
+}
+
+static void run_cycle(uint32_t k, int64_t late_ns)
+{
+    engine_setpoint_t sp = sp_at(k, k * 0.001);
+    can_port_setpoint(port, 0, &sp);
+    can_port_cycle(port, (int64_t)k * 1000000, late_ns);
+}
+
+static unsigned count_id(uint32_t id)
+{
+    unsigned n = 0;
+    for (unsigned i = 0; i < io.nout; i++)
+        n += io.out[i].id == id;
+    return n;
+}
+
+static void queue_waypoint(uint32_t seq, double t)
+{
+    engine_waypoint_t w = { .t_s = t, .pos_m = { t, -t, 0.5 }, .seq = seq };
+    assert_true(canproto_encode_waypoint(0x680, &w, &io.in[io.nin]) >= 0);
+    io.nin += 4;
+}
+
+/* Given cycles with SYNC (overflow 3), then each cycle is SYNC then 3
+ * setpoint frames, and the SYNC counter runs 1,2,3,1,... */
+static void test_cycle_frames_and_sync(void **state)
+{
+    (void)state;
+    for (uint32_t k = 0; k < 5; k++)
+        run_cycle(k, 0);
+    assert_int_equal(count_id(0x080), 5);
+    assert_int_equal(count_id(0x6A0), 15);
+    unsigned sync_seen = 0;
+    const uint8_t expect[5] = { 1, 2, 3, 1, 2 };
+    for (unsigned i = 0; i < io.nout; i++)
+        if (io.out[i].id == 0x080) {
+            assert_int_equal(io.out[i].len, 1);
+            assert_int_equal(io.out[i].data[0], expect[sync_seen]);
+            /* the three setpoint frames of this cycle follow the SYNC */
+            for (unsigned a = 0; a < 3; a++)
+                assert_int_equal(io.out[i + 1 + a].id, 0x6A0);
+            sync_seen++;
+        }
+    assert_int_equal(count_id(0x6C0), 1); /* first status only (period 0) */
+}
+
+/* Given the TX queue full (ENOBUFS) for 3 cycles, then those setpoints are
+ * dropped and counted, and the next cycle sends only its own frames (no burst). */
+static void test_queue_full_drops_no_burst(void **state)
+{
+    (void)state;
+    run_cycle(0, 0);
+    unsigned before = count_id(0x6A0);
+    io.fail_with = -ENOBUFS;
+    for (uint32_t k = 1; k <= 3; k++)
+        run_cycle(k, 0);
+    io.fail_with = 0;
+    run_cycle(4, 0);
+    assert_int_equal(count_id(0x6A0) - before, 3);
+    can_port_obj_stats_t st;
+    can_port_obj_stats(port, 0, &st);
+    assert_int_equal(st.dropped_full, 3);
+    assert_int_equal(st.setpoints_sent, 2);
+    /* the frames after the gap carry cycle 4 (not 1) */
+    canproto_setpoint_t d;
+    for (unsigned i = 0; i < io.nout; i++)
+        if (io.out[i].id == 0x6A0) {
+            assert_int_equal(canproto_decode_setpoint(&io.out[i], &d), 0);
+            assert_true(d.cycle == 0 || d.cycle == 4);
+        }
+    /* the STATUS after recovery reports the drops */
+    canproto_status_t s;
+    unsigned last = 0;
+    for (unsigned i = 0; i < io.nout; i++)
+        if (io.out[i].id == 0x6C0)
+            last = i;
+    assert_int_equal(canproto_decode_status(&io.out[last], &s), 0);
+    (void)s;
+}
+
+/* Given the interface down for 5 cycles and then back (maintain reopens),
+ * then nothing is sent while down, drops are counted as down, and the first
+ * cycle after has exactly one setpoint and a STATUS flagging the outage. */
+static void test_down_and_back(void **state)
+{
+    (void)state;
+    run_cycle(0, 0);
+    io.up = 0;
+    unsigned n0 = io.nout;
+    for (uint32_t k = 1; k <= 5; k++) {
+        assert_int_equal(can_port_maintain(port, (int64_t)k * 1000000), 0);
+        run_cycle(k, 0);
+    }
+    assert_int_equal(io.nout, n0);
+    io.reopen_ok = 1;
+    assert_int_equal(can_port_maintain(port, 6000000), 1);
+    run_cycle(6, 0);
+    assert_int_equal(count_id(0x6A0), 6);
+    can_port_obj_stats_t st;
+    can_port_obj_stats(port, 0, &st);
+    assert_int_equal(st.dropped_down, 5);
+    can_port_stats_t ps;
+    can_port_stats(port, &ps);
+    assert_int_equal(ps.down_cycles, 5);
+    assert_int_equal(ps.reopens, 1);
+    /* the status right after recovery says: bus was down, setpoints dropped */
+    canproto_status_t s;
+    assert_int_equal(io.out[io.nout - 1].id, 0x6C0);
+    assert_int_equal(canproto_decode_status(&io.out[io.nout - 1], &s), 0);
+    assert_true(s.flags & CANPROTO_ST_BUS_DOWN);
+    assert_true(s.flags & CANPROTO_ST_TX_DROP);
+    assert_int_equal(s.dropped, 5);
+    assert_int_equal(s.last_err, CANPROTO_STERR_BUS_DOWN);
+}
+
+/* Given a cycle run later than max_late_ns, then it is not sent (counted). */
+static void test_late_cycle_dropped(void **state)
+{
+    (void)state;
+    run_cycle(0, 0);
+    run_cycle(1, 2000000);
+    run_cycle(2, 100000);
+    assert_int_equal(count_id(0x6A0), 6);
+    can_port_obj_stats_t st;
+    can_port_obj_stats(port, 0, &st);
+    assert_int_equal(st.dropped_late, 1);
+}
+
+/* Given waypoints with a gap, a duplicate, a malformed and a foreign frame,
+ * then the engine gets each good waypoint once, and STATUS reports the loss
+ * and the malformed frame. */
+static void test_rx_paths(void **state)
+{
+    (void)state;
+    queue_waypoint(1, 1.0);
+    queue_waypoint(2, 2.0);
+    queue_waypoint(2, 2.0);   /* duplicate */
+    queue_waypoint(5, 5.0);   /* 3 and 4 lost */
+    canproto_frame_t *bad = &io.in[io.nin++];
+    memset(bad, 0, sizeof *bad);
+    bad->id = 0x680;
+    bad->len = 3;             /* malformed */
+    canproto_frame_t *foreign = &io.in[io.nin++];
+    memset(foreign, 0, sizeof *foreign);
+    foreign->id = 0x123;
+    foreign->len = 1;
+    assert_int_equal(can_port_rx(port, 0), (int)io.nin);
+    assert_int_equal(eng.n, 3);
+    assert_int_equal(eng.got[2].seq, 5);
+    assert_true(fabs(eng.got[1].pos_m[1] + 2.0) < 1e-9);
+    can_port_stats_t ps;
+    can_port_stats(port, &ps);
+    assert_int_equal(ps.rx_foreign, 1);
+    run_cycle(0, 0);
+    canproto_status_t s;
+    assert_int_equal(io.out[io.nout - 1].id, 0x6C0);
+    canproto_decode_status(&io.out[io.nout - 1], &s);
+    assert_int_equal(s.lost, 2);
+    assert_int_equal(s.malformed, 1);
+    assert_int_equal(s.last_seq, 5);
+    assert_int_equal(s.free, 40);
+    assert_int_equal(s.last_err, CANPROTO_STERR_MALFORMED);
+}
+
+/* Given the engine full (EFULL), then the waypoint is not consumed, STATUS
+ * says rejected with error EFULL, and the sender's repeat is accepted. */
+static void test_flow_control_efull(void **state)
+{
+    (void)state;
+    queue_waypoint(1, 1.0);
+    eng.answer = -ENGINE_EFULL;
+    can_port_rx(port, 0);
+    assert_int_equal(eng.n, 0);
+    run_cycle(0, 0);
+    canproto_status_t s;
+    canproto_decode_status(&io.out[io.nout - 1], &s);
+    assert_int_equal(s.rejected, 1);
+    assert_int_equal(s.last_err, ENGINE_EFULL);
+    eng.answer = 0;
+    queue_waypoint(1, 1.0); /* the sender repeats */
+    can_port_rx(port, 0);
+    assert_int_equal(eng.n, 1);
+    can_port_obj_stats_t st;
+    can_port_obj_stats(port, 0, &st);
+    assert_int_equal(st.rx.lost, 0);
+}
+
+/* Given commands, then the hook sees them; CLEAR restarts sequence numbering. */
+static void test_commands(void **state)
+{
+    (void)state;
+    queue_waypoint(10, 1.0);
+    canproto_encode_command(0x680, CANPROTO_CMD_CLEAR, &io.in[io.nin++]);
+    queue_waypoint(0, 0.5);  /* would be "out of order" without the restart */
+    can_port_rx(port, 0);
+    assert_int_equal(eng.ncmd, 1);
+    assert_int_equal(eng.cmds[0], CANPROTO_CMD_CLEAR);
+    assert_int_equal(eng.n, 2);
+}
+
+/* Given two objects with clashing ids, then the second is refused. */
+static void test_id_clash(void **state)
+{
+    (void)state;
+    can_port_config_t cfg;
+    canproto_ids_t a, b;
+    can_port_config_default(&cfg);
+    can_port_t *p = can_port_new(&cfg, &fake_ops, &io, 2);
+    canproto_ids_default(&a, 0);
+    canproto_ids_default(&b, 1);
+    b.status_id = a.setpoint_id;
+    assert_int_equal(can_port_set_object(p, 0, &a, &fe_hooks, &eng), 0);
+    assert_int_equal(can_port_set_object(p, 1, &b, &fe_hooks, &eng), -CANPROTO_ECONFIG);
+    canproto_ids_default(&b, 1);
+    b.fd = 1;
+    assert_int_equal(can_port_set_object(p, 1, &b, &fe_hooks, &eng), 0);
+    uint32_t rx[8];
+    assert_int_equal(can_port_rx_ids(p, rx, 8), 3);
+    assert_int_equal(rx[0], 0x680);
+    assert_int_equal(rx[1], 0x681);
+    assert_int_equal(rx[2], 0x691);
+    can_port_free(p);
+}
+
+/* Given the real candump capture (comments at the top, 29-bit NMEA 2000
+ * frames), when replayed through can_logfile into can_port, then every frame is
+ * delivered on time and counted as foreign, comments are skipped. */
+static void test_can_logfile_real_capture(void **state)
+{
+    (void)state;
+    char err[256];
+    can_logfile_t *l = can_logfile_open("tests/data/canboat_candumpSample3.log", NULL, "can0", 0, err,
+                              sizeof err);
+    assert_non_null(l);
+    can_logfile_stats_t ls;
+    can_logfile_stats(l, &ls);
+    assert_int_equal(ls.frames_in, 2368);
+    assert_int_equal(ls.bad_lines, 0);
+    assert_true(ls.comments >= 9);
+    canproto_frame_t f;
+    /* nothing is due before time 0; the first frame is due at 0 */
+    assert_int_equal(can_logfile_recv(l, -1, &f), 0);
+    assert_int_equal(can_logfile_recv(l, 0, &f), 1);
+    assert_int_equal(f.id, 0x09F112CC);
+    assert_true(f.flags & CANPROTO_F_EFF);
+    /* second frame: 22 us later */
+    assert_int_equal(can_logfile_recv(l, 21000, &f), 0);
+    assert_int_equal(can_logfile_recv(l, 22000, &f), 1);
+    unsigned n = 2;
+    while (can_logfile_recv(l, INT64_MAX / 2, &f))
+        n++;
+    assert_int_equal(n, 2368);
+    assert_true(can_logfile_done(l));
+    can_logfile_close(l);
+}
+
+/* Given a can_logfile output, when setpoints are sent, then the file holds candump
+ * -L lines with engine-time stamps that our parser reads back. */
+static void test_can_logfile_output(void **state)
+{
+    (void)state;
+    char path[] = "/tmp/trajd-can_logfile-XXXXXX", err[256], line[256];
+    int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    close(fd);
+    can_logfile_t *l = can_logfile_open(NULL, path, "vcan0", 0, err, sizeof err);
+    assert_non_null(l);
+    engine_setpoint_t sp = sp_at(7, 1.5);
+    canproto_frame_t f[3];
+    canproto_encode_setpoint(0x6A0, &sp, f);
+    can_logfile_set_time(l, 1234567000);
+    for (int a = 0; a < 3; a++)
+        assert_int_equal(can_logfile_send(l, &f[a]), 0);
+    can_logfile_close(l);
+    FILE *fp = fopen(path, "r");
+    assert_non_null(fp);
+    int n = 0;
+    while (fgets(line, sizeof line, fp)) {
+        candump_line_t cl;
+        assert_int_equal(candump_parse_line(line, &cl), 0);
+        assert_int_equal(cl.ts_us, 1234567);
+        assert_string_equal(cl.ifname, "vcan0");
+        assert_memory_equal(cl.frame.data, f[n].data, 8);
+        n++;
+    }
+    fclose(fp);
+    unlink(path);
+    assert_int_equal(n, 3);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test_setup_teardown(test_cycle_frames_and_sync, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_queue_full_drops_no_burst, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_down_and_back, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_late_cycle_dropped, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_rx_paths, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_flow_control_efull, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_commands, setup, teardown),
+        cmocka_unit_test(test_id_clash),
+        cmocka_unit_test(test_can_logfile_real_capture),
+        cmocka_unit_test(test_can_logfile_output),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,264 @@
+/* test_cfg.c - the config parser: accepted files give the values written,
+ * every kind of mistake is refused with "name:line: ..." pointing at the
+ * offending line (counted by the test from the text it wrote), and the
+ * documented config/trajd.conf is accepted with every documented default
+ * uncommented.  Run from the repository root (tests/run.sh does). */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cfg.h"
+#include "csv_transport.h"
+#include "replay_transport.h"
+#include "transport.h"
+
+#define TRACK "tests/data/n2k_furuno_figure8_src52.csv"
+#define OBJ "[object.boat]\ninput = replay\nreplay.track = " TRACK "\noutput = stdout\n"
+
+static char err[1024];
+
+static cfg_t *load_ok(const char *text)
+{
+    cfg_t *c = NULL;
+    err[0] = 0;
+    int rc = cfg_load_string(text, "t.conf", ".", &c, err, sizeof err);
+    if (rc != 0)
+        fail_msg("expected success, got %d: %s", rc, err);
+    return c;
+}
+
+/* Expect failure code, and err to start with "t.conf:LINE:" and contain needle. */
+static void load_bad(const char *text, int code, int line, const char *needle)
+{
+    cfg_t *c = (cfg_t *)1;
+    char prefix[64];
+    err[0] = 0;
+    int rc = cfg_load_string(text, "t.conf", ".", &c, err, sizeof err);
+    assert_null(c);
+    if (rc != -code)
+        fail_msg("expected -%d, got %d: %s", code, rc, err);
+    if (line > 0)
+        snprintf(prefix, sizeof prefix, "t.conf:%d: ", line);
+    else
+        snprintf(prefix, sizeof prefix, "t.conf: ");
+    if (strncmp(err, prefix, strlen(prefix)) != 0)
+        fail_msg("expected prefix '%s', got '%s'", prefix, err);
+    if (needle && !strstr(err, needle))
+        fail_msg("expected '%s' in '%s'", needle, err);
+}
+
+/* Given a minimal file, then defaults are filled and the object is wired. */
+static void test_minimal(void **state)
+{
+    (void)state;
+    cfg_t *c = load_ok(OBJ);
+    assert_int_equal(c->nobj, 1);
+    assert_string_equal(c->obj[0].name, "boat");
+    assert_ptr_equal(c->obj[0].input, &replay_transport);
+    assert_int_equal(c->obj[0].noutput, 1);
+    assert_ptr_equal(c->obj[0].output[0], &stdout_transport);
+    assert_true(c->daemon.rate_hz > 99.999 && c->daemon.rate_hz < 100.001);
+    assert_int_equal(c->daemon.period_ns, 10000000);
+    assert_int_equal(c->obj[0].engine.period_ns, 10000000);
+    assert_int_equal(c->rt.fifo_priority, 0);
+    assert_int_equal(c->rt.mlockall, 0);
+    assert_int_equal(c->rt.affinity_set, 0);
+    const replay_transport_obj_cfg_t *r = cfg_obj_transport(&c->obj[0], &replay_transport);
+    assert_true(r->loaded);
+    assert_int_equal(r->trk.n, 1786); /* rows of the file (ATTRIBUTION.md) */
+    assert_true(cfg_uses(c, &stdout_transport));
+    assert_false(cfg_uses(c, &csv_transport));
+    cfg_free(c);
+}
+
+/* Given every core key with a non-default value, then each lands in its field. */
+static void test_values(void **state)
+{
+    (void)state;
+    cfg_t *c = load_ok("[daemon]\nrate_hz = 1000\nspeed = 2.5\nstatus_interval_s = 0\n"
+                       "stop_timeout_s = 1.5\nexit_when_done = yes\nlog_level = debug\n"
+                       "[realtime]\nfifo_priority = 80\nmlockall = on\ncpu_affinity = 0,2-3\n"
+                       "[object.a-1]\ninput = replay\nreplay.track = " TRACK "\n"
+                       "output = csv, stdout\ncsv.path = out.csv\nmethod = bspline\n"
+                       "param = uniform\nends = clamped\nstart_vel_m_s = 1, -2,3e-1\n"
+                       "fragment = 32\noverlap = 16\nmax_gap_s = 7.5\n"
+                       "max_accel_m_s2 = 12.5\nstart_slack = 3\n"
+                       "[object.b]\ninput = replay\nreplay.track = " TRACK "\n"
+                       "replay.start_s = 2\noutput = stdout\n");
+    assert_int_equal(c->daemon.period_ns, 1000000);
+    assert_true(c->daemon.speed > 2.4999 && c->daemon.speed < 2.5001);
+    assert_int_equal(c->daemon.exit_when_done, 1);
+    assert_int_equal(c->rt.fifo_priority, 80);
+    assert_int_equal(c->rt.mlockall, 1);
+    assert_true(c->rt.affinity_set);
+    assert_true(CPU_ISSET(0, &c->rt.affinity) && !CPU_ISSET(1, &c->rt.affinity) &&
+                CPU_ISSET(2, &c->rt.affinity) && CPU_ISSET(3, &c->rt.affinity));
+    assert_int_equal(c->nobj, 2);
+    const cfg_obj_t *o = &c->obj[0];
+    assert_string_equal(o->name, "a-1");
+    assert_int_equal(o->noutput, 2);
+    assert_ptr_equal(o->output[0], &csv_transport);
+    assert_ptr_equal(o->output[1], &stdout_transport);
+    assert_int_equal(o->engine.method, ENGINE_METHOD_BSPLINE);
+    assert_int_equal(o->engine.param, ENGINE_PARAM_UNIFORM);
+    assert_int_equal(o->engine.ends, ENGINE_ENDS_CLAMPED);
+    assert_true(o->engine.start_vel_m_s[1] > -2.0001 && o->engine.start_vel_m_s[1] < -1.9999);
+    assert_true(o->engine.start_vel_m_s[2] > 0.2999 && o->engine.start_vel_m_s[2] < 0.3001);
+    assert_int_equal(o->engine.fragment, 32);
+    assert_true(o->engine.max_accel_m_s2 > 12.4999 && o->engine.max_accel_m_s2 < 12.5001);
+    assert_int_equal(o->engine.start_slack, 3);
+    assert_int_equal(o->engine.overlap, 16);
+    const csv_transport_obj_cfg_t *cs = cfg_obj_transport(o, &csv_transport);
+    assert_string_equal(cs->path, "./out.csv"); /* relative to the config's directory */
+    cfg_free(c);
+}
+
+/* Each mistake: refused, with the line of the mistake. */
+static void test_errors(void **state)
+{
+    (void)state;
+    load_bad("[daemon]\nrate_hz = 100\nbogus = 1\n" OBJ, CFG_EUNKNOWN, 3, "bogus: unknown key");
+    load_bad("[daemon]\n[deamon]\n" OBJ, CFG_EUNKNOWN, 2, "unknown section [deamon]");
+    load_bad("[daemon]\nrate_hz = fast\n" OBJ, CFG_EVALUE, 2, "rate_hz");
+    load_bad("[daemon]\nrate_hz = 100x\n" OBJ, CFG_EVALUE, 2, "got '100x'");
+    load_bad("[daemon]\nrate_hz = 0\n" OBJ, CFG_EVALUE, 2, "rate_hz");
+    load_bad("[daemon]\nrate_hz = nan\n" OBJ, CFG_EVALUE, 2, "rate_hz");
+    load_bad("[daemon]\nspeed = 1\nspeed = 2\n" OBJ, CFG_EDUP, 3, "given twice");
+    load_bad(OBJ "[object.boat]\n", CFG_EDUP, 5, "section given twice");
+    load_bad("rate_hz = 100\n" OBJ, CFG_ESYNTAX, 1, "before any");
+    load_bad("[daemon]\nthis is not ini\n" OBJ, CFG_ESYNTAX, 2, "syntax");
+    load_bad("[daemon]\nrate_hz = 100\n  speed = 2\n" OBJ, CFG_ESYNTAX, 3, "do not indent");
+    load_bad("[daemon]\n\n\n" OBJ "fragment = 4.5\n", CFG_EVALUE, 8, "fragment");
+    load_bad(OBJ "method = spline\n", CFG_EVALUE, 5, "bspline, cubic, smooth");
+    load_bad(OBJ "max_accel_m_s2 = -1\n", CFG_EVALUE, 5, "max_accel_m_s2");
+    load_bad(OBJ "start_slack = 2000\n", CFG_EVALUE, 5, "start_slack");
+    load_bad(OBJ "start_vel_m_s = 1,2\n", CFG_EVALUE, 5, "three numbers");
+    load_bad("[realtime]\nfifo_priority = 100\n" OBJ, CFG_EVALUE, 2, "[0, 99]");
+    load_bad("[realtime]\ncpu_affinity = 1-\n" OBJ, CFG_EVALUE, 2, "CPU list");
+    load_bad("[object.bad name]\ninput = replay\n", CFG_EVALUE, 1, "object name");
+    load_bad("[object.x]\ninput = carrier-pigeon\n", CFG_EVALUE, 2, "replay");
+    load_bad("[object.x]\ninput = replay\noutput = stdout, fax\n", CFG_EVALUE, 3, "fax");
+    load_bad("[object.x]\ninput = replay\noutput = stdout,stdout\n", CFG_EVALUE, 3, "twice");
+    load_bad("[object.x]\ninput = replay\nreplay.colour = red\n", CFG_EUNKNOWN, 3,
+             "replay.colour");
+    load_bad("[object.x]\ninput = replay\nnope.key = 1\n", CFG_EUNKNOWN, 3, "nope.key");
+    /* keys for a transport the object does not use */
+    load_bad(OBJ "csv.path = x.csv\n", CFG_EVALUE, 5, "does not use");
+    /* whole-file rules: reported at the object's header line */
+    load_bad("[daemon]\n", CFG_EMISSING, 0, "no [object");
+    load_bad("[daemon]\n[object.x]\noutput = stdout\n", CFG_EMISSING, 2, "'input' is missing");
+    load_bad("[object.x]\ninput = replay\nreplay.track = " TRACK "\n", CFG_EMISSING, 1,
+             "'output' is missing");
+    load_bad("[object.x]\ninput = replay\noutput = stdout\n", CFG_EMISSING, 1,
+             "replay.track is missing");
+    load_bad("[object.x]\ninput = replay\nreplay.track = " TRACK "\noutput = csv\n",
+             CFG_EMISSING, 1, "csv.path is missing");
+    /* a missing track file: at the replay.track line, with the OS's reason */
+    load_bad("[object.x]\ninput = replay\noutput = stdout\n\nreplay.track = /nonexistent.csv\n",
+             CFG_EVALUE, 5, "nonexistent.csv");
+    /* engine rule (lib/engine/engine.h: overlap even and < fragment): at the object's line */
+    load_bad("[daemon]\n" OBJ "fragment = 8\noverlap = 8\n", CFG_EVALUE, 2, "engine");
+    /* a line too long for inih is refused, not split */
+    char big[600];
+    snprintf(big, sizeof big, "[daemon]\nlog_level = %0400d\n" OBJ, 0);
+    load_bad(big, CFG_ESYNTAX, 2, "longer than");
+}
+
+/* Given config/trajd.conf with every documented "#key = default" uncommented,
+ * then it is still accepted (each documented key exists and its documented
+ * default is a valid value), and the file as shipped is accepted too. */
+static void test_documented_conf(void **state)
+{
+    (void)state;
+    FILE *f = fopen("config/trajd.conf", "r");
+    assert_non_null(f);
+    static char text[65536], line[512];
+    size_t n = 0;
+    int uncommented = 0;
+    while (fgets(line, sizeof line, f)) {
+        const char *l = line;
+        /* "#key = value" with a key character right after '#' */
+        if (line[0] == '#' && line[1] >= 'a' && line[1] <= 'z' && strstr(line, " = ")) {
+            l = line + 1;
+            uncommented++;
+        }
+        size_t m = strlen(l);
+        assert_true(n + m < sizeof text);
+        memcpy(text + n, l, m);
+        n += m;
+    }
+    text[n] = 0;
+    fclose(f);
+    assert_true(uncommented >= 20);
+    cfg_t *c = NULL;
+    int rc = cfg_load_string(text, "trajd.conf(uncommented)", "config", &c, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    /* and the documented defaults are the real ones: the engine's
+     * engine_config_default() and the parser's own for [daemon]/[realtime] */
+    engine_config_t e;
+    engine_config_default(&e);
+    const engine_config_t *d = &c->obj[0].engine;
+    assert_int_equal(d->method, e.method);
+    assert_int_equal(d->param, e.param);
+    assert_int_equal(d->ends, e.ends);
+    assert_int_equal(d->fragment, e.fragment);
+    assert_int_equal(d->overlap, e.overlap);
+    assert_int_equal(d->capacity, e.capacity);
+    assert_memory_equal(&d->max_gap_s, &e.max_gap_s, sizeof(double));
+    assert_memory_equal(&d->max_abs_m, &e.max_abs_m, sizeof(double));
+    assert_memory_equal(&d->max_speed_m_s, &e.max_speed_m_s, sizeof(double));
+    assert_memory_equal(&d->max_segment_s, &e.max_segment_s, sizeof(double));
+    assert_memory_equal(&d->max_accel_m_s2, &e.max_accel_m_s2, sizeof(double));
+    assert_int_equal(d->start_slack, e.start_slack);
+    assert_int_equal(d->smooth_window, e.smooth_window);
+    assert_int_equal(d->smooth_ctrl, e.smooth_ctrl);
+    assert_memory_equal(d->start_vel_m_s, e.start_vel_m_s, sizeof e.start_vel_m_s);
+    cfg_t *m = load_ok(OBJ); /* nothing set: the parser's defaults */
+    assert_memory_equal(&c->daemon.rate_hz, &m->daemon.rate_hz, sizeof(double));
+    assert_memory_equal(&c->daemon.speed, &m->daemon.speed, sizeof(double));
+    assert_memory_equal(&c->daemon.status_interval_s, &m->daemon.status_interval_s,
+                        sizeof(double));
+    assert_memory_equal(&c->daemon.stop_timeout_s, &m->daemon.stop_timeout_s, sizeof(double));
+    assert_int_equal(c->daemon.log_level, m->daemon.log_level);
+    assert_int_equal(c->rt.fifo_priority, m->rt.fifo_priority);
+    assert_int_equal(c->rt.mlockall, m->rt.mlockall);
+    cfg_free(m);
+    cfg_free(c);
+    rc = cfg_load("config/trajd.conf", &c, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    cfg_free(c);
+    rc = cfg_load("config/demo.conf", &c, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    cfg_free(c);
+}
+
+/* Given a missing file, then -CFG_EIO with the OS's reason. */
+static void test_missing_file(void **state)
+{
+    (void)state;
+    cfg_t *c = (cfg_t *)1;
+    assert_int_equal(cfg_load("/nonexistent/trajd.conf", &c, err, sizeof err), -CFG_EIO);
+    assert_null(c);
+    assert_non_null(strstr(err, "No such file"));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_minimal),
+        cmocka_unit_test(test_values),
+        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_documented_conf),
+        cmocka_unit_test(test_missing_file),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,1036 @@
+/*
+ * test_engine.c - the engine's state machine and its refusals.
+ *
+ * References: setpoints are checked against direct Horner evaluation of the
+ * curve at the setpoint's own time (fdiff_eval over engine_curve's segments,
+ * whose shapes test_spline.py checks against scipy), and motion limits
+ * against the curve's own maximum speed.
+ */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <float.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "engine.h"
+#include "fdiff.h"
+
+#define PERIOD_NS 10000000LL
+/* Setpoint vs Horner at the same time: the stepper re-seeds every
+ * FDIFF_RESEED_STEPS, so only ~1000 additions of drift (~1e-13 m on tens of
+ * metres); 1e-9 m leaves room and still catches a phase error of one tick
+ * (>= 1e-3 m at these speeds). */
+#define TOL_HORNER_M 1e-9
+/* A tick moves at most vmax * period; 1 % over for the discrete maximum. */
+#define STEP_SLACK 1.01
+
+static void circle_wp(engine_waypoint_t *w, int i, double dt)
+{
+    memset(w, 0, sizeof(*w));
+    w->t_s = i * dt;
+    w->pos_m[0] = 20.0 * cos(0.15 * i);
+    w->pos_m[1] = 20.0 * sin(0.15 * i);
+    w->pos_m[2] = 0.3 * i;
+    w->seq = (uint32_t)i + 1;
+}
+
+static engine_t *mk(engine_config_t *c)
+{
+    int err = -1;
+    engine_t *e = engine_new(c, &err);
+    assert_non_null(e);
+    assert_int_equal(err, 0);
+    return e;
+}
+
+static int finite_sp(const engine_setpoint_t *sp)
+{
+    for (int k = 0; k < 3; k++)
+        if (!isfinite(sp->pos_m[k]) || !isfinite(sp->vel_m_s[k]) || !isfinite(sp->acc_m_s2[k]))
+            return 0;
+    return isfinite(sp->t_s);
+}
+
+static double dist3(const double *a, const double *b)
+{
+    double d = 0;
+    for (int k = 0; k < 3; k++)
+        d += (a[k] - b[k]) * (a[k] - b[k]);
+    return sqrt(d);
+}
+
+/* max speed of a curve, sampled densely by Horner */
+static double curve_vmax(const fdiff_seg_t *s, size_t n)
+{
+    double vmax = 0;
+    for (size_t i = 0; i < n; i++)
+        for (int j = 0; j <= 200; j++) {
+            double v[3];
+            fdiff_eval(&s[i], j / 200.0, NULL, v, NULL);
+            double sp = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            if (sp > vmax)
+                vmax = sp;
+        }
+    return vmax;
+}
+
+/* Given defaults, then they pass the check; SMOOTH with more control points
+ * than its window, HELD with the cubic form, a bad overlap and a tiny
+ * capacity are refused with a reason. */
+static void test_config(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    const char *why = NULL;
+    int err = 0;
+
+    engine_config_default(&c);
+    assert_int_equal(engine_config_check(&c, &why), 0);
+    assert_null(why);
+    c.method = ENGINE_METHOD_SMOOTH;
+    assert_int_equal(engine_config_check(&c, &why), 0); /* toolkit: lib/spline/lsq.h */
+    c.smooth_ctrl = c.smooth_window + 1;
+    assert_int_equal(engine_config_check(&c, &why), -ENGINE_ECONFIG);
+    assert_non_null(strstr(why, "smooth"));
+    assert_null(engine_new(&c, &err));
+    assert_int_equal(err, ENGINE_ECONFIG);
+    engine_config_default(&c);
+    c.ends = ENGINE_ENDS_HELD;
+    assert_int_equal(engine_config_check(&c, &why), -ENGINE_ECONFIG);
+    assert_non_null(strstr(why, "ends"));
+    c.method = ENGINE_METHOD_BSPLINE;
+    c.param = ENGINE_PARAM_UNIFORM;
+    assert_int_equal(engine_config_check(&c, &why), 0);
+    engine_config_default(&c);
+    c.overlap = 7;
+    assert_int_equal(engine_config_check(&c, &why), -ENGINE_ECONFIG);
+    assert_non_null(strstr(why, "overlap"));
+    engine_config_default(&c);
+    c.capacity = 10;
+    assert_int_equal(engine_config_check(&c, &why), -ENGINE_ECONFIG);
+    assert_non_null(strstr(why, "capacity"));
+    assert_string_equal(engine_state_name(ENGINE_STATE_UNDERRUN), "underrun");
+    assert_non_null(engine_strerror(-ENGINE_EFULL));
+    engine_free(NULL);
+}
+
+/* Given (F, O), when waypoints arrive one by one, then the output leaves
+ * WAITING exactly when lookahead + 2 waypoints are in (segment 0 needs its
+ * end waypoint plus the lookahead); before any waypoint it holds 0. */
+static void test_lookahead_is_real(void **state)
+{
+    (void)state;
+    static const unsigned fo[][2] = {{8, 4}, {16, 8}, {32, 16}, {32, 30}};
+    for (size_t m = 0; m < 2; m++)
+        for (size_t i = 0; i < sizeof(fo) / sizeof(fo[0]); i++) {
+            engine_config_t c;
+            engine_setpoint_t sp;
+            engine_waypoint_t w;
+            engine_config_default(&c);
+            c.fragment = fo[i][0];
+            c.overlap = fo[i][1];
+            if (m) {
+                c.method = ENGINE_METHOD_BSPLINE;
+                c.param = ENGINE_PARAM_UNIFORM;
+                c.ends = ENGINE_ENDS_NATURAL;
+            }
+            engine_t *e = mk(&c);
+            unsigned la = engine_lookahead(&c);
+            int64_t now = 0;
+            assert_true(la > 0 && la < 2 * c.fragment);
+            assert_int_equal(engine_tick(e, now, &sp), 0);
+            assert_int_equal(sp.state, ENGINE_STATE_WAITING);
+            assert_true(sp.flags & ENGINE_SP_HOLD);
+            assert_true(fabs(sp.pos_m[0]) <= 0.0 && fabs(sp.pos_m[1]) <= 0.0);
+            for (unsigned k = 0; k < la + 2; k++) {
+                circle_wp(&w, (int)k, 1.0);
+                assert_int_equal(engine_push(e, &w), 0);
+                now += PERIOD_NS;
+                assert_int_equal(engine_tick(e, now, &sp), 0);
+                if (k + 1 < la + 2) {
+                    assert_int_equal(sp.state, ENGINE_STATE_WAITING);
+                    /* holding at the first waypoint */
+                    assert_true(dist3(sp.pos_m, (double[]){20, 0, 0}) < 1e-12);
+                }
+            }
+            assert_int_equal(sp.state, ENGINE_STATE_STREAMING);
+            assert_true(sp.flags & ENGINE_SP_NEW_TRACK);
+            assert_int_equal(sp.track, 1);
+            engine_status_t st;
+            engine_status(e, &st);
+            assert_int_equal(st.lookahead, la);
+            engine_free(e);
+        }
+}
+
+/*
+ * Given waypoints fed on time, then a pause of the sender, then the rest and
+ * engine_finish: the states go WAITING -> STREAMING -> UNDERRUN -> STREAMING
+ * -> FINISHED; while streaming every setpoint equals Horner evaluation of the
+ * curve at the setpoint's own time (exact phase across segment boundaries);
+ * no tick moves more than vmax * period (no jump, the underrun delays the
+ * track); the end rests exactly on the last waypoint.
+ */
+static void test_stream_underrun_finish(void **state)
+{
+    (void)state;
+    enum { N = 120 };
+    engine_config_t c;
+    engine_waypoint_t wp[N];
+    static fdiff_seg_t segs[N + 8];
+    size_t nseg = 0;
+    engine_setpoint_t sp, prev;
+    int next = 0, seen[4] = {0}, last_state = -1, transitions = 0;
+    double maxerr = 0, maxstep = 0;
+
+    engine_config_default(&c);
+    for (int i = 0; i < N; i++) {
+        circle_wp(&wp[i], i, 0.5 + 0.25 * (i % 3)); /* irregular: 0.5, 0.75, 1.0 */
+        if (i)
+            wp[i].t_s = wp[i - 1].t_s + 0.5 + 0.25 * (i % 3);
+    }
+    assert_int_equal(engine_curve(&c, wp, N, segs, N + 8, &nseg), 0);
+    assert_int_equal(nseg, N - 1);
+    double vmax = curve_vmax(segs, nseg);
+
+    engine_t *e = mk(&c);
+    int paused = 0;
+    for (int64_t k = 0; k < 20000; k++) {
+        int64_t now = k * PERIOD_NS;
+        double now_s = (double)now * 1e-9;
+        /* the sender stops for 20 s after waypoint 70, then catches up */
+        while (next < N && (next != 70 || paused) && wp[next].t_s <= now_s - (paused ? 20 : 0)) {
+            assert_int_equal(engine_push(e, &wp[next]), 0);
+            next++;
+        }
+        if (next == 70 && !paused && now_s > wp[70].t_s + 20)
+            paused = 1;
+        if (next == N)
+            assert_int_equal(engine_finish(e), 0);
+        assert_int_equal(engine_tick(e, now, &sp), 0);
+        assert_true(finite_sp(&sp));
+        seen[sp.state]++;
+        if ((int)sp.state != last_state) {
+            transitions++;
+            last_state = (int)sp.state;
+        }
+        if (sp.state == ENGINE_STATE_STREAMING && prev.state == ENGINE_STATE_STREAMING) {
+            /* track time on the period grid: one period per streaming tick */
+            assert_true(fabs(sp.t_s - prev.t_s - 0.01) < 1e-12);
+        }
+        if (sp.state == ENGINE_STATE_STREAMING) {
+            double p[3];
+            fdiff_eval_curve(segs, nseg, &sp.t_s, 1, p, NULL, NULL);
+            double d = dist3(p, sp.pos_m);
+            if (d > maxerr)
+                maxerr = d;
+        }
+        if (k > 0 && prev.track == sp.track && sp.track > 0) {
+            double d = dist3(prev.pos_m, sp.pos_m);
+            if (d > maxstep)
+                maxstep = d;
+        }
+        prev = sp;
+        if (sp.state == ENGINE_STATE_FINISHED)
+            break;
+    }
+    engine_status_t st;
+    engine_status(e, &st);
+    assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+    assert_true(sp.flags & ENGINE_SP_HOLD);
+    assert_true(seen[ENGINE_STATE_WAITING] > 0 && seen[ENGINE_STATE_STREAMING] > 0 &&
+                seen[ENGINE_STATE_UNDERRUN] > 0);
+    assert_int_equal(transitions, 5); /* W, S, U, S, F */
+    assert_int_equal(st.underruns, 1);
+    assert_int_equal(st.underrun_ticks, (uint64_t)seen[ENGINE_STATE_UNDERRUN]);
+    assert_int_equal(st.accepted, N);
+    assert_true(maxerr < TOL_HORNER_M);
+    assert_true(maxstep <= vmax * 0.01 * STEP_SLACK);
+    assert_true(dist3(sp.pos_m, wp[N - 1].pos_m) < 1e-9);
+    assert_true(fabs(sp.vel_m_s[0]) <= 0.0 && fabs(sp.acc_m_s2[0]) <= 0.0);
+    assert_int_equal(st.tracks, 1);
+    engine_free(e);
+}
+
+/* Given two engines holding the same whole track, one ticked every period and
+ * one every third period, then at common ticks their setpoints are bitwise
+ * identical (waiting, streaming, finished), and skipped ticks are counted and
+ * flagged.  (With input arriving between the ticks the two would differ by
+ * when they saw it, which is the point of skipping: late ticks see late data.) */
+static void test_skipped_ticks_identical(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_config_default(&c);
+    engine_t *a = mk(&c), *b = mk(&c);
+    engine_waypoint_t w;
+    engine_setpoint_t sa, sb;
+    int next = 0;
+
+    for (int64_t k = 0; k < 6000; k++) {
+        int64_t now = k * PERIOD_NS;
+        while (next < 80) {
+            circle_wp(&w, next, 0.7);
+            assert_int_equal(engine_push(a, &w), 0);
+            assert_int_equal(engine_push(b, &w), 0);
+            if (++next == 80) {
+                engine_finish(a);
+                engine_finish(b);
+            }
+        }
+        assert_int_equal(engine_tick(a, now, &sa), 0);
+        if (k % 3 == 0) {
+            assert_int_equal(engine_tick(b, now, &sb), 0);
+            assert_memory_equal(sa.pos_m, sb.pos_m, sizeof(sa.pos_m));
+            assert_memory_equal(sa.vel_m_s, sb.vel_m_s, sizeof(sa.vel_m_s));
+            assert_memory_equal(sa.acc_m_s2, sb.acc_m_s2, sizeof(sa.acc_m_s2));
+            assert_memory_equal(&sa.t_s, &sb.t_s, sizeof(double));
+            assert_int_equal(sa.state, sb.state);
+            assert_int_equal(sa.cycle, sb.cycle);
+            if (k > 0)
+                assert_true(sb.flags & ENGINE_SP_SKIPPED);
+        }
+    }
+    engine_status_t st;
+    engine_status(b, &st);
+    assert_int_equal(st.skipped_ticks, 2 * (6000 / 3 - 1) + 0);
+    /* a tick going backwards is refused and repeats the last setpoint */
+    assert_int_equal(engine_tick(b, 0, &sb), -ENGINE_ESTATE);
+    /* a clock jump of ~11.6 days at rest costs nothing and counts the ticks */
+    uint32_t cyc = sa.cycle;
+    assert_int_equal(sa.state, ENGINE_STATE_FINISHED);
+    assert_int_equal(engine_tick(a, 5999 * PERIOD_NS + 100000000LL * PERIOD_NS, &sa), 0);
+    assert_int_equal(sa.cycle, (uint32_t)(cyc + 100000000u));
+    assert_int_equal(sa.state, ENGINE_STATE_FINISHED);
+    assert_true(sa.flags & ENGINE_SP_SKIPPED);
+    engine_free(a);
+    engine_free(b);
+}
+
+/* Given every kind of bad waypoint, then each is refused with its code and
+ * counted, nothing accepted changes, duplicates are dropped and counted, and
+ * no setpoint is ever NaN. */
+static void test_bad_input(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_config_default(&c);
+    c.max_speed_m_s = 50;
+    engine_t *e = mk(&c);
+    engine_waypoint_t w = {.t_s = 10, .pos_m = {1, 2, 3}, .seq = 1}, b;
+    engine_status_t st;
+    engine_setpoint_t sp;
+
+    assert_int_equal(engine_push(e, &w), 0);
+    b = w; b.t_s = 11; b.pos_m[1] = NAN;
+    assert_int_equal(engine_push(e, &b), -ENGINE_ENOTFINITE);
+    b = w; b.t_s = INFINITY;
+    assert_int_equal(engine_push(e, &b), -ENGINE_ENOTFINITE);
+    b = w; b.t_s = 11; b.pos_m[0] = 2e7;
+    assert_int_equal(engine_push(e, &b), -ENGINE_ERANGE);
+    b = w; b.t_s = 11; b.pos_m[2] = -2e7; /* |coordinate|: negative too */
+    assert_int_equal(engine_push(e, &b), -ENGINE_ERANGE);
+    b = w; b.t_s = 1e13;
+    assert_int_equal(engine_push(e, &b), -ENGINE_ERANGE);
+    b = w; b.t_s = 9;
+    assert_int_equal(engine_push(e, &b), -ENGINE_EBACKWARDS);
+    b = w; b.pos_m[0] = 1.5;
+    assert_int_equal(engine_push(e, &b), -ENGINE_ESAMETIME);
+    b = w; b.seq = 2;
+    assert_int_equal(engine_push(e, &b), ENGINE_DUPLICATE);
+    b = w; b.t_s = 11; b.pos_m[0] = 1 + 51; /* 51 m in 1 s */
+    assert_int_equal(engine_push(e, &b), -ENGINE_ESPEED);
+    b = w; b.t_s = 11; b.pos_m[0] = 1 + 49; b.seq = 3;
+    assert_int_equal(engine_push(e, &b), 0);
+    engine_status(e, &st);
+    assert_int_equal(st.accepted, 2);
+    assert_int_equal(st.duplicates, 1);
+    assert_int_equal(st.rejected, 8);
+    assert_int_equal(st.rejected_by[ENGINE_ENOTFINITE], 2);
+    assert_int_equal(st.rejected_by[ENGINE_ERANGE], 3);
+    assert_int_equal(st.rejected_by[ENGINE_EBACKWARDS], 1);
+    assert_int_equal(st.rejected_by[ENGINE_ESAMETIME], 1);
+    assert_int_equal(st.rejected_by[ENGINE_ESPEED], 1);
+    assert_int_equal(st.last_seq, 3);
+    engine_reset_counters(e);
+    engine_status(e, &st);
+    assert_int_equal(st.rejected, 0);
+    assert_int_equal(st.accepted, 0);
+
+    /* a shower of garbage: no NaN ever comes out */
+    unsigned s = 12345;
+    for (int i = 0; i < 20000; i++) {
+        s = s * 1103515245u + 12345u;
+        engine_waypoint_t g = {.t_s = 11 + i * 0.05 + ((s >> 16) % 7 == 0 ? -3 : 0)};
+        for (int k = 0; k < 3; k++) {
+            s = s * 1103515245u + 12345u;
+            g.pos_m[k] = ((s >> 8) % 1000) * 0.01;
+        }
+        if (i % 97 == 0)
+            g.pos_m[i % 3] = NAN;
+        if (i % 101 == 0)
+            g.t_s = g.t_s - 0.05; /* same time */
+        (void)engine_push(e, &g);
+        if (i % 3000 == 2999)
+            engine_finish(e);
+        if (i % 7000 == 6999)
+            engine_clear(e);
+        assert_int_equal(engine_tick(e, (int64_t)i * PERIOD_NS, &sp), 0);
+        assert_true(finite_sp(&sp));
+    }
+    engine_free(e);
+}
+
+/* Given a small capacity and a sender pushing as fast as it can, then pushes
+ * fail with EFULL (free == 0), succeed again as the output drains, and every
+ * waypoint offered is eventually accepted (nothing accepted and then lost:
+ * the output ends on the last one). */
+static void test_full_and_retry(void **state)
+{
+    (void)state;
+    enum { N = 400 };
+    engine_config_t c;
+    engine_config_default(&c);
+    c.capacity = engine_lookahead(&c) + c.fragment + 8;
+    engine_t *e = mk(&c);
+    engine_waypoint_t w;
+    engine_setpoint_t sp;
+    engine_status_t st;
+    int next = 0, fulls = 0;
+
+    for (int64_t k = 0; k < 100000; k++) {
+        for (;;) {
+            if (next == N)
+                break;
+            circle_wp(&w, next, 0.2);
+            int rc = engine_push(e, &w);
+            engine_status(e, &st);
+            assert_int_equal(st.buffered + st.free, c.capacity);
+            if (rc == -ENGINE_EFULL) {
+                assert_int_equal(st.free, 0);
+                fulls++;
+                break;
+            }
+            assert_int_equal(rc, 0);
+            if (++next == N)
+                engine_finish(e);
+        }
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+        if (sp.state == ENGINE_STATE_FINISHED)
+            break;
+    }
+    engine_status(e, &st);
+    assert_true(fulls > 0);
+    assert_int_equal(st.accepted, N);
+    assert_int_equal(st.rejected_by[ENGINE_EFULL], (uint64_t)fulls);
+    assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+    circle_wp(&w, N - 1, 0.2);
+    assert_true(dist3(sp.pos_m, w.pos_m) < 1e-9);
+    engine_free(e);
+}
+
+/* Run e on ticks until FINISHED with nothing pending, checking steps. */
+static void run_to_finish(engine_t *e, int64_t *k, double max_step,
+                          engine_setpoint_t *sp, int *saw_transfer, int *new_tracks)
+{
+    engine_setpoint_t prev = *sp;
+    for (int i = 0; i < 200000; i++, (*k)++) {
+        assert_int_equal(engine_tick(e, *k * PERIOD_NS, sp), 0);
+        assert_true(finite_sp(sp));
+        if (prev.track > 0 || sp->track > 1)
+            assert_true(dist3(prev.pos_m, sp->pos_m) <= max_step);
+        if (sp->flags & ENGINE_SP_TRANSFER)
+            (*saw_transfer)++;
+        if (sp->flags & ENGINE_SP_NEW_TRACK)
+            (*new_tracks)++;
+        prev = *sp;
+        if (sp->state == ENGINE_STATE_FINISHED)
+            return;
+    }
+    fail_msg("never finished");
+}
+
+/* Given a trajectory, a gap longer than max_gap_s and a second trajectory
+ * starting 300 m away, then the first ends at rest on its last waypoint, the
+ * output moves to the second's start by a smoothstep transfer (flagged, no
+ * step above its peak speed), the second streams, gaps and tracks are
+ * counted.  Then engine_clear holds in place and the next trajectory again
+ * starts with a transfer from there. */
+static void test_gap_transfer_clear(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_config_default(&c);
+    c.max_gap_s = 5;
+    c.max_speed_m_s = 30;
+    engine_t *e = mk(&c);
+    engine_waypoint_t w;
+    engine_setpoint_t sp = {0};
+    engine_status_t st;
+    int64_t k = 0;
+    int xfer = 0, newt = 0;
+
+    for (int i = 0; i < 60; i++) {
+        circle_wp(&w, i, 1.0);
+        assert_int_equal(engine_push(e, &w), 0);
+    }
+    double end1[3];
+    memcpy(end1, w.pos_m, sizeof(end1));
+    for (int i = 0; i < 60; i++) {
+        circle_wp(&w, i, 1.0);
+        w.t_s += 100; /* 41 s after the last one: a gap */
+        w.pos_m[0] += 300;
+        assert_int_equal(engine_push(e, &w), 0);
+    }
+    engine_finish(e);
+    engine_status(e, &st);
+    assert_int_equal(st.gaps, 1);
+    assert_int_equal(st.tracks, 2);
+    /* circle: |v| <= 20*0.15 + 0.3 per s; transfer peak 1.5*300/(1.5*300/30) = 30 m/s */
+    double max_step = 30.0 * 0.01 * STEP_SLACK;
+    run_to_finish(e, &k, max_step, &sp, &xfer, &newt);
+    /* the first trajectory's end: FINISHED is only reported at the very end */
+    assert_true(xfer > 0);
+    assert_int_equal(newt, 2);
+    assert_int_equal(sp.track, 2);
+    assert_true(dist3(sp.pos_m, w.pos_m) < 1e-9);
+    (void)end1;
+
+    /* clear mid-stream: hold exactly in place, WAITING */
+    for (int i = 0; i < 60; i++) {
+        circle_wp(&w, i, 1.0);
+        w.t_s += 1000;
+        assert_int_equal(engine_push(e, &w), 0);
+    }
+    engine_finish(e);
+    engine_setpoint_t before;
+    for (int i = 0; i < 3000; i++, k++)
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, &before), 0);
+    assert_int_equal(before.state, ENGINE_STATE_STREAMING);
+    engine_clear(e);
+    assert_int_equal(engine_tick(e, k++ * PERIOD_NS, &sp), 0);
+    assert_int_equal(sp.state, ENGINE_STATE_WAITING);
+    assert_true(sp.flags & ENGINE_SP_HOLD);
+    assert_memory_equal(sp.pos_m, before.pos_m, sizeof(sp.pos_m));
+    assert_true(fabs(sp.vel_m_s[0]) <= 0.0);
+    for (int i = 0; i < 40; i++) {
+        circle_wp(&w, i, 1.0);
+        w.pos_m[1] -= 100;
+        assert_int_equal(engine_push(e, &w), 0);
+    }
+    engine_finish(e);
+    xfer = newt = 0;
+    run_to_finish(e, &k, max_step, &sp, &xfer, &newt);
+    assert_true(xfer > 0);
+    assert_int_equal(newt, 1);
+    assert_true(dist3(sp.pos_m, w.pos_m) < 1e-9);
+    engine_free(e);
+}
+
+/* Given the paper's ends (held, multiple) and the other ends, when streamed,
+ * then held starts at R(1) and ends at R(N-2), multiple runs R(0)..R(N-1)
+ * with no loop segment, rest starts and ends with zero velocity, and a
+ * one-waypoint trajectory rests on its point. */
+static void test_ends(void **state)
+{
+    (void)state;
+    enum { N = 30 };
+    engine_config_t c;
+    engine_waypoint_t wp[N];
+    fdiff_seg_t segs[N + 8];
+    size_t nseg;
+    double p[3], v[3];
+
+    for (int i = 0; i < N; i++)
+        circle_wp(&wp[i], i, 1.0);
+    engine_config_default(&c);
+    c.method = ENGINE_METHOD_BSPLINE;
+    c.param = ENGINE_PARAM_UNIFORM;
+    c.fragment = 8;
+    c.overlap = 4;
+    c.ends = ENGINE_ENDS_HELD;
+    assert_int_equal(engine_curve(&c, wp, N, segs, N + 8, &nseg), 0);
+    assert_int_equal(nseg, N - 3);
+    assert_memory_equal(&segs[0].t0_s, &wp[1].t_s, sizeof(double));
+    fdiff_eval(&segs[nseg - 1], 1.0, p, NULL, NULL);
+    /* F=8/O=4: the ends are fragment-exact (held rows pinned to R) */
+    assert_true(dist3(p, wp[N - 2].pos_m) < 1e-9);
+    c.ends = ENGINE_ENDS_MULTIPLE;
+    assert_int_equal(engine_curve(&c, wp, N, segs, N + 8, &nseg), 0);
+    assert_int_equal(nseg, N - 1);
+    for (size_t i = 0; i < nseg; i++) {
+        assert_true(segs[i].dur_s > 0);
+        assert_memory_equal(&segs[i].t0_s, &wp[i].t_s, sizeof(double));
+    }
+    fdiff_eval(&segs[0], 0.0, p, NULL, NULL);
+    assert_true(dist3(p, wp[0].pos_m) < 1e-9);
+    c.method = ENGINE_METHOD_CUBIC;
+    c.param = ENGINE_PARAM_TIME;
+    c.ends = ENGINE_ENDS_REST;
+    assert_int_equal(engine_curve(&c, wp, N, segs, N + 8, &nseg), 0);
+    fdiff_eval(&segs[0], 0.0, NULL, v, NULL);
+    assert_true(fabs(v[0]) + fabs(v[1]) + fabs(v[2]) < 1e-9);
+    fdiff_eval(&segs[nseg - 1], 1.0, NULL, v, NULL);
+    assert_true(fabs(v[0]) + fabs(v[1]) + fabs(v[2]) < 1e-9);
+    c.ends = ENGINE_ENDS_CLAMPED;
+    c.start_vel_m_s[0] = 2.0;
+    c.end_vel_m_s[1] = -1.0;
+    assert_int_equal(engine_curve(&c, wp, N, segs, N + 8, &nseg), 0);
+    fdiff_eval(&segs[0], 0.0, NULL, v, NULL);
+    assert_true(fabs(v[0] - 2.0) < 1e-9 && fabs(v[1]) < 1e-9);
+    fdiff_eval(&segs[nseg - 1], 1.0, NULL, v, NULL);
+    assert_true(fabs(v[1] + 1.0) < 1e-9 && fabs(v[0]) < 1e-9);
+
+    /* one waypoint, then finish: rest on it */
+    engine_config_default(&c);
+    engine_t *e = mk(&c);
+    engine_setpoint_t sp;
+    assert_int_equal(engine_finish(e), 0); /* nothing to finish: harmless */
+    assert_int_equal(engine_push(e, &wp[3]), 0);
+    assert_int_equal(engine_finish(e), 0);
+    assert_int_equal(engine_tick(e, 0, &sp), 0);
+    assert_int_equal(engine_tick(e, PERIOD_NS, &sp), 0);
+    assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+    assert_true(dist3(sp.pos_m, wp[3].pos_m) < 1e-12);
+    /* two waypoints: a single segment, at rest at both ends */
+    engine_waypoint_t w2[2] = {wp[0], wp[1]};
+    assert_int_equal(engine_curve(&c, w2, 2, segs, 8, &nseg), 0);
+    assert_int_equal(nseg, 1);
+    engine_free(e);
+}
+
+
+/* Given every method, parameterisation and end condition the engine accepts,
+ * when a track is streamed on time (irregular intervals), then every
+ * streaming setpoint equals Horner on the offline curve at its own time, no
+ * tick moves more than the curve's top speed allows, nothing is NaN, and
+ * the output comes to rest on the curve's end (held: R(N-2)). */
+static void test_all_configs_stream(void **state)
+{
+    (void)state;
+    enum { N = 70 };
+    static const int combos[][3] = {
+        {ENGINE_METHOD_BSPLINE, ENGINE_PARAM_UNIFORM, ENGINE_ENDS_HELD},
+        {ENGINE_METHOD_BSPLINE, ENGINE_PARAM_UNIFORM, ENGINE_ENDS_MULTIPLE},
+        {ENGINE_METHOD_BSPLINE, ENGINE_PARAM_UNIFORM, ENGINE_ENDS_NATURAL},
+        {ENGINE_METHOD_BSPLINE, ENGINE_PARAM_UNIFORM, ENGINE_ENDS_CLAMPED},
+        {ENGINE_METHOD_BSPLINE, ENGINE_PARAM_UNIFORM, ENGINE_ENDS_REST},
+        {ENGINE_METHOD_BSPLINE, ENGINE_PARAM_TIME, ENGINE_ENDS_NATURAL},
+        {ENGINE_METHOD_CUBIC, ENGINE_PARAM_UNIFORM, ENGINE_ENDS_CLAMPED},
+        {ENGINE_METHOD_CUBIC, ENGINE_PARAM_TIME, ENGINE_ENDS_REST},
+    };
+    engine_waypoint_t wp[N];
+    static fdiff_seg_t segs[N + 8];
+
+    for (int i = 0; i < N; i++) {
+        circle_wp(&wp[i], i, 1.0);
+        if (i)
+            wp[i].t_s = wp[i - 1].t_s + 0.6 + 0.3 * (i % 4);
+    }
+    for (size_t m = 0; m < sizeof(combos) / sizeof(combos[0]); m++) {
+        engine_config_t c;
+        size_t nseg = 0;
+        engine_config_default(&c);
+        c.method = (engine_method_t)combos[m][0];
+        c.param = (engine_param_t)combos[m][1];
+        c.ends = (engine_ends_t)combos[m][2];
+        c.fragment = 16;
+        c.overlap = 8;
+        c.start_vel_m_s[0] = 1.0;
+        c.end_vel_m_s[2] = -0.5;
+        assert_int_equal(engine_curve(&c, wp, N, segs, N + 8, &nseg), 0);
+        double vmax = curve_vmax(segs, nseg), end[3];
+        fdiff_eval(&segs[nseg - 1], 1.0, end, NULL, NULL);
+        engine_t *e = mk(&c);
+        engine_setpoint_t sp, prev = {0};
+        int next = 0, streamed = 0;
+        double maxerr = 0, maxstep = 0;
+        for (int64_t k = 0; k < 20000; k++) {
+            while (next < N && wp[next].t_s <= (double)(k * PERIOD_NS) * 1e-9) {
+                assert_int_equal(engine_push(e, &wp[next]), 0);
+                if (++next == N)
+                    engine_finish(e);
+            }
+            assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+            assert_true(finite_sp(&sp));
+            if (sp.state == ENGINE_STATE_STREAMING) {
+                double p[3];
+                fdiff_eval_curve(segs, nseg, &sp.t_s, 1, p, NULL, NULL);
+                if (dist3(p, sp.pos_m) > maxerr)
+                    maxerr = dist3(p, sp.pos_m);
+                streamed++;
+            }
+            if (k > 0 && prev.track == 1 && sp.track == 1 && dist3(prev.pos_m, sp.pos_m) > maxstep)
+                maxstep = dist3(prev.pos_m, sp.pos_m);
+            prev = sp;
+            if (sp.state == ENGINE_STATE_FINISHED)
+                break;
+        }
+        print_message("config %zu: %d streamed, max |sp - Horner| %.1e m, max step %.4f m "
+                      "(vmax * period %.4f)\n", m, streamed, maxerr, maxstep, vmax * 0.01);
+        assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+        assert_true(streamed > 1000);
+        assert_true(maxerr < TOL_HORNER_M);
+        assert_true(maxstep <= vmax * 0.01 * STEP_SLACK);
+        assert_true(dist3(sp.pos_m, end) < 1e-9);
+        engine_free(e);
+    }
+}
+
+/* A boat at 4 m/s sampled at 5 Hz with a late burst as in the real
+ * n2k_furuno_figure8 log around t = 135 s: waypoint J stamped 0.296 s late,
+ * J+1 0.120 s late (24 ms after J), J+2 on time but only 0.105 s after J.
+ * Positions are on time (evenly spaced): only the stamps are off. */
+enum { JIT_N = 400, JIT_J = 200 };
+static void jitter_wp(engine_waypoint_t *w, int i)
+{
+    double t = 0.2 * i;
+    memset(w, 0, sizeof(*w));
+    w->t_s = t + (i == JIT_J ? 0.296 : i == JIT_J + 1 ? 0.120 : i == JIT_J + 2 ? 0.001 : 0.0);
+    w->pos_m[0] = 4.0 * t;
+    w->pos_m[1] = 5.0 * sin(0.2 * t); /* gentle weave: 0.2 m/s^2 at most */
+    w->seq = (uint32_t)i + 1;
+}
+
+/* Largest |acceleration| per axis of a curve, by Horner every 1 ms within
+ * [t_lo, t_hi] (and overall, into *all_max). */
+static double curve_amax_axis(const fdiff_seg_t *s, size_t n, double t_lo, double t_hi,
+                              double *all_max)
+{
+    double m = 0, am = 0;
+    for (size_t i = 0; i < n; i++)
+        for (int j = 0; j <= 1000; j++) {
+            double a[3], t = s[i].t0_s + s[i].dur_s * j / 1000.0;
+            fdiff_eval(&s[i], j / 1000.0, NULL, NULL, a);
+            for (int k = 0; k < 3; k++) {
+                if (fabs(a[k]) > am)
+                    am = fabs(a[k]);
+                if (t >= t_lo && t <= t_hi && fabs(a[k]) > m)
+                    m = fabs(a[k]);
+            }
+        }
+    if (all_max)
+        *all_max = am;
+    return m;
+}
+
+/*
+ * Given the default configuration and a track with the real log's late
+ * burst, when pushed, then J (whose lateness cannot be seen yet) is
+ * accepted, J+1 and J+2 are refused with ENGINE_EACCEL and counted, J+3 on
+ * is accepted; when streamed, every setpoint equals (Horner) the curve
+ * through the waypoints kept as if the two had never been sent (the rest of
+ * the curve is unaffected: same nodes, same solve), no tick jumps, and away
+ * from the REST start and stop the acceleration per axis stays within
+ * 3 * max_accel_m_s2 - the max principle of the diagonally dominant
+ * second-derivative system: at its largest |M_i|,
+ * |M_i| (h1 + h2) <= 6 |second difference| = 3 |a_implied| (h1 + h2).
+ * Without the check the same track peaks far above that bound (the test
+ * discriminates), and a gap restarts the check (two waypoints of a new
+ * trajectory are never tested against the old one).
+ */
+static void test_jitter_rejected(void **state)
+{
+    (void)state;
+    engine_config_t c, c0;
+    static engine_waypoint_t wp[JIT_N], kept[JIT_N];
+    static fdiff_seg_t segs[JIT_N + 8], segs_all[JIT_N + 8];
+    size_t nseg = 0, nall = 0, nk = 0;
+    engine_status_t st;
+    engine_setpoint_t sp, prev;
+    double maxerr = 0, maxaerr = 0, maxstep = 0, maxdv = 0, amax_stream = 0;
+
+    engine_config_default(&c);
+    assert_true(c.max_accel_m_s2 > 0);
+    engine_t *e = mk(&c);
+    for (int i = 0; i < JIT_N; i++) {
+        jitter_wp(&wp[i], i);
+        int rc = engine_push(e, &wp[i]);
+        if (i == JIT_J + 1 || i == JIT_J + 2) {
+            assert_int_equal(rc, -ENGINE_EACCEL);
+        } else {
+            assert_int_equal(rc, 0);
+            kept[nk++] = wp[i];
+        }
+    }
+    assert_int_equal(engine_finish(e), 0);
+    engine_status(e, &st);
+    assert_int_equal(st.accepted, JIT_N - 2);
+    assert_int_equal(st.rejected, 2);
+    assert_int_equal(st.rejected_by[ENGINE_EACCEL], 2);
+    assert_int_equal(st.last_seq, JIT_N);
+    assert_non_null(strstr(engine_strerror(-ENGINE_EACCEL), "max_accel_m_s2"));
+
+    /* the reference: the kept waypoints with no check at all */
+    c0 = c;
+    c0.max_accel_m_s2 = 0;
+    assert_int_equal(engine_curve(&c0, kept, nk, segs, JIT_N + 8, &nseg), 0);
+    assert_int_equal(nseg, nk - 1);
+    double vmax = curve_vmax(segs, nseg), amax_all;
+    /* REST pulls the first and last segments from/to standstill (4 m/s in
+     * 0.2 s); its influence decays by rho = 0.27 per waypoint: 10 waypoints
+     * (2 s) leave < 1e-5 of it. */
+    double t_lo = kept[0].t_s + 2.0, t_hi = kept[nk - 1].t_s - 2.0;
+    double amax_ref = curve_amax_axis(segs, nseg, t_lo, t_hi, &amax_all);
+
+    memset(&prev, 0, sizeof prev);
+    for (int64_t k = 0; k < 100000; k++) {
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+        assert_true(finite_sp(&sp));
+        if (sp.state == ENGINE_STATE_STREAMING) {
+            double p[3], a[3];
+            fdiff_eval_curve(segs, nseg, &sp.t_s, 1, p, NULL, a);
+            maxerr = fmax(maxerr, dist3(p, sp.pos_m));
+            maxaerr = fmax(maxaerr, dist3(a, sp.acc_m_s2));
+            if (sp.t_s >= t_lo && sp.t_s <= t_hi)
+                for (int ax = 0; ax < 3; ax++)
+                    amax_stream = fmax(amax_stream, fabs(sp.acc_m_s2[ax]));
+        }
+        if (k > 0) {
+            maxstep = fmax(maxstep, dist3(prev.pos_m, sp.pos_m));
+            maxdv = fmax(maxdv, dist3(prev.vel_m_s, sp.vel_m_s));
+        }
+        prev = sp;
+        if (sp.state == ENGINE_STATE_FINISHED)
+            break;
+    }
+    assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+    assert_true(maxerr < TOL_HORNER_M);
+    assert_true(maxaerr < 1e-6); /* m/s^2: same stepper drift, two derivatives down */
+    assert_true(maxstep <= vmax * 0.01 * STEP_SLACK);
+    /* velocity changes by at most |a| * period per axis (sqrt 3 for the norm) */
+    assert_true(maxdv <= sqrt(3.0) * amax_all * 0.01 * STEP_SLACK);
+    engine_free(e);
+
+    /* without the check: all 400 in, and the spike the check prevents */
+    assert_int_equal(engine_curve(&c0, wp, JIT_N, segs_all, JIT_N + 8, &nall), 0);
+    assert_int_equal(nall, JIT_N - 1);
+    double amax_nocheck = curve_amax_axis(segs_all, nall, t_lo, t_hi, NULL);
+    print_message("jitter: max |a| per axis (interior) %.1f m/s^2 streamed, %.1f curve, "
+                  "%.1f without the check; bound 3 * %.0f; max |sp - Horner| %.1e m\n",
+                  amax_stream, amax_ref, amax_nocheck, c.max_accel_m_s2, maxerr);
+    assert_true(amax_ref <= 3 * c.max_accel_m_s2);
+    assert_true(amax_stream <= 3 * c.max_accel_m_s2);
+    assert_true(amax_nocheck > 3 * c.max_accel_m_s2);
+
+    /* a gap restarts it: a fast new trajectory is not judged by the old one */
+    e = mk(&c);
+    engine_waypoint_t g = {.t_s = 0, .pos_m = {0, 0, 0}};
+    assert_int_equal(engine_push(e, &g), 0);
+    g.t_s = 1; g.pos_m[0] = 1;
+    assert_int_equal(engine_push(e, &g), 0);
+    g.t_s = 2; g.pos_m[0] = 2;
+    assert_int_equal(engine_push(e, &g), 0);
+    g.t_s = 2 + c.max_gap_s + 1; g.pos_m[0] = 500;  /* new trajectory */
+    assert_int_equal(engine_push(e, &g), 0);
+    g.t_s += 1; g.pos_m[0] += 50;                   /* 50 m/s at once: no triple yet */
+    assert_int_equal(engine_push(e, &g), 0);
+    g.t_s += 1; g.pos_m[0] += 10;                   /* 50 -> 10 m/s in 1 s: 40 m/s^2 */
+    assert_int_equal(engine_push(e, &g), -ENGINE_EACCEL);
+    g.t_s += 1; g.pos_m[0] += 40;                   /* 50 -> 25 m/s over 2 + 1 s: 16.7 */
+    assert_int_equal(engine_push(e, &g), 0);
+    engine_status(e, &st);
+    assert_int_equal(st.gaps, 1);
+    assert_int_equal(st.rejected_by[ENGINE_EACCEL], 1);
+    engine_free(e);
+
+    /* 0 switches it off; negative or non-finite is refused */
+    c.max_accel_m_s2 = -1;
+    assert_int_equal(engine_config_check(&c, NULL), -ENGINE_ECONFIG);
+    c.max_accel_m_s2 = NAN;
+    assert_int_equal(engine_config_check(&c, NULL), -ENGINE_ECONFIG);
+    c.max_accel_m_s2 = 0;
+    assert_int_equal(engine_config_check(&c, NULL), 0);
+}
+
+/* The longest segment the engine streams (just under max_gap_s) at the
+ * fastest rate, far from the origin: 590000 ticks in one segment.  fdiff.h:
+ * the engine re-seeds the stepper at deterministic ticks, every
+ * FDIFF_RESEED_STEPS after the segment's start, so (a) at those ticks the
+ * setpoint is the closed-form value, i.e. Horner at the same u to a few ulps
+ * (u is computed the same way: the track starts at t = 0), and (b) between
+ * them no setpoint drifts from Horner by more than the worst case of that
+ * many steps, 2 n eps sum|c| with n = FDIFF_RESEED_STEPS (test_fdiff.c
+ * derives it).  Without re-seeding the drift grows with the step count
+ * (measured: 1.7e-8 m by tick 3000, 2e-7 m at the end, against (a)'s
+ * tolerance of 4 ulps of sum|c| = 4.4e-9 m). */
+#define TOL_RESEED_ULPS 4.0 /* the same formula at the same u, a few roundings */
+static void test_long_segment_reseeded(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_waypoint_t wp[2];
+    fdiff_seg_t segs[4];
+    size_t nseg = 0;
+    engine_setpoint_t sp;
+    double worst = 0, bound;
+
+    engine_config_default(&c);
+    c.period_ns = ENGINE_PERIOD_NS_MIN;
+    memset(wp, 0, sizeof wp);
+    wp[0].pos_m[0] = 3e6; wp[0].pos_m[1] = -4e6; wp[0].pos_m[2] = 5e6;
+    wp[1].t_s = 59.0;
+    wp[1].pos_m[0] = 3e6 + 900; wp[1].pos_m[1] = -4e6 - 700; wp[1].pos_m[2] = 5e6 + 300;
+    assert_int_equal(engine_curve(&c, wp, 2, segs, 4, &nseg), 0);
+    assert_int_equal(nseg, 1);
+    double m = 0;
+    for (int k = 0; k < 3; k++)
+        m = fmax(m, fabs(segs[0].c[k][0]) + fabs(segs[0].c[k][1]) + fabs(segs[0].c[k][2]) +
+                    fabs(segs[0].c[k][3]));
+    bound = 2.0 * FDIFF_RESEED_STEPS * DBL_EPSILON * m;
+
+    engine_t *e = mk(&c);
+    assert_int_equal(engine_push(e, &wp[0]), 0);
+    assert_int_equal(engine_push(e, &wp[1]), 0);
+    assert_int_equal(engine_finish(e), 0);
+    long long ticks = 0;
+    for (int64_t k = 0; k < 700000; k++) {
+        assert_int_equal(engine_tick(e, k * c.period_ns, &sp), 0);
+        if (sp.state == ENGINE_STATE_STREAMING) {
+            double p[3];
+            fdiff_eval_curve(segs, nseg, &sp.t_s, 1, p, NULL, NULL);
+            double err = dist3(p, sp.pos_m);
+            worst = fmax(worst, err);
+            if (ticks % FDIFF_RESEED_STEPS == 0 && err > TOL_RESEED_ULPS * DBL_EPSILON * m)
+                fail_msg("tick %lld of the segment (a re-seed) is %.3g m off Horner", ticks, err);
+            ticks++;
+        }
+        if (sp.state == ENGINE_STATE_FINISHED)
+            break;
+    }
+    assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+    assert_true(ticks > 500000);
+    print_message("one segment of %lld ticks at 10 kHz: drift %.2e m (bound %.2e m)\n", ticks,
+                  worst, bound);
+    assert_true(worst <= bound);
+    engine_free(e);
+}
+
+/* Given a stream that ran dry (UNDERRUN, holding where segment j starts),
+ * when waypoints then trickle in one per tick, then the output resumes
+ * exactly when the lookahead is buffered again beyond segment j (j + 2 +
+ * lookahead waypoints in, as at the start: test_lookahead_is_real), not as
+ * soon as segment j itself is solved, which would leave no margin and
+ * underrun again at the next late waypoint (engine.h: start_slack and
+ * engine_lookahead); and it resumes exactly where it stopped, on the curve. */
+static void test_underrun_resumes_with_lookahead(void **state)
+{
+    (void)state;
+    for (int m = 0; m < 2; m++) {
+        engine_config_t c;
+        engine_waypoint_t w;
+        engine_setpoint_t sp, prev;
+        memset(&sp, 0, sizeof sp);
+        engine_config_default(&c);
+        if (m) {
+            c.method = ENGINE_METHOD_BSPLINE;
+            c.param = ENGINE_PARAM_UNIFORM;
+            c.ends = ENGINE_ENDS_NATURAL;
+            c.fragment = 16;
+            c.overlap = 8;
+        }
+        engine_t *e = mk(&c);
+        unsigned la = engine_lookahead(&c);
+        int pushed = 0;
+        int64_t k = 0;
+        /* a burst of 40 waypoints (1 s apart), streamed until it runs dry */
+        for (; pushed < 40; pushed++) {
+            circle_wp(&w, pushed, 1.0);
+            assert_int_equal(engine_push(e, &w), 0);
+        }
+        do {
+            prev = sp;
+            assert_int_equal(engine_tick(e, k++ * PERIOD_NS, &sp), 0);
+        } while (sp.state != ENGINE_STATE_UNDERRUN && k < 100000);
+        assert_int_equal(sp.state, ENGINE_STATE_UNDERRUN);
+        /* the last streamed tick is one period before node j's time (= j s) */
+        int j = (int)ceil(prev.t_s);
+        assert_true(fabs(prev.t_s - (j - 0.01)) < 1e-9);
+        assert_true(j + 2 + (int)la > pushed);
+        while (sp.state == ENGINE_STATE_UNDERRUN) {
+            circle_wp(&w, pushed, 1.0);
+            assert_int_equal(engine_push(e, &w), 0);
+            pushed++;
+            assert_int_equal(engine_tick(e, k++ * PERIOD_NS, &sp), 0);
+            assert_true(pushed < 200);
+        }
+        assert_int_equal(sp.state, ENGINE_STATE_STREAMING);
+        assert_int_equal(pushed, j + 2 + (int)la);
+        /* resumed at node j's time, on node j (the curve passes through it) */
+        assert_true(fabs(sp.t_s - j) < 1e-9);
+        circle_wp(&w, j, 1.0);
+        assert_true(dist3(sp.pos_m, w.pos_m) < 1e-9);
+        engine_free(e);
+    }
+}
+
+/* Given a caller whose clock jitters around the period grid (each now_ns
+ * within +-24 % of a period of its scheduled tick, so two calls are 0.52 to
+ * 1.48 periods apart), then every call is one tick (engine.c: periods since
+ * the last call, rounded), never a repeat or a
+ * skip: the setpoints are bitwise those of an engine ticked exactly on the
+ * grid, apart from now_ns, and no SKIPPED flag is raised.  (Truncating would
+ * turn every early call into a repeated setpoint and the next into a skip.) */
+static void test_jittered_clock_rounds_to_ticks(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_waypoint_t w;
+    engine_setpoint_t sa, sb;
+    engine_config_default(&c);
+    engine_t *a = mk(&c), *b = mk(&c);
+    for (int i = 0; i < 60; i++) {
+        circle_wp(&w, i, 0.5);
+        assert_int_equal(engine_push(a, &w), 0);
+        assert_int_equal(engine_push(b, &w), 0);
+    }
+    engine_finish(a);
+    engine_finish(b);
+    unsigned s = 777;
+    int streamed = 0;
+    for (int64_t k = 0; k < 4000; k++) {
+        s = s * 1103515245u + 12345u;
+        int64_t jitter = (int64_t)((s >> 8) % 481) - 240; /* -240..240 of 1000 */
+        assert_int_equal(engine_tick(a, k * PERIOD_NS, &sa), 0);
+        assert_int_equal(engine_tick(b, k * PERIOD_NS + jitter * PERIOD_NS / 1000, &sb), 0);
+        assert_memory_equal(sa.pos_m, sb.pos_m, sizeof sa.pos_m);
+        assert_memory_equal(sa.vel_m_s, sb.vel_m_s, sizeof sa.vel_m_s);
+        assert_memory_equal(&sa.t_s, &sb.t_s, sizeof sa.t_s);
+        assert_int_equal(sa.cycle, sb.cycle);
+        assert_int_equal(sa.state, sb.state);
+        assert_false(sb.flags & ENGINE_SP_SKIPPED);
+        streamed += sb.state == ENGINE_STATE_STREAMING;
+    }
+    assert_true(streamed > 2000);
+    engine_status_t st;
+    engine_status(b, &st);
+    assert_int_equal(st.skipped_ticks, 0);
+    engine_free(a);
+    engine_free(b);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_config),
+        cmocka_unit_test(test_lookahead_is_real),
+        cmocka_unit_test(test_stream_underrun_finish),
+        cmocka_unit_test(test_skipped_ticks_identical),
+        cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_jitter_rejected),
+        cmocka_unit_test(test_full_and_retry),
+        cmocka_unit_test(test_gap_transfer_clear),
+        cmocka_unit_test(test_ends),
+        cmocka_unit_test(test_all_configs_stream),
+        cmocka_unit_test(test_long_segment_reseeded),
+        cmocka_unit_test(test_underrun_resumes_with_lookahead),
+        cmocka_unit_test(test_jittered_clock_rounds_to_ticks),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
