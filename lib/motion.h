@@ -79,7 +79,7 @@ typedef struct {
     double ahead_s;                 /* track time buffered ahead of the output */
     uint64_t accepted;
     uint64_t duplicates;
-    uint64_t rejected;              /* sum of rejected_by[] */
+    uint64_t rejected;              /* sum of rejected_by[]: bad data only (not EFULL) */
     uint64_t rejected_by[ENGINE_ERROR_COUNT]; /* per engine_error */
     uint64_t underruns;             /* transitions into UNDERRUN */
     uint64_t underrun_ticks;        /* ticks spent in UNDERRUN */
@@ -87,6 +87,8 @@ typedef struct {
     uint64_t gaps;                  /* trajectories ended by a gap */
     uint64_t tracks;                /* trajectories started */
     uint64_t setpoints;             /* ticks answered */
+    uint64_t full;                  /* offers refused with ENGINE_EFULL: flow control, the
+                                     * sender retries; not in rejected */
 } engine_status_t;
 
 #endif

@@ -397,10 +397,12 @@ int core_summary(const core_t *c, char *buf, size_t len)
     }
     for (unsigned i = 0; i < c->nobj && n < len; i++) {
         const obj_t *o = &c->obj[i];
-        m = snprintf(buf + n, len - n, "; %s %s t=%.1f s, wp %llu ok %llu rejected, %llu underruns",
+        m = snprintf(buf + n, len - n,
+                     "; %s %s t=%.1f s, wp %llu ok %llu rejected %llu full, %llu underruns",
                      o->name, engine_state_name(o->status.state), o->sp.t_s,
                      (unsigned long long)o->status.accepted,
                      (unsigned long long)o->status.rejected,
+                     (unsigned long long)o->status.full,
                      (unsigned long long)o->status.underruns);
         n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
     }

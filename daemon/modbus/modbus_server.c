@@ -63,6 +63,8 @@ struct modbus_server {
     uint64_t *mb_rejected;  /* per object */
     uint64_t *lost;         /* per object, sequence gaps of Modbus waypoints */
     uint32_t *last_seq;     /* per object, of the last waypoint accepted over Modbus */
+    uint32_t *alt_seq;      /* per object, the last sequence number outside the window (0: none) */
+    uint64_t *seq_jumps;    /* per object, sequence numbers outside the window */
     modbus_server_stats_t st;
 };
 
@@ -424,8 +426,11 @@ modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg, const modb
     s->mb_rejected = calloc(s->n_objects, sizeof *s->mb_rejected);
     s->lost = calloc(s->n_objects, sizeof *s->lost);
     s->last_seq = calloc(s->n_objects, sizeof *s->last_seq);
+    s->alt_seq = calloc(s->n_objects, sizeof *s->alt_seq);
+    s->seq_jumps = calloc(s->n_objects, sizeof *s->seq_jumps);
     s->map = modbus_mapping_new(0, 0, (int)MBMAP_REGS(s->n_objects), (int)MBMAP_REGS(s->n_objects));
-    if (!s->clients || !s->mb_rejected || !s->lost || !s->last_seq || !s->map) {
+    if (!s->clients || !s->mb_rejected || !s->lost || !s->last_seq || !s->alt_seq ||
+        !s->seq_jumps || !s->map) {
         msg(err, errlen, "modbus: out of memory");
         goto fail;
     }
@@ -502,6 +507,8 @@ void modbus_server_free(modbus_server_t *s)
     free(s->mb_rejected);
     free(s->lost);
     free(s->last_seq);
+    free(s->alt_seq);
+    free(s->seq_jumps);
     free(s);
 }
 
@@ -532,6 +539,38 @@ void modbus_server_stats(const modbus_server_t *s, modbus_server_stats_t *st)
 
 /* ---- requests ------------------------------------------------------------- */
 
+/*
+ * Sequence numbers are the sender's (0 = not numbered): a step forward of d
+ * within MODBUS_SERVER_SEQ_WINDOW means d - 1 waypoints it sent never
+ * reached us.  A number outside the window (a bogus 0xFFFFFFFF, a sender
+ * that restarted its numbering, a repeat or an older one) is not a loss: it
+ * is counted in seq_jumps and remembered; the numbering it starts is adopted
+ * as soon as the next waypoint continues it, else the old one is kept.
+ * Modular arithmetic, so a wrap from 0xFFFFFFFF to 1 is a step of 2.
+ */
+static void count_seq(modbus_server_t *s, unsigned k, uint32_t seq)
+{
+    uint32_t last = s->last_seq[k], alt = s->alt_seq[k];
+    if (!seq)
+        return;
+    if (!last) {
+        s->last_seq[k] = seq;
+        return;
+    }
+    uint32_t d = seq - last;
+    if (d >= 1 && d <= MODBUS_SERVER_SEQ_WINDOW) {
+        s->lost[k] += d - 1;
+    } else if (alt && seq - alt >= 1 && seq - alt <= MODBUS_SERVER_SEQ_WINDOW) {
+        s->lost[k] += seq - alt - 1;     /* the new numbering continues: adopt it */
+    } else {
+        s->seq_jumps[k]++;
+        s->alt_seq[k] = seq;
+        return;
+    }
+    s->last_seq[k] = seq;
+    s->alt_seq[k] = 0;
+}
+
 /* Apply a validated write; returns 0 or -MBMAP_E*. */
 static int apply_write(modbus_server_t *s, const mbmap_write_t *w)
 {
@@ -540,22 +579,19 @@ static int apply_write(modbus_server_t *s, const mbmap_write_t *w)
         r = s->hooks.waypoint ? s->hooks.waypoint(s->hooks.ctx, w->object, &w->wp) : -ENGINE_ESTATE;
         if (r == MODBUS_SERVER_HOOK_EADDRESS)
             return -MBMAP_EADDRESS;
-        if (r == 0) {
-            /* Sequence numbers are the sender's: a jump forward means waypoints
-             * it sent never reached us (0 = not numbered). */
-            uint32_t last = s->last_seq[w->object];
-            if (last && w->wp.seq > last + 1)
-                s->lost[w->object] += w->wp.seq - last - 1;
-            s->last_seq[w->object] = w->wp.seq;
-        }
+        if (r == 0)
+            count_seq(s, w->object, w->wp.seq);
         return mbmap_from_engine(r);
     }
     if (w->command == MBMAP_CMD_RESET_COUNTERS) {
         s->mb_rejected[w->object] = 0;
         s->lost[w->object] = 0;
+        s->seq_jumps[w->object] = 0;
     }
-    if (w->command == MBMAP_CMD_CLEAR)
+    if (w->command == MBMAP_CMD_CLEAR) {
         s->last_seq[w->object] = 0;
+        s->alt_seq[w->object] = 0;
+    }
     r = s->hooks.command ? s->hooks.command(s->hooks.ctx, w->object, w->command) : -ENGINE_ESTATE;
     if (r == MODBUS_SERVER_HOOK_EADDRESS)
         return -MBMAP_EADDRESS;
@@ -843,6 +879,7 @@ void modbus_server_publish(modbus_server_t *s, const mbmap_daemon_t *d, const mb
         mbmap_object_t o = objs[k];
         o.mb_rejected = s->mb_rejected[k];
         o.lost += s->lost[k];
+        o.seq_jumps += s->seq_jumps[k];
         mbmap_encode_object(ir, k, s->gen, &o);
     }
 }

@@ -48,6 +48,9 @@
 #define MODBUS_SERVER_RTU_SILENCE_MS 20
 #define MODBUS_SERVER_ALLOW_MAX 32          /* entries in the allow-list */
 #define MODBUS_SERVER_HOUSEKEEPING_MS 100   /* idle-timeout resolution */
+/* Largest forward step of a waypoint sequence number counted as lost
+ * waypoints; a bigger one is a jump (see modbus_server_publish). */
+#define MODBUS_SERVER_SEQ_WINDOW 65536u
 
 typedef struct {
     int enabled;                /* [modbus] enabled: the daemon starts a server only if 1 */

@@ -630,6 +630,11 @@ static double implied_accel(const engine_t *e, const engine_waypoint_t *wp, doub
 
 static int reject(engine_t *e, int code)
 {
+    if (code == ENGINE_EFULL) {
+        /* flow control, not bad data: its own counter (rejected means refused) */
+        e->st.full++;
+        return -code;
+    }
     e->st.rejected++;
     e->st.rejected_by[code]++;
     return -code;

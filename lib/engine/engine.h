@@ -205,7 +205,8 @@ void engine_free(engine_t *e);
  * Offer a waypoint.  Returns 0 (accepted), ENGINE_DUPLICATE (same time, to
  * 1 ns, and position, to 1 nm, as the previous one: dropped, counted), or a
  * negated engine_error (rejected, counted in status.rejected_by, nothing
- * changed):
+ * changed; EFULL alone is counted in status.full instead, being flow
+ * control rather than bad data):
  *   -ENGINE_ENOTFINITE  NaN or infinite time or coordinate
  *   -ENGINE_ERANGE      |coordinate| > max_abs_m, or |t_s| > 1e12 s
  *   -ENGINE_EBACKWARDS  earlier than the previous waypoint of the trajectory

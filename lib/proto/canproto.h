@@ -39,7 +39,8 @@
  *    0 state (bits 0..2 engine state, bit 4 bus DOWN seen since last status,
  *      bit 5 TX dropped since last status), 1 last accepted seq (low 8 bits),
  *    2 free waypoint slots (saturated at 255), 3 lost waypoints (sequence
- *    gaps), 4 rejected waypoints, 5 malformed frames, 6 dropped setpoints
+ *    gaps), 4 rejected waypoints (bad data; a full buffer is flow control,
+ *    shown by last_err EFULL and last_seq not moving), 5 malformed frames, 6 dropped setpoints
  *    (late or TX queue full), 7 last error code (canproto_status_err_t).
  *    Counters 3..6 are modulo 256: a sender watches them change.
  *  SYNC (out, default 0x080, DLC 0, or DLC 1 with a counter 1..overflow as

@@ -90,6 +90,10 @@ void mbmap_encode_daemon(uint16_t *regs, const mbmap_daemon_t *d)
     mbmap_put_u32(regs + MBMAP_D_MB_EXCEPTIONS, lo32(d->mb_exceptions));
     mbmap_put_u32(regs + MBMAP_D_MB_REFUSED, lo32(d->mb_refused));
     regs[MBMAP_D_MB_CLIENTS] = d->mb_clients;
+    mbmap_put_u32(regs + MBMAP_D_MB_EVICTED, lo32(d->mb_evicted));
+    mbmap_put_u32(regs + MBMAP_D_MB_SLOW, lo32(d->mb_slow));
+    mbmap_put_u32(regs + MBMAP_D_OUT_LOST, lo32(d->out_lost));
+    regs[MBMAP_D_OUT_FAULT] = d->out_fault ? 1 : 0;
     mbmap_put_u32(regs + MBMAP_D_GEN_TAIL, d->generation);
 }
 
@@ -127,6 +131,10 @@ int mbmap_encode_object(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_ob
     b[MBMAP_O_CAN_STATE] = o->can_state;
     b[MBMAP_O_CAN_LOAD] = o->can_load_permille;
     mbmap_put_u32(b + MBMAP_O_UPTIME_S, lo32(o->uptime_s));
+    mbmap_put_u32(b + MBMAP_O_FULL, lo32(o->st.full));
+    mbmap_put_u32(b + MBMAP_O_OUT_LOST, lo32(o->out_lost));
+    b[MBMAP_O_OUT_FAULT] = o->out_fault ? 1 : 0;
+    mbmap_put_u32(b + MBMAP_O_SEQ_JUMPS, lo32(o->seq_jumps));
     mbmap_put_u32(b + MBMAP_O_GEN_TAIL, gen);
     return 0;
 }
@@ -298,6 +306,10 @@ static const mbmap_field_t fields[] = {
     F(ID, MBMAP_D_MB_EXCEPTIONS, 2, MBMAP_T_U32, "mb_exceptions", "", "exception responses sent"),
     F(ID, MBMAP_D_MB_REFUSED, 2, MBMAP_T_U32, "mb_refused", "", "connections refused (allow-list, max clients)"),
     F(ID, MBMAP_D_MB_CLIENTS, 1, MBMAP_T_U16, "mb_clients", "", "TCP clients connected"),
+    F(ID, MBMAP_D_MB_EVICTED, 2, MBMAP_T_U32, "mb_evicted", "", "clients evicted at max_clients to admit a newcomer"),
+    F(ID, MBMAP_D_MB_SLOW, 2, MBMAP_T_U32, "mb_slow", "", "clients dropped: a request not whole within request_timeout_ms"),
+    F(ID, MBMAP_D_OUT_LOST, 2, MBMAP_T_U32, "out_lost", "", "setpoint lines lost by csv/stdout outputs (write error or full buffer)"),
+    F(ID, MBMAP_D_OUT_FAULT, 1, MBMAP_T_U16, "out_fault", "", "1 once an output failed to write (disk full, I/O error)"),
     F(ID, MBMAP_D_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "", "copy of generation (whole-block reads)"),
 
     F(IO, MBMAP_O_GEN, 2, MBMAP_T_U32, "generation", "", "snapshot generation of this block"),
@@ -321,7 +333,7 @@ static const mbmap_field_t fields[] = {
     F(IO, MBMAP_O_ACC + 2, 2, MBMAP_T_F32, "ay", "m/s2", "acceleration"),
     F(IO, MBMAP_O_ACC + 4, 2, MBMAP_T_F32, "az", "m/s2", "acceleration"),
     F(IO, MBMAP_O_ACCEPTED, 2, MBMAP_T_U32, "accepted", "", "waypoints accepted"),
-    F(IO, MBMAP_O_REJECTED, 2, MBMAP_T_U32, "rejected", "", "waypoints rejected by the engine"),
+    F(IO, MBMAP_O_REJECTED, 2, MBMAP_T_U32, "rejected", "", "waypoints rejected by the engine (bad data; a full buffer is in full)"),
     F(IO, MBMAP_O_LOST, 2, MBMAP_T_U32, "lost", "", "waypoints lost (sequence gaps)"),
     F(IO, MBMAP_O_UNDERRUNS, 2, MBMAP_T_U32, "underruns", "", "transitions into underrun"),
     F(IO, MBMAP_O_MISSED_TICKS, 2, MBMAP_T_U32, "missed_ticks", "", "ticks stepped over"),
@@ -332,6 +344,10 @@ static const mbmap_field_t fields[] = {
     F(IO, MBMAP_O_CAN_STATE, 1, MBMAP_T_U16, "can_state", "", "as can_state of the daemon block, for this object's bus"),
     F(IO, MBMAP_O_CAN_LOAD, 1, MBMAP_T_U16, "can_load", "0.1 %", "this object's CAN bus load"),
     F(IO, MBMAP_O_UPTIME_S, 2, MBMAP_T_U32, "uptime", "s", "since the daemon started"),
+    F(IO, MBMAP_O_FULL, 2, MBMAP_T_U32, "full", "", "waypoints refused with a full buffer (flow control, exception 06; not in rejected)"),
+    F(IO, MBMAP_O_OUT_LOST, 2, MBMAP_T_U32, "out_lost", "", "setpoint lines of this object lost by its outputs"),
+    F(IO, MBMAP_O_OUT_FAULT, 1, MBMAP_T_U16, "out_fault", "", "1 once an output of this object failed to write"),
+    F(IO, MBMAP_O_SEQ_JUMPS, 2, MBMAP_T_U32, "seq_jumps", "", "Modbus sequence numbers outside the plausible window (not counted in lost)"),
     F(IO, MBMAP_O_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "", "copy of generation (whole-block reads)"),
 
     F(HO, MBMAP_H_COMMAND, 1, MBMAP_T_U16, "command", "", "1 start, 2 stop to rest, 3 clear, 4 reset counters"),

@@ -77,6 +77,10 @@
 #define MBMAP_D_MB_EXCEPTIONS 22     /* u32 exception responses sent */
 #define MBMAP_D_MB_REFUSED 24        /* u32 connections refused (allow-list, max clients) */
 #define MBMAP_D_MB_CLIENTS 26        /* u16 TCP clients connected now */
+#define MBMAP_D_MB_EVICTED 28        /* u32 clients evicted at max_clients to admit a newcomer */
+#define MBMAP_D_MB_SLOW 30           /* u32 clients dropped: a request not whole within request_timeout_ms */
+#define MBMAP_D_OUT_LOST 32          /* u32 setpoint lines lost by the outputs (all objects) */
+#define MBMAP_D_OUT_FAULT 34         /* u16 1 if an output failed to write (disk full, I/O error) */
 #define MBMAP_D_GEN_TAIL 98          /* u32 copy of GEN */
 
 /* ---- object block, input registers (offset from MBMAP_OBJ_BASE(k)) ------ */
@@ -95,7 +99,7 @@
 #define MBMAP_O_VEL 28               /* f32 x3 velocity, m/s */
 #define MBMAP_O_ACC 34               /* f32 x3 acceleration, m/s^2 */
 #define MBMAP_O_ACCEPTED 40          /* u32 waypoints accepted */
-#define MBMAP_O_REJECTED 42          /* u32 waypoints rejected by the engine (all inputs) */
+#define MBMAP_O_REJECTED 42          /* u32 waypoints rejected by the engine (all inputs; not EFULL) */
 #define MBMAP_O_LOST 44              /* u32 waypoints lost (gaps in sequence numbers) */
 #define MBMAP_O_UNDERRUNS 46         /* u32 transitions into underrun */
 #define MBMAP_O_MISSED_TICKS 48      /* u32 ticks stepped over */
@@ -106,6 +110,10 @@
 #define MBMAP_O_CAN_STATE 58         /* u16 MBMAP_CAN_* of the object's bus */
 #define MBMAP_O_CAN_LOAD 59          /* u16 bus load, 0.1 % */
 #define MBMAP_O_UPTIME_S 60          /* u32 */
+#define MBMAP_O_FULL 62              /* u32 waypoints refused with a full buffer (flow control) */
+#define MBMAP_O_OUT_LOST 64          /* u32 setpoint lines of this object lost by its outputs */
+#define MBMAP_O_OUT_FAULT 66         /* u16 1 if an output of this object failed to write */
+#define MBMAP_O_SEQ_JUMPS 68         /* u32 sequence numbers outside the plausible window */
 #define MBMAP_O_GEN_TAIL 98          /* u32 copy of GEN */
 
 /* ---- object block, holding registers (offset from MBMAP_OBJ_BASE(k)) ---- */
@@ -159,6 +167,9 @@ typedef struct {
     uint16_t can_state, can_load_permille;
     uint64_t mb_requests, mb_exceptions, mb_refused;
     uint16_t mb_clients;
+    uint64_t mb_evicted, mb_slow;
+    uint64_t out_lost;
+    uint16_t out_fault;
 } mbmap_daemon_t;
 
 typedef struct {
@@ -169,6 +180,9 @@ typedef struct {
     uint32_t late_p99_us, late_max_us;
     uint16_t can_state, can_load_permille;
     uint64_t uptime_s;
+    uint64_t out_lost;          /* lines lost by this object's outputs */
+    uint16_t out_fault;
+    uint64_t seq_jumps;
 } mbmap_object_t;
 
 /* Write the daemon block into regs[0 .. MBMAP_BLOCK-1]. */

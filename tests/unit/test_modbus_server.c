@@ -481,6 +481,31 @@ static void test_writes(void **state)
     fixture_stop(f);
 }
 
+/* Given numbered waypoints 1, 2, then one bogus 0xFFFFFFFF, then 3, 5, when
+ * the counters are read, then lost is 1 (the 4), not 4 294 967 253: the
+ * bogus number is outside the plausible window and counted as a jump.  A
+ * sender that restarts its numbering (1000000, 1000001) is adopted after one
+ * jump, and its next gap counts again (1000003: 1 lost). */
+static void test_lost_window(void **state)
+{
+    (void)state;
+    hopts_t o;
+    hopts_default(&o);
+    fixture_t *f = fixture_start(&o);
+    modbus_t *c = client(f->port);
+    uint16_t r[MBMAP_BLOCK];
+    const uint32_t seq[] = { 1, 2, 0xFFFFFFFFu, 3, 5, 1000000, 1000001, 1000003 };
+    for (unsigned i = 0; i < sizeof seq / sizeof seq[0]; i++)
+        assert_int_equal(write_wp(c, 0, seq[i], 1.0 + i, 1.0 + i), MBMAP_H_WP_COUNT);
+    uint32_t g = next_gen(c, 0);
+    next_gen(c, g);
+    assert_int_equal(modbus_read_input_registers(c, (int)MBMAP_OBJ_BASE(0), MBMAP_BLOCK, r), MBMAP_BLOCK);
+    assert_int_equal(mbmap_get_u32(r + MBMAP_O_LOST), 2);
+    assert_int_equal(mbmap_get_u32(r + MBMAP_O_SEQ_JUMPS), 2);
+    client_free(c);
+    fixture_stop(f);
+}
+
 /* Given writes disabled (the default), when a client writes, then it gets
  * exception 01 and the fake engine sees nothing. */
 static void test_writes_disabled(void **state)
@@ -619,6 +644,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_reads_consistent),
         cmocka_unit_test(test_writes),
         cmocka_unit_test(test_writes_disabled),
+        cmocka_unit_test(test_lost_window),
         cmocka_unit_test(test_connections),
         cmocka_unit_test(test_idle_timeout),
         cmocka_unit_test(test_allow_list),
