@@ -42,6 +42,10 @@
  * exactly on the circle).  A bad line is an error "path:line: what" (never
  * skipped: a path is a program, not a log).  line[] holds the line of the
  * element that produced each waypoint.
+ *
+ * Files: track.c (this API, the choice of format, rows to waypoints), one
+ * parser per format in track_<format>.c (csv, gpx, path), what they share in
+ * track_loader.h/.c, dates in track_time.c.
  */
 #ifndef TRAJD_TRACK_H
 #define TRAJD_TRACK_H
