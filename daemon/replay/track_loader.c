@@ -10,6 +10,9 @@
 #include <string.h>
 
 static void vmsg(char *err, size_t errlen, const char *name, unsigned long line,
+                 const char *fmt, va_list ap) __attribute__((format(printf, 5, 0)));
+
+static void vmsg(char *err, size_t errlen, const char *name, unsigned long line,
                  const char *fmt, va_list ap)
 {
     if (!err || errlen == 0)
