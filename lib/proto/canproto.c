@@ -55,8 +55,13 @@ static int64_t sext(uint64_t v, unsigned nbits)
 }
 
 /*
- * round(x / scale) clamped to [lo, hi].  *clamped is set if x was out of range
- * or not finite (NaN is sent as 0: a setpoint frame must still go out).
+ * The code nearest to x / scale, clamped to [lo, hi].  *clamped is set if x was
+ * out of range or not finite (NaN is sent as 0: a setpoint frame must still go out).
+ * Every scale is 10^-k, so 1 / scale rounds to an exact integer: x is multiplied
+ * by it, and fma() gives the product's rounding error exactly, which decides the
+ * values whose product rounded onto (or off) a half-code tie.  Dividing by the
+ * inexact scale sent codes up to 1e-4 LSB beyond half an LSB from the value
+ * (tests/oracle/test_canproto.py EncodersSendTheNearestCode).
  */
 static int64_t quantize(double x, double scale, int64_t lo, int64_t hi, int *clamped)
 {
@@ -64,7 +69,17 @@ static int64_t quantize(double x, double scale, int64_t lo, int64_t hi, int *cla
         *clamped = 1;
         return isnan(x) ? 0 : (x > 0 ? hi : lo);
     }
-    double r = nearbyint(x / scale);
+    double inv = nearbyint(1.0 / scale);
+    double p = x * inv;
+    double e = fma(x, inv, -p); /* x * inv == p + e exactly */
+    double r = nearbyint(p);
+    /* p - r is exact (|p| < 2^53, r within 1/2 of p); ties to even are kept
+     * only where the exact value is a tie. */
+    double d = p - r; /* in [-1/2, 1/2]: the tests below are for d == +-1/2 */
+    if (d >= 0.5 && e > 0)
+        r += 1;
+    else if (d <= -0.5 && e < 0)
+        r -= 1;
     /* Compare in double: lo/hi are at most 2^48 in magnitude here, exact in a double. */
     if (r < (double)lo) {
         *clamped = 1;

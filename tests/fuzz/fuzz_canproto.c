@@ -9,7 +9,11 @@
  *  - the counters add up: every frame is counted once as malformed, or
  *    reaches the sequence logic;
  *  - extended sequence numbers of consumed waypoints strictly increase;
- *  - decode(encode(sp)) round-trips setpoints within half a bit.
+ *  - encode(sp) sends the code nearest to the position / LSB, checked in exact
+ *    integer arithmetic (a double tolerance of half an LSB was wrong: at
+ *    -130927.96875 m, an exact tie, the decoded double differs by half an LSB
+ *    plus its own rounding; tests/fuzz/regress/fuzz_canproto/), and decode
+ *    gives that code x LSB up to the rounding to a double.
  */
 #include <math.h>
 #include <stdint.h>
@@ -20,6 +24,28 @@
 #include "canproto.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+/* |code - x * per_unit| <= 1/2, exactly: x = m 2^ex with m a 53-bit integer,
+ * compared as 2 m per_unit 2^ex against (2 code +- 1) in 128-bit integers. */
+static int nearest_code(double x, int64_t per_unit, int64_t code)
+{
+    int ex;
+    double fr = frexp(x, &ex);             /* x = fr 2^ex, 1/2 <= |fr| < 1 */
+    __int128 m = (__int128)ldexp(fr, 53); /* exact */
+    ex -= 53;
+    __int128 lhs = 2 * m * per_unit, lo = 2 * (__int128)code - 1, hi = 2 * (__int128)code + 1;
+    if (ex >= 0) {
+        if (ex > 40)
+            return 0; /* |x| >= 2^93: never in range */
+        lhs *= (__int128)1 << ex;
+    } else if (-ex <= 80) {
+        lo *= (__int128)1 << -ex;
+        hi *= (__int128)1 << -ex;
+    } else {
+        return code == 0; /* |x| < 2^-27: the nearest code is 0 */
+    }
+    return lo <= lhs && lhs <= hi;
+}
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
@@ -99,7 +125,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         for (int a = 0; a < 3; a++) {
             if (canproto_decode_setpoint(&f3[a], &d) != 0)
                 abort();
-            if (rc == 0 && fabs(d.pos_m[a] - sp.pos_m[a]) > 0.5e-4 * (1 + 1e-9))
+            int32_t code = (int32_t)((uint32_t)f3[a].data[2] | (uint32_t)f3[a].data[3] << 8 |
+                                     (uint32_t)f3[a].data[4] << 16 | (uint32_t)f3[a].data[5] << 24);
+            if (rc == 0 && !nearest_code(sp.pos_m[a], 10000, code))
+                abort();
+            /* decoded: code x 1e-4 up to the rounding to a double */
+            double want = (double)code / 1e4;
+            if (fabs(d.pos_m[a] - want) > 2 * nextafter(fabs(want), INFINITY) - 2 * fabs(want))
                 abort();
         }
     }

@@ -13,8 +13,10 @@
 """
 import ctypes
 import decimal
+import fractions
 import io
 import logging
+import math
 import os
 import random
 import sys
@@ -174,6 +176,102 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
         self.assertEqual((f.id, f.len), (0x202, 4))
         d = decode(self.db, f)
         self.assertEqual(d["Target_Position_607A"], round(-12.34567 * 10000))
+
+
+class EncodersSendTheNearestCode(unittest.TestCase):
+    """Exact arithmetic (fractions.Fraction) as the reference: the code in the
+    frame is the integer nearest to value / LSB, computed exactly from the double
+    that was encoded (a true tie may go either way).  Values are taken at and a few
+    doubles either side of the half-LSB ties, where a double division by the LSB
+    can round the wrong way."""
+
+    # The fuzz finding of issue 15: z = -130927.96875 m is exactly a half-LSB tie.
+    FINDING = "AQCACAABQA0DAAAAYOMWAAAAAID/9v/Axi0AAAAAAAAAAAAAgAgAAUANAwAAAACACAH/AIAIAwHAxi0AAIAIAABg4xYAAADw"
+
+    def near_ties(self, rng, lsb_inv, n, hi):
+        for _ in range(n):
+            k = rng.randrange(-hi, hi)
+            x = (k + 0.5) / lsb_inv
+            for step in range(-3, 4):
+                y = x
+                for _ in range(abs(step)):
+                    y = math.nextafter(y, math.inf if step > 0 else -math.inf)
+                yield y
+
+    def assertNearest(self, code, x, lsb_inv, what):
+        err = abs(fractions.Fraction(code) - fractions.Fraction(x) * lsb_inv)
+        self.assertLessEqual(err, fractions.Fraction(1, 2),
+                             "%s: %r encoded as %d, %s LSB from the exact value"
+                             % (what, x, code, float(err)))
+
+    def setpoint_codes(self, pos, vel):
+        sp = cp.Setpoint()
+        for a in range(3):
+            sp.pos_m[a], sp.vel_m_s[a] = pos[a], vel[a]
+        fr = (cp.Frame * 3)()
+        LIB.canproto_encode_setpoint(0x6A0, ctypes.byref(sp), fr)
+        fd = cp.Frame()
+        LIB.canproto_encode_setpoint_fd(0x6B0, 0, ctypes.byref(sp), ctypes.byref(fd))
+        classic = [(int.from_bytes(fr[a].payload()[2:6], "little", signed=True),
+                    int.from_bytes(fr[a].payload()[6:8], "little", signed=True)) for a in range(3)]
+        fdc = [(int.from_bytes(fd.payload()[4 + 4 * a:8 + 4 * a], "little", signed=True),
+                int.from_bytes(fd.payload()[16 + 4 * a:20 + 4 * a], "little", signed=True))
+               for a in range(3)]
+        return classic, fdc
+
+    # Given the fuzz finding's doubles, when encoded as a setpoint, then every
+    # position code is a nearest code: z is an exact tie, so the codec was right
+    # and the fuzz oracle, which left out the rounding of code x 1e-4 to a double
+    # on decode, was wrong (its input is replayed from tests/fuzz/regress/).
+    def test_fuzz_finding(self):
+        import base64
+        import struct
+        data = base64.b64decode(self.FINDING)
+        pos = struct.unpack("<3d", data[:24])
+        self.assertEqual(pos[2], -130927.96875)
+        classic, _ = self.setpoint_codes(pos, (0.0, 0.0, 0.0))
+        for a in range(3):
+            if math.isfinite(pos[a]) and abs(pos[a]) < 2e5:
+                self.assertNearest(classic[a][0], pos[a], 10000, "pos")
+        code = classic[2][0]
+        self.assertIn(code, (-1309279687, -1309279688))
+
+    # Given values at and next to half-LSB ties, when encoded as classic and FD
+    # setpoints, then every position and velocity code is a nearest code.
+    def test_setpoint_ties(self):
+        rng = random.Random(15)
+        pos = list(self.near_ties(rng, 10000, 300, 2 ** 31 - 1))
+        vel16 = list(self.near_ties(rng, 1000, 300, 2 ** 15 - 1))
+        vel32 = list(self.near_ties(rng, 10 ** 6, 300, 2 ** 31 - 1))
+        for i in range(0, len(pos) - 2, 3):
+            p = pos[i:i + 3]
+            v = vel16[i:i + 3]
+            w = vel32[i:i + 3]
+            classic, _ = self.setpoint_codes(p, v)
+            _, fdc = self.setpoint_codes(p, w)
+            for a in range(3):
+                self.assertNearest(classic[a][0], p[a], 10000, "classic pos")
+                self.assertNearest(classic[a][1], v[a], 1000, "classic vel")
+                self.assertNearest(fdc[a][0], p[a], 10000, "FD pos")
+                self.assertNearest(fdc[a][1], w[a], 10 ** 6, "FD vel")
+
+    # Given waypoint times and positions at and next to half-microunit ties, when
+    # encoded as an FD waypoint, then every 48-bit code is a nearest code.
+    def test_waypoint_ties(self):
+        rng = random.Random(16)
+        ts = [abs(t) for t in self.near_ties(rng, 10 ** 6, 200, 2 ** 40)]
+        ps = list(self.near_ties(rng, 10 ** 6, 600, 2 ** 40))
+        for i, t in enumerate(ts):
+            p = ps[3 * i:3 * i + 3]
+            wp = cp.Waypoint(t, (ctypes.c_double * 3)(*p), 1)
+            f = cp.Frame()
+            self.assertEqual(LIB.canproto_encode_waypoint_fd(0x690, ctypes.byref(wp),
+                                                             ctypes.byref(f)), 0)
+            b = f.payload()
+            self.assertNearest(int.from_bytes(b[2:8], "little"), t, 10 ** 6, "time")
+            for a in range(3):
+                self.assertNearest(int.from_bytes(b[8 + 6 * a:14 + 6 * a], "little", signed=True),
+                                   p[a], 10 ** 6, "waypoint pos")
 
 
 class CanmatrixEncodesOurDecoderReads(unittest.TestCase):
