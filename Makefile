@@ -55,12 +55,16 @@ DAEMON_OBJ := $(DAEMON_SRC:%.c=$(BUILD)/%.o)
 BINS := $(DAEMON_MAINS:daemon/%.c=$(BUILD)/bin/%)
 TEST_BINS := $(TEST_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 BENCHES := $(BENCH_SRC:tests/bench/%.c=$(BUILD)/tests/%)
+# Each fuzz target with a plain main (tests/fuzz/replay.c): a C test that replays
+# tests/fuzz/regress/<target>/ and tests/fuzz/corpus/<target>/.
+REPLAY_BINS := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/tests/test_%)
 
 .PHONY: all run check check-build test test-asan bench fuzz install deps deps-run clean
 .DELETE_ON_ERROR:
 .SECONDARY:
 
-all: $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/libtrajdaemon.a $(BINS) $(TEST_BINS) $(BENCHES)
+all: $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/libtrajdaemon.a $(BINS) $(TEST_BINS) $(BENCHES) \
+     $(REPLAY_BINS)
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(@D)
@@ -89,6 +93,15 @@ $(BUILD)/bin/%: $(BUILD)/daemon/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.a
 $(TEST_BINS): $(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_TEST)
+
+$(BUILD)/tests/fuzz/replay-%.o: tests/fuzz/replay.c
+	@mkdir -p $(@D)
+	$(CC) $(TRAJD_CPPFLAGS) $(TRAJD_CFLAGS) -DFUZZ_NAME='"$*"' -c -o $@ $<
+
+$(REPLAY_BINS): $(BUILD)/tests/test_%: $(BUILD)/tests/fuzz/%.o $(BUILD)/tests/fuzz/replay-%.o \
+		$(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.a
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_DAEMON)
 
 $(BENCHES): $(BUILD)/tests/%: $(BUILD)/tests/bench/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.a
 	@mkdir -p $(@D)
@@ -129,7 +142,8 @@ test: all
 SAN := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 test-asan:
 	@$(MAKE) --no-print-directory BUILD=$(BUILD)/asan CFLAGS="-O1 -g $(SAN)" \
-		LDFLAGS="$(SAN)" $(TEST_BINS:$(BUILD)/%=$(BUILD)/asan/%) $(BINS:$(BUILD)/%=$(BUILD)/asan/%)
+		LDFLAGS="$(SAN)" $(TEST_BINS:$(BUILD)/%=$(BUILD)/asan/%) $(BINS:$(BUILD)/%=$(BUILD)/asan/%) \
+		$(REPLAY_BINS:$(BUILD)/%=$(BUILD)/asan/%)
 	@BUILD=$(abspath $(BUILD)/asan) ONLY=c sh tests/run.sh
 
 bench: deps
