@@ -12,6 +12,8 @@
 # Files are found by name, so adding a module or a test needs no edit here:
 #   lib/<family>/*.c             -> $(BUILD)/libtrajd.a (pure: no I/O)
 #   daemon/<family>/*.c          -> $(BUILD)/libtrajdaemon.a
+#   daemon/<family>/*_transport.c: each `const transport_t NAME_transport = {`
+#                                   -> transport_table[] ($(BUILD)/gen/transport_table.c)
 #   daemon/<program>.c           -> $(BUILD)/bin/<program>
 #   tests/unit/test_*.c          -> cmocka test binaries $(BUILD)/tests/test_*
 #   tests/*/test_*.py, test_*.sh -> run by tests/run.sh
@@ -51,7 +53,10 @@ FUZZ_SRC := $(wildcard tests/fuzz/fuzz_*.c)
 
 LIB_OBJ := $(LIB_SRC:%.c=$(BUILD)/%.o)
 PIC_OBJ := $(LIB_SRC:%.c=$(BUILD)/pic/%.o)
-DAEMON_OBJ := $(DAEMON_SRC:%.c=$(BUILD)/%.o)
+# The transport table is generated (see daemon/core/transport.h): sorted by path.
+TRANSPORT_SRC := $(sort $(wildcard daemon/*/*_transport.c))
+GEN_TABLE := $(BUILD)/gen/transport_table.c
+DAEMON_OBJ := $(DAEMON_SRC:%.c=$(BUILD)/%.o) $(GEN_TABLE:%.c=%.o)
 BINS := $(DAEMON_MAINS:daemon/%.c=$(BUILD)/bin/%)
 TEST_BINS := $(TEST_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 BENCHES := $(BENCH_SRC:tests/bench/%.c=$(BUILD)/tests/%)
@@ -68,6 +73,17 @@ all: $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/libtrajdaemon.a $(BINS) $
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(@D)
+	$(CC) $(TRAJD_CPPFLAGS) $(TRAJD_CFLAGS) -c -o $@ $<
+
+# Regenerated at every make (cheap), replaced only when its text changes, so a
+# transport file added, removed or renamed is picked up and nothing else rebuilds.
+$(GEN_TABLE): FORCE
+	@mkdir -p $(@D)
+	@sh daemon/core/transport_table.sh $(TRANSPORT_SRC) > $@.tmp
+	@if cmp -s $@.tmp $@; then rm -f $@.tmp; else mv $@.tmp $@; echo "generated $@"; fi
+FORCE:
+
+$(BUILD)/gen/%.o: $(BUILD)/gen/%.c
 	$(CC) $(TRAJD_CPPFLAGS) $(TRAJD_CFLAGS) -c -o $@ $<
 
 $(BUILD)/pic/%.o: %.c
@@ -158,7 +174,10 @@ FUZZ_BINS := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/fuzz/%)
 $(BUILD)/fuzz/obj/%.o: %.c
 	@mkdir -p $(@D)
 	$(FUZZ_CC) $(TRAJD_CPPFLAGS) -std=c11 $(FUZZ_FLAGS) -MMD -MP -c -o $@ $<
-$(BUILD)/fuzz/%: $(BUILD)/fuzz/obj/tests/fuzz/%.o $(LIB_SRC:%.c=$(BUILD)/fuzz/obj/%.o) $(DAEMON_SRC:%.c=$(BUILD)/fuzz/obj/%.o)
+$(BUILD)/fuzz/obj/gen/%.o: $(BUILD)/gen/%.c
+	@mkdir -p $(@D)
+	$(FUZZ_CC) $(TRAJD_CPPFLAGS) -std=c11 $(FUZZ_FLAGS) -MMD -MP -c -o $@ $<
+$(BUILD)/fuzz/%: $(BUILD)/fuzz/obj/tests/fuzz/%.o $(LIB_SRC:%.c=$(BUILD)/fuzz/obj/%.o) $(DAEMON_SRC:%.c=$(BUILD)/fuzz/obj/%.o) $(BUILD)/fuzz/obj/gen/transport_table.o
 	$(FUZZ_CC) -fsanitize=fuzzer,address,undefined -o $@ $^ $(LDLIBS_DAEMON)
 fuzz: deps
 	@$(MAKE) --no-print-directory $(FUZZ_BINS)

@@ -1,4 +1,4 @@
-/* can_transport.c - the "can" transport (see can.h). */
+/* can_transport.c - the "can" transport (see can_transport.h). */
 #include "can_transport.h"
 
 #include <errno.h>
@@ -13,7 +13,7 @@
 #include "core.h"
 #include "log.h"
 
-#define CAN_MAINTAIN_NS 100000000LL  /* housekeeping: reopen, counters to stats */
+#define CAN_MAINTAIN_NS 100000000LL  /* housekeeping: reopen, bus state */
 
 enum {
     GIVEN_WP = 1u << 0, GIVEN_WPFD = 1u << 1, GIVEN_SP = 1u << 2, GIVEN_SPFD = 1u << 3,
@@ -279,12 +279,14 @@ typedef struct {
     uint64_t rx_tick;       /* last tick whose pre_tick drained the input */
     int drained;
     int was_up;
+    can_bus_state_t bus_state;  /* as of the last housekeeping timer, for Modbus */
+    uint32_t load_permille;     /* worst-case bus load of the configured traffic, 0.1 % */
 } can_state_t;
 
 static int hk_push(void *ctx, const engine_waypoint_t *wp)
 {
     obj_t *o = ctx;
-    return obj_push(o, OBJ_SRC_CAN, wp);
+    return obj_push(o, wp);
 }
 
 static void hk_command(void *ctx, canproto_cmd_t cmd)
@@ -356,33 +358,17 @@ static void sync_fd(can_state_t *s)
         s->sock_fd = fd;
 }
 
-static void publish_stats(can_state_t *s)
+/* Refresh what other transports read through can_transport_bus (Modbus). */
+static void publish_state(can_state_t *s)
 {
-    stats_t *st = s->c->stats;
-    can_port_stats_t ps;
-    can_port_stats(s->port, &ps);
-    int up = io_is_up(s);
-    st->can.state = up ? STATS_CAN_ERROR_ACTIVE : STATS_CAN_DOWN;
-    if (s->bus) {
-        can_socket_stats_t bs;
-        can_socket_stats(s->bus, &bs);
-        st->can.tx_frames = bs.tx_frames;
-        st->can.rx_frames = bs.rx_frames;
-    } else {
-        can_logfile_stats_t ls;
-        can_logfile_stats(s->log, &ls);
-        st->can.tx_frames = ls.frames_out;
-        st->can.rx_frames = ps.rx_frames;
-    }
-    uint64_t dropped = 0, bad = ps.rx_foreign;
-    for (unsigned i = 0; i < s->n; i++) {
-        can_port_obj_stats_t os;
-        can_port_obj_stats(s->port, i, &os);
-        dropped += os.dropped_late + os.dropped_full + os.dropped_down + os.dropped_error;
-        bad += os.rx.malformed;
-    }
-    st->can.tx_dropped = dropped;
-    st->can.rx_bad = bad;
+    s->bus_state = io_is_up(s) ? CAN_BUS_ERROR_ACTIVE : CAN_BUS_DOWN;
+}
+
+can_bus_state_t can_transport_bus(const core_t *c, uint32_t *load_permille)
+{
+    const can_state_t *s = c->tstate[transport_index(&can_transport)];
+    *load_permille = s ? s->load_permille : 0;
+    return s && s->port ? s->bus_state : CAN_BUS_UNUSED;
 }
 
 static void on_readable(loop_t *l, int fd, uint32_t ev, void *ctx)
@@ -411,7 +397,7 @@ static void on_timer(loop_t *l, uint64_t exp, void *ctx)
                 s->cfg->interface, strerror(bs.last_errno));
     }
     s->was_up = up;
-    publish_stats(s);
+    publish_state(s);
 }
 
 static void close_(void *state, core_t *c)
@@ -425,7 +411,6 @@ static void close_(void *state, core_t *c)
     if (s->timer_fd > 0)
         loop_timer_del(s->c->loop, s->timer_fd);
     if (s->port) {
-        publish_stats(s);
         for (unsigned k = 0; k < s->n; k++) {
             can_port_obj_stats_t os;
             can_port_obj_stats(s->port, k, &os);
@@ -449,6 +434,64 @@ static void close_(void *state, core_t *c)
     free(s);
 }
 
+/* The objects that use CAN, in config order, as can_port indices. */
+static void collect_objects(can_state_t *s, core_t *c)
+{
+    for (unsigned i = 0; i < c->nobj; i++) {
+        s->port_index[i] = -1;
+        if (!uses_can(c->obj[i].cfg))
+            continue;
+        s->port_index[i] = (int)s->n;
+        s->is_input[s->n] = c->obj[i].cfg->input == &can_transport;
+        s->objs[s->n++] = &c->obj[i];
+    }
+}
+
+/* Give every object its ids and hooks; the ids to receive go to rx_ids. */
+static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *why, size_t wl)
+{
+    for (unsigned k = 0; k < s->n; k++) {
+        canproto_ids_t ids;
+        can_obj_ids(cfg_obj_transport(s->objs[k]->cfg, &can_transport), s->objs[k]->index, &ids);
+        can_port_hooks_t hk = { s->is_input[k] ? hk_push : hk_push_refuse, hk_command, hk_status };
+        if (can_port_set_object(s->port, k, &ids, &hk, s->objs[k]) < 0) {
+            snprintf(why, wl, "can: object '%s': invalid or clashing ids", s->objs[k]->name);
+            return -EINVAL;
+        }
+        if (s->is_input[k])
+            if (*nrx + 2 <= CAN_SOCKET_MAX_FILTERS) /* 32 objects x 2 ids at most: always fits */
+                *nrx += canproto_ids_rx(&ids, rx_ids + *nrx, CAN_SOCKET_MAX_FILTERS - *nrx);
+    }
+    return 0;
+}
+
+/* The candump logs if configured, else the socket (a missing or down
+ * interface is not an error: the port runs DOWN and keeps reopening). */
+static int open_io(can_state_t *s, const uint32_t *rx_ids, unsigned nrx, char *why, size_t wl)
+{
+    const can_cfg_t *cfg = s->cfg;
+    if (cfg->log_in[0] || cfg->log_out[0]) {
+        s->log = can_logfile_open(cfg->log_in[0] ? cfg->log_in : NULL,
+                             cfg->log_out[0] ? cfg->log_out : NULL, cfg->log_ifname, 0, why, wl);
+        return s->log ? 0 : -EIO;
+    }
+    s->bus = can_socket_new(cfg->interface, cfg->fd, rx_ids, nrx);
+    if (!s->bus) {
+        snprintf(why, wl, "can: bad interface name '%s'", cfg->interface);
+        return -EINVAL;
+    }
+    int rc = can_socket_open(s->bus);
+    if (rc == -EAFNOSUPPORT || rc == -EPERM || rc == -EACCES) {
+        snprintf(why, wl, "can: cannot open a CAN socket: %s", strerror(-rc));
+        return rc;
+    }
+    if (rc < 0) /* missing or down: run DOWN and keep reopening */
+        log_msg(LOG_WARNING, "can: %s: %s; setpoints dropped until it is up", cfg->interface,
+                strerror(-rc));
+    sync_fd(s);
+    return 0;
+}
+
 static int open_(core_t *c, void **state, char *why, size_t wl)
 {
     const can_cfg_t *cfg = cfg_transport(c->cfg, &can_transport);
@@ -461,14 +504,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     s->c = c;
     s->cfg = cfg;
     s->sock_fd = -1;
-    for (unsigned i = 0; i < c->nobj; i++) {
-        s->port_index[i] = -1;
-        if (!uses_can(c->obj[i].cfg))
-            continue;
-        s->port_index[i] = (int)s->n;
-        s->is_input[s->n] = c->obj[i].cfg->input == &can_transport;
-        s->objs[s->n++] = &c->obj[i];
-    }
+    collect_objects(s, c);
     if (!s->n) {
         *state = s; /* [can] present but no object uses it: nothing to do */
         return 0;
@@ -484,58 +520,22 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     }
     uint32_t rx_ids[CAN_SOCKET_MAX_FILTERS];
     unsigned nrx = 0;
-    for (unsigned k = 0; k < s->n; k++) {
-        canproto_ids_t ids;
-        can_obj_ids(cfg_obj_transport(s->objs[k]->cfg, &can_transport), s->objs[k]->index, &ids);
-        can_port_hooks_t hk = { s->is_input[k] ? hk_push : hk_push_refuse, hk_command, hk_status };
-        if (can_port_set_object(s->port, k, &ids, &hk, s->objs[k]) < 0) {
-            snprintf(why, wl, "can: object '%s': invalid or clashing ids", s->objs[k]->name);
-            rc = -EINVAL;
-            goto fail;
-        }
-        if (s->is_input[k])
-            if (nrx + 2 <= CAN_SOCKET_MAX_FILTERS) /* 32 objects x 2 ids at most: always fits */
-                nrx += canproto_ids_rx(&ids, rx_ids + nrx, CAN_SOCKET_MAX_FILTERS - nrx);
-    }
-    if (cfg->log_in[0] || cfg->log_out[0]) {
-        s->log = can_logfile_open(cfg->log_in[0] ? cfg->log_in : NULL,
-                             cfg->log_out[0] ? cfg->log_out : NULL, cfg->log_ifname, 0, why, wl);
-        if (!s->log) {
-            rc = -EIO;
-            goto fail;
-        }
-    } else {
-        s->bus = can_socket_new(cfg->interface, cfg->fd, rx_ids, nrx);
-        if (!s->bus) {
-            snprintf(why, wl, "can: bad interface name '%s'", cfg->interface);
-            rc = -EINVAL;
-            goto fail;
-        }
-        rc = can_socket_open(s->bus);
-        if (rc == -EAFNOSUPPORT || rc == -EPERM || rc == -EACCES) {
-            snprintf(why, wl, "can: cannot open a CAN socket: %s", strerror(-rc));
-            goto fail;
-        }
-        if (rc < 0) /* missing or down: run DOWN and keep reopening */
-            log_msg(LOG_WARNING, "can: %s: %s; setpoints dropped until it is up", cfg->interface,
-                    strerror(-rc));
-        rc = 0;
-        sync_fd(s);
-    }
+    if ((rc = set_objects(s, rx_ids, &nrx, why, wl)) < 0 ||
+        (rc = open_io(s, rx_ids, nrx, why, wl)) < 0)
+        goto fail;
     double load = can_port_busload(s->port, c->cfg->daemon.rate_hz, cfg->waypoint_hz, cfg->bitrate,
                                   cfg->data_bitrate);
-    c->stats->can.load_permille = load > 0 ? (uint32_t)llround(load * 1000) : 0;
+    s->load_permille = load > 0 ? (uint32_t)llround(load * 1000) : 0;
     log_msg(LOG_INFO, "can: %u object(s) on %s, worst-case bus load %.1f %% at %g bit/s",
             s->n, s->log ? "candump logs" : cfg->interface, load * 100, cfg->bitrate);
     s->was_up = io_is_up(s);
+    publish_state(s);
     s->timer_fd = loop_timer_add(c->loop, CAN_MAINTAIN_NS, on_timer, s);
     if (s->timer_fd < 0) {
         rc = s->timer_fd;
         snprintf(why, wl, "can: timer: %s", strerror(-rc));
         goto fail;
     }
-    for (unsigned k = 0; k < s->n; k++)
-        s->objs[k]->tstate[transport_index(&can_transport)] = s;
     *state = s;
     return 0;
 fail:

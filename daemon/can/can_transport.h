@@ -1,5 +1,5 @@
 /*
- * can.h - the "can" transport of trajd: waypoints in and setpoints out over
+ * can_transport.h - the "can" transport of trajd: waypoints in and setpoints out over
  * SocketCAN (daemon/can/can_socket.h) or a candump log (daemon/can/can_logfile.h), with the
  * frames of lib/proto/canproto.h, driven by daemon/can/can_port.h.
  *
@@ -55,6 +55,27 @@ typedef struct {
 } can_obj_cfg_t;
 
 extern const transport_t can_transport;
+
+/* CAN bus state (values follow linux/can/netlink.h, plus DOWN; the Modbus
+ * register map publishes them as its MBMAP_CAN_*). */
+typedef enum {
+    CAN_BUS_UNUSED = 0,         /* no object uses CAN */
+    CAN_BUS_ERROR_ACTIVE = 1,
+    CAN_BUS_ERROR_WARNING = 2,
+    CAN_BUS_ERROR_PASSIVE = 3,
+    CAN_BUS_OFF = 4,
+    CAN_BUS_DOWN = 5,           /* interface down or gone; reopening */
+} can_bus_state_t;
+
+struct core;
+
+/*
+ * The bus state of c's CAN transport as of its last housekeeping timer
+ * (every 100 ms), and in *load_permille the worst-case bus load of the
+ * configured traffic in 0.1 %.  CAN_BUS_UNUSED and 0 when CAN is not open.
+ * For the Modbus status registers; any time, also in the tick.
+ */
+can_bus_state_t can_transport_bus(const struct core *c, uint32_t *load_permille);
 
 /*
  * The ids of object o (defaults for its can.index, then the keys given).

@@ -29,24 +29,11 @@ int64_t core_mono_ns(void)
     return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
 }
 
-int obj_push(obj_t *o, obj_source_t src, const engine_waypoint_t *wp)
+int obj_push(obj_t *o, const engine_waypoint_t *wp)
 {
-    obj_src_stats_t *st = &o->src[src < OBJ_SRC_COUNT ? src : 0];
-    st->offered++;
-    if (o->stopping) {
-        st->refused++;
+    if (o->stopping)
         return -ENGINE_ESTATE;
-    }
-    int rc = engine_push(o->engine, wp);
-    if (rc == 0)
-        st->accepted++;
-    else if (rc == ENGINE_DUPLICATE)
-        st->duplicates++;
-    else if (rc == -ENGINE_EFULL)
-        st->full++;
-    else
-        st->rejected++;
-    return rc;
+    return engine_push(o->engine, wp);
 }
 
 void obj_reset_counters(obj_t *o)
@@ -188,6 +175,66 @@ static obj_t *carry_source(core_t *prev, const cfg_obj_t *o)
     return q;
 }
 
+/* Step 1 of core_open: an object per config entry, a new engine unless one is
+ * carried over from prev.  0, or -ENOMEM with why (prev untouched). */
+static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
+{
+    const cfg_t *cfg = c->cfg;
+    for (unsigned i = 0; i < cfg->nobj; i++) {
+        obj_t *o = &c->obj[i];
+        int err = 0;
+        snprintf(o->name, sizeof o->name, "%s", cfg->obj[i].name);
+        o->index = i;
+        o->cfg = &cfg->obj[i];
+        o->born_ns = c->t0_ns;
+        if (carry_source(prev, o->cfg))
+            continue;
+        o->engine = engine_new(&cfg->obj[i].engine, &err);
+        if (!o->engine) {
+            snprintf(why, whylen, "object '%s': engine: %s", o->name, engine_strerror(err));
+            return -ENOMEM;
+        }
+        engine_status(o->engine, &o->status);
+    }
+    return 0;
+}
+
+/* Step 2 of core_open: take the engines of prev's carried objects (cannot fail). */
+static void carry_objects(core_t *c, core_t *prev)
+{
+    for (unsigned i = 0; i < c->nobj; i++) {
+        obj_t *o = &c->obj[i], *q = carry_source(prev, o->cfg);
+        if (!q)
+            continue;
+        o->engine = q->engine;
+        q->engine = NULL;
+        o->sp = q->sp;
+        o->status = q->status;
+        o->skipped_ticks = q->skipped_ticks;
+        o->born_ns = q->born_ns;
+        o->carried = 1;
+    }
+}
+
+/* Step 3 of core_open: open every transport the config uses, in table order. */
+static int open_transports(core_priv_t *p, char *why, size_t whylen)
+{
+    core_t *c = &p->pub;
+    for (unsigned t = 0; transport_table[t]; t++) {
+        const transport_t *tr = transport_table[t];
+        if (!cfg_uses(c->cfg, tr) || !tr->open)
+            continue;
+        char w[256] = "";
+        int rc = tr->open(c, &c->tstate[t], w, sizeof w);
+        if (rc < 0) {
+            snprintf(why, whylen, "%s: %s", tr->name, w[0] ? w : strerror(-rc));
+            return rc;
+        }
+        p->opened[t] = 1;
+    }
+    return 0;
+}
+
 int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, core_t **out,
               char *why, size_t whylen)
 {
@@ -217,54 +264,19 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
         goto fail;
     }
     /* 1. new engines (may fail: prev is still untouched) */
-    for (unsigned i = 0; i < cfg->nobj; i++) {
-        obj_t *o = &c->obj[i];
-        int err = 0;
-        snprintf(o->name, sizeof o->name, "%s", cfg->obj[i].name);
-        o->index = i;
-        o->cfg = &cfg->obj[i];
-        o->born_ns = c->t0_ns;
-        if (carry_source(prev, o->cfg))
-            continue;
-        o->engine = engine_new(&cfg->obj[i].engine, &err);
-        if (!o->engine) {
-            snprintf(why, whylen, "object '%s': engine: %s", o->name, engine_strerror(err));
-            rc = -ENOMEM;
-            goto fail;
-        }
-        engine_status(o->engine, &o->status);
-    }
+    rc = new_objects(c, prev, why, whylen);
+    if (rc < 0)
+        goto fail;
     /* 2. carry engines over (cannot fail), then the old core goes */
-    for (unsigned i = 0; i < cfg->nobj; i++) {
-        obj_t *o = &c->obj[i], *q = carry_source(prev, o->cfg);
-        if (!q)
-            continue;
-        o->engine = q->engine;
-        q->engine = NULL;
-        o->sp = q->sp;
-        o->status = q->status;
-        memcpy(o->src, q->src, sizeof o->src);
-        o->skipped_ticks = q->skipped_ticks;
-        o->born_ns = q->born_ns;
-        o->carried = 1;
-    }
+    carry_objects(c, prev);
     if (prev) {
         core_close(prev);
         *prevp = NULL;
     }
     /* 3. transports */
-    for (unsigned t = 0; transport_table[t]; t++) {
-        const transport_t *tr = transport_table[t];
-        if (!cfg_uses(cfg, tr) || !tr->open)
-            continue;
-        char w[256] = "";
-        rc = tr->open(c, &c->tstate[t], w, sizeof w);
-        if (rc < 0) {
-            snprintf(why, whylen, "%s: %s", tr->name, w[0] ? w : strerror(-rc));
-            goto fail;
-        }
-        p->opened[t] = 1;
-    }
+    rc = open_transports(p, why, whylen);
+    if (rc < 0)
+        goto fail;
     *out = c;
     return 0;
 fail:
@@ -390,11 +402,12 @@ int core_summary(const core_t *c, char *buf, size_t len)
     if (m < 0)
         return m;
     n = (size_t)m < len ? (size_t)m : len;
-    if (s->out_dropped && n < len) {
-        m = snprintf(buf + n, len - n, ", out dropped %llu",
-                     (unsigned long long)s->out_dropped);
-        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
-    }
+    /* every transport's counters, open or not (a reload may have closed it) */
+    for (unsigned t = 0; transport_table[t] && n < len; t++)
+        if (transport_table[t]->summary) {
+            m = transport_table[t]->summary(c, buf + n, len - n);
+            n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+        }
     for (unsigned i = 0; i < c->nobj && n < len; i++) {
         const obj_t *o = &c->obj[i];
         m = snprintf(buf + n, len - n,

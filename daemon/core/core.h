@@ -43,24 +43,6 @@
 #include "loop.h"
 #include "transport.h"
 
-/* Where a waypoint came from (per-source counters in obj_t). */
-typedef enum {
-    OBJ_SRC_REPLAY = 0,
-    OBJ_SRC_CAN = 1,
-    OBJ_SRC_MODBUS = 2,
-    OBJ_SRC_COUNT
-} obj_source_t;
-
-/* Counters of waypoints offered by one source. */
-typedef struct {
-    uint64_t offered;       /* obj_push calls */
-    uint64_t accepted;      /* engine_push returned 0 */
-    uint64_t duplicates;    /* ENGINE_DUPLICATE */
-    uint64_t full;          /* -ENGINE_EFULL (sender must retry: flow control) */
-    uint64_t rejected;      /* any other error (bad data), see o->status.rejected_by */
-    uint64_t refused;       /* daemon stopping */
-} obj_src_stats_t;
-
 /* One moving object. */
 typedef struct obj {
     char name[CFG_NAME_MAX];
@@ -69,38 +51,29 @@ typedef struct obj {
     engine_t *engine;
     engine_setpoint_t sp;           /* setpoint of the last tick (zero before the first) */
     engine_status_t status;         /* engine status after the last tick */
-    obj_src_stats_t src[OBJ_SRC_COUNT];
     uint64_t skipped_ticks;         /* missed deadlines this object was stepped through with
                                      * no output (added into status.skipped_ticks) */
     int stopping;                   /* the daemon is stopping: obj_push refuses */
     int carried;                    /* 1 if engine (and counters) were carried over a reload */
     int64_t born_ns;                /* engine time when its engine was created (0 at start;
                                      * kept when carried): replay due times count from here */
-    void *tstate[CFG_TRANSPORTS_MAX]; /* free slot per transport (by index) for its per-object state */
 } obj_t;
 
 /*
- * Offer a waypoint to o's engine, counted under src.  For event-driven inputs
- * (CAN frames, Modbus writes), from their fd callbacks.  Returns what
+ * Offer a waypoint to o's engine: the one path every input uses (replay from
+ * its pre_tick, CAN and Modbus from their fd callbacks).  Returns what
  * engine_push returns (0, ENGINE_DUPLICATE, -ENGINE_*), or -ENGINE_ESTATE
- * while the daemon is stopping.
+ * while the daemon is stopping.  The engine counts the outcome (o->status).
  */
-int obj_push(obj_t *o, obj_source_t src, const engine_waypoint_t *wp);
+int obj_push(obj_t *o, const engine_waypoint_t *wp);
 
 /* Reset o's counters: the engine's and the daemon's own (the reset command). */
 void obj_reset_counters(obj_t *o);
 
-/* CAN bus state as published to Modbus (values follow linux/can/netlink.h, plus DOWN). */
-typedef enum {
-    STATS_CAN_UNUSED = 0,
-    STATS_CAN_ERROR_ACTIVE = 1,
-    STATS_CAN_ERROR_WARNING = 2,
-    STATS_CAN_ERROR_PASSIVE = 3,
-    STATS_CAN_BUS_OFF = 4,
-    STATS_CAN_DOWN = 5,            /* interface down or gone; reopening */
-} stats_can_state_t;
+/* Counters per transport in stats_t.tcount. */
+#define STATS_TCOUNT_MAX 4
 
-/* Daemon-wide statistics.  The core fills the tick part; transports fill theirs. */
+/* Daemon-wide statistics.  The core fills the tick part; transports their tcount row. */
 typedef struct {
     int64_t start_mono_ns;          /* CLOCK_MONOTONIC at start (uptime = now - this) */
     uint64_t ticks;                 /* ticks run */
@@ -112,21 +85,13 @@ typedef struct {
     lat_hist_t late_recent_hist;    /* lateness in the current 1 s window */
     lat_summary_t late;             /* summary of late_hist, refreshed every second */
     lat_summary_t late_recent;      /* summary of the last complete 1 s window */
-    struct {                        /* filled by the CAN transport */
-        stats_can_state_t state;
-        uint32_t load_permille;     /* worst-case bus load of the configured traffic, 0.1 % */
-        uint64_t tx_frames, rx_frames;
-        uint64_t tx_dropped;        /* late or ENOBUFS */
-        uint64_t rx_bad;            /* malformed or unknown */
-    } can;
-    struct {                        /* filled by the Modbus transport */
-        uint32_t clients;
-        uint64_t requests, exceptions;
-    } modbus;
-    uint64_t out_dropped;           /* setpoint lines dropped by csv/stdout (blocked writer) */
+    /* Counters a transport keeps across reloads (a reload rebuilds its state):
+     * tcount[transport_index(t)][0 .. STATS_TCOUNT_MAX - 1], meaning defined by
+     * transport t, printed by its summary callback. */
+    uint64_t tcount[CFG_TRANSPORTS_MAX][STATS_TCOUNT_MAX];
 } stats_t;
 
-/* The daemon core. Fields are read-only for transports except stats.can/.modbus/.out_dropped. */
+/* The daemon core. Fields are read-only for transports except their own stats->tcount row. */
 typedef struct core {
     loop_t *loop;                   /* the event loop: loop_add your fds here */
     const cfg_t *cfg;               /* the running configuration */

@@ -22,8 +22,11 @@ typedef struct {
     char *buf;             /* CSV_TRANSPORT_BUF_BYTES */
 } stream_t;
 
+/* This transport's row of stats_t.tcount (survives reloads). */
+enum { TCOUNT_DROPPED = 0 };  /* lines dropped: the buffer was full */
+
 typedef struct {
-    stats_t *stats;
+    uint64_t *dropped;     /* &stats->tcount[its index][TCOUNT_DROPPED] */
     unsigned n;
     stream_t *s;           /* csv: one per object index (fd -1 if unused); stdout: one */
 } csv_transport_t;
@@ -102,7 +105,7 @@ static void flush(stream_t *s)
 static void put(csv_transport_t *st, stream_t *s, const char *line, int n)
 {
     if (n < 0 || (size_t)n > CSV_TRANSPORT_BUF_BYTES - s->len) {
-        st->stats->out_dropped++;
+        (*st->dropped)++;
         return;
     }
     memcpy(s->buf + s->len, line, (size_t)n);
@@ -168,12 +171,12 @@ static void close_(void *state, core_t *c)
     free(st);
 }
 
-static csv_transport_t *alloc_state(core_t *c, unsigned n)
+static csv_transport_t *alloc_state(core_t *c, const transport_t *t, unsigned n)
 {
     csv_transport_t *st = calloc(1, sizeof *st);
     if (!st)
         return NULL;
-    st->stats = c->stats;
+    st->dropped = &c->stats->tcount[transport_index(t)][TCOUNT_DROPPED];
     st->n = n;
     st->s = calloc(n, sizeof *st->s);
     if (!st->s) {
@@ -187,7 +190,7 @@ static csv_transport_t *alloc_state(core_t *c, unsigned n)
 
 static int csv_open(core_t *c, void **state, char *why, size_t wl)
 {
-    csv_transport_t *st = alloc_state(c, c->nobj);
+    csv_transport_t *st = alloc_state(c, &csv_transport, c->nobj);
     int rc = 0;
     if (!st) {
         snprintf(why, wl, "out of memory");
@@ -214,7 +217,6 @@ static int csv_open(core_t *c, void **state, char *why, size_t wl)
         }
         if (oc->header)
             header(st, &st->s[i]);
-        o->tstate[transport_index(&csv_transport)] = &st->s[i];
     }
     *state = st;
     return 0;
@@ -225,7 +227,7 @@ fail:
 
 static int stdout_open(core_t *c, void **state, char *why, size_t wl)
 {
-    csv_transport_t *st = alloc_state(c, 1);
+    csv_transport_t *st = alloc_state(c, &stdout_transport, 1);
     if (!st || stream_init(&st->s[0], STDOUT_FILENO, 0) < 0) {
         close_(st, c);
         snprintf(why, wl, "out of memory");
@@ -278,6 +280,14 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
             flush(&st->s[i]);
 }
 
+/* Lines dropped by csv and stdout together, as one status item. */
+static int summary(const core_t *c, char *buf, size_t len)
+{
+    uint64_t n = c->stats->tcount[transport_index(&csv_transport)][TCOUNT_DROPPED] +
+                 c->stats->tcount[transport_index(&stdout_transport)][TCOUNT_DROPPED];
+    return n ? snprintf(buf, len, ", out dropped %llu", (unsigned long long)n) : 0;
+}
+
 const transport_t csv_transport = {
     .name = "csv",
     .roles = TRANSPORT_OUTPUT,
@@ -289,6 +299,7 @@ const transport_t csv_transport = {
     .setpoint = csv_setpoint,
     .cycle = cycle,
     .close = close_,
+    .summary = summary,         /* stdout's count too */
 };
 
 const transport_t stdout_transport = {

@@ -15,7 +15,8 @@
  * (CSV_TRANSPORT_BUF_BYTES); the buffer is written once per tick (cycle hook) with
  * non-blocking writes (O_NONBLOCK is set on a pipe/tty stdout and restored at
  * close).  If the reader is slow and the buffer is full, the line is dropped
- * and counted in stats.out_dropped (a gap in the cycle column shows where).
+ * and counted ("out dropped" on the status line; a gap in the cycle column
+ * shows where).
  * Limit: a regular file on a slow disk can still block in write(); that is
  * the kernel's page cache's call, not ours.
  */

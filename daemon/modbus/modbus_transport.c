@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "can_transport.h"
 #include "core.h"
 #include "log.h"
 #include "mbmap.h"
@@ -67,7 +68,7 @@ static int hook_waypoint(void *ctx, unsigned k, const engine_waypoint_t *wp)
     obj_t *o = &t->core->obj[k];
     if (o->cfg->input != &modbus_transport)
         return MODBUS_SERVER_HOOK_EADDRESS;
-    return obj_push(o, OBJ_SRC_MODBUS, wp);
+    return obj_push(o, wp);
 }
 
 static int hook_command(void *ctx, unsigned k, unsigned cmd)
@@ -162,6 +163,13 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     return 0;
 }
 
+/* The register map publishes the CAN transport's bus state as is. */
+_Static_assert(MBMAP_CAN_NONE == CAN_BUS_UNUSED && MBMAP_CAN_ACTIVE == CAN_BUS_ERROR_ACTIVE &&
+                   MBMAP_CAN_WARNING == CAN_BUS_ERROR_WARNING &&
+                   MBMAP_CAN_PASSIVE == CAN_BUS_ERROR_PASSIVE &&
+                   MBMAP_CAN_BUS_OFF == CAN_BUS_OFF && MBMAP_CAN_DOWN == CAN_BUS_DOWN,
+               "mbmap.h MBMAP_CAN_* and can_transport.h can_bus_state_t disagree");
+
 /* In the tick: no allocation, no blocking call, no logging. */
 static void cycle(void *state, core_t *c, int64_t now_ns)
 {
@@ -179,8 +187,9 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
     d.late_p99_us = s->late.p99_us;
     d.late_max_us = s->late.max_us;
     d.missed_ticks = s->missed_ticks;
-    d.can_state = (uint16_t)s->can.state;
-    d.can_load_permille = (uint16_t)(s->can.load_permille > 0xffff ? 0xffff : s->can.load_permille);
+    uint32_t load_permille;
+    d.can_state = (uint16_t)can_transport_bus(c, &load_permille);
+    d.can_load_permille = (uint16_t)(load_permille > 0xffff ? 0xffff : load_permille);
     for (unsigned k = 0; k < t->nobj; k++) {
         mbmap_object_t *o = &t->objs[k];
         o->sp = c->obj[k].sp;
@@ -193,11 +202,6 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         o->uptime_s = up_s;
     }
     modbus_server_publish(t->srv, &d, t->objs);
-    modbus_server_stats_t ms;
-    modbus_server_stats(t->srv, &ms);
-    c->stats->modbus.clients = ms.clients;
-    c->stats->modbus.requests = ms.requests;
-    c->stats->modbus.exceptions = ms.exceptions;
 }
 
 static void close_(void *state, core_t *c)

@@ -35,7 +35,17 @@ int64_t replay_next_due_ns(const replay_t *r)
     return due_ns(r, r->next);
 }
 
+static int push_engine(void *e, const engine_waypoint_t *wp)
+{
+    return engine_push(e, wp);
+}
+
 int replay_feed(replay_t *r, engine_t *e, int64_t now_ns)
+{
+    return replay_feed_via(r, push_engine, e, e, now_ns);
+}
+
+int replay_feed_via(replay_t *r, replay_push_fn push, void *ctx, engine_t *e, int64_t now_ns)
 {
     int taken = 0;
     if (!r->trk)
@@ -43,7 +53,7 @@ int replay_feed(replay_t *r, engine_t *e, int64_t now_ns)
     while (r->next < r->trk->n) {
         if (due_ns(r, r->next) > now_ns)
             break;
-        int rc = engine_push(e, &r->trk->wp[r->next]);
+        int rc = push(ctx, &r->trk->wp[r->next]);
         if (rc == -ENGINE_EFULL) {
             r->retries++;
             break;

@@ -53,6 +53,17 @@ void replay_init(replay_t *r, const track_t *trk, int64_t start_ns);
  */
 int replay_feed(replay_t *r, engine_t *e, int64_t now_ns);
 
+/* How replay_feed_via offers a waypoint: engine_push's contract (0,
+ * ENGINE_DUPLICATE or -ENGINE_*; -ENGINE_EFULL = offer it again later). */
+typedef int (*replay_push_fn)(void *ctx, const engine_waypoint_t *wp);
+
+/*
+ * replay_feed, offering each waypoint through push(ctx, wp) instead of
+ * engine_push(e, wp): the daemon passes obj_push, the path every input takes.
+ * e is still the engine that push feeds (engine_finish is called on it).
+ */
+int replay_feed_via(replay_t *r, replay_push_fn push, void *ctx, engine_t *e, int64_t now_ns);
+
 /* Engine time at which the next waypoint is due (INT64_MAX if none left). */
 int64_t replay_next_due_ns(const replay_t *r);
 

@@ -118,26 +118,20 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
             if (r->next >= rc->trk.n)
                 r->finished = 1; /* the old replay called engine_finish already */
         }
-        o->tstate[transport_index(&replay_transport)] = &s->r[i];
     }
     *state = s;
     return 0;
 }
 
+static int push_obj(void *o, const engine_waypoint_t *wp)
+{
+    return obj_push(o, wp);
+}
+
 static void pre_tick(void *state, obj_t *o, int64_t now_ns)
 {
     replay_transport_t *s = state;
-    replay_t *r = &s->r[o->index];
-    size_t before = r->next;
-    uint64_t refused = r->refused, retries = r->retries;
-    int n = replay_feed(r, o->engine, now_ns);
-    /* Count under the replay source as obj_push would (replay_feed talks to
-     * the engine directly, so it can keep its EFULL retry semantics). */
-    obj_src_stats_t *st = &o->src[OBJ_SRC_REPLAY];
-    st->offered += n > 0 ? (uint64_t)n : 0;
-    st->full += r->retries - retries;
-    st->rejected += r->refused - refused;
-    st->accepted += (r->next - before) - (r->refused - refused);
+    (void)replay_feed_via(&s->r[o->index], push_obj, o, o->engine, now_ns);
 }
 
 static int input_done(void *state, const obj_t *o)
