@@ -57,6 +57,10 @@ const char *engine_state_name(engine_state_t s);
 #define ENGINE_SP_NEW_TRACK 0x02u /* first setpoint of a new trajectory (after a gap or clear) */
 #define ENGINE_SP_SKIPPED   0x04u /* ticks were skipped before this one */
 #define ENGINE_SP_TRANSFER  0x08u /* rest-to-rest transfer to a new trajectory's start */
+/* No valid position exists yet (nothing received, or a required position not
+ * yet given): pos_m[] is NaN and is NOT a setpoint.  A subscriber must not
+ * move; CiA 402 RPDOs are not sent at all while it is set. */
+#define ENGINE_SP_NO_POSITION 0x10u
 
 typedef struct {
     int64_t now_ns;                 /* the tick this setpoint is for (as passed in) */

@@ -231,14 +231,15 @@ static int is_full(int rc)
     return rc == -ENOBUFS || rc == -EAGAIN;
 }
 
-/* Send object o's frames for this cycle; 0 or the first failure. */
-static int send_setpoint(can_port_t *p, can_port_obj_t *o)
+/* Send object o's frames for this cycle (own frames only if own); 0 or the
+ * first failure. */
+static int send_setpoint(can_port_t *p, can_port_obj_t *o, int own)
 {
     canproto_frame_t f[ENGINE_AXES + CANPROTO_CIA402_AXES];
     unsigned n = 0;
     int clamped = 0, rc;
 
-    if (o->ids.own) {
+    if (o->ids.own && own) {
         if (o->ids.fd)
             rc = canproto_encode_setpoint_fd(o->ids.setpoint_fd_id, o->ids.brs, &o->sp, &f[n++]);
         else {
@@ -247,7 +248,9 @@ static int send_setpoint(can_port_t *p, can_port_obj_t *o)
         }
         clamped |= rc == CANPROTO_CLAMPED;
     }
-    if (o->ids.cia402)
+    /* no valid position yet: nothing a drive would follow (own frames carry
+     * the n/a marker instead) */
+    if (o->ids.cia402 && !(o->sp.flags & ENGINE_SP_NO_POSITION))
         for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
             if (o->ids.cia402_cob_id[a]) {
                 rc = canproto_encode_cia402(&o->ids, a, o->sp.pos_m[a], &f[n++]);
@@ -321,15 +324,11 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
                 count_drop(&p->obj[i], -ENETDOWN);
         goto out;
     }
-    if (p->cfg.max_late_ns > 0 && late_ns > p->cfg.max_late_ns) {
-        for (unsigned i = 0; i < p->nobj; i++)
-            if (p->obj[i].set && p->obj[i].have_sp) {
-                p->obj[i].st.dropped_late++;
-                p->obj[i].flags_since |= CANPROTO_ST_TX_DROP;
-                event(&p->obj[i], CANPROTO_STERR_TX_DROPPED);
-            }
-        goto out;
-    }
+    /* A late cycle still sends its SYNC and its CiA 402 targets (a drive
+     * applies the target at the next SYNC, so a late one is as good as an
+     * early one; a missing SYNC is a fault for most drives); only the own
+     * frames, stamped for a deadline that has passed, are dropped. */
+    int late = p->cfg.max_late_ns > 0 && late_ns > p->cfg.max_late_ns;
     if (p->cfg.sync) {
         canproto_frame_t f;
         uint8_t c = 0;
@@ -341,16 +340,23 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
         canproto_encode_sync(p->cfg.sync_id, c, &f);
         if (p->io.send(p->io_ctx, &f) == 0)
             p->st.sync_sent++;
+        else
+            p->st.sync_dropped++;
     }
     for (unsigned i = 0; i < p->nobj; i++) {
         can_port_obj_t *o = &p->obj[i];
         if (!o->set || !o->have_sp)
             continue;
-        int rc = send_setpoint(p, o);
-        if (rc < 0)
+        int rc = send_setpoint(p, o, !late);
+        if (rc < 0) {
             count_drop(o, rc);
-        else
+        } else if (late && o->ids.own) {
+            o->st.dropped_late++;
+            o->flags_since |= CANPROTO_ST_TX_DROP;
+            event(o, CANPROTO_STERR_TX_DROPPED);
+        } else {
             o->st.setpoints_sent++;
+        }
     }
     for (unsigned i = 0; i < p->nobj; i++) {
         can_port_obj_t *o = &p->obj[i];

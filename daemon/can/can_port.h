@@ -11,11 +11,20 @@
  *
  * Per cycle (can_port_cycle, called once per tick after every object's
  * setpoint was handed over with can_port_setpoint):
- *   1. if the caller was later than max_late_ns for this cycle: nothing is
- *      sent, every object's setpoint counts as dropped (late);
- *   2. SYNC (if enabled), then per object its own SETPOINT frame(s) and its
- *      CiA 402 RPDOs (a CSP drive applies the target received after SYNC k at
- *      SYNC k + 1: one cycle of latency, the CiA 402 norm);
+ *   1. SYNC (if enabled), always, even when the caller is late;
+ *   2. per object its own SETPOINT frame(s) and its CiA 402 RPDOs (a CSP
+ *      drive applies the target received after SYNC k at SYNC k + 1: one
+ *      cycle of latency, the CiA 402 norm).  If the caller was later than
+ *      max_late_ns for this cycle, the own frames are not sent (counted as
+ *      dropped, late) but SYNC and the RPDOs are: what the drive sees on a
+ *      late cycle is its SYNC and its target late by the lateness, and it
+ *      applies the target at the next SYNC as on any cycle, so the
+ *      positions it follows are exactly the planned ones.  A deadline missed
+ *      altogether (the daemon woke after the next one: core.h) has no SYNC:
+ *      the drive sees one SYNC interval of two periods and a target two
+ *      periods ahead; drives that count SYNC loss count it (the daemon counts
+ *      it too: stats.missed_ticks).  RPDOs are never sent
+ *      while the setpoint has no position (ENGINE_SP_NO_POSITION);
  *   3. STATUS frames that are due (every status_period_ns, or at once after a
  *      rejection, a loss, a malformed frame or a change of engine state, at
  *      most one per object per cycle).
@@ -87,6 +96,7 @@ typedef struct {
     uint64_t rx_foreign;       /* frames with an id no object uses (log input; filters stop them on a socket) */
     uint64_t rx_errors;
     uint64_t sync_sent;
+    uint64_t sync_dropped;     /* SYNC frames the transport refused (queue full, down) */
     uint64_t cycles;
     uint64_t down_cycles;      /* cycles during which the transport was down */
     uint64_t reopens;

@@ -78,7 +78,10 @@ struct engine {
 
     /* ---- output ---- */
     int mode;
-    int moved;            /* the output position means something (a trajectory was started) */
+    int have_pos;         /* the output stands somewhere real: set by engine_set_position,
+                             or the first waypoint adopted as the last resort.  From then on
+                             the output only moves by streaming or by a transfer */
+    int need_pos;         /* engine_require_position: no first-waypoint fallback */
     int finished;         /* the last trajectory ran to its end */
     int underrun;
     qent_t cur;           /* segment (or transfer) being stepped */
@@ -749,6 +752,34 @@ void engine_clear(engine_t *e)
     }
 }
 
+int engine_set_position(engine_t *e, const double pos_m[ENGINE_AXES])
+{
+    for (int k = 0; k < AX; k++) {
+        if (!isfinite(pos_m[k]))
+            return -ENGINE_ENOTFINITE;
+        if (fabs(pos_m[k]) > e->cfg.max_abs_m)
+            return -ENGINE_ERANGE;
+    }
+    if (e->mode != OUT_HOLD)
+        return -ENGINE_ESTATE;
+    for (int k = 0; k < AX; k++) {
+        e->pos[k] = pos_m[k];
+        e->vel[k] = e->acc[k] = 0.0;
+    }
+    e->have_pos = 1;
+    return 0;
+}
+
+void engine_require_position(engine_t *e, int on)
+{
+    e->need_pos = on != 0;
+}
+
+int engine_has_position(const engine_t *e)
+{
+    return e->have_pos;
+}
+
 void engine_reset_counters(engine_t *e)
 {
     uint32_t last_seq = e->st.last_seq;
@@ -840,7 +871,7 @@ static void start_trajectory(engine_t *e, int new_flag)
         e->out_track++;
         e->flags_pending |= ENGINE_SP_NEW_TRACK;
     }
-    e->moved = 1;
+    e->have_pos = 1;
     e->underrun = 0;
     if (h->kind == QE_END) {
         /* a trajectory with no segment: rest on its point */
@@ -910,14 +941,15 @@ static void step_once(engine_t *e)
     switch (e->mode) {
     case OUT_HOLD: {
         qent_t *h = q_head(e);
-        if (!h || !h->first || !enough_ahead(e, h)) {
+        if (!h || !h->first || !enough_ahead(e, h) || (!e->have_pos && e->need_pos)) {
             hold_here(e);
             break;
         }
-        if (!e->moved) {
-            /* nothing was ever output: the position takes the start */
+        if (!e->have_pos) {
+            /* no position known and none required: the start is the last resort */
             for (int k = 0; k < AX; k++)
                 e->pos[k] = h->seg.c[k][0];
+            e->have_pos = 1;
         }
         double d2 = 0;
         for (int k = 0; k < AX; k++)
@@ -1006,8 +1038,10 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     engine_state_t s = out_state(e);
 
     sp->now_ns = now_ns;
-    /* before any trajectory the position is the first waypoint, if any */
-    if (!e->moved && e->mode == OUT_HOLD) {
+    /* No position known yet: the first waypoint is the last resort (unless a
+     * position is required), adopted once and for all, so the output never
+     * jumps from it to somewhere else (a new start is reached by a transfer). */
+    if (!e->have_pos && e->mode == OUT_HOLD && !e->need_pos) {
         qent_t *h = q_head(e);
         if (h)
             for (int k = 0; k < AX; k++)
@@ -1020,9 +1054,14 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
             e->out_t = h->seg.t0_s;
         else if (e->in_open && e->nodes)
             e->out_t = nt(e, 0);
+        if (h || e->in_open)
+            e->have_pos = 1;
     }
     sp->t_s = e->out_t;
     memcpy(sp->pos_m, e->pos, sizeof(sp->pos_m));
+    if (!e->have_pos)
+        for (int k = 0; k < AX; k++)
+            sp->pos_m[k] = NAN; /* not a position: see ENGINE_SP_NO_POSITION */
     memcpy(sp->vel_m_s, e->vel, sizeof(sp->vel_m_s));
     memcpy(sp->acc_m_s2, e->acc, sizeof(sp->acc_m_s2));
     sp->state = s;
@@ -1032,6 +1071,8 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
         sp->flags |= ENGINE_SP_HOLD;
     if (e->mode == OUT_XFER)
         sp->flags |= ENGINE_SP_TRANSFER;
+    if (!e->have_pos)
+        sp->flags |= ENGINE_SP_NO_POSITION;
     sp->cycle = e->cycle;
     sp->track = e->out_track;
 }

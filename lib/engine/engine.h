@@ -25,7 +25,9 @@
  * in integers), segments are entered at the fractional phase left over.
  *
  * States: WAITING (nothing yet, or a trajectory buffering its lookahead;
- * holding: position 0 before any waypoint, then the first waypoint),
+ * holding: no position at all before any waypoint (flag NO_POSITION, NaN),
+ * then the position given by engine_set_position, or else the first
+ * waypoint),
  * STREAMING (moving, including a transfer), UNDERRUN, FINISHED (the last
  * trajectory ran to its end and rests on it; pushing again starts a new one).
  *
@@ -39,8 +41,10 @@
  * first moves there with a rest-to-rest smoothstep k(u) = A + (B-A)(3u^2-2u^3)
  * lasting max(1 s, 1.5 * distance / max_speed_m_s) (10 m/s if no limit),
  * rounded up to whole periods (flags TRANSFER; the first setpoint of every
- * trajectory carries NEW_TRACK and track + 1).  Before any motion at all
- * the output simply takes the first trajectory's start (no transfer).
+ * trajectory carries NEW_TRACK and track + 1).  Before any motion at all,
+ * with no position set, the output adopts the first waypoint as where it
+ * stands (the last resort; see engine_set_position), and reaches the curve's
+ * start from there (the same point, except for HELD ends and SMOOTH).
  * Waypoint times may restart (e.g. from 0) with each new trajectory.
  *
  * Method and parameterisation (see hoang.h, cubic.h, README "The engine"):
@@ -256,6 +260,32 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
 void engine_clear(engine_t *e);
 /* As engine_finish: run to the last waypoint received and rest there. */
 int engine_stop(engine_t *e);
+/*
+ * Where the object really stands (drive feedback, a config key), before the
+ * output moves it: the output holds there and reaches the first trajectory's
+ * start by a transfer instead of taking it as its position.  Valid while the
+ * output holds (WAITING, FINISHED, after engine_clear), not while it streams,
+ * transfers or underruns.  Returns 0, -ENGINE_ENOTFINITE, -ENGINE_ERANGE
+ * (|coordinate| > max_abs_m), or -ENGINE_ESTATE (the output is moving).
+ *
+ * Without it the engine's last resort is the first waypoint: the output
+ * adopts it as its position when it is received (ENGINE_SP_NO_POSITION, and
+ * NaN positions, until then).  Once the output has a position it never
+ * leaves it except by streaming or a transfer: no setpoint ever jumps.
+ */
+int engine_set_position(engine_t *e, const double pos_m[ENGINE_AXES]);
+
+/*
+ * on = 1: no first-waypoint fallback; the output stays without a position
+ * (ENGINE_SP_NO_POSITION, WAITING) and buffers waypoints until
+ * engine_set_position gives one (e.g. the drive's position actual value is
+ * awaited).  on = 0: the default.
+ */
+void engine_require_position(engine_t *e, int on);
+
+/* 1 once the output has a position (set, or the first waypoint adopted). */
+int engine_has_position(const engine_t *e);
+
 /* Zero every counter of engine_status (state and last_seq are kept). */
 void engine_reset_counters(engine_t *e);
 

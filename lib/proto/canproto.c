@@ -244,20 +244,29 @@ static uint8_t sp_state(const engine_setpoint_t *sp)
     return (uint8_t)((unsigned)sp->state & 0x7u);
 }
 
+/* Position field: the n/a marker without a position, else never the marker. */
+static int64_t sp_pos_raw(const engine_setpoint_t *sp, unsigned a, int *clamped)
+{
+    if (sp->flags & ENGINE_SP_NO_POSITION)
+        return CANPROTO_SP_POS_NA;
+    return quantize(sp->pos_m[a], CANPROTO_SP_POS_M_PER_BIT, (int64_t)CANPROTO_SP_POS_NA + 1,
+                    INT32_MAX, clamped);
+}
+
 int canproto_encode_setpoint(uint32_t id, const engine_setpoint_t *sp,
                              canproto_frame_t out[ENGINE_AXES])
 {
-    int clamped = 0;
+    int clamped = 0, nopos = (sp->flags & ENGINE_SP_NO_POSITION) != 0;
     for (unsigned a = 0; a < ENGINE_AXES; a++) {
         canproto_frame_t *f = &out[a];
         frame_init(f, id, CANPROTO_SP_DLEN, 0);
         f->data[0] = (uint8_t)(a | (unsigned)sp_state(sp) << CANPROTO_SP_STATE_SHIFT |
-                               ((sp->flags & ENGINE_SP_HOLD) ? CANPROTO_SP_HOLD : 0));
+                               ((sp->flags & ENGINE_SP_HOLD) || nopos ? CANPROTO_SP_HOLD : 0));
         f->data[1] = (uint8_t)sp->cycle;
-        put_le(&f->data[2], 4, (uint64_t)quantize(sp->pos_m[a], CANPROTO_SP_POS_M_PER_BIT,
-                                                  INT32_MIN, INT32_MAX, &clamped));
-        put_le(&f->data[6], 2, (uint64_t)quantize(sp->vel_m_s[a], CANPROTO_SP_VEL_M_S_PER_BIT,
-                                                  INT16_MIN, INT16_MAX, &clamped));
+        put_le(&f->data[2], 4, (uint64_t)sp_pos_raw(sp, a, &clamped));
+        put_le(&f->data[6], 2, nopos ? 0 : (uint64_t)quantize(sp->vel_m_s[a],
+                                                              CANPROTO_SP_VEL_M_S_PER_BIT,
+                                                              INT16_MIN, INT16_MAX, &clamped));
     }
     return clamped ? CANPROTO_CLAMPED : 0;
 }
@@ -268,13 +277,12 @@ int canproto_encode_setpoint_fd(uint32_t id, int brs, const engine_setpoint_t *s
     int clamped = 0;
     frame_init(out, id, CANPROTO_SP_FD_DLEN, CANPROTO_F_FD | (brs ? CANPROTO_F_BRS : 0));
     put_le(&out->data[0], 4, sp->cycle);
+    int nopos = (sp->flags & ENGINE_SP_NO_POSITION) != 0;
     for (unsigned a = 0; a < ENGINE_AXES; a++) {
-        put_le(&out->data[4 + 4 * a], 4,
-               (uint64_t)quantize(sp->pos_m[a], CANPROTO_SP_POS_M_PER_BIT, INT32_MIN,
-                                  INT32_MAX, &clamped));
+        put_le(&out->data[4 + 4 * a], 4, (uint64_t)sp_pos_raw(sp, a, &clamped));
         put_le(&out->data[16 + 4 * a], 4,
-               (uint64_t)quantize(sp->vel_m_s[a], CANPROTO_SPFD_VEL_M_S_PER_BIT, INT32_MIN,
-                                  INT32_MAX, &clamped));
+               nopos ? 0 : (uint64_t)quantize(sp->vel_m_s[a], CANPROTO_SPFD_VEL_M_S_PER_BIT,
+                                              INT32_MIN, INT32_MAX, &clamped));
     }
     out->data[28] = sp_state(sp);
     out->data[29] = (uint8_t)sp->flags;
@@ -337,8 +345,8 @@ int canproto_decode_setpoint(const canproto_frame_t *f, canproto_setpoint_t *out
             return -CANPROTO_ELEN;
         out->cycle = (uint32_t)get_le(&f->data[0], 4);
         for (unsigned a = 0; a < ENGINE_AXES; a++) {
-            out->pos_m[a] = (double)sext(get_le(&f->data[4 + 4 * a], 4), 32) *
-                            CANPROTO_SP_POS_M_PER_BIT;
+            int64_t raw = sext(get_le(&f->data[4 + 4 * a], 4), 32);
+            out->pos_m[a] = raw == CANPROTO_SP_POS_NA ? NAN : (double)raw * CANPROTO_SP_POS_M_PER_BIT;
             out->vel_m_s[a] = (double)sext(get_le(&f->data[16 + 4 * a], 4), 32) *
                               CANPROTO_SPFD_VEL_M_S_PER_BIT;
         }
@@ -356,7 +364,13 @@ int canproto_decode_setpoint(const canproto_frame_t *f, canproto_setpoint_t *out
     out->state = (uint8_t)((f->data[0] & CANPROTO_SP_STATE_MASK) >> CANPROTO_SP_STATE_SHIFT);
     out->flags = (f->data[0] & CANPROTO_SP_HOLD) ? ENGINE_SP_HOLD : 0;
     out->cycle = f->data[1];
-    out->pos_m[axis] = (double)sext(get_le(&f->data[2], 4), 32) * CANPROTO_SP_POS_M_PER_BIT;
+    int64_t raw = sext(get_le(&f->data[2], 4), 32);
+    if (raw == CANPROTO_SP_POS_NA) {
+        out->pos_m[axis] = NAN;
+        out->flags |= ENGINE_SP_NO_POSITION;
+    } else {
+        out->pos_m[axis] = (double)raw * CANPROTO_SP_POS_M_PER_BIT;
+    }
     out->vel_m_s[axis] = (double)sext(get_le(&f->data[6], 2), 16) * CANPROTO_SP_VEL_M_S_PER_BIT;
     return out->state > ENGINE_STATE_FINISHED ? -CANPROTO_EVALUE : 0;
 }

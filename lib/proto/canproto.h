@@ -28,10 +28,12 @@
  *    byte 0       bits 0..1 axis (0 x, 1 y, 2 z), bits 4..6 engine state,
  *                 bit 7 HOLD
  *    byte 1       cycle counter, low 8 bits
- *    bytes 2..5   position, int32, 0.1 mm per bit (+-214 km)
+ *    bytes 2..5   position, int32, 0.1 mm per bit (+-214 km); 0x80000000 =
+ *                 no position yet (CANPROTO_SP_POS_NA: do not move)
  *    bytes 6..7   velocity, int16, 1 mm/s per bit (+-32.767 m/s)
  *  SETPOINT_FD (out, CAN FD, length 32, default 0x6B0+n), 1 frame per cycle:
- *    0..3 cycle uint32; 4..7 x, 8..11 y, 12..15 z (int32, 0.1 mm);
+ *    0..3 cycle uint32; 4..7 x, 8..11 y, 12..15 z (int32, 0.1 mm; 0x80000000
+ *    = no position yet, with flags bit 4);
  *    16..19 vx, 20..23 vy, 24..27 vz (int32, 1 um/s); 28 state; 29 flags
  *    (ENGINE_SP_*); 30..31 track number, uint16.
  *  STATUS (out, classic, DLC 8, default 0x6C0+n), every status period and
@@ -48,6 +50,7 @@
  *  CiA 402 RPDO (out, one per axis, COB-ids configured, e.g. 0x200+node):
  *    target position 0x607A:00 int32 in drive increments (counts per metre
  *    configured), optionally preceded by controlword 0x6040:00 uint16.
+ *    Never sent while trajd has no valid position (ENGINE_SP_NO_POSITION).
  *
  * Values that do not fit a field are clamped to its range and counted
  * (canproto_encode_* return CANPROTO_CLAMPED).
@@ -139,6 +142,14 @@ typedef enum {
 #define CANPROTO_SP_STATE_SHIFT 4
 #define CANPROTO_SP_STATE_MASK 0x70u
 #define CANPROTO_SP_HOLD 0x80u
+/*
+ * Position "not available" (int32 0x80000000) in SETPOINT and SETPOINT_FD:
+ * trajd has no valid position yet (ENGINE_SP_NO_POSITION; FD flags bit 4 is
+ * set too, classic frames set HOLD).  A subscriber must not move on it and
+ * must not read it as -214 km: hold what it has, or stay disabled.  A real
+ * position is never encoded as this value (it clamps one count above).
+ */
+#define CANPROTO_SP_POS_NA INT32_MIN
 
 /* STATUS byte 0 */
 #define CANPROTO_ST_STATE_MASK 0x07u
@@ -239,8 +250,9 @@ int canproto_encode_waypoint_fd(uint32_t id, const engine_waypoint_t *wp,
 int canproto_encode_command(uint32_t id, canproto_cmd_t cmd, canproto_frame_t *out);
 
 /*
- * The three classic SETPOINT frames of sp (out[3]).  NaN is sent as 0 and
- * counted like a clamp.  Returns 0 or CANPROTO_CLAMPED.
+ * The three classic SETPOINT frames of sp (out[3]).  With ENGINE_SP_NO_POSITION
+ * the positions are CANPROTO_SP_POS_NA, velocities 0, HOLD set.  Otherwise
+ * NaN is sent as 0 and counted like a clamp.  Returns 0 or CANPROTO_CLAMPED.
  */
 int canproto_encode_setpoint(uint32_t id, const engine_setpoint_t *sp,
                              canproto_frame_t out[ENGINE_AXES]);
@@ -282,9 +294,9 @@ typedef struct {
     unsigned axis;          /* classic only */
     uint32_t cycle;         /* classic: low 8 bits */
     uint8_t state;
-    uint8_t flags;          /* classic: ENGINE_SP_HOLD only */
+    uint8_t flags;          /* classic: ENGINE_SP_HOLD, and ENGINE_SP_NO_POSITION from the marker */
     uint16_t track;         /* FD only */
-    double pos_m[ENGINE_AXES];   /* classic: [axis] only */
+    double pos_m[ENGINE_AXES];   /* classic: [axis] only; NaN for CANPROTO_SP_POS_NA */
     double vel_m_s[ENGINE_AXES];
 } canproto_setpoint_t;
 

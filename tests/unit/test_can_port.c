@@ -262,13 +262,58 @@ static void test_down_and_back(void **state)
     assert_int_equal(s.last_err, CANPROTO_STERR_BUS_DOWN);
 }
 
-/* Given a cycle run later than max_late_ns, then it is not sent (counted). */
+/* Given a cycle run later than max_late_ns, then its own frames are not sent
+ * (counted), its SYNC is. */
 static void test_late_cycle_dropped(void **state)
 {
     (void)state;
     run_cycle(0, 0);
     run_cycle(1, 2000000);
     run_cycle(2, 100000);
+    assert_int_equal(count_id(0x6A0), 6);
+    /* the late cycle still has its SYNC: a drive faults on missing ones */
+    assert_int_equal(count_id(0x080), 3);
+    can_port_obj_stats_t st;
+    can_port_obj_stats(port, 0, &st);
+    assert_int_equal(st.dropped_late, 1);
+}
+
+/* Given a CiA 402 object, when setpoints have no position yet, then no RPDO
+ * is sent (a drive would follow it) and the own frames carry the n/a marker;
+ * when a late cycle comes, SYNC and the RPDOs still go out, the own frames
+ * do not (counted). */
+static void test_cia402_no_position_and_late(void **state)
+{
+    (void)state;
+    canproto_ids_t ids;
+    canproto_ids_default(&ids, 0);
+    ids.cia402 = 1;
+    assert_int_equal(can_port_set_object(port, 0, &ids, &fe_hooks, &eng), 0);
+    engine_setpoint_t sp = sp_at(0, NAN);
+    sp.pos_m[1] = sp.pos_m[2] = NAN;
+    sp.state = ENGINE_STATE_WAITING;
+    sp.flags = ENGINE_SP_NO_POSITION;
+    can_port_setpoint(port, 0, &sp);
+    can_port_cycle(port, 0, 0);
+    assert_int_equal(count_id(0x080), 1);
+    assert_int_equal(count_id(0x201) + count_id(0x202) + count_id(0x203), 0);
+    assert_int_equal(count_id(0x6A0), 3);
+    for (unsigned i = 0; i < io.nout; i++)
+        if (io.out[i].id == 0x6A0) {
+            canproto_setpoint_t d;
+            assert_int_equal(canproto_decode_setpoint(&io.out[i], &d), 0);
+            assert_true(d.flags & ENGINE_SP_NO_POSITION);
+            assert_true(d.flags & ENGINE_SP_HOLD);
+            assert_true(isnan(d.pos_m[d.axis]));
+            /* raw field: int32 0x80000000 */
+            assert_int_equal(io.out[i].data[2] | io.out[i].data[3] | io.out[i].data[4], 0);
+            assert_int_equal(io.out[i].data[5], 0x80);
+        }
+    run_cycle(1, 0);
+    assert_int_equal(count_id(0x201), 1);
+    run_cycle(2, 2000000); /* later than max_late_ns (0.5 ms) */
+    assert_int_equal(count_id(0x080), 3);
+    assert_int_equal(count_id(0x201), 2);
     assert_int_equal(count_id(0x6A0), 6);
     can_port_obj_stats_t st;
     can_port_obj_stats(port, 0, &st);
@@ -445,6 +490,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_queue_full_drops_no_burst, setup, teardown),
         cmocka_unit_test_setup_teardown(test_down_and_back, setup, teardown),
         cmocka_unit_test_setup_teardown(test_late_cycle_dropped, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_cia402_no_position_and_late, setup, teardown),
         cmocka_unit_test_setup_teardown(test_rx_paths, setup, teardown),
         cmocka_unit_test_setup_teardown(test_flow_control_efull, setup, teardown),
         cmocka_unit_test_setup_teardown(test_commands, setup, teardown),

@@ -147,7 +147,9 @@ static void test_lookahead_is_real(void **state)
             assert_int_equal(engine_tick(e, now, &sp), 0);
             assert_int_equal(sp.state, ENGINE_STATE_WAITING);
             assert_true(sp.flags & ENGINE_SP_HOLD);
-            assert_true(fabs(sp.pos_m[0]) <= 0.0 && fabs(sp.pos_m[1]) <= 0.0);
+            /* no waypoint yet: no position at all, nothing a drive could follow */
+            assert_true(sp.flags & ENGINE_SP_NO_POSITION);
+            assert_true(isnan(sp.pos_m[0]) && isnan(sp.pos_m[1]) && isnan(sp.pos_m[2]));
             for (unsigned k = 0; k < la + 2; k++) {
                 circle_wp(&w, (int)k, 1.0);
                 assert_int_equal(engine_push(e, &w), 0);
@@ -662,14 +664,20 @@ static void test_all_configs_stream(void **state)
             }
             assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
             assert_true(finite_sp(&sp));
-            if (sp.state == ENGINE_STATE_STREAMING) {
+            if (sp.state == ENGINE_STATE_STREAMING && !(sp.flags & ENGINE_SP_TRANSFER)) {
+                /* (HELD: a transfer first, from the first waypoint where the
+                 * output stood to the curve's start at R(1)) */
                 double p[3];
                 fdiff_eval_curve(segs, nseg, &sp.t_s, 1, p, NULL, NULL);
                 if (dist3(p, sp.pos_m) > maxerr)
                     maxerr = dist3(p, sp.pos_m);
                 streamed++;
             }
-            if (k > 0 && prev.track == 1 && sp.track == 1 && dist3(prev.pos_m, sp.pos_m) > maxstep)
+            /* every pair of setpoints with a position, whatever the state
+             * (HELD: the step from the first waypoint, where the output stood
+             * while waiting, to the curve's start at R(1) used to be one tick) */
+            if (k > 0 && !(prev.flags & ENGINE_SP_NO_POSITION) &&
+                dist3(prev.pos_m, sp.pos_m) > maxstep)
                 maxstep = dist3(prev.pos_m, sp.pos_m);
             prev = sp;
             if (sp.state == ENGINE_STATE_FINISHED)
@@ -864,6 +872,141 @@ static void test_jitter_rejected(void **state)
  * (measured: 1.7e-8 m by tick 3000, 2e-7 m at the end, against (a)'s
  * tolerance of 4 ulps of sum|c| = 4.4e-9 m). */
 #define TOL_RESEED_ULPS 4.0 /* the same formula at the same u, a few roundings */
+
+/* Largest |delta position| over consecutive ticks with a position. */
+static double run_steps(engine_t *e, const engine_waypoint_t *wp, int n, int64_t *now,
+                        int ticks, engine_setpoint_t *last)
+{
+    engine_setpoint_t sp, prev;
+    int have_prev = 0, next = 0;
+    double maxstep = 0;
+    for (int k = 0; k < ticks; k++) {
+        while (next < n && wp[next].t_s <= (double)(*now) * 1e-9) {
+            assert_int_equal(engine_push(e, &wp[next]), 0);
+            if (++next == n)
+                engine_finish(e);
+        }
+        assert_int_equal(engine_tick(e, *now, &sp), 0);
+        *now += PERIOD_NS;
+        if (have_prev && !(sp.flags & ENGINE_SP_NO_POSITION) &&
+            !(prev.flags & ENGINE_SP_NO_POSITION) && dist3(prev.pos_m, sp.pos_m) > maxstep)
+            maxstep = dist3(prev.pos_m, sp.pos_m);
+        prev = sp;
+        have_prev = 1;
+    }
+    *last = prev;
+    return maxstep;
+}
+
+/* Given where the object really stands, 2 m off the track's start, the output
+ * holds there, then transfers to the start: no step, the track streamed after. */
+static void test_set_position_transfer(void **state)
+{
+    (void)state;
+    enum { N = 80 };
+    engine_config_t c;
+    engine_waypoint_t wp[N];
+    engine_setpoint_t sp;
+    engine_config_default(&c);
+    for (int i = 0; i < N; i++)
+        circle_wp(&wp[i], i, 1.0);
+    engine_t *e = mk(&c);
+    double at[3] = {wp[0].pos_m[0] - 2.0, wp[0].pos_m[1], wp[0].pos_m[2]};
+    int64_t now = 0;
+    /* nothing known: no position */
+    assert_int_equal(engine_tick(e, now, &sp), 0);
+    assert_true(sp.flags & ENGINE_SP_NO_POSITION);
+    assert_int_equal(engine_set_position(e, (double[]){NAN, 0, 0}), -ENGINE_ENOTFINITE);
+    assert_int_equal(engine_set_position(e, (double[]){2e7, 0, 0}), -ENGINE_ERANGE);
+    assert_int_equal(engine_set_position(e, at), 0);
+    assert_true(engine_has_position(e));
+    now += PERIOD_NS;
+    assert_int_equal(engine_tick(e, now, &sp), 0);
+    assert_false(sp.flags & ENGINE_SP_NO_POSITION);
+    assert_true(dist3(sp.pos_m, at) < 1e-15);
+    now += PERIOD_NS;
+    /* the waypoints' own clock: the first one at now */
+    for (int i = 0; i < N; i++)
+        wp[i].t_s += (double)now * 1e-9;
+    int xfer = 0;
+    engine_setpoint_t prev = sp;
+    double maxstep = 0;
+    int next = 0;
+    for (int k = 0; k < 20000 && sp.state != ENGINE_STATE_FINISHED; k++) {
+        while (next < N && wp[next].t_s <= (double)now * 1e-9) {
+            assert_int_equal(engine_push(e, &wp[next]), 0);
+            if (++next == N)
+                engine_finish(e);
+        }
+        assert_int_equal(engine_tick(e, now, &sp), 0);
+        now += PERIOD_NS;
+        assert_false(sp.flags & ENGINE_SP_NO_POSITION);
+        if (sp.state == ENGINE_STATE_WAITING)
+            assert_true(dist3(sp.pos_m, at) < 1e-15); /* holds where it stands */
+        if (sp.flags & ENGINE_SP_TRANSFER) {
+            xfer++;
+            assert_int_equal(engine_set_position(e, at), -ENGINE_ESTATE);
+        }
+        if (dist3(prev.pos_m, sp.pos_m) > maxstep)
+            maxstep = dist3(prev.pos_m, sp.pos_m);
+        prev = sp;
+    }
+    assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+    assert_true(xfer > 0);
+    /* a tick moves at most the curve's own top speed, or the transfer's peak
+     * (1.5 x its mean: 2 m in at least 1 s), times the period */
+    static fdiff_seg_t segs[N + 8];
+    size_t nseg;
+    assert_int_equal(engine_curve(&c, wp, N, segs, N + 8, &nseg), 0);
+    double vmax = fmax(curve_vmax(segs, nseg), 1.5 * 2.0 / 1.0);
+    print_message("set_position 2 m off: %d transfer ticks, max step %.4f m (bound %.4f)\n",
+                  xfer, maxstep, vmax * 0.01 * STEP_SLACK);
+    assert_true(maxstep <= vmax * 0.01 * STEP_SLACK);
+    engine_free(e);
+}
+
+/* A required position: waypoints buffer, the output has no position and
+ * does not start until it is given. */
+static void test_require_position(void **state)
+{
+    (void)state;
+    enum { N = 60 };
+    engine_config_t c;
+    engine_waypoint_t wp[N];
+    engine_setpoint_t sp;
+    engine_config_default(&c);
+    for (int i = 0; i < N; i++)
+        circle_wp(&wp[i], i, 0.2);
+    engine_t *e = mk(&c);
+    engine_require_position(e, 1);
+    int64_t now = 0;
+    for (int i = 0; i < N; i++)
+        assert_int_equal(engine_push(e, &wp[i]), 0);
+    engine_finish(e);
+    for (int k = 0; k < 500; k++) {
+        assert_int_equal(engine_tick(e, now, &sp), 0);
+        now += PERIOD_NS;
+        assert_int_equal(sp.state, ENGINE_STATE_WAITING);
+        assert_true(sp.flags & ENGINE_SP_NO_POSITION);
+        assert_true(isnan(sp.pos_m[0]));
+    }
+    double at[3] = {1, 2, 3};
+    assert_int_equal(engine_set_position(e, at), 0);
+    double maxstep = run_steps(e, wp, 0, &now, 5000, &sp);
+    assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+    assert_true(dist3(sp.pos_m, wp[N - 1].pos_m) < 1e-9);
+    static fdiff_seg_t segs[N + 8];
+    size_t nseg;
+    assert_int_equal(engine_curve(&c, wp, N, segs, N + 8, &nseg), 0);
+    /* transfer from (1,2,3) to (20,0,0): 19.3 m at most 1.5 x 100 m/s mean, at
+     * least 1 s: its peak 1.5 x 19.3 m/s; or the curve's top speed */
+    double vmax = fmax(curve_vmax(segs, nseg), 1.5 * dist3(at, wp[0].pos_m) / 1.0);
+    print_message("required position: max step %.4f m (bound %.4f)\n", maxstep,
+                  vmax * 0.01 * STEP_SLACK);
+    assert_true(maxstep <= vmax * 0.01 * STEP_SLACK);
+    engine_free(e);
+}
+
 static void test_long_segment_reseeded(void **state)
 {
     (void)state;
@@ -1031,6 +1174,8 @@ int main(void)
         cmocka_unit_test(test_gap_transfer_clear),
         cmocka_unit_test(test_ends),
         cmocka_unit_test(test_all_configs_stream),
+        cmocka_unit_test(test_set_position_transfer),
+        cmocka_unit_test(test_require_position),
         cmocka_unit_test(test_long_segment_reseeded),
         cmocka_unit_test(test_underrun_resumes_with_lookahead),
         cmocka_unit_test(test_jittered_clock_rounds_to_ticks),
