@@ -133,7 +133,7 @@ def decode_fd_setpoints(log, sp_id=0x6B0):
         rows[round(m.timestamp * 1e6) * 1000] = {
             "x": d["SPFD_X"], "y": d["SPFD_Y"], "z": d["SPFD_Z"], "vx": d["SPFD_VX"],
             "vy": d["SPFD_VY"], "vz": d["SPFD_VZ"], "state": int(d["SPFD_State"]),
-            "cycle": int(d["SPFD_Cycle"])}
+            "cycle": int(d["SPFD_Cycle"]), "flags": int(d["SPFD_Flags"])}
     return rows
 
 
@@ -240,6 +240,14 @@ def uml_check(run, xyz, ref1k):
         elif i == 0x6C0 and finished_at is None and m.data[0] == 3:
             finished_at = m.timestamp
     assert finished_at is not None
+    # Before the first waypoint trajd has no position: its own frames carry the
+    # int32 n/a marker (0x80000000), and no RPDO goes out (a drive would follow it)
+    nopos = [c for c in cycles if all(c.get("raw" + ax) == -2**31 for ax in "xyz")]
+    assert nopos, "no cycle without a position before the track started"
+    for c in nopos:
+        assert not any(k in c for k in ("rpdo0", "rpdo1", "rpdo2")), c
+        assert c["state"] == 0, c
+    cycles = [c for c in cycles if not any(c.get("raw" + ax) == -2**31 for ax in "xyz")]
     whole = [c for c in cycles if all(k in c for k in ("x", "y", "z", "rpdo0", "rpdo1", "rpdo2"))]
     # The guest is slow: candump may lose frames (its receive queue), and trajd
     # drops a cycle when its socket buffer is full (counted in STATUS): most
@@ -273,7 +281,11 @@ def uml_check(run, xyz, ref1k):
         abs(fin[0]["y"] - float(last_wp[2])) <= 0.5e-4 + 1e-9, (fin, last_wp)
     # object 1 streams the same track as FD frames (0x691 in, 0x6B1 out)
     fdrows = decode_fd_setpoints(os.path.join(run, "cap.log"), sp_id=0x6B1)
-    fd_pts = [(r["x"], r["y"]) for t, r in sorted(fdrows.items()) if t / 1e9 <= finished_at]
+    # no position yet: the n/a marker with flags bit 4 (ENGINE_SP_NO_POSITION)
+    for r in fdrows.values():
+        assert (r["x"] == -2**31 * 1e-4) == bool(r["flags"] & 0x10), r
+    fd_pts = [(r["x"], r["y"]) for t, r in sorted(fdrows.items())
+              if t / 1e9 <= finished_at and not r["flags"] & 0x10]
     assert len(fd_pts) > 0.5 * len(pts), (len(fd_pts), len(pts))
     fd_worst = 0.0
     for (px, py) in fd_pts:
