@@ -5,14 +5,8 @@
 #include <string.h>
 #include <time.h>
 
+#include "test.h"
 #include "canproto.h"
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
 
 typedef struct {
     const char *name;

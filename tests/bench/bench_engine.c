@@ -22,6 +22,7 @@
 
 #include <gsl/gsl_spline.h>
 
+#include "test.h"
 #include "cubic.h"
 #include "engine.h"
 #include "fdiff.h"
@@ -69,13 +70,6 @@ void free(void *p)
 }
 
 /* ---------------------------------------------------------------------------- */
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
-
 static void walk_wp(engine_waypoint_t *w, long i, double dt, unsigned *seed, double *pos)
 {
     for (int k = 0; k < 3; k++) {

@@ -13,6 +13,7 @@
 #include <gsl/gsl_multifit.h>
 #include <gsl/gsl_spline.h>
 
+#include "test.h"
 #include "bspline.h"
 #include "cspline.h"
 #include "lsq.h"
@@ -22,25 +23,12 @@
 
 static volatile double sink;
 
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
-
 static void row(const char *what, double ns, const char *gsl_what, double gsl_ns)
 {
     if (gsl_what)
         printf("| %-44s | %9.1f | %-40s | %9.1f |\n", what, ns, gsl_what, gsl_ns);
     else
         printf("| %-44s | %9.1f | %-40s | %9s |\n", what, ns, "-", "-");
-}
-
-static double urand(unsigned *s)
-{
-    *s = *s * 1103515245u + 12345u;
-    return ((*s >> 8) & 0xffff) / 65535.0;
 }
 
 #define NC 1000

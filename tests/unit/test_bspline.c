@@ -1,11 +1,7 @@
 /* test_bspline.c - any-order B-splines against GSL's gsl_bspline, the seed's
  * properties (partition of unity, local support, Bezier case, multiple knots)
  * and the literal Cox-de Boor recursion. */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -23,12 +19,6 @@
 #define TOL_DERIV_REL 1e-12
 /* The curve is an affine combination of control points of size ~10. */
 #define TOL_CURVE 1e-12
-
-static double urand(unsigned *s)
-{
-    *s = *s * 1103515245u + 12345u;
-    return ((*s >> 8) & 0xffff) / 65535.0;
-}
 
 /* Given breakpoints 0 < ... < 1 (non-uniform), orders 1..8, when the basis
  * is computed by bspline_basis and by gsl_bspline_eval on the same clamped

@@ -2,11 +2,7 @@
  * and a fake engine: queue full, interface down and back, late cycles,
  * flow control (EFULL), malformed/foreign frames, SYNC, status events; and
  * the candump-log transport on the real capture in tests/data. */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <errno.h>
 #include <math.h>

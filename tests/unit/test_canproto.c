@@ -1,11 +1,7 @@
 /* test_canproto.c - CAN codec: reassembly state machine, malformed frames,
  * clamping, bus-load arithmetic against published worst-case frame lengths.
  * (Bit-level layouts are cross-checked against canmatrix in test_canproto.py.) */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <math.h>
 #include <string.h>

@@ -3,11 +3,7 @@
  * offending line (counted by the test from the text it wrote), and the
  * documented config/trajd.conf is accepted with every documented default
  * uncommented.  Run from the repository root (tests/run.sh does). */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <stdio.h>
 #include <stdlib.h>

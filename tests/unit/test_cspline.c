@@ -1,11 +1,7 @@
 /* test_cspline.c - the seed-002 cubic spline against GSL's gsl_interp_cspline
  * (natural) and gsl_interp_cspline_periodic, plus the end conditions'
  * defining equations checked on the result. */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -21,12 +17,6 @@
 /* First and second derivatives: divided by h >= 0.05, so 20-400x the value error. */
 #define TOL_D1 1e-9
 #define TOL_D2 1e-8
-
-static double urand(unsigned *s)
-{
-    *s = *s * 1103515245u + 12345u;
-    return ((*s >> 8) & 0xffff) / 65535.0;
-}
 
 /* Jittery timestamps (like a logged track) and a 2-D random walk. */
 static void make_track(unsigned seed, double *t, double *p, int closed)

@@ -6,11 +6,7 @@
  * whose shapes test_spline.py checks against scipy), and motion limits
  * against the curve's own maximum speed.
  */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <math.h>
 #include <float.h>

@@ -2,11 +2,7 @@
  * test_fdiff.c - forward differences against Horner; the time-knot cubic
  * against GSL's natural cubic spline; the fragment window's bookkeeping.
  */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <float.h>
 #include <math.h>

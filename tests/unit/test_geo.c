@@ -1,10 +1,6 @@
 /* test_geo.c - WGS84 geodetic -> ECEF -> ENU against closed-form values.
  * (tests/oracle/test_geo.py checks the same functions against pyproj.) */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <math.h>
 

@@ -1,10 +1,6 @@
 /* test_latency.c - lateness histogram against an exact reference: the samples
  * kept, sorted with qsort, and the nearest-rank quantile read off directly. */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -2,11 +2,7 @@
  * timerfds): dispatch, deleting fds from inside callbacks (including one
  * whose event is pending in the same batch, and reusing its number), timers
  * and stop.  The kernel is the reference: readiness comes from real fds. */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <errno.h>
 #include <fcntl.h>

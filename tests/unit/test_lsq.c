@@ -1,11 +1,7 @@
 /* test_lsq.c - least-squares B-spline fit against GSL's gsl_multifit_linear
  * (SVD on the design matrix), the streaming smoother's bookkeeping, and the
  * engine's method smooth end to end (also run under ASan/UBSan). */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -20,12 +16,6 @@
 /* Normal equations (Cholesky) vs SVD of N on a well-conditioned problem:
  * values ~5, condition of N^T N < 1e3: agreement ~1e-16 * 1e3 * 5. */
 #define TOL_FIT 1e-11
-
-static double urand(unsigned *s)
-{
-    *s = *s * 1103515245u + 12345u;
-    return ((*s >> 8) & 0xffff) / 65535.0;
-}
 
 /* Given 400 noisy samples and a cubic on 14 clamped uniform breakpoints,
  * when fitted by lsq_fit and by gsl_multifit_linear on GSL's own design

@@ -8,11 +8,7 @@
  * Run with --markdown to print the README register table (generated from
  * mbmap_fields(); tests/e2e/test_mbmap_readme.sh compares it with README.md).
  */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <math.h>
 #include <modbus.h>

@@ -19,11 +19,7 @@
  * tests/helpers/mbsim.py:  t = c * 0.001 s;  x,y,z = c + 1000 k + {0, 0.25, 0.5} m;
  * vx,vy,vz = -(c + {0,1,2}); ax,ay,az = 2 c + k (exact in f32 for c < 2^22).
  */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <errno.h>
 #include <math.h>

@@ -1,9 +1,5 @@
 /* test_nurbs.c - the seed-004 circle, arcs by angle, conics, derivatives. */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <math.h>
 #include <stdlib.h>

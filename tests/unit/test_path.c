@@ -1,9 +1,5 @@
 /* test_path.c - path text -> waypoints: lines, exact arcs, circles, timing. */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,11 +1,7 @@
 /* test_replay.c - the replay feeder (due times, EFULL kept and retried,
  * backward/NaN rows, finish once) against the real engine, and the csv_format
  * text form (round trip through libc's strtod, bit for bit). */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <inttypes.h>
 #include <math.h>

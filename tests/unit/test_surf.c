@@ -1,11 +1,7 @@
 /* test_surf.c - bicubic B-spline surface: exact interpolation through the
  * grid, forward differences against direct evaluation, derivatives.
  * (The oracle comparison with scipy is in test_toolkit_scipy.py.) */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,10 +1,6 @@
 /* test_svg.c - the SVG plot: bounded decimation, and a document that an
  * independent XML parser (expat) accepts, with the expected elements. */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -1,11 +1,7 @@
 /* test_track.c - the track loader: CSV and GPX, comments, errors with line
  * numbers, skipping bad lines, GPX == CSV on the same real track, ISO 8601
  * against libc's timegm and the epoch column recorded in the data. */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <math.h>
 #include <stdio.h>

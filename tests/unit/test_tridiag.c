@@ -1,9 +1,5 @@
 /* test_tridiag.c - Thomas solver against GSL's tridiagonal solver. */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -15,12 +11,6 @@
 #define N 200
 /* Both solvers are backward stable on a diagonally dominant system of this size. */
 #define TOL 1e-12
-
-static double urand(unsigned *s)
-{
-    *s = *s * 1103515245u + 12345u;
-    return ((*s >> 8) & 0xffff) / 65535.0;
-}
 
 /* Given a random diagonally dominant system, when solved by tridiag_solve and
  * by gsl_linalg_solve_tridiag, then the solutions agree for every RHS. */
