@@ -7,6 +7,9 @@
  *   SIGHUP           re-read the config; a bad one is refused, the old keeps running
  *   SIGTERM, SIGINT  stop policy of core.h (bring objects to rest, exit 0);
  *                    a second one exits at once (0)
+ * Exit status: 0; EX_USAGE, EX_CONFIG, EX_UNAVAILABLE (cannot start), EX_OSERR,
+ * EX_SOFTWARE; CORE_EXIT_OUTPUT_LOST (74) if any setpoint line was lost by an
+ * output; CORE_EXIT_EPIPE (141) when stdout's reader went away.
  * systemd (sd_notify; no-ops without NOTIFY_SOCKET):
  *   READY=1 once every input and output is open and the clock runs;
  *   RELOADING=1 ... READY=1 around a reload; STOPPING=1 at SIGTERM;
@@ -307,7 +310,8 @@ int main(int argc, char **argv)
         return EX_OSERR;
     }
 
-    /* A reader that goes away must not kill us: EPIPE is counted as a drop. */
+    /* A reader that goes away must not kill us mid-write: EPIPE on stdout
+     * ends the daemon cleanly with CORE_EXIT_EPIPE (csv_transport.h). */
     signal(SIGPIPE, SIG_IGN);
     sigset_t mask;
     sigemptyset(&mask);
@@ -358,7 +362,20 @@ int main(int argc, char **argv)
     }
 out:
     report_ready(&d, (char)(rc ? rc : EX_SOFTWARE));
-    core_close(d.core);
+    core_close(d.core); /* outputs drain here: lines left over count as lost */
+    if (d.stats.exit_code == CORE_EXIT_EPIPE) {
+        log_msg(LOG_NOTICE, "stdout: the reader went away, exiting with status %d",
+                CORE_EXIT_EPIPE);
+        rc = CORE_EXIT_EPIPE;
+    } else if (d.stats.exit_code) {
+        rc = d.stats.exit_code;
+    } else if (rc == 0 && d.stats.out_lost) {
+        log_msg(LOG_ERR, "%llu setpoint lines were lost by the outputs%s%s: exit status %d",
+                (unsigned long long)d.stats.out_lost,
+                d.stats.out_fault ? ", last write error: " : "",
+                d.stats.out_fault ? strerror(d.stats.out_errno) : "", CORE_EXIT_OUTPUT_LOST);
+        rc = CORE_EXIT_OUTPUT_LOST;
+    }
     if (d.sig_fd >= 0)
         close(d.sig_fd);
     loop_free(d.loop);

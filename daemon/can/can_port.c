@@ -19,7 +19,9 @@ typedef struct {
     int status_due;
     int64_t last_status_ns;
     int sent_status;
-    uint8_t flags_since;       /* CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP since last STATUS */
+    uint8_t flags_since;       /* CANPROTO_ST_BUS_DOWN | _TX_DROP | _OUT_FAULT since last STATUS */
+    uint64_t out_lost_seen;    /* can_port_output_fault: lines lost as of the last call */
+    int out_fault_seen;
     uint8_t last_err;
     int last_state;            /* engine state in the last STATUS (-1: none yet) */
     can_port_obj_stats_t st;
@@ -152,6 +154,19 @@ static void handle_waypoint(can_port_obj_t *o, canproto_rx_out_t *out)
         o->st.waypoints_rejected++;
         event(o, (uint8_t)(rc < 0 ? -rc : rc));
     }
+}
+
+void can_port_output_fault(can_port_t *p, unsigned i, uint64_t lost, int fault)
+{
+    if (i >= p->nobj)
+        return;
+    can_port_obj_t *o = &p->obj[i];
+    if (lost > o->out_lost_seen || (fault && !o->out_fault_seen)) {
+        o->flags_since |= CANPROTO_ST_OUT_FAULT;
+        event(o, CANPROTO_STERR_OUTPUT);
+    }
+    o->out_lost_seen = lost;
+    o->out_fault_seen = fault;
 }
 
 static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd)

@@ -127,6 +127,14 @@ unsigned can_port_rx_ids(const can_port_t *p, uint32_t *out, unsigned max);
 /* Read and handle every frame available now.  Returns frames handled or -errno. */
 int can_port_rx(can_port_t *p, int64_t now_ns);
 
+/*
+ * Tell the port about object i's other outputs (csv/stdout): lost = lines
+ * lost so far, fault = 1 once a write failed.  When lost grows or fault
+ * appears, the next STATUS carries CANPROTO_ST_OUT_FAULT and last_err
+ * CANPROTO_STERR_OUTPUT (sent at once, as after a rejection).
+ */
+void can_port_output_fault(can_port_t *p, unsigned i, uint64_t lost, int fault);
+
 /* Hand over object i's setpoint for this cycle (copied). */
 void can_port_setpoint(can_port_t *p, unsigned i, const engine_setpoint_t *sp);
 

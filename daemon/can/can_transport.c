@@ -561,8 +561,11 @@ static void pre_tick(void *state, obj_t *o, int64_t now_ns)
 static void setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
 {
     can_state_t *s = state;
-    if (s->port && s->port_index[o->index] >= 0)
+    if (s->port && s->port_index[o->index] >= 0) {
+        can_port_output_fault(s->port, (unsigned)s->port_index[o->index], o->out_lost,
+                              o->out_fault);
         can_port_setpoint(s->port, (unsigned)s->port_index[o->index], sp);
+    }
 }
 
 static void cycle(void *state, core_t *c, int64_t now_ns)

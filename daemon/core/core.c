@@ -40,6 +40,8 @@ void obj_reset_counters(obj_t *o)
 {
     engine_reset_counters(o->engine);
     o->skipped_ticks = 0;
+    o->out_lost = 0;
+    o->out_fault = 0;
     engine_status(o->engine, &o->status);
 }
 
@@ -118,7 +120,9 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
     lat_add(&s->late_recent_hist, late_us);
     if (core_mono_ns() > p->wall_base_ns + (int64_t)(k + 1) * p->wall_period_ns)
         s->overruns++;
-    if (core_done(c))
+    if (s->exit_code)
+        loop_stop(c->loop, s->exit_code); /* e.g. a Unix filter whose reader left */
+    else if (core_done(c))
         loop_stop(c->loop, 0);
 }
 
@@ -212,6 +216,8 @@ static void carry_objects(core_t *c, core_t *prev)
         o->status = q->status;
         o->skipped_ticks = q->skipped_ticks;
         o->born_ns = q->born_ns;
+        o->out_lost = q->out_lost;
+        o->out_fault = q->out_fault;
         o->carried = 1;
     }
 }
@@ -408,6 +414,11 @@ int core_summary(const core_t *c, char *buf, size_t len)
             m = transport_table[t]->summary(c, buf + n, len - n);
             n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
         }
+    if (s->out_fault && n < len) {
+        m = snprintf(buf + n, len - n, ", OUTPUT FAULT (%llu failed writes, last: %s)",
+                     (unsigned long long)s->out_errors, strerror(s->out_errno));
+        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+    }
     for (unsigned i = 0; i < c->nobj && n < len; i++) {
         const obj_t *o = &c->obj[i];
         m = snprintf(buf + n, len - n,
@@ -418,6 +429,11 @@ int core_summary(const core_t *c, char *buf, size_t len)
                      (unsigned long long)o->status.full,
                      (unsigned long long)o->status.underruns);
         n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+        if (o->out_lost && n < len) {
+            m = snprintf(buf + n, len - n, ", %s%llu lines lost by outputs",
+                         o->out_fault ? "FAULT, " : "", (unsigned long long)o->out_lost);
+            n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+        }
     }
     return (int)n;
 }

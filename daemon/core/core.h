@@ -57,6 +57,10 @@ typedef struct obj {
     int carried;                    /* 1 if engine (and counters) were carried over a reload */
     int64_t born_ns;                /* engine time when its engine was created (0 at start;
                                      * kept when carried): replay due times count from here */
+    uint64_t out_lost;              /* setpoint lines of this object that never reached one of
+                                     * its outputs (buffer full, write error) */
+    int out_fault;                  /* 1 once a write to one of its outputs failed (ENOSPC,
+                                     * EIO, ...); cleared by the reset-counters command */
 } obj_t;
 
 /*
@@ -89,9 +93,24 @@ typedef struct {
      * tcount[transport_index(t)][0 .. STATS_TCOUNT_MAX - 1], meaning defined by
      * transport t, printed by its summary callback. */
     uint64_t tcount[CFG_TRANSPORTS_MAX][STATS_TCOUNT_MAX];
+    /* Output faults, any output transport (they also count in their own way):
+     * any line lost makes trajd exit with CORE_EXIT_OUTPUT_LOST. */
+    uint64_t out_lost;              /* setpoint lines lost (buffer full, write error, left at exit) */
+    uint64_t out_errors;            /* failed writes (not EAGAIN) */
+    int out_errno;                  /* errno of the last one */
+    int out_fault;                  /* 1 once an output write failed */
+    int exit_code;                  /* nonzero: a transport asks the daemon to end now with
+                                     * this status (stdout's reader left: CORE_EXIT_EPIPE);
+                                     * the tick stops the loop with it */
 } stats_t;
 
-/* The daemon core. Fields are read-only for transports except their own stats->tcount row. */
+/* Exit statuses of trajd beyond sysexits.h (README "Output faults are errors"). */
+#define CORE_EXIT_OUTPUT_LOST 74    /* EX_IOERR: setpoint lines were lost by an output */
+#define CORE_EXIT_EPIPE 141         /* stdout's reader went away (128 + SIGPIPE, what a shell
+                                     * reports for a filter ended by SIGPIPE) */
+
+/* The daemon core. Fields are read-only for transports except their own stats->tcount row,
+ * stats->out_* and exit_code, and obj_t.out_lost/.out_fault. */
 typedef struct core {
     loop_t *loop;                   /* the event loop: loop_add your fds here */
     const cfg_t *cfg;               /* the running configuration */

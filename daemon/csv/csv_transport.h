@@ -4,9 +4,11 @@
  * two can be compared byte for byte), header line first.
  *
  *   csv     one file per object.  Object keys:
- *             csv.path   = FILE   output file, relative to the config's directory (required;
- *                                 truncated at start and at each reload)
- *             csv.header = yes    write the header line first
+ *             csv.path   = FILE   output file, relative to the config's directory (required)
+ *             csv.header = yes    write the header line first (into an empty file)
+ *             csv.truncate = no   at start and at each reload, append to the file, after a
+ *                                 marker line "# trajd: appended at <UTC time> (start or
+ *                                 reload)" if it was not empty; yes: empty it first
  *   stdout  every object using it writes to standard output, lines of one
  *           tick grouped in config order; the header once.  Object keys:
  *             stdout.header = yes (the header is written if any object asks)
@@ -15,8 +17,18 @@
  * (CSV_TRANSPORT_BUF_BYTES); the buffer is written once per tick (cycle hook) with
  * non-blocking writes (O_NONBLOCK is set on a pipe/tty stdout and restored at
  * close).  If the reader is slow and the buffer is full, the line is dropped
- * and counted ("out dropped" on the status line; a gap in the cycle column
- * shows where).
+ * and counted ("out dropped" on the status line, the object's out_lost and
+ * the daemon's stats.out_lost; a gap in the cycle column shows where).
+ *
+ * Faults: a write that fails (ENOSPC, EIO, EPIPE on a FIFO, ...) sets the
+ * fault flag of the objects writing there and stats.out_fault, is counted
+ * (stats.out_errors), and is logged at warning level from a 1 s timer, at
+ * most once per CSV_TRANSPORT_LOG_EVERY_S while lines keep being lost.  A line
+ * reaches a regular file whole or not at all (a torn tail is cut off again
+ * and retried).  The lines are kept and retried until the buffer is full;
+ * then new lines are lost and counted.  EPIPE on stdout ends the daemon with
+ * CORE_EXIT_EPIPE, as a Unix filter whose reader left; any line lost makes
+ * trajd exit with CORE_EXIT_OUTPUT_LOST at the end (core.h).
  * Limit: a regular file on a slow disk can still block in write(); that is
  * the kernel's page cache's call, not ours.
  */
@@ -32,6 +44,7 @@
 typedef struct {
     char path[PATH_MAX];
     int header;
+    int truncate;
 } csv_transport_obj_cfg_t;
 
 extern const transport_t csv_transport;

@@ -181,6 +181,8 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
     uint64_t up_s = (uint64_t)((core_mono_ns() - s->start_mono_ns) / 1000000000);
     mbmap_daemon_t d;
     memset(&d, 0, sizeof d);
+    d.out_lost = s->out_lost;
+    d.out_fault = (uint16_t)(s->out_fault != 0);
     d.uptime_s = up_s;
     d.period_us = (uint32_t)(c->period_ns / 1000);
     d.late_p50_us = s->late.p50_us;
@@ -200,6 +202,9 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         o->can_state = d.can_state;
         o->can_load_permille = d.can_load_permille;
         o->uptime_s = up_s;
+        o->out_lost = c->obj[k].out_lost;
+        o->out_fault = (uint16_t)(c->obj[k].out_fault != 0);
+        o->seq_jumps = 0;       /* the server adds its own */
     }
     modbus_server_publish(t->srv, &d, t->objs);
 }

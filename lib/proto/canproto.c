@@ -323,7 +323,8 @@ void canproto_encode_status(uint32_t id, const canproto_status_t *st, canproto_f
 {
     frame_init(out, id, CANPROTO_STATUS_DLEN, 0);
     out->data[0] = (uint8_t)((st->state & CANPROTO_ST_STATE_MASK) |
-                             (st->flags & (CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP)));
+                             (st->flags & (CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP |
+                                           CANPROTO_ST_OUT_FAULT)));
     out->data[1] = (uint8_t)st->last_seq;
     out->data[2] = sat8(st->free);
     out->data[3] = (uint8_t)st->lost;
@@ -381,7 +382,7 @@ int canproto_decode_status(const canproto_frame_t *f, canproto_status_t *out)
     if (f->len != CANPROTO_STATUS_DLEN || (f->flags & (CANPROTO_F_RTR | CANPROTO_F_ERR | CANPROTO_F_EFF)))
         return -CANPROTO_ELEN;
     out->state = f->data[0] & CANPROTO_ST_STATE_MASK;
-    out->flags = f->data[0] & (CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP);
+    out->flags = f->data[0] & (CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP | CANPROTO_ST_OUT_FAULT);
     out->last_seq = f->data[1];
     out->free = f->data[2];
     out->lost = f->data[3];

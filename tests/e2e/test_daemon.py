@@ -495,8 +495,9 @@ class TestRunning(unittest.TestCase):
             # one status second apart: >= half the rate, allowing for a loaded machine
             self.assertGreater(ticks(f2) - ticks(f1), 500, (f1, f2))
             d.p.send_signal(signal.SIGTERM)
-            # exits although the reader never reads (bounded drain at close)
-            self.assertEqual(d.wait(10), 0)
+            # exits although the reader never reads (bounded drain at close),
+            # with 74 (EX_IOERR): lines were lost (issue 11: never silently)
+            self.assertEqual(d.wait(10), 74)
         finally:
             d.close()
 

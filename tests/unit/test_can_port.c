@@ -376,6 +376,31 @@ static void test_flow_control_efull(void **state)
     assert_int_equal(st.rx.lost, 0);
 }
 
+/* Given the object's csv/stdout output losing lines (disk full), then the
+ * next STATUS goes out at once with the OUT_FAULT flag and error OUTPUT; a
+ * later STATUS with nothing new lost has the flag clear again. */
+static void test_output_fault_in_status(void **state)
+{
+    (void)state;
+    canproto_status_t s;
+    run_cycle(0, 0);                        /* the first STATUS */
+    unsigned before = count_id(0x6C0);
+    can_port_output_fault(port, 0, 3, 1);
+    run_cycle(1, 0);
+    assert_int_equal(count_id(0x6C0), before + 1);
+    canproto_decode_status(&io.out[io.nout - 1], &s);
+    assert_true(s.flags & CANPROTO_ST_OUT_FAULT);
+    assert_int_equal(s.last_err, CANPROTO_STERR_OUTPUT);
+    can_port_output_fault(port, 0, 3, 1);  /* nothing new */
+    run_cycle(2, 0);
+    assert_int_equal(count_id(0x6C0), before + 1);
+    can_port_output_fault(port, 0, 4, 1);  /* one more line lost */
+    run_cycle(3, 0);
+    assert_int_equal(count_id(0x6C0), before + 2);
+    canproto_decode_status(&io.out[io.nout - 1], &s);
+    assert_true(s.flags & CANPROTO_ST_OUT_FAULT);
+}
+
 /* Given commands, then the hook sees them; CLEAR restarts sequence numbering. */
 static void test_commands(void **state)
 {
@@ -490,6 +515,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_rx_paths, setup, teardown),
         cmocka_unit_test_setup_teardown(test_flow_control_efull, setup, teardown),
         cmocka_unit_test_setup_teardown(test_commands, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_output_fault_in_status, setup, teardown),
         cmocka_unit_test(test_id_clash),
         cmocka_unit_test(test_can_logfile_real_capture),
         cmocka_unit_test(test_can_logfile_output),

@@ -1,0 +1,187 @@
+"""test_output_faults.py - output failures are errors (issue 11, cases 2 and 3).
+
+The real trajd, with faults made by the kernel, observed from outside:
+1. csv.path = /dev/full (every write fails with ENOSPC): a warning-level log
+   line names the error, the object's out_fault and out_lost registers and
+   the daemon's out_fault register say so over Modbus, and trajd exits with
+   74 (EX_IOERR) instead of 0.
+2. csv.path on a 64 KiB tmpfs (mounted here if we may; skipped otherwise):
+   the disk fills, every line in the file is whole (no torn "o,9"), and the
+   exit status is 74.
+3. stdout is a pipe whose reader goes away (`trajd | head -1`): trajd ends
+   by itself, promptly, with status 141, not after being killed.
+4. A restart appends to the CSV file after a marker line instead of
+   truncating it; csv.truncate = yes empties it first.
+Every wait is bounded; the daemon is stopped by pid.
+"""
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+import mbsim  # noqa: E402
+from mbsim import M, obj_base  # noqa: E402
+
+TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
+DEMO = os.path.join(mbsim.ROOT, "config", "demo.conf")
+WAIT_S = 30            # bound on a whole run (a loaded 2-core machine)
+EX_IOERR = 74
+EXIT_EPIPE = 141
+FIELDS = 16            # columns of a setpoint line (daemon/csv/csv_format.c)
+
+
+def track(path, n=400, dt_s=0.1):
+    with open(path, "w") as f:
+        f.write("t,x,y,z\n")
+        for i in range(n):
+            f.write("%.3f,%.3f,%.3f,1.0\n" % (i * dt_s, 2.0 * i * dt_s, 0.5 * i * dt_s))
+
+
+def conf(tmp, csv_path, extra_daemon="", extra_obj="", modbus=False):
+    text = ("[daemon]\nrate_hz = 100\nspeed = 20\nstatus_interval_s = 1\nstop_timeout_s = 2\n"
+            + extra_daemon +
+            "[object.o]\ninput = replay\nreplay.track = track.csv\noutput = csv\n"
+            "csv.path = %s\n" % csv_path + extra_obj)
+    if modbus:
+        text += "[modbus]\naddress = 127.0.0.1\nport = 0\n"
+    path = os.path.join(tmp, "trajd.conf")
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+def run(path, timeout=WAIT_S):
+    p = subprocess.run([TRAJD, "-f", "-c", path], stdin=subprocess.DEVNULL,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                       timeout=timeout)
+    return p.returncode, p.stderr
+
+
+class OutputFaults(unittest.TestCase):
+    def setUp(self):
+        self.tmpd = tempfile.TemporaryDirectory()
+        self.tmp = self.tmpd.name
+        track(os.path.join(self.tmp, "track.csv"))
+
+    def tearDown(self):
+        self.tmpd.cleanup()
+
+    def test_dev_full_is_loud(self):
+        # Given csv.path = /dev/full and Modbus on, when trajd streams, then
+        # the object's out_fault = 1 and out_lost grows, the daemon's out_fault
+        # = 1, a <4> (warning) line says "No space left on device"; after
+        # SIGTERM the exit status is 74.
+        path = conf(self.tmp, "/dev/full", modbus=True)
+        p = subprocess.Popen([TRAJD, "-f", "-c", path], stdin=subprocess.DEVNULL,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        try:
+            lines = mbsim.Lines(p.stderr)
+            line = lines.wait_for("modbus: TCP on", WAIT_S)
+            self.assertIsNotNone(line, "".join(lines.all))
+            port = int(line.split(" port ")[1].split(",")[0])
+            warn = lines.wait_for("No space left on device", WAIT_S)
+            self.assertIsNotNone(warn, "".join(lines.all))
+            self.assertTrue(warn.startswith("<4>"), warn)
+            self.assertIn("csv.path /dev/full", warn)
+            # Lines are kept for a retry until the buffer is full (256 KiB,
+            # about half a second here), then lost: wait for that, bounded.
+            s = mbsim.connect(port)
+            deadline = time.monotonic() + WAIT_S
+            while True:
+                r = mbsim.read_input(s, obj_base(0), mbsim.BLOCK)
+                if mbsim.u32(r, M["MBMAP_O_OUT_LOST"]) > 0 or time.monotonic() > deadline:
+                    break
+            d = mbsim.read_input(s, 0, mbsim.BLOCK)
+            s.close()
+            self.assertEqual(r[M["MBMAP_O_OUT_FAULT"]], 1)
+            self.assertGreater(mbsim.u32(r, M["MBMAP_O_OUT_LOST"]), 0)
+            self.assertEqual(d[M["MBMAP_D_OUT_FAULT"]], 1)
+            self.assertGreater(mbsim.u32(d, M["MBMAP_D_OUT_LOST"]), 0)
+        finally:
+            p.send_signal(signal.SIGTERM)
+            rc = p.wait(WAIT_S)
+        self.assertEqual(rc, EX_IOERR)
+
+    def test_small_disk_no_torn_line(self):
+        # Given csv.path on a 64 KiB tmpfs, when the track (~40 000 lines)
+        # streams to its end (exit_when_done), then every line in the file
+        # is whole, the last one too, and the exit status is 74.
+        mnt = os.path.join(self.tmp, "small")
+        os.mkdir(mnt)
+        m = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", mnt],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        if m.returncode != 0:
+            self.skipTest("cannot mount a tmpfs here (%s)" % m.stderr.strip())
+        try:
+            out = os.path.join(mnt, "o.csv")
+            rc, err = run(conf(self.tmp, out, extra_daemon="exit_when_done = yes\n"))
+            self.assertEqual(rc, EX_IOERR, err)
+            self.assertIn("No space left on device", err)
+            with open(out, "rb") as f:
+                data = f.read()
+            self.assertGreater(len(data), 32 * 1024)      # the disk did fill
+            self.assertTrue(data.endswith(b"\n"), data[-80:])
+            rows = data.decode().splitlines()
+            self.assertTrue(rows[0].startswith("object,"))
+            for row in rows[1:]:
+                self.assertEqual(len(row.split(",")), FIELDS, row)
+        finally:
+            subprocess.run(["umount", mnt], check=False)
+
+    def test_broken_stdout_pipe_ends_trajd(self):
+        # Given `trajd -f -c config/demo.conf | head -1`, when head has read
+        # its line and exits, then trajd ends by itself within the bound,
+        # with status 141, and says why.
+        p = subprocess.Popen([TRAJD, "-f", "-c", DEMO], stdin=subprocess.DEVNULL,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        try:
+            head = subprocess.run(["head", "-1"], stdin=p.stdout, stdout=subprocess.PIPE,
+                                  timeout=WAIT_S)
+            p.stdout.close()
+            self.assertTrue(head.stdout.startswith(b"object,"), head.stdout)
+            rc = p.wait(WAIT_S)
+        finally:
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+        err = p.stderr.read().decode()
+        self.assertEqual(rc, EXIT_EPIPE, err)
+        self.assertIn("reader went away", err)
+
+    def test_restart_appends_with_marker(self):
+        # Given a CSV file written by one run, when trajd runs again on the
+        # same path, then the first run's rows are kept, a marker line
+        # starting with '#' follows them, then the second run's rows (no
+        # second header); with csv.truncate = yes only the new run is left.
+        out = os.path.join(self.tmp, "o.csv")
+        path = conf(self.tmp, out, extra_daemon="exit_when_done = yes\n")
+        self.assertEqual(run(path)[0], 0)
+        with open(out) as f:
+            first = f.read().splitlines()
+        self.assertEqual(run(path)[0], 0)
+        with open(out) as f:
+            both = f.read().splitlines()
+        self.assertEqual(both[:len(first)], first)
+        marker = both[len(first)]
+        self.assertTrue(marker.startswith("# trajd: appended at "), marker)
+        rest = both[len(first) + 1:]
+        self.assertGreater(len(rest), len(first) // 2)   # a whole second run
+        for row in rest:
+            self.assertTrue(row.startswith("o,"), row)   # rows only, no second header
+            self.assertEqual(len(row.split(",")), FIELDS, row)
+        path = conf(self.tmp, out, extra_daemon="exit_when_done = yes\n",
+                    extra_obj="csv.truncate = yes\n")
+        self.assertEqual(run(path)[0], 0)
+        with open(out) as f:
+            again = f.read().splitlines()
+        self.assertEqual(again[0], first[0])           # the header, at the top
+        self.assertFalse(any(row.startswith("#") for row in again))
+        self.assertLess(len(again), len(both) * 3 // 4)
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
