@@ -7,6 +7,9 @@
  * output is byte-identical to trajd's CSV output for the same input and
  * settings.  No sleeping: a long track replays as fast as the CPU allows.
  *
+ * Engine options are generated from lib/engine/engine_settings.h's table;
+ * -c FILE --object NAME takes an object's settings from a trajd config.
+ *
  * Exit status: 0 done; 1 the track could not be loaded; 2 usage or an
  * invalid engine configuration; 3 writing an output failed; 4 the engine
  * did not reach FINISHED within the tick bound (a bug, reported as such).
@@ -21,8 +24,11 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "cfg.h"
 #include "engine.h"
+#include "engine_settings.h"
 #include "replay.h"
+#include "replay_transport.h"
 #include "csv_format.h"
 #include "svg.h"
 #include "track.h"
@@ -43,56 +49,84 @@ enum { EXIT_INPUT = 1, EXIT_USAGE = 2, EXIT_OUTPUT = 3, EXIT_ENGINE = 4 };
 #define PROGRESS_AFTER_MS 500
 #define PROGRESS_EVERY_NS 250000000LL
 
+/* Engine options given on the command line, applied in order after the
+ * settings of -c's object (so they override them). */
+#define ENGINE_ARGS_MAX 64
+
 typedef struct {
     const char *input;
     const char *output;
     const char *svg;
     const char *object;
+    const char *config;
     track_format_t format;
     unsigned load_flags;
     int summary;
     int quiet;
+    int rate_given;
     unsigned progress_after_ms;
     double rate_hz;
+    int64_t start_ns;      /* engine time at which the first waypoint is due */
     engine_config_t cfg;
+    struct {
+        const engine_setting_t *s;
+        const char *arg;
+    } eng[ENGINE_ARGS_MAX];
+    unsigned neng;
+    char track_buf[PATH_MAX];            /* replay.track of -c's object */
+    char object_buf[CFG_NAME_MAX];       /* -c's object name */
 } opts_t;
+
+static void usage_engine(FILE *f)
+{
+    engine_config_t d;
+    engine_config_default(&d);
+    fputs("\nEngine settings (lib/engine/engine_settings.c; the key is the same setting\n"
+          "in an [object.NAME] section of trajd.conf):\n", f);
+    for (size_t i = 0; i < engine_settings_count; i++) {
+        const engine_setting_t *s = &engine_settings[i];
+        if (!s->option)
+            continue;
+        char opt[64], def[96];
+        snprintf(opt, sizeof opt, "--%s %s", s->option, s->arg);
+        engine_setting_format(s, &d, def, sizeof def);
+        fprintf(f, "  %-20s %s\n  %-20s (key %s, default %s)\n", opt, s->help, "", s->name, def);
+    }
+}
 
 static void usage(FILE *f)
 {
     fputs(
         "usage: trajreplay [options] TRACK\n"
-        "Replay a logged track (CSV t,x,y,z / t,lat,lon,alt, or GPX) through the trajd\n"
-        "engine on a virtual clock and write the setpoints as CSV.\n"
+        "       trajreplay -c trajd.conf [--object NAME] [options] [TRACK]\n"
+        "Replay a logged track (CSV t,x,y,z / t,lat,lon,alt, GPX or a path) through the\n"
+        "trajd engine on a virtual clock and write the setpoints as CSV.\n"
         "\n"
-        "  --rate HZ            output rate (default 100)\n"
-        "  --fragment F         waypoints per fragment (default: engine's)\n"
-        "  --overlap O          waypoints shared by consecutive fragments (even, < F)\n"
-        "  --param P            uniform | time (knots at the timestamps)\n"
-        "  --ends E             held | multiple | natural | clamped | rest\n"
-        "  --start-vel VX,VY,VZ start velocity for --ends clamped, m/s (default 0,0,0)\n"
-        "  --end-vel VX,VY,VZ   end velocity for --ends clamped, m/s (default 0,0,0)\n"
-        "  --method M           bspline | cubic | smooth\n"
-        "  --smooth-window W    smooth: waypoints per least-squares fit (default 24)\n"
-        "  --smooth-ctrl C      smooth: control points per fit (default 6)\n"
-        "  --max-gap S          a longer interval ends the trajectory and starts a new one\n"
-        "  --max-speed M_S      reject waypoints implying a higher speed (0 = no limit)\n"
-        "  --max-accel M_S2     reject waypoints implying a higher acceleration from the\n"
-        "                       two before (timestamp jitter; default 30, 0 = no limit)\n"
+        "  -c, --config FILE    take the engine settings, rate_hz, replay.track,\n"
+        "                       replay.format and replay.start_s of object NAME in a\n"
+        "                       trajd config (the only object if --object is not given):\n"
+        "                       the output is the rows trajd writes for it.  Options\n"
+        "                       given too override the file's settings; a TRACK given\n"
+        "                       replaces replay.track\n"
+        "  --rate HZ            output rate (default 100, or -c's rate_hz)\n"
         "  --format F           auto | xyz | latlon | gpx | path (default auto;\n"
         "                       path: lines and arcs, lib/spline/path.h, auto for *.path)\n"
         "  --skip-bad           skip and count malformed lines instead of failing\n"
-        "  --object NAME        value of the object column (default \"replay\")\n"
+        "  --object NAME        value of the object column (default \"replay\"); with -c,\n"
+        "                       the object of the config to replay\n"
         "  -o, --output FILE    setpoint CSV (default stdout; \"-\" = stdout)\n"
         "  --svg FILE           draw waypoints, curve and speed profile\n"
         "  --summary            counters on stderr at the end\n"
         "  -q, --quiet          no progress line\n"
         "  --progress-after MS  progress line (stderr a terminal only) after MS ms (default 500)\n"
         "  -h, --help           this text\n"
-        "  -V, --version        version\n"
-        "\n"
-        "Exit status: 0 ok, 1 track not loadable, 2 usage or configuration,\n"
-        "3 output write failed, 4 engine did not finish.\n",
+        "  -V, --version        version\n",
         f);
+    usage_engine(f);
+    fputs("\n"
+          "Exit status: 0 ok, 1 track not loadable, 2 usage or configuration,\n"
+          "3 output write failed, 4 engine did not finish.\n",
+          f);
 }
 
 static int parse_double(const char *s, double *v)
@@ -114,33 +148,6 @@ static int parse_uint(const char *s, unsigned *v)
     return 0;
 }
 
-static int parse_vec3(const char *s, double v[3])
-{
-    char buf[256];
-    if (strlen(s) >= sizeof buf)
-        return -1;
-    strcpy(buf, s);
-    char *save = NULL, *tok = strtok_r(buf, ",", &save);
-    for (int k = 0; k < 3; k++) {
-        if (!tok || parse_double(tok, &v[k]))
-            return -1;
-        tok = strtok_r(NULL, ",", &save);
-    }
-    return tok ? -1 : 0;
-}
-
-static int lookup(const char *s, const char *const *names, int n)
-{
-    for (int i = 0; i < n; i++)
-        if (strcmp(s, names[i]) == 0)
-            return i;
-    return -1;
-}
-
-static const char *const param_names[] = {"uniform", "time"};
-static const char *const ends_names[] = {"held", "multiple", "natural", "clamped", "rest"};
-static const char *const method_names[] = {"bspline", "cubic", "smooth"};
-
 /* Short names of the reasons a waypoint can be refused for bad data
  * (NULL for codes engine_push does not return for data). */
 static const char *reason_name(int e)
@@ -158,164 +165,156 @@ static const char *reason_name(int e)
 }
 
 enum {
-    OPT_RATE = 256, OPT_FRAGMENT, OPT_OVERLAP, OPT_PARAM, OPT_ENDS, OPT_METHOD, OPT_SMOOTH_WINDOW, OPT_SMOOTH_CTRL, OPT_FORMAT,
-    OPT_SVG, OPT_SUMMARY, OPT_MAX_GAP, OPT_MAX_SPEED, OPT_MAX_ACCEL, OPT_SKIP_BAD, OPT_OBJECT,
-    OPT_START_VEL, OPT_END_VEL, OPT_PROGRESS_AFTER,
+    OPT_RATE = 256, OPT_FORMAT, OPT_SVG, OPT_SUMMARY, OPT_SKIP_BAD, OPT_OBJECT,
+    OPT_PROGRESS_AFTER,
+    OPT_ENGINE = 1024, /* + index in engine_settings[] */
 };
 
-/* Returns -1 to go on, else an exit status. */
-static int parse_args(int argc, char **argv, opts_t *o)
+static const struct option fixed_opts[] = {
+    {"config", required_argument, NULL, 'c'},
+    {"rate", required_argument, NULL, OPT_RATE},
+    {"format", required_argument, NULL, OPT_FORMAT},
+    {"svg", required_argument, NULL, OPT_SVG},
+    {"summary", no_argument, NULL, OPT_SUMMARY},
+    {"skip-bad", no_argument, NULL, OPT_SKIP_BAD},
+    {"object", required_argument, NULL, OPT_OBJECT},
+    {"progress-after", required_argument, NULL, OPT_PROGRESS_AFTER},
+    {"output", required_argument, NULL, 'o'},
+    {"quiet", no_argument, NULL, 'q'},
+    {"help", no_argument, NULL, 'h'},
+    {"version", no_argument, NULL, 'V'},
+};
+#define FIXED_OPTS (sizeof fixed_opts / sizeof fixed_opts[0])
+
+/* fixed_opts, then one option per engine setting, then the terminator. */
+static void build_long_opts(struct option *lopts, size_t cap)
 {
-    static const struct option lopts[] = {
-        {"rate", required_argument, NULL, OPT_RATE},
-        {"fragment", required_argument, NULL, OPT_FRAGMENT},
-        {"overlap", required_argument, NULL, OPT_OVERLAP},
-        {"param", required_argument, NULL, OPT_PARAM},
-        {"ends", required_argument, NULL, OPT_ENDS},
-        {"method", required_argument, NULL, OPT_METHOD},
-        {"smooth-window", required_argument, NULL, OPT_SMOOTH_WINDOW},
-        {"smooth-ctrl", required_argument, NULL, OPT_SMOOTH_CTRL},
-        {"format", required_argument, NULL, OPT_FORMAT},
-        {"svg", required_argument, NULL, OPT_SVG},
-        {"summary", no_argument, NULL, OPT_SUMMARY},
-        {"max-gap", required_argument, NULL, OPT_MAX_GAP},
-        {"max-speed", required_argument, NULL, OPT_MAX_SPEED},
-        {"max-accel", required_argument, NULL, OPT_MAX_ACCEL},
-        {"skip-bad", no_argument, NULL, OPT_SKIP_BAD},
-        {"object", required_argument, NULL, OPT_OBJECT},
-        {"start-vel", required_argument, NULL, OPT_START_VEL},
-        {"end-vel", required_argument, NULL, OPT_END_VEL},
-        {"progress-after", required_argument, NULL, OPT_PROGRESS_AFTER},
-        {"output", required_argument, NULL, 'o'},
-        {"quiet", no_argument, NULL, 'q'},
-        {"help", no_argument, NULL, 'h'},
-        {"version", no_argument, NULL, 'V'},
-        {NULL, 0, NULL, 0},
-    };
-    int c, k;
-    memset(o, 0, sizeof *o);
-    engine_config_default(&o->cfg);
-    o->rate_hz = 100.0;
-    o->progress_after_ms = PROGRESS_AFTER_MS;
-    o->object = "replay";
-    opterr = 0;
-    while ((c = getopt_long(argc, argv, ":o:qhV", lopts, NULL)) != -1) {
-        switch (c) {
-        case OPT_RATE:
-            if (parse_double(optarg, &o->rate_hz) || o->rate_hz <= 0) {
-                fprintf(stderr, "trajreplay: --rate: '%s' is not a positive number of Hz\n", optarg);
-                return EXIT_USAGE;
-            }
-            break;
-        case OPT_FRAGMENT:
-            if (parse_uint(optarg, &o->cfg.fragment)) {
-                fprintf(stderr, "trajreplay: --fragment: '%s' is not a count\n", optarg);
-                return EXIT_USAGE;
-            }
-            break;
-        case OPT_OVERLAP:
-            if (parse_uint(optarg, &o->cfg.overlap)) {
-                fprintf(stderr, "trajreplay: --overlap: '%s' is not a count\n", optarg);
-                return EXIT_USAGE;
-            }
-            break;
-        case OPT_PARAM:
-            if ((k = lookup(optarg, param_names, 2)) < 0) {
-                fprintf(stderr, "trajreplay: --param: '%s' is not uniform or time\n", optarg);
-                return EXIT_USAGE;
-            }
-            o->cfg.param = (engine_param_t)k;
-            break;
-        case OPT_ENDS:
-            if ((k = lookup(optarg, ends_names, 5)) < 0) {
-                fprintf(stderr, "trajreplay: --ends: '%s' is not held, multiple, natural, "
-                        "clamped or rest\n", optarg);
-                return EXIT_USAGE;
-            }
-            o->cfg.ends = (engine_ends_t)k;
-            break;
-        case OPT_METHOD:
-            if ((k = lookup(optarg, method_names, 3)) < 0) {
-                fprintf(stderr, "trajreplay: --method: '%s' is not bspline, cubic or smooth\n",
-                        optarg);
-                return EXIT_USAGE;
-            }
-            o->cfg.method = (engine_method_t)k;
-            break;
-        case OPT_SMOOTH_WINDOW:
-        case OPT_SMOOTH_CTRL:
-            if (parse_uint(optarg, c == OPT_SMOOTH_WINDOW ? &o->cfg.smooth_window
-                                                          : &o->cfg.smooth_ctrl)) {
-                fprintf(stderr, "trajreplay: --%s: '%s' is not a count\n",
-                        c == OPT_SMOOTH_WINDOW ? "smooth-window" : "smooth-ctrl", optarg);
-                return EXIT_USAGE;
-            }
-            break;
-        case OPT_FORMAT:
-            if (track_format_parse(optarg, &o->format)) {
-                fprintf(stderr, "trajreplay: --format: '%s' is not auto, xyz, latlon, gpx or path\n",
-                        optarg);
-                return EXIT_USAGE;
-            }
-            break;
-        case OPT_SVG: o->svg = optarg; break;
-        case OPT_SUMMARY: o->summary = 1; break;
-        case OPT_SKIP_BAD: o->load_flags |= TRACK_SKIP_BAD; break;
-        case OPT_OBJECT: o->object = optarg; break;
-        case OPT_MAX_GAP:
-            if (parse_double(optarg, &o->cfg.max_gap_s) || o->cfg.max_gap_s <= 0) {
-                fprintf(stderr, "trajreplay: --max-gap: '%s' is not a positive number of seconds\n",
-                        optarg);
-                return EXIT_USAGE;
-            }
-            break;
-        case OPT_MAX_SPEED:
-            if (parse_double(optarg, &o->cfg.max_speed_m_s) || o->cfg.max_speed_m_s < 0) {
-                fprintf(stderr, "trajreplay: --max-speed: '%s' is not a speed >= 0 in m/s\n",
-                        optarg);
-                return EXIT_USAGE;
-            }
-            break;
-        case OPT_MAX_ACCEL:
-            if (parse_double(optarg, &o->cfg.max_accel_m_s2) || o->cfg.max_accel_m_s2 < 0) {
-                fprintf(stderr,
-                        "trajreplay: --max-accel: '%s' is not an acceleration >= 0 in m/s^2\n",
-                        optarg);
-                return EXIT_USAGE;
-            }
-            break;
-        case OPT_START_VEL:
-        case OPT_END_VEL:
-            if (parse_vec3(optarg, c == OPT_START_VEL ? o->cfg.start_vel_m_s : o->cfg.end_vel_m_s)) {
-                fprintf(stderr, "trajreplay: --%s: '%s' is not VX,VY,VZ in m/s\n",
-                        c == OPT_START_VEL ? "start-vel" : "end-vel", optarg);
-                return EXIT_USAGE;
-            }
-            break;
-        case OPT_PROGRESS_AFTER:
-            if (parse_uint(optarg, &o->progress_after_ms)) {
-                fprintf(stderr, "trajreplay: --progress-after: '%s' is not milliseconds\n", optarg);
-                return EXIT_USAGE;
-            }
-            break;
-        case 'o': o->output = optarg; break;
-        case 'q': o->quiet = 1; break;
-        case 'h': usage(stdout); return 0;
-        case 'V': printf("trajreplay %s\n", TRAJREPLAY_VERSION); return 0;
-        case ':':
-            fprintf(stderr, "trajreplay: %s needs a value\n", argv[optind - 1]);
+    size_t n = 0;
+    for (; n < FIXED_OPTS; n++)
+        lopts[n] = fixed_opts[n];
+    for (size_t i = 0; i < engine_settings_count && n + 1 < cap; i++)
+        if (engine_settings[i].option)
+            lopts[n++] = (struct option){engine_settings[i].option, required_argument, NULL,
+                                         OPT_ENGINE + (int)i};
+    lopts[n] = (struct option){NULL, 0, NULL, 0};
+}
+
+/* One option other than an engine setting.  Returns -1 to go on, else an exit status. */
+static int parse_option(int c, char **argv, opts_t *o)
+{
+    switch (c) {
+    case 'c': o->config = optarg; return -1;
+    case OPT_RATE:
+        if (parse_double(optarg, &o->rate_hz) || o->rate_hz <= 0) {
+            fprintf(stderr, "trajreplay: --rate: '%s' is not a positive number of Hz\n", optarg);
             return EXIT_USAGE;
-        default:
-            fprintf(stderr, "trajreplay: unknown option '%s' (see --help)\n", argv[optind - 1]);
+        }
+        o->rate_given = 1;
+        return -1;
+    case OPT_FORMAT:
+        if (track_format_parse(optarg, &o->format)) {
+            fprintf(stderr, "trajreplay: --format: '%s' is not auto, xyz, latlon, gpx or path\n",
+                    optarg);
+            return EXIT_USAGE;
+        }
+        return -1;
+    case OPT_SVG: o->svg = optarg; return -1;
+    case OPT_SUMMARY: o->summary = 1; return -1;
+    case OPT_SKIP_BAD: o->load_flags |= TRACK_SKIP_BAD; return -1;
+    case OPT_OBJECT: o->object = optarg; return -1;
+    case OPT_PROGRESS_AFTER:
+        if (parse_uint(optarg, &o->progress_after_ms)) {
+            fprintf(stderr, "trajreplay: --progress-after: '%s' is not milliseconds\n", optarg);
+            return EXIT_USAGE;
+        }
+        return -1;
+    case 'o': o->output = optarg; return -1;
+    case 'q': o->quiet = 1; return -1;
+    case 'h': usage(stdout); return 0;
+    case 'V': printf("trajreplay %s\n", TRAJREPLAY_VERSION); return 0;
+    case ':':
+        fprintf(stderr, "trajreplay: %s needs a value\n", argv[optind - 1]);
+        return EXIT_USAGE;
+    default:
+        if (c >= OPT_ENGINE && (size_t)(c - OPT_ENGINE) < engine_settings_count &&
+            o->neng < ENGINE_ARGS_MAX) {
+            o->eng[o->neng].s = &engine_settings[c - OPT_ENGINE];
+            o->eng[o->neng++].arg = optarg;
+            return -1;
+        }
+        if (c >= OPT_ENGINE) {
+            fprintf(stderr, "trajreplay: more than %d engine options\n", ENGINE_ARGS_MAX);
+            return EXIT_USAGE;
+        }
+        fprintf(stderr, "trajreplay: unknown option '%s' (see --help)\n", argv[optind - 1]);
+        return EXIT_USAGE;
+    }
+}
+
+/*
+ * -c FILE: the engine settings and rate of one object of a trajd config,
+ * and its replay.track, replay.format and replay.start_s (a TRACK given on
+ * the command line wins, with --format).  Returns -1 to go on, else an exit
+ * status.
+ */
+static int load_config(opts_t *o)
+{
+    cfg_t *c = NULL;
+    char err[CFG_WHY_MAX + PATH_MAX];
+    if (cfg_load(o->config, &c, err, sizeof err) < 0) {
+        fprintf(stderr, "trajreplay: %s\n", err);
+        return EXIT_USAGE;
+    }
+    const cfg_obj_t *obj = NULL;
+    char names[CFG_OBJECTS_MAX * (CFG_NAME_MAX + 2)] = "";
+    for (unsigned i = 0; i < c->nobj; i++) {
+        size_t n = strlen(names);
+        snprintf(names + n, sizeof names - n, "%s%s", i ? ", " : "", c->obj[i].name);
+        if (o->object ? strcmp(c->obj[i].name, o->object) == 0 : c->nobj == 1)
+            obj = &c->obj[i];
+    }
+    int rc = -1;
+    if (!obj) {
+        fprintf(stderr, "trajreplay: %s: %s (objects: %s)\n", o->config,
+                o->object ? "no such object" : "several objects: choose one with --object",
+                names);
+        rc = EXIT_USAGE;
+        goto out;
+    }
+    snprintf(o->object_buf, sizeof o->object_buf, "%s", obj->name);
+    o->object = o->object_buf;
+    o->cfg = obj->engine; /* period_ns from the daemon's rate_hz */
+    if (!o->rate_given)
+        o->rate_hz = c->daemon.rate_hz;
+    if (obj->input == &replay_transport) {
+        const replay_transport_obj_cfg_t *r = cfg_obj_transport(obj, &replay_transport);
+        if (!o->input) {
+            snprintf(o->track_buf, sizeof o->track_buf, "%s", r->path);
+            o->input = o->track_buf;
+            o->format = r->format;
+        }
+        o->start_ns = llround(r->start_s * 1e9);
+    } else if (!o->input) {
+        fprintf(stderr, "trajreplay: %s: object %s has input = %s, not replay: give a TRACK\n",
+                o->config, obj->name, obj->input->name);
+        rc = EXIT_USAGE;
+    }
+out:
+    cfg_free(c);
+    return rc;
+}
+
+/* Command-line engine settings, the rate, and the object column.  Returns -1
+ * to go on, else an exit status. */
+static int finish_opts(opts_t *o)
+{
+    for (unsigned i = 0; i < o->neng; i++) {
+        char why[160];
+        if (engine_setting_parse(o->eng[i].s, o->eng[i].arg, &o->cfg, why, sizeof why)) {
+            fprintf(stderr, "trajreplay: --%s: %s\n", o->eng[i].s->option, why);
             return EXIT_USAGE;
         }
     }
-    if (optind != argc - 1) {
-        fprintf(stderr, optind >= argc ? "trajreplay: no track file given (see --help)\n"
-                                       : "trajreplay: one track file only (see --help)\n");
-        return EXIT_USAGE;
-    }
-    o->input = argv[optind];
     /* 1e9 / rate rounded to whole nanoseconds: the grid is exact in ns. */
     double period = 1e9 / o->rate_hz;
     if (!(period >= (double)ENGINE_PERIOD_NS_MIN && period <= (double)ENGINE_PERIOD_NS_MAX)) {
@@ -333,6 +332,34 @@ static int parse_args(int argc, char **argv, opts_t *o)
         return EXIT_USAGE;
     }
     return -1;
+}
+
+/* Returns -1 to go on, else an exit status. */
+static int parse_args(int argc, char **argv, opts_t *o)
+{
+    struct option lopts[FIXED_OPTS + ENGINE_ARGS_MAX + 1];
+    build_long_opts(lopts, sizeof lopts / sizeof lopts[0]);
+    memset(o, 0, sizeof *o);
+    engine_config_default(&o->cfg);
+    o->rate_hz = 100.0;
+    o->progress_after_ms = PROGRESS_AFTER_MS;
+    opterr = 0;
+    int c, rc;
+    while ((c = getopt_long(argc, argv, ":c:o:qhV", lopts, NULL)) != -1)
+        if ((rc = parse_option(c, argv, o)) >= 0)
+            return rc;
+    if (argc - optind > 1 || (optind == argc && !o->config)) {
+        fprintf(stderr, optind >= argc ? "trajreplay: no track file given (see --help)\n"
+                                       : "trajreplay: one track file only (see --help)\n");
+        return EXIT_USAGE;
+    }
+    if (optind < argc)
+        o->input = argv[optind];
+    if (o->config && (rc = load_config(o)) >= 0)
+        return rc;
+    if (!o->object)
+        o->object = "replay";
+    return finish_opts(o);
 }
 
 static int64_t mono_ns(void)
@@ -376,83 +403,124 @@ static void print_summary(const track_t *trk, const replay_t *r, const engine_st
             max_v, max_a);
 }
 
-int main(int argc, char **argv)
-{
-    opts_t o;
-    int rc = parse_args(argc, argv, &o);
-    if (rc >= 0)
-        return rc;
+/* One replay: its inputs, outputs and what was seen. */
+typedef struct {
+    const opts_t *o;
+    track_t trk;
+    engine_t *e;
+    replay_t r;
+    int *results;          /* engine_push result of each waypoint */
+    svg_plot_t *plot;
+    FILE *out;
+    double span_s;         /* track time from first to last waypoint */
+    double max_v, max_a;
+    uint64_t written;      /* setpoint rows */
+    engine_status_t st;
+    int64_t t_start, t_shown; /* progress line */
+    int progress, shown;
+} run_t;
 
+/* Load the track, make the engine and open the outputs.  Returns -1 to go
+ * on, else an exit status (run_free releases what was made). */
+static int run_open(run_t *run, const opts_t *o)
+{
+    static char outbuf[1 << 20]; /* static: stdout may still use it at exit */
+    char err[512];
+    int eng_err = 0;
     const char *why = NULL;
-    if (engine_config_check(&o.cfg, &why)) {
+    memset(run, 0, sizeof *run);
+    run->o = o;
+    run->out = stdout;
+    if (engine_config_check(&o->cfg, &why)) {
         fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", why ? why : "?");
         return EXIT_USAGE;
     }
-
-    track_t trk;
-    char err[512];
-    if (track_load_opts(o.input, o.format, o.load_flags, &trk, err, sizeof err)) {
+    if (track_load_opts(o->input, o->format, o->load_flags, &run->trk, err, sizeof err)) {
         fprintf(stderr, "trajreplay: %s\n", err);
         return EXIT_INPUT;
     }
-    if (trk.skipped)
-        fprintf(stderr, "trajreplay: skipped %zu bad line%s, the first: %s\n", trk.skipped,
-                trk.skipped == 1 ? "" : "s", err);
-
-    int status = 0, eng_err = 0;
-    engine_t *e = NULL;
-    svg_plot_t *plot = NULL;
-    int *results = NULL;
-    FILE *out = stdout;
-    static char outbuf[1 << 20]; /* static: stdout may still use it at exit */
-
-    e = engine_new(&o.cfg, &eng_err);
-    if (!e) {
+    if (run->trk.skipped)
+        fprintf(stderr, "trajreplay: skipped %zu bad line%s, the first: %s\n", run->trk.skipped,
+                run->trk.skipped == 1 ? "" : "s", err);
+    run->e = engine_new(&o->cfg, &eng_err);
+    if (!run->e) {
         fprintf(stderr, "trajreplay: engine: %s\n", engine_strerror(eng_err));
-        status = EXIT_ENGINE;
-        goto out;
+        return EXIT_ENGINE;
     }
-    results = malloc(trk.n * sizeof *results);
-    if (o.svg)
-        plot = svg_plot_new(SVG_POINTS_DEFAULT, trk.geographic);
-    if (!results || (o.svg && !plot)) {
+    run->results = malloc(run->trk.n * sizeof *run->results);
+    if (o->svg)
+        run->plot = svg_plot_new(SVG_POINTS_DEFAULT, run->trk.geographic);
+    if (!run->results || (o->svg && !run->plot)) {
         fprintf(stderr, "trajreplay: out of memory\n");
-        status = EXIT_ENGINE;
-        goto out;
+        return EXIT_ENGINE;
     }
-    if (o.output && strcmp(o.output, "-") != 0) {
-        out = fopen(o.output, "w");
-        if (!out) {
-            fprintf(stderr, "trajreplay: %s: %s\n", o.output, strerror(errno));
-            out = stdout;
-            status = EXIT_OUTPUT;
-            goto out;
+    if (o->output && strcmp(o->output, "-") != 0) {
+        FILE *f = fopen(o->output, "w");
+        if (!f) {
+            fprintf(stderr, "trajreplay: %s: %s\n", o->output, strerror(errno));
+            return EXIT_OUTPUT;
         }
+        run->out = f;
     }
-    setvbuf(out, outbuf, _IOFBF, sizeof outbuf);
+    setvbuf(run->out, outbuf, _IOFBF, sizeof outbuf);
+    replay_init(&run->r, &run->trk, o->start_ns);
+    run->r.results = run->results;
+    run->span_s = run->trk.wp[run->trk.n - 1].t_s - run->trk.wp[0].t_s;
+    if (!(run->span_s >= 0 && run->span_s < REPLAY_T_MAX_S))
+        run->span_s = 0; /* backward or absurd last time: the run bound still holds */
+    run->progress = !o->quiet && isatty(2);
+    run->t_start = run->progress ? mono_ns() : 0;
+    return -1;
+}
 
+/* Progress line on stderr (a terminal only), at most every PROGRESS_EVERY_NS. */
+static void run_progress(run_t *run, const engine_setpoint_t *sp)
+{
+    int64_t t = mono_ns();
+    if (t - run->t_start < (int64_t)run->o->progress_after_ms * 1000000 ||
+        (run->shown && t - run->t_shown <= PROGRESS_EVERY_NS))
+        return;
+    fprintf(stderr, "\rtrajreplay: %zu/%zu waypoints, track time %.1f/%.1f s, "
+            "%" PRIu64 " setpoints\033[K", run->r.next, run->trk.n,
+            sp->t_s - run->trk.wp[0].t_s, run->span_s, run->written);
+    run->t_shown = t;
+    run->shown = 1;
+}
+
+/* Write one setpoint row and keep its statistics. */
+static void run_emit(run_t *run, const engine_setpoint_t *sp)
+{
+    char line[CSV_FORMAT_LINE_MAX];
+    int len = csv_format_format(line, sizeof line, run->o->object, sp);
+    if (len > 0)
+        fwrite(line, 1, (size_t)len, run->out);
+    run->written++;
+    double v = sqrt(sp->vel_m_s[0] * sp->vel_m_s[0] + sp->vel_m_s[1] * sp->vel_m_s[1] +
+                    sp->vel_m_s[2] * sp->vel_m_s[2]);
+    double a = sqrt(sp->acc_m_s2[0] * sp->acc_m_s2[0] + sp->acc_m_s2[1] * sp->acc_m_s2[1] +
+                    sp->acc_m_s2[2] * sp->acc_m_s2[2]);
+    if (v > run->max_v)
+        run->max_v = v;
+    if (a > run->max_a)
+        run->max_a = a;
+    if (run->plot)
+        svg_plot_setpoint(run->plot, sp);
+}
+
+/* Tick the engine on the virtual clock until the track ran out.  Returns 0
+ * or an exit status. */
+static int run_ticks(run_t *run)
+{
+    const int64_t period = run->o->cfg.period_ns;
+    const uint64_t max_ticks =
+        (uint64_t)(((double)run->o->start_ns * 1e-9 + 2 * run->span_s + RUN_BOUND_EXTRA_S) *
+                   1e9 / (double)period);
     char line[CSV_FORMAT_LINE_MAX];
     int len = csv_format_header(line, sizeof line);
-    fwrite(line, 1, (size_t)len, out);
-
-    replay_t r;
-    replay_init(&r, &trk, 0);
-    r.results = results;
-
-    const int64_t period = o.cfg.period_ns;
-    double span_s = trk.wp[trk.n - 1].t_s - trk.wp[0].t_s;
-    if (!(span_s >= 0 && span_s < REPLAY_T_MAX_S))
-        span_s = 0; /* backward or absurd last time: the bound below still holds */
-    const uint64_t max_ticks = (uint64_t)((2 * span_s + RUN_BOUND_EXTRA_S) * 1e9 / (double)period);
-
-    int progress = !o.quiet && isatty(2);
-    int64_t t_start = progress ? mono_ns() : 0, t_shown = 0;
-    int shown = 0;
-
-    double max_v = 0, max_a = 0;
-    uint64_t k = 0, tail = 0, written = 0;
-    engine_status_t st;
-    for (;; k++) {
+    fwrite(line, 1, (size_t)len, run->out);
+    int status = 0;
+    uint64_t tail = 0;
+    for (uint64_t k = 0;; k++) {
         if (k > max_ticks) {
             fprintf(stderr, "trajreplay: the engine did not finish within %" PRIu64 " ticks "
                     "(%.0f s of track time): engine bug\n", max_ticks,
@@ -462,88 +530,91 @@ int main(int argc, char **argv)
         }
         int64_t now = (int64_t)k * period;
         engine_setpoint_t sp;
-        replay_feed(&r, e, now);
-        (void)engine_tick(e, now, &sp);
-        len = csv_format_format(line, sizeof line, o.object, &sp);
-        if (len > 0)
-            fwrite(line, 1, (size_t)len, out);
-        written++;
-        double v = sqrt(sp.vel_m_s[0] * sp.vel_m_s[0] + sp.vel_m_s[1] * sp.vel_m_s[1] +
-                        sp.vel_m_s[2] * sp.vel_m_s[2]);
-        double a = sqrt(sp.acc_m_s2[0] * sp.acc_m_s2[0] + sp.acc_m_s2[1] * sp.acc_m_s2[1] +
-                        sp.acc_m_s2[2] * sp.acc_m_s2[2]);
-        if (v > max_v)
-            max_v = v;
-        if (a > max_a)
-            max_a = a;
-        if (plot)
-            svg_plot_setpoint(plot, &sp);
-        if (replay_done(&r) && sp.state == ENGINE_STATE_FINISHED) {
-            engine_status(e, &st);
+        replay_feed(&run->r, run->e, now);
+        (void)engine_tick(run->e, now, &sp);
+        run_emit(run, &sp);
+        if (replay_done(&run->r) && sp.state == ENGINE_STATE_FINISHED) {
+            engine_status(run->e, &run->st);
             /* FINISHED with nothing buffered: the end of the last
              * trajectory, not a rest between two (after a gap). */
-            if (st.buffered == 0 && ++tail > TAIL_TICKS)
+            if (run->st.buffered == 0 && ++tail > TAIL_TICKS)
                 break;
         }
-        if ((k & 1023) == 0 && ferror(out))
-            break; /* a full disk: stop now, reported below */
-        if (progress && (k & 1023) == 0) {
-            int64_t t = mono_ns();
-            if (t - t_start >= (int64_t)o.progress_after_ms * 1000000 &&
-                (!shown || t - t_shown > PROGRESS_EVERY_NS)) {
-                fprintf(stderr, "\rtrajreplay: %zu/%zu waypoints, track time %.1f/%.1f s, "
-                        "%" PRIu64 " setpoints\033[K", r.next, trk.n, sp.t_s - trk.wp[0].t_s, span_s,
-                        written);
-                t_shown = t;
-                shown = 1;
-            }
-        }
+        if ((k & 1023) == 0 && ferror(run->out))
+            break; /* a full disk: stop now, reported by the caller */
+        if (run->progress && (k & 1023) == 0)
+            run_progress(run, &sp);
     }
-    if (shown)
+    if (run->shown)
         fputs("\r\033[K", stderr);
-    engine_status(e, &st);
+    engine_status(run->e, &run->st);
+    return status;
+}
 
-    if (fflush(out) || ferror(out)) {
+/* The --svg drawing.  Returns 0 or EXIT_OUTPUT. */
+static int run_svg(run_t *run)
+{
+    const opts_t *o = run->o;
+    for (size_t i = 0; i < run->trk.n; i++)
+        svg_plot_waypoint(run->plot, run->trk.wp[i].pos_m[0], run->trk.wp[i].pos_m[1],
+                          i < run->r.next && run->results[i] >= 0);
+    char title[512];
+    snprintf(title, sizeof title, "%s: %zu waypoints, %s %s, F=%u O=%u, %g Hz", o->input,
+             run->trk.n, engine_setting_enum_name(engine_setting_find("method"), o->cfg.method),
+             engine_setting_enum_name(engine_setting_find("param"), o->cfg.param),
+             o->cfg.fragment, o->cfg.overlap, o->rate_hz);
+    FILE *f = fopen(o->svg, "w");
+    if (!f) {
+        fprintf(stderr, "trajreplay: %s: %s\n", o->svg, strerror(errno));
+        return EXIT_OUTPUT;
+    }
+    int wrc = svg_plot_write(run->plot, f, title);
+    if (fclose(f) || wrc) {
+        fprintf(stderr, "trajreplay: %s: write error\n", o->svg);
+        return EXIT_OUTPUT;
+    }
+    return 0;
+}
+
+/* Close the output (status: the exit status so far) and free everything.
+ * Returns the exit status. */
+static int run_close(run_t *run, int status)
+{
+    const char *name = run->o->output ? run->o->output : "stdout";
+    if (run->out && (fflush(run->out) || ferror(run->out)) && status != EXIT_OUTPUT) {
+        fprintf(stderr, "trajreplay: %s: write error: %s\n", name, strerror(errno));
+        status = EXIT_OUTPUT;
+    }
+    if (run->out && run->out != stdout && fclose(run->out) && !status) {
+        fprintf(stderr, "trajreplay: %s: %s\n", name, strerror(errno));
+        status = EXIT_OUTPUT;
+    }
+    free(run->results);
+    svg_plot_free(run->plot);
+    engine_free(run->e);
+    track_free(&run->trk);
+    return status;
+}
+
+int main(int argc, char **argv)
+{
+    opts_t o;
+    run_t run;
+    int rc = parse_args(argc, argv, &o);
+    if (rc >= 0)
+        return rc;
+    int status = run_open(&run, &o);
+    if (status >= 0)
+        return run_close(&run, status);
+    status = run_ticks(&run);
+    if (fflush(run.out) || ferror(run.out)) {
         fprintf(stderr, "trajreplay: %s: write error: %s\n", o.output ? o.output : "stdout",
                 strerror(errno));
         status = EXIT_OUTPUT;
     }
-
-    if (plot) {
-        for (size_t i = 0; i < trk.n; i++)
-            svg_plot_waypoint(plot, trk.wp[i].pos_m[0], trk.wp[i].pos_m[1],
-                              i < r.next && results[i] >= 0);
-        char title[512];
-        snprintf(title, sizeof title, "%s: %zu waypoints, %s %s, F=%u O=%u, %g Hz", o.input,
-                 trk.n, method_names[o.cfg.method], param_names[o.cfg.param], o.cfg.fragment,
-                 o.cfg.overlap, o.rate_hz);
-        FILE *f = fopen(o.svg, "w");
-        if (!f) {
-            fprintf(stderr, "trajreplay: %s: %s\n", o.svg, strerror(errno));
-            status = EXIT_OUTPUT;
-        } else {
-            int wrc = svg_plot_write(plot, f, title);
-            if (fclose(f) || wrc) {
-                fprintf(stderr, "trajreplay: %s: write error\n", o.svg);
-                status = EXIT_OUTPUT;
-            }
-        }
-    }
-    if (o.summary)
-        print_summary(&trk, &r, &st, max_v, max_a, written);
-
-out:
-    if (out != stdout) {
-        if (fclose(out) && !status) {
-            fprintf(stderr, "trajreplay: %s: %s\n", o.output, strerror(errno));
-            status = EXIT_OUTPUT;
-        }
-    } else if (fflush(stdout) && !status) {
+    if (run.plot && run_svg(&run))
         status = EXIT_OUTPUT;
-    }
-    free(results);
-    svg_plot_free(plot);
-    engine_free(e);
-    track_free(&trk);
-    return status;
+    if (o.summary)
+        print_summary(&run.trk, &run.r, &run.st, run.max_v, run.max_a, run.written);
+    return run_close(&run, status);
 }

@@ -17,6 +17,7 @@
 #include <string.h>
 #include <syslog.h>
 
+#include "engine_settings.h"
 #include "log.h"
 #include "transport.h"
 
@@ -336,34 +337,6 @@ static char *reader(char *str, int num, void *stream)
     return str;
 }
 
-static const char *const method_names[] = {"bspline", "cubic", "smooth", NULL};
-static const char *const param_names[] = {"uniform", "time", NULL};
-static const char *const ends_names[] = {"held", "multiple", "natural", "clamped", "rest", NULL};
-
-/* "x,y,z" into three finite numbers. */
-static int get_vec3(const cfg_kv_t *kv, double v[ENGINE_AXES], char *why, size_t whylen)
-{
-    const char *s = kv->value;
-    for (int i = 0; i < ENGINE_AXES; i++) {
-        char *end;
-        errno = 0;
-        v[i] = strtod(s, &end);
-        if (end == s || errno == ERANGE || !isfinite(v[i]))
-            return why_set(why, whylen, "expected three numbers x,y,z, got '%s'", kv->value);
-        while (isspace((unsigned char)*end))
-            end++;
-        if (i < ENGINE_AXES - 1) {
-            if (*end != ',')
-                return why_set(why, whylen, "expected three numbers x,y,z, got '%s'",
-                               kv->value);
-            s = end + 1;
-        } else if (*end) {
-            return why_set(why, whylen, "expected three numbers x,y,z, got '%s'", kv->value);
-        }
-    }
-    return 0;
-}
-
 /* "0,2-3" into a cpu_set_t. */
 static int get_cpus(const cfg_kv_t *kv, cpu_set_t *set, char *why, size_t whylen)
 {
@@ -470,9 +443,6 @@ static void transport_names(unsigned role, char *list, size_t len)
 
 static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size_t wl)
 {
-    engine_config_t *e = &o->engine;
-    long long ll;
-    int i, rc;
     const char *dot = strchr(kv->key, '.');
     if (dot) { /* "T.key": transport T's */
         char tname[32];
@@ -524,74 +494,10 @@ static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size
             return why_set(why, wl, "expected at least one output");
         return 0;
     }
-    if (strcmp(kv->key, "method") == 0) {
-        rc = cfg_get_enum(kv, method_names, &i, why, wl);
-        if (rc == 0)
-            e->method = (engine_method_t)i;
-        return rc;
-    }
-    if (strcmp(kv->key, "param") == 0) {
-        rc = cfg_get_enum(kv, param_names, &i, why, wl);
-        if (rc == 0)
-            e->param = (engine_param_t)i;
-        return rc;
-    }
-    if (strcmp(kv->key, "ends") == 0) {
-        rc = cfg_get_enum(kv, ends_names, &i, why, wl);
-        if (rc == 0)
-            e->ends = (engine_ends_t)i;
-        return rc;
-    }
-    if (strcmp(kv->key, "start_vel_m_s") == 0)
-        return get_vec3(kv, e->start_vel_m_s, why, wl);
-    if (strcmp(kv->key, "end_vel_m_s") == 0)
-        return get_vec3(kv, e->end_vel_m_s, why, wl);
-    if (strcmp(kv->key, "fragment") == 0) {
-        rc = cfg_get_int(kv, ENGINE_FRAGMENT_MIN, ENGINE_FRAGMENT_MAX, &ll, why, wl);
-        if (rc == 0)
-            e->fragment = (unsigned)ll;
-        return rc;
-    }
-    if (strcmp(kv->key, "overlap") == 0) {
-        rc = cfg_get_int(kv, 0, ENGINE_FRAGMENT_MAX - 1, &ll, why, wl);
-        if (rc == 0)
-            e->overlap = (unsigned)ll;
-        return rc;
-    }
-    if (strcmp(kv->key, "capacity") == 0) {
-        rc = cfg_get_int(kv, 1, 1 << 20, &ll, why, wl);
-        if (rc == 0)
-            e->capacity = (unsigned)ll;
-        return rc;
-    }
-    if (strcmp(kv->key, "max_gap_s") == 0)
-        return cfg_get_double(kv, 1e-6, 1e9, &e->max_gap_s, why, wl);
-    if (strcmp(kv->key, "max_abs_m") == 0)
-        return cfg_get_double(kv, 1e-6, 1e12, &e->max_abs_m, why, wl);
-    if (strcmp(kv->key, "max_speed_m_s") == 0)
-        return cfg_get_double(kv, 0, 1e9, &e->max_speed_m_s, why, wl);
-    if (strcmp(kv->key, "max_accel_m_s2") == 0)
-        return cfg_get_double(kv, 0, 1e9, &e->max_accel_m_s2, why, wl);
-    if (strcmp(kv->key, "start_slack") == 0) {
-        rc = cfg_get_int(kv, 0, ENGINE_FRAGMENT_MAX, &ll, why, wl);
-        if (rc == 0)
-            e->start_slack = (unsigned)ll;
-        return rc;
-    }
-    if (strcmp(kv->key, "max_segment_s") == 0)
-        return cfg_get_double(kv, 1e-6, 1e9, &e->max_segment_s, why, wl);
-    if (strcmp(kv->key, "smooth_window") == 0) {
-        rc = cfg_get_int(kv, 4, ENGINE_SMOOTH_WINDOW_MAX, &ll, why, wl);
-        if (rc == 0)
-            e->smooth_window = (unsigned)ll;
-        return rc;
-    }
-    if (strcmp(kv->key, "smooth_ctrl") == 0) {
-        rc = cfg_get_int(kv, 4, ENGINE_SMOOTH_WINDOW_MAX, &ll, why, wl);
-        if (rc == 0)
-            e->smooth_ctrl = (unsigned)ll;
-        return rc;
-    }
+    /* engine settings: lib/engine/engine_settings.h's table */
+    const engine_setting_t *es = engine_setting_find(kv->key);
+    if (es && !(es->flags & ENGINE_SETTING_DERIVED))
+        return engine_setting_parse(es, kv->value, &o->engine, why, wl) < 0 ? -CFG_EVALUE : 0;
     return -CFG_EUNKNOWN;
 }
 

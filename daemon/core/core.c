@@ -10,6 +10,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "engine_settings.h"
+
 /* Private part of the core, after the public struct. */
 typedef struct {
     core_t pub;
@@ -145,23 +147,6 @@ static void on_clock(loop_t *l, int fd, uint32_t events, void *ctx)
     tick(p, k0, k, wake_ns, late_ns);
 }
 
-/* Exact equality of two engine configurations (doubles compared bitwise). */
-static int engine_cfg_same(const engine_config_t *a, const engine_config_t *b)
-{
-    return a->method == b->method && a->param == b->param && a->ends == b->ends &&
-           memcmp(a->start_vel_m_s, b->start_vel_m_s, sizeof a->start_vel_m_s) == 0 &&
-           memcmp(a->end_vel_m_s, b->end_vel_m_s, sizeof a->end_vel_m_s) == 0 &&
-           a->fragment == b->fragment && a->overlap == b->overlap &&
-           a->period_ns == b->period_ns && a->capacity == b->capacity &&
-           memcmp(&a->max_gap_s, &b->max_gap_s, sizeof a->max_gap_s) == 0 &&
-           memcmp(&a->max_abs_m, &b->max_abs_m, sizeof a->max_abs_m) == 0 &&
-           memcmp(&a->max_speed_m_s, &b->max_speed_m_s, sizeof a->max_speed_m_s) == 0 &&
-           memcmp(&a->max_segment_s, &b->max_segment_s, sizeof a->max_segment_s) == 0 &&
-           memcmp(&a->max_accel_m_s2, &b->max_accel_m_s2, sizeof a->max_accel_m_s2) == 0 &&
-           a->start_slack == b->start_slack && a->smooth_window == b->smooth_window &&
-           a->smooth_ctrl == b->smooth_ctrl;
-}
-
 /* The object of prev that o (in the new config) may take over, or NULL. */
 static obj_t *carry_source(core_t *prev, const cfg_obj_t *o)
 {
@@ -169,7 +154,7 @@ static obj_t *carry_source(core_t *prev, const cfg_obj_t *o)
         return NULL;
     obj_t *q = core_obj_find(prev, o->name);
     if (!q || !q->engine || q->cfg->input != o->input ||
-        !engine_cfg_same(&q->cfg->engine, &o->engine))
+        !engine_config_same(&q->cfg->engine, &o->engine))
         return NULL;
     const transport_t *in = o->input;
     const void *a = cfg_obj_transport(q->cfg, in), *b = cfg_obj_transport(o, in);

@@ -630,7 +630,8 @@ class TestReplayMatchesTrajreplay(unittest.TestCase):
             # outputs: 'track', the first 60 s of the real 5 Hz figure-eight,
             # default engine, to a CSV file; 'walk', the first 80 s of the
             # irregularly sampled Visnjan walk (1-20 s between points), with
-            # the Hoang B-spline, F=16/O=8, natural ends, to stdout;
+            # the Hoang B-spline, F=16/O=8, natural ends, start slack 3, due
+            # from 1.5 s, to stdout;
             fig8 = os.path.join(tmp, "fig8.csv")
             with open(N2K) as f:
                 write(fig8, "".join(f.readlines()[:302]))
@@ -646,7 +647,7 @@ class TestReplayMatchesTrajreplay(unittest.TestCase):
                         "output = csv\ncsv.path = d.csv\n"
                         "[object.walk]\ninput = replay\nreplay.track = walk.csv\n"
                         "output = stdout\nmethod = bspline\nparam = uniform\nends = natural\n"
-                        "fragment = 16\noverlap = 8\n")
+                        "fragment = 16\noverlap = 8\nstart_slack = 3\nreplay.start_s = 1.5\n")
             d = Daemon(tmp, conf)
             try:
                 self.assertEqual(d.wait(120), 0, d.stderr())
@@ -655,15 +656,14 @@ class TestReplayMatchesTrajreplay(unittest.TestCase):
             finally:
                 d.close()
             missed = int(summary.split("missed ")[-1].split(",")[0])
-            # and by trajreplay on the same files with the same settings,
+            # and by trajreplay on the same files with the same settings
+            # (given as options for 'track', read from the config for 'walk'),
             refs = {}
-            for name, track, opts in (
-                    ("track", fig8, []),
-                    ("walk", walk, ["--method", "bspline", "--param", "uniform", "--ends", "natural",
-                                    "--fragment", "16", "--overlap", "8"])):
+            for name, args in (("track", ["--rate", "100", fig8]),
+                               ("walk", ["-c", conf])):
                 ref = os.path.join(tmp, name + ".ref.csv")
-                r = subprocess.run([TRAJREPLAY, "--rate", "100", "--object", name, "-q", "-o", ref]
-                                   + opts + [track], capture_output=True, text=True, timeout=120)
+                r = subprocess.run([TRAJREPLAY, "--object", name, "-q", "-o", ref] + args,
+                                   capture_output=True, text=True, timeout=120)
                 self.assertEqual(r.returncode, 0, r.stderr)
                 with open(ref) as f:
                     refs[name] = f.read().splitlines()

@@ -1,0 +1,300 @@
+/* engine_settings.c - the table of engine settings (see engine_settings.h). */
+#include "engine_settings.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+static const char *const method_names[] = {
+    [ENGINE_METHOD_BSPLINE] = "bspline",
+    [ENGINE_METHOD_CUBIC] = "cubic",
+    [ENGINE_METHOD_SMOOTH] = "smooth",
+    NULL,
+};
+static const char *const param_names[] = {
+    [ENGINE_PARAM_UNIFORM] = "uniform",
+    [ENGINE_PARAM_TIME] = "time",
+    NULL,
+};
+static const char *const ends_names[] = {
+    [ENGINE_ENDS_HELD] = "held",
+    [ENGINE_ENDS_MULTIPLE] = "multiple",
+    [ENGINE_ENDS_NATURAL] = "natural",
+    [ENGINE_ENDS_CLAMPED] = "clamped",
+    [ENGINE_ENDS_REST] = "rest",
+    NULL,
+};
+
+/* Enum fields are read and written as int. */
+_Static_assert(sizeof(engine_method_t) == sizeof(int), "engine_method_t is not int-sized");
+_Static_assert(sizeof(engine_param_t) == sizeof(int), "engine_param_t is not int-sized");
+_Static_assert(sizeof(engine_ends_t) == sizeof(int), "engine_ends_t is not int-sized");
+_Static_assert(ENGINE_AXES == 3, "VEC3 settings are written x,y,z");
+
+/* One entry: the field f names the key, its offset and its size. */
+#define S(f, opt_, type_, flags_, lo_, hi_, names_, arg_, help_)                                \
+    {.name = #f, .option = opt_, .type = ENGINE_SETTING_##type_, .flags = flags_,             \
+     .offset = offsetof(engine_config_t, f), .size = sizeof(((engine_config_t *)0)->f),       \
+     .min = lo_, .max = hi_, .names = names_, .arg = arg_, .help = help_}
+
+/* Ranges: what the config parser always accepted for each key; the rules
+ * between fields (overlap even and < fragment, capacity >= lookahead +
+ * fragment, smooth_ctrl <= smooth_window, ...) are engine_config_check's. */
+const engine_setting_t engine_settings[] = {
+    S(method, "method", ENUM, 0, 0, 0, method_names, "M",
+      "bspline | cubic | smooth (least squares, not exact)"),
+    S(param, "param", ENUM, 0, 0, 0, param_names, "P",
+      "uniform (the paper) | time (knots at the timestamps)"),
+    S(ends, "ends", ENUM, 0, 0, 0, ends_names, "E",
+      "end condition: held | multiple | natural | clamped | rest"),
+    S(start_vel_m_s, "start-vel", VEC3, 0, 0, 0, NULL, "VX,VY,VZ",
+      "start velocity for ends = clamped, m/s"),
+    S(end_vel_m_s, "end-vel", VEC3, 0, 0, 0, NULL, "VX,VY,VZ",
+      "end velocity for ends = clamped, m/s"),
+    S(fragment, "fragment", UNSIGNED, 0, ENGINE_FRAGMENT_MIN, ENGINE_FRAGMENT_MAX, NULL, "F",
+      "waypoints per fragment"),
+    S(overlap, "overlap", UNSIGNED, 0, 0, ENGINE_FRAGMENT_MAX - 1, NULL, "O",
+      "waypoints shared by two fragments (even, < fragment)"),
+    S(period_ns, NULL, INT64, ENGINE_SETTING_DERIVED, 0, 0, NULL, NULL,
+      "output period, ns: 1e9 / rate_hz of [daemon] (trajreplay --rate)"),
+    S(capacity, "capacity", UNSIGNED, 0, 1, 1 << 20, NULL, "N",
+      "waypoints buffered at most (>= lookahead + fragment)"),
+    S(max_gap_s, "max-gap", DOUBLE, 0, 1e-6, 1e9, NULL, "S",
+      "a longer interval ends the trajectory at rest, s"),
+    S(max_abs_m, "max-abs", DOUBLE, 0, 1e-6, 1e12, NULL, "M",
+      "reject a waypoint with a |coordinate| above this, m"),
+    S(max_speed_m_s, "max-speed", DOUBLE, 0, 0, 1e9, NULL, "M_S",
+      "reject a higher implied speed, m/s (0 = no limit)"),
+    S(max_accel_m_s2, "max-accel", DOUBLE, 0, 0, 1e9, NULL, "M_S2",
+      "reject a higher implied acceleration, m/s^2 (0 = none)"),
+    S(max_segment_s, "max-segment", DOUBLE, 0, 1e-6, 1e9, NULL, "S",
+      "longest segment the stepper is trusted for, s"),
+    S(start_slack, "start-slack", UNSIGNED, 0, 0, ENGINE_FRAGMENT_MAX, NULL, "N",
+      "waypoints buffered beyond the solver's lookahead"),
+    S(smooth_window, "smooth-window", UNSIGNED, 0, 4, ENGINE_SMOOTH_WINDOW_MAX, NULL, "W",
+      "method smooth: waypoints per least-squares fit"),
+    S(smooth_ctrl, "smooth-ctrl", UNSIGNED, 0, 4, ENGINE_SMOOTH_WINDOW_MAX, NULL, "C",
+      "method smooth: control points per fit (<= smooth-window)"),
+};
+
+const size_t engine_settings_count = sizeof engine_settings / sizeof engine_settings[0];
+
+const engine_setting_t *engine_setting_find(const char *name)
+{
+    for (size_t i = 0; i < engine_settings_count; i++)
+        if (strcmp(engine_settings[i].name, name) == 0)
+            return &engine_settings[i];
+    return NULL;
+}
+
+const engine_setting_t *engine_setting_find_option(const char *opt)
+{
+    for (size_t i = 0; i < engine_settings_count; i++)
+        if (engine_settings[i].option && strcmp(engine_settings[i].option, opt) == 0)
+            return &engine_settings[i];
+    return NULL;
+}
+
+static int why_set(char *why, size_t whylen, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static int why_set(char *why, size_t whylen, const char *fmt, ...)
+{
+    if (why && whylen) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(why, whylen, fmt, ap);
+        va_end(ap);
+    }
+    return -ENGINE_ECONFIG;
+}
+
+static void *field(const engine_setting_t *s, engine_config_t *cfg)
+{
+    return (char *)cfg + s->offset;
+}
+
+static const void *cfield(const engine_setting_t *s, const engine_config_t *cfg)
+{
+    return (const char *)cfg + s->offset;
+}
+
+static int parse_double(const engine_setting_t *s, const char *text, double *out, char *why,
+                        size_t whylen)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(text, &end);
+    if (end == text || *end || errno == ERANGE || !isfinite(v) || v < s->min || v > s->max)
+        return why_set(why, whylen, "expected a number in [%g, %g], got '%s'", s->min, s->max,
+                       text);
+    *out = v;
+    return 0;
+}
+
+static int parse_unsigned(const engine_setting_t *s, const char *text, unsigned *out,
+                          char *why, size_t whylen)
+{
+    char *end;
+    errno = 0;
+    int base = (text[0] == '0' && (text[1] == 'x' || text[1] == 'X')) ? 16 : 10;
+    long long v = strtoll(text, &end, base);
+    if (end == text || *end || errno == ERANGE || (double)v < s->min || (double)v > s->max)
+        return why_set(why, whylen, "expected an integer in [%.0f, %.0f], got '%s'", s->min,
+                       s->max, text);
+    *out = (unsigned)v;
+    return 0;
+}
+
+static int parse_enum(const engine_setting_t *s, const char *text, int *out, char *why,
+                      size_t whylen)
+{
+    char list[160] = "";
+    for (int i = 0; s->names[i]; i++) {
+        if (strcmp(text, s->names[i]) == 0) {
+            *out = i;
+            return 0;
+        }
+        size_t n = strlen(list);
+        snprintf(list + n, sizeof list - n, "%s%s", i ? ", " : "", s->names[i]);
+    }
+    return why_set(why, whylen, "expected one of %s, got '%s'", list, text);
+}
+
+static int parse_bool(const char *text, int *out, char *why, size_t whylen)
+{
+    static const char *const yes[] = {"yes", "true", "on", "1", NULL};
+    static const char *const no[] = {"no", "false", "off", "0", NULL};
+    for (int i = 0; yes[i]; i++) {
+        if (strcasecmp(text, yes[i]) == 0) {
+            *out = 1;
+            return 0;
+        }
+        if (strcasecmp(text, no[i]) == 0) {
+            *out = 0;
+            return 0;
+        }
+    }
+    return why_set(why, whylen, "expected yes or no, got '%s'", text);
+}
+
+/* "x,y,z" (blanks allowed around the numbers) into three finite numbers. */
+static int parse_vec3(const char *text, double v[ENGINE_AXES], char *why, size_t whylen)
+{
+    const char *s = text;
+    double r[ENGINE_AXES];
+    for (int i = 0; i < ENGINE_AXES; i++) {
+        char *end;
+        errno = 0;
+        r[i] = strtod(s, &end);
+        if (end == s || errno == ERANGE || !isfinite(r[i]))
+            return why_set(why, whylen, "expected three numbers x,y,z, got '%s'", text);
+        while (*end == ' ' || *end == '\t')
+            end++;
+        if (i < ENGINE_AXES - 1) {
+            if (*end != ',')
+                return why_set(why, whylen, "expected three numbers x,y,z, got '%s'", text);
+            s = end + 1;
+        } else if (*end) {
+            return why_set(why, whylen, "expected three numbers x,y,z, got '%s'", text);
+        }
+    }
+    memcpy(v, r, sizeof r);
+    return 0;
+}
+
+int engine_setting_parse(const engine_setting_t *s, const char *text, engine_config_t *cfg,
+                         char *why, size_t whylen)
+{
+    if (s->flags & ENGINE_SETTING_DERIVED)
+        return why_set(why, whylen, "%s is set by the program, not given", s->name);
+    switch (s->type) {
+    case ENGINE_SETTING_DOUBLE:
+        return parse_double(s, text, field(s, cfg), why, whylen);
+    case ENGINE_SETTING_UNSIGNED:
+        return parse_unsigned(s, text, field(s, cfg), why, whylen);
+    case ENGINE_SETTING_ENUM: {
+        int v = 0, rc = parse_enum(s, text, &v, why, whylen);
+        if (rc == 0) /* every engine enum is int-sized (checked by the unit test) */
+            memcpy(field(s, cfg), &v, sizeof v);
+        return rc;
+    }
+    case ENGINE_SETTING_BOOL:
+        return parse_bool(text, field(s, cfg), why, whylen);
+    case ENGINE_SETTING_VEC3:
+        return parse_vec3(text, field(s, cfg), why, whylen);
+    case ENGINE_SETTING_INT64:
+    default:
+        return why_set(why, whylen, "%s cannot be parsed", s->name);
+    }
+}
+
+/* Shortest of %.15g .. %.17g that reads back to the same double. */
+static int format_double(double v, char *buf, size_t len)
+{
+    char tmp[40];
+    for (int prec = 15; prec <= 17; prec++) {
+        snprintf(tmp, sizeof tmp, "%.*g", prec, v);
+        if (prec == 17 || memcmp(&(double){strtod(tmp, NULL)}, &v, sizeof v) == 0)
+            break;
+    }
+    return snprintf(buf, len, "%s", tmp);
+}
+
+const char *engine_setting_enum_name(const engine_setting_t *s, int v)
+{
+    if (s->type != ENGINE_SETTING_ENUM || v < 0)
+        return "?";
+    for (int i = 0; s->names[i]; i++)
+        if (i == v)
+            return s->names[i];
+    return "?";
+}
+
+int engine_setting_format(const engine_setting_t *s, const engine_config_t *cfg, char *buf,
+                          size_t len)
+{
+    const void *p = cfield(s, cfg);
+    switch (s->type) {
+    case ENGINE_SETTING_DOUBLE:
+        return format_double(*(const double *)p, buf, len);
+    case ENGINE_SETTING_UNSIGNED:
+        return snprintf(buf, len, "%u", *(const unsigned *)p);
+    case ENGINE_SETTING_ENUM: {
+        int v;
+        memcpy(&v, p, sizeof v);
+        return snprintf(buf, len, "%s", engine_setting_enum_name(s, v));
+    }
+    case ENGINE_SETTING_BOOL:
+        return snprintf(buf, len, "%s", *(const int *)p ? "yes" : "no");
+    case ENGINE_SETTING_VEC3: {
+        const double *v = p;
+        char a[3][40];
+        for (int i = 0; i < ENGINE_AXES; i++)
+            format_double(v[i], a[i], sizeof a[i]);
+        return snprintf(buf, len, "%s,%s,%s", a[0], a[1], a[2]);
+    }
+    case ENGINE_SETTING_INT64:
+        return snprintf(buf, len, "%lld", (long long)*(const int64_t *)p);
+    default:
+        return snprintf(buf, len, "?");
+    }
+}
+
+int engine_setting_same(const engine_setting_t *s, const engine_config_t *a,
+                        const engine_config_t *b)
+{
+    return memcmp(cfield(s, a), cfield(s, b), s->size) == 0;
+}
+
+int engine_config_same(const engine_config_t *a, const engine_config_t *b)
+{
+    for (size_t i = 0; i < engine_settings_count; i++)
+        if (!engine_setting_same(&engine_settings[i], a, b))
+            return 0;
+    return 1;
+}
