@@ -243,7 +243,8 @@ static void report_ready(trajd_t *d, char code)
     }
 }
 
-int main(int argc, char **argv)
+/* The command line into d, *foreground and *check; -1 to go on, else the exit code. */
+static int parse_args(int argc, char **argv, trajd_t *d, int *foreground, const char **check)
 {
     static const struct option opts[] = {
         {"config", required_argument, NULL, 'c'},
@@ -253,22 +254,17 @@ int main(int argc, char **argv)
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
     };
-    trajd_t d = {.conf_path = TRAJD_DEFAULT_CONF, .sig_fd = -1, .status_fd = -1,
-                 .watchdog_fd = -1, .ready_fd = -1};
-    int foreground = 0, c, rc = 0;
-    const char *check = NULL;
-    char err[1024];
-
+    int c;
     while ((c = getopt_long(argc, argv, "c:fVh", opts, NULL)) != -1) {
         switch (c) {
         case 'c':
-            d.conf_path = optarg;
+            d->conf_path = optarg;
             break;
         case 'f':
-            foreground = 1;
+            *foreground = 1;
             break;
         case 'C':
-            check = optarg;
+            *check = optarg;
             break;
         case 'V':
             printf("trajd %s\n", TRAJD_VERSION);
@@ -286,30 +282,30 @@ int main(int argc, char **argv)
         usage(stderr);
         return EX_USAGE;
     }
-    if (check) {
-        cfg_t *cfg;
-        if (cfg_load(check, &cfg, err, sizeof err) < 0) {
-            fprintf(stderr, "%s\n", err);
-            return EX_CONFIG;
-        }
-        printf("%s: ok, %u object(s):", check, cfg->nobj);
-        for (unsigned i = 0; i < cfg->nobj; i++)
-            printf(" %s", cfg->obj[i].name);
-        printf("\n");
-        cfg_free(cfg);
-        return 0;
-    }
+    return -1;
+}
 
-    if (cfg_load(d.conf_path, &d.cfg, err, sizeof err) < 0) {
-        log_msg(LOG_ERR, "%s", err);
+/* --check-config FILE: the exit code. */
+static int check_config(const char *path)
+{
+    char err[1024];
+    cfg_t *cfg;
+    if (cfg_load(path, &cfg, err, sizeof err) < 0) {
+        fprintf(stderr, "%s\n", err);
         return EX_CONFIG;
     }
-    log_set_level(d.cfg->daemon.log_level);
-    if (!foreground && detach(&d) < 0) {
-        log_msg(LOG_ERR, "cannot detach: %s", strerror(errno));
-        return EX_OSERR;
-    }
+    printf("%s: ok, %u object(s):", path, cfg->nobj);
+    for (unsigned i = 0; i < cfg->nobj; i++)
+        printf(" %s", cfg->obj[i].name);
+    printf("\n");
+    cfg_free(cfg);
+    return 0;
+}
 
+/* The event loop, with SIGHUP/SIGTERM/SIGINT delivered to it by a signalfd:
+ * 0 or an exit code (logged). */
+static int open_loop(trajd_t *d)
+{
     /* A reader that goes away must not kill us mid-write: EPIPE on stdout
      * ends the daemon cleanly with CORE_EXIT_EPIPE (csv_transport.h). */
     signal(SIGPIPE, SIG_IGN);
@@ -321,46 +317,78 @@ int main(int argc, char **argv)
     sigprocmask(SIG_BLOCK, &mask, NULL);
 
     int e = 0;
-    d.loop = loop_new(&e);
-    if (!d.loop) {
+    d->loop = loop_new(&e);
+    if (!d->loop) {
         log_msg(LOG_ERR, "event loop: %s", strerror(-e));
-        rc = EX_OSERR;
-        goto out;
+        return EX_OSERR;
     }
-    d.sig_fd = signalfd(-1, &mask, SFD_NONBLOCK | SFD_CLOEXEC);
-    if (d.sig_fd < 0 || loop_add(d.loop, d.sig_fd, EPOLLIN, on_signal, &d) < 0) {
+    d->sig_fd = signalfd(-1, &mask, SFD_NONBLOCK | SFD_CLOEXEC);
+    if (d->sig_fd < 0 || loop_add(d->loop, d->sig_fd, EPOLLIN, on_signal, d) < 0) {
         log_msg(LOG_ERR, "signalfd: %s", strerror(errno));
-        rc = EX_OSERR;
-        goto out;
+        return EX_OSERR;
     }
-    d.stats.start_mono_ns = core_mono_ns();
-    if (start_core(&d, d.cfg, err, sizeof err) < 0) {
+    return 0;
+}
+
+/* Start the core and the housekeeping timers, tell systemd and the waiting
+ * parent, run until the stop policy ends the loop: the exit code. */
+static int run(trajd_t *d)
+{
+    char err[1024];
+    d->stats.start_mono_ns = core_mono_ns();
+    if (start_core(d, d->cfg, err, sizeof err) < 0) {
         log_msg(LOG_ERR, "cannot start: %s", err);
-        rc = EX_UNAVAILABLE;
-        goto out;
+        return EX_UNAVAILABLE;
     }
-    d.status_fd = loop_timer_add(d.loop, 1000000000, on_second, &d);
+    d->status_fd = loop_timer_add(d->loop, 1000000000, on_second, d);
     uint64_t wd_usec = 0;
     if (sd_watchdog_enabled(0, &wd_usec) > 0 && wd_usec > 0)
-        d.watchdog_fd = loop_timer_add(d.loop, (int64_t)wd_usec * 1000 / 2, on_watchdog, &d);
+        d->watchdog_fd = loop_timer_add(d->loop, (int64_t)wd_usec * 1000 / 2, on_watchdog, d);
     log_msg(LOG_INFO, "started: %u object(s) at %.6g Hz, speed %.6g, config %s",
-            d.cfg->nobj, d.cfg->daemon.rate_hz, d.cfg->daemon.speed, d.conf_path);
+            d->cfg->nobj, d->cfg->daemon.rate_hz, d->cfg->daemon.speed, d->conf_path);
     sd_notify(0, "READY=1");
-    notify_status(&d);
-    report_ready(&d, 0);
+    notify_status(d);
+    report_ready(d, 0);
 
-    rc = loop_run(d.loop);
+    int rc = loop_run(d->loop);
     if (rc < 0) {
         log_msg(LOG_ERR, "event loop: %s", strerror(-rc));
         rc = EX_OSERR;
     }
-    if (d.core) {
+    if (d->core) {
         char line[1024];
-        core_stats_roll(d.core);
-        core_summary(d.core, line, sizeof line);
+        core_stats_roll(d->core);
+        core_summary(d->core, line, sizeof line);
         log_msg(LOG_INFO, "exit: %s", line);
     }
-out:
+    return rc;
+}
+
+int main(int argc, char **argv)
+{
+    trajd_t d = {.conf_path = TRAJD_DEFAULT_CONF, .sig_fd = -1, .status_fd = -1,
+                 .watchdog_fd = -1, .ready_fd = -1};
+    int foreground = 0, rc;
+    const char *check = NULL;
+    char err[1024];
+
+    if ((rc = parse_args(argc, argv, &d, &foreground, &check)) >= 0)
+        return rc;
+    if (check)
+        return check_config(check);
+
+    if (cfg_load(d.conf_path, &d.cfg, err, sizeof err) < 0) {
+        log_msg(LOG_ERR, "%s", err);
+        return EX_CONFIG;
+    }
+    log_set_level(d.cfg->daemon.log_level);
+    if (!foreground && detach(&d) < 0) {
+        log_msg(LOG_ERR, "cannot detach: %s", strerror(errno));
+        return EX_OSERR;
+    }
+    rc = open_loop(&d);
+    if (rc == 0)
+        rc = run(&d);
     report_ready(&d, (char)(rc ? rc : EX_SOFTWARE));
     core_close(d.core); /* outputs drain here: lines left over count as lost */
     if (d.stats.exit_code == CORE_EXIT_EPIPE) {

@@ -74,101 +74,132 @@ static int parse_row(char *line, double *v, int max)
     return n;
 }
 
-/* Read the grid; 0 or -1 with a message. */
-static int read_grid(const char *path, double dx, double dy, grid_t *gr)
+/* The rows of the open file f: *indexed = 1 for "i,j,x,y,z" rows (5 numbers
+ * each), 0 for a matrix (*ncols numbers each), -1 if there was no row.
+ * 0 or -1 with a message; *rows is the caller's to free either way. */
+static int read_rows(FILE *f, const char *path, double **rows, size_t *nrows, size_t *ncols,
+                     int *indexed)
 {
-    FILE *f = strcmp(path, "-") ? fopen(path, "r") : stdin;
     char line[1 << 16];
-    double *rows = NULL, v[GRID_MAX];
-    size_t nrows = 0, cap = 0, ncols = 0, lineno = 0, i;
-    int indexed = -1, rc = -1;
-    unsigned char *seen = NULL;
+    double v[GRID_MAX];
+    size_t cap = 0, lineno = 0;
 
-    if (!f) {
-        fprintf(stderr, "%s: %s\n", path, strerror(errno));
-        return -1;
-    }
     while (fgets(line, sizeof line, f)) {
         int n;
         lineno++;
         if (line[0] == '#' || line[strspn(line, " \t\r\n")] == '\0')
             continue;
-        if (indexed < 0) {
-            indexed = strncmp(line, "i,j,x,y,z", 9) == 0;
-            if (indexed)
+        if (*indexed < 0) {
+            *indexed = strncmp(line, "i,j,x,y,z", 9) == 0;
+            if (*indexed)
                 continue;
         }
-        n = parse_row(line, v, indexed ? 5 : GRID_MAX);
-        if (n <= 0 || (indexed && n != 5)) {
+        n = parse_row(line, v, *indexed ? 5 : GRID_MAX);
+        if (n <= 0 || (*indexed && n != 5)) {
             fprintf(stderr, "%s:%zu: expected %s\n", path, lineno,
-                    indexed ? "i,j,x,y,z" : "comma-separated numbers");
-            goto out;
+                    *indexed ? "i,j,x,y,z" : "comma-separated numbers");
+            return -1;
         }
-        if (!indexed) {
-            if (ncols == 0)
-                ncols = (size_t)n;
-            if ((size_t)n != ncols) {
-                fprintf(stderr, "%s:%zu: %d values, first row had %zu\n", path, lineno, n, ncols);
-                goto out;
+        if (!*indexed) {
+            if (*ncols == 0)
+                *ncols = (size_t)n;
+            if ((size_t)n != *ncols) {
+                fprintf(stderr, "%s:%zu: %d values, first row had %zu\n", path, lineno, n, *ncols);
+                return -1;
             }
         }
-        if (nrows == cap) {
+        if (*nrows == cap) {
             size_t nc = cap ? 2 * cap : 64;
-            double *r = realloc(rows, nc * (indexed ? 5 : ncols) * sizeof *r);
+            double *r = realloc(*rows, nc * (*indexed ? 5 : *ncols) * sizeof *r);
             if (!r) {
                 fprintf(stderr, "%s: out of memory\n", path);
-                goto out;
+                return -1;
             }
-            rows = r;
+            *rows = r;
             cap = nc;
         }
-        memcpy(rows + nrows * (indexed ? 5 : ncols), v, (size_t)n * sizeof *v);
-        nrows++;
+        memcpy(*rows + *nrows * (*indexed ? 5 : *ncols), v, (size_t)n * sizeof *v);
+        (*nrows)++;
     }
-    if (indexed == 1) {
-        size_t m = 0, n = 0;
-        for (i = 0; i < nrows; i++) {
-            double a = rows[i * 5], b = rows[i * 5 + 1];
-            if (a < 0 || b < 0 || fabs(a - floor(a)) > 0.0 || fabs(b - floor(b)) > 0.0 || a >= GRID_MAX || b >= GRID_MAX) {
-                fprintf(stderr, "%s: row %zu: bad grid index\n", path, i + 1);
-                goto out;
-            }
-            if ((size_t)a + 1 > m) m = (size_t)a + 1;
-            if ((size_t)b + 1 > n) n = (size_t)b + 1;
+    return 0;
+}
+
+/* The grid from "i,j,x,y,z" rows: every (i, j) of an m x n grid exactly once. */
+static int grid_from_indexed(const double *rows, size_t nrows, const char *path, grid_t *gr)
+{
+    size_t m = 0, n = 0, i;
+    unsigned char *seen = NULL;
+    int rc = -1;
+    for (i = 0; i < nrows; i++) {
+        double a = rows[i * 5], b = rows[i * 5 + 1];
+        if (a < 0 || b < 0 || fabs(a - floor(a)) > 0.0 || fabs(b - floor(b)) > 0.0 || a >= GRID_MAX || b >= GRID_MAX) {
+            fprintf(stderr, "%s: row %zu: bad grid index\n", path, i + 1);
+            return -1;
         }
-        if (m * n != nrows) {
-            fprintf(stderr, "%s: %zu points do not fill a %zu x %zu grid\n", path, nrows, m, n);
-            goto out;
-        }
-        gr->g = malloc(m * n * DIM * sizeof *gr->g);
-        seen = calloc(m * n, 1);
-        if (!gr->g || !seen)
-            goto out;
-        for (i = 0; i < nrows; i++) {
-            size_t k = (size_t)rows[i * 5] * n + (size_t)rows[i * 5 + 1];
-            if (seen[k]++) {
-                fprintf(stderr, "%s: grid point (%g, %g) given twice\n", path, rows[i * 5], rows[i * 5 + 1]);
-                goto out;
-            }
-            memcpy(gr->g + k * DIM, rows + i * 5 + 2, DIM * sizeof *gr->g);
-        }
-        gr->m = m;
-        gr->n = n;
-    } else {
-        size_t r, c;
-        gr->g = malloc(nrows * ncols * DIM * sizeof *gr->g);
-        if (!gr->g)
-            goto out;
-        for (r = 0; r < nrows; r++)
-            for (c = 0; c < ncols; c++) {
-                double *p = gr->g + (r * ncols + c) * DIM;
-                p[0] = (double)c * dx;
-                p[1] = (double)r * dy;
-                p[2] = rows[r * ncols + c];
-            }
-        gr->m = nrows;
-        gr->n = ncols;
+        if ((size_t)a + 1 > m) m = (size_t)a + 1;
+        if ((size_t)b + 1 > n) n = (size_t)b + 1;
     }
+    if (m * n != nrows) {
+        fprintf(stderr, "%s: %zu points do not fill a %zu x %zu grid\n", path, nrows, m, n);
+        return -1;
+    }
+    gr->g = malloc(m * n * DIM * sizeof *gr->g);
+    seen = calloc(m * n, 1);
+    if (!gr->g || !seen)
+        goto out;
+    for (i = 0; i < nrows; i++) {
+        size_t k = (size_t)rows[i * 5] * n + (size_t)rows[i * 5 + 1];
+        if (seen[k]++) {
+            fprintf(stderr, "%s: grid point (%g, %g) given twice\n", path, rows[i * 5], rows[i * 5 + 1]);
+            goto out;
+        }
+        memcpy(gr->g + k * DIM, rows + i * 5 + 2, DIM * sizeof *gr->g);
+    }
+    gr->m = m;
+    gr->n = n;
+    rc = 0;
+out:
+    free(seen);
+    return rc;
+}
+
+/* The grid from a matrix of heights: x = column * dx, y = row * dy. */
+static int grid_from_matrix(const double *rows, size_t nrows, size_t ncols, double dx, double dy,
+                            grid_t *gr)
+{
+    size_t r, c;
+    gr->g = malloc(nrows * ncols * DIM * sizeof *gr->g);
+    if (!gr->g)
+        return -1;
+    for (r = 0; r < nrows; r++)
+        for (c = 0; c < ncols; c++) {
+            double *p = gr->g + (r * ncols + c) * DIM;
+            p[0] = (double)c * dx;
+            p[1] = (double)r * dy;
+            p[2] = rows[r * ncols + c];
+        }
+    gr->m = nrows;
+    gr->n = ncols;
+    return 0;
+}
+
+/* Read the grid; 0 or -1 with a message. */
+static int read_grid(const char *path, double dx, double dy, grid_t *gr)
+{
+    FILE *f = strcmp(path, "-") ? fopen(path, "r") : stdin;
+    double *rows = NULL;
+    size_t nrows = 0, ncols = 0;
+    int indexed = -1, rc = -1;
+
+    if (!f) {
+        fprintf(stderr, "%s: %s\n", path, strerror(errno));
+        return -1;
+    }
+    if (read_rows(f, path, &rows, &nrows, &ncols, &indexed) < 0)
+        goto out;
+    if (indexed == 1 ? grid_from_indexed(rows, nrows, path, gr) < 0
+                     : grid_from_matrix(rows, nrows, ncols, dx, dy, gr) < 0)
+        goto out;
     if (gr->m < 2 || gr->n < 2) {
         fprintf(stderr, "%s: need a grid of at least 2 x 2 points\n", path);
         goto out;
@@ -178,7 +209,6 @@ out:
     if (f != stdin)
         fclose(f);
     free(rows);
-    free(seen);
     return rc;
 }
 
@@ -284,6 +314,56 @@ static int write_svg(const char *path, const grid_t *gr, const double *smp,
     return 0;
 }
 
+/* Samples of surface s on steps per cell into smp (su x sv, sv = (n - 1) *
+ * steps + 1) by forward differences patch by patch; shared edges are written
+ * by both neighbours (the later one wins; they agree to rounding).  patch
+ * holds (steps + 1)^2 points. */
+static int sample(const surf_t *s, const grid_t *gr, size_t steps, size_t sv, double *patch,
+                  double *smp)
+{
+    size_t i, j, a, b;
+    for (i = 0; i + 1 < gr->m; i++)
+        for (j = 0; j + 1 < gr->n; j++) {
+            if (surf_patch_fd(s, i, j, (unsigned)steps, (unsigned)steps, patch) < 0)
+                return -1;
+            for (a = 0; a <= steps; a++)
+                for (b = 0; b <= steps; b++)
+                    memcpy(smp + ((i * steps + a) * sv + j * steps + b) * DIM,
+                           patch + (a * (steps + 1) + b) * DIM, DIM * sizeof *smp);
+        }
+    /* Grid nodes exactly: the interpolation condition, not FD rounding. */
+    for (i = 0; i < gr->m; i++)
+        for (j = 0; j < gr->n; j++)
+            memcpy(smp + ((i * steps) * sv + j * steps) * DIM, gr->g + (i * gr->n + j) * DIM,
+                   DIM * sizeof *smp);
+    return 0;
+}
+
+/* The samples CSV to path ("-": stdout); 0 or -1 with a message. */
+static int write_samples(const char *path, const double *smp, size_t su, size_t sv, long steps)
+{
+    FILE *out = strcmp(path, "-") ? fopen(path, "w") : stdout;
+    size_t a, b;
+    if (!out) {
+        fprintf(stderr, "%s: %s\n", path, strerror(errno));
+        return -1;
+    }
+    fprintf(out, "u,v,x,y,z\n");
+    for (a = 0; a < su; a++)
+        for (b = 0; b < sv; b++) {
+            const double *p = smp + (a * sv + b) * DIM;
+            fprintf(out, "%.17g,%.17g,%.17g,%.17g,%.17g\n", (double)a / steps,
+                    (double)b / steps, p[0], p[1], p[2]);
+        }
+    if (out != stdout && fclose(out) != 0) {
+        fprintf(stderr, "%s: %s\n", path, strerror(errno));
+        return -1;
+    }
+    if (out == stdout)
+        fflush(stdout);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     const char *out_path = "-", *svg_path = NULL;
@@ -291,9 +371,8 @@ int main(int argc, char **argv)
     long steps = 8;
     grid_t gr = {0, 0, NULL};
     double *ctrl = NULL, *scratch = NULL, *smp = NULL, *patch = NULL;
-    size_t su, sv, i, j, a, b;
+    size_t su, sv;
     surf_t s;
-    FILE *out = NULL;
     int opt, rc = 1;
 
     while ((opt = getopt(argc, argv, "n:o:s:x:y:z:h")) != -1) {
@@ -335,48 +414,13 @@ int main(int argc, char **argv)
         goto out;
     }
     rc = 1;
-    /* Forward differences patch by patch; shared edges are written by both
-     * neighbours (the later one wins; they agree to rounding). */
-    for (i = 0; i + 1 < gr.m; i++)
-        for (j = 0; j + 1 < gr.n; j++) {
-            if (surf_patch_fd(&s, i, j, (unsigned)steps, (unsigned)steps, patch) < 0)
-                goto out;
-            for (a = 0; a <= (size_t)steps; a++)
-                for (b = 0; b <= (size_t)steps; b++)
-                    memcpy(smp + ((i * steps + a) * sv + j * steps + b) * DIM,
-                           patch + (a * (steps + 1) + b) * DIM, DIM * sizeof *smp);
-        }
-    /* Grid nodes exactly: the interpolation condition, not FD rounding. */
-    for (i = 0; i < gr.m; i++)
-        for (j = 0; j < gr.n; j++)
-            memcpy(smp + ((i * steps) * sv + j * steps) * DIM, gr.g + (i * gr.n + j) * DIM,
-                   DIM * sizeof *smp);
-    out = strcmp(out_path, "-") ? fopen(out_path, "w") : stdout;
-    if (!out) {
-        fprintf(stderr, "%s: %s\n", out_path, strerror(errno));
+    if (sample(&s, &gr, (size_t)steps, sv, patch, smp) < 0 ||
+        write_samples(out_path, smp, su, sv, steps) < 0)
         goto out;
-    }
-    fprintf(out, "u,v,x,y,z\n");
-    for (a = 0; a < su; a++)
-        for (b = 0; b < sv; b++) {
-            const double *p = smp + (a * sv + b) * DIM;
-            fprintf(out, "%.17g,%.17g,%.17g,%.17g,%.17g\n", (double)a / steps,
-                    (double)b / steps, p[0], p[1], p[2]);
-        }
-    if (out != stdout && fclose(out) != 0) {
-        out = NULL;
-        fprintf(stderr, "%s: %s\n", out_path, strerror(errno));
-        goto out;
-    }
-    if (out == stdout)
-        fflush(stdout);
-    out = NULL;
     if (svg_path && write_svg(svg_path, &gr, smp, su, sv, zscale) < 0)
         goto out;
     rc = 0;
 out:
-    if (out && out != stdout)
-        fclose(out);
     free(gr.g);
     free(ctrl);
     free(scratch);

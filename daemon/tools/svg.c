@@ -297,6 +297,53 @@ static void draw_events(FILE *f, const svg_plot_t *p, const axis_t *ax, const ax
     fputs("</g>\n", f);
 }
 
+/* The page, its title and the legend. */
+static void draw_header(FILE *f, const svg_plot_t *p, const char *title)
+{
+    fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
+            "viewBox=\"0 0 %.0f %.0f\">\n", PAGE_W, PAGE_H, PAGE_W, PAGE_H);
+    fputs("<title>", f);
+    xml_escape(f, title ? title : "trajreplay");
+    fputs("</title>\n<rect width=\"100%\" height=\"100%\" fill=\"#f8f8f8\"/>\n", f);
+    fprintf(f, "<text id=\"title\" x=\"%.1f\" y=\"22\" font-family=\"sans-serif\" "
+            "font-size=\"15\">", MARGIN_L);
+    xml_escape(f, title ? title : "trajreplay");
+    fputs("</text>\n", f);
+
+    /* Legend. */
+    fprintf(f, "<g id=\"legend\" font-family=\"sans-serif\" font-size=\"12\">"
+            "<circle cx=\"%.1f\" cy=\"38\" r=\"3\" fill=\"#1f5fbf\"/>"
+            "<text x=\"%.1f\" y=\"42\">waypoints (%zu)</text>"
+            "<line x1=\"%.1f\" y1=\"38\" x2=\"%.1f\" y2=\"38\" stroke=\"#d62728\" stroke-width=\"2\"/>"
+            "<text x=\"%.1f\" y=\"42\">setpoints</text>"
+            "<path d=\"M%.1f 35 l6 6 m0 -6 l-6 6\" stroke=\"#ff7f0e\" stroke-width=\"2\"/>"
+            "<text x=\"%.1f\" y=\"42\">rejected</text>"
+            "<path d=\"M%.1f 34 l4 8 h-8 z\" fill=\"#9467bd\"/>"
+            "<text x=\"%.1f\" y=\"42\">underrun (%zu)</text></g>\n",
+            MARGIN_L + 4, MARGIN_L + 12, p->nw, MARGIN_L + 160, MARGIN_L + 180,
+            MARGIN_L + 186, MARGIN_L + 270, MARGIN_L + 282, MARGIN_L + 360, MARGIN_L + 370,
+            p->ev_total);
+}
+
+/* Accepted waypoints as dots (at most about SVG_WAYPOINTS_DRAWN of them),
+ * every rejected one as a cross. */
+static void draw_waypoints(FILE *f, const svg_plot_t *p, const axis_t *ax, const axis_t *ay)
+{
+    size_t every = p->nw > SVG_WAYPOINTS_DRAWN ? (p->nw + SVG_WAYPOINTS_DRAWN - 1) / SVG_WAYPOINTS_DRAWN : 1;
+    fputs("<g id=\"waypoints\" fill=\"#1f5fbf\">", f);
+    for (size_t i = 0; i < p->nw; i += every)
+        if (p->w[i].accepted)
+            fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"2.5\"/>", ax_map(ax, p->w[i].x_m),
+                    ax_map(ay, p->w[i].y_m));
+    fputs("</g>\n<g id=\"rejected\" stroke=\"#ff7f0e\" stroke-width=\"1.5\">", f);
+    for (size_t i = 0; i < p->nw; i++)
+        if (!p->w[i].accepted)
+            fprintf(f, "<path d=\"M%.1f %.1f l6 6 m0 -6 l-6 6\"/>", ax_map(ax, p->w[i].x_m) - 3,
+                    ax_map(ay, p->w[i].y_m) - 3);
+    fputs("</g>\n", f);
+}
+
 int svg_plot_write(const svg_plot_t *p, FILE *f, const char *title)
 {
     size_t n = nsamples(p);
@@ -330,30 +377,7 @@ int svg_plot_write(const svg_plot_t *p, FILE *f, const char *title)
     axis_t st = {tlo, thi, MARGIN_L, MARGIN_L + bw};
     axis_t sv = {vlo, vhi, sp_top + SPEED_H, sp_top};
 
-    fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
-            "viewBox=\"0 0 %.0f %.0f\">\n", PAGE_W, PAGE_H, PAGE_W, PAGE_H);
-    fputs("<title>", f);
-    xml_escape(f, title ? title : "trajreplay");
-    fputs("</title>\n<rect width=\"100%\" height=\"100%\" fill=\"#f8f8f8\"/>\n", f);
-    fprintf(f, "<text id=\"title\" x=\"%.1f\" y=\"22\" font-family=\"sans-serif\" "
-            "font-size=\"15\">", MARGIN_L);
-    xml_escape(f, title ? title : "trajreplay");
-    fputs("</text>\n", f);
-
-    /* Legend. */
-    fprintf(f, "<g id=\"legend\" font-family=\"sans-serif\" font-size=\"12\">"
-            "<circle cx=\"%.1f\" cy=\"38\" r=\"3\" fill=\"#1f5fbf\"/>"
-            "<text x=\"%.1f\" y=\"42\">waypoints (%zu)</text>"
-            "<line x1=\"%.1f\" y1=\"38\" x2=\"%.1f\" y2=\"38\" stroke=\"#d62728\" stroke-width=\"2\"/>"
-            "<text x=\"%.1f\" y=\"42\">setpoints</text>"
-            "<path d=\"M%.1f 35 l6 6 m0 -6 l-6 6\" stroke=\"#ff7f0e\" stroke-width=\"2\"/>"
-            "<text x=\"%.1f\" y=\"42\">rejected</text>"
-            "<path d=\"M%.1f 34 l4 8 h-8 z\" fill=\"#9467bd\"/>"
-            "<text x=\"%.1f\" y=\"42\">underrun (%zu)</text></g>\n",
-            MARGIN_L + 4, MARGIN_L + 12, p->nw, MARGIN_L + 160, MARGIN_L + 180,
-            MARGIN_L + 186, MARGIN_L + 270, MARGIN_L + 282, MARGIN_L + 360, MARGIN_L + 370,
-            p->ev_total);
+    draw_header(f, p, title);
 
     char lx[64], ly[64];
     snprintf(lx, sizeof lx, "%s (m)", p->geographic ? "east" : "x");
@@ -362,18 +386,7 @@ int svg_plot_write(const svg_plot_t *p, FILE *f, const char *title)
     fprintf(f, "<clipPath id=\"plan-clip\"><rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" "
             "height=\"%.1f\"/></clipPath>\n", px.p0, py.p1, bw, bh);
     fputs("<g clip-path=\"url(#plan-clip)\">\n", f);
-    size_t every = p->nw > SVG_WAYPOINTS_DRAWN ? (p->nw + SVG_WAYPOINTS_DRAWN - 1) / SVG_WAYPOINTS_DRAWN : 1;
-    fputs("<g id=\"waypoints\" fill=\"#1f5fbf\">", f);
-    for (size_t i = 0; i < p->nw; i += every)
-        if (p->w[i].accepted)
-            fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"2.5\"/>", ax_map(&px, p->w[i].x_m),
-                    ax_map(&py, p->w[i].y_m));
-    fputs("</g>\n<g id=\"rejected\" stroke=\"#ff7f0e\" stroke-width=\"1.5\">", f);
-    for (size_t i = 0; i < p->nw; i++)
-        if (!p->w[i].accepted)
-            fprintf(f, "<path d=\"M%.1f %.1f l6 6 m0 -6 l-6 6\"/>", ax_map(&px, p->w[i].x_m) - 3,
-                    ax_map(&py, p->w[i].y_m) - 3);
-    fputs("</g>\n", f);
+    draw_waypoints(f, p, &px, &py);
     draw_path(f, p, &px, &py, 0, "curve", "#d62728");
     draw_events(f, p, &px, &py, 0);
     fputs("</g>\n", f);
