@@ -2,10 +2,12 @@
 #include "can_logfile.h"
 
 #include <errno.h>
+#include <inttypes.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "candump.h"
+#include "log.h"
 
 typedef struct {
     int64_t ts_us;
@@ -23,53 +25,105 @@ struct can_logfile {
     can_logfile_stats_t st;
 };
 
+/* One bad line: counted; the first CAN_LOGFILE_REPORT_MAX are logged with
+ * name:line and the reason, the rest summed up at the end of the load. */
+static void bad_line(can_logfile_t *l, const char *name, uint64_t lineno, const char *why)
+{
+    if (!l->st.first_bad_line)
+        l->st.first_bad_line = lineno;
+    if (l->st.bad_lines++ < CAN_LOGFILE_REPORT_MAX)
+        log_msg(LOG_WARNING, "can: %s:%" PRIu64 ": %s: line not replayed", name, lineno, why);
+}
+
+static int add_frame(can_logfile_t *l, const candump_line_t *cl)
+{
+    if (l->n == l->cap) {
+        size_t cap = l->cap ? 2 * l->cap : 256;
+        can_logfile_rec_t *r = realloc(l->rec, cap * sizeof *r);
+        if (!r)
+            return -1;
+        l->rec = r;
+        l->cap = cap;
+    }
+    l->rec[l->n].ts_us = cl->ts_us;
+    l->rec[l->n].f = cl->frame;
+    l->n++;
+    return 0;
+}
+
+/* One whole line (len bytes, '\n' included if present). */
+static int load_line(can_logfile_t *l, const char *name, uint64_t lineno, const char *line,
+                     size_t len)
+{
+    candump_line_t cl;
+    l->st.lines++;
+    size_t i = 0;
+    while (i < len && (line[i] == ' ' || line[i] == '\t'))
+        i++;
+    if (i == len || line[i] == '#' || line[i] == '\n' || line[i] == '\r') {
+        l->st.comments++; /* a comment of any length is still only a comment */
+        return 0;
+    }
+    if (len > CAN_LOGFILE_LINE_MAX) {
+        /* refused whole: parsing a cut-off piece could deliver a frame (a command) */
+        char why[64];
+        snprintf(why, sizeof why, "longer than %d bytes", CAN_LOGFILE_LINE_MAX);
+        bad_line(l, name, lineno, why);
+        return 0;
+    }
+    if (memchr(line, '\0', len)) {
+        bad_line(l, name, lineno, "NUL byte (binary file?)");
+        return 0;
+    }
+    int rc = candump_parse_line(line, &cl);
+    if (rc == -CANDUMP_ESKIP) {
+        l->st.comments++;
+        return 0;
+    }
+    if (rc < 0) {
+        bad_line(l, name, lineno, candump_strerror(rc));
+        return 0;
+    }
+    return add_frame(l, &cl);
+}
+
+int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, size_t errlen)
+{
+    char *line = NULL;
+    size_t cap = 0;
+    ssize_t len;
+    uint64_t lineno = 0;
+    int rc = 0;
+    while ((len = getline(&line, &cap, fp)) >= 0) {
+        if (load_line(l, name, ++lineno, line, (size_t)len) < 0) {
+            snprintf(err, errlen, "%s: out of memory", name);
+            rc = -1;
+            break;
+        }
+    }
+    free(line);
+    if (rc == 0 && ferror(fp)) {
+        snprintf(err, errlen, "%s: read error", name);
+        rc = -1;
+    }
+    if (l->st.bad_lines > CAN_LOGFILE_REPORT_MAX)
+        log_msg(LOG_WARNING, "can: %s: %" PRIu64 " lines not replayed in all (first at line %"
+                PRIu64 ", %d reported)", name, l->st.bad_lines, l->st.first_bad_line,
+                CAN_LOGFILE_REPORT_MAX);
+    l->st.frames_in = l->n;
+    return rc;
+}
+
 static int load(can_logfile_t *l, const char *path, char *err, size_t errlen)
 {
     FILE *fp = fopen(path, "r");
-    char line[512];
-    int lineno = 0;
     if (!fp) {
         snprintf(err, errlen, "%s: %s", path, strerror(errno));
         return -1;
     }
-    while (fgets(line, sizeof line, fp)) {
-        candump_line_t cl;
-        lineno++;
-        l->st.lines++;
-        int rc = candump_parse_line(line, &cl);
-        if (rc == -CANDUMP_ESKIP) {
-            l->st.comments++;
-            continue;
-        }
-        if (rc < 0) {
-            l->st.bad_lines++;
-            if (!l->st.first_bad_line)
-                l->st.first_bad_line = lineno;
-            continue;
-        }
-        if (l->n == l->cap) {
-            size_t cap = l->cap ? 2 * l->cap : 256;
-            can_logfile_rec_t *r = realloc(l->rec, cap * sizeof *r);
-            if (!r) {
-                snprintf(err, errlen, "%s: out of memory", path);
-                fclose(fp);
-                return -1;
-            }
-            l->rec = r;
-            l->cap = cap;
-        }
-        l->rec[l->n].ts_us = cl.ts_us;
-        l->rec[l->n].f = cl.frame;
-        l->n++;
-    }
-    int bad = ferror(fp);
+    int rc = can_logfile_load(l, fp, path, err, errlen);
     fclose(fp);
-    if (bad) {
-        snprintf(err, errlen, "%s: read error", path);
-        return -1;
-    }
-    l->st.frames_in = l->n;
-    return 0;
+    return rc;
 }
 
 can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const char *ifname,

@@ -8,6 +8,12 @@
  * Input timing: frame k is due at engine time start_ns + (ts_k - ts_0); the
  * whole file is read at can_logfile_open (never in the tick).  Frames with ids
  * that are not ours are delivered too: can_port counts them as foreign.
+ *
+ * Lines are read whole, of any length (getline).  A line that is not a
+ * candump frame, holds a NUL byte or is longer than CAN_LOGFILE_LINE_MAX is
+ * refused as a whole (never cut: the tail of a long comment must not become
+ * a frame), counted in bad_lines and logged as a warning "can: file:line:
+ * why", the first CAN_LOGFILE_REPORT_MAX of them, then one summary line.
  */
 #ifndef TRAJD_CANLOG_H
 #define TRAJD_CANLOG_H
@@ -20,14 +26,20 @@
 typedef struct {
     uint64_t lines;           /* lines read */
     uint64_t comments;        /* '#' and blank lines skipped */
-    uint64_t bad_lines;       /* lines that are not candump frames (skipped) */
-    int first_bad_line;       /* line number of the first, 0 if none */
+    uint64_t bad_lines;       /* lines refused (skipped): not a frame, too long, NUL byte */
+    uint64_t first_bad_line;  /* line number of the first, 0 if none */
     uint64_t frames_in;       /* frames loaded */
     uint64_t frames_out;      /* frames written */
     uint64_t write_errors;
 } can_logfile_stats_t;
 
 typedef struct can_logfile can_logfile_t;
+
+/* Longest candump line accepted, bytes: a CAN FD frame with a 29-bit id,
+ * 64 data bytes, a 20-digit stamp and a 15-character interface is ~190. */
+#define CAN_LOGFILE_LINE_MAX 1024
+/* Bad lines logged one by one per load (then one summary line). */
+#define CAN_LOGFILE_REPORT_MAX 5
 
 /*
  * Open.  in_path: candump log to replay (NULL: no input); out_path: file to
@@ -37,6 +49,14 @@ typedef struct can_logfile can_logfile_t;
  */
 can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const char *ifname,
                       int64_t start_ns, char *err, size_t errlen);
+
+/*
+ * Append the frames of a candump log read from fp to l's input (can_logfile_open
+ * does this for in_path; tests and the fuzz target use fmemopen).  name is
+ * used in messages.  Returns 0, or -1 with a message in err (out of memory,
+ * read error); bad lines are not errors (see above).
+ */
+int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, size_t errlen);
 
 /* Flush and close; NULL is a no-op. */
 void can_logfile_close(can_logfile_t *l);
