@@ -439,9 +439,13 @@ static int run_open(run_t *run, const opts_t *o)
         fprintf(stderr, "trajreplay: %s\n", err);
         return EXIT_INPUT;
     }
+    for (size_t i = 0; i < run->trk.nreports; i++)
+        fprintf(stderr, "trajreplay: skipped %s\n", run->trk.reports[i]);
     if (run->trk.skipped)
-        fprintf(stderr, "trajreplay: skipped %zu bad line%s, the first: %s\n", run->trk.skipped,
-                run->trk.skipped == 1 ? "" : "s", err);
+        fprintf(stderr, "trajreplay: skipped %zu bad line%s in all%s, the first: %s\n",
+                run->trk.skipped, run->trk.skipped == 1 ? "" : "s",
+                run->trk.skipped > run->trk.nreports ? " (the first ones listed above)" : "",
+                err);
     run->e = engine_new(&o->cfg, &eng_err);
     if (!run->e) {
         fprintf(stderr, "trajreplay: engine: %s\n", engine_strerror(eng_err));

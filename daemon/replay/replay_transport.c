@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "core.h"
+#include "log.h"
 #include "replay.h"
 
 static void obj_default(void *ocfg)
@@ -30,6 +31,8 @@ static int obj_key(void *ocfg, const cfg_kv_t *kv, char *why, size_t wl)
             rc = -CFG_EVALUE; /* the two lists disagree: track.h wins */
         return rc;
     }
+    if (strcmp(kv->key, "skip_bad") == 0)
+        return cfg_get_bool(kv, &r->skip_bad, why, wl);
     if (strcmp(kv->key, "start_s") == 0)
         return cfg_get_double(kv, 0, 1e6, &r->start_s, why, wl);
     return -CFG_EUNKNOWN;
@@ -40,6 +43,7 @@ static int obj_same(const void *a, const void *b)
 {
     const replay_transport_obj_cfg_t *x = a, *y = b;
     return strcmp(x->path, y->path) == 0 && x->format == y->format &&
+           x->skip_bad == y->skip_bad &&
            memcmp(&x->start_s, &y->start_s, sizeof x->start_s) == 0;
 }
 
@@ -67,12 +71,18 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
         if (r->loaded)
             continue;
         char err[512];
-        if (track_load(r->path, r->format, &r->trk, err, sizeof err) < 0) {
+        if (track_load_opts(r->path, r->format, r->skip_bad ? TRACK_SKIP_BAD : 0, &r->trk, err,
+                            sizeof err) < 0) {
             *line = r->line;
             snprintf(why, wl, "object '%s' replay.track: %s", o->name, err);
             return -CFG_EVALUE;
         }
         r->loaded = 1;
+        for (size_t k = 0; k < r->trk.nreports; k++)
+            log_msg(LOG_WARNING, "object '%s': replay: skipped %s", o->name, r->trk.reports[k]);
+        if (r->trk.skipped > r->trk.nreports)
+            log_msg(LOG_WARNING, "object '%s': replay: skipped %zu bad lines in all", o->name,
+                    r->trk.skipped);
         if (r->trk.n == 0) {
             *line = r->line;
             snprintf(why, wl, "object '%s' replay.track: %s has no waypoints", o->name,

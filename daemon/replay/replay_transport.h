@@ -7,7 +7,9 @@
  *
  * Object keys ([object.NAME]):
  *   replay.track   = FILE      track file, relative to the config's directory (required)
- *   replay.format  = auto      auto | xyz | latlon | gpx
+ *   replay.format  = auto      auto | xyz | latlon | gpx | path
+ *   replay.skip_bad = no       yes: a malformed line is skipped, counted and
+ *                              logged (warning "file:line: what"), not an error
  *   replay.start_s = 0         engine time (s after start) at which the first waypoint is due
  * The track is loaded when the config is checked (start, reload, --check-config),
  * so a missing or bad file rejects the config with its own file:line message.
@@ -22,6 +24,7 @@ typedef struct {
     char path[PATH_MAX];
     track_format_t format;
     double start_s;
+    int skip_bad;       /* TRACK_SKIP_BAD */
     int line;           /* line of replay.track, for messages */
     track_t trk;        /* loaded by check() */
     int loaded;

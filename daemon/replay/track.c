@@ -43,6 +43,7 @@ void track_free(track_t *trk)
         return;
     free(trk->wp);
     free(trk->line);
+    free(trk->reports);
     memset(trk, 0, sizeof *trk);
 }
 
@@ -97,6 +98,9 @@ static int rows_to_track(track_loader_t *L, int geographic, track_t *trk)
     trk->n = L->n;
     trk->geographic = geographic;
     trk->skipped = L->skipped;
+    trk->reports = L->reports;
+    trk->nreports = L->nreports;
+    L->reports = NULL;
     return 0;
 }
 
@@ -137,6 +141,7 @@ int track_parse(const char *name, const char *buf, size_t len,
     if (rc == 0)
         trk->format = got;
     free(L.rows);
+    free(L.reports);
     if (rc) {
         track_free(trk);
         return -1;

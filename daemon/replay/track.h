@@ -23,8 +23,11 @@
  * Extra columns are ignored.  With an explicit format (XYZ or LATLON) and a
  * first line made of numbers, the columns are taken by position instead:
  * t,x,y[,z] or t,lat,lon[,alt].  Times are kept as written.
+ * Every data row has exactly as many fields as the header (or as the first
+ * row, by position): a missing or an extra field is a bad line, never a
+ * guess (a row "0,1,2" under "t,x,y,z" is not z = 0).
  *
- * Altitude / z: NaN, an empty field or a missing column give z = 0 ("0 up").
+ * Altitude / z: NaN, an empty field or no such column give z = 0 ("0 up").
  * Geographic rows are converted on the WGS84 ellipsoid (lib/util/geo.h) to east,
  * north, up about the first row; a row without altitude gets its east/north
  * at the origin's altitude and up = 0.  If the first row has no altitude the
@@ -67,6 +70,10 @@ typedef enum {
 
 /* Largest file accepted (the whole file is read into memory). */
 #define TRACK_FILE_MAX_BYTES (1024L * 1024L * 1024L)
+/* Skipped lines whose message is kept in track_t.reports (the count is in
+ * skipped): the caller prints them, so a log says which lines were lost. */
+#define TRACK_REPORT_MAX 10
+#define TRACK_REPORT_LEN 256
 /* Longest CSV line accepted, bytes. */
 #define TRACK_LINE_MAX 4096
 
@@ -78,6 +85,8 @@ typedef struct {
     int geographic;           /* 1 if converted from lat/lon */
     double lat0_deg, lon0_deg, alt0_m; /* ENU origin (first point) when geographic */
     size_t skipped;           /* bad lines skipped (TRACK_SKIP_BAD) */
+    size_t nreports;          /* messages in reports[] (at most TRACK_REPORT_MAX) */
+    char (*reports)[TRACK_REPORT_LEN]; /* "file:line: what" of the first skipped lines */
     size_t segments;          /* GPX <trkseg> elements seen (0 for CSV) */
 } track_t;
 

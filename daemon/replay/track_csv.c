@@ -73,7 +73,8 @@ typedef struct {
     int col[COL_COUNT];   /* field index of each column, -1 if absent */
     int have_header;
     int geographic;
-    int needed;           /* fields a data row must have */
+    int needed;           /* fields a data row must have (that of the header) */
+    int positional;       /* columns by position: rows have as many as the first */
 } csv_t;
 
 /* A line that cannot be split or read: before the header it is fatal (the
@@ -87,17 +88,10 @@ static int csv_refuse(csv_t *c, unsigned long lineno, const char *what)
     return track_loader_bad(c->L, lineno, "%s", what);
 }
 
-/* The columns a data row needs follow from the format and the header. */
+/* Whether rows hold lat/lon follows from the format. */
 static void csv_columns_set(csv_t *c)
 {
     c->geographic = c->fmt == TRACK_FMT_LATLON;
-    int a = c->geographic ? COL_LAT : COL_X, b = c->geographic ? COL_LON : COL_Y;
-    int needed = c->col[COL_T];
-    if (c->col[a] > needed)
-        needed = c->col[a];
-    if (c->col[b] > needed)
-        needed = c->col[b];
-    c->needed = needed + 1;
 }
 
 /* The first non-blank line.  Returns 1 if it is data (positional columns),
@@ -117,7 +111,14 @@ static int csv_header(csv_t *c, char **field, int nf, unsigned long lineno)
         col[geo ? COL_LAT : COL_X] = 1;
         col[geo ? COL_LON : COL_Y] = 2;
         col[geo ? COL_ALT : COL_Z] = 3;
-        csv_columns_set(c);
+        if (nf < 3 || nf > 4) {
+            track_loader_fatal(c->L, lineno, "%d fields: by position a row is t,%s[,%s]", nf,
+                               geo ? "lat,lon" : "x,y", geo ? "alt" : "z");
+            return -1;
+        }
+        c->positional = 1;
+        c->needed = nf;
+        c->geographic = geo;
         return 1;
     }
     for (int i = 0; i < nf; i++) {
@@ -144,6 +145,7 @@ static int csv_header(csv_t *c, char **field, int nf, unsigned long lineno)
         return -1;
     }
     csv_columns_set(c);
+    c->needed = nf;
     return 0;
 }
 
@@ -156,8 +158,10 @@ static int csv_row(csv_t *c, char **field, int nf, unsigned long lineno)
     double t, va, vb, vc = NAN;
     int empty;
 
-    if (nf < c->needed)
-        return track_loader_bad(L, lineno, "%d columns, %d needed", nf, c->needed);
+    if (nf != c->needed)
+        return track_loader_bad(L, lineno, "%d fields, the %s has %d (%s)", nf,
+                                c->positional ? "first row" : "header", c->needed,
+                                nf < c->needed ? "field missing" : "extra field");
     if (track_field_num(field[c->col[COL_T]], &t, NULL) || !isfinite(t))
         return track_loader_bad(L, lineno, "time '%s' is not a finite number",
                                 track_field_show(field[c->col[COL_T]]).s);

@@ -44,6 +44,13 @@ int track_loader_bad(track_loader_t *L, unsigned long line, const char *fmt, ...
             vmsg(L->err, L->errlen, L->name, line, fmt, ap);
             va_end(ap);
         }
+        if (!L->reports)
+            L->reports = calloc(TRACK_REPORT_MAX, sizeof *L->reports);
+        if (L->reports && L->nreports < TRACK_REPORT_MAX) {
+            va_start(ap, fmt);
+            vmsg(L->reports[L->nreports++], TRACK_REPORT_LEN, L->name, line, fmt, ap);
+            va_end(ap);
+        } /* out of memory for a message: the count is still right */
         return 0;
     }
     if (!L->failed) {

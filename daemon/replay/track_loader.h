@@ -31,6 +31,8 @@ typedef struct {
     track_row_t *rows;
     size_t n, cap;
     size_t skipped;
+    char (*reports)[TRACK_REPORT_LEN]; /* TRACK_REPORT_MAX, allocated on the first skip */
+    size_t nreports;
     int geographic;   /* rows hold lat, lon, alt (set by the parser) */
     int failed;       /* a fatal error was recorded in err */
     int oom;
@@ -41,7 +43,8 @@ typedef struct {
 void track_loader_fatal(track_loader_t *L, unsigned long line, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
-/* A bad line: fatal unless TRACK_SKIP_BAD, then counted (first message kept).
+/* A bad line: fatal unless TRACK_SKIP_BAD, then counted (first message kept
+ * in err, the first TRACK_REPORT_MAX in reports).
  * Returns 0 if the caller may go on, -1 if loading must stop. */
 int track_loader_bad(track_loader_t *L, unsigned long line, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));

@@ -7,84 +7,122 @@
 
 #include "path.h"
 
-/*
- * Parse a path text and expand it straight into trk (no row_t stage: the
- * waypoints are metric already).  Waypoints of element k are those between
- * the expansions of elements 0..k-1 and 0..k, which gives line[].
- */
-int track_path_parse(track_loader_t *L, const char *buf, size_t len, track_t *trk)
-{
-    path_elem_t *el = NULL;
-    uint32_t *el_line = NULL;
-    size_t nel = 0, cap = 0, pos = 0, nw = 0, k, prev = 0;
-    unsigned long lineno = 0;
-    int rc = -1;
+typedef struct {
+    path_elem_t *el;
+    uint32_t *el_line;   /* source line of each element */
+    size_t n, cap;
+} elems_t;
 
+static int elems_grow(elems_t *E)
+{
+    if (E->n < E->cap)
+        return 0;
+    size_t nc = E->cap ? 2 * E->cap : 64;
+    path_elem_t *ne = realloc(E->el, nc * sizeof *E->el);
+    if (!ne)
+        return -1;
+    E->el = ne;
+    uint32_t *nl = realloc(E->el_line, nc * sizeof *E->el_line);
+    if (!nl)
+        return -1;
+    E->el_line = nl;
+    E->cap = nc;
+    return 0;
+}
+
+/* Every line into an element; a bad line is an error with its line number
+ * (never skipped: a path is a program, not a log). */
+static int read_elems(track_loader_t *L, const char *buf, size_t len, elems_t *E)
+{
+    size_t pos = 0;
+    unsigned long lineno = 0;
     while (pos < len) {
         char line[PATH_LINE_MAX + 1];
-        size_t e = pos, ll;
-        int prc;
+        size_t e = pos;
         while (e < len && buf[e] != '\n')
             e++;
-        ll = e - pos;
+        size_t ll = e - pos;
         lineno++;
         if (ll > PATH_LINE_MAX) {
             track_loader_fatal(L, lineno, "line longer than %d characters", PATH_LINE_MAX);
-            goto out;
+            return -1;
+        }
+        if (memchr(buf + pos, '\0', ll)) {
+            track_loader_fatal(L, lineno, "NUL byte (binary file?)");
+            return -1;
         }
         memcpy(line, buf + pos, ll);
         line[ll] = '\0';
         pos = e + 1;
-        if (nel == cap) {
-            size_t nc = cap ? 2 * cap : 64;
-            path_elem_t *ne = realloc(el, nc * sizeof *el);
-            uint32_t *nl = ne ? realloc(el_line, nc * sizeof *el_line) : NULL;
-            if (ne)
-                el = ne;
-            if (!ne || !nl) {
-                track_loader_fatal(L, 0, "out of memory");
-                goto out;
-            }
-            el_line = nl;
-            cap = nc;
+        if (elems_grow(E) < 0) {
+            track_loader_fatal(L, 0, "out of memory");
+            return -1;
         }
-        prc = path_parse_line(line, &el[nel]);
+        int prc = path_parse_line(line, &E->el[E->n]);
         if (prc < 0) {
             track_loader_fatal(L, lineno, "%s", path_strerror(prc));
-            goto out;
+            return -1;
         }
-        if (el[nel].kind != PATH_NONE)
-            el_line[nel++] = (uint32_t)lineno;
+        if (E->el[E->n].kind != PATH_NONE)
+            E->el_line[E->n++] = lineno > UINT32_MAX ? UINT32_MAX : (uint32_t)lineno;
     }
-    if ((rc = path_expand(el, nel, NULL, 0, &nw)) < 0) {
-        track_loader_fatal(L, 0, "%s", path_strerror(rc));
-        goto out;
+    return 0;
+}
+
+/* Expand (counting first), with an expansion error at its element's line. */
+static int expand(track_loader_t *L, const elems_t *E, size_t *el_end, track_t *trk)
+{
+    size_t nw = 0, bad = 0;
+    int rc = path_expand_ex(E->el, E->n, NULL, 0, &nw, el_end, &bad);
+    if (rc < 0) {
+        track_loader_fatal(L, E->el_line[bad], "%s", path_strerror(rc));
+        return -1;
     }
-    rc = -1;
     if (nw == 0) {
         track_loader_fatal(L, 0, "no waypoints");
-        goto out;
+        return -1;
     }
     trk->wp = calloc(nw, sizeof *trk->wp);
     trk->line = calloc(nw, sizeof *trk->line);
     if (!trk->wp || !trk->line) {
         track_loader_fatal(L, 0, "out of memory");
-        goto out;
+        return -1;
     }
-    if (path_expand(el, nel, trk->wp, nw, &nw) < 0)
-        goto out;
-    for (k = 1; k <= nel; k++) {
-        size_t upto = 0, i;
-        (void)path_expand(el, k, NULL, 0, &upto);
-        for (i = prev; i < upto && i < nw; i++)
-            trk->line[i] = el_line[k - 1];
-        prev = upto;
+    if (path_expand(E->el, E->n, trk->wp, nw, &nw) < 0) {
+        track_loader_fatal(L, 0, "path expansion changed between count and fill");
+        return -1;
     }
     trk->n = nw;
+    return 0;
+}
+
+/*
+ * Parse a path text and expand it straight into trk (no row stage: the
+ * waypoints are metric already).  Element i made waypoints el_end[i-1] ..
+ * el_end[i]-1, which gives line[].
+ */
+int track_path_parse(track_loader_t *L, const char *buf, size_t len, track_t *trk)
+{
+    elems_t E = {0};
+    size_t *el_end = NULL;
+    int rc = -1;
+    if (read_elems(L, buf, len, &E) < 0)
+        goto out;
+    el_end = calloc(E.n ? E.n : 1, sizeof *el_end);
+    if (!el_end) {
+        track_loader_fatal(L, 0, "out of memory");
+        goto out;
+    }
+    if (expand(L, &E, el_end, trk) < 0)
+        goto out;
+    for (size_t k = 0, i = 0; k < E.n; k++)
+        for (; i < el_end[k] && i < trk->n; i++)
+            trk->line[i] = E.el_line[k];
     trk->format = TRACK_FMT_PATH;
     rc = 0;
 out:
-    free(el);
-    free(el_line);
+    free(E.el);
+    free(E.el_line);
+    free(el_end);
     return rc;
 }

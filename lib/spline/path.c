@@ -26,6 +26,8 @@ const char *path_strerror(int err)
     case PATH_ENOSTART: return "path: element before 'start'";
     case PATH_EFULL: return "path: more waypoints than fit";
     case PATH_ETWICE: return "path: 'start' given twice";
+    case PATH_ETIME: return "path: time beyond 1e9 s or not increasing (wait, start time, "
+                            "or a step too short for the time's resolution)";
     default: return "unknown path error";
     }
 }
@@ -86,7 +88,7 @@ int path_parse_line(const char *line, path_elem_t *el)
         el->kind = PATH_START;
         memcpy(el->xyz_m, v, sizeof el->xyz_m);
         el->t_s = n == 5 ? v[3] : 0.0;
-        return 0;
+        return fabs(el->t_s) <= PATH_TIME_MAX_S ? 0 : -PATH_ETIME;
     }
     if (!strcasecmp(f[0], "speed") || !strcasecmp(f[0], "step") || !strcasecmp(f[0], "wait")) {
         if (n != 2 || nums(f + 1, 1, v) < 0)
@@ -96,6 +98,8 @@ int path_parse_line(const char *line, path_elem_t *el)
         if (!(v[0] > 0.0))
             return -PATH_ERANGE;
         el->value = v[0];
+        if (el->kind == PATH_WAIT && v[0] > PATH_TIME_MAX_S)
+            return -PATH_ETIME;
         return 0;
     }
     if (!strcasecmp(f[0], "line")) {
@@ -135,12 +139,15 @@ int path_parse_line(const char *line, path_elem_t *el)
 typedef struct {
     double pos[3], t, speed, step;
     int started;
+    int bad_time;    /* a waypoint's time was beyond PATH_TIME_MAX_S or not increasing */
     size_t n, cap;
     engine_waypoint_t *out;
 } walker_t;
 
 static void emit(walker_t *w, const double *p, double t)
 {
+    if (!(fabs(t) <= PATH_TIME_MAX_S) || (w->n > 0 && !(t > w->t)))
+        w->bad_time = 1;
     if (w->out && w->n < w->cap) {
         engine_waypoint_t *o = &w->out[w->n];
         o->t_s = t;
@@ -225,6 +232,12 @@ static int do_arc(walker_t *w, const path_elem_t *el)
 int path_expand(const path_elem_t *el, size_t nel, engine_waypoint_t *out,
                 size_t cap, size_t *n_out)
 {
+    return path_expand_ex(el, nel, out, cap, n_out, NULL, NULL);
+}
+
+int path_expand_ex(const path_elem_t *el, size_t nel, engine_waypoint_t *out,
+                   size_t cap, size_t *n_out, size_t *el_end, size_t *bad_el)
+{
     walker_t w;
     size_t i;
     int rc = 0;
@@ -275,6 +288,12 @@ int path_expand(const path_elem_t *el, size_t nel, engine_waypoint_t *out,
             rc = -PATH_ERANGE;
             break;
         }
+        if (rc == 0 && w.bad_time)
+            rc = -PATH_ETIME;
+        if (rc < 0 && bad_el)
+            *bad_el = i;
+        if (rc == 0 && el_end)
+            el_end[i] = w.n;
     }
     if (n_out)
         *n_out = w.n;

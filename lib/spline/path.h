@@ -16,6 +16,12 @@
  *   circle CX CY R A0 DIR  a full turn from angle A0, DIR = ccw or cw
  *   wait S                 stay S seconds (one waypoint at the end)
  *
+ * Times (start T, wait S, and every waypoint's time) stay within
+ * |t| <= PATH_TIME_MAX_S and strictly increase from one waypoint to the
+ * next: "wait 1e300" or a step too short for the resolution of double at
+ * that time would otherwise give waypoints all at one time, which a
+ * consumer rejects as duplicates, losing the rest of the path silently.
+ *
  * Each moving element of length L becomes ceil(L / (V S)) equal steps
  * (at least one), so waypoints are at most S apart in time and the speed is
  * exactly V along the element.  Arc waypoints are points of a NURBS circle
@@ -39,7 +45,12 @@ enum path_error {
     PATH_ENOSTART = 3, /* a moving element before any 'start' */
     PATH_EFULL = 4,    /* more waypoints than the caller's capacity */
     PATH_ETWICE = 5,   /* a second 'start' (time would run backwards) */
+    PATH_ETIME = 6,    /* a time beyond PATH_TIME_MAX_S, or not increasing */
 };
+
+/* Largest |time| in a path, s (about 31.7 years).  Double resolution there
+ * is 1.2e-7 s, so steps down to a microsecond still increase exactly. */
+#define PATH_TIME_MAX_S 1e9
 
 /* Longest line path_parse_line accepts (characters). */
 #define PATH_LINE_MAX 256
@@ -69,7 +80,8 @@ typedef struct {
 
 /*
  * Parse one line of the text form into el (PATH_NONE for blank/comment).
- * Returns 0, -PATH_ESYNTAX, -PATH_ERANGE.
+ * Returns 0, -PATH_ESYNTAX, -PATH_ERANGE, -PATH_ETIME (start T or wait S
+ * beyond PATH_TIME_MAX_S).
  */
 int path_parse_line(const char *line, path_elem_t *el);
 
@@ -77,9 +89,20 @@ int path_parse_line(const char *line, path_elem_t *el);
  * Expand elements into waypoints (seq = 1, 2, ...).  With out == NULL only
  * counts.  *n_out receives the number of waypoints (also on -PATH_EFULL:
  * the number that would be needed).
- * Returns 0, -PATH_ENOSTART, -PATH_ETWICE, -PATH_ERANGE, -PATH_EFULL.
+ * Returns 0, -PATH_ENOSTART, -PATH_ETWICE, -PATH_ERANGE, -PATH_ETIME,
+ * -PATH_EFULL.
  */
 int path_expand(const path_elem_t *el, size_t nel, engine_waypoint_t *out,
                 size_t cap, size_t *n_out);
+
+/*
+ * As path_expand, and also: el_end (NULL or nel entries) receives for each
+ * element the number of waypoints made up to and including it (so element
+ * i made waypoints el_end[i-1] .. el_end[i]-1); on an error *bad_el (may be
+ * NULL) is the index of the element that failed (for a message with its
+ * line), and el_end is filled up to it.
+ */
+int path_expand_ex(const path_elem_t *el, size_t nel, engine_waypoint_t *out,
+                   size_t cap, size_t *n_out, size_t *el_end, size_t *bad_el);
 
 #endif

@@ -122,12 +122,49 @@ static void test_parse_errors(void **state)
     assert_non_null(path_strerror(-PATH_EFULL));
 }
 
+/* Given times a consumer cannot use (issue 11: "wait 1e300" made every
+ * later waypoint a duplicate in time, dropped without a word), then they are
+ * refused: at parse for a start time or a wait beyond PATH_TIME_MAX_S, at
+ * expansion (with the failing element's index) for a step that no longer
+ * advances a double time, and el_end maps waypoints to their elements. */
+static void test_time_limits(void **state)
+{
+    (void)state;
+    path_elem_t el[4];
+    size_t end[4], bad = 99, n = 0;
+    assert_int_equal(path_parse_line("wait 1e300", &el[0]), -PATH_ETIME);
+    assert_int_equal(path_parse_line("start 0 0 0 -1e300", &el[0]), -PATH_ETIME);
+    assert_int_equal(path_parse_line("wait 1e9", &el[1]), 0);
+    assert_int_equal(path_parse_line("start 0 0 0 1e9", &el[0]), 0);
+    /* 1e9 + 1e9 is beyond the limit: the wait element (index 1) fails */
+    assert_int_equal(path_expand_ex(el, 2, NULL, 0, &n, end, &bad), -PATH_ETIME);
+    assert_int_equal(bad, 1);
+    /* at t = 1e8 s a 1e-12 s move does not change the double time */
+    assert_int_equal(path_parse_line("start 0 0 0 1e8", &el[0]), 0);
+    assert_int_equal(path_parse_line("speed 1e12", &el[1]), 0);
+    assert_int_equal(path_parse_line("line 1 0 0", &el[2]), 0);
+    bad = 99;
+    assert_int_equal(path_expand_ex(el, 3, NULL, 0, &n, end, &bad), -PATH_ETIME);
+    assert_int_equal(bad, 2);
+    /* the same at t = 0 is fine; el_end counts waypoints per element */
+    assert_int_equal(path_parse_line("start 0 0 0", &el[0]), 0);
+    assert_int_equal(path_parse_line("line 3 0 0", &el[2]), 0);
+    assert_int_equal(path_parse_line("wait 2", &el[3]), 0);
+    assert_int_equal(path_expand_ex(el, 4, NULL, 0, &n, end, &bad), 0);
+    assert_int_equal(n, 3);
+    assert_int_equal(end[0], 1);
+    assert_int_equal(end[1], 1);
+    assert_int_equal(end[2], 2);
+    assert_int_equal(end[3], 3);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_line_arc_circle),
         cmocka_unit_test(test_arc_join),
         cmocka_unit_test(test_parse_errors),
+        cmocka_unit_test(test_time_limits),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

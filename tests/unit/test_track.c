@@ -121,6 +121,11 @@ static void test_csv_positional(void **state)
     assert_int_equal(parse("p.csv", "0,1,2,3\n", TRACK_FMT_AUTO, 0, &t, err, sizeof err), -1);
     assert_non_null(strstr(err, "p.csv:1: no header line"));
     assert_null(t.wp);
+    /* by position, every row has as many fields as the first (issue 11) */
+    assert_int_equal(parse("p.csv", "0,1,2,3\n1,2,3\n", TRACK_FMT_XYZ, 0, &t, err, sizeof err), -1);
+    assert_non_null(strstr(err, "p.csv:2: 3 fields, the first row has 4 (field missing)"));
+    assert_int_equal(parse("p.csv", "0,1,2,3,4\n", TRACK_FMT_XYZ, 0, &t, err, sizeof err), -1);
+    assert_non_null(strstr(err, "p.csv:1: 5 fields: by position a row is t,x,y[,z]"));
 }
 
 /* Given the first point of visnjan, when loaded as latlon, then the second
@@ -155,10 +160,14 @@ static void test_csv_errors(void **state)
     (void)state;
     const struct bad_case cases[] = {
         {"t,x,y\n0,1,2\n1,abc,3\n", "bad.csv:3: x 'abc' is not a finite number"},
-        {"t,x,y\n0,1,2\n\n# c\n1,2\n", "bad.csv:5: 2 columns, 3 needed"},
+        {"t,x,y\n0,1,2\n\n# c\n1,2\n", "bad.csv:5: 2 fields, the header has 3 (field missing)"},
+        /* issue 11: a missing z is not z = 0, an extra field is not ignored */
+        {"t,x,y,z\n0,1,2,3\n1,2,3\n", "bad.csv:3: 3 fields, the header has 4 (field missing)"},
+        {"t,x,y\n0,1,2\n1,2,3,4\n", "bad.csv:3: 4 fields, the header has 3 (extra field)"},
+        {"t,x,y,z\n0,1,2,3,\n", "bad.csv:2: 5 fields, the header has 4 (extra field)"},
         {"t,x,y\n0,1,2\nnan,2,3\n", "bad.csv:3: time 'nan' is not a finite number"},
         {"t,x,y\n0,1,2\n1,inf,3\n", "bad.csv:3: x 'inf' is not a finite number"},
-        {"t,x,y\n0,1,2 3,2\n", "bad.csv:2: y '2 3' is not a finite number"},
+        {"t,x,y\n0,1,2 3\n", "bad.csv:2: y '2 3' is not a finite number"},
         {"t,lat,lon\n0,91,2\n", "bad.csv:2: latitude outside [-90, 90] degrees"},
         {"t,lat,lon,alt\n0,45,2,abc\n", "bad.csv:2: altitude 'abc' is not a number"},
         {"a,b,c\n1,2,3\n", "bad.csv:1: header has no time column"},
@@ -190,7 +199,8 @@ static void test_csv_wrong_format(void **state)
 }
 
 /* Given bad lines and TRACK_SKIP_BAD, when loaded, then the good rows load,
- * the bad ones are counted and the first is named. */
+ * the bad ones are counted, the first is named in err and every one is
+ * reported with its line (an extra field is a bad line too: issue 11). */
 static void test_csv_skip_bad(void **state)
 {
     (void)state;
@@ -198,11 +208,15 @@ static void test_csv_skip_bad(void **state)
     char err[256];
     const char *text = "t,x,y\n0,1,2\n1,zz,3\n2,3\n3,4,5\n4,5,6,7,8\n";
     assert_int_equal(parse("s.csv", text, TRACK_FMT_AUTO, TRACK_SKIP_BAD, &t, err, sizeof err), 0);
-    assert_int_equal(t.n, 3);
-    assert_int_equal(t.skipped, 2);
+    assert_int_equal(t.n, 2);
+    assert_int_equal(t.skipped, 3);
     assert_non_null(strstr(err, "s.csv:3:"));
-    assert_int_equal(t.line[2], 6);
-    assert_int_equal(t.wp[2].seq, 3);
+    assert_int_equal(t.nreports, 3);
+    assert_non_null(strstr(t.reports[0], "s.csv:3: x 'zz'"));
+    assert_non_null(strstr(t.reports[1], "s.csv:4: 2 fields, the header has 3 (field missing)"));
+    assert_non_null(strstr(t.reports[2], "s.csv:6: 5 fields, the header has 3 (extra field)"));
+    assert_int_equal(t.line[1], 5);
+    assert_int_equal(t.wp[1].seq, 2);
     track_free(&t);
     assert_int_equal(parse("s.csv", "t,x,y\nq,1,2\n", TRACK_FMT_AUTO, TRACK_SKIP_BAD, &t, err,
                            sizeof err), -1);
@@ -496,6 +510,47 @@ static void test_format_names(void **state)
     assert_string_equal(track_format_name(TRACK_FMT_XYZ), "xyz");
 }
 
+/* Given path programs that fail when expanded (issue 11: such errors had no
+ * line number although the README promises file:line), then the message
+ * names the line of the element that failed; a wait of 1e300 s is refused
+ * at its line instead of silently turning the rest into duplicates. */
+static void test_path_errors_have_lines(void **state)
+{
+    (void)state;
+    const struct bad_case cases[] = {
+        {"start 0 0 0\nspeed 1e-9\nline 100 0 0\n", "p.path:3: path: value out of range"},
+        {"start 0 0 0\nline 1 0 0\nwait 1e300\nline 2 0 0\n", "p.path:3: path: time beyond"},
+        {"# t\nstart 0 0 0 1e8\nspeed 1e12\n\nline 1 0 0\n", "p.path:5: path: time beyond"},
+        {"start 0 0 0\nstart 1 0 0\n", "p.path:2: path: 'start' given twice"},
+        {"line 1 0 0\n", "p.path:1: path: element before 'start'"},
+        {"start 0 0 0\nspeed 0\n", "p.path:2: path: value out of range"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        track_t t;
+        char err[256];
+        assert_int_equal(parse("p.path", cases[i].text, TRACK_FMT_AUTO, 0, &t, err, sizeof err), -1);
+        if (!strstr(err, cases[i].want))
+            fail_msg("case %zu: got '%s', want '%s'", i, err, cases[i].want);
+        assert_int_equal(t.n, 0);
+    }
+}
+
+/* Given a path, then each waypoint carries the line of the element that made it. */
+static void test_path_lines(void **state)
+{
+    (void)state;
+    track_t t;
+    char err[256];
+    assert_int_equal(parse("p.path", "start 0 0 0\n# c\nline 2 0 0\nwait 1\n", TRACK_FMT_AUTO, 0,
+                           &t, err, sizeof err), 0);
+    assert_int_equal(t.n, 4);
+    assert_int_equal(t.line[0], 1);
+    assert_int_equal(t.line[1], 3);
+    assert_int_equal(t.line[2], 3);
+    assert_int_equal(t.line[3], 4);
+    track_free(&t);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -503,6 +558,8 @@ int main(void)
         cmocka_unit_test(test_csv_xyz_comments),
         cmocka_unit_test(test_csv_optional_columns),
         cmocka_unit_test(test_csv_positional),
+        cmocka_unit_test(test_path_errors_have_lines),
+        cmocka_unit_test(test_path_lines),
         cmocka_unit_test(test_csv_latlon_origin),
         cmocka_unit_test(test_csv_errors),
         cmocka_unit_test(test_csv_wrong_format),
