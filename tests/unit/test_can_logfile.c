@@ -2,11 +2,7 @@
  * whole lines of any length, every refused line counted and reported with
  * file:line (issue 11: a 511-byte cut once turned the tail of a comment
  * into a CLEAR command). */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <stdio.h>
 #include <stdlib.h>
