@@ -61,6 +61,9 @@ const char *engine_state_name(engine_state_t s);
  * yet given): pos_m[] is NaN and is NOT a setpoint.  A subscriber must not
  * move; CiA 402 RPDOs are not sent at all while it is set. */
 #define ENGINE_SP_NO_POSITION 0x10u
+/* The safety monitor (lib/safety/safety.h) refused the engine's setpoint:
+ * this one holds the last position sent, and the object is faulted. */
+#define ENGINE_SP_FAULT       0x20u
 
 typedef struct {
     int64_t now_ns;                 /* the tick this setpoint is for (as passed in) */

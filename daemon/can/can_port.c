@@ -237,6 +237,8 @@ void can_port_setpoint(can_port_t *p, unsigned i, const engine_setpoint_t *sp)
 {
     if (i >= p->nobj)
         return;
+    if ((sp->flags & ENGINE_SP_FAULT) && !(p->obj[i].sp.flags & ENGINE_SP_FAULT))
+        event(&p->obj[i], CANPROTO_STERR_SAFETY); /* reported at once */
     p->obj[i].sp = *sp;
     p->obj[i].have_sp = 1;
 }
@@ -310,6 +312,8 @@ static void send_status(can_port_t *p, can_port_obj_t *o, const engine_status_t 
     memset(&st, 0, sizeof st);
     st.state = (uint8_t)es.state;
     st.flags = o->flags_since;
+    if (o->sp.flags & ENGINE_SP_FAULT)
+        st.flags |= CANPROTO_ST_FAULT;
     st.last_seq = es.last_seq;
     st.free = es.free;
     st.lost = (uint32_t)o->rx.st.lost;

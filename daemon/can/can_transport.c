@@ -295,7 +295,7 @@ static void hk_command(void *ctx, canproto_cmd_t cmd)
     switch (cmd) {
     case CANPROTO_CMD_FINISH: engine_finish(o->engine); break;
     case CANPROTO_CMD_STOP: engine_stop(o->engine); break;
-    case CANPROTO_CMD_CLEAR: engine_clear(o->engine); break;
+    case CANPROTO_CMD_CLEAR: obj_clear(o); break;
     case CANPROTO_CMD_RESET_COUNTERS: obj_reset_counters(o); break;
     default: break;
     }

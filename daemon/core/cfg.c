@@ -258,6 +258,7 @@ static void begin_section(parse_t *p, const char *name)
         memcpy(o->name, on, strlen(on) + 1);
         o->line = p->line;
         engine_config_default(&o->engine);
+        o->safety_max_step_m = o->safety_max_speed_m_s = o->safety_max_accel_m_s2 = -1;
         for (unsigned t = 0; transport_table[t]; t++)
             if (alloc_block(&o->tcfg[t], transport_table[t]->obj_cfg_size,
                             transport_table[t]->obj_cfg_default) < 0) {
@@ -441,6 +442,33 @@ static void transport_names(unsigned role, char *list, size_t len)
         }
 }
 
+/* The safety monitor's and the start position's keys (not engine settings). */
+static int key_obj_drive(cfg_obj_t *o, const cfg_kv_t *kv, char *why, size_t wl)
+{
+    if (strcmp(kv->key, "safety_max_step_m") == 0)
+        return cfg_get_double(kv, 0, 1e9, &o->safety_max_step_m, why, wl);
+    if (strcmp(kv->key, "safety_max_speed_m_s") == 0)
+        return cfg_get_double(kv, 0, 1e9, &o->safety_max_speed_m_s, why, wl);
+    if (strcmp(kv->key, "safety_max_accel_m_s2") == 0)
+        return cfg_get_double(kv, 0, 1e9, &o->safety_max_accel_m_s2, why, wl);
+    if (strcmp(kv->key, "initial_position") == 0) {
+        double v[ENGINE_AXES];
+        char *end = NULL;
+        const char *q = kv->value;
+        for (int a = 0; a < ENGINE_AXES; a++) {
+            v[a] = strtod(q, &end);
+            if (end == q || !isfinite(v[a]) || fabs(v[a]) > 1e9 ||
+                (a < ENGINE_AXES - 1 ? *end != ',' : *end != '\0'))
+                return why_set(why, wl, "expected x,y,z in metres, got '%s'", kv->value);
+            q = end + 1;
+        }
+        memcpy(o->initial_position_m, v, sizeof v);
+        o->has_initial_position = 1;
+        return 0;
+    }
+    return -CFG_EUNKNOWN;
+}
+
 static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size_t wl)
 {
     const char *dot = strchr(kv->key, '.');
@@ -461,6 +489,8 @@ static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size
             p->tkey_line[p->sec_index][ti] = kv->line;
         return t->obj_key(o->tcfg[ti], &sub, why, wl);
     }
+    if (strncmp(kv->key, "safety_", 7) == 0 || strcmp(kv->key, "initial_position") == 0)
+        return key_obj_drive(o, kv, why, wl);
     if (strcmp(kv->key, "input") == 0) {
         const transport_t *t = transport_find(kv->value);
         if (!t || !(t->roles & TRANSPORT_INPUT)) {

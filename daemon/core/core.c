@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "engine_settings.h"
+#include "log.h"
 
 /* Private part of the core, after the public struct. */
 typedef struct {
@@ -45,6 +46,37 @@ void obj_reset_counters(obj_t *o)
     o->out_lost = 0;
     o->out_fault = 0;
     engine_status(o->engine, &o->status);
+}
+
+void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim)
+{
+    memset(lim, 0, sizeof *lim);
+    lim->max_step_m = o->safety_max_step_m >= 0 ? o->safety_max_step_m : 0;
+    lim->max_speed_m_s =
+        o->safety_max_speed_m_s >= 0 ? o->safety_max_speed_m_s : 2.0 * o->engine.max_speed_m_s;
+    lim->max_accel_m_s2 = o->safety_max_accel_m_s2 >= 0 ? o->safety_max_accel_m_s2 : 0;
+    lim->tol_m = SAFETY_TOL_M_DEFAULT;
+}
+
+/* Rearm the monitor once the engine stands on the held position. */
+static void obj_try_rearm(obj_t *o)
+{
+    double held[ENGINE_AXES];
+    if (!o->safety_rearm)
+        return;
+    if (safety_held(&o->safety, held) < 0 || engine_set_position(o->engine, held) == 0) {
+        safety_rearm(&o->safety);
+        o->safety_rearm = 0;
+    }
+}
+
+void obj_clear(obj_t *o)
+{
+    engine_clear(o->engine);
+    if (safety_fault(&o->safety)) {
+        o->safety_rearm = 1;
+        obj_try_rearm(o);
+    }
 }
 
 obj_t *core_obj_find(core_t *c, const char *name)
@@ -102,6 +134,8 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
         }
         engine_status(o->engine, &o->status);
         o->status.skipped_ticks += o->skipped_ticks;
+        obj_try_rearm(o);
+        safety_check(&o->safety, &o->sp);
     }
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i];
@@ -183,6 +217,14 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
             snprintf(why, whylen, "object '%s': engine: %s", o->name, engine_strerror(err));
             return -ENOMEM;
         }
+        safety_limits_t lim;
+        obj_safety_limits(o->cfg, &lim);
+        safety_init(&o->safety, &lim);
+        if (o->cfg->has_initial_position &&
+            engine_set_position(o->engine, o->cfg->initial_position_m) < 0) {
+            snprintf(why, whylen, "object '%s': initial_position outside max_abs_m", o->name);
+            return -EINVAL;
+        }
         engine_status(o->engine, &o->status);
     }
     return 0;
@@ -200,6 +242,12 @@ static void carry_objects(core_t *c, core_t *prev)
         o->sp = q->sp;
         o->status = q->status;
         o->skipped_ticks = q->skipped_ticks;
+        o->safety = q->safety;
+        safety_limits_t lim;
+        obj_safety_limits(o->cfg, &lim);
+        safety_set_limits(&o->safety, &lim); /* the new config's bounds */
+        o->safety_logged = q->safety_logged;
+        o->safety_rearm = q->safety_rearm;
         o->born_ns = q->born_ns;
         o->out_lost = q->out_lost;
         o->out_fault = q->out_fault;
@@ -373,6 +421,22 @@ void core_close(core_t *c)
 void core_stats_roll(core_t *c)
 {
     stats_t *s = c->stats;
+    /* safety violations, logged here (once a second at most per object), not in the tick */
+    for (unsigned i = 0; i < c->nobj; i++) {
+        obj_t *o = &c->obj[i];
+        const safety_t *sf = &o->safety;
+        if (sf->violations == o->safety_logged)
+            continue;
+        double held[ENGINE_AXES] = { NAN, NAN, NAN };
+        (void)safety_held(sf, held);
+        log_msg(LOG_ERR,
+                "object '%s': safety monitor: %s (%.6g, bound %.6g): setpoints not sent, "
+                "holding at (%.4f, %.4f, %.4f) until 'clear'; %llu refused so far",
+                o->name, safety_strerror(sf->fault ? sf->fault : SAFETY_FNOTFINITE),
+                sf->last_value, sf->last_limit, held[0], held[1], held[2],
+                (unsigned long long)sf->violations);
+        o->safety_logged = sf->violations;
+    }
     lat_summarize(&s->late_hist, &s->late);
     lat_summarize(&s->late_recent_hist, &s->late_recent);
     lat_reset(&s->late_recent_hist);
@@ -407,8 +471,9 @@ int core_summary(const core_t *c, char *buf, size_t len)
     for (unsigned i = 0; i < c->nobj && n < len; i++) {
         const obj_t *o = &c->obj[i];
         m = snprintf(buf + n, len - n,
-                     "; %s %s t=%.1f s, wp %llu ok %llu rejected %llu full, %llu underruns",
-                     o->name, engine_state_name(o->status.state), o->sp.t_s,
+                     "; %s %s%s t=%.1f s, wp %llu ok %llu rejected %llu full, %llu underruns",
+                     o->name, engine_state_name(o->status.state),
+                     safety_fault(&o->safety) ? " SAFETY FAULT (holding)" : "", o->sp.t_s,
                      (unsigned long long)o->status.accepted,
                      (unsigned long long)o->status.rejected,
                      (unsigned long long)o->status.full,

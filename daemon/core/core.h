@@ -15,7 +15,9 @@
  *   1. for each object (in config order) whose input has pre_tick, unless stopping:
  *        input->pre_tick(state, o, now_ns)
  *   2. for each object: engine_tick(o->engine, now_ns, &o->sp);
- *        o->status refreshed (engine_status)
+ *        o->status refreshed (engine_status); then the safety monitor
+ *        (lib/safety/safety.h) judges o->sp and replaces it by a hold if it
+ *        breaks the object's bounds: no output ever sees a refused setpoint
  *   3. for each object, for each of its outputs: output->setpoint(state, o, &o->sp)
  *   4. for each open transport: cycle(state, core, now_ns)
  *   5. lateness (wake-up time - the oldest deadline not yet served, so a
@@ -41,6 +43,7 @@
 #include "engine.h"
 #include "latency.h"
 #include "loop.h"
+#include "safety.h"
 #include "transport.h"
 
 /* One moving object. */
@@ -61,7 +64,30 @@ typedef struct obj {
                                      * its outputs (buffer full, write error) */
     int out_fault;                  /* 1 once a write to one of its outputs failed (ENOSPC,
                                      * EIO, ...); cleared by the reset-counters command */
+    safety_t safety;                /* the last check of o->sp before any output sees it
+                                     * (kept when carried) */
+    uint64_t safety_logged;         /* safety violations already logged */
+    int safety_rearm;               /* a clear asked to rearm the monitor: done once the
+                                     * engine stands on the held position */
 } obj_t;
+
+/*
+ * The safety monitor's bounds for object o: its safety_* keys, and where a
+ * key is not given, derived from its engine limits: speed 2 x max_speed_m_s
+ * (the engine's transfer peaks at 1.5 x; max_speed_m_s = 0, no limit, leaves
+ * it unchecked), no absolute step bound, no acceleration bound (an underrun
+ * still stops the output within one tick: an acceleration bound would fault
+ * every underrun at speed).
+ */
+void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim);
+
+/*
+ * Clear o (CAN and Modbus command "clear"): engine_clear, and if the safety
+ * monitor holds o faulted, make the engine stand where the output is held
+ * (engine_set_position) and rearm the monitor, so motion resumes from there
+ * by a transfer.  The only way out of a safety fault.
+ */
+void obj_clear(obj_t *o);
 
 /*
  * Offer a waypoint to o's engine: the one path every input uses (replay from

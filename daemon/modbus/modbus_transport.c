@@ -91,7 +91,7 @@ static int hook_command(void *ctx, unsigned k, unsigned cmd)
     case MBMAP_CMD_STOP:
         return engine_stop(o->engine);
     case MBMAP_CMD_CLEAR:
-        engine_clear(o->engine);
+        obj_clear(o);
         return 0;
     case MBMAP_CMD_RESET_COUNTERS:
         obj_reset_counters(o);

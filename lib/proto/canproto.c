@@ -324,7 +324,7 @@ void canproto_encode_status(uint32_t id, const canproto_status_t *st, canproto_f
     frame_init(out, id, CANPROTO_STATUS_DLEN, 0);
     out->data[0] = (uint8_t)((st->state & CANPROTO_ST_STATE_MASK) |
                              (st->flags & (CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP |
-                                           CANPROTO_ST_OUT_FAULT)));
+                                           CANPROTO_ST_OUT_FAULT | CANPROTO_ST_FAULT)));
     out->data[1] = (uint8_t)st->last_seq;
     out->data[2] = sat8(st->free);
     out->data[3] = (uint8_t)st->lost;
@@ -382,7 +382,8 @@ int canproto_decode_status(const canproto_frame_t *f, canproto_status_t *out)
     if (f->len != CANPROTO_STATUS_DLEN || (f->flags & (CANPROTO_F_RTR | CANPROTO_F_ERR | CANPROTO_F_EFF)))
         return -CANPROTO_ELEN;
     out->state = f->data[0] & CANPROTO_ST_STATE_MASK;
-    out->flags = f->data[0] & (CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP | CANPROTO_ST_OUT_FAULT);
+    out->flags = f->data[0] & (CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP | CANPROTO_ST_OUT_FAULT |
+                               CANPROTO_ST_FAULT);
     out->last_seq = f->data[1];
     out->free = f->data[2];
     out->lost = f->data[3];
@@ -704,6 +705,8 @@ static const canproto_signal_t sig_st[] = {
     SIG_U("ST_State", -1, 0, 3, 1, ""),
     SIG_U("ST_BusDown", -1, 4, 1, 1, ""),
     SIG_U("ST_TxDrop", -1, 5, 1, 1, ""),
+    SIG_U("ST_OutFault", -1, 6, 1, 1, ""),
+    SIG_U("ST_SafetyFault", -1, 7, 1, 1, ""),
     SIG_U("ST_LastSeq", -1, 8, 8, 1, ""),
     SIG_U("ST_Free", -1, 16, 8, 1, ""),
     SIG_U("ST_Lost", -1, 24, 8, 1, ""),
@@ -790,7 +793,8 @@ int canproto_dbc(char *buf, size_t len)
          "the defaults of object 0 (object n: + n), RPDOs for CiA 402 nodes 1..3.\";\n"
          "CM_ SG_ %u WP_Command \"1 finish, 2 stop, 3 clear, 4 reset counters\";\n"
          "CM_ SG_ %u ST_LastErr \"1..11 engine_error of the last rejected waypoint, 0x40 "
-         "malformed, 0x41 lost, 0x42 out of order, 0x43 setpoints dropped, 0x44 bus down\";\n",
+         "malformed, 0x41 lost, 0x42 out of order, 0x43 setpoints dropped, 0x44 bus down, 0x45 "
+         "csv/stdout output lost lines, 0x46 safety monitor fault (object held until clear)\";\n",
          CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_STATUS_BASE);
     emit(buf, len, &pos,
          "BA_DEF_ BO_ \"VFrameFormat\" ENUM \"StandardCAN\",\"ExtendedCAN\",\"reserved\","

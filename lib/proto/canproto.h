@@ -41,7 +41,8 @@
  *    0 state (bits 0..2 engine state, bit 4 bus DOWN seen since last status,
  *      bit 5 TX dropped since last status, bit 6 a csv/stdout output of the
  *      object lost lines or failed to write since last status: the count is
- *      on Modbus, out_lost), 1 last accepted seq (low 8 bits),
+ *      on Modbus, out_lost), bit 7 safety FAULT: the monitor holds the
+ *      object's position until a CLEAR command), 1 last accepted seq (low 8 bits),
  *    2 free waypoint slots (saturated at 255), 3 lost waypoints (sequence
  *    gaps), 4 rejected waypoints (bad data; a full buffer is flow control,
  *    shown by last_err EFULL and last_seq not moving), 5 malformed frames, 6 dropped setpoints
@@ -158,6 +159,7 @@ typedef enum {
 #define CANPROTO_ST_BUS_DOWN 0x10u
 #define CANPROTO_ST_TX_DROP 0x20u
 #define CANPROTO_ST_OUT_FAULT 0x40u   /* a csv/stdout output of the object lost lines or failed */
+#define CANPROTO_ST_FAULT 0x80u     /* the safety monitor holds the object (until clear) */
 
 /* STATUS byte 7: the last thing that went wrong. */
 typedef enum {
@@ -169,6 +171,7 @@ typedef enum {
     CANPROTO_STERR_TX_DROPPED = 0x43,   /* setpoints dropped (late or queue full) */
     CANPROTO_STERR_BUS_DOWN = 0x44,     /* the interface went down */
     CANPROTO_STERR_OUTPUT = 0x45,       /* a csv/stdout output lost lines (disk full, I/O error) */
+    CANPROTO_STERR_SAFETY = 0x46,       /* the safety monitor refused a setpoint (object held) */
 } canproto_status_err_t;
 
 /* ---- errors ------------------------------------------------------------------ */
@@ -279,7 +282,7 @@ int canproto_encode_cia402(const canproto_ids_t *ids, unsigned axis, double pos_
 /* STATUS frame contents. */
 typedef struct {
     uint8_t state;          /* engine_state_t */
-    uint8_t flags;          /* CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP | CANPROTO_ST_OUT_FAULT */
+    uint8_t flags;          /* CANPROTO_ST_BUS_DOWN | _TX_DROP | _OUT_FAULT | _FAULT */
     uint32_t last_seq;
     uint32_t free;
     uint32_t lost;

@@ -1,0 +1,187 @@
+/*
+ * safety.c - the last check before a setpoint leaves (see safety.h).
+ * Shares nothing with the engine: positions and tick times only.
+ */
+#include "safety.h"
+
+#include <math.h>
+#include <string.h>
+
+#define AX ENGINE_AXES
+
+const char *safety_strerror(int fault)
+{
+    switch (fault < 0 ? -fault : fault) {
+    case SAFETY_OK: return "ok";
+    case SAFETY_FNOTFINITE: return "position not finite (or lost after having one)";
+    case SAFETY_FTIME: return "tick time did not advance";
+    case SAFETY_FSTEP: return "step above max_step_m";
+    case SAFETY_FSPEED: return "speed above max_speed_m_s";
+    case SAFETY_FACCEL: return "acceleration above max_accel_m_s2";
+    default: return "unknown safety fault";
+    }
+}
+
+/* A bound that is not a positive finite number is "not checked" (0). */
+static double bound(double v)
+{
+    return v > 0 && isfinite(v) ? v : 0.0;
+}
+
+void safety_init(safety_t *s, const safety_limits_t *lim)
+{
+    memset(s, 0, sizeof *s);
+    safety_set_limits(s, lim);
+}
+
+void safety_set_limits(safety_t *s, const safety_limits_t *lim)
+{
+    s->lim.max_step_m = bound(lim->max_step_m);
+    s->lim.max_speed_m_s = bound(lim->max_speed_m_s);
+    s->lim.max_accel_m_s2 = bound(lim->max_accel_m_s2);
+    s->lim.tol_m = bound(lim->tol_m) > 0 ? lim->tol_m : SAFETY_TOL_M_DEFAULT;
+}
+
+static double norm3(const double *v)
+{
+    return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+}
+
+/* Replace sp by the hold on the last position sent. */
+static void hold(safety_t *s, engine_setpoint_t *sp)
+{
+    for (int k = 0; k < AX; k++) {
+        sp->pos_m[k] = s->last_pos[k];
+        sp->vel_m_s[k] = 0.0;
+        sp->acc_m_s2[k] = 0.0;
+    }
+    sp->flags |= ENGINE_SP_HOLD | ENGINE_SP_FAULT;
+    sp->flags &= ~(uint32_t)(ENGINE_SP_NO_POSITION | ENGINE_SP_TRANSFER);
+    s->held++;
+    if (sp->now_ns > s->last_ns)
+        s->last_ns = sp->now_ns;
+    memset(s->last_vel, 0, sizeof s->last_vel);
+}
+
+/* First violation of sp against the last output, with its value and bound. */
+static int judge(const safety_t *s, const engine_setpoint_t *sp, double *value, double *limit,
+                 double vel[AX])
+{
+    const safety_limits_t *l = &s->lim;
+    double d[AX], dt, step;
+
+    if (sp->flags & ENGINE_SP_NO_POSITION) {
+        *value = NAN;
+        *limit = 0;
+        return SAFETY_FNOTFINITE; /* a position was sent before: it cannot be lost */
+    }
+    for (int k = 0; k < AX; k++)
+        if (!isfinite(sp->pos_m[k])) {
+            *value = sp->pos_m[k];
+            *limit = 0;
+            return SAFETY_FNOTFINITE;
+        }
+    if (sp->now_ns <= s->last_ns) {
+        *value = (double)(sp->now_ns - s->last_ns) * 1e-9;
+        *limit = 0;
+        return SAFETY_FTIME;
+    }
+    dt = (double)(sp->now_ns - s->last_ns) * 1e-9; /* > 0 */
+    for (int k = 0; k < AX; k++) {
+        d[k] = sp->pos_m[k] - s->last_pos[k];
+        vel[k] = d[k] / dt;
+    }
+    step = norm3(d);
+    if (l->max_step_m > 0 && step > l->max_step_m + l->tol_m) {
+        *value = step;
+        *limit = l->max_step_m;
+        return SAFETY_FSTEP;
+    }
+    if (l->max_speed_m_s > 0 && step > l->max_speed_m_s * dt + l->tol_m) {
+        *value = step / dt;
+        *limit = l->max_speed_m_s;
+        return SAFETY_FSPEED;
+    }
+    if (l->max_accel_m_s2 > 0 && s->have_vel) {
+        double dv[AX];
+        for (int k = 0; k < AX; k++)
+            dv[k] = vel[k] - s->last_vel[k];
+        /* |dv| * dt is the change of step a constant acceleration bound allows, in metres */
+        if (norm3(dv) * dt > l->max_accel_m_s2 * dt * dt + l->tol_m) {
+            *value = norm3(dv) / dt;
+            *limit = l->max_accel_m_s2;
+            return SAFETY_FACCEL;
+        }
+    }
+    return SAFETY_OK;
+}
+
+int safety_check(safety_t *s, engine_setpoint_t *sp)
+{
+    double value = 0, limit = 0, vel[AX];
+    int f;
+
+    if (!s->have_pos) {
+        /* nothing sent yet: no position is fine, a first position is taken as is */
+        if (sp->flags & ENGINE_SP_NO_POSITION)
+            return SAFETY_OK;
+        s->checked++;
+        for (int k = 0; k < AX; k++)
+            if (!isfinite(sp->pos_m[k])) {
+                /* nothing to hold on: send it as "no position" */
+                s->violations++;
+                s->by[SAFETY_FNOTFINITE]++;
+                s->last_value = sp->pos_m[k];
+                s->last_limit = 0;
+                for (int j = 0; j < AX; j++)
+                    sp->pos_m[j] = NAN;
+                sp->flags |= ENGINE_SP_NO_POSITION | ENGINE_SP_FAULT | ENGINE_SP_HOLD;
+                return SAFETY_FNOTFINITE;
+            }
+        s->have_pos = 1;
+        s->last_ns = sp->now_ns;
+        memcpy(s->last_pos, sp->pos_m, sizeof s->last_pos);
+        return SAFETY_OK;
+    }
+    s->checked++;
+    if (s->fault) {
+        s->violations++;
+        hold(s, sp);
+        return s->fault;
+    }
+    f = judge(s, sp, &value, &limit, vel);
+    if (f != SAFETY_OK) {
+        s->fault = f;
+        s->violations++;
+        s->by[f]++;
+        s->last_value = value;
+        s->last_limit = limit;
+        hold(s, sp);
+        return f;
+    }
+    memcpy(s->last_pos, sp->pos_m, sizeof s->last_pos);
+    memcpy(s->last_vel, vel, sizeof s->last_vel);
+    s->have_vel = 1;
+    s->last_ns = sp->now_ns;
+    return SAFETY_OK;
+}
+
+int safety_fault(const safety_t *s)
+{
+    return s->fault;
+}
+
+int safety_held(const safety_t *s, double pos_m[ENGINE_AXES])
+{
+    if (!s->have_pos)
+        return -1;
+    memcpy(pos_m, s->last_pos, sizeof s->last_pos);
+    return 0;
+}
+
+void safety_rearm(safety_t *s)
+{
+    s->fault = SAFETY_OK;
+    memset(s->last_vel, 0, sizeof s->last_vel);
+    s->have_vel = s->have_pos;
+}

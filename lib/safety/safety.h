@@ -1,0 +1,110 @@
+/*
+ * safety.h - the last check every setpoint passes before it leaves the
+ * daemon: no step, no speed and no acceleration above an object's bounds.
+ *
+ * It is deliberately separate from the interpolation: it shares no code with
+ * lib/engine or lib/spline and does not trust the velocity or acceleration
+ * the engine reports.  It looks only at the positions that were actually
+ * sent and the times of their ticks, and judges the new one by finite
+ * differences:
+ *   step  = |p_k - p_{k-1}|                            (Euclidean, metres)
+ *   v_k   = (p_k - p_{k-1}) / dt_k,  dt_k = now_k - now_{k-1}
+ *   speed = |v_k|,   accel = |v_k - v_{k-1}| / dt_k
+ * dt is the time between two outputs, so skipped ticks are judged over the
+ * time that really passed.
+ *
+ * A violation is never sent: the setpoint is replaced by the last one sent
+ * (the position held, velocity and acceleration 0, flags HOLD and
+ * ENGINE_SP_FAULT), the fault latches, and every later setpoint is replaced
+ * the same way until safety_rearm() (after the engine was made to stand on
+ * the held position again).  Holding is itself a stop within one tick: the
+ * monitor is the last line of defence for what must never happen, not a way
+ * to stop motion smoothly (that is the engine's job).
+ *
+ * Before the first position (ENGINE_SP_NO_POSITION) nothing is judged; a
+ * setpoint without a position after one with a position is a violation.
+ *
+ * Pure: no I/O, no clock, no allocation.  The daemon logs from the counters.
+ */
+#ifndef TRAJD_SAFETY_H
+#define TRAJD_SAFETY_H
+
+#include <stdint.h>
+
+#include "motion.h"
+
+/* Setpoint flag: the safety monitor replaced this setpoint by a hold. */
+#define SAFETY_SP_FAULT ENGINE_SP_FAULT
+
+/* What was violated (the first one found, in this order). */
+enum safety_fault {
+    SAFETY_OK = 0,
+    SAFETY_FNOTFINITE = 1, /* a position is NaN or infinite, or lost after having one */
+    SAFETY_FTIME = 2,      /* the tick time did not advance */
+    SAFETY_FSTEP = 3,      /* step above max_step_m */
+    SAFETY_FSPEED = 4,     /* step / dt above max_speed_m_s */
+    SAFETY_FACCEL = 5,     /* change of step / dt per dt above max_accel_m_s2 */
+    SAFETY_FAULT_COUNT
+};
+
+/* Text for a safety_fault ("step above its bound", ...). */
+const char *safety_strerror(int fault);
+
+typedef struct {
+    double max_step_m;      /* largest step between two outputs; 0 = not checked */
+    double max_speed_m_s;   /* 0 = not checked */
+    double max_accel_m_s2;  /* 0 = not checked */
+    double tol_m;           /* added to every bound after converting it to metres per
+                               output (rounding of positions of up to 1e7 m: 1e-8 m
+                               default, SAFETY_TOL_M_DEFAULT) */
+} safety_limits_t;
+
+#define SAFETY_TOL_M_DEFAULT 1e-8
+
+typedef struct {
+    safety_limits_t lim;
+    int have_pos;           /* a position was sent */
+    int have_vel;           /* two were sent: last_vel is meaningful */
+    int64_t last_ns;
+    double last_pos[ENGINE_AXES];
+    double last_vel[ENGINE_AXES];
+    int fault;              /* latched safety_fault, 0 = none */
+    uint64_t checked;       /* setpoints judged */
+    uint64_t violations;    /* setpoints refused while not yet faulted + while faulted */
+    uint64_t held;          /* setpoints replaced by the hold (faulted) */
+    uint64_t by[SAFETY_FAULT_COUNT]; /* first violations by reason */
+    double last_value;      /* the violating value of the last violation (m, m/s, m/s^2) */
+    double last_limit;      /* and the bound it broke */
+} safety_t;
+
+/*
+ * Start with no history and no fault.  lim is copied; negative or NaN
+ * bounds are taken as 0 (not checked), tol_m <= 0 or NaN as the default.
+ */
+void safety_init(safety_t *s, const safety_limits_t *lim);
+
+/* New bounds (as safety_init takes them), history and fault kept. */
+void safety_set_limits(safety_t *s, const safety_limits_t *lim);
+
+/*
+ * Judge sp (in place).  Returns SAFETY_OK if sp may be sent as it is, or the
+ * safety_fault found (or already latched), in which case sp was replaced by
+ * the hold described above.  Counts in s.
+ */
+int safety_check(safety_t *s, engine_setpoint_t *sp);
+
+/* The latched fault, 0 if none. */
+int safety_fault(const safety_t *s);
+
+/* The held position (the last one sent); 0, or -1 if none was ever sent. */
+int safety_held(const safety_t *s, double pos_m[ENGINE_AXES]);
+
+/*
+ * Clear the latched fault: the next setpoint is judged against the held
+ * position again, as if the output had rested there (velocity 0).  The
+ * caller first makes the engine stand on safety_held() (engine_clear then
+ * engine_set_position), so the motion resumes from there by a transfer.
+ */
+void safety_rearm(safety_t *s);
+
+#endif

@@ -1,0 +1,106 @@
+#!/usr/bin/python3
+"""test_drive_safety.py - trajd's start position and its safety monitor, seen
+from the setpoints it writes (CSV), with bounds checked by finite differences
+of those rows here, not by the daemon's own numbers.
+
+- initial_position: the output stands there from the first row (never NaN,
+  never the track's start), then reaches the track by a transfer, no step;
+- safety_max_speed_m_s below the track's speed: no row ever moves faster than
+  the bound, the object is held from the first violation on (flag 0x20), and
+  the daemon says so on stderr and in its summary.
+"""
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+BUILD = os.environ.get("BUILD", os.path.abspath("build"))
+TRAJD = os.path.join(BUILD, "bin", "trajd")
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+N2K = os.path.join(REPO, "tests", "data", "n2k_furuno_figure8_src52.csv")
+PERIOD_S = 0.01
+F_HOLD, F_TRANSFER, F_NOPOS, F_FAULT = 0x01, 0x08, 0x10, 0x20
+
+
+def run(tmp, obj_keys, rows=152):
+    fig8 = os.path.join(tmp, "fig8.csv")
+    with open(N2K) as f:
+        lines = f.readlines()[:rows]
+    with open(fig8, "w") as f:
+        f.write("".join(lines))
+    conf = os.path.join(tmp, "t.conf")
+    with open(conf, "w") as f:
+        f.write("[daemon]\nrate_hz = 100\nspeed = 20\nexit_when_done = yes\nstatus_interval_s = 0\n"
+                "[object.boat]\ninput = replay\nreplay.track = fig8.csv\noutput = csv\n"
+                "csv.path = out.csv\n" + obj_keys)
+    p = subprocess.run([TRAJD, "-f", "-c", conf], capture_output=True, text=True, timeout=120)
+    with open(os.path.join(tmp, "out.csv")) as f:
+        head, *body = f.read().splitlines()
+    cols = head.split(",")
+    out = []
+    for line in body:
+        r = dict(zip(cols, line.split(",")))
+        out.append({"now": int(r["now_ns"]), "p": [float(r[k]) for k in ("x_m", "y_m", "z_m")],
+                    "flags": int(r["flags"]), "state": r["state"]})
+    return p, out
+
+
+def dist(a, b):
+    return math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b)))
+
+
+class DriveSafety(unittest.TestCase):
+    def test_initial_position_reached_by_transfer(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            # Given an object known to stand 2 m east of the track's first fix
+            # (the lat/lon track's local frame has its origin on that fix)
+            p, rows = run(tmp, "initial_position = 2,0,0\n")
+            self.assertEqual(p.returncode, 0, p.stderr)
+            # then every row has a position, the first ones that one
+            self.assertTrue(all(not r["flags"] & F_NOPOS and all(map(math.isfinite, r["p"]))
+                                for r in rows))
+            self.assertLess(dist(rows[0]["p"], (2, 0, 0)), 1e-12)
+            # a transfer brings it to the track's start (0, 0, 0) ...
+            xfer = [i for i, r in enumerate(rows) if r["flags"] & F_TRANSFER]
+            self.assertTrue(xfer)
+            self.assertLess(dist(rows[xfer[0] - 1]["p"], (2, 0, 0)), 1e-12)
+            # (rows of deadlines the daemon missed are absent: within the
+            # distance the boat covers between the two rows at its 6 m/s)
+            a, b = rows[xfer[-1]], rows[xfer[-1] + 1]
+            self.assertLessEqual(dist(b["p"], (0, 0, 0)), 6.0 * (b["now"] - a["now"]) * 1e-9)
+            # ... with no step: the boat's fastest fix-to-fix speed in the first 30 s
+            # is under 6 m/s (the track file's own positions), the transfer's
+            # peak 1.5 x 2 m / 1 s: a row moves less than 8 m/s x 10 ms
+            worst = max(dist(a["p"], b["p"]) / ((b["now"] - a["now"]) * 1e-9)
+                        for a, b in zip(rows, rows[1:]))
+            print("initial position 2 m off: %d transfer rows, fastest row-to-row %.2f m/s"
+                  % (len(xfer), worst), file=sys.stderr)
+            self.assertLess(worst, 8.0)
+            self.assertEqual(rows[-1]["state"], "finished")
+
+    def test_safety_monitor_holds_above_its_bound(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            # Given a speed bound of 1 m/s on a boat that runs at about 4 m/s
+            p, rows = run(tmp, "safety_max_speed_m_s = 1\n")
+            self.assertEqual(p.returncode, 0, p.stderr)
+            # then no row ever moved faster than 1 m/s (+ the 1e-8 m tolerance)
+            for a, b in zip(rows, rows[1:]):
+                dt = (b["now"] - a["now"]) * 1e-9
+                self.assertLessEqual(dist(a["p"], b["p"]), 1.0 * dt + 1e-8, (a, b))
+            # and from the first refused setpoint on, the position is held, flagged
+            first = next(i for i, r in enumerate(rows) if r["flags"] & F_FAULT)
+            self.assertGreater(first, 0)
+            for r in rows[first:]:
+                self.assertTrue(r["flags"] & F_FAULT and r["flags"] & F_HOLD, r)
+                self.assertEqual(r["p"], rows[first - 1]["p"])
+            # and the daemon says so: a log line and its summary
+            self.assertIn("safety monitor: speed above max_speed_m_s", p.stderr)
+            self.assertIn("SAFETY FAULT", p.stderr)
+            print("safety: held from row %d of %d at %s" % (first, len(rows), rows[first]["p"]),
+                  file=sys.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)

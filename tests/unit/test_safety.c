@@ -1,0 +1,175 @@
+/*
+ * test_safety.c - the safety monitor (lib/safety/safety.h): every bound is
+ * checked against motions whose finite differences are known exactly by hand
+ * (constant speed, constant acceleration), with no engine involved.
+ */
+#include "test.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "safety.h"
+
+#define T_NS 10000000LL /* 100 Hz */
+#define T_S 0.01
+
+static engine_setpoint_t at(int64_t k, double x)
+{
+    engine_setpoint_t sp;
+    memset(&sp, 0, sizeof sp);
+    sp.now_ns = k * T_NS;
+    sp.pos_m[0] = x;
+    sp.vel_m_s[0] = 123.0; /* the monitor must not trust what the engine says */
+    sp.state = ENGINE_STATE_STREAMING;
+    return sp;
+}
+
+static safety_t mk(double step, double speed, double accel)
+{
+    safety_t s;
+    safety_limits_t l = { step, speed, accel, 0 };
+    safety_init(&s, &l);
+    return s;
+}
+
+/* Given a 1 m/s motion and a 2 m/s bound, when a tick jumps 5 cm (5 m/s),
+ * then that setpoint is replaced by the last one sent, flagged, counted, and
+ * every later one is held until rearmed. */
+static void test_speed_violation_holds_and_latches(void **state)
+{
+    (void)state;
+    safety_t s = mk(0, 2.0, 0);
+    engine_setpoint_t sp;
+    for (int k = 0; k <= 10; k++) {
+        sp = at(k, 0.01 * k);
+        assert_int_equal(safety_check(&s, &sp), SAFETY_OK);
+        assert_memory_equal(&sp.pos_m[0], &(double){0.01 * k}, sizeof(double)); /* untouched */
+        assert_false(sp.flags & ENGINE_SP_FAULT);
+    }
+    sp = at(11, 0.10 + 0.05);
+    assert_int_equal(safety_check(&s, &sp), SAFETY_FSPEED);
+    assert_true(fabs(sp.pos_m[0] - 0.10) < 1e-15);
+    assert_true(fabs(sp.vel_m_s[0]) <= 0.0 && fabs(sp.acc_m_s2[0]) <= 0.0);
+    assert_true((sp.flags & (ENGINE_SP_FAULT | ENGINE_SP_HOLD)) == (ENGINE_SP_FAULT | ENGINE_SP_HOLD));
+    assert_true(fabs(s.last_value - 5.0) < 1e-9 && fabs(s.last_limit - 2.0) <= 0.0);
+    /* latched: even a setpoint that would be fine is held */
+    sp = at(12, 0.105);
+    assert_int_equal(safety_check(&s, &sp), SAFETY_FSPEED);
+    assert_true(fabs(sp.pos_m[0] - 0.10) < 1e-15);
+    assert_int_equal(s.by[SAFETY_FSPEED], 1);
+    assert_int_equal(s.violations, 2);
+    assert_int_equal(s.held, 2);
+    double held[3];
+    assert_int_equal(safety_held(&s, held), 0);
+    assert_true(fabs(held[0] - 0.10) < 1e-15);
+    /* rearmed: judged from the held position at rest */
+    safety_rearm(&s);
+    sp = at(13, 0.10 + 0.001); /* 0.1 m/s from rest */
+    assert_int_equal(safety_check(&s, &sp), SAFETY_OK);
+    assert_int_equal(safety_fault(&s), 0);
+}
+
+/* Given positions of a constant acceleration a (p = a t^2 / 2), the finite
+ * differences give exactly a: a bound of a passes, a bound 1 % below fails. */
+static void test_accel_exact(void **state)
+{
+    (void)state;
+    const double a = 10.0;
+    for (int pass = 0; pass < 2; pass++) {
+        safety_t s = mk(0, 0, pass ? a * 0.99 : a);
+        int faults = 0;
+        for (int k = 0; k < 100; k++) {
+            double t = k * T_S;
+            engine_setpoint_t sp = at(k, 0.5 * a * t * t);
+            faults += safety_check(&s, &sp) != SAFETY_OK;
+        }
+        assert_int_equal(faults, pass ? 98 : 0); /* ticks 2..99 once latched */
+        if (pass)
+            assert_int_equal(s.by[SAFETY_FACCEL], 1);
+    }
+}
+
+/* Given ticks skipped (dt = 3 periods), then speed is judged over the time
+ * that passed; the absolute step bound is not. */
+static void test_skipped_ticks_and_step(void **state)
+{
+    (void)state;
+    safety_t s = mk(0, 1.5, 0);
+    engine_setpoint_t sp = at(0, 0);
+    assert_int_equal(safety_check(&s, &sp), SAFETY_OK);
+    sp = at(3, 0.03); /* 1 m/s over 30 ms */
+    sp.flags |= ENGINE_SP_SKIPPED;
+    assert_int_equal(safety_check(&s, &sp), SAFETY_OK);
+    safety_t s2 = mk(0.02, 0, 0);
+    sp = at(0, 0);
+    assert_int_equal(safety_check(&s2, &sp), SAFETY_OK);
+    sp = at(3, 0.03);
+    assert_int_equal(safety_check(&s2, &sp), SAFETY_FSTEP);
+    /* Euclidean: 0.012 in x and 0.016 in y is a 0.02 step */
+    safety_t s3 = mk(0.02, 0, 0);
+    sp = at(0, 0);
+    assert_int_equal(safety_check(&s3, &sp), SAFETY_OK);
+    sp = at(1, 0.012);
+    sp.pos_m[1] = 0.016;
+    assert_int_equal(safety_check(&s3, &sp), SAFETY_OK);
+    sp = at(2, 0.012 + 0.0121);
+    sp.pos_m[1] = 0.016 + 0.016;
+    assert_int_equal(safety_check(&s3, &sp), SAFETY_FSTEP);
+}
+
+/* No position before the first: passed through; NaN, a lost position or a
+ * tick time that does not advance afterwards: faults. */
+static void test_positions_and_time(void **state)
+{
+    (void)state;
+    safety_t s = mk(0, 1.0, 0);
+    engine_setpoint_t sp = at(0, NAN);
+    sp.flags = ENGINE_SP_NO_POSITION | ENGINE_SP_HOLD;
+    assert_int_equal(safety_check(&s, &sp), SAFETY_OK);
+    assert_true(isnan(sp.pos_m[0]));
+    assert_int_equal(s.checked, 0);
+    /* NaN without the flag before anything was sent: refused, sent as no position */
+    sp = at(1, NAN);
+    assert_int_equal(safety_check(&s, &sp), SAFETY_FNOTFINITE);
+    assert_true(sp.flags & ENGINE_SP_NO_POSITION);
+    sp = at(2, 5.0);
+    assert_int_equal(safety_check(&s, &sp), SAFETY_OK); /* the first position is taken */
+    sp = at(3, NAN);
+    assert_int_equal(safety_check(&s, &sp), SAFETY_FNOTFINITE);
+    assert_true(fabs(sp.pos_m[0] - 5.0) <= 0.0);
+    safety_rearm(&s);
+    sp = at(4, NAN);
+    sp.flags = ENGINE_SP_NO_POSITION;
+    assert_int_equal(safety_check(&s, &sp), SAFETY_FNOTFINITE);
+    assert_false(sp.flags & ENGINE_SP_NO_POSITION);
+    assert_true(fabs(sp.pos_m[0] - 5.0) <= 0.0);
+    safety_rearm(&s);
+    sp = at(4, 5.0); /* same tick time as the hold sent at 4 */
+    assert_int_equal(safety_check(&s, &sp), SAFETY_FTIME);
+    assert_string_equal(safety_strerror(SAFETY_FTIME), "tick time did not advance");
+}
+
+/* Bounds that are not positive finite numbers are "not checked". */
+static void test_bad_limits_off(void **state)
+{
+    (void)state;
+    safety_t s = mk(-1, NAN, INFINITY);
+    assert_true(s.lim.max_step_m <= 0 && s.lim.max_speed_m_s <= 0 && s.lim.max_accel_m_s2 <= 0);
+    assert_true(fabs(s.lim.tol_m - SAFETY_TOL_M_DEFAULT) <= 0.0);
+    engine_setpoint_t sp = at(0, 0);
+    assert_int_equal(safety_check(&s, &sp), SAFETY_OK);
+    sp = at(1, 1e6);
+    assert_int_equal(safety_check(&s, &sp), SAFETY_OK);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_speed_violation_holds_and_latches),
+        cmocka_unit_test(test_accel_exact),
+        cmocka_unit_test(test_skipped_ticks_and_step),
+        cmocka_unit_test(test_positions_and_time),
+        cmocka_unit_test(test_bad_limits_off),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
