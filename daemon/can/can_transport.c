@@ -141,6 +141,18 @@ static int obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
             oc->given |= GIVEN_COB << a;
             return get_id(kv, &ids->cia402_cob_id[a], why, wl);
         }
+        snprintf(name, sizeof name, "cia402_counts_per_m_%c", "xyz"[a]);
+        if (!strcmp(k, name))
+            return cfg_get_double(kv, 1e-3, 1e9, &ids->cia402_axis_counts_per_m[a], why, wl);
+        snprintf(name, sizeof name, "cia402_invert_%c", "xyz"[a]);
+        if (!strcmp(k, name))
+            return cfg_get_bool(kv, &ids->cia402_invert[a], why, wl);
+        snprintf(name, sizeof name, "cia402_offset_%c", "xyz"[a]);
+        if (!strcmp(k, name)) {
+            rc = cfg_get_int(kv, INT32_MIN, INT32_MAX, &v, why, wl);
+            ids->cia402_offset[a] = (int32_t)v;
+            return rc;
+        }
     }
     if (!strcmp(k, "index")) {
         rc = cfg_get_int(kv, 0, 15, &v, why, wl);
@@ -180,6 +192,10 @@ void can_obj_ids(const can_obj_cfg_t *oc, unsigned obj_index, canproto_ids_t *id
     ids->cia402 = g->cia402;
     ids->cia402_counts_per_m = g->cia402_counts_per_m;
     ids->cia402_controlword = g->cia402_controlword;
+    memcpy(ids->cia402_axis_counts_per_m, g->cia402_axis_counts_per_m,
+           sizeof ids->cia402_axis_counts_per_m);
+    memcpy(ids->cia402_invert, g->cia402_invert, sizeof ids->cia402_invert);
+    memcpy(ids->cia402_offset, g->cia402_offset, sizeof ids->cia402_offset);
 }
 
 /* ---- config check: ids, clashes, bus load ---- */

@@ -150,6 +150,9 @@ int canproto_ids_check(const canproto_ids_t *ids, const char **why)
         /* > 0 and finite; also excludes NaN, for which both comparisons fail */
         if (!(ids->cia402_counts_per_m > 0 && ids->cia402_counts_per_m < 1e12))
             w = "cia402 counts per metre must be > 0 and finite";
+        for (unsigned a = 0; a < CANPROTO_CIA402_AXES && !w; a++)
+            if (!(ids->cia402_axis_counts_per_m[a] >= 0 && ids->cia402_axis_counts_per_m[a] < 1e12))
+                w = "cia402 counts per metre of an axis must be > 0 and finite (0: the object's)";
         unsigned any = 0;
         for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
             any |= ids->cia402_cob_id[a] != 0;
@@ -296,13 +299,42 @@ void canproto_encode_sync(uint32_t id, uint8_t counter, canproto_frame_t *out)
     out->data[0] = counter;
 }
 
+static double axis_cpm(const canproto_ids_t *ids, unsigned axis)
+{
+    double c = ids->cia402_axis_counts_per_m[axis];
+    return c > 0 ? c : ids->cia402_counts_per_m;
+}
+
+int32_t canproto_cia402_counts(const canproto_ids_t *ids, unsigned axis, double pos_m,
+                               int *clamped)
+{
+    if (axis >= CANPROTO_CIA402_AXES) {
+        *clamped = 1;
+        return 0;
+    }
+    double sign = ids->cia402_invert[axis] ? -1.0 : 1.0;
+    int64_t lo = (int64_t)INT32_MIN - ids->cia402_offset[axis];
+    int64_t hi = (int64_t)INT32_MAX - ids->cia402_offset[axis];
+    /* the offset is added in integers, after rounding: exact */
+    int64_t r = quantize(sign * pos_m * axis_cpm(ids, axis), 1.0, lo, hi, clamped);
+    return (int32_t)(r + ids->cia402_offset[axis]);
+}
+
+double canproto_cia402_pos_m(const canproto_ids_t *ids, unsigned axis, int32_t inc)
+{
+    if (axis >= CANPROTO_CIA402_AXES)
+        return NAN;
+    double sign = ids->cia402_invert[axis] ? -1.0 : 1.0;
+    return sign * (double)((int64_t)inc - ids->cia402_offset[axis]) / axis_cpm(ids, axis);
+}
+
 int canproto_encode_cia402(const canproto_ids_t *ids, unsigned axis, double pos_m,
                            canproto_frame_t *out)
 {
     int clamped = 0;
     if (axis >= CANPROTO_CIA402_AXES || !ids->cia402_cob_id[axis])
         return -CANPROTO_ECONFIG;
-    int64_t inc = quantize(pos_m * ids->cia402_counts_per_m, 1.0, INT32_MIN, INT32_MAX, &clamped);
+    int64_t inc = canproto_cia402_counts(ids, axis, pos_m, &clamped);
     if (ids->cia402_controlword) {
         frame_init(out, ids->cia402_cob_id[axis], 6, 0);
         put_le(&out->data[0], 2, ids->cia402_controlword_value);

@@ -213,7 +213,22 @@ typedef struct {
     double cia402_counts_per_m; /* target position increments per metre (> 0) */
     int cia402_controlword;     /* 1: RPDO = controlword (2 bytes) + target (4 bytes) */
     uint16_t cia402_controlword_value; /* default 0x000F: enable operation */
+    /* Per axis (a drive's own scale, direction and zero):
+     *   increments = offset + (invert ? -1 : 1) * round(pos_m * counts_per_m)
+     * counts_per_m 0 = cia402_counts_per_m. */
+    double cia402_axis_counts_per_m[CANPROTO_CIA402_AXES];
+    int cia402_invert[CANPROTO_CIA402_AXES];
+    int32_t cia402_offset[CANPROTO_CIA402_AXES];
 } canproto_ids_t;
+
+/*
+ * Drive increments for pos_m on axis (the formula above, clamped to int32;
+ * *clamped set if it was).  And back: the position in metres of drive
+ * increments inc (e.g. its 0x6064 position actual value).
+ */
+int32_t canproto_cia402_counts(const canproto_ids_t *ids, unsigned axis, double pos_m,
+                               int *clamped);
+double canproto_cia402_pos_m(const canproto_ids_t *ids, unsigned axis, int32_t inc);
 
 /* Defaults for object n (0-based): the bases above + n, own frames, no FD, no CiA 402. */
 void canproto_ids_default(canproto_ids_t *ids, unsigned n);
@@ -272,9 +287,9 @@ int canproto_encode_setpoint_fd(uint32_t id, int brs, const engine_setpoint_t *s
 void canproto_encode_sync(uint32_t id, uint8_t counter, canproto_frame_t *out);
 
 /*
- * CiA 402 RPDO for one axis: 0x607A target position = round(pos_m *
- * counts_per_m), clamped to int32.  Returns 0, CANPROTO_CLAMPED, or
- * -CANPROTO_ECONFIG (axis not configured).
+ * CiA 402 RPDO for one axis: 0x607A target position =
+ * canproto_cia402_counts(pos_m), clamped to int32.  Returns 0,
+ * CANPROTO_CLAMPED, or -CANPROTO_ECONFIG (axis not configured).
  */
 int canproto_encode_cia402(const canproto_ids_t *ids, unsigned axis, double pos_m,
                            canproto_frame_t *out);

@@ -43,7 +43,9 @@ class Ids(ctypes.Structure):
                 ("own", ctypes.c_int), ("cia402", ctypes.c_int),
                 ("cia402_cob_id", ctypes.c_uint32 * AXES),
                 ("cia402_counts_per_m", ctypes.c_double), ("cia402_controlword", ctypes.c_int),
-                ("cia402_controlword_value", ctypes.c_uint16)]
+                ("cia402_controlword_value", ctypes.c_uint16),
+                ("cia402_axis_counts_per_m", ctypes.c_double * AXES),
+                ("cia402_invert", ctypes.c_int * AXES), ("cia402_offset", ctypes.c_int32 * AXES)]
 
 
 class Status(ctypes.Structure):
@@ -66,6 +68,8 @@ def load():
                                                 P(Frame)]
     lib.canproto_encode_status.argtypes = [ctypes.c_uint32, P(Status), P(Frame)]
     lib.canproto_encode_cia402.argtypes = [P(Ids), ctypes.c_uint, ctypes.c_double, P(Frame)]
+    lib.canproto_cia402_pos_m.argtypes = [P(Ids), ctypes.c_uint, ctypes.c_int32]
+    lib.canproto_cia402_pos_m.restype = ctypes.c_double
     lib.canproto_ids_default.argtypes = [P(Ids), ctypes.c_uint]
     lib.canproto_rx_init.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint]
     lib.canproto_rx_frame.argtypes = [ctypes.c_void_p, P(Frame), ctypes.c_int, P(RxOut)]

@@ -177,6 +177,26 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
         d = decode(self.db, f)
         self.assertEqual(d["Target_Position_607A"], round(-12.34567 * 10000))
 
+    # Given per-axis scale, an inverted axis and an offset, then the increments
+    # are offset - round(pos * counts_per_m) (exact in Python's integers and
+    # Fractions), and they read back to the position.
+    def test_cia402_axis_scale_sign_offset(self):
+        ids = cp.Ids()
+        LIB.canproto_ids_default(ctypes.byref(ids), 0)
+        ids.cia402_axis_counts_per_m[2] = 131072.0  # 2^17 per metre, as an encoder
+        ids.cia402_invert[2] = 1
+        ids.cia402_offset[2] = -5000
+        f = cp.Frame()
+        for pos in (0.0, 1.5, -2.25, 3.1e-6, 100.0):
+            self.assertEqual(LIB.canproto_encode_cia402(ctypes.byref(ids), 2, pos, ctypes.byref(f)), 0)
+            want = -5000 - round(fractions.Fraction(pos) * 131072)
+            self.assertEqual(decode(self.db, f)["Target_Position_607A"], want, pos)
+            self.assertAlmostEqual(LIB.canproto_cia402_pos_m(ctypes.byref(ids), 2, want), pos,
+                                   delta=0.5 / 131072)
+        # out of int32 after the offset: clamped, reported
+        self.assertEqual(LIB.canproto_encode_cia402(ctypes.byref(ids), 2, -17000.0, ctypes.byref(f)), 1)
+        self.assertEqual(decode(self.db, f)["Target_Position_607A"], 2**31 - 1)
+
 
 class EncodersSendTheNearestCode(unittest.TestCase):
     """Exact arithmetic (fractions.Fraction) as the reference: the code in the
