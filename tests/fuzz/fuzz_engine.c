@@ -1,9 +1,24 @@
 /*
- * fuzz_engine.c - libFuzzer target: arbitrary sequences of pushes (any bit
- * patterns for time and position, NaN and infinities included), ticks (also
- * skipping and going backwards), finish, stop, clear and counter resets, on
- * several configurations.  Checks: no crash, no sanitizer finding, and no
- * setpoint is ever NaN or infinite.
+ * fuzz_engine.c - libFuzzer target: bounded random sequences of pushes (small
+ * steps mostly, raw bit patterns for time and position sometimes: NaN and
+ * infinities included), ticks (one or several periods, sometimes backwards),
+ * finish, stop, clear and counter resets, on several configurations.
+ *
+ * Oracle: the safe-motion property (issue 10):
+ *  - every setpoint is finite (from the first position on);
+ *  - no position step beyond the speed limit: between two ticks k periods
+ *    apart, |delta pos| <= k * period * max_speed_m_s + 1e-9 m (Euclidean)
+ *    when the configuration has a speed limit, both ticks holding or
+ *    transferring; CURVE_MARGIN times that on the curve (see below);
+ *  - it always finishes: after engine_finish with no further input, the
+ *    output reaches FINISHED (or stays WAITING when no waypoint was accepted
+ *    since the last clear) within the time the accepted waypoints and their
+ *    transfers can take, and rests there.
+ *
+ * Fast by construction: the engine's buffer is the smallest the configuration
+ * allows (lookahead + fragment + 8 waypoints; the default 4096 cost a 2 MB
+ * calloc per input), at most MAX_OPS operations per input, coordinates within
+ * max_abs_m = 20 m and gaps above 1 s so transfers and tracks stay short.
  */
 #include <math.h>
 #include <stdint.h>
@@ -11,6 +26,18 @@
 #include <string.h>
 
 #include "engine.h"
+
+#define MAX_OPS 256
+/* The curve passes through the waypoints at their times, and engine_push
+ * checks the mean speed between waypoints against max_speed_m_s; between them
+ * the cubic may be faster (1.5 x the mean on a rest-to-rest segment).  Steps
+ * on the curve are checked against CURVE_MARGIN x the limit (a jump is far
+ * beyond it); holds and transfers (rest-to-rest at most the limit, engine.h)
+ * against the limit itself. */
+#ifndef CURVE_MARGIN
+#define CURVE_MARGIN 3.0
+#endif
+#define HOLD_OR_TRANSFER (ENGINE_SP_HOLD | ENGINE_SP_TRANSFER)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -24,47 +51,120 @@ static double take_double(const uint8_t **p, const uint8_t *end)
     return d;
 }
 
+typedef struct {
+    engine_t *e;
+    engine_config_t c;
+    int64_t now;
+    engine_setpoint_t last;
+    int have_last;   /* last holds a setpoint with a position */
+    int positioned;  /* a waypoint was accepted or a position set: from the
+                        next tick on, every setpoint is a position */
+} run_t;
+
+/* Before any position exists the output is no position (ENGINE_SP_NO_POSITION,
+ * NaN; before that flag existed: a documented hold at 0), not a setpoint: the
+ * step bound applies from the first position on. */
+static int no_position(const run_t *r, const engine_setpoint_t *sp)
+{
+#ifdef ENGINE_SP_NO_POSITION
+    if (sp->flags & ENGINE_SP_NO_POSITION) {
+        if (r->have_last || sp->state != ENGINE_STATE_WAITING)
+            abort(); /* a position, once there, is never lost */
+        return 1;
+    }
+#endif
+    (void)sp;
+    return !r->positioned;
+}
+
+/* Tick to now + k periods and check the setpoint against the previous one. */
+static void tick(run_t *r, int64_t k)
+{
+    engine_setpoint_t sp;
+    r->now += k * r->c.period_ns;
+    if (engine_tick(r->e, r->now, &sp) != 0)
+        abort(); /* time went forward: never refused */
+    if (no_position(r, &sp))
+        return;
+    for (int a = 0; a < ENGINE_AXES; a++)
+        if (!isfinite(sp.pos_m[a]) || !isfinite(sp.vel_m_s[a]) || !isfinite(sp.acc_m_s2[a]))
+            abort();
+    if (r->have_last && r->c.max_speed_m_s > 0) {
+        double d2 = 0;
+        for (int a = 0; a < ENGINE_AXES; a++)
+            d2 += (sp.pos_m[a] - r->last.pos_m[a]) * (sp.pos_m[a] - r->last.pos_m[a]);
+        int exact = (sp.flags & HOLD_OR_TRANSFER) && (r->last.flags & HOLD_OR_TRANSFER);
+        double bound = (double)k * (double)r->c.period_ns * 1e-9 * r->c.max_speed_m_s *
+                       (exact ? 1 : CURVE_MARGIN) + 1e-9;
+        if (sqrt(d2) > bound)
+            abort();
+    }
+    r->last = sp;
+    r->have_last = 1;
+}
+
+static void configure(engine_config_t *c, uint8_t b0, uint8_t b1)
+{
+    engine_config_default(c);
+    switch (b0 % 5) {
+    case 1:
+        c->method = ENGINE_METHOD_BSPLINE;
+        c->param = ENGINE_PARAM_UNIFORM;
+        c->ends = ENGINE_ENDS_MULTIPLE;
+        c->fragment = 8;
+        c->overlap = 4;
+        break;
+    case 2:
+        c->ends = ENGINE_ENDS_NATURAL;
+        c->fragment = 6;
+        c->overlap = 2;
+        c->start_slack = 0;
+        break;
+    case 3:
+        c->method = ENGINE_METHOD_BSPLINE;
+        c->param = ENGINE_PARAM_UNIFORM;
+        c->ends = ENGINE_ENDS_HELD;
+        c->fragment = 8;
+        c->overlap = 4;
+        break;
+    case 4:
+        c->method = ENGINE_METHOD_SMOOTH;
+        c->fragment = 8;
+        c->overlap = 4;
+        c->smooth_window = 8;
+        c->smooth_ctrl = 4;
+        break;
+    default:
+        c->fragment = 8 + (b0 >> 4);
+        c->overlap = 2 * (1 + (b0 >> 6));
+        break;
+    }
+    static const double speeds[4] = {100, 10, 0, 5};
+    c->max_speed_m_s = speeds[b1 & 3];
+    c->max_accel_m_s2 = (b1 & 4) ? 0 : 30;
+    c->period_ns = (b1 & 8) ? 100000000 : 20000000;
+    c->max_gap_s = 1;
+    c->max_abs_m = 20;
+    c->capacity = engine_lookahead(c) + c->fragment + 8 + ((b1 >> 4) & 7);
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     const uint8_t *p = data, *end = data + size;
-    engine_config_t c;
-    engine_setpoint_t sp;
+    run_t r;
     engine_status_t st;
-    int64_t now = 0;
     double t = 0;
+    unsigned accepted = 0, ops = 0;
 
-    if (size < 1)
+    if (size < 2)
         return 0;
-    engine_config_default(&c);
-    switch (*p++ % 4) {
-    case 1:
-        c.method = ENGINE_METHOD_BSPLINE;
-        c.param = ENGINE_PARAM_UNIFORM;
-        c.ends = ENGINE_ENDS_MULTIPLE;
-        c.fragment = 8;
-        c.overlap = 4;
-        break;
-    case 2:
-        c.ends = ENGINE_ENDS_NATURAL;
-        c.fragment = 6;
-        c.overlap = 2;
-        c.start_slack = 0;
-        c.max_speed_m_s = 0;
-        break;
-    case 3:
-        c.method = ENGINE_METHOD_BSPLINE;
-        c.param = ENGINE_PARAM_UNIFORM;
-        c.ends = ENGINE_ENDS_HELD;
-        c.capacity = 96; /* near the minimum (lookahead + F + 8): EFULL often */
-        break;
-    default:
-        break;
-    }
-    c.max_gap_s = 5;
-    engine_t *e = engine_new(&c, NULL);
-    if (!e)
+    memset(&r, 0, sizeof r);
+    configure(&r.c, p[0], p[1]);
+    p += 2;
+    r.e = engine_new(&r.c, NULL);
+    if (!r.e)
         abort();
-    while (p < end) {
+    while (p < end && ops++ < MAX_OPS) {
         uint8_t op = *p++;
         switch (op % 8) {
         case 0: case 1: case 2: { /* push: small steps mostly, raw doubles sometimes */
@@ -74,39 +174,68 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 for (int k = 0; k < 3; k++)
                     w.pos_m[k] = take_double(&p, end);
             } else {
-                t += (op >> 3) * 0.05;
+                t += (op >> 3) * 0.02;
                 w.t_s = t;
                 for (int k = 0; k < 3 && p < end; k++)
-                    w.pos_m[k] = (double)(int8_t)*p++;
+                    w.pos_m[k] = 0.125 * (double)(int8_t)*p++;
             }
-            (void)engine_push(e, &w);
+            if (engine_push(r.e, &w) == 0) {
+                accepted++;
+                r.positioned = 1;
+            }
             break;
         }
         case 3: case 4: case 5:
-            now += (int64_t)((op >> 3) + 1) * c.period_ns;
-            (void)engine_tick(e, now, &sp);
-            for (int k = 0; k < 3; k++)
-                if (!isfinite(sp.pos_m[k]) || !isfinite(sp.vel_m_s[k]) ||
-                    !isfinite(sp.acc_m_s2[k]))
-                    abort();
+            tick(&r, (op >> 3) + 1);
             break;
         case 6:
-            if (op & 0x40)
-                engine_clear(e);
-            else if (op & 0x20)
-                (void)engine_stop(e);
-            else
-                (void)engine_finish(e);
+            if (op & 0x40) {
+                engine_clear(r.e);
+                accepted = 0;
+            } else if (op & 0x20) {
+                (void)engine_stop(r.e);
+            } else {
+                (void)engine_finish(r.e);
+            }
             break;
         default:
-            if (op & 0x80)
-                (void)engine_tick(e, now - c.period_ns, &sp); /* backwards: refused */
-            else if (op & 0x40)
-                engine_reset_counters(e);
-            engine_status(e, &st);
+            if ((op & 0x80) && r.have_last) {
+                engine_setpoint_t sp;
+                if (engine_tick(r.e, r.now - r.c.period_ns, &sp) != -ENGINE_ESTATE)
+                    abort(); /* backwards: refused */
+            } else if (op & 0x40) {
+                engine_reset_counters(r.e);
+            }
+            engine_status(r.e, &st);
             break;
         }
     }
-    engine_free(e);
+
+    /* It always finishes.  Every accepted waypoint adds at most max_gap_s of
+     * track and may start a trajectory reached by a transfer of at most
+     * max(1 s, 1.5 * distance / speed) (10 m/s without a limit), distance at
+     * most the box's diagonal. */
+    (void)engine_finish(r.e);
+    double v = r.c.max_speed_m_s > 0 ? r.c.max_speed_m_s : 10;
+    double transfer = fmax(1, 1.5 * 2 * sqrt(3) * r.c.max_abs_m / v) + 1;
+    double bound_s = (double)accepted * (r.c.max_gap_s + transfer) + transfer + 1;
+    int64_t step = 20, n = (int64_t)(bound_s * 1e9 / (double)r.c.period_ns) / step + 2;
+    for (int64_t i = 0; i < n; i++) {
+        engine_status(r.e, &st);
+        if (st.state == ENGINE_STATE_FINISHED || (accepted == 0 && st.state == ENGINE_STATE_WAITING))
+            break;
+        tick(&r, step);
+    }
+    engine_status(r.e, &st);
+    if (!(st.state == ENGINE_STATE_FINISHED || (accepted == 0 && st.state == ENGINE_STATE_WAITING)))
+        abort();
+    /* and rests there */
+    engine_setpoint_t rest = r.last;
+    tick(&r, 1);
+    if (r.have_last)
+        for (int a = 0; a < ENGINE_AXES; a++)
+            if (fabs(r.last.pos_m[a] - rest.pos_m[a]) > 1e-9 || fabs(r.last.vel_m_s[a]) > 0)
+                abort();
+    engine_free(r.e);
     return 0;
 }
