@@ -6,7 +6,8 @@
 #                   (unit, oracle, replay, daemon, CAN on a UML kernel, Modbus,
 #                   then the C tests again under ASan+UBSan)
 #   make bench      benchmarks, printing tables
-#   make fuzz       libFuzzer targets, FUZZ_SECONDS each
+#   make fuzz       libFuzzer targets to FUZZ_EXECS executions (or FUZZ_SECONDS)
+#                   each, two at a time, then a table (tests/fuzz/run_fuzz.sh)
 #   make install    PREFIX, DESTDIR respected
 #
 # Files are found by name, so adding a module or a test needs no edit here:
@@ -27,7 +28,10 @@ CFLAGS ?= -O2 -g
 PREFIX ?= /usr/local
 DESTDIR ?=
 BUILD ?= build
-FUZZ_SECONDS ?= 30
+FUZZ_SECONDS ?=
+FUZZ_EXECS ?=
+FUZZ_JOBS ?= 2
+FUZZ_TARGETS ?=
 PYTHON ?= /usr/bin/python3
 
 PROGRAMS := trajd trajreplay trajsurf
@@ -64,7 +68,7 @@ BENCHES := $(BENCH_SRC:tests/bench/%.c=$(BUILD)/tests/%)
 # tests/fuzz/regress/<target>/ and tests/fuzz/corpus/<target>/.
 REPLAY_BINS := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/tests/test_%)
 
-.PHONY: all run check check-build test test-asan bench fuzz install deps deps-run clean
+.PHONY: all run check check-build test test-asan bench fuzz fuzz-merge install deps deps-run clean
 .DELETE_ON_ERROR:
 .SECONDARY:
 
@@ -179,14 +183,25 @@ $(BUILD)/fuzz/obj/gen/%.o: $(BUILD)/gen/%.c
 	$(FUZZ_CC) $(TRAJD_CPPFLAGS) -std=c11 $(FUZZ_FLAGS) -MMD -MP -c -o $@ $<
 $(BUILD)/fuzz/%: $(BUILD)/fuzz/obj/tests/fuzz/%.o $(LIB_SRC:%.c=$(BUILD)/fuzz/obj/%.o) $(DAEMON_SRC:%.c=$(BUILD)/fuzz/obj/%.o) $(BUILD)/fuzz/obj/gen/transport_table.o
 	$(FUZZ_CC) -fsanitize=fuzzer,address,undefined -o $@ $^ $(LDLIBS_DAEMON)
+# Numeric code (engine, splines) without comparison tracing: it finds nothing
+# there (no magic values) and took 40 % of the engine target's time.
+FUZZ_NUMERIC := $(filter-out lib/spline/path.c,$(wildcard lib/engine/*.c lib/spline/*.c))
+$(FUZZ_NUMERIC:%.c=$(BUILD)/fuzz/obj/%.o): FUZZ_FLAGS += -fno-sanitize-coverage=trace-cmp
+# make fuzz [FUZZ_EXECS=N | FUZZ_SECONDS=S] [FUZZ_JOBS=2] [FUZZ_TARGETS="fuzz_x ..."]
 fuzz: deps
 	@$(MAKE) --no-print-directory $(FUZZ_BINS)
-	@for f in $(FUZZ_BINS); do n=$$(basename $$f); mkdir -p $(BUILD)/fuzz/corpus/$$n; \
-		echo "== $$n ($(FUZZ_SECONDS) s)"; \
-		$$f -max_total_time=$(FUZZ_SECONDS) -print_final_stats=1 $(BUILD)/fuzz/corpus/$$n \
-			$$( [ -d tests/fuzz/corpus/$$n ] && echo tests/fuzz/corpus/$$n ) > $(BUILD)/fuzz/$$n.log 2>&1; rc=$$?; \
-		grep -E 'stat::number_of_executed_units|stat::peak_rss_mb|ERROR|SUMMARY' $(BUILD)/fuzz/$$n.log; \
-		[ $$rc -eq 0 ] || { echo "$$n: finding, see $(BUILD)/fuzz/$$n.log"; exit 1; }; done
+	@BUILD=$(abspath $(BUILD)) FUZZ_EXECS="$(FUZZ_EXECS)" FUZZ_SECONDS="$(FUZZ_SECONDS)" \
+		FUZZ_JOBS="$(FUZZ_JOBS)" FUZZ_TARGETS="$(FUZZ_TARGETS)" bash tests/fuzz/run_fuzz.sh
+
+# The corpora a run grew, minimized (-merge=1) back into tests/fuzz/corpus/<target>/.
+fuzz-merge:
+	@$(MAKE) --no-print-directory $(FUZZ_BINS)
+	@for f in $(FUZZ_BINS); do n=$$(basename $$f); new=$(BUILD)/fuzz/merged/$$n; \
+		rm -rf $$new; mkdir -p $$new tests/fuzz/corpus/$$n; \
+		$$f -merge=1 $$new tests/fuzz/corpus/$$n $(BUILD)/fuzz/corpus/$$n > $(BUILD)/fuzz/$$n.merge.log 2>&1 \
+			|| { echo "$$n: merge failed, see $(BUILD)/fuzz/$$n.merge.log"; exit 1; }; \
+		rm -f tests/fuzz/corpus/$$n/*; cp $$new/* tests/fuzz/corpus/$$n/ 2>/dev/null; \
+		echo "$$n: $$(ls tests/fuzz/corpus/$$n | wc -l) files, $$(du -sk tests/fuzz/corpus/$$n | cut -f1) KB"; done
 
 # ---- install ----------------------------------------------------------------
 install: $(BINS)

@@ -1,0 +1,88 @@
+/*
+ * fuzz_can_logfile.c - libFuzzer target for the candump log reader
+ * (daemon/can/can_logfile.c, can_logfile_load): the input is the file, lines
+ * of any length.
+ *
+ * Oracle, a model of the reader built here independently: split the input at
+ * '\n'; a line becomes a frame only if, whole, it is no longer than
+ * CAN_LOGFILE_LINE_MAX, holds no NUL byte, and candump_parse_line accepts it.
+ * The frames replayed (all of them, at a time far ahead) must be exactly these,
+ * in file order: no piece of a line is ever parsed as a frame (a 511-byte
+ * split once turned the tail of a long line into a command).  Every line is
+ * counted once: lines = comments + bad lines + frames.
+ */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <syslog.h>
+
+#include "can_logfile.h"
+#include "candump.h"
+#include "log.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+#define MAX_FRAMES 4096
+
+static int same_frame(const canproto_frame_t *a, const canproto_frame_t *b)
+{
+    return a->id == b->id && a->len == b->len && a->flags == b->flags &&
+           !memcmp(a->data, b->data, a->len);
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    static canproto_frame_t want[MAX_FRAMES];
+    static char line[CAN_LOGFILE_LINE_MAX + 1];
+    size_t nwant = 0, nlines = 0, pos = 0;
+    char err[256];
+
+    if (size == 0)
+        return 0;
+    log_set_level(LOG_ERR); /* bad lines are logged as warnings: not here */
+    /* the model */
+    while (pos < size) {
+        const uint8_t *nl = memchr(data + pos, '\n', size - pos);
+        size_t len = nl ? (size_t)(nl - (data + pos)) + 1 : size - pos;
+        candump_line_t cl;
+        nlines++;
+        if (len <= CAN_LOGFILE_LINE_MAX && !memchr(data + pos, '\0', len)) {
+            memcpy(line, data + pos, len);
+            line[len] = '\0';
+            if (candump_parse_line(line, &cl) == 0) {
+                if (nwant == MAX_FRAMES)
+                    return 0;
+                want[nwant++] = cl.frame;
+            }
+        }
+        pos += len;
+    }
+
+    can_logfile_t *l = can_logfile_open(NULL, NULL, "vcan0", 0, err, sizeof err);
+    if (!l)
+        abort();
+    FILE *fp = fmemopen((void *)data, size, "r");
+    if (!fp)
+        abort();
+    if (can_logfile_load(l, fp, "fuzz", err, sizeof err) != 0)
+        abort();
+    fclose(fp);
+
+    can_logfile_stats_t st;
+    can_logfile_stats(l, &st);
+    if (st.lines != nlines || st.lines != st.comments + st.bad_lines + st.frames_in ||
+        st.frames_in != nwant)
+        abort();
+    canproto_frame_t f;
+    size_t got = 0;
+    while (can_logfile_recv(l, INT64_MAX, &f) == 1) {
+        if (got >= nwant || !same_frame(&f, &want[got]))
+            abort();
+        got++;
+    }
+    if (got != nwant || !can_logfile_done(l))
+        abort();
+    can_logfile_close(l);
+    return 0;
+}
