@@ -14,18 +14,6 @@
 #include "geo.h"
 #include "track_loader.h"
 
-static int ends_with_path(const char *name)
-{
-    size_t n = strlen(name);
-    return n >= 5 && strcasecmp(name + n - 5, ".path") == 0;
-}
-
-static int ends_with_gpx(const char *name)
-{
-    size_t n = strlen(name);
-    return n >= 4 && strcasecmp(name + n - 4, ".gpx") == 0;
-}
-
 static int looks_like_xml(const char *buf, size_t len)
 {
     size_t i = 0;
@@ -35,6 +23,55 @@ static int looks_like_xml(const char *buf, size_t len)
     while (i < len && isspace((unsigned char)buf[i]))
         i++;
     return i < len && buf[i] == '<';
+}
+
+/* Every format: its name, what it reads, the extension and the content test
+ * that pick it under TRACK_FMT_AUTO (extensions first, then content in this
+ * order; CSV when nothing matches). */
+typedef struct {
+    const char *help;
+    const char *ext;
+    int (*sniff)(const char *buf, size_t len);
+} format_info_t;
+
+static const format_info_t formats[TRACK_FMT_COUNT] = {
+    [TRACK_FMT_AUTO] = {"from the extension, else the content, else the CSV header",
+                        NULL, NULL},
+    [TRACK_FMT_XYZ] = {"CSV t,x,y[,z]: seconds, metres", NULL, NULL},
+    [TRACK_FMT_LATLON] = {"CSV t,lat,lon[,alt]: seconds, degrees, metres", NULL,
+                          NULL},
+    [TRACK_FMT_GPX] = {"GPX 1.0/1.1 <trkpt> with <time> (*.gpx, or starts with '<')",
+                       ".gpx", looks_like_xml},
+    [TRACK_FMT_PATH] = {"lines and arcs, lib/spline/path.h (*.path)", ".path", NULL},
+    [TRACK_FMT_N2K] = {"candump log of NMEA 2000 PGN 129029 or 129025 positions",
+                       NULL, track_n2k_sniff},
+    [TRACK_FMT_NMEA0183] = {"NMEA 0183 GGA/RMC sentences, checksummed (*.nmea)",
+                            ".nmea", track_nmea0183_sniff},
+    [TRACK_FMT_IGC] = {"IGC flight log: B records, date from HFDTE (*.igc)", ".igc",
+                       track_igc_sniff},
+};
+
+const char *const track_format_names[TRACK_FMT_COUNT + 1] = {
+    "auto", "xyz", "latlon", "gpx", "path", "n2k", "nmea", "igc", NULL,
+};
+
+static int ends_with(const char *name, const char *ext)
+{
+    size_t n = strlen(name), e = strlen(ext);
+    return n >= e && strcasecmp(name + n - e, ext) == 0;
+}
+
+/* The format AUTO picks for name and content; XYZ stands for "CSV, the
+ * header decides". */
+static track_format_t detect(const char *name, const char *buf, size_t len)
+{
+    for (int f = 0; f < TRACK_FMT_COUNT; f++)
+        if (formats[f].ext && ends_with(name, formats[f].ext))
+            return (track_format_t)f;
+    for (int f = 0; f < TRACK_FMT_COUNT; f++)
+        if (formats[f].sniff && formats[f].sniff(buf, len))
+            return (track_format_t)f;
+    return TRACK_FMT_AUTO;
 }
 
 void track_free(track_t *trk)
@@ -98,6 +135,7 @@ static int rows_to_track(track_loader_t *L, int geographic, track_t *trk)
     trk->n = L->n;
     trk->geographic = geographic;
     trk->skipped = L->skipped;
+    trk->ignored = L->ignored;
     trk->reports = L->reports;
     trk->nreports = L->nreports;
     L->reports = NULL;
@@ -119,22 +157,34 @@ int track_parse(const char *name, const char *buf, size_t len,
         err[0] = '\0';
 
     int rc;
-    track_format_t got = fmt;
-    if (fmt == TRACK_FMT_PATH || (fmt == TRACK_FMT_AUTO && ends_with_path(L.name))) {
+    track_format_t got = fmt == TRACK_FMT_AUTO ? detect(L.name, buf, len) : fmt;
+    switch (got) {
+    case TRACK_FMT_PATH:
         rc = track_path_parse(&L, buf, len, trk);
         if (rc)
             track_free(trk);
         return rc;
-    }
-    if (fmt == TRACK_FMT_GPX ||
-        (fmt == TRACK_FMT_AUTO && (ends_with_gpx(L.name) || looks_like_xml(buf, len)))) {
-        got = TRACK_FMT_GPX;
+    case TRACK_FMT_GPX:
         rc = track_gpx_parse(&L, buf, len, &trk->segments);
-    } else if (fmt == TRACK_FMT_AUTO || fmt == TRACK_FMT_XYZ || fmt == TRACK_FMT_LATLON) {
-        rc = track_csv_parse(&L, buf, len, fmt, &got);
-    } else {
+        break;
+    case TRACK_FMT_N2K:
+        rc = track_n2k_parse(&L, buf, len);
+        break;
+    case TRACK_FMT_NMEA0183:
+        rc = track_nmea0183_parse(&L, buf, len);
+        break;
+    case TRACK_FMT_IGC:
+        rc = track_igc_parse(&L, buf, len);
+        break;
+    case TRACK_FMT_AUTO:
+    case TRACK_FMT_XYZ:
+    case TRACK_FMT_LATLON:
+        rc = track_csv_parse(&L, buf, len, got, &got);
+        break;
+    default:
         track_loader_fatal(&L, 0, "unknown format %d", (int)fmt);
         rc = -1;
+        break;
     }
     if (rc == 0)
         rc = rows_to_track(&L, got != TRACK_FMT_XYZ, trk);
@@ -211,16 +261,11 @@ int track_load(const char *path, track_format_t fmt, track_t *trk, char *err,
 
 int track_format_parse(const char *s, track_format_t *fmt)
 {
-    static const struct { const char *name; track_format_t f; } tab[] = {
-        {"auto", TRACK_FMT_AUTO}, {"xyz", TRACK_FMT_XYZ},
-        {"latlon", TRACK_FMT_LATLON}, {"gpx", TRACK_FMT_GPX},
-        {"path", TRACK_FMT_PATH},
-    };
     if (!s)
         return -1;
-    for (size_t i = 0; i < sizeof tab / sizeof tab[0]; i++)
-        if (strcmp(s, tab[i].name) == 0) {
-            *fmt = tab[i].f;
+    for (int f = 0; f < TRACK_FMT_COUNT; f++)
+        if (strcmp(s, track_format_names[f]) == 0) {
+            *fmt = (track_format_t)f;
             return 0;
         }
     return -1;
@@ -228,12 +273,10 @@ int track_format_parse(const char *s, track_format_t *fmt)
 
 const char *track_format_name(track_format_t fmt)
 {
-    switch (fmt) {
-    case TRACK_FMT_AUTO: return "auto";
-    case TRACK_FMT_XYZ: return "xyz";
-    case TRACK_FMT_LATLON: return "latlon";
-    case TRACK_FMT_GPX: return "gpx";
-    case TRACK_FMT_PATH: return "path";
-    }
-    return "unknown";
+    return (unsigned)fmt < TRACK_FMT_COUNT ? track_format_names[fmt] : "unknown";
+}
+
+const char *track_format_help(track_format_t fmt)
+{
+    return (unsigned)fmt < TRACK_FMT_COUNT ? formats[fmt].help : "";
 }

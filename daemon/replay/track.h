@@ -58,11 +58,15 @@
 #include "engine.h"
 
 typedef enum {
-    TRACK_FMT_AUTO = 0,  /* from the extension (.gpx) or a leading '<', else the CSV header */
+    TRACK_FMT_AUTO = 0,  /* from the extension, else the content, else the CSV header */
     TRACK_FMT_XYZ,       /* CSV t,x,y,z in seconds and metres */
     TRACK_FMT_LATLON,    /* CSV t,lat,lon[,alt] in seconds, degrees, metres */
     TRACK_FMT_GPX,       /* GPX 1.0/1.1 trkpt with <time> (and <ele>) */
     TRACK_FMT_PATH,      /* a path of lines and arcs (lib/spline/path.h text form; AUTO: extension .path) */
+    TRACK_FMT_N2K,       /* candump log of NMEA 2000 PGN 129029 / 129025 */
+    TRACK_FMT_NMEA0183,  /* NMEA 0183 GGA / RMC sentences */
+    TRACK_FMT_IGC,       /* IGC flight log, B records */
+    TRACK_FMT_COUNT
 } track_format_t;
 
 /* track_load_opts flags */
@@ -85,6 +89,10 @@ typedef struct {
     int geographic;           /* 1 if converted from lat/lon */
     double lat0_deg, lon0_deg, alt0_m; /* ENU origin (first point) when geographic */
     size_t skipped;           /* bad lines skipped (TRACK_SKIP_BAD) */
+    size_t ignored;           /* well-formed records that give no waypoint: N2K
+                                 position n/a, no fix, a fast packet missing a
+                                 frame, another source; NMEA status V / quality 0;
+                                 IGC validity V is kept (2-D fix: no altitude) */
     size_t nreports;          /* messages in reports[] (at most TRACK_REPORT_MAX) */
     char (*reports)[TRACK_REPORT_LEN]; /* "file:line: what" of the first skipped lines */
     size_t segments;          /* GPX <trkseg> elements seen (0 for CSV) */
@@ -119,11 +127,19 @@ int track_parse(const char *name, const char *buf, size_t len,
 /* Release; safe on a zeroed or already freed track. */
 void track_free(track_t *trk);
 
-/* Parse "auto", "xyz", "latlon", "gpx"; returns -1 if unknown. */
+/* Format names indexed by track_format_t ("auto", "xyz", "latlon", "gpx",
+ * "path", "n2k", "nmea", "igc"), NULL-terminated: for --format, replay.format
+ * and help texts, so a new format needs no edit there. */
+extern const char *const track_format_names[TRACK_FMT_COUNT + 1];
+
+/* Parse a name of track_format_names; returns -1 if unknown. */
 int track_format_parse(const char *s, track_format_t *fmt);
 
-/* Name of a format ("auto", "xyz", "latlon", "gpx"). */
+/* Name of a format, "unknown" if out of range. */
 const char *track_format_name(track_format_t fmt);
+
+/* One line saying what a format reads (for --help), "" if out of range. */
+const char *track_format_help(track_format_t fmt);
 
 /*
  * Parse an ISO 8601 UTC date-time as used by GPX ("2014-08-22T16:48:52Z",

@@ -132,3 +132,39 @@ track_shown_t track_field_show(const char *f)
     o.s[j] = '\0';
     return o;
 }
+
+void track_lines_init(track_lines_t *it, const char *buf, size_t len)
+{
+    it->buf = buf;
+    it->len = len;
+    it->pos = 0;
+    it->lineno = 0;
+    it->line[0] = '\0';
+}
+
+int track_lines_next(track_loader_t *L, track_lines_t *it)
+{
+    for (;;) {
+        if (it->pos >= it->len)
+            return 0;
+        const char *src = it->buf + it->pos;
+        const char *nl = memchr(src, '\n', it->len - it->pos);
+        size_t ll = nl ? (size_t)(nl - src) : it->len - it->pos;
+        it->pos += ll + 1;
+        it->lineno++;
+        if (ll > 0 && src[ll - 1] == '\r')
+            ll--;
+        int rc = 0;
+        if (ll > TRACK_LINE_MAX)
+            rc = track_loader_bad(L, it->lineno, "line longer than %d bytes", TRACK_LINE_MAX);
+        else if (memchr(src, '\0', ll))
+            rc = track_loader_bad(L, it->lineno, "NUL byte (binary file?)");
+        else {
+            memcpy(it->line, src, ll);
+            it->line[ll] = '\0';
+            return 1;
+        }
+        if (rc)
+            return -1;
+    }
+}

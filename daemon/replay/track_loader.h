@@ -31,6 +31,7 @@ typedef struct {
     track_row_t *rows;
     size_t n, cap;
     size_t skipped;
+    size_t ignored;   /* records without a usable fix (see track_t.ignored) */
     char (*reports)[TRACK_REPORT_LEN]; /* TRACK_REPORT_MAX, allocated on the first skip */
     size_t nreports;
     int geographic;   /* rows hold lat, lon, alt (set by the parser) */
@@ -67,6 +68,21 @@ typedef struct {
 } track_shown_t;
 track_shown_t track_field_show(const char *f);
 
+/* Lines of a buffer, for the text formats: each call gives the next line
+ * as a NUL-terminated copy in line[] ('\n' and a '\r' before it removed).
+ * Returns 1 (it->lineno is its number), 0 at the end, -1 when loading must
+ * stop.  A line longer than TRACK_LINE_MAX or holding a NUL byte is a bad
+ * line (track_loader_bad): skipped with TRACK_SKIP_BAD, else -1. */
+typedef struct {
+    const char *buf;
+    size_t len, pos;
+    unsigned long lineno;
+    char line[TRACK_LINE_MAX + 1];
+} track_lines_t;
+
+void track_lines_init(track_lines_t *it, const char *buf, size_t len);
+int track_lines_next(track_loader_t *L, track_lines_t *it);
+
 /* Days from 1970-01-01 to y-m-d in the proleptic Gregorian calendar. */
 int64_t track_days_from_civil(int64_t y, int m, int d);
 
@@ -77,5 +93,12 @@ int track_gpx_parse(track_loader_t *L, const char *buf, size_t len,
                     size_t *segments);
 int track_path_parse(track_loader_t *L, const char *buf, size_t len,
                      track_t *trk);
+int track_n2k_parse(track_loader_t *L, const char *buf, size_t len);
+int track_nmea0183_parse(track_loader_t *L, const char *buf, size_t len);
+int track_igc_parse(track_loader_t *L, const char *buf, size_t len);
+/* Content sniffers for TRACK_FMT_AUTO (1: looks like this format). */
+int track_n2k_sniff(const char *buf, size_t len);
+int track_nmea0183_sniff(const char *buf, size_t len);
+int track_igc_sniff(const char *buf, size_t len);
 
 #endif

@@ -1,0 +1,191 @@
+/* track_n2k.c - NMEA 2000 positions from a candump log (PGN 129025 Position
+ * Rapid Update, PGN 129029 GNSS Position Data over fast packets; decoders in
+ * lib/proto/nmea2000.h).  See track.h for the rules. */
+#include "track_loader.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "candump.h"
+#include "geo.h"
+#include "nmea2000.h"
+
+/* One position as read, of any stream. */
+typedef struct {
+    int64_t sec;        /* whole seconds (log stamp, or 129029 date and time) */
+    double frac;        /* and the fraction, kept apart so differences are exact */
+    double lat, lon, alt;
+    uint32_t line;
+    uint32_t pgn;
+    uint8_t src;
+} fix_t;
+
+typedef struct {
+    track_loader_t *L;
+    n2k_fast_t *fast;   /* 256: one 129029 message in progress per source */
+    fix_t *fix;
+    size_t n, cap;
+} n2k_t;
+
+static int add_fix(n2k_t *N, const fix_t *f)
+{
+    if (N->n == N->cap) {
+        size_t cap = N->cap ? 2 * N->cap : 256;
+        fix_t *nf = realloc(N->fix, cap * sizeof *nf);
+        if (!nf) {
+            track_loader_fatal(N->L, 0, "out of memory");
+            return -1;
+        }
+        N->fix = nf;
+        N->cap = cap;
+    }
+    N->fix[N->n++] = *f;
+    return 0;
+}
+
+/* A decoded position of a frame at log time ts_us.  Returns 0 or -1. */
+static int position(n2k_t *N, int rc, const n2k_position_t *p, const n2k_id_t *id,
+                    int64_t ts_us, unsigned long lineno)
+{
+    if (rc == 0 && geo_check(p->lat_deg, p->lon_deg, isnan(p->alt_m) ? 0.0 : p->alt_m))
+        rc = -N2K_ERANGE;
+    if (rc < 0 || (id->pgn == N2K_PGN_GNSS_POSITION && !p->has_time)) {
+        N->L->ignored++; /* a record without a usable fix: not a bad line */
+        return 0;
+    }
+    fix_t f = {.lat = p->lat_deg, .lon = p->lon_deg, .alt = p->alt_m, .pgn = id->pgn,
+               .src = id->source, .line = lineno > UINT32_MAX ? UINT32_MAX : (uint32_t)lineno};
+    if (id->pgn == N2K_PGN_GNSS_POSITION) {
+        double whole = floor(p->tod_s);
+        f.sec = p->days * 86400 + (int64_t)whole;
+        f.frac = p->tod_s - whole;
+    } else {
+        f.sec = ts_us / 1000000;
+        f.frac = (double)(ts_us % 1000000) * 1e-6;
+    }
+    return add_fix(N, &f);
+}
+
+static int frame(n2k_t *N, const candump_line_t *cl, unsigned long lineno)
+{
+    const canproto_frame_t *fr = &cl->frame;
+    n2k_id_t id;
+    n2k_position_t p;
+    if (!(fr->flags & CANPROTO_F_EFF) || (fr->flags & (CANPROTO_F_RTR | CANPROTO_F_ERR)))
+        return 0; /* NMEA 2000 uses 29-bit data frames only */
+    n2k_id_decode(fr->id, &id);
+    if (id.pgn == N2K_PGN_POSITION_RAPID)
+        return position(N, n2k_decode_position_rapid(fr->data, fr->len, &p), &p, &id,
+                        cl->ts_us, lineno);
+    if (id.pgn != N2K_PGN_GNSS_POSITION)
+        return 0;
+    n2k_fast_t *f = &N->fast[id.source];
+    int rc = n2k_fast_push(f, fr->data, fr->len);
+    if (rc < 0) {
+        N->L->ignored++; /* a message lost to a missing frame */
+        return 0;
+    }
+    if (rc == 0)
+        return 0;
+    return position(N, n2k_decode_gnss_position(f->data, f->len, &p), &p, &id, cl->ts_us,
+                    lineno);
+}
+
+/* The stream kept: 129029 if any (fix time, 1e-16 deg, altitude), else
+ * 129025; of that PGN the source with the most fixes (the first on a tie). */
+static void choose(const n2k_t *N, uint32_t *pgn, int *src)
+{
+    size_t count[2][256] = {{0}};
+    for (size_t i = 0; i < N->n; i++)
+        count[N->fix[i].pgn == N2K_PGN_GNSS_POSITION][N->fix[i].src]++;
+    *src = -1;
+    for (int k = 1; k >= 0 && *src < 0; k--) {
+        size_t best = 0;
+        for (int s = 0; s < 256; s++)
+            if (count[k][s] > best) {
+                best = count[k][s];
+                *src = s;
+            }
+        *pgn = k ? N2K_PGN_GNSS_POSITION : N2K_PGN_POSITION_RAPID;
+    }
+}
+
+static int rows(n2k_t *N)
+{
+    uint32_t pgn;
+    int src;
+    choose(N, &pgn, &src);
+    const fix_t *f0 = NULL;
+    for (size_t i = 0; i < N->n; i++) {
+        const fix_t *f = &N->fix[i];
+        if (f->pgn != pgn || f->src != src) {
+            N->L->ignored++; /* another source or the other PGN */
+            continue;
+        }
+        if (!f0)
+            f0 = f;
+        double t = (double)(f->sec - f0->sec) + (f->frac - f0->frac);
+        if (track_loader_add_row(N->L, t, f->lat, f->lon, f->alt, f->line))
+            return -1;
+    }
+    return 0;
+}
+
+int track_n2k_parse(track_loader_t *L, const char *buf, size_t len)
+{
+    n2k_t N = {.L = L};
+    track_lines_t *it = malloc(sizeof *it);
+    N.fast = calloc(256, sizeof *N.fast);
+    int rc = -1, r;
+    if (!it || !N.fast) {
+        track_loader_fatal(L, 0, "out of memory");
+        goto out;
+    }
+    track_lines_init(it, buf, len);
+    while ((r = track_lines_next(L, it)) > 0) {
+        candump_line_t cl;
+        int prc = candump_parse_line(it->line, &cl);
+        if (prc == -CANDUMP_ESKIP)
+            continue;
+        if (prc < 0) {
+            if (track_loader_bad(L, it->lineno, "not a candump frame: %s",
+                                 candump_strerror(prc)))
+                goto out;
+            continue;
+        }
+        if (frame(&N, &cl, it->lineno) < 0)
+            goto out;
+    }
+    if (r == 0)
+        rc = rows(&N);
+out:
+    free(it);
+    free(N.fast);
+    free(N.fix);
+    return rc;
+}
+
+int track_n2k_sniff(const char *buf, size_t len)
+{
+    /* the first line that is not blank or a comment is a stamped candump frame */
+    size_t i = 0;
+    while (i < len) {
+        size_t e = i;
+        while (e < len && buf[e] != '\n')
+            e++;
+        size_t k = i;
+        while (k < e && (buf[k] == ' ' || buf[k] == '\t' || buf[k] == '\r'))
+            k++;
+        if (k < e && buf[k] != '#') {
+            char line[256];
+            size_t n = e - k < sizeof line - 1 ? e - k : sizeof line - 1;
+            candump_line_t cl;
+            memcpy(line, buf + k, n);
+            line[n] = '\0';
+            return buf[k] == '(' && candump_parse_line(line, &cl) == 0;
+        }
+        i = e + 1;
+    }
+    return 0;
+}
