@@ -99,8 +99,9 @@ static void usage(FILE *f)
     fputs(
         "usage: trajreplay [options] TRACK\n"
         "       trajreplay -c trajd.conf [--object NAME] [options] [TRACK]\n"
-        "Replay a logged track (CSV t,x,y,z / t,lat,lon,alt, GPX or a path) through the\n"
-        "trajd engine on a virtual clock and write the setpoints as CSV.\n"
+        "Replay a logged track (CSV, GPX, NMEA 2000 candump, NMEA 0183, IGC or a path:\n"
+        "the formats below) through the trajd engine on a virtual clock and write the\n"
+        "setpoints as CSV.\n"
         "\n"
         "  -c, --config FILE    take the engine settings, rate_hz, replay.track,\n"
         "                       replay.format and replay.start_s of object NAME in a\n"
@@ -109,8 +110,7 @@ static void usage(FILE *f)
         "                       given too override the file's settings; a TRACK given\n"
         "                       replaces replay.track\n"
         "  --rate HZ            output rate (default 100, or -c's rate_hz)\n"
-        "  --format F           auto | xyz | latlon | gpx | path (default auto;\n"
-        "                       path: lines and arcs, lib/spline/path.h, auto for *.path)\n"
+        "  --format F           track format, default auto (the list below)\n"
         "  --skip-bad           skip and count malformed lines instead of failing\n"
         "  --object NAME        value of the object column (default \"replay\"); with -c,\n"
         "                       the object of the config to replay\n"
@@ -122,6 +122,10 @@ static void usage(FILE *f)
         "  -h, --help           this text\n"
         "  -V, --version        version\n",
         f);
+    fputs("\nTrack formats (--format, replay.format; daemon/replay/track.h):\n", f);
+    for (int k = 0; k < TRACK_FMT_COUNT; k++)
+        fprintf(f, "  %-20s %s\n", track_format_name((track_format_t)k),
+                track_format_help((track_format_t)k));
     usage_engine(f);
     fputs("\n"
           "Exit status: 0 ok, 1 track not loadable, 2 usage or configuration,\n"
@@ -213,7 +217,7 @@ static int parse_option(int c, char **argv, opts_t *o)
         return -1;
     case OPT_FORMAT:
         if (track_format_parse(optarg, &o->format)) {
-            fprintf(stderr, "trajreplay: --format: '%s' is not auto, xyz, latlon, gpx or path\n",
+            fprintf(stderr, "trajreplay: --format: '%s' is not a track format (see --help)\n",
                     optarg);
             return EXIT_USAGE;
         }
@@ -441,6 +445,10 @@ static int run_open(run_t *run, const opts_t *o)
     }
     for (size_t i = 0; i < run->trk.nreports; i++)
         fprintf(stderr, "trajreplay: skipped %s\n", run->trk.reports[i]);
+    if (run->trk.ignored)
+        fprintf(stderr, "trajreplay: ignored %zu record%s without a usable fix (no fix, position "
+                "not available, a fast packet missing a frame, another source)\n",
+                run->trk.ignored, run->trk.ignored == 1 ? "" : "s");
     if (run->trk.skipped)
         fprintf(stderr, "trajreplay: skipped %zu bad line%s in all%s, the first: %s\n",
                 run->trk.skipped, run->trk.skipped == 1 ? "" : "s",

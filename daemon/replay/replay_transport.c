@@ -25,10 +25,9 @@ static int obj_key(void *ocfg, const cfg_kv_t *kv, char *why, size_t wl)
         return cfg_get_path(kv, r->path, sizeof r->path, why, wl);
     }
     if (strcmp(kv->key, "format") == 0) {
-        static const char *const names[] = {"auto", "xyz", "latlon", "gpx", "path", NULL};
-        int i, rc = cfg_get_enum(kv, names, &i, why, wl);
-        if (rc == 0 && track_format_parse(kv->value, &r->format) < 0)
-            rc = -CFG_EVALUE; /* the two lists disagree: track.h wins */
+        int i, rc = cfg_get_enum(kv, track_format_names, &i, why, wl);
+        if (rc == 0)
+            r->format = (track_format_t)i;
         return rc;
     }
     if (strcmp(kv->key, "skip_bad") == 0)

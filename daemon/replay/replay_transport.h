@@ -7,7 +7,7 @@
  *
  * Object keys ([object.NAME]):
  *   replay.track   = FILE      track file, relative to the config's directory (required)
- *   replay.format  = auto      auto | xyz | latlon | gpx | path
+ *   replay.format  = auto      a name of track_format_names (track.h)
  *   replay.skip_bad = no       yes: a malformed line is skipped, counted and
  *                              logged (warning "file:line: what"), not an error
  *   replay.start_s = 0         engine time (s after start) at which the first waypoint is due

@@ -60,7 +60,9 @@ int n2k_fast_push(n2k_fast_t *f, const uint8_t *data, size_t len)
         f->active = 1;
         return 0;
     }
-    if (!f->active || seq != f->seq || frame != f->next) {
+    if (!f->active)
+        return 0; /* the rest of a message whose start we never saw */
+    if (seq != f->seq || frame != f->next) {
         f->active = 0;
         return -N2K_ESEQ;
     }

@@ -76,9 +76,10 @@ typedef struct {
 
 /*
  * Feed one frame (data, len <= 8) of a fast-packet PGN.  Returns 1 when the
- * message is complete (f->data, f->len), 0 when more frames are needed,
- * -N2K_ESEQ when the frame does not continue the message in progress (the
- * partial message is dropped; a frame 0 starts a new one and returns 0),
+ * message is complete (f->data, f->len), 0 when more frames are needed (or
+ * for a stray continuation frame with no message in progress, as at the
+ * start of a log), -N2K_ESEQ when the frame breaks the message in progress
+ * (a frame missing: that message is dropped; a frame 0 starts a new one),
  * -N2K_ELEN for a frame 0 announcing more than N2K_FAST_MAX bytes or a
  * frame shorter than its header.
  */
