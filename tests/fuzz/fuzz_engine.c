@@ -10,6 +10,10 @@
  *    apart, |delta pos| <= k * period * max_speed_m_s + 1e-9 m (Euclidean)
  *    when the configuration has a speed limit, both ticks holding or
  *    transferring; CURVE_MARGIN times that on the curve (see below);
+ *  - lib/safety after the engine, as in the daemon: with the daemon's default
+ *    bounds it never refuses a setpoint; with tighter ones (some inputs) what
+ *    it lets out keeps them (checked here) and what it refuses is the held
+ *    position; rearmed as the daemon does;
  *  - it always finishes: after engine_finish with no further input, the
  *    output reaches FINISHED (or stays WAITING when no waypoint was accepted
  *    since the last clear) within the time the accepted waypoints and their
@@ -26,16 +30,18 @@
 #include <string.h>
 
 #include "engine.h"
+#include "safety.h"
 
 #define MAX_OPS 256
 /* The curve passes through the waypoints at their times, and engine_push
  * checks the mean speed between waypoints against max_speed_m_s; between them
  * the cubic may be faster (1.5 x the mean on a rest-to-rest segment).  Steps
- * on the curve are checked against CURVE_MARGIN x the limit (a jump is far
- * beyond it); holds and transfers (rest-to-rest at most the limit, engine.h)
- * against the limit itself. */
+ * on the curve are checked against CURVE_MARGIN x the limit, the daemon's
+ * default safety bound (daemon/core/core.c obj_safety_limits: the engine must
+ * never trip its own monitor); holds and transfers (rest-to-rest at most the
+ * limit, engine.h) against the limit itself. */
 #ifndef CURVE_MARGIN
-#define CURVE_MARGIN 3.0
+#define CURVE_MARGIN 2.0
 #endif
 #define HOLD_OR_TRANSFER (ENGINE_SP_HOLD | ENGINE_SP_TRANSFER)
 
@@ -59,7 +65,50 @@ typedef struct {
     int have_last;   /* last holds a setpoint with a position */
     int positioned;  /* a waypoint was accepted or a position set: from the
                         next tick on, every setpoint is a position */
+    safety_t mon;    /* lib/safety as the daemon runs it after the engine */
+    int tight;       /* mon has bounds the engine may break (else the daemon's defaults) */
+    engine_setpoint_t sent; /* the last setpoint mon let out or held */
+    int have_sent;
 } run_t;
+
+/* The monitor: what it lets out keeps its bounds, checked here independently;
+ * what it refuses is replaced by the last position sent; with the daemon's
+ * default bounds the engine never trips it. */
+static void monitor(run_t *r, const engine_setpoint_t *sp)
+{
+    engine_setpoint_t out = *sp;
+    int rc = safety_check(&r->mon, &out);
+    if (rc == SAFETY_OK) {
+        if (memcmp(out.pos_m, sp->pos_m, sizeof out.pos_m) || r->mon.fault)
+            abort();
+    } else {
+        if (!r->tight)
+            abort(); /* the engine tripped the daemon's default monitor */
+        if (!(out.flags & SAFETY_SP_FAULT) || !r->mon.fault)
+            abort();
+        if (r->have_sent && memcmp(out.pos_m, r->sent.pos_m, sizeof out.pos_m))
+            abort(); /* a refused setpoint is the held position */
+    }
+#ifdef ENGINE_SP_NO_POSITION
+    if (out.flags & ENGINE_SP_NO_POSITION)
+        return;
+#endif
+    for (int a = 0; a < ENGINE_AXES; a++)
+        if (!isfinite(out.pos_m[a]))
+            abort();
+    if (r->have_sent && rc == SAFETY_OK) {
+        const safety_limits_t *lim = &r->mon.lim;
+        double d2 = 0, dt = (double)(out.now_ns - r->sent.now_ns) * 1e-9;
+        for (int a = 0; a < ENGINE_AXES; a++)
+            d2 += (out.pos_m[a] - r->sent.pos_m[a]) * (out.pos_m[a] - r->sent.pos_m[a]);
+        double tol = lim->tol_m + 1e-12;
+        if ((lim->max_step_m > 0 && sqrt(d2) > lim->max_step_m + tol) ||
+            (lim->max_speed_m_s > 0 && sqrt(d2) > lim->max_speed_m_s * dt + tol))
+            abort();
+    }
+    r->sent = out;
+    r->have_sent = 1;
+}
 
 /* Before any position exists the output is no position (ENGINE_SP_NO_POSITION,
  * NaN; before that flag existed: a documented hold at 0), not a setpoint: the
@@ -84,6 +133,7 @@ static void tick(run_t *r, int64_t k)
     r->now += k * r->c.period_ns;
     if (engine_tick(r->e, r->now, &sp) != 0)
         abort(); /* time went forward: never refused */
+    monitor(r, &sp);
     if (no_position(r, &sp))
         return;
     for (int a = 0; a < ENGINE_AXES; a++)
@@ -160,6 +210,17 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         return 0;
     memset(&r, 0, sizeof r);
     configure(&r.c, p[0], p[1]);
+    safety_limits_t lim = {0};
+    r.tight = (p[1] & 0x80) != 0;
+    if (r.tight) { /* bounds the engine may break: the monitor's own paths */
+        double v = r.c.max_speed_m_s > 0 ? r.c.max_speed_m_s : 10;
+        lim.max_speed_m_s = (p[0] & 0x20) ? 0.5 * v : 0;
+        lim.max_step_m = (p[0] & 0x40) ? 0.02 : 0;
+        lim.max_accel_m_s2 = (p[0] & 0x80) ? 20 : 0;
+    } else { /* the daemon's defaults (obj_safety_limits) */
+        lim.max_speed_m_s = 2.0 * r.c.max_speed_m_s;
+    }
+    safety_init(&r.mon, &lim);
     p += 2;
     r.e = engine_new(&r.c, NULL);
     if (!r.e)
@@ -205,6 +266,16 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                     abort(); /* backwards: refused */
             } else if (op & 0x40) {
                 engine_reset_counters(r.e);
+            } else if ((op & 0x20) && safety_fault(&r.mon)) {
+                /* rearm as the daemon does: the engine stands on the held position */
+                double held[ENGINE_AXES];
+                engine_clear(r.e);
+                accepted = 0;
+                if (safety_held(&r.mon, held) < 0 || engine_set_position(r.e, held) == 0) {
+                    safety_rearm(&r.mon);
+                    r.last = r.sent; /* the engine continues from what was sent */
+                    r.have_last = r.have_sent;
+                }
             }
             engine_status(r.e, &st);
             break;
