@@ -135,7 +135,7 @@ DEPS_BUILD := gcc make pkg-config libc6-dev libmodbus-dev libsystemd-dev libinih
 DEPS_TEST := libcmocka-dev libgsl-dev python3 python3-scipy python3-numpy mbpoll \
              python3-pymodbus python3-serial python3-serial-asyncio can-utils python3-can python3-canmatrix \
              user-mode-linux busybox-static socat iproute2 clang libclang-rt-14-dev \
-             systemd procps valgrind python3-pyproj
+             systemd procps valgrind python3-pyproj gpsbabel
 
 deps-run:
 	@sh tests/deps.sh $(DEPS_BUILD)
