@@ -38,6 +38,12 @@ PROGRAMS := trajd trajreplay trajsurf
 
 WARN := -Wall -Wextra -Wshadow -Wfloat-equal -Wstrict-prototypes \
         -Wmissing-prototypes -Wpointer-arith -Wformat=2 -Wvla -Wundef
+# CI (which sets CI=true) builds with warnings as errors; .ci/run still just
+# calls `make check`, and a local build with a newer compiler is not broken
+# by a warning it introduces.
+ifneq ($(filter true 1 yes,$(CI)),)
+WARN += -Werror
+endif
 # pkg-config is expanded lazily (=), so it is read after 'make deps' installed it.
 PKGS := libmodbus libsystemd inih expat
 PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
