@@ -4,11 +4,7 @@
  * config/trajd.conf documents every key with its real default; trajreplay
  * --help lists every option.  Run from the repository root with BUILD set
  * (tests/run.sh does). */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <ctype.h>
 #include <stdio.h>
