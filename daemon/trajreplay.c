@@ -10,9 +10,20 @@
  * Engine options are generated from lib/engine/engine_settings.h's table;
  * -c FILE --object NAME takes an object's settings from a trajd config.
  *
- * Exit status: 0 done; 1 the track could not be loaded; 2 usage or an
- * invalid engine configuration; 3 writing an output failed; 4 the engine
- * did not reach FINISHED within the tick bound (a bug, reported as such).
+ * Gaps: while the engine holds (waiting, underrun, finished between two
+ * trajectories) and the next waypoint is due more than max_gap_s later, the
+ * virtual clock jumps to that waypoint's tick instead of writing hold rows
+ * through the gap (the engine steps over skipped ticks without changing a
+ * number); the row after the jump carries ENGINE_SP_SKIPPED.  --keep-gaps
+ * writes every tick, as trajd streams them.  --max-rows bounds the output.
+ *
+ * Every rejected waypoint is reported as "file:line: rejected (reason)",
+ * rate-limited, with a per-reason count at the end.
+ *
+ * Exit status: 0 done; 1 the track could not be loaded, or no waypoint of it
+ * was usable; 2 usage or an invalid engine configuration; 3 writing an
+ * output failed; 4 out of memory; 5 --max-rows reached; 6 --strict and a
+ * waypoint was rejected or a line skipped.
  */
 #include <errno.h>
 #include <getopt.h>
@@ -35,15 +46,27 @@
 
 #define TRAJREPLAY_VERSION "0.1"
 
-enum { EXIT_INPUT = 1, EXIT_USAGE = 2, EXIT_OUTPUT = 3, EXIT_ENGINE = 4 };
+enum {
+    EXIT_INPUT = 1,    /* track not loadable, or nothing in it usable */
+    EXIT_USAGE = 2,
+    EXIT_OUTPUT = 3,
+    EXIT_MEMORY = 4,   /* out of memory (never from the input) */
+    EXIT_MAX_ROWS = 5, /* --max-rows reached: the output is cut */
+    EXIT_STRICT = 6,   /* --strict: a waypoint was rejected or a line skipped */
+};
 
 /* Ticks written after the engine reports FINISHED for good: they show the
  * rest state (zero velocity, the last waypoint) to whoever reads the file. */
 #define TAIL_TICKS 3
-/* Bound on the virtual run: twice the track's duration plus an hour covers
- * the start-up lookahead, gap transfers and the final run-out many times
- * over; reaching it means the engine never finished. */
-#define RUN_BOUND_EXTRA_S 3600.0
+/* Default --max-rows: 5e7 rows (about 10 GB of CSV; 139 h of output at
+ * 100 Hz, 14 h at 1 kHz).  A bound on what a slip in the input (timestamps
+ * in seconds read as microseconds, a transfer across a continent) can make
+ * trajreplay write; 0 = no bound. */
+#define MAX_ROWS_DEFAULT 50000000ULL
+/* Rejected waypoints reported one line each for the first REJECT_SHOW_FIRST,
+ * then one in REJECT_SHOW_EVERY (all are counted in the summary). */
+#define REJECT_SHOW_FIRST 20
+#define REJECT_SHOW_EVERY 1000
 /* Progress line (stderr a terminal only): from PROGRESS_AFTER_MS into the
  * run (--progress-after), at most every PROGRESS_EVERY_NS. */
 #define PROGRESS_AFTER_MS 500
@@ -64,6 +87,9 @@ typedef struct {
     int summary;
     int quiet;
     int rate_given;
+    int keep_gaps;         /* write hold rows through gaps too */
+    int strict;            /* any rejection or skipped line: EXIT_STRICT */
+    unsigned long long max_rows; /* 0 = no bound */
     unsigned progress_after_ms;
     double rate_hz;
     int64_t start_ns;      /* engine time at which the first waypoint is due */
@@ -112,6 +138,13 @@ static void usage(FILE *f)
         "  --rate HZ            output rate (default 100, or -c's rate_hz)\n"
         "  --format F           track format, default auto (the list below)\n"
         "  --skip-bad           skip and count malformed lines instead of failing\n"
+        "  --strict             exit 6 if any waypoint was rejected or line skipped\n"
+        "                       (each is reported as file:line: rejected (reason))\n"
+        "  --keep-gaps          write hold rows through gaps longer than max_gap_s too\n"
+        "                       (default: skip them; the row after a skipped gap has\n"
+        "                       flag 4, ENGINE_SP_SKIPPED)\n"
+        "  --max-rows N         stop with exit 5 after N setpoint rows (default\n"
+        "                       50000000; 0 = no limit)\n"
         "  --object NAME        value of the object column (default \"replay\"); with -c,\n"
         "                       the object of the config to replay\n"
         "  -o, --output FILE    setpoint CSV (default stdout; \"-\" = stdout)\n"
@@ -128,8 +161,9 @@ static void usage(FILE *f)
                 track_format_help((track_format_t)k));
     usage_engine(f);
     fputs("\n"
-          "Exit status: 0 ok, 1 track not loadable, 2 usage or configuration,\n"
-          "3 output write failed, 4 engine did not finish.\n",
+          "Exit status: 0 ok, 1 track not loadable or no usable waypoint in it, 2 usage\n"
+          "or configuration, 3 output write failed, 4 out of memory, 5 --max-rows\n"
+          "reached, 6 --strict and something was rejected.\n",
           f);
 }
 
@@ -170,7 +204,7 @@ static const char *reason_name(int e)
 
 enum {
     OPT_RATE = 256, OPT_FORMAT, OPT_SVG, OPT_SUMMARY, OPT_SKIP_BAD, OPT_OBJECT,
-    OPT_PROGRESS_AFTER,
+    OPT_PROGRESS_AFTER, OPT_STRICT, OPT_KEEP_GAPS, OPT_MAX_ROWS,
     OPT_ENGINE = 1024, /* + index in engine_settings[] */
 };
 
@@ -183,6 +217,9 @@ static const struct option fixed_opts[] = {
     {"skip-bad", no_argument, NULL, OPT_SKIP_BAD},
     {"object", required_argument, NULL, OPT_OBJECT},
     {"progress-after", required_argument, NULL, OPT_PROGRESS_AFTER},
+    {"strict", no_argument, NULL, OPT_STRICT},
+    {"keep-gaps", no_argument, NULL, OPT_KEEP_GAPS},
+    {"max-rows", required_argument, NULL, OPT_MAX_ROWS},
     {"output", required_argument, NULL, 'o'},
     {"quiet", no_argument, NULL, 'q'},
     {"help", no_argument, NULL, 'h'},
@@ -226,6 +263,18 @@ static int parse_option(int c, char **argv, opts_t *o)
     case OPT_SUMMARY: o->summary = 1; return -1;
     case OPT_SKIP_BAD: o->load_flags |= TRACK_SKIP_BAD; return -1;
     case OPT_OBJECT: o->object = optarg; return -1;
+    case OPT_STRICT: o->strict = 1; return -1;
+    case OPT_KEEP_GAPS: o->keep_gaps = 1; return -1;
+    case OPT_MAX_ROWS: {
+        char *end;
+        errno = 0;
+        o->max_rows = strtoull(optarg, &end, 10);
+        if (end == optarg || *end || errno || optarg[0] == '-') {
+            fprintf(stderr, "trajreplay: --max-rows: '%s' is not a number of rows\n", optarg);
+            return EXIT_USAGE;
+        }
+        return -1;
+    }
     case OPT_PROGRESS_AFTER:
         if (parse_uint(optarg, &o->progress_after_ms)) {
             fprintf(stderr, "trajreplay: --progress-after: '%s' is not milliseconds\n", optarg);
@@ -347,6 +396,7 @@ static int parse_args(int argc, char **argv, opts_t *o)
     engine_config_default(&o->cfg);
     o->rate_hz = 100.0;
     o->progress_after_ms = PROGRESS_AFTER_MS;
+    o->max_rows = MAX_ROWS_DEFAULT;
     opterr = 0;
     int c, rc;
     while ((c = getopt_long(argc, argv, ":c:o:qhV", lopts, NULL)) != -1)
@@ -422,6 +472,12 @@ typedef struct {
     engine_status_t st;
     int64_t t_start, t_shown; /* progress line */
     int progress, shown;
+    size_t reported;       /* waypoints before this one were reported if rejected */
+    uint64_t rejected;     /* waypoints rejected as bad data */
+    uint64_t rejected_by[ENGINE_ERROR_COUNT];
+    size_t first_rejected; /* index of the first one */
+    uint64_t skipped_gaps; /* gaps jumped over (not --keep-gaps) */
+    uint64_t skipped_ticks;
 } run_t;
 
 /* Load the track, make the engine and open the outputs.  Returns -1 to go
@@ -457,14 +513,14 @@ static int run_open(run_t *run, const opts_t *o)
     run->e = engine_new(&o->cfg, &eng_err);
     if (!run->e) {
         fprintf(stderr, "trajreplay: engine: %s\n", engine_strerror(eng_err));
-        return EXIT_ENGINE;
+        return EXIT_MEMORY;
     }
     run->results = malloc(run->trk.n * sizeof *run->results);
     if (o->svg)
         run->plot = svg_plot_new(SVG_POINTS_DEFAULT, run->trk.geographic);
     if (!run->results || (o->svg && !run->plot)) {
         fprintf(stderr, "trajreplay: out of memory\n");
-        return EXIT_ENGINE;
+        return EXIT_MEMORY;
     }
     if (o->output && strcmp(o->output, "-") != 0) {
         FILE *f = fopen(o->output, "w");
@@ -499,6 +555,14 @@ static void run_progress(run_t *run, const engine_setpoint_t *sp)
     run->shown = 1;
 }
 
+/* Clear the progress line before a message (it is drawn again later). */
+static void run_clear_progress(run_t *run)
+{
+    if (run->shown)
+        fputs("\r\033[K", stderr);
+    run->shown = 0;
+}
+
 /* Write one setpoint row and keep its statistics. */
 static void run_emit(run_t *run, const engine_setpoint_t *sp)
 {
@@ -519,46 +583,132 @@ static void run_emit(run_t *run, const engine_setpoint_t *sp)
         svg_plot_setpoint(run->plot, sp);
 }
 
+/* "file:line: rejected (reason)" for each waypoint the engine rejected since
+ * the last call: the first REJECT_SHOW_FIRST, then one in REJECT_SHOW_EVERY. */
+static void run_report_rejections(run_t *run)
+{
+    for (; run->reported < run->r.next; run->reported++) {
+        int rc = run->results[run->reported];
+        if (rc >= 0)
+            continue; /* accepted, or an exact duplicate dropped */
+        int e = -rc;
+        if (e > 0 && e < ENGINE_ERROR_COUNT)
+            run->rejected_by[e]++;
+        if (run->rejected++ == 0)
+            run->first_rejected = run->reported;
+        if (run->rejected <= REJECT_SHOW_FIRST || run->rejected % REJECT_SHOW_EVERY == 0) {
+            const char *why = reason_name(e);
+            run_clear_progress(run);
+            fprintf(stderr, "%s:%" PRIu32 ": rejected (%s)\n", run->o->input,
+                    run->trk.line[run->reported], why ? why : engine_strerror(e));
+        }
+        if (run->rejected == REJECT_SHOW_FIRST + 1) {
+            run_clear_progress(run);
+            fprintf(stderr, "trajreplay: more rejected waypoints: one in %d shown, all "
+                    "counted at the end\n", REJECT_SHOW_EVERY);
+        }
+    }
+}
+
+/* The per-reason count of rejections, if any. */
+static void run_report_rejected_total(const run_t *run)
+{
+    if (!run->rejected)
+        return;
+    char reasons[256] = "";
+    for (int e = 1; e < ENGINE_ERROR_COUNT; e++) {
+        size_t n = strlen(reasons);
+        if (run->rejected_by[e])
+            snprintf(reasons + n, sizeof reasons - n, "%s%s %" PRIu64, n ? ", " : "",
+                     reason_name(e) ? reason_name(e) : engine_strerror(e), run->rejected_by[e]);
+    }
+    fprintf(stderr, "trajreplay: %s: rejected %" PRIu64 " of %zu waypoints (%s), the first at "
+            "line %" PRIu32 "\n", run->o->input, run->rejected, run->trk.n, reasons,
+            run->trk.line[run->first_rejected]);
+}
+
+/*
+ * After the row of tick k: while the engine is stalled (holds, and nothing
+ * can change before the next push) and the next waypoint is due more than
+ * max_gap_s after now_ns, the tick to jump to (the first one at or after
+ * that waypoint's due time), else k + 1.
+ */
+static uint64_t run_next_tick(run_t *run, uint64_t k, int64_t now_ns,
+                              const engine_setpoint_t *sp)
+{
+    if (run->o->keep_gaps || !(sp->flags & ENGINE_SP_HOLD) || replay_done(&run->r))
+        return k + 1;
+    engine_status(run->e, &run->st);
+    if (!run->st.stalled)
+        return k + 1; /* holding for a tick between two trajectories, say */
+    int64_t due = replay_next_due_ns(&run->r);
+    const int64_t period = run->o->cfg.period_ns;
+    if (due == INT64_MAX || (double)(due - now_ns) <= run->o->cfg.max_gap_s * 1e9)
+        return k + 1;
+    /* due > now_ns >= 0 here, so the division rounds up a positive number */
+    uint64_t next = (uint64_t)((due + period - 1) / period);
+    if (next <= k + 1)
+        return k + 1;
+    run->skipped_gaps++;
+    run->skipped_ticks += next - k - 1;
+    return next;
+}
+
 /* Tick the engine on the virtual clock until the track ran out.  Returns 0
- * or an exit status. */
+ * or an exit status (EXIT_INPUT: nothing usable, EXIT_MAX_ROWS). */
 static int run_ticks(run_t *run)
 {
     const int64_t period = run->o->cfg.period_ns;
-    const uint64_t max_ticks =
-        (uint64_t)(((double)run->o->start_ns * 1e-9 + 2 * run->span_s + RUN_BOUND_EXTRA_S) *
-                   1e9 / (double)period);
     char line[CSV_FORMAT_LINE_MAX];
     int len = csv_format_header(line, sizeof line);
     fwrite(line, 1, (size_t)len, run->out);
-    int status = 0;
+    int status = 0, skipped = 0;
     uint64_t tail = 0;
-    for (uint64_t k = 0;; k++) {
-        if (k > max_ticks) {
-            fprintf(stderr, "trajreplay: the engine did not finish within %" PRIu64 " ticks "
-                    "(%.0f s of track time): engine bug\n", max_ticks,
-                    (double)max_ticks * (double)period * 1e-9);
-            status = EXIT_ENGINE;
+    for (uint64_t k = 0;;) {
+        if (run->o->max_rows && run->written >= run->o->max_rows) {
+            run_clear_progress(run);
+            fprintf(stderr, "trajreplay: stopped after %" PRIu64 " rows (--max-rows), %zu of "
+                    "%zu waypoints replayed: raise --max-rows (0 = no limit)\n",
+                    run->written, run->r.next, run->trk.n);
+            status = EXIT_MAX_ROWS;
             break;
         }
         int64_t now = (int64_t)k * period;
         engine_setpoint_t sp;
         replay_feed(&run->r, run->e, now);
+        run_report_rejections(run);
         (void)engine_tick(run->e, now, &sp);
+        if (skipped)
+            sp.flags |= ENGINE_SP_SKIPPED;
         run_emit(run, &sp);
-        if (replay_done(&run->r) && sp.state == ENGINE_STATE_FINISHED) {
+        if (replay_done(&run->r) && (sp.flags & ENGINE_SP_HOLD)) {
             engine_status(run->e, &run->st);
-            /* FINISHED with nothing buffered: the end of the last
-             * trajectory, not a rest between two (after a gap). */
+            /* At rest with nothing buffered once the track ran out: the
+             * end of the last trajectory (FINISHED), or nothing was ever
+             * accepted (WAITING). */
+            if (run->st.buffered == 0 && sp.state == ENGINE_STATE_WAITING &&
+                run->st.accepted == 0) {
+                run_clear_progress(run);
+                fprintf(stderr, "trajreplay: %s: no usable waypoint: all %zu rejected\n",
+                        run->o->input, run->trk.n);
+                status = EXIT_INPUT;
+                break;
+            }
             if (run->st.buffered == 0 && ++tail > TAIL_TICKS)
                 break;
         }
-        if ((k & 1023) == 0 && ferror(run->out))
+        if ((run->written & 1023) == 0 && ferror(run->out))
             break; /* a full disk: stop now, reported by the caller */
-        if (run->progress && (k & 1023) == 0)
+        if (run->progress && (run->written & 1023) == 0)
             run_progress(run, &sp);
+        uint64_t next = run_next_tick(run, k, now, &sp);
+        skipped = next != k + 1;
+        if (skipped) /* bring the engine to the tick before (no waypoint is due
+                      * there), so the next waypoint meets it where it would have */
+            (void)engine_tick(run->e, (int64_t)(next - 1) * period, &sp);
+        k = next;
     }
-    if (run->shown)
-        fputs("\r\033[K", stderr);
+    run_clear_progress(run);
     engine_status(run->e, &run->st);
     return status;
 }
@@ -626,7 +776,17 @@ int main(int argc, char **argv)
     }
     if (run.plot && run_svg(&run))
         status = EXIT_OUTPUT;
-    if (o.summary)
+    run_report_rejected_total(&run);
+    if (o.summary) {
         print_summary(&run.trk, &run.r, &run.st, run.max_v, run.max_a, run.written);
+        fprintf(stderr, "summary: skipped_gaps %" PRIu64 "\nsummary: skipped_ticks %" PRIu64 "\n",
+                run.skipped_gaps, run.skipped_ticks);
+    }
+    if (!status && o.strict && (run.rejected || run.trk.skipped)) {
+        fprintf(stderr, "trajreplay: --strict: %" PRIu64 " waypoint%s rejected, %zu line%s "
+                "skipped\n", run.rejected, run.rejected == 1 ? "" : "s", run.trk.skipped,
+                run.trk.skipped == 1 ? "" : "s");
+        status = EXIT_STRICT;
+    }
     return run_close(&run, status);
 }

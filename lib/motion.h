@@ -55,7 +55,8 @@ const char *engine_state_name(engine_state_t s);
 /* Setpoint flags. */
 #define ENGINE_SP_HOLD      0x01u /* position held (waiting, underrun, finished) */
 #define ENGINE_SP_NEW_TRACK 0x02u /* first setpoint of a new trajectory (after a gap or clear) */
-#define ENGINE_SP_SKIPPED   0x04u /* ticks were skipped before this one */
+#define ENGINE_SP_SKIPPED   0x04u /* ticks were skipped before this one (trajd: missed
+                                         deadlines; trajreplay: a gap not written) */
 #define ENGINE_SP_TRANSFER  0x08u /* rest-to-rest transfer to a new trajectory's start */
 /* No valid position exists yet (nothing received, or a required position not
  * yet given): pos_m[] is NaN and is NOT a setpoint.  A subscriber must not
@@ -96,6 +97,9 @@ typedef struct {
     uint64_t setpoints;             /* ticks answered */
     uint64_t full;                  /* offers refused with ENGINE_EFULL: flow control, the
                                      * sender retries; not in rejected */
+    uint32_t stalled;               /* 1: holding, and nothing can change before the next
+                                     * waypoint is pushed (ticks until then are identical
+                                     * holds: trajreplay skips them across a gap) */
 } engine_status_t;
 
 #endif

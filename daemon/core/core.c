@@ -393,7 +393,10 @@ int core_done(const core_t *c)
         const transport_t *in = o->cfg->input;
         if (!in->input_done || !in->input_done(c->tstate[transport_index(in)], o))
             return 0;
-        if (o->status.state != ENGINE_STATE_FINISHED)
+        /* at rest on its last waypoint, or waiting with nothing buffered
+         * (its input gave nothing usable: nothing more can happen) */
+        if (o->status.state != ENGINE_STATE_FINISHED &&
+            !(o->status.state == ENGINE_STATE_WAITING && o->status.buffered == 0))
             return 0;
     }
     return 1;

@@ -140,7 +140,20 @@ static int push_obj(void *o, const engine_waypoint_t *wp)
 static void pre_tick(void *state, obj_t *o, int64_t now_ns)
 {
     replay_transport_t *s = state;
-    (void)replay_feed_via(&s->r[o->index], push_obj, o, o->engine, now_ns);
+    replay_t *r = &s->r[o->index];
+    int was_done = replay_done(r);
+    (void)replay_feed_via(r, push_obj, o, o->engine, now_ns);
+    if (was_done || !replay_done(r))
+        return;
+    /* The track ran out: say so if none of it was usable (the object then
+     * waits with nothing buffered, which exit_when_done counts as done). */
+    engine_status_t st;
+    engine_status(o->engine, &st);
+    if (st.accepted == 0) {
+        const replay_transport_obj_cfg_t *rc = cfg_obj_transport(o->cfg, &replay_transport);
+        log_msg(LOG_WARNING, "object %s: replay.track %s: no usable waypoint: all %zu rejected",
+                o->cfg->name, rc->path, r->trk->n);
+    }
 }
 
 static int input_done(void *state, const obj_t *o)

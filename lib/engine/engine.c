@@ -1078,9 +1078,9 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 }
 
 /* 1 if further steps cannot change anything until new input arrives. */
-static int stalled(engine_t *e)
+static int stalled(const engine_t *e)
 {
-    qent_t *h = q_head(e);
+    const qent_t *h = e->qlen ? &e->q[e->qhead] : NULL; /* q_head, read only */
 
     if (e->mode == OUT_HOLD)
         return !h || !h->first || !enough_ahead(e, h);
@@ -1141,6 +1141,7 @@ void engine_status(const engine_t *e, engine_status_t *st)
     st->buffered = (uint32_t)b;
     st->free = b >= e->cfg.capacity ? 0 : (uint32_t)(e->cfg.capacity - b);
     st->lookahead = e->lookahead;
+    st->stalled = (uint32_t)stalled(e);
     st->ahead_s = 0;
     if (e->qlen) {
         const qent_t *tail = &e->q[(e->qhead + e->qlen - 1) % e->qcap];

@@ -472,7 +472,15 @@ def test_progress(tmp):
     check(rc == 0, f"progress run: exit {rc}")
     check(b"\rtrajreplay: " in text and b"waypoints, track time" in text,
           f"no progress line on a terminal: {text[:200]!r}")
-    check(text.endswith(b"\r\x1b[K"), f"progress line not cleared: {text[-40:]!r}")
+    # every progress line is cleared before anything else is printed (the
+    # rejection reports, the totals) and at the end
+    # (or redrawn by the next one)
+    parts = text.split(b"\rtrajreplay: ")[1:]
+    for k, part in enumerate(parts):
+        line, cr, after = part.partition(b"\r")
+        redrawn = not cr and k < len(parts) - 1
+        check(b"\n" not in line and (redrawn or after.startswith(b"\x1b[K")),
+              f"progress line {k} not cleared before the next output: {part[:120]!r}")
 
 
 def main():

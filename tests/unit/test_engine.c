@@ -1112,6 +1112,56 @@ static void test_underrun_resumes_with_lookahead(void **state)
     }
 }
 
+/* Given fewer waypoints than the lookahead, then the engine holds and
+ * reports stalled, and a thousand more ticks change nothing; once the
+ * lookahead is there it streams and is not stalled; resting at the end of
+ * the trajectory it is stalled again (what trajreplay relies on to skip a
+ * gap: nothing can change before the next push). */
+static void test_status_stalled(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_config_default(&c);
+    engine_t *e = mk(&c);
+    engine_waypoint_t w;
+    engine_setpoint_t sp, sp2;
+    engine_status_t st;
+    int64_t k = 0;
+    unsigned need = engine_lookahead(&c);
+    for (unsigned i = 0; i < need / 2; i++) {
+        circle_wp(&w, (int)i, 1.0);
+        assert_int_equal(engine_push(e, &w), 0);
+    }
+    assert_int_equal(engine_tick(e, k++ * PERIOD_NS, &sp), 0);
+    engine_status(e, &st);
+    assert_int_equal(st.state, ENGINE_STATE_WAITING);
+    assert_int_equal(st.stalled, 1);
+    for (int i = 0; i < 1000; i++, k++)
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp2), 0);
+    assert_memory_equal(sp2.pos_m, sp.pos_m, sizeof sp.pos_m);
+    assert_int_equal(sp2.state, ENGINE_STATE_WAITING);
+    for (unsigned i = need / 2; i < need + 8; i++) {
+        circle_wp(&w, (int)i, 1.0);
+        assert_int_equal(engine_push(e, &w), 0);
+    }
+    assert_int_equal(engine_tick(e, k++ * PERIOD_NS, &sp), 0);
+    engine_status(e, &st);
+    assert_int_equal(st.state, ENGINE_STATE_STREAMING);
+    assert_int_equal(st.stalled, 0);
+    engine_finish(e);
+    for (int i = 0; i < 100000 && sp.state != ENGINE_STATE_FINISHED; i++, k++) {
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+        engine_status(e, &st);
+        if (sp.state == ENGINE_STATE_STREAMING)
+            assert_int_equal(st.stalled, 0);
+    }
+    assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+    engine_status(e, &st);
+    assert_int_equal(st.buffered, 0);
+    assert_int_equal(st.stalled, 1);
+    engine_free(e);
+}
+
 /* Given a caller whose clock jitters around the period grid (each now_ns
  * within +-24 % of a period of its scheduled tick, so two calls are 0.52 to
  * 1.48 periods apart), then every call is one tick (engine.c: periods since
@@ -1175,6 +1225,7 @@ int main(void)
         cmocka_unit_test(test_long_segment_reseeded),
         cmocka_unit_test(test_underrun_resumes_with_lookahead),
         cmocka_unit_test(test_jittered_clock_rounds_to_ticks),
+        cmocka_unit_test(test_status_stalled),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

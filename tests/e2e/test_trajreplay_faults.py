@@ -1,0 +1,279 @@
+#!/usr/bin/python3
+"""test_trajreplay_faults.py - trajreplay (and trajd's replay) on tracks that
+are wrong in the ways real logs are (issues 11 and 12):
+
+  * a seconds-for-microseconds slip (rows 1e5 s apart) gives bounded output:
+    gaps longer than max_gap_s are skipped, the row after each carries flag
+    4 (ENGINE_SP_SKIPPED), and the rows kept are exactly the rows written
+    without skipping (--keep-gaps);
+  * --max-rows stops a runaway with exit 5 and says so;
+  * a track with no usable waypoint ends with a clear message and exit 1
+    (trajreplay) and trajd with exit_when_done exits;
+  * every rejected waypoint is reported as file:line: rejected (reason), the
+    line counted here from the file, rate-limited, with a per-reason total;
+    --strict turns any rejection into exit 6.
+Every process is bounded: output is read through a pipe with a byte limit
+and the process is killed by its pid past it.
+"""
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import unittest
+
+BUILD = os.environ.get("BUILD", os.path.abspath("build"))
+TRAJREPLAY = os.path.join(BUILD, "bin", "trajreplay")
+TRAJD = os.path.join(BUILD, "bin", "trajd")
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+DATA = os.path.join(REPO, "tests", "data")
+CERKNICA = os.path.join(DATA, "gpxpy_cerknicko-jezero.csv")
+FIGURE8 = os.path.join(DATA, "n2k_furuno_figure8_src52.csv")
+FLAG_HOLD, FLAG_SKIPPED = 0x01, 0x04
+
+
+def write(path, text):
+    with open(path, "w") as f:
+        f.write(text)
+
+
+def bounded_run(args, limit_bytes=20_000_000, timeout=120):
+    """Run with stdout through a pipe; kill (by pid) once more than
+    limit_bytes came out.  Returns (returncode or None if killed, stdout
+    bytes, stderr text)."""
+    errf = tempfile.TemporaryFile()  # a file, not a pipe: no deadlock on a chatty stderr
+    p = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=errf)
+    out = bytearray()
+    killed = False
+    while True:
+        b = p.stdout.read(1 << 16)
+        if not b:
+            break
+        out += b
+        if len(out) > limit_bytes:
+            p.kill()
+            killed = True
+            break
+    try:
+        p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        p.communicate()
+        killed = True
+    errf.seek(0)
+    err = errf.read().decode(errors="replace")
+    errf.close()
+    return (None if killed else p.returncode), bytes(out), err
+
+
+def rows(data):
+    lines = data.decode().splitlines()
+    assert lines[0].startswith("object,now_ns,"), lines[:1]
+    return [l.split(",") for l in lines[1:]]
+
+
+@unittest.skipUnless(os.access(TRAJREPLAY, os.X_OK), "trajreplay not built in this tree")
+class TestGapsAndBounds(unittest.TestCase):
+    def setUp(self):
+        self.tmpdir = tempfile.TemporaryDirectory()
+        self.tmp = self.tmpdir.name
+
+    def tearDown(self):
+        self.tmpdir.cleanup()
+
+    def test_seconds_for_microseconds_slip_is_bounded(self):
+        # Given 60 rows 1e5 s apart (timestamps in seconds where microseconds
+        # were meant: 69 days of track), when replayed at the default 100 Hz,
+        # then trajreplay ends by itself with about one transfer (1 s, 100
+        # rows) per waypoint, not the 590 million hold rows of the gaps, exit 0,
+        slip = os.path.join(self.tmp, "slip.csv")
+        write(slip, "t,x,y,z\n" + "".join("%d,%d,%d,0\n" % (i * 100000, 3 * i, 2 * (i % 7))
+                                          for i in range(60)))
+        rc, out, err = bounded_run([TRAJREPLAY, "-q", "--summary", slip], limit_bytes=5_000_000)
+        self.assertEqual(rc, 0, err[-500:])
+        r = rows(out)
+        self.assertLess(len(r), 60 * 200)
+        # and each of the 59 gaps is marked on the row after it
+        skipped = [x for x in r if int(x[13]) & FLAG_SKIPPED]
+        self.assertEqual(len(skipped), 59)
+        self.assertIn("summary: skipped_gaps 59\n", err)
+        # and the output still ends at rest on the last waypoint
+        self.assertEqual(r[-1][12], "finished")
+        self.assertEqual((float(r[-1][3]), float(r[-1][4])), (177.0, 6.0))
+
+    def test_skipping_keeps_every_number(self):
+        # Given the real cerknicko track (18 intervals above the 60 s
+        # max_gap_s) and a small slip (10 rows 1000 s apart), then the rows
+        # written when gaps are skipped are the rows written through them
+        # (--keep-gaps) for the same ticks, equal but for flag 4 on the row
+        # after each skip; the rows left out are all hold rows.
+        slip = os.path.join(self.tmp, "slip10.csv")
+        write(slip, "t,x,y,z\n" + "".join("%d,%d,%d,0\n" % (i * 1000, 3 * i, 2 * (i % 7))
+                                          for i in range(10)))
+        for track in (CERKNICA, slip):
+            with self.subTest(track=os.path.basename(track)):
+                self.skip_equals_keep(track)
+
+    def skip_equals_keep(self, track):
+        args = ["-q", "--summary", "--rate", "10", track]
+        rc, skip, err = bounded_run([TRAJREPLAY] + args)
+        self.assertEqual(rc, 0, err[-500:])
+        rc, keep, err_keep = bounded_run([TRAJREPLAY, "--keep-gaps"] + args)
+        self.assertEqual(rc, 0, err_keep[-500:])
+        skip, keep = rows(skip), rows(keep)
+        by_ns = {x[1]: x for x in keep}
+        kept_ns = set()
+        flagged = 0
+        for x in skip:
+            ref = by_ns[x[1]]
+            flags = int(x[13])
+            self.assertEqual(x[:13] + x[14:], ref[:13] + ref[14:], "row at now_ns " + x[1])
+            self.assertEqual(flags & ~FLAG_SKIPPED, int(ref[13]))
+            flagged += bool(flags & FLAG_SKIPPED)
+            kept_ns.add(x[1])
+        left_out = [x for x in keep if x[1] not in kept_ns]
+        self.assertTrue(left_out)
+        self.assertTrue(all(int(x[13]) & FLAG_HOLD for x in left_out))
+        gaps = int(re.search(r"summary: skipped_gaps (\d+)", err).group(1))
+        self.assertEqual(flagged, gaps)
+        self.assertGreaterEqual(gaps, 1)
+        self.assertIn("summary: skipped_gaps 0\n", err_keep)
+
+    def test_max_rows(self):
+        # Given --max-rows 100, then exactly 100 rows, exit 5 and a message
+        rc, out, err = bounded_run([TRAJREPLAY, "-q", "--max-rows", "100", FIGURE8])
+        self.assertEqual(rc, 5, err)
+        self.assertEqual(len(rows(out)), 100)
+        self.assertIn("--max-rows", err)
+        # and the default cap is documented
+        h = subprocess.run([TRAJREPLAY, "--help"], capture_output=True, text=True)
+        self.assertIn("--max-rows N", h.stdout)
+        self.assertIn("5 --max-rows", h.stdout.replace("\n", " "))
+
+    def test_nothing_usable(self):
+        # Given a track whose every x is 1e300 (above max_abs_m), then a
+        # clear message and exit 1, and a bounded output (never exit 4 "engine bug")
+        bad = os.path.join(self.tmp, "huge.csv")
+        write(bad, "t,x,y,z\n" + "".join("%d,1e300,0,0\n" % i for i in range(60)))
+        rc, out, err = bounded_run([TRAJREPLAY, "-q", "--rate", "10", bad], limit_bytes=1_000_000)
+        self.assertEqual(rc, 1, err[-500:])
+        self.assertIn(bad + ": no usable waypoint: all 60 rejected", err)
+        self.assertNotIn("engine bug", err)
+        self.assertLess(len(rows(out)), 1000)
+
+
+@unittest.skipUnless(os.access(TRAJREPLAY, os.X_OK), "trajreplay not built in this tree")
+class TestRejectionsReported(unittest.TestCase):
+    def setUp(self):
+        self.tmpdir = tempfile.TemporaryDirectory()
+        self.tmp = self.tmpdir.name
+
+    def tearDown(self):
+        self.tmpdir.cleanup()
+
+    def track(self, name, bad_every, n=200, comment_every=0):
+        """A straight walk at 1 m/s, 1 s apart; every bad_every-th row has
+        x = 1e300 (rejected: range) and every comment_every-th line is a
+        comment.  Returns the path and the file line numbers of the bad rows."""
+        lines, bad = ["t,x,y,z"], []
+        for i in range(n):
+            if comment_every and i % comment_every == 0:
+                lines.append("# note")
+            if bad_every and i % bad_every == bad_every - 1:
+                lines.append("%d,1e300,0,0" % i)
+                bad.append(len(lines))  # 1-based line number of this row
+            else:
+                lines.append("%d,%d,0,0" % (i, i))
+        path = os.path.join(self.tmp, name)
+        write(path, "\n".join(lines) + "\n")
+        return path, bad
+
+    def test_each_rejection_has_its_line(self):
+        # Given 12 rows out of range among 120, with comment lines in between
+        # (so row number != line number), then each is reported once as
+        # file:line: rejected (range), at its own line, and the total says
+        # 12 of 120 with the reason
+        path, bad = self.track("some.csv", 10, n=120, comment_every=7)
+        rc, _, err = bounded_run([TRAJREPLAY, "-q", "--rate", "10", path])
+        self.assertEqual(rc, 0, err)
+        got = [int(m) for m in re.findall(re.escape(path) + r":(\d+): rejected \(range\)", err)]
+        self.assertEqual(got, bad)
+        self.assertIn(path + ": rejected 12 of 120 waypoints (range 12), the first at line %d"
+                      % bad[0], err)
+
+    def test_rate_limited(self):
+        # Given 3000 rejected rows, then the first 20 are shown, then one in
+        # 1000, with a note, and the total counts all 3000
+        path, bad = self.track("many.csv", 2, n=6000)
+        rc, _, err = bounded_run([TRAJREPLAY, "-q", "--rate", "1", path])
+        self.assertEqual(rc, 0, err[-500:])
+        got = [int(m) for m in re.findall(r":(\d+): rejected \(range\)", err)]
+        self.assertEqual(got, bad[:20] + [bad[999], bad[1999], bad[2999]])
+        self.assertIn("one in 1000 shown", err)
+        self.assertIn("rejected 3000 of 6000 waypoints (range 3000)", err)
+
+    def test_real_track_jitter_reported(self):
+        # Given the real figure-8 log, whose two late-stamped fixes the
+        # acceleration rule refuses (README "Jitter and outliers"), then both
+        # are reported at their lines, found here as the two rows whose
+        # interval to the previous row is below 0.1 s around t = 135 s
+        with open(FIGURE8) as f:
+            lines = f.read().splitlines()
+        t = [float(l.split(",")[0]) for l in lines[1:]]
+        short = [i + 2 for i in range(1, len(t)) if t[i] - t[i - 1] < 0.1 and 130 < t[i] < 140]
+        self.assertEqual(len(short), 2)
+        rc, _, err = bounded_run([TRAJREPLAY, "-q", "--rate", "10", FIGURE8])
+        self.assertEqual(rc, 0, err)
+        got = [int(m) for m in re.findall(r":(\d+): rejected \(accel\)", err)]
+        self.assertEqual(got, short)
+
+    def test_strict(self):
+        # Given rejections, then --strict exits 6 (the output is still
+        # complete); a clean track exits 0 with --strict; a skipped bad line
+        # (--skip-bad) counts as a rejection for --strict
+        path, _ = self.track("some.csv", 10, n=60)
+        out = os.path.join(self.tmp, "o.csv")
+        p = subprocess.run([TRAJREPLAY, "-q", "--strict", "-o", out, path],
+                           capture_output=True, text=True, timeout=120)
+        self.assertEqual(p.returncode, 6, p.stderr)
+        self.assertIn("--strict", p.stderr)
+        with open(out) as f:
+            self.assertEqual(f.read().splitlines()[-1].split(",")[12], "finished")
+        clean, _ = self.track("clean.csv", 0, n=60)
+        p = subprocess.run([TRAJREPLAY, "-q", "--strict", "-o", out, clean],
+                           capture_output=True, text=True, timeout=120)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        self.assertNotIn("rejected", p.stderr)
+        with open(clean, "a") as f:
+            f.write("61,abc,0,0\n")
+        p = subprocess.run([TRAJREPLAY, "-q", "--strict", "--skip-bad", "-o", out, clean],
+                           capture_output=True, text=True, timeout=120)
+        self.assertEqual(p.returncode, 6, p.stderr)
+        p = subprocess.run([TRAJREPLAY, "-q", "--skip-bad", "-o", out, clean],
+                           capture_output=True, text=True, timeout=120)
+        self.assertEqual(p.returncode, 0, p.stderr)
+
+
+@unittest.skipUnless(os.access(TRAJD, os.X_OK), "trajd not built in this tree")
+class TestTrajdNothingUsable(unittest.TestCase):
+    def test_exit_when_done(self):
+        # Given trajd with exit_when_done replaying a track with no usable
+        # waypoint, then it exits (0) and says why in a warning
+        with tempfile.TemporaryDirectory() as tmp:
+            write(os.path.join(tmp, "huge.csv"),
+                  "t,x,y,z\n" + "".join("%d,1e300,0,0\n" % i for i in range(60)))
+            conf = os.path.join(tmp, "t.conf")
+            write(conf, "[daemon]\nspeed = 100\nexit_when_done = yes\nstatus_interval_s = 0\n"
+                        "[object.boat]\ninput = replay\nreplay.track = huge.csv\n"
+                        "output = stdout\n")
+            # 60 s of track at speed 100: under a second of wall time; the
+            # bound only stops a daemon that would wait for ever
+            rc, _, err = bounded_run([TRAJD, "-f", "-c", conf], limit_bytes=5_000_000,
+                                     timeout=60)
+            self.assertEqual(rc, 0, err[-500:])
+            self.assertIn("object boat: replay.track %s/huge.csv: no usable waypoint: all 60 "
+                          "rejected" % tmp, err)
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
