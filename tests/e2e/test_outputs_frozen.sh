@@ -6,7 +6,9 @@
 # The list was generated before the source tree was restructured, so a
 # structural change that alters a single bit of output fails here.  trajd's
 # replay is byte-identical to trajreplay (test_daemon.py compares the two row
-# by row), so this covers the daemon's output too.
+# by row), so this covers the daemon's output too (but for the hold rows
+# trajd streams through gaps longer than max_gap_s, which trajreplay skips
+# unless --keep-gaps).
 #
 # A change that is *meant* to alter output regenerates the list with
 #     bash tests/e2e/test_outputs_frozen.sh --update
