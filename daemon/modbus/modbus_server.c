@@ -1,5 +1,6 @@
 /* modbus_server.c - see modbus_server.h. */
 #include "modbus_server.h"
+#include "mbrtu.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -56,9 +57,7 @@ struct modbus_server {
     client_t *clients;
     allow_t allow[MODBUS_SERVER_ALLOW_MAX];
     unsigned n_allow;
-    uint8_t rtu_buf[RTU_BUF];
-    size_t rtu_len;
-    int rtu_discard;        /* drop bytes until the line is silent */
+    mbrtu_rx_t rtu_rx;      /* RTU request framing (lib/proto/mbrtu.h) */
     uint32_t gen;
     uint64_t *mb_rejected;  /* per object */
     uint64_t *lost;         /* per object, sequence gaps of Modbus waypoints */
@@ -756,14 +755,9 @@ static void rtu_arm_silence(modbus_server_t *s)
     timerfd_settime(s->silfd, 0, &t, NULL);
 }
 
-static int rtu_crc_ok(const uint8_t *f, size_t len)
+static void rtu_frame(void *ctx, const uint8_t *f, size_t len)
 {
-    uint16_t crc = mbmap_crc16(f, len - 2);
-    return f[len - 2] == (crc & 0xffu) && f[len - 1] == (crc >> 8);
-}
-
-static void rtu_frame(modbus_server_t *s, const uint8_t *f, size_t len)
-{
+    modbus_server_t *s = ctx;
     if (f[0] != s->unit_id || (f[1] & 0x80)) /* not ours, broadcast, or no function */
         return;
     serve(s, s->rtu, f, (int)len, f + 1, len - 3);
@@ -771,7 +765,9 @@ static void rtu_frame(modbus_server_t *s, const uint8_t *f, size_t len)
 
 static void rtu_read(modbus_server_t *s)
 {
-    ssize_t n = read(s->rtufd, s->rtu_buf + s->rtu_len, sizeof s->rtu_buf - s->rtu_len);
+    uint8_t b[RTU_BUF];
+    uint64_t e0 = s->rtu_rx.crc_errors;
+    ssize_t n = read(s->rtufd, b, mbrtu_space(&s->rtu_rx));
     if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR))
         return;
     if (n <= 0) {
@@ -782,50 +778,17 @@ static void rtu_read(modbus_server_t *s)
         return;
     }
     rtu_arm_silence(s);
-    if (s->rtu_discard) {
-        s->rtu_len = 0;
-        return;
-    }
-    s->rtu_len += (size_t)n;
-    for (;;) {
-        int fl = mbmap_rtu_frame_len(s->rtu_buf, s->rtu_len);
-        if (fl == 0 || (fl < 0 && s->rtu_len < sizeof s->rtu_buf))
-            return;             /* more bytes, or the silence, will tell */
-        if (fl < 0 || fl > MBMAP_RTU_ADU_MAX) {
-            s->rtu_discard = 1;
-            s->rtu_len = 0;
-            return;
-        }
-        if (s->rtu_len < (size_t)fl)
-            return;
-        if (rtu_crc_ok(s->rtu_buf, (size_t)fl)) {
-            rtu_frame(s, s->rtu_buf, (size_t)fl);
-        } else {
-            /* Frame boundary unknown from here on: resynchronise at silence. */
-            s->st.rtu_crc_errors++;
-            s->rtu_discard = 1;
-            s->rtu_len = 0;
-            return;
-        }
-        memmove(s->rtu_buf, s->rtu_buf + fl, s->rtu_len - (size_t)fl);
-        s->rtu_len -= (size_t)fl;
-    }
+    mbrtu_bytes(&s->rtu_rx, b, (size_t)n, rtu_frame, s);
+    s->st.rtu_crc_errors += s->rtu_rx.crc_errors - e0;
 }
 
 static void rtu_silence(modbus_server_t *s)
 {
-    uint64_t exp;
+    uint64_t exp, e0 = s->rtu_rx.crc_errors;
     if (read(s->silfd, &exp, sizeof exp) < 0)
         return;
-    /* A frame of a function we cannot size is delimited by this silence:
-     * if it is whole and ours, it gets its exception 01. */
-    if (!s->rtu_discard && s->rtu_len >= 4 && mbmap_rtu_frame_len(s->rtu_buf, s->rtu_len) < 0 &&
-        rtu_crc_ok(s->rtu_buf, s->rtu_len))
-        rtu_frame(s, s->rtu_buf, s->rtu_len);
-    else if (s->rtu_len && !s->rtu_discard)
-        s->st.rtu_crc_errors++;
-    s->rtu_len = 0;
-    s->rtu_discard = 0;
+    mbrtu_silence(&s->rtu_rx, rtu_frame, s);
+    s->st.rtu_crc_errors += s->rtu_rx.crc_errors - e0;
 }
 
 /* ---- loop ----------------------------------------------------------------- */
