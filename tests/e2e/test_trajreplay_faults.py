@@ -161,6 +161,25 @@ class TestGapsAndBounds(unittest.TestCase):
         self.assertNotIn("engine bug", err)
         self.assertLess(len(rows(out)), 1000)
 
+    def test_long_transfer_finishes(self):
+        # Given an ADS-B-like jump: 10 fixes, silence for 100 s (a gap), then
+        # 10 fixes 97 km away, with --max-speed 0 (transfers at 10 m/s: about
+        # 4 h for 97 km, longer than the old bound of twice the 190 s track
+        # plus an hour, which exited 4 "engine bug"), then trajreplay runs
+        # the transfer to its end and finishes on the last fix, exit 0
+        jump = os.path.join(self.tmp, "jump.csv")
+        rows_ = ["%d,%d,0,0" % (5 * i, 10 * i) for i in range(10)]
+        rows_ += ["%d,%d,0,0" % (145 + 5 * i, 97000 + 10 * i) for i in range(10)]
+        write(jump, "t,x,y,z\n" + "\n".join(rows_) + "\n")
+        rc, out, err = bounded_run([TRAJREPLAY, "-q", "--rate", "1", "--max-speed", "0", jump],
+                                   limit_bytes=20_000_000)
+        self.assertEqual(rc, 0, err[-500:])
+        self.assertNotIn("engine bug", err)
+        r = rows(out)
+        self.assertGreater(len(r), 3980)  # past the old bound
+        self.assertEqual(r[-1][12], "finished")
+        self.assertAlmostEqual(float(r[-1][3]), 97090.0, delta=1e-6)
+
 
 @unittest.skipUnless(os.access(TRAJREPLAY, os.X_OK), "trajreplay not built in this tree")
 class TestRejectionsReported(unittest.TestCase):
