@@ -750,6 +750,14 @@ static const canproto_signal_t sig_st[] = {
 static const canproto_signal_t sig_rpdo[] = {
     SIG_S("Target_Position_607A", -1, 0, 32, 1, "inc"),
 };
+static const canproto_signal_t sig_rpdo_cw[] = {
+    SIG_U("Controlword_6040", -1, 0, 16, 1, ""),
+    SIG_S("Target_Position_607A", -1, 16, 32, 1, "inc"),
+};
+static const canproto_signal_t sig_tpdo_fb[] = {
+    SIG_U("Statusword_6041", -1, 0, 16, 1, ""),
+    SIG_S("Position_Actual_6064", -1, 16, 32, 1, "inc"),
+};
 
 static const canproto_message_t canproto_msgs[] = {
     { "TRAJD_WAYPOINT", CANPROTO_ID_WAYPOINT_BASE, CANPROTO_WP_DLEN, 0, "SENDER", sig_wp,
@@ -766,6 +774,12 @@ static const canproto_message_t canproto_msgs[] = {
     { "RPDO1_NODE1", CANPROTO_CIA402_RPDO1_BASE + 1, 4, 0, "TRAJD", sig_rpdo, 1 },
     { "RPDO1_NODE2", CANPROTO_CIA402_RPDO1_BASE + 2, 4, 0, "TRAJD", sig_rpdo, 1 },
     { "RPDO1_NODE3", CANPROTO_CIA402_RPDO1_BASE + 3, 4, 0, "TRAJD", sig_rpdo, 1 },
+    { "RPDO_CW_NODE1", CANPROTO_CIA402_RPDO2_BASE + 1, 6, 0, "TRAJD", sig_rpdo_cw, 2 },
+    { "RPDO_CW_NODE2", CANPROTO_CIA402_RPDO2_BASE + 2, 6, 0, "TRAJD", sig_rpdo_cw, 2 },
+    { "RPDO_CW_NODE3", CANPROTO_CIA402_RPDO2_BASE + 3, 6, 0, "TRAJD", sig_rpdo_cw, 2 },
+    { "TPDO1_NODE1", CANPROTO_CIA402_TPDO1_BASE + 1, 6, 0, "SENDER", sig_tpdo_fb, 2 },
+    { "TPDO1_NODE2", CANPROTO_CIA402_TPDO1_BASE + 2, 6, 0, "SENDER", sig_tpdo_fb, 2 },
+    { "TPDO1_NODE3", CANPROTO_CIA402_TPDO1_BASE + 3, 6, 0, "SENDER", sig_tpdo_fb, 2 },
 };
 
 const canproto_message_t *canproto_messages(unsigned *count)
@@ -822,7 +836,7 @@ int canproto_dbc(char *buf, size_t len)
     }
     emit(buf, len, &pos,
          "CM_ \"trajd CAN protocol, generated from lib/proto/canproto.h by canproto_dbc(); ids are "
-         "the defaults of object 0 (object n: + n), RPDOs for CiA 402 nodes 1..3.\";\n"
+         "the defaults of object 0 (object n: + n), RPDOs for CiA 402 nodes 1..3 (RPDO_CW: the layout sent with can.cia402_controlword = yes, shown on the RPDO2 ids 0x301..0x303; TPDO1: the drive feedback trajd reads, statusword 0x6041 and position actual value 0x6064). Setpoint positions 0x80000000: no position yet, do not move.\";\n"
          "CM_ SG_ %u WP_Command \"1 finish, 2 stop, 3 clear, 4 reset counters\";\n"
          "CM_ SG_ %u ST_LastErr \"1..11 engine_error of the last rejected waypoint, 0x40 "
          "malformed, 0x41 lost, 0x42 out of order, 0x43 setpoints dropped, 0x44 bus down, 0x45 "
@@ -837,9 +851,31 @@ int canproto_dbc(char *buf, size_t len)
     for (unsigned i = 0; i < n; i++)
         if (m[i].fd)
             emit(buf, len, &pos, "BA_ \"VFrameFormat\" BO_ %u 14;\n", (unsigned)m[i].id);
+    /* value tables of every enum field, from the enums of canproto.h / motion.h */
+    const char *states = "0 \"waiting\" 1 \"streaming\" 2 \"underrun\" 3 \"finished\"";
+    emit(buf, len, &pos, "VAL_ %u WP_Mux %d \"time\" %d \"x\" %d \"y\" %d \"z\" %d \"command\" ;\n",
+         CANPROTO_ID_WAYPOINT_BASE, CANPROTO_MUX_TIME, CANPROTO_MUX_X, CANPROTO_MUX_Y,
+         CANPROTO_MUX_Z, CANPROTO_MUX_COMMAND);
     emit(buf, len, &pos,
-         "VAL_ %u SP_State 0 \"waiting\" 1 \"streaming\" 2 \"underrun\" 3 \"finished\" ;\n"
-         "VAL_ %u ST_State 0 \"waiting\" 1 \"streaming\" 2 \"underrun\" 3 \"finished\" ;\n",
-         CANPROTO_ID_SETPOINT_BASE, CANPROTO_ID_STATUS_BASE);
+         "VAL_ %u WP_Command %d \"finish\" %d \"stop\" %d \"clear\" %d \"reset counters\" ;\n",
+         CANPROTO_ID_WAYPOINT_BASE, CANPROTO_CMD_FINISH, CANPROTO_CMD_STOP, CANPROTO_CMD_CLEAR,
+         CANPROTO_CMD_RESET_COUNTERS);
+    emit(buf, len, &pos, "VAL_ %u SP_Axis 0 \"x\" 1 \"y\" 2 \"z\" ;\n", CANPROTO_ID_SETPOINT_BASE);
+    emit(buf, len, &pos, "VAL_ %u SP_State %s ;\n", CANPROTO_ID_SETPOINT_BASE, states);
+    emit(buf, len, &pos, "VAL_ %u SPFD_State %s ;\n", CANPROTO_ID_SETPOINT_FD_BASE, states);
+    emit(buf, len, &pos, "VAL_ %u ST_State %s ;\n", CANPROTO_ID_STATUS_BASE, states);
+    emit(buf, len, &pos,
+         "VAL_ %u ST_LastErr 0 \"ok\" 1 \"not finite\" 2 \"out of range\" 3 \"backwards\" "
+         "4 \"same time\" 5 \"speed\" 6 \"full\" 7 \"config\" 8 \"no memory\" 9 \"state\" "
+         "10 \"numeric\" 11 \"acceleration\" %d \"malformed\" %d \"lost\" %d \"out of order\" "
+         "%d \"setpoints dropped\" %d \"bus down\" %d \"output lost lines\" %d \"safety fault\" ;\n",
+         CANPROTO_ID_STATUS_BASE, CANPROTO_STERR_MALFORMED, CANPROTO_STERR_LOST,
+         CANPROTO_STERR_OUT_OF_ORDER, CANPROTO_STERR_TX_DROPPED, CANPROTO_STERR_BUS_DOWN,
+         CANPROTO_STERR_OUTPUT, CANPROTO_STERR_SAFETY);
+    for (unsigned k = 1; k <= 3; k++)
+        emit(buf, len, &pos,
+             "VAL_ %u Controlword_6040 0 \"disable voltage\" 2 \"quick stop\" 6 \"shutdown\" "
+             "7 \"switch on\" 15 \"enable operation\" 128 \"fault reset\" ;\n",
+             CANPROTO_CIA402_RPDO2_BASE + k);
     return pos > (size_t)INT32_MAX ? -1 : (int)pos;
 }

@@ -99,6 +99,8 @@ typedef struct {
 #define CANPROTO_ID_STATUS_BASE      0x6C0u
 #define CANPROTO_ID_SYNC_DEFAULT     0x080u
 #define CANPROTO_CIA402_RPDO1_BASE   0x200u  /* CiA 301 RPDO1 = 0x200 + node-id */
+#define CANPROTO_CIA402_RPDO2_BASE   0x300u  /* CiA 301 RPDO2 = 0x300 + node-id */
+#define CANPROTO_CIA402_TPDO1_BASE   0x180u  /* CiA 301 TPDO1 = 0x180 + node-id */
 
 #define CANPROTO_WP_DLEN 8
 #define CANPROTO_WP_FD_DLEN 32

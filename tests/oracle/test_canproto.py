@@ -177,6 +177,33 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
         d = decode(self.db, f)
         self.assertEqual(d["Target_Position_607A"], round(-12.34567 * 10000))
 
+    # Given the controlword layout on an RPDO2 id, then canmatrix decodes the
+    # 6-byte frame (it raised DecodingFrameLength before the DBC had it), and
+    # the value tables name what our enums mean.
+    def test_cia402_controlword_rpdo_and_value_tables(self):
+        ids = cp.Ids()
+        LIB.canproto_ids_default(ctypes.byref(ids), 0)
+        ids.cia402_controlword = 1
+        ids.cia402_cob_id[0] = 0x301
+        f = cp.Frame()
+        self.assertEqual(LIB.canproto_encode_cia402(ctypes.byref(ids), 0, 1.25, ctypes.byref(f)), 0)
+        self.assertEqual((f.id, f.len), (0x301, 6))
+        fr = frame_of(self.db, 0x301)
+        d = fr.decode(f.payload())
+        self.assertEqual(d["Controlword_6040"].raw_value, 0x000F)
+        self.assertEqual(d["Controlword_6040"].named_value, "enable operation")
+        self.assertEqual(d["Target_Position_607A"].raw_value, 12500)
+        sp = frame_of(self.db, 0x6A0).signal_by_name("SP_State")
+        LIB.engine_state_name.restype = ctypes.c_char_p
+        for v, name in sp.values.items():
+            self.assertEqual(LIB.engine_state_name(int(v)).decode(), name)
+        cmd = frame_of(self.db, 0x680).signal_by_name("WP_Command").values
+        self.assertEqual({int(k): v for k, v in cmd.items()},
+                         {1: "finish", 2: "stop", 3: "clear", 4: "reset counters"})
+        err = frame_of(self.db, 0x6C0).signal_by_name("ST_LastErr").values
+        # ok, the 11 engine errors (motion.h), the CAN side's 0x40..0x46
+        self.assertEqual(sorted(int(k) for k in err), list(range(12)) + list(range(0x40, 0x47)))
+
     # Given per-axis scale, an inverted axis and an offset, then the increments
     # are offset - round(pos * counts_per_m) (exact in Python's integers and
     # Fractions), and they read back to the position.
