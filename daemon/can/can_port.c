@@ -24,6 +24,7 @@ typedef struct {
     int out_fault_seen;
     uint8_t last_err;
     int last_state;            /* engine state in the last STATUS (-1: none yet) */
+    can_port_drive_t drive;
     can_port_obj_stats_t st;
 } can_port_obj_t;
 
@@ -70,6 +71,8 @@ can_port_t *can_port_new(const can_port_config_t *cfg, const can_port_io_t *io, 
     for (unsigned i = 0; i < nobj; i++) {
         canproto_rx_init(&p->obj[i].rx, p->obj[i].slots, CAN_PORT_RX_SLOTS);
         p->obj[i].last_state = -1;
+        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+            p->obj[i].drive.state[a] = CIA402_STATE_UNKNOWN;
     }
     return p;
 }
@@ -117,10 +120,10 @@ unsigned can_port_rx_ids(const can_port_t *p, uint32_t *out, unsigned max)
 {
     unsigned n = 0;
     for (unsigned i = 0; i < p->nobj; i++) {
-        uint32_t ids[4];
+        uint32_t ids[8];
         if (!p->obj[i].set)
             continue;
-        unsigned k = canproto_ids_rx(&p->obj[i].ids, ids, 4);
+        unsigned k = canproto_ids_rx(&p->obj[i].ids, ids, 8);
         for (unsigned j = 0; j < k; j++, n++)
             if (n < max)
                 out[n] = ids[j];
@@ -183,6 +186,38 @@ static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd)
     o->status_due = 1;
 }
 
+/* A feedback TPDO of axis a of object o. */
+static void drive_feedback(can_port_obj_t *o, unsigned a, const canproto_frame_t *f)
+{
+    can_port_drive_t *d = &o->drive;
+    uint16_t sw;
+    int32_t inc;
+    if (cia402_decode_feedback(f, &sw, &inc) < 0) {
+        o->st.drive_bad++;
+        event(o, CANPROTO_STERR_MALFORMED);
+        return;
+    }
+    o->st.drive_frames++;
+    d->statusword[a] = sw;
+    d->state[a] = cia402_state(sw);
+    d->pos_m[a] = canproto_cia402_pos_m(&o->ids, a, inc);
+    d->seen |= 1u << a;
+    d->all_seen = d->all_enabled = 1;
+    for (unsigned k = 0; k < CANPROTO_CIA402_AXES; k++)
+        if (o->ids.cia402_cob_id[k]) {
+            d->all_seen &= (d->seen >> k) & 1u;
+            d->all_enabled &= d->state[k] == CIA402_OPERATION_ENABLED;
+        }
+    d->all_enabled &= d->all_seen;
+    if (o->hooks.feedback)
+        o->hooks.feedback(o->ctx, d);
+    if (d->was_enabled && !d->all_enabled) {
+        o->st.drive_lost++;
+        event(o, CANPROTO_STERR_DRIVE);
+    }
+    d->was_enabled = d->all_enabled;
+}
+
 static void dispatch(can_port_t *p, const canproto_frame_t *f)
 {
     if (!(f->flags & CANPROTO_F_EFF)) {
@@ -191,6 +226,11 @@ static void dispatch(can_port_t *p, const canproto_frame_t *f)
             int is_fd;
             if (!o->set)
                 continue;
+            for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+                if (f->id == canproto_cia402_tpdo(&o->ids, a)) {
+                    drive_feedback(o, a, f);
+                    return;
+                }
             if (f->id == o->ids.waypoint_id)
                 is_fd = 0;
             else if (o->ids.fd && f->id == o->ids.waypoint_fd_id)
@@ -408,6 +448,11 @@ int can_port_maintain(can_port_t *p, int64_t now_ns)
 void can_port_stats(const can_port_t *p, can_port_stats_t *st)
 {
     *st = p->st;
+}
+
+const can_port_drive_t *can_port_drive(const can_port_t *p, unsigned i)
+{
+    return i < p->nobj ? &p->obj[i].drive : NULL;
 }
 
 void can_port_obj_stats(const can_port_t *p, unsigned i, can_port_obj_stats_t *st)

@@ -41,6 +41,7 @@
 
 #include <stdint.h>
 #include "canproto.h"
+#include "cia402.h"
 #include "engine.h"
 
 /* Slots per object for interleaved waypoint frames (see canproto_rx_init). */
@@ -57,6 +58,18 @@ typedef struct {
     int (*is_up)(const void *io);
 } can_port_io_t;
 
+/* What the drives of one object report (CiA 402 feedback TPDOs). */
+typedef struct {
+    uint16_t statusword[CANPROTO_CIA402_AXES];
+    cia402_state_t state[CANPROTO_CIA402_AXES]; /* CIA402_STATE_UNKNOWN until heard */
+    double pos_m[CANPROTO_CIA402_AXES];  /* position actual values (0x6064) in metres (scale,
+                                          * sign and offset undone); 0 for axes without a drive */
+    unsigned seen;          /* bit per axis heard from */
+    int all_seen;           /* every axis with a COB-id was heard from */
+    int all_enabled;        /* and every one is in Operation Enabled */
+    int was_enabled;        /* all were enabled, until this frame (a loss is this and !all_enabled) */
+} can_port_drive_t;
+
 typedef struct {
     /* Offer a waypoint; returns what engine_push returns. */
     int (*push)(void *ctx, const engine_waypoint_t *wp);
@@ -64,6 +77,8 @@ typedef struct {
     void (*command)(void *ctx, canproto_cmd_t cmd);
     /* Current engine status (state, last_seq, free). */
     void (*status)(void *ctx, engine_status_t *st);
+    /* A feedback TPDO of one of the object's drives arrived (may be NULL). */
+    void (*feedback)(void *ctx, const can_port_drive_t *d);
 } can_port_hooks_t;
 
 typedef struct {
@@ -88,6 +103,9 @@ typedef struct {
     uint64_t waypoints_rejected;   /* engine refused (not EFULL) */
     uint64_t waypoints_full;       /* engine EFULL: not consumed, sender must repeat */
     uint64_t engine_duplicates;
+    uint64_t drive_frames;     /* feedback TPDOs received */
+    uint64_t drive_lost;       /* times the drives left Operation Enabled while the object ran */
+    uint64_t drive_bad;        /* feedback TPDOs too short */
     canproto_rx_stats_t rx;    /* reassembly counters */
 } can_port_obj_stats_t;
 
@@ -149,6 +167,9 @@ int can_port_maintain(can_port_t *p, int64_t now_ns);
 
 void can_port_stats(const can_port_t *p, can_port_stats_t *st);
 void can_port_obj_stats(const can_port_t *p, unsigned i, can_port_obj_stats_t *st);
+
+/* What object i's drives last reported (NULL if i is out of range). */
+const can_port_drive_t *can_port_drive(const can_port_t *p, unsigned i);
 
 /* Reset every counter (CAN command RESET_COUNTERS does it for its object). */
 void can_port_reset_counters(can_port_t *p);

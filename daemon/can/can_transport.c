@@ -141,6 +141,9 @@ static int obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
             oc->given |= GIVEN_COB << a;
             return get_id(kv, &ids->cia402_cob_id[a], why, wl);
         }
+        snprintf(name, sizeof name, "cia402_tpdo_%c", "xyz"[a]);
+        if (!strcmp(k, name))
+            return get_id(kv, &ids->cia402_tpdo_id[a], why, wl);
         snprintf(name, sizeof name, "cia402_counts_per_m_%c", "xyz"[a]);
         if (!strcmp(k, name))
             return cfg_get_double(kv, 1e-3, 1e9, &ids->cia402_axis_counts_per_m[a], why, wl);
@@ -171,6 +174,8 @@ static int obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
         return cfg_get_double(kv, 1e-3, 1e9, &ids->cia402_counts_per_m, why, wl);
     if (!strcmp(k, "cia402_controlword"))
         return cfg_get_bool(kv, &ids->cia402_controlword, why, wl);
+    if (!strcmp(k, "cia402_feedback"))
+        return cfg_get_bool(kv, &ids->cia402_feedback, why, wl);
     return -CFG_EUNKNOWN;
 }
 
@@ -196,6 +201,8 @@ void can_obj_ids(const can_obj_cfg_t *oc, unsigned obj_index, canproto_ids_t *id
            sizeof ids->cia402_axis_counts_per_m);
     memcpy(ids->cia402_invert, g->cia402_invert, sizeof ids->cia402_invert);
     memcpy(ids->cia402_offset, g->cia402_offset, sizeof ids->cia402_offset);
+    ids->cia402_feedback = g->cia402_feedback;
+    memcpy(ids->cia402_tpdo_id, g->cia402_tpdo_id, sizeof ids->cia402_tpdo_id);
 }
 
 /* ---- config check: ids, clashes, bus load ---- */
@@ -234,7 +241,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
     can_port_config_t pc;
     port_config(c, (int64_t)llround((double)cfg->daemon.period_ns / cfg->daemon.speed), &pc);
     can_port_io_t io = { null_send, null_recv, NULL, null_up };
-    can_port_hooks_t hk = { null_push, NULL, null_status };
+    can_port_hooks_t hk = { null_push, NULL, null_status, NULL };
     can_port_t *p = can_port_new(&pc, &io, NULL, n);
     if (!p) {
         snprintf(why, wl, "[can] sync settings invalid or out of memory");
@@ -314,6 +321,25 @@ static void hk_command(void *ctx, canproto_cmd_t cmd)
     case CANPROTO_CMD_CLEAR: obj_clear(o); break;
     case CANPROTO_CMD_RESET_COUNTERS: obj_reset_counters(o); break;
     default: break;
+    }
+}
+
+/*
+ * A drive's feedback for one axis.  The object moves only while every axis
+ * it drives is in Operation Enabled: until then (and again after a drive
+ * fault or quick stop) the output has no position, so no target is sent
+ * (a drive being enabled takes its own position as target); when all are
+ * enabled, the engine starts from their position actual values and reaches
+ * the track by a transfer.
+ */
+static void hk_feedback(void *ctx, const can_port_drive_t *d)
+{
+    obj_t *o = ctx;
+    if (d->all_seen && d->all_enabled) {
+        if (!engine_has_position(o->engine))
+            obj_set_position(o, d->pos_m);
+    } else if (engine_has_position(o->engine) && d->was_enabled) {
+        obj_drive_lost(o);
     }
 }
 
@@ -469,14 +495,24 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
     for (unsigned k = 0; k < s->n; k++) {
         canproto_ids_t ids;
         can_obj_ids(cfg_obj_transport(s->objs[k]->cfg, &can_transport), s->objs[k]->index, &ids);
-        can_port_hooks_t hk = { s->is_input[k] ? hk_push : hk_push_refuse, hk_command, hk_status };
+        can_port_hooks_t hk = { s->is_input[k] ? hk_push : hk_push_refuse, hk_command, hk_status,
+                                hk_feedback };
+        if (ids.cia402 && ids.cia402_feedback && !s->objs[k]->carried)
+            engine_require_position(s->objs[k]->engine, 1); /* the drive says where it is */
         if (can_port_set_object(s->port, k, &ids, &hk, s->objs[k]) < 0) {
             snprintf(why, wl, "can: object '%s': invalid or clashing ids", s->objs[k]->name);
             return -EINVAL;
         }
-        if (s->is_input[k])
-            if (*nrx + 2 <= CAN_SOCKET_MAX_FILTERS) /* 32 objects x 2 ids at most: always fits */
-                *nrx += canproto_ids_rx(&ids, rx_ids + *nrx, CAN_SOCKET_MAX_FILTERS - *nrx);
+        uint32_t mine[8];
+        unsigned m = canproto_ids_rx(&ids, mine, 8), from = s->is_input[k] ? 0 : 1 + (unsigned)ids.fd;
+        for (unsigned j = from; j < m && j < 8; j++) { /* waypoint ids (inputs), feedback TPDOs */
+            if (*nrx >= CAN_SOCKET_MAX_FILTERS) {
+                snprintf(why, wl, "can: more than %d ids to receive (waypoints, drive feedback)",
+                         CAN_SOCKET_MAX_FILTERS);
+                return -EINVAL;
+            }
+            rx_ids[(*nrx)++] = mine[j];
+        }
     }
     return 0;
 }

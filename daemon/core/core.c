@@ -79,6 +79,21 @@ void obj_clear(obj_t *o)
     }
 }
 
+int obj_set_position(obj_t *o, const double pos_m[ENGINE_AXES])
+{
+    int rc = engine_set_position(o->engine, pos_m);
+    if (rc == 0)
+        safety_forget(&o->safety); /* the next output is its first: judged from there */
+    return rc;
+}
+
+void obj_drive_lost(obj_t *o)
+{
+    obj_clear(o);
+    engine_require_position(o->engine, 1);
+    safety_forget(&o->safety);
+}
+
 obj_t *core_obj_find(core_t *c, const char *name)
 {
     for (unsigned i = 0; i < c->nobj; i++)

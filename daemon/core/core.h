@@ -90,6 +90,20 @@ void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim);
 void obj_clear(obj_t *o);
 
 /*
+ * Where o really stands (a drive's position actual value): the engine holds
+ * there (engine_set_position) and the safety monitor judges from there.
+ * Returns what engine_set_position returns.
+ */
+int obj_set_position(obj_t *o, const double pos_m[ENGINE_AXES]);
+
+/*
+ * o's drive stopped following (fault, quick stop, disabled): clear o and drop
+ * its position (engine_require_position), so nothing a drive would follow is
+ * sent until obj_set_position gives it again from the drive.
+ */
+void obj_drive_lost(obj_t *o);
+
+/*
  * Offer a waypoint to o's engine: the one path every input uses (replay from
  * its pre_tick, CAN and Modbus from their fd callbacks).  Returns what
  * engine_push returns (0, ENGINE_DUPLICATE, -ENGINE_*), or -ENGINE_ESTATE

@@ -773,6 +773,9 @@ int engine_set_position(engine_t *e, const double pos_m[ENGINE_AXES])
 void engine_require_position(engine_t *e, int on)
 {
     e->need_pos = on != 0;
+    /* holding: the position it had is not trusted any more */
+    if (e->need_pos && e->mode == OUT_HOLD)
+        e->have_pos = 0;
 }
 
 int engine_has_position(const engine_t *e)

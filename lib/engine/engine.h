@@ -279,7 +279,9 @@ int engine_set_position(engine_t *e, const double pos_m[ENGINE_AXES]);
  * on = 1: no first-waypoint fallback; the output stays without a position
  * (ENGINE_SP_NO_POSITION, WAITING) and buffers waypoints until
  * engine_set_position gives one (e.g. the drive's position actual value is
- * awaited).  on = 0: the default.
+ * awaited).  If the output holds, the position it had is dropped too (its
+ * drive faulted: where it stands must come from the drive again).  on = 0:
+ * the default.
  */
 void engine_require_position(engine_t *e, int on);
 

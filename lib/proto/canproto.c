@@ -130,7 +130,19 @@ unsigned canproto_ids_in_use(const canproto_ids_t *ids, uint32_t out[CANPROTO_ID
         for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
             if (ids->cia402_cob_id[a])
                 out[n++] = ids->cia402_cob_id[a];
+    for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+        if (canproto_cia402_tpdo(ids, a))
+            out[n++] = canproto_cia402_tpdo(ids, a);
     return n;
+}
+
+uint32_t canproto_cia402_tpdo(const canproto_ids_t *ids, unsigned axis)
+{
+    if (!ids->cia402 || !ids->cia402_feedback || axis >= CANPROTO_CIA402_AXES ||
+        !ids->cia402_cob_id[axis])
+        return 0;
+    return ids->cia402_tpdo_id[axis] ? ids->cia402_tpdo_id[axis]
+                                     : CANPROTO_CIA402_TPDO1_BASE + (ids->cia402_cob_id[axis] & 0x7Fu);
 }
 
 int canproto_ids_check(const canproto_ids_t *ids, const char **why)
@@ -177,6 +189,12 @@ unsigned canproto_ids_rx(const canproto_ids_t *ids, uint32_t *out, unsigned max)
             out[n] = ids->waypoint_fd_id;
         n++;
     }
+    for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+        if (canproto_cia402_tpdo(ids, a)) {
+            if (n < max)
+                out[n] = canproto_cia402_tpdo(ids, a);
+            n++;
+        }
     return n;
 }
 
@@ -840,7 +858,8 @@ int canproto_dbc(char *buf, size_t len)
          "CM_ SG_ %u WP_Command \"1 finish, 2 stop, 3 clear, 4 reset counters\";\n"
          "CM_ SG_ %u ST_LastErr \"1..11 engine_error of the last rejected waypoint, 0x40 "
          "malformed, 0x41 lost, 0x42 out of order, 0x43 setpoints dropped, 0x44 bus down, 0x45 "
-         "csv/stdout output lost lines, 0x46 safety monitor fault (object held until clear)\";\n",
+         "csv/stdout output lost lines, 0x46 safety monitor fault (object held until clear), 0x47 a CiA 402 "
+         "drive left Operation Enabled\";\n",
          CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_STATUS_BASE);
     emit(buf, len, &pos,
          "BA_DEF_ BO_ \"VFrameFormat\" ENUM \"StandardCAN\",\"ExtendedCAN\",\"reserved\","
@@ -868,10 +887,11 @@ int canproto_dbc(char *buf, size_t len)
          "VAL_ %u ST_LastErr 0 \"ok\" 1 \"not finite\" 2 \"out of range\" 3 \"backwards\" "
          "4 \"same time\" 5 \"speed\" 6 \"full\" 7 \"config\" 8 \"no memory\" 9 \"state\" "
          "10 \"numeric\" 11 \"acceleration\" %d \"malformed\" %d \"lost\" %d \"out of order\" "
-         "%d \"setpoints dropped\" %d \"bus down\" %d \"output lost lines\" %d \"safety fault\" ;\n",
+         "%d \"setpoints dropped\" %d \"bus down\" %d \"output lost lines\" %d \"safety fault\" "
+         "%d \"drive not enabled\" ;\n",
          CANPROTO_ID_STATUS_BASE, CANPROTO_STERR_MALFORMED, CANPROTO_STERR_LOST,
          CANPROTO_STERR_OUT_OF_ORDER, CANPROTO_STERR_TX_DROPPED, CANPROTO_STERR_BUS_DOWN,
-         CANPROTO_STERR_OUTPUT, CANPROTO_STERR_SAFETY);
+         CANPROTO_STERR_OUTPUT, CANPROTO_STERR_SAFETY, CANPROTO_STERR_DRIVE);
     for (unsigned k = 1; k <= 3; k++)
         emit(buf, len, &pos,
              "VAL_ %u Controlword_6040 0 \"disable voltage\" 2 \"quick stop\" 6 \"shutdown\" "

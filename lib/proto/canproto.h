@@ -174,6 +174,8 @@ typedef enum {
     CANPROTO_STERR_BUS_DOWN = 0x44,     /* the interface went down */
     CANPROTO_STERR_OUTPUT = 0x45,       /* a csv/stdout output lost lines (disk full, I/O error) */
     CANPROTO_STERR_SAFETY = 0x46,       /* the safety monitor refused a setpoint (object held) */
+    CANPROTO_STERR_DRIVE = 0x47,        /* a CiA 402 drive left Operation Enabled (fault, quick
+                                           stop, disabled): the object is cleared, no target sent */
 } canproto_status_err_t;
 
 /* ---- errors ------------------------------------------------------------------ */
@@ -221,7 +223,15 @@ typedef struct {
     double cia402_axis_counts_per_m[CANPROTO_CIA402_AXES];
     int cia402_invert[CANPROTO_CIA402_AXES];
     int32_t cia402_offset[CANPROTO_CIA402_AXES];
+    /* Drive feedback: a TPDO per axis with statusword 0x6041 (u16) then
+     * position actual value 0x6064 (i32) on cia402_tpdo_id (0 = 0x180 + the
+     * node of the axis' COB-id, its low 7 bits). */
+    int cia402_feedback;
+    uint32_t cia402_tpdo_id[CANPROTO_CIA402_AXES];
 } canproto_ids_t;
+
+/* The feedback TPDO id of axis (0 if feedback is off or the axis unused). */
+uint32_t canproto_cia402_tpdo(const canproto_ids_t *ids, unsigned axis);
 
 /*
  * Drive increments for pos_m on axis (the formula above, clamped to int32;
@@ -241,7 +251,7 @@ void canproto_ids_default(canproto_ids_t *ids, unsigned n);
  */
 int canproto_ids_check(const canproto_ids_t *ids, const char **why);
 
-/* Most ids one object can use: 2 waypoint, 1 setpoint, 1 status, 3 CiA 402. */
+/* Most ids one object can use: 2 waypoint, 1 setpoint, 1 status, 3 CiA 402, 3 feedback. */
 #define CANPROTO_IDS_MAX 16
 
 /*

@@ -166,6 +166,13 @@ int safety_check(safety_t *s, engine_setpoint_t *sp)
     return SAFETY_OK;
 }
 
+void safety_forget(safety_t *s)
+{
+    s->have_pos = 0;
+    s->have_vel = 0;
+    memset(s->last_vel, 0, sizeof s->last_vel);
+}
+
 int safety_fault(const safety_t *s)
 {
     return s->fault;

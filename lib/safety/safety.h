@@ -83,6 +83,13 @@ typedef struct {
  */
 void safety_init(safety_t *s, const safety_limits_t *lim);
 
+/*
+ * Forget the position history (fault kept): the output's position was
+ * re-established from outside (a drive's actual position) or deliberately
+ * dropped (ENGINE_SP_NO_POSITION): the next position is taken as the first.
+ */
+void safety_forget(safety_t *s);
+
 /* New bounds (as safety_init takes them), history and fault kept. */
 void safety_set_limits(safety_t *s, const safety_limits_t *lim);
 

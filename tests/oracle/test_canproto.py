@@ -201,8 +201,8 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
         self.assertEqual({int(k): v for k, v in cmd.items()},
                          {1: "finish", 2: "stop", 3: "clear", 4: "reset counters"})
         err = frame_of(self.db, 0x6C0).signal_by_name("ST_LastErr").values
-        # ok, the 11 engine errors (motion.h), the CAN side's 0x40..0x46
-        self.assertEqual(sorted(int(k) for k in err), list(range(12)) + list(range(0x40, 0x47)))
+        # ok, the 11 engine errors (motion.h), the CAN side's 0x40..0x47
+        self.assertEqual(sorted(int(k) for k in err), list(range(12)) + list(range(0x40, 0x48)))
 
     # Given per-axis scale, an inverted axis and an offset, then the increments
     # are offset - round(pos * counts_per_m) (exact in Python's integers and

@@ -100,7 +100,17 @@ static void fe_status(void *ctx, engine_status_t *st)
     st->free = e->free_slots;
 }
 
-static const can_port_hooks_t fe_hooks = { fe_push, fe_command, fe_status };
+static can_port_drive_t fe_drive;
+static unsigned fe_feedbacks;
+
+static void fe_feedback(void *ctx, const can_port_drive_t *d)
+{
+    (void)ctx;
+    fe_drive = *d;
+    fe_feedbacks++;
+}
+
+static const can_port_hooks_t fe_hooks = { fe_push, fe_command, fe_status, fe_feedback };
 
 static fake_io_t io;
 static fake_engine_t eng;
@@ -316,6 +326,57 @@ static void test_cia402_no_position_and_late(void **state)
     assert_int_equal(st.dropped_late, 1);
 }
 
+static void queue_tpdo(uint32_t id, uint16_t sw, int32_t pos)
+{
+    canproto_frame_t *f = &io.in[io.nin++];
+    memset(f, 0, sizeof *f);
+    f->id = id;
+    f->len = 6;
+    f->data[0] = (uint8_t)sw;
+    f->data[1] = (uint8_t)(sw >> 8);
+    for (int i = 0; i < 4; i++)
+        f->data[2 + i] = (uint8_t)((uint32_t)pos >> (8 * i));
+}
+
+/* Given a drive on axis x with feedback (TPDO 0x180 + node 1), inverted, then
+ * its statusword gives the state (CiA 402 patterns), its position actual
+ * value the position in metres, Operation Enabled is reported once seen, and
+ * leaving it (fault) is counted and reported in STATUS (0x47). */
+static void test_cia402_feedback(void **state)
+{
+    (void)state;
+    canproto_ids_t ids;
+    canproto_ids_default(&ids, 0);
+    ids.cia402 = 1;
+    ids.cia402_feedback = 1;
+    ids.cia402_cob_id[1] = ids.cia402_cob_id[2] = 0;
+    ids.cia402_invert[0] = 1;
+    assert_int_equal(can_port_set_object(port, 0, &ids, &fe_hooks, &eng), 0);
+    uint32_t rx[8];
+    unsigned n = can_port_rx_ids(port, rx, 8);
+    assert_int_equal(n, 2);
+    assert_int_equal(rx[1], 0x181);
+    fe_feedbacks = 0;
+    queue_tpdo(0x181, 0x0250, 12345);   /* switch on disabled */
+    queue_tpdo(0x181, 0x0637, -20000);  /* operation enabled, at +2 m (inverted) */
+    assert_int_equal(can_port_rx(port, 0), 2);
+    assert_int_equal(fe_feedbacks, 2);
+    assert_int_equal(fe_drive.state[0], CIA402_OPERATION_ENABLED);
+    assert_true(fe_drive.all_seen && fe_drive.all_enabled && !fe_drive.was_enabled);
+    assert_true(fabs(fe_drive.pos_m[0] - 2.0) < 1e-12);
+    queue_tpdo(0x181, 0x0218, -20000);  /* fault */
+    queue_tpdo(0x181, 0x02, 0);         /* too short: 1 byte */
+    io.in[io.nin - 1].len = 1;
+    assert_int_equal(can_port_rx(port, 0), 2);
+    assert_int_equal(fe_drive.state[0], CIA402_FAULT);
+    assert_true(fe_drive.was_enabled && !fe_drive.all_enabled);
+    can_port_obj_stats_t st;
+    can_port_obj_stats(port, 0, &st);
+    assert_int_equal(st.drive_frames, 3);
+    assert_int_equal(st.drive_lost, 1);
+    assert_int_equal(st.drive_bad, 1);
+}
+
 /* Given waypoints with a gap, a duplicate, a malformed and a foreign frame,
  * then the engine gets each good waypoint once, and STATUS reports the loss
  * and the malformed frame. */
@@ -512,6 +573,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_down_and_back, setup, teardown),
         cmocka_unit_test_setup_teardown(test_late_cycle_dropped, setup, teardown),
         cmocka_unit_test_setup_teardown(test_cia402_no_position_and_late, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_cia402_feedback, setup, teardown),
         cmocka_unit_test_setup_teardown(test_rx_paths, setup, teardown),
         cmocka_unit_test_setup_teardown(test_flow_control_efull, setup, teardown),
         cmocka_unit_test_setup_teardown(test_commands, setup, teardown),
