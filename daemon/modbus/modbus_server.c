@@ -20,6 +20,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "log.h"
+
 /* Two whole TCP ADUs: a client may pipeline a second request behind the first. */
 #define CLIENT_BUF (2 * MBMAP_TCP_ADU_MAX)
 #define RTU_BUF (2 * MBMAP_RTU_ADU_MAX)
@@ -37,7 +39,11 @@ typedef struct {
 typedef struct {
     int fd;                 /* -1: free slot */
     size_t len;
-    int64_t last_ns;
+    int64_t connected_ns;
+    int64_t last_ns;        /* last complete request, or the connection */
+    int64_t pending_ns;     /* first byte of the partial request in buf, 0 if none */
+    uint64_t requests, exceptions, bytes_in;
+    char peer[64];
     uint8_t buf[CLIENT_BUF];
 } client_t;
 
@@ -46,7 +52,11 @@ struct modbus_server {
     int writes_enabled;
     unsigned max_clients;
     int64_t idle_ns;
+    int64_t request_ns;
     int unit_id;
+    int64_t log_window_ns;  /* rate limit of client messages: start of this second */
+    unsigned log_count;     /* messages in it */
+    unsigned log_suppressed;
     modbus_server_hooks_t hooks;
     int ep, lfd, hkfd, rtufd, silfd;
     int port;
@@ -215,6 +225,7 @@ void modbus_server_config_default(modbus_server_config_t *cfg)
     cfg->unit_id = 1;
     cfg->max_clients = MODBUS_SERVER_DEFAULT_MAX_CLIENTS;
     cfg->idle_timeout_ms = MODBUS_SERVER_DEFAULT_IDLE_MS;
+    cfg->request_timeout_ms = MODBUS_SERVER_DEFAULT_REQUEST_MS;
     cfg->n_objects = 1;
 }
 
@@ -286,6 +297,9 @@ int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const
     } else if (!strcmp(key, "idle_timeout_ms")) {
         if ((rc = parse_uint(value, 0, 86400000, &x)) == 0)
             cfg->idle_timeout_ms = (unsigned)x;
+    } else if (!strcmp(key, "request_timeout_ms")) {
+        if ((rc = parse_uint(value, 100, 600000, &x)) == 0)
+            cfg->request_timeout_ms = (unsigned)x;
     } else if (!strcmp(key, "rtu_parity")) {
         if (!strcmp(value, "N") || !strcmp(value, "none")) cfg->rtu_parity = 'N';
         else if (!strcmp(value, "E") || !strcmp(value, "even")) cfg->rtu_parity = 'E';
@@ -417,6 +431,8 @@ modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg, const modb
     s->writes_enabled = cfg->writes_enabled;
     s->max_clients = cfg->max_clients;
     s->idle_ns = (int64_t)cfg->idle_timeout_ms * 1000000;
+    s->request_ns = (int64_t)(cfg->request_timeout_ms ? cfg->request_timeout_ms
+                                                       : MODBUS_SERVER_DEFAULT_REQUEST_MS) * 1000000;
     s->unit_id = cfg->unit_id;
     if (hooks)
         s->hooks = *hooks;
@@ -536,6 +552,47 @@ void modbus_server_stats(const modbus_server_t *s, modbus_server_stats_t *st)
     *st = s->st;
 }
 
+int modbus_server_client(const modbus_server_t *s, unsigned i, modbus_server_client_t *out)
+{
+    if (i >= s->max_clients || s->clients[i].fd < 0)
+        return -ENOENT;
+    const client_t *c = &s->clients[i];
+    memset(out, 0, sizeof *out);
+    snprintf(out->peer, sizeof out->peer, "%s", c->peer);
+    out->connected_ns = c->connected_ns;
+    out->requests = c->requests;
+    out->exceptions = c->exceptions;
+    out->bytes_in = c->bytes_in;
+    out->pending_since_ns = c->pending_ns;
+    out->last_request_ns = c->last_ns;
+    return 0;
+}
+
+/* A notice about a client, at most MODBUS_SERVER_LOG_PER_S a second (the
+ * rest counted and reported with the next one that passes). */
+static void client_note(modbus_server_t *s, const client_t *c, const char *what, int64_t now)
+{
+    if (now - s->log_window_ns >= 1000000000) {
+        s->log_window_ns = now;
+        s->log_count = 0;
+    }
+    if (s->log_count >= MODBUS_SERVER_LOG_PER_S) {
+        s->log_suppressed++;
+        return;
+    }
+    s->log_count++;
+    char more[64] = "";
+    if (s->log_suppressed)
+        snprintf(more, sizeof more, " (%u more such messages not shown)", s->log_suppressed);
+    s->log_suppressed = 0;
+    log_msg(LOG_NOTICE,
+            "modbus: %s %s after %.1f s: %llu requests, %llu exceptions, %llu bytes%s%s", what,
+            c->peer[0] ? c->peer : "(socket)", (double)(now - c->connected_ns) / 1e9,
+            (unsigned long long)c->requests, (unsigned long long)c->exceptions,
+            (unsigned long long)c->bytes_in, c->pending_ns ? ", a partial request pending" : "",
+            more);
+}
+
 /* ---- requests ------------------------------------------------------------- */
 
 /*
@@ -635,8 +692,11 @@ static void client_read(modbus_server_t *s, client_t *c)
     }
     if (n < 0)
         return;
+    int64_t now = now_ns();
+    if (c->len == 0)
+        c->pending_ns = now;    /* the deadline runs from a request's first byte */
     c->len += (size_t)n;
-    c->last_ns = now_ns();
+    c->bytes_in += (uint64_t)n;
     /* MBAP: transaction id (2), protocol id (2) = 0, length (2) = unit + PDU. */
     while (c->len >= 7) {
         unsigned proto = ((unsigned)c->buf[2] << 8) | c->buf[3];
@@ -657,9 +717,13 @@ static void client_read(modbus_server_t *s, client_t *c)
             client_close(s, c);
             return;
         }
+        uint64_t exc = s->st.exceptions;
         modbus_set_socket(s->tcp, c->fd);
         int rc = serve(s, s->tcp, c->buf, (int)total, c->buf + 7, total - 7);
         modbus_set_socket(s->tcp, -1);
+        c->requests++;
+        c->exceptions += s->st.exceptions - exc;
+        c->last_ns = now;
         if (rc < 0) {           /* peer not reading its answers: let it go */
             s->st.dropped++;
             client_close(s, c);
@@ -667,31 +731,98 @@ static void client_read(modbus_server_t *s, client_t *c)
         }
         memmove(c->buf, c->buf + total, c->len - total);
         c->len -= total;
+        c->pending_ns = c->len ? now : 0;
     }
 }
 
-static int client_add(modbus_server_t *s, int fd)
+/*
+ * The client to evict for a newcomer (policy in modbus_server.h), or NULL if
+ * every client is within MODBUS_SERVER_EVICT_GRACE_MS of its connection.
+ */
+static client_t *eviction_victim(modbus_server_t *s, int64_t now)
 {
+    client_t *best = NULL;
+    int best_proven = 0;
+    int64_t best_since = 0;
     for (unsigned i = 0; i < s->max_clients; i++) {
         client_t *c = &s->clients[i];
-        if (c->fd >= 0)
+        if (c->fd < 0 || now - c->connected_ns < (int64_t)MODBUS_SERVER_EVICT_GRACE_MS * 1000000)
             continue;
-        if (set_nonblock(fd) < 0 || ep_add(s->ep, fd, tag(TAG_CLIENT, i)) < 0)
-            break;
-        c->fd = fd;
-        c->len = 0;
-        c->last_ns = now_ns();
-        s->st.clients++;
-        return 0;
+        int proven = c->requests > 0;
+        int64_t since = c->pending_ns ? c->pending_ns : c->last_ns; /* waiting since */
+        if (!best || proven < best_proven || (proven == best_proven && since < best_since)) {
+            best = c;
+            best_proven = proven;
+            best_since = since;
+        }
     }
-    s->st.refused++;
-    close(fd);
-    return -EMFILE;
+    return best;
+}
+
+static void peer_name(int fd, const struct sockaddr_storage *ss, char *out, size_t len)
+{
+    char host[INET6_ADDRSTRLEN] = "?";
+    unsigned port = 0;
+    struct sockaddr_storage tmp;
+    if (!ss) {
+        socklen_t sl = sizeof tmp;
+        if (getpeername(fd, (struct sockaddr *)&tmp, &sl) < 0) {
+            out[0] = 0;
+            return;
+        }
+        ss = &tmp;
+    }
+    if (ss->ss_family == AF_INET) {
+        const struct sockaddr_in *a = (const struct sockaddr_in *)ss;
+        inet_ntop(AF_INET, &a->sin_addr, host, sizeof host);
+        port = ntohs(a->sin_port);
+    } else if (ss->ss_family == AF_INET6) {
+        const struct sockaddr_in6 *a = (const struct sockaddr_in6 *)ss;
+        inet_ntop(AF_INET6, &a->sin6_addr, host, sizeof host);
+        port = ntohs(a->sin6_port);
+    } else {
+        out[0] = 0;
+        return;
+    }
+    snprintf(out, len, "%s:%u", host, port);
+}
+
+static void reap_hung_up(modbus_server_t *s);
+
+static int client_add(modbus_server_t *s, int fd, const struct sockaddr_storage *ss)
+{
+    int64_t now = now_ns();
+    client_t *c = NULL;
+    for (unsigned i = 0; i < s->max_clients && !c; i++)
+        if (s->clients[i].fd < 0)
+            c = &s->clients[i];
+    if (!c) {
+        c = eviction_victim(s, now);
+        if (c) {
+            s->st.evicted++;
+            client_note(s, c, "evicted to admit a newcomer:", now);
+            client_close(s, c);
+        }
+    }
+    if (!c || set_nonblock(fd) < 0 || ep_add(s->ep, fd, tag(TAG_CLIENT, (unsigned)(c - s->clients))) < 0) {
+        s->st.refused++;
+        close(fd);
+        return -EMFILE;
+    }
+    memset(c, 0, offsetof(client_t, buf));
+    c->fd = fd;
+    c->connected_ns = now;
+    c->last_ns = now;
+    peer_name(fd, ss, c->peer, sizeof c->peer);
+    s->st.clients++;
+    return 0;
 }
 
 int modbus_server_adopt(modbus_server_t *s, int fd)
 {
-    return client_add(s, fd);
+    if (s->st.clients >= s->max_clients)
+        reap_hung_up(s);
+    return client_add(s, fd, NULL);
 }
 
 /*
@@ -719,14 +850,14 @@ static void do_accept(modbus_server_t *s)
         int fd = accept4(s->lfd, (struct sockaddr *)&ss, &sl, SOCK_NONBLOCK | SOCK_CLOEXEC);
         if (fd < 0)
             return;             /* EAGAIN, or a connection reset before accept */
-        if (allowed(s, &ss) && s->st.clients >= s->max_clients)
-            reap_hung_up(s);
-        if (!allowed(s, &ss) || s->st.clients >= s->max_clients) {
+        if (!allowed(s, &ss)) {
             s->st.refused++;
             close(fd);
             continue;
         }
-        client_add(s, fd);
+        if (s->st.clients >= s->max_clients)
+            reap_hung_up(s);
+        client_add(s, fd, &ss);
     }
 }
 
@@ -735,12 +866,18 @@ static void housekeeping(modbus_server_t *s)
     uint64_t exp;
     if (read(s->hkfd, &exp, sizeof exp) < 0)
         return;
-    if (s->idle_ns <= 0)
-        return;
     int64_t now = now_ns();
     for (unsigned i = 0; i < s->max_clients; i++) {
         client_t *c = &s->clients[i];
-        if (c->fd >= 0 && now - c->last_ns > s->idle_ns) {
+        if (c->fd < 0)
+            continue;
+        if (c->pending_ns && now - c->pending_ns > s->request_ns) {
+            /* trickling: the deadline is for the whole request, not per byte */
+            s->st.slow++;
+            s->st.dropped++;
+            client_note(s, c, "closed, request not whole within request_timeout_ms:", now);
+            client_close(s, c);
+        } else if (!c->pending_ns && s->idle_ns > 0 && now - c->last_ns > s->idle_ns) {
             s->st.dropped++;
             client_close(s, c);
         }
@@ -837,6 +974,8 @@ void modbus_server_publish(modbus_server_t *s, const mbmap_daemon_t *d, const mb
     dd.mb_exceptions = s->st.exceptions;
     dd.mb_refused = s->st.refused;
     dd.mb_clients = (uint16_t)s->st.clients;
+    dd.mb_evicted = s->st.evicted;
+    dd.mb_slow = s->st.slow;
     mbmap_encode_daemon(ir, &dd);
     for (unsigned k = 0; k < s->n_objects; k++) {
         mbmap_object_t o = objs[k];

@@ -30,6 +30,32 @@
  * silence after a corrupted frame (the client's retry is then answered).
  * Requests to another unit id are skipped; broadcasts (unit 0) are ignored
  * (a write must be acknowledged to be trusted).
+ *
+ * TCP connection policy (no client can lock the others out):
+ *  - Deadline per request, not per byte: a request must arrive whole within
+ *    request_timeout_ms of its first byte, else the client is closed
+ *    (counted in slow).  A client with no partial request is closed after
+ *    idle_timeout_ms without a complete request (counted in dropped).
+ *  - At max_clients a newcomer is admitted by evicting one client (counted
+ *    in evicted), never refused for want of a slot while an older client is
+ *    there.  The victim, among clients connected for at least
+ *    MODBUS_SERVER_EVICT_GRACE_MS: clients that never completed a request
+ *    before those that did; within each group the stalest, i.e. the one
+ *    waiting longest since the first byte of its pending partial request if
+ *    it has one, else since its last complete request (or its connection).
+ *    So a client that polls keeps its slot against silent, slow and newly
+ *    connected ones.  Only when every client is within its grace period is
+ *    the newcomer closed (counted in refused, as are allow-list refusals).
+ *  - A client that sends faster than it reads its answers is closed when an
+ *    answer cannot be written (dropped); each readiness event handles at
+ *    most one buffer (2 ADUs read) of one client, and epoll serves ready
+ *    clients in turn, so a flooding client costs others one bounded batch.
+ *  - Per client: peer address, connection time, requests, exceptions and
+ *    bytes (modbus_server_client); evictions and drops are logged at notice
+ *    level with them, at most MODBUS_SERVER_LOG_PER_S lines a second.
+ *  Limit: a connection flood that completes requests (or comes from many
+ *  addresses faster than clients poll) still churns the slots; the allow-list
+ *  and a firewall's rate limit are the tools for that.
  */
 #ifndef TRAJD_MBSRV_H
 #define TRAJD_MBSRV_H
@@ -44,6 +70,9 @@
 #define MODBUS_SERVER_DEFAULT_MAX_CLIENTS 16
 #define MODBUS_SERVER_MAX_CLIENTS_LIMIT 1024
 #define MODBUS_SERVER_DEFAULT_IDLE_MS 60000
+#define MODBUS_SERVER_DEFAULT_REQUEST_MS 2000 /* a whole request, from its first byte */
+#define MODBUS_SERVER_EVICT_GRACE_MS 250    /* a client this new is never evicted */
+#define MODBUS_SERVER_LOG_PER_S 5           /* client messages per second at most */
 #define MODBUS_SERVER_EVENTS_PER_CALL 8
 #define MODBUS_SERVER_RTU_SILENCE_MS 20
 #define MODBUS_SERVER_ALLOW_MAX 32          /* entries in the allow-list */
@@ -72,8 +101,10 @@ typedef struct {
     /* Comma- or space-separated CIDR list ("127.0.0.1/32, ::1, 10.0.0.0/8");
      * "" allows every client. */
     char allow[512];
-    unsigned max_clients;       /* TCP clients at once; more are accepted and closed */
+    unsigned max_clients;       /* TCP clients at once; a newcomer evicts one (policy above) */
     unsigned idle_timeout_ms;   /* close a TCP client silent this long (0 = never) */
+    unsigned request_timeout_ms; /* close a TCP client whose request is not whole this long
+                                  * after its first byte */
     unsigned n_objects;         /* 1..MBMAP_MAX_OBJECTS */
 } modbus_server_config_t;
 
@@ -95,7 +126,10 @@ typedef struct {
     uint64_t requests;          /* answered (normal or exception) */
     uint64_t exceptions;
     uint64_t refused;           /* connections refused: allow-list or max_clients */
-    uint64_t dropped;           /* connections closed for bad framing or idleness */
+    uint64_t dropped;           /* connections closed for bad framing, idleness, or answers
+                                 * not read; and slow ones (also counted in slow) */
+    uint64_t slow;              /* closed: a request not whole within request_timeout_ms */
+    uint64_t evicted;           /* closed at max_clients to admit a newcomer */
     uint64_t rtu_crc_errors;
     int rtu_down;               /* 1 once the serial line failed (not reopened) */
     unsigned clients;           /* TCP clients connected now */
@@ -108,7 +142,8 @@ typedef struct modbus_server modbus_server_t;
 
 /* Defaults: not enabled, 127.0.0.1:1502, systemd socket if passed, no RTU
  * (9600 8N1, unit 1 when set), writes off, no allow-list,
- * MODBUS_SERVER_DEFAULT_MAX_CLIENTS, MODBUS_SERVER_DEFAULT_IDLE_MS, 1 object. */
+ * MODBUS_SERVER_DEFAULT_MAX_CLIENTS, MODBUS_SERVER_DEFAULT_IDLE_MS,
+ * MODBUS_SERVER_DEFAULT_REQUEST_MS, 1 object. */
 void modbus_server_config_default(modbus_server_config_t *cfg);
 
 /*
@@ -116,7 +151,8 @@ void modbus_server_config_default(modbus_server_config_t *cfg);
  * this for each key of the section; n_objects is the daemon's to set).
  * Keys: enabled, address, port, systemd_socket, rtu_device, rtu_baud,
  * rtu_parity (N|E|O|none|even|odd), rtu_data_bits, rtu_stop_bits, unit_id,
- * writes, allow, max_clients, idle_timeout_ms.  Booleans: yes/no/true/false/1/0.
+ * writes, allow, max_clients, idle_timeout_ms, request_timeout_ms (100 ..
+ * 600000).  Booleans: yes/no/true/false/1/0.
  * Returns 0, -ENOENT for an unknown key, -EINVAL for a bad value (with the
  * reason in err if not NULL).
  */
@@ -165,10 +201,25 @@ uint32_t modbus_server_generation(const modbus_server_t *s);
 
 void modbus_server_stats(const modbus_server_t *s, modbus_server_stats_t *st);
 
+/* One TCP client's counters. */
+typedef struct {
+    char peer[64];              /* "address:port" */
+    int64_t connected_ns;       /* CLOCK_MONOTONIC at accept */
+    uint64_t requests;          /* answered (normal or exception) */
+    uint64_t exceptions;
+    uint64_t bytes_in;
+    int64_t pending_since_ns;   /* first byte of a partial request, 0 if none */
+    int64_t last_request_ns;    /* last complete request (connected_ns if none) */
+} modbus_server_client_t;
+
+/* Client slot i (0 .. max_clients-1): 0 and *out, or -ENOENT if free. */
+int modbus_server_client(const modbus_server_t *s, unsigned i, modbus_server_client_t *out);
+
 /*
  * Serve an already connected stream socket as a TCP client (the fuzz target
- * and tests use a socketpair).  Takes ownership of fd.  Returns 0, or -EMFILE
- * when max_clients are connected (fd closed).
+ * and tests use a socketpair).  Takes ownership of fd.  At max_clients a
+ * client is evicted as for accept.  Returns 0, or -EMFILE when no slot could
+ * be had (fd closed).
  */
 int modbus_server_adopt(modbus_server_t *s, int fd);
 

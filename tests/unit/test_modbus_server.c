@@ -13,7 +13,7 @@
  *                              listening, runs until stdin closes or SIGTERM,
  *                              then prints one "STATS key=value ..." line.
  *     --objects N --period-us P --writes 0|1 --port P --rtu DEV --unit U
- *     --max-clients M --idle-ms I --allow LIST --capacity C
+ *     --max-clients M --idle-ms I --request-ms R --allow LIST --capacity C
  *
  * Synthetic snapshot of object k at cycle c (= generation), shared with
  * tests/helpers/mbsim.py:  t = c * 0.001 s;  x,y,z = c + 1000 k + {0, 0.25, 0.5} m;
@@ -165,6 +165,7 @@ typedef struct {
     int unit;
     unsigned max_clients;
     unsigned idle_ms;
+    unsigned request_ms;
     const char *allow;
     unsigned capacity;
 } hopts_t;
@@ -178,6 +179,7 @@ static void hopts_default(hopts_t *o)
     o->unit = 1;
     o->max_clients = 16;
     o->idle_ms = 60000;
+    o->request_ms = MODBUS_SERVER_DEFAULT_REQUEST_MS;
     o->capacity = 100000;
 }
 
@@ -196,6 +198,7 @@ static harness_t *harness_new(const hopts_t *o, int with_tcp)
     cfg.writes_enabled = o->writes;
     cfg.max_clients = o->max_clients;
     cfg.idle_timeout_ms = o->idle_ms;
+    cfg.request_timeout_ms = o->request_ms;
     snprintf(cfg.allow, sizeof cfg.allow, "%s", o->allow ? o->allow : "");
     cfg.n_objects = o->objects;
     h->n = o->objects;
@@ -271,6 +274,7 @@ static int serve_main(int argc, char **argv)
         else if (!strcmp(k, "--unit")) o.unit = atoi(v);
         else if (!strcmp(k, "--max-clients")) o.max_clients = (unsigned)atoi(v);
         else if (!strcmp(k, "--idle-ms")) o.idle_ms = (unsigned)atoi(v);
+        else if (!strcmp(k, "--request-ms")) o.request_ms = (unsigned)atoi(v);
         else if (!strcmp(k, "--allow")) o.allow = v;
         else if (!strcmp(k, "--capacity")) o.capacity = (unsigned)atoi(v);
         else { fprintf(stderr, "unknown option %s\n", k); return 2; }
@@ -299,11 +303,12 @@ static int serve_main(int argc, char **argv)
     harness_run(h);
     modbus_server_stats_t st;
     modbus_server_stats(h->srv, &st);
-    printf("STATS requests=%llu exceptions=%llu refused=%llu dropped=%llu crc_errors=%llu "
-           "ticks=%llu missed=%llu late_p50_us=%u late_p99_us=%u late_max_us=%u "
+    printf("STATS requests=%llu exceptions=%llu refused=%llu dropped=%llu slow=%llu evicted=%llu "
+           "crc_errors=%llu ticks=%llu missed=%llu late_p50_us=%u late_p99_us=%u late_max_us=%u "
            "process_max_us=%llu process_mean_ns=%llu\n",
            (unsigned long long)st.requests, (unsigned long long)st.exceptions,
            (unsigned long long)st.refused, (unsigned long long)st.dropped,
+           (unsigned long long)st.slow, (unsigned long long)st.evicted,
            (unsigned long long)st.rtu_crc_errors, (unsigned long long)h->ticks,
            (unsigned long long)h->missed, percentile(h, 0.5), percentile(h, 0.99), h->late_max_us,
            (unsigned long long)(st.process_max_ns / 1000),
@@ -549,8 +554,9 @@ static int closed_within(int fd, int ms)
 }
 
 /* Given max_clients 8 and a 1 s idle timeout, when 200 connections open
- * at once and stay silent, then 8 are kept, the rest are closed at once, the
- * kept ones are closed after the timeout, and a new client is then served. */
+ * at once and stay silent, then 8 are kept (the others are refused within
+ * the eviction grace period, or evicted by later ones), the kept ones are
+ * closed after the timeout, and a new client is then served. */
 static void test_connections(void **state)
 {
     (void)state;
@@ -560,29 +566,91 @@ static void test_connections(void **state)
     o.idle_ms = 1000;
     fixture_t *f = fixture_start(&o);
     int fds[200], open_now = 0;
-    for (int i = 0; i < 200; i++)
+    for (int i = 0; i < 200; i++) {
         fds[i] = raw_connect(f->port);
-    /* The refused ones first (closed at accept), then the 8 kept, at once. */
-    for (int i = 8; i < 200; i++)
-        if (fds[i] >= 0 && !closed_within(fds[i], 1000))
-            open_now++;
-    for (int i = 0; i < 8; i++)
-        if (fds[i] >= 0 && !closed_within(fds[i], 0))
-            open_now++;
-    assert_int_equal(open_now, 8);
-    for (int i = 0; i < 8; i++)
         assert_true(fds[i] >= 0);
+    }
+    /* Bounded: until the server has handled every accept, 8 stay open. */
+    for (int t = 0; t < WAIT_MS / 10; t++) {
+        open_now = 0;
+        for (int i = 0; i < 200; i++)
+            if (fds[i] >= 0 && !closed_within(fds[i], 0))
+                open_now++;
+        if (open_now == 8)
+            break;
+        struct pollfd none;
+        poll(&none, 0, 10);
+    }
+    assert_int_equal(open_now, 8);
     /* Silent clients go after idle_ms (+ housekeeping period), bounded. */
-    for (int i = 0; i < 200; i++)
-        if (fds[i] >= 0) {
-            assert_true(closed_within(fds[i], 1000 + MODBUS_SERVER_HOUSEKEEPING_MS + WAIT_MS));
-            close(fds[i]);
-        }
+    for (int i = 0; i < 200; i++) {
+        assert_true(closed_within(fds[i], 1000 + MODBUS_SERVER_HOUSEKEEPING_MS + WAIT_MS));
+        close(fds[i]);
+    }
     modbus_t *c = client(f->port);
     uint16_t r[1];
     assert_int_equal(modbus_read_input_registers(c, 0, 1, r), 1);
     assert_int_equal(r[0], MBMAP_MAGIC);
     client_free(c);
+    fixture_stop(f);
+}
+
+/* Given max_clients 2 held by a silent client and a client that polls,
+ * both older than the eviction grace, when a newcomer connects, then the
+ * silent one is evicted (not the poller, not the newcomer), and both the
+ * poller and the newcomer are served. */
+static void test_eviction_keeps_the_poller(void **state)
+{
+    (void)state;
+    hopts_t o;
+    hopts_default(&o);
+    o.max_clients = 2;
+    fixture_t *f = fixture_start(&o);
+    int silent = raw_connect(f->port);
+    assert_true(silent >= 0);
+    modbus_t *poller = client(f->port);
+    uint16_t r[1];
+    /* Past the grace period of both, the poller polling meanwhile. */
+    int64_t t0 = mono_ns();
+    while (mono_ns() - t0 < (int64_t)(MODBUS_SERVER_EVICT_GRACE_MS + 50) * 1000000)
+        assert_int_equal(modbus_read_input_registers(poller, 0, 1, r), 1);
+    modbus_t *newcomer = client(f->port);
+    assert_int_equal(modbus_read_input_registers(newcomer, 0, 1, r), 1);
+    assert_int_equal(r[0], MBMAP_MAGIC);
+    assert_true(closed_within(silent, WAIT_MS));
+    assert_int_equal(modbus_read_input_registers(poller, 0, 1, r), 1);
+    close(silent);
+    client_free(newcomer);
+    client_free(poller);
+    fixture_stop(f);
+}
+
+/* Given a 300 ms request deadline, when a client sends one byte of a
+ * request every 100 ms (each byte would have restarted a per-byte timer),
+ * then it is closed within the deadline plus a housekeeping period. */
+static void test_request_deadline(void **state)
+{
+    (void)state;
+    hopts_t o;
+    hopts_default(&o);
+    o.request_ms = 300;
+    fixture_t *f = fixture_start(&o);
+    int fd = raw_connect(f->port);
+    assert_true(fd >= 0);
+    const uint8_t req[12] = { 0, 1, 0, 0, 0, 6, 1, 4, 0, 0, 0, 1 };
+    int64_t t0 = mono_ns();
+    int closed = 0;
+    for (unsigned i = 0; i < sizeof req && !closed; i++) {
+        if (send(fd, &req[i], 1, MSG_NOSIGNAL) != 1)
+            break;
+        closed = closed_within(fd, 100);
+    }
+    if (!closed)
+        closed = closed_within(fd, 300 + MODBUS_SERVER_HOUSEKEEPING_MS + WAIT_MS);
+    assert_true(closed);
+    /* Not before the deadline: a housekeeping period of tolerance. */
+    assert_true(mono_ns() - t0 >= (int64_t)(300 - MODBUS_SERVER_HOUSEKEEPING_MS) * 1000000);
+    close(fd);
     fixture_stop(f);
 }
 
@@ -642,6 +710,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_writes_disabled),
         cmocka_unit_test(test_lost_window),
         cmocka_unit_test(test_connections),
+        cmocka_unit_test(test_eviction_keeps_the_poller),
+        cmocka_unit_test(test_request_deadline),
         cmocka_unit_test(test_idle_timeout),
         cmocka_unit_test(test_allow_list),
     };
