@@ -18,6 +18,8 @@
  */
 #include <errno.h>
 #include <getopt.h>
+#include <grp.h>
+#include <pwd.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -125,6 +127,45 @@ static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
     if (rt_apply(&cfg->rt, rtwhy, sizeof rtwhy) < 0)
         log_msg(LOG_WARNING, "realtime settings not applied (running without them): %s",
                 rtwhy);
+    return 0;
+}
+
+/*
+ * Started as root: once every socket and file is open, become [daemon] user
+ * (its groups, then its gid, then its uid; checked: root cannot be regained).
+ * Without a user, warn loudly unless systemd started us (its unit decides
+ * the user: User=, DynamicUser=).  Returns 0, or -1 with why (then trajd
+ * does not go on as root against its configuration).
+ */
+static int drop_privileges(const cfg_t *cfg, char *why, size_t wl)
+{
+    if (geteuid() != 0)
+        return 0;
+    if (!cfg->daemon.user[0]) {
+        if (!getenv("INVOCATION_ID"))
+            log_msg(LOG_WARNING,
+                    "RUNNING AS ROOT: every Modbus/CAN peer talks to a root process; set "
+                    "[daemon] user = <name> to drop to it once the sockets are open");
+        return 0;
+    }
+    errno = 0;
+    struct passwd *pw = getpwnam(cfg->daemon.user);
+    if (!pw) {
+        snprintf(why, wl, "[daemon] user %s: %s", cfg->daemon.user,
+                 errno ? strerror(errno) : "no such user");
+        return -1;
+    }
+    if (initgroups(pw->pw_name, pw->pw_gid) < 0 || setgid(pw->pw_gid) < 0 ||
+        setuid(pw->pw_uid) < 0) {
+        snprintf(why, wl, "[daemon] user %s: %s", cfg->daemon.user, strerror(errno));
+        return -1;
+    }
+    if (pw->pw_uid != 0 && (setuid(0) == 0 || geteuid() == 0)) {
+        snprintf(why, wl, "[daemon] user %s: root could be regained", cfg->daemon.user);
+        return -1;
+    }
+    log_msg(LOG_NOTICE, "dropped privileges to user %s (uid %u, gid %u)", pw->pw_name,
+            (unsigned)pw->pw_uid, (unsigned)pw->pw_gid);
     return 0;
 }
 
@@ -339,6 +380,10 @@ static int run(trajd_t *d)
     if (start_core(d, d->cfg, err, sizeof err) < 0) {
         log_msg(LOG_ERR, "cannot start: %s", err);
         return EX_UNAVAILABLE;
+    }
+    if (drop_privileges(d->cfg, err, sizeof err) < 0) {
+        log_msg(LOG_ERR, "cannot start: %s", err);
+        return EX_NOPERM;
     }
     d->status_fd = loop_timer_add(d->loop, 1000000000, on_second, d);
     uint64_t wd_usec = 0;

@@ -259,6 +259,7 @@ static void begin_section(parse_t *p, const char *name)
         o->line = p->line;
         engine_config_default(&o->engine);
         o->safety_max_step_m = o->safety_max_speed_m_s = o->safety_max_accel_m_s2 = -1;
+        o->writable = -1;
         for (unsigned t = 0; transport_table[t]; t++)
             if (alloc_block(&o->tcfg[t], transport_table[t]->obj_cfg_size,
                             transport_table[t]->obj_cfg_default) < 0) {
@@ -394,6 +395,13 @@ static int key_daemon(cfg_t *c, parse_t *p, const cfg_kv_t *kv, char *why, size_
         return cfg_get_double(kv, 0, 3600, &d->stop_timeout_s, why, wl);
     if (strcmp(kv->key, "exit_when_done") == 0)
         return cfg_get_bool(kv, &d->exit_when_done, why, wl);
+    if (strcmp(kv->key, "user") == 0) {
+        if (strlen(kv->value) >= sizeof d->user)
+            return why_set(why, wl, "expected a user name of at most %zu characters",
+                           sizeof d->user - 1);
+        snprintf(d->user, sizeof d->user, "%s", kv->value);
+        return 0;
+    }
     if (strcmp(kv->key, "log_level") == 0) {
         static const char *const lv[] = {"err", "warning", "notice", "info", "debug", NULL};
         static const int lvv[] = {LOG_ERR, LOG_WARNING, LOG_NOTICE, LOG_INFO, LOG_DEBUG};
@@ -491,6 +499,8 @@ static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size
     }
     if (strncmp(kv->key, "safety_", 7) == 0 || strcmp(kv->key, "initial_position") == 0)
         return key_obj_drive(o, kv, why, wl);
+    if (strcmp(kv->key, "writable") == 0)
+        return cfg_get_bool(kv, &o->writable, why, wl);
     if (strcmp(kv->key, "input") == 0) {
         const transport_t *t = transport_find(kv->value);
         if (!t || !(t->roles & TRANSPORT_INPUT)) {

@@ -75,6 +75,8 @@ typedef struct {
     double stop_timeout_s;      /* SIGTERM: longest wait for objects to come to rest */
     int exit_when_done;         /* exit 0 once every input is done and every object is finished */
     int log_level;              /* LOG_ERR .. LOG_DEBUG */
+    char user[64];              /* started as root: drop to this user once the sockets are
+                                 * open ("" = stay, with a warning outside systemd) */
 } cfg_daemon_t;
 
 /* [realtime] (all off by default) */
@@ -102,6 +104,9 @@ typedef struct {
      * holds there and reaches the first trajectory by a transfer) */
     int has_initial_position;
     double initial_position_m[ENGINE_AXES];
+    int writable;                               /* writable = yes/no: commands and waypoints
+                                                 * from outside (Modbus) may change it;
+                                                 * -1 not given (the input decides) */
 } cfg_obj_t;
 
 typedef struct cfg {

@@ -43,6 +43,7 @@ typedef struct {
     int64_t last_ns;        /* last complete request, or the connection */
     int64_t pending_ns;     /* first byte of the partial request in buf, 0 if none */
     uint64_t requests, exceptions, bytes_in;
+    int may_write;          /* writes = yes and in write_allow */
     char peer[64];
     uint8_t buf[CLIENT_BUF];
 } client_t;
@@ -68,6 +69,8 @@ struct modbus_server {
     allow_t allow[MODBUS_SERVER_ALLOW_MAX];
     unsigned n_allow;
     mbrtu_rx_t rtu_rx;      /* RTU request framing (lib/proto/mbrtu.h) */
+    allow_t wallow[MODBUS_SERVER_ALLOW_MAX]; /* write_allow */
+    unsigned n_wallow;
     uint32_t gen;
     uint64_t *mb_rejected;  /* per object */
     uint64_t *lost;         /* per object, sequence gaps of Modbus waypoints */
@@ -182,12 +185,28 @@ static int prefix_match(const uint8_t *a, const uint8_t *b, unsigned bits)
     return (a[full] & mask) == (b[full] & mask);
 }
 
+static int in_list(const allow_t *list, unsigned n, const struct sockaddr_storage *ss);
+
 static int allowed(const modbus_server_t *s, const struct sockaddr_storage *ss)
+{
+    return !s->n_allow || in_list(s->allow, s->n_allow, ss);
+}
+
+/* Writes for a client at ss (NULL: an adopted socket, RTU): writes = yes,
+ * and the client in write_allow if there is one. */
+static int may_write(const modbus_server_t *s, const struct sockaddr_storage *ss)
+{
+    if (!s->writes_enabled)
+        return 0;
+    if (!s->n_wallow)
+        return 1;
+    return ss && in_list(s->wallow, s->n_wallow, ss);
+}
+
+static int in_list(const allow_t *list, unsigned n, const struct sockaddr_storage *ss)
 {
     uint8_t a4[4], a6[16];
     int has4 = 0, has6 = 0;
-    if (!s->n_allow)
-        return 1;
     if (ss->ss_family == AF_INET) {
         memcpy(a4, &((const struct sockaddr_in *)ss)->sin_addr, 4);
         has4 = 1;
@@ -200,8 +219,8 @@ static int allowed(const modbus_server_t *s, const struct sockaddr_storage *ss)
             has4 = 1;
         }
     }
-    for (unsigned i = 0; i < s->n_allow; i++) {
-        const allow_t *e = &s->allow[i];
+    for (unsigned i = 0; i < n; i++) {
+        const allow_t *e = &list[i];
         if (e->family == AF_INET && has4 && prefix_match(e->addr, a4, e->prefix))
             return 1;
         if (e->family == AF_INET6 && has6 && prefix_match(e->addr, a6, e->prefix))
@@ -274,6 +293,10 @@ int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const
         rc = copy_str(cfg->rtu_device, sizeof cfg->rtu_device, value);
     else if (!strcmp(key, "allow")) {
         rc = copy_str(cfg->allow, sizeof cfg->allow, value);
+        if (rc == 0 && modbus_server_allow_check(value, err, errlen) < 0)
+            return -EINVAL;
+    } else if (!strcmp(key, "write_allow")) {
+        rc = copy_str(cfg->write_allow, sizeof cfg->write_allow, value);
         if (rc == 0 && modbus_server_allow_check(value, err, errlen) < 0)
             return -EINVAL;
     } else if (!strcmp(key, "port")) {
@@ -427,6 +450,10 @@ modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg, const modb
     if (rc < 0)
         goto fail;
     s->n_allow = (unsigned)rc;
+    rc = allow_parse(cfg->write_allow, s->wallow, MODBUS_SERVER_ALLOW_MAX, err, errlen);
+    if (rc < 0)
+        goto fail;
+    s->n_wallow = (unsigned)rc;
     s->n_objects = cfg->n_objects;
     s->writes_enabled = cfg->writes_enabled;
     s->max_clients = cfg->max_clients;
@@ -659,10 +686,10 @@ static int apply_write(modbus_server_t *s, const mbmap_write_t *w)
  * (MBAP or address first, no CRC checked here), pdu/pdu_len its PDU.
  * Returns what libmodbus returned (< 0: the peer could not be written to).
  */
-static int serve(modbus_server_t *s, modbus_t *ctx, const uint8_t *req, int req_len,
+static int serve(modbus_server_t *s, modbus_t *ctx, int writes, const uint8_t *req, int req_len,
                  const uint8_t *pdu, size_t pdu_len)
 {
-    int rc = mbmap_check_request(s->n_objects, s->writes_enabled, pdu, pdu_len);
+    int rc = mbmap_check_request(s->n_objects, writes, pdu, pdu_len);
     if (rc == 0 && (pdu[0] == MBMAP_FC_WRITE_SINGLE || pdu[0] == MBMAP_FC_WRITE_MULTIPLE)) {
         mbmap_write_t w;
         memset(&w, 0, sizeof w);
@@ -719,7 +746,7 @@ static void client_read(modbus_server_t *s, client_t *c)
         }
         uint64_t exc = s->st.exceptions;
         modbus_set_socket(s->tcp, c->fd);
-        int rc = serve(s, s->tcp, c->buf, (int)total, c->buf + 7, total - 7);
+        int rc = serve(s, s->tcp, c->may_write, c->buf, (int)total, c->buf + 7, total - 7);
         modbus_set_socket(s->tcp, -1);
         c->requests++;
         c->exceptions += s->st.exceptions - exc;
@@ -813,6 +840,7 @@ static int client_add(modbus_server_t *s, int fd, const struct sockaddr_storage 
     c->fd = fd;
     c->connected_ns = now;
     c->last_ns = now;
+    c->may_write = may_write(s, ss);
     peer_name(fd, ss, c->peer, sizeof c->peer);
     s->st.clients++;
     return 0;
@@ -897,7 +925,7 @@ static void rtu_frame(void *ctx, const uint8_t *f, size_t len)
     modbus_server_t *s = ctx;
     if (f[0] != s->unit_id || (f[1] & 0x80)) /* not ours, broadcast, or no function */
         return;
-    serve(s, s->rtu, f, (int)len, f + 1, len - 3);
+    serve(s, s->rtu, s->writes_enabled, f, (int)len, f + 1, len - 3);
 }
 
 static void rtu_read(modbus_server_t *s)

@@ -101,6 +101,10 @@ typedef struct {
     /* Comma- or space-separated CIDR list ("127.0.0.1/32, ::1, 10.0.0.0/8");
      * "" allows every client. */
     char allow[512];
+    /* Clients that may write when writes_enabled (same syntax); "" = every
+     * allowed client.  Others get exception 01 for FC 06/16, as with writes
+     * off.  RTU has no address: writes_enabled alone decides there. */
+    char write_allow[512];
     unsigned max_clients;       /* TCP clients at once; a newcomer evicts one (policy above) */
     unsigned idle_timeout_ms;   /* close a TCP client silent this long (0 = never) */
     unsigned request_timeout_ms; /* close a TCP client whose request is not whole this long
@@ -151,7 +155,7 @@ void modbus_server_config_default(modbus_server_config_t *cfg);
  * this for each key of the section; n_objects is the daemon's to set).
  * Keys: enabled, address, port, systemd_socket, rtu_device, rtu_baud,
  * rtu_parity (N|E|O|none|even|odd), rtu_data_bits, rtu_stop_bits, unit_id,
- * writes, allow, max_clients, idle_timeout_ms, request_timeout_ms (100 ..
+ * writes, allow, write_allow, max_clients, idle_timeout_ms, request_timeout_ms (100 ..
  * 600000).  Booleans: yes/no/true/false/1/0.
  * Returns 0, -ENOENT for an unknown key, -EINVAL for a bad value (with the
  * reason in err if not NULL).

@@ -46,6 +46,11 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
     for (unsigned i = 0; i < cfg->nobj; i++) {
         if (cfg->obj[i].input != &modbus_transport)
             continue;
+        if (cfg->obj[i].writable == 0) {
+            *line = cfg->obj[i].line;
+            snprintf(why, wl, "object '%s' has input = modbus but writable = no", cfg->obj[i].name);
+            return -CFG_EVALUE;
+        }
         if (!m->enabled || !m->writes_enabled) {
             *line = cfg->obj[i].line;
             snprintf(why, wl, "object '%s' has input = modbus but [modbus] %s", cfg->obj[i].name,
@@ -60,13 +65,21 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
     return 0;
 }
 
+/* Whether Modbus may change object o (commands, waypoints): writable = yes,
+ * or, not given, only an object fed by Modbus itself.  So writes = yes no
+ * longer lets a client STOP or CLEAR an object fed by replay or CAN. */
+static int obj_writable(const obj_t *o)
+{
+    return o->cfg->writable == 1 || (o->cfg->writable < 0 && o->cfg->input == &modbus_transport);
+}
+
 static int hook_waypoint(void *ctx, unsigned k, const engine_waypoint_t *wp)
 {
     mbt_t *t = ctx;
     if (k >= t->nobj)
         return MODBUS_SERVER_HOOK_EADDRESS;
     obj_t *o = &t->core->obj[k];
-    if (o->cfg->input != &modbus_transport)
+    if (o->cfg->input != &modbus_transport || !obj_writable(o))
         return MODBUS_SERVER_HOOK_EADDRESS;
     return obj_push(o, wp);
 }
@@ -77,6 +90,8 @@ static int hook_command(void *ctx, unsigned k, unsigned cmd)
     if (k >= t->nobj)
         return MODBUS_SERVER_HOOK_EADDRESS;
     obj_t *o = &t->core->obj[k];
+    if (!obj_writable(o))
+        return MODBUS_SERVER_HOOK_EADDRESS;
     if (o->stopping || t->core->stopping)
         return -ENGINE_ESTATE;
     engine_status_t st;

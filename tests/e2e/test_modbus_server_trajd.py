@@ -102,6 +102,7 @@ input = replay
 replay.track = %s
 output = csv
 csv.path = %s/boat.csv
+writable = yes
 """ % (TRACK, tmp), tmp)
             try:
                 # Given trajd replaying the boat, when mbpoll reads the daemon
