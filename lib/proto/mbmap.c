@@ -304,7 +304,7 @@ static const mbmap_field_t fields[] = {
     F(ID, MBMAP_D_CAN_LOAD, 1, MBMAP_T_U16, "can_load", "0.1 %", "CAN bus load"),
     F(ID, MBMAP_D_MB_REQUESTS, 2, MBMAP_T_U32, "mb_requests", "", "Modbus requests answered"),
     F(ID, MBMAP_D_MB_EXCEPTIONS, 2, MBMAP_T_U32, "mb_exceptions", "", "exception responses sent"),
-    F(ID, MBMAP_D_MB_REFUSED, 2, MBMAP_T_U32, "mb_refused", "", "connections refused (allow-list, max clients)"),
+    F(ID, MBMAP_D_MB_REFUSED, 2, MBMAP_T_U32, "mb_refused", "", "connections refused (allow-list; at max_clients only if every client is under 250 ms old)"),
     F(ID, MBMAP_D_MB_CLIENTS, 1, MBMAP_T_U16, "mb_clients", "", "TCP clients connected"),
     F(ID, MBMAP_D_MB_EVICTED, 2, MBMAP_T_U32, "mb_evicted", "", "clients evicted at max_clients to admit a newcomer"),
     F(ID, MBMAP_D_MB_SLOW, 2, MBMAP_T_U32, "mb_slow", "", "clients dropped: a request not whole within request_timeout_ms"),

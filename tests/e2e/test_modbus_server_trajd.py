@@ -226,6 +226,11 @@ csv.path = %s/fed.csv
                     if r[M["MBMAP_O_STATE"]] == 3:
                         break
                 self.assertEqual(r[M["MBMAP_O_STATE"]], 3, "not finished")
+                # Counters mean what they say (issue 11): rejected is the bad
+                # data (exception 03), the buffer-full refusals (exception 06)
+                # are flow control, counted in full.
+                self.assertEqual(mbsim.u32(r, M["MBMAP_O_REJECTED"]), refused)
+                self.assertEqual(mbsim.u32(r, M["MBMAP_O_FULL"]), busy)
                 c.close()
             finally:
                 self.assertEqual(d.stop(), 0, "".join(d.log))
