@@ -425,11 +425,37 @@ static int rtu_open(modbus_server_t *s, const modbus_server_config_t *cfg, char 
     return 0;
 }
 
+/* The settings of cfg the server keeps (checked; lists parsed).  0 or -1. */
+static int settings_take(modbus_server_t *s, const modbus_server_config_t *cfg, char *err,
+                         size_t errlen)
+{
+    if (cfg->max_clients < 1 || cfg->max_clients > MODBUS_SERVER_MAX_CLIENTS_LIMIT) {
+        msg(err, errlen, "modbus: max_clients %u outside 1..%d", cfg->max_clients,
+            MODBUS_SERVER_MAX_CLIENTS_LIMIT);
+        return -1;
+    }
+    int rc = allow_parse(cfg->allow, s->allow, MODBUS_SERVER_ALLOW_MAX, err, errlen);
+    if (rc < 0)
+        return -1;
+    s->n_allow = (unsigned)rc;
+    rc = allow_parse(cfg->write_allow, s->wallow, MODBUS_SERVER_ALLOW_MAX, err, errlen);
+    if (rc < 0)
+        return -1;
+    s->n_wallow = (unsigned)rc;
+    s->n_objects = cfg->n_objects;
+    s->writes_enabled = cfg->writes_enabled;
+    s->max_clients = cfg->max_clients;
+    s->idle_ns = (int64_t)cfg->idle_timeout_ms * 1000000;
+    s->request_ns = (int64_t)(cfg->request_timeout_ms ? cfg->request_timeout_ms
+                                                       : MODBUS_SERVER_DEFAULT_REQUEST_MS) * 1000000;
+    s->unit_id = cfg->unit_id;
+    return 0;
+}
+
 modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg, const modbus_server_hooks_t *hooks, char *err,
                    size_t errlen)
 {
     modbus_server_t *s = calloc(1, sizeof *s);
-    int rc;
     if (!s) {
         msg(err, errlen, "modbus: out of memory");
         return NULL;
@@ -441,26 +467,8 @@ modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg, const modb
             MBMAP_MAX_OBJECTS);
         goto fail;
     }
-    if (cfg->max_clients < 1 || cfg->max_clients > MODBUS_SERVER_MAX_CLIENTS_LIMIT) {
-        msg(err, errlen, "modbus: max_clients %u outside 1..%d", cfg->max_clients,
-            MODBUS_SERVER_MAX_CLIENTS_LIMIT);
+    if (settings_take(s, cfg, err, errlen) < 0)
         goto fail;
-    }
-    rc = allow_parse(cfg->allow, s->allow, MODBUS_SERVER_ALLOW_MAX, err, errlen);
-    if (rc < 0)
-        goto fail;
-    s->n_allow = (unsigned)rc;
-    rc = allow_parse(cfg->write_allow, s->wallow, MODBUS_SERVER_ALLOW_MAX, err, errlen);
-    if (rc < 0)
-        goto fail;
-    s->n_wallow = (unsigned)rc;
-    s->n_objects = cfg->n_objects;
-    s->writes_enabled = cfg->writes_enabled;
-    s->max_clients = cfg->max_clients;
-    s->idle_ns = (int64_t)cfg->idle_timeout_ms * 1000000;
-    s->request_ns = (int64_t)(cfg->request_timeout_ms ? cfg->request_timeout_ms
-                                                       : MODBUS_SERVER_DEFAULT_REQUEST_MS) * 1000000;
-    s->unit_id = cfg->unit_id;
     if (hooks)
         s->hooks = *hooks;
 
