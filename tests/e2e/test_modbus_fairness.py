@@ -7,10 +7,13 @@ slots and a 1 s request deadline, attacked at once, on 127.0.0.1, by
   - 4 silent clients (reconnecting once a second when closed),
   - 2 flooding clients, pipelining read requests as fast as they can,
 14 clients for 8 slots.  Meanwhile a well-behaved client (raw socket, and
-then pymodbus) connects and makes 20 reads 0.1 s apart: every one must be
-answered within BOUND_S on the same connection.  With a per-byte idle timer
-and refusal at the limit (the old server) the slow clients hold every slot
-and the well-behaved client is closed at once.
+then pymodbus) connects: its first answer must come within BOUND_S (it may
+retry a connection closed before that first answer: a newcomer that has not
+spoken yet is indistinguishable from a silent attacker), and from then on
+each of 20 reads 0.1 s apart must be answered within BOUND_S on the same
+connection.  With a per-byte idle timer and refusal at the limit (the old
+server) the slow clients hold every slot and the well-behaved client never
+gets in.
 
 The bound is stated for a loaded 2-core machine; the test does not measure
 speed (that is tests/bench/bench_modbus_server_load.py's job), only that no
@@ -29,6 +32,7 @@ import mbsim  # noqa: E402
 from mbsim import M  # noqa: E402
 
 from pymodbus.client import ModbusTcpClient  # noqa: E402
+from pymodbus.exceptions import ModbusException  # noqa: E402
 
 SLOTS = 8
 REQUEST_MS = 1000
@@ -121,6 +125,37 @@ class Attackers:
             t.join(BOUND_S + 2)
 
 
+def first_raw(port):
+    """A raw connection that has had its first answer, within BOUND_S."""
+    deadline = time.monotonic() + BOUND_S
+    tries = 0
+    while True:
+        tries += 1
+        try:
+            s = socket.create_connection(("127.0.0.1", port), timeout=BOUND_S)
+            mbsim.read_input(s, 0, 4, tid=1000)
+            return s, tries
+        except (OSError, ConnectionError):
+            if time.monotonic() > deadline:
+                raise
+
+
+def first_pymodbus(port):
+    deadline = time.monotonic() + BOUND_S
+    tries = 0
+    while True:
+        tries += 1
+        c = ModbusTcpClient("127.0.0.1", port=port, timeout=BOUND_S, retries=0)
+        try:
+            if c.connect() and not c.read_input_registers(0, 4, slave=1).isError():
+                return c, tries
+        except ModbusException:
+            pass
+        c.close()
+        if time.monotonic() > deadline:
+            raise AssertionError("pymodbus: no first answer within %.1f s" % BOUND_S)
+
+
 class Fairness(unittest.TestCase):
     def setUp(self):
         self.srv = mbsim.Server(["--objects", "1", "--max-clients", str(SLOTS),
@@ -135,7 +170,7 @@ class Fairness(unittest.TestCase):
             att.stop.wait(SETTLE_S)   # the attackers' head start, not a wait for an event
             # Given every slot held or fought over by attackers, when a
             # well-behaved raw client connects and polls,
-            s = socket.create_connection(("127.0.0.1", self.srv.port), timeout=BOUND_S)
+            s, tries_raw = first_raw(self.srv.port)
             worst = 0.0
             for i in range(20):
                 t0 = time.monotonic()
@@ -145,16 +180,16 @@ class Fairness(unittest.TestCase):
                 att.stop.wait(0.1)
             s.close()
             # and so does pymodbus (its own framing, no retries to hide a failure)
-            c = ModbusTcpClient("127.0.0.1", port=self.srv.port, timeout=BOUND_S, retries=0)
-            self.assertTrue(c.connect())
+            c, tries_py = first_pymodbus(self.srv.port)
             for i in range(20):
                 rr = c.read_input_registers(0, 4, slave=1)
                 self.assertFalse(rr.isError(), rr)
                 self.assertEqual(rr.registers[0], M["MBMAP_MAGIC"])
                 att.stop.wait(0.1)
             c.close()
-            print("worst raw read %.3f s (bound %.1f s); attacker connects %d"
-                  % (worst, BOUND_S, att.connects))
+            print("worst raw read %.3f s (bound %.1f s); connections to a first answer: raw %d,"
+                  " pymodbus %d; attacker connects %d"
+                  % (worst, BOUND_S, tries_raw, tries_py, att.connects))
         stats = self.srv.stop()
         # then every read was answered within the bound on one connection
         # (read_input raised otherwise), slow clients were cut at the
