@@ -23,7 +23,9 @@ typedef struct {
 
 typedef struct {
     track_loader_t *L;
-    n2k_fast_t *fast;   /* 256: one 129029 message in progress per source */
+    n2k_fast_t *fast[256]; /* one 129029 message in progress per source, made on its first frame */
+    uint8_t fast_src[256]; /* the sources that have one, nfast of them */
+    int nfast;
     fix_t *fix;
     size_t n, cap;
 } n2k_t;
@@ -80,7 +82,14 @@ static int frame(n2k_t *N, const candump_line_t *cl, unsigned long lineno)
                         cl->ts_us, lineno);
     if (id.pgn != N2K_PGN_GNSS_POSITION)
         return 0;
-    n2k_fast_t *f = &N->fast[id.source];
+    n2k_fast_t *f = N->fast[id.source];
+    if (!f) {
+        if (!(f = N->fast[id.source] = calloc(1, sizeof *f))) {
+            track_loader_fatal(N->L, 0, "out of memory");
+            return -1;
+        }
+        N->fast_src[N->nfast++] = id.source;
+    }
     int rc = n2k_fast_push(f, fr->data, fr->len);
     if (rc < 0) {
         N->L->ignored++; /* a message lost to a missing frame */
@@ -93,21 +102,33 @@ static int frame(n2k_t *N, const candump_line_t *cl, unsigned long lineno)
 }
 
 /* The stream kept: 129029 if any (fix time, 1e-16 deg, altitude), else
- * 129025; of that PGN the source with the most fixes (the first on a tie). */
+ * 129025; of that PGN the source with the most fixes (the first seen on a
+ * tie).  Streams are counted in a short list: a log has a few sources. */
 static void choose(const n2k_t *N, uint32_t *pgn, int *src)
 {
-    size_t count[2][256] = {{0}};
-    for (size_t i = 0; i < N->n; i++)
-        count[N->fix[i].pgn == N2K_PGN_GNSS_POSITION][N->fix[i].src]++;
+    struct { uint32_t pgn; uint8_t src; size_t n; } st[512];
+    size_t ns = 0, best = 0;
+    for (size_t i = 0; i < N->n; i++) {
+        size_t k = 0;
+        while (k < ns && (st[k].pgn != N->fix[i].pgn || st[k].src != N->fix[i].src))
+            k++;
+        if (k == ns) { /* at most 2 PGNs x 256 sources: always fits */
+            st[k].pgn = N->fix[i].pgn;
+            st[k].src = N->fix[i].src;
+            st[k].n = 0;
+            ns++;
+        }
+        st[k].n++;
+    }
     *src = -1;
-    for (int k = 1; k >= 0 && *src < 0; k--) {
-        size_t best = 0;
-        for (int s = 0; s < 256; s++)
-            if (count[k][s] > best) {
-                best = count[k][s];
-                *src = s;
-            }
-        *pgn = k ? N2K_PGN_GNSS_POSITION : N2K_PGN_POSITION_RAPID;
+    *pgn = N2K_PGN_POSITION_RAPID;
+    for (size_t k = 0; k < ns; k++) {
+        int gnss = st[k].pgn == N2K_PGN_GNSS_POSITION, had_gnss = *pgn == N2K_PGN_GNSS_POSITION;
+        if (*src < 0 || (gnss && !had_gnss) || (gnss == had_gnss && st[k].n > best)) {
+            *pgn = st[k].pgn;
+            *src = st[k].src;
+            best = st[k].n;
+        }
     }
 }
 
@@ -136,9 +157,8 @@ int track_n2k_parse(track_loader_t *L, const char *buf, size_t len)
 {
     n2k_t N = {.L = L};
     track_lines_t *it = malloc(sizeof *it);
-    N.fast = calloc(256, sizeof *N.fast);
     int rc = -1, r;
-    if (!it || !N.fast) {
+    if (!it) {
         track_loader_fatal(L, 0, "out of memory");
         goto out;
     }
@@ -161,7 +181,8 @@ int track_n2k_parse(track_loader_t *L, const char *buf, size_t len)
         rc = rows(&N);
 out:
     free(it);
-    free(N.fast);
+    for (int k = 0; k < N.nfast; k++)
+        free(N.fast[N.fast_src[k]]);
     free(N.fix);
     return rc;
 }
