@@ -25,6 +25,19 @@ typedef struct {
     uint8_t last_err;
     int last_state;            /* engine state in the last STATUS (-1: none yet) */
     can_port_drive_t drive;
+    /* bring-up (ids.cia402_enable) */
+    int nmt_sent;
+    unsigned sdo_next[CANPROTO_CIA402_AXES];   /* next configuration SDO */
+    int sdo_wait[CANPROTO_CIA402_AXES];        /* 1 config SDO, 2 controlword, in flight */
+    int64_t sdo_sent_ns[CANPROTO_CIA402_AXES];
+    canproto_frame_t sdo_frame[CANPROTO_CIA402_AXES];
+    int sdo_failed[CANPROTO_CIA402_AXES];      /* a configuration SDO was aborted */
+    int cw_known[CANPROTO_CIA402_AXES];
+    uint16_t cw_sent[CANPROTO_CIA402_AXES];
+    int reset_req;                             /* CLEAR: fault reset and re-enable */
+    int64_t hb_last_ns[CANPROTO_CIA402_AXES];
+    int hb_lost[CANPROTO_CIA402_AXES];
+    int64_t now_ns;
     can_port_obj_stats_t st;
 } can_port_obj_t;
 
@@ -120,10 +133,10 @@ unsigned can_port_rx_ids(const can_port_t *p, uint32_t *out, unsigned max)
 {
     unsigned n = 0;
     for (unsigned i = 0; i < p->nobj; i++) {
-        uint32_t ids[8];
+        uint32_t ids[24];
         if (!p->obj[i].set)
             continue;
-        unsigned k = canproto_ids_rx(&p->obj[i].ids, ids, 8);
+        unsigned k = canproto_ids_rx(&p->obj[i].ids, ids, 24);
         for (unsigned j = 0; j < k; j++, n++)
             if (n < max)
                 out[n] = ids[j];
@@ -174,6 +187,8 @@ void can_port_output_fault(can_port_t *p, unsigned i, uint64_t lost, int fault)
 
 static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd)
 {
+    if (cmd == CANPROTO_CMD_CLEAR && o->ids.cia402_enable && o->drive.held)
+        o->reset_req = 1; /* fault reset, then the drives are enabled again */
     if (o->hooks.command)
         o->hooks.command(o->ctx, cmd);
     if (cmd == CANPROTO_CMD_CLEAR)
@@ -209,13 +224,75 @@ static void drive_feedback(can_port_obj_t *o, unsigned a, const canproto_frame_t
             d->all_enabled &= d->state[k] == CIA402_OPERATION_ENABLED;
         }
     d->all_enabled &= d->all_seen;
-    if (o->hooks.feedback)
-        o->hooks.feedback(o->ctx, d);
     if (d->was_enabled && !d->all_enabled) {
         o->st.drive_lost++;
         event(o, CANPROTO_STERR_DRIVE);
+        if (o->ids.cia402_enable)
+            d->held = 1; /* re-enabling is the operator's decision: CLEAR */
     }
+    if (d->all_enabled) {
+        d->held = 0;
+        o->reset_req = 0;
+    }
+    if (o->hooks.feedback)
+        o->hooks.feedback(o->ctx, d);
     d->was_enabled = d->all_enabled;
+}
+
+/* Frames of the bring-up: SDO replies, heartbeats, EMCY of o's nodes; 1 if taken. */
+static int drive_frame(can_port_obj_t *o, const canproto_frame_t *f)
+{
+    if (!o->ids.cia402_enable)
+        return 0;
+    for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
+        unsigned node = canproto_cia402_node(&o->ids, a);
+        if (!node)
+            continue;
+        if (f->id == 0x580u + node) {
+            cia402_sdo_reply_t r;
+            if (cia402_decode_sdo_reply((uint8_t)node, f, &r) < 0 || !o->sdo_wait[a])
+                return 1; /* not an answer to a request of ours: ignored */
+            if (r.kind == CIA402_SDO_ABORT) {
+                o->st.sdo_aborts++;
+                o->st.last_abort = r.abort_code;
+                o->st.last_abort_index = r.index;
+                event(o, CANPROTO_STERR_DRIVE);
+                if (o->sdo_wait[a] == 1)
+                    o->sdo_failed[a] = 1; /* not configured as asked: never enabled */
+            }
+            if (o->sdo_wait[a] == 1)
+                o->sdo_next[a]++;
+            o->sdo_wait[a] = 0;
+            return 1;
+        }
+        if (f->id == 0x700u + node) {
+            uint8_t n, st;
+            if (cia402_decode_heartbeat(f, &n, &st) == 0) {
+                o->hb_last_ns[a] = o->now_ns;
+                o->hb_lost[a] = 0;
+                if (st == CIA402_HB_BOOTUP) {
+                    /* the drive (re)booted: bring it up again from NMT on */
+                    o->nmt_sent = 0;
+                    memset(o->sdo_next, 0, sizeof o->sdo_next);
+                    memset(o->sdo_wait, 0, sizeof o->sdo_wait);
+                    memset(o->cw_known, 0, sizeof o->cw_known);
+                }
+            }
+            return 1;
+        }
+        if (f->id == 0x080u + node) {
+            uint8_t n, reg;
+            uint16_t code;
+            if (cia402_decode_emcy(f, &n, &code, &reg) == 0) {
+                o->st.emcy++;
+                o->st.last_emcy = code;
+                if (code)
+                    event(o, CANPROTO_STERR_DRIVE);
+            }
+            return 1;
+        }
+    }
+    return 0;
 }
 
 static void dispatch(can_port_t *p, const canproto_frame_t *f)
@@ -231,6 +308,8 @@ static void dispatch(can_port_t *p, const canproto_frame_t *f)
                     drive_feedback(o, a, f);
                     return;
                 }
+            if (drive_frame(o, f))
+                return;
             if (f->id == o->ids.waypoint_id)
                 is_fd = 0;
             else if (o->ids.fd && f->id == o->ids.waypoint_fd_id)
@@ -373,6 +452,81 @@ static void send_status(can_port_t *p, can_port_obj_t *o, const engine_status_t 
     }
 }
 
+#define CAN_PORT_SDO_TIMEOUT_NS 100000000LL /* an SDO request unanswered this long is resent */
+
+/* The controlword axis a's drive needs now (bring-up). */
+static uint16_t wanted_cw(const can_port_obj_t *o, unsigned a)
+{
+    cia402_state_t st = o->drive.state[a];
+    if (o->sdo_failed[a] || o->sdo_next[a] < o->ids.cia402_nsdo || (o->drive.held && !o->reset_req))
+        return CIA402_CW_DISABLE_VOLTAGE;
+    if (st == CIA402_FAULT)
+        /* fault reset acts on the rising edge of bit 7: 0x0000 first, then 0x0080 */
+        return o->cw_known[a] && o->cw_sent[a] == CIA402_CW_DISABLE_VOLTAGE
+                   ? CIA402_CW_FAULT_RESET : CIA402_CW_DISABLE_VOLTAGE;
+    return cia402_controlword_towards_enabled(st, 0);
+}
+
+/* One step of object o's bring-up: NMT start, configuration SDOs, controlword. */
+static void bring_up(can_port_t *p, can_port_obj_t *o, int64_t now_ns)
+{
+    canproto_frame_t f;
+    o->now_ns = now_ns;
+    if (!o->nmt_sent) {
+        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+            if (canproto_cia402_node(&o->ids, a)) {
+                cia402_encode_nmt(CIA402_NMT_START, (uint8_t)canproto_cia402_node(&o->ids, a), &f);
+                if (p->io.send(p->io_ctx, &f) < 0)
+                    return; /* try again next cycle */
+                o->hb_last_ns[a] = now_ns;
+            }
+        o->nmt_sent = 1;
+    }
+    for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
+        uint8_t node = (uint8_t)canproto_cia402_node(&o->ids, a);
+        if (!node)
+            continue;
+        if (o->ids.cia402_heartbeat_ms && !o->hb_lost[a] &&
+            now_ns - o->hb_last_ns[a] > (int64_t)o->ids.cia402_heartbeat_ms * 1000000) {
+            o->hb_lost[a] = 1;
+            o->st.heartbeat_lost++;
+            event(o, CANPROTO_STERR_DRIVE);
+        }
+        if (o->sdo_wait[a]) {
+            if (now_ns - o->sdo_sent_ns[a] < CAN_PORT_SDO_TIMEOUT_NS)
+                continue;
+            o->st.sdo_timeouts++;
+            if (p->io.send(p->io_ctx, &o->sdo_frame[a]) == 0)
+                o->sdo_sent_ns[a] = now_ns;
+            continue;
+        }
+        int kind = 0;
+        if (o->sdo_next[a] < o->ids.cia402_nsdo) {
+            unsigned k = o->sdo_next[a];
+            cia402_encode_sdo_download(node, o->ids.cia402_sdo[k].index, o->ids.cia402_sdo[k].sub,
+                                       o->ids.cia402_sdo[k].value, o->ids.cia402_sdo[k].size,
+                                       &o->sdo_frame[a]);
+            kind = 1;
+        } else if (o->drive.seen & (1u << a)) {
+            uint16_t cw = wanted_cw(o, a);
+            if (o->cw_known[a] && cw == o->cw_sent[a])
+                continue;
+            cia402_encode_sdo_download(node, CIA402_OBJ_CONTROLWORD, 0, cw, 2, &o->sdo_frame[a]);
+            o->cw_sent[a] = cw;
+            o->cw_known[a] = 1;
+            kind = 2;
+        } else {
+            continue; /* no statusword yet: nothing to decide */
+        }
+        if (p->io.send(p->io_ctx, &o->sdo_frame[a]) == 0) {
+            o->sdo_wait[a] = kind;
+            o->sdo_sent_ns[a] = now_ns;
+        } else if (kind == 2) {
+            o->cw_known[a] = 0; /* not sent: decide again next cycle */
+        }
+    }
+}
+
 void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
 {
     p->st.cycles++;
@@ -402,6 +556,9 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
         else
             p->st.sync_dropped++;
     }
+    for (unsigned i = 0; i < p->nobj; i++)
+        if (p->obj[i].set && p->obj[i].ids.cia402_enable)
+            bring_up(p, &p->obj[i], now_ns);
     for (unsigned i = 0; i < p->nobj; i++) {
         can_port_obj_t *o = &p->obj[i];
         if (!o->set || !o->have_sp)

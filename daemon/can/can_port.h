@@ -68,6 +68,8 @@ typedef struct {
     int all_seen;           /* every axis with a COB-id was heard from */
     int all_enabled;        /* and every one is in Operation Enabled */
     int was_enabled;        /* all were enabled, until this frame (a loss is this and !all_enabled) */
+    int held;               /* bring-up: the drives left Operation Enabled; they stay disabled
+                             * until a CLEAR command asks for a fault reset and re-enable */
 } can_port_drive_t;
 
 typedef struct {
@@ -106,6 +108,13 @@ typedef struct {
     uint64_t drive_frames;     /* feedback TPDOs received */
     uint64_t drive_lost;       /* times the drives left Operation Enabled while the object ran */
     uint64_t drive_bad;        /* feedback TPDOs too short */
+    uint64_t sdo_aborts;       /* SDO writes a drive refused (last_abort says why) */
+    uint64_t sdo_timeouts;     /* SDO writes resent after no reply */
+    uint64_t emcy;             /* EMCY frames from the object's drives */
+    uint64_t heartbeat_lost;   /* a drive's heartbeat not heard within cia402_heartbeat_ms */
+    uint32_t last_abort;       /* abort code of the last SDO abort (cia402_sdo_abort_text) */
+    uint16_t last_abort_index;
+    uint16_t last_emcy;        /* error code of the last EMCY */
     canproto_rx_stats_t rx;    /* reassembly counters */
 } can_port_obj_stats_t;
 

@@ -10,6 +10,7 @@
 #include "can_socket.h"
 #include "can_logfile.h"
 #include "can_port.h"
+#include "cia402.h"
 #include "core.h"
 #include "log.h"
 
@@ -51,6 +52,55 @@ static int get_str(const cfg_kv_t *kv, char *out, size_t len, char *why, size_t 
     }
     snprintf(out, len, "%s", kv->value);
     return 0;
+}
+
+/* "0x6060:0=8/1, 0x60C2:1=10/1, 0x60C2:2=-3/1": index:sub=value/size bytes. */
+static int get_sdo_list(const cfg_kv_t *kv, canproto_ids_t *ids, char *why, size_t wl)
+{
+    const char *q = kv->value;
+    unsigned n = 0;
+    while (*q) {
+        char *end;
+        while (*q == ' ' || *q == ',')
+            q++;
+        if (!*q)
+            break;
+        if (n == CANPROTO_CIA402_SDO_MAX) {
+            snprintf(why, wl, "at most %d SDO writes", CANPROTO_CIA402_SDO_MAX);
+            return -CFG_EVALUE;
+        }
+        unsigned long idx = strtoul(q, &end, 0);
+        if (end == q || *end != ':' || idx > 0xFFFF)
+            goto bad;
+        q = end + 1;
+        unsigned long sub = strtoul(q, &end, 0);
+        if (end == q || *end != '=' || sub > 0xFF)
+            goto bad;
+        q = end + 1;
+        long long val = strtoll(q, &end, 0);
+        if (end == q || *end != '/')
+            goto bad;
+        q = end + 1;
+        unsigned long size = strtoul(q, &end, 0);
+        if (end == q || (size != 1 && size != 2 && size != 4))
+            goto bad;
+        long long lo = size == 4 ? INT32_MIN : -(1LL << (8 * size - 1));
+        long long hi = size == 4 ? UINT32_MAX : (1LL << (8 * size)) - 1;
+        if (val < lo || val > hi)
+            goto bad;
+        q = end;
+        ids->cia402_sdo[n].index = (uint16_t)idx;
+        ids->cia402_sdo[n].sub = (uint8_t)sub;
+        ids->cia402_sdo[n].size = (uint8_t)size;
+        ids->cia402_sdo[n].value = (uint32_t)val; /* two's complement for negative values */
+        n++;
+    }
+    ids->cia402_nsdo = n;
+    return 0;
+bad:
+    snprintf(why, wl, "expected index:sub=value/size (size 1, 2 or 4 bytes), comma separated, "
+             "got '%s'", kv->value);
+    return -CFG_EVALUE;
 }
 
 static int cfg_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
@@ -176,6 +226,15 @@ static int obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
         return cfg_get_bool(kv, &ids->cia402_controlword, why, wl);
     if (!strcmp(k, "cia402_feedback"))
         return cfg_get_bool(kv, &ids->cia402_feedback, why, wl);
+    if (!strcmp(k, "cia402_enable"))
+        return cfg_get_bool(kv, &ids->cia402_enable, why, wl);
+    if (!strcmp(k, "cia402_heartbeat_ms")) {
+        rc = cfg_get_int(kv, 0, 60000, &v, why, wl);
+        ids->cia402_heartbeat_ms = (uint32_t)v;
+        return rc;
+    }
+    if (!strcmp(k, "cia402_sdo"))
+        return get_sdo_list(kv, ids, why, wl);
     return -CFG_EUNKNOWN;
 }
 
@@ -203,6 +262,10 @@ void can_obj_ids(const can_obj_cfg_t *oc, unsigned obj_index, canproto_ids_t *id
     memcpy(ids->cia402_offset, g->cia402_offset, sizeof ids->cia402_offset);
     ids->cia402_feedback = g->cia402_feedback;
     memcpy(ids->cia402_tpdo_id, g->cia402_tpdo_id, sizeof ids->cia402_tpdo_id);
+    ids->cia402_enable = g->cia402_enable;
+    memcpy(ids->cia402_sdo, g->cia402_sdo, sizeof ids->cia402_sdo);
+    ids->cia402_nsdo = g->cia402_nsdo;
+    ids->cia402_heartbeat_ms = g->cia402_heartbeat_ms;
 }
 
 /* ---- config check: ids, clashes, bus load ---- */
@@ -304,7 +367,45 @@ typedef struct {
     int was_up;
     can_bus_state_t bus_state;  /* as of the last housekeeping timer, for Modbus */
     uint32_t load_permille;     /* worst-case bus load of the configured traffic, 0.1 % */
+    can_port_obj_stats_t drive_logged[CFG_OBJECTS_MAX]; /* drive counters already logged */
+    int drive_state_logged[CFG_OBJECTS_MAX];            /* all_enabled as last logged, -1 never */
 } can_state_t;
+
+/* What the object's drives did since the last housekeeping (once per 100 ms at most). */
+static void log_drives(can_state_t *s)
+{
+    for (unsigned k = 0; k < s->n; k++) {
+        can_port_obj_stats_t os, *was = &s->drive_logged[k];
+        const can_port_drive_t *d = can_port_drive(s->port, k);
+        const char *name = s->objs[k]->name;
+        can_port_obj_stats(s->port, k, &os);
+        if (os.sdo_aborts != was->sdo_aborts)
+            log_msg(LOG_ERR, "can: object '%s': drive refused SDO write of 0x%04X: abort 0x%08X (%s)",
+                    name, os.last_abort_index, os.last_abort, cia402_sdo_abort_text(os.last_abort));
+        if (os.emcy != was->emcy)
+            log_msg(LOG_WARNING, "can: object '%s': EMCY from a drive: error code 0x%04X (%llu so far)",
+                    name, os.last_emcy, (unsigned long long)os.emcy);
+        if (os.heartbeat_lost != was->heartbeat_lost)
+            log_msg(LOG_ERR, "can: object '%s': a drive's heartbeat was not heard in time (%llu)",
+                    name, (unsigned long long)os.heartbeat_lost);
+        if (os.sdo_timeouts != was->sdo_timeouts)
+            log_msg(LOG_WARNING, "can: object '%s': SDO request unanswered, resent (%llu)", name,
+                    (unsigned long long)os.sdo_timeouts);
+        if (d && d->all_seen && d->all_enabled != s->drive_state_logged[k]) {
+            if (d->all_enabled)
+                log_msg(LOG_NOTICE, "can: object '%s': drives in Operation Enabled, starting from "
+                        "(%.4f, %.4f, %.4f)", name, d->pos_m[0], d->pos_m[1], d->pos_m[2]);
+            else if (s->drive_state_logged[k] == 1)
+                log_msg(LOG_ERR, "can: object '%s': a drive left Operation Enabled (x: %s, y: %s, "
+                        "z: %s): object cleared, no target sent%s", name,
+                        cia402_state_name(d->state[0]), cia402_state_name(d->state[1]),
+                        cia402_state_name(d->state[2]),
+                        d->held ? "; command clear resets and re-enables it" : "");
+            s->drive_state_logged[k] = d->all_enabled;
+        }
+        *was = os;
+    }
+}
 
 static int hk_push(void *ctx, const engine_waypoint_t *wp)
 {
@@ -439,6 +540,7 @@ static void on_timer(loop_t *l, uint64_t exp, void *ctx)
                 s->cfg->interface, strerror(bs.last_errno));
     }
     s->was_up = up;
+    log_drives(s);
     publish_state(s);
 }
 
@@ -497,15 +599,16 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
         can_obj_ids(cfg_obj_transport(s->objs[k]->cfg, &can_transport), s->objs[k]->index, &ids);
         can_port_hooks_t hk = { s->is_input[k] ? hk_push : hk_push_refuse, hk_command, hk_status,
                                 hk_feedback };
-        if (ids.cia402 && ids.cia402_feedback && !s->objs[k]->carried)
+        s->drive_state_logged[k] = -1;
+        if (ids.cia402 && (ids.cia402_feedback || ids.cia402_enable) && !s->objs[k]->carried)
             engine_require_position(s->objs[k]->engine, 1); /* the drive says where it is */
         if (can_port_set_object(s->port, k, &ids, &hk, s->objs[k]) < 0) {
             snprintf(why, wl, "can: object '%s': invalid or clashing ids", s->objs[k]->name);
             return -EINVAL;
         }
-        uint32_t mine[8];
-        unsigned m = canproto_ids_rx(&ids, mine, 8), from = s->is_input[k] ? 0 : 1 + (unsigned)ids.fd;
-        for (unsigned j = from; j < m && j < 8; j++) { /* waypoint ids (inputs), feedback TPDOs */
+        uint32_t mine[24];
+        unsigned m = canproto_ids_rx(&ids, mine, 24), from = s->is_input[k] ? 0 : 1 + (unsigned)ids.fd;
+        for (unsigned j = from; j < m && j < 24; j++) { /* waypoint ids (inputs), feedback TPDOs */
             if (*nrx >= CAN_SOCKET_MAX_FILTERS) {
                 snprintf(why, wl, "can: more than %d ids to receive (waypoints, drive feedback)",
                          CAN_SOCKET_MAX_FILTERS);

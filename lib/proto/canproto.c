@@ -136,9 +136,16 @@ unsigned canproto_ids_in_use(const canproto_ids_t *ids, uint32_t out[CANPROTO_ID
     return n;
 }
 
+unsigned canproto_cia402_node(const canproto_ids_t *ids, unsigned axis)
+{
+    if (!ids->cia402 || axis >= CANPROTO_CIA402_AXES || !ids->cia402_cob_id[axis])
+        return 0;
+    return ids->cia402_cob_id[axis] & 0x7Fu;
+}
+
 uint32_t canproto_cia402_tpdo(const canproto_ids_t *ids, unsigned axis)
 {
-    if (!ids->cia402 || !ids->cia402_feedback || axis >= CANPROTO_CIA402_AXES ||
+    if (!ids->cia402 || !(ids->cia402_feedback || ids->cia402_enable) || axis >= CANPROTO_CIA402_AXES ||
         !ids->cia402_cob_id[axis])
         return 0;
     return ids->cia402_tpdo_id[axis] ? ids->cia402_tpdo_id[axis]
@@ -166,8 +173,11 @@ int canproto_ids_check(const canproto_ids_t *ids, const char **why)
             if (!(ids->cia402_axis_counts_per_m[a] >= 0 && ids->cia402_axis_counts_per_m[a] < 1e12))
                 w = "cia402 counts per metre of an axis must be > 0 and finite (0: the object's)";
         unsigned any = 0;
-        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
             any |= ids->cia402_cob_id[a] != 0;
+            if (ids->cia402_enable && ids->cia402_cob_id[a] && !(ids->cia402_cob_id[a] & 0x7Fu))
+                w = "cia402_enable: the node-id (low 7 bits of a COB-id) must be 1..127";
+        }
         if (!w && !any)
             w = "cia402 enabled but no axis has a COB-id";
     }
@@ -195,6 +205,17 @@ unsigned canproto_ids_rx(const canproto_ids_t *ids, uint32_t *out, unsigned max)
                 out[n] = canproto_cia402_tpdo(ids, a);
             n++;
         }
+    for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
+        unsigned node = canproto_cia402_node(ids, a);
+        if (!ids->cia402_enable || !node)
+            continue;
+        const uint32_t bring[3] = { 0x580u + node, 0x700u + node, 0x080u + node };
+        for (unsigned k = 0; k < 3; k++) {
+            if (n < max)
+                out[n] = bring[k];
+            n++;
+        }
+    }
     return n;
 }
 

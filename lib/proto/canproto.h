@@ -202,6 +202,7 @@ int canproto_fd_len_valid(unsigned len);
 /* ---- per-object id configuration ------------------------------------------------- */
 
 #define CANPROTO_CIA402_AXES ENGINE_AXES
+#define CANPROTO_CIA402_SDO_MAX 8    /* configuration SDO writes per object */
 
 typedef struct {
     uint32_t waypoint_id;       /* classic waypoint frames in */
@@ -228,7 +229,24 @@ typedef struct {
      * node of the axis' COB-id, its low 7 bits). */
     int cia402_feedback;
     uint32_t cia402_tpdo_id[CANPROTO_CIA402_AXES];
+    /* Bring-up (implies feedback): NMT start, the SDO writes below to each
+     * axis' node (node = low 7 bits of its COB-id), then the controlword
+     * written by SDO (0x6040) from the statusword: Shutdown, Switch on,
+     * Enable operation.  Heartbeats (consumer time heartbeat_ms, 0 = not
+     * watched), EMCY and SDO aborts are reported. */
+    int cia402_enable;
+    struct {
+        uint16_t index;
+        uint8_t sub;
+        uint8_t size;       /* 1, 2, 4 bytes */
+        uint32_t value;
+    } cia402_sdo[CANPROTO_CIA402_SDO_MAX];
+    unsigned cia402_nsdo;
+    uint32_t cia402_heartbeat_ms;
 } canproto_ids_t;
+
+/* The CANopen node-id of axis (low 7 bits of its COB-id), 0 if unused. */
+unsigned canproto_cia402_node(const canproto_ids_t *ids, unsigned axis);
 
 /* The feedback TPDO id of axis (0 if feedback is off or the axis unused). */
 uint32_t canproto_cia402_tpdo(const canproto_ids_t *ids, unsigned axis);

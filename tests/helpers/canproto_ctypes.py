@@ -36,6 +36,11 @@ class RxOut(ctypes.Structure):
     _fields_ = [("wp", Waypoint), ("cmd", ctypes.c_int), ("lost_before", ctypes.c_uint32)]
 
 
+class CiaSdo(ctypes.Structure):
+    _fields_ = [("index", ctypes.c_uint16), ("sub", ctypes.c_uint8), ("size", ctypes.c_uint8),
+                ("value", ctypes.c_uint32)]
+
+
 class Ids(ctypes.Structure):
     _fields_ = [("waypoint_id", ctypes.c_uint32), ("waypoint_fd_id", ctypes.c_uint32),
                 ("setpoint_id", ctypes.c_uint32), ("setpoint_fd_id", ctypes.c_uint32),
@@ -45,7 +50,10 @@ class Ids(ctypes.Structure):
                 ("cia402_counts_per_m", ctypes.c_double), ("cia402_controlword", ctypes.c_int),
                 ("cia402_controlword_value", ctypes.c_uint16),
                 ("cia402_axis_counts_per_m", ctypes.c_double * AXES),
-                ("cia402_invert", ctypes.c_int * AXES), ("cia402_offset", ctypes.c_int32 * AXES)]
+                ("cia402_invert", ctypes.c_int * AXES), ("cia402_offset", ctypes.c_int32 * AXES),
+                ("cia402_feedback", ctypes.c_int), ("cia402_tpdo_id", ctypes.c_uint32 * AXES),
+                ("cia402_enable", ctypes.c_int), ("cia402_sdo", CiaSdo * 8),
+                ("cia402_nsdo", ctypes.c_uint), ("cia402_heartbeat_ms", ctypes.c_uint32)]
 
 
 class Status(ctypes.Structure):

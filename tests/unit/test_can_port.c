@@ -377,6 +377,124 @@ static void test_cia402_feedback(void **state)
     assert_int_equal(st.drive_bad, 1);
 }
 
+static void queue_sdo_reply(uint8_t node, uint8_t cs, uint16_t index, uint32_t abort_code)
+{
+    canproto_frame_t *f = &io.in[io.nin++];
+    memset(f, 0, sizeof *f);
+    f->id = 0x580u + node;
+    f->len = 8;
+    f->data[0] = cs;
+    f->data[1] = (uint8_t)index;
+    f->data[2] = (uint8_t)(index >> 8);
+    for (int i = 0; i < 4; i++)
+        f->data[4 + i] = (uint8_t)(abort_code >> (8 * i));
+}
+
+/* The last SDO download sent to node: index and value, or -1 if none since mark. */
+static long last_sdo(uint8_t node, unsigned mark, uint16_t *index)
+{
+    long v = -1;
+    for (unsigned i = mark; i < io.nout; i++)
+        if (io.out[i].id == 0x600u + node) {
+            *index = (uint16_t)(io.out[i].data[1] | io.out[i].data[2] << 8);
+            v = (long)(io.out[i].data[4] | io.out[i].data[5] << 8);
+        }
+    return v;
+}
+
+/* One step: the drive reports statusword sw; trajd's next cycle writes the
+ * controlword it answers with (returned), and the drive acknowledges it. */
+static long step_drive(uint16_t sw, uint32_t k)
+{
+    uint16_t index = 0;
+    queue_tpdo(0x181, sw, 0);
+    can_port_rx(port, 0);
+    unsigned mark = io.nout;
+    run_cycle(k, 0);
+    long cw = last_sdo(1, mark, &index);
+    if (cw >= 0) {
+        assert_int_equal(index, 0x6040);
+        queue_sdo_reply(1, 0x60, 0x6040, 0);
+        can_port_rx(port, 0);
+    }
+    return cw;
+}
+
+/* Given cia402_enable with one configuration SDO (0x6060 = 8), then trajd
+ * starts the node (NMT), writes the SDO, and drives the controlword from the
+ * statusword: Shutdown, Switch on, Enable operation (CiA 402 patterns); a
+ * drive fault gets Disable voltage and stays so until CLEAR, which resets it
+ * on a rising edge of bit 7. */
+static void test_cia402_bring_up(void **state)
+{
+    (void)state;
+    canproto_ids_t ids;
+    canproto_ids_default(&ids, 0);
+    ids.cia402 = 1;
+    ids.cia402_enable = 1;
+    ids.cia402_cob_id[1] = ids.cia402_cob_id[2] = 0;
+    ids.cia402_sdo[0].index = 0x6060;
+    ids.cia402_sdo[0].sub = 0;
+    ids.cia402_sdo[0].size = 1;
+    ids.cia402_sdo[0].value = 8;
+    ids.cia402_nsdo = 1;
+    assert_int_equal(can_port_set_object(port, 0, &ids, &fe_hooks, &eng), 0);
+    run_cycle(0, 0);
+    assert_int_equal(count_id(0x000), 1); /* NMT start node 1 */
+    for (unsigned i = 0; i < io.nout; i++)
+        if (io.out[i].id == 0)
+            assert_true(io.out[i].len == 2 && io.out[i].data[0] == 0x01 && io.out[i].data[1] == 1);
+    uint16_t index = 0;
+    assert_int_equal(last_sdo(1, 0, &index), 8);
+    assert_int_equal(index, 0x6060);
+    queue_sdo_reply(1, 0x60, 0x6060, 0);
+    can_port_rx(port, 0);
+    assert_int_equal(step_drive(0x0250, 1), 0x0006); /* switch on disabled -> shutdown */
+    assert_int_equal(step_drive(0x0231, 2), 0x0007); /* ready -> switch on */
+    assert_int_equal(step_drive(0x0233, 3), 0x000F); /* switched on -> enable operation */
+    assert_int_equal(step_drive(0x0237, 4), -1);     /* enabled: nothing more to write */
+    assert_true(fe_drive.all_enabled);
+    assert_int_equal(step_drive(0x0218, 5), 0x0000); /* fault: disable voltage, held */
+    assert_true(fe_drive.held);
+    assert_int_equal(step_drive(0x0218, 6), -1);     /* no reset without the operator */
+    canproto_frame_t clr;
+    assert_int_equal(canproto_encode_command(0x680, CANPROTO_CMD_CLEAR, &clr), 0);
+    io.in[io.nin++] = clr;
+    assert_int_equal(step_drive(0x0218, 7), 0x0080); /* rising edge of bit 7 */
+    assert_int_equal(step_drive(0x0250, 8), 0x0006); /* and the sequence again */
+    can_port_obj_stats_t st;
+    can_port_obj_stats(port, 0, &st);
+    assert_int_equal(st.drive_lost, 1);
+    assert_int_equal(st.sdo_aborts, 0);
+}
+
+/* Given the drive refuses the configuration SDO, then the abort is counted
+ * with its code and the drive is never enabled. */
+static void test_cia402_sdo_abort(void **state)
+{
+    (void)state;
+    canproto_ids_t ids;
+    canproto_ids_default(&ids, 0);
+    ids.cia402 = 1;
+    ids.cia402_enable = 1;
+    ids.cia402_cob_id[1] = ids.cia402_cob_id[2] = 0;
+    ids.cia402_sdo[0].index = 0x6060;
+    ids.cia402_sdo[0].size = 1;
+    ids.cia402_sdo[0].value = 8;
+    ids.cia402_nsdo = 1;
+    assert_int_equal(can_port_set_object(port, 0, &ids, &fe_hooks, &eng), 0);
+    run_cycle(0, 0);
+    queue_sdo_reply(1, 0x80, 0x6060, 0x06020000);
+    can_port_rx(port, 0);
+    assert_int_equal(step_drive(0x0250, 1), 0x0000); /* stays disabled */
+    assert_int_equal(step_drive(0x0250, 2), -1);
+    can_port_obj_stats_t st;
+    can_port_obj_stats(port, 0, &st);
+    assert_int_equal(st.sdo_aborts, 1);
+    assert_int_equal(st.last_abort, 0x06020000);
+    assert_int_equal(st.last_abort_index, 0x6060);
+}
+
 /* Given waypoints with a gap, a duplicate, a malformed and a foreign frame,
  * then the engine gets each good waypoint once, and STATUS reports the loss
  * and the malformed frame. */
@@ -574,6 +692,8 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_late_cycle_dropped, setup, teardown),
         cmocka_unit_test_setup_teardown(test_cia402_no_position_and_late, setup, teardown),
         cmocka_unit_test_setup_teardown(test_cia402_feedback, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_cia402_bring_up, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_cia402_sdo_abort, setup, teardown),
         cmocka_unit_test_setup_teardown(test_rx_paths, setup, teardown),
         cmocka_unit_test_setup_teardown(test_flow_control_efull, setup, teardown),
         cmocka_unit_test_setup_teardown(test_commands, setup, teardown),
