@@ -285,7 +285,8 @@ static void stream_fini(csv_transport_t *st, stream_t *s)
 static void header(csv_transport_t *st, stream_t *s)
 {
     char line[CSV_TRANSPORT_LINE_MAX];
-    put(st, s, NULL, line, csv_format_header(line, sizeof line));
+    int n = csv_format_header(line, sizeof line);
+    put(st, s, NULL, line, n);
 }
 
 /* The line that marks where a restart or a reload appended to a file that
@@ -429,14 +430,16 @@ static void csv_setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
 {
     csv_transport_t *st = state;
     char line[CSV_TRANSPORT_LINE_MAX];
-    put(st, &st->s[o->index], o, line, csv_format_format(line, sizeof line, o->name, sp));
+    int n = csv_format_format(line, sizeof line, o->name, sp);
+    put(st, &st->s[o->index], o, line, n);
 }
 
 static void stdout_setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
 {
     csv_transport_t *st = state;
     char line[CSV_TRANSPORT_LINE_MAX];
-    put(st, &st->s[0], o, line, csv_format_format(line, sizeof line, o->name, sp));
+    int n = csv_format_format(line, sizeof line, o->name, sp);
+    put(st, &st->s[0], o, line, n);
 }
 
 static void cycle(void *state, core_t *c, int64_t now_ns)

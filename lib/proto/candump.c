@@ -49,7 +49,7 @@ int candump_parse_frame(const char *s, canproto_frame_t *f)
     memset(f, 0, sizeof *f);
     unsigned ndig = 0;
     uint32_t id = 0;
-    while (hexval(s[ndig]) >= 0 && ndig < 9) {
+    while (ndig < 9 && hexval(s[ndig]) >= 0) {
         id = id << 4 | (uint32_t)hexval(s[ndig]);
         ndig++;
     }

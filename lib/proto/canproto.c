@@ -538,7 +538,9 @@ static void fill_out(const canproto_rx_t *rx, uint8_t seq8, uint64_t t_us,
 
 static canproto_slot_t *slot_for(canproto_rx_t *rx, uint8_t seq8)
 {
-    canproto_slot_t *free_slot = NULL, *oldest = NULL;
+    /* nslots >= 1 (canproto_rx_init's contract), so slot 0 exists: the search
+     * for the oldest starts there (it only matters when every slot is used) */
+    canproto_slot_t *free_slot = NULL, *oldest = &rx->slots[0];
     for (unsigned i = 0; i < rx->nslots; i++) {
         canproto_slot_t *s = &rx->slots[i];
         if (s->used && s->seq8 == seq8)
@@ -546,7 +548,7 @@ static canproto_slot_t *slot_for(canproto_rx_t *rx, uint8_t seq8)
         if (!s->used && !free_slot)
             free_slot = s;
         /* oldest = the one opened first: lowest arrival stamp */
-        if (s->used && (!oldest || s->stamp < oldest->stamp))
+        if (s->used && s->stamp < oldest->stamp)
             oldest = s;
     }
     canproto_slot_t *s = free_slot;

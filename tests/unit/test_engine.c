@@ -873,7 +873,7 @@ static void test_jitter_rejected(void **state)
 static double run_steps(engine_t *e, const engine_waypoint_t *wp, int n, int64_t *now,
                         int ticks, engine_setpoint_t *last)
 {
-    engine_setpoint_t sp, prev;
+    engine_setpoint_t sp, prev = {0}; /* *last = prev even for ticks = 0 */
     int have_prev = 0, next = 0;
     double maxstep = 0;
     for (int k = 0; k < ticks; k++) {

@@ -111,6 +111,7 @@ static void test_cubic_vs_gsl(void **state)
 
     for (int i = 0; i < N; i++) {
         seed = seed * 1103515245u + 12345u;
+        /* cppcheck-suppress uninitvar ; t[i - 1] is read for i >= 1 only, set the step before */
         t[i] = i ? t[i - 1] + 0.2 + ((seed >> 8) % 1000) * 0.003 : 0.0;
         for (int k = 0; k < 3; k++) {
             seed = seed * 1103515245u + 12345u;
