@@ -290,10 +290,19 @@ static char *reader(char *str, int num, void *stream)
     if (p->err)
         return NULL; /* stop at the first error */
     size_t n = 0;
+    int nul = 0;
     if (p->fp) {
-        if (!fgets(str, num, p->fp))
+        /* byte by byte (not fgets): a NUL byte must not hide the rest of its line */
+        int ch;
+        while (n + 1 < (size_t)num && (ch = getc(p->fp)) != EOF) {
+            nul |= ch == '\0';
+            str[n++] = (char)ch;
+            if (ch == '\n')
+                break;
+        }
+        str[n] = 0;
+        if (n == 0)
             return NULL;
-        n = strlen(str);
     } else {
         if (!p->text[p->pos])
             return NULL;
@@ -306,7 +315,11 @@ static char *reader(char *str, int num, void *stream)
         str[n] = 0;
     }
     p->line++;
-    int at_eof = p->fp ? feof(p->fp) : !p->text[p->pos];
+    if (nul) {
+        fail(p, CFG_ESYNTAX, p->line, "NUL byte (binary file?)");
+        return NULL;
+    }
+    int at_eof = p->fp ? feof(p->fp) || (ungetc(getc(p->fp), p->fp) == EOF) : !p->text[p->pos];
     if (n && str[n - 1] != '\n' && !at_eof) {
         fail(p, CFG_ESYNTAX, p->line, "line longer than %d characters", CFG_LINE_MAX - 2);
         return NULL;
