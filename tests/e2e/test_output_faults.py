@@ -10,7 +10,7 @@ The real trajd, with faults made by the kernel, observed from outside:
    exit status is 74.
 3. stdout is a pipe whose reader goes away (`trajd | head -1`): trajd ends
    by itself, promptly, with status 141, not after being killed.
-4. A restart appends to the CSV file after a marker line instead of
+4. A restart or a reload (SIGHUP) appends to the CSV file after a marker line instead of
    truncating it; csv.truncate = yes empties it first.
 Every wait is bounded; the daemon is stopped by pid.
 """
@@ -181,6 +181,38 @@ class OutputFaults(unittest.TestCase):
         self.assertEqual(again[0], first[0])           # the header, at the top
         self.assertFalse(any(row.startswith("#") for row in again))
         self.assertLess(len(again), len(both) * 3 // 4)
+
+    def test_reload_appends_with_marker(self):
+        # Given trajd streaming to a CSV file, when SIGHUP reloads it (the
+        # csv output is closed and reopened), then the rows written before
+        # are kept, a marker line follows, and rows go on after it.
+        out = os.path.join(self.tmp, "o.csv")
+        path = conf(self.tmp, out)
+        p = subprocess.Popen([TRAJD, "-f", "-c", path], stdin=subprocess.DEVNULL,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        try:
+            lines = mbsim.Lines(p.stderr)
+            self.assertIsNotNone(lines.wait_for("started:", WAIT_S), "".join(lines.all))
+            deadline = time.monotonic() + WAIT_S
+            while os.path.getsize(out) < 10000 and time.monotonic() < deadline:
+                lines.wait_for("\0", 0.1)
+            before = os.path.getsize(out)
+            p.send_signal(signal.SIGHUP)
+            self.assertIsNotNone(lines.wait_for("reloaded", WAIT_S), "".join(lines.all))
+            while time.monotonic() < deadline:
+                with open(out) as f:
+                    rows = f.read().splitlines()
+                marks = [i for i, r in enumerate(rows) if r.startswith("# trajd: appended at ")]
+                if marks and len(rows) > marks[0] + 10:
+                    break
+                lines.wait_for("\0", 0.1)
+            self.assertEqual(len(marks), 1, rows[:3])
+            self.assertGreater(len("\n".join(rows[:marks[0]])), before - 4096)  # kept
+            self.assertTrue(rows[0].startswith("object,"))
+            self.assertTrue(all(r.startswith("o,") for r in rows[marks[0] + 1:-1]))
+        finally:
+            p.send_signal(signal.SIGTERM)
+            p.wait(WAIT_S)
 
 
 if __name__ == "__main__":
