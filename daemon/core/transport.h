@@ -41,8 +41,9 @@
  *             where it was (replay: after the row the engine accepted last).
  *   pre_tick  for each object whose INPUT is this transport, just before its
  *             engine_tick: feed waypoints that are due by engine time (replay).
- *             Event-driven inputs (CAN frames, Modbus writes) do not need it:
- *             they call obj_push() from their fd callbacks.
+ *             Event-driven inputs (CAN frames, Modbus writes) do not need it.
+ *             Every input offers its waypoints through obj_push() (core.h),
+ *             from pre_tick or from its fd callbacks, never engine_push.
  *   setpoint  for each object that has this transport among its OUTPUTS,
  *             right after its engine_tick, with the new setpoint.
  *   cycle     once per tick after every object was ticked, for every open

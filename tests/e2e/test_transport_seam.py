@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The transport seam is closed (STYLE.md 16, issue 9): adding a transport
-edits no core file.
+edits no core file, and every input reaches its engine the same way.
 
 Given the sources, when the core (daemon/core/, daemon/trajd.c) is read with
 comments and strings blanked, then it names no transport and includes no
@@ -68,6 +68,15 @@ class Seam(unittest.TestCase):
             self.assertEqual(names, set(), f"{rel} names transports")
             for word in ("OBJ_SRC", "stats_can", "STATS_CAN", "modbus", "replay"):
                 self.assertFalse(word in code, f"{rel}: '{word}' outside comments")
+
+    def test_inputs_push_through_obj_push(self):
+        # Given every transport file, then none offers waypoints to an engine
+        # directly: the one push path is obj_push (replay included).
+        for f in transport_files():
+            code = blank(read(f))
+            self.assertNotIn("engine_push(", code, f"{os.path.relpath(f, ROOT)}: use obj_push")
+        self.assertIn("obj_push(", blank(read(os.path.join(ROOT, "daemon", "replay",
+                                                            "replay_transport.c"))))
 
     def test_table_is_every_definition_in_path_order(self):
         files = transport_files()
