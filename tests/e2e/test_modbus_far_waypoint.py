@@ -94,7 +94,9 @@ class FarWaypoint(unittest.TestCase):
             if far == 3 or rejected >= 1 or time.monotonic() > deadline:
                 break
         self.assertTrue(far == 3 or rejected >= 1, (far, rejected))
-        self.assertEqual(mbsim.u32(r, M["MBMAP_O_ACCEPTED"]), 80)
+        # all 80 good ones in (the far one too, if the engine takes it in
+        # before its verdict: then it is in rejected as well)
+        self.assertGreaterEqual(mbsim.u32(r, M["MBMAP_O_ACCEPTED"]), 80)
         # the setpoint stays on the good track (never near t = 1e9)
         self.assertLess(mbsim.f64(r, M["MBMAP_O_T_S"]), 100.0)
         s.close()
