@@ -5,7 +5,7 @@
 #   make check      install missing Debian packages, build, run every test
 #                   (unit, oracle, replay, daemon, CAN on a UML kernel, Modbus,
 #                   then the C tests again under ASan+UBSan)
-#   make lint       cppcheck (also part of make check)
+#   make lint       cppcheck (make check runs it: tests/e2e/test_cppcheck.sh)
 #   make format     rewrite the C sources with clang-format (.clang-format);
 #   make format-check  list the files that differ from it, fail if any
 #   make bench      benchmarks, printing tables
@@ -159,7 +159,6 @@ run: deps-run
 
 check: deps
 	@$(MAKE) --no-print-directory check-build
-	@$(MAKE) --no-print-directory lint
 	@BUILD=$(abspath $(BUILD)) PYTHON=$(PYTHON) sh tests/run.sh
 	@$(MAKE) --no-print-directory test-asan
 
@@ -182,7 +181,8 @@ test-asan:
 # bad API use, uninitialised or null reads), portability, performance.  Not
 # "style": its findings here are taste (variableScope against our
 # declarations at the top of a block) or defensive checks it calls
-# redundant.  A false positive is suppressed on its line with a reason:
+# redundant.  Run by tests/run.sh as tests/e2e/test_cppcheck.sh.  A false
+# positive is suppressed on its line with a reason:
 #   /* cppcheck-suppress <id> ; why it cannot happen */
 CPPCHECK_SRC := lib daemon tests/unit tests/bench tests/fuzz
 lint: $(GEN_TABLE)

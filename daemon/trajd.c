@@ -179,7 +179,6 @@ static void reload(trajd_t *d)
                (unsigned long long)(core_mono_ns() / 1000));
     log_msg(LOG_NOTICE, "SIGHUP: reloading %s", d->conf_path);
     if (cfg_load(d->conf_path, &nc, err, sizeof err) < 0) {
-        d->stats.reload_failures++;
         log_msg(LOG_ERR, "reload refused, still running the old configuration: %s", err);
         sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
         return;
@@ -190,7 +189,6 @@ static void reload(trajd_t *d)
      * old core was already closed). */
     if (start_core(d, nc, err, sizeof err) < 0) {
         char err2[1024];
-        d->stats.reload_failures++;
         cfg_free(nc);
         if (d->core) { /* failed before touching the old core: it still runs */
             log_msg(LOG_ERR, "reload refused: %s", err);
@@ -209,7 +207,6 @@ static void reload(trajd_t *d)
     }
     cfg_free(d->cfg);
     d->cfg = nc;
-    d->stats.reloads++;
     unsigned kept = 0;
     for (unsigned i = 0; i < d->core->nobj; i++)
         kept += (unsigned)d->core->obj[i].carried;

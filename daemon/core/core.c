@@ -168,7 +168,6 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
     s->ticks++;
     uint64_t late_us = late_ns > 0 ? (uint64_t)(late_ns / 1000) : 0;
     lat_add(&s->late_hist, late_us);
-    lat_add(&s->late_recent_hist, late_us);
     if (core_mono_ns() > p->wall_base_ns + (int64_t)(k + 1) * p->wall_period_ns)
         s->overruns++;
     if (s->exit_code)
@@ -456,8 +455,6 @@ void core_stats_roll(core_t *c)
         o->safety_logged = sf->violations;
     }
     lat_summarize(&s->late_hist, &s->late);
-    lat_summarize(&s->late_recent_hist, &s->late_recent);
-    lat_reset(&s->late_recent_hist);
 }
 
 int core_summary(const core_t *c, char *buf, size_t len)

@@ -123,12 +123,8 @@ typedef struct {
     uint64_t ticks;                 /* ticks run */
     uint64_t missed_ticks;          /* deadlines skipped (timerfd expirations - 1, summed) */
     uint64_t overruns;              /* ticks whose work ended after the next deadline */
-    uint64_t reloads;               /* successful SIGHUP reloads */
-    uint64_t reload_failures;       /* refused reloads (old config kept) */
     lat_hist_t late_hist;           /* lateness since start / reset, us */
-    lat_hist_t late_recent_hist;    /* lateness in the current 1 s window */
     lat_summary_t late;             /* summary of late_hist, refreshed every second */
-    lat_summary_t late_recent;      /* summary of the last complete 1 s window */
     /* Counters a transport keeps across reloads (a reload rebuilds its state):
      * tcount[transport_index(t)][0 .. STATS_TCOUNT_MAX - 1], meaning defined by
      * transport t, printed by its summary callback. */
@@ -220,7 +216,7 @@ void core_close(core_t *c);
 /* One-line summary ("12 s, 3 objects: boat streaming ..., late p99 40 us ..."). */
 int core_summary(const core_t *c, char *buf, size_t len);
 
-/* Refresh stats->late / late_recent (called every second by trajd). */
+/* Refresh stats->late (called every second by trajd). */
 void core_stats_roll(core_t *c);
 
 #endif

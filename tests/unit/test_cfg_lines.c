@@ -51,17 +51,24 @@ static size_t conf_with(char *buf, size_t cap, size_t n, int newline_at_end)
     return len;
 }
 
+/* conf_with into buf, then load_bytes: cfg_load's code. */
+static int load_conf_with(size_t n, int newline_at_end)
+{
+    static char buf[1024];
+    size_t len = conf_with(buf, sizeof buf, n, newline_at_end);
+    return load_bytes(buf, len);
+}
+
 /* Given a line of 198 characters, then accepted; 199, then refused at its
  * line (6), whether or not the file ends there. */
 static void test_longest_line(void **state)
 {
     (void)state;
-    char buf[1024];
-    assert_int_equal(load_bytes(buf, conf_with(buf, sizeof buf, 198, 1)), 0);
-    assert_int_equal(load_bytes(buf, conf_with(buf, sizeof buf, 198, 0)), 0);
-    assert_int_equal(load_bytes(buf, conf_with(buf, sizeof buf, 199, 1)), -CFG_ESYNTAX);
+    assert_int_equal(load_conf_with(198, 1), 0);
+    assert_int_equal(load_conf_with(198, 0), 0);
+    assert_int_equal(load_conf_with(199, 1), -CFG_ESYNTAX);
     assert_non_null(strstr(err, ".conf:6: line longer than 198 characters"));
-    assert_int_equal(load_bytes(buf, conf_with(buf, sizeof buf, 250, 0)), -CFG_ESYNTAX);
+    assert_int_equal(load_conf_with(250, 0), -CFG_ESYNTAX);
     assert_non_null(strstr(err, ".conf:6: line longer than 198 characters"));
 }
 
