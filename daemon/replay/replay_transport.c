@@ -79,6 +79,9 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
         r->loaded = 1;
         for (size_t k = 0; k < r->trk.nreports; k++)
             log_msg(LOG_WARNING, "object '%s': replay: skipped %s", o->name, r->trk.reports[k]);
+        if (r->trk.ignored)
+            log_msg(LOG_NOTICE, "object '%s': replay: ignored %zu records without a usable fix",
+                    o->name, r->trk.ignored);
         if (r->trk.skipped > r->trk.nreports)
             log_msg(LOG_WARNING, "object '%s': replay: skipped %zu bad lines in all", o->name,
                     r->trk.skipped);
