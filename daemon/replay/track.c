@@ -35,18 +35,16 @@ typedef struct {
 } format_info_t;
 
 static const format_info_t formats[TRACK_FMT_COUNT] = {
-    [TRACK_FMT_AUTO] = {"from the extension, else the content, else the CSV header",
-                        NULL, NULL},
+    [TRACK_FMT_AUTO] = {"from the extension, else the content, else the CSV header", NULL, NULL},
     [TRACK_FMT_XYZ] = {"CSV t,x,y[,z]: seconds, metres", NULL, NULL},
-    [TRACK_FMT_LATLON] = {"CSV t,lat,lon[,alt]: seconds, degrees, metres", NULL,
-                          NULL},
-    [TRACK_FMT_GPX] = {"GPX 1.0/1.1 <trkpt> with <time> (*.gpx, or starts with '<')",
-                       ".gpx", looks_like_xml},
+    [TRACK_FMT_LATLON] = {"CSV t,lat,lon[,alt]: seconds, degrees, metres", NULL, NULL},
+    [TRACK_FMT_GPX] = {"GPX 1.0/1.1 <trkpt> with <time> (*.gpx, or starts with '<')", ".gpx",
+                       looks_like_xml},
     [TRACK_FMT_PATH] = {"lines and arcs, lib/spline/path.h (*.path)", ".path", NULL},
-    [TRACK_FMT_N2K] = {"candump log of NMEA 2000 PGN 129029 or 129025 positions",
-                       NULL, track_n2k_sniff},
-    [TRACK_FMT_NMEA0183] = {"NMEA 0183 GGA/RMC sentences, checksummed (*.nmea)",
-                            ".nmea", track_nmea0183_sniff},
+    [TRACK_FMT_N2K] = {"candump log of NMEA 2000 PGN 129029 or 129025 positions", NULL,
+                       track_n2k_sniff},
+    [TRACK_FMT_NMEA0183] = {"NMEA 0183 GGA/RMC sentences, checksummed (*.nmea)", ".nmea",
+                            track_nmea0183_sniff},
     [TRACK_FMT_IGC] = {"IGC flight log: B records, date from HFDTE (*.igc)", ".igc",
                        track_igc_sniff},
 };
@@ -89,8 +87,8 @@ void track_free(track_t *trk)
 static int rows_to_track(track_loader_t *L, int geographic, track_t *trk)
 {
     if (L->n == 0) {
-        track_loader_fatal(L, 0, L->skipped ? "no waypoints (every data line was bad)"
-                                            : "no waypoints");
+        track_loader_fatal(L, 0,
+                           L->skipped ? "no waypoints (every data line was bad)" : "no waypoints");
         return -1;
     }
     if (L->n > UINT32_MAX) {
@@ -142,9 +140,8 @@ static int rows_to_track(track_loader_t *L, int geographic, track_t *trk)
     return 0;
 }
 
-int track_parse(const char *name, const char *buf, size_t len,
-                track_format_t fmt, unsigned flags, track_t *trk, char *err,
-                size_t errlen)
+int track_parse(const char *name, const char *buf, size_t len, track_format_t fmt, unsigned flags,
+                track_t *trk, char *err, size_t errlen)
 {
     track_loader_t L;
     memset(&L, 0, sizeof L);
@@ -164,23 +161,13 @@ int track_parse(const char *name, const char *buf, size_t len,
         if (rc)
             track_free(trk);
         return rc;
-    case TRACK_FMT_GPX:
-        rc = track_gpx_parse(&L, buf, len, &trk->segments);
-        break;
-    case TRACK_FMT_N2K:
-        rc = track_n2k_parse(&L, buf, len);
-        break;
-    case TRACK_FMT_NMEA0183:
-        rc = track_nmea0183_parse(&L, buf, len);
-        break;
-    case TRACK_FMT_IGC:
-        rc = track_igc_parse(&L, buf, len);
-        break;
+    case TRACK_FMT_GPX: rc = track_gpx_parse(&L, buf, len, &trk->segments); break;
+    case TRACK_FMT_N2K: rc = track_n2k_parse(&L, buf, len); break;
+    case TRACK_FMT_NMEA0183: rc = track_nmea0183_parse(&L, buf, len); break;
+    case TRACK_FMT_IGC: rc = track_igc_parse(&L, buf, len); break;
     case TRACK_FMT_AUTO:
     case TRACK_FMT_XYZ:
-    case TRACK_FMT_LATLON:
-        rc = track_csv_parse(&L, buf, len, got, &got);
-        break;
+    case TRACK_FMT_LATLON: rc = track_csv_parse(&L, buf, len, got, &got); break;
     default:
         track_loader_fatal(&L, 0, "unknown format %d", (int)fmt);
         rc = -1;
@@ -199,8 +186,8 @@ int track_parse(const char *name, const char *buf, size_t len,
     return 0;
 }
 
-int track_load_opts(const char *path, track_format_t fmt, unsigned flags,
-                    track_t *trk, char *err, size_t errlen)
+int track_load_opts(const char *path, track_format_t fmt, unsigned flags, track_t *trk, char *err,
+                    size_t errlen)
 {
     track_loader_t L; /* only for the message helpers */
     memset(&L, 0, sizeof L);
@@ -253,8 +240,7 @@ int track_load_opts(const char *path, track_format_t fmt, unsigned flags,
     return rc;
 }
 
-int track_load(const char *path, track_format_t fmt, track_t *trk, char *err,
-               size_t errlen)
+int track_load(const char *path, track_format_t fmt, track_t *trk, char *err, size_t errlen)
 {
     return track_load_opts(path, fmt, 0, trk, err, errlen);
 }

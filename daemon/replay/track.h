@@ -46,8 +46,27 @@
  * skipped: a path is a program, not a log).  line[] holds the line of the
  * element that produced each waypoint.
  *
+ * Logged positions (lat/lon converted like CSV latlon; t from the first fix):
+ *   n2k   a candump log (-l/-L text) of NMEA 2000: PGN 129029 GNSS Position
+ *         Data, fast packets reassembled (t from its date and time; altitude),
+ *         or, if the log has none, PGN 129025 Position Rapid Update (t from
+ *         the log's stamps; no altitude).  Of that PGN, the source address with
+ *         the most fixes.  AUTO: the first line that is not a comment is a
+ *         stamped candump frame.  Decoders: lib/proto/nmea2000.h.
+ *   nmea  NMEA 0183 GGA and RMC of any talker, checksum required; sentences of
+ *         one time make one fix (GGA's position and altitude above MSL, else
+ *         RMC's); the date from RMC (before the first RMC: the first RMC's),
+ *         midnight without an RMC from a time that runs backwards by > 12 h.
+ *         Other sentences are passed over.  AUTO: *.nmea, or a first line
+ *         "$...*hh".  Decoder: lib/proto/nmea0183.h.
+ *   igc   IGC B records dated by HFDTE; an earlier time than the last is the
+ *         next day; GNSS altitude, none for validity V.  AUTO: *.igc, or an A
+ *         record then an H or B record.  Decoder: lib/proto/igc.h.
+ * A malformed line is a bad line (error, or skipped with TRACK_SKIP_BAD); a
+ * well-formed record without a usable fix is counted in track_t.ignored.
+ *
  * Files: track.c (this API, the choice of format, rows to waypoints), one
- * parser per format in track_<format>.c (csv, gpx, path), what they share in
+ * parser per format in track_<format>.c (csv, gpx, path, n2k, nmea0183, igc), what they share in
  * track_loader.h/.c, dates in track_time.c.
  */
 #ifndef TRAJD_TRACK_H

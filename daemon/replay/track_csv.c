@@ -69,12 +69,12 @@ static int numeric_line(char **field, int nf)
 
 typedef struct {
     track_loader_t *L;
-    track_format_t fmt;   /* AUTO until the header decided */
-    int col[COL_COUNT];   /* field index of each column, -1 if absent */
+    track_format_t fmt; /* AUTO until the header decided */
+    int col[COL_COUNT]; /* field index of each column, -1 if absent */
     int have_header;
     int geographic;
-    int needed;           /* fields a data row must have (that of the header) */
-    int positional;       /* columns by position: rows have as many as the first */
+    int needed;     /* fields a data row must have (that of the header) */
+    int positional; /* columns by position: rows have as many as the first */
 } csv_t;
 
 /* A line that cannot be split or read: before the header it is fatal (the
@@ -102,8 +102,9 @@ static int csv_header(csv_t *c, char **field, int nf, unsigned long lineno)
     c->have_header = 1;
     if (numeric_line(field, nf)) {
         if (c->fmt != TRACK_FMT_XYZ && c->fmt != TRACK_FMT_LATLON) {
-            track_loader_fatal(c->L, lineno, "no header line: expected one naming the "
-                  "columns (t,x,y,z or t,lat,lon,alt), or give the format");
+            track_loader_fatal(c->L, lineno,
+                               "no header line: expected one naming the "
+                               "columns (t,x,y,z or t,lat,lon,alt), or give the format");
             return -1;
         }
         int geo = c->fmt == TRACK_FMT_LATLON;
@@ -139,9 +140,10 @@ static int csv_header(csv_t *c, char **field, int nf, unsigned long lineno)
         return -1;
     }
     if (c->fmt == TRACK_FMT_XYZ && !has_xy) {
-        track_loader_fatal(c->L, lineno, has_ll ? "header has no x and y columns"
-              " (it has lat/lon: use format latlon)"
-              : "header names neither t,x,y[,z] nor t,lat,lon[,alt]");
+        track_loader_fatal(c->L, lineno,
+                           has_ll ? "header has no x and y columns"
+                                    " (it has lat/lon: use format latlon)"
+                                  : "header names neither t,x,y[,z] nor t,lat,lon[,alt]");
         return -1;
     }
     csv_columns_set(c);
@@ -166,15 +168,15 @@ static int csv_row(csv_t *c, char **field, int nf, unsigned long lineno)
         return track_loader_bad(L, lineno, "time '%s' is not a finite number",
                                 track_field_show(field[c->col[COL_T]]).s);
     if (track_field_num(field[c->col[a]], &va, NULL) || !isfinite(va))
-        return track_loader_bad(L, lineno, "%s '%s' is not a finite number",
-                                geo ? "latitude" : "x", track_field_show(field[c->col[a]]).s);
+        return track_loader_bad(L, lineno, "%s '%s' is not a finite number", geo ? "latitude" : "x",
+                                track_field_show(field[c->col[a]]).s);
     if (track_field_num(field[c->col[b]], &vb, NULL) || !isfinite(vb))
         return track_loader_bad(L, lineno, "%s '%s' is not a finite number",
                                 geo ? "longitude" : "y", track_field_show(field[c->col[b]]).s);
     if (c->col[c3] >= 0 && c->col[c3] < nf &&
         (track_field_num(field[c->col[c3]], &vc, &empty) || isinf(vc)))
-        return track_loader_bad(L, lineno, "%s '%s' is not a number",
-                                geo ? "altitude" : "z", track_field_show(field[c->col[c3]]).s);
+        return track_loader_bad(L, lineno, "%s '%s' is not a number", geo ? "altitude" : "z",
+                                track_field_show(field[c->col[c3]]).s);
     if (geo) {
         int rc = geo_check(va, vb, isnan(vc) ? 0.0 : vc);
         if (rc)
@@ -210,8 +212,8 @@ static int csv_line(csv_t *c, char *line, unsigned long lineno)
     return csv_row(c, field, nf, lineno);
 }
 
-int track_csv_parse(track_loader_t *L, const char *buf, size_t len,
-                    track_format_t fmt, track_format_t *got)
+int track_csv_parse(track_loader_t *L, const char *buf, size_t len, track_format_t fmt,
+                    track_format_t *got)
 {
     csv_t c = {.L = L, .fmt = fmt};
     unsigned long lineno = 0;

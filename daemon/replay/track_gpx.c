@@ -14,10 +14,10 @@
 typedef struct {
     track_loader_t *L;
     XML_Parser p;
-    int trk_depth;          /* >0 inside <trk> */
+    int trk_depth; /* >0 inside <trk> */
     int in_trkpt;
-    int depth_in_trkpt;     /* element depth below <trkpt> */
-    int text_kind;          /* 0 none, 1 ele, 2 time */
+    int depth_in_trkpt; /* element depth below <trkpt> */
+    int text_kind;      /* 0 none, 1 ele, 2 time */
     char text[GPX_TEXT_MAX + 1];
     size_t text_len;
     int text_overflow;
@@ -90,7 +90,7 @@ static void XMLCALL gpx_start(void *ud, const XML_Char *name, const XML_Char **a
     if (track_field_num(slat, &g->lat, NULL) || track_field_num(slon, &g->lon, NULL)) {
         g->bad_pt = 1;
         if (track_loader_bad(g->L, g->pt_line, "trkpt lat '%s' or lon '%s' is not a number",
-                track_field_show(slat).s, track_field_show(slon).s))
+                             track_field_show(slat).s, track_field_show(slon).s))
             gpx_stop(g);
         return;
     }
@@ -129,14 +129,15 @@ static void XMLCALL gpx_end(void *ud, const XML_Char *name)
                 int empty;
                 if (track_field_num(g->text, &g->ele, &empty) || isinf(g->ele)) {
                     g->bad_pt = 1;
-                    if (track_loader_bad(g->L, line, "<ele> '%s' is not a number", track_field_show(g->text).s))
+                    if (track_loader_bad(g->L, line, "<ele> '%s' is not a number",
+                                         track_field_show(g->text).s))
                         gpx_stop(g);
                 }
             } else {
                 if (track_parse_iso8601(g->text, &g->sec, &g->frac)) {
                     g->bad_pt = 1;
                     if (track_loader_bad(g->L, line, "<time> '%s' is not an ISO 8601 date-time",
-                            track_field_show(g->text).s))
+                                         track_field_show(g->text).s))
                         gpx_stop(g);
                 } else {
                     g->have_time = 1;
@@ -200,7 +201,7 @@ int track_gpx_parse(track_loader_t *L, const char *buf, size_t len, size_t *segm
         if (XML_Parse(g.p, buf + off, (int)n, final) == XML_STATUS_ERROR) {
             if (!L->failed)
                 track_loader_fatal(L, XML_GetCurrentLineNumber(g.p), "XML error: %s",
-                      XML_ErrorString(XML_GetErrorCode(g.p)));
+                                   XML_ErrorString(XML_GetErrorCode(g.p)));
             rc = -1;
             break;
         }

@@ -9,11 +9,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-static void vmsg(char *err, size_t errlen, const char *name, unsigned long line,
-                 const char *fmt, va_list ap) __attribute__((format(printf, 5, 0)));
+static void vmsg(char *err, size_t errlen, const char *name, unsigned long line, const char *fmt,
+                 va_list ap) __attribute__((format(printf, 5, 0)));
 
-static void vmsg(char *err, size_t errlen, const char *name, unsigned long line,
-                 const char *fmt, va_list ap)
+static void vmsg(char *err, size_t errlen, const char *name, unsigned long line, const char *fmt,
+                 va_list ap)
 {
     if (!err || errlen == 0)
         return;
@@ -62,8 +62,8 @@ int track_loader_bad(track_loader_t *L, unsigned long line, const char *fmt, ...
     return -1;
 }
 
-int track_loader_add_row(track_loader_t *L, double t_s, double a, double b,
-                         double c, unsigned long line)
+int track_loader_add_row(track_loader_t *L, double t_s, double a, double b, double c,
+                         unsigned long line)
 {
     if (L->n == L->cap) {
         size_t cap = L->cap ? L->cap * 2 : 1024;

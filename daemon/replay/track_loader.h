@@ -19,7 +19,7 @@
 /* One row as read, before the geographic conversion. */
 typedef struct {
     double t_s;
-    double a, b, c;   /* x,y,z or lat,lon,alt (c NaN: no altitude / z) */
+    double a, b, c; /* x,y,z or lat,lon,alt (c NaN: no altitude / z) */
     uint32_t line;
 } track_row_t;
 
@@ -31,11 +31,11 @@ typedef struct {
     track_row_t *rows;
     size_t n, cap;
     size_t skipped;
-    size_t ignored;   /* records without a usable fix (see track_t.ignored) */
+    size_t ignored;                    /* records without a usable fix (see track_t.ignored) */
     char (*reports)[TRACK_REPORT_LEN]; /* TRACK_REPORT_MAX, allocated on the first skip */
     size_t nreports;
-    int geographic;   /* rows hold lat, lon, alt (set by the parser) */
-    int failed;       /* a fatal error was recorded in err */
+    int geographic; /* rows hold lat, lon, alt (set by the parser) */
+    int failed;     /* a fatal error was recorded in err */
     int oom;
 } track_loader_t;
 
@@ -51,8 +51,8 @@ int track_loader_bad(track_loader_t *L, unsigned long line, const char *fmt, ...
     __attribute__((format(printf, 3, 4)));
 
 /* Append a row; -1 (fatal "out of memory" recorded) if it cannot grow. */
-int track_loader_add_row(track_loader_t *L, double t_s, double a, double b,
-                         double c, unsigned long line);
+int track_loader_add_row(track_loader_t *L, double t_s, double a, double b, double c,
+                         unsigned long line);
 
 /* Parse a whole field as a double.  Leading/trailing blanks allowed.
  * An empty field gives NaN with *empty set (empty may be NULL: then an
@@ -87,12 +87,10 @@ int track_lines_next(track_loader_t *L, track_lines_t *it);
 int64_t track_days_from_civil(int64_t y, int m, int d);
 
 /* The parsers, one file each (track_<format>.c). */
-int track_csv_parse(track_loader_t *L, const char *buf, size_t len,
-                    track_format_t fmt, track_format_t *got);
-int track_gpx_parse(track_loader_t *L, const char *buf, size_t len,
-                    size_t *segments);
-int track_path_parse(track_loader_t *L, const char *buf, size_t len,
-                     track_t *trk);
+int track_csv_parse(track_loader_t *L, const char *buf, size_t len, track_format_t fmt,
+                    track_format_t *got);
+int track_gpx_parse(track_loader_t *L, const char *buf, size_t len, size_t *segments);
+int track_path_parse(track_loader_t *L, const char *buf, size_t len, track_t *trk);
 int track_n2k_parse(track_loader_t *L, const char *buf, size_t len);
 int track_nmea0183_parse(track_loader_t *L, const char *buf, size_t len);
 int track_igc_parse(track_loader_t *L, const char *buf, size_t len);

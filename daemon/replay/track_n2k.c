@@ -13,8 +13,8 @@
 
 /* One position as read, of any stream. */
 typedef struct {
-    int64_t sec;        /* whole seconds (log stamp, or 129029 date and time) */
-    double frac;        /* and the fraction, kept apart so differences are exact */
+    int64_t sec; /* whole seconds (log stamp, or 129029 date and time) */
+    double frac; /* and the fraction, kept apart so differences are exact */
     double lat, lon, alt;
     uint32_t line;
     uint32_t pgn;
@@ -47,8 +47,8 @@ static int add_fix(n2k_t *N, const fix_t *f)
 }
 
 /* A decoded position of a frame at log time ts_us.  Returns 0 or -1. */
-static int position(n2k_t *N, int rc, const n2k_position_t *p, const n2k_id_t *id,
-                    int64_t ts_us, unsigned long lineno)
+static int position(n2k_t *N, int rc, const n2k_position_t *p, const n2k_id_t *id, int64_t ts_us,
+                    unsigned long lineno)
 {
     if (rc == 0 && geo_check(p->lat_deg, p->lon_deg, isnan(p->alt_m) ? 0.0 : p->alt_m))
         rc = -N2K_ERANGE;
@@ -56,8 +56,12 @@ static int position(n2k_t *N, int rc, const n2k_position_t *p, const n2k_id_t *i
         N->L->ignored++; /* a record without a usable fix: not a bad line */
         return 0;
     }
-    fix_t f = {.lat = p->lat_deg, .lon = p->lon_deg, .alt = p->alt_m, .pgn = id->pgn,
-               .src = id->source, .line = lineno > UINT32_MAX ? UINT32_MAX : (uint32_t)lineno};
+    fix_t f = {.lat = p->lat_deg,
+               .lon = p->lon_deg,
+               .alt = p->alt_m,
+               .pgn = id->pgn,
+               .src = id->source,
+               .line = lineno > UINT32_MAX ? UINT32_MAX : (uint32_t)lineno};
     if (id->pgn == N2K_PGN_GNSS_POSITION) {
         double whole = floor(p->tod_s);
         f.sec = p->days * 86400 + (int64_t)whole;
@@ -78,8 +82,8 @@ static int frame(n2k_t *N, const candump_line_t *cl, unsigned long lineno)
         return 0; /* NMEA 2000 uses 29-bit data frames only */
     n2k_id_decode(fr->id, &id);
     if (id.pgn == N2K_PGN_POSITION_RAPID)
-        return position(N, n2k_decode_position_rapid(fr->data, fr->len, &p), &p, &id,
-                        cl->ts_us, lineno);
+        return position(N, n2k_decode_position_rapid(fr->data, fr->len, &p), &p, &id, cl->ts_us,
+                        lineno);
     if (id.pgn != N2K_PGN_GNSS_POSITION)
         return 0;
     n2k_fast_t *f = N->fast[id.source];
@@ -97,8 +101,7 @@ static int frame(n2k_t *N, const candump_line_t *cl, unsigned long lineno)
     }
     if (rc == 0)
         return 0;
-    return position(N, n2k_decode_gnss_position(f->data, f->len, &p), &p, &id, cl->ts_us,
-                    lineno);
+    return position(N, n2k_decode_gnss_position(f->data, f->len, &p), &p, &id, cl->ts_us, lineno);
 }
 
 /* The stream kept: 129029 if any (fix time, 1e-16 deg, altitude), else
@@ -106,7 +109,11 @@ static int frame(n2k_t *N, const candump_line_t *cl, unsigned long lineno)
  * tie).  Streams are counted in a short list: a log has a few sources. */
 static void choose(const n2k_t *N, uint32_t *pgn, int *src)
 {
-    struct { uint32_t pgn; uint8_t src; size_t n; } st[512];
+    struct {
+        uint32_t pgn;
+        uint8_t src;
+        size_t n;
+    } st[512];
     size_t ns = 0, best = 0;
     for (size_t i = 0; i < N->n; i++) {
         size_t k = 0;
@@ -169,8 +176,7 @@ int track_n2k_parse(track_loader_t *L, const char *buf, size_t len)
         if (prc == -CANDUMP_ESKIP)
             continue;
         if (prc < 0) {
-            if (track_loader_bad(L, it->lineno, "not a candump frame: %s",
-                                 candump_strerror(prc)))
+            if (track_loader_bad(L, it->lineno, "not a candump frame: %s", candump_strerror(prc)))
                 goto out;
             continue;
         }

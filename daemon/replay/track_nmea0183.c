@@ -18,7 +18,7 @@ typedef struct {
     int active;
     double tod_s;
     int64_t day;
-    int have;          /* a valid position */
+    int have; /* a valid position */
     int from_gga;
     double lat, lon, alt;
     unsigned long line;
@@ -27,8 +27,8 @@ typedef struct {
 typedef struct {
     track_loader_t *L;
     epoch_t e;
-    int64_t day;        /* current date, days since 1970 */
-    double last_tod;    /* for midnight without an RMC date */
+    int64_t day;     /* current date, days since 1970 */
+    double last_tod; /* for midnight without an RMC date */
     int have_t0;
     int64_t sec0;
     double frac0;
@@ -66,7 +66,8 @@ static int sentence(nmea_t *N, const nmea0183_fix_t *f, unsigned long lineno)
     else if (f->tod_s < N->last_tod - 43200.0)
         N->day++; /* past midnight with no RMC date to say so */
     N->last_tod = f->tod_s;
-    if (!e->active || fabs(e->tod_s - f->tod_s) > NMEA_SAME_TIME_S || e->day != N->day) { /* a new time: a new fix */
+    if (!e->active || fabs(e->tod_s - f->tod_s) > NMEA_SAME_TIME_S ||
+        e->day != N->day) { /* a new time: a new fix */
         if (flush(N) < 0)
             return -1;
         memset(e, 0, sizeof *e);

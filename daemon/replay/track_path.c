@@ -9,7 +9,7 @@
 
 typedef struct {
     path_elem_t *el;
-    uint32_t *el_line;   /* source line of each element */
+    uint32_t *el_line; /* source line of each element */
     size_t n, cap;
 } elems_t;
 

@@ -17,16 +17,16 @@
 
 enum igc_error {
     IGC_OK = 0,
-    IGC_ESYNTAX = 1,   /* not a B record / date header, or a field does not parse */
-    IGC_ERANGE = 2,    /* time, date, latitude or longitude out of range */
+    IGC_ESYNTAX = 1, /* not a B record / date header, or a field does not parse */
+    IGC_ERANGE = 2,  /* time, date, latitude or longitude out of range */
 };
 
 const char *igc_strerror(int err);
 
 typedef struct {
-    int tod_s;          /* time of day, seconds [0, 86400) */
+    int tod_s; /* time of day, seconds [0, 86400) */
     double lat_deg, lon_deg;
-    int valid_3d;       /* validity A */
+    int valid_3d; /* validity A */
     int pressure_alt_m;
     int gnss_alt_m;
 } igc_fix_t;

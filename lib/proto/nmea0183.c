@@ -6,7 +6,7 @@
 #include <string.h>
 
 #define NMEA0183_FIELDS_MAX 24
-#define NMEA0183_LINE_MAX 120   /* 82 by the standard; some receivers write more */
+#define NMEA0183_LINE_MAX 120 /* 82 by the standard; some receivers write more */
 
 const char *nmea0183_strerror(int err)
 {
@@ -21,8 +21,10 @@ const char *nmea0183_strerror(int err)
 
 static int hexval(char c)
 {
-    return c >= '0' && c <= '9' ? c - '0' : c >= 'A' && c <= 'F' ? c - 'A' + 10
-         : c >= 'a' && c <= 'f' ? c - 'a' + 10 : -1;
+    return c >= '0' && c <= '9'   ? c - '0'
+           : c >= 'A' && c <= 'F' ? c - 'A' + 10
+           : c >= 'a' && c <= 'f' ? c - 'a' + 10
+                                  : -1;
 }
 
 /* A whole decimal number ("" is not one). */

@@ -17,9 +17,9 @@
 
 enum nmea0183_error {
     NMEA0183_OK = 0,
-    NMEA0183_ESYNTAX = 1,    /* not a sentence, or a field that does not parse */
-    NMEA0183_ECHECKSUM = 2,  /* missing or wrong checksum */
-    NMEA0183_ERANGE = 3,     /* time, date, latitude or longitude out of range */
+    NMEA0183_ESYNTAX = 1,   /* not a sentence, or a field that does not parse */
+    NMEA0183_ECHECKSUM = 2, /* missing or wrong checksum */
+    NMEA0183_ERANGE = 3,    /* time, date, latitude or longitude out of range */
 };
 
 const char *nmea0183_strerror(int err);
@@ -28,14 +28,14 @@ typedef enum { NMEA0183_OTHER = 0, NMEA0183_GGA, NMEA0183_RMC } nmea0183_kind_t;
 
 typedef struct {
     nmea0183_kind_t kind;
-    int valid;               /* GGA quality > 0, RMC status A */
-    int has_pos;             /* latitude and longitude present */
-    double tod_s;            /* time of day, [0, 86400) */
+    int valid;    /* GGA quality > 0, RMC status A */
+    int has_pos;  /* latitude and longitude present */
+    double tod_s; /* time of day, [0, 86400) */
     double lat_deg, lon_deg;
-    double alt_m;            /* GGA altitude above MSL, NaN if empty or RMC */
-    double sep_m;            /* GGA geoid separation, NaN if empty */
-    int has_date;            /* RMC */
-    int64_t days;            /* RMC date, days since 1970-01-01 (years 1980-2079) */
+    double alt_m; /* GGA altitude above MSL, NaN if empty or RMC */
+    double sep_m; /* GGA geoid separation, NaN if empty */
+    int has_date; /* RMC */
+    int64_t days; /* RMC date, days since 1970-01-01 (years 1980-2079) */
 } nmea0183_fix_t;
 
 /*

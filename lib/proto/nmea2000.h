@@ -42,11 +42,11 @@
 
 enum n2k_error {
     N2K_OK = 0,
-    N2K_ENA = 1,      /* the position field is "not available" */
-    N2K_ELEN = 2,     /* message too short */
-    N2K_ERANGE = 3,   /* latitude or longitude out of range, bad date or time */
-    N2K_ESEQ = 4,     /* fast packet: a frame out of sequence (message dropped) */
-    N2K_ENOFIX = 5,   /* 129029 method 0: no GNSS fix */
+    N2K_ENA = 1,    /* the position field is "not available" */
+    N2K_ELEN = 2,   /* message too short */
+    N2K_ERANGE = 3, /* latitude or longitude out of range, bad date or time */
+    N2K_ESEQ = 4,   /* fast packet: a frame out of sequence (message dropped) */
+    N2K_ENOFIX = 5, /* 129029 method 0: no GNSS fix */
 };
 
 const char *n2k_strerror(int err);
@@ -55,7 +55,7 @@ typedef struct {
     uint32_t pgn;
     uint8_t priority;
     uint8_t source;
-    uint8_t dest;      /* 255 (global) for PDU2 */
+    uint8_t dest; /* 255 (global) for PDU2 */
 } n2k_id_t;
 
 /* Split a 29-bit identifier. */
@@ -67,10 +67,10 @@ uint32_t n2k_id_encode(const n2k_id_t *id);
 /* One fast-packet message being reassembled (one per source and PGN). */
 typedef struct {
     uint8_t data[N2K_FAST_MAX];
-    uint8_t len;       /* total length announced by frame 0 */
-    uint8_t got;       /* bytes received so far */
-    uint8_t seq;       /* sequence counter of the message */
-    uint8_t next;      /* frame counter expected next */
+    uint8_t len;  /* total length announced by frame 0 */
+    uint8_t got;  /* bytes received so far */
+    uint8_t seq;  /* sequence counter of the message */
+    uint8_t next; /* frame counter expected next */
     uint8_t active;
 } n2k_fast_t;
 
@@ -87,11 +87,11 @@ int n2k_fast_push(n2k_fast_t *f, const uint8_t *data, size_t len);
 
 typedef struct {
     double lat_deg, lon_deg;
-    double alt_m;          /* NaN if not available (always for 129025) */
-    int has_time;          /* 129029: date and time valid */
-    int64_t days;          /* since 1970-01-01 */
-    double tod_s;          /* seconds since midnight, [0, 86400) */
-    uint8_t method;        /* 129029 method (bits 4..7 of byte 31) */
+    double alt_m;   /* NaN if not available (always for 129025) */
+    int has_time;   /* 129029: date and time valid */
+    int64_t days;   /* since 1970-01-01 */
+    double tod_s;   /* seconds since midnight, [0, 86400) */
+    uint8_t method; /* 129029 method (bits 4..7 of byte 31) */
 } n2k_position_t;
 
 /* Decode 129025.  Returns 0, -N2K_ELEN, -N2K_ENA, -N2K_ERANGE. */

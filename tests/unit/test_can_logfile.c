@@ -139,7 +139,7 @@ static void test_bad_lines_reported_rate_limited(void **state)
     can_logfile_stats_t st;
     can_logfile_stats(l, &st);
     assert_int_equal(st.comments, 1);
-    assert_int_equal(st.bad_lines, 9);  /* 8 syntax + 1 with 11 data bytes */
+    assert_int_equal(st.bad_lines, 9); /* 8 syntax + 1 with 11 data bytes */
     assert_int_equal(st.first_bad_line, 3);
     assert_int_equal(st.frames_in, 2);
     assert_int_equal(count_lines_with(log, "line not replayed"), CAN_LOGFILE_REPORT_MAX);

@@ -13,8 +13,8 @@ static void test_gga_example(void **state)
 {
     (void)state;
     nmea0183_fix_t f;
-    assert_int_equal(nmea0183_parse("$GPGGA,123519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*47",
-                                    &f), 0);
+    assert_int_equal(
+        nmea0183_parse("$GPGGA,123519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*47", &f), 0);
     assert_int_equal(f.kind, NMEA0183_GGA);
     assert_true(f.valid);
     assert_true(f.has_pos);
@@ -32,24 +32,25 @@ static void test_rmc_example(void **state)
 {
     (void)state;
     nmea0183_fix_t f;
-    assert_int_equal(nmea0183_parse("$GPRMC,123519,A,4807.038,N,01131.000,E,022.4,084.4,230394,003.1,W*6A",
-                                    &f), 0);
+    assert_int_equal(
+        nmea0183_parse("$GPRMC,123519,A,4807.038,N,01131.000,E,022.4,084.4,230394,003.1,W*6A", &f),
+        0);
     assert_int_equal(f.kind, NMEA0183_RMC);
     assert_true(f.valid);
     assert_true(f.has_date);
     assert_int_equal(f.days, 8847); /* 1994-03-23 */
     assert_true(isnan(f.alt_m));
     /* gpsbabel's sentence for the first point of visnjan: 2014-08-22 */
-    assert_int_equal(nmea0183_parse("$GPRMC,164852.000,A,4516.395,N,01342.911,E,0.00,0.00,220814,,*06",
-                                    &f), 0);
+    assert_int_equal(
+        nmea0183_parse("$GPRMC,164852.000,A,4516.395,N,01342.911,E,0.00,0.00,220814,,*06", &f), 0);
     assert_int_equal(f.days, 16304);
     assert_true(fabs(f.tod_s - 60532.0) < 1e-9);
     /* status V: no valid fix */
-    assert_int_equal(nmea0183_parse("$GPRMC,164852.000,V,4516.395,N,01342.911,E,0.00,0.00,220814,,*11",
-                                    &f), 0);
+    assert_int_equal(
+        nmea0183_parse("$GPRMC,164852.000,V,4516.395,N,01342.911,E,0.00,0.00,220814,,*11", &f), 0);
     assert_false(f.valid);
-    assert_int_equal(nmea0183_parse("$GPGGA,000001,4807.038,S,01131.000,W,1,08,0.9,5,M,,M,,*4A", &f),
-                     0);
+    assert_int_equal(
+        nmea0183_parse("$GPGGA,000001,4807.038,S,01131.000,W,1,08,0.9,5,M,,M,,*4A", &f), 0);
     assert_true(f.lat_deg < 0 && f.lon_deg < 0);
     assert_true(isnan(f.sep_m));
 }
@@ -60,21 +61,26 @@ static void test_refused(void **state)
 {
     (void)state;
     nmea0183_fix_t f;
-    assert_int_equal(nmea0183_parse("$GPGGA,123519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*48",
-                                    &f), -NMEA0183_ECHECKSUM);
-    assert_int_equal(nmea0183_parse("$GPGGA,123519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,",
-                                    &f), -NMEA0183_ECHECKSUM);
-    assert_int_equal(nmea0183_parse("$GPGGA,123519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*4G",
-                                    &f), -NMEA0183_ECHECKSUM);
+    assert_int_equal(
+        nmea0183_parse("$GPGGA,123519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*48", &f),
+        -NMEA0183_ECHECKSUM);
+    assert_int_equal(
+        nmea0183_parse("$GPGGA,123519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,", &f),
+        -NMEA0183_ECHECKSUM);
+    assert_int_equal(
+        nmea0183_parse("$GPGGA,123519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*4G", &f),
+        -NMEA0183_ECHECKSUM);
     assert_int_equal(nmea0183_parse("$GPGSA,A,3,,,,,,,,,,,,,0.0,0.0,0.0*32", &f), 0);
     assert_int_equal(f.kind, NMEA0183_OTHER);
     assert_int_equal(nmea0183_parse("hello", &f), -NMEA0183_ESYNTAX);
     /* 61 minutes of latitude (checksum made right): out of range */
-    assert_int_equal(nmea0183_parse("$GPGGA,123519,4861.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*47",
-                                    &f), -NMEA0183_ERANGE);
+    assert_int_equal(
+        nmea0183_parse("$GPGGA,123519,4861.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*47", &f),
+        -NMEA0183_ERANGE);
     /* hour 25 */
-    assert_int_equal(nmea0183_parse("$GPGGA,253519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*43",
-                                    &f), -NMEA0183_ERANGE);
+    assert_int_equal(
+        nmea0183_parse("$GPGGA,253519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*43", &f),
+        -NMEA0183_ERANGE);
     assert_non_null(nmea0183_strerror(-NMEA0183_ECHECKSUM));
 }
 

@@ -60,7 +60,7 @@ static void test_gnss_position_canboatjs_vector(void **state)
     assert_true(p.has_time);
     assert_int_equal(p.days, 17271); /* 2017-04-15 */
     assert_true(fabs(p.tod_s - (14 * 3600 + 57 * 60 + 56.895)) < 1e-9);
-    assert_int_equal(p.method, 2);   /* DGNSS fix */
+    assert_int_equal(p.method, 2); /* DGNSS fix */
 }
 
 /* Given a frame missing from a message, then that message is dropped

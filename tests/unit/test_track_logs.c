@@ -30,8 +30,8 @@
  * by <= 1.6e-7 rad, <= 3e-4 m over this 2 km track. */
 #define FRAME_M 1e-3
 
-static int parse(const char *name, const char *text, track_format_t fmt, unsigned flags,
-                 track_t *t, char *err, size_t errlen)
+static int parse(const char *name, const char *text, track_format_t fmt, unsigned flags, track_t *t,
+                 char *err, size_t errlen)
 {
     return track_parse(name, text, strlen(text), fmt, flags, t, err, errlen);
 }
@@ -68,9 +68,9 @@ static void compare_with_gpx(const char *path, track_format_t want, double alt_t
             if (fabs(p[k] - g.wp[i].pos_m[k]) > worst[k])
                 worst[k] = fabs(p[k] - g.wp[i].pos_m[k]);
     }
-    print_message("%s: worst |d east| %.3f m (bound %.3f), |d north| %.3f m (%.3f), |d up| %.4f m (%.4f)\n",
-                  path, worst[0], east + FRAME_M, worst[1], north + FRAME_M, worst[2],
-                  alt_tol_m + FRAME_M);
+    print_message(
+        "%s: worst |d east| %.3f m (bound %.3f), |d north| %.3f m (%.3f), |d up| %.4f m (%.4f)\n",
+        path, worst[0], east + FRAME_M, worst[1], north + FRAME_M, worst[2], alt_tol_m + FRAME_M);
     assert_true(worst[0] <= east + FRAME_M);
     assert_true(worst[1] <= north + FRAME_M);
     assert_true(worst[2] <= alt_tol_m + FRAME_M);
@@ -95,10 +95,11 @@ static void test_gpsbabel_nmea_igc(void **state)
     assert_non_null(mkdtemp(dir));
     snprintf(nmea, sizeof nmea, "%s/v.nmea", dir);
     snprintf(igc, sizeof igc, "%s/v.igc", dir);
-    snprintf(cmd, sizeof cmd,
-             "sed 's|</time></trkpt>|</time><fix>3d</fix></trkpt>|' " VISNJAN_GPX " > %s/f.gpx && "
-             "gpsbabel -i gpx -f %s/f.gpx -o nmea -F %s && gpsbabel -i gpx -f %s/f.gpx -o igc -F %s",
-             dir, dir, nmea, dir, igc);
+    snprintf(
+        cmd, sizeof cmd,
+        "sed 's|</time></trkpt>|</time><fix>3d</fix></trkpt>|' " VISNJAN_GPX " > %s/f.gpx && "
+        "gpsbabel -i gpx -f %s/f.gpx -o nmea -F %s && gpsbabel -i gpx -f %s/f.gpx -o igc -F %s",
+        dir, dir, nmea, dir, igc);
     assert_int_equal(system(cmd), 0);
     compare_with_gpx(nmea, TRACK_FMT_NMEA0183, NMEA_ALT_M);
     compare_with_gpx(igc, TRACK_FMT_IGC, IGC_ALT_M);
@@ -194,10 +195,8 @@ static void test_format_table(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_gpsbabel_nmea_igc),
-        cmocka_unit_test(test_nmea_midnight_and_validity),
-        cmocka_unit_test(test_nmea_bad_checksum),
-        cmocka_unit_test(test_igc_midnight),
+        cmocka_unit_test(test_gpsbabel_nmea_igc), cmocka_unit_test(test_nmea_midnight_and_validity),
+        cmocka_unit_test(test_nmea_bad_checksum), cmocka_unit_test(test_igc_midnight),
         cmocka_unit_test(test_format_table),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
