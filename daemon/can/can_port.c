@@ -452,7 +452,7 @@ static void send_status(can_port_t *p, can_port_obj_t *o, const engine_status_t 
     }
 }
 
-#define CAN_PORT_SDO_TIMEOUT_NS 100000000LL /* an SDO request unanswered this long is resent */
+#define CAN_PORT_SDO_TIMEOUT_NS 500000000LL /* an SDO request unanswered this long is resent */
 
 /* The controlword axis a's drive needs now (bring-up). */
 static uint16_t wanted_cw(const can_port_obj_t *o, unsigned a)

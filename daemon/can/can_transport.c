@@ -398,8 +398,9 @@ static void log_drives(can_state_t *s)
             else if (s->drive_state_logged[k] == 1)
                 log_msg(LOG_ERR, "can: object '%s': a drive left Operation Enabled (x: %s, y: %s, "
                         "z: %s): object cleared, no target sent%s", name,
-                        cia402_state_name(d->state[0]), cia402_state_name(d->state[1]),
-                        cia402_state_name(d->state[2]),
+                        d->seen & 1 ? cia402_state_name(d->state[0]) : "-",
+                        d->seen & 2 ? cia402_state_name(d->state[1]) : "-",
+                        d->seen & 4 ? cia402_state_name(d->state[2]) : "-",
                         d->held ? "; command clear resets and re-enables it" : "");
             s->drive_state_logged[k] = d->all_enabled;
         }
