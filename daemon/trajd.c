@@ -35,10 +35,8 @@
 #include "log.h"
 #include "loop.h"
 #include "rt.h"
+#include "version.h"
 
-#ifndef TRAJD_VERSION
-#define TRAJD_VERSION "0.1"
-#endif
 #define TRAJD_DEFAULT_CONF "/etc/trajd/trajd.conf"
 
 typedef struct {

@@ -43,8 +43,8 @@
 #include "csv_format.h"
 #include "svg.h"
 #include "track.h"
+#include "version.h"
 
-#define TRAJREPLAY_VERSION "0.1"
 
 enum {
     EXIT_INPUT = 1,    /* track not loadable, or nothing in it usable */
@@ -284,7 +284,7 @@ static int parse_option(int c, char **argv, opts_t *o)
     case 'o': o->output = optarg; return -1;
     case 'q': o->quiet = 1; return -1;
     case 'h': usage(stdout); return 0;
-    case 'V': printf("trajreplay %s\n", TRAJREPLAY_VERSION); return 0;
+    case 'V': printf("trajreplay %s\n", TRAJD_VERSION); return 0;
     case ':':
         fprintf(stderr, "trajreplay: %s needs a value\n", argv[optind - 1]);
         return EXIT_USAGE;

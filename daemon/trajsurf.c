@@ -18,6 +18,7 @@
  * Exit status 0, 1 on bad input (message "file:line: what" on stderr), 2 on usage.
  */
 #include <errno.h>
+#include <getopt.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -25,6 +26,7 @@
 #include <unistd.h>
 
 #include "surf.h"
+#include "version.h"
 
 #define DIM 3
 #define GRID_MAX 4096        /* rows or columns */
@@ -38,10 +40,32 @@ typedef struct {
     double *g; /* m*n*DIM */
 } grid_t;
 
-static void usage(void)
+static void usage(FILE *f)
 {
-    fprintf(stderr, "usage: trajsurf [-n steps] [-o samples.csv] [-s picture.svg] "
-                    "[-x dx] [-y dy] [-z zscale] grid.csv\n");
+    fputs("usage: trajsurf [-n steps] [-o samples.csv] [-s picture.svg] "
+          "[-x dx] [-y dy] [-z zscale] grid.csv\n",
+          f);
+}
+
+static void help(void)
+{
+    usage(stdout);
+    fputs("Fit an interpolating bicubic B-spline surface through a grid and sample it.\n"
+          "\n"
+          "  grid.csv             \"i,j,x,y,z\" rows (every cell of an M x N grid once),\n"
+          "                       or a matrix of heights, one grid row per line\n"
+          "  -n, --steps N        samples per grid cell in each direction (default 8,\n"
+          "                       1 to 256)\n"
+          "  -o, --output FILE    samples CSV \"u,v,x,y,z\" (default stdout; \"-\" = stdout)\n"
+          "  -s, --svg FILE       isometric wireframe picture\n"
+          "  -x, --dx DX          column spacing of a height matrix (default 1)\n"
+          "  -y, --dy DY          row spacing of a height matrix (default 1)\n"
+          "  -z, --zscale Z       height factor in the picture (default 1)\n"
+          "  -h, --help           this text\n"
+          "  -V, --version        version\n"
+          "\n"
+          "Exit status: 0 ok, 1 bad input (file:line: what, on stderr), 2 usage.\n",
+          stdout);
 }
 
 static int parse_row(char *line, double *v, int max)
@@ -375,7 +399,19 @@ int main(int argc, char **argv)
     surf_t s;
     int opt, rc = 1;
 
-    while ((opt = getopt(argc, argv, "n:o:s:x:y:z:h")) != -1) {
+    static const struct option lopts[] = {
+        {"steps", required_argument, NULL, 'n'},
+        {"output", required_argument, NULL, 'o'},
+        {"svg", required_argument, NULL, 's'},
+        {"dx", required_argument, NULL, 'x'},
+        {"dy", required_argument, NULL, 'y'},
+        {"zscale", required_argument, NULL, 'z'},
+        {"help", no_argument, NULL, 'h'},
+        {"version", no_argument, NULL, 'V'},
+        {NULL, 0, NULL, 0},
+    };
+
+    while ((opt = getopt_long(argc, argv, "n:o:s:x:y:z:hV", lopts, NULL)) != -1) {
         char *end = NULL;
         switch (opt) {
         case 'n': steps = strtol(optarg, &end, 10); break;
@@ -384,16 +420,18 @@ int main(int argc, char **argv)
         case 'x': dx = strtod(optarg, &end); break;
         case 'y': dy = strtod(optarg, &end); break;
         case 'z': zscale = strtod(optarg, &end); break;
-        default: usage(); return 2;
+        case 'h': help(); return 0;
+        case 'V': printf("trajsurf %s\n", TRAJD_VERSION); return 0;
+        default: usage(stderr); return 2;
         }
         if (end && (*end || end == optarg)) {
-            usage();
+            usage(stderr);
             return 2;
         }
     }
     if (optind != argc - 1 || steps < 1 || steps > SAMPLES_MAX || !isfinite(dx) ||
         !isfinite(dy) || !isfinite(zscale)) {
-        usage();
+        usage(stderr);
         return 2;
     }
     if (read_grid(argv[optind], dx, dy, &gr) < 0)
