@@ -40,6 +40,7 @@
 #include "engine_settings.h"
 #include "replay.h"
 #include "replay_transport.h"
+#include "csv_fixed.h"
 #include "csv_format.h"
 #include "svg.h"
 #include "track.h"
@@ -91,6 +92,8 @@ typedef struct {
     int strict;            /* any rejection or skipped line: EXIT_STRICT */
     unsigned long long max_rows; /* 0 = no bound */
     unsigned progress_after_ms;
+    int precision;         /* --precision: decimals in fixed notation; -1: %.17g */
+    int binary;            /* --binary: the records of csv_format.h instead of CSV */
     double rate_hz;
     int64_t start_ns;      /* engine time at which the first waypoint is due */
     engine_config_t cfg;
@@ -148,6 +151,12 @@ static void usage(FILE *f)
         "  --object NAME        value of the object column (default \"replay\"); with -c,\n"
         "                       the object of the config to replay\n"
         "  -o, --output FILE    setpoint CSV (default stdout; \"-\" = stdout)\n"
+        "  --precision N        numbers in fixed notation with N decimals (0..17, e.g. 9:\n"
+        "                       nanometres), exactly printf's %.Nf, by a fast formatter\n"
+        "                       (default: %.17g, which round-trips every double)\n"
+        "  --binary             write little-endian binary records instead of CSV: a\n"
+        "                       64-byte header then 112 bytes per setpoint (layout in\n"
+        "                       daemon/csv/csv_format.h; numpy.fromfile(offset=64))\n"
         "  --svg FILE           draw waypoints, curve and speed profile\n"
         "  --summary            counters on stderr at the end\n"
         "  -q, --quiet          no progress line\n"
@@ -204,7 +213,7 @@ static const char *reason_name(int e)
 
 enum {
     OPT_RATE = 256, OPT_FORMAT, OPT_SVG, OPT_SUMMARY, OPT_SKIP_BAD, OPT_OBJECT,
-    OPT_PROGRESS_AFTER, OPT_STRICT, OPT_KEEP_GAPS, OPT_MAX_ROWS,
+    OPT_PROGRESS_AFTER, OPT_STRICT, OPT_KEEP_GAPS, OPT_MAX_ROWS, OPT_PRECISION, OPT_BINARY,
     OPT_ENGINE = 1024, /* + index in engine_settings[] */
 };
 
@@ -220,6 +229,8 @@ static const struct option fixed_opts[] = {
     {"strict", no_argument, NULL, OPT_STRICT},
     {"keep-gaps", no_argument, NULL, OPT_KEEP_GAPS},
     {"max-rows", required_argument, NULL, OPT_MAX_ROWS},
+    {"precision", required_argument, NULL, OPT_PRECISION},
+    {"binary", no_argument, NULL, OPT_BINARY},
     {"output", required_argument, NULL, 'o'},
     {"quiet", no_argument, NULL, 'q'},
     {"help", no_argument, NULL, 'h'},
@@ -275,6 +286,17 @@ static int parse_option(int c, char **argv, opts_t *o)
         }
         return -1;
     }
+    case OPT_PRECISION: {
+        unsigned p;
+        if (parse_uint(optarg, &p) || p > CSV_FIXED_PREC_MAX) {
+            fprintf(stderr, "trajreplay: --precision: '%s' is not a number of decimals "
+                    "0..%d\n", optarg, CSV_FIXED_PREC_MAX);
+            return EXIT_USAGE;
+        }
+        o->precision = (int)p;
+        return -1;
+    }
+    case OPT_BINARY: o->binary = 1; return -1;
     case OPT_PROGRESS_AFTER:
         if (parse_uint(optarg, &o->progress_after_ms)) {
             fprintf(stderr, "trajreplay: --progress-after: '%s' is not milliseconds\n", optarg);
@@ -396,6 +418,7 @@ static int parse_args(int argc, char **argv, opts_t *o)
     engine_config_default(&o->cfg);
     o->rate_hz = 100.0;
     o->progress_after_ms = PROGRESS_AFTER_MS;
+    o->precision = -1;
     o->max_rows = MAX_ROWS_DEFAULT;
     opterr = 0;
     int c, rc;
@@ -566,10 +589,17 @@ static void run_clear_progress(run_t *run)
 /* Write one setpoint row and keep its statistics. */
 static void run_emit(run_t *run, const engine_setpoint_t *sp)
 {
-    char line[CSV_FORMAT_LINE_MAX];
-    int len = csv_format_format(line, sizeof line, run->o->object, sp);
-    if (len > 0)
-        fwrite(line, 1, (size_t)len, run->out);
+    if (run->o->binary) {
+        unsigned char rec[CSV_BIN_RECORD];
+        csv_format_bin_record(rec, sp);
+        fwrite(rec, 1, sizeof rec, run->out);
+    } else {
+        char line[CSV_FORMAT_OBJECT_MAX + 16 * (CSV_FIXED_MAX + 1) + 64];
+        int len = csv_format_format_prec(line, sizeof line, run->o->object, sp,
+                                         run->o->precision);
+        if (len > 0)
+            fwrite(line, 1, (size_t)len, run->out);
+    }
     run->written++;
     double v = sqrt(sp->vel_m_s[0] * sp->vel_m_s[0] + sp->vel_m_s[1] * sp->vel_m_s[1] +
                     sp->vel_m_s[2] * sp->vel_m_s[2]);
@@ -659,9 +689,15 @@ static uint64_t run_next_tick(run_t *run, uint64_t k, int64_t now_ns,
 static int run_ticks(run_t *run)
 {
     const int64_t period = run->o->cfg.period_ns;
-    char line[CSV_FORMAT_LINE_MAX];
-    int len = csv_format_header(line, sizeof line);
-    fwrite(line, 1, (size_t)len, run->out);
+    if (run->o->binary) {
+        unsigned char hdr[CSV_BIN_HEADER];
+        csv_format_bin_header(hdr, run->o->object);
+        fwrite(hdr, 1, sizeof hdr, run->out);
+    } else {
+        char line[CSV_FORMAT_LINE_MAX];
+        int len = csv_format_header(line, sizeof line);
+        fwrite(line, 1, (size_t)len, run->out);
+    }
     int status = 0, skipped = 0;
     uint64_t tail = 0;
     for (uint64_t k = 0;;) {

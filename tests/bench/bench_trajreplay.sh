@@ -61,4 +61,47 @@ with tempfile.TemporaryDirectory() as tmp:
 print("ns/setpoint and us/waypoint are wall time divided by each count (the same run);")
 print("output to /dev/null, so formatting (%.17g x 12 per line) is included, disk is not.")
 print("RSS MB: peak resident set of trajreplay (GNU time %M; n/a without /usr/bin/time).")
+# Output forms side by side in this run: the default %.17g CSV (snprintf, the
+# previous and still the default formatter), --precision 9 (the fast
+# fixed-notation formatter, daemon/csv/csv_fixed.h) and --binary.  CPU time
+# (user + sys of the child, from wait4) rather than wall time, which other
+# processes on a loaded machine inflate; the ratios compare runs of this
+# invocation only.  Target (issue 13): >= 2 M rows/s to CSV.
+def cpu_run(args):
+    cmd = [exe, "-q", "--summary"] + args
+    p = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    err = p.stderr.read()
+    _, status, ru = os.wait4(p.pid, 0)
+    p.returncode = os.waitstatus_to_exitcode(status)
+    if p.returncode != 0:
+        print(f"{cmd}: exit {p.returncode}\n{err}")
+        sys.exit(1)
+    rows = int(next(l.split()[2] for l in err.splitlines() if l.startswith("summary: setpoints ")))
+    return ru.ru_utime + ru.ru_stime, rows
+
+
+with tempfile.TemporaryDirectory() as tmp:
+    n = 30000  # 30 000 waypoints at 1 Hz, replayed at 100 Hz: 3 M rows
+    xyz = os.path.join(tmp, "rows.csv")
+    with open(xyz, "w") as f:
+        f.write("t,x,y,z\n")
+        for i in range(n):
+            f.write(f"{i},{1000*math.cos(i/500):.3f},{1000*math.sin(i/500):.3f},{i%7}\n")
+    out = os.path.join(tmp, "out")
+    forms = [("default %.17g CSV (snprintf)", []), ("--precision 9 CSV", ["--precision", "9"]),
+             ("--precision 3 CSV", ["--precision", "3"]), ("--binary", ["--binary"])]
+    res = []
+    for name, args in forms:
+        best = None
+        for _ in range(3):  # best of 3: the least disturbed by other processes
+            cpu, rows = cpu_run(args + ["--rate", "100", "-o", out, xyz])
+            best = cpu if best is None or cpu < best else best
+        res.append((name, rows, best, os.path.getsize(out)))
+    print()
+    print(f"trajreplay to a file, {res[0][1]} rows (synthetic, 100 Hz), CPU time best of 3:")
+    print(f"| {'output':30} | {'CPU s':>6} | {'M rows/s':>8} | {'x default':>9} | {'bytes/row':>9} |")
+    print(f"|{'-'*32}|{'-'*8}|{'-'*10}|{'-'*11}|{'-'*11}|")
+    for name, rows, cpu, size in res:
+        print(f"| {name:30} | {cpu:6.2f} | {rows/cpu/1e6:8.2f} | {res[0][2]/cpu:9.1f} | {size/rows:9.1f} |")
+    print("target >= 2 M rows/s to CSV (issue 13); x default = speed-up over the default CSV in this run.")
 PY

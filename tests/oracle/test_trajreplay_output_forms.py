@@ -1,0 +1,92 @@
+"""test_trajreplay_output_forms.py - trajreplay --precision N and --binary
+against the default CSV (%.17g, which round-trips every double).
+
+References: Python's own "%.*f" formatting (correctly rounded, independent of
+our formatter) of the default CSV's numbers, and numpy.fromfile reading the
+binary layout documented in daemon/csv/csv_format.h.
+Run with /usr/bin/python3 (Debian numpy).
+"""
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+BUILD = os.environ.get("BUILD", os.path.abspath("build"))
+TRAJREPLAY = os.path.join(BUILD, "bin", "trajreplay")
+DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data")
+TRACKS = [os.path.join(DATA, "gpxgo_visnjan.gpx"), os.path.join(DATA, "n2k_furuno_figure8_src52.csv")]
+STATES = {"waiting": 0, "streaming": 1, "underrun": 2, "finished": 3}
+# The record layout of daemon/csv/csv_format.h, as a user would write it.
+DTYPE = np.dtype([("now_ns", "<i8"), ("t_s", "<f8"), ("pos_m", "<f8", 3), ("vel_m_s", "<f8", 3),
+                  ("acc_m_s2", "<f8", 3), ("state", "<u4"), ("flags", "<u4"), ("cycle", "<u4"),
+                  ("track", "<u4"), ("reserved", "<u8")])
+
+failures = 0
+
+
+def check(cond, what):
+    global failures
+    print(("ok   " if cond else "FAIL ") + what)
+    if not cond:
+        failures += 1
+
+
+def replay(args, path):
+    r = subprocess.run([TRAJREPLAY, "-q"] + args + ["-o", path], capture_output=True)
+    if r.returncode != 0:
+        print(r.stderr.decode())
+    return r.returncode
+
+
+with tempfile.TemporaryDirectory() as tmp:
+    for track in TRACKS:
+        name = os.path.basename(track)
+        base = os.path.join(tmp, "default.csv")
+        check(replay([track], base) == 0, f"{name}: default CSV")
+        with open(base) as f:
+            header = f.readline()
+            rows = [l.rstrip("\n").split(",") for l in f]
+        check(len(rows) > 1000, f"{name}: {len(rows)} rows")
+
+        # --precision N: every number is Python's "%.Nf" of the default's double.
+        for prec in (0, 3, 9, 17):
+            out = os.path.join(tmp, f"p{prec}.csv")
+            check(replay(["--precision", str(prec), track], out) == 0, f"{name}: --precision {prec}")
+            with open(out) as f:
+                h = f.readline()
+                got = [l.rstrip("\n").split(",") for l in f]
+            bad = sum(1 for a, b in zip(rows, got)
+                      if b != a[:2] + ["%.*f" % (prec, float(v)) for v in a[2:12]] + a[12:])
+            check(h == header and len(got) == len(rows) and bad == 0,
+                  f"{name}: --precision {prec}: {len(got)} rows, {bad} differ from Python's %.{prec}f")
+
+        # --binary: numpy.fromfile with the documented layout gives the same doubles.
+        out = os.path.join(tmp, "sp.bin")
+        check(replay(["--binary", "--object", "boat", track], out) == 0, f"{name}: --binary")
+        raw = open(out, "rb").read(64)
+        check(raw[:8] == b"TRAJDSP1" and int.from_bytes(raw[8:12], "little") == 64
+              and int.from_bytes(raw[12:16], "little") == 112 and raw[16:21] == b"boat\0",
+              f"{name}: binary header (magic, sizes, object)")
+        check((os.path.getsize(out) - 64) % DTYPE.itemsize == 0 and DTYPE.itemsize == 112,
+              f"{name}: whole 112-byte records")
+        rec = np.fromfile(out, dtype=DTYPE, offset=64)
+        check(len(rec) == len(rows), f"{name}: {len(rec)} records, {len(rows)} CSV rows")
+        want = np.array([[float(v) for v in r[2:12]] for r in rows])
+        got = np.column_stack([rec["t_s"], rec["pos_m"], rec["vel_m_s"], rec["acc_m_s2"]])
+        check(np.array_equal(want, got), f"{name}: binary doubles equal the CSV's bit for bit")
+        check(np.array_equal(rec["now_ns"], [int(r[1]) for r in rows])
+              and np.array_equal(rec["state"], [STATES[r[12]] for r in rows])
+              and np.array_equal(rec["flags"], [int(r[13]) for r in rows])
+              and np.array_equal(rec["cycle"], [int(r[14]) for r in rows])
+              and np.array_equal(rec["track"], [int(r[15]) for r in rows])
+              and not rec["reserved"].any(), f"{name}: binary integers equal the CSV's")
+
+    # bad values refused
+    for bad in ("18", "-1", "x"):
+        r = subprocess.run([TRAJREPLAY, "-q", "--precision", bad, TRACKS[0]], capture_output=True)
+        check(r.returncode == 2 and b"--precision" in r.stderr, f"--precision {bad}: exit 2")
+
+print(f"{'FAILED' if failures else 'passed'}: {failures} failure(s)")
+sys.exit(1 if failures else 0)
