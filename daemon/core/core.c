@@ -234,8 +234,18 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
         safety_limits_t lim;
         obj_safety_limits(o->cfg, &lim);
         safety_init(&o->safety, &lim);
-        if (o->cfg->has_initial_position &&
-            engine_set_position(o->engine, o->cfg->initial_position_m) < 0) {
+        /* An object of the same name that was not carried over (its settings
+         * changed) stands where its output stood: the new engine starts there
+         * and reaches its first trajectory by a transfer, never a step. */
+        obj_t *q = prev && !prev->stopping ? core_obj_find(prev, o->name) : NULL;
+        if (q && q->sp.cycle != 0 && !(q->sp.flags & ENGINE_SP_NO_POSITION)) {
+            if (engine_set_position(o->engine, q->sp.pos_m) < 0) {
+                snprintf(why, whylen, "object '%s': its position is outside the new max_abs_m",
+                         o->name);
+                return -EINVAL;
+            }
+        } else if (o->cfg->has_initial_position &&
+                   engine_set_position(o->engine, o->cfg->initial_position_m) < 0) {
             snprintf(why, whylen, "object '%s': initial_position outside max_abs_m", o->name);
             return -EINVAL;
         }

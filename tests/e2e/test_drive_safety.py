@@ -13,7 +13,9 @@ import math
 import os
 import subprocess
 import sys
+import signal
 import tempfile
+import time
 import unittest
 
 BUILD = os.environ.get("BUILD", os.path.abspath("build"))
@@ -51,7 +53,61 @@ def dist(a, b):
     return math.sqrt(sum((x - y) ** 2 for x, y in zip(a, b)))
 
 
+def read_rows(path):
+    with open(path) as f:
+        lines = [l for l in f.read().splitlines() if l and not l.startswith("#")]
+    cols = lines[0].split(",")
+    out = []
+    for line in lines[1:]:
+        if line.startswith("object,"):
+            continue
+        r = dict(zip(cols, line.split(",")))
+        out.append({"now": int(r["now_ns"]), "p": [float(r[k]) for k in ("x_m", "y_m", "z_m")],
+                    "flags": int(r["flags"])})
+    return out
+
+
 class DriveSafety(unittest.TestCase):
+    def test_reload_with_new_settings_does_not_step(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            # Given a boat streaming, when a reload changes an engine setting (so
+            # the object gets a new engine and its replay starts over), then the
+            # new engine starts where the output stood and reaches the track's
+            # start by a transfer: no row jumps (the old code took the track's
+            # first fix as its position at once: a jump of metres)
+            fig8 = os.path.join(tmp, "fig8.csv")
+            with open(N2K) as f:
+                lines = f.readlines()[:152]
+            with open(fig8, "w") as f:
+                f.write("".join(lines))
+            conf = os.path.join(tmp, "t.conf")
+            body = ("[daemon]\nrate_hz = 100\nspeed = 5\nexit_when_done = yes\n"
+                    "status_interval_s = 0\n[object.boat]\ninput = replay\n"
+                    "replay.track = fig8.csv\noutput = csv\ncsv.path = out.csv\n")
+            with open(conf, "w") as f:
+                f.write(body + "max_gap_s = 60\n")
+            p = subprocess.Popen([TRAJD, "-f", "-c", conf], stderr=subprocess.PIPE, text=True)
+            out = os.path.join(tmp, "out.csv")
+            deadline = time.monotonic() + 60
+            # wait (bounded) until the boat has moved a few metres from the start
+            while time.monotonic() < deadline:
+                rows = read_rows(out) if os.path.exists(out) else []
+                if rows and dist(rows[-1]["p"], (0, 0, 0)) > 5:
+                    break
+                time.sleep(0.05)
+            with open(conf, "w") as f:
+                f.write(body + "max_gap_s = 30\n")
+            p.send_signal(signal.SIGHUP)
+            _, err = p.communicate(timeout=120)
+            self.assertEqual(p.returncode, 0, err)
+            rows = read_rows(out)
+            worst = max(dist(a["p"], b["p"]) / ((b["now"] - a["now"]) * 1e-9)
+                        for a, b in zip(rows, rows[1:]) if b["now"] > a["now"])
+            print("reload with new settings: fastest row-to-row %.2f m/s over %d rows"
+                  % (worst, len(rows)), file=sys.stderr)
+            self.assertTrue(any(r["flags"] & F_TRANSFER for r in rows))
+            self.assertLess(worst, 8.0)
+
     def test_initial_position_reached_by_transfer(self):
         with tempfile.TemporaryDirectory() as tmp:
             # Given an object known to stand 2 m east of the track's first fix
