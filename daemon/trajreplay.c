@@ -471,12 +471,14 @@ static void print_summary(const track_t *trk, const replay_t *r, const engine_st
             "summary: full_retries %" PRIu64 "\n"
             "summary: underruns %" PRIu64 "\n"
             "summary: underrun_ticks %" PRIu64 "\n"
+            "summary: hard_stops %" PRIu64 "\n"
             "summary: gaps %" PRIu64 "\n"
             "summary: tracks %" PRIu64 "\n"
             "summary: setpoints %" PRIu64 "\n"
             "summary: max_speed_m_s %.6g\n"
             "summary: max_acc_m_s2 %.6g\n",
-            r->retries, st->underruns, st->underrun_ticks, st->gaps, st->tracks, ticks,
+            r->retries, st->underruns, st->underrun_ticks, st->hard_stops, st->gaps,
+            st->tracks, ticks,
             max_v, max_a);
 }
 

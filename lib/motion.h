@@ -65,6 +65,8 @@ const char *engine_state_name(engine_state_t s);
 /* The safety monitor (lib/safety/safety.h) refused the engine's setpoint:
  * this one holds the last position sent, and the object is faulted. */
 #define ENGINE_SP_FAULT       0x20u
+#define ENGINE_SP_SCALED    0x40u /* time-scaled: the output runs along the curve at a
+                                     rate other than 1 (stop, clear, underrun, override) */
 
 typedef struct {
     int64_t now_ns;                 /* the tick this setpoint is for (as passed in) */
@@ -100,6 +102,11 @@ typedef struct {
     uint32_t stalled;               /* 1: holding, and nothing can change before the next
                                      * waypoint is pushed (ticks until then are identical
                                      * holds: trajreplay skips them across a gap) */
+    uint64_t hard_stops;            /* the solved curve ended under a moving output
+                                       (the time scaling failed to brake in time):
+                                       velocity set to 0 in one tick.  Should stay 0 */
+    double rate;                    /* time-scaling rate ds/dt of the output (1 = as solved) */
+    double override;                /* feed override, 0 .. 2 */
 } engine_status_t;
 
 #endif

@@ -29,8 +29,9 @@
  *
  * Stop policy (SIGTERM/SIGINT, core_stop): inputs stop (no pre_tick,
  * obj_push refuses with -ENGINE_ESTATE), every engine gets engine_stop() so
- * it runs on to its last buffered waypoint and rests there (FINISHED), the
- * outputs keep streaming meanwhile; the daemon exits 0 when every object is
+ * it brakes along its path to rest (a category-1 stop by the time scaling,
+ * lib/engine/TIMESCALE.md) and stays there (FINISHED), the outputs keep
+ * streaming meanwhile; the daemon exits 0 when every object is
  * FINISHED or WAITING (nothing to finish), or after [daemon] stop_timeout_s,
  * whichever comes first.  A second signal exits at once (still 0).
  */

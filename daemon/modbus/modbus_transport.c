@@ -111,6 +111,8 @@ static int hook_command(void *ctx, unsigned k, unsigned cmd)
     case MBMAP_CMD_RESET_COUNTERS:
         obj_reset_counters(o);
         return 0;
+    case MBMAP_CMD_FINISH:
+        return engine_finish(o->engine);
     default:
         return -ENGINE_ESTATE;
     }

@@ -19,9 +19,11 @@
  *            it has and rests on the last waypoint.  In any other state it
  *            does nothing (streaming starts by itself once the lookahead is
  *            buffered).  Refused (03) when nothing is buffered.
- *   2 stop   engine_stop: run on to the last buffered waypoint and rest.
- *   3 clear  engine_clear: drop every waypoint, hold where it is (WAITING).
+ *   2 stop   engine_stop: brake along the path to rest now, drop what is
+ *            buffered (FINISHED).
+ *   3 clear  engine_clear: the same controlled stop, then WAITING.
  *   4 reset counters  engine_reset_counters and the Modbus per-object counters.
+ *   5 finish engine_finish: end of input, run on to the last waypoint.
  * While the daemon is stopping (SIGTERM) writes are refused with 03.
  * Waypoints written to an object whose input is not modbus: exception 02.
  */

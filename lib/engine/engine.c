@@ -25,6 +25,7 @@
 #include "frag.h"
 #include "hoang.h"
 #include "lsq.h"
+#include "timescale.h"
 
 #define AX ENGINE_AXES
 
@@ -36,10 +37,12 @@ typedef struct {
     int first;            /* first entry of its trajectory */
     double t1_s;          /* segment end (absolute track time); END: rest time */
     uint64_t node;        /* SEG: index of its first node in the trajectory */
+    uint64_t traj;        /* input trajectory it belongs to (engine.in_traj) */
     fdiff_seg_t seg;      /* END: c[k][0] is the rest position, t0_s = t1_s */
 } qent_t;
 
 enum { OUT_HOLD = 0, OUT_XFER = 1, OUT_STREAM = 2 };
+enum { STOP_NONE = 0, STOP_STOP = 1, STOP_CLEAR = 2 };
 
 struct engine {
     engine_config_t cfg;
@@ -70,6 +73,8 @@ struct engine {
     double prev_r[AX];
     double end_r[AX];     /* end of the last queued segment */
     double end_t;
+    double end_speed;     /* speed at the end of the last queued segment */
+    uint64_t in_traj;     /* +1 per trajectory opened */
 
     /* ---- the queue ---- */
     qent_t *q;
@@ -99,6 +104,21 @@ struct engine {
     int64_t last_now;
     engine_setpoint_t last_sp;
 
+    /* ---- time scaling (timescale.h, TIMESCALE.md) ---- */
+    ts_state_t ts;        /* rate ds/dt and its derivative */
+    int scaled;           /* off the unit grid: the output's track time is s */
+    double s;             /* scaled: track time of the output, relative to origin_t */
+    double s_off;         /* unit grid: track time = tick_time(n) + s_off */
+    double cspeed;        /* |k'(s)|: the curve's own speed at the output */
+    double override;      /* feed override 0 .. 2 */
+    int stop_req;         /* STOP_*: braking to rest, then drop */
+    size_t drop_n;        /* queue entries to drop once at rest */
+    uint64_t out_traj;    /* trajectory the output streams */
+    double avail_t;       /* end of its solved curve (absolute track time) */
+    int avail_closed;     /* its END is queued */
+    int avail_rest;       /* ... and the curve ends at rest there */
+    int end_brake;        /* braking to rest before an end that is not at rest */
+
     engine_status_t st;
 };
 
@@ -113,6 +133,12 @@ struct engine {
 #define ENGINE_SAME_POS_M 1e-9
 /* |t| above this is absurd for a track clock (about 31700 years). */
 #define ENGINE_T_ABS_MAX_S 1e12
+/* Below this speed (m/s) the curve's end counts as at rest. */
+#define ENGINE_REST_SPEED_M_S 1e-6
+/* The time scaling's limits are converted to rate units at the curve's speed,
+ * but never at less than this (m/s): where the curve stands nearly still the
+ * rate may change fast, but not without bound (TIMESCALE.md). */
+#define ENGINE_SCALE_V_FLOOR_M_S 1.0
 /* Capacity accepted at most (memory is sized from it). */
 #define ENGINE_CAPACITY_MAX (1u << 20)
 
@@ -164,6 +190,8 @@ void engine_config_default(engine_config_t *cfg)
     cfg->start_slack = 8;
     cfg->smooth_window = 24;
     cfg->smooth_ctrl = 6;
+    cfg->scale_accel_m_s2 = 5.0;
+    cfg->scale_jerk_m_s3 = 50.0;
 }
 
 static int uses_pstar(const engine_config_t *cfg)
@@ -283,6 +311,10 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
         w = "max_accel_m_s2: must be 0 (no limit) or positive and finite";
     else if (!(cfg->max_segment_s >= 0) || !isfinite(cfg->max_segment_s))
         w = "max_segment_s: must be 0 or positive and finite";
+    else if (!(cfg->scale_accel_m_s2 > 0) || !isfinite(cfg->scale_accel_m_s2))
+        w = "scale_accel_m_s2: must be positive and finite";
+    else if (!(cfg->scale_jerk_m_s3 > 0) || !isfinite(cfg->scale_jerk_m_s3))
+        w = "scale_jerk_m_s3: must be positive and finite";
     else if (cfg->start_slack > ENGINE_FRAGMENT_MAX)
         w = "start_slack: at most ENGINE_FRAGMENT_MAX waypoints";
     else if (cfg->ends == ENGINE_ENDS_CLAMPED &&
@@ -344,6 +376,8 @@ engine_t *engine_new(const engine_config_t *cfg, int *err)
     if (!e->node_t || !e->node_r || !e->fw || !e->q)
         goto nomem;
     e->st.lookahead = e->lookahead;
+    e->ts.rate = 1.0;
+    e->override = 1.0;
     if (err)
         *err = 0;
     return e;
@@ -399,6 +433,7 @@ static qent_t *q_push(engine_t *e)
     q = &e->q[(e->qhead + e->qlen) % e->qcap];
     e->qlen++;
     q->first = e->in_first_pending;
+    q->traj = e->in_traj;
     e->in_first_pending = 0;
     return q;
 }
@@ -415,8 +450,15 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
     q->t1_s = seg->t0_s + seg->dur_s;
     e->in_emitted = 1;
     e->end_t = q->t1_s;
-    for (int k = 0; k < AX; k++)
+    double v2 = 0;
+    for (int k = 0; k < AX; k++) {
+        double v = (seg->c[k][1] + 2 * seg->c[k][2] + 3 * seg->c[k][3]) / seg->dur_s;
         e->end_r[k] = seg->c[k][0] + seg->c[k][1] + seg->c[k][2] + seg->c[k][3];
+        v2 += v * v;
+    }
+    e->end_speed = sqrt(v2);
+    if (e->mode != OUT_HOLD && q->traj == e->out_traj)
+        e->avail_t = q->t1_s; /* more curve for the output (see remaining()) */
 }
 
 static void queue_end(engine_t *e)
@@ -432,6 +474,13 @@ static void queue_end(engine_t *e)
     q->seg.t0_s = q->t1_s;
     for (int k = 0; k < AX; k++)
         q->seg.c[k][0] = e->in_emitted ? e->end_r[k] : e->last_r[k];
+    /* END: c[0][1] is the speed at which the curve arrives (0 at rest) */
+    q->seg.c[0][1] = e->in_emitted ? e->end_speed : 0.0;
+    if (e->mode != OUT_HOLD && q->traj == e->out_traj) {
+        e->avail_t = q->t1_s;
+        e->avail_closed = 1;
+        e->avail_rest = q->seg.c[0][1] <= ENGINE_REST_SPEED_M_S;
+    }
 }
 
 /* end velocities in the unknowns' parameter (dk/du for P*, dk/ds for M) */
@@ -602,6 +651,7 @@ static void open_input(engine_t *e, const engine_waypoint_t *wp)
     e->seg_next = 0;
     e->in_emitted = 0;
     e->in_first_pending = 1;
+    e->in_traj++;
     e->st.tracks++;
     e->finished = 0;
     memcpy(e->first_r, wp->pos_m, sizeof(e->first_r));
@@ -727,12 +777,8 @@ int engine_finish(engine_t *e)
     return rc < 0 ? rc : 0;
 }
 
-int engine_stop(engine_t *e)
-{
-    return engine_finish(e);
-}
-
-void engine_clear(engine_t *e)
+/* Forget the trajectory being received: the next waypoint opens a new one. */
+static void drop_input(engine_t *e)
 {
     e->in_open = 0;
     e->nodes = 0;
@@ -740,16 +786,50 @@ void engine_clear(engine_t *e)
     frag_reset(e->fw);
     if (e->smooth)
         lsq_smooth_reset(&e->sm);
-    e->qhead = 0;
-    e->qlen = 0;
-    e->qends = 0;
-    e->finished = 0;
+}
+
+/*
+ * Stop or clear: the input is dropped now; an output that stands still
+ * drops the queue now too, a moving one brakes along its path (target rate
+ * 0 in the time scaling) and drops what was queued at this call once at
+ * rest (stop_at_rest).
+ */
+static void request_stop(engine_t *e, int kind)
+{
+    drop_input(e);
     e->underrun = 0;
-    if (e->mode != OUT_HOLD) {
-        e->mode = OUT_HOLD;
-        for (int k = 0; k < AX; k++)
-            e->vel[k] = e->acc[k] = 0.0;
+    if (e->mode == OUT_HOLD) {
+        e->qhead = 0;
+        e->qlen = 0;
+        e->qends = 0;
+        e->finished = kind == STOP_STOP;
+        e->stop_req = STOP_NONE;
+        e->drop_n = 0;
+        return;
     }
+    e->finished = 0;
+    if (e->stop_req != STOP_CLEAR)
+        e->stop_req = kind;
+    e->drop_n = e->qlen;
+}
+
+int engine_stop(engine_t *e)
+{
+    request_stop(e, STOP_STOP);
+    return 0;
+}
+
+void engine_clear(engine_t *e)
+{
+    request_stop(e, STOP_CLEAR);
+}
+
+int engine_set_override(engine_t *e, double ratio)
+{
+    if (!(ratio >= 0 && ratio <= TS_RATE_MAX))
+        return -ENGINE_ERANGE;
+    e->override = ratio;
+    return 0;
 }
 
 int engine_set_position(engine_t *e, const double pos_m[ENGINE_AXES])
@@ -801,6 +881,8 @@ static qent_t *q_head(engine_t *e)
 
 static void q_pop(engine_t *e)
 {
+    if (e->drop_n)
+        e->drop_n--;
     if (e->q[e->qhead].kind == QE_END)
         e->qends--;
     e->qhead = (e->qhead + 1) % e->qcap;
@@ -825,6 +907,43 @@ static void hold_here(engine_t *e)
         e->vel[k] = e->acc[k] = 0.0;
 }
 
+/* Exact comparisons of the time scaling's state (it lands on its targets
+ * exactly, see ts_step), written without == for -Wfloat-equal. */
+static int is_exactly(double x, double v)
+{
+    return !(x < v || x > v);
+}
+
+static int at_rest(const engine_t *e)
+{
+    return is_exactly(e->ts.rate, 0.0) && is_exactly(e->ts.acc, 0.0);
+}
+
+/* Back on the unit grid with rate 1 (every start from HOLD). */
+static void unit_reset(engine_t *e)
+{
+    e->scaled = 0;
+    e->s_off = 0.0;
+    e->ts.rate = 1.0;
+    e->ts.acc = 0.0;
+    e->end_brake = 0;
+}
+
+/* A stop or clear has brought the output to rest: drop what was queued at
+ * the request, stand here (FINISHED after a stop, WAITING after a clear). */
+static void stop_at_rest(engine_t *e)
+{
+    while (e->drop_n && e->qlen)
+        q_pop(e);
+    e->drop_n = 0;
+    e->mode = OUT_HOLD;
+    hold_here(e);
+    e->finished = e->stop_req == STOP_STOP;
+    e->stop_req = STOP_NONE;
+    e->underrun = 0;
+    unit_reset(e);
+}
+
 /* The queue head is a trajectory's end marker: rest on its point, FINISHED. */
 static void rest_at_end(engine_t *e, const qent_t *h)
 {
@@ -836,6 +955,25 @@ static void rest_at_end(engine_t *e, const qent_t *h)
     e->mode = OUT_HOLD;
     e->finished = 1;
     e->underrun = 0;
+    if (e->stop_req)
+        stop_at_rest(e);
+}
+
+/* A closed trajectory whose curve does not end at rest, braked to rest just
+ * before its end: finish here, where the output stands (no jump to the end). */
+static void finish_here(engine_t *e)
+{
+    while (e->qlen) {
+        int end = q_head(e)->kind == QE_END && q_head(e)->traj == e->out_traj;
+        q_pop(e);
+        if (end)
+            break;
+    }
+    e->mode = OUT_HOLD;
+    hold_here(e);
+    e->finished = 1;
+    e->underrun = 0;
+    unit_reset(e);
 }
 
 static double tick_time(const engine_t *e, int64_t n)
@@ -843,15 +981,47 @@ static double tick_time(const engine_t *e, int64_t n)
     return (double)(n * e->cfg.period_ns) * 1e-9;
 }
 
+/* Track time of tick n on the unit grid (relative to origin_t); s_off is 0
+ * until the time scaling first moved the output off the grid. */
+static double tau_of(const engine_t *e, int64_t n)
+{
+    return tick_time(e, n) + e->s_off;
+}
+
 static void out_eval(engine_t *e)
 {
+    double v2 = 0;
+
     fdiff_get(&e->fd, e->pos, e->vel, e->acc);
+    for (int k = 0; k < AX; k++)
+        v2 += e->vel[k] * e->vel[k];
+    e->cspeed = sqrt(v2); /* rate 1: the curve's own speed */
+}
+
+/* Scaled output: the curve at s by Horner, then the chain rule
+ * (timescale.h): v = k' r, a = k'' r^2 + k' dr/dt. */
+static void out_eval_scaled(engine_t *e)
+{
+    double u = (e->s - e->cur_t0) / e->cur.seg.dur_s, cv[AX], ca[AX], v2 = 0;
+    double r = e->ts.rate, ra = e->ts.acc;
+
+    if (u < 0)
+        u = 0;
+    if (u > 1)
+        u = 1;
+    fdiff_eval(&e->cur.seg, u, e->pos, cv, ca);
+    for (int k = 0; k < AX; k++) {
+        e->vel[k] = cv[k] * r;
+        e->acc[k] = ca[k] * r * r + cv[k] * ra;
+        v2 += cv[k] * cv[k];
+    }
+    e->cspeed = sqrt(v2);
 }
 
 /* Seed cur at tick n (relative time tau in [cur_t0, cur_t1)). */
 static void seed_cur(engine_t *e, int64_t n)
 {
-    double tau = tick_time(e, n);
+    double tau = tau_of(e, n);
     double u0 = (tau - e->cur_t0) / e->cur.seg.dur_s;
     fdiff_seed(&e->fd, &e->cur.seg, u0, e->period_s / e->cur.seg.dur_s);
 }
@@ -863,6 +1033,26 @@ static void take_segment(engine_t *e)
     q_pop(e);
     e->cur_t0 = e->cur.seg.t0_s - e->origin_t;
     e->cur_t1 = e->cur.t1_s - e->origin_t;
+}
+
+/* Where the solved curve of the output's trajectory ends, from the queue
+ * (once per trajectory; queue_segment and queue_end keep it up to date). */
+static void find_avail(engine_t *e)
+{
+    e->avail_t = e->cur.t1_s;
+    e->avail_closed = 0;
+    e->avail_rest = 0;
+    for (size_t i = 0; i < e->qlen; i++) {
+        const qent_t *q = &e->q[(e->qhead + i) % e->qcap];
+        if (q->traj != e->out_traj)
+            break;
+        e->avail_t = q->t1_s;
+        if (q->kind == QE_END) {
+            e->avail_closed = 1;
+            e->avail_rest = q->seg.c[0][1] <= ENGINE_REST_SPEED_M_S;
+            break;
+        }
+    }
 }
 
 /* Begin streaming the trajectory at the queue head (tick 0 of it). */
@@ -882,13 +1072,21 @@ static void start_trajectory(engine_t *e, int new_flag)
         return;
     }
     e->origin_t = h->seg.t0_s;
+    e->out_traj = h->traj;
     take_segment(e);
+    find_avail(e);
     e->n = 0;
     e->seg_n0 = 0;
+    e->s_off = 0.0;
     seed_cur(e, 0);
     out_eval(e);
     e->out_t = e->origin_t;
     e->mode = OUT_STREAM;
+    if (e->scaled) {
+        /* from a scaled transfer: go on scaled from the start */
+        e->s = 0.0;
+        out_eval_scaled(e);
+    }
 }
 
 /* Start a transfer from the output position to target. */
@@ -921,6 +1119,7 @@ static void start_transfer(engine_t *e, const double *target)
     e->cur_t1 = e->cur.seg.dur_s;
     e->n = 0;
     e->seg_n0 = 0;
+    e->s_off = 0.0;
     e->out_track++;
     e->flags_pending |= ENGINE_SP_NEW_TRACK;
     e->mode = OUT_XFER;
@@ -937,17 +1136,174 @@ static void step_cur(engine_t *e, int64_t n)
     out_eval(e);
 }
 
+/*
+ * Track time still available ahead of s (relative) before the output must
+ * be at rest, with TS_MARGIN_TICKS in reserve; INFINITY when the curve ahead
+ * ends at rest anyway (a transfer, a closed trajectory with rest ends).
+ */
+static double remaining(const engine_t *e, double s)
+{
+    if (e->mode == OUT_XFER)
+        return e->stop_req ? e->cur_t1 - s : INFINITY;
+    if (e->avail_closed && e->avail_rest)
+        return INFINITY;
+    return (e->avail_t - e->origin_t) - s - TS_MARGIN_TICKS * e->period_s;
+}
+
+/* The time scaling's limits in rate units at the curve's speed here. */
+static void scale_limits(const engine_t *e, double *A, double *J)
+{
+    double v = e->cspeed > ENGINE_SCALE_V_FLOOR_M_S ? e->cspeed : ENGINE_SCALE_V_FLOOR_M_S;
+    *A = e->cfg.scale_accel_m_s2 / v;
+    *J = e->cfg.scale_jerk_m_s3 / v;
+}
+
+/* The rate the output is asked for, before the buffer's limit. */
+static double scale_target(const engine_t *e)
+{
+    return e->stop_req || e->end_brake ? 0.0 : e->override;
+}
+
+/* One tick on the unit grid (rate 1): the forward-difference stepper. */
+static void unit_step(engine_t *e)
+{
+    if (e->mode == OUT_XFER) {
+        int64_t n = e->n + 1;
+        if (tau_of(e, n) >= e->cur_t1) {
+            start_trajectory(e, 0); /* the transfer ends exactly on its start */
+        } else {
+            e->n = n;
+            step_cur(e, n);
+        }
+        return;
+    }
+    int64_t n = e->n + 1;
+    double tau = tau_of(e, n);
+    if (tau < e->cur_t1) {
+        e->n = n;
+        step_cur(e, n);
+        e->out_t = e->origin_t + tau;
+        e->underrun = 0;
+        return;
+    }
+    for (;;) {
+        qent_t *h = q_head(e);
+        if (h && h->traj != e->out_traj)
+            h = NULL;
+        if (!h) {
+            /* the solved curve ended under a moving output: cannot happen
+             * while remaining() is right (the scaling brakes before); hold
+             * and go on scaled from rest */
+            if (!e->underrun)
+                e->st.underruns++;
+            e->underrun = 1;
+            e->st.underrun_ticks++;
+            e->st.hard_stops++;
+            hold_here(e);
+            e->scaled = 1;
+            e->s = tau_of(e, e->n);
+            e->ts.rate = 0.0;
+            e->ts.acc = 0.0;
+            return;
+        }
+        if (h->kind == QE_END) {
+            rest_at_end(e, h);
+            return;
+        }
+        take_segment(e);
+        if (tau < e->cur_t1)
+            break;
+        /* shorter than a period: no tick falls in it */
+    }
+    e->n = n;
+    e->seg_n0 = n;
+    seed_cur(e, n);
+    out_eval(e);
+    e->out_t = e->origin_t + tau;
+    e->underrun = 0;
+}
+
+/* One tick off the unit grid: the time scaling chooses the advance. */
+static void scaled_step(engine_t *e, double target, double R, double A, double J)
+{
+    int lim = 0;
+    double s = e->scaled ? e->s : tau_of(e, e->n);
+    double ds = ts_step(&e->ts, target, R, A, J, e->period_s, NULL, &lim);
+    double s1 = s + ds;
+
+    e->scaled = 1;
+    e->n++;
+    while (s1 >= e->cur_t1) {
+        if (e->mode == OUT_XFER) {
+            if (e->stop_req) {
+                /* a transfer ends at rest: stop on its end */
+                s1 = e->cur_t1;
+                e->ts.rate = e->ts.acc = 0.0;
+                break;
+            }
+            start_trajectory(e, 0);
+            if (e->mode != OUT_STREAM)
+                return;
+            s1 = 0.0;
+            continue;
+        }
+        qent_t *h = q_head(e);
+        if (h && h->traj == e->out_traj && h->kind == QE_END) {
+            rest_at_end(e, h);
+            return;
+        }
+        if (!h || h->traj != e->out_traj) {
+            /* cannot happen while remaining() is right: see unit_step */
+            s1 = e->cur_t1;
+            if (e->ts.rate > 0)
+                e->st.hard_stops++;
+            e->ts.rate = e->ts.acc = 0.0;
+            break;
+        }
+        take_segment(e);
+    }
+    e->s = s1;
+    out_eval_scaled(e);
+    e->out_t = e->origin_t + s1;
+
+    if (lim && !e->stop_req && !e->avail_closed && e->mode == OUT_STREAM) {
+        if (!e->underrun)
+            e->st.underruns++;
+        e->underrun = 1;
+    } else if (e->underrun && !lim && e->ts.rate >= target) {
+        e->underrun = 0;
+    }
+    if (e->underrun)
+        e->st.underrun_ticks++;
+
+    if (at_rest(e)) {
+        if (e->stop_req)
+            stop_at_rest(e);
+        else if (e->end_brake)
+            finish_here(e);
+        return;
+    }
+    if (is_exactly(e->ts.rate, 1.0) && is_exactly(e->ts.acc, 0.0) &&
+        is_exactly(target, 1.0)) {
+        /* back on a grid of whole periods, shifted by the time lost */
+        e->s_off = e->s - tick_time(e, e->n);
+        e->seg_n0 = e->n;
+        seed_cur(e, e->n);
+        e->scaled = 0;
+    }
+}
+
 /* One tick of the output state machine. */
 static void step_once(engine_t *e)
 {
     e->cycle++;
-    switch (e->mode) {
-    case OUT_HOLD: {
+    if (e->mode == OUT_HOLD) {
         qent_t *h = q_head(e);
         if (!h || !h->first || !enough_ahead(e, h) || (!e->have_pos && e->need_pos)) {
             hold_here(e);
-            break;
+            return;
         }
+        unit_reset(e);
         if (!e->have_pos) {
             /* no position known and none required: the start is the last resort */
             for (int k = 0; k < AX; k++)
@@ -966,63 +1322,23 @@ static void step_once(engine_t *e)
         } else {
             start_trajectory(e, 1);
         }
-        break;
+        return;
     }
-    case OUT_XFER: {
-        int64_t n = e->n + 1;
-        if (tick_time(e, n) >= e->cur_t1) {
-            start_trajectory(e, 0); /* the transfer ends exactly on its start */
-        } else {
-            e->n = n;
-            step_cur(e, n);
-        }
-        break;
+    /* moving (a transfer or a trajectory): on the unit grid while nothing
+     * asks for another rate and the curve ahead is long enough to stop in */
+    double A, J, s = e->scaled ? e->s : tau_of(e, e->n), R;
+    scale_limits(e, &A, &J);
+    R = remaining(e, s);
+    if (e->mode == OUT_STREAM && e->avail_closed && !e->avail_rest && !e->end_brake &&
+        ts_stop_dist(e->ts.rate, e->ts.acc, A, J) >= R - e->ts.rate * e->period_s)
+        e->end_brake = 1; /* the curve does not end at rest: brake before its end */
+    double target = scale_target(e);
+    if (!e->scaled && is_exactly(target, 1.0) &&
+        (isinf(R) || ts_stop_dist(1.0, 0.0, A, J) < R - e->period_s)) {
+        unit_step(e);
+        return;
     }
-    case OUT_STREAM: {
-        int64_t n = e->n + 1;
-        double tau = tick_time(e, n);
-        if (tau < e->cur_t1) {
-            e->n = n;
-            step_cur(e, n);
-            e->out_t = e->origin_t + tau;
-            e->underrun = 0;
-            break;
-        }
-        for (;;) {
-            qent_t *h = q_head(e);
-            /* Out of an underrun only once the lookahead is buffered again
-             * beyond the next segment, as at the start (or the end is in
-             * sight): resuming on the first segment back would leave no
-             * margin and underrun again at the next late waypoint. */
-            if (h && e->underrun && !enough_ahead(e, h))
-                h = NULL;
-            if (!h) {
-                /* waypoints late: hold, keep n; resume exactly here */
-                if (!e->underrun)
-                    e->st.underruns++;
-                e->underrun = 1;
-                e->st.underrun_ticks++;
-                hold_here(e);
-                return;
-            }
-            if (h->kind == QE_END) {
-                rest_at_end(e, h);
-                return;
-            }
-            take_segment(e);
-            if (tau < e->cur_t1)
-                break;
-            /* shorter than a period: no tick falls in it */
-        }
-        e->n = n;
-        e->seg_n0 = n;
-        seed_cur(e, n);
-        out_eval(e);
-        e->out_t = e->origin_t + tau;
-        e->underrun = 0;
-        break;
-    }
-    }
+    scaled_step(e, target, R, A, J);
 }
 
 static engine_state_t out_state(const engine_t *e)
@@ -1070,12 +1386,16 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     sp->state = s;
     sp->flags = e->flags_pending;
     e->flags_pending = 0;
-    if (s != ENGINE_STATE_STREAMING)
+    if (e->mode == OUT_HOLD || (e->scaled && at_rest(e)))
+        sp->flags |= ENGINE_SP_HOLD;
+    else if (s != ENGINE_STATE_STREAMING && s != ENGINE_STATE_UNDERRUN)
         sp->flags |= ENGINE_SP_HOLD;
     if (e->mode == OUT_XFER)
         sp->flags |= ENGINE_SP_TRANSFER;
     if (!e->have_pos)
         sp->flags |= ENGINE_SP_NO_POSITION;
+    if (e->mode != OUT_HOLD && e->scaled)
+        sp->flags |= ENGINE_SP_SCALED;
     sp->cycle = e->cycle;
     sp->track = e->out_track;
 }
@@ -1087,8 +1407,13 @@ static int stalled(const engine_t *e)
 
     if (e->mode == OUT_HOLD)
         return !h || !h->first || !enough_ahead(e, h);
-    if (e->mode == OUT_STREAM && e->underrun)
-        return !h || !enough_ahead(e, h);
+    if (e->mode == OUT_STREAM && e->scaled && at_rest(e) && !e->stop_req && !e->end_brake) {
+        double A, J, target = scale_target(e);
+        if (!(target > 0))
+            return 1;
+        scale_limits(e, &A, &J);
+        return ts_rate_max(remaining(e, e->s), A, J) < J * e->period_s * e->period_s;
+    }
     return 0;
 }
 
@@ -1120,7 +1445,7 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
              * jump of hours must not cost hours of steps). */
             int64_t rest = k - 1 - i;
             e->cycle += (uint32_t)rest;
-            if (e->mode == OUT_STREAM)
+            if (e->mode == OUT_STREAM && e->underrun)
                 e->st.underrun_ticks += (uint64_t)rest;
             break;
         }
@@ -1145,6 +1470,8 @@ void engine_status(const engine_t *e, engine_status_t *st)
     st->free = b >= e->cfg.capacity ? 0 : (uint32_t)(e->cfg.capacity - b);
     st->lookahead = e->lookahead;
     st->stalled = (uint32_t)stalled(e);
+    st->rate = e->mode == OUT_HOLD ? 0.0 : e->ts.rate;
+    st->override = e->override;
     st->ahead_s = 0;
     if (e->qlen) {
         const qent_t *tail = &e->q[(e->qhead + e->qlen - 1) % e->qcap];

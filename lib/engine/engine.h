@@ -18,11 +18,15 @@
  *
  * Track time and the caller's clock: streaming starts once the lookahead is
  * buffered; from then on track time advances one period per tick while the
- * segments needed are solved.  When they are not (waypoints late) the engine
- * holds the last position (UNDERRUN, vel = acc = 0), and resumes from that
- * exact point once the lookahead is buffered again: the track is delayed,
- * never jumped.  Setpoint times are t(first) + n * period exactly (n counted
- * in integers), segments are entered at the fractional phase left over.
+ * segments needed are solved, and setpoint times are t(first) + n * period
+ * exactly (n counted in integers), segments entered at the fractional phase
+ * left over.  Between the curve and the output sits the time scaling
+ * (timescale.h): when the solved curve ahead runs short (waypoints late) the
+ * output slows down along the path so that it can always come to rest
+ * before the curve ends (UNDERRUN while it is held back), and speeds up
+ * again as waypoints arrive; the track is delayed, never jumped, and no
+ * tick changes velocity by more than the scaling's acceleration allows.  A
+ * clean run that never needs it is bit-identical to the unscaled stepping.
  *
  * States: WAITING (nothing yet, or a trajectory buffering its lookahead;
  * holding: no position at all before any waypoint (flag NO_POSITION, NaN),
@@ -170,6 +174,13 @@ typedef struct {
                                4 .. ENGINE_SMOOTH_WINDOW_MAX.  Default 24 */
     unsigned smooth_ctrl;   /* SMOOTH only: control points per fit,
                                4 .. smooth_window.  Default 6 */
+    double scale_accel_m_s2; /* time scaling (timescale.h): the most it adds to
+                               the acceleration along the path when it slows
+                               down or speeds up (stop, clear, underrun, feed
+                               override).  Default 5 m/s^2 */
+    double scale_jerk_m_s3; /* ... and to the jerk.  Default 50 m/s^3: a stop
+                               from v takes v^2/(2 a) + v a/(2 j) + v T (T the
+                               period) of path, see lib/engine/TIMESCALE.md */
 } engine_config_t;
 
 /* Fill cfg with working defaults (each one commented above; documented in
@@ -253,12 +264,18 @@ int engine_finish(engine_t *e);
  */
 int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
 
-/* Commands (Modbus holding registers, CAN, the daemon on SIGTERM). */
-/* Drop every buffered waypoint and segment; the output holds exactly where it
- * stands (vel = acc = 0), WAITING; the next waypoint starts a new trajectory,
- * reached by a transfer. */
+/* Commands (Modbus holding registers, CAN, the daemon on SIGTERM).
+ * Stop and clear are controlled stops by the time scaling (timescale.h,
+ * lib/engine/TIMESCALE.md): the output slows down along the path it is on,
+ * within scale_accel_m_s2 and scale_jerk_m_s3, to rest within
+ * v^2/(2 a) + v a/(2 j) + v T of path, and only then is anything dropped.
+ * Waypoints pushed meanwhile start a new trajectory, kept. */
+/* Stop, then drop every waypoint and segment buffered at the time of the
+ * call; the output rests where it stopped, WAITING; the next waypoint starts
+ * a new trajectory, reached by a transfer. */
 void engine_clear(engine_t *e);
-/* As engine_finish: run to the last waypoint received and rest there. */
+/* Stop now (category 1): as engine_clear, but the state at rest is FINISHED.
+ * (To run on to the last waypoint received, use engine_finish.)  Returns 0. */
 int engine_stop(engine_t *e);
 /*
  * Where the object really stands (drive feedback, a config key), before the
@@ -288,6 +305,14 @@ void engine_require_position(engine_t *e, int on);
 /* 1 once the output has a position (set, or the first waypoint adopted). */
 int engine_has_position(const engine_t *e);
 
+/*
+ * Feed override: the output runs along the same path at ratio times the
+ * solved speed (0 = stand still on the path, 2 = 200 %), ramped within the
+ * time scaling's limits; positions stay on the curve (it is evaluated at the
+ * scaled track time, reported in the setpoint's t_s).  Kept across
+ * trajectories.  Returns 0, or -ENGINE_ERANGE (NaN, below 0 or above 2).
+ */
+int engine_set_override(engine_t *e, double ratio);
 /* Zero every counter of engine_status (state and last_seq are kept). */
 void engine_reset_counters(engine_t *e);
 

@@ -214,7 +214,7 @@ int mbmap_decode_write(unsigned n, const uint8_t *pdu, size_t len, mbmap_write_t
     out->object = k;
     if (off == MBMAP_H_COMMAND && count == 1) {
         unsigned cmd = be16(val);
-        if (cmd < MBMAP_CMD_START || cmd > MBMAP_CMD_RESET_COUNTERS)
+        if (cmd < MBMAP_CMD_START || cmd > MBMAP_CMD_FINISH)
             return -MBMAP_EVALUE;
         out->kind = MBMAP_WRITE_COMMAND;
         out->command = cmd;
@@ -350,7 +350,7 @@ static const mbmap_field_t fields[] = {
     F(IO, MBMAP_O_SEQ_JUMPS, 2, MBMAP_T_U32, "seq_jumps", "", "Modbus sequence numbers outside the plausible window (not counted in lost)"),
     F(IO, MBMAP_O_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "", "copy of generation (whole-block reads)"),
 
-    F(HO, MBMAP_H_COMMAND, 1, MBMAP_T_U16, "command", "", "1 start, 2 stop to rest, 3 clear, 4 reset counters"),
+    F(HO, MBMAP_H_COMMAND, 1, MBMAP_T_U16, "command", "", "1 start, 2 stop now, 3 clear, 4 reset counters, 5 finish"),
     F(HO, MBMAP_H_WP_SEQ, 2, MBMAP_T_U32, "wp_seq", "", "waypoint sequence number"),
     F(HO, MBMAP_H_WP_T_S, 4, MBMAP_T_F64, "wp_t", "s", "waypoint time"),
     F(HO, MBMAP_H_WP_POS + 0, 4, MBMAP_T_F64, "wp_x", "m", "waypoint position"),

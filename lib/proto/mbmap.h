@@ -127,9 +127,10 @@
 
 /* Commands (holding register MBMAP_H_COMMAND). */
 #define MBMAP_CMD_START 1            /* start now with what is buffered (see README) */
-#define MBMAP_CMD_STOP 2             /* run to the last waypoint and rest (engine_stop) */
-#define MBMAP_CMD_CLEAR 3            /* drop waypoints, hold where it is (engine_clear) */
+#define MBMAP_CMD_STOP 2             /* stop now along the path, then drop (engine_stop) */
+#define MBMAP_CMD_CLEAR 3            /* stop along the path, drop, WAITING (engine_clear) */
 #define MBMAP_CMD_RESET_COUNTERS 4   /* engine_reset_counters + Modbus counters */
+#define MBMAP_CMD_FINISH 5           /* end of input: run to the last waypoint (engine_finish) */
 
 /* CAN bus state (MBMAP_D_CAN_STATE, MBMAP_O_CAN_STATE). */
 #define MBMAP_CAN_NONE 0             /* no CAN on this object / daemon */

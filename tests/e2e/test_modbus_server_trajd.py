@@ -6,7 +6,7 @@
    (clear) and the state register follows.
 2. pymodbus feeds a whole real track (the NMEA 2000 figure eight, converted
    to x,y,z) through the waypoint block, pacing itself on exception 06, then
-   writes stop; the setpoints trajd streams for that object (CSV output) are
+   writes finish (end of input); the setpoints trajd streams for that object (CSV output) are
    those of `trajreplay` on the same x,y,z file (row for row by track time,
    bit for bit), and every block read over Modbus during the feed is one of
    trajreplay's rows rounded to float32 (no torn read).
@@ -125,11 +125,15 @@ writable = yes
                 self.assertEqual(len(v), 9, out)
                 got = [float(x) for x in v]
                 # Clear it (mbpoll writes holding register 100 = 3), and the
-                # state register shows waiting.
+                # state register shows waiting once the boat has braked to
+                # rest along its path (a controlled stop: bounded wait).
                 rc, _, out = mbpoll(d.port, "-r", str(base + M["MBMAP_H_COMMAND"]), "-t", "4",
                                     write=[M["MBMAP_CMD_CLEAR"]])
                 self.assertEqual(rc, 0, out)
-                rc, v, out = mbpoll(d.port, "-r", str(base + M["MBMAP_O_STATE"]), "-t", "3")
+                for _ in range(200):
+                    rc, v, out = mbpoll(d.port, "-r", str(base + M["MBMAP_O_STATE"]), "-t", "3")
+                    if v == ["0"]:
+                        break
                 self.assertEqual(v, ["0"], out)
             finally:
                 self.assertEqual(d.stop(), 0, "".join(d.log))
@@ -213,7 +217,7 @@ csv.path = %s/fed.csv
                         break
                     if i % 10 == 0:
                         reads.append(c.read_input_registers(base, mbsim.BLOCK, slave=1).registers)
-                rq = c.write_register(base + M["MBMAP_H_COMMAND"], M["MBMAP_CMD_STOP"], slave=1)
+                rq = c.write_register(base + M["MBMAP_H_COMMAND"], M["MBMAP_CMD_FINISH"], slave=1)
                 self.assertFalse(rq.isError(), rq)
                 # Wait (bounded) for the object to finish, reading blocks meanwhile
                 # (one per new generation is enough: keep the first of each).

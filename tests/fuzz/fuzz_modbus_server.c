@@ -48,7 +48,7 @@ static int wp_hook(void *ctx, unsigned k, const engine_waypoint_t *wp)
 static int cmd_hook(void *ctx, unsigned k, unsigned cmd)
 {
     (void)ctx;
-    if (k >= NOBJ || cmd < MBMAP_CMD_START || cmd > MBMAP_CMD_RESET_COUNTERS)
+    if (k >= NOBJ || cmd < MBMAP_CMD_START || cmd > MBMAP_CMD_FINISH)
         abort();
     if (cmd == MBMAP_CMD_CLEAR)
         last_t[k] = -INFINITY, buffered[k] = 0;

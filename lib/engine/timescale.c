@@ -1,0 +1,141 @@
+/* timescale.c - the time scaling s(t); see timescale.h and TIMESCALE.md. */
+#include "timescale.h"
+
+#include <math.h>
+
+/* Stopping distance from (r, 0): a symmetric S-curve.  With r >= A^2/J the
+ * deceleration reaches -A (ramps of A/J each side, total time r/A + A/J),
+ * otherwise it peaks at sqrt(r J) (total time 2 sqrt(r/J)); the rate falls
+ * symmetrically, so the distance is r/2 times the total time. */
+static double stop_dist0(double r, double A, double J)
+{
+    if (r <= 0)
+        return 0;
+    if (r >= A * A / J)
+        return 0.5 * r * (r / A + A / J);
+    return r * sqrt(r / J);
+}
+
+double ts_stop_dist(double r, double a, double A, double J)
+{
+    if (r <= 0)
+        return 0;
+    if (a > 0) {
+        /* first bring a down to 0 at full jerk: t0 = a/J, the rate still
+         * rises by a^2/(2J) */
+        double t0 = a / J;
+        double s0 = r * t0 + 0.5 * a * t0 * t0 - J * t0 * t0 * t0 / 6.0;
+        return s0 + stop_dist0(r + 0.5 * a * a / J, A, J);
+    }
+    if (a < 0) {
+        double m = a < -A ? A : -a;          /* |a| (a beyond -A is brought back) */
+        if (0.5 * m * m / J >= r) {
+            /* releasing now at full jerk, the rate still reaches 0 before
+             * the deceleration does (a state the braking itself never
+             * enters; the limits may have shrunk): the distance until
+             * r + a t + J t^2/2 = 0 */
+            double t = (m - sqrt(fmax(m * m - 2.0 * J * r, 0.0))) / J;
+            return r * t - 0.5 * m * t * t + J * t * t * t / 6.0;
+        }
+        /* (r, a) lies on the braking profile that started from (rv, 0)
+         * tb = m/J ago: subtract what that profile covered before now */
+        double tb = m / J, rv = r + 0.5 * m * m / J;
+        double d = stop_dist0(rv, A, J) - (rv * tb - J * tb * tb * tb / 6.0);
+        return d > 0 ? d : 0;
+    }
+    return stop_dist0(r, A, J);
+}
+
+double ts_rate_max(double R, double A, double J)
+{
+    if (isinf(R) && R > 0)
+        return INFINITY;
+    if (!(R > 0))
+        return 0;
+    if (R >= A * A * A / (J * J)) {
+        /* r^2/(2A) + r A/(2J) = R */
+        double h = 0.5 * A * A / J;
+        return -h + sqrt(h * h + 2.0 * R * A);
+    }
+    /* r^1.5 / sqrt(J) = R */
+    return cbrt(R * R * J);
+}
+
+/* Jerk that drives the rate towards tgt as fast as the limits allow: the
+ * acceleration wanted for an error e is the one from which, released at
+ * full jerk, the rate lands on tgt (sqrt(2 J |e|), corrected for the
+ * discrete tick), at most A. */
+static double track_jerk(double r, double a, double tgt, double A, double J, double T)
+{
+    double e = tgt - r, ae = fabs(e);
+    double want = -0.5 * J * T + sqrt(0.25 * J * J * T * T + 2.0 * J * ae);
+    double j;
+
+    if (want > A)
+        want = A;
+    if (e < 0)
+        want = -want;
+    j = (want - a) / T;
+    if (j > J)
+        j = J;
+    if (j < -J)
+        j = -J;
+    return j;
+}
+
+/* Exact integration over one tick with constant jerk. */
+static double integrate(double r, double a, double j, double T, double *r1, double *a1)
+{
+    *r1 = r + a * T + 0.5 * j * T * T;
+    *a1 = a + j * T;
+    return r * T + 0.5 * a * T * T + j * T * T * T / 6.0;
+}
+
+double ts_step(ts_state_t *st, double target, double R, double A, double J, double T,
+               double *j_out, int *limited)
+{
+    double r = st->rate, a = st->acc, tgt = target, r1, a1, ds, j;
+    int lim = 0;
+
+    if (!(tgt > 0))
+        tgt = 0;
+    if (tgt > TS_RATE_MAX)
+        tgt = TS_RATE_MAX;
+    if (!isinf(R)) {
+        double rm = ts_rate_max(R, A, J);
+        if (rm < tgt) {
+            tgt = rm;
+            lim = 1;
+        }
+    }
+    if (tgt < J * T * T)
+        tgt = 0; /* dead band: a rate this low comes to rest exactly */
+    j = track_jerk(r, a, tgt, A, J, T);
+    ds = integrate(r, a, j, T, &r1, &a1);
+    if (!isinf(R) && r1 > 0 && ts_stop_dist(r1, a1, A, J) > R - ds) {
+        /* the move would leave too little to stop: brake as hard as allowed */
+        tgt = 0;
+        j = track_jerk(r, a, tgt, A, J, T);
+        ds = integrate(r, a, j, T, &r1, &a1);
+        lim = 1;
+    }
+    if (r1 <= 0) {
+        /* came to rest within the tick (the release of the braking ends
+         * here): rest exactly; a is within one tick's jerk of 0 */
+        r1 = 0;
+        a1 = 0;
+    }
+    if (ds < 0)
+        ds = 0;
+    if (fabs(tgt - r1) <= J * T * T && fabs(a1) <= J * T) {
+        r1 = tgt;
+        a1 = 0;
+    }
+    st->rate = r1;
+    st->acc = a1;
+    if (j_out)
+        *j_out = j;
+    if (limited)
+        *limited = lim;
+    return ds;
+}

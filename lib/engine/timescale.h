@@ -1,0 +1,81 @@
+/*
+ * timescale.h - the time scaling s(t) between the curve and every output.
+ *
+ * The engine's curve is a function of track time, k(s).  The output does not
+ * evaluate it at the tick's own time but at s(t), a track time that advances
+ * at the rate r = ds/dt.  r = 1 is the curve as solved; r < 1 slows down
+ * along the same path, r = 0 stands still on it, r up to 2 is a feed
+ * override above 100 %.  The setpoint is then (chain rule)
+ *
+ *     position      k(s)
+ *     velocity      k'(s) r
+ *     acceleration  k''(s) r^2 + k'(s) a          (a = dr/dt)
+ *     jerk          k'''(s) r^3 + 3 k''(s) r a + k'(s) j   (j = da/dt)
+ *
+ * so the path never changes, only the speed along it.  This module keeps the
+ * state (r, a) and chooses j once per tick, piecewise constant over the
+ * tick, with |j| <= J and |a| <= A (J, A in rate units: 1/s^2 and 1/s).
+ * The engine turns physical limits into rate units with the curve's speed
+ * v = |k'(s)| at the current point: A = accel_m_s2 / max(v, v_floor),
+ * J = jerk_m_s3 / max(v, v_floor), so the term k'(s) a that the scaling adds
+ * to the acceleration is at most accel_m_s2 and k'(s) j adds at most
+ * jerk_m_s3 to the jerk (see lib/engine/TIMESCALE.md for the whole bound).
+ *
+ * Every use of the scaling is one target rate and one distance:
+ *   - feed override: target = override (0 .. 2);
+ *   - stop now, clear: target = 0;
+ *   - underrun: R = track time still available ahead (the curve's solved
+ *     segments end there); the rate is capped by ts_rate_max(R), the highest
+ *     rate from which the output can still come to rest within R, so it
+ *     slows down smoothly as the buffer drains and speeds up again as it
+ *     fills;
+ *   - catch-up: target slightly above 1 until a lag is won back.
+ * ts_step never lets the state leave the set from which rest within R is
+ * reachable (it brakes when the move it would rather make would leave it),
+ * up to the discretisation error that TS_MARGIN_TICKS of margin absorbs.
+ *
+ * Pure: no allocation, no I/O, no clock.  Continuous-time formulas for the
+ * stopping distance (a jerk-limited "S-curve"), exact cubic integration of
+ * the state over a tick.
+ */
+#ifndef TRAJD_TIMESCALE_H
+#define TRAJD_TIMESCALE_H
+
+/* Highest rate (feed override 200 %). */
+#define TS_RATE_MAX 2.0
+/* Track time kept in reserve before the end of the solved curve, in ticks of
+ * rate 1: absorbs the discretisation of the braking (the continuous-time
+ * stopping distance is exact to O(J T^2) per tick). */
+#define TS_MARGIN_TICKS 2.0
+
+typedef struct {
+    double rate;   /* r = ds/dt (1 = as solved) */
+    double acc;    /* a = dr/dt, 1/s */
+} ts_state_t;
+
+/*
+ * Track time (s-distance) needed to come to rest, r = a = 0, from (r, a)
+ * with |a| <= A and |da/dt| <= J, braking as hard as the limits allow
+ * (continuous time).  0 if r <= 0.  A, J > 0.
+ */
+double ts_stop_dist(double r, double a, double A, double J);
+
+/*
+ * Highest rate r from which rest (starting with a = 0) is reached within R:
+ * the inverse of ts_stop_dist(r, 0, A, J).  0 if R <= 0, INFINITY if R is.
+ */
+double ts_rate_max(double R, double A, double J);
+
+/*
+ * Advance the state by one tick of T seconds towards target (clamped to
+ * 0 .. TS_RATE_MAX) without ever needing more than R of track time to stop
+ * (R may be INFINITY).  Writes the jerk used into *j_out (may be NULL) and
+ * returns the track time advanced, ds >= 0.  Lands exactly on target
+ * (rate == target, acc == 0) once within one tick's jerk of it, so that the
+ * caller can tell an unscaled output by rate == 1.0 && acc == 0.0.
+ * *limited (may be NULL) is set to 1 when R, not target, decided the move.
+ */
+double ts_step(ts_state_t *st, double target, double R, double A, double J, double T,
+               double *j_out, int *limited);
+
+#endif

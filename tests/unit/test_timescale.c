@@ -1,0 +1,441 @@
+/*
+ * test_timescale.c - the time scaling between the curve and the output
+ * (lib/engine/timescale.h, lib/engine/TIMESCALE.md), alone and in the engine.
+ *
+ * References: the stopping distance against a tick-by-tick simulation of the
+ * braking; the engine's setpoints against direct Horner evaluation of the
+ * curve (engine_curve + fdiff_eval) at the setpoint's own track time, and
+ * against the chain-rule bounds on acceleration and jerk computed from the
+ * curve's own derivatives (sampled densely by Horner, not by the engine).
+ */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "engine.h"
+#include "fdiff.h"
+#include "timescale.h"
+
+#define PERIOD_NS 10000000LL
+#define T_S 0.01
+/* lib/engine/engine.c ENGINE_SCALE_V_FLOOR_M_S, documented in TIMESCALE.md */
+#define V_FLOOR_M_S 1.0
+/* Setpoint vs Horner at its own track time (as test_engine.c). */
+#define TOL_HORNER_M 1e-9
+/* Bounds are for the continuous profile; 2 % for the sampled maxima of the
+ * curve's derivatives and the change of the limits within a tick. */
+#define SLACK 1.02
+
+static uint64_t rng = 88172645463325252ULL;
+static double urand(void)
+{
+    rng ^= rng << 13;
+    rng ^= rng >> 7;
+    rng ^= rng << 17;
+    return (double)(rng >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static double norm3(const double *a)
+{
+    return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+}
+
+static double dist3(const double *a, const double *b)
+{
+    double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+    return norm3(d);
+}
+
+/* ---- the scaling alone ------------------------------------------------- */
+
+/* Given random states and limits, when braking tick by tick with target 0,
+ * then the distance run matches ts_stop_dist within the discretisation
+ * (a few ticks of the starting rate), |a| stays within A, every jerk within
+ * J, and the rate ends exactly at 0; ts_rate_max inverts ts_stop_dist. */
+static void test_stop_dist_matches_simulation(void **state)
+{
+    (void)state;
+    for (int i = 0; i < 2000; i++) {
+        double A = 0.05 + 5 * urand(), J = 0.5 + 50 * urand();
+        double r = 2 * urand(), a = (2 * urand() - 1) * A;
+        if (a < 0 && 0.5 * a * a / J >= r)
+            continue; /* decelerating too hard to end at rest within J: not reachable */
+        ts_state_t st = {r, a};
+        double d = ts_stop_dist(r, a, A, J), run = 0, jmax = 0, amax = 0;
+        int n = 0;
+        while (st.rate > 0 || st.acc < 0 || st.acc > 0) {
+            double j;
+            run += ts_step(&st, 0.0, INFINITY, A, J, T_S, &j, NULL);
+            jmax = fmax(jmax, fabs(j));
+            amax = fmax(amax, fabs(st.acc));
+            assert_true(++n < 1000000);
+        }
+        /* a few ticks at the highest rate the braking passes through */
+        double rpeak = r + (a > 0 ? 0.5 * a * a / J : 0);
+        if (!(fabs(run - d) <= 3 * (rpeak + A * T_S) * T_S + 1e-12))
+            fail_msg("r %g a %g A %g J %g: ran %.6g, formula %.6g", r, a, A, J, run, d);
+        assert_true(jmax <= J * (1 + 1e-12));
+        assert_true(amax <= fmax(A, fabs(a)) * (1 + 1e-12));
+        double r0 = 2 * urand();
+        double back = ts_rate_max(ts_stop_dist(r0, 0, A, J), A, J);
+        assert_true(fabs(back - r0) <= 1e-9 * (1 + r0));
+    }
+    assert_true(isinf(ts_rate_max(INFINITY, 1, 1)));
+    assert_true(ts_rate_max(-1, 1, 1) <= 0);
+}
+
+/* Given a remaining distance R, when running at full target, then the
+ * scaling never needs more than R to stop: it comes to rest within R plus
+ * the margin the engine keeps (TS_MARGIN_TICKS of track time) and at rest
+ * exactly. */
+static void test_never_overruns_R(void **state)
+{
+    (void)state;
+    for (int i = 0; i < 500; i++) {
+        double A = 0.05 + 5 * urand(), J = 0.5 + 50 * urand(), R = 20 * urand();
+        ts_state_t st = {urand(), 0};
+        if (ts_stop_dist(st.rate, 0, A, J) > R)
+            continue;
+        double run = 0;
+        for (int n = 0; n < 200000 && (st.rate > 0 || run < 1e-12); n++) {
+            run += ts_step(&st, 1.0 + urand(), R - run, A, J, T_S, NULL, NULL);
+            if (!(st.rate > 0) && n > 0)
+                break;
+        }
+        if (!(run <= R + TS_MARGIN_TICKS * T_S))
+            fail_msg("A %g J %g R %g: ran %.6g", A, J, R, run);
+    }
+}
+
+/* ---- in the engine ------------------------------------------------------ */
+
+typedef struct {
+    double v, a, j; /* max |k'|, |k''|, |k'''| of the curve */
+} curve_max_t;
+
+/* The curve's own maxima, sampled densely by Horner (k''' from the cubic). */
+static curve_max_t curve_max(const fdiff_seg_t *s, size_t n)
+{
+    curve_max_t m = {0, 0, 0};
+    for (size_t i = 0; i < n; i++) {
+        double jj[3];
+        for (int k = 0; k < 3; k++)
+            jj[k] = 6 * s[i].c[k][3] / (s[i].dur_s * s[i].dur_s * s[i].dur_s);
+        m.j = fmax(m.j, norm3(jj));
+        for (int q = 0; q <= 100; q++) {
+            double v[3], a[3];
+            fdiff_eval(&s[i], q / 100.0, NULL, v, a);
+            m.v = fmax(m.v, norm3(v));
+            m.a = fmax(m.a, norm3(a));
+        }
+    }
+    return m;
+}
+
+/* Chain rule (TIMESCALE.md): with rate <= rmax, |k' dr/dt| <= a_s, |k' j| <=
+ * j_s and |dr/dt| <= a_s / V_FLOOR_M_S,
+ *   |acc|  <= A_c rmax^2 + a_s
+ *   |jerk| <= J_c rmax^3 + 3 A_c rmax a_s / V_FLOOR_M_S + j_s            */
+static void limits(const engine_config_t *c, curve_max_t m, double rmax, double *acc_lim,
+                   double *jerk_lim)
+{
+    double as = c->scale_accel_m_s2, js = c->scale_jerk_m_s3;
+    *acc_lim = m.a * rmax * rmax + as;
+    *jerk_lim = m.j * rmax * rmax * rmax + 3 * m.a * rmax * as / V_FLOOR_M_S + js;
+}
+
+/* Circle of radius 20 m, 0.15 rad per waypoint, climbing 0.3 m per waypoint. */
+static void circle_wp(engine_waypoint_t *w, int i, double dt)
+{
+    memset(w, 0, sizeof(*w));
+    w->t_s = i * dt;
+    w->pos_m[0] = 20.0 * cos(0.15 * i);
+    w->pos_m[1] = 20.0 * sin(0.15 * i);
+    w->pos_m[2] = 0.3 * i;
+    w->seq = (uint32_t)i + 1;
+}
+
+typedef struct {
+    double dv_max, da_max, horner_max;
+    long moving, scaled;
+} check_t;
+
+/* Every pair of consecutive setpoints of one trajectory that are not WAITING. */
+static void check_pair(check_t *ck, const engine_setpoint_t *p, const engine_setpoint_t *sp,
+                       const fdiff_seg_t *segs, size_t nseg)
+{
+    if (sp->state == ENGINE_STATE_WAITING || p->state == ENGINE_STATE_WAITING ||
+        p->track != sp->track || (sp->flags & ENGINE_SP_TRANSFER))
+        return;
+    ck->dv_max = fmax(ck->dv_max, dist3(sp->vel_m_s, p->vel_m_s));
+    if (getenv("TS_DEBUG") && dist3(sp->acc_m_s2, p->acc_m_s2) > ck->da_max)
+        fprintf(stderr, "da %.3f at t_s %.4f state %d->%d flags %x->%x |a| %.3f->%.3f\n",
+                dist3(sp->acc_m_s2, p->acc_m_s2), sp->t_s, p->state, sp->state, p->flags,
+                sp->flags, norm3(p->acc_m_s2), norm3(sp->acc_m_s2));
+    /* not into FINISHED: a REST end is reached with the curve's own k'' != 0
+     * and the rest sets 0 (the end condition's step, not the scaling's) */
+    if (sp->state != ENGINE_STATE_FINISHED)
+        ck->da_max = fmax(ck->da_max, dist3(sp->acc_m_s2, p->acc_m_s2));
+    if (sp->state != ENGINE_STATE_FINISHED) {
+        double q[3];
+        fdiff_eval_curve(segs, nseg, &sp->t_s, 1, q, NULL, NULL);
+        ck->horner_max = fmax(ck->horner_max, dist3(q, sp->pos_m));
+    }
+    ck->moving++;
+    ck->scaled += (sp->flags & ENGINE_SP_SCALED) != 0;
+}
+
+/*
+ * Property: given random stalls of the sender (it pauses for 0 .. 8 s at
+ * random waypoints, then sends what it owes at once) and, in half of the
+ * runs, random feed overrides (0 .. 2), then on every output |delta
+ * velocity| per tick <= accel limit * T and |delta acceleration| per tick
+ * <= jerk limit * T (limits from the chain rule on the curve's own maxima),
+ * every position is the curve at the setpoint's track time, the scaling
+ * never failed to brake in time (hard_stops 0), and the run finishes on the
+ * last waypoint.
+ */
+static void test_property_random_stalls(void **state)
+{
+    (void)state;
+    enum { N = 240 };
+    static engine_waypoint_t wp[N];
+    static fdiff_seg_t segs[N + 8];
+    double worst_dv = 0, worst_da = 0;
+    long scaled = 0, underruns = 0;
+
+    for (int run = 0; run < 12; run++) {
+        engine_config_t c;
+        size_t nseg = 0;
+        double dt = 0.2 + 0.3 * urand();
+        int overrides = run % 2;
+        engine_config_default(&c);
+        c.scale_accel_m_s2 = 2 + 8 * urand();
+        c.scale_jerk_m_s3 = 10 + 90 * urand();
+        for (int i = 0; i < N; i++)
+            circle_wp(&wp[i], i, dt);
+        assert_int_equal(engine_curve(&c, wp, N, segs, N + 8, &nseg), 0);
+        curve_max_t m = curve_max(segs, nseg);
+        double acc_lim, jerk_lim;
+        limits(&c, m, overrides ? 2.0 : 1.0, &acc_lim, &jerk_lim);
+
+        engine_t *e = engine_new(&c, NULL);
+        assert_non_null(e);
+        engine_setpoint_t sp, p;
+        memset(&p, 0, sizeof p);
+        check_t ck = {0};
+        int next = 0;
+        double lag = 0, pause_until = -1;
+        for (int64_t k = 0; k < 2000000; k++) {
+            double now_s = (double)k * T_S;
+            while (next < N && now_s >= pause_until && wp[next].t_s + lag <= now_s) {
+                assert_int_equal(engine_push(e, &wp[next]), 0);
+                if (++next == N)
+                    engine_finish(e);
+                else if (urand() < 0.05) {
+                    double pause = 8 * urand();
+                    pause_until = now_s + pause;
+                    lag += pause * urand(); /* owes some, then catches up */
+                }
+            }
+            if (overrides && k % 500 == 0)
+                assert_int_equal(engine_set_override(e, 2 * urand()), 0);
+            if (overrides && k % 500 == 250)
+                assert_int_equal(engine_set_override(e, 1.0), 0);
+            assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+            check_pair(&ck, &p, &sp, segs, nseg);
+            p = sp;
+            if (sp.state == ENGINE_STATE_FINISHED)
+                break;
+        }
+        engine_status_t st;
+        engine_status(e, &st);
+        assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+        assert_true(dist3(sp.pos_m, wp[N - 1].pos_m) < 1e-9);
+        assert_int_equal(st.hard_stops, 0);
+        assert_true(ck.horner_max < TOL_HORNER_M);
+        if (ck.dv_max > acc_lim * T_S * SLACK || ck.da_max > jerk_lim * T_S * SLACK)
+            fail_msg("run %d: dv/T %.3f (limit %.3f), da/T %.3f (limit %.3f)", run,
+                     ck.dv_max / T_S, acc_lim, ck.da_max / T_S, jerk_lim);
+        worst_dv = fmax(worst_dv, ck.dv_max / T_S / acc_lim);
+        worst_da = fmax(worst_da, ck.da_max / T_S / jerk_lim);
+        scaled += ck.scaled;
+        underruns += (long)st.underruns;
+        engine_free(e);
+    }
+    print_message("12 runs: %ld scaled ticks, %ld underruns; worst dv/T %.2f of the "
+                  "accel limit, da/T %.2f of the jerk limit\n",
+                  scaled, underruns, worst_dv, worst_da);
+    /* the property was exercised: the scaling acted, and underruns happened */
+    assert_true(scaled > 1000);
+    assert_true(underruns > 3);
+}
+
+/*
+ * Given a straight line at v = 20 m/s (10 Hz, all waypoints buffered), when
+ * engine_stop is called mid-track, then the output comes to rest along the
+ * line within v^2/(2a) + v a/(2j) + v T (a category-1 stop with jerk-limited
+ * onset, TIMESCALE.md), not sooner than v^2/(2a) (it braked, it did not
+ * jump), FINISHED, velocity exactly 0; no velocity change above a T per tick.
+ * A waypoint pushed afterwards starts a new trajectory.
+ */
+static void test_stop_now_distance(void **state)
+{
+    (void)state;
+    enum { N = 400 };
+    const double v = 20.0;
+    for (int run = 0; run < 6; run++) {
+        engine_config_t c;
+        engine_config_default(&c);
+        c.scale_accel_m_s2 = 2 + 4 * run;
+        c.scale_jerk_m_s3 = 20 + 40 * run;
+        engine_t *e = engine_new(&c, NULL);
+        assert_non_null(e);
+        engine_waypoint_t w;
+        for (int i = 0; i < N; i++) {
+            memset(&w, 0, sizeof w);
+            w.t_s = 0.1 * i;
+            w.pos_m[0] = v * w.t_s;
+            w.pos_m[1] = 5.0;
+            assert_int_equal(engine_push(e, &w), 0);
+        }
+        engine_setpoint_t sp, p;
+        int64_t k = 0, stop_at = 1500 + run * 100;
+        do {
+            assert_int_equal(engine_tick(e, k++ * PERIOD_NS, &sp), 0);
+        } while (k < stop_at);
+        assert_int_equal(sp.state, ENGINE_STATE_STREAMING);
+        double v0 = norm3(sp.vel_m_s), a = c.scale_accel_m_s2, j = c.scale_jerk_m_s3;
+        assert_true(fabs(v0 - v) < 1e-6);
+        double start[3], path = 0, dv = 0;
+        memcpy(start, sp.pos_m, sizeof start);
+        assert_int_equal(engine_stop(e), 0);
+        p = sp;
+        int ticks = 0;
+        do {
+            assert_int_equal(engine_tick(e, k++ * PERIOD_NS, &sp), 0);
+            path += dist3(sp.pos_m, p.pos_m);
+            dv = fmax(dv, dist3(sp.vel_m_s, p.vel_m_s));
+            assert_true(fabs(sp.pos_m[1] - 5.0) < 1e-9); /* on the line */
+            p = sp;
+            assert_true(++ticks < 100000);
+        } while (sp.state != ENGINE_STATE_FINISHED);
+        double bound = v0 * v0 / (2 * a) + v0 * a / (2 * j) + v0 * T_S;
+        print_message("a %4.1f j %5.1f: stopped in %.3f m (%d ticks), bound %.3f m, "
+                      "v^2/2a %.3f m\n", a, j, path, ticks, bound, v0 * v0 / (2 * a));
+        assert_true(path <= bound);
+        assert_true(path >= v0 * v0 / (2 * a));
+        assert_true(fabs(dist3(sp.pos_m, start) - path) < 1e-6); /* straight on */
+        assert_true(dv <= a * T_S * SLACK);
+        assert_true(norm3(sp.vel_m_s) <= 0.0 && norm3(sp.acc_m_s2) <= 0.0);
+        engine_status_t st;
+        engine_status(e, &st);
+        assert_int_equal(st.buffered, 0); /* the rest was dropped */
+        /* then a new trajectory starts (by a transfer from here) */
+        for (int i = 0; i < 60; i++) {
+            memset(&w, 0, sizeof w);
+            w.t_s = 1000 + 0.1 * i;
+            w.pos_m[0] = 3 * i * 0.1;
+            assert_int_equal(engine_push(e, &w), 0);
+        }
+        engine_finish(e);
+        int moved = 0;
+        for (int i = 0; i < 100000 && sp.state != ENGINE_STATE_STREAMING; i++)
+            assert_int_equal(engine_tick(e, k++ * PERIOD_NS, &sp), 0);
+        moved = sp.state == ENGINE_STATE_STREAMING;
+        assert_true(moved);
+        assert_true(sp.flags & ENGINE_SP_TRANSFER);
+        engine_free(e);
+    }
+}
+
+/*
+ * Given a track fully buffered, when the feed override goes 100 % -> 50 %
+ * -> 200 % -> 0 % -> 100 %, then every position is the unscaled curve at
+ * the setpoint's track time (the same path), track time advances by
+ * override * T per tick once settled, velocity is the curve's times the
+ * rate, the bounds of the property hold with rmax 2, and the run finishes
+ * on the last waypoint; override outside 0..2 is refused.
+ */
+static void test_override_same_path(void **state)
+{
+    (void)state;
+    enum { N = 300 };
+    static engine_waypoint_t wp[N];
+    static fdiff_seg_t segs[N + 8];
+    size_t nseg = 0;
+    engine_config_t c;
+    engine_config_default(&c);
+    for (int i = 0; i < N; i++)
+        circle_wp(&wp[i], i, 0.5);
+    assert_int_equal(engine_curve(&c, wp, N, segs, N + 8, &nseg), 0);
+    curve_max_t m = curve_max(segs, nseg);
+    double acc_lim, jerk_lim;
+    limits(&c, m, 2.0, &acc_lim, &jerk_lim);
+    engine_t *e = engine_new(&c, NULL);
+    assert_non_null(e);
+    assert_int_equal(engine_set_override(e, 2.5), -ENGINE_ERANGE);
+    assert_int_equal(engine_set_override(e, -0.1), -ENGINE_ERANGE);
+    assert_int_equal(engine_set_override(e, NAN), -ENGINE_ERANGE);
+    for (int i = 0; i < N; i++)
+        assert_int_equal(engine_push(e, &wp[i]), 0);
+    engine_finish(e);
+    static const struct { int64_t at; double ov; } plan[] = {
+        {1000, 0.5}, {3000, 2.0}, {5000, 0.0}, {7000, 1.0},
+    };
+    engine_setpoint_t sp, p;
+    memset(&p, 0, sizeof p);
+    check_t ck = {0};
+    size_t pi = 0;
+    double ov = 1.0;
+    int settled_checked = 0;
+    for (int64_t k = 0; k < 200000; k++) {
+        if (pi < 4 && k == plan[pi].at) {
+            ov = plan[pi].ov;
+            assert_int_equal(engine_set_override(e, ov), 0);
+            pi++;
+        }
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+        check_pair(&ck, &p, &sp, segs, nseg);
+        if (pi > 0 && k == plan[pi - 1].at + 1500 && sp.state == ENGINE_STATE_STREAMING) {
+            /* settled: track time advances at the override */
+            assert_true(fabs(sp.t_s - p.t_s - ov * T_S) < 1e-12);
+            double cv[3];
+            fdiff_eval_curve(segs, nseg, &sp.t_s, 1, NULL, cv, NULL);
+            for (int a = 0; a < 3; a++)
+                assert_true(fabs(sp.vel_m_s[a] - ov * cv[a]) < 1e-9);
+            settled_checked++;
+        }
+        p = sp;
+        if (sp.state == ENGINE_STATE_FINISHED)
+            break;
+    }
+    assert_int_equal(settled_checked, 4);
+    assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+    assert_true(dist3(sp.pos_m, wp[N - 1].pos_m) < 1e-9);
+    assert_true(ck.horner_max < TOL_HORNER_M);
+    print_message("override: dv/T %.3f (limit %.3f), da/T %.3f (limit %.3f)\n",
+                  ck.dv_max / T_S, acc_lim, ck.da_max / T_S, jerk_lim);
+    assert_true(ck.dv_max <= acc_lim * T_S * SLACK);
+    assert_true(ck.da_max <= jerk_lim * T_S * SLACK);
+    engine_free(e);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_stop_dist_matches_simulation),
+        cmocka_unit_test(test_never_overruns_R),
+        cmocka_unit_test(test_property_random_stalls),
+        cmocka_unit_test(test_stop_now_distance),
+        cmocka_unit_test(test_override_same_path),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
