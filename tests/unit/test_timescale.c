@@ -8,11 +8,7 @@
  * against the chain-rule bounds on acceleration and jerk computed from the
  * curve's own derivatives (sampled densely by Horner, not by the engine).
  */
-#include <stdarg.h>
-#include <stddef.h>
-#include <stdint.h>
-#include <setjmp.h>
-#include <cmocka.h>
+#include "test.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -33,13 +29,10 @@
  * curve's derivatives and the change of the limits within a tick. */
 #define SLACK 1.02
 
-static uint64_t rng = 88172645463325252ULL;
-static double urand(void)
+static unsigned seed = 16;
+static double ur(void)
 {
-    rng ^= rng << 13;
-    rng ^= rng >> 7;
-    rng ^= rng << 17;
-    return (double)(rng >> 11) * (1.0 / 9007199254740992.0);
+    return urand(&seed);
 }
 
 static double norm3(const double *a)
@@ -63,8 +56,8 @@ static void test_stop_dist_matches_simulation(void **state)
 {
     (void)state;
     for (int i = 0; i < 2000; i++) {
-        double A = 0.05 + 5 * urand(), J = 0.5 + 50 * urand();
-        double r = 2 * urand(), a = (2 * urand() - 1) * A;
+        double A = 0.05 + 5 * ur(), J = 0.5 + 50 * ur();
+        double r = 2 * ur(), a = (2 * ur() - 1) * A;
         if (a < 0 && 0.5 * a * a / J >= r)
             continue; /* decelerating too hard to end at rest within J: not reachable */
         ts_state_t st = {r, a};
@@ -83,7 +76,7 @@ static void test_stop_dist_matches_simulation(void **state)
             fail_msg("r %g a %g A %g J %g: ran %.6g, formula %.6g", r, a, A, J, run, d);
         assert_true(jmax <= J * (1 + 1e-12));
         assert_true(amax <= fmax(A, fabs(a)) * (1 + 1e-12));
-        double r0 = 2 * urand();
+        double r0 = 2 * ur();
         double back = ts_rate_max(ts_stop_dist(r0, 0, A, J), A, J);
         assert_true(fabs(back - r0) <= 1e-9 * (1 + r0));
     }
@@ -99,13 +92,13 @@ static void test_never_overruns_R(void **state)
 {
     (void)state;
     for (int i = 0; i < 500; i++) {
-        double A = 0.05 + 5 * urand(), J = 0.5 + 50 * urand(), R = 20 * urand();
-        ts_state_t st = {urand(), 0};
+        double A = 0.05 + 5 * ur(), J = 0.5 + 50 * ur(), R = 20 * ur();
+        ts_state_t st = {ur(), 0};
         if (ts_stop_dist(st.rate, 0, A, J) > R)
             continue;
         double run = 0;
         for (int n = 0; n < 200000 && (st.rate > 0 || run < 1e-12); n++) {
-            run += ts_step(&st, 1.0 + urand(), R - run, A, J, T_S, NULL, NULL);
+            run += ts_step(&st, 1.0 + ur(), R - run, A, J, T_S, NULL, NULL);
             if (!(st.rate > 0) && n > 0)
                 break;
         }
@@ -151,13 +144,13 @@ static void limits(const engine_config_t *c, curve_max_t m, double rmax, double 
     *jerk_lim = m.j * rmax * rmax * rmax + 3 * m.a * rmax * as / V_FLOOR_M_S + js;
 }
 
-/* Circle of radius 20 m, 0.15 rad per waypoint, climbing 0.3 m per waypoint. */
-static void circle_wp(engine_waypoint_t *w, int i, double dt)
+/* Helix of radius radius_m, 0.15 rad per waypoint, climbing 0.3 m per waypoint. */
+static void helix_wp(engine_waypoint_t *w, int i, double dt, double radius_m)
 {
     memset(w, 0, sizeof(*w));
     w->t_s = i * dt;
-    w->pos_m[0] = 20.0 * cos(0.15 * i);
-    w->pos_m[1] = 20.0 * sin(0.15 * i);
+    w->pos_m[0] = radius_m * cos(0.15 * i);
+    w->pos_m[1] = radius_m * sin(0.15 * i);
     w->pos_m[2] = 0.3 * i;
     w->seq = (uint32_t)i + 1;
 }
@@ -214,13 +207,13 @@ static void test_property_random_stalls(void **state)
     for (int run = 0; run < 12; run++) {
         engine_config_t c;
         size_t nseg = 0;
-        double dt = 0.2 + 0.3 * urand();
+        double dt = 0.2 + 0.3 * ur();
         int overrides = run % 2;
         engine_config_default(&c);
-        c.scale_accel_m_s2 = 2 + 8 * urand();
-        c.scale_jerk_m_s3 = 10 + 90 * urand();
+        c.scale_accel_m_s2 = 2 + 8 * ur();
+        c.scale_jerk_m_s3 = 10 + 90 * ur();
         for (int i = 0; i < N; i++)
-            circle_wp(&wp[i], i, dt);
+            helix_wp(&wp[i], i, dt, 20.0);
         assert_int_equal(engine_curve(&c, wp, N, segs, N + 8, &nseg), 0);
         curve_max_t m = curve_max(segs, nseg);
         double acc_lim, jerk_lim;
@@ -239,14 +232,14 @@ static void test_property_random_stalls(void **state)
                 assert_int_equal(engine_push(e, &wp[next]), 0);
                 if (++next == N)
                     engine_finish(e);
-                else if (urand() < 0.05) {
-                    double pause = 8 * urand();
+                else if (ur() < 0.05) {
+                    double pause = 8 * ur();
                     pause_until = now_s + pause;
-                    lag += pause * urand(); /* owes some, then catches up */
+                    lag += pause * ur(); /* owes some, then catches up */
                 }
             }
             if (overrides && k % 500 == 0)
-                assert_int_equal(engine_set_override(e, 2 * urand()), 0);
+                assert_int_equal(engine_set_override(e, 2 * ur()), 0);
             if (overrides && k % 500 == 250)
                 assert_int_equal(engine_set_override(e, 1.0), 0);
             assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
@@ -374,7 +367,7 @@ static void test_override_same_path(void **state)
     engine_config_t c;
     engine_config_default(&c);
     for (int i = 0; i < N; i++)
-        circle_wp(&wp[i], i, 0.5);
+        helix_wp(&wp[i], i, 0.5, 20.0);
     assert_int_equal(engine_curve(&c, wp, N, segs, N + 8, &nseg), 0);
     curve_max_t m = curve_max(segs, nseg);
     double acc_lim, jerk_lim;
