@@ -185,12 +185,12 @@ void can_port_output_fault(can_port_t *p, unsigned i, uint64_t lost, int fault)
     o->out_fault_seen = fault;
 }
 
-static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd)
+static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg)
 {
     if (cmd == CANPROTO_CMD_CLEAR && o->ids.cia402_enable && o->drive.held)
         o->reset_req = 1; /* fault reset, then the drives are enabled again */
     if (o->hooks.command)
-        o->hooks.command(o->ctx, cmd);
+        o->hooks.command(o->ctx, cmd, arg);
     if (cmd == CANPROTO_CMD_CLEAR)
         canproto_rx_restart(&o->rx);
     if (cmd == CANPROTO_CMD_RESET_COUNTERS) {
@@ -324,7 +324,7 @@ static void dispatch(can_port_t *p, const canproto_frame_t *f)
             else if (rc == CANPROTO_RX_WAYPOINT)
                 handle_waypoint(o, &out);
             else if (rc == CANPROTO_RX_COMMAND)
-                handle_command(o, out.cmd);
+                handle_command(o, out.cmd, out.cmd_arg);
             if (o->rx.st.out_of_order != ooo)
                 event(o, CANPROTO_STERR_OUT_OF_ORDER);
             return;

@@ -76,7 +76,7 @@ typedef struct {
     /* Offer a waypoint; returns what engine_push returns. */
     int (*push)(void *ctx, const engine_waypoint_t *wp);
     /* A command frame arrived. */
-    void (*command)(void *ctx, canproto_cmd_t cmd);
+    void (*command)(void *ctx, canproto_cmd_t cmd, unsigned arg);
     /* Current engine status (state, last_seq, free). */
     void (*status)(void *ctx, engine_status_t *st);
     /* A feedback TPDO of one of the object's drives arrived (may be NULL). */

@@ -414,7 +414,7 @@ static int hk_push(void *ctx, const engine_waypoint_t *wp)
     return obj_push(o, wp);
 }
 
-static void hk_command(void *ctx, canproto_cmd_t cmd)
+static void hk_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
 {
     obj_t *o = ctx;
     switch (cmd) {
@@ -422,6 +422,7 @@ static void hk_command(void *ctx, canproto_cmd_t cmd)
     case CANPROTO_CMD_STOP: engine_stop(o->engine); break;
     case CANPROTO_CMD_CLEAR: obj_clear(o); break;
     case CANPROTO_CMD_RESET_COUNTERS: obj_reset_counters(o); break;
+    case CANPROTO_CMD_OVERRIDE: engine_set_override(o->engine, arg / 100.0); break;
     default: break;
     }
 }

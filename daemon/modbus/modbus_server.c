@@ -674,6 +674,13 @@ static int apply_write(modbus_server_t *s, const mbmap_write_t *w)
             count_seq(s, w->object, w->wp.seq);
         return mbmap_from_engine(r);
     }
+    if (w->kind == MBMAP_WRITE_OVERRIDE) {
+        r = s->hooks.override ? s->hooks.override(s->hooks.ctx, w->object, w->override_pct)
+                              : -ENGINE_ESTATE;
+        if (r == MODBUS_SERVER_HOOK_EADDRESS)
+            return -MBMAP_EADDRESS;
+        return mbmap_from_engine(r);
+    }
     if (w->command == MBMAP_CMD_RESET_COUNTERS) {
         s->mb_rejected[w->object] = 0;
         s->lost[w->object] = 0;

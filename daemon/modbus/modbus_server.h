@@ -124,6 +124,9 @@ typedef struct {
     int (*waypoint)(void *ctx, unsigned object, const engine_waypoint_t *wp);
     int (*command)(void *ctx, unsigned object, unsigned command);
     void *ctx;
+    /* A feed override (percent, 0 .. MBMAP_OVERRIDE_MAX_PCT) was written;
+     * NULL: refused with 03.  Returns 0 or a negated engine_error. */
+    int (*override)(void *ctx, unsigned object, unsigned percent);
 } modbus_server_hooks_t;
 
 typedef struct {

@@ -118,6 +118,14 @@ static int hook_command(void *ctx, unsigned k, unsigned cmd)
     }
 }
 
+static int hook_override(void *ctx, unsigned k, unsigned percent)
+{
+    mbt_t *t = ctx;
+    if (k >= t->nobj)
+        return MODBUS_SERVER_HOOK_EADDRESS;
+    return engine_set_override(t->core->obj[k].engine, percent / 100.0);
+}
+
 static void on_ready(loop_t *l, int fd, uint32_t events, void *ctx)
 {
     (void)l; (void)fd; (void)events;
@@ -149,7 +157,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     t->objs = calloc(c->nobj, sizeof *t->objs);
     modbus_server_config_t mc = *m;
     mc.n_objects = c->nobj;
-    modbus_server_hooks_t hooks = { hook_waypoint, hook_command, t };
+    modbus_server_hooks_t hooks = { hook_waypoint, hook_command, t, hook_override };
     if (t->objs)
         t->srv = modbus_server_new(&mc, &hooks, why, wl);
     else

@@ -24,6 +24,8 @@
  *   3 clear  engine_clear: the same controlled stop, then WAITING.
  *   4 reset counters  engine_reset_counters and the Modbus per-object counters.
  *   5 finish engine_finish: end of input, run on to the last waypoint.
+ * Holding register 1 of an object's block: feed override in percent
+ * (0 .. 200, engine_set_override; above 200: exception 03).
  * While the daemon is stopping (SIGTERM) writes are refused with 03.
  * Waypoints written to an object whose input is not modbus: exception 02.
  */

@@ -281,6 +281,15 @@ int canproto_encode_command(uint32_t id, canproto_cmd_t cmd, canproto_frame_t *o
     return 0;
 }
 
+int canproto_encode_override(uint32_t id, unsigned percent, canproto_frame_t *out)
+{
+    if (percent > CANPROTO_OVERRIDE_MAX_PCT)
+        return -CANPROTO_EVALUE;
+    canproto_encode_command(id, CANPROTO_CMD_OVERRIDE, out);
+    out->data[3] = (uint8_t)percent;
+    return 0;
+}
+
 static uint8_t sp_state(const engine_setpoint_t *sp)
 {
     return (uint8_t)((unsigned)sp->state & 0x7u);
@@ -600,11 +609,15 @@ int canproto_rx_frame(canproto_rx_t *rx, const canproto_frame_t *f, int is_fd_id
         unsigned cmd = f->data[2];
         if (cmd < CANPROTO_CMD_FINISH || cmd >= CANPROTO_CMD_COUNT)
             return malformed(rx, CANPROTO_EVALUE);
-        for (unsigned i = 3; i < CANPROTO_WP_DLEN; i++)
+        unsigned arg = f->data[3];
+        if (cmd == CANPROTO_CMD_OVERRIDE ? arg > CANPROTO_OVERRIDE_MAX_PCT : arg != 0)
+            return malformed(rx, CANPROTO_EVALUE);
+        for (unsigned i = 4; i < CANPROTO_WP_DLEN; i++)
             if (f->data[i])
                 return malformed(rx, CANPROTO_EVALUE);
         memset(out, 0, sizeof *out);
         out->cmd = (canproto_cmd_t)cmd;
+        out->cmd_arg = arg;
         rx->st.commands++;
         return CANPROTO_RX_COMMAND;
     }
@@ -741,6 +754,7 @@ static const canproto_signal_t sig_wp[] = {
     SIG_S("WP_Y", CANPROTO_MUX_Y, 16, 48, CANPROTO_WP_POS_M_PER_BIT, "m"),
     SIG_S("WP_Z", CANPROTO_MUX_Z, 16, 48, CANPROTO_WP_POS_M_PER_BIT, "m"),
     SIG_U("WP_Command", CANPROTO_MUX_COMMAND, 16, 8, 1, ""),
+    SIG_U("WP_CommandArg", CANPROTO_MUX_COMMAND, 24, 8, 1, "%"),
 };
 static const canproto_signal_t sig_wpfd[] = {
     SIG_U("WPFD_Mux", -1, 0, 8, 1, ""),
@@ -878,12 +892,13 @@ int canproto_dbc(char *buf, size_t len)
     emit(buf, len, &pos,
          "CM_ \"trajd CAN protocol, generated from lib/proto/canproto.h by canproto_dbc(); ids are "
          "the defaults of object 0 (object n: + n), RPDOs for CiA 402 nodes 1..3 (RPDO_CW: the layout sent with can.cia402_controlword = yes, shown on the RPDO2 ids 0x301..0x303; TPDO1: the drive feedback trajd reads, statusword 0x6041 and position actual value 0x6064). Setpoint positions 0x80000000: no position yet, do not move.\";\n"
-         "CM_ SG_ %u WP_Command \"1 finish, 2 stop, 3 clear, 4 reset counters\";\n"
+         "CM_ SG_ %u WP_Command \"1 finish, 2 stop now, 3 clear, 4 reset counters, 5 feed override\";\n"
+         "CM_ SG_ %u WP_CommandArg \"feed override in percent (0..200) for command 5, else 0\";\n"
          "CM_ SG_ %u ST_LastErr \"1..11 engine_error of the last rejected waypoint, 0x40 "
          "malformed, 0x41 lost, 0x42 out of order, 0x43 setpoints dropped, 0x44 bus down, 0x45 "
          "csv/stdout output lost lines, 0x46 safety monitor fault (object held until clear), 0x47 a CiA 402 "
          "drive left Operation Enabled\";\n",
-         CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_STATUS_BASE);
+         CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_STATUS_BASE);
     emit(buf, len, &pos,
          "BA_DEF_ BO_ \"VFrameFormat\" ENUM \"StandardCAN\",\"ExtendedCAN\",\"reserved\","
          "\"J1939PG\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\","

@@ -119,12 +119,16 @@ enum canproto_mux {
 };
 #define CANPROTO_WP_PARTS 4          /* TIME, X, Y, Z */
 
-/* Commands (WAYPOINT frame, mux COMMAND, byte 2). */
+/* Commands (WAYPOINT frame, mux COMMAND, byte 2; byte 3 the argument of
+ * OVERRIDE, 0 for the others; bytes 4..7 zero). */
+#define CANPROTO_OVERRIDE_MAX_PCT 200
 typedef enum {
     CANPROTO_CMD_FINISH = 1,         /* end of input: run to the last waypoint (engine_finish) */
-    CANPROTO_CMD_STOP = 2,           /* engine_stop */
+    CANPROTO_CMD_STOP = 2,           /* engine_stop: stop now along the path, then drop */
     CANPROTO_CMD_CLEAR = 3,          /* engine_clear; sequence numbering restarts */
     CANPROTO_CMD_RESET_COUNTERS = 4, /* engine and CAN counters to zero */
+    CANPROTO_CMD_OVERRIDE = 5,       /* feed override: byte 3 = percent, 0 .. 200
+                                        (engine_set_override) */
     CANPROTO_CMD_COUNT
 } canproto_cmd_t;
 
@@ -300,6 +304,9 @@ int canproto_encode_waypoint_fd(uint32_t id, const engine_waypoint_t *wp,
 
 /* A COMMAND frame on the waypoint id.  Returns 0 or -CANPROTO_EVALUE. */
 int canproto_encode_command(uint32_t id, canproto_cmd_t cmd, canproto_frame_t *out);
+/* The OVERRIDE command with percent (0 .. CANPROTO_OVERRIDE_MAX_PCT) in byte 3.
+ * Returns 0 or -CANPROTO_EVALUE (percent out of range). */
+int canproto_encode_override(uint32_t id, unsigned percent, canproto_frame_t *out);
 
 /*
  * The three classic SETPOINT frames of sp (out[3]).  With ENGINE_SP_NO_POSITION
@@ -400,6 +407,7 @@ typedef enum {
 typedef struct {
     engine_waypoint_t wp;      /* wp.seq: extended 32-bit sequence number */
     canproto_cmd_t cmd;
+    unsigned cmd_arg;          /* byte 3: OVERRIDE percent (0 for the other commands) */
     uint32_t lost_before;      /* waypoints missing between the last consumed one and this */
 } canproto_rx_out_t;
 

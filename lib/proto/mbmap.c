@@ -135,6 +135,9 @@ int mbmap_encode_object(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_ob
     mbmap_put_u32(b + MBMAP_O_OUT_LOST, lo32(o->out_lost));
     b[MBMAP_O_OUT_FAULT] = o->out_fault ? 1 : 0;
     mbmap_put_u32(b + MBMAP_O_SEQ_JUMPS, lo32(o->seq_jumps));
+    mbmap_put_f32(b + MBMAP_O_RATE, (float)o->st.rate);
+    b[MBMAP_O_OVERRIDE] = (uint16_t)lround(o->st.override * 100.0);
+    mbmap_put_u32(b + MBMAP_O_HARD_STOPS, lo32(o->st.hard_stops));
     mbmap_put_u32(b + MBMAP_O_GEN_TAIL, gen);
     return 0;
 }
@@ -218,6 +221,14 @@ int mbmap_decode_write(unsigned n, const uint8_t *pdu, size_t len, mbmap_write_t
             return -MBMAP_EVALUE;
         out->kind = MBMAP_WRITE_COMMAND;
         out->command = cmd;
+        return 0;
+    }
+    if (off == MBMAP_H_OVERRIDE && count == 1) {
+        unsigned pct = be16(val);
+        if (pct > MBMAP_OVERRIDE_MAX_PCT)
+            return -MBMAP_EVALUE;
+        out->kind = MBMAP_WRITE_OVERRIDE;
+        out->override_pct = pct;
         return 0;
     }
     if (off == MBMAP_H_WP && count == MBMAP_H_WP_COUNT) {
@@ -348,9 +359,13 @@ static const mbmap_field_t fields[] = {
     F(IO, MBMAP_O_OUT_LOST, 2, MBMAP_T_U32, "out_lost", "", "setpoint lines of this object lost by its outputs"),
     F(IO, MBMAP_O_OUT_FAULT, 1, MBMAP_T_U16, "out_fault", "", "1 once an output of this object failed to write"),
     F(IO, MBMAP_O_SEQ_JUMPS, 2, MBMAP_T_U32, "seq_jumps", "", "Modbus sequence numbers outside the plausible window (not counted in lost)"),
+    F(IO, MBMAP_O_RATE, 2, MBMAP_T_F32, "rate", "", "time-scaling rate of the output: 1 as solved, below 1 slowing (underrun, stop, override), lib/engine/TIMESCALE.md"),
+    F(IO, MBMAP_O_OVERRIDE, 1, MBMAP_T_U16, "override", "%", "feed override in force"),
+    F(IO, MBMAP_O_HARD_STOPS, 2, MBMAP_T_U32, "hard_stops", "", "times the solved curve ended under a moving output (velocity to 0 in one tick); should stay 0"),
     F(IO, MBMAP_O_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "", "copy of generation (whole-block reads)"),
 
     F(HO, MBMAP_H_COMMAND, 1, MBMAP_T_U16, "command", "", "1 start, 2 stop now, 3 clear, 4 reset counters, 5 finish"),
+    F(HO, MBMAP_H_OVERRIDE, 1, MBMAP_T_U16, "override", "%", "feed override 0..200: the same path at this % of the solved speed, ramped (lib/engine/TIMESCALE.md)"),
     F(HO, MBMAP_H_WP_SEQ, 2, MBMAP_T_U32, "wp_seq", "", "waypoint sequence number"),
     F(HO, MBMAP_H_WP_T_S, 4, MBMAP_T_F64, "wp_t", "s", "waypoint time"),
     F(HO, MBMAP_H_WP_POS + 0, 4, MBMAP_T_F64, "wp_x", "m", "waypoint position"),

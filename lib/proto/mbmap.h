@@ -115,10 +115,15 @@
 #define MBMAP_O_OUT_LOST 64          /* u32 setpoint lines of this object lost by its outputs */
 #define MBMAP_O_OUT_FAULT 66         /* u16 1 if an output of this object failed to write */
 #define MBMAP_O_SEQ_JUMPS 68         /* u32 sequence numbers outside the plausible window */
+#define MBMAP_O_RATE 70              /* f32 time-scaling rate ds/dt of the output (1 = as solved) */
+#define MBMAP_O_OVERRIDE 72          /* u16 feed override in force, % */
+#define MBMAP_O_HARD_STOPS 74        /* u32 the curve ended under a moving output (should stay 0) */
 #define MBMAP_O_GEN_TAIL 98          /* u32 copy of GEN */
 
 /* ---- object block, holding registers (offset from MBMAP_OBJ_BASE(k)) ---- */
 #define MBMAP_H_COMMAND 0            /* u16 write MBMAP_CMD_* (FC 06 or FC 16 of 1) */
+#define MBMAP_H_OVERRIDE 1           /* u16 feed override, % (0 .. MBMAP_OVERRIDE_MAX_PCT) */
+#define MBMAP_OVERRIDE_MAX_PCT 200
 #define MBMAP_H_WP 10                /* first register of the waypoint block */
 #define MBMAP_H_WP_SEQ 10            /* u32 sequence number */
 #define MBMAP_H_WP_T_S 12            /* f64 time, s */
@@ -219,19 +224,21 @@ double mbmap_get_f64(const uint16_t *r);
  */
 int mbmap_check_request(unsigned n, int writes_enabled, const uint8_t *pdu, size_t len);
 
-typedef enum { MBMAP_WRITE_COMMAND = 1, MBMAP_WRITE_WAYPOINT = 2 } mbmap_write_kind_t;
+typedef enum { MBMAP_WRITE_COMMAND = 1, MBMAP_WRITE_WAYPOINT = 2, MBMAP_WRITE_OVERRIDE = 3 } mbmap_write_kind_t;
 
 typedef struct {
     mbmap_write_kind_t kind;
     unsigned object;            /* 0-based */
     unsigned command;           /* MBMAP_CMD_*, for MBMAP_WRITE_COMMAND */
+    unsigned override_pct;      /* for MBMAP_WRITE_OVERRIDE: 0 .. MBMAP_OVERRIDE_MAX_PCT */
     engine_waypoint_t wp;       /* for MBMAP_WRITE_WAYPOINT */
 } mbmap_write_t;
 
 /*
  * Decode a write PDU that passed mbmap_check_request (FC 06 or 16) into one
- * command or one waypoint.  Writable: MBMAP_H_COMMAND of an object (one
- * register) and the waypoint block of an object (exactly MBMAP_H_WP ..
+ * command, one feed override or one waypoint.  Writable: MBMAP_H_COMMAND and
+ * MBMAP_H_OVERRIDE of an object (one register each; an override above
+ * MBMAP_OVERRIDE_MAX_PCT is -MBMAP_EVALUE) and the waypoint block of an object (exactly MBMAP_H_WP ..
  * +MBMAP_H_WP_COUNT-1 in one FC 16, so it is applied whole or not at all).
  * Returns 0, -MBMAP_EADDRESS (anything else, including a part of the
  * waypoint block or a write spanning two fields), -MBMAP_EVALUE (unknown

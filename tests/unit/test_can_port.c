@@ -73,6 +73,7 @@ typedef struct {
     unsigned n;
     int answer;          /* what push returns */
     unsigned cmds[8];
+    unsigned args[8];
     unsigned ncmd;
     uint32_t free_slots;
 } fake_engine_t;
@@ -85,11 +86,13 @@ static int fe_push(void *ctx, const engine_waypoint_t *wp)
     return e->answer;
 }
 
-static void fe_command(void *ctx, canproto_cmd_t cmd)
+static void fe_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
 {
     fake_engine_t *e = ctx;
-    if (e->ncmd < 8)
+    if (e->ncmd < 8) {
+        e->args[e->ncmd] = arg;
         e->cmds[e->ncmd++] = cmd;
+    }
 }
 
 static void fe_status(void *ctx, engine_status_t *st)
@@ -580,16 +583,21 @@ static void test_output_fault_in_status(void **state)
     assert_true(s.flags & CANPROTO_ST_OUT_FAULT);
 }
 
-/* Given commands, then the hook sees them; CLEAR restarts sequence numbering. */
+/* Given commands, then the hook sees them with their argument (OVERRIDE's
+ * percent); CLEAR restarts sequence numbering. */
 static void test_commands(void **state)
 {
     (void)state;
     queue_waypoint(10, 1.0);
     canproto_encode_command(0x680, CANPROTO_CMD_CLEAR, &io.in[io.nin++]);
     queue_waypoint(0, 0.5);  /* would be "out of order" without the restart */
+    assert_int_equal(canproto_encode_override(0x680, 150, &io.in[io.nin++]), 0);
     can_port_rx(port, 0);
-    assert_int_equal(eng.ncmd, 1);
+    assert_int_equal(eng.ncmd, 2);
     assert_int_equal(eng.cmds[0], CANPROTO_CMD_CLEAR);
+    assert_int_equal(eng.args[0], 0);
+    assert_int_equal(eng.cmds[1], CANPROTO_CMD_OVERRIDE);
+    assert_int_equal(eng.args[1], 150);
     assert_int_equal(eng.n, 2);
 }
 

@@ -291,8 +291,16 @@ static void test_decode_write(void **state)
     /* Read-only places: the daemon block, other registers of an object. */
     s6[1] = 0; s6[2] = 5; s6[3] = 0; s6[4] = 1;
     assert_int_equal(mbmap_decode_write(NOBJ, s6, 5, &w), -MBMAP_EADDRESS);
-    s6[1] = 0; s6[2] = 101;
+    s6[1] = 0; s6[2] = 102;
     assert_int_equal(mbmap_decode_write(NOBJ, s6, 5, &w), -MBMAP_EADDRESS);
+    /* The feed override: 0..200 %, one register. */
+    s6[1] = 0; s6[2] = 100 + MBMAP_H_OVERRIDE; s6[3] = 0; s6[4] = 150;
+    assert_int_equal(mbmap_decode_write(NOBJ, s6, 5, &w), 0);
+    assert_int_equal(w.kind, MBMAP_WRITE_OVERRIDE);
+    assert_int_equal(w.object, 0);
+    assert_int_equal(w.override_pct, 150);
+    s6[4] = 201;
+    assert_int_equal(mbmap_decode_write(NOBJ, s6, 5, &w), -MBMAP_EVALUE);
     /* A read is not a write. */
     assert_int_equal(mbmap_decode_write(NOBJ, p, read_pdu(p, 3, 100, 1), &w), -MBMAP_EFUNCTION);
 }
