@@ -1147,7 +1147,9 @@ static double remaining(const engine_t *e, double s)
         return e->stop_req ? e->cur_t1 - s : INFINITY;
     if (e->avail_closed && e->avail_rest)
         return INFINITY;
-    return (e->avail_t - e->origin_t) - s - TS_MARGIN_TICKS * e->period_s;
+    /* the margin scales with the rate: standing still needs none, so a
+     * buffer shorter than the margin never deadlocks the output */
+    return (e->avail_t - e->origin_t) - s - TS_MARGIN_TICKS * e->period_s * e->ts.rate;
 }
 
 /* The time scaling's limits in rate units at the curve's speed here. */

@@ -80,6 +80,10 @@ const engine_setting_t engine_settings[] = {
       "method smooth: waypoints per least-squares fit"),
     S(smooth_ctrl, "smooth-ctrl", UNSIGNED, 0, 4, ENGINE_SMOOTH_WINDOW_MAX, NULL, "C",
       "method smooth: control points per fit (<= smooth-window)"),
+    S(scale_accel_m_s2, "scale-accel", DOUBLE, 0, 1e-6, 1e6, NULL, "M_S2",
+      "time scaling (stop, clear, underrun, override): acceleration it adds, m/s^2"),
+    S(scale_jerk_m_s3, "scale-jerk", DOUBLE, 0, 1e-6, 1e9, NULL, "M_S3",
+      "time scaling: jerk it adds, m/s^3"),
 };
 
 const size_t engine_settings_count = sizeof engine_settings / sizeof engine_settings[0];

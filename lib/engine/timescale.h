@@ -43,9 +43,10 @@
 
 /* Highest rate (feed override 200 %). */
 #define TS_RATE_MAX 2.0
-/* Track time kept in reserve before the end of the solved curve, in ticks of
- * rate 1: absorbs the discretisation of the braking (the continuous-time
- * stopping distance is exact to O(J T^2) per tick). */
+/* Track time kept in reserve before the end of the solved curve, in ticks at
+ * the current rate (the engine's remaining()): absorbs the discretisation of
+ * the braking (the continuous-time stopping distance is exact to O(r T) per
+ * tick); none at rest, so a buffer shorter than the margin cannot deadlock. */
 #define TS_MARGIN_TICKS 2.0
 
 typedef struct {

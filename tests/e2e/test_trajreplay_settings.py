@@ -48,6 +48,7 @@ class TestConfigMode(unittest.TestCase):
         "max_speed_m_s": ("3", "--max-speed"), "max_accel_m_s2": ("0.5", "--max-accel"),
         "max_segment_s": ("30", "--max-segment"), "start_slack": ("3", "--start-slack"),
         "smooth_window": ("20", "--smooth-window"), "smooth_ctrl": ("5", "--smooth-ctrl"),
+        "scale_accel_m_s2": ("2", "--scale-accel"), "scale_jerk_m_s3": ("20", "--scale-jerk"),
     }
 
     def setUp(self):
@@ -97,7 +98,10 @@ class TestConfigMode(unittest.TestCase):
         # is rest), which must at least be accepted.
         default = self.out(["--rate", "20", self.track], "d")
         no_effect = {"max_abs_m", "max_segment_s", "smooth_window", "smooth_ctrl", "ends",
-                     "end_vel_m_s", "start_vel_m_s", "capacity"}
+                     "end_vel_m_s", "start_vel_m_s", "capacity",
+                     # the time scaling acts only when it is needed (underrun,
+                     # stop, override): a clean replay is the same
+                     "scale_accel_m_s2", "scale_jerk_m_s3"}
         for key, (v, opt) in self.ENGINE_KEYS.items():
             extra = [opt, v]
             if key == "fragment":
