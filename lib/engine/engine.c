@@ -1447,6 +1447,8 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
              * jump of hours must not cost hours of steps). */
             int64_t rest = k - 1 - i;
             e->cycle += (uint32_t)rest;
+            if (e->mode != OUT_HOLD && e->scaled)
+                e->n += rest; /* as each scaled step at rest would (the grid of s_off) */
             if (e->mode == OUT_STREAM && e->underrun)
                 e->st.underrun_ticks += (uint64_t)rest;
             break;
