@@ -77,11 +77,17 @@ BENCHES := $(BENCH_SRC:tests/bench/%.c=$(BUILD)/tests/%)
 # tests/fuzz/regress/<target>/ and tests/fuzz/corpus/<target>/.
 REPLAY_BINS := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/tests/test_%)
 
+# Manual pages (daemon/doc/): hand-written troff with @VERSION@/@DATADIR@, and
+# trajd.conf(5) generated from config/trajd.conf's comments (one source each).
+VERSION := $(shell sed -n 's/^\#define TRAJD_VERSION "\(.*\)"$$/\1/p' daemon/core/version.h)
+MAN_SRC := $(wildcard daemon/doc/*.[1-8])
+MANS := $(MAN_SRC:daemon/doc/%=$(BUILD)/man/%) $(BUILD)/man/trajd.conf.5
+
 .PHONY: all run check check-build test test-asan bench fuzz fuzz-merge install deps deps-run clean
 .DELETE_ON_ERROR:
 .SECONDARY:
 
-all: $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/libtrajdaemon.a $(BINS) $(TEST_BINS) $(BENCHES) \
+all: $(MANS) $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/libtrajdaemon.a $(BINS) $(TEST_BINS) $(BENCHES) \
      $(REPLAY_BINS)
 
 $(BUILD)/%.o: %.c
@@ -136,6 +142,14 @@ $(BENCHES): $(BUILD)/tests/%: $(BUILD)/tests/bench/%.o $(BUILD)/libtrajdaemon.a 
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_TEST)
 
+$(BUILD)/man/%: daemon/doc/% daemon/core/version.h
+	@mkdir -p $(@D)
+	sed -e 's|@VERSION@|$(VERSION)|g' -e 's|@DATADIR@|$(PREFIX)/share|g' $< > $@
+
+$(BUILD)/man/trajd.conf.5: config/trajd.conf daemon/doc/conf2man.awk daemon/core/version.h
+	@mkdir -p $(@D)
+	awk -v version=$(VERSION) -f daemon/doc/conf2man.awk $< > $@
+
 # ---- Debian packages ---------------------------------------------------
 # Everything beyond a minimal Debian 12 (debootstrap --variant=minbase, which has
 # neither make nor procps): procps gives /bin/kill, which the units' ExecReload
@@ -144,7 +158,8 @@ DEPS_BUILD := gcc make pkg-config libc6-dev libmodbus-dev libsystemd-dev libinih
 DEPS_TEST := libcmocka-dev libgsl-dev python3 python3-scipy python3-numpy mbpoll \
              python3-pymodbus python3-serial python3-serial-asyncio can-utils python3-can python3-canmatrix \
              user-mode-linux busybox-static socat iproute2 clang libclang-rt-14-dev \
-             systemd procps valgrind python3-pyproj cppcheck clang-format gpsbabel
+             systemd procps valgrind python3-pyproj cppcheck clang-format gpsbabel \
+             groff-base man-db
 
 deps-run:
 	@sh tests/deps.sh $(DEPS_BUILD)
@@ -241,7 +256,10 @@ fuzz-merge:
 		echo "$$n: $$(ls tests/fuzz/corpus/$$n | wc -l) files, $$(du -sk tests/fuzz/corpus/$$n | cut -f1) KB"; done
 
 # ---- install ----------------------------------------------------------------
-install: $(BINS)
+install: $(BINS) $(MANS)
+	install -d $(DESTDIR)$(PREFIX)/share/man/man1 $(DESTDIR)$(PREFIX)/share/man/man5 \
+		$(DESTDIR)$(PREFIX)/share/man/man8
+	for m in $(MANS); do install -m 644 $$m $(DESTDIR)$(PREFIX)/share/man/man$${m##*.}/ || exit 1; done
 	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)/etc/trajd $(DESTDIR)$(PREFIX)/lib/systemd/system \
 		$(DESTDIR)$(PREFIX)/share/trajd/tracks
 	install -m 755 $(BINS) $(DESTDIR)$(PREFIX)/bin/
