@@ -174,7 +174,8 @@ static void run_seed(unsigned seed, double *worst_v_ratio, double *worst_a_ratio
                     pos[a] += vel[a] * dt;
                 }
                 t_wp += dt;
-                engine_waypoint_t w = { .t_s = t_wp, .seq = ++seq };
+                seq++;
+                engine_waypoint_t w = { .t_s = t_wp, .seq = seq };
                 memcpy(w.pos_m, pos, sizeof pos);
                 if (urand(&s) < 0.02)
                     w.pos_m[0] += 500; /* an outlier: refused by the engine */
