@@ -29,6 +29,9 @@
 CC ?= cc
 CFLAGS ?= -O2 -g
 PREFIX ?= /usr/local
+# Debian's multiarch would be LIBDIR=$(PREFIX)/lib/x86_64-linux-gnu.
+LIBDIR ?= $(PREFIX)/lib
+SYSCONFDIR ?= /etc
 DESTDIR ?=
 BUILD ?= build
 FUZZ_SECONDS ?=
@@ -83,7 +86,7 @@ VERSION := $(shell sed -n 's/^\#define TRAJD_VERSION "\(.*\)"$$/\1/p' daemon/cor
 MAN_SRC := $(wildcard daemon/doc/*.[1-8])
 MANS := $(MAN_SRC:daemon/doc/%=$(BUILD)/man/%) $(BUILD)/man/trajd.conf.5
 
-.PHONY: all run check check-build test test-asan bench fuzz fuzz-merge install deps deps-run clean
+.PHONY: all run check uninstall check-build test test-asan bench fuzz fuzz-merge install deps deps-run clean
 .DELETE_ON_ERROR:
 .SECONDARY:
 
@@ -113,9 +116,18 @@ $(BUILD)/libtrajd.a: $(LIB_OBJ)
 	@rm -f $@
 	$(AR) rcs $@ $^
 
-# For the Python oracle tests (ctypes).
-$(BUILD)/libtrajd.so: $(PIC_OBJ)
-	$(CC) -shared -o $@ $^ -lm
+# The shared library (also for the Python oracle tests, ctypes), with the
+# soname libtrajd.so.$(SOVERSION): bump SOVERSION when lib/'s ABI breaks.
+SOVERSION := 0
+$(BUILD)/libtrajd.so: $(PIC_OBJ) Makefile
+	$(CC) -shared -Wl,-soname,libtrajd.so.$(SOVERSION) -o $@ $(filter %.o,$^) -lm
+
+$(BUILD)/trajd.pc: Makefile daemon/core/version.h
+	@mkdir -p $(@D)
+	printf '%s\n' 'prefix=$(PREFIX)' 'libdir=$(LIBDIR)' 'includedir=$${prefix}/include' '' \
+		'Name: trajd' 'Description: trajd engine: streaming spline interpolation of timed waypoints (pure, no I/O)' \
+		'Version: $(VERSION)' 'Cflags: -I$${includedir}/trajd' 'Libs: -L$${libdir} -ltrajd' \
+		'Libs.private: -lm' > $@
 
 $(BUILD)/libtrajdaemon.a: $(DAEMON_OBJ)
 	@rm -f $@
@@ -256,21 +268,52 @@ fuzz-merge:
 		echo "$$n: $$(ls tests/fuzz/corpus/$$n | wc -l) files, $$(du -sk tests/fuzz/corpus/$$n | cut -f1) KB"; done
 
 # ---- install ----------------------------------------------------------------
-install: $(BINS) $(MANS)
+# FHS under PREFIX (/usr/local; a package: PREFIX=/usr), DESTDIR for staging.
+# Headers go to include/trajd/ and are included by bare name (Cflags of
+# trajd.pc), as inside the tree.  make uninstall removes exactly these files,
+# and /etc/trajd/trajd.conf only if it is still as installed (a changed
+# config is kept, as dpkg keeps a changed conffile).
+LIB_HEADERS := lib/motion.h $(wildcard lib/*/*.h)
+DOCDIR := $(PREFIX)/share/doc/trajd
+INSTALLED_CONF = sed 's|^replay.track = .*|replay.track = $(PREFIX)/share/trajd/tracks/n2k_furuno_figure8_src52.csv|' config/trajd.conf
+install: $(BINS) $(MANS) $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/trajd.pc
 	install -d $(DESTDIR)$(PREFIX)/share/man/man1 $(DESTDIR)$(PREFIX)/share/man/man5 \
 		$(DESTDIR)$(PREFIX)/share/man/man8
 	for m in $(MANS); do install -m 644 $$m $(DESTDIR)$(PREFIX)/share/man/man$${m##*.}/ || exit 1; done
-	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)/etc/trajd $(DESTDIR)$(PREFIX)/lib/systemd/system \
-		$(DESTDIR)$(PREFIX)/share/trajd/tracks
+	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(SYSCONFDIR)/trajd $(DESTDIR)$(PREFIX)/lib/systemd/system \
+		$(DESTDIR)$(PREFIX)/share/trajd/tracks $(DESTDIR)$(LIBDIR)/pkgconfig \
+		$(DESTDIR)$(PREFIX)/include/trajd $(DESTDIR)$(DOCDIR)/examples
 	install -m 755 $(BINS) $(DESTDIR)$(PREFIX)/bin/
+	install -m 644 $(BUILD)/libtrajd.a $(DESTDIR)$(LIBDIR)/
+	install -m 755 $(BUILD)/libtrajd.so $(DESTDIR)$(LIBDIR)/libtrajd.so.$(VERSION)
+	ln -sf libtrajd.so.$(VERSION) $(DESTDIR)$(LIBDIR)/libtrajd.so.$(SOVERSION)
+	ln -sf libtrajd.so.$(SOVERSION) $(DESTDIR)$(LIBDIR)/libtrajd.so
+	install -m 644 $(BUILD)/trajd.pc $(DESTDIR)$(LIBDIR)/pkgconfig/
+	install -m 644 $(LIB_HEADERS) $(DESTDIR)$(PREFIX)/include/trajd/
+	install -m 644 config/trajd.dbc $(DESTDIR)$(PREFIX)/share/trajd/
+	install -m 644 config/trajd.conf config/demo.conf daemon/doc/examples/trajd_client.c \
+		$(DESTDIR)$(DOCDIR)/examples/
 	install -m 644 tests/data/n2k_furuno_figure8_src52.csv tests/data/ATTRIBUTION.md \
 		$(DESTDIR)$(PREFIX)/share/trajd/tracks/
-	test -e $(DESTDIR)/etc/trajd/trajd.conf || { \
-		sed 's|^replay.track = .*|replay.track = $(PREFIX)/share/trajd/tracks/n2k_furuno_figure8_src52.csv|' \
-			config/trajd.conf > $(DESTDIR)/etc/trajd/trajd.conf && chmod 644 $(DESTDIR)/etc/trajd/trajd.conf; }
+	test -e $(DESTDIR)$(SYSCONFDIR)/trajd/trajd.conf || { \
+		$(INSTALLED_CONF) > $(DESTDIR)$(SYSCONFDIR)/trajd/trajd.conf && chmod 644 $(DESTDIR)$(SYSCONFDIR)/trajd/trajd.conf; }
 	for u in $(wildcard systemd/*.service systemd/*.socket); do \
 		sed 's|@BINDIR@|$(PREFIX)/bin|g' $$u > $(DESTDIR)$(PREFIX)/lib/systemd/system/$$(basename $$u) && \
 		chmod 644 $(DESTDIR)$(PREFIX)/lib/systemd/system/$$(basename $$u) || exit 1; done
+
+uninstall:
+	rm -f $(BINS:$(BUILD)/bin/%=$(DESTDIR)$(PREFIX)/bin/%)
+	for m in $(MANS); do rm -f $(DESTDIR)$(PREFIX)/share/man/man$${m##*.}/$${m##*/}; done
+	rm -f $(DESTDIR)$(LIBDIR)/libtrajd.a $(DESTDIR)$(LIBDIR)/libtrajd.so \
+		$(DESTDIR)$(LIBDIR)/libtrajd.so.$(SOVERSION) $(DESTDIR)$(LIBDIR)/libtrajd.so.$(VERSION) \
+		$(DESTDIR)$(LIBDIR)/pkgconfig/trajd.pc
+	rm -rf $(DESTDIR)$(PREFIX)/include/trajd $(DESTDIR)$(PREFIX)/share/trajd $(DESTDIR)$(DOCDIR)
+	for u in $(notdir $(wildcard systemd/*.service systemd/*.socket)); do \
+		rm -f $(DESTDIR)$(PREFIX)/lib/systemd/system/$$u; done
+	@if [ -f $(DESTDIR)$(SYSCONFDIR)/trajd/trajd.conf ]; then \
+		if $(INSTALLED_CONF) | cmp -s - $(DESTDIR)$(SYSCONFDIR)/trajd/trajd.conf; then \
+			rm -f $(DESTDIR)$(SYSCONFDIR)/trajd/trajd.conf; rmdir $(DESTDIR)$(SYSCONFDIR)/trajd 2>/dev/null || true; \
+		else echo "kept $(DESTDIR)$(SYSCONFDIR)/trajd/trajd.conf (changed since it was installed)"; fi; fi
 
 clean:
 	rm -rf $(BUILD)
