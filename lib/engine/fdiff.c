@@ -2,29 +2,31 @@
 #include "fdiff.h"
 
 #include <stddef.h>
+#include <string.h>
 
 void fdiff_seed(fdiff_t *fd, const fdiff_seg_t *seg, double u0, double du)
 {
     double inv_t = 1.0 / seg->dur_s, inv_t2 = inv_t * inv_t;
     double h = du, h2 = du * du, h3 = h2 * du, u = u0;
 
+    memset(fd, 0, sizeof *fd); /* the zero lane stays zero */
     for (int k = 0; k < FDIFF_AXES; k++) {
         double c0 = seg->c[k][0], c1 = seg->c[k][1], c2 = seg->c[k][2],
                c3 = seg->c[k][3];
         /* Differences of the cubic written in closed form at u (exact
          * algebra, no cancellation of k(u+h) - k(u) on large values). */
-        fd->p[k][0] = c0 + u * (c1 + u * (c2 + u * c3));
-        fd->p[k][1] = c1 * h + c2 * (2 * u * h + h2) +
+        fd->p0[k] = c0 + u * (c1 + u * (c2 + u * c3));
+        fd->p1[k] = c1 * h + c2 * (2 * u * h + h2) +
                       c3 * (3 * u * u * h + 3 * u * h2 + h3);
-        fd->p[k][2] = 2 * c2 * h2 + c3 * (6 * u * h2 + 6 * h3);
-        fd->p[k][3] = 6 * c3 * h3;
+        fd->p2[k] = 2 * c2 * h2 + c3 * (6 * u * h2 + 6 * h3);
+        fd->p3[k] = 6 * c3 * h3;
         /* k'(u) = c1 + 2 c2 u + 3 c3 u^2, a quadratic */
-        fd->v[k][0] = (c1 + u * (2 * c2 + u * 3 * c3)) * inv_t;
-        fd->v[k][1] = (2 * c2 * h + 3 * c3 * (2 * u * h + h2)) * inv_t;
-        fd->v[k][2] = 6 * c3 * h2 * inv_t;
+        fd->v0[k] = (c1 + u * (2 * c2 + u * 3 * c3)) * inv_t;
+        fd->v1[k] = (2 * c2 * h + 3 * c3 * (2 * u * h + h2)) * inv_t;
+        fd->v2[k] = 6 * c3 * h2 * inv_t;
         /* k''(u) = 2 c2 + 6 c3 u, a line */
-        fd->a[k][0] = (2 * c2 + 6 * c3 * u) * inv_t2;
-        fd->a[k][1] = 6 * c3 * h * inv_t2;
+        fd->a0[k] = (2 * c2 + 6 * c3 * u) * inv_t2;
+        fd->a1[k] = 6 * c3 * h * inv_t2;
     }
 }
 
@@ -32,11 +34,11 @@ void fdiff_get(const fdiff_t *fd, double *pos, double *vel, double *acc)
 {
     for (int k = 0; k < FDIFF_AXES; k++) {
         if (pos)
-            pos[k] = fd->p[k][0];
+            pos[k] = fd->p0[k];
         if (vel)
-            vel[k] = fd->v[k][0];
+            vel[k] = fd->v0[k];
         if (acc)
-            acc[k] = fd->a[k][0];
+            acc[k] = fd->a0[k];
     }
 }
 

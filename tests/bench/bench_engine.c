@@ -26,6 +26,7 @@
 #include "cubic.h"
 #include "engine.h"
 #include "fdiff.h"
+#include "fdiff_aos.h"
 #include "hoang.h"
 
 /* ---- allocation counter ---------------------------------------------------- */
@@ -246,8 +247,53 @@ static size_t load_figure8(engine_waypoint_t *wp, size_t max)
     return n;
 }
 
+/* ns per 3-axis setpoint (step + position, velocity, acceleration out) of
+ * the struct-of-arrays stepper and of the previous per-axis one, in the same
+ * run, re-seeding every FDIFF_RESEED_STEPS as the engine does. */
+static void bench_stepper(void)
+{
+    enum { STEPS = 20000000 };
+    fdiff_seg_t seg = {.t0_s = 0, .dur_s = 1.0, .c = {{1, 2, 3, 4}, {5, 6, 7, 8}, {9, 1, 2, 3}}};
+    double pos[3], vel[3], acc[3], sink = 0, best_soa = 1e9, best_aos = 1e9;
+    for (int rep = 0; rep < 3; rep++) { /* best of 3: the least disturbed */
+        fdiff_t fd;
+        fdiff_aos_t ref;
+        double t0 = now_s();
+        for (long n = 0; n < STEPS; n++) {
+            if (n % FDIFF_RESEED_STEPS == 0)
+                fdiff_seed(&fd, &seg, 0, 1e-3);
+            else
+                fdiff_step(&fd);
+            fdiff_get(&fd, pos, vel, acc);
+            sink += pos[0] + vel[1] + acc[2];
+        }
+        double t1 = now_s();
+        for (long n = 0; n < STEPS; n++) {
+            if (n % FDIFF_RESEED_STEPS == 0)
+                fdiff_aos_seed(&ref, &seg, 0, 1e-3);
+            else
+                fdiff_aos_step(&ref);
+            fdiff_aos_get(&ref, pos, vel, acc);
+            sink += pos[0] + vel[1] + acc[2];
+        }
+        double t2 = now_s();
+        if ((t1 - t0) < best_soa)
+            best_soa = t1 - t0;
+        if ((t2 - t1) < best_aos)
+            best_aos = t2 - t1;
+    }
+    printf("forward-difference stepper, ns per 3-axis setpoint (p, v, a), best of 3, same run:\n"
+           "| stepper | ns/setpoint | x previous |\n|---|---|---|\n"
+           "| previous per-axis (tests/helpers/fdiff_aos.h) | %.2f | 1.00 |\n"
+           "| struct-of-arrays (lib/engine/fdiff.h) | %.2f | %.2f |\n"
+           "target <= 8 ns per setpoint (issue 13); the engine_tick figure below adds the "
+           "state machine around it.  (sink %g)\n\n",
+           best_aos * 1e9 / STEPS, best_soa * 1e9 / STEPS, best_aos / best_soa, sink > 0 ? 1.0 : 0.0);
+}
+
 int main(void)
 {
+    bench_stepper();
     static const long lengths[] = {1000, 10000, 100000, 1000000};
     static const unsigned fo[][2] = {{8, 4}, {16, 4}, {16, 8}, {24, 12}, {32, 8}, {32, 16},
                                      {48, 24}, {64, 32}, {32, 30}};

@@ -16,6 +16,7 @@
 #include "cubic.h"
 #include "engine.h"
 #include "fdiff.h"
+#include "fdiff_aos.h"
 #include "frag.h"
 
 /* The longest segment the engine may stream: max_gap_s (60 s by default)
@@ -77,6 +78,37 @@ static void test_drift_longest_segment(void **state)
 
 /* Given a seed at a fractional phase u0, then the stepper's k-th point is
  * the cubic at u0 + k du (the phase the engine carries across boundaries). */
+/* Given random segments, seeds and steps, when stepped 20000 times by the
+ * struct-of-arrays stepper and by the previous per-axis one (fdiff_aos.h),
+ * then every position, velocity and acceleration is the same double. */
+static void test_soa_equals_previous(void **state)
+{
+    (void)state;
+    unsigned seed = 77;
+    for (int s = 0; s < 20; s++) {
+        fdiff_seg_t seg = {.t0_s = 0, .dur_s = 0.05 + 10 * urand(&seed)};
+        for (int k = 0; k < 3; k++)
+            for (int j = 0; j < 4; j++)
+                seg.c[k][j] = (urand(&seed) - 0.5) * pow(10, 7 * urand(&seed));
+        double du = 1.0 / (1 + 20000 * urand(&seed)), u0 = urand(&seed) * du;
+        fdiff_t fd;
+        fdiff_aos_t ref;
+        fdiff_seed(&fd, &seg, u0, du);
+        fdiff_aos_seed(&ref, &seg, u0, du);
+        for (int n = 0; n < 20000; n++) {
+            double p[3], v[3], a[3], P[3], V[3], A[3];
+            fdiff_get(&fd, p, v, a);
+            fdiff_aos_get(&ref, P, V, A);
+            if (memcmp(p, P, sizeof p) || memcmp(v, V, sizeof v) || memcmp(a, A, sizeof a)) {
+                print_error("segment %d step %d differs\n", s, n);
+                fail();
+            }
+            fdiff_step(&fd);
+            fdiff_aos_step(&ref);
+        }
+    }
+}
+
 static void test_seed_phase(void **state)
 {
     (void)state;
@@ -331,6 +363,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_drift_longest_segment),
+        cmocka_unit_test(test_soa_equals_previous),
         cmocka_unit_test(test_seed_phase),
         cmocka_unit_test(test_cubic_vs_gsl),
         cmocka_unit_test(test_frag_bookkeeping),
