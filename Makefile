@@ -173,6 +173,10 @@ DEPS_TEST := libcmocka-dev libgsl-dev python3 python3-scipy python3-numpy mbpoll
              systemd procps valgrind python3-pyproj cppcheck clang-format gpsbabel \
              groff-base man-db
 
+# make bench only: cyclictest (rt-tests), the wakeup-latency reference
+# tests/bench/bench_lateness.sh measures beside trajd's tick lateness.
+DEPS_BENCH := rt-tests
+
 deps-run:
 	@sh tests/deps.sh $(DEPS_BUILD)
 
@@ -231,6 +235,7 @@ format-check:
 		for f in $$bad; do echo "  $$f"; done; exit 1; fi; echo "format-check: $(words $(FORMAT_SRC)) files clean"
 
 bench: deps
+	@sh tests/deps.sh $(DEPS_BENCH)
 	@$(MAKE) --no-print-directory all
 	@for b in $(BENCHES); do echo "== $$b"; $$b || exit 1; done
 	@for b in $(wildcard tests/bench/bench_*.sh); do echo "== $$b"; BUILD=$(abspath $(BUILD)) sh $$b || exit 1; done

@@ -47,18 +47,46 @@ run() { # $1 = label
             label, ticks, q[1], q[2], q[3], q[4], missed, over, 100 * cpu / dur }'
 }
 
+# cyclictest (rt-tests, in make bench's dependencies) at the same 1 kHz for
+# the same duration, one thread at the same policy: the machine's own wakeup
+# latency, the floor trajd's lateness is read against.
+cyclic() { # $1 = label, $2... = extra cyclictest options
+    local label=$1; shift
+    command -v cyclictest > /dev/null || { echo "| $label | cyclictest not installed (rt-tests) |"; return; }
+    cyclictest -q -t 1 -i 1000 -D "$DURATION_S" -h 100000 "$@" 2> /dev/null | awk -v label="$label" '
+        /^[0-9]/ { h[$1 + 0] = $2 + 0; if ($1 + 0 > top) top = $1 + 0; next }
+        /^# Total:/ { total = $3 + 0 }
+        /^# Max Latencies:/ { max = $4 + 0 }
+        /^# Histogram Overflows:/ { over = $4 + 0 }
+        END {
+            if (total == 0) { printf "| %-24s | no samples |\n", label; exit }
+            c = 0; p50 = p99 = p999 = -1;
+            for (us = 0; us <= top; us++) {
+                c += h[us];
+                if (p50 < 0 && c >= 0.5 * total) p50 = us;
+                if (p99 < 0 && c >= 0.99 * total) p99 = us;
+                if (p999 < 0 && c >= 0.999 * total) p999 = us;
+            }
+            if (p99 < 0) p99 = ">100000"; if (p999 < 0) p999 = ">100000";
+            printf "| %-24s | %6d | %5s | %5s | %7s | %6d | %6s | %8s | %7s |\n",
+                label, total, p50, p99, p999, max, "-", over " ovf", "-" }'
+}
+
 echo "trajd lateness at 1 kHz, 4 objects, ${DURATION_S} s per run, $ncpu CPUs, $(uname -r)"
 echo "| run                      |  ticks | p50us | p99us | p99.9us | max us | missed | overruns | CPU     |"
 echo "|---|---|---|---|---|---|---|---|---|"
 conf ""
 run "idle"
+cyclic "cyclictest, idle"
 if [ "$ncpu" -ge 2 ]; then
     conf "cpu_affinity = 0\n"
     taskset -c 1 sh -c 'while :; do :; done' & busy=$!
     run "other core busy"
+    cyclic "cyclictest, other busy" -a 0
     kill "$busy"; wait "$busy" 2>/dev/null || true; busy=""
 fi
 if [ "$(id -u)" -eq 0 ]; then
     conf "fifo_priority = 50\nmlockall = yes\n"
     run "SCHED_FIFO 50 + mlockall"
+    cyclic "cyclictest, FIFO 50 + mlock" -p 50 -m
 fi
