@@ -141,7 +141,7 @@ typedef struct {
                                      * the tick stops the loop with it */
 } stats_t;
 
-/* Exit statuses of trajd beyond sysexits.h (README "Output faults are errors"). */
+/* Exit statuses of trajd beyond sysexits.h (daemon/README.md "Output faults are errors"). */
 #define CORE_EXIT_OUTPUT_LOST 74    /* EX_IOERR: setpoint lines were lost by an output */
 #define CORE_EXIT_EPIPE 141         /* stdout's reader went away (128 + SIGPIPE, what a shell
                                      * reports for a filter ended by SIGPIPE) */

@@ -51,7 +51,7 @@
  * start from there (the same point, except for HELD ends and SMOOTH).
  * Waypoint times may restart (e.g. from 0) with each new trajectory.
  *
- * Method and parameterisation (see hoang.h, cubic.h, README "The engine"):
+ * Method and parameterisation (see hoang.h, cubic.h, lib/engine/README.md):
  *   (a) ENGINE_PARAM_UNIFORM  the paper: uniform B-spline, each segment
  *       mapped linearly onto its own time interval.  Physical velocity jumps
  *       at every waypoint whose neighbouring intervals differ (measured on
@@ -130,7 +130,7 @@ typedef struct {
                                solve ~rho^(O/2) = 2.7e-5 of the curvature scale
                                (measured 4e-7 .. 7e-7 of a random walk's extent),
                                lookahead 32 waypoints with start_slack 8;
-                               see README for the table */
+                               see lib/engine/README.md for the table */
     int64_t period_ns;      /* output period.  Default 10 ms (100 Hz) */
     unsigned capacity;      /* waypoints buffered at most (lookahead + fragment
                                + 8 .. 2^20; about 272 bytes each).  Default
@@ -153,7 +153,7 @@ typedef struct {
                                Default 30 m/s^2 (3 g: generous for ground and
                                sea vehicles; measured on the real tracks: legit
                                samples reach 11.4 at 5 Hz, the figure-8's
-                               jittered ones 117 and 44; see README "Jitter
+                               jittered ones 117 and 44; see lib/engine/README.md "Jitter
                                and outliers").  Position noise alone implies
                                ~4 noise / dt^2: raise it for noisy fixes at
                                10 Hz and more */

@@ -3,7 +3,7 @@
  * type, scaling and word order.  Pure: encodes a status snapshot into a
  * register image, validates requests and decodes holding-register writes into
  * commands and waypoints, with the Modbus exception code to answer.  No I/O.
- * The README table is generated from mbmap_fields() (tests/e2e/test_mbmap_readme.sh
+ * The table in config/PROTOCOL.md is generated from mbmap_fields() (tests/e2e/test_mbmap_readme.sh
  * fails if the two differ).
  *
  * Addresses are the 0-based addresses carried in the PDU (mbpoll: use -0, or
@@ -131,7 +131,7 @@
 #define MBMAP_H_WP_COUNT 18          /* the block is written whole, by one FC 16 */
 
 /* Commands (holding register MBMAP_H_COMMAND). */
-#define MBMAP_CMD_START 1            /* start now with what is buffered (see README) */
+#define MBMAP_CMD_START 1            /* start now with what is buffered (see config/PROTOCOL.md) */
 #define MBMAP_CMD_STOP 2             /* stop now along the path, then drop (engine_stop) */
 #define MBMAP_CMD_CLEAR 3            /* stop along the path, drop, WAITING (engine_clear) */
 #define MBMAP_CMD_RESET_COUNTERS 4   /* engine_reset_counters + Modbus counters */
@@ -280,7 +280,7 @@ typedef struct {
     const char *doc;
 } mbmap_field_t;
 
-/* The map as a table (for the README and the tests); *n receives its length. */
+/* The map as a table (for config/PROTOCOL.md and the tests); *n receives its length. */
 const mbmap_field_t *mbmap_fields(size_t *n);
 
 /* Name of a type: "u16", "u32", "f32", "f64". */

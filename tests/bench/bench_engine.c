@@ -1,5 +1,5 @@
 /*
- * bench_engine.c - prints the engine's numbers (README "## The engine").
+ * bench_engine.c - prints the engine's numbers (lib/engine/README.md).
  *
  *  1. ns per waypoint (engine_push: validation + incremental fragment solve +
  *     segment building) and ns per 3-axis setpoint (engine_tick) for tracks

@@ -233,7 +233,7 @@ class TestRejectionsReported(unittest.TestCase):
 
     def test_real_track_jitter_reported(self):
         # Given the real figure-8 log, whose two late-stamped fixes the
-        # acceleration rule refuses (README "Jitter and outliers"), then both
+        # acceleration rule refuses (lib/engine/README.md "Jitter and outliers"), then both
         # are reported at their lines, found here as the two rows whose
         # interval to the previous row is below 0.1 s around t = 135 s
         with open(FIGURE8) as f:

@@ -49,7 +49,7 @@ RHO = 2.0 - math.sqrt(3.0)
 TOL_ORACLE_REL = 1e-12
 # Documented fragment bound: |streamed - global| <= FRAG_K * rho^(O/2) * max|c2|/3
 # (c2/3 = k''/6 scale of the error injected at an artificial fragment end);
-# measured K <= 1.3 over random walks and several (F, O), see README.
+# measured K <= 1.3 over random walks and several (F, O), see lib/engine/README.md.
 FRAG_K = 2.0
 
 failures = []
@@ -313,7 +313,7 @@ def test_real_tracks():
     the timestamps, F=32, O=16) and with the paper's uniform B-spline, then:
     every waypoint is hit (b: 1e-9 of the extent), the fragments stay within the
     bound of one global solve, nothing is NaN, the velocity is continuous at
-    the joins for (b); the velocity jumps of (a) are printed (README)."""
+    the joins for (b); the velocity jumps of (a) are printed (lib/engine/README.md)."""
     for name in ("gpxgo_visnjan.csv", "gpxpy_cerknicko-jezero.csv", "n2k_furuno_figure8_src52.csv"):
         t, xyz = load_track(name)
         ext = np.ptp(xyz, axis=0).max()

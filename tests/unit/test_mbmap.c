@@ -5,8 +5,8 @@
  * the CRC-16/MODBUS check value from the CRC catalogue, the request rules of
  * the Modbus Application Protocol spec.
  *
- * Run with --markdown to print the README register table (generated from
- * mbmap_fields(); tests/e2e/test_mbmap_readme.sh compares it with README.md).
+ * Run with --markdown to print the register table of config/PROTOCOL.md (generated from
+ * mbmap_fields(); tests/e2e/test_mbmap_readme.sh compares it with config/PROTOCOL.md).
  */
 #include "test.h"
 
