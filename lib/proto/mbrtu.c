@@ -57,9 +57,11 @@ void mbrtu_bytes(mbrtu_rx_t *r, const uint8_t *b, size_t n, mbrtu_deliver_fn del
 void mbrtu_silence(mbrtu_rx_t *r, mbrtu_deliver_fn deliver, void *ctx)
 {
     /* A frame of a function we cannot size is delimited by this silence:
-     * if it is whole and ours, it gets its exception 01. */
-    if (!r->discard && r->len >= 4 && mbmap_rtu_frame_len(r->buf, r->len) < 0 &&
-        crc_ok(r->buf, r->len))
+     * if it is whole and ours, it gets its exception 01.  No RTU frame is
+     * longer than MBMAP_RTU_ADU_MAX (the buffer holds twice that): a longer
+     * one is refused and counted, even with a right CRC. */
+    if (!r->discard && r->len >= 4 && r->len <= MBMAP_RTU_ADU_MAX &&
+        mbmap_rtu_frame_len(r->buf, r->len) < 0 && crc_ok(r->buf, r->len))
         deliver(ctx, r->buf, r->len);
     else if (r->len && !r->discard)
         r->crc_errors++;
