@@ -117,8 +117,8 @@ static int no_position(const run_t *r, const engine_setpoint_t *sp)
 {
 #ifdef ENGINE_SP_NO_POSITION
     if (sp->flags & ENGINE_SP_NO_POSITION) {
-        if (r->have_last || sp->state != ENGINE_STATE_WAITING)
-            abort(); /* a position, once there, is never lost */
+        if (r->have_last || sp->state == ENGINE_STATE_STREAMING)
+            abort(); /* a position, once there, is never lost; no motion without one */
         return 1;
     }
 #endif
