@@ -276,6 +276,9 @@ static void report_ready(trajd_t *d, char code)
         (void)w;
         close(d->ready_fd);
         d->ready_fd = -1;
+        /* Detached and running: the terminal that started us is not watching. */
+        if (code == 0)
+            log_set_mode(LOG_MODE_SYSLOG);
     }
 }
 

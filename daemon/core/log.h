@@ -1,8 +1,15 @@
 /*
- * log.h - log lines to stderr with the "<N>" priority prefix journald reads
- * (sd-daemon(3): SD_ERR is "<3>", SD_INFO "<6>" ...), one write() per line so
- * lines from one process never interleave.  Priorities are syslog.h's
- * LOG_ERR .. LOG_DEBUG.
+ * log.h - log lines, one write() per line so lines from one process never
+ * interleave.  Priorities are syslog.h's LOG_ERR .. LOG_DEBUG.  Where they go
+ * (chosen at the first line, or set by log_set_mode):
+ *   LOG_MODE_TTY      stderr is a terminal (and not journald's stream):
+ *                     plain text, "warning: " / "error: " before those levels;
+ *   LOG_MODE_PREFIX   otherwise (journald's stream: JOURNAL_STREAM names
+ *                     stderr's device:inode, systemd.exec(5); or a pipe or
+ *                     file): the "<N>" priority prefix journald reads
+ *                     (sd-daemon(3): SD_ERR is "<3>", SD_INFO "<6>" ...);
+ *   LOG_MODE_SYSLOG   detached (trajd without -f, once it is ready):
+ *                     syslog(3), ident "trajd", facility LOG_DAEMON.
  *
  * Not for the tick: stderr may block when journald is slow.  The tick counts
  * events; a housekeeping timer logs them.
@@ -18,6 +25,14 @@ int log_get_level(void);
 
 /* Parse "err", "warning", "notice", "info", "debug"; returns the LOG_* value or -1. */
 int log_level_parse(const char *s);
+
+typedef enum { LOG_MODE_AUTO = 0, LOG_MODE_TTY, LOG_MODE_PREFIX, LOG_MODE_SYSLOG } log_mode_t;
+
+/* Choose the destination; LOG_MODE_AUTO: decide again from stderr and
+ * JOURNAL_STREAM at the next line.  LOG_MODE_SYSLOG opens syslog. */
+void log_set_mode(log_mode_t mode);
+/* The mode the next line would use (LOG_MODE_AUTO resolved). */
+log_mode_t log_get_mode(void);
 
 /* Write "<prio>message\n" to stderr (printf format; a trailing '\n' is not needed). */
 void log_msg(int prio, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
