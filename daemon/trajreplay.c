@@ -207,6 +207,8 @@ static const char *reason_name(int e)
     case ENGINE_ESPEED: return "speed";
     case ENGINE_ENUMERIC: return "numeric";
     case ENGINE_EACCEL: return "accel";
+    case ENGINE_EUNCONFIRMED: return "unconfirmed";
+    case ENGINE_ESTALE: return "stale";
     default: return NULL;
     }
 }
@@ -619,7 +621,11 @@ static void run_emit(run_t *run, const engine_setpoint_t *sp)
  * the last call: the first REJECT_SHOW_FIRST, then one in REJECT_SHOW_EVERY. */
 static void run_report_rejections(run_t *run)
 {
-    for (; run->reported < run->r.next; run->reported++) {
+    /* the engine judges a waypoint with its neighbours: the last `judging`
+     * offered have no verdict yet (replay_feed records it when it comes) */
+    engine_status(run->e, &run->st);
+    size_t judged = run->r.next > run->st.judging ? run->r.next - run->st.judging : 0;
+    for (; run->reported < judged; run->reported++) {
         int rc = run->results[run->reported];
         if (rc >= 0)
             continue; /* accepted, or an exact duplicate dropped */
@@ -722,10 +728,8 @@ static int run_ticks(run_t *run)
         if (replay_done(&run->r) && (sp.flags & ENGINE_SP_HOLD)) {
             engine_status(run->e, &run->st);
             /* At rest with nothing buffered once the track ran out: the
-             * end of the last trajectory (FINISHED), or nothing was ever
-             * accepted (WAITING). */
-            if (run->st.buffered == 0 && sp.state == ENGINE_STATE_WAITING &&
-                run->st.accepted == 0) {
+             * end of the last trajectory, or nothing was ever accepted. */
+            if (run->st.buffered == 0 && run->st.accepted == 0) {
                 run_clear_progress(run);
                 fprintf(stderr, "trajreplay: %s: no usable waypoint: all %zu rejected\n",
                         run->o->input, run->trk.n);

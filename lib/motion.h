@@ -27,6 +27,9 @@ enum engine_error {
     ENGINE_ESTATE = 9,      /* call not valid in this state */
     ENGINE_ENUMERIC = 10,   /* solver failed (singular system); waypoint rejected */
     ENGINE_EACCEL = 11,     /* implied acceleration from the last two waypoints above max_accel_m_s2 */
+    ENGINE_EUNCONFIRMED = 12, /* far from the trajectory in time or space (or at odds with its
+                                 neighbours) and not confirmed by `confirm` consistent waypoints */
+    ENGINE_ESTALE = 13,     /* repeats the last position while the object was moving: a frozen fix */
     ENGINE_ERROR_COUNT
 };
 
@@ -41,6 +44,16 @@ typedef struct {
     double pos_m[ENGINE_AXES];   /* x, y, z (east, north, up for geographic input), metres */
     uint32_t seq;                /* transport sequence number (0 if none) */
 } engine_waypoint_t;
+
+/* A waypoint the engine refused, as reported by engine_rejection_next: the
+ * verdict on a waypoint may come a few waypoints after it was pushed (it is
+ * judged with its neighbours), so the caller learns it here. */
+typedef struct {
+    uint32_t seq;                /* the waypoint's seq as pushed */
+    int reason;                  /* engine_error (positive) */
+    double t_s;
+    double pos_m[ENGINE_AXES];
+} engine_rejection_t;
 
 typedef enum {
     ENGINE_STATE_WAITING = 0,   /* no trajectory yet, or lookahead not yet buffered; holding */
@@ -107,6 +120,15 @@ typedef struct {
                                        velocity set to 0 in one tick.  Should stay 0 */
     double rate;                    /* time-scaling rate ds/dt of the output (1 = as solved) */
     double override;                /* feed override, 0 .. 2 */
+    uint64_t reanchors;             /* trajectories ended by `confirm` waypoints that
+                                       did not continue it (not a gap) */
+    uint64_t transfers;             /* transfers started */
+    double transfer_s;              /* their total duration (track seconds) */
+    uint64_t transfers_capped;      /* derived transfers cut to max_gap_s (faster than
+                                       the object's recent motion) */
+    uint64_t rejections_unreported; /* rejections pushed out of the report ring unread */
+    uint32_t judging;               /* waypoints pushed and still awaiting their verdict
+                                     * (judged with their neighbours: at most 8) */
 } engine_status_t;
 
 #endif

@@ -42,7 +42,26 @@ static int push_engine(void *e, const engine_waypoint_t *wp)
 
 int replay_feed(replay_t *r, engine_t *e, int64_t now_ns)
 {
+    r->drain = 1;
     return replay_feed_via(r, push_engine, e, e, now_ns);
+}
+
+/* Record the verdicts the engine gave since the last call: refused later,
+ * after engine_push returned 0 (those refused at once were counted then). */
+static void read_rejections(replay_t *r, engine_t *e)
+{
+    engine_rejection_t j;
+    while (engine_rejection_next(e, &j)) {
+        size_t i = (size_t)j.seq - 1;
+        int known = j.seq >= 1 && i < r->trk->n && r->trk->wp[i].seq == j.seq;
+        /* engine_push returns these at once: counted when offered */
+        if (j.reason == ENGINE_ENOTFINITE || j.reason == ENGINE_ERANGE ||
+            j.reason == ENGINE_ENUMERIC)
+            continue;
+        r->refused++;
+        if (known && r->results)
+            r->results[i] = -j.reason;
+    }
 }
 
 int replay_feed_via(replay_t *r, replay_push_fn push, void *ctx, engine_t *e, int64_t now_ns)
@@ -67,10 +86,14 @@ int replay_feed_via(replay_t *r, replay_push_fn push, void *ctx, engine_t *e, in
             r->refused++;
         r->next++;
         taken++;
+        if (r->drain)
+            read_rejections(r, e);
     }
     if (r->next >= r->trk->n && !r->finished) {
         (void)engine_finish(e);
         r->finished = 1;
+        if (r->drain)
+            read_rejections(r, e);
     }
     return taken;
 }

@@ -37,7 +37,9 @@ typedef struct {
     uint64_t duplicates;  /* waypoints the engine dropped as exact duplicates */
     int last_rc;          /* engine_push result of the last waypoint offered */
     int *results;         /* optional, caller-owned, trk->n entries (NULL = none):
-                             engine_push result of each waypoint once taken */
+                             engine_push result of each waypoint once taken,
+                             then -reason if the engine refused it later */
+    int drain;            /* replay_feed: read the engine's rejections (private) */
 } replay_t;
 
 /* Start replaying trk (not copied: it must outlive r) with waypoint 0 due at
@@ -50,6 +52,11 @@ void replay_init(replay_t *r, const track_t *trk, int64_t start_ns);
  * offered, calls engine_finish() (once).  Returns how many waypoints the
  * engine took (accepted, dropped as duplicates or rejected as bad data),
  * never an error: rejections are counted in r and in the engine's status.
+ * The engine judges a waypoint with its neighbours, so its verdict may come
+ * a few pushes later: replay_feed reads them (engine_rejection_next) and
+ * records each in results[seq - 1] (the track loader numbers waypoints from
+ * 1 in file order) and in refused.  replay_feed_via leaves them to its
+ * caller (the daemon reads them where it logs them).
  */
 int replay_feed(replay_t *r, engine_t *e, int64_t now_ns);
 

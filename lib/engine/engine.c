@@ -20,12 +20,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "accept.h"
 #include "cubic.h"
 #include "fdiff.h"
 #include "frag.h"
 #include "hoang.h"
 #include "lsq.h"
 #include "timescale.h"
+#include "transfer.h"
 
 #define AX ENGINE_AXES
 
@@ -39,6 +41,8 @@ typedef struct {
     uint64_t node;        /* SEG: index of its first node in the trajectory */
     uint64_t traj;        /* input trajectory it belongs to (engine.in_traj) */
     fdiff_seg_t seg;      /* END: c[k][0] is the rest position, t0_s = t1_s */
+    double gap_s;         /* first entry: track time since the previous trajectory's
+                             end when a gap separates them, else 0 */
 } qent_t;
 
 enum { OUT_HOLD = 0, OUT_XFER = 1, OUT_STREAM = 2 };
@@ -75,6 +79,14 @@ struct engine {
     double end_t;
     double end_speed;     /* speed at the end of the last queued segment */
     uint64_t in_traj;     /* +1 per trajectory opened */
+    double in_gap_s;      /* gap before the trajectory being received (0: none) */
+
+    /* ---- acceptance (accept.h) and transfers (transfer.h) ---- */
+    accept_t policy;
+    transfer_config_t xcfg;
+    transfer_motion_t motion;
+    engine_rejection_t rej[ENGINE_REJECTIONS_KEPT];
+    unsigned rej_head, rej_len;
 
     /* ---- the queue ---- */
     qent_t *q;
@@ -122,9 +134,6 @@ struct engine {
     engine_status_t st;
 };
 
-/* Rest-to-rest transfer: shortest duration, and the speed used when no max_speed_m_s. */
-#define ENGINE_TRANSFER_MIN_S 1.0
-#define ENGINE_TRANSFER_SPEED_M_S 10.0
 /* Output and curve start closer than this need no transfer (metres). */
 #define ENGINE_TRANSFER_TOL_M 1e-9
 /* Timestamps closer than this are "the same time" (seconds). */
@@ -157,6 +166,10 @@ const char *engine_strerror(int err)
     case ENGINE_ESTATE: return "call not valid in this state";
     case ENGINE_ENUMERIC: return "solver failed (singular system)";
     case ENGINE_EACCEL: return "implied acceleration from the previous two waypoints above max_accel_m_s2";
+    case ENGINE_EUNCONFIRMED:
+        return "far from the trajectory in time or space, or at odds with its neighbours, "
+               "and not confirmed by consistent waypoints";
+    case ENGINE_ESTALE: return "stale: the same position again while the object was moving";
     default: return "unknown engine error";
     }
 }
@@ -184,14 +197,45 @@ void engine_config_default(engine_config_t *cfg)
     cfg->capacity = 4096;
     cfg->max_gap_s = 60.0;
     cfg->max_abs_m = 1e7;
-    cfg->max_speed_m_s = 100.0;
-    cfg->max_accel_m_s2 = 30.0;
+    cfg->profile = ENGINE_PROFILE_AUTO;
+    cfg->max_speed_m_s = ENGINE_LIMIT_PROFILE;
+    cfg->max_accel_m_s2 = ENGINE_LIMIT_PROFILE;
+    cfg->confirm = 3;
     cfg->max_segment_s = 60.0;
     cfg->start_slack = 8;
     cfg->smooth_window = 24;
     cfg->smooth_ctrl = 6;
     cfg->scale_accel_m_s2 = 5.0;
     cfg->scale_jerk_m_s3 = 50.0;
+}
+
+/* The numbers and where they come from: engine.h, engine_profile_t. */
+static const struct {
+    double speed_m_s, accel_m_s2;
+} profile_limits[ENGINE_PROFILE_COUNT] = {
+    [ENGINE_PROFILE_AUTO] = {400.0, 30.0},
+    [ENGINE_PROFILE_VESSEL] = {40.0, 30.0},
+    [ENGINE_PROFILE_ROAD] = {100.0, 30.0},
+    [ENGINE_PROFILE_AIR] = {400.0, 0.0},
+    [ENGINE_PROFILE_MACHINE] = {0.0, 0.0},
+    [ENGINE_PROFILE_NONE] = {0.0, 0.0},
+};
+
+static engine_profile_t profile_of(const engine_config_t *cfg)
+{
+    return (unsigned)cfg->profile < ENGINE_PROFILE_COUNT ? cfg->profile : ENGINE_PROFILE_AUTO;
+}
+
+double engine_config_max_speed(const engine_config_t *cfg)
+{
+    return cfg->max_speed_m_s < 0 ? profile_limits[profile_of(cfg)].speed_m_s
+                                  : cfg->max_speed_m_s;
+}
+
+double engine_config_max_accel(const engine_config_t *cfg)
+{
+    return cfg->max_accel_m_s2 < 0 ? profile_limits[profile_of(cfg)].accel_m_s2
+                                   : cfg->max_accel_m_s2;
 }
 
 static int uses_pstar(const engine_config_t *cfg)
@@ -267,7 +311,8 @@ unsigned engine_lookahead(const engine_config_t *cfg)
         return 0;
     /* what the solver needs, from the start on (a few periods cover it) ... */
     la = scan_lookahead(f, o, frag_delta(cfg), uses_pstar(cfg) ? 3 : 2, 0, 4u * f,
-                        extra, first);
+                        extra, first) +
+         ACCEPT_LAG; /* a waypoint becomes a node once its next neighbour is in */
     /* ... and what the output waits for */
     want = steady_lookahead(cfg) + extra + cfg->start_slack;
     return la > want ? la : want;
@@ -305,10 +350,18 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
         w = "max_gap_s: must be positive and finite";
     else if (!(cfg->max_abs_m > 0) || !isfinite(cfg->max_abs_m))
         w = "max_abs_m: must be positive and finite";
-    else if (!(cfg->max_speed_m_s >= 0) || !isfinite(cfg->max_speed_m_s))
-        w = "max_speed_m_s: must be 0 (no limit) or positive and finite";
-    else if (!(cfg->max_accel_m_s2 >= 0) || !isfinite(cfg->max_accel_m_s2))
-        w = "max_accel_m_s2: must be 0 (no limit) or positive and finite";
+    else if (!(cfg->max_speed_m_s >= ENGINE_LIMIT_PROFILE) || !isfinite(cfg->max_speed_m_s))
+        w = "max_speed_m_s: must be -1 (the profile's), 0 (no limit) or positive and finite";
+    else if (!(cfg->max_accel_m_s2 >= ENGINE_LIMIT_PROFILE) || !isfinite(cfg->max_accel_m_s2))
+        w = "max_accel_m_s2: must be -1 (the profile's), 0 (no limit) or positive and finite";
+    else if ((unsigned)cfg->profile >= ENGINE_PROFILE_COUNT)
+        w = "profile: unknown";
+    else if (cfg->confirm < 1 || cfg->confirm > ACCEPT_WINDOW_MAX)
+        w = "confirm: must be within 1..8";
+    else if (!(cfg->transfer_speed_m_s >= 0) || !isfinite(cfg->transfer_speed_m_s))
+        w = "transfer_speed_m_s: must be 0 (derived) or positive and finite";
+    else if (!(cfg->transfer_accel_m_s2 >= 0) || !isfinite(cfg->transfer_accel_m_s2))
+        w = "transfer_accel_m_s2: must be 0 (derived) or positive and finite";
     else if (!(cfg->max_segment_s >= 0) || !isfinite(cfg->max_segment_s))
         w = "max_segment_s: must be 0 or positive and finite";
     else if (!(cfg->scale_accel_m_s2 > 0) || !isfinite(cfg->scale_accel_m_s2))
@@ -361,6 +414,26 @@ engine_t *engine_new(const engine_config_t *cfg, int *err)
             goto nomem;
     }
     e->period_s = (double)cfg->period_ns * 1e-9;
+    {
+        accept_config_t ac = {
+            .max_speed_m_s = engine_config_max_speed(cfg),
+            .max_accel_m_s2 = engine_config_max_accel(cfg),
+            .max_gap_s = cfg->max_gap_s,
+            .learned = cfg->profile == ENGINE_PROFILE_AUTO,
+            .stale = cfg->profile != ENGINE_PROFILE_MACHINE && cfg->profile != ENGINE_PROFILE_NONE,
+            /* judged within the start slack: no latency beyond the solver's */
+            .window = cfg->start_slack < ACCEPT_WINDOW_MAX ? cfg->start_slack : ACCEPT_WINDOW_MAX,
+            .confirm = cfg->confirm,
+        };
+        if (ac.window < ac.confirm)
+            ac.window = ac.confirm;
+        accept_init(&e->policy, &ac);
+    }
+    e->xcfg.speed_m_s = cfg->transfer_speed_m_s;
+    e->xcfg.accel_m_s2 = cfg->transfer_accel_m_s2;
+    e->xcfg.max_s = cfg->max_gap_s;
+    e->xcfg.period_s = e->period_s;
+    transfer_motion_reset(&e->motion);
     /* nodes from the oldest unbuilt segment (lags the newest by the lookahead
      * plus the copies of MULTIPLE) to the newest, with margin */
     while (ring < 2 * ((size_t)cfg->fragment + e->lookahead) + 16)
@@ -421,7 +494,7 @@ static double hpar(const engine_t *e, uint64_t j)
 static size_t buffered(const engine_t *e)
 {
     return e->qlen + (size_t)(e->nodes - e->seg_next) +
-           (e->smooth ? (size_t)lsq_smooth_pending(&e->sm) : 0);
+           (e->smooth ? (size_t)lsq_smooth_pending(&e->sm) : 0) + accept_pending(&e->policy);
 }
 
 static qent_t *q_push(engine_t *e)
@@ -434,6 +507,7 @@ static qent_t *q_push(engine_t *e)
     e->qlen++;
     q->first = e->in_first_pending;
     q->traj = e->in_traj;
+    q->gap_s = q->first ? e->in_gap_s : 0;
     e->in_first_pending = 0;
     return q;
 }
@@ -693,54 +767,50 @@ static int reject(engine_t *e, int code)
     return -code;
 }
 
-int engine_push(engine_t *e, const engine_waypoint_t *wp)
+/* Count a refused waypoint and keep it for engine_rejection_next. */
+static int reject_wp(engine_t *e, int code, const engine_waypoint_t *wp)
 {
-    int gap = 0, rc;
-    double dist = 0;
+    engine_rejection_t *r;
 
-    for (int k = 0; k < AX; k++)
-        if (!isfinite(wp->pos_m[k]))
-            return reject(e, ENGINE_ENOTFINITE);
-    if (!isfinite(wp->t_s))
-        return reject(e, ENGINE_ENOTFINITE);
-    for (int k = 0; k < AX; k++)
-        if (fabs(wp->pos_m[k]) > e->cfg.max_abs_m)
-            return reject(e, ENGINE_ERANGE);
-    if (fabs(wp->t_s) > ENGINE_T_ABS_MAX_S)
-        return reject(e, ENGINE_ERANGE);
-    if (e->in_open) {
-        double dt = wp->t_s - e->last_t;
-        for (int k = 0; k < AX; k++)
-            dist += (wp->pos_m[k] - e->last_r[k]) * (wp->pos_m[k] - e->last_r[k]);
-        dist = sqrt(dist);
-        if (dt < -ENGINE_SAME_TIME_S)
-            return reject(e, ENGINE_EBACKWARDS);
-        if (dt <= ENGINE_SAME_TIME_S) {
-            if (dist <= ENGINE_SAME_POS_M) {
-                e->st.duplicates++;
-                return ENGINE_DUPLICATE;
-            }
-            return reject(e, ENGINE_ESAMETIME);
-        }
-        if (dt > e->cfg.max_gap_s)
-            gap = 1;
-        else if (e->cfg.max_speed_m_s > 0 && dist > e->cfg.max_speed_m_s * dt)
-            return reject(e, ENGINE_ESPEED);
-        else if (e->cfg.max_accel_m_s2 > 0 && e->have_prev &&
-                 implied_accel(e, wp, dt) > e->cfg.max_accel_m_s2)
-            return reject(e, ENGINE_EACCEL);
+    if (e->rej_len == ENGINE_REJECTIONS_KEPT) {
+        /* the oldest unread one makes room (its count stays in rejected_by) */
+        e->rej_head = (e->rej_head + 1) % ENGINE_REJECTIONS_KEPT;
+        e->rej_len--;
+        e->st.rejections_unreported++;
     }
-    /* room for this waypoint (and for the copies MULTIPLE adds) */
-    if (buffered(e) + 1 + (e->mult ? 4 : 0) > e->cfg.capacity)
-        return reject(e, ENGINE_EFULL);
-    if (gap) {
-        e->st.gaps++;
-        close_input(e);
-    }
+    r = &e->rej[(e->rej_head + e->rej_len) % ENGINE_REJECTIONS_KEPT];
+    e->rej_len++;
+    r->seq = wp->seq;
+    r->reason = code;
+    r->t_s = wp->t_s;
+    memcpy(r->pos_m, wp->pos_m, sizeof r->pos_m);
+    return reject(e, code);
+}
+
+int engine_rejection_next(engine_t *e, engine_rejection_t *r)
+{
+    if (!e->rej_len)
+        return 0;
+    *r = e->rej[e->rej_head];
+    e->rej_head = (e->rej_head + 1) % ENGINE_REJECTIONS_KEPT;
+    e->rej_len--;
+    return 1;
+}
+
+/* Append a waypoint the acceptance policy kept to the trajectory being received. */
+static int keep(engine_t *e, const engine_waypoint_t *wp)
+{
+    int rc;
+
     if (!e->in_open) {
         open_input(e, wp);
         e->have_prev = 0;
     } else {
+        double d1 = wp->t_s - e->last_t, v2 = 0;
+        for (int k = 0; k < AX; k++)
+            v2 += (wp->pos_m[k] - e->last_r[k]) * (wp->pos_m[k] - e->last_r[k]);
+        transfer_motion_note(&e->motion, sqrt(v2) / d1,
+                             e->have_prev ? implied_accel(e, wp, d1) : 0.0);
         e->have_prev = 1;
         e->prev_t = e->last_t;
         memcpy(e->prev_r, e->last_r, sizeof(e->prev_r));
@@ -764,22 +834,91 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
         e->in_open = 0;
         e->seg_next = e->nodes;
         queue_end(e);
-        return reject(e, -rc);
+        accept_close(&e->policy);
+        return reject_wp(e, -rc, wp);
     }
     e->st.accepted++;
     e->st.last_seq = wp->seq;
     return 0;
 }
 
+/* Carry out every verdict the acceptance policy can give now. */
+static int judge(engine_t *e, int closing)
+{
+    accept_verdict_t v;
+    int rc = 0;
+
+    while (accept_decide(&e->policy, closing, &v)) {
+        switch (v.kind) {
+        case ACCEPT_TAKE:
+            if (keep(e, &v.wp) < 0)
+                rc = -ENGINE_ENUMERIC;
+            break;
+        case ACCEPT_START:
+            e->in_gap_s = 0;
+            if (e->in_open) {
+                if (v.gap) {
+                    e->st.gaps++;
+                    e->in_gap_s = v.wp.t_s - e->last_t;
+                } else {
+                    e->st.reanchors++;
+                }
+                if (close_input(e) < 0)
+                    rc = -ENGINE_ENUMERIC;
+            }
+            if (keep(e, &v.wp) < 0)
+                rc = -ENGINE_ENUMERIC;
+            break;
+        case ACCEPT_DROP:
+            reject_wp(e, v.reason, &v.wp);
+            break;
+        }
+    }
+    return rc;
+}
+
+int engine_push(engine_t *e, const engine_waypoint_t *wp)
+{
+    int rc;
+
+    for (int k = 0; k < AX; k++)
+        if (!isfinite(wp->pos_m[k]))
+            return reject_wp(e, ENGINE_ENOTFINITE, wp);
+    if (!isfinite(wp->t_s))
+        return reject_wp(e, ENGINE_ENOTFINITE, wp);
+    for (int k = 0; k < AX; k++)
+        if (fabs(wp->pos_m[k]) > e->cfg.max_abs_m)
+            return reject_wp(e, ENGINE_ERANGE, wp);
+    if (fabs(wp->t_s) > ENGINE_T_ABS_MAX_S)
+        return reject_wp(e, ENGINE_ERANGE, wp);
+    /* room for this waypoint (and for the copies MULTIPLE adds) */
+    if (buffered(e) + 1 + (e->mult ? 4 : 0) > e->cfg.capacity)
+        return reject(e, ENGINE_EFULL);
+    rc = accept_offer(&e->policy, wp);
+    if (rc == ENGINE_DUPLICATE) {
+        e->st.duplicates++;
+        return ENGINE_DUPLICATE;
+    }
+    if (rc < 0)
+        return reject(e, -rc); /* cannot happen: judge() empties the window below */
+    return judge(e, 0);
+}
+
 int engine_finish(engine_t *e)
 {
+    int rj = judge(e, 1);
     int rc = close_input(e);
-    return rc < 0 ? rc : 0;
+
+    accept_close(&e->policy);
+    if (!e->qlen && e->mode == OUT_HOLD && !e->in_open)
+        e->finished = 1; /* nothing left to stream: the input is over */
+    return rc < 0 ? rc : rj < 0 ? rj : 0;
 }
 
 /* Forget the trajectory being received: the next waypoint opens a new one. */
 static void drop_input(engine_t *e)
 {
+    accept_reset(&e->policy);
     e->in_open = 0;
     e->nodes = 0;
     e->seg_next = 0;
@@ -896,7 +1035,10 @@ static void q_pop(engine_t *e)
 static int enough_ahead(const engine_t *e, const qent_t *h)
 {
     /* waypoints received: nodes, plus those the smoother still holds (SMOOTH) */
-    uint64_t in = e->nodes + (e->smooth ? lsq_smooth_pending(&e->sm) : 0);
+    /* and those the acceptance policy still judges: their verdicts come
+     * within the start slack, so they count as lookahead (accept.h) */
+    uint64_t in = e->nodes + (e->smooth ? lsq_smooth_pending(&e->sm) : 0) +
+                  accept_pending(&e->policy);
 
     return e->qends > 0 || h->kind != QE_SEG || in >= h->node + 2 + e->lookahead;
 }
@@ -1089,32 +1231,41 @@ static void start_trajectory(engine_t *e, int new_flag)
     }
 }
 
-/* Start a transfer from the output position to target. */
-static void start_transfer(engine_t *e, const double *target)
+/* Fastest chord speed of the first queued segments of the trajectory at the
+ * queue head: how the object moves where the transfer takes it. */
+static double head_speed(const engine_t *e)
 {
-    double dist = 0, v, dur;
-    int64_t k;
+    double v = 0;
+
+    for (size_t i = 0; i < e->qlen && i < TRANSFER_HIST; i++) {
+        const qent_t *q = &e->q[(e->qhead + i) % e->qcap];
+        double d2 = 0;
+        if (q->kind != QE_SEG || (i > 0 && q->first))
+            break;
+        for (int k = 0; k < AX; k++) {
+            double d = q->seg.c[k][1] + q->seg.c[k][2] + q->seg.c[k][3];
+            d2 += d * d;
+        }
+        v = fmax(v, sqrt(d2) / q->seg.dur_s);
+    }
+    return v;
+}
+
+/* Start a transfer from the output position to target (transfer.h). */
+static void start_transfer(engine_t *e, const double *target, double gap_s)
+{
+    double dist = 0, v_obj, dur;
+    int capped = 0;
 
     for (int i = 0; i < AX; i++)
         dist += (target[i] - e->pos[i]) * (target[i] - e->pos[i]);
     dist = sqrt(dist);
-    v = e->cfg.max_speed_m_s > 0 ? e->cfg.max_speed_m_s : ENGINE_TRANSFER_SPEED_M_S;
-    /* smoothstep 3u^2 - 2u^3 peaks at 1.5 x the mean speed */
-    dur = 1.5 * dist / v;
-    if (dur < ENGINE_TRANSFER_MIN_S)
-        dur = ENGINE_TRANSFER_MIN_S;
-    k = (int64_t)ceil(dur / e->period_s);
+    v_obj = fmax(transfer_motion_speed(&e->motion), head_speed(e));
+    dur = transfer_duration(&e->xcfg, dist, v_obj, transfer_motion_accel(&e->motion), gap_s,
+                            &capped);
     memset(&e->cur, 0, sizeof(e->cur));
     e->cur.kind = QE_SEG;
-    e->cur.seg.t0_s = 0;
-    e->cur.seg.dur_s = (double)k * e->period_s;
-    for (int i = 0; i < AX; i++) {
-        double d = target[i] - e->pos[i];
-        e->cur.seg.c[i][0] = e->pos[i];
-        e->cur.seg.c[i][1] = 0.0;
-        e->cur.seg.c[i][2] = 3.0 * d;
-        e->cur.seg.c[i][3] = -2.0 * d;
-    }
+    transfer_segment(&e->cur.seg, e->pos, target, dur);
     e->cur_t0 = 0;
     e->cur_t1 = e->cur.seg.dur_s;
     e->n = 0;
@@ -1123,6 +1274,9 @@ static void start_transfer(engine_t *e, const double *target)
     e->out_track++;
     e->flags_pending |= ENGINE_SP_NEW_TRACK;
     e->mode = OUT_XFER;
+    e->st.transfers++;
+    e->st.transfer_s += dur;
+    e->st.transfers_capped += (uint64_t)capped;
     seed_cur(e, 0);
 }
 
@@ -1319,7 +1473,7 @@ static void step_once(engine_t *e)
             double target[AX];
             for (int k = 0; k < AX; k++)
                 target[k] = h->seg.c[k][0];
-            start_transfer(e, target);
+            start_transfer(e, target, h->gap_s);
             step_cur(e, ++e->n);
         } else {
             start_trajectory(e, 1);
@@ -1349,7 +1503,7 @@ static engine_state_t out_state(const engine_t *e)
         return e->underrun ? ENGINE_STATE_UNDERRUN : ENGINE_STATE_STREAMING;
     if (e->mode == OUT_XFER)
         return ENGINE_STATE_STREAMING;
-    if (e->in_open || e->qlen)
+    if (e->in_open || e->qlen || accept_pending(&e->policy))
         return ENGINE_STATE_WAITING;
     return e->finished ? ENGINE_STATE_FINISHED : ENGINE_STATE_WAITING;
 }
@@ -1476,6 +1630,7 @@ void engine_status(const engine_t *e, engine_status_t *st)
     st->stalled = (uint32_t)stalled(e);
     st->rate = e->mode == OUT_HOLD ? 0.0 : e->ts.rate;
     st->override = e->override;
+    st->judging = accept_pending(&e->policy);
     st->ahead_s = 0;
     if (e->qlen) {
         const qent_t *tail = &e->q[(e->qhead + e->qlen - 1) % e->qcap];
@@ -1542,8 +1697,7 @@ long engine_curve_flat(int method, int param, int ends, unsigned fragment,
     cfg.ends = (engine_ends_t)ends;
     cfg.fragment = fragment;
     cfg.overlap = overlap;
-    cfg.max_speed_m_s = 0;
-    cfg.max_accel_m_s2 = 0;
+    cfg.profile = ENGINE_PROFILE_NONE;
     cfg.max_gap_s = 1e9;
     wp = calloc(n ? n : 1, sizeof(*wp));
     segs = calloc(max_seg ? max_seg : 1, sizeof(*segs));

@@ -33,7 +33,8 @@
  * then the position given by engine_set_position, or else the first
  * waypoint),
  * STREAMING (moving, including a transfer), UNDERRUN, FINISHED (the last
- * trajectory ran to its end and rests on it; pushing again starts a new one).
+ * trajectory ran to its end and rests on it, or the input ended with nothing
+ * to stream; pushing again starts a new one).
  *
  * Trajectories, gaps and transfers.  A trajectory is the waypoints between
  * two ends: engine_finish/engine_stop, engine_clear, or a gap (an interval
@@ -43,12 +44,14 @@
  * new one.  Setpoints never jump: when a new trajectory starts where the
  * output does not stand (after a gap, a clear, or with HELD ends), the output
  * first moves there with a rest-to-rest smoothstep k(u) = A + (B-A)(3u^2-2u^3)
- * lasting max(1 s, 1.5 * distance / max_speed_m_s) (10 m/s if no limit),
- * rounded up to whole periods (flags TRANSFER; the first setpoint of every
- * trajectory carries NEW_TRACK and track + 1).  Before any motion at all,
- * with no position set, the output adopts the first waypoint as where it
- * stands (the last resort; see engine_set_position), and reaches the curve's
- * start from there (the same point, except for HELD ends and SMOOTH).
+ * within the object's own limits (transfer.h: transfer_speed_m_s and
+ * transfer_accel_m_s2, derived from its recent motion by default; bounded
+ * in time when derived), rounded up to whole periods (flags TRANSFER; the
+ * first setpoint of every trajectory carries NEW_TRACK and track + 1).
+ * Before any motion at all, with no position set, the output adopts the
+ * first waypoint as where it stands (the last resort; see
+ * engine_set_position), and reaches the curve's start from there (the same
+ * point, except for HELD ends and SMOOTH).
  * Waypoint times may restart (e.g. from 0) with each new trajectory.
  *
  * Method and parameterisation (see hoang.h, cubic.h, lib/engine/README.md):
@@ -100,6 +103,41 @@ typedef enum {
     ENGINE_ENDS_REST = 4,     /* start and stop at rest: clamped with zero velocity */
 } engine_ends_t;
 
+/*
+ * What kind of object the track belongs to (engine_config_profile).  Each sets
+ * the waypoint limits; where the numbers come from:
+ *   AUTO     the default, for any of the kinds below: max_speed_m_s 400 (an
+ *            airliner at cruise, Mach 0.85 = 250 m/s true airspeed, plus a
+ *            strong jet stream stays below it), the speed limit learned from
+ *            the track (4 x its recent speed, at least 5 m/s: accept.h),
+ *            max_accel_m_s2 30 for changes of speed while turns are free (a
+ *            toolpath timed by feed rate turns its corners instantly), stale
+ *            fixes dropped.
+ *   VESSEL   40 m/s (78 kn: above high-speed craft), 30 m/s^2 (GNSS noise at
+ *            5 Hz: legit fixes of the NMEA 2000 figure-8 reach 11.4), stale
+ *            fixes dropped.
+ *   ROAD     100 m/s (360 km/h), 30 m/s^2 (3 g: far above any road vehicle,
+ *            it catches timestamp jitter, not driving), stale fixes dropped.
+ *   AIR      400 m/s (as AUTO), no acceleration limit (ADS-B positions carry
+ *            the receiver's time of arrival: at 222 m/s a 0.1 s error is 22 m,
+ *            so implied accelerations of tens of m/s^2 are noise, not
+ *            motion), stale fixes dropped.
+ *   MACHINE  no limits, no stale rule: a feed-rate-timed toolpath changes
+ *            velocity instantly at corners and may dwell on a point; every
+ *            point is kept (acceleration limits are the CNC planner's job).
+ *   NONE     no limits, no stale rule (time order and gaps only).
+ * Every profile keeps the time rules and the confirmation of new trajectories.
+ */
+typedef enum {
+    ENGINE_PROFILE_AUTO = 0,
+    ENGINE_PROFILE_VESSEL = 1,
+    ENGINE_PROFILE_ROAD = 2,
+    ENGINE_PROFILE_AIR = 3,
+    ENGINE_PROFILE_MACHINE = 4,
+    ENGINE_PROFILE_NONE = 5,
+    ENGINE_PROFILE_COUNT
+} engine_profile_t;
+
 typedef enum {
     ENGINE_METHOD_BSPLINE = 0, /* exact interpolation, Hoang control points */
     ENGINE_METHOD_CUBIC = 1,   /* exact interpolation, second-derivative system (seed 002) */
@@ -139,24 +177,35 @@ typedef struct {
                                starts a new one.  Default 60 s */
     double max_abs_m;       /* |coordinate| above this is rejected.  Default 1e7 m
                                (beyond the Earth's radius from any ENU origin) */
-    double max_speed_m_s;   /* implied speed above this is rejected (0 = no
-                               limit); also the transfer speed.  Default 100 m/s:
-                               generous for ground and sea vehicles, rejects GPS
-                               jumps of kilometres between fixes */
-    double max_accel_m_s2;  /* implied acceleration above this is rejected (0 =
-                               no limit): the change of mean velocity over the
-                               last two intervals, 2 |v2 - v1| / (dt1 + dt2).
-                               Catches timestamp jitter (a fix stamped late or
-                               early by a fraction of the interval), which the
+    engine_profile_t profile; /* what kind of object: the limits below when
+                               they are left at ENGINE_LIMIT_PROFILE, and the
+                               rules (learned, stale).  Default AUTO */
+    double max_speed_m_s;   /* chord speed above this is refused (0 = no
+                               limit, ENGINE_LIMIT_PROFILE = the profile's:
+                               AUTO 400 m/s).  Default ENGINE_LIMIT_PROFILE */
+    double max_accel_m_s2;  /* implied acceleration above this is refused (0 =
+                               no limit): the change of mean velocity over two
+                               intervals, 2 |v2 - v1| / (dt1 + dt2).  Catches
+                               timestamp jitter (a fix stamped late or early
+                               by a fraction of the interval), which the
                                curve, forced through every waypoint at its
                                time, would turn into an acceleration spike.
-                               Default 30 m/s^2 (3 g: generous for ground and
-                               sea vehicles; measured on the real tracks: legit
-                               samples reach 11.4 at 5 Hz, the figure-8's
-                               jittered ones 117 and 44; see lib/engine/README.md "Jitter
-                               and outliers").  Position noise alone implies
-                               ~4 noise / dt^2: raise it for noisy fixes at
-                               10 Hz and more */
+                               ENGINE_LIMIT_PROFILE = the profile's (AUTO
+                               30 m/s^2, with free turns: see accept.h).
+                               Default ENGINE_LIMIT_PROFILE.  Measured on the real
+                               tracks: legit samples reach 11.4 at 5 Hz, the
+                               figure-8's jittered ones 117 and 44 (lib/engine/README.md
+                               "Jitter and outliers").  Position noise alone
+                               implies ~4 noise / dt^2 */
+    unsigned confirm;       /* mutually consistent waypoints needed before a
+                               waypoint far from the current trajectory (in
+                               time, space or at odds with its neighbours)
+                               abandons it for a new one, 1..8.  Default 3 */
+    double transfer_speed_m_s; /* speed of the rest-to-rest transfers to a new
+                               trajectory's start (after a gap, a re-anchor, a
+                               clear); 0 = derived from the object's own recent
+                               motion (transfer.h).  Default 0 */
+    double transfer_accel_m_s2; /* their acceleration; 0 = derived.  Default 0 */
     double max_segment_s;   /* longest segment the stepper is tested for
                                (informational: the stepper re-seeds every
                                FDIFF_RESEED_STEPS, so drift does not grow with
@@ -186,6 +235,16 @@ typedef struct {
 /* Fill cfg with working defaults (each one commented above; documented in
  * config/trajd.conf). */
 void engine_config_default(engine_config_t *cfg);
+
+/* max_speed_m_s or max_accel_m_s2 left to the profile (any value in
+ * [-1, 0) means the same). */
+#define ENGINE_LIMIT_PROFILE (-1.0)
+
+/* The limits in force: the field, or the profile's if ENGINE_LIMIT_PROFILE
+ * (0 = no limit). */
+double engine_config_max_speed(const engine_config_t *cfg);
+double engine_config_max_accel(const engine_config_t *cfg);
+
 
 /*
  * Check a configuration.  Returns 0 or -ENGINE_ECONFIG; if why is not NULL
@@ -217,40 +276,54 @@ engine_t *engine_new(const engine_config_t *cfg, int *err);
 void engine_free(engine_t *e);
 
 /*
- * Offer a waypoint.  Returns 0 (accepted), ENGINE_DUPLICATE (same time, to
- * 1 ns, and position, to 1 nm, as the previous one: dropped, counted), or a
- * negated engine_error (rejected, counted in status.rejected_by, nothing
- * changed; EFULL alone is counted in status.full instead, being flow
- * control rather than bad data):
- *   -ENGINE_ENOTFINITE  NaN or infinite time or coordinate
- *   -ENGINE_ERANGE      |coordinate| > max_abs_m, or |t_s| > 1e12 s
- *   -ENGINE_EBACKWARDS  earlier than the previous waypoint of the trajectory
- *   -ENGINE_ESAMETIME   same time as the previous one, different position
- *   -ENGINE_ESPEED      distance / interval from the previous one > max_speed_m_s
- *   -ENGINE_EACCEL      with the two previous waypoints of the trajectory
- *                       (r0, r1 at t0, t1), the implied acceleration
- *                       2 |(r - r1)/(t - t1) - (r1 - r0)/(t1 - t0)| / (t - t0)
- *                       > max_accel_m_s2 (timestamp jitter, position jump).
- *                       Checked against accepted waypoints only, so after a
- *                       bad waypoint was accepted good ones can be refused
- *                       too, for at most about 2 |dv| / max_accel_m_s2
- *                       seconds (the implied acceleration falls as the
- *                       interval grows)
+ * Offer a waypoint.  Returns at once:
+ *   0                   taken for judgement (the verdict may come later)
+ *   ENGINE_DUPLICATE    same time, to 1 ns, and position, to 1 nm, as the
+ *                       previous one: dropped, counted
+ *   -ENGINE_ENOTFINITE  NaN or infinite time or coordinate (counted)
+ *   -ENGINE_ERANGE      |coordinate| > max_abs_m, or |t_s| > 1e12 s (counted)
  *   -ENGINE_EFULL       capacity waypoints buffered: offer it again later
- *                       (flow control: nothing accepted is ever dropped)
+ *                       (flow control: counted in status.full, not in
+ *                       rejected; nothing
+ *                       accepted is ever dropped)
  *   -ENGINE_ENUMERIC    the solver refused (cannot happen with finite data:
  *                       the systems are diagonally dominant); the trajectory
  *                       is ended where it was
- * A time gap above max_gap_s ends the current trajectory at rest on its
- * last waypoint and starts a new one with this waypoint (no speed check
- * across a gap).  Speed, acceleration and time checks are against the
- * previous waypoints of the same trajectory only (the acceleration check
- * needs two of them: not on a trajectory's first two waypoints).
+ * Every other verdict is given with the waypoint's neighbours (accept.h: the
+ * waypoints after it are the lookahead the solver buffers anyway, so a clean
+ * track waits for nothing extra), within `confirm`..8 waypoints or at
+ * engine_finish; a refused waypoint is counted in status.rejected_by and
+ * reported by engine_rejection_next with its reason:
+ *   ENGINE_EBACKWARDS   earlier than the waypoint kept before it
+ *   ENGINE_ESAMETIME    same time as it, different position
+ *   ENGINE_ESPEED       chord speed above the limit (max_speed_m_s; learned
+ *                       under profile AUTO)
+ *   ENGINE_EACCEL       with the two waypoints kept before it (r0, r1 at t0,
+ *                       t1), 2 |(r - r1)/(t - t1) - (r1 - r0)/(t1 - t0)| / (t - t0)
+ *                       > max_accel_m_s2 (timestamp jitter, position jump)
+ *   ENGINE_ESTALE       the same position again while the object was moving
+ *   ENGINE_EUNCONFIRMED far from the trajectory in time or space (e.g. one
+ *                       waypoint at t = 1e9), or at odds with its neighbours,
+ *                       and not confirmed by `confirm` consistent waypoints
+ * A bad waypoint is dropped when its neighbours agree without it, so it
+ * never condemns the good ones after it.  `confirm` mutually consistent
+ * waypoints that do not continue the trajectory end it at rest (a gap if
+ * the interval exceeds max_gap_s, else a re-anchor) and start a new one,
+ * reached by a transfer.
  */
 int engine_push(engine_t *e, const engine_waypoint_t *wp);
 
 /*
- * End of input for the current trajectory: the last fragment is closed with
+ * The oldest unread refused waypoint (reason and all), 1, or 0 if none.
+ * The engine keeps the last ENGINE_REJECTIONS_KEPT; older unread ones are
+ * counted in status.rejections_unreported (the counters stay exact).
+ */
+#define ENGINE_REJECTIONS_KEPT 64
+int engine_rejection_next(engine_t *e, engine_rejection_t *r);
+
+/*
+ * End of input for the current trajectory: every waypoint still held is
+ * judged, the last fragment is closed with
  * the configured end condition and the output runs to the last waypoint and
  * stops there (FINISHED).  Pushing again afterwards starts a new trajectory.
  * Returns 0 (also when there is nothing to finish), or -ENGINE_ENUMERIC.

@@ -30,10 +30,21 @@ static const char *const ends_names[] = {
     NULL,
 };
 
+static const char *const profile_names[] = {
+    [ENGINE_PROFILE_AUTO] = "auto",
+    [ENGINE_PROFILE_VESSEL] = "vessel",
+    [ENGINE_PROFILE_ROAD] = "road",
+    [ENGINE_PROFILE_AIR] = "air",
+    [ENGINE_PROFILE_MACHINE] = "machine",
+    [ENGINE_PROFILE_NONE] = "none",
+    NULL,
+};
+
 /* Enum fields are read and written as int. */
 _Static_assert(sizeof(engine_method_t) == sizeof(int), "engine_method_t is not int-sized");
 _Static_assert(sizeof(engine_param_t) == sizeof(int), "engine_param_t is not int-sized");
 _Static_assert(sizeof(engine_ends_t) == sizeof(int), "engine_ends_t is not int-sized");
+_Static_assert(sizeof(engine_profile_t) == sizeof(int), "engine_profile_t is not int-sized");
 _Static_assert(ENGINE_AXES == 3, "VEC3 settings are written x,y,z");
 
 /* One entry: the field f names the key, its offset and its size. */
@@ -68,10 +79,18 @@ const engine_setting_t engine_settings[] = {
       "a longer interval ends the trajectory at rest, s"),
     S(max_abs_m, "max-abs", DOUBLE, 0, 1e-6, 1e12, NULL, "M",
       "reject a waypoint with a |coordinate| above this, m"),
-    S(max_speed_m_s, "max-speed", DOUBLE, 0, 0, 1e9, NULL, "M_S",
-      "reject a higher implied speed, m/s (0 = no limit)"),
-    S(max_accel_m_s2, "max-accel", DOUBLE, 0, 0, 1e9, NULL, "M_S2",
-      "reject a higher implied acceleration, m/s^2 (0 = none)"),
+    S(profile, "profile", ENUM, 0, 0, 0, profile_names, "P",
+      "kind of object: auto | vessel | road | air | machine | none (the limits)"),
+    S(max_speed_m_s, "max-speed", DOUBLE, 0, ENGINE_LIMIT_PROFILE, 1e9, NULL, "M_S",
+      "reject a higher chord speed, m/s (0 = no limit, -1 = the profile's)"),
+    S(max_accel_m_s2, "max-accel", DOUBLE, 0, ENGINE_LIMIT_PROFILE, 1e9, NULL, "M_S2",
+      "reject a higher implied acceleration, m/s^2 (0 = none, -1 = the profile's)"),
+    S(confirm, "confirm", UNSIGNED, 0, 1, 8, NULL, "K",
+      "consistent waypoints that confirm a new trajectory far from the current one"),
+    S(transfer_speed_m_s, "transfer-speed", DOUBLE, 0, 0, 1e9, NULL, "M_S",
+      "speed of transfers to a new trajectory, m/s (0 = the object's own)"),
+    S(transfer_accel_m_s2, "transfer-accel", DOUBLE, 0, 0, 1e9, NULL, "M_S2",
+      "acceleration of transfers, m/s^2 (0 = the object's own)"),
     S(max_segment_s, "max-segment", DOUBLE, 0, 1e-6, 1e9, NULL, "S",
       "longest segment the stepper is trusted for, s"),
     S(start_slack, "start-slack", UNSIGNED, 0, 0, ENGINE_FRAGMENT_MAX, NULL, "N",

@@ -13,6 +13,7 @@ transport (the same codec and can_port as on a socket, no kernel needed):
 - a configuration above the bus-load limit is refused with a clear message,
   and the limit agrees with an independent computation of frame lengths.
 """
+import math
 import os
 import subprocess
 import sys
@@ -83,9 +84,11 @@ class CanDaemon(unittest.TestCase):
         logged = ct.read_replay(os.path.join(d, "sp.csv"))
         by_t = {}
         for _, r in sorted(self.refrows.items()):
+            if math.isnan(float(r["x_m"])):
+                continue  # no position yet (NO_POSITION): nothing to match a time to
             by_t.setdefault(round(float(r["t_s"]) * 1e9), r)
         ref = {now: by_t[round(float(r["t_s"]) * 1e9)] for now, r in logged.items()
-               if round(float(r["t_s"]) * 1e9) in by_t}
+               if round(float(r["t_s"]) * 1e9) in by_t and not math.isnan(float(r["x_m"]))}
         self.assertGreater(len(ref), 0.95 * len(logged))
         for now, e in ref.items():  # the daemon's log against trajreplay (doubles, %.17g)
             for ax in "xyz":
@@ -112,6 +115,8 @@ class CanDaemon(unittest.TestCase):
         for now_ns, r in rows.items():
             e = logged[now_ns]
             for ax in "xyz":
+                if math.isnan(float(e[ax + "_m"])):
+                    continue  # no position yet (NO_POSITION): the n/a marker on CAN
                 self.assertLessEqual(abs(r[ax] - float(e[ax + "_m"])), ct.SP_POS_TOL)
                 self.assertLessEqual(abs(r["v" + ax] - float(e["v%s_m_s" % ax])), ct.SP_VEL_TOL)
             self.assertEqual(r["cycle8"], int(e["cycle"]) & 0xFF)
@@ -156,6 +161,8 @@ class CanDaemon(unittest.TestCase):
                 if e is None:
                     continue
                 for ax in "xyz":
+                    if math.isnan(float(e[ax + "_m"])):
+                        continue  # no position yet (NO_POSITION): the n/a marker on CAN
                     self.assertLessEqual(abs(r[ax] - float(e[ax + "_m"])), ct.SP_POS_TOL + tol)
                     self.assertLessEqual(abs(r["v" + ax] - float(e["v%s_m_s" % ax])), 0.5e-6 + 1e-9)
             self.assertEqual(r["cycle"], int(logged[now_ns]["cycle"]))
@@ -175,7 +182,10 @@ class CanDaemon(unittest.TestCase):
         logged, ref = self.reference(d)
         for a, (ax, cob) in enumerate(zip("xyz", (0x201, 0x202, 0x203))):
             frames = ct.decode_by_id(log, cob)
-            self.assertEqual(len(frames), len(logged))
+            # no RPDO while there is no position (NO_POSITION: the first
+            # waypoints are still being confirmed, lib/engine/accept.h)
+            self.assertEqual(len(frames),
+                             sum(not math.isnan(float(e["x_m"])) for e in logged.values()))
             for now_ns, sig in frames:
                 for e in (logged[now_ns], ref.get(now_ns)):
                     if e is None:

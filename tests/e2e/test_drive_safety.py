@@ -147,6 +147,8 @@ class DriveSafety(unittest.TestCase):
             self.assertEqual(p.returncode, 0, p.stderr)
             # then no row ever moved faster than 1 m/s (+ the 1e-8 m tolerance)
             for a, b in zip(rows, rows[1:]):
+                if a["flags"] & F_NOPOS:
+                    continue  # no position yet (the first fixes are being confirmed)
                 dt = (b["now"] - a["now"]) * 1e-9
                 self.assertLessEqual(dist(a["p"], b["p"]), 1.0 * dt + 1e-8, (a, b))
             # and from the first refused setpoint on, the position is held, flagged

@@ -45,7 +45,12 @@ class TestConfigMode(unittest.TestCase):
         "end_vel_m_s": ("0,0.125,0", "--end-vel"), "fragment": ("20", "--fragment"),
         "overlap": ("10", "--overlap"), "capacity": ("999", "--capacity"),
         "max_gap_s": ("8", "--max-gap"), "max_abs_m": ("5e5", "--max-abs"),
-        "max_speed_m_s": ("3", "--max-speed"), "max_accel_m_s2": ("0.5", "--max-accel"),
+        "profile": ("road", "--profile"), "max_speed_m_s": ("3", "--max-speed"),
+        # 0.05: under the default profile (auto) turns are free and 0.5 m/s^2
+        # of speed change does not bite on this walk
+        "max_accel_m_s2": ("0.05", "--max-accel"), "confirm": ("1", "--confirm"),
+        "transfer_speed_m_s": ("0.5", "--transfer-speed"),
+        "transfer_accel_m_s2": ("0.2", "--transfer-accel"),
         "max_segment_s": ("30", "--max-segment"), "start_slack": ("3", "--start-slack"),
         "smooth_window": ("20", "--smooth-window"), "smooth_ctrl": ("5", "--smooth-ctrl"),
         "scale_accel_m_s2": ("2", "--scale-accel"), "scale_jerk_m_s3": ("20", "--scale-jerk"),
@@ -101,7 +106,9 @@ class TestConfigMode(unittest.TestCase):
                      "end_vel_m_s", "start_vel_m_s", "capacity",
                      # the time scaling acts only when it is needed (underrun,
                      # stop, override): a clean replay is the same
-                     "scale_accel_m_s2", "scale_jerk_m_s3"}
+                     "scale_accel_m_s2", "scale_jerk_m_s3",
+                     # a clean walk: every profile keeps every fix; no transfer
+                     "profile", "transfer_speed_m_s", "transfer_accel_m_s2"}
         for key, (v, opt) in self.ENGINE_KEYS.items():
             extra = [opt, v]
             if key == "fragment":

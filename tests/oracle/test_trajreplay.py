@@ -116,35 +116,27 @@ def replay(track, extra, tmp, name="out"):
     return read_setpoints(out), summary, p
 
 
-def expected_counts(t, pos, max_gap_s, enu=None, max_accel=0.0):
-    """Duplicates, rejections and gaps by lib/engine/engine.h's rules, applied here:
-    compared with the last *accepted* waypoint (and, for the acceleration
-    rule, the one accepted before it in the same trajectory, on enu)."""
-    dup = back = same = gaps = accel = 0
-    last = prev = None
-    for i in range(len(t)):
-        if last is not None:
-            if t[i] < t[last]:
-                back += 1
-                continue
-            if t[i] == t[last]:
-                if np.array_equal(pos[i], pos[last]):
-                    dup += 1
-                else:
-                    same += 1
-                continue
-            if t[i] - t[last] > max_gap_s:
-                gaps += 1
-                last, prev = i, None
-                continue
-            if max_accel > 0 and prev is not None:
-                v1 = (enu[last] - enu[prev]) / (t[last] - t[prev])
-                v2 = (enu[i] - enu[last]) / (t[i] - t[last])
-                if np.linalg.norm(2 * (v2 - v1) / (t[i] - t[prev])) > max_accel:
-                    accel += 1
-                    continue
-        last, prev = i, last
-    return dup, back, same, gaps, accel, last
+# lib/motion.h: the setpoint carries no position yet (NaN), before the first
+# waypoint is confirmed; nothing a drive would follow.
+SP_NO_POSITION = 0x10
+
+
+def check_positions(sp, label):
+    """Positions finite on every row but the leading ones flagged NO_POSITION
+    (NaN there); velocity, acceleration and time finite everywhere."""
+    nopos = (sp["flags"] & SP_NO_POSITION) != 0
+    first = int(np.argmin(nopos)) if not nopos.all() else len(nopos)
+    check(not nopos[first:].any(), f"{label}: NO_POSITION after a position")
+    check(np.all(np.isnan(sp["pos"][:first])), f"{label}: NO_POSITION rows with a position")
+    check(np.all(np.isfinite(sp["pos"][first:])), f"{label}: non-finite pos")
+    for name in ("vel", "acc", "t_s"):
+        check(np.all(np.isfinite(sp[name])), f"{label}: non-finite {name}")
+
+
+def gaps_between(t, kept, max_gap_s):
+    """Intervals above max_gap_s between consecutive kept waypoints."""
+    tk = t[np.sort(np.array(list(kept)))]
+    return int(np.sum(np.diff(tk) > max_gap_s))
 
 
 def common_checks(sp, label, period_ns):
@@ -152,8 +144,7 @@ def common_checks(sp, label, period_ns):
     velocity continuous; ends finished."""
     n = len(sp["now_ns"])
     check(n > 0, f"{label}: no setpoints")
-    for name in ("pos", "vel", "acc", "t_s"):
-        check(np.all(np.isfinite(sp[name])), f"{label}: non-finite {name}")
+    check_positions(sp, label)
     # Given the virtual clock, then row k is tick k exactly (integers).
     check(np.array_equal(sp["now_ns"], np.arange(n, dtype=np.int64) * period_ns),
           f"{label}: now_ns not k * period")
@@ -261,47 +252,62 @@ def test_spline_agreement(tmp):
 
 
 def test_counts_real_and_injected(tmp):
-    """Given the real tracks (and visnjan with duplicates, backward steps and
-    same-time rows injected), when replayed with --summary, then duplicates,
-    rejections by reason and gaps are exactly what this test counts in the
-    file."""
+    """Given visnjan with exact duplicates, backward steps and same-time rows
+    injected (each after a real row), when replayed with --summary, then
+    every injected row and no real one is refused, with its own reason and
+    count, and the gaps are the intervals above max_gap_s between the rows
+    kept.  Given the real tracks as recorded, then every fix is kept but the
+    known bad ones: figure-8's fix stamped 0.296 s late at t = 135.096 s
+    (its position is on the 5 Hz grid of t = 134.8 s) and cerknicko's jump of
+    310 m at t = 4561 s that the next fix (184 m back in 2 s) and the rest
+    of the track contradict (lib/engine/accept.h)."""
     rnd = random.Random(5)
     t, lat, lon, alt = read_track(VISNJAN_CSV)
     rows = list(zip(t, lat, lon, alt))
-    noisy = []
+    noisy, real, ndup, nback, nsame = [], [], 0, 0, 0
     for i, r in enumerate(rows):
+        real.append(len(noisy))
         noisy.append(r)
         if i > 0 and rnd.random() < 0.06:
             noisy.append(r)                                  # exact duplicate
+            ndup += 1
         if i > 2 and rnd.random() < 0.04:
             noisy.append((r[0] - 2.5,) + r[1:])              # backward step
-        if i > 0 and rnd.random() < 0.03:
+            nback += 1
+        elif i > 0 and rnd.random() < 0.03:
             noisy.append((r[0], r[1] + 1e-5, r[2], r[3]))    # same time, moved
+            nsame += 1
     injected = os.path.join(tmp, "visnjan_noisy.csv")
     with open(injected, "w") as f:
         f.write("t_s,lat_deg,lon_deg,alt_m\n")
         for r in noisy:
             f.write(f"{r[0]:.6f},{r[1]:.9f},{r[2]:.9f},{r[3]:.9f}\n")
+    t8, _, _, _ = read_track(FIGURE8)
+    tc, _, _, _ = read_track(CERKNICA)
+    bad = {VISNJAN_CSV: [], FIGURE8: list(np.where(np.abs(t8 - 135.096) < 1e-6)[0]),
+           CERKNICA: list(np.where(np.abs(tc - 4561.0) < 1e-6)[0]), injected: None}
     for path, max_gap in ((VISNJAN_CSV, 60), (CERKNICA, 60), (FIGURE8, 60), (injected, 30)):
         label = os.path.basename(path)
         t, lat, lon, alt = read_track(path)
         enu = enu_pyproj(lat, lon, alt)
-        # Identical text -> identical doubles, so exact comparisons are right.
-        pos_key = np.stack([lat, lon, np.nan_to_num(alt, nan=-1e300)], axis=1)
-        # the engine's default max_accel_m_s2 (lib/engine/engine.h), applied here on pyproj's ENU
-        dup, back, same, gaps, accel, last = expected_counts(t, pos_key, max_gap, enu, 30.0)
+        if bad[path] is None:
+            kept = set(real)
+            want = {"duplicates": ndup, "rejected_backwards": nback, "rejected_same_time": nsame,
+                    "rejected": nback + nsame}
+        else:
+            check(path == VISNJAN_CSV or len(bad[path]) == 1, f"{label}: the log changed?")
+            kept = set(range(len(t))) - set(bad[path])
+            want = {"duplicates": 0, "rejected": len(bad[path])}
+        want["accepted"] = len(kept)
+        want["gaps"] = gaps_between(t, kept, max_gap)
         sp, s, _ = replay(path, ["--rate", "10", "--max-gap", str(max_gap)], tmp, "counts")
-        got = (s.get("duplicates"), s.get("rejected_backwards"), s.get("rejected_same_time"),
-               s.get("gaps"), s.get("rejected_accel"))
-        want = (dup, back, same, gaps, accel)
-        print(f"{label}: duplicates/backwards/same_time/gaps/accel expected {want}, "
-              f"--summary {got}")
+        got = {k: s.get(k) for k in want}
+        print(f"{label}: expected {want}, --summary {got}")
         check(got == want, f"{label}: counts {got} != {want}")
-        check(s.get("accepted") == len(t) - dup - back - same - accel,
-              f"{label}: accepted {s.get('accepted')}")
         check(s.get("setpoints") == len(sp["now_ns"]), f"{label}: setpoints count")
-        check(all(np.isfinite(sp["pos"]).ravel()), f"{label}: NaN")
+        check_positions(sp, label)
         check(sp["state"][-1] == "finished", f"{label}: last state {sp['state'][-1]}")
+        last = max(kept)
         check(np.max(np.abs(sp["pos"][-1] - enu[last])) < 1e-6,
               f"{label}: does not end on the last accepted waypoint")
 
@@ -313,43 +319,56 @@ MAX_ACCEL_DEFAULT = 30.0
 def test_jitter_figure8(tmp):
     """Given the figure-8 boat log, whose only intervals far below its median
     (0.2 s) are the late burst around t = 135 s (134.600 -> 135.096 -> 135.120
-    -> 135.201 s: fixes 24 and 81 ms apart, positions evenly spaced), when
-    replayed with the defaults at 100 Hz, then exactly those two short-interval
-    waypoints are rejected (rejected_accel 2, accepted 1784), the setpoints
-    follow scipy's CubicSpline (rest ends) through the waypoints kept to the
-    fragment bound, and away from the rest start and stop (2 s) the
-    acceleration per axis stays within 3 * max_accel_m_s2: the max principle
-    of the C2 second-derivative system (at its largest |M_i|,
-    |M_i| (h1 + h2) <= 3 |a_implied| (h1 + h2), and every accepted triple has
-    |a_implied| <= max_accel_m_s2).  The spline through all waypoints breaks
-    that bound by far (the test can fail)."""
+    -> 135.201 s: fixes 24 and 81 ms apart, positions evenly spaced: the two
+    first are stamped 0.296 s and 0.120 s off the 5 Hz grid their positions
+    are on, the third is on it), when replayed at 100 Hz
+      - with profile vessel (absolute limits: the boat's own), then exactly
+        the two late fixes are rejected, every kept triple implies at most
+        max_accel_m_s2 and away from the rest start and stop (2 s) the
+        streamed acceleration per axis stays within 3 * max_accel_m_s2: the
+        max principle of the C2 second-derivative system (at its largest
+        |M_i|, |M_i| (h1 + h2) <= 3 |a_implied| (h1 + h2));
+      - with the defaults (profile auto: turns are free, lib/engine/accept.h),
+        then only the 0.296 s late one is rejected (the fixes after it are
+        kept) and the streamed acceleration stays within 3 x the largest
+        |a_implied| of the kept triples (the same principle, the bound the
+        profile states);
+    and both follow scipy's CubicSpline (rest ends) through the waypoints
+    kept to the fragment bound.  The spline through all waypoints breaks the
+    vessel bound by far (the test can fail)."""
     t, lat, lon, alt = read_track(FIGURE8)
     enu = enu_pyproj(lat, lon, alt)
     dt = np.diff(t)
     short = np.where(dt < 0.5 * np.median(dt))[0] + 1   # waypoint after a short interval
     check(len(short) == 2 and abs(t[short[0]] - 135.120) < 1e-9,
           f"figure-8 short intervals at {t[short]} (the log changed?)")
-    kept = np.setdiff1d(np.arange(len(t)), short)
-    sp, s, _ = replay(FIGURE8, [], tmp, "jitter")
-    check(s.get("rejected_accel") == len(short) and s.get("rejected") == len(short),
-          f"figure-8: rejected_accel {s.get('rejected_accel')}, rejected {s.get('rejected')}")
-    check(s.get("accepted") == len(kept), f"figure-8: accepted {s.get('accepted')}")
-    streaming = np.array([x == "streaming" for x in sp["state"]])
-    tol = 100 * 0.268 ** (16 / 2)   # default F=32, O=16
-    err = spline_errors(sp, CubicSpline(t[kept], enu[kept], bc_type="clamped"), streaming)
-    for k, v in err.items():
-        check(v <= tol, f"figure-8 jitter: {k} differs from the kept-waypoint CubicSpline by {v:g}")
-    inner = streaming & (sp["t_s"] > t[0] + 2) & (sp["t_s"] < t[-1] - 2)
-    a_axis = np.max(np.abs(sp["acc"][inner]))
-    win = inner & (np.abs(sp["t_s"] - 135.1) < 5)
-    a_win = np.max(np.linalg.norm(sp["acc"][win], axis=1))
+    late = [short[0] - 1, short[0]]                      # 135.096, 135.120
     ts = np.arange(t[0] + 2, t[-1] - 2, 0.01)
     raw = np.max(np.abs(CubicSpline(t, enu, bc_type="clamped")(ts, 2)))
-    print(f"figure-8 jitter: streamed max |a| per axis {a_axis:.1f} m/s^2 (|a| {a_win:.1f} "
-          f"within 5 s of t=135), spline through every waypoint {raw:.1f}; bound "
-          f"{3 * MAX_ACCEL_DEFAULT:.0f}; vs kept-waypoint spline "
-          + ", ".join(f"{k} {v:.2g}" for k, v in err.items()))
-    check(a_axis <= 3 * MAX_ACCEL_DEFAULT, f"figure-8: acceleration {a_axis:g} m/s^2 per axis")
+    for profile, bad in (("vessel", late), ("auto", late[:1])):
+        kept = np.setdiff1d(np.arange(len(t)), bad)
+        sp, s, _ = replay(FIGURE8, ["--profile", profile], tmp, "jitter")
+        check(s.get("rejected") == len(bad), f"figure-8 {profile}: rejected {s.get('rejected')}")
+        check(s.get("accepted") == len(kept), f"figure-8 {profile}: accepted {s.get('accepted')}")
+        tk, ek = t[kept], enu[kept]
+        v = np.diff(ek, axis=0) / np.diff(tk)[:, None]
+        a_impl = np.max(2 * np.linalg.norm(np.diff(v, axis=0), axis=1) / (tk[2:] - tk[:-2]))
+        if profile == "vessel":
+            check(a_impl <= MAX_ACCEL_DEFAULT,
+                  f"figure-8 vessel: a kept triple implies {a_impl:g} m/s^2")
+        bound = 3 * (MAX_ACCEL_DEFAULT if profile == "vessel" else a_impl)
+        streaming = np.array([x == "streaming" for x in sp["state"]])
+        tol = 100 * 0.268 ** (16 / 2)   # default F=32, O=16
+        err = spline_errors(sp, CubicSpline(tk, ek, bc_type="clamped"), streaming)
+        for k, e in err.items():
+            check(e <= tol, f"figure-8 {profile}: {k} differs from the kept-waypoint "
+                            f"CubicSpline by {e:g}")
+        inner = streaming & (sp["t_s"] > t[0] + 2) & (sp["t_s"] < t[-1] - 2)
+        a_axis = np.max(np.abs(sp["acc"][inner]))
+        print(f"figure-8 {profile}: streamed max |a| per axis {a_axis:.1f} m/s^2, kept triples "
+              f"imply {a_impl:.1f}, bound {bound:.0f}; spline through every waypoint {raw:.1f}; "
+              "vs kept-waypoint spline " + ", ".join(f"{k} {e:.2g}" for k, e in err.items()))
+        check(a_axis <= bound, f"figure-8 {profile}: acceleration {a_axis:g} m/s^2 per axis")
     check(raw > 3 * MAX_ACCEL_DEFAULT, f"figure-8: the raw spline peaks at only {raw:g}")
 
 
@@ -382,11 +401,11 @@ def test_svg(tmp):
     for want in ("curve", "speed", "waypoints", "rejected", "underruns", "plan-axes", "speed-axes",
                  "legend"):
         check(want in ids, f"svg: no element id={want}")
-    # one dot per accepted waypoint, one cross per rejected one (the two
-    # jittered fixes at t = 135.120 and 135.201 s, see test_counts_real_and_injected)
+    # one dot per accepted waypoint, one cross per rejected one (the fix
+    # stamped late at t = 135.096 s, see test_counts_real_and_injected)
     dots = root.find(f".//{ns}g[@id='waypoints']").findall(f"{ns}circle")
     crosses = root.find(f".//{ns}g[@id='rejected']").findall(f"{ns}path")
-    check(len(dots) == 1784 and len(crosses) == 2,
+    check(len(dots) == 1785 and len(crosses) == 1,
           f"svg: {len(dots)} waypoint dots, {len(crosses)} rejected crosses")
     texts = {e.text for e in root.iter(ns + "text")}
     for want in ("east (m)", "north (m)", "track time t (s)", "speed |v| (m/s)"):

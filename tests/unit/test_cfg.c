@@ -133,7 +133,7 @@ static void test_errors(void **state)
     load_bad("[daemon]\nrate_hz = 100\n  speed = 2\n" OBJ, CFG_ESYNTAX, 3, "do not indent");
     load_bad("[daemon]\n\n\n" OBJ "fragment = 4.5\n", CFG_EVALUE, 8, "fragment");
     load_bad(OBJ "method = spline\n", CFG_EVALUE, 5, "bspline, cubic, smooth");
-    load_bad(OBJ "max_accel_m_s2 = -1\n", CFG_EVALUE, 5, "max_accel_m_s2");
+    load_bad(OBJ "max_accel_m_s2 = -2\n", CFG_EVALUE, 5, "max_accel_m_s2");
     load_bad(OBJ "start_slack = 2000\n", CFG_EVALUE, 5, "start_slack");
     load_bad(OBJ "start_vel_m_s = 1,2\n", CFG_EVALUE, 5, "three numbers");
     load_bad("[realtime]\nfifo_priority = 100\n" OBJ, CFG_EVALUE, 2, "[0, 99]");

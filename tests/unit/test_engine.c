@@ -45,10 +45,14 @@ static engine_t *mk(engine_config_t *c)
     return e;
 }
 
+/* Every number finite; the position may be NaN only flagged NO_POSITION
+ * (before the first waypoint is confirmed: nothing a drive would follow). */
 static int finite_sp(const engine_setpoint_t *sp)
 {
+    int nopos = (sp->flags & ENGINE_SP_NO_POSITION) != 0;
     for (int k = 0; k < 3; k++)
-        if (!isfinite(sp->pos_m[k]) || !isfinite(sp->vel_m_s[k]) || !isfinite(sp->acc_m_s2[k]))
+        if ((!nopos && !isfinite(sp->pos_m[k])) || !isfinite(sp->vel_m_s[k]) ||
+            !isfinite(sp->acc_m_s2[k]))
             return 0;
     return isfinite(sp->t_s);
 }
@@ -153,8 +157,12 @@ static void test_lookahead_is_real(void **state)
                 assert_int_equal(engine_tick(e, now, &sp), 0);
                 if (k + 1 < la + 2) {
                     assert_int_equal(sp.state, ENGINE_STATE_WAITING);
-                    /* holding at the first waypoint */
-                    assert_true(dist3(sp.pos_m, (double[]){20, 0, 0}) < 1e-12);
+                    /* no position until the first waypoint is confirmed by
+                     * `confirm` consistent ones, then holding at it */
+                    if (k + 1 < c.confirm)
+                        assert_true(sp.flags & ENGINE_SP_NO_POSITION);
+                    else
+                        assert_true(dist3(sp.pos_m, (double[]){20, 0, 0}) < 1e-12);
                 }
             }
             assert_int_equal(sp.state, ENGINE_STATE_STREAMING);
@@ -313,41 +321,68 @@ static void test_skipped_ticks_identical(void **state)
     engine_free(b);
 }
 
-/* Given every kind of bad waypoint, then each is refused with its code and
- * counted, nothing accepted changes, duplicates are dropped and counted, and
- * no setpoint is ever NaN. */
+/* Read every rejection the engine reports into seq[] / reason[] (at most max). */
+static int drain_rejections(engine_t *e, uint32_t *seq, int *reason, int max)
+{
+    engine_rejection_t r;
+    int n = 0;
+    while (engine_rejection_next(e, &r)) {
+        if (n < max) {
+            seq[n] = r.seq;
+            reason[n] = r.reason;
+        }
+        n++;
+    }
+    return n;
+}
+
+/* Given every kind of bad waypoint, then NaN, infinity and out-of-range are
+ * refused at once with their code, duplicates are dropped at once, and the
+ * rest (backwards, same time, too fast) are refused when judged with their
+ * neighbours (at the latest at engine_finish), each counted and reported
+ * with its seq and reason; nothing accepted changes, and no setpoint is
+ * ever NaN. */
 static void test_bad_input(void **state)
 {
     (void)state;
     engine_config_t c;
     engine_config_default(&c);
+    c.profile = ENGINE_PROFILE_ROAD; /* absolute limits */
     c.max_speed_m_s = 50;
     engine_t *e = mk(&c);
     engine_waypoint_t w = {.t_s = 10, .pos_m = {1, 2, 3}, .seq = 1}, b;
     engine_status_t st;
     engine_setpoint_t sp;
+    uint32_t seq[16];
+    int why[16];
 
     assert_int_equal(engine_push(e, &w), 0);
-    b = w; b.t_s = 11; b.pos_m[1] = NAN;
+    b = w; b.t_s = 11; b.pos_m[1] = NAN; b.seq = 11;
     assert_int_equal(engine_push(e, &b), -ENGINE_ENOTFINITE);
-    b = w; b.t_s = INFINITY;
+    b = w; b.t_s = INFINITY; b.seq = 12;
     assert_int_equal(engine_push(e, &b), -ENGINE_ENOTFINITE);
-    b = w; b.t_s = 11; b.pos_m[0] = 2e7;
+    b = w; b.t_s = 11; b.pos_m[0] = 2e7; b.seq = 13;
     assert_int_equal(engine_push(e, &b), -ENGINE_ERANGE);
-    b = w; b.t_s = 11; b.pos_m[2] = -2e7; /* |coordinate|: negative too */
+    b = w; b.t_s = 11; b.pos_m[2] = -2e7; b.seq = 14; /* |coordinate|: negative too */
     assert_int_equal(engine_push(e, &b), -ENGINE_ERANGE);
-    b = w; b.t_s = 1e13;
+    b = w; b.t_s = 1e13; b.seq = 15;
     assert_int_equal(engine_push(e, &b), -ENGINE_ERANGE);
-    b = w; b.t_s = 9;
-    assert_int_equal(engine_push(e, &b), -ENGINE_EBACKWARDS);
-    b = w; b.pos_m[0] = 1.5;
-    assert_int_equal(engine_push(e, &b), -ENGINE_ESAMETIME);
+    assert_int_equal(drain_rejections(e, seq, why, 16), 5);
+    assert_int_equal(seq[0], 11);
+    assert_int_equal(why[0], ENGINE_ENOTFINITE);
+    assert_int_equal(seq[4], 15);
+    assert_int_equal(why[4], ENGINE_ERANGE);
+    b = w; b.t_s = 9; b.seq = 16;
+    assert_int_equal(engine_push(e, &b), 0);
+    b = w; b.pos_m[0] = 1.5; b.seq = 17;
+    assert_int_equal(engine_push(e, &b), 0);
     b = w; b.seq = 2;
     assert_int_equal(engine_push(e, &b), ENGINE_DUPLICATE);
-    b = w; b.t_s = 11; b.pos_m[0] = 1 + 51; /* 51 m in 1 s */
-    assert_int_equal(engine_push(e, &b), -ENGINE_ESPEED);
+    b = w; b.t_s = 11; b.pos_m[0] = 1 + 51; b.seq = 18; /* 51 m in 1 s */
+    assert_int_equal(engine_push(e, &b), 0);
     b = w; b.t_s = 11; b.pos_m[0] = 1 + 49; b.seq = 3;
     assert_int_equal(engine_push(e, &b), 0);
+    assert_int_equal(engine_finish(e), 0);
     engine_status(e, &st);
     assert_int_equal(st.accepted, 2);
     assert_int_equal(st.duplicates, 1);
@@ -358,6 +393,15 @@ static void test_bad_input(void **state)
     assert_int_equal(st.rejected_by[ENGINE_ESAMETIME], 1);
     assert_int_equal(st.rejected_by[ENGINE_ESPEED], 1);
     assert_int_equal(st.last_seq, 3);
+    /* every one reported, in order, with its own reason */
+    assert_int_equal(drain_rejections(e, seq, why, 16), 3);
+    assert_int_equal(seq[0], 16);
+    assert_int_equal(why[0], ENGINE_EBACKWARDS);
+    assert_int_equal(seq[1], 17);
+    assert_int_equal(why[1], ENGINE_ESAMETIME);
+    assert_int_equal(seq[2], 18);
+    assert_int_equal(why[2], ENGINE_ESPEED);
+    assert_int_equal(st.rejections_unreported, 0);
     engine_reset_counters(e);
     engine_status(e, &st);
     assert_int_equal(st.rejected, 0);
@@ -752,9 +796,11 @@ static double curve_amax_axis(const fdiff_seg_t *s, size_t n, double t_lo, doubl
 
 /*
  * Given the default configuration and a track with the real log's late
- * burst, when pushed, then J (whose lateness cannot be seen yet) is
- * accepted, J+1 and J+2 are refused with ENGINE_EACCEL and counted, J+3 on
- * is accepted; when streamed, every setpoint equals (Horner) the curve
+ * burst, when pushed, then J (0.296 s late: its neighbours agree without it)
+ * is refused and reported, and every other waypoint is kept: J+1 (0.120 s
+ * late, 24 m/s^2 with its kept neighbours, within max_accel_m_s2) and J+2 (on
+ * time) are not condemned by J, as they were when the check looked back
+ * only; when streamed, every setpoint equals (Horner) the curve
  * through the waypoints kept as if the two had never been sent (the rest of
  * the curve is unaffected: same nodes, same solve), no tick jumps, and away
  * from the REST start and stop the acceleration per axis stays within
@@ -777,29 +823,32 @@ static void test_jitter_rejected(void **state)
     double maxerr = 0, maxaerr = 0, maxstep = 0, maxdv = 0, amax_stream = 0;
 
     engine_config_default(&c);
-    assert_true(c.max_accel_m_s2 > 0);
+    const double amax_lim = engine_config_max_accel(&c);
+    assert_true(amax_lim > 0);
     engine_t *e = mk(&c);
     for (int i = 0; i < JIT_N; i++) {
         jitter_wp(&wp[i], i);
-        int rc = engine_push(e, &wp[i]);
-        if (i == JIT_J + 1 || i == JIT_J + 2) {
-            assert_int_equal(rc, -ENGINE_EACCEL);
-        } else {
-            assert_int_equal(rc, 0);
+        assert_int_equal(engine_push(e, &wp[i]), 0);
+        if (i != JIT_J)
             kept[nk++] = wp[i];
-        }
     }
     assert_int_equal(engine_finish(e), 0);
     engine_status(e, &st);
-    assert_int_equal(st.accepted, JIT_N - 2);
-    assert_int_equal(st.rejected, 2);
-    assert_int_equal(st.rejected_by[ENGINE_EACCEL], 2);
+    assert_int_equal(st.accepted, JIT_N - 1);
+    assert_int_equal(st.rejected, 1);
+    assert_int_equal(st.rejected_by[ENGINE_EACCEL] + st.rejected_by[ENGINE_ESPEED], 1);
     assert_int_equal(st.last_seq, JIT_N);
+    {
+        engine_rejection_t r;
+        assert_int_equal(engine_rejection_next(e, &r), 1);
+        assert_int_equal(r.seq, JIT_J + 1);
+        assert_int_equal(engine_rejection_next(e, &r), 0);
+    }
     assert_non_null(strstr(engine_strerror(-ENGINE_EACCEL), "max_accel_m_s2"));
 
     /* the reference: the kept waypoints with no check at all */
     c0 = c;
-    c0.max_accel_m_s2 = 0;
+    c0.profile = ENGINE_PROFILE_NONE;
     assert_int_equal(engine_curve(&c0, kept, nk, segs, JIT_N + 8, &nseg), 0);
     assert_int_equal(nseg, nk - 1);
     double vmax = curve_vmax(segs, nseg), amax_all;
@@ -844,12 +893,14 @@ static void test_jitter_rejected(void **state)
     double amax_nocheck = curve_amax_axis(segs_all, nall, t_lo, t_hi, NULL);
     print_message("jitter: max |a| per axis (interior) %.1f m/s^2 streamed, %.1f curve, "
                   "%.1f without the check; bound 3 * %.0f; max |sp - Horner| %.1e m\n",
-                  amax_stream, amax_ref, amax_nocheck, c.max_accel_m_s2, maxerr);
-    assert_true(amax_ref <= 3 * c.max_accel_m_s2);
-    assert_true(amax_stream <= 3 * c.max_accel_m_s2);
-    assert_true(amax_nocheck > 3 * c.max_accel_m_s2);
+                  amax_stream, amax_ref, amax_nocheck, amax_lim, maxerr);
+    assert_true(amax_ref <= 3 * amax_lim);
+    assert_true(amax_stream <= 3 * amax_lim);
+    assert_true(amax_nocheck > 3 * amax_lim);
 
-    /* a gap restarts it: a fast new trajectory is not judged by the old one */
+    /* a gap restarts it: a fast new trajectory is not judged by the old one
+     * (absolute limits: profile ROAD) */
+    c.profile = ENGINE_PROFILE_ROAD;
     e = mk(&c);
     engine_waypoint_t g = {.t_s = 0, .pos_m = {0, 0, 0}};
     assert_int_equal(engine_push(e, &g), 0);
@@ -859,19 +910,30 @@ static void test_jitter_rejected(void **state)
     assert_int_equal(engine_push(e, &g), 0);
     g.t_s = 2 + c.max_gap_s + 1; g.pos_m[0] = 500;  /* new trajectory */
     assert_int_equal(engine_push(e, &g), 0);
-    g.t_s += 1; g.pos_m[0] += 50;                   /* 50 m/s at once: no triple yet */
+    g.t_s += 1; g.pos_m[0] += 50; g.seq = 77;       /* 50 m/s at once: no triple yet */
     assert_int_equal(engine_push(e, &g), 0);
-    g.t_s += 1; g.pos_m[0] += 10;                   /* 50 -> 10 m/s in 1 s: 40 m/s^2 */
-    assert_int_equal(engine_push(e, &g), -ENGINE_EACCEL);
-    g.t_s += 1; g.pos_m[0] += 40;                   /* 50 -> 25 m/s over 2 + 1 s: 16.7 */
+    g.t_s += 1; g.pos_m[0] += 10; g.seq = 0;        /* 50 -> 10 m/s in 1 s: 40 m/s^2 */
     assert_int_equal(engine_push(e, &g), 0);
+    /* 50 -> 25 m/s over 2 + 1 s: 16.7; without the 50 m/s one: 30 -> 40
+     * m/s, 6.7: of the two that cannot both be right, the smoother chain
+     * keeps the second (accept.h) */
+    g.t_s += 1; g.pos_m[0] += 40;
+    assert_int_equal(engine_push(e, &g), 0);
+    assert_int_equal(engine_finish(e), 0);
     engine_status(e, &st);
     assert_int_equal(st.gaps, 1);
+    assert_int_equal(st.accepted, 6);
     assert_int_equal(st.rejected_by[ENGINE_EACCEL], 1);
+    {
+        engine_rejection_t r;
+        assert_int_equal(engine_rejection_next(e, &r), 1);
+        assert_int_equal(r.seq, 77);
+        assert_int_equal(r.reason, ENGINE_EACCEL);
+    }
     engine_free(e);
 
-    /* 0 switches it off; negative or non-finite is refused */
-    c.max_accel_m_s2 = -1;
+    /* 0 switches it off, -1 the profile; below -1 or non-finite is refused */
+    c.max_accel_m_s2 = -1.5;
     assert_int_equal(engine_config_check(&c, NULL), -ENGINE_ECONFIG);
     c.max_accel_m_s2 = NAN;
     assert_int_equal(engine_config_check(&c, NULL), -ENGINE_ECONFIG);

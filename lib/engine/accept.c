@@ -1,0 +1,410 @@
+/* accept.c - the acceptance policy, judged with both neighbours; see accept.h. */
+#include "accept.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Timestamps closer than this are "the same time" (seconds), as in engine.c. */
+#define ACCEPT_SAME_TIME_S 1e-9
+/* Positions closer than this at the same time are a duplicate (metres). */
+#define ACCEPT_SAME_POS_M 1e-9
+
+void accept_init(accept_t *a, const accept_config_t *cfg)
+{
+    memset(a, 0, sizeof *a);
+    a->cfg = *cfg;
+    if (a->cfg.window < 1)
+        a->cfg.window = 1;
+    if (a->cfg.window > ACCEPT_WINDOW_MAX)
+        a->cfg.window = ACCEPT_WINDOW_MAX;
+    if (a->cfg.confirm < 1)
+        a->cfg.confirm = 1;
+    if (a->cfg.confirm > a->cfg.window)
+        a->cfg.confirm = a->cfg.window;
+}
+
+void accept_reset(accept_t *a)
+{
+    a->npend = 0;
+    a->open = 0;
+    a->have_a0 = 0;
+}
+
+void accept_close(accept_t *a)
+{
+    a->open = 0;
+    a->have_a0 = 0;
+}
+
+static double dist(const engine_waypoint_t *p, const engine_waypoint_t *q)
+{
+    double d2 = 0;
+    for (int k = 0; k < ENGINE_AXES; k++)
+        d2 += (q->pos_m[k] - p->pos_m[k]) * (q->pos_m[k] - p->pos_m[k]);
+    return sqrt(d2);
+}
+
+/* chord speed p -> q; only for q later than p */
+static double chord_speed(const engine_waypoint_t *p, const engine_waypoint_t *q)
+{
+    return dist(p, q) / (q->t_s - p->t_s);
+}
+
+static int same(const engine_waypoint_t *p, const engine_waypoint_t *q)
+{
+    return fabs(p->t_s - q->t_s) <= ACCEPT_SAME_TIME_S && dist(p, q) <= ACCEPT_SAME_POS_M;
+}
+
+int accept_offer(accept_t *a, const engine_waypoint_t *wp)
+{
+    if (a->open && same(&a->a1, wp))
+        return ENGINE_DUPLICATE;
+    for (unsigned i = 0; i < a->npend; i++)
+        if (same(&a->pend[i], wp))
+            return ENGINE_DUPLICATE;
+    if (a->npend == ACCEPT_WINDOW_MAX) /* cannot happen: verdicts are taken first */
+        return -ENGINE_EFULL;
+    a->pend[a->npend++] = *wp;
+    return 0;
+}
+
+double accept_recent_speed(const accept_t *a)
+{
+    double m = 0;
+    for (unsigned i = 0; i < a->nhist; i++)
+        if (a->vhist[i] > m)
+            m = a->vhist[i];
+    return m;
+}
+
+/* lower median of the chord speeds between consecutive waypoints held (and
+ * from the anchor to the first), forward intervals only; 0 if none */
+static double window_median_speed(const accept_t *a)
+{
+    double v[ACCEPT_WINDOW_MAX];
+    unsigned n = 0;
+    const engine_waypoint_t *p = a->open ? &a->a1 : NULL;
+
+    for (unsigned i = 0; i < a->npend; i++) {
+        const engine_waypoint_t *q = &a->pend[i];
+        if (p && q->t_s - p->t_s > ACCEPT_SAME_TIME_S &&
+            q->t_s - p->t_s <= a->cfg.max_gap_s)
+            v[n++] = chord_speed(p, q);
+        p = q;
+    }
+    if (!n)
+        return 0;
+    /* insertion sort: n <= ACCEPT_WINDOW_MAX */
+    for (unsigned i = 1; i < n; i++)
+        for (unsigned j = i; j > 0 && v[j - 1] > v[j]; j--) {
+            double t = v[j];
+            v[j] = v[j - 1];
+            v[j - 1] = t;
+        }
+    /* the lower median: with two chords, one of them an outlier's, the
+     * smaller one */
+    return v[(n - 1) / 2];
+}
+
+double accept_speed_limit(const accept_t *a)
+{
+    double cap = a->cfg.max_speed_m_s, learned, vref;
+
+    if (!a->cfg.learned)
+        return cap;
+    vref = fmax(accept_recent_speed(a), window_median_speed(a));
+    learned = fmax(ACCEPT_LEARN_FLOOR_M_S, ACCEPT_LEARN_FACTOR * vref);
+    return cap > 0 ? fmin(cap, learned) : learned;
+}
+
+/*
+ * accept_check, and with gaps_ok an interval above max_gap_s passes too (time
+ * order and speed only: an acceleration over a gap means nothing).  That is
+ * what "mutually consistent" means for waypoints that confirm a new
+ * trajectory: a sparse or slipped track (every interval a gap) still
+ * confirms itself, a lone waypoint at t = 1e9 among waypoints at t ~ 100
+ * does not (they are earlier than it).
+ */
+static int check(const accept_t *a, const engine_waypoint_t *pre, const engine_waypoint_t *p,
+                 const engine_waypoint_t *b, double vlim, int gaps_ok)
+{
+    double dt = b->t_s - p->t_s, amax = a->cfg.max_accel_m_s2;
+
+    if (dt < -ACCEPT_SAME_TIME_S)
+        return ENGINE_EBACKWARDS;
+    if (dt <= ACCEPT_SAME_TIME_S)
+        return ENGINE_ESAMETIME;
+    if (dt > a->cfg.max_gap_s) {
+        if (!gaps_ok)
+            return ENGINE_EUNCONFIRMED;
+        pre = NULL;
+    }
+    if (vlim > 0 && dist(p, b) > vlim * dt)
+        return ENGINE_ESPEED;
+    if (amax > 0 && pre) {
+        /* pre is earlier than p by more than 1 ns: it was checked so */
+        double d1 = p->t_s - pre->t_s, dv2 = 0, s1 = 0, s2 = 0, allow;
+        for (int k = 0; k < ENGINE_AXES; k++) {
+            double v1 = (p->pos_m[k] - pre->pos_m[k]) / d1;
+            double v2 = (b->pos_m[k] - p->pos_m[k]) / dt;
+            dv2 += (v2 - v1) * (v2 - v1);
+            s1 += v1 * v1;
+            s2 += v2 * v2;
+        }
+        /* 2 |v2 - v1| / (d1 + dt) <= amax, plus a free turn when learned */
+        allow = amax * 0.5 * (d1 + dt);
+        if (a->cfg.learned)
+            allow += 2.0 * sqrt(fmin(s1, s2));
+        if (sqrt(dv2) > allow)
+            return ENGINE_EACCEL;
+    }
+    return 0;
+}
+
+int accept_check(const accept_t *a, const engine_waypoint_t *pre, const engine_waypoint_t *p,
+                 const engine_waypoint_t *b, double vlim)
+{
+    return check(a, pre, p, b, vlim, 0);
+}
+
+/* |implied acceleration| of pre -> p -> b (0 without pre); forward intervals */
+static double accel_of(const engine_waypoint_t *pre, const engine_waypoint_t *p,
+                       const engine_waypoint_t *b)
+{
+    double d1, d2, dv2 = 0;
+
+    if (!pre)
+        return 0;
+    d1 = p->t_s - pre->t_s;
+    d2 = b->t_s - p->t_s;
+    for (int k = 0; k < ENGINE_AXES; k++) {
+        double dv = (b->pos_m[k] - p->pos_m[k]) / d2 - (p->pos_m[k] - pre->pos_m[k]) / d1;
+        dv2 += dv * dv;
+    }
+    return 2.0 * sqrt(dv2) / (d1 + d2);
+}
+
+/* chain (len, cost) better than (l2, c2): longer, or as long and smoother */
+static int better(unsigned len, double cost, unsigned l2, double c2)
+{
+    return len > l2 || (len == l2 && cost < c2);
+}
+
+/*
+ * Longest consistent chain that starts at nd[0] (preceded by pre) and whose
+ * second waypoint, if any, has an index in jmin..jmax; among the longest,
+ * the smoothest (the least largest implied acceleration along it, in *cost).
+ * m <= ACCEPT_WINDOW_MAX + 1.  len[i][j], cst[i][j]: the best such chain
+ * ending with the step nd[i] -> nd[j] (len 0: none).
+ */
+static unsigned longest(const accept_t *a, const engine_waypoint_t *const *nd, unsigned m,
+                        const engine_waypoint_t *pre, unsigned jmin, unsigned jmax,
+                        double vlim, int gaps_ok, double *cost)
+{
+    unsigned len[ACCEPT_WINDOW_MAX + 1][ACCEPT_WINDOW_MAX + 1];
+    double cst[ACCEPT_WINDOW_MAX + 1][ACCEPT_WINDOW_MAX + 1];
+    unsigned best = 1;
+    double best_cost = 0;
+
+    memset(len, 0, sizeof len);
+    for (unsigned j = jmin; j < m && j <= jmax; j++)
+        if (check(a, pre, nd[0], nd[j], vlim, gaps_ok) == 0) {
+            len[0][j] = 2;
+            cst[0][j] = accel_of(pre, nd[0], nd[j]);
+        }
+    for (unsigned i = 1; i < m; i++)
+        for (unsigned h = 0; h < i; h++) {
+            if (!len[h][i])
+                continue;
+            if (better(len[h][i], cst[h][i], best, best_cost)) {
+                best = len[h][i];
+                best_cost = cst[h][i];
+            }
+            for (unsigned j = i + 1; j < m; j++) {
+                double c;
+                if (check(a, nd[h], nd[i], nd[j], vlim, gaps_ok))
+                    continue;
+                c = fmax(cst[h][i], accel_of(nd[h], nd[i], nd[j]));
+                if (!len[i][j] || better(len[h][i] + 1, c, len[i][j], cst[i][j])) {
+                    len[i][j] = len[h][i] + 1;
+                    cst[i][j] = c;
+                }
+            }
+        }
+    if (cost)
+        *cost = best_cost;
+    return best;
+}
+
+/* 1 if nd[0..m-1] in order is one consistent chain (nd[0] preceded by pre) */
+static int chain_all(const accept_t *a, const engine_waypoint_t *const *nd, unsigned m,
+                     const engine_waypoint_t *pre, double vlim, int gaps_ok)
+{
+    for (unsigned i = 0; i + 1 < m; i++) {
+        if (check(a, pre, nd[i], nd[i + 1], vlim, gaps_ok))
+            return 0;
+        pre = nd[i];
+    }
+    return 1;
+}
+
+/* q follows p across a plausible gap: beyond max_gap_s, but not far in time
+ * (ACCEPT_FAR_GAP_FACTOR) and covered within the speed limit */
+static int plausible_gap(const accept_t *a, const engine_waypoint_t *p,
+                         const engine_waypoint_t *q, double vlim)
+{
+    double dt = q->t_s - p->t_s;
+    return dt > a->cfg.max_gap_s && dt <= ACCEPT_FAR_GAP_FACTOR * a->cfg.max_gap_s &&
+           (!(vlim > 0) || dist(p, q) <= vlim * dt);
+}
+
+/* take the oldest waypoint out of the window into v */
+static void pop(accept_t *a, accept_verdict_t *v, accept_kind_t kind, int reason)
+{
+    memset(v, 0, sizeof *v);
+    v->kind = kind;
+    v->reason = reason;
+    v->wp = a->pend[0];
+    a->npend--;
+    memmove(&a->pend[0], &a->pend[1], a->npend * sizeof a->pend[0]);
+    if (kind == ACCEPT_TAKE) {
+        a->vhist[a->hnext] = chord_speed(&a->a1, &v->wp);
+        a->hnext = (a->hnext + 1) % ACCEPT_HIST;
+        if (a->nhist < ACCEPT_HIST)
+            a->nhist++;
+        a->a0 = a->a1;
+        a->have_a0 = 1;
+        a->a1 = v->wp;
+    } else if (kind == ACCEPT_START) {
+        v->gap = a->open && v->wp.t_s - a->a1.t_s > a->cfg.max_gap_s;
+        a->open = 1;
+        a->have_a0 = 0;
+        a->a1 = v->wp;
+    }
+}
+
+/*
+ * Stale repeat of the anchor while moving: 1 = drop c as stale, 0 = not
+ * stale (judge it as any other), -1 = wait for a waypoint with a new position.
+ */
+static int stale_verdict(const accept_t *a, int full, double vlim)
+{
+    const engine_waypoint_t *c = &a->pend[0];
+    double v_in;
+
+    if (!a->cfg.stale || !a->open || !a->have_a0 || dist(&a->a1, c) > ACCEPT_STALE_POS_M ||
+        c->t_s - a->a1.t_s <= ACCEPT_SAME_TIME_S)
+        return 0;
+    v_in = chord_speed(&a->a0, &a->a1);
+    if (v_in < ACCEPT_STALE_MIN_SPEED_M_S)
+        return 0;
+    for (unsigned i = 1; i < a->npend; i++) {
+        const engine_waypoint_t *f = &a->pend[i];
+        if (dist(&a->a1, f) <= ACCEPT_STALE_POS_M)
+            continue; /* the run goes on */
+        if (f->t_s - a->a1.t_s > ACCEPT_SAME_TIME_S &&
+            accept_check(a, &a->a0, &a->a1, f, vlim) == 0 &&
+            chord_speed(&a->a1, f) >= 0.5 * v_in)
+            return 1;
+        return 0;
+    }
+    return full ? 0 : -1;
+}
+
+int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
+{
+    const engine_waypoint_t *nd[ACCEPT_WINDOW_MAX + 1];
+    const engine_waypoint_t *pre = a->open && a->have_a0 ? &a->a0 : NULL;
+    unsigned n = a->npend, k = a->cfg.confirm;
+    int full = closing || n >= a->cfg.window;
+    double vlim;
+    int r;
+
+    if (!n)
+        return 0;
+    vlim = accept_speed_limit(a);
+    if (!a->open) {
+        unsigned u, vbest = 0;
+        for (unsigned i = 0; i < n; i++)
+            nd[i] = &a->pend[i];
+        if (n >= k && chain_all(a, nd, n, NULL, vlim, 1)) {
+            pop(a, v, ACCEPT_START, 0);
+            return 1;
+        }
+        if (!full)
+            return 0;
+        u = longest(a, nd, n, NULL, 1, n, vlim, 1, NULL);
+        for (unsigned s = 1; s < n; s++) {
+            unsigned l = longest(a, nd + s, n - s, NULL, 1, n, vlim, 1, NULL);
+            if (l > vbest)
+                vbest = l;
+        }
+        /* nothing to abandon: at the close, the chain there is will do; a
+         * waypoint a plausible gap before the next one is a trajectory of
+         * its own */
+        if ((u >= vbest && (u >= k || closing)) ||
+            (n >= 2 && plausible_gap(a, nd[0], nd[1], vlim))) {
+            pop(a, v, ACCEPT_START, 0);
+            return 1;
+        }
+        r = n >= 2 ? accept_check(a, NULL, nd[0], nd[1], vlim) : 0;
+        pop(a, v, ACCEPT_DROP, r ? r : ENGINE_EUNCONFIRMED);
+        return 1;
+    }
+
+    /* an open trajectory: the anchor a1 (after a0) and the window */
+    r = stale_verdict(a, full, vlim);
+    if (r < 0)
+        return 0;
+    if (r > 0) {
+        pop(a, v, ACCEPT_DROP, ENGINE_ESTALE);
+        return 1;
+    }
+    nd[0] = &a->a1;
+    for (unsigned i = 0; i < n; i++)
+        nd[i + 1] = &a->pend[i];
+    if (n >= 2 && chain_all(a, nd, n + 1, pre, vlim, 0)) {
+        pop(a, v, ACCEPT_TAKE, 0);
+        return 1;
+    }
+    r = accept_check(a, pre, &a->a1, nd[1], vlim);
+    if (r == ENGINE_EUNCONFIRMED && a->pend[0].t_s > a->a1.t_s && n >= k &&
+        chain_all(a, nd + 1, k, NULL, vlim, 1)) {
+        /* after a gap: nothing later can continue the anchor (all are later
+         * than c, which is beyond max_gap_s), so k consistent waypoints are
+         * all it takes */
+        pop(a, v, ACCEPT_START, 0);
+        return 1;
+    }
+    if (!full)
+        return 0;
+    {
+        double cw, co;
+        unsigned lw = longest(a, nd, n + 1, pre, 1, 1, vlim, 0, &cw); /* through c */
+        unsigned lo = longest(a, nd, n + 1, pre, 2, n, vlim, 0, &co); /* skipping c */
+        /* keep c unless a longer chain skips it, or one as long and smoother
+         * (of two fixes that cannot both be right, the one that bends the
+         * track less) */
+        if (r == 0 && !better(lo, co, lw, cw)) {
+            pop(a, v, ACCEPT_TAKE, 0);
+            return 1;
+        }
+        if (lo < 2) {
+            /* nothing held continues the anchor: re-anchor on k consistent */
+            unsigned u = longest(a, nd + 1, n, NULL, 1, n, vlim, 1, NULL);
+            /* at the close, what is left confirms itself if it is all one
+             * chain that the anchor reaches within the speed limit */
+            if (u >= k || plausible_gap(a, &a->a1, nd[1], vlim) ||
+                (closing && u == n && check(a, NULL, &a->a1, nd[1], vlim, 1) == 0)) {
+                pop(a, v, ACCEPT_START, 0);
+                return 1;
+            }
+        }
+        if (r == 0 && n >= 2)
+            r = accept_check(a, &a->a1, nd[1], nd[2], vlim);
+        if (r == 0 && lo == lw)
+            r = ENGINE_EACCEL; /* as long a chain bends less without it */
+        pop(a, v, ACCEPT_DROP, r ? r : ENGINE_EUNCONFIRMED);
+        return 1;
+    }
+}

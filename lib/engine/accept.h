@@ -1,0 +1,180 @@
+/*
+ * accept.h - which waypoints a trajectory keeps: the acceptance policy of
+ * the engine, judged with both neighbours of each waypoint.
+ *
+ * Pure and allocation-free: an accept_t lives inside the engine.  The engine
+ * offers every finite, in-range waypoint (accept_offer) and then asks for
+ * verdicts (accept_decide) until there is none: each verdict says what to do
+ * with the oldest waypoint held, in arrival order.
+ *
+ * The rule.  The waypoints held (at most `window`, taken out of the engine's
+ * start_slack, so a clean track costs no latency: see engine_lookahead) are
+ * judged together with the anchor, the last waypoint kept (and the one kept
+ * before it, for the acceleration test).  Two waypoints are *consistent* if
+ * the later one is later in time (by more than 1 ns), the interval is at
+ * most max_gap_s, the chord speed is within the speed limit and, with the
+ * waypoint before, the implied acceleration is within the acceleration
+ * limit (see accept_check).  The oldest waypoint held, c, is
+ *   - kept (ACCEPT_TAKE) if the longest consistent chain from the anchor
+ *     through the waypoints held goes through c, or ties with the longest
+ *     one that skips it (keep every good fix);
+ *   - dropped (ACCEPT_DROP) if a longer chain from the anchor skips it: its
+ *     neighbours agree without it, so one bad fix never condemns the good
+ *     ones after it (they are judged against the anchor, not against it);
+ *   - the start of a new trajectory (ACCEPT_START; the engine closes the
+ *     current one at rest and transfers) if nothing held is consistent with
+ *     the anchor and c begins a chain of `confirm` mutually consistent
+ *     waypoints: re-anchoring after a bad anchor, a restarted clock, a gap.
+ *     A plausible gap (ACCEPT_FAR_GAP_FACTOR) needs no confirmation once
+ *     nothing held continues the anchor: a sparse track keeps its isolated
+ *     fixes.  A waypoint far from the current trajectory in time or space that is
+ *     not confirmed so is dropped as ENGINE_EUNCONFIRMED (one Modbus
+ *     waypoint at t = 1e9 never abandons the current trajectory);
+ *   - dropped as ENGINE_ESTALE if it repeats the anchor's position (within
+ *     ACCEPT_STALE_POS_M) although the object was moving (at least
+ *     ACCEPT_STALE_MIN_SPEED_M_S into the anchor) and the next waypoint with
+ *     a new position is consistent with the anchor and shows the object kept
+ *     at least half its pace across the repeats: a frozen receiver, not a
+ *     stop.  (profiles with stale detection only; a toolpath's dwell is a
+ *     real repeat.)
+ * A clean stretch is decided as soon as c and the waypoint after it
+ * (ACCEPT_LAG) form a consistent chain with the anchor; otherwise the verdict waits until
+ * the window is full or the input is closed.  The first trajectory (nothing
+ * to abandon) starts on a chain of `confirm` waypoints, or at the close on
+ * whatever consistent chain there is.
+ *
+ * The limits (see engine.h, engine_profile_t):
+ *   - absolute: chord speed <= max_speed_m_s, implied acceleration
+ *     2 |v2 - v1| / (dt1 + dt2) <= max_accel_m_s2 (0 = off).  Every kept
+ *     triple satisfies them, so the C2 curve's acceleration stays within
+ *     3 x max_accel_m_s2 (max principle of the second-derivative system).
+ *   - learned (profile auto): the speed limit is also at most
+ *     max(ACCEPT_LEARN_FLOOR_M_S, ACCEPT_LEARN_FACTOR x v_ref), v_ref the
+ *     fastest chord of the last ACCEPT_HIST kept intervals or the lower
+ *     median chord of the waypoints held, whichever is larger; and a turn is free:
+ *     |v2 - v1| may exceed the acceleration allowance by up to
+ *     2 min(|v1|, |v2|) (a reversal at the lower of the two speeds), so a
+ *     feed-rate-timed corner passes while a change of speed is held to
+ *     max_accel_m_s2.  The bound becomes 3 (max_accel_m_s2 +
+ *     4 min(|v1|, |v2|) / (dt1 + dt2)) per kept triple.
+ */
+#ifndef TRAJD_ACCEPT_H
+#define TRAJD_ACCEPT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "motion.h"
+
+/* Waypoints after c that a clean verdict waits for (its next neighbour). */
+#define ACCEPT_LAG 1
+/* Waypoints judged at once, at most. */
+#define ACCEPT_WINDOW_MAX 8
+/* Kept intervals whose chord speeds the learned limit looks back on. */
+#define ACCEPT_HIST 16
+/* Learned speed limit: this many times the recent speed ... */
+#define ACCEPT_LEARN_FACTOR 4.0
+/* ... but never below this (m/s): GNSS noise of a standing receiver at 5 Hz
+ * (3 m at 0.2 s is 15 m/s; the chord median of the window covers it), a
+ * walker, and every machine tool's feed. */
+#define ACCEPT_LEARN_FLOOR_M_S 5.0
+/* A repeat within this distance is the same position (metres): positions
+ * decoded from one fix are bit-identical. */
+#define ACCEPT_STALE_POS_M 1e-6
+/* A gap (interval above max_gap_s) up to this many times max_gap_s, covered
+ * within the speed limit, is plausible: a sparse track, a receiver that lost
+ * the sky for a while.  Beyond it, it is "far in time" (a seconds-for-
+ * microseconds slip, t = 1e9): only `confirm` consistent waypoints start a
+ * trajectory there. */
+#define ACCEPT_FAR_GAP_FACTOR 60.0
+/* The object was moving into the repeat at least this fast (m/s). */
+#define ACCEPT_STALE_MIN_SPEED_M_S 0.5
+
+typedef struct {
+    double max_speed_m_s;   /* absolute speed limit, 0 = none */
+    double max_accel_m_s2;  /* acceleration limit, 0 = none */
+    double max_gap_s;       /* a longer interval is not a continuation */
+    int learned;            /* learned speed limit and free turns (profile auto) */
+    int stale;              /* drop stale repeats */
+    unsigned window;        /* waypoints held for judgement, confirm..ACCEPT_WINDOW_MAX */
+    unsigned confirm;       /* mutually consistent waypoints that start a new trajectory */
+} accept_config_t;
+
+typedef enum {
+    ACCEPT_TAKE = 0,   /* append to the open trajectory */
+    ACCEPT_START = 1,  /* close the open trajectory (if any), start a new one with it */
+    ACCEPT_DROP = 2,   /* refused: reason says why */
+} accept_kind_t;
+
+typedef struct {
+    accept_kind_t kind;
+    int reason;              /* ACCEPT_DROP: an engine_error */
+    int gap;                 /* ACCEPT_START: the interval from the anchor exceeds max_gap_s */
+    engine_waypoint_t wp;
+} accept_verdict_t;
+
+typedef struct {
+    accept_config_t cfg;
+    engine_waypoint_t pend[ACCEPT_WINDOW_MAX];
+    unsigned npend;
+    int open;                 /* a trajectory is open: a1 is its last waypoint */
+    int have_a0;              /* a0 is the waypoint before a1 in it */
+    engine_waypoint_t a0, a1;
+    int started;              /* some trajectory was started since accept_init */
+    double vhist[ACCEPT_HIST];/* chord speeds of the last kept intervals */
+    unsigned nhist, hnext;
+} accept_t;
+
+/* Set up with cfg (window and confirm clamped to 1..ACCEPT_WINDOW_MAX,
+ * confirm <= window). */
+void accept_init(accept_t *a, const accept_config_t *cfg);
+
+/* Forget the waypoints held and the open trajectory (engine_clear); the
+ * recent speeds are kept: they describe the object, not the trajectory. */
+void accept_reset(accept_t *a);
+
+/* The engine ended the open trajectory (finish, stop): the next waypoint
+ * kept starts a new one. */
+void accept_close(accept_t *a);
+
+/* Waypoints held. */
+static inline unsigned accept_pending(const accept_t *a) { return a->npend; }
+
+/* The oldest waypoint held, or NULL. */
+static inline const engine_waypoint_t *accept_first(const accept_t *a)
+{
+    return a->npend ? &a->pend[0] : NULL;
+}
+
+/*
+ * Hold wp for judgement.  Returns 0, or ENGINE_DUPLICATE if it repeats a
+ * waypoint held or the last one kept, to 1 ns and 1 nm (not held).  The caller must take every verdict before offering again, so
+ * there is always room.
+ */
+int accept_offer(accept_t *a, const engine_waypoint_t *wp);
+
+/*
+ * The verdict on the oldest waypoint held, if it can be given now; closing
+ * = the input ends here (finish): give every verdict with what is held.
+ * Returns 1 with *v filled (the waypoint leaves the window, and on TAKE or
+ * START becomes the anchor), or 0 when it must wait for more waypoints.
+ */
+int accept_decide(accept_t *a, int closing, accept_verdict_t *v);
+
+/*
+ * The test of b following p (pre: the waypoint before p, or NULL), with the
+ * speed limit vlim (0 = none): 0 if consistent, else the engine_error that
+ * fails first (EBACKWARDS, ESAMETIME, EUNCONFIRMED for an interval above
+ * max_gap_s, ESPEED, EACCEL).  Exposed for the tests.
+ */
+int accept_check(const accept_t *a, const engine_waypoint_t *pre, const engine_waypoint_t *p,
+                 const engine_waypoint_t *b, double vlim);
+
+/* The speed limit now in force (m/s, 0 = none): max_speed_m_s, and with
+ * `learned` the learned limit from the recent speeds and the window. */
+double accept_speed_limit(const accept_t *a);
+
+/* Fastest chord speed of the last ACCEPT_HIST kept intervals (m/s, 0 if none). */
+double accept_recent_speed(const accept_t *a);
+
+#endif
