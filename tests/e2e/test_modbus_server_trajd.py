@@ -195,8 +195,13 @@ class FeedTest(unittest.TestCase):
                     o.write(line)
                     wps.append(tuple(float(v) for v in line.split(",")))
             ref_path = os.path.join(tmp, "ref.csv")
-            subprocess.run([TRAJREPLAY, "--rate", str(FEED_RATE_HZ), "-q", "-o", ref_path, xyz],
-                           check=True, timeout=60)
+            p = subprocess.run([TRAJREPLAY, "--rate", str(FEED_RATE_HZ), "-q", "--summary",
+                                "-o", ref_path, xyz], check=True, timeout=60,
+                               capture_output=True, text=True)
+            # the waypoints trajreplay refuses: the engine judges each with
+            # its neighbours, so a refusal may come after the write was
+            # answered (lib/engine/accept.h); the register counts them all
+            ref_rejected = int(re.search(r"summary: rejected (\d+)", p.stderr).group(1))
             ref = {r["t_s"]: r for r in read_csv(ref_path) if r["state"] in ("1", "streaming")}
             self.assertGreater(len(ref), 1000)
 
@@ -258,9 +263,12 @@ csv.path = %s/fed.csv
                         break
                 self.assertEqual(r[M["MBMAP_O_STATE"]], 3, "not finished")
                 # Counters mean what they say (issue 11): rejected is the bad
-                # data (exception 03), the buffer-full refusals (exception 06)
-                # are flow control, counted in full.
-                self.assertEqual(mbsim.u32(r, M["MBMAP_O_REJECTED"]), refused)
+                # data (exception 03 when refused at once, or judged later
+                # with its neighbours: as many as trajreplay refuses), the
+                # buffer-full refusals (exception 06) are flow control,
+                # counted in full.
+                self.assertEqual(mbsim.u32(r, M["MBMAP_O_REJECTED"]), ref_rejected)
+                self.assertLessEqual(refused, ref_rejected)
                 self.assertEqual(mbsim.u32(r, M["MBMAP_O_FULL"]), busy)
                 c.close()
             finally:
