@@ -432,6 +432,7 @@ engine_t *engine_new(const engine_config_t *cfg, int *err)
     e->xcfg.speed_m_s = cfg->transfer_speed_m_s;
     e->xcfg.accel_m_s2 = cfg->transfer_accel_m_s2;
     e->xcfg.max_s = cfg->max_gap_s;
+    e->xcfg.vmax_m_s = engine_config_max_speed(cfg);
     e->xcfg.period_s = e->period_s;
     transfer_motion_reset(&e->motion);
     /* nodes from the oldest unbuilt segment (lags the newest by the lookahead

@@ -65,6 +65,12 @@ double transfer_duration(const transfer_config_t *c, double dist_m, double v_obj
         if (capped)
             *capped = 1;
     }
+    /* never faster than the object may go: its speed limit comes first */
+    if (derived && c->vmax_m_s > 0 && dur < 1.5 * dist_m / c->vmax_m_s) {
+        dur = 1.5 * dist_m / c->vmax_m_s;
+        if (capped)
+            *capped = 0;
+    }
     if (dur < TRANSFER_MIN_S)
         dur = TRANSFER_MIN_S;
     /* whole periods: the transfer ends exactly on a tick (period_s > 0) */

@@ -19,7 +19,9 @@
  * Bounded in time: a derived transfer never lasts longer than max_s (the
  * engine passes max_gap_s: it never spends longer moving between two
  * trajectories than it would wait for a gap) or, across a gap, 1.5 x the gap
- * (the object's own pace), unless TRANSFER_MIN_S is longer; when cut so its peak speed is 1.5 D / max_s, the one case where a derived
+ * (the object's own pace), unless TRANSFER_MIN_S is longer or its peak
+ * speed would exceed the object's speed limit (vmax_m_s: that comes first,
+ * the duration is then 1.5 D / vmax_m_s); when cut so its peak speed is 1.5 D / max_s, the one case where a derived
  * transfer outruns the object's recent motion, and transfer_duration says so
  * (*capped).  With both limits configured the duration is not capped: the
  * configured limits are the machine's, and the engine still finishes, in
@@ -49,6 +51,9 @@ typedef struct {
     double speed_m_s;   /* configured transfer speed, 0 = derive */
     double accel_m_s2;  /* configured transfer acceleration, 0 = derive */
     double max_s;       /* a derived transfer lasts at most this, > 0 */
+    double vmax_m_s;    /* the object's speed limit (max_speed_m_s in force, 0 =
+                           none): a derived transfer's peak never exceeds it,
+                           before and above max_s */
     double period_s;    /* output period, > 0 */
 } transfer_config_t;
 
