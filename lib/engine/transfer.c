@@ -58,8 +58,9 @@ double transfer_duration(const transfer_config_t *c, double dist_m, double v_obj
     dur = fmax(1.5 * dist_m / v, sqrt(6.0 * dist_m / a));
     if (capped)
         *capped = 0;
-    /* across a gap the object itself took gap_s: 1.5 gap_s is its own pace */
-    cap = fmax(c->max_s, 1.5 * gap_s);
+    /* across a gap the object itself took gap_s: 1.5 gap_s is its own pace,
+     * up to TRANSFER_GAP_CAP x max_s (a gap of days is not a pace) */
+    cap = fmax(c->max_s, fmin(1.5 * gap_s, TRANSFER_GAP_CAP * c->max_s));
     if (derived && dur > cap) {
         dur = cap;
         if (capped)

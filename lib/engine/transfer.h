@@ -19,9 +19,11 @@
  * Bounded in time: a derived transfer never lasts longer than max_s (the
  * engine passes max_gap_s: it never spends longer moving between two
  * trajectories than it would wait for a gap) or, across a gap, 1.5 x the gap
- * (the object's own pace), unless TRANSFER_MIN_S is longer or its peak
- * speed would exceed the object's speed limit (vmax_m_s: that comes first,
- * the duration is then 1.5 D / vmax_m_s); when cut so its peak speed is 1.5 D / max_s, the one case where a derived
+ * (the object's own pace) up to TRANSFER_GAP_CAP x max_s, unless
+ * TRANSFER_MIN_S is longer or its peak speed would exceed the object's
+ * speed limit (vmax_m_s: that comes first, the duration is then
+ * 1.5 D / vmax_m_s).  So a derived transfer lasts at most
+ * max(TRANSFER_MIN_S, TRANSFER_GAP_CAP x max_s, 1.5 D / vmax_m_s); when cut so its peak speed is 1.5 D / max_s, the one case where a derived
  * transfer outruns the object's recent motion, and transfer_duration says so
  * (*capped).  With both limits configured the duration is not capped: the
  * configured limits are the machine's, and the engine still finishes, in
@@ -44,6 +46,9 @@
  * by it): the duration is then capped (max_s). */
 #define TRANSFER_SPEED_TINY_M_S 1e-9
 #define TRANSFER_ACCEL_TINY_M_S2 1e-9
+/* Across a gap a derived transfer may take 1.5 x the gap, at most this many
+ * times max_s (1 h with max_gap_s = 60 s: cerknicko's 894 s gap gives 1341 s). */
+#define TRANSFER_GAP_CAP 60.0
 /* Kept waypoints whose motion the derived limits look back on. */
 #define TRANSFER_HIST 16
 

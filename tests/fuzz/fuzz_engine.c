@@ -284,11 +284,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 
     /* It always finishes.  Every accepted waypoint adds at most max_gap_s of
      * track and may start a trajectory reached by a transfer of at most
-     * max(1 s, 1.5 * distance / speed) (10 m/s without a limit), distance at
-     * most the box's diagonal. */
+     * max(1 s, TRANSFER_GAP_CAP x max_gap_s, 1.5 * distance / speed limit)
+     * (lib/engine/transfer.h, derived limits), distance at most the box's
+     * diagonal.  (accepted counts the waypoints taken for judgement: the
+     * engine may refuse some later, lib/engine/accept.h.) */
     (void)engine_finish(r.e);
-    double v = r.c.max_speed_m_s > 0 ? r.c.max_speed_m_s : 10;
-    double transfer = fmax(1, 1.5 * 2 * sqrt(3) * r.c.max_abs_m / v) + 1;
+    double diag = 2 * sqrt(3) * r.c.max_abs_m;
+    double transfer = fmax(fmax(1, 60.0 * r.c.max_gap_s),
+                           r.c.max_speed_m_s > 0 ? 1.5 * diag / r.c.max_speed_m_s : 0) + 1;
     double bound_s = (double)accepted * (r.c.max_gap_s + transfer) + transfer + 1;
     int64_t step = 20, n = (int64_t)(bound_s * 1e9 / (double)r.c.period_ns) / step + 2;
     for (int64_t i = 0; i < n; i++) {
