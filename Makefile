@@ -190,6 +190,7 @@ run: deps-run
 
 check: deps
 	@$(MAKE) --no-print-directory check-build
+	@$(MAKE) --no-print-directory format-check
 	@BUILD=$(abspath $(BUILD)) PYTHON=$(PYTHON) sh tests/run.sh
 	@$(MAKE) --no-print-directory test-asan
 

@@ -46,11 +46,11 @@ typedef struct {
     core_t *core;
     stats_t stats;
     int sig_fd;
-    int status_fd;        /* 1 s housekeeping timer */
+    int status_fd; /* 1 s housekeeping timer */
     int watchdog_fd;
-    uint64_t seconds;     /* housekeeping ticks */
-    int signals_seen;     /* SIGTERM/SIGINT count */
-    int ready_fd;         /* background mode: pipe to the waiting parent, else -1 */
+    uint64_t seconds; /* housekeeping ticks */
+    int signals_seen; /* SIGTERM/SIGINT count */
+    int ready_fd;     /* background mode: pipe to the waiting parent, else -1 */
 } trajd_t;
 
 static void usage(FILE *f)
@@ -123,8 +123,7 @@ static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
     }
     log_set_level(cfg->daemon.log_level);
     if (rt_apply(&cfg->rt, rtwhy, sizeof rtwhy) < 0)
-        log_msg(LOG_WARNING, "realtime settings not applied (running without them): %s",
-                rtwhy);
+        log_msg(LOG_WARNING, "realtime settings not applied (running without them): %s", rtwhy);
     return 0;
 }
 
@@ -173,8 +172,7 @@ static void reload(trajd_t *d)
     cfg_t *nc = NULL;
     if (!d->core || d->core->stopping)
         return;
-    sd_notifyf(0, "RELOADING=1\nMONOTONIC_USEC=%llu",
-               (unsigned long long)(core_mono_ns() / 1000));
+    sd_notifyf(0, "RELOADING=1\nMONOTONIC_USEC=%llu", (unsigned long long)(core_mono_ns() / 1000));
     log_msg(LOG_NOTICE, "SIGHUP: reloading %s", d->conf_path);
     if (cfg_load(d->conf_path, &nc, err, sizeof err) < 0) {
         log_msg(LOG_ERR, "reload refused, still running the old configuration: %s", err);
@@ -193,8 +191,7 @@ static void reload(trajd_t *d)
             sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
             return;
         }
-        log_msg(LOG_ERR, "reload refused (cannot open): %s; reopening the old configuration",
-                err);
+        log_msg(LOG_ERR, "reload refused (cannot open): %s; reopening the old configuration", err);
         if (start_core(d, d->cfg, err2, sizeof err2) < 0) {
             log_msg(LOG_CRIT, "cannot reopen the old configuration either: %s", err2);
             loop_stop(d->loop, EX_SOFTWARE);
@@ -208,8 +205,8 @@ static void reload(trajd_t *d)
     unsigned kept = 0;
     for (unsigned i = 0; i < d->core->nobj; i++)
         kept += (unsigned)d->core->obj[i].carried;
-    log_msg(LOG_NOTICE, "reloaded: %u object(s), %u carried over without interruption",
-            nc->nobj, kept);
+    log_msg(LOG_NOTICE, "reloaded: %u object(s), %u carried over without interruption", nc->nobj,
+            kept);
     sd_notify(0, "READY=1");
     notify_status(d);
 }
@@ -223,9 +220,7 @@ static void on_signal(loop_t *l, int fd, uint32_t events, void *ctx)
         if (!d->core)
             return; /* a failed reload is ending the loop */
         switch (si.ssi_signo) {
-        case SIGHUP:
-            reload(d);
-            break;
+        case SIGHUP: reload(d); break;
         case SIGTERM:
         case SIGINT:
             if (++d->signals_seen > 1) {
@@ -238,8 +233,7 @@ static void on_signal(loop_t *l, int fd, uint32_t events, void *ctx)
             sd_notify(0, "STOPPING=1");
             core_stop(d->core);
             break;
-        default:
-            break;
+        default: break;
         }
     }
 }
@@ -296,24 +290,12 @@ static int parse_args(int argc, char **argv, trajd_t *d, int *foreground, const 
     int c;
     while ((c = getopt_long(argc, argv, "c:fVh", opts, NULL)) != -1) {
         switch (c) {
-        case 'c':
-            d->conf_path = optarg;
-            break;
-        case 'f':
-            *foreground = 1;
-            break;
-        case 'C':
-            *check = optarg;
-            break;
-        case 'V':
-            printf("trajd %s\n", TRAJD_VERSION);
-            return 0;
-        case 'h':
-            usage(stdout);
-            return 0;
-        default:
-            usage(stderr);
-            return EX_USAGE;
+        case 'c': d->conf_path = optarg; break;
+        case 'f': *foreground = 1; break;
+        case 'C': *check = optarg; break;
+        case 'V': printf("trajd %s\n", TRAJD_VERSION); return 0;
+        case 'h': usage(stdout); return 0;
+        default: usage(stderr); return EX_USAGE;
         }
     }
     if (optind < argc) {
@@ -387,8 +369,8 @@ static int run(trajd_t *d)
     uint64_t wd_usec = 0;
     if (sd_watchdog_enabled(0, &wd_usec) > 0 && wd_usec > 0)
         d->watchdog_fd = loop_timer_add(d->loop, (int64_t)wd_usec * 1000 / 2, on_watchdog, d);
-    log_msg(LOG_INFO, "started: %u object(s) at %.6g Hz, speed %.6g, config %s",
-            d->cfg->nobj, d->cfg->daemon.rate_hz, d->cfg->daemon.speed, d->conf_path);
+    log_msg(LOG_INFO, "started: %u object(s) at %.6g Hz, speed %.6g, config %s", d->cfg->nobj,
+            d->cfg->daemon.rate_hz, d->cfg->daemon.speed, d->conf_path);
     sd_notify(0, "READY=1");
     notify_status(d);
     report_ready(d, 0);
@@ -409,8 +391,11 @@ static int run(trajd_t *d)
 
 int main(int argc, char **argv)
 {
-    trajd_t d = {.conf_path = TRAJD_DEFAULT_CONF, .sig_fd = -1, .status_fd = -1,
-                 .watchdog_fd = -1, .ready_fd = -1};
+    trajd_t d = {.conf_path = TRAJD_DEFAULT_CONF,
+                 .sig_fd = -1,
+                 .status_fd = -1,
+                 .watchdog_fd = -1,
+                 .ready_fd = -1};
     int foreground = 0, rc;
     const char *check = NULL;
     char err[1024];

@@ -46,9 +46,8 @@
 #include "track.h"
 #include "version.h"
 
-
 enum {
-    EXIT_INPUT = 1,    /* track not loadable, or nothing in it usable */
+    EXIT_INPUT = 1, /* track not loadable, or nothing in it usable */
     EXIT_USAGE = 2,
     EXIT_OUTPUT = 3,
     EXIT_MEMORY = 4,   /* out of memory (never from the input) */
@@ -88,22 +87,22 @@ typedef struct {
     int summary;
     int quiet;
     int rate_given;
-    int keep_gaps;         /* write hold rows through gaps too */
-    int strict;            /* any rejection or skipped line: EXIT_STRICT */
+    int keep_gaps;               /* write hold rows through gaps too */
+    int strict;                  /* any rejection or skipped line: EXIT_STRICT */
     unsigned long long max_rows; /* 0 = no bound */
     unsigned progress_after_ms;
-    int precision;         /* --precision: decimals in fixed notation; -1: %.17g */
-    int binary;            /* --binary: the records of csv_format.h instead of CSV */
+    int precision; /* --precision: decimals in fixed notation; -1: %.17g */
+    int binary;    /* --binary: the records of csv_format.h instead of CSV */
     double rate_hz;
-    int64_t start_ns;      /* engine time at which the first waypoint is due */
+    int64_t start_ns; /* engine time at which the first waypoint is due */
     engine_config_t cfg;
     struct {
         const engine_setting_t *s;
         const char *arg;
     } eng[ENGINE_ARGS_MAX];
     unsigned neng;
-    char track_buf[PATH_MAX];            /* replay.track of -c's object */
-    char object_buf[CFG_NAME_MAX];       /* -c's object name */
+    char track_buf[PATH_MAX];      /* replay.track of -c's object */
+    char object_buf[CFG_NAME_MAX]; /* -c's object name */
 } opts_t;
 
 static void usage_engine(FILE *f)
@@ -111,7 +110,8 @@ static void usage_engine(FILE *f)
     engine_config_t d;
     engine_config_default(&d);
     fputs("\nEngine settings (lib/engine/engine_settings.c; the key is the same setting\n"
-          "in an [object.NAME] section of trajd.conf):\n", f);
+          "in an [object.NAME] section of trajd.conf):\n",
+          f);
     for (size_t i = 0; i < engine_settings_count; i++) {
         const engine_setting_t *s = &engine_settings[i];
         if (!s->option)
@@ -214,8 +214,18 @@ static const char *reason_name(int e)
 }
 
 enum {
-    OPT_RATE = 256, OPT_FORMAT, OPT_SVG, OPT_SUMMARY, OPT_SKIP_BAD, OPT_OBJECT,
-    OPT_PROGRESS_AFTER, OPT_STRICT, OPT_KEEP_GAPS, OPT_MAX_ROWS, OPT_PRECISION, OPT_BINARY,
+    OPT_RATE = 256,
+    OPT_FORMAT,
+    OPT_SVG,
+    OPT_SUMMARY,
+    OPT_SKIP_BAD,
+    OPT_OBJECT,
+    OPT_PROGRESS_AFTER,
+    OPT_STRICT,
+    OPT_KEEP_GAPS,
+    OPT_MAX_ROWS,
+    OPT_PRECISION,
+    OPT_BINARY,
     OPT_ENGINE = 1024, /* + index in engine_settings[] */
 };
 
@@ -291,8 +301,10 @@ static int parse_option(int c, char **argv, opts_t *o)
     case OPT_PRECISION: {
         unsigned p;
         if (parse_uint(optarg, &p) || p > CSV_FIXED_PREC_MAX) {
-            fprintf(stderr, "trajreplay: --precision: '%s' is not a number of decimals "
-                    "0..%d\n", optarg, CSV_FIXED_PREC_MAX);
+            fprintf(stderr,
+                    "trajreplay: --precision: '%s' is not a number of decimals "
+                    "0..%d\n",
+                    optarg, CSV_FIXED_PREC_MAX);
             return EXIT_USAGE;
         }
         o->precision = (int)p;
@@ -353,8 +365,7 @@ static int load_config(opts_t *o)
     int rc = -1;
     if (!obj) {
         fprintf(stderr, "trajreplay: %s: %s (objects: %s)\n", o->config,
-                o->object ? "no such object" : "several objects: choose one with --object",
-                names);
+                o->object ? "no such object" : "several objects: choose one with --object", names);
         rc = EXIT_USAGE;
         goto out;
     }
@@ -404,8 +415,10 @@ static int finish_opts(opts_t *o)
     engine_setpoint_t probe;
     memset(&probe, 0, sizeof probe);
     if (csv_format_format(line, sizeof line, o->object, &probe) < 0) {
-        fprintf(stderr, "trajreplay: --object: at most %d characters, no comma, quote or "
-                "control character\n", CSV_FORMAT_OBJECT_MAX);
+        fprintf(stderr,
+                "trajreplay: --object: at most %d characters, no comma, quote or "
+                "control character\n",
+                CSV_FORMAT_OBJECT_MAX);
         return EXIT_USAGE;
     }
     return -1;
@@ -479,9 +492,8 @@ static void print_summary(const track_t *trk, const replay_t *r, const engine_st
             "summary: setpoints %" PRIu64 "\n"
             "summary: max_speed_m_s %.6g\n"
             "summary: max_acc_m_s2 %.6g\n",
-            r->retries, st->underruns, st->underrun_ticks, st->hard_stops, st->gaps,
-            st->tracks, ticks,
-            max_v, max_a);
+            r->retries, st->underruns, st->underrun_ticks, st->hard_stops, st->gaps, st->tracks,
+            ticks, max_v, max_a);
 }
 
 /* One replay: its inputs, outputs and what was seen. */
@@ -490,17 +502,17 @@ typedef struct {
     track_t trk;
     engine_t *e;
     replay_t r;
-    int *results;          /* engine_push result of each waypoint */
+    int *results; /* engine_push result of each waypoint */
     svg_plot_t *plot;
     FILE *out;
-    double span_s;         /* track time from first to last waypoint */
+    double span_s; /* track time from first to last waypoint */
     double max_v, max_a;
-    uint64_t written;      /* setpoint rows */
+    uint64_t written; /* setpoint rows */
     engine_status_t st;
     int64_t t_start, t_shown; /* progress line */
     int progress, shown;
-    size_t reported;       /* waypoints before this one were reported if rejected */
-    uint64_t rejected;     /* waypoints rejected as bad data */
+    size_t reported;   /* waypoints before this one were reported if rejected */
+    uint64_t rejected; /* waypoints rejected as bad data */
     uint64_t rejected_by[ENGINE_ERROR_COUNT];
     size_t first_rejected; /* index of the first one */
     uint64_t skipped_gaps; /* gaps jumped over (not --keep-gaps) */
@@ -529,14 +541,14 @@ static int run_open(run_t *run, const opts_t *o)
     for (size_t i = 0; i < run->trk.nreports; i++)
         fprintf(stderr, "trajreplay: skipped %s\n", run->trk.reports[i]);
     if (run->trk.ignored)
-        fprintf(stderr, "trajreplay: ignored %zu record%s without a usable fix (no fix, position "
+        fprintf(stderr,
+                "trajreplay: ignored %zu record%s without a usable fix (no fix, position "
                 "not available, a fast packet missing a frame, another source)\n",
                 run->trk.ignored, run->trk.ignored == 1 ? "" : "s");
     if (run->trk.skipped)
         fprintf(stderr, "trajreplay: skipped %zu bad line%s in all%s, the first: %s\n",
                 run->trk.skipped, run->trk.skipped == 1 ? "" : "s",
-                run->trk.skipped > run->trk.nreports ? " (the first ones listed above)" : "",
-                err);
+                run->trk.skipped > run->trk.nreports ? " (the first ones listed above)" : "", err);
     run->e = engine_new(&o->cfg, &eng_err);
     if (!run->e) {
         fprintf(stderr, "trajreplay: engine: %s\n", engine_strerror(eng_err));
@@ -575,9 +587,10 @@ static void run_progress(run_t *run, const engine_setpoint_t *sp)
     if (t - run->t_start < (int64_t)run->o->progress_after_ms * 1000000 ||
         (run->shown && t - run->t_shown <= PROGRESS_EVERY_NS))
         return;
-    fprintf(stderr, "\rtrajreplay: %zu/%zu waypoints, track time %.1f/%.1f s, "
-            "%" PRIu64 " setpoints\033[K", run->r.next, run->trk.n,
-            sp->t_s - run->trk.wp[0].t_s, run->span_s, run->written);
+    fprintf(stderr,
+            "\rtrajreplay: %zu/%zu waypoints, track time %.1f/%.1f s, "
+            "%" PRIu64 " setpoints\033[K",
+            run->r.next, run->trk.n, sp->t_s - run->trk.wp[0].t_s, run->span_s, run->written);
     run->t_shown = t;
     run->shown = 1;
 }
@@ -599,8 +612,7 @@ static void run_emit(run_t *run, const engine_setpoint_t *sp)
         fwrite(rec, 1, sizeof rec, run->out);
     } else {
         char line[CSV_FORMAT_OBJECT_MAX + 16 * (CSV_FIXED_MAX + 1) + 64];
-        int len = csv_format_format_prec(line, sizeof line, run->o->object, sp,
-                                         run->o->precision);
+        int len = csv_format_format_prec(line, sizeof line, run->o->object, sp, run->o->precision);
         if (len > 0)
             fwrite(line, 1, (size_t)len, run->out);
     }
@@ -642,8 +654,10 @@ static void run_report_rejections(run_t *run)
         }
         if (run->rejected == REJECT_SHOW_FIRST + 1) {
             run_clear_progress(run);
-            fprintf(stderr, "trajreplay: more rejected waypoints: one in %d shown, all "
-                    "counted at the end\n", REJECT_SHOW_EVERY);
+            fprintf(stderr,
+                    "trajreplay: more rejected waypoints: one in %d shown, all "
+                    "counted at the end\n",
+                    REJECT_SHOW_EVERY);
         }
     }
 }
@@ -660,9 +674,10 @@ static void run_report_rejected_total(const run_t *run)
             snprintf(reasons + n, sizeof reasons - n, "%s%s %" PRIu64, n ? ", " : "",
                      reason_name(e) ? reason_name(e) : engine_strerror(e), run->rejected_by[e]);
     }
-    fprintf(stderr, "trajreplay: %s: rejected %" PRIu64 " of %zu waypoints (%s), the first at "
-            "line %" PRIu32 "\n", run->o->input, run->rejected, run->trk.n, reasons,
-            run->trk.line[run->first_rejected]);
+    fprintf(stderr,
+            "trajreplay: %s: rejected %" PRIu64 " of %zu waypoints (%s), the first at "
+            "line %" PRIu32 "\n",
+            run->o->input, run->rejected, run->trk.n, reasons, run->trk.line[run->first_rejected]);
 }
 
 /*
@@ -671,8 +686,7 @@ static void run_report_rejected_total(const run_t *run)
  * max_gap_s after now_ns, the tick to jump to (the first one at or after
  * that waypoint's due time), else k + 1.
  */
-static uint64_t run_next_tick(run_t *run, uint64_t k, int64_t now_ns,
-                              const engine_setpoint_t *sp)
+static uint64_t run_next_tick(run_t *run, uint64_t k, int64_t now_ns, const engine_setpoint_t *sp)
 {
     if (run->o->keep_gaps || !(sp->flags & ENGINE_SP_HOLD) || replay_done(&run->r))
         return k + 1;
@@ -711,7 +725,8 @@ static int run_ticks(run_t *run)
     for (uint64_t k = 0;;) {
         if (run->o->max_rows && run->written >= run->o->max_rows) {
             run_clear_progress(run);
-            fprintf(stderr, "trajreplay: stopped after %" PRIu64 " rows (--max-rows), %zu of "
+            fprintf(stderr,
+                    "trajreplay: stopped after %" PRIu64 " rows (--max-rows), %zu of "
                     "%zu waypoints replayed: raise --max-rows (0 = no limit)\n",
                     run->written, run->r.next, run->trk.n);
             status = EXIT_MAX_ROWS;
@@ -765,8 +780,8 @@ static int run_svg(run_t *run)
     char title[512];
     snprintf(title, sizeof title, "%s: %zu waypoints, %s %s, F=%u O=%u, %g Hz", o->input,
              run->trk.n, engine_setting_enum_name(engine_setting_find("method"), o->cfg.method),
-             engine_setting_enum_name(engine_setting_find("param"), o->cfg.param),
-             o->cfg.fragment, o->cfg.overlap, o->rate_hz);
+             engine_setting_enum_name(engine_setting_find("param"), o->cfg.param), o->cfg.fragment,
+             o->cfg.overlap, o->rate_hz);
     FILE *f = fopen(o->svg, "w");
     if (!f) {
         fprintf(stderr, "trajreplay: %s: %s\n", o->svg, strerror(errno));
@@ -825,8 +840,10 @@ int main(int argc, char **argv)
                 run.skipped_gaps, run.skipped_ticks);
     }
     if (!status && o.strict && (run.rejected || run.trk.skipped)) {
-        fprintf(stderr, "trajreplay: --strict: %" PRIu64 " waypoint%s rejected, %zu line%s "
-                "skipped\n", run.rejected, run.rejected == 1 ? "" : "s", run.trk.skipped,
+        fprintf(stderr,
+                "trajreplay: --strict: %" PRIu64 " waypoint%s rejected, %zu line%s "
+                "skipped\n",
+                run.rejected, run.rejected == 1 ? "" : "s", run.trk.skipped,
                 run.trk.skipped == 1 ? "" : "s");
         status = EXIT_STRICT;
     }

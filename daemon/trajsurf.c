@@ -29,8 +29,8 @@
 #include "version.h"
 
 #define DIM 3
-#define GRID_MAX 4096        /* rows or columns */
-#define SAMPLES_MAX 256      /* steps per cell */
+#define GRID_MAX 4096   /* rows or columns */
+#define SAMPLES_MAX 256 /* steps per cell */
 #define SVG_W 900.0
 #define SVG_H 700.0
 #define SVG_MARGIN 30.0
@@ -156,12 +156,15 @@ static int grid_from_indexed(const double *rows, size_t nrows, const char *path,
     int rc = -1;
     for (i = 0; i < nrows; i++) {
         double a = rows[i * 5], b = rows[i * 5 + 1];
-        if (a < 0 || b < 0 || fabs(a - floor(a)) > 0.0 || fabs(b - floor(b)) > 0.0 || a >= GRID_MAX || b >= GRID_MAX) {
+        if (a < 0 || b < 0 || fabs(a - floor(a)) > 0.0 || fabs(b - floor(b)) > 0.0 ||
+            a >= GRID_MAX || b >= GRID_MAX) {
             fprintf(stderr, "%s: row %zu: bad grid index\n", path, i + 1);
             return -1;
         }
-        if ((size_t)a + 1 > m) m = (size_t)a + 1;
-        if ((size_t)b + 1 > n) n = (size_t)b + 1;
+        if ((size_t)a + 1 > m)
+            m = (size_t)a + 1;
+        if ((size_t)b + 1 > n)
+            n = (size_t)b + 1;
     }
     if (m * n != nrows) {
         fprintf(stderr, "%s: %zu points do not fill a %zu x %zu grid\n", path, nrows, m, n);
@@ -174,7 +177,8 @@ static int grid_from_indexed(const double *rows, size_t nrows, const char *path,
     for (i = 0; i < nrows; i++) {
         size_t k = (size_t)rows[i * 5] * n + (size_t)rows[i * 5 + 1];
         if (seen[k]++) {
-            fprintf(stderr, "%s: grid point (%g, %g) given twice\n", path, rows[i * 5], rows[i * 5 + 1]);
+            fprintf(stderr, "%s: grid point (%g, %g) given twice\n", path, rows[i * 5],
+                    rows[i * 5 + 1]);
             goto out;
         }
         memcpy(gr->g + k * DIM, rows + i * 5 + 2, DIM * sizeof *gr->g);
@@ -261,13 +265,29 @@ static int far_first(const void *x, const void *y)
  * (blue low, red high).  Good enough for height fields seen from above;
  * a surface folding over itself may show ordering errors (no z-buffer).
  */
-static int write_svg(const char *path, const grid_t *gr, const double *smp,
-                     size_t su, size_t sv, double zscale)
+/* The (su - 1) x (sv - 1) cells of the sampled surface, farthest first
+ * (painter's algorithm). */
+static void sort_cells(cell_t *cells, const double *smp, size_t su, size_t sv)
+{
+    size_t a, b, k = 0;
+    for (a = 0; a + 1 < su; a++)
+        for (b = 0; b + 1 < sv; b++) {
+            const double *p = smp + (a * sv + b) * DIM, *q = smp + ((a + 1) * sv + b + 1) * DIM;
+            cells[k].depth = p[0] + p[1] + q[0] + q[1];
+            cells[k].a = a;
+            cells[k].b = b;
+            k++;
+        }
+    qsort(cells, k, sizeof *cells, far_first);
+}
+
+static int write_svg(const char *path, const grid_t *gr, const double *smp, size_t su, size_t sv,
+                     double zscale)
 {
     FILE *f = fopen(path, "w");
     double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY, sc, ox, oy;
     double zlo = INFINITY, zhi = -INFINITY;
-    size_t a, b, k, nc = (su - 1) * (sv - 1);
+    size_t k, nc = (su - 1) * (sv - 1);
     cell_t *cells = malloc(nc * sizeof *cells);
 
     if (!f || !cells) {
@@ -280,8 +300,10 @@ static int write_svg(const char *path, const grid_t *gr, const double *smp,
     for (k = 0; k < su * sv; k++) {
         double X, Y;
         project(smp + k * DIM, zscale, &X, &Y);
-        x0 = fmin(x0, X); x1 = fmax(x1, X);
-        y0 = fmin(y0, Y); y1 = fmax(y1, Y);
+        x0 = fmin(x0, X);
+        x1 = fmax(x1, X);
+        y0 = fmin(y0, Y);
+        y1 = fmax(y1, Y);
         zlo = fmin(zlo, smp[k * DIM + 2]);
         zhi = fmax(zhi, smp[k * DIM + 2]);
     }
@@ -289,22 +311,14 @@ static int write_svg(const char *path, const grid_t *gr, const double *smp,
               (SVG_H - 2 * SVG_MARGIN - 20) / fmax(y1 - y0, 1e-12));
     ox = 0.5 * (SVG_W - (x1 - x0) * sc);
     oy = 20 + 0.5 * (SVG_H - 20 - (y1 - y0) * sc);
-    fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-               "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
-               "viewBox=\"0 0 %.0f %.0f\">\n"
-               "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n"
-               "<g stroke=\"#333\" stroke-width=\"0.3\">\n",
+    fprintf(f,
+            "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
+            "viewBox=\"0 0 %.0f %.0f\">\n"
+            "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n"
+            "<g stroke=\"#333\" stroke-width=\"0.3\">\n",
             SVG_W, SVG_H, SVG_W, SVG_H);
-    k = 0;
-    for (a = 0; a + 1 < su; a++)
-        for (b = 0; b + 1 < sv; b++) {
-            const double *p = smp + (a * sv + b) * DIM, *q = smp + ((a + 1) * sv + b + 1) * DIM;
-            cells[k].depth = p[0] + p[1] + q[0] + q[1];
-            cells[k].a = a;
-            cells[k].b = b;
-            k++;
-        }
-    qsort(cells, nc, sizeof *cells, far_first);
+    sort_cells(cells, smp, su, sv);
     for (k = 0; k < nc; k++) {
         static const size_t da[4] = {0, 1, 1, 0}, db[4] = {0, 0, 1, 1};
         double zm = 0.0, q;
@@ -318,18 +332,21 @@ static int write_svg(const char *path, const grid_t *gr, const double *smp,
             zm += 0.25 * p[2];
         }
         q = (zm - zlo) / fmax(zhi - zlo, 1e-300);
-        fprintf(f, "\" fill=\"rgb(%d,%d,%d)\"/>\n", (int)(60 + 190 * q), (int)(120 + 60 * (1 - fabs(2 * q - 1))),
-                (int)(250 - 190 * q));
+        fprintf(f, "\" fill=\"rgb(%d,%d,%d)\"/>\n", (int)(60 + 190 * q),
+                (int)(120 + 60 * (1 - fabs(2 * q - 1))), (int)(250 - 190 * q));
     }
     fprintf(f, "</g>\n<g fill=\"black\">\n");
     for (k = 0; k < gr->m * gr->n; k++) {
         double X, Y;
         project(gr->g + k * DIM, zscale, &X, &Y);
-        fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"2.2\"/>\n", ox + (X - x0) * sc, oy + (Y - y0) * sc);
+        fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"2.2\"/>\n", ox + (X - x0) * sc,
+                oy + (Y - y0) * sc);
     }
-    fprintf(f, "</g>\n<text x=\"10\" y=\"20\" font-family=\"sans-serif\" font-size=\"13\">"
-               "bicubic B-spline surface through a %zu x %zu grid (dots), isometric view</text>\n</svg>\n",
-            gr->m, gr->n);
+    fprintf(
+        f,
+        "</g>\n<text x=\"10\" y=\"20\" font-family=\"sans-serif\" font-size=\"13\">"
+        "bicubic B-spline surface through a %zu x %zu grid (dots), isometric view</text>\n</svg>\n",
+        gr->m, gr->n);
     free(cells);
     if (fclose(f) != 0) {
         fprintf(stderr, "%s: %s\n", path, strerror(errno));
@@ -376,8 +393,8 @@ static int write_samples(const char *path, const double *smp, size_t su, size_t 
     for (a = 0; a < su; a++)
         for (b = 0; b < sv; b++) {
             const double *p = smp + (a * sv + b) * DIM;
-            fprintf(out, "%.17g,%.17g,%.17g,%.17g,%.17g\n", (double)a / steps,
-                    (double)b / steps, p[0], p[1], p[2]);
+            fprintf(out, "%.17g,%.17g,%.17g,%.17g,%.17g\n", (double)a / steps, (double)b / steps,
+                    p[0], p[1], p[2]);
         }
     if (out != stdout && fclose(out) != 0) {
         fprintf(stderr, "%s: %s\n", path, strerror(errno));
@@ -429,8 +446,8 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    if (optind != argc - 1 || steps < 1 || steps > SAMPLES_MAX || !isfinite(dx) ||
-        !isfinite(dy) || !isfinite(zscale)) {
+    if (optind != argc - 1 || steps < 1 || steps > SAMPLES_MAX || !isfinite(dx) || !isfinite(dy) ||
+        !isfinite(zscale)) {
         usage(stderr);
         return 2;
     }

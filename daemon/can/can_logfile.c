@@ -107,9 +107,10 @@ int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, si
         rc = -1;
     }
     if (l->st.bad_lines > CAN_LOGFILE_REPORT_MAX)
-        log_msg(LOG_WARNING, "can: %s: %" PRIu64 " lines not replayed in all (first at line %"
-                PRIu64 ", %d reported)", name, l->st.bad_lines, l->st.first_bad_line,
-                CAN_LOGFILE_REPORT_MAX);
+        log_msg(LOG_WARNING,
+                "can: %s: %" PRIu64 " lines not replayed in all (first at line %" PRIu64
+                ", %d reported)",
+                name, l->st.bad_lines, l->st.first_bad_line, CAN_LOGFILE_REPORT_MAX);
     l->st.frames_in = l->n;
     return rc;
 }
@@ -127,7 +128,7 @@ static int load(can_logfile_t *l, const char *path, char *err, size_t errlen)
 }
 
 can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const char *ifname,
-                      int64_t start_ns, char *err, size_t errlen)
+                                int64_t start_ns, char *err, size_t errlen)
 {
     can_logfile_t *l = calloc(1, sizeof *l);
     if (!l) {
@@ -175,8 +176,8 @@ int can_logfile_recv(can_logfile_t *l, int64_t now_ns, canproto_frame_t *f)
      * 1e18, so the difference fits, and the product is checked */
     int64_t d_us = l->rec[l->next].ts_us - l->rec[0].ts_us;
     int64_t due = d_us <= 0 ? l->start_ns /* stamped before the first: due with it */
-                : d_us > (INT64_MAX / 2 - l->start_ns) / 1000 ? INT64_MAX
-                : l->start_ns + d_us * 1000;
+                  : d_us > (INT64_MAX / 2 - l->start_ns) / 1000 ? INT64_MAX
+                                                                : l->start_ns + d_us * 1000;
     if (due > now_ns)
         return 0;
     *f = l->rec[l->next++].f;

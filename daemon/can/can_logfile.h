@@ -24,12 +24,12 @@
 #include "canproto.h"
 
 typedef struct {
-    uint64_t lines;           /* lines read */
-    uint64_t comments;        /* '#' and blank lines skipped */
-    uint64_t bad_lines;       /* lines refused (skipped): not a frame, too long, NUL byte */
-    uint64_t first_bad_line;  /* line number of the first, 0 if none */
-    uint64_t frames_in;       /* frames loaded */
-    uint64_t frames_out;      /* frames written */
+    uint64_t lines;          /* lines read */
+    uint64_t comments;       /* '#' and blank lines skipped */
+    uint64_t bad_lines;      /* lines refused (skipped): not a frame, too long, NUL byte */
+    uint64_t first_bad_line; /* line number of the first, 0 if none */
+    uint64_t frames_in;      /* frames loaded */
+    uint64_t frames_out;     /* frames written */
     uint64_t write_errors;
 } can_logfile_stats_t;
 
@@ -48,7 +48,7 @@ typedef struct can_logfile can_logfile_t;
  * Returns NULL with a message in err on failure (file missing, unreadable).
  */
 can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const char *ifname,
-                      int64_t start_ns, char *err, size_t errlen);
+                                int64_t start_ns, char *err, size_t errlen);
 
 /*
  * Append the frames of a candump log read from fp to l's input (can_logfile_open

@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define CAN_PORT_RX_BATCH 256  /* frames handled per can_port_rx call: do not starve the loop */
+#define CAN_PORT_RX_BATCH 256 /* frames handled per can_port_rx call: do not starve the loop */
 
 typedef struct {
     int set;
@@ -19,22 +19,22 @@ typedef struct {
     int status_due;
     int64_t last_status_ns;
     int sent_status;
-    uint8_t flags_since;       /* CANPROTO_ST_BUS_DOWN | _TX_DROP | _OUT_FAULT since last STATUS */
-    uint64_t out_lost_seen;    /* can_port_output_fault: lines lost as of the last call */
+    uint8_t flags_since;    /* CANPROTO_ST_BUS_DOWN | _TX_DROP | _OUT_FAULT since last STATUS */
+    uint64_t out_lost_seen; /* can_port_output_fault: lines lost as of the last call */
     int out_fault_seen;
     uint8_t last_err;
-    int last_state;            /* engine state in the last STATUS (-1: none yet) */
+    int last_state; /* engine state in the last STATUS (-1: none yet) */
     can_port_drive_t drive;
     /* bring-up (ids.cia402_enable) */
     int nmt_sent;
-    unsigned sdo_next[CANPROTO_CIA402_AXES];   /* next configuration SDO */
-    int sdo_wait[CANPROTO_CIA402_AXES];        /* 1 config SDO, 2 controlword, in flight */
+    unsigned sdo_next[CANPROTO_CIA402_AXES]; /* next configuration SDO */
+    int sdo_wait[CANPROTO_CIA402_AXES];      /* 1 config SDO, 2 controlword, in flight */
     int64_t sdo_sent_ns[CANPROTO_CIA402_AXES];
     canproto_frame_t sdo_frame[CANPROTO_CIA402_AXES];
-    int sdo_failed[CANPROTO_CIA402_AXES];      /* a configuration SDO was aborted */
+    int sdo_failed[CANPROTO_CIA402_AXES]; /* a configuration SDO was aborted */
     int cw_known[CANPROTO_CIA402_AXES];
     uint16_t cw_sent[CANPROTO_CIA402_AXES];
-    int reset_req;                             /* CLEAR: fault reset and re-enable */
+    int reset_req; /* CLEAR: fault reset and re-enable */
     int64_t hb_last_ns[CANPROTO_CIA402_AXES];
     int hb_lost[CANPROTO_CIA402_AXES];
     int64_t now_ns;
@@ -47,7 +47,7 @@ struct can_port {
     void *io_ctx;
     unsigned nobj;
     can_port_obj_t *obj;
-    canproto_ids_t *ids;       /* copy of each object's ids, contiguous (bus load) */
+    canproto_ids_t *ids; /* copy of each object's ids, contiguous (bus load) */
     uint8_t sync_counter;
     can_port_stats_t st;
 };
@@ -63,7 +63,7 @@ void can_port_config_default(can_port_config_t *c)
 }
 
 can_port_t *can_port_new(const can_port_config_t *cfg, const can_port_io_t *io, void *io_ctx,
-                       unsigned nobj)
+                         unsigned nobj)
 {
     if (!cfg || !io || !io->send || !io->recv || !io->is_up || nobj == 0 ||
         cfg->sync_id > CANPROTO_SFF_MASK || cfg->sync_overflow == 1 || cfg->sync_overflow > 240)
@@ -100,7 +100,7 @@ void can_port_free(can_port_t *p)
 }
 
 int can_port_set_object(can_port_t *p, unsigned i, const canproto_ids_t *ids,
-                       const can_port_hooks_t *hooks, void *ctx)
+                        const can_port_hooks_t *hooks, void *ctx)
 {
     uint32_t mine[CANPROTO_IDS_MAX], other[CANPROTO_IDS_MAX];
     if (i >= p->nobj || !hooks || !hooks->push || !hooks->status)
@@ -463,7 +463,8 @@ static uint16_t wanted_cw(const can_port_obj_t *o, unsigned a)
     if (st == CIA402_FAULT)
         /* fault reset acts on the rising edge of bit 7: 0x0000 first, then 0x0080 */
         return o->cw_known[a] && o->cw_sent[a] == CIA402_CW_DISABLE_VOLTAGE
-                   ? CIA402_CW_FAULT_RESET : CIA402_CW_DISABLE_VOLTAGE;
+                   ? CIA402_CW_FAULT_RESET
+                   : CIA402_CW_DISABLE_VOLTAGE;
     return cia402_controlword_towards_enabled(st, 0);
 }
 
@@ -631,7 +632,7 @@ void can_port_reset_counters(can_port_t *p)
 }
 
 double can_port_busload(const can_port_t *p, double rate_hz, double waypoint_hz, double bitrate,
-                       double data_bitrate)
+                        double data_bitrate)
 {
     canproto_traffic_t tr = {
         .rate_hz = rate_hz,

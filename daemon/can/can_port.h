@@ -62,13 +62,13 @@ typedef struct {
 typedef struct {
     uint16_t statusword[CANPROTO_CIA402_AXES];
     cia402_state_t state[CANPROTO_CIA402_AXES]; /* CIA402_STATE_UNKNOWN until heard */
-    double pos_m[CANPROTO_CIA402_AXES];  /* position actual values (0x6064) in metres (scale,
+    double pos_m[CANPROTO_CIA402_AXES];         /* position actual values (0x6064) in metres (scale,
                                           * sign and offset undone); 0 for axes without a drive */
-    unsigned seen;          /* bit per axis heard from */
-    int all_seen;           /* every axis with a COB-id was heard from */
-    int all_enabled;        /* and every one is in Operation Enabled */
-    int was_enabled;        /* all were enabled, until this frame (a loss is this and !all_enabled) */
-    int held;               /* bring-up: the drives left Operation Enabled; they stay disabled
+    unsigned seen;                              /* bit per axis heard from */
+    int all_seen;                               /* every axis with a COB-id was heard from */
+    int all_enabled;                            /* and every one is in Operation Enabled */
+    int was_enabled; /* all were enabled, until this frame (a loss is this and !all_enabled) */
+    int held;        /* bring-up: the drives left Operation Enabled; they stay disabled
                              * until a CLEAR command asks for a fault reset and re-enable */
 } can_port_drive_t;
 
@@ -84,48 +84,49 @@ typedef struct {
 } can_port_hooks_t;
 
 typedef struct {
-    int sync;                  /* send a SYNC frame each cycle */
-    uint32_t sync_id;          /* default 0x080 */
-    uint8_t sync_overflow;     /* 0: SYNC with DLC 0; 2..240: DLC 1, counter 1..overflow */
-    int64_t status_period_ns;  /* STATUS period, default 100 ms; 0 = only on events */
-    int64_t max_late_ns;       /* cycle later than this is not sent; <= 0 = never drop */
+    int sync;                 /* send a SYNC frame each cycle */
+    uint32_t sync_id;         /* default 0x080 */
+    uint8_t sync_overflow;    /* 0: SYNC with DLC 0; 2..240: DLC 1, counter 1..overflow */
+    int64_t status_period_ns; /* STATUS period, default 100 ms; 0 = only on events */
+    int64_t max_late_ns;      /* cycle later than this is not sent; <= 0 = never drop */
 } can_port_config_t;
 
 void can_port_config_default(can_port_config_t *c);
 
 typedef struct {
-    uint64_t setpoints_sent;   /* cycles whose frames all went out */
-    uint64_t dropped_late;     /* cycles not sent: caller late */
-    uint64_t dropped_full;     /* cycles not (wholly) sent: ENOBUFS / EAGAIN */
-    uint64_t dropped_down;     /* cycles not sent: interface down */
-    uint64_t dropped_error;    /* cycles not sent: other write error (EINVAL: FD on a classic MTU) */
-    uint64_t tx_clamped;       /* setpoints with a value clamped to its field */
+    uint64_t setpoints_sent; /* cycles whose frames all went out */
+    uint64_t dropped_late;   /* cycles not sent: caller late */
+    uint64_t dropped_full;   /* cycles not (wholly) sent: ENOBUFS / EAGAIN */
+    uint64_t dropped_down;   /* cycles not sent: interface down */
+    uint64_t dropped_error;  /* cycles not sent: other write error (EINVAL: FD on a classic MTU) */
+    uint64_t tx_clamped;     /* setpoints with a value clamped to its field */
     uint64_t status_sent;
     uint64_t waypoints_accepted;
-    uint64_t waypoints_rejected;   /* engine refused (not EFULL) */
-    uint64_t waypoints_full;       /* engine EFULL: not consumed, sender must repeat */
+    uint64_t waypoints_rejected; /* engine refused (not EFULL) */
+    uint64_t waypoints_full;     /* engine EFULL: not consumed, sender must repeat */
     uint64_t engine_duplicates;
-    uint64_t drive_frames;     /* feedback TPDOs received */
-    uint64_t drive_lost;       /* times the drives left Operation Enabled while the object ran */
-    uint64_t drive_bad;        /* feedback TPDOs too short */
-    uint64_t sdo_aborts;       /* SDO writes a drive refused (last_abort says why) */
-    uint64_t sdo_timeouts;     /* SDO writes resent after no reply */
-    uint64_t emcy;             /* EMCY frames from the object's drives */
-    uint64_t heartbeat_lost;   /* a drive's heartbeat not heard within cia402_heartbeat_ms */
-    uint32_t last_abort;       /* abort code of the last SDO abort (cia402_sdo_abort_text) */
+    uint64_t drive_frames;   /* feedback TPDOs received */
+    uint64_t drive_lost;     /* times the drives left Operation Enabled while the object ran */
+    uint64_t drive_bad;      /* feedback TPDOs too short */
+    uint64_t sdo_aborts;     /* SDO writes a drive refused (last_abort says why) */
+    uint64_t sdo_timeouts;   /* SDO writes resent after no reply */
+    uint64_t emcy;           /* EMCY frames from the object's drives */
+    uint64_t heartbeat_lost; /* a drive's heartbeat not heard within cia402_heartbeat_ms */
+    uint32_t last_abort;     /* abort code of the last SDO abort (cia402_sdo_abort_text) */
     uint16_t last_abort_index;
-    uint16_t last_emcy;        /* error code of the last EMCY */
-    canproto_rx_stats_t rx;    /* reassembly counters */
+    uint16_t last_emcy;     /* error code of the last EMCY */
+    canproto_rx_stats_t rx; /* reassembly counters */
 } can_port_obj_stats_t;
 
 typedef struct {
     uint64_t rx_frames;
-    uint64_t rx_foreign;       /* frames with an id no object uses (log input; filters stop them on a socket) */
+    uint64_t
+        rx_foreign; /* frames with an id no object uses (log input; filters stop them on a socket) */
     uint64_t rx_errors;
     uint64_t sync_sent;
-    uint64_t sync_dropped;     /* SYNC frames the transport refused (queue full, down) */
+    uint64_t sync_dropped; /* SYNC frames the transport refused (queue full, down) */
     uint64_t cycles;
-    uint64_t down_cycles;      /* cycles during which the transport was down */
+    uint64_t down_cycles; /* cycles during which the transport was down */
     uint64_t reopens;
 } can_port_stats_t;
 
@@ -133,7 +134,7 @@ typedef struct can_port can_port_t;
 
 /* Allocate for nobj objects (>= 1).  Returns NULL on bad arguments / no memory. */
 can_port_t *can_port_new(const can_port_config_t *cfg, const can_port_io_t *io, void *io_ctx,
-                       unsigned nobj);
+                         unsigned nobj);
 
 /* Free; NULL is a no-op.  Does not close the transport. */
 void can_port_free(can_port_t *p);
@@ -143,7 +144,7 @@ void can_port_free(can_port_t *p);
  * clashing with another object's), or -CANPROTO_EID (i out of range).
  */
 int can_port_set_object(can_port_t *p, unsigned i, const canproto_ids_t *ids,
-                       const can_port_hooks_t *hooks, void *ctx);
+                        const can_port_hooks_t *hooks, void *ctx);
 
 /*
  * The ids to receive over all objects (for CAN_RAW_FILTER).  Writes at most
@@ -189,6 +190,6 @@ void can_port_reset_counters(can_port_t *p);
  * Returns the load (0..1+), or a negative value for invalid bitrates.
  */
 double can_port_busload(const can_port_t *p, double rate_hz, double waypoint_hz, double bitrate,
-                       double data_bitrate);
+                        double data_bitrate);
 
 #endif

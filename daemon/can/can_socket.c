@@ -25,7 +25,8 @@ struct can_socket {
     can_socket_stats_t st;
 };
 
-can_socket_t *can_socket_new(const char *ifname, int fd_frames, const uint32_t *rx_ids, unsigned n_rx)
+can_socket_t *can_socket_new(const char *ifname, int fd_frames, const uint32_t *rx_ids,
+                             unsigned n_rx)
 {
     if (!ifname || !*ifname || strlen(ifname) >= IF_NAMESIZE || n_rx > CAN_SOCKET_MAX_FILTERS)
         return NULL;

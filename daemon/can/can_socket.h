@@ -21,19 +21,19 @@
 #define CAN_SOCKET_REOPEN_NS 200000000LL
 
 typedef enum {
-    CAN_SOCKET_DOWN = 0,   /* no usable socket: interface down, missing or not yet opened */
+    CAN_SOCKET_DOWN = 0, /* no usable socket: interface down, missing or not yet opened */
     CAN_SOCKET_UP = 1,
 } can_socket_state_t;
 
 typedef struct {
-    uint64_t tx_frames;        /* whole frames written */
-    uint64_t tx_dropped_full;  /* ENOBUFS / EAGAIN: queue or buffer full */
-    uint64_t tx_dropped_down;  /* interface down or missing */
-    uint64_t tx_errors;        /* other write errors, short writes */
+    uint64_t tx_frames;       /* whole frames written */
+    uint64_t tx_dropped_full; /* ENOBUFS / EAGAIN: queue or buffer full */
+    uint64_t tx_dropped_down; /* interface down or missing */
+    uint64_t tx_errors;       /* other write errors, short writes */
     uint64_t rx_frames;
-    uint64_t rx_errors;        /* short reads, error frames */
-    uint64_t downs;            /* transitions UP -> DOWN */
-    uint64_t reopens;          /* transitions DOWN -> UP */
+    uint64_t rx_errors; /* short reads, error frames */
+    uint64_t downs;     /* transitions UP -> DOWN */
+    uint64_t reopens;   /* transitions DOWN -> UP */
     int last_errno;
 } can_socket_stats_t;
 
@@ -45,7 +45,8 @@ typedef struct can_socket can_socket_t;
  * ids = receive nothing.  fd_frames: enable CAN FD (needs an MTU 72 iface).
  * Returns NULL on a bad argument or no memory.
  */
-can_socket_t *can_socket_new(const char *ifname, int fd_frames, const uint32_t *rx_ids, unsigned n_rx);
+can_socket_t *can_socket_new(const char *ifname, int fd_frames, const uint32_t *rx_ids,
+                             unsigned n_rx);
 
 /* Close and free; NULL is a no-op. */
 void can_socket_free(can_socket_t *b);

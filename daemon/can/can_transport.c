@@ -14,11 +14,15 @@
 #include "core.h"
 #include "log.h"
 
-#define CAN_MAINTAIN_NS 100000000LL  /* housekeeping: reopen, bus state */
+#define CAN_MAINTAIN_NS 100000000LL /* housekeeping: reopen, bus state */
 
 enum {
-    GIVEN_WP = 1u << 0, GIVEN_WPFD = 1u << 1, GIVEN_SP = 1u << 2, GIVEN_SPFD = 1u << 3,
-    GIVEN_ST = 1u << 4, GIVEN_COB = 1u << 5, /* << axis */
+    GIVEN_WP = 1u << 0,
+    GIVEN_WPFD = 1u << 1,
+    GIVEN_SP = 1u << 2,
+    GIVEN_SPFD = 1u << 3,
+    GIVEN_ST = 1u << 4,
+    GIVEN_COB = 1u << 5, /* << axis */
 };
 
 static void cfg_default(void *p)
@@ -98,8 +102,10 @@ static int get_sdo_list(const cfg_kv_t *kv, canproto_ids_t *ids, char *why, size
     ids->cia402_nsdo = n;
     return 0;
 bad:
-    snprintf(why, wl, "expected index:sub=value/size (size 1, 2 or 4 bytes), comma separated, "
-             "got '%s'", kv->value);
+    snprintf(why, wl,
+             "expected index:sub=value/size (size 1, 2 or 4 bytes), comma separated, "
+             "got '%s'",
+             kv->value);
     return -CFG_EVALUE;
 }
 
@@ -173,11 +179,11 @@ static int obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
         size_t off;
         unsigned bit;
     } idkeys[] = {
-        { "waypoint_id", offsetof(canproto_ids_t, waypoint_id), GIVEN_WP },
-        { "waypoint_fd_id", offsetof(canproto_ids_t, waypoint_fd_id), GIVEN_WPFD },
-        { "setpoint_id", offsetof(canproto_ids_t, setpoint_id), GIVEN_SP },
-        { "setpoint_fd_id", offsetof(canproto_ids_t, setpoint_fd_id), GIVEN_SPFD },
-        { "status_id", offsetof(canproto_ids_t, status_id), GIVEN_ST },
+        {"waypoint_id", offsetof(canproto_ids_t, waypoint_id), GIVEN_WP},
+        {"waypoint_fd_id", offsetof(canproto_ids_t, waypoint_fd_id), GIVEN_WPFD},
+        {"setpoint_id", offsetof(canproto_ids_t, setpoint_id), GIVEN_SP},
+        {"setpoint_fd_id", offsetof(canproto_ids_t, setpoint_fd_id), GIVEN_SPFD},
+        {"status_id", offsetof(canproto_ids_t, status_id), GIVEN_ST},
     };
     for (size_t i = 0; i < sizeof idkeys / sizeof idkeys[0]; i++)
         if (!strcmp(k, idkeys[i].key)) {
@@ -242,11 +248,16 @@ void can_obj_ids(const can_obj_cfg_t *oc, unsigned obj_index, canproto_ids_t *id
 {
     canproto_ids_default(ids, oc->index >= 0 ? (unsigned)oc->index : obj_index);
     const canproto_ids_t *g = &oc->ids;
-    if (oc->given & GIVEN_WP) ids->waypoint_id = g->waypoint_id;
-    if (oc->given & GIVEN_WPFD) ids->waypoint_fd_id = g->waypoint_fd_id;
-    if (oc->given & GIVEN_SP) ids->setpoint_id = g->setpoint_id;
-    if (oc->given & GIVEN_SPFD) ids->setpoint_fd_id = g->setpoint_fd_id;
-    if (oc->given & GIVEN_ST) ids->status_id = g->status_id;
+    if (oc->given & GIVEN_WP)
+        ids->waypoint_id = g->waypoint_id;
+    if (oc->given & GIVEN_WPFD)
+        ids->waypoint_fd_id = g->waypoint_fd_id;
+    if (oc->given & GIVEN_SP)
+        ids->setpoint_id = g->setpoint_id;
+    if (oc->given & GIVEN_SPFD)
+        ids->setpoint_fd_id = g->setpoint_fd_id;
+    if (oc->given & GIVEN_ST)
+        ids->status_id = g->status_id;
     for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
         if (oc->given & (GIVEN_COB << a))
             ids->cia402_cob_id[a] = g->cia402_cob_id[a];
@@ -275,11 +286,35 @@ static int uses_can(const cfg_obj_t *o)
     return cfg_obj_uses(o, &can_transport) != 0;
 }
 
-static int null_send(void *io, const canproto_frame_t *f) { (void)io; (void)f; return 0; }
-static int null_recv(void *io, int64_t t, canproto_frame_t *f) { (void)io; (void)t; (void)f; return 0; }
-static int null_up(const void *io) { (void)io; return 1; }
-static int null_push(void *ctx, const engine_waypoint_t *wp) { (void)ctx; (void)wp; return 0; }
-static void null_status(void *ctx, engine_status_t *st) { (void)ctx; memset(st, 0, sizeof *st); }
+static int null_send(void *io, const canproto_frame_t *f)
+{
+    (void)io;
+    (void)f;
+    return 0;
+}
+static int null_recv(void *io, int64_t t, canproto_frame_t *f)
+{
+    (void)io;
+    (void)t;
+    (void)f;
+    return 0;
+}
+static int null_up(const void *io)
+{
+    (void)io;
+    return 1;
+}
+static int null_push(void *ctx, const engine_waypoint_t *wp)
+{
+    (void)ctx;
+    (void)wp;
+    return 0;
+}
+static void null_status(void *ctx, engine_status_t *st)
+{
+    (void)ctx;
+    memset(st, 0, sizeof *st);
+}
 
 /* period_ns: wall-clock period (engine period / speed): lateness is wall time. */
 static void port_config(const can_cfg_t *c, int64_t period_ns, can_port_config_t *pc)
@@ -303,8 +338,8 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
         return 0;
     can_port_config_t pc;
     port_config(c, (int64_t)llround((double)cfg->daemon.period_ns / cfg->daemon.speed), &pc);
-    can_port_io_t io = { null_send, null_recv, NULL, null_up };
-    can_port_hooks_t hk = { null_push, NULL, null_status, NULL };
+    can_port_io_t io = {null_send, null_recv, NULL, null_up};
+    can_port_hooks_t hk = {null_push, NULL, null_status, NULL};
     can_port_t *p = can_port_new(&pc, &io, NULL, n);
     if (!p) {
         snprintf(why, wl, "[can] sync settings invalid or out of memory");
@@ -333,7 +368,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
     }
     if (!rc && c->max_load_percent > 0) {
         double load = can_port_busload(p, cfg->daemon.rate_hz, c->waypoint_hz, c->bitrate,
-                                      c->data_bitrate);
+                                       c->data_bitrate);
         if (!(load >= 0) || load * 100 > c->max_load_percent) {
             snprintf(why, wl,
                      "CAN bus load %.1f %% (worst case with bit stuffing: %u object(s) at %g Hz, "
@@ -356,17 +391,17 @@ typedef struct {
     can_socket_t *bus;
     can_logfile_t *log;
     can_port_t *port;
-    int sock_fd;            /* registered in the loop, -1 if none */
+    int sock_fd; /* registered in the loop, -1 if none */
     int timer_fd;
     unsigned n;
-    obj_t *objs[CFG_OBJECTS_MAX];   /* can_port index -> object */
+    obj_t *objs[CFG_OBJECTS_MAX];    /* can_port index -> object */
     int port_index[CFG_OBJECTS_MAX]; /* object index -> can_port index or -1 */
     int is_input[CFG_OBJECTS_MAX];
-    uint64_t rx_tick;       /* last tick whose pre_tick drained the input */
+    uint64_t rx_tick; /* last tick whose pre_tick drained the input */
     int drained;
     int was_up;
-    can_bus_state_t bus_state;  /* as of the last housekeeping timer, for Modbus */
-    uint32_t load_permille;     /* worst-case bus load of the configured traffic, 0.1 % */
+    can_bus_state_t bus_state; /* as of the last housekeeping timer, for Modbus */
+    uint32_t load_permille;    /* worst-case bus load of the configured traffic, 0.1 % */
     can_port_obj_stats_t drive_logged[CFG_OBJECTS_MAX]; /* drive counters already logged */
     int drive_state_logged[CFG_OBJECTS_MAX];            /* all_enabled as last logged, -1 never */
 } can_state_t;
@@ -380,11 +415,13 @@ static void log_drives(can_state_t *s)
         const char *name = s->objs[k]->name;
         can_port_obj_stats(s->port, k, &os);
         if (os.sdo_aborts != was->sdo_aborts)
-            log_msg(LOG_ERR, "can: object '%s': drive refused SDO write of 0x%04X: abort 0x%08X (%s)",
-                    name, os.last_abort_index, os.last_abort, cia402_sdo_abort_text(os.last_abort));
+            log_msg(LOG_ERR,
+                    "can: object '%s': drive refused SDO write of 0x%04X: abort 0x%08X (%s)", name,
+                    os.last_abort_index, os.last_abort, cia402_sdo_abort_text(os.last_abort));
         if (os.emcy != was->emcy)
-            log_msg(LOG_WARNING, "can: object '%s': EMCY from a drive: error code 0x%04X (%llu so far)",
-                    name, os.last_emcy, (unsigned long long)os.emcy);
+            log_msg(LOG_WARNING,
+                    "can: object '%s': EMCY from a drive: error code 0x%04X (%llu so far)", name,
+                    os.last_emcy, (unsigned long long)os.emcy);
         if (os.heartbeat_lost != was->heartbeat_lost)
             log_msg(LOG_ERR, "can: object '%s': a drive's heartbeat was not heard in time (%llu)",
                     name, (unsigned long long)os.heartbeat_lost);
@@ -393,12 +430,15 @@ static void log_drives(can_state_t *s)
                     (unsigned long long)os.sdo_timeouts);
         if (d && d->all_seen && d->all_enabled != s->drive_state_logged[k]) {
             if (d->all_enabled)
-                log_msg(LOG_NOTICE, "can: object '%s': drives in Operation Enabled, starting from "
-                        "(%.4f, %.4f, %.4f)", name, d->pos_m[0], d->pos_m[1], d->pos_m[2]);
+                log_msg(LOG_NOTICE,
+                        "can: object '%s': drives in Operation Enabled, starting from "
+                        "(%.4f, %.4f, %.4f)",
+                        name, d->pos_m[0], d->pos_m[1], d->pos_m[2]);
             else if (s->drive_state_logged[k] == 1)
-                log_msg(LOG_ERR, "can: object '%s': a drive left Operation Enabled (x: %s, y: %s, "
-                        "z: %s): object cleared, no target sent%s", name,
-                        d->seen & 1 ? cia402_state_name(d->state[0]) : "-",
+                log_msg(LOG_ERR,
+                        "can: object '%s': a drive left Operation Enabled (x: %s, y: %s, "
+                        "z: %s): object cleared, no target sent%s",
+                        name, d->seen & 1 ? cia402_state_name(d->state[0]) : "-",
                         d->seen & 2 ? cia402_state_name(d->state[1]) : "-",
                         d->seen & 4 ? cia402_state_name(d->state[2]) : "-",
                         d->held ? "; command clear resets and re-enables it" : "");
@@ -599,8 +639,8 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
     for (unsigned k = 0; k < s->n; k++) {
         canproto_ids_t ids;
         can_obj_ids(cfg_obj_transport(s->objs[k]->cfg, &can_transport), s->objs[k]->index, &ids);
-        can_port_hooks_t hk = { s->is_input[k] ? hk_push : hk_push_refuse, hk_command, hk_status,
-                                hk_feedback };
+        can_port_hooks_t hk = {s->is_input[k] ? hk_push : hk_push_refuse, hk_command, hk_status,
+                               hk_feedback};
         s->drive_state_logged[k] = -1;
         if (ids.cia402 && (ids.cia402_feedback || ids.cia402_enable) && !s->objs[k]->carried)
             engine_require_position(s->objs[k]->engine, 1); /* the drive says where it is */
@@ -609,7 +649,8 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
             return -EINVAL;
         }
         uint32_t mine[24];
-        unsigned m = canproto_ids_rx(&ids, mine, 24), from = s->is_input[k] ? 0 : 1 + (unsigned)ids.fd;
+        unsigned m = canproto_ids_rx(&ids, mine, 24),
+                 from = s->is_input[k] ? 0 : 1 + (unsigned)ids.fd;
         for (unsigned j = from; j < m && j < 24; j++) { /* waypoint ids (inputs), feedback TPDOs */
             if (*nrx >= CAN_SOCKET_MAX_FILTERS) {
                 snprintf(why, wl, "can: more than %d ids to receive (waypoints, drive feedback)",
@@ -629,7 +670,8 @@ static int open_io(can_state_t *s, const uint32_t *rx_ids, unsigned nrx, char *w
     const can_cfg_t *cfg = s->cfg;
     if (cfg->log_in[0] || cfg->log_out[0]) {
         s->log = can_logfile_open(cfg->log_in[0] ? cfg->log_in : NULL,
-                             cfg->log_out[0] ? cfg->log_out : NULL, cfg->log_ifname, 0, why, wl);
+                                  cfg->log_out[0] ? cfg->log_out : NULL, cfg->log_ifname, 0, why,
+                                  wl);
         return s->log ? 0 : -EIO;
     }
     s->bus = can_socket_new(cfg->interface, cfg->fd, rx_ids, nrx);
@@ -668,7 +710,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     }
     can_port_config_t pc;
     port_config(cfg, (int64_t)llround((double)c->period_ns / c->cfg->daemon.speed), &pc);
-    can_port_io_t io = { io_send, io_recv, io_maintain, io_is_up };
+    can_port_io_t io = {io_send, io_recv, io_maintain, io_is_up};
     s->port = can_port_new(&pc, &io, s, s->n);
     if (!s->port) {
         snprintf(why, wl, "can: out of memory");
@@ -681,10 +723,10 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
         (rc = open_io(s, rx_ids, nrx, why, wl)) < 0)
         goto fail;
     double load = can_port_busload(s->port, c->cfg->daemon.rate_hz, cfg->waypoint_hz, cfg->bitrate,
-                                  cfg->data_bitrate);
+                                   cfg->data_bitrate);
     s->load_permille = load > 0 ? (uint32_t)llround(load * 1000) : 0;
-    log_msg(LOG_INFO, "can: %u object(s) on %s, worst-case bus load %.1f %% at %g bit/s",
-            s->n, s->log ? "candump logs" : cfg->interface, load * 100, cfg->bitrate);
+    log_msg(LOG_INFO, "can: %u object(s) on %s, worst-case bus load %.1f %% at %g bit/s", s->n,
+            s->log ? "candump logs" : cfg->interface, load * 100, cfg->bitrate);
     s->was_up = io_is_up(s);
     publish_state(s);
     s->timer_fd = loop_timer_add(c->loop, CAN_MAINTAIN_NS, on_timer, s);

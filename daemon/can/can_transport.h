@@ -49,9 +49,9 @@ typedef struct {
 } can_cfg_t;
 
 typedef struct {
-    int index;                  /* -1 = the object's index */
+    int index; /* -1 = the object's index */
     canproto_ids_t ids;
-    unsigned given;             /* bit per id key given explicitly */
+    unsigned given; /* bit per id key given explicitly */
 } can_obj_cfg_t;
 
 extern const transport_t can_transport;
@@ -59,12 +59,12 @@ extern const transport_t can_transport;
 /* CAN bus state (values follow linux/can/netlink.h, plus DOWN; the Modbus
  * register map publishes them as its MBMAP_CAN_*). */
 typedef enum {
-    CAN_BUS_UNUSED = 0,         /* no object uses CAN */
+    CAN_BUS_UNUSED = 0, /* no object uses CAN */
     CAN_BUS_ERROR_ACTIVE = 1,
     CAN_BUS_ERROR_WARNING = 2,
     CAN_BUS_ERROR_PASSIVE = 3,
     CAN_BUS_OFF = 4,
-    CAN_BUS_DOWN = 5,           /* interface down or gone; reopening */
+    CAN_BUS_DOWN = 5, /* interface down or gone; reopening */
 } can_bus_state_t;
 
 struct core;

@@ -60,15 +60,13 @@ static int why_set(char *why, size_t whylen, const char *fmt, ...)
     return -CFG_EVALUE;
 }
 
-int cfg_get_double(const cfg_kv_t *kv, double lo, double hi, double *out, char *why,
-                   size_t whylen)
+int cfg_get_double(const cfg_kv_t *kv, double lo, double hi, double *out, char *why, size_t whylen)
 {
     char *end;
     errno = 0;
     double v = strtod(kv->value, &end);
     if (end == kv->value || *end || errno == ERANGE || !isfinite(v) || v < lo || v > hi)
-        return why_set(why, whylen, "expected a number in [%g, %g], got '%s'", lo, hi,
-                       kv->value);
+        return why_set(why, whylen, "expected a number in [%g, %g], got '%s'", lo, hi, kv->value);
     *out = v;
     return 0;
 }
@@ -105,8 +103,7 @@ int cfg_get_bool(const cfg_kv_t *kv, int *out, char *why, size_t whylen)
     return why_set(why, whylen, "expected yes or no, got '%s'", kv->value);
 }
 
-int cfg_get_enum(const cfg_kv_t *kv, const char *const *names, int *out, char *why,
-                 size_t whylen)
+int cfg_get_enum(const cfg_kv_t *kv, const char *const *names, int *out, char *why, size_t whylen)
 {
     char list[160] = "";
     for (int i = 0; names[i]; i++) {
@@ -146,12 +143,12 @@ typedef struct {
     cfg_t *c;
     const char *text; /* in-memory source (cfg_load_string) */
     size_t pos;
-    FILE *fp;         /* file source (cfg_load) */
-    int line;         /* lines read so far */
-    int indented;     /* the line just read starts with blanks (inih: a continuation) */
+    FILE *fp;     /* file source (cfg_load) */
+    int line;     /* lines read so far */
+    int indented; /* the line just read starts with blanks (inih: a continuation) */
     /* current section */
     enum sec_kind kind;
-    int sec_index;    /* object index or transport index */
+    int sec_index; /* object index or transport index */
     char sec_name[64];
     int sec_line;
     /* per-object: first line of a "T." key, by transport, to report keys for
@@ -248,8 +245,7 @@ static void begin_section(parse_t *p, const char *name)
             return;
         }
         if (c->nobj == CFG_OBJECTS_MAX) {
-            fail(p, CFG_EVALUE, p->line, "[%s]: more than %d objects", name,
-                 CFG_OBJECTS_MAX);
+            fail(p, CFG_EVALUE, p->line, "[%s]: more than %d objects", name, CFG_OBJECTS_MAX);
             return;
         }
         cfg_obj_t *o = &c->obj[c->nobj];
@@ -451,7 +447,6 @@ static int key_rt(cfg_t *c, const cfg_kv_t *kv, char *why, size_t wl)
     return -CFG_EUNKNOWN;
 }
 
-
 /* "replay, csv, ..." : the names of the transports that have role, for messages. */
 static void transport_names(unsigned role, char *list, size_t len)
 {
@@ -562,8 +557,13 @@ static int handler(void *user, const char *section, const char *name, const char
     if (p->err)
         return 0;
     (void)section; /* == p->sec_name: the reader saw the header */
-    cfg_kv_t kv = {.file = c->path, .dir = c->dir, .section = p->sec_name, .key = name,
-                   .value = value, .line = p->line, .object = NULL};
+    cfg_kv_t kv = {.file = c->path,
+                   .dir = c->dir,
+                   .section = p->sec_name,
+                   .key = name,
+                   .value = value,
+                   .line = p->line,
+                   .object = NULL};
     char why[CFG_WHY_MAX] = "";
     int rc;
     if (p->kind == SEC_NONE && !p->sec_name[0]) {
@@ -581,12 +581,8 @@ static int handler(void *user, const char *section, const char *name, const char
         return 0;
     }
     switch (p->kind) {
-    case SEC_DAEMON:
-        rc = key_daemon(c, p, &kv, why, sizeof why);
-        break;
-    case SEC_RT:
-        rc = key_rt(c, &kv, why, sizeof why);
-        break;
+    case SEC_DAEMON: rc = key_daemon(c, p, &kv, why, sizeof why); break;
+    case SEC_RT: rc = key_rt(c, &kv, why, sizeof why); break;
     case SEC_OBJ:
         kv.object = c->obj[p->sec_index].name;
         rc = key_obj(p, &c->obj[p->sec_index], &kv, why, sizeof why);
@@ -596,14 +592,12 @@ static int handler(void *user, const char *section, const char *name, const char
         rc = t->cfg_key(c->tcfg[p->sec_index], &kv, why, sizeof why);
         break;
     }
-    default:
-        return 0; /* the section itself was already reported */
+    default: return 0; /* the section itself was already reported */
     }
     if (rc == -CFG_EUNKNOWN)
         fail(p, CFG_EUNKNOWN, p->line, "[%s] %s: unknown key", p->sec_name, name);
     else if (rc < 0)
-        fail(p, -rc, p->line, "[%s] %s: %s", p->sec_name, name,
-             why[0] ? why : cfg_strerror(rc));
+        fail(p, -rc, p->line, "[%s] %s: %s", p->sec_name, name, why[0] ? why : cfg_strerror(rc));
     return rc == 0;
 }
 
@@ -658,8 +652,8 @@ static void check_all(parse_t *p)
         int line = c->tline[t];
         int rc = tr->check(c, &line, why, sizeof why);
         if (rc < 0) {
-            fail(p, rc == -CFG_EMISSING ? CFG_EMISSING : CFG_EVALUE, line, "[%s]: %s",
-                 tr->name, why[0] ? why : "invalid");
+            fail(p, rc == -CFG_EMISSING ? CFG_EMISSING : CFG_EVALUE, line, "[%s]: %s", tr->name,
+                 why[0] ? why : "invalid");
             return;
         }
     }
@@ -719,8 +713,8 @@ static int parse(parse_t *p, const char *name, const char *dir, cfg_t **out, cha
     return 0;
 }
 
-int cfg_load_string(const char *text, const char *name, const char *dir, cfg_t **out,
-                    char *err, size_t errlen)
+int cfg_load_string(const char *text, const char *name, const char *dir, cfg_t **out, char *err,
+                    size_t errlen)
 {
     parse_t *p = calloc(1, sizeof *p);
     if (!p) {

@@ -32,21 +32,21 @@
 
 #include "engine.h"
 
-#define CFG_OBJECTS_MAX 32     /* objects per daemon */
-#define CFG_NAME_MAX 32        /* object name, with its NUL ([A-Za-z0-9_-]) */
-#define CFG_OUTPUTS_MAX 4      /* outputs per object */
-#define CFG_TRANSPORTS_MAX 16  /* transports in transport_table */
-#define CFG_WHY_MAX 256        /* room for a key function's message */
+#define CFG_OBJECTS_MAX 32    /* objects per daemon */
+#define CFG_NAME_MAX 32       /* object name, with its NUL ([A-Za-z0-9_-]) */
+#define CFG_OUTPUTS_MAX 4     /* outputs per object */
+#define CFG_TRANSPORTS_MAX 16 /* transports in transport_table */
+#define CFG_WHY_MAX 256       /* room for a key function's message */
 
 enum cfg_error {
     CFG_OK = 0,
-    CFG_EUNKNOWN = 1,   /* unknown section or key */
-    CFG_EVALUE = 2,     /* bad value (why says which rule) */
-    CFG_EMISSING = 3,   /* a required key or section is missing */
-    CFG_EIO = 4,        /* cannot open or read the file */
-    CFG_ENOMEM = 5,     /* out of memory */
-    CFG_ESYNTAX = 6,    /* not INI (no '=', unterminated section, line too long) */
-    CFG_EDUP = 7,       /* key or section given twice */
+    CFG_EUNKNOWN = 1, /* unknown section or key */
+    CFG_EVALUE = 2,   /* bad value (why says which rule) */
+    CFG_EMISSING = 3, /* a required key or section is missing */
+    CFG_EIO = 4,      /* cannot open or read the file */
+    CFG_ENOMEM = 5,   /* out of memory */
+    CFG_ESYNTAX = 6,  /* not INI (no '=', unterminated section, line too long) */
+    CFG_EDUP = 7,     /* key or section given twice */
     CFG_ERROR_COUNT
 };
 
@@ -57,45 +57,45 @@ struct transport;
 
 /* One "key = value" line, as handed to a transport's key function. */
 typedef struct {
-    const char *file;     /* config file path, for messages */
-    const char *dir;      /* its directory: relative paths are resolved against it */
-    const char *section;  /* "can", "object.boat", ... */
-    const char *object;   /* object name for [object.NAME] keys, else NULL */
-    const char *key;      /* key without the "T." prefix */
-    const char *value;    /* value, trimmed, inline ';' comment removed */
-    int line;             /* 1-based line number */
+    const char *file;    /* config file path, for messages */
+    const char *dir;     /* its directory: relative paths are resolved against it */
+    const char *section; /* "can", "object.boat", ... */
+    const char *object;  /* object name for [object.NAME] keys, else NULL */
+    const char *key;     /* key without the "T." prefix */
+    const char *value;   /* value, trimmed, inline ';' comment removed */
+    int line;            /* 1-based line number */
 } cfg_kv_t;
 
 /* [daemon] */
 typedef struct {
-    double rate_hz;             /* output rate shared by all objects */
-    int64_t period_ns;          /* 1e9 / rate_hz, rounded */
-    double speed;               /* engine time per wall-clock time (replay speed) */
-    double status_interval_s;   /* status line period, 0 = never */
-    double stop_timeout_s;      /* SIGTERM: longest wait for objects to come to rest */
-    int exit_when_done;         /* exit 0 once every input is done and every object is finished */
-    int log_level;              /* LOG_ERR .. LOG_DEBUG */
-    char user[64];              /* started as root: drop to this user once the sockets are
+    double rate_hz;           /* output rate shared by all objects */
+    int64_t period_ns;        /* 1e9 / rate_hz, rounded */
+    double speed;             /* engine time per wall-clock time (replay speed) */
+    double status_interval_s; /* status line period, 0 = never */
+    double stop_timeout_s;    /* SIGTERM: longest wait for objects to come to rest */
+    int exit_when_done;       /* exit 0 once every input is done and every object is finished */
+    int log_level;            /* LOG_ERR .. LOG_DEBUG */
+    char user[64];            /* started as root: drop to this user once the sockets are
                                  * open ("" = stay, with a warning outside systemd) */
 } cfg_daemon_t;
 
 /* [realtime] (all off by default) */
 typedef struct {
-    int fifo_priority;          /* 0 = SCHED_OTHER, 1..99 = SCHED_FIFO priority */
-    int mlockall;               /* lock current and future pages */
-    int affinity_set;           /* 1 if cpu_affinity was given */
-    cpu_set_t affinity;         /* CPUs the daemon may run on */
+    int fifo_priority;  /* 0 = SCHED_OTHER, 1..99 = SCHED_FIFO priority */
+    int mlockall;       /* lock current and future pages */
+    int affinity_set;   /* 1 if cpu_affinity was given */
+    cpu_set_t affinity; /* CPUs the daemon may run on */
 } cfg_rt_t;
 
 /* [object.NAME] */
 typedef struct {
     char name[CFG_NAME_MAX];
-    int line;                                   /* line of its section header */
-    engine_config_t engine;                     /* period_ns = daemon.period_ns */
-    const struct transport *input;              /* required */
+    int line;                      /* line of its section header */
+    engine_config_t engine;        /* period_ns = daemon.period_ns */
+    const struct transport *input; /* required */
     const struct transport *output[CFG_OUTPUTS_MAX];
-    unsigned noutput;                           /* >= 1 */
-    void *tcfg[CFG_TRANSPORTS_MAX];             /* per-object block of each transport, by index */
+    unsigned noutput;               /* >= 1 */
+    void *tcfg[CFG_TRANSPORTS_MAX]; /* per-object block of each transport, by index */
     /* The safety monitor's bounds (lib/safety/safety.h), keys safety_max_step_m,
      * safety_max_speed_m_s, safety_max_accel_m_s2: < 0 = derived from the
      * engine's limits (obj_safety_limits in core.h), 0 = not checked. */
@@ -104,7 +104,7 @@ typedef struct {
      * holds there and reaches the first trajectory by a transfer) */
     int has_initial_position;
     double initial_position_m[ENGINE_AXES];
-    int writable;                               /* writable = yes/no: commands and waypoints
+    int writable; /* writable = yes/no: commands and waypoints
                                                  * from outside (Modbus) may change it;
                                                  * -1 not given (the input decides) */
 } cfg_obj_t;
@@ -115,9 +115,9 @@ typedef struct cfg {
     cfg_daemon_t daemon;
     cfg_rt_t rt;
     cfg_obj_t obj[CFG_OBJECTS_MAX];
-    unsigned nobj;                              /* >= 1 */
-    void *tcfg[CFG_TRANSPORTS_MAX];             /* daemon-wide block of each transport, by index */
-    int tline[CFG_TRANSPORTS_MAX];              /* line of its [T] section, 0 if absent */
+    unsigned nobj;                  /* >= 1 */
+    void *tcfg[CFG_TRANSPORTS_MAX]; /* daemon-wide block of each transport, by index */
+    int tline[CFG_TRANSPORTS_MAX];  /* line of its [T] section, 0 if absent */
 } cfg_t;
 
 /*
@@ -129,8 +129,8 @@ typedef struct cfg {
 int cfg_load(const char *path, cfg_t **out, char *err, size_t errlen);
 
 /* The same from text in memory; name is used in messages, dir for relative paths. */
-int cfg_load_string(const char *text, const char *name, const char *dir, cfg_t **out,
-                    char *err, size_t errlen);
+int cfg_load_string(const char *text, const char *name, const char *dir, cfg_t **out, char *err,
+                    size_t errlen);
 
 /* Release (the transports' blocks too, via their cfg_fini/obj_cfg_fini).  NULL is a no-op. */
 void cfg_free(cfg_t *c);
@@ -150,8 +150,7 @@ int cfg_obj_uses(const cfg_obj_t *o, const struct transport *t);
 /* ---- value helpers for key functions: 0, or -CFG_EVALUE with why filled ---- */
 
 /* Finite decimal number in [lo, hi]. */
-int cfg_get_double(const cfg_kv_t *kv, double lo, double hi, double *out, char *why,
-                   size_t whylen);
+int cfg_get_double(const cfg_kv_t *kv, double lo, double hi, double *out, char *why, size_t whylen);
 
 /* Integer (decimal, or 0x hex) in [lo, hi]. */
 int cfg_get_int(const cfg_kv_t *kv, long long lo, long long hi, long long *out, char *why,
@@ -161,8 +160,7 @@ int cfg_get_int(const cfg_kv_t *kv, long long lo, long long hi, long long *out, 
 int cfg_get_bool(const cfg_kv_t *kv, int *out, char *why, size_t whylen);
 
 /* One of names[] (NULL-terminated); *out is its index. */
-int cfg_get_enum(const cfg_kv_t *kv, const char *const *names, int *out, char *why,
-                 size_t whylen);
+int cfg_get_enum(const cfg_kv_t *kv, const char *const *names, int *out, char *why, size_t whylen);
 
 /* A path, made absolute against kv->dir if relative (not checked for existence). */
 int cfg_get_path(const cfg_kv_t *kv, char *out, size_t outlen, char *why, size_t whylen);

@@ -52,8 +52,8 @@ void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim)
 {
     memset(lim, 0, sizeof *lim);
     lim->max_step_m = o->safety_max_step_m >= 0 ? o->safety_max_step_m : 0;
-    lim->max_speed_m_s =
-        o->safety_max_speed_m_s >= 0 ? o->safety_max_speed_m_s : 2.0 * o->engine.max_speed_m_s;
+    lim->max_speed_m_s = o->safety_max_speed_m_s >= 0 ? o->safety_max_speed_m_s
+                                                      : 2.0 * o->engine.max_speed_m_s;
     lim->max_accel_m_s2 = o->safety_max_accel_m_s2 >= 0 ? o->safety_max_accel_m_s2 : 0;
     lim->tol_m = SAFETY_TOL_M_DEFAULT;
 }
@@ -454,14 +454,13 @@ void core_stats_roll(core_t *c)
         const safety_t *sf = &o->safety;
         if (sf->violations == o->safety_logged)
             continue;
-        double held[ENGINE_AXES] = { NAN, NAN, NAN };
+        double held[ENGINE_AXES] = {NAN, NAN, NAN};
         (void)safety_held(sf, held);
         log_msg(LOG_ERR,
                 "object '%s': safety monitor: %s (%.6g, bound %.6g): setpoints not sent, "
                 "holding at (%.4f, %.4f, %.4f) until 'clear'; %llu refused so far",
-                o->name, safety_strerror(sf->fault ? sf->fault : SAFETY_FNOTFINITE),
-                sf->last_value, sf->last_limit, held[0], held[1], held[2],
-                (unsigned long long)sf->violations);
+                o->name, safety_strerror(sf->fault ? sf->fault : SAFETY_FNOTFINITE), sf->last_value,
+                sf->last_limit, held[0], held[1], held[2], (unsigned long long)sf->violations);
         o->safety_logged = sf->violations;
     }
     lat_summarize(&s->late_hist, &s->late);
@@ -499,10 +498,8 @@ int core_summary(const core_t *c, char *buf, size_t len)
                      "; %s %s%s t=%.1f s, wp %llu ok %llu rejected %llu full, %llu underruns",
                      o->name, engine_state_name(o->status.state),
                      safety_fault(&o->safety) ? " SAFETY FAULT (holding)" : "", o->sp.t_s,
-                     (unsigned long long)o->status.accepted,
-                     (unsigned long long)o->status.rejected,
-                     (unsigned long long)o->status.full,
-                     (unsigned long long)o->status.underruns);
+                     (unsigned long long)o->status.accepted, (unsigned long long)o->status.rejected,
+                     (unsigned long long)o->status.full, (unsigned long long)o->status.underruns);
         n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
         if (o->out_lost && n < len) {
             m = snprintf(buf + n, len - n, ", %s%llu lines lost by outputs",

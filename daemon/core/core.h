@@ -50,25 +50,25 @@
 /* One moving object. */
 typedef struct obj {
     char name[CFG_NAME_MAX];
-    unsigned index;                 /* 0-based, config order */
-    const cfg_obj_t *cfg;           /* its [object.NAME] section (engine settings, transport blocks) */
+    unsigned index;       /* 0-based, config order */
+    const cfg_obj_t *cfg; /* its [object.NAME] section (engine settings, transport blocks) */
     engine_t *engine;
-    engine_setpoint_t sp;           /* setpoint of the last tick (zero before the first) */
-    engine_status_t status;         /* engine status after the last tick */
-    uint64_t skipped_ticks;         /* missed deadlines this object was stepped through with
+    engine_setpoint_t sp;   /* setpoint of the last tick (zero before the first) */
+    engine_status_t status; /* engine status after the last tick */
+    uint64_t skipped_ticks; /* missed deadlines this object was stepped through with
                                      * no output (added into status.skipped_ticks) */
-    int stopping;                   /* the daemon is stopping: obj_push refuses */
-    int carried;                    /* 1 if engine (and counters) were carried over a reload */
-    int64_t born_ns;                /* engine time when its engine was created (0 at start;
+    int stopping;           /* the daemon is stopping: obj_push refuses */
+    int carried;            /* 1 if engine (and counters) were carried over a reload */
+    int64_t born_ns;        /* engine time when its engine was created (0 at start;
                                      * kept when carried): replay due times count from here */
-    uint64_t out_lost;              /* setpoint lines of this object that never reached one of
+    uint64_t out_lost;      /* setpoint lines of this object that never reached one of
                                      * its outputs (buffer full, write error) */
-    int out_fault;                  /* 1 once a write to one of its outputs failed (ENOSPC,
+    int out_fault;          /* 1 once a write to one of its outputs failed (ENOSPC,
                                      * EIO, ...); cleared by the reset-counters command */
-    safety_t safety;                /* the last check of o->sp before any output sees it
+    safety_t safety;        /* the last check of o->sp before any output sees it
                                      * (kept when carried) */
-    uint64_t safety_logged;         /* safety violations already logged */
-    int safety_rearm;               /* a clear asked to rearm the monitor: done once the
+    uint64_t safety_logged; /* safety violations already logged */
+    int safety_rearm;       /* a clear asked to rearm the monitor: done once the
                                      * engine stands on the held position */
 } obj_t;
 
@@ -120,50 +120,51 @@ void obj_reset_counters(obj_t *o);
 
 /* Daemon-wide statistics.  The core fills the tick part; transports their tcount row. */
 typedef struct {
-    int64_t start_mono_ns;          /* CLOCK_MONOTONIC at start (uptime = now - this) */
-    uint64_t ticks;                 /* ticks run */
-    uint64_t missed_ticks;          /* deadlines skipped (timerfd expirations - 1, summed) */
-    uint64_t overruns;              /* ticks whose work ended after the next deadline */
-    lat_hist_t late_hist;           /* lateness since start / reset, us */
-    lat_summary_t late;             /* summary of late_hist, refreshed every second */
+    int64_t start_mono_ns; /* CLOCK_MONOTONIC at start (uptime = now - this) */
+    uint64_t ticks;        /* ticks run */
+    uint64_t missed_ticks; /* deadlines skipped (timerfd expirations - 1, summed) */
+    uint64_t overruns;     /* ticks whose work ended after the next deadline */
+    lat_hist_t late_hist;  /* lateness since start / reset, us */
+    lat_summary_t late;    /* summary of late_hist, refreshed every second */
     /* Counters a transport keeps across reloads (a reload rebuilds its state):
      * tcount[transport_index(t)][0 .. STATS_TCOUNT_MAX - 1], meaning defined by
      * transport t, printed by its summary callback. */
     uint64_t tcount[CFG_TRANSPORTS_MAX][STATS_TCOUNT_MAX];
     /* Output faults, any output transport (they also count in their own way):
      * any line lost makes trajd exit with CORE_EXIT_OUTPUT_LOST. */
-    uint64_t out_lost;              /* setpoint lines lost (buffer full, write error, left at exit) */
-    uint64_t out_errors;            /* failed writes (not EAGAIN) */
-    int out_errno;                  /* errno of the last one */
-    int out_fault;                  /* 1 once an output write failed */
-    int exit_code;                  /* nonzero: a transport asks the daemon to end now with
+    uint64_t out_lost;   /* setpoint lines lost (buffer full, write error, left at exit) */
+    uint64_t out_errors; /* failed writes (not EAGAIN) */
+    int out_errno;       /* errno of the last one */
+    int out_fault;       /* 1 once an output write failed */
+    int exit_code;       /* nonzero: a transport asks the daemon to end now with
                                      * this status (stdout's reader left: CORE_EXIT_EPIPE);
                                      * the tick stops the loop with it */
 } stats_t;
 
 /* Exit statuses of trajd beyond sysexits.h (daemon/README.md "Output faults are errors"). */
-#define CORE_EXIT_OUTPUT_LOST 74    /* EX_IOERR: setpoint lines were lost by an output */
-#define CORE_EXIT_EPIPE 141         /* stdout's reader went away (128 + SIGPIPE, what a shell
+#define CORE_EXIT_OUTPUT_LOST 74 /* EX_IOERR: setpoint lines were lost by an output */
+#define CORE_EXIT_EPIPE                                                                            \
+    141 /* stdout's reader went away (128 + SIGPIPE, what a shell
                                      * reports for a filter ended by SIGPIPE) */
 
 /* The daemon core. Fields are read-only for transports except their own stats->tcount row,
  * stats->out_* and exit_code, and obj_t.out_lost/.out_fault. */
 typedef struct core {
-    loop_t *loop;                   /* the event loop: loop_add your fds here */
-    const cfg_t *cfg;               /* the running configuration */
-    obj_t *obj;                     /* nobj objects, config order */
+    loop_t *loop;     /* the event loop: loop_add your fds here */
+    const cfg_t *cfg; /* the running configuration */
+    obj_t *obj;       /* nobj objects, config order */
     unsigned nobj;
-    int64_t period_ns;              /* engine time per tick */
-    int64_t t0_ns;                  /* engine time of deadline 0 (0 at start; after a
+    int64_t period_ns;                /* engine time per tick */
+    int64_t t0_ns;                    /* engine time of deadline 0 (0 at start; after a
                                      * reload, continues the previous core's clock) */
-    int64_t now_ns;                 /* engine time of the last tick: t0_ns + cycle * period_ns */
-    uint64_t cycle;                 /* index k of the last tick's deadline (0 after a reload) */
-    int64_t late_ns;                /* how late the last tick woke up after the deadline it
+    int64_t now_ns;                   /* engine time of the last tick: t0_ns + cycle * period_ns */
+    uint64_t cycle;                   /* index k of the last tick's deadline (0 after a reload) */
+    int64_t late_ns;                  /* how late the last tick woke up after the deadline it
                                      * serves (the newest, after a skip), wall ns: how stale
                                      * its setpoint is (CAN drops late cycles).  The stats
                                      * histogram counts from the oldest missed deadline. */
-    int stopping;                   /* SIGTERM received: bringing objects to rest */
-    stats_t *stats;                 /* survives reloads */
+    int stopping;                     /* SIGTERM received: bringing objects to rest */
+    stats_t *stats;                   /* survives reloads */
     void *tstate[CFG_TRANSPORTS_MAX]; /* each open transport's state (NULL if not open) */
 } core_t;
 

@@ -56,7 +56,7 @@ int log_level_parse(const char *s)
     static const struct {
         const char *name;
         int level;
-    } t[] = {{"err", LOG_ERR},   {"error", LOG_ERR}, {"warning", LOG_WARNING},
+    } t[] = {{"err", LOG_ERR},       {"error", LOG_ERR}, {"warning", LOG_WARNING},
              {"notice", LOG_NOTICE}, {"info", LOG_INFO}, {"debug", LOG_DEBUG}};
     for (size_t i = 0; i < sizeof t / sizeof t[0]; i++)
         if (strcmp(s, t[i].name) == 0)
@@ -77,8 +77,8 @@ void log_msg(int prio, const char *fmt, ...)
         va_end(ap);
         return;
     }
-    int n = mode == LOG_MODE_PREFIX ? snprintf(buf, sizeof buf, "<%d>", prio & 7)
-            : (prio & 7) <= LOG_ERR  ? snprintf(buf, sizeof buf, "error: ")
+    int n = mode == LOG_MODE_PREFIX     ? snprintf(buf, sizeof buf, "<%d>", prio & 7)
+            : (prio & 7) <= LOG_ERR     ? snprintf(buf, sizeof buf, "error: ")
             : (prio & 7) == LOG_WARNING ? snprintf(buf, sizeof buf, "warning: ")
                                         : 0;
     va_start(ap, fmt);
@@ -86,8 +86,8 @@ void log_msg(int prio, const char *fmt, ...)
     va_end(ap);
     if (m < 0)
         m = 0;
-    size_t len = (size_t)n + ((size_t)m < sizeof buf - (size_t)n - 1
-                                   ? (size_t)m : sizeof buf - (size_t)n - 2);
+    size_t len = (size_t)n +
+                 ((size_t)m < sizeof buf - (size_t)n - 1 ? (size_t)m : sizeof buf - (size_t)n - 2);
     if (len == 0 || buf[len - 1] != '\n')
         buf[len++] = '\n';
     /* One write: a line is never interleaved with another process's line. */

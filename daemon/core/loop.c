@@ -11,8 +11,8 @@
 #define LOOP_BATCH 64 /* events taken per epoll_wait */
 
 typedef struct {
-    int fd;              /* -1 when the slot is free */
-    uint32_t gen;        /* bumped when the slot is freed: stale events are ignored */
+    int fd;       /* -1 when the slot is free */
+    uint32_t gen; /* bumped when the slot is freed: stale events are ignored */
     loop_fn fn;
     void *ctx;
     loop_timer_fn timer_fn; /* set for loop_timer_add timers */
@@ -22,8 +22,8 @@ typedef struct {
 struct loop {
     int epfd;
     loop_entry_t *e;
-    unsigned n, cap;     /* slots used (high-water), allocated */
-    unsigned count;      /* registered fds */
+    unsigned n, cap; /* slots used (high-water), allocated */
+    unsigned count;  /* registered fds */
     int stop, code;
 };
 
@@ -67,8 +67,8 @@ static int find(const loop_t *l, int fd)
     return -1;
 }
 
-static int add_entry(loop_t *l, int fd, uint32_t events, loop_fn fn, void *ctx,
-                     loop_timer_fn tfn, void *tctx)
+static int add_entry(loop_t *l, int fd, uint32_t events, loop_fn fn, void *ctx, loop_timer_fn tfn,
+                     void *tctx)
 {
     if (fd < 0 || (!fn && !tfn))
         return -EINVAL;
@@ -91,8 +91,7 @@ static int add_entry(loop_t *l, int fd, uint32_t events, loop_fn fn, void *ctx,
         l->n++;
     }
     loop_entry_t *e = &l->e[i];
-    struct epoll_event ev = {.events = events,
-                             .data.u64 = ((uint64_t)e->gen << 32) | i};
+    struct epoll_event ev = {.events = events, .data.u64 = ((uint64_t)e->gen << 32) | i};
     if (epoll_ctl(l->epfd, EPOLL_CTL_ADD, fd, &ev) < 0)
         return -errno;
     e->fd = fd;

@@ -12,14 +12,14 @@ int rt_apply(const cfg_rt_t *rt, char *why, size_t whylen)
     int rc = 0;
     size_t n = 0;
     why[0] = 0;
-#define RT_FAIL(what)                                                                     \
-    do {                                                                                  \
-        int e = errno;                                                                    \
-        if (!rc)                                                                          \
-            rc = -e;                                                                      \
-        int m = snprintf(why + n, whylen - n, "%s%s: %s", n ? "; " : "", what, strerror(e)); \
-        if (m > 0)                                                                        \
-            n = (size_t)m < whylen - n ? n + (size_t)m : whylen - 1;                      \
+#define RT_FAIL(what)                                                                              \
+    do {                                                                                           \
+        int e = errno;                                                                             \
+        if (!rc)                                                                                   \
+            rc = -e;                                                                               \
+        int m = snprintf(why + n, whylen - n, "%s%s: %s", n ? "; " : "", what, strerror(e));       \
+        if (m > 0)                                                                                 \
+            n = (size_t)m < whylen - n ? n + (size_t)m : whylen - 1;                               \
     } while (0)
     /* the CPUs allowed at start: what a reload without cpu_affinity goes back to */
     static cpu_set_t initial;

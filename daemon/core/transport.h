@@ -67,13 +67,13 @@
 struct core;
 struct obj;
 
-#define TRANSPORT_INPUT 0x1u    /* can be an object's input = */
-#define TRANSPORT_OUTPUT 0x2u   /* can be in an object's output = */
-#define TRANSPORT_SERVICE 0x4u  /* serves all objects (e.g. Modbus status) when [T] is present */
+#define TRANSPORT_INPUT 0x1u   /* can be an object's input = */
+#define TRANSPORT_OUTPUT 0x2u  /* can be in an object's output = */
+#define TRANSPORT_SERVICE 0x4u /* serves all objects (e.g. Modbus status) when [T] is present */
 
 typedef struct transport {
-    const char *name;           /* section name and "name." key prefix */
-    unsigned roles;             /* TRANSPORT_* */
+    const char *name; /* section name and "name." key prefix */
+    unsigned roles;   /* TRANSPORT_* */
 
     /* [name] section */
     size_t cfg_size;

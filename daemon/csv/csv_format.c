@@ -41,11 +41,10 @@ int csv_format_format(char *buf, size_t len, const char *object, const engine_se
     int n = snprintf(buf, len,
                      "%s,%" PRId64 ",%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,"
                      "%.17g,%.17g,%.17g,%s,%" PRIu32 ",%" PRIu32 ",%" PRIu32 "\n",
-                     object, sp->now_ns, sp->t_s,
-                     sp->pos_m[0], sp->pos_m[1], sp->pos_m[2],
-                     sp->vel_m_s[0], sp->vel_m_s[1], sp->vel_m_s[2],
-                     sp->acc_m_s2[0], sp->acc_m_s2[1], sp->acc_m_s2[2],
-                     engine_state_name(sp->state), sp->flags, sp->cycle, sp->track);
+                     object, sp->now_ns, sp->t_s, sp->pos_m[0], sp->pos_m[1], sp->pos_m[2],
+                     sp->vel_m_s[0], sp->vel_m_s[1], sp->vel_m_s[2], sp->acc_m_s2[0],
+                     sp->acc_m_s2[1], sp->acc_m_s2[2], engine_state_name(sp->state), sp->flags,
+                     sp->cycle, sp->track);
     if (n < 0 || (size_t)n >= len)
         return -1;
     return n;
@@ -64,8 +63,8 @@ static int put_u64(char *o, uint64_t v)
     return 20 - i;
 }
 
-int csv_format_format_prec(char *buf, size_t len, const char *object,
-                           const engine_setpoint_t *sp, int prec)
+int csv_format_format_prec(char *buf, size_t len, const char *object, const engine_setpoint_t *sp,
+                           int prec)
 {
     if (prec < 0)
         return csv_format_format(buf, len, object, sp);
@@ -97,9 +96,9 @@ int csv_format_format_prec(char *buf, size_t len, const char *object,
     } else {
         o += put_u64(o, (uint64_t)sp->now_ns);
     }
-    const double v[10] = {sp->t_s, sp->pos_m[0], sp->pos_m[1], sp->pos_m[2],
-                          sp->vel_m_s[0], sp->vel_m_s[1], sp->vel_m_s[2],
-                          sp->acc_m_s2[0], sp->acc_m_s2[1], sp->acc_m_s2[2]};
+    const double v[10] = {sp->t_s,         sp->pos_m[0],   sp->pos_m[1],   sp->pos_m[2],
+                          sp->vel_m_s[0],  sp->vel_m_s[1], sp->vel_m_s[2], sp->acc_m_s2[0],
+                          sp->acc_m_s2[1], sp->acc_m_s2[2]};
     for (int k = 0; k < 10; k++) {
         *o++ = ',';
         o += csv_fixed(o, v[k], prec);

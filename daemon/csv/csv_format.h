@@ -36,8 +36,8 @@ int csv_format_format(char *buf, size_t len, const char *object, const engine_se
  * written by a fast formatter (trajreplay --precision).  prec < 0: the
  * default %.17g form, as csv_format_format.  Same returns.
  */
-int csv_format_format_prec(char *buf, size_t len, const char *object,
-                           const engine_setpoint_t *sp, int prec);
+int csv_format_format_prec(char *buf, size_t len, const char *object, const engine_setpoint_t *sp,
+                           int prec);
 
 /*
  * Binary setpoint file (trajreplay --binary): a 64-byte header, then one

@@ -19,30 +19,30 @@
 
 typedef struct {
     int fd;
-    int own;               /* close at the end */
-    int restore_flags;     /* fcntl flags to put back (stdout), or -1 */
-    int regular;           /* a regular file: a torn line can be cut off again */
+    int own;           /* close at the end */
+    int restore_flags; /* fcntl flags to put back (stdout), or -1 */
+    int regular;       /* a regular file: a torn line can be cut off again */
     int is_stdout;
-    obj_t *obj;            /* csv: the one object writing here; stdout: NULL (all of them) */
+    obj_t *obj; /* csv: the one object writing here; stdout: NULL (all of them) */
     size_t len;
-    char *buf;             /* CSV_TRANSPORT_BUF_BYTES */
+    char *buf;                               /* CSV_TRANSPORT_BUF_BYTES */
     char what[PATH_MAX + CFG_NAME_MAX + 32]; /* for the log: "object 'boat' csv.path /x" */
-    int last_errno;        /* of the last failed write */
-    uint64_t errors;       /* failed write calls */
-    uint64_t lost;         /* lines lost */
+    int last_errno;                          /* of the last failed write */
+    uint64_t errors;                         /* failed write calls */
+    uint64_t lost;                           /* lines lost */
     uint64_t errors_logged, lost_logged;
-    int64_t logged_ns;     /* CLOCK_MONOTONIC of the last warning, 0: none yet */
+    int64_t logged_ns; /* CLOCK_MONOTONIC of the last warning, 0: none yet */
 } stream_t;
 
 /* This transport's row of stats_t.tcount (survives reloads). */
-enum { TCOUNT_DROPPED = 0 };  /* lines dropped: the buffer was full */
+enum { TCOUNT_DROPPED = 0 }; /* lines dropped: the buffer was full */
 
 typedef struct {
     core_t *core;
-    uint64_t *dropped;     /* &stats->tcount[its index][TCOUNT_DROPPED] */
+    uint64_t *dropped; /* &stats->tcount[its index][TCOUNT_DROPPED] */
     unsigned n;
-    stream_t *s;           /* csv: one per object index (fd -1 if unused); stdout: one */
-    int timer_fd;          /* the 1 s housekeeping timer that logs faults, or -1 */
+    stream_t *s;  /* csv: one per object index (fd -1 if unused); stdout: one */
+    int timer_fd; /* the 1 s housekeeping timer that logs faults, or -1 */
 } csv_transport_t;
 
 /* Warnings about one output: the first at once (within a second), then at
@@ -212,8 +212,8 @@ static void report(stream_t *s, int final)
                 s->what, strerror(s->last_errno), (unsigned long long)s->errors,
                 (unsigned long long)s->lost);
     else
-        log_msg(LOG_WARNING, "%s: reader too slow, buffer full: %llu lines lost so far",
-                s->what, (unsigned long long)s->lost);
+        log_msg(LOG_WARNING, "%s: reader too slow, buffer full: %llu lines lost so far", s->what,
+                (unsigned long long)s->lost);
     s->lost_logged = s->lost;
     s->errors_logged = s->errors;
     s->logged_ns = now;
@@ -350,12 +350,13 @@ static int csv_open(core_t *c, void **state, char *why, size_t wl)
         /* O_NONBLOCK matters for a FIFO; a regular file ignores it.  O_APPEND
          * always: a torn line is cut off the end (flush), and the next write
          * must land there, not at an offset past it. */
-        int fd = open(oc->path, O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | O_NONBLOCK |
-                                    (oc->truncate ? O_TRUNC : 0), 0644);
+        int fd = open(oc->path,
+                      O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | O_NONBLOCK |
+                          (oc->truncate ? O_TRUNC : 0),
+                      0644);
         if (fd < 0) {
             rc = -errno;
-            snprintf(why, wl, "object '%s': csv.path %s: %s", o->name, oc->path,
-                     strerror(errno));
+            snprintf(why, wl, "object '%s': csv.path %s: %s", o->name, oc->path, strerror(errno));
             goto fail;
         }
         if (stream_init(&st->s[i], fd, 1) < 0) {
@@ -369,7 +370,7 @@ static int csv_open(core_t *c, void **state, char *why, size_t wl)
         snprintf(sm->what, sizeof sm->what, "object '%s' csv.path %s", o->name, oc->path);
         struct stat sb;
         if (sm->regular && fstat(fd, &sb) == 0 && sb.st_size > 0)
-            marker(st, sm);         /* appending: no second header */
+            marker(st, sm); /* appending: no second header */
         else if (oc->header)
             header(st, sm);
     }
@@ -471,7 +472,7 @@ const transport_t csv_transport = {
     .setpoint = csv_setpoint,
     .cycle = cycle,
     .close = close_,
-    .summary = summary,         /* stdout's count too */
+    .summary = summary, /* stdout's count too */
 };
 
 const transport_t stdout_transport = {

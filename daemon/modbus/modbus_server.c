@@ -31,19 +31,19 @@
 enum tag { TAG_LISTEN = 1, TAG_HOUSEKEEPING, TAG_RTU, TAG_SILENCE, TAG_CLIENT };
 
 typedef struct {
-    int family;             /* AF_INET or AF_INET6 */
+    int family; /* AF_INET or AF_INET6 */
     uint8_t addr[16];
     unsigned prefix;
 } allow_t;
 
 typedef struct {
-    int fd;                 /* -1: free slot */
+    int fd; /* -1: free slot */
     size_t len;
     int64_t connected_ns;
-    int64_t last_ns;        /* last complete request, or the connection */
-    int64_t pending_ns;     /* first byte of the partial request in buf, 0 if none */
+    int64_t last_ns;    /* last complete request, or the connection */
+    int64_t pending_ns; /* first byte of the partial request in buf, 0 if none */
     uint64_t requests, exceptions, bytes_in;
-    int may_write;          /* writes = yes and in write_allow */
+    int may_write; /* writes = yes and in write_allow */
     char peer[64];
     uint8_t buf[CLIENT_BUF];
 } client_t;
@@ -55,8 +55,8 @@ struct modbus_server {
     int64_t idle_ns;
     int64_t request_ns;
     int unit_id;
-    int64_t log_window_ns;  /* rate limit of client messages: start of this second */
-    unsigned log_count;     /* messages in it */
+    int64_t log_window_ns; /* rate limit of client messages: start of this second */
+    unsigned log_count;    /* messages in it */
     unsigned log_suppressed;
     modbus_server_hooks_t hooks;
     int ep, lfd, hkfd, rtufd, silfd;
@@ -68,15 +68,15 @@ struct modbus_server {
     client_t *clients;
     allow_t allow[MODBUS_SERVER_ALLOW_MAX];
     unsigned n_allow;
-    mbrtu_rx_t rtu_rx;      /* RTU request framing (lib/proto/mbrtu.h) */
+    mbrtu_rx_t rtu_rx;                       /* RTU request framing (lib/proto/mbrtu.h) */
     allow_t wallow[MODBUS_SERVER_ALLOW_MAX]; /* write_allow */
     unsigned n_wallow;
     uint32_t gen;
-    uint64_t *mb_rejected;  /* per object */
-    uint64_t *lost;         /* per object, sequence gaps of Modbus waypoints */
-    uint32_t *last_seq;     /* per object, of the last waypoint accepted over Modbus */
-    uint32_t *alt_seq;      /* per object, the last sequence number outside the window (0: none) */
-    uint64_t *seq_jumps;    /* per object, sequence numbers outside the window */
+    uint64_t *mb_rejected; /* per object */
+    uint64_t *lost;        /* per object, sequence gaps of Modbus waypoints */
+    uint32_t *last_seq;    /* per object, of the last waypoint accepted over Modbus */
+    uint32_t *alt_seq;     /* per object, the last sequence number outside the window (0: none) */
+    uint64_t *seq_jumps;   /* per object, sequence numbers outside the window */
     modbus_server_stats_t st;
 };
 
@@ -112,7 +112,7 @@ static int set_nonblock(int fd)
 
 static int ep_add(int ep, int fd, uint64_t data)
 {
-    struct epoll_event ev = { .events = EPOLLIN, .data.u64 = data };
+    struct epoll_event ev = {.events = EPOLLIN, .data.u64 = data};
     return epoll_ctl(ep, EPOLL_CTL_ADD, fd, &ev) < 0 ? -errno : 0;
 }
 
@@ -138,7 +138,7 @@ static int allow_parse(const char *list, allow_t *out, unsigned max, char *err, 
         memcpy(tok, p, l);
         tok[l] = 0;
         p += l;
-        allow_t a = { 0 };
+        allow_t a = {0};
         unsigned maxp;
         slash = strchr(tok, '/');
         if (slash)
@@ -276,8 +276,8 @@ static int copy_str(char *dst, size_t len, const char *v)
     return 0;
 }
 
-int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const char *value, char *err,
-                     size_t errlen)
+int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const char *value,
+                             char *err, size_t errlen)
 {
     long x = 0;
     int rc = 0;
@@ -324,10 +324,14 @@ int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const
         if ((rc = parse_uint(value, 100, 600000, &x)) == 0)
             cfg->request_timeout_ms = (unsigned)x;
     } else if (!strcmp(key, "rtu_parity")) {
-        if (!strcmp(value, "N") || !strcmp(value, "none")) cfg->rtu_parity = 'N';
-        else if (!strcmp(value, "E") || !strcmp(value, "even")) cfg->rtu_parity = 'E';
-        else if (!strcmp(value, "O") || !strcmp(value, "odd")) cfg->rtu_parity = 'O';
-        else rc = -EINVAL;
+        if (!strcmp(value, "N") || !strcmp(value, "none"))
+            cfg->rtu_parity = 'N';
+        else if (!strcmp(value, "E") || !strcmp(value, "even"))
+            cfg->rtu_parity = 'E';
+        else if (!strcmp(value, "O") || !strcmp(value, "odd"))
+            cfg->rtu_parity = 'O';
+        else
+            rc = -EINVAL;
     } else {
         msg(err, errlen, "modbus: unknown key '%s'", key);
         return -ENOENT;
@@ -348,10 +352,12 @@ static int systemd_listener(void)
     return -1;
 }
 
-static int tcp_listen(modbus_server_t *s, const modbus_server_config_t *cfg, char *err, size_t errlen)
+static int tcp_listen(modbus_server_t *s, const modbus_server_config_t *cfg, char *err,
+                      size_t errlen)
 {
-    struct addrinfo hints = { .ai_family = AF_UNSPEC, .ai_socktype = SOCK_STREAM,
-                              .ai_flags = AI_PASSIVE | AI_NUMERICSERV | AI_NUMERICHOST };
+    struct addrinfo hints = {.ai_family = AF_UNSPEC,
+                             .ai_socktype = SOCK_STREAM,
+                             .ai_flags = AI_PASSIVE | AI_NUMERICSERV | AI_NUMERICHOST};
     struct addrinfo *res = NULL;
     char port[16];
     int fd = -1, rc, one = 1;
@@ -385,7 +391,7 @@ bound:;
     socklen_t sl = sizeof ss;
     if (getsockname(s->lfd, (struct sockaddr *)&ss, &sl) == 0)
         s->port = ntohs(ss.ss_family == AF_INET6 ? ((struct sockaddr_in6 *)&ss)->sin6_port
-                                                  : ((struct sockaddr_in *)&ss)->sin_port);
+                                                 : ((struct sockaddr_in *)&ss)->sin_port);
     if ((rc = set_nonblock(s->lfd)) < 0 || (rc = ep_add(s->ep, s->lfd, tag(TAG_LISTEN, 0))) < 0) {
         msg(err, errlen, "modbus: listening socket: %s", strerror(-rc));
         return rc;
@@ -406,8 +412,8 @@ static int rtu_open(modbus_server_t *s, const modbus_server_config_t *cfg, char 
         msg(err, errlen, "modbus: unit_id %d outside 1..247", cfg->unit_id);
         return -EINVAL;
     }
-    s->rtu = modbus_new_rtu(cfg->rtu_device, cfg->rtu_baud, cfg->rtu_parity,
-                            cfg->rtu_data_bits, cfg->rtu_stop_bits);
+    s->rtu = modbus_new_rtu(cfg->rtu_device, cfg->rtu_baud, cfg->rtu_parity, cfg->rtu_data_bits,
+                            cfg->rtu_stop_bits);
     if (!s->rtu || modbus_set_slave(s->rtu, cfg->unit_id) < 0 || modbus_connect(s->rtu) < 0) {
         rc = -errno;
         msg(err, errlen, "modbus: RTU %s: %s", cfg->rtu_device, modbus_strerror(errno));
@@ -447,13 +453,14 @@ static int settings_take(modbus_server_t *s, const modbus_server_config_t *cfg, 
     s->max_clients = cfg->max_clients;
     s->idle_ns = (int64_t)cfg->idle_timeout_ms * 1000000;
     s->request_ns = (int64_t)(cfg->request_timeout_ms ? cfg->request_timeout_ms
-                                                       : MODBUS_SERVER_DEFAULT_REQUEST_MS) * 1000000;
+                                                      : MODBUS_SERVER_DEFAULT_REQUEST_MS) *
+                    1000000;
     s->unit_id = cfg->unit_id;
     return 0;
 }
 
-modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg, const modbus_server_hooks_t *hooks, char *err,
-                   size_t errlen)
+modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg,
+                                   const modbus_server_hooks_t *hooks, char *err, size_t errlen)
 {
     modbus_server_t *s = calloc(1, sizeof *s);
     if (!s) {
@@ -494,10 +501,11 @@ modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg, const modb
         goto fail;
     }
     struct itimerspec hk = {
-        .it_interval = { 0, MODBUS_SERVER_HOUSEKEEPING_MS * 1000000L },
-        .it_value = { 0, MODBUS_SERVER_HOUSEKEEPING_MS * 1000000L },
+        .it_interval = {0, MODBUS_SERVER_HOUSEKEEPING_MS * 1000000L},
+        .it_value = {0, MODBUS_SERVER_HOUSEKEEPING_MS * 1000000L},
     };
-    if (timerfd_settime(s->hkfd, 0, &hk, NULL) < 0 || ep_add(s->ep, s->hkfd, tag(TAG_HOUSEKEEPING, 0)) < 0) {
+    if (timerfd_settime(s->hkfd, 0, &hk, NULL) < 0 ||
+        ep_add(s->ep, s->hkfd, tag(TAG_HOUSEKEEPING, 0)) < 0) {
         msg(err, errlen, "modbus: timer: %s", strerror(errno));
         goto fail;
     }
@@ -507,8 +515,8 @@ modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg, const modb
     if (cfg->rtu_device[0] && rtu_open(s, cfg, err, errlen) < 0)
         goto fail;
     /* The image before the first tick: magic, version, object count. */
-    mbmap_daemon_t d = { .objects = (uint16_t)s->n_objects,
-                         .writes_enabled = (uint16_t)(s->writes_enabled != 0) };
+    mbmap_daemon_t d = {.objects = (uint16_t)s->n_objects,
+                        .writes_enabled = (uint16_t)(s->writes_enabled != 0)};
     mbmap_encode_daemon(s->map->tab_input_registers, &d);
     return s;
 fail:
@@ -535,7 +543,7 @@ void modbus_server_free(modbus_server_t *s)
         for (unsigned i = 0; i < s->max_clients; i++)
             client_close(s, &s->clients[i]);
     if (s->tcp)
-        modbus_free(s->tcp);        /* never connected: its socket is not ours */
+        modbus_free(s->tcp); /* never connected: its socket is not ours */
     if (s->rtu) {
         modbus_close(s->rtu);
         modbus_free(s->rtu);
@@ -620,12 +628,11 @@ static void client_note(modbus_server_t *s, const client_t *c, const char *what,
     if (s->log_suppressed)
         snprintf(more, sizeof more, " (%u more such messages not shown)", s->log_suppressed);
     s->log_suppressed = 0;
-    log_msg(LOG_NOTICE,
-            "modbus: %s %s after %.1f s: %llu requests, %llu exceptions, %llu bytes%s%s", what,
-            c->peer[0] ? c->peer : "(socket)", (double)(now - c->connected_ns) / 1e9,
-            (unsigned long long)c->requests, (unsigned long long)c->exceptions,
-            (unsigned long long)c->bytes_in, c->pending_ns ? ", a partial request pending" : "",
-            more);
+    log_msg(
+        LOG_NOTICE, "modbus: %s %s after %.1f s: %llu requests, %llu exceptions, %llu bytes%s%s",
+        what, c->peer[0] ? c->peer : "(socket)", (double)(now - c->connected_ns) / 1e9,
+        (unsigned long long)c->requests, (unsigned long long)c->exceptions,
+        (unsigned long long)c->bytes_in, c->pending_ns ? ", a partial request pending" : "", more);
 }
 
 /* ---- requests ------------------------------------------------------------- */
@@ -652,7 +659,7 @@ static void count_seq(modbus_server_t *s, unsigned k, uint32_t seq)
     if (d >= 1 && d <= MODBUS_SERVER_SEQ_WINDOW) {
         s->lost[k] += d - 1;
     } else if (alt && seq - alt >= 1 && seq - alt <= MODBUS_SERVER_SEQ_WINDOW) {
-        s->lost[k] += seq - alt - 1;     /* the new numbering continues: adopt it */
+        s->lost[k] += seq - alt - 1; /* the new numbering continues: adopt it */
     } else {
         s->seq_jumps[k]++;
         s->alt_seq[k] = seq;
@@ -736,7 +743,7 @@ static void client_read(modbus_server_t *s, client_t *c)
         return;
     int64_t now = now_ns();
     if (c->len == 0)
-        c->pending_ns = now;    /* the deadline runs from a request's first byte */
+        c->pending_ns = now; /* the deadline runs from a request's first byte */
     c->len += (size_t)n;
     c->bytes_in += (uint64_t)n;
     /* MBAP: transaction id (2), protocol id (2) = 0, length (2) = unit + PDU. */
@@ -766,7 +773,7 @@ static void client_read(modbus_server_t *s, client_t *c)
         c->requests++;
         c->exceptions += s->st.exceptions - exc;
         c->last_ns = now;
-        if (rc < 0) {           /* peer not reading its answers: let it go */
+        if (rc < 0) { /* peer not reading its answers: let it go */
             s->st.dropped++;
             client_close(s, c);
             return;
@@ -846,7 +853,8 @@ static int client_add(modbus_server_t *s, int fd, const struct sockaddr_storage 
             client_close(s, c);
         }
     }
-    if (!c || set_nonblock(fd) < 0 || ep_add(s->ep, fd, tag(TAG_CLIENT, (unsigned)(c - s->clients))) < 0) {
+    if (!c || set_nonblock(fd) < 0 ||
+        ep_add(s->ep, fd, tag(TAG_CLIENT, (unsigned)(c - s->clients))) < 0) {
         s->st.refused++;
         close(fd);
         return -EMFILE;
@@ -878,7 +886,7 @@ static void reap_hung_up(modbus_server_t *s)
 {
     for (unsigned i = 0; i < s->max_clients; i++) {
         client_t *c = &s->clients[i];
-        struct pollfd p = { .fd = c->fd, .events = POLLRDHUP };
+        struct pollfd p = {.fd = c->fd, .events = POLLRDHUP};
         if (c->fd >= 0 && poll(&p, 1, 0) > 0 &&
             (p.revents & (POLLRDHUP | POLLHUP | POLLERR | POLLNVAL)))
             client_close(s, c);
@@ -892,7 +900,7 @@ static void do_accept(modbus_server_t *s)
         socklen_t sl = sizeof ss;
         int fd = accept4(s->lfd, (struct sockaddr *)&ss, &sl, SOCK_NONBLOCK | SOCK_CLOEXEC);
         if (fd < 0)
-            return;             /* EAGAIN, or a connection reset before accept */
+            return; /* EAGAIN, or a connection reset before accept */
         if (!allowed(s, &ss)) {
             s->st.refused++;
             close(fd);
@@ -931,7 +939,7 @@ static void housekeeping(modbus_server_t *s)
 
 static void rtu_arm_silence(modbus_server_t *s)
 {
-    struct itimerspec t = { .it_value = { 0, MODBUS_SERVER_RTU_SILENCE_MS * 1000000L } };
+    struct itimerspec t = {.it_value = {0, MODBUS_SERVER_RTU_SILENCE_MS * 1000000L}};
     timerfd_settime(s->silfd, 0, &t, NULL);
 }
 

@@ -71,18 +71,18 @@
 #define MODBUS_SERVER_MAX_CLIENTS_LIMIT 1024
 #define MODBUS_SERVER_DEFAULT_IDLE_MS 60000
 #define MODBUS_SERVER_DEFAULT_REQUEST_MS 2000 /* a whole request, from its first byte */
-#define MODBUS_SERVER_EVICT_GRACE_MS 250    /* a client this new is never evicted */
-#define MODBUS_SERVER_LOG_PER_S 5           /* client messages per second at most */
+#define MODBUS_SERVER_EVICT_GRACE_MS 250      /* a client this new is never evicted */
+#define MODBUS_SERVER_LOG_PER_S 5             /* client messages per second at most */
 #define MODBUS_SERVER_EVENTS_PER_CALL 8
 #define MODBUS_SERVER_RTU_SILENCE_MS 20
-#define MODBUS_SERVER_ALLOW_MAX 32          /* entries in the allow-list */
-#define MODBUS_SERVER_HOUSEKEEPING_MS 100   /* idle-timeout resolution */
+#define MODBUS_SERVER_ALLOW_MAX 32        /* entries in the allow-list */
+#define MODBUS_SERVER_HOUSEKEEPING_MS 100 /* idle-timeout resolution */
 /* Largest forward step of a waypoint sequence number counted as lost
  * waypoints; a bigger one is a jump (see modbus_server_publish). */
 #define MODBUS_SERVER_SEQ_WINDOW 65536u
 
 typedef struct {
-    int enabled;                /* [modbus] enabled: the daemon starts a server only if 1 */
+    int enabled; /* [modbus] enabled: the daemon starts a server only if 1 */
     /* TCP: tcp_address "" disables TCP.  tcp_port 0 picks a free
      * port (read it back with modbus_server_tcp_port; used by the tests). */
     char tcp_address[64];
@@ -93,11 +93,11 @@ typedef struct {
     /* RTU: rtu_device "" disables RTU. */
     char rtu_device[256];
     int rtu_baud;
-    char rtu_parity;            /* 'N', 'E', 'O' */
+    char rtu_parity; /* 'N', 'E', 'O' */
     int rtu_data_bits;
     int rtu_stop_bits;
-    int unit_id;                /* RTU slave address 1..247 (TCP answers any) */
-    int writes_enabled;         /* 0: FC 06/16 answered with exception 01 */
+    int unit_id;        /* RTU slave address 1..247 (TCP answers any) */
+    int writes_enabled; /* 0: FC 06/16 answered with exception 01 */
     /* Comma- or space-separated CIDR list ("127.0.0.1/32, ::1, 10.0.0.0/8");
      * "" allows every client. */
     char allow[512];
@@ -105,11 +105,11 @@ typedef struct {
      * allowed client.  Others get exception 01 for FC 06/16, as with writes
      * off.  RTU has no address: writes_enabled alone decides there. */
     char write_allow[512];
-    unsigned max_clients;       /* TCP clients at once; a newcomer evicts one (policy above) */
-    unsigned idle_timeout_ms;   /* close a TCP client silent this long (0 = never) */
+    unsigned max_clients;        /* TCP clients at once; a newcomer evicts one (policy above) */
+    unsigned idle_timeout_ms;    /* close a TCP client silent this long (0 = never) */
     unsigned request_timeout_ms; /* close a TCP client whose request is not whole this long
                                   * after its first byte */
-    unsigned n_objects;         /* 1..MBMAP_MAX_OBJECTS */
+    unsigned n_objects;          /* 1..MBMAP_MAX_OBJECTS */
 } modbus_server_config_t;
 
 /*
@@ -130,19 +130,20 @@ typedef struct {
 } modbus_server_hooks_t;
 
 typedef struct {
-    uint64_t requests;          /* answered (normal or exception) */
+    uint64_t requests; /* answered (normal or exception) */
     uint64_t exceptions;
-    uint64_t refused;           /* connections refused: allow-list or max_clients */
-    uint64_t dropped;           /* connections closed for bad framing, idleness, or answers
+    uint64_t refused; /* connections refused: allow-list or max_clients */
+    uint64_t dropped; /* connections closed for bad framing, idleness, or answers
                                  * not read; and slow ones (also counted in slow) */
-    uint64_t slow;              /* closed: a request not whole within request_timeout_ms */
-    uint64_t evicted;           /* closed at max_clients to admit a newcomer */
+    uint64_t slow;    /* closed: a request not whole within request_timeout_ms */
+    uint64_t evicted; /* closed at max_clients to admit a newcomer */
     uint64_t rtu_crc_errors;
-    int rtu_down;               /* 1 once the serial line failed (not reopened) */
-    unsigned clients;           /* TCP clients connected now */
-    uint64_t process_calls;     /* modbus_server_process calls that handled events */
-    uint64_t process_max_ns;    /* longest modbus_server_process call: the most a tick can wait on Modbus */
-    uint64_t process_total_ns;  /* time spent in modbus_server_process, for the mean */
+    int rtu_down;           /* 1 once the serial line failed (not reopened) */
+    unsigned clients;       /* TCP clients connected now */
+    uint64_t process_calls; /* modbus_server_process calls that handled events */
+    uint64_t
+        process_max_ns; /* longest modbus_server_process call: the most a tick can wait on Modbus */
+    uint64_t process_total_ns; /* time spent in modbus_server_process, for the mean */
 } modbus_server_stats_t;
 
 typedef struct modbus_server modbus_server_t;
@@ -163,16 +164,16 @@ void modbus_server_config_default(modbus_server_config_t *cfg);
  * Returns 0, -ENOENT for an unknown key, -EINVAL for a bad value (with the
  * reason in err if not NULL).
  */
-int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const char *value, char *err,
-                     size_t errlen);
+int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const char *value,
+                             char *err, size_t errlen);
 
 /*
  * Open the listening socket and/or the serial port and allocate everything
  * the server will use (no allocation afterwards).  hooks may be NULL (writes
  * refused).  Returns NULL on failure with a message in err (if not NULL).
  */
-modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg, const modbus_server_hooks_t *hooks, char *err,
-                   size_t errlen);
+modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg,
+                                   const modbus_server_hooks_t *hooks, char *err, size_t errlen);
 
 /* Close everything; NULL is a no-op. */
 void modbus_server_free(modbus_server_t *s);
@@ -210,13 +211,13 @@ void modbus_server_stats(const modbus_server_t *s, modbus_server_stats_t *st);
 
 /* One TCP client's counters. */
 typedef struct {
-    char peer[64];              /* "address:port" */
-    int64_t connected_ns;       /* CLOCK_MONOTONIC at accept */
-    uint64_t requests;          /* answered (normal or exception) */
+    char peer[64];        /* "address:port" */
+    int64_t connected_ns; /* CLOCK_MONOTONIC at accept */
+    uint64_t requests;    /* answered (normal or exception) */
     uint64_t exceptions;
     uint64_t bytes_in;
-    int64_t pending_since_ns;   /* first byte of a partial request, 0 if none */
-    int64_t last_request_ns;    /* last complete request (connected_ns if none) */
+    int64_t pending_since_ns; /* first byte of a partial request, 0 if none */
+    int64_t last_request_ns;  /* last complete request (connected_ns if none) */
 } modbus_server_client_t;
 
 /* Client slot i (0 .. max_clients-1): 0 and *out, or -ENOENT if free. */

@@ -15,7 +15,7 @@
 typedef struct {
     core_t *core;
     modbus_server_t *srv;
-    mbmap_object_t *objs;       /* nobj, rewritten every tick (taken at open) */
+    mbmap_object_t *objs; /* nobj, rewritten every tick (taken at open) */
     unsigned nobj;
     int rtu_down_logged;
 } mbt_t;
@@ -24,7 +24,7 @@ static void cfg_default(void *cfg)
 {
     modbus_server_config_t *m = cfg;
     modbus_server_config_default(m);
-    m->enabled = 1;             /* a [modbus] section or an input = modbus turns it on */
+    m->enabled = 1; /* a [modbus] section or an input = modbus turns it on */
 }
 
 static int cfg_key(void *cfg, const cfg_kv_t *kv, char *why, size_t wl)
@@ -54,7 +54,8 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
         if (!m->enabled || !m->writes_enabled) {
             *line = cfg->obj[i].line;
             snprintf(why, wl, "object '%s' has input = modbus but [modbus] %s", cfg->obj[i].name,
-                     m->enabled ? "writes = no (waypoints could never be written)" : "enabled = no");
+                     m->enabled ? "writes = no (waypoints could never be written)"
+                                : "enabled = no");
             return -CFG_EVALUE;
         }
     }
@@ -103,18 +104,11 @@ static int hook_command(void *ctx, unsigned k, unsigned cmd)
         if (st.buffered == 0)
             return -ENGINE_ESTATE;
         return engine_finish(o->engine);
-    case MBMAP_CMD_STOP:
-        return engine_stop(o->engine);
-    case MBMAP_CMD_CLEAR:
-        obj_clear(o);
-        return 0;
-    case MBMAP_CMD_RESET_COUNTERS:
-        obj_reset_counters(o);
-        return 0;
-    case MBMAP_CMD_FINISH:
-        return engine_finish(o->engine);
-    default:
-        return -ENGINE_ESTATE;
+    case MBMAP_CMD_STOP: return engine_stop(o->engine);
+    case MBMAP_CMD_CLEAR: obj_clear(o); return 0;
+    case MBMAP_CMD_RESET_COUNTERS: obj_reset_counters(o); return 0;
+    case MBMAP_CMD_FINISH: return engine_finish(o->engine);
+    default: return -ENGINE_ESTATE;
     }
 }
 
@@ -128,7 +122,9 @@ static int hook_override(void *ctx, unsigned k, unsigned percent)
 
 static void on_ready(loop_t *l, int fd, uint32_t events, void *ctx)
 {
-    (void)l; (void)fd; (void)events;
+    (void)l;
+    (void)fd;
+    (void)events;
     mbt_t *t = ctx;
     int rc = modbus_server_process(t->srv);
     if (rc < 0)
@@ -157,7 +153,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     t->objs = calloc(c->nobj, sizeof *t->objs);
     modbus_server_config_t mc = *m;
     mc.n_objects = c->nobj;
-    modbus_server_hooks_t hooks = { hook_waypoint, hook_command, t, hook_override };
+    modbus_server_hooks_t hooks = {hook_waypoint, hook_command, t, hook_override};
     if (t->objs)
         t->srv = modbus_server_new(&mc, &hooks, why, wl);
     else
@@ -191,8 +187,8 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
 /* The register map publishes the CAN transport's bus state as is. */
 _Static_assert(MBMAP_CAN_NONE == CAN_BUS_UNUSED && MBMAP_CAN_ACTIVE == CAN_BUS_ERROR_ACTIVE &&
                    MBMAP_CAN_WARNING == CAN_BUS_ERROR_WARNING &&
-                   MBMAP_CAN_PASSIVE == CAN_BUS_ERROR_PASSIVE &&
-                   MBMAP_CAN_BUS_OFF == CAN_BUS_OFF && MBMAP_CAN_DOWN == CAN_BUS_DOWN,
+                   MBMAP_CAN_PASSIVE == CAN_BUS_ERROR_PASSIVE && MBMAP_CAN_BUS_OFF == CAN_BUS_OFF &&
+                   MBMAP_CAN_DOWN == CAN_BUS_DOWN,
                "mbmap.h MBMAP_CAN_* and can_transport.h can_bus_state_t disagree");
 
 /* In the tick: no allocation, no blocking call, no logging. */
@@ -221,7 +217,7 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         mbmap_object_t *o = &t->objs[k];
         o->sp = c->obj[k].sp;
         o->st = c->obj[k].status;
-        o->lost = 0;            /* sequence gaps are counted by the inputs that number waypoints */
+        o->lost = 0; /* sequence gaps are counted by the inputs that number waypoints */
         o->late_p99_us = d.late_p99_us;
         o->late_max_us = d.late_max_us;
         o->can_state = d.can_state;
@@ -229,7 +225,7 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         o->uptime_s = up_s;
         o->out_lost = c->obj[k].out_lost;
         o->out_fault = (uint16_t)(c->obj[k].out_fault != 0);
-        o->seq_jumps = 0;       /* the server adds its own */
+        o->seq_jumps = 0; /* the server adds its own */
     }
     modbus_server_publish(t->srv, &d, t->objs);
 }

@@ -29,17 +29,17 @@
 
 typedef struct {
     const track_t *trk;
-    size_t next;          /* index of the next waypoint to offer */
-    int64_t start_ns;     /* engine time at which waypoint 0 is due */
-    int finished;         /* engine_finish() has been called */
-    uint64_t retries;     /* offers refused with ENGINE_EFULL */
-    uint64_t refused;     /* waypoints the engine rejected (bad data) */
-    uint64_t duplicates;  /* waypoints the engine dropped as exact duplicates */
-    int last_rc;          /* engine_push result of the last waypoint offered */
-    int *results;         /* optional, caller-owned, trk->n entries (NULL = none):
+    size_t next;         /* index of the next waypoint to offer */
+    int64_t start_ns;    /* engine time at which waypoint 0 is due */
+    int finished;        /* engine_finish() has been called */
+    uint64_t retries;    /* offers refused with ENGINE_EFULL */
+    uint64_t refused;    /* waypoints the engine rejected (bad data) */
+    uint64_t duplicates; /* waypoints the engine dropped as exact duplicates */
+    int last_rc;         /* engine_push result of the last waypoint offered */
+    int *results;        /* optional, caller-owned, trk->n entries (NULL = none):
                              engine_push result of each waypoint once taken,
                              then -reason if the engine refused it later */
-    int drain;            /* replay_feed: read the engine's rejections (private) */
+    int drain;           /* replay_feed: read the engine's rejections (private) */
 } replay_t;
 
 /* Start replaying trk (not copied: it must outlive r) with waypoint 0 due at

@@ -41,8 +41,7 @@ static int obj_key(void *ocfg, const cfg_kv_t *kv, char *why, size_t wl)
 static int obj_same(const void *a, const void *b)
 {
     const replay_transport_obj_cfg_t *x = a, *y = b;
-    return strcmp(x->path, y->path) == 0 && x->format == y->format &&
-           x->skip_bad == y->skip_bad &&
+    return strcmp(x->path, y->path) == 0 && x->format == y->format && x->skip_bad == y->skip_bad &&
            memcmp(&x->start_s, &y->start_s, sizeof x->start_s) == 0;
 }
 
@@ -87,8 +86,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
                     r->trk.skipped);
         if (r->trk.n == 0) {
             *line = r->line;
-            snprintf(why, wl, "object '%s' replay.track: %s has no waypoints", o->name,
-                     r->path);
+            snprintf(why, wl, "object '%s' replay.track: %s has no waypoints", o->name, r->path);
             return -CFG_EVALUE;
         }
     }
@@ -96,7 +94,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
 }
 
 typedef struct {
-    replay_t *r;   /* per object index (NULL if not replayed) */
+    replay_t *r; /* per object index (NULL if not replayed) */
     unsigned n;
 } replay_transport_t;
 

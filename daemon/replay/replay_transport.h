@@ -24,9 +24,9 @@ typedef struct {
     char path[PATH_MAX];
     track_format_t format;
     double start_s;
-    int skip_bad;       /* TRACK_SKIP_BAD */
-    int line;           /* line of replay.track, for messages */
-    track_t trk;        /* loaded by check() */
+    int skip_bad; /* TRACK_SKIP_BAD */
+    int line;     /* line of replay.track, for messages */
+    track_t trk;  /* loaded by check() */
     int loaded;
 } replay_transport_obj_cfg_t;
 

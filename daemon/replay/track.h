@@ -77,19 +77,19 @@
 #include "engine.h"
 
 typedef enum {
-    TRACK_FMT_AUTO = 0,  /* from the extension, else the content, else the CSV header */
-    TRACK_FMT_XYZ,       /* CSV t,x,y,z in seconds and metres */
-    TRACK_FMT_LATLON,    /* CSV t,lat,lon[,alt] in seconds, degrees, metres */
-    TRACK_FMT_GPX,       /* GPX 1.0/1.1 trkpt with <time> (and <ele>) */
-    TRACK_FMT_PATH,      /* a path of lines and arcs (lib/spline/path.h text form; AUTO: extension .path) */
-    TRACK_FMT_N2K,       /* candump log of NMEA 2000 PGN 129029 / 129025 */
-    TRACK_FMT_NMEA0183,  /* NMEA 0183 GGA / RMC sentences */
-    TRACK_FMT_IGC,       /* IGC flight log, B records */
+    TRACK_FMT_AUTO = 0, /* from the extension, else the content, else the CSV header */
+    TRACK_FMT_XYZ,      /* CSV t,x,y,z in seconds and metres */
+    TRACK_FMT_LATLON,   /* CSV t,lat,lon[,alt] in seconds, degrees, metres */
+    TRACK_FMT_GPX,      /* GPX 1.0/1.1 trkpt with <time> (and <ele>) */
+    TRACK_FMT_PATH, /* a path of lines and arcs (lib/spline/path.h text form; AUTO: extension .path) */
+    TRACK_FMT_N2K,      /* candump log of NMEA 2000 PGN 129029 / 129025 */
+    TRACK_FMT_NMEA0183, /* NMEA 0183 GGA / RMC sentences */
+    TRACK_FMT_IGC,      /* IGC flight log, B records */
     TRACK_FMT_COUNT
 } track_format_t;
 
 /* track_load_opts flags */
-#define TRACK_SKIP_BAD 0x1u  /* skip and count bad lines instead of failing */
+#define TRACK_SKIP_BAD 0x1u /* skip and count bad lines instead of failing */
 
 /* Largest file accepted (the whole file is read into memory). */
 #define TRACK_FILE_MAX_BYTES (1024L * 1024L * 1024L)
@@ -101,20 +101,20 @@ typedef enum {
 #define TRACK_LINE_MAX 4096
 
 typedef struct {
-    size_t n;                 /* waypoints */
-    engine_waypoint_t *wp;    /* n waypoints, seq = 1-based row number */
-    uint32_t *line;           /* n source line numbers (CSV line, or line of <trkpt>) */
-    track_format_t format;    /* the format actually read (never AUTO) */
-    int geographic;           /* 1 if converted from lat/lon */
+    size_t n;                          /* waypoints */
+    engine_waypoint_t *wp;             /* n waypoints, seq = 1-based row number */
+    uint32_t *line;                    /* n source line numbers (CSV line, or line of <trkpt>) */
+    track_format_t format;             /* the format actually read (never AUTO) */
+    int geographic;                    /* 1 if converted from lat/lon */
     double lat0_deg, lon0_deg, alt0_m; /* ENU origin (first point) when geographic */
-    size_t skipped;           /* bad lines skipped (TRACK_SKIP_BAD) */
-    size_t ignored;           /* well-formed records that give no waypoint: N2K
+    size_t skipped;                    /* bad lines skipped (TRACK_SKIP_BAD) */
+    size_t ignored;                    /* well-formed records that give no waypoint: N2K
                                  position n/a, no fix, a fast packet missing a
                                  frame, another source; NMEA status V / quality 0;
                                  IGC validity V is kept (2-D fix: no altitude) */
-    size_t nreports;          /* messages in reports[] (at most TRACK_REPORT_MAX) */
+    size_t nreports;                   /* messages in reports[] (at most TRACK_REPORT_MAX) */
     char (*reports)[TRACK_REPORT_LEN]; /* "file:line: what" of the first skipped lines */
-    size_t segments;          /* GPX <trkseg> elements seen (0 for CSV) */
+    size_t segments;                   /* GPX <trkseg> elements seen (0 for CSV) */
 } track_t;
 
 /*
@@ -123,25 +123,23 @@ typedef struct {
  * release with track_free; on failure trk is zeroed.
  * A track with no waypoint is an error ("no waypoints").
  */
-int track_load(const char *path, track_format_t fmt, track_t *trk, char *err,
-               size_t errlen);
+int track_load(const char *path, track_format_t fmt, track_t *trk, char *err, size_t errlen);
 
 /*
  * As track_load, with flags (TRACK_SKIP_BAD).  When lines were skipped,
  * trk->skipped counts them and err holds the message of the first one
  * even though the call succeeded.
  */
-int track_load_opts(const char *path, track_format_t fmt, unsigned flags,
-                    track_t *trk, char *err, size_t errlen);
+int track_load_opts(const char *path, track_format_t fmt, unsigned flags, track_t *trk, char *err,
+                    size_t errlen);
 
 /*
  * Parse a track held in memory (buf need not be NUL-terminated; NUL bytes
  * are an error).  name is used in messages and, with TRACK_FMT_AUTO, for
  * the .gpx extension.  Same results as track_load_opts.
  */
-int track_parse(const char *name, const char *buf, size_t len,
-                track_format_t fmt, unsigned flags, track_t *trk, char *err,
-                size_t errlen);
+int track_parse(const char *name, const char *buf, size_t len, track_format_t fmt, unsigned flags,
+                track_t *trk, char *err, size_t errlen);
 
 /* Release; safe on a zeroed or already freed track. */
 void track_free(track_t *trk);

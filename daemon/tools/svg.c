@@ -19,14 +19,14 @@ typedef struct {
 
 struct svg_plot {
     int geographic;
-    size_t max;           /* capacity of s */
+    size_t max; /* capacity of s */
     sample_t *s;
-    size_t n;             /* kept */
-    size_t stride;        /* keep one setpoint in stride */
-    size_t seen;          /* setpoints offered (drawn ones) */
-    sample_t last;        /* last setpoint, always drawn */
+    size_t n;      /* kept */
+    size_t stride; /* keep one setpoint in stride */
+    size_t seen;   /* setpoints offered (drawn ones) */
+    sample_t last; /* last setpoint, always drawn */
     int have_last;
-    int last_kept;        /* last was also appended to s */
+    int last_kept; /* last was also appended to s */
     wpt_t *w;
     size_t nw, capw;
     sample_t ev[SVG_UNDERRUNS_DRAWN]; /* where underruns began (never decimated) */
@@ -145,8 +145,8 @@ size_t svg_plot_stride(const svg_plot_t *p)
 /* ---- drawing helpers ------------------------------------------------------ */
 
 typedef struct {
-    double lo, hi;      /* data range */
-    double p0, p1;      /* pixel range (p0 for lo) */
+    double lo, hi; /* data range */
+    double p0, p1; /* pixel range (p0 for lo) */
 } axis_t;
 
 static double ax_map(const axis_t *a, double v)
@@ -212,30 +212,33 @@ static void draw_axes(FILE *f, const axis_t *ax, const axis_t *ay, const char *x
 {
     double x0 = ax->p0, x1 = ax->p1, y0 = ay->p0, y1 = ay->p1; /* y0 bottom, y1 top */
     fprintf(f, "<g id=\"%s-axes\" font-family=\"sans-serif\" font-size=\"12\">\n", id);
-    fprintf(f, "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"white\" "
-            "stroke=\"black\"/>\n", x0, y1, x1 - x0, y0 - y1);
+    fprintf(f,
+            "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"white\" "
+            "stroke=\"black\"/>\n",
+            x0, y1, x1 - x0, y0 - y1);
     double step = nice_step(ax->hi - ax->lo);
     char buf[64];
     for (double v = ceil(ax->lo / step) * step; v <= ax->hi + step * 1e-9; v += step) {
         double px = ax_map(ax, v);
-        fprintf(f, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>",
-                px, y0, px, y1);
+        fprintf(f, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>", px,
+                y0, px, y1);
         fmt_tick(buf, sizeof buf, v, step);
-        fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">%s</text>\n", px,
-                y0 + 16, buf);
+        fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">%s</text>\n", px, y0 + 16,
+                buf);
     }
     step = nice_step(ay->hi - ay->lo);
     for (double v = ceil(ay->lo / step) * step; v <= ay->hi + step * 1e-9; v += step) {
         double py = ax_map(ay, v);
-        fprintf(f, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>",
-                x0, py, x1, py);
+        fprintf(f, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>", x0,
+                py, x1, py);
         fmt_tick(buf, sizeof buf, v, step);
-        fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">%s</text>\n", x0 - 6,
-                py + 4, buf);
+        fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">%s</text>\n", x0 - 6, py + 4,
+                buf);
     }
     fprintf(f, "<text class=\"xlabel\" x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">%s</text>\n",
             (x0 + x1) / 2, y0 + 36, xlabel);
-    fprintf(f, "<text class=\"ylabel\" x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\" "
+    fprintf(f,
+            "<text class=\"ylabel\" x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\" "
             "transform=\"rotate(-90 %.1f %.1f)\">%s</text>\n",
             x0 - 58, (y0 + y1) / 2, x0 - 58, (y0 + y1) / 2, ylabel);
     fputs("</g>\n", f);
@@ -267,12 +270,14 @@ static int speed_break(const sample_t *a, const sample_t *b)
     return dt_s < 0 || dt_s > SPEED_BREAK_FACTOR * dnow_s + 1e-9;
 }
 
-static void draw_path(FILE *f, const svg_plot_t *p, const axis_t *ax, const axis_t *ay,
-                      int speed, const char *id, const char *color)
+static void draw_path(FILE *f, const svg_plot_t *p, const axis_t *ax, const axis_t *ay, int speed,
+                      const char *id, const char *color)
 {
     size_t n = nsamples(p);
-    fprintf(f, "<path id=\"%s\" fill=\"none\" stroke=\"%s\" stroke-width=\"1.5\" "
-            "stroke-linejoin=\"round\" d=\"", id, color);
+    fprintf(f,
+            "<path id=\"%s\" fill=\"none\" stroke=\"%s\" stroke-width=\"1.5\" "
+            "stroke-linejoin=\"round\" d=\"",
+            id, color);
     for (size_t i = 0; i < n; i++) {
         const sample_t *s = sample(p, i);
         int move = i == 0 || (speed && speed_break(sample(p, i - 1), s));
@@ -285,8 +290,7 @@ static void draw_path(FILE *f, const svg_plot_t *p, const axis_t *ax, const axis
 
 /* A triangle where each underrun began (plan: at the held position;
  * speed panel: on the time axis). */
-static void draw_events(FILE *f, const svg_plot_t *p, const axis_t *ax, const axis_t *ay,
-                        int speed)
+static void draw_events(FILE *f, const svg_plot_t *p, const axis_t *ax, const axis_t *ay, int speed)
 {
     fprintf(f, "<g id=\"%s\" fill=\"#9467bd\">", speed ? "underruns-t" : "underruns");
     for (size_t i = 0; i < p->nev; i++) {
@@ -300,37 +304,44 @@ static void draw_events(FILE *f, const svg_plot_t *p, const axis_t *ax, const ax
 /* The page, its title and the legend. */
 static void draw_header(FILE *f, const svg_plot_t *p, const char *title)
 {
-    fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+    fprintf(f,
+            "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
             "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" "
-            "viewBox=\"0 0 %.0f %.0f\">\n", PAGE_W, PAGE_H, PAGE_W, PAGE_H);
+            "viewBox=\"0 0 %.0f %.0f\">\n",
+            PAGE_W, PAGE_H, PAGE_W, PAGE_H);
     fputs("<title>", f);
     xml_escape(f, title ? title : "trajreplay");
     fputs("</title>\n<rect width=\"100%\" height=\"100%\" fill=\"#f8f8f8\"/>\n", f);
-    fprintf(f, "<text id=\"title\" x=\"%.1f\" y=\"22\" font-family=\"sans-serif\" "
-            "font-size=\"15\">", MARGIN_L);
+    fprintf(f,
+            "<text id=\"title\" x=\"%.1f\" y=\"22\" font-family=\"sans-serif\" "
+            "font-size=\"15\">",
+            MARGIN_L);
     xml_escape(f, title ? title : "trajreplay");
     fputs("</text>\n", f);
 
     /* Legend. */
-    fprintf(f, "<g id=\"legend\" font-family=\"sans-serif\" font-size=\"12\">"
-            "<circle cx=\"%.1f\" cy=\"38\" r=\"3\" fill=\"#1f5fbf\"/>"
-            "<text x=\"%.1f\" y=\"42\">waypoints (%zu)</text>"
-            "<line x1=\"%.1f\" y1=\"38\" x2=\"%.1f\" y2=\"38\" stroke=\"#d62728\" stroke-width=\"2\"/>"
-            "<text x=\"%.1f\" y=\"42\">setpoints</text>"
-            "<path d=\"M%.1f 35 l6 6 m0 -6 l-6 6\" stroke=\"#ff7f0e\" stroke-width=\"2\"/>"
-            "<text x=\"%.1f\" y=\"42\">rejected</text>"
-            "<path d=\"M%.1f 34 l4 8 h-8 z\" fill=\"#9467bd\"/>"
-            "<text x=\"%.1f\" y=\"42\">underrun (%zu)</text></g>\n",
-            MARGIN_L + 4, MARGIN_L + 12, p->nw, MARGIN_L + 160, MARGIN_L + 180,
-            MARGIN_L + 186, MARGIN_L + 270, MARGIN_L + 282, MARGIN_L + 360, MARGIN_L + 370,
-            p->ev_total);
+    fprintf(
+        f,
+        "<g id=\"legend\" font-family=\"sans-serif\" font-size=\"12\">"
+        "<circle cx=\"%.1f\" cy=\"38\" r=\"3\" fill=\"#1f5fbf\"/>"
+        "<text x=\"%.1f\" y=\"42\">waypoints (%zu)</text>"
+        "<line x1=\"%.1f\" y1=\"38\" x2=\"%.1f\" y2=\"38\" stroke=\"#d62728\" stroke-width=\"2\"/>"
+        "<text x=\"%.1f\" y=\"42\">setpoints</text>"
+        "<path d=\"M%.1f 35 l6 6 m0 -6 l-6 6\" stroke=\"#ff7f0e\" stroke-width=\"2\"/>"
+        "<text x=\"%.1f\" y=\"42\">rejected</text>"
+        "<path d=\"M%.1f 34 l4 8 h-8 z\" fill=\"#9467bd\"/>"
+        "<text x=\"%.1f\" y=\"42\">underrun (%zu)</text></g>\n",
+        MARGIN_L + 4, MARGIN_L + 12, p->nw, MARGIN_L + 160, MARGIN_L + 180, MARGIN_L + 186,
+        MARGIN_L + 270, MARGIN_L + 282, MARGIN_L + 360, MARGIN_L + 370, p->ev_total);
 }
 
 /* Accepted waypoints as dots (at most about SVG_WAYPOINTS_DRAWN of them),
  * every rejected one as a cross. */
 static void draw_waypoints(FILE *f, const svg_plot_t *p, const axis_t *ax, const axis_t *ay)
 {
-    size_t every = p->nw > SVG_WAYPOINTS_DRAWN ? (p->nw + SVG_WAYPOINTS_DRAWN - 1) / SVG_WAYPOINTS_DRAWN : 1;
+    size_t every = p->nw > SVG_WAYPOINTS_DRAWN
+                       ? (p->nw + SVG_WAYPOINTS_DRAWN - 1) / SVG_WAYPOINTS_DRAWN
+                       : 1;
     fputs("<g id=\"waypoints\" fill=\"#1f5fbf\">", f);
     for (size_t i = 0; i < p->nw; i += every)
         if (p->w[i].accepted)
@@ -350,14 +361,19 @@ int svg_plot_write(const svg_plot_t *p, FILE *f, const char *title)
     double xlo = INFINITY, xhi = -INFINITY, ylo = INFINITY, yhi = -INFINITY;
     double tlo = INFINITY, thi = -INFINITY, vhi = 0;
     for (size_t i = 0; i < p->nw; i++) {
-        xlo = fmin(xlo, p->w[i].x_m); xhi = fmax(xhi, p->w[i].x_m);
-        ylo = fmin(ylo, p->w[i].y_m); yhi = fmax(yhi, p->w[i].y_m);
+        xlo = fmin(xlo, p->w[i].x_m);
+        xhi = fmax(xhi, p->w[i].x_m);
+        ylo = fmin(ylo, p->w[i].y_m);
+        yhi = fmax(yhi, p->w[i].y_m);
     }
     for (size_t i = 0; i < n; i++) {
         const sample_t *s = sample(p, i);
-        xlo = fmin(xlo, s->x_m); xhi = fmax(xhi, s->x_m);
-        ylo = fmin(ylo, s->y_m); yhi = fmax(yhi, s->y_m);
-        tlo = fmin(tlo, s->t_s); thi = fmax(thi, s->t_s);
+        xlo = fmin(xlo, s->x_m);
+        xhi = fmax(xhi, s->x_m);
+        ylo = fmin(ylo, s->y_m);
+        yhi = fmax(yhi, s->y_m);
+        tlo = fmin(tlo, s->t_s);
+        thi = fmax(thi, s->t_s);
         vhi = fmax(vhi, s->speed_m_s);
     }
     range_fix(&xlo, &xhi);
@@ -383,8 +399,10 @@ int svg_plot_write(const svg_plot_t *p, FILE *f, const char *title)
     snprintf(lx, sizeof lx, "%s (m)", p->geographic ? "east" : "x");
     snprintf(ly, sizeof ly, "%s (m)", p->geographic ? "north" : "y");
     draw_axes(f, &px, &py, lx, ly, "plan");
-    fprintf(f, "<clipPath id=\"plan-clip\"><rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" "
-            "height=\"%.1f\"/></clipPath>\n", px.p0, py.p1, bw, bh);
+    fprintf(f,
+            "<clipPath id=\"plan-clip\"><rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" "
+            "height=\"%.1f\"/></clipPath>\n",
+            px.p0, py.p1, bw, bh);
     fputs("<g clip-path=\"url(#plan-clip)\">\n", f);
     draw_waypoints(f, p, &px, &py);
     draw_path(f, p, &px, &py, 0, "curve", "#d62728");

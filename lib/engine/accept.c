@@ -87,8 +87,7 @@ static double window_median_speed(const accept_t *a)
 
     for (unsigned i = 0; i < a->npend; i++) {
         const engine_waypoint_t *q = &a->pend[i];
-        if (p && q->t_s - p->t_s > ACCEPT_SAME_TIME_S &&
-            q->t_s - p->t_s <= a->cfg.max_gap_s)
+        if (p && q->t_s - p->t_s > ACCEPT_SAME_TIME_S && q->t_s - p->t_s <= a->cfg.max_gap_s)
             v[n++] = chord_speed(p, q);
         p = q;
     }
@@ -198,8 +197,8 @@ static int better(unsigned len, double cost, unsigned l2, double c2)
  * ending with the step nd[i] -> nd[j] (len 0: none).
  */
 static unsigned longest(const accept_t *a, const engine_waypoint_t *const *nd, unsigned m,
-                        const engine_waypoint_t *pre, unsigned jmin, unsigned jmax,
-                        double vlim, int gaps_ok, double *cost)
+                        const engine_waypoint_t *pre, unsigned jmin, unsigned jmax, double vlim,
+                        int gaps_ok, double *cost)
 {
     unsigned len[ACCEPT_WINDOW_MAX + 1][ACCEPT_WINDOW_MAX + 1];
     double cst[ACCEPT_WINDOW_MAX + 1][ACCEPT_WINDOW_MAX + 1];
@@ -250,8 +249,8 @@ static int chain_all(const accept_t *a, const engine_waypoint_t *const *nd, unsi
 
 /* q follows p across a plausible gap: beyond max_gap_s, but not far in time
  * (ACCEPT_FAR_GAP_FACTOR) and covered within the speed limit */
-static int plausible_gap(const accept_t *a, const engine_waypoint_t *p,
-                         const engine_waypoint_t *q, double vlim)
+static int plausible_gap(const accept_t *a, const engine_waypoint_t *p, const engine_waypoint_t *q,
+                         double vlim)
 {
     double dt = q->t_s - p->t_s;
     return dt > a->cfg.max_gap_s && dt <= ACCEPT_FAR_GAP_FACTOR * a->cfg.max_gap_s &&
@@ -303,8 +302,7 @@ static int stale_verdict(const accept_t *a, int full, double vlim)
         if (dist(&a->a1, f) <= ACCEPT_STALE_POS_M)
             continue; /* the run goes on */
         if (f->t_s - a->a1.t_s > ACCEPT_SAME_TIME_S &&
-            accept_check(a, &a->a0, &a->a1, f, vlim) == 0 &&
-            chord_speed(&a->a1, f) >= 0.5 * v_in)
+            accept_check(a, &a->a0, &a->a1, f, vlim) == 0 && chord_speed(&a->a1, f) >= 0.5 * v_in)
             return 1;
         return 0;
     }

@@ -91,25 +91,25 @@
 #define ACCEPT_STALE_MIN_SPEED_M_S 0.5
 
 typedef struct {
-    double max_speed_m_s;   /* absolute speed limit, 0 = none */
-    double max_accel_m_s2;  /* acceleration limit, 0 = none */
-    double max_gap_s;       /* a longer interval is not a continuation */
-    int learned;            /* learned speed limit and free turns (profile auto) */
-    int stale;              /* drop stale repeats */
-    unsigned window;        /* waypoints held for judgement, confirm..ACCEPT_WINDOW_MAX */
-    unsigned confirm;       /* mutually consistent waypoints that start a new trajectory */
+    double max_speed_m_s;  /* absolute speed limit, 0 = none */
+    double max_accel_m_s2; /* acceleration limit, 0 = none */
+    double max_gap_s;      /* a longer interval is not a continuation */
+    int learned;           /* learned speed limit and free turns (profile auto) */
+    int stale;             /* drop stale repeats */
+    unsigned window;       /* waypoints held for judgement, confirm..ACCEPT_WINDOW_MAX */
+    unsigned confirm;      /* mutually consistent waypoints that start a new trajectory */
 } accept_config_t;
 
 typedef enum {
-    ACCEPT_TAKE = 0,   /* append to the open trajectory */
-    ACCEPT_START = 1,  /* close the open trajectory (if any), start a new one with it */
-    ACCEPT_DROP = 2,   /* refused: reason says why */
+    ACCEPT_TAKE = 0,  /* append to the open trajectory */
+    ACCEPT_START = 1, /* close the open trajectory (if any), start a new one with it */
+    ACCEPT_DROP = 2,  /* refused: reason says why */
 } accept_kind_t;
 
 typedef struct {
     accept_kind_t kind;
-    int reason;              /* ACCEPT_DROP: an engine_error */
-    int gap;                 /* ACCEPT_START: the interval from the anchor exceeds max_gap_s */
+    int reason; /* ACCEPT_DROP: an engine_error */
+    int gap;    /* ACCEPT_START: the interval from the anchor exceeds max_gap_s */
     engine_waypoint_t wp;
 } accept_verdict_t;
 
@@ -117,11 +117,11 @@ typedef struct {
     accept_config_t cfg;
     engine_waypoint_t pend[ACCEPT_WINDOW_MAX];
     unsigned npend;
-    int open;                 /* a trajectory is open: a1 is its last waypoint */
-    int have_a0;              /* a0 is the waypoint before a1 in it */
+    int open;    /* a trajectory is open: a1 is its last waypoint */
+    int have_a0; /* a0 is the waypoint before a1 in it */
     engine_waypoint_t a0, a1;
-    int started;              /* some trajectory was started since accept_init */
-    double vhist[ACCEPT_HIST];/* chord speeds of the last kept intervals */
+    int started;               /* some trajectory was started since accept_init */
+    double vhist[ACCEPT_HIST]; /* chord speeds of the last kept intervals */
     unsigned nhist, hnext;
 } accept_t;
 
@@ -138,7 +138,10 @@ void accept_reset(accept_t *a);
 void accept_close(accept_t *a);
 
 /* Waypoints held. */
-static inline unsigned accept_pending(const accept_t *a) { return a->npend; }
+static inline unsigned accept_pending(const accept_t *a)
+{
+    return a->npend;
+}
 
 /* The oldest waypoint held, or NULL. */
 static inline const engine_waypoint_t *accept_first(const accept_t *a)

@@ -12,8 +12,8 @@ static double vel_s(engine_ends_t ends, const double *v, int k)
     return ends == ENGINE_ENDS_CLAMPED && v ? v[k] : 0.0;
 }
 
-void cubic_row_interior(double h0, double h1, const double *rm,
-                        const double *r, const double *rp, frag_row_t *row)
+void cubic_row_interior(double h0, double h1, const double *rm, const double *r, const double *rp,
+                        frag_row_t *row)
 {
     row->a = h0;
     row->b = 2.0 * (h0 + h1);
@@ -22,8 +22,8 @@ void cubic_row_interior(double h0, double h1, const double *rm,
         row->d[k] = 6.0 * ((rp[k] - r[k]) / h1 - (r[k] - rm[k]) / h0);
 }
 
-void cubic_row_start(engine_ends_t ends, double h0, const double *r0,
-                     const double *r1, const double *v0_s, frag_row_t *row)
+void cubic_row_start(engine_ends_t ends, double h0, const double *r0, const double *r1,
+                     const double *v0_s, frag_row_t *row)
 {
     row->a = 0.0;
     if (ends == ENGINE_ENDS_NATURAL) {
@@ -39,8 +39,8 @@ void cubic_row_start(engine_ends_t ends, double h0, const double *r0,
     }
 }
 
-void cubic_row_end(engine_ends_t ends, double h, const double *rm,
-                   const double *rl, const double *v1_s, frag_row_t *row)
+void cubic_row_end(engine_ends_t ends, double h, const double *rm, const double *rl,
+                   const double *v1_s, frag_row_t *row)
 {
     row->c = 0.0;
     if (ends == ENGINE_ENDS_NATURAL) {
@@ -56,9 +56,8 @@ void cubic_row_end(engine_ends_t ends, double h, const double *rm,
     }
 }
 
-void cubic_segment(const double *r0, const double *r1, const double *m0,
-                   const double *m1, double h, double t0_s, double dur_s,
-                   fdiff_seg_t *seg)
+void cubic_segment(const double *r0, const double *r1, const double *m0, const double *m1, double h,
+                   double t0_s, double dur_s, fdiff_seg_t *seg)
 {
     double q = h * h / 6.0;
 
@@ -73,10 +72,9 @@ void cubic_segment(const double *r0, const double *r1, const double *m0,
     }
 }
 
-int cubic_curve(size_t n, const double *t_s, const double *r,
-                engine_param_t param, engine_ends_t ends, const double *v0,
-                const double *v1, fdiff_seg_t *segs, size_t max_seg,
-                size_t *nseg)
+int cubic_curve(size_t n, const double *t_s, const double *r, engine_param_t param,
+                engine_ends_t ends, const double *v0, const double *v1, fdiff_seg_t *segs,
+                size_t max_seg, size_t *nseg)
 {
     double *mem, *a, *b, *c, *m, *scr, v0s[AX], v1s[AX];
     frag_row_t row;
@@ -84,8 +82,7 @@ int cubic_curve(size_t n, const double *t_s, const double *r,
     int rc = 0;
 
     *nseg = 0;
-    if (n < 2 || max_seg + 1 < n || ends == ENGINE_ENDS_HELD ||
-        ends == ENGINE_ENDS_MULTIPLE)
+    if (n < 2 || max_seg + 1 < n || ends == ENGINE_ENDS_HELD || ends == ENGINE_ENDS_MULTIPLE)
         return -ENGINE_ECONFIG;
     mem = malloc(sizeof(double) * n * (4 + AX));
     if (!mem)
@@ -104,11 +101,10 @@ int cubic_curve(size_t n, const double *t_s, const double *r,
         if (i == 0)
             cubic_row_start(ends, H(0), r, r + AX, v0s, &row);
         else if (i == n - 1)
-            cubic_row_end(ends, H(n - 2), r + (n - 2) * AX, r + (n - 1) * AX,
-                          v1s, &row);
+            cubic_row_end(ends, H(n - 2), r + (n - 2) * AX, r + (n - 1) * AX, v1s, &row);
         else
-            cubic_row_interior(H(i - 1), H(i), r + (i - 1) * AX, r + i * AX,
-                               r + (i + 1) * AX, &row);
+            cubic_row_interior(H(i - 1), H(i), r + (i - 1) * AX, r + i * AX, r + (i + 1) * AX,
+                               &row);
         a[i] = row.a;
         b[i] = row.b;
         c[i] = row.c;
@@ -120,9 +116,8 @@ int cubic_curve(size_t n, const double *t_s, const double *r,
         goto out;
     }
     for (i = 0; i + 1 < n; i++)
-        cubic_segment(r + i * AX, r + (i + 1) * AX, m + i * AX,
-                      m + (i + 1) * AX, H(i), t_s[i], t_s[i + 1] - t_s[i],
-                      &segs[i]);
+        cubic_segment(r + i * AX, r + (i + 1) * AX, m + i * AX, m + (i + 1) * AX, H(i), t_s[i],
+                      t_s[i + 1] - t_s[i], &segs[i]);
 #undef H
     *nseg = n - 1;
 out:

@@ -36,22 +36,21 @@
 #include "frag.h"
 
 /* Interior row at node j: h0 = h(j-1), h1 = h(j); rm, r, rp = R(j-1..j+1). */
-void cubic_row_interior(double h0, double h1, const double *rm,
-                        const double *r, const double *rp, frag_row_t *row);
+void cubic_row_interior(double h0, double h1, const double *rm, const double *r, const double *rp,
+                        frag_row_t *row);
 
 /* Start row at node 0; v0_s = dk/ds at the start (velocity * T(0) / h(0)). */
-void cubic_row_start(engine_ends_t ends, double h0, const double *r0,
-                     const double *r1, const double *v0_s, frag_row_t *row);
+void cubic_row_start(engine_ends_t ends, double h0, const double *r0, const double *r1,
+                     const double *v0_s, frag_row_t *row);
 
 /* End row at the last node L; h = h(L-1); v1_s = dk/ds at the end. */
-void cubic_row_end(engine_ends_t ends, double h, const double *rm,
-                   const double *rl, const double *v1_s, frag_row_t *row);
+void cubic_row_end(engine_ends_t ends, double h, const double *rm, const double *rl,
+                   const double *v1_s, frag_row_t *row);
 
 /* Segment between nodes with positions r0, r1, second derivatives m0, m1
  * (per s), parameter step h, mapped onto [t0_s, t0_s + dur_s]. */
-void cubic_segment(const double *r0, const double *r1, const double *m0,
-                   const double *m1, double h, double t0_s, double dur_s,
-                   fdiff_seg_t *seg);
+void cubic_segment(const double *r0, const double *r1, const double *m0, const double *m1, double h,
+                   double t0_s, double dur_s, fdiff_seg_t *seg);
 
 /*
  * The whole curve through N timed waypoints (t strictly increasing) by one
@@ -60,9 +59,8 @@ void cubic_segment(const double *r0, const double *r1, const double *m0,
  * Returns 0, -ENGINE_ECONFIG (n < 2, max_seg too small, HELD or MULTIPLE),
  * -ENGINE_ENOMEM, -ENGINE_ENUMERIC.
  */
-int cubic_curve(size_t n, const double *t_s, const double *r,
-                engine_param_t param, engine_ends_t ends, const double *v0,
-                const double *v1, fdiff_seg_t *segs, size_t max_seg,
-                size_t *nseg);
+int cubic_curve(size_t n, const double *t_s, const double *r, engine_param_t param,
+                engine_ends_t ends, const double *v0, const double *v1, fdiff_seg_t *segs,
+                size_t max_seg, size_t *nseg);
 
 #endif

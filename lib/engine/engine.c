@@ -36,12 +36,12 @@ enum { QE_SEG = 0, QE_END = 1 };
 /* One queued entry: a segment to stream, or the rest point ending a trajectory. */
 typedef struct {
     int kind;
-    int first;            /* first entry of its trajectory */
-    double t1_s;          /* segment end (absolute track time); END: rest time */
-    uint64_t node;        /* SEG: index of its first node in the trajectory */
-    uint64_t traj;        /* input trajectory it belongs to (engine.in_traj) */
-    fdiff_seg_t seg;      /* END: c[k][0] is the rest position, t0_s = t1_s */
-    double gap_s;         /* first entry: track time since the previous trajectory's
+    int first;       /* first entry of its trajectory */
+    double t1_s;     /* segment end (absolute track time); END: rest time */
+    uint64_t node;   /* SEG: index of its first node in the trajectory */
+    uint64_t traj;   /* input trajectory it belongs to (engine.in_traj) */
+    fdiff_seg_t seg; /* END: c[k][0] is the rest position, t0_s = t1_s */
+    double gap_s;    /* first entry: track time since the previous trajectory's
                              end when a gap separates them, else 0 */
 } qent_t;
 
@@ -51,35 +51,35 @@ enum { STOP_NONE = 0, STOP_STOP = 1, STOP_CLEAR = 2 };
 struct engine {
     engine_config_t cfg;
     unsigned lookahead;
-    int pstar;            /* unknowns are Hoang control points (BSPLINE + UNIFORM) */
-    int held;             /* HELD or MULTIPLE: first and last segments not emitted */
-    int mult;             /* MULTIPLE: end points entered three times */
-    int smooth;           /* SMOOTH: waypoints pass through the lsq smoother first */
+    int pstar;  /* unknowns are Hoang control points (BSPLINE + UNIFORM) */
+    int held;   /* HELD or MULTIPLE: first and last segments not emitted */
+    int mult;   /* MULTIPLE: end points entered three times */
+    int smooth; /* SMOOTH: waypoints pass through the lsq smoother first */
     lsq_smooth_t sm;
     double *sm_mem;
-    double first_r[AX];   /* first waypoint of the current trajectory */
+    double first_r[AX]; /* first waypoint of the current trajectory */
     double period_s;
 
     /* ---- input: the trajectory being received ---- */
     int in_open;
-    uint64_t nodes;       /* nodes of the current trajectory (copies included) */
-    uint64_t seg_next;    /* next segment index to build */
-    size_t ring;          /* nodes kept */
-    double *node_t;       /* ring */
-    double *node_r;       /* ring x AX */
+    uint64_t nodes;    /* nodes of the current trajectory (copies included) */
+    uint64_t seg_next; /* next segment index to build */
+    size_t ring;       /* nodes kept */
+    double *node_t;    /* ring */
+    double *node_r;    /* ring x AX */
     frag_t *fw;
     int in_emitted;       /* a segment of this trajectory was queued */
     int in_first_pending; /* the next queued entry is the trajectory's first */
     double last_t;        /* last accepted waypoint of the current trajectory */
     double last_r[AX];
-    int have_prev;        /* prev_t/prev_r hold the waypoint before last (same trajectory) */
-    double prev_t;        /* for the acceleration check */
+    int have_prev; /* prev_t/prev_r hold the waypoint before last (same trajectory) */
+    double prev_t; /* for the acceleration check */
     double prev_r[AX];
-    double end_r[AX];     /* end of the last queued segment */
+    double end_r[AX]; /* end of the last queued segment */
     double end_t;
-    double end_speed;     /* speed at the end of the last queued segment */
-    uint64_t in_traj;     /* +1 per trajectory opened */
-    double in_gap_s;      /* gap before the trajectory being received (0: none) */
+    double end_speed; /* speed at the end of the last queued segment */
+    uint64_t in_traj; /* +1 per trajectory opened */
+    double in_gap_s;  /* gap before the trajectory being received (0: none) */
 
     /* ---- acceptance (accept.h) and transfers (transfer.h) ---- */
     accept_t policy;
@@ -91,24 +91,24 @@ struct engine {
     /* ---- the queue ---- */
     qent_t *q;
     size_t qcap, qhead, qlen;
-    size_t qends;         /* END entries in the queue */
+    size_t qends; /* END entries in the queue */
 
     /* ---- output ---- */
     int mode;
-    int have_pos;         /* the output stands somewhere real: set by engine_set_position,
+    int have_pos; /* the output stands somewhere real: set by engine_set_position,
                              or the first waypoint adopted as the last resort.  From then on
                              the output only moves by streaming or by a transfer */
-    int need_pos;         /* engine_require_position: no first-waypoint fallback */
-    int finished;         /* the last trajectory ran to its end */
+    int need_pos; /* engine_require_position: no first-waypoint fallback */
+    int finished; /* the last trajectory ran to its end */
     int underrun;
-    qent_t cur;           /* segment (or transfer) being stepped */
+    qent_t cur;            /* segment (or transfer) being stepped */
     double cur_t0, cur_t1; /* its start and end relative to base */
     fdiff_t fd;
-    int64_t n;            /* ticks since base */
-    int64_t seg_n0;       /* tick at which cur was seeded */
-    double origin_t;      /* absolute track time of tick 0 of the trajectory */
+    int64_t n;       /* ticks since base */
+    int64_t seg_n0;  /* tick at which cur was seeded */
+    double origin_t; /* absolute track time of tick 0 of the trajectory */
     double pos[AX], vel[AX], acc[AX];
-    double out_t;         /* track time of the output */
+    double out_t; /* track time of the output */
     uint32_t out_track;
     uint32_t cycle;
     uint32_t flags_pending;
@@ -117,19 +117,19 @@ struct engine {
     engine_setpoint_t last_sp;
 
     /* ---- time scaling (timescale.h, TIMESCALE.md) ---- */
-    ts_state_t ts;        /* rate ds/dt and its derivative */
-    int scaled;           /* off the unit grid: the output's track time is s */
-    double s;             /* scaled: track time of the output, relative to origin_t */
-    double s_off;         /* unit grid: track time = tick_time(n) + s_off */
-    double cspeed;        /* |k'(s)|: the curve's own speed at the output */
-    double override;      /* feed override 0 .. 2 */
-    int stop_req;         /* STOP_*: braking to rest, then drop */
-    size_t drop_n;        /* queue entries to drop once at rest */
-    uint64_t out_traj;    /* trajectory the output streams */
-    double avail_t;       /* end of its solved curve (absolute track time) */
-    int avail_closed;     /* its END is queued */
-    int avail_rest;       /* ... and the curve ends at rest there */
-    int end_brake;        /* braking to rest before an end that is not at rest */
+    ts_state_t ts;     /* rate ds/dt and its derivative */
+    int scaled;        /* off the unit grid: the output's track time is s */
+    double s;          /* scaled: track time of the output, relative to origin_t */
+    double s_off;      /* unit grid: track time = tick_time(n) + s_off */
+    double cspeed;     /* |k'(s)|: the curve's own speed at the output */
+    double override;   /* feed override 0 .. 2 */
+    int stop_req;      /* STOP_*: braking to rest, then drop */
+    size_t drop_n;     /* queue entries to drop once at rest */
+    uint64_t out_traj; /* trajectory the output streams */
+    double avail_t;    /* end of its solved curve (absolute track time) */
+    int avail_closed;  /* its END is queued */
+    int avail_rest;    /* ... and the curve ends at rest there */
+    int end_brake;     /* braking to rest before an end that is not at rest */
 
     engine_status_t st;
 };
@@ -165,7 +165,8 @@ const char *engine_strerror(int err)
     case ENGINE_ENOMEM: return "out of memory";
     case ENGINE_ESTATE: return "call not valid in this state";
     case ENGINE_ENUMERIC: return "solver failed (singular system)";
-    case ENGINE_EACCEL: return "implied acceleration from the previous two waypoints above max_accel_m_s2";
+    case ENGINE_EACCEL:
+        return "implied acceleration from the previous two waypoints above max_accel_m_s2";
     case ENGINE_EUNCONFIRMED:
         return "far from the trajectory in time or space, or at odds with its neighbours, "
                "and not confirmed by consistent waypoints";
@@ -213,12 +214,9 @@ void engine_config_default(engine_config_t *cfg)
 static const struct {
     double speed_m_s, accel_m_s2;
 } profile_limits[ENGINE_PROFILE_COUNT] = {
-    [ENGINE_PROFILE_AUTO] = {400.0, 30.0},
-    [ENGINE_PROFILE_VESSEL] = {40.0, 30.0},
-    [ENGINE_PROFILE_ROAD] = {100.0, 30.0},
-    [ENGINE_PROFILE_AIR] = {400.0, 0.0},
-    [ENGINE_PROFILE_MACHINE] = {0.0, 0.0},
-    [ENGINE_PROFILE_NONE] = {0.0, 0.0},
+    [ENGINE_PROFILE_AUTO] = {400.0, 30.0}, [ENGINE_PROFILE_VESSEL] = {40.0, 30.0},
+    [ENGINE_PROFILE_ROAD] = {100.0, 30.0}, [ENGINE_PROFILE_AIR] = {400.0, 0.0},
+    [ENGINE_PROFILE_MACHINE] = {0.0, 0.0}, [ENGINE_PROFILE_NONE] = {0.0, 0.0},
 };
 
 static engine_profile_t profile_of(const engine_config_t *cfg)
@@ -228,8 +226,7 @@ static engine_profile_t profile_of(const engine_config_t *cfg)
 
 double engine_config_max_speed(const engine_config_t *cfg)
 {
-    return cfg->max_speed_m_s < 0 ? profile_limits[profile_of(cfg)].speed_m_s
-                                  : cfg->max_speed_m_s;
+    return cfg->max_speed_m_s < 0 ? profile_limits[profile_of(cfg)].speed_m_s : cfg->max_speed_m_s;
 }
 
 double engine_config_max_accel(const engine_config_t *cfg)
@@ -240,8 +237,7 @@ double engine_config_max_accel(const engine_config_t *cfg)
 
 static int uses_pstar(const engine_config_t *cfg)
 {
-    return cfg->method == ENGINE_METHOD_BSPLINE &&
-           cfg->param == ENGINE_PARAM_UNIFORM;
+    return cfg->method == ENGINE_METHOD_BSPLINE && cfg->param == ENGINE_PARAM_UNIFORM;
 }
 
 /*
@@ -250,8 +246,8 @@ static int uses_pstar(const engine_config_t *cfg)
  * max(n + extra, first) is in (extra = smooth_window/2, first =
  * smooth_window - 1); otherwise extra = first = 0 and nodes are waypoints.
  */
-static unsigned scan_lookahead(unsigned f, unsigned o, unsigned delta, unsigned need,
-                               uint64_t j0, uint64_t j1, uint64_t extra, uint64_t first)
+static unsigned scan_lookahead(unsigned f, unsigned o, unsigned delta, unsigned need, uint64_t j0,
+                               uint64_t j1, uint64_t extra, uint64_t first)
 {
     unsigned best = 0;
     uint64_t j, n, raw;
@@ -310,8 +306,7 @@ unsigned engine_lookahead(const engine_config_t *cfg)
     if (!config_sizes_ok(cfg) || cfg->start_slack > ENGINE_FRAGMENT_MAX)
         return 0;
     /* what the solver needs, from the start on (a few periods cover it) ... */
-    la = scan_lookahead(f, o, frag_delta(cfg), uses_pstar(cfg) ? 3 : 2, 0, 4u * f,
-                        extra, first) +
+    la = scan_lookahead(f, o, frag_delta(cfg), uses_pstar(cfg) ? 3 : 2, 0, 4u * f, extra, first) +
          ACCEPT_LAG; /* a waypoint becomes a node once its next neighbour is in */
     /* ... and what the output waits for */
     want = steady_lookahead(cfg) + extra + cfg->start_slack;
@@ -607,17 +602,15 @@ static void build_segments(engine_t *e)
             }
             if (j + 1 == last) {
                 end_vel_param(e, 1, v);
-                hoang_ghost_end(e->cfg.ends, frag_x(e->fw, last - 1),
-                                frag_x(e->fw, last), v, g1);
+                hoang_ghost_end(e->cfg.ends, frag_x(e->fw, last - 1), frag_x(e->fw, last), v, g1);
                 p3 = g1;
             } else {
                 p3 = frag_x(e->fw, j + 2);
             }
-            hoang_segment(p0, frag_x(e->fw, j), frag_x(e->fw, j + 1), p3,
-                          nt(e, j), dur, &seg);
+            hoang_segment(p0, frag_x(e->fw, j), frag_x(e->fw, j + 1), p3, nt(e, j), dur, &seg);
         } else {
-            cubic_segment(nr(e, j), nr(e, j + 1), frag_x(e->fw, j),
-                          frag_x(e->fw, j + 1), hpar(e, j), nt(e, j), dur, &seg);
+            cubic_segment(nr(e, j), nr(e, j + 1), frag_x(e->fw, j), frag_x(e->fw, j + 1),
+                          hpar(e, j), nt(e, j), dur, &seg);
         }
         queue_segment(e, &seg, j);
     }
@@ -654,8 +647,8 @@ static int add_node(engine_t *e, double t, const double *r)
                 end_vel_param(e, 0, v);
                 cubic_row_start(e->cfg.ends, hpar(e, 0), nr(e, 0), nr(e, 1), v, &row);
             } else {
-                cubic_row_interior(hpar(e, i - 1), hpar(e, i), nr(e, i - 1), nr(e, i),
-                                   nr(e, i + 1), &row);
+                cubic_row_interior(hpar(e, i - 1), hpar(e, i), nr(e, i - 1), nr(e, i), nr(e, i + 1),
+                                   &row);
             }
             rc = frag_push(e->fw, &row, zero3);
         }
@@ -870,9 +863,7 @@ static int judge(engine_t *e, int closing)
             if (keep(e, &v.wp) < 0)
                 rc = -ENGINE_ENUMERIC;
             break;
-        case ACCEPT_DROP:
-            reject_wp(e, v.reason, &v.wp);
-            break;
+        case ACCEPT_DROP: reject_wp(e, v.reason, &v.wp); break;
         }
     }
     return rc;
@@ -1440,8 +1431,7 @@ static void scaled_step(engine_t *e, double target, double R, double A, double J
             finish_here(e);
         return;
     }
-    if (is_exactly(e->ts.rate, 1.0) && is_exactly(e->ts.acc, 0.0) &&
-        is_exactly(target, 1.0)) {
+    if (is_exactly(e->ts.rate, 1.0) && is_exactly(e->ts.acc, 0.0) && is_exactly(target, 1.0)) {
         /* back on a grid of whole periods, shifted by the time lost */
         e->s_off = e->s - tick_time(e, e->n);
         e->seg_n0 = e->n;
@@ -1642,13 +1632,12 @@ void engine_status(const engine_t *e, engine_status_t *st)
 
 /* ---- offline ------------------------------------------------------------- */
 
-int engine_curve(const engine_config_t *cfg, const engine_waypoint_t *wp,
-                 size_t n, fdiff_seg_t *seg, size_t max_seg, size_t *nseg)
+int engine_curve(const engine_config_t *cfg, const engine_waypoint_t *wp, size_t n,
+                 fdiff_seg_t *seg, size_t max_seg, size_t *nseg)
 {
     int err = 0, rc = 0;
     engine_t *e = engine_new(cfg, &err);
     size_t i, out = 0;
-
 
     *nseg = 0;
     if (!e)
@@ -1682,9 +1671,9 @@ out:
     return rc;
 }
 
-long engine_curve_flat(int method, int param, int ends, unsigned fragment,
-                       unsigned overlap, size_t n, const double *t_s,
-                       const double *xyz, double *seg_out, size_t max_seg)
+long engine_curve_flat(int method, int param, int ends, unsigned fragment, unsigned overlap,
+                       size_t n, const double *t_s, const double *xyz, double *seg_out,
+                       size_t max_seg)
 {
     engine_config_t cfg;
     engine_waypoint_t *wp;

@@ -22,12 +22,9 @@ static const char *const param_names[] = {
     NULL,
 };
 static const char *const ends_names[] = {
-    [ENGINE_ENDS_HELD] = "held",
-    [ENGINE_ENDS_MULTIPLE] = "multiple",
-    [ENGINE_ENDS_NATURAL] = "natural",
-    [ENGINE_ENDS_CLAMPED] = "clamped",
-    [ENGINE_ENDS_REST] = "rest",
-    NULL,
+    [ENGINE_ENDS_HELD] = "held",       [ENGINE_ENDS_MULTIPLE] = "multiple",
+    [ENGINE_ENDS_NATURAL] = "natural", [ENGINE_ENDS_CLAMPED] = "clamped",
+    [ENGINE_ENDS_REST] = "rest",       NULL,
 };
 
 static const char *const profile_names[] = {
@@ -48,10 +45,12 @@ _Static_assert(sizeof(engine_profile_t) == sizeof(int), "engine_profile_t is not
 _Static_assert(ENGINE_AXES == 3, "VEC3 settings are written x,y,z");
 
 /* One entry: the field f names the key, its offset and its size. */
-#define S(f, opt_, type_, flags_, lo_, hi_, names_, arg_, help_)                                \
-    {.name = #f, .option = opt_, .type = ENGINE_SETTING_##type_, .flags = flags_,             \
-     .offset = offsetof(engine_config_t, f), .size = sizeof(((engine_config_t *)0)->f),       \
-     .min = lo_, .max = hi_, .names = names_, .arg = arg_, .help = help_}
+#define S(f, opt_, type_, flags_, lo_, hi_, names_, arg_, help_)                                   \
+    {                                                                                              \
+        .name = #f, .option = opt_, .type = ENGINE_SETTING_##type_, .flags = flags_,               \
+        .offset = offsetof(engine_config_t, f), .size = sizeof(((engine_config_t *)0)->f),         \
+        .min = lo_, .max = hi_, .names = names_, .arg = arg_, .help = help_                        \
+    }
 
 /* Ranges: what the config parser always accepted for each key; the rules
  * between fields (overlap even and < fragment, capacity >= lookahead +
@@ -159,16 +158,16 @@ static int parse_double(const engine_setting_t *s, const char *text, double *out
     return 0;
 }
 
-static int parse_unsigned(const engine_setting_t *s, const char *text, unsigned *out,
-                          char *why, size_t whylen)
+static int parse_unsigned(const engine_setting_t *s, const char *text, unsigned *out, char *why,
+                          size_t whylen)
 {
     char *end;
     errno = 0;
     int base = (text[0] == '0' && (text[1] == 'x' || text[1] == 'X')) ? 16 : 10;
     long long v = strtoll(text, &end, base);
     if (end == text || *end || errno == ERANGE || (double)v < s->min || (double)v > s->max)
-        return why_set(why, whylen, "expected an integer in [%.0f, %.0f], got '%s'", s->min,
-                       s->max, text);
+        return why_set(why, whylen, "expected an integer in [%.0f, %.0f], got '%s'", s->min, s->max,
+                       text);
     *out = (unsigned)v;
     return 0;
 }
@@ -236,23 +235,18 @@ int engine_setting_parse(const engine_setting_t *s, const char *text, engine_con
     if (s->flags & ENGINE_SETTING_DERIVED)
         return why_set(why, whylen, "%s is set by the program, not given", s->name);
     switch (s->type) {
-    case ENGINE_SETTING_DOUBLE:
-        return parse_double(s, text, field(s, cfg), why, whylen);
-    case ENGINE_SETTING_UNSIGNED:
-        return parse_unsigned(s, text, field(s, cfg), why, whylen);
+    case ENGINE_SETTING_DOUBLE: return parse_double(s, text, field(s, cfg), why, whylen);
+    case ENGINE_SETTING_UNSIGNED: return parse_unsigned(s, text, field(s, cfg), why, whylen);
     case ENGINE_SETTING_ENUM: {
         int v = 0, rc = parse_enum(s, text, &v, why, whylen);
         if (rc == 0) /* every engine enum is int-sized (checked by the unit test) */
             memcpy(field(s, cfg), &v, sizeof v);
         return rc;
     }
-    case ENGINE_SETTING_BOOL:
-        return parse_bool(text, field(s, cfg), why, whylen);
-    case ENGINE_SETTING_VEC3:
-        return parse_vec3(text, field(s, cfg), why, whylen);
+    case ENGINE_SETTING_BOOL: return parse_bool(text, field(s, cfg), why, whylen);
+    case ENGINE_SETTING_VEC3: return parse_vec3(text, field(s, cfg), why, whylen);
     case ENGINE_SETTING_INT64:
-    default:
-        return why_set(why, whylen, "%s cannot be parsed", s->name);
+    default: return why_set(why, whylen, "%s cannot be parsed", s->name);
     }
 }
 
@@ -283,17 +277,14 @@ int engine_setting_format(const engine_setting_t *s, const engine_config_t *cfg,
 {
     const void *p = cfield(s, cfg);
     switch (s->type) {
-    case ENGINE_SETTING_DOUBLE:
-        return format_double(*(const double *)p, buf, len);
-    case ENGINE_SETTING_UNSIGNED:
-        return snprintf(buf, len, "%u", *(const unsigned *)p);
+    case ENGINE_SETTING_DOUBLE: return format_double(*(const double *)p, buf, len);
+    case ENGINE_SETTING_UNSIGNED: return snprintf(buf, len, "%u", *(const unsigned *)p);
     case ENGINE_SETTING_ENUM: {
         int v;
         memcpy(&v, p, sizeof v);
         return snprintf(buf, len, "%s", engine_setting_enum_name(s, v));
     }
-    case ENGINE_SETTING_BOOL:
-        return snprintf(buf, len, "%s", *(const int *)p ? "yes" : "no");
+    case ENGINE_SETTING_BOOL: return snprintf(buf, len, "%s", *(const int *)p ? "yes" : "no");
     case ENGINE_SETTING_VEC3: {
         const double *v = p;
         char a[3][40];
@@ -301,10 +292,8 @@ int engine_setting_format(const engine_setting_t *s, const engine_config_t *cfg,
             format_double(v[i], a[i], sizeof a[i]);
         return snprintf(buf, len, "%s,%s,%s", a[0], a[1], a[2]);
     }
-    case ENGINE_SETTING_INT64:
-        return snprintf(buf, len, "%lld", (long long)*(const int64_t *)p);
-    default:
-        return snprintf(buf, len, "?");
+    case ENGINE_SETTING_INT64: return snprintf(buf, len, "%lld", (long long)*(const int64_t *)p);
+    default: return snprintf(buf, len, "?");
     }
 }
 

@@ -36,20 +36,21 @@ typedef enum {
 } engine_setting_type_t;
 
 /* Flags of an entry. */
-#define ENGINE_SETTING_DERIVED 0x1u /* not a key nor an option of its own: set by
+#define ENGINE_SETTING_DERIVED                                                                     \
+    0x1u /* not a key nor an option of its own: set by
                                        the program (period_ns = 1e9 / rate_hz) */
 
 typedef struct {
-    const char *name;              /* config key = engine_config_t field name */
-    const char *option;            /* trajreplay long option, without "--" */
+    const char *name;   /* config key = engine_config_t field name */
+    const char *option; /* trajreplay long option, without "--" */
     engine_setting_type_t type;
-    unsigned flags;                /* ENGINE_SETTING_* */
-    size_t offset;                 /* offsetof(engine_config_t, field) */
-    size_t size;                   /* sizeof the field */
-    double min, max;               /* inclusive range (DOUBLE, UNSIGNED) */
-    const char *const *names;      /* ENUM: names by value, NULL-terminated */
-    const char *arg;               /* the value in --help ("M_S", "VX,VY,VZ") */
-    const char *help;              /* one line, without the default */
+    unsigned flags;           /* ENGINE_SETTING_* */
+    size_t offset;            /* offsetof(engine_config_t, field) */
+    size_t size;              /* sizeof the field */
+    double min, max;          /* inclusive range (DOUBLE, UNSIGNED) */
+    const char *const *names; /* ENUM: names by value, NULL-terminated */
+    const char *arg;          /* the value in --help ("M_S", "VX,VY,VZ") */
+    const char *help;         /* one line, without the default */
 } engine_setting_t;
 
 /* The table, in engine_config_t order, and its length. */

@@ -11,13 +11,11 @@ void fdiff_seed(fdiff_t *fd, const fdiff_seg_t *seg, double u0, double du)
 
     memset(fd, 0, sizeof *fd); /* the zero lane stays zero */
     for (int k = 0; k < FDIFF_AXES; k++) {
-        double c0 = seg->c[k][0], c1 = seg->c[k][1], c2 = seg->c[k][2],
-               c3 = seg->c[k][3];
+        double c0 = seg->c[k][0], c1 = seg->c[k][1], c2 = seg->c[k][2], c3 = seg->c[k][3];
         /* Differences of the cubic written in closed form at u (exact
          * algebra, no cancellation of k(u+h) - k(u) on large values). */
         fd->p0[k] = c0 + u * (c1 + u * (c2 + u * c3));
-        fd->p1[k] = c1 * h + c2 * (2 * u * h + h2) +
-                      c3 * (3 * u * u * h + 3 * u * h2 + h3);
+        fd->p1[k] = c1 * h + c2 * (2 * u * h + h2) + c3 * (3 * u * u * h + 3 * u * h2 + h3);
         fd->p2[k] = 2 * c2 * h2 + c3 * (6 * u * h2 + 6 * h3);
         fd->p3[k] = 6 * c3 * h3;
         /* k'(u) = c1 + 2 c2 u + 3 c3 u^2, a quadratic */
@@ -42,8 +40,7 @@ void fdiff_get(const fdiff_t *fd, double *pos, double *vel, double *acc)
     }
 }
 
-void fdiff_eval(const fdiff_seg_t *seg, double u, double *pos, double *vel,
-                double *acc)
+void fdiff_eval(const fdiff_seg_t *seg, double u, double *pos, double *vel, double *acc)
 {
     double inv_t = 1.0 / seg->dur_s;
 
@@ -58,9 +55,8 @@ void fdiff_eval(const fdiff_seg_t *seg, double u, double *pos, double *vel,
     }
 }
 
-void fdiff_eval_curve(const fdiff_seg_t *segs, unsigned long nseg,
-                      const double *t_s, unsigned long n, double *pos,
-                      double *vel, double *acc)
+void fdiff_eval_curve(const fdiff_seg_t *segs, unsigned long nseg, const double *t_s,
+                      unsigned long n, double *pos, double *vel, double *acc)
 {
     unsigned long i, j = 0;
 
@@ -84,7 +80,6 @@ void fdiff_eval_curve(const fdiff_seg_t *segs, unsigned long nseg,
         if (u > 1)
             u = 1;
         fdiff_eval(&segs[j], u, pos ? pos + i * FDIFF_AXES : NULL,
-                   vel ? vel + i * FDIFF_AXES : NULL,
-                   acc ? acc + i * FDIFF_AXES : NULL);
+                   vel ? vel + i * FDIFF_AXES : NULL, acc ? acc + i * FDIFF_AXES : NULL);
     }
 }

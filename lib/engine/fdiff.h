@@ -36,9 +36,9 @@
 
 /* One cubic segment per axis over [t0_s, t0_s + dur_s]. */
 typedef struct {
-    double t0_s;                 /* start time */
-    double dur_s;                /* duration, > 0 */
-    double c[FDIFF_AXES][4];     /* k(u) = c0 + c1 u + c2 u^2 + c3 u^3 */
+    double t0_s;             /* start time */
+    double dur_s;            /* duration, > 0 */
+    double c[FDIFF_AXES][4]; /* k(u) = c0 + c1 u + c2 u^2 + c3 u^3 */
 } fdiff_seg_t;
 
 /*
@@ -62,10 +62,10 @@ typedef struct {
     double p1[FDIFF_LANES];              /* position d1, d2, d3 */
     double p2[FDIFF_LANES];
     double p3[FDIFF_LANES];
-    double v0[FDIFF_LANES];              /* velocity f, d1, d2 (m/s) */
+    double v0[FDIFF_LANES]; /* velocity f, d1, d2 (m/s) */
     double v1[FDIFF_LANES];
     double v2[FDIFF_LANES];
-    double a0[FDIFF_LANES];              /* acceleration f, d1 (m/s^2) */
+    double a0[FDIFF_LANES]; /* acceleration f, d1 (m/s^2) */
     double a1[FDIFF_LANES];
 } fdiff_t;
 
@@ -95,8 +95,7 @@ void fdiff_get(const fdiff_t *fd, double *pos, double *vel, double *acc);
  * Direct (Horner) evaluation of seg at u: the reference the stepper is
  * checked against, also used for exact end points.  Any output may be NULL.
  */
-void fdiff_eval(const fdiff_seg_t *seg, double u, double *pos, double *vel,
-                double *acc);
+void fdiff_eval(const fdiff_seg_t *seg, double u, double *pos, double *vel, double *acc);
 
 /*
  * Evaluate a sorted piecewise curve (segments in time order, possibly with
@@ -105,8 +104,7 @@ void fdiff_eval(const fdiff_seg_t *seg, double u, double *pos, double *vel,
  * For tests and tools (ctypes: segs is nseg x 14 doubles).
  * pos, vel, acc: n x FDIFF_AXES each (any may be NULL).
  */
-void fdiff_eval_curve(const fdiff_seg_t *segs, unsigned long nseg,
-                      const double *t_s, unsigned long n, double *pos,
-                      double *vel, double *acc);
+void fdiff_eval_curve(const fdiff_seg_t *segs, unsigned long nseg, const double *t_s,
+                      unsigned long n, double *pos, double *vel, double *acc);
 
 #endif

@@ -94,8 +94,8 @@ static int solve_fragment(frag_t *fw, uint64_t k, int to_end)
 {
     frag_slot_t *sl = slot_of(fw, k);
     uint64_t first = sl->first, last = first + sl->sw.n - 1;
-    uint64_t jprev = k * fw->s - fw->delta + fw->o / 2;       /* J(k-1), k > 0 */
-    uint64_t jk = (k + 1) * fw->s - fw->delta + fw->o / 2;    /* J(k) */
+    uint64_t jprev = k * fw->s - fw->delta + fw->o / 2;    /* J(k-1), k > 0 */
+    uint64_t jk = (k + 1) * fw->s - fw->delta + fw->o / 2; /* J(k) */
     uint64_t j, lo = 0;
     int rc, m;
 

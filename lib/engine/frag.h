@@ -43,25 +43,25 @@ typedef struct {
 
 typedef struct {
     tridiag_sweep_t sw;
-    uint64_t first;       /* global row of the fragment's first row */
+    uint64_t first; /* global row of the fragment's first row */
     int open;
 } frag_slot_t;
 
 typedef struct {
-    unsigned f, o, s;     /* F, O, S = F - O */
-    unsigned delta;       /* D: start offset of the fragment grid */
-    unsigned nslots;      /* fragments open at once at most */
-    size_t ring;          /* rows of x kept */
-    uint64_t rows;        /* rows pushed so far (the next row's number) */
-    uint64_t final_rows;  /* x[0 .. final_rows-1] are final */
-    uint64_t next_frag;   /* next fragment to open */
-    uint64_t next_solve;  /* next fragment to solve (they solve in order) */
-    int done;             /* closed: no more rows until frag_reset */
+    unsigned f, o, s;           /* F, O, S = F - O */
+    unsigned delta;             /* D: start offset of the fragment grid */
+    unsigned nslots;            /* fragments open at once at most */
+    size_t ring;                /* rows of x kept */
+    uint64_t rows;              /* rows pushed so far (the next row's number) */
+    uint64_t final_rows;        /* x[0 .. final_rows-1] are final */
+    uint64_t next_frag;         /* next fragment to open */
+    uint64_t next_solve;        /* next fragment to solve (they solve in order) */
+    int done;                   /* closed: no more rows until frag_reset */
     double junction[FRAG_AXES]; /* fragment k's value at J(k), waiting for k+1 */
     frag_slot_t *slot;
-    double *mem;          /* all doubles, one allocation */
-    double *xs;           /* F x AXES back-substitution scratch */
-    double *x;            /* ring x AXES final values */
+    double *mem; /* all doubles, one allocation */
+    double *xs;  /* F x AXES back-substitution scratch */
+    double *x;   /* ring x AXES final values */
 } frag_t;
 
 /*

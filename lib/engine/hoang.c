@@ -27,8 +27,7 @@ void hoang_row_interior(const double *r, frag_row_t *row)
         row->d[k] = 6.0 * r[k];
 }
 
-void hoang_row_start(engine_ends_t ends, const double *r0, const double *v0_u,
-                     frag_row_t *row)
+void hoang_row_start(engine_ends_t ends, const double *r0, const double *v0_u, frag_row_t *row)
 {
     row->a = 0.0;
     if (clamped(ends)) {
@@ -45,8 +44,7 @@ void hoang_row_start(engine_ends_t ends, const double *r0, const double *v0_u,
     }
 }
 
-void hoang_row_end(engine_ends_t ends, const double *rl, const double *v1_u,
-                   frag_row_t *row)
+void hoang_row_end(engine_ends_t ends, const double *rl, const double *v1_u, frag_row_t *row)
 {
     row->c = 0.0;
     if (clamped(ends)) {
@@ -63,25 +61,22 @@ void hoang_row_end(engine_ends_t ends, const double *rl, const double *v1_u,
     }
 }
 
-void hoang_ghost_start(engine_ends_t ends, const double *p0, const double *p1,
-                       const double *v0_u, double *out)
+void hoang_ghost_start(engine_ends_t ends, const double *p0, const double *p1, const double *v0_u,
+                       double *out)
 {
     for (int k = 0; k < AX; k++)
-        out[k] = clamped(ends) ? p1[k] - 2.0 * vel_u(ends, v0_u, k)
-                               : 2.0 * p0[k] - p1[k];
+        out[k] = clamped(ends) ? p1[k] - 2.0 * vel_u(ends, v0_u, k) : 2.0 * p0[k] - p1[k];
 }
 
-void hoang_ghost_end(engine_ends_t ends, const double *pm, const double *pl,
-                     const double *v1_u, double *out)
+void hoang_ghost_end(engine_ends_t ends, const double *pm, const double *pl, const double *v1_u,
+                     double *out)
 {
     for (int k = 0; k < AX; k++)
-        out[k] = clamped(ends) ? pm[k] + 2.0 * vel_u(ends, v1_u, k)
-                               : 2.0 * pl[k] - pm[k];
+        out[k] = clamped(ends) ? pm[k] + 2.0 * vel_u(ends, v1_u, k) : 2.0 * pl[k] - pm[k];
 }
 
-void hoang_segment(const double *p0, const double *p1, const double *p2,
-                   const double *p3, double t0_s, double dur_s,
-                   fdiff_seg_t *seg)
+void hoang_segment(const double *p0, const double *p1, const double *p2, const double *p3,
+                   double t0_s, double dur_s, fdiff_seg_t *seg)
 {
     seg->t0_s = t0_s;
     seg->dur_s = dur_s;
@@ -94,12 +89,10 @@ void hoang_segment(const double *p0, const double *p1, const double *p2,
     }
 }
 
-int hoang_solve(size_t n, const double *r, engine_ends_t ends,
-                const double *v0_u, const double *v1_u, double *p,
-                double *scratch)
+int hoang_solve(size_t n, const double *r, engine_ends_t ends, const double *v0_u,
+                const double *v1_u, double *p, double *scratch)
 {
-    double *a = scratch, *b = scratch + n, *c = scratch + 2 * n,
-           *s = scratch + 3 * n;
+    double *a = scratch, *b = scratch + n, *c = scratch + 2 * n, *s = scratch + 3 * n;
     frag_row_t row;
     size_t i;
 
@@ -122,9 +115,8 @@ int hoang_solve(size_t n, const double *r, engine_ends_t ends,
     return tridiag_solve(n, AX, a, b, c, p, p, s) < 0 ? -ENGINE_ENUMERIC : 0;
 }
 
-int hoang_curve(size_t n, const double *t_s, const double *r,
-                engine_ends_t ends, const double *v0, const double *v1,
-                fdiff_seg_t *segs, size_t max_seg, size_t *nseg)
+int hoang_curve(size_t n, const double *t_s, const double *r, engine_ends_t ends, const double *v0,
+                const double *v1, fdiff_seg_t *segs, size_t max_seg, size_t *nseg)
 {
     int mult = ends == ENGINE_ENDS_MULTIPLE;
     size_t m = mult ? n + 4 : n, i, j, out = 0;
@@ -168,8 +160,7 @@ int hoang_curve(size_t n, const double *t_s, const double *r,
             rc = -ENGINE_ECONFIG;
             goto out;
         }
-        hoang_segment(q0, p + j * AX, p + (j + 1) * AX, q3, tt[j], dur,
-                      &segs[out++]);
+        hoang_segment(q0, p + j * AX, p + (j + 1) * AX, q3, tt[j], dur, &segs[out++]);
     }
     *nseg = out;
 out:

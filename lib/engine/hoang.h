@@ -43,25 +43,22 @@
 void hoang_row_interior(const double *r, frag_row_t *row);
 
 /* True start row at node 0; v0_u = start velocity * T(0) (dk/du). */
-void hoang_row_start(engine_ends_t ends, const double *r0, const double *v0_u,
-                     frag_row_t *row);
+void hoang_row_start(engine_ends_t ends, const double *r0, const double *v0_u, frag_row_t *row);
 
 /* True end row at the last node; v1_u = end velocity * T(last interval). */
-void hoang_row_end(engine_ends_t ends, const double *rl, const double *v1_u,
-                   frag_row_t *row);
+void hoang_row_end(engine_ends_t ends, const double *rl, const double *v1_u, frag_row_t *row);
 
 /* Ghost control point before node 0 (p0 = P*(0), p1 = P*(1)). */
-void hoang_ghost_start(engine_ends_t ends, const double *p0, const double *p1,
-                       const double *v0_u, double *out);
+void hoang_ghost_start(engine_ends_t ends, const double *p0, const double *p1, const double *v0_u,
+                       double *out);
 
 /* Ghost control point after the last node (pl = P*(L), pm = P*(L-1)). */
-void hoang_ghost_end(engine_ends_t ends, const double *pm, const double *pl,
-                     const double *v1_u, double *out);
+void hoang_ghost_end(engine_ends_t ends, const double *pm, const double *pl, const double *v1_u,
+                     double *out);
 
 /* Segment from the four control points p[0..3] = P*(j-1 .. j+2). */
-void hoang_segment(const double *p0, const double *p1, const double *p2,
-                   const double *p3, double t0_s, double dur_s,
-                   fdiff_seg_t *seg);
+void hoang_segment(const double *p0, const double *p1, const double *p2, const double *p3,
+                   double t0_s, double dur_s, fdiff_seg_t *seg);
 
 /*
  * The paper's global approach: solve every control point of N nodes at once
@@ -69,9 +66,8 @@ void hoang_segment(const double *p0, const double *p1, const double *p2,
  * v0_u, v1_u: end velocities in u units (CLAMPED; may be NULL otherwise).
  * scratch: 4n doubles.  Returns 0, -ENGINE_ECONFIG (n < 2), -ENGINE_ENUMERIC.
  */
-int hoang_solve(size_t n, const double *r, engine_ends_t ends,
-                const double *v0_u, const double *v1_u, double *p,
-                double *scratch);
+int hoang_solve(size_t n, const double *r, engine_ends_t ends, const double *v0_u,
+                const double *v1_u, double *p, double *scratch);
 
 /*
  * The whole curve through N timed waypoints (t strictly increasing), with
@@ -82,8 +78,7 @@ int hoang_solve(size_t n, const double *r, engine_ends_t ends,
  * Returns 0, -ENGINE_ECONFIG (n < 2 or max_seg too small), -ENGINE_ENOMEM,
  * -ENGINE_ENUMERIC.
  */
-int hoang_curve(size_t n, const double *t_s, const double *r,
-                engine_ends_t ends, const double *v0, const double *v1,
-                fdiff_seg_t *segs, size_t max_seg, size_t *nseg);
+int hoang_curve(size_t n, const double *t_s, const double *r, engine_ends_t ends, const double *v0,
+                const double *v1, fdiff_seg_t *segs, size_t max_seg, size_t *nseg);
 
 #endif

@@ -28,7 +28,7 @@ double ts_stop_dist(double r, double a, double A, double J)
         return s0 + stop_dist0(r + 0.5 * a * a / J, A, J);
     }
     if (a < 0) {
-        double m = a < -A ? A : -a;          /* |a| (a beyond -A is brought back) */
+        double m = a < -A ? A : -a; /* |a| (a beyond -A is brought back) */
         if (0.5 * m * m / J >= r) {
             /* releasing now at full jerk, the rate still reaches 0 before
              * the deceleration does (a state the braking itself never
@@ -91,8 +91,8 @@ static double integrate(double r, double a, double j, double T, double *r1, doub
     return r * T + 0.5 * a * T * T + j * T * T * T / 6.0;
 }
 
-double ts_step(ts_state_t *st, double target, double R, double A, double J, double T,
-               double *j_out, int *limited)
+double ts_step(ts_state_t *st, double target, double R, double A, double J, double T, double *j_out,
+               int *limited)
 {
     double r = st->rate, a = st->acc, tgt = target, r1, a1, ds, j;
     int lim = 0;

@@ -50,8 +50,8 @@
 #define TS_MARGIN_TICKS 2.0
 
 typedef struct {
-    double rate;   /* r = ds/dt (1 = as solved) */
-    double acc;    /* a = dr/dt, 1/s */
+    double rate; /* r = ds/dt (1 = as solved) */
+    double acc;  /* a = dr/dt, 1/s */
 } ts_state_t;
 
 /*
@@ -76,7 +76,7 @@ double ts_rate_max(double R, double A, double J);
  * caller can tell an unscaled output by rate == 1.0 && acc == 0.0.
  * *limited (may be NULL) is set to 1 when R, not target, decided the move.
  */
-double ts_step(ts_state_t *st, double target, double R, double A, double J, double T,
-               double *j_out, int *limited);
+double ts_step(ts_state_t *st, double target, double R, double A, double J, double T, double *j_out,
+               int *limited);
 
 #endif

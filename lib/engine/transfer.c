@@ -38,8 +38,8 @@ double transfer_motion_accel(const transfer_motion_t *m)
     return ring_max(m->a, m->n);
 }
 
-double transfer_duration(const transfer_config_t *c, double dist_m, double v_obj,
-                         double a_obj, double gap_s, int *capped)
+double transfer_duration(const transfer_config_t *c, double dist_m, double v_obj, double a_obj,
+                         double gap_s, int *capped)
 {
     double v = c->speed_m_s, a = c->accel_m_s2, dur, cap;
     int derived = !(v > 0 && a > 0);

@@ -53,13 +53,13 @@
 #define TRANSFER_HIST 16
 
 typedef struct {
-    double speed_m_s;   /* configured transfer speed, 0 = derive */
-    double accel_m_s2;  /* configured transfer acceleration, 0 = derive */
-    double max_s;       /* a derived transfer lasts at most this, > 0 */
-    double vmax_m_s;    /* the object's speed limit (max_speed_m_s in force, 0 =
+    double speed_m_s;  /* configured transfer speed, 0 = derive */
+    double accel_m_s2; /* configured transfer acceleration, 0 = derive */
+    double max_s;      /* a derived transfer lasts at most this, > 0 */
+    double vmax_m_s;   /* the object's speed limit (max_speed_m_s in force, 0 =
                            none): a derived transfer's peak never exceeds it,
                            before and above max_s */
-    double period_s;    /* output period, > 0 */
+    double period_s;   /* output period, > 0 */
 } transfer_config_t;
 
 /* The object's recent motion, from the waypoints kept. */
@@ -80,8 +80,8 @@ double transfer_motion_accel(const transfer_motion_t *m);
  * gap_s: track time between the two ends when they are across a gap (0 =
  * not a gap).  *capped (may be NULL) is set to 1 when max_s cut it short.
  */
-double transfer_duration(const transfer_config_t *c, double dist_m, double v_obj,
-                         double a_obj, double gap_s, int *capped);
+double transfer_duration(const transfer_config_t *c, double dist_m, double v_obj, double a_obj,
+                         double gap_s, int *capped);
 
 /* The smoothstep from `from` to `to` over dur_s (> 0), starting at t0_s = 0. */
 void transfer_segment(fdiff_seg_t *seg, const double *from, const double *to, double dur_s);

@@ -183,7 +183,8 @@ int candump_format_frame(char *buf, size_t len, const canproto_frame_t *f)
     size_t n = 0;
     unsigned dlen = f->len;
     if (f->flags & (CANPROTO_F_EFF | CANPROTO_F_ERR)) {
-        uint32_t id = (f->id & CANPROTO_EFF_MASK) | ((f->flags & CANPROTO_F_ERR) ? CANDUMP_ERR_FLAG : 0);
+        uint32_t id = (f->id & CANPROTO_EFF_MASK) |
+                      ((f->flags & CANPROTO_F_ERR) ? CANDUMP_ERR_FLAG : 0);
         for (int i = 7; i >= 0; i--)
             tmp[n++] = hexd[(id >> (4 * i)) & 0xF];
     } else {

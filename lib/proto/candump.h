@@ -21,10 +21,10 @@
 
 enum candump_error {
     CANDUMP_OK = 0,
-    CANDUMP_ESKIP = 1,    /* comment or blank line: no frame (not an error for a reader) */
-    CANDUMP_ESYNTAX = 2,  /* not a candump line / frame */
-    CANDUMP_ELEN = 3,     /* too many data bytes, or an invalid CAN FD length */
-    CANDUMP_ESPACE = 4,   /* output buffer too small */
+    CANDUMP_ESKIP = 1,   /* comment or blank line: no frame (not an error for a reader) */
+    CANDUMP_ESYNTAX = 2, /* not a candump line / frame */
+    CANDUMP_ELEN = 3,    /* too many data bytes, or an invalid CAN FD length */
+    CANDUMP_ESPACE = 4,  /* output buffer too small */
     CANDUMP_ERROR_COUNT
 };
 
@@ -35,8 +35,8 @@ const char *candump_strerror(int err);
 #define CANDUMP_IFNAME_MAX 15
 
 typedef struct {
-    int64_t ts_us;                        /* timestamp, microseconds (0 if none) */
-    char ifname[CANDUMP_IFNAME_MAX + 1];  /* "" if none */
+    int64_t ts_us;                       /* timestamp, microseconds (0 if none) */
+    char ifname[CANDUMP_IFNAME_MAX + 1]; /* "" if none */
     canproto_frame_t frame;
 } candump_line_t;
 

@@ -26,8 +26,8 @@ const char *canproto_strerror(int err)
 
 int canproto_fd_len_valid(unsigned len)
 {
-    return len <= 8 || len == 12 || len == 16 || len == 20 || len == 24 ||
-           len == 32 || len == 48 || len == 64;
+    return len <= 8 || len == 12 || len == 16 || len == 20 || len == 24 || len == 32 || len == 48 ||
+           len == 64;
 }
 
 /* ---- little-endian fields ---------------------------------------------------- */
@@ -145,11 +145,12 @@ unsigned canproto_cia402_node(const canproto_ids_t *ids, unsigned axis)
 
 uint32_t canproto_cia402_tpdo(const canproto_ids_t *ids, unsigned axis)
 {
-    if (!ids->cia402 || !(ids->cia402_feedback || ids->cia402_enable) || axis >= CANPROTO_CIA402_AXES ||
-        !ids->cia402_cob_id[axis])
+    if (!ids->cia402 || !(ids->cia402_feedback || ids->cia402_enable) ||
+        axis >= CANPROTO_CIA402_AXES || !ids->cia402_cob_id[axis])
         return 0;
-    return ids->cia402_tpdo_id[axis] ? ids->cia402_tpdo_id[axis]
-                                     : CANPROTO_CIA402_TPDO1_BASE + (ids->cia402_cob_id[axis] & 0x7Fu);
+    return ids->cia402_tpdo_id[axis]
+               ? ids->cia402_tpdo_id[axis]
+               : CANPROTO_CIA402_TPDO1_BASE + (ids->cia402_cob_id[axis] & 0x7Fu);
 }
 
 int canproto_ids_check(const canproto_ids_t *ids, const char **why)
@@ -209,7 +210,7 @@ unsigned canproto_ids_rx(const canproto_ids_t *ids, uint32_t *out, unsigned max)
         unsigned node = canproto_cia402_node(ids, a);
         if (!ids->cia402_enable || !node)
             continue;
-        const uint32_t bring[3] = { 0x580u + node, 0x700u + node, 0x080u + node };
+        const uint32_t bring[3] = {0x580u + node, 0x700u + node, 0x080u + node};
         for (unsigned k = 0; k < 3; k++) {
             if (n < max)
                 out[n] = bring[k];
@@ -315,9 +316,10 @@ int canproto_encode_setpoint(uint32_t id, const engine_setpoint_t *sp,
                                ((sp->flags & ENGINE_SP_HOLD) || nopos ? CANPROTO_SP_HOLD : 0));
         f->data[1] = (uint8_t)sp->cycle;
         put_le(&f->data[2], 4, (uint64_t)sp_pos_raw(sp, a, &clamped));
-        put_le(&f->data[6], 2, nopos ? 0 : (uint64_t)quantize(sp->vel_m_s[a],
-                                                              CANPROTO_SP_VEL_M_S_PER_BIT,
-                                                              INT16_MIN, INT16_MAX, &clamped));
+        put_le(&f->data[6], 2,
+               nopos ? 0
+                     : (uint64_t)quantize(sp->vel_m_s[a], CANPROTO_SP_VEL_M_S_PER_BIT, INT16_MIN,
+                                          INT16_MAX, &clamped));
     }
     return clamped ? CANPROTO_CLAMPED : 0;
 }
@@ -332,8 +334,9 @@ int canproto_encode_setpoint_fd(uint32_t id, int brs, const engine_setpoint_t *s
     for (unsigned a = 0; a < ENGINE_AXES; a++) {
         put_le(&out->data[4 + 4 * a], 4, (uint64_t)sp_pos_raw(sp, a, &clamped));
         put_le(&out->data[16 + 4 * a], 4,
-               nopos ? 0 : (uint64_t)quantize(sp->vel_m_s[a], CANPROTO_SPFD_VEL_M_S_PER_BIT,
-                                              INT32_MIN, INT32_MAX, &clamped));
+               nopos ? 0
+                     : (uint64_t)quantize(sp->vel_m_s[a], CANPROTO_SPFD_VEL_M_S_PER_BIT, INT32_MIN,
+                                          INT32_MAX, &clamped));
     }
     out->data[28] = sp_state(sp);
     out->data[29] = (uint8_t)sp->flags;
@@ -353,8 +356,7 @@ static double axis_cpm(const canproto_ids_t *ids, unsigned axis)
     return c > 0 ? c : ids->cia402_counts_per_m;
 }
 
-int32_t canproto_cia402_counts(const canproto_ids_t *ids, unsigned axis, double pos_m,
-                               int *clamped)
+int32_t canproto_cia402_counts(const canproto_ids_t *ids, unsigned axis, double pos_m, int *clamped)
 {
     if (axis >= CANPROTO_CIA402_AXES) {
         *clamped = 1;
@@ -427,7 +429,8 @@ int canproto_decode_setpoint(const canproto_frame_t *f, canproto_setpoint_t *out
         out->cycle = (uint32_t)get_le(&f->data[0], 4);
         for (unsigned a = 0; a < ENGINE_AXES; a++) {
             int64_t raw = sext(get_le(&f->data[4 + 4 * a], 4), 32);
-            out->pos_m[a] = raw == CANPROTO_SP_POS_NA ? NAN : (double)raw * CANPROTO_SP_POS_M_PER_BIT;
+            out->pos_m[a] = raw == CANPROTO_SP_POS_NA ? NAN
+                                                      : (double)raw * CANPROTO_SP_POS_M_PER_BIT;
             out->vel_m_s[a] = (double)sext(get_le(&f->data[16 + 4 * a], 4), 32) *
                               CANPROTO_SPFD_VEL_M_S_PER_BIT;
         }
@@ -459,7 +462,8 @@ int canproto_decode_setpoint(const canproto_frame_t *f, canproto_setpoint_t *out
 int canproto_decode_status(const canproto_frame_t *f, canproto_status_t *out)
 {
     memset(out, 0, sizeof *out);
-    if (f->len != CANPROTO_STATUS_DLEN || (f->flags & (CANPROTO_F_RTR | CANPROTO_F_ERR | CANPROTO_F_EFF)))
+    if (f->len != CANPROTO_STATUS_DLEN ||
+        (f->flags & (CANPROTO_F_RTR | CANPROTO_F_ERR | CANPROTO_F_EFF)))
         return -CANPROTO_ELEN;
     out->state = f->data[0] & CANPROTO_ST_STATE_MASK;
     out->flags = f->data[0] & (CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP | CANPROTO_ST_OUT_FAULT |
@@ -701,8 +705,8 @@ double canproto_busload(const canproto_ids_t *ids, unsigned nobj, int sync, unsi
                         const canproto_traffic_t *tr, double bitrate, double data_bitrate)
 {
     double busy_s = 0, t;
-    if (!(bitrate > 0) || !(tr->rate_hz >= 0) || !(tr->status_hz >= 0) ||
-        !(tr->waypoint_hz >= 0) || sync_dlen > 1)
+    if (!(bitrate > 0) || !(tr->rate_hz >= 0) || !(tr->status_hz >= 0) || !(tr->waypoint_hz >= 0) ||
+        sync_dlen > 1)
         return -1;
     if (sync) {
         if ((t = canproto_frame_time_s(sync_dlen, 0, 0, 0, bitrate, 0)) < 0)
@@ -722,12 +726,12 @@ double canproto_busload(const canproto_ids_t *ids, unsigned nobj, int sync, unsi
         if (o->cia402)
             for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
                 if (o->cia402_cob_id[a])
-                    busy_s += tr->rate_hz *
-                              canproto_frame_time_s(o->cia402_controlword ? 6 : 4, 0, 0, 0,
-                                                    bitrate, 0);
+                    busy_s += tr->rate_hz * canproto_frame_time_s(o->cia402_controlword ? 6 : 4, 0,
+                                                                  0, 0, bitrate, 0);
         busy_s += tr->status_hz * canproto_frame_time_s(CANPROTO_STATUS_DLEN, 0, 0, 0, bitrate, 0);
-        t = o->fd ? canproto_frame_time_s(CANPROTO_WP_FD_DLEN, 1, brs, 0, bitrate, data_bitrate)
-                  : CANPROTO_WP_PARTS * canproto_frame_time_s(CANPROTO_WP_DLEN, 0, 0, 0, bitrate, 0);
+        t = o->fd
+                ? canproto_frame_time_s(CANPROTO_WP_FD_DLEN, 1, brs, 0, bitrate, data_bitrate)
+                : CANPROTO_WP_PARTS * canproto_frame_time_s(CANPROTO_WP_DLEN, 0, 0, 0, bitrate, 0);
         if (t < 0)
             return -1;
         busy_s += tr->waypoint_hz * t;
@@ -739,12 +743,16 @@ double canproto_busload(const canproto_ids_t *ids, unsigned nobj, int sync, unsi
 
 /* Range of a raw field in physical units. */
 #define U_MAX(bits) ((double)((1ull << (bits)) - 1))
-#define S_MIN(bits) (-(double)(1ull << ((bits) - 1)))
-#define S_MAX(bits) ((double)((1ull << ((bits) - 1)) - 1))
-#define SIG_U(name, mux, start, bits, factor, unit) \
-    { name, mux, start, bits, 0, factor, 0, 0, U_MAX(bits) * (factor), unit }
-#define SIG_S(name, mux, start, bits, factor, unit) \
-    { name, mux, start, bits, 1, factor, 0, S_MIN(bits) * (factor), S_MAX(bits) * (factor), unit }
+#define S_MIN(bits) (-(double)(1ull << ((bits)-1)))
+#define S_MAX(bits) ((double)((1ull << ((bits)-1)) - 1))
+#define SIG_U(name, mux, start, bits, factor, unit)                                                \
+    {                                                                                              \
+        name, mux, start, bits, 0, factor, 0, 0, U_MAX(bits) * (factor), unit                      \
+    }
+#define SIG_S(name, mux, start, bits, factor, unit)                                                \
+    {                                                                                              \
+        name, mux, start, bits, 1, factor, 0, S_MIN(bits) * (factor), S_MAX(bits) * (factor), unit \
+    }
 
 static const canproto_signal_t sig_wp[] = {
     SIG_U("WP_Mux", -2, 0, 8, 1, ""),
@@ -789,18 +797,12 @@ static const canproto_signal_t sig_spfd[] = {
     SIG_U("SPFD_Track", -1, 240, 16, 1, ""),
 };
 static const canproto_signal_t sig_st[] = {
-    SIG_U("ST_State", -1, 0, 3, 1, ""),
-    SIG_U("ST_BusDown", -1, 4, 1, 1, ""),
-    SIG_U("ST_TxDrop", -1, 5, 1, 1, ""),
-    SIG_U("ST_OutFault", -1, 6, 1, 1, ""),
-    SIG_U("ST_SafetyFault", -1, 7, 1, 1, ""),
-    SIG_U("ST_LastSeq", -1, 8, 8, 1, ""),
-    SIG_U("ST_Free", -1, 16, 8, 1, ""),
-    SIG_U("ST_Lost", -1, 24, 8, 1, ""),
-    SIG_U("ST_Rejected", -1, 32, 8, 1, ""),
-    SIG_U("ST_Malformed", -1, 40, 8, 1, ""),
-    SIG_U("ST_Dropped", -1, 48, 8, 1, ""),
-    SIG_U("ST_LastErr", -1, 56, 8, 1, ""),
+    SIG_U("ST_State", -1, 0, 3, 1, ""),       SIG_U("ST_BusDown", -1, 4, 1, 1, ""),
+    SIG_U("ST_TxDrop", -1, 5, 1, 1, ""),      SIG_U("ST_OutFault", -1, 6, 1, 1, ""),
+    SIG_U("ST_SafetyFault", -1, 7, 1, 1, ""), SIG_U("ST_LastSeq", -1, 8, 8, 1, ""),
+    SIG_U("ST_Free", -1, 16, 8, 1, ""),       SIG_U("ST_Lost", -1, 24, 8, 1, ""),
+    SIG_U("ST_Rejected", -1, 32, 8, 1, ""),   SIG_U("ST_Malformed", -1, 40, 8, 1, ""),
+    SIG_U("ST_Dropped", -1, 48, 8, 1, ""),    SIG_U("ST_LastErr", -1, 56, 8, 1, ""),
 };
 static const canproto_signal_t sig_rpdo[] = {
     SIG_S("Target_Position_607A", -1, 0, 32, 1, "inc"),
@@ -815,26 +817,26 @@ static const canproto_signal_t sig_tpdo_fb[] = {
 };
 
 static const canproto_message_t canproto_msgs[] = {
-    { "TRAJD_WAYPOINT", CANPROTO_ID_WAYPOINT_BASE, CANPROTO_WP_DLEN, 0, "SENDER", sig_wp,
-      sizeof sig_wp / sizeof sig_wp[0] },
-    { "TRAJD_WAYPOINT_FD", CANPROTO_ID_WAYPOINT_FD_BASE, CANPROTO_WP_FD_DLEN, 1, "SENDER",
-      sig_wpfd, sizeof sig_wpfd / sizeof sig_wpfd[0] },
-    { "TRAJD_SETPOINT", CANPROTO_ID_SETPOINT_BASE, CANPROTO_SP_DLEN, 0, "TRAJD", sig_sp,
-      sizeof sig_sp / sizeof sig_sp[0] },
-    { "TRAJD_SETPOINT_FD", CANPROTO_ID_SETPOINT_FD_BASE, CANPROTO_SP_FD_DLEN, 1, "TRAJD",
-      sig_spfd, sizeof sig_spfd / sizeof sig_spfd[0] },
-    { "TRAJD_STATUS", CANPROTO_ID_STATUS_BASE, CANPROTO_STATUS_DLEN, 0, "TRAJD", sig_st,
-      sizeof sig_st / sizeof sig_st[0] },
-    { "SYNC", CANPROTO_ID_SYNC_DEFAULT, 0, 0, "TRAJD", NULL, 0 },
-    { "RPDO1_NODE1", CANPROTO_CIA402_RPDO1_BASE + 1, 4, 0, "TRAJD", sig_rpdo, 1 },
-    { "RPDO1_NODE2", CANPROTO_CIA402_RPDO1_BASE + 2, 4, 0, "TRAJD", sig_rpdo, 1 },
-    { "RPDO1_NODE3", CANPROTO_CIA402_RPDO1_BASE + 3, 4, 0, "TRAJD", sig_rpdo, 1 },
-    { "RPDO_CW_NODE1", CANPROTO_CIA402_RPDO2_BASE + 1, 6, 0, "TRAJD", sig_rpdo_cw, 2 },
-    { "RPDO_CW_NODE2", CANPROTO_CIA402_RPDO2_BASE + 2, 6, 0, "TRAJD", sig_rpdo_cw, 2 },
-    { "RPDO_CW_NODE3", CANPROTO_CIA402_RPDO2_BASE + 3, 6, 0, "TRAJD", sig_rpdo_cw, 2 },
-    { "TPDO1_NODE1", CANPROTO_CIA402_TPDO1_BASE + 1, 6, 0, "SENDER", sig_tpdo_fb, 2 },
-    { "TPDO1_NODE2", CANPROTO_CIA402_TPDO1_BASE + 2, 6, 0, "SENDER", sig_tpdo_fb, 2 },
-    { "TPDO1_NODE3", CANPROTO_CIA402_TPDO1_BASE + 3, 6, 0, "SENDER", sig_tpdo_fb, 2 },
+    {"TRAJD_WAYPOINT", CANPROTO_ID_WAYPOINT_BASE, CANPROTO_WP_DLEN, 0, "SENDER", sig_wp,
+     sizeof sig_wp / sizeof sig_wp[0]},
+    {"TRAJD_WAYPOINT_FD", CANPROTO_ID_WAYPOINT_FD_BASE, CANPROTO_WP_FD_DLEN, 1, "SENDER", sig_wpfd,
+     sizeof sig_wpfd / sizeof sig_wpfd[0]},
+    {"TRAJD_SETPOINT", CANPROTO_ID_SETPOINT_BASE, CANPROTO_SP_DLEN, 0, "TRAJD", sig_sp,
+     sizeof sig_sp / sizeof sig_sp[0]},
+    {"TRAJD_SETPOINT_FD", CANPROTO_ID_SETPOINT_FD_BASE, CANPROTO_SP_FD_DLEN, 1, "TRAJD", sig_spfd,
+     sizeof sig_spfd / sizeof sig_spfd[0]},
+    {"TRAJD_STATUS", CANPROTO_ID_STATUS_BASE, CANPROTO_STATUS_DLEN, 0, "TRAJD", sig_st,
+     sizeof sig_st / sizeof sig_st[0]},
+    {"SYNC", CANPROTO_ID_SYNC_DEFAULT, 0, 0, "TRAJD", NULL, 0},
+    {"RPDO1_NODE1", CANPROTO_CIA402_RPDO1_BASE + 1, 4, 0, "TRAJD", sig_rpdo, 1},
+    {"RPDO1_NODE2", CANPROTO_CIA402_RPDO1_BASE + 2, 4, 0, "TRAJD", sig_rpdo, 1},
+    {"RPDO1_NODE3", CANPROTO_CIA402_RPDO1_BASE + 3, 4, 0, "TRAJD", sig_rpdo, 1},
+    {"RPDO_CW_NODE1", CANPROTO_CIA402_RPDO2_BASE + 1, 6, 0, "TRAJD", sig_rpdo_cw, 2},
+    {"RPDO_CW_NODE2", CANPROTO_CIA402_RPDO2_BASE + 2, 6, 0, "TRAJD", sig_rpdo_cw, 2},
+    {"RPDO_CW_NODE3", CANPROTO_CIA402_RPDO2_BASE + 3, 6, 0, "TRAJD", sig_rpdo_cw, 2},
+    {"TPDO1_NODE1", CANPROTO_CIA402_TPDO1_BASE + 1, 6, 0, "SENDER", sig_tpdo_fb, 2},
+    {"TPDO1_NODE2", CANPROTO_CIA402_TPDO1_BASE + 2, 6, 0, "SENDER", sig_tpdo_fb, 2},
+    {"TPDO1_NODE3", CANPROTO_CIA402_TPDO1_BASE + 3, 6, 0, "SENDER", sig_tpdo_fb, 2},
 };
 
 const canproto_message_t *canproto_messages(unsigned *count)
@@ -847,7 +849,8 @@ const canproto_message_t *canproto_messages(unsigned *count)
 #if defined(__GNUC__)
 __attribute__((format(printf, 4, 5)))
 #endif
-static void emit(char *buf, size_t len, size_t *pos, const char *fmt, ...);
+static void
+emit(char *buf, size_t len, size_t *pos, const char *fmt, ...);
 
 static void emit(char *buf, size_t len, size_t *pos, const char *fmt, ...)
 {
@@ -891,12 +894,17 @@ int canproto_dbc(char *buf, size_t len)
     }
     emit(buf, len, &pos,
          "CM_ \"trajd CAN protocol, generated from lib/proto/canproto.h by canproto_dbc(); ids are "
-         "the defaults of object 0 (object n: + n), RPDOs for CiA 402 nodes 1..3 (RPDO_CW: the layout sent with can.cia402_controlword = yes, shown on the RPDO2 ids 0x301..0x303; TPDO1: the drive feedback trajd reads, statusword 0x6041 and position actual value 0x6064). Setpoint positions 0x80000000: no position yet, do not move.\";\n"
-         "CM_ SG_ %u WP_Command \"1 finish, 2 stop now, 3 clear, 4 reset counters, 5 feed override\";\n"
+         "the defaults of object 0 (object n: + n), RPDOs for CiA 402 nodes 1..3 (RPDO_CW: the "
+         "layout sent with can.cia402_controlword = yes, shown on the RPDO2 ids 0x301..0x303; "
+         "TPDO1: the drive feedback trajd reads, statusword 0x6041 and position actual value "
+         "0x6064). Setpoint positions 0x80000000: no position yet, do not move.\";\n"
+         "CM_ SG_ %u WP_Command \"1 finish, 2 stop now, 3 clear, 4 reset counters, 5 feed "
+         "override\";\n"
          "CM_ SG_ %u WP_CommandArg \"feed override in percent (0..200) for command 5, else 0\";\n"
          "CM_ SG_ %u ST_LastErr \"1..11 engine_error of the last rejected waypoint, 0x40 "
          "malformed, 0x41 lost, 0x42 out of order, 0x43 setpoints dropped, 0x44 bus down, 0x45 "
-         "csv/stdout output lost lines, 0x46 safety monitor fault (object held until clear), 0x47 a CiA 402 "
+         "csv/stdout output lost lines, 0x46 safety monitor fault (object held until clear), 0x47 "
+         "a CiA 402 "
          "drive left Operation Enabled\";\n",
          CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_STATUS_BASE);
     emit(buf, len, &pos,

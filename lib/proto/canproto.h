@@ -67,40 +67,40 @@
 
 /* ---- frames ------------------------------------------------------------ */
 
-#define CANPROTO_MAX_DLEN 64     /* CAN FD payload */
+#define CANPROTO_MAX_DLEN 64 /* CAN FD payload */
 #define CANPROTO_CLASSIC_DLEN 8
 
 /* canproto_frame_t.flags */
-#define CANPROTO_F_EFF 0x01u     /* 29-bit identifier */
-#define CANPROTO_F_RTR 0x02u     /* remote request (classic only) */
-#define CANPROTO_F_ERR 0x04u     /* error frame (from the kernel) */
-#define CANPROTO_F_FD  0x08u     /* CAN FD frame */
-#define CANPROTO_F_BRS 0x10u     /* FD bit-rate switch */
-#define CANPROTO_F_ESI 0x20u     /* FD error state indicator */
+#define CANPROTO_F_EFF 0x01u /* 29-bit identifier */
+#define CANPROTO_F_RTR 0x02u /* remote request (classic only) */
+#define CANPROTO_F_ERR 0x04u /* error frame (from the kernel) */
+#define CANPROTO_F_FD 0x08u  /* CAN FD frame */
+#define CANPROTO_F_BRS 0x10u /* FD bit-rate switch */
+#define CANPROTO_F_ESI 0x20u /* FD error state indicator */
 
 #define CANPROTO_SFF_MASK 0x7FFu
 #define CANPROTO_EFF_MASK 0x1FFFFFFFu
 
 /* One frame, independent of <linux/can.h> (the daemon converts). */
 typedef struct {
-    uint32_t id;                      /* 11 or 29 bits, no flag bits */
-    uint8_t len;                      /* payload bytes, 0..8 or a CAN FD length */
-    uint8_t flags;                    /* CANPROTO_F_* */
+    uint32_t id;   /* 11 or 29 bits, no flag bits */
+    uint8_t len;   /* payload bytes, 0..8 or a CAN FD length */
+    uint8_t flags; /* CANPROTO_F_* */
     uint8_t data[CANPROTO_MAX_DLEN];
 } canproto_frame_t;
 
 /* ---- ids and layouts ------------------------------------------------------ */
 
 #define CANPROTO_OBJECTS_DEFAULT_MAX 16
-#define CANPROTO_ID_WAYPOINT_BASE    0x680u
+#define CANPROTO_ID_WAYPOINT_BASE 0x680u
 #define CANPROTO_ID_WAYPOINT_FD_BASE 0x690u
-#define CANPROTO_ID_SETPOINT_BASE    0x6A0u
+#define CANPROTO_ID_SETPOINT_BASE 0x6A0u
 #define CANPROTO_ID_SETPOINT_FD_BASE 0x6B0u
-#define CANPROTO_ID_STATUS_BASE      0x6C0u
-#define CANPROTO_ID_SYNC_DEFAULT     0x080u
-#define CANPROTO_CIA402_RPDO1_BASE   0x200u  /* CiA 301 RPDO1 = 0x200 + node-id */
-#define CANPROTO_CIA402_RPDO2_BASE   0x300u  /* CiA 301 RPDO2 = 0x300 + node-id */
-#define CANPROTO_CIA402_TPDO1_BASE   0x180u  /* CiA 301 TPDO1 = 0x180 + node-id */
+#define CANPROTO_ID_STATUS_BASE 0x6C0u
+#define CANPROTO_ID_SYNC_DEFAULT 0x080u
+#define CANPROTO_CIA402_RPDO1_BASE 0x200u /* CiA 301 RPDO1 = 0x200 + node-id */
+#define CANPROTO_CIA402_RPDO2_BASE 0x300u /* CiA 301 RPDO2 = 0x300 + node-id */
+#define CANPROTO_CIA402_TPDO1_BASE 0x180u /* CiA 301 TPDO1 = 0x180 + node-id */
 
 #define CANPROTO_WP_DLEN 8
 #define CANPROTO_WP_FD_DLEN 32
@@ -117,7 +117,7 @@ enum canproto_mux {
     CANPROTO_MUX_COMMAND = 4,
     CANPROTO_MUX_FD_WAYPOINT = 5,
 };
-#define CANPROTO_WP_PARTS 4          /* TIME, X, Y, Z */
+#define CANPROTO_WP_PARTS 4 /* TIME, X, Y, Z */
 
 /* Commands (WAYPOINT frame, mux COMMAND, byte 2; byte 3 the argument of
  * OVERRIDE, 0 for the others; bytes 4..7 zero). */
@@ -133,12 +133,12 @@ typedef enum {
 } canproto_cmd_t;
 
 /* Scalings: physical value = raw * scale. */
-#define CANPROTO_WP_T_S_PER_BIT 1e-6      /* uint48 */
-#define CANPROTO_WP_POS_M_PER_BIT 1e-6    /* int48 */
-#define CANPROTO_WP_BITS_PER_S 1e6        /* the same scalings as exact divisors */
+#define CANPROTO_WP_T_S_PER_BIT 1e-6   /* uint48 */
+#define CANPROTO_WP_POS_M_PER_BIT 1e-6 /* int48 */
+#define CANPROTO_WP_BITS_PER_S 1e6     /* the same scalings as exact divisors */
 #define CANPROTO_WP_BITS_PER_M 1e6
-#define CANPROTO_SP_POS_M_PER_BIT 1e-4    /* int32 */
-#define CANPROTO_SP_VEL_M_S_PER_BIT 1e-3  /* int16, classic */
+#define CANPROTO_SP_POS_M_PER_BIT 1e-4     /* int32 */
+#define CANPROTO_SP_VEL_M_S_PER_BIT 1e-3   /* int16, classic */
 #define CANPROTO_SPFD_VEL_M_S_PER_BIT 1e-6 /* int32, FD */
 
 #define CANPROTO_U48_MAX 0xFFFFFFFFFFFFLL
@@ -164,7 +164,7 @@ typedef enum {
 #define CANPROTO_ST_STATE_MASK 0x07u
 #define CANPROTO_ST_BUS_DOWN 0x10u
 #define CANPROTO_ST_TX_DROP 0x20u
-#define CANPROTO_ST_OUT_FAULT 0x40u   /* a csv/stdout output of the object lost lines or failed */
+#define CANPROTO_ST_OUT_FAULT 0x40u /* a csv/stdout output of the object lost lines or failed */
 #define CANPROTO_ST_FAULT 0x80u     /* the safety monitor holds the object (until clear) */
 
 /* STATUS byte 7: the last thing that went wrong. */
@@ -186,11 +186,12 @@ typedef enum {
 
 enum canproto_error {
     CANPROTO_OK = 0,
-    CANPROTO_ELEN = 1,      /* wrong length or frame kind (FD/classic/RTR/EFF) for the id */
-    CANPROTO_EMUX = 2,      /* unknown multiplexer value */
-    CANPROTO_EVALUE = 3,    /* a field holds a forbidden value (reserved bits, n/a marker, unknown command) */
-    CANPROTO_EID = 4,       /* not one of our ids */
-    CANPROTO_ECONFIG = 5,   /* invalid id or profile configuration */
+    CANPROTO_ELEN = 1, /* wrong length or frame kind (FD/classic/RTR/EFF) for the id */
+    CANPROTO_EMUX = 2, /* unknown multiplexer value */
+    CANPROTO_EVALUE =
+        3, /* a field holds a forbidden value (reserved bits, n/a marker, unknown command) */
+    CANPROTO_EID = 4,     /* not one of our ids */
+    CANPROTO_ECONFIG = 5, /* invalid id or profile configuration */
     CANPROTO_ERROR_COUNT
 };
 
@@ -206,21 +207,21 @@ int canproto_fd_len_valid(unsigned len);
 /* ---- per-object id configuration ------------------------------------------------- */
 
 #define CANPROTO_CIA402_AXES ENGINE_AXES
-#define CANPROTO_CIA402_SDO_MAX 8    /* configuration SDO writes per object */
+#define CANPROTO_CIA402_SDO_MAX 8 /* configuration SDO writes per object */
 
 typedef struct {
-    uint32_t waypoint_id;       /* classic waypoint frames in */
-    uint32_t waypoint_fd_id;    /* FD waypoint frames in (used if fd) */
-    uint32_t setpoint_id;       /* classic setpoints out */
-    uint32_t setpoint_fd_id;    /* FD setpoints out (used if fd) */
+    uint32_t waypoint_id;    /* classic waypoint frames in */
+    uint32_t waypoint_fd_id; /* FD waypoint frames in (used if fd) */
+    uint32_t setpoint_id;    /* classic setpoints out */
+    uint32_t setpoint_fd_id; /* FD setpoints out (used if fd) */
     uint32_t status_id;
-    int fd;                     /* 1: FD setpoints out and FD waypoints in */
-    int brs;                    /* 1: FD frames with bit-rate switch */
-    int own;                    /* 1: send trajd's own setpoint frames */
-    int cia402;                 /* 1: send CiA 402 RPDOs */
+    int fd;                                       /* 1: FD setpoints out and FD waypoints in */
+    int brs;                                      /* 1: FD frames with bit-rate switch */
+    int own;                                      /* 1: send trajd's own setpoint frames */
+    int cia402;                                   /* 1: send CiA 402 RPDOs */
     uint32_t cia402_cob_id[CANPROTO_CIA402_AXES]; /* 0 = axis not sent */
-    double cia402_counts_per_m; /* target position increments per metre (> 0) */
-    int cia402_controlword;     /* 1: RPDO = controlword (2 bytes) + target (4 bytes) */
+    double cia402_counts_per_m;                   /* target position increments per metre (> 0) */
+    int cia402_controlword;            /* 1: RPDO = controlword (2 bytes) + target (4 bytes) */
     uint16_t cia402_controlword_value; /* default 0x000F: enable operation */
     /* Per axis (a drive's own scale, direction and zero):
      *   increments = offset + (invert ? -1 : 1) * round(pos_m * counts_per_m)
@@ -242,7 +243,7 @@ typedef struct {
     struct {
         uint16_t index;
         uint8_t sub;
-        uint8_t size;       /* 1, 2, 4 bytes */
+        uint8_t size; /* 1, 2, 4 bytes */
         uint32_t value;
     } cia402_sdo[CANPROTO_CIA402_SDO_MAX];
     unsigned cia402_nsdo;
@@ -299,8 +300,7 @@ int canproto_encode_waypoint(uint32_t id, const engine_waypoint_t *wp,
                              canproto_frame_t out[CANPROTO_WP_PARTS]);
 
 /* Same, as one CAN FD frame.  Same returns. */
-int canproto_encode_waypoint_fd(uint32_t id, const engine_waypoint_t *wp,
-                                canproto_frame_t *out);
+int canproto_encode_waypoint_fd(uint32_t id, const engine_waypoint_t *wp, canproto_frame_t *out);
 
 /* A COMMAND frame on the waypoint id.  Returns 0 or -CANPROTO_EVALUE. */
 int canproto_encode_command(uint32_t id, canproto_cmd_t cmd, canproto_frame_t *out);
@@ -333,15 +333,15 @@ int canproto_encode_cia402(const canproto_ids_t *ids, unsigned axis, double pos_
 
 /* STATUS frame contents. */
 typedef struct {
-    uint8_t state;          /* engine_state_t */
-    uint8_t flags;          /* CANPROTO_ST_BUS_DOWN | _TX_DROP | _OUT_FAULT | _FAULT */
+    uint8_t state; /* engine_state_t */
+    uint8_t flags; /* CANPROTO_ST_BUS_DOWN | _TX_DROP | _OUT_FAULT | _FAULT */
     uint32_t last_seq;
     uint32_t free;
     uint32_t lost;
     uint32_t rejected;
     uint32_t malformed;
     uint32_t dropped;
-    uint8_t last_err;       /* canproto_status_err_t or engine_error */
+    uint8_t last_err; /* canproto_status_err_t or engine_error */
 } canproto_status_t;
 
 void canproto_encode_status(uint32_t id, const canproto_status_t *st, canproto_frame_t *out);
@@ -350,12 +350,12 @@ void canproto_encode_status(uint32_t id, const canproto_status_t *st, canproto_f
 
 /* One decoded SETPOINT frame (classic: one axis; FD: all). */
 typedef struct {
-    unsigned axis;          /* classic only */
-    uint32_t cycle;         /* classic: low 8 bits */
+    unsigned axis;  /* classic only */
+    uint32_t cycle; /* classic: low 8 bits */
     uint8_t state;
-    uint8_t flags;          /* classic: ENGINE_SP_HOLD, and ENGINE_SP_NO_POSITION from the marker */
-    uint16_t track;         /* FD only */
-    double pos_m[ENGINE_AXES];   /* classic: [axis] only; NaN for CANPROTO_SP_POS_NA */
+    uint8_t flags;  /* classic: ENGINE_SP_HOLD, and ENGINE_SP_NO_POSITION from the marker */
+    uint16_t track; /* FD only */
+    double pos_m[ENGINE_AXES]; /* classic: [axis] only; NaN for CANPROTO_SP_POS_NA */
     double vel_m_s[ENGINE_AXES];
 } canproto_setpoint_t;
 
@@ -370,45 +370,45 @@ int canproto_decode_status(const canproto_frame_t *f, canproto_status_t *out);
 typedef struct {
     int used;
     uint8_t seq8;
-    uint8_t have;           /* bit per part (1 << mux) */
+    uint8_t have; /* bit per part (1 << mux) */
     uint64_t t_us;
     int64_t pos_um[ENGINE_AXES];
-    uint32_t stamp;         /* order in which slots were opened (oldest is evicted) */
+    uint32_t stamp; /* order in which slots were opened (oldest is evicted) */
 } canproto_slot_t;
 
 typedef struct {
-    uint64_t frames;        /* frames offered */
-    uint64_t malformed;     /* sum of malformed_by */
+    uint64_t frames;    /* frames offered */
+    uint64_t malformed; /* sum of malformed_by */
     uint64_t malformed_by[CANPROTO_ERROR_COUNT];
-    uint64_t completed;     /* waypoints reassembled and handed out */
-    uint64_t lost;          /* waypoints never handed out (sequence gaps) */
-    uint64_t duplicates;    /* frames or waypoints already handed out, ignored */
-    uint64_t out_of_order;  /* frames of a waypoint older than the last handed out, dropped */
-    uint64_t incomplete;    /* partial waypoints abandoned (also counted in lost) */
+    uint64_t completed;    /* waypoints reassembled and handed out */
+    uint64_t lost;         /* waypoints never handed out (sequence gaps) */
+    uint64_t duplicates;   /* frames or waypoints already handed out, ignored */
+    uint64_t out_of_order; /* frames of a waypoint older than the last handed out, dropped */
+    uint64_t incomplete;   /* partial waypoints abandoned (also counted in lost) */
     uint64_t commands;
 } canproto_rx_stats_t;
 
 typedef struct {
-    canproto_slot_t *slots;  /* caller's */
+    canproto_slot_t *slots; /* caller's */
     unsigned nslots;
-    int have_last;           /* a waypoint was consumed since init/restart */
-    uint32_t last_seq;       /* extended sequence number of the last consumed waypoint */
+    int have_last;     /* a waypoint was consumed since init/restart */
+    uint32_t last_seq; /* extended sequence number of the last consumed waypoint */
     uint32_t stamp;
     canproto_rx_stats_t st;
 } canproto_rx_t;
 
 /* What canproto_rx_frame produced. */
 typedef enum {
-    CANPROTO_RX_NONE = 0,      /* frame absorbed (part of a waypoint, duplicate, stale) */
-    CANPROTO_RX_WAYPOINT = 1,  /* a complete waypoint is in out->wp (not yet consumed) */
-    CANPROTO_RX_COMMAND = 2,   /* out->cmd */
+    CANPROTO_RX_NONE = 0,     /* frame absorbed (part of a waypoint, duplicate, stale) */
+    CANPROTO_RX_WAYPOINT = 1, /* a complete waypoint is in out->wp (not yet consumed) */
+    CANPROTO_RX_COMMAND = 2,  /* out->cmd */
 } canproto_rx_kind_t;
 
 typedef struct {
-    engine_waypoint_t wp;      /* wp.seq: extended 32-bit sequence number */
+    engine_waypoint_t wp; /* wp.seq: extended 32-bit sequence number */
     canproto_cmd_t cmd;
-    unsigned cmd_arg;          /* byte 3: OVERRIDE percent (0 for the other commands) */
-    uint32_t lost_before;      /* waypoints missing between the last consumed one and this */
+    unsigned cmd_arg;     /* byte 3: OVERRIDE percent (0 for the other commands) */
+    uint32_t lost_before; /* waypoints missing between the last consumed one and this */
 } canproto_rx_out_t;
 
 /*
@@ -452,8 +452,8 @@ void canproto_rx_consume(canproto_rx_t *rx, const canproto_rx_out_t *out);
  * len must be a valid length for the kind; bitrates > 0 (data_bitrate only
  * used with FD + BRS).  Returns a negative value for invalid arguments.
  */
-double canproto_frame_time_s(unsigned len, int fd, int brs, int eff,
-                             double bitrate, double data_bitrate);
+double canproto_frame_time_s(unsigned len, int fd, int brs, int eff, double bitrate,
+                             double data_bitrate);
 
 /* Worst-case bits at the nominal rate equivalent: frame_time_s * bitrate. */
 double canproto_frame_bits(unsigned len, int fd, int brs, int eff, double bitrate,
@@ -461,9 +461,9 @@ double canproto_frame_bits(unsigned len, int fd, int brs, int eff, double bitrat
 
 /* Traffic trajd puts on the bus for one object (output) plus its expected input. */
 typedef struct {
-    double rate_hz;              /* setpoint cycles per second */
-    double status_hz;            /* STATUS frames per second */
-    double waypoint_hz;          /* expected waypoints per second in (from the sender) */
+    double rate_hz;     /* setpoint cycles per second */
+    double status_hz;   /* STATUS frames per second */
+    double waypoint_hz; /* expected waypoints per second in (from the sender) */
 } canproto_traffic_t;
 
 /*
@@ -471,16 +471,15 @@ typedef struct {
  * (an array of nobj), with a SYNC of sync_dlen bytes per cycle if sync is set.
  * Returns the load, or a negative value for invalid arguments.
  */
-double canproto_busload(const canproto_ids_t *ids, unsigned nobj, int sync,
-                        unsigned sync_dlen, const canproto_traffic_t *tr,
-                        double bitrate, double data_bitrate);
+double canproto_busload(const canproto_ids_t *ids, unsigned nobj, int sync, unsigned sync_dlen,
+                        const canproto_traffic_t *tr, double bitrate, double data_bitrate);
 
 /* ---- description tables (DBC generation, docs, tests) ----------------------------- */
 
 typedef struct {
-    const char *name;       /* DBC signal name */
-    int mux;                /* -1: not multiplexed, -2: the multiplexer, >= 0: mux value */
-    unsigned start_bit;     /* Intel (little-endian) start bit */
+    const char *name;   /* DBC signal name */
+    int mux;            /* -1: not multiplexed, -2: the multiplexer, >= 0: mux value */
+    unsigned start_bit; /* Intel (little-endian) start bit */
     unsigned bits;
     int is_signed;
     double factor;
@@ -490,8 +489,8 @@ typedef struct {
 } canproto_signal_t;
 
 typedef struct {
-    const char *name;       /* DBC message name */
-    uint32_t id;            /* default id for object 0 */
+    const char *name; /* DBC message name */
+    uint32_t id;      /* default id for object 0 */
     unsigned dlen;
     int fd;
     const char *sender;

@@ -26,14 +26,22 @@ static uint32_t le(const uint8_t *p, unsigned n)
 cia402_state_t cia402_state(uint16_t sw)
 {
     /* CiA 402-2 table 30: (mask, value) per state; the masks differ */
-    if ((sw & 0x4F) == 0x00) return CIA402_NOT_READY;
-    if ((sw & 0x4F) == 0x40) return CIA402_SWITCH_ON_DISABLED;
-    if ((sw & 0x6F) == 0x21) return CIA402_READY;
-    if ((sw & 0x6F) == 0x23) return CIA402_SWITCHED_ON;
-    if ((sw & 0x6F) == 0x27) return CIA402_OPERATION_ENABLED;
-    if ((sw & 0x6F) == 0x07) return CIA402_QUICK_STOP_ACTIVE;
-    if ((sw & 0x4F) == 0x0F) return CIA402_FAULT_REACTION;
-    if ((sw & 0x4F) == 0x08) return CIA402_FAULT;
+    if ((sw & 0x4F) == 0x00)
+        return CIA402_NOT_READY;
+    if ((sw & 0x4F) == 0x40)
+        return CIA402_SWITCH_ON_DISABLED;
+    if ((sw & 0x6F) == 0x21)
+        return CIA402_READY;
+    if ((sw & 0x6F) == 0x23)
+        return CIA402_SWITCHED_ON;
+    if ((sw & 0x6F) == 0x27)
+        return CIA402_OPERATION_ENABLED;
+    if ((sw & 0x6F) == 0x07)
+        return CIA402_QUICK_STOP_ACTIVE;
+    if ((sw & 0x4F) == 0x0F)
+        return CIA402_FAULT_REACTION;
+    if ((sw & 0x4F) == 0x08)
+        return CIA402_FAULT;
     return CIA402_STATE_UNKNOWN;
 }
 
@@ -121,37 +129,40 @@ const char *cia402_sdo_abort_text(uint32_t code)
         uint32_t code;
         const char *text;
     } t[] = {
-        { 0x05030000, "toggle bit not alternated" },
-        { 0x05040000, "SDO protocol timed out" },
-        { 0x05040001, "client/server command specifier not valid or unknown" },
-        { 0x05040002, "invalid block size (block mode only)" },
-        { 0x05040003, "invalid sequence number (block mode only)" },
-        { 0x05040004, "CRC error (block mode only)" },
-        { 0x05040005, "out of memory" },
-        { 0x06010000, "unsupported access to an object" },
-        { 0x06010001, "attempt to read a write only object" },
-        { 0x06010002, "attempt to write a read only object" },
-        { 0x06020000, "object does not exist in the object dictionary" },
-        { 0x06040041, "object cannot be mapped to the PDO" },
-        { 0x06040042, "the number and length of the objects to be mapped would exceed PDO length" },
-        { 0x06040043, "general parameter incompatibility reason" },
-        { 0x06040047, "general internal incompatibility in the device" },
-        { 0x06060000, "access failed due to a hardware error" },
-        { 0x06070010, "data type does not match, length of service parameter does not match" },
-        { 0x06070012, "data type does not match, length of service parameter too high" },
-        { 0x06070013, "data type does not match, length of service parameter too low" },
-        { 0x06090011, "sub-index does not exist" },
-        { 0x06090030, "invalid value for parameter (download only)" },
-        { 0x06090031, "value of parameter written too high (download only)" },
-        { 0x06090032, "value of parameter written too low (download only)" },
-        { 0x06090036, "maximum value is less than minimum value" },
-        { 0x060A0023, "resource not available: SDO connection" },
-        { 0x08000000, "general error" },
-        { 0x08000020, "data cannot be transferred or stored to the application" },
-        { 0x08000021, "data cannot be transferred or stored to the application because of local control" },
-        { 0x08000022, "data cannot be transferred or stored to the application because of the present device state" },
-        { 0x08000023, "object dictionary dynamic generation fails or no object dictionary is present" },
-        { 0x08000024, "no data available" },
+        {0x05030000, "toggle bit not alternated"},
+        {0x05040000, "SDO protocol timed out"},
+        {0x05040001, "client/server command specifier not valid or unknown"},
+        {0x05040002, "invalid block size (block mode only)"},
+        {0x05040003, "invalid sequence number (block mode only)"},
+        {0x05040004, "CRC error (block mode only)"},
+        {0x05040005, "out of memory"},
+        {0x06010000, "unsupported access to an object"},
+        {0x06010001, "attempt to read a write only object"},
+        {0x06010002, "attempt to write a read only object"},
+        {0x06020000, "object does not exist in the object dictionary"},
+        {0x06040041, "object cannot be mapped to the PDO"},
+        {0x06040042, "the number and length of the objects to be mapped would exceed PDO length"},
+        {0x06040043, "general parameter incompatibility reason"},
+        {0x06040047, "general internal incompatibility in the device"},
+        {0x06060000, "access failed due to a hardware error"},
+        {0x06070010, "data type does not match, length of service parameter does not match"},
+        {0x06070012, "data type does not match, length of service parameter too high"},
+        {0x06070013, "data type does not match, length of service parameter too low"},
+        {0x06090011, "sub-index does not exist"},
+        {0x06090030, "invalid value for parameter (download only)"},
+        {0x06090031, "value of parameter written too high (download only)"},
+        {0x06090032, "value of parameter written too low (download only)"},
+        {0x06090036, "maximum value is less than minimum value"},
+        {0x060A0023, "resource not available: SDO connection"},
+        {0x08000000, "general error"},
+        {0x08000020, "data cannot be transferred or stored to the application"},
+        {0x08000021,
+         "data cannot be transferred or stored to the application because of local control"},
+        {0x08000022, "data cannot be transferred or stored to the application because of the "
+                     "present device state"},
+        {0x08000023,
+         "object dictionary dynamic generation fails or no object dictionary is present"},
+        {0x08000024, "no data available"},
     };
     for (unsigned i = 0; i < sizeof t / sizeof t[0]; i++)
         if (t[i].code == code)

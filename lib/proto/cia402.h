@@ -25,8 +25,8 @@
 #define CIA402_COB_EMCY 0x080u
 #define CIA402_COB_TPDO1 0x180u
 #define CIA402_COB_RPDO1 0x200u
-#define CIA402_COB_SDO_TX 0x580u   /* server (drive) -> client (trajd) */
-#define CIA402_COB_SDO_RX 0x600u   /* client (trajd) -> server (drive) */
+#define CIA402_COB_SDO_TX 0x580u /* server (drive) -> client (trajd) */
+#define CIA402_COB_SDO_RX 0x600u /* client (trajd) -> server (drive) */
 #define CIA402_COB_HEARTBEAT 0x700u
 #define CIA402_NODE_MAX 127
 
@@ -50,7 +50,7 @@ enum cia402_nmt_state {
 /* Objects trajd uses. */
 #define CIA402_OBJ_CONTROLWORD 0x6040u
 #define CIA402_OBJ_STATUSWORD 0x6041u
-#define CIA402_OBJ_MODE 0x6060u          /* modes of operation: 8 = CSP */
+#define CIA402_OBJ_MODE 0x6060u /* modes of operation: 8 = CSP */
 #define CIA402_OBJ_POSITION_ACTUAL 0x6064u
 #define CIA402_OBJ_TARGET_POSITION 0x607Au
 #define CIA402_OBJ_INTERP_PERIOD 0x60C2u /* sub 1 value, sub 2 index (10^index s) */
@@ -62,19 +62,19 @@ enum cia402_nmt_state {
 #define CIA402_CW_SWITCH_ON 0x0007u
 #define CIA402_CW_ENABLE_OPERATION 0x000Fu
 #define CIA402_CW_QUICK_STOP 0x0002u
-#define CIA402_CW_FAULT_RESET 0x0080u     /* on its rising edge */
+#define CIA402_CW_FAULT_RESET 0x0080u /* on its rising edge */
 
 /* Drive states (CiA 402-2, figure 13 and table 30). */
 typedef enum {
-    CIA402_NOT_READY = 0,         /* xxxx xxxx x0xx 0000 */
-    CIA402_SWITCH_ON_DISABLED = 1,/* xxxx xxxx x1xx 0000 */
-    CIA402_READY = 2,             /* xxxx xxxx x01x 0001 ready to switch on */
-    CIA402_SWITCHED_ON = 3,       /* xxxx xxxx x01x 0011 */
-    CIA402_OPERATION_ENABLED = 4, /* xxxx xxxx x01x 0111 */
-    CIA402_QUICK_STOP_ACTIVE = 5, /* xxxx xxxx x00x 0111 */
-    CIA402_FAULT_REACTION = 6,    /* xxxx xxxx x0xx 1111 */
-    CIA402_FAULT = 7,             /* xxxx xxxx x0xx 1000 */
-    CIA402_STATE_UNKNOWN = 8,     /* no pattern matches (or no statusword yet) */
+    CIA402_NOT_READY = 0,          /* xxxx xxxx x0xx 0000 */
+    CIA402_SWITCH_ON_DISABLED = 1, /* xxxx xxxx x1xx 0000 */
+    CIA402_READY = 2,              /* xxxx xxxx x01x 0001 ready to switch on */
+    CIA402_SWITCHED_ON = 3,        /* xxxx xxxx x01x 0011 */
+    CIA402_OPERATION_ENABLED = 4,  /* xxxx xxxx x01x 0111 */
+    CIA402_QUICK_STOP_ACTIVE = 5,  /* xxxx xxxx x00x 0111 */
+    CIA402_FAULT_REACTION = 6,     /* xxxx xxxx x0xx 1111 */
+    CIA402_FAULT = 7,              /* xxxx xxxx x0xx 1000 */
+    CIA402_STATE_UNKNOWN = 8,      /* no pattern matches (or no statusword yet) */
 } cia402_state_t;
 
 /* The state a statusword shows. */
@@ -111,17 +111,17 @@ int cia402_encode_sdo_download(uint8_t node, uint16_t index, uint8_t sub, uint32
 /* ---- decoders (frames from the drive) ---- */
 
 typedef enum {
-    CIA402_SDO_DOWNLOAD_OK = 1,   /* 0x60: the write was done */
-    CIA402_SDO_ABORT = 2,         /* 0x80: refused, abort_code says why */
-    CIA402_SDO_UPLOAD = 3,        /* 0x4x: an expedited read reply (value) */
+    CIA402_SDO_DOWNLOAD_OK = 1, /* 0x60: the write was done */
+    CIA402_SDO_ABORT = 2,       /* 0x80: refused, abort_code says why */
+    CIA402_SDO_UPLOAD = 3,      /* 0x4x: an expedited read reply (value) */
 } cia402_sdo_kind_t;
 
 typedef struct {
     cia402_sdo_kind_t kind;
     uint16_t index;
     uint8_t sub;
-    uint32_t value;               /* UPLOAD */
-    uint32_t abort_code;          /* ABORT */
+    uint32_t value;      /* UPLOAD */
+    uint32_t abort_code; /* ABORT */
 } cia402_sdo_reply_t;
 
 /*

@@ -185,8 +185,7 @@ int mbmap_check_request(unsigned n, int writes_enabled, const uint8_t *pdu, size
             len != 6 + 2 * (size_t)count)
             return -MBMAP_EVALUE;
         break;
-    default:
-        return -MBMAP_EFUNCTION;
+    default: return -MBMAP_EFUNCTION;
     }
     if (addr + count > regs)
         return -MBMAP_EADDRESS;
@@ -275,26 +274,35 @@ int mbmap_rtu_frame_len(const uint8_t *buf, size_t len)
     if (len < 2)
         return 0;
     switch (buf[1]) {
-    case 0x01: case 0x02: case 0x03: case 0x04: case 0x05: case 0x06:
-        return 8;                           /* addr fc a a n n crc crc */
-    case 0x0f: case 0x10:
+    case 0x01:
+    case 0x02:
+    case 0x03:
+    case 0x04:
+    case 0x05:
+    case 0x06: return 8; /* addr fc a a n n crc crc */
+    case 0x0f:
+    case 0x10:
         if (len < 7)
             return 0;
-        return 9 + buf[6];                  /* addr fc a a n n bc data crc crc */
+        return 9 + buf[6]; /* addr fc a a n n bc data crc crc */
     case 0x17:
         if (len < 11)
             return 0;
         return 13 + buf[10];
-    case 0x07: case 0x0b: case 0x0c: case 0x11:
-        return 4;                           /* addr fc crc crc */
-    default:
-        return -1;
+    case 0x07:
+    case 0x0b:
+    case 0x0c:
+    case 0x11: return 4; /* addr fc crc crc */
+    default: return -1;
     }
 }
 
 /* ---- documentation ----------------------------------------------------- */
 
-#define F(tab, off, cnt, ty, name, unit, doc) { tab, off, cnt, ty, name, unit, doc }
+#define F(tab, off, cnt, ty, name, unit, doc)                                                      \
+    {                                                                                              \
+        tab, off, cnt, ty, name, unit, doc                                                         \
+    }
 #define ID "input daemon"
 #define IO "input object"
 #define HO "holding object"
@@ -303,36 +311,52 @@ static const mbmap_field_t fields[] = {
     F(ID, MBMAP_D_MAGIC, 1, MBMAP_T_U16, "magic", "", "0x7444, identifies trajd"),
     F(ID, MBMAP_D_VERSION, 1, MBMAP_T_U16, "version", "", "register map version"),
     F(ID, MBMAP_D_OBJECTS, 1, MBMAP_T_U16, "objects", "", "number of objects"),
-    F(ID, MBMAP_D_WRITES, 1, MBMAP_T_U16, "writes_enabled", "", "1 if holding registers accept writes"),
+    F(ID, MBMAP_D_WRITES, 1, MBMAP_T_U16, "writes_enabled", "",
+      "1 if holding registers accept writes"),
     F(ID, MBMAP_D_GEN, 2, MBMAP_T_U32, "generation", "", "snapshot generation, +1 per tick"),
     F(ID, MBMAP_D_UPTIME_S, 2, MBMAP_T_U32, "uptime", "s", "since the daemon started"),
     F(ID, MBMAP_D_PERIOD_US, 2, MBMAP_T_U32, "period", "us", "output period"),
     F(ID, MBMAP_D_LATE_P50_US, 2, MBMAP_T_U32, "lateness_p50", "us", "tick lateness, median"),
-    F(ID, MBMAP_D_LATE_P99_US, 2, MBMAP_T_U32, "lateness_p99", "us", "tick lateness, 99th percentile"),
+    F(ID, MBMAP_D_LATE_P99_US, 2, MBMAP_T_U32, "lateness_p99", "us",
+      "tick lateness, 99th percentile"),
     F(ID, MBMAP_D_LATE_MAX_US, 2, MBMAP_T_U32, "lateness_max", "us", "tick lateness, maximum"),
-    F(ID, MBMAP_D_MISSED_TICKS, 2, MBMAP_T_U32, "missed_ticks", "", "timer expirations missed by the loop"),
-    F(ID, MBMAP_D_CAN_STATE, 1, MBMAP_T_U16, "can_state", "", "0 none, 1 active, 2 warning, 3 passive, 4 bus-off, 5 down"),
+    F(ID, MBMAP_D_MISSED_TICKS, 2, MBMAP_T_U32, "missed_ticks", "",
+      "timer expirations missed by the loop"),
+    F(ID, MBMAP_D_CAN_STATE, 1, MBMAP_T_U16, "can_state", "",
+      "0 none, 1 active, 2 warning, 3 passive, 4 bus-off, 5 down"),
     F(ID, MBMAP_D_CAN_LOAD, 1, MBMAP_T_U16, "can_load", "0.1 %", "CAN bus load"),
     F(ID, MBMAP_D_MB_REQUESTS, 2, MBMAP_T_U32, "mb_requests", "", "Modbus requests answered"),
     F(ID, MBMAP_D_MB_EXCEPTIONS, 2, MBMAP_T_U32, "mb_exceptions", "", "exception responses sent"),
-    F(ID, MBMAP_D_MB_REFUSED, 2, MBMAP_T_U32, "mb_refused", "", "connections refused (allow-list; at max_clients only if every client is under 250 ms old)"),
+    F(ID, MBMAP_D_MB_REFUSED, 2, MBMAP_T_U32, "mb_refused", "",
+      "connections refused (allow-list; at max_clients only if every client is under 250 ms old)"),
     F(ID, MBMAP_D_MB_CLIENTS, 1, MBMAP_T_U16, "mb_clients", "", "TCP clients connected"),
-    F(ID, MBMAP_D_MB_EVICTED, 2, MBMAP_T_U32, "mb_evicted", "", "clients evicted at max_clients to admit a newcomer"),
-    F(ID, MBMAP_D_MB_SLOW, 2, MBMAP_T_U32, "mb_slow", "", "clients dropped: a request not whole within request_timeout_ms"),
-    F(ID, MBMAP_D_OUT_LOST, 2, MBMAP_T_U32, "out_lost", "", "setpoint lines lost by csv/stdout outputs (write error or full buffer)"),
-    F(ID, MBMAP_D_OUT_FAULT, 1, MBMAP_T_U16, "out_fault", "", "1 once an output failed to write (disk full, I/O error)"),
-    F(ID, MBMAP_D_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "", "copy of generation (whole-block reads)"),
+    F(ID, MBMAP_D_MB_EVICTED, 2, MBMAP_T_U32, "mb_evicted", "",
+      "clients evicted at max_clients to admit a newcomer"),
+    F(ID, MBMAP_D_MB_SLOW, 2, MBMAP_T_U32, "mb_slow", "",
+      "clients dropped: a request not whole within request_timeout_ms"),
+    F(ID, MBMAP_D_OUT_LOST, 2, MBMAP_T_U32, "out_lost", "",
+      "setpoint lines lost by csv/stdout outputs (write error or full buffer)"),
+    F(ID, MBMAP_D_OUT_FAULT, 1, MBMAP_T_U16, "out_fault", "",
+      "1 once an output failed to write (disk full, I/O error)"),
+    F(ID, MBMAP_D_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "",
+      "copy of generation (whole-block reads)"),
 
     F(IO, MBMAP_O_GEN, 2, MBMAP_T_U32, "generation", "", "snapshot generation of this block"),
-    F(IO, MBMAP_O_STATE, 1, MBMAP_T_U16, "state", "", "0 waiting, 1 streaming, 2 underrun, 3 finished"),
-    F(IO, MBMAP_O_FLAGS, 1, MBMAP_T_U16, "flags", "", "bit 0 hold, 1 new track, 2 ticks skipped, 3 transfer, 4 no position yet: x, y, z are NaN, do not move (ENGINE_SP_*)"),
+    F(IO, MBMAP_O_STATE, 1, MBMAP_T_U16, "state", "",
+      "0 waiting, 1 streaming, 2 underrun, 3 finished"),
+    F(IO, MBMAP_O_FLAGS, 1, MBMAP_T_U16, "flags", "",
+      "bit 0 hold, 1 new track, 2 ticks skipped, 3 transfer, 4 no position yet: x, y, z are NaN, "
+      "do not move (ENGINE_SP_*)"),
     F(IO, MBMAP_O_CYCLE, 2, MBMAP_T_U32, "cycle", "", "setpoint tick counter"),
     F(IO, MBMAP_O_TRACK, 2, MBMAP_T_U32, "track", "", "trajectory number"),
     F(IO, MBMAP_O_BUFFERED, 2, MBMAP_T_U32, "buffered", "", "waypoints buffered"),
     F(IO, MBMAP_O_FREE, 2, MBMAP_T_U32, "free", "", "waypoints that can still be written"),
-    F(IO, MBMAP_O_LOOKAHEAD, 2, MBMAP_T_U32, "lookahead_needed", "", "waypoints of lookahead needed to stream"),
-    F(IO, MBMAP_O_AHEAD_S, 2, MBMAP_T_F32, "lookahead_available", "s", "track time buffered ahead of the output"),
-    F(IO, MBMAP_O_LAST_SEQ, 2, MBMAP_T_U32, "last_seq", "", "sequence number of the last accepted waypoint"),
+    F(IO, MBMAP_O_LOOKAHEAD, 2, MBMAP_T_U32, "lookahead_needed", "",
+      "waypoints of lookahead needed to stream"),
+    F(IO, MBMAP_O_AHEAD_S, 2, MBMAP_T_F32, "lookahead_available", "s",
+      "track time buffered ahead of the output"),
+    F(IO, MBMAP_O_LAST_SEQ, 2, MBMAP_T_U32, "last_seq", "",
+      "sequence number of the last accepted waypoint"),
     F(IO, MBMAP_O_T_S, 4, MBMAP_T_F64, "t", "s", "track time of the setpoint"),
     F(IO, MBMAP_O_POS + 0, 2, MBMAP_T_F32, "x", "m", "position"),
     F(IO, MBMAP_O_POS + 2, 2, MBMAP_T_F32, "y", "m", "position"),
@@ -344,33 +368,51 @@ static const mbmap_field_t fields[] = {
     F(IO, MBMAP_O_ACC + 2, 2, MBMAP_T_F32, "ay", "m/s2", "acceleration"),
     F(IO, MBMAP_O_ACC + 4, 2, MBMAP_T_F32, "az", "m/s2", "acceleration"),
     F(IO, MBMAP_O_ACCEPTED, 2, MBMAP_T_U32, "accepted", "", "waypoints accepted"),
-    F(IO, MBMAP_O_REJECTED, 2, MBMAP_T_U32, "rejected", "", "waypoints rejected by the engine (bad data; a full buffer is in full)"),
+    F(IO, MBMAP_O_REJECTED, 2, MBMAP_T_U32, "rejected", "",
+      "waypoints rejected by the engine (bad data; a full buffer is in full)"),
     F(IO, MBMAP_O_LOST, 2, MBMAP_T_U32, "lost", "", "waypoints lost (sequence gaps)"),
     F(IO, MBMAP_O_UNDERRUNS, 2, MBMAP_T_U32, "underruns", "", "transitions into underrun"),
     F(IO, MBMAP_O_MISSED_TICKS, 2, MBMAP_T_U32, "missed_ticks", "", "ticks stepped over"),
-    F(IO, MBMAP_O_DUPLICATES, 2, MBMAP_T_U32, "duplicates", "", "exact duplicate waypoints dropped"),
-    F(IO, MBMAP_O_MB_REJECTED, 2, MBMAP_T_U32, "mb_rejected", "", "Modbus writes refused with exception 03"),
-    F(IO, MBMAP_O_LATE_P99_US, 2, MBMAP_T_U32, "lateness_p99", "us", "tick lateness, 99th percentile"),
+    F(IO, MBMAP_O_DUPLICATES, 2, MBMAP_T_U32, "duplicates", "",
+      "exact duplicate waypoints dropped"),
+    F(IO, MBMAP_O_MB_REJECTED, 2, MBMAP_T_U32, "mb_rejected", "",
+      "Modbus writes refused with exception 03"),
+    F(IO, MBMAP_O_LATE_P99_US, 2, MBMAP_T_U32, "lateness_p99", "us",
+      "tick lateness, 99th percentile"),
     F(IO, MBMAP_O_LATE_MAX_US, 2, MBMAP_T_U32, "lateness_max", "us", "tick lateness, maximum"),
-    F(IO, MBMAP_O_CAN_STATE, 1, MBMAP_T_U16, "can_state", "", "as can_state of the daemon block, for this object's bus"),
+    F(IO, MBMAP_O_CAN_STATE, 1, MBMAP_T_U16, "can_state", "",
+      "as can_state of the daemon block, for this object's bus"),
     F(IO, MBMAP_O_CAN_LOAD, 1, MBMAP_T_U16, "can_load", "0.1 %", "this object's CAN bus load"),
     F(IO, MBMAP_O_UPTIME_S, 2, MBMAP_T_U32, "uptime", "s", "since the daemon started"),
-    F(IO, MBMAP_O_FULL, 2, MBMAP_T_U32, "full", "", "waypoints refused with a full buffer (flow control, exception 06; not in rejected)"),
-    F(IO, MBMAP_O_OUT_LOST, 2, MBMAP_T_U32, "out_lost", "", "setpoint lines of this object lost by its outputs"),
-    F(IO, MBMAP_O_OUT_FAULT, 1, MBMAP_T_U16, "out_fault", "", "1 once an output of this object failed to write"),
-    F(IO, MBMAP_O_SEQ_JUMPS, 2, MBMAP_T_U32, "seq_jumps", "", "Modbus sequence numbers outside the plausible window (not counted in lost)"),
-    F(IO, MBMAP_O_RATE, 2, MBMAP_T_F32, "rate", "", "time-scaling rate of the output: 1 as solved, below 1 slowing (underrun, stop, override), lib/engine/TIMESCALE.md"),
+    F(IO, MBMAP_O_FULL, 2, MBMAP_T_U32, "full", "",
+      "waypoints refused with a full buffer (flow control, exception 06; not in rejected)"),
+    F(IO, MBMAP_O_OUT_LOST, 2, MBMAP_T_U32, "out_lost", "",
+      "setpoint lines of this object lost by its outputs"),
+    F(IO, MBMAP_O_OUT_FAULT, 1, MBMAP_T_U16, "out_fault", "",
+      "1 once an output of this object failed to write"),
+    F(IO, MBMAP_O_SEQ_JUMPS, 2, MBMAP_T_U32, "seq_jumps", "",
+      "Modbus sequence numbers outside the plausible window (not counted in lost)"),
+    F(IO, MBMAP_O_RATE, 2, MBMAP_T_F32, "rate", "",
+      "time-scaling rate of the output: 1 as solved, below 1 slowing (underrun, stop, override), "
+      "lib/engine/TIMESCALE.md"),
     F(IO, MBMAP_O_OVERRIDE, 1, MBMAP_T_U16, "override", "%", "feed override in force"),
-    F(IO, MBMAP_O_HARD_STOPS, 2, MBMAP_T_U32, "hard_stops", "", "times the solved curve ended under a moving output (velocity to 0 in one tick); should stay 0"),
-    F(IO, MBMAP_O_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "", "copy of generation (whole-block reads)"),
+    F(IO, MBMAP_O_HARD_STOPS, 2, MBMAP_T_U32, "hard_stops", "",
+      "times the solved curve ended under a moving output (velocity to 0 in one tick); should stay "
+      "0"),
+    F(IO, MBMAP_O_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "",
+      "copy of generation (whole-block reads)"),
 
-    F(HO, MBMAP_H_COMMAND, 1, MBMAP_T_U16, "command", "", "1 start, 2 stop now, 3 clear, 4 reset counters, 5 finish"),
-    F(HO, MBMAP_H_OVERRIDE, 1, MBMAP_T_U16, "override", "%", "feed override 0..200: the same path at this % of the solved speed, ramped (lib/engine/TIMESCALE.md)"),
+    F(HO, MBMAP_H_COMMAND, 1, MBMAP_T_U16, "command", "",
+      "1 start, 2 stop now, 3 clear, 4 reset counters, 5 finish"),
+    F(HO, MBMAP_H_OVERRIDE, 1, MBMAP_T_U16, "override", "%",
+      "feed override 0..200: the same path at this % of the solved speed, ramped "
+      "(lib/engine/TIMESCALE.md)"),
     F(HO, MBMAP_H_WP_SEQ, 2, MBMAP_T_U32, "wp_seq", "", "waypoint sequence number"),
     F(HO, MBMAP_H_WP_T_S, 4, MBMAP_T_F64, "wp_t", "s", "waypoint time"),
     F(HO, MBMAP_H_WP_POS + 0, 4, MBMAP_T_F64, "wp_x", "m", "waypoint position"),
     F(HO, MBMAP_H_WP_POS + 4, 4, MBMAP_T_F64, "wp_y", "m", "waypoint position"),
-    F(HO, MBMAP_H_WP_POS + 8, 4, MBMAP_T_F64, "wp_z", "m", "waypoint position; the 18 registers 10..27 go in one FC 16"),
+    F(HO, MBMAP_H_WP_POS + 8, 4, MBMAP_T_F64, "wp_z", "m",
+      "waypoint position; the 18 registers 10..27 go in one FC 16"),
 };
 
 const mbmap_field_t *mbmap_fields(size_t *n)

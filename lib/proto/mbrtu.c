@@ -32,7 +32,7 @@ void mbrtu_bytes(mbrtu_rx_t *r, const uint8_t *b, size_t n, mbrtu_deliver_fn del
     for (;;) {
         int fl = mbmap_rtu_frame_len(r->buf, r->len);
         if (fl == 0 || (fl < 0 && r->len < sizeof r->buf))
-            return;             /* more bytes, or the silence, will tell */
+            return; /* more bytes, or the silence, will tell */
         if (fl < 0 || fl > MBMAP_RTU_ADU_MAX) {
             r->discard = 1;
             r->len = 0;

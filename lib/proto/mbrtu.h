@@ -24,8 +24,8 @@ typedef void (*mbrtu_deliver_fn)(void *ctx, const uint8_t *frame, size_t len);
 typedef struct {
     uint8_t buf[2 * MBMAP_RTU_ADU_MAX];
     size_t len;
-    int discard;          /* drop bytes until the line is silent */
-    uint64_t crc_errors;  /* frames refused: bad CRC, or cut by a silence */
+    int discard;         /* drop bytes until the line is silent */
+    uint64_t crc_errors; /* frames refused: bad CRC, or cut by a silence */
 } mbrtu_rx_t;
 
 void mbrtu_init(mbrtu_rx_t *r);

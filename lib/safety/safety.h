@@ -51,10 +51,10 @@ enum safety_fault {
 const char *safety_strerror(int fault);
 
 typedef struct {
-    double max_step_m;      /* largest step between two outputs; 0 = not checked */
-    double max_speed_m_s;   /* 0 = not checked */
-    double max_accel_m_s2;  /* 0 = not checked */
-    double tol_m;           /* added to every bound after converting it to metres per
+    double max_step_m;     /* largest step between two outputs; 0 = not checked */
+    double max_speed_m_s;  /* 0 = not checked */
+    double max_accel_m_s2; /* 0 = not checked */
+    double tol_m;          /* added to every bound after converting it to metres per
                                output (rounding of positions of up to 1e7 m: 1e-8 m
                                default, SAFETY_TOL_M_DEFAULT) */
 } safety_limits_t;
@@ -63,18 +63,18 @@ typedef struct {
 
 typedef struct {
     safety_limits_t lim;
-    int have_pos;           /* a position was sent */
-    int have_vel;           /* two were sent: last_vel is meaningful */
+    int have_pos; /* a position was sent */
+    int have_vel; /* two were sent: last_vel is meaningful */
     int64_t last_ns;
     double last_pos[ENGINE_AXES];
     double last_vel[ENGINE_AXES];
-    int fault;              /* latched safety_fault, 0 = none */
-    uint64_t checked;       /* setpoints judged */
-    uint64_t violations;    /* setpoints refused while not yet faulted + while faulted */
-    uint64_t held;          /* setpoints replaced by the hold (faulted) */
+    int fault;                       /* latched safety_fault, 0 = none */
+    uint64_t checked;                /* setpoints judged */
+    uint64_t violations;             /* setpoints refused while not yet faulted + while faulted */
+    uint64_t held;                   /* setpoints replaced by the hold (faulted) */
     uint64_t by[SAFETY_FAULT_COUNT]; /* first violations by reason */
-    double last_value;      /* the violating value of the last violation (m, m/s, m/s^2) */
-    double last_limit;      /* and the bound it broke */
+    double last_value;               /* the violating value of the last violation (m, m/s, m/s^2) */
+    double last_limit;               /* and the bound it broke */
 } safety_t;
 
 /*

@@ -10,9 +10,11 @@ const char *bspline_strerror(int err)
 {
     switch (err < 0 ? -err : err) {
     case BSPLINE_OK: return "success";
-    case BSPLINE_EORDER: return "B-spline order out of range (1..16, at most the number of control points)";
+    case BSPLINE_EORDER:
+        return "B-spline order out of range (1..16, at most the number of control points)";
     case BSPLINE_EKNOTS: return "B-spline knots not finite, decreasing, or the domain is empty";
-    case BSPLINE_ESIZE: return "B-spline size out of range (control points, dimension or derivative count)";
+    case BSPLINE_ESIZE:
+        return "B-spline size out of range (control points, dimension or derivative count)";
     case BSPLINE_EDOMAIN: return "B-spline parameter outside the domain or not finite";
     default: return "unknown bspline error";
     }
@@ -49,8 +51,7 @@ void bspline_domain(const bspline_t *b, double *t_min, double *t_max)
     *t_max = b->knots[b->n_ctrl];
 }
 
-int bspline_knots_uniform(size_t n_ctrl, unsigned order, double t0, double dt,
-                          double *knots)
+int bspline_knots_uniform(size_t n_ctrl, unsigned order, double t0, double dt, double *knots)
 {
     size_t k, nk = n_ctrl + order;
 
@@ -81,8 +82,7 @@ int bspline_knots_open_uniform(size_t n_ctrl, unsigned order, double *knots)
     return 0;
 }
 
-int bspline_knots_clamped(const double *breaks, size_t nbreak, unsigned order,
-                          double *knots)
+int bspline_knots_clamped(const double *breaks, size_t nbreak, unsigned order, double *knots)
 {
     size_t i, k = 0;
     unsigned j;
@@ -117,8 +117,7 @@ static int clamp_domain(double lo, double hi, double *t)
     return 0;
 }
 
-long bspline_find_span(const double *knots, size_t n_ctrl, unsigned order,
-                       double t)
+long bspline_find_span(const double *knots, size_t n_ctrl, unsigned order, double t)
 {
     size_t lo, hi, n, p;
 
@@ -162,8 +161,7 @@ static size_t last_nonempty(const double *knots, size_t n_knots)
     return n_knots;
 }
 
-static double basis_rec(const double *knots, size_t last, size_t k,
-                        unsigned q, double t)
+static double basis_rec(const double *knots, size_t last, size_t k, unsigned q, double t)
 {
     double v = 0.0, den;
 
@@ -184,11 +182,9 @@ static double basis_rec(const double *knots, size_t last, size_t k,
     return v;
 }
 
-double bspline_basis_one(const double *knots, size_t n_knots, size_t k,
-                         unsigned order, double t)
+double bspline_basis_one(const double *knots, size_t n_knots, size_t k, unsigned order, double t)
 {
-    if (order < 1 || order > BSPLINE_ORDER_MAX || k + order >= n_knots ||
-        !isfinite(t))
+    if (order < 1 || order > BSPLINE_ORDER_MAX || k + order >= n_knots || !isfinite(t))
         return NAN;
     return basis_rec(knots, last_nonempty(knots, n_knots), k, order, t);
 }
@@ -217,8 +213,8 @@ static void basis_at(const double *U, size_t mu, unsigned q, double t, double *N
     }
 }
 
-int bspline_basis(const double *knots, size_t n_ctrl, unsigned order, double t,
-                  size_t *first, double *N)
+int bspline_basis(const double *knots, size_t n_ctrl, unsigned order, double t, size_t *first,
+                  double *N)
 {
     long mu = bspline_find_span(knots, n_ctrl, order, t);
     double lo, hi;
@@ -238,8 +234,8 @@ int bspline_basis(const double *knots, size_t n_ctrl, unsigned order, double t,
  * Denominators ndu[p+1][..] are knot differences over spans that contain
  * the non-empty span mu (as in basis_at): positive.
  */
-int bspline_basis_derivs(const double *knots, size_t n_ctrl, unsigned order,
-                         double t, unsigned nder, size_t *first, double *ders)
+int bspline_basis_derivs(const double *knots, size_t n_ctrl, unsigned order, double t,
+                         unsigned nder, size_t *first, double *ders)
 {
     double ndu[BSPLINE_ORDER_MAX][BSPLINE_ORDER_MAX];
     double a[2][BSPLINE_ORDER_MAX];
@@ -387,10 +383,22 @@ int bspline_eval_derivs(const bspline_t *b, double t, unsigned nder, double *out
 void bspline_cubic_matrix(double u, double *M)
 {
     const double m[16] = {
-        -u, 12.0 - 9.0 * u, 9.0 * u - 12.0, u,
-        3.0 * u, 12.0 * u - 18.0, 18.0 - 15.0 * u, 0.0,
-        -3.0 * u, 0.0, 3.0 * u, 0.0,
-        u, 6.0 - 2.0 * u, u, 0.0,
+        -u,
+        12.0 - 9.0 * u,
+        9.0 * u - 12.0,
+        u,
+        3.0 * u,
+        12.0 * u - 18.0,
+        18.0 - 15.0 * u,
+        0.0,
+        -3.0 * u,
+        0.0,
+        3.0 * u,
+        0.0,
+        u,
+        6.0 - 2.0 * u,
+        u,
+        0.0,
     };
     int i;
 
@@ -398,8 +406,8 @@ void bspline_cubic_matrix(double u, double *M)
         M[i] = m[i] / 6.0;
 }
 
-void bspline_cubic_segment(const double *M, const double *p, size_t dim,
-                           double t, unsigned nder, double *out)
+void bspline_cubic_segment(const double *M, const double *p, size_t dim, double t, unsigned nder,
+                           double *out)
 {
     size_t c;
     int r, j;

@@ -25,10 +25,10 @@
 
 enum bspline_error {
     BSPLINE_OK = 0,
-    BSPLINE_EORDER = 1,   /* order 0 or above BSPLINE_ORDER_MAX, or more than n_ctrl */
-    BSPLINE_EKNOTS = 2,   /* knots not finite or decreasing, or an empty domain */
-    BSPLINE_ESIZE = 3,    /* n_ctrl, dim or a derivative count out of range */
-    BSPLINE_EDOMAIN = 4,  /* parameter outside [t_{q-1}, t_{n+1}] or not finite */
+    BSPLINE_EORDER = 1,  /* order 0 or above BSPLINE_ORDER_MAX, or more than n_ctrl */
+    BSPLINE_EKNOTS = 2,  /* knots not finite or decreasing, or an empty domain */
+    BSPLINE_ESIZE = 3,   /* n_ctrl, dim or a derivative count out of range */
+    BSPLINE_EDOMAIN = 4, /* parameter outside [t_{q-1}, t_{n+1}] or not finite */
 };
 
 /* Highest order handled (degree 15): evaluation keeps q x q values on the stack. */
@@ -46,11 +46,11 @@ const char *bspline_strerror(int err);
 
 /* A curve: everything belongs to the caller. */
 typedef struct {
-    unsigned order;        /* q >= 1: degree q-1 */
-    size_t n_ctrl;         /* n+1 >= q control points */
-    size_t dim;            /* coordinates per control point, >= 1 */
-    const double *knots;   /* n_ctrl + order values, non-decreasing */
-    const double *ctrl;    /* n_ctrl * dim values, row-major (ctrl[k*dim + c]) */
+    unsigned order;      /* q >= 1: degree q-1 */
+    size_t n_ctrl;       /* n+1 >= q control points */
+    size_t dim;          /* coordinates per control point, >= 1 */
+    const double *knots; /* n_ctrl + order values, non-decreasing */
+    const double *ctrl;  /* n_ctrl * dim values, row-major (ctrl[k*dim + c]) */
 } bspline_t;
 
 /*
@@ -68,8 +68,7 @@ void bspline_domain(const bspline_t *b, double *t_min, double *t_max);
  * B-spline in the seed's sense (every basis function a shift of the first).
  * Returns 0, -BSPLINE_ESIZE (no knot), -BSPLINE_EKNOTS (dt <= 0 or not finite).
  */
-int bspline_knots_uniform(size_t n_ctrl, unsigned order, double t0, double dt,
-                          double *knots);
+int bspline_knots_uniform(size_t n_ctrl, unsigned order, double t0, double dt, double *knots);
 
 /*
  * Open uniform integer knots, the seed's generator formula (n = n_ctrl-1, q = order):
@@ -88,8 +87,7 @@ int bspline_knots_open_uniform(size_t n_ctrl, unsigned order, double *knots);
  * Returns 0, -BSPLINE_EORDER, -BSPLINE_ESIZE (nbreak < 2),
  * -BSPLINE_EKNOTS (breakpoints not finite or not increasing).
  */
-int bspline_knots_clamped(const double *breaks, size_t nbreak, unsigned order,
-                          double *knots);
+int bspline_knots_clamped(const double *breaks, size_t nbreak, unsigned order, double *knots);
 
 /*
  * Index mu of the knot interval holding t: t_mu <= t < t_{mu+1} with
@@ -98,8 +96,7 @@ int bspline_knots_clamped(const double *breaks, size_t nbreak, unsigned order,
  * t must lie in the domain (clamped by BSPLINE_DOMAIN_REL_TOL);
  * returns mu >= 0 or -BSPLINE_EDOMAIN.  Binary search: O(log n).
  */
-long bspline_find_span(const double *knots, size_t n_ctrl, unsigned order,
-                       double t);
+long bspline_find_span(const double *knots, size_t n_ctrl, unsigned order, double t);
 
 /*
  * One basis function N_k^q(t) by the literal recursion of the seed (formula 2,
@@ -109,15 +106,14 @@ long bspline_find_span(const double *knots, size_t n_ctrl, unsigned order,
  * Intervals are half-open except the last non-empty one of the knot vector,
  * consistent with bspline_find_span.
  */
-double bspline_basis_one(const double *knots, size_t n_knots, size_t k,
-                         unsigned order, double t);
+double bspline_basis_one(const double *knots, size_t n_knots, size_t k, unsigned order, double t);
 
 /*
  * The q basis functions non-zero at t: N[j] = N_{first+j}^q(t), j = 0..q-1.
  * Returns 0, -BSPLINE_EORDER, -BSPLINE_EDOMAIN.  *first = mu - q + 1.
  */
-int bspline_basis(const double *knots, size_t n_ctrl, unsigned order, double t,
-                  size_t *first, double *N);
+int bspline_basis(const double *knots, size_t n_ctrl, unsigned order, double t, size_t *first,
+                  double *N);
 
 /*
  * The q non-zero basis functions and their derivatives up to nder at t:
@@ -125,8 +121,8 @@ int bspline_basis(const double *knots, size_t n_ctrl, unsigned order, double t,
  * higher derivatives of a degree q-1 polynomial are 0 and are refused).
  * Returns 0, -BSPLINE_EORDER, -BSPLINE_ESIZE (nder >= order), -BSPLINE_EDOMAIN.
  */
-int bspline_basis_derivs(const double *knots, size_t n_ctrl, unsigned order,
-                         double t, unsigned nder, size_t *first, double *ders);
+int bspline_basis_derivs(const double *knots, size_t n_ctrl, unsigned order, double t,
+                         unsigned nder, size_t *first, double *ders);
 
 /*
  * Point r(t) by de Boor's algorithm (repeated convex combinations of the q
@@ -166,7 +162,7 @@ void bspline_cubic_matrix(double tension, double *M);
  * nder 1, 2 or 3 adds derivatives by t: out[d*dim + c].  No check: the
  * caller gives M from bspline_cubic_matrix and nder <= 3.
  */
-void bspline_cubic_segment(const double *M, const double *p, size_t dim,
-                           double t, unsigned nder, double *out);
+void bspline_cubic_segment(const double *M, const double *p, size_t dim, double t, unsigned nder,
+                           double *out);
 
 #endif

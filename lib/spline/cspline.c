@@ -16,15 +16,15 @@ const char *cspline_strerror(int err)
     case CSPLINE_ESIZE: return "cubic spline: too few points (2, periodic 3) or no coordinate";
     case CSPLINE_EPARAM: return "cubic spline: parameters not finite or not strictly increasing";
     case CSPLINE_ENOTFINITE: return "cubic spline: point or end derivative not finite";
-    case CSPLINE_ENOTCLOSED: return "cubic spline: periodic curve whose last point is not its first";
+    case CSPLINE_ENOTCLOSED:
+        return "cubic spline: periodic curve whose last point is not its first";
     case CSPLINE_ESINGULAR: return "cubic spline: system could not be solved";
     case CSPLINE_EDOMAIN: return "cubic spline: parameter outside the curve or not finite";
     default: return "unknown cspline error";
     }
 }
 
-int cspline_params(size_t npts, size_t dim, const double *p, cspline_param_t param,
-                   double *t)
+int cspline_params(size_t npts, size_t dim, const double *p, cspline_param_t param, double *t)
 {
     size_t i, c;
 
@@ -57,8 +57,8 @@ size_t cspline_scratch_len(size_t npts, size_t dim)
 }
 
 /* Right-hand side 6 (p_{i+1}-p_i)/h_i - 6 (p_i-p_{i-1})/h_{i-1} for coordinate c. */
-static double rhs_row(const double *p, size_t dim, size_t im, size_t i, size_t ip,
-                      double hm, double h, size_t c)
+static double rhs_row(const double *p, size_t dim, size_t im, size_t i, size_t ip, double hm,
+                      double h, size_t c)
 {
     return 6.0 * (p[ip * dim + c] - p[i * dim + c]) / h -
            6.0 * (p[i * dim + c] - p[im * dim + c]) / hm;
@@ -77,9 +77,8 @@ static int check_input(size_t npts, size_t dim, const double *t, const double *p
     return 0;
 }
 
-static int solve_open(size_t npts, size_t dim, const double *t, const double *p,
-                      cspline_end_t end, const double *d0, const double *dn,
-                      double *s, double *scratch)
+static int solve_open(size_t npts, size_t dim, const double *t, const double *p, cspline_end_t end,
+                      const double *d0, const double *dn, double *s, double *scratch)
 {
     size_t n = npts - 1, i, c;
     double *a = scratch, *b = a + npts, *cc = b + npts, *tw = cc + npts;
@@ -152,8 +151,8 @@ static int solve_open(size_t npts, size_t dim, const double *t, const double *p,
  * dominant; the system is strictly diagonally dominant (2(h+h') > h + h'),
  * so 1 + v.z cannot vanish.
  */
-static int solve_periodic(size_t npts, size_t dim, const double *t, const double *p,
-                          double *s, double *scratch)
+static int solve_periodic(size_t npts, size_t dim, const double *t, const double *p, double *s,
+                          double *scratch)
 {
     size_t m = npts - 1, i, c;
     double *a = scratch, *b = a + npts, *cc = b + npts, *tw = cc + npts;
@@ -211,9 +210,8 @@ static int solve_periodic(size_t npts, size_t dim, const double *t, const double
     return 0;
 }
 
-int cspline_solve(size_t npts, size_t dim, const double *t, const double *p,
-                  cspline_end_t end, const double *d0, const double *dn,
-                  double *s, double *scratch, cspline_t *cs)
+int cspline_solve(size_t npts, size_t dim, const double *t, const double *p, cspline_end_t end,
+                  const double *d0, const double *dn, double *s, double *scratch, cspline_t *cs)
 {
     int rc;
 

@@ -31,12 +31,12 @@
 
 enum cspline_error {
     CSPLINE_OK = 0,
-    CSPLINE_ESIZE = 1,     /* too few points (2 open, 3 periodic) or dim 0 */
-    CSPLINE_EPARAM = 2,    /* parameters not finite or not strictly increasing */
-    CSPLINE_ENOTFINITE = 3,/* a point or end derivative not finite */
-    CSPLINE_ENOTCLOSED = 4,/* periodic: last point differs from the first */
-    CSPLINE_ESINGULAR = 5, /* the system could not be solved */
-    CSPLINE_EDOMAIN = 6,   /* evaluation parameter outside [t_0, t_n] or not finite */
+    CSPLINE_ESIZE = 1,      /* too few points (2 open, 3 periodic) or dim 0 */
+    CSPLINE_EPARAM = 2,     /* parameters not finite or not strictly increasing */
+    CSPLINE_ENOTFINITE = 3, /* a point or end derivative not finite */
+    CSPLINE_ENOTCLOSED = 4, /* periodic: last point differs from the first */
+    CSPLINE_ESINGULAR = 5,  /* the system could not be solved */
+    CSPLINE_EDOMAIN = 6,    /* evaluation parameter outside [t_0, t_n] or not finite */
 };
 
 const char *cspline_strerror(int err);
@@ -62,12 +62,12 @@ typedef enum {
 
 /* A solved spline: views of caller memory. */
 typedef struct {
-    size_t n;          /* intervals: n+1 points */
+    size_t n; /* intervals: n+1 points */
     size_t dim;
-    const double *t;   /* n+1 parameters */
-    const double *p;   /* (n+1)*dim points, row-major */
-    const double *s;   /* (n+1)*dim second derivatives */
-    int periodic;      /* evaluation wraps t into [t_0, t_n] */
+    const double *t; /* n+1 parameters */
+    const double *p; /* (n+1)*dim points, row-major */
+    const double *s; /* (n+1)*dim second derivatives */
+    int periodic;    /* evaluation wraps t into [t_0, t_n] */
 } cspline_t;
 
 /*
@@ -76,8 +76,7 @@ typedef struct {
  * cspline_solve then refuses (-CSPLINE_EPARAM).
  * Returns 0, -CSPLINE_ESIZE, -CSPLINE_ENOTFINITE.
  */
-int cspline_params(size_t npts, size_t dim, const double *p, cspline_param_t param,
-                   double *t);
+int cspline_params(size_t npts, size_t dim, const double *p, cspline_param_t param, double *t);
 
 /* Doubles of scratch cspline_solve needs for npts points and dim coordinates. */
 size_t cspline_scratch_len(size_t npts, size_t dim);
@@ -94,9 +93,8 @@ size_t cspline_scratch_len(size_t npts, size_t dim);
  * Returns 0, -CSPLINE_ESIZE, -CSPLINE_EPARAM, -CSPLINE_ENOTFINITE,
  * -CSPLINE_ENOTCLOSED, -CSPLINE_ESINGULAR.
  */
-int cspline_solve(size_t npts, size_t dim, const double *t, const double *p,
-                  cspline_end_t end, const double *d0, const double *dn,
-                  double *s, double *scratch, cspline_t *cs);
+int cspline_solve(size_t npts, size_t dim, const double *t, const double *p, cspline_end_t end,
+                  const double *d0, const double *dn, double *s, double *scratch, cspline_t *cs);
 
 /*
  * Interval index i with t_i <= t <= t_{i+1} (binary search); periodic

@@ -10,12 +10,16 @@ const char *lsq_strerror(int err)
 {
     switch (err < 0 ? -err : err) {
     case LSQ_OK: return "success";
-    case LSQ_ESIZE: return "least squares: sizes (need data >= control points >= order; pinned: 3 control points)";
+    case LSQ_ESIZE:
+        return "least squares: sizes (need data >= control points >= order; pinned: 3 control "
+               "points)";
     case LSQ_EORDER: return "least squares: order out of range";
     case LSQ_EKNOTS: return "least squares: invalid knot vector";
-    case LSQ_EPARAM: return "least squares: parameter not finite or outside the knots, or all points equal";
+    case LSQ_EPARAM:
+        return "least squares: parameter not finite or outside the knots, or all points equal";
     case LSQ_ENOTFINITE: return "least squares: data point not finite";
-    case LSQ_ESINGULAR: return "least squares: too few data in some knot span (normal equations singular)";
+    case LSQ_ESINGULAR:
+        return "least squares: too few data in some knot span (normal equations singular)";
     default: return "unknown lsq error";
     }
 }
@@ -110,8 +114,8 @@ static int band_cholesky(double *A, unsigned q, size_t lo, size_t hi)
 }
 
 /* Solve U^T U x = b for rows lo..hi (b, x in ctrl, stride dim, coordinate c). */
-static void band_solve(const double *A, unsigned q, size_t lo, size_t hi,
-                       double *x, size_t dim, size_t c)
+static void band_solve(const double *A, unsigned q, size_t lo, size_t hi, double *x, size_t dim,
+                       size_t c)
 {
     size_t i, k;
     unsigned p = q - 1;
@@ -131,9 +135,8 @@ static void band_solve(const double *A, unsigned q, size_t lo, size_t hi,
     }
 }
 
-int lsq_fit(size_t m, size_t dim, const double *u, const double *pts,
-            unsigned order, size_t n_ctrl, const double *knots, unsigned flags,
-            double *ctrl, double *work)
+int lsq_fit(size_t m, size_t dim, const double *u, const double *pts, unsigned order, size_t n_ctrl,
+            const double *knots, unsigned flags, double *ctrl, double *work)
 {
     double N[BSPLINE_ORDER_MAX];
     double *A = work;
@@ -212,11 +215,10 @@ unsigned lsq_smooth_delay(unsigned window)
     return window / 2;
 }
 
-int lsq_smooth_init(lsq_smooth_t *s, unsigned window, unsigned ctrl, size_t dim,
-                    double *mem)
+int lsq_smooth_init(lsq_smooth_t *s, unsigned window, unsigned ctrl, size_t dim, double *mem)
 {
-    if (ctrl < SMOOTH_ORDER || ctrl > window || window > LSQ_SMOOTH_WINDOW_MAX ||
-        dim < 1 || dim > LSQ_SMOOTH_DIM_MAX)
+    if (ctrl < SMOOTH_ORDER || ctrl > window || window > LSQ_SMOOTH_WINDOW_MAX || dim < 1 ||
+        dim > LSQ_SMOOTH_DIM_MAX)
         return -LSQ_ESIZE;
     memset(s, 0, sizeof *s);
     s->window = window;

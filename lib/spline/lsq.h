@@ -38,10 +38,10 @@
 
 enum lsq_error {
     LSQ_OK = 0,
-    LSQ_ESIZE = 1,      /* m < n_ctrl, n_ctrl < order, dim 0, or pinned with n_ctrl < 3 */
-    LSQ_EORDER = 2,     /* order 0 or above BSPLINE_ORDER_MAX */
-    LSQ_EKNOTS = 3,     /* knot vector invalid (see bspline_check) */
-    LSQ_EPARAM = 4,     /* a parameter not finite or outside the knot domain; chord: all points equal */
+    LSQ_ESIZE = 1,  /* m < n_ctrl, n_ctrl < order, dim 0, or pinned with n_ctrl < 3 */
+    LSQ_EORDER = 2, /* order 0 or above BSPLINE_ORDER_MAX */
+    LSQ_EKNOTS = 3, /* knot vector invalid (see bspline_check) */
+    LSQ_EPARAM = 4, /* a parameter not finite or outside the knot domain; chord: all points equal */
     LSQ_ENOTFINITE = 5, /* a data point not finite */
     LSQ_ESINGULAR = 6,  /* N^T N not positive definite: too few data in some span */
 };
@@ -82,9 +82,8 @@ int lsq_knots(size_t n_ctrl, unsigned order, double u0, double u1, double *knots
  *   work             lsq_work_len(n_ctrl, order, dim) doubles
  * Returns 0 or a negated lsq_error.
  */
-int lsq_fit(size_t m, size_t dim, const double *u, const double *pts,
-            unsigned order, size_t n_ctrl, const double *knots, unsigned flags,
-            double *ctrl, double *work);
+int lsq_fit(size_t m, size_t dim, const double *u, const double *pts, unsigned order, size_t n_ctrl,
+            const double *knots, unsigned flags, double *ctrl, double *work);
 
 /*
  * Streaming smoother: each point j is replaced by the value at t_j of the
@@ -109,11 +108,11 @@ int lsq_fit(size_t m, size_t dim, const double *u, const double *pts,
 typedef struct {
     unsigned window, ctrl, delay;
     size_t dim;
-    uint64_t n_in;        /* points pushed */
-    uint64_t n_out;       /* smoothed points popped */
+    uint64_t n_in;  /* points pushed */
+    uint64_t n_out; /* smoothed points popped */
     int finished;
-    uint64_t fallbacks;   /* fits refused: fewer control points or raw value used */
-    double *t, *r;        /* ring of the last `window` points */
+    uint64_t fallbacks;                  /* fits refused: fewer control points or raw value used */
+    double *t, *r;                       /* ring of the last `window` points */
     double *u, *pts, *knots, *cp, *work; /* fit scratch */
 } lsq_smooth_t;
 
@@ -127,8 +126,7 @@ unsigned lsq_smooth_delay(unsigned window);
  * Attach memory and empty.  Requires 4 <= ctrl <= window <= LSQ_SMOOTH_WINDOW_MAX
  * and 1 <= dim <= LSQ_SMOOTH_DIM_MAX.  Returns 0, -LSQ_ESIZE.
  */
-int lsq_smooth_init(lsq_smooth_t *s, unsigned window, unsigned ctrl, size_t dim,
-                    double *mem);
+int lsq_smooth_init(lsq_smooth_t *s, unsigned window, unsigned ctrl, size_t dim, double *mem);
 
 /* Forget all points (a new track); keep the memory and settings. */
 void lsq_smooth_reset(lsq_smooth_t *s);

@@ -99,8 +99,7 @@ int nurbs_eval(const nurbs_t *c, double t, double *out)
 void nurbs_unit_circle(double *knots, double *ctrl, double *w, nurbs_t *c)
 {
     static const double K[12] = {0, 0, 0, 0.25, 0.25, 0.5, 0.5, 0.75, 0.75, 1, 1, 1};
-    static const double P[18] = {1, 0, 1, 1, 0, 1, -1, 1, -1, 0,
-                                 -1, -1, 0, -1, 1, -1, 1, 0};
+    static const double P[18] = {1, 0, 1, 1, 0, 1, -1, 1, -1, 0, -1, -1, 0, -1, 1, -1, 1, 0};
     size_t i;
 
     memcpy(knots, K, sizeof K);
@@ -130,17 +129,15 @@ static unsigned arc_pieces(double sweep)
  * intersection, centre + r/cos(d/2) (cos(mid), sin(mid)), weight cos(d/2).
  * d <= pi/2, so cos(d/2) >= sqrt(2)/2: no division by a small number.
  */
-int nurbs_arc(double cx, double cy, double cz, size_t dim, double r_m,
-              double start_rad, double sweep_rad, double *knots, double *ctrl,
-              double *w, nurbs_t *c)
+int nurbs_arc(double cx, double cy, double cz, size_t dim, double r_m, double start_rad,
+              double sweep_rad, double *knots, double *ctrl, double *w, nurbs_t *c)
 {
     unsigned np, k;
     double d, half, wm;
     size_t i;
 
-    if ((dim != 2 && dim != 3) || !isfinite(cx) || !isfinite(cy) ||
-        !isfinite(cz) || !isfinite(r_m) || !(r_m > 0.0) ||
-        !isfinite(start_rad) || !isfinite(sweep_rad) ||
+    if ((dim != 2 && dim != 3) || !isfinite(cx) || !isfinite(cy) || !isfinite(cz) ||
+        !isfinite(r_m) || !(r_m > 0.0) || !isfinite(start_rad) || !isfinite(sweep_rad) ||
         !(fabs(sweep_rad) > 0.0) || fabs(sweep_rad) > 2.0 * M_PI + NURBS_SWEEP_TOL)
         return -NURBS_EARG;
     np = arc_pieces(sweep_rad);
@@ -204,14 +201,14 @@ double nurbs_arc_param(double sweep_rad, double frac)
     if (k >= np)
         k = np - 1;
     /* angle from the piece's middle, in units of the piece's half-angle */
-    phi = 0.5 * fabs(sweep_rad) / np;      /* half-angle, <= pi/4 */
-    th = (pos - k - 0.5) * 2.0 * phi;      /* in [-phi, phi] */
+    phi = 0.5 * fabs(sweep_rad) / np;               /* half-angle, <= pi/4 */
+    th = (pos - k - 0.5) * 2.0 * phi;               /* in [-phi, phi] */
     s = 0.5 + 0.5 * tan(0.5 * th) / tan(0.5 * phi); /* tan(phi/2) >= tan(tiny) > 0 */
     return ((double)k + s) / np;
 }
 
-int nurbs_conic(const double *p, size_t dim, double w1, double *knots,
-                double *ctrl, double *w, nurbs_t *c)
+int nurbs_conic(const double *p, size_t dim, double w1, double *knots, double *ctrl, double *w,
+                nurbs_t *c)
 {
     size_t i;
 

@@ -46,12 +46,12 @@ enum nurbs_error {
 const char *nurbs_strerror(int err);
 
 typedef struct {
-    unsigned order;        /* q (2 for conics) */
+    unsigned order; /* q (2 for conics) */
     size_t n_ctrl;
-    size_t dim;            /* 1 .. NURBS_DIM_MAX */
-    const double *knots;   /* n_ctrl + order */
-    const double *ctrl;    /* n_ctrl * dim, Cartesian (not pre-multiplied by w) */
-    const double *w;       /* n_ctrl weights > 0 */
+    size_t dim;          /* 1 .. NURBS_DIM_MAX */
+    const double *knots; /* n_ctrl + order */
+    const double *ctrl;  /* n_ctrl * dim, Cartesian (not pre-multiplied by w) */
+    const double *w;     /* n_ctrl weights > 0 */
 } nurbs_t;
 
 /* Check the B-spline part, dim and every weight.  Returns 0, -NURBS_EBSPLINE,
@@ -88,9 +88,8 @@ void nurbs_unit_circle(double *knots, double *ctrl, double *w, nurbs_t *c);
  * c receives the curve (order 3, n_ctrl = 2*pieces + 1).
  * Returns 0, -NURBS_EARG.
  */
-int nurbs_arc(double cx, double cy, double cz, size_t dim, double r_m,
-              double start_rad, double sweep_rad, double *knots, double *ctrl,
-              double *w, nurbs_t *c);
+int nurbs_arc(double cx, double cy, double cz, size_t dim, double r_m, double start_rad,
+              double sweep_rad, double *knots, double *ctrl, double *w, nurbs_t *c);
 
 /*
  * Parameter t in [0, 1] of the arc built by nurbs_arc(start, sweep) at which
@@ -105,7 +104,7 @@ double nurbs_arc_param(double sweep_rad, double frac);
  * p: the three points (3*dim), copied into ctrl (3*dim); knots 6; w 3.
  * Returns 0, -NURBS_EWEIGHT (w1 <= 0 or not finite), -NURBS_ESIZE.
  */
-int nurbs_conic(const double *p, size_t dim, double w1, double *knots,
-                double *ctrl, double *w, nurbs_t *c);
+int nurbs_conic(const double *p, size_t dim, double w1, double *knots, double *ctrl, double *w,
+                nurbs_t *c);
 
 #endif

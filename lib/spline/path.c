@@ -26,8 +26,9 @@ const char *path_strerror(int err)
     case PATH_ENOSTART: return "path: element before 'start'";
     case PATH_EFULL: return "path: more waypoints than fit";
     case PATH_ETWICE: return "path: 'start' given twice";
-    case PATH_ETIME: return "path: time beyond 1e9 s or not increasing (wait, start time, "
-                            "or a step too short for the time's resolution)";
+    case PATH_ETIME:
+        return "path: time beyond 1e9 s or not increasing (wait, start time, "
+               "or a step too short for the time's resolution)";
     default: return "unknown path error";
     }
 }
@@ -93,8 +94,9 @@ int path_parse_line(const char *line, path_elem_t *el)
     if (!strcasecmp(f[0], "speed") || !strcasecmp(f[0], "step") || !strcasecmp(f[0], "wait")) {
         if (n != 2 || nums(f + 1, 1, v) < 0)
             return -PATH_ESYNTAX;
-        el->kind = f[0][1] == 'p' || f[0][1] == 'P' ? PATH_SPEED
-                 : (f[0][1] == 't' || f[0][1] == 'T') ? PATH_STEP : PATH_WAIT;
+        el->kind = f[0][1] == 'p' || f[0][1] == 'P'     ? PATH_SPEED
+                   : (f[0][1] == 't' || f[0][1] == 'T') ? PATH_STEP
+                                                        : PATH_WAIT;
         if (!(v[0] > 0.0))
             return -PATH_ERANGE;
         el->value = v[0];
@@ -139,7 +141,7 @@ int path_parse_line(const char *line, path_elem_t *el)
 typedef struct {
     double pos[3], t, speed, step;
     int started;
-    int bad_time;    /* a waypoint's time was beyond PATH_TIME_MAX_S or not increasing */
+    int bad_time; /* a waypoint's time was beyond PATH_TIME_MAX_S or not increasing */
     size_t n, cap;
     engine_waypoint_t *out;
 } walker_t;
@@ -206,8 +208,8 @@ static int do_arc(walker_t *w, const path_elem_t *el)
     nurbs_t arc;
     int rc;
 
-    rc = nurbs_arc(el->centre_m[0], el->centre_m[1], w->pos[2], 3, el->radius_m,
-                   el->start_rad, el->sweep_rad, knots, ctrl, wt, &arc);
+    rc = nurbs_arc(el->centre_m[0], el->centre_m[1], w->pos[2], 3, el->radius_m, el->start_rad,
+                   el->sweep_rad, knots, ctrl, wt, &arc);
     if (rc < 0)
         return -PATH_ERANGE;
     /* The arc's first pole is its start point: join it by a line if needed. */
@@ -229,14 +231,14 @@ static int do_arc(walker_t *w, const path_elem_t *el)
     return 0;
 }
 
-int path_expand(const path_elem_t *el, size_t nel, engine_waypoint_t *out,
-                size_t cap, size_t *n_out)
+int path_expand(const path_elem_t *el, size_t nel, engine_waypoint_t *out, size_t cap,
+                size_t *n_out)
 {
     return path_expand_ex(el, nel, out, cap, n_out, NULL, NULL);
 }
 
-int path_expand_ex(const path_elem_t *el, size_t nel, engine_waypoint_t *out,
-                   size_t cap, size_t *n_out, size_t *el_end, size_t *bad_el)
+int path_expand_ex(const path_elem_t *el, size_t nel, engine_waypoint_t *out, size_t cap,
+                   size_t *n_out, size_t *el_end, size_t *bad_el)
 {
     walker_t w;
     size_t i;
@@ -249,8 +251,7 @@ int path_expand_ex(const path_elem_t *el, size_t nel, engine_waypoint_t *out,
     w.cap = cap;
     for (i = 0; i < nel && rc == 0; i++) {
         switch (el[i].kind) {
-        case PATH_NONE:
-            break;
+        case PATH_NONE: break;
         case PATH_START:
             if (w.started) {
                 rc = -PATH_ETWICE;
@@ -270,12 +271,8 @@ int path_expand_ex(const path_elem_t *el, size_t nel, engine_waypoint_t *out,
             else
                 w.step = el[i].value;
             break;
-        case PATH_LINE:
-            rc = w.started ? do_line(&w, el[i].xyz_m) : -PATH_ENOSTART;
-            break;
-        case PATH_ARC:
-            rc = w.started ? do_arc(&w, &el[i]) : -PATH_ENOSTART;
-            break;
+        case PATH_LINE: rc = w.started ? do_line(&w, el[i].xyz_m) : -PATH_ENOSTART; break;
+        case PATH_ARC: rc = w.started ? do_arc(&w, &el[i]) : -PATH_ENOSTART; break;
         case PATH_WAIT:
             if (!w.started)
                 rc = -PATH_ENOSTART;
@@ -284,9 +281,7 @@ int path_expand_ex(const path_elem_t *el, size_t nel, engine_waypoint_t *out,
             else
                 emit(&w, w.pos, w.t + el[i].value);
             break;
-        default:
-            rc = -PATH_ERANGE;
-            break;
+        default: rc = -PATH_ERANGE; break;
         }
         if (rc == 0 && w.bad_time)
             rc = -PATH_ETIME;

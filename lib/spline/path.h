@@ -58,7 +58,7 @@ enum path_error {
 const char *path_strerror(int err);
 
 typedef enum {
-    PATH_NONE = 0,   /* blank or comment line */
+    PATH_NONE = 0, /* blank or comment line */
     PATH_START,
     PATH_SPEED,
     PATH_STEP,
@@ -69,13 +69,13 @@ typedef enum {
 
 typedef struct {
     path_kind_t kind;
-    double xyz_m[3];       /* START, LINE: the point */
-    double t_s;            /* START: its time */
-    double value;          /* SPEED m/s, STEP s, WAIT s */
-    double centre_m[2];    /* ARC */
-    double radius_m;       /* ARC */
-    double start_rad;      /* ARC */
-    double sweep_rad;      /* ARC: signed, |sweep| <= 2 pi */
+    double xyz_m[3];    /* START, LINE: the point */
+    double t_s;         /* START: its time */
+    double value;       /* SPEED m/s, STEP s, WAIT s */
+    double centre_m[2]; /* ARC */
+    double radius_m;    /* ARC */
+    double start_rad;   /* ARC */
+    double sweep_rad;   /* ARC: signed, |sweep| <= 2 pi */
 } path_elem_t;
 
 /*
@@ -92,8 +92,8 @@ int path_parse_line(const char *line, path_elem_t *el);
  * Returns 0, -PATH_ENOSTART, -PATH_ETWICE, -PATH_ERANGE, -PATH_ETIME,
  * -PATH_EFULL.
  */
-int path_expand(const path_elem_t *el, size_t nel, engine_waypoint_t *out,
-                size_t cap, size_t *n_out);
+int path_expand(const path_elem_t *el, size_t nel, engine_waypoint_t *out, size_t cap,
+                size_t *n_out);
 
 /*
  * As path_expand, and also: el_end (NULL or nel entries) receives for each
@@ -102,7 +102,7 @@ int path_expand(const path_elem_t *el, size_t nel, engine_waypoint_t *out,
  * NULL) is the index of the element that failed (for a message with its
  * line), and el_end is filled up to it.
  */
-int path_expand_ex(const path_elem_t *el, size_t nel, engine_waypoint_t *out,
-                   size_t cap, size_t *n_out, size_t *el_end, size_t *bad_el);
+int path_expand_ex(const path_elem_t *el, size_t nel, engine_waypoint_t *out, size_t cap,
+                   size_t *n_out, size_t *el_end, size_t *bad_el);
 
 #endif

@@ -44,8 +44,8 @@ static void hoang_rows(size_t k, double *a, double *b, double *c)
     }
 }
 
-int surf_interpolate(size_t m, size_t n, size_t dim, const double *grid,
-                     double *ctrl, double *scratch, surf_t *s)
+int surf_interpolate(size_t m, size_t n, size_t dim, const double *grid, double *ctrl,
+                     double *scratch, surf_t *s)
 {
     size_t k = m > n ? m : n, i, j, c, w = n * dim, W = (n + 2) * dim;
     double *a = scratch, *b = a + k, *cc = b + k, *tw = cc + k, *T = tw + k;
@@ -162,8 +162,7 @@ int surf_eval(const surf_t *s, double u, double v, unsigned nder, double *out)
 }
 
 /* C = M . P . M^T for coordinate c of patch (i, j) (16 values). */
-static void coeffs_one(const surf_t *s, size_t i, size_t j, size_t c,
-                       const double *M, double *C)
+static void coeffs_one(const surf_t *s, size_t i, size_t j, size_t c, const double *M, double *C)
 {
     double MP[16];
     size_t dim = s->dim, W = (s->n + 2) * dim;
@@ -215,8 +214,7 @@ static void fd_step(double *st)
     st[2] += st[3];
 }
 
-int surf_patch_fd(const surf_t *s, size_t i, size_t j, unsigned nu, unsigned nv,
-                  double *out)
+int surf_patch_fd(const surf_t *s, size_t i, size_t j, unsigned nu, unsigned nv, double *out)
 {
     double M[16], C[16];
     size_t c, dim = s->dim;

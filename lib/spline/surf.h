@@ -41,9 +41,9 @@ enum surf_error {
 const char *surf_strerror(int err);
 
 typedef struct {
-    size_t m, n;         /* grid rows and columns (>= 2 each) */
-    size_t dim;          /* coordinates per point (3 for x, y, z) */
-    const double *ctrl;  /* (m+2)*(n+2)*dim control points, row-major */
+    size_t m, n;        /* grid rows and columns (>= 2 each) */
+    size_t dim;         /* coordinates per point (3 for x, y, z) */
+    const double *ctrl; /* (m+2)*(n+2)*dim control points, row-major */
 } surf_t;
 
 /* Doubles of scratch surf_interpolate needs. */
@@ -57,8 +57,8 @@ size_t surf_scratch_len(size_t m, size_t n, size_t dim);
  *   s       out (may be NULL): the surface viewing ctrl
  * Returns 0, -SURF_ESIZE, -SURF_ENOTFINITE, -SURF_ESINGULAR.
  */
-int surf_interpolate(size_t m, size_t n, size_t dim, const double *grid,
-                     double *ctrl, double *scratch, surf_t *s);
+int surf_interpolate(size_t m, size_t n, size_t dim, const double *grid, double *ctrl,
+                     double *scratch, surf_t *s);
 
 /*
  * Point at (u, v) in [0, m-1] x [0, n-1]; with nder = 1 also dR/du and
@@ -80,7 +80,6 @@ int surf_patch_coeffs(const surf_t *s, size_t i, size_t j, double *C);
  *   out[((a*(nv+1)) + b)*dim + c] = R(i + a/nu, j + b/nv)_c
  * Returns 0, -SURF_EDOMAIN, -SURF_ESIZE (nu or nv 0).
  */
-int surf_patch_fd(const surf_t *s, size_t i, size_t j, unsigned nu, unsigned nv,
-                  double *out);
+int surf_patch_fd(const surf_t *s, size_t i, size_t j, unsigned nu, unsigned nv, double *out);
 
 #endif

@@ -20,8 +20,7 @@ static int pivot_ok(double piv, double a, double b, double c)
     return isfinite(piv) && fabs(piv) > TRIDIAG_PIVOT_REL_MIN * scale;
 }
 
-void tridiag_sweep_init(tridiag_sweep_t *s, double *cp, double *dp, size_t cap,
-                        size_t nrhs)
+void tridiag_sweep_init(tridiag_sweep_t *s, double *cp, double *dp, size_t cap, size_t nrhs)
 {
     s->n = 0;
     s->cap = cap;
@@ -35,8 +34,7 @@ void tridiag_sweep_reset(tridiag_sweep_t *s)
     s->n = 0;
 }
 
-int tridiag_sweep_push(tridiag_sweep_t *s, double a, double b, double c,
-                       const double *d)
+int tridiag_sweep_push(tridiag_sweep_t *s, double a, double b, double c, const double *d)
 {
     size_t i = s->n, k, m = s->nrhs;
     double piv, inv;
@@ -76,8 +74,8 @@ int tridiag_sweep_solve(const tridiag_sweep_t *s, double *x)
     return 0;
 }
 
-int tridiag_solve(size_t n, size_t nrhs, const double *a, const double *b,
-                  const double *c, const double *d, double *x, double *scratch)
+int tridiag_solve(size_t n, size_t nrhs, const double *a, const double *b, const double *c,
+                  const double *d, double *x, double *scratch)
 {
     tridiag_sweep_t s;
     size_t i;
@@ -88,8 +86,7 @@ int tridiag_solve(size_t n, size_t nrhs, const double *a, const double *b,
     /* x doubles as d' storage: row i of d is read before row i of x is written. */
     tridiag_sweep_init(&s, scratch, x, n, nrhs);
     for (i = 0; i < n; i++) {
-        rc = tridiag_sweep_push(&s, a[i], b[i], i + 1 < n ? c[i] : 0.0,
-                                d + i * nrhs);
+        rc = tridiag_sweep_push(&s, a[i], b[i], i + 1 < n ? c[i] : 0.0, d + i * nrhs);
         if (rc < 0)
             return rc;
     }

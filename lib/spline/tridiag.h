@@ -34,8 +34,8 @@ const char *tridiag_strerror(int err);
  * scratch: n doubles.
  * Returns 0, -TRIDIAG_ESIZE (n == 0 or nrhs == 0), -TRIDIAG_ESINGULAR.
  */
-int tridiag_solve(size_t n, size_t nrhs, const double *a, const double *b,
-                  const double *c, const double *d, double *x, double *scratch);
+int tridiag_solve(size_t n, size_t nrhs, const double *a, const double *b, const double *c,
+                  const double *d, double *x, double *scratch);
 
 /*
  * Incremental forward sweep: rows are pushed as the data for them arrives
@@ -43,16 +43,15 @@ int tridiag_solve(size_t n, size_t nrhs, const double *a, const double *b,
  * is in.  The memory is the caller's: cp holds cap doubles, dp cap*nrhs.
  */
 typedef struct {
-    size_t n;     /* rows pushed so far */
-    size_t cap;   /* rows that fit */
-    size_t nrhs;  /* right-hand sides per row */
-    double *cp;   /* modified super-diagonal c'[i] */
-    double *dp;   /* modified right-hand sides d'[i*nrhs + k] */
+    size_t n;    /* rows pushed so far */
+    size_t cap;  /* rows that fit */
+    size_t nrhs; /* right-hand sides per row */
+    double *cp;  /* modified super-diagonal c'[i] */
+    double *dp;  /* modified right-hand sides d'[i*nrhs + k] */
 } tridiag_sweep_t;
 
 /* Attach caller memory and empty the sweep. */
-void tridiag_sweep_init(tridiag_sweep_t *s, double *cp, double *dp, size_t cap,
-                        size_t nrhs);
+void tridiag_sweep_init(tridiag_sweep_t *s, double *cp, double *dp, size_t cap, size_t nrhs);
 
 /* Forget the rows pushed; keep the memory. */
 void tridiag_sweep_reset(tridiag_sweep_t *s);
@@ -61,8 +60,7 @@ void tridiag_sweep_reset(tridiag_sweep_t *s);
  * Eliminate one row (a is ignored for the first row).  d: nrhs values.
  * Returns 0, -TRIDIAG_ESIZE (full), -TRIDIAG_ESINGULAR.
  */
-int tridiag_sweep_push(tridiag_sweep_t *s, double a, double b, double c,
-                       const double *d);
+int tridiag_sweep_push(tridiag_sweep_t *s, double a, double b, double c, const double *d);
 
 /*
  * Back substitution over the rows pushed, treating the last one's c as 0.

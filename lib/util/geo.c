@@ -67,8 +67,8 @@ int geo_enu_init(double lat0_deg, double lon0_deg, double alt0_m, geo_enu_t *fra
     return 0;
 }
 
-int geo_to_enu(const geo_enu_t *frame, double lat_deg, double lon_deg,
-               double alt_m, double enu_m[3])
+int geo_to_enu(const geo_enu_t *frame, double lat_deg, double lon_deg, double alt_m,
+               double enu_m[3])
 {
     double p[3];
     int rc = geo_to_ecef(lat_deg, lon_deg, alt_m, p);

@@ -16,8 +16,8 @@
 #define TRAJD_GEO_H
 
 /* WGS84 defining constants (NIMA TR8350.2, table 3.1). */
-#define GEO_WGS84_A_M 6378137.0                 /* semi-major axis */
-#define GEO_WGS84_INV_F 298.257223563           /* inverse flattening */
+#define GEO_WGS84_A_M 6378137.0       /* semi-major axis */
+#define GEO_WGS84_INV_F 298.257223563 /* inverse flattening */
 
 /* Heights accepted, metres: from the deepest ocean trench to low orbit.
  * Anything outside is a data error (a wrong column or unit), not a place. */
@@ -64,7 +64,7 @@ int geo_enu_init(double lat0_deg, double lon0_deg, double alt0_m, geo_enu_t *fra
  * Position in the frame: enu_m[0] east, [1] north, [2] up, metres.
  * Returns 0, or the error of geo_check (enu_m then untouched).
  */
-int geo_to_enu(const geo_enu_t *frame, double lat_deg, double lon_deg,
-               double alt_m, double enu_m[3]);
+int geo_to_enu(const geo_enu_t *frame, double lat_deg, double lon_deg, double alt_m,
+               double enu_m[3]);
 
 #endif

@@ -18,17 +18,17 @@
 
 #include <stdint.h>
 
-#define LAT_LINEAR_US 1024u                  /* 1 us buckets for 0 .. 1023 us */
-#define LAT_SUB 32u                          /* buckets per octave above */
-#define LAT_OCTAVES 16u                      /* 1024 us .. 67 s */
+#define LAT_LINEAR_US 1024u /* 1 us buckets for 0 .. 1023 us */
+#define LAT_SUB 32u         /* buckets per octave above */
+#define LAT_OCTAVES 16u     /* 1024 us .. 67 s */
 #define LAT_MAX_US (LAT_LINEAR_US << LAT_OCTAVES)
 #define LAT_BUCKETS (LAT_LINEAR_US + LAT_SUB * LAT_OCTAVES)
 
 typedef struct {
-    uint64_t count;                 /* samples added */
-    uint64_t sum_us;                /* for the mean */
-    uint64_t max_us;                /* exact largest sample */
-    uint32_t bucket[LAT_BUCKETS];   /* sample counts (saturate at UINT32_MAX) */
+    uint64_t count;               /* samples added */
+    uint64_t sum_us;              /* for the mean */
+    uint64_t max_us;              /* exact largest sample */
+    uint32_t bucket[LAT_BUCKETS]; /* sample counts (saturate at UINT32_MAX) */
 } lat_hist_t;
 
 /* The four numbers the daemon logs and publishes (all 0 when empty). */

@@ -18,21 +18,22 @@ typedef struct {
 int main(void)
 {
     static const variant_t v[] = {
-        { "default: 1 object, 100 Hz, classic own frames", 1, 100, 0, 0, 0, 0, 1 },
-        { "1 object, 100 Hz, SYNC + own + CiA 402 x3", 1, 100, 1, 0, 0, 1, 1 },
-        { "1 object, 1 kHz, SYNC + CiA 402 x3 only", 1, 1000, 1, 0, 0, 1, 0 },
-        { "1 object, 1 kHz, classic own frames", 1, 1000, 0, 0, 0, 0, 1 },
-        { "1 object, 1 kHz, FD own frame, BRS x4", 1, 1000, 0, 1, 1, 0, 1 },
-        { "4 objects, 250 Hz, SYNC + own", 4, 250, 1, 0, 0, 0, 1 },
+        {"default: 1 object, 100 Hz, classic own frames", 1, 100, 0, 0, 0, 0, 1},
+        {"1 object, 100 Hz, SYNC + own + CiA 402 x3", 1, 100, 1, 0, 0, 1, 1},
+        {"1 object, 1 kHz, SYNC + CiA 402 x3 only", 1, 1000, 1, 0, 0, 1, 0},
+        {"1 object, 1 kHz, classic own frames", 1, 1000, 0, 0, 0, 0, 1},
+        {"1 object, 1 kHz, FD own frame, BRS x4", 1, 1000, 0, 1, 1, 0, 1},
+        {"4 objects, 250 Hz, SYNC + own", 4, 250, 1, 0, 0, 0, 1},
     };
-    static const double br[] = { 125e3, 250e3, 500e3, 1e6 };
-    canproto_traffic_t tr = { .status_hz = 10, .waypoint_hz = 10 };
+    static const double br[] = {125e3, 250e3, 500e3, 1e6};
+    canproto_traffic_t tr = {.status_hz = 10, .waypoint_hz = 10};
 
     printf("Worst-case frame lengths (bits incl. stuffing and IFS), 11-bit ids:\n");
     printf("  classic DLC 0: %.0f, DLC 4: %.0f, DLC 8: %.0f; FD 32 bytes no BRS: %.0f\n",
            canproto_frame_bits(0, 0, 0, 0, 500e3, 0), canproto_frame_bits(4, 0, 0, 0, 500e3, 0),
            canproto_frame_bits(8, 0, 0, 0, 500e3, 0), canproto_frame_bits(32, 1, 0, 0, 500e3, 0));
-    printf("\nWorst-case bus load, %% (status 10 Hz, 10 waypoints/s in, per object; FD data phase 4x nominal)\n");
+    printf("\nWorst-case bus load, %% (status 10 Hz, 10 waypoints/s in, per object; FD data phase "
+           "4x nominal)\n");
     printf("%-48s %9s %9s %9s %9s\n", "configuration", "125k", "250k", "500k", "1M");
     for (size_t i = 0; i < sizeof v / sizeof v[0]; i++) {
         canproto_ids_t ids[4];
@@ -46,7 +47,8 @@ int main(void)
         tr.rate_hz = v[i].rate_hz;
         printf("%-48s", v[i].name);
         for (size_t b = 0; b < sizeof br / sizeof br[0]; b++)
-            printf(" %9.1f", 100 * canproto_busload(ids, v[i].nobj, v[i].sync, 0, &tr, br[b], 4 * br[b]));
+            printf(" %9.1f",
+                   100 * canproto_busload(ids, v[i].nobj, v[i].sync, 0, &tr, br[b], 4 * br[b]));
         printf("\n");
     }
 
@@ -73,7 +75,7 @@ int main(void)
     canproto_slot_t slots[2];
     canproto_rx_t rx;
     canproto_rx_init(&rx, slots, 2);
-    engine_waypoint_t w = { .t_s = 0, .pos_m = { 1, 2, 3 }, .seq = 0 };
+    engine_waypoint_t w = {.t_s = 0, .pos_m = {1, 2, 3}, .seq = 0};
     canproto_frame_t wf[4];
     canproto_rx_out_t out;
     double t3 = now_s();

@@ -168,8 +168,7 @@ static void bench_global(long n, double *ns_paper, double *ns_gsl)
 
 /* max |streamed - global| over dense samples, relative to the extent */
 static double frag_error(const engine_waypoint_t *wp, size_t n, engine_method_t m,
-                         engine_param_t pa, engine_ends_t en, unsigned f, unsigned o,
-                         double *abs_m)
+                         engine_param_t pa, engine_ends_t en, unsigned f, unsigned o, double *abs_m)
 {
     engine_config_t c;
     fdiff_seg_t *g = __libc_malloc(sizeof(fdiff_seg_t) * (n + 8));
@@ -193,8 +192,10 @@ static double frag_error(const engine_waypoint_t *wp, size_t n, engine_method_t 
     engine_curve(&c, wp, n, s, n + 8, &ns);
     for (size_t i = 0; i < n; i++)
         for (int k = 0; k < 3; k++) {
-            if (wp[i].pos_m[k] < lo[k]) lo[k] = wp[i].pos_m[k];
-            if (wp[i].pos_m[k] > hi[k]) hi[k] = wp[i].pos_m[k];
+            if (wp[i].pos_m[k] < lo[k])
+                lo[k] = wp[i].pos_m[k];
+            if (wp[i].pos_m[k] > hi[k])
+                hi[k] = wp[i].pos_m[k];
         }
     for (int k = 0; k < 3; k++)
         if (hi[k] - lo[k] > ext)
@@ -288,21 +289,23 @@ static void bench_stepper(void)
            "| struct-of-arrays (lib/engine/fdiff.h) | %.2f | %.2f |\n"
            "target <= 8 ns per setpoint (issue 13); the engine_tick figure below adds the "
            "state machine around it.  (sink %g)\n\n",
-           best_aos * 1e9 / STEPS, best_soa * 1e9 / STEPS, best_aos / best_soa, sink > 0 ? 1.0 : 0.0);
+           best_aos * 1e9 / STEPS, best_soa * 1e9 / STEPS, best_aos / best_soa,
+           sink > 0 ? 1.0 : 0.0);
 }
 
 int main(void)
 {
     bench_stepper();
     static const long lengths[] = {1000, 10000, 100000, 1000000};
-    static const unsigned fo[][2] = {{8, 4}, {16, 4}, {16, 8}, {24, 12}, {32, 8}, {32, 16},
-                                     {48, 24}, {64, 32}, {32, 30}};
+    static const unsigned fo[][2] = {{8, 4},   {16, 4},  {16, 8},  {24, 12}, {32, 8},
+                                     {32, 16}, {48, 24}, {64, 32}, {32, 30}};
     engine_config_t c;
 
     engine_config_default(&c);
     printf("engine defaults: method cubic, param time, ends rest, F=%u O=%u, period %lld ns\n\n",
            c.fragment, c.overlap, (long long)c.period_ns);
-    printf("| waypoints | ns/waypoint (push+solve) | ns/setpoint (3 axes) | heap allocs in push/tick | "
+    printf("| waypoints | ns/waypoint (push+solve) | ns/setpoint (3 axes) | heap allocs in "
+           "push/tick | "
            "paper global re-solve ns/waypoint | GSL cspline init ns/waypoint |\n");
     printf("|---|---|---|---|---|---|\n");
     for (size_t i = 0; i < sizeof(lengths) / sizeof(lengths[0]); i++) {
@@ -326,7 +329,8 @@ int main(void)
     size_t n8 = load_figure8(fig8, 1000); /* fragment 0 of F=1024 covers 1000: global */
     printf("\nerror of the streamed curve against one global solve (max over dense samples)\n");
     printf("random walk: 1000 waypoints, irregular times; figure8: first %zu fixes of "
-           "n2k_furuno_figure8_src52 (5 Hz)\n\n", n8);
+           "n2k_furuno_figure8_src52 (5 Hz)\n\n",
+           n8);
     printf("| F | O | lookahead (waypoints) | latency at 1 Hz / 5 Hz | walk (b) rel. extent | "
            "walk (a) rel. extent | figure8 (b) metres | rho^(O/2) |\n");
     printf("|---|---|---|---|---|---|---|---|\n");
@@ -340,7 +344,9 @@ int main(void)
         double ea = frag_error(walk, NW, ENGINE_METHOD_BSPLINE, ENGINE_PARAM_UNIFORM,
                                ENGINE_ENDS_NATURAL, fo[i][0], fo[i][1], &aa);
         double e8 = n8 ? (frag_error(fig8, n8, ENGINE_METHOD_CUBIC, ENGINE_PARAM_TIME,
-                                     ENGINE_ENDS_REST, fo[i][0], fo[i][1], &a8), a8) : NAN;
+                                     ENGINE_ENDS_REST, fo[i][0], fo[i][1], &a8),
+                          a8)
+                       : NAN;
         printf("| %u | %u | %u | %u s / %.1f s | %.1e | %.1e | %.1e | %.1e |\n", fo[i][0], fo[i][1],
                la, la, la / 5.0, eb, ea, e8, pow(2 - sqrt(3), fo[i][1] / 2.0));
     }

@@ -42,7 +42,8 @@ int main(void)
     size_t i, first, nc, k;
     double t0, a, b, ns, gns, lo, hi;
 
-    printf("GSL 2.7 finds the knot interval by a linear search, hence its O(n) cost at n = 1001.\n\n");
+    printf(
+        "GSL 2.7 finds the knot interval by a linear search, hence its O(n) cost at n = 1001.\n\n");
     printf("| evaluator | ns/point | GSL counterpart | ns/point |\n|---|---:|---|---:|\n");
 
     /* ---- B-spline, order 4, 1000 breakpoints, clamped, 3-D ---- */
@@ -227,7 +228,8 @@ int main(void)
         gsl_bspline_workspace *w2 = gsl_bspline_alloc(4, NCL - 2);
         gsl_bspline_knots_uniform(0, 1, w2);
         gsl_matrix *X = gsl_matrix_alloc(M, NCL), *cov = gsl_matrix_alloc(NCL, NCL);
-        gsl_vector *yv = gsl_vector_alloc(M), *cv = gsl_vector_alloc(NCL), *Bv = gsl_vector_alloc(NCL);
+        gsl_vector *yv = gsl_vector_alloc(M), *cv = gsl_vector_alloc(NCL),
+                   *Bv = gsl_vector_alloc(NCL);
         gsl_multifit_linear_workspace *mw = gsl_multifit_linear_alloc(M, NCL);
         double chisq;
         int greps = 3;
@@ -246,9 +248,15 @@ int main(void)
         }
         gns = (now_s() - t0) / greps / M * 1e9;
         sink += gsl_vector_get(cv, 3) - cp[9];
-        row("lsq_fit 2000 pts -> 60 ctrl, cubic, 3-D, per pt", ns, "design matrix + gsl_multifit_linear x3", gns);
-        gsl_matrix_free(X); gsl_matrix_free(cov); gsl_vector_free(yv); gsl_vector_free(cv);
-        gsl_vector_free(Bv); gsl_multifit_linear_free(mw); gsl_bspline_free(w2);
+        row("lsq_fit 2000 pts -> 60 ctrl, cubic, 3-D, per pt", ns,
+            "design matrix + gsl_multifit_linear x3", gns);
+        gsl_matrix_free(X);
+        gsl_matrix_free(cov);
+        gsl_vector_free(yv);
+        gsl_vector_free(cv);
+        gsl_vector_free(Bv);
+        gsl_multifit_linear_free(mw);
+        gsl_bspline_free(w2);
     }
 
     /* ---- streaming smoother (engine method smooth), window 24, 6 control points ---- */
@@ -266,14 +274,16 @@ int main(void)
                     nout++;
                 }
             }
-            row("lsq_smooth (window 24, 6 ctrl), per waypoint", (now_s() - t0) / nout * 1e9, NULL, 0);
+            row("lsq_smooth (window 24, 6 ctrl), per waypoint", (now_s() - t0) / nout * 1e9, NULL,
+                0);
         }
     }
 
     /* ---- surface ---- */
     {
         enum { GM = 30, GN = 40, ST = 32 };
-        static double g[GM * GN * 3], cp[(GM + 2) * (GN + 2) * 3], scr[8192], fd[(ST + 1) * (ST + 1) * 3];
+        static double g[GM * GN * 3], cp[(GM + 2) * (GN + 2) * 3], scr[8192],
+            fd[(ST + 1) * (ST + 1) * 3];
         surf_t s;
         size_t j, n = 0;
         for (i = 0; i < GM; i++)
@@ -307,13 +317,19 @@ int main(void)
         t0 = now_s();
         for (i = 0; i < 100; i++)
             surf_interpolate(GM, GN, 3, g, cp, scr, &s);
-        row("surf_interpolate 30x40 grid, per grid point", (now_s() - t0) / 100 / (GM * GN) * 1e9, NULL, 0);
+        row("surf_interpolate 30x40 grid, per grid point", (now_s() - t0) / 100 / (GM * GN) * 1e9,
+            NULL, 0);
     }
 
     /* ---- path ---- */
     {
-        const char *prog[] = {"start 0 0 0", "speed 5", "step 0.1", "line 100 0 0",
-                              "arc 100 50 50 -90 90", "circle 100 50 50 90 cw", "line 0 100 0"};
+        const char *prog[] = {"start 0 0 0",
+                              "speed 5",
+                              "step 0.1",
+                              "line 100 0 0",
+                              "arc 100 50 50 -90 90",
+                              "circle 100 50 50 90 cw",
+                              "line 0 100 0"};
         path_elem_t el[8];
         static engine_waypoint_t wp[4096];
         size_t nw = 0;
@@ -323,10 +339,14 @@ int main(void)
         t0 = now_s();
         for (i = 0; i < (size_t)reps; i++)
             path_expand(el, 7, wp, 4096, &nw);
-        row("path_expand (lines + NURBS arcs), per waypoint", (now_s() - t0) / reps / nw * 1e9, NULL, 0);
+        row("path_expand (lines + NURBS arcs), per waypoint", (now_s() - t0) / reps / nw * 1e9,
+            NULL, 0);
         sink += wp[5].pos_m[0];
     }
 
-    gsl_vector_free(gb); gsl_vector_free(B); gsl_matrix_free(dB); gsl_bspline_free(w);
+    gsl_vector_free(gb);
+    gsl_vector_free(B);
+    gsl_matrix_free(dB);
+    gsl_bspline_free(w);
     return sink > 1e300;
 }

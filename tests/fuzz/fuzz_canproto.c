@@ -30,7 +30,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 static int nearest_code(double x, int64_t per_unit, int64_t code)
 {
     int ex;
-    double fr = frexp(x, &ex);             /* x = fr 2^ex, 1/2 <= |fr| < 1 */
+    double fr = frexp(x, &ex);            /* x = fr 2^ex, 1/2 <= |fr| < 1 */
     __int128 m = (__int128)ldexp(fr, 53); /* exact */
     ex -= 53;
     __int128 lhs = 2 * m * per_unit, lo = 2 * (__int128)code - 1, hi = 2 * (__int128)code + 1;

@@ -28,7 +28,8 @@ static void check_frame(const canproto_frame_t *f)
     cia402_sdo_reply_t r;
 
     if (cia402_decode_heartbeat(f, &node, &st) == 0)
-        if (node < 1 || node > CIA402_NODE_MAX || f->id != CIA402_COB_HEARTBEAT + node || f->len != 1)
+        if (node < 1 || node > CIA402_NODE_MAX || f->id != CIA402_COB_HEARTBEAT + node ||
+            f->len != 1)
             abort();
     if (cia402_decode_emcy(f, &node, &code, &reg) == 0)
         if (node < 1 || node > CIA402_NODE_MAX || f->id != CIA402_COB_EMCY + node || f->len != 8)
@@ -80,8 +81,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         unsigned sz = 1u << (f.data[1] % 3); /* 1, 2, 4 */
         uint8_t node = (uint8_t)(f.data[2] % 130);
         if (cia402_encode_sdo_download(node, index, f.data[3], (uint32_t)f.id, sz, &d) == 0) {
-            if (node < 1 || node > CIA402_NODE_MAX || d.id != CIA402_COB_SDO_RX + node || d.len != 8 ||
-                d.data[0] != (uint8_t)(0x23 | ((4 - sz) << 2)) ||
+            if (node < 1 || node > CIA402_NODE_MAX || d.id != CIA402_COB_SDO_RX + node ||
+                d.len != 8 || d.data[0] != (uint8_t)(0x23 | ((4 - sz) << 2)) ||
                 (uint16_t)(d.data[1] | d.data[2] << 8) != index || d.data[3] != f.data[3])
                 abort();
         } else if (node >= 1 && node <= CIA402_NODE_MAX) {

@@ -62,11 +62,11 @@ typedef struct {
     engine_config_t c;
     int64_t now;
     engine_setpoint_t last;
-    int have_last;   /* last holds a setpoint with a position */
-    int positioned;  /* a waypoint was accepted or a position set: from the
+    int have_last;          /* last holds a setpoint with a position */
+    int positioned;         /* a waypoint was accepted or a position set: from the
                         next tick on, every setpoint is a position */
-    safety_t mon;    /* lib/safety as the daemon runs it after the engine */
-    int tight;       /* mon has bounds the engine may break (else the daemon's defaults) */
+    safety_t mon;           /* lib/safety as the daemon runs it after the engine */
+    int tight;              /* mon has bounds the engine may break (else the daemon's defaults) */
     engine_setpoint_t sent; /* the last setpoint mon let out or held */
     int have_sent;
 } run_t;
@@ -145,7 +145,8 @@ static void tick(run_t *r, int64_t k)
             d2 += (sp.pos_m[a] - r->last.pos_m[a]) * (sp.pos_m[a] - r->last.pos_m[a]);
         int exact = (sp.flags & HOLD_OR_TRANSFER) && (r->last.flags & HOLD_OR_TRANSFER);
         double bound = (double)k * (double)r->c.period_ns * 1e-9 * r->c.max_speed_m_s *
-                       (exact ? 1 : CURVE_MARGIN) + 1e-9;
+                           (exact ? 1 : CURVE_MARGIN) +
+                       1e-9;
         if (sqrt(d2) > bound)
             abort();
     }
@@ -228,7 +229,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     while (p < end && ops++ < MAX_OPS) {
         uint8_t op = *p++;
         switch (op % 8) {
-        case 0: case 1: case 2: { /* push: small steps mostly, raw doubles sometimes */
+        case 0:
+        case 1:
+        case 2: { /* push: small steps mostly, raw doubles sometimes */
             engine_waypoint_t w = {0};
             if (op & 0x80) {
                 w.t_s = take_double(&p, end);
@@ -246,9 +249,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             }
             break;
         }
-        case 3: case 4: case 5:
-            tick(&r, (op >> 3) + 1);
-            break;
+        case 3:
+        case 4:
+        case 5: tick(&r, (op >> 3) + 1); break;
         case 6:
             if (op & 0x40) {
                 engine_clear(r.e);
@@ -291,12 +294,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     (void)engine_finish(r.e);
     double diag = 2 * sqrt(3) * r.c.max_abs_m;
     double transfer = fmax(fmax(1, 60.0 * r.c.max_gap_s),
-                           r.c.max_speed_m_s > 0 ? 1.5 * diag / r.c.max_speed_m_s : 0) + 1;
+                           r.c.max_speed_m_s > 0 ? 1.5 * diag / r.c.max_speed_m_s : 0) +
+                      1;
     double bound_s = (double)accepted * (r.c.max_gap_s + transfer) + transfer + 1;
     int64_t step = 20, n = (int64_t)(bound_s * 1e9 / (double)r.c.period_ns) / step + 2;
     for (int64_t i = 0; i < n; i++) {
         engine_status(r.e, &st);
-        if (st.state == ENGINE_STATE_FINISHED || (accepted == 0 && st.state == ENGINE_STATE_WAITING))
+        if (st.state == ENGINE_STATE_FINISHED ||
+            (accepted == 0 && st.state == ENGINE_STATE_WAITING))
             break;
         tick(&r, step);
     }

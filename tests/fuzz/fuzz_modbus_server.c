@@ -31,9 +31,9 @@ static int wp_hook(void *ctx, unsigned k, const engine_waypoint_t *wp)
 {
     (void)ctx;
     if (k >= NOBJ)
-        abort();                    /* the decoder let a bad object through */
+        abort(); /* the decoder let a bad object through */
     if (!isfinite(wp->t_s) || !isfinite(wp->pos_m[0]))
-        abort();                    /* NaN must be refused before the engine */
+        abort(); /* NaN must be refused before the engine */
     if (wp->t_s < last_t[k])
         return -ENGINE_EBACKWARDS;
     if (buffered[k] >= 8) {
@@ -65,14 +65,14 @@ static void check_responses(const uint8_t *b, size_t n)
         if (proto != 0 || len < 2 || len > 254)
             abort();
         if (n < 6 + (size_t)len)
-            return;                 /* cut by our read buffer */
+            return; /* cut by our read buffer */
         uint8_t fc = b[7];
         if (fc & 0x80) {
             uint8_t code = b[8];
             if (len != 3 || (code != 1 && code != 2 && code != 3 && code != 6))
                 abort();
         } else if (fc != 3 && fc != 4 && fc != 6 && fc != 16) {
-            abort();                /* a normal answer to a function we do not serve */
+            abort(); /* a normal answer to a function we do not serve */
         }
         b += 6 + len;
         n -= 6 + (size_t)len;
@@ -90,7 +90,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         cfg.writes_enabled = 1;
         cfg.n_objects = NOBJ;
         cfg.max_clients = 2;
-        modbus_server_hooks_t hooks = { wp_hook, cmd_hook, NULL, NULL };
+        modbus_server_hooks_t hooks = {wp_hook, cmd_hook, NULL, NULL};
         srv = modbus_server_new(&cfg, &hooks, NULL, 0);
         if (!srv)
             abort();

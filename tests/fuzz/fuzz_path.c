@@ -45,8 +45,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (path_expand(el, nel, wp, MAX_WP, &got) != 0 || got != need)
         abort();
     for (i = 0; i < got; i++) {
-        if (!isfinite(wp[i].t_s) || !isfinite(wp[i].pos_m[0]) ||
-            !isfinite(wp[i].pos_m[1]) || !isfinite(wp[i].pos_m[2]))
+        if (!isfinite(wp[i].t_s) || !isfinite(wp[i].pos_m[0]) || !isfinite(wp[i].pos_m[1]) ||
+            !isfinite(wp[i].pos_m[2]))
             abort();
         if (i && wp[i].t_s < wp[i - 1].t_s)
             abort();

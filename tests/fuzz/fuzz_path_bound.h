@@ -38,7 +38,9 @@ static inline double expansion_bound(const path_elem_t *el, size_t nel)
         case PATH_SPEED: speed = e->value; break;
         case PATH_STEP: step = e->value; break;
         case PATH_LINE: n += ceil(line) + 1; break;
-        case PATH_ARC: n += ceil(line) + 1 + ceil(fabs(e->radius_m * e->sweep_rad) / (speed * step)) + 1; break;
+        case PATH_ARC:
+            n += ceil(line) + 1 + ceil(fabs(e->radius_m * e->sweep_rad) / (speed * step)) + 1;
+            break;
         default: n += 1; break;
         }
         if (!(speed > 0) || !(step > 0))

@@ -23,8 +23,8 @@ static inline void fuzz_track_check(const char *buf, size_t len, track_format_t 
     if (t.n == 0 || t.format != fmt)
         abort();
     for (size_t i = 0; i < t.n; i++) {
-        if (!isfinite(t.wp[i].t_s) || !isfinite(t.wp[i].pos_m[0]) ||
-            !isfinite(t.wp[i].pos_m[1]) || !isfinite(t.wp[i].pos_m[2]))
+        if (!isfinite(t.wp[i].t_s) || !isfinite(t.wp[i].pos_m[0]) || !isfinite(t.wp[i].pos_m[1]) ||
+            !isfinite(t.wp[i].pos_m[2]))
             abort();
         if (i && t.line && t.line[i] < t.line[i - 1])
             abort();

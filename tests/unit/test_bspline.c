@@ -152,8 +152,8 @@ static void test_open_uniform_bezier(void **state)
 {
     (void)state;
     double knots[32], ctrl[8 * 2], out[2];
-    const double ex1[] = {0, 0, 1, 2, 3, 3};          /* q = 2, n = 3 */
-    const double ex2[] = {0, 0, 0, 0, 1, 2, 2, 2};    /* q = 4, n = 4 */
+    const double ex1[] = {0, 0, 1, 2, 3, 3};       /* q = 2, n = 3 */
+    const double ex2[] = {0, 0, 0, 0, 1, 2, 2, 2}; /* q = 4, n = 4 */
     unsigned seed = 5, n, i;
     size_t k;
 
@@ -233,11 +233,14 @@ static void test_multiple_knots_lower_continuity(void **state)
     for (m = 1; m <= 3; m++) {
         double knots[20];
         size_t k = 0, i, nc;
-        for (i = 0; i < 4; i++) knots[k++] = 0;
+        for (i = 0; i < 4; i++)
+            knots[k++] = 0;
         knots[k++] = 1;
-        for (i = 0; i < m; i++) knots[k++] = 2;
+        for (i = 0; i < m; i++)
+            knots[k++] = 2;
         knots[k++] = 3;
-        for (i = 0; i < 4; i++) knots[k++] = 4;
+        for (i = 0; i < 4; i++)
+            knots[k++] = 4;
         nc = k - 4;
         bspline_t b = {4, nc, 1, knots, ctrl};
         assert_int_equal(bspline_check(&b), 0);
@@ -302,7 +305,8 @@ static void test_errors(void **state)
     assert_int_equal(bspline_check(&b), -BSPLINE_EORDER);
     b.order = 0;
     assert_int_equal(bspline_eval(&b, 0.5, out), -BSPLINE_EORDER);
-    b.order = 2; b.dim = 0;
+    b.order = 2;
+    b.dim = 0;
     assert_int_equal(bspline_check(&b), -BSPLINE_ESIZE);
     assert_int_equal(bspline_knots_uniform(3, 2, 0, 0, knots), -BSPLINE_EKNOTS);
     assert_non_null(bspline_strerror(-BSPLINE_EDOMAIN));

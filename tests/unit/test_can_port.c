@@ -23,7 +23,7 @@ typedef struct {
     canproto_frame_t out[FAKE_MAX];
     unsigned nout;
     int up;
-    int fail_with;      /* send returns this (negative) while set */
+    int fail_with; /* send returns this (negative) while set */
     int reopen_ok;
 } fake_io_t;
 
@@ -65,13 +65,13 @@ static int fake_is_up(const void *io)
     return ((const fake_io_t *)io)->up;
 }
 
-static const can_port_io_t fake_ops = { fake_send, fake_recv, fake_maintain, fake_is_up };
+static const can_port_io_t fake_ops = {fake_send, fake_recv, fake_maintain, fake_is_up};
 
 /* ---- fake engine ---- */
 typedef struct {
     engine_waypoint_t got[256];
     unsigned n;
-    int answer;          /* what push returns */
+    int answer; /* what push returns */
     unsigned cmds[8];
     unsigned args[8];
     unsigned ncmd;
@@ -113,7 +113,7 @@ static void fe_feedback(void *ctx, const can_port_drive_t *d)
     fe_feedbacks++;
 }
 
-static const can_port_hooks_t fe_hooks = { fe_push, fe_command, fe_status, fe_feedback };
+static const can_port_hooks_t fe_hooks = {fe_push, fe_command, fe_status, fe_feedback};
 
 static fake_io_t io;
 static fake_engine_t eng;
@@ -174,7 +174,7 @@ static unsigned count_id(uint32_t id)
 
 static void queue_waypoint(uint32_t seq, double t)
 {
-    engine_waypoint_t w = { .t_s = t, .pos_m = { t, -t, 0.5 }, .seq = seq };
+    engine_waypoint_t w = {.t_s = t, .pos_m = {t, -t, 0.5}, .seq = seq};
     assert_true(canproto_encode_waypoint(0x680, &w, &io.in[io.nin]) >= 0);
     io.nin += 4;
 }
@@ -189,7 +189,7 @@ static void test_cycle_frames_and_sync(void **state)
     assert_int_equal(count_id(0x080), 5);
     assert_int_equal(count_id(0x6A0), 15);
     unsigned sync_seen = 0;
-    const uint8_t expect[5] = { 1, 2, 3, 1, 2 };
+    const uint8_t expect[5] = {1, 2, 3, 1, 2};
     for (unsigned i = 0; i < io.nout; i++)
         if (io.out[i].id == 0x080) {
             assert_int_equal(io.out[i].len, 1);
@@ -360,15 +360,15 @@ static void test_cia402_feedback(void **state)
     assert_int_equal(n, 2);
     assert_int_equal(rx[1], 0x181);
     fe_feedbacks = 0;
-    queue_tpdo(0x181, 0x0250, 12345);   /* switch on disabled */
-    queue_tpdo(0x181, 0x0637, -20000);  /* operation enabled, at +2 m (inverted) */
+    queue_tpdo(0x181, 0x0250, 12345);  /* switch on disabled */
+    queue_tpdo(0x181, 0x0637, -20000); /* operation enabled, at +2 m (inverted) */
     assert_int_equal(can_port_rx(port, 0), 2);
     assert_int_equal(fe_feedbacks, 2);
     assert_int_equal(fe_drive.state[0], CIA402_OPERATION_ENABLED);
     assert_true(fe_drive.all_seen && fe_drive.all_enabled && !fe_drive.was_enabled);
     assert_true(fabs(fe_drive.pos_m[0] - 2.0) < 1e-12);
-    queue_tpdo(0x181, 0x0218, -20000);  /* fault */
-    queue_tpdo(0x181, 0x02, 0);         /* too short: 1 byte */
+    queue_tpdo(0x181, 0x0218, -20000); /* fault */
+    queue_tpdo(0x181, 0x02, 0);        /* too short: 1 byte */
     io.in[io.nin - 1].len = 1;
     assert_int_equal(can_port_rx(port, 0), 2);
     assert_int_equal(fe_drive.state[0], CIA402_FAULT);
@@ -459,7 +459,7 @@ static void test_cia402_bring_up(void **state)
     assert_true(fe_drive.all_enabled);
     assert_int_equal(step_drive(0x0218, 5), 0x0000); /* fault: disable voltage, held */
     assert_true(fe_drive.held);
-    assert_int_equal(step_drive(0x0218, 6), -1);     /* no reset without the operator */
+    assert_int_equal(step_drive(0x0218, 6), -1); /* no reset without the operator */
     canproto_frame_t clr;
     assert_int_equal(canproto_encode_command(0x680, CANPROTO_CMD_CLEAR, &clr), 0);
     io.in[io.nin++] = clr;
@@ -506,12 +506,12 @@ static void test_rx_paths(void **state)
     (void)state;
     queue_waypoint(1, 1.0);
     queue_waypoint(2, 2.0);
-    queue_waypoint(2, 2.0);   /* duplicate */
-    queue_waypoint(5, 5.0);   /* 3 and 4 lost */
+    queue_waypoint(2, 2.0); /* duplicate */
+    queue_waypoint(5, 5.0); /* 3 and 4 lost */
     canproto_frame_t *bad = &io.in[io.nin++];
     memset(bad, 0, sizeof *bad);
     bad->id = 0x680;
-    bad->len = 3;             /* malformed */
+    bad->len = 3; /* malformed */
     canproto_frame_t *foreign = &io.in[io.nin++];
     memset(foreign, 0, sizeof *foreign);
     foreign->id = 0x123;
@@ -565,7 +565,7 @@ static void test_output_fault_in_status(void **state)
 {
     (void)state;
     canproto_status_t s;
-    run_cycle(0, 0);                        /* the first STATUS */
+    run_cycle(0, 0); /* the first STATUS */
     unsigned before = count_id(0x6C0);
     can_port_output_fault(port, 0, 3, 1);
     run_cycle(1, 0);
@@ -573,10 +573,10 @@ static void test_output_fault_in_status(void **state)
     canproto_decode_status(&io.out[io.nout - 1], &s);
     assert_true(s.flags & CANPROTO_ST_OUT_FAULT);
     assert_int_equal(s.last_err, CANPROTO_STERR_OUTPUT);
-    can_port_output_fault(port, 0, 3, 1);  /* nothing new */
+    can_port_output_fault(port, 0, 3, 1); /* nothing new */
     run_cycle(2, 0);
     assert_int_equal(count_id(0x6C0), before + 1);
-    can_port_output_fault(port, 0, 4, 1);  /* one more line lost */
+    can_port_output_fault(port, 0, 4, 1); /* one more line lost */
     run_cycle(3, 0);
     assert_int_equal(count_id(0x6C0), before + 2);
     canproto_decode_status(&io.out[io.nout - 1], &s);
@@ -590,7 +590,7 @@ static void test_commands(void **state)
     (void)state;
     queue_waypoint(10, 1.0);
     canproto_encode_command(0x680, CANPROTO_CMD_CLEAR, &io.in[io.nin++]);
-    queue_waypoint(0, 0.5);  /* would be "out of order" without the restart */
+    queue_waypoint(0, 0.5); /* would be "out of order" without the restart */
     assert_int_equal(canproto_encode_override(0x680, 150, &io.in[io.nin++]), 0);
     can_port_rx(port, 0);
     assert_int_equal(eng.ncmd, 2);
@@ -632,8 +632,8 @@ static void test_can_logfile_real_capture(void **state)
 {
     (void)state;
     char err[256];
-    can_logfile_t *l = can_logfile_open("tests/data/canboat_candumpSample3.log", NULL, "can0", 0, err,
-                              sizeof err);
+    can_logfile_t *l = can_logfile_open("tests/data/canboat_candumpSample3.log", NULL, "can0", 0,
+                                        err, sizeof err);
     assert_non_null(l);
     can_logfile_stats_t ls;
     can_logfile_stats(l, &ls);

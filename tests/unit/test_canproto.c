@@ -26,7 +26,7 @@ static int setup(void **state)
 
 static engine_waypoint_t wpt(uint32_t seq, double t, double x, double y, double z)
 {
-    engine_waypoint_t w = { .t_s = t, .pos_m = { x, y, z }, .seq = seq };
+    engine_waypoint_t w = {.t_s = t, .pos_m = {x, y, z}, .seq = seq};
     return w;
 }
 
@@ -49,7 +49,7 @@ static void test_reassembly_any_order(void **state)
     engine_waypoint_t w = wpt(7, 12.345678, -1234.567891, 0.000001, 98765.4321);
     canproto_frame_t f[4];
     canproto_rx_out_t out;
-    const int order[4] = { 2, 0, 3, 1 };
+    const int order[4] = {2, 0, 3, 1};
     assert_int_equal(canproto_encode_waypoint(ID, &w, f), 0);
     for (int k = 0; k < 3; k++)
         assert_int_equal(canproto_rx_frame(&rx, &f[order[k]], 0, &out), CANPROTO_RX_NONE);
@@ -155,26 +155,37 @@ static void test_malformed(void **state)
     engine_waypoint_t w = wpt(3, 1, 2, 3, 4);
     canproto_encode_waypoint(ID, &w, f);
 
-    g = f[0]; g.len = 7;
+    g = f[0];
+    g.len = 7;
     assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_ELEN);
-    g = f[0]; g.flags |= CANPROTO_F_FD;
+    g = f[0];
+    g.flags |= CANPROTO_F_FD;
     assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_ELEN);
-    g = f[0]; g.flags |= CANPROTO_F_RTR;
+    g = f[0];
+    g.flags |= CANPROTO_F_RTR;
     assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_ELEN);
-    g = f[0]; g.flags |= CANPROTO_F_EFF;
+    g = f[0];
+    g.flags |= CANPROTO_F_EFF;
     assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_ELEN);
-    g = f[0]; g.data[0] = 9;
+    g = f[0];
+    g.data[0] = 9;
     assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_EMUX);
-    g = f[1]; memset(&g.data[2], 0, 6); g.data[7] = 0x80; /* int48 min: n/a */
+    g = f[1];
+    memset(&g.data[2], 0, 6);
+    g.data[7] = 0x80; /* int48 min: n/a */
     assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_EVALUE);
-    canproto_encode_command(ID, CANPROTO_CMD_STOP, &g); g.data[2] = 77;
+    canproto_encode_command(ID, CANPROTO_CMD_STOP, &g);
+    g.data[2] = 77;
     assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_EVALUE);
-    canproto_encode_command(ID, CANPROTO_CMD_STOP, &g); g.data[5] = 1;
+    canproto_encode_command(ID, CANPROTO_CMD_STOP, &g);
+    g.data[5] = 1;
     assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_EVALUE);
-    canproto_encode_command(ID, CANPROTO_CMD_STOP, &g); g.data[3] = 1; /* no argument */
+    canproto_encode_command(ID, CANPROTO_CMD_STOP, &g);
+    g.data[3] = 1; /* no argument */
     assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_EVALUE);
     assert_int_equal(canproto_encode_override(ID, 201, &g), -CANPROTO_EVALUE);
-    canproto_encode_override(ID, 200, &g); g.data[3] = 201; /* above 200 % */
+    canproto_encode_override(ID, 200, &g);
+    g.data[3] = 201; /* above 200 % */
     assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_EVALUE);
     /* classic frame on the FD id */
     assert_int_equal(canproto_rx_frame(&rx, &f[0], 1, &out), -CANPROTO_ELEN);
@@ -214,11 +225,14 @@ static void test_fd_waypoint(void **state)
     for (int a = 0; a < 3; a++)
         assert_true(fabs(out.wp.pos_m[a] - w.pos_m[a]) <= WP_POS_TOL);
     assert_true(fabs(out.wp.t_s - w.t_s) <= WP_T_TOL);
-    h = g; h.data[30] = 1;
+    h = g;
+    h.data[30] = 1;
     assert_int_equal(canproto_rx_frame(&rx, &h, 1, &out), -CANPROTO_EVALUE);
-    h = g; h.len = 24;
+    h = g;
+    h.len = 24;
     assert_int_equal(canproto_rx_frame(&rx, &h, 1, &out), -CANPROTO_ELEN);
-    h = g; h.data[0] = 4;
+    h = g;
+    h.data[0] = 4;
     assert_int_equal(canproto_rx_frame(&rx, &h, 1, &out), -CANPROTO_EMUX);
     /* the int48 n/a marker (0x800000000000, little-endian) in any axis is
      * refused, as in the classic frames, never decoded as -140737 km */
@@ -240,8 +254,8 @@ static void test_clamping(void **state)
     canproto_frame_t f[3];
     canproto_setpoint_t d;
     memset(&sp, 0, sizeof sp);
-    sp.pos_m[0] = 1e6;       /* > 214 km */
-    sp.vel_m_s[1] = -40;     /* < -32.768 m/s */
+    sp.pos_m[0] = 1e6;   /* > 214 km */
+    sp.vel_m_s[1] = -40; /* < -32.768 m/s */
     sp.pos_m[2] = NAN;
     assert_int_equal(canproto_encode_setpoint(0x6A0, &sp, f), CANPROTO_CLAMPED);
     assert_int_equal(canproto_decode_setpoint(&f[0], &d), 0);
@@ -315,7 +329,7 @@ static void test_busload(void **state)
     (void)state;
     canproto_ids_t ids;
     canproto_ids_default(&ids, 0);
-    canproto_traffic_t tr = { .rate_hz = 1000, .status_hz = 0, .waypoint_hz = 0 };
+    canproto_traffic_t tr = {.rate_hz = 1000, .status_hz = 0, .waypoint_hz = 0};
     double l = canproto_busload(&ids, 1, 0, 0, &tr, 500e3, 0);
     assert_true(fabs(l - 3 * 135 * 1000 / 500e3) < 1e-12);
     /* SYNC (55 bits) and 10 Hz status (135 bits) and 10 waypoints/s (4 x 135) */

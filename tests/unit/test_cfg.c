@@ -142,8 +142,7 @@ static void test_errors(void **state)
     load_bad("[object.x]\ninput = carrier-pigeon\n", CFG_EVALUE, 2, "replay");
     load_bad("[object.x]\ninput = replay\noutput = stdout, fax\n", CFG_EVALUE, 3, "fax");
     load_bad("[object.x]\ninput = replay\noutput = stdout,stdout\n", CFG_EVALUE, 3, "twice");
-    load_bad("[object.x]\ninput = replay\nreplay.colour = red\n", CFG_EUNKNOWN, 3,
-             "replay.colour");
+    load_bad("[object.x]\ninput = replay\nreplay.colour = red\n", CFG_EUNKNOWN, 3, "replay.colour");
     load_bad("[object.x]\ninput = replay\nnope.key = 1\n", CFG_EUNKNOWN, 3, "nope.key");
     /* keys for a transport the object does not use */
     load_bad(OBJ "csv.path = x.csv\n", CFG_EVALUE, 5, "does not use");
@@ -154,8 +153,8 @@ static void test_errors(void **state)
              "'output' is missing");
     load_bad("[object.x]\ninput = replay\noutput = stdout\n", CFG_EMISSING, 1,
              "replay.track is missing");
-    load_bad("[object.x]\ninput = replay\nreplay.track = " TRACK "\noutput = csv\n",
-             CFG_EMISSING, 1, "csv.path is missing");
+    load_bad("[object.x]\ninput = replay\nreplay.track = " TRACK "\noutput = csv\n", CFG_EMISSING,
+             1, "csv.path is missing");
     /* a missing track file: at the replay.track line, with the OS's reason */
     load_bad("[object.x]\ninput = replay\noutput = stdout\n\nreplay.track = /nonexistent.csv\n",
              CFG_EVALUE, 5, "nonexistent.csv");
@@ -203,11 +202,10 @@ static void test_documented_conf(void **state)
     engine_config_default(&e);
     const engine_config_t *d = &c->obj[0].engine;
     assert_true(engine_config_same(d, &e)); /* every field: engine_settings.h's table */
-    cfg_t *m = load_ok(OBJ); /* nothing set: the parser's defaults */
+    cfg_t *m = load_ok(OBJ);                /* nothing set: the parser's defaults */
     assert_memory_equal(&c->daemon.rate_hz, &m->daemon.rate_hz, sizeof(double));
     assert_memory_equal(&c->daemon.speed, &m->daemon.speed, sizeof(double));
-    assert_memory_equal(&c->daemon.status_interval_s, &m->daemon.status_interval_s,
-                        sizeof(double));
+    assert_memory_equal(&c->daemon.status_interval_s, &m->daemon.status_interval_s, sizeof(double));
     assert_memory_equal(&c->daemon.stop_timeout_s, &m->daemon.stop_timeout_s, sizeof(double));
     assert_int_equal(c->daemon.log_level, m->daemon.log_level);
     assert_int_equal(c->rt.fifo_priority, m->rt.fifo_priority);
@@ -237,10 +235,8 @@ static void test_missing_file(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_minimal),
-        cmocka_unit_test(test_values),
-        cmocka_unit_test(test_errors),
-        cmocka_unit_test(test_documented_conf),
+        cmocka_unit_test(test_minimal),      cmocka_unit_test(test_values),
+        cmocka_unit_test(test_errors),       cmocka_unit_test(test_documented_conf),
         cmocka_unit_test(test_missing_file),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -39,8 +39,10 @@ static size_t conf_with(char *buf, size_t cap, size_t n, int newline_at_end)
 {
     char cwd[PATH_MAX];
     assert_non_null(getcwd(cwd, sizeof cwd));
-    int k = snprintf(buf, cap, "[object.a]\ninput = replay\nreplay.track = %s/tests/data/demo.path\n"
-                     "output = stdout\n[daemon]\nlog_level = info", cwd);
+    int k = snprintf(buf, cap,
+                     "[object.a]\ninput = replay\nreplay.track = %s/tests/data/demo.path\n"
+                     "output = stdout\n[daemon]\nlog_level = info",
+                     cwd);
     assert_true(k > 0 && (size_t)k + n < cap);
     size_t len = (size_t)k, pad = n - strlen("log_level = info");
     memset(buf + len, ' ', pad); /* inih strips trailing blanks */

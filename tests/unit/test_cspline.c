@@ -23,7 +23,8 @@ static void make_track(unsigned seed, double *t, double *p, int closed)
 {
     int i;
     t[0] = 0;
-    p[0] = 0; p[1] = 0;
+    p[0] = 0;
+    p[1] = 0;
     for (i = 1; i < NP; i++) {
         t[i] = t[i - 1] + 0.05 + urand(&seed);
         p[2 * i] = p[2 * i - 2] + urand(&seed) * 4 - 2;
@@ -128,7 +129,8 @@ static void test_coeffs(void **state)
     int i, k, c;
 
     make_track(3, t, p, 0);
-    assert_int_equal(cspline_solve(NP, 2, t, p, CSPLINE_END_NATURAL, NULL, NULL, s, scratch, &cs), 0);
+    assert_int_equal(cspline_solve(NP, 2, t, p, CSPLINE_END_NATURAL, NULL, NULL, s, scratch, &cs),
+                     0);
     for (i = 0; i < NP - 1; i++) {
         cspline_coeffs(&cs, (size_t)i, co);
         for (k = 0; k <= 10; k++) {
@@ -147,17 +149,24 @@ static void test_errors(void **state)
     (void)state;
     double t[4] = {0, 1, 1, 2}, p[4] = {0, 1, 2, 0}, s[4], scratch[64], out[1];
     cspline_t cs;
-    assert_int_equal(cspline_solve(4, 1, t, p, CSPLINE_END_NATURAL, NULL, NULL, s, scratch, &cs), -CSPLINE_EPARAM);
+    assert_int_equal(cspline_solve(4, 1, t, p, CSPLINE_END_NATURAL, NULL, NULL, s, scratch, &cs),
+                     -CSPLINE_EPARAM);
     t[2] = 1.5;
-    assert_int_equal(cspline_solve(4, 1, t, p, CSPLINE_END_PERIODIC, NULL, NULL, s, scratch, &cs), 0);
+    assert_int_equal(cspline_solve(4, 1, t, p, CSPLINE_END_PERIODIC, NULL, NULL, s, scratch, &cs),
+                     0);
     p[3] = 0.5;
-    assert_int_equal(cspline_solve(4, 1, t, p, CSPLINE_END_PERIODIC, NULL, NULL, s, scratch, &cs), -CSPLINE_ENOTCLOSED);
-    assert_int_equal(cspline_solve(1, 1, t, p, CSPLINE_END_NATURAL, NULL, NULL, s, scratch, &cs), -CSPLINE_ESIZE);
-    assert_int_equal(cspline_solve(4, 1, t, p, CSPLINE_END_CLAMPED, NULL, NULL, s, scratch, &cs), -CSPLINE_ENOTFINITE);
+    assert_int_equal(cspline_solve(4, 1, t, p, CSPLINE_END_PERIODIC, NULL, NULL, s, scratch, &cs),
+                     -CSPLINE_ENOTCLOSED);
+    assert_int_equal(cspline_solve(1, 1, t, p, CSPLINE_END_NATURAL, NULL, NULL, s, scratch, &cs),
+                     -CSPLINE_ESIZE);
+    assert_int_equal(cspline_solve(4, 1, t, p, CSPLINE_END_CLAMPED, NULL, NULL, s, scratch, &cs),
+                     -CSPLINE_ENOTFINITE);
     p[1] = NAN;
-    assert_int_equal(cspline_solve(4, 1, t, p, CSPLINE_END_NATURAL, NULL, NULL, s, scratch, &cs), -CSPLINE_ENOTFINITE);
+    assert_int_equal(cspline_solve(4, 1, t, p, CSPLINE_END_NATURAL, NULL, NULL, s, scratch, &cs),
+                     -CSPLINE_ENOTFINITE);
     p[1] = 1;
-    assert_int_equal(cspline_solve(4, 1, t, p, CSPLINE_END_NATURAL, NULL, NULL, s, scratch, &cs), 0);
+    assert_int_equal(cspline_solve(4, 1, t, p, CSPLINE_END_NATURAL, NULL, NULL, s, scratch, &cs),
+                     0);
     assert_int_equal(cspline_eval(&cs, 2.5, 0, out), -CSPLINE_EDOMAIN);
     assert_int_equal(cspline_eval(&cs, NAN, 0, out), -CSPLINE_EDOMAIN);
     assert_non_null(cspline_strerror(-CSPLINE_ESINGULAR));

@@ -46,12 +46,47 @@ static void test_edges(void **state)
 {
     (void)state;
     static const double xs[] = {
-        0.0, -0.0, 0.5, -0.5, 1.5, 2.5, -2.5, 0.125, 0.375, 1e-300, -1e-300, 5e-324,
-        DBL_MIN, DBL_MAX, -DBL_MAX, 4503599627370495.5, 4503599627370496.0,
-        9007199254740993.0, 1e15 + 0.5, 0.05, 0.15, 0.25, 0.35, 1.005, 2.675,
-        0.0000000005, 0.0000000015, 0.0000000025, 999999.9999999995, 9.5, 99.5,
-        0.49999999999999994, 1e22, 1e23, 123456789.123456789, -1e-10, -0.0004,
-        6378137.0, 6378137.123456789, 1e308, 1.7976931348623157e308,
+        0.0,
+        -0.0,
+        0.5,
+        -0.5,
+        1.5,
+        2.5,
+        -2.5,
+        0.125,
+        0.375,
+        1e-300,
+        -1e-300,
+        5e-324,
+        DBL_MIN,
+        DBL_MAX,
+        -DBL_MAX,
+        4503599627370495.5,
+        4503599627370496.0,
+        9007199254740993.0,
+        1e15 + 0.5,
+        0.05,
+        0.15,
+        0.25,
+        0.35,
+        1.005,
+        2.675,
+        0.0000000005,
+        0.0000000015,
+        0.0000000025,
+        999999.9999999995,
+        9.5,
+        99.5,
+        0.49999999999999994,
+        1e22,
+        1e23,
+        123456789.123456789,
+        -1e-10,
+        -0.0004,
+        6378137.0,
+        6378137.123456789,
+        1e308,
+        1.7976931348623157e308,
     };
     for (size_t i = 0; i < sizeof xs / sizeof xs[0]; i++)
         for (int p = 0; p <= CSV_FIXED_PREC_MAX + 3; p++) {
@@ -128,19 +163,24 @@ static void test_line(void **state)
 {
     (void)state;
     engine_setpoint_t sp = {
-        .now_ns = 123456789012345, .t_s = 1234.5678901234,
+        .now_ns = 123456789012345,
+        .t_s = 1234.5678901234,
         .pos_m = {-0.0, 6378137.1234567891, -1e-12},
         .vel_m_s = {2.5, -2.5, 1e300},
         .acc_m_s2 = {NAN, -INFINITY, 0.1},
-        .state = ENGINE_STATE_STREAMING, .flags = 9, .cycle = 4294967295u, .track = 7,
+        .state = ENGINE_STATE_STREAMING,
+        .flags = 9,
+        .cycle = 4294967295u,
+        .track = 7,
     };
     for (int p = 0; p <= CSV_FIXED_PREC_MAX; p++) {
         char want[8192], got[8192];
         snprintf(want, sizeof want,
                  "obj,%" PRId64 ",%.*f,%.*f,%.*f,%.*f,%.*f,%.*f,%.*f,%.*f,%.*f,%.*f,streaming,9,"
-                 "4294967295,7\n", sp.now_ns, p, sp.t_s, p, sp.pos_m[0], p, sp.pos_m[1], p,
-                 sp.pos_m[2], p, sp.vel_m_s[0], p, sp.vel_m_s[1], p, sp.vel_m_s[2], p,
-                 sp.acc_m_s2[0], p, sp.acc_m_s2[1], p, sp.acc_m_s2[2]);
+                 "4294967295,7\n",
+                 sp.now_ns, p, sp.t_s, p, sp.pos_m[0], p, sp.pos_m[1], p, sp.pos_m[2], p,
+                 sp.vel_m_s[0], p, sp.vel_m_s[1], p, sp.vel_m_s[2], p, sp.acc_m_s2[0], p,
+                 sp.acc_m_s2[1], p, sp.acc_m_s2[2]);
         int n = csv_format_format_prec(got, sizeof got, "obj", &sp, p);
         assert_int_equal(n, (int)strlen(want));
         assert_string_equal(got, want);
@@ -161,10 +201,8 @@ static void test_line(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_edges),
-        cmocka_unit_test(test_random_bits),
-        cmocka_unit_test(test_near_ties),
-        cmocka_unit_test(test_typical_fast),
+        cmocka_unit_test(test_edges),     cmocka_unit_test(test_random_bits),
+        cmocka_unit_test(test_near_ties), cmocka_unit_test(test_typical_fast),
         cmocka_unit_test(test_line),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);

@@ -362,30 +362,54 @@ static void test_bad_input(void **state)
     int why[16];
 
     assert_int_equal(engine_push(e, &w), 0);
-    b = w; b.t_s = 11; b.pos_m[1] = NAN; b.seq = 11;
+    b = w;
+    b.t_s = 11;
+    b.pos_m[1] = NAN;
+    b.seq = 11;
     assert_int_equal(engine_push(e, &b), -ENGINE_ENOTFINITE);
-    b = w; b.t_s = INFINITY; b.seq = 12;
+    b = w;
+    b.t_s = INFINITY;
+    b.seq = 12;
     assert_int_equal(engine_push(e, &b), -ENGINE_ENOTFINITE);
-    b = w; b.t_s = 11; b.pos_m[0] = 2e7; b.seq = 13;
+    b = w;
+    b.t_s = 11;
+    b.pos_m[0] = 2e7;
+    b.seq = 13;
     assert_int_equal(engine_push(e, &b), -ENGINE_ERANGE);
-    b = w; b.t_s = 11; b.pos_m[2] = -2e7; b.seq = 14; /* |coordinate|: negative too */
+    b = w;
+    b.t_s = 11;
+    b.pos_m[2] = -2e7;
+    b.seq = 14; /* |coordinate|: negative too */
     assert_int_equal(engine_push(e, &b), -ENGINE_ERANGE);
-    b = w; b.t_s = 1e13; b.seq = 15;
+    b = w;
+    b.t_s = 1e13;
+    b.seq = 15;
     assert_int_equal(engine_push(e, &b), -ENGINE_ERANGE);
     assert_int_equal(drain_rejections(e, seq, why, 16), 5);
     assert_int_equal(seq[0], 11);
     assert_int_equal(why[0], ENGINE_ENOTFINITE);
     assert_int_equal(seq[4], 15);
     assert_int_equal(why[4], ENGINE_ERANGE);
-    b = w; b.t_s = 9; b.seq = 16;
+    b = w;
+    b.t_s = 9;
+    b.seq = 16;
     assert_int_equal(engine_push(e, &b), 0);
-    b = w; b.pos_m[0] = 1.5; b.seq = 17;
+    b = w;
+    b.pos_m[0] = 1.5;
+    b.seq = 17;
     assert_int_equal(engine_push(e, &b), 0);
-    b = w; b.seq = 2;
+    b = w;
+    b.seq = 2;
     assert_int_equal(engine_push(e, &b), ENGINE_DUPLICATE);
-    b = w; b.t_s = 11; b.pos_m[0] = 1 + 51; b.seq = 18; /* 51 m in 1 s */
+    b = w;
+    b.t_s = 11;
+    b.pos_m[0] = 1 + 51;
+    b.seq = 18; /* 51 m in 1 s */
     assert_int_equal(engine_push(e, &b), 0);
-    b = w; b.t_s = 11; b.pos_m[0] = 1 + 49; b.seq = 3;
+    b = w;
+    b.t_s = 11;
+    b.pos_m[0] = 1 + 49;
+    b.seq = 3;
     assert_int_equal(engine_push(e, &b), 0);
     assert_int_equal(engine_finish(e), 0);
     engine_status(e, &st);
@@ -488,8 +512,8 @@ static void test_full_and_retry(void **state)
 }
 
 /* Run e on ticks until FINISHED with nothing pending, checking steps. */
-static void run_to_finish(engine_t *e, int64_t *k, double max_step,
-                          engine_setpoint_t *sp, int *saw_transfer, int *new_tracks)
+static void run_to_finish(engine_t *e, int64_t *k, double max_step, engine_setpoint_t *sp,
+                          int *saw_transfer, int *new_tracks)
 {
     engine_setpoint_t prev = *sp;
     for (int i = 0; i < 200000; i++, (*k)++) {
@@ -667,7 +691,6 @@ static void test_ends(void **state)
     engine_free(e);
 }
 
-
 /* Given every method, parameterisation and end condition the engine accepts,
  * when a track is streamed on time (irregular intervals), then every
  * streaming setpoint equals Horner on the offline curve at its own time, no
@@ -741,7 +764,8 @@ static void test_all_configs_stream(void **state)
                 break;
         }
         print_message("config %zu: %d streamed, max |sp - Horner| %.1e m, max step %.4f m "
-                      "(vmax * period %.4f)\n", m, streamed, maxerr, maxstep, vmax * 0.01);
+                      "(vmax * period %.4f)\n",
+                      m, streamed, maxerr, maxstep, vmax * 0.01);
         assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
         assert_true(streamed > 1000);
         assert_true(maxerr < TOL_HORNER_M);
@@ -909,20 +933,28 @@ static void test_jitter_rejected(void **state)
     e = mk(&c);
     engine_waypoint_t g = {.t_s = 0, .pos_m = {0, 0, 0}};
     assert_int_equal(engine_push(e, &g), 0);
-    g.t_s = 1; g.pos_m[0] = 1;
+    g.t_s = 1;
+    g.pos_m[0] = 1;
     assert_int_equal(engine_push(e, &g), 0);
-    g.t_s = 2; g.pos_m[0] = 2;
+    g.t_s = 2;
+    g.pos_m[0] = 2;
     assert_int_equal(engine_push(e, &g), 0);
-    g.t_s = 2 + c.max_gap_s + 1; g.pos_m[0] = 500;  /* new trajectory */
+    g.t_s = 2 + c.max_gap_s + 1;
+    g.pos_m[0] = 500; /* new trajectory */
     assert_int_equal(engine_push(e, &g), 0);
-    g.t_s += 1; g.pos_m[0] += 50; g.seq = 77;       /* 50 m/s at once: no triple yet */
+    g.t_s += 1;
+    g.pos_m[0] += 50;
+    g.seq = 77; /* 50 m/s at once: no triple yet */
     assert_int_equal(engine_push(e, &g), 0);
-    g.t_s += 1; g.pos_m[0] += 10; g.seq = 0;        /* 50 -> 10 m/s in 1 s: 40 m/s^2 */
+    g.t_s += 1;
+    g.pos_m[0] += 10;
+    g.seq = 0; /* 50 -> 10 m/s in 1 s: 40 m/s^2 */
     assert_int_equal(engine_push(e, &g), 0);
     /* 50 -> 25 m/s over 2 + 1 s: 16.7; without the 50 m/s one: 30 -> 40
      * m/s, 6.7: of the two that cannot both be right, the smoother chain
      * keeps the second (accept.h) */
-    g.t_s += 1; g.pos_m[0] += 40;
+    g.t_s += 1;
+    g.pos_m[0] += 40;
     assert_int_equal(engine_push(e, &g), 0);
     assert_int_equal(engine_finish(e), 0);
     engine_status(e, &st);
@@ -960,8 +992,8 @@ static void test_jitter_rejected(void **state)
 #define TOL_RESEED_ULPS 4.0 /* the same formula at the same u, a few roundings */
 
 /* Largest |delta position| over consecutive ticks with a position. */
-static double run_steps(engine_t *e, const engine_waypoint_t *wp, int n, int64_t *now,
-                        int ticks, engine_setpoint_t *last)
+static double run_steps(engine_t *e, const engine_waypoint_t *wp, int n, int64_t *now, int ticks,
+                        engine_setpoint_t *last)
 {
     engine_setpoint_t sp, prev = {0}; /* *last = prev even for ticks = 0 */
     int have_prev = 0, next = 0;
@@ -1045,8 +1077,8 @@ static void test_set_position_transfer(void **state)
     size_t nseg;
     assert_int_equal(engine_curve(&c, wp, N, segs, N + 8, &nseg), 0);
     double vmax = fmax(curve_vmax(segs, nseg), 1.5 * 2.0 / 1.0);
-    print_message("set_position 2 m off: %d transfer ticks, max step %.4f m (bound %.4f)\n",
-                  xfer, maxstep, vmax * 0.01 * STEP_SLACK);
+    print_message("set_position 2 m off: %d transfer ticks, max step %.4f m (bound %.4f)\n", xfer,
+                  maxstep, vmax * 0.01 * STEP_SLACK);
     assert_true(maxstep <= vmax * 0.01 * STEP_SLACK);
     engine_free(e);
 }
@@ -1106,15 +1138,19 @@ static void test_long_segment_reseeded(void **state)
     engine_config_default(&c);
     c.period_ns = ENGINE_PERIOD_NS_MIN;
     memset(wp, 0, sizeof wp);
-    wp[0].pos_m[0] = 3e6; wp[0].pos_m[1] = -4e6; wp[0].pos_m[2] = 5e6;
+    wp[0].pos_m[0] = 3e6;
+    wp[0].pos_m[1] = -4e6;
+    wp[0].pos_m[2] = 5e6;
     wp[1].t_s = 59.0;
-    wp[1].pos_m[0] = 3e6 + 900; wp[1].pos_m[1] = -4e6 - 700; wp[1].pos_m[2] = 5e6 + 300;
+    wp[1].pos_m[0] = 3e6 + 900;
+    wp[1].pos_m[1] = -4e6 - 700;
+    wp[1].pos_m[2] = 5e6 + 300;
     assert_int_equal(engine_curve(&c, wp, 2, segs, 4, &nseg), 0);
     assert_int_equal(nseg, 1);
     double m = 0;
     for (int k = 0; k < 3; k++)
         m = fmax(m, fabs(segs[0].c[k][0]) + fabs(segs[0].c[k][1]) + fabs(segs[0].c[k][2]) +
-                    fabs(segs[0].c[k][3]));
+                        fabs(segs[0].c[k][3]));
     bound = 2.0 * FDIFF_RESEED_STEPS * DBL_EPSILON * m;
 
     engine_t *e = mk(&c);
@@ -1202,8 +1238,8 @@ static void test_underrun_rides_through(void **state)
         engine_status_t st;
         engine_status(e, &st);
         print_message("config %d: rested in underrun %d, resumed: state %s rate %.3f, "
-                      "max |sp - Horner| %.1e m\n", m, rested, engine_state_name(sp.state),
-                      st.rate, maxerr);
+                      "max |sp - Horner| %.1e m\n",
+                      m, rested, engine_state_name(sp.state), st.rate, maxerr);
         assert_int_equal(st.hard_stops, 0);
         assert_true(st.underruns >= 1);
         assert_true(maxerr < 1e-6);

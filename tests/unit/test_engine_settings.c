@@ -57,7 +57,8 @@ static void test_table_tiles_the_struct(void **state)
     size_t al = _Alignof(engine_config_t);
     if ((end + al - 1) / al * al != sizeof(engine_config_t))
         fail_msg("the table ends at %zu, engine_config_t is %zu bytes: a field at its end is "
-                 "missing from engine_settings[]", end, sizeof(engine_config_t));
+                 "missing from engine_settings[]",
+                 end, sizeof(engine_config_t));
 }
 
 /* Given the struct's declaration in lib/engine/engine.h (read as text, so a
@@ -254,8 +255,7 @@ static void test_trajd_conf_documents_every_key(void **state)
         if (!engine_setting_same(s, &c, &d)) {
             char def[128];
             engine_setting_format(s, &d, def, sizeof def);
-            fail_msg("trajd.conf:%d: documents %s = %s, the default is %s", lineno, key, val,
-                     def);
+            fail_msg("trajd.conf:%d: documents %s = %s, the default is %s", lineno, key, val, def);
         }
     }
     fclose(f);

@@ -151,8 +151,9 @@ static void test_cubic_vs_gsl(void **state)
             r[i * 3 + k] = y[k][i];
         }
     }
-    assert_int_equal(cubic_curve(N, t, r, ENGINE_PARAM_TIME, ENGINE_ENDS_NATURAL, NULL, NULL,
-                                 segs, N, &nseg), 0);
+    assert_int_equal(
+        cubic_curve(N, t, r, ENGINE_PARAM_TIME, ENGINE_ENDS_NATURAL, NULL, NULL, segs, N, &nseg),
+        0);
     assert_int_equal(nseg, N - 1);
     for (int k = 0; k < 3; k++) {
         gsl_interp_accel *acc = gsl_interp_accel_alloc();
@@ -303,7 +304,8 @@ static void test_frag_values_vs_gsl(void **state)
             assert_non_null(fw);
             for (size_t r = 0; r < n; r++) {
                 /* a time-knot cubic's rows: h, 2(h0+h1), h1 with uneven h */
-                double h0 = 1.0 + 0.5 * sin(0.7 * (double)r), h1 = 1.0 + 0.5 * sin(0.7 * (double)(r + 1));
+                double h0 = 1.0 + 0.5 * sin(0.7 * (double)r),
+                       h1 = 1.0 + 0.5 * sin(0.7 * (double)(r + 1));
                 a[r] = r ? h0 : 0.0;
                 b[r] = 2.0 * (h0 + h1);
                 c[r] = r + 1 < n ? h1 : 0.0;
@@ -333,13 +335,15 @@ static void test_frag_values_vs_gsl(void **state)
             assert_true(split > 1e6 * TOL_FRAG_REL * scale);
             if (maxerr > TOL_FRAG_REL * scale)
                 fail_msg("F=%u O=%u delta=%u n=%zu: frag_x off the per-fragment reference by "
-                         "%.3g (scale %.3g)", f, o, delta, n, maxerr, scale);
+                         "%.3g (scale %.3g)",
+                         f, o, delta, n, maxerr, scale);
             worst_rel = fmax(worst_rel, maxerr / scale);
             least_split = fmin(least_split, split / scale);
             frag_free(fw);
         }
     print_message("window vs per-fragment GSL: worst %.1e relative; fragments split at a "
-                  "junction by >= %.1e relative\n", worst_rel, least_split);
+                  "junction by >= %.1e relative\n",
+                  worst_rel, least_split);
 }
 
 /* Given a curve with a gap (two trajectories: fdiff.h allows gaps), when it

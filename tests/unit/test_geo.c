@@ -25,7 +25,8 @@ static void test_ecef_axes(void **state)
     assert_int_equal(geo_to_ecef(90, 0, 0, p), 0);
     assert_true(fabs(p[0]) < TOL_M && fabs(p[1]) < TOL_M && fabs(p[2] - WGS84_B_M) < 1e-4);
     assert_int_equal(geo_to_ecef(0, 90, 100, p), 0);
-    assert_true(fabs(p[0]) < TOL_M && fabs(p[1] - GEO_WGS84_A_M - 100) < TOL_M && fabs(p[2]) < TOL_M);
+    assert_true(fabs(p[0]) < TOL_M && fabs(p[1] - GEO_WGS84_A_M - 100) < TOL_M &&
+                fabs(p[2]) < TOL_M);
     assert_int_equal(geo_to_ecef(-90, 0, 0, p), 0);
     assert_true(fabs(p[2] + WGS84_B_M) < 1e-4);
 }
@@ -126,12 +127,9 @@ static void test_errors(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_ecef_axes),
-        cmocka_unit_test(test_enu_vertical),
-        cmocka_unit_test(test_enu_equator_circle),
-        cmocka_unit_test(test_enu_meridian),
-        cmocka_unit_test(test_enu_parallel_circle),
-        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_ecef_axes),           cmocka_unit_test(test_enu_vertical),
+        cmocka_unit_test(test_enu_equator_circle),  cmocka_unit_test(test_enu_meridian),
+        cmocka_unit_test(test_enu_parallel_circle), cmocka_unit_test(test_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

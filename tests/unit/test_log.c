@@ -54,7 +54,8 @@ static void set_journal_stream(int fd)
     struct stat st;
     char v[64];
     assert_int_equal(fstat(fd, &st), 0);
-    snprintf(v, sizeof v, "%llu:%llu", (unsigned long long)st.st_dev, (unsigned long long)st.st_ino);
+    snprintf(v, sizeof v, "%llu:%llu", (unsigned long long)st.st_dev,
+             (unsigned long long)st.st_ino);
     setenv("JOURNAL_STREAM", v, 1);
 }
 

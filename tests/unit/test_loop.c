@@ -13,8 +13,8 @@
 
 typedef struct {
     int calls;
-    int victim_fd;    /* fd this callback deletes (and closes) */
-    int *reuse_fd;    /* then registers a new eventfd that reuses the slot */
+    int victim_fd; /* fd this callback deletes (and closes) */
+    int *reuse_fd; /* then registers a new eventfd that reuses the slot */
     void *reuse_ctx;
     int stop_after;
 } ctx_t;

@@ -54,8 +54,12 @@ static void test_fit_matches_gsl_multifit(void **state)
     for (k = 0; k < NC; k++)
         assert_true(fabs(ctrl[k] - gsl_vector_get(c, k)) < TOL_FIT);
     gsl_bspline_free(w);
-    gsl_vector_free(B); gsl_vector_free(gy); gsl_vector_free(c);
-    gsl_matrix_free(X); gsl_matrix_free(cov); gsl_multifit_linear_free(mw);
+    gsl_vector_free(B);
+    gsl_vector_free(gy);
+    gsl_vector_free(c);
+    gsl_matrix_free(X);
+    gsl_matrix_free(cov);
+    gsl_multifit_linear_free(mw);
 }
 
 static void test_fit_errors(void **state)

@@ -32,19 +32,19 @@ static void test_word_order(void **state)
 {
     (void)state;
     uint16_t r[4];
-    mbmap_put_f32(r, -2.5f);                  /* binary32 0xC0200000 */
+    mbmap_put_f32(r, -2.5f); /* binary32 0xC0200000 */
     assert_int_equal(r[0], 0xC020);
     assert_int_equal(r[1], 0x0000);
     mbmap_put_f32(r, 1234.5678f);
     assert_true(exact(modbus_get_float_abcd(r), 1234.5678f)); /* exact: same bits */
     mbmap_put_u32(r, 0x12345678u);
     assert_int_equal(r[0], 0x1234);
-    uint32_t w[2] = { r[0], r[1] };        /* widened: see read_field */
+    uint32_t w[2] = {r[0], r[1]}; /* widened: see read_field */
     assert_int_equal((uint32_t)MODBUS_GET_INT32_FROM_INT16(w, 0), 0x12345678u);
-    mbmap_put_f64(r, 1.0);                    /* binary64 0x3FF0000000000000 */
+    mbmap_put_f64(r, 1.0); /* binary64 0x3FF0000000000000 */
     assert_int_equal(r[0], 0x3FF0);
     assert_int_equal(r[1] | r[2] | r[3], 0);
-    mbmap_put_f64(r, -0.1);                   /* 0xBFB999999999999A */
+    mbmap_put_f64(r, -0.1); /* 0xBFB999999999999A */
     assert_int_equal(r[0], 0xBFB9);
     assert_int_equal(r[1], 0x9999);
     assert_int_equal(r[2], 0x9999);
@@ -73,7 +73,7 @@ static double read_field(const uint16_t *block, const mbmap_field_t *f)
     case MBMAP_T_U32: {
         /* libmodbus's macro shifts its element type: widen first, or a
          * uint16_t promoted to int overflows (UBSan). */
-        uint32_t w[2] = { r[0], r[1] };
+        uint32_t w[2] = {r[0], r[1]};
         return (uint32_t)MODBUS_GET_INT32_FROM_INT16(w, 0);
     }
     case MBMAP_T_F32: return modbus_get_float_abcd(r);
@@ -100,25 +100,64 @@ static void test_encode_matches_table(void **state)
         o.sp.vel_m_s[a] = -1.25 - a;
         o.sp.acc_m_s2[a] = 0.125 * (a + 1);
     }
-    o.st.buffered = 11; o.st.free = 12; o.st.lookahead = 13; o.st.ahead_s = 2.5;
-    o.st.last_seq = 99999; o.st.accepted = 0x100000005ull; /* wraps to 5 */
-    o.st.rejected = 21; o.st.underruns = 22; o.st.skipped_ticks = 23; o.st.duplicates = 24;
-    o.lost = 25; o.mb_rejected = 26; o.late_p99_us = 27; o.late_max_us = 28;
-    o.can_state = MBMAP_CAN_PASSIVE; o.can_load_permille = 345; o.uptime_s = 3600;
+    o.st.buffered = 11;
+    o.st.free = 12;
+    o.st.lookahead = 13;
+    o.st.ahead_s = 2.5;
+    o.st.last_seq = 99999;
+    o.st.accepted = 0x100000005ull; /* wraps to 5 */
+    o.st.rejected = 21;
+    o.st.underruns = 22;
+    o.st.skipped_ticks = 23;
+    o.st.duplicates = 24;
+    o.lost = 25;
+    o.mb_rejected = 26;
+    o.late_p99_us = 27;
+    o.late_max_us = 28;
+    o.can_state = MBMAP_CAN_PASSIVE;
+    o.can_load_permille = 345;
+    o.uptime_s = 3600;
 
     assert_int_equal(mbmap_encode_object(regs, 2, 0xABCD1234u, &o), 0);
     assert_int_equal(mbmap_encode_object(regs, MBMAP_MAX_OBJECTS, 1, &o), -MBMAP_EADDRESS);
     const uint16_t *b = regs + MBMAP_OBJ_BASE(2);
-    struct { const char *name; double v; } want[] = {
-        {"generation", 0xABCD1234u}, {"generation_tail", 0xABCD1234u},
-        {"state", 2}, {"flags", 5}, {"cycle", 70001}, {"track", 7},
-        {"buffered", 11}, {"free", 12}, {"lookahead_needed", 13},
-        {"lookahead_available", 2.5}, {"last_seq", 99999}, {"t", 1234.000125},
-        {"x", 10.5}, {"y", 11.5}, {"z", 12.5}, {"vx", -1.25}, {"vy", -2.25}, {"vz", -3.25},
-        {"ax", 0.125}, {"ay", 0.25}, {"az", 0.375}, {"accepted", 5}, {"rejected", 21},
-        {"lost", 25}, {"underruns", 22}, {"missed_ticks", 23}, {"duplicates", 24},
-        {"mb_rejected", 26}, {"lateness_p99", 27}, {"lateness_max", 28},
-        {"can_state", 3}, {"can_load", 345}, {"uptime", 3600},
+    struct {
+        const char *name;
+        double v;
+    } want[] = {
+        {"generation", 0xABCD1234u},
+        {"generation_tail", 0xABCD1234u},
+        {"state", 2},
+        {"flags", 5},
+        {"cycle", 70001},
+        {"track", 7},
+        {"buffered", 11},
+        {"free", 12},
+        {"lookahead_needed", 13},
+        {"lookahead_available", 2.5},
+        {"last_seq", 99999},
+        {"t", 1234.000125},
+        {"x", 10.5},
+        {"y", 11.5},
+        {"z", 12.5},
+        {"vx", -1.25},
+        {"vy", -2.25},
+        {"vz", -3.25},
+        {"ax", 0.125},
+        {"ay", 0.25},
+        {"az", 0.375},
+        {"accepted", 5},
+        {"rejected", 21},
+        {"lost", 25},
+        {"underruns", 22},
+        {"missed_ticks", 23},
+        {"duplicates", 24},
+        {"mb_rejected", 26},
+        {"lateness_p99", 27},
+        {"lateness_max", 28},
+        {"can_state", 3},
+        {"can_load", 345},
+        {"uptime", 3600},
     };
     for (size_t i = 0; i < sizeof want / sizeof want[0]; i++) {
         double got = read_field(b, field("input object", want[i].name));
@@ -129,18 +168,32 @@ static void test_encode_matches_table(void **state)
     for (unsigned i = 0; i < MBMAP_BLOCK; i++)
         assert_int_equal(regs[MBMAP_OBJ_BASE(1) + i], 0);
 
-    mbmap_daemon_t d = { .generation = 77, .objects = 3, .writes_enabled = 1, .uptime_s = 5,
-                         .period_us = 1000, .late_p50_us = 8, .late_p99_us = 9,
-                         .late_max_us = 10, .missed_ticks = 11, .can_state = 1,
-                         .can_load_permille = 12, .mb_requests = 13, .mb_exceptions = 14,
-                         .mb_refused = 15, .mb_clients = 16 };
+    mbmap_daemon_t d = {.generation = 77,
+                        .objects = 3,
+                        .writes_enabled = 1,
+                        .uptime_s = 5,
+                        .period_us = 1000,
+                        .late_p50_us = 8,
+                        .late_p99_us = 9,
+                        .late_max_us = 10,
+                        .missed_ticks = 11,
+                        .can_state = 1,
+                        .can_load_permille = 12,
+                        .mb_requests = 13,
+                        .mb_exceptions = 14,
+                        .mb_refused = 15,
+                        .mb_clients = 16};
     mbmap_encode_daemon(regs, &d);
-    struct { const char *name; double v; } dw[] = {
-        {"magic", 0x7444}, {"version", MBMAP_VERSION}, {"objects", 3}, {"writes_enabled", 1},
-        {"generation", 77}, {"uptime", 5}, {"period", 1000}, {"lateness_p50", 8},
-        {"lateness_p99", 9}, {"lateness_max", 10}, {"missed_ticks", 11}, {"can_state", 1},
-        {"can_load", 12}, {"mb_requests", 13}, {"mb_exceptions", 14}, {"mb_refused", 15},
-        {"mb_clients", 16}, {"generation_tail", 77},
+    struct {
+        const char *name;
+        double v;
+    } dw[] = {
+        {"magic", 0x7444},     {"version", MBMAP_VERSION}, {"objects", 3},
+        {"writes_enabled", 1}, {"generation", 77},         {"uptime", 5},
+        {"period", 1000},      {"lateness_p50", 8},        {"lateness_p99", 9},
+        {"lateness_max", 10},  {"missed_ticks", 11},       {"can_state", 1},
+        {"can_load", 12},      {"mb_requests", 13},        {"mb_exceptions", 14},
+        {"mb_refused", 15},    {"mb_clients", 16},         {"generation_tail", 77},
     };
     for (size_t i = 0; i < sizeof dw / sizeof dw[0]; i++) {
         double got = read_field(regs, field("input daemon", dw[i].name));
@@ -166,7 +219,8 @@ static void test_table_consistent(void **state)
                             f[j].offset >= f[i].offset + f[i].count);
     }
     /* The waypoint block in the table is the block the decoder takes. */
-    const mbmap_field_t *a = field("holding object", "wp_seq"), *z = field("holding object", "wp_z");
+    const mbmap_field_t *a = field("holding object", "wp_seq"),
+                        *z = field("holding object", "wp_z");
     assert_int_equal(a->offset, MBMAP_H_WP);
     assert_int_equal(z->offset + z->count - a->offset, MBMAP_H_WP_COUNT);
 }
@@ -174,16 +228,20 @@ static void test_table_consistent(void **state)
 static size_t read_pdu(uint8_t *p, int fc, unsigned addr, unsigned count)
 {
     p[0] = (uint8_t)fc;
-    p[1] = (uint8_t)(addr >> 8); p[2] = (uint8_t)addr;
-    p[3] = (uint8_t)(count >> 8); p[4] = (uint8_t)count;
+    p[1] = (uint8_t)(addr >> 8);
+    p[2] = (uint8_t)addr;
+    p[3] = (uint8_t)(count >> 8);
+    p[4] = (uint8_t)count;
     return 5;
 }
 
 static size_t write_pdu(uint8_t *p, unsigned addr, unsigned count, const uint16_t *v)
 {
     p[0] = 0x10;
-    p[1] = (uint8_t)(addr >> 8); p[2] = (uint8_t)addr;
-    p[3] = (uint8_t)(count >> 8); p[4] = (uint8_t)count;
+    p[1] = (uint8_t)(addr >> 8);
+    p[2] = (uint8_t)addr;
+    p[3] = (uint8_t)(count >> 8);
+    p[4] = (uint8_t)count;
     p[5] = (uint8_t)(2 * count);
     for (unsigned i = 0; i < count; i++) {
         p[6 + 2 * i] = (uint8_t)(v[i] >> 8);
@@ -212,17 +270,19 @@ static void test_check_request(void **state)
         assert_int_equal(mbmap_check_request(NOBJ, 0, p, read_pdu(p, fc, 0, 0)), -MBMAP_EVALUE);
         assert_int_equal(mbmap_check_request(NOBJ, 0, p, read_pdu(p, fc, 0, 126)), -MBMAP_EVALUE);
         assert_int_equal(mbmap_check_request(NOBJ, 0, p, read_pdu(p, fc, end - 1, 1)), 0);
-        assert_int_equal(mbmap_check_request(NOBJ, 0, p, read_pdu(p, fc, end - 1, 2)), -MBMAP_EADDRESS);
-        assert_int_equal(mbmap_check_request(NOBJ, 0, p, read_pdu(p, fc, 65535, 125)), -MBMAP_EADDRESS);
+        assert_int_equal(mbmap_check_request(NOBJ, 0, p, read_pdu(p, fc, end - 1, 2)),
+                         -MBMAP_EADDRESS);
+        assert_int_equal(mbmap_check_request(NOBJ, 0, p, read_pdu(p, fc, 65535, 125)),
+                         -MBMAP_EADDRESS);
         assert_int_equal(mbmap_check_request(NOBJ, 0, p, 4), -MBMAP_EVALUE); /* truncated */
         assert_int_equal(mbmap_check_request(NOBJ, 0, p, 6), -MBMAP_EVALUE); /* trailing byte */
     }
-    uint16_t v[124] = { 0 };
+    uint16_t v[124] = {0};
     assert_int_equal(mbmap_check_request(NOBJ, 0, p, write_pdu(p, 100, 1, v)), -MBMAP_EFUNCTION);
     assert_int_equal(mbmap_check_request(NOBJ, 1, p, write_pdu(p, 100, 1, v)), 0);
     assert_int_equal(mbmap_check_request(NOBJ, 1, p, write_pdu(p, 100, 124, v)), -MBMAP_EVALUE);
     size_t l = write_pdu(p, 100, 2, v);
-    p[5] = 3;                                           /* byte count lies */
+    p[5] = 3; /* byte count lies */
     assert_int_equal(mbmap_check_request(NOBJ, 1, p, l), -MBMAP_EVALUE);
     assert_int_equal(mbmap_check_request(NOBJ, 1, p, write_pdu(p, end - 1, 2, v)), -MBMAP_EADDRESS);
     p[0] = 6;
@@ -250,31 +310,43 @@ static void test_decode_write(void **state)
     mbmap_write_t w;
 
     wp_regs(r, 4000000000u, 12.345678901234, -1e5, 0.1, 7);
-    assert_int_equal(mbmap_decode_write(NOBJ, p, write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP,
-                                                          MBMAP_H_WP_COUNT, r), &w), 0);
+    assert_int_equal(
+        mbmap_decode_write(NOBJ, p,
+                           write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP, MBMAP_H_WP_COUNT, r), &w),
+        0);
     assert_int_equal(w.kind, MBMAP_WRITE_WAYPOINT);
     assert_int_equal(w.object, 1);
     assert_int_equal(w.wp.seq, 4000000000u);
-    assert_true(exact(w.wp.t_s, 12.345678901234));  /* f64 carries the double exactly */
+    assert_true(exact(w.wp.t_s, 12.345678901234)); /* f64 carries the double exactly */
     assert_true(exact(w.wp.pos_m[0], -1e5) && exact(w.wp.pos_m[1], 0.1) && exact(w.wp.pos_m[2], 7));
 
     /* Part of the block, or one register too many: not applied. */
-    assert_int_equal(mbmap_decode_write(NOBJ, p, write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP,
-                                                          MBMAP_H_WP_COUNT - 1, r), &w), -MBMAP_EADDRESS);
-    assert_int_equal(mbmap_decode_write(NOBJ, p, write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP,
-                                                          MBMAP_H_WP_COUNT + 1, r), &w), -MBMAP_EADDRESS);
-    assert_int_equal(mbmap_decode_write(NOBJ, p, write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP + 2,
-                                                          4, r), &w), -MBMAP_EADDRESS);
+    assert_int_equal(
+        mbmap_decode_write(
+            NOBJ, p, write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP, MBMAP_H_WP_COUNT - 1, r), &w),
+        -MBMAP_EADDRESS);
+    assert_int_equal(
+        mbmap_decode_write(
+            NOBJ, p, write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP, MBMAP_H_WP_COUNT + 1, r), &w),
+        -MBMAP_EADDRESS);
+    assert_int_equal(
+        mbmap_decode_write(NOBJ, p, write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP + 2, 4, r), &w),
+        -MBMAP_EADDRESS);
     /* NaN and infinity refused. */
     wp_regs(r, 1, 1, NAN, 0, 0);
-    assert_int_equal(mbmap_decode_write(NOBJ, p, write_pdu(p, MBMAP_OBJ_BASE(0) + MBMAP_H_WP,
-                                                          MBMAP_H_WP_COUNT, r), &w), -MBMAP_EVALUE);
+    assert_int_equal(
+        mbmap_decode_write(NOBJ, p,
+                           write_pdu(p, MBMAP_OBJ_BASE(0) + MBMAP_H_WP, MBMAP_H_WP_COUNT, r), &w),
+        -MBMAP_EVALUE);
     assert_int_equal(w.object, 0);
     wp_regs(r, 1, INFINITY, 0, 0, 0);
-    assert_int_equal(mbmap_decode_write(NOBJ, p, write_pdu(p, MBMAP_OBJ_BASE(0) + MBMAP_H_WP,
-                                                          MBMAP_H_WP_COUNT, r), &w), -MBMAP_EVALUE);
+    assert_int_equal(
+        mbmap_decode_write(NOBJ, p,
+                           write_pdu(p, MBMAP_OBJ_BASE(0) + MBMAP_H_WP, MBMAP_H_WP_COUNT, r), &w),
+        -MBMAP_EVALUE);
     /* Commands by FC 06 and FC 16. */
-    uint8_t s6[5] = { 6, (uint8_t)(MBMAP_OBJ_BASE(2) >> 8), (uint8_t)MBMAP_OBJ_BASE(2), 0, MBMAP_CMD_CLEAR };
+    uint8_t s6[5] = {6, (uint8_t)(MBMAP_OBJ_BASE(2) >> 8), (uint8_t)MBMAP_OBJ_BASE(2), 0,
+                     MBMAP_CMD_CLEAR};
     assert_int_equal(mbmap_decode_write(NOBJ, s6, 5, &w), 0);
     assert_int_equal(w.kind, MBMAP_WRITE_COMMAND);
     assert_int_equal(w.object, 2);
@@ -285,16 +357,24 @@ static void test_decode_write(void **state)
     for (unsigned bad = 0; bad < 65536; bad += (bad < 10 ? 1 : 997)) {
         if (bad >= MBMAP_CMD_START && bad <= MBMAP_CMD_FINISH)
             continue;
-        s6[3] = (uint8_t)(bad >> 8); s6[4] = (uint8_t)bad;
+        s6[3] = (uint8_t)(bad >> 8);
+        s6[4] = (uint8_t)bad;
         assert_int_equal(mbmap_decode_write(NOBJ, s6, 5, &w), -MBMAP_EVALUE);
     }
     /* Read-only places: the daemon block, other registers of an object. */
-    s6[1] = 0; s6[2] = 5; s6[3] = 0; s6[4] = 1;
+    s6[1] = 0;
+    s6[2] = 5;
+    s6[3] = 0;
+    s6[4] = 1;
     assert_int_equal(mbmap_decode_write(NOBJ, s6, 5, &w), -MBMAP_EADDRESS);
-    s6[1] = 0; s6[2] = 102;
+    s6[1] = 0;
+    s6[2] = 102;
     assert_int_equal(mbmap_decode_write(NOBJ, s6, 5, &w), -MBMAP_EADDRESS);
     /* The feed override: 0..200 %, one register. */
-    s6[1] = 0; s6[2] = 100 + MBMAP_H_OVERRIDE; s6[3] = 0; s6[4] = 150;
+    s6[1] = 0;
+    s6[2] = 100 + MBMAP_H_OVERRIDE;
+    s6[3] = 0;
+    s6[4] = 150;
     assert_int_equal(mbmap_decode_write(NOBJ, s6, 5, &w), 0);
     assert_int_equal(w.kind, MBMAP_WRITE_OVERRIDE);
     assert_int_equal(w.object, 0);
@@ -323,12 +403,12 @@ static void test_crc_and_framing(void **state)
 {
     (void)state;
     assert_int_equal(mbmap_crc16((const uint8_t *)"123456789", 9), 0x4B37);
-    const uint8_t req[] = { 0x01, 0x03, 0x00, 0x00, 0x00, 0x0A };
+    const uint8_t req[] = {0x01, 0x03, 0x00, 0x00, 0x00, 0x0A};
     uint16_t crc = mbmap_crc16(req, sizeof req);
     assert_int_equal(crc & 0xff, 0xC5);
     assert_int_equal(crc >> 8, 0xCD);
 
-    uint8_t f[16] = { 1, 3 };
+    uint8_t f[16] = {1, 3};
     assert_int_equal(mbmap_rtu_frame_len(f, 1), 0);
     assert_int_equal(mbmap_rtu_frame_len(f, 2), 8);
     f[1] = 0x10;
@@ -347,13 +427,13 @@ static int markdown(void)
     for (size_t i = 0; i < n; i++) {
         if (strcmp(last, f[i].table)) {
             const char *base = !strcmp(f[i].table, "input daemon") ? "absolute address"
-                                                                    : "offset from 100·(k+1)";
+                                                                   : "offset from 100·(k+1)";
             printf("%s| %s (%s) | type | name | unit | meaning |\n|---|---|---|---|---|\n",
                    i ? "\n" : "", f[i].table, base);
             last = f[i].table;
         }
-        printf("| %u | %s | %s | %s | %s |\n", f[i].offset, mbmap_type_name(f[i].type),
-               f[i].name, f[i].unit, f[i].doc);
+        printf("| %u | %s | %s | %s | %s |\n", f[i].offset, mbmap_type_name(f[i].type), f[i].name,
+               f[i].unit, f[i].doc);
     }
     return 0;
 }
@@ -363,12 +443,9 @@ int main(int argc, char **argv)
     if (argc > 1 && !strcmp(argv[1], "--markdown"))
         return markdown();
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_word_order),
-        cmocka_unit_test(test_encode_matches_table),
-        cmocka_unit_test(test_table_consistent),
-        cmocka_unit_test(test_check_request),
-        cmocka_unit_test(test_decode_write),
-        cmocka_unit_test(test_from_engine),
+        cmocka_unit_test(test_word_order),       cmocka_unit_test(test_encode_matches_table),
+        cmocka_unit_test(test_table_consistent), cmocka_unit_test(test_check_request),
+        cmocka_unit_test(test_decode_write),     cmocka_unit_test(test_from_engine),
         cmocka_unit_test(test_crc_and_framing),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

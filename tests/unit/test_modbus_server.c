@@ -43,8 +43,8 @@
 #include "mbmap.h"
 #include "modbus_server.h"
 
-#define LATE_BINS 20000           /* 1 us bins up to 20 ms; beyond counts in the last */
-#define WAIT_MS 3000              /* bound on every wait for an event in the tests */
+#define LATE_BINS 20000 /* 1 us bins up to 20 ms; beyond counts in the last */
+#define WAIT_MS 3000    /* bound on every wait for an event in the tests */
 
 typedef struct {
     double last_t;
@@ -98,7 +98,11 @@ static int fake_command(void *ctx, unsigned k, unsigned cmd)
     switch (cmd) {
     case MBMAP_CMD_START: f->state = ENGINE_STATE_STREAMING; break;
     case MBMAP_CMD_STOP: f->state = ENGINE_STATE_FINISHED; break;
-    case MBMAP_CMD_CLEAR: f->state = ENGINE_STATE_WAITING; f->buffered = 0; f->have = 0; break;
+    case MBMAP_CMD_CLEAR:
+        f->state = ENGINE_STATE_WAITING;
+        f->buffered = 0;
+        f->have = 0;
+        break;
     case MBMAP_CMD_RESET_COUNTERS: f->accepted = 0; break;
     default: return -ENGINE_ESTATE;
     }
@@ -149,10 +153,12 @@ static void harness_tick(harness_t *h)
         o[k].late_p99_us = percentile(h, 0.99);
         o[k].late_max_us = h->late_max_us;
     }
-    mbmap_daemon_t d = { .period_us = (uint32_t)(h->period_ns / 1000),
-                         .late_p50_us = percentile(h, 0.5), .late_p99_us = percentile(h, 0.99),
-                         .late_max_us = h->late_max_us, .missed_ticks = h->missed,
-                         .uptime_s = (uint64_t)((mono_ns() - h->start_ns) / 1000000000) };
+    mbmap_daemon_t d = {.period_us = (uint32_t)(h->period_ns / 1000),
+                        .late_p50_us = percentile(h, 0.5),
+                        .late_p99_us = percentile(h, 0.99),
+                        .late_max_us = h->late_max_us,
+                        .missed_ticks = h->missed,
+                        .uptime_s = (uint64_t)((mono_ns() - h->start_ns) / 1000000000)};
     modbus_server_publish(h->srv, &d, o);
 }
 
@@ -206,7 +212,7 @@ static harness_t *harness_new(const hopts_t *o, int with_tcp)
     h->hist = calloc(LATE_BINS, sizeof *h->hist);
     for (unsigned k = 0; k < MBMAP_MAX_OBJECTS; k++)
         h->fake[k].capacity = o->capacity;
-    modbus_server_hooks_t hooks = { fake_waypoint, fake_command, h, NULL };
+    modbus_server_hooks_t hooks = {fake_waypoint, fake_command, h, NULL};
     h->srv = modbus_server_new(&cfg, &hooks, err, sizeof err);
     if (!h->srv) {
         fprintf(stderr, "%s\n", err);
@@ -217,14 +223,18 @@ static harness_t *harness_new(const hopts_t *o, int with_tcp)
     h->stopfd = eventfd(0, EFD_NONBLOCK);
     h->start_ns = mono_ns();
     struct itimerspec its = {
-        .it_interval = { h->period_ns / 1000000000, h->period_ns % 1000000000 },
-        .it_value = { (h->start_ns + h->period_ns) / 1000000000, (h->start_ns + h->period_ns) % 1000000000 },
+        .it_interval = {h->period_ns / 1000000000, h->period_ns % 1000000000},
+        .it_value = {(h->start_ns + h->period_ns) / 1000000000,
+                     (h->start_ns + h->period_ns) % 1000000000},
     };
     timerfd_settime(h->tfd, TFD_TIMER_ABSTIME, &its, NULL);
-    struct epoll_event ev = { .events = EPOLLIN };
-    ev.data.u32 = 1; epoll_ctl(h->ep, EPOLL_CTL_ADD, h->tfd, &ev);
-    ev.data.u32 = 2; epoll_ctl(h->ep, EPOLL_CTL_ADD, modbus_server_fd(h->srv), &ev);
-    ev.data.u32 = 3; epoll_ctl(h->ep, EPOLL_CTL_ADD, h->stopfd, &ev);
+    struct epoll_event ev = {.events = EPOLLIN};
+    ev.data.u32 = 1;
+    epoll_ctl(h->ep, EPOLL_CTL_ADD, h->tfd, &ev);
+    ev.data.u32 = 2;
+    epoll_ctl(h->ep, EPOLL_CTL_ADD, modbus_server_fd(h->srv), &ev);
+    ev.data.u32 = 3;
+    epoll_ctl(h->ep, EPOLL_CTL_ADD, h->stopfd, &ev);
     h->sigfd = -1;
     return h;
 }
@@ -253,7 +263,9 @@ static void harness_run(harness_t *h)
 static void harness_free(harness_t *h)
 {
     modbus_server_free(h->srv);
-    close(h->ep); close(h->tfd); close(h->stopfd);
+    close(h->ep);
+    close(h->tfd);
+    close(h->stopfd);
     free(h->hist);
     free(h);
 }
@@ -266,18 +278,32 @@ static int serve_main(int argc, char **argv)
     hopts_default(&o);
     for (int i = 2; i + 1 < argc; i += 2) {
         const char *k = argv[i], *v = argv[i + 1];
-        if (!strcmp(k, "--objects")) o.objects = (unsigned)atoi(v);
-        else if (!strcmp(k, "--period-us")) o.period_ns = atoll(v) * 1000;
-        else if (!strcmp(k, "--writes")) o.writes = atoi(v);
-        else if (!strcmp(k, "--port")) o.port = atoi(v);
-        else if (!strcmp(k, "--rtu")) o.rtu = v;
-        else if (!strcmp(k, "--unit")) o.unit = atoi(v);
-        else if (!strcmp(k, "--max-clients")) o.max_clients = (unsigned)atoi(v);
-        else if (!strcmp(k, "--idle-ms")) o.idle_ms = (unsigned)atoi(v);
-        else if (!strcmp(k, "--request-ms")) o.request_ms = (unsigned)atoi(v);
-        else if (!strcmp(k, "--allow")) o.allow = v;
-        else if (!strcmp(k, "--capacity")) o.capacity = (unsigned)atoi(v);
-        else { fprintf(stderr, "unknown option %s\n", k); return 2; }
+        if (!strcmp(k, "--objects"))
+            o.objects = (unsigned)atoi(v);
+        else if (!strcmp(k, "--period-us"))
+            o.period_ns = atoll(v) * 1000;
+        else if (!strcmp(k, "--writes"))
+            o.writes = atoi(v);
+        else if (!strcmp(k, "--port"))
+            o.port = atoi(v);
+        else if (!strcmp(k, "--rtu"))
+            o.rtu = v;
+        else if (!strcmp(k, "--unit"))
+            o.unit = atoi(v);
+        else if (!strcmp(k, "--max-clients"))
+            o.max_clients = (unsigned)atoi(v);
+        else if (!strcmp(k, "--idle-ms"))
+            o.idle_ms = (unsigned)atoi(v);
+        else if (!strcmp(k, "--request-ms"))
+            o.request_ms = (unsigned)atoi(v);
+        else if (!strcmp(k, "--allow"))
+            o.allow = v;
+        else if (!strcmp(k, "--capacity"))
+            o.capacity = (unsigned)atoi(v);
+        else {
+            fprintf(stderr, "unknown option %s\n", k);
+            return 2;
+        }
     }
     signal(SIGPIPE, SIG_IGN);
     harness_t *h = harness_new(&o, 1);
@@ -287,15 +313,17 @@ static int serve_main(int argc, char **argv)
     sigaddset(&ss, SIGINT);
     sigprocmask(SIG_BLOCK, &ss, NULL);
     h->sigfd = signalfd(-1, &ss, SFD_NONBLOCK);
-    struct epoll_event ev = { .events = EPOLLIN };
-    ev.data.u32 = 4; epoll_ctl(h->ep, EPOLL_CTL_ADD, h->sigfd, &ev);
-    ev.data.u32 = 4; epoll_ctl(h->ep, EPOLL_CTL_ADD, 0, &ev); /* stdin closed: stop */
+    struct epoll_event ev = {.events = EPOLLIN};
+    ev.data.u32 = 4;
+    epoll_ctl(h->ep, EPOLL_CTL_ADD, h->sigfd, &ev);
+    ev.data.u32 = 4;
+    epoll_ctl(h->ep, EPOLL_CTL_ADD, 0, &ev); /* stdin closed: stop */
     /* Publish the first tick before announcing the port: a client that
      * connects at once must read a tick's snapshot, not the all-zero map of
      * generation 0 that no tick wrote (the Python clients check every block
      * against the synthetic values; under load they lost that race).  Bounded:
      * the 1 kHz timer fires within a millisecond, a second is plenty. */
-    struct pollfd first = { .fd = h->tfd, .events = POLLIN };
+    struct pollfd first = {.fd = h->tfd, .events = POLLIN};
     while (modbus_server_generation(h->srv) == 0 && poll(&first, 1, 1000) > 0)
         harness_tick(h);
     printf("PORT %d\n", modbus_server_tcp_port(h->srv));
@@ -376,7 +404,7 @@ static uint32_t next_gen(modbus_t *c, uint32_t g)
         if (now > g)
             return now;
         struct pollfd none;
-        poll(&none, 0, 1);              /* 1 ms between polls of a 1 kHz tick */
+        poll(&none, 0, 1); /* 1 ms between polls of a 1 kHz tick */
     }
     fail_msg("generation did not move past %u", g);
     return 0;
@@ -406,7 +434,7 @@ static void test_reads_consistent(void **state)
         assert_int_equal(mbmap_get_u32(r + MBMAP_O_GEN_TAIL), g);
         assert_int_equal(mbmap_get_u32(r + MBMAP_O_CYCLE), g);
         double t = mbmap_get_f64(r + MBMAP_O_T_S), want = g * 0.001;
-        assert_memory_equal(&t, &want, sizeof t);   /* f64 carries it bit for bit */
+        assert_memory_equal(&t, &want, sizeof t); /* f64 carries it bit for bit */
         assert_int_equal((long)modbus_get_float_abcd(r + MBMAP_O_POS), (long)g + 1000L * k);
         assert_int_equal((long)modbus_get_float_abcd(r + MBMAP_O_ACC + 4), 2L * g + k);
     }
@@ -439,43 +467,47 @@ static void test_writes(void **state)
     uint16_t r[MBMAP_BLOCK];
 
     assert_int_equal(write_wp(c, 1, 1, 10.0, 1.0), MBMAP_H_WP_COUNT);
-    assert_int_equal(write_wp(c, 1, 4, 11.0, 2.0), MBMAP_H_WP_COUNT);   /* 2, 3 lost */
-    assert_int_equal(write_wp(c, 1, 5, 10.5, 2.0), -1);                 /* backwards */
+    assert_int_equal(write_wp(c, 1, 4, 11.0, 2.0), MBMAP_H_WP_COUNT); /* 2, 3 lost */
+    assert_int_equal(write_wp(c, 1, 5, 10.5, 2.0), -1);               /* backwards */
     assert_int_equal(errno, EMBXILVAL);
     assert_int_equal(write_wp(c, 1, 5, NAN, 2.0), -1);
     assert_int_equal(errno, EMBXILVAL);
     assert_int_equal(write_wp(c, 1, 5, 12.0, 3.0), MBMAP_H_WP_COUNT);
-    assert_int_equal(write_wp(c, 1, 6, 13.0, 3.0), -1);                 /* capacity 3 */
+    assert_int_equal(write_wp(c, 1, 6, 13.0, 3.0), -1); /* capacity 3 */
     assert_int_equal(errno, EMBXSBUSY);
     assert_int_equal(modbus_write_register(c, (int)MBMAP_OBJ_BASE(1) + MBMAP_H_COMMAND, 99), -1);
     assert_int_equal(errno, EMBXILVAL);
     assert_int_equal(modbus_write_register(c, (int)MBMAP_OBJ_BASE(1) + MBMAP_H_WP, 1), -1);
-    assert_int_equal(errno, EMBXILADD);                                 /* part of the block */
-    assert_int_equal(modbus_write_register(c, 3, 1), -1);               /* daemon block */
+    assert_int_equal(errno, EMBXILADD);                   /* part of the block */
+    assert_int_equal(modbus_write_register(c, 3, 1), -1); /* daemon block */
     assert_int_equal(errno, EMBXILADD);
-    assert_int_equal(modbus_write_register(c, (int)MBMAP_OBJ_BASE(1) + MBMAP_H_COMMAND,
-                                           MBMAP_CMD_START), 1);
+    assert_int_equal(
+        modbus_write_register(c, (int)MBMAP_OBJ_BASE(1) + MBMAP_H_COMMAND, MBMAP_CMD_START), 1);
 
     uint32_t g = next_gen(c, 0);
     next_gen(c, g);
-    assert_int_equal(modbus_read_input_registers(c, (int)MBMAP_OBJ_BASE(1), MBMAP_BLOCK, r), MBMAP_BLOCK);
+    assert_int_equal(modbus_read_input_registers(c, (int)MBMAP_OBJ_BASE(1), MBMAP_BLOCK, r),
+                     MBMAP_BLOCK);
     assert_int_equal(mbmap_get_u32(r + MBMAP_O_ACCEPTED), 3);
     assert_int_equal(mbmap_get_u32(r + MBMAP_O_LAST_SEQ), 5);
     assert_int_equal(mbmap_get_u32(r + MBMAP_O_LOST), 2);
-    assert_int_equal(mbmap_get_u32(r + MBMAP_O_MB_REJECTED), 3);        /* backwards, NaN, 99 */
+    assert_int_equal(mbmap_get_u32(r + MBMAP_O_MB_REJECTED), 3); /* backwards, NaN, 99 */
     assert_int_equal(r[MBMAP_O_STATE], ENGINE_STATE_STREAMING);
     /* Object 0 untouched. */
-    assert_int_equal(modbus_read_input_registers(c, (int)MBMAP_OBJ_BASE(0), MBMAP_BLOCK, r), MBMAP_BLOCK);
+    assert_int_equal(modbus_read_input_registers(c, (int)MBMAP_OBJ_BASE(0), MBMAP_BLOCK, r),
+                     MBMAP_BLOCK);
     assert_int_equal(mbmap_get_u32(r + MBMAP_O_ACCEPTED), 0);
     /* The holding block reads back what was last written whole. */
-    assert_int_equal(modbus_read_registers(c, (int)MBMAP_OBJ_BASE(1) + MBMAP_H_WP, MBMAP_H_WP_COUNT, r),
-                     MBMAP_H_WP_COUNT);
+    assert_int_equal(
+        modbus_read_registers(c, (int)MBMAP_OBJ_BASE(1) + MBMAP_H_WP, MBMAP_H_WP_COUNT, r),
+        MBMAP_H_WP_COUNT);
     assert_int_equal(mbmap_get_u32(r), 5);
     /* Reset counters clears the Modbus counters too. */
     assert_int_equal(modbus_write_register(c, (int)MBMAP_OBJ_BASE(1), MBMAP_CMD_RESET_COUNTERS), 1);
     g = next_gen(c, 0);
     next_gen(c, g);
-    assert_int_equal(modbus_read_input_registers(c, (int)MBMAP_OBJ_BASE(1), MBMAP_BLOCK, r), MBMAP_BLOCK);
+    assert_int_equal(modbus_read_input_registers(c, (int)MBMAP_OBJ_BASE(1), MBMAP_BLOCK, r),
+                     MBMAP_BLOCK);
     assert_int_equal(mbmap_get_u32(r + MBMAP_O_MB_REJECTED), 0);
     assert_int_equal(mbmap_get_u32(r + MBMAP_O_LOST), 0);
     client_free(c);
@@ -495,12 +527,13 @@ static void test_lost_window(void **state)
     fixture_t *f = fixture_start(&o);
     modbus_t *c = client(f->port);
     uint16_t r[MBMAP_BLOCK];
-    const uint32_t seq[] = { 1, 2, 0xFFFFFFFFu, 3, 5, 1000000, 1000001, 1000003 };
+    const uint32_t seq[] = {1, 2, 0xFFFFFFFFu, 3, 5, 1000000, 1000001, 1000003};
     for (unsigned i = 0; i < sizeof seq / sizeof seq[0]; i++)
         assert_int_equal(write_wp(c, 0, seq[i], 1.0 + i, 1.0 + i), MBMAP_H_WP_COUNT);
     uint32_t g = next_gen(c, 0);
     next_gen(c, g);
-    assert_int_equal(modbus_read_input_registers(c, (int)MBMAP_OBJ_BASE(0), MBMAP_BLOCK, r), MBMAP_BLOCK);
+    assert_int_equal(modbus_read_input_registers(c, (int)MBMAP_OBJ_BASE(0), MBMAP_BLOCK, r),
+                     MBMAP_BLOCK);
     assert_int_equal(mbmap_get_u32(r + MBMAP_O_LOST), 2);
     assert_int_equal(mbmap_get_u32(r + MBMAP_O_SEQ_JUMPS), 2);
     client_free(c);
@@ -533,7 +566,7 @@ static void test_writes_disabled(void **state)
 static int raw_connect(int port)
 {
     int fd = socket(AF_INET, SOCK_STREAM, 0);
-    struct sockaddr_in a = { .sin_family = AF_INET, .sin_port = htons((uint16_t)port) };
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
     a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
     if (connect(fd, (struct sockaddr *)&a, sizeof a) < 0) {
         close(fd);
@@ -545,7 +578,7 @@ static int raw_connect(int port)
 /* 1 if the server closed fd within ms (EOF or reset), 0 if it is still open. */
 static int closed_within(int fd, int ms)
 {
-    struct pollfd p = { .fd = fd, .events = POLLIN };
+    struct pollfd p = {.fd = fd, .events = POLLIN};
     if (poll(&p, 1, ms) <= 0)
         return 0;
     char b[300];
@@ -637,7 +670,7 @@ static void test_request_deadline(void **state)
     fixture_t *f = fixture_start(&o);
     int fd = raw_connect(f->port);
     assert_true(fd >= 0);
-    const uint8_t req[12] = { 0, 1, 0, 0, 0, 6, 1, 4, 0, 0, 0, 1 };
+    const uint8_t req[12] = {0, 1, 0, 0, 0, 6, 1, 4, 0, 0, 0, 1};
     int64_t t0 = mono_ns();
     int closed = 0;
     for (unsigned i = 0; i < sizeof req && !closed; i++) {
@@ -705,14 +738,10 @@ int main(int argc, char **argv)
         return serve_main(argc, argv);
     signal(SIGPIPE, SIG_IGN);
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_reads_consistent),
-        cmocka_unit_test(test_writes),
-        cmocka_unit_test(test_writes_disabled),
-        cmocka_unit_test(test_lost_window),
-        cmocka_unit_test(test_connections),
-        cmocka_unit_test(test_eviction_keeps_the_poller),
-        cmocka_unit_test(test_request_deadline),
-        cmocka_unit_test(test_idle_timeout),
+        cmocka_unit_test(test_reads_consistent), cmocka_unit_test(test_writes),
+        cmocka_unit_test(test_writes_disabled),  cmocka_unit_test(test_lost_window),
+        cmocka_unit_test(test_connections),      cmocka_unit_test(test_eviction_keeps_the_poller),
+        cmocka_unit_test(test_request_deadline), cmocka_unit_test(test_idle_timeout),
         cmocka_unit_test(test_allow_list),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

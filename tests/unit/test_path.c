@@ -33,7 +33,8 @@ static void test_line_arc_circle(void **state)
     const char *const prog[] = {
         "# a test path",
         "start 0 0 1.5",
-        "speed 2", "step 0.5",
+        "speed 2",
+        "step 0.5",
         "line 30 0 1.5",
         "arc 30 20 20 -90 0   # quarter turn ccw from (30,0) to (50,20)",
         "circle 30 20 20 0 cw",

@@ -48,16 +48,16 @@
 #define START_S 0.6
 
 enum { OUT_ENGINE, OUT_CAN, OUT_CANFD, OUT_CIA402, OUT_CSV, OUT_MODBUS, OUT_N };
-static const char *const out_name[OUT_N] = { "engine", "can", "canfd", "cia402", "csv", "modbus" };
+static const char *const out_name[OUT_N] = {"engine", "can", "canfd", "cia402", "csv", "modbus"};
 /* position quantum of each output (m): field LSB, float32 at <= 2^12 m */
-static const double out_quantum[OUT_N] = { 0, 1e-4, 1e-4, 1e-4, 0, 5e-4 };
+static const double out_quantum[OUT_N] = {0, 1e-4, 1e-4, 1e-4, 0, 5e-4};
 
 typedef struct {
     int have;
     double p[3], v[3];
     int64_t now;
     int vhave;
-    int stopped;   /* held, or no velocity last tick */
+    int stopped; /* held, or no velocity last tick */
 } track_t;
 
 /* Decoded position of sp through output k; 0 if the output has no position. */
@@ -140,7 +140,7 @@ static void run_seed(unsigned seed, double *worst_v_ratio, double *worst_a_ratio
     engine_t *e = engine_new(&c, &err);
     assert_non_null(e);
     safety_t sf;
-    safety_limits_t lim = { 0, 2.0 * c.max_speed_m_s, 0, SAFETY_TOL_M_DEFAULT };
+    safety_limits_t lim = {0, 2.0 * c.max_speed_m_s, 0, SAFETY_TOL_M_DEFAULT};
     safety_init(&sf, &lim);
     canproto_ids_t ids;
     canproto_ids_default(&ids, 0);
@@ -152,7 +152,7 @@ static void run_seed(unsigned seed, double *worst_v_ratio, double *worst_a_ratio
     track_t tr[OUT_N];
     memset(tr, 0, sizeof tr);
     unsigned s = seed;
-    double t_wp = 0, pos[3] = { 0, 0, 0 }, vel[3] = { 1, 0.5, 0 };
+    double t_wp = 0, pos[3] = {0, 0, 0}, vel[3] = {1, 0.5, 0};
     int64_t now = 0;
     uint32_t seq = 0;
     int ticks = 3000 + (int)(urand(&s) * 2000);
@@ -175,7 +175,7 @@ static void run_seed(unsigned seed, double *worst_v_ratio, double *worst_a_ratio
                 }
                 t_wp += dt;
                 seq++;
-                engine_waypoint_t w = { .t_s = t_wp, .seq = seq };
+                engine_waypoint_t w = {.t_s = t_wp, .seq = seq};
                 memcpy(w.pos_m, pos, sizeof pos);
                 if (urand(&s) < 0.02)
                     w.pos_m[0] += 500; /* an outlier: refused by the engine */
@@ -245,8 +245,9 @@ static void run_seed(unsigned seed, double *worst_v_ratio, double *worst_a_ratio
                         if (dv > abound * dt * 1.01 + 1e-9)
                             (*over)++;
                         if (getenv("PROP_DEBUG") && dv > abound * dt * 1.01 + 1e-9)
-                            print_message("seed %u tick %d flags %u state %d since %.2f dt %.3f: %g\n", seed, k,
-                                          sp.flags, sp.state, since_start, dt, dv / (abound * dt));
+                            print_message(
+                                "seed %u tick %d flags %u state %d since %.2f dt %.3f: %g\n", seed,
+                                k, sp.flags, sp.state, since_start, dt, dv / (abound * dt));
                         else if (ASSERT_ACCEL && dv > abound * dt * 1.01 + 1e-9)
                             fail_msg("seed %u tick %d %s: |dv| %.6g m/s over %.3g s > %.6g", seed,
                                      k, out_name[o], dv, dt, abound * dt);
@@ -274,11 +275,13 @@ static void test_random_sequences(void **state)
     for (unsigned seed = 1; seed <= 40; seed++)
         run_seed(seed, &wv, &wa, &exempt, &exempt_start, &ws, &over, &ticks);
     print_message("velocity: %u pairs above the acceleration bound while streaming (worst %.2f x); "
-                  "asserted only with ASSERT_ACCEL\n", over, wa);
+                  "asserted only with ASSERT_ACCEL\n",
+                  over, wa);
     print_message("40 random sequences, %u ticks x %d outputs: worst step %.3f of the speed bound, "
                   "worst |dv| %.3f of the acceleration bound; exempted: %u stops in one tick "
                   "(underrun/clear, issue 16), %u ticks of trajectory starts from rest on a moving "
-                  "track (worst %.2f x the bound)\n", ticks, OUT_N, wv, wa, exempt, exempt_start, ws);
+                  "track (worst %.2f x the bound)\n",
+                  ticks, OUT_N, wv, wa, exempt, exempt_start, ws);
 }
 
 int main(void)

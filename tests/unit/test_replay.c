@@ -125,8 +125,8 @@ static void test_bad_rows_offered_at_once(void **state)
 {
     (void)state;
     track_t t = make_track(6, 1.0);
-    t.wp[2].t_s = t.wp[1].t_s - 0.5;   /* backward */
-    t.wp[3] = t.wp[1];                 /* duplicate of row 1 (row 2 was refused) */
+    t.wp[2].t_s = t.wp[1].t_s - 0.5; /* backward */
+    t.wp[3] = t.wp[1];               /* duplicate of row 1 (row 2 was refused) */
     t.wp[4].t_s = NAN;
     engine_config_t cfg;
     engine_config_default(&cfg);
@@ -185,10 +185,18 @@ static void test_csv_format_round_trip(void **state)
                              "ay_m_s2,az_m_s2,state,flags,cycle,track\n");
     assert_int_equal(csv_format_header(hdr, 10), -1);
 
-    const double vals[] = {0.1, -0.0, 1.0 / 3.0, 6378137.123456789, -1e-300,
+    const double vals[] = {0.1,
+                           -0.0,
+                           1.0 / 3.0,
+                           6378137.123456789,
+                           -1e-300,
                            bits_to_double(1), /* smallest subnormal */
-                           1.7976931348623157e308, 123456.78901234567, -2.5e-17, 1e22,
-                           M_PI, -M_E};
+                           1.7976931348623157e308,
+                           123456.78901234567,
+                           -2.5e-17,
+                           1e22,
+                           M_PI,
+                           -M_E};
     const size_t nv = sizeof vals / sizeof vals[0];
     unsigned seed = 3;
     for (int round = 0; round < 2000; round++) {

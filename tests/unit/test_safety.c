@@ -27,7 +27,7 @@ static engine_setpoint_t at(int64_t k, double x)
 static safety_t mk(double step, double speed, double accel)
 {
     safety_t s;
-    safety_limits_t l = { step, speed, accel, 0 };
+    safety_limits_t l = {step, speed, accel, 0};
     safety_init(&s, &l);
     return s;
 }
@@ -50,7 +50,8 @@ static void test_speed_violation_holds_and_latches(void **state)
     assert_int_equal(safety_check(&s, &sp), SAFETY_FSPEED);
     assert_true(fabs(sp.pos_m[0] - 0.10) < 1e-15);
     assert_true(fabs(sp.vel_m_s[0]) <= 0.0 && fabs(sp.acc_m_s2[0]) <= 0.0);
-    assert_true((sp.flags & (ENGINE_SP_FAULT | ENGINE_SP_HOLD)) == (ENGINE_SP_FAULT | ENGINE_SP_HOLD));
+    assert_true((sp.flags & (ENGINE_SP_FAULT | ENGINE_SP_HOLD)) ==
+                (ENGINE_SP_FAULT | ENGINE_SP_HOLD));
     assert_true(fabs(s.last_value - 5.0) < 1e-9 && fabs(s.last_limit - 2.0) <= 0.0);
     /* latched: even a setpoint that would be fine is held */
     sp = at(12, 0.105);

@@ -57,15 +57,22 @@ static void XMLCALL on_start(void *ud, const XML_Char *name, const XML_Char **at
     counts_t *c = ud;
     if (++c->depth > c->depth_max)
         c->depth_max = c->depth;
-    if (strcmp(name, "svg") == 0) c->svg++;
-    if (strcmp(name, "title") == 0) c->title++;
-    if (strcmp(name, "path") == 0) c->paths++;
-    if (strcmp(name, "circle") == 0) c->circles++;
-    if (strcmp(name, "text") == 0) c->texts++;
+    if (strcmp(name, "svg") == 0)
+        c->svg++;
+    if (strcmp(name, "title") == 0)
+        c->title++;
+    if (strcmp(name, "path") == 0)
+        c->paths++;
+    if (strcmp(name, "circle") == 0)
+        c->circles++;
+    if (strcmp(name, "text") == 0)
+        c->texts++;
     const char *id = NULL, *d = NULL;
     for (int i = 0; attr[i]; i += 2) {
-        if (strcmp(attr[i], "id") == 0) id = attr[i + 1];
-        if (strcmp(attr[i], "d") == 0) d = attr[i + 1];
+        if (strcmp(attr[i], "id") == 0)
+            id = attr[i + 1];
+        if (strcmp(attr[i], "d") == 0)
+            d = attr[i + 1];
     }
     if (id && strlen(c->ids) + strlen(id) + 2 < sizeof c->ids) {
         strcat(c->ids, id);

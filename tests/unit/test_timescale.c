@@ -170,8 +170,8 @@ static void check_pair(check_t *ck, const engine_setpoint_t *p, const engine_set
     ck->dv_max = fmax(ck->dv_max, dist3(sp->vel_m_s, p->vel_m_s));
     if (getenv("TS_DEBUG") && dist3(sp->acc_m_s2, p->acc_m_s2) > ck->da_max)
         fprintf(stderr, "da %.3f at t_s %.4f state %d->%d flags %x->%x |a| %.3f->%.3f\n",
-                dist3(sp->acc_m_s2, p->acc_m_s2), sp->t_s, p->state, sp->state, p->flags,
-                sp->flags, norm3(p->acc_m_s2), norm3(sp->acc_m_s2));
+                dist3(sp->acc_m_s2, p->acc_m_s2), sp->t_s, p->state, sp->state, p->flags, sp->flags,
+                norm3(p->acc_m_s2), norm3(sp->acc_m_s2));
     /* not into FINISHED: a REST end is reached with the curve's own k'' != 0
      * and the rest sets 0 (the end condition's step, not the scaling's) */
     if (sp->state != ENGINE_STATE_FINISHED)
@@ -255,8 +255,8 @@ static void test_property_random_stalls(void **state)
         assert_int_equal(st.hard_stops, 0);
         assert_true(ck.horner_max < TOL_HORNER_M);
         if (ck.dv_max > acc_lim * T_S * SLACK || ck.da_max > jerk_lim * T_S * SLACK)
-            fail_msg("run %d: dv/T %.3f (limit %.3f), da/T %.3f (limit %.3f)", run,
-                     ck.dv_max / T_S, acc_lim, ck.da_max / T_S, jerk_lim);
+            fail_msg("run %d: dv/T %.3f (limit %.3f), da/T %.3f (limit %.3f)", run, ck.dv_max / T_S,
+                     acc_lim, ck.da_max / T_S, jerk_lim);
         worst_dv = fmax(worst_dv, ck.dv_max / T_S / acc_lim);
         worst_da = fmax(worst_da, ck.da_max / T_S / jerk_lim);
         scaled += ck.scaled;
@@ -322,7 +322,8 @@ static void test_stop_now_distance(void **state)
         } while (sp.state != ENGINE_STATE_FINISHED);
         double bound = v0 * v0 / (2 * a) + v0 * a / (2 * j) + v0 * T_S;
         print_message("a %4.1f j %5.1f: stopped in %.3f m (%d ticks), bound %.3f m, "
-                      "v^2/2a %.3f m\n", a, j, path, ticks, bound, v0 * v0 / (2 * a));
+                      "v^2/2a %.3f m\n",
+                      a, j, path, ticks, bound, v0 * v0 / (2 * a));
         assert_true(path <= bound);
         assert_true(path >= v0 * v0 / (2 * a));
         assert_true(fabs(dist3(sp.pos_m, start) - path) < 1e-6); /* straight on */
@@ -380,8 +381,14 @@ static void test_override_same_path(void **state)
     for (int i = 0; i < N; i++)
         assert_int_equal(engine_push(e, &wp[i]), 0);
     engine_finish(e);
-    static const struct { int64_t at; double ov; } plan[] = {
-        {1000, 0.5}, {3000, 2.0}, {5000, 0.0}, {7000, 1.0},
+    static const struct {
+        int64_t at;
+        double ov;
+    } plan[] = {
+        {1000, 0.5},
+        {3000, 2.0},
+        {5000, 0.0},
+        {7000, 1.0},
     };
     engine_setpoint_t sp, p;
     memset(&p, 0, sizeof p);
@@ -414,8 +421,8 @@ static void test_override_same_path(void **state)
     assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
     assert_true(dist3(sp.pos_m, wp[N - 1].pos_m) < 1e-9);
     assert_true(ck.horner_max < TOL_HORNER_M);
-    print_message("override: dv/T %.3f (limit %.3f), da/T %.3f (limit %.3f)\n",
-                  ck.dv_max / T_S, acc_lim, ck.da_max / T_S, jerk_lim);
+    print_message("override: dv/T %.3f (limit %.3f), da/T %.3f (limit %.3f)\n", ck.dv_max / T_S,
+                  acc_lim, ck.da_max / T_S, jerk_lim);
     assert_true(ck.dv_max <= acc_lim * T_S * SLACK);
     assert_true(ck.da_max <= jerk_lim * T_S * SLACK);
     engine_free(e);

@@ -16,8 +16,8 @@
 #define VISNJAN_GPX "tests/data/gpxgo_visnjan.gpx"
 #define VISNJAN_N 413 /* tests/data/ATTRIBUTION.md */
 
-static int parse(const char *name, const char *text, track_format_t fmt,
-                 unsigned flags, track_t *t, char *err, size_t errlen)
+static int parse(const char *name, const char *text, track_format_t fmt, unsigned flags, track_t *t,
+                 char *err, size_t errlen)
 {
     return track_parse(name, text, strlen(text), fmt, flags, t, err, errlen);
 }
@@ -61,15 +61,14 @@ static void test_visnjan_gpx_equals_csv(void **state)
 static void test_csv_xyz_comments(void **state)
 {
     (void)state;
-    const char *text =
-        "# a comment before the header\r\n"
-        "\r\n"
-        "label, z_m ,t,x,y\r\n"
-        "a,3,0.5,1,2\r\n"
-        "   # indented comment\n"
-        "\n"
-        "b,nan,1.5,4,5\n"
-        "c,,2.5,-1e3,6.25"; /* no final newline, empty z */
+    const char *text = "# a comment before the header\r\n"
+                       "\r\n"
+                       "label, z_m ,t,x,y\r\n"
+                       "a,3,0.5,1,2\r\n"
+                       "   # indented comment\n"
+                       "\n"
+                       "b,nan,1.5,4,5\n"
+                       "c,,2.5,-1e3,6.25"; /* no final newline, empty z */
     track_t t;
     char err[256];
     assert_int_equal(parse("mem.csv", text, TRACK_FMT_AUTO, 0, &t, err, sizeof err), 0);
@@ -93,12 +92,14 @@ static void test_csv_optional_columns(void **state)
     (void)state;
     track_t t;
     char err[256];
-    assert_int_equal(parse("m", "t,x,y\n0,1,2\n1,3,4\n", TRACK_FMT_AUTO, 0, &t, err, sizeof err), 0);
+    assert_int_equal(parse("m", "t,x,y\n0,1,2\n1,3,4\n", TRACK_FMT_AUTO, 0, &t, err, sizeof err),
+                     0);
     assert_int_equal(t.n, 2);
     assert_true(fabs(t.wp[1].pos_m[2]) < 1e-300);
     track_free(&t);
-    assert_int_equal(parse("m", "t,lat,lon\n0,45,13\n1,45.001,13.001\n", TRACK_FMT_AUTO, 0,
-                           &t, err, sizeof err), 0);
+    assert_int_equal(
+        parse("m", "t,lat,lon\n0,45,13\n1,45.001,13.001\n", TRACK_FMT_AUTO, 0, &t, err, sizeof err),
+        0);
     assert_int_equal(t.format, TRACK_FMT_LATLON);
     assert_int_equal(t.n, 2);
     assert_true(fabs(t.wp[1].pos_m[2]) < 1e-300); /* no altitude: up = 0 exactly */
@@ -114,7 +115,8 @@ static void test_csv_positional(void **state)
     (void)state;
     track_t t;
     char err[256];
-    assert_int_equal(parse("p.csv", "0,1,2,3\n1,2,3,4\n", TRACK_FMT_XYZ, 0, &t, err, sizeof err), 0);
+    assert_int_equal(parse("p.csv", "0,1,2,3\n1,2,3,4\n", TRACK_FMT_XYZ, 0, &t, err, sizeof err),
+                     0);
     assert_int_equal(t.n, 2);
     assert_true(fabs(t.wp[1].pos_m[2] - 4) < 1e-15);
     track_free(&t);
@@ -136,10 +138,12 @@ static void test_csv_latlon_origin(void **state)
     (void)state;
     track_t t;
     char err[256];
-    assert_int_equal(parse("v", "t_s,lat_deg,lon_deg,alt_m\n"
-                                "0,45.273245,13.715185,271\n"
-                                "15,45.273178,13.715221,258\n",
-                           TRACK_FMT_LATLON, 0, &t, err, sizeof err), 0);
+    assert_int_equal(parse("v",
+                           "t_s,lat_deg,lon_deg,alt_m\n"
+                           "0,45.273245,13.715185,271\n"
+                           "15,45.273178,13.715221,258\n",
+                           TRACK_FMT_LATLON, 0, &t, err, sizeof err),
+                     0);
     geo_enu_t f;
     double enu[3];
     assert_int_equal(geo_enu_init(45.273245, 13.715185, 271, &f), 0);
@@ -179,7 +183,8 @@ static void test_csv_errors(void **state)
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         track_t t;
         char err[256];
-        assert_int_equal(parse("bad.csv", cases[i].text, TRACK_FMT_AUTO, 0, &t, err, sizeof err), -1);
+        assert_int_equal(parse("bad.csv", cases[i].text, TRACK_FMT_AUTO, 0, &t, err, sizeof err),
+                         -1);
         if (!strstr(err, cases[i].want))
             fail_msg("case %zu: got '%s', want '%s'", i, err, cases[i].want);
         assert_int_equal(t.n, 0);
@@ -192,9 +197,11 @@ static void test_csv_wrong_format(void **state)
     (void)state;
     track_t t;
     char err[256];
-    assert_int_equal(parse("w.csv", "t,lat,lon\n0,1,2\n", TRACK_FMT_XYZ, 0, &t, err, sizeof err), -1);
+    assert_int_equal(parse("w.csv", "t,lat,lon\n0,1,2\n", TRACK_FMT_XYZ, 0, &t, err, sizeof err),
+                     -1);
     assert_non_null(strstr(err, "w.csv:1: header has no x and y columns (it has lat/lon"));
-    assert_int_equal(parse("w.csv", "t,x,y\n0,1,2\n", TRACK_FMT_LATLON, 0, &t, err, sizeof err), -1);
+    assert_int_equal(parse("w.csv", "t,x,y\n0,1,2\n", TRACK_FMT_LATLON, 0, &t, err, sizeof err),
+                     -1);
     assert_non_null(strstr(err, "w.csv:1: header has no lat and lon columns"));
 }
 
@@ -218,8 +225,8 @@ static void test_csv_skip_bad(void **state)
     assert_int_equal(t.line[1], 5);
     assert_int_equal(t.wp[1].seq, 2);
     track_free(&t);
-    assert_int_equal(parse("s.csv", "t,x,y\nq,1,2\n", TRACK_FMT_AUTO, TRACK_SKIP_BAD, &t, err,
-                           sizeof err), -1);
+    assert_int_equal(
+        parse("s.csv", "t,x,y\nq,1,2\n", TRACK_FMT_AUTO, TRACK_SKIP_BAD, &t, err, sizeof err), -1);
     assert_non_null(strstr(err, "every data line was bad"));
 }
 
@@ -229,8 +236,9 @@ static void test_rows_kept_as_recorded(void **state)
     (void)state;
     track_t t;
     char err[256];
-    assert_int_equal(parse("k", "t,x,y\n0,0,0\n1,1,1\n1,1,1\n0.5,2,2\n", TRACK_FMT_AUTO, 0, &t,
-                           err, sizeof err), 0);
+    assert_int_equal(
+        parse("k", "t,x,y\n0,0,0\n1,1,1\n1,1,1\n0.5,2,2\n", TRACK_FMT_AUTO, 0, &t, err, sizeof err),
+        0);
     assert_int_equal(t.n, 4);
     assert_true(t.wp[3].t_s < t.wp[2].t_s);
     track_free(&t);
@@ -248,7 +256,8 @@ static const char gpx_two_segs[] =
     "<extensions><time>1999-01-01T00:00:00Z</time><ele>5</ele></extensions></trkpt>\n"
     "</trkseg>\n"
     "<trkseg>\n"
-    "<trkpt lon=\"13.0\" lat=\"45.0002\"><ele>101.5</ele><time>2020-03-01T01:00:01+01:00</time></trkpt>\n"
+    "<trkpt lon=\"13.0\" "
+    "lat=\"45.0002\"><ele>101.5</ele><time>2020-03-01T01:00:01+01:00</time></trkpt>\n"
     "</trkseg></trk></gpx>\n";
 
 /* Given GPX with wpt/rte, two trkseg, fractional seconds, a leap day, a
@@ -264,8 +273,8 @@ static void test_gpx_segments_times(void **state)
     assert_int_equal(t.segments, 2);
     assert_true(fabs(t.wp[0].t_s) < 1e-300);
     assert_true(fabs(t.wp[1].t_s - 0.75) < 1e-12);
-    assert_true(fabs(t.wp[2].t_s - 1.5) < 1e-12); /* 01:00:01+01:00 = 00:00:01Z */
-    assert_true(fabs(t.wp[1].pos_m[2]) < 1e-300); /* no <ele>: up = 0 */
+    assert_true(fabs(t.wp[2].t_s - 1.5) < 1e-12);                  /* 01:00:01+01:00 = 00:00:01Z */
+    assert_true(fabs(t.wp[1].pos_m[2]) < 1e-300);                  /* no <ele>: up = 0 */
     assert_true(t.wp[1].pos_m[1] > 11 && t.wp[1].pos_m[1] < 11.2); /* 0.0001 deg ~ 11.1 m */
     assert_true(t.wp[2].pos_m[2] > 1.49 && t.wp[2].pos_m[2] < 1.51);
     assert_int_equal(t.line[0], 7);
@@ -289,12 +298,12 @@ static void test_gpx_truncated(void **state)
     }
     track_t t;
     char err[256];
-    assert_int_equal(track_parse("cut.gpx", gpx_two_segs, len - 1, TRACK_FMT_AUTO, 0, &t, err,
-                                 sizeof err), 0);
+    assert_int_equal(
+        track_parse("cut.gpx", gpx_two_segs, len - 1, TRACK_FMT_AUTO, 0, &t, err, sizeof err), 0);
     assert_int_equal(t.n, 3);
     track_free(&t);
-    assert_int_equal(track_parse("cut.gpx", gpx_two_segs, 300, TRACK_FMT_AUTO, 0, &t, err,
-                                 sizeof err), -1);
+    assert_int_equal(
+        track_parse("cut.gpx", gpx_two_segs, 300, TRACK_FMT_AUTO, 0, &t, err, sizeof err), -1);
     assert_non_null(strstr(err, "XML error"));
 }
 
@@ -306,18 +315,23 @@ static void test_gpx_errors(void **state)
         {"<gpx><trk><trkseg>\n<trkpt lat=\"1\" lon=\"2\"></trkpt></trkseg></trk></gpx>",
          "e.gpx:2: trkpt without <time>"},
         {"<gpx><trk><trkseg>\n<trkpt lat=\"1\"><time>2000-01-01T00:00:00Z</time></trkpt>"
-         "</trkseg></trk></gpx>", "e.gpx:2: trkpt without lat or lon"},
+         "</trkseg></trk></gpx>",
+         "e.gpx:2: trkpt without lat or lon"},
         {"<gpx><trk><trkseg>\n<trkpt lat=\"x\" lon=\"2\"><time>2000-01-01T00:00:00Z</time>"
-         "</trkpt></trkseg></trk></gpx>", "e.gpx:2: trkpt lat 'x'"},
+         "</trkpt></trkseg></trk></gpx>",
+         "e.gpx:2: trkpt lat 'x'"},
         {"<gpx><trk><trkseg>\n<trkpt lat=\"1\" lon=\"2\">\n<time>yesterday</time></trkpt>"
-         "</trkseg></trk></gpx>", "e.gpx:3: <time> 'yesterday' is not an ISO 8601"},
+         "</trkseg></trk></gpx>",
+         "e.gpx:3: <time> 'yesterday' is not an ISO 8601"},
         {"<gpx><trk><trkseg>\n<trkpt lat=\"1\" lon=\"2\">\n<ele>high</ele>"
          "<time>2000-01-01T00:00:00Z</time></trkpt></trkseg></trk></gpx>",
          "e.gpx:3: <ele> 'high' is not a number"},
         {"<gpx><trk><trkseg>\n<trkpt lat=\"95\" lon=\"2\"><time>2000-01-01T00:00:00Z</time>"
-         "</trkpt></trkseg></trk></gpx>", "e.gpx:2: latitude outside"},
+         "</trkpt></trkseg></trk></gpx>",
+         "e.gpx:2: latitude outside"},
         {"<gpx><trk><trkseg>\n<trkpt lat=\"1\" lon=\"2\"><time>2000-01-01T00:00:00Z</time>"
-         "</trkpt></trkseg></trk>\n<oops></gpx>", "e.gpx:3: XML error: mismatched tag"},
+         "</trkpt></trkseg></trk>\n<oops></gpx>",
+         "e.gpx:3: XML error: mismatched tag"},
         {"<gpx></gpx>", "e.gpx: no waypoints"},
         {"not xml at all", "e.gpx:1: XML error: syntax error"},
     };
@@ -334,12 +348,11 @@ static void test_gpx_errors(void **state)
 static void test_gpx_skip_bad(void **state)
 {
     (void)state;
-    const char *text =
-        "<gpx><trk><trkseg>\n"
-        "<trkpt lat=\"1\" lon=\"2\"><time>2000-01-01T00:00:00Z</time></trkpt>\n"
-        "<trkpt lat=\"1\" lon=\"2\"><time>never</time><ele>x</ele></trkpt>\n"
-        "<trkpt lat=\"1.1\" lon=\"2\"><time>2000-01-01T00:00:09Z</time></trkpt>\n"
-        "</trkseg></trk></gpx>";
+    const char *text = "<gpx><trk><trkseg>\n"
+                       "<trkpt lat=\"1\" lon=\"2\"><time>2000-01-01T00:00:00Z</time></trkpt>\n"
+                       "<trkpt lat=\"1\" lon=\"2\"><time>never</time><ele>x</ele></trkpt>\n"
+                       "<trkpt lat=\"1.1\" lon=\"2\"><time>2000-01-01T00:00:09Z</time></trkpt>\n"
+                       "</trkseg></trk></gpx>";
     track_t t;
     char err[256];
     assert_int_equal(parse("s.gpx", text, TRACK_FMT_GPX, TRACK_SKIP_BAD, &t, err, sizeof err), 0);
@@ -365,11 +378,16 @@ static void test_iso8601(void **state)
         seed = seed * 1103515245u + 12345u;
         int mo = 1 + (int)((seed >> 8) % 12), d = 1 + (int)((seed >> 12) % 28);
         seed = seed * 1103515245u + 12345u;
-        int h = (int)((seed >> 8) % 24), mi = (int)((seed >> 14) % 60), se = (int)((seed >> 20) % 60);
+        int h = (int)((seed >> 8) % 24), mi = (int)((seed >> 14) % 60),
+            se = (int)((seed >> 20) % 60);
         char buf[64];
         snprintf(buf, sizeof buf, "%04d-%02d-%02dT%02d:%02d:%02dZ", y, mo, d, h, mi, se);
-        struct tm tm = {.tm_year = y - 1900, .tm_mon = mo - 1, .tm_mday = d,
-                        .tm_hour = h, .tm_min = mi, .tm_sec = se};
+        struct tm tm = {.tm_year = y - 1900,
+                        .tm_mon = mo - 1,
+                        .tm_mday = d,
+                        .tm_hour = h,
+                        .tm_min = mi,
+                        .tm_sec = se};
         assert_int_equal(track_parse_iso8601(buf, &s, &fr), 0);
         assert_int_equal(s, (int64_t)timegm(&tm));
         assert_true(fr < 1e-300);
@@ -386,9 +404,16 @@ static void test_iso8601(void **state)
      * Python's calendar.timegm give 951825600), 1900 is not */
     assert_int_equal(track_parse_iso8601("2000-02-29T12:00:00Z", &s, &fr), 0);
     assert_int_equal(s, 951825600);
-    const char *bad[] = {"", "2014-08-22", "2014-13-01T00:00:00Z", "2014-02-30T00:00:00Z",
-                         "2019-02-29T00:00:00Z", "1900-02-29T00:00:00Z", "2014-08-22T25:00:00Z",
-                         "2014-08-22T16:48:52.Z", "2014-08-22T16:48:52Zjunk", "20140822T164852Z",
+    const char *bad[] = {"",
+                         "2014-08-22",
+                         "2014-13-01T00:00:00Z",
+                         "2014-02-30T00:00:00Z",
+                         "2019-02-29T00:00:00Z",
+                         "1900-02-29T00:00:00Z",
+                         "2014-08-22T25:00:00Z",
+                         "2014-08-22T16:48:52.Z",
+                         "2014-08-22T16:48:52Zjunk",
+                         "20140822T164852Z",
                          "2014-08-22T16:48"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
         assert_int_equal(track_parse_iso8601(bad[i], &s, &fr), -1);
@@ -435,7 +460,8 @@ static void test_garbage(void **state)
             track_t t;
             char err[128];
             for (unsigned flags = 0; flags <= TRACK_SKIP_BAD; flags++) {
-                int rc = track_parse("g", buf, len, (track_format_t)fmt, flags, &t, err, sizeof err);
+                int rc = track_parse("g", buf, len, (track_format_t)fmt, flags, &t, err,
+                                     sizeof err);
                 assert_true(rc == 0 || rc == -1);
                 if (rc == 0) {
                     assert_true(t.n > 0);
@@ -454,11 +480,12 @@ static void test_garbage(void **state)
     memcpy(buf, "t,x,y\n0,1,2\n", 12);
     track_t t;
     char err[128];
-    assert_int_equal(track_parse("long", buf, sizeof buf, TRACK_FMT_AUTO, 0, &t, err, sizeof err), -1);
+    assert_int_equal(track_parse("long", buf, sizeof buf, TRACK_FMT_AUTO, 0, &t, err, sizeof err),
+                     -1);
     assert_non_null(strstr(err, "long:3: line longer than"));
     /* A NUL byte inside a data line. */
-    assert_int_equal(track_parse("nul", "t,x,y\n0,1\0,2\n", 13, TRACK_FMT_AUTO, 0, &t, err,
-                                 sizeof err), -1);
+    assert_int_equal(
+        track_parse("nul", "t,x,y\n0,1\0,2\n", 13, TRACK_FMT_AUTO, 0, &t, err, sizeof err), -1);
     assert_non_null(strstr(err, "nul:2: NUL byte"));
 }
 
@@ -477,7 +504,10 @@ static void test_missing_file(void **state)
 static void test_real_tracks(void **state)
 {
     (void)state;
-    const struct { const char *path; size_t n; } tr[] = {
+    const struct {
+        const char *path;
+        size_t n;
+    } tr[] = {
         {"tests/data/gpxpy_cerknicko-jezero.csv", 296},
         {"tests/data/n2k_furuno_figure8_src52.csv", 1786},
     };
@@ -494,8 +524,9 @@ static void test_real_tracks(void **state)
      * tests/oracle/test_n2k_candump.py by an independent decode). */
     track_t t;
     char err[256];
-    assert_int_equal(track_load("tests/data/canboat_candumpSample3.log", TRACK_FMT_AUTO, &t, err,
-                                sizeof err), 0);
+    assert_int_equal(
+        track_load("tests/data/canboat_candumpSample3.log", TRACK_FMT_AUTO, &t, err, sizeof err),
+        0);
     assert_int_equal(t.format, TRACK_FMT_N2K);
     assert_int_equal(t.n, 165);
     assert_true(t.geographic);
@@ -533,7 +564,8 @@ static void test_path_errors_have_lines(void **state)
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         track_t t;
         char err[256];
-        assert_int_equal(parse("p.path", cases[i].text, TRACK_FMT_AUTO, 0, &t, err, sizeof err), -1);
+        assert_int_equal(parse("p.path", cases[i].text, TRACK_FMT_AUTO, 0, &t, err, sizeof err),
+                         -1);
         if (!strstr(err, cases[i].want))
             fail_msg("case %zu: got '%s', want '%s'", i, err, cases[i].want);
         assert_int_equal(t.n, 0);
@@ -547,7 +579,8 @@ static void test_path_lines(void **state)
     track_t t;
     char err[256];
     assert_int_equal(parse("p.path", "start 0 0 0\n# c\nline 2 0 0\nwait 1\n", TRACK_FMT_AUTO, 0,
-                           &t, err, sizeof err), 0);
+                           &t, err, sizeof err),
+                     0);
     assert_int_equal(t.n, 4);
     assert_int_equal(t.line[0], 1);
     assert_int_equal(t.line[1], 3);

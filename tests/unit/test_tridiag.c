@@ -31,8 +31,7 @@ static void test_solve_matches_gsl(void **state)
     assert_int_equal(tridiag_solve(N, 3, a, b, c, d, x, scratch), 0);
 
     gsl_vector *gd = gsl_vector_alloc(N), *ge = gsl_vector_alloc(N - 1),
-               *gf = gsl_vector_alloc(N - 1), *gb = gsl_vector_alloc(N),
-               *gx = gsl_vector_alloc(N);
+               *gf = gsl_vector_alloc(N - 1), *gb = gsl_vector_alloc(N), *gx = gsl_vector_alloc(N);
     for (i = 0; i < N; i++) {
         gsl_vector_set(gd, i, b[i]);
         if (i < N - 1) {
@@ -47,8 +46,11 @@ static void test_solve_matches_gsl(void **state)
         for (i = 0; i < N; i++)
             assert_true(fabs(gsl_vector_get(gx, i) - x[i * 3 + k]) < TOL);
     }
-    gsl_vector_free(gd); gsl_vector_free(ge); gsl_vector_free(gf);
-    gsl_vector_free(gb); gsl_vector_free(gx);
+    gsl_vector_free(gd);
+    gsl_vector_free(ge);
+    gsl_vector_free(gf);
+    gsl_vector_free(gb);
+    gsl_vector_free(gx);
 }
 
 /* Given the 1-4-1 system, when rows are pushed one by one, then the result
@@ -61,7 +63,10 @@ static void test_sweep_equals_whole(void **state)
     int i;
 
     for (i = 0; i < 50; i++) {
-        a[i] = 1; b[i] = 4; c[i] = 1; d[i] = sin(i * 0.3) * 10;
+        a[i] = 1;
+        b[i] = 4;
+        c[i] = 1;
+        d[i] = sin(i * 0.3) * 10;
     }
     assert_int_equal(tridiag_solve(50, 1, a, b, c, d, x1, s1), 0);
     tridiag_sweep_init(&sw, cp, dp, 50, 1);
