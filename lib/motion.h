@@ -8,6 +8,9 @@
  */
 #ifndef TRAJD_MOTION_H
 #define TRAJD_MOTION_H
+/* The #define tables are read by the tests (tests/helpers/mbsim.py,
+ * tests/oracle/test_trajreplay.py) one line each: kept as written. */
+/* clang-format off */
 
 #include <stdint.h>
 
@@ -16,20 +19,20 @@
 
 enum engine_error {
     ENGINE_OK = 0,
-    ENGINE_ENOTFINITE = 1, /* NaN or infinite time or coordinate */
-    ENGINE_ERANGE = 2,     /* |coordinate| above max_abs_m or |t| absurd */
-    ENGINE_EBACKWARDS = 3, /* timestamp earlier than the previous waypoint */
-    ENGINE_ESAMETIME = 4,  /* same timestamp, different position */
-    ENGINE_ESPEED = 5,     /* implied speed from the previous waypoint above max_speed_m_s */
-    ENGINE_EFULL = 6,      /* waypoint buffer full: sender must wait (flow control) */
-    ENGINE_ECONFIG = 7,    /* invalid configuration */
-    ENGINE_ENOMEM = 8,     /* engine_new could not allocate */
-    ENGINE_ESTATE = 9,     /* call not valid in this state */
-    ENGINE_ENUMERIC = 10,  /* solver failed (singular system); waypoint rejected */
-    ENGINE_EACCEL = 11, /* implied acceleration from the last two waypoints above max_accel_m_s2 */
+    ENGINE_ENOTFINITE = 1,  /* NaN or infinite time or coordinate */
+    ENGINE_ERANGE = 2,      /* |coordinate| above max_abs_m or |t| absurd */
+    ENGINE_EBACKWARDS = 3,  /* timestamp earlier than the previous waypoint */
+    ENGINE_ESAMETIME = 4,   /* same timestamp, different position */
+    ENGINE_ESPEED = 5,      /* implied speed from the previous waypoint above max_speed_m_s */
+    ENGINE_EFULL = 6,       /* waypoint buffer full: sender must wait (flow control) */
+    ENGINE_ECONFIG = 7,     /* invalid configuration */
+    ENGINE_ENOMEM = 8,      /* engine_new could not allocate */
+    ENGINE_ESTATE = 9,      /* call not valid in this state */
+    ENGINE_ENUMERIC = 10,   /* solver failed (singular system); waypoint rejected */
+    ENGINE_EACCEL = 11,     /* implied acceleration from the last two waypoints above max_accel_m_s2 */
     ENGINE_EUNCONFIRMED = 12, /* far from the trajectory in time or space (or at odds with its
                                  neighbours) and not confirmed by `confirm` consistent waypoints */
-    ENGINE_ESTALE = 13, /* repeats the last position while the object was moving: a frozen fix */
+    ENGINE_ESTALE = 13,     /* repeats the last position while the object was moving: a frozen fix */
     ENGINE_ERROR_COUNT
 };
 
@@ -40,17 +43,17 @@ enum engine_error {
 const char *engine_strerror(int err);
 
 typedef struct {
-    double t_s;                /* waypoint time, seconds, sender's track clock */
-    double pos_m[ENGINE_AXES]; /* x, y, z (east, north, up for geographic input), metres */
-    uint32_t seq;              /* transport sequence number (0 if none) */
+    double t_s;                  /* waypoint time, seconds, sender's track clock */
+    double pos_m[ENGINE_AXES];   /* x, y, z (east, north, up for geographic input), metres */
+    uint32_t seq;                /* transport sequence number (0 if none) */
 } engine_waypoint_t;
 
 /* A waypoint the engine refused, as reported by engine_rejection_next: the
  * verdict on a waypoint may come a few waypoints after it was pushed (it is
  * judged with its neighbours), so the caller learns it here. */
 typedef struct {
-    uint32_t seq; /* the waypoint's seq as pushed */
-    int reason;   /* engine_error (positive) */
+    uint32_t seq;                /* the waypoint's seq as pushed */
+    int reason;                  /* engine_error (positive) */
     double t_s;
     double pos_m[ENGINE_AXES];
 } engine_rejection_t;
@@ -66,58 +69,56 @@ typedef enum {
 const char *engine_state_name(engine_state_t s);
 
 /* Setpoint flags. */
-#define ENGINE_SP_HOLD 0x01u      /* position held (waiting, underrun, finished) */
+#define ENGINE_SP_HOLD      0x01u /* position held (waiting, underrun, finished) */
 #define ENGINE_SP_NEW_TRACK 0x02u /* first setpoint of a new trajectory (after a gap or clear) */
-#define ENGINE_SP_SKIPPED                                                                          \
-    0x04u                        /* ticks were skipped before this one (trajd: missed
+#define ENGINE_SP_SKIPPED   0x04u /* ticks were skipped before this one (trajd: missed
                                          deadlines; trajreplay: a gap not written) */
-#define ENGINE_SP_TRANSFER 0x08u /* rest-to-rest transfer to a new trajectory's start */
+#define ENGINE_SP_TRANSFER  0x08u /* rest-to-rest transfer to a new trajectory's start */
 /* No valid position exists yet (nothing received, or a required position not
  * yet given): pos_m[] is NaN and is NOT a setpoint.  A subscriber must not
  * move; CiA 402 RPDOs are not sent at all while it is set. */
 #define ENGINE_SP_NO_POSITION 0x10u
 /* The safety monitor (lib/safety/safety.h) refused the engine's setpoint:
  * this one holds the last position sent, and the object is faulted. */
-#define ENGINE_SP_FAULT 0x20u
-#define ENGINE_SP_SCALED                                                                           \
-    0x40u /* time-scaled: the output runs along the curve at a
+#define ENGINE_SP_FAULT       0x20u
+#define ENGINE_SP_SCALED    0x40u /* time-scaled: the output runs along the curve at a
                                      rate other than 1 (stop, clear, underrun, override) */
 
 typedef struct {
-    int64_t now_ns; /* the tick this setpoint is for (as passed in) */
-    double t_s;     /* track time of the setpoint (sender's clock) */
+    int64_t now_ns;                 /* the tick this setpoint is for (as passed in) */
+    double t_s;                     /* track time of the setpoint (sender's clock) */
     double pos_m[ENGINE_AXES];
     double vel_m_s[ENGINE_AXES];
     double acc_m_s2[ENGINE_AXES];
     engine_state_t state;
-    uint32_t flags; /* ENGINE_SP_* */
-    uint32_t cycle; /* tick counter, wraps */
-    uint32_t track; /* trajectory number, +1 at each new trajectory */
+    uint32_t flags;                 /* ENGINE_SP_* */
+    uint32_t cycle;                 /* tick counter, wraps */
+    uint32_t track;                 /* trajectory number, +1 at each new trajectory */
 } engine_setpoint_t;
 
 typedef struct {
     engine_state_t state;
-    uint32_t last_seq;  /* seq of the last accepted waypoint */
-    uint32_t buffered;  /* waypoints held, not yet passed by the output */
-    uint32_t free;      /* waypoints that can still be pushed */
-    uint32_t lookahead; /* waypoints needed ahead of the output (from F, O) */
-    double ahead_s;     /* track time buffered ahead of the output */
+    uint32_t last_seq;              /* seq of the last accepted waypoint */
+    uint32_t buffered;              /* waypoints held, not yet passed by the output */
+    uint32_t free;                  /* waypoints that can still be pushed */
+    uint32_t lookahead;             /* waypoints needed ahead of the output (from F, O) */
+    double ahead_s;                 /* track time buffered ahead of the output */
     uint64_t accepted;
     uint64_t duplicates;
-    uint64_t rejected;                        /* sum of rejected_by[]: bad data only (not EFULL) */
+    uint64_t rejected;              /* sum of rejected_by[]: bad data only (not EFULL) */
     uint64_t rejected_by[ENGINE_ERROR_COUNT]; /* per engine_error */
-    uint64_t underruns;                       /* transitions into UNDERRUN */
-    uint64_t underrun_ticks;                  /* ticks spent in UNDERRUN */
-    uint64_t skipped_ticks;                   /* ticks stepped over (caller late) */
-    uint64_t gaps;                            /* trajectories ended by a gap */
-    uint64_t tracks;                          /* trajectories started */
-    uint64_t setpoints;                       /* ticks answered */
-    uint64_t full;                            /* offers refused with ENGINE_EFULL: flow control, the
+    uint64_t underruns;             /* transitions into UNDERRUN */
+    uint64_t underrun_ticks;        /* ticks spent in UNDERRUN */
+    uint64_t skipped_ticks;         /* ticks stepped over (caller late) */
+    uint64_t gaps;                  /* trajectories ended by a gap */
+    uint64_t tracks;                /* trajectories started */
+    uint64_t setpoints;             /* ticks answered */
+    uint64_t full;                  /* offers refused with ENGINE_EFULL: flow control, the
                                      * sender retries; not in rejected */
-    uint32_t stalled;                         /* 1: holding, and nothing can change before the next
+    uint32_t stalled;               /* 1: holding, and nothing can change before the next
                                      * waypoint is pushed (ticks until then are identical
                                      * holds: trajreplay skips them across a gap) */
-    uint64_t hard_stops;                      /* the solved curve ended under a moving output
+    uint64_t hard_stops;            /* the solved curve ended under a moving output
                                        (the time scaling failed to brake in time):
                                        velocity set to 0 in one tick.  Should stay 0 */
     double rate;                    /* time-scaling rate ds/dt of the output (1 = as solved) */
@@ -133,4 +134,5 @@ typedef struct {
                                      * (judged with their neighbours: at most 8) */
 } engine_status_t;
 
+/* clang-format on */
 #endif

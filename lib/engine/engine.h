@@ -73,6 +73,9 @@
  */
 #ifndef TRAJD_ENGINE_H
 #define TRAJD_ENGINE_H
+/* The #define tables are read by the tests (tests/helpers/mbsim.py,
+ * tests/oracle/test_trajreplay.py) one line each: kept as written. */
+/* clang-format off */
 
 #include <stddef.h>
 #include <stdint.h>
@@ -80,25 +83,27 @@
 #include "fdiff.h"
 #include "motion.h"
 
+
 /* Limits on the configuration (checked by engine_config_check). */
 #define ENGINE_FRAGMENT_MIN 4
 #define ENGINE_FRAGMENT_MAX 1024
-#define ENGINE_PERIOD_NS_MIN 100000LL     /* 10 kHz */
-#define ENGINE_PERIOD_NS_MAX 1000000000LL /* 1 Hz */
+#define ENGINE_PERIOD_NS_MIN 100000LL        /* 10 kHz */
+#define ENGINE_PERIOD_NS_MAX 1000000000LL    /* 1 Hz */
+
+
+
 
 typedef enum {
-    ENGINE_PARAM_UNIFORM =
-        0, /* (a) the paper: uniform B-spline, each segment mapped onto its time interval */
-    ENGINE_PARAM_TIME = 1, /* (b) knots at the timestamps: C2 in physical time */
+    ENGINE_PARAM_UNIFORM = 0, /* (a) the paper: uniform B-spline, each segment mapped onto its time interval */
+    ENGINE_PARAM_TIME = 1,    /* (b) knots at the timestamps: C2 in physical time */
 } engine_param_t;
 
 typedef enum {
-    ENGINE_ENDS_HELD = 0, /* the paper: P*(0)=R(0), P*(N-1)=R(N-1); curve spans R(1)..R(N-2) */
-    ENGINE_ENDS_MULTIPLE =
-        1, /* the paper: end points repeated twice more; loop segments never emitted */
-    ENGINE_ENDS_NATURAL = 2, /* zero second derivative at the ends */
-    ENGINE_ENDS_CLAMPED = 3, /* given start/end velocity (start_vel_m_s, end_vel_m_s) */
-    ENGINE_ENDS_REST = 4,    /* start and stop at rest: clamped with zero velocity */
+    ENGINE_ENDS_HELD = 0,     /* the paper: P*(0)=R(0), P*(N-1)=R(N-1); curve spans R(1)..R(N-2) */
+    ENGINE_ENDS_MULTIPLE = 1, /* the paper: end points repeated twice more; loop segments never emitted */
+    ENGINE_ENDS_NATURAL = 2,  /* zero second derivative at the ends */
+    ENGINE_ENDS_CLAMPED = 3,  /* given start/end velocity (start_vel_m_s, end_vel_m_s) */
+    ENGINE_ENDS_REST = 4,     /* start and stop at rest: clamped with zero velocity */
 } engine_ends_t;
 
 /*
@@ -154,34 +159,34 @@ typedef enum {
 #define ENGINE_SMOOTH_WINDOW_MAX 1024
 
 typedef struct {
-    engine_method_t method;            /* default CUBIC (see (b) above) */
-    engine_param_t param;              /* default TIME: C2 in physical time, see above */
-    engine_ends_t ends;                /* default REST: start and stop with zero velocity,
+    engine_method_t method; /* default CUBIC (see (b) above) */
+    engine_param_t param;   /* default TIME: C2 in physical time, see above */
+    engine_ends_t ends;     /* default REST: start and stop with zero velocity,
                                no velocity step when the output starts or stops */
     double start_vel_m_s[ENGINE_AXES]; /* ENGINE_ENDS_CLAMPED only (default 0) */
     double end_vel_m_s[ENGINE_AXES];   /* ENGINE_ENDS_CLAMPED only (default 0) */
-    unsigned fragment;                 /* F: waypoints per fragment.  Default 32 */
-    unsigned overlap;                  /* O: waypoints shared by consecutive fragments, even,
+    unsigned fragment;      /* F: waypoints per fragment.  Default 32 */
+    unsigned overlap;       /* O: waypoints shared by consecutive fragments, even,
                                2 <= O < F.  Default 16: error against one global
                                solve ~rho^(O/2) = 2.7e-5 of the curvature scale
                                (measured 4e-7 .. 7e-7 of a random walk's extent),
                                lookahead 32 waypoints with start_slack 8;
                                see lib/engine/README.md for the table */
-    int64_t period_ns;                 /* output period.  Default 10 ms (100 Hz) */
-    unsigned capacity;                 /* waypoints buffered at most (lookahead + fragment
+    int64_t period_ns;      /* output period.  Default 10 ms (100 Hz) */
+    unsigned capacity;      /* waypoints buffered at most (lookahead + fragment
                                + 8 .. 2^20; about 272 bytes each).  Default
                                4096: 68 min at 1 Hz, 1.1 MB */
-    double max_gap_s;                  /* a longer interval ends the trajectory at rest and
+    double max_gap_s;       /* a longer interval ends the trajectory at rest and
                                starts a new one.  Default 60 s */
-    double max_abs_m;                  /* |coordinate| above this is rejected.  Default 1e7 m
+    double max_abs_m;       /* |coordinate| above this is rejected.  Default 1e7 m
                                (beyond the Earth's radius from any ENU origin) */
-    engine_profile_t profile;          /* what kind of object: the limits below when
+    engine_profile_t profile; /* what kind of object: the limits below when
                                they are left at ENGINE_LIMIT_PROFILE, and the
                                rules (learned, stale).  Default AUTO */
-    double max_speed_m_s;              /* chord speed above this is refused (0 = no
+    double max_speed_m_s;   /* chord speed above this is refused (0 = no
                                limit, ENGINE_LIMIT_PROFILE = the profile's:
                                AUTO 400 m/s).  Default ENGINE_LIMIT_PROFILE */
-    double max_accel_m_s2;             /* implied acceleration above this is refused (0 =
+    double max_accel_m_s2;  /* implied acceleration above this is refused (0 =
                                no limit): the change of mean velocity over two
                                intervals, 2 |v2 - v1| / (dt1 + dt2).  Catches
                                timestamp jitter (a fix stamped late or early
@@ -195,20 +200,20 @@ typedef struct {
                                figure-8's jittered ones 117 and 44 (lib/engine/README.md
                                "Jitter and outliers").  Position noise alone
                                implies ~4 noise / dt^2 */
-    unsigned confirm;                  /* mutually consistent waypoints needed before a
+    unsigned confirm;       /* mutually consistent waypoints needed before a
                                waypoint far from the current trajectory (in
                                time, space or at odds with its neighbours)
                                abandons it for a new one, 1..8.  Default 3 */
-    double transfer_speed_m_s;         /* speed of the rest-to-rest transfers to a new
+    double transfer_speed_m_s; /* speed of the rest-to-rest transfers to a new
                                trajectory's start (after a gap, a re-anchor, a
                                clear); 0 = derived from the object's own recent
                                motion (transfer.h).  Default 0 */
-    double transfer_accel_m_s2;        /* their acceleration; 0 = derived.  Default 0 */
-    double max_segment_s;              /* longest segment the stepper is tested for
+    double transfer_accel_m_s2; /* their acceleration; 0 = derived.  Default 0 */
+    double max_segment_s;   /* longest segment the stepper is tested for
                                (informational: the stepper re-seeds every
                                FDIFF_RESEED_STEPS, so drift does not grow with
                                the segment).  Default 60 s (= max_gap_s) */
-    unsigned start_slack;              /* waypoints buffered beyond what the solver needs
+    unsigned start_slack;   /* waypoints buffered beyond what the solver needs
                                before the output starts, and again before it
                                resumes after an underrun: absorbs irregular
                                input timing (a missed fix, jitter, a pause) of
@@ -217,15 +222,15 @@ typedef struct {
                                Default 8 (measured: no underrun replaying the
                                irregular gpxgo_visnjan track with F=64/O=32;
                                2 were enough for the regular 5 Hz figure-8) */
-    unsigned smooth_window;            /* SMOOTH only: waypoints per local least-squares fit,
+    unsigned smooth_window; /* SMOOTH only: waypoints per local least-squares fit,
                                4 .. ENGINE_SMOOTH_WINDOW_MAX.  Default 24 */
-    unsigned smooth_ctrl;              /* SMOOTH only: control points per fit,
+    unsigned smooth_ctrl;   /* SMOOTH only: control points per fit,
                                4 .. smooth_window.  Default 6 */
-    double scale_accel_m_s2;           /* time scaling (timescale.h): the most it adds to
+    double scale_accel_m_s2; /* time scaling (timescale.h): the most it adds to
                                the acceleration along the path when it slows
                                down or speeds up (stop, clear, underrun, feed
                                override).  Default 5 m/s^2 */
-    double scale_jerk_m_s3;            /* ... and to the jerk.  Default 50 m/s^3: a stop
+    double scale_jerk_m_s3; /* ... and to the jerk.  Default 50 m/s^3: a stop
                                from v takes v^2/(2 a) + v a/(2 j) + v T (T the
                                period) of path, see lib/engine/TIMESCALE.md */
 } engine_config_t;
@@ -243,6 +248,7 @@ void engine_config_default(engine_config_t *cfg);
 double engine_config_max_speed(const engine_config_t *cfg);
 double engine_config_max_accel(const engine_config_t *cfg);
 
+
 /*
  * Check a configuration.  Returns 0 or -ENGINE_ECONFIG; if why is not NULL
  * it receives a static string naming the offending field and the rule (NULL
@@ -253,6 +259,11 @@ double engine_config_max_accel(const engine_config_t *cfg);
  * or capacity out of range, non-finite or non-positive limits.
  */
 int engine_config_check(const engine_config_t *cfg, const char **why);
+
+
+
+
+
 
 /* One engine per moving object; not thread-safe: push, tick and the commands
  * of one engine must come from one thread (or be serialised by the caller). */
@@ -394,6 +405,7 @@ void engine_status(const engine_t *e, engine_status_t *st);
  */
 unsigned engine_lookahead(const engine_config_t *cfg);
 
+
 /*
  * Offline: the curve the engine streams for a whole track, built by the same
  * code as engine_push/engine_finish (the queue drained after every push), as
@@ -403,8 +415,8 @@ unsigned engine_lookahead(const engine_config_t *cfg);
  * Returns 0, -ENGINE_ECONFIG (bad cfg, or more than max_seg segments),
  * -ENGINE_ENOMEM.  *nseg receives the number of segments written.
  */
-int engine_curve(const engine_config_t *cfg, const engine_waypoint_t *wp, size_t n,
-                 fdiff_seg_t *seg, size_t max_seg, size_t *nseg);
+int engine_curve(const engine_config_t *cfg, const engine_waypoint_t *wp,
+                 size_t n, fdiff_seg_t *seg, size_t max_seg, size_t *nseg);
 
 /*
  * engine_curve with flat arguments, for Python ctypes: the default
@@ -414,8 +426,9 @@ int engine_curve(const engine_config_t *cfg, const engine_waypoint_t *wp, size_t
  * xyz: n x 3; seg_out: max_seg x 14 doubles (t0_s, dur_s, then c[axis][0..3]
  * for x, y, z).  Returns the number of segments, or a negated engine_error.
  */
-long engine_curve_flat(int method, int param, int ends, unsigned fragment, unsigned overlap,
-                       size_t n, const double *t_s, const double *xyz, double *seg_out,
-                       size_t max_seg);
+long engine_curve_flat(int method, int param, int ends, unsigned fragment,
+                       unsigned overlap, size_t n, const double *t_s,
+                       const double *xyz, double *seg_out, size_t max_seg);
 
+/* clang-format on */
 #endif

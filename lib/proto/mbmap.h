@@ -33,25 +33,28 @@
  */
 #ifndef TRAJD_MBMAP_H
 #define TRAJD_MBMAP_H
+/* The #define tables are read by the tests (tests/helpers/mbsim.py,
+ * tests/oracle/test_trajreplay.py) one line each: kept as written. */
+/* clang-format off */
 
 #include <stddef.h>
 #include <stdint.h>
 #include "motion.h"
 
 #define MBMAP_VERSION 1
-#define MBMAP_MAGIC 0x7444u /* "tD": register 0, to recognise trajd */
+#define MBMAP_MAGIC 0x7444u          /* "tD": register 0, to recognise trajd */
 #define MBMAP_MAX_OBJECTS 64
-#define MBMAP_BLOCK 100 /* registers per block */
+#define MBMAP_BLOCK 100              /* registers per block */
 #define MBMAP_OBJ_BASE(k) (MBMAP_BLOCK * (1u + (unsigned)(k)))
 /* Registers in each table (input and holding) for n objects. */
 #define MBMAP_REGS(n) (MBMAP_BLOCK * (1u + (unsigned)(n)))
 
 /* Modbus protocol limits (Modbus Application Protocol V1.1b3, 6.3, 6.4, 6.12). */
-#define MBMAP_MAX_READ 125    /* registers per read (FC 03, 04) */
-#define MBMAP_MAX_WRITE 123   /* registers per write multiple (FC 16) */
-#define MBMAP_PDU_MAX 253     /* function code + data */
-#define MBMAP_TCP_ADU_MAX 260 /* MBAP (7) + PDU */
-#define MBMAP_RTU_ADU_MAX 256 /* address + PDU + CRC */
+#define MBMAP_MAX_READ 125           /* registers per read (FC 03, 04) */
+#define MBMAP_MAX_WRITE 123          /* registers per write multiple (FC 16) */
+#define MBMAP_PDU_MAX 253            /* function code + data */
+#define MBMAP_TCP_ADU_MAX 260        /* MBAP (7) + PDU */
+#define MBMAP_RTU_ADU_MAX 256        /* address + PDU + CRC */
 
 /* Function codes served; every other one is answered with exception 01. */
 #define MBMAP_FC_READ_HOLDING 0x03
@@ -60,92 +63,90 @@
 #define MBMAP_FC_WRITE_MULTIPLE 0x10
 
 /* ---- daemon block, input registers (absolute addresses) ---------------- */
-#define MBMAP_D_MAGIC 0   /* u16 MBMAP_MAGIC */
-#define MBMAP_D_VERSION 1 /* u16 MBMAP_VERSION */
-#define MBMAP_D_OBJECTS 2 /* u16 number of objects */
-#define MBMAP_D_WRITES 3  /* u16 1 if writes are enabled */
-#define MBMAP_D_GEN                                                                                \
-    4 /* u32 snapshot generation (+1 per tick; 0 = none published yet, all values 0) */
-#define MBMAP_D_UPTIME_S 6       /* u32 */
-#define MBMAP_D_PERIOD_US 8      /* u32 output period */
-#define MBMAP_D_LATE_P50_US 10   /* u32 tick lateness */
-#define MBMAP_D_LATE_P99_US 12   /* u32 */
-#define MBMAP_D_LATE_MAX_US 14   /* u32 */
-#define MBMAP_D_MISSED_TICKS 16  /* u32 timer expirations missed by the loop */
-#define MBMAP_D_CAN_STATE 18     /* u16 MBMAP_CAN_* */
-#define MBMAP_D_CAN_LOAD 19      /* u16 bus load, 0.1 % */
-#define MBMAP_D_MB_REQUESTS 20   /* u32 Modbus requests answered */
-#define MBMAP_D_MB_EXCEPTIONS 22 /* u32 exception responses sent */
-#define MBMAP_D_MB_REFUSED                                                                         \
-    24                        /* u32 connections refused (allow-list; max clients, see
+#define MBMAP_D_MAGIC 0              /* u16 MBMAP_MAGIC */
+#define MBMAP_D_VERSION 1            /* u16 MBMAP_VERSION */
+#define MBMAP_D_OBJECTS 2            /* u16 number of objects */
+#define MBMAP_D_WRITES 3             /* u16 1 if writes are enabled */
+#define MBMAP_D_GEN 4                /* u32 snapshot generation (+1 per tick; 0 = none published yet, all values 0) */
+#define MBMAP_D_UPTIME_S 6           /* u32 */
+#define MBMAP_D_PERIOD_US 8          /* u32 output period */
+#define MBMAP_D_LATE_P50_US 10       /* u32 tick lateness */
+#define MBMAP_D_LATE_P99_US 12       /* u32 */
+#define MBMAP_D_LATE_MAX_US 14       /* u32 */
+#define MBMAP_D_MISSED_TICKS 16      /* u32 timer expirations missed by the loop */
+#define MBMAP_D_CAN_STATE 18         /* u16 MBMAP_CAN_* */
+#define MBMAP_D_CAN_LOAD 19          /* u16 bus load, 0.1 % */
+#define MBMAP_D_MB_REQUESTS 20       /* u32 Modbus requests answered */
+#define MBMAP_D_MB_EXCEPTIONS 22     /* u32 exception responses sent */
+#define MBMAP_D_MB_REFUSED 24        /* u32 connections refused (allow-list; max clients, see
                                       * modbus_server.h's connection policy) */
-#define MBMAP_D_MB_CLIENTS 26 /* u16 TCP clients connected now */
-#define MBMAP_D_MB_EVICTED 28 /* u32 clients evicted at max_clients to admit a newcomer */
-#define MBMAP_D_MB_SLOW 30  /* u32 clients dropped: a request not whole within request_timeout_ms */
-#define MBMAP_D_OUT_LOST 32 /* u32 setpoint lines lost by the outputs (all objects) */
-#define MBMAP_D_OUT_FAULT 34 /* u16 1 if an output failed to write (disk full, I/O error) */
-#define MBMAP_D_GEN_TAIL 98  /* u32 copy of GEN */
+#define MBMAP_D_MB_CLIENTS 26        /* u16 TCP clients connected now */
+#define MBMAP_D_MB_EVICTED 28        /* u32 clients evicted at max_clients to admit a newcomer */
+#define MBMAP_D_MB_SLOW 30           /* u32 clients dropped: a request not whole within request_timeout_ms */
+#define MBMAP_D_OUT_LOST 32          /* u32 setpoint lines lost by the outputs (all objects) */
+#define MBMAP_D_OUT_FAULT 34         /* u16 1 if an output failed to write (disk full, I/O error) */
+#define MBMAP_D_GEN_TAIL 98          /* u32 copy of GEN */
 
 /* ---- object block, input registers (offset from MBMAP_OBJ_BASE(k)) ------ */
-#define MBMAP_O_GEN 0           /* u32 snapshot generation */
-#define MBMAP_O_STATE 2         /* u16 engine_state_t */
-#define MBMAP_O_FLAGS 3         /* u16 ENGINE_SP_* of the setpoint */
-#define MBMAP_O_CYCLE 4         /* u32 setpoint tick counter */
-#define MBMAP_O_TRACK 6         /* u32 trajectory number */
-#define MBMAP_O_BUFFERED 8      /* u32 waypoints buffered */
-#define MBMAP_O_FREE 10         /* u32 waypoints that can still be written */
-#define MBMAP_O_LOOKAHEAD 12    /* u32 waypoints of lookahead needed */
-#define MBMAP_O_AHEAD_S 14      /* f32 lookahead available, s of track time */
-#define MBMAP_O_LAST_SEQ 16     /* u32 sequence number of the last accepted waypoint */
-#define MBMAP_O_T_S 18          /* f64 track time of the setpoint, s */
-#define MBMAP_O_POS 22          /* f32 x3 position, m */
-#define MBMAP_O_VEL 28          /* f32 x3 velocity, m/s */
-#define MBMAP_O_ACC 34          /* f32 x3 acceleration, m/s^2 */
-#define MBMAP_O_ACCEPTED 40     /* u32 waypoints accepted */
-#define MBMAP_O_REJECTED 42     /* u32 waypoints rejected by the engine (all inputs; not EFULL) */
-#define MBMAP_O_LOST 44         /* u32 waypoints lost (gaps in sequence numbers) */
-#define MBMAP_O_UNDERRUNS 46    /* u32 transitions into underrun */
-#define MBMAP_O_MISSED_TICKS 48 /* u32 ticks stepped over */
-#define MBMAP_O_DUPLICATES 50   /* u32 exact duplicates dropped */
-#define MBMAP_O_MB_REJECTED 52  /* u32 Modbus writes refused with exception 03 */
-#define MBMAP_O_LATE_P99_US 54  /* u32 tick lateness (the daemon's loop) */
-#define MBMAP_O_LATE_MAX_US 56  /* u32 */
-#define MBMAP_O_CAN_STATE 58    /* u16 MBMAP_CAN_* of the object's bus */
-#define MBMAP_O_CAN_LOAD 59     /* u16 bus load, 0.1 % */
-#define MBMAP_O_UPTIME_S 60     /* u32 */
-#define MBMAP_O_FULL 62         /* u32 waypoints refused with a full buffer (flow control) */
-#define MBMAP_O_OUT_LOST 64     /* u32 setpoint lines of this object lost by its outputs */
-#define MBMAP_O_OUT_FAULT 66    /* u16 1 if an output of this object failed to write */
-#define MBMAP_O_SEQ_JUMPS 68    /* u32 sequence numbers outside the plausible window */
-#define MBMAP_O_RATE 70         /* f32 time-scaling rate ds/dt of the output (1 = as solved) */
-#define MBMAP_O_OVERRIDE 72     /* u16 feed override in force, % */
-#define MBMAP_O_HARD_STOPS 74   /* u32 the curve ended under a moving output (should stay 0) */
-#define MBMAP_O_GEN_TAIL 98     /* u32 copy of GEN */
+#define MBMAP_O_GEN 0                /* u32 snapshot generation */
+#define MBMAP_O_STATE 2              /* u16 engine_state_t */
+#define MBMAP_O_FLAGS 3              /* u16 ENGINE_SP_* of the setpoint */
+#define MBMAP_O_CYCLE 4              /* u32 setpoint tick counter */
+#define MBMAP_O_TRACK 6              /* u32 trajectory number */
+#define MBMAP_O_BUFFERED 8           /* u32 waypoints buffered */
+#define MBMAP_O_FREE 10              /* u32 waypoints that can still be written */
+#define MBMAP_O_LOOKAHEAD 12         /* u32 waypoints of lookahead needed */
+#define MBMAP_O_AHEAD_S 14           /* f32 lookahead available, s of track time */
+#define MBMAP_O_LAST_SEQ 16          /* u32 sequence number of the last accepted waypoint */
+#define MBMAP_O_T_S 18               /* f64 track time of the setpoint, s */
+#define MBMAP_O_POS 22               /* f32 x3 position, m */
+#define MBMAP_O_VEL 28               /* f32 x3 velocity, m/s */
+#define MBMAP_O_ACC 34               /* f32 x3 acceleration, m/s^2 */
+#define MBMAP_O_ACCEPTED 40          /* u32 waypoints accepted */
+#define MBMAP_O_REJECTED 42          /* u32 waypoints rejected by the engine (all inputs; not EFULL) */
+#define MBMAP_O_LOST 44              /* u32 waypoints lost (gaps in sequence numbers) */
+#define MBMAP_O_UNDERRUNS 46         /* u32 transitions into underrun */
+#define MBMAP_O_MISSED_TICKS 48      /* u32 ticks stepped over */
+#define MBMAP_O_DUPLICATES 50        /* u32 exact duplicates dropped */
+#define MBMAP_O_MB_REJECTED 52       /* u32 Modbus writes refused with exception 03 */
+#define MBMAP_O_LATE_P99_US 54       /* u32 tick lateness (the daemon's loop) */
+#define MBMAP_O_LATE_MAX_US 56       /* u32 */
+#define MBMAP_O_CAN_STATE 58         /* u16 MBMAP_CAN_* of the object's bus */
+#define MBMAP_O_CAN_LOAD 59          /* u16 bus load, 0.1 % */
+#define MBMAP_O_UPTIME_S 60          /* u32 */
+#define MBMAP_O_FULL 62              /* u32 waypoints refused with a full buffer (flow control) */
+#define MBMAP_O_OUT_LOST 64          /* u32 setpoint lines of this object lost by its outputs */
+#define MBMAP_O_OUT_FAULT 66         /* u16 1 if an output of this object failed to write */
+#define MBMAP_O_SEQ_JUMPS 68         /* u32 sequence numbers outside the plausible window */
+#define MBMAP_O_RATE 70              /* f32 time-scaling rate ds/dt of the output (1 = as solved) */
+#define MBMAP_O_OVERRIDE 72          /* u16 feed override in force, % */
+#define MBMAP_O_HARD_STOPS 74        /* u32 the curve ended under a moving output (should stay 0) */
+#define MBMAP_O_GEN_TAIL 98          /* u32 copy of GEN */
 
 /* ---- object block, holding registers (offset from MBMAP_OBJ_BASE(k)) ---- */
-#define MBMAP_H_COMMAND 0  /* u16 write MBMAP_CMD_* (FC 06 or FC 16 of 1) */
-#define MBMAP_H_OVERRIDE 1 /* u16 feed override, % (0 .. MBMAP_OVERRIDE_MAX_PCT) */
+#define MBMAP_H_COMMAND 0            /* u16 write MBMAP_CMD_* (FC 06 or FC 16 of 1) */
+#define MBMAP_H_OVERRIDE 1           /* u16 feed override, % (0 .. MBMAP_OVERRIDE_MAX_PCT) */
 #define MBMAP_OVERRIDE_MAX_PCT 200
-#define MBMAP_H_WP 10       /* first register of the waypoint block */
-#define MBMAP_H_WP_SEQ 10   /* u32 sequence number */
-#define MBMAP_H_WP_T_S 12   /* f64 time, s */
-#define MBMAP_H_WP_POS 16   /* f64 x3 x, y, z, m */
-#define MBMAP_H_WP_COUNT 18 /* the block is written whole, by one FC 16 */
+#define MBMAP_H_WP 10                /* first register of the waypoint block */
+#define MBMAP_H_WP_SEQ 10            /* u32 sequence number */
+#define MBMAP_H_WP_T_S 12            /* f64 time, s */
+#define MBMAP_H_WP_POS 16            /* f64 x3 x, y, z, m */
+#define MBMAP_H_WP_COUNT 18          /* the block is written whole, by one FC 16 */
 
 /* Commands (holding register MBMAP_H_COMMAND). */
-#define MBMAP_CMD_START 1          /* start now with what is buffered (see config/PROTOCOL.md) */
-#define MBMAP_CMD_STOP 2           /* stop now along the path, then drop (engine_stop) */
-#define MBMAP_CMD_CLEAR 3          /* stop along the path, drop, WAITING (engine_clear) */
-#define MBMAP_CMD_RESET_COUNTERS 4 /* engine_reset_counters + Modbus counters */
-#define MBMAP_CMD_FINISH 5         /* end of input: run to the last waypoint (engine_finish) */
+#define MBMAP_CMD_START 1            /* start now with what is buffered (see config/PROTOCOL.md) */
+#define MBMAP_CMD_STOP 2             /* stop now along the path, then drop (engine_stop) */
+#define MBMAP_CMD_CLEAR 3            /* stop along the path, drop, WAITING (engine_clear) */
+#define MBMAP_CMD_RESET_COUNTERS 4   /* engine_reset_counters + Modbus counters */
+#define MBMAP_CMD_FINISH 5           /* end of input: run to the last waypoint (engine_finish) */
 
 /* CAN bus state (MBMAP_D_CAN_STATE, MBMAP_O_CAN_STATE). */
-#define MBMAP_CAN_NONE 0   /* no CAN on this object / daemon */
-#define MBMAP_CAN_ACTIVE 1 /* error-active */
+#define MBMAP_CAN_NONE 0             /* no CAN on this object / daemon */
+#define MBMAP_CAN_ACTIVE 1           /* error-active */
 #define MBMAP_CAN_WARNING 2
 #define MBMAP_CAN_PASSIVE 3
 #define MBMAP_CAN_BUS_OFF 4
-#define MBMAP_CAN_DOWN 5 /* interface down */
+#define MBMAP_CAN_DOWN 5             /* interface down */
 
 /*
  * Errors.  The values are the Modbus exception codes to answer, so that
@@ -153,11 +154,11 @@
  */
 enum mbmap_error {
     MBMAP_OK = 0,
-    MBMAP_EFUNCTION = 1, /* illegal function: not served, or writes disabled */
-    MBMAP_EADDRESS = 2,  /* illegal data address: outside the map or a partial block */
-    MBMAP_EVALUE = 3,    /* illegal data value: bad count/length, NaN, unknown command,
+    MBMAP_EFUNCTION = 1,  /* illegal function: not served, or writes disabled */
+    MBMAP_EADDRESS = 2,   /* illegal data address: outside the map or a partial block */
+    MBMAP_EVALUE = 3,     /* illegal data value: bad count/length, NaN, unknown command,
                              waypoint refused by the engine */
-    MBMAP_EBUSY = 6,     /* server busy: waypoint buffer full, retry later */
+    MBMAP_EBUSY = 6,      /* server busy: waypoint buffer full, retry later */
 };
 
 /* Text for an mbmap_error (positive or negated). */
@@ -182,14 +183,14 @@ typedef struct {
 } mbmap_daemon_t;
 
 typedef struct {
-    engine_setpoint_t sp; /* the setpoint of this tick */
-    engine_status_t st;   /* the engine's status after this tick */
+    engine_setpoint_t sp;       /* the setpoint of this tick */
+    engine_status_t st;         /* the engine's status after this tick */
     uint64_t lost;
     uint64_t mb_rejected;
     uint32_t late_p99_us, late_max_us;
     uint16_t can_state, can_load_permille;
     uint64_t uptime_s;
-    uint64_t out_lost; /* lines lost by this object's outputs */
+    uint64_t out_lost;          /* lines lost by this object's outputs */
     uint16_t out_fault;
     uint64_t seq_jumps;
 } mbmap_object_t;
@@ -226,18 +227,14 @@ double mbmap_get_f64(const uint16_t *r);
  */
 int mbmap_check_request(unsigned n, int writes_enabled, const uint8_t *pdu, size_t len);
 
-typedef enum {
-    MBMAP_WRITE_COMMAND = 1,
-    MBMAP_WRITE_WAYPOINT = 2,
-    MBMAP_WRITE_OVERRIDE = 3
-} mbmap_write_kind_t;
+typedef enum { MBMAP_WRITE_COMMAND = 1, MBMAP_WRITE_WAYPOINT = 2, MBMAP_WRITE_OVERRIDE = 3 } mbmap_write_kind_t;
 
 typedef struct {
     mbmap_write_kind_t kind;
-    unsigned object;       /* 0-based */
-    unsigned command;      /* MBMAP_CMD_*, for MBMAP_WRITE_COMMAND */
-    unsigned override_pct; /* for MBMAP_WRITE_OVERRIDE: 0 .. MBMAP_OVERRIDE_MAX_PCT */
-    engine_waypoint_t wp;  /* for MBMAP_WRITE_WAYPOINT */
+    unsigned object;            /* 0-based */
+    unsigned command;           /* MBMAP_CMD_*, for MBMAP_WRITE_COMMAND */
+    unsigned override_pct;      /* for MBMAP_WRITE_OVERRIDE: 0 .. MBMAP_OVERRIDE_MAX_PCT */
+    engine_waypoint_t wp;       /* for MBMAP_WRITE_WAYPOINT */
 } mbmap_write_t;
 
 /*
@@ -277,9 +274,9 @@ int mbmap_rtu_frame_len(const uint8_t *buf, size_t len);
 typedef enum { MBMAP_T_U16 = 1, MBMAP_T_U32 = 2, MBMAP_T_F32 = 3, MBMAP_T_F64 = 4 } mbmap_type_t;
 
 typedef struct {
-    const char *table; /* "input daemon", "input object", "holding object" */
-    uint16_t offset;   /* absolute for the daemon block, else from MBMAP_OBJ_BASE(k) */
-    uint16_t count;    /* registers */
+    const char *table;      /* "input daemon", "input object", "holding object" */
+    uint16_t offset;        /* absolute for the daemon block, else from MBMAP_OBJ_BASE(k) */
+    uint16_t count;         /* registers */
     mbmap_type_t type;
     const char *name;
     const char *unit;
@@ -292,4 +289,5 @@ const mbmap_field_t *mbmap_fields(size_t *n);
 /* Name of a type: "u16", "u32", "f32", "f64". */
 const char *mbmap_type_name(mbmap_type_t t);
 
+/* clang-format on */
 #endif
