@@ -81,7 +81,7 @@ void hoang_segment(const double *p0, const double *p1, const double *p2, const d
     seg->t0_s = t0_s;
     seg->dur_s = dur_s;
     for (int k = 0; k < AX; k++) {
-        /* [u^3 u^2 u 1] M [P0 P1 P2 P3]^T with M of MATH.md section 1 */
+        /* [u^3 u^2 u 1] M [P0 P1 P2 P3]^T with M the uniform cubic B-spline basis matrix */
         seg->c[k][0] = (p0[k] + 4.0 * p1[k] + p2[k]) / 6.0;
         seg->c[k][1] = (p2[k] - p0[k]) / 2.0;
         seg->c[k][2] = (p0[k] - 2.0 * p1[k] + p2[k]) / 2.0;

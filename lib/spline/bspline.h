@@ -141,7 +141,7 @@ int bspline_eval_derivs(const bspline_t *b, double t, unsigned nder, double *out
 
 /*
  * The cubic matrix with the seed's tension parameter u (u = 1: the uniform
- * cubic B-spline matrix M of MATH.md section 1):
+ * cubic B-spline basis matrix M):
  *   M_u = 1/6 | -u   12-9u  9u-12  u |
  *             | 3u   12u-18 18-15u 0 |
  *             | -3u  0      3u     0 |
