@@ -43,8 +43,8 @@ run() { # $1 = label
         match($0, /missed [0-9]+/); missed = substr($0, RSTART + 7, RLENGTH - 7);
         match($0, /overruns [0-9]+/); over = substr($0, RSTART + 9, RLENGTH - 9);
         match($0, /p50\/p99\/p99.9\/max [0-9\/]+/); split(substr($0, RSTART + 18, RLENGTH - 18), q, "/");
-        printf "| %-24s | %6s | %5s | %5s | %7s | %6s | %6s | %8s | %5.2f %% |\n",
-            label, ticks, q[1], q[2], q[3], q[4], missed, over, 100 * cpu / dur }'
+        printf "| %-24s | %6s | %5s | %5s | %7s | %6s | %6s | %8s | %5.2f %% |",
+            label, ticks, q[1], q[2], q[3], q[4], missed, over, 100 * cpu / dur }' > "$tmp/row"
 }
 
 # cyclictest (rt-tests, in make bench's dependencies) at the same 1 kHz for
@@ -52,8 +52,9 @@ run() { # $1 = label
 # latency, the floor trajd's lateness is read against.
 cyclic() { # $1 = label, $2... = extra cyclictest options
     local label=$1; shift
-    command -v cyclictest > /dev/null || { echo "| $label | cyclictest not installed (rt-tests) |"; return; }
-    cyclictest -q -t 1 -i 1000 -D "$DURATION_S" -h 100000 "$@" 2> /dev/null | awk -v label="$label" '
+    command -v cyclictest > /dev/null || { cat "$tmp/row"; echo " - |"; echo "| $label | cyclictest not installed (rt-tests) |"; return; }
+    cyclictest -q -t 1 -i 1000 -D "$DURATION_S" -h 100000 "$@" 2> /dev/null | awk -v label="$label" \
+        -v row="$(cat "$tmp/row")" '
         /^[0-9]/ { h[$1 + 0] = $2 + 0; if ($1 + 0 > top) top = $1 + 0; next }
         /^# Total:/ { total = $3 + 0 }
         /^# Max Latencies:/ { max = $4 + 0 }
@@ -68,13 +69,17 @@ cyclic() { # $1 = label, $2... = extra cyclictest options
                 if (p999 < 0 && c >= 0.999 * total) p999 = us;
             }
             if (p99 < 0) p99 = ">100000"; if (p999 < 0) p999 = ">100000";
-            printf "| %-24s | %6d | %5s | %5s | %7s | %6d | %6s | %8s | %7s |\n",
-                label, total, p50, p99, p999, max, "-", over " ovf", "-" }'
+            # the trajd row of the same condition, with its p99 over this p99
+            split(row, f, "|"); tp99 = f[5] + 0;
+            printf "%s %s |\n", row, (p99 + 0 > 0) ? sprintf("%.2f", tp99 / p99) : "-";
+            printf "| %-24s | %6d | %5s | %5s | %7s | %6d | %6s | %8s | %7s | %s |\n",
+                label, total, p50, p99, p999, max, "-", over " ovf", "-", "1.00" }'
 }
 
 echo "trajd lateness at 1 kHz, 4 objects, ${DURATION_S} s per run, $ncpu CPUs, $(uname -r)"
-echo "| run                      |  ticks | p50us | p99us | p99.9us | max us | missed | overruns | CPU     |"
-echo "|---|---|---|---|---|---|---|---|---|"
+echo "x cyclictest = trajd's p99 lateness over cyclictest's p99 wakeup latency in the same condition, this run"
+echo "| run                      |  ticks | p50us | p99us | p99.9us | max us | missed | overruns | CPU     | x cyclictest |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
 conf ""
 run "idle"
 cyclic "cyclictest, idle"
