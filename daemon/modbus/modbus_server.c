@@ -65,6 +65,8 @@ struct modbus_server {
     modbus_t *tcp;
     modbus_t *rtu;
     modbus_mapping_t *map;
+    modbus_mapping_t mirror; /* FC 03 at MBMAP_MIRROR_BASE: the input table, read-only */
+    mbmap_order_t order;     /* [modbus] word_order */
     client_t *clients;
     allow_t allow[MODBUS_SERVER_ALLOW_MAX];
     unsigned n_allow;
@@ -323,6 +325,9 @@ int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const
     } else if (!strcmp(key, "request_timeout_ms")) {
         if ((rc = parse_uint(value, 100, 600000, &x)) == 0)
             cfg->request_timeout_ms = (unsigned)x;
+    } else if (!strcmp(key, "word_order")) {
+        if ((cfg->word_order = mbmap_order_parse(value)) < 0)
+            rc = -EINVAL, cfg->word_order = MBMAP_ORDER_ABCD;
     } else if (!strcmp(key, "rtu_parity")) {
         if (!strcmp(value, "N") || !strcmp(value, "none"))
             cfg->rtu_parity = 'N';
@@ -456,6 +461,9 @@ static int settings_take(modbus_server_t *s, const modbus_server_config_t *cfg, 
                                                       : MODBUS_SERVER_DEFAULT_REQUEST_MS) *
                     1000000;
     s->unit_id = cfg->unit_id;
+    s->order = cfg->word_order >= 0 && cfg->word_order <= MBMAP_ORDER_DCBA
+                   ? (mbmap_order_t)cfg->word_order
+                   : MBMAP_ORDER_ABCD;
     return 0;
 }
 
@@ -493,6 +501,9 @@ modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg,
     }
     for (unsigned i = 0; i < s->max_clients; i++)
         s->clients[i].fd = -1;
+    s->mirror.start_registers = MBMAP_MIRROR_BASE;
+    s->mirror.nb_registers = (int)MBMAP_REGS(s->n_objects);
+    s->mirror.tab_registers = s->map->tab_input_registers;
 
     s->ep = epoll_create1(EPOLL_CLOEXEC);
     s->hkfd = timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
@@ -518,6 +529,7 @@ modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg,
     mbmap_daemon_t d = {.objects = (uint16_t)s->n_objects,
                         .writes_enabled = (uint16_t)(s->writes_enabled != 0)};
     mbmap_encode_daemon(s->map->tab_input_registers, &d);
+    mbmap_order_image(s->map->tab_input_registers, 0, s->order);
     return s;
 fail:
     modbus_server_free(s);
@@ -716,7 +728,7 @@ static int serve(modbus_server_t *s, modbus_t *ctx, int writes, const uint8_t *r
         mbmap_write_t w;
         memset(&w, 0, sizeof w);
         w.object = s->n_objects;
-        rc = mbmap_decode_write(s->n_objects, pdu, pdu_len, &w);
+        rc = mbmap_decode_write_order(s->n_objects, s->order, pdu, pdu_len, &w);
         if (rc == 0)
             rc = apply_write(s, &w);
         if (rc == -MBMAP_EVALUE && w.object < s->n_objects)
@@ -729,6 +741,8 @@ static int serve(modbus_server_t *s, modbus_t *ctx, int writes, const uint8_t *r
     }
     /* Validated above, so libmodbus takes none of its error paths (some of
      * which sleep for the response timeout and flush the socket). */
+    if (pdu[0] == MBMAP_FC_READ_HOLDING && (((unsigned)pdu[1] << 8) | pdu[2]) >= MBMAP_MIRROR_BASE)
+        return modbus_reply(ctx, req, req_len, &s->mirror);
     return modbus_reply(ctx, req, req_len, s->map);
 }
 
@@ -1035,4 +1049,5 @@ void modbus_server_publish(modbus_server_t *s, const mbmap_daemon_t *d, const mb
         o.seq_jumps += s->seq_jumps[k];
         mbmap_encode_object(ir, k, s->gen, &o);
     }
+    mbmap_order_image(ir, s->n_objects, s->order);
 }

@@ -110,6 +110,7 @@ typedef struct {
     unsigned request_timeout_ms; /* close a TCP client whose request is not whole this long
                                   * after its first byte */
     unsigned n_objects;          /* 1..MBMAP_MAX_OBJECTS */
+    int word_order;              /* mbmap_order_t of u32/f32/f64 values (ABCD default) */
 } modbus_server_config_t;
 
 /*

@@ -3,6 +3,7 @@
 
 #include <math.h>
 #include <string.h>
+#include <strings.h>
 
 const char *mbmap_strerror(int err)
 {
@@ -60,6 +61,58 @@ double mbmap_get_f64(const uint16_t *r)
         u = (u << 16) | r[i];
     memcpy(&v, &u, sizeof v);
     return v;
+}
+
+/* ---- word order -------------------------------------------------------- */
+
+int mbmap_order_parse(const char *s)
+{
+    static const char *names[] = {"ABCD", "CDAB", "BADC", "DCBA"};
+    for (int i = 0; i < 4; i++)
+        if (!strcasecmp(s, names[i]))
+            return i;
+    return -1;
+}
+
+const char *mbmap_order_name(mbmap_order_t o)
+{
+    switch (o) {
+    case MBMAP_ORDER_ABCD: return "ABCD";
+    case MBMAP_ORDER_CDAB: return "CDAB";
+    case MBMAP_ORDER_BADC: return "BADC";
+    case MBMAP_ORDER_DCBA: return "DCBA";
+    default: return "?";
+    }
+}
+
+void mbmap_order_value(uint16_t *r, unsigned count, mbmap_order_t o)
+{
+    if (o == MBMAP_ORDER_CDAB || o == MBMAP_ORDER_DCBA)
+        for (unsigned i = 0; i < count / 2; i++) {
+            uint16_t w = r[i];
+            r[i] = r[count - 1 - i];
+            r[count - 1 - i] = w;
+        }
+    if (o == MBMAP_ORDER_BADC || o == MBMAP_ORDER_DCBA)
+        for (unsigned i = 0; i < count; i++)
+            r[i] = (uint16_t)((r[i] << 8) | (r[i] >> 8));
+}
+
+void mbmap_order_image(uint16_t *regs, unsigned n, mbmap_order_t o)
+{
+    if (o == MBMAP_ORDER_ABCD)
+        return;
+    size_t nf;
+    const mbmap_field_t *f = mbmap_fields(&nf);
+    for (size_t i = 0; i < nf; i++) {
+        if (f[i].count < 2)
+            continue;
+        if (!strcmp(f[i].table, "input daemon"))
+            mbmap_order_value(regs + f[i].offset, f[i].count, o);
+        else if (!strcmp(f[i].table, "input object"))
+            for (unsigned k = 0; k < n && k < MBMAP_MAX_OBJECTS; k++)
+                mbmap_order_value(regs + MBMAP_OBJ_BASE(k) + f[i].offset, f[i].count, o);
+    }
 }
 
 /* Counters are 64-bit in the daemon; the map carries their low 32 bits. */
@@ -165,6 +218,8 @@ int mbmap_check_request(unsigned n, int writes_enabled, const uint8_t *pdu, size
         count = be16(pdu + 3);
         if (count < 1 || count > MBMAP_MAX_READ)
             return -MBMAP_EVALUE;
+        if (pdu[0] == MBMAP_FC_READ_HOLDING && addr >= MBMAP_MIRROR_BASE)
+            addr -= MBMAP_MIRROR_BASE; /* the input table, read through the mirror */
         break;
     case MBMAP_FC_WRITE_SINGLE:
         if (!writes_enabled)
@@ -193,6 +248,12 @@ int mbmap_check_request(unsigned n, int writes_enabled, const uint8_t *pdu, size
 }
 
 int mbmap_decode_write(unsigned n, const uint8_t *pdu, size_t len, mbmap_write_t *out)
+{
+    return mbmap_decode_write_order(n, MBMAP_ORDER_ABCD, pdu, len, out);
+}
+
+int mbmap_decode_write_order(unsigned n, mbmap_order_t o, const uint8_t *pdu, size_t len,
+                             mbmap_write_t *out)
 {
     int rc = mbmap_check_request(n, 1, pdu, len);
     if (rc < 0)
@@ -234,6 +295,10 @@ int mbmap_decode_write(unsigned n, const uint8_t *pdu, size_t len, mbmap_write_t
         uint16_t r[MBMAP_H_WP_COUNT];
         for (unsigned i = 0; i < MBMAP_H_WP_COUNT; i++)
             r[i] = (uint16_t)be16(val + 2 * i);
+        mbmap_order_value(r + (MBMAP_H_WP_SEQ - MBMAP_H_WP), 2, o);
+        mbmap_order_value(r + (MBMAP_H_WP_T_S - MBMAP_H_WP), 4, o);
+        for (int a = 0; a < ENGINE_AXES; a++)
+            mbmap_order_value(r + (MBMAP_H_WP_POS - MBMAP_H_WP) + 4 * a, 4, o);
         out->kind = MBMAP_WRITE_WAYPOINT;
         out->wp.seq = mbmap_get_u32(r + (MBMAP_H_WP_SEQ - MBMAP_H_WP));
         out->wp.t_s = mbmap_get_f64(r + (MBMAP_H_WP_T_S - MBMAP_H_WP));

@@ -62,6 +62,12 @@
 #define MBMAP_FC_WRITE_SINGLE 0x06
 #define MBMAP_FC_WRITE_MULTIPLE 0x10
 
+/* FC 03 mirror: holding register MBMAP_MIRROR_BASE + a reads input register a
+ * (read-only; writes there are exception 02), for HMIs that read holding
+ * registers only.  Above every holding and input block (MBMAP_REGS of 129
+ * blocks < MBMAP_MIRROR_BASE, and MBMAP_MIRROR_BASE + that < 65536). */
+#define MBMAP_MIRROR_BASE 20000
+
 /* ---- daemon block, input registers (absolute addresses) ---------------- */
 #define MBMAP_D_MAGIC 0              /* u16 MBMAP_MAGIC */
 #define MBMAP_D_VERSION 1            /* u16 MBMAP_VERSION */
@@ -205,6 +211,26 @@ void mbmap_encode_daemon(uint16_t *regs, const mbmap_daemon_t *d);
  */
 int mbmap_encode_object(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_object_t *o);
 
+/*
+ * Word order of the values of more than one register ([modbus] word_order).
+ * The letters name the bytes of a 32-bit value, A most significant, in the
+ * order they go on the wire: ABCD big-endian words (the default), CDAB words
+ * swapped, BADC bytes swapped in each word, DCBA both.  A 64-bit value
+ * follows the same rule over its 8 bytes: CDAB and DCBA reverse its 4 words
+ * (pymodbus wordorder=Endian.Little), BADC and DCBA swap the bytes of each
+ * word (byteorder=Endian.Little).  Both operations are their own inverse.
+ */
+typedef enum { MBMAP_ORDER_ABCD = 0, MBMAP_ORDER_CDAB = 1, MBMAP_ORDER_BADC = 2, MBMAP_ORDER_DCBA = 3 } mbmap_order_t;
+
+/* "ABCD", "CDAB", "BADC", "DCBA" (case-insensitive) -> the order, else -1. */
+int mbmap_order_parse(const char *s);
+const char *mbmap_order_name(mbmap_order_t o);
+/* Reorder one value of count registers (2 or 4) from ABCD to o, or back. */
+void mbmap_order_value(uint16_t *r, unsigned count, mbmap_order_t o);
+/* Reorder every u32/f32/f64 field of an input table for n objects (the
+ * daemon block and the object blocks, from mbmap_fields()), ABCD -> o. */
+void mbmap_order_image(uint16_t *regs, unsigned n, mbmap_order_t o);
+
 /* Word helpers (ABCD).  Exposed for the tests and the daemon. */
 void mbmap_put_u32(uint16_t *r, uint32_t v);
 void mbmap_put_f32(uint16_t *r, float v);
@@ -249,6 +275,9 @@ typedef struct {
  * write).  Time order and ranges are the engine's to check (engine_push).
  */
 int mbmap_decode_write(unsigned n, const uint8_t *pdu, size_t len, mbmap_write_t *out);
+/* As mbmap_decode_write, for a client that writes in word order o. */
+int mbmap_decode_write_order(unsigned n, mbmap_order_t o, const uint8_t *pdu, size_t len,
+                             mbmap_write_t *out);
 
 /* The exception for an engine_push / command result (negated engine_error):
  * ENGINE_EFULL -> -MBMAP_EBUSY, any other error -> -MBMAP_EVALUE, 0 and

@@ -252,6 +252,99 @@ static size_t write_pdu(uint8_t *p, unsigned addr, unsigned count, const uint16_
 
 /* Given the spec's rules (function, then quantity, then address), when
  * requests break each one, then the exception code is the spec's. */
+/* Given an image with a known f32 position and u32 counter, when reordered
+ * to each word order, then libmodbus's decoder of that name (independent:
+ * modbus_get_float_cdab etc.) reads the value, the ABCD one does not (except
+ * ABCD), and reordering twice restores the image.  f64: the order is the
+ * same rule over 8 bytes (CDAB reverses the words, BADC swaps bytes). */
+static float dec_order(int o, const uint16_t *r)
+{
+    switch (o) {
+    case MBMAP_ORDER_CDAB: return modbus_get_float_cdab(r);
+    case MBMAP_ORDER_BADC: return modbus_get_float_badc(r);
+    case MBMAP_ORDER_DCBA: return modbus_get_float_dcba(r);
+    default: return modbus_get_float_abcd(r);
+    }
+}
+
+static void test_word_orders(void **state)
+{
+    (void)state;
+    assert_int_equal(mbmap_order_parse("cdab"), MBMAP_ORDER_CDAB);
+    assert_int_equal(mbmap_order_parse("ABDC"), -1);
+    for (int o = 0; o < 4; o++) {
+        assert_int_equal(mbmap_order_parse(mbmap_order_name((mbmap_order_t)o)), o);
+        static uint16_t img[MBMAP_REGS(NOBJ)], ref[MBMAP_REGS(NOBJ)];
+        mbmap_object_t ob;
+        memset(&ob, 0, sizeof ob);
+        ob.sp.pos_m[1] = -1234.5678f;
+        ob.sp.t_s = 0x1.23456789abcdep+3;
+        ob.st.accepted = 0x11223344u;
+        mbmap_daemon_t d = {.period_us = 0xA1B2C3D4u};
+        mbmap_encode_daemon(img, &d);
+        for (unsigned k = 0; k < NOBJ; k++)
+            mbmap_encode_object(img, k, 7, &ob);
+        memcpy(ref, img, sizeof img);
+        mbmap_order_image(img, NOBJ, (mbmap_order_t)o);
+        const uint16_t *b = img + MBMAP_OBJ_BASE(NOBJ - 1);
+        assert_true(exact(dec_order(o, b + MBMAP_O_POS + 2), -1234.5678f));
+        if (o)
+            assert_false(exact(modbus_get_float_abcd(b + MBMAP_O_POS + 2), -1234.5678f));
+        uint32_t u;
+        float f = dec_order(o, b + MBMAP_O_ACCEPTED);
+        memcpy(&u, &f, sizeof u);
+        assert_int_equal(u, 0x11223344u);
+        f = dec_order(o, img + MBMAP_D_PERIOD_US);
+        memcpy(&u, &f, sizeof u);
+        assert_int_equal(u, 0xA1B2C3D4u);
+        /* f64 bytes on the wire, from the value's big-endian bytes B0..B7. */
+        uint64_t bits;
+        memcpy(&bits, &ob.sp.t_s, sizeof bits);
+        uint8_t want[8], got[8];
+        for (int i = 0; i < 8; i++)
+            want[i] = (uint8_t)(bits >> (56 - 8 * i));
+        for (int i = 0; i < 4; i++) {
+            got[2 * i] = (uint8_t)(b[MBMAP_O_T_S + i] >> 8);
+            got[2 * i + 1] = (uint8_t)b[MBMAP_O_T_S + i];
+        }
+        for (int i = 0; i < 8; i++) {
+            int w = i / 2, byte = i % 2;
+            if (o == MBMAP_ORDER_CDAB || o == MBMAP_ORDER_DCBA)
+                w = 3 - w;
+            if (o == MBMAP_ORDER_BADC || o == MBMAP_ORDER_DCBA)
+                byte = 1 - byte;
+            assert_int_equal(got[i], want[2 * w + byte]);
+        }
+        assert_int_equal(img[MBMAP_D_MAGIC], MBMAP_MAGIC); /* u16: never reordered */
+        mbmap_order_image(img, NOBJ, (mbmap_order_t)o);
+        assert_memory_equal(img, ref, sizeof img);
+    }
+}
+
+/* Given the FC 03 mirror, when reading holding registers at MBMAP_MIRROR_BASE
+ * + a, then the range rules of the input table apply; writes there are 02. */
+static void test_mirror_request(void **state)
+{
+    (void)state;
+    uint8_t p[260];
+    uint16_t v[2] = {0};
+    unsigned end = MBMAP_REGS(NOBJ);
+    assert_int_equal(mbmap_check_request(NOBJ, 0, p, read_pdu(p, 3, MBMAP_MIRROR_BASE, 125)), 0);
+    assert_int_equal(
+        mbmap_check_request(NOBJ, 0, p, read_pdu(p, 3, MBMAP_MIRROR_BASE + end - 1, 1)), 0);
+    assert_int_equal(
+        mbmap_check_request(NOBJ, 0, p, read_pdu(p, 3, MBMAP_MIRROR_BASE + end - 1, 2)),
+        -MBMAP_EADDRESS);
+    assert_int_equal(mbmap_check_request(NOBJ, 0, p, read_pdu(p, 3, MBMAP_MIRROR_BASE - 1, 2)),
+                     -MBMAP_EADDRESS);
+    assert_int_equal(mbmap_check_request(NOBJ, 0, p, read_pdu(p, 4, MBMAP_MIRROR_BASE, 1)),
+                     -MBMAP_EADDRESS);
+    assert_int_equal(mbmap_check_request(NOBJ, 1, p, write_pdu(p, MBMAP_MIRROR_BASE + 100, 1, v)),
+                     -MBMAP_EADDRESS);
+    assert_true(MBMAP_REGS(1 + 2 * MBMAP_MAX_OBJECTS) <= MBMAP_MIRROR_BASE);
+    assert_true(MBMAP_MIRROR_BASE + MBMAP_REGS(1 + 2 * MBMAP_MAX_OBJECTS) <= 65536);
+}
+
 static void test_check_request(void **state)
 {
     (void)state;
@@ -446,7 +539,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_word_order),       cmocka_unit_test(test_encode_matches_table),
         cmocka_unit_test(test_table_consistent), cmocka_unit_test(test_check_request),
         cmocka_unit_test(test_decode_write),     cmocka_unit_test(test_from_engine),
-        cmocka_unit_test(test_crc_and_framing),
+        cmocka_unit_test(test_crc_and_framing),  cmocka_unit_test(test_word_orders),
+        cmocka_unit_test(test_mirror_request),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
