@@ -480,6 +480,7 @@ static int key_obj_drive(cfg_obj_t *o, const cfg_kv_t *kv, char *why, size_t wl)
         }
         memcpy(o->initial_position_m, v, sizeof v);
         o->has_initial_position = 1;
+        o->initial_position_line = kv->line;
         return 0;
     }
     return -CFG_EUNKNOWN;
@@ -643,6 +644,15 @@ static void check_all(parse_t *p)
                  ewhy ? ewhy : "invalid");
             return;
         }
+        if (o->has_initial_position)
+            for (int a = 0; a < ENGINE_AXES; a++)
+                if (fabs(o->initial_position_m[a]) > o->engine.max_abs_m) {
+                    /* engine_set_position would refuse it when the daemon starts */
+                    fail(p, CFG_EVALUE, o->initial_position_line,
+                         "[object.%s] initial_position: |%c| = %g m is above max_abs_m (%g m)",
+                         o->name, "xyz"[a], fabs(o->initial_position_m[a]), o -> engine.max_abs_m);
+                    return;
+                }
     }
     for (unsigned t = 0; transport_table[t]; t++) {
         const transport_t *tr = transport_table[t];

@@ -103,6 +103,7 @@ typedef struct {
     /* initial_position = x,y,z: where the object stands at start (the output
      * holds there and reaches the first trajectory by a transfer) */
     int has_initial_position;
+    int initial_position_line; /* its line, for the range check against max_abs_m */
     double initial_position_m[ENGINE_AXES];
     int writable; /* writable = yes/no: commands and waypoints
                                                  * from outside (Modbus) may change it;

@@ -209,6 +209,15 @@ class TestCommandLine(unittest.TestCase):
             self.assertNotEqual(r.returncode, 0)
             self.assertTrue(r.stderr.startswith(bad + ":5: "), r.stderr)
             self.assertIn("foo", r.stderr)
+            # Given an initial_position the engine would refuse at start (beyond
+            # max_abs_m, given after it), --check-config names its line.
+            write(bad, "[object.b]\ninput = replay\nreplay.track = %s\noutput = stdout\n"
+                       "initial_position = 0,0,150\nmax_abs_m = 100\n" % N2K)
+            r = subprocess.run([TRAJD, "--check-config", bad], capture_output=True, text=True, timeout=10)
+            self.assertNotEqual(r.returncode, 0)
+            self.assertTrue(r.stderr.startswith(bad + ":5: "), r.stderr)
+            self.assertIn("initial_position", r.stderr)
+            write(bad, "[object.b]\ninput = replay\nreplay.track = %s\noutput = stdout\nfoo = 1\n" % N2K)
             # Given a bad config to run, trajd refuses to start, with the message.
             r = subprocess.run([TRAJD, "-f", "-c", bad], capture_output=True, text=True, timeout=10)
             self.assertNotEqual(r.returncode, 0)

@@ -136,6 +136,13 @@ static void test_errors(void **state)
     load_bad(OBJ "max_accel_m_s2 = -2\n", CFG_EVALUE, 5, "max_accel_m_s2");
     load_bad(OBJ "start_slack = 2000\n", CFG_EVALUE, 5, "start_slack");
     load_bad(OBJ "start_vel_m_s = 1,2\n", CFG_EVALUE, 5, "three numbers");
+    /* initial_position: three finite numbers within max_abs_m, wherever max_abs_m is given */
+    load_bad(OBJ "initial_position = 1,2\n", CFG_EVALUE, 5, "x,y,z");
+    load_bad(OBJ "initial_position = 1,2,3,4\n", CFG_EVALUE, 5, "x,y,z");
+    load_bad(OBJ "initial_position = 1,nan,3\n", CFG_EVALUE, 5, "x,y,z");
+    load_bad(OBJ "initial_position = 1,inf,3\n", CFG_EVALUE, 5, "x,y,z");
+    load_bad(OBJ "initial_position = 0,0,2e7\n", CFG_EVALUE, 5, "max_abs_m");
+    load_bad(OBJ "initial_position = 0,-500,0\nmax_abs_m = 100\n", CFG_EVALUE, 5, "|y| = 500");
     load_bad("[realtime]\nfifo_priority = 100\n" OBJ, CFG_EVALUE, 2, "[0, 99]");
     load_bad("[realtime]\ncpu_affinity = 1-\n" OBJ, CFG_EVALUE, 2, "CPU list");
     load_bad("[object.bad name]\ninput = replay\n", CFG_EVALUE, 1, "object name");
