@@ -195,24 +195,6 @@ static int parse_uint(const char *s, unsigned *v)
     return 0;
 }
 
-/* Short names of the reasons a waypoint can be refused for bad data
- * (NULL for codes engine_push does not return for data). */
-static const char *reason_name(int e)
-{
-    switch (e) {
-    case ENGINE_ENOTFINITE: return "not_finite";
-    case ENGINE_ERANGE: return "range";
-    case ENGINE_EBACKWARDS: return "backwards";
-    case ENGINE_ESAMETIME: return "same_time";
-    case ENGINE_ESPEED: return "speed";
-    case ENGINE_ENUMERIC: return "numeric";
-    case ENGINE_EACCEL: return "accel";
-    case ENGINE_EUNCONFIRMED: return "unconfirmed";
-    case ENGINE_ESTALE: return "stale";
-    default: return NULL;
-    }
-}
-
 enum {
     OPT_RATE = 256,
     OPT_FORMAT,
@@ -479,8 +461,8 @@ static void print_summary(const track_t *trk, const replay_t *r, const engine_st
             "summary: rejected %" PRIu64 "\n",
             trk->n, trk->skipped, st->accepted, st->duplicates, rejected);
     for (int e = 1; e < ENGINE_ERROR_COUNT; e++)
-        if (e != ENGINE_EFULL && reason_name(e))
-            fprintf(stderr, "summary: rejected_%s %" PRIu64 "\n", reason_name(e),
+        if (e != ENGINE_EFULL && engine_reason_name(e))
+            fprintf(stderr, "summary: rejected_%s %" PRIu64 "\n", engine_reason_name(e),
                     st->rejected_by[e]);
     fprintf(stderr,
             "summary: full_retries %" PRIu64 "\n"
@@ -647,7 +629,7 @@ static void run_report_rejections(run_t *run)
         if (run->rejected++ == 0)
             run->first_rejected = run->reported;
         if (run->rejected <= REJECT_SHOW_FIRST || run->rejected % REJECT_SHOW_EVERY == 0) {
-            const char *why = reason_name(e);
+            const char *why = engine_reason_name(e);
             run_clear_progress(run);
             fprintf(stderr, "%s:%" PRIu32 ": rejected (%s)\n", run->o->input,
                     run->trk.line[run->reported], why ? why : engine_strerror(e));
@@ -672,7 +654,8 @@ static void run_report_rejected_total(const run_t *run)
         size_t n = strlen(reasons);
         if (run->rejected_by[e])
             snprintf(reasons + n, sizeof reasons - n, "%s%s %" PRIu64, n ? ", " : "",
-                     reason_name(e) ? reason_name(e) : engine_strerror(e), run->rejected_by[e]);
+                     engine_reason_name(e) ? engine_reason_name(e) : engine_strerror(e),
+                     run->rejected_by[e]);
     }
     fprintf(stderr,
             "trajreplay: %s: rejected %" PRIu64 " of %zu waypoints (%s), the first at "

@@ -42,6 +42,11 @@ enum engine_error {
 /* Human-readable text for an engine_error (positive or negated). */
 const char *engine_strerror(int err);
 
+/* Short name of a reason a waypoint is refused for bad data ("speed",
+ * "stale", ...: trajreplay's reports, the daemon's log, config/PROTOCOL.md),
+ * NULL for codes that are not such a reason (EFULL, ECONFIG, ...). */
+const char *engine_reason_name(int err);
+
 typedef struct {
     double t_s;                  /* waypoint time, seconds, sender's track clock */
     double pos_m[ENGINE_AXES];   /* x, y, z (east, north, up for geographic input), metres */

@@ -436,7 +436,10 @@ static void send_status(can_port_t *p, can_port_obj_t *o, const engine_status_t 
     st.last_seq = es.last_seq;
     st.free = es.free;
     st.lost = (uint32_t)o->rx.st.lost;
-    st.rejected = (uint32_t)o->st.waypoints_rejected; /* EFULL shows as last_err only */
+    /* the engine's count: it also holds the waypoints refused once judged with
+     * their neighbours, after the push had taken them (EFULL shows as last_err only) */
+    st.rejected = (uint32_t)(es.rejected > o->st.waypoints_rejected ? es.rejected
+                                                                    : o->st.waypoints_rejected);
     st.malformed = (uint32_t)o->rx.st.malformed;
     st.dropped = (uint32_t)(o->st.dropped_late + o->st.dropped_full + o->st.dropped_down +
                             o->st.dropped_error);

@@ -2,6 +2,7 @@
 #include "can_transport.h"
 
 #include <errno.h>
+#include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -385,6 +386,13 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
 
 /* ---- runtime ---- */
 
+/* What can_port's hooks get: the object, and its waypoints' source as the
+ * rejection log names it ("can IFACE id 0xID"). */
+typedef struct {
+    obj_t *o;
+    char src[48];
+} can_hook_ctx_t;
+
 typedef struct {
     core_t *c;
     const can_cfg_t *cfg;
@@ -397,7 +405,8 @@ typedef struct {
     obj_t *objs[CFG_OBJECTS_MAX];    /* can_port index -> object */
     int port_index[CFG_OBJECTS_MAX]; /* object index -> can_port index or -1 */
     int is_input[CFG_OBJECTS_MAX];
-    uint64_t rx_tick; /* last tick whose pre_tick drained the input */
+    can_hook_ctx_t hctx[CFG_OBJECTS_MAX]; /* can_port index -> its hooks' context */
+    uint64_t rx_tick;                     /* last tick whose pre_tick drained the input */
     int drained;
     int was_up;
     can_bus_state_t bus_state; /* as of the last housekeeping timer, for Modbus */
@@ -450,13 +459,15 @@ static void log_drives(can_state_t *s)
 
 static int hk_push(void *ctx, const engine_waypoint_t *wp)
 {
-    obj_t *o = ctx;
-    return obj_push(o, wp);
+    const can_hook_ctx_t *h = ctx;
+    char src[REJLOG_SRC_LEN];
+    snprintf(src, sizeof src, "%s seq %" PRIu32, h->src, wp->seq);
+    return obj_push_from(h->o, wp, src);
 }
 
 static void hk_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
 {
-    obj_t *o = ctx;
+    obj_t *o = ((const can_hook_ctx_t *)ctx)->o;
     switch (cmd) {
     case CANPROTO_CMD_FINISH: engine_finish(o->engine); break;
     case CANPROTO_CMD_STOP: engine_stop(o->engine); break;
@@ -477,7 +488,7 @@ static void hk_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
  */
 static void hk_feedback(void *ctx, const can_port_drive_t *d)
 {
-    obj_t *o = ctx;
+    obj_t *o = ((const can_hook_ctx_t *)ctx)->o;
     if (d->all_seen && d->all_enabled) {
         if (!engine_has_position(o->engine))
             obj_set_position(o, d->pos_m);
@@ -488,7 +499,7 @@ static void hk_feedback(void *ctx, const can_port_drive_t *d)
 
 static void hk_status(void *ctx, engine_status_t *st)
 {
-    obj_t *o = ctx;
+    obj_t *o = ((const can_hook_ctx_t *)ctx)->o;
     engine_status(o->engine, st);
 }
 
@@ -644,7 +655,11 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
         s->drive_state_logged[k] = -1;
         if (ids.cia402 && (ids.cia402_feedback || ids.cia402_enable) && !s->objs[k]->carried)
             engine_require_position(s->objs[k]->engine, 1); /* the drive says where it is */
-        if (can_port_set_object(s->port, k, &ids, &hk, s->objs[k]) < 0) {
+        s->hctx[k].o = s->objs[k];
+        snprintf(s->hctx[k].src, sizeof s->hctx[k].src, "can %s id 0x%03" PRIX32,
+                 s->cfg->log_in[0] || s->cfg->log_out[0] ? s->cfg->log_ifname : s->cfg->interface,
+                 ids.fd ? ids.waypoint_fd_id : ids.waypoint_id);
+        if (can_port_set_object(s->port, k, &ids, &hk, &s->hctx[k]) < 0) {
             snprintf(why, wl, "can: object '%s': invalid or clashing ids", s->objs[k]->name);
             return -EINVAL;
         }

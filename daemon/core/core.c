@@ -32,11 +32,19 @@ int64_t core_mono_ns(void)
     return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
 }
 
-int obj_push(obj_t *o, const engine_waypoint_t *wp)
+int obj_push_from(obj_t *o, const engine_waypoint_t *wp, const char *src)
 {
     if (o->stopping)
         return -ENGINE_ESTATE;
-    return engine_push(o->engine, wp);
+    rejlog_offered(&o->rejlog, wp, src);
+    int rc = engine_push(o->engine, wp);
+    rejlog_drain(&o->rejlog, o->engine);
+    return rc;
+}
+
+int obj_push(obj_t *o, const engine_waypoint_t *wp)
+{
+    return obj_push_from(o, wp, NULL);
 }
 
 void obj_reset_counters(obj_t *o)
@@ -147,6 +155,7 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
             o->sp.flags |= ENGINE_SP_SKIPPED;
             o->skipped_ticks += k - k0;
         }
+        rejlog_drain(&o->rejlog, o->engine); /* verdicts given by a finish or a tick */
         engine_status(o->engine, &o->status);
         o->status.skipped_ticks += o->skipped_ticks;
         obj_try_rearm(o);
@@ -275,6 +284,7 @@ static void carry_objects(core_t *c, core_t *prev)
         o->born_ns = q->born_ns;
         o->out_lost = q->out_lost;
         o->out_fault = q->out_fault;
+        o->rejlog = q->rejlog;
         o->carried = 1;
     }
 }
@@ -426,6 +436,8 @@ int core_done(const core_t *c)
     return 1;
 }
 
+static void log_rejections(core_t *c);
+
 void core_close(core_t *c)
 {
     if (!c)
@@ -439,15 +451,34 @@ void core_close(core_t *c)
         if (p->opened[t] && transport_table[t]->close)
             transport_table[t]->close(c->tstate[t], c);
     if (c->obj)
+        log_rejections(c); /* engines carried to a new core were taken (NULL) */
+    if (c->obj)
         for (unsigned i = 0; i < c->nobj; i++)
             engine_free(c->obj[i].engine);
     free(c->obj);
     free(p);
 }
 
+static void log_rejection(void *ctx, const char *line)
+{
+    (void)ctx;
+    log_msg(LOG_WARNING, "%s", line);
+}
+
+/* Log the refusals of each object read since the last call (rejlog.h). */
+static void log_rejections(core_t *c)
+{
+    for (unsigned i = 0; i < c->nobj; i++)
+        if (c->obj[i].engine) {
+            rejlog_drain(&c->obj[i].rejlog, c->obj[i].engine);
+            rejlog_flush(&c->obj[i].rejlog, c->obj[i].name, log_rejection, NULL);
+        }
+}
+
 void core_stats_roll(core_t *c)
 {
     stats_t *s = c->stats;
+    log_rejections(c);
     /* safety violations, logged here (once a second at most per object), not in the tick */
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i];

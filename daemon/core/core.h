@@ -44,6 +44,7 @@
 #include "engine.h"
 #include "latency.h"
 #include "loop.h"
+#include "rejlog.h"
 #include "safety.h"
 #include "transport.h"
 
@@ -70,6 +71,8 @@ typedef struct obj {
     uint64_t safety_logged; /* safety violations already logged */
     int safety_rearm;       /* a clear asked to rearm the monitor: done once the
                                      * engine stands on the held position */
+    rejlog_t rejlog;        /* sources of the last waypoints offered, and the refusals
+                                     * to log (rejlog.h; kept when carried) */
 } obj_t;
 
 /*
@@ -111,6 +114,14 @@ void obj_drive_lost(obj_t *o);
  * while the daemon is stopping.  The engine counts the outcome (o->status).
  */
 int obj_push(obj_t *o, const engine_waypoint_t *wp);
+
+/*
+ * obj_push, naming where the waypoint came from (replay "file:line", Modbus
+ * "modbus PEER", CAN "can IFACE id 0xID seq N"; NULL: unknown): a refusal
+ * is logged with it (rejlog.h), rate-limited, once a second by
+ * core_stats_roll.
+ */
+int obj_push_from(obj_t *o, const engine_waypoint_t *wp, const char *src);
 
 /* Reset o's counters: the engine's and the daemon's own (the reset command). */
 void obj_reset_counters(obj_t *o);
@@ -218,7 +229,8 @@ void core_close(core_t *c);
 /* One-line summary ("12 s, 3 objects: boat streaming ..., late p99 40 us ..."). */
 int core_summary(const core_t *c, char *buf, size_t len);
 
-/* Refresh stats->late (called every second by trajd). */
+/* Refresh stats->late and log what happened since the last call (refused
+ * waypoints, rate-limited; safety faults): called every second by trajd. */
 void core_stats_roll(core_t *c);
 
 #endif

@@ -79,6 +79,8 @@ struct modbus_server {
     uint32_t *last_seq;    /* per object, of the last waypoint accepted over Modbus */
     uint32_t *alt_seq;     /* per object, the last sequence number outside the window (0: none) */
     uint64_t *seq_jumps;   /* per object, sequence numbers outside the window */
+    const char *cur_peer;  /* the peer of the request being served ("" between requests) */
+    char rtu_peer[80];     /* "rtu DEVICE unit N" */
     modbus_server_stats_t st;
 };
 
@@ -417,6 +419,7 @@ static int rtu_open(modbus_server_t *s, const modbus_server_config_t *cfg, char 
         msg(err, errlen, "modbus: unit_id %d outside 1..247", cfg->unit_id);
         return -EINVAL;
     }
+    snprintf(s->rtu_peer, sizeof s->rtu_peer, "rtu %.60s unit %d", cfg->rtu_device, cfg->unit_id);
     s->rtu = modbus_new_rtu(cfg->rtu_device, cfg->rtu_baud, cfg->rtu_parity, cfg->rtu_data_bits,
                             cfg->rtu_stop_bits);
     if (!s->rtu || modbus_set_slave(s->rtu, cfg->unit_id) < 0 || modbus_connect(s->rtu) < 0) {
@@ -585,6 +588,11 @@ void modbus_server_free(modbus_server_t *s)
 int modbus_server_fd(const modbus_server_t *s)
 {
     return s->ep;
+}
+
+const char *modbus_server_peer(const modbus_server_t *s)
+{
+    return s->cur_peer ? s->cur_peer : "";
 }
 
 int modbus_server_tcp_port(const modbus_server_t *s)
@@ -782,8 +790,10 @@ static void client_read(modbus_server_t *s, client_t *c)
         }
         uint64_t exc = s->st.exceptions;
         modbus_set_socket(s->tcp, c->fd);
+        s->cur_peer = c->peer;
         int rc = serve(s, s->tcp, c->may_write, c->buf, (int)total, c->buf + 7, total - 7);
         modbus_set_socket(s->tcp, -1);
+        s->cur_peer = "";
         c->requests++;
         c->exceptions += s->st.exceptions - exc;
         c->last_ns = now;
@@ -962,7 +972,9 @@ static void rtu_frame(void *ctx, const uint8_t *f, size_t len)
     modbus_server_t *s = ctx;
     if (f[0] != s->unit_id || (f[1] & 0x80)) /* not ours, broadcast, or no function */
         return;
+    s->cur_peer = s->rtu_peer;
     serve(s, s->rtu, s->writes_enabled, f, (int)len, f + 1, len - 3);
+    s->cur_peer = "";
 }
 
 static void rtu_read(modbus_server_t *s)

@@ -182,6 +182,10 @@ void modbus_server_free(modbus_server_t *s);
 /* The one descriptor to watch for EPOLLIN in the daemon's loop. */
 int modbus_server_fd(const modbus_server_t *s);
 
+/* Inside a hook: the peer whose request is being served (TCP "address:port",
+ * RTU "rtu DEVICE unit N"); "" outside a request. */
+const char *modbus_server_peer(const modbus_server_t *s);
+
 /* The TCP port listened on (after tcp_port 0), or -1 without TCP. */
 int modbus_server_tcp_port(const modbus_server_t *s);
 

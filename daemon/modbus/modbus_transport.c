@@ -82,7 +82,9 @@ static int hook_waypoint(void *ctx, unsigned k, const engine_waypoint_t *wp)
     obj_t *o = &t->core->obj[k];
     if (o->cfg->input != &modbus_transport || !obj_writable(o))
         return MODBUS_SERVER_HOOK_EADDRESS;
-    return obj_push(o, wp);
+    char src[REJLOG_SRC_LEN];
+    snprintf(src, sizeof src, "modbus %s", t->srv ? modbus_server_peer(t->srv) : "");
+    return obj_push_from(o, wp, src);
 }
 
 static int hook_command(void *ctx, unsigned k, unsigned cmd)

@@ -1,6 +1,7 @@
 /* replay_transport.c - replay input transport (see replay_transport.h). */
 #include "replay_transport.h"
 
+#include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -133,9 +134,27 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     return 0;
 }
 
-static int push_obj(void *o, const engine_waypoint_t *wp)
+typedef struct {
+    obj_t *o;
+    const replay_transport_obj_cfg_t *rc;
+} push_ctx_t;
+
+/* Offer a row, named "file:line" for the rejection log (rows carry their
+ * 1-based index in the track as seq). */
+static int push_obj(void *ctx, const engine_waypoint_t *wp)
 {
-    return obj_push(o, wp);
+    const push_ctx_t *p = ctx;
+    const track_t *trk = &p->rc->trk;
+    char src[REJLOG_SRC_LEN];
+    size_t i = (size_t)wp->seq - 1, len = strlen(p->rc->path);
+    /* a long path keeps its end (the file's name) */
+    const char *path = len > 160 ? p->rc->path + len - 160 : p->rc->path;
+    if (wp->seq >= 1 && i < trk->n && trk->line)
+        snprintf(src, sizeof src, "%s%.160s:%" PRIu32, path != p->rc->path ? "..." : "", path,
+                 trk->line[i]);
+    else
+        snprintf(src, sizeof src, "%s%.160s", path != p->rc->path ? "..." : "", path);
+    return obj_push_from(p->o, wp, src);
 }
 
 static void pre_tick(void *state, obj_t *o, int64_t now_ns)
@@ -143,7 +162,8 @@ static void pre_tick(void *state, obj_t *o, int64_t now_ns)
     replay_transport_t *s = state;
     replay_t *r = &s->r[o->index];
     int was_done = replay_done(r);
-    (void)replay_feed_via(r, push_obj, o, o->engine, now_ns);
+    push_ctx_t ctx = {o, cfg_obj_transport(o->cfg, &replay_transport)};
+    (void)replay_feed_via(r, push_obj, &ctx, o->engine, now_ns);
     if (was_done || !replay_done(r))
         return;
     /* The track ran out: say so if none of it was usable (the object then

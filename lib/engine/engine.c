@@ -175,6 +175,22 @@ const char *engine_strerror(int err)
     }
 }
 
+const char *engine_reason_name(int err)
+{
+    switch (err < 0 ? -err : err) {
+    case ENGINE_ENOTFINITE: return "not_finite";
+    case ENGINE_ERANGE: return "range";
+    case ENGINE_EBACKWARDS: return "backwards";
+    case ENGINE_ESAMETIME: return "same_time";
+    case ENGINE_ESPEED: return "speed";
+    case ENGINE_ENUMERIC: return "numeric";
+    case ENGINE_EACCEL: return "accel";
+    case ENGINE_EUNCONFIRMED: return "unconfirmed";
+    case ENGINE_ESTALE: return "stale";
+    default: return NULL;
+    }
+}
+
 const char *engine_state_name(engine_state_t s)
 {
     switch (s) {

@@ -231,6 +231,28 @@ class CanDaemon(unittest.TestCase):
         # the loss was reported at once: some STATUS carries last_err LOST (0x41)
         self.assertIn(0x41, [int(s["ST_LastErr"]) for _, s in st])
 
+    # Given waypoint 70 of the track moved 500 m east (a position jump no
+    # boat makes in 0.2 s), then STATUS counts exactly one rejection and
+    # trajd's log names it by its bus, frame id and sequence number.
+    def test_rejection_logged(self):
+        d = self.sub("spike")
+        xyz = os.path.join(d, "track.csv")
+        with open(self.xyz) as fh:
+            rows = fh.read().splitlines()
+        t, x, y, z = rows[70].split(",")  # the header is line 0: waypoint 70, seq 70
+        rows[70] = ",".join((t, "%.6f" % (float(x) + 500.0), y, z))
+        with open(xyz, "w") as fh:
+            fh.write("\n".join(rows) + "\n")
+        ct.write_wplog(xyz, os.path.join(d, "wp.log"), iface="vcan0")
+        p = run_trajd(conf(d))
+        self.assertEqual(p.returncode, 0, p.stderr)
+        last = ct.decode_by_id(os.path.join(d, "sp.log"), 0x6C0)[-1][1]
+        self.assertEqual(int(last["ST_Rejected"]), 1)
+        lines = [l for l in p.stderr.splitlines() if ": rejected (" in l]
+        self.assertEqual(len(lines), 1, p.stderr)
+        self.assertIn("object 'boat': can vcan0 id 0x680 seq 70: rejected (", lines[0])
+        self.assertIn(" t=%.3f s" % float(t), lines[0])
+
     # Given 4 objects at 1 kHz with own frames and CiA 402 RPDOs at 500 kbit/s,
     # then --check-config refuses with the computed load, which agrees with
     # frame lengths computed here from Davis et al. 2007 (eq. 2).

@@ -698,5 +698,58 @@ class TestReplayMatchesTrajreplay(unittest.TestCase):
         missed, ticks = self.run_and_compare(1000)
         self.assertGreater(missed, ticks // 4)
 
+class TestRejectionsLogged(unittest.TestCase):
+    def test_rejections_logged_like_trajreplay(self):
+        """Given a clean 5 Hz circle with 3 fixes moved 500 m away and 12 rows
+        stamped back at t = 0 in one burst, when trajd replays it, then each
+        refusal it logs names the file:line and reason trajreplay reports for
+        that row, at most REJLOG_LINES (5) lines per second and object are
+        logged in full, the rest are counted by reason in a "more ... not
+        shown" line, and shown + counted equals trajreplay's total."""
+        with tempfile.TemporaryDirectory() as tmp:
+            track = os.path.join(tmp, "bad.csv")
+            xyz_track(track, 400, 0.2)
+            with open(track) as f:
+                rows = f.read().splitlines()
+            for i in (50, 150, 250):  # row i is on line i + 2 (header on line 1)
+                t, x, y, z = rows[i + 1].split(",")
+                rows[i + 1] = ",".join((t, "%.6f" % (float(x) + 500.0), y, z))
+            rows[301:301] = ["0.000,%d.0,0.0,1.0" % (1000 + k) for k in range(12)]
+            write(track, "\n".join(rows) + "\n")
+            conf = os.path.join(tmp, "t.conf")
+            write(conf, "[daemon]\nrate_hz = 100\nspeed = 20\nexit_when_done = yes\n"
+                        "status_interval_s = 0\n[object.boat]\ninput = replay\n"
+                        "replay.track = bad.csv\noutput = csv\ncsv.path = d.csv\n")
+            d = Daemon(tmp, conf)
+            try:
+                self.assertEqual(d.wait(120), 0, d.stderr())
+                log = d.stderr()
+            finally:
+                d.close()
+            r = subprocess.run([TRAJREPLAY, "--rate", "100", "-q", "-o", os.path.join(tmp, "r.csv"),
+                                track], capture_output=True, text=True, timeout=120)
+            self.assertEqual(r.returncode, 0, r.stderr)
+        want = {}  # "bad.csv:LINE" -> reason, as trajreplay reports them
+        for l in r.stderr.splitlines():
+            if ": rejected (" in l:
+                where, why = l.split(": rejected (")
+                want[os.path.basename(where)] = why.rstrip(")")
+        self.assertEqual(len(want), 15, r.stderr)
+        shown, more = 0, 0
+        for l in log.splitlines():
+            if ": rejected (" in l:
+                where = l.split("object 'boat': ")[1].split(": rejected (")[0]
+                why = l.split(": rejected (")[1].split(")")[0]
+                self.assertEqual(want.get(os.path.basename(where)), why, l)
+                shown += 1
+            elif "more rejected waypoints not shown" in l:
+                n = int(l.split("object 'boat': ")[1].split(" ")[0])
+                by = l.split("(")[1].rstrip(")").split(", ")
+                self.assertEqual(sum(int(b.split(" ")[1]) for b in by), n, l)
+                more += n
+        self.assertEqual(shown + more, 15, log)
+        self.assertGreater(more, 0, log)  # the burst of 12 in one second was cut short
+
+
 if __name__ == "__main__":
     unittest.main(verbosity=2)

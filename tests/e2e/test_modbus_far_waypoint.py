@@ -102,6 +102,13 @@ class FarWaypoint(unittest.TestCase):
         self.assertGreaterEqual(mbsim.u32(r, M["MBMAP_O_ACCEPTED"]), 79)
         # the setpoint stays on the good track (never near t = 1e9)
         self.assertLess(mbsim.f64(r, M["MBMAP_O_T_S"]), 100.0)
+        # and the refusal is logged with the client that wrote it (its own
+        # address:port, as this socket sees it) and the waypoint's seq
+        me = "modbus %s:%d" % s.getsockname()[:2]
+        line = self.lines.wait_for(": rejected (", WAIT_S)
+        self.assertIsNotNone(line, "".join(self.lines.all))
+        self.assertIn("object 'fed': %s: rejected (" % me, line)
+        self.assertIn(" seq 41 t=1000000000.000 s", line)
         s.close()
 
     if HAVE_CONFIRM:
