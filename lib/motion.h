@@ -99,6 +99,10 @@ typedef struct {
     uint32_t flags;                 /* ENGINE_SP_* */
     uint32_t cycle;                 /* tick counter, wraps */
     uint32_t track;                 /* trajectory number, +1 at each new trajectory */
+    double age_s;                   /* under one clock (engine_set_clock): now - t_s, the age of
+                                       the instant this setpoint stands for, on the sender's
+                                       time base (the play-out delay D plus the lag); NaN for
+                                       relative-time tracks and before any position */
 } engine_setpoint_t;
 
 typedef struct {

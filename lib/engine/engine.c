@@ -131,6 +131,15 @@ struct engine {
     int avail_rest;    /* ... and the curve ends at rest there */
     int end_brake;     /* braking to rest before an end that is not at rest */
 
+    /* ---- one clock (engine_set_clock, CLOCK.md) ---- */
+    int clocked;          /* the output follows the caller's clock */
+    int locked;           /* its track time is exactly the play time */
+    int64_t clk_now_ns;   /* now on the sender's time base (last call) */
+    int64_t clk_delay_ns; /* play-out delay D */
+    double clk_rate;      /* d now / dt */
+    double clk_catchup;   /* most the rate rises above clk_rate */
+    int64_t play_ns;      /* now - D at the step being made */
+
     engine_status_t st;
 };
 
@@ -979,6 +988,20 @@ int engine_set_override(engine_t *e, double ratio)
     return 0;
 }
 
+int engine_set_clock(engine_t *e, const engine_clock_t *clk)
+{
+    if (!(clk->delay_ns >= 0) || !(fabs(clk->rate - 1.0) <= ENGINE_CLOCK_RATE_TOL) ||
+        !(clk->catchup >= 0 && clk->catchup <= 1))
+        return -ENGINE_ERANGE;
+    e->clocked = 1;
+    e->clk_now_ns = clk->now_ns;
+    e->clk_delay_ns = clk->delay_ns;
+    e->clk_rate = clk->rate;
+    e->clk_catchup = clk->catchup;
+    e->play_ns = clk->now_ns - clk->delay_ns;
+    return 0;
+}
+
 int engine_set_position(engine_t *e, const double pos_m[ENGINE_AXES])
 {
     for (int k = 0; k < AX; k++) {
@@ -1138,6 +1161,19 @@ static double tau_of(const engine_t *e, int64_t n)
     return tick_time(e, n) + e->s_off;
 }
 
+/* The play time (now - D), absolute, and relative to origin_t: epoch
+ * seconds in a double are only good to 2.4e-7 s, so the difference is taken
+ * in long double from the integer nanoseconds. */
+static double play_abs(const engine_t *e)
+{
+    return (double)((long double)e->play_ns * 1e-9L);
+}
+
+static double play_rel(const engine_t *e)
+{
+    return (double)((long double)e->play_ns * 1e-9L - (long double)e->origin_t);
+}
+
 static void out_eval(engine_t *e)
 {
     double v2 = 0;
@@ -1205,6 +1241,24 @@ static void find_avail(engine_t *e)
     }
 }
 
+/* One clock: a trajectory starts at the play time's sub-tick phase past its
+ * first waypoint, locked (the output was at rest there, or moving by the
+ * curve's own start, exactly as an unclocked start on its grid), or, if the
+ * play time is already a tick or more past it (waypoints came late), at its
+ * start, with the lag to win back. */
+static void clock_start(engine_t *e)
+{
+    double d = play_rel(e);
+
+    e->scaled = 1;
+    e->ts.rate = e->clk_rate;
+    e->ts.acc = 0.0;
+    e->locked = d >= 0 && d < e->period_s && d < e->cur_t1;
+    e->s = e->locked ? d : 0.0;
+    out_eval_scaled(e);
+    e->out_t = e->locked ? play_abs(e) : e->origin_t;
+}
+
 /* Begin streaming the trajectory at the queue head (tick 0 of it). */
 static void start_trajectory(engine_t *e, int new_flag)
 {
@@ -1232,7 +1286,9 @@ static void start_trajectory(engine_t *e, int new_flag)
     out_eval(e);
     e->out_t = e->origin_t;
     e->mode = OUT_STREAM;
-    if (e->scaled) {
+    if (e->clocked) {
+        clock_start(e);
+    } else if (e->scaled) {
         /* from a scaled transfer: go on scaled from the start */
         e->s = 0.0;
         out_eval_scaled(e);
@@ -1259,18 +1315,25 @@ static double head_speed(const engine_t *e)
     return v;
 }
 
-/* Start a transfer from the output position to target (transfer.h). */
-static void start_transfer(engine_t *e, const double *target, double gap_s)
+/* How long a transfer from the output position to target takes (transfer.h). */
+static double xfer_duration(const engine_t *e, const double *target, double gap_s, int *capped)
 {
-    double dist = 0, v_obj, dur;
-    int capped = 0;
+    double dist = 0, v_obj;
 
     for (int i = 0; i < AX; i++)
         dist += (target[i] - e->pos[i]) * (target[i] - e->pos[i]);
     dist = sqrt(dist);
     v_obj = fmax(transfer_motion_speed(&e->motion), head_speed(e));
-    dur = transfer_duration(&e->xcfg, dist, v_obj, transfer_motion_accel(&e->motion), gap_s,
-                            &capped);
+    return transfer_duration(&e->xcfg, dist, v_obj, transfer_motion_accel(&e->motion), gap_s,
+                             capped);
+}
+
+/* Start a transfer from the output position to target (transfer.h). */
+static void start_transfer(engine_t *e, const double *target, double gap_s)
+{
+    int capped = 0;
+    double dur = xfer_duration(e, target, gap_s, &capped);
+
     memset(&e->cur, 0, sizeof(e->cur));
     e->cur.kind = QE_SEG;
     transfer_segment(&e->cur.seg, e->pos, target, dur);
@@ -1387,14 +1450,22 @@ static void unit_step(engine_t *e)
     e->underrun = 0;
 }
 
+static void scaled_advance(engine_t *e, double s1, double target, int lim);
+
 /* One tick off the unit grid: the time scaling chooses the advance. */
 static void scaled_step(engine_t *e, double target, double R, double A, double J)
 {
     int lim = 0;
     double s = e->scaled ? e->s : tau_of(e, e->n);
     double ds = ts_step(&e->ts, target, R, A, J, e->period_s, NULL, &lim);
-    double s1 = s + ds;
 
+    scaled_advance(e, s + ds, target, lim);
+}
+
+/* Move the scaled output to track time s1 (relative to origin_t), through
+ * the queued segments, and update the states that depend on it. */
+static void scaled_advance(engine_t *e, double s1, double target, int lim)
+{
     e->scaled = 1;
     e->n++;
     while (s1 >= e->cur_t1) {
@@ -1447,13 +1518,55 @@ static void scaled_step(engine_t *e, double target, double R, double A, double J
             finish_here(e);
         return;
     }
-    if (is_exactly(e->ts.rate, 1.0) && is_exactly(e->ts.acc, 0.0) && is_exactly(target, 1.0)) {
+    if (!e->clocked && is_exactly(e->ts.rate, 1.0) && is_exactly(e->ts.acc, 0.0) &&
+        is_exactly(target, 1.0)) {
         /* back on a grid of whole periods, shifted by the time lost */
         e->s_off = e->s - tick_time(e, e->n);
         e->seg_n0 = e->n;
         seed_cur(e, e->n);
         e->scaled = 0;
     }
+}
+
+/*
+ * One tick of a clocked trajectory (CLOCK.md): locked on the play time while
+ * it advances by one tick and the curve ahead is long enough to stop in;
+ * else the time scaling with the target rate + GAIN * lag, the lag's part
+ * bounded by catchup above (a bounded catch-up) and by rest below.
+ */
+static void clocked_step(engine_t *e, double R, double A, double J)
+{
+    double s = e->scaled ? e->s : tau_of(e, e->n), p = play_rel(e), rho = e->clk_rate;
+    double T = e->period_s;
+    int free_run = !e->stop_req && !e->end_brake && e->override >= 1.0;
+
+    if (e->locked && free_run && fabs(p - s - rho * T) <= ENGINE_CLOCK_LOCK_S && p > s &&
+        (isinf(R) || ts_stop_dist(rho, 0.0, A, J) < R - rho * T)) {
+        e->ts.rate = rho;
+        e->ts.acc = 0.0;
+        e->n++;
+        scaled_advance(e, p, rho, 0);
+        if (e->mode == OUT_STREAM)
+            e->out_t = play_abs(e);
+        return;
+    }
+    e->locked = 0;
+    double target = 0.0;
+    if (!e->stop_req && !e->end_brake) {
+        /* the lag left after this tick if it ran at the clock's rate */
+        double lead = ENGINE_CLOCK_GAIN * (p - s - rho * T);
+        if (lead > e->clk_catchup)
+            lead = e->clk_catchup;
+        target = rho + lead;
+        if (target < 0)
+            target = 0;
+        if (e->override < 1.0)
+            target *= e->override;
+    }
+    scaled_step(e, target, R, A, J);
+    if (e->mode == OUT_STREAM && free_run && fabs(p - e->s) <= ENGINE_CLOCK_LOCK_S &&
+        fabs(e->ts.rate - rho) <= ENGINE_CLOCK_LOCK_S * ENGINE_CLOCK_GAIN + 1e-9)
+        e->locked = 1;
 }
 
 /* One tick of the output state machine. */
@@ -1466,7 +1579,6 @@ static void step_once(engine_t *e)
             hold_here(e);
             return;
         }
-        unit_reset(e);
         if (!e->have_pos) {
             /* no position known and none required: the start is the last resort */
             for (int k = 0; k < AX; k++)
@@ -1476,7 +1588,23 @@ static void step_once(engine_t *e)
         double d2 = 0;
         for (int k = 0; k < AX; k++)
             d2 += (h->seg.c[k][0] - e->pos[k]) * (h->seg.c[k][0] - e->pos[k]);
-        if (sqrt(d2) > ENGINE_TRANSFER_TOL_M) {
+        int xfer = sqrt(d2) > ENGINE_TRANSFER_TOL_M;
+        if (e->clocked) {
+            /* one clock: not before the play time reaches the start, less
+             * the transfer that leads there */
+            double lead = 0.0, target[AX];
+            int capped = 0;
+            for (int k = 0; k < AX; k++)
+                target[k] = h->seg.c[k][0];
+            if (xfer)
+                lead = xfer_duration(e, target, h->gap_s, &capped);
+            if ((long double)e->play_ns * 1e-9L < (long double)h->seg.t0_s - lead) {
+                hold_here(e);
+                return;
+            }
+        }
+        unit_reset(e);
+        if (xfer) {
             double target[AX];
             for (int k = 0; k < AX; k++)
                 target[k] = h->seg.c[k][0];
@@ -1495,6 +1623,10 @@ static void step_once(engine_t *e)
     if (e->mode == OUT_STREAM && e->avail_closed && !e->avail_rest && !e->end_brake &&
         ts_stop_dist(e->ts.rate, e->ts.acc, A, J) >= R - e->ts.rate * e->period_s)
         e->end_brake = 1; /* the curve does not end at rest: brake before its end */
+    if (e->clocked && e->mode == OUT_STREAM) {
+        clocked_step(e, R, A, J);
+        return;
+    }
     double target = scale_target(e);
     if (!e->scaled && is_exactly(target, 1.0) &&
         (isinf(R) || ts_stop_dist(1.0, 0.0, A, J) < R - e->period_s)) {
@@ -1561,6 +1693,9 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
         sp->flags |= ENGINE_SP_SCALED;
     sp->cycle = e->cycle;
     sp->track = e->out_track;
+    sp->age_s = NAN;
+    if (e->clocked && e->have_pos)
+        sp->age_s = (double)((long double)e->clk_now_ns * 1e-9L - (long double)e->out_t);
 }
 
 /* 1 if further steps cannot change anything until new input arrives. */
@@ -1601,6 +1736,10 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     e->have_now = 1;
     e->last_now = now_ns;
     for (i = 0; i < k; i++) {
+        if (e->clocked) /* the play time of each step, the last one's given */
+            e->play_ns = e->clk_now_ns - e->clk_delay_ns -
+                         (int64_t)llround((double)(k - 1 - i) * e->clk_rate *
+                                          (double)e->cfg.period_ns);
         step_once(e);
         if (i + 1 < k && stalled(e)) {
             /* Nothing can change before the next push: the remaining steps

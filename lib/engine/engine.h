@@ -389,6 +389,42 @@ int engine_has_position(const engine_t *e);
  * trajectories.  Returns 0, or -ENGINE_ERANGE (NaN, below 0 or above 2).
  */
 int engine_set_override(engine_t *e, double ratio);
+/*
+ * One clock (issue 16 item 2, lib/engine/CLOCK.md).  For tracks stamped in
+ * absolute time (seconds since the epoch), the caller passes, before every
+ * engine_tick, the time now on the sender's time base (its CLOCK_REALTIME
+ * with the sender's drift absorbed: playout.h) and the play-out delay D.
+ * The output then stands at track time now - D, the same instant for every
+ * engine given the same clock, instead of an origin of its own:
+ *   - a trajectory starts when now - D reaches its first waypoint's time
+ *     (a transfer to it starts early enough to arrive by then), at the
+ *     sub-tick phase of that moment, locked: its track time is exactly
+ *     now - D at every tick (the curve evaluated there, velocity k' * rate);
+ *   - when the solved curve runs short (waypoints late) the time scaling
+ *     slows it down as without a clock; behind the clock by a lag L, the
+ *     output runs at rate + min(ENGINE_CLOCK_GAIN * L, catchup) (a bounded
+ *     catch-up within scale_accel_m_s2 and scale_jerk_m_s3), and locks
+ *     again once within ENGINE_CLOCK_LOCK_S of now - D;
+ *   - a feed override below 100 % slows it down (the lag is won back
+ *     afterwards); above 100 % it cannot run ahead of the clock.
+ * The setpoint's age_s is now - t_s.  Without engine_set_clock the engine
+ * keeps its own origin per trajectory exactly as before (relative time).
+ * Once called, the engine stays clocked: call it before every tick.
+ * Returns 0, or -ENGINE_ERANGE (delay_ns < 0, rate outside 1 +- 1e-3,
+ * catchup outside 0 .. 1, or now_ns before the previous call's).
+ */
+#define ENGINE_CLOCK_GAIN 1.0        /* 1/s: a lag decays with a time constant of 1 s */
+#define ENGINE_CLOCK_LOCK_S 1e-6     /* lag within which the output locks on the clock */
+#define ENGINE_CLOCK_RATE_TOL 1e-3   /* |rate - 1| accepted at most */
+typedef struct {
+    int64_t now_ns;   /* now on the sender's time base, ns since the epoch */
+    int64_t delay_ns; /* play-out delay D: the output stands at now - D */
+    double rate;      /* d now / dt: 1 + the sender's drift */
+    double catchup;   /* most the rate rises above `rate` to win back a lag
+                         (0.05: 5 %) */
+} engine_clock_t;
+int engine_set_clock(engine_t *e, const engine_clock_t *clk);
+
 /* Zero every counter of engine_status (state and last_seq are kept). */
 void engine_reset_counters(engine_t *e);
 

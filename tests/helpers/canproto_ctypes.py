@@ -29,7 +29,7 @@ class Setpoint(ctypes.Structure):
                 ("pos_m", ctypes.c_double * AXES), ("vel_m_s", ctypes.c_double * AXES),
                 ("acc_m_s2", ctypes.c_double * AXES), ("state", ctypes.c_int),
                 ("flags", ctypes.c_uint32), ("cycle", ctypes.c_uint32),
-                ("track", ctypes.c_uint32)]
+                ("track", ctypes.c_uint32), ("age_s", ctypes.c_double)]
 
 
 class RxOut(ctypes.Structure):
