@@ -174,9 +174,11 @@ static void reload(trajd_t *d)
         return;
     sd_notifyf(0, "RELOADING=1\nMONOTONIC_USEC=%llu", (unsigned long long)(core_mono_ns() / 1000));
     log_msg(LOG_NOTICE, "SIGHUP: reloading %s", d->conf_path);
-    if (cfg_load(d->conf_path, &nc, err, sizeof err) < 0) {
+    if (cfg_load(d->conf_path, &nc, err, sizeof err) < 0 ||
+        cfg_reload_check(d->cfg, nc, err, sizeof err) < 0) {
         log_msg(LOG_ERR, "reload refused, still running the old configuration: %s", err);
         sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
+        cfg_free(nc);
         return;
     }
     /* core_open carries unchanged objects over, closes the old transports

@@ -215,7 +215,7 @@ static int obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
         }
     }
     if (!strcmp(k, "index")) {
-        rc = cfg_get_int(kv, 0, 15, &v, why, wl);
+        rc = cfg_get_int(kv, 0, CAN_INDEX_MAX, &v, why, wl);
         oc->index = (int)v;
         return rc;
     }
@@ -245,9 +245,9 @@ static int obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
     return -CFG_EUNKNOWN;
 }
 
-void can_obj_ids(const can_obj_cfg_t *oc, unsigned obj_index, canproto_ids_t *ids)
+void can_obj_ids(const can_obj_cfg_t *oc, unsigned obj_id, canproto_ids_t *ids)
 {
-    canproto_ids_default(ids, oc->index >= 0 ? (unsigned)oc->index : obj_index);
+    canproto_ids_default(ids, oc->index >= 0 ? (unsigned)oc->index : obj_id);
     const canproto_ids_t *g = &oc->ids;
     if (oc->given & GIVEN_WP)
         ids->waypoint_id = g->waypoint_id;
@@ -328,6 +328,85 @@ static void port_config(const can_cfg_t *c, int64_t period_ns, can_port_config_t
     pc->max_late_ns = c->max_late_ms < 0 ? period_ns / 2 : (int64_t)llround(c->max_late_ms * 1e6);
 }
 
+/* Ids that must not come from a default: the defaults of an object id above
+ * 15 (they would run into the next id range), and CiA 402 COB-IDs (they are
+ * the drives' node ids: a drive must be named, never numbered by trajd). */
+static int ids_explicit(const cfg_obj_t *o, char *why, size_t wl)
+{
+    const can_obj_cfg_t *oc = cfg_obj_transport(o, &can_transport);
+    const unsigned all = GIVEN_WP | GIVEN_WPFD | GIVEN_SP | GIVEN_SPFD | GIVEN_ST;
+    const unsigned cobs = (GIVEN_COB << CANPROTO_CIA402_AXES) - GIVEN_COB;
+    if (oc->index < 0 && o->id > CAN_INDEX_MAX && (oc->given & all) != all) {
+        snprintf(why, wl,
+                 "object '%s': id %d has no default CAN ids (0..%d): give can.index = 0..%d or "
+                 "every CAN id (can.waypoint_id, waypoint_fd_id, setpoint_id, setpoint_fd_id, "
+                 "status_id)",
+                 o->name, o->id, CAN_INDEX_MAX, CAN_INDEX_MAX);
+        return -CFG_EVALUE;
+    }
+    if (oc->ids.cia402 && (oc->given & cobs) != cobs) {
+        snprintf(why, wl,
+                 "object '%s': can.cia402 = yes needs every COB-ID explicit (can.cia402_cob_x, "
+                 "can.cia402_cob_y, can.cia402_cob_z; 0 = axis not sent): they name the drives' "
+                 "nodes and never follow the object's id or place in the file",
+                 o->name);
+        return -CFG_EVALUE;
+    }
+    return 0;
+}
+
+/* An id moved: changed, unless optional and sent before or after only (a
+ * CiA 402 axis switched on or off is not a move). */
+static int id_moved(uint32_t was, uint32_t now, int optional)
+{
+    return was != now && (!optional || (was && now));
+}
+
+/* A reload may not move a CAN id of an object that stays (same name). */
+static int reload_check(const cfg_t *old, const cfg_t *nw, int *line, char *why, size_t wl)
+{
+    for (unsigned k = 0; k < nw->nobj; k++) {
+        const cfg_obj_t *o = &nw->obj[k];
+        const cfg_obj_t *was = cfg_obj_by_name(old, o->name);
+        if (!was || !uses_can(o) || !uses_can(was))
+            continue;
+        canproto_ids_t a, b;
+        can_obj_ids(cfg_obj_transport(was, &can_transport), (unsigned)was->id, &a);
+        can_obj_ids(cfg_obj_transport(o, &can_transport), (unsigned)o->id, &b);
+        static const struct {
+            const char *name;
+            size_t off;
+        } f[] = {{"waypoint", offsetof(canproto_ids_t, waypoint_id)},
+                 {"FD waypoint", offsetof(canproto_ids_t, waypoint_fd_id)},
+                 {"setpoint", offsetof(canproto_ids_t, setpoint_id)},
+                 {"FD setpoint", offsetof(canproto_ids_t, setpoint_fd_id)},
+                 {"status", offsetof(canproto_ids_t, status_id)}};
+        uint32_t va[8], vb[8];
+        const char *what[8];
+        unsigned n = 0;
+        for (size_t i = 0; i < sizeof f / sizeof f[0]; i++, n++) {
+            memcpy(&va[n], (const char *)&a + f[i].off, sizeof va[n]);
+            memcpy(&vb[n], (const char *)&b + f[i].off, sizeof vb[n]);
+            what[n] = f[i].name;
+        }
+        for (unsigned ax = 0; ax < CANPROTO_CIA402_AXES; ax++, n++) {
+            va[n] = a.cia402 ? a.cia402_cob_id[ax] : 0;
+            vb[n] = b.cia402 ? b.cia402_cob_id[ax] : 0;
+            what[n] = ax == 0   ? "CiA 402 COB-ID x"
+                      : ax == 1 ? "CiA 402 COB-ID y"
+                                : "CiA 402 COB-ID z";
+        }
+        for (unsigned i = 0; i < n; i++)
+            if (id_moved(va[i], vb[i], i >= 5)) {
+                *line = o->line;
+                snprintf(why, wl, "[object.%s]: its %s id would move from 0x%03X to 0x%03X",
+                         o->name, what[i], (unsigned)va[i], (unsigned)vb[i]);
+                return -CFG_EVALUE;
+            }
+    }
+    return 0;
+}
+
 static int check(cfg_t *cfg, int *line, char *why, size_t wl)
 {
     const can_cfg_t *c = cfg_transport(cfg, &can_transport);
@@ -351,8 +430,11 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
         const cfg_obj_t *o = &cfg->obj[idx[k]];
         canproto_ids_t ids;
         const char *rule = NULL;
-        can_obj_ids(cfg_obj_transport(o, &can_transport), idx[k], &ids);
-        if (canproto_ids_check(&ids, &rule) < 0) {
+        can_obj_ids(cfg_obj_transport(o, &can_transport), (unsigned)o->id, &ids);
+        if (ids_explicit(o, why, wl) < 0) {
+            *line = o->line;
+            rc = -CFG_EVALUE;
+        } else if (canproto_ids_check(&ids, &rule) < 0) {
             *line = o->line;
             snprintf(why, wl, "object '%s': %s", o->name, rule);
             rc = -CFG_EVALUE;
@@ -649,7 +731,8 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
 {
     for (unsigned k = 0; k < s->n; k++) {
         canproto_ids_t ids;
-        can_obj_ids(cfg_obj_transport(s->objs[k]->cfg, &can_transport), s->objs[k]->index, &ids);
+        can_obj_ids(cfg_obj_transport(s->objs[k]->cfg, &can_transport),
+                    (unsigned)s->objs[k]->cfg->id, &ids);
         can_port_hooks_t hk = {s->is_input[k] ? hk_push : hk_push_refuse, hk_command, hk_status,
                                hk_feedback};
         s->drive_state_logged[k] = -1;
@@ -812,6 +895,7 @@ const transport_t can_transport = {
     .obj_cfg_default = obj_default,
     .obj_key = obj_key,
     .check = check,
+    .reload_check = reload_check,
     .open = open_,
     .pre_tick = pre_tick,
     .setpoint = setpoint,

@@ -77,10 +77,14 @@ struct core;
  */
 can_bus_state_t can_transport_bus(const struct core *c, uint32_t *load_permille);
 
+/* Highest can.index (and object id) with default ids: 0x680+n .. 0x6C0+n. */
+#define CAN_INDEX_MAX 15
+
 /*
- * The ids of object o (defaults for its can.index, then the keys given).
- * For the tests and the bus-load message.
+ * The ids of an object (defaults for its can.index, or if not given for its
+ * id = N, never its place in the file; then the keys given).  For the tests
+ * and the bus-load message.
  */
-void can_obj_ids(const can_obj_cfg_t *oc, unsigned obj_index, canproto_ids_t *ids);
+void can_obj_ids(const can_obj_cfg_t *oc, unsigned obj_id, canproto_ids_t *ids);
 
 #endif

@@ -256,6 +256,7 @@ static void begin_section(parse_t *p, const char *name)
         engine_config_default(&o->engine);
         o->safety_max_step_m = o->safety_max_speed_m_s = o->safety_max_accel_m_s2 = -1;
         o->writable = -1;
+        o->id = -1;
         for (unsigned t = 0; transport_table[t]; t++)
             if (alloc_block(&o->tcfg[t], transport_table[t]->obj_cfg_size,
                             transport_table[t]->obj_cfg_default) < 0) {
@@ -510,6 +511,15 @@ static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size
         return key_obj_drive(o, kv, why, wl);
     if (strcmp(kv->key, "writable") == 0)
         return cfg_get_bool(kv, &o->writable, why, wl);
+    if (strcmp(kv->key, "id") == 0) {
+        long long v;
+        int rc = cfg_get_int(kv, 0, CFG_ID_MAX, &v, why, wl);
+        if (rc == 0) {
+            o->id = (int)v;
+            o->id_line = kv->line;
+        }
+        return rc;
+    }
     if (strcmp(kv->key, "input") == 0) {
         const transport_t *t = transport_find(kv->value);
         if (!t || !(t->roles & TRANSPORT_INPUT)) {
@@ -602,6 +612,33 @@ static int handler(void *user, const char *section, const char *name, const char
     return rc == 0;
 }
 
+/* Every object's id: given (required with more than one object), unique. */
+static void check_ids(parse_t *p)
+{
+    cfg_t *c = p->c;
+    for (unsigned i = 0; i < c->nobj && !p->err; i++) {
+        cfg_obj_t *o = &c->obj[i];
+        if (o->id < 0 && c->nobj == 1) {
+            o->id = 0;
+            continue;
+        }
+        if (o->id < 0) {
+            fail(p, CFG_EMISSING, o->line,
+                 "[object.%s]: 'id' is missing: with more than one object each needs its own "
+                 "id = 0..%d (its Modbus block and CAN ids derive from it, never from its place "
+                 "in the file)",
+                 o->name, CFG_ID_MAX);
+            return;
+        }
+        for (unsigned j = 0; j < i; j++)
+            if (c->obj[j].id == o->id) {
+                fail(p, CFG_EDUP, o->id_line, "[object.%s] id: %d is also object '%s''s id",
+                     o->name, o->id, c->obj[j].name);
+                return;
+            }
+    }
+}
+
 /* Rules that need the whole file. */
 static void check_all(parse_t *p)
 {
@@ -654,6 +691,9 @@ static void check_all(parse_t *p)
                     return;
                 }
     }
+    check_ids(p);
+    if (p->err)
+        return;
     for (unsigned t = 0; transport_table[t]; t++) {
         const transport_t *tr = transport_table[t];
         if (!tr->check || !cfg_uses(c, tr))
@@ -821,5 +861,49 @@ int cfg_uses(const cfg_t *c, const transport_t *t)
     for (unsigned k = 0; k < c->nobj; k++)
         if (cfg_obj_uses(&c->obj[k], t))
             return 1;
+    return 0;
+}
+
+const cfg_obj_t *cfg_obj_by_id(const cfg_t *c, int id)
+{
+    for (unsigned k = 0; k < c->nobj; k++)
+        if (c->obj[k].id == id)
+            return &c->obj[k];
+    return NULL;
+}
+
+const cfg_obj_t *cfg_obj_by_name(const cfg_t *c, const char *name)
+{
+    for (unsigned k = 0; k < c->nobj; k++)
+        if (strcmp(c->obj[k].name, name) == 0)
+            return &c->obj[k];
+    return NULL;
+}
+
+int cfg_reload_check(const cfg_t *old, const cfg_t *nw, char *err, size_t errlen)
+{
+    for (unsigned k = 0; k < nw->nobj; k++) {
+        const cfg_obj_t *o = &nw->obj[k];
+        const cfg_obj_t *was = cfg_obj_by_name(old, o->name);
+        if (!was || was->id == o->id)
+            continue;
+        snprintf(err, errlen,
+                 "%s:%d: [object.%s] id: %d, running as %d: a reload never moves an object's "
+                 "Modbus block or CAN ids (restart trajd to renumber)",
+                 nw->path, o->id_line ? o->id_line : o->line, o->name, o->id, was->id);
+        return -CFG_EVALUE;
+    }
+    for (unsigned t = 0; transport_table[t]; t++) {
+        const transport_t *tr = transport_table[t];
+        char why[CFG_WHY_MAX] = "";
+        int line = 0;
+        if (tr->reload_check && tr->reload_check(old, nw, &line, why, sizeof why) < 0) {
+            snprintf(err, errlen,
+                     "%s:%d: %s (a reload never moves an object's addresses: "
+                     "restart trajd to change them)",
+                     nw->path, line, why);
+            return -CFG_EVALUE;
+        }
+    }
     return 0;
 }

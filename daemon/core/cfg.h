@@ -37,6 +37,7 @@
 #define CFG_OUTPUTS_MAX 4     /* outputs per object */
 #define CFG_TRANSPORTS_MAX 16 /* transports in transport_table */
 #define CFG_WHY_MAX 256       /* room for a key function's message */
+#define CFG_ID_MAX 63         /* object ids 0..63 (the Modbus map holds 64 object blocks) */
 
 enum cfg_error {
     CFG_OK = 0,
@@ -90,7 +91,14 @@ typedef struct {
 /* [object.NAME] */
 typedef struct {
     char name[CFG_NAME_MAX];
-    int line;                      /* line of its section header */
+    int line; /* line of its section header */
+    /* id = N: the object's identity on the buses, 0..CFG_ID_MAX.  Its Modbus
+     * block (MBMAP_OBJ_BASE(id)) and its default CAN ids (can.index = id)
+     * derive from it, never from its place in the file.  Required when the
+     * file has more than one object; a lone object without it is id 0.  A
+     * reload may not change it (cfg_reload_check). */
+    int id;
+    int id_line;                   /* line of the id key, 0 if not given */
     engine_config_t engine;        /* period_ns = daemon.period_ns */
     const struct transport *input; /* required */
     const struct transport *output[CFG_OUTPUTS_MAX];
@@ -132,6 +140,20 @@ int cfg_load(const char *path, cfg_t **out, char *err, size_t errlen);
 /* The same from text in memory; name is used in messages, dir for relative paths. */
 int cfg_load_string(const char *text, const char *name, const char *dir, cfg_t **out, char *err,
                     size_t errlen);
+
+/*
+ * Whether nw may replace the running old at a reload: no object present in
+ * both (by name) may change its id, nor any address a transport derives for it
+ * (transport_t.reload_check: CAN ids, CiA 402 COB-IDs).  Returns 0, or
+ * -CFG_EVALUE with err holding "newpath:line: message".
+ */
+int cfg_reload_check(const cfg_t *old, const cfg_t *nw, char *err, size_t errlen);
+
+/* Object by id, or NULL. */
+const cfg_obj_t *cfg_obj_by_id(const cfg_t *c, int id);
+
+/* Object by name, or NULL. */
+const cfg_obj_t *cfg_obj_by_name(const cfg_t *c, const char *name);
 
 /* Release (the transports' blocks too, via their cfg_fini/obj_cfg_fini).  NULL is a no-op. */
 void cfg_free(cfg_t *c);

@@ -97,6 +97,10 @@ typedef struct transport {
      * at the line of the [T] section, 0 if absent; remember a key's
      * cfg_kv_t.line in your block to point at the key). */
     int (*check)(cfg_t *cfg, int *line, char *why, size_t whylen);
+    /* Reload (cfg_reload_check): 0 if no address this transport derives for
+     * an object present in both old and nw (same name) moves; else -CFG_EVALUE
+     * with why and *line (a line of nw) set.  NULL: nothing to compare. */
+    int (*reload_check)(const cfg_t *old, const cfg_t *nw, int *line, char *why, size_t whylen);
 
     /* Runtime.  open returns 0 or a negative code (-errno or the transport's own)
      * with a message in why; *state is then passed to every other callback. */

@@ -1055,6 +1055,8 @@ void modbus_server_publish(modbus_server_t *s, const mbmap_daemon_t *d, const mb
     dd.mb_slow = s->st.slow;
     mbmap_encode_daemon(ir, &dd);
     for (unsigned k = 0; k < s->n_objects; k++) {
+        if (objs[k].absent)
+            continue; /* no object has this id: all 0 */
         mbmap_object_t o = objs[k];
         o.mb_rejected = s->mb_rejected[k];
         o.lost += s->lost[k];

@@ -15,8 +15,9 @@
 typedef struct {
     core_t *core;
     modbus_server_t *srv;
-    mbmap_object_t *objs; /* nobj, rewritten every tick (taken at open) */
-    unsigned nobj;
+    mbmap_object_t *objs;          /* nblock, rewritten every tick (taken at open) */
+    unsigned nblock;               /* object blocks in the map: the highest object id + 1 */
+    int obj_of[MBMAP_MAX_OBJECTS]; /* block (object id) -> core object index, -1 none */
     int rtu_down_logged;
 } mbt_t;
 
@@ -38,6 +39,13 @@ static int cfg_key(void *cfg, const cfg_kv_t *kv, char *why, size_t wl)
 static int check(cfg_t *cfg, int *line, char *why, size_t wl)
 {
     const modbus_server_config_t *m = cfg_transport(cfg, &modbus_transport);
+    for (unsigned i = 0; i < cfg->nobj; i++)
+        if (cfg->obj[i].id >= MBMAP_MAX_OBJECTS) {
+            *line = cfg->obj[i].id_line;
+            snprintf(why, wl, "object '%s': id %d, the register map holds ids 0..%d",
+                     cfg->obj[i].name, cfg->obj[i].id, MBMAP_MAX_OBJECTS - 1);
+            return -CFG_EVALUE;
+        }
     if (cfg->nobj > MBMAP_MAX_OBJECTS) {
         snprintf(why, wl, "modbus: %u objects, the register map holds %d", cfg->nobj,
                  MBMAP_MAX_OBJECTS);
@@ -74,12 +82,20 @@ static int obj_writable(const obj_t *o)
     return o->cfg->writable == 1 || (o->cfg->writable < 0 && o->cfg->input == &modbus_transport);
 }
 
+/* The object whose block is k (its id = k), or NULL: no object has that id. */
+static obj_t *obj_at(mbt_t *t, unsigned k)
+{
+    if (k >= t->nblock || t->obj_of[k] < 0)
+        return NULL;
+    return &t->core->obj[t->obj_of[k]];
+}
+
 static int hook_waypoint(void *ctx, unsigned k, const engine_waypoint_t *wp)
 {
     mbt_t *t = ctx;
-    if (k >= t->nobj)
+    obj_t *o = obj_at(t, k);
+    if (!o)
         return MODBUS_SERVER_HOOK_EADDRESS;
-    obj_t *o = &t->core->obj[k];
     if (o->cfg->input != &modbus_transport || !obj_writable(o))
         return MODBUS_SERVER_HOOK_EADDRESS;
     char src[REJLOG_SRC_LEN];
@@ -90,9 +106,9 @@ static int hook_waypoint(void *ctx, unsigned k, const engine_waypoint_t *wp)
 static int hook_command(void *ctx, unsigned k, unsigned cmd)
 {
     mbt_t *t = ctx;
-    if (k >= t->nobj)
+    obj_t *o = obj_at(t, k);
+    if (!o)
         return MODBUS_SERVER_HOOK_EADDRESS;
-    obj_t *o = &t->core->obj[k];
     if (!obj_writable(o))
         return MODBUS_SERVER_HOOK_EADDRESS;
     if (o->stopping || t->core->stopping)
@@ -117,9 +133,10 @@ static int hook_command(void *ctx, unsigned k, unsigned cmd)
 static int hook_override(void *ctx, unsigned k, unsigned percent)
 {
     mbt_t *t = ctx;
-    if (k >= t->nobj)
+    obj_t *o = obj_at(t, k);
+    if (!o)
         return MODBUS_SERVER_HOOK_EADDRESS;
-    return engine_set_override(t->core->obj[k].engine, percent / 100.0);
+    return engine_set_override(o->engine, percent / 100.0);
 }
 
 static void on_ready(loop_t *l, int fd, uint32_t events, void *ctx)
@@ -151,10 +168,19 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
         return -ENOMEM;
     }
     t->core = c;
-    t->nobj = c->nobj;
-    t->objs = calloc(c->nobj, sizeof *t->objs);
+    for (unsigned k = 0; k < MBMAP_MAX_OBJECTS; k++)
+        t->obj_of[k] = -1;
+    for (unsigned i = 0; i < c->nobj; i++) { /* ids are unique and < MBMAP_MAX_OBJECTS (check) */
+        unsigned id = (unsigned)c->obj[i].cfg->id;
+        t->obj_of[id] = (int)i;
+        if (id + 1 > t->nblock)
+            t->nblock = id + 1;
+    }
+    t->objs = calloc(t->nblock, sizeof *t->objs);
+    for (unsigned k = 0; t->objs && k < t->nblock; k++)
+        t->objs[k].absent = t->obj_of[k] < 0;
     modbus_server_config_t mc = *m;
-    mc.n_objects = c->nobj;
+    mc.n_objects = t->nblock;
     modbus_server_hooks_t hooks = {hook_waypoint, hook_command, t, hook_override};
     if (t->objs)
         t->srv = modbus_server_new(&mc, &hooks, why, wl);
@@ -215,18 +241,21 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
     uint32_t load_permille;
     d.can_state = (uint16_t)can_transport_bus(c, &load_permille);
     d.can_load_permille = (uint16_t)(load_permille > 0xffff ? 0xffff : load_permille);
-    for (unsigned k = 0; k < t->nobj; k++) {
+    for (unsigned k = 0; k < t->nblock; k++) {
+        if (t->obj_of[k] < 0)
+            continue;
+        const obj_t *ob = &c->obj[t->obj_of[k]];
         mbmap_object_t *o = &t->objs[k];
-        o->sp = c->obj[k].sp;
-        o->st = c->obj[k].status;
+        o->sp = ob->sp;
+        o->st = ob->status;
         o->lost = 0; /* sequence gaps are counted by the inputs that number waypoints */
         o->late_p99_us = d.late_p99_us;
         o->late_max_us = d.late_max_us;
         o->can_state = d.can_state;
         o->can_load_permille = d.can_load_permille;
         o->uptime_s = up_s;
-        o->out_lost = c->obj[k].out_lost;
-        o->out_fault = (uint16_t)(c->obj[k].out_fault != 0);
+        o->out_lost = ob->out_lost;
+        o->out_fault = (uint16_t)(ob->out_fault != 0);
         o->seq_jumps = 0; /* the server adds its own */
     }
     modbus_server_publish(t->srv, &d, t->objs);

@@ -375,7 +375,8 @@ int mbmap_rtu_frame_len(const uint8_t *buf, size_t len)
 static const mbmap_field_t fields[] = {
     F(ID, MBMAP_D_MAGIC, 1, MBMAP_T_U16, "magic", "", "0x7444, identifies trajd"),
     F(ID, MBMAP_D_VERSION, 1, MBMAP_T_U16, "version", "", "register map version"),
-    F(ID, MBMAP_D_OBJECTS, 1, MBMAP_T_U16, "objects", "", "number of objects"),
+    F(ID, MBMAP_D_OBJECTS, 1, MBMAP_T_U16, "objects", "",
+      "object blocks: highest object id + 1 (GEN 0: no object has that id)"),
     F(ID, MBMAP_D_WRITES, 1, MBMAP_T_U16, "writes_enabled", "",
       "1 if holding registers accept writes"),
     F(ID, MBMAP_D_GEN, 2, MBMAP_T_U32, "generation", "", "snapshot generation, +1 per tick"),

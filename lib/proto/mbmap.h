@@ -8,8 +8,10 @@
  *
  * Addresses are the 0-based addresses carried in the PDU (mbpoll: use -0, or
  * add 1).  Objects are selected by BLOCK OFFSET, not by unit id: the daemon
- * block is at 0, object k (0-based, in config order) at MBMAP_OBJ_BASE(k) =
- * 100 * (k + 1), both in the input and in the holding registers.  Why: an RTU
+ * block is at 0, object k (its `id = k` in the config, never its place in
+ * the file) at MBMAP_OBJ_BASE(k) = 100 * (k + 1), both in the input and in the
+ * holding registers.  A block of an id no object has reads all 0 (GEN 0) and
+ * refuses writes (exception 02).  Why: an RTU
  * line gives the daemon one slave address (unit ids 248..255 are reserved and
  * 0 is broadcast, so unit ids would cap the objects and collide with other
  * slaves on the bus), many TCP gateways and SCADA tools rewrite or ignore the
@@ -71,7 +73,7 @@
 /* ---- daemon block, input registers (absolute addresses) ---------------- */
 #define MBMAP_D_MAGIC 0              /* u16 MBMAP_MAGIC */
 #define MBMAP_D_VERSION 1            /* u16 MBMAP_VERSION */
-#define MBMAP_D_OBJECTS 2            /* u16 number of objects */
+#define MBMAP_D_OBJECTS 2            /* u16 object blocks: the highest object id + 1 (a block whose GEN reads 0 has no object) */
 #define MBMAP_D_WRITES 3             /* u16 1 if writes are enabled */
 #define MBMAP_D_GEN 4                /* u32 snapshot generation (+1 per tick; 0 = none published yet, all values 0) */
 #define MBMAP_D_UPTIME_S 6           /* u32 */
@@ -199,6 +201,7 @@ typedef struct {
     uint64_t out_lost;          /* lines lost by this object's outputs */
     uint16_t out_fault;
     uint64_t seq_jumps;
+    int absent;                 /* no object has this id: the block stays all 0 (GEN 0) */
 } mbmap_object_t;
 
 /* Write the daemon block into regs[0 .. MBMAP_BLOCK-1]. */

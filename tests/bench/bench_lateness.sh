@@ -21,8 +21,8 @@ conf() { # $1 = extra [realtime] lines
         printf '[daemon]\nrate_hz = 1000\nstatus_interval_s = 0\nstop_timeout_s = 0\n'
         printf '[realtime]\n%b' "$1"
         for i in 1 2 3 4; do
-            printf '[object.obj%d]\ninput = replay\nreplay.track = %s\noutput = csv\ncsv.path = %s/obj%d.csv\n' \
-                "$i" "$TRACK" "$tmp" "$i"
+            printf '[object.obj%d]\nid = %d\ninput = replay\nreplay.track = %s\noutput = csv\ncsv.path = %s/obj%d.csv\n' \
+                "$i" "$i" "$TRACK" "$tmp" "$i"
         done
     } > "$tmp/bench.conf"
 }

@@ -52,11 +52,12 @@ TRACK = os.path.join(mbsim.ROOT, "tests", "data", "n2k_furuno_figure8_src52.csv"
 def trajd_conf(tmp):
     objs = "".join("""
 [object.o%d]
+id = %d
 input = replay
 replay.track = %s
 output = csv
 csv.path = %s/o%d.csv
-""" % (k, TRACK, tmp, k) for k in range(OBJECTS))
+""" % (k, k, TRACK, tmp, k) for k in range(OBJECTS))
     return """
 [daemon]
 rate_hz = 1000

@@ -175,7 +175,9 @@ class CanDaemon(unittest.TestCase):
         d = self.sub("cia402")
         ct.write_wplog(self.xyz, os.path.join(d, "wp.log"))
         p = run_trajd(conf(d, "sync = yes\n", "can.own = no\ncan.cia402 = yes\n"
-                                              "can.cia402_counts_per_m = 1000\ncsv.path = sp.csv\n",
+                                              "can.cia402_counts_per_m = 1000\ncsv.path = sp.csv\n"
+                                              "can.cia402_cob_x = 0x201\ncan.cia402_cob_y = 0x202\n"
+                                              "can.cia402_cob_z = 0x203\n",
                            output="can, csv"))
         self.assertEqual(p.returncode, 0, p.stderr)
         log = os.path.join(d, "sp.log")
@@ -260,8 +262,9 @@ class CanDaemon(unittest.TestCase):
         d = self.sub("load")
         def bits(n):  # worst-case classic 11-bit frame, with IFS
             return 8 * n + 47 + (34 + 8 * n - 1) // 4
-        objs = "".join("[object.o%d]\ninput = can\noutput = can\ncan.cia402 = yes\n" % i
-                       for i in range(4))
+        objs = "".join("[object.o%d]\nid = %d\ninput = can\noutput = can\ncan.cia402 = yes\n"
+                       "can.cia402_cob_x = 0x%x\ncan.cia402_cob_y = 0x%x\ncan.cia402_cob_z = 0x%x\n"
+                       % (i, i, 0x201 + 3 * i, 0x202 + 3 * i, 0x203 + 3 * i) for i in range(4))
         path = os.path.join(d, "load.conf")
         with open(path, "w") as fh:
             fh.write("[daemon]\nrate_hz = 1000\n[can]\ninterface = vcan0\nsync = yes\n"

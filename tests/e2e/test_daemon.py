@@ -492,8 +492,8 @@ class TestRunning(unittest.TestCase):
         # then the pipe and trajd's buffer fill, lines are dropped and
         # counted ("out dropped"), and the clock keeps ticking (the tick count
         # in STATUS grows by about the rate between two status lines).
-        objs = "".join("[object.o%d]\ninput = replay\nreplay.track = circle.csv\noutput = stdout\n" % i
-                       for i in range(4))
+        objs = "".join("[object.o%d]\nid = %d\ninput = replay\nreplay.track = circle.csv\n"
+                       "output = stdout\n" % (i, i) for i in range(4))
         write(self.conf, "[daemon]\nrate_hz = 1000\nstatus_interval_s = 1\nstop_timeout_s = 0\n" + objs)
         d = Daemon(self.tmp, self.conf, read_stdout=False)
         ticks = lambda f: int(f["STATUS"].split("ticks ")[1].split(",")[0])
@@ -652,9 +652,9 @@ class TestReplayMatchesTrajreplay(unittest.TestCase):
             # replayed by trajd `speed` times faster than real time, exiting when done,
             write(conf, ("[daemon]\nrate_hz = 100\nspeed = %g\nexit_when_done = yes\n" % speed) +
                         "status_interval_s = 0\n"
-                        "[object.track]\ninput = replay\nreplay.track = fig8.csv\n"
+                        "[object.track]\nid = 0\ninput = replay\nreplay.track = fig8.csv\n"
                         "output = csv\ncsv.path = d.csv\n"
-                        "[object.walk]\ninput = replay\nreplay.track = walk.csv\n"
+                        "[object.walk]\nid = 1\ninput = replay\nreplay.track = walk.csv\n"
                         "output = stdout\nmethod = bspline\nparam = uniform\nends = natural\n"
                         "fragment = 16\noverlap = 8\nstart_slack = 3\nreplay.start_s = 1.5\n")
             d = Daemon(tmp, conf)

@@ -85,11 +85,13 @@ writes = yes
 systemd_socket = no
 %s
 [object.replayed]
+id = 0
 input = replay
 replay.track = track.csv
 output = stdout
 stdout.header = no
 [object.operated]
+id = 1
 input = replay
 replay.track = track.csv
 output = stdout

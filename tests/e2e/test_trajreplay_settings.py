@@ -64,9 +64,9 @@ class TestConfigMode(unittest.TestCase):
         self.conf = os.path.join(self.tmp, "t.conf")
         keys = "".join("%s = %s\n" % (k, v) for k, (v, _) in self.ENGINE_KEYS.items())
         write(self.conf, "[daemon]\nrate_hz = 40\n"
-                         "[object.a]\ninput = replay\nreplay.track = walk.csv\noutput = stdout\n"
+                         "[object.a]\nid = 0\ninput = replay\nreplay.track = walk.csv\noutput = stdout\n"
                          + keys +
-                         "[object.b]\ninput = replay\nreplay.track = walk.csv\noutput = stdout\n")
+                         "[object.b]\nid = 1\ninput = replay\nreplay.track = walk.csv\noutput = stdout\n")
 
     def tearDown(self):
         self.tmpdir.cleanup()

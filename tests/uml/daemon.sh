@@ -24,11 +24,16 @@ sync = yes
 status_period_ms = 100
 bitrate = 1000000
 [object.boat]
+id = 0
 input = can
 output = can
 can.cia402 = yes
 can.cia402_counts_per_m = 10000
+can.cia402_cob_x = 0x201
+can.cia402_cob_y = 0x202
+can.cia402_cob_z = 0x203
 [object.fdboat]
+id = 1
 input = can
 output = can
 can.fd = yes
@@ -149,7 +154,7 @@ touch "$out/ok.late_iface"
 {
     printf '[daemon]\nrate_hz = 10000\nspeed = 1\nstatus_interval_s = 0\nstop_timeout_s = 1\n'
     printf '[can]\ninterface = vcan0\nmax_load_percent = 0\nsync = yes\n'
-    for i in 0 1 2 3 4 5 6 7; do printf '[object.o%d]\ninput = can\noutput = can\n' $i; done
+    for i in 0 1 2 3 4 5 6 7; do printf '[object.o%d]\nid = %d\ninput = can\noutput = can\n' $i $i; done
 } > "$out/fast.conf"
 timeout 30 candump -r 8000000 -D -L vcan0 > "$out/cap5.log" & cp=$!
 wait_rx vcan0 || fail "candump 5 not ready"

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "can_transport.h"
 #include "cfg.h"
 #include "csv_transport.h"
 #include "engine_settings.h"
@@ -81,12 +82,12 @@ static void test_values(void **state)
     cfg_t *c = load_ok("[daemon]\nrate_hz = 1000\nspeed = 2.5\nstatus_interval_s = 0\n"
                        "stop_timeout_s = 1.5\nexit_when_done = yes\nlog_level = debug\n"
                        "[realtime]\nfifo_priority = 80\nmlockall = on\ncpu_affinity = 0,2-3\n"
-                       "[object.a-1]\ninput = replay\nreplay.track = " TRACK "\n"
+                       "[object.a-1]\nid = 3\ninput = replay\nreplay.track = " TRACK "\n"
                        "output = csv, stdout\ncsv.path = out.csv\nmethod = bspline\n"
                        "param = uniform\nends = clamped\nstart_vel_m_s = 1, -2,3e-1\n"
                        "fragment = 32\noverlap = 16\nmax_gap_s = 7.5\n"
                        "max_accel_m_s2 = 12.5\nstart_slack = 3\n"
-                       "[object.b]\ninput = replay\nreplay.track = " TRACK "\n"
+                       "[object.b]\nid = 0\ninput = replay\nreplay.track = " TRACK "\n"
                        "replay.start_s = 2\noutput = stdout\n");
     assert_int_equal(c->daemon.period_ns, 1000000);
     assert_true(c->daemon.speed > 2.4999 && c->daemon.speed < 2.5001);
@@ -99,6 +100,9 @@ static void test_values(void **state)
     assert_int_equal(c->nobj, 2);
     const cfg_obj_t *o = &c->obj[0];
     assert_string_equal(o->name, "a-1");
+    assert_int_equal(o->id, 3);
+    assert_int_equal(o->id_line, 13);
+    assert_int_equal(c->obj[1].id, 0);
     assert_int_equal(o->noutput, 2);
     assert_ptr_equal(o->output[0], &csv_transport);
     assert_ptr_equal(o->output[1], &stdout_transport);
@@ -173,6 +177,113 @@ static void test_errors(void **state)
     load_bad(big, CFG_ESYNTAX, 2, "longer than");
 }
 
+#define CAN_OBJ(name, id, extra)                                                                   \
+    "[object." name "]\n" id "input = replay\nreplay.track = " TRACK "\noutput = can\n" extra
+#define CAN_LOG "[can]\nlog_out = /dev/null\nmax_load_percent = 0\n"
+
+/* Given two objects, then each needs its own id; a lone object is id 0. */
+static void test_ids(void **state)
+{
+    (void)state;
+    cfg_t *c = load_ok(OBJ);
+    assert_int_equal(c->obj[0].id, 0);
+    assert_int_equal(c->obj[0].id_line, 0);
+    cfg_free(c);
+    c = load_ok("[object.boat]\nid = 7\ninput = replay\nreplay.track = " TRACK
+                "\noutput = stdout\n");
+    assert_int_equal(c->obj[0].id, 7);
+    cfg_free(c);
+    /* the second object has no id: refused at its section, whatever the order */
+    load_bad("[object.a]\nid = 1\ninput = replay\nreplay.track = " TRACK "\noutput = stdout\n"
+             "[object.b]\ninput = replay\nreplay.track = " TRACK "\noutput = stdout\n",
+             CFG_EMISSING, 6, "'id' is missing");
+    load_bad("[object.a]\ninput = replay\nreplay.track = " TRACK "\noutput = stdout\n"
+             "[object.b]\nid = 1\ninput = replay\nreplay.track = " TRACK "\noutput = stdout\n",
+             CFG_EMISSING, 1, "'id' is missing");
+    load_bad("[object.a]\nid = 1\ninput = replay\nreplay.track = " TRACK "\noutput = stdout\n"
+             "[object.b]\nid = 1\ninput = replay\nreplay.track = " TRACK "\noutput = stdout\n",
+             CFG_EDUP, 7, "also object 'a''s id");
+    load_bad("[object.a]\nid = 64\ninput = replay\n", CFG_EVALUE, 2, "[0, 63]");
+    load_bad("[object.a]\nid = -1\ninput = replay\n", CFG_EVALUE, 2, "[0, 63]");
+}
+
+/* CAN: default ids come from the id (never the place in the file); ids above
+ * 15 have no defaults; CiA 402 COB-IDs must be given. */
+static void test_can_ids(void **state)
+{
+    (void)state;
+    cfg_t *c = load_ok(CAN_LOG CAN_OBJ("b", "id = 5\n", "") CAN_OBJ("a", "id = 2\n", ""));
+    canproto_ids_t ids;
+    can_obj_ids(cfg_obj_transport(&c->obj[0], &can_transport), (unsigned)c->obj[0].id, &ids);
+    assert_int_equal(ids.setpoint_id, 0x6A5); /* first in the file, id 5 */
+    assert_int_equal(ids.status_id, 0x6C5);
+    can_obj_ids(cfg_obj_transport(&c->obj[1], &can_transport), (unsigned)c->obj[1].id, &ids);
+    assert_int_equal(ids.setpoint_id, 0x6A2);
+    cfg_free(c);
+    load_bad(CAN_LOG CAN_OBJ("b", "id = 16\n", ""), CFG_EVALUE, 4, "no default CAN ids");
+    c = load_ok(CAN_LOG CAN_OBJ("b", "id = 16\n", "can.index = 3\n"));
+    cfg_free(c);
+    load_bad(CAN_LOG CAN_OBJ("b", "", "can.cia402 = yes\ncan.cia402_cob_x = 0x201\n"), CFG_EVALUE,
+             4, "COB-ID explicit");
+    c = load_ok(CAN_LOG CAN_OBJ("b", "",
+                                "can.cia402 = yes\ncan.cia402_cob_x = 0x201\n"
+                                "can.cia402_cob_y = 0x202\ncan.cia402_cob_z = 0\n"));
+    cfg_free(c);
+}
+
+/* Reload: reordering objects that keep their ids is accepted; a moved id, CAN
+ * id or COB-ID of an object that stays is refused at its line in the new file. */
+static void test_reload_check(void **state)
+{
+    (void)state;
+    const char *cob = "can.cia402 = yes\ncan.cia402_cob_x = 0x201\ncan.cia402_cob_y = 0\n"
+                      "can.cia402_cob_z = 0\n";
+    char text[2048];
+    snprintf(text, sizeof text, CAN_LOG CAN_OBJ("a", "id = 0\n", "%s") CAN_OBJ("b", "id = 1\n", ""),
+             cob);
+    cfg_t *old = load_ok(text);
+    snprintf(text, sizeof text, CAN_LOG CAN_OBJ("b", "id = 1\n", "") CAN_OBJ("a", "id = 0\n", "%s"),
+             cob);
+    cfg_t *nw = load_ok(text);
+    assert_int_equal(cfg_reload_check(old, nw, err, sizeof err), 0);
+    cfg_free(nw);
+    /* an object inserted above, the others renumbered: refused at b's id line */
+    snprintf(text, sizeof text,
+             CAN_LOG CAN_OBJ("c", "id = 0\n", "") CAN_OBJ("a", "id = 1\n", "%s")
+                 CAN_OBJ("b", "id = 2\n", ""),
+             cob);
+    nw = load_ok(text);
+    assert_int_equal(cfg_reload_check(old, nw, err, sizeof err), -CFG_EVALUE);
+    if (strncmp(err, "t.conf:10: [object.a] id: 1, running as 0", 41) != 0)
+        fail_msg("got '%s'", err);
+    cfg_free(nw);
+    /* same id, a COB-ID moved: refused at a's section */
+    snprintf(text, sizeof text, CAN_LOG CAN_OBJ("b", "id = 1\n", "") CAN_OBJ("a", "id = 0\n", "%s"),
+             "can.cia402 = yes\ncan.cia402_cob_x = 0x205\ncan.cia402_cob_y = 0\n"
+             "can.cia402_cob_z = 0\n");
+    nw = load_ok(text);
+    assert_int_equal(cfg_reload_check(old, nw, err, sizeof err), -CFG_EVALUE);
+    if (!strstr(err, "t.conf:9: ") || !strstr(err, "COB-ID x id would move from 0x201 to 0x205"))
+        fail_msg("got '%s'", err);
+    cfg_free(nw);
+    /* same id, can.index moves the default ids */
+    snprintf(text, sizeof text,
+             CAN_LOG CAN_OBJ("a", "id = 0\n", "%s") CAN_OBJ("b", "id = 1\n", "can.index = 4\n"),
+             cob);
+    nw = load_ok(text);
+    assert_int_equal(cfg_reload_check(old, nw, err, sizeof err), -CFG_EVALUE);
+    if (!strstr(err, "t.conf:13: ") || !strstr(err, "waypoint id would move from 0x681 to 0x684"))
+        fail_msg("got '%s'", err);
+    cfg_free(nw);
+    /* an object removed and another added with its id: not a move */
+    snprintf(text, sizeof text, CAN_LOG CAN_OBJ("a", "id = 0\n", "%s") CAN_OBJ("d", "id = 1\n", ""),
+             cob);
+    nw = load_ok(text);
+    assert_int_equal(cfg_reload_check(old, nw, err, sizeof err), 0);
+    cfg_free(nw);
+    cfg_free(old);
+}
+
 /* Given config/trajd.conf with every documented "#key = default" uncommented,
  * then it is still accepted (each documented key exists and its documented
  * default is a valid value), and the file as shipped is accepted too. */
@@ -244,7 +355,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_minimal),      cmocka_unit_test(test_values),
         cmocka_unit_test(test_errors),       cmocka_unit_test(test_documented_conf),
-        cmocka_unit_test(test_missing_file),
+        cmocka_unit_test(test_missing_file), cmocka_unit_test(test_ids),
+        cmocka_unit_test(test_can_ids),      cmocka_unit_test(test_reload_check),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
