@@ -70,11 +70,13 @@ writes = yes
 systemd_socket = no
 word_order = %s
 [object.boat]
+id = 0
 input = replay
 replay.track = %s
 output = csv
 csv.path = %s/boat.csv
 [object.fed]
+id = 1
 input = modbus
 output = csv
 csv.path = %s/fed.csv
