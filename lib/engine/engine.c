@@ -1377,12 +1377,30 @@ static double remaining(const engine_t *e, double s)
     return (e->avail_t - e->origin_t) - s - TS_MARGIN_TICKS * e->period_s * e->ts.rate;
 }
 
-/* The time scaling's limits in rate units at the curve's speed here. */
+/* The jerk of a stop or clear (m/s^3): at least a / T, so that the braking
+ * reaches its full deceleration within one tick and the stop ends within
+ * v^2/(2 a) + v T of path (a jerk j adds v a/(2 j) of onset: TIMESCALE.md,
+ * "Stop distance"). */
+static double stop_jerk(const engine_t *e)
+{
+    return fmax(e->cfg.scale_jerk_m_s3, e->cfg.scale_accel_m_s2 / e->period_s);
+}
+
+/* The time scaling's limits in rate units at the curve's speed here.  A stop
+ * converts them at the curve's speed down to a T (not the 1 m/s floor): below
+ * the floor a slow object would brake at less than a, and a stop from v must
+ * end within v^2/(2 a) + v T. */
 static void scale_limits(const engine_t *e, double *A, double *J)
 {
-    double v = e->cspeed > ENGINE_SCALE_V_FLOOR_M_S ? e->cspeed : ENGINE_SCALE_V_FLOOR_M_S;
+    double floor = ENGINE_SCALE_V_FLOOR_M_S, jerk = e->cfg.scale_jerk_m_s3;
+
+    if (e->stop_req) {
+        floor = fmin(floor, e->cfg.scale_accel_m_s2 * e->period_s);
+        jerk = stop_jerk(e);
+    }
+    double v = e->cspeed > floor ? e->cspeed : floor;
     *A = e->cfg.scale_accel_m_s2 / v;
-    *J = e->cfg.scale_jerk_m_s3 / v;
+    *J = jerk / v;
 }
 
 /* The rate the output is asked for, before the buffer's limit. */

@@ -231,7 +231,7 @@ typedef struct {
                                down or speeds up (stop, clear, underrun, feed
                                override).  Default 5 m/s^2 */
     double scale_jerk_m_s3; /* ... and to the jerk.  Default 50 m/s^3: a stop
-                               from v takes v^2/(2 a) + v a/(2 j) + v T (T the
+                               from v takes v^2/(2 a) + v T (T the
                                period) of path, see lib/engine/TIMESCALE.md */
 } engine_config_t;
 
@@ -344,7 +344,8 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
  * Stop and clear are controlled stops by the time scaling (timescale.h,
  * lib/engine/TIMESCALE.md): the output slows down along the path it is on,
  * within scale_accel_m_s2 and scale_jerk_m_s3, to rest within
- * v^2/(2 a) + v a/(2 j) + v T of path, and only then is anything dropped.
+ * v^2/(2 a) + v T of path (the stop's jerk is max(scale_jerk_m_s3, a/T)),
+ * and only then is anything dropped.
  * Waypoints pushed meanwhile start a new trajectory, kept. */
 /* Stop, then drop every waypoint and segment buffered at the time of the
  * call; the output rests where it stopped, WAITING; the next waypoint starts

@@ -119,6 +119,17 @@ double ts_step(ts_state_t *st, double target, double R, double A, double J, doub
         ds = integrate(r, a, j, T, &r1, &a1);
         lim = 1;
     }
+    if (r1 <= 0 && r > A * T) {
+        /* the jerk would take the rate through 0 within the tick, from
+         * further than one tick at A: brake at -A instead (|j| <= J still),
+         * so that no tick changes the rate by more than A T */
+        j = (-A - a) / T;
+        if (j > J)
+            j = J;
+        if (j < -J)
+            j = -J;
+        ds = integrate(r, a, j, T, &r1, &a1);
+    }
     if (r1 <= 0) {
         /* came to rest within the tick (the release of the braking ends
          * here): rest exactly; a is within one tick's jerk of 0 */
@@ -127,7 +138,7 @@ double ts_step(ts_state_t *st, double target, double R, double A, double J, doub
     }
     if (ds < 0)
         ds = 0;
-    if (fabs(tgt - r1) <= J * T * T && fabs(a1) <= J * T) {
+    if (fabs(tgt - r1) <= J * T * T && fabs(a1) <= J * T && fabs(tgt - r) <= A * T) {
         r1 = tgt;
         a1 = 0;
     }
