@@ -496,7 +496,8 @@ modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg,
     s->last_seq = calloc(s->n_objects, sizeof *s->last_seq);
     s->alt_seq = calloc(s->n_objects, sizeof *s->alt_seq);
     s->seq_jumps = calloc(s->n_objects, sizeof *s->seq_jumps);
-    s->map = modbus_mapping_new(0, 0, (int)MBMAP_REGS(s->n_objects), (int)MBMAP_REGS(s->n_objects));
+    s->map = modbus_mapping_new(0, 0, (int)MBMAP_TABLE_REGS(s->n_objects),
+                                (int)MBMAP_TABLE_REGS(s->n_objects));
     if (!s->clients || !s->mb_rejected || !s->lost || !s->last_seq || !s->alt_seq ||
         !s->seq_jumps || !s->map) {
         msg(err, errlen, "modbus: out of memory");
@@ -505,7 +506,7 @@ modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg,
     for (unsigned i = 0; i < s->max_clients; i++)
         s->clients[i].fd = -1;
     s->mirror.start_registers = MBMAP_MIRROR_BASE;
-    s->mirror.nb_registers = (int)MBMAP_REGS(s->n_objects);
+    s->mirror.nb_registers = (int)MBMAP_TABLE_REGS(s->n_objects);
     s->mirror.tab_registers = s->map->tab_input_registers;
 
     s->ep = epoll_create1(EPOLL_CLOEXEC);
@@ -1062,6 +1063,8 @@ void modbus_server_publish(modbus_server_t *s, const mbmap_daemon_t *d, const mb
         o.lost += s->lost[k];
         o.seq_jumps += s->seq_jumps[k];
         mbmap_encode_object(ir, k, s->gen, &o);
+        mbmap_encode_diag(ir, k, s->gen, &o);
     }
     mbmap_order_image(ir, s->n_objects, s->order);
+    mbmap_order_diag(ir, s->n_objects, s->order);
 }

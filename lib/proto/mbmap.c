@@ -115,6 +115,18 @@ void mbmap_order_image(uint16_t *regs, unsigned n, mbmap_order_t o)
     }
 }
 
+void mbmap_order_diag(uint16_t *regs, unsigned n, mbmap_order_t o)
+{
+    if (o == MBMAP_ORDER_ABCD)
+        return;
+    size_t nf;
+    const mbmap_field_t *f = mbmap_fields(&nf);
+    for (size_t i = 0; i < nf; i++)
+        if (f[i].count >= 2 && !strcmp(f[i].table, "input diagnostics"))
+            for (unsigned k = 0; k < n && k < MBMAP_MAX_OBJECTS; k++)
+                mbmap_order_value(regs + MBMAP_X_BASE(k) + f[i].offset, f[i].count, o);
+}
+
 /* Counters are 64-bit in the daemon; the map carries their low 32 bits. */
 static uint32_t lo32(uint64_t v)
 {
@@ -195,6 +207,20 @@ int mbmap_encode_object(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_ob
     return 0;
 }
 
+int mbmap_encode_diag(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_object_t *o)
+{
+    if (k >= MBMAP_MAX_OBJECTS)
+        return -MBMAP_EADDRESS;
+    uint16_t *b = regs + MBMAP_X_BASE(k);
+    memset(b, 0, MBMAP_BLOCK * sizeof *b);
+    mbmap_put_u32(b + MBMAP_X_GEN, gen);
+    for (int c = 1; c < ENGINE_ERROR_COUNT; c++)
+        if (engine_reason_name(c)) /* reasons for data only: EFULL is full */
+            mbmap_put_u32(b + MBMAP_X_REJECTED_BY + 2 * (c - 1), lo32(o->st.rejected_by[c]));
+    mbmap_put_u32(b + MBMAP_X_GEN_TAIL, gen);
+    return 0;
+}
+
 /* ---- requests ---------------------------------------------------------- */
 
 static unsigned be16(const uint8_t *p)
@@ -242,7 +268,10 @@ int mbmap_check_request(unsigned n, int writes_enabled, const uint8_t *pdu, size
         break;
     default: return -MBMAP_EFUNCTION;
     }
-    if (addr + count > regs)
+    /* the daemon and object blocks, or the diagnostics blocks: never both,
+     * nor the unserved object slots between them */
+    unsigned x_end = MBMAP_X_BASE(n > MBMAP_MAX_OBJECTS ? MBMAP_MAX_OBJECTS : n);
+    if (addr + count > regs && (addr < MBMAP_X_BASE(0) || addr + count > x_end))
         return -MBMAP_EADDRESS;
     return 0;
 }
@@ -371,6 +400,7 @@ int mbmap_rtu_frame_len(const uint8_t *buf, size_t len)
 #define ID "input daemon"
 #define IO "input object"
 #define HO "holding object"
+#define IX "input diagnostics"
 
 static const mbmap_field_t fields[] = {
     F(ID, MBMAP_D_MAGIC, 1, MBMAP_T_U16, "magic", "", "0x7444, identifies trajd"),
@@ -466,6 +496,29 @@ static const mbmap_field_t fields[] = {
       "times the solved curve ended under a moving output (velocity to 0 in one tick); should stay "
       "0"),
     F(IO, MBMAP_O_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "",
+      "copy of generation (whole-block reads)"),
+
+    F(IX, MBMAP_X_GEN, 2, MBMAP_T_U32, "generation", "",
+      "snapshot generation (the object block's)"),
+    F(IX, MBMAP_X_REJ_NOTFINITE, 2, MBMAP_T_U32, "rejected_not_finite", "",
+      "waypoints refused: time or coordinate NaN or infinite (engine_error 1)"),
+    F(IX, MBMAP_X_REJ_RANGE, 2, MBMAP_T_U32, "rejected_range", "",
+      "refused: a coordinate above max_abs_m or an absurd time (2)"),
+    F(IX, MBMAP_X_REJ_BACKWARDS, 2, MBMAP_T_U32, "rejected_backwards", "",
+      "refused: earlier than the waypoint kept before it (3)"),
+    F(IX, MBMAP_X_REJ_SAMETIME, 2, MBMAP_T_U32, "rejected_same_time", "",
+      "refused: same time as the waypoint kept before it, another position (4)"),
+    F(IX, MBMAP_X_REJ_SPEED, 2, MBMAP_T_U32, "rejected_speed", "",
+      "refused: chord speed above the limit (5)"),
+    F(IX, MBMAP_X_REJ_NUMERIC, 2, MBMAP_T_U32, "rejected_numeric", "",
+      "refused by the solver (10; unreachable with finite data)"),
+    F(IX, MBMAP_X_REJ_ACCEL, 2, MBMAP_T_U32, "rejected_accel", "",
+      "refused: implied acceleration above the limit (11; timestamp jitter, position jump)"),
+    F(IX, MBMAP_X_REJ_UNCONFIRMED, 2, MBMAP_T_U32, "rejected_unconfirmed", "",
+      "refused: far from the trajectory or at odds with its neighbours, not confirmed (12)"),
+    F(IX, MBMAP_X_REJ_STALE, 2, MBMAP_T_U32, "rejected_stale", "",
+      "refused: the same position again while the object was moving (13)"),
+    F(IX, MBMAP_X_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "",
       "copy of generation (whole-block reads)"),
 
     F(HO, MBMAP_H_COMMAND, 1, MBMAP_T_U16, "command", "",

@@ -48,8 +48,15 @@
 #define MBMAP_MAX_OBJECTS 64
 #define MBMAP_BLOCK 100              /* registers per block */
 #define MBMAP_OBJ_BASE(k) (MBMAP_BLOCK * (1u + (unsigned)(k)))
-/* Registers in each table (input and holding) for n objects. */
+/* Registers of the daemon and object blocks for n objects. */
 #define MBMAP_REGS(n) (MBMAP_BLOCK * (1u + (unsigned)(n)))
+/* Object k's diagnostics block (input registers): after the space of every
+ * possible object block, so adding objects never moves it. */
+#define MBMAP_X_BASE(k) (MBMAP_BLOCK * (1u + MBMAP_MAX_OBJECTS + (unsigned)(k)))
+/* Registers in each table (input and holding) for n objects: the daemon and
+ * object blocks, then (after object slots n..MBMAP_MAX_OBJECTS-1, not
+ * served) the n diagnostics blocks. */
+#define MBMAP_TABLE_REGS(n) MBMAP_X_BASE(n)
 
 /* Modbus protocol limits (Modbus Application Protocol V1.1b3, 6.3, 6.4, 6.12). */
 #define MBMAP_MAX_READ 125           /* registers per read (FC 03, 04) */
@@ -130,6 +137,23 @@
 #define MBMAP_O_OVERRIDE 72          /* u16 feed override in force, % */
 #define MBMAP_O_HARD_STOPS 74        /* u32 the curve ended under a moving output (should stay 0) */
 #define MBMAP_O_GEN_TAIL 98          /* u32 copy of GEN */
+
+/* ---- diagnostics block, input registers (offset from MBMAP_X_BASE(k)) -- */
+/* Waypoints refused, per reason: the u32 for engine_error c (lib/motion.h)
+ * is at MBMAP_X_REJECTED_BY + 2 * (c - 1); the codes that are not reasons for
+ * data (6..9) read 0.  Their sum is the object block's rejected. */
+#define MBMAP_X_GEN 0                /* u32 snapshot generation (the object block's) */
+#define MBMAP_X_REJECTED_BY 2        /* first of the per-reason counters */
+#define MBMAP_X_REJ_NOTFINITE 2      /* u32 ENGINE_ENOTFINITE (1): NaN or infinite */
+#define MBMAP_X_REJ_RANGE 4          /* u32 ENGINE_ERANGE (2) */
+#define MBMAP_X_REJ_BACKWARDS 6      /* u32 ENGINE_EBACKWARDS (3) */
+#define MBMAP_X_REJ_SAMETIME 8       /* u32 ENGINE_ESAMETIME (4) */
+#define MBMAP_X_REJ_SPEED 10         /* u32 ENGINE_ESPEED (5) */
+#define MBMAP_X_REJ_NUMERIC 20       /* u32 ENGINE_ENUMERIC (10) */
+#define MBMAP_X_REJ_ACCEL 22         /* u32 ENGINE_EACCEL (11) */
+#define MBMAP_X_REJ_UNCONFIRMED 24   /* u32 ENGINE_EUNCONFIRMED (12) */
+#define MBMAP_X_REJ_STALE 26         /* u32 ENGINE_ESTALE (13) */
+#define MBMAP_X_GEN_TAIL 98          /* u32 copy of GEN */
 
 /* ---- object block, holding registers (offset from MBMAP_OBJ_BASE(k)) ---- */
 #define MBMAP_H_COMMAND 0            /* u16 write MBMAP_CMD_* (FC 06 or FC 16 of 1) */
@@ -233,6 +257,15 @@ void mbmap_order_value(uint16_t *r, unsigned count, mbmap_order_t o);
 /* Reorder every u32/f32/f64 field of an input table for n objects (the
  * daemon block and the object blocks, from mbmap_fields()), ABCD -> o. */
 void mbmap_order_image(uint16_t *regs, unsigned n, mbmap_order_t o);
+/* The same for the n diagnostics blocks of a table of MBMAP_TABLE_REGS(n). */
+void mbmap_order_diag(uint16_t *regs, unsigned n, mbmap_order_t o);
+
+/*
+ * Write object k's diagnostics block into regs (the whole input table,
+ * MBMAP_TABLE_REGS(n) registers), stamped with generation gen.  Returns 0,
+ * or -MBMAP_EADDRESS if k >= MBMAP_MAX_OBJECTS (nothing written).
+ */
+int mbmap_encode_diag(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_object_t *o);
 
 /* Word helpers (ABCD).  Exposed for the tests and the daemon. */
 void mbmap_put_u32(uint16_t *r, uint32_t v);

@@ -202,6 +202,75 @@ static void test_encode_matches_table(void **state)
     }
 }
 
+/* Given a status with a distinct count for every reason a waypoint is
+ * refused, when object 2's diagnostics block is encoded, then each count is
+ * where the documentation table puts "rejected_" + the reason's name (the
+ * names trajreplay --summary prints), the block is stamped, the codes that
+ * are no reason for data read 0, and no other register is touched. */
+static void test_encode_diag(void **state)
+{
+    (void)state;
+    static uint16_t regs[MBMAP_TABLE_REGS(NOBJ)];
+    mbmap_object_t o;
+    memset(&o, 0, sizeof o);
+    for (int c = 1; c < ENGINE_ERROR_COUNT; c++)
+        o.st.rejected_by[c] = 0x100000000ull * (unsigned)c + 1000u + (unsigned)c; /* low 32 bits */
+    assert_int_equal(mbmap_encode_diag(regs, 2, 0xABCD1234u, &o), 0);
+    assert_int_equal(mbmap_encode_diag(regs, MBMAP_MAX_OBJECTS, 1, &o), -MBMAP_EADDRESS);
+    const uint16_t *b = regs + MBMAP_X_BASE(2);
+    assert_int_equal(read_field(b, field("input diagnostics", "generation")), 0xABCD1234u);
+    assert_int_equal(read_field(b, field("input diagnostics", "generation_tail")), 0xABCD1234u);
+    unsigned reasons = 0;
+    for (int c = 1; c < ENGINE_ERROR_COUNT; c++) {
+        unsigned off = MBMAP_X_REJECTED_BY + 2 * (unsigned)(c - 1);
+        if (!engine_reason_name(c)) {
+            assert_int_equal(b[off] | b[off + 1], 0);
+            continue;
+        }
+        char name[64];
+        snprintf(name, sizeof name, "rejected_%s", engine_reason_name(c));
+        const mbmap_field_t *f = field("input diagnostics", name);
+        assert_int_equal(f->offset, off);
+        assert_int_equal(read_field(b, f), 1000 + c);
+        reasons++;
+    }
+    assert_int_equal(reasons, 9);
+    /* everything before it (object 2's is the last block of the table) */
+    for (unsigned i = 0; i < MBMAP_X_BASE(2); i++)
+        assert_int_equal(regs[i], 0);
+}
+
+static size_t read_pdu(uint8_t *p, int fc, unsigned addr, unsigned count);
+static size_t write_pdu(uint8_t *p, unsigned addr, unsigned count, const uint16_t *v);
+
+/* Given n objects, then reads of the diagnostics blocks 0..n-1 are served
+ * (input table and FC 03 mirror), and a read spanning the object blocks and
+ * the unserved object slots, or past the last diagnostics block, is 02;
+ * writes there are 02 too. */
+static void test_diag_requests(void **state)
+{
+    (void)state;
+    uint8_t p[260];
+    uint16_t v[1] = {1};
+    mbmap_write_t w;
+    assert_int_equal(mbmap_check_request(NOBJ, 0, p, read_pdu(p, 4, MBMAP_X_BASE(0), 125)), 0);
+    assert_int_equal(mbmap_check_request(NOBJ, 0, p, read_pdu(p, 4, MBMAP_X_BASE(NOBJ) - 1, 1)), 0);
+    assert_int_equal(mbmap_check_request(NOBJ, 0, p, read_pdu(p, 4, MBMAP_X_BASE(NOBJ) - 1, 2)),
+                     -MBMAP_EADDRESS);
+    assert_int_equal(mbmap_check_request(NOBJ, 0, p, read_pdu(p, 4, MBMAP_X_BASE(0) - 1, 2)),
+                     -MBMAP_EADDRESS);
+    assert_int_equal(mbmap_check_request(NOBJ, 0, p, read_pdu(p, 4, MBMAP_REGS(NOBJ), 1)),
+                     -MBMAP_EADDRESS);
+    assert_int_equal(
+        mbmap_check_request(NOBJ, 0, p, read_pdu(p, 3, MBMAP_MIRROR_BASE + MBMAP_X_BASE(1), 100)),
+        0);
+    assert_int_equal(mbmap_check_request(MBMAP_MAX_OBJECTS, 0, p,
+                                         read_pdu(p, 4, MBMAP_X_BASE(MBMAP_MAX_OBJECTS) - 2, 2)),
+                     0);
+    assert_int_equal(mbmap_decode_write(NOBJ, p, write_pdu(p, MBMAP_X_BASE(0), 1, v), &w),
+                     -MBMAP_EADDRESS);
+}
+
 /* Given the documentation table, then fields fit their block, do not
  * overlap, and their register count matches their type. */
 static void test_table_consistent(void **state)
@@ -519,8 +588,9 @@ static int markdown(void)
     const char *last = "";
     for (size_t i = 0; i < n; i++) {
         if (strcmp(last, f[i].table)) {
-            const char *base = !strcmp(f[i].table, "input daemon") ? "absolute address"
-                                                                   : "offset from 100·(k+1)";
+            const char *base = !strcmp(f[i].table, "input daemon")        ? "absolute address"
+                               : !strcmp(f[i].table, "input diagnostics") ? "offset from 100·(65+k)"
+                                                                          : "offset from 100·(k+1)";
             printf("%s| %s (%s) | type | name | unit | meaning |\n|---|---|---|---|---|\n",
                    i ? "\n" : "", f[i].table, base);
             last = f[i].table;
@@ -540,7 +610,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_table_consistent), cmocka_unit_test(test_check_request),
         cmocka_unit_test(test_decode_write),     cmocka_unit_test(test_from_engine),
         cmocka_unit_test(test_crc_and_framing),  cmocka_unit_test(test_word_orders),
-        cmocka_unit_test(test_mirror_request),
+        cmocka_unit_test(test_mirror_request),   cmocka_unit_test(test_encode_diag),
+        cmocka_unit_test(test_diag_requests),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
