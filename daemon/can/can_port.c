@@ -38,6 +38,11 @@ typedef struct {
     int64_t hb_last_ns[CANPROTO_CIA402_AXES];
     int hb_lost[CANPROTO_CIA402_AXES];
     int64_t now_ns;
+    uint32_t cmd_allow;                       /* can_port_allow_commands */
+    canproto_frame_t st2[CANPROTO_ST2_PAGES]; /* STATUS2 pages as last given */
+    uint32_t st2_have;                        /* bit per page given */
+    uint32_t st2_changed;                     /* bit per page changed since last sent */
+    unsigned st2_next;                        /* round robin: the page after the last sent */
     can_port_obj_stats_t st;
 } can_port_obj_t;
 
@@ -122,6 +127,7 @@ int can_port_set_object(can_port_t *p, unsigned i, const canproto_ids_t *ids,
     }
     can_port_obj_t *o = &p->obj[i];
     o->set = 1;
+    o->cmd_allow = CAN_PORT_CMD_ALL;
     o->ids = *ids;
     o->hooks = *hooks;
     o->ctx = ctx;
@@ -185,8 +191,35 @@ void can_port_output_fault(can_port_t *p, unsigned i, uint64_t lost, int fault)
     o->out_fault_seen = fault;
 }
 
-static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg)
+void can_port_allow_commands(can_port_t *p, unsigned i, uint32_t mask)
 {
+    if (i < p->nobj)
+        p->obj[i].cmd_allow = mask;
+}
+
+void can_port_status2(can_port_t *p, unsigned i, const canproto_frame_t *f)
+{
+    unsigned page = f->data[0];
+    if (i >= p->nobj || page == 0 || page >= CANPROTO_ST2_PAGES)
+        return;
+    can_port_obj_t *o = &p->obj[i];
+    canproto_frame_t *k = &o->st2[page];
+    if (!(o->st2_have & (1u << page)) || k->len != f->len || memcmp(k->data, f->data, f->len))
+        o->st2_changed |= 1u << page;
+    *k = *f;
+    k->id = o->ids.status2_id;
+    o->st2_have |= 1u << page;
+}
+
+static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, uint32_t id)
+{
+    if (!((o->cmd_allow >> cmd) & 1u)) {
+        o->st.cmd_refused++;
+        o->st.last_refused = (uint8_t)cmd;
+        o->st.last_refused_id = id;
+        event(o, CANPROTO_STERR_REFUSED);
+        return;
+    }
     if (cmd == CANPROTO_CMD_CLEAR && o->ids.cia402_enable && o->drive.held)
         o->reset_req = 1; /* fault reset, then the drives are enabled again */
     if (o->hooks.command)
@@ -324,7 +357,7 @@ static void dispatch(can_port_t *p, const canproto_frame_t *f)
             else if (rc == CANPROTO_RX_WAYPOINT)
                 handle_waypoint(o, &out);
             else if (rc == CANPROTO_RX_COMMAND)
-                handle_command(o, out.cmd, out.cmd_arg);
+                handle_command(o, out.cmd, out.cmd_arg, f->id);
             if (o->rx.st.out_of_order != ooo)
                 event(o, CANPROTO_STERR_OUT_OF_ORDER);
             return;
@@ -421,6 +454,26 @@ static void count_drop(can_port_obj_t *o, int rc)
     event(o, CANPROTO_STERR_TX_DROPPED);
 }
 
+/* One STATUS2 page after a STATUS: a changed one first, else the next in turn. */
+static void send_status2(can_port_t *p, can_port_obj_t *o)
+{
+    unsigned page = 0;
+    if (!o->st2_have)
+        return;
+    for (unsigned k = 1; k < CANPROTO_ST2_PAGES && !page; k++)
+        if (o->st2_changed & (1u << k))
+            page = k;
+    for (unsigned j = 0; j < CANPROTO_ST2_PAGES && !page; j++) {
+        unsigned k = (o->st2_next + j) % CANPROTO_ST2_PAGES;
+        if (o->st2_have & (1u << k))
+            page = k;
+    }
+    if (p->io.send(p->io_ctx, &o->st2[page]) == 0) {
+        o->st2_changed &= ~(1u << page);
+        o->st2_next = (page + 1) % CANPROTO_ST2_PAGES;
+    }
+}
+
 static void send_status(can_port_t *p, can_port_obj_t *o, const engine_status_t *es_in,
                         int64_t now_ns)
 {
@@ -452,6 +505,7 @@ static void send_status(can_port_t *p, can_port_obj_t *o, const engine_status_t 
         o->last_status_ns = now_ns;
         o->sent_status = 1;
         o->last_state = (int)es.state;
+        send_status2(p, o);
     }
 }
 

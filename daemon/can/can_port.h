@@ -114,8 +114,11 @@ typedef struct {
     uint64_t heartbeat_lost; /* a drive's heartbeat not heard within cia402_heartbeat_ms */
     uint32_t last_abort;     /* abort code of the last SDO abort (cia402_sdo_abort_text) */
     uint16_t last_abort_index;
-    uint16_t last_emcy;     /* error code of the last EMCY */
-    canproto_rx_stats_t rx; /* reassembly counters */
+    uint16_t last_emcy;       /* error code of the last EMCY */
+    uint64_t cmd_refused;     /* command frames refused (can_port_allow_commands) */
+    uint8_t last_refused;     /* canproto_cmd_t of the last one */
+    uint32_t last_refused_id; /* CAN id it came on */
+    canproto_rx_stats_t rx;   /* reassembly counters */
 } can_port_obj_stats_t;
 
 typedef struct {
@@ -162,6 +165,25 @@ int can_port_rx(can_port_t *p, int64_t now_ns);
  * CANPROTO_STERR_OUTPUT (sent at once, as after a rejection).
  */
 void can_port_output_fault(can_port_t *p, unsigned i, uint64_t lost, int fault);
+
+/*
+ * Which commands object i obeys: bit (1u << canproto_cmd_t) per command
+ * (default: all, CAN_PORT_CMD_ALL).  A command frame outside the mask is
+ * refused: nothing happens, it is counted (stats cmd_refused, with its
+ * command and id), reported in STATUS at once (last_err
+ * CANPROTO_STERR_REFUSED).
+ */
+#define CAN_PORT_CMD_ALL 0xFFFFFFFFu
+void can_port_allow_commands(can_port_t *p, unsigned i, uint32_t mask);
+
+/*
+ * Object i's STATUS2 page f->data[0] (1 .. CANPROTO_ST2_PAGES - 1; the id of
+ * f is ignored: the object's status2_id is used), copied.  After each STATUS,
+ * one STATUS2 page goes out: the first page whose bytes changed since it was
+ * last sent, else the pages given so far in turn.  A change does not make a
+ * STATUS due by itself (events do).
+ */
+void can_port_status2(can_port_t *p, unsigned i, const canproto_frame_t *f);
 
 /* Hand over object i's setpoint for this cycle (copied). */
 void can_port_setpoint(can_port_t *p, unsigned i, const engine_setpoint_t *sp);

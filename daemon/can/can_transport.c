@@ -23,7 +23,8 @@ enum {
     GIVEN_SP = 1u << 2,
     GIVEN_SPFD = 1u << 3,
     GIVEN_ST = 1u << 4,
-    GIVEN_COB = 1u << 5, /* << axis */
+    GIVEN_ST2 = 1u << 5,
+    GIVEN_COB = 1u << 6, /* << axis */
 };
 
 static void cfg_default(void *p)
@@ -185,6 +186,7 @@ static int obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
         {"setpoint_id", offsetof(canproto_ids_t, setpoint_id), GIVEN_SP},
         {"setpoint_fd_id", offsetof(canproto_ids_t, setpoint_fd_id), GIVEN_SPFD},
         {"status_id", offsetof(canproto_ids_t, status_id), GIVEN_ST},
+        {"status2_id", offsetof(canproto_ids_t, status2_id), GIVEN_ST2},
     };
     for (size_t i = 0; i < sizeof idkeys / sizeof idkeys[0]; i++)
         if (!strcmp(k, idkeys[i].key)) {
@@ -259,6 +261,8 @@ void can_obj_ids(const can_obj_cfg_t *oc, unsigned obj_id, canproto_ids_t *ids)
         ids->setpoint_fd_id = g->setpoint_fd_id;
     if (oc->given & GIVEN_ST)
         ids->status_id = g->status_id;
+    if (oc->given & GIVEN_ST2)
+        ids->status2_id = g->status2_id;
     for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
         if (oc->given & (GIVEN_COB << a))
             ids->cia402_cob_id[a] = g->cia402_cob_id[a];
@@ -495,7 +499,40 @@ typedef struct {
     uint32_t load_permille;    /* worst-case bus load of the configured traffic, 0.1 % */
     can_port_obj_stats_t drive_logged[CFG_OBJECTS_MAX]; /* drive counters already logged */
     int drive_state_logged[CFG_OBJECTS_MAX];            /* all_enabled as last logged, -1 never */
+    uint64_t refused_logged[CFG_OBJECTS_MAX];           /* cmd_refused already logged */
+    int64_t refused_log_ns;                             /* when log_refused last logged */
 } can_state_t;
+
+static const char *cmd_name(unsigned cmd)
+{
+    static const char *const names[] = {"?",     "finish",         "stop",
+                                        "clear", "reset counters", "override"};
+    return cmd < sizeof names / sizeof names[0] ? names[cmd] : "?";
+}
+
+/* Command frames refused since the last line, at most one line a second. */
+static void log_refused(can_state_t *s, int64_t now_ns)
+{
+    if (s->refused_log_ns && now_ns - s->refused_log_ns < 1000000000LL)
+        return;
+    for (unsigned k = 0; k < s->n; k++) {
+        can_port_obj_stats_t os;
+        can_port_obj_stats(s->port, k, &os);
+        if (os.cmd_refused <= s->refused_logged[k]) {
+            s->refused_logged[k] = os.cmd_refused; /* reset counters */
+            continue;
+        }
+        log_msg(LOG_WARNING,
+                "can: object '%s': %llu command frame(s) refused, the last %s on id 0x%03X: "
+                "the object is not writable (writable = yes in [object.%s] lets CAN command "
+                "it; %llu refused in all)",
+                s->objs[k]->name, (unsigned long long)(os.cmd_refused - s->refused_logged[k]),
+                cmd_name(os.last_refused), (unsigned)os.last_refused_id, s->objs[k]->name,
+                (unsigned long long)os.cmd_refused);
+        s->refused_logged[k] = os.cmd_refused;
+        s->refused_log_ns = now_ns;
+    }
+}
 
 /* What the object's drives did since the last housekeeping (once per 100 ms at most). */
 static void log_drives(can_state_t *s)
@@ -676,6 +713,7 @@ static void on_timer(loop_t *l, uint64_t exp, void *ctx)
     }
     s->was_up = up;
     log_drives(s);
+    log_refused(s, core_mono_ns());
     publish_state(s);
 }
 
@@ -696,7 +734,8 @@ static void close_(void *state, core_t *c)
             log_msg(LOG_INFO,
                     "can: %s: setpoints sent %llu, dropped late %llu / queue full %llu / down %llu"
                     " / error %llu; waypoints %llu accepted, %llu rejected, %llu full, %llu lost,"
-                    " %llu duplicate frames, %llu out of order, %llu malformed frames",
+                    " %llu duplicate frames, %llu out of order, %llu malformed frames;"
+                    " %llu commands refused",
                     s->objs[k]->name, (unsigned long long)os.setpoints_sent,
                     (unsigned long long)os.dropped_late, (unsigned long long)os.dropped_full,
                     (unsigned long long)os.dropped_down, (unsigned long long)os.dropped_error,
@@ -704,7 +743,7 @@ static void close_(void *state, core_t *c)
                     (unsigned long long)os.waypoints_rejected,
                     (unsigned long long)os.waypoints_full, (unsigned long long)os.rx.lost,
                     (unsigned long long)os.rx.duplicates, (unsigned long long)os.rx.out_of_order,
-                    (unsigned long long)os.rx.malformed);
+                    (unsigned long long)os.rx.malformed, (unsigned long long)os.cmd_refused);
         }
     }
     can_port_free(s->port);
@@ -724,6 +763,20 @@ static void collect_objects(can_state_t *s, core_t *c)
         s->is_input[s->n] = c->obj[i].cfg->input == &can_transport;
         s->objs[s->n++] = &c->obj[i];
     }
+}
+
+/*
+ * The commands CAN may give object k: all if it is writable (writable = yes,
+ * or not given and its input is CAN); otherwise none, except FINISH for a CAN
+ * input (the end of its own input, as the end of a replay file).  Refused
+ * commands are counted, reported in STATUS / STATUS2 and logged (log_refused).
+ */
+static uint32_t cmd_mask(const can_state_t *s, unsigned k)
+{
+    int w = s->objs[k]->cfg->writable;
+    if (w == 1 || (w < 0 && s->is_input[k]))
+        return CAN_PORT_CMD_ALL;
+    return s->is_input[k] ? 1u << CANPROTO_CMD_FINISH : 0;
 }
 
 /* Give every object its ids and hooks; the ids to receive go to rx_ids. */
@@ -746,9 +799,11 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
             snprintf(why, wl, "can: object '%s': invalid or clashing ids", s->objs[k]->name);
             return -EINVAL;
         }
+        can_port_allow_commands(s->port, k, cmd_mask(s, k));
         uint32_t mine[24];
+        /* waypoint ids for inputs and for objects that take commands */
         unsigned m = canproto_ids_rx(&ids, mine, 24),
-                 from = s->is_input[k] ? 0 : 1 + (unsigned)ids.fd;
+                 from = s->is_input[k] || cmd_mask(s, k) ? 0 : 1 + (unsigned)ids.fd;
         for (unsigned j = from; j < m && j < 24; j++) { /* waypoint ids (inputs), feedback TPDOs */
             if (*nrx >= CAN_SOCKET_MAX_FILTERS) {
                 snprintf(why, wl, "can: more than %d ids to receive (waypoints, drive feedback)",
@@ -859,9 +914,15 @@ static void setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
 {
     can_state_t *s = state;
     if (s->port && s->port_index[o->index] >= 0) {
-        can_port_output_fault(s->port, (unsigned)s->port_index[o->index], o->out_lost,
-                              o->out_fault);
-        can_port_setpoint(s->port, (unsigned)s->port_index[o->index], sp);
+        unsigned k = (unsigned)s->port_index[o->index];
+        can_port_obj_stats_t os;
+        canproto_frame_t f;
+        can_port_output_fault(s->port, k, o->out_lost, o->out_fault);
+        can_port_obj_stats(s->port, k, &os);
+        canproto_st2_faults_t pg = {o->out_lost, o->out_errors, os.cmd_refused};
+        canproto_encode_status2_faults(0, &pg, &f);
+        can_port_status2(s->port, k, &f);
+        can_port_setpoint(s->port, k, sp);
     }
 }
 
@@ -870,6 +931,11 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
     can_state_t *s = state;
     if (!s->port)
         return;
+    if (s->log && !(s->drained && s->rx_tick == c->cycle)) {
+        /* no CAN input ticked (only outputs, e.g. a writable replay object):
+         * commands due in log_in still arrive once per tick */
+        pre_tick(s, NULL, now_ns);
+    }
     if (s->log)
         can_logfile_set_time(s->log, now_ns);
     can_port_cycle(s->port, now_ns, c->late_ns);

@@ -53,6 +53,7 @@ void obj_reset_counters(obj_t *o)
     o->skipped_ticks = 0;
     o->out_lost = 0;
     o->out_fault = 0;
+    o->out_errors = 0;
     engine_status(o->engine, &o->status);
 }
 
@@ -285,6 +286,7 @@ static void carry_objects(core_t *c, core_t *prev)
         o->out_lost = q->out_lost;
         o->out_fault = q->out_fault;
         o->rejlog = q->rejlog;
+        o->out_errors = q->out_errors;
         o->carried = 1;
     }
 }

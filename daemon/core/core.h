@@ -66,6 +66,7 @@ typedef struct obj {
                                      * its outputs (buffer full, write error) */
     int out_fault;          /* 1 once a write to one of its outputs failed (ENOSPC,
                                      * EIO, ...); cleared by the reset-counters command */
+    uint64_t out_errors;    /* failed writes of its outputs (CAN STATUS2 page 1) */
     safety_t safety;        /* the last check of o->sp before any output sees it
                                      * (kept when carried) */
     uint64_t safety_logged; /* safety violations already logged */

@@ -136,10 +136,13 @@ static void fault(csv_transport_t *st, stream_t *s, int err)
     stats->out_fault = 1;
     if (s->obj) {
         s->obj->out_fault = 1;
+        s->obj->out_errors++;
     } else {
         for (unsigned i = 0; i < st->core->nobj; i++)
-            if (cfg_obj_uses(st->core->obj[i].cfg, &stdout_transport) & 2)
+            if (cfg_obj_uses(st->core->obj[i].cfg, &stdout_transport) & 2) {
                 st->core->obj[i].out_fault = 1;
+                st->core->obj[i].out_errors++;
+            }
     }
     if (err == EPIPE && s->is_stdout)
         stats->exit_code = CORE_EXIT_EPIPE;

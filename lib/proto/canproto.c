@@ -110,6 +110,7 @@ void canproto_ids_default(canproto_ids_t *ids, unsigned n)
     ids->setpoint_id = CANPROTO_ID_SETPOINT_BASE + n;
     ids->setpoint_fd_id = CANPROTO_ID_SETPOINT_FD_BASE + n;
     ids->status_id = CANPROTO_ID_STATUS_BASE + n;
+    ids->status2_id = CANPROTO_ID_STATUS2_BASE + n;
     ids->own = 1;
     for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
         ids->cia402_cob_id[a] = CANPROTO_CIA402_RPDO1_BASE + 1 + CANPROTO_CIA402_AXES * n + a;
@@ -126,6 +127,7 @@ unsigned canproto_ids_in_use(const canproto_ids_t *ids, uint32_t out[CANPROTO_ID
     if (ids->own)
         out[n++] = ids->fd ? ids->setpoint_fd_id : ids->setpoint_id;
     out[n++] = ids->status_id;
+    out[n++] = ids->status2_id;
     if (ids->cia402)
         for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
             if (ids->cia402_cob_id[a])
@@ -416,7 +418,46 @@ void canproto_encode_status(uint32_t id, const canproto_status_t *st, canproto_f
     out->data[7] = st->last_err;
 }
 
+static uint64_t sat_max(uint64_t v, uint64_t max)
+{
+    return v > max ? max : v;
+}
+
+void canproto_encode_status2_faults(uint32_t id, const canproto_st2_faults_t *p,
+                                    canproto_frame_t *out)
+{
+    frame_init(out, id, CANPROTO_STATUS2_DLEN, 0);
+    out->data[0] = CANPROTO_ST2_FAULTS;
+    put_le(&out->data[1], 3, sat_max(p->out_lost, CANPROTO_ST2_U24_MAX));
+    put_le(&out->data[4], 2, sat_max(p->out_errors, 0xFFFF));
+    put_le(&out->data[6], 2, sat_max(p->cmd_refused, 0xFFFF));
+}
+
 /* ---- decoders ------------------------------------------------------------------------ */
+
+int canproto_status2_page(const canproto_frame_t *f)
+{
+    if (f->len != CANPROTO_STATUS2_DLEN ||
+        (f->flags & (CANPROTO_F_RTR | CANPROTO_F_ERR | CANPROTO_F_EFF | CANPROTO_F_FD)))
+        return -CANPROTO_ELEN;
+    if (f->data[0] == 0 || f->data[0] >= CANPROTO_ST2_PAGES)
+        return -CANPROTO_EMUX;
+    return f->data[0];
+}
+
+int canproto_decode_status2_faults(const canproto_frame_t *f, canproto_st2_faults_t *out)
+{
+    memset(out, 0, sizeof *out);
+    int page = canproto_status2_page(f);
+    if (page < 0)
+        return page;
+    if (page != CANPROTO_ST2_FAULTS)
+        return -CANPROTO_EMUX;
+    out->out_lost = get_le(&f->data[1], 3);
+    out->out_errors = get_le(&f->data[4], 2);
+    out->cmd_refused = get_le(&f->data[6], 2);
+    return 0;
+}
 
 int canproto_decode_setpoint(const canproto_frame_t *f, canproto_setpoint_t *out)
 {
@@ -728,7 +769,10 @@ double canproto_busload(const canproto_ids_t *ids, unsigned nobj, int sync, unsi
                 if (o->cia402_cob_id[a])
                     busy_s += tr->rate_hz * canproto_frame_time_s(o->cia402_controlword ? 6 : 4, 0,
                                                                   0, 0, bitrate, 0);
-        busy_s += tr->status_hz * canproto_frame_time_s(CANPROTO_STATUS_DLEN, 0, 0, 0, bitrate, 0);
+        /* STATUS and the STATUS2 page that follows it */
+        busy_s += tr->status_hz *
+                  (canproto_frame_time_s(CANPROTO_STATUS_DLEN, 0, 0, 0, bitrate, 0) +
+                   canproto_frame_time_s(CANPROTO_STATUS2_DLEN, 0, 0, 0, bitrate, 0));
         t = o->fd
                 ? canproto_frame_time_s(CANPROTO_WP_FD_DLEN, 1, brs, 0, bitrate, data_bitrate)
                 : CANPROTO_WP_PARTS * canproto_frame_time_s(CANPROTO_WP_DLEN, 0, 0, 0, bitrate, 0);
@@ -804,6 +848,12 @@ static const canproto_signal_t sig_st[] = {
     SIG_U("ST_Rejected", -1, 32, 8, 1, ""),   SIG_U("ST_Malformed", -1, 40, 8, 1, ""),
     SIG_U("ST_Dropped", -1, 48, 8, 1, ""),    SIG_U("ST_LastErr", -1, 56, 8, 1, ""),
 };
+static const canproto_signal_t sig_st2[] = {
+    SIG_U("ST2_Page", -2, 0, 8, 1, ""),
+    SIG_U("ST2_OutLost", CANPROTO_ST2_FAULTS, 8, 24, 1, ""),
+    SIG_U("ST2_OutErrors", CANPROTO_ST2_FAULTS, 32, 16, 1, ""),
+    SIG_U("ST2_CmdRefused", CANPROTO_ST2_FAULTS, 48, 16, 1, ""),
+};
 static const canproto_signal_t sig_rpdo[] = {
     SIG_S("Target_Position_607A", -1, 0, 32, 1, "inc"),
 };
@@ -827,6 +877,8 @@ static const canproto_message_t canproto_msgs[] = {
      sizeof sig_spfd / sizeof sig_spfd[0]},
     {"TRAJD_STATUS", CANPROTO_ID_STATUS_BASE, CANPROTO_STATUS_DLEN, 0, "TRAJD", sig_st,
      sizeof sig_st / sizeof sig_st[0]},
+    {"TRAJD_STATUS2", CANPROTO_ID_STATUS2_BASE, CANPROTO_STATUS2_DLEN, 0, "TRAJD", sig_st2,
+     sizeof sig_st2 / sizeof sig_st2[0]},
     {"SYNC", CANPROTO_ID_SYNC_DEFAULT, 0, 0, "TRAJD", NULL, 0},
     {"RPDO1_NODE1", CANPROTO_CIA402_RPDO1_BASE + 1, 4, 0, "TRAJD", sig_rpdo, 1},
     {"RPDO1_NODE2", CANPROTO_CIA402_RPDO1_BASE + 2, 4, 0, "TRAJD", sig_rpdo, 1},
@@ -905,8 +957,14 @@ int canproto_dbc(char *buf, size_t len)
          "malformed, 0x41 lost, 0x42 out of order, 0x43 setpoints dropped, 0x44 bus down, 0x45 "
          "csv/stdout output lost lines, 0x46 safety monitor fault (object held until clear), 0x47 "
          "a CiA 402 "
-         "drive left Operation Enabled\";\n",
-         CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_STATUS_BASE);
+         "drive left Operation Enabled, 0x48 a command refused (object not writable)\";\n"
+         "CM_ SG_ %u ST2_Page \"STATUS2 page: 1 faults; counters saturate at their maximum\";\n"
+         "CM_ SG_ %u ST2_OutLost \"setpoint lines lost by the object's csv/stdout outputs\";\n"
+         "CM_ SG_ %u ST2_OutErrors \"failed writes of the object's csv/stdout outputs\";\n"
+         "CM_ SG_ %u ST2_CmdRefused \"command frames refused: the object is not writable\";\n",
+         CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_STATUS_BASE,
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
+         CANPROTO_ID_STATUS2_BASE);
     emit(buf, len, &pos,
          "BA_DEF_ BO_ \"VFrameFormat\" ENUM \"StandardCAN\",\"ExtendedCAN\",\"reserved\","
          "\"J1939PG\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\","
@@ -934,10 +992,13 @@ int canproto_dbc(char *buf, size_t len)
          "4 \"same time\" 5 \"speed\" 6 \"full\" 7 \"config\" 8 \"no memory\" 9 \"state\" "
          "10 \"numeric\" 11 \"acceleration\" %d \"malformed\" %d \"lost\" %d \"out of order\" "
          "%d \"setpoints dropped\" %d \"bus down\" %d \"output lost lines\" %d \"safety fault\" "
-         "%d \"drive not enabled\" ;\n",
+         "%d \"drive not enabled\" %d \"command refused\" ;\n",
          CANPROTO_ID_STATUS_BASE, CANPROTO_STERR_MALFORMED, CANPROTO_STERR_LOST,
          CANPROTO_STERR_OUT_OF_ORDER, CANPROTO_STERR_TX_DROPPED, CANPROTO_STERR_BUS_DOWN,
-         CANPROTO_STERR_OUTPUT, CANPROTO_STERR_SAFETY, CANPROTO_STERR_DRIVE);
+         CANPROTO_STERR_OUTPUT, CANPROTO_STERR_SAFETY, CANPROTO_STERR_DRIVE,
+         CANPROTO_STERR_REFUSED);
+    emit(buf, len, &pos, "VAL_ %u ST2_Page %d \"faults\" ;\n", CANPROTO_ID_STATUS2_BASE,
+         CANPROTO_ST2_FAULTS);
     for (unsigned k = 1; k <= 3; k++)
         emit(buf, len, &pos,
              "VAL_ %u Controlword_6040 0 \"disable voltage\" 2 \"quick stop\" 6 \"shutdown\" "

@@ -48,6 +48,14 @@
  *    shown by last_err EFULL and last_seq not moving), 5 malformed frames, 6 dropped setpoints
  *    (late or TX queue full), 7 last error code (canproto_status_err_t).
  *    Counters 3..6 are modulo 256: a sender watches them change.
+ *  STATUS2 (out, classic, DLC 8, default 0x6D0+n), multiplexed by byte 0 =
+ *    page (canproto_st2_page_t); sent after STATUS, one page per STATUS: a
+ *    page whose content changed first, else the pages in turn.  Counters in
+ *    pages saturate at their field's maximum (they never wrap: a reader sees
+ *    "at least this many").  Pages:
+ *    1 FAULTS: 1..3 setpoint lines lost by the object's csv/stdout outputs
+ *      (uint24), 4..5 failed output writes (uint16), 6..7 commands refused
+ *      (uint16: the object is not writable, [object] writable = no).
  *  SYNC (out, default 0x080, DLC 0, or DLC 1 with a counter 1..overflow as
  *    CiA 301 allows), once per cycle before the setpoints, optional.
  *  CiA 402 RPDO (out, one per axis, COB-ids configured, e.g. 0x200+node):
@@ -97,6 +105,7 @@ typedef struct {
 #define CANPROTO_ID_SETPOINT_BASE 0x6A0u
 #define CANPROTO_ID_SETPOINT_FD_BASE 0x6B0u
 #define CANPROTO_ID_STATUS_BASE 0x6C0u
+#define CANPROTO_ID_STATUS2_BASE 0x6D0u
 #define CANPROTO_ID_SYNC_DEFAULT 0x080u
 #define CANPROTO_CIA402_RPDO1_BASE 0x200u /* CiA 301 RPDO1 = 0x200 + node-id */
 #define CANPROTO_CIA402_RPDO2_BASE 0x300u /* CiA 301 RPDO2 = 0x300 + node-id */
@@ -107,6 +116,14 @@ typedef struct {
 #define CANPROTO_SP_DLEN 8
 #define CANPROTO_SP_FD_DLEN 32
 #define CANPROTO_STATUS_DLEN 8
+#define CANPROTO_STATUS2_DLEN 8
+
+/* STATUS2 pages (byte 0).  New pages take the next free number; a page is
+ * 7 bytes (1..7), little-endian fields, counters saturating. */
+typedef enum {
+    CANPROTO_ST2_FAULTS = 1, /* output and command faults (canproto_st2_faults_t) */
+    CANPROTO_ST2_PAGES = 8   /* pages are 1 .. CANPROTO_ST2_PAGES - 1 */
+} canproto_st2_page_t;
 
 /* Waypoint multiplexer values (byte 0). */
 enum canproto_mux {
@@ -180,6 +197,8 @@ typedef enum {
     CANPROTO_STERR_SAFETY = 0x46,       /* the safety monitor refused a setpoint (object held) */
     CANPROTO_STERR_DRIVE = 0x47,        /* a CiA 402 drive left Operation Enabled (fault, quick
                                            stop, disabled): the object is cleared, no target sent */
+    CANPROTO_STERR_REFUSED = 0x48,      /* a command frame was refused: the object is not
+                                           writable (STATUS2 page 1 counts them) */
 } canproto_status_err_t;
 
 /* ---- errors ------------------------------------------------------------------ */
@@ -248,6 +267,7 @@ typedef struct {
     } cia402_sdo[CANPROTO_CIA402_SDO_MAX];
     unsigned cia402_nsdo;
     uint32_t cia402_heartbeat_ms;
+    uint32_t status2_id; /* STATUS2 out (pages) */
 } canproto_ids_t;
 
 /* The CANopen node-id of axis (low 7 bits of its COB-id), 0 if unused. */
@@ -274,7 +294,7 @@ void canproto_ids_default(canproto_ids_t *ids, unsigned n);
  */
 int canproto_ids_check(const canproto_ids_t *ids, const char **why);
 
-/* Most ids one object can use: 2 waypoint, 1 setpoint, 1 status, 3 CiA 402, 3 feedback. */
+/* Most ids one object can use: 2 waypoint, 1 setpoint, 2 status, 3 CiA 402, 3 feedback. */
 #define CANPROTO_IDS_MAX 16
 
 /*
@@ -364,6 +384,24 @@ int canproto_decode_setpoint(const canproto_frame_t *f, canproto_setpoint_t *out
 
 /* Decode a STATUS frame.  Returns 0 or -CANPROTO_ELEN. */
 int canproto_decode_status(const canproto_frame_t *f, canproto_status_t *out);
+
+/* STATUS2 page 1, FAULTS (values above a field's maximum are sent as the maximum). */
+#define CANPROTO_ST2_U24_MAX 0xFFFFFFu
+typedef struct {
+    uint64_t out_lost;    /* setpoint lines lost by the object's csv/stdout outputs (uint24) */
+    uint64_t out_errors;  /* failed writes of those outputs (uint16) */
+    uint64_t cmd_refused; /* command frames refused: object not writable (uint16) */
+} canproto_st2_faults_t;
+
+void canproto_encode_status2_faults(uint32_t id, const canproto_st2_faults_t *p,
+                                    canproto_frame_t *out);
+
+/* The page of a STATUS2 frame (1 .. CANPROTO_ST2_PAGES - 1), or -CANPROTO_ELEN
+ * (wrong length or kind) or -CANPROTO_EMUX (page 0 or unknown). */
+int canproto_status2_page(const canproto_frame_t *f);
+
+/* Decode STATUS2 page 1.  Returns 0, -CANPROTO_ELEN, or -CANPROTO_EMUX (another page). */
+int canproto_decode_status2_faults(const canproto_frame_t *f, canproto_st2_faults_t *out);
 
 /* ---- waypoint reassembly ------------------------------------------------------------ */
 

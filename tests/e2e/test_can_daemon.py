@@ -255,6 +255,72 @@ class CanDaemon(unittest.TestCase):
         self.assertIn("object 'boat': can vcan0 id 0x680 seq 70: rejected (", lines[0])
         self.assertIn(" t=%.3f s" % float(t), lines[0])
 
+    def run_commands(self, name, obj):
+        """Object boat (keys obj) with its output on CAN and on a full disk
+        (csv.path = /dev/full); the candump input carries the track's waypoint
+        frames (and FINISH after the last) with STOP at t = 5 s and CLEAR at
+        t = 6 s on its waypoint id, all encoded by canmatrix."""
+        d = self.sub(name)
+        db = ct.load_db()
+        wp = os.path.join(d, "wp.log")
+        ct.write_wplog(self.xyz, wp, iface="vcan0")
+        with open(wp) as fh:
+            lines = fh.read().splitlines()
+        lines += ["(%.6f) vcan0 %s" % (t, ct.fmt_frame(*ct.command_frame(db, cmd)))
+                  for t, cmd in ((5.0, 2), (6.0, 3))]
+        key = lambda l: float(l[1:l.index(")")]) if l.startswith("(") else -1.0
+        with open(wp, "w") as fh:
+            fh.write("\n".join(sorted(lines, key=key)) + "\n")
+        path = os.path.join(d, "t.conf")
+        with open(path, "w") as fh:
+            fh.write("[daemon]\nrate_hz = %d\nspeed = %d\nexit_when_done = yes\n"
+                     "stop_timeout_s = 1\nstatus_interval_s = 0\n"
+                     "[can]\nlog_in = wp.log\nlog_out = sp.log\nlog_ifname = vcan0\nmax_late_ms = 0\n"
+                     "[object.boat]\noutput = can, csv\ncsv.path = /dev/full\n%s" % (RATE_HZ, SPEED, obj))
+        p = run_trajd(path)
+        rows, _ = ct.decode_setpoints(os.path.join(d, "sp.log"))
+        end = self.refrows[max(self.refrows)]
+        last = rows[max(rows)]
+        dist = math.hypot(last["x"] - float(end["x_m"]), last["y"] - float(end["y_m"]))
+        states = []  # the engine state in the setpoints, each change
+        for k in sorted(rows):
+            if not states or states[-1] != rows[k]["state"]:
+                states.append(rows[k]["state"])
+        return p, d, dist, states
+
+    # Given a CAN input with writable = no, when STOP and CLEAR arrive on its
+    # waypoint id amid its waypoints, then neither is obeyed (it runs to the
+    # end of its track, where trajreplay ends: FINISH, the end of its own
+    # input, is), both are counted in STATUS2 page 1 (decoded by canmatrix
+    # from the DBC) and reported in STATUS (0x48), and the log names the
+    # object, the command and the id.  Its csv output on a full disk shows in
+    # the same page (lines lost, failed writes) and in the exit status.  An
+    # object fed by replay with writable = yes obeys the same STOP (state
+    # FINISHED mid-track) and CLEAR (WAITING again, then the replay resumes).
+    def test_commands_need_writable(self):
+        p, d, dist, states = self.run_commands("cmd_ro", "input = can\nwritable = no\n")
+        self.assertEqual(states, [0, 1, 3])  # waiting, streaming, finished at the end
+        self.assertEqual(p.returncode, 74, p.stderr)  # EX_IOERR: lines lost on /dev/full
+        self.assertLess(dist, 2 * ct.SP_POS_TOL)
+        st2 = ct.decode_by_id(os.path.join(d, "sp.log"), 0x6D0)
+        self.assertGreater(len(st2), 0)
+        last = st2[-1][1]
+        self.assertEqual(int(last["ST2_Page"]), 1)
+        self.assertEqual(int(last["ST2_CmdRefused"]), 2)
+        self.assertGreater(int(last["ST2_OutLost"]), 0)
+        self.assertGreater(int(last["ST2_OutErrors"]), 0)
+        st = ct.decode_by_id(os.path.join(d, "sp.log"), 0x6C0)
+        self.assertIn(0x48, [int(s["ST_LastErr"]) for _, s in st])
+        self.assertIn("object 'boat'", p.stderr)
+        self.assertRegex(p.stderr, r"command frame\(s\) refused, the last (stop|clear) on id 0x680")
+        p, d, dist, states = self.run_commands("cmd_rw", "input = replay\nreplay.track = %s\n"
+                                               "writable = yes\n" % self.xyz)
+        self.assertEqual(p.returncode, 74, p.stderr)
+        self.assertIn(3, states[:-1])  # stopped before the end of the track
+        self.assertNotIn("command frame(s) refused", p.stderr)
+        st2 = ct.decode_by_id(os.path.join(d, "sp.log"), 0x6D0)
+        self.assertEqual(int(st2[-1][1]["ST2_CmdRefused"]), 0)
+
     # Given 4 objects at 1 kHz with own frames and CiA 402 RPDOs at 500 kbit/s,
     # then --check-config refuses with the computed load, which agrees with
     # frame lengths computed here from Davis et al. 2007 (eq. 2).
@@ -269,7 +335,8 @@ class CanDaemon(unittest.TestCase):
         with open(path, "w") as fh:
             fh.write("[daemon]\nrate_hz = 1000\n[can]\ninterface = vcan0\nsync = yes\n"
                      "bitrate = 500000\nwaypoint_hz = 10\nstatus_period_ms = 100\n" + objs)
-        per_s = 1000 * (bits(0) + 4 * (3 * bits(8) + 3 * bits(4))) + 4 * (10 * bits(8) + 10 * 4 * bits(8))
+        # per object: STATUS and STATUS2 at 10 Hz, 10 waypoints/s of 4 frames
+        per_s = 1000 * (bits(0) + 4 * (3 * bits(8) + 3 * bits(4))) + 4 * (2 * 10 * bits(8) + 10 * 4 * bits(8))
         expect = per_s / 500000 * 100
         p = subprocess.run([TRAJD, "--check-config", path], capture_output=True, text=True, timeout=10)
         self.assertNotEqual(p.returncode, 0)

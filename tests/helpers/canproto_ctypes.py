@@ -54,7 +54,13 @@ class Ids(ctypes.Structure):
                 ("cia402_invert", ctypes.c_int * AXES), ("cia402_offset", ctypes.c_int32 * AXES),
                 ("cia402_feedback", ctypes.c_int), ("cia402_tpdo_id", ctypes.c_uint32 * AXES),
                 ("cia402_enable", ctypes.c_int), ("cia402_sdo", CiaSdo * 8),
-                ("cia402_nsdo", ctypes.c_uint), ("cia402_heartbeat_ms", ctypes.c_uint32)]
+                ("cia402_nsdo", ctypes.c_uint), ("cia402_heartbeat_ms", ctypes.c_uint32),
+                ("status2_id", ctypes.c_uint32)]
+
+
+class St2Faults(ctypes.Structure):
+    _fields_ = [("out_lost", ctypes.c_uint64), ("out_errors", ctypes.c_uint64),
+                ("cmd_refused", ctypes.c_uint64)]
 
 
 class Status(ctypes.Structure):
@@ -76,6 +82,8 @@ def load():
     lib.canproto_encode_setpoint_fd.argtypes = [ctypes.c_uint32, ctypes.c_int, P(Setpoint),
                                                 P(Frame)]
     lib.canproto_encode_status.argtypes = [ctypes.c_uint32, P(Status), P(Frame)]
+    lib.canproto_encode_status2_faults.argtypes = [ctypes.c_uint32, P(St2Faults), P(Frame)]
+    lib.canproto_decode_status2_faults.argtypes = [P(Frame), P(St2Faults)]
     lib.canproto_encode_cia402.argtypes = [P(Ids), ctypes.c_uint, ctypes.c_double, P(Frame)]
     lib.canproto_cia402_pos_m.argtypes = [P(Ids), ctypes.c_uint, ctypes.c_int32]
     lib.canproto_cia402_pos_m.restype = ctypes.c_double

@@ -167,6 +167,45 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
         self.assertEqual((d["ST_Rejected"], d["ST_Malformed"], d["ST_Dropped"]), (3, 4, 5))
         self.assertEqual(d["ST_LastErr"], 0x41)
 
+    # Given STATUS2 page 1 (faults) from our encoder, then canmatrix decodes the
+    # page through the DBC multiplexor and every counter, saturated at its
+    # field's maximum (never wrapped); and a page canmatrix encodes from the
+    # DBC is what our decoder reads.
+    def test_status2_faults(self):
+        fr = frame_of(self.db, 0x6D0)
+        self.assertEqual(fr.name, "TRAJD_STATUS2")
+        self.assertTrue(fr.is_complex_multiplexed or fr.is_multiplexed)
+        for lost, errs, refused in [(0, 0, 0), (123456, 789, 3), (1 << 24, 65536, 70000),
+                                    (2 ** 40, 2 ** 33, 2 ** 20),
+                                    (self.rng.randrange(1 << 24), self.rng.randrange(1 << 16),
+                                     self.rng.randrange(1 << 16))]:
+            p = cp.St2Faults(lost, errs, refused)
+            f = cp.Frame()
+            LIB.canproto_encode_status2_faults(0x6D0, ctypes.byref(p), ctypes.byref(f))
+            self.assertEqual(f.len, 8)
+            d = decode(self.db, f)
+            self.assertEqual(d["ST2_Page"], 1)
+            self.assertEqual(d["ST2_OutLost"], min(lost, (1 << 24) - 1))
+            self.assertEqual(d["ST2_OutErrors"], min(errs, 65535))
+            self.assertEqual(d["ST2_CmdRefused"], min(refused, 65535))
+            # canmatrix -> our decoder
+            data = fr.encode({"ST2_Page": 1, "ST2_OutLost": raw(fr, "ST2_OutLost", d["ST2_OutLost"]),
+                              "ST2_OutErrors": raw(fr, "ST2_OutErrors", d["ST2_OutErrors"]),
+                              "ST2_CmdRefused": raw(fr, "ST2_CmdRefused", d["ST2_CmdRefused"])})
+            g = cp.Frame()
+            g.id, g.len = 0x6D0, 8
+            for i, b in enumerate(bytes(data)):
+                g.data[i] = b
+            q = cp.St2Faults()
+            self.assertEqual(LIB.canproto_decode_status2_faults(ctypes.byref(g), ctypes.byref(q)), 0)
+            self.assertEqual((q.out_lost, q.out_errors, q.cmd_refused),
+                             (d["ST2_OutLost"], d["ST2_OutErrors"], d["ST2_CmdRefused"]))
+        # another page, or page 0, is not page 1
+        g.data[0] = 2
+        self.assertLess(LIB.canproto_decode_status2_faults(ctypes.byref(g), ctypes.byref(q)), 0)
+        g.data[0] = 0
+        self.assertLess(LIB.canproto_decode_status2_faults(ctypes.byref(g), ctypes.byref(q)), 0)
+
     # Given a CiA 402 axis, then canmatrix reads the target position in increments.
     def test_cia402(self):
         ids = cp.Ids()
@@ -201,8 +240,8 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
         self.assertEqual({int(k): v for k, v in cmd.items()},
                          {1: "finish", 2: "stop", 3: "clear", 4: "reset counters"})
         err = frame_of(self.db, 0x6C0).signal_by_name("ST_LastErr").values
-        # ok, the 11 engine errors (motion.h), the CAN side's 0x40..0x47
-        self.assertEqual(sorted(int(k) for k in err), list(range(12)) + list(range(0x40, 0x48)))
+        # ok, the 11 engine errors (motion.h), the CAN side's 0x40..0x48
+        self.assertEqual(sorted(int(k) for k in err), list(range(12)) + list(range(0x40, 0x49)))
 
     # Given per-axis scale, an inverted axis and an offset, then the increments
     # are offset - round(pos * counts_per_m) (exact in Python's integers and

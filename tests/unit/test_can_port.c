@@ -601,6 +601,92 @@ static void test_commands(void **state)
     assert_int_equal(eng.n, 2);
 }
 
+/* Given an object that obeys only FINISH (a CAN input with writable = no),
+ * when CLEAR, STOP, OVERRIDE and FINISH arrive, then only FINISH reaches the
+ * hook; the three others are counted with the last one's command and id,
+ * STATUS goes out at once with last_err REFUSED, and the refused CLEAR did
+ * not restart sequence numbering (seq 0 after 10 is out of order). */
+static void test_commands_refused(void **state)
+{
+    (void)state;
+    can_port_obj_stats_t os;
+    canproto_status_t s;
+    can_port_allow_commands(port, 0, 1u << CANPROTO_CMD_FINISH);
+    run_cycle(0, 0); /* the first STATUS */
+    unsigned before = count_id(0x6C0);
+    queue_waypoint(10, 1.0);
+    canproto_encode_command(0x680, CANPROTO_CMD_CLEAR, &io.in[io.nin++]);
+    canproto_encode_command(0x680, CANPROTO_CMD_STOP, &io.in[io.nin++]);
+    assert_int_equal(canproto_encode_override(0x680, 50, &io.in[io.nin++]), 0);
+    canproto_encode_command(0x680, CANPROTO_CMD_FINISH, &io.in[io.nin++]);
+    queue_waypoint(0, 0.5);
+    can_port_rx(port, 0);
+    assert_int_equal(eng.ncmd, 1);
+    assert_int_equal(eng.cmds[0], CANPROTO_CMD_FINISH);
+    can_port_obj_stats(port, 0, &os);
+    assert_int_equal(os.cmd_refused, 3);
+    assert_int_equal(os.last_refused, CANPROTO_CMD_OVERRIDE);
+    assert_int_equal(os.last_refused_id, 0x680);
+    assert_int_equal(eng.n, 1); /* seq 0 after 10: out of order, not a restart */
+    assert_int_equal(os.rx.out_of_order, CANPROTO_WP_PARTS) /* frames */;
+    run_cycle(1, 0);
+    assert_int_equal(count_id(0x6C0), before + 1);
+    memset(&s, 0, sizeof s);
+    for (unsigned i = io.nout; i-- > 0;)
+        if (io.out[i].id == 0x6C0) {
+            canproto_decode_status(&io.out[i], &s);
+            break;
+        }
+    assert_true(s.last_err == CANPROTO_STERR_REFUSED || s.last_err == CANPROTO_STERR_OUT_OF_ORDER);
+    /* all allowed again: CLEAR reaches the hook */
+    can_port_allow_commands(port, 0, CAN_PORT_CMD_ALL);
+    canproto_encode_command(0x680, CANPROTO_CMD_CLEAR, &io.in[io.nin++]);
+    can_port_rx(port, 0);
+    assert_int_equal(eng.ncmd, 2);
+    assert_int_equal(eng.cmds[1], CANPROTO_CMD_CLEAR);
+}
+
+/* Given STATUS2 pages, then each STATUS is followed by one STATUS2 on the
+ * object's status2_id (0x6D0): a page whose bytes changed first, else the
+ * pages in turn; the counters of page 1 read back through the decoder. */
+static void test_status2_pages(void **state)
+{
+    (void)state;
+    canproto_frame_t f, g;
+    canproto_st2_faults_t pg = {5, 2, 1}, back;
+    run_cycle(0, 0); /* a STATUS before any page: no STATUS2 */
+    assert_int_equal(count_id(0x6D0), 0);
+    canproto_encode_status2_faults(0x123, &pg, &f); /* the id is the object's, not f's */
+    can_port_status2(port, 0, &f);
+    can_port_output_fault(port, 0, 5, 1); /* an event: STATUS due */
+    run_cycle(1, 0);
+    assert_int_equal(count_id(0x6D0), 1);
+    assert_int_equal(io.out[io.nout - 1].id, 0x6D0);
+    assert_int_equal(io.out[io.nout - 2].id, 0x6C0); /* right after its STATUS */
+    assert_int_equal(canproto_decode_status2_faults(&io.out[io.nout - 1], &back), 0);
+    assert_int_equal(back.out_lost, 5);
+    assert_int_equal(back.out_errors, 2);
+    assert_int_equal(back.cmd_refused, 1);
+    /* a second page (as another module would give it), then page 1 changes:
+     * the changed page 1 goes first, then page 2, then 1, 2 in turn */
+    memset(&g, 0, sizeof g);
+    g.len = 8;
+    g.data[0] = 2;
+    g.data[1] = 0xAB;
+    can_port_status2(port, 0, &g);
+    pg.out_lost = 6;
+    canproto_encode_status2_faults(0, &pg, &f);
+    can_port_status2(port, 0, &f);
+    unsigned want[] = {1, 2, 1, 2};
+    for (unsigned k = 0; k < 4; k++) {
+        can_port_output_fault(port, 0, 6 + k + 1, 1); /* STATUS due */
+        run_cycle(2 + k, 0);
+        assert_int_equal(io.out[io.nout - 1].id, 0x6D0);
+        assert_int_equal(io.out[io.nout - 1].data[0], want[k]);
+    }
+    assert_int_equal(count_id(0x6D0), 5);
+}
+
 /* Given two objects with clashing ids, then the second is refused. */
 static void test_id_clash(void **state)
 {
@@ -706,6 +792,8 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_flow_control_efull, setup, teardown),
         cmocka_unit_test_setup_teardown(test_commands, setup, teardown),
         cmocka_unit_test_setup_teardown(test_output_fault_in_status, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_commands_refused, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_status2_pages, setup, teardown),
         cmocka_unit_test(test_id_clash),
         cmocka_unit_test(test_can_logfile_real_capture),
         cmocka_unit_test(test_can_logfile_output),

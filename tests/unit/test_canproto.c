@@ -332,11 +332,12 @@ static void test_busload(void **state)
     canproto_traffic_t tr = {.rate_hz = 1000, .status_hz = 0, .waypoint_hz = 0};
     double l = canproto_busload(&ids, 1, 0, 0, &tr, 500e3, 0);
     assert_true(fabs(l - 3 * 135 * 1000 / 500e3) < 1e-12);
-    /* SYNC (55 bits) and 10 Hz status (135 bits) and 10 waypoints/s (4 x 135) */
+    /* SYNC (55 bits) and 10 Hz STATUS + STATUS2 (2 x 135 bits) and 10
+     * waypoints/s (4 x 135) */
     tr.status_hz = 10;
     tr.waypoint_hz = 10;
     l = canproto_busload(&ids, 1, 1, 0, &tr, 1e6, 0);
-    assert_true(fabs(l - (1000.0 * (3 * 135 + 55) + 10 * 135 + 10 * 4 * 135) / 1e6) < 1e-12);
+    assert_true(fabs(l - (1000.0 * (3 * 135 + 55) + 10 * 2 * 135 + 10 * 4 * 135) / 1e6) < 1e-12);
     assert_true(canproto_busload(&ids, 1, 0, 0, &tr, 0, 0) < 0);
 }
 
