@@ -55,6 +55,7 @@ struct can_port {
     canproto_ids_t *ids; /* copy of each object's ids, contiguous (bus load) */
     uint8_t sync_counter;
     can_port_stats_t st;
+    canerr_bus_t err; /* bus state and counters from error frames */
 };
 
 void can_port_config_default(can_port_config_t *c)
@@ -76,6 +77,7 @@ can_port_t *can_port_new(const can_port_config_t *cfg, const can_port_io_t *io, 
     can_port_t *p = calloc(1, sizeof *p);
     if (!p)
         return NULL;
+    canerr_bus_init(&p->err);
     p->obj = calloc(nobj, sizeof *p->obj);
     p->ids = calloc(nobj, sizeof *p->ids);
     if (!p->obj || !p->ids) {
@@ -330,6 +332,10 @@ static int drive_frame(can_port_obj_t *o, const canproto_frame_t *f)
 
 static void dispatch(can_port_t *p, const canproto_frame_t *f)
 {
+    if (f->flags & CANPROTO_F_ERR) {
+        canerr_bus_frame(&p->err, f->id, f->data, f->len);
+        return;
+    }
     if (!(f->flags & CANPROTO_F_EFF)) {
         for (unsigned i = 0; i < p->nobj; i++) {
             can_port_obj_t *o = &p->obj[i];
@@ -663,6 +669,11 @@ int can_port_maintain(can_port_t *p, int64_t now_ns)
 void can_port_stats(const can_port_t *p, can_port_stats_t *st)
 {
     *st = p->st;
+}
+
+const canerr_bus_t *can_port_bus_errors(const can_port_t *p)
+{
+    return &p->err;
 }
 
 const can_port_drive_t *can_port_drive(const can_port_t *p, unsigned i)

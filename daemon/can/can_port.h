@@ -40,6 +40,7 @@
 #define TRAJD_CANPORT_H
 
 #include <stdint.h>
+#include "canerr.h"
 #include "canproto.h"
 #include "cia402.h"
 #include "engine.h"
@@ -198,6 +199,10 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns);
 int can_port_maintain(can_port_t *p, int64_t now_ns);
 
 void can_port_stats(const can_port_t *p, can_port_stats_t *st);
+
+/* The bus state and error counters decoded from the error frames received
+ * (socket: CAN_RAW_ERR_FILTER; log input: "2000xxxx#" lines). */
+const canerr_bus_t *can_port_bus_errors(const can_port_t *p);
 void can_port_obj_stats(const can_port_t *p, unsigned i, can_port_obj_stats_t *st);
 
 /* What object i's drives last reported (NULL if i is out of range). */

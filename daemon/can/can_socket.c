@@ -105,7 +105,10 @@ int can_socket_open(can_socket_t *b)
         rc = -errno;
         goto out;
     }
-    if (b->fd_frames && setsockopt(s, SOL_CAN_RAW, CAN_RAW_FD_FRAMES, &one, sizeof one) < 0) {
+    /* every error class: the bus state comes from them (lib/proto/canerr.h) */
+    can_err_mask_t emask = CAN_ERR_MASK;
+    if (setsockopt(s, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &emask, sizeof emask) < 0 ||
+        (b->fd_frames && setsockopt(s, SOL_CAN_RAW, CAN_RAW_FD_FRAMES, &one, sizeof one) < 0)) {
         rc = -errno;
         goto out;
     }
@@ -234,12 +237,12 @@ int can_socket_recv(can_socket_t *b, canproto_frame_t *f)
             b->st.rx_errors++;
             continue;
         }
-        if (cf.can_id & CAN_ERR_FLAG) {
-            b->st.rx_errors++;
-            continue;
-        }
         memset(f, 0, sizeof *f);
-        if (cf.can_id & CAN_EFF_FLAG) {
+        if (cf.can_id & CAN_ERR_FLAG) {
+            /* the kernel's report of the controller (bus state, errors) */
+            f->flags |= CANPROTO_F_ERR;
+            f->id = cf.can_id & CAN_ERR_MASK;
+        } else if (cf.can_id & CAN_EFF_FLAG) {
             f->flags |= CANPROTO_F_EFF;
             f->id = cf.can_id & CAN_EFF_MASK;
         } else {

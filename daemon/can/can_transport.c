@@ -496,6 +496,7 @@ typedef struct {
     int drained;
     int was_up;
     can_bus_state_t bus_state; /* as of the last housekeeping timer, for Modbus */
+    canerr_bus_t err;          /* error-frame counters as of the same timer */
     uint32_t load_permille;    /* worst-case bus load of the configured traffic, 0.1 % */
     can_port_obj_stats_t drive_logged[CFG_OBJECTS_MAX]; /* drive counters already logged */
     int drive_state_logged[CFG_OBJECTS_MAX];            /* all_enabled as last logged, -1 never */
@@ -676,7 +677,26 @@ static void sync_fd(can_state_t *s)
 /* Refresh what other transports read through can_transport_bus (Modbus). */
 static void publish_state(can_state_t *s)
 {
-    s->bus_state = io_is_up(s) ? CAN_BUS_ERROR_ACTIVE : CAN_BUS_DOWN;
+    const canerr_bus_t *e = can_port_bus_errors(s->port);
+    can_bus_state_t was = s->bus_state;
+    s->bus_state = io_is_up(s) ? (can_bus_state_t)e->state : CAN_BUS_DOWN;
+    if (was && s->bus_state != was && s->bus_state != CAN_BUS_DOWN && was != CAN_BUS_DOWN)
+        log_msg(s->bus_state == CAN_BUS_ERROR_ACTIVE ? LOG_NOTICE : LOG_WARNING,
+                "can: %s controller %s (error frames %llu, TX/RX error counters %u/%u, "
+                "bus-off %llu, restarts %llu)",
+                s->cfg->interface[0] ? s->cfg->interface : "log", canerr_state_name(e->state),
+                (unsigned long long)e->frames, e->tx_err, e->rx_err,
+                (unsigned long long)e->bus_offs, (unsigned long long)e->restarts);
+    s->err = *e;
+}
+
+void can_transport_bus_errors(const core_t *c, canerr_bus_t *out)
+{
+    const can_state_t *s = c->tstate[transport_index(&can_transport)];
+    if (s && s->port)
+        *out = s->err;
+    else
+        memset(out, 0, sizeof *out);
 }
 
 can_bus_state_t can_transport_bus(const core_t *c, uint32_t *load_permille)

@@ -27,6 +27,7 @@
 #define TRAJD_CAN_TRANSPORT_H
 
 #include <limits.h>
+#include "canerr.h"
 #include "canproto.h"
 #include "transport.h"
 
@@ -79,6 +80,10 @@ can_bus_state_t can_transport_bus(const struct core *c, uint32_t *load_permille)
 
 /* Highest can.index (and object id) with default ids: 0x680+n .. 0x6C0+n. */
 #define CAN_INDEX_MAX 15
+
+/* The error-frame counters of c's CAN bus (lib/proto/canerr.h) as of the last
+ * housekeeping timer; all 0 when CAN is not open. */
+void can_transport_bus_errors(const struct core *c, canerr_bus_t *out);
 
 /*
  * The ids of an object (defaults for its can.index, or if not given for its

@@ -219,6 +219,22 @@ _Static_assert(MBMAP_CAN_NONE == CAN_BUS_UNUSED && MBMAP_CAN_ACTIVE == CAN_BUS_E
                    MBMAP_CAN_DOWN == CAN_BUS_DOWN,
                "mbmap.h MBMAP_CAN_* and can_transport.h can_bus_state_t disagree");
 
+/* The CAN bus's error-frame counters into the daemon block. */
+static void can_errors(const core_t *c, mbmap_daemon_t *d)
+{
+    canerr_bus_t e;
+    can_transport_bus_errors(c, &e);
+    d->can_err_frames = e.frames;
+    d->can_warnings = e.warnings;
+    d->can_passives = e.passives;
+    d->can_bus_offs = e.bus_offs;
+    d->can_restarts = e.restarts;
+    d->can_bus_errors = e.bus_errors;
+    d->can_overflows = e.overflows;
+    d->can_tx_err = e.tx_err;
+    d->can_rx_err = e.rx_err;
+}
+
 /* In the tick: no allocation, no blocking call, no logging. */
 static void cycle(void *state, core_t *c, int64_t now_ns)
 {
@@ -241,6 +257,7 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
     uint32_t load_permille;
     d.can_state = (uint16_t)can_transport_bus(c, &load_permille);
     d.can_load_permille = (uint16_t)(load_permille > 0xffff ? 0xffff : load_permille);
+    can_errors(c, &d);
     for (unsigned k = 0; k < t->nblock; k++) {
         if (t->obj_of[k] < 0)
             continue;

@@ -159,6 +159,15 @@ void mbmap_encode_daemon(uint16_t *regs, const mbmap_daemon_t *d)
     mbmap_put_u32(regs + MBMAP_D_MB_SLOW, lo32(d->mb_slow));
     mbmap_put_u32(regs + MBMAP_D_OUT_LOST, lo32(d->out_lost));
     regs[MBMAP_D_OUT_FAULT] = d->out_fault ? 1 : 0;
+    mbmap_put_u32(regs + MBMAP_D_CAN_ERR_FRAMES, lo32(d->can_err_frames));
+    mbmap_put_u32(regs + MBMAP_D_CAN_WARNINGS, lo32(d->can_warnings));
+    mbmap_put_u32(regs + MBMAP_D_CAN_PASSIVES, lo32(d->can_passives));
+    mbmap_put_u32(regs + MBMAP_D_CAN_BUS_OFFS, lo32(d->can_bus_offs));
+    mbmap_put_u32(regs + MBMAP_D_CAN_RESTARTS, lo32(d->can_restarts));
+    mbmap_put_u32(regs + MBMAP_D_CAN_BUS_ERRORS, lo32(d->can_bus_errors));
+    mbmap_put_u32(regs + MBMAP_D_CAN_OVERFLOWS, lo32(d->can_overflows));
+    regs[MBMAP_D_CAN_TX_ERR] = d->can_tx_err;
+    regs[MBMAP_D_CAN_RX_ERR] = d->can_rx_err;
     mbmap_put_u32(regs + MBMAP_D_GEN_TAIL, d->generation);
 }
 
@@ -434,6 +443,24 @@ static const mbmap_field_t fields[] = {
       "setpoint lines lost by csv/stdout outputs (write error or full buffer)"),
     F(ID, MBMAP_D_OUT_FAULT, 1, MBMAP_T_U16, "out_fault", "",
       "1 once an output failed to write (disk full, I/O error)"),
+    F(ID, MBMAP_D_CAN_ERR_FRAMES, 2, MBMAP_T_U32, "can_err_frames", "",
+      "CAN error frames received (SocketCAN CAN_ERR_*; they set can_state)"),
+    F(ID, MBMAP_D_CAN_WARNINGS, 2, MBMAP_T_U32, "can_warnings", "",
+      "CAN controller entries into error-warning"),
+    F(ID, MBMAP_D_CAN_PASSIVES, 2, MBMAP_T_U32, "can_passives", "",
+      "CAN controller entries into error-passive"),
+    F(ID, MBMAP_D_CAN_BUS_OFFS, 2, MBMAP_T_U32, "can_bus_offs", "",
+      "CAN controller entries into bus-off"),
+    F(ID, MBMAP_D_CAN_RESTARTS, 2, MBMAP_T_U32, "can_restarts", "",
+      "CAN controller restarts (error-active again)"),
+    F(ID, MBMAP_D_CAN_BUS_ERRORS, 2, MBMAP_T_U32, "can_bus_errors", "",
+      "CAN error frames reporting protocol, ACK, arbitration, transceiver or TX timeout errors"),
+    F(ID, MBMAP_D_CAN_OVERFLOWS, 2, MBMAP_T_U32, "can_overflows", "",
+      "CAN controller RX/TX buffer overflows"),
+    F(ID, MBMAP_D_CAN_TX_ERR, 1, MBMAP_T_U16, "can_tx_err", "",
+      "CAN TX error counter, as last reported by the controller"),
+    F(ID, MBMAP_D_CAN_RX_ERR, 1, MBMAP_T_U16, "can_rx_err", "",
+      "CAN RX error counter, as last reported by the controller"),
     F(ID, MBMAP_D_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "",
       "copy of generation (whole-block reads)"),
 

@@ -100,6 +100,15 @@
 #define MBMAP_D_MB_SLOW 30           /* u32 clients dropped: a request not whole within request_timeout_ms */
 #define MBMAP_D_OUT_LOST 32          /* u32 setpoint lines lost by the outputs (all objects) */
 #define MBMAP_D_OUT_FAULT 34         /* u16 1 if an output failed to write (disk full, I/O error) */
+#define MBMAP_D_CAN_ERR_FRAMES 64    /* u32 CAN error frames received (lib/proto/canerr.h) */
+#define MBMAP_D_CAN_WARNINGS 66      /* u32 entries into error-warning */
+#define MBMAP_D_CAN_PASSIVES 68      /* u32 entries into error-passive */
+#define MBMAP_D_CAN_BUS_OFFS 70      /* u32 entries into bus-off */
+#define MBMAP_D_CAN_RESTARTS 72      /* u32 controller restarts */
+#define MBMAP_D_CAN_BUS_ERRORS 74    /* u32 error frames with a bus-error class (protocol, ACK, arbitration, ...) */
+#define MBMAP_D_CAN_OVERFLOWS 76     /* u32 controller RX/TX buffer overflows */
+#define MBMAP_D_CAN_TX_ERR 78        /* u16 TX error counter, last reported */
+#define MBMAP_D_CAN_RX_ERR 79        /* u16 RX error counter, last reported */
 #define MBMAP_D_GEN_TAIL 98          /* u32 copy of GEN */
 
 /* ---- object block, input registers (offset from MBMAP_OBJ_BASE(k)) ------ */
@@ -212,6 +221,9 @@ typedef struct {
     uint64_t mb_evicted, mb_slow;
     uint64_t out_lost;
     uint16_t out_fault;
+    uint64_t can_err_frames, can_warnings, can_passives, can_bus_offs, can_restarts;
+    uint64_t can_bus_errors, can_overflows;
+    uint16_t can_tx_err, can_rx_err;
 } mbmap_daemon_t;
 
 typedef struct {

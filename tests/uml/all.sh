@@ -3,7 +3,7 @@
 # Exit code = number of failed scenarios (0 = all passed).
 out=$1
 failed=0
-for s in smoke daemon; do
+for s in smoke daemon canerr; do
     if sh "tests/uml/$s.sh" "$out" > "$out/$s.out" 2>&1; then
         echo "PASS uml/$s"
     else
