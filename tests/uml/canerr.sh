@@ -29,7 +29,7 @@ CONF
 "$BUILD/bin/trajd" -f -c "$out/canerr.conf" 2> "$out/canerr.err" & tp=$!
 wait_grep "$out/canerr.err" "modbus: TCP on" || fail "no Modbus port"
 port=$(sed -n 's/.*modbus: TCP on .* port \([0-9]*\).*/\1/p' "$out/canerr.err" | head -1)
-wait_rx vcan0 || fail "trajd has no CAN socket"
+grep -q "can: 1 object(s) on vcan0" "$out/canerr.err" || fail "trajd has no CAN socket"
 reg() { # reg ADDR [TYPE]: one value of the daemon block
     mbpoll -m tcp -p "$port" -a 1 -0 -1 -t "${2:-3}" -B -r "$1" 127.0.0.1 2>/dev/null |
         sed -n 's/^\[[0-9]*\]: *\t*//p' | tr -d ' \t'
