@@ -171,7 +171,7 @@ DEPS_TEST := libcmocka-dev libgsl-dev python3 python3-scipy python3-numpy mbpoll
              python3-pymodbus python3-serial python3-serial-asyncio can-utils python3-can python3-canmatrix \
              user-mode-linux busybox-static socat iproute2 clang libclang-rt-14-dev \
              systemd procps valgrind python3-pyproj cppcheck clang-format gpsbabel \
-             groff-base man-db
+             groff-base man-db tshark
 
 # make bench only: cyclictest (rt-tests), the wakeup-latency reference
 # tests/bench/bench_lateness.sh measures beside trajd's tick lateness.
@@ -296,7 +296,7 @@ install: $(BINS) $(MANS) $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/trajd
 	ln -sf libtrajd.so.$(SOVERSION) $(DESTDIR)$(LIBDIR)/libtrajd.so
 	install -m 644 $(BUILD)/trajd.pc $(DESTDIR)$(LIBDIR)/pkgconfig/
 	install -m 644 $(LIB_HEADERS) $(DESTDIR)$(PREFIX)/include/trajd/
-	install -m 644 config/trajd.dbc $(DESTDIR)$(PREFIX)/share/trajd/
+	install -m 644 config/trajd.dbc config/trajd.lua $(DESTDIR)$(PREFIX)/share/trajd/
 	install -m 644 config/trajd.conf config/demo.conf daemon/doc/examples/trajd_client.c \
 		$(DESTDIR)$(DOCDIR)/examples/
 	install -m 644 tests/data/n2k_furuno_figure8_src52.csv tests/data/ATTRIBUTION.md \

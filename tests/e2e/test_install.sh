@@ -21,7 +21,7 @@ fail() { echo "FAIL: $*"; exit 1; }
 make --no-print-directory install BUILD="$BUILD" DESTDIR="$dest" PREFIX="$PREFIX" > "$tmp/log" 2>&1 ||
     { cat "$tmp/log"; fail "make install"; }
 for f in bin/trajd bin/trajreplay bin/trajsurf share/man/man8/trajd.8 share/man/man5/trajd.conf.5 \
-         share/man/man1/trajreplay.1 share/man/man1/trajsurf.1 share/trajd/trajd.dbc \
+         share/man/man1/trajreplay.1 share/man/man1/trajsurf.1 share/trajd/trajd.dbc share/trajd/trajd.lua \
          share/doc/trajd/examples/trajd.conf share/doc/trajd/examples/trajd_client.c \
          lib/libtrajd.a lib/libtrajd.so lib/libtrajd.so.0 lib/pkgconfig/trajd.pc \
          include/trajd/engine.h include/trajd/motion.h; do
