@@ -66,8 +66,8 @@ class DissectorTest(unittest.TestCase):
                 fh.write("[daemon]\nrate_hz = 20\nspeed = 30\nexit_when_done = yes\n"
                          "stop_timeout_s = 1\nstatus_interval_s = 0\n"
                          "[can]\nlog_in = wp.log\nlog_out = sp.log\nfd = yes\nmax_late_ms = 0\n"
-                         "[object.boat]\ninput = can\noutput = can\n"
-                         "[object.fdboat]\ninput = can\noutput = can\ncan.fd = yes\n")
+                         "[object.boat]\nid = 0\ninput = can\noutput = can\n"
+                         "[object.fdboat]\nid = 1\ninput = can\noutput = can\ncan.fd = yes\n")
             r = subprocess.run([TRAJD, "-f", "-c", "t.conf"], cwd=d, capture_output=True,
                                text=True, timeout=120)
             self.assertEqual(r.returncode, 0, r.stderr)
