@@ -63,6 +63,10 @@ LDLIBS_TEST = -lcmocka -lgsl -lgslcblas $(LDLIBS_DAEMON)
 LIB_SRC := $(wildcard lib/*.c lib/*/*.c)
 DAEMON_MAINS := $(wildcard $(PROGRAMS:%=daemon/%.c))
 DAEMON_SRC := $(wildcard daemon/*/*.c)
+# The daemon's C++ files: each only wraps a header-only Debian C++ library in a
+# C function (daemon/csv/csv_dragonbox.cc: libdragonbox-dev), built without
+# exceptions or RTTI, so nothing links libstdc++.
+DAEMON_CXX_SRC := $(wildcard daemon/*/*.cc)
 TEST_SRC := $(wildcard tests/unit/test_*.c)
 BENCH_SRC := $(wildcard tests/bench/bench_*.c)
 FUZZ_SRC := $(wildcard tests/fuzz/fuzz_*.c)
@@ -72,7 +76,7 @@ PIC_OBJ := $(LIB_SRC:%.c=$(BUILD)/pic/%.o)
 # The transport table is generated (see daemon/core/transport.h): sorted by path.
 TRANSPORT_SRC := $(sort $(wildcard daemon/*/*_transport.c))
 GEN_TABLE := $(BUILD)/gen/transport_table.c
-DAEMON_OBJ := $(DAEMON_SRC:%.c=$(BUILD)/%.o) $(GEN_TABLE:%.c=%.o)
+DAEMON_OBJ := $(DAEMON_SRC:%.c=$(BUILD)/%.o) $(DAEMON_CXX_SRC:%.cc=$(BUILD)/%.o) $(GEN_TABLE:%.c=%.o)
 BINS := $(DAEMON_MAINS:daemon/%.c=$(BUILD)/bin/%)
 TEST_BINS := $(TEST_SRC:tests/unit/%.c=$(BUILD)/tests/%)
 BENCHES := $(BENCH_SRC:tests/bench/%.c=$(BUILD)/tests/%)
@@ -96,6 +100,14 @@ all: $(MANS) $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/libtrajdaemon.a $
 $(BUILD)/%.o: %.c
 	@mkdir -p $(@D)
 	$(CC) $(TRAJD_CPPFLAGS) $(TRAJD_CFLAGS) -c -o $@ $<
+
+# Debian installs Dragonbox's headers under a versioned folder.
+DRAGONBOX_INC = $(firstword $(wildcard /usr/include/dragonbox-*))
+TRAJD_CXXFLAGS = -std=c++17 -fno-exceptions -fno-rtti -Wall -Wextra $(CFLAGS) -MMD -MP \
+                 $(if $(DRAGONBOX_INC),-I$(DRAGONBOX_INC))
+$(BUILD)/%.o: %.cc
+	@mkdir -p $(@D)
+	$(CXX) $(TRAJD_CXXFLAGS) -c -o $@ $<
 
 # Regenerated at every make (cheap), replaced only when its text changes, so a
 # transport file added, removed or renamed is picked up and nothing else rebuilds.
@@ -166,7 +178,8 @@ $(BUILD)/man/trajd.conf.5: config/trajd.conf daemon/doc/conf2man.awk daemon/core
 # Everything beyond a minimal Debian 12 (debootstrap --variant=minbase, which has
 # neither make nor procps): procps gives /bin/kill, which the units' ExecReload
 # names and `systemd-analyze verify` (tests/e2e/test_systemd.sh) requires to exist.
-DEPS_BUILD := gcc make pkg-config libc6-dev libmodbus-dev libsystemd-dev libinih-dev libexpat1-dev
+DEPS_BUILD := gcc g++ make pkg-config libc6-dev libmodbus-dev libsystemd-dev libinih-dev libexpat1-dev \
+              libdragonbox-dev
 DEPS_TEST := libcmocka-dev libgsl-dev python3 python3-scipy python3-numpy mbpoll \
              python3-pymodbus python3-serial python3-serial-asyncio can-utils python3-can python3-canmatrix \
              user-mode-linux busybox-static socat iproute2 clang libclang-rt-14-dev \
@@ -243,6 +256,7 @@ bench: deps
 
 # ---- libFuzzer (clang) ------------------------------------------------------
 FUZZ_CC := clang
+FUZZ_CXX := clang++
 FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer-no-link,address,undefined
 FUZZ_BINS := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/fuzz/%)
 $(BUILD)/fuzz/obj/%.o: %.c
@@ -251,7 +265,11 @@ $(BUILD)/fuzz/obj/%.o: %.c
 $(BUILD)/fuzz/obj/gen/%.o: $(BUILD)/gen/%.c
 	@mkdir -p $(@D)
 	$(FUZZ_CC) $(TRAJD_CPPFLAGS) -std=c11 $(FUZZ_FLAGS) -MMD -MP -c -o $@ $<
-$(BUILD)/fuzz/%: $(BUILD)/fuzz/obj/tests/fuzz/%.o $(LIB_SRC:%.c=$(BUILD)/fuzz/obj/%.o) $(DAEMON_SRC:%.c=$(BUILD)/fuzz/obj/%.o) $(BUILD)/fuzz/obj/gen/transport_table.o
+$(BUILD)/fuzz/obj/%.o: %.cc
+	@mkdir -p $(@D)
+	$(FUZZ_CXX) $(TRAJD_CXXFLAGS) $(FUZZ_FLAGS) -c -o $@ $<
+$(BUILD)/fuzz/%: $(BUILD)/fuzz/obj/tests/fuzz/%.o $(LIB_SRC:%.c=$(BUILD)/fuzz/obj/%.o) $(DAEMON_SRC:%.c=$(BUILD)/fuzz/obj/%.o) \
+		$(DAEMON_CXX_SRC:%.cc=$(BUILD)/fuzz/obj/%.o) $(BUILD)/fuzz/obj/gen/transport_table.o
 	$(FUZZ_CC) -fsanitize=fuzzer,address,undefined -o $@ $^ $(LDLIBS_DAEMON)
 # Numeric code (engine, splines) without comparison tracing: it finds nothing
 # there (no magic values) and took 40 % of the engine target's time.

@@ -91,7 +91,7 @@ typedef struct {
     int strict;                  /* any rejection or skipped line: EXIT_STRICT */
     unsigned long long max_rows; /* 0 = no bound */
     unsigned progress_after_ms;
-    int precision; /* --precision: decimals in fixed notation; -1: %.17g */
+    int precision; /* --precision: decimals in fixed notation, or CSV_PREC_* */
     int binary;    /* --binary: the records of csv_format.h instead of CSV */
     double rate_hz;
     int64_t start_ns; /* engine time at which the first waypoint is due */
@@ -152,8 +152,10 @@ static void usage(FILE *f)
         "                       the object of the config to replay\n"
         "  -o, --output FILE    setpoint CSV (default stdout; \"-\" = stdout)\n"
         "  --precision N        numbers in fixed notation with N decimals (0..17, e.g. 9:\n"
-        "                       nanometres), exactly printf's %.Nf, by a fast formatter\n"
-        "                       (default: %.17g, which round-trips every double)\n"
+        "                       nanometres), exactly printf's %.Nf, by a fast formatter;\n"
+        "                       g17: printf's %.17g (17 digits always, the former default)\n"
+        "                       (default: the shortest decimal that reads back to the\n"
+        "                       same double, as Python's repr writes it)\n"
         "  --binary             write little-endian binary records instead of CSV: a\n"
         "                       64-byte header then 112 bytes per setpoint (layout in\n"
         "                       daemon/csv/csv_format.h; numpy.fromfile(offset=64))\n"
@@ -282,10 +284,14 @@ static int parse_option(int c, char **argv, opts_t *o)
     }
     case OPT_PRECISION: {
         unsigned p;
+        if (strcmp(optarg, "g17") == 0) {
+            o->precision = CSV_PREC_G17;
+            return -1;
+        }
         if (parse_uint(optarg, &p) || p > CSV_FIXED_PREC_MAX) {
             fprintf(stderr,
                     "trajreplay: --precision: '%s' is not a number of decimals "
-                    "0..%d\n",
+                    "0..%d, nor g17\n",
                     optarg, CSV_FIXED_PREC_MAX);
             return EXIT_USAGE;
         }
@@ -415,7 +421,7 @@ static int parse_args(int argc, char **argv, opts_t *o)
     engine_config_default(&o->cfg);
     o->rate_hz = 100.0;
     o->progress_after_ms = PROGRESS_AFTER_MS;
-    o->precision = -1;
+    o->precision = CSV_PREC_SHORTEST;
     o->max_rows = MAX_ROWS_DEFAULT;
     opterr = 0;
     int c, rc;

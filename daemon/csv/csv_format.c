@@ -1,6 +1,7 @@
 /* csv_format.c - the text form of a setpoint.  See csv_format.h. */
 #include "csv_format.h"
 #include "csv_fixed.h"
+#include "csv_shortest.h"
 
 #include <inttypes.h>
 #include <stdio.h>
@@ -30,14 +31,10 @@ static int object_ok(const char *o)
     return n <= CSV_FORMAT_OBJECT_MAX;
 }
 
-int csv_format_format(char *buf, size_t len, const char *object, const engine_setpoint_t *sp)
+/* The previous default: printf's %.17g (17 significant digits, also round-trips,
+ * but longer and about 8 times slower; trajreplay --precision g17). */
+static int format_g17(char *buf, size_t len, const char *object, const engine_setpoint_t *sp)
 {
-    if (!buf || !sp)
-        return -1;
-    if (!object)
-        object = "";
-    if (!object_ok(object))
-        return -1;
     int n = snprintf(buf, len,
                      "%s,%" PRId64 ",%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,"
                      "%.17g,%.17g,%.17g,%s,%" PRIu32 ",%" PRIu32 ",%" PRIu32 "\n",
@@ -48,6 +45,11 @@ int csv_format_format(char *buf, size_t len, const char *object, const engine_se
     if (n < 0 || (size_t)n >= len)
         return -1;
     return n;
+}
+
+int csv_format_format(char *buf, size_t len, const char *object, const engine_setpoint_t *sp)
+{
+    return csv_format_format_prec(buf, len, object, sp, CSV_PREC_SHORTEST);
 }
 
 /* Decimal of a uint64 at o; returns the length. */
@@ -66,18 +68,20 @@ static int put_u64(char *o, uint64_t v)
 int csv_format_format_prec(char *buf, size_t len, const char *object, const engine_setpoint_t *sp,
                            int prec)
 {
-    if (prec < 0)
-        return csv_format_format(buf, len, object, sp);
-    if (!buf || !sp)
+    if (!buf || !sp || prec < CSV_PREC_G17)
         return -1;
     if (!object)
         object = "";
     if (!object_ok(object))
         return -1;
+    if (prec == CSV_PREC_G17)
+        return format_g17(buf, len, object, sp);
     const char *state = engine_state_name(sp->state);
     size_t on = strlen(object), sn = strlen(state);
     /* worst case: 10 doubles, 4 integers, the names, 16 separators */
-    if (len < on + sn + 10 * (CSV_FIXED_MAX + 1) + 4 * 21 + 2) {
+    size_t need = prec == CSV_PREC_SHORTEST ? 10 * (CSV_SHORTEST_LEN + 1) + CSV_SHORTEST_MAX
+                                            : 10 * (CSV_FIXED_MAX + 1);
+    if (len < on + sn + need + 4 * 21 + 2) {
         /* a short buffer: format into a full one and copy if it fits */
         static _Thread_local char big[CSV_FIXED_MAX * 12 + 256];
         int n = csv_format_format_prec(big, sizeof big, object, sp, prec);
@@ -101,7 +105,7 @@ int csv_format_format_prec(char *buf, size_t len, const char *object, const engi
                           sp->acc_m_s2[1], sp->acc_m_s2[2]};
     for (int k = 0; k < 10; k++) {
         *o++ = ',';
-        o += csv_fixed(o, v[k], prec);
+        o += prec == CSV_PREC_SHORTEST ? csv_shortest(o, v[k]) : csv_fixed(o, v[k], prec);
     }
     *o++ = ',';
     memcpy(o, state, sn);

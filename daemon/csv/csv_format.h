@@ -2,8 +2,9 @@
  * csv_format.h - the one text form of a setpoint, shared by trajd's CSV/stdout
  * output and trajreplay, so their outputs can be compared byte for byte.
  * Columns: object,now_ns,t_s,x_m,y_m,z_m,vx_m_s,vy_m_s,vz_m_s,ax_m_s2,ay_m_s2,az_m_s2,state,flags,cycle,track
- * Numbers are printed with %.17g so they round-trip exactly; now_ns, flags,
- * cycle and track as decimal integers; state as engine_state_name()
+ * Numbers are printed as the shortest decimal that reads back to the same
+ * double, in Python's repr() form (csv_shortest.h), so they round-trip
+ * exactly; now_ns, flags, cycle and track as decimal integers; state as engine_state_name()
  * ("waiting", "streaming", "underrun", "finished").
  * printf follows LC_NUMERIC, so a program using csv_format keeps the C locale
  * for numbers (neither trajd nor trajreplay calls setlocale) to get '.'.
@@ -33,9 +34,15 @@ int csv_format_format(char *buf, size_t len, const char *object, const engine_se
 /*
  * The same line with every double (t_s and the nine coordinates) in fixed
  * notation with prec decimals, byte for byte printf("%.*f") (csv_fixed.h),
- * written by a fast formatter (trajreplay --precision).  prec < 0: the
- * default %.17g form, as csv_format_format.  Same returns.
+ * written by a fast formatter (trajreplay --precision).  Same returns.
+ *   prec CSV_PREC_SHORTEST: the default shortest round-trip form, as
+ *        csv_format_format;
+ *   prec CSV_PREC_G17: printf's %.17g, the default before (also round-trips,
+ *        17 significant digits always; kept for files compared against it and
+ *        as the reference make bench times the default against).
  */
+#define CSV_PREC_SHORTEST (-1)
+#define CSV_PREC_G17 (-2)
 int csv_format_format_prec(char *buf, size_t len, const char *object, const engine_setpoint_t *sp,
                            int prec);
 

@@ -59,10 +59,11 @@ with tempfile.TemporaryDirectory() as tmp:
         name = os.path.basename(path) + (" (synthetic)" if path.startswith(tmp) else "")
         print(f"{name:42} {rate:>5} {wp:>9} {sp:>9} {wall:7.2f} {wall/sp*1e9:11.0f} {wall/wp*1e6:11.2f} {rss_mb:>7}")
 print("ns/setpoint and us/waypoint are wall time divided by each count (the same run);")
-print("output to /dev/null, so formatting (%.17g x 12 per line) is included, disk is not.")
+print("output to /dev/null, so formatting (10 doubles per line) is included, disk is not.")
 print("RSS MB: peak resident set of trajreplay (GNU time %M; n/a without /usr/bin/time).")
-# Output forms side by side in this run: the default %.17g CSV (snprintf, the
-# previous and still the default formatter), --precision 9 (the fast
+# Output forms side by side in this run: the former default %.17g CSV
+# (snprintf, kept as --precision g17), the default shortest round-trip form
+# (daemon/csv/csv_shortest.h), --precision 9 (the fast
 # fixed-notation formatter, daemon/csv/csv_fixed.h) and --binary.  CPU time
 # (user + sys of the child, from wait4) rather than wall time, which other
 # processes on a loaded machine inflate; the ratios compare runs of this
@@ -88,7 +89,9 @@ with tempfile.TemporaryDirectory() as tmp:
         for i in range(n):
             f.write(f"{i},{1000*math.cos(i/500):.3f},{1000*math.sin(i/500):.3f},{i%7}\n")
     out = os.path.join(tmp, "out")
-    forms = [("default %.17g CSV (snprintf)", []), ("--precision 9 CSV", ["--precision", "9"]),
+    forms = [("former default %.17g (g17)", ["--precision", "g17"]),
+             ("default shortest round trip", []),
+             ("--precision 9 CSV", ["--precision", "9"]),
              ("--precision 3 CSV", ["--precision", "3"]), ("--binary", ["--binary"])]
     res = []
     for name, args in forms:
@@ -99,9 +102,10 @@ with tempfile.TemporaryDirectory() as tmp:
         res.append((name, rows, best, os.path.getsize(out)))
     print()
     print(f"trajreplay to a file, {res[0][1]} rows (synthetic, 100 Hz), CPU time best of 3:")
-    print(f"| {'output':30} | {'CPU s':>6} | {'M rows/s':>8} | {'x default':>9} | {'bytes/row':>9} |")
+    print(f"| {'output':30} | {'CPU s':>6} | {'M rows/s':>8} | {'x %.17g':>9} | {'bytes/row':>9} |")
     print(f"|{'-'*32}|{'-'*8}|{'-'*10}|{'-'*11}|{'-'*11}|")
     for name, rows, cpu, size in res:
         print(f"| {name:30} | {cpu:6.2f} | {rows/cpu/1e6:8.2f} | {res[0][2]/cpu:9.1f} | {size/rows:9.1f} |")
-    print("target >= 2 M rows/s to CSV (issue 13); x default = speed-up over the default CSV in this run.")
+    print("target >= 2 M rows/s to CSV by default (issue 13); x %.17g = speed-up over the former "
+          "default in this run.")
 PY

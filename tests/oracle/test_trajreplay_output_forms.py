@@ -1,5 +1,5 @@
 """test_trajreplay_output_forms.py - trajreplay --precision N and --binary
-against the default CSV (%.17g, which round-trips every double).
+against the default CSV (the shortest round-trip form, which reads back to every double).
 
 References: Python's own "%.*f" formatting (correctly rounded, independent of
 our formatter) of the default CSV's numbers, and numpy.fromfile reading the

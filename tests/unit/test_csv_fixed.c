@@ -192,7 +192,7 @@ static void test_line(void **state)
     /* negative now_ns and the default form */
     assert_true(csv_format_format_prec(a, sizeof a, "o", &sp, 3) > 0);
     assert_true(strncmp(a, "o,-5,1234.568,", 14) == 0);
-    assert_int_equal(csv_format_format_prec(a, sizeof a, "o", &sp, -1),
+    assert_int_equal(csv_format_format_prec(a, sizeof a, "o", &sp, CSV_PREC_SHORTEST),
                      csv_format_format(b, sizeof b, "o", &sp));
     assert_string_equal(a, b);
     assert_int_equal(csv_format_format_prec(a, sizeof a, "o,x", &sp, 3), -1);
