@@ -309,6 +309,25 @@ static int stale_verdict(const accept_t *a, int full, double vlim)
     return full ? 0 : -1;
 }
 
+/*
+ * 1 if a later waypoint held repeats c's position (a frozen receiver starts
+ * repeating after c): c is the one that was stamped when the position was
+ * fixed, the repeats are the stale ones, so c is kept over them even where
+ * a chain through a repeat would bend the track less (keep the good fix;
+ * the repeats then meet stale_verdict with c as the anchor).
+ */
+static int repeated_later(const accept_t *a)
+{
+    const engine_waypoint_t *c = &a->pend[0];
+    if (!a->cfg.stale)
+        return 0;
+    for (unsigned i = 1; i < a->npend; i++)
+        if (dist(c, &a->pend[i]) <= ACCEPT_STALE_POS_M &&
+            a->pend[i].t_s - c->t_s > ACCEPT_SAME_TIME_S)
+            return 1;
+    return 0;
+}
+
 int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
 {
     const engine_waypoint_t *nd[ACCEPT_WINDOW_MAX + 1];
@@ -383,7 +402,7 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
         /* keep c unless a longer chain skips it, or one as long and smoother
          * (of two fixes that cannot both be right, the one that bends the
          * track less) */
-        if (r == 0 && !better(lo, co, lw, cw)) {
+        if (r == 0 && (!better(lo, co, lw, cw) || (lw >= lo && repeated_later(a)))) {
             pop(a, v, ACCEPT_TAKE, 0);
             return 1;
         }

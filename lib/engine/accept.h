@@ -36,7 +36,9 @@
  *     a new position is consistent with the anchor and shows the object kept
  *     at least half its pace across the repeats: a frozen receiver, not a
  *     stop.  (profiles with stale detection only; a toolpath's dwell is a
- *     real repeat.)
+ *     real repeat.)  Of a fix and its later repeats, the fix is kept (it was
+ *     stamped when the position was fixed), even where a chain through a
+ *     repeat would bend the track less.
  * A clean stretch is decided as soon as c and the waypoint after it
  * (ACCEPT_LAG) form a consistent chain with the anchor; otherwise the verdict waits until
  * the window is full or the input is closed.  The first trajectory (nothing

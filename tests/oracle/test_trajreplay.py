@@ -148,9 +148,12 @@ def common_checks(sp, label, period_ns):
     # Given the virtual clock, then row k is tick k exactly (integers).
     check(np.array_equal(sp["now_ns"], np.arange(n, dtype=np.int64) * period_ns),
           f"{label}: now_ns not k * period")
-    # Track time: consecutive streaming rows of one trajectory one period apart.
+    # Track time: consecutive streaming rows of one trajectory one period apart
+    # (but where the time scaling slows the output down: flag SCALED).
     streaming = np.array([s == "streaming" for s in sp["state"]])
-    both = streaming[1:] & streaming[:-1] & (sp["track"][1:] == sp["track"][:-1])
+    unscaled = (sp["flags"] & ENGINE_SP_SCALED) == 0
+    both = streaming[1:] & streaming[:-1] & (sp["track"][1:] == sp["track"][:-1]) & \
+        unscaled[1:] & unscaled[:-1]
     dt = np.diff(sp["t_s"])[both]
     if check(len(dt) > 0, f"{label}: nothing streamed"):
         err = np.max(np.abs(dt - period_ns * 1e-9))
