@@ -1,8 +1,9 @@
 -- trajd.lua - Wireshark/tshark dissector for trajd's CAN frames.
 --
 -- The layouts of config/trajd.dbc (generated from lib/proto/canproto.h):
--- WAYPOINT, WAYPOINT_FD, SETPOINT, SETPOINT_FD and STATUS at their default
--- ids for objects 0..15 (0x680+n, 0x690+n, 0x6A0+n, 0x6B0+n, 0x6C0+n).
+-- WAYPOINT, WAYPOINT_FD, SETPOINT, SETPOINT_FD, STATUS and STATUS2 at their
+-- default ids for objects 0..15 (0x680+n, 0x690+n, 0x6A0+n, 0x6B0+n, 0x6C0+n,
+-- 0x6D0+n).
 -- SYNC and the CiA 402 RPDOs are CANopen: Wireshark's own CANopen dissector
 -- decodes them.  Every field is named after its DBC signal (trajd.SP_X_Pos,
 -- trajd.ST_LastErr, ...) with the DBC's scaling, so a display filter reads
@@ -17,7 +18,7 @@
 -- Ids other than the defaults: change BASE below.
 
 local BASE = {WAYPOINT = 0x680, WAYPOINT_FD = 0x690, SETPOINT = 0x6A0, SETPOINT_FD = 0x6B0,
-              STATUS = 0x6C0}
+              STATUS = 0x6C0, STATUS2 = 0x6D0}
 local OBJECTS = 16
 
 local p = Proto("trajd", "trajd trajectory daemon")
@@ -35,7 +36,10 @@ local VALS = {
                   [8] = "no memory", [9] = "state", [10] = "numeric", [11] = "acceleration",
                   [64] = "malformed", [65] = "lost", [66] = "out of order",
                   [67] = "setpoints dropped", [68] = "bus down", [69] = "output lost lines",
-                  [70] = "safety fault", [71] = "drive not enabled"},
+                  [70] = "safety fault", [71] = "drive not enabled", [72] = "command refused"},
+    ST2_Page = {[1] = "faults", [5] = "bus"},
+    ST2_BusState = {[1] = "error-active", [2] = "error-warning", [3] = "error-passive",
+                    [4] = "bus-off", [5] = "down"},
 }
 
 -- Signals: name, start bit, length, signed, factor, unit, mux value (nil: always).
@@ -62,6 +66,12 @@ local MSG = {
         {"ST_OutFault", 6, 1}, {"ST_SafetyFault", 7, 1}, {"ST_LastSeq", 8, 8},
         {"ST_Free", 16, 8}, {"ST_Lost", 24, 8}, {"ST_Rejected", 32, 8},
         {"ST_Malformed", 40, 8}, {"ST_Dropped", 48, 8}, {"ST_LastErr", 56, 8}},
+    STATUS2 = {mux = "ST2_Page", {"ST2_Page", 0, 8},
+        {"ST2_OutLost", 8, 24, false, 1, "", 1}, {"ST2_OutErrors", 32, 16, false, 1, "", 1},
+        {"ST2_CmdRefused", 48, 16, false, 1, "", 1},
+        {"ST2_BusState", 8, 8, false, 1, "", 5}, {"ST2_TxErr", 16, 8, false, 1, "", 5},
+        {"ST2_RxErr", 24, 8, false, 1, "", 5}, {"ST2_BusOffs", 32, 16, false, 1, "", 5},
+        {"ST2_ErrFrames", 48, 16, false, 1, "", 5}},
 }
 -- Setpoint positions 0x80000000: no position yet (do not move).
 local NO_POSITION = {SP_X_Pos = true, SP_Y_Pos = true, SP_Z_Pos = true, SPFD_X = true,
@@ -108,7 +118,7 @@ local function decode(kind, obj, tvb, pinfo, tree)
     local t = tree:add(p, tvb(), string.format("trajd %s, object %d", kind, obj))
     t:add(f_frame, kind)
     t:add(f_obj, obj)
-    local muxv = m.mux and raw(bytes, 0, m.mux == "WP_Mux" and 8 or 2, false)
+    local muxv = m.mux and raw(bytes, 0, m.mux == "SP_Axis" and 2 or 8, false)
     local info = {}
     for _, s in ipairs(m) do
         local name, start, len, signed, factor = s[1], s[2], s[3], s[4], s[5] or 1

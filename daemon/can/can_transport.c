@@ -942,6 +942,10 @@ static void setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
         canproto_st2_faults_t pg = {o->out_lost, o->out_errors, os.cmd_refused};
         canproto_encode_status2_faults(0, &pg, &f);
         can_port_status2(s->port, k, &f);
+        canproto_st2_bus_t bus = {(uint8_t)s->bus_state, s->err.tx_err, s->err.rx_err,
+                                  s->err.bus_offs, s->err.frames};
+        canproto_encode_status2_bus(0, &bus, &f);
+        can_port_status2(s->port, k, &f);
         can_port_setpoint(s->port, k, sp);
     }
 }

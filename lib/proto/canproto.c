@@ -435,6 +435,33 @@ void canproto_encode_status2_faults(uint32_t id, const canproto_st2_faults_t *p,
 
 /* ---- decoders ------------------------------------------------------------------------ */
 
+void canproto_encode_status2_bus(uint32_t id, const canproto_st2_bus_t *p, canproto_frame_t *out)
+{
+    frame_init(out, id, CANPROTO_STATUS2_DLEN, 0);
+    out->data[0] = CANPROTO_ST2_BUS;
+    out->data[1] = p->state;
+    out->data[2] = p->tx_err;
+    out->data[3] = p->rx_err;
+    put_le(&out->data[4], 2, sat_max(p->bus_offs, 0xFFFF));
+    put_le(&out->data[6], 2, sat_max(p->err_frames, 0xFFFF));
+}
+
+int canproto_decode_status2_bus(const canproto_frame_t *f, canproto_st2_bus_t *out)
+{
+    memset(out, 0, sizeof *out);
+    int page = canproto_status2_page(f);
+    if (page < 0)
+        return page;
+    if (page != CANPROTO_ST2_BUS)
+        return -CANPROTO_EMUX;
+    out->state = f->data[1];
+    out->tx_err = f->data[2];
+    out->rx_err = f->data[3];
+    out->bus_offs = get_le(&f->data[4], 2);
+    out->err_frames = get_le(&f->data[6], 2);
+    return 0;
+}
+
 int canproto_status2_page(const canproto_frame_t *f)
 {
     if (f->len != CANPROTO_STATUS2_DLEN ||
@@ -853,6 +880,11 @@ static const canproto_signal_t sig_st2[] = {
     SIG_U("ST2_OutLost", CANPROTO_ST2_FAULTS, 8, 24, 1, ""),
     SIG_U("ST2_OutErrors", CANPROTO_ST2_FAULTS, 32, 16, 1, ""),
     SIG_U("ST2_CmdRefused", CANPROTO_ST2_FAULTS, 48, 16, 1, ""),
+    SIG_U("ST2_BusState", CANPROTO_ST2_BUS, 8, 8, 1, ""),
+    SIG_U("ST2_TxErr", CANPROTO_ST2_BUS, 16, 8, 1, ""),
+    SIG_U("ST2_RxErr", CANPROTO_ST2_BUS, 24, 8, 1, ""),
+    SIG_U("ST2_BusOffs", CANPROTO_ST2_BUS, 32, 16, 1, ""),
+    SIG_U("ST2_ErrFrames", CANPROTO_ST2_BUS, 48, 16, 1, ""),
 };
 static const canproto_signal_t sig_rpdo[] = {
     SIG_S("Target_Position_607A", -1, 0, 32, 1, "inc"),
@@ -958,13 +990,20 @@ int canproto_dbc(char *buf, size_t len)
          "csv/stdout output lost lines, 0x46 safety monitor fault (object held until clear), 0x47 "
          "a CiA 402 "
          "drive left Operation Enabled, 0x48 a command refused (object not writable)\";\n"
-         "CM_ SG_ %u ST2_Page \"STATUS2 page: 1 faults; counters saturate at their maximum\";\n"
+         "CM_ SG_ %u ST2_Page \"STATUS2 page: 1 faults, 5 bus; counters saturate at their "
+         "maximum\";\n"
          "CM_ SG_ %u ST2_OutLost \"setpoint lines lost by the object's csv/stdout outputs\";\n"
          "CM_ SG_ %u ST2_OutErrors \"failed writes of the object's csv/stdout outputs\";\n"
-         "CM_ SG_ %u ST2_CmdRefused \"command frames refused: the object is not writable\";\n",
+         "CM_ SG_ %u ST2_CmdRefused \"command frames refused: the object is not writable\";\n"
+         "CM_ SG_ %u ST2_BusState \"CAN bus state from the controller's error frames\";\n"
+         "CM_ SG_ %u ST2_TxErr \"TX error counter, as last reported (CAN_ERR_CNT)\";\n"
+         "CM_ SG_ %u ST2_RxErr \"RX error counter, as last reported (CAN_ERR_CNT)\";\n"
+         "CM_ SG_ %u ST2_BusOffs \"entries into bus-off\";\n"
+         "CM_ SG_ %u ST2_ErrFrames \"error frames received\";\n",
          CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_STATUS_BASE,
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
-         CANPROTO_ID_STATUS2_BASE);
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE);
     emit(buf, len, &pos,
          "BA_DEF_ BO_ \"VFrameFormat\" ENUM \"StandardCAN\",\"ExtendedCAN\",\"reserved\","
          "\"J1939PG\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\","
@@ -997,8 +1036,12 @@ int canproto_dbc(char *buf, size_t len)
          CANPROTO_STERR_OUT_OF_ORDER, CANPROTO_STERR_TX_DROPPED, CANPROTO_STERR_BUS_DOWN,
          CANPROTO_STERR_OUTPUT, CANPROTO_STERR_SAFETY, CANPROTO_STERR_DRIVE,
          CANPROTO_STERR_REFUSED);
-    emit(buf, len, &pos, "VAL_ %u ST2_Page %d \"faults\" ;\n", CANPROTO_ID_STATUS2_BASE,
-         CANPROTO_ST2_FAULTS);
+    emit(buf, len, &pos, "VAL_ %u ST2_Page %d \"faults\" %d \"bus\" ;\n", CANPROTO_ID_STATUS2_BASE,
+         CANPROTO_ST2_FAULTS, CANPROTO_ST2_BUS);
+    emit(buf, len, &pos,
+         "VAL_ %u ST2_BusState 1 \"error-active\" 2 \"error-warning\" 3 \"error-passive\" "
+         "4 \"bus-off\" 5 \"down\" ;\n",
+         CANPROTO_ID_STATUS2_BASE);
     for (unsigned k = 1; k <= 3; k++)
         emit(buf, len, &pos,
              "VAL_ %u Controlword_6040 0 \"disable voltage\" 2 \"quick stop\" 6 \"shutdown\" "

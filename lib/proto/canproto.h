@@ -56,6 +56,10 @@
  *    1 FAULTS: 1..3 setpoint lines lost by the object's csv/stdout outputs
  *      (uint24), 4..5 failed output writes (uint16), 6..7 commands refused
  *      (uint16: the object is not writable, [object] writable = no).
+ *    5 BUS: 1 bus state (1 error-active, 2 error-warning, 3 error-passive,
+ *      4 bus-off, 5 interface down; from the kernel's error frames,
+ *      lib/proto/canerr.h), 2 TX error counter, 3 RX error counter (as last
+ *      reported), 4..5 entries into bus-off (uint16), 6..7 error frames (uint16).
  *  SYNC (out, default 0x080, DLC 0, or DLC 1 with a counter 1..overflow as
  *    CiA 301 allows), once per cycle before the setpoints, optional.
  *  CiA 402 RPDO (out, one per axis, COB-ids configured, e.g. 0x200+node):
@@ -122,6 +126,7 @@ typedef struct {
  * 7 bytes (1..7), little-endian fields, counters saturating. */
 typedef enum {
     CANPROTO_ST2_FAULTS = 1, /* output and command faults (canproto_st2_faults_t) */
+    CANPROTO_ST2_BUS = 5,    /* CAN bus state from error frames (canproto_st2_bus_t) */
     CANPROTO_ST2_PAGES = 8   /* pages are 1 .. CANPROTO_ST2_PAGES - 1 */
 } canproto_st2_page_t;
 
@@ -395,6 +400,18 @@ typedef struct {
 
 void canproto_encode_status2_faults(uint32_t id, const canproto_st2_faults_t *p,
                                     canproto_frame_t *out);
+
+/* STATUS2 page 5, BUS (counters saturate at 65535). */
+typedef struct {
+    uint8_t state; /* 1 error-active .. 4 bus-off, 5 down (MBMAP_CAN_*) */
+    uint8_t tx_err, rx_err;
+    uint64_t bus_offs;   /* entries into bus-off (uint16) */
+    uint64_t err_frames; /* error frames received (uint16) */
+} canproto_st2_bus_t;
+
+void canproto_encode_status2_bus(uint32_t id, const canproto_st2_bus_t *p, canproto_frame_t *out);
+/* Decode STATUS2 page 5.  Returns 0, -CANPROTO_ELEN, or -CANPROTO_EMUX (another page). */
+int canproto_decode_status2_bus(const canproto_frame_t *f, canproto_st2_bus_t *out);
 
 /* The page of a STATUS2 frame (1 .. CANPROTO_ST2_PAGES - 1), or -CANPROTO_ELEN
  * (wrong length or kind) or -CANPROTO_EMUX (page 0 or unknown). */

@@ -9,6 +9,9 @@ restarted, then a protocol error, an RX overflow and warning again.  Then:
   the counters the sequence implies (entries into each state, restarts, bus
   errors, overflows, the last TX/RX error counters);
 - trajd logs each state change in order, with the interface;
+- its CAN output (log_out) carries the state in STATUS2 page 5 (decoded by
+  canmatrix with config/trajd.dbc): bus-off while it lasted, at the end
+  warning with the counters;
 - frames are spaced wider than the daemon's 100 ms housekeeping, so every
   state is published once.
 Real kernel error frames on vcan0 are injected in the UML guest
@@ -28,6 +31,9 @@ import mbsim  # noqa: E402
 from mbsim import M  # noqa: E402
 
 from pymodbus.client import ModbusTcpClient  # noqa: E402
+import cantools_trajd as ct  # noqa: E402
+import can  # noqa: E402
+import canmatrix  # noqa: E402
 
 TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
 
@@ -81,8 +87,8 @@ class CanErrorsTest(unittest.TestCase):
                 f.write("[daemon]\nrate_hz = 50\nstatus_interval_s = 0\n"
                         "[modbus]\nport = 0\nsystemd_socket = no\n"
                         "[can]\nlog_in = %s/err.log\nlog_out = %s/out.log\n"
-                        "[object.boat]\ninput = can\noutput = csv\ncsv.path = %s/b.csv\n"
-                        % (tmp, tmp, tmp))
+                        "[object.boat]\ninput = can\noutput = can\n"
+                        % (tmp, tmp))
             p = subprocess.Popen([TRAJD, "-f", "-c", conf], stdin=subprocess.DEVNULL,
                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
             lines = mbsim.Lines(p.stderr)
@@ -117,6 +123,21 @@ class CanErrorsTest(unittest.TestCase):
                 p.wait(timeout=mbsim.WAIT_S + 10)
                 lines.wait_for("\0", 0.5)
                 p.stderr.close()
+            # STATUS2 page 5 in trajd's CAN log, decoded by canmatrix with config/trajd.dbc
+            db = ct.load_db()
+            fr = db.frame_by_id(canmatrix.ArbitrationId(0x6D0))
+            pages = []
+            reader = can.CanutilsLogReader(os.path.join(tmp, "out.log"))
+            for m in reader:
+                if m.arbitration_id == 0x6D0:
+                    d = {k: int(v.phys_value) for k, v in fr.decode(bytes(m.data)).items()}
+                    if d["ST2_Page"] == 5:
+                        pages.append(d)
+            reader.stop()
+            self.assertTrue(pages, "no STATUS2 page 5")
+            self.assertEqual(pages[-1], {"ST2_Page": 5, "ST2_BusState": 2, "ST2_TxErr": 100,
+                                         "ST2_RxErr": 3, "ST2_BusOffs": 1, "ST2_ErrFrames": 7})
+            self.assertIn(4, [d["ST2_BusState"] for d in pages])   # bus-off was sent too
             logged = [m.group(1) for m in (re.search(r"controller (\S+) \(error frames", x)
                                            for x in lines.all) if m]
             self.assertEqual(logged, [s for _, s in SEQUENCE if s], "".join(lines.all))

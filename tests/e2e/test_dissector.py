@@ -33,7 +33,7 @@ TRAJD = os.path.join(BUILD, "bin", "trajd")
 LUA = os.path.join(ROOT, "config", "trajd.lua")
 TRACK = os.path.join(ROOT, "tests", "data", "n2k_furuno_figure8_src52.csv")
 BASES = {0x680: "TRAJD_WAYPOINT", 0x690: "TRAJD_WAYPOINT_FD", 0x6A0: "TRAJD_SETPOINT",
-         0x6B0: "TRAJD_SETPOINT_FD", 0x6C0: "TRAJD_STATUS"}
+         0x6B0: "TRAJD_SETPOINT_FD", 0x6C0: "TRAJD_STATUS", 0x6D0: "TRAJD_STATUS2"}
 NO_POS = -214748.3648   # 0x80000000 at 0.1 mm
 LINKTYPE_CAN_SOCKETCAN = 227
 CANFD_FDF = 0x04

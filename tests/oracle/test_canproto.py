@@ -206,6 +206,37 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
         g.data[0] = 0
         self.assertLess(LIB.canproto_decode_status2_faults(ctypes.byref(g), ctypes.byref(q)), 0)
 
+    # Given STATUS2 page 5 (bus state) from our encoder, then canmatrix decodes
+    # it through the multiplexor with the state's value table, counters
+    # saturated at 65535; and a page canmatrix encodes is what our decoder reads.
+    def test_status2_bus(self):
+        fr = frame_of(self.db, 0x6D0)
+        names = {int(k): v for k, v in fr.signal_by_name("ST2_BusState").values.items()}
+        self.assertEqual(names, {1: "error-active", 2: "error-warning", 3: "error-passive",
+                                 4: "bus-off", 5: "down"})
+        for state, tx, rx, offs, frames in [(1, 0, 0, 0, 0), (3, 128, 5, 2, 300),
+                                            (4, 255, 255, 70000, 2 ** 40)]:
+            p = cp.St2Bus(state, tx, rx, offs, frames)
+            f = cp.Frame()
+            LIB.canproto_encode_status2_bus(0x6D0, ctypes.byref(p), ctypes.byref(f))
+            d = decode(self.db, f)
+            self.assertEqual((d["ST2_Page"], d["ST2_BusState"], d["ST2_TxErr"], d["ST2_RxErr"]),
+                             (5, state, tx, rx))
+            self.assertEqual((d["ST2_BusOffs"], d["ST2_ErrFrames"]),
+                             (min(offs, 65535), min(frames, 65535)))
+            self.assertNotIn("ST2_OutLost", d)
+            data = fr.encode({k: raw(fr, k, v) for k, v in d.items()})
+            g = cp.Frame()
+            g.id, g.len = 0x6D0, 8
+            for i, b in enumerate(bytes(data)):
+                g.data[i] = b
+            q = cp.St2Bus()
+            self.assertEqual(LIB.canproto_decode_status2_bus(ctypes.byref(g), ctypes.byref(q)), 0)
+            self.assertEqual((q.state, q.tx_err, q.rx_err, q.bus_offs, q.err_frames),
+                             (state, tx, rx, d["ST2_BusOffs"], d["ST2_ErrFrames"]))
+        g.data[0] = 1
+        self.assertLess(LIB.canproto_decode_status2_bus(ctypes.byref(g), ctypes.byref(q)), 0)
+
     # Given a CiA 402 axis, then canmatrix reads the target position in increments.
     def test_cia402(self):
         ids = cp.Ids()
