@@ -57,13 +57,25 @@ void obj_reset_counters(obj_t *o)
     engine_status(o->engine, &o->status);
 }
 
+double obj_safety_accel(const engine_config_t *e)
+{
+    double aw = engine_config_max_accel(e);
+    if (e->param != ENGINE_PARAM_TIME || !(aw > 0))
+        return 0; /* no bound the curve keeps: not checked */
+    /* the curve through waypoints of implied acceleration <= aw stays within
+     * 3 aw (diagonal dominance), the time scaling adds scale_accel_m_s2, a
+     * transfer at most its configured acceleration; twice that */
+    return 2.0 * fmax(3.0 * aw + e->scale_accel_m_s2, e->transfer_accel_m_s2);
+}
+
 void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim)
 {
     memset(lim, 0, sizeof *lim);
     lim->max_step_m = o->safety_max_step_m >= 0 ? o->safety_max_step_m : 0;
     lim->max_speed_m_s = o->safety_max_speed_m_s >= 0 ? o->safety_max_speed_m_s
-                                                      : 2.0 * o->engine.max_speed_m_s;
-    lim->max_accel_m_s2 = o->safety_max_accel_m_s2 >= 0 ? o->safety_max_accel_m_s2 : 0;
+                                                      : 2.0 * engine_config_max_speed(&o->engine);
+    lim->max_accel_m_s2 = o->safety_max_accel_m_s2 >= 0 ? o->safety_max_accel_m_s2
+                                                        : obj_safety_accel(&o->engine);
     lim->tol_m = SAFETY_TOL_M_DEFAULT;
 }
 

@@ -78,13 +78,23 @@ typedef struct obj {
 
 /*
  * The safety monitor's bounds for object o: its safety_* keys, and where a
- * key is not given, derived from its engine limits: speed 2 x max_speed_m_s
- * (the engine's transfer peaks at 1.5 x; max_speed_m_s = 0, no limit, leaves
- * it unchecked), no absolute step bound, no acceleration bound (an underrun
- * still stops the output within one tick: an acceleration bound would fault
- * every underrun at speed).
+ * key is not given, derived from its engine limits (the ones in force, the
+ * profile's included): speed 2 x max_speed_m_s (the engine's transfer peaks
+ * at 1.5 x; no speed limit leaves it unchecked), no absolute step bound,
+ * acceleration obj_safety_accel().
  */
 void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim);
+
+/*
+ * The derived acceleration bound (m/s^2): 2 x max(3 a_w + scale_accel_m_s2,
+ * transfer_accel_m_s2), a_w = max_accel_m_s2 in force (the curve through
+ * waypoints whose implied acceleration is at most a_w stays within 3 a_w, the
+ * time scaling adds at most scale_accel_m_s2: lib/engine/TIMESCALE.md).  0
+ * (not checked) without an acceleration limit (profiles air, machine, none)
+ * and with param = uniform (the paper's parameterisation steps the velocity
+ * at waypoints by design: lib/engine/README.md).
+ */
+double obj_safety_accel(const engine_config_t *e);
 
 /*
  * Clear o (CAN and Modbus command "clear"): engine_clear, and if the safety

@@ -5,12 +5,14 @@
  * uncommented.  Run from the repository root (tests/run.sh does). */
 #include "test.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "can_transport.h"
 #include "cfg.h"
+#include "core.h"
 #include "csv_transport.h"
 #include "engine_settings.h"
 #include "replay_transport.h"
@@ -350,13 +352,49 @@ static void test_missing_file(void **state)
     assert_non_null(strstr(err, "No such file"));
 }
 
+/* The safety monitor's default bounds (issue 10 item 3, daemon/core/core.h
+ * obj_safety_limits): derived from the engine's limits in force, the
+ * acceleration bound on by default; off without an acceleration limit or
+ * with the uniform parameterisation; an explicit key wins. */
+static double safety_of(const char *extra, double *speed)
+{
+    char text[1024];
+    snprintf(text, sizeof text, "%s%s", OBJ, extra);
+    cfg_t *c = load_ok(text);
+    safety_limits_t lim;
+    obj_safety_limits(&c->obj[0], &lim);
+    cfg_free(c);
+    *speed = lim.max_speed_m_s;
+    return lim.max_accel_m_s2;
+}
+
+static void test_safety_defaults(void **state)
+{
+    (void)state;
+    double v;
+    /* profile auto: max_speed 400, max_accel 30, scale_accel 5 (engine.h) */
+    assert_true(fabs(safety_of("", &v) - 2 * (3 * 30 + 5)) < 1e-9);
+    assert_true(fabs(v - 800) < 1e-9);
+    assert_true(
+        fabs(safety_of("max_accel_m_s2 = 10\nscale_accel_m_s2 = 4\nmax_speed_m_s = 20\n", &v) -
+             2 * (3 * 10 + 4)) < 1e-9);
+    assert_true(fabs(v - 40) < 1e-9);
+    assert_true(fabs(safety_of("max_accel_m_s2 = 1\ntransfer_accel_m_s2 = 50\n", &v) - 100) < 1e-9);
+    assert_true(safety_of("profile = machine\n", &v) <= 0);
+    assert_true(safety_of("profile = air\n", &v) <= 0);
+    assert_true(safety_of("method = bspline\nparam = uniform\n", &v) <= 0);
+    assert_true(fabs(safety_of("safety_max_accel_m_s2 = 0\n", &v)) <= 0);
+    assert_true(fabs(safety_of("safety_max_accel_m_s2 = 12\n", &v) - 12) < 1e-9);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_minimal),      cmocka_unit_test(test_values),
-        cmocka_unit_test(test_errors),       cmocka_unit_test(test_documented_conf),
-        cmocka_unit_test(test_missing_file), cmocka_unit_test(test_ids),
-        cmocka_unit_test(test_can_ids),      cmocka_unit_test(test_reload_check),
+        cmocka_unit_test(test_minimal),         cmocka_unit_test(test_values),
+        cmocka_unit_test(test_errors),          cmocka_unit_test(test_documented_conf),
+        cmocka_unit_test(test_missing_file),    cmocka_unit_test(test_ids),
+        cmocka_unit_test(test_safety_defaults), cmocka_unit_test(test_can_ids),
+        cmocka_unit_test(test_reload_check),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
