@@ -95,6 +95,8 @@ typedef struct {
     int binary;    /* --binary: the records of csv_format.h instead of CSV */
     double rate_hz;
     int64_t start_ns; /* engine time at which the first waypoint is due */
+    int origin_set;   /* -c: the daemon's datum, about which a geographic track is expressed */
+    double origin[3];
     engine_config_t cfg;
     struct {
         const engine_setting_t *s;
@@ -370,6 +372,12 @@ static int load_config(opts_t *o)
             o->format = r->format;
         }
         o->start_ns = llround(r->start_s * 1e9);
+        if (c->datum_set) {
+            o->origin_set = 1;
+            o->origin[0] = c->datum.lat0_deg;
+            o->origin[1] = c->datum.lon0_deg;
+            o->origin[2] = c->datum.alt0_m;
+        }
     } else if (!o->input) {
         fprintf(stderr, "trajreplay: %s: object %s has input = %s, not replay: give a TRACK\n",
                 o->config, obj->name, obj->input->name);
@@ -526,6 +534,9 @@ static int run_open(run_t *run, const opts_t *o)
         fprintf(stderr, "trajreplay: %s\n", err);
         return EXIT_INPUT;
     }
+    /* -c: about the daemon's one datum, as trajd writes it */
+    if (o->origin_set && run->trk.geographic)
+        (void)track_reframe(&run->trk, o->origin[0], o->origin[1], o->origin[2]);
     for (size_t i = 0; i < run->trk.nreports; i++)
         fprintf(stderr, "trajreplay: skipped %s\n", run->trk.reports[i]);
     if (run->trk.ignored)

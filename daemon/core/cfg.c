@@ -386,6 +386,27 @@ bad:
     return why_set(why, whylen, "expected a CPU list like 1 or 0,2-3, got '%s'", kv->value);
 }
 
+/* origin = lat,lon,alt */
+static int get_origin(cfg_daemon_t *d, const cfg_kv_t *kv, char *why, size_t wl)
+{
+    int rc;
+    char *end = NULL;
+    const char *q = kv->value;
+    for (int a = 0; a < 3; a++) {
+        d->origin[a] = strtod(q, &end);
+        if (end == q || (a < 2 ? *end != ',' : *end != '\0'))
+            return why_set(why, wl, "expected lat,lon,alt (degrees, degrees, metres), got '%s'",
+                           kv->value);
+        q = end + 1;
+    }
+    rc = geo_check(d->origin[0], d->origin[1], d->origin[2]);
+    if (rc < 0)
+        return why_set(why, wl, "%s", geo_strerror(rc));
+    d->origin_given = 1;
+    d->origin_line = kv->line;
+    return 0;
+}
+
 static int key_daemon(cfg_t *c, parse_t *p, const cfg_kv_t *kv, char *why, size_t wl)
 {
     cfg_daemon_t *d = &c->daemon;
@@ -405,6 +426,8 @@ static int key_daemon(cfg_t *c, parse_t *p, const cfg_kv_t *kv, char *why, size_
         return cfg_get_double(kv, 0, 3600, &d->stop_timeout_s, why, wl);
     if (strcmp(kv->key, "exit_when_done") == 0)
         return cfg_get_bool(kv, &d->exit_when_done, why, wl);
+    if (strcmp(kv->key, "origin") == 0)
+        return get_origin(d, kv, why, wl);
     if (strcmp(kv->key, "user") == 0) {
         if (strlen(kv->value) >= sizeof d->user)
             return why_set(why, wl, "expected a user name of at most %zu characters",
@@ -891,6 +914,18 @@ int cfg_reload_check(const cfg_t *old, const cfg_t *nw, char *err, size_t errlen
                  "%s:%d: [object.%s] id: %d, running as %d: a reload never moves an object's "
                  "Modbus block or CAN ids (restart trajd to renumber)",
                  nw->path, o->id_line ? o->id_line : o->line, o->name, o->id, was->id);
+        return -CFG_EVALUE;
+    }
+    if (old->datum_set && nw->datum_set &&
+        (memcmp(&old->datum.lat0_deg, &nw->datum.lat0_deg, sizeof(double)) != 0 ||
+         memcmp(&old->datum.lon0_deg, &nw->datum.lon0_deg, sizeof(double)) != 0 ||
+         memcmp(&old->datum.alt0_m, &nw->datum.alt0_m, sizeof(double)) != 0)) {
+        snprintf(err, errlen,
+                 "%s:%d: the datum would move from %.9f,%.9f,%.3f to %.9f,%.9f,%.3f: every "
+                 "geographic object's east/north/up would jump (set [daemon] origin to keep it; "
+                 "restart trajd to change it)",
+                 nw->path, nw->datum_line, old->datum.lat0_deg, old->datum.lon0_deg,
+                 old->datum.alt0_m, nw->datum.lat0_deg, nw->datum.lon0_deg, nw->datum.alt0_m);
         return -CFG_EVALUE;
     }
     for (unsigned t = 0; transport_table[t]; t++) {

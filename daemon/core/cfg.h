@@ -31,6 +31,7 @@
 #include <stdint.h>
 
 #include "engine.h"
+#include "geo.h"
 
 #define CFG_OBJECTS_MAX 32    /* objects per daemon */
 #define CFG_NAME_MAX 32       /* object name, with its NUL ([A-Za-z0-9_-]) */
@@ -76,7 +77,10 @@ typedef struct {
     double stop_timeout_s;    /* SIGTERM: longest wait for objects to come to rest */
     int exit_when_done;       /* exit 0 once every input is done and every object is finished */
     int log_level;            /* LOG_ERR .. LOG_DEBUG */
-    char user[64];            /* started as root: drop to this user once the sockets are
+    int origin_given;         /* origin = lat,lon,alt: the datum of every geographic object */
+    double origin[3];         /* degrees, degrees, metres above the WGS84 ellipsoid */
+    int origin_line;
+    char user[64]; /* started as root: drop to this user once the sockets are
                                  * open ("" = stay, with a warning outside systemd) */
 } cfg_daemon_t;
 
@@ -113,7 +117,13 @@ typedef struct {
     int has_initial_position;
     int initial_position_line; /* its line, for the range check against max_abs_m */
     double initial_position_m[ENGINE_AXES];
-    int writable; /* writable = yes/no: commands and waypoints
+    struct {
+        const double *t_s, *deg; /* n samples, track time and unwrapped degrees */
+        size_t n;                /* 0: no heading axis */
+    } heading;                   /* set by its input (a replay track with a heading column) */
+    int geographic;              /* its positions are east/north/up about the daemon's datum
+                     * (a geographic replay track): outputs give lat/lon/alt */
+    int writable;                /* writable = yes/no: commands and waypoints
                                                  * from outside (Modbus) may change it;
                                                  * -1 not given (the input decides) */
 } cfg_obj_t;
@@ -127,6 +137,12 @@ typedef struct cfg {
     unsigned nobj;                  /* >= 1 */
     void *tcfg[CFG_TRANSPORTS_MAX]; /* daemon-wide block of each transport, by index */
     int tline[CFG_TRANSPORTS_MAX];  /* line of its [T] section, 0 if absent */
+    /* The one datum of all geographic objects (set by the replay transport's
+     * check): [daemon] origin, or the first fix of the geographic object with
+     * the lowest id (stable under reordering, like the addresses). */
+    int datum_set;
+    int datum_line; /* line of origin, or of that object's section */
+    geo_enu_t datum;
 } cfg_t;
 
 /*

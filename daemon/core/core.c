@@ -10,6 +10,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "angle.h"
 #include "engine_settings.h"
 #include "log.h"
 
@@ -77,6 +78,24 @@ void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim)
     lim->max_accel_m_s2 = o->safety_max_accel_m_s2 >= 0 ? o->safety_max_accel_m_s2
                                                         : obj_safety_accel(&o->engine);
     lim->tol_m = SAFETY_TOL_M_DEFAULT;
+}
+
+/* The setpoint as latitude/longitude/height (geographic objects, about the
+ * daemon's one datum) and the heading axis at its track time.  In the tick:
+ * no allocation. */
+static void obj_frames(const cfg_t *cfg, obj_t *o)
+{
+    const engine_setpoint_t *sp = &o->sp;
+    o->geo[0] = o->geo[1] = o->geo[2] = NAN;
+    o->heading_deg = NAN;
+    if (o->cfg->geographic && cfg->datum_set && isfinite(sp->pos_m[0]) && isfinite(sp->pos_m[1]) &&
+        isfinite(sp->pos_m[2]) &&
+        geo_from_enu(&cfg->datum, sp->pos_m, &o->geo[0], &o->geo[1], &o->geo[2]) < 0)
+        o->geo[0] = o->geo[1] = o->geo[2] = NAN;
+    if (o->cfg->heading.n && isfinite(sp->t_s) && isfinite(sp->pos_m[0]))
+        o->heading_deg = angle_wrap_deg(angle_pchip_eval(o->cfg->heading.t_s, o->cfg->heading.deg,
+                                                         o->cfg->heading.n, sp->t_s,
+                                                         &o->heading_hint));
 }
 
 /* Rearm the monitor once the engine stands on the held position. */
@@ -173,6 +192,7 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
         o->status.skipped_ticks += o->skipped_ticks;
         obj_try_rearm(o);
         safety_check(&o->safety, &o->sp);
+        obj_frames(c->cfg, o);
     }
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i];

@@ -74,6 +74,11 @@ typedef struct obj {
                                      * engine stands on the held position */
     rejlog_t rejlog;        /* sources of the last waypoints offered, and the refusals
                                      * to log (rejlog.h; kept when carried) */
+    double geo[3];          /* the setpoint as WGS84 lat, lon (deg), alt (m) when
+                                     * o->cfg->geographic (about c->cfg->datum), else NaN */
+    double heading_deg;     /* heading axis at the setpoint's track time, wrapped to
+                                     * (-180, 180]; NaN if the object has none */
+    size_t heading_hint;    /* interval of the last heading evaluation */
 } obj_t;
 
 /*

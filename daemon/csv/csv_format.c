@@ -52,6 +52,17 @@ int csv_format_format(char *buf, size_t len, const char *object, const engine_se
     return csv_format_format_prec(buf, len, object, sp, CSV_PREC_SHORTEST);
 }
 
+int csv_format_append(char *buf, size_t len, int n, const char *cols)
+{
+    size_t m = strlen(cols);
+    if (n < 1 || buf[n - 1] != '\n' || (size_t)n + m + 1 > len)
+        return -1;
+    memcpy(buf + n - 1, cols, m);
+    buf[n - 1 + m] = '\n';
+    buf[n + m] = '\0';
+    return n + (int)m;
+}
+
 /* Decimal of a uint64 at o; returns the length. */
 static int put_u64(char *o, uint64_t v)
 {

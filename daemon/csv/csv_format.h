@@ -32,6 +32,13 @@ int csv_format_header(char *buf, size_t len);
 int csv_format_format(char *buf, size_t len, const char *object, const engine_setpoint_t *sp);
 
 /*
+ * Append more columns (text starting with ',') to a line or header of length
+ * n that ends with '\n', before the '\n'.  Returns the new length, or -1 if it
+ * does not fit (or n < 1).
+ */
+int csv_format_append(char *buf, size_t len, int n, const char *cols);
+
+/*
  * The same line with every double (t_s and the nine coordinates) in fixed
  * notation with prec decimals, byte for byte printf("%.*f") (csv_fixed.h),
  * written by a fast formatter (trajreplay --precision).  Same returns.

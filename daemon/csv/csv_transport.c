@@ -13,6 +13,7 @@
 
 #include "core.h"
 #include "csv_format.h"
+#include "csv_shortest.h"
 #include "log.h"
 
 #define CSV_TRANSPORT_LINE_MAX 1024 /* one csv_format line: 16 numbers at most ~25 chars + name */
@@ -23,6 +24,7 @@ typedef struct {
     int restore_flags; /* fcntl flags to put back (stdout), or -1 */
     int regular;       /* a regular file: a torn line can be cut off again */
     int is_stdout;
+    int geo;    /* csv.geo: lat_deg,lon_deg,alt_m,heading_deg appended to every line */
     obj_t *obj; /* csv: the one object writing here; stdout: NULL (all of them) */
     size_t len;
     char *buf;                               /* CSV_TRANSPORT_BUF_BYTES */
@@ -65,6 +67,8 @@ static int csv_obj_key(void *ocfg, const cfg_kv_t *kv, char *why, size_t wl)
         return cfg_get_bool(kv, &c->header, why, wl);
     if (strcmp(kv->key, "truncate") == 0)
         return cfg_get_bool(kv, &c->truncate, why, wl);
+    if (strcmp(kv->key, "geo") == 0)
+        return cfg_get_bool(kv, &c->geo, why, wl);
     return -CFG_EUNKNOWN;
 }
 
@@ -289,6 +293,8 @@ static void header(csv_transport_t *st, stream_t *s)
 {
     char line[CSV_TRANSPORT_LINE_MAX];
     int n = csv_format_header(line, sizeof line);
+    if (n > 0 && s->geo)
+        n = csv_format_append(line, sizeof line, n, ",lat_deg,lon_deg,alt_m,heading_deg");
     put(st, s, NULL, line, n);
 }
 
@@ -370,6 +376,7 @@ static int csv_open(core_t *c, void **state, char *why, size_t wl)
         }
         stream_t *sm = &st->s[i];
         sm->obj = o;
+        sm->geo = oc->geo;
         snprintf(sm->what, sizeof sm->what, "object '%s' csv.path %s", o->name, oc->path);
         struct stat sb;
         if (sm->regular && fstat(fd, &sb) == 0 && sb.st_size > 0)
@@ -435,6 +442,18 @@ static void csv_setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
     csv_transport_t *st = state;
     char line[CSV_TRANSPORT_LINE_MAX];
     int n = csv_format_format(line, sizeof line, o->name, sp);
+    if (n > 0 && st->s[o->index].geo) {
+        /* the same number form as the other columns (csv_shortest.h) */
+        char extra[4 * (CSV_SHORTEST_MAX + 1) + 1];
+        const double v[4] = {o->geo[0], o->geo[1], o->geo[2], o->heading_deg};
+        size_t m = 0;
+        for (int k = 0; k < 4; k++) {
+            extra[m++] = ',';
+            m += (size_t)csv_shortest(extra + m, v[k]);
+        }
+        extra[m] = '\0';
+        n = csv_format_append(line, sizeof line, n, extra);
+    }
     put(st, &st->s[o->index], o, line, n);
 }
 

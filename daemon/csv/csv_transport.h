@@ -45,6 +45,7 @@ typedef struct {
     char path[PATH_MAX];
     int header;
     int truncate;
+    int geo; /* csv.geo = yes: columns lat_deg,lon_deg,alt_m,heading_deg appended */
 } csv_transport_obj_cfg_t;
 
 extern const transport_t csv_transport;

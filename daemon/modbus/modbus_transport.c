@@ -271,6 +271,9 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         o->can_state = d.can_state;
         o->can_load_permille = d.can_load_permille;
         o->uptime_s = up_s;
+        o->lat_deg = ob->geo[0];
+        o->lon_deg = ob->geo[1];
+        o->alt_m = ob->geo[2];
         o->out_lost = ob->out_lost;
         o->out_fault = (uint16_t)(ob->out_fault != 0);
         o->seq_jumps = 0; /* the server adds its own */

@@ -54,6 +54,46 @@ static void obj_fini(void *ocfg)
     r->loaded = 0;
 }
 
+/* One datum for every geographic track: [daemon] origin, or the first fix of
+ * the geographic object with the lowest id (never the first in the file);
+ * each geographic track is re-expressed about it. */
+static int set_datum(cfg_t *cfg, int *line, char *why, size_t wl)
+{
+    const cfg_obj_t *first = NULL;
+    const replay_transport_obj_cfg_t *r0 = NULL;
+    for (unsigned i = 0; i < cfg->nobj; i++) {
+        const cfg_obj_t *o = &cfg->obj[i];
+        const replay_transport_obj_cfg_t *r = o->tcfg[transport_index(&replay_transport)];
+        if (o->input == &replay_transport && r->trk.geographic && (!first || o->id < first->id)) {
+            first = o;
+            r0 = r;
+        }
+    }
+    if (!first)
+        return 0;
+    const cfg_daemon_t *d = &cfg->daemon;
+    double g[3] = {r0->trk.geo[0][0], r0->trk.geo[0][1],
+                   isnan(r0->trk.geo[0][2]) ? 0.0 : r0->trk.geo[0][2]};
+    if (d->origin_given)
+        memcpy(g, d->origin, sizeof g);
+    (void)geo_enu_init(g[0], g[1], g[2], &cfg->datum); /* checked when read */
+    cfg->datum_set = 1;
+    cfg->datum_line = d->origin_given ? d->origin_line : first->line;
+    for (unsigned i = 0; i < cfg->nobj; i++) {
+        cfg_obj_t *o = &cfg->obj[i];
+        replay_transport_obj_cfg_t *r = o->tcfg[transport_index(&replay_transport)];
+        if (o->input != &replay_transport || !r->trk.geographic)
+            continue;
+        if (track_reframe(&r->trk, g[0], g[1], g[2]) < 0) {
+            *line = cfg->datum_line;
+            snprintf(why, wl, "object '%s': cannot express its track about the datum", o->name);
+            return -CFG_EVALUE;
+        }
+        o->geographic = 1;
+    }
+    return 0;
+}
+
 /* Load every replayed object's track, so a bad file rejects the config. */
 static int check(cfg_t *cfg, int *line, char *why, size_t wl)
 {
@@ -77,6 +117,9 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
             return -CFG_EVALUE;
         }
         r->loaded = 1;
+        o->heading.t_s = r->trk.heading_t;
+        o->heading.deg = r->trk.heading;
+        o->heading.n = r->trk.nheading;
         for (size_t k = 0; k < r->trk.nreports; k++)
             log_msg(LOG_WARNING, "object '%s': replay: skipped %s", o->name, r->trk.reports[k]);
         if (r->trk.ignored)
@@ -91,7 +134,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
             return -CFG_EVALUE;
         }
     }
-    return 0;
+    return set_datum(cfg, line, why, wl);
 }
 
 typedef struct {

@@ -11,6 +11,7 @@
 #include <string.h>
 #include <strings.h>
 
+#include "angle.h"
 #include "geo.h"
 #include "track_loader.h"
 
@@ -78,8 +79,55 @@ void track_free(track_t *trk)
         return;
     free(trk->wp);
     free(trk->line);
+    free(trk->geo);
+    free(trk->heading_t);
+    free(trk->heading);
     free(trk->reports);
     memset(trk, 0, sizeof *trk);
+}
+
+int track_reframe(track_t *trk, double lat0_deg, double lon0_deg, double alt0_m)
+{
+    geo_enu_t frame;
+    if (!trk->geo || geo_enu_init(lat0_deg, lon0_deg, alt0_m, &frame) < 0)
+        return -1;
+    trk->lat0_deg = lat0_deg;
+    trk->lon0_deg = lon0_deg;
+    trk->alt0_m = alt0_m;
+    for (size_t i = 0; i < trk->n; i++) {
+        const double *g = trk->geo[i];
+        double enu[3];
+        int no_alt = isnan(g[2]);
+        (void)geo_to_enu(&frame, g[0], g[1], no_alt ? alt0_m : g[2], enu);
+        trk->wp[i].pos_m[0] = enu[0];
+        trk->wp[i].pos_m[1] = enu[1];
+        trk->wp[i].pos_m[2] = no_alt ? 0.0 : enu[2];
+    }
+    return 0;
+}
+
+/* The heading axis of the rows that have one (time strictly increasing),
+ * unwrapped (lib/util/angle.h).  Returns 0 or -1 (out of memory). */
+static int rows_heading(track_loader_t *L, track_t *trk)
+{
+    size_t m = 0;
+    for (size_t i = 0; i < L->n; i++)
+        m += !isnan(L->rows[i].h);
+    if (!m)
+        return 0;
+    trk->heading_t = calloc(m, sizeof *trk->heading_t);
+    trk->heading = calloc(m, sizeof *trk->heading);
+    if (!trk->heading_t || !trk->heading)
+        return -1;
+    for (size_t i = 0; i < L->n; i++) {
+        const track_row_t *r = &L->rows[i];
+        if (isnan(r->h) || (trk->nheading && r->t_s <= trk->heading_t[trk->nheading - 1]))
+            continue; /* a repeated or backward time: the engine drops that row too */
+        trk->heading_t[trk->nheading] = r->t_s;
+        trk->heading[trk->nheading++] = r->h;
+    }
+    angle_unwrap_deg(trk->heading, trk->nheading);
+    return 0;
 }
 
 /* Rows read by a parser into trk's waypoints (lat/lon to local metres about
@@ -101,15 +149,12 @@ static int rows_to_track(track_loader_t *L, int geographic, track_t *trk)
         track_loader_fatal(L, 0, "out of memory");
         return -1;
     }
-    geo_enu_t frame;
     if (geographic) {
-        const track_row_t *r0 = &L->rows[0];
-        double alt0 = isnan(r0->c) ? 0.0 : r0->c;
-        /* Rows were checked with geo_check as they were read. */
-        (void)geo_enu_init(r0->a, r0->b, alt0, &frame);
-        trk->lat0_deg = r0->a;
-        trk->lon0_deg = r0->b;
-        trk->alt0_m = alt0;
+        trk->geo = calloc(L->n, sizeof *trk->geo);
+        if (!trk->geo) {
+            track_loader_fatal(L, 0, "out of memory");
+            return -1;
+        }
     }
     for (size_t i = 0; i < L->n; i++) {
         const track_row_t *r = &L->rows[i];
@@ -118,17 +163,24 @@ static int rows_to_track(track_loader_t *L, int geographic, track_t *trk)
         w->seq = (uint32_t)(i + 1);
         trk->line[i] = r->line;
         if (geographic) {
-            double enu[3];
-            int no_alt = isnan(r->c);
-            (void)geo_to_enu(&frame, r->a, r->b, no_alt ? frame.alt0_m : r->c, enu);
-            w->pos_m[0] = enu[0];
-            w->pos_m[1] = enu[1];
-            w->pos_m[2] = no_alt ? 0.0 : enu[2];
+            trk->geo[i][0] = r->a;
+            trk->geo[i][1] = r->b;
+            trk->geo[i][2] = r->c; /* NaN: no altitude */
         } else {
             w->pos_m[0] = r->a;
             w->pos_m[1] = r->b;
             w->pos_m[2] = isnan(r->c) ? 0.0 : r->c;
         }
+    }
+    trk->n = L->n;
+    if (rows_heading(L, trk) < 0) {
+        track_loader_fatal(L, 0, "out of memory");
+        return -1;
+    }
+    if (geographic) {
+        double alt0 = isnan(L->rows[0].c) ? 0.0 : L->rows[0].c;
+        /* Rows were checked with geo_check as they were read. */
+        (void)track_reframe(trk, L->rows[0].a, L->rows[0].b, alt0);
     }
     trk->n = L->n;
     trk->geographic = geographic;

@@ -20,6 +20,8 @@
  *   metric    x, x_m, east_m / y, y_m, north_m / z, z_m, up_m   (metres; z optional)
  *   geographic lat, lat_deg, latitude / lon, lon_deg, lng, longitude /
  *             alt, alt_m, ele, altitude                  (degrees, metres; alt optional)
+ *   heading   heading, heading_deg, yaw, yaw_deg   (degrees, optional, any range:
+ *             the axis wraps, see track_t.heading; an empty field: none on that row)
  * Extra columns are ignored.  With an explicit format (XYZ or LATLON) and a
  * first line made of numbers, the columns are taken by position instead:
  * t,x,y[,z] or t,lat,lon[,alt].  Times are kept as written.
@@ -106,7 +108,15 @@ typedef struct {
     uint32_t *line;                    /* n source line numbers (CSV line, or line of <trkpt>) */
     track_format_t format;             /* the format actually read (never AUTO) */
     int geographic;                    /* 1 if converted from lat/lon */
-    double lat0_deg, lon0_deg, alt0_m; /* ENU origin (first point) when geographic */
+    double lat0_deg, lon0_deg, alt0_m; /* ENU origin when geographic: the first point,
+                                 * or the datum given to track_reframe */
+    double *heading_t, *heading;       /* nheading samples of the heading axis (CSV column
+                                 * heading, heading_deg, yaw or yaw_deg): track time
+                                 * (strictly increasing) and angle in degrees,
+                                 * unwrapped (lib/util/angle.h); NULL if none */
+    size_t nheading;
+    double (*geo)[3];                  /* n rows lat, lon (deg), alt (m, NaN: none) when
+                                 * geographic, else NULL */
     size_t skipped;                    /* bad lines skipped (TRACK_SKIP_BAD) */
     size_t ignored;                    /* well-formed records that give no waypoint: N2K
                                  position n/a, no fix, a fast packet missing a
@@ -140,6 +150,15 @@ int track_load_opts(const char *path, track_format_t fmt, unsigned flags, track_
  */
 int track_parse(const char *name, const char *buf, size_t len, track_format_t fmt, unsigned flags,
                 track_t *trk, char *err, size_t errlen);
+
+/*
+ * Re-express a geographic track's waypoints as east/north/up about another
+ * origin (a daemon's one datum, so all its objects share one frame) instead
+ * of its first point; rows without altitude get east/north at alt0_m and
+ * up = 0, as about the first point.  Returns 0, or -1 for a metric track or
+ * an origin geo_check refuses (trk untouched).
+ */
+int track_reframe(track_t *trk, double lat0_deg, double lon0_deg, double alt0_m);
 
 /* Release; safe on a zeroed or already freed track. */
 void track_free(track_t *trk);

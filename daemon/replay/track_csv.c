@@ -9,7 +9,7 @@
 
 #include "geo.h"
 
-enum { COL_T, COL_X, COL_Y, COL_Z, COL_LAT, COL_LON, COL_ALT, COL_COUNT };
+enum { COL_T, COL_X, COL_Y, COL_Z, COL_LAT, COL_LON, COL_ALT, COL_HDG, COL_COUNT };
 
 static const char *const col_names[COL_COUNT][5] = {
     [COL_T] = {"t", "t_s", "time", "time_s", NULL},
@@ -19,6 +19,7 @@ static const char *const col_names[COL_COUNT][5] = {
     [COL_LAT] = {"lat", "lat_deg", "latitude", NULL},
     [COL_LON] = {"lon", "lon_deg", "lng", "longitude", NULL},
     [COL_ALT] = {"alt", "alt_m", "ele", "altitude", NULL},
+    [COL_HDG] = {"heading", "heading_deg", "yaw", "yaw_deg", NULL},
 };
 
 #define MAX_FIELDS 64
@@ -182,7 +183,15 @@ static int csv_row(csv_t *c, char **field, int nf, unsigned long lineno)
         if (rc)
             return track_loader_bad(L, lineno, "%s", geo_strerror(rc));
     }
-    return track_loader_add_row(L, t, va, vb, vc, lineno);
+    double vh = NAN;
+    if (c->col[COL_HDG] >= 0 && c->col[COL_HDG] < nf &&
+        (track_field_num(field[c->col[COL_HDG]], &vh, &empty) || isinf(vh)))
+        return track_loader_bad(L, lineno, "heading '%s' is not a number",
+                                track_field_show(field[c->col[COL_HDG]]).s);
+    if (track_loader_add_row(L, t, va, vb, vc, lineno) < 0)
+        return -1;
+    L->rows[L->n - 1].h = vh;
+    return 0;
 }
 
 /* One line (NUL-terminated copy in line).  Returns 0 or -1. */

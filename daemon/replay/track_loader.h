@@ -20,6 +20,7 @@
 typedef struct {
     double t_s;
     double a, b, c; /* x,y,z or lat,lon,alt (c NaN: no altitude / z) */
+    double h;       /* heading, degrees (NaN: none) */
     uint32_t line;
 } track_row_t;
 

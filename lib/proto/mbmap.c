@@ -212,6 +212,9 @@ int mbmap_encode_object(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_ob
     mbmap_put_f32(b + MBMAP_O_RATE, (float)o->st.rate);
     b[MBMAP_O_OVERRIDE] = (uint16_t)lround(o->st.override * 100.0);
     mbmap_put_u32(b + MBMAP_O_HARD_STOPS, lo32(o->st.hard_stops));
+    mbmap_put_f64(b + MBMAP_O_LAT, o->lat_deg);
+    mbmap_put_f64(b + MBMAP_O_LON, o->lon_deg);
+    mbmap_put_f64(b + MBMAP_O_ALT, o->alt_m);
     mbmap_put_u32(b + MBMAP_O_GEN_TAIL, gen);
     return 0;
 }
@@ -522,6 +525,13 @@ static const mbmap_field_t fields[] = {
     F(IO, MBMAP_O_HARD_STOPS, 2, MBMAP_T_U32, "hard_stops", "",
       "times the solved curve ended under a moving output (velocity to 0 in one tick); should stay "
       "0"),
+    F(IO, MBMAP_O_LAT, 4, MBMAP_T_F64, "lat", "deg",
+      "latitude of the setpoint (WGS84), for an object whose track is geographic: its "
+      "east/north/up about the daemon's one datum converted back; NaN otherwise or with no "
+      "position"),
+    F(IO, MBMAP_O_LON, 4, MBMAP_T_F64, "lon", "deg", "longitude of the setpoint (WGS84), as lat"),
+    F(IO, MBMAP_O_ALT, 4, MBMAP_T_F64, "alt", "m",
+      "height of the setpoint above the WGS84 ellipsoid, as lat"),
     F(IO, MBMAP_O_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "",
       "copy of generation (whole-block reads)"),
 

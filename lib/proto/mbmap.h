@@ -145,6 +145,9 @@
 #define MBMAP_O_RATE 70              /* f32 time-scaling rate ds/dt of the output (1 = as solved) */
 #define MBMAP_O_OVERRIDE 72          /* u16 feed override in force, % */
 #define MBMAP_O_HARD_STOPS 74        /* u32 the curve ended under a moving output (should stay 0) */
+#define MBMAP_O_LAT 84               /* f64 latitude of the setpoint, degrees (WGS84; NaN: not geographic or no position) */
+#define MBMAP_O_LON 88               /* f64 longitude, degrees */
+#define MBMAP_O_ALT 92               /* f64 height above the WGS84 ellipsoid, m */
 #define MBMAP_O_GEN_TAIL 98          /* u32 copy of GEN */
 
 /* ---- diagnostics block, input registers (offset from MBMAP_X_BASE(k)) -- */
@@ -238,6 +241,7 @@ typedef struct {
     uint16_t out_fault;
     uint64_t seq_jumps;
     int absent;                 /* no object has this id: the block stays all 0 (GEN 0) */
+    double lat_deg, lon_deg, alt_m; /* the setpoint as WGS84 geodetic (NaN: none) */
 } mbmap_object_t;
 
 /* Write the daemon block into regs[0 .. MBMAP_BLOCK-1]. */

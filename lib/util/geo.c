@@ -85,3 +85,49 @@ int geo_to_enu(const geo_enu_t *frame, double lat_deg, double lon_deg, double al
     enu_m[2] = cl * co * dx + cl * so * dy + sl * dz;
     return 0;
 }
+
+int geo_from_ecef(const double ecef_m[3], double *lat_deg, double *lon_deg, double *alt_m)
+{
+    const double x = ecef_m[0], y = ecef_m[1], z = ecef_m[2];
+    if (!isfinite(x) || !isfinite(y) || !isfinite(z))
+        return -GEO_ENOTFINITE;
+    const double a = GEO_WGS84_A_M, f = 1.0 / GEO_WGS84_INV_F;
+    const double b = a * (1.0 - f), e2 = f * (2.0 - f), ep2 = e2 / (1.0 - e2);
+    double p = hypot(x, y);
+    double lon = atan2(y, x);
+    /* parametric latitude beta, then geodetic latitude from it, to a fixed point */
+    double beta = atan2(z, (1.0 - f) * p), lat = 0.0;
+    for (int i = 0; i < 8; i++) {
+        double sb = sin(beta), cb = cos(beta);
+        double nl = atan2(z + ep2 * b * sb * sb * sb, p - e2 * a * cb * cb * cb);
+        double nb = atan2((1.0 - f) * sin(nl), cos(nl));
+        int done = fabs(nl - lat) < 1e-15;
+        lat = nl;
+        beta = nb;
+        if (done && i > 0)
+            break;
+    }
+    double sl = sin(lat), cl = cos(lat);
+    double n_m = a / sqrt(1.0 - e2 * sl * sl);
+    /* the better-conditioned of the two height forms */
+    double h = fabs(cl) > 0.7 ? p / cl - n_m : z / sl - n_m * (1.0 - e2);
+    *lat_deg = lat / DEG_TO_RAD;
+    *lon_deg = lon / DEG_TO_RAD;
+    *alt_m = h;
+    return 0;
+}
+
+int geo_from_enu(const geo_enu_t *frame, const double enu_m[3], double *lat_deg, double *lon_deg,
+                 double *alt_m)
+{
+    const double e = enu_m[0], n = enu_m[1], u = enu_m[2];
+    if (!isfinite(e) || !isfinite(n) || !isfinite(u))
+        return -GEO_ENOTFINITE;
+    const double sl = frame->sin_lat, cl = frame->cos_lat;
+    const double so = frame->sin_lon, co = frame->cos_lon;
+    /* the transpose of geo_to_enu's rotation */
+    double p[3] = {frame->ecef0_m[0] - so * e - sl * co * n + cl * co * u,
+                   frame->ecef0_m[1] + co * e - sl * so * n + cl * so * u,
+                   frame->ecef0_m[2] + cl * n + sl * u};
+    return geo_from_ecef(p, lat_deg, lon_deg, alt_m);
+}

@@ -67,4 +67,19 @@ int geo_enu_init(double lat0_deg, double lon0_deg, double alt0_m, geo_enu_t *fra
 int geo_to_enu(const geo_enu_t *frame, double lat_deg, double lon_deg, double alt_m,
                double enu_m[3]);
 
+/*
+ * ECEF metres to geodetic (degrees in [-90, 90] and (-180, 180], metres
+ * above the ellipsoid): Bowring's parametric-latitude iteration (B. R.
+ * Bowring, "Transformation from spatial to geographical coordinates",
+ * Survey Review 23(181), 1976), run to a fixed point; converges to
+ * ~1e-12 degrees within a few rounds anywhere within GEO_ALT_MAX_M of the
+ * ellipsoid.  Returns 0, or -GEO_ENOTFINITE.
+ */
+int geo_from_ecef(const double ecef_m[3], double *lat_deg, double *lon_deg, double *alt_m);
+
+/* The inverse of geo_to_enu: east/north/up metres about frame's origin to
+ * geodetic.  Returns 0, or -GEO_ENOTFINITE. */
+int geo_from_enu(const geo_enu_t *frame, const double enu_m[3], double *lat_deg, double *lon_deg,
+                 double *alt_m);
+
 #endif

@@ -6,6 +6,7 @@ several origins (polar, equatorial, both hemispheres, the date line, the
 real tracks' first points), heights from -500 m to 9 km.
 """
 import ctypes
+import math
 import os
 import random
 import sys
@@ -24,6 +25,11 @@ Vec3 = ctypes.c_double * 3
 lib.geo_enu_init.argtypes = [ctypes.c_double] * 3 + [ctypes.POINTER(Frame)]
 lib.geo_to_enu.argtypes = [ctypes.POINTER(Frame)] + [ctypes.c_double] * 3 + [ctypes.POINTER(Vec3)]
 lib.geo_to_ecef.argtypes = [ctypes.c_double] * 3 + [ctypes.POINTER(Vec3)]
+D = ctypes.c_double
+lib.geo_from_enu.argtypes = [ctypes.POINTER(Frame), ctypes.POINTER(Vec3)] + [ctypes.POINTER(D)] * 3
+lib.geo_from_ecef.argtypes = [ctypes.POINTER(Vec3)] + [ctypes.POINTER(D)] * 3
+# The inverse (ENU/ECEF -> geodetic): 1e-9 degree is 0.1 mm on the ground.
+TOL_DEG = 1e-9
 
 
 def proj_enu(lat0, lon0, h0):
@@ -42,6 +48,7 @@ def main():
     ecef = pyproj.Transformer.from_crs("EPSG:4979", "EPSG:4978", always_xy=True)
     worst = 0.0
     count = 0
+    inv_count = [0]
     for lat0, lon0, h0 in origins:
         # Given an origin, when random nearby points are converted by both,
         # then east/north/up agree to TOL_M.
@@ -59,6 +66,16 @@ def main():
             worst = max(worst, err)
             count += 1
             assert err < TOL_M, (lat0, lon0, lat, lon, h, tuple(out), (e, n, u))
+            # and back: pyproj's inverse of its own east/north/up against geo_from_enu
+            la, lo, hh = D(), D(), D()
+            assert lib.geo_from_enu(ctypes.byref(frame), ctypes.byref(Vec3(e, n, u)), ctypes.byref(la),
+                                    ctypes.byref(lo), ctypes.byref(hh)) == 0
+            rlat, rlon, rh = tr.transform(e, n, u, direction="INVERSE")
+            # longitude as a distance on the ground (meaningless at a pole)
+            dlon = ((lo.value - rlon + 180.0) % 360.0 - 180.0) * math.cos(math.radians(rlat))
+            assert abs(la.value - rlat) < TOL_DEG and abs(dlon) < TOL_DEG and abs(hh.value - rh) < TOL_M, \
+                (lat0, lon0, (e, n, u), (la.value, lo.value, hh.value), (rlat, rlon, rh))
+            inv_count[0] += 1
         # And ECEF itself against EPSG:4979 -> EPSG:4978.
         for _ in range(50):
             lat, lon, h = rnd.uniform(-90, 90), rnd.uniform(-180, 180), rnd.uniform(-500, 9000)
@@ -68,11 +85,18 @@ def main():
             err = max(abs(out[0] - x), abs(out[1] - y), abs(out[2] - z))
             worst = max(worst, err)
             assert err < TOL_M, (lat, lon, h, tuple(out), (x, y, z))
+            la, lo, hh = D(), D(), D()
+            assert lib.geo_from_ecef(ctypes.byref(Vec3(x, y, z)), ctypes.byref(la), ctypes.byref(lo),
+                                     ctypes.byref(hh)) == 0
+            rlon, rlat, rh = ecef.transform(x, y, z, direction="INVERSE")
+            assert abs(la.value - rlat) < TOL_DEG and abs(lo.value - rlon) < TOL_DEG and \
+                abs(hh.value - rh) < TOL_M, ((x, y, z), (la.value, lo.value, hh.value), (rlat, rlon, rh))
     # Given bad input, then a negative error and no exception.
     out = Vec3()
     assert lib.geo_to_ecef(float("nan"), 0.0, 0.0, ctypes.byref(out)) < 0
     assert lib.geo_to_ecef(91.0, 0.0, 0.0, ctypes.byref(out)) < 0
-    print(f"test_geo.py: {count} ENU points + ECEF points, worst difference to pyproj {worst:.3g} m")
+    print(f"test_geo.py: {count} ENU points + ECEF points, worst difference to pyproj {worst:.3g} m; "
+          f"{inv_count[0]} ENU -> lat/lon/alt inverses within {TOL_DEG:g} deg, {TOL_M:g} m")
     return 0
 
 
