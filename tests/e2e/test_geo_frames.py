@@ -28,6 +28,7 @@ import struct
 import subprocess
 import sys
 import tempfile
+import time
 import unittest
 
 import numpy as np
@@ -219,7 +220,8 @@ class GeoFrames(unittest.TestCase):
             return out
         try:
             count = M["MBMAP_O_ALT"] + 4
-            for _ in range(2000):
+            end = time.monotonic() + WAIT_S   # bounded; the daemon ends when done anyway
+            while time.monotonic() < end:
                 for k in (0, 1):
                     r = c.read_input_registers(obj_base(k), count=count)
                     if r.isError():
