@@ -19,6 +19,7 @@ struct can_logfile {
     size_t n, cap, next;
     int64_t start_ns;
     int64_t now_ns;
+    int64_t epoch_ns; /* added to engine time in output stamps */
     FILE *out;
     int out_is_stdout;
     char ifname[CANDUMP_IFNAME_MAX + 1];
@@ -189,12 +190,17 @@ void can_logfile_set_time(can_logfile_t *l, int64_t now_ns)
     l->now_ns = now_ns;
 }
 
+void can_logfile_set_epoch(can_logfile_t *l, int64_t epoch_ns)
+{
+    l->epoch_ns = epoch_ns;
+}
+
 int can_logfile_send(can_logfile_t *l, const canproto_frame_t *f)
 {
     char buf[256];
     if (!l->out)
         return 0;
-    int n = candump_format_line(buf, sizeof buf, l->now_ns / 1000, l->ifname, f);
+    int n = candump_format_line(buf, sizeof buf, (l->now_ns + l->epoch_ns) / 1000, l->ifname, f);
     if (n < 0 || fwrite(buf, 1, (size_t)n, l->out) != (size_t)n) {
         l->st.write_errors++;
         return -EIO;

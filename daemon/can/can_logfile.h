@@ -2,7 +2,7 @@
  * can_logfile.h - candump-log transport: waypoint frames are read from a candump
  * log (`candump -l` / `-L` text, '#' comment lines skipped) and replayed on
  * the engine's clock; frames sent are written as a candump -L log whose
- * timestamps are engine time.  The same codec as on a socket is exercised
+ * timestamps are engine time, or epoch times (can_logfile_set_epoch).  The same codec as on a socket is exercised
  * without a kernel, and logged bus traffic can be replayed.
  *
  * Input timing: frame k is due at engine time start_ns + (ts_k - ts_0); the
@@ -70,6 +70,11 @@ int can_logfile_send(can_logfile_t *l, const canproto_frame_t *f);
 
 /* Set the time stamped on output lines (engine time, ns). */
 void can_logfile_set_time(can_logfile_t *l, int64_t now_ns);
+
+/* Output stamps are engine time + epoch_ns (0 by default: engine time; the
+ * daemon's [can] log_time = wall sets the wall clock at engine time 0, so
+ * stamps are epoch times whose differences are exactly engine time). */
+void can_logfile_set_epoch(can_logfile_t *l, int64_t epoch_ns);
 
 /* 1 once every input frame was delivered (or there is no input). */
 int can_logfile_done(const can_logfile_t *l);

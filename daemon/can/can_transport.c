@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "can_socket.h"
 #include "can_logfile.h"
@@ -132,6 +133,14 @@ static int cfg_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
     }
     if (!strcmp(k, "log_ifname"))
         return get_str(kv, c->log_ifname, sizeof c->log_ifname, why, wl);
+    if (!strcmp(k, "log_time")) {
+        if (strcmp(kv->value, "wall") && strcmp(kv->value, "engine")) {
+            snprintf(why, wl, "log_time: '%s' is not wall or engine", kv->value);
+            return -CFG_EVALUE;
+        }
+        c->log_time_engine = !strcmp(kv->value, "engine");
+        return 0;
+    }
     if (!strcmp(k, "fd"))
         return cfg_get_bool(kv, &c->fd, why, wl);
     if (!strcmp(k, "bitrate"))
@@ -845,6 +854,13 @@ static int open_io(can_state_t *s, const uint32_t *rx_ids, unsigned nrx, char *w
         s->log = can_logfile_open(cfg->log_in[0] ? cfg->log_in : NULL,
                                   cfg->log_out[0] ? cfg->log_out : NULL, cfg->log_ifname, 0, why,
                                   wl);
+        if (s->log && !cfg->log_time_engine) {
+            /* epoch stamps: the wall clock now is the engine's now */
+            struct timespec ts;
+            clock_gettime(CLOCK_REALTIME, &ts);
+            can_logfile_set_epoch(s->log,
+                                  (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec - s->c->now_ns);
+        }
         return s->log ? 0 : -EIO;
     }
     s->bus = can_socket_new(cfg->interface, cfg->fd, rx_ids, nrx);

@@ -36,6 +36,7 @@ typedef struct {
     char log_in[PATH_MAX];
     char log_out[PATH_MAX];
     char log_ifname[16];
+    int log_time_engine; /* [can] log_time = engine: log_out stamps from 0, not epoch */
     int fd;
     double bitrate;
     double data_bitrate;

@@ -40,7 +40,7 @@ def conf(d, extra_can="", extra_obj="", output="can"):
     with open(path, "w") as fh:
         fh.write("[daemon]\nrate_hz = %d\nspeed = %d\nexit_when_done = yes\n"
                  "stop_timeout_s = 1\nstatus_interval_s = 0\n"
-                 "[can]\nlog_in = wp.log\nlog_out = sp.log\nlog_ifname = vcan0\n"
+                 "[can]\nlog_in = wp.log\nlog_out = sp.log\nlog_ifname = vcan0\nlog_time = engine\n"
                  # never drop late cycles here: at speed 30 the wall period is 333 us
                  # and a loaded machine (ASan, other jobs) would drop many (tested in test_can_port)
                  "max_late_ms = 0\n%s"
