@@ -962,6 +962,10 @@ static void setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
                                   s->err.bus_offs, s->err.frames};
         canproto_encode_status2_bus(0, &bus, &f);
         can_port_status2(s->port, k, &f);
+        canproto_st2_rejected_t rj;
+        canproto_st2_rejected_from(o->status.rejected_by, &rj);
+        canproto_encode_status2_rejected(0, &rj, &f);
+        can_port_status2(s->port, k, &f);
         can_port_setpoint(s->port, k, sp);
     }
 }

@@ -433,6 +433,30 @@ void canproto_encode_status2_faults(uint32_t id, const canproto_st2_faults_t *p,
     put_le(&out->data[6], 2, sat_max(p->cmd_refused, 0xFFFF));
 }
 
+void canproto_st2_rejected_from(const uint64_t rejected_by[ENGINE_ERROR_COUNT],
+                                canproto_st2_rejected_t *out)
+{
+    out->backwards = rejected_by[ENGINE_EBACKWARDS];
+    out->same_time = rejected_by[ENGINE_ESAMETIME];
+    out->speed = rejected_by[ENGINE_ESPEED];
+    out->accel = rejected_by[ENGINE_EACCEL];
+    out->unconfirmed = rejected_by[ENGINE_EUNCONFIRMED];
+    out->stale = rejected_by[ENGINE_ESTALE];
+    out->other = rejected_by[ENGINE_ENOTFINITE] + rejected_by[ENGINE_ERANGE] +
+                 rejected_by[ENGINE_ENUMERIC];
+}
+
+void canproto_encode_status2_rejected(uint32_t id, const canproto_st2_rejected_t *p,
+                                      canproto_frame_t *out)
+{
+    const uint64_t v[7] = {p->backwards,   p->same_time, p->speed, p->accel,
+                           p->unconfirmed, p->stale,     p->other};
+    frame_init(out, id, CANPROTO_STATUS2_DLEN, 0);
+    out->data[0] = CANPROTO_ST2_REJECTED;
+    for (int i = 0; i < 7; i++)
+        out->data[1 + i] = (uint8_t)sat_max(v[i], 0xFF);
+}
+
 /* ---- decoders ------------------------------------------------------------------------ */
 
 void canproto_encode_status2_bus(uint32_t id, const canproto_st2_bus_t *p, canproto_frame_t *out)
@@ -483,6 +507,24 @@ int canproto_decode_status2_faults(const canproto_frame_t *f, canproto_st2_fault
     out->out_lost = get_le(&f->data[1], 3);
     out->out_errors = get_le(&f->data[4], 2);
     out->cmd_refused = get_le(&f->data[6], 2);
+    return 0;
+}
+
+int canproto_decode_status2_rejected(const canproto_frame_t *f, canproto_st2_rejected_t *out)
+{
+    memset(out, 0, sizeof *out);
+    int page = canproto_status2_page(f);
+    if (page < 0)
+        return page;
+    if (page != CANPROTO_ST2_REJECTED)
+        return -CANPROTO_EMUX;
+    out->backwards = f->data[1];
+    out->same_time = f->data[2];
+    out->speed = f->data[3];
+    out->accel = f->data[4];
+    out->unconfirmed = f->data[5];
+    out->stale = f->data[6];
+    out->other = f->data[7];
     return 0;
 }
 
@@ -885,6 +927,13 @@ static const canproto_signal_t sig_st2[] = {
     SIG_U("ST2_RxErr", CANPROTO_ST2_BUS, 24, 8, 1, ""),
     SIG_U("ST2_BusOffs", CANPROTO_ST2_BUS, 32, 16, 1, ""),
     SIG_U("ST2_ErrFrames", CANPROTO_ST2_BUS, 48, 16, 1, ""),
+    SIG_U("ST2_RejBackwards", CANPROTO_ST2_REJECTED, 8, 8, 1, ""),
+    SIG_U("ST2_RejSameTime", CANPROTO_ST2_REJECTED, 16, 8, 1, ""),
+    SIG_U("ST2_RejSpeed", CANPROTO_ST2_REJECTED, 24, 8, 1, ""),
+    SIG_U("ST2_RejAccel", CANPROTO_ST2_REJECTED, 32, 8, 1, ""),
+    SIG_U("ST2_RejUnconfirmed", CANPROTO_ST2_REJECTED, 40, 8, 1, ""),
+    SIG_U("ST2_RejStale", CANPROTO_ST2_REJECTED, 48, 8, 1, ""),
+    SIG_U("ST2_RejOther", CANPROTO_ST2_REJECTED, 56, 8, 1, ""),
 };
 static const canproto_signal_t sig_rpdo[] = {
     SIG_S("Target_Position_607A", -1, 0, 32, 1, "inc"),
@@ -990,11 +1039,15 @@ int canproto_dbc(char *buf, size_t len)
          "csv/stdout output lost lines, 0x46 safety monitor fault (object held until clear), 0x47 "
          "a CiA 402 "
          "drive left Operation Enabled, 0x48 a command refused (object not writable)\";\n"
-         "CM_ SG_ %u ST2_Page \"STATUS2 page: 1 faults, 5 bus; counters saturate at their "
-         "maximum\";\n"
+         "CM_ SG_ %u ST2_Page \"STATUS2 page: 1 faults, 2 rejected waypoints per reason, 5 bus; "
+         "counters saturate at their maximum\";\n"
          "CM_ SG_ %u ST2_OutLost \"setpoint lines lost by the object's csv/stdout outputs\";\n"
          "CM_ SG_ %u ST2_OutErrors \"failed writes of the object's csv/stdout outputs\";\n"
          "CM_ SG_ %u ST2_CmdRefused \"command frames refused: the object is not writable\";\n"
+         "CM_ SG_ %u ST2_RejSpeed \"waypoints refused per reason (engine_error: backwards 3, "
+         "same time 4, speed 5, acceleration 11, unconfirmed 12, stale 13; other: not finite 1, "
+         "out of range 2, numeric 10), saturating at 255; exact counts in the Modbus diagnostics "
+         "block\";\n"
          "CM_ SG_ %u ST2_BusState \"CAN bus state from the controller's error frames\";\n"
          "CM_ SG_ %u ST2_TxErr \"TX error counter, as last reported (CAN_ERR_CNT)\";\n"
          "CM_ SG_ %u ST2_RxErr \"RX error counter, as last reported (CAN_ERR_CNT)\";\n"
@@ -1003,7 +1056,8 @@ int canproto_dbc(char *buf, size_t len)
          CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_WAYPOINT_BASE, CANPROTO_ID_STATUS_BASE,
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
-         CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE);
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
+         CANPROTO_ID_STATUS2_BASE);
     emit(buf, len, &pos,
          "BA_DEF_ BO_ \"VFrameFormat\" ENUM \"StandardCAN\",\"ExtendedCAN\",\"reserved\","
          "\"J1939PG\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\","
@@ -1036,12 +1090,13 @@ int canproto_dbc(char *buf, size_t len)
          CANPROTO_STERR_OUT_OF_ORDER, CANPROTO_STERR_TX_DROPPED, CANPROTO_STERR_BUS_DOWN,
          CANPROTO_STERR_OUTPUT, CANPROTO_STERR_SAFETY, CANPROTO_STERR_DRIVE,
          CANPROTO_STERR_REFUSED);
-    emit(buf, len, &pos, "VAL_ %u ST2_Page %d \"faults\" %d \"bus\" ;\n", CANPROTO_ID_STATUS2_BASE,
-         CANPROTO_ST2_FAULTS, CANPROTO_ST2_BUS);
+    emit(buf, len, &pos, "VAL_ %u ST2_Page %d \"faults\" %d \"rejected\" %d \"bus\" ;\n",
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_ST2_FAULTS, CANPROTO_ST2_REJECTED, CANPROTO_ST2_BUS);
     emit(buf, len, &pos,
          "VAL_ %u ST2_BusState 1 \"error-active\" 2 \"error-warning\" 3 \"error-passive\" "
          "4 \"bus-off\" 5 \"down\" ;\n",
          CANPROTO_ID_STATUS2_BASE);
+
     for (unsigned k = 1; k <= 3; k++)
         emit(buf, len, &pos,
              "VAL_ %u Controlword_6040 0 \"disable voltage\" 2 \"quick stop\" 6 \"shutdown\" "

@@ -56,6 +56,10 @@
  *    1 FAULTS: 1..3 setpoint lines lost by the object's csv/stdout outputs
  *      (uint24), 4..5 failed output writes (uint16), 6..7 commands refused
  *      (uint16: the object is not writable, [object] writable = no).
+ *    2 REJECTED: waypoints the engine refused, per reason (uint8 each,
+ *      saturating at 255; the exact 32-bit counts are in the object's Modbus
+ *      diagnostics block): 1 backwards, 2 same time, 3 speed, 4 acceleration,
+ *      5 unconfirmed, 6 stale, 7 other (not finite, out of range, numeric).
  *    5 BUS: 1 bus state (1 error-active, 2 error-warning, 3 error-passive,
  *      4 bus-off, 5 interface down; from the kernel's error frames,
  *      lib/proto/canerr.h), 2 TX error counter, 3 RX error counter (as last
@@ -125,9 +129,10 @@ typedef struct {
 /* STATUS2 pages (byte 0).  New pages take the next free number; a page is
  * 7 bytes (1..7), little-endian fields, counters saturating. */
 typedef enum {
-    CANPROTO_ST2_FAULTS = 1, /* output and command faults (canproto_st2_faults_t) */
-    CANPROTO_ST2_BUS = 5,    /* CAN bus state from error frames (canproto_st2_bus_t) */
-    CANPROTO_ST2_PAGES = 8   /* pages are 1 .. CANPROTO_ST2_PAGES - 1 */
+    CANPROTO_ST2_FAULTS = 1,   /* output and command faults (canproto_st2_faults_t) */
+    CANPROTO_ST2_REJECTED = 2, /* waypoints refused, per reason (canproto_st2_rejected_t) */
+    CANPROTO_ST2_BUS = 5,      /* CAN bus state from error frames (canproto_st2_bus_t) */
+    CANPROTO_ST2_PAGES = 8     /* pages are 1 .. CANPROTO_ST2_PAGES - 1 */
 } canproto_st2_page_t;
 
 /* Waypoint multiplexer values (byte 0). */
@@ -419,6 +424,27 @@ int canproto_status2_page(const canproto_frame_t *f);
 
 /* Decode STATUS2 page 1.  Returns 0, -CANPROTO_ELEN, or -CANPROTO_EMUX (another page). */
 int canproto_decode_status2_faults(const canproto_frame_t *f, canproto_st2_faults_t *out);
+
+/* STATUS2 page 2, REJECTED: waypoints refused per reason (uint8, saturating). */
+typedef struct {
+    uint64_t backwards;   /* ENGINE_EBACKWARDS */
+    uint64_t same_time;   /* ENGINE_ESAMETIME */
+    uint64_t speed;       /* ENGINE_ESPEED */
+    uint64_t accel;       /* ENGINE_EACCEL */
+    uint64_t unconfirmed; /* ENGINE_EUNCONFIRMED */
+    uint64_t stale;       /* ENGINE_ESTALE */
+    uint64_t other;       /* ENGINE_ENOTFINITE + ENGINE_ERANGE + ENGINE_ENUMERIC */
+} canproto_st2_rejected_t;
+
+/* The page's counters from an engine_status_t's rejected_by[]. */
+void canproto_st2_rejected_from(const uint64_t rejected_by[ENGINE_ERROR_COUNT],
+                                canproto_st2_rejected_t *out);
+
+void canproto_encode_status2_rejected(uint32_t id, const canproto_st2_rejected_t *p,
+                                      canproto_frame_t *out);
+
+/* Decode STATUS2 page 2.  Returns 0, -CANPROTO_ELEN, or -CANPROTO_EMUX (another page). */
+int canproto_decode_status2_rejected(const canproto_frame_t *f, canproto_st2_rejected_t *out);
 
 /* ---- waypoint reassembly ------------------------------------------------------------ */
 

@@ -234,8 +234,9 @@ class CanDaemon(unittest.TestCase):
         self.assertIn(0x41, [int(s["ST_LastErr"]) for _, s in st])
 
     # Given waypoint 70 of the track moved 500 m east (a position jump no
-    # boat makes in 0.2 s), then STATUS counts exactly one rejection and
-    # trajd's log names it by its bus, frame id and sequence number.
+    # boat makes in 0.2 s), then STATUS counts exactly one rejection,
+    # trajd's log names it by its bus, frame id and sequence number, and
+    # STATUS2 page 2 counts it under its reason.
     def test_rejection_logged(self):
         d = self.sub("spike")
         xyz = os.path.join(d, "track.csv")
@@ -254,6 +255,17 @@ class CanDaemon(unittest.TestCase):
         self.assertEqual(len(lines), 1, p.stderr)
         self.assertIn("object 'boat': can vcan0 id 0x680 seq 70: rejected (", lines[0])
         self.assertIn(" t=%.3f s" % float(t), lines[0])
+        # and STATUS2 page 2 counts it under the reason the log gives
+        # (canmatrix decodes the page from config/trajd.dbc)
+        why = lines[0].split(": rejected (")[1].split(")")[0]
+        sig = {"backwards": "ST2_RejBackwards", "same_time": "ST2_RejSameTime",
+               "speed": "ST2_RejSpeed", "accel": "ST2_RejAccel",
+               "unconfirmed": "ST2_RejUnconfirmed", "stale": "ST2_RejStale"}.get(why, "ST2_RejOther")
+        pages = [p2 for _, p2 in ct.decode_by_id(os.path.join(d, "sp.log"), 0x6D0)
+                 if int(p2["ST2_Page"]) == 2]
+        self.assertGreater(len(pages), 0)
+        self.assertEqual(int(pages[-1][sig]), 1, pages[-1])
+        self.assertEqual(sum(int(v) for k, v in pages[-1].items() if k.startswith("ST2_Rej")), 1)
 
     def run_commands(self, name, obj):
         """Object boat (keys obj) with its output on CAN and on a full disk

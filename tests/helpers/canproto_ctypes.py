@@ -68,6 +68,11 @@ class St2Bus(ctypes.Structure):
                 ("bus_offs", ctypes.c_uint64), ("err_frames", ctypes.c_uint64)]
 
 
+class St2Rejected(ctypes.Structure):
+    _fields_ = [(n, ctypes.c_uint64) for n in ("backwards", "same_time", "speed", "accel",
+                                               "unconfirmed", "stale", "other")]
+
+
 class Status(ctypes.Structure):
     _fields_ = [("state", ctypes.c_uint8), ("flags", ctypes.c_uint8),
                 ("last_seq", ctypes.c_uint32), ("free", ctypes.c_uint32),
@@ -91,6 +96,8 @@ def load():
     lib.canproto_decode_status2_faults.argtypes = [P(Frame), P(St2Faults)]
     lib.canproto_encode_status2_bus.argtypes = [ctypes.c_uint32, P(St2Bus), P(Frame)]
     lib.canproto_decode_status2_bus.argtypes = [P(Frame), P(St2Bus)]
+    lib.canproto_encode_status2_rejected.argtypes = [ctypes.c_uint32, P(St2Rejected), P(Frame)]
+    lib.canproto_decode_status2_rejected.argtypes = [P(Frame), P(St2Rejected)]
     lib.canproto_encode_cia402.argtypes = [P(Ids), ctypes.c_uint, ctypes.c_double, P(Frame)]
     lib.canproto_cia402_pos_m.argtypes = [P(Ids), ctypes.c_uint, ctypes.c_int32]
     lib.canproto_cia402_pos_m.restype = ctypes.c_double

@@ -237,6 +237,41 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
         g.data[0] = 1
         self.assertLess(LIB.canproto_decode_status2_bus(ctypes.byref(g), ctypes.byref(q)), 0)
 
+    # Given STATUS2 page 2 (waypoints refused per reason) from our encoder,
+    # then canmatrix decodes each reason's counter through the multiplexor,
+    # saturated at 255; the VAL_ table names the page; and a page 2 canmatrix
+    # encodes from the DBC is what our decoder reads (page 1 is not page 2).
+    def test_status2_rejected(self):
+        fr = frame_of(self.db, 0x6D0)
+        names = ("backwards", "same_time", "speed", "accel", "unconfirmed", "stale", "other")
+        sig = {"backwards": "ST2_RejBackwards", "same_time": "ST2_RejSameTime",
+               "speed": "ST2_RejSpeed", "accel": "ST2_RejAccel",
+               "unconfirmed": "ST2_RejUnconfirmed", "stale": "ST2_RejStale", "other": "ST2_RejOther"}
+        page = fr.signal_by_name("ST2_Page")
+        self.assertEqual(str(page.values.get(2, page.values.get("2"))), "rejected")
+        for vals in ([0] * 7, list(range(1, 8)), [255, 256, 1000, 2 ** 40, 0, 254, 7],
+                     [self.rng.randrange(300) for _ in range(7)]):
+            p = cp.St2Rejected(*vals)
+            f = cp.Frame()
+            LIB.canproto_encode_status2_rejected(0x6D0, ctypes.byref(p), ctypes.byref(f))
+            self.assertEqual((f.id, f.len), (0x6D0, 8))
+            d = decode(self.db, f)
+            self.assertEqual(d["ST2_Page"], 2)
+            for n, v in zip(names, vals):
+                self.assertEqual(d[sig[n]], min(v, 255), n)
+            self.assertNotIn("ST2_OutLost", d)
+            data = fr.encode(dict({"ST2_Page": 2},
+                                  **{sig[n]: raw(fr, sig[n], d[sig[n]]) for n in names}))
+            g = cp.Frame()
+            g.id, g.len = 0x6D0, 8
+            for i, b in enumerate(bytes(data)):
+                g.data[i] = b
+            q = cp.St2Rejected()
+            self.assertEqual(LIB.canproto_decode_status2_rejected(ctypes.byref(g), ctypes.byref(q)), 0)
+            self.assertEqual([getattr(q, n) for n in names], [d[sig[n]] for n in names])
+        g.data[0] = 1
+        self.assertLess(LIB.canproto_decode_status2_rejected(ctypes.byref(g), ctypes.byref(q)), 0)
+
     # Given a CiA 402 axis, then canmatrix reads the target position in increments.
     def test_cia402(self):
         ids = cp.Ids()
