@@ -433,6 +433,10 @@ int main(int argc, char **argv)
                 d.stats.out_fault ? ", last write error: " : "",
                 d.stats.out_fault ? strerror(d.stats.out_errno) : "", CORE_EXIT_OUTPUT_LOST);
         rc = CORE_EXIT_OUTPUT_LOST;
+    } else if (rc == 0 && d.stats.no_input) {
+        log_msg(LOG_ERR, "%llu replayed object(s) had no usable waypoint: exit status %d",
+                (unsigned long long)d.stats.no_input, CORE_EXIT_NO_INPUT);
+        rc = CORE_EXIT_NO_INPUT;
     }
     if (d.sig_fd >= 0)
         close(d.sig_fd);

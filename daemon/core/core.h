@@ -163,6 +163,8 @@ typedef struct {
     uint64_t out_errors; /* failed writes (not EAGAIN) */
     int out_errno;       /* errno of the last one */
     int out_fault;       /* 1 once an output write failed */
+    uint64_t no_input;   /* objects whose replayed track had no usable waypoint: trajd
+                                     * exits with CORE_EXIT_NO_INPUT at the end */
     int exit_code;       /* nonzero: a transport asks the daemon to end now with
                                      * this status (stdout's reader left: CORE_EXIT_EPIPE);
                                      * the tick stops the loop with it */
@@ -170,6 +172,7 @@ typedef struct {
 
 /* Exit statuses of trajd beyond sysexits.h (daemon/README.md "Output faults are errors"). */
 #define CORE_EXIT_OUTPUT_LOST 74 /* EX_IOERR: setpoint lines were lost by an output */
+#define CORE_EXIT_NO_INPUT 65    /* EX_DATAERR: a replayed track had no usable waypoint */
 #define CORE_EXIT_EPIPE                                                                            \
     141 /* stdout's reader went away (128 + SIGPIPE, what a shell
                                      * reports for a filter ended by SIGPIPE) */

@@ -94,6 +94,35 @@ static int set_datum(cfg_t *cfg, int *line, char *why, size_t wl)
     return 0;
 }
 
+/*
+ * 0 if some waypoint of trk passes the engine's checks on a waypoint alone
+ * (engine_waypoint_check with the object's settings); else -CFG_EVALUE and
+ * why says how many were refused for which reason and the first line: no
+ * engine with these settings would accept any of them (the neighbours only
+ * refuse more), so the object could never move.
+ */
+static int check_usable(const cfg_obj_t *o, const replay_transport_obj_cfg_t *r, char *why,
+                        size_t wl)
+{
+    size_t nf = 0, nr = 0;
+    for (size_t k = 0; k < r->trk.n; k++) {
+        int rc = engine_waypoint_check(&o->engine, &r->trk.wp[k]);
+        if (rc == 0)
+            return 0;
+        if (rc == -ENGINE_ERANGE)
+            nr++;
+        else
+            nf++;
+    }
+    snprintf(why, wl,
+             "object '%s' replay.track: %s: no usable waypoint: all %zu rejected (%s %zu, %s %zu; "
+             "max_abs_m = %g), the first at line %u",
+             o->name, r->path, r->trk.n, engine_reason_name(ENGINE_ERANGE), nr,
+             engine_reason_name(ENGINE_ENOTFINITE), nf, o->engine.max_abs_m,
+             r->trk.line ? (unsigned)r->trk.line[0] : 0u);
+    return -CFG_EVALUE;
+}
+
 /* Load every replayed object's track, so a bad file rejects the config. */
 static int check(cfg_t *cfg, int *line, char *why, size_t wl)
 {
@@ -134,12 +163,20 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
             return -CFG_EVALUE;
         }
     }
-    return set_datum(cfg, line, why, wl);
+    int rc = set_datum(cfg, line, why, wl);
+    for (unsigned i = 0; i < cfg->nobj && rc == 0; i++) { /* positions about the datum */
+        const cfg_obj_t *o = &cfg->obj[i];
+        const replay_transport_obj_cfg_t *r = o->tcfg[transport_index(&replay_transport)];
+        if (o->input == &replay_transport && (rc = check_usable(o, r, why, wl)) < 0)
+            *line = r->line;
+    }
+    return rc;
 }
 
 typedef struct {
     replay_t *r; /* per object index (NULL if not replayed) */
     unsigned n;
+    core_t *c;
 } replay_transport_t;
 
 static int open_(core_t *c, void **state, char *why, size_t wl)
@@ -153,6 +190,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
         return -12; /* -ENOMEM */
     }
     s->n = c->nobj;
+    s->c = c;
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i];
         if (o->cfg->input != &replay_transport)
@@ -215,8 +253,11 @@ static void pre_tick(void *state, obj_t *o, int64_t now_ns)
     engine_status(o->engine, &st);
     if (st.accepted == 0) {
         const replay_transport_obj_cfg_t *rc = cfg_obj_transport(o->cfg, &replay_transport);
-        log_msg(LOG_WARNING, "object %s: replay.track %s: no usable waypoint: all %zu rejected",
-                o->cfg->name, rc->path, r->trk->n);
+        log_msg(LOG_ERR,
+                "object %s: replay.track %s: no usable waypoint: all %zu rejected; trajd "
+                "will exit with status %d",
+                o->cfg->name, rc->path, r->trk->n, CORE_EXIT_NO_INPUT);
+        s->c->stats->no_input++;
     }
 }
 

@@ -894,20 +894,27 @@ static int judge(engine_t *e, int closing)
     return rc;
 }
 
-int engine_push(engine_t *e, const engine_waypoint_t *wp)
+int engine_waypoint_check(const engine_config_t *cfg, const engine_waypoint_t *wp)
 {
-    int rc;
-
     for (int k = 0; k < AX; k++)
         if (!isfinite(wp->pos_m[k]))
-            return reject_wp(e, ENGINE_ENOTFINITE, wp);
+            return -ENGINE_ENOTFINITE;
     if (!isfinite(wp->t_s))
-        return reject_wp(e, ENGINE_ENOTFINITE, wp);
+        return -ENGINE_ENOTFINITE;
     for (int k = 0; k < AX; k++)
-        if (fabs(wp->pos_m[k]) > e->cfg.max_abs_m)
-            return reject_wp(e, ENGINE_ERANGE, wp);
+        if (fabs(wp->pos_m[k]) > cfg->max_abs_m)
+            return -ENGINE_ERANGE;
     if (fabs(wp->t_s) > ENGINE_T_ABS_MAX_S)
-        return reject_wp(e, ENGINE_ERANGE, wp);
+        return -ENGINE_ERANGE;
+    return 0;
+}
+
+int engine_push(engine_t *e, const engine_waypoint_t *wp)
+{
+    int rc = engine_waypoint_check(&e->cfg, wp);
+
+    if (rc < 0)
+        return reject_wp(e, -rc, wp);
     /* room for this waypoint (and for the copies MULTIPLE adds) */
     if (buffered(e) + 1 + (e->mult ? 4 : 0) > e->cfg.capacity)
         return reject(e, ENGINE_EFULL);

@@ -317,6 +317,15 @@ void engine_free(engine_t *e);
 int engine_push(engine_t *e, const engine_waypoint_t *wp);
 
 /*
+ * The checks engine_push makes on wp alone, before any neighbour is seen:
+ * 0, -ENGINE_ENOTFINITE or -ENGINE_ERANGE (cfg->max_abs_m, |t_s| > 1e12 s).
+ * A waypoint that fails them is refused by every engine with cfg; one that
+ * passes may still be refused with its neighbours.  Pure (config checks:
+ * a track none of whose waypoints passes has nothing usable).
+ */
+int engine_waypoint_check(const engine_config_t *cfg, const engine_waypoint_t *wp);
+
+/*
  * The oldest unread refused waypoint (reason and all), 1, or 0 if none.
  * The engine keeps the last ENGINE_REJECTIONS_KEPT; older unread ones are
  * counted in status.rejections_unreported (the counters stay exact).

@@ -284,8 +284,12 @@ class TestRejectionsReported(unittest.TestCase):
 @unittest.skipUnless(os.access(TRAJD, os.X_OK), "trajd not built in this tree")
 class TestTrajdNothingUsable(unittest.TestCase):
     def test_exit_when_done(self):
-        # Given trajd with exit_when_done replaying a track with no usable
-        # waypoint, then it exits (0) and says why in a warning
+        # Given trajd replaying a track with no usable waypoint (every x is
+        # 1e300, above max_abs_m), then --check-config refuses it
+        # (exit 78, EX_CONFIG) at the replay.track line with the counts per
+        # reason and the first line, and trajd refuses to start with the same
+        # message instead of running with nothing (it exited 0, or waited for
+        # ever without exit_when_done)
         with tempfile.TemporaryDirectory() as tmp:
             write(os.path.join(tmp, "huge.csv"),
                   "t,x,y,z\n" + "".join("%d,1e300,0,0\n" % i for i in range(60)))
@@ -293,13 +297,26 @@ class TestTrajdNothingUsable(unittest.TestCase):
             write(conf, "[daemon]\nspeed = 100\nexit_when_done = yes\nstatus_interval_s = 0\n"
                         "[object.boat]\ninput = replay\nreplay.track = huge.csv\n"
                         "output = stdout\n")
-            # 60 s of track at speed 100: under a second of wall time; the
-            # bound only stops a daemon that would wait for ever
-            rc, _, err = bounded_run([TRAJD, "-f", "-c", conf], limit_bytes=5_000_000,
-                                     timeout=60)
+            msg = ("%s:7: [replay]: object 'boat' replay.track: %s/huge.csv: no usable waypoint: "
+                   "all 60 rejected (range 60, not_finite 0; max_abs_m = 1e+07), the first at "
+                   "line 2" % (conf, tmp))
+            p = subprocess.run([TRAJD, "--check-config", conf], capture_output=True, text=True,
+                               timeout=60)
+            self.assertEqual(p.returncode, 78, p.stdout + p.stderr)
+            self.assertIn(msg, p.stdout + p.stderr)
+            for when_done in ("yes", "no"):
+                write(conf + ".2", open(conf).read().replace("exit_when_done = yes",
+                                                             "exit_when_done = " + when_done))
+                rc, _, err = bounded_run([TRAJD, "-f", "-c", conf + ".2"],
+                                         limit_bytes=5_000_000, timeout=60)
+                self.assertEqual(rc, 78, err[-500:])
+                self.assertIn(msg.replace(conf, conf + ".2"), err)
+            # one usable row among them: accepted by the check, the object
+            # rests there, the 59 others are reported, exit 0
+            write(os.path.join(tmp, "huge.csv"),
+                  "t,x,y,z\n" + "".join("%d,1e300,0,0\n" % i for i in range(59)) + "59,1,2,3\n")
+            rc, _, err = bounded_run([TRAJD, "-f", "-c", conf], limit_bytes=5_000_000, timeout=60)
             self.assertEqual(rc, 0, err[-500:])
-            self.assertIn("object boat: replay.track %s/huge.csv: no usable waypoint: all 60 "
-                          "rejected" % tmp, err)
 
 
 if __name__ == "__main__":
