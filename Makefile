@@ -316,6 +316,7 @@ install: $(BINS) $(MANS) $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/trajd
 	install -m 644 $(LIB_HEADERS) $(DESTDIR)$(PREFIX)/include/trajd/
 	install -m 644 config/trajd.dbc config/trajd.lua $(DESTDIR)$(PREFIX)/share/trajd/
 	install -m 644 config/trajd.conf config/demo.conf daemon/doc/examples/trajd_client.c \
+		daemon/doc/examples/trajd_can_sender.py daemon/doc/examples/trajd_modbus_hmi.py \
 		$(DESTDIR)$(DOCDIR)/examples/
 	install -m 644 tests/data/n2k_furuno_figure8_src52.csv tests/data/ATTRIBUTION.md \
 		$(DESTDIR)$(PREFIX)/share/trajd/tracks/

@@ -23,6 +23,7 @@ make --no-print-directory install BUILD="$BUILD" DESTDIR="$dest" PREFIX="$PREFIX
 for f in bin/trajd bin/trajreplay bin/trajsurf share/man/man8/trajd.8 share/man/man5/trajd.conf.5 \
          share/man/man1/trajreplay.1 share/man/man1/trajsurf.1 share/trajd/trajd.dbc share/trajd/trajd.lua \
          share/doc/trajd/examples/trajd.conf share/doc/trajd/examples/trajd_client.c \
+         share/doc/trajd/examples/trajd_can_sender.py share/doc/trajd/examples/trajd_modbus_hmi.py \
          lib/libtrajd.a lib/libtrajd.so lib/libtrajd.so.0 lib/pkgconfig/trajd.pc \
          include/trajd/engine.h include/trajd/motion.h; do
     [ -e "$dest$PREFIX/$f" ] || fail "missing $PREFIX/$f"

@@ -4,7 +4,8 @@
 # delivers them only to sockets whose CAN_RAW_ERR_FILTER has that class, as
 # it does for a controller's reports.  trajd (error filter set) must publish
 # each state on Modbus (can_state, daemon register 18, read by mbpoll) and
-# count them (registers 64..79).  Classes (linux/can/error.h): 004 CRTL with
+# count them (registers 64..79).  Then the example CAN sender streams a
+# track into trajd, paced by STATUS.  Classes (linux/can/error.h): 004 CRTL with
 # data[1] 04 RX warning / 20 TX passive, 040 BUSOFF, 100 RESTARTED, 200 CNT
 # (data[6] TX, data[7] RX error counter).
 out=$1
@@ -50,6 +51,10 @@ cansend vcan0 20000100#0000000000000000; expect_state 1 "restarted"
 [ "$(reg 64 3:int)" = 4 ] || fail "can_err_frames $(reg 64 3:int), wanted 4"
 [ "$(reg 70 3:int)" = 1 ] || fail "can_bus_offs $(reg 70 3:int), wanted 1"
 [ "$(reg 78)" = 128 ] && [ "$(reg 79)" = 5 ] || fail "error counters $(reg 78)/$(reg 79), wanted 128/5"
+# The shipped example sender (daemon/doc/examples/trajd_can_sender.py) paces a
+# track on trajd's STATUS: every waypoint accepted, finished (its exit status).
+/usr/bin/python3 daemon/doc/examples/trajd_can_sender.py "$out/dtrack.csv" --channel vcan0 \
+    --timeout 60 > "$out/sender.txt" 2>&1 || { cat "$out/sender.txt"; fail "example sender"; }
 kill -0 $tp || fail "trajd died"
 kill -TERM $tp; wait $tp; rc=$?
 tp=
