@@ -5,9 +5,12 @@
    candump log; trajd's output (SETPOINT, SETPOINT_FD, STATUS) written as a
    candump log.  Both logs are read by python-can and written as one pcap
    (LINKTYPE_CAN_SOCKETCAN, the format of a live capture on can0).
-2. tshark, with the dissector loaded (-X lua_script:), prints every trajd.*
-   field named after a signal of the DBC (tshark refuses an unknown field, so
-   a signal the dissector lacks fails here).
+2. To that capture are added, for every frame and every multiplexer value of
+   the DBC, one frame canmatrix encodes with random values, so every signal
+   occurs; tshark, with the dissector loaded (-X lua_script:), prints every
+   trajd.* field named after a signal of the DBC, and each signal must be
+   shown at least once (tshark prints an unknown field as empty, so this is
+   what catches a signal the dissector lacks).
 3. Frame by frame, signal by signal, tshark's values equal canmatrix's
    decoding of the same bytes with config/trajd.dbc (multiplexed signals
    only when selected; a setpoint position 0x80000000 is shown as
@@ -15,6 +18,7 @@
 Every frame type must occur, so the comparison cannot pass empty.
 """
 import os
+import random
 import shutil
 import struct
 import subprocess
@@ -52,6 +56,27 @@ def write_pcap(msgs, path):
             f.write(struct.pack("<IIII", us // 1000000, us % 1000000, len(rec), len(rec)) + rec)
 
 
+def synthetic(frames):
+    """One message per frame and multiplexer value, encoded by canmatrix from
+    random raw values within each signal's range."""
+    rng = random.Random(14)
+    out, t = [], 1e6
+    for base, fr in sorted(frames.items()):
+        muxes = sorted({s.mux_val for s in fr.signals if s.mux_val is not None}) or [None]
+        for mv in muxes:
+            vals = {}
+            for s in fr.signals:
+                if s.is_multiplexer:
+                    vals[s.name] = mv
+                elif s.mux_val in (None, mv):
+                    hi = (1 << (s.size - 1)) - 1 if s.is_signed else (1 << s.size) - 1
+                    vals[s.name] = rng.randint(0, min(hi, 10 ** 6))
+            t += 0.001
+            out.append(can.Message(timestamp=t, arbitration_id=base, is_extended_id=False,
+                                   is_fd=fr.is_fd, data=bytes(fr.encode(vals))))
+    return out
+
+
 class DissectorTest(unittest.TestCase):
     @unittest.skipUnless(shutil.which("tshark"), "tshark not installed (make deps)")
     def test_fields_equal_canmatrix(self):
@@ -78,6 +103,7 @@ class DissectorTest(unittest.TestCase):
                 reader = can.CanutilsLogReader(os.path.join(d, "c.log"))
                 msgs += list(reader)
                 reader.stop()
+            msgs += synthetic(frames)
             pcap = os.path.join(d, "trajd.pcap")
             write_pcap(msgs, pcap)
             cmd = ["tshark", "-n", "-X", "lua_script:" + LUA, "-r", pcap, "-T", "fields",
@@ -87,8 +113,9 @@ class DissectorTest(unittest.TestCase):
             self.assertEqual(out.returncode, 0, out.stderr)
             rows = out.stdout.splitlines()
             self.assertEqual(len(rows), len(msgs))
-            seen = {}
+            seen, shown = {}, set()
             for m, row in zip(msgs, rows):
+                shown |= {s for i, s in enumerate(signals) if row.split("\t")[2 + i] != ""}
                 cols = row.split("\t")
                 base = m.arbitration_id & ~0xF
                 if base not in BASES:
@@ -97,6 +124,7 @@ class DissectorTest(unittest.TestCase):
                 seen[base] = seen.get(base, 0) + 1
                 self.check_frame(frames[base], m, cols, signals)
             self.assertEqual(set(seen), set(BASES), seen)
+            self.assertEqual(set(signals) - shown, set())
 
     def check_frame(self, fr, m, cols, signals):
         where = "%s %s#%s" % (m.timestamp, hex(m.arbitration_id), bytes(m.data).hex())
