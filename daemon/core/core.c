@@ -154,8 +154,22 @@ static void step_engines(core_t *c, int64_t now_ns)
             if (o->cfg->input->pre_tick)
                 o->cfg->input->pre_tick(c->tstate[transport_index(o->cfg->input)], o, now_ns);
         }
-    for (unsigned i = 0; i < c->nobj; i++)
-        engine_tick(c->obj[i].engine, now_ns, &c->obj[i].sp);
+    for (unsigned i = 0; i < c->nobj; i++) {
+        obj_t *o = &c->obj[i];
+        if (!o->retiring) {
+            engine_tick(o->engine, now_ns, &o->sp);
+            continue;
+        }
+        /* the predecessor brakes; once at rest the new engine starts there */
+        engine_tick(o->retiring, now_ns, &o->sp);
+        if ((o->sp.flags & ENGINE_SP_HOLD) && o->sp.state != ENGINE_STATE_STREAMING &&
+            o->sp.state != ENGINE_STATE_UNDERRUN) {
+            if (!(o->sp.flags & ENGINE_SP_NO_POSITION))
+                (void)engine_set_position(o->engine, o->sp.pos_m); /* within max_abs_m: checked */
+            engine_free(o->retiring);
+            o->retiring = NULL;
+        }
+    }
 }
 
 /*
@@ -296,13 +310,40 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
     return 0;
 }
 
+/* A reloaded object that gets a new engine while its old one moves: the old
+ * one is kept braking to rest (engine_stop) and hands over there. */
+static void retire_moving(obj_t *o, core_t *prev)
+{
+    obj_t *q = prev && !prev->stopping ? core_obj_find(prev, o->name) : NULL;
+    if (!q)
+        return;
+    if (q->retiring) { /* still braking from an earlier reload */
+        o->retiring = q->retiring;
+        q->retiring = NULL;
+    } else if (!o->carried && q->engine && q->sp.cycle != 0 &&
+               !(q->sp.flags & (ENGINE_SP_HOLD | ENGINE_SP_NO_POSITION))) {
+        o->retiring = q->engine;
+        q->engine = NULL;
+        engine_stop(o->retiring);
+    } else {
+        return;
+    }
+    o->sp = q->sp;
+    o->safety = q->safety; /* the braking is judged against what was sent */
+    safety_limits_t lim;
+    obj_safety_limits(o->cfg, &lim);
+    safety_set_limits(&o->safety, &lim);
+}
+
 /* Step 2 of core_open: take the engines of prev's carried objects (cannot fail). */
 static void carry_objects(core_t *c, core_t *prev)
 {
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i], *q = carry_source(prev, o->cfg);
-        if (!q)
+        if (!q) {
+            retire_moving(o, prev);
             continue;
+        }
         o->engine = q->engine;
         q->engine = NULL;
         o->sp = q->sp;
@@ -320,6 +361,7 @@ static void carry_objects(core_t *c, core_t *prev)
         o->rejlog = q->rejlog;
         o->out_errors = q->out_errors;
         o->carried = 1;
+        retire_moving(o, prev);
     }
 }
 
@@ -432,6 +474,8 @@ void core_stop(core_t *c)
     for (unsigned i = 0; i < c->nobj; i++) {
         c->obj[i].stopping = 1;
         engine_stop(c->obj[i].engine);
+        if (c->obj[i].retiring)
+            engine_stop(c->obj[i].retiring);
     }
     for (unsigned t = 0; transport_table[t]; t++)
         if (p->opened[t] && transport_table[t]->stop)
@@ -449,7 +493,7 @@ int core_done(const core_t *c)
             return 0;
         for (unsigned i = 0; i < c->nobj; i++) {
             engine_state_t s = c->obj[i].status.state;
-            if (s != ENGINE_STATE_FINISHED && s != ENGINE_STATE_WAITING)
+            if ((s != ENGINE_STATE_FINISHED && s != ENGINE_STATE_WAITING) || c->obj[i].retiring)
                 return 0;
         }
         return 1;
@@ -463,8 +507,9 @@ int core_done(const core_t *c)
             return 0;
         /* at rest on its last waypoint, or waiting with nothing buffered
          * (its input gave nothing usable: nothing more can happen) */
-        if (o->status.state != ENGINE_STATE_FINISHED &&
-            !(o->status.state == ENGINE_STATE_WAITING && o->status.buffered == 0))
+        if ((o->status.state != ENGINE_STATE_FINISHED &&
+             !(o->status.state == ENGINE_STATE_WAITING && o->status.buffered == 0)) ||
+            o->retiring)
             return 0;
     }
     return 1;
@@ -487,8 +532,10 @@ void core_close(core_t *c)
     if (c->obj)
         log_rejections(c); /* engines carried to a new core were taken (NULL) */
     if (c->obj)
-        for (unsigned i = 0; i < c->nobj; i++)
+        for (unsigned i = 0; i < c->nobj; i++) {
             engine_free(c->obj[i].engine);
+            engine_free(c->obj[i].retiring);
+        }
     free(c->obj);
     free(p);
 }

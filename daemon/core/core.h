@@ -54,6 +54,10 @@ typedef struct obj {
     unsigned index;       /* 0-based, config order */
     const cfg_obj_t *cfg; /* its [object.NAME] section (engine settings, transport blocks) */
     engine_t *engine;
+    engine_t *retiring;     /* a reload gave the object a new engine while the old
+                                     * one moved: the old one brakes to rest (engine_stop,
+                                     * its setpoints go out), then the new one starts where
+                                     * it rests (no velocity step); NULL otherwise */
     engine_setpoint_t sp;   /* setpoint of the last tick (zero before the first) */
     engine_status_t status; /* engine status after the last tick */
     uint64_t skipped_ticks; /* missed deadlines this object was stepped through with

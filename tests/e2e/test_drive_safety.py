@@ -113,6 +113,23 @@ class DriveSafety(unittest.TestCase):
             # (from where the output stood to the track's start) over at least 1 s
             d = dist(rows[xfer[0] - 1]["p"], (0, 0, 0))
             self.assertLess(worst, max(6.0, 1.5 * d / 1.0) * 1.05, d)
+            # and no velocity step: the old engine brakes to rest along its path
+            # (engine_stop) before the new one starts there (the old code held
+            # at once: 6 m/s to 0 in one tick, 600 m/s^2).  Bound: the engine's
+            # own, 3 max_accel_m_s2 + scale_accel_m_s2 = 95 m/s^2 (profile auto,
+            # daemon/core/core.h obj_safety_accel), from the rows alone
+            acc = 0.0
+            for a, b, c in zip(rows, rows[1:], rows[2:]):
+                if a["flags"] & F_NOPOS or not (c["now"] > b["now"] > a["now"]):
+                    continue
+                t1, t2 = (b["now"] - a["now"]) * 1e-9, (c["now"] - b["now"]) * 1e-9
+                v1 = [(y - x) / t1 for x, y in zip(a["p"], b["p"])]
+                v2 = [(y - x) / t2 for x, y in zip(b["p"], c["p"])]
+                acc = max(acc, dist(v1, v2) / t2)
+            print("reload with new settings: largest row-to-row acceleration %.1f m/s^2" % acc,
+                  file=sys.stderr)
+            self.assertLess(acc, 95.0)
+            self.assertFalse([r for r in rows if r["flags"] & 0x20])  # no safety fault
 
     def test_initial_position_reached_by_transfer(self):
         with tempfile.TemporaryDirectory() as tmp:
