@@ -61,6 +61,7 @@ static void hold(safety_t *s, engine_setpoint_t *sp)
     if (sp->now_ns > s->last_ns)
         s->last_ns = sp->now_ns;
     memset(s->last_vel, 0, sizeof s->last_vel);
+    s->last_dt = 0;
 }
 
 /* First violation of sp against the last output, with its value and bound. */
@@ -106,9 +107,12 @@ static int judge(const safety_t *s, const engine_setpoint_t *sp, double *value, 
         double dv[AX];
         for (int k = 0; k < AX; k++)
             dv[k] = vel[k] - s->last_vel[k];
-        /* |dv| * dt is the change of step a constant acceleration bound allows, in metres */
-        if (norm3(dv) * dt > l->max_accel_m_s2 * dt * dt + l->tol_m) {
-            *value = norm3(dv) / dt;
+        /* the velocities belong to the middles of their intervals: after a
+         * skipped tick they are (dt_prev + dt)/2 apart, not dt */
+        double span = s->last_dt > 0 ? 0.5 * (s->last_dt + dt) : dt;
+        /* |dv| * span is the change of step a constant acceleration bound allows, in metres */
+        if (norm3(dv) * span > l->max_accel_m_s2 * span * span + l->tol_m) {
+            *value = norm3(dv) / span;
             *limit = l->max_accel_m_s2;
             return SAFETY_FACCEL;
         }
@@ -161,6 +165,7 @@ int safety_check(safety_t *s, engine_setpoint_t *sp)
     }
     memcpy(s->last_pos, sp->pos_m, sizeof s->last_pos);
     memcpy(s->last_vel, vel, sizeof s->last_vel);
+    s->last_dt = (double)(sp->now_ns - s->last_ns) * 1e-9;
     s->have_vel = 1;
     s->last_ns = sp->now_ns;
     return SAFETY_OK;
@@ -171,6 +176,7 @@ void safety_forget(safety_t *s)
     s->have_pos = 0;
     s->have_vel = 0;
     memset(s->last_vel, 0, sizeof s->last_vel);
+    s->last_dt = 0;
 }
 
 int safety_fault(const safety_t *s)

@@ -9,7 +9,8 @@
  * differences:
  *   step  = |p_k - p_{k-1}|                            (Euclidean, metres)
  *   v_k   = (p_k - p_{k-1}) / dt_k,  dt_k = now_k - now_{k-1}
- *   speed = |v_k|,   accel = |v_k - v_{k-1}| / dt_k
+ *   speed = |v_k|,   accel = |v_k - v_{k-1}| / ((dt_{k-1} + dt_k) / 2)
+ *   (the two velocities belong to the middles of their intervals)
  * dt is the time between two outputs, so skipped ticks are judged over the
  * time that really passed.
  *
@@ -68,6 +69,7 @@ typedef struct {
     int64_t last_ns;
     double last_pos[ENGINE_AXES];
     double last_vel[ENGINE_AXES];
+    double last_dt;                  /* the interval last_vel was measured over, s (0 = unknown) */
     int fault;                       /* latched safety_fault, 0 = none */
     uint64_t checked;                /* setpoints judged */
     uint64_t violations;             /* setpoints refused while not yet faulted + while faulted */

@@ -90,6 +90,33 @@ static void test_accel_exact(void **state)
     }
 }
 
+/* Given a constant acceleration a sampled with skipped ticks (intervals of
+ * 1 and 3 periods mixed), then it is judged as a, not more: the velocities
+ * of two intervals belong to their middles, (dt1 + dt2)/2 apart (the old
+ * monitor divided by dt2 alone and saw 2 a after a skip: a false trip of
+ * the default bound under load); and 1.01 a over the same ticks trips. */
+static void test_accel_across_skipped_ticks(void **state)
+{
+    (void)state;
+    const double a = 10.0;
+    static const int steps[] = {1, 1, 3, 1, 1, 3, 3, 1, 2, 1, 3, 1};
+    for (int pass = 0; pass < 2; pass++) {
+        safety_t s = mk(0, 0, pass ? a / 1.01 : a * (1 + 1e-9));
+        int faults = 0;
+        int64_t k = 0;
+        for (int i = 0; i < 40; i++) {
+            double t = (double)k * T_S;
+            engine_setpoint_t sp = at(k, 0.5 * a * t * t);
+            faults += safety_check(&s, &sp) != SAFETY_OK;
+            k += steps[i % 12];
+        }
+        if (pass)
+            assert_int_equal(s.by[SAFETY_FACCEL], 1);
+        else
+            assert_int_equal(faults, 0);
+    }
+}
+
 /* Given ticks skipped (dt = 3 periods), then speed is judged over the time
  * that passed; the absolute step bound is not. */
 static void test_skipped_ticks_and_step(void **state)
@@ -168,6 +195,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_speed_violation_holds_and_latches),
         cmocka_unit_test(test_accel_exact),
+        cmocka_unit_test(test_accel_across_skipped_ticks),
         cmocka_unit_test(test_skipped_ticks_and_step),
         cmocka_unit_test(test_positions_and_time),
         cmocka_unit_test(test_bad_limits_off),
