@@ -56,6 +56,8 @@ def dist(a, b):
 def read_rows(path):
     with open(path) as f:
         lines = [l for l in f.read().splitlines() if l and not l.startswith("#")]
+    if not lines:
+        return []  # created, nothing written yet
     cols = lines[0].split(",")
     out = []
     for line in lines[1:]:
