@@ -87,15 +87,16 @@ static void obj_frames(const cfg_t *cfg, obj_t *o)
 {
     const engine_setpoint_t *sp = &o->sp;
     o->geo[0] = o->geo[1] = o->geo[2] = NAN;
-    o->heading_deg = NAN;
+    o->heading_deg = o->heading_unwrapped_deg = NAN;
     if (o->cfg->geographic && cfg->datum_set && isfinite(sp->pos_m[0]) && isfinite(sp->pos_m[1]) &&
         isfinite(sp->pos_m[2]) &&
         geo_from_enu(&cfg->datum, sp->pos_m, &o->geo[0], &o->geo[1], &o->geo[2]) < 0)
         o->geo[0] = o->geo[1] = o->geo[2] = NAN;
-    if (o->cfg->heading.n && isfinite(sp->t_s) && isfinite(sp->pos_m[0]))
-        o->heading_deg = angle_wrap_deg(angle_pchip_eval(o->cfg->heading.t_s, o->cfg->heading.deg,
-                                                         o->cfg->heading.n, sp->t_s,
-                                                         &o->heading_hint));
+    if (o->cfg->heading.n && isfinite(sp->t_s) && isfinite(sp->pos_m[0])) {
+        o->heading_unwrapped_deg = angle_pchip_eval(o->cfg->heading.t_s, o->cfg->heading.deg,
+                                                    o->cfg->heading.n, sp->t_s, &o->heading_hint);
+        o->heading_deg = angle_wrap_deg(o->heading_unwrapped_deg);
+    }
 }
 
 /* Rearm the monitor once the engine stands on the held position. */

@@ -54,35 +54,36 @@ typedef struct obj {
     unsigned index;       /* 0-based, config order */
     const cfg_obj_t *cfg; /* its [object.NAME] section (engine settings, transport blocks) */
     engine_t *engine;
-    engine_t *retiring;     /* a reload gave the object a new engine while the old
+    engine_t *retiring;           /* a reload gave the object a new engine while the old
                                      * one moved: the old one brakes to rest (engine_stop,
                                      * its setpoints go out), then the new one starts where
                                      * it rests (no velocity step); NULL otherwise */
-    engine_setpoint_t sp;   /* setpoint of the last tick (zero before the first) */
-    engine_status_t status; /* engine status after the last tick */
-    uint64_t skipped_ticks; /* missed deadlines this object was stepped through with
+    engine_setpoint_t sp;         /* setpoint of the last tick (zero before the first) */
+    engine_status_t status;       /* engine status after the last tick */
+    uint64_t skipped_ticks;       /* missed deadlines this object was stepped through with
                                      * no output (added into status.skipped_ticks) */
-    int stopping;           /* the daemon is stopping: obj_push refuses */
-    int carried;            /* 1 if engine (and counters) were carried over a reload */
-    int64_t born_ns;        /* engine time when its engine was created (0 at start;
+    int stopping;                 /* the daemon is stopping: obj_push refuses */
+    int carried;                  /* 1 if engine (and counters) were carried over a reload */
+    int64_t born_ns;              /* engine time when its engine was created (0 at start;
                                      * kept when carried): replay due times count from here */
-    uint64_t out_lost;      /* setpoint lines of this object that never reached one of
+    uint64_t out_lost;            /* setpoint lines of this object that never reached one of
                                      * its outputs (buffer full, write error) */
-    int out_fault;          /* 1 once a write to one of its outputs failed (ENOSPC,
+    int out_fault;                /* 1 once a write to one of its outputs failed (ENOSPC,
                                      * EIO, ...); cleared by the reset-counters command */
-    uint64_t out_errors;    /* failed writes of its outputs (CAN STATUS2 page 1) */
-    safety_t safety;        /* the last check of o->sp before any output sees it
+    uint64_t out_errors;          /* failed writes of its outputs (CAN STATUS2 page 1) */
+    safety_t safety;              /* the last check of o->sp before any output sees it
                                      * (kept when carried) */
-    uint64_t safety_logged; /* safety violations already logged */
-    int safety_rearm;       /* a clear asked to rearm the monitor: done once the
+    uint64_t safety_logged;       /* safety violations already logged */
+    int safety_rearm;             /* a clear asked to rearm the monitor: done once the
                                      * engine stands on the held position */
-    rejlog_t rejlog;        /* sources of the last waypoints offered, and the refusals
+    rejlog_t rejlog;              /* sources of the last waypoints offered, and the refusals
                                      * to log (rejlog.h; kept when carried) */
-    double geo[3];          /* the setpoint as WGS84 lat, lon (deg), alt (m) when
+    double geo[3];                /* the setpoint as WGS84 lat, lon (deg), alt (m) when
                                      * o->cfg->geographic (about c->cfg->datum), else NaN */
-    double heading_deg;     /* heading axis at the setpoint's track time, wrapped to
+    double heading_deg;           /* heading axis at the setpoint's track time, wrapped to
                                      * (-180, 180]; NaN if the object has none */
-    size_t heading_hint;    /* interval of the last heading evaluation */
+    double heading_unwrapped_deg; /* the same, continuous across +-180 (NaN: none) */
+    size_t heading_hint;          /* interval of the last heading evaluation */
 } obj_t;
 
 /*

@@ -274,6 +274,8 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         o->lat_deg = ob->geo[0];
         o->lon_deg = ob->geo[1];
         o->alt_m = ob->geo[2];
+        o->heading_deg = ob->heading_deg;
+        o->heading_unwrapped_deg = ob->heading_unwrapped_deg;
         o->out_lost = ob->out_lost;
         o->out_fault = (uint16_t)(ob->out_fault != 0);
         o->seq_jumps = 0; /* the server adds its own */

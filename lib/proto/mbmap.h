@@ -165,6 +165,8 @@
 #define MBMAP_X_REJ_ACCEL 22         /* u32 ENGINE_EACCEL (11) */
 #define MBMAP_X_REJ_UNCONFIRMED 24   /* u32 ENGINE_EUNCONFIRMED (12) */
 #define MBMAP_X_REJ_STALE 26         /* u32 ENGINE_ESTALE (13) */
+#define MBMAP_X_HEADING 50           /* f64 heading axis, degrees in (-180, 180] (NaN: none) */
+#define MBMAP_X_HEADING_UNWRAPPED 54 /* f64 the same, continuous (no jump at +-180): for a rotary axis */
 #define MBMAP_X_GEN_TAIL 98          /* u32 copy of GEN */
 
 /* ---- object block, holding registers (offset from MBMAP_OBJ_BASE(k)) ---- */
@@ -242,6 +244,7 @@ typedef struct {
     uint64_t seq_jumps;
     int absent;                 /* no object has this id: the block stays all 0 (GEN 0) */
     double lat_deg, lon_deg, alt_m; /* the setpoint as WGS84 geodetic (NaN: none) */
+    double heading_deg, heading_unwrapped_deg; /* heading axis (NaN: none) */
 } mbmap_object_t;
 
 /* Write the daemon block into regs[0 .. MBMAP_BLOCK-1]. */

@@ -17,7 +17,8 @@ a few hundred metres from a, so before this work b had its own east/north/up ori
    pyproj's inverse of the east/north/up of the same row/block.
 4. A heading column crossing +-180 (both ways) is output with no spin: every
    heading_deg equals scipy's PchipInterpolator of numpy-unwrapped headings at the
-   row's track time, wrapped, and consecutive rows differ by the short way round.
+   row's track time, wrapped, and consecutive rows differ by the short way round;
+   the Modbus diagnostics block (pymodbus) has it wrapped and continuous.
 5. A reload that would move the datum is refused with file:line.
 """
 import csv
@@ -252,12 +253,21 @@ class GeoFrames(unittest.TestCase):
         track = os.path.join(self.tmp, "h.csv")
         write(track, "t,x,y,z,heading\n" + "".join(
             "%g,%g,0,0,%.6f\n" % (ti, 2.0 * ti, wi) for ti, wi in zip(t, wrapped)))
-        write(self.conf, "[daemon]\nrate_hz = 20\nspeed = 100\nexit_when_done = yes\n"
-                         "status_interval_s = 0\n[object.h]\ninput = replay\nreplay.track = h.csv\n"
+        write(self.conf, "[daemon]\nrate_hz = 20\nspeed = 10\nexit_when_done = yes\n"
+                         "status_interval_s = 0\n[modbus]\nport = 0\nsystemd_socket = no\n"
+                         "[object.h]\ninput = replay\nreplay.track = h.csv\n"
                          "output = csv\ncsv.path = h_out.csv\ncsv.geo = yes\n")
-        p = subprocess.run([TRAJD, "-f", "-c", self.conf], capture_output=True, text=True,
-                           timeout=WAIT_S)
-        self.assertEqual(p.returncode, 0, p.stderr)
+        p = subprocess.Popen([TRAJD, "-f", "-c", self.conf], stdin=subprocess.DEVNULL,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        lines = mbsim.Lines(p.stderr)
+        try:
+            line = lines.wait_for("modbus: TCP on", WAIT_S)
+            self.assertIsNotNone(line, "".join(lines.all))
+            snaps = self.read_heading(int(line.split(" port ")[1].split(",")[0]))
+        finally:
+            rc = p.wait(timeout=WAIT_S)
+            lines.wait_for("\0", 0.5)
+        self.assertEqual(rc, 0, "".join(lines.all))
         out = [r for r in rows(os.path.join(self.tmp, "h_out.csv")) if finite(r)]
         self.assertGreater(len(out), 500)
         f = PchipInterpolator(t, np.unwrap(np.radians(wrapped.round(6)), period=2 * math.pi))
@@ -276,6 +286,42 @@ class GeoFrames(unittest.TestCase):
                 crossings += abs(h - prev) > 180.0            # ... even where the value wraps
             prev, prev_t = h, ts
         self.assertGreaterEqual(crossings, 2)   # it did cross +-180, both ways
+        # Modbus diagnostics block: heading (wrapped) and heading_unwrapped (continuous)
+        # at the object block's track time of the same snapshot (same generation)
+        self.assertGreater(len(snaps), 10)
+        for ts, h, hu in snaps:
+            want = math.degrees(float(f(min(max(ts, t[0]), t[-1]))))
+            self.assertLess(abs(hu - want), 1e-6, (ts, h, hu))
+            self.assertLess(abs(h - ((want + 180.0) % 360.0 - 180.0)), 1e-6, (ts, h, hu))
+        self.assertGreater(max(s[2] for s in snaps), 180.0)   # unwrapped: past 180, no jump
+
+    def read_heading(self, port):
+        """(t_s, heading, heading_unwrapped) of object 0 from pymodbus reads of its
+        object block and its diagnostics block in one tick (equal generations)."""
+        c = ModbusTcpClient("127.0.0.1", port=port, timeout=mbsim.WAIT_S)
+        out = []
+        if not c.connect():
+            return out
+        xb = M["MBMAP_BLOCK"] * (1 + M["MBMAP_MAX_OBJECTS"])      # MBMAP_X_BASE(0)
+        f64 = lambda r, o: struct.unpack(">d", struct.pack(">HHHH", *r[o:o + 4]))[0]
+        try:
+            end = time.monotonic() + WAIT_S
+            while time.monotonic() < end:
+                a = c.read_input_registers(obj_base(0), count=M["MBMAP_O_T_S"] + 4)
+                x = c.read_input_registers(xb, count=M["MBMAP_X_HEADING_UNWRAPPED"] + 4)
+                if a.isError() or x.isError():
+                    break
+                if a.registers[:2] != x.registers[:2] or a.registers[M["MBMAP_O_STATE"]] != 1:
+                    continue
+                h = f64(x.registers, M["MBMAP_X_HEADING"])
+                if math.isfinite(h):
+                    out.append((f64(a.registers, M["MBMAP_O_T_S"]), h,
+                                f64(x.registers, M["MBMAP_X_HEADING_UNWRAPPED"])))
+        except Exception:  # the daemon exits when done: keep what was read
+            pass
+        finally:
+            c.close()
+        return out
 
     def test_datum_move_refused_at_reload(self):
         write(self.conf, self.config().replace("exit_when_done = yes", "exit_when_done = no"))
