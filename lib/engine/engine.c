@@ -140,8 +140,15 @@ struct engine {
     double clk_catchup;   /* most the rate rises above clk_rate */
     int64_t play_ns;      /* now - D at the step being made */
 
+    /* ---- fast ticks (fast_window, fast_tick) ---- */
+    int64_t fast_left; /* ticks ahead that are certainly plain unit-grid steps */
+    int fast_off;      /* engine_set_fast_ticks(e, 0): every tick the full way */
+    int fast_last;     /* the last tick was fast: last_sp and cspeed not yet written */
+
     engine_status_t st;
 };
+
+static void fast_close(engine_t *e);
 
 /* Output and curve start closer than this need no transfer (metres). */
 #define ENGINE_TRANSFER_TOL_M 1e-9
@@ -808,6 +815,7 @@ static int reject_wp(engine_t *e, int code, const engine_waypoint_t *wp)
 
 int engine_rejection_next(engine_t *e, engine_rejection_t *r)
 {
+    fast_close(e); /* whatever it changes, the next tick looks again */
     if (!e->rej_len)
         return 0;
     *r = e->rej[e->rej_head];
@@ -911,6 +919,7 @@ int engine_waypoint_check(const engine_config_t *cfg, const engine_waypoint_t *w
 
 int engine_push(engine_t *e, const engine_waypoint_t *wp)
 {
+    fast_close(e); /* whatever it changes, the next tick looks again */
     int rc = engine_waypoint_check(&e->cfg, wp);
 
     if (rc < 0)
@@ -930,6 +939,7 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
 
 int engine_finish(engine_t *e)
 {
+    fast_close(e); /* whatever it changes, the next tick looks again */
     int rj = judge(e, 1);
     int rc = close_input(e);
 
@@ -978,17 +988,20 @@ static void request_stop(engine_t *e, int kind)
 
 int engine_stop(engine_t *e)
 {
+    fast_close(e); /* whatever it changes, the next tick looks again */
     request_stop(e, STOP_STOP);
     return 0;
 }
 
 void engine_clear(engine_t *e)
 {
+    fast_close(e); /* whatever it changes, the next tick looks again */
     request_stop(e, STOP_CLEAR);
 }
 
 int engine_set_override(engine_t *e, double ratio)
 {
+    fast_close(e); /* whatever it changes, the next tick looks again */
     if (!(ratio >= 0 && ratio <= TS_RATE_MAX))
         return -ENGINE_ERANGE;
     e->override = ratio;
@@ -997,6 +1010,7 @@ int engine_set_override(engine_t *e, double ratio)
 
 int engine_set_clock(engine_t *e, const engine_clock_t *clk)
 {
+    fast_close(e); /* whatever it changes, the next tick looks again */
     if (!(clk->delay_ns >= 0) || !(fabs(clk->rate - 1.0) <= ENGINE_CLOCK_RATE_TOL) ||
         !(clk->catchup >= 0 && clk->catchup <= 1))
         return -ENGINE_ERANGE;
@@ -1011,6 +1025,7 @@ int engine_set_clock(engine_t *e, const engine_clock_t *clk)
 
 int engine_set_position(engine_t *e, const double pos_m[ENGINE_AXES])
 {
+    fast_close(e); /* whatever it changes, the next tick looks again */
     for (int k = 0; k < AX; k++) {
         if (!isfinite(pos_m[k]))
             return -ENGINE_ENOTFINITE;
@@ -1029,6 +1044,7 @@ int engine_set_position(engine_t *e, const double pos_m[ENGINE_AXES])
 
 void engine_require_position(engine_t *e, int on)
 {
+    fast_close(e); /* whatever it changes, the next tick looks again */
     e->need_pos = on != 0;
     /* holding: the position it had is not trusted any more */
     if (e->need_pos && e->mode == OUT_HOLD)
@@ -1042,6 +1058,7 @@ int engine_has_position(const engine_t *e)
 
 void engine_reset_counters(engine_t *e)
 {
+    fast_close(e); /* whatever it changes, the next tick looks again */
     uint32_t last_seq = e->st.last_seq;
 
     memset(&e->st, 0, sizeof(e->st));
@@ -1740,10 +1757,152 @@ static int stalled(const engine_t *e)
     return 0;
 }
 
+/*
+ * Fast ticks.  Most ticks are a plain step on the unit grid inside the
+ * current segment: step_once then only re-derives, every tick, that nothing
+ * asks for another rate (two divisions, the stopping distance ts_stop_dist
+ * against the buffer's remaining time) and engine_tick divides for the
+ * number of periods.  fast_window decides once, after a full tick, for how
+ * many ticks ahead that answer cannot change: until the next re-seed, and
+ * while the stopping distance at an upper bound of the curve's speed over
+ * the segment (|k'(u)| <= |c1| + 2|c2| + 3|c3| per axis) stays short of the
+ * remaining time with two ticks to spare.  ts_stop_dist grows with the speed
+ * (the limits are scale_accel/v and scale_jerk/v), so the check each of those
+ * ticks would make passes.  Every public call that changes the engine
+ * (push, finish, stop, clear, override, clock, position) closes the window.
+ * fast_tick then does what the full path does for such a tick, to the same
+ * doubles in the same order: tests/unit/test_engine_fast.c compares both
+ * paths setpoint for setpoint (engine_set_fast_ticks).
+ */
+static double seg_speed_bound(const fdiff_seg_t *seg)
+{
+    double v2 = 0;
+    for (int k = 0; k < AX; k++) {
+        double b = fabs(seg->c[k][1]) + 2 * fabs(seg->c[k][2]) + 3 * fabs(seg->c[k][3]);
+        v2 += b * b;
+    }
+    return sqrt(v2) / seg->dur_s * (1 + 1e-6); /* and a margin for rounding */
+}
+
+static void fast_window(engine_t *e)
+{
+    e->fast_left = 0;
+    if (e->fast_off || e->mode != OUT_STREAM || e->scaled || e->clocked || e->underrun ||
+        !e->have_pos || e->stop_req || e->end_brake || e->flags_pending ||
+        !is_exactly(e->override, 1.0) || !is_exactly(e->ts.rate, 1.0) ||
+        !is_exactly(e->ts.acc, 0.0))
+        return;
+    /* the ticks before the next re-seed (step_cur) */
+    int64_t m = (int64_t)(FDIFF_RESEED_STEPS - (uint64_t)(e->n - e->seg_n0) % FDIFF_RESEED_STEPS) -
+                1;
+    if (!(e->avail_closed && e->avail_rest)) { /* remaining() is finite */
+        double v = seg_speed_bound(&e->cur.seg);
+        if (v < ENGINE_SCALE_V_FLOOR_M_S)
+            v = ENGINE_SCALE_V_FLOOR_M_S;
+        double A = e->cfg.scale_accel_m_s2 / v, J = e->cfg.scale_jerk_m_s3 / v;
+        double d = ts_stop_dist(1.0, 0.0, A, J) * (1 + 1e-9);
+        /* remaining() at the last fast tick's step, less one period, still above d */
+        double room = (e->avail_t - e->origin_t) - tau_of(e, e->n) - TS_MARGIN_TICKS * e->period_s -
+                      e->period_s - d;
+        if (!(room > 0) || !isfinite(d))
+            return;
+        double mr = floor(room / e->period_s) - 2;
+        if (mr < (double)m)
+            m = (int64_t)mr;
+    }
+    e->fast_left = m > 0 ? m : 0;
+}
+
+/* One tick as step_once + fill_sp would make it inside the window; 0 (and
+ * nothing changed) at the end of the segment. */
+static void fast_fill(const engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    sp->now_ns = now_ns; /* fill_sp: streaming, no flags */
+    sp->t_s = e->out_t;
+    memcpy(sp->pos_m, e->pos, sizeof(sp->pos_m));
+    memcpy(sp->vel_m_s, e->vel, sizeof(sp->vel_m_s));
+    memcpy(sp->acc_m_s2, e->acc, sizeof(sp->acc_m_s2));
+    sp->state = ENGINE_STATE_STREAMING;
+    sp->flags = 0;
+    sp->cycle = e->cycle;
+    sp->track = e->out_track;
+    sp->age_s = NAN;
+}
+
+/* What a fast tick left for later: the setpoint kept for a repeated call
+ * (last_sp, 120 bytes copied every tick otherwise) and the curve's speed
+ * (a square root only the full path reads), both from the same doubles. */
+static void fast_sync(engine_t *e)
+{
+    if (!e->fast_last)
+        return;
+    double v2 = 0;
+    for (int k = 0; k < AX; k++) /* as out_eval */
+        v2 += e->vel[k] * e->vel[k];
+    e->cspeed = sqrt(v2);
+    fast_fill(e, e->last_now, &e->last_sp);
+    e->fast_last = 0;
+}
+
+/*
+ * One tick as step_once + fill_sp would make it inside the window; 0 (and
+ * nothing changed) at the end of the segment.  What is left per setpoint
+ * (gcc -O2, x86-64 baseline SSE2): the tick's time (an integer multiply and
+ * two floating additions), one compare with the segment's end, the step as
+ * 12 packed addpd over the fdiff_t rows, and 18 stores of the 9 doubles into
+ * the engine and the setpoint; the full path added two divisions and
+ * ts_stop_dist's branches (step_once), a 64-bit idiv (engine_tick's count of
+ * periods), out_state/fill_sp's flag logic, a sqrt and a 120-byte copy.
+ */
+static int fast_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    int64_t n = e->n + 1;
+    double tau = tau_of(e, n);
+    if (!(tau < e->cur_t1)) {
+        e->fast_left = 0;
+        return 0;
+    }
+    e->fast_left--;
+    e->fast_last = 1;
+    e->cycle++;
+    e->n = n;
+    e->last_now = now_ns;
+    fdiff_step(&e->fd);
+    for (int k = 0; k < AX; k++) { /* out_eval */
+        e->pos[k] = e->fd.p0[k];
+        e->vel[k] = e->fd.v0[k];
+        e->acc[k] = e->fd.a0[k];
+    }
+    e->out_t = e->origin_t + tau;
+    fast_fill(e, now_ns, sp);
+    e->st.setpoints++;
+    return 1;
+}
+
+static void fast_close(engine_t *e)
+{
+    e->fast_left = 0;
+    fast_sync(e);
+}
+
+void engine_set_fast_ticks(engine_t *e, int on)
+{
+    fast_close(e);
+    e->fast_off = !on;
+}
+
 int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
     int64_t k = 1, i;
 
+    if (e->fast_left > 0) {
+        /* one period since the last call, as the division below would round */
+        int64_t d = now_ns - e->last_now, p = e->cfg.period_ns;
+        if (d >= p - p / 2 && d < 2 * p - p / 2 && fast_tick(e, now_ns, sp))
+            return 0;
+        e->fast_left = 0;
+    }
+    fast_sync(e);
     if (e->have_now) {
         if (now_ns < e->last_now) {
             *sp = e->last_sp;
@@ -1786,6 +1945,7 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     fill_sp(e, now_ns, sp);
     e->st.setpoints++;
     e->last_sp = *sp;
+    fast_window(e);
     return 0;
 }
 

@@ -293,9 +293,63 @@ static void bench_stepper(void)
            sink > 0 ? 1.0 : 0.0);
 }
 
+/* ns per engine_tick while streaming a prefilled walk (waypoints every
+ * 0.1 s), the full state machine every tick or with fast ticks, best of 5. */
+static double bench_ticks(int64_t period_ns, int fast)
+{
+    double best = 1e30, sink = 0;
+    for (int rep = 0; rep < 5; rep++) {
+        engine_config_t c;
+        engine_config_default(&c);
+        c.capacity = 8192;
+        c.period_ns = period_ns;
+        engine_t *e = engine_new(&c, NULL);
+        engine_set_fast_ticks(e, fast);
+        engine_waypoint_t w = {0};
+        double pos[3] = {0, 0, 0};
+        unsigned seed = 5;
+        for (long i = 0; i < 4000; i++) {
+            walk_wp(&w, i, 0.1, &seed, pos);
+            engine_push(e, &w);
+        }
+        engine_finish(e);
+        engine_setpoint_t sp;
+        long n = 0;
+        double t0 = now_s();
+        for (int64_t k = 0;; k++) {
+            engine_tick(e, k * period_ns, &sp);
+            sink += sp.pos_m[0];
+            n++;
+            if (sp.state == ENGINE_STATE_FINISHED)
+                break;
+        }
+        double t = (now_s() - t0) * 1e9 / (double)n;
+        if (t < best)
+            best = t;
+        engine_free(e);
+    }
+    return best + (sink > 0 ? 0 : 0);
+}
+
+static void bench_fast_ticks(void)
+{
+    printf("engine_tick while streaming, ns per 3-axis setpoint (p, v, a), best of 5, same run;\n"
+           "full = every tick through the state machine (engine_set_fast_ticks(e, 0), the "
+           "previous engine_tick), fast = the default\n\n"
+           "| rate | full ns/setpoint | fast ns/setpoint | x full |\n|---|---|---|---|\n");
+    static const int64_t periods[] = {10000000, 1000000};
+    for (int i = 0; i < 2; i++) {
+        double full = bench_ticks(periods[i], 0), fast = bench_ticks(periods[i], 1);
+        printf("| %lld Hz | %.1f | %.1f | %.2f |\n", (long long)(1000000000 / periods[i]), full,
+               fast, full / fast);
+    }
+    printf("target <= 8 ns per setpoint (issue 13)\n\n");
+}
+
 int main(void)
 {
     bench_stepper();
+    bench_fast_ticks();
     static const long lengths[] = {1000, 10000, 100000, 1000000};
     static const unsigned fo[][2] = {{8, 4},   {16, 4},  {16, 8},  {24, 12}, {32, 8},
                                      {32, 16}, {48, 24}, {64, 32}, {32, 30}};

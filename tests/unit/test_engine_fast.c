@@ -1,0 +1,167 @@
+/*
+ * test_engine_fast.c - engine_tick's fast ticks (engine.c fast_window,
+ * fast_tick) against the full state machine: two engines with the same
+ * configuration, one with engine_set_fast_ticks(e, 0), get the same calls
+ * (pushes between ticks, finish, override changes, stop, clear, a position,
+ * clocks that jitter within a period, skip periods, repeat or go back) and
+ * must return the same codes, the same setpoints bit for bit (NaN included)
+ * and the same status.  Several methods, periods and speeds (so the
+ * stopping-distance bound of the window is met and missed), long enough to
+ * cross re-seeds (FDIFF_RESEED_STEPS).  Checked to fail when fast_tick
+ * skips the cycle count, when the window ignores the re-seed or the
+ * stopping distance, or when it runs two score ticks too long.
+ */
+#include "test.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "engine.h"
+
+typedef struct {
+    engine_t *e[2]; /* [0] full path only, [1] fast ticks on */
+    unsigned long setpoints, compared;
+} pair_t;
+
+static void pair_new(pair_t *p, const engine_config_t *c)
+{
+    memset(p, 0, sizeof *p);
+    for (int i = 0; i < 2; i++) {
+        int err = 0;
+        p->e[i] = engine_new(c, &err);
+        assert_non_null(p->e[i]);
+        engine_set_fast_ticks(p->e[i], i);
+    }
+}
+
+static void pair_free(pair_t *p)
+{
+    engine_status_t s0, s1;
+    memset(&s0, 0, sizeof s0);
+    memset(&s1, 0, sizeof s1);
+    engine_status(p->e[0], &s0);
+    engine_status(p->e[1], &s1);
+    assert_memory_equal(&s0, &s1, sizeof s0);
+    engine_free(p->e[0]);
+    engine_free(p->e[1]);
+}
+
+static void pair_tick(pair_t *p, int64_t now)
+{
+    engine_setpoint_t a, b;
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
+    int ra = engine_tick(p->e[0], now, &a), rb = engine_tick(p->e[1], now, &b);
+    assert_int_equal(ra, rb);
+    if (memcmp(&a, &b, sizeof a) != 0) {
+        print_error("now %lld: full t %.17g x %.17g v %.17g state %d flags %u cycle %u | fast t "
+                    "%.17g x %.17g v %.17g state %d flags %u cycle %u\n",
+                    (long long)now, a.t_s, a.pos_m[0], a.vel_m_s[0], a.state, a.flags, a.cycle,
+                    b.t_s, b.pos_m[0], b.vel_m_s[0], b.state, b.flags, b.cycle);
+        fail();
+    }
+    p->compared++;
+}
+
+static void pair_push(pair_t *p, const engine_waypoint_t *w)
+{
+    assert_int_equal(engine_push(p->e[0], w), engine_push(p->e[1], w));
+}
+
+/* One random scenario: a walk of n waypoints at dt (irregular), pushed a few
+ * at a time between ticks, with the calls above at random ticks. */
+static void scenario(unsigned seed, engine_method_t m, int64_t period_ns, double dt, double step_m,
+                     int events)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    c.method = m;
+    c.period_ns = period_ns;
+    pair_t p;
+    pair_new(&p, &c);
+    double pos[3] = {0, 0, 0}, t = 0;
+    int64_t now = 0;
+    uint32_t seq = 0;
+    for (int round = 0; round < 400; round++) {
+        int npush = (int)(urand(&seed) * 4);
+        for (int i = 0; i < npush; i++) {
+            engine_waypoint_t w = {.t_s = t, .seq = seq++};
+            for (int k = 0; k < 3; k++) {
+                pos[k] += (urand(&seed) - 0.5) * step_m;
+                w.pos_m[k] = pos[k];
+            }
+            pair_push(&p, &w);
+            t += dt * (0.7 + 0.6 * urand(&seed));
+        }
+        int nticks = (int)(dt / ((double)period_ns * 1e-9) * (1 + urand(&seed) * 2));
+        for (int i = 0; i < nticks; i++) {
+            double r = urand(&seed);
+            int64_t d = period_ns;
+            if (events && r < 0.02)
+                d = (int64_t)(period_ns * (0.5 + urand(&seed))); /* jitter within rounding */
+            else if (events && r < 0.025)
+                d = period_ns * (2 + (int64_t)(urand(&seed) * 5)); /* skipped periods */
+            else if (events && r < 0.027)
+                d = 0; /* the same time again */
+            else if (events && r < 0.028)
+                d = -period_ns; /* backwards: refused, last setpoint */
+            now += d;
+            pair_tick(&p, now);
+            if (d < 0)
+                now -= d;
+        }
+        if (events) {
+            double r = urand(&seed);
+            if (r < 0.05) {
+                double ov = urand(&seed) * 1.5;
+                assert_int_equal(engine_set_override(p.e[0], ov), engine_set_override(p.e[1], ov));
+            } else if (r < 0.08) {
+                assert_int_equal(engine_set_override(p.e[0], 1.0),
+                                 engine_set_override(p.e[1], 1.0));
+            } else if (r < 0.085) {
+                assert_int_equal(engine_stop(p.e[0]), engine_stop(p.e[1]));
+            } else if (r < 0.09) {
+                engine_clear(p.e[0]);
+                engine_clear(p.e[1]);
+            } else if (r < 0.095) {
+                assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1]));
+                t += 5 * dt; /* the next waypoints open a new trajectory */
+            }
+        }
+    }
+    assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1]));
+    for (int i = 0; i < 200000; i++) {
+        now += period_ns;
+        pair_tick(&p, now);
+    }
+    pair_free(&p);
+}
+
+static void test_plain_streams(void **state)
+{
+    (void)state;
+    scenario(1, ENGINE_METHOD_CUBIC, 1000000, 0.2, 2.0, 0);    /* 1 kHz, 5 Hz input */
+    scenario(2, ENGINE_METHOD_CUBIC, 10000000, 0.1, 1.0, 0);   /* 100 Hz */
+    scenario(3, ENGINE_METHOD_BSPLINE, 1000000, 0.1, 50.0, 0); /* fast: window bound short */
+    scenario(4, ENGINE_METHOD_SMOOTH, 2000000, 0.25, 0.5, 0);  /* smoother */
+    scenario(5, ENGINE_METHOD_CUBIC, 100000, 0.25, 0.01, 0);   /* 10 kHz: re-seeds in a segment */
+}
+
+static void test_with_events(void **state)
+{
+    (void)state;
+    for (unsigned s = 10; s < 22; s++)
+        scenario(s, (engine_method_t)(s % 3), s % 2 ? 1000000 : 10000000, 0.1 + 0.05 * (s % 4),
+                 s % 5 == 0 ? 80.0 : 1.5, 1);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_plain_streams),
+        cmocka_unit_test(test_with_events),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
