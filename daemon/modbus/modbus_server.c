@@ -43,10 +43,27 @@ typedef struct {
     int64_t last_ns;    /* last complete request, or the connection */
     int64_t pending_ns; /* first byte of the partial request in buf, 0 if none */
     uint64_t requests, exceptions, bytes_in;
+    int peer_idx;  /* its entry in peers[], -1 if none */
     int may_write; /* writes = yes and in write_allow */
     char peer[64];
     uint8_t buf[CLIENT_BUF];
 } client_t;
+
+/* Counters of one client address over all its connections. */
+typedef struct {
+    char host[64];
+    int64_t last_ns; /* last connection or close (0: free entry) */
+    uint64_t n[6];   /* PEER_*: closed connections' counts */
+    uint64_t logged[6];
+} peer_t;
+enum { PEER_CONN, PEER_REQ, PEER_EXC, PEER_EVICTED, PEER_SLOW, PEER_DROPPED };
+/* Why a client is closed (its peer's counters). */
+enum close_why {
+    WHY_PEER = -1,
+    WHY_EVICTED = PEER_EVICTED,
+    WHY_SLOW = PEER_SLOW,
+    WHY_DROPPED = PEER_DROPPED
+};
 
 struct modbus_server {
     unsigned n_objects;
@@ -81,6 +98,11 @@ struct modbus_server {
     uint64_t *seq_jumps;   /* per object, sequence numbers outside the window */
     const char *cur_peer;  /* the peer of the request being served ("" between requests) */
     char rtu_peer[80];     /* "rtu DEVICE unit N" */
+    peer_t peers[MODBUS_SERVER_PEERS];
+    unsigned n_peers;       /* entries in use */
+    int64_t peer_log_ns;    /* summary lines at most this often (0: none) */
+    int64_t peer_logged_ns; /* when the last summary ran */
+    mbmap_daemon_t worst;   /* the mb_peers / mb_worst_* fields, refreshed by housekeeping */
     modbus_server_stats_t st;
 };
 
@@ -249,6 +271,7 @@ void modbus_server_config_default(modbus_server_config_t *cfg)
     cfg->max_clients = MODBUS_SERVER_DEFAULT_MAX_CLIENTS;
     cfg->idle_timeout_ms = MODBUS_SERVER_DEFAULT_IDLE_MS;
     cfg->request_timeout_ms = MODBUS_SERVER_DEFAULT_REQUEST_MS;
+    cfg->peer_log_s = MODBUS_SERVER_DEFAULT_PEER_LOG_S;
     cfg->n_objects = 1;
 }
 
@@ -327,6 +350,9 @@ int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const
     } else if (!strcmp(key, "request_timeout_ms")) {
         if ((rc = parse_uint(value, 100, 600000, &x)) == 0)
             cfg->request_timeout_ms = (unsigned)x;
+    } else if (!strcmp(key, "peer_log_s")) {
+        if ((rc = parse_uint(value, 0, 86400, &x)) == 0)
+            cfg->peer_log_s = (unsigned)x;
     } else if (!strcmp(key, "word_order")) {
         if ((cfg->word_order = mbmap_order_parse(value)) < 0)
             rc = -EINVAL, cfg->word_order = MBMAP_ORDER_ABCD;
@@ -464,6 +490,8 @@ static int settings_take(modbus_server_t *s, const modbus_server_config_t *cfg, 
                                                       : MODBUS_SERVER_DEFAULT_REQUEST_MS) *
                     1000000;
     s->unit_id = cfg->unit_id;
+    s->peer_log_ns = (int64_t)cfg->peer_log_s * 1000000000;
+    s->peer_logged_ns = now_ns();
     s->order = cfg->word_order >= 0 && cfg->word_order <= MBMAP_ORDER_DCBA
                    ? (mbmap_order_t)cfg->word_order
                    : MBMAP_ORDER_ABCD;
@@ -540,15 +568,128 @@ fail:
     return NULL;
 }
 
-static void client_close(modbus_server_t *s, client_t *c)
+static void client_close_why(modbus_server_t *s, client_t *c, int why)
 {
     if (c->fd < 0)
         return;
+    if (c->peer_idx >= 0) {
+        peer_t *p = &s->peers[c->peer_idx];
+        p->n[PEER_REQ] += c->requests;
+        p->n[PEER_EXC] += c->exceptions;
+        if (why >= 0)
+            p->n[why]++;
+        p->last_ns = now_ns();
+    }
     epoll_ctl(s->ep, EPOLL_CTL_DEL, c->fd, NULL);
     close(c->fd);
     c->fd = -1;
     c->len = 0;
     s->st.clients--;
+}
+
+static void client_close(modbus_server_t *s, client_t *c)
+{
+    client_close_why(s, c, WHY_PEER);
+}
+
+/* The entry of host ("a.b.c.d" or an IPv6 text): found, a free one, or the
+ * least recently seen one no connected client uses (forgotten); -1 if none. */
+static int peer_find(modbus_server_t *s, const char *host, int64_t now)
+{
+    int lru = -1;
+    for (unsigned k = 0; k < s->n_peers; k++)
+        if (!strcmp(s->peers[k].host, host))
+            return (int)k;
+    if (s->n_peers < MODBUS_SERVER_PEERS) {
+        lru = (int)s->n_peers++;
+    } else {
+        for (unsigned k = 0; k < MODBUS_SERVER_PEERS; k++) {
+            int used = 0;
+            for (unsigned i = 0; i < s->max_clients && !used; i++)
+                used = s->clients[i].fd >= 0 && s->clients[i].peer_idx == (int)k;
+            if (!used && (lru < 0 || s->peers[k].last_ns < s->peers[lru].last_ns))
+                lru = (int)k;
+        }
+        if (lru < 0)
+            return -1;
+    }
+    memset(&s->peers[lru], 0, sizeof s->peers[lru]);
+    snprintf(s->peers[lru].host, sizeof s->peers[lru].host, "%s", host);
+    s->peers[lru].last_ns = now;
+    return lru;
+}
+
+/* Peer k's counts: its closed connections plus the connected ones. */
+static void peer_counts(const modbus_server_t *s, unsigned k, uint64_t n[6])
+{
+    memcpy(n, s->peers[k].n, 6 * sizeof n[0]);
+    for (unsigned i = 0; i < s->max_clients; i++) {
+        const client_t *c = &s->clients[i];
+        if (c->fd >= 0 && c->peer_idx == (int)k) {
+            n[PEER_REQ] += c->requests;
+            n[PEER_EXC] += c->exceptions;
+        }
+    }
+}
+
+/* mb_peers and the mb_worst_* fields: the address with the most drops
+ * (evicted, slow, dropped), then the most exceptions; none if all are 0. */
+static void peer_worst(modbus_server_t *s)
+{
+    uint64_t best_d = 0, best_e = 0, n[6];
+    int best = -1;
+    for (unsigned k = 0; k < s->n_peers; k++) {
+        peer_counts(s, k, n);
+        uint64_t d = n[PEER_EVICTED] + n[PEER_SLOW] + n[PEER_DROPPED];
+        if ((d || n[PEER_EXC]) && (d > best_d || (d == best_d && n[PEER_EXC] > best_e))) {
+            best = (int)k;
+            best_d = d;
+            best_e = n[PEER_EXC];
+        }
+    }
+    memset(&s->worst, 0, sizeof s->worst);
+    s->worst.mb_peers = (uint16_t)s->n_peers;
+    if (best < 0)
+        return;
+    struct in_addr a4;
+    peer_counts(s, (unsigned)best, n);
+    if (inet_pton(AF_INET, s->peers[best].host, &a4) == 1) {
+        s->worst.mb_worst_family = 4;
+        s->worst.mb_worst_ipv4 = ntohl(a4.s_addr);
+    } else {
+        s->worst.mb_worst_family = 6;
+    }
+    s->worst.mb_worst_requests = n[PEER_REQ];
+    s->worst.mb_worst_exceptions = n[PEER_EXC];
+    s->worst.mb_worst_drops = best_d;
+}
+
+/* Every peer_log_s: one notice line per client address that got exceptions
+ * or was dropped since the last summary, with those counts and its totals. */
+static void peer_log(modbus_server_t *s, int64_t now)
+{
+    if (!s->peer_log_ns || now - s->peer_logged_ns < s->peer_log_ns)
+        return;
+    s->peer_logged_ns = now;
+    for (unsigned k = 0; k < s->n_peers; k++) {
+        uint64_t n[6], *was = s->peers[k].logged, d[6];
+        peer_counts(s, k, n);
+        for (int j = 0; j < 6; j++)
+            d[j] = n[j] - was[j];
+        if (!d[PEER_EXC] && !d[PEER_EVICTED] && !d[PEER_SLOW] && !d[PEER_DROPPED])
+            continue;
+        log_msg(LOG_NOTICE,
+                "modbus: client %s in the last %.0f s: %llu connections, %llu requests, %llu "
+                "exceptions, %llu evicted, %llu slow, %llu dropped (since start: %llu requests, "
+                "%llu exceptions, %llu evicted, %llu slow, %llu dropped)",
+                s->peers[k].host, (double)s->peer_log_ns / 1e9, (unsigned long long)d[PEER_CONN],
+                (unsigned long long)d[PEER_REQ], (unsigned long long)d[PEER_EXC],
+                (unsigned long long)d[PEER_EVICTED], (unsigned long long)d[PEER_SLOW],
+                (unsigned long long)d[PEER_DROPPED], (unsigned long long)n[PEER_REQ],
+                (unsigned long long)n[PEER_EXC], (unsigned long long)n[PEER_EVICTED],
+                (unsigned long long)n[PEER_SLOW], (unsigned long long)n[PEER_DROPPED]);
+        memcpy(was, n, sizeof n);
+    }
 }
 
 void modbus_server_free(modbus_server_t *s)
@@ -776,7 +917,7 @@ static void client_read(modbus_server_t *s, client_t *c)
         if (proto != 0 || length < 2 || length > 1 + MBMAP_PDU_MAX) {
             /* A byte stream with no frame boundary we can trust: drop it. */
             s->st.dropped++;
-            client_close(s, c);
+            client_close_why(s, c, WHY_DROPPED);
             return;
         }
         size_t total = 6 + length;
@@ -786,7 +927,7 @@ static void client_read(modbus_server_t *s, client_t *c)
             /* 128..255 is the exception range, not a function: no valid
              * answer exists (libmodbus would wrap fc + 0x80 to a request code). */
             s->st.dropped++;
-            client_close(s, c);
+            client_close_why(s, c, WHY_DROPPED);
             return;
         }
         uint64_t exc = s->st.exceptions;
@@ -800,7 +941,7 @@ static void client_read(modbus_server_t *s, client_t *c)
         c->last_ns = now;
         if (rc < 0) { /* peer not reading its answers: let it go */
             s->st.dropped++;
-            client_close(s, c);
+            client_close_why(s, c, WHY_DROPPED);
             return;
         }
         memmove(c->buf, c->buf + total, c->len - total);
@@ -875,7 +1016,7 @@ static int client_add(modbus_server_t *s, int fd, const struct sockaddr_storage 
         if (c) {
             s->st.evicted++;
             client_note(s, c, "evicted to admit a newcomer:", now);
-            client_close(s, c);
+            client_close_why(s, c, WHY_EVICTED);
         }
     }
     if (!c || set_nonblock(fd) < 0 ||
@@ -891,6 +1032,17 @@ static int client_add(modbus_server_t *s, int fd, const struct sockaddr_storage 
     c->may_write = may_write(s, ss);
     peer_name(fd, ss, c->peer, sizeof c->peer);
     s->st.clients++;
+    s->st.connections++;
+    char host[sizeof c->peer];
+    snprintf(host, sizeof host, "%s", c->peer);
+    char *colon = strrchr(host, ':'); /* host:port, the host without the port */
+    if (colon)
+        *colon = 0;
+    c->peer_idx = host[0] ? peer_find(s, host, now) : -1;
+    if (c->peer_idx >= 0) {
+        s->peers[c->peer_idx].n[PEER_CONN]++;
+        s->peers[c->peer_idx].last_ns = now;
+    }
     return 0;
 }
 
@@ -952,12 +1104,14 @@ static void housekeeping(modbus_server_t *s)
             s->st.slow++;
             s->st.dropped++;
             client_note(s, c, "closed, request not whole within request_timeout_ms:", now);
-            client_close(s, c);
+            client_close_why(s, c, WHY_SLOW);
         } else if (!c->pending_ns && s->idle_ns > 0 && now - c->last_ns > s->idle_ns) {
             s->st.dropped++;
-            client_close(s, c);
+            client_close_why(s, c, WHY_DROPPED);
         }
     }
+    peer_worst(s);
+    peer_log(s, now);
 }
 
 /* ---- RTU ---------------------------------------------------------------- */
@@ -1054,6 +1208,14 @@ void modbus_server_publish(modbus_server_t *s, const mbmap_daemon_t *d, const mb
     dd.mb_clients = (uint16_t)s->st.clients;
     dd.mb_evicted = s->st.evicted;
     dd.mb_slow = s->st.slow;
+    dd.mb_connections = s->st.connections;
+    dd.mb_dropped = s->st.dropped;
+    dd.mb_peers = s->worst.mb_peers;
+    dd.mb_worst_family = s->worst.mb_worst_family;
+    dd.mb_worst_ipv4 = s->worst.mb_worst_ipv4;
+    dd.mb_worst_requests = s->worst.mb_worst_requests;
+    dd.mb_worst_exceptions = s->worst.mb_worst_exceptions;
+    dd.mb_worst_drops = s->worst.mb_worst_drops;
     mbmap_encode_daemon(ir, &dd);
     for (unsigned k = 0; k < s->n_objects; k++) {
         if (objs[k].absent)

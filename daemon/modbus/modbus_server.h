@@ -77,6 +77,10 @@
 #define MODBUS_SERVER_RTU_SILENCE_MS 20
 #define MODBUS_SERVER_ALLOW_MAX 32        /* entries in the allow-list */
 #define MODBUS_SERVER_HOUSEKEEPING_MS 100 /* idle-timeout resolution */
+/* Client addresses (host, without the port) whose counters are kept across
+ * their connections: the least recently seen is forgotten for a new one. */
+#define MODBUS_SERVER_PEERS 32
+#define MODBUS_SERVER_DEFAULT_PEER_LOG_S 60 /* per-client summary lines, at most this often */
 /* Largest forward step of a waypoint sequence number counted as lost
  * waypoints; a bigger one is a jump (see modbus_server_publish). */
 #define MODBUS_SERVER_SEQ_WINDOW 65536u
@@ -109,6 +113,8 @@ typedef struct {
     unsigned idle_timeout_ms;    /* close a TCP client silent this long (0 = never) */
     unsigned request_timeout_ms; /* close a TCP client whose request is not whole this long
                                   * after its first byte */
+    unsigned peer_log_s;         /* a notice line per client address that had exceptions or
+                                  * drops, at most every this many seconds (0 = none) */
     unsigned n_objects;          /* 1..MBMAP_MAX_OBJECTS */
     int word_order;              /* mbmap_order_t of u32/f32/f64 values (ABCD default) */
 } modbus_server_config_t;
@@ -133,11 +139,12 @@ typedef struct {
 typedef struct {
     uint64_t requests; /* answered (normal or exception) */
     uint64_t exceptions;
-    uint64_t refused; /* connections refused: allow-list or max_clients */
-    uint64_t dropped; /* connections closed for bad framing, idleness, or answers
+    uint64_t refused;     /* connections refused: allow-list or max_clients */
+    uint64_t dropped;     /* connections closed for bad framing, idleness, or answers
                                  * not read; and slow ones (also counted in slow) */
-    uint64_t slow;    /* closed: a request not whole within request_timeout_ms */
-    uint64_t evicted; /* closed at max_clients to admit a newcomer */
+    uint64_t slow;        /* closed: a request not whole within request_timeout_ms */
+    uint64_t evicted;     /* closed at max_clients to admit a newcomer */
+    uint64_t connections; /* TCP connections accepted */
     uint64_t rtu_crc_errors;
     int rtu_down;           /* 1 once the serial line failed (not reopened) */
     unsigned clients;       /* TCP clients connected now */
@@ -161,7 +168,7 @@ void modbus_server_config_default(modbus_server_config_t *cfg);
  * Keys: enabled, address, port, systemd_socket, rtu_device, rtu_baud,
  * rtu_parity (N|E|O|none|even|odd), rtu_data_bits, rtu_stop_bits, unit_id,
  * writes, allow, write_allow, max_clients, idle_timeout_ms, request_timeout_ms (100 ..
- * 600000).  Booleans: yes/no/true/false/1/0.
+ * 600000), peer_log_s (0 .. 86400).  Booleans: yes/no/true/false/1/0.
  * Returns 0, -ENOENT for an unknown key, -EINVAL for a bad value (with the
  * reason in err if not NULL).
  */

@@ -159,6 +159,14 @@ void mbmap_encode_daemon(uint16_t *regs, const mbmap_daemon_t *d)
     mbmap_put_u32(regs + MBMAP_D_MB_SLOW, lo32(d->mb_slow));
     mbmap_put_u32(regs + MBMAP_D_OUT_LOST, lo32(d->out_lost));
     regs[MBMAP_D_OUT_FAULT] = d->out_fault ? 1 : 0;
+    mbmap_put_u32(regs + MBMAP_D_MB_CONNECTIONS, lo32(d->mb_connections));
+    mbmap_put_u32(regs + MBMAP_D_MB_DROPPED, lo32(d->mb_dropped));
+    regs[MBMAP_D_MB_PEERS] = d->mb_peers;
+    regs[MBMAP_D_MB_WORST_FAMILY] = d->mb_worst_family;
+    mbmap_put_u32(regs + MBMAP_D_MB_WORST_IPV4, d->mb_worst_ipv4);
+    mbmap_put_u32(regs + MBMAP_D_MB_WORST_REQUESTS, lo32(d->mb_worst_requests));
+    mbmap_put_u32(regs + MBMAP_D_MB_WORST_EXCEPTIONS, lo32(d->mb_worst_exceptions));
+    mbmap_put_u32(regs + MBMAP_D_MB_WORST_DROPS, lo32(d->mb_worst_drops));
     mbmap_put_u32(regs + MBMAP_D_CAN_ERR_FRAMES, lo32(d->can_err_frames));
     mbmap_put_u32(regs + MBMAP_D_CAN_WARNINGS, lo32(d->can_warnings));
     mbmap_put_u32(regs + MBMAP_D_CAN_PASSIVES, lo32(d->can_passives));
@@ -448,6 +456,21 @@ static const mbmap_field_t fields[] = {
       "setpoint lines lost by csv/stdout outputs (write error or full buffer)"),
     F(ID, MBMAP_D_OUT_FAULT, 1, MBMAP_T_U16, "out_fault", "",
       "1 once an output failed to write (disk full, I/O error)"),
+    F(ID, MBMAP_D_MB_CONNECTIONS, 2, MBMAP_T_U32, "mb_connections", "", "TCP connections accepted"),
+    F(ID, MBMAP_D_MB_DROPPED, 2, MBMAP_T_U32, "mb_dropped", "",
+      "clients closed by the server: bad framing, idle, answers not read, slow (evictions: "
+      "mb_evicted)"),
+    F(ID, MBMAP_D_MB_PEERS, 1, MBMAP_T_U16, "mb_peers", "",
+      "client addresses seen (the 32 most recent kept)"),
+    F(ID, MBMAP_D_MB_WORST_FAMILY, 1, MBMAP_T_U16, "mb_worst_family", "",
+      "the client address with the most drops, then exceptions: 0 none, 4 IPv4, 6 IPv6"),
+    F(ID, MBMAP_D_MB_WORST_IPV4, 2, MBMAP_T_U32, "mb_worst_ipv4", "",
+      "its IPv4 address, a.b.c.d as a*2^24 + b*2^16 + c*2^8 + d (0 if IPv6: see the log)"),
+    F(ID, MBMAP_D_MB_WORST_REQUESTS, 2, MBMAP_T_U32, "mb_worst_requests", "", "requests it sent"),
+    F(ID, MBMAP_D_MB_WORST_EXCEPTIONS, 2, MBMAP_T_U32, "mb_worst_exceptions", "",
+      "exception responses it got"),
+    F(ID, MBMAP_D_MB_WORST_DROPS, 2, MBMAP_T_U32, "mb_worst_drops", "",
+      "its connections evicted, dropped slow or closed by the server"),
     F(ID, MBMAP_D_CAN_ERR_FRAMES, 2, MBMAP_T_U32, "can_err_frames", "",
       "CAN error frames received (SocketCAN CAN_ERR_*; they set can_state)"),
     F(ID, MBMAP_D_CAN_WARNINGS, 2, MBMAP_T_U32, "can_warnings", "",

@@ -100,6 +100,14 @@
 #define MBMAP_D_MB_SLOW 30           /* u32 clients dropped: a request not whole within request_timeout_ms */
 #define MBMAP_D_OUT_LOST 32          /* u32 setpoint lines lost by the outputs (all objects) */
 #define MBMAP_D_OUT_FAULT 34         /* u16 1 if an output failed to write (disk full, I/O error) */
+#define MBMAP_D_MB_CONNECTIONS 48    /* u32 TCP connections accepted */
+#define MBMAP_D_MB_DROPPED 50        /* u32 clients closed by the server (framing, idle, answers not read, slow) */
+#define MBMAP_D_MB_PEERS 52          /* u16 client addresses seen (at most MODBUS_SERVER_PEERS kept) */
+#define MBMAP_D_MB_WORST_FAMILY 53   /* u16 the client address with the most drops, then exceptions: 0 none, 4 IPv4, 6 IPv6 */
+#define MBMAP_D_MB_WORST_IPV4 54     /* u32 its IPv4 address (a.b.c.d = a*2^24 + b*2^16 + c*2^8 + d; 0 if IPv6) */
+#define MBMAP_D_MB_WORST_REQUESTS 56 /* u32 requests it sent */
+#define MBMAP_D_MB_WORST_EXCEPTIONS 58 /* u32 exception responses it got */
+#define MBMAP_D_MB_WORST_DROPS 60    /* u32 its connections evicted, dropped slow or closed by the server */
 #define MBMAP_D_CAN_ERR_FRAMES 64    /* u32 CAN error frames received (lib/proto/canerr.h) */
 #define MBMAP_D_CAN_WARNINGS 66      /* u32 entries into error-warning */
 #define MBMAP_D_CAN_PASSIVES 68      /* u32 entries into error-passive */
@@ -226,6 +234,10 @@ typedef struct {
     uint64_t mb_evicted, mb_slow;
     uint64_t out_lost;
     uint16_t out_fault;
+    uint64_t mb_connections, mb_dropped;
+    uint16_t mb_peers, mb_worst_family;
+    uint32_t mb_worst_ipv4;
+    uint64_t mb_worst_requests, mb_worst_exceptions, mb_worst_drops;
     uint64_t can_err_frames, can_warnings, can_passives, can_bus_offs, can_restarts;
     uint64_t can_bus_errors, can_overflows;
     uint16_t can_tx_err, can_rx_err;
