@@ -543,8 +543,7 @@ void core_close(core_t *c)
 
 static void log_rejection(void *ctx, const char *line)
 {
-    (void)ctx;
-    log_msg(LOG_WARNING, "%s", line);
+    log_obj(LOG_WARNING, (const char *)ctx, "%s", line); /* ctx: the object's name */
 }
 
 /* Log the refusals of each object read since the last call (rejlog.h). */
@@ -553,7 +552,7 @@ static void log_rejections(core_t *c)
     for (unsigned i = 0; i < c->nobj; i++)
         if (c->obj[i].engine) {
             rejlog_drain(&c->obj[i].rejlog, c->obj[i].engine);
-            rejlog_flush(&c->obj[i].rejlog, c->obj[i].name, log_rejection, NULL);
+            rejlog_flush(&c->obj[i].rejlog, c->obj[i].name, log_rejection, (void *)c->obj[i].name);
         }
 }
 

@@ -6,6 +6,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/uio.h>
+#define SD_JOURNAL_SUPPRESS_LOCATION
+#include <systemd/sd-journal.h>
 #include <unistd.h>
 
 static int log_level = LOG_INFO;
@@ -64,13 +67,62 @@ int log_level_parse(const char *s)
     return -1;
 }
 
-void log_msg(int prio, const char *fmt, ...)
+/* One "NAME=value" field into iov[*n] from buf (truncated to buf's size). */
+static void field(struct iovec *iov, int *n, char *buf, size_t size, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+static void field(struct iovec *iov, int *n, char *buf, size_t size, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int k = vsnprintf(buf, size, fmt, ap);
+    va_end(ap);
+    iov[*n].iov_base = buf;
+    iov[(*n)++].iov_len = k < 0 ? 0 : (size_t)k < size ? (size_t)k : size - 1;
+}
+
+/* The line to the journal with its fields; 0, or < 0 if it could not be sent. */
+static int journal_send(const char *file, int line, const char *func, const char *object,
+                        const char *peer, int prio, const char *msg)
+{
+    char f_msg[1100], f_prio[16], f_id[32], f_file[256], f_line[32], f_func[128], f_obj[160],
+        f_peer[160];
+    struct iovec iov[8];
+    int n = 0;
+    field(iov, &n, f_msg, sizeof f_msg, "MESSAGE=%s", msg);
+    field(iov, &n, f_prio, sizeof f_prio, "PRIORITY=%d", prio & 7);
+    field(iov, &n, f_id, sizeof f_id, "SYSLOG_IDENTIFIER=trajd");
+    field(iov, &n, f_file, sizeof f_file, "CODE_FILE=%s", file);
+    field(iov, &n, f_line, sizeof f_line, "CODE_LINE=%d", line);
+    field(iov, &n, f_func, sizeof f_func, "CODE_FUNC=%s", func);
+    if (object)
+        field(iov, &n, f_obj, sizeof f_obj, "OBJECT=%s", object);
+    if (peer)
+        field(iov, &n, f_peer, sizeof f_peer, "PEER=%s", peer);
+    return sd_journal_sendv(iov, n);
+}
+
+void log_at(const char *file, int line, const char *func, const char *object, const char *peer,
+            int prio, const char *fmt, ...)
 {
     if (prio > log_level)
         return;
     char buf[1024];
     log_mode_t mode = log_get_mode();
     va_list ap;
+    /* sd_journal_sendv drops lines silently when journald is not running:
+     * only when its socket is there (else the "<N>" line below) */
+    if (mode == LOG_MODE_PREFIX && stderr_is_journal() &&
+        access("/run/systemd/journal/socket", W_OK) == 0) {
+        va_start(ap, fmt);
+        int m = vsnprintf(buf, sizeof buf, fmt, ap);
+        va_end(ap);
+        size_t len = m < 0 ? 0 : (size_t)m < sizeof buf ? (size_t)m : sizeof buf - 1;
+        while (len && buf[len - 1] == '\n')
+            len--;
+        buf[len] = '\0';
+        if (journal_send(file, line, func, object, peer, prio, buf) >= 0)
+            return;
+    }
     if (mode == LOG_MODE_SYSLOG) {
         va_start(ap, fmt);
         vsyslog(prio & 7, fmt, ap);

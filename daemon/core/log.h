@@ -34,7 +34,21 @@ void log_set_mode(log_mode_t mode);
 /* The mode the next line would use (LOG_MODE_AUTO resolved). */
 log_mode_t log_get_mode(void);
 
-/* Write "<prio>message\n" to stderr (printf format; a trailing '\n' is not needed). */
-void log_msg(int prio, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/*
+ * One line (printf format; a trailing '\n' is not needed), with where it was
+ * logged from.  On journald's stream (JOURNAL_STREAM names stderr) the line
+ * goes to the journal natively (sd_journal_sendv) with the fields MESSAGE,
+ * PRIORITY, SYSLOG_IDENTIFIER=trajd, CODE_FILE, CODE_LINE, CODE_FUNC, and
+ * OBJECT= (the [object] name) / PEER= (a client's address) when given;
+ * if the journal socket cannot be written, as "<prio>message" on stderr.
+ */
+void log_at(const char *file, int line, const char *func, const char *object, const char *peer,
+            int prio, const char *fmt, ...) __attribute__((format(printf, 7, 8)));
+#define log_msg(prio, ...) log_at(__FILE__, __LINE__, __func__, NULL, NULL, prio, __VA_ARGS__)
+/* A line about one object (OBJECT=name), or one peer (PEER=address). */
+#define log_obj(prio, object, ...)                                                                 \
+    log_at(__FILE__, __LINE__, __func__, object, NULL, prio, __VA_ARGS__)
+#define log_peer(prio, peer, ...)                                                                  \
+    log_at(__FILE__, __LINE__, __func__, NULL, peer, prio, __VA_ARGS__)
 
 #endif

@@ -790,11 +790,12 @@ static void client_note(modbus_server_t *s, const client_t *c, const char *what,
     if (s->log_suppressed)
         snprintf(more, sizeof more, " (%u more such messages not shown)", s->log_suppressed);
     s->log_suppressed = 0;
-    log_msg(
-        LOG_NOTICE, "modbus: %s %s after %.1f s: %llu requests, %llu exceptions, %llu bytes%s%s",
-        what, c->peer[0] ? c->peer : "(socket)", (double)(now - c->connected_ns) / 1e9,
-        (unsigned long long)c->requests, (unsigned long long)c->exceptions,
-        (unsigned long long)c->bytes_in, c->pending_ns ? ", a partial request pending" : "", more);
+    log_peer(LOG_NOTICE, c->peer[0] ? c->peer : NULL,
+             "modbus: %s %s after %.1f s: %llu requests, %llu exceptions, %llu bytes%s%s", what,
+             c->peer[0] ? c->peer : "(socket)", (double)(now - c->connected_ns) / 1e9,
+             (unsigned long long)c->requests, (unsigned long long)c->exceptions,
+             (unsigned long long)c->bytes_in, c->pending_ns ? ", a partial request pending" : "",
+             more);
 }
 
 /* ---- requests ------------------------------------------------------------- */
