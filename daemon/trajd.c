@@ -391,6 +391,17 @@ static int run(trajd_t *d)
     return rc;
 }
 
+/* What the engines document cannot happen, summed over the objects: hard
+ * stops (a moving output's curve ended) and numeric refusals (a solver
+ * refused finite data).  Never from the input: an exit status of its own. */
+static uint64_t engine_faults(const core_t *c)
+{
+    uint64_t n = 0;
+    for (unsigned i = 0; c && i < c->nobj; i++)
+        n += c->obj[i].status.hard_stops + c->obj[i].status.rejected_by[ENGINE_ENUMERIC];
+    return n;
+}
+
 int main(int argc, char **argv)
 {
     trajd_t d = {.conf_path = TRAJD_DEFAULT_CONF,
@@ -420,6 +431,7 @@ int main(int argc, char **argv)
     if (rc == 0)
         rc = run(&d);
     report_ready(&d, (char)(rc ? rc : EX_SOFTWARE));
+    uint64_t faults = engine_faults(d.core);
     core_close(d.core); /* outputs drain here: lines left over count as lost */
     if (d.stats.exit_code == CORE_EXIT_EPIPE) {
         log_msg(LOG_NOTICE, "stdout: the reader went away, exiting with status %d",
@@ -433,6 +445,12 @@ int main(int argc, char **argv)
                 d.stats.out_fault ? ", last write error: " : "",
                 d.stats.out_fault ? strerror(d.stats.out_errno) : "", CORE_EXIT_OUTPUT_LOST);
         rc = CORE_EXIT_OUTPUT_LOST;
+    } else if (rc == 0 && faults) {
+        log_msg(LOG_ERR,
+                "internal fault: the engines counted %llu hard stops or numeric refusals, which "
+                "they document cannot happen: a defect of trajd, please report it: exit status %d",
+                (unsigned long long)faults, EX_SOFTWARE);
+        rc = EX_SOFTWARE;
     } else if (rc == 0 && d.stats.no_input) {
         log_msg(LOG_ERR, "%llu replayed object(s) had no usable waypoint: exit status %d",
                 (unsigned long long)d.stats.no_input, CORE_EXIT_NO_INPUT);

@@ -23,7 +23,9 @@
  * Exit status: 0 done; 1 the track could not be loaded, or no waypoint of it
  * was usable; 2 usage or an invalid engine configuration; 3 writing an
  * output failed; 4 out of memory; 5 --max-rows reached; 6 --strict and a
- * waypoint was rejected or a line skipped.
+ * waypoint was rejected or a line skipped; 7 the engine counted what it
+ * documents cannot happen (hard stops, numeric refusals): a defect of
+ * trajd, never a fault of the track.
  */
 #include <errno.h>
 #include <getopt.h>
@@ -53,6 +55,8 @@ enum {
     EXIT_MEMORY = 4,   /* out of memory (never from the input) */
     EXIT_MAX_ROWS = 5, /* --max-rows reached: the output is cut */
     EXIT_STRICT = 6,   /* --strict: a waypoint was rejected or a line skipped */
+    EXIT_INTERNAL = 7, /* the engine did what it documents cannot happen (never from the
+                          input: a defect to report) */
 };
 
 /* Ticks written after the engine reports FINISHED for good: they show the
@@ -176,7 +180,8 @@ static void usage(FILE *f)
     fputs("\n"
           "Exit status: 0 ok, 1 track not loadable or no usable waypoint in it, 2 usage\n"
           "or configuration, 3 output write failed, 4 out of memory, 5 --max-rows\n"
-          "reached, 6 --strict and something was rejected.\n",
+          "reached, 6 --strict and something was rejected, 7 internal fault (a defect:\n"
+          "the engine counted hard stops or numeric refusals; please report it).\n",
           f);
 }
 
@@ -846,6 +851,16 @@ int main(int argc, char **argv)
                 run.rejected, run.rejected == 1 ? "" : "s", run.trk.skipped,
                 run.trk.skipped == 1 ? "" : "s");
         status = EXIT_STRICT;
+    }
+    uint64_t hard = run.st.hard_stops, numeric = run.st.rejected_by[ENGINE_ENUMERIC];
+    if ((hard || numeric) && status != EXIT_OUTPUT && status != EXIT_MEMORY) {
+        fprintf(stderr,
+                "trajreplay: %s: internal fault: %" PRIu64 " hard stop%s, %" PRIu64
+                " numeric refusal%s: a defect of trajd, not of the track; please report it "
+                "with the track (exit %d)\n",
+                o.input, hard, hard == 1 ? "" : "s", numeric, numeric == 1 ? "" : "s",
+                EXIT_INTERNAL);
+        status = EXIT_INTERNAL;
     }
     return run_close(&run, status);
 }

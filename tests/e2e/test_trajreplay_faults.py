@@ -163,6 +163,53 @@ class TestGapsAndBounds(unittest.TestCase):
         self.assertNotIn("engine bug", err)
         self.assertLess(len(rows(out)), 1000)
 
+    def test_hostile_tracks_exit_honestly(self):
+        # Given tracks that are wrong in every way a log is (out of range,
+        # backwards, one time for all, teleporting, a seconds-for-us slip, one
+        # row, duplicates, a 97 km jump after silence, alternating absurd
+        # speeds), then trajreplay ends with exit 0 or 1 (nothing usable),
+        # never 4 (memory), 5 (a runaway) or 7 (the engine did what it
+        # documents cannot happen), its --summary counts 0 hard stops and 0
+        # numeric refusals, and no message speaks of a bug or an internal
+        # fault; and trajd replaying each one (exit_when_done) exits 0, or 78
+        # for a track with nothing usable, never 70 (EX_SOFTWARE).  trajd
+        # follows its clock through gaps: the slip (22 days of track) is
+        # trajreplay's case only
+        cases = {
+            "range": "".join("%d,1e300,0,0\n" % i for i in range(40)),
+            "backwards": "".join("%d,%d,0,0\n" % (100 - i, i) for i in range(40)),
+            "same_time": "".join("5,%d,0,0\n" % (1000 * i) for i in range(40)),
+            "teleport": "".join("%d,%g,0,0\n" % (i, (i % 2) * 1e6) for i in range(40)),
+            "slip": "".join("%d,%d,%d,0\n" % (i * 100000, i, i) for i in range(20)),
+            "one_row": "3,1,2,3\n",
+            "duplicates": "".join("%d,%d,0,0\n" % (i // 2, i // 2) for i in range(40)),
+            "jump": "".join("%d,%d,0,0\n" % (i, i) for i in range(10))
+                    + "".join("%d,%d,0,0\n" % (110 + i, 97000 + i) for i in range(10)),
+            "zigzag": "".join("%g,%g,%g,0\n" % (0.01 * i, (-1) ** i * 50.0, 0.3 * i)
+                              for i in range(60)),
+        }
+        for name, body in cases.items():
+            path = os.path.join(self.tmp, name + ".csv")
+            write(path, "t,x,y,z\n" + body)
+            rc, out, err = bounded_run([TRAJREPLAY, "-q", "--summary", "--rate", "50",
+                                        "--max-rows", "2000000", path], limit_bytes=300_000_000)
+            self.assertIn(rc, (0, 1), "%s: %s" % (name, err[-800:]))
+            self.assertIn("summary: hard_stops 0\n", err, name)
+            self.assertIn("summary: rejected_numeric 0\n", err, name)
+            for word in ("bug", "internal fault"):
+                self.assertNotIn(word, err, name)
+            if name == "slip":
+                continue
+            conf = os.path.join(self.tmp, name + ".conf")
+            write(conf, "[daemon]\nrate_hz = 50\nspeed = 1000\nexit_when_done = yes\n"
+                        "status_interval_s = 0\nstop_timeout_s = 1\n[object.o]\ninput = replay\n"
+                        "replay.track = %s\noutput = csv\ncsv.path = %s.out\n" % (path, path))
+            p = subprocess.run([TRAJD, "-f", "-c", conf], capture_output=True, text=True,
+                               timeout=120)
+            self.assertIn(p.returncode, (0, 78) if name == "range" else (0,),
+                          "%s: %s" % (name, p.stderr[-800:]))
+            self.assertNotIn("internal fault", p.stderr, name)
+
     def test_long_transfer_finishes(self):
         # Given an ADS-B-like jump: 10 fixes, silence for 100 s (a gap), then
         # 10 fixes 97 km away, with --max-speed 0 (the old transfer ran at
