@@ -41,6 +41,9 @@
 #include "engine.h"
 #include "engine_settings.h"
 #include "replay.h"
+#include "angle.h"
+#include "csv_shortest.h"
+#include "geo.h"
 #include "replay_transport.h"
 #include "csv_fixed.h"
 #include "csv_format.h"
@@ -97,6 +100,7 @@ typedef struct {
     unsigned progress_after_ms;
     int precision; /* --precision: decimals in fixed notation, or CSV_PREC_* */
     int binary;    /* --binary: the records of csv_format.h instead of CSV */
+    int geo;       /* --geo: columns lat_deg,lon_deg,alt_m,heading_deg appended */
     double rate_hz;
     int64_t start_ns; /* engine time at which the first waypoint is due */
     int origin_set;   /* -c: the daemon's datum, about which a geographic track is expressed */
@@ -162,6 +166,9 @@ static void usage(FILE *f)
         "                       g17: printf's %.17g (17 digits always, the former default)\n"
         "                       (default: the shortest decimal that reads back to the\n"
         "                       same double, as Python's repr writes it)\n"
+        "  --geo                append the columns lat_deg,lon_deg,alt_m (a geographic\n"
+        "                       track's setpoint in WGS84) and heading_deg (a heading\n"
+        "                       column's axis, wrapped), as trajd's csv.geo = yes\n"
         "  --binary             write little-endian binary records instead of CSV: a\n"
         "                       64-byte header then 112 bytes per setpoint (layout in\n"
         "                       daemon/csv/csv_format.h; numpy.fromfile(offset=64))\n"
@@ -217,6 +224,7 @@ enum {
     OPT_MAX_ROWS,
     OPT_PRECISION,
     OPT_BINARY,
+    OPT_GEO,
     OPT_ENGINE = 1024, /* + index in engine_settings[] */
 };
 
@@ -234,6 +242,7 @@ static const struct option fixed_opts[] = {
     {"max-rows", required_argument, NULL, OPT_MAX_ROWS},
     {"precision", required_argument, NULL, OPT_PRECISION},
     {"binary", no_argument, NULL, OPT_BINARY},
+    {"geo", no_argument, NULL, OPT_GEO},
     {"output", required_argument, NULL, 'o'},
     {"quiet", no_argument, NULL, 'q'},
     {"help", no_argument, NULL, 'h'},
@@ -306,6 +315,7 @@ static int parse_option(int c, char **argv, opts_t *o)
         return -1;
     }
     case OPT_BINARY: o->binary = 1; return -1;
+    case OPT_GEO: o->geo = 1; return -1;
     case OPT_PROGRESS_AFTER:
         if (parse_uint(optarg, &o->progress_after_ms)) {
             fprintf(stderr, "trajreplay: --progress-after: '%s' is not milliseconds\n", optarg);
@@ -510,6 +520,8 @@ typedef struct {
     double max_v, max_a;
     uint64_t written; /* setpoint rows */
     engine_status_t st;
+    geo_enu_t frame;          /* --geo: the track's east/north/up origin */
+    size_t heading_hint;      /* --geo: interval of the last heading evaluation */
     int64_t t_start, t_shown; /* progress line */
     int progress, shown;
     size_t reported;   /* waypoints before this one were reported if rejected */
@@ -542,6 +554,8 @@ static int run_open(run_t *run, const opts_t *o)
     /* -c: about the daemon's one datum, as trajd writes it */
     if (o->origin_set && run->trk.geographic)
         (void)track_reframe(&run->trk, o->origin[0], o->origin[1], o->origin[2]);
+    if (run->trk.geographic)
+        (void)geo_enu_init(run->trk.lat0_deg, run->trk.lon0_deg, run->trk.alt0_m, &run->frame);
     for (size_t i = 0; i < run->trk.nreports; i++)
         fprintf(stderr, "trajreplay: skipped %s\n", run->trk.reports[i]);
     if (run->trk.ignored)
@@ -607,6 +621,26 @@ static void run_clear_progress(run_t *run)
     run->shown = 0;
 }
 
+/* --geo: lat_deg,lon_deg,alt_m,heading_deg appended to a row (as trajd's csv.geo). */
+static int append_geo(run_t *run, const engine_setpoint_t *sp, char *line, size_t len, int n)
+{
+    double v[4] = {NAN, NAN, NAN, NAN};
+    if (run->trk.geographic && isfinite(sp->pos_m[0]) && isfinite(sp->pos_m[1]) &&
+        isfinite(sp->pos_m[2]) && geo_from_enu(&run->frame, sp->pos_m, &v[0], &v[1], &v[2]) < 0)
+        v[0] = v[1] = v[2] = NAN;
+    if (run->trk.nheading && isfinite(sp->t_s) && isfinite(sp->pos_m[0]))
+        v[3] = angle_wrap_deg(angle_pchip_eval(run->trk.heading_t, run->trk.heading,
+                                               run->trk.nheading, sp->t_s, &run->heading_hint));
+    char extra[4 * (CSV_SHORTEST_MAX + 1) + 1];
+    size_t m = 0;
+    for (int k = 0; k < 4; k++) {
+        extra[m++] = ',';
+        m += (size_t)csv_shortest(extra + m, v[k]);
+    }
+    extra[m] = '\0';
+    return csv_format_append(line, len, n, extra);
+}
+
 /* Write one setpoint row and keep its statistics. */
 static void run_emit(run_t *run, const engine_setpoint_t *sp)
 {
@@ -617,6 +651,8 @@ static void run_emit(run_t *run, const engine_setpoint_t *sp)
     } else {
         char line[CSV_FORMAT_OBJECT_MAX + 16 * (CSV_FIXED_MAX + 1) + 64];
         int len = csv_format_format_prec(line, sizeof line, run->o->object, sp, run->o->precision);
+        if (len > 0 && run->o->geo)
+            len = append_geo(run, sp, line, sizeof line, len);
         if (len > 0)
             fwrite(line, 1, (size_t)len, run->out);
     }
@@ -723,7 +759,10 @@ static int run_ticks(run_t *run)
     } else {
         char line[CSV_FORMAT_LINE_MAX];
         int len = csv_format_header(line, sizeof line);
-        fwrite(line, 1, (size_t)len, run->out);
+        if (run->o->geo)
+            len = csv_format_append(line, sizeof line, len, ",lat_deg,lon_deg,alt_m,heading_deg");
+        if (len > 0)
+            fwrite(line, 1, (size_t)len, run->out);
     }
     int status = 0, skipped = 0;
     uint64_t tail = 0;

@@ -6,6 +6,7 @@ second half, written by this test as a GPX of its own, as object b (id 1): b sta
 a few hundred metres from a, so before this work b had its own east/north/up origin
 (its first fix) and the two were not in one frame.
 
+0. trajreplay --geo writes a's rows with the same lat/lon/alt columns as trajd's csv.geo.
 1. The datum is a's first fix (the geographic object with the lowest id).  b's
    setpoints are trajreplay's setpoints of b alone (east/north/up about b's own first
    fix) carried into the datum's frame by pyproj (topocentric inverse, then forward
@@ -127,8 +128,8 @@ class GeoFrames(unittest.TestCase):
                 "[object.a]\nid = 0\ninput = replay\nreplay.track = %s\noutput = csv\n"
                 "csv.path = a.csv\ncsv.geo = yes\n" % (extra_daemon, self.b_gpx, GPX))
 
-    def trajreplay(self, track, out, key):
-        p = subprocess.run([TRAJREPLAY, "-q", "--rate", "10", "-o", out, track],
+    def trajreplay(self, track, out, key, extra=()):
+        p = subprocess.run([TRAJREPLAY, "-q", "--rate", "10", "-o", out] + list(extra) + [track],
                            capture_output=True, text=True, timeout=WAIT_S)
         self.assertEqual(p.returncode, 0, p.stderr)
         return {r[key]: r for r in rows(out) if on_curve(r)}
@@ -171,7 +172,7 @@ class GeoFrames(unittest.TestCase):
         #    solved curve, is trajreplay's b moved from b's own frame into the datum's by
         #    pyproj, at the same track time (b first waits at the datum and comes to its
         #    start by a transfer, so its track time runs later than alone)
-        ra = self.trajreplay(GPX, os.path.join(self.tmp, "ra.csv"), "now_ns")
+        ra = self.trajreplay(GPX, os.path.join(self.tmp, "ra.csv"), "now_ns", ["--geo"])
         rb = self.trajreplay(self.b_gpx, os.path.join(self.tmp, "rb.csv"), "t_s")
         own_b = topo(*self.b0)
         bt = [r for r in b.values() if on_curve(r)]
@@ -187,8 +188,9 @@ class GeoFrames(unittest.TestCase):
         self.assertLess(worst, TOL_M)
         for k, r in a.items():
             if on_curve(r):
-                self.assertEqual([r[c] for c in ("t_s", "x_m", "y_m", "z_m")],
-                                 [ra[k][c] for c in ("t_s", "x_m", "y_m", "z_m")])
+                # trajreplay --geo writes the same lat/lon/alt columns as csv.geo
+                cols = ("t_s", "x_m", "y_m", "z_m", "lat_deg", "lon_deg", "alt_m", "heading_deg")
+                self.assertEqual([r[c] for c in cols], [ra[k][c] for c in cols])
         # 2. relative geometry at every tick both are on their curves: pyproj's geodesic
         #    distance and azimuth from trajd's lat/lon columns, and from the references
         #    each in its own frame converted by pyproj
