@@ -87,7 +87,8 @@ static void scenario(unsigned seed, engine_method_t m, int64_t period_ns, double
     for (int round = 0; round < 400; round++) {
         int npush = (int)(urand(&seed) * 4);
         for (int i = 0; i < npush; i++) {
-            engine_waypoint_t w = {.t_s = t, .seq = seq++};
+            engine_waypoint_t w = {.t_s = t};
+            w.seq = seq++;
             for (int k = 0; k < 3; k++) {
                 pos[k] += (urand(&seed) - 0.5) * step_m;
                 w.pos_m[k] = pos[k];
