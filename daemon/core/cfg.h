@@ -33,12 +33,12 @@
 #include "engine.h"
 #include "geo.h"
 
-#define CFG_OBJECTS_MAX 32    /* objects per daemon */
-#define CFG_NAME_MAX 32       /* object name, with its NUL ([A-Za-z0-9_-]) */
-#define CFG_OUTPUTS_MAX 4     /* outputs per object */
-#define CFG_TRANSPORTS_MAX 16 /* transports in transport_table */
-#define CFG_WHY_MAX 256       /* room for a key function's message */
-#define CFG_ID_MAX 63         /* object ids 0..63 (the Modbus map holds 64 object blocks) */
+#define CFG_OBJECTS_MAX 1024             /* objects per daemon (make bench: bench_scale.sh) */
+#define CFG_NAME_MAX 32                  /* object name, with its NUL ([A-Za-z0-9_-]) */
+#define CFG_OUTPUTS_MAX 4                /* outputs per object */
+#define CFG_TRANSPORTS_MAX 16            /* transports in transport_table */
+#define CFG_WHY_MAX 256                  /* room for a key function's message */
+#define CFG_ID_MAX (CFG_OBJECTS_MAX - 1) /* ids 0..1023; Modbus and CAN take fewer and say so */
 
 enum cfg_error {
     CFG_OK = 0,

@@ -205,8 +205,8 @@ static void test_ids(void **state)
     load_bad("[object.a]\nid = 1\ninput = replay\nreplay.track = " TRACK "\noutput = stdout\n"
              "[object.b]\nid = 1\ninput = replay\nreplay.track = " TRACK "\noutput = stdout\n",
              CFG_EDUP, 7, "also object 'a''s id");
-    load_bad("[object.a]\nid = 64\ninput = replay\n", CFG_EVALUE, 2, "[0, 63]");
-    load_bad("[object.a]\nid = -1\ninput = replay\n", CFG_EVALUE, 2, "[0, 63]");
+    load_bad("[object.a]\nid = 1024\ninput = replay\n", CFG_EVALUE, 2, "[0, 1023]");
+    load_bad("[object.a]\nid = -1\ninput = replay\n", CFG_EVALUE, 2, "[0, 1023]");
 }
 
 /* CAN: default ids come from the id (never the place in the file); ids above
