@@ -91,8 +91,10 @@ can_port_t *can_port_new(const can_port_config_t *cfg, const can_port_io_t *io, 
     for (unsigned i = 0; i < nobj; i++) {
         canproto_rx_init(&p->obj[i].rx, p->obj[i].slots, CAN_PORT_RX_SLOTS);
         p->obj[i].last_state = -1;
-        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
             p->obj[i].drive.state[a] = CIA402_STATE_UNKNOWN;
+            p->obj[i].drive.nmt[a] = CANPROTO_S2_NMT_NONE;
+        }
     }
     return p;
 }
@@ -285,8 +287,14 @@ static int drive_frame(can_port_obj_t *o, const canproto_frame_t *f)
             continue;
         if (f->id == 0x580u + node) {
             cia402_sdo_reply_t r;
-            if (cia402_decode_sdo_reply((uint8_t)node, f, &r) < 0 || !o->sdo_wait[a])
-                return 1; /* not an answer to a request of ours: ignored */
+            if (cia402_decode_sdo_reply((uint8_t)node, f, &r) < 0 || !o->sdo_wait[a] ||
+                r.index != (uint16_t)(o->sdo_frame[a].data[1] | o->sdo_frame[a].data[2] << 8) ||
+                r.sub != o->sdo_frame[a].data[3]) {
+                /* not the answer to the request in flight (e.g. a late answer to one
+                 * that was resent and answered already): ignored */
+                o->st.sdo_stale++;
+                return 1;
+            }
             if (r.kind == CIA402_SDO_ABORT) {
                 o->st.sdo_aborts++;
                 o->st.last_abort = r.abort_code;
@@ -305,6 +313,8 @@ static int drive_frame(can_port_obj_t *o, const canproto_frame_t *f)
             if (cia402_decode_heartbeat(f, &n, &st) == 0) {
                 o->hb_last_ns[a] = o->now_ns;
                 o->hb_lost[a] = 0;
+                o->drive.nmt[a] = st;
+                o->drive.hb_lost &= ~(1u << a);
                 if (st == CIA402_HB_BOOTUP) {
                     /* the drive (re)booted: bring it up again from NMT on */
                     o->nmt_sent = 0;
@@ -406,6 +416,17 @@ static int is_full(int rc)
     return rc == -ENOBUFS || rc == -EAGAIN;
 }
 
+/* The controlword of axis a's RPDO: with the bring-up, the command it last
+ * wrote (Disable voltage before any), so that the RPDO never enables a drive
+ * the bring-up does not (a quick-stopped drive would take Enable operation as
+ * transition 16); without it, the configured value. */
+static uint16_t rpdo_cw(const can_port_obj_t *o, unsigned a)
+{
+    if (!o->ids.cia402_enable)
+        return o->ids.cia402_controlword_value;
+    return o->cw_known[a] ? o->cw_sent[a] : CIA402_CW_DISABLE_VOLTAGE;
+}
+
 /* Send object o's frames for this cycle (own frames only if own); 0 or the
  * first failure. */
 static int send_setpoint(can_port_t *p, can_port_obj_t *o, int own)
@@ -428,7 +449,7 @@ static int send_setpoint(can_port_t *p, can_port_obj_t *o, int own)
     if (o->ids.cia402 && !(o->sp.flags & ENGINE_SP_NO_POSITION))
         for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
             if (o->ids.cia402_cob_id[a]) {
-                rc = canproto_encode_cia402(&o->ids, a, o->sp.pos_m[a], &f[n++]);
+                rc = canproto_encode_cia402_cw(&o->ids, a, o->sp.pos_m[a], rpdo_cw(o, a), &f[n++]);
                 clamped |= rc == CANPROTO_CLAMPED;
             }
     if (clamped)
@@ -515,6 +536,21 @@ static void send_status(can_port_t *p, can_port_obj_t *o, const engine_status_t 
     }
 }
 
+/* STATUS2 page 4 of object i, if it has drives, given to the page rotation;
+ * a change makes a STATUS due at once, and the changed page goes out with it. */
+static void update_status2_drive(can_port_t *p, unsigned i)
+{
+    can_port_obj_t *o = &p->obj[i];
+    canproto_status2_drive_t d;
+    canproto_frame_t f;
+    if (!can_port_drive_summary(p, i, &d))
+        return;
+    canproto_encode_status2_drive(o->ids.status2_id, &d, &f);
+    can_port_status2(p, i, &f);
+    if (o->st2_changed & (1u << CANPROTO_ST2_DRIVE))
+        o->status_due = 1;
+}
+
 #define CAN_PORT_SDO_TIMEOUT_NS 500000000LL /* an SDO request unanswered this long is resent */
 
 /* The controlword axis a's drive needs now (bring-up). */
@@ -553,6 +589,7 @@ static void bring_up(can_port_t *p, can_port_obj_t *o, int64_t now_ns)
         if (o->ids.cia402_heartbeat_ms && !o->hb_lost[a] &&
             now_ns - o->hb_last_ns[a] > (int64_t)o->ids.cia402_heartbeat_ms * 1000000) {
             o->hb_lost[a] = 1;
+            o->drive.hb_lost |= 1u << a;
             o->st.heartbeat_lost++;
             event(o, CANPROTO_STERR_DRIVE);
         }
@@ -645,11 +682,13 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
         engine_status_t es;
         memset(&es, 0, sizeof es);
         o->hooks.status(o->ctx, &es);
+        update_status2_drive(p, i);
         /* a change of state is reported at once (e.g. FINISHED, UNDERRUN) */
-        if (o->status_due || !o->sent_status || (int)es.state != o->last_state ||
-            (p->cfg.status_period_ns > 0 && now_ns - o->last_status_ns >= p->cfg.status_period_ns))
-            if (p->io.is_up(p->io_ctx))
-                send_status(p, o, &es, now_ns);
+        int due = o->status_due || !o->sent_status || (int)es.state != o->last_state ||
+                  (p->cfg.status_period_ns > 0 &&
+                   now_ns - o->last_status_ns >= p->cfg.status_period_ns);
+        if (due && p->io.is_up(p->io_ctx))
+            send_status(p, o, &es, now_ns);
     }
 out:
     for (unsigned i = 0; i < p->nobj; i++)
@@ -679,6 +718,36 @@ const canerr_bus_t *can_port_bus_errors(const can_port_t *p)
 const can_port_drive_t *can_port_drive(const can_port_t *p, unsigned i)
 {
     return i < p->nobj ? &p->obj[i].drive : NULL;
+}
+
+int can_port_drive_summary(const can_port_t *p, unsigned i, canproto_status2_drive_t *out)
+{
+    memset(out, 0, sizeof *out);
+    for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+        out->state[a] = CANPROTO_S2_NO_DRIVE;
+    out->nmt = CANPROTO_S2_NMT_NONE;
+    if (!p || i >= p->nobj || !p->obj[i].set)
+        return 0;
+    const can_port_obj_t *o = &p->obj[i];
+    if (!o->ids.cia402 || !(o->ids.cia402_feedback || o->ids.cia402_enable))
+        return 0;
+    int pick = -1;
+    for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
+        if (!o->ids.cia402_cob_id[a])
+            continue;
+        out->state[a] = (uint8_t)o->drive.state[a];
+        if (pick < 0 || (o->drive.state[pick] == CIA402_OPERATION_ENABLED &&
+                         o->drive.state[a] != CIA402_OPERATION_ENABLED))
+            pick = (int)a;
+    }
+    if (pick >= 0) {
+        out->statusword = o->drive.statusword[pick];
+        out->nmt = o->drive.nmt[pick];
+    }
+    out->held = o->drive.held;
+    out->hb_lost = o->drive.hb_lost != 0;
+    out->emcy = o->st.last_emcy;
+    return 1;
 }
 
 void can_port_obj_stats(const can_port_t *p, unsigned i, can_port_obj_stats_t *st)

@@ -27,7 +27,11 @@
  *      while the setpoint has no position (ENGINE_SP_NO_POSITION);
  *   3. STATUS frames that are due (every status_period_ns, or at once after a
  *      rejection, a loss, a malformed frame or a change of engine state, at
- *      most one per object per cycle).
+ *      most one per object per cycle); for an object with CiA 402 drives,
+ *      STATUS2 page 4 is one of its pages, and a change of it makes a STATUS due.
+ * With cia402_enable and cia402_controlword, the RPDO's controlword is the one
+ * the bring-up last wrote to 0x6040 (Enable operation only while it enables
+ * the drive; Disable voltage before any), never a fixed value.
  * A frame the transport cannot take (queue full, interface down) is dropped
  * and counted; the rest of that object's frames this cycle are not attempted
  * (the setpoint is dropped whole).  Nothing is kept for later: after a fault
@@ -71,6 +75,8 @@ typedef struct {
     int was_enabled; /* all were enabled, until this frame (a loss is this and !all_enabled) */
     int held;        /* bring-up: the drives left Operation Enabled; they stay disabled
                              * until a CLEAR command asks for a fault reset and re-enable */
+    uint8_t nmt[CANPROTO_CIA402_AXES]; /* last heartbeat NMT state (CANPROTO_S2_NMT_NONE: none) */
+    unsigned hb_lost;                  /* bit per axis: heartbeat not heard in time (consumer) */
 } can_port_drive_t;
 
 typedef struct {
@@ -111,6 +117,7 @@ typedef struct {
     uint64_t drive_bad;      /* feedback TPDOs too short */
     uint64_t sdo_aborts;     /* SDO writes a drive refused (last_abort says why) */
     uint64_t sdo_timeouts;   /* SDO writes resent after no reply */
+    uint64_t sdo_stale;      /* SDO replies not for the request in flight, ignored */
     uint64_t emcy;           /* EMCY frames from the object's drives */
     uint64_t heartbeat_lost; /* a drive's heartbeat not heard within cia402_heartbeat_ms */
     uint32_t last_abort;     /* abort code of the last SDO abort (cia402_sdo_abort_text) */
@@ -207,6 +214,15 @@ void can_port_obj_stats(const can_port_t *p, unsigned i, can_port_obj_stats_t *s
 
 /* What object i's drives last reported (NULL if i is out of range). */
 const can_port_drive_t *can_port_drive(const can_port_t *p, unsigned i);
+
+/*
+ * Object i's drives in brief (STATUS2 page 4, Modbus): state per axis, held,
+ * heartbeat lost, the statusword and NMT state of the first axis not in
+ * Operation Enabled (else the first), the last EMCY code.  Returns 1 if the
+ * object has CiA 402 drives it hears from (cia402 with feedback or enable), else
+ * 0 (out zeroed, states CANPROTO_S2_NO_DRIVE).
+ */
+int can_port_drive_summary(const can_port_t *p, unsigned i, canproto_status2_drive_t *out);
 
 /* Reset every counter (CAN command RESET_COUNTERS does it for its object). */
 void can_port_reset_counters(can_port_t *p);

@@ -715,6 +715,24 @@ can_bus_state_t can_transport_bus(const core_t *c, uint32_t *load_permille)
     return s && s->port ? s->bus_state : CAN_BUS_UNUSED;
 }
 
+int can_transport_drive(const core_t *c, unsigned obj, can_drive_info_t *out)
+{
+    const can_state_t *s = c->tstate[transport_index(&can_transport)];
+    memset(out, 0, sizeof *out);
+    if (!s || !s->port || obj >= CFG_OBJECTS_MAX || s->port_index[obj] < 0) {
+        can_port_drive_summary(NULL, 0, &out->d);
+        return 0;
+    }
+    unsigned k = (unsigned)s->port_index[obj];
+    can_port_obj_stats_t st;
+    can_port_obj_stats(s->port, k, &st);
+    out->emcy = st.emcy;
+    out->sdo_aborts = st.sdo_aborts;
+    out->last_abort = st.last_abort;
+    out->hb_lost = st.heartbeat_lost;
+    return can_port_drive_summary(s->port, k, &out->d);
+}
+
 static void on_readable(loop_t *l, int fd, uint32_t ev, void *ctx)
 {
     can_state_t *s = ctx;

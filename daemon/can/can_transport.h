@@ -85,6 +85,19 @@ can_bus_state_t can_transport_bus(const struct core *c, uint32_t *load_permille)
 /* The error-frame counters of c's CAN bus (lib/proto/canerr.h) as of the last
  * housekeeping timer; all 0 when CAN is not open. */
 void can_transport_bus_errors(const struct core *c, canerr_bus_t *out);
+/* What the Modbus registers say of object obj's CiA 402 drives. */
+typedef struct {
+    canproto_status2_drive_t d; /* as STATUS2 page 4 */
+    uint64_t emcy;              /* EMCY frames from its drives */
+    uint64_t sdo_aborts;
+    uint32_t last_abort; /* abort code of the last SDO abort, 0 = none */
+    uint64_t hb_lost;    /* heartbeat consumer timeouts */
+} can_drive_info_t;
+
+/* Object obj's drives (config index).  Returns 1 if it has CiA 402 drives trajd
+ * hears from, else 0 (*out zeroed, states CANPROTO_S2_NO_DRIVE).  Any time,
+ * also in the tick. */
+int can_transport_drive(const struct core *c, unsigned obj, can_drive_info_t *out);
 
 /*
  * The ids of an object (defaults for its can.index, or if not given for its

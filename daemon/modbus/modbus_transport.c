@@ -235,6 +235,24 @@ static void can_errors(const core_t *c, mbmap_daemon_t *d)
     d->can_rx_err = e.rx_err;
 }
 
+/* Object k's CiA 402 drives into its block, and the daemon's totals. */
+static void drive_regs(const core_t *c, unsigned k, mbmap_object_t *o, mbmap_daemon_t *d)
+{
+    can_drive_info_t di;
+    can_transport_drive(c, k, &di);
+    o->drive_states = (uint16_t)((di.d.state[0] & 0x0F) | (di.d.state[1] & 0x0F) << 4 |
+                                 (di.d.state[2] & 0x0F) << 8 | (di.d.hb_lost ? 0x4000 : 0) |
+                                 (di.d.held ? 0x8000 : 0));
+    o->drive_statusword = di.d.statusword;
+    o->drive_nmt = di.d.nmt;
+    o->drive_emcy = di.d.emcy;
+    d->drive_emcy += di.emcy;
+    d->drive_sdo_aborts += di.sdo_aborts;
+    d->drive_hb_lost += di.hb_lost;
+    if (di.sdo_aborts)
+        d->drive_last_abort = di.last_abort;
+}
+
 /* In the tick: no allocation, no blocking call, no logging. */
 static void cycle(void *state, core_t *c, int64_t now_ns)
 {
@@ -279,6 +297,7 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         o->out_lost = ob->out_lost;
         o->out_fault = (uint16_t)(ob->out_fault != 0);
         o->seq_jumps = 0; /* the server adds its own */
+        drive_regs(c, (unsigned)t->obj_of[k], o, &d);
     }
     modbus_server_publish(t->srv, &d, t->objs);
 }

@@ -383,13 +383,19 @@ double canproto_cia402_pos_m(const canproto_ids_t *ids, unsigned axis, int32_t i
 int canproto_encode_cia402(const canproto_ids_t *ids, unsigned axis, double pos_m,
                            canproto_frame_t *out)
 {
+    return canproto_encode_cia402_cw(ids, axis, pos_m, ids->cia402_controlword_value, out);
+}
+
+int canproto_encode_cia402_cw(const canproto_ids_t *ids, unsigned axis, double pos_m, uint16_t cw,
+                              canproto_frame_t *out)
+{
     int clamped = 0;
     if (axis >= CANPROTO_CIA402_AXES || !ids->cia402_cob_id[axis])
         return -CANPROTO_ECONFIG;
     int64_t inc = canproto_cia402_counts(ids, axis, pos_m, &clamped);
     if (ids->cia402_controlword) {
         frame_init(out, ids->cia402_cob_id[axis], 6, 0);
-        put_le(&out->data[0], 2, ids->cia402_controlword_value);
+        put_le(&out->data[0], 2, cw);
         put_le(&out->data[2], 4, (uint64_t)inc);
     } else {
         frame_init(out, ids->cia402_cob_id[axis], 4, 0);
@@ -455,6 +461,18 @@ void canproto_encode_status2_rejected(uint32_t id, const canproto_st2_rejected_t
     out->data[0] = CANPROTO_ST2_REJECTED;
     for (int i = 0; i < 7; i++)
         out->data[1 + i] = (uint8_t)sat_max(v[i], 0xFF);
+}
+
+void canproto_encode_status2_drive(uint32_t id, const canproto_status2_drive_t *d,
+                                   canproto_frame_t *out)
+{
+    frame_init(out, id, CANPROTO_STATUS2_DLEN, 0);
+    out->data[0] = CANPROTO_ST2_DRIVE;
+    out->data[1] = (uint8_t)((d->state[0] & 0x0F) | (d->state[1] & 0x0F) << 4);
+    out->data[2] = (uint8_t)((d->state[2] & 0x0F) | (d->hb_lost ? 0x40 : 0) | (d->held ? 0x80 : 0));
+    put_le(&out->data[3], 2, d->statusword);
+    out->data[5] = d->nmt;
+    put_le(&out->data[6], 2, d->emcy);
 }
 
 /* ---- decoders ------------------------------------------------------------------------ */
@@ -585,6 +603,25 @@ int canproto_decode_status(const canproto_frame_t *f, canproto_status_t *out)
     out->malformed = f->data[5];
     out->dropped = f->data[6];
     out->last_err = f->data[7];
+    return 0;
+}
+
+int canproto_decode_status2_drive(const canproto_frame_t *f, canproto_status2_drive_t *out)
+{
+    memset(out, 0, sizeof *out);
+    if (f->len != CANPROTO_STATUS2_DLEN ||
+        (f->flags & (CANPROTO_F_RTR | CANPROTO_F_ERR | CANPROTO_F_EFF | CANPROTO_F_FD)))
+        return -CANPROTO_ELEN;
+    if (f->data[0] != CANPROTO_ST2_DRIVE)
+        return -CANPROTO_EMUX;
+    out->state[0] = f->data[1] & 0x0F;
+    out->state[1] = f->data[1] >> 4;
+    out->state[2] = f->data[2] & 0x0F;
+    out->hb_lost = !!(f->data[2] & 0x40);
+    out->held = !!(f->data[2] & 0x80);
+    out->statusword = (uint16_t)(f->data[3] | f->data[4] << 8);
+    out->nmt = f->data[5];
+    out->emcy = (uint16_t)(f->data[6] | f->data[7] << 8);
     return 0;
 }
 
@@ -934,6 +971,14 @@ static const canproto_signal_t sig_st2[] = {
     SIG_U("ST2_RejUnconfirmed", CANPROTO_ST2_REJECTED, 40, 8, 1, ""),
     SIG_U("ST2_RejStale", CANPROTO_ST2_REJECTED, 48, 8, 1, ""),
     SIG_U("ST2_RejOther", CANPROTO_ST2_REJECTED, 56, 8, 1, ""),
+    SIG_U("ST2_StateX", CANPROTO_ST2_DRIVE, 8, 4, 1, ""),
+    SIG_U("ST2_StateY", CANPROTO_ST2_DRIVE, 12, 4, 1, ""),
+    SIG_U("ST2_StateZ", CANPROTO_ST2_DRIVE, 16, 4, 1, ""),
+    SIG_U("ST2_HbLost", CANPROTO_ST2_DRIVE, 22, 1, 1, ""),
+    SIG_U("ST2_Held", CANPROTO_ST2_DRIVE, 23, 1, 1, ""),
+    SIG_U("ST2_Statusword", CANPROTO_ST2_DRIVE, 24, 16, 1, ""),
+    SIG_U("ST2_Nmt", CANPROTO_ST2_DRIVE, 40, 8, 1, ""),
+    SIG_U("ST2_Emcy", CANPROTO_ST2_DRIVE, 48, 16, 1, ""),
 };
 static const canproto_signal_t sig_rpdo[] = {
     SIG_S("Target_Position_607A", -1, 0, 32, 1, "inc"),
@@ -1039,7 +1084,8 @@ int canproto_dbc(char *buf, size_t len)
          "csv/stdout output lost lines, 0x46 safety monitor fault (object held until clear), 0x47 "
          "a CiA 402 "
          "drive left Operation Enabled, 0x48 a command refused (object not writable)\";\n"
-         "CM_ SG_ %u ST2_Page \"STATUS2 page: 1 faults, 2 rejected waypoints per reason, 5 bus; "
+         "CM_ SG_ %u ST2_Page \"STATUS2 page: 1 faults, 2 rejected waypoints per reason, 4 drive, "
+         "5 bus; "
          "counters saturate at their maximum\";\n"
          "CM_ SG_ %u ST2_OutLost \"setpoint lines lost by the object's csv/stdout outputs\";\n"
          "CM_ SG_ %u ST2_OutErrors \"failed writes of the object's csv/stdout outputs\";\n"
@@ -1058,6 +1104,18 @@ int canproto_dbc(char *buf, size_t len)
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
          CANPROTO_ID_STATUS2_BASE);
+    emit(buf, len, &pos,
+         "CM_ SG_ %u ST2_Statusword \"page 4: statusword 0x6041 of the first drive axis not in "
+         "Operation Enabled, else of the first\";\n"
+         "CM_ SG_ %u ST2_Nmt \"page 4: heartbeat NMT state of the same node\";\n"
+         "CM_ SG_ %u ST2_Held \"page 4: a drive left Operation Enabled: no target sent, drives "
+         "disabled until the command clear\";\n"
+         "CM_ SG_ %u ST2_HbLost \"page 4: a drive's heartbeat not heard within "
+         "can.cia402_heartbeat_ms\";\n"
+         "CM_ SG_ %u ST2_Emcy \"page 4: error code of the last EMCY from the object's drives, 0: "
+         "none\";\n",
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE);
     emit(buf, len, &pos,
          "BA_DEF_ BO_ \"VFrameFormat\" ENUM \"StandardCAN\",\"ExtendedCAN\",\"reserved\","
          "\"J1939PG\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\","
@@ -1090,13 +1148,26 @@ int canproto_dbc(char *buf, size_t len)
          CANPROTO_STERR_OUT_OF_ORDER, CANPROTO_STERR_TX_DROPPED, CANPROTO_STERR_BUS_DOWN,
          CANPROTO_STERR_OUTPUT, CANPROTO_STERR_SAFETY, CANPROTO_STERR_DRIVE,
          CANPROTO_STERR_REFUSED);
-    emit(buf, len, &pos, "VAL_ %u ST2_Page %d \"faults\" %d \"rejected\" %d \"bus\" ;\n",
-         CANPROTO_ID_STATUS2_BASE, CANPROTO_ST2_FAULTS, CANPROTO_ST2_REJECTED, CANPROTO_ST2_BUS);
+    emit(buf, len, &pos,
+         "VAL_ %u ST2_Page %d \"faults\" %d \"rejected\" %d \"drive\" %d \"bus\" ;\n",
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_ST2_FAULTS, CANPROTO_ST2_REJECTED, CANPROTO_ST2_DRIVE,
+         CANPROTO_ST2_BUS);
     emit(buf, len, &pos,
          "VAL_ %u ST2_BusState 1 \"error-active\" 2 \"error-warning\" 3 \"error-passive\" "
          "4 \"bus-off\" 5 \"down\" ;\n",
          CANPROTO_ID_STATUS2_BASE);
 
+    for (unsigned a = 0; a < 3; a++)
+        emit(buf, len, &pos,
+             "VAL_ %u ST2_State%c 0 \"not ready to switch on\" 1 \"switch on disabled\" "
+             "2 \"ready to switch on\" 3 \"switched on\" 4 \"operation enabled\" "
+             "5 \"quick stop active\" 6 \"fault reaction active\" 7 \"fault\" 8 \"not heard\" "
+             "%u \"no drive\" ;\n",
+             CANPROTO_ID_STATUS2_BASE, "XYZ"[a], CANPROTO_S2_NO_DRIVE);
+    emit(buf, len, &pos,
+         "VAL_ %u ST2_Nmt 0 \"boot-up\" 4 \"stopped\" 5 \"operational\" 127 "
+         "\"pre-operational\" %u \"none heard\" ;\n",
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_S2_NMT_NONE);
     for (unsigned k = 1; k <= 3; k++)
         emit(buf, len, &pos,
              "VAL_ %u Controlword_6040 0 \"disable voltage\" 2 \"quick stop\" 6 \"shutdown\" "

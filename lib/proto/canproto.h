@@ -131,6 +131,7 @@ typedef struct {
 typedef enum {
     CANPROTO_ST2_FAULTS = 1,   /* output and command faults (canproto_st2_faults_t) */
     CANPROTO_ST2_REJECTED = 2, /* waypoints refused, per reason (canproto_st2_rejected_t) */
+    CANPROTO_ST2_DRIVE = 4,    /* the object's CiA 402 drives (canproto_status2_drive_t) */
     CANPROTO_ST2_BUS = 5,      /* CAN bus state from error frames (canproto_st2_bus_t) */
     CANPROTO_ST2_PAGES = 8     /* pages are 1 .. CANPROTO_ST2_PAGES - 1 */
 } canproto_st2_page_t;
@@ -360,6 +361,10 @@ void canproto_encode_sync(uint32_t id, uint8_t counter, canproto_frame_t *out);
  */
 int canproto_encode_cia402(const canproto_ids_t *ids, unsigned axis, double pos_m,
                            canproto_frame_t *out);
+/* The same with the controlword cw in the RPDO (if ids->cia402_controlword)
+ * instead of ids->cia402_controlword_value: the bring-up's current command. */
+int canproto_encode_cia402_cw(const canproto_ids_t *ids, unsigned axis, double pos_m, uint16_t cw,
+                              canproto_frame_t *out);
 
 /* STATUS frame contents. */
 typedef struct {
@@ -375,6 +380,24 @@ typedef struct {
 } canproto_status_t;
 
 void canproto_encode_status(uint32_t id, const canproto_status_t *st, canproto_frame_t *out);
+
+/* STATUS2 page 4: the object's CiA 402 drives. */
+#define CANPROTO_S2_NO_DRIVE 0x0Fu /* state nibble of an axis without a drive */
+#define CANPROTO_S2_NMT_NONE 0xFFu /* no heartbeat heard */
+typedef struct {
+    /* cia402_state_t of each axis (8 = not heard yet), CANPROTO_S2_NO_DRIVE if none:
+     * byte 1 bits 0..3 x, 4..7 y; byte 2 bits 0..3 z */
+    uint8_t state[CANPROTO_CIA402_AXES];
+    int hb_lost; /* byte 2 bit 6: a drive's heartbeat not heard within cia402_heartbeat_ms */
+    int held;    /* byte 2 bit 7: a drive left Operation Enabled; held until clear */
+    uint16_t statusword; /* bytes 3..4 (LE): of the first drive axis not in Operation Enabled,
+                          * else of the first drive axis */
+    uint8_t nmt;         /* byte 5: heartbeat NMT state of that axis' node, 0xFF = none heard */
+    uint16_t emcy;       /* bytes 6..7 (LE): error code of the last EMCY, 0 = none */
+} canproto_status2_drive_t;
+
+void canproto_encode_status2_drive(uint32_t id, const canproto_status2_drive_t *d,
+                                   canproto_frame_t *out);
 
 /* ---- decoders ------------------------------------------------------------------ */
 
@@ -424,6 +447,8 @@ int canproto_status2_page(const canproto_frame_t *f);
 
 /* Decode STATUS2 page 1.  Returns 0, -CANPROTO_ELEN, or -CANPROTO_EMUX (another page). */
 int canproto_decode_status2_faults(const canproto_frame_t *f, canproto_st2_faults_t *out);
+/* Decode STATUS2 page 4.  Returns 0, -CANPROTO_ELEN, -CANPROTO_EMUX (another page). */
+int canproto_decode_status2_drive(const canproto_frame_t *f, canproto_status2_drive_t *out);
 
 /* STATUS2 page 2, REJECTED: waypoints refused per reason (uint8, saturating). */
 typedef struct {

@@ -159,6 +159,11 @@ void mbmap_encode_daemon(uint16_t *regs, const mbmap_daemon_t *d)
     mbmap_put_u32(regs + MBMAP_D_MB_SLOW, lo32(d->mb_slow));
     mbmap_put_u32(regs + MBMAP_D_OUT_LOST, lo32(d->out_lost));
     regs[MBMAP_D_OUT_FAULT] = d->out_fault ? 1 : 0;
+    mbmap_put_u32(regs + MBMAP_D_DRIVE_EMCY, lo32(d->drive_emcy));
+    mbmap_put_u32(regs + MBMAP_D_DRIVE_LAST_ABORT, d->drive_last_abort);
+    regs[MBMAP_D_DRIVE_SDO_ABORTS] = (uint16_t)(d->drive_sdo_aborts > 0xffff ? 0xffff
+                                                                             : d->drive_sdo_aborts);
+    regs[MBMAP_D_DRIVE_HB_LOST] = (uint16_t)(d->drive_hb_lost > 0xffff ? 0xffff : d->drive_hb_lost);
     mbmap_put_u32(regs + MBMAP_D_MB_CONNECTIONS, lo32(d->mb_connections));
     mbmap_put_u32(regs + MBMAP_D_MB_DROPPED, lo32(d->mb_dropped));
     regs[MBMAP_D_MB_PEERS] = d->mb_peers;
@@ -220,6 +225,10 @@ int mbmap_encode_object(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_ob
     mbmap_put_f32(b + MBMAP_O_RATE, (float)o->st.rate);
     b[MBMAP_O_OVERRIDE] = (uint16_t)lround(o->st.override * 100.0);
     mbmap_put_u32(b + MBMAP_O_HARD_STOPS, lo32(o->st.hard_stops));
+    b[MBMAP_O_DRIVE_STATES] = o->drive_states;
+    b[MBMAP_O_DRIVE_STATUSWORD] = o->drive_statusword;
+    b[MBMAP_O_DRIVE_NMT] = o->drive_nmt;
+    b[MBMAP_O_DRIVE_EMCY] = o->drive_emcy;
     mbmap_put_f64(b + MBMAP_O_LAT, o->lat_deg);
     mbmap_put_f64(b + MBMAP_O_LON, o->lon_deg);
     mbmap_put_f64(b + MBMAP_O_ALT, o->alt_m);
@@ -456,6 +465,14 @@ static const mbmap_field_t fields[] = {
       "setpoint lines lost by csv/stdout outputs (write error or full buffer)"),
     F(ID, MBMAP_D_OUT_FAULT, 1, MBMAP_T_U16, "out_fault", "",
       "1 once an output failed to write (disk full, I/O error)"),
+    F(ID, MBMAP_D_DRIVE_EMCY, 2, MBMAP_T_U32, "drive_emcy", "",
+      "EMCY frames from CiA 402 drives (all objects)"),
+    F(ID, MBMAP_D_DRIVE_LAST_ABORT, 2, MBMAP_T_U32, "drive_last_abort", "",
+      "abort code of the last SDO write a drive refused (CiA 301 table 22), 0 none"),
+    F(ID, MBMAP_D_DRIVE_SDO_ABORTS, 1, MBMAP_T_U16, "drive_sdo_aborts", "",
+      "SDO writes drives refused (saturates at 65535)"),
+    F(ID, MBMAP_D_DRIVE_HB_LOST, 1, MBMAP_T_U16, "drive_hb_lost", "",
+      "drive heartbeats not heard within can.cia402_heartbeat_ms (saturates)"),
     F(ID, MBMAP_D_MB_CONNECTIONS, 2, MBMAP_T_U32, "mb_connections", "", "TCP connections accepted"),
     F(ID, MBMAP_D_MB_DROPPED, 2, MBMAP_T_U32, "mb_dropped", "",
       "clients closed by the server: bad framing, idle, answers not read, slow (evictions: "
@@ -550,6 +567,18 @@ static const mbmap_field_t fields[] = {
     F(IO, MBMAP_O_HARD_STOPS, 2, MBMAP_T_U32, "hard_stops", "",
       "times the solved curve ended under a moving output (velocity to 0 in one tick); should stay "
       "0"),
+    F(IO, MBMAP_O_DRIVE_STATES, 1, MBMAP_T_U16, "drive_states", "",
+      "CiA 402 drive state per axis, 4 bits each (x bits 0..3, y 4..7, z 8..11): 0 not ready, 1 "
+      "switch on disabled, 2 ready, 3 switched on, 4 operation enabled, 5 quick stop, 6 fault "
+      "reaction, 7 fault, 8 not heard, 15 no drive; bit 14 heartbeat lost, bit 15 held until "
+      "clear"),
+    F(IO, MBMAP_O_DRIVE_STATUSWORD, 1, MBMAP_T_U16, "drive_statusword", "",
+      "statusword 0x6041 of the first drive axis not in operation enabled, else of the first"),
+    F(IO, MBMAP_O_DRIVE_NMT, 1, MBMAP_T_U16, "drive_nmt", "",
+      "heartbeat NMT state of that node: 0 boot-up, 4 stopped, 5 operational, 127 "
+      "pre-operational, 255 none heard"),
+    F(IO, MBMAP_O_DRIVE_EMCY, 1, MBMAP_T_U16, "drive_emcy", "",
+      "error code of the last EMCY from the object's drives, 0 none"),
     F(IO, MBMAP_O_LAT, 4, MBMAP_T_F64, "lat", "deg",
       "latitude of the setpoint (WGS84), for an object whose track is geographic: its "
       "east/north/up about the daemon's one datum converted back; NaN otherwise or with no "

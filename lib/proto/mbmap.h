@@ -100,6 +100,10 @@
 #define MBMAP_D_MB_SLOW 30           /* u32 clients dropped: a request not whole within request_timeout_ms */
 #define MBMAP_D_OUT_LOST 32          /* u32 setpoint lines lost by the outputs (all objects) */
 #define MBMAP_D_OUT_FAULT 34         /* u16 1 if an output failed to write (disk full, I/O error) */
+#define MBMAP_D_DRIVE_EMCY 36        /* u32 EMCY frames from CiA 402 drives (all objects) */
+#define MBMAP_D_DRIVE_LAST_ABORT 38  /* u32 abort code of the last SDO abort from a drive, 0 = none */
+#define MBMAP_D_DRIVE_SDO_ABORTS 40  /* u16 SDO writes drives refused (all objects, saturates) */
+#define MBMAP_D_DRIVE_HB_LOST 41     /* u16 heartbeat consumer timeouts (all objects, saturates) */
 #define MBMAP_D_MB_CONNECTIONS 48    /* u32 TCP connections accepted */
 #define MBMAP_D_MB_DROPPED 50        /* u32 clients closed by the server (framing, idle, answers not read, slow) */
 #define MBMAP_D_MB_PEERS 52          /* u16 client addresses seen (at most MODBUS_SERVER_PEERS kept) */
@@ -153,6 +157,10 @@
 #define MBMAP_O_RATE 70              /* f32 time-scaling rate ds/dt of the output (1 = as solved) */
 #define MBMAP_O_OVERRIDE 72          /* u16 feed override in force, % */
 #define MBMAP_O_HARD_STOPS 74        /* u32 the curve ended under a moving output (should stay 0) */
+#define MBMAP_O_DRIVE_STATES 76      /* u16 CiA 402 state per axis: bits 0..3 x, 4..7 y, 8..11 z; bit 14 heartbeat lost, 15 held */
+#define MBMAP_O_DRIVE_STATUSWORD 77  /* u16 statusword of the first drive axis not in Operation Enabled, else the first */
+#define MBMAP_O_DRIVE_NMT 78         /* u16 heartbeat NMT state of that node (0xFF: none heard) */
+#define MBMAP_O_DRIVE_EMCY 79        /* u16 error code of the last EMCY from the object's drives */
 #define MBMAP_O_LAT 84               /* f64 latitude of the setpoint, degrees (WGS84; NaN: not geographic or no position) */
 #define MBMAP_O_LON 88               /* f64 longitude, degrees */
 #define MBMAP_O_ALT 92               /* f64 height above the WGS84 ellipsoid, m */
@@ -241,6 +249,8 @@ typedef struct {
     uint64_t can_err_frames, can_warnings, can_passives, can_bus_offs, can_restarts;
     uint64_t can_bus_errors, can_overflows;
     uint16_t can_tx_err, can_rx_err;
+    uint64_t drive_emcy, drive_sdo_aborts, drive_hb_lost;
+    uint32_t drive_last_abort;
 } mbmap_daemon_t;
 
 typedef struct {
@@ -255,6 +265,8 @@ typedef struct {
     uint16_t out_fault;
     uint64_t seq_jumps;
     int absent;                 /* no object has this id: the block stays all 0 (GEN 0) */
+    /* CiA 402 drives (STATUS2 page 4 on CAN); states 0x0FFF, nmt 0xFF without drives */
+    uint16_t drive_states, drive_statusword, drive_nmt, drive_emcy;
     double lat_deg, lon_deg, alt_m; /* the setpoint as WGS84 geodetic (NaN: none) */
     double heading_deg, heading_unwrapped_deg; /* heading axis (NaN: none) */
 } mbmap_object_t;

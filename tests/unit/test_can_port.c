@@ -471,6 +471,149 @@ static void test_cia402_bring_up(void **state)
     assert_int_equal(st.sdo_aborts, 0);
 }
 
+/* The controlword of the last RPDO (6 bytes: controlword, target) to node 1, -1 if none since mark. */
+static long last_rpdo_cw(unsigned mark)
+{
+    long v = -1;
+    for (unsigned i = mark; i < io.nout; i++)
+        if (io.out[i].id == 0x201 && io.out[i].len == 6)
+            v = (long)(io.out[i].data[0] | io.out[i].data[1] << 8);
+    return v;
+}
+
+static void enable_with_controlword_rpdo(void)
+{
+    canproto_ids_t ids;
+    canproto_ids_default(&ids, 0);
+    ids.cia402 = 1;
+    ids.cia402_enable = 1;
+    ids.cia402_controlword = 1;
+    ids.cia402_heartbeat_ms = 100;
+    ids.cia402_cob_id[1] = ids.cia402_cob_id[2] = 0;
+    assert_int_equal(can_port_set_object(port, 0, &ids, &fe_hooks, &eng), 0);
+}
+
+/* Given cia402_enable with the controlword in the RPDO, then the RPDO carries
+ * the command the bring-up last wrote by SDO, never a fixed Enable operation:
+ * Disable voltage before the drive is enabled, Enable operation once it is,
+ * Disable voltage again after a fault and for a drive in quick stop (which
+ * would take Enable operation as transition 16 and move again). */
+static void test_cia402_rpdo_controlword_follows_bring_up(void **state)
+{
+    (void)state;
+    enable_with_controlword_rpdo();
+    unsigned mark = io.nout;
+    run_cycle(0, 0);
+    assert_int_equal(last_rpdo_cw(mark), 0x0000); /* nothing written yet */
+    assert_int_equal(step_drive(0x0250, 1), 0x0006);
+    assert_int_equal(step_drive(0x0231, 2), 0x0007);
+    mark = io.nout;
+    assert_int_equal(step_drive(0x0233, 3), 0x000F);
+    assert_int_equal(last_rpdo_cw(mark), 0x000F);
+    mark = io.nout;
+    assert_int_equal(step_drive(0x0207, 4), 0x0000); /* quick stop active: disable voltage */
+    assert_int_equal(last_rpdo_cw(mark), 0x0000);
+    mark = io.nout;
+    run_cycle(5, 0);
+    assert_int_equal(last_rpdo_cw(mark), 0x0000); /* held until clear */
+}
+
+/* Given an SDO request resent after no answer, when the late answer to the
+ * first and then the answer to the resent one arrive, then only the one for
+ * the request in flight counts: the second does not acknowledge the next
+ * request (a different object) before its own answer came. */
+static void test_cia402_sdo_stale_reply_ignored(void **state)
+{
+    (void)state;
+    canproto_ids_t ids;
+    canproto_ids_default(&ids, 0);
+    ids.cia402 = 1;
+    ids.cia402_enable = 1;
+    ids.cia402_cob_id[1] = ids.cia402_cob_id[2] = 0;
+    ids.cia402_sdo[0].index = 0x6060;
+    ids.cia402_sdo[0].size = 1;
+    ids.cia402_sdo[0].value = 8;
+    ids.cia402_sdo[1].index = 0x60C2;
+    ids.cia402_sdo[1].sub = 1;
+    ids.cia402_sdo[1].size = 1;
+    ids.cia402_sdo[1].value = 10;
+    ids.cia402_nsdo = 2;
+    assert_int_equal(can_port_set_object(port, 0, &ids, &fe_hooks, &eng), 0);
+    uint16_t index = 0;
+    run_cycle(0, 0);
+    assert_int_equal(last_sdo(1, 0, &index), 8);
+    run_cycle(1000, 0); /* 1 s later: resent */
+    queue_sdo_reply(1, 0x60, 0x6060, 0);
+    can_port_rx(port, 0);
+    unsigned mark = io.nout;
+    run_cycle(1001, 0);
+    assert_int_equal(last_sdo(1, mark, &index), 10);
+    assert_int_equal(index, 0x60C2);
+    queue_sdo_reply(1, 0x60, 0x6060, 0); /* the answer to the resent 0x6060 */
+    can_port_rx(port, 0);
+    queue_tpdo(0x181, 0x0250, 0);
+    can_port_rx(port, 0);
+    mark = io.nout;
+    run_cycle(1002, 0);
+    assert_int_equal(last_sdo(1, mark, &index), -1); /* still waiting for 0x60C2 */
+    can_port_obj_stats_t st;
+    can_port_obj_stats(port, 0, &st);
+    assert_int_equal(st.sdo_stale, 1);
+    assert_int_equal(st.sdo_timeouts, 1);
+}
+
+/* Given a drive going through bring-up, fault and heartbeat loss, then STATUS2
+ * page 4 (decoded by canproto_decode_status2_drive) says its state, the
+ * statusword, the NMT state of its heartbeat, held, heartbeat lost and the
+ * last EMCY code; it is sent at once when it changes. */
+static void test_cia402_status2_drive_page(void **state)
+{
+    (void)state;
+    enable_with_controlword_rpdo();
+    canproto_status2_drive_t d;
+    io.in[io.nin] = (canproto_frame_t){.id = 0x701, .len = 1, .data = {0x05}};
+    io.nin++;
+    can_port_rx(port, 0);
+    step_drive(0x0250, 1);
+    step_drive(0x0231, 2);
+    step_drive(0x0233, 3);
+    step_drive(0x0237, 4);
+    unsigned mark = io.nout;
+    io.in[io.nin] = (canproto_frame_t){.id = 0x081, .len = 8, .data = {0x11, 0x86, 0x01}};
+    io.nin++;
+    step_drive(0x0218, 5);
+    int found = 0;
+    for (unsigned i = mark; i < io.nout; i++)
+        if (io.out[i].id == 0x6D0) {
+            assert_int_equal(canproto_decode_status2_drive(&io.out[i], &d), 0);
+            found = 1;
+        }
+    assert_true(found);
+    assert_int_equal(d.state[0], CIA402_FAULT);
+    assert_int_equal(d.state[1], CANPROTO_S2_NO_DRIVE);
+    assert_int_equal(d.state[2], CANPROTO_S2_NO_DRIVE);
+    assert_int_equal(d.statusword, 0x0218);
+    assert_int_equal(d.nmt, 0x05);
+    assert_int_equal(d.emcy, 0x8611);
+    assert_true(d.held);
+    assert_false(d.hb_lost);
+    /* no heartbeat for longer than cia402_heartbeat_ms (100 ms): lost */
+    mark = io.nout;
+    run_cycle(500, 0);
+    found = 0;
+    for (unsigned i = mark; i < io.nout; i++)
+        if (io.out[i].id == 0x6D0 && canproto_decode_status2_drive(&io.out[i], &d) == 0)
+            found = 1;
+    assert_true(found && d.hb_lost);
+    canproto_status2_drive_t s;
+    assert_int_equal(can_port_drive_summary(port, 0, &s), 1);
+    assert_memory_equal(&s, &d, sizeof s);
+    /* another page is not page 4 */
+    canproto_frame_t other = io.out[io.nout - 1];
+    other.data[0] = CANPROTO_ST2_BUS;
+    assert_int_equal(canproto_decode_status2_drive(&other, &d), -CANPROTO_EMUX);
+}
+
 /* Given the drive refuses the configuration SDO, then the abort is counted
  * with its code and the drive is never enabled. */
 static void test_cia402_sdo_abort(void **state)
@@ -788,6 +931,10 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_cia402_feedback, setup, teardown),
         cmocka_unit_test_setup_teardown(test_cia402_bring_up, setup, teardown),
         cmocka_unit_test_setup_teardown(test_cia402_sdo_abort, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_cia402_rpdo_controlword_follows_bring_up, setup,
+                                        teardown),
+        cmocka_unit_test_setup_teardown(test_cia402_sdo_stale_reply_ignored, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_cia402_status2_drive_page, setup, teardown),
         cmocka_unit_test_setup_teardown(test_rx_paths, setup, teardown),
         cmocka_unit_test_setup_teardown(test_flow_control_efull, setup, teardown),
         cmocka_unit_test_setup_teardown(test_commands, setup, teardown),
