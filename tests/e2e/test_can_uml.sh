@@ -16,19 +16,6 @@ run=$BUILD/uml-run
 rm -rf "$run"; mkdir -p "$run"
 SPEED=10     # the guest's trajd runs at speed 10 (tests/uml/daemon.sh)
 echo "BUILD=$BUILD" > "$run/env"
-# python-canopen for the drive simulator (tests/uml/drive.sh): ../shared/peers next
-# to the checkout, or TRAJD_PEERS; the scenario skips with a message without it
-peers=${TRAJD_PEERS:-$PWD/../shared/peers}
-[ -d "$peers/python-canopen" ] && echo "TRAJD_PEERS=$(cd "$peers" && pwd)" >> "$run/env"
-# The drive scenario's track: a line along y at 1 m/s for 3 s, 20 waypoints/s, from (0, 0, 0)
-$PY - "$run/dtrack.csv" <<'PYEOF' || exit 1
-import sys
-with open(sys.argv[1], "w") as f:
-    f.write("t_s,x_m,y_m,z_m\n")
-    for i in range(61):
-        f.write("%.6f,0.000000,%.6f,0.000000\n" % (i * 0.05, i * 0.05))
-PYEOF
-$PY tests/helpers/cantools_trajd.py wplog "$run/dtrack.csv" "$run/dwp.log" > /dev/null || exit 1
 # The track: 100 waypoints (20 s) of the figure eight, sent in 2 s of wall time.
 $PY tests/helpers/cantools_trajd.py xyz tests/data/n2k_furuno_figure8_src52.csv "$run/track.csv" 100 || exit 1
 $PY tests/helpers/cantools_trajd.py wplog "$run/track.csv" "$run/wp.log" --time-scale $SPEED --also-fd-obj 1 > /dev/null || exit 1
@@ -52,8 +39,4 @@ rc=$(cat "$run/rc")
 echo "uml: guest exit code $rc"
 [ "$rc" = 0 ] || { for f in "$run"/*.out "$run"/trajd.err; do echo "== $f"; tail -20 "$f"; done; exit 1; }
 $PY tests/helpers/cantools_trajd.py uml-check "$run" "$run/track.csv" "$run/ref1k.csv" || exit 1
-# tests/uml/drive.sh (simulated CiA 402 drives) is not in all.sh yet: see its header
-if [ -f "$run/ok.drive" ]; then
-    $PY tests/helpers/cantools_trajd.py drive-check "$run" || exit 1
-fi
 tail -2 "$run/fast.err"

@@ -1,19 +1,16 @@
 #!/bin/sh
-# Guest scenario: trajd brings up two simulated CiA 402 drives (tests/uml/drive_sim.py,
-# python-canopen's LocalNode) and drives them: node 1 on x starts 2 m away from the
-# track, node 2 on y is inverted; every cycle counts as late (max_late_ms tiny), so
-# only SYNC and the RPDOs go out; then a drive fault, and the clear command.  The
-# captures and the simulator's log are checked on the host (cantools_trajd.py drive-check).
-# 20 Hz: the guest on a loaded host misses 10 ms deadlines, and a drive faults on two
-# missed SYNCs (as real ones do); 50 ms leaves room.
-#
-# NOT YET IN tests/uml/all.sh.  Seen in the guest (host load ~12): power-on to
-# Operation Enabled for both drives (NMT, the three SDOs, Shutdown, Switch on, Enable
-# operation), the 2 m start and the track to its end, the injected fault detected
-# and reported by trajd.  Not passing yet: after the fault the simulator stopped
-# answering SDO requests (cause not found), so clear -> fault reset -> enable was
-# not seen; and the STATUS wait for error 0x47 races with 0x43 (every cycle late
-# here overwrites the last error).  Run it alone by putting it in all.sh.
+# Guest scenario of tests/e2e/test_drive_uml.sh: trajd brings up simulated CiA 402
+# drives (tests/uml/drive_sim.py on python-canopen's LocalNode) from power-on and
+# drives them.  Object 'arm': node 1 on x starts 2 m away from the track, node 2
+# on y is inverted, the RPDO carries the controlword; every cycle counts as late
+# (max_late_ms tiny), so only SYNC and the RPDOs go out.  Object 'spare': node 3,
+# whose configuration list has an object the drive lacks (SDO abort).  Then a
+# drive fault and a quick stop, each followed by the clear command.  Every wait
+# is for an event with a generous bound (a loaded host slows the guest a lot);
+# the captures and the simulator's log are checked on the host
+# (tests/helpers/cantools_trajd.py drive-check).
+# 20 Hz: the guest on a loaded host misses 10 ms deadlines, and a drive faults
+# on two missed SYNCs (as real ones do); 50 ms leaves room.
 out=$1
 . tests/uml/wait.sh
 . "$out/env"   # BUILD, TRAJD_PEERS
@@ -23,48 +20,65 @@ if [ ! -d "${TRAJD_PEERS:-/nonexistent}/python-canopen/canopen" ]; then
     touch "$out/drive.skipped"; exit 0
 fi
 export TRAJD_PEERS
-fail() { echo "FAIL: $*"; [ -n "${tp:-}" ] && kill "$tp" 2>/dev/null; [ -n "${sp:-}" ] && kill "$sp" 2>/dev/null; exit 1; }
-cat > "$out/drive.conf" <<CONF
-[daemon]
-rate_hz = 20
-speed = 1
-status_interval_s = 0
-stop_timeout_s = 1
-[can]
-interface = vcan0
-sync = yes
-sync_overflow = 240
-status_period_ms = 100
-max_late_ms = 0.001
-[object.arm]
-input = can
-output = can
-fragment = 8
-overlap = 4
-start_slack = 0
-can.cia402 = yes
-can.cia402_enable = yes
-can.cia402_cob_x = 0x201
-can.cia402_cob_y = 0x202
-can.cia402_cob_z = 0
-can.cia402_invert_y = yes
-can.cia402_sdo = 0x6060:0=8/1, 0x60C2:1=10/1, 0x60C2:2=-3/1
-CONF
-timeout 60 candump -r 8000000 -D -L vcan0 > "$out/dcap.log" & cp=$!
+fail() {
+    echo "FAIL: $*"
+    [ -n "${tp:-}" ] && kill "$tp" 2>/dev/null
+    [ -n "${sp:-}" ] && { kill "$sp" 2>/dev/null; wait "$sp"; }
+    exit 1
+}
+# count_ev NODE STATE: how many times the simulated drive NODE entered STATE
+count_ev() { grep -c "^[0-9.]* $1 $2 " "$out/sim_events.txt" 2>/dev/null; }
+# wait_ev NODE STATE N: until NODE entered STATE at least N times (up to 40 s)
+wait_ev() {
+    i=0
+    while [ $i -lt 2000 ]; do
+        [ "$(count_ev "$1" "$2")" -ge "$3" ] && return 0
+        i=$((i + 1)); sleep 0.02
+    done
+    echo "wait_ev: node $1 entered $2 $(count_ev "$1" "$2") times, wanted $3" >&2; return 1
+}
+# The configuration is README.md's "Wiring a CiA 402 drive" example (the host
+# test extracts it into drive.conf), with the test's own settings around it.
+[ -f "$out/drive.conf" ] || fail "no drive.conf"
+timeout 100 candump -r 8000000 -D -L vcan0 > "$out/dcap.log" & cp=$!
 wait_rx vcan0 || fail "candump not ready"
-/usr/bin/python3 tests/uml/drive_sim.py "$out" 1:20000 2:0 2> "$out/sim.err" & sp=$!
-wait_grep "$out/drive_sim.ready" ready || fail "simulator not ready"
+/usr/bin/python3 tests/uml/drive_sim.py "$out" 1:20000 2:0 3:0 2> "$out/sim.err" & sp=$!
+wait_grep "$out/drive_sim.ready" ready 2000 || fail "simulator not ready"
 "$BUILD/bin/trajd" -f -c "$out/drive.conf" 2> "$out/drive.err" & tp=$!
-# power-on to Operation Enabled: NMT start, SDOs, Shutdown, Switch on, Enable operation
-wait_grep "$out/drive.err" "drives in Operation Enabled" 500 || fail "drives never enabled"
+# ---- power-on to Operation Enabled: NMT start, SDOs, Shutdown, Switch on, Enable operation
+wait_ev 1 OPERATION_ENABLED 1 || fail "node 1 never enabled"
+wait_ev 2 OPERATION_ENABLED 1 || fail "node 2 never enabled"
+wait_grep "$out/drive.err" "drives in Operation Enabled" 2000 || fail "trajd did not report the drives enabled"
+# node 3 refused its configuration: reported, never enabled
+wait_grep "$out/drive.err" "refused SDO write of 0x6071" 2000 || fail "SDO abort not reported"
+touch "$out/ok.bringup"
+# ---- the track: from 2 m away, smoothly; every cycle late
 canplayer -I "$out/dwp.log" vcan0=can0 || fail "canplayer"
-wait_grep "$out/dcap.log" " 6C0#03" 750 || fail "track never finished"
-touch "$out/inject_fault_1"
-wait_grep "$out/drive.err" "left Operation Enabled" || fail "drive fault not reported"
+# STATUS byte 0: engine state in bits 0..2 (3 = finished), flags above (tx-drop: late)
+wait_grep "$out/dcap.log" " 6C0#[0-9A-F]3" 2000 || fail "track never finished"
+touch "$out/ok.track"
+# ---- drive fault: trajd holds and reports; clear -> fault reset -> enabled again
+kill -USR1 "$sp"
+wait_ev 1 FAULT 1 || fail "simulator did not fault"
+wait_grep "$out/drive.err" "left Operation Enabled" 2000 || fail "drive fault not reported"
+# ... and on Modbus: object 0's drive registers (76..79) and the daemon's (36..41)
+mbpoll -m tcp -p 1502 -a 1 -0 -r 176 -c 4 -t 3:hex -1 127.0.0.1 > "$out/mb_obj.txt" 2>&1 || fail "mbpoll object"
+mbpoll -m tcp -p 1502 -a 1 -0 -r 36 -c 6 -t 3:hex -1 127.0.0.1 > "$out/mb_daemon.txt" 2>&1 || fail "mbpoll daemon"
+# every drive of the object is disabled (node 2 too), until the clear command
+wait_ev 2 SWITCH_ON_DISABLED 2 || fail "trajd did not disable the object's other drive"
 cansend vcan0 680#0400030000000000   # command clear: fault reset, enable again
-i=0; while [ $i -lt 500 ] && [ "$(grep -c 'drives in Operation Enabled' "$out/drive.err")" -lt 2 ]; do
-    i=$((i + 1)); sleep 0.02; done
-[ "$(grep -c 'drives in Operation Enabled' "$out/drive.err")" -ge 2 ] || fail "not enabled again after clear"
+wait_ev 1 OPERATION_ENABLED 2 || fail "node 1 not enabled again after clear"
+wait_ev 2 OPERATION_ENABLED 2 || fail "node 2 not enabled again after clear"
+touch "$out/ok.fault"
+# ---- the drives' own quick stop: trajd disables them (no re-enable without clear)
+kill -USR2 "$sp"
+wait_ev 2 QUICK_STOP_ACTIVE 1 || fail "simulator did not quick-stop"
+wait_ev 1 SWITCH_ON_DISABLED 3 || fail "trajd did not disable quick-stopped node 1"
+wait_ev 2 SWITCH_ON_DISABLED 3 || fail "trajd did not disable quick-stopped node 2"
+cansend vcan0 680#0400030000000000
+wait_ev 1 OPERATION_ENABLED 3 || fail "node 1 not enabled again after the quick stop"
+wait_ev 2 OPERATION_ENABLED 3 || fail "node 2 not enabled again after the quick stop"
+touch "$out/ok.quickstop"
 kill -0 $tp || fail "trajd died"
 kill -TERM $tp; wait $tp; rc=$?; tp=
 [ $rc -eq 0 ] || fail "trajd exit code $rc"

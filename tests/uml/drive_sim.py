@@ -1,28 +1,37 @@
 #!/usr/bin/python3
 """drive_sim.py - CiA 402 drives in cyclic synchronous position mode, simulated
-on vcan0 inside the user-mode-linux guest (tests/uml/drive.sh).
+on vcan0 inside the user-mode-linux guest (tests/uml/drive.sh), or on
+python-can's virtual bus (tests/e2e/test_drive_sim.py).
 
-The CANopen side is python-canopen's LocalNode (SDO server, NMT slave) with
-the object dictionary of tests/uml/cia402_drive.eds; only the CiA 402
-behaviour is written here, from CiA 402-2: the state machine driven by the
-controlword written to 0x6040 (table 28: command = controlword bits under a
-mask), the statusword bit patterns of table 30, and CSP: the target 0x607A
-received by RPDO is applied at the next SYNC.  Like real drives, a drive here
-faults (state FAULT, EMCY) on
+The CANopen side is python-canopen's LocalNode (SDO server, NMT slave with
+boot-up and heartbeat) with the object dictionary of tests/uml/cia402_drive.eds;
+only the CiA 402 behaviour is written here, from CiA 402-2: the state machine
+driven by the controlword written to 0x6040 (table 28: command = controlword
+bits under a mask), the statusword bit patterns of table 30, and CSP: the
+target 0x607A received by RPDO is applied at the next SYNC.  Like real drives,
+a drive here faults (state FAULT, EMCY) on
   - a following error: |target - position| above 0x6065 after its move
     (it moves at most max_step increments per SYNC);
   - a step: two consecutive targets further apart than step_limit increments;
   - two missed SYNCs in a row (the SYNC counter, CiA 301, jumps by 3 or more);
-  - a fault injected by the test (the file <out>/inject_fault appears).
-Each drive sends a TPDO (0x180 + node: statusword u16, position actual value
-i32) after every SYNC and on every state change.
+  - a fault injected by the test (SIGUSR1: node 1; SIGUSR2: every node's quick
+    stop, as from a local quick-stop input).
+Once NMT-started (CiA 301: PDOs only in operational), each drive sends a TPDO
+(0x180 + node: statusword u16, position actual value i32) after every SYNC and
+on every state change, and keeps 0x6041, 0x6061 and
+0x6064 readable by SDO.  An object the EDS does not list is answered by SDO
+abort 0x06020000 (python-canopen's SDO server), as by a real drive.
 
 Usage: drive_sim.py OUT NODE:START_INC [NODE:START_INC ...]
-Runs until SIGTERM, then writes OUT/drive_sim.json (what each drive saw).
+Writes OUT/drive_sim.ready once listening, one line per state change to
+OUT/sim_events.txt ("<t> <node> <STATE> <why>"), and runs until SIGTERM,
+then writes OUT/drive_sim.json (what each drive saw).
 """
 import json
+import logging
 import os
 import signal
+import socket
 import struct
 import sys
 import threading
@@ -40,33 +49,41 @@ SW = {"NOT READY TO SWITCH ON": 0x0000, "SWITCH ON DISABLED": 0x0040,
 REMOTE = 0x0200          # statusword bit 9: controlled over the network
 SYNC_OVERFLOW = 240      # the SYNC counter runs 1..240 (trajd: can.sync_overflow = 240)
 EMCY = {"following error": 0x8611, "step": 0x8612, "sync lost": 0x8700, "injected": 0xFF00}
+log = logging.getLogger("drive_sim")
 
 
 class Drive:
     # 4 m/s at 20 Hz, 10000 increments per metre (tests/uml/drive.sh)
-    def __init__(self, net, node_id, start_inc, out, max_step=2000, step_limit=2000):
+    def __init__(self, net, node_id, start_inc, events=None, max_step=2000, step_limit=5000,
+                 eds=EDS):
         self.id = node_id
         self.net = net
-        self.node = canopen.LocalNode(node_id, EDS)
+        self.node = canopen.LocalNode(node_id, eds)
         net.add_node(self.node)
         self.node.add_write_callback(self.on_write)
+        self.node.add_read_callback(self.on_read)
         net.subscribe(0x200 + node_id, self.on_rpdo)
-        self.lock = threading.Lock()
-        self.state = "SWITCH ON DISABLED"  # NOT READY passes on by itself (transition 1)
+        self.lock = threading.RLock()
+        self.events = events
         self.pos = start_inc
         self.target = None       # last target received (applied at the next SYNC)
         self.last_applied = None
         self.max_step = max_step
         self.step_limit = step_limit
-        self.window = 5000       # 0x6065 default (EDS)
         self.last_cw = 0
         self.last_counter = None
-        self.out = out
         self.log = {"node": node_id, "start_inc": start_inc, "states": [], "faults": [],
-                    "syncs": 0, "rpdo": 0, "rpdo_not_enabled": 0, "rpdo_before_enabled": 0, "max_target_step": 0,
-                    "max_sync_gap": 0, "targets": [], "cw": []}
+                    "syncs": 0, "rpdo": 0, "rpdo_not_enabled": 0, "rpdo_before_enabled": 0,
+                    "max_target_step": 0, "max_sync_gap": 0, "targets": [], "cw": [],
+                    "sdo": []}
         self.t0 = time.monotonic()
-        self.enter(self.state)
+        self.state = "NOT READY TO SWITCH ON"
+        # power-on: CiA 301 boot-up (0x700 + node, 0x00), then pre-operational with
+        # the heartbeat of 0x1017 (python-canopen's NMT slave sends both)
+        self.node.nmt.send_command(0x81)
+        self.node.nmt.send_command(0x80)
+        self.enter("NOT READY TO SWITCH ON", "power on")
+        self.enter("SWITCH ON DISABLED", "self test done")  # transition 1, by itself
 
     def now(self):
         return round(time.monotonic() - self.t0, 4)
@@ -77,26 +94,54 @@ class Drive:
     def enter(self, state, why=""):
         self.state = state
         self.log["states"].append([self.now(), state, why])
+        if self.events:
+            with open(self.events, "a") as f:
+                f.write("%.4f %d %s %s\n" % (self.now(), self.id, state.replace(" ", "_"),
+                                              why.replace(" ", "_")))
         self.send_tpdo()
 
     def send_tpdo(self):
+        if self.node.nmt.state != "OPERATIONAL":
+            return    # CiA 301: PDOs only in NMT operational (after NMT start)
         self.net.send_message(0x180 + self.id, struct.pack("<Hi", self.statusword(), int(self.pos)))
 
     def fault(self, why):
-        if self.state in ("FAULT", "FAULT REACTION ACTIVE"):
-            return
-        self.log["faults"].append([self.now(), why])
-        self.enter("FAULT REACTION ACTIVE", why)
-        self.net.send_message(0x80 + self.id, struct.pack("<HB5x", EMCY[why], 0x01))
-        self.enter("FAULT", why)
+        with self.lock:
+            if self.state in ("FAULT", "FAULT REACTION ACTIVE"):
+                return
+            log.warning("node %d: fault: %s", self.id, why)
+            self.log["faults"].append([self.now(), why])
+            self.enter("FAULT REACTION ACTIVE", why)
+            self.net.send_message(0x80 + self.id, struct.pack("<HB5x", EMCY[why], 0x01))
+            self.enter("FAULT", why)
+
+    def quick_stop(self, why):
+        with self.lock:
+            if self.state == "OPERATION ENABLED":
+                self.enter("QUICK STOP ACTIVE", why)
+
+    def on_read(self, index, subindex, od):
+        with self.lock:
+            if index == 0x6041:
+                return self.statusword()
+            if index == 0x6064:
+                return int(self.pos)
+            if index == 0x6061:
+                return self.node.sdo[0x6060].raw
+        return None
 
     # controlword (CiA 402-2 table 28; the transitions of figure 13)
     def on_write(self, index, subindex, od, data):
+        self.log["sdo"].append([self.now(), index, subindex, int.from_bytes(data, "little")])
         if index != 0x6040:
             return
-        cw = int.from_bytes(data, "little")
+        self.controlword(int.from_bytes(data, "little"))
+
+    def controlword(self, cw):
         with self.lock:
-            self.log["cw"].append([self.now(), cw])
+            if cw == self.last_cw and self.log["cw"]:
+                return    # unchanged (an RPDO repeats it every cycle)
+            self.log["cw"].append([self.now(), cw, self.state])
             rising_reset = cw & 0x80 and not self.last_cw & 0x80
             self.last_cw = cw
             s = self.state
@@ -104,6 +149,8 @@ class Drive:
                 if rising_reset:
                     self.enter("SWITCH ON DISABLED", "fault reset")        # 15
                 return
+            if s in ("NOT READY TO SWITCH ON", "FAULT REACTION ACTIVE"):
+                return                                                      # not commandable
             if cw & 0x82 == 0x00:                                           # disable voltage
                 if s in ("READY TO SWITCH ON", "SWITCHED ON", "OPERATION ENABLED",
                          "QUICK STOP ACTIVE"):
@@ -134,7 +181,11 @@ class Drive:
                 if not any(st == "OPERATION ENABLED" for _, st, _ in self.log["states"]):
                     self.log["rpdo_before_enabled"] += 1
             raw = bytes(data)
-            self.target = struct.unpack("<i", raw[-4:])[0]  # 607A last (with or without 6040)
+            self.target = struct.unpack("<i", raw[-4:])[0]
+            if len(raw) == 6:    # controlword, then target (trajd's can.cia402_controlword)
+                cw = struct.unpack("<H", raw[:2])[0]
+                self.log.setdefault("rpdo_cw", []).append([cw, self.state])
+                self.controlword(cw)    # a mapped controlword acts as if written by SDO
 
     def on_sync(self, counter):
         with self.lock:
@@ -143,45 +194,60 @@ class Drive:
                 gap = (counter - self.last_counter) % SYNC_OVERFLOW
                 self.log["max_sync_gap"] = max(self.log["max_sync_gap"], gap)
                 if gap >= 3 and self.state == "OPERATION ENABLED":
+                    log.warning("node %d: SYNC counter %d after %d", self.id, counter,
+                                self.last_counter)
                     self.fault("sync lost")
             self.last_counter = counter
-            if os.path.exists(os.path.join(self.out, "inject_fault_%d" % self.id)):
-                os.unlink(os.path.join(self.out, "inject_fault_%d" % self.id))
-                self.fault("injected")
             if self.state == "OPERATION ENABLED" and self.target is not None:
                 t = self.target
-                if self.last_applied is not None:
+                if self.last_applied is None:
+                    # the first target after Enable operation: how far from where it stands
+                    self.log.setdefault("enable_offsets", []).append(abs(t - self.pos))
+                else:
                     step = abs(t - self.last_applied)
                     self.log["max_target_step"] = max(self.log["max_target_step"], step)
                     if step > self.step_limit:
+                        log.warning("node %d: target step %d", self.id, step)
                         self.fault("step")
                         return
                 self.last_applied = t
                 self.log["targets"].append(t)
                 d = max(-self.max_step, min(self.max_step, t - self.pos))
                 self.pos += d
-                if abs(t - self.pos) > self.window:
+                if abs(t - self.pos) > self.node.sdo[0x6065].raw:
                     self.fault("following error")
                     return
             self.send_tpdo()
 
 
-def main():
-    out = sys.argv[1]
-    net = canopen.Network()
-    net.connect(interface="socketcan", channel="vcan0")
-    drives = []
-    for spec in sys.argv[2:]:
-        node, start = spec.split(":")
-        drives.append(Drive(net, int(node), int(start), out))
-
+def attach_sync(net, drives):
     def on_sync(cob, data, ts):
         c = data[0] if len(data) else 0
         for d in drives:
             d.on_sync(c)
     net.subscribe(0x080, on_sync)
+
+
+def main():
+    out = sys.argv[1]
+    logging.basicConfig(level=logging.WARNING, stream=sys.stderr,
+                        format="%(relativeCreated)d %(name)s %(levelname)s %(message)s")
+    specs = [(int(n), int(s)) for n, s in (a.split(":") for a in sys.argv[2:])]
+    # only what a drive listens to: NMT, SYNC, EMCY/SYNC range, its RPDO and SDO
+    filters = [{"can_id": 0x000, "can_mask": 0x7FF}, {"can_id": 0x080, "can_mask": 0x7FF}]
+    for n, _ in specs:
+        filters += [{"can_id": 0x200 + n, "can_mask": 0x7FF}, {"can_id": 0x600 + n, "can_mask": 0x7FF}]
+    net = canopen.Network()
+    net.connect(interface="socketcan", channel="vcan0", can_filters=filters)
+    # a slow guest must not lose SYNCs in the socket: room for seconds of traffic
+    net.bus.socket.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
+    events = os.path.join(out, "sim_events.txt")
+    drives = [Drive(net, n, s, events) for n, s in specs]
+    attach_sync(net, drives)
     done = threading.Event()
     signal.signal(signal.SIGTERM, lambda *a: done.set())
+    signal.signal(signal.SIGUSR1, lambda *a: drives[0].fault("injected"))
+    signal.signal(signal.SIGUSR2, lambda *a: [d.quick_stop("local quick stop") for d in drives])
     with open(os.path.join(out, "drive_sim.ready"), "w") as f:
         f.write("ready\n")
     while not done.wait(0.05):
@@ -191,8 +257,10 @@ def main():
         d.log["final_state"] = d.state
         d.log["sdo_6060"] = d.node.sdo[0x6060].raw
         d.log["sdo_60c2"] = [d.node.sdo[0x60C2][1].raw, d.node.sdo[0x60C2][2].raw]
-    with open(os.path.join(out, "drive_sim.json"), "w") as f:
+    tmp = os.path.join(out, "drive_sim.json.tmp")
+    with open(tmp, "w") as f:
         json.dump([d.log for d in drives], f)
+    os.rename(tmp, os.path.join(out, "drive_sim.json"))
     net.disconnect()
 
 

@@ -34,7 +34,8 @@ mount -t hostfs -o "$dir" none "$dir"
 {
     echo "guest: $(uname -r)"
     k=/usr/lib/uml/modules/$(uname -r)/kernel
-    for mod in net/can/can.ko net/can/can-raw.ko drivers/net/can/dev/can-dev.ko drivers/net/can/vcan.ko; do
+    # can-bcm: python-can sends periodic frames (a simulated node's heartbeat) through it
+    for mod in net/can/can.ko net/can/can-raw.ko net/can/can-bcm.ko drivers/net/can/dev/can-dev.ko drivers/net/can/vcan.ko; do
         busybox insmod "$k/$mod" || echo "guest: insmod $mod failed"
     done
     ip link set lo up
