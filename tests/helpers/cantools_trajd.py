@@ -414,7 +414,9 @@ def drive_check(run):
               for m in msgs if m.arbitration_id == cob]
         for (ta, a), (tb, b) in zip(rp, rp[1:]):
             worst = max(worst, abs(b - a) / (10000 * 3.0 * (tb - ta + 1 / rate)))
-    assert worst <= 1.0, worst
+    # (1.5: margin for the capture's timestamp jitter in a loaded guest; the old 2 m step
+    # in one cycle is 20000 / (30000 x 0.1) = 6.7)
+    assert worst <= 1.5, worst
     # drive fault: after node 1's FAULT statusword, trajd sent node 1 no target
     # (beyond one cycle in flight) until the drive was enabled again
     i = next(k for k, m in enumerate(msgs) if m.arbitration_id == 0x181 and m.data[0] & 0x4F == 0x08)
@@ -428,7 +430,7 @@ def drive_check(run):
     assert any(m.data[7] == 0x47 for m in st), [bytes(m.data).hex() for m in st[:3]]
     db = load_db()
     s2 = db.frame_by_id(canmatrix.ArbitrationId(0x6D0))
-    pages = [s2.decode(bytes(m.data)) for m in msgs[i:j] if m.arbitration_id == 0x6D0]
+    pages = [s2.decode(bytes(m.data)) for m in msgs[i:j] if m.arbitration_id == 0x6D0 and m.data[0] == 4]
     val = lambda sig: getattr(sig.raw_value, "real", sig.raw_value)  # noqa: E731
     held = [p for p in pages if val(p["ST2_Held"]) == 1 and val(p["ST2_StateX"]) == 7]
     assert held and val(held[-1]["ST2_Emcy"]) == 0xFF00, pages[:2]
@@ -450,7 +452,7 @@ def drive_check(run):
         assert k and d["cw"][k[0]][1] == 0, d["cw"]
         assert names(d)[-3:] == ["READY TO SWITCH ON", "SWITCHED ON", "OPERATION ENABLED"]
     # heartbeat consumer: the nodes' NMT state (operational after NMT start) in STATUS2
-    ok = [p for p in (s2.decode(bytes(m.data)) for m in msgs if m.arbitration_id == 0x6D0)
+    ok = [p for p in (s2.decode(bytes(m.data)) for m in msgs if m.arbitration_id == 0x6D0 and m.data[0] == 4)
           if val(p["ST2_StateX"]) == 4]
     assert ok and all(val(p["ST2_Nmt"]) == 5 for p in ok[-3:]), ok[-1:]
     return {"syncs_seen_by_drive1": d1["syncs"], "max_sync_gap": max(d1["max_sync_gap"], d2["max_sync_gap"]),
