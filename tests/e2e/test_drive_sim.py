@@ -98,6 +98,10 @@ class DriveSim(unittest.TestCase):
         self.master.send_message(0x205, struct.pack("<i", inc))
 
     def enable(self):
+        # interpolation period 1 s: every SYNC of these tests comes within one period,
+        # so a step is judged per one period (the drive allows more after a longer gap)
+        self.node.sdo[0x60C2][1].raw = 1
+        self.node.sdo[0x60C2][2].raw = 0
         self.node.nmt.send_command(0x01)  # NMT start: PDOs from now on
         self.assertTrue(wait_for(lambda: self.drive.node.nmt.state == "OPERATIONAL"))
         self.node.state = "OPERATION ENABLED"

@@ -12,7 +12,8 @@ target 0x607A received by RPDO is applied at the next SYNC.  Like real drives,
 a drive here faults (state FAULT, EMCY) on
   - a following error: |target - position| above 0x6065 after its move
     (it moves at most max_step increments per SYNC);
-  - a step: two consecutive targets further apart than step_limit increments;
+  - a step: two consecutive targets further apart than step_limit increments
+    per interpolation period (0x60C2) over the time between their SYNCs;
   - two missed SYNCs in a row (the SYNC counter, CiA 301, jumps by 3 or more);
   - a fault injected by the test (SIGUSR1: node 1; SIGUSR2: every node's quick
     stop, as from a local quick-stop input).
@@ -72,6 +73,7 @@ class Drive:
         self.step_limit = step_limit
         self.last_cw = 0
         self.last_counter = None
+        self.last_sync_ts = None
         self.log = {"node": node_id, "start_inc": start_inc, "states": [], "faults": [],
                     "syncs": 0, "rpdo": 0, "rpdo_not_enabled": 0, "rpdo_before_enabled": 0,
                     "max_target_step": 0, "max_sync_gap": 0, "targets": [], "cw": [],
@@ -187,9 +189,17 @@ class Drive:
                 self.log.setdefault("rpdo_cw", []).append([cw, self.state])
                 self.controlword(cw)    # a mapped controlword acts as if written by SDO
 
-    def on_sync(self, counter):
+    def period(self):
+        # the interpolation period trajd wrote to 0x60C2 (value x 10^index s)
+        return self.node.sdo[0x60C2][1].raw * 10.0 ** self.node.sdo[0x60C2][2].raw
+
+    def on_sync(self, counter, ts=None):
         with self.lock:
             self.log["syncs"] += 1
+            # time since the last SYNC as the bus saw it (a master that missed a
+            # deadline sends the next SYNC and target later, and further ahead)
+            dt = None if ts is None or self.last_sync_ts is None else ts - self.last_sync_ts
+            self.last_sync_ts = ts
             if self.last_counter is not None and counter:
                 gap = (counter - self.last_counter) % SYNC_OVERFLOW
                 self.log["max_sync_gap"] = max(self.log["max_sync_gap"], gap)
@@ -206,7 +216,10 @@ class Drive:
                 else:
                     step = abs(t - self.last_applied)
                     self.log["max_target_step"] = max(self.log["max_target_step"], step)
-                    if step > self.step_limit:
+                    # step_limit increments per interpolation period, over the
+                    # time the SYNCs say passed (never less than one period)
+                    cycles = 1.0 if dt is None else max(1.0, dt / self.period())
+                    if step > self.step_limit * cycles:
                         log.warning("node %d: target step %d", self.id, step)
                         self.fault("step")
                         return
@@ -224,7 +237,7 @@ def attach_sync(net, drives):
     def on_sync(cob, data, ts):
         c = data[0] if len(data) else 0
         for d in drives:
-            d.on_sync(c)
+            d.on_sync(c, ts)
     net.subscribe(0x080, on_sync)
 
 
