@@ -501,9 +501,11 @@ static void print_summary(const track_t *trk, const replay_t *r, const engine_st
             "summary: tracks %" PRIu64 "\n"
             "summary: setpoints %" PRIu64 "\n"
             "summary: max_speed_m_s %.6g\n"
-            "summary: max_acc_m_s2 %.6g\n",
+            "summary: max_acc_m_s2 %.6g\n"
+            "summary: uniform_irregular %" PRIu64 "\n"
+            "summary: uniform_ratio_max %.6g\n",
             r->retries, st->underruns, st->underrun_ticks, st->hard_stops, st->gaps, st->tracks,
-            ticks, max_v, max_a);
+            ticks, max_v, max_a, st->uniform_irregular, st->uniform_ratio_max);
 }
 
 /* One replay: its inputs, outputs and what was seen. */
@@ -701,6 +703,20 @@ static void run_report_rejections(run_t *run)
     }
 }
 
+/* param = uniform on irregular intervals: say so once, with the numbers. */
+static void run_report_uniform(run_t *run)
+{
+    engine_status(run->e, &run->st);
+    if (!run->st.uniform_irregular)
+        return;
+    fprintf(stderr,
+            "trajreplay: %s: warning: param = uniform on irregular intervals: %" PRIu64
+            " waypoints between intervals differing by more than %.2gx (worst %.3gx, at t = "
+            "%.3f s): the velocity steps by that ratio there (param = time is C2 in time)\n",
+            run->o->input, run->st.uniform_irregular, ENGINE_UNIFORM_RATIO_WARN,
+            run->st.uniform_ratio_max, run->st.uniform_ratio_t_s);
+}
+
 /* The per-reason count of rejections, if any. */
 static void run_report_rejected_total(const run_t *run)
 {
@@ -877,6 +893,7 @@ int main(int argc, char **argv)
     if (run.plot && run_svg(&run))
         status = EXIT_OUTPUT;
     run_report_rejected_total(&run);
+    run_report_uniform(&run);
     if (o.summary) {
         print_summary(&run.trk, &run.r, &run.st, run.max_v, run.max_a, run.written);
         fprintf(stderr, "summary: skipped_gaps %" PRIu64 "\nsummary: skipped_ticks %" PRIu64 "\n",

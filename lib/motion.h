@@ -141,6 +141,12 @@ typedef struct {
     uint64_t rejections_unreported; /* rejections pushed out of the report ring unread */
     uint32_t judging;               /* waypoints pushed and still awaiting their verdict
                                      * (judged with their neighbours: at most 8) */
+    uint64_t uniform_irregular;     /* param uniform only: kept waypoints whose two intervals
+                                       differ by more than ENGINE_UNIFORM_RATIO_WARN (engine.h):
+                                       the velocity steps by that ratio there */
+    double uniform_ratio_max;       /* param uniform: the largest ratio of a kept waypoint's two
+                                       intervals (longer / shorter; 0 until there are two) */
+    double uniform_ratio_t_s;       /* ... and that waypoint's time */
 } engine_status_t;
 
 /* clang-format on */

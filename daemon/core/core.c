@@ -360,6 +360,7 @@ static void carry_objects(core_t *c, core_t *prev)
         o->out_lost = q->out_lost;
         o->out_fault = q->out_fault;
         o->rejlog = q->rejlog;
+        o->uniform_warned = q->uniform_warned;
         o->out_errors = q->out_errors;
         o->carried = 1;
         retire_moving(o, prev);
@@ -546,11 +547,26 @@ static void log_rejection(void *ctx, const char *line)
     log_obj(LOG_WARNING, (const char *)ctx, "%s", line); /* ctx: the object's name */
 }
 
+/* param = uniform on irregular intervals (ENGINE_UNIFORM_RATIO_WARN): once per object. */
+static void warn_uniform(obj_t *o)
+{
+    if (o->uniform_warned || !o->status.uniform_irregular)
+        return;
+    o->uniform_warned = 1;
+    log_msg(LOG_WARNING,
+            "object '%s': param = uniform on irregular intervals: %llu waypoints so far between "
+            "intervals differing by more than %.2gx (worst %.3gx, at t = %.3f s): the velocity "
+            "steps by that ratio there (param = time, the default, is C2 in time)",
+            o->name, (unsigned long long)o->status.uniform_irregular, ENGINE_UNIFORM_RATIO_WARN,
+            o->status.uniform_ratio_max, o->status.uniform_ratio_t_s);
+}
+
 /* Log the refusals of each object read since the last call (rejlog.h). */
 static void log_rejections(core_t *c)
 {
     for (unsigned i = 0; i < c->nobj; i++)
         if (c->obj[i].engine) {
+            warn_uniform(&c->obj[i]);
             rejlog_drain(&c->obj[i].rejlog, c->obj[i].engine);
             rejlog_flush(&c->obj[i].rejlog, c->obj[i].name, log_rejection, (void *)c->obj[i].name);
         }

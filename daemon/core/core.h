@@ -76,6 +76,7 @@ typedef struct obj {
     uint64_t safety_logged;       /* safety violations already logged */
     int safety_rearm;             /* a clear asked to rearm the monitor: done once the
                                      * engine stands on the held position */
+    int uniform_warned;           /* param = uniform met irregular intervals: warned once */
     rejlog_t rejlog;              /* sources of the last waypoints offered, and the refusals
                                      * to log (rejlog.h; kept when carried) */
     double geo[3];                /* the setpoint as WGS84 lat, lon (deg), alt (m) when

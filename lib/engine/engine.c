@@ -825,6 +825,21 @@ int engine_rejection_next(engine_t *e, engine_rejection_t *r)
 }
 
 /* Append a waypoint the acceptance policy kept to the trajectory being received. */
+/* Param uniform: the ratio of the last kept waypoint's two intervals h1, h2
+ * (its velocity steps by it: ENGINE_UNIFORM_RATIO_WARN). */
+static void note_uniform(engine_t *e, double h1, double h2)
+{
+    double r = h1 > h2 ? h1 / h2 : h2 / h1;
+    if (!(r >= 1.0))
+        return; /* cannot happen: kept intervals are positive */
+    if (r > e->st.uniform_ratio_max) {
+        e->st.uniform_ratio_max = r;
+        e->st.uniform_ratio_t_s = e->last_t;
+    }
+    if (r > ENGINE_UNIFORM_RATIO_WARN)
+        e->st.uniform_irregular++;
+}
+
 static int keep(engine_t *e, const engine_waypoint_t *wp)
 {
     int rc;
@@ -838,6 +853,8 @@ static int keep(engine_t *e, const engine_waypoint_t *wp)
             v2 += (wp->pos_m[k] - e->last_r[k]) * (wp->pos_m[k] - e->last_r[k]);
         transfer_motion_note(&e->motion, sqrt(v2) / d1,
                              e->have_prev ? implied_accel(e, wp, d1) : 0.0);
+        if (e->have_prev && e->cfg.param == ENGINE_PARAM_UNIFORM)
+            note_uniform(e, e->last_t - e->prev_t, d1);
         e->have_prev = 1;
         e->prev_t = e->last_t;
         memcpy(e->prev_r, e->last_r, sizeof(e->prev_r));

@@ -58,7 +58,9 @@
  *   (a) ENGINE_PARAM_UNIFORM  the paper: uniform B-spline, each segment
  *       mapped linearly onto its own time interval.  Physical velocity jumps
  *       at every waypoint whose neighbouring intervals differ (measured on
- *       gpxgo_visnjan: up to 9.0 m/s on a walk).
+ *       gpxgo_visnjan: up to 9.0 m/s on a walk), by their ratio: such
+ *       waypoints (ratio above ENGINE_UNIFORM_RATIO_WARN) are counted in
+ *       engine_status_t uniform_irregular, and trajd and trajreplay warn.
  *   (b) ENGINE_PARAM_TIME     knots at the timestamps: C2 in physical time
  *       (jumps only from the fragment junctions, 1.5e-4 m/s on the same track
  *       with F=32, O=16).  The default, because motion controllers follow
@@ -83,6 +85,13 @@
 #include "fdiff.h"
 #include "motion.h"
 
+
+/* Param uniform (the paper's parameterisation) maps each segment linearly
+ * onto its own interval, so at a waypoint between intervals h1 and h2 the
+ * physical velocity steps by the ratio h1 / h2.  Above this ratio (a 10 %
+ * velocity step) the waypoint is counted in engine_status_t
+ * uniform_irregular, and trajreplay and trajd warn (once) with the numbers. */
+#define ENGINE_UNIFORM_RATIO_WARN 1.1
 
 /* Limits on the configuration (checked by engine_config_check). */
 #define ENGINE_FRAGMENT_MIN 4

@@ -665,6 +665,10 @@ class TestReplayMatchesTrajreplay(unittest.TestCase):
             finally:
                 d.close()
             missed = int(summary.split("missed ")[-1].split(",")[0])
+            # 'walk' (param = uniform, 1-20 s between fixes) is warned about once
+            uni = [l for l in summary.splitlines() if "param = uniform on irregular" in l]
+            self.assertEqual(len(uni), 1, summary)
+            self.assertIn("object 'walk'", uni[0])
             # and by trajreplay on the same files with the same settings
             # (given as options for 'track', read from the config for 'walk'),
             refs = {}

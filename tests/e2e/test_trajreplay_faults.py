@@ -365,5 +365,37 @@ class TestTrajdNothingUsable(unittest.TestCase):
             self.assertEqual(rc, 0, err[-500:])
 
 
+@unittest.skipUnless(os.access(TRAJREPLAY, os.X_OK), "trajreplay not built in this tree")
+class TestUniformIrregular(unittest.TestCase):
+    def test_warned_once_with_the_numbers(self):
+        """Given the Visnjan walk (fixes 1 to 20 s apart, every one kept), when
+        replayed with param = uniform, then trajreplay warns once that the
+        velocity steps at the waypoints between intervals differing by more
+        than 1.1x, with their count, the worst ratio and its time as computed
+        here from the file; with param = time (the default) it says nothing."""
+        import csv
+        with open(os.path.join(DATA, "gpxgo_visnjan.csv")) as f:
+            t = [float(r["t_s"]) for r in csv.DictReader(f)]
+        h = [b - a for a, b in zip(t, t[1:])]
+        ratios = [(max(a, b) / min(a, b), t[i + 1]) for i, (a, b) in enumerate(zip(h, h[1:]))]
+        worst = max(ratios, key=lambda r: r[0])   # the first of the largest, as the engine keeps it
+        worst = next(r for r in ratios if r[0] == worst[0])
+        n = sum(1 for r, _ in ratios if r > 1.1)
+        self.assertGreater(n, 0)
+        track = os.path.join(DATA, "gpxgo_visnjan.csv")
+        rc, _, err = bounded_run([TRAJREPLAY, "-q", "--summary", "--method", "bspline",
+                                  "--param", "uniform", "-o", os.devnull, track])
+        self.assertEqual(rc, 0, err)
+        lines = [l for l in err.splitlines() if "param = uniform on irregular intervals" in l]
+        self.assertEqual(len(lines), 1, err)
+        self.assertIn(": %d waypoints between intervals differing by more than 1.1x" % n, lines[0])
+        self.assertIn("(worst %.3gx, at t = %.3f s)" % worst, lines[0])
+        self.assertIn("summary: uniform_irregular %d\n" % n, err)
+        self.assertIn("summary: accepted %d\n" % len(t), err)  # the count is over kept fixes
+        rc, _, err = bounded_run([TRAJREPLAY, "-q", "-o", os.devnull, track])
+        self.assertEqual(rc, 0, err)
+        self.assertNotIn("param = uniform", err)
+
+
 if __name__ == "__main__":
     unittest.main(verbosity=2)

@@ -1344,6 +1344,48 @@ static void test_jittered_clock_rounds_to_ticks(void **state)
     engine_free(b);
 }
 
+/* Given the paper's uniform parameterisation and waypoints 1 s apart but
+ * for one interval of 1.5 s (t = 3 -> 4.5), when the track is replayed,
+ * then the two waypoints on either side of it (t = 3: 1 s then 1.5 s; t =
+ * 4.5 is between 1.5 and 1.5: regular; t = 6: 1.5 s then 1 s) are counted as
+ * irregular with the ratio 1.5 (first at t = 3), and a regular track or
+ * param = time counts nothing. */
+static void test_uniform_irregular(void **state)
+{
+    (void)state;
+    const double t[] = {0, 1, 2, 3, 4.5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20};
+    const unsigned n = sizeof t / sizeof t[0];
+    for (int param = 0; param < 2; param++)
+        for (int irregular = 0; irregular < 2; irregular++) {
+            engine_config_t c;
+            engine_config_default(&c);
+            c.method = ENGINE_METHOD_BSPLINE;
+            c.param = param ? ENGINE_PARAM_TIME : ENGINE_PARAM_UNIFORM;
+            engine_t *e = engine_new(&c, NULL);
+            assert_non_null(e);
+            for (unsigned i = 0; i < n; i++) {
+                engine_waypoint_t wp = {.t_s = irregular ? t[i] : (double)i,
+                                        .pos_m = {0.5 * (irregular ? t[i] : (double)i), 0, 0},
+                                        .seq = i + 1};
+                assert_int_equal(engine_push(e, &wp), 0);
+            }
+            assert_int_equal(engine_finish(e), 0);
+            engine_status_t st;
+            engine_status(e, &st);
+            assert_int_equal(st.accepted, n);
+            engine_free(e);
+            if (param || !irregular) {
+                assert_int_equal(st.uniform_irregular, 0);
+                if (!param)
+                    assert_true(fabs(st.uniform_ratio_max - 1.0) < 1e-12);
+                continue;
+            }
+            assert_int_equal(st.uniform_irregular, 2);
+            assert_true(fabs(st.uniform_ratio_max - 1.5) < 1e-12);
+            assert_true(fabs(st.uniform_ratio_t_s - 3.0) < 1e-12);
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1363,6 +1405,7 @@ int main(void)
         cmocka_unit_test(test_underrun_rides_through),
         cmocka_unit_test(test_jittered_clock_rounds_to_ticks),
         cmocka_unit_test(test_status_stalled),
+        cmocka_unit_test(test_uniform_irregular),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
