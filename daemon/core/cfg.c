@@ -155,6 +155,7 @@ typedef struct {
      * transports the object does not use */
     int tkey_line[CFG_OBJECTS_MAX][CFG_TRANSPORTS_MAX];
     int rate_line;
+    int clock_line;
     /* duplicates */
     seen_t *seen;
     size_t nseen, capseen;
@@ -428,6 +429,19 @@ static int key_daemon(cfg_t *c, parse_t *p, const cfg_kv_t *kv, char *why, size_
         return cfg_get_bool(kv, &d->exit_when_done, why, wl);
     if (strcmp(kv->key, "origin") == 0)
         return get_origin(d, kv, why, wl);
+    if (strcmp(kv->key, "clock") == 0) {
+        static const char *const ck[] = {"auto", "epoch", "relative", NULL};
+        p->clock_line = kv->line;
+        return cfg_get_enum(kv, ck, &d->clock, why, wl);
+    }
+    if (strcmp(kv->key, "delay_s") == 0)
+        return cfg_get_double(kv, 0, 3600, &d->delay_s, why, wl);
+    if (strcmp(kv->key, "catchup") == 0)
+        return cfg_get_double(kv, 0, 1, &d->catchup, why, wl);
+    if (strcmp(kv->key, "drift_max_ppm") == 0)
+        return cfg_get_double(kv, 0, 1000, &d->drift_max_ppm, why, wl);
+    if (strcmp(kv->key, "clock_window_s") == 0)
+        return cfg_get_double(kv, 1, 1e9, &d->clock_window_s, why, wl);
     if (strcmp(kv->key, "user") == 0) {
         if (strlen(kv->value) >= sizeof d->user)
             return why_set(why, wl, "expected a user name of at most %zu characters",
@@ -670,6 +684,11 @@ static void check_all(parse_t *p)
     if (p->err)
         return;
     c->daemon.period_ns = (int64_t)llround(1e9 / c->daemon.rate_hz);
+    if (c->daemon.clock == CFG_CLOCK_EPOCH && fabs(c->daemon.speed - 1.0) > 0) {
+        fail(p, CFG_EVALUE, p->clock_line,
+             "[daemon] clock = epoch: needs speed = 1 (the play-out clock is real time)");
+        return;
+    }
     if (c->nobj == 0) {
         fail(p, CFG_EMISSING, 0, "no [object.NAME] section: nothing to do");
         return;
@@ -740,6 +759,11 @@ static void defaults(cfg_t *c)
     c->daemon.stop_timeout_s = 5;
     c->daemon.exit_when_done = 0;
     c->daemon.log_level = LOG_INFO;
+    c->daemon.clock = CFG_CLOCK_AUTO;
+    c->daemon.delay_s = 10;
+    c->daemon.catchup = 0.05;
+    c->daemon.drift_max_ppm = 500;
+    c->daemon.clock_window_s = 86400;
 }
 
 static int parse(parse_t *p, const char *name, const char *dir, cfg_t **out, char *err,

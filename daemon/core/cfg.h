@@ -68,6 +68,9 @@ typedef struct {
     int line;            /* 1-based line number */
 } cfg_kv_t;
 
+/* [daemon] clock (lib/engine/CLOCK.md) */
+enum { CFG_CLOCK_AUTO = 0, CFG_CLOCK_EPOCH = 1, CFG_CLOCK_RELATIVE = 2 };
+
 /* [daemon] */
 typedef struct {
     double rate_hz;           /* output rate shared by all objects */
@@ -80,7 +83,12 @@ typedef struct {
     int origin_given;         /* origin = lat,lon,alt: the datum of every geographic object */
     double origin[3];         /* degrees, degrees, metres above the WGS84 ellipsoid */
     int origin_line;
-    char user[64]; /* started as root: drop to this user once the sockets are
+    int clock;             /* CFG_CLOCK_*: one clock for epoch-stamped objects (CLOCK.md) */
+    double delay_s;        /* play-out delay D: clocked objects stand at now - D */
+    double catchup;        /* most the rate rises above the clock's to win back a lag */
+    double drift_max_ppm;  /* sender clock drift absorbed at most */
+    double clock_window_s; /* auto: epoch when the first time is this close to now */
+    char user[64];         /* started as root: drop to this user once the sockets are
                                  * open ("" = stay, with a warning outside systemd) */
 } cfg_daemon_t;
 

@@ -24,6 +24,8 @@ typedef struct {
     int64_t stop_deadline_ns; /* CLOCK_MONOTONIC after which stopping gives up */
     uint64_t ticks_at_stop;
     int opened[CFG_TRANSPORTS_MAX];
+    int64_t rt_off_ns; /* CLOCK_REALTIME - CLOCK_MONOTONIC (real_offset) */
+    int have_rt_off;
 } core_priv_t;
 
 int64_t core_mono_ns(void)
@@ -33,13 +35,36 @@ int64_t core_mono_ns(void)
     return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
 }
 
+int64_t core_real_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
+}
+
+/* One clock (lib/engine/CLOCK.md): an undecided object's first waypoint
+ * decides whether its times are epoch time (within clock_window_s of now). */
+static void obj_clock_decide(obj_t *o, const engine_waypoint_t *wp, int64_t real_ns)
+{
+    if (o->clocked >= 0 || !isfinite(wp->t_s))
+        return;
+    o->clocked = fabs(wp->t_s - (double)real_ns * 1e-9) <= o->clock_window_s;
+    log_msg(LOG_INFO, "object '%s': first waypoint at t = %.3f s: %s", o->name, wp->t_s,
+            o->clocked ? "epoch time, played out on the daemon's clock"
+                       : "relative time, the object keeps its own origin");
+}
+
 int obj_push_from(obj_t *o, const engine_waypoint_t *wp, const char *src)
 {
     if (o->stopping)
         return -ENGINE_ESTATE;
+    int64_t real_ns = o->clocked ? core_real_ns() : 0;
+    obj_clock_decide(o, wp, real_ns);
     rejlog_offered(&o->rejlog, wp, src);
     int rc = engine_push(o->engine, wp);
     rejlog_drain(&o->rejlog, o->engine);
+    if (rc == 0 && o->clocked == 1 && o->drift)
+        playout_drift_add(o->drift, real_ns, wp->t_s);
     return rc;
 }
 
@@ -146,17 +171,27 @@ obj_t *core_obj_find(core_t *c, const char *name)
 /* Missed deadlines stepped one by one at most (about 20 ms of work for 4 objects). */
 #define CORE_CATCHUP_MAX 100000u
 
-/* Clocked inputs, then every engine, at engine time now_ns. */
-static void step_engines(core_t *c, int64_t now_ns)
+/* Clocked inputs, then every engine, at engine time now_ns; real_ns is
+ * CLOCK_REALTIME at the deadline, from which the play-out clock (one for all
+ * objects on it, lib/engine/CLOCK.md) is advanced. */
+static void step_engines(core_t *c, int64_t now_ns, int64_t real_ns)
 {
+    stats_t *s = c->stats;
     if (!c->stopping)
         for (unsigned i = 0; i < c->nobj; i++) {
             obj_t *o = &c->obj[i];
             if (o->cfg->input->pre_tick)
                 o->cfg->input->pre_tick(c->tstate[transport_index(o->cfg->input)], o, now_ns);
         }
+    s->clock_now_ns = playout_clock_now(&s->pclock, real_ns, playout_drift_eps(&s->drift),
+                                        &s->clock_rate);
+    engine_clock_t clk = {s->clock_now_ns, (int64_t)llround(c->cfg->daemon.delay_s * 1e9),
+                          s->clock_rate, c->cfg->daemon.catchup};
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i];
+        engine_t *e = o->retiring ? o->retiring : o->engine;
+        if (o->clocked == 1)
+            (void)engine_set_clock(e, &clk); /* cannot fail: cfg bounds */
         if (!o->retiring) {
             engine_tick(o->engine, now_ns, &o->sp);
             continue;
@@ -171,6 +206,31 @@ static void step_engines(core_t *c, int64_t now_ns)
             o->retiring = NULL;
         }
     }
+}
+
+/* CLOCK_REALTIME - CLOCK_MONOTONIC, kept while it moves by less than 1 ms
+ * (it only changes when the system clock is set), so that the play-out
+ * clock is a function of the deadline, not of when the two were read.  Read
+ * between two monotonic reads, and only when those are close (not
+ * preempted in between). */
+static int64_t real_offset(core_priv_t *p)
+{
+    for (int i = 0; i < 3; i++) {
+        int64_t m1 = core_mono_ns(), r = core_real_ns(), m2 = core_mono_ns();
+        if (m2 - m1 > 100000)
+            continue;
+        int64_t off = r - (m1 + (m2 - m1) / 2);
+        if (!p->have_rt_off || llabs(off - p->rt_off_ns) > 1000000) {
+            p->rt_off_ns = off;
+            p->have_rt_off = 1;
+        }
+        break;
+    }
+    if (!p->have_rt_off) { /* never read calmly: take it as it is */
+        p->rt_off_ns = core_real_ns() - core_mono_ns();
+        p->have_rt_off = 1;
+    }
+    return p->rt_off_ns;
 }
 
 /*
@@ -194,8 +254,10 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
     /* after a long stall (suspend) the engines step over the oldest deadlines
      * inside one call instead: bounded work, exactness kept for ordinary misses */
     uint64_t from = k - k0 > CORE_CATCHUP_MAX ? k - CORE_CATCHUP_MAX : k0;
+    int64_t rt_off = real_offset(p);
     for (uint64_t j = from; j <= k; j++)
-        step_engines(c, c->t0_ns + (int64_t)j * c->period_ns);
+        step_engines(c, c->t0_ns + (int64_t)j * c->period_ns,
+                     p->wall_base_ns + (int64_t)j * p->wall_period_ns + rt_off);
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i];
         if (k > k0) {
@@ -252,8 +314,19 @@ static void on_clock(loop_t *l, int fd, uint32_t events, void *ctx)
     tick(p, k0, k, wake_ns, late_ns);
 }
 
+/* One clock: 0 (relative) for a replay input, with clock = relative, or
+ * at a replay speed; 1 with clock = epoch; -1 (the first waypoint decides)
+ * with clock = auto. */
+static int obj_clock_initial(const cfg_t *cfg, const cfg_obj_t *o)
+{
+    if (strcmp(o->input->name, "replay") == 0 || cfg->daemon.clock == CFG_CLOCK_RELATIVE ||
+        fabs(cfg->daemon.speed - 1.0) > 0)
+        return 0;
+    return cfg->daemon.clock == CFG_CLOCK_EPOCH ? 1 : -1;
+}
+
 /* The object of prev that o (in the new config) may take over, or NULL. */
-static obj_t *carry_source(core_t *prev, const cfg_obj_t *o)
+static obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o)
 {
     if (!prev || prev->stopping)
         return NULL;
@@ -261,6 +334,8 @@ static obj_t *carry_source(core_t *prev, const cfg_obj_t *o)
     if (!q || !q->engine || q->cfg->input != o->input ||
         !engine_config_same(&q->cfg->engine, &o->engine))
         return NULL;
+    if (q->clocked == 1 && obj_clock_initial(cfg, o) == 0)
+        return NULL; /* an engine on the clock cannot leave it: a new one */
     const transport_t *in = o->input;
     const void *a = cfg_obj_transport(q->cfg, in), *b = cfg_obj_transport(o, in);
     if (in->obj_cfg_same ? !in->obj_cfg_same(a, b)
@@ -281,7 +356,10 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
         o->index = i;
         o->cfg = &cfg->obj[i];
         o->born_ns = c->t0_ns;
-        if (carry_source(prev, o->cfg))
+        o->drift = &c->stats->drift;
+        o->clock_window_s = cfg->daemon.clock_window_s;
+        o->clocked = obj_clock_initial(cfg, o->cfg);
+        if (carry_source(prev, cfg, o->cfg))
             continue;
         o->engine = engine_new(&cfg->obj[i].engine, &err);
         if (!o->engine) {
@@ -340,7 +418,7 @@ static void retire_moving(obj_t *o, core_t *prev)
 static void carry_objects(core_t *c, core_t *prev)
 {
     for (unsigned i = 0; i < c->nobj; i++) {
-        obj_t *o = &c->obj[i], *q = carry_source(prev, o->cfg);
+        obj_t *o = &c->obj[i], *q = carry_source(prev, c->cfg, o->cfg);
         if (!q) {
             retire_moving(o, prev);
             continue;
@@ -357,6 +435,8 @@ static void carry_objects(core_t *c, core_t *prev)
         o->safety_logged = q->safety_logged;
         o->safety_rearm = q->safety_rearm;
         o->born_ns = q->born_ns;
+        if (o->clocked != 0)
+            o->clocked = q->clocked; /* its engine stays on the clock, or decided */
         o->out_lost = q->out_lost;
         o->out_fault = q->out_fault;
         o->rejlog = q->rejlog;
@@ -403,6 +483,7 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
     c->cfg = cfg;
     c->stats = stats;
     c->period_ns = cfg->daemon.period_ns;
+    stats->drift.max_ppm = cfg->daemon.drift_max_ppm;
     /* engine time goes on from the previous core: carried engines never see
      * it go backwards */
     c->t0_ns = prev ? prev->now_ns + prev->period_ns : 0;

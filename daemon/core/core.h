@@ -44,6 +44,7 @@
 #include "engine.h"
 #include "latency.h"
 #include "loop.h"
+#include "playout.h"
 #include "rejlog.h"
 #include "safety.h"
 #include "transport.h"
@@ -85,6 +86,12 @@ typedef struct obj {
                                      * (-180, 180]; NaN if the object has none */
     double heading_unwrapped_deg; /* the same, continuous across +-180 (NaN: none) */
     size_t heading_hint;          /* interval of the last heading evaluation */
+    int clocked;                  /* one clock (lib/engine/CLOCK.md): 1 played out on the
+                                     * daemon's clock, 0 relative, -1 its first waypoint
+                                     * decides ([daemon] clock = auto; kept when carried) */
+    double clock_window_s;        /* auto: epoch when the first time is this close to now */
+    playout_drift_t *drift;       /* the daemon's drift estimate (stats_t), fed with the
+                                     * arrivals of a clocked object's waypoints */
 } obj_t;
 
 /*
@@ -169,9 +176,15 @@ typedef struct {
     uint64_t out_errors; /* failed writes (not EAGAIN) */
     int out_errno;       /* errno of the last one */
     int out_fault;       /* 1 once an output write failed */
-    uint64_t no_input;   /* objects whose replayed track had no usable waypoint: trajd
+    /* One clock (lib/engine/CLOCK.md): the sender's drift and the play-out
+     * clock, kept across reloads. */
+    playout_drift_t drift;
+    playout_clock_t pclock;
+    double clock_rate;    /* d now_sender / dt of the last tick */
+    int64_t clock_now_ns; /* now on the sender's time base at the last tick */
+    uint64_t no_input;    /* objects whose replayed track had no usable waypoint: trajd
                                      * exits with CORE_EXIT_NO_INPUT at the end */
-    int exit_code;       /* nonzero: a transport asks the daemon to end now with
+    int exit_code;        /* nonzero: a transport asks the daemon to end now with
                                      * this status (stdout's reader left: CORE_EXIT_EPIPE);
                                      * the tick stops the loop with it */
 } stats_t;
@@ -206,6 +219,9 @@ typedef struct core {
 
 /* Object by name, or NULL. */
 obj_t *core_obj_find(core_t *c, const char *name);
+
+/* CLOCK_REALTIME in ns since the epoch. */
+int64_t core_real_ns(void);
 
 /* Monotonic clock in ns (CLOCK_MONOTONIC). */
 int64_t core_mono_ns(void);

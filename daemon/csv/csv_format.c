@@ -63,6 +63,14 @@ int csv_format_append(char *buf, size_t len, int n, const char *cols)
     return n + (int)m;
 }
 
+int csv_format_add_age(char *buf, size_t len, int n, const engine_setpoint_t *sp)
+{
+    char col[CSV_SHORTEST_MAX + 2] = ",age_s";
+    if (sp)
+        col[1 + csv_shortest(col + 1, sp->age_s)] = '\0'; /* as the other numbers; NaN: nan */
+    return csv_format_append(buf, len, n, col);
+}
+
 /* Decimal of a uint64 at o; returns the length. */
 static int put_u64(char *o, uint64_t v)
 {

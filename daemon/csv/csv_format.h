@@ -39,6 +39,15 @@ int csv_format_format(char *buf, size_t len, const char *object, const engine_se
 int csv_format_append(char *buf, size_t len, int n, const char *cols);
 
 /*
+ * One more column at the end of the header or setpoint line held in buf
+ * (length n, ending in '\n'): "age_s" (header: sp NULL) or the setpoint's
+ * age_s in the shortest round-trip form of the other numbers ("nan" for
+ * relative time): the opt-in data age column of trajd's csv and stdout
+ * outputs (csv.age, stdout.age; lib/engine/CLOCK.md).  Same returns.
+ */
+int csv_format_add_age(char *buf, size_t len, int n, const engine_setpoint_t *sp);
+
+/*
  * The same line with every double (t_s and the nine coordinates) in fixed
  * notation with prec decimals, byte for byte printf("%.*f") (csv_fixed.h),
  * written by a fast formatter (trajreplay --precision).  Same returns.

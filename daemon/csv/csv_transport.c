@@ -25,6 +25,7 @@ typedef struct {
     int regular;       /* a regular file: a torn line can be cut off again */
     int is_stdout;
     int geo;    /* csv.geo: lat_deg,lon_deg,alt_m,heading_deg appended to every line */
+    int age;    /* lines carry the age_s column */
     obj_t *obj; /* csv: the one object writing here; stdout: NULL (all of them) */
     size_t len;
     char *buf;                               /* CSV_TRANSPORT_BUF_BYTES */
@@ -69,6 +70,8 @@ static int csv_obj_key(void *ocfg, const cfg_kv_t *kv, char *why, size_t wl)
         return cfg_get_bool(kv, &c->truncate, why, wl);
     if (strcmp(kv->key, "geo") == 0)
         return cfg_get_bool(kv, &c->geo, why, wl);
+    if (strcmp(kv->key, "age") == 0)
+        return cfg_get_bool(kv, &c->age, why, wl);
     return -CFG_EUNKNOWN;
 }
 
@@ -77,6 +80,8 @@ static int stdout_obj_key(void *ocfg, const cfg_kv_t *kv, char *why, size_t wl)
     csv_transport_obj_cfg_t *c = ocfg;
     if (strcmp(kv->key, "header") == 0)
         return cfg_get_bool(kv, &c->header, why, wl);
+    if (strcmp(kv->key, "age") == 0)
+        return cfg_get_bool(kv, &c->age, why, wl);
     return -CFG_EUNKNOWN;
 }
 
@@ -295,6 +300,8 @@ static void header(csv_transport_t *st, stream_t *s)
     int n = csv_format_header(line, sizeof line);
     if (n > 0 && s->geo)
         n = csv_format_append(line, sizeof line, n, ",lat_deg,lon_deg,alt_m,heading_deg");
+    if (s->age && n > 0)
+        n = csv_format_add_age(line, sizeof line, n, NULL);
     put(st, s, NULL, line, n);
 }
 
@@ -377,6 +384,7 @@ static int csv_open(core_t *c, void **state, char *why, size_t wl)
         stream_t *sm = &st->s[i];
         sm->obj = o;
         sm->geo = oc->geo;
+        sm->age = oc->age;
         snprintf(sm->what, sizeof sm->what, "object '%s' csv.path %s", o->name, oc->path);
         struct stat sb;
         if (sm->regular && fstat(fd, &sb) == 0 && sb.st_size > 0)
@@ -423,6 +431,7 @@ static int stdout_open(core_t *c, void **state, char *why, size_t wl)
         if (cfg_obj_uses(c->obj[i].cfg, &stdout_transport) & 2) {
             const csv_transport_obj_cfg_t *oc = cfg_obj_transport(c->obj[i].cfg, &stdout_transport);
             want_header |= oc->header;
+            st->s[0].age |= oc->age;
         }
     if (want_header)
         header(st, &st->s[0]);
@@ -454,6 +463,8 @@ static void csv_setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
         extra[m] = '\0';
         n = csv_format_append(line, sizeof line, n, extra);
     }
+    if (st->s[o->index].age && n > 0)
+        n = csv_format_add_age(line, sizeof line, n, sp);
     put(st, &st->s[o->index], o, line, n);
 }
 
@@ -462,6 +473,8 @@ static void stdout_setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
     csv_transport_t *st = state;
     char line[CSV_TRANSPORT_LINE_MAX];
     int n = csv_format_format(line, sizeof line, o->name, sp);
+    if (st->s[0].age && n > 0)
+        n = csv_format_add_age(line, sizeof line, n, sp);
     put(st, &st->s[0], o, line, n);
 }
 

@@ -9,9 +9,13 @@
  *             csv.truncate = no   at start and at each reload, append to the file, after a
  *                                 marker line "# trajd: appended at <UTC time> (start or
  *                                 reload)" if it was not empty; yes: empty it first
+ *             csv.age = no        yes: one more column at the end, age_s, the data age
+ *                                 of the setpoint (lib/engine/CLOCK.md; nan for relative
+ *                                 time), so readers of the 16 columns are not broken
  *   stdout  every object using it writes to standard output, lines of one
  *           tick grouped in config order; the header once.  Object keys:
  *             stdout.header = yes (the header is written if any object asks)
+ *             stdout.age = no     (the age_s column, for every line if any object asks)
  *
  * Never stalls the tick: lines go into a fixed buffer per stream
  * (CSV_TRANSPORT_BUF_BYTES); the buffer is written once per tick (cycle hook) with
@@ -46,6 +50,7 @@ typedef struct {
     int header;
     int truncate;
     int geo; /* csv.geo = yes: columns lat_deg,lon_deg,alt_m,heading_deg appended */
+    int age; /* append the column age_s (csv_format_add_age) */
 } csv_transport_obj_cfg_t;
 
 extern const transport_t csv_transport;

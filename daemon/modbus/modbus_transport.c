@@ -272,6 +272,9 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
     d.late_p99_us = s->late.p99_us;
     d.late_max_us = s->late.max_us;
     d.missed_ticks = s->missed_ticks;
+    d.clock_drift_ppm = s->clock_rate > 0 ? (s->clock_rate - 1.0) * 1e6 : 0;
+    d.clock_delay_s = c->cfg->daemon.delay_s;
+    d.clock_mode = (uint16_t)c->cfg->daemon.clock;
     uint32_t load_permille;
     d.can_state = (uint16_t)can_transport_bus(c, &load_permille);
     d.can_load_permille = (uint16_t)(load_permille > 0xffff ? 0xffff : load_permille);
@@ -298,6 +301,8 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         o->out_fault = (uint16_t)(ob->out_fault != 0);
         o->seq_jumps = 0; /* the server adds its own */
         drive_regs(c, (unsigned)t->obj_of[k], o, &d);
+        o->clocked = (uint16_t)(ob->clocked == 1);
+        d.clock_objects += o->clocked;
     }
     modbus_server_publish(t->srv, &d, t->objs);
 }

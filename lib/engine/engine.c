@@ -1642,6 +1642,7 @@ static void step_once(engine_t *e)
             /* no position known and none required: the start is the last resort */
             for (int k = 0; k < AX; k++)
                 e->pos[k] = h->seg.c[k][0];
+            e->out_t = h->seg.t0_s;
             e->have_pos = 1;
         }
         double d2 = 0;

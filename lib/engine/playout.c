@@ -11,7 +11,7 @@
 void playout_drift_init(playout_drift_t *d, double max_ppm)
 {
     memset(d, 0, sizeof *d);
-    d->max_ppm = max_ppm > 0 ? max_ppm : PLAYOUT_MAX_PPM;
+    d->max_ppm = max_ppm >= 0 ? max_ppm : PLAYOUT_MAX_PPM;
 }
 
 static int cmp_double(const void *a, const void *b)

@@ -51,7 +51,9 @@ typedef struct {
     double scratch[PLAYOUT_WINDOWS * (PLAYOUT_WINDOWS - 1) / 2];
 } playout_drift_t;
 
-/* Start with no sample; max_ppm > 0 bounds the estimate. */
+/* Start with no sample; max_ppm >= 0 bounds the estimate (0: no drift is
+ * absorbed; negative: PLAYOUT_MAX_PPM).  A zeroed struct is the same with
+ * max_ppm 0. */
 void playout_drift_init(playout_drift_t *d, double max_ppm);
 
 /* One waypoint: received at arrival_ns (trajd's clock, ns since the epoch),

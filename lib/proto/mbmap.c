@@ -164,6 +164,10 @@ void mbmap_encode_daemon(uint16_t *regs, const mbmap_daemon_t *d)
     regs[MBMAP_D_DRIVE_SDO_ABORTS] = (uint16_t)(d->drive_sdo_aborts > 0xffff ? 0xffff
                                                                              : d->drive_sdo_aborts);
     regs[MBMAP_D_DRIVE_HB_LOST] = (uint16_t)(d->drive_hb_lost > 0xffff ? 0xffff : d->drive_hb_lost);
+    mbmap_put_f32(regs + MBMAP_D_CLOCK_DRIFT, (float)d->clock_drift_ppm);
+    mbmap_put_f32(regs + MBMAP_D_CLOCK_DELAY, (float)d->clock_delay_s);
+    regs[MBMAP_D_CLOCK_MODE] = d->clock_mode;
+    regs[MBMAP_D_CLOCK_OBJECTS] = d->clock_objects;
     mbmap_put_u32(regs + MBMAP_D_MB_CONNECTIONS, lo32(d->mb_connections));
     mbmap_put_u32(regs + MBMAP_D_MB_DROPPED, lo32(d->mb_dropped));
     regs[MBMAP_D_MB_PEERS] = d->mb_peers;
@@ -229,6 +233,8 @@ int mbmap_encode_object(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_ob
     b[MBMAP_O_DRIVE_STATUSWORD] = o->drive_statusword;
     b[MBMAP_O_DRIVE_NMT] = o->drive_nmt;
     b[MBMAP_O_DRIVE_EMCY] = o->drive_emcy;
+    mbmap_put_f32(b + MBMAP_O_AGE_S, (float)o->sp.age_s);
+    b[MBMAP_O_CLOCKED] = o->clocked ? 1 : 0;
     mbmap_put_f64(b + MBMAP_O_LAT, o->lat_deg);
     mbmap_put_f64(b + MBMAP_O_LON, o->lon_deg);
     mbmap_put_f64(b + MBMAP_O_ALT, o->alt_m);
@@ -473,6 +479,14 @@ static const mbmap_field_t fields[] = {
       "SDO writes drives refused (saturates at 65535)"),
     F(ID, MBMAP_D_DRIVE_HB_LOST, 1, MBMAP_T_U16, "drive_hb_lost", "",
       "drive heartbeats not heard within can.cia402_heartbeat_ms (saturates)"),
+    F(ID, MBMAP_D_CLOCK_DRIFT, 2, MBMAP_T_F32, "clock_drift", "ppm",
+      "sender clock drift absorbed by the play-out clock (+ = sender fast), lib/engine/CLOCK.md"),
+    F(ID, MBMAP_D_CLOCK_DELAY, 2, MBMAP_T_F32, "clock_delay", "s",
+      "play-out delay D: objects on the clock stand at now - D"),
+    F(ID, MBMAP_D_CLOCK_MODE, 1, MBMAP_T_U16, "clock_mode", "",
+      "[daemon] clock: 0 auto, 1 epoch, 2 relative"),
+    F(ID, MBMAP_D_CLOCK_OBJECTS, 1, MBMAP_T_U16, "clock_objects", "",
+      "objects played out on the daemon's clock"),
     F(ID, MBMAP_D_MB_CONNECTIONS, 2, MBMAP_T_U32, "mb_connections", "", "TCP connections accepted"),
     F(ID, MBMAP_D_MB_DROPPED, 2, MBMAP_T_U32, "mb_dropped", "",
       "clients closed by the server: bad framing, idle, answers not read, slow (evictions: "
@@ -579,6 +593,11 @@ static const mbmap_field_t fields[] = {
       "pre-operational, 255 none heard"),
     F(IO, MBMAP_O_DRIVE_EMCY, 1, MBMAP_T_U16, "drive_emcy", "",
       "error code of the last EMCY from the object's drives, 0 none"),
+    F(IO, MBMAP_O_AGE_S, 2, MBMAP_T_F32, "age", "s",
+      "data age: now - t_s on the sender's time base, D plus any lag (lib/engine/CLOCK.md); NaN "
+      "for relative time"),
+    F(IO, MBMAP_O_CLOCKED, 1, MBMAP_T_U16, "clocked", "",
+      "1 if played out on the daemon's clock (epoch time), 0 relative"),
     F(IO, MBMAP_O_LAT, 4, MBMAP_T_F64, "lat", "deg",
       "latitude of the setpoint (WGS84), for an object whose track is geographic: its "
       "east/north/up about the daemon's one datum converted back; NaN otherwise or with no "

@@ -104,6 +104,10 @@
 #define MBMAP_D_DRIVE_LAST_ABORT 38  /* u32 abort code of the last SDO abort from a drive, 0 = none */
 #define MBMAP_D_DRIVE_SDO_ABORTS 40  /* u16 SDO writes drives refused (all objects, saturates) */
 #define MBMAP_D_DRIVE_HB_LOST 41     /* u16 heartbeat consumer timeouts (all objects, saturates) */
+#define MBMAP_D_CLOCK_DRIFT 42       /* f32 sender clock drift absorbed, ppm (lib/engine/CLOCK.md) */
+#define MBMAP_D_CLOCK_DELAY 44       /* f32 play-out delay D, s */
+#define MBMAP_D_CLOCK_MODE 46        /* u16 [daemon] clock: 0 auto, 1 epoch, 2 relative */
+#define MBMAP_D_CLOCK_OBJECTS 47     /* u16 objects played out on the clock */
 #define MBMAP_D_MB_CONNECTIONS 48    /* u32 TCP connections accepted */
 #define MBMAP_D_MB_DROPPED 50        /* u32 clients closed by the server (framing, idle, answers not read, slow) */
 #define MBMAP_D_MB_PEERS 52          /* u16 client addresses seen (at most MODBUS_SERVER_PEERS kept) */
@@ -161,6 +165,8 @@
 #define MBMAP_O_DRIVE_STATUSWORD 77  /* u16 statusword of the first drive axis not in Operation Enabled, else the first */
 #define MBMAP_O_DRIVE_NMT 78         /* u16 heartbeat NMT state of that node (0xFF: none heard) */
 #define MBMAP_O_DRIVE_EMCY 79        /* u16 error code of the last EMCY from the object's drives */
+#define MBMAP_O_AGE_S 80             /* f32 data age: now - t_s on the sender's time base (NaN: relative time) */
+#define MBMAP_O_CLOCKED 82           /* u16 1 if played out on the daemon's clock */
 #define MBMAP_O_LAT 84               /* f64 latitude of the setpoint, degrees (WGS84; NaN: not geographic or no position) */
 #define MBMAP_O_LON 88               /* f64 longitude, degrees */
 #define MBMAP_O_ALT 92               /* f64 height above the WGS84 ellipsoid, m */
@@ -251,6 +257,8 @@ typedef struct {
     uint16_t can_tx_err, can_rx_err;
     uint64_t drive_emcy, drive_sdo_aborts, drive_hb_lost;
     uint32_t drive_last_abort;
+    double clock_drift_ppm, clock_delay_s;
+    uint16_t clock_mode, clock_objects;
 } mbmap_daemon_t;
 
 typedef struct {
@@ -267,6 +275,7 @@ typedef struct {
     int absent;                 /* no object has this id: the block stays all 0 (GEN 0) */
     /* CiA 402 drives (STATUS2 page 4 on CAN); states 0x0FFF, nmt 0xFF without drives */
     uint16_t drive_states, drive_statusword, drive_nmt, drive_emcy;
+    uint16_t clocked;           /* on the daemon's clock (the age is sp.age_s) */
     double lat_deg, lon_deg, alt_m; /* the setpoint as WGS84 geodetic (NaN: none) */
     double heading_deg, heading_unwrapped_deg; /* heading axis (NaN: none) */
 } mbmap_object_t;

@@ -122,6 +122,36 @@ static void test_values(void **state)
     cfg_free(c);
 }
 
+/* Given the one-clock keys (lib/engine/CLOCK.md), then defaults are auto,
+ * 10 s, 5 %, 500 ppm, a day; each key lands in its field; clock = epoch with
+ * a replay speed is refused at its line, and so are values out of range. */
+static void test_clock_keys(void **state)
+{
+    (void)state;
+    cfg_t *c = load_ok(OBJ);
+    assert_int_equal(c->daemon.clock, CFG_CLOCK_AUTO);
+    assert_true(c->daemon.delay_s > 9.999 && c->daemon.delay_s < 10.001);
+    assert_true(c->daemon.catchup > 0.0499 && c->daemon.catchup < 0.0501);
+    assert_true(c->daemon.drift_max_ppm > 499.9 && c->daemon.drift_max_ppm < 500.1);
+    assert_true(c->daemon.clock_window_s > 86399 && c->daemon.clock_window_s < 86401);
+    cfg_free(c);
+    c = load_ok("[daemon]\nclock = epoch\ndelay_s = 2.5\ncatchup = 0.1\ndrift_max_ppm = 100\n"
+                "clock_window_s = 60\n" OBJ);
+    assert_int_equal(c->daemon.clock, CFG_CLOCK_EPOCH);
+    assert_true(c->daemon.delay_s > 2.4999 && c->daemon.delay_s < 2.5001);
+    assert_true(c->daemon.catchup > 0.0999 && c->daemon.catchup < 0.1001);
+    assert_true(c->daemon.drift_max_ppm > 99.99 && c->daemon.drift_max_ppm < 100.01);
+    assert_true(c->daemon.clock_window_s > 59.99 && c->daemon.clock_window_s < 60.01);
+    cfg_free(c);
+    c = load_ok("[daemon]\nclock = relative\nspeed = 20\n" OBJ);
+    assert_int_equal(c->daemon.clock, CFG_CLOCK_RELATIVE);
+    cfg_free(c);
+    load_bad("[daemon]\nspeed = 20\nclock = epoch\n" OBJ, CFG_EVALUE, 3, "needs speed = 1");
+    load_bad("[daemon]\nclock = gps\n" OBJ, CFG_EVALUE, 2, "auto, epoch, relative");
+    load_bad("[daemon]\ndelay_s = -1\n" OBJ, CFG_EVALUE, 2, "delay_s");
+    load_bad("[daemon]\ncatchup = 2\n" OBJ, CFG_EVALUE, 2, "catchup");
+}
+
 /* Each mistake: refused, with the line of the mistake. */
 static void test_errors(void **state)
 {
@@ -390,10 +420,15 @@ static void test_safety_defaults(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_minimal),         cmocka_unit_test(test_values),
-        cmocka_unit_test(test_errors),          cmocka_unit_test(test_documented_conf),
-        cmocka_unit_test(test_missing_file),    cmocka_unit_test(test_ids),
-        cmocka_unit_test(test_safety_defaults), cmocka_unit_test(test_can_ids),
+        cmocka_unit_test(test_minimal),
+        cmocka_unit_test(test_values),
+        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_clock_keys),
+        cmocka_unit_test(test_documented_conf),
+        cmocka_unit_test(test_missing_file),
+        cmocka_unit_test(test_ids),
+        cmocka_unit_test(test_safety_defaults),
+        cmocka_unit_test(test_can_ids),
         cmocka_unit_test(test_reload_check),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

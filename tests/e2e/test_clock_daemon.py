@@ -1,0 +1,144 @@
+"""test_clock_daemon.py - one clock for every object (issue 16 item 2), seen from
+a Modbus client and in the CSV output (lib/engine/CLOCK.md).
+
+trajd with [daemon] clock = epoch, delay_s = D and two objects fed over Modbus
+with waypoints stamped in epoch time (the client's time.time(), a few seconds
+ahead), of different tracks and starting at different times. Wanted:
+  - in every Modbus snapshot (one read covering both objects' t_s and states:
+    one image, one tick) where both stream, their t_s are the same double:
+    skew 0, whatever the order or time their waypoints came in;
+  - the object registers say they are on the clock (clocked = 1) and the
+    data age is D; the daemon block gives D and the mode;
+  - the CSV output with csv.age = yes has the age_s column after the 16
+    usual ones, equal to D (f64) on every streaming row before the stop, and
+    the two files' rows of one cycle have the same t_s.
+Nothing here measures time: the age and the skew are the engine's, exact
+whatever the load.
+"""
+import csv
+import os
+import signal
+import struct
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+import mbsim  # noqa: E402
+from mbsim import M, obj_base  # noqa: E402
+
+TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
+WAIT_S = 60
+D = 2.5
+STREAMING = 1
+
+
+def write_wp(s, k, seq, t, xyz, tid):
+    regs = struct.pack(">Idddd", seq, t, *xyz)
+    n = len(regs) // 2
+    pdu = struct.pack(">BHHB", 16, obj_base(k) + M["MBMAP_H_WP"], n, len(regs)) + regs
+    rsp = mbsim.transact(s, pdu, tid)
+    return None if rsp[0] == 16 else rsp[1]
+
+
+def track(k, u):
+    """Object k's position u seconds into its track (different shapes)."""
+    if k == 0:
+        return (3.0 * u, 0.5 * u * u / 10.0, 0.0)
+    return (-2.0 * u, 1.0 * u, 0.2 * u)
+
+
+class OneClock(unittest.TestCase):
+    def setUp(self):
+        self.tmpd = tempfile.TemporaryDirectory()
+        d = self.tmpd.name
+        conf = os.path.join(d, "trajd.conf")
+        with open(conf, "w") as f:
+            f.write("[daemon]\nrate_hz = 50\nstatus_interval_s = 0\nstop_timeout_s = 1\n"
+                    "clock = epoch\ndelay_s = %g\n"
+                    "[modbus]\naddress = 127.0.0.1\nport = 0\nwrites = yes\nsystemd_socket = no\n"
+                    "[object.a]\nid = 0\ninput = modbus\noutput = csv\ncsv.path = a.csv\n"
+                    "csv.age = yes\nfragment = 8\noverlap = 4\nstart_slack = 2\n"
+                    "[object.b]\nid = 1\ninput = modbus\noutput = csv\ncsv.path = b.csv\n"
+                    "csv.age = yes\nfragment = 8\noverlap = 4\nstart_slack = 2\n" % D)
+        self.p = subprocess.Popen([TRAJD, "-f", "-c", conf], stdin=subprocess.DEVNULL,
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        self.lines = mbsim.Lines(self.p.stderr)
+        line = self.lines.wait_for("modbus: TCP on", WAIT_S)
+        if line is None:
+            self.p.kill()
+            raise RuntimeError("trajd did not start: %s" % "".join(self.lines.all))
+        self.port = int(line.split(" port ")[1].split(",")[0])
+
+    def tearDown(self):
+        if self.p.poll() is None:
+            self.p.kill()
+            self.p.wait(WAIT_S)
+        self.tmpd.cleanup()
+
+    def test_same_instant(self):
+        s = mbsim.connect(self.port)
+        t0 = float(int(time.time())) + 1.0
+        tid = 0
+        # object b's waypoints first, and starting 0.3 s later than a's
+        for k, start in ((1, 0.3), (0, 0.0)):
+            for i in range(0, 101):
+                u = start + 0.1 * i
+                tid += 1
+                rc = write_wp(s, k, i + 1, t0 + u, track(k, u), tid)
+                self.assertIsNone(rc, "object %d waypoint %d: exception %r" % (k, i, rc))
+        base0, base1 = obj_base(0), obj_base(1)
+        first = base0 + M["MBMAP_O_STATE"]
+        last = base1 + M["MBMAP_O_T_S"] + 4
+        both = 0
+        deadline = time.monotonic() + WAIT_S
+        while both < 30 and time.monotonic() < deadline:
+            tid += 1
+            r = mbsim.read_input(s, first, last - first, tid)
+            st0 = r[base0 + M["MBMAP_O_STATE"] - first]
+            st1 = r[base1 + M["MBMAP_O_STATE"] - first]
+            ts0 = mbsim.f64(r, base0 + M["MBMAP_O_T_S"] - first)
+            ts1 = mbsim.f64(r, base1 + M["MBMAP_O_T_S"] - first)
+            if st0 == STREAMING and st1 == STREAMING:
+                both += 1
+                self.assertEqual(ts0, ts1, "one snapshot, two instants: %r vs %r" % (ts0, ts1))
+            time.sleep(0.05)
+        self.assertGreaterEqual(both, 30, "the objects never streamed together")
+        # the clock registers
+        tid += 1
+        a = mbsim.read_input(s, base0 + M["MBMAP_O_AGE_S"], 3, tid)
+        self.assertEqual(a[2], 1, "object a is on the clock")
+        self.assertAlmostEqual(mbsim.f32(a, 0), D, delta=1e-4)
+        tid += 1
+        dm = mbsim.read_input(s, M["MBMAP_D_CLOCK_DRIFT"], 6, tid)
+        self.assertEqual(mbsim.f32(dm, 2), D)
+        self.assertEqual(dm[4], 1, "clock = epoch")
+        self.assertEqual(dm[5], 2, "two objects on the clock")
+        tid += 1
+        before_stop = mbsim.u32(mbsim.read_input(s, base0 + M["MBMAP_O_CYCLE"], 2, tid), 0)
+        s.close()
+        self.p.send_signal(signal.SIGTERM)
+        self.p.wait(WAIT_S)
+        rows = {}
+        for name in ("a", "b"):
+            with open(os.path.join(self.tmpd.name, name + ".csv")) as f:
+                rd = list(csv.reader(f))
+            self.assertEqual(rd[0][-1], "age_s")
+            self.assertEqual(len(rd[0]), 17)
+            # SIGTERM stops along the path (the age then grows): rows before it
+            streaming = [r for r in rd[1:]
+                         if r[12] == "streaming" and int(r[14]) <= before_stop]
+            self.assertGreater(len(streaming), 30)
+            for r in streaming:
+                self.assertAlmostEqual(float(r[16]), D, delta=1e-6, msg=repr(r))
+            rows[name] = {r[14]: r[2] for r in streaming}
+        common = set(rows["a"]) & set(rows["b"])
+        self.assertGreater(len(common), 30)
+        for cyc in common:
+            self.assertEqual(rows["a"][cyc], rows["b"][cyc], "cycle %s" % cyc)
+
+
+if __name__ == "__main__":
+    unittest.main()
