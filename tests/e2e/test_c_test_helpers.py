@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The C tests share one helper header (STYLE.md 20, issue 9).
+"""The C tests share one helper header (issue 9).
 
 Given tests/unit/*.c, tests/bench/*.c and tests/fuzz/*.c, then none includes
 cmocka.h itself (tests/helpers/test.h does, with what it needs first), and

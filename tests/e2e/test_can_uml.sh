@@ -1,6 +1,6 @@
 #!/bin/bash
 # CAN scenarios on a real Linux kernel with vcan: user-mode-linux runs as an
-# ordinary process (this host's kernel has no CAN; see SOCKETCAN.md).  One boot
+# ordinary process (for hosts whose kernel has no CAN modules).  One boot
 # runs every scenario of tests/uml/all.sh (smoke: cansend/candump; canerr: error
 # frames injected with cansend, the bus state on Modbus; daemon:
 # trajd streaming a track sent by canplayer, down/up, removal, ENOBUFS,

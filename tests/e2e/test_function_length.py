@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Functions in daemon/ over MAX_LINES lines fail this test unless allow-listed.
 
-STYLE.md and issue 9: no function over ~80 lines in daemon/ unless argued
+Issue 9: no function over ~80 lines in daemon/ unless argued
 for.  A function's length is counted from the line holding its name to its
 closing brace.  The scanner is a small brace matcher over the source with
 comments, strings and character constants blanked (no compiler needed); a

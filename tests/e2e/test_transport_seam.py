@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The transport seam is closed (STYLE.md 16, issue 9): adding a transport
+"""The transport seam is closed (issue 9): adding a transport
 edits no core file, and every input reaches its engine the same way.
 
 Given the sources, when the core (daemon/core/, daemon/trajd.c) is read with

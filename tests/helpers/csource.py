@@ -1,6 +1,6 @@
 """csource.py - a small reader of this project's C sources for the structure
 tests (test_function_length.py, test_transport_seam.py): no compiler, no
-dependency.  Good enough for code that follows STYLE.md; not a C parser.
+dependency.  Good enough for code formatted by the tree's .clang-format; not a C parser.
 """
 import re
 

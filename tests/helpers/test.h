@@ -1,6 +1,6 @@
 /*
  * test.h - what the C unit tests (tests/unit/) and benchmarks (tests/bench/)
- * share, instead of copies in each file (STYLE.md 20):
+ * share, instead of copies in each file:
  *   - cmocka's include block: cmocka.h needs stdarg.h, stddef.h, stdint.h and
  *     setjmp.h before it;
  *   - urand(), a reproducible pseudo-random number in [0, 1] from a seed the

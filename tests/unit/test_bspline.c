@@ -257,7 +257,8 @@ static void test_multiple_knots_lower_continuity(void **state)
 }
 
 /* Given the tension matrix, then its blending functions sum to 1 for every
- * t and tension (affine invariance), u = 1 gives MATH.md's M, and the u = 1
+ * t and tension (affine invariance), u = 1 gives the uniform
+ * B-spline matrix of bspline.h, and the u = 1
  * segment equals the general evaluator on uniform knots. */
 static void test_tension_matrix(void **state)
 {
