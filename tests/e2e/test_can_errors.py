@@ -95,7 +95,7 @@ class CanErrorsTest(unittest.TestCase):
             try:
                 line = lines.wait_for("modbus: TCP on")
                 self.assertIsNotNone(line, "".join(lines.all))
-                port = int(line.split(" port ")[1].split(",")[0])
+                port = mbsim.port_of(line)
                 c = ModbusTcpClient("127.0.0.1", port=port, timeout=mbsim.WAIT_S)
                 self.assertTrue(c.connect())
                 deadline = time.monotonic() + 30

@@ -19,7 +19,6 @@ import csv
 import os
 import signal
 import struct
-import subprocess
 import sys
 import tempfile
 import time
@@ -63,14 +62,7 @@ class OneClock(unittest.TestCase):
                     "csv.age = yes\nfragment = 8\noverlap = 4\nstart_slack = 2\n"
                     "[object.b]\nid = 1\ninput = modbus\noutput = csv\ncsv.path = b.csv\n"
                     "csv.age = yes\nfragment = 8\noverlap = 4\nstart_slack = 2\n" % D)
-        self.p = subprocess.Popen([TRAJD, "-f", "-c", conf], stdin=subprocess.DEVNULL,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        self.lines = mbsim.Lines(self.p.stderr)
-        line = self.lines.wait_for("modbus: TCP on", WAIT_S)
-        if line is None:
-            self.p.kill()
-            raise RuntimeError("trajd did not start: %s" % "".join(self.lines.all))
-        self.port = int(line.split(" port ")[1].split(",")[0])
+        self.p, self.lines, self.port = mbsim.start_trajd([TRAJD, "-f", "-c", conf], WAIT_S)
 
     def tearDown(self):
         if self.p.poll() is None:

@@ -142,7 +142,7 @@ class GeoFrames(unittest.TestCase):
         try:
             line = lines.wait_for("modbus: TCP on", WAIT_S)
             self.assertIsNotNone(line, "".join(lines.all))
-            port = int(line.split(" port ")[1].split(",")[0])
+            port = mbsim.port_of(line)
             blocks = self.read_blocks(port, lines)
         finally:
             rc = p.wait(timeout=WAIT_S)
@@ -265,7 +265,7 @@ class GeoFrames(unittest.TestCase):
         try:
             line = lines.wait_for("modbus: TCP on", WAIT_S)
             self.assertIsNotNone(line, "".join(lines.all))
-            snaps = self.read_heading(int(line.split(" port ")[1].split(",")[0]))
+            snaps = self.read_heading(mbsim.port_of(line))
         finally:
             rc = p.wait(timeout=WAIT_S)
             lines.wait_for("\0", 0.5)

@@ -88,7 +88,7 @@ class Diagnostics(unittest.TestCase):
             try:
                 line = lines.wait_for("modbus: TCP on", WAIT_S)
                 self.assertIsNotNone(line, "".join(lines.all))
-                port = int(line.split(" port ")[1].split(",")[0])
+                port = mbsim.port_of(line)
                 c = ModbusTcpClient("127.0.0.1", port=port, timeout=mbsim.WAIT_S)
                 self.assertTrue(c.connect())
                 k = 1  # the second object (id 1): its block is not the first one

@@ -19,7 +19,6 @@ import os
 import re
 import signal
 import struct
-import subprocess
 import sys
 import tempfile
 import time
@@ -57,14 +56,7 @@ class FarWaypoint(unittest.TestCase):
             f.write("[daemon]\nrate_hz = 100\nstatus_interval_s = 0\nstop_timeout_s = 1\n"
                     "[modbus]\naddress = 127.0.0.1\nport = 0\nwrites = yes\nsystemd_socket = no\n"
                     "[object.fed]\ninput = modbus\noutput = csv\ncsv.path = fed.csv\n")
-        self.p = subprocess.Popen([TRAJD, "-f", "-c", conf], stdin=subprocess.DEVNULL,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        self.lines = mbsim.Lines(self.p.stderr)
-        line = self.lines.wait_for("modbus: TCP on", WAIT_S)
-        if line is None:
-            self.p.kill()
-            raise RuntimeError("trajd did not start: %s" % "".join(self.lines.all))
-        self.port = int(line.split(" port ")[1].split(",")[0])
+        self.p, self.lines, self.port = mbsim.start_trajd([TRAJD, "-f", "-c", conf], WAIT_S)
 
     def tearDown(self):
         self.p.send_signal(signal.SIGTERM)

@@ -23,7 +23,6 @@ import re
 import signal
 import socket
 import struct
-import subprocess
 import sys
 import tempfile
 import time
@@ -54,14 +53,7 @@ class PeerCounters(unittest.TestCase):
                     "request_timeout_ms = 300\npeer_log_s = 1\n"
                     "[object.boat]\ninput = replay\nreplay.track = %s\noutput = csv\n"
                     "csv.path = boat.csv\n" % TRACK)
-        self.p = subprocess.Popen([TRAJD, "-f", "-c", conf], stdin=subprocess.DEVNULL,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        self.lines = mbsim.Lines(self.p.stderr)
-        line = self.lines.wait_for("modbus: TCP on", WAIT_S)
-        if line is None:
-            self.p.kill()
-            raise RuntimeError("trajd did not start: %s" % "".join(self.lines.all))
-        self.port = int(line.split(" port ")[1].split(",")[0])
+        self.p, self.lines, self.port = mbsim.start_trajd([TRAJD, "-f", "-c", conf], WAIT_S)
 
     def tearDown(self):
         if self.p.poll() is None:

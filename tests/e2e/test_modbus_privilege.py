@@ -15,7 +15,6 @@ import os
 import pwd
 import signal
 import struct
-import subprocess
 import sys
 import tempfile
 import time
@@ -41,15 +40,7 @@ class Trajd:
         self.conf = os.path.join(tmp, "trajd.conf")
         with open(self.conf, "w") as f:
             f.write(text)
-        self.p = subprocess.Popen([TRAJD, "-f", "-c", self.conf], stdin=subprocess.DEVNULL,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                                  env=env)
-        self.lines = mbsim.Lines(self.p.stderr)
-        line = self.lines.wait_for("modbus: TCP on", WAIT_S)
-        if line is None:
-            self.p.kill()
-            raise RuntimeError("trajd did not start: %s" % "".join(self.lines.all))
-        self.port = int(line.split(" port ")[1].split(",")[0])
+        self.p, self.lines, self.port = mbsim.start_trajd([TRAJD, "-f", "-c", self.conf], WAIT_S, env=env)
 
     def stop(self):
         self.p.send_signal(signal.SIGTERM)

@@ -60,14 +60,7 @@ class Trajd:
         self.conf = os.path.join(tmp, "trajd.conf")
         with open(self.conf, "w") as f:
             f.write(conf_text)
-        self.p = subprocess.Popen([TRAJD, "-f", "-c", self.conf], stdin=subprocess.DEVNULL,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        self.lines = mbsim.Lines(self.p.stderr)
-        line = self.lines.wait_for("modbus: TCP on")
-        if line is None:
-            self.p.kill()
-            raise RuntimeError("trajd did not report its Modbus port: %s" % "".join(self.lines.all))
-        self.port = int(line.split(" port ")[1].split(",")[0])
+        self.p, self.lines, self.port = mbsim.start_trajd([TRAJD, "-f", "-c", self.conf])
 
     def stop(self):
         self.p.send_signal(signal.SIGTERM)

@@ -87,7 +87,7 @@ csv.path = %s/fed.csv
         try:
             line = lines.wait_for("modbus: TCP on")
             self.assertIsNotNone(line, "".join(lines.all))
-            port = int(line.split(" port ")[1].split(",")[0])
+            port = mbsim.port_of(line)
             self.check(order, port, tmp)
         finally:
             p.send_signal(signal.SIGTERM)

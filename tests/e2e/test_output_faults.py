@@ -82,7 +82,7 @@ class OutputFaults(unittest.TestCase):
             lines = mbsim.Lines(p.stderr)
             line = lines.wait_for("modbus: TCP on", WAIT_S)
             self.assertIsNotNone(line, "".join(lines.all))
-            port = int(line.split(" port ")[1].split(",")[0])
+            port = mbsim.port_of(line)
             warn = lines.wait_for("No space left on device", WAIT_S)
             self.assertIsNotNone(warn, "".join(lines.all))
             self.assertTrue(warn.startswith("<4>"), warn)

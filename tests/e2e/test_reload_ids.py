@@ -136,7 +136,7 @@ class ReloadIds(unittest.TestCase):
         try:
             line = self.lines.wait_for("modbus: TCP on", WAIT_S)
             self.assertIsNotNone(line, "".join(self.lines.all))
-            port = int(line.split(" port ")[1].split(",")[0])
+            port = mbsim.port_of(line)
             # 1. block k is the object with id k
             self.assertEqual(self.owners(port, 3), {0: "a", 1: "b", 2: "c"})
 
@@ -145,7 +145,7 @@ class ReloadIds(unittest.TestCase):
             p.send_signal(signal.SIGHUP)
             line = self.lines.wait_for("modbus: TCP on", WAIT_S)
             self.assertIsNotNone(line, "".join(self.lines.all))
-            port = int(line.split(" port ")[1].split(",")[0])
+            port = mbsim.port_of(line)
             self.assertIsNotNone(self.lines.wait_for("reloaded:", WAIT_S), "".join(self.lines.all))
             self.assertEqual(self.owners(port, 4), {0: "a", 1: "b", 2: "c", 3: "d"})
 

@@ -120,6 +120,25 @@ class Lines:
                 return line
 
 
+def port_of(line):
+    """The TCP port in trajd's "modbus: TCP on ... port N, ..." line."""
+    return int(line.split(" port ")[1].split(",")[0])
+
+
+def start_trajd(argv, timeout=WAIT_S, **popen_kw):
+    """Start trajd (argv: its command line) and wait up to timeout s for its
+    Modbus port.  Returns (process, Lines of its stderr, port); kills it and
+    raises RuntimeError with its log when it never reports the port."""
+    p = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                         stderr=subprocess.PIPE, text=True, **popen_kw)
+    lines = Lines(p.stderr)
+    line = lines.wait_for("modbus: TCP on", timeout)
+    if line is None:
+        p.kill()
+        raise RuntimeError("trajd did not start: %s" % "".join(lines.all))
+    return p, lines, port_of(line)
+
+
 # ---- raw Modbus/TCP ----------------------------------------------------------
 
 def connect(port):
