@@ -20,6 +20,14 @@ echo "BUILD=$BUILD" > "$run/env"
 $PY tests/helpers/cantools_trajd.py xyz tests/data/n2k_furuno_figure8_src52.csv "$run/track.csv" 100 || exit 1
 $PY tests/helpers/cantools_trajd.py wplog "$run/track.csv" "$run/wp.log" --time-scale $SPEED --also-fd-obj 1 > /dev/null || exit 1
 "$BUILD/bin/trajreplay" --rate 1000 -q -o "$run/ref1k.csv" "$run/track.csv" || exit 1
+# The example sender's track (tests/uml/canerr.sh): a line at 1 m/s for 3 s.
+$PY - "$run/dtrack.csv" <<'PYEOF' || exit 1
+import sys
+with open(sys.argv[1], "w") as f:
+    f.write("t_s,x_m,y_m,z_m\n")
+    for i in range(61):
+        f.write("%.6f,0.000000,%.6f,0.000000\n" % (i * 0.05, i * 0.05))
+PYEOF
 
 # UML keeps its pid file and mconsole socket in uml_dir, by default ~/.uml: without
 # HOME (env -i, some service managers) it panics at boot.  A short temporary path

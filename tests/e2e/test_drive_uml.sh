@@ -63,4 +63,4 @@ cat "$run/guest.log" 2>/dev/null
 rc=$(cat "$run/rc")
 echo "uml: guest exit code $rc"
 [ "$rc" = 0 ] || { for f in "$run"/drive.err "$run"/sim.err; do echo "== $f"; tail -30 "$f"; done; exit 1; }
-$PY tests/helpers/cantools_trajd.py drive-check "$run" || exit 1
+TRAJD_PEERS=$(cd "$peers" && pwd) $PY tests/helpers/cantools_trajd.py drive-check "$run" || exit 1
