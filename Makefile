@@ -255,39 +255,64 @@ bench: deps
 	@for b in $(wildcard tests/bench/bench_*.sh); do echo "== $$b"; BUILD=$(abspath $(BUILD)) sh $$b || exit 1; done
 
 # ---- libFuzzer (clang) ------------------------------------------------------
+# Two builds of every target.  Depth (the default, $(BUILD)/fuzz/): -O2 with
+# UndefinedBehaviorSanitizer only, so a target runs at the speed of the code it
+# checks: AddressSanitizer cost the engine target 17 x in CPU time (its shadow
+# memory and allocator, not the engine), which kept it from depth.  Memory
+# errors are still looked for: run_fuzz.sh replays every input a run kept
+# (the grown corpus) through the AddressSanitizer + UBSan build of the plain
+# replay driver ($(BUILD)/asan/tests/test_fuzz_*, as `make check` does for the
+# checked-in corpora).  FUZZ_ASAN=1 fuzzes with ASan itself ($(BUILD)/fuzz-asan/).
 FUZZ_CC := clang
 FUZZ_CXX := clang++
-FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer-no-link,address,undefined
-FUZZ_BINS := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/fuzz/%)
-$(BUILD)/fuzz/obj/%.o: %.c
+FUZZ_ASAN ?= 0
+ifeq ($(FUZZ_ASAN),1)
+FUZZ_SAN := address,undefined
+FUZZ_OPT := -O1
+FUZZ_DIR := $(BUILD)/fuzz-asan
+FUZZ_OBJ := $(FUZZ_DIR)/obj
+else
+FUZZ_SAN := undefined
+FUZZ_OPT := -O2
+FUZZ_DIR := $(BUILD)/fuzz
+FUZZ_OBJ := $(FUZZ_DIR)/obj-O2-ubsan
+endif
+FUZZ_FLAGS := -g $(FUZZ_OPT) -fsanitize=fuzzer-no-link,$(FUZZ_SAN)
+FUZZ_BINS := $(FUZZ_SRC:tests/fuzz/%.c=$(FUZZ_DIR)/%)
+$(FUZZ_OBJ)/%.o: %.c
 	@mkdir -p $(@D)
 	$(FUZZ_CC) $(TRAJD_CPPFLAGS) -std=c11 $(FUZZ_FLAGS) -MMD -MP -c -o $@ $<
-$(BUILD)/fuzz/obj/gen/%.o: $(BUILD)/gen/%.c
+$(FUZZ_OBJ)/gen/%.o: $(BUILD)/gen/%.c
 	@mkdir -p $(@D)
 	$(FUZZ_CC) $(TRAJD_CPPFLAGS) -std=c11 $(FUZZ_FLAGS) -MMD -MP -c -o $@ $<
-$(BUILD)/fuzz/obj/%.o: %.cc
+$(FUZZ_OBJ)/%.o: %.cc
 	@mkdir -p $(@D)
 	$(FUZZ_CXX) $(TRAJD_CXXFLAGS) $(FUZZ_FLAGS) -c -o $@ $<
-$(BUILD)/fuzz/%: $(BUILD)/fuzz/obj/tests/fuzz/%.o $(LIB_SRC:%.c=$(BUILD)/fuzz/obj/%.o) $(DAEMON_SRC:%.c=$(BUILD)/fuzz/obj/%.o) \
-		$(DAEMON_CXX_SRC:%.cc=$(BUILD)/fuzz/obj/%.o) $(BUILD)/fuzz/obj/gen/transport_table.o
-	$(FUZZ_CC) -fsanitize=fuzzer,address,undefined -o $@ $^ $(LDLIBS_DAEMON)
+$(FUZZ_DIR)/%: $(FUZZ_OBJ)/tests/fuzz/%.o $(LIB_SRC:%.c=$(FUZZ_OBJ)/%.o) $(DAEMON_SRC:%.c=$(FUZZ_OBJ)/%.o) \
+		$(DAEMON_CXX_SRC:%.cc=$(FUZZ_OBJ)/%.o) $(FUZZ_OBJ)/gen/transport_table.o
+	$(FUZZ_CC) -fsanitize=fuzzer,$(FUZZ_SAN) -o $@ $^ $(LDLIBS_DAEMON)
 # Numeric code (engine, splines) without comparison tracing: it finds nothing
 # there (no magic values) and took 40 % of the engine target's time.
 FUZZ_NUMERIC := $(filter-out lib/spline/path.c,$(wildcard lib/engine/*.c lib/spline/*.c))
-$(FUZZ_NUMERIC:%.c=$(BUILD)/fuzz/obj/%.o): FUZZ_FLAGS += -fno-sanitize-coverage=trace-cmp
-# make fuzz [FUZZ_EXECS=N | FUZZ_SECONDS=S] [FUZZ_JOBS=2] [FUZZ_TARGETS="fuzz_x ..."]
+$(FUZZ_NUMERIC:%.c=$(FUZZ_OBJ)/%.o): FUZZ_FLAGS += -fno-sanitize-coverage=trace-cmp
+# The AddressSanitizer replay drivers run_fuzz.sh passes every kept input through.
+FUZZ_ASAN_REPLAY := $(REPLAY_BINS:$(BUILD)/%=$(BUILD)/asan/%)
+# make fuzz [FUZZ_EXECS=N | FUZZ_SECONDS=S] [FUZZ_JOBS=2] [FUZZ_TARGETS="fuzz_x ..."] [FUZZ_ASAN=1]
 fuzz: deps
 	@$(MAKE) --no-print-directory $(FUZZ_BINS)
-	@BUILD=$(abspath $(BUILD)) FUZZ_EXECS="$(FUZZ_EXECS)" FUZZ_SECONDS="$(FUZZ_SECONDS)" \
-		FUZZ_JOBS="$(FUZZ_JOBS)" FUZZ_TARGETS="$(FUZZ_TARGETS)" bash tests/fuzz/run_fuzz.sh
+	@$(MAKE) --no-print-directory BUILD=$(BUILD)/asan CFLAGS="-O1 -g $(SAN)" LDFLAGS="$(SAN)" \
+		$(FUZZ_ASAN_REPLAY)
+	@BUILD=$(abspath $(BUILD)) FUZZ_DIR=$(abspath $(FUZZ_DIR)) FUZZ_EXECS="$(FUZZ_EXECS)" \
+		FUZZ_SECONDS="$(FUZZ_SECONDS)" FUZZ_JOBS="$(FUZZ_JOBS)" FUZZ_TARGETS="$(FUZZ_TARGETS)" \
+		bash tests/fuzz/run_fuzz.sh
 
 # The corpora a run grew, minimized (-merge=1) back into tests/fuzz/corpus/<target>/.
 fuzz-merge:
 	@$(MAKE) --no-print-directory $(FUZZ_BINS)
-	@for f in $(FUZZ_BINS); do n=$$(basename $$f); new=$(BUILD)/fuzz/merged/$$n; \
+	@for f in $(FUZZ_BINS); do n=$$(basename $$f); new=$(FUZZ_DIR)/merged/$$n; \
 		rm -rf $$new; mkdir -p $$new tests/fuzz/corpus/$$n; \
-		$$f -merge=1 $$new tests/fuzz/corpus/$$n $(BUILD)/fuzz/corpus/$$n > $(BUILD)/fuzz/$$n.merge.log 2>&1 \
-			|| { echo "$$n: merge failed, see $(BUILD)/fuzz/$$n.merge.log"; exit 1; }; \
+		$$f -merge=1 $$new tests/fuzz/corpus/$$n $(FUZZ_DIR)/corpus/$$n > $(FUZZ_DIR)/$$n.merge.log 2>&1 \
+			|| { echo "$$n: merge failed, see $(FUZZ_DIR)/$$n.merge.log"; exit 1; }; \
 		rm -f tests/fuzz/corpus/$$n/*; cp $$new/* tests/fuzz/corpus/$$n/ 2>/dev/null; \
 		echo "$$n: $$(ls tests/fuzz/corpus/$$n | wc -l) files, $$(du -sk tests/fuzz/corpus/$$n | cut -f1) KB"; done
 
