@@ -13,7 +13,11 @@
  *    integer arithmetic (a double tolerance of half an LSB was wrong: at
  *    -130927.96875 m, an exact tie, the decoded double differs by half an LSB
  *    plus its own rounding; tests/fuzz/regress/fuzz_canproto/), and decode
- *    gives that code x LSB up to the rounding to a double.
+ *    gives that code x LSB up to the rounding to a double;
+ *  - the STATUS and STATUS2 decoders (what a CAN tool reads back from the
+ *    daemon) on every frame: a page decoder answers exactly when
+ *    canproto_status2_page names its page, and what a decoder accepts,
+ *    encoded again and decoded, gives the same fields (check_status).
  */
 #include <math.h>
 #include <stdint.h>
@@ -47,6 +51,46 @@ static int nearest_code(double x, int64_t per_unit, int64_t code)
     return lo <= lhs && lhs <= hi;
 }
 
+/* decode(encode(decode(f))) == decode(f), field by field (the structs are
+ * zeroed by the decoders, so memcmp compares padding as zero). */
+#define ROUND_TRIP(T, dec, enc, id, f)                                                             \
+    do {                                                                                           \
+        T a_, b_;                                                                                  \
+        canproto_frame_t g_;                                                                       \
+        if (dec(f, &a_) == 0) {                                                                    \
+            enc(id, &a_, &g_);                                                                     \
+            if (dec(&g_, &b_) != 0 || memcmp(&a_, &b_, sizeof a_))                                 \
+                abort();                                                                           \
+            found++;                                                                               \
+        }                                                                                          \
+    } while (0)
+
+static void check_status(const canproto_frame_t *f)
+{
+    int page = canproto_status2_page(f), found = 0;
+    ROUND_TRIP(canproto_status_t, canproto_decode_status, canproto_encode_status, 0x6C1, f);
+    found = 0;
+    ROUND_TRIP(canproto_st2_faults_t, canproto_decode_status2_faults,
+               canproto_encode_status2_faults, 0x6D1, f);
+    if (found != (page == CANPROTO_ST2_FAULTS))
+        abort();
+    found = 0;
+    ROUND_TRIP(canproto_st2_rejected_t, canproto_decode_status2_rejected,
+               canproto_encode_status2_rejected, 0x6D1, f);
+    if (found != (page == CANPROTO_ST2_REJECTED))
+        abort();
+    found = 0;
+    ROUND_TRIP(canproto_status2_drive_t, canproto_decode_status2_drive,
+               canproto_encode_status2_drive, 0x6D1, f);
+    if (found != (page == CANPROTO_ST2_DRIVE))
+        abort();
+    found = 0;
+    ROUND_TRIP(canproto_st2_bus_t, canproto_decode_status2_bus, canproto_encode_status2_bus, 0x6D1,
+               f);
+    if (found != (page == CANPROTO_ST2_BUS))
+        abort();
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     canproto_slot_t slots[4];
@@ -73,6 +117,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             n = size - i;
         memcpy(f.data, data + i, n);
         i += n;
+        check_status(&f);
         canproto_rx_out_t out;
         int rc = canproto_rx_frame(&rx, &f, is_fd, &out);
         frames++;
