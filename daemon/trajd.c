@@ -458,7 +458,9 @@ int main(int argc, char **argv)
                 (unsigned long long)faults, EX_SOFTWARE);
         rc = EX_SOFTWARE;
     } else if (rc == 0 && d.stats.no_input) {
-        log_msg(LOG_ERR, "%llu replayed object(s) had no usable waypoint: exit status %d",
+        log_msg(LOG_ERR,
+                "%llu object(s) had no usable waypoint in their replayed track or candump log: "
+                "exit status %d",
                 (unsigned long long)d.stats.no_input, CORE_EXIT_NO_INPUT);
         rc = CORE_EXIT_NO_INPUT;
     }

@@ -503,6 +503,7 @@ typedef struct {
     can_hook_ctx_t hctx[CFG_OBJECTS_MAX]; /* can_port index -> its hooks' context */
     uint64_t rx_tick;                     /* last tick whose pre_tick drained the input */
     int drained;
+    int log_ended; /* log_in delivered its last frame (nothing_usable judged) */
     int was_up;
     can_bus_state_t bus_state; /* as of the last housekeeping timer, for Modbus */
     canerr_bus_t err;          /* error-frame counters as of the same timer */
@@ -949,6 +950,33 @@ fail:
     return rc ? rc : -EINVAL;
 }
 
+/* log_in delivered its last frame: an object fed by it that accepted no
+ * waypoint had nothing usable in it (issue 11), an error as for a replayed
+ * track with none: logged, and trajd exits with CORE_EXIT_NO_INPUT. */
+static void nothing_usable(can_state_t *s)
+{
+    can_logfile_stats_t ls;
+    can_logfile_stats(s->log, &ls);
+    for (unsigned k = 0; k < s->n; k++) {
+        if (!s->is_input[k])
+            continue;
+        engine_status_t st;
+        engine_status(s->objs[k]->engine, &st);
+        if (st.accepted)
+            continue;
+        can_port_obj_stats_t os;
+        can_port_obj_stats(s->port, k, &os);
+        log_msg(LOG_ERR,
+                "can: object '%s': log_in %s ended with no usable waypoint for it (0 accepted, "
+                "%llu rejected, %llu malformed frames, %llu bad lines); trajd will exit with "
+                "status %d",
+                s->objs[k]->name, s->cfg->log_in, (unsigned long long)os.waypoints_rejected,
+                (unsigned long long)os.rx.malformed, (unsigned long long)ls.bad_lines,
+                CORE_EXIT_NO_INPUT);
+        s->c->stats->no_input++;
+    }
+}
+
 static void pre_tick(void *state, obj_t *o, int64_t now_ns)
 {
     can_state_t *s = state;
@@ -961,6 +989,10 @@ static void pre_tick(void *state, obj_t *o, int64_t now_ns)
     if (s->port) {
         can_port_rx(s->port, now_ns);
         sync_fd(s);
+    }
+    if (s->port && s->log && s->cfg->log_in[0] && !s->log_ended && can_logfile_done(s->log)) {
+        s->log_ended = 1;
+        nothing_usable(s);
     }
 }
 

@@ -182,16 +182,16 @@ typedef struct {
     playout_clock_t pclock;
     double clock_rate;    /* d now_sender / dt of the last tick */
     int64_t clock_now_ns; /* now on the sender's time base at the last tick */
-    uint64_t no_input;    /* objects whose replayed track had no usable waypoint: trajd
+    uint64_t no_input; /* objects whose replayed track or CAN log_in had no usable waypoint: trajd
                                      * exits with CORE_EXIT_NO_INPUT at the end */
-    int exit_code;        /* nonzero: a transport asks the daemon to end now with
+    int exit_code;     /* nonzero: a transport asks the daemon to end now with
                                      * this status (stdout's reader left: CORE_EXIT_EPIPE);
                                      * the tick stops the loop with it */
 } stats_t;
 
 /* Exit statuses of trajd beyond sysexits.h (daemon/README.md "Output faults are errors"). */
 #define CORE_EXIT_OUTPUT_LOST 74 /* EX_IOERR: setpoint lines were lost by an output */
-#define CORE_EXIT_NO_INPUT 65    /* EX_DATAERR: a replayed track had no usable waypoint */
+#define CORE_EXIT_NO_INPUT 65    /* EX_DATAERR: a replayed track or log_in had no usable waypoint */
 #define CORE_EXIT_EPIPE                                                                            \
     141 /* stdout's reader went away (128 + SIGPIPE, what a shell
                                      * reports for a filter ended by SIGPIPE) */

@@ -11,7 +11,11 @@ transport (the same codec and can_port as on a socket, no kernel needed):
 - faults in the input (gap, duplicate, wrong length, unknown multiplexer) are
   reported in the STATUS frames and the trajectory carries on;
 - a configuration above the bus-load limit is refused with a clear message,
-  and the limit agrees with an independent computation of frame lengths.
+  and the limit agrees with an independent computation of frame lengths;
+- a log with nothing usable for an object (empty, only comments and garbage,
+  only foreign frames, or every waypoint out of range) ends trajd with
+  exit_when_done with an error line naming the object and the log and exit
+  65 (EX_DATAERR), as a replayed track does (issue 11 "nothing usable").
 """
 import math
 import os
@@ -380,6 +384,59 @@ class CanDaemon(unittest.TestCase):
         p = subprocess.run([TRAJD, "-f", "-c", path], capture_output=True, text=True, timeout=10)
         self.assertNotEqual(p.returncode, 0)
         self.assertIn("cannot open a CAN socket", p.stderr)
+
+
+class CanLogNothingUsable(unittest.TestCase):
+    # Given a candump log_in holding nothing usable for the object, when
+    # trajd replays it with exit_when_done, then it exits 65 (EX_DATAERR,
+    # as for a replayed track with no usable waypoint) with an error line
+    # naming the object and the log, never 0 as if it had done its work
+    def run_log(self, d, body):
+        with open(os.path.join(d, "wp.log"), "w") as fh:
+            fh.write(body)
+        return run_trajd(conf(d, output="csv", extra_obj="csv.path = sp.csv\n"))
+
+    def test_nothing_usable(self):
+        with tempfile.TemporaryDirectory() as d:
+            far = os.path.join(d, "far.csv")
+            with open(far, "w") as fh:  # x = 1e8 m: encodable, above max_abs_m (1e7)
+                fh.write("t,x,y,z\n" + "".join("%d,1e8,0,0\n" % i for i in range(20)))
+            ct.write_wplog(far, os.path.join(d, "far.log"))
+            with open(os.path.join(d, "far.log")) as fh:
+                far_log = fh.read()
+            with open(CAPTURE) as fh:
+                foreign = "".join(l for l in fh if l.strip() and not l.startswith("#"))
+            cases = {
+                "empty": "",
+                "garbage": "# only comments\nnot a frame\n(1.0) can0 zz#\n",
+                "foreign": foreign,
+                "range": far_log,
+            }
+            for name, body in cases.items():
+                p = self.run_log(d, body)
+                self.assertEqual(p.returncode, 65, "%s: %s" % (name, p.stderr[-800:]))
+                self.assertRegex(p.stderr, r"<3>can: object 'boat': log_in \S*wp.log ended with no "
+                                 r"usable waypoint for it \(0 accepted, \d+ rejected, \d+ malformed"
+                                 r" frames, \d+ bad lines\); trajd will exit with status 65", name)
+            # one usable waypoint among them: exit 0
+            good = cases["range"].replace("#010100407A10F35A", "#0101000000000000", 1)  # x 1e8 -> 0
+            self.assertNotEqual(good, cases["range"])
+            p = self.run_log(d, good)
+            self.assertEqual(p.returncode, 0, p.stderr[-800:])
+            self.assertNotIn("no usable waypoint", p.stderr)
+
+    # Given an NMEA 2000 candump log with no position in it, when trajreplay
+    # reads it, then a clear message and exit 1
+    def test_trajreplay_nothing_usable(self):
+        with tempfile.TemporaryDirectory() as d:
+            log = os.path.join(d, "x.log")
+            with open(log, "w") as fh:
+                fh.write("(0.100000) can0 123#00\n(0.200000) can0 124#0011\n")
+            p = subprocess.run([TRAJREPLAY, "-q", "--format", "n2k", log], capture_output=True,
+                               text=True, timeout=RUN_TIMEOUT_S)
+            self.assertEqual(p.returncode, 1, p.stderr)
+            self.assertIn("trajreplay: %s: no waypoints" % log, p.stderr)
+            self.assertEqual(p.stdout, "")
 
 
 if __name__ == "__main__":
