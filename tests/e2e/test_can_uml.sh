@@ -36,9 +36,9 @@ umldir=$(mktemp -d) || exit 1
 trap 'rm -rf "$umldir"' EXIT
 start_ms=$(( $(date +%s%N) / 1000000 ))
 # Host timeout > guest timeout, so a hung scenario still leaves a verdict file.
-timeout -k 5 130 linux.uml uml_dir="$umldir" mem=256M rootfstype=hostfs rootflags=/ ro quiet loglevel=1 \
+timeout -k 5 250 linux.uml uml_dir="$umldir" mem=256M rootfstype=hostfs rootflags=/ ro quiet loglevel=1 \
     init="$PWD/tests/uml/init.sh" trajd_dir="$run" trajd_script=tests/uml/all.sh \
-    trajd_src="$PWD" trajd_timeout=110 con=null con0=null,fd:1 < /dev/null > "$run/console.log" 2>&1
+    trajd_src="$PWD" trajd_timeout=230 con=null con0=null,fd:1 < /dev/null > "$run/console.log" 2>&1
 # (shell arithmetic: bc is not on a minimal Debian)
 echo "uml: boot and scenarios took $(( $(date +%s%N) / 1000000 - start_ms )) ms"
 cat "$run/guest.log" 2>/dev/null
