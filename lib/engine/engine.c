@@ -998,8 +998,7 @@ static void request_stop(engine_t *e, int kind)
         return;
     }
     e->finished = 0;
-    if (e->stop_req != STOP_CLEAR)
-        e->stop_req = kind;
+    e->stop_req = kind; /* the later command decides the state at rest, as when holding */
     e->drop_n = e->qlen;
 }
 

@@ -370,7 +370,9 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
  * a new trajectory, reached by a transfer. */
 void engine_clear(engine_t *e);
 /* Stop now (category 1): as engine_clear, but the state at rest is FINISHED.
- * (To run on to the last waypoint received, use engine_finish.)  Returns 0. */
+ * Of a clear and a stop given while the output brakes, the later one decides
+ * the state at rest.  (To run on to the last waypoint received, use
+ * engine_finish.)  Returns 0. */
 int engine_stop(engine_t *e);
 /*
  * Where the object really stands (drive feedback, a config key), before the

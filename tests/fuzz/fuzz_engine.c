@@ -17,7 +17,9 @@
  *  - it always finishes: after engine_finish with no further input, the
  *    output reaches FINISHED (or stays WAITING when no waypoint was accepted
  *    since the last clear) within the time the accepted waypoints and their
- *    transfers can take, and rests there.
+ *    transfers can take, and rests there; FINISHED when the last command
+ *    since the last accepted waypoint was a stop (engine.h: the later of stop
+ *    and clear decides the state at rest, even while the output brakes).
  *
  * Fast by construction: the engine's buffer is the smallest the configuration
  * allows (lookahead + fragment + 8 waypoints; the default 4096 cost a 2 MB
@@ -206,6 +208,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     engine_status_t st;
     double t = 0;
     unsigned accepted = 0, ops = 0;
+    int stopped = 0; /* engine_stop was the last command since the last accepted waypoint */
 
     if (size < 2)
         return 0;
@@ -245,6 +248,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             }
             if (engine_push(r.e, &w) == 0) {
                 accepted++;
+                stopped = 0;
                 r.positioned = 1;
             }
             break;
@@ -256,8 +260,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             if (op & 0x40) {
                 engine_clear(r.e);
                 accepted = 0;
+                stopped = 0;
             } else if (op & 0x20) {
                 (void)engine_stop(r.e);
+                accepted = 0; /* every waypoint buffered is dropped */
+                stopped = 1;
             } else {
                 (void)engine_finish(r.e);
             }
@@ -274,6 +281,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 double held[ENGINE_AXES];
                 engine_clear(r.e);
                 accepted = 0;
+                stopped = 0;
                 if (safety_held(&r.mon, held) < 0 || engine_set_position(r.e, held) == 0) {
                     safety_rearm(&r.mon);
                     r.last = r.sent; /* the engine continues from what was sent */
@@ -307,6 +315,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     engine_status(r.e, &st);
     if (!(st.state == ENGINE_STATE_FINISHED || (accepted == 0 && st.state == ENGINE_STATE_WAITING)))
+        abort();
+    if (stopped && st.state != ENGINE_STATE_FINISHED)
         abort();
     /* and rests there */
     engine_setpoint_t rest = r.last;

@@ -1386,6 +1386,53 @@ static void test_uniform_irregular(void **state)
         }
 }
 
+/* Given an output streaming a straight line, when two of engine_clear and
+ * engine_stop follow each other while it brakes, then the later one decides
+ * the state at rest (engine.h: stop rests FINISHED, clear WAITING), as it
+ * does when they are given to an output at rest; and a waypoint pushed
+ * between them is dropped by the second (found by fuzz_engine:
+ * tests/fuzz/regress/fuzz_engine/clear-then-stop-*, where clear, push, stop
+ * ended WAITING). */
+static void test_clear_then_stop(void **state)
+{
+    (void)state;
+    for (int order = 0; order < 2; order++) {
+        engine_config_t c;
+        engine_config_default(&c);
+        engine_t *e = engine_new(&c, NULL);
+        assert_non_null(e);
+        for (int i = 0; i < 100; i++) {
+            engine_waypoint_t w = {.t_s = 0.1 * i, .pos_m = {0.5 * i, 1, 2}};
+            assert_int_equal(engine_push(e, &w), 0);
+        }
+        engine_setpoint_t sp;
+        int64_t k = 0;
+        while (k < 200)
+            assert_int_equal(engine_tick(e, k++ * PERIOD_NS, &sp), 0);
+        assert_int_equal(sp.state, ENGINE_STATE_STREAMING);
+        if (order)
+            assert_int_equal(engine_stop(e), 0);
+        else
+            engine_clear(e);
+        assert_int_equal(engine_tick(e, k++ * PERIOD_NS, &sp), 0);
+        assert_int_equal(sp.state, ENGINE_STATE_STREAMING); /* braking */
+        engine_waypoint_t w = {.t_s = 50, .pos_m = {3, 1, 2}};
+        assert_int_equal(engine_push(e, &w), 0);
+        if (order)
+            engine_clear(e);
+        else
+            assert_int_equal(engine_stop(e), 0);
+        for (int i = 0; i < 100000 && sp.state == ENGINE_STATE_STREAMING; i++)
+            assert_int_equal(engine_tick(e, k++ * PERIOD_NS, &sp), 0);
+        assert_int_equal(sp.state, order ? ENGINE_STATE_WAITING : ENGINE_STATE_FINISHED);
+        assert_true(fabs(sp.vel_m_s[0]) + fabs(sp.vel_m_s[1]) + fabs(sp.vel_m_s[2]) <= 0.0);
+        engine_status_t st;
+        engine_status(e, &st);
+        assert_int_equal(st.buffered, 0); /* the waypoint between them was dropped */
+        engine_free(e);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1406,6 +1453,7 @@ int main(void)
         cmocka_unit_test(test_jittered_clock_rounds_to_ticks),
         cmocka_unit_test(test_status_stalled),
         cmocka_unit_test(test_uniform_irregular),
+        cmocka_unit_test(test_clear_then_stop),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
