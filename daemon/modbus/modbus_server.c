@@ -632,6 +632,30 @@ static void peer_counts(const modbus_server_t *s, unsigned k, uint64_t n[6])
     }
 }
 
+/* mb_worst_family, _ipv4 and _addr of host ("a.b.c.d" or an IPv6 text):
+ * the address as 16 bytes, an IPv4 one as ::ffff:a.b.c.d (RFC 4291
+ * 2.5.5.2), which is also how a dual-stack socket gives an IPv4 client:
+ * family 4 for both. */
+static void peer_address(const char *host, mbmap_daemon_t *w)
+{
+    uint8_t a[16] = {0};
+    struct in_addr a4;
+    if (inet_pton(AF_INET, host, &a4) == 1) {
+        a[10] = a[11] = 0xff;
+        memcpy(a + 12, &a4, 4);
+    } else if (inet_pton(AF_INET6, host, a) != 1) {
+        return; /* not an address: family 0 */
+    }
+    static const uint8_t mapped[12] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0xff, 0xff};
+    int v4 = memcmp(a, mapped, sizeof mapped) == 0;
+    w->mb_worst_family = v4 ? 4 : 6;
+    w->mb_worst_ipv4 = v4 ? (uint32_t)a[12] << 24 | (uint32_t)a[13] << 16 | (uint32_t)a[14] << 8 |
+                                a[15]
+                          : 0;
+    for (unsigned i = 0; i < MBMAP_X_MB_WORST_ADDR_GROUPS; i++)
+        w->mb_worst_addr[i] = (uint16_t)(a[2 * i] << 8 | a[2 * i + 1]);
+}
+
 /* mb_peers and the mb_worst_* fields: the address with the most drops
  * (evicted, slow, dropped), then the most exceptions; none if all are 0. */
 static void peer_worst(modbus_server_t *s)
@@ -651,14 +675,8 @@ static void peer_worst(modbus_server_t *s)
     s->worst.mb_peers = (uint16_t)s->n_peers;
     if (best < 0)
         return;
-    struct in_addr a4;
     peer_counts(s, (unsigned)best, n);
-    if (inet_pton(AF_INET, s->peers[best].host, &a4) == 1) {
-        s->worst.mb_worst_family = 4;
-        s->worst.mb_worst_ipv4 = ntohl(a4.s_addr);
-    } else {
-        s->worst.mb_worst_family = 6;
-    }
+    peer_address(s->peers[best].host, &s->worst);
     s->worst.mb_worst_requests = n[PEER_REQ];
     s->worst.mb_worst_exceptions = n[PEER_EXC];
     s->worst.mb_worst_drops = best_d;
@@ -1217,6 +1235,7 @@ void modbus_server_publish(modbus_server_t *s, const mbmap_daemon_t *d, const mb
     dd.mb_worst_requests = s->worst.mb_worst_requests;
     dd.mb_worst_exceptions = s->worst.mb_worst_exceptions;
     dd.mb_worst_drops = s->worst.mb_worst_drops;
+    memcpy(dd.mb_worst_addr, s->worst.mb_worst_addr, sizeof dd.mb_worst_addr);
     mbmap_encode_daemon(ir, &dd);
     for (unsigned k = 0; k < s->n_objects; k++) {
         if (objs[k].absent)
@@ -1225,6 +1244,7 @@ void modbus_server_publish(modbus_server_t *s, const mbmap_daemon_t *d, const mb
         o.mb_rejected = s->mb_rejected[k];
         o.lost += s->lost[k];
         o.seq_jumps += s->seq_jumps[k];
+        memcpy(o.mb_worst_addr, dd.mb_worst_addr, sizeof o.mb_worst_addr);
         mbmap_encode_object(ir, k, s->gen, &o);
         mbmap_encode_diag(ir, k, s->gen, &o);
     }

@@ -254,6 +254,8 @@ int mbmap_encode_diag(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_obje
             mbmap_put_u32(b + MBMAP_X_REJECTED_BY + 2 * (c - 1), lo32(o->st.rejected_by[c]));
     mbmap_put_f64(b + MBMAP_X_HEADING, o->heading_deg);
     mbmap_put_f64(b + MBMAP_X_HEADING_UNWRAPPED, o->heading_unwrapped_deg);
+    for (unsigned i = 0; i < MBMAP_X_MB_WORST_ADDR_GROUPS; i++)
+        b[MBMAP_X_MB_WORST_ADDR + i] = o->mb_worst_addr[i];
     mbmap_put_u32(b + MBMAP_X_GEN_TAIL, gen);
     return 0;
 }
@@ -496,7 +498,8 @@ static const mbmap_field_t fields[] = {
     F(ID, MBMAP_D_MB_WORST_FAMILY, 1, MBMAP_T_U16, "mb_worst_family", "",
       "the client address with the most drops, then exceptions: 0 none, 4 IPv4, 6 IPv6"),
     F(ID, MBMAP_D_MB_WORST_IPV4, 2, MBMAP_T_U32, "mb_worst_ipv4", "",
-      "its IPv4 address, a.b.c.d as a*2^24 + b*2^16 + c*2^8 + d (0 if IPv6: see the log)"),
+      "its IPv4 address, a.b.c.d as a*2^24 + b*2^16 + c*2^8 + d (0 if IPv6: any address is in "
+      "the diagnostics blocks, mb_worst_addr0..7)"),
     F(ID, MBMAP_D_MB_WORST_REQUESTS, 2, MBMAP_T_U32, "mb_worst_requests", "", "requests it sent"),
     F(ID, MBMAP_D_MB_WORST_EXCEPTIONS, 2, MBMAP_T_U32, "mb_worst_exceptions", "",
       "exception responses it got"),
@@ -633,6 +636,18 @@ static const mbmap_field_t fields[] = {
       "unwrapped, monotone cubic, lib/util/angle.h); NaN without one"),
     F(IX, MBMAP_X_HEADING_UNWRAPPED, 4, MBMAP_T_F64, "heading_unwrapped", "deg",
       "the same heading, continuous across +-180 (turns counted): the target of a rotary axis"),
+    F(IX, MBMAP_X_MB_WORST_ADDR, 1, MBMAP_T_U16, "mb_worst_addr0", "",
+      "the daemon's worst Modbus client (daemon mb_worst_*), its address as 8 groups of 16 bits "
+      "in the order IPv6 text writes them (RFC 4291 2.2): group 0; an IPv4 client as "
+      "::ffff:a.b.c.d (RFC 4291 2.5.5.2); all 0: none; the same in every diagnostics block"),
+    F(IX, MBMAP_X_MB_WORST_ADDR + 1, 1, MBMAP_T_U16, "mb_worst_addr1", "", "group 1"),
+    F(IX, MBMAP_X_MB_WORST_ADDR + 2, 1, MBMAP_T_U16, "mb_worst_addr2", "", "group 2"),
+    F(IX, MBMAP_X_MB_WORST_ADDR + 3, 1, MBMAP_T_U16, "mb_worst_addr3", "", "group 3"),
+    F(IX, MBMAP_X_MB_WORST_ADDR + 4, 1, MBMAP_T_U16, "mb_worst_addr4", "", "group 4"),
+    F(IX, MBMAP_X_MB_WORST_ADDR + 5, 1, MBMAP_T_U16, "mb_worst_addr5", "",
+      "group 5 (0xffff for an IPv4 client)"),
+    F(IX, MBMAP_X_MB_WORST_ADDR + 6, 1, MBMAP_T_U16, "mb_worst_addr6", "", "group 6"),
+    F(IX, MBMAP_X_MB_WORST_ADDR + 7, 1, MBMAP_T_U16, "mb_worst_addr7", "", "group 7"),
     F(IX, MBMAP_X_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "",
       "copy of generation (whole-block reads)"),
 

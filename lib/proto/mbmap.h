@@ -112,7 +112,7 @@
 #define MBMAP_D_MB_DROPPED 50        /* u32 clients closed by the server (framing, idle, answers not read, slow) */
 #define MBMAP_D_MB_PEERS 52          /* u16 client addresses seen (at most MODBUS_SERVER_PEERS kept) */
 #define MBMAP_D_MB_WORST_FAMILY 53   /* u16 the client address with the most drops, then exceptions: 0 none, 4 IPv4, 6 IPv6 */
-#define MBMAP_D_MB_WORST_IPV4 54     /* u32 its IPv4 address (a.b.c.d = a*2^24 + b*2^16 + c*2^8 + d; 0 if IPv6) */
+#define MBMAP_D_MB_WORST_IPV4 54     /* u32 its IPv4 address (a.b.c.d = a*2^24 + b*2^16 + c*2^8 + d; 0 if IPv6: any address in MBMAP_X_MB_WORST_ADDR) */
 #define MBMAP_D_MB_WORST_REQUESTS 56 /* u32 requests it sent */
 #define MBMAP_D_MB_WORST_EXCEPTIONS 58 /* u32 exception responses it got */
 #define MBMAP_D_MB_WORST_DROPS 60    /* u32 its connections evicted, dropped slow or closed by the server */
@@ -189,6 +189,8 @@
 #define MBMAP_X_REJ_STALE 26         /* u32 ENGINE_ESTALE (13) */
 #define MBMAP_X_HEADING 50           /* f64 heading axis, degrees in (-180, 180] (NaN: none) */
 #define MBMAP_X_HEADING_UNWRAPPED 54 /* f64 the same, continuous (no jump at +-180): for a rotary axis */
+#define MBMAP_X_MB_WORST_ADDR 62     /* u16 x8 the daemon's worst Modbus client (mb_worst_*): its address as 8 groups of 16 bits in IPv6 text order (RFC 4291 2.2), an IPv4 client as ::ffff:a.b.c.d (2.5.5.2); all 0: none; the same in every diagnostics block */
+#define MBMAP_X_MB_WORST_ADDR_GROUPS 8
 #define MBMAP_X_GEN_TAIL 98          /* u32 copy of GEN */
 
 /* ---- object block, holding registers (offset from MBMAP_OBJ_BASE(k)) ---- */
@@ -251,6 +253,7 @@ typedef struct {
     uint64_t mb_connections, mb_dropped;
     uint16_t mb_peers, mb_worst_family;
     uint32_t mb_worst_ipv4;
+    uint16_t mb_worst_addr[MBMAP_X_MB_WORST_ADDR_GROUPS]; /* in the diagnostics blocks */
     uint64_t mb_worst_requests, mb_worst_exceptions, mb_worst_drops;
     uint64_t can_err_frames, can_warnings, can_passives, can_bus_offs, can_restarts;
     uint64_t can_bus_errors, can_overflows;
@@ -278,6 +281,7 @@ typedef struct {
     uint16_t clocked;           /* on the daemon's clock (the age is sp.age_s) */
     double lat_deg, lon_deg, alt_m; /* the setpoint as WGS84 geodetic (NaN: none) */
     double heading_deg, heading_unwrapped_deg; /* heading axis (NaN: none) */
+    uint16_t mb_worst_addr[MBMAP_X_MB_WORST_ADDR_GROUPS]; /* daemon-wide (mbmap_daemon_t's) */
 } mbmap_object_t;
 
 /* Write the daemon block into regs[0 .. MBMAP_BLOCK-1]. */

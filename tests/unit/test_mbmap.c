@@ -240,6 +240,30 @@ static void test_encode_diag(void **state)
         assert_int_equal(regs[i], 0);
 }
 
+/* Given the worst client's address as 8 groups, when the diagnostics block
+ * is encoded and put in every word order, then group i is at
+ * mb_worst_addr<i> unchanged (one u16 each: no order applies). */
+static void test_encode_diag_worst_addr(void **state)
+{
+    (void)state;
+    static uint16_t regs[MBMAP_TABLE_REGS(NOBJ)];
+    mbmap_object_t o;
+    memset(&o, 0, sizeof o);
+    static const uint16_t a[MBMAP_X_MB_WORST_ADDR_GROUPS] = {0x2001, 0x0db8, 0, 0, 0, 0, 0x12, 7};
+    memcpy(o.mb_worst_addr, a, sizeof a);
+    for (int ord = MBMAP_ORDER_ABCD; ord <= MBMAP_ORDER_DCBA; ord++) {
+        assert_int_equal(mbmap_encode_diag(regs, 1, 5, &o), 0);
+        mbmap_order_diag(regs, NOBJ, (mbmap_order_t)ord);
+        for (unsigned i = 0; i < MBMAP_X_MB_WORST_ADDR_GROUPS; i++) {
+            char name[32];
+            snprintf(name, sizeof name, "mb_worst_addr%u", i);
+            const mbmap_field_t *f = field("input diagnostics", name);
+            assert_int_equal(f->offset, MBMAP_X_MB_WORST_ADDR + i);
+            assert_int_equal(regs[MBMAP_X_BASE(1) + f->offset], a[i]);
+        }
+    }
+}
+
 static size_t read_pdu(uint8_t *p, int fc, unsigned addr, unsigned count);
 static size_t write_pdu(uint8_t *p, unsigned addr, unsigned count, const uint16_t *v);
 
@@ -606,11 +630,17 @@ int main(int argc, char **argv)
     if (argc > 1 && !strcmp(argv[1], "--markdown"))
         return markdown();
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_word_order),       cmocka_unit_test(test_encode_matches_table),
-        cmocka_unit_test(test_table_consistent), cmocka_unit_test(test_check_request),
-        cmocka_unit_test(test_decode_write),     cmocka_unit_test(test_from_engine),
-        cmocka_unit_test(test_crc_and_framing),  cmocka_unit_test(test_word_orders),
-        cmocka_unit_test(test_mirror_request),   cmocka_unit_test(test_encode_diag),
+        cmocka_unit_test(test_word_order),
+        cmocka_unit_test(test_encode_matches_table),
+        cmocka_unit_test(test_table_consistent),
+        cmocka_unit_test(test_check_request),
+        cmocka_unit_test(test_decode_write),
+        cmocka_unit_test(test_from_engine),
+        cmocka_unit_test(test_crc_and_framing),
+        cmocka_unit_test(test_word_orders),
+        cmocka_unit_test(test_mirror_request),
+        cmocka_unit_test(test_encode_diag),
+        cmocka_unit_test(test_encode_diag_worst_addr),
         cmocka_unit_test(test_diag_requests),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
