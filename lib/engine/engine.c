@@ -36,13 +36,16 @@ enum { QE_SEG = 0, QE_END = 1 };
 /* One queued entry: a segment to stream, or the rest point ending a trajectory. */
 typedef struct {
     int kind;
-    int first;       /* first entry of its trajectory */
-    double t1_s;     /* segment end (absolute track time); END: rest time */
-    uint64_t node;   /* SEG: index of its first node in the trajectory */
-    uint64_t traj;   /* input trajectory it belongs to (engine.in_traj) */
-    fdiff_seg_t seg; /* END: c[k][0] is the rest position, t0_s = t1_s */
-    double gap_s;    /* first entry: track time since the previous trajectory's
+    int first;         /* first entry of its trajectory */
+    double t1_s;       /* segment end (absolute track time); END: rest time */
+    uint64_t node;     /* SEG: index of its first node in the trajectory */
+    uint64_t traj;     /* input trajectory it belongs to (engine.in_traj) */
+    fdiff_seg_t seg;   /* END: c[k][0] is the rest position, t0_s = t1_s */
+    double gap_s;      /* first entry: track time since the previous trajectory's
                              end when a gap separates them, else 0 */
+    double vmin, vmax; /* SEG: bounds on the curve's speed |k'| over it (m/s) */
+    double kcum;       /* SEG: braking capacity of its trajectory up to its end,
+                        the sum of dur / max(vmax, floor) (see remaining()) */
 } qent_t;
 
 enum { OUT_HOLD = 0, OUT_XFER = 1, OUT_STREAM = 2 };
@@ -78,6 +81,7 @@ struct engine {
     double end_r[AX]; /* end of the last queued segment */
     double end_t;
     double end_speed; /* speed at the end of the last queued segment */
+    double in_kcum;   /* capacity queued so far of the trajectory (qent_t kcum) */
     uint64_t in_traj; /* +1 per trajectory opened */
     double in_gap_s;  /* gap before the trajectory being received (0: none) */
 
@@ -127,6 +131,7 @@ struct engine {
     size_t drop_n;     /* queue entries to drop once at rest */
     uint64_t out_traj; /* trajectory the output streams */
     double avail_t;    /* end of its solved curve (absolute track time) */
+    double avail_kcum; /* braking capacity up to there (qent_t kcum) */
     int avail_closed;  /* its END is queued */
     int avail_rest;    /* ... and the curve ends at rest there */
     int end_brake;     /* braking to rest before an end that is not at rest */
@@ -166,6 +171,34 @@ static void fast_close(engine_t *e);
 #define ENGINE_SCALE_V_FLOOR_M_S 1.0
 /* Capacity accepted at most (memory is sized from it). */
 #define ENGINE_CAPACITY_MAX (1u << 20)
+/* Samples of a segment's speed for its bounds (seg_speed_range). */
+#define ENGINE_SPEED_SAMPLES 8
+
+/* Lower and upper bounds on the speed |k'| over a segment (m/s): the largest
+ * and smallest of ENGINE_SPEED_SAMPLES + 1 evenly spaced samples, widened by
+ * what |k''| can change between a sample and the point halfway to the next
+ * (|k''(u)| <= 2|c2| + 6|c3| per axis, in units of u). */
+static void seg_speed_range(const fdiff_seg_t *seg, double *vmin, double *vmax)
+{
+    double lo = INFINITY, hi = 0, b2 = 0;
+
+    for (int k = 0; k < AX; k++) {
+        double b = 2 * fabs(seg->c[k][2]) + 6 * fabs(seg->c[k][3]);
+        b2 += b * b;
+    }
+    for (int i = 0; i <= ENGINE_SPEED_SAMPLES; i++) {
+        double u = (double)i / ENGINE_SPEED_SAMPLES, v2 = 0;
+        for (int k = 0; k < AX; k++) {
+            double d = seg->c[k][1] + u * (2 * seg->c[k][2] + 3 * u * seg->c[k][3]);
+            v2 += d * d;
+        }
+        lo = fmin(lo, sqrt(v2));
+        hi = fmax(hi, sqrt(v2));
+    }
+    double w = sqrt(b2) / (2.0 * ENGINE_SPEED_SAMPLES);
+    *vmin = fmax(lo - w, 0.0) / seg->dur_s;
+    *vmax = (hi + w) / seg->dur_s;
+}
 
 const char *engine_strerror(int err)
 {
@@ -550,6 +583,9 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
     q->node = node;
     q->seg = *seg;
     q->t1_s = seg->t0_s + seg->dur_s;
+    seg_speed_range(seg, &q->vmin, &q->vmax);
+    e->in_kcum += seg->dur_s / fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
+    q->kcum = e->in_kcum;
     e->in_emitted = 1;
     e->end_t = q->t1_s;
     double v2 = 0;
@@ -559,8 +595,10 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
         v2 += v * v;
     }
     e->end_speed = sqrt(v2);
-    if (e->mode != OUT_HOLD && q->traj == e->out_traj)
+    if (e->mode != OUT_HOLD && q->traj == e->out_traj) {
         e->avail_t = q->t1_s; /* more curve for the output (see remaining()) */
+        e->avail_kcum = q->kcum;
+    }
 }
 
 static void queue_end(engine_t *e)
@@ -750,6 +788,7 @@ static void open_input(engine_t *e, const engine_waypoint_t *wp)
     e->nodes = 0;
     e->seg_next = 0;
     e->in_emitted = 0;
+    e->in_kcum = 0.0;
     e->in_first_pending = 1;
     e->in_traj++;
     e->st.tracks++;
@@ -1266,6 +1305,7 @@ static void take_segment(engine_t *e)
 static void find_avail(engine_t *e)
 {
     e->avail_t = e->cur.t1_s;
+    e->avail_kcum = e->cur.kcum;
     e->avail_closed = 0;
     e->avail_rest = 0;
     for (size_t i = 0; i < e->qlen; i++) {
@@ -1273,6 +1313,8 @@ static void find_avail(engine_t *e)
         if (q->traj != e->out_traj)
             break;
         e->avail_t = q->t1_s;
+        if (q->kind == QE_SEG)
+            e->avail_kcum = q->kcum;
         if (q->kind == QE_END) {
             e->avail_closed = 1;
             e->avail_rest = q->seg.c[0][1] <= ENGINE_REST_SPEED_M_S;
@@ -1405,6 +1447,18 @@ static void step_cur(engine_t *e, int64_t n)
  * Track time still available ahead of s (relative) before the output must
  * be at rest, with TS_MARGIN_TICKS in reserve; INFINITY when the curve ahead
  * ends at rest anyway (a transfer, a closed trajectory with rest ends).
+ *
+ * Not the plain track time left: the limits are a / v in rate units, so
+ * braking on a part of the curve at speed v removes r^2/2 at a / v per unit
+ * of track time (d(r^2/2)/ds = dr/dt).  What the curve ahead can absorb is
+ * the capacity K = sum of dur / v over it (each segment at its fastest,
+ * seg_speed_range, so K is a lower bound), and the output can stop within
+ * it from r iff r^2/2 <= a K.  Expressed for ts_step, whose limits are
+ * converted at the speed here, that is track time v_here K: more than is
+ * left where the curve ahead is slower, less where it is faster.  With the
+ * plain track time, a curve speeding up 8x in its last solved segment
+ * (bspline + uniform on gpxpy_cerknicko-jezero.csv) was reached at 0.8 of
+ * its rate and ended under the moving output (a hard stop).
  */
 static double remaining(const engine_t *e, double s)
 {
@@ -1412,9 +1466,14 @@ static double remaining(const engine_t *e, double s)
         return e->stop_req ? e->cur_t1 - s : INFINITY;
     if (e->avail_closed && e->avail_rest)
         return INFINITY;
+    /* the braking capacity left, in the units of the limits here */
+    double in_cur = e->cur_t1 - s, k;
+    k = (in_cur > 0 ? in_cur / fmax(e->cur.vmax, ENGINE_SCALE_V_FLOOR_M_S) : 0.0) +
+        (e->avail_kcum - e->cur.kcum);
     /* the margin scales with the rate: standing still needs none, so a
      * buffer shorter than the margin never deadlocks the output */
-    return (e->avail_t - e->origin_t) - s - TS_MARGIN_TICKS * e->period_s * e->ts.rate;
+    return fmax(e->cspeed, ENGINE_SCALE_V_FLOOR_M_S) * k -
+           TS_MARGIN_TICKS * e->period_s * e->ts.rate;
 }
 
 /* The jerk of a stop or clear (m/s^3): at least a / T, so that the braking
@@ -1781,26 +1840,16 @@ static int stalled(const engine_t *e)
  * against the buffer's remaining time) and engine_tick divides for the
  * number of periods.  fast_window decides once, after a full tick, for how
  * many ticks ahead that answer cannot change: until the next re-seed, and
- * while the stopping distance at an upper bound of the curve's speed over
- * the segment (|k'(u)| <= |c1| + 2|c2| + 3|c3| per axis) stays short of the
- * remaining time with two ticks to spare.  ts_stop_dist grows with the speed
- * (the limits are scale_accel/v and scale_jerk/v), so the check each of those
- * ticks would make passes.  Every public call that changes the engine
- * (push, finish, stop, clear, override, clock, position) closes the window.
+ * while the stopping distance stays short of the remaining capacity
+ * (remaining()) with two ticks to spare, at the segment's lower bound on the
+ * curve's speed (seg_speed_range): the check each of those ticks would make
+ * passes at any speed above it (see fast_window).  Every public call that
+ * changes the engine (push, finish, stop, clear, override, clock, position)
+ * closes the window.
  * fast_tick then does what the full path does for such a tick, to the same
  * doubles in the same order: tests/unit/test_engine_fast.c compares both
  * paths setpoint for setpoint (engine_set_fast_ticks).
  */
-static double seg_speed_bound(const fdiff_seg_t *seg)
-{
-    double v2 = 0;
-    for (int k = 0; k < AX; k++) {
-        double b = fabs(seg->c[k][1]) + 2 * fabs(seg->c[k][2]) + 3 * fabs(seg->c[k][3]);
-        v2 += b * b;
-    }
-    return sqrt(v2) / seg->dur_s * (1 + 1e-6); /* and a margin for rounding */
-}
-
 static void fast_window(engine_t *e)
 {
     e->fast_left = 0;
@@ -1813,14 +1862,19 @@ static void fast_window(engine_t *e)
     int64_t m = (int64_t)(FDIFF_RESEED_STEPS - (uint64_t)(e->n - e->seg_n0) % FDIFF_RESEED_STEPS) -
                 1;
     if (!(e->avail_closed && e->avail_rest)) { /* remaining() is finite */
-        double v = seg_speed_bound(&e->cur.seg);
-        if (v < ENGINE_SCALE_V_FLOOR_M_S)
-            v = ENGINE_SCALE_V_FLOOR_M_S;
+        /* step_once's check, ts_stop_dist(1, 0, a/v, j/v) < v K - (margin + 1) T
+         * with v = max(cspeed, floor) and K the capacity left (remaining()),
+         * holds for every v >= v_lo once it holds at v_lo (divided by v, both
+         * sides of the stopping distance fall with v): take the segment's
+         * lower bound on its speed */
+        double v = fmax(e->cur.vmin, ENGINE_SCALE_V_FLOOR_M_S) * (1 - 1e-9);
+        double vm = fmax(e->cur.vmax, ENGINE_SCALE_V_FLOOR_M_S);
         double A = e->cfg.scale_accel_m_s2 / v, J = e->cfg.scale_jerk_m_s3 / v;
         double d = ts_stop_dist(1.0, 0.0, A, J) * (1 + 1e-9);
-        /* remaining() at the last fast tick's step, less one period, still above d */
-        double room = (e->avail_t - e->origin_t) - tau_of(e, e->n) - TS_MARGIN_TICKS * e->period_s -
-                      e->period_s - d;
+        double in_cur = e->cur_t1 - tau_of(e, e->n);
+        double k = (in_cur > 0 ? in_cur / vm : 0.0) + (e->avail_kcum - e->cur.kcum);
+        /* K falls by T / vm per tick: the ticks for which it stays above */
+        double room = (k - (d + (TS_MARGIN_TICKS + 1) * e->period_s) / v) * vm;
         if (!(room > 0) || !isfinite(d))
             return;
         double mr = floor(room / e->period_s) - 2;

@@ -397,5 +397,30 @@ class TestUniformIrregular(unittest.TestCase):
         self.assertNotIn("param = uniform", err)
 
 
+@unittest.skipUnless(os.access(TRAJREPLAY, os.X_OK), "trajreplay not built in this tree")
+class TestNoHardStops(unittest.TestCase):
+    def test_every_track_method_param(self):
+        """Given every real track in tests/data replayed with every method and
+        parameterisation (the replay underruns where a track's hole is longer
+        than the lookahead; bspline + uniform on gpxpy_cerknicko-jezero.csv
+        made a curve 8x faster in the last segment solved, and the output,
+        braking at limits converted at the slower speed behind it, reached
+        the end moving), then no hard stop: the summary says hard_stops 0 and
+        no warning says 'hard stop'."""
+        tracks = sorted(f for f in os.listdir(DATA) if f.endswith(".csv") and
+                        f.startswith(("gpx", "n2k")))
+        self.assertGreaterEqual(len(tracks), 3)
+        for track in tracks:
+            for method in ("bspline", "cubic", "smooth"):
+                for param in ("uniform", "time"):
+                    with self.subTest(track=track, method=method, param=param):
+                        rc, _, err = bounded_run([TRAJREPLAY, "-q", "--summary", "--method",
+                                                  method, "--param", param, "-o", os.devnull,
+                                                  os.path.join(DATA, track)])
+                        self.assertEqual(rc, 0, err[-500:])
+                        self.assertIn("summary: hard_stops 0\n", err)
+                        self.assertNotIn("hard stop", err)
+
+
 if __name__ == "__main__":
     unittest.main(verbosity=2)

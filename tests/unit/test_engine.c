@@ -256,9 +256,11 @@ static void test_stream_underrun_finish(void **state)
     /* W, S, U, S, F; the time scaling resumes at full rate without
      * refilling the start slack, and the waypoint the acceptance policy
      * holds for its next neighbour (accept.h, ACCEPT_LAG) leaves the buffer
-     * one interval thinner after the catch-up: one more scaled slow-down
-     * (U, S) may follow, never a hard stop (below) */
-    assert_true(st.underruns >= 1 && st.underruns <= 2);
+     * one interval thinner after the catch-up: scaled slow-downs (U, S) may
+     * follow while it is thin, never a hard stop (below).  The buffer's
+     * braking capacity counts every segment at its fastest (remaining() in
+     * engine.c), so on these irregular intervals two such slow-downs follow */
+    assert_true(st.underruns >= 1 && st.underruns <= 3);
     assert_int_equal(transitions, 3 + 2 * (int)st.underruns);
     assert_int_equal(st.hard_stops, 0); /* the time scaling braked in time */
     assert_int_equal(st.underrun_ticks, (uint64_t)seen[ENGINE_STATE_UNDERRUN]);

@@ -457,6 +457,71 @@ static void test_override_same_path(void **state)
     engine_free(e);
 }
 
+/*
+ * Hard stops unreachable (issue 10, gpxpy_cerknicko-jezero with bspline +
+ * uniform had one).  With the uniform parameterisation a short interval
+ * between evenly spaced waypoints is a segment many times faster than its
+ * neighbours.  The limits of the scaling are in rate units at the curve's
+ * speed (A = a / v), so the track time needed to brake grows with the speed
+ * of the curve ahead.  Given a sender that stalls for good after waypoint
+ * n (every n of a range, so that the fast segment comes to be the last one
+ * solved), when the output rides the underrun up to the end of the solved
+ * curve, then it comes to rest there by braking: hard_stops 0 (a hard stop
+ * is a step of the velocity to 0 in one tick), velocity 0 at rest.
+ */
+static void test_no_hard_stop_fast_end(void **state)
+{
+    (void)state;
+    enum { N = 100 };
+    engine_waypoint_t wp[N];
+    uint64_t hard = 0;
+    int ran = 0;
+    for (int i = 0; i < N; i++) {
+        memset(&wp[i], 0, sizeof wp[i]);
+        /* 2 s apart; every 7th step 40 m instead of 2 m (20x faster) */
+        wp[i].t_s = 2.0 * i;
+        wp[i].pos_m[0] = i == 0 ? 0 : wp[i - 1].pos_m[0] + (i % 7 == 0 ? 40.0 : 2.0);
+        wp[i].pos_m[1] = 0.3 * (i % 2);
+        wp[i].seq = (uint32_t)i + 1;
+    }
+    for (int stall = 40; stall < N; stall++) {
+        engine_config_t c;
+        engine_config_default(&c);
+        c.method = ENGINE_METHOD_BSPLINE;
+        c.param = ENGINE_PARAM_UNIFORM;
+        c.max_accel_m_s2 = 0;
+        engine_t *e = engine_new(&c, NULL);
+        assert_non_null(e);
+        engine_setpoint_t sp;
+        int next = 0, rest_ticks = 0;
+        for (int64_t k = 0; k < 400000 && rest_ticks < 100; k++) {
+            double now_s = (double)k * T_S;
+            while (next < stall && wp[next].t_s <= now_s)
+                assert_int_equal(engine_push(e, &wp[next++]), 0);
+            assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+            rest_ticks = next == stall && (sp.flags & ENGINE_SP_HOLD) ? rest_ticks + 1 : 0;
+        }
+        engine_status_t st;
+        engine_status(e, &st);
+        if (st.hard_stops)
+            print_message("stall after waypoint %d: %llu hard stops\n", stall,
+                          (unsigned long long)st.hard_stops);
+        if (sp.state == ENGINE_STATE_WAITING && st.setpoints > 0 && st.underruns == 0) {
+            engine_free(e); /* stalled before its lookahead was in: never moved */
+            continue;
+        }
+        assert_int_equal(sp.state, ENGINE_STATE_UNDERRUN);
+        assert_true(norm3(sp.vel_m_s) <= 0.0);
+        hard += st.hard_stops;
+        ran++;
+        engine_free(e);
+    }
+    print_message("%d stalls before a fast segment: %llu hard stops\n", ran,
+                  (unsigned long long)hard);
+    assert_true(ran >= 40);
+    assert_true(hard == 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -465,6 +530,7 @@ int main(void)
         cmocka_unit_test(test_property_random_stalls),
         cmocka_unit_test(test_stop_now_distance),
         cmocka_unit_test(test_override_same_path),
+        cmocka_unit_test(test_no_hard_stop_fast_end),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
