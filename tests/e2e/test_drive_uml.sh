@@ -13,18 +13,11 @@ if [ ! -d "$peers/python-canopen/canopen" ]; then
     echo "SKIP: python-canopen not found at $peers/python-canopen (the drive simulator runs on it; set TRAJD_PEERS)"
     exit 0
 fi
-command -v linux.uml > /dev/null || { echo "linux.uml missing (apt-get install user-mode-linux)"; exit 1; }
+. tests/uml/host.sh
 run=$BUILD/uml-drive
 rm -rf "$run"; mkdir -p "$run"
 { echo "BUILD=$BUILD"; echo "TRAJD_PEERS=$(cd "$peers" && pwd)"; } > "$run/env"
-# The track: a line along y at 1 m/s for 3 s, 20 waypoints/s, from (0, 0, 0)
-$PY - "$run/dtrack.csv" <<'PYEOF' || exit 1
-import sys
-with open(sys.argv[1], "w") as f:
-    f.write("t_s,x_m,y_m,z_m\n")
-    for i in range(61):
-        f.write("%.6f,0.000000,%.6f,0.000000\n" % (i * 0.05, i * 0.05))
-PYEOF
+uml_line_track "$run/dtrack.csv"
 $PY tests/helpers/cantools_trajd.py wplog "$run/dtrack.csv" "$run/dwp.log" > /dev/null || exit 1
 # The config: README.md's drive example exactly (so it cannot rot), on vcan0; the test
 # adds only what it needs: every cycle counts as late (max_late_ms tiny: SYNC and the
@@ -51,16 +44,5 @@ conf += ("[object.spare]\nid = 1\ninput = can\noutput = can\ncan.own = no\ncan.c
 open(sys.argv[2], "w").write(conf)
 PYEOF
 "$BUILD/bin/trajd" --check-config "$run/drive.conf" || exit 1
-umldir=$(mktemp -d) || exit 1
-trap 'rm -rf "$umldir"' EXIT
-start_ms=$(( $(date +%s%N) / 1000000 ))
-timeout -k 5 190 linux.uml uml_dir="$umldir" mem=256M rootfstype=hostfs rootflags=/ ro quiet loglevel=1 \
-    init="$PWD/tests/uml/init.sh" trajd_dir="$run" trajd_script=tests/uml/drive.sh \
-    trajd_src="$PWD" trajd_timeout=170 con=null con0=null,fd:1 < /dev/null > "$run/console.log" 2>&1
-echo "uml: boot and drive scenario took $(( $(date +%s%N) / 1000000 - start_ms )) ms"
-cat "$run/guest.log" 2>/dev/null
-[ -f "$run/rc" ] || { echo "no verdict file: the guest did not finish"; cat "$run/console.log"; exit 1; }
-rc=$(cat "$run/rc")
-echo "uml: guest exit code $rc"
-[ "$rc" = 0 ] || { for f in "$run"/drive.err "$run"/sim.err; do echo "== $f"; tail -30 "$f"; done; exit 1; }
+uml_boot "$run" tests/uml/drive.sh 170 "$run"/drive.err "$run"/sim.err || exit 1
 TRAJD_PEERS=$(cd "$peers" && pwd) $PY tests/helpers/cantools_trajd.py drive-check "$run" || exit 1
