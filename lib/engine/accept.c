@@ -328,6 +328,41 @@ static int repeated_later(const accept_t *a)
     return 0;
 }
 
+/*
+ * 1 if a waypoint held after c continues the anchor (a chain skipping c
+ * exists): c, which does not follow the anchor, is then dropped whatever
+ * comes later (the full window's verdict: lo >= 2 and r != 0).
+ */
+static int continues_anchor(const accept_t *a, const engine_waypoint_t *pre, double vlim)
+{
+    for (unsigned i = 1; i < a->npend; i++)
+        if (accept_check(a, pre, &a->a1, &a->pend[i], vlim) == 0)
+            return 1;
+    return 0;
+}
+
+/*
+ * 1 if c (which follows the anchor) is followed, past waypoints that cannot
+ * take its place, by one that continues it: the waypoints between neither
+ * follow the anchor nor are anything but repeats of c's position (stale
+ * profiles), so every chain skipping c is one shorter than the chain
+ * through it, and the full window would take c.  One outlier after a good
+ * fix so holds it one interval, not a window.
+ */
+static int taken_past_outliers(const accept_t *a, double vlim)
+{
+    const engine_waypoint_t *c = &a->pend[0];
+    for (unsigned j = 1; j < a->npend; j++) {
+        const engine_waypoint_t *q = &a->pend[j];
+        if (check(a, &a->a1, c, q, vlim, 0) == 0)
+            return j >= 2;
+        if (!(a->cfg.stale && dist(c, q) <= ACCEPT_STALE_POS_M) &&
+            accept_check(a, a->have_a0 ? &a->a0 : NULL, &a->a1, q, vlim) == 0)
+            return 0; /* q could replace c: the full window compares them */
+    }
+    return 0;
+}
+
 int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
 {
     const engine_waypoint_t *nd[ACCEPT_WINDOW_MAX + 1];
@@ -391,6 +426,17 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
          * than c, which is beyond max_gap_s), so k consistent waypoints are
          * all it takes */
         pop(a, v, ACCEPT_START, 0);
+        return 1;
+    }
+    /* verdicts the full window would give, as soon as they are certain: a
+     * bad fix must not hold the good ones around it for a whole window (the
+     * output draws on its start slack meanwhile) */
+    if (r != 0 && continues_anchor(a, pre, vlim)) {
+        pop(a, v, ACCEPT_DROP, r);
+        return 1;
+    }
+    if (r == 0 && taken_past_outliers(a, vlim)) {
+        pop(a, v, ACCEPT_TAKE, 0);
         return 1;
     }
     if (!full)

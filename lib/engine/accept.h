@@ -40,8 +40,14 @@
  *     stamped when the position was fixed), even where a chain through a
  *     repeat would bend the track less.
  * A clean stretch is decided as soon as c and the waypoint after it
- * (ACCEPT_LAG) form a consistent chain with the anchor; otherwise the verdict waits until
- * the window is full or the input is closed.  The first trajectory (nothing
+ * (ACCEPT_LAG) form a consistent chain with the anchor.  Otherwise the
+ * verdict comes as soon as the full window's is certain: c that does not
+ * follow the anchor is dropped once a later waypoint does; c that follows
+ * it is kept once a later waypoint continues it past waypoints that cannot
+ * take its place (they do not follow the anchor, or repeat c's position).
+ * So one bad fix holds its neighbours one interval more, not a window, and
+ * costs the output no underrun (tests/unit/test_accept.c).  Else the verdict
+ * waits until the window is full or the input is closed.  The first trajectory (nothing
  * to abandon) starts on a chain of `confirm` waypoints, or at the close on
  * whatever consistent chain there is.
  *

@@ -31,7 +31,9 @@ grid), the test asserts:
     O = 16: 2.7e-3 of the largest value) in position, velocity and
     acceleration on every streamed row;
   - no NaN after the first position, no velocity step (test_trajreplay.py's
-    common checks), and it finishes at rest on the last good fix.
+    common checks), and it finishes at rest on the last good fix;
+  - no underrun: each bad row's verdict comes within the start slack, so the
+    output never waits for it.
 The references are independent: pyproj for the ENU frame, scipy for the curve,
 and the injected rows are known by construction here, not read from the
 program's output.
@@ -129,6 +131,9 @@ def test_faults(tmp):
     want = {"rejected": len(injected), "accepted": len(kept), "duplicates": ndup}
     got = {k: s.get(k) for k in want}
     tr.check(got == want, f"{label}: --summary {got} != {want}")
+    # a bad row costs no underrun: its verdict comes within the start slack
+    # (lib/engine/accept.c, tests/unit/test_accept.c)
+    tr.check(s.get("underruns") == 0, f"{label}: {s.get('underruns')} underrun(s)")
     enu = tr.enu_pyproj(lat, lon, np.full(len(lat), np.nan))
     tk, ek = t[kept], enu[kept]
     # hits: the curve at each kept fix's time passes through it.  The tick

@@ -1,0 +1,136 @@
+/*
+ * test_accept.c - one bad fix costs nothing but itself (issue 12): the
+ * acceptance policy (lib/engine/accept.h) judges each waypoint with its
+ * neighbours, and its verdicts must come within the start slack the output
+ * keeps for them, or the output runs dry while a bad fix waits for its
+ * verdict.
+ *
+ * The track: a boat on a circle of 50 m radius at 5 m/s, a fix every 0.2 s
+ * (the NMEA 2000 figure-eight's rate, tests/data/ATTRIBUTION.md), pushed on
+ * a virtual clock when its time comes, the output ticking at 100 Hz with the
+ * default configuration.  Into it, one bad row between two fixes, at every
+ * site over three fragment periods (the solver's lookahead depends on where
+ * a waypoint falls in the fragment grid, lib/engine/frag.h):
+ *   spike  300 m off the path, halfway between the two fixes;
+ *   back   a re-sent fix from 1 s before (a backwards stamp);
+ *   stale  the previous fix's position again, halfway (a frozen receiver);
+ *   jump   1 km off, with the next fix's time plus 0.1 s.
+ * Each run must refuse exactly the bad row and keep every good fix, stream
+ * with no underrun and no hard stop, and end finished.
+ */
+#include "test.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "engine.h"
+
+#define PERIOD_NS 10000000LL
+#define N_FIX 200
+#define DT_S 0.2
+
+enum { K_SPIKE, K_BACK, K_STALE, K_JUMP, K_COUNT };
+static const char *const kind_name[K_COUNT] = {"spike", "back", "stale", "jump"};
+
+static void boat(engine_waypoint_t *w, int i)
+{
+    memset(w, 0, sizeof *w);
+    w->t_s = i * DT_S;
+    w->pos_m[0] = 50.0 * sin(0.02 * i);
+    w->pos_m[1] = 50.0 * (1.0 - cos(0.02 * i));
+    w->seq = (uint32_t)i + 1;
+}
+
+/* the fixes with one bad row after fix `site`; returns the row count */
+static int build(engine_waypoint_t *rows, int site, int kind)
+{
+    int n = 0;
+    for (int i = 0; i < N_FIX; i++) {
+        boat(&rows[n++], i);
+        if (i != site)
+            continue;
+        engine_waypoint_t b, nx;
+        boat(&nx, i + 1);
+        b = rows[n - 1];
+        b.t_s = 0.5 * (b.t_s + nx.t_s);
+        switch (kind) {
+        case K_SPIKE: b.pos_m[0] = 0.5 * (rows[n - 1].pos_m[0] + nx.pos_m[0]) + 300.0; break;
+        case K_BACK: boat(&b, i - 5); break;
+        case K_STALE: break;
+        case K_JUMP:
+            b = nx;
+            b.t_s += 0.1;
+            b.pos_m[1] += 1000.0;
+            break;
+        }
+        rows[n++] = b;
+    }
+    for (int r = 0; r < n; r++)
+        rows[r].seq = (uint32_t)r + 1;
+    return n;
+}
+
+/* replay rows on a virtual clock; status at the end */
+static void replay(const engine_waypoint_t *rows, int n, engine_status_t *st, int *finished)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    int err = -1, next = 0;
+    engine_t *e = engine_new(&c, &err);
+    engine_setpoint_t sp;
+    assert_non_null(e);
+    *finished = 0;
+    for (int64_t k = 0; k < 100000 && !*finished; k++) {
+        double now_s = (double)(k * PERIOD_NS) * 1e-9;
+        /* in file order, each when its time has come (a backwards one at once) */
+        while (next < n && rows[next].t_s <= now_s + 1e-9) {
+            (void)engine_push(e, &rows[next]);
+            if (++next == n)
+                assert_int_equal(engine_finish(e), 0);
+        }
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+        *finished = sp.state == ENGINE_STATE_FINISHED;
+    }
+    engine_status(e, st);
+    engine_free(e);
+}
+
+static void test_one_bad_fix_costs_nothing(void **state)
+{
+    (void)state;
+    static engine_waypoint_t rows[N_FIX + 1];
+    engine_config_t c;
+    engine_config_default(&c);
+    int bad = 0;
+
+    for (int kind = 0; kind < K_COUNT; kind++) {
+        int underruns = 0, lost = 0;
+        for (int site = 40; site < 40 + 3 * (int)(c.fragment - c.overlap); site++) {
+            engine_status_t st;
+            int fin, n = build(rows, site, kind);
+            replay(rows, n, &st, &fin);
+            if (st.underruns || st.accepted != N_FIX || st.rejected != 1 || st.hard_stops || !fin) {
+                print_message("%s after fix %d: accepted %llu rejected %llu underruns %llu "
+                              "hard stops %llu finished %d\n",
+                              kind_name[kind], site, (unsigned long long)st.accepted,
+                              (unsigned long long)st.rejected, (unsigned long long)st.underruns,
+                              (unsigned long long)st.hard_stops, fin);
+                bad++;
+            }
+            underruns += st.underruns != 0;
+            lost += st.accepted != N_FIX;
+        }
+        print_message("%s: %d of %u sites with an underrun, %d losing good fixes\n",
+                      kind_name[kind], underruns, 3 * (c.fragment - c.overlap), lost);
+    }
+    assert_int_equal(bad, 0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_one_bad_fix_costs_nothing),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
