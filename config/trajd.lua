@@ -37,7 +37,8 @@ local VALS = {
                   [64] = "malformed", [65] = "lost", [66] = "out of order",
                   [67] = "setpoints dropped", [68] = "bus down", [69] = "output lost lines",
                   [70] = "safety fault", [71] = "drive not enabled", [72] = "command refused"},
-    ST2_Page = {[1] = "faults", [2] = "rejected", [5] = "bus"},
+    ST2_Page = {[1] = "faults", [2] = "rejected", [3] = "clock", [4] = "drive", [5] = "bus"},
+    ST2_Clocked = {[0] = "relative", [1] = "on the clock", [2] = "undecided"},
     ST2_BusState = {[1] = "error-active", [2] = "error-warning", [3] = "error-passive",
                     [4] = "bus-off", [5] = "down"},
 }
@@ -73,6 +74,8 @@ local MSG = {
         {"ST2_RejSpeed", 24, 8, false, 1, "", 2}, {"ST2_RejAccel", 32, 8, false, 1, "", 2},
         {"ST2_RejUnconfirmed", 40, 8, false, 1, "", 2}, {"ST2_RejStale", 48, 8, false, 1, "", 2},
         {"ST2_RejOther", 56, 8, false, 1, "", 2},
+        {"ST2_Age", 8, 24, true, 1e-3, "s", 3}, {"ST2_Drift", 32, 16, true, 0.1, "ppm", 3},
+        {"ST2_Clocked", 48, 8, false, 1, "", 3},
         {"ST2_StateX", 8, 4, false, 1, "", 4}, {"ST2_StateY", 12, 4, false, 1, "", 4},
         {"ST2_StateZ", 16, 4, false, 1, "", 4}, {"ST2_HbLost", 22, 1, false, 1, "", 4},
         {"ST2_Held", 23, 1, false, 1, "", 4}, {"ST2_Statusword", 24, 16, false, 1, "", 4},
@@ -84,11 +87,15 @@ local MSG = {
 -- Setpoint positions 0x80000000: no position yet (do not move).
 local NO_POSITION = {SP_X_Pos = true, SP_Y_Pos = true, SP_Z_Pos = true, SPFD_X = true,
                      SPFD_Y = true, SPFD_Z = true}
+-- STATUS2 page 3: the field's minimum means no value (data age of a
+-- relative-time track or before any position; no drift estimate).
+local NOT_AVAILABLE = {ST2_Age = -2 ^ 23, ST2_Drift = -2 ^ 15}
 
 local f_frame = ProtoField.string("trajd.frame", "Frame")
 local f_obj = ProtoField.uint8("trajd.obj", "Object")
 local f_nopos = ProtoField.bool("trajd.no_position", "No position yet (do not move)")
-local fields = {f_frame, f_obj, f_nopos}
+local f_na = ProtoField.string("trajd.not_available", "Not available")
+local fields = {f_frame, f_obj, f_nopos, f_na}
 local F = {}
 for _, m in pairs(MSG) do
     for _, s in ipairs(m) do
@@ -127,7 +134,7 @@ local function decode(kind, obj, tvb, pinfo, tree)
     t:add(f_frame, kind)
     t:add(f_obj, obj)
     local muxv = m.mux and raw(bytes, 0, m.mux == "SP_Axis" and 2 or 8, false)
-    local info = {}
+    local info, na = {}, {}
     for _, s in ipairs(m) do
         local name, start, len, signed, factor = s[1], s[2], s[3], s[4], s[5] or 1
         if (s[7] == nil or s[7] == muxv) and (start + len) <= 8 * n then
@@ -135,6 +142,9 @@ local function decode(kind, obj, tvb, pinfo, tree)
             local range = tvb(math.floor(start / 8), math.ceil((start % 8 + len) / 8))
             if NO_POSITION[name] and v == -2 ^ 31 then
                 t:add(f_nopos, range, true)
+            elseif NOT_AVAILABLE[name] == v then
+                na[#na + 1] = name
+                info[#info + 1] = name .. "=n/a"
             elseif factor ~= 1 then
                 t:add(F[name], range, v * factor)
                 info[#info + 1] = string.format("%s=%.6g", name, v * factor)
@@ -146,6 +156,7 @@ local function decode(kind, obj, tvb, pinfo, tree)
             end
         end
     end
+    if #na > 0 then t:add(f_na, table.concat(na, ",")) end
     pinfo.cols.protocol = "trajd"
     pinfo.cols.info = string.format("%s obj %d %s", kind, obj, table.concat(info, " "))
 end

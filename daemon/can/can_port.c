@@ -201,18 +201,29 @@ void can_port_allow_commands(can_port_t *p, unsigned i, uint32_t mask)
         p->obj[i].cmd_allow = mask;
 }
 
-void can_port_status2(can_port_t *p, unsigned i, const canproto_frame_t *f)
+static void status2_put(can_port_t *p, unsigned i, const canproto_frame_t *f, int value)
 {
     unsigned page = f->data[0];
     if (i >= p->nobj || page == 0 || page >= CANPROTO_ST2_PAGES)
         return;
     can_port_obj_t *o = &p->obj[i];
     canproto_frame_t *k = &o->st2[page];
-    if (!(o->st2_have & (1u << page)) || k->len != f->len || memcmp(k->data, f->data, f->len))
+    if (!(o->st2_have & (1u << page)) ||
+        (!value && (k->len != f->len || memcmp(k->data, f->data, f->len))))
         o->st2_changed |= 1u << page;
     *k = *f;
     k->id = o->ids.status2_id;
     o->st2_have |= 1u << page;
+}
+
+void can_port_status2(can_port_t *p, unsigned i, const canproto_frame_t *f)
+{
+    status2_put(p, i, f, 0);
+}
+
+void can_port_status2_value(can_port_t *p, unsigned i, const canproto_frame_t *f)
+{
+    status2_put(p, i, f, 1);
 }
 
 static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, uint32_t id)

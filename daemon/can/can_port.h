@@ -192,6 +192,10 @@ void can_port_allow_commands(can_port_t *p, unsigned i, uint32_t mask);
  * STATUS due by itself (events do).
  */
 void can_port_status2(can_port_t *p, unsigned i, const canproto_frame_t *f);
+/* The same for a page of values that change all the time (page 3, the data
+ * age): its new bytes never count as a change, so it goes out in turn (and
+ * first when it is new) and never holds the other pages back. */
+void can_port_status2_value(can_port_t *p, unsigned i, const canproto_frame_t *f);
 
 /* Hand over object i's setpoint for this cycle (copied). */
 void can_port_setpoint(can_port_t *p, unsigned i, const engine_setpoint_t *sp);

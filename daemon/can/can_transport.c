@@ -996,6 +996,19 @@ static void pre_tick(void *state, obj_t *o, int64_t now_ns)
     }
 }
 
+/* STATUS2 page 3: the data age of the setpoint, the daemon's drift estimate
+ * (as Modbus clock_drift gives it) and the object's clock. */
+static void status2_clock(const can_state_t *s, const obj_t *o, const engine_setpoint_t *sp,
+                          canproto_frame_t *f)
+{
+    double rate = s->c->stats->clock_rate;
+    canproto_st2_clock_t pg = {sp->age_s, rate > 0 ? (rate - 1.0) * 1e6 : 0,
+                               o->clocked == 1   ? CANPROTO_ST2_CLOCK_ON
+                               : o->clocked == 0 ? CANPROTO_ST2_CLOCK_RELATIVE
+                                                 : CANPROTO_ST2_CLOCK_UNDECIDED};
+    canproto_encode_status2_clock(0, &pg, f);
+}
+
 static void setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
 {
     can_state_t *s = state;
@@ -1016,6 +1029,8 @@ static void setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
         canproto_st2_rejected_from(o->status.rejected_by, &rj);
         canproto_encode_status2_rejected(0, &rj, &f);
         can_port_status2(s->port, k, &f);
+        status2_clock(s, o, sp, &f);
+        can_port_status2_value(s->port, k, &f);
         can_port_setpoint(s->port, k, sp);
     }
 }

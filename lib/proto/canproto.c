@@ -463,6 +463,50 @@ void canproto_encode_status2_rejected(uint32_t id, const canproto_st2_rejected_t
         out->data[1 + i] = (uint8_t)sat_max(v[i], 0xFF);
 }
 
+/* v / lsb to the nearest integer, saturated at +-max (v finite). */
+static int64_t sat_signed(double v, double lsb, int64_t max)
+{
+    if (v >= (double)max * lsb)
+        return max;
+    if (v <= -(double)max * lsb)
+        return -max;
+    return llround(v / lsb);
+}
+
+void canproto_encode_status2_clock(uint32_t id, const canproto_st2_clock_t *p,
+                                   canproto_frame_t *out)
+{
+    frame_init(out, id, CANPROTO_STATUS2_DLEN, 0);
+    out->data[0] = CANPROTO_ST2_CLOCK;
+    int64_t age = isfinite(p->age_s)
+                      ? sat_signed(p->age_s, CANPROTO_ST2_AGE_S_PER_BIT, CANPROTO_ST2_AGE_MAX)
+                      : CANPROTO_ST2_AGE_NA;
+    put_le(&out->data[1], 3, (uint64_t)age & 0xFFFFFFu);
+    int64_t drift = isfinite(p->drift_ppm)
+                        ? sat_signed(p->drift_ppm, CANPROTO_ST2_DRIFT_PPM_PER_BIT, 32767)
+                        : CANPROTO_ST2_DRIFT_NA;
+    put_le(&out->data[4], 2, (uint64_t)drift & 0xFFFFu);
+    out->data[6] = p->clocked;
+}
+
+int canproto_decode_status2_clock(const canproto_frame_t *f, canproto_st2_clock_t *out)
+{
+    memset(out, 0, sizeof *out);
+    int page = canproto_status2_page(f);
+    if (page < 0)
+        return page;
+    if (page != CANPROTO_ST2_CLOCK)
+        return -CANPROTO_EMUX;
+    int64_t age = sext(get_le(&f->data[1], 3), 24);
+    out->age_s = age == CANPROTO_ST2_AGE_NA ? NAN : (double)age * CANPROTO_ST2_AGE_S_PER_BIT;
+    int64_t drift = sext(get_le(&f->data[4], 2), 16);
+    out->drift_ppm = drift == CANPROTO_ST2_DRIFT_NA
+                         ? NAN
+                         : (double)drift * CANPROTO_ST2_DRIFT_PPM_PER_BIT;
+    out->clocked = f->data[6];
+    return 0;
+}
+
 void canproto_encode_status2_drive(uint32_t id, const canproto_status2_drive_t *d,
                                    canproto_frame_t *out)
 {
@@ -971,6 +1015,9 @@ static const canproto_signal_t sig_st2[] = {
     SIG_U("ST2_RejUnconfirmed", CANPROTO_ST2_REJECTED, 40, 8, 1, ""),
     SIG_U("ST2_RejStale", CANPROTO_ST2_REJECTED, 48, 8, 1, ""),
     SIG_U("ST2_RejOther", CANPROTO_ST2_REJECTED, 56, 8, 1, ""),
+    SIG_S("ST2_Age", CANPROTO_ST2_CLOCK, 8, 24, CANPROTO_ST2_AGE_S_PER_BIT, "s"),
+    SIG_S("ST2_Drift", CANPROTO_ST2_CLOCK, 32, 16, CANPROTO_ST2_DRIFT_PPM_PER_BIT, "ppm"),
+    SIG_U("ST2_Clocked", CANPROTO_ST2_CLOCK, 48, 8, 1, ""),
     SIG_U("ST2_StateX", CANPROTO_ST2_DRIVE, 8, 4, 1, ""),
     SIG_U("ST2_StateY", CANPROTO_ST2_DRIVE, 12, 4, 1, ""),
     SIG_U("ST2_StateZ", CANPROTO_ST2_DRIVE, 16, 4, 1, ""),
@@ -1084,8 +1131,8 @@ int canproto_dbc(char *buf, size_t len)
          "csv/stdout output lost lines, 0x46 safety monitor fault (object held until clear), 0x47 "
          "a CiA 402 "
          "drive left Operation Enabled, 0x48 a command refused (object not writable)\";\n"
-         "CM_ SG_ %u ST2_Page \"STATUS2 page: 1 faults, 2 rejected waypoints per reason, 4 drive, "
-         "5 bus; "
+         "CM_ SG_ %u ST2_Page \"STATUS2 page: 1 faults, 2 rejected waypoints per reason, 3 clock, "
+         "4 drive, 5 bus; "
          "counters saturate at their maximum\";\n"
          "CM_ SG_ %u ST2_OutLost \"setpoint lines lost by the object's csv/stdout outputs\";\n"
          "CM_ SG_ %u ST2_OutErrors \"failed writes of the object's csv/stdout outputs\";\n"
@@ -1105,6 +1152,14 @@ int canproto_dbc(char *buf, size_t len)
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
          CANPROTO_ID_STATUS2_BASE);
     emit(buf, len, &pos,
+         "CM_ SG_ %u ST2_Age \"page 3: data age now - t_s of the setpoint on the sender's time "
+         "base (lib/engine/CLOCK.md; D when on time, negative while waiting for the clock to "
+         "reach the start), -8388.608: none (relative time, no position), saturating at "
+         "+-8388.607\";\n"
+         "CM_ SG_ %u ST2_Drift \"page 3: sender clock drift absorbed by the play-out clock (+ = "
+         "sender fast), one estimate per daemon; -3276.8: none\";\n"
+         "CM_ SG_ %u ST2_Clocked \"page 3: 0 relative time, 1 on the daemon's clock, 2 "
+         "undecided (clock = auto: the first waypoint decides)\";\n"
          "CM_ SG_ %u ST2_Statusword \"page 4: statusword 0x6041 of the first drive axis not in "
          "Operation Enabled, else of the first\";\n"
          "CM_ SG_ %u ST2_Nmt \"page 4: heartbeat NMT state of the same node\";\n"
@@ -1114,6 +1169,7 @@ int canproto_dbc(char *buf, size_t len)
          "can.cia402_heartbeat_ms\";\n"
          "CM_ SG_ %u ST2_Emcy \"page 4: error code of the last EMCY from the object's drives, 0: "
          "none\";\n",
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE);
     emit(buf, len, &pos,
@@ -1149,9 +1205,13 @@ int canproto_dbc(char *buf, size_t len)
          CANPROTO_STERR_OUTPUT, CANPROTO_STERR_SAFETY, CANPROTO_STERR_DRIVE,
          CANPROTO_STERR_REFUSED);
     emit(buf, len, &pos,
-         "VAL_ %u ST2_Page %d \"faults\" %d \"rejected\" %d \"drive\" %d \"bus\" ;\n",
-         CANPROTO_ID_STATUS2_BASE, CANPROTO_ST2_FAULTS, CANPROTO_ST2_REJECTED, CANPROTO_ST2_DRIVE,
-         CANPROTO_ST2_BUS);
+         "VAL_ %u ST2_Page %d \"faults\" %d \"rejected\" %d \"clock\" %d \"drive\" %d \"bus\" ;\n",
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_ST2_FAULTS, CANPROTO_ST2_REJECTED, CANPROTO_ST2_CLOCK,
+         CANPROTO_ST2_DRIVE, CANPROTO_ST2_BUS);
+    emit(buf, len, &pos,
+         "VAL_ %u ST2_Clocked %d \"relative\" %d \"on the clock\" %d \"undecided\" ;\n",
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_ST2_CLOCK_RELATIVE, CANPROTO_ST2_CLOCK_ON,
+         CANPROTO_ST2_CLOCK_UNDECIDED);
     emit(buf, len, &pos,
          "VAL_ %u ST2_BusState 1 \"error-active\" 2 \"error-warning\" 3 \"error-passive\" "
          "4 \"bus-off\" 5 \"down\" ;\n",

@@ -60,6 +60,13 @@
  *      saturating at 255; the exact 32-bit counts are in the object's Modbus
  *      diagnostics block): 1 backwards, 2 same time, 3 speed, 4 acceleration,
  *      5 unconfirmed, 6 stale, 7 other (not finite, out of range, numeric).
+ *    3 CLOCK (lib/engine/CLOCK.md): 1..3 data age now - t_s of the setpoint
+ *      (int24, ms; negative while a trajectory waits for the clock to reach
+ *      its start; 0x800000: none, a relative-time track or no position;
+ *      saturating at +-0x7FFFFF), 4..5 the sender's clock drift absorbed (int16,
+ *      0.1 ppm, + = sender fast, the daemon's one estimate; saturating), 6 the
+ *      object's clock (0 relative, 1 on the daemon's clock, 2 undecided: its
+ *      first waypoint decides), 7 reserved (0).
  *    5 BUS: 1 bus state (1 error-active, 2 error-warning, 3 error-passive,
  *      4 bus-off, 5 interface down; from the kernel's error frames,
  *      lib/proto/canerr.h), 2 TX error counter, 3 RX error counter (as last
@@ -131,6 +138,7 @@ typedef struct {
 typedef enum {
     CANPROTO_ST2_FAULTS = 1,   /* output and command faults (canproto_st2_faults_t) */
     CANPROTO_ST2_REJECTED = 2, /* waypoints refused, per reason (canproto_st2_rejected_t) */
+    CANPROTO_ST2_CLOCK = 3,    /* data age and sender clock drift (canproto_st2_clock_t) */
     CANPROTO_ST2_DRIVE = 4,    /* the object's CiA 402 drives (canproto_status2_drive_t) */
     CANPROTO_ST2_BUS = 5,      /* CAN bus state from error frames (canproto_st2_bus_t) */
     CANPROTO_ST2_PAGES = 8     /* pages are 1 .. CANPROTO_ST2_PAGES - 1 */
@@ -449,6 +457,29 @@ int canproto_status2_page(const canproto_frame_t *f);
 int canproto_decode_status2_faults(const canproto_frame_t *f, canproto_st2_faults_t *out);
 /* Decode STATUS2 page 4.  Returns 0, -CANPROTO_ELEN, -CANPROTO_EMUX (another page). */
 int canproto_decode_status2_drive(const canproto_frame_t *f, canproto_status2_drive_t *out);
+
+/* STATUS2 page 3, CLOCK (lib/engine/CLOCK.md). */
+#define CANPROTO_ST2_AGE_NA (-8388608) /* bytes 1..3 (int24): no age (NaN) */
+#define CANPROTO_ST2_AGE_MAX 8388607   /* ms; ages beyond +-this are sent as +-this */
+#define CANPROTO_ST2_AGE_S_PER_BIT 1e-3
+#define CANPROTO_ST2_DRIFT_PPM_PER_BIT 0.1
+#define CANPROTO_ST2_DRIFT_NA (-32768) /* bytes 4..5: no estimate (NaN) */
+typedef enum {
+    CANPROTO_ST2_CLOCK_RELATIVE = 0,  /* its own origin (relative time) */
+    CANPROTO_ST2_CLOCK_ON = 1,        /* played out on the daemon's clock */
+    CANPROTO_ST2_CLOCK_UNDECIDED = 2, /* clock = auto: its first waypoint decides */
+} canproto_st2_clocked_t;
+typedef struct {
+    double age_s;     /* now - t_s, s (NaN: none); sent to 1 ms */
+    double drift_ppm; /* sender clock drift absorbed, ppm (NaN: none); to 0.1 ppm */
+    uint8_t clocked;  /* canproto_st2_clocked_t */
+} canproto_st2_clock_t;
+
+void canproto_encode_status2_clock(uint32_t id, const canproto_st2_clock_t *p,
+                                   canproto_frame_t *out);
+/* Decode STATUS2 page 3: age and drift as the field's value times its LSB,
+ * NaN for the n/a codes.  Returns 0, -CANPROTO_ELEN, or -CANPROTO_EMUX. */
+int canproto_decode_status2_clock(const canproto_frame_t *f, canproto_st2_clock_t *out);
 
 /* STATUS2 page 2, REJECTED: waypoints refused per reason (uint8, saturating). */
 typedef struct {

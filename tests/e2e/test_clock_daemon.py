@@ -12,10 +12,17 @@ ahead), of different tracks and starting at different times. Wanted:
   - the CSV output with csv.age = yes has the age_s column after the 16
     usual ones, equal to D (f64) on every streaming row before the stop, and
     the two files' rows of one cycle have the same t_s.
+  - CAN STATUS2 page 3 (the objects' CAN output written as a candump log,
+    read by python-can and decoded by canmatrix with config/trajd.dbc) gives
+    each object's data age as its CSV row of the same tick does (to the
+    field's 1 ms; n/a where the CSV has none), D while streaming on time,
+    the clock state "on the clock" and the drift the Modbus daemon block
+    gives.
 Nothing here measures time: the age and the skew are the engine's, exact
 whatever the load.
 """
 import csv
+import math
 import os
 import signal
 import struct
@@ -27,6 +34,9 @@ import unittest
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
 import mbsim  # noqa: E402
 from mbsim import M, obj_base  # noqa: E402
+import cantools_trajd as ct  # noqa: E402
+import can  # noqa: E402
+import canmatrix  # noqa: E402
 
 TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
 WAIT_S = 60
@@ -58,10 +68,12 @@ class OneClock(unittest.TestCase):
             f.write("[daemon]\nrate_hz = 50\nstatus_interval_s = 0\nstop_timeout_s = 1\n"
                     "clock = epoch\ndelay_s = %g\n"
                     "[modbus]\naddress = 127.0.0.1\nport = 0\nwrites = yes\nsystemd_socket = no\n"
-                    "[object.a]\nid = 0\ninput = modbus\noutput = csv\ncsv.path = a.csv\n"
+                    "[can]\nlog_out = %s\nlog_time = engine\nmax_late_ms = 0\n"
+                    "[object.a]\nid = 0\ninput = modbus\noutput = csv, can\ncsv.path = a.csv\n"
                     "csv.age = yes\nfragment = 8\noverlap = 4\nstart_slack = 2\n"
-                    "[object.b]\nid = 1\ninput = modbus\noutput = csv\ncsv.path = b.csv\n"
-                    "csv.age = yes\nfragment = 8\noverlap = 4\nstart_slack = 2\n" % D)
+                    "[object.b]\nid = 1\ninput = modbus\noutput = csv, can\ncsv.path = b.csv\n"
+                    "csv.age = yes\nfragment = 8\noverlap = 4\nstart_slack = 2\n"
+                    % (D, os.path.join(d, "can.log")))
         self.p, self.lines, self.port = mbsim.start_trajd([TRAJD, "-f", "-c", conf], WAIT_S)
 
     def tearDown(self):
@@ -108,6 +120,7 @@ class OneClock(unittest.TestCase):
         self.assertEqual(mbsim.f32(dm, 2), D)
         self.assertEqual(dm[4], 1, "clock = epoch")
         self.assertEqual(dm[5], 2, "two objects on the clock")
+        drift_ppm = mbsim.f32(dm, 0)
         tid += 1
         before_stop = mbsim.u32(mbsim.read_input(s, base0 + M["MBMAP_O_CYCLE"], 2, tid), 0)
         s.close()
@@ -130,6 +143,35 @@ class OneClock(unittest.TestCase):
         self.assertGreater(len(common), 30)
         for cyc in common:
             self.assertEqual(rows["a"][cyc], rows["b"][cyc], "cycle %s" % cyc)
+        self.check_status2_clock(drift_ppm)
+
+    def check_status2_clock(self, drift_ppm):
+        db = ct.load_db()
+        fr = db.frame_by_id(canmatrix.ArbitrationId(0x6D0))  # object k: 0x6D0 + k
+        pages = {0x6D0: [], 0x6D1: []}
+        reader = can.CanutilsLogReader(os.path.join(self.tmpd.name, "can.log"))
+        for m in reader:
+            if m.arbitration_id in pages:
+                d = {k: float(v.phys_value) for k, v in fr.decode(bytes(m.data)).items()}
+                if d["ST2_Page"] == 3:
+                    pages[m.arbitration_id].append((round(m.timestamp * 1e6) * 1000, d))
+        reader.stop()
+        for name, can_id in (("a", 0x6D0), ("b", 0x6D1)):
+            with open(os.path.join(self.tmpd.name, name + ".csv")) as f:
+                age = {int(r["now_ns"]): r["age_s"] for r in csv.DictReader(
+                    l for l in f if not l.startswith("#"))}
+            on_time = 0
+            self.assertGreater(len(pages[can_id]), 5, name)
+            for now_ns, d in pages[can_id]:
+                self.assertEqual(d["ST2_Clocked"], 1, name)  # VAL_ "on the clock"
+                self.assertAlmostEqual(d["ST2_Drift"], round(drift_ppm * 10) / 10, delta=1e-9)
+                a = float(age[now_ns])
+                if math.isnan(a):
+                    self.assertEqual(d["ST2_Age"], -8388.608, (name, now_ns))  # n/a
+                    continue
+                self.assertLessEqual(abs(d["ST2_Age"] - a), 0.0005 + 1e-9, (name, now_ns))
+                on_time += abs(a - D) < 1e-6 and d["ST2_Age"] == D
+            self.assertGreater(on_time, 3, name)
 
 
 if __name__ == "__main__":

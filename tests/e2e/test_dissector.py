@@ -14,7 +14,9 @@
 3. Frame by frame, signal by signal, tshark's values equal canmatrix's
    decoding of the same bytes with config/trajd.dbc (multiplexed signals
    only when selected; a setpoint position 0x80000000 is shown as
-   trajd.no_position instead), and trajd.obj is the object of the id.
+   trajd.no_position instead, and STATUS2 page 3's n/a codes (the minimum of
+   ST2_Age, ST2_Drift: the run's relative-time objects have no data age) by
+   name in trajd.not_available), and trajd.obj is the object of the id.
 Every frame type must occur, so the comparison cannot pass empty.
 """
 import os
@@ -39,6 +41,7 @@ TRACK = os.path.join(ROOT, "tests", "data", "n2k_furuno_figure8_src52.csv")
 BASES = {0x680: "TRAJD_WAYPOINT", 0x690: "TRAJD_WAYPOINT_FD", 0x6A0: "TRAJD_SETPOINT",
          0x6B0: "TRAJD_SETPOINT_FD", 0x6C0: "TRAJD_STATUS", 0x6D0: "TRAJD_STATUS2"}
 NO_POS = -214748.3648   # 0x80000000 at 0.1 mm
+NOT_AVAILABLE = {"ST2_Age": -8388.608, "ST2_Drift": -3276.8}   # the fields' minimum
 LINKTYPE_CAN_SOCKETCAN = 227
 CANFD_FDF = 0x04
 
@@ -108,14 +111,15 @@ class DissectorTest(unittest.TestCase):
             write_pcap(msgs, pcap)
             cmd = ["tshark", "-n", "-X", "lua_script:" + LUA, "-r", pcap, "-T", "fields",
                    "-E", "separator=\t", "-E", "occurrence=f", "-e", "trajd.obj",
-                   "-e", "trajd.no_position"] + [a for s in signals for a in ("-e", "trajd." + s)]
+                   "-e", "trajd.no_position", "-e", "trajd.not_available"]
+            cmd += [a for s in signals for a in ("-e", "trajd." + s)]
             out = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
             self.assertEqual(out.returncode, 0, out.stderr)
             rows = out.stdout.splitlines()
             self.assertEqual(len(rows), len(msgs))
             seen, shown = {}, set()
             for m, row in zip(msgs, rows):
-                shown |= {s for i, s in enumerate(signals) if row.split("\t")[2 + i] != ""}
+                shown |= {s for i, s in enumerate(signals) if row.split("\t")[3 + i] != ""}
                 cols = row.split("\t")
                 base = m.arbitration_id & ~0xF
                 if base not in BASES:
@@ -125,17 +129,23 @@ class DissectorTest(unittest.TestCase):
                 self.check_frame(frames[base], m, cols, signals)
             self.assertEqual(set(seen), set(BASES), seen)
             self.assertEqual(set(signals) - shown, set())
+            self.assertGreater(getattr(self, "na_seen", 0), 0, "no STATUS2 page 3 with no age")
 
     def check_frame(self, fr, m, cols, signals):
         where = "%s %s#%s" % (m.timestamp, hex(m.arbitration_id), bytes(m.data).hex())
         self.assertEqual(int(cols[0]), m.arbitration_id & 0xF, where)
         want = {k: float(v.phys_value) for k, v in fr.decode(bytes(m.data)).items()}
-        got = {s: cols[2 + i] for i, s in enumerate(signals) if cols[2 + i] != ""}
+        got = {s: cols[3 + i] for i, s in enumerate(signals) if cols[3 + i] != ""}
         nopos = [k for k, v in want.items() if v == NO_POS and ("_Pos" in k or
                                                                  k in ("SPFD_X", "SPFD_Y", "SPFD_Z"))]
         for k in nopos:
             del want[k]
         self.assertEqual(cols[1] in ("1", "True"), bool(nopos), where)
+        na = sorted(k for k, v in want.items() if NOT_AVAILABLE.get(k) == v)
+        for k in na:
+            del want[k]
+        self.assertEqual(sorted(filter(None, cols[2].split(","))), na, where)
+        self.na_seen = getattr(self, "na_seen", 0) + len(na)
         self.assertEqual(set(got), set(want), where)
         for k, v in want.items():
             self.assertAlmostEqual(float(got[k]), v, delta=1e-9 * max(1.0, abs(v)),

@@ -73,6 +73,11 @@ class St2Rejected(ctypes.Structure):
                                                "unconfirmed", "stale", "other")]
 
 
+class St2Clock(ctypes.Structure):
+    _fields_ = [("age_s", ctypes.c_double), ("drift_ppm", ctypes.c_double),
+                ("clocked", ctypes.c_uint8)]
+
+
 class Status(ctypes.Structure):
     _fields_ = [("state", ctypes.c_uint8), ("flags", ctypes.c_uint8),
                 ("last_seq", ctypes.c_uint32), ("free", ctypes.c_uint32),
@@ -98,6 +103,8 @@ def load():
     lib.canproto_decode_status2_bus.argtypes = [P(Frame), P(St2Bus)]
     lib.canproto_encode_status2_rejected.argtypes = [ctypes.c_uint32, P(St2Rejected), P(Frame)]
     lib.canproto_decode_status2_rejected.argtypes = [P(Frame), P(St2Rejected)]
+    lib.canproto_encode_status2_clock.argtypes = [ctypes.c_uint32, P(St2Clock), P(Frame)]
+    lib.canproto_decode_status2_clock.argtypes = [P(Frame), P(St2Clock)]
     lib.canproto_encode_cia402.argtypes = [P(Ids), ctypes.c_uint, ctypes.c_double, P(Frame)]
     lib.canproto_cia402_pos_m.argtypes = [P(Ids), ctypes.c_uint, ctypes.c_int32]
     lib.canproto_cia402_pos_m.restype = ctypes.c_double

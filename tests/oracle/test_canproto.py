@@ -272,6 +272,64 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
         g.data[0] = 1
         self.assertLess(LIB.canproto_decode_status2_rejected(ctypes.byref(g), ctypes.byref(q)), 0)
 
+    # Given STATUS2 page 3 (clock) from our encoder, then canmatrix decodes
+    # through the multiplexor the data age to 1 ms (signed: negative while
+    # waiting for the clock; n/a at the field's minimum, saturating at +-its
+    # maximum), the drift to 0.1 ppm (the same rules) and the clock state
+    # with its VAL_ names; and a page canmatrix encodes is what our decoder
+    # reads.
+    def test_status2_clock(self):
+        fr = frame_of(self.db, 0x6D0)
+        page = fr.signal_by_name("ST2_Page")
+        self.assertEqual(str(page.values.get(3, page.values.get("3"))), "clock")
+        names = {int(k): v for k, v in fr.signal_by_name("ST2_Clocked").values.items()}
+        self.assertEqual(names, {0: "relative", 1: "on the clock", 2: "undecided"})
+        age_na, age_max = -(1 << 23), (1 << 23) - 1
+        cases = [  # age_s, drift_ppm, clocked -> age field (ms), drift field (0.1 ppm)
+            (10.0, 0.0, 1, 10000, 0), (10.0004, 99.94, 1, 10000, 999),
+            (10.0006, -99.96, 1, 10001, -1000), (0.0, 1000.0, 1, 0, 10000),
+            (-2.4e-7, -1000.0, 1, 0, -10000), (-0.15647, 0.0, 1, -156, 0),
+            (float("nan"), 12.3, 0, age_na, 123), (1e9, float("nan"), 2, age_max, -32768),
+            (-1e9, 5000.0, 1, -age_max, 32767), (8388.6074, -5000.0, 1, age_max, -32767),
+            (3.25, -3276.7, 1, 3250, -32767),
+        ]
+        cases += [(self.rng.uniform(-8000, 8000), self.rng.uniform(-3000, 3000), 1, None, None)
+                  for _ in range(50)]
+        for age, drift, clocked, want_age, want_drift in cases:
+            if want_age is None:  # half-way cases have probability 0
+                want_age, want_drift = round(age * 1000), round(drift * 10)
+            p = cp.St2Clock(age, drift, clocked)
+            f = cp.Frame()
+            LIB.canproto_encode_status2_clock(0x6D0, ctypes.byref(p), ctypes.byref(f))
+            self.assertEqual((f.id, f.len, f.data[7]), (0x6D0, 8, 0))
+            d = decode(self.db, f)
+            self.assertEqual(d["ST2_Page"], 3)
+            sig_age, sig_drift = fr.signal_by_name("ST2_Age"), fr.signal_by_name("ST2_Drift")
+            self.assertEqual(raw(fr, "ST2_Age", d["ST2_Age"]), want_age, age)
+            self.assertAlmostEqual(d["ST2_Age"], want_age * float(sig_age.factor), delta=1e-9)
+            self.assertEqual(round(d["ST2_Drift"] / float(sig_drift.factor)), want_drift, drift)
+            self.assertEqual(d["ST2_Clocked"], clocked)
+            self.assertNotIn("ST2_OutLost", d)
+            data = fr.encode({"ST2_Page": 3, "ST2_Age": want_age, "ST2_Drift": want_drift,
+                              "ST2_Clocked": clocked})
+            g = cp.Frame()
+            g.id, g.len = 0x6D0, 8
+            for i, b in enumerate(bytes(data)):
+                g.data[i] = b
+            q = cp.St2Clock()
+            self.assertEqual(LIB.canproto_decode_status2_clock(ctypes.byref(g), ctypes.byref(q)), 0)
+            if want_age == age_na:
+                self.assertTrue(math.isnan(q.age_s))
+            else:
+                self.assertAlmostEqual(q.age_s, want_age / 1000, delta=1e-9)
+            if want_drift == -32768:
+                self.assertTrue(math.isnan(q.drift_ppm))
+            else:
+                self.assertAlmostEqual(q.drift_ppm, want_drift / 10, delta=1e-9)
+            self.assertEqual(q.clocked, clocked)
+        g.data[0] = 2
+        self.assertLess(LIB.canproto_decode_status2_clock(ctypes.byref(g), ctypes.byref(q)), 0)
+
     # Given a CiA 402 axis, then canmatrix reads the target position in increments.
     def test_cia402(self):
         ids = cp.Ids()

@@ -830,6 +830,43 @@ static void test_status2_pages(void **state)
     assert_int_equal(count_id(0x6D0), 5);
 }
 
+/* Given pages 1 and 2 and the clock page 3 as a value page whose age changes
+ * every cycle, then each STATUS is followed by the pages in turn: the page
+ * that always changes never holds the others back (given as a changed page
+ * it would go out after every STATUS), and it carries the latest age. */
+static void test_status2_value_page(void **state)
+{
+    (void)state;
+    canproto_frame_t f;
+    canproto_st2_faults_t pg = {5, 2, 1};
+    canproto_st2_rejected_t rj = {1, 2, 3, 4, 5, 6, 7};
+    canproto_encode_status2_faults(0, &pg, &f);
+    can_port_status2(port, 0, &f);
+    canproto_encode_status2_rejected(0, &rj, &f);
+    can_port_status2(port, 0, &f);
+    unsigned seen[4] = {0};
+    for (unsigned k = 0; k < 9; k++) {
+        canproto_st2_clock_t ck = {10.0 + 0.1 * k, 1.5, CANPROTO_ST2_CLOCK_ON}, back;
+        canproto_encode_status2_clock(0, &ck, &f);
+        can_port_status2_value(port, 0, &f);
+        can_port_output_fault(port, 0, k + 1, 1); /* an event: STATUS due */
+        run_cycle(k, 0);
+        const canproto_frame_t *o = &io.out[io.nout - 1];
+        assert_int_equal(o->id, 0x6D0);
+        assert_true(o->data[0] >= 1 && o->data[0] <= 3);
+        seen[o->data[0]]++;
+        if (o->data[0] == CANPROTO_ST2_CLOCK) {
+            assert_int_equal(canproto_decode_status2_clock(o, &back), 0);
+            assert_float_equal(back.age_s, 10.0 + 0.1 * k, 1e-9);
+            assert_float_equal(back.drift_ppm, 1.5, 1e-9);
+            assert_int_equal(back.clocked, CANPROTO_ST2_CLOCK_ON);
+        }
+    }
+    assert_int_equal(seen[1], 3);
+    assert_int_equal(seen[2], 3);
+    assert_int_equal(seen[3], 3);
+}
+
 /* Given two objects with clashing ids, then the second is refused. */
 static void test_id_clash(void **state)
 {
@@ -941,6 +978,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_output_fault_in_status, setup, teardown),
         cmocka_unit_test_setup_teardown(test_commands_refused, setup, teardown),
         cmocka_unit_test_setup_teardown(test_status2_pages, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_status2_value_page, setup, teardown),
         cmocka_unit_test(test_id_clash),
         cmocka_unit_test(test_can_logfile_real_capture),
         cmocka_unit_test(test_can_logfile_output),
