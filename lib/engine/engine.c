@@ -1739,8 +1739,12 @@ static void step_once(engine_t *e)
     scale_limits(e, &A, &J);
     R = remaining(e, s);
     if (e->mode == OUT_STREAM && e->avail_closed && !e->avail_rest && !e->end_brake &&
-        ts_stop_dist(e->ts.rate, e->ts.acc, A, J) >= R - e->ts.rate * e->period_s)
-        e->end_brake = 1; /* the curve does not end at rest: brake before its end */
+        (ts_stop_dist(e->ts.rate, e->ts.acc, A, J) >= R - e->ts.rate * e->period_s ||
+         (e->scaled && at_rest(e) && ts_rate_max(R, A, J) < J * e->period_s * e->period_s)))
+        /* the curve does not end at rest: brake before its end; at rest with
+         * less curve left than one tick of motion needs (stalled()), no input
+         * can come to lengthen it: finish here, not wait for ever */
+        e->end_brake = 1;
     if (e->clocked && e->mode == OUT_STREAM) {
         clocked_step(e, R, A, J);
         return;
