@@ -23,7 +23,9 @@
  *
  * Fast by construction: the engine's buffer is the smallest the configuration
  * allows (lookahead + fragment + 8 waypoints; the default 4096 cost a 2 MB
- * calloc per input), at most MAX_OPS operations per input, coordinates within
+ * calloc per input), at most MAX_OPS operations and MAX_PUSH waypoints per
+ * input (judging and fitting waypoints is most of the engine's work: a push
+ * costs about two ticks), coordinates within
  * max_abs_m = 20 m and gaps above 1 s so transfers and tracks stay short.
  */
 #include <math.h>
@@ -34,7 +36,8 @@
 #include "engine.h"
 #include "safety.h"
 
-#define MAX_OPS 256
+#define MAX_OPS 128
+#define MAX_PUSH 40 /* several lookaheads (engine_lookahead: 8..14 waypoints) */
 /* The curve passes through the waypoints at their times, and engine_push
  * checks the mean speed between waypoints against max_speed_m_s; between them
  * the cubic may be faster (1.5 x the mean on a rest-to-rest segment).  Steps
@@ -207,7 +210,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     run_t r;
     engine_status_t st;
     double t = 0;
-    unsigned accepted = 0, ops = 0;
+    unsigned accepted = 0, ops = 0, pushes = 0;
     int stopped = 0; /* engine_stop was the last command since the last accepted waypoint */
 
     if (size < 2)
@@ -236,6 +239,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         case 1:
         case 2: { /* push: small steps mostly, raw doubles sometimes */
             engine_waypoint_t w = {0};
+            if (pushes++ >= MAX_PUSH)
+                break;
             if (op & 0x80) {
                 w.t_s = take_double(&p, end);
                 for (int k = 0; k < 3; k++)
