@@ -14,7 +14,7 @@
  *    -130927.96875 m, an exact tie, the decoded double differs by half an LSB
  *    plus its own rounding; tests/fuzz/regress/fuzz_canproto/), and decode
  *    gives that code x LSB up to the rounding to a double;
- *  - the STATUS and STATUS2 decoders (what a CAN tool reads back from the
+ *  - the STATUS and STATUS2 decoders (every page; what a CAN tool reads back from the
  *    daemon) on every frame: a page decoder answers exactly when
  *    canproto_status2_page names its page, and what a decoder accepts,
  *    encoded again and decoded, gives the same fields (check_status).
@@ -78,6 +78,11 @@ static void check_status(const canproto_frame_t *f)
     ROUND_TRIP(canproto_st2_rejected_t, canproto_decode_status2_rejected,
                canproto_encode_status2_rejected, 0x6D1, f);
     if (found != (page == CANPROTO_ST2_REJECTED))
+        abort();
+    found = 0;
+    ROUND_TRIP(canproto_st2_clock_t, canproto_decode_status2_clock, canproto_encode_status2_clock,
+               0x6D1, f);
+    if (found != (page == CANPROTO_ST2_CLOCK))
         abort();
     found = 0;
     ROUND_TRIP(canproto_st2_clock_t, canproto_decode_status2_clock, canproto_encode_status2_clock,
