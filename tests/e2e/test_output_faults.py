@@ -12,9 +12,15 @@ The real trajd, with faults made by the kernel, observed from outside:
    by itself, promptly, with status 141, not after being killed.
 4. A restart or a reload (SIGHUP) appends to the CSV file after a marker line instead of
    truncating it; csv.truncate = yes empties it first.
+5. The same /dev/full with the object's CAN output written as a candump
+   log: python-can reads it, canmatrix decodes it with config/trajd.dbc:
+   STATUS says output fault (bit 6, last error 0x45 "output lost lines") and
+   STATUS2 page 1 counts the lines lost and the failed writes, never more
+   than the exit line gives; exit 74.
 Every wait is bounded; the daemon is stopped by pid.
 """
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -25,6 +31,9 @@ import unittest
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
 import mbsim  # noqa: E402
 from mbsim import M, obj_base  # noqa: E402
+import cantools_trajd as ct  # noqa: E402
+import can  # noqa: E402
+import canmatrix  # noqa: E402
 
 TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
 DEMO = os.path.join(mbsim.ROOT, "config", "demo.conf")
@@ -105,6 +114,46 @@ class OutputFaults(unittest.TestCase):
             p.send_signal(signal.SIGTERM)
             rc = p.wait(WAIT_S)
         self.assertEqual(rc, EX_IOERR)
+
+    def test_dev_full_on_can_status(self):
+        # Given csv.path = /dev/full and the object's CAN output as a
+        # candump log, when the track streams to its end, then STATUS
+        # frames carry the output fault (bit 6) and error 0x45, STATUS2 page
+        # 1 counts lost lines and failed writes (both > 0, at most the exit
+        # line's count), and the exit status is 74
+        path = conf(self.tmp, "/dev/full", extra_daemon="exit_when_done = yes\n")
+        with open(path) as f:
+            text = f.read().replace("output = csv\n", "output = csv, can\n")
+        with open(path, "w") as f:
+            f.write(text + "[can]\nlog_out = %s\nlog_time = engine\nmax_late_ms = 0\n"
+                    % os.path.join(self.tmp, "can.log"))
+        rc, err = run(path)
+        self.assertEqual(rc, EX_IOERR, err)
+        m = re.search(r"(\d+) setpoint lines were lost by the outputs", err)
+        self.assertIsNotNone(m, err)
+        lost_total = int(m.group(1))
+        db = ct.load_db()
+        st = db.frame_by_id(canmatrix.ArbitrationId(0x6C0))
+        st2 = db.frame_by_id(canmatrix.ArbitrationId(0x6D0))
+        status, page1 = [], []
+        reader = can.CanutilsLogReader(os.path.join(self.tmp, "can.log"))
+        for msg in reader:
+            if msg.arbitration_id == 0x6C0:
+                status.append({k: int(v.phys_value) for k, v in st.decode(bytes(msg.data)).items()})
+            elif msg.arbitration_id == 0x6D0:
+                d = {k: int(v.phys_value) for k, v in st2.decode(bytes(msg.data)).items()}
+                if d["ST2_Page"] == 1:
+                    page1.append(d)
+        reader.stop()
+        faulted = [d for d in status if d["ST_OutFault"] == 1]
+        self.assertGreater(len(faulted), 0, "no STATUS with the output fault bit")
+        self.assertIn(0x45, [d["ST_LastErr"] for d in faulted])
+        self.assertGreater(len(page1), 0, "no STATUS2 page 1")
+        last = page1[-1]
+        self.assertGreater(last["ST2_OutLost"], 0)
+        self.assertLessEqual(last["ST2_OutLost"], lost_total)
+        self.assertGreater(last["ST2_OutErrors"], 0)
+        self.assertEqual([d["ST2_OutLost"] for d in page1], sorted(d["ST2_OutLost"] for d in page1))
 
     def test_small_disk_no_torn_line(self):
         # Given csv.path on a 64 KiB tmpfs, when the track (~40 000 lines)
