@@ -104,13 +104,21 @@ static int parse_row(char *line, double *v, int max)
 static int read_rows(FILE *f, const char *path, double **rows, size_t *nrows, size_t *ncols,
                      int *indexed)
 {
-    char line[1 << 16];
+    char *line = NULL; /* whole lines of any length (a row of GRID_MAX numbers is long) */
+    size_t linecap = 0;
+    ssize_t len;
     double v[GRID_MAX];
     size_t cap = 0, lineno = 0;
+    int rc = 0;
 
-    while (fgets(line, sizeof line, f)) {
+    while ((len = getline(&line, &linecap, f)) >= 0) {
         int n;
         lineno++;
+        if (strlen(line) != (size_t)len) {
+            fprintf(stderr, "%s:%zu: NUL byte in the line\n", path, lineno);
+            rc = -1;
+            break;
+        }
         if (line[0] == '#' || line[strspn(line, " \t\r\n")] == '\0')
             continue;
         if (*indexed < 0) {
@@ -122,14 +130,16 @@ static int read_rows(FILE *f, const char *path, double **rows, size_t *nrows, si
         if (n <= 0 || (*indexed && n != 5)) {
             fprintf(stderr, "%s:%zu: expected %s\n", path, lineno,
                     *indexed ? "i,j,x,y,z" : "comma-separated numbers");
-            return -1;
+            rc = -1;
+            break;
         }
         if (!*indexed) {
             if (*ncols == 0)
                 *ncols = (size_t)n;
             if ((size_t)n != *ncols) {
                 fprintf(stderr, "%s:%zu: %d values, first row had %zu\n", path, lineno, n, *ncols);
-                return -1;
+                rc = -1;
+                break;
             }
         }
         if (*nrows == cap) {
@@ -137,7 +147,8 @@ static int read_rows(FILE *f, const char *path, double **rows, size_t *nrows, si
             double *r = realloc(*rows, nc * (*indexed ? 5 : *ncols) * sizeof *r);
             if (!r) {
                 fprintf(stderr, "%s: out of memory\n", path);
-                return -1;
+                rc = -1;
+                break;
             }
             *rows = r;
             cap = nc;
@@ -145,7 +156,8 @@ static int read_rows(FILE *f, const char *path, double **rows, size_t *nrows, si
         memcpy(*rows + *nrows * (*indexed ? 5 : *ncols), v, (size_t)n * sizeof *v);
         (*nrows)++;
     }
-    return 0;
+    free(line);
+    return rc;
 }
 
 /* The grid from "i,j,x,y,z" rows: every (i, j) of an m x n grid exactly once. */

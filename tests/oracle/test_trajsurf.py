@@ -90,12 +90,32 @@ class TestTrajsurf(unittest.TestCase):
         g = np.dstack([np.tile(np.arange(4) * 0.5, (3, 1)), np.tile(np.arange(3)[:, None] * 2.0, (1, 4)), z])
         np.testing.assert_allclose(xyz, reference(g, 2), atol=TOL, rtol=0)
 
+    def test_long_rows(self):
+        # Given a height matrix of 4000 columns written by repr (a row is
+        # about 76 kB, longer than the 64 KiB the reader once took in one
+        # piece: it read the tail as a row of its own and refused the file),
+        # then every row is read whole: with -n 1 the output is the grid,
+        # x = column, y = row, z = the heights, bit for bit.
+        rng = np.random.default_rng(11)
+        z = rng.uniform(-1000, 1000, (2, 4000))
+        src = os.path.join(self.d, "wide.csv")
+        with open(src, "w") as f:
+            for row in z:
+                f.write(",".join(repr(float(v)) for v in row) + "\n")
+        self.assertGreater(os.path.getsize(src), 2 * 65536)
+        r = run("-n", "1", src)
+        self.assertEqual(r.returncode, 0, r.stderr[-300:])
+        data = np.loadtxt(r.stdout.splitlines(), delimiter=",", skiprows=1)
+        xyz = data[:, 2:].reshape(2, 4000, 3)
+        np.testing.assert_array_equal(xyz[:, :, 2], z)
+        np.testing.assert_array_equal(xyz[:, :, 0], np.tile(np.arange(4000.0), (2, 1)))
+
     def test_bad_input(self):
         # Given ragged, non-numeric or incomplete grids, then exit 1 with a
         # message naming the file (and line); bad options exit 2.
         cases = {"ragged.csv": "1,2,3\n4,5\n", "text.csv": "1,2\nx,y\n",
                  "hole.csv": "i,j,x,y,z\n0,0,0,0,0\n1,1,1,1,1\n0,1,0,1,0\n",
-                 "tiny.csv": "1,2,3\n"}
+                 "tiny.csv": "1,2,3\n", "nul.csv": "1,2\n3,4\n5\x00,6\n"}
         for name, text in cases.items():
             p = os.path.join(self.d, name)
             with open(p, "w") as f:
@@ -103,6 +123,7 @@ class TestTrajsurf(unittest.TestCase):
             r = run(p)
             self.assertEqual(r.returncode, 1, name)
             self.assertIn(name, r.stderr)
+        self.assertIn("nul.csv:3: NUL byte", run(os.path.join(self.d, "nul.csv")).stderr)
         self.assertEqual(run("-n", "0", "x").returncode, 2)
         self.assertEqual(run().returncode, 2)
 
