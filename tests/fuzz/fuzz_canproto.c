@@ -85,11 +85,6 @@ static void check_status(const canproto_frame_t *f)
     if (found != (page == CANPROTO_ST2_CLOCK))
         abort();
     found = 0;
-    ROUND_TRIP(canproto_st2_clock_t, canproto_decode_status2_clock, canproto_encode_status2_clock,
-               0x6D1, f);
-    if (found != (page == CANPROTO_ST2_CLOCK))
-        abort();
-    found = 0;
     ROUND_TRIP(canproto_status2_drive_t, canproto_decode_status2_drive,
                canproto_encode_status2_drive, 0x6D1, f);
     if (found != (page == CANPROTO_ST2_DRIVE))
