@@ -282,6 +282,24 @@ static void pop(accept_t *a, accept_verdict_t *v, accept_kind_t kind, int reason
     }
 }
 
+/* lower median of the chord speeds of the last kept intervals (0 if none) */
+static double recent_median_speed(const accept_t *a)
+{
+    double v[ACCEPT_HIST];
+    unsigned n = a->nhist;
+
+    if (!n)
+        return 0;
+    memcpy(v, a->vhist, n * sizeof v[0]);
+    for (unsigned i = 1; i < n; i++) /* insertion sort: n <= ACCEPT_HIST */
+        for (unsigned j = i; j > 0 && v[j - 1] > v[j]; j--) {
+            double t = v[j];
+            v[j] = v[j - 1];
+            v[j - 1] = t;
+        }
+    return v[(n - 1) / 2];
+}
+
 /*
  * Stale repeat of the anchor while moving: 1 = drop c as stale, 0 = not
  * stale (judge it as any other), -1 = wait for a waypoint with a new position.
@@ -306,7 +324,17 @@ static int stale_verdict(const accept_t *a, int full, double vlim)
             return 1;
         return 0;
     }
-    return full ? 0 : -1;
+    if (!full)
+        return -1;
+    /* the window holds nothing but repeats: a run longer than the window.
+     * An object that stood there stopped dead within one interval from its
+     * recent pace (the median of the last kept chords: one noisy step of a
+     * moored boat is no pace); beyond ACCEPT_STALE_STOP_M_S2 no vehicle
+     * does that, a frozen receiver does (the anchor's own interval, so every
+     * repeat of the run gets the same verdict) */
+    v_in = recent_median_speed(a);
+    return v_in >= ACCEPT_STALE_MIN_SPEED_M_S &&
+           v_in / (a->a1.t_s - a->a0.t_s) > ACCEPT_STALE_STOP_M_S2;
 }
 
 /*

@@ -35,8 +35,10 @@
  *     ACCEPT_STALE_MIN_SPEED_M_S into the anchor) and the next waypoint with
  *     a new position is consistent with the anchor and shows the object kept
  *     at least half its pace across the repeats: a frozen receiver, not a
- *     stop.  (profiles with stale detection only; a toolpath's dwell is a
- *     real repeat.)  Of a fix and its later repeats, the fix is kept (it was
+ *     stop.  A run longer than the window, with no new position yet, is
+ *     stale if standing there means stopping dead from the recent pace
+ *     within the anchor's interval harder than ACCEPT_STALE_STOP_M_S2.  (profiles with stale
+ *     detection only; a toolpath's dwell is a real repeat.)  Of a fix and its later repeats, the fix is kept (it was
  *     stamped when the position was fixed), even where a chain through a
  *     repeat would bend the track less.
  * A clean stretch is decided as soon as c and the waypoint after it
@@ -97,6 +99,16 @@
 #define ACCEPT_FAR_GAP_FACTOR 60.0
 /* The object was moving into the repeat at least this fast (m/s). */
 #define ACCEPT_STALE_MIN_SPEED_M_S 0.5
+/* A run of repeats longer than the window (no new position to judge it by
+ * yet) is stale if standing there means stopping dead, from the recent pace
+ * (the lower median of the last ACCEPT_HIST kept chords, at least
+ * ACCEPT_STALE_MIN_SPEED_M_S) within the anchor's interval, harder than
+ * this (m/s^2, 1 g: a car's emergency stop on dry asphalt; a boat or an
+ * aircraft cannot come near it): 5 m/s at 5 Hz is 25 m/s^2, an airliner at
+ * 1 Hz 230; a walker at 1.5 m/s and 1 Hz (1.5 m/s^2) stands still, and a
+ * moored boat whose 10 Hz messages repeat a 1 Hz fix has no pace (its
+ * chords are mostly 0): their repeats are kept. */
+#define ACCEPT_STALE_STOP_M_S2 9.81
 
 typedef struct {
     double max_speed_m_s;  /* absolute speed limit, 0 = none */

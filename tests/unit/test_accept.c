@@ -127,10 +127,63 @@ static void test_one_bad_fix_costs_nothing(void **state)
     assert_int_equal(bad, 0);
 }
 
+/*
+ * A run of repeats longer than the judging window (accept.h,
+ * ACCEPT_STALE_STOP_M_S2): the boat's receiver freezes for 3 s (15 fixes
+ * repeat the position of the fix before, then the true positions resume:
+ * frozen, then a jump), and a walker at 1.2 m/s and 1 Hz stands 30 s on one
+ * bit-identical position (a receiver's static hold).  The frozen run is
+ * refused as stale and every good fix around it kept (keeping the run made
+ * the jump after it look like 60 m/s: the 4 good fixes after it were
+ * refused); the walker's stand is kept whole.
+ */
+static void test_long_frozen_run(void **state)
+{
+    (void)state;
+    static engine_waypoint_t rows[N_FIX + 60];
+    engine_status_t st;
+    int fin, n = 0;
+
+    for (int i = 0; i < N_FIX; i++) {
+        boat(&rows[n], i);
+        if (i >= 100 && i < 115)
+            memcpy(rows[n].pos_m, rows[99].pos_m, sizeof rows[n].pos_m);
+        n++;
+    }
+    replay(rows, n, &st, &fin);
+    print_message("boat frozen 3 s: accepted %llu, stale %llu, rejected %llu\n",
+                  (unsigned long long)st.accepted,
+                  (unsigned long long)st.rejected_by[ENGINE_ESTALE],
+                  (unsigned long long)st.rejected);
+    assert_int_equal(st.accepted, N_FIX - 15);
+    assert_int_equal(st.rejected_by[ENGINE_ESTALE], 15);
+    assert_int_equal(st.rejected, 15);
+    assert_int_equal(st.hard_stops, 0);
+    assert_true(fin);
+
+    n = 0;
+    for (int i = 0; i < 150; i++, n++) {
+        memset(&rows[n], 0, sizeof rows[n]);
+        rows[n].t_s = i;
+        rows[n].pos_m[0] = 1.2 * (i < 50 ? i : i < 80 ? 50 : i - 30);
+        rows[n].pos_m[1] = 0.2 * sin(0.1 * i);
+        if (i >= 50 && i < 80)
+            rows[n].pos_m[1] = 0.2 * sin(5.0);
+        rows[n].seq = (uint32_t)n + 1;
+    }
+    replay(rows, n, &st, &fin);
+    print_message("walker standing 30 s: accepted %llu, rejected %llu\n",
+                  (unsigned long long)st.accepted, (unsigned long long)st.rejected);
+    assert_int_equal(st.accepted, 150);
+    assert_int_equal(st.rejected, 0);
+    assert_true(fin);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_one_bad_fix_costs_nothing),
+        cmocka_unit_test(test_long_frozen_run),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
