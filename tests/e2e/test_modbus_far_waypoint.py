@@ -9,14 +9,13 @@ continue the first. Wanted:
     may decide a few waypoints later, ENGINE_EUNCONFIRMED);
   - every later good waypoint is accepted (no exception at all), and the
     object's setpoint time stays on the good track.
-Today's engine takes the far waypoint as a new trajectory and answers every
-later good one with exception 03 until CLEAR. The engine side (confirming a
-far-away trajectory) is issue 11's "time sanity", done separately: until
-lib/motion.h has ENGINE_EUNCONFIRMED this test is marked as an expected
-failure; from then on it must pass.
+The engine before the acceptance policy (lib/engine/accept.h) took the far
+waypoint as a new trajectory and answered every later good one with
+exception 03 until CLEAR. The far waypoint is refused with its own reason,
+unconfirmed (diagnostics block rejected_unconfirmed), and logged with the
+client that wrote it.
 """
 import os
-import re
 import signal
 import struct
 import sys
@@ -30,8 +29,6 @@ from mbsim import M, obj_base  # noqa: E402
 
 TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
 WAIT_S = 20
-with open(os.path.join(mbsim.ROOT, "lib", "motion.h")) as _f:
-    HAVE_CONFIRM = re.search(r"\bENGINE_EUNCONFIRMED\b", _f.read()) is not None
 
 
 def write_wp(s, seq, t, x, y, z, tid):
@@ -89,6 +86,11 @@ class FarWaypoint(unittest.TestCase):
                     or time.monotonic() > deadline:
                 break
         self.assertTrue(far == 3 or rejected >= 1, (far, rejected))
+        # with its own reason: unconfirmed (the diagnostics block's per-reason
+        # counter; issue 11 "rejected with its own reason code"), and nothing else
+        x = mbsim.read_input(s, M["MBMAP_BLOCK"] * (1 + M["MBMAP_MAX_OBJECTS"]), mbsim.BLOCK)
+        self.assertEqual(mbsim.u32(x, M["MBMAP_X_REJ_UNCONFIRMED"]), 1)
+        self.assertEqual(sum(mbsim.u32(x, M["MBMAP_X_REJECTED_BY"] + 2 * k) for k in range(13)), 1)
         # all 80 good ones in but the newest, whose verdict waits for its
         # next neighbour (lib/engine/accept.h, ACCEPT_LAG)
         self.assertGreaterEqual(mbsim.u32(r, M["MBMAP_O_ACCEPTED"]), 79)
@@ -103,13 +105,8 @@ class FarWaypoint(unittest.TestCase):
         self.assertIn(" seq 41 t=1000000000.000 s", line)
         s.close()
 
-    if HAVE_CONFIRM:
-        def test_far_waypoint_does_not_block(self):
-            self.check()
-    else:
-        @unittest.expectedFailure
-        def test_far_waypoint_does_not_block(self):
-            self.check()
+    def test_far_waypoint_does_not_block(self):
+        self.check()
 
 
 if __name__ == "__main__":

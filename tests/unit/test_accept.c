@@ -179,11 +179,109 @@ static void test_long_frozen_run(void **state)
     assert_true(fin);
 }
 
+/* The boat's fixes with fixes [from, from + n) moved `off` metres north
+ * (a relocated object, or a burst of bad fixes); returns the row count. */
+static int build_moved(engine_waypoint_t *rows, int from, int n, double off)
+{
+    for (int i = 0; i < N_FIX; i++) {
+        boat(&rows[i], i);
+        if (i >= from && i < from + n)
+            rows[i].pos_m[1] += off;
+    }
+    return N_FIX;
+}
+
+/* replay as replay() does, also giving the last setpoint */
+static void replay_sp(const engine_waypoint_t *rows, int n, engine_status_t *st,
+                      engine_setpoint_t *last)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    int err = -1, next = 0;
+    engine_t *e = engine_new(&c, &err);
+    assert_non_null(e);
+    memset(last, 0, sizeof *last);
+    for (int64_t k = 0; k < 200000 && last->state != ENGINE_STATE_FINISHED; k++) {
+        double now_s = (double)(k * PERIOD_NS) * 1e-9;
+        while (next < n && rows[next].t_s <= now_s + 1e-9) {
+            (void)engine_push(e, &rows[next]);
+            if (++next == n)
+                assert_int_equal(engine_finish(e), 0);
+        }
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, last), 0);
+    }
+    engine_status(e, st);
+    engine_free(e);
+}
+
+/* Issue 11 "time sanity": given the boat relocated 1 km north from fix 100
+ * on (every later fix consistent with the ones after it), then the engine
+ * abandons the old trajectory for a new one once `confirm` fixes agree:
+ * every fix kept, a new trajectory number, and the output ends on the last
+ * moved fix.  Given only confirm - 1 moved fixes (then the boat back on its
+ * track), then those are refused, for their chord speed from the trajectory
+ * (5 km/s), and the trajectory is not abandoned.  Given one fix far in the
+ * future (t = 1e9 s) among them, then it alone is refused, with its own
+ * reason: unconfirmed. */
+static void test_far_start_needs_confirmation(void **state)
+{
+    (void)state;
+    static engine_waypoint_t rows[N_FIX + 1];
+    engine_config_t c;
+    engine_config_default(&c);
+    engine_status_t st;
+    engine_setpoint_t sp;
+
+    int n = build_moved(rows, 100, N_FIX - 100, 1000.0);
+    replay_sp(rows, n, &st, &sp);
+    assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+    assert_int_equal(st.rejected, 0);
+    assert_int_equal(st.accepted, N_FIX);
+    assert_int_equal(st.tracks, 2); /* the old one abandoned for a second */
+    assert_float_equal(sp.pos_m[1], rows[N_FIX - 1].pos_m[1], 1e-9);
+
+    assert_true(c.confirm >= 2);
+    n = build_moved(rows, 100, (int)c.confirm - 1, 1000.0);
+    replay_sp(rows, n, &st, &sp);
+    assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+    assert_int_equal(st.rejected, c.confirm - 1);
+    assert_int_equal(st.rejected_by[ENGINE_ESPEED], c.confirm - 1);
+    assert_int_equal(st.accepted, N_FIX - (c.confirm - 1));
+    assert_int_equal(st.tracks, 1);
+    assert_float_equal(sp.pos_m[1], rows[N_FIX - 1].pos_m[1], 1e-9);
+
+    n = build_moved(rows, 0, 0, 0.0);
+    memmove(&rows[101], &rows[100], (size_t)(N_FIX - 100) * sizeof rows[0]);
+    rows[100].t_s = 1e9; /* between fixes 99 and 100, all pushed at once */
+    n++;
+    engine_t *e;
+    int err = -1;
+    e = engine_new(&c, &err);
+    assert_non_null(e);
+    for (int r = 0; r < n; r++)
+        (void)engine_push(e, &rows[r]);
+    assert_int_equal(engine_finish(e), 0);
+    for (int64_t k = 0; k < 200000; k++) {
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+        if (sp.state == ENGINE_STATE_FINISHED)
+            break;
+    }
+    engine_status(e, &st);
+    engine_free(e);
+    assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+    assert_int_equal(st.rejected, 1);
+    assert_int_equal(st.rejected_by[ENGINE_EUNCONFIRMED], 1);
+    assert_int_equal(st.accepted, N_FIX);
+    assert_int_equal(st.tracks, 1);
+    assert_float_equal(sp.t_s, rows[n - 1].t_s, 1e-9);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_one_bad_fix_costs_nothing),
         cmocka_unit_test(test_long_frozen_run),
+        cmocka_unit_test(test_far_start_needs_confirmation),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
