@@ -356,6 +356,14 @@ static int repeated_later(const accept_t *a)
     return 0;
 }
 
+/* q repeats the position of c, the oldest waypoint held (profiles with stale
+ * detection): a frozen receiver's copy of c, no evidence of its own for or
+ * against c (it may follow the anchor only because it is stamped later) */
+static int repeats_c(const accept_t *a, const engine_waypoint_t *q)
+{
+    return a->cfg.stale && q != &a->pend[0] && dist(&a->pend[0], q) <= ACCEPT_STALE_POS_M;
+}
+
 /*
  * 1 if a waypoint held after c continues the anchor (a chain skipping c
  * exists): c, which does not follow the anchor, is then dropped whatever
@@ -364,7 +372,7 @@ static int repeated_later(const accept_t *a)
 static int continues_anchor(const accept_t *a, const engine_waypoint_t *pre, double vlim)
 {
     for (unsigned i = 1; i < a->npend; i++)
-        if (accept_check(a, pre, &a->a1, &a->pend[i], vlim) == 0)
+        if (!repeats_c(a, &a->pend[i]) && accept_check(a, pre, &a->a1, &a->pend[i], vlim) == 0)
             return 1;
     return 0;
 }
@@ -384,8 +392,7 @@ static int taken_past_outliers(const accept_t *a, double vlim)
         const engine_waypoint_t *q = &a->pend[j];
         if (check(a, &a->a1, c, q, vlim, 0) == 0)
             return j >= 2;
-        if (!(a->cfg.stale && dist(c, q) <= ACCEPT_STALE_POS_M) &&
-            accept_check(a, a->have_a0 ? &a->a0 : NULL, &a->a1, q, vlim) == 0)
+        if (!repeats_c(a, q) && accept_check(a, a->have_a0 ? &a->a0 : NULL, &a->a1, q, vlim) == 0)
             return 0; /* q could replace c: the full window compares them */
     }
     return 0;
@@ -471,8 +478,16 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
         return 0;
     {
         double cw, co;
+        const engine_waypoint_t *nr[ACCEPT_WINDOW_MAX + 1];
+        unsigned m = 0;
+        /* chains skipping c leave out c's repeats too: a frozen receiver's
+         * copies of c, stamped later, would otherwise outvote the fix they
+         * copy (a chain through them is as long as the run) */
+        for (unsigned i = 0; i <= n; i++)
+            if (i < 2 || !repeats_c(a, nd[i]))
+                nr[m++] = nd[i];
         unsigned lw = longest(a, nd, n + 1, pre, 1, 1, vlim, 0, &cw); /* through c */
-        unsigned lo = longest(a, nd, n + 1, pre, 2, n, vlim, 0, &co); /* skipping c */
+        unsigned lo = longest(a, nr, m, pre, 2, m - 1, vlim, 0, &co); /* skipping c */
         /* keep c unless a longer chain skips it, or one as long and smoother
          * (of two fixes that cannot both be right, the one that bends the
          * track less) */

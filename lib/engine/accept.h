@@ -38,7 +38,10 @@
  *     stop.  A run longer than the window, with no new position yet, is
  *     stale if standing there means stopping dead from the recent pace
  *     within the anchor's interval harder than ACCEPT_STALE_STOP_M_S2.  (profiles with stale
- *     detection only; a toolpath's dwell is a real repeat.)  Of a fix and its later repeats, the fix is kept (it was
+ *     detection only; a toolpath's dwell is a real repeat.)  A later
+ *     repeat of c is no evidence against c: chains that skip c leave its
+ *     repeats out (a frozen run's copies, stamped later, would outvote the
+ *     fix they copy).  Of a fix and its later repeats, the fix is kept (it was
  *     stamped when the position was fixed), even where a chain through a
  *     repeat would bend the track less.
  * A clean stretch is decided as soon as c and the waypoint after it

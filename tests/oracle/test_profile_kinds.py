@@ -310,6 +310,57 @@ def test_kinds(tmp):
     return gco
 
 
+def test_airliner_stale_then_jumps(tmp):
+    """The issue's first track: an ADS-B airliner whose positions freeze, then
+    jump.  Into the built flight, 4 runs of 10, 30, 20 and 15 fixes repeat the
+    fix before them (lat, lon and altitude: what a receiver re-sends when the
+    aircraft's position stops updating) with their own stamps.  Replayed at
+    10 Hz with the default and with profile air: exit 0, exactly the repeats
+    refused (as stale, every reported line one of theirs), every good fix
+    kept, none of the fixes the runs repeat (the frozen copies, stamped later,
+    outvoted the fix they copy: 4 good fixes were refused, 'accel')."""
+    air = os.path.join(tmp, "airliner.csv")
+    frozen_path = os.path.join(tmp, "airliner_frozen.csv")
+    airliner(air)
+    with open(air) as f:
+        header, rows = f.readline(), f.read().splitlines()
+    runs = {400: 10, 1200: 30, 2000: 20, 2800: 15}
+    out, repeat_lines, i = [], set(), 0
+    while i < len(rows):
+        if i in runs:
+            src = rows[i - 1].split(",")
+            for j in range(i, i + runs[i]):
+                repeat_lines.add(len(out) + 2)
+                out.append(",".join([rows[j].split(",")[0]] + src[1:]))
+            i += runs[i]
+            continue
+        out.append(rows[i])
+        i += 1
+    with open(frozen_path, "w") as f:
+        f.write(header + "\n".join(out) + "\n")
+    good = len(out) - len(repeat_lines)
+    for prof in ("auto", "air"):
+        p = tr.run(["--summary", "--rate", "10", "--profile", prof, "-o", "/dev/null", frozen_path])
+        s = {}
+        lines = {}
+        for line in p.stderr.splitlines():
+            if line.startswith("summary: "):
+                k, v = line[len("summary: "):].split(" ", 1)
+                s[k] = float(v)
+            elif ": rejected (" in line:
+                where, why = line.split(": rejected (")
+                lines[int(where.rsplit(":", 1)[1])] = why.rstrip(")")
+        label = f"airliner frozen then jumps, profile {prof}"
+        print(f"{label}: exit {p.returncode}, {int(s.get('accepted', -1))} of {good} good fixes kept, "
+              f"{int(s.get('rejected_stale', -1))} of {len(repeat_lines)} repeats refused as stale, "
+              f"{int(s.get('rejected', -1))} refused in all")
+        tr.check(p.returncode == 0, f"{label}: exit {p.returncode}: {p.stderr[-300:]}")
+        tr.check(s.get("accepted") == good and s.get("rejected") == len(repeat_lines) and
+                 s.get("rejected_stale") == len(repeat_lines), f"{label}: --summary {s}")
+        tr.check(lines and all(l in repeat_lines and w == "stale" for l, w in lines.items()),
+                 f"{label}: reported {lines}")
+
+
 def test_machine_curve(tmp, gco):
     """profile machine: the curve passes through every toolpath point: scipy's
     CubicSpline through all of them (rest ends) on every streamed row the
@@ -345,6 +396,7 @@ def main():
     with tempfile.TemporaryDirectory(prefix="profile-kinds-") as tmp:
         gco = test_kinds(tmp)
         test_machine_curve(tmp, gco)
+        test_airliner_stale_then_jumps(tmp)
     print(f"test_profile_kinds.py: {len(tr.failures)} failure(s)")
     return 1 if tr.failures else 0
 
