@@ -276,11 +276,55 @@ static void test_far_start_needs_confirmation(void **state)
     assert_float_equal(sp.t_s, rows[n - 1].t_s, 1e-9);
 }
 
+/*
+ * After `confirm` mutually consistent fixes far from the trajectory, a new
+ * one starts there (issue 12 item 1, re-anchoring): from fix 100 on the
+ * boat's fixes are 500 m north (a relocated object, a corrected datum).
+ * Every fix is kept, the trajectory is re-anchored once (a transfer joins
+ * them), nothing is refused.  Fewer far fixes than `confirm` (2 of 3) are
+ * refused and abandon nothing.
+ */
+static void test_reanchor_after_confirm(void **state)
+{
+    (void)state;
+    static engine_waypoint_t rows[N_FIX];
+    engine_status_t st;
+    engine_config_t c;
+    int fin;
+
+    engine_config_default(&c);
+    for (int far = 0; far < 2; far++) {
+        for (int i = 0; i < N_FIX; i++) {
+            boat(&rows[i], i);
+            if (far ? i >= 100 : (i >= 100 && i < 100 + (int)c.confirm - 1))
+                rows[i].pos_m[1] += 500.0;
+        }
+        replay(rows, N_FIX, &st, &fin);
+        print_message("%s: accepted %llu rejected %llu reanchors %llu gaps %llu\n",
+                      far ? "relocated from fix 100 on" : "2 far fixes",
+                      (unsigned long long)st.accepted, (unsigned long long)st.rejected,
+                      (unsigned long long)st.reanchors, (unsigned long long)st.gaps);
+        assert_true(fin);
+        assert_int_equal(st.hard_stops, 0);
+        assert_int_equal(st.gaps, 0);
+        if (far) {
+            assert_int_equal(st.accepted, N_FIX);
+            assert_int_equal(st.rejected, 0);
+            assert_int_equal(st.reanchors, 1);
+        } else {
+            assert_int_equal(st.accepted, N_FIX - (c.confirm - 1));
+            assert_int_equal(st.rejected, c.confirm - 1);
+            assert_int_equal(st.reanchors, 0);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_one_bad_fix_costs_nothing),
         cmocka_unit_test(test_long_frozen_run),
+        cmocka_unit_test(test_reanchor_after_confirm),
         cmocka_unit_test(test_far_start_needs_confirmation),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
