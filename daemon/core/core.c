@@ -710,6 +710,10 @@ int core_summary(const core_t *c, char *buf, size_t len)
                      (unsigned long long)o->status.accepted, (unsigned long long)o->status.rejected,
                      (unsigned long long)o->status.full, (unsigned long long)o->status.underruns);
         n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+        if (o->clocked == 1 && isfinite(o->sp.age_s) && n < len) { /* lib/engine/CLOCK.md */
+            m = snprintf(buf + n, len - n, ", data age %.3f s", o->sp.age_s);
+            n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+        }
         if (o->out_lost && n < len) {
             m = snprintf(buf + n, len - n, ", %s%llu lines lost by outputs",
                          o->out_fault ? "FAULT, " : "", (unsigned long long)o->out_lost);

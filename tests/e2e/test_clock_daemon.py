@@ -17,13 +17,15 @@ ahead), of different tracks and starting at different times. Wanted:
     each object's data age as its CSV row of the same tick does (to the
     field's 1 ms; n/a where the CSV has none), D while streaming on time,
     the clock state "on the clock" and the drift the Modbus daemon block
-    gives.
+    gives;
+  - the exit status line gives each object's data age, as its last CSV row.
 Nothing here measures time: the age and the skew are the engine's, exact
 whatever the load.
 """
 import csv
 import math
 import os
+import re
 import signal
 import struct
 import sys
@@ -143,6 +145,18 @@ class OneClock(unittest.TestCase):
         self.assertGreater(len(common), 30)
         for cyc in common:
             self.assertEqual(rows["a"][cyc], rows["b"][cyc], "cycle %s" % cyc)
+        # the exit status line gives each clocked object's data age: the
+        # last CSV row's (a SIGTERM stop lets it grow past D)
+        self.lines.wait_for("\0never\0", 1)
+        ex = [l for l in self.lines.all if "exit: up" in l]
+        self.assertEqual(len(ex), 1, "".join(self.lines.all))
+        for name in ("a", "b"):
+            with open(os.path.join(self.tmpd.name, name + ".csv")) as f:
+                last = [r for r in csv.reader(f) if r and not r[0].startswith("#")][-1]
+            m = re.search(r"; %s \w+ t=[-\d.]+ s, wp \d+ ok \d+ rejected \d+ full, \d+ underruns, "
+                          r"data age (-?[\d.]+) s" % name, ex[0])
+            self.assertIsNotNone(m, ex[0])
+            self.assertAlmostEqual(float(m.group(1)), float(last[16]), delta=0.0005 + 1e-9)
         self.check_status2_clock(drift_ppm)
 
     def check_status2_clock(self, drift_ppm):
