@@ -28,6 +28,7 @@ typedef struct {
     int nfast;
     fix_t *fix;
     size_t n, cap;
+    size_t frames; /* candump frames read */
 } n2k_t;
 
 static int add_fix(n2k_t *N, const fix_t *f)
@@ -78,6 +79,7 @@ static int frame(n2k_t *N, const candump_line_t *cl, unsigned long lineno)
     const canproto_frame_t *fr = &cl->frame;
     n2k_id_t id;
     n2k_position_t p;
+    N->frames++;
     if (!(fr->flags & CANPROTO_F_EFF) || (fr->flags & (CANPROTO_F_RTR | CANPROTO_F_ERR)))
         return 0; /* NMEA 2000 uses 29-bit data frames only */
     n2k_id_decode(fr->id, &id);
@@ -185,6 +187,15 @@ int track_n2k_parse(track_loader_t *L, const char *buf, size_t len)
     }
     if (r == 0)
         rc = rows(&N);
+    if (rc == 0 && L->n == 0) { /* nothing usable: say what the log held */
+        track_loader_fatal(L, 0,
+                           "no waypoints: no NMEA 2000 position with a usable fix (PGN 129029 or "
+                           "129025) among its %zu frames (%zu positions without one, %zu bad "
+                           "lines); a log of trajd's own WAYPOINT frames is replayed by trajd "
+                           "([can] log_in)",
+                           N.frames, L->ignored, L->skipped);
+        rc = -1;
+    }
 out:
     free(it);
     for (int k = 0; k < N.nfast; k++)

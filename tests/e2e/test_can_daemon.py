@@ -425,8 +425,10 @@ class CanLogNothingUsable(unittest.TestCase):
             self.assertEqual(p.returncode, 0, p.stderr[-800:])
             self.assertNotIn("no usable waypoint", p.stderr)
 
-    # Given an NMEA 2000 candump log with no position in it, when trajreplay
-    # reads it, then a clear message and exit 1
+    # Given an NMEA 2000 candump log with no position in it (foreign frames,
+    # or trajd's own waypoint frames), when trajreplay reads it, then a
+    # message saying what the log held and what replays it instead, exit 1
+    # (it said "no waypoints" alone)
     def test_trajreplay_nothing_usable(self):
         with tempfile.TemporaryDirectory() as d:
             log = os.path.join(d, "x.log")
@@ -435,8 +437,21 @@ class CanLogNothingUsable(unittest.TestCase):
             p = subprocess.run([TRAJREPLAY, "-q", "--format", "n2k", log], capture_output=True,
                                text=True, timeout=RUN_TIMEOUT_S)
             self.assertEqual(p.returncode, 1, p.stderr)
-            self.assertIn("trajreplay: %s: no waypoints" % log, p.stderr)
+            self.assertIn("trajreplay: %s: no waypoints: no NMEA 2000 position with a usable fix "
+                          "(PGN 129029 or 129025) among its 2 frames (0 positions without one, 0 "
+                          "bad lines); a log of trajd's own WAYPOINT frames is replayed by trajd "
+                          "([can] log_in)" % log, p.stderr)
             self.assertEqual(p.stdout, "")
+            # trajd's own waypoint log given to trajreplay: the same hint
+            xyz = os.path.join(d, "t.csv")
+            with open(xyz, "w") as fh:
+                fh.write("t,x,y,z\n" + "".join("%d,%d,0,0\n" % (i, i) for i in range(10)))
+            ct.write_wplog(xyz, log)
+            p = subprocess.run([TRAJREPLAY, "-q", log], capture_output=True, text=True,
+                               timeout=RUN_TIMEOUT_S)
+            self.assertEqual(p.returncode, 1, p.stderr)
+            self.assertIn("among its 41 frames", p.stderr)
+            self.assertIn("is replayed by trajd ([can] log_in)", p.stderr)
 
 
 if __name__ == "__main__":
