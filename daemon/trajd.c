@@ -459,8 +459,8 @@ int main(int argc, char **argv)
         rc = EX_SOFTWARE;
     } else if (rc == 0 && d.stats.no_input) {
         log_msg(LOG_ERR,
-                "%llu object(s) had no usable waypoint in their replayed track or candump log: "
-                "exit status %d",
+                "a replayed track or candump log ended %llu time(s) with no usable waypoint for "
+                "an object (a reload replays it again): exit status %d",
                 (unsigned long long)d.stats.no_input, CORE_EXIT_NO_INPUT);
         rc = CORE_EXIT_NO_INPUT;
     }

@@ -182,11 +182,12 @@ typedef struct {
     playout_clock_t pclock;
     double clock_rate;    /* d now_sender / dt of the last tick */
     int64_t clock_now_ns; /* now on the sender's time base at the last tick */
-    uint64_t no_input; /* objects whose replayed track or CAN log_in had no usable waypoint: trajd
-                                     * exits with CORE_EXIT_NO_INPUT at the end */
-    int exit_code;     /* nonzero: a transport asks the daemon to end now with
-                                     * this status (stdout's reader left: CORE_EXIT_EPIPE);
-                                     * the tick stops the loop with it */
+    /* times a replayed track or CAN log_in ended with no usable waypoint for an
+     * object: trajd exits with CORE_EXIT_NO_INPUT at the end */
+    uint64_t no_input;
+    /* nonzero: a transport asks the daemon to end now with this status
+     * (stdout's reader left: CORE_EXIT_EPIPE); the tick stops the loop with it */
+    int exit_code;
 } stats_t;
 
 /* Exit statuses of trajd beyond sysexits.h (daemon/README.md "Output faults are errors"). */

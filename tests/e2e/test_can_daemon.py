@@ -418,6 +418,8 @@ class CanLogNothingUsable(unittest.TestCase):
                 self.assertRegex(p.stderr, r"<3>can: object 'boat': log_in \S*wp.log ended with no "
                                  r"usable waypoint for it \(0 accepted, \d+ rejected, \d+ malformed"
                                  r" frames, \d+ bad lines\); trajd will exit with status 65", name)
+                self.assertIn("<3>a replayed track or candump log ended 1 time(s) with no usable "
+                              "waypoint for an object", p.stderr)
             # one usable waypoint among them: exit 0
             good = cases["range"].replace("#010100407A10F35A", "#0101000000000000", 1)  # x 1e8 -> 0
             self.assertNotEqual(good, cases["range"])
