@@ -7,8 +7,9 @@
  * verdicts (accept_decide) until there is none: each verdict says what to do
  * with the oldest waypoint held, in arrival order.
  *
- * The rule.  The waypoints held (at most `window`, taken out of the engine's
- * start_slack, so a clean track costs no latency: see engine_lookahead) are
+ * The rule.  The waypoints held (at most `window`: the engine's start_slack,
+ * or ACCEPT_WINDOW_MAX with start_slack auto; a clean track's verdicts come
+ * after ACCEPT_LAG, so they cost no latency: see engine_lookahead) are
  * judged together with the anchor, the last waypoint kept (and the one kept
  * before it, for the acceleration test).  Two waypoints are *consistent* if
  * the later one is later in time (by more than 1 ns), the interval is at

@@ -52,12 +52,21 @@ enum { OUT_HOLD = 0, OUT_XFER = 1, OUT_STREAM = 2 };
 enum { STOP_NONE = 0, STOP_STOP = 1, STOP_CLEAR = 2 };
 
 struct engine {
-    engine_config_t cfg;
+    engine_config_t cfg; /* resolved: fragment and overlap never ENGINE_AUTO */
     unsigned lookahead;
-    int pstar;  /* unknowns are Hoang control points (BSPLINE + UNIFORM) */
-    int held;   /* HELD or MULTIPLE: first and last segments not emitted */
-    int mult;   /* MULTIPLE: end points entered three times */
-    int smooth; /* SMOOTH: waypoints pass through the lsq smoother first */
+    unsigned la_steady;   /* what the solver needs far from the start (steady_lookahead) */
+    int slack_auto;       /* start_slack auto (engine.h) */
+    unsigned slack_learn; /* start_slack auto: one more per underrun seen */
+    unsigned slack_more;  /* start_slack auto: the most it adds to lookahead
+                             (ENGINE_SLACK_AUTO_MAX - MIN, less if capacity is short) */
+    double span_max;      /* start_slack auto: longest time spanned by la_steady + 1
+                           intervals of the input, decaying by 1/256 per node */
+    double vmax_in;       /* start_slack auto: fastest chord speed of the input,
+                           decaying the same way */
+    int pstar;            /* unknowns are Hoang control points (BSPLINE + UNIFORM) */
+    int held;             /* HELD or MULTIPLE: first and last segments not emitted */
+    int mult;             /* MULTIPLE: end points entered three times */
+    int smooth;           /* SMOOTH: waypoints pass through the lsq smoother first */
     lsq_smooth_t sm;
     double *sm_mem;
     double first_r[AX]; /* first waypoint of the current trajectory */
@@ -257,8 +266,10 @@ void engine_config_default(engine_config_t *cfg)
     cfg->method = ENGINE_METHOD_CUBIC;
     cfg->param = ENGINE_PARAM_TIME;
     cfg->ends = ENGINE_ENDS_REST;
-    cfg->fragment = 32;
-    cfg->overlap = 16;
+    cfg->fragment = ENGINE_AUTO;
+    cfg->overlap = ENGINE_AUTO;
+    cfg->accuracy = 3e-7;
+    cfg->max_lookahead = 18;
     cfg->period_ns = 10000000;
     cfg->capacity = 4096;
     cfg->max_gap_s = 60.0;
@@ -268,7 +279,7 @@ void engine_config_default(engine_config_t *cfg)
     cfg->max_accel_m_s2 = ENGINE_LIMIT_PROFILE;
     cfg->confirm = 3;
     cfg->max_segment_s = 60.0;
-    cfg->start_slack = 8;
+    cfg->start_slack = ENGINE_AUTO;
     cfg->smooth_window = 24;
     cfg->smooth_ctrl = 6;
     cfg->scale_accel_m_s2 = 5.0;
@@ -351,37 +362,137 @@ static unsigned steady_lookahead(const engine_config_t *cfg)
  * (steady-state lookahead + start_slack) instead of after F - 1 waypoints;
  * never beyond S - 1 (see frag.h).
  */
-static unsigned frag_delta(const engine_config_t *cfg)
+/* start_slack in waypoints (auto: its least) */
+static unsigned slack_of(const engine_config_t *cfg)
 {
-    unsigned f = cfg->fragment, s = f - cfg->overlap;
-    unsigned want = steady_lookahead(cfg) + cfg->start_slack;
-    unsigned d = f - 1 > want ? f - 1 - want : 0;
-
-    return d < s ? d : s - 1;
+    return cfg->start_slack == ENGINE_AUTO ? ENGINE_SLACK_AUTO_MIN : cfg->start_slack;
 }
 
-unsigned engine_lookahead(const engine_config_t *cfg)
+static unsigned frag_delta(const engine_config_t *cfg)
 {
-    unsigned f = cfg->fragment, o = cfg->overlap, la, want;
+    unsigned f = cfg->fragment, dmax = frag_delta_max(f, cfg->overlap);
+    unsigned want = steady_lookahead(cfg) + slack_of(cfg);
+    unsigned d = f - 1 > want ? f - 1 - want : 0;
+
+    return d < dmax ? d : dmax;
+}
+
+static unsigned smooth_extra(const engine_config_t *cfg)
+{
     /* SMOOTH: the smoother holds smooth_window/2 waypoints back (lsq.h) */
     int sm = cfg->method == ENGINE_METHOD_SMOOTH && cfg->smooth_window >= 1;
-    unsigned extra = sm ? lsq_smooth_delay(cfg->smooth_window) : 0;
+    return sm ? lsq_smooth_delay(cfg->smooth_window) : 0;
+}
+
+/* engine_lookahead of a resolved configuration */
+static unsigned lookahead_of(const engine_config_t *cfg)
+{
+    unsigned f = cfg->fragment, o = cfg->overlap, la, want;
+    int sm = cfg->method == ENGINE_METHOD_SMOOTH && cfg->smooth_window >= 1;
+    unsigned extra = smooth_extra(cfg);
     unsigned first = sm ? cfg->smooth_window - 1 : 0;
 
-    if (!config_sizes_ok(cfg) || cfg->start_slack > ENGINE_FRAGMENT_MAX)
+    if (!config_sizes_ok(cfg) || slack_of(cfg) > ENGINE_FRAGMENT_MAX)
         return 0;
     /* what the solver needs, from the start on (a few periods cover it) ... */
     la = scan_lookahead(f, o, frag_delta(cfg), uses_pstar(cfg) ? 3 : 2, 0, 4u * f, extra, first) +
          ACCEPT_LAG; /* a waypoint becomes a node once its next neighbour is in */
     /* ... and what the output waits for */
-    want = steady_lookahead(cfg) + extra + cfg->start_slack;
+    want = steady_lookahead(cfg) + extra + slack_of(cfg);
     return la > want ? la : want;
 }
 
-int engine_config_check(const engine_config_t *cfg, const char **why)
+/* overlap auto: the smallest even O with 2 rho^(O/2) <= accuracy (frag.h) */
+static unsigned auto_overlap(double accuracy)
+{
+    const double rho = 2.0 - sqrt(3.0);
+    double bound = 2.0 * rho;
+    unsigned o = 2;
+
+    while (bound > accuracy && o + 2 < ENGINE_FRAGMENT_MAX) {
+        o += 2;
+        bound *= rho;
+    }
+    return o;
+}
+
+int engine_config_resolve(const engine_config_t *cfg, engine_config_t *out)
+{
+    *out = *cfg;
+    if (cfg->overlap == ENGINE_AUTO) {
+        if (!(cfg->accuracy > 0) || !isfinite(cfg->accuracy))
+            return -ENGINE_ECONFIG;
+        out->overlap = auto_overlap(cfg->accuracy);
+    }
+    if (cfg->fragment == ENGINE_AUTO) {
+        unsigned o = out->overlap;
+        if (o < 2 || o % 2 || o >= ENGINE_FRAGMENT_MAX) {
+            out->fragment = ENGINE_FRAGMENT_MAX; /* engine_config_check: "overlap" */
+            return 0;
+        }
+        /* the largest S (least work: about 2F/S rows per waypoint) that fits;
+         * beyond S = O the work hardly falls */
+        for (unsigned s = o; s >= 1; s--) {
+            if (o + s > ENGINE_FRAGMENT_MAX)
+                continue;
+            out->fragment = o + s;
+            /* SMOOTH's smoother holds smooth_window/2 more back: not counted */
+            unsigned la = lookahead_of(out);
+            if (la && la - smooth_extra(out) <= cfg->max_lookahead)
+                return 0;
+        }
+        out->fragment = o + 1;
+        return -ENGINE_ECONFIG;
+    }
+    return 0;
+}
+
+unsigned engine_lookahead(const engine_config_t *cfg)
+{
+    engine_config_t r;
+
+    if (engine_config_resolve(cfg, &r) < 0)
+        return 0;
+    return lookahead_of(&r);
+}
+
+unsigned engine_pick_flat(int method, int param, double accuracy, unsigned max_lookahead,
+                          unsigned *fragment, unsigned *overlap)
+{
+    engine_config_t c, r;
+
+    engine_config_default(&c);
+    c.method = (engine_method_t)method;
+    c.param = (engine_param_t)param;
+    if (accuracy > 0)
+        c.accuracy = accuracy;
+    if (max_lookahead > 0)
+        c.max_lookahead = max_lookahead;
+    if (engine_config_resolve(&c, &r) < 0)
+        return 0;
+    *fragment = r.fragment;
+    *overlap = r.overlap;
+    return lookahead_of(&r);
+}
+
+int engine_config_check(const engine_config_t *cfg_in, const char **why)
 {
     const char *w = NULL;
     unsigned la;
+    engine_config_t r;
+    const engine_config_t *cfg = &r;
+
+    if (cfg_in->overlap == ENGINE_AUTO &&
+        (!(cfg_in->accuracy > 0 && cfg_in->accuracy < 1) || !isfinite(cfg_in->accuracy)))
+        w = "accuracy: must be within (0, 1)";
+    else if (engine_config_resolve(cfg_in, &r) < 0)
+        w = "max_lookahead: too short for the overlap accuracy asks plus start_slack: no "
+            "fragment fits; raise max_lookahead or accuracy, or lower start_slack";
+    if (w) {
+        if (why)
+            *why = w;
+        return -ENGINE_ECONFIG;
+    }
 
     if (cfg->method != ENGINE_METHOD_BSPLINE && cfg->method != ENGINE_METHOD_CUBIC &&
         cfg->method != ENGINE_METHOD_SMOOTH)
@@ -428,7 +539,7 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
         w = "scale_accel_m_s2: must be positive and finite";
     else if (!(cfg->scale_jerk_m_s3 > 0) || !isfinite(cfg->scale_jerk_m_s3))
         w = "scale_jerk_m_s3: must be positive and finite";
-    else if (cfg->start_slack > ENGINE_FRAGMENT_MAX)
+    else if (cfg->start_slack > ENGINE_FRAGMENT_MAX && cfg->start_slack != ENGINE_AUTO)
         w = "start_slack: at most ENGINE_FRAGMENT_MAX waypoints";
     else if (cfg->ends == ENGINE_ENDS_CLAMPED &&
              !(isfinite(cfg->start_vel_m_s[0]) && isfinite(cfg->start_vel_m_s[1]) &&
@@ -436,7 +547,7 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
                isfinite(cfg->end_vel_m_s[1]) && isfinite(cfg->end_vel_m_s[2])))
         w = "start_vel_m_s/end_vel_m_s: must be finite";
     if (!w) {
-        la = engine_lookahead(cfg);
+        la = lookahead_of(cfg);
         if (cfg->capacity < la + cfg->fragment + 8 || cfg->capacity > ENGINE_CAPACITY_MAX)
             w = "capacity: must be at least lookahead + fragment + 8 and at most 2^20";
     }
@@ -447,12 +558,14 @@ int engine_config_check(const engine_config_t *cfg, const char **why)
 
 /* ------------------------------------------------------------------------ */
 
-engine_t *engine_new(const engine_config_t *cfg, int *err)
+engine_t *engine_new(const engine_config_t *cfg_in, int *err)
 {
     engine_t *e;
     size_t ring = 16;
+    engine_config_t r;
+    const engine_config_t *cfg = &r;
 
-    if (engine_config_check(cfg, NULL) < 0) {
+    if (engine_config_check(cfg_in, NULL) < 0 || engine_config_resolve(cfg_in, &r) < 0) {
         if (err)
             *err = ENGINE_ECONFIG;
         return NULL;
@@ -461,7 +574,16 @@ engine_t *engine_new(const engine_config_t *cfg, int *err)
     if (!e)
         goto nomem;
     e->cfg = *cfg;
-    e->lookahead = engine_lookahead(cfg);
+    e->lookahead = lookahead_of(cfg);
+    e->la_steady = steady_lookahead(cfg) + smooth_extra(cfg);
+    e->slack_auto = cfg->start_slack == ENGINE_AUTO;
+    {
+        /* the slack must fit the buffer: capacity >= lookahead + F + 8 (checked) */
+        unsigned room = cfg->capacity - (e->lookahead + cfg->fragment + 8);
+        e->slack_more = ENGINE_SLACK_AUTO_MAX - ENGINE_SLACK_AUTO_MIN;
+        if (room < e->slack_more)
+            e->slack_more = room;
+    }
     e->pstar = uses_pstar(cfg);
     e->held = cfg->ends == ENGINE_ENDS_HELD || cfg->ends == ENGINE_ENDS_MULTIPLE;
     e->mult = cfg->ends == ENGINE_ENDS_MULTIPLE;
@@ -497,7 +619,7 @@ engine_t *engine_new(const engine_config_t *cfg, int *err)
     transfer_motion_reset(&e->motion);
     /* nodes from the oldest unbuilt segment (lags the newest by the lookahead
      * plus the copies of MULTIPLE) to the newest, with margin */
-    while (ring < 2 * ((size_t)cfg->fragment + e->lookahead) + 16)
+    while (ring < 2 * ((size_t)cfg->fragment + e->lookahead + e->slack_more) + 16)
         ring *= 2;
     e->ring = ring;
     e->node_t = calloc(ring, sizeof(double));
@@ -688,6 +810,26 @@ static void build_segments(engine_t *e)
 
 static const double zero3[AX] = {0, 0, 0};
 
+/* start_slack auto: what node j says about the input's timing and speed */
+static void measure_input(engine_t *e, uint64_t j)
+{
+    const double decay = 1.0 - 1.0 / 256;
+    double dt = nt(e, j) - nt(e, j - 1), d2 = 0;
+
+    for (int k = 0; k < AX; k++)
+        d2 += (nr(e, j)[k] - nr(e, j - 1)[k]) * (nr(e, j)[k] - nr(e, j - 1)[k]);
+    if (dt > 0) {
+        double v = sqrt(d2) / dt;
+        e->vmax_in = fmax(v, e->vmax_in * decay);
+    }
+    if (j > e->la_steady) {
+        /* how far ahead of the output this node must have been sent to be
+         * built on time (see enough_ahead) */
+        double w = nt(e, j) - nt(e, j - e->la_steady - 1);
+        e->span_max = fmax(w, e->span_max * decay);
+    }
+}
+
 /* Append a node; push the row it completes (row nodes-1 before it). */
 static int add_node(engine_t *e, double t, const double *r)
 {
@@ -698,6 +840,8 @@ static int add_node(engine_t *e, double t, const double *r)
     e->node_t[j % e->ring] = t;
     memcpy(nr(e, j), r, sizeof(double) * AX);
     e->nodes = j + 1;
+    if (e->slack_auto && j >= 1)
+        measure_input(e, j);
     if (j >= 1) {
         uint64_t i = j - 1; /* the row now complete */
         if (e->pstar) {
@@ -1118,7 +1262,7 @@ void engine_reset_counters(engine_t *e)
 
     memset(&e->st, 0, sizeof(e->st));
     e->st.last_seq = last_seq;
-    e->st.lookahead = e->lookahead;
+    e->st.lookahead = e->lookahead + e->slack_learn;
 }
 
 /* ---- output side --------------------------------------------------------- */
@@ -1138,6 +1282,69 @@ static void q_pop(engine_t *e)
     e->qlen--;
 }
 
+/* The newest interval of the input (0: fewer than two nodes). */
+static double last_interval(const engine_t *e)
+{
+    return e->nodes >= 2 ? nt(e, e->nodes - 1) - nt(e, e->nodes - 2) : 0.0;
+}
+
+/* start_slack auto: the curve kept ahead of the output beyond what the
+ * solver needs, track seconds: twice a stop from full rate at the input's
+ * top speed (the curve may be faster than its chords), a few ticks, and the
+ * newest interval once per underrun seen. */
+static double brake_s(const engine_t *e)
+{
+    double v = e->vmax_in > ENGINE_SCALE_V_FLOOR_M_S ? e->vmax_in : ENGINE_SCALE_V_FLOOR_M_S;
+    return 2.0 * ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / v, e->cfg.scale_jerk_m_s3 / v) +
+           (TS_MARGIN_TICKS + 2) * e->period_s + e->slack_learn * last_interval(e);
+}
+
+/* Time of the newest waypoint received for the current trajectory: the
+ * newest node, or a waypoint the acceptance policy still holds (-inf: none). */
+static double newest_t(const engine_t *e)
+{
+    double t = e->nodes > 0 ? nt(e, e->nodes - 1) : -INFINITY;
+    unsigned np = accept_pending(&e->policy);
+    if (np > 0 && e->policy.pend[np - 1].t_s > t)
+        t = e->policy.pend[np - 1].t_s;
+    return t;
+}
+
+/* start_slack auto: an output stopped by an underrun at s stays stopped
+ * until the curve surely built ahead of it is longer than brake_s (or the
+ * buffer holds the most slack, or the input is closed).  Not span_max, as
+ * at a start: after a long hole in the input that would hold it for as long
+ * as the hole. */
+static int rebuffering(const engine_t *e, double s)
+{
+    uint64_t in = e->nodes + (e->smooth ? lsq_smooth_pending(&e->sm) : 0) +
+                  accept_pending(&e->policy);
+
+    if (e->avail_closed || e->cur.kind != QE_SEG ||
+        in >= e->cur.node + 2 + e->lookahead + e->slack_more)
+        return 0;
+    /* the curve is built at least up to the node la_steady + 1 before the
+     * newest one, whatever the fragment phase */
+    uint64_t back = (uint64_t)e->la_steady + 1;
+    if (e->nodes <= back)
+        return 1;
+    return !(nt(e, e->nodes - 1 - back) - (e->origin_t + s) >=
+             brake_s(e) - e->slack_learn * last_interval(e));
+}
+
+/* An underrun: counted, and (start_slack auto) the next start waits one
+ * waypoint more, up to ENGINE_SLACK_AUTO_MAX: the input came later than its
+ * timestamps said. */
+static void count_underrun(engine_t *e)
+{
+    e->st.underruns++;
+
+    if (e->slack_auto && e->slack_learn < e->slack_more) {
+        e->slack_learn++;
+        e->st.lookahead = e->lookahead + e->slack_learn;
+    }
+}
+
 /*
  * The output may start (or resume after an underrun) on the segment h only
  * once the lookahead is buffered beyond it, or its trajectory is closed.
@@ -1150,7 +1357,20 @@ static int enough_ahead(const engine_t *e, const qent_t *h)
     uint64_t in = e->nodes + (e->smooth ? lsq_smooth_pending(&e->sm) : 0) +
                   accept_pending(&e->policy);
 
-    return e->qends > 0 || h->kind != QE_SEG || in >= h->node + 2 + e->lookahead;
+    if (e->qends > 0 || h->kind != QE_SEG)
+        return 1;
+    if (in < h->node + 2 + e->lookahead + e->slack_learn)
+        return 0;
+    if (!e->slack_auto || in >= h->node + 2 + e->lookahead + e->slack_more)
+        return 1;
+    /* start_slack auto.  Starting at t0 with the newest node at t_m puts
+     * the output D = t_m - t0 behind the input; the curve built ahead of it
+     * is then always longer than D - span_max (span_max: the longest time of
+     * la_steady + 1 intervals), and must stay longer than a stop from full
+     * rate at the input's top speed, so that the time scaling can brake
+     * if the input stops (timescale.h; twice that: the curve may be faster than
+     * its chords).  Regular slow input: at once. */
+    return newest_t(e) - h->seg.t0_s >= e->span_max + brake_s(e);
 }
 
 static void hold_here(engine_t *e)
@@ -1539,7 +1759,7 @@ static void unit_step(engine_t *e)
              * while remaining() is right (the scaling brakes before); hold
              * and go on scaled from rest */
             if (!e->underrun)
-                e->st.underruns++;
+                count_underrun(e);
             e->underrun = 1;
             e->st.underrun_ticks++;
             e->st.hard_stops++;
@@ -1620,7 +1840,7 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
 
     if (lim && !e->stop_req && !e->avail_closed && e->mode == OUT_STREAM) {
         if (!e->underrun)
-            e->st.underruns++;
+            count_underrun(e);
         e->underrun = 1;
     } else if (e->underrun && !lim && e->ts.rate >= target) {
         e->underrun = 0;
@@ -1750,6 +1970,17 @@ static void step_once(engine_t *e)
         return;
     }
     double target = scale_target(e);
+    /* start_slack auto: an output stopped by an underrun resumes once it is
+     * as far behind the newest waypoint as at the start (enough_ahead) */
+    if (e->slack_auto && e->underrun && e->mode == OUT_STREAM && !(e->ts.rate > 0) && target > 0 &&
+        rebuffering(e, s)) {
+        scaled_step(e, 0.0, R, A, J);
+        if (!e->underrun) { /* still in the same underrun */
+            e->underrun = 1;
+            e->st.underrun_ticks++;
+        }
+        return;
+    }
     if (!e->scaled && is_exactly(target, 1.0) &&
         (isinf(R) || ts_stop_dist(1.0, 0.0, A, J) < R - e->period_s)) {
         unit_step(e);
@@ -2032,7 +2263,7 @@ void engine_status(const engine_t *e, engine_status_t *st)
     st->state = out_state(e);
     st->buffered = (uint32_t)b;
     st->free = b >= e->cfg.capacity ? 0 : (uint32_t)(e->cfg.capacity - b);
-    st->lookahead = e->lookahead;
+    st->lookahead = e->lookahead + e->slack_learn;
     st->stalled = (uint32_t)stalled(e);
     st->rate = e->mode == OUT_HOLD ? 0.0 : e->ts.rate;
     st->override = e->override;
@@ -2100,8 +2331,10 @@ long engine_curve_flat(int method, int param, int ends, unsigned fragment, unsig
     cfg.method = (engine_method_t)method;
     cfg.param = (engine_param_t)param;
     cfg.ends = (engine_ends_t)ends;
-    cfg.fragment = fragment;
-    cfg.overlap = overlap;
+    if (fragment)
+        cfg.fragment = fragment;
+    if (overlap)
+        cfg.overlap = overlap;
     cfg.profile = ENGINE_PROFILE_NONE;
     cfg.max_gap_s = 1e9;
     wp = calloc(n ? n : 1, sizeof(*wp));

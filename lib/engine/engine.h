@@ -62,8 +62,8 @@
  *       waypoints (ratio above ENGINE_UNIFORM_RATIO_WARN) are counted in
  *       engine_status_t uniform_irregular, and trajd and trajreplay warn.
  *   (b) ENGINE_PARAM_TIME     knots at the timestamps: C2 in physical time
- *       (jumps only from the fragment junctions, 1.5e-4 m/s on the same track
- *       with F=32, O=16).  The default, because motion controllers follow
+ *       (jumps only from the fragment junctions, 4.0e-6 m/s on the same track
+ *       with the defaults, F=28, O=24).  The default, because motion controllers follow
  *       velocity and acceleration, and real tracks are irregular.
  * METHOD_BSPLINE with PARAM_TIME is the non-uniform cubic B-spline
  * interpolant on the timestamps, which is the same curve as METHOD_CUBIC with
@@ -96,6 +96,11 @@
 /* Limits on the configuration (checked by engine_config_check). */
 #define ENGINE_FRAGMENT_MIN 4
 #define ENGINE_FRAGMENT_MAX 1024
+/* fragment, overlap, start_slack: picked by the engine (config text "auto") */
+#define ENGINE_AUTO 0xFFFFFFFFu
+/* start_slack auto: the least and the most waypoints it adds */
+#define ENGINE_SLACK_AUTO_MIN 1
+#define ENGINE_SLACK_AUTO_MAX 8
 #define ENGINE_PERIOD_NS_MIN 100000LL        /* 10 kHz */
 #define ENGINE_PERIOD_NS_MAX 1000000000LL    /* 1 Hz */
 
@@ -174,13 +179,27 @@ typedef struct {
                                no velocity step when the output starts or stops */
     double start_vel_m_s[ENGINE_AXES]; /* ENGINE_ENDS_CLAMPED only (default 0) */
     double end_vel_m_s[ENGINE_AXES];   /* ENGINE_ENDS_CLAMPED only (default 0) */
-    unsigned fragment;      /* F: waypoints per fragment.  Default 32 */
+    unsigned fragment;      /* F: waypoints per fragment, or ENGINE_AUTO (the
+                               default): picked with overlap from accuracy and
+                               max_lookahead (engine_config_resolve) */
     unsigned overlap;       /* O: waypoints shared by consecutive fragments, even,
-                               2 <= O < F.  Default 16: error against one global
-                               solve ~rho^(O/2) = 2.7e-5 of the curvature scale
-                               (measured 4e-7 .. 7e-7 of a random walk's extent),
-                               lookahead 32 waypoints with start_slack 8;
-                               see lib/engine/README.md for the table */
+                               2 <= O < F, or ENGINE_AUTO (the default).  The
+                               error against one global solve is at most
+                               2 rho^(O/2) of the curvature scale max|k''|/6
+                               (rho = 2 - sqrt(3)); F - O sets the lookahead
+                               and the work: see lib/engine/README.md */
+    double accuracy;        /* overlap auto: the smallest even O with
+                               2 rho^(O/2) <= accuracy, the error bound
+                               against one global solve relative to the
+                               curvature scale.  Default 3e-7: O = 24,
+                               measured 2e-9 .. 3e-9 of a random walk's
+                               extent (lib/engine/README.md) */
+    unsigned max_lookahead; /* fragment auto: the largest S = F - O (the least
+                               work per waypoint) whose lookahead, with one
+                               waypoint of slack, is at most this many
+                               waypoints (regular input; start_slack auto adds
+                               what irregular input needs).  Default 18: F = 28
+                               with O = 24 */
     int64_t period_ns;      /* output period.  Default 10 ms (100 Hz) */
     unsigned capacity;      /* waypoints buffered at most (lookahead + fragment
                                + 8 .. 2^20; about 272 bytes each).  Default
@@ -223,14 +242,23 @@ typedef struct {
                                FDIFF_RESEED_STEPS, so drift does not grow with
                                the segment).  Default 60 s (= max_gap_s) */
     unsigned start_slack;   /* waypoints buffered beyond what the solver needs
-                               before the output starts, and again before it
-                               resumes after an underrun: absorbs irregular
-                               input timing (a missed fix, jitter, a pause) of
-                               up to this many waypoint intervals over a
-                               lookahead window.  Adds to engine_lookahead.
-                               Default 8 (measured: no underrun replaying the
+                               before a trajectory's output starts: absorbs
+                               irregular input timing.  ENGINE_AUTO (the
+                               default): adapts to the input, from
+                               ENGINE_SLACK_AUTO_MIN to ENGINE_SLACK_AUTO_MAX:
+                               the output starts once the waypoints buffered
+                               span in time the longest stretch of lookahead
+                               + 1 intervals measured so far (so a regular
+                               input waits one waypoint more than the solver,
+                               an irregular one as much more as its intervals
+                               vary), plus one per underrun seen (late
+                               arrivals); the most it adds is also bounded by
+                               what capacity leaves beyond lookahead +
+                               fragment + 8.  A number fixes it (the former
+                               default was 8: no underrun replaying the
                                irregular gpxgo_visnjan track with F=64/O=32;
-                               2 were enough for the regular 5 Hz figure-8) */
+                               2 were enough for the regular 5 Hz figure-8).
+                               Adds to engine_lookahead */
     unsigned smooth_window; /* SMOOTH only: waypoints per local least-squares fit,
                                4 .. ENGINE_SMOOTH_WINDOW_MAX.  Default 24 */
     unsigned smooth_ctrl;   /* SMOOTH only: control points per fit,
@@ -470,6 +498,22 @@ void engine_status(const engine_t *e, engine_status_t *st);
  */
 unsigned engine_lookahead(const engine_config_t *cfg);
 
+/*
+ * cfg with fragment and overlap ENGINE_AUTO replaced by what accuracy and
+ * max_lookahead pick (the others copied).  Returns 0, or -ENGINE_ECONFIG
+ * when no fragment fits within max_lookahead (engine_config_check says why).
+ */
+int engine_config_resolve(const engine_config_t *cfg, engine_config_t *out);
+
+/*
+ * For Python ctypes: F and O picked for method/param, accuracy and
+ * max_lookahead (the defaults otherwise), and the lookahead that results
+ * (start_slack auto at its least); 0 if none fits.
+ */
+unsigned engine_pick_flat(int method, int param, double accuracy,
+                          unsigned max_lookahead, unsigned *fragment,
+                          unsigned *overlap);
+
 
 /*
  * Offline: the curve the engine streams for a whole track, built by the same
@@ -485,7 +529,8 @@ int engine_curve(const engine_config_t *cfg, const engine_waypoint_t *wp,
 
 /*
  * engine_curve with flat arguments, for Python ctypes: the default
- * configuration with method, param, ends, fragment, overlap given,
+ * configuration with method, param, ends, fragment, overlap given (0:
+ * auto, as the default),
  * max_speed_m_s = 0, max_accel_m_s2 = 0 (every waypoint kept) and
  * max_gap_s = 1e9 (one trajectory).  t_s: n times,
  * xyz: n x 3; seg_out: max_seg x 14 doubles (t0_s, dur_s, then c[axis][0..3]

@@ -66,10 +66,14 @@ const engine_setting_t engine_settings[] = {
       "start velocity for ends = clamped, m/s"),
     S(end_vel_m_s, "end-vel", VEC3, 0, 0, 0, NULL, "VX,VY,VZ",
       "end velocity for ends = clamped, m/s"),
-    S(fragment, "fragment", UNSIGNED, 0, ENGINE_FRAGMENT_MIN, ENGINE_FRAGMENT_MAX, NULL, "F",
-      "waypoints per fragment"),
-    S(overlap, "overlap", UNSIGNED, 0, 0, ENGINE_FRAGMENT_MAX - 1, NULL, "O",
-      "waypoints shared by two fragments (even, < fragment)"),
+    S(fragment, "fragment", UNSIGNED, ENGINE_SETTING_AUTO, ENGINE_FRAGMENT_MIN, ENGINE_FRAGMENT_MAX,
+      NULL, "F", "waypoints per fragment (auto: from max_lookahead)"),
+    S(overlap, "overlap", UNSIGNED, ENGINE_SETTING_AUTO, 0, ENGINE_FRAGMENT_MAX - 1, NULL, "O",
+      "waypoints shared by two fragments (even, < fragment; auto: from accuracy)"),
+    S(accuracy, "accuracy", DOUBLE, 0, 1e-300, 0.999, NULL, "A",
+      "overlap auto: error bound against one global solve, of the curvature scale"),
+    S(max_lookahead, "max-lookahead", UNSIGNED, 0, 2, ENGINE_FRAGMENT_MAX, NULL, "N",
+      "fragment auto: lookahead at most, waypoints (regular input, slack included)"),
     S(period_ns, NULL, INT64, ENGINE_SETTING_DERIVED, 0, 0, NULL, NULL,
       "output period, ns: 1e9 / rate_hz of [daemon] (trajreplay --rate)"),
     S(capacity, "capacity", UNSIGNED, 0, 1, 1 << 20, NULL, "N",
@@ -92,8 +96,8 @@ const engine_setting_t engine_settings[] = {
       "acceleration of transfers, m/s^2 (0 = the object's own)"),
     S(max_segment_s, "max-segment", DOUBLE, 0, 1e-6, 1e9, NULL, "S",
       "longest segment the stepper is trusted for, s"),
-    S(start_slack, "start-slack", UNSIGNED, 0, 0, ENGINE_FRAGMENT_MAX, NULL, "N",
-      "waypoints buffered beyond the solver's lookahead"),
+    S(start_slack, "start-slack", UNSIGNED, ENGINE_SETTING_AUTO, 0, ENGINE_FRAGMENT_MAX, NULL, "N",
+      "waypoints buffered beyond the solver's lookahead (auto: from the input's timing)"),
     S(smooth_window, "smooth-window", UNSIGNED, 0, 4, ENGINE_SMOOTH_WINDOW_MAX, NULL, "W",
       "method smooth: waypoints per least-squares fit"),
     S(smooth_ctrl, "smooth-ctrl", UNSIGNED, 0, 4, ENGINE_SMOOTH_WINDOW_MAX, NULL, "C",
@@ -166,8 +170,8 @@ static int parse_unsigned(const engine_setting_t *s, const char *text, unsigned 
     int base = (text[0] == '0' && (text[1] == 'x' || text[1] == 'X')) ? 16 : 10;
     long long v = strtoll(text, &end, base);
     if (end == text || *end || errno == ERANGE || (double)v < s->min || (double)v > s->max)
-        return why_set(why, whylen, "expected an integer in [%.0f, %.0f], got '%s'", s->min, s->max,
-                       text);
+        return why_set(why, whylen, "expected an integer in [%.0f, %.0f]%s, got '%s'", s->min,
+                       s->max, (s->flags & ENGINE_SETTING_AUTO) ? " or auto" : "", text);
     *out = (unsigned)v;
     return 0;
 }
@@ -236,7 +240,12 @@ int engine_setting_parse(const engine_setting_t *s, const char *text, engine_con
         return why_set(why, whylen, "%s is set by the program, not given", s->name);
     switch (s->type) {
     case ENGINE_SETTING_DOUBLE: return parse_double(s, text, field(s, cfg), why, whylen);
-    case ENGINE_SETTING_UNSIGNED: return parse_unsigned(s, text, field(s, cfg), why, whylen);
+    case ENGINE_SETTING_UNSIGNED:
+        if ((s->flags & ENGINE_SETTING_AUTO) && strcmp(text, "auto") == 0) {
+            *(unsigned *)field(s, cfg) = ENGINE_AUTO;
+            return 0;
+        }
+        return parse_unsigned(s, text, field(s, cfg), why, whylen);
     case ENGINE_SETTING_ENUM: {
         int v = 0, rc = parse_enum(s, text, &v, why, whylen);
         if (rc == 0) /* every engine enum is int-sized (checked by the unit test) */
@@ -278,7 +287,10 @@ int engine_setting_format(const engine_setting_t *s, const engine_config_t *cfg,
     const void *p = cfield(s, cfg);
     switch (s->type) {
     case ENGINE_SETTING_DOUBLE: return format_double(*(const double *)p, buf, len);
-    case ENGINE_SETTING_UNSIGNED: return snprintf(buf, len, "%u", *(const unsigned *)p);
+    case ENGINE_SETTING_UNSIGNED:
+        if ((s->flags & ENGINE_SETTING_AUTO) && *(const unsigned *)p == ENGINE_AUTO)
+            return snprintf(buf, len, "auto");
+        return snprintf(buf, len, "%u", *(const unsigned *)p);
     case ENGINE_SETTING_ENUM: {
         int v;
         memcpy(&v, p, sizeof v);

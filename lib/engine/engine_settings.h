@@ -40,6 +40,9 @@ typedef enum {
     0x1u /* not a key nor an option of its own: set by
                                        the program (period_ns = 1e9 / rate_hz) */
 
+/* UNSIGNED that may also be "auto" (ENGINE_AUTO: picked by the engine) */
+#define ENGINE_SETTING_AUTO 0x2u
+
 typedef struct {
     const char *name;   /* config key = engine_config_t field name */
     const char *option; /* trajreplay long option, without "--" */

@@ -8,7 +8,7 @@ frag_t *frag_new(unsigned f, unsigned o, unsigned delta, size_t ring)
     frag_t *fw;
     size_t i, per_slot, total;
 
-    if (f < 4 || o < 2 || o % 2 || o >= f || ring < f || delta >= f - o)
+    if (f < 4 || o < 2 || o % 2 || o >= f || ring < f || delta > frag_delta_max(f, o))
         return NULL;
     fw = calloc(1, sizeof(*fw));
     if (!fw)
@@ -17,8 +17,9 @@ frag_t *frag_new(unsigned f, unsigned o, unsigned delta, size_t ring)
     fw->o = o;
     fw->s = f - o;
     fw->delta = delta;
-    /* Fragment k is open from row kS to row kS+F-1: at most ceil(F/S)
-     * fragments hold a row, one more may be opening on it. */
+    /* Fragment k is open from row kS - D (at least 0) to row kS+F-1-D: at
+     * most ceil(F/S) fragments hold a row, one more may be opening on it;
+     * fragments cut at row 0 (kS <= D) are shorter, so no more of them. */
     fw->nslots = (f + fw->s - 1) / fw->s + 1;
     fw->ring = ring;
     per_slot = (size_t)f * (1 + FRAG_AXES);
@@ -68,10 +69,10 @@ static frag_slot_t *slot_of(frag_t *fw, uint64_t k)
     return &fw->slot[k % fw->nslots];
 }
 
-/* first and last row of fragment k (fragment 0 is cut at row 0) */
+/* first and last row of fragment k (fragments with kS <= D are cut at row 0) */
 static uint64_t frag_first(const frag_t *fw, uint64_t k)
 {
-    return k == 0 ? 0 : k * fw->s - fw->delta;
+    return k * fw->s > fw->delta ? k * fw->s - fw->delta : 0;
 }
 
 static uint64_t frag_last(const frag_t *fw, uint64_t k)
@@ -151,7 +152,8 @@ int frag_push(frag_t *fw, const frag_row_t *row, const double *pin)
         if (rc < 0)
             return rc;
     }
-    if (r == frag_first(fw, fw->next_frag)) {
+    /* open the fragments starting here (several at row 0 when D >= S) */
+    while (r == frag_first(fw, fw->next_frag)) {
         frag_slot_t *sl = slot_of(fw, fw->next_frag);
         if (sl->open)
             return -TRIDIAG_ESIZE; /* cannot happen with nslots as sized */
@@ -214,6 +216,11 @@ int frag_finish(frag_t *fw, const frag_row_t *row)
     fw->rows = r + 1;
     fw->done = 1;
     return 0;
+}
+
+unsigned frag_delta_max(unsigned f, unsigned o)
+{
+    return f - o + o / 2 - 1;
 }
 
 uint64_t frag_final_after(unsigned f, unsigned o, unsigned delta, uint64_t r)

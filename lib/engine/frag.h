@@ -3,10 +3,13 @@
  *
  * One tridiagonal system per coordinate, rows arriving one at a time (one per
  * node), is solved in fragments of F rows overlapping by O (S = F - O):
- * fragment k holds rows [kS - D, kS - D + F - 1], fragment 0 cut at row 0
- * (so it has F - D rows and ends, and is solved, D rows earlier: the start
- * offset D < S shortens the wait before the first segment to what the steady
- * state needs anyway; D = 0 is the plain grid).  Each fragment's forward sweep
+ * fragment k holds rows [max(0, kS - D), kS - D + F - 1]: the fragments
+ * with kS <= D are cut at row 0 (fragment 0 has F - D rows and ends, and is
+ * solved, D rows earlier: the start offset D <= S + O/2 - 1 shortens the
+ * wait before the first segment down to O/2 + 1 rows, so that the start
+ * needs no more than the steady state; D = 0 is the plain grid).  A fragment
+ * cut at row 0 has the true start condition there, and still ends at least
+ * O/2 rows after its junction J(k) >= 1.  Each fragment's forward sweep
  * advances one row per pushed row; when its last row is in, it is
  * back-substituted (F rows) and its values become final:
  *
@@ -64,8 +67,12 @@ typedef struct {
     double *x;   /* ring x AXES final values */
 } frag_t;
 
+/* Largest start offset D for F, O: S + O/2 - 1 (J(0) = 1). */
+unsigned frag_delta_max(unsigned f, unsigned o);
+
 /*
- * Allocate a window for F, O (O even, 2 <= O < F), start offset D < F - O,
+ * Allocate a window for F, O (O even, 2 <= O < F), start offset
+ * D <= frag_delta_max(F, O),
  * keeping ring final rows (ring >= F).  Returns NULL on bad sizes or no memory.
  */
 frag_t *frag_new(unsigned f, unsigned o, unsigned delta, size_t ring);

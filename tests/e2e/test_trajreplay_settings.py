@@ -43,7 +43,8 @@ class TestConfigMode(unittest.TestCase):
         "method": ("smooth", "--method"), "param": ("uniform", "--param"),
         "ends": ("clamped", "--ends"), "start_vel_m_s": ("0.5,-0.25,0", "--start-vel"),
         "end_vel_m_s": ("0,0.125,0", "--end-vel"), "fragment": ("20", "--fragment"),
-        "overlap": ("10", "--overlap"), "capacity": ("999", "--capacity"),
+        "overlap": ("10", "--overlap"), "accuracy": ("1e-4", "--accuracy"),
+        "max_lookahead": ("24", "--max-lookahead"), "capacity": ("999", "--capacity"),
         "max_gap_s": ("8", "--max-gap"), "max_abs_m": ("5e5", "--max-abs"),
         "profile": ("road", "--profile"), "max_speed_m_s": ("3", "--max-speed"),
         # 0.05: under the default profile (auto) turns are free and 0.5 m/s^2

@@ -57,7 +57,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import test_trajreplay as tr  # noqa: E402  (replay, run, read_setpoints, checks)
 
 MAX_REFUSED = 0.01
-O_DEFAULT = 16  # engine.h: default overlap; fragment bound 100 * 0.268^(O/2)
+O_DEFAULT = 24  # engine.h: the overlap the default accuracy picks; fragment bound 100 * 0.268^(O/2)
 GEOD = pyproj.Geod(ellps="WGS84")
 G = 9.80665
 

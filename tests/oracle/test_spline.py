@@ -35,6 +35,9 @@ BSPLINE, CUBIC = 0, 1
 UNIFORM, TIME = 0, 1
 HELD, MULTIPLE, NATURAL, CLAMPED, REST = 0, 1, 2, 3, 4
 
+lib.engine_pick_flat.restype = ctypes.c_uint
+lib.engine_pick_flat.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_double, ctypes.c_uint,
+                                 ctypes.POINTER(ctypes.c_uint), ctypes.POINTER(ctypes.c_uint)]
 lib.engine_curve_flat.restype = ctypes.c_long
 lib.engine_curve_flat.argtypes = [ctypes.c_int] * 3 + [ctypes.c_uint] * 2 + [SZ, D, D, D, SZ]
 lib.hoang_curve.restype = ctypes.c_int
@@ -51,6 +54,12 @@ TOL_ORACLE_REL = 1e-12
 # (c2/3 = k''/6 scale of the error injected at an artificial fragment end);
 # measured K <= 1.3 over random walks and several (F, O), see lib/engine/README.md.
 FRAG_K = 2.0
+# On the real tracks, whose intervals jump (cerknicko switches between 7 s
+# and 2 s steps, visnjan has 1-41 s), an artificial end's error decays more
+# slowly than rho per row near the jumps: measured factor up to 4.8
+# (cerknicko, F=28/O=24, position) instead of 1.3, so the real-track checks
+# allow FRAG_K_REAL.
+FRAG_K_REAL = 6.0
 
 failures = []
 
@@ -72,6 +81,13 @@ def engine_curve(method, param, ends, f, o, t, xyz):
     n = lib.engine_curve_flat(method, param, ends, f, o, len(t), ptr(t), ptr(xyz), ptr(out), len(out))
     assert n >= 0, "engine_curve_flat failed: %d" % n
     return out[:n]
+
+
+def pick(accuracy=0.0, max_lookahead=0, method=CUBIC, param=TIME):
+    """(F, O, lookahead) the engine picks (0: the default accuracy/max_lookahead)."""
+    f, o = ctypes.c_uint(0), ctypes.c_uint(0)
+    la = lib.engine_pick_flat(method, param, accuracy, max_lookahead, ctypes.byref(f), ctypes.byref(o))
+    return f.value, o.value, la
 
 
 def hoang_curve(t, xyz, ends, v0=None, v1=None):
@@ -280,6 +296,40 @@ def test_fragments_vs_global():
                       % (seed, method, param, ends, f, o, err / ext, bound / ext))
 
 
+def test_default_accuracy_vs_scipy():
+    """Given regular random walks (waypoints every 0.2 s), when streamed with
+    the default settings, then the curve is within 1e-8 of the extent of
+    scipy's CubicSpline through every waypoint (one global solve, clamped at
+    rest as ends = rest) with a lookahead of at most 18 waypoints; and for
+    other accuracy / max_lookahead pairs, within accuracy of the curvature
+    scale (the documented bound, engine.h) and within max_lookahead."""
+    fd, od, la = pick()
+    check(la <= 18, "defaults: F=%d O=%d, lookahead %d <= 18 waypoints" % (fd, od, la))
+    for seed in (11, 12, 13):
+        rng = np.random.default_rng(seed)
+        n = 1000
+        t = np.arange(n) * 0.2
+        xyz = np.cumsum(rng.uniform(-1, 1, (n, 3)), axis=0)
+        ext = np.ptp(xyz, axis=0).max()
+        ref = CubicSpline(t, xyz, bc_type="clamped")
+        tq = samples(t[0], t[-1], t, 20000)
+        s = engine_curve(CUBIC, TIME, REST, 0, 0, t, xyz)
+        err = np.abs(evaluate(s, tq) - ref(tq)).max() / ext
+        check(len(s) == n - 1 and err <= 1e-8,
+              "seed %d defaults F=%d O=%d vs scipy global: %.1e of extent <= 1e-8" % (seed, fd, od, err))
+        scale = np.abs(ref.c[1]).max() / 3.0 * 0.2 ** 2  # max |c2|/3 in the u form (h = 0.2 s)
+        for acc, mla in ((1e-3, 12), (1e-5, 16), (1e-9, 24), (1e-11, 30)):
+            f, o, la2 = pick(acc, mla)
+            check(la2 > 0 and la2 <= mla and 2 * RHO ** (o / 2) <= acc,
+                  "accuracy %.0e max_lookahead %d: F=%d O=%d lookahead %d" % (acc, mla, f, o, la2))
+            s = engine_curve(CUBIC, TIME, REST, f, o, t, xyz)
+            err = np.abs(evaluate(s, tq) - ref(tq)).max()
+            check(err <= acc * scale, "seed %d accuracy %.0e: %.1e of the curvature scale"
+                  % (seed, acc, err / scale))
+    f, o, la2 = pick(1e-12, 12)
+    check(la2 == 0, "accuracy 1e-12 within 12 waypoints: refused (no fragment fits)")
+
+
 # ---------------------------------------------------------------------------
 def load_track(name):
     """Test-only local projection (equirectangular about the first point), and
@@ -310,14 +360,16 @@ def joins_velocity_jump(segs):
 
 def test_real_tracks():
     """Given the real logged tracks, when streamed with the defaults (knots at
-    the timestamps, F=32, O=16) and with the paper's uniform B-spline, then:
+    the timestamps, F and O picked from accuracy and max_lookahead) and with
+    the paper's uniform B-spline (F=32, O=16), then:
     every waypoint is hit (b: 1e-9 of the extent), the fragments stay within the
     bound of one global solve, nothing is NaN, the velocity is continuous at
     the joins for (b); the velocity jumps of (a) are printed (lib/engine/README.md)."""
     for name in ("gpxgo_visnjan.csv", "gpxpy_cerknicko-jezero.csv", "n2k_furuno_figure8_src52.csv"):
         t, xyz = load_track(name)
         ext = np.ptp(xyz, axis=0).max()
-        b = engine_curve(CUBIC, TIME, REST, 32, 16, t, xyz)
+        fd, od, _ = pick()
+        b = engine_curve(CUBIC, TIME, REST, 0, 0, t, xyz)  # the defaults: F=fd, O=od
         bg = cubic_curve(t, xyz, TIME, REST)
         check(bool(np.all(np.isfinite(b))), "%s (b): no NaN" % name)
         miss = max(np.abs(seg_start(b) - xyz[:-1]).max(), np.abs(seg_end(b) - xyz[1:]).max())
@@ -325,17 +377,17 @@ def test_real_tracks():
         tq = samples(t[0], t[-1], t, 20000)
         scale = np.abs(bg[:, [4, 8, 12]]).max() / 3.0
         err = np.abs(evaluate(b, tq) - evaluate(bg, tq)).max()
-        check(err <= FRAG_K * RHO ** 8 * scale,
-              "%s (b): F=32/O=16 vs global %.1e of extent (bound %.1e)"
-              % (name, err / ext, FRAG_K * RHO ** 8 * scale / ext))
+        check(err <= FRAG_K_REAL * RHO ** (od / 2) * scale,
+              "%s (b): F=%d/O=%d vs global %.1e of extent (bound %.1e)"
+              % (name, fd, od, err / ext, FRAG_K_REAL * RHO ** (od / 2) * scale / ext))
         jb = joins_velocity_jump(b)
         jbg = joins_velocity_jump(bg)
         vmax = np.abs(evaluate(bg, tq, 1)).max()
         check(jbg.max() < 1e-9 * vmax, "%s (b) global: velocity continuous at joins (max jump %.1e m/s)"
               % (name, jbg.max()))
-        check(jb.max() <= FRAG_K * RHO ** 8 * vmax,
-              "%s (b) F=32/O=16: velocity jump at joins %.1e m/s <= rho^(O/2) scale (vmax %.1f m/s)"
-              % (name, jb.max(), vmax))
+        check(jb.max() <= FRAG_K_REAL * RHO ** (od / 2) * vmax,
+              "%s (b) F=%d/O=%d: velocity jump at joins %.1e m/s <= rho^(O/2) scale (vmax %.1f m/s)"
+              % (name, fd, od, jb.max(), vmax))
         a = engine_curve(BSPLINE, UNIFORM, NATURAL, 32, 16, t, xyz)
         ag = hoang_curve(t, xyz, NATURAL)
         ja = joins_velocity_jump(a)
@@ -360,6 +412,7 @@ if __name__ == "__main__":
     test_uniform_natural_clamped()
     test_time_knots()
     test_fragments_vs_global()
+    test_default_accuracy_vs_scipy()
     test_real_tracks()
     print("%d failure(s)" % len(failures))
     sys.exit(1 if failures else 0)

@@ -120,6 +120,55 @@ static void test_config(void **state)
     engine_free(NULL);
 }
 
+/* Waypoints pushed one per tick until the output leaves WAITING; returns
+ * how many were in then (0: never within max). */
+static unsigned waypoints_to_start(engine_config_t *c, const double *dt, unsigned ndt, unsigned max)
+{
+    engine_t *e = mk(c);
+    engine_waypoint_t w;
+    engine_setpoint_t sp;
+    double t = 0;
+    unsigned k, got = 0;
+    for (k = 0; k < max && !got; k++) {
+        circle_wp(&w, (int)k, 1.0);
+        w.t_s = t;
+        t += dt[k % ndt];
+        assert_int_equal(engine_push(e, &w), 0);
+        assert_int_equal(engine_tick(e, (int64_t)(k + 1) * PERIOD_NS, &sp), 0);
+        if (sp.state == ENGINE_STATE_STREAMING)
+            got = k + 1;
+    }
+    engine_free(e);
+    return got;
+}
+
+/* Given start_slack auto (the default), when the input is regular and slow
+ * (1 s steps at 3 m/s: a stop takes less than a step), then the output
+ * starts one waypoint after the solver's lookahead, as with start_slack 1;
+ * when the intervals vary (0.5 s and 1.5 s in turn), then it waits for more
+ * (the longest stretch of intervals measured), as a fixed small slack would
+ * not, but never more than ENGINE_SLACK_AUTO_MAX beyond the lookahead. */
+static void test_start_slack_auto(void **state)
+{
+    (void)state;
+    engine_config_t c, one;
+    static const double regular[] = {1.0}, uneven[] = {0.5, 1.5};
+    engine_config_default(&c);
+    one = c;
+    one.start_slack = 1;
+    unsigned la = engine_lookahead(&c);
+    assert_int_equal(la, engine_lookahead(&one));
+    assert_true(la <= c.max_lookahead);
+    assert_int_equal(waypoints_to_start(&c, regular, 1, 100), la + 2);
+    assert_int_equal(waypoints_to_start(&one, regular, 1, 100), la + 2);
+    unsigned auto_n = waypoints_to_start(&c, uneven, 2, 100);
+    assert_int_equal(waypoints_to_start(&one, uneven, 2, 100), la + 2);
+    assert_true(auto_n > la + 2);
+    assert_true(auto_n <= la + 2 + ENGINE_SLACK_AUTO_MAX - ENGINE_SLACK_AUTO_MIN);
+    print_message("start_slack auto: regular %u waypoints, uneven %u (lookahead %u)\n", la + 2,
+                  auto_n, la);
+}
+
 /* Given (F, O), when waypoints arrive one by one, then the output leaves
  * WAITING exactly when lookahead + 2 waypoints are in (segment 0 needs its
  * end waypoint plus the lookahead); before any waypoint it holds 0. */
@@ -472,7 +521,9 @@ static void test_full_and_retry(void **state)
     enum { N = 400 };
     engine_config_t c;
     engine_config_default(&c);
-    c.capacity = engine_lookahead(&c) + c.fragment + 8;
+    engine_config_t r; /* fragment auto: the one picked */
+    assert_int_equal(engine_config_resolve(&c, &r), 0);
+    c.capacity = engine_lookahead(&c) + r.fragment + 8; /* the least */
     engine_t *e = mk(&c);
     engine_waypoint_t w;
     engine_setpoint_t sp;
@@ -1440,6 +1491,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_config),
         cmocka_unit_test(test_lookahead_is_real),
+        cmocka_unit_test(test_start_slack_auto),
         cmocka_unit_test(test_stream_underrun_finish),
         cmocka_unit_test(test_skipped_ticks_identical),
         cmocka_unit_test(test_bad_input),

@@ -186,7 +186,7 @@ static void test_frag_bookkeeping(void **state)
     assert_non_null(fw);
     assert_null(frag_new(16, 7, 0, 64));
     assert_null(frag_new(16, 16, 0, 64));
-    assert_null(frag_new(16, 8, 8, 64)); /* offset must stay below S */
+    assert_null(frag_new(16, 8, 12, 64)); /* offset at most S + O/2 - 1 */
     for (uint64_t r = 0; r < 200; r++) {
         row.d[0] = 6.0 * sin(0.1 * (double)r);
         assert_int_equal(frag_push(fw, &row, pin), 0);
