@@ -292,7 +292,11 @@ class CanDaemon(unittest.TestCase):
             fh.write("[daemon]\nrate_hz = %d\nspeed = %d\nexit_when_done = yes\n"
                      "stop_timeout_s = 1\nstatus_interval_s = 0\n"
                      "[can]\nlog_in = wp.log\nlog_out = sp.log\nlog_ifname = vcan0\nmax_late_ms = 0\n"
-                     "[object.boat]\noutput = can, csv\ncsv.path = /dev/full\n%s" % (RATE_HZ, SPEED, obj))
+                     "[object.boat]\noutput = can, csv\ncsv.path = /dev/full\n"
+                     # a fixed start slack: the candump input's arrival jitter would
+                     # otherwise slow the default one-waypoint slack (start_slack auto)
+                     # down once, an underrun state in the states asserted below
+                     "start_slack = 8\nmax_lookahead = 25\n%s" % (RATE_HZ, SPEED, obj))
         p = run_trajd(path)
         rows, _ = ct.decode_setpoints(os.path.join(d, "sp.log"))
         end = self.refrows[max(self.refrows)]

@@ -40,6 +40,7 @@ TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
 TRAJREPLAY = os.path.join(mbsim.BUILD, "bin", "trajreplay")
 TRACK = os.path.join(mbsim.ROOT, "tests", "data", "n2k_furuno_figure8_src52.csv")
 FEED_RATE_HZ = 10      # output rate for the feed test
+FINE_RATE_HZ = 1000    # the reference curve between the feed test's rows
 FEED_SPEED = 50        # engine time per wall time: the 357 s track streams in ~7 s
 FEED_WAIT_S = 60       # bound on the whole feed + stream
 
@@ -195,7 +196,11 @@ class FeedTest(unittest.TestCase):
             # its neighbours, so a refusal may come after the write was
             # answered (lib/engine/accept.h); the register counts them all
             ref_rejected = int(re.search(r"summary: rejected (\d+)", p.stderr).group(1))
-            ref = {r["t_s"]: r for r in read_csv(ref_path) if r["state"] in ("1", "streaming")}
+            # the reference's rows on the curve's own timing: a time-scaled row
+            # (ENGINE_SP_SCALED: trajreplay's own replay slowed down where the
+            # track's timing needed more than the start slack) moves at rate * k'
+            ref = {r["t_s"]: r for r in read_csv(ref_path)
+                   if r["state"] in ("1", "streaming") and not int(r["flags"]) & SCALED}
             self.assertGreater(len(ref), 1000)
 
             d = Trajd("""
@@ -275,12 +280,18 @@ csv.path = %s/fed.csv
             # where the feed fell behind (a loaded machine) and the time
             # scaling slowed the output down (lib/engine/TIMESCALE.md), which
             # shifts the grid of track times afterwards: a point of the same
-            # curve at its own track time (cubic Hermite between trajreplay's
-            # two rows around it, exact within a segment).
+            # curve at its own track time (cubic Hermite between the two rows
+            # around it of trajreplay's replay at FINE_RATE_HZ: exact within a
+            # segment, within jerk jump * (1 ms)^3 across one).
             fed = [r for r in read_csv(os.path.join(tmp, "fed.csv")) if r["state"] in ("1", "streaming")]
             cols = ["x_m", "y_m", "z_m", "vx_m_s", "vy_m_s", "vz_m_s", "ax_m_s2", "ay_m_s2", "az_m_s2"]
-            t_ref = sorted(float(t) for t in ref)
-            by_t = {float(k): v for k, v in ref.items()}
+            fine_path = os.path.join(tmp, "fine.csv")
+            subprocess.run([TRAJREPLAY, "--rate", str(FINE_RATE_HZ), "-q", "-o", fine_path, xyz],
+                           check=True, timeout=60, capture_output=True, text=True)
+            fine = {r["t_s"]: r for r in read_csv(fine_path)
+                    if r["state"] in ("1", "streaming") and not int(r["flags"]) & SCALED}
+            t_ref = sorted(float(t) for t in fine)
+            by_t = {float(k): v for k, v in fine.items()}
 
             def on_curve(t):
                 """x, y, z of the reference curve at track time t."""
@@ -288,6 +299,8 @@ csv.path = %s/fed.csv
                 if i < 0 or i + 1 >= len(t_ref):
                     return None
                 t0, t1 = t_ref[i], t_ref[i + 1]
+                if t1 - t0 > 1.001 / FINE_RATE_HZ:
+                    return None  # across reference rows left out (time-scaled)
                 a, b = by_t[t0], by_t[t1]
                 h, u = t1 - t0, (t - t0) / (t1 - t0)
                 h00, h10 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u
