@@ -1,5 +1,6 @@
 /* csv_fixed.c - fast printf("%.*f") for doubles; see csv_fixed.h. */
 #include "csv_fixed.h"
+#include "csv_shortest.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -71,6 +72,78 @@ static int write_u64(char *out, uint64_t v, int mindig)
     return 24 - i;
 }
 
+/* The last n (1..8) of the 8 padded digits of v < 10^8 at out. */
+static void put_last(char *out, uint32_t v, int n)
+{
+    uint64_t d = csv_digits8(v) >> (8 * (8 - n));
+    memcpy(out, &d, (size_t)n);
+}
+
+/* Decimal digits of v < 10^8 (1 for 0). */
+static int ndigits8(uint32_t v)
+{
+    return v < 10000 ? (v < 100 ? (v < 10 ? 1 : 2) : (v < 1000 ? 3 : 4))
+                     : (v < 1000000 ? (v < 100000 ? 5 : 6) : (v < 10000000 ? 7 : 8));
+}
+
+/* q = ip * 10^prec + fr, prec 1..17, with constant divisors (a division by a
+ * variable 64-bit divisor costs tens of cycles, by a constant a multiply). */
+static uint64_t split_pow10(uint64_t q, int prec, uint64_t *fr)
+{
+    uint64_t ip;
+    switch (prec) {
+#define P(n, p10)                                                                                  \
+    case n:                                                                                        \
+        ip = q / p10##ull;                                                                         \
+        *fr = q % p10##ull;                                                                        \
+        return ip;
+        P(1, 10)
+        P(2, 100)
+        P(3, 1000)
+        P(4, 10000)
+        P(5, 100000)
+        P(6, 1000000)
+        P(7, 10000000)
+        P(8, 100000000)
+        P(9, 1000000000)
+        P(10, 10000000000)
+        P(11, 100000000000)
+        P(12, 1000000000000)
+        P(13, 10000000000000)
+        P(14, 100000000000000)
+        P(15, 1000000000000000)
+        P(16, 10000000000000000)
+#undef P
+    default:
+        ip = q / 100000000000000000ull;
+        *fr = q % 100000000000000000ull;
+        return ip;
+    }
+}
+
+/* ip "." fr with prec digits of fraction (1..17), by 8-digit blocks. */
+static int put_fixed(char *o, uint64_t ip, uint64_t fr, int prec)
+{
+    char *p = o;
+    if (ip < 100000000) {
+        int n = ndigits8((uint32_t)ip);
+        put_last(p, (uint32_t)ip, n);
+        p += n;
+    } else {
+        p += write_u64(p, ip, 1);
+    }
+    *p++ = '.';
+    if (prec <= 8) {
+        put_last(p, (uint32_t)fr, prec);
+    } else if (prec <= 16) {
+        put_last(p, (uint32_t)(fr / 100000000), prec - 8);
+        put_last(p + prec - 8, (uint32_t)(fr % 100000000), 8);
+    } else {
+        write_u64(p, fr, prec);
+    }
+    return (int)(p + prec - o);
+}
+
 int csv_fixed(char *out, double x, int prec)
 {
     if (prec < 0 || prec > CSV_FIXED_PREC_MAX || !isfinite(x))
@@ -99,9 +172,6 @@ int csv_fixed(char *out, double x, int prec)
         *o++ = '-';
     if (prec == 0)
         return (int)(o - out) + write_u64(o, q, 1);
-    uint64_t scale = (uint64_t)pow10_tab[prec];
-    o += write_u64(o, q / scale, 1);
-    *o++ = '.';
-    o += write_u64(o, q % scale, prec);
-    return (int)(o - out);
+    uint64_t fr, ip = split_pow10(q, prec, &fr);
+    return (int)(o - out) + put_fixed(o, ip, fr, prec);
 }
