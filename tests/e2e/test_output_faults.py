@@ -120,7 +120,10 @@ class OutputFaults(unittest.TestCase):
         # candump log, when the track streams to its end, then STATUS
         # frames carry the output fault (bit 6) and error 0x45, STATUS2 page
         # 1 counts lost lines and failed writes (both > 0, at most the exit
-        # line's count), and the exit status is 74
+        # line's count), and the exit status is 74.  A track long enough that
+        # the lines held for /dev/full overflow the output's buffer
+        # (CSV_TRANSPORT_BUF_BYTES) while it streams, not only at the exit
+        track(os.path.join(self.tmp, "track.csv"), n=1200)
         path = conf(self.tmp, "/dev/full", extra_daemon="exit_when_done = yes\n")
         with open(path) as f:
             text = f.read().replace("output = csv\n", "output = csv, can\n")
