@@ -1728,6 +1728,15 @@ static double scale_target(const engine_t *e)
     return e->stop_req || e->end_brake ? 0.0 : e->override;
 }
 
+/* 1 if the time scaling's next tick would advance the output (tried on a
+ * copy of its state). */
+static int moves(const engine_t *e, double R, double A, double J)
+{
+    ts_state_t ts = e->ts;
+    int lim = 0;
+    return ts_step(&ts, scale_target(e), R, A, J, e->period_s, NULL, &lim) > 0;
+}
+
 /* One tick on the unit grid (rate 1): the forward-difference stepper. */
 static void unit_step(engine_t *e)
 {
@@ -1960,9 +1969,9 @@ static void step_once(engine_t *e)
     R = remaining(e, s);
     if (e->mode == OUT_STREAM && e->avail_closed && !e->avail_rest && !e->end_brake &&
         (ts_stop_dist(e->ts.rate, e->ts.acc, A, J) >= R - e->ts.rate * e->period_s ||
-         (e->scaled && at_rest(e) && ts_rate_max(R, A, J) < J * e->period_s * e->period_s)))
+         (e->scaled && at_rest(e) && !moves(e, R, A, J))))
         /* the curve does not end at rest: brake before its end; at rest with
-         * less curve left than one tick of motion needs (stalled()), no input
+         * less curve left than one tick of motion and its stop need, no input
          * can come to lengthen it: finish here, not wait for ever */
         e->end_brake = 1;
     if (e->clocked && e->mode == OUT_STREAM) {
