@@ -1728,13 +1728,16 @@ static double scale_target(const engine_t *e)
     return e->stop_req || e->end_brake ? 0.0 : e->override;
 }
 
-/* 1 if the time scaling's next tick would advance the output (tried on a
- * copy of its state). */
+/* 1 if the time scaling's next tick would set the output moving (tried on a
+ * copy of its state): it advances and is not back at rest at the tick's end
+ * (a tick that brakes back to rest within itself, or advances by less than
+ * the track time's last bit, repeats for ever on a curve that cannot grow). */
 static int moves(const engine_t *e, double R, double A, double J)
 {
     ts_state_t ts = e->ts;
     int lim = 0;
-    return ts_step(&ts, scale_target(e), R, A, J, e->period_s, NULL, &lim) > 0;
+    double ds = ts_step(&ts, scale_target(e), R, A, J, e->period_s, NULL, &lim);
+    return e->s + ds > e->s && !(is_exactly(ts.rate, 0.0) && is_exactly(ts.acc, 0.0));
 }
 
 /* One tick on the unit grid (rate 1): the forward-difference stepper. */
