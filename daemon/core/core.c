@@ -106,22 +106,31 @@ void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim)
 }
 
 /* The setpoint as latitude/longitude/height (geographic objects, about the
- * daemon's one datum) and the heading axis at its track time.  In the tick:
- * no allocation. */
+ * daemon's one datum: left pending for core_obj_geo, which an output that
+ * writes it calls) and the heading axis at its track time.  In the tick: no
+ * allocation. */
 static void obj_frames(const cfg_t *cfg, obj_t *o)
 {
     const engine_setpoint_t *sp = &o->sp;
     o->geo[0] = o->geo[1] = o->geo[2] = NAN;
     o->heading_deg = o->heading_unwrapped_deg = NAN;
-    if (o->cfg->geographic && cfg->datum_set && isfinite(sp->pos_m[0]) && isfinite(sp->pos_m[1]) &&
-        isfinite(sp->pos_m[2]) &&
-        geo_from_enu(&cfg->datum, sp->pos_m, &o->geo[0], &o->geo[1], &o->geo[2]) < 0)
-        o->geo[0] = o->geo[1] = o->geo[2] = NAN;
+    o->geo_pending = o->cfg->geographic && cfg->datum_set && isfinite(sp->pos_m[0]) &&
+                     isfinite(sp->pos_m[1]) && isfinite(sp->pos_m[2]);
     if (o->cfg->heading.n && isfinite(sp->t_s) && isfinite(sp->pos_m[0])) {
         o->heading_unwrapped_deg = angle_pchip_eval(o->cfg->heading.t_s, o->cfg->heading.deg,
                                                     o->cfg->heading.n, sp->t_s, &o->heading_hint);
         o->heading_deg = angle_wrap_deg(o->heading_unwrapped_deg);
     }
+}
+
+const double *core_obj_geo(const core_t *c, obj_t *o)
+{
+    if (o->geo_pending) {
+        o->geo_pending = 0;
+        if (geo_from_enu(&c->cfg->datum, o->sp.pos_m, &o->geo[0], &o->geo[1], &o->geo[2]) < 0)
+            o->geo[0] = o->geo[1] = o->geo[2] = NAN;
+    }
+    return o->geo;
 }
 
 /* Rearm the monitor once the engine stands on the held position. */

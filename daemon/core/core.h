@@ -81,7 +81,10 @@ typedef struct obj {
     rejlog_t rejlog;              /* sources of the last waypoints offered, and the refusals
                                      * to log (rejlog.h; kept when carried) */
     double geo[3];                /* the setpoint as WGS84 lat, lon (deg), alt (m) when
-                                     * o->cfg->geographic (about c->cfg->datum), else NaN */
+                                     * o->cfg->geographic (about c->cfg->datum), else NaN:
+                                     * read it through core_obj_geo (computed on first use
+                                     * in a tick) */
+    int geo_pending;              /* geo not computed yet for this tick's setpoint */
     double heading_deg;           /* heading axis at the setpoint's track time, wrapped to
                                      * (-180, 180]; NaN if the object has none */
     double heading_unwrapped_deg; /* the same, continuous across +-180 (NaN: none) */
@@ -220,6 +223,10 @@ typedef struct core {
 
 /* Object by name, or NULL. */
 obj_t *core_obj_find(core_t *c, const char *name);
+
+/* o->geo for this tick's setpoint, computed on the first call in the tick
+ * (geodetic conversion: atan2, sincos; most objects' outputs never ask). */
+const double *core_obj_geo(const core_t *c, obj_t *o);
 
 /* CLOCK_REALTIME in ns since the epoch. */
 int64_t core_real_ns(void);

@@ -454,7 +454,8 @@ static void csv_setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
     if (n > 0 && st->s[o->index].geo) {
         /* the same number form as the other columns (csv_shortest.h) */
         char extra[4 * (CSV_SHORTEST_MAX + 1) + 1];
-        const double v[4] = {o->geo[0], o->geo[1], o->geo[2], o->heading_deg};
+        const double *geo = core_obj_geo(st->core, o);
+        const double v[4] = {geo[0], geo[1], geo[2], o->heading_deg};
         size_t m = 0;
         for (int k = 0; k < 4; k++) {
             extra[m++] = ',';

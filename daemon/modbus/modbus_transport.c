@@ -282,7 +282,7 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
     for (unsigned k = 0; k < t->nblock; k++) {
         if (t->obj_of[k] < 0)
             continue;
-        const obj_t *ob = &c->obj[t->obj_of[k]];
+        obj_t *ob = &c->obj[t->obj_of[k]];
         mbmap_object_t *o = &t->objs[k];
         o->sp = ob->sp;
         o->st = ob->status;
@@ -292,9 +292,10 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         o->can_state = d.can_state;
         o->can_load_permille = d.can_load_permille;
         o->uptime_s = up_s;
-        o->lat_deg = ob->geo[0];
-        o->lon_deg = ob->geo[1];
-        o->alt_m = ob->geo[2];
+        const double *geo = core_obj_geo(c, ob);
+        o->lat_deg = geo[0];
+        o->lon_deg = geo[1];
+        o->alt_m = geo[2];
         o->heading_deg = ob->heading_deg;
         o->heading_unwrapped_deg = ob->heading_unwrapped_deg;
         o->out_lost = ob->out_lost;

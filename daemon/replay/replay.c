@@ -4,11 +4,25 @@
 #include <math.h>
 #include <string.h>
 
+static int64_t due_ns(const replay_t *r, size_t i);
+
 void replay_init(replay_t *r, const track_t *trk, int64_t start_ns)
 {
     memset(r, 0, sizeof *r);
     r->trk = trk;
     r->start_ns = start_ns;
+    r->due_i = (size_t)-1;
+}
+
+/* due_ns of the next waypoint, kept while next and start_ns stay */
+static int64_t next_due(replay_t *r)
+{
+    if (r->due_i != r->next || r->due_start != r->start_ns) {
+        r->due = due_ns(r, r->next);
+        r->due_i = r->next;
+        r->due_start = r->start_ns;
+    }
+    return r->due;
 }
 
 static int64_t due_ns(const replay_t *r, size_t i)
@@ -70,7 +84,7 @@ int replay_feed_via(replay_t *r, replay_push_fn push, void *ctx, engine_t *e, in
     if (!r->trk)
         return 0;
     while (r->next < r->trk->n) {
-        if (due_ns(r, r->next) > now_ns)
+        if (next_due(r) > now_ns)
             break;
         int rc = push(ctx, &r->trk->wp[r->next]);
         if (rc == -ENGINE_EFULL) {

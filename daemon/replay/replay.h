@@ -40,6 +40,9 @@ typedef struct {
                              engine_push result of each waypoint once taken,
                              then -reason if the engine refused it later */
     int drain;           /* replay_feed: read the engine's rejections (private) */
+    size_t due_i;        /* private: due_ns(due_i) at start due_start is due, so */
+    int64_t due_start;   /* that a tick with nothing due costs no llround */
+    int64_t due;
 } replay_t;
 
 /* Start replaying trk (not copied: it must outlive r) with waypoint 0 due at
