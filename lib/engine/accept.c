@@ -78,7 +78,12 @@ double accept_recent_speed(const accept_t *a)
 }
 
 /* lower median of the chord speeds between consecutive waypoints held (and
- * from the anchor to the first), forward intervals only; 0 if none */
+ * from the anchor to the first), forward intervals only; 0 if none, or if
+ * there are fewer than ACCEPT_PACE_CHORDS of them once kept intervals give a
+ * recent speed: one outlier among the waypoints held has two chords (into
+ * it and out of it), and with two or three chords those are the lower
+ * median, so an outlier would set the limit that judges it (a 300 m spike
+ * between two fixes of a walk passed as its own pace, 100 m/s) */
 static double window_median_speed(const accept_t *a)
 {
     double v[ACCEPT_WINDOW_MAX];
@@ -91,7 +96,7 @@ static double window_median_speed(const accept_t *a)
             v[n++] = chord_speed(p, q);
         p = q;
     }
-    if (!n)
+    if (!n || (a->nhist && n < ACCEPT_PACE_CHORDS))
         return 0;
     /* insertion sort: n <= ACCEPT_WINDOW_MAX */
     for (unsigned i = 1; i < n; i++)

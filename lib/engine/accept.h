@@ -65,7 +65,11 @@
  *   - learned (profile auto): the speed limit is also at most
  *     max(ACCEPT_LEARN_FLOOR_M_S, ACCEPT_LEARN_FACTOR x v_ref), v_ref the
  *     fastest chord of the last ACCEPT_HIST kept intervals or the lower
- *     median chord of the waypoints held, whichever is larger; and a turn is free:
+ *     median chord of the waypoints held, whichever is larger (the window's
+ *     median only from ACCEPT_PACE_CHORDS chords once there are kept
+ *     intervals: a spike's own two chords never set the limit that judges
+ *     it, tests/oracle/test_fault_injection.py test_spike_every_site; before
+ *     any, the window's chords are all there is); and a turn is free:
  *     |v2 - v1| may exceed the acceleration allowance by up to
  *     2 min(|v1|, |v2|) (a reversal at the lower of the two speeds), so a
  *     feed-rate-timed corner passes while a change of speed is held to
@@ -92,6 +96,10 @@
  * (3 m at 0.2 s is 15 m/s; the chord median of the window covers it), a
  * walker, and every machine tool's feed. */
 #define ACCEPT_LEARN_FLOOR_M_S 5.0
+/* The window's chords count towards the learned speed limit only if there
+ * are this many (once there is a recent speed): the lower median of 4 is
+ * not one outlier's two chords. */
+#define ACCEPT_PACE_CHORDS 4
 /* A repeat within this distance is the same position (metres): positions
  * decoded from one fix are bit-identical. */
 #define ACCEPT_STALE_POS_M 1e-6
