@@ -36,16 +36,18 @@ enum { QE_SEG = 0, QE_END = 1 };
 /* One queued entry: a segment to stream, or the rest point ending a trajectory. */
 typedef struct {
     int kind;
-    int first;         /* first entry of its trajectory */
-    double t1_s;       /* segment end (absolute track time); END: rest time */
-    uint64_t node;     /* SEG: index of its first node in the trajectory */
-    uint64_t traj;     /* input trajectory it belongs to (engine.in_traj) */
-    fdiff_seg_t seg;   /* END: c[k][0] is the rest position, t0_s = t1_s */
-    double gap_s;      /* first entry: track time since the previous trajectory's
+    int first;       /* first entry of its trajectory */
+    double t1_s;     /* segment end (absolute track time); END: rest time */
+    uint64_t node;   /* SEG: index of its first node in the trajectory */
+    uint64_t traj;   /* input trajectory it belongs to (engine.in_traj) */
+    fdiff_seg_t seg; /* END: c[k][0] is the rest position, t0_s = t1_s */
+    double gap_s;    /* first entry: track time since the previous trajectory's
                              end when a gap separates them, else 0 */
-    double vmin, vmax; /* SEG: bounds on the curve's speed |k'| over it (m/s) */
-    double kcum;       /* SEG: braking capacity of its trajectory up to its end,
+    double vmax;     /* SEG: bound on the curve's speed |k'| over it (m/s) */
+    double kcum;     /* SEG: braking capacity of its trajectory up to its end,
                         the sum of dur / max(vmax, floor) (see remaining()) */
+    double ucum;     /* SEG: the rises of 1 / max(vmax, floor) from each segment
+                          of its trajectory to the next, summed up to it */
 } qent_t;
 
 enum { OUT_HOLD = 0, OUT_XFER = 1, OUT_STREAM = 2 };
@@ -91,6 +93,8 @@ struct engine {
     double end_t;
     double end_speed; /* speed at the end of the last queued segment */
     double in_kcum;   /* capacity queued so far of the trajectory (qent_t kcum) */
+    double in_inv;    /* 1 / max(vmax, floor) of its last queued segment */
+    double in_ucum;   /* qent_t ucum so far */
     uint64_t in_traj; /* +1 per trajectory opened */
     double in_gap_s;  /* gap before the trajectory being received (0: none) */
 
@@ -141,6 +145,7 @@ struct engine {
     uint64_t out_traj; /* trajectory the output streams */
     double avail_t;    /* end of its solved curve (absolute track time) */
     double avail_kcum; /* braking capacity up to there (qent_t kcum) */
+    double avail_ucum; /* ... and the rises of the limits (qent_t ucum) */
     int avail_closed;  /* its END is queued */
     int avail_rest;    /* ... and the curve ends at rest there */
     int end_brake;     /* braking to rest before an end that is not at rest */
@@ -166,6 +171,9 @@ static void fast_close(engine_t *e);
 
 /* Output and curve start closer than this need no transfer (metres). */
 #define ENGINE_TRANSFER_TOL_M 1e-9
+/* A transfer's or REST end's point closer than this to where the output
+ * came to rest is taken as reached (rest_handover; metres). */
+#define ENGINE_HANDOVER_TOL_M 1e-6
 /* Timestamps closer than this are "the same time" (seconds). */
 #define ENGINE_SAME_TIME_S 1e-9
 /* Positions closer than this at the same time are a duplicate (metres). */
@@ -180,16 +188,16 @@ static void fast_close(engine_t *e);
 #define ENGINE_SCALE_V_FLOOR_M_S 1.0
 /* Capacity accepted at most (memory is sized from it). */
 #define ENGINE_CAPACITY_MAX (1u << 20)
-/* Samples of a segment's speed for its bounds (seg_speed_range). */
+/* Samples of a segment's speed for its bounds (seg_speed_max). */
 #define ENGINE_SPEED_SAMPLES 8
 
-/* Lower and upper bounds on the speed |k'| over a segment (m/s): the largest
- * and smallest of ENGINE_SPEED_SAMPLES + 1 evenly spaced samples, widened by
- * what |k''| can change between a sample and the point halfway to the next
- * (|k''(u)| <= 2|c2| + 6|c3| per axis, in units of u). */
-static void seg_speed_range(const fdiff_seg_t *seg, double *vmin, double *vmax)
+/* Upper bound on the speed |k'| over a segment (m/s): the largest of
+ * ENGINE_SPEED_SAMPLES + 1 evenly spaced samples, widened by what |k''| can
+ * change between a sample and the point halfway to the next (|k''(u)| <=
+ * 2|c2| + 6|c3| per axis, in units of u). */
+static double seg_speed_max(const fdiff_seg_t *seg)
 {
-    double lo = INFINITY, hi = 0, b2 = 0;
+    double hi = 0, b2 = 0;
 
     for (int k = 0; k < AX; k++) {
         double b = 2 * fabs(seg->c[k][2]) + 6 * fabs(seg->c[k][3]);
@@ -201,12 +209,9 @@ static void seg_speed_range(const fdiff_seg_t *seg, double *vmin, double *vmax)
             double d = seg->c[k][1] + u * (2 * seg->c[k][2] + 3 * u * seg->c[k][3]);
             v2 += d * d;
         }
-        lo = fmin(lo, sqrt(v2));
         hi = fmax(hi, sqrt(v2));
     }
-    double w = sqrt(b2) / (2.0 * ENGINE_SPEED_SAMPLES);
-    *vmin = fmax(lo - w, 0.0) / seg->dur_s;
-    *vmax = (hi + w) / seg->dur_s;
+    return (hi + sqrt(b2) / (2.0 * ENGINE_SPEED_SAMPLES)) / seg->dur_s;
 }
 
 const char *engine_strerror(int err)
@@ -705,8 +710,13 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
     q->node = node;
     q->seg = *seg;
     q->t1_s = seg->t0_s + seg->dur_s;
-    seg_speed_range(seg, &q->vmin, &q->vmax);
-    e->in_kcum += seg->dur_s / fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
+    q->vmax = seg_speed_max(seg);
+    double inv = 1.0 / fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
+    if (e->in_emitted && inv > e->in_inv)
+        e->in_ucum += inv - e->in_inv; /* the limits rise from the last one to this */
+    e->in_inv = inv;
+    q->ucum = e->in_ucum;
+    e->in_kcum += seg->dur_s * inv;
     q->kcum = e->in_kcum;
     e->in_emitted = 1;
     e->end_t = q->t1_s;
@@ -720,6 +730,7 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
     if (e->mode != OUT_HOLD && q->traj == e->out_traj) {
         e->avail_t = q->t1_s; /* more curve for the output (see remaining()) */
         e->avail_kcum = q->kcum;
+        e->avail_ucum = q->ucum;
     }
 }
 
@@ -933,6 +944,7 @@ static void open_input(engine_t *e, const engine_waypoint_t *wp)
     e->seg_next = 0;
     e->in_emitted = 0;
     e->in_kcum = 0.0;
+    e->in_ucum = 0.0;
     e->in_first_pending = 1;
     e->in_traj++;
     e->st.tracks++;
@@ -1526,6 +1538,7 @@ static void find_avail(engine_t *e)
 {
     e->avail_t = e->cur.t1_s;
     e->avail_kcum = e->cur.kcum;
+    e->avail_ucum = e->cur.ucum;
     e->avail_closed = 0;
     e->avail_rest = 0;
     for (size_t i = 0; i < e->qlen; i++) {
@@ -1533,8 +1546,10 @@ static void find_avail(engine_t *e)
         if (q->traj != e->out_traj)
             break;
         e->avail_t = q->t1_s;
-        if (q->kind == QE_SEG)
+        if (q->kind == QE_SEG) {
             e->avail_kcum = q->kcum;
+            e->avail_ucum = q->ucum;
+        }
         if (q->kind == QE_END) {
             e->avail_closed = 1;
             e->avail_rest = q->seg.c[0][1] <= ENGINE_REST_SPEED_M_S;
@@ -1639,6 +1654,7 @@ static void start_transfer(engine_t *e, const double *target, double gap_s)
     memset(&e->cur, 0, sizeof(e->cur));
     e->cur.kind = QE_SEG;
     transfer_segment(&e->cur.seg, e->pos, target, dur);
+    e->cur.vmax = seg_speed_max(&e->cur.seg);
     e->cur_t0 = 0;
     e->cur_t1 = e->cur.seg.dur_s;
     e->n = 0;
@@ -1663,6 +1679,28 @@ static void step_cur(engine_t *e, int64_t n)
     out_eval(e);
 }
 
+/* The speed (m/s) at which the scaling's limits are converted outside a
+ * stop: the largest the curve reaches on the current segment (seg_speed_max;
+ * a transfer's: 1.5 D / T_x), at least the floor.  (Converted at the speed
+ * here, the limits shrink as a ramp speeds up along a transfer faster than
+ * the jerk can take the rate's acceleration back: the rate overshot 1.) */
+static double conv_speed(const engine_t *e)
+{
+    return fmax(e->cur.vmax, ENGINE_SCALE_V_FLOOR_M_S);
+}
+
+/* Track time (per unit of rate, in the units of the limits converted at v)
+ * kept for the rises of the limits ahead.  Where the output brakes into a
+ * segment with larger limits (a slower one: A = a / v), its deceleration must
+ * ramp up to the new A at the jerk J: a stop then needs up to
+ * r (A_new - A_old)^2 / (2 J_new) <= r dA a / (2 j) of capacity more than
+ * r^2/2; so much per rise of A ahead, summed (ucum), is kept in reserve. */
+static double rise_reserve(const engine_t *e, double v)
+{
+    double du = e->avail_ucum - e->cur.ucum;
+    return du > 0 ? 0.5 * e->cfg.scale_accel_m_s2 / e->cfg.scale_jerk_m_s3 * v * du : 0.0;
+}
+
 /*
  * Track time still available ahead of s (relative) before the output must
  * be at rest, with TS_MARGIN_TICKS in reserve; INFINITY when the curve ahead
@@ -1672,7 +1710,7 @@ static void step_cur(engine_t *e, int64_t n)
  * braking on a part of the curve at speed v removes r^2/2 at a / v per unit
  * of track time (d(r^2/2)/ds = dr/dt).  What the curve ahead can absorb is
  * the capacity K = sum of dur / v over it (each segment at its fastest,
- * seg_speed_range, so K is a lower bound), and the output can stop within
+ * seg_speed_max, so K is a lower bound), and the output can stop within
  * it from r iff r^2/2 <= a K.  Expressed for ts_step, whose limits are
  * converted at the speed here, that is track time v_here K: more than is
  * left where the curve ahead is slower, less where it is faster.  With the
@@ -1683,17 +1721,13 @@ static void step_cur(engine_t *e, int64_t n)
 static double remaining(const engine_t *e, double s)
 {
     if (e->mode == OUT_XFER)
-        return e->stop_req ? e->cur_t1 - s : INFINITY;
-    if (e->avail_closed && e->avail_rest)
-        return INFINITY;
+        return e->cur_t1 - s; /* left at rate 0 (handover) */
     /* the braking capacity left, in the units of the limits here */
-    double in_cur = e->cur_t1 - s, k;
-    k = (in_cur > 0 ? in_cur / fmax(e->cur.vmax, ENGINE_SCALE_V_FLOOR_M_S) : 0.0) +
-        (e->avail_kcum - e->cur.kcum);
+    double in_cur = e->cur_t1 - s, v = conv_speed(e), k;
+    k = (in_cur > 0 ? in_cur / v : 0.0) + (e->avail_kcum - e->cur.kcum);
     /* the margin scales with the rate: standing still needs none, so a
      * buffer shorter than the margin never deadlocks the output */
-    return fmax(e->cspeed, ENGINE_SCALE_V_FLOOR_M_S) * k -
-           TS_MARGIN_TICKS * e->period_s * e->ts.rate;
+    return v * k - e->ts.rate * (rise_reserve(e, v) + TS_MARGIN_TICKS * e->period_s);
 }
 
 /* The jerk of a stop or clear (m/s^3): at least a / T, so that the braking
@@ -1705,19 +1739,24 @@ static double stop_jerk(const engine_t *e)
     return fmax(e->cfg.scale_jerk_m_s3, e->cfg.scale_accel_m_s2 / e->period_s);
 }
 
-/* The time scaling's limits in rate units at the curve's speed here.  A stop
- * converts them at the curve's speed down to a T (not the 1 m/s floor): below
- * the floor a slow object would brake at less than a, and a stop from v must
- * end within v^2/(2 a) + v T. */
+/* The time scaling's limits in rate units at the curve's speed: outside a
+ * stop at the largest speed the curve reaches on the current segment and the
+ * next one (conv_speed), so that k' dr/dt stays within a over the ticks ahead
+ * also where the curve speeds up (a REST start, entered at rate 0).  A stop
+ * converts them at the curve's speed here, down to a T (not the 1 m/s floor):
+ * below the floor a slow object would brake at less than a, and a stop from v
+ * must end within v^2/(2 a) + v T. */
 static void scale_limits(const engine_t *e, double *A, double *J)
 {
-    double floor = ENGINE_SCALE_V_FLOOR_M_S, jerk = e->cfg.scale_jerk_m_s3;
+    double v, jerk = e->cfg.scale_jerk_m_s3;
 
     if (e->stop_req) {
-        floor = fmin(floor, e->cfg.scale_accel_m_s2 * e->period_s);
+        double floor = fmin(ENGINE_SCALE_V_FLOOR_M_S, e->cfg.scale_accel_m_s2 * e->period_s);
         jerk = stop_jerk(e);
+        v = e->cspeed > floor ? e->cspeed : floor;
+    } else {
+        v = conv_speed(e);
     }
-    double v = e->cspeed > floor ? e->cspeed : floor;
     *A = e->cfg.scale_accel_m_s2 / v;
     *J = jerk / v;
 }
@@ -1740,12 +1779,87 @@ static int moves(const engine_t *e, double R, double A, double J)
     return e->s + ds > e->s && !(is_exactly(ts.rate, 0.0) && is_exactly(ts.acc, 0.0));
 }
 
+/* Scaled, at rate 0 at the start of cur (s = 0).  Every transfer and every
+ * trajectory is entered at rate 0 and every transfer and REST end left at
+ * rate 0: there the curve rests (k' = 0) with its own k'' != 0 (the
+ * smoothstep's 6 D / T_x^2, a REST end's M), and the output's acceleration
+ * k'' r^2 + k' dr/dt is 0 on both sides of the handover instead of stepping
+ * by k'' (TIMESCALE.md, "Handovers"). */
+static void scaled_rest(engine_t *e)
+{
+    e->scaled = 1;
+    e->s = 0.0;
+    e->ts.rate = 0.0;
+    e->ts.acc = 0.0;
+}
+
+/* The output stands within ENGINE_HANDOVER_TOL_M of p. */
+static int near_here(const engine_t *e, const double *p)
+{
+    double d2 = 0;
+    for (int k = 0; k < AX; k++)
+        d2 += (p[k] - e->pos[k]) * (p[k] - e->pos[k]);
+    return d2 <= ENGINE_HANDOVER_TOL_M * ENGINE_HANDOVER_TOL_M;
+}
+
+/* At rest (rate 0) within the dead band of the end of a transfer or of a
+ * trajectory's REST end (asked to move, the next tick could not: no move of
+ * one tick would leave room to stop, ts_step's creep included): the curve is
+ * as good as there.  A closed trajectory whose end is not at rest finishes
+ * where it stands (finish_here, as its end braking does) (its speed
+ * vanishes at the end, the position within k'' d^2 / 2 of it, d the track
+ * time left): hand over from its end. */
+static void rest_handover(engine_t *e)
+{
+    double A, J, target = scale_target(e), end[AX];
+    ts_state_t probe = e->ts;
+
+    if (!(target > 0))
+        return; /* at rest by the override */
+    scale_limits(e, &A, &J);
+    (void)ts_step(&probe, target, remaining(e, e->s), A, J, e->period_s, NULL, NULL);
+    if (probe.rate > 0)
+        return; /* the next tick moves on (its advance from rest alone may be a
+                 * rounding residue of 1e-22: not a move) */
+    if (e->mode == OUT_XFER) {
+        fdiff_eval(&e->cur.seg, 1.0, end, NULL, NULL);
+        if (near_here(e, end))
+            start_trajectory(e, 0);
+        return;
+    }
+    if (e->mode != OUT_STREAM || !e->avail_closed)
+        return; /* an underrun: resumes when waypoints come */
+    const qent_t *h = NULL;
+    for (size_t i = 0; i < e->qlen && !h; i++) {
+        const qent_t *q = &e->q[(e->qhead + i) % e->qcap];
+        if (q->traj != e->out_traj)
+            break;
+        if (q->kind == QE_END)
+            h = q;
+    }
+    for (int k = 0; k < AX; k++)
+        end[k] = h ? h->seg.c[k][0] : NAN;
+    if (!e->avail_rest || !near_here(e, end)) {
+        /* an end not at rest (as end_brake would), or one that the braking
+         * cannot reach (the curve ahead too fast to stop on from any move):
+         * finish where the output stands, never a jump */
+        finish_here(e);
+        return;
+    }
+    while (q_head(e)->kind == QE_SEG)
+        q_pop(e);
+    rest_at_end(e, q_head(e));
+}
+
 /* One tick on the unit grid (rate 1): the forward-difference stepper. */
 static void unit_step(engine_t *e)
 {
     if (e->mode == OUT_XFER) {
         int64_t n = e->n + 1;
         if (tau_of(e, n) >= e->cur_t1) {
+            /* not reached: remaining() brakes the transfer to rate 0 before its
+             * end; should it be, the trajectory is entered at rate 0 as well */
+            scaled_rest(e);
             start_trajectory(e, 0); /* the transfer ends exactly on its start */
         } else {
             e->n = n;
@@ -1819,12 +1933,11 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
     e->n++;
     while (s1 >= e->cur_t1) {
         if (e->mode == OUT_XFER) {
-            if (e->stop_req) {
-                /* a transfer ends at rest: stop on its end */
-                s1 = e->cur_t1;
-                e->ts.rate = e->ts.acc = 0.0;
-                break;
-            }
+            /* a transfer ends at rest, braked to rate 0 (remaining()) */
+            s1 = e->cur_t1;
+            e->ts.rate = e->ts.acc = 0.0;
+            if (e->stop_req)
+                break; /* stop on its end */
             start_trajectory(e, 0);
             if (e->mode != OUT_STREAM)
                 return;
@@ -1865,6 +1978,8 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
             stop_at_rest(e);
         else if (e->end_brake)
             finish_here(e);
+        else
+            rest_handover(e);
         return;
     }
     if (!e->clocked && is_exactly(e->ts.rate, 1.0) && is_exactly(e->ts.acc, 0.0) &&
@@ -1959,8 +2074,12 @@ static void step_once(engine_t *e)
             for (int k = 0; k < AX; k++)
                 target[k] = h->seg.c[k][0];
             start_transfer(e, target, h->gap_s);
-            step_cur(e, ++e->n);
+            scaled_rest(e);
+            e->n++;
+            out_eval_scaled(e);
         } else {
+            if (!e->clocked)
+                scaled_rest(e);
             start_trajectory(e, 1);
         }
         return;
@@ -2075,7 +2194,7 @@ static int stalled(const engine_t *e)
         if (!(target > 0))
             return 1;
         scale_limits(e, &A, &J);
-        return ts_rate_max(remaining(e, e->s), A, J) < J * e->period_s * e->period_s;
+        return ts_rate_max(remaining(e, e->s), A, J) < ts_dead_band(J, e->period_s);
     }
     return 0;
 }
@@ -2089,7 +2208,7 @@ static int stalled(const engine_t *e)
  * many ticks ahead that answer cannot change: until the next re-seed, and
  * while the stopping distance stays short of the remaining capacity
  * (remaining()) with two ticks to spare, at the segment's lower bound on the
- * curve's speed (seg_speed_range): the check each of those ticks would make
+ * curve's speed (seg_speed_max): the check each of those ticks would make
  * passes at any speed above it (see fast_window).  Every public call that
  * changes the engine (push, finish, stop, clear, override, clock, position)
  * closes the window.
@@ -2108,20 +2227,18 @@ static void fast_window(engine_t *e)
     /* the ticks before the next re-seed (step_cur) */
     int64_t m = (int64_t)(FDIFF_RESEED_STEPS - (uint64_t)(e->n - e->seg_n0) % FDIFF_RESEED_STEPS) -
                 1;
-    if (!(e->avail_closed && e->avail_rest)) { /* remaining() is finite */
+    { /* remaining() is finite: a REST end too is left at rate 0 */
         /* step_once's check, ts_stop_dist(1, 0, a/v, j/v) < v K - (margin + 1) T
-         * with v = max(cspeed, floor) and K the capacity left (remaining()),
-         * holds for every v >= v_lo once it holds at v_lo (divided by v, both
-         * sides of the stopping distance fall with v): take the segment's
-         * lower bound on its speed */
-        double v = fmax(e->cur.vmin, ENGINE_SCALE_V_FLOOR_M_S) * (1 - 1e-9);
-        double vm = fmax(e->cur.vmax, ENGINE_SCALE_V_FLOOR_M_S);
+         * with v = conv_speed (the same on every tick of the window: a push
+         * closes it) and K the capacity left (remaining()) */
+        double v = conv_speed(e);
+
         double A = e->cfg.scale_accel_m_s2 / v, J = e->cfg.scale_jerk_m_s3 / v;
         double d = ts_stop_dist(1.0, 0.0, A, J) * (1 + 1e-9);
         double in_cur = e->cur_t1 - tau_of(e, e->n);
-        double k = (in_cur > 0 ? in_cur / vm : 0.0) + (e->avail_kcum - e->cur.kcum);
-        /* K falls by T / vm per tick: the ticks for which it stays above */
-        double room = (k - (d + (TS_MARGIN_TICKS + 1) * e->period_s) / v) * vm;
+        double k = (in_cur > 0 ? in_cur / v : 0.0) + (e->avail_kcum - e->cur.kcum);
+        /* K falls by T / v per tick: the ticks for which it stays above */
+        double room = (k - (d + rise_reserve(e, v) + (TS_MARGIN_TICKS + 1) * e->period_s) / v) * v;
         if (!(room > 0) || !isfinite(d))
             return;
         double mr = floor(room / e->period_s) - 2;

@@ -265,11 +265,18 @@ typedef struct {
                                4 .. smooth_window.  Default 6 */
     double scale_accel_m_s2; /* time scaling (timescale.h): the most it adds to
                                the acceleration along the path when it slows
-                               down or speeds up (stop, clear, underrun, feed
-                               override).  Default 5 m/s^2 */
+                               down or speeds up (start, end, transfer, stop,
+                               clear, underrun, feed override).  Default 5 m/s^2 */
     double scale_jerk_m_s3; /* ... and to the jerk.  Default 50 m/s^3: a stop
                                from v takes v^2/(2 a) + v T (T the
-                               period) of path, see lib/engine/TIMESCALE.md */
+                               period) of path, see lib/engine/TIMESCALE.md.
+                               Every output then changes its acceleration
+                               per tick by at most T times the jerk bound
+                               J_c r^3 + 3 A_c r a / (1 m/s) + j (J_c, A_c the
+                               curve's own largest |k'''|, |k''|, r <= 2 the
+                               rate, j this or, in a stop, max(j, a / T)):
+                               every trajectory and transfer is entered and
+                               left at rate 0 (TIMESCALE.md, "Handovers") */
 } engine_config_t;
 
 /* Fill cfg with working defaults (each one commented above; documented in

@@ -61,6 +61,29 @@ double ts_rate_max(double R, double A, double J)
     return cbrt(R * R * J);
 }
 
+/* For a tick of jerk j that leaves the acceleration a1 = a + j T below 0:
+ * the smallest jerk >= j after which a release at full jerk does not take
+ * the rate below tgt (r1 - a1^2 / (2 J) >= tgt, r1 the rate after the tick);
+ * J if none does.  The law of track_jerk alone, sqrt(2 J |e|) from the error
+ * now, releases up to a few ticks late and lands with the acceleration
+ * still at several J T, which the landing then cleared in one tick. */
+static double release_in_time(double r, double a, double tgt, double j, double J, double T)
+{
+    double a1 = a + j * T, r1 = r + a * T + 0.5 * j * T * T;
+
+    if (!(a1 < 0 && r1 - a1 * a1 / (2.0 * J) < tgt))
+        return j;
+    /* r + a T + x T^2/2 - (a + x T)^2 / (2 J) = tgt, a downward parabola in
+     * x: the root left of its vertex (where the final rate rises with x) */
+    double c0 = r + a * T - tgt;
+    double b = 2.0 * a / T - J, c = -(2.0 * J / (T * T)) * (c0 - a * a / (2.0 * J));
+    double disc = b * b - 4.0 * c;
+    double x = disc >= 0 ? 0.5 * (-b - sqrt(disc)) : J;
+    if (x > J)
+        x = J;
+    return x > j ? x : j;
+}
+
 /* Jerk that drives the rate towards tgt as fast as the limits allow: the
  * acceleration wanted for an error e is the one from which, released at
  * full jerk, the rate lands on tgt (sqrt(2 J |e|), corrected for the
@@ -80,6 +103,9 @@ static double track_jerk(double r, double a, double tgt, double A, double J, dou
         j = J;
     if (j < -J)
         j = -J;
+    /* and no later release than lands on tgt (both directions) */
+    j = release_in_time(r, a, tgt, j, J, T);
+    j = -release_in_time(-r, -a, -tgt, -j, J, T);
     return j;
 }
 
@@ -91,11 +117,40 @@ static double integrate(double r, double a, double j, double T, double *r1, doub
     return r * T + 0.5 * a * T * T + j * T * T * T / 6.0;
 }
 
+/* At rest, asked to move, but a tick at full jerk would need more than R to
+ * stop again (a long period: the distance grows as J T^3): a smaller jerk,
+ * halved up to TS_CREEP_HALVINGS times, that does leave room, so that the
+ * output creeps on instead of standing still for good with room ahead.
+ * Returns the advance (0 and nothing changed if none fits). */
+#define TS_CREEP_HALVINGS 10
+static double creep(double R, double A, double J, double T, double *j, double *r1, double *a1)
+{
+    double jj = J;
+    for (int i = 0; i < TS_CREEP_HALVINGS; i++) {
+        double rr, aa, dd;
+        jj *= 0.5;
+        dd = integrate(0.0, 0.0, jj, T, &rr, &aa);
+        if (ts_stop_dist(rr, aa, A, J) <= R - dd) {
+            *j = jj;
+            *r1 = rr;
+            *a1 = aa;
+            return dd;
+        }
+    }
+    return 0.0;
+}
+
+double ts_dead_band(double J, double T)
+{
+    double d = J * T * T;
+    return d < TS_DEAD_BAND_MAX ? d : TS_DEAD_BAND_MAX;
+}
+
 double ts_step(ts_state_t *st, double target, double R, double A, double J, double T, double *j_out,
                int *limited)
 {
     double r = st->rate, a = st->acc, tgt = target, r1, a1, ds, j;
-    int lim = 0;
+    int lim = 0, crept = 0;
 
     if (!(tgt > 0))
         tgt = 0;
@@ -108,7 +163,7 @@ double ts_step(ts_state_t *st, double target, double R, double A, double J, doub
             lim = 1;
         }
     }
-    if (tgt < J * T * T)
+    if (tgt < ts_dead_band(J, T))
         tgt = 0; /* dead band: a rate this low comes to rest exactly */
     j = track_jerk(r, a, tgt, A, J, T);
     ds = integrate(r, a, j, T, &r1, &a1);
@@ -118,6 +173,10 @@ double ts_step(ts_state_t *st, double target, double R, double A, double J, doub
         j = track_jerk(r, a, tgt, A, J, T);
         ds = integrate(r, a, j, T, &r1, &a1);
         lim = 1;
+        if (!(r > 0) && !(a < 0 || a > 0) && target > 0) {
+            ds = creep(R, A, J, T, &j, &r1, &a1);
+            crept = ds > 0;
+        }
     }
     if (r1 <= 0 && r > A * T) {
         /* the jerk would take the rate through 0 within the tick, from
@@ -138,7 +197,13 @@ double ts_step(ts_state_t *st, double target, double R, double A, double J, doub
     }
     if (ds < 0)
         ds = 0;
-    if (fabs(tgt - r1) <= J * T * T && fabs(a1) <= J * T && fabs(tgt - r) <= A * T) {
+    if (!crept && fabs(tgt - r1) <= J * T * T && fabs(a) <= J * T && fabs(tgt - r) <= A * T) {
+        /* land: the acceleration goes from a to 0 within this tick's jerk
+         * (|a| <= J T, not |a1|: a1 may be up to J T beyond a the other way) */
+        j = -a / T;
+        ds = integrate(r, a, j, T, &r1, &a1);
+        if (ds < 0)
+            ds = 0;
         r1 = tgt;
         a1 = 0;
     }

@@ -49,6 +49,10 @@
  * tick); none at rest, so a buffer shorter than the margin cannot deadlock. */
 #define TS_MARGIN_TICKS 2.0
 
+/* Largest dead band of the rate (ts_dead_band): at long periods J T^2 can
+ * exceed 1, and a target below it would never be left from rest. */
+#define TS_DEAD_BAND_MAX 1e-3
+
 typedef struct {
     double rate; /* r = ds/dt (1 = as solved) */
     double acc;  /* a = dr/dt, 1/s */
@@ -66,6 +70,12 @@ double ts_stop_dist(double r, double a, double A, double J);
  * the inverse of ts_stop_dist(r, 0, A, J).  0 if R <= 0, INFINITY if R is.
  */
 double ts_rate_max(double R, double A, double J);
+
+/*
+ * A target rate below this is taken as 0 (rest comes exactly): J T^2, at
+ * most TS_DEAD_BAND_MAX.
+ */
+double ts_dead_band(double J, double T);
 
 /*
  * Advance the state by one tick of T seconds towards target (clamped to

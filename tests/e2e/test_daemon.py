@@ -361,7 +361,10 @@ class TestRunning(unittest.TestCase):
             # row (after the header the reopened stdout writes) continues the
             # old one by exactly one period of engine and track time, on the
             # same trajectory, with no jump in position.
-            before = d.line(lambda l: l.startswith("boat,") and ",streaming," in l)
+            # on the unit grid: past the start, which is entered at rate 0
+            # (flag SCALED 0x40 while the time scaling ramps up)
+            before = d.line(lambda l: l.startswith("boat,") and ",streaming," in l and
+                            not int(l.split(",")[13]) & 0x40)
             write(self.conf, self.config("boat").replace("status_interval_s = 1",
                                                          "status_interval_s = 2"))
             d.p.send_signal(signal.SIGHUP)

@@ -365,8 +365,9 @@ static void test_catchup_after_stall(void **state)
 
 /* Given a clocked engine, when the play time crosses the first waypoint's
  * time between two ticks, then the output starts at that sub-tick phase:
- * its t_s is now - D exactly (age D) from the first moving tick on, and the
- * position is the curve's at t_s (Horner on engine_curve's segments). */
+ * its t_s is now - D exactly (age D) from the first moving tick on (up to
+ * the braking into the REST end), and the position is the curve's at t_s
+ * (Horner on engine_curve's segments). */
 static void test_start_on_the_clock(void **state)
 {
     (void)state;
@@ -398,8 +399,13 @@ static void test_start_on_the_clock(void **state)
             continue;
         }
         moving++;
-        assert_true(fabs(sp.t_s - play) < 1e-6);
-        assert_true(fabs(sp.age_s - 3.0) < 1e-6);
+        /* on the clock up to the REST end, which is left at rate 0 (braking
+         * from v = where()'s speed, under 30 m/s, takes v/(2a) + a/(2j) <=
+         * 3.05 s of track time at a = 5 m/s^2, j = 50 m/s^3; then late) */
+        if (sp.t_s < wp[99].t_s - 3.1) {
+            assert_true(fabs(sp.t_s - play) < 1e-6);
+            assert_true(fabs(sp.age_s - 3.0) < 1e-6);
+        }
         for (size_t i = 0; i < nseg; i++)
             if (sp.t_s >= seg[i].t0_s && sp.t_s < seg[i].t0_s + seg[i].dur_s) {
                 double p[3];

@@ -948,7 +948,10 @@ static void test_jitter_rejected(void **state)
             double p[3], a[3];
             fdiff_eval_curve(segs, nseg, &sp.t_s, 1, p, NULL, a);
             maxerr = fmax(maxerr, dist3(p, sp.pos_m));
-            maxaerr = fmax(maxaerr, dist3(a, sp.acc_m_s2));
+            /* the curve's own k'' at rate 1 (a trajectory is entered and
+             * left at rate 0: those ticks add k'' (r^2 - 1) + k' dr/dt) */
+            if (!(sp.flags & ENGINE_SP_SCALED))
+                maxaerr = fmax(maxaerr, dist3(a, sp.acc_m_s2));
             if (sp.t_s >= t_lo && sp.t_s <= t_hi)
                 for (int ax = 0; ax < 3; ax++)
                     amax_stream = fmax(amax_stream, fabs(sp.acc_m_s2[ax]));
@@ -1213,7 +1216,9 @@ static void test_long_segment_reseeded(void **state)
     long long ticks = 0;
     for (int64_t k = 0; k < 700000; k++) {
         assert_int_equal(engine_tick(e, k * c.period_ns, &sp), 0);
-        if (sp.state == ENGINE_STATE_STREAMING) {
+        /* on the unit grid (entered and left at rate 0, scaled), counted
+         * from its first tick, a re-seed */
+        if (sp.state == ENGINE_STATE_STREAMING && !(sp.flags & ENGINE_SP_SCALED)) {
             double p[3];
             fdiff_eval_curve(segs, nseg, &sp.t_s, 1, p, NULL, NULL);
             double err = dist3(p, sp.pos_m);
@@ -1226,7 +1231,7 @@ static void test_long_segment_reseeded(void **state)
             break;
     }
     assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
-    assert_true(ticks > 500000);
+    assert_true(ticks > 400000); /* 590 000 less the ramps in and out at rate 0 */
     print_message("one segment of %lld ticks at 10 kHz: drift %.2e m (bound %.2e m)\n", ticks,
                   worst, bound);
     assert_true(worst <= bound);
