@@ -176,10 +176,7 @@ class GeoFrames(unittest.TestCase):
         ra = self.trajreplay(GPX, os.path.join(self.tmp, "ra.csv"), "now_ns", ["--geo"])
         rb = self.trajreplay(self.b_gpx, os.path.join(self.tmp, "rb.csv"), "t_s")
         own_b = topo(*self.b0)
-        # (rows at the same track time: both enter the trajectory at rate 0 and
-        # ramp up, TIMESCALE.md "Handovers"; rows that are not in both are the
-        # ramps' own, off the period grid)
-        bt = [r for r in b.values() if on_curve(r) and r["t_s"] in rb]
+        bt = [r for r in b.values() if on_curve(r)]
         self.assertGreater(len(bt), 1000)
         worst = 0.0
         # b's curve at trajd's track times: a cubic Hermite between trajreplay's
@@ -222,8 +219,7 @@ class GeoFrames(unittest.TestCase):
         # 2. relative geometry at every tick both are on their curves: pyproj's geodesic
         #    distance and azimuth from trajd's lat/lon columns, and from the references
         #    each in its own frame converted by pyproj
-        both = [k for k in a if on_curve(a[k]) and k in b and on_curve(b[k]) and k in ra and
-                b[k]["t_s"] in rb]
+        both = [k for k in a if on_curve(a[k]) and k in b and on_curve(b[k])]
         self.assertGreater(len(both), 1000)
         far = 0.0
         for k in both:
