@@ -82,7 +82,7 @@ double ts_dead_band(double J, double T);
  * 0 .. TS_RATE_MAX) without ever needing more than R of track time to stop
  * (R may be INFINITY).  Writes the jerk used into *j_out (may be NULL) and
  * returns the track time advanced, ds >= 0.  Lands exactly on target
- * (rate == target, acc == 0) once within one tick's jerk of it, so that the
+ * (rate == target, acc == 0) within two ticks' jerk of it (continuously), so the
  * caller can tell an unscaled output by rate == 1.0 && acc == 0.0.
  * *limited (may be NULL) is set to 1 when R, not target, decided the move.
  */
