@@ -220,6 +220,8 @@ double ts_step(ts_state_t *st, double target, double R, double A, double J, doub
             j = -J;
         ds = integrate(r, a, j, T, &r1, &a1);
     }
+    if (!(tgt > 0) && r1 > 0 && r1 <= 1e-15 && fabs(a1) <= 1e-12 * J * T)
+        r1 = 0; /* rounding residue of a landing on rest (1e-19): at rest */
     if (r1 <= 0) {
         /* came to rest within the tick (the release of the braking ends
          * here): rest exactly; a is within one tick's jerk of 0 */
@@ -232,7 +234,7 @@ double ts_step(ts_state_t *st, double target, double R, double A, double J, doub
         fabs(a) <= 2.0 * J * T) {
         double lj = j, lds = ds, lr = r1, la = a1;
         land(r, a, tgt, J, T, &lj, &lds, &lr, &la);
-        if (isinf(R) || !(lr > 0) || ts_stop_dist(lr, la, A, J) <= R - lds) {
+        if (isinf(R) || (lds <= R && (!(lr > 0) || ts_stop_dist(lr, la, A, J) <= R - lds))) {
             j = lj; /* a landing that leaves room to stop */
             ds = lds;
             r1 = lr;
