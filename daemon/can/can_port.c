@@ -35,6 +35,7 @@ typedef struct {
     int cw_known[CANPROTO_CIA402_AXES];
     uint16_t cw_sent[CANPROTO_CIA402_AXES];
     int reset_req; /* CLEAR: fault reset and re-enable */
+    int hb_hold;   /* a drive's heartbeat was lost: feed hold until CLEAR */
     int64_t hb_last_ns[CANPROTO_CIA402_AXES];
     int hb_lost[CANPROTO_CIA402_AXES];
     int64_t now_ns;
@@ -235,10 +236,22 @@ static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, 
         event(o, CANPROTO_STERR_REFUSED);
         return;
     }
+    if (cmd == CANPROTO_CMD_OVERRIDE && o->hb_hold && arg > 0) {
+        o->st.cmd_refused++; /* moving again after a lost drive is CLEAR's */
+        o->st.last_refused = (uint8_t)cmd;
+        o->st.last_refused_id = id;
+        event(o, CANPROTO_STERR_REFUSED);
+        return;
+    }
     if (cmd == CANPROTO_CMD_CLEAR && o->ids.cia402_enable && o->drive.held)
         o->reset_req = 1; /* fault reset, then the drives are enabled again */
     if (o->hooks.command)
         o->hooks.command(o->ctx, cmd, arg);
+    if (cmd == CANPROTO_CMD_CLEAR && o->hb_hold) {
+        o->hb_hold = 0; /* the operator's: the feed back at 100 % */
+        if (o->hooks.command)
+            o->hooks.command(o->ctx, CANPROTO_CMD_OVERRIDE, 100);
+    }
     if (cmd == CANPROTO_CMD_CLEAR)
         canproto_rx_restart(&o->rx);
     if (cmd == CANPROTO_CMD_RESET_COUNTERS) {
@@ -603,6 +616,13 @@ static void bring_up(can_port_t *p, can_port_obj_t *o, int64_t now_ns)
             o->drive.hb_lost |= 1u << a;
             o->st.heartbeat_lost++;
             event(o, CANPROTO_STERR_DRIVE);
+            if (!o->hb_hold && o->hooks.command) {
+                /* a drive that went silent may not follow: feed hold (override
+                 * 0), a controlled stop along the path by the time scaling,
+                 * every axis together; held until a CLEAR command */
+                o->hb_hold = 1;
+                o->hooks.command(o->ctx, CANPROTO_CMD_OVERRIDE, 0);
+            }
         }
         if (o->sdo_wait[a]) {
             if (now_ns - o->sdo_sent_ns[a] < CAN_PORT_SDO_TIMEOUT_NS)

@@ -562,7 +562,9 @@ static void log_drives(can_state_t *s)
                     "can: object '%s': EMCY from a drive: error code 0x%04X (%llu so far)", name,
                     os.last_emcy, (unsigned long long)os.emcy);
         if (os.heartbeat_lost != was->heartbeat_lost)
-            log_msg(LOG_ERR, "can: object '%s': a drive's heartbeat was not heard in time (%llu)",
+            log_msg(LOG_ERR,
+                    "can: object '%s': a drive's heartbeat was not heard in time (%llu): feed "
+                    "hold, the object stops along its path; command clear resumes",
                     name, (unsigned long long)os.heartbeat_lost);
         if (os.sdo_timeouts != was->sdo_timeouts)
             log_msg(LOG_WARNING, "can: object '%s': SDO request unanswered, resent (%llu)", name,

@@ -614,6 +614,49 @@ static void test_cia402_status2_drive_page(void **state)
     assert_int_equal(canproto_decode_status2_drive(&other, &d), -CANPROTO_EMUX);
 }
 
+/* Given a drive with a heartbeat consumer (100 ms) whose heartbeat stops,
+ * then the object is held: one feed override 0 (a controlled stop along the
+ * path by the time scaling, engine_set_override), an override command from
+ * the bus to move again is refused and counted while held, and a CLEAR
+ * command (the operator's) passes and sets the feed back to 100 %. */
+static void test_cia402_heartbeat_lost_holds(void **state)
+{
+    (void)state;
+    enable_with_controlword_rpdo();
+    io.in[io.nin] = (canproto_frame_t){.id = 0x701, .len = 1, .data = {0x05}};
+    io.nin++;
+    can_port_rx(port, 0);
+    step_drive(0x0250, 1);
+    step_drive(0x0231, 2);
+    step_drive(0x0233, 3);
+    eng.ncmd = 0;
+    run_cycle(50, 0);
+    assert_int_equal(eng.ncmd, 0); /* heard 50 ms ago: fine */
+    run_cycle(500, 0);
+    assert_int_equal(eng.ncmd, 1);
+    assert_int_equal(eng.cmds[0], CANPROTO_CMD_OVERRIDE);
+    assert_int_equal(eng.args[0], 0);
+    run_cycle(600, 0);
+    assert_int_equal(eng.ncmd, 1); /* once */
+    can_port_obj_stats_t st;
+    can_port_obj_stats(port, 0, &st);
+    assert_int_equal(st.heartbeat_lost, 1);
+    canproto_frame_t f;
+    assert_int_equal(canproto_encode_override(0x680, 100, &f), 0);
+    io.in[io.nin++] = f;
+    can_port_rx(port, 0);
+    assert_int_equal(eng.ncmd, 1); /* refused */
+    can_port_obj_stats(port, 0, &st);
+    assert_int_equal(st.cmd_refused, 1);
+    assert_int_equal(canproto_encode_command(0x680, CANPROTO_CMD_CLEAR, &f), 0);
+    io.in[io.nin++] = f;
+    can_port_rx(port, 0);
+    assert_int_equal(eng.ncmd, 3);
+    assert_int_equal(eng.cmds[1], CANPROTO_CMD_CLEAR);
+    assert_int_equal(eng.cmds[2], CANPROTO_CMD_OVERRIDE);
+    assert_int_equal(eng.args[2], 100);
+}
+
 /* Given the drive refuses the configuration SDO, then the abort is counted
  * with its code and the drive is never enabled. */
 static void test_cia402_sdo_abort(void **state)
@@ -972,6 +1015,7 @@ int main(void)
                                         teardown),
         cmocka_unit_test_setup_teardown(test_cia402_sdo_stale_reply_ignored, setup, teardown),
         cmocka_unit_test_setup_teardown(test_cia402_status2_drive_page, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_cia402_heartbeat_lost_holds, setup, teardown),
         cmocka_unit_test_setup_teardown(test_rx_paths, setup, teardown),
         cmocka_unit_test_setup_teardown(test_flow_control_efull, setup, teardown),
         cmocka_unit_test_setup_teardown(test_commands, setup, teardown),
