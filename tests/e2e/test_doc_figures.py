@@ -16,6 +16,11 @@ Rules (a figure is flagged, with file:line, if it breaks one):
 2. A table whose header row names a time or rate unit (ns, us, µs, ms, /s)
    and that has a data row with a digit must have a command in one of the
    two blocks before it in the same section.
+3. No doc speaks of the machine or the session a figure was taken on
+   ("load average", "this machine", "virtual machine", "shared 2-core",
+   "other builds", "on a loaded machine", "quiet machine"): a figure is a
+   property of the product, measured by its command; comparisons are ratios
+   against a reference run in the same benchmark.
 Deterministic counts (setpoints, waypoints of a replay) are checked against
 their runs by the tests that produce them, not here.
 """
@@ -28,6 +33,9 @@ ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 DOCS = ["README.md", "config/*.md", "daemon/*.md", "lib/*/*.md", "tests/*/*.md"]
 COMMAND = re.compile(r"`(make|build/|tests/|python3|sh |bash |BUILD=|FUZZ_|trajd|trajreplay|"
                      r"trajsurf|tshark|mbpoll|candump)[^`]*`")
+MACHINE_TALK = re.compile(r"load average|this machine|virtual machine|shared 2-core|2 cores shared|"
+                          r"other builds|loaded machine|quiet machine|nothing else (running|on)",
+                          re.I)
 UNIT_HEADER = re.compile(r"(\bns\b|\bus\b|µs|\bms\b|/s\b)")
 
 
@@ -91,6 +99,11 @@ def violations(path):
                     and not any(has_command(p) for p in before)):
                 bad.append("%s:%d: table of measured figures with no command above it"
                            % (path, line))
+    for section, kind, line, text in bs:
+        for k, row in enumerate(text.split("\n")):
+            if MACHINE_TALK.search(row):
+                bad.append("%s:%d: speaks of the machine or the session: %s"
+                           % (path, line + k, MACHINE_TALK.search(row).group(0)))
     return bad
 
 
@@ -102,10 +115,10 @@ class DocFigures(unittest.TestCase):
             f.write("# A\n\nMeasured: 5 us per call.\n\n# B\n\nMeasured by `make bench`: 5 us.\n\n"
                     "# C\n\nRun:\n\n    build/bin/x\n\nMeasured: 7 ms.\n\n# D\n\n"
                     "| phase | p99 us |\n|---|---|\n| idle | 12 |\n\n# E\n\n`make bench`:\n\n"
-                    "| phase | p99 us |\n|---|---|\n| idle | 12 |\n")
+                    "| phase | p99 us |\n|---|---|\n| idle | 12 |\n\n# F\n\nRun with `make bench` at load average 3.\n")
         try:
             got = [v.split(":")[1] for v in violations(f.name)]
-            self.assertEqual(got, ["3", "19"])
+            self.assertEqual(got, ["3", "19", "33"])
         finally:
             os.unlink(f.name)
 

@@ -1,0 +1,63 @@
+"""test_doc_counts.py - the counts in daemon/README.md's trajreplay table are
+those of a run (issue 14: no stale numbers).
+
+The table under "**Measured.**" in daemon/README.md's trajreplay part gives,
+per bundled track, what `trajreplay --summary -o FILE TRACK` (default
+settings) reports: waypoints read, accepted, gaps, setpoints, and the CSV's
+size in bytes.  Each row is replayed here and compared exactly.
+"""
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import unittest
+
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+BUILD = os.environ.get("BUILD", os.path.join(ROOT, "build"))
+
+
+def table_rows():
+    """[(track, {column: int})] of the table whose header starts '| track | read |'."""
+    with open(os.path.join(ROOT, "daemon", "README.md"), encoding="utf-8") as f:
+        lines = f.read().split("\n")
+    start = next(i for i, l in enumerate(lines) if l.startswith("| track | read |"))
+    head = [c.strip() for c in lines[start].strip("|").split("|")]
+    rows = []
+    for l in lines[start + 2:]:
+        if not l.startswith("|"):
+            break
+        cells = [c.strip() for c in l.strip("|").split("|")]
+        track = cells[0].strip("`")
+        rows.append((track, {h: int(re.sub(r"[ ,]", "", c)) for h, c in zip(head[1:], cells[1:])}))
+    return rows
+
+
+def summary(track, out):
+    r = subprocess.run([os.path.join(BUILD, "bin", "trajreplay"), "--summary", "-q", "-o", out,
+                        os.path.join(ROOT, "tests", "data", track)],
+                       capture_output=True, text=True, check=True)
+    s = {}
+    for line in r.stderr.splitlines():
+        m = re.match(r"summary: (\w+) (\S+)", line)
+        if m:
+            s[m.group(1)] = m.group(2)
+    return s
+
+
+class DocCounts(unittest.TestCase):
+    def test_trajreplay_table(self):
+        rows = table_rows()
+        self.assertGreaterEqual(len(rows), 3)
+        with tempfile.TemporaryDirectory() as tmp:
+            for track, want in rows:
+                out = os.path.join(tmp, "out.csv")
+                s = summary(track, out)
+                got = {"read": int(s["waypoints"]), "accepted": int(s["accepted"]),
+                       "gaps": int(s["gaps"]), "setpoints": int(s["setpoints"]),
+                       "CSV bytes": os.path.getsize(out)}
+                self.assertEqual(got, want, "daemon/README.md's row for %s is stale" % track)
+
+
+if __name__ == "__main__":
+    unittest.main(argv=sys.argv[:1])
