@@ -86,6 +86,20 @@ typedef struct {
     unsigned scaled;  /* time-scaled ticks */
 } worst_t;
 
+/* The three f32 values at object offset off of sp's Modbus block (encoded,
+ * read back); 0 if the first is NaN. */
+static int modbus_vec(const engine_setpoint_t *sp, int off, double v[3])
+{
+    static uint16_t regs[MBMAP_REGS(1)];
+    mbmap_object_t o;
+    memset(&o, 0, sizeof o);
+    o.sp = *sp;
+    assert_int_equal(mbmap_encode_object(regs, 0, 1, &o), 0);
+    for (int x = 0; x < 3; x++)
+        v[x] = mbmap_get_f32(regs + MBMAP_OBJ_BASE(0) + off + 2 * x);
+    return !isnan(v[0]);
+}
+
 /* Decoded position of sp through output k; 0 if the output has no position. */
 static int decode_out(int k, const canproto_ids_t *ids, const engine_setpoint_t *sp, double p[3])
 {
@@ -129,16 +143,7 @@ static int decode_out(int k, const canproto_ids_t *ids, const engine_setpoint_t 
             p[a] = strtod(q + 1, &q);
         return !isnan(p[0]);
     }
-    case OUT_MODBUS: {
-        static uint16_t regs[MBMAP_REGS(1)];
-        mbmap_object_t o;
-        memset(&o, 0, sizeof o);
-        o.sp = *sp;
-        assert_int_equal(mbmap_encode_object(regs, 0, 1, &o), 0);
-        for (int a = 0; a < 3; a++)
-            p[a] = mbmap_get_f32(regs + MBMAP_OBJ_BASE(0) + MBMAP_O_POS + 2 * a);
-        return !isnan(p[0]);
-    }
+    case OUT_MODBUS: return modbus_vec(sp, MBMAP_O_POS, p);
     }
     return 0;
 }
@@ -160,16 +165,7 @@ static int decode_acc(int k, const engine_setpoint_t *sp, double a[3])
         }
         return !isnan(a[0]);
     }
-    case OUT_MODBUS: {
-        static uint16_t regs[MBMAP_REGS(1)];
-        mbmap_object_t o;
-        memset(&o, 0, sizeof o);
-        o.sp = *sp;
-        assert_int_equal(mbmap_encode_object(regs, 0, 1, &o), 0);
-        for (int x = 0; x < 3; x++)
-            a[x] = mbmap_get_f32(regs + MBMAP_OBJ_BASE(0) + MBMAP_O_ACC + 2 * x);
-        return !isnan(a[0]);
-    }
+    case OUT_MODBUS: return modbus_vec(sp, MBMAP_O_ACC, a);
     }
     return 0;
 }
