@@ -1,5 +1,6 @@
-"""test_doc_counts.py - the counts in daemon/README.md's trajreplay table are
-those of a run (issue 14: no stale numbers).
+"""test_doc_counts.py - the counts in daemon/README.md's trajreplay table and
+lib/spline/README.md's cubic-vs-smooth table are those of a run (issue 14: no
+stale numbers).
 
 The table under "**Measured.**" in daemon/README.md's trajreplay part gives,
 per bundled track, what `trajreplay --summary -o FILE TRACK` (default
@@ -57,6 +58,28 @@ class DocCounts(unittest.TestCase):
                        "gaps": int(s["gaps"]), "setpoints": int(s["setpoints"]),
                        "CSV bytes": os.path.getsize(out)}
                 self.assertEqual(got, want, "daemon/README.md's row for %s is stale" % track)
+
+    def test_smooth_table(self):
+        """lib/spline/README.md: visnjan at 10 Hz, cubic and smooth: path length,
+        p99 speed, p99 and max acceleration, as the doc rounds them."""
+        import numpy as np
+        with open(os.path.join(ROOT, "lib", "spline", "README.md"), encoding="utf-8") as f:
+            doc = f.read()
+        with tempfile.TemporaryDirectory() as tmp:
+            for method, label in (("cubic", "cubic (exact)"), ("smooth", "smooth (")):
+                row = next(l for l in doc.split("\n") if l.startswith("| " + label))
+                want = [float(x) for x in re.findall(r"\| ([0-9.]+) m", row)]
+                out = os.path.join(tmp, method + ".csv")
+                subprocess.run([os.path.join(BUILD, "bin", "trajreplay"), "-q", "--rate", "10",
+                                "--method", method, "-o", out,
+                                os.path.join(ROOT, "tests", "data", "gpxgo_visnjan.csv")], check=True)
+                d = np.genfromtxt(out, delimiter=",", names=True, dtype=None, encoding=None)
+                v = np.hypot(d["vx_m_s"], d["vy_m_s"])
+                a = np.hypot(d["ax_m_s2"], d["ay_m_s2"])
+                got = [round(float(np.nansum(np.hypot(np.diff(d["x_m"]), np.diff(d["y_m"]))))),
+                       round(float(np.nanpercentile(v, 99)), 2), round(float(np.nanpercentile(a, 99)), 2),
+                       round(float(np.nanmax(a)), 2)]
+                self.assertEqual(got, want, "lib/spline/README.md's %s row is stale" % method)
 
 
 if __name__ == "__main__":

@@ -260,9 +260,10 @@ def pic_engine_smooth():
         runs[m] = d
         v = np.hypot(d["vx_m_s"], d["vy_m_s"])
         a = np.hypot(d["ax_m_s2"], d["ay_m_s2"])
+        # (rows before the first position exist have NaN positions: left out)
         print("visnjan %s: path %.0f m, p99 speed %.2f m/s, p99 acceleration %.2f m/s^2, max %.2f" % (
-            m, np.hypot(np.diff(d["x_m"]), np.diff(d["y_m"])).sum(), np.percentile(v, 99),
-            np.percentile(a, 99), a.max()))
+            m, np.nansum(np.hypot(np.diff(d["x_m"]), np.diff(d["y_m"]))), np.nanpercentile(v, 99),
+            np.nanpercentile(a, 99), np.nanmax(a)))
     # the fixes, converted like trajreplay does: take them from the cubic run's
     # waypoint times (the curve passes through them), first 400 s
     t0, t1 = 0.0, 400.0
