@@ -227,33 +227,30 @@ void can_port_status2_value(can_port_t *p, unsigned i, const canproto_frame_t *f
     status2_put(p, i, f, 1);
 }
 
+static void refuse_command(can_port_obj_t *o, canproto_cmd_t cmd, uint32_t id)
+{
+    o->st.cmd_refused++;
+    o->st.last_refused = (uint8_t)cmd;
+    o->st.last_refused_id = id;
+    event(o, CANPROTO_STERR_REFUSED);
+}
+
 static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, uint32_t id)
 {
     if (!((o->cmd_allow >> cmd) & 1u)) {
-        o->st.cmd_refused++;
-        o->st.last_refused = (uint8_t)cmd;
-        o->st.last_refused_id = id;
-        event(o, CANPROTO_STERR_REFUSED);
-        return;
-    }
-    if (cmd == CANPROTO_CMD_OVERRIDE && o->hb_hold && arg > 0) {
-        o->st.cmd_refused++; /* moving again after a lost drive is CLEAR's */
-        o->st.last_refused = (uint8_t)cmd;
-        o->st.last_refused_id = id;
-        event(o, CANPROTO_STERR_REFUSED);
+        refuse_command(o, cmd, id);
         return;
     }
     if (cmd == CANPROTO_CMD_CLEAR && o->ids.cia402_enable && o->drive.held)
         o->reset_req = 1; /* fault reset, then the drives are enabled again */
-    if (o->hooks.command)
-        o->hooks.command(o->ctx, cmd, arg);
-    if (cmd == CANPROTO_CMD_CLEAR && o->hb_hold) {
-        o->hb_hold = 0; /* the operator's: the feed back at 100 % */
-        if (o->hooks.command)
-            o->hooks.command(o->ctx, CANPROTO_CMD_OVERRIDE, 100);
+    if (o->hooks.command && o->hooks.command(o->ctx, cmd, arg) < 0) {
+        refuse_command(o, cmd, id); /* e.g. an override while held (obj_set_override) */
+        return;
     }
-    if (cmd == CANPROTO_CMD_CLEAR)
+    if (cmd == CANPROTO_CMD_CLEAR) {
+        o->hb_hold = 0; /* the clear released the object's hold: a new loss holds again */
         canproto_rx_restart(&o->rx);
+    }
     if (cmd == CANPROTO_CMD_RESET_COUNTERS) {
         memset(&o->st, 0, sizeof o->st);
         memset(&o->rx.st, 0, sizeof o->rx.st);
@@ -616,12 +613,12 @@ static void bring_up(can_port_t *p, can_port_obj_t *o, int64_t now_ns)
             o->drive.hb_lost |= 1u << a;
             o->st.heartbeat_lost++;
             event(o, CANPROTO_STERR_DRIVE);
-            if (!o->hb_hold && o->hooks.command) {
+            if (!o->hb_hold && o->hooks.hold) {
                 /* a drive that went silent may not follow: feed hold (override
                  * 0), a controlled stop along the path by the time scaling,
-                 * every axis together; held until a CLEAR command */
+                 * every axis together; held until a CLEAR command (obj_hold) */
                 o->hb_hold = 1;
-                o->hooks.command(o->ctx, CANPROTO_CMD_OVERRIDE, 0);
+                o->hooks.hold(o->ctx);
             }
         }
         if (o->sdo_wait[a]) {

@@ -82,12 +82,16 @@ typedef struct {
 typedef struct {
     /* Offer a waypoint; returns what engine_push returns. */
     int (*push)(void *ctx, const engine_waypoint_t *wp);
-    /* A command frame arrived. */
-    void (*command)(void *ctx, canproto_cmd_t cmd, unsigned arg);
+    /* A command frame arrived.  Returns 0, or < 0: refused (counted as
+     * cmd_refused, e.g. an override > 0 while the object is held). */
+    int (*command)(void *ctx, canproto_cmd_t cmd, unsigned arg);
     /* Current engine status (state, last_seq, free). */
     void (*status)(void *ctx, engine_status_t *st);
     /* A feedback TPDO of one of the object's drives arrived (may be NULL). */
     void (*feedback)(void *ctx, const can_port_drive_t *d);
+    /* A drive's heartbeat was lost: hold the object (feed override 0 until a
+     * CLEAR command; may be NULL). */
+    void (*hold)(void *ctx);
 } can_port_hooks_t;
 
 typedef struct {

@@ -432,7 +432,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
     can_port_config_t pc;
     port_config(c, (int64_t)llround((double)cfg->daemon.period_ns / cfg->daemon.speed), &pc);
     can_port_io_t io = {null_send, null_recv, NULL, null_up};
-    can_port_hooks_t hk = {null_push, NULL, null_status, NULL};
+    can_port_hooks_t hk = {null_push, NULL, null_status, NULL, NULL};
     can_port_t *p = can_port_new(&pc, &io, NULL, n);
     if (!p) {
         snprintf(why, wl, "[can] sync settings invalid or out of memory");
@@ -597,7 +597,7 @@ static int hk_push(void *ctx, const engine_waypoint_t *wp)
     return obj_push_from(h->o, wp, src);
 }
 
-static void hk_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
+static int hk_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
 {
     obj_t *o = ((const can_hook_ctx_t *)ctx)->o;
     switch (cmd) {
@@ -605,9 +605,15 @@ static void hk_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
     case CANPROTO_CMD_STOP: engine_stop(o->engine); break;
     case CANPROTO_CMD_CLEAR: obj_clear(o); break;
     case CANPROTO_CMD_RESET_COUNTERS: obj_reset_counters(o); break;
-    case CANPROTO_CMD_OVERRIDE: engine_set_override(o->engine, arg / 100.0); break;
+    case CANPROTO_CMD_OVERRIDE: return obj_set_override(o, arg);
     default: break;
     }
+    return 0;
+}
+
+static void hk_hold(void *ctx)
+{
+    obj_hold(((const can_hook_ctx_t *)ctx)->o);
 }
 
 /*
@@ -837,7 +843,7 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
         can_obj_ids(cfg_obj_transport(s->objs[k]->cfg, &can_transport),
                     (unsigned)s->objs[k]->cfg->id, &ids);
         can_port_hooks_t hk = {s->is_input[k] ? hk_push : hk_push_refuse, hk_command, hk_status,
-                               hk_feedback};
+                               hk_feedback, hk_hold};
         s->drive_state_logged[k] = -1;
         if (ids.cia402 && (ids.cia402_feedback || ids.cia402_enable) && !s->objs[k]->carried)
             engine_require_position(s->objs[k]->engine, 1); /* the drive says where it is */

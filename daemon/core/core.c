@@ -148,10 +148,27 @@ static void obj_try_rearm(obj_t *o)
 void obj_clear(obj_t *o)
 {
     engine_clear(o->engine);
+    if (o->held) { /* the operator's: the feed back at 100 % */
+        o->held = 0;
+        engine_set_override(o->engine, 1.0);
+    }
     if (safety_fault(&o->safety)) {
         o->safety_rearm = 1;
         obj_try_rearm(o);
     }
+}
+
+void obj_hold(obj_t *o)
+{
+    o->held = 1;
+    engine_set_override(o->engine, 0.0);
+}
+
+int obj_set_override(obj_t *o, unsigned percent)
+{
+    if (o->held && percent > 0)
+        return -ENGINE_ESTATE; /* moving again after a hold is clear's */
+    return engine_set_override(o->engine, percent / 100.0);
 }
 
 int obj_set_position(obj_t *o, const double pos_m[ENGINE_AXES])

@@ -95,6 +95,8 @@ typedef struct obj {
     double clock_window_s;        /* auto: epoch when the first time is this close to now */
     playout_drift_t *drift;       /* the daemon's drift estimate (stats_t), fed with the
                                      * arrivals of a clocked object's waypoints */
+    int held;                     /* feed hold (obj_hold, e.g. a CiA 402 drive's heartbeat
+                                     * lost): an override > 0 is refused until obj_clear */
 } obj_t;
 
 /*
@@ -124,6 +126,20 @@ double obj_safety_accel(const engine_config_t *e);
  * by a transfer.  The only way out of a safety fault.
  */
 void obj_clear(obj_t *o);
+
+/*
+ * Hold o (a CiA 402 drive's heartbeat lost): feed override 0, a controlled
+ * stop along its path by the time scaling; until obj_clear, every source's
+ * override above 0 is refused (obj_set_override).  The one owner of the hold.
+ */
+void obj_hold(obj_t *o);
+
+/*
+ * Feed override in percent (CAN and Modbus): engine_set_override, or
+ * -ENGINE_ESTATE (refused, the caller counts it) while o is held and
+ * percent > 0.  obj_clear releases the hold and sets the feed back to 100 %.
+ */
+int obj_set_override(obj_t *o, unsigned percent);
 
 /*
  * Where o really stands (a drive's position actual value): the engine holds

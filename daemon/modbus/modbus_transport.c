@@ -136,7 +136,7 @@ static int hook_override(void *ctx, unsigned k, unsigned percent)
     obj_t *o = obj_at(t, k);
     if (!o)
         return MODBUS_SERVER_HOOK_EADDRESS;
-    return engine_set_override(o->engine, percent / 100.0);
+    return obj_set_override(o, percent);
 }
 
 static void on_ready(loop_t *l, int fd, uint32_t events, void *ctx)

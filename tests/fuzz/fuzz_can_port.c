@@ -93,11 +93,12 @@ static int obj_push(void *ctx, const engine_waypoint_t *wp)
     return o->answer;
 }
 
-static void obj_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
+static int obj_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
 {
     obj_t *o = ctx;
     (void)arg;
     o->st.state = (cmd & 1) ? ENGINE_STATE_FINISHED : ENGINE_STATE_STREAMING;
+    return 0;
 }
 
 static void obj_status(void *ctx, engine_status_t *st)
@@ -113,7 +114,7 @@ static void obj_feedback(void *ctx, const can_port_drive_t *d)
             abort();
 }
 
-static const can_port_hooks_t obj_hooks = {obj_push, obj_command, obj_status, obj_feedback};
+static const can_port_hooks_t obj_hooks = {obj_push, obj_command, obj_status, obj_feedback, NULL};
 
 static void configure(canproto_ids_t *ids, uint8_t b)
 {

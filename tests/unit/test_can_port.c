@@ -75,6 +75,8 @@ typedef struct {
     unsigned cmds[8];
     unsigned args[8];
     unsigned ncmd;
+    int cmd_answer; /* what command returns (< 0: refused, as obj_set_override) */
+    unsigned nhold; /* hold requests */
     uint32_t free_slots;
 } fake_engine_t;
 
@@ -86,13 +88,19 @@ static int fe_push(void *ctx, const engine_waypoint_t *wp)
     return e->answer;
 }
 
-static void fe_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
+static int fe_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
 {
     fake_engine_t *e = ctx;
     if (e->ncmd < 8) {
         e->args[e->ncmd] = arg;
         e->cmds[e->ncmd++] = cmd;
     }
+    return e->cmd_answer;
+}
+
+static void fe_hold(void *ctx)
+{
+    ((fake_engine_t *)ctx)->nhold++;
 }
 
 static void fe_status(void *ctx, engine_status_t *st)
@@ -113,7 +121,7 @@ static void fe_feedback(void *ctx, const can_port_drive_t *d)
     fe_feedbacks++;
 }
 
-static const can_port_hooks_t fe_hooks = {fe_push, fe_command, fe_status, fe_feedback};
+static const can_port_hooks_t fe_hooks = {fe_push, fe_command, fe_status, fe_feedback, fe_hold};
 
 static fake_io_t io;
 static fake_engine_t eng;
@@ -615,10 +623,10 @@ static void test_cia402_status2_drive_page(void **state)
 }
 
 /* Given a drive with a heartbeat consumer (100 ms) whose heartbeat stops,
- * then the object is held: one feed override 0 (a controlled stop along the
- * path by the time scaling, engine_set_override), an override command from
- * the bus to move again is refused and counted while held, and a CLEAR
- * command (the operator's) passes and sets the feed back to 100 %. */
+ * then the object is asked once to hold (obj_hold: feed override 0, a
+ * controlled stop along the path by the time scaling); a command the object
+ * refuses (obj_set_override while held) is counted as refused, and a CLEAR
+ * (which releases the object's hold, obj_clear) passes. */
 static void test_cia402_heartbeat_lost_holds(void **state)
 {
     (void)state;
@@ -631,30 +639,32 @@ static void test_cia402_heartbeat_lost_holds(void **state)
     step_drive(0x0233, 3);
     eng.ncmd = 0;
     run_cycle(50, 0);
-    assert_int_equal(eng.ncmd, 0); /* heard 50 ms ago: fine */
+    assert_int_equal(eng.nhold, 0); /* heard 50 ms ago: fine */
     run_cycle(500, 0);
-    assert_int_equal(eng.ncmd, 1);
-    assert_int_equal(eng.cmds[0], CANPROTO_CMD_OVERRIDE);
-    assert_int_equal(eng.args[0], 0);
+    assert_int_equal(eng.nhold, 1);
     run_cycle(600, 0);
-    assert_int_equal(eng.ncmd, 1); /* once */
+    assert_int_equal(eng.nhold, 1); /* once */
+    assert_int_equal(eng.ncmd, 0);
     can_port_obj_stats_t st;
     can_port_obj_stats(port, 0, &st);
     assert_int_equal(st.heartbeat_lost, 1);
     canproto_frame_t f;
     assert_int_equal(canproto_encode_override(0x680, 100, &f), 0);
     io.in[io.nin++] = f;
+    eng.cmd_answer = -ENGINE_ESTATE; /* the held object refuses it */
     can_port_rx(port, 0);
-    assert_int_equal(eng.ncmd, 1); /* refused */
+    assert_int_equal(eng.ncmd, 1);
     can_port_obj_stats(port, 0, &st);
     assert_int_equal(st.cmd_refused, 1);
+    assert_int_equal(st.last_refused, CANPROTO_CMD_OVERRIDE);
+    eng.cmd_answer = 0;
     assert_int_equal(canproto_encode_command(0x680, CANPROTO_CMD_CLEAR, &f), 0);
     io.in[io.nin++] = f;
     can_port_rx(port, 0);
-    assert_int_equal(eng.ncmd, 3);
+    assert_int_equal(eng.ncmd, 2);
     assert_int_equal(eng.cmds[1], CANPROTO_CMD_CLEAR);
-    assert_int_equal(eng.cmds[2], CANPROTO_CMD_OVERRIDE);
-    assert_int_equal(eng.args[2], 100);
+    can_port_obj_stats(port, 0, &st);
+    assert_int_equal(st.cmd_refused, 1);
 }
 
 /* Given the drive refuses the configuration SDO, then the abort is counted

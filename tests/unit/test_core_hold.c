@@ -1,0 +1,88 @@
+/*
+ * test_core_hold.c - the feed hold of an object (daemon/core/core.h obj_hold,
+ * obj_set_override, obj_clear): the one owner of the hold a CiA 402 drive's
+ * lost heartbeat asks for, whichever source (CAN, Modbus) writes the override.
+ * Driven with a real engine, no clock, no sockets.
+ */
+#include "test.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "core.h"
+
+#define PERIOD_NS 10000000LL /* 100 Hz */
+
+/* A straight line along x at 1 m/s from x0, one waypoint a second. */
+static void push_line(obj_t *o, double x0, uint32_t seq0)
+{
+    for (int i = 0; i < 20; i++) {
+        engine_waypoint_t w;
+        memset(&w, 0, sizeof w);
+        w.t_s = i;
+        w.pos_m[0] = x0 + i;
+        w.seq = seq0 + (uint32_t)i;
+        assert_int_equal(engine_push(o->engine, &w), 0);
+    }
+    assert_int_equal(engine_finish(o->engine), 0);
+}
+
+/* Tick from tick k0 for n ticks; returns the last setpoint. */
+static engine_setpoint_t run(obj_t *o, int64_t k0, int n)
+{
+    engine_setpoint_t sp;
+    memset(&sp, 0, sizeof sp);
+    for (int64_t k = k0; k < k0 + n; k++)
+        assert_int_equal(engine_tick(o->engine, k * PERIOD_NS, &sp), 0);
+    return sp;
+}
+
+/* Given an object moving at 1 m/s, when it is held (a drive's heartbeat
+ * lost, obj_hold), then it comes to rest on its path; an override to move
+ * again (as a Modbus override register write or a CAN override frame makes
+ * it, obj_set_override) is refused with -ENGINE_ESTATE (Modbus: exception 03,
+ * counted in mb_rejected; CAN: cmd_refused) and the object stays at rest; an
+ * override 0 is taken; the clear releases the hold and the feed is back at
+ * 100 %: a new track moves the object again. */
+static void test_hold_refuses_override_until_clear(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_config_default(&c);
+    obj_t o;
+    memset(&o, 0, sizeof o);
+    o.engine = engine_new(&c, NULL);
+    assert_non_null(o.engine);
+    safety_limits_t lim = {0, 0, 0, SAFETY_TOL_M_DEFAULT};
+    safety_init(&o.safety, &lim);
+    push_line(&o, 0.0, 1);
+    engine_setpoint_t sp = run(&o, 0, 500);
+    assert_true(sp.vel_m_s[0] > 0.5);
+    double x_at_hold = sp.pos_m[0];
+    obj_hold(&o);
+    sp = run(&o, 500, 500);
+    assert_true(fabs(sp.vel_m_s[0]) < 1e-9);
+    double x_held = sp.pos_m[0];
+    assert_true(x_held > x_at_hold && x_held < 19.0); /* stopped on the path, short of its end */
+    assert_int_equal(obj_set_override(&o, 100), -ENGINE_ESTATE);
+    assert_int_equal(obj_set_override(&o, 1), -ENGINE_ESTATE);
+    assert_int_equal(obj_set_override(&o, 0), 0);
+    sp = run(&o, 1000, 300);
+    assert_true(fabs(sp.pos_m[0] - x_held) < 1e-9); /* still at rest */
+    obj_clear(&o);
+    assert_int_equal(o.held, 0);
+    sp = run(&o, 1300, 10);
+    push_line(&o, sp.pos_m[0], 100);
+    sp = run(&o, 1310, 500);
+    assert_true(sp.pos_m[0] > x_held + 1.0); /* moving again at the feed */
+    assert_int_equal(obj_set_override(&o, 50), 0);
+    engine_free(o.engine);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_hold_refuses_override_until_clear),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
