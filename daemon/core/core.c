@@ -468,6 +468,7 @@ static void carry_objects(core_t *c, core_t *prev)
         o->rejlog = q->rejlog;
         o->uniform_warned = q->uniform_warned;
         o->out_errors = q->out_errors;
+        o->held = q->held; /* its engine keeps the override 0 */
         o->carried = 1;
         retire_moving(o, prev);
     }
