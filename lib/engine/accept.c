@@ -28,12 +28,14 @@ void accept_reset(accept_t *a)
     a->npend = 0;
     a->open = 0;
     a->have_a0 = 0;
+    a->have_burst = 0;
 }
 
 void accept_close(accept_t *a)
 {
     a->open = 0;
     a->have_a0 = 0;
+    a->have_burst = 0;
 }
 
 static double dist(const engine_waypoint_t *p, const engine_waypoint_t *q)
@@ -271,6 +273,9 @@ static void pop(accept_t *a, accept_verdict_t *v, accept_kind_t kind, int reason
     v->wp = a->pend[0];
     a->npend--;
     memmove(&a->pend[0], &a->pend[1], a->npend * sizeof a->pend[0]);
+    a->have_burst = kind == ACCEPT_DROP && reason == ENGINE_EUNCONFIRMED;
+    if (a->have_burst)
+        a->burst = v->wp;
     if (kind == ACCEPT_TAKE) {
         a->vhist[a->hnext] = chord_speed(&a->a1, &v->wp);
         a->hnext = (a->hnext + 1) % ACCEPT_HIST;
@@ -403,6 +408,36 @@ static int taken_past_outliers(const accept_t *a, double vlim)
     return 0;
 }
 
+/*
+ * The reason for dropping c, which does not follow the anchor (r: ESPEED or
+ * EACCEL from accept_check): ENGINE_EUNCONFIRMED if c is one of a burst of
+ * mutually consistent waypoints off the trajectory (a new trajectory that
+ * was not confirmed, far in space): c is consistent (within max_gap_s) with
+ * the burst waypoint dropped just before it, or with a later waypoint held
+ * that does not follow the anchor either, for its speed or acceleration
+ * (not a repeat of c, not one beyond a gap).  A lone spike, consistent
+ * with nothing held, keeps r.  Only the reason: the verdict is the same.
+ */
+static int drop_reason(const accept_t *a, const engine_waypoint_t *pre, double vlim, int r)
+{
+    const engine_waypoint_t *c = &a->pend[0];
+
+    if (r != ENGINE_ESPEED && r != ENGINE_EACCEL)
+        return r;
+    if (a->have_burst && check(a, NULL, &a->burst, c, vlim, 0) == 0)
+        return ENGINE_EUNCONFIRMED;
+    for (unsigned i = 1; i < a->npend; i++) {
+        const engine_waypoint_t *q = &a->pend[i];
+        int rq;
+        if (repeats_c(a, q) || check(a, NULL, c, q, vlim, 0) != 0)
+            continue;
+        rq = accept_check(a, pre, &a->a1, q, vlim);
+        if (rq == ENGINE_ESPEED || rq == ENGINE_EACCEL)
+            return ENGINE_EUNCONFIRMED;
+    }
+    return r;
+}
+
 int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
 {
     const engine_waypoint_t *nd[ACCEPT_WINDOW_MAX + 1];
@@ -472,7 +507,7 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
      * bad fix must not hold the good ones around it for a whole window (the
      * output draws on its start slack meanwhile) */
     if (r != 0 && continues_anchor(a, pre, vlim)) {
-        pop(a, v, ACCEPT_DROP, r);
+        pop(a, v, ACCEPT_DROP, drop_reason(a, pre, vlim, r));
         return 1;
     }
     if (r == 0 && taken_past_outliers(a, vlim)) {
@@ -511,7 +546,9 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
                 return 1;
             }
         }
-        if (r == 0 && n >= 2)
+        if (r != 0)
+            r = drop_reason(a, pre, vlim, r);
+        else if (n >= 2)
             r = accept_check(a, &a->a1, nd[1], nd[2], vlim);
         if (r == 0 && lo == lw)
             r = ENGINE_EACCEL; /* as long a chain bends less without it */

@@ -30,7 +30,10 @@
  *     nothing held continues the anchor: a sparse track keeps its isolated
  *     fixes.  A waypoint far from the current trajectory in time or space that is
  *     not confirmed so is dropped as ENGINE_EUNCONFIRMED (one Modbus
- *     waypoint at t = 1e9 never abandons the current trajectory);
+ *     waypoint at t = 1e9 never abandons the current trajectory; nor do
+ *     fewer than `confirm` fixes 1 km off, consistent among themselves: each
+ *     is unconfirmed, while a lone spike, consistent with nothing held, keeps
+ *     its ESPEED or EACCEL);
  *   - dropped as ENGINE_ESTALE if it repeats the anchor's position (within
  *     ACCEPT_STALE_POS_M) although the object was moving (at least
  *     ACCEPT_STALE_MIN_SPEED_M_S into the anchor) and the next waypoint with
@@ -155,6 +158,8 @@ typedef struct {
     int started;               /* some trajectory was started since accept_init */
     double vhist[ACCEPT_HIST]; /* chord speeds of the last kept intervals */
     unsigned nhist, hnext;
+    int have_burst;          /* burst: the last waypoint dropped as a far */
+    engine_waypoint_t burst; /* burst's (since the last kept or started) */
 } accept_t;
 
 /* Set up with cfg (window and confirm clamped to 1..ACCEPT_WINDOW_MAX,

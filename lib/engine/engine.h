@@ -350,8 +350,11 @@ void engine_free(engine_t *e);
  *                       > max_accel_m_s2 (timestamp jitter, position jump)
  *   ENGINE_ESTALE       the same position again while the object was moving
  *   ENGINE_EUNCONFIRMED far from the trajectory in time or space (e.g. one
- *                       waypoint at t = 1e9), or at odds with its neighbours,
- *                       and not confirmed by `confirm` consistent waypoints
+ *                       waypoint at t = 1e9, or a burst of fewer than
+ *                       `confirm` fixes 1 km off, consistent among
+ *                       themselves), or at odds with its neighbours, and not
+ *                       confirmed by `confirm` consistent waypoints (a lone
+ *                       spike is ESPEED or EACCEL)
  * A bad waypoint is dropped when its neighbours agree without it, so it
  * never condemns the good ones after it.  `confirm` mutually consistent
  * waypoints that do not continue the trajectory end it at rest (a gap if

@@ -219,8 +219,9 @@ static void replay_sp(const engine_waypoint_t *rows, int n, engine_status_t *st,
  * abandons the old trajectory for a new one once `confirm` fixes agree:
  * every fix kept, a new trajectory number, and the output ends on the last
  * moved fix.  Given only confirm - 1 moved fixes (then the boat back on its
- * track), then those are refused, for their chord speed from the trajectory
- * (5 km/s), and the trajectory is not abandoned.  Given one fix far in the
+ * track), then those are refused as unconfirmed (a new trajectory that
+ * was not confirmed; test_far_burst_unconfirmed), and the trajectory is not
+ * abandoned.  Given one fix far in the
  * future (t = 1e9 s) among them, then it alone is refused, with its own
  * reason: unconfirmed. */
 static void test_far_start_needs_confirmation(void **state)
@@ -245,7 +246,7 @@ static void test_far_start_needs_confirmation(void **state)
     replay_sp(rows, n, &st, &sp);
     assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
     assert_int_equal(st.rejected, c.confirm - 1);
-    assert_int_equal(st.rejected_by[ENGINE_ESPEED], c.confirm - 1);
+    assert_int_equal(st.rejected_by[ENGINE_EUNCONFIRMED], c.confirm - 1);
     assert_int_equal(st.accepted, N_FIX - (c.confirm - 1));
     assert_int_equal(st.tracks, 1);
     assert_float_equal(sp.pos_m[1], rows[N_FIX - 1].pos_m[1], 1e-9);
@@ -319,6 +320,47 @@ static void test_reanchor_after_confirm(void **state)
     }
 }
 
+/*
+ * Issue 11 "time sanity", far in space: a burst of confirm - 1 fixes 1 km
+ * north of the boat, consistent among themselves (the boat's own motion,
+ * shifted), then the boat on its old path again.  The burst would start a
+ * new trajectory and is not confirmed: each of its fixes is refused as
+ * unconfirmed (counted in rejected_by[ENGINE_EUNCONFIRMED], the daemon's
+ * rejected_unconfirmed), not as speed, and every good fix is kept.  A lone
+ * spike 1 km north (one fix, consistent with nothing held) stays speed.
+ */
+static void test_far_burst_unconfirmed(void **state)
+{
+    (void)state;
+    static engine_waypoint_t rows[N_FIX];
+    engine_config_t c;
+    engine_status_t st;
+    int fin;
+
+    engine_config_default(&c);
+    assert_true(c.confirm >= 3); /* a burst of 2 mutually consistent fixes */
+    for (int burst = 1; burst <= (int)c.confirm - 1; burst++) {
+        int n = build_moved(rows, 120, burst, 1000.0);
+        replay(rows, n, &st, &fin);
+        print_message("burst of %d fixes 1 km off: accepted %llu, unconfirmed %llu, "
+                      "speed %llu, accel %llu\n",
+                      burst, (unsigned long long)st.accepted,
+                      (unsigned long long)st.rejected_by[ENGINE_EUNCONFIRMED],
+                      (unsigned long long)st.rejected_by[ENGINE_ESPEED],
+                      (unsigned long long)st.rejected_by[ENGINE_EACCEL]);
+        assert_true(fin);
+        assert_int_equal(st.accepted, N_FIX - burst);
+        assert_int_equal(st.rejected, burst);
+        assert_int_equal(st.tracks, 1);
+        assert_int_equal(st.reanchors, 0);
+        if (burst == 1) { /* a lone spike: consistent with nothing */
+            assert_int_equal(st.rejected_by[ENGINE_ESPEED], 1);
+        } else {
+            assert_int_equal(st.rejected_by[ENGINE_EUNCONFIRMED], burst);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -326,6 +368,7 @@ int main(void)
         cmocka_unit_test(test_long_frozen_run),
         cmocka_unit_test(test_reanchor_after_confirm),
         cmocka_unit_test(test_far_start_needs_confirmation),
+        cmocka_unit_test(test_far_burst_unconfirmed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
