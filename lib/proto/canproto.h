@@ -431,7 +431,7 @@ int canproto_decode_status(const canproto_frame_t *f, canproto_status_t *out);
 typedef struct {
     uint64_t out_lost;    /* setpoint lines lost by the object's csv/stdout outputs (uint24) */
     uint64_t out_errors;  /* failed writes of those outputs (uint16) */
-    uint64_t cmd_refused; /* command frames refused: object not writable (uint16) */
+    uint64_t cmd_refused; /* command frames refused: not writable, or held (uint16) */
 } canproto_st2_faults_t;
 
 void canproto_encode_status2_faults(uint32_t id, const canproto_st2_faults_t *p,
