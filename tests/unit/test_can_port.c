@@ -431,6 +431,18 @@ static long step_drive(uint16_t sw, uint32_t k)
     return cw;
 }
 
+/* Node 1's heartbeat (operational), then the drive through Switch on disabled,
+ * Ready to switch on and Switched on (steps 1..3). */
+static void heartbeat_to_switched_on(void)
+{
+    io.in[io.nin] = (canproto_frame_t){.id = 0x701, .len = 1, .data = {0x05}};
+    io.nin++;
+    can_port_rx(port, 0);
+    step_drive(0x0250, 1);
+    step_drive(0x0231, 2);
+    step_drive(0x0233, 3);
+}
+
 /* Given cia402_enable with one configuration SDO (0x6060 = 8), then trajd
  * starts the node (NMT), writes the SDO, and drives the controlword from the
  * statusword: Shutdown, Switch on, Enable operation (CiA 402 patterns); a
@@ -579,12 +591,7 @@ static void test_cia402_status2_drive_page(void **state)
     (void)state;
     enable_with_controlword_rpdo();
     canproto_status2_drive_t d;
-    io.in[io.nin] = (canproto_frame_t){.id = 0x701, .len = 1, .data = {0x05}};
-    io.nin++;
-    can_port_rx(port, 0);
-    step_drive(0x0250, 1);
-    step_drive(0x0231, 2);
-    step_drive(0x0233, 3);
+    heartbeat_to_switched_on();
     step_drive(0x0237, 4);
     unsigned mark = io.nout;
     io.in[io.nin] = (canproto_frame_t){.id = 0x081, .len = 8, .data = {0x11, 0x86, 0x01}};
@@ -631,12 +638,7 @@ static void test_cia402_heartbeat_lost_holds(void **state)
 {
     (void)state;
     enable_with_controlword_rpdo();
-    io.in[io.nin] = (canproto_frame_t){.id = 0x701, .len = 1, .data = {0x05}};
-    io.nin++;
-    can_port_rx(port, 0);
-    step_drive(0x0250, 1);
-    step_drive(0x0231, 2);
-    step_drive(0x0233, 3);
+    heartbeat_to_switched_on();
     eng.ncmd = 0;
     run_cycle(50, 0);
     assert_int_equal(eng.nhold, 0); /* heard 50 ms ago: fine */
