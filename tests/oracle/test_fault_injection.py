@@ -70,6 +70,16 @@ O_DEFAULT = 24  # engine.h: the overlap accuracy 3e-7 picks
 M_PER_DEG_LAT = 111195.0  # a mean metre per degree: the offsets only need to be large
 
 
+def pick_sites(rnd, n, hi, gap):
+    """n fix indices drawn from [25, hi), each at least gap from the others."""
+    sites = []
+    while len(sites) < n:
+        i = rnd.randrange(25, hi)
+        if all(abs(i - j) >= gap for j in sites):
+            sites.append(i)
+    return sites
+
+
 def build(path):
     """Write the faulty track; return (good indices kept, {line: kind}, duplicates)."""
     t, lat, lon, alt = tr.read_track(tr.FIGURE8)
@@ -78,11 +88,7 @@ def build(path):
     kinds = ["spike"] * 3 + ["stale"] * 2 + ["frozen", "jump"] + ["back"] * 3 + ["dup"] * 3 + \
             ["drop"] * 2
     rnd.shuffle(kinds)
-    sites = []
-    while len(sites) < len(kinds):
-        i = rnd.randrange(25, NFIX - 30)
-        if all(abs(i - j) >= 25 for j in sites):
-            sites.append(i)
+    sites = pick_sites(rnd, len(kinds), NFIX - 30, 25)
     at = dict(zip(sites, kinds))
     rows, injected, kept, ndup = [], {}, [], 0   # rows: (t, lat, lon); line = index + 2
     skip = set()
@@ -223,11 +229,7 @@ def build_more(path):
     t, lat, lon = t[:NFIX + 1], lat[:NFIX + 1], lon[:NFIX + 1]
     rnd = random.Random(7)
     kinds = ["same_time", "late", "sound", "frozen_long", "nan", "late", "sound", "nan"]
-    sites = []
-    while len(sites) < len(kinds):
-        i = rnd.randrange(25, NFIX - 40)
-        if all(abs(i - j) >= 30 for j in sites):
-            sites.append(i)
+    sites = pick_sites(rnd, len(kinds), NFIX - 40, 30)
     at = dict(zip(sites, kinds))
     rows, injected, kept, nan_lines, skip = [], {}, [], [], set()
     east = 1 / (M_PER_DEG_LAT * math.cos(math.radians(lat[0])))
