@@ -59,6 +59,15 @@ def frame_of(db, can_id):
     return db.frame_by_id(canmatrix.ArbitrationId(can_id))
 
 
+def status2_frame(data):
+    """Our frame struct holding STATUS2 (object 0) bytes encoded by canmatrix."""
+    g = cp.Frame()
+    g.id, g.len = 0x6D0, 8
+    for i, b in enumerate(bytes(data)):
+        g.data[i] = b
+    return g
+
+
 def decode(db, f):
     fr = frame_of(db, f.id)
     return {k: float(v.phys_value) for k, v in fr.decode(f.payload()).items()}
@@ -192,10 +201,7 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
             data = fr.encode({"ST2_Page": 1, "ST2_OutLost": raw(fr, "ST2_OutLost", d["ST2_OutLost"]),
                               "ST2_OutErrors": raw(fr, "ST2_OutErrors", d["ST2_OutErrors"]),
                               "ST2_CmdRefused": raw(fr, "ST2_CmdRefused", d["ST2_CmdRefused"])})
-            g = cp.Frame()
-            g.id, g.len = 0x6D0, 8
-            for i, b in enumerate(bytes(data)):
-                g.data[i] = b
+            g = status2_frame(data)
             q = cp.St2Faults()
             self.assertEqual(LIB.canproto_decode_status2_faults(ctypes.byref(g), ctypes.byref(q)), 0)
             self.assertEqual((q.out_lost, q.out_errors, q.cmd_refused),
@@ -226,10 +232,7 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
                              (min(offs, 65535), min(frames, 65535)))
             self.assertNotIn("ST2_OutLost", d)
             data = fr.encode({k: raw(fr, k, v) for k, v in d.items()})
-            g = cp.Frame()
-            g.id, g.len = 0x6D0, 8
-            for i, b in enumerate(bytes(data)):
-                g.data[i] = b
+            g = status2_frame(data)
             q = cp.St2Bus()
             self.assertEqual(LIB.canproto_decode_status2_bus(ctypes.byref(g), ctypes.byref(q)), 0)
             self.assertEqual((q.state, q.tx_err, q.rx_err, q.bus_offs, q.err_frames),
@@ -262,10 +265,7 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
             self.assertNotIn("ST2_OutLost", d)
             data = fr.encode(dict({"ST2_Page": 2},
                                   **{sig[n]: raw(fr, sig[n], d[sig[n]]) for n in names}))
-            g = cp.Frame()
-            g.id, g.len = 0x6D0, 8
-            for i, b in enumerate(bytes(data)):
-                g.data[i] = b
+            g = status2_frame(data)
             q = cp.St2Rejected()
             self.assertEqual(LIB.canproto_decode_status2_rejected(ctypes.byref(g), ctypes.byref(q)), 0)
             self.assertEqual([getattr(q, n) for n in names], [d[sig[n]] for n in names])
@@ -312,10 +312,7 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
             self.assertNotIn("ST2_OutLost", d)
             data = fr.encode({"ST2_Page": 3, "ST2_Age": want_age, "ST2_Drift": want_drift,
                               "ST2_Clocked": clocked})
-            g = cp.Frame()
-            g.id, g.len = 0x6D0, 8
-            for i, b in enumerate(bytes(data)):
-                g.data[i] = b
+            g = status2_frame(data)
             q = cp.St2Clock()
             self.assertEqual(LIB.canproto_decode_status2_clock(ctypes.byref(g), ctypes.byref(q)), 0)
             if want_age == age_na:
