@@ -14,6 +14,9 @@ import sys
 import tempfile
 import unittest
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+import replay_summary  # noqa: E402
+
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 BUILD = os.environ.get("BUILD", os.path.join(ROOT, "build"))
 
@@ -38,12 +41,7 @@ def summary(track, out):
     r = subprocess.run([os.path.join(BUILD, "bin", "trajreplay"), "--summary", "-q", "-o", out,
                         os.path.join(ROOT, "tests", "data", track)],
                        capture_output=True, text=True, check=True)
-    s = {}
-    for line in r.stderr.splitlines():
-        m = re.match(r"summary: (\w+) (\S+)", line)
-        if m:
-            s[m.group(1)] = m.group(2)
-    return s
+    return replay_summary.parse(r.stderr)
 
 
 class DocCounts(unittest.TestCase):

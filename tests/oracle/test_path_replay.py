@@ -5,10 +5,14 @@ bad path lines are reported with their line number."""
 import math
 import os
 import subprocess
+import sys
 import tempfile
 import unittest
 
 import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+import replay_summary  # noqa: E402
 
 BUILD = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
 TRAJREPLAY = os.path.join(BUILD, "bin", "trajreplay")
@@ -33,15 +37,6 @@ def replay(*args):
     return subprocess.run([TRAJREPLAY, "-q", *args], capture_output=True, text=True, timeout=120)
 
 
-def summary(stderr):
-    out = {}
-    for line in stderr.splitlines():
-        if line.startswith("summary: "):
-            k, v = line[9:].split(" ", 1)
-            out[k] = float(v)
-    return out
-
-
 class TestPathReplay(unittest.TestCase):
     def setUp(self):
         self.dir = tempfile.TemporaryDirectory()
@@ -60,7 +55,7 @@ class TestPathReplay(unittest.TestCase):
         out = os.path.join(self.dir.name, "sp.csv")
         r = replay("--summary", "-o", out, self.path)
         self.assertEqual(r.returncode, 0, r.stderr)
-        s = summary(r.stderr)
+        s = replay_summary.parse(r.stderr)
         self.assertEqual(s["waypoints"], 116)
         self.assertEqual(s["accepted"], 116)
         data = np.genfromtxt(out, delimiter=",", names=True, dtype=None, encoding=None)

@@ -270,11 +270,7 @@ def refused(track, extra, tmp):
     p = tr.run(["--summary", "-q", "-o", "/dev/null"] + extra + [track])
     tr.check(p.returncode == 0, f"{os.path.basename(track)} {extra}: exit {p.returncode}: "
              f"{p.stderr[-300:]}")
-    s = {}
-    for line in p.stderr.splitlines():
-        if line.startswith("summary: "):
-            k, v = line[len("summary: "):].split(" ", 1)
-            s[k] = float(v)
+    s = tr.replay_summary.parse(p.stderr)
     return tuple(int(s.get(k, -1)) for k in ("waypoints", "rejected", "accepted", "duplicates"))
 
 
@@ -341,13 +337,10 @@ def test_airliner_stale_then_jumps(tmp):
     good = len(out) - len(repeat_lines)
     for prof in ("auto", "air"):
         p = tr.run(["--summary", "--rate", "10", "--profile", prof, "-o", "/dev/null", frozen_path])
-        s = {}
+        s = tr.replay_summary.parse(p.stderr)
         lines = {}
         for line in p.stderr.splitlines():
-            if line.startswith("summary: "):
-                k, v = line[len("summary: "):].split(" ", 1)
-                s[k] = float(v)
-            elif ": rejected (" in line:
+            if ": rejected (" in line:
                 where, why = line.split(": rejected (")
                 lines[int(where.rsplit(":", 1)[1])] = why.rstrip(")")
         label = f"airliner frozen then jumps, profile {prof}"

@@ -20,6 +20,9 @@ import tempfile
 import xml.etree.ElementTree as ET
 
 import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+import replay_summary  # noqa: E402
 import pyproj
 from scipy.interpolate import CubicSpline
 
@@ -108,12 +111,7 @@ def replay(track, extra, tmp, name="out"):
     out = os.path.join(tmp, name + ".csv")
     p = run(["--summary", "-o", out] + extra + [track])
     check(p.returncode == 0, f"{os.path.basename(track)} {extra}: exit {p.returncode}: {p.stderr}")
-    summary = {}
-    for line in p.stderr.splitlines():
-        if line.startswith("summary: "):
-            k, v = line[len("summary: "):].split(" ", 1)
-            summary[k] = float(v)
-    return read_setpoints(out), summary, p
+    return read_setpoints(out), replay_summary.parse(p.stderr), p
 
 
 # lib/motion.h: the setpoint carries no position yet (NaN), before the first
