@@ -23,7 +23,7 @@ $PY tests/helpers/cantools_trajd.py wplog "$run/dtrack.csv" "$run/dwp.log" > /de
 # adds only what it needs: every cycle counts as late (max_late_ms tiny: SYNC and the
 # RPDOs must still go out), and object 'spare' (node 3), whose list has an object the
 # drive lacks (0x6071: SDO abort, reported, that drive never enabled), and a Modbus
-# server the guest reads with mbpoll.
+# server the guest reads with mbpoll and writes arm's feed override to.
 $PY - README.md "$run/drive.conf" <<'PYEOF' || exit 1
 import sys
 lines = open(sys.argv[1]).read().splitlines()
@@ -37,10 +37,11 @@ conf = "\n".join(block) + "\n"
 assert "interface = can0\n" in conf and "[can]\n" in conf, conf
 conf = conf.replace("interface = can0\n", "interface = vcan0\n")
 conf = conf.replace("[can]\n", "[can]\nmax_late_ms = 0.001\n")
+conf = conf.replace("[object.arm]\n", "[object.arm]\nwritable = yes\n")  # its override by Modbus
 conf += ("[object.spare]\nid = 1\ninput = can\noutput = can\ncan.own = no\ncan.cia402 = yes\n"
          "can.cia402_enable = yes\ncan.cia402_cob_x = 0x203\ncan.cia402_cob_y = 0\n"
          "can.cia402_cob_z = 0\ncan.cia402_sdo = 0x6060:0=8/1, 0x6071:0=0/2\n"
-         "[modbus]\naddress = 127.0.0.1\nport = 1502\n")
+         "[modbus]\naddress = 127.0.0.1\nport = 1502\nwrites = yes\n")
 open(sys.argv[2], "w").write(conf)
 PYEOF
 "$BUILD/bin/trajd" --check-config "$run/drive.conf" || exit 1

@@ -451,6 +451,14 @@ def drive_check(run):
         k = [n for n, (_, cw, state) in enumerate(d["cw"]) if state == "QUICK STOP ACTIVE"]
         assert k and d["cw"][k[0]][1] == 0, d["cw"]
         assert names(d)[-3:] == ["READY TO SWITCH ON", "SWITCHED ON", "OPERATION ENABLED"]
+    # node 2's heartbeat stopped: object 0 held (override in force 0 %, drive_states
+    # bit 14 heartbeat lost; the drives stay enabled), the daemon's count; after the clear the
+    # operator's 50 % is in force (drive.sh waited for it), the loss no longer shown
+    override, _, _, _, states = regs("mb_hb.txt")
+    assert override == 0 and states & 0x4000, (override, hex(states))
+    assert regs("mb_hb_daemon.txt")[0] >= 1
+    override, _, _, _, states = regs("mb_hb_after.txt")
+    assert override == 50 and not states & 0xC000, (override, hex(states))
     # heartbeat consumer: the nodes' NMT state (operational after NMT start) in STATUS2
     ok = [p for p in (s2.decode(bytes(m.data)) for m in msgs if m.arbitration_id == 0x6D0 and m.data[0] == 4)
           if val(p["ST2_StateX"]) == 4]

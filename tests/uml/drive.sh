@@ -5,7 +5,8 @@
 # on y is inverted, the RPDO carries the controlword; every cycle counts as late
 # (max_late_ms tiny), so only SYNC and the RPDOs go out.  Object 'spare': node 3,
 # whose configuration list has an object the drive lacks (SDO abort).  Then a
-# drive fault and a quick stop, each followed by the clear command.  Every wait
+# drive fault and a quick stop, each followed by the clear command; then node 2's
+# heartbeat stops: the object is held, a Modbus override refused until clear.  Every wait
 # is for an event with a generous bound (a loaded host slows the guest a lot);
 # the captures and the simulator's log are checked on the host
 # (tests/helpers/cantools_trajd.py drive-check).
@@ -79,6 +80,34 @@ cansend vcan0 680#0400030000000000
 wait_ev 1 OPERATION_ENABLED 3 || fail "node 1 not enabled again after the quick stop"
 wait_ev 2 OPERATION_ENABLED 3 || fail "node 2 not enabled again after the quick stop"
 touch "$out/ok.quickstop"
+# ---- a drive goes silent (node 2's heartbeat stops, its PDOs go on): trajd reports it
+# and holds the object (override 0); an override written by Modbus is refused
+# (exception 03) until the clear command releases the hold
+kill -HUP "$sp"
+wait_ev 2 HEARTBEAT_OFF 1 || fail "simulator did not stop its heartbeat"
+wait_grep "$out/drive.err" "heartbeat was not heard in time" 2000 || fail "heartbeat loss not reported"
+# object 0's override in force (172) and drive states (176); the daemon's heartbeat count (41)
+mbpoll -m tcp -p 1502 -a 1 -0 -r 172 -c 5 -t 3:hex -1 127.0.0.1 > "$out/mb_hb.txt" 2>&1 || fail "mbpoll hb"
+mbpoll -m tcp -p 1502 -a 1 -0 -r 41 -t 3:hex -1 127.0.0.1 > "$out/mb_hb_daemon.txt" 2>&1 || fail "mbpoll hb count"
+if mbpoll -m tcp -p 1502 -a 1 -0 -r 101 -t 4 -1 127.0.0.1 50 > "$out/mb_hb_override.txt" 2>&1; then
+    fail "override accepted while held: $(cat "$out/mb_hb_override.txt")"
+fi
+grep -qi "illegal data value" "$out/mb_hb_override.txt" || fail "override: $(cat "$out/mb_hb_override.txt")"
+kill -HUP "$sp"
+wait_ev 2 HEARTBEAT_ON 1 || fail "simulator did not restart its heartbeat"
+cansend vcan0 680#0400030000000000   # command clear: releases the hold
+i=0
+until mbpoll -m tcp -p 1502 -a 1 -0 -r 101 -t 4 -1 127.0.0.1 50 > "$out/mb_hb_release.txt" 2>&1; do
+    i=$((i + 1)); [ $i -lt 100 ] || fail "override still refused after clear: $(cat "$out/mb_hb_release.txt")"
+    sleep 0.1
+done
+i=0   # the override in force follows within a tick
+until mbpoll -m tcp -p 1502 -a 1 -0 -r 172 -c 5 -t 3:hex -1 127.0.0.1 > "$out/mb_hb_after.txt" 2>&1 &&
+      grep -q "^\[172\]:[[:space:]]*0x0032" "$out/mb_hb_after.txt"; do
+    i=$((i + 1)); [ $i -lt 100 ] || fail "override in force not 50 %: $(cat "$out/mb_hb_after.txt")"
+    sleep 0.1
+done
+touch "$out/ok.heartbeat"
 kill -0 $tp || fail "trajd died"
 kill -TERM $tp; wait $tp; rc=$?; tp=
 [ $rc -eq 0 ] || fail "trajd exit code $rc"

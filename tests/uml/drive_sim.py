@@ -17,6 +17,9 @@ a drive here faults (state FAULT, EMCY) on
   - two missed SYNCs in a row (the SYNC counter, CiA 301, jumps by 3 or more);
   - a fault injected by the test (SIGUSR1: node 1; SIGUSR2: every node's quick
     stop, as from a local quick-stop input).
+SIGHUP silences node 2's heartbeat (python-canopen's NmtSlave.stop_heartbeat; its
+PDOs go on, as from a drive whose heartbeat producer failed), the next SIGHUP
+starts it again at 0x1017's period; each logged as HEARTBEAT_OFF / HEARTBEAT_ON.
 Once NMT-started (CiA 301: PDOs only in operational), each drive sends a TPDO
 (0x180 + node: statusword u16, position actual value i32) after every SYNC and
 on every state change, and keeps 0x6041, 0x6061 and
@@ -93,13 +96,24 @@ class Drive:
     def statusword(self):
         return SW[self.state] | REMOTE
 
+    def toggle_heartbeat(self):
+        nmt = self.node.nmt
+        self.hb_off = not getattr(self, "hb_off", False)
+        if self.hb_off:
+            nmt.stop_heartbeat()
+        else:
+            nmt.start_heartbeat(self.node.sdo[0x1017].raw)
+        self.note("HEARTBEAT_OFF" if self.hb_off else "HEARTBEAT_ON", "test")
+
+    def note(self, what, why):
+        if self.events:
+            with open(self.events, "a") as f:
+                f.write("%.4f %d %s %s\n" % (self.now(), self.id, what, why.replace(" ", "_")))
+
     def enter(self, state, why=""):
         self.state = state
         self.log["states"].append([self.now(), state, why])
-        if self.events:
-            with open(self.events, "a") as f:
-                f.write("%.4f %d %s %s\n" % (self.now(), self.id, state.replace(" ", "_"),
-                                              why.replace(" ", "_")))
+        self.note(state.replace(" ", "_"), why)
         self.send_tpdo()
 
     def send_tpdo(self):
@@ -261,6 +275,7 @@ def main():
     signal.signal(signal.SIGTERM, lambda *a: done.set())
     signal.signal(signal.SIGUSR1, lambda *a: drives[0].fault("injected"))
     signal.signal(signal.SIGUSR2, lambda *a: [d.quick_stop("local quick stop") for d in drives])
+    signal.signal(signal.SIGHUP, lambda *a: drives[1].toggle_heartbeat())
     with open(os.path.join(out, "drive_sim.ready"), "w") as f:
         f.write("ready\n")
     while not done.wait(0.05):
