@@ -1558,22 +1558,19 @@ static void find_avail(engine_t *e)
     }
 }
 
-/* One clock: a trajectory starts at the play time's sub-tick phase past its
- * first waypoint, locked (the output was at rest there, or moving by the
- * curve's own start, exactly as an unclocked start on its grid), or, if the
- * play time is already a tick or more past it (waypoints came late), at its
- * start, with the lag to win back. */
+static void scaled_rest(engine_t *e);
+
+/* One clock: a trajectory is entered at rate 0 like every other
+ * (scaled_rest, TIMESCALE.md "Handovers": locked at once, its acceleration
+ * would step by k''(0) rho^2), behind the play time by the sub-tick phase
+ * past its first waypoint (and by what the waypoints came late); the
+ * catch-up of clocked_step wins the lag back and locks on the clock. */
 static void clock_start(engine_t *e)
 {
-    double d = play_rel(e);
-
-    e->scaled = 1;
-    e->ts.rate = e->clk_rate;
-    e->ts.acc = 0.0;
-    e->locked = d >= 0 && d < e->period_s && d < e->cur_t1;
-    e->s = e->locked ? d : 0.0;
+    scaled_rest(e);
+    e->locked = 0;
     out_eval_scaled(e);
-    e->out_t = e->locked ? play_abs(e) : e->origin_t;
+    e->out_t = e->origin_t;
 }
 
 /* Begin streaming the trajectory at the queue head (tick 0 of it). */

@@ -456,9 +456,11 @@ int engine_set_override(engine_t *e, double ratio);
  * The output then stands at track time now - D, the same instant for every
  * engine given the same clock, instead of an origin of its own:
  *   - a trajectory starts when now - D reaches its first waypoint's time
- *     (a transfer to it starts early enough to arrive by then), at the
- *     sub-tick phase of that moment, locked: its track time is exactly
- *     now - D at every tick (the curve evaluated there, velocity k' * rate);
+ *     (a transfer to it starts early enough to arrive by then), at rate 0
+ *     like every start (its acceleration never steps), so behind now - D
+ *     by the sub-tick phase of that moment and the ramp; it catches up as
+ *     below and locks: its track time is then exactly now - D at every
+ *     tick (the curve evaluated there, velocity k' * rate);
  *   - when the solved curve runs short (waypoints late) the time scaling
  *     slows it down as without a clock; behind the clock by a lag L, the
  *     output runs at rate + min(ENGINE_CLOCK_GAIN * L, catchup) (a bounded
