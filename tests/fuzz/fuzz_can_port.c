@@ -159,7 +159,11 @@ static uint32_t pick_id(const canproto_ids_t *ids, uint8_t sel, uint8_t *flags)
     }
 }
 
-static void check_summary(const can_port_t *p)
+/* The summary's states are valid and it survives the STATUS2 round trip.  The
+ * round trip is a pure function of the summary: it is checked again only when
+ * the summary changed since the last check (*last, *have_last), not every
+ * cycle (most cycles leave the drives as they were). */
+static void check_summary(const can_port_t *p, canproto_status2_drive_t *last, int *have_last)
 {
     canproto_status2_drive_t s, back;
     canproto_frame_t f;
@@ -167,9 +171,13 @@ static void check_summary(const can_port_t *p)
     for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
         if (s.state[a] > CIA402_STATE_UNKNOWN && s.state[a] != CANPROTO_S2_NO_DRIVE)
             abort();
+    if (*have_last && !memcmp(&s, last, sizeof s))
+        return;
     canproto_encode_status2_drive(0x6D0, &s, &f);
     if (canproto_decode_status2_drive(&f, &back) != 0 || memcmp(&s, &back, sizeof s))
         abort();
+    *last = s;
+    *have_last = 1;
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -178,6 +186,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     obj_t obj;
     canproto_ids_t ids;
     can_port_config_t cfg;
+    canproto_status2_drive_t summary;
+    int have_summary = 0;
     if (size < 1)
         return 0;
     memset(&bus, 0, sizeof bus);
@@ -216,7 +226,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             can_port_setpoint(p, 0, &sp);
             can_port_cycle(p, now, 0);
             (void)can_port_maintain(p, now);
-            check_summary(p);
+            check_summary(p, &summary, &have_summary);
             continue;
         }
         canproto_frame_t f;
@@ -240,7 +250,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     can_port_stats(p, &st);
     if (st.rx_frames != delivered)
         abort();
-    check_summary(p);
+    check_summary(p, &summary, &have_summary);
     can_port_free(p);
     return 0;
 }
