@@ -1,4 +1,16 @@
-/* accept.c - the acceptance policy, judged with both neighbours; see accept.h. */
+/* accept.c - the acceptance policy, judged with both neighbours; see accept.h.
+ *
+ * Every test looks at pairs of waypoints (a chord and its speed, the
+ * velocities on both sides of a waypoint), and a verdict may run the chain
+ * search over the whole window.  The waypoints therefore live in slots
+ * (accept_t.wp), and the chord and velocity of a pair of slots are computed
+ * once, when a test first needs them, and kept while both waypoints are
+ * held (accept_t.pair, accept_t.known): a test is then a few subtractions
+ * and one square root.  Each cached value is the same expression of the
+ * same two waypoints as before the cache, so every verdict is the same bit
+ * for bit (tests/unit/test_accept.c drives this and the former code,
+ * tests/helpers/accept_ref.h, with random dirty tracks).
+ */
 #include "accept.h"
 
 #include <math.h>
@@ -8,6 +20,20 @@
 #define ACCEPT_SAME_TIME_S 1e-9
 /* Positions closer than this at the same time are a duplicate (metres). */
 #define ACCEPT_SAME_POS_M 1e-9
+/* No slot (no waypoint before p in a test). */
+#define NO_SLOT 0xffu
+
+/* fmax and fmin (NaN: the other), inline instead of libm's calls; of two
+ * zeros either (the callers compare non-negative values) */
+static inline double max_of(double x, double y)
+{
+    return isnan(x) ? y : (y > x ? y : x);
+}
+
+static inline double min_of(double x, double y)
+{
+    return isnan(x) ? y : (y < x ? y : x);
+}
 
 void accept_init(accept_t *a, const accept_config_t *cfg)
 {
@@ -46,37 +72,86 @@ static double dist(const engine_waypoint_t *p, const engine_waypoint_t *q)
     return sqrt(d2);
 }
 
-/* chord speed p -> q; only for q later than p */
-static double chord_speed(const engine_waypoint_t *p, const engine_waypoint_t *q)
-{
-    return dist(p, q) / (q->t_s - p->t_s);
-}
-
 static int same(const engine_waypoint_t *p, const engine_waypoint_t *q)
 {
     return fabs(p->t_s - q->t_s) <= ACCEPT_SAME_TIME_S && dist(p, q) <= ACCEPT_SAME_POS_M;
 }
 
+/* what the tests need of p -> b: dist(), the velocity and its norm as the
+ * acceleration test writes them ((b - p) / dt per axis; |v| for the free
+ * turn's sqrt(fmin(s1, s2)), which is fmin of the norms: sqrt is monotonic) */
+static void pair_of(const engine_waypoint_t *p, const engine_waypoint_t *b, accept_pair_t *q)
+{
+    double dt = b->t_s - p->t_s, d2 = 0, s = 0;
+    for (int k = 0; k < ENGINE_AXES; k++) {
+        double dk = b->pos_m[k] - p->pos_m[k];
+        d2 += dk * dk;
+        q->v[k] = dk / dt;
+        s += q->v[k] * q->v[k];
+    }
+    q->d = sqrt(d2);
+    q->vn = sqrt(s);
+    q->c = q->d / dt;
+}
+
+/* the pair x -> y (slots, y offered after x), computed on first use */
+static const accept_pair_t *pair(accept_t *a, unsigned x, unsigned y)
+{
+    accept_pair_t *q = &a->pair[x][y];
+    if (!(a->known[x] >> y & 1u)) {
+        pair_of(&a->wp[x], &a->wp[y], q);
+        a->known[x] |= (unsigned short)(1u << y);
+    }
+    return q;
+}
+
+static double pair_dist(accept_t *a, unsigned x, unsigned y)
+{
+    return pair(a, x, y)->d;
+}
+
+/* chord speed x -> y; only for y later than x */
+static double chord_speed(accept_t *a, unsigned x, unsigned y)
+{
+    return pair(a, x, y)->c;
+}
+
+/* a free slot for the waypoint offered: none of the window, the anchor (a0,
+ * a1) and burst; its pairs are forgotten */
+static unsigned new_slot(accept_t *a)
+{
+    unsigned used = 0, s = 0;
+    for (unsigned i = 0; i < a->npend; i++)
+        used |= 1u << a->pend[i];
+    if (a->open)
+        used |= 1u << a->a1;
+    if (a->open && a->have_a0)
+        used |= 1u << a->a0;
+    if (a->have_burst)
+        used |= 1u << a->burst;
+    while (used >> s & 1u)
+        s++;
+    for (unsigned x = 0; x < ACCEPT_SLOTS; x++)
+        a->known[x] &= (unsigned short)~(1u << s);
+    a->known[s] = 0;
+    return s;
+}
+
 int accept_offer(accept_t *a, const engine_waypoint_t *wp)
 {
-    if (a->open && same(&a->a1, wp))
+    unsigned s;
+
+    if (a->open && same(&a->wp[a->a1], wp))
         return ENGINE_DUPLICATE;
     for (unsigned i = 0; i < a->npend; i++)
-        if (same(&a->pend[i], wp))
+        if (same(&a->wp[a->pend[i]], wp))
             return ENGINE_DUPLICATE;
     if (a->npend == ACCEPT_WINDOW_MAX) /* cannot happen: verdicts are taken first */
         return -ENGINE_EFULL;
-    a->pend[a->npend++] = *wp;
+    s = new_slot(a);
+    a->wp[s] = *wp;
+    a->pend[a->npend++] = (unsigned char)s;
     return 0;
-}
-
-double accept_recent_speed(const accept_t *a)
-{
-    double m = 0;
-    for (unsigned i = 0; i < a->nhist; i++)
-        if (a->vhist[i] > m)
-            m = a->vhist[i];
-    return m;
 }
 
 /* lower median of the chord speeds between consecutive waypoints held (and
@@ -86,16 +161,16 @@ double accept_recent_speed(const accept_t *a)
  * it and out of it), and with two or three chords those are the lower
  * median, so an outlier would set the limit that judges it (a 300 m spike
  * between two fixes of a walk passed as its own pace, 100 m/s) */
-static double window_median_speed(const accept_t *a)
+static double window_median_speed(accept_t *a)
 {
     double v[ACCEPT_WINDOW_MAX];
-    unsigned n = 0;
-    const engine_waypoint_t *p = a->open ? &a->a1 : NULL;
+    unsigned n = 0, p = a->open ? a->a1 : NO_SLOT;
 
     for (unsigned i = 0; i < a->npend; i++) {
-        const engine_waypoint_t *q = &a->pend[i];
-        if (p && q->t_s - p->t_s > ACCEPT_SAME_TIME_S && q->t_s - p->t_s <= a->cfg.max_gap_s)
-            v[n++] = chord_speed(p, q);
+        unsigned q = a->pend[i];
+        double dt = p == NO_SLOT ? 0 : a->wp[q].t_s - a->wp[p].t_s;
+        if (p != NO_SLOT && dt > ACCEPT_SAME_TIME_S && dt <= a->cfg.max_gap_s)
+            v[n++] = chord_speed(a, p, q);
         p = q;
     }
     if (!n || (a->nhist && n < ACCEPT_PACE_CHORDS))
@@ -112,82 +187,115 @@ static double window_median_speed(const accept_t *a)
     return v[(n - 1) / 2];
 }
 
-double accept_speed_limit(const accept_t *a)
+double accept_speed_limit(accept_t *a)
 {
     double cap = a->cfg.max_speed_m_s, learned, vref;
 
     if (!a->cfg.learned)
         return cap;
-    vref = fmax(accept_recent_speed(a), window_median_speed(a));
-    learned = fmax(ACCEPT_LEARN_FLOOR_M_S, ACCEPT_LEARN_FACTOR * vref);
-    return cap > 0 ? fmin(cap, learned) : learned;
+    vref = max_of(a->vrecent, window_median_speed(a));
+    learned = max_of(ACCEPT_LEARN_FLOOR_M_S, ACCEPT_LEARN_FACTOR * vref);
+    return cap > 0 ? min_of(cap, learned) : learned;
 }
 
-/*
- * accept_check, and with gaps_ok an interval above max_gap_s passes too (time
- * order and speed only: an acceleration over a gap means nothing).  That is
- * what "mutually consistent" means for waypoints that confirm a new
- * trajectory: a sparse or slipped track (every interval a gap) still
- * confirms itself, a lone waypoint at t = 1e9 among waypoints at t ~ 100
- * does not (they are earlier than it).
- */
-static int check(const accept_t *a, const engine_waypoint_t *pre, const engine_waypoint_t *p,
-                 const engine_waypoint_t *b, double vlim, int gaps_ok)
+/* the time order of b after p (dt = t_b - t_p): 0, or EBACKWARDS, ESAMETIME,
+ * EUNCONFIRMED for an interval above max_gap_s unless gaps_ok; *gap: above */
+static inline int time_test(const accept_t *a, double dt, int gaps_ok, int *gap)
 {
-    double dt = b->t_s - p->t_s, amax = a->cfg.max_accel_m_s2;
-
     if (dt < -ACCEPT_SAME_TIME_S)
         return ENGINE_EBACKWARDS;
     if (dt <= ACCEPT_SAME_TIME_S)
         return ENGINE_ESAMETIME;
-    if (dt > a->cfg.max_gap_s) {
-        if (!gaps_ok)
-            return ENGINE_EUNCONFIRMED;
-        pre = NULL;
-    }
-    if (vlim > 0 && dist(p, b) > vlim * dt)
+    *gap = dt > a->cfg.max_gap_s;
+    return *gap && !gaps_ok ? ENGINE_EUNCONFIRMED : 0;
+}
+
+/* |v2 - v1| across p (q1: pre -> p, q2: p -> b) */
+static inline double dv_norm(const accept_pair_t *q1, const accept_pair_t *q2)
+{
+    double dv2 = 0;
+    for (int k = 0; k < ENGINE_AXES; k++)
+        dv2 += (q2->v[k] - q1->v[k]) * (q2->v[k] - q1->v[k]);
+    return sqrt(dv2);
+}
+
+/* the acceleration test of pre -> p -> b (d1, dt: the two intervals, dvn:
+ * dv_norm): 2 |v2 - v1| / (d1 + dt) <= amax, plus a free turn when learned */
+static inline int accel_test(const accept_t *a, const accept_pair_t *q1, const accept_pair_t *q2,
+                             double d1, double dt, double dvn)
+{
+    double allow = a->cfg.max_accel_m_s2 * 0.5 * (d1 + dt);
+    if (a->cfg.learned)
+        allow += 2.0 * min_of(q1->vn, q2->vn);
+    return dvn > allow ? ENGINE_EACCEL : 0;
+}
+
+/*
+ * The test of b following p (slots; pre: the slot before p, or NO_SLOT), as
+ * accept_check, and with gaps_ok an interval above max_gap_s passes too
+ * (time order and speed only: an acceleration over a gap means nothing).
+ * That is what "mutually consistent" means for waypoints that confirm a new
+ * trajectory: a sparse or slipped track (every interval a gap) still
+ * confirms itself, a lone waypoint at t = 1e9 among waypoints at t ~ 100
+ * does not (they are earlier than it).  With cost, a passed test also gives
+ * the implied acceleration of pre -> p -> b, gap or not (0 without pre).
+ */
+static inline int judge(accept_t *a, unsigned pre, unsigned p, unsigned b, double vlim, int gaps_ok,
+                        double *cost)
+{
+    double dt = a->wp[b].t_s - a->wp[p].t_s, d1, dvn;
+    int gap = 0, r = time_test(a, dt, gaps_ok, &gap), acc;
+    const accept_pair_t *q1, *q2;
+
+    if (r)
+        return r;
+    q2 = pair(a, p, b);
+    if (vlim > 0 && q2->d > vlim * dt)
         return ENGINE_ESPEED;
-    if (amax > 0 && pre) {
-        /* pre is earlier than p by more than 1 ns: it was checked so */
-        double d1 = p->t_s - pre->t_s, dv2 = 0, s1 = 0, s2 = 0, allow;
-        for (int k = 0; k < ENGINE_AXES; k++) {
-            double v1 = (p->pos_m[k] - pre->pos_m[k]) / d1;
-            double v2 = (b->pos_m[k] - p->pos_m[k]) / dt;
-            dv2 += (v2 - v1) * (v2 - v1);
-            s1 += v1 * v1;
-            s2 += v2 * v2;
-        }
-        /* 2 |v2 - v1| / (d1 + dt) <= amax, plus a free turn when learned */
-        allow = amax * 0.5 * (d1 + dt);
-        if (a->cfg.learned)
-            allow += 2.0 * sqrt(fmin(s1, s2));
-        if (sqrt(dv2) > allow)
-            return ENGINE_EACCEL;
+    acc = a->cfg.max_accel_m_s2 > 0 && !gap;
+    if (pre == NO_SLOT || (!acc && !cost)) {
+        if (cost)
+            *cost = 0;
+        return 0;
     }
+    /* pre is earlier than p by more than 1 ns: it was checked so */
+    q1 = pair(a, pre, p);
+    d1 = a->wp[p].t_s - a->wp[pre].t_s;
+    dvn = dv_norm(q1, q2);
+    if (acc && accel_test(a, q1, q2, d1, dt, dvn))
+        return ENGINE_EACCEL;
+    if (cost)
+        *cost = 2.0 * dvn / (d1 + dt);
     return 0;
+}
+
+static int check(accept_t *a, unsigned pre, unsigned p, unsigned b, double vlim, int gaps_ok)
+{
+    return judge(a, pre, p, b, vlim, gaps_ok, NULL);
+}
+
+/* accept_check's test, between slots: an interval above max_gap_s fails */
+static int check0(accept_t *a, unsigned pre, unsigned p, unsigned b, double vlim)
+{
+    return judge(a, pre, p, b, vlim, 0, NULL);
 }
 
 int accept_check(const accept_t *a, const engine_waypoint_t *pre, const engine_waypoint_t *p,
                  const engine_waypoint_t *b, double vlim)
 {
-    return check(a, pre, p, b, vlim, 0);
-}
+    double dt = b->t_s - p->t_s;
+    int gap = 0, r = time_test(a, dt, 0, &gap);
+    accept_pair_t q1, q2;
 
-/* |implied acceleration| of pre -> p -> b (0 without pre); forward intervals */
-static double accel_of(const engine_waypoint_t *pre, const engine_waypoint_t *p,
-                       const engine_waypoint_t *b)
-{
-    double d1, d2, dv2 = 0;
-
-    if (!pre)
+    if (r)
+        return r;
+    pair_of(p, b, &q2);
+    if (vlim > 0 && q2.d > vlim * dt)
+        return ENGINE_ESPEED;
+    if (!(a->cfg.max_accel_m_s2 > 0) || !pre)
         return 0;
-    d1 = p->t_s - pre->t_s;
-    d2 = b->t_s - p->t_s;
-    for (int k = 0; k < ENGINE_AXES; k++) {
-        double dv = (b->pos_m[k] - p->pos_m[k]) / d2 - (p->pos_m[k] - pre->pos_m[k]) / d1;
-        dv2 += dv * dv;
-    }
-    return 2.0 * sqrt(dv2) / (d1 + d2);
+    pair_of(pre, p, &q1);
+    return accel_test(a, &q1, &q2, p->t_s - pre->t_s, dt, dv_norm(&q1, &q2));
 }
 
 /* chain (len, cost) better than (l2, c2): longer, or as long and smoother */
@@ -200,24 +308,21 @@ static int better(unsigned len, double cost, unsigned l2, double c2)
  * Longest consistent chain that starts at nd[0] (preceded by pre) and whose
  * second waypoint, if any, has an index in jmin..jmax; among the longest,
  * the smoothest (the least largest implied acceleration along it, in *cost).
- * m <= ACCEPT_WINDOW_MAX + 1.  len[i][j], cst[i][j]: the best such chain
- * ending with the step nd[i] -> nd[j] (len 0: none).
+ * nd: slots, m <= ACCEPT_WINDOW_MAX + 1.  len[i][j], cst[i][j]: the best
+ * such chain ending with the step nd[i] -> nd[j] (len 0: none).
  */
-static unsigned longest(const accept_t *a, const engine_waypoint_t *const *nd, unsigned m,
-                        const engine_waypoint_t *pre, unsigned jmin, unsigned jmax, double vlim,
-                        int gaps_ok, double *cost)
+static unsigned longest(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre,
+                        unsigned jmin, unsigned jmax, double vlim, int gaps_ok, double *cost)
 {
-    unsigned len[ACCEPT_WINDOW_MAX + 1][ACCEPT_WINDOW_MAX + 1];
+    unsigned char len[ACCEPT_WINDOW_MAX + 1][ACCEPT_WINDOW_MAX + 1];
     double cst[ACCEPT_WINDOW_MAX + 1][ACCEPT_WINDOW_MAX + 1];
     unsigned best = 1;
     double best_cost = 0;
 
     memset(len, 0, sizeof len);
     for (unsigned j = jmin; j < m && j <= jmax; j++)
-        if (check(a, pre, nd[0], nd[j], vlim, gaps_ok) == 0) {
+        if (judge(a, pre, nd[0], nd[j], vlim, gaps_ok, &cst[0][j]) == 0)
             len[0][j] = 2;
-            cst[0][j] = accel_of(pre, nd[0], nd[j]);
-        }
     for (unsigned i = 1; i < m; i++)
         for (unsigned h = 0; h < i; h++) {
             if (!len[h][i])
@@ -228,11 +333,11 @@ static unsigned longest(const accept_t *a, const engine_waypoint_t *const *nd, u
             }
             for (unsigned j = i + 1; j < m; j++) {
                 double c;
-                if (check(a, nd[h], nd[i], nd[j], vlim, gaps_ok))
+                if (judge(a, nd[h], nd[i], nd[j], vlim, gaps_ok, &c))
                     continue;
-                c = fmax(cst[h][i], accel_of(nd[h], nd[i], nd[j]));
-                if (!len[i][j] || better(len[h][i] + 1, c, len[i][j], cst[i][j])) {
-                    len[i][j] = len[h][i] + 1;
+                c = max_of(cst[h][i], c);
+                if (!len[i][j] || better(len[h][i] + 1u, c, len[i][j], cst[i][j])) {
+                    len[i][j] = (unsigned char)(len[h][i] + 1);
                     cst[i][j] = c;
                 }
             }
@@ -242,9 +347,9 @@ static unsigned longest(const accept_t *a, const engine_waypoint_t *const *nd, u
     return best;
 }
 
-/* 1 if nd[0..m-1] in order is one consistent chain (nd[0] preceded by pre) */
-static int chain_all(const accept_t *a, const engine_waypoint_t *const *nd, unsigned m,
-                     const engine_waypoint_t *pre, double vlim, int gaps_ok)
+/* 1 if nd[0..m-1] (slots) in order is one consistent chain (nd[0] preceded by pre) */
+static int chain_all(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre, double vlim,
+                     int gaps_ok)
 {
     for (unsigned i = 0; i + 1 < m; i++) {
         if (check(a, pre, nd[i], nd[i + 1], vlim, gaps_ok))
@@ -254,41 +359,54 @@ static int chain_all(const accept_t *a, const engine_waypoint_t *const *nd, unsi
     return 1;
 }
 
-/* q follows p across a plausible gap: beyond max_gap_s, but not far in time
- * (ACCEPT_FAR_GAP_FACTOR) and covered within the speed limit */
-static int plausible_gap(const accept_t *a, const engine_waypoint_t *p, const engine_waypoint_t *q,
-                         double vlim)
+/* q follows p (slots) across a plausible gap: beyond max_gap_s, but not far
+ * in time (ACCEPT_FAR_GAP_FACTOR) and covered within the speed limit */
+static int plausible_gap(accept_t *a, unsigned p, unsigned q, double vlim)
 {
-    double dt = q->t_s - p->t_s;
+    double dt = a->wp[q].t_s - a->wp[p].t_s;
     return dt > a->cfg.max_gap_s && dt <= ACCEPT_FAR_GAP_FACTOR * a->cfg.max_gap_s &&
-           (!(vlim > 0) || dist(p, q) <= vlim * dt);
+           (!(vlim > 0) || pair_dist(a, p, q) <= vlim * dt);
+}
+
+/* the fastest of the last kept chord speeds */
+static double recent_max_speed(const accept_t *a)
+{
+    double m = 0;
+    for (unsigned i = 0; i < a->nhist; i++)
+        if (a->vhist[i] > m)
+            m = a->vhist[i];
+    return m;
 }
 
 /* take the oldest waypoint out of the window into v */
 static void pop(accept_t *a, accept_verdict_t *v, accept_kind_t kind, int reason)
 {
+    unsigned c = a->pend[0];
+
     memset(v, 0, sizeof *v);
     v->kind = kind;
     v->reason = reason;
-    v->wp = a->pend[0];
+    v->wp = a->wp[c];
     a->npend--;
-    memmove(&a->pend[0], &a->pend[1], a->npend * sizeof a->pend[0]);
+    for (unsigned i = 0; i < a->npend; i++)
+        a->pend[i] = a->pend[i + 1];
     a->have_burst = kind == ACCEPT_DROP && reason == ENGINE_EUNCONFIRMED;
     if (a->have_burst)
-        a->burst = v->wp;
+        a->burst = (unsigned char)c;
     if (kind == ACCEPT_TAKE) {
-        a->vhist[a->hnext] = chord_speed(&a->a1, &v->wp);
+        a->vhist[a->hnext] = chord_speed(a, a->a1, c);
         a->hnext = (a->hnext + 1) % ACCEPT_HIST;
         if (a->nhist < ACCEPT_HIST)
             a->nhist++;
+        a->vrecent = recent_max_speed(a);
         a->a0 = a->a1;
         a->have_a0 = 1;
-        a->a1 = v->wp;
+        a->a1 = (unsigned char)c;
     } else if (kind == ACCEPT_START) {
-        v->gap = a->open && v->wp.t_s - a->a1.t_s > a->cfg.max_gap_s;
+        v->gap = a->open && v->wp.t_s - a->wp[a->a1].t_s > a->cfg.max_gap_s;
         a->open = 1;
         a->have_a0 = 0;
-        a->a1 = v->wp;
+        a->a1 = (unsigned char)c;
     }
 }
 
@@ -314,23 +432,23 @@ static double recent_median_speed(const accept_t *a)
  * Stale repeat of the anchor while moving: 1 = drop c as stale, 0 = not
  * stale (judge it as any other), -1 = wait for a waypoint with a new position.
  */
-static int stale_verdict(const accept_t *a, int full, double vlim)
+static int stale_verdict(accept_t *a, int full, double vlim)
 {
-    const engine_waypoint_t *c = &a->pend[0];
+    unsigned c = a->pend[0], a1 = a->a1;
     double v_in;
 
-    if (!a->cfg.stale || !a->open || !a->have_a0 || dist(&a->a1, c) > ACCEPT_STALE_POS_M ||
-        c->t_s - a->a1.t_s <= ACCEPT_SAME_TIME_S)
+    if (!a->cfg.stale || !a->open || !a->have_a0 || pair_dist(a, a1, c) > ACCEPT_STALE_POS_M ||
+        a->wp[c].t_s - a->wp[a1].t_s <= ACCEPT_SAME_TIME_S)
         return 0;
-    v_in = chord_speed(&a->a0, &a->a1);
+    v_in = chord_speed(a, a->a0, a1);
     if (v_in < ACCEPT_STALE_MIN_SPEED_M_S)
         return 0;
     for (unsigned i = 1; i < a->npend; i++) {
-        const engine_waypoint_t *f = &a->pend[i];
-        if (dist(&a->a1, f) <= ACCEPT_STALE_POS_M)
+        unsigned f = a->pend[i];
+        if (pair_dist(a, a1, f) <= ACCEPT_STALE_POS_M)
             continue; /* the run goes on */
-        if (f->t_s - a->a1.t_s > ACCEPT_SAME_TIME_S &&
-            accept_check(a, &a->a0, &a->a1, f, vlim) == 0 && chord_speed(&a->a1, f) >= 0.5 * v_in)
+        if (a->wp[f].t_s - a->wp[a1].t_s > ACCEPT_SAME_TIME_S &&
+            check0(a, a->a0, a1, f, vlim) == 0 && chord_speed(a, a1, f) >= 0.5 * v_in)
             return 1;
         return 0;
     }
@@ -344,7 +462,7 @@ static int stale_verdict(const accept_t *a, int full, double vlim)
      * repeat of the run gets the same verdict) */
     v_in = recent_median_speed(a);
     return v_in >= ACCEPT_STALE_MIN_SPEED_M_S &&
-           v_in / (a->a1.t_s - a->a0.t_s) > ACCEPT_STALE_STOP_M_S2;
+           v_in / (a->wp[a1].t_s - a->wp[a->a0].t_s) > ACCEPT_STALE_STOP_M_S2;
 }
 
 /*
@@ -354,24 +472,25 @@ static int stale_verdict(const accept_t *a, int full, double vlim)
  * a chain through a repeat would bend the track less (keep the good fix;
  * the repeats then meet stale_verdict with c as the anchor).
  */
-static int repeated_later(const accept_t *a)
+static int repeated_later(accept_t *a)
 {
-    const engine_waypoint_t *c = &a->pend[0];
+    unsigned c = a->pend[0];
     if (!a->cfg.stale)
         return 0;
     for (unsigned i = 1; i < a->npend; i++)
-        if (dist(c, &a->pend[i]) <= ACCEPT_STALE_POS_M &&
-            a->pend[i].t_s - c->t_s > ACCEPT_SAME_TIME_S)
+        if (pair_dist(a, c, a->pend[i]) <= ACCEPT_STALE_POS_M &&
+            a->wp[a->pend[i]].t_s - a->wp[c].t_s > ACCEPT_SAME_TIME_S)
             return 1;
     return 0;
 }
 
-/* q repeats the position of c, the oldest waypoint held (profiles with stale
- * detection): a frozen receiver's copy of c, no evidence of its own for or
- * against c (it may follow the anchor only because it is stamped later) */
-static int repeats_c(const accept_t *a, const engine_waypoint_t *q)
+/* q (a slot) repeats the position of c, the oldest waypoint held (profiles
+ * with stale detection): a frozen receiver's copy of c, no evidence of its
+ * own for or against c (it may follow the anchor only because it is stamped
+ * later) */
+static int repeats_c(accept_t *a, unsigned q)
 {
-    return a->cfg.stale && q != &a->pend[0] && dist(&a->pend[0], q) <= ACCEPT_STALE_POS_M;
+    return a->cfg.stale && q != a->pend[0] && pair_dist(a, a->pend[0], q) <= ACCEPT_STALE_POS_M;
 }
 
 /*
@@ -379,10 +498,10 @@ static int repeats_c(const accept_t *a, const engine_waypoint_t *q)
  * exists): c, which does not follow the anchor, is then dropped whatever
  * comes later (the full window's verdict: lo >= 2 and r != 0).
  */
-static int continues_anchor(const accept_t *a, const engine_waypoint_t *pre, double vlim)
+static int continues_anchor(accept_t *a, unsigned pre, double vlim)
 {
     for (unsigned i = 1; i < a->npend; i++)
-        if (!repeats_c(a, &a->pend[i]) && accept_check(a, pre, &a->a1, &a->pend[i], vlim) == 0)
+        if (!repeats_c(a, a->pend[i]) && check0(a, pre, a->a1, a->pend[i], vlim) == 0)
             return 1;
     return 0;
 }
@@ -395,14 +514,14 @@ static int continues_anchor(const accept_t *a, const engine_waypoint_t *pre, dou
  * through it, and the full window would take c.  One outlier after a good
  * fix so holds it one interval, not a window.
  */
-static int taken_past_outliers(const accept_t *a, double vlim)
+static int taken_past_outliers(accept_t *a, double vlim)
 {
-    const engine_waypoint_t *c = &a->pend[0];
+    unsigned c = a->pend[0], pre = a->have_a0 ? a->a0 : NO_SLOT;
     for (unsigned j = 1; j < a->npend; j++) {
-        const engine_waypoint_t *q = &a->pend[j];
-        if (check(a, &a->a1, c, q, vlim, 0) == 0)
+        unsigned q = a->pend[j];
+        if (check(a, a->a1, c, q, vlim, 0) == 0)
             return j >= 2;
-        if (!repeats_c(a, q) && accept_check(a, a->have_a0 ? &a->a0 : NULL, &a->a1, q, vlim) == 0)
+        if (!repeats_c(a, q) && check0(a, pre, a->a1, q, vlim) == 0)
             return 0; /* q could replace c: the full window compares them */
     }
     return 0;
@@ -418,30 +537,210 @@ static int taken_past_outliers(const accept_t *a, double vlim)
  * (not a repeat of c, not one beyond a gap).  A lone spike, consistent
  * with nothing held, keeps r.  Only the reason: the verdict is the same.
  */
-static int drop_reason(const accept_t *a, const engine_waypoint_t *pre, double vlim, int r)
+static int drop_reason(accept_t *a, unsigned pre, double vlim, int r)
 {
-    const engine_waypoint_t *c = &a->pend[0];
+    unsigned c = a->pend[0];
 
     if (r != ENGINE_ESPEED && r != ENGINE_EACCEL)
         return r;
-    if (a->have_burst && check(a, NULL, &a->burst, c, vlim, 0) == 0)
+    if (a->have_burst && check(a, NO_SLOT, a->burst, c, vlim, 0) == 0)
         return ENGINE_EUNCONFIRMED;
     for (unsigned i = 1; i < a->npend; i++) {
-        const engine_waypoint_t *q = &a->pend[i];
+        unsigned q = a->pend[i];
         int rq;
-        if (repeats_c(a, q) || check(a, NULL, c, q, vlim, 0) != 0)
+        if (repeats_c(a, q) || check(a, NO_SLOT, c, q, vlim, 0) != 0)
             continue;
-        rq = accept_check(a, pre, &a->a1, q, vlim);
+        rq = check0(a, pre, a->a1, q, vlim);
         if (rq == ENGINE_ESPEED || rq == ENGINE_EACCEL)
             return ENGINE_EUNCONFIRMED;
     }
     return r;
 }
 
+/* no trajectory open: start one on a chain of confirm (or what there is at
+ * the close), else drop c */
+static int decide_closed(accept_t *a, int closing, int full, double vlim, accept_verdict_t *v)
+{
+    const unsigned char *nd = a->pend;
+    unsigned n = a->npend, k = a->cfg.confirm, u, vbest = 0;
+    int r;
+
+    if (n >= k && chain_all(a, nd, n, NO_SLOT, vlim, 1)) {
+        pop(a, v, ACCEPT_START, 0);
+        return 1;
+    }
+    if (!full)
+        return 0;
+    u = longest(a, nd, n, NO_SLOT, 1, n, vlim, 1, NULL);
+    for (unsigned s = 1; s < n; s++) {
+        unsigned l = longest(a, nd + s, n - s, NO_SLOT, 1, n, vlim, 1, NULL);
+        if (l > vbest)
+            vbest = l;
+    }
+    /* nothing to abandon: at the close, the chain there is will do; a
+     * waypoint a plausible gap before the next one is a trajectory of
+     * its own */
+    if ((u >= vbest && (u >= k || closing)) || (n >= 2 && plausible_gap(a, nd[0], nd[1], vlim))) {
+        pop(a, v, ACCEPT_START, 0);
+        return 1;
+    }
+    r = n >= 2 ? check0(a, NO_SLOT, nd[0], nd[1], vlim) : 0;
+    pop(a, v, ACCEPT_DROP, r ? r : ENGINE_EUNCONFIRMED);
+    return 1;
+}
+
+/*
+ * longest() from nd[0] (preceded by pre, m <= ACCEPT_WINDOW_MAX + 1 slots)
+ * through nd[1] (best[0], cost[0]: lw) and skipping it (best[1], cost[1]:
+ * lo) in one pass: both searches judge the same steps, each once here.  A
+ * step's time and speed tests are taken per pair first (ok[i][j]), so a
+ * triple is the acceleration test alone.
+ */
+static void longest_both(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre,
+                         double vlim, unsigned best[2], double cost[2])
+{
+    enum { M = ACCEPT_WINDOW_MAX + 1 };
+    unsigned char len[2][M][M], ok[M][M];
+    double cst[2][M][M], t[M];
+    const accept_pair_t *q[M][M];
+    int acc = a->cfg.max_accel_m_s2 > 0;
+
+    memset(len, 0, sizeof len);
+    for (unsigned i = 0; i < m; i++)
+        t[i] = a->wp[nd[i]].t_s;
+    for (unsigned i = 1; i < m; i++)
+        for (unsigned j = i + 1; j < m; j++) {
+            double dt = t[j] - t[i];
+            int gap = 0;
+            ok[i][j] = time_test(a, dt, 0, &gap) == 0 &&
+                       !(vlim > 0 && (q[i][j] = pair(a, nd[i], nd[j]))->d > vlim * dt);
+            if (ok[i][j])
+                q[i][j] = pair(a, nd[i], nd[j]);
+        }
+    best[0] = best[1] = 1;
+    cost[0] = cost[1] = 0;
+    for (unsigned j = 1; j < m; j++) {
+        double c;
+        if (judge(a, pre, nd[0], nd[j], vlim, 0, &c) == 0) {
+            len[j >= 2][0][j] = 2;
+            cst[j >= 2][0][j] = c;
+            q[0][j] = pair(a, nd[0], nd[j]);
+        }
+    }
+    for (unsigned i = 1; i < m; i++)
+        for (unsigned h = 0; h < i; h++) {
+            if (!len[0][h][i] && !len[1][h][i])
+                continue;
+            for (unsigned k = 0; k < 2; k++)
+                if (len[k][h][i] && better(len[k][h][i], cst[k][h][i], best[k], cost[k])) {
+                    best[k] = len[k][h][i];
+                    cost[k] = cst[k][h][i];
+                }
+            for (unsigned j = i + 1; j < m; j++) {
+                double d1 = t[i] - t[h], dt = t[j] - t[i], dvn, c;
+                if (!ok[i][j])
+                    continue;
+                dvn = dv_norm(q[h][i], q[i][j]);
+                if (acc && accel_test(a, q[h][i], q[i][j], d1, dt, dvn))
+                    continue;
+                c = 2.0 * dvn / (d1 + dt);
+                for (unsigned k = 0; k < 2; k++) {
+                    double ck;
+                    if (!len[k][h][i])
+                        continue;
+                    ck = max_of(cst[k][h][i], c);
+                    if (!len[k][i][j] ||
+                        better(len[k][h][i] + 1u, ck, len[k][i][j], cst[k][i][j])) {
+                        len[k][i][j] = (unsigned char)(len[k][h][i] + 1);
+                        cst[k][i][j] = ck;
+                    }
+                }
+            }
+        }
+}
+
+/* an open trajectory, the full window's verdict on c (r: c after the
+ * anchor, nd: the anchor and the window, slots) */
+static int decide_full(accept_t *a, int closing, double vlim, unsigned pre, int r,
+                       const unsigned char *nd, accept_verdict_t *v)
+{
+    unsigned n = a->npend, k = a->cfg.confirm, m = 0, lw, lo;
+    unsigned char nr[ACCEPT_WINDOW_MAX + 1];
+    double cw, co;
+
+    /* chains skipping c leave out c's repeats too: a frozen receiver's
+     * copies of c, stamped later, would otherwise outvote the fix they
+     * copy (a chain through them is as long as the run) */
+    for (unsigned i = 0; i <= n; i++)
+        if (i < 2 || !repeats_c(a, nd[i]))
+            nr[m++] = nd[i];
+    if (m == n + 1) { /* no repeats of c: the same waypoints both ways */
+        unsigned l[2];
+        double cl[2];
+        longest_both(a, nd, m, pre, vlim, l, cl);
+        lw = l[0], cw = cl[0], lo = l[1], co = cl[1];
+    } else {
+        lw = longest(a, nd, n + 1, pre, 1, 1, vlim, 0, &cw); /* through c */
+        lo = longest(a, nr, m, pre, 2, m - 1, vlim, 0, &co); /* skipping c */
+    }
+    /* keep c unless a longer chain skips it, or one as long and smoother
+     * (of two fixes that cannot both be right, the one that bends the
+     * track less) */
+    if (r == 0 && (!better(lo, co, lw, cw) || (lw >= lo && repeated_later(a)))) {
+        pop(a, v, ACCEPT_TAKE, 0);
+        return 1;
+    }
+    if (lo < 2) {
+        /* nothing held continues the anchor: re-anchor on k consistent */
+        unsigned u = longest(a, nd + 1, n, NO_SLOT, 1, n, vlim, 1, NULL);
+        /* at the close, what is left confirms itself if it is all one
+         * chain that the anchor reaches within the speed limit */
+        if (u >= k || plausible_gap(a, nd[0], nd[1], vlim) ||
+            (closing && u == n && check(a, NO_SLOT, nd[0], nd[1], vlim, 1) == 0)) {
+            pop(a, v, ACCEPT_START, 0);
+            return 1;
+        }
+    }
+    if (r != 0)
+        r = drop_reason(a, pre, vlim, r);
+    else if (n >= 2)
+        r = check0(a, nd[0], nd[1], nd[2], vlim);
+    if (r == 0 && lo == lw)
+        r = ENGINE_EACCEL; /* as long a chain bends less without it */
+    pop(a, v, ACCEPT_DROP, r ? r : ENGINE_EUNCONFIRMED);
+    return 1;
+}
+
+/*
+ * accept_decide with a trajectory open and c alone in a window not yet full
+ * (every waypoint of a clean track waits here for its next neighbour): the
+ * general path below, left with what can give a verdict then.  A stale
+ * verdict needs a later waypoint or a full window (a repeat of the anchor
+ * waits: stale_verdict -1, which needs no speed limit then); chain_all, the
+ * early drops and takes need a second waypoint; so only a START after a gap
+ * is possible, when confirm is 1, and for that the test of c after the
+ * anchor is EUNCONFIRMED exactly when its time test is (the other tests come
+ * after it and give other errors).  So no speed limit and no acceleration.
+ */
+static int decide_one(accept_t *a, accept_verdict_t *v)
+{
+    double dt = a->wp[a->pend[0]].t_s - a->wp[a->a1].t_s;
+    int gap = 0;
+
+    if (stale_verdict(a, 0, 0) < 0)
+        return 0;
+    if (a->cfg.confirm == 1 && time_test(a, dt, 0, &gap) == ENGINE_EUNCONFIRMED &&
+        a->wp[a->pend[0]].t_s > a->wp[a->a1].t_s) {
+        pop(a, v, ACCEPT_START, 0);
+        return 1;
+    }
+    return 0;
+}
+
 int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
 {
-    const engine_waypoint_t *nd[ACCEPT_WINDOW_MAX + 1];
-    const engine_waypoint_t *pre = a->open && a->have_a0 ? &a->a0 : NULL;
+    unsigned char nd[ACCEPT_WINDOW_MAX + 1];
+    unsigned pre = a->open && a->have_a0 ? a->a0 : NO_SLOT;
     unsigned n = a->npend, k = a->cfg.confirm;
     int full = closing || n >= a->cfg.window;
     double vlim;
@@ -449,35 +748,11 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
 
     if (!n)
         return 0;
+    if (a->open && n < 2 && !full)
+        return decide_one(a, v);
     vlim = accept_speed_limit(a);
-    if (!a->open) {
-        unsigned u, vbest = 0;
-        for (unsigned i = 0; i < n; i++)
-            nd[i] = &a->pend[i];
-        if (n >= k && chain_all(a, nd, n, NULL, vlim, 1)) {
-            pop(a, v, ACCEPT_START, 0);
-            return 1;
-        }
-        if (!full)
-            return 0;
-        u = longest(a, nd, n, NULL, 1, n, vlim, 1, NULL);
-        for (unsigned s = 1; s < n; s++) {
-            unsigned l = longest(a, nd + s, n - s, NULL, 1, n, vlim, 1, NULL);
-            if (l > vbest)
-                vbest = l;
-        }
-        /* nothing to abandon: at the close, the chain there is will do; a
-         * waypoint a plausible gap before the next one is a trajectory of
-         * its own */
-        if ((u >= vbest && (u >= k || closing)) ||
-            (n >= 2 && plausible_gap(a, nd[0], nd[1], vlim))) {
-            pop(a, v, ACCEPT_START, 0);
-            return 1;
-        }
-        r = n >= 2 ? accept_check(a, NULL, nd[0], nd[1], vlim) : 0;
-        pop(a, v, ACCEPT_DROP, r ? r : ENGINE_EUNCONFIRMED);
-        return 1;
-    }
+    if (!a->open)
+        return decide_closed(a, closing, full, vlim, v);
 
     /* an open trajectory: the anchor a1 (after a0) and the window */
     r = stale_verdict(a, full, vlim);
@@ -487,16 +762,15 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
         pop(a, v, ACCEPT_DROP, ENGINE_ESTALE);
         return 1;
     }
-    nd[0] = &a->a1;
-    for (unsigned i = 0; i < n; i++)
-        nd[i + 1] = &a->pend[i];
+    nd[0] = a->a1;
+    memcpy(nd + 1, a->pend, n);
     if (n >= 2 && chain_all(a, nd, n + 1, pre, vlim, 0)) {
         pop(a, v, ACCEPT_TAKE, 0);
         return 1;
     }
-    r = accept_check(a, pre, &a->a1, nd[1], vlim);
-    if (r == ENGINE_EUNCONFIRMED && a->pend[0].t_s > a->a1.t_s && n >= k &&
-        chain_all(a, nd + 1, k, NULL, vlim, 1)) {
+    r = check0(a, pre, nd[0], nd[1], vlim);
+    if (r == ENGINE_EUNCONFIRMED && a->wp[nd[1]].t_s > a->wp[nd[0]].t_s && n >= k &&
+        chain_all(a, nd + 1, k, NO_SLOT, vlim, 1)) {
         /* after a gap: nothing later can continue the anchor (all are later
          * than c, which is beyond max_gap_s), so k consistent waypoints are
          * all it takes */
@@ -516,43 +790,5 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
     }
     if (!full)
         return 0;
-    {
-        double cw, co;
-        const engine_waypoint_t *nr[ACCEPT_WINDOW_MAX + 1];
-        unsigned m = 0;
-        /* chains skipping c leave out c's repeats too: a frozen receiver's
-         * copies of c, stamped later, would otherwise outvote the fix they
-         * copy (a chain through them is as long as the run) */
-        for (unsigned i = 0; i <= n; i++)
-            if (i < 2 || !repeats_c(a, nd[i]))
-                nr[m++] = nd[i];
-        unsigned lw = longest(a, nd, n + 1, pre, 1, 1, vlim, 0, &cw); /* through c */
-        unsigned lo = longest(a, nr, m, pre, 2, m - 1, vlim, 0, &co); /* skipping c */
-        /* keep c unless a longer chain skips it, or one as long and smoother
-         * (of two fixes that cannot both be right, the one that bends the
-         * track less) */
-        if (r == 0 && (!better(lo, co, lw, cw) || (lw >= lo && repeated_later(a)))) {
-            pop(a, v, ACCEPT_TAKE, 0);
-            return 1;
-        }
-        if (lo < 2) {
-            /* nothing held continues the anchor: re-anchor on k consistent */
-            unsigned u = longest(a, nd + 1, n, NULL, 1, n, vlim, 1, NULL);
-            /* at the close, what is left confirms itself if it is all one
-             * chain that the anchor reaches within the speed limit */
-            if (u >= k || plausible_gap(a, &a->a1, nd[1], vlim) ||
-                (closing && u == n && check(a, NULL, &a->a1, nd[1], vlim, 1) == 0)) {
-                pop(a, v, ACCEPT_START, 0);
-                return 1;
-            }
-        }
-        if (r != 0)
-            r = drop_reason(a, pre, vlim, r);
-        else if (n >= 2)
-            r = accept_check(a, &a->a1, nd[1], nd[2], vlim);
-        if (r == 0 && lo == lw)
-            r = ENGINE_EACCEL; /* as long a chain bends less without it */
-        pop(a, v, ACCEPT_DROP, r ? r : ENGINE_EUNCONFIRMED);
-        return 1;
-    }
+    return decide_full(a, closing, vlim, pre, r, nd, v);
 }

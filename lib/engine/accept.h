@@ -148,18 +148,35 @@ typedef struct {
     engine_waypoint_t wp;
 } accept_verdict_t;
 
+/* Slots for the waypoints the policy holds: the window, the anchor a1 and
+ * a0 before it, the last far waypoint dropped (burst) and the one offered
+ * (the window has at most ACCEPT_WINDOW_MAX - 1 when one is offered). */
+#define ACCEPT_SLOTS (ACCEPT_WINDOW_MAX + 3)
+
+/* What the tests need of two waypoints p, b (b offered after p), computed
+ * once while both are held: the chord, and the velocity across it. */
+typedef struct {
+    double d;              /* |b - p| (metres) */
+    double v[ENGINE_AXES]; /* (b - p) / (t_b - t_p) per axis */
+    double vn;             /* |v| */
+    double c;              /* d / (t_b - t_p): the chord speed */
+} accept_pair_t;
+
 typedef struct {
     accept_config_t cfg;
-    engine_waypoint_t pend[ACCEPT_WINDOW_MAX];
+    engine_waypoint_t wp[ACCEPT_SLOTS];    /* the waypoints, by slot */
+    unsigned char pend[ACCEPT_WINDOW_MAX]; /* slots of the waypoints held, oldest first */
     unsigned npend;
-    int open;    /* a trajectory is open: a1 is its last waypoint */
-    int have_a0; /* a0 is the waypoint before a1 in it */
-    engine_waypoint_t a0, a1;
-    int started;               /* some trajectory was started since accept_init */
+    int open;                  /* a trajectory is open: a1 is its last waypoint */
+    int have_a0;               /* a0 is the waypoint before a1 in it */
+    unsigned char a0, a1;      /* their slots */
     double vhist[ACCEPT_HIST]; /* chord speeds of the last kept intervals */
     unsigned nhist, hnext;
-    int have_burst;          /* burst: the last waypoint dropped as a far */
-    engine_waypoint_t burst; /* burst's (since the last kept or started) */
+    double vrecent;                     /* the fastest of them (accept_recent_speed) */
+    int have_burst;                     /* burst: the last waypoint dropped as a far */
+    unsigned char burst;                /* burst's slot (since the last kept or started) */
+    unsigned short known[ACCEPT_SLOTS]; /* bit y of known[x]: pair[x][y] is computed */
+    accept_pair_t pair[ACCEPT_SLOTS][ACCEPT_SLOTS];
 } accept_t;
 
 /* Set up with cfg (window and confirm clamped to 1..ACCEPT_WINDOW_MAX,
@@ -183,7 +200,13 @@ static inline unsigned accept_pending(const accept_t *a)
 /* The oldest waypoint held, or NULL. */
 static inline const engine_waypoint_t *accept_first(const accept_t *a)
 {
-    return a->npend ? &a->pend[0] : NULL;
+    return a->npend ? &a->wp[a->pend[0]] : NULL;
+}
+
+/* The newest waypoint held, or NULL. */
+static inline const engine_waypoint_t *accept_last(const accept_t *a)
+{
+    return a->npend ? &a->wp[a->pend[a->npend - 1]] : NULL;
 }
 
 /*
@@ -212,9 +235,12 @@ int accept_check(const accept_t *a, const engine_waypoint_t *pre, const engine_w
 
 /* The speed limit now in force (m/s, 0 = none): max_speed_m_s, and with
  * `learned` the learned limit from the recent speeds and the window. */
-double accept_speed_limit(const accept_t *a);
+double accept_speed_limit(accept_t *a);
 
 /* Fastest chord speed of the last ACCEPT_HIST kept intervals (m/s, 0 if none). */
-double accept_recent_speed(const accept_t *a);
+static inline double accept_recent_speed(const accept_t *a)
+{
+    return a->vrecent;
+}
 
 #endif

@@ -1316,9 +1316,9 @@ static double brake_s(const engine_t *e)
 static double newest_t(const engine_t *e)
 {
     double t = e->nodes > 0 ? nt(e, e->nodes - 1) : -INFINITY;
-    unsigned np = accept_pending(&e->policy);
-    if (np > 0 && e->policy.pend[np - 1].t_s > t)
-        t = e->policy.pend[np - 1].t_s;
+    const engine_waypoint_t *held = accept_last(&e->policy);
+    if (held && held->t_s > t)
+        t = held->t_s;
     return t;
 }
 

@@ -10,6 +10,8 @@
  *  3. error against one global solve and lookahead for several (F, O).
  *  4. heap allocations inside push/tick after setup, counted by wrapping
  *     malloc/calloc/realloc/free (forwarded to glibc's __libc_* functions).
+ *  5. the acceptance policy alone (offer + every verdict), lib/engine/accept.c
+ *     against the former one kept in tests/helpers/accept_ref.h.
  *
  * Numbers only, no assertions (timings on a shared machine are noisy).
  */
@@ -23,6 +25,8 @@
 #include <gsl/gsl_spline.h>
 
 #include "test.h"
+#include "accept.h"
+#include "accept_ref.h"
 #include "cubic.h"
 #include "engine.h"
 #include "fdiff.h"
@@ -393,8 +397,103 @@ static void bench_fast_ticks(void)
     printf("target <= 8 ns per setpoint (issue 13)\n\n");
 }
 
+/* the acceptance policy of the default configuration (profile auto) */
+static void accept_cfg_default(accept_config_t *ac)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    memset(ac, 0, sizeof *ac);
+    ac->max_speed_m_s = engine_config_max_speed(&c);
+    ac->max_accel_m_s2 = engine_config_max_accel(&c);
+    ac->max_gap_s = c.max_gap_s;
+    ac->learned = 1;
+    ac->stale = 1;
+    ac->window = ACCEPT_WINDOW_MAX; /* start_slack auto */
+    ac->confirm = c.confirm;
+}
+
+/* seconds to offer w[0..n-1] to the current policy and take every verdict;
+ * *kept: waypoints taken or started */
+static double time_accept(const engine_waypoint_t *w, long n, long *kept)
+{
+    accept_config_t ac;
+    accept_verdict_t v;
+    static accept_t a;
+    double t0;
+    accept_cfg_default(&ac);
+    accept_init(&a, &ac);
+    *kept = 0;
+    t0 = now_s();
+    for (long i = 0; i < n; i++) {
+        accept_offer(&a, &w[i]);
+        while (accept_decide(&a, i == n - 1, &v))
+            *kept += v.kind != ACCEPT_DROP;
+    }
+    return now_s() - t0;
+}
+
+/* the same with the former policy (tests/helpers/accept_ref.h) */
+static double time_accept_ref(const engine_waypoint_t *w, long n, long *kept)
+{
+    accept_config_t ac;
+    accept_verdict_t v;
+    static aref_t a;
+    double t0;
+    accept_cfg_default(&ac);
+    aref_init(&a, &ac);
+    *kept = 0;
+    t0 = now_s();
+    for (long i = 0; i < n; i++) {
+        aref_offer(&a, &w[i]);
+        while (aref_decide(&a, i == n - 1, &v))
+            *kept += v.kind != ACCEPT_DROP;
+    }
+    return now_s() - t0;
+}
+
+/* ns per waypoint of the acceptance policy alone, former and current, best
+ * of 5 interleaved: the rough walk of the streaming table (white-noise
+ * velocity, so profile auto refuses about 1 in 10) and a clean circle */
+static void bench_accept(void)
+{
+    enum { N = 100000 };
+    static engine_waypoint_t walk[N], circle[N];
+    const engine_waypoint_t *tracks[2] = {walk, circle};
+    static const char *const names[2] = {"rough walk of the table below (0.1 s)",
+                                         "circle, 5 m/s, radius 50 m (0.2 s)"};
+    double pos[3] = {0, 0, 0};
+    unsigned seed = 1;
+    for (long i = 0; i < N; i++) {
+        walk_wp(&walk[i], i, 0.1, &seed, pos);
+        circle[i].t_s = 0.2 * (double)i;
+        circle[i].pos_m[0] = 50.0 * cos(0.02 * (double)i);
+        circle[i].pos_m[1] = 50.0 * sin(0.02 * (double)i);
+        circle[i].pos_m[2] = 0;
+    }
+    printf("acceptance policy alone (accept_offer + accept_decide, default profile auto), ns per "
+           "waypoint, %d waypoints, best of 5 interleaved, same run:\n"
+           "| track | kept | previous (tests/helpers/accept_ref.h) | lib/engine/accept.c | x "
+           "previous |\n|---|---|---|---|---|\n",
+           N);
+    for (int t = 0; t < 2; t++) {
+        double best_ref = 1e30, best_new = 1e30;
+        long kept_ref = 0, kept_new = 0;
+        for (int rep = 0; rep < 5; rep++) {
+            double r = time_accept_ref(tracks[t], N, &kept_ref);
+            double c = time_accept(tracks[t], N, &kept_new);
+            best_ref = r < best_ref ? r : best_ref;
+            best_new = c < best_new ? c : best_new;
+        }
+        printf("| %s | %ld%s | %.0f | %.0f | %.2f |\n", names[t], kept_new,
+               kept_new == kept_ref ? "" : " (differs!)", best_ref * 1e9 / N, best_new * 1e9 / N,
+               best_ref / best_new);
+    }
+    printf("\n");
+}
+
 int main(void)
 {
+    bench_accept();
     bench_stepper();
     bench_fast_ticks();
     static const long lengths[] = {1000, 10000, 100000, 1000000};

@@ -17,6 +17,10 @@
  *   jump   1 km off, with the next fix's time plus 0.1 s.
  * Each run must refuse exactly the bad row and keep every good fix, stream
  * with no underrun and no hard stop, and end finished.
+ *
+ * And the policy's pair cache changes no verdict: test_same_verdicts_as_
+ * reference drives lib/engine/accept.c and the former code
+ * (tests/helpers/accept_ref.h) with the same random dirty tracks.
  */
 #include "test.h"
 
@@ -24,6 +28,8 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "accept.h"
+#include "accept_ref.h"
 #include "engine.h"
 
 #define PERIOD_NS 10000000LL
@@ -361,6 +367,243 @@ static void test_far_burst_unconfirmed(void **state)
     }
 }
 
+/* ---- the same verdicts as the reference (tests/helpers/accept_ref.h) ------ */
+
+/* 64-bit LCG (Knuth's MMIX constants): more resolution than urand for the
+ * positions and times of the differential test */
+static uint64_t rng_state;
+static double rnd(void)
+{
+    rng_state = rng_state * 6364136223846793005ull + 1442695040888963407ull;
+    return (double)(rng_state >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static unsigned rndn(unsigned n)
+{
+    return (unsigned)(rnd() * n) % n;
+}
+
+/* The next waypoint of a dirty track: a base motion (random walk, steady
+ * course, standing still with noise) at a regular, jittered or bursty
+ * rate, with faults mixed in: spikes, repeats of the last position (frozen
+ * receiver), equal stamps, exact duplicates, late and backwards stamps,
+ * gaps, far jumps in time and space, bursts off the track. */
+typedef struct {
+    double t, dt, pos[3], vel[3], noise;
+    engine_waypoint_t last, prev;
+    unsigned seq, fault_pct, bursty, burst_left;
+    double burst_off[3];
+} track_t;
+
+static void track_init(track_t *tr)
+{
+    static const double dts[] = {0.001, 0.1, 0.2, 1.0, 5.0};
+    static const double speeds[] = {0.0, 1.0, 5.0, 30.0, 250.0};
+    double sp = speeds[rndn(5)];
+    memset(tr, 0, sizeof *tr);
+    tr->dt = dts[rndn(5)];
+    tr->t = rnd() * 1000.0;
+    for (int k = 0; k < 3; k++) {
+        tr->pos[k] = (rnd() - 0.5) * 1e4;
+        tr->vel[k] = (rnd() - 0.5) * sp;
+    }
+    tr->noise = rndn(2) ? 0.0 : 3.0 * rnd();
+    tr->fault_pct = (unsigned[]){0, 2, 10, 30}[rndn(4)];
+    tr->bursty = rndn(3) == 0;
+}
+
+static void track_base(track_t *tr, engine_waypoint_t *w)
+{
+    double step = tr->dt;
+    if (tr->bursty)
+        step *= (double)rndn(4) * 0.5; /* 0: the same stamp again */
+    else if (rndn(2))
+        step *= 0.5 + rnd(); /* jitter */
+    tr->t += step;
+    for (int k = 0; k < 3; k++) {
+        if (rndn(4) == 0)
+            tr->vel[k] += (rnd() - 0.5) * 2.0 * (1.0 + fabs(tr->vel[k]));
+        tr->pos[k] += tr->vel[k] * step;
+        w->pos_m[k] = tr->pos[k] + (rnd() - 0.5) * tr->noise;
+    }
+    w->t_s = tr->t;
+}
+
+static void track_fault(track_t *tr, engine_waypoint_t *w)
+{
+    switch (rndn(9)) {
+    case 0: /* spike */
+        for (int k = 0; k < 3; k++)
+            w->pos_m[k] += (rnd() - 0.5) * 600.0;
+        break;
+    case 1: /* repeat of the last position, later (frozen receiver) */
+        memcpy(w->pos_m, tr->last.pos_m, sizeof w->pos_m);
+        break;
+    case 2: /* equal stamp, other position */ w->t_s = tr->last.t_s; break;
+    case 3: /* exact duplicate of the last or the one before */
+        *w = rndn(2) ? tr->last : tr->prev;
+        return;
+    case 4: /* late or backwards stamp */
+        w->t_s = tr->last.t_s - tr->dt * (double)rndn(12) * 0.5;
+        break;
+    case 5: /* a gap, plausible or far */
+        tr->t += tr->dt * (double)(rndn(2) ? 30 + rndn(2000) : 1000000);
+        w->t_s = tr->t;
+        break;
+    case 6: /* a burst off the track, far in space */
+        tr->burst_left = 1 + rndn(5);
+        for (int k = 0; k < 3; k++)
+            tr->burst_off[k] = (rnd() - 0.5) * 4000.0;
+        break;
+    case 7: /* the clock restarts */
+        tr->t = rnd() * 10.0;
+        w->t_s = tr->t;
+        break;
+    default: /* a stamp within a nanosecond of the last */
+        w->t_s = tr->last.t_s + (rnd() - 0.5) * 2e-9;
+        break;
+    }
+}
+
+static void track_next(track_t *tr, engine_waypoint_t *w)
+{
+    track_base(tr, w);
+    if (tr->burst_left) {
+        tr->burst_left--;
+        for (int k = 0; k < 3; k++)
+            w->pos_m[k] += tr->burst_off[k];
+    } else if (rndn(100) < tr->fault_pct)
+        track_fault(tr, w);
+    w->seq = ++tr->seq;
+    tr->prev = tr->last;
+    tr->last = *w;
+}
+
+static void random_config(accept_config_t *c)
+{
+    static const double speeds[] = {0.0, 5.0, 40.0, 100.0, 400.0};
+    static const double accels[] = {0.0, 3.0, 30.0};
+    static const double gaps[] = {0.5, 5.0, 60.0, 1e9};
+    c->max_speed_m_s = speeds[rndn(5)];
+    c->max_accel_m_s2 = accels[rndn(3)];
+    c->max_gap_s = gaps[rndn(4)];
+    c->learned = (int)rndn(2);
+    c->stale = (int)rndn(2);
+    c->window = rndn(ACCEPT_WINDOW_MAX + 2); /* 0 and 9: clamped */
+    c->confirm = rndn(ACCEPT_WINDOW_MAX + 2);
+}
+
+static int same_wp(const engine_waypoint_t *p, const engine_waypoint_t *q)
+{
+    return memcmp(&p->t_s, &q->t_s, sizeof p->t_s) == 0 &&
+           memcmp(p->pos_m, q->pos_m, sizeof p->pos_m) == 0 && p->seq == q->seq;
+}
+
+static void assert_same_state(accept_t *a, const aref_t *r)
+{
+    double l1 = accept_speed_limit(a), l2 = aref_speed_limit(r);
+    double s1 = accept_recent_speed(a), s2 = aref_recent_speed(r);
+    assert_int_equal(accept_pending(a), r->npend);
+    assert_memory_equal(&l1, &l2, sizeof l1);
+    assert_memory_equal(&s1, &s2, sizeof s1);
+    if (r->npend)
+        assert_true(same_wp(accept_first(a), &r->pend[0]));
+}
+
+/* every verdict there is now, from both: the same, in the same order */
+static unsigned drain_both(accept_t *a, aref_t *r, int closing, unsigned long *kinds)
+{
+    accept_verdict_t v1, v2;
+    unsigned n = 0;
+    for (;;) {
+        int d1 = accept_decide(a, closing, &v1), d2 = aref_decide(r, closing, &v2);
+        assert_int_equal(d1, d2);
+        if (!d1)
+            return n;
+        assert_int_equal(v1.kind, v2.kind);
+        assert_int_equal(v1.reason, v2.reason);
+        assert_int_equal(v1.gap, v2.gap);
+        assert_true(same_wp(&v1.wp, &v2.wp));
+        kinds[v1.kind == ACCEPT_DROP ? 2 + v1.reason : (int)v1.kind]++;
+        assert_same_state(a, r);
+        n++;
+    }
+}
+
+/* accept_check on a random triple of the track against the reference's */
+static void check_triple(const accept_t *a, const aref_t *r, const engine_waypoint_t *w)
+{
+    double vlim = rndn(2) ? 0.0 : 50.0 * rnd();
+    const engine_waypoint_t *pre = rndn(3) ? &w[0] : NULL;
+    assert_int_equal(accept_check(a, pre, &w[1], &w[2], vlim),
+                     aref_check(r, pre, &w[1], &w[2], vlim));
+}
+
+static void run_track(unsigned npts, unsigned long *kinds)
+{
+    accept_config_t cfg;
+    accept_t a;
+    aref_t r;
+    track_t tr;
+    engine_waypoint_t w, tri[3] = {{0}};
+
+    random_config(&cfg);
+    accept_init(&a, &cfg);
+    aref_init(&r, &cfg);
+    track_init(&tr);
+    for (unsigned i = 0; i < npts; i++) {
+        track_next(&tr, &w);
+        assert_int_equal(accept_offer(&a, &w), aref_offer(&r, &w));
+        assert_same_state(&a, &r);
+        drain_both(&a, &r, 0, kinds);
+        tri[0] = tri[1], tri[1] = tri[2], tri[2] = w;
+        check_triple(&a, &r, tri);
+        if (rndn(400) == 0) { /* the engine finishes, stops or is cleared */
+            unsigned what = rndn(3);
+            if (what < 2)
+                drain_both(&a, &r, 1, kinds);
+            if (what == 2) {
+                accept_reset(&a);
+                aref_reset(&r);
+            } else {
+                accept_close(&a);
+                aref_close(&r);
+            }
+            assert_same_state(&a, &r);
+        }
+    }
+    drain_both(&a, &r, 1, kinds);
+    assert_int_equal(accept_pending(&a), 0);
+}
+
+/*
+ * The pair cache of lib/engine/accept.c (chords and velocities computed once
+ * per pair of waypoints held) gives the verdicts of the policy as it was
+ * (tests/helpers/accept_ref.h): over 3000 random dirty tracks and
+ * configurations, the same return of every offer and decide, the same
+ * verdict (kind, reason, gap, waypoint), the same speed limit and recent
+ * speed bit for bit, the same waypoints held.  The counts of each verdict
+ * show the tracks reach every kind and reason.
+ */
+static void test_same_verdicts_as_reference(void **state)
+{
+    unsigned long kinds[2 + ENGINE_ERROR_COUNT] = {0};
+    (void)state;
+    rng_state = 12345;
+    for (int t = 0; t < 3000; t++)
+        run_track(50 + rndn(400), kinds);
+    printf("verdicts: take %lu start %lu drop:", kinds[ACCEPT_TAKE], kinds[ACCEPT_START]);
+    for (int e = 0; e < ENGINE_ERROR_COUNT; e++)
+        if (kinds[2 + e])
+            printf(" %s %lu", engine_reason_name(e) ? engine_reason_name(e) : "?", kinds[2 + e]);
+    printf("\n");
+    assert_true(kinds[ACCEPT_TAKE] > 0 && kinds[ACCEPT_START] > 0);
+    static const int reasons[] = {ENGINE_EBACKWARDS, ENGINE_ESAMETIME,    ENGINE_ESPEED,
+                                  ENGINE_EACCEL,     ENGINE_EUNCONFIRMED, ENGINE_ESTALE};
+    for (size_t i = 0; i < sizeof reasons / sizeof reasons[0]; i++)
+        assert_true(kinds[2 + reasons[i]] > 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -369,6 +612,7 @@ int main(void)
         cmocka_unit_test(test_reanchor_after_confirm),
         cmocka_unit_test(test_far_start_needs_confirmation),
         cmocka_unit_test(test_far_burst_unconfirmed),
+        cmocka_unit_test(test_same_verdicts_as_reference),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
