@@ -17,10 +17,19 @@ The real trajd, with faults made by the kernel, observed from outside:
    STATUS says output fault (bit 6, last error 0x45 "output lost lines") and
    STATUS2 page 1 counts the lines lost and the failed writes, never more
    than the exit line gives; exit 74.
+6. An EIO from the kernel: csv.path (or stdout) is the slave side of a
+   pseudo-terminal whose master is then closed, so every write fails with
+   EIO (checked first with a write of our own to the same slave).  trajd
+   says so at warning level while it runs on (naming the output and the
+   error), sets out_fault over Modbus, and exits 74; trajreplay, which
+   writes to a pty stdout or -o, stops with status 3 ("writing an output
+   failed", daemon/doc/trajreplay.1) and a message naming the output.
 Every wait is bounded; the daemon is stopped by pid.
 """
+import errno
 import os
 import re
+import select
 import signal
 import subprocess
 import sys
@@ -36,10 +45,13 @@ import can  # noqa: E402
 import canmatrix  # noqa: E402
 
 TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
+TRAJREPLAY = os.path.join(mbsim.BUILD, "bin", "trajreplay")
 DEMO = os.path.join(mbsim.ROOT, "config", "demo.conf")
 WAIT_S = 30            # bound on a whole run (a loaded 2-core machine)
 EX_IOERR = 74
 EXIT_EPIPE = 141
+EXIT_TRAJREPLAY_WRITE = 3   # daemon/doc/trajreplay.1, EXIT STATUS
+EIO_TEXT = os.strerror(errno.EIO)   # "Input/output error", from Python's libc
 FIELDS = 16            # columns of a setpoint line (daemon/csv/csv_format.c)
 
 
@@ -68,6 +80,144 @@ def run(path, timeout=WAIT_S):
                        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                        timeout=timeout)
     return p.returncode, p.stderr
+
+
+class HungUpPty:
+    """A pseudo-terminal whose slave is handed to a process; hang_up()
+    closes the master so the kernel fails every write to the slave with EIO
+    (and checks that it does, with a write of its own)."""
+
+    def __init__(self):
+        self.master, self.slave = os.openpty()
+        self.name = os.ttyname(self.slave)
+        self.probe = os.open(self.name, os.O_WRONLY | os.O_NOCTTY)
+
+    def read_until(self, text, timeout=WAIT_S):
+        """Read the master until text came (True) or timeout s passed."""
+        got, end = b"", time.monotonic() + timeout
+        while text not in got and time.monotonic() < end:
+            if select.select([self.master], [], [], 0.2)[0]:
+                got += os.read(self.master, 4096)
+        return text in got
+
+    def hang_up(self, test):
+        os.close(self.slave)
+        os.close(self.master)
+        with test.assertRaises(OSError) as e:
+            os.write(self.probe, b"x")
+        test.assertEqual(e.exception.errno, errno.EIO)
+
+    def close(self):
+        for fd in (self.probe, self.slave, self.master):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+
+
+class OutputEIO(unittest.TestCase):
+    def setUp(self):
+        self.tmpd = tempfile.TemporaryDirectory()
+        self.tmp = self.tmpd.name
+        self.pty = HungUpPty()
+
+    def tearDown(self):
+        self.pty.close()
+        self.tmpd.cleanup()
+
+    def test_csv_path_eio_is_loud(self):
+        # Given csv.path = a pty slave and Modbus on, when the pty hangs up
+        # mid-stream (writes fail with EIO), then while trajd runs on a <4>
+        # line names the output and the error, the object's and the
+        # daemon's out_fault = 1 and out_lost grows, and after SIGTERM the
+        # exit status is 74 with an error line saying why.
+        track(os.path.join(self.tmp, "track.csv"), n=3000)
+        path = conf(self.tmp, self.pty.name, modbus=True)
+        p = subprocess.Popen([TRAJD, "-f", "-c", path], stdin=subprocess.DEVNULL,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        try:
+            lines = mbsim.Lines(p.stderr)
+            line = lines.wait_for("modbus: TCP on", WAIT_S)
+            self.assertIsNotNone(line, "".join(lines.all))
+            port = mbsim.port_of(line)
+            self.assertTrue(self.pty.read_until(b"\no,"), "no setpoint row on the pty")
+            self.pty.hang_up(self)
+            warn = lines.wait_for(EIO_TEXT, WAIT_S)
+            self.assertIsNotNone(warn, "".join(lines.all))
+            self.assertTrue(warn.startswith("<4>"), warn)
+            self.assertIn("object 'o' csv.path %s" % self.pty.name, warn)
+            self.assertIsNone(p.poll())                  # runs on, loudly
+            s = mbsim.connect(port)
+            deadline = time.monotonic() + WAIT_S
+            while True:
+                r = mbsim.read_input(s, obj_base(0), mbsim.BLOCK)
+                if mbsim.u32(r, M["MBMAP_O_OUT_LOST"]) > 0 or time.monotonic() > deadline:
+                    break
+            d = mbsim.read_input(s, 0, mbsim.BLOCK)
+            s.close()
+            self.assertEqual(r[M["MBMAP_O_OUT_FAULT"]], 1)
+            self.assertGreater(mbsim.u32(r, M["MBMAP_O_OUT_LOST"]), 0)
+            self.assertEqual(d[M["MBMAP_D_OUT_FAULT"]], 1)
+        finally:
+            p.send_signal(signal.SIGTERM)
+            rc = p.wait(WAIT_S)
+        lines.wait_for("\0", WAIT_S)                     # the rest, to EOF
+        err = "".join(lines.all)
+        self.assertEqual(rc, EX_IOERR, err)
+        self.assertRegex(err, r"<3>\d+ setpoint lines were lost by the outputs, last write error: "
+                         + EIO_TEXT)
+
+    def test_stdout_eio_exits_74(self):
+        # Given output = stdout on a pty slave and exit_when_done, when the
+        # pty hangs up mid-stream, then trajd still ends at the track's end
+        # with status 74 and a <4> "stdout: write failed: <EIO>" line.
+        track(os.path.join(self.tmp, "track.csv"), n=1200)
+        path = conf(self.tmp, "unused", extra_daemon="exit_when_done = yes\n")
+        with open(path) as f:
+            text = f.read().replace("output = csv\ncsv.path = unused\n", "output = stdout\n")
+        with open(path, "w") as f:
+            f.write(text)
+        errf = tempfile.TemporaryFile(mode="w+")
+        self.addCleanup(errf.close)
+        p = subprocess.Popen([TRAJD, "-f", "-c", path], stdin=subprocess.DEVNULL,
+                             stdout=self.pty.slave, stderr=errf)
+        try:
+            self.assertTrue(self.pty.read_until(b"\no,"), "no setpoint row on the pty")
+            self.pty.hang_up(self)
+            rc = p.wait(WAIT_S)
+        finally:
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+        errf.seek(0)
+        err = errf.read()
+        self.assertEqual(rc, EX_IOERR, err)
+        self.assertIn("<4>stdout: write failed: %s" % EIO_TEXT, err)
+
+    def trajreplay_eio(self, args, stdout, name):
+        track(os.path.join(self.tmp, "track.csv"), n=3000)
+        p = subprocess.Popen([TRAJREPLAY, "-q"] + args + [os.path.join(self.tmp, "track.csv")],
+                             stdin=subprocess.DEVNULL, stdout=stdout, stderr=subprocess.PIPE,
+                             text=True)
+        try:
+            self.assertTrue(self.pty.read_until(b"\nreplay,"), "no setpoint row on the pty")
+            self.pty.hang_up(self)
+            err = p.communicate(timeout=WAIT_S)[1]
+        finally:
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+        self.assertEqual(p.returncode, EXIT_TRAJREPLAY_WRITE, err)
+        self.assertIn("trajreplay: %s: write error: %s" % (name, EIO_TEXT), err)
+
+    def test_trajreplay_stdout_eio(self):
+        # Given trajreplay writing a 300 s track to a pty stdout, when the pty
+        # hangs up, then it stops with status 3 and says "stdout: ... <EIO>".
+        self.trajreplay_eio([], self.pty.slave, "stdout")
+
+    def test_trajreplay_output_eio(self):
+        # The same with -o naming the pty slave.
+        self.trajreplay_eio(["-o", self.pty.name], subprocess.DEVNULL, self.pty.name)
 
 
 class OutputFaults(unittest.TestCase):
