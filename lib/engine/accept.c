@@ -527,6 +527,38 @@ static int taken_past_outliers(accept_t *a, double vlim)
     return 0;
 }
 
+/* nd (slots: the anchor, then the n waypoints held) without c's later
+ * repeats, into nr: the chains that skip c leave them out too (a frozen
+ * receiver's copies of c, stamped later, would otherwise outvote the fix
+ * they copy: a chain through them is as long as the run).  Returns their
+ * count. */
+static unsigned without_repeats(accept_t *a, const unsigned char *nd, unsigned n, unsigned char *nr)
+{
+    unsigned m = 0;
+    for (unsigned i = 0; i <= n; i++)
+        if (i < 2 || !repeats_c(a, nd[i]))
+            nr[m++] = nd[i];
+    return m;
+}
+
+/*
+ * 1 if c (which follows the anchor) is continued by a later waypoint held
+ * and the longest chain through c is longer than every chain that skips
+ * it, among the waypoints held (nd: the anchor and the window, slots): the
+ * full window's verdict, given now.  A spike that the learned limit lets
+ * follow the anchor (taken_past_outliers then waits) but that nothing held
+ * continues is one waypoint against c's two: without this, c would wait
+ * for the full window (the output drains its start slack meanwhile:
+ * visnjan, tests/oracle/test_fault_injection.py test_spike_rides_through).
+ */
+static int outvotes_held(accept_t *a, const unsigned char *nd, unsigned pre, double vlim)
+{
+    unsigned char nr[ACCEPT_WINDOW_MAX + 1];
+    unsigned n = a->npend, m = without_repeats(a, nd, n, nr);
+    unsigned lw = longest(a, nd, n + 1, pre, 1, 1, vlim, 0, NULL);
+    return lw >= 3 && lw > longest(a, nr, m, pre, 2, m - 1, vlim, 0, NULL);
+}
+
 /*
  * The reason for dropping c, which does not follow the anchor (r: ESPEED or
  * EACCEL from accept_check): ENGINE_EUNCONFIRMED if c is one of a burst of
@@ -664,16 +696,11 @@ static void longest_both(accept_t *a, const unsigned char *nd, unsigned m, unsig
 static int decide_full(accept_t *a, int closing, double vlim, unsigned pre, int r,
                        const unsigned char *nd, accept_verdict_t *v)
 {
-    unsigned n = a->npend, k = a->cfg.confirm, m = 0, lw, lo;
+    unsigned n = a->npend, k = a->cfg.confirm, lw, lo;
     unsigned char nr[ACCEPT_WINDOW_MAX + 1];
+    unsigned m = without_repeats(a, nd, n, nr);
     double cw, co;
 
-    /* chains skipping c leave out c's repeats too: a frozen receiver's
-     * copies of c, stamped later, would otherwise outvote the fix they
-     * copy (a chain through them is as long as the run) */
-    for (unsigned i = 0; i <= n; i++)
-        if (i < 2 || !repeats_c(a, nd[i]))
-            nr[m++] = nd[i];
     if (m == n + 1) { /* no repeats of c: the same waypoints both ways */
         unsigned l[2];
         double cl[2];
@@ -784,7 +811,7 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
         pop(a, v, ACCEPT_DROP, drop_reason(a, pre, vlim, r));
         return 1;
     }
-    if (r == 0 && taken_past_outliers(a, vlim)) {
+    if (r == 0 && (taken_past_outliers(a, vlim) || (n >= 3 && outvotes_held(a, nd, pre, vlim)))) {
         pop(a, v, ACCEPT_TAKE, 0);
         return 1;
     }

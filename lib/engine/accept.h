@@ -53,7 +53,10 @@
  * verdict comes as soon as the full window's is certain: c that does not
  * follow the anchor is dropped once a later waypoint does; c that follows
  * it is kept once a later waypoint continues it past waypoints that cannot
- * take its place (they do not follow the anchor, or repeat c's position).
+ * take its place (they do not follow the anchor, or repeat c's position),
+ * or once the longest chain through c among the waypoints held is longer
+ * than every chain that skips c (a spike that a loose learned limit lets
+ * follow the anchor, but that nothing held continues).
  * So one bad fix holds its neighbours one interval more, not a window, and
  * costs the output no underrun (tests/unit/test_accept.c).  Else the verdict
  * waits until the window is full or the input is closed.  The first trajectory (nothing

@@ -2,7 +2,9 @@
  * accept_ref.h - the acceptance policy as it was before its pair cache
  * (lib/engine/accept.c up to commit 61f59e6: every test recomputes its
  * chord speeds and velocities from the waypoints, the window is an array
- * shifted on each verdict), kept as the reference: test_accept drives it
+ * shifted on each verdict; with the early take of a fix that outvotes a
+ * spike among the waypoints held, aref_outvotes_held, added to both), kept
+ * as the reference: test_accept drives it
  * and lib/engine/accept.c with the same random dirty tracks and checks the
  * verdicts are the same, and bench_engine times the two side by side.
  * Header-only (static functions), the same accept_config_t and verdicts.
@@ -435,6 +437,21 @@ static inline int aref_taken_past_outliers(const aref_t *a, double vlim)
     return 0;
 }
 
+/* accept.c outvotes_held: c continued by a later waypoint held, and the
+ * longest chain through c longer than every chain skipping it (and c's
+ * later repeats) among the waypoints held */
+static inline int aref_outvotes_held(const aref_t *a, const engine_waypoint_t *const *nd,
+                                     const engine_waypoint_t *pre, double vlim)
+{
+    const engine_waypoint_t *nr[ACCEPT_WINDOW_MAX + 1];
+    unsigned n = a->npend, m = 0, lw;
+    for (unsigned i = 0; i <= n; i++)
+        if (i < 2 || !aref_repeats_c(a, nd[i]))
+            nr[m++] = nd[i];
+    lw = aref_longest(a, nd, n + 1, pre, 1, 1, vlim, 0, NULL);
+    return lw >= 3 && lw > aref_longest(a, nr, m, pre, 2, m - 1, vlim, 0, NULL);
+}
+
 /*
  * The reason for dropping c, which does not follow the anchor (r: ESPEED or
  * EACCEL from aref_check): ENGINE_EUNCONFIRMED if c is one of a burst of
@@ -538,7 +555,8 @@ static inline int aref_decide(aref_t *a, int closing, accept_verdict_t *v)
         aref_pop(a, v, ACCEPT_DROP, aref_drop_reason(a, pre, vlim, r));
         return 1;
     }
-    if (r == 0 && aref_taken_past_outliers(a, vlim)) {
+    if (r == 0 &&
+        (aref_taken_past_outliers(a, vlim) || (n >= 3 && aref_outvotes_held(a, nd, pre, vlim)))) {
         aref_pop(a, v, ACCEPT_TAKE, 0);
         return 1;
     }
