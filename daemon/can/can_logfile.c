@@ -5,6 +5,7 @@
 #include <inttypes.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "candump.h"
 #include "log.h"
@@ -24,14 +25,17 @@ struct can_logfile {
     int out_is_stdout;
     char ifname[CANDUMP_IFNAME_MAX + 1];
     can_logfile_stats_t st;
+    char first_bad_why[64]; /* why the first bad line was refused */
 };
 
 /* One bad line: counted; the first CAN_LOGFILE_REPORT_MAX are logged with
  * name:line and the reason, the rest summed up at the end of the load. */
 static void bad_line(can_logfile_t *l, const char *name, uint64_t lineno, const char *why)
 {
-    if (!l->st.first_bad_line)
+    if (!l->st.first_bad_line) {
         l->st.first_bad_line = lineno;
+        snprintf(l->first_bad_why, sizeof l->first_bad_why, "%s", why);
+    }
     if (l->st.bad_lines++ < CAN_LOGFILE_REPORT_MAX)
         log_msg(LOG_WARNING, "can: %s:%" PRIu64 ": %s: line not replayed", name, lineno, why);
 }
@@ -126,6 +130,53 @@ static int load(can_logfile_t *l, const char *path, char *err, size_t errlen)
     int rc = can_logfile_load(l, fp, path, err, errlen);
     fclose(fp);
     return rc;
+}
+
+/* What a probe that found no frame saw in the file, into why. */
+static void probe_why(const can_logfile_t *l, char *why, size_t wl)
+{
+    if (!l->st.lines) {
+        snprintf(why, wl, "empty: no CAN frame in it");
+        return;
+    }
+    int n = snprintf(why, wl,
+                     "no CAN frame in it (%" PRIu64 " lines: %" PRIu64
+                     " comments or blank, %" PRIu64 " bad",
+                     l->st.lines, l->st.comments, l->st.bad_lines);
+    if (n >= 0 && (size_t)n < wl)
+        snprintf(why + n, wl - (size_t)n,
+                 l->st.bad_lines ? ", the first bad at line %" PRIu64 ": %s)" : ")",
+                 l->st.first_bad_line, l->first_bad_why);
+}
+
+int can_logfile_probe(const char *path, char *why, size_t wl)
+{
+    FILE *fp = fopen(path, "r");
+    struct stat sb;
+    if (!fp || (fstat(fileno(fp), &sb) == 0 && S_ISDIR(sb.st_mode))) {
+        snprintf(why, wl, "%s", strerror(fp ? EISDIR : errno));
+        if (fp)
+            fclose(fp);
+        return -1;
+    }
+    can_logfile_t l = {0};
+    char *line = NULL;
+    size_t cap = 0;
+    ssize_t len;
+    int rc = 0;
+    while (!rc && l.n == 0 && (len = getline(&line, &cap, fp)) >= 0)
+        rc = load_line(&l, path, l.st.lines + 1, line, (size_t)len);
+    int read_err = ferror(fp) ? errno : 0;
+    free(line);
+    free(l.rec);
+    fclose(fp);
+    if (rc < 0)
+        snprintf(why, wl, "out of memory");
+    else if (read_err)
+        snprintf(why, wl, "read error: %s", strerror(read_err));
+    else if (l.n == 0)
+        probe_why(&l, why, wl);
+    return rc < 0 || read_err || l.n == 0 ? -1 : 0;
 }
 
 can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const char *ifname,

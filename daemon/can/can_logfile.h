@@ -58,6 +58,15 @@ can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const
  */
 int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, size_t errlen);
 
+/*
+ * Whether the candump log at path can be replayed: 0 once a line holds a
+ * frame (read no further), else -1 with why: it cannot be opened, is a
+ * directory, cannot be read, is empty, or has no frame line (the count of
+ * lines, comments and bad lines, and the first bad line with its reason).
+ * For the config check; bad lines met are logged as by the load.
+ */
+int can_logfile_probe(const char *path, char *why, size_t wl);
+
 /* Flush and close; NULL is a no-op. */
 void can_logfile_close(can_logfile_t *l);
 

@@ -420,6 +420,18 @@ static int reload_check(const cfg_t *old, const cfg_t *nw, int *line, char *why,
     return 0;
 }
 
+/* A log_in that cannot be read or holds no frame: refused at its line (it
+ * would be accepted, then replay nothing). */
+static int check_log_in(const can_cfg_t *c, int *line, char *why, size_t wl)
+{
+    char probe[512];
+    if (!c->log_in[0] || can_logfile_probe(c->log_in, probe, sizeof probe) == 0)
+        return 0;
+    *line = c->line_log_in;
+    snprintf(why, wl, "log_in %s: %s", c->log_in, probe);
+    return -CFG_EVALUE;
+}
+
 static int check(cfg_t *cfg, int *line, char *why, size_t wl)
 {
     const can_cfg_t *c = cfg_transport(cfg, &can_transport);
@@ -429,6 +441,8 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
             idx[n++] = i;
     if (!n)
         return 0;
+    if (check_log_in(c, line, why, wl) < 0)
+        return -CFG_EVALUE;
     can_port_config_t pc;
     port_config(c, (int64_t)llround((double)cfg->daemon.period_ns / cfg->daemon.speed), &pc);
     can_port_io_t io = {null_send, null_recv, NULL, null_up};

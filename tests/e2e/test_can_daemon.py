@@ -12,11 +12,16 @@ transport (the same codec and can_port as on a socket, no kernel needed):
   reported in the STATUS frames and the trajectory carries on;
 - a configuration above the bus-load limit is refused with a clear message,
   and the limit agrees with an independent computation of frame lengths;
-- a log with nothing usable for an object (empty, only comments and garbage,
-  only foreign frames, or every waypoint out of range) ends trajd with
-  exit_when_done with an error line naming the object and the log and exit
-  65 (EX_DATAERR), as a replayed track does (issue 11 "nothing usable").
+- a log with nothing usable for an object (only foreign frames, or every
+  waypoint out of range) ends trajd with exit_when_done with an error line
+  naming the object and the log and exit 65 (EX_DATAERR), as a replayed
+  track does (issue 11 "nothing usable");
+- a log_in with no frame at all (empty, only comments and bad lines) or that
+  cannot be read (missing, a directory, no permission) is refused by
+  --check-config and at start, exit 78, naming the config line and the log
+  (and its first bad line), never accepted and then waited on.
 """
+import errno
 import math
 import os
 import subprocess
@@ -410,9 +415,7 @@ class CanLogNothingUsable(unittest.TestCase):
                 far_log = fh.read()
             with open(CAPTURE) as fh:
                 foreign = "".join(l for l in fh if l.strip() and not l.startswith("#"))
-            cases = {
-                "empty": "",
-                "garbage": "# only comments\nnot a frame\n(1.0) can0 zz#\n",
+            cases = {  # a log with no frame at all: CanLogInRefused
                 "foreign": foreign,
                 "range": far_log,
             }
@@ -458,6 +461,73 @@ class CanLogNothingUsable(unittest.TestCase):
             self.assertEqual(p.returncode, 1, p.stderr)
             self.assertIn("among its 41 frames", p.stderr)
             self.assertIn("is replayed by trajd ([can] log_in)", p.stderr)
+
+
+
+class CanLogInRefused(unittest.TestCase):
+    # Given a [can] log_in (line 8 of the config) that holds no CAN frame or
+    # cannot be read, when trajd --check-config reads the config, then it
+    # exits 78 (EX_CONFIG) with "<conf>:8: [can]: log_in <path>: <why>", the
+    # why naming the first bad line where there is one; trajd -f refuses to
+    # start with the same line (with or without exit_when_done), within a
+    # bound: it accepted the config, then exited 65 at the end of an empty
+    # replay, or only at start ("read error") for a directory
+    LOG_IN_LINE = 8
+
+    def refused(self, d, why, user=None):
+        path = conf(d, output="csv", extra_obj="csv.path = sp.csv\n")
+        msg = "%s:%d: [can]: log_in %s: %s" % (path, self.LOG_IN_LINE, os.path.join(d, "wp.log"),
+                                               why)
+        kw = {"user": user} if user is not None else {}
+        p = subprocess.run([TRAJD, "--check-config", path], capture_output=True, text=True,
+                           timeout=RUN_TIMEOUT_S, **kw)
+        self.assertEqual(p.returncode, 78, p.stdout + p.stderr)
+        self.assertIn(msg, p.stderr)
+        for when_done in ("yes", "no"):
+            with open(path) as fh:
+                text = fh.read().replace("exit_when_done = yes", "exit_when_done = " + when_done)
+            with open(path, "w") as fh:
+                fh.write(text)
+            p = subprocess.run([TRAJD, "-f", "-c", path], capture_output=True, text=True,
+                               timeout=RUN_TIMEOUT_S, **kw)
+            self.assertEqual(p.returncode, 78, when_done + ": " + p.stderr[-800:])
+            self.assertIn(msg, p.stderr)
+            self.assertFalse(os.path.exists(os.path.join(d, "sp.csv")), "it ran")
+
+    def test_empty(self):
+        with tempfile.TemporaryDirectory() as d:
+            open(os.path.join(d, "wp.log"), "w").close()
+            self.refused(d, "empty: no CAN frame in it")
+
+    def test_no_frame_line(self):
+        # 4 lines: 1 comment, 1 blank, 2 bad (lines 3 and 4)
+        with tempfile.TemporaryDirectory() as d:
+            with open(os.path.join(d, "wp.log"), "w") as fh:
+                fh.write("# only comments\n\nnot a frame\n(1.0) can0 zz#\n")
+            self.refused(d, "no CAN frame in it (4 lines: 2 comments or blank, 2 bad, the "
+                            "first bad at line 3: not a candump frame)")
+
+    def test_missing(self):
+        with tempfile.TemporaryDirectory() as d:
+            self.refused(d, os.strerror(errno.ENOENT))
+
+    def test_directory(self):
+        with tempfile.TemporaryDirectory() as d:
+            os.mkdir(os.path.join(d, "wp.log"))
+            self.refused(d, os.strerror(errno.EISDIR))
+
+    def test_unreadable(self):
+        # root reads a mode-000 file: then trajd runs as nobody (65534)
+        with tempfile.TemporaryDirectory() as d:
+            log = os.path.join(d, "wp.log")
+            with open(log, "w") as fh:
+                fh.write("(1.000000) vcan0 123#00\n")
+            os.chmod(log, 0)
+            user = None
+            if os.geteuid() == 0:
+                os.chmod(d, 0o777)
+                user = 65534
+            self.refused(d, os.strerror(errno.EACCES), user=user)
 
 
 if __name__ == "__main__":
