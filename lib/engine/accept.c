@@ -94,13 +94,36 @@ static void pair_of(const engine_waypoint_t *p, const engine_waypoint_t *b, acce
     q->c = q->d / dt;
 }
 
-/* the pair x -> y (slots, y offered after x), computed on first use */
+/* index of the pair of slots x != y in accept_t.pair: either order */
+static inline unsigned pair_index(unsigned x, unsigned y)
+{
+    unsigned lo = x < y ? x : y, hi = x < y ? y : x;
+    return hi * (hi - 1) / 2 + lo;
+}
+
+/* the bits of accept_t.known of the pairs with slot s */
+static inline uint64_t slot_pairs(unsigned s)
+{
+    uint64_t m = 0;
+    for (unsigned x = 0; x < s; x++) /* pairs (x, s): s (s - 1) / 2 + x */
+        m |= (uint64_t)1 << (s * (s - 1) / 2 + x);
+    for (unsigned y = s + 1; y < ACCEPT_SLOTS; y++) /* pairs (s, y) */
+        m |= (uint64_t)1 << (y * (y - 1) / 2 + s);
+    return m;
+}
+
+/* the pair x -> y (slots, y offered after x), computed on first use.  Kept
+ * once for both orders: y -> x has the same v, d and vn bit for bit (both
+ * differences change sign, exactly) and c of the other sign, so c is kept
+ * as |c| (a chord speed is only asked of a later y) */
 static const accept_pair_t *pair(accept_t *a, unsigned x, unsigned y)
 {
-    accept_pair_t *q = &a->pair[x][y];
-    if (!(a->known[x] >> y & 1u)) {
+    unsigned ix = pair_index(x, y);
+    accept_pair_t *q = &a->pair[ix];
+    if (!(a->known >> ix & 1u)) {
         pair_of(&a->wp[x], &a->wp[y], q);
-        a->known[x] |= (unsigned short)(1u << y);
+        q->c = fabs(q->c);
+        a->known |= (uint64_t)1 << ix;
     }
     return q;
 }
@@ -131,9 +154,7 @@ static unsigned new_slot(accept_t *a)
         used |= 1u << a->burst;
     while (used >> s & 1u)
         s++;
-    for (unsigned x = 0; x < ACCEPT_SLOTS; x++)
-        a->known[x] &= (unsigned short)~(1u << s);
-    a->known[s] = 0;
+    a->known &= ~slot_pairs(s);
     return s;
 }
 
@@ -164,27 +185,44 @@ int accept_offer(accept_t *a, const engine_waypoint_t *wp)
 static double window_median_speed(accept_t *a)
 {
     double v[ACCEPT_WINDOW_MAX];
-    unsigned n = 0, p = a->open ? a->a1 : NO_SLOT;
+    unsigned char from[ACCEPT_WINDOW_MAX], to[ACCEPT_WINDOW_MAX];
+    unsigned n = 0, p = a->open ? a->a1 : NO_SLOT, mid;
 
     for (unsigned i = 0; i < a->npend; i++) {
         unsigned q = a->pend[i];
         double dt = p == NO_SLOT ? 0 : a->wp[q].t_s - a->wp[p].t_s;
-        if (p != NO_SLOT && dt > ACCEPT_SAME_TIME_S && dt <= a->cfg.max_gap_s)
-            v[n++] = chord_speed(a, p, q);
+        if (p != NO_SLOT && dt > ACCEPT_SAME_TIME_S && dt <= a->cfg.max_gap_s) {
+            from[n] = (unsigned char)p;
+            to[n++] = (unsigned char)q;
+        }
         p = q;
     }
     if (!n || (a->nhist && n < ACCEPT_PACE_CHORDS))
         return 0;
-    /* insertion sort: n <= ACCEPT_WINDOW_MAX */
+    for (unsigned i = 0; i < n; i++)
+        v[i] = chord_speed(a, from[i], to[i]);
+    /* the lower median, v[mid] of v sorted: with two chords, one of them
+     * an outlier's, the smaller one.  The chord whose rank spans mid (as
+     * many below it as mid at most, and more up to it): no branch on the
+     * values to mispredict, as a sort has */
+    mid = (n - 1) / 2;
+    for (unsigned i = 0; i < n; i++) {
+        unsigned lt = 0, le = 0;
+        for (unsigned j = 0; j < n; j++) {
+            lt += v[j] < v[i];
+            le += v[j] <= v[i];
+        }
+        if (lt <= mid && mid < le)
+            return v[i];
+    }
+    /* not reached (chords are finite, some v[i] is the median); as the sort */
     for (unsigned i = 1; i < n; i++)
         for (unsigned j = i; j > 0 && v[j - 1] > v[j]; j--) {
             double t = v[j];
             v[j] = v[j - 1];
             v[j - 1] = t;
         }
-    /* the lower median: with two chords, one of them an outlier's, the
-     * smaller one */
-    return v[(n - 1) / 2];
+    return v[mid];
 }
 
 double accept_speed_limit(accept_t *a)

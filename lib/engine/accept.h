@@ -175,11 +175,12 @@ typedef struct {
     unsigned char a0, a1;      /* their slots */
     double vhist[ACCEPT_HIST]; /* chord speeds of the last kept intervals */
     unsigned nhist, hnext;
-    double vrecent;                     /* the fastest of them (accept_recent_speed) */
-    int have_burst;                     /* burst: the last waypoint dropped as a far */
-    unsigned char burst;                /* burst's slot (since the last kept or started) */
-    unsigned short known[ACCEPT_SLOTS]; /* bit y of known[x]: pair[x][y] is computed */
-    accept_pair_t pair[ACCEPT_SLOTS][ACCEPT_SLOTS];
+    double vrecent;      /* the fastest of them (accept_recent_speed) */
+    int have_burst;      /* burst: the last waypoint dropped as a far */
+    unsigned char burst; /* burst's slot (since the last kept or started) */
+    uint64_t known;      /* bit i: pair[i] is computed */
+    /* the pairs of slots x < y, at y (y - 1) / 2 + x (accept.c) */
+    accept_pair_t pair[ACCEPT_SLOTS * (ACCEPT_SLOTS - 1) / 2];
 } accept_t;
 
 /* Set up with cfg (window and confirm clamped to 1..ACCEPT_WINDOW_MAX,
