@@ -175,7 +175,7 @@ static void test_start_slack_auto(void **state)
 static void test_lookahead_is_real(void **state)
 {
     (void)state;
-    static const unsigned fo[][2] = {{8, 4}, {16, 8}, {32, 16}, {32, 30}};
+    static const unsigned fo[][2] = {{8, 4}, {16, 8}, {32, 16}, {32, 30}, {40, 26}, {97, 94}};
     for (size_t m = 0; m < 2; m++)
         for (size_t i = 0; i < sizeof(fo) / sizeof(fo[0]); i++) {
             engine_config_t c;
