@@ -48,7 +48,13 @@ typedef struct {
                         the sum of dur / max(vmax, floor) (see remaining()) */
     double ucum;     /* SEG: the rises of 1 / max(vmax, floor) from each segment
                           of its trajectory to the next, summed up to it */
+    double ceil;     /* SEG: the highest rate at which it keeps the speed cap
+                        (ENGINE_SPEED_CAP; INFINITY if none) */
 } qent_t;
+
+/* The lowest speed cap rate: below the time scaling's dead band (at most
+ * TS_DEAD_BAND_MAX) the output would never leave rest before such a segment. */
+#define ENGINE_CEIL_MIN 0.01
 
 enum { OUT_HOLD = 0, OUT_XFER = 1, OUT_STREAM = 2 };
 enum { STOP_NONE = 0, STOP_STOP = 1, STOP_CLEAR = 2 };
@@ -149,6 +155,9 @@ struct engine {
     int avail_closed;  /* its END is queued */
     int avail_rest;    /* ... and the curve ends at rest there */
     int end_brake;     /* braking to rest before an end that is not at rest */
+    size_t *slow;      /* ring (qcap): the queue slots, in queue order, of the
+                     segments whose speed cap holds the rate below TS_RATE_MAX */
+    size_t slow_head, slow_len;
 
     /* ---- one clock (engine_set_clock, CLOCK.md) ---- */
     int clocked;          /* the output follows the caller's clock */
@@ -640,7 +649,8 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
      * one END: twice the capacity always fits */
     e->qcap = 2 * (size_t)cfg->capacity + 8;
     e->q = calloc(e->qcap, sizeof(qent_t));
-    if (!e->node_t || !e->node_r || !e->fw || !e->q)
+    e->slow = calloc(e->qcap, sizeof(size_t));
+    if (!e->node_t || !e->node_r || !e->fw || !e->q || !e->slow)
         goto nomem;
     e->st.lookahead = e->lookahead;
     e->ts.rate = 1.0;
@@ -663,6 +673,7 @@ void engine_free(engine_t *e)
     free(e->node_r);
     frag_free(e->fw);
     free(e->q);
+    free(e->slow);
     free(e->sm_mem);
     free(e);
 }
@@ -706,6 +717,22 @@ static qent_t *q_push(engine_t *e)
     return q;
 }
 
+/* The highest rate at which a segment whose speed is at most vmax keeps the
+ * speed cap (ENGINE_SPEED_CAP x the speed limit), at least ENGINE_CEIL_MIN. */
+static double seg_ceiling(const engine_t *e, double vmax)
+{
+    double v = engine_config_max_speed(&e->cfg);
+    if (!(v > 0) || !(vmax > 0))
+        return INFINITY;
+    return fmax(ENGINE_SPEED_CAP * v / vmax, ENGINE_CEIL_MIN);
+}
+
+/* A queued segment whose speed cap holds the rate below TS_RATE_MAX. */
+static int is_slow(const qent_t *q)
+{
+    return q->kind == QE_SEG && q->ceil < TS_RATE_MAX;
+}
+
 static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
 {
     qent_t *q = q_push(e);
@@ -717,6 +744,9 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
     q->seg = *seg;
     q->t1_s = seg->t0_s + seg->dur_s;
     q->vmax = seg_speed_max(seg);
+    q->ceil = seg_ceiling(e, q->vmax);
+    if (is_slow(q)) /* every queued slot has room: so has the ring */
+        e->slow[(e->slow_head + e->slow_len++) % e->qcap] = (size_t)(q - e->q);
     double inv = 1.0 / fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
     if (e->in_emitted && inv > e->in_inv)
         e->in_ucum += inv - e->in_inv; /* the limits rise from the last one to this */
@@ -1192,6 +1222,7 @@ static void request_stop(engine_t *e, int kind)
     if (e->mode == OUT_HOLD) {
         e->qhead = 0;
         e->qlen = 0;
+        e->slow_len = 0;
         e->qends = 0;
         e->finished = kind == STOP_STOP;
         e->stop_req = STOP_NONE;
@@ -1296,6 +1327,10 @@ static void q_pop(engine_t *e)
         e->drop_n--;
     if (e->q[e->qhead].kind == QE_END)
         e->qends--;
+    if (is_slow(&e->q[e->qhead])) { /* the ring's head */
+        e->slow_head = (e->slow_head + 1) % e->qcap;
+        e->slow_len--;
+    }
     e->qhead = (e->qhead + 1) % e->qcap;
     e->qlen--;
 }
@@ -1733,6 +1768,41 @@ static double remaining(const engine_t *e, double s)
     return v * k - e->ts.rate * (rise_reserve(e, v) + TS_MARGIN_TICKS * e->period_s);
 }
 
+/*
+ * The speed cap ahead (ENGINE_SPEED_CAP, TIMESCALE.md "Speed cap"), as a
+ * distance for ts_step like remaining(): the output must enter each slow
+ * segment ahead (rate ceiling c) at a rate of at most c.  The braking that
+ * comes to rest within the track time D to its start plus what a braking at
+ * -A from c still needs, ts_stop_dist(c, -A), passes c within D (it passes c
+ * decelerating at most at A, and needs at least that much more from there).
+ * D as in remaining(): the capacity to the segment's start at the limits
+ * here, less the same reserve.  INFINITY if no slow segment is ahead.
+ */
+static double ceil_room(const engine_t *e, double s, double A, double J)
+{
+    double R = INFINITY;
+
+    if (e->mode != OUT_STREAM || !e->slow_len)
+        return R;
+    double in_cur = e->cur_t1 - s, v = conv_speed(e);
+    double k0 = (in_cur > 0 ? in_cur / v : 0.0) - e->cur.kcum;
+    double res = e->ts.rate * (rise_reserve(e, v) + TS_MARGIN_TICKS * e->period_s);
+    for (size_t i = 0; i < e->slow_len; i++) {
+        const qent_t *q = &e->q[e->slow[(e->slow_head + i) % e->qcap]];
+        if (q->traj != e->out_traj)
+            break;
+        double kstart = q->kcum - q->seg.dur_s / fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
+        R = fmin(R, v * (k0 + kstart) - res + ts_stop_dist(q->ceil, -A, A, J));
+    }
+    return R;
+}
+
+/* The rate the speed cap allows on the current segment. */
+static double ceil_here(const engine_t *e)
+{
+    return e->mode == OUT_STREAM ? e->cur.ceil : INFINITY;
+}
+
 /* The jerk of a stop or clear (m/s^3): at least a / T, so that the braking
  * reaches its full deceleration within one tick and the stop ends within
  * v^2/(2 a) + v T of path (a jerk j adds v a/(2 j) of onset: TIMESCALE.md,
@@ -1767,7 +1837,7 @@ static void scale_limits(const engine_t *e, double *A, double *J)
 /* The rate the output is asked for, before the buffer's limit. */
 static double scale_target(const engine_t *e)
 {
-    return e->stop_req || e->end_brake ? 0.0 : e->override;
+    return e->stop_req || e->end_brake ? 0.0 : fmin(e->override, ceil_here(e));
 }
 
 /* 1 if the time scaling's next tick would set the output moving (tried on a
@@ -1922,10 +1992,11 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim);
 static void scaled_step(engine_t *e, double target, double R, double A, double J)
 {
     int lim = 0;
-    double s = e->scaled ? e->s : tau_of(e, e->n);
-    double ds = ts_step(&e->ts, target, R, A, J, e->period_s, NULL, &lim);
+    double s = e->scaled ? e->s : tau_of(e, e->n), Rc = ceil_room(e, s, A, J);
+    double ds = ts_step(&e->ts, target, fmin(R, Rc), A, J, e->period_s, NULL, &lim);
 
-    scaled_advance(e, s + ds, target, lim);
+    /* held back by the speed cap ahead, not by the curve running short */
+    scaled_advance(e, s + ds, target, lim && !(Rc < R));
 }
 
 /* Move the scaled output to track time s1 (relative to origin_t), through
@@ -2007,8 +2078,9 @@ static void clocked_step(engine_t *e, double R, double A, double J)
     double T = e->period_s;
     int free_run = !e->stop_req && !e->end_brake && e->override >= 1.0;
 
+    double Rm = fmin(R, ceil_room(e, s, A, J));
     if (e->locked && free_run && fabs(p - s - rho * T) <= ENGINE_CLOCK_LOCK_S && p > s &&
-        (isinf(R) || ts_stop_dist(rho, 0.0, A, J) < R - rho * T)) {
+        rho <= ceil_here(e) && (isinf(Rm) || ts_stop_dist(rho, 0.0, A, J) < Rm - rho * T)) {
         e->ts.rate = rho;
         e->ts.acc = 0.0;
         e->n++;
@@ -2029,6 +2101,7 @@ static void clocked_step(engine_t *e, double R, double A, double J)
             target = 0;
         if (e->override < 1.0)
             target *= e->override;
+        target = fmin(target, ceil_here(e));
     }
     scaled_step(e, target, R, A, J);
     if (e->mode == OUT_STREAM && free_run && fabs(p - e->s) <= ENGINE_CLOCK_LOCK_S &&
@@ -2115,8 +2188,9 @@ static void step_once(engine_t *e)
         }
         return;
     }
+    double Rm = fmin(R, ceil_room(e, s, A, J)); /* the speed cap ahead too */
     if (!e->scaled && is_exactly(target, 1.0) &&
-        (isinf(R) || ts_stop_dist(1.0, 0.0, A, J) < R - e->period_s)) {
+        (isinf(Rm) || ts_stop_dist(1.0, 0.0, A, J) < Rm - e->period_s)) {
         unit_step(e);
         return;
     }
@@ -2225,7 +2299,7 @@ static void fast_window(engine_t *e)
     if (e->fast_off || e->mode != OUT_STREAM || e->scaled || e->clocked || e->underrun ||
         !e->have_pos || e->stop_req || e->end_brake || e->flags_pending ||
         !is_exactly(e->override, 1.0) || !is_exactly(e->ts.rate, 1.0) ||
-        !is_exactly(e->ts.acc, 0.0))
+        !is_exactly(e->ts.acc, 0.0) || ceil_here(e) < 1.0)
         return;
     /* the ticks before the next re-seed (step_cur) */
     int64_t m = (int64_t)(FDIFF_RESEED_STEPS - (uint64_t)(e->n - e->seg_n0) % FDIFF_RESEED_STEPS) -
@@ -2242,6 +2316,8 @@ static void fast_window(engine_t *e)
         double k = (in_cur > 0 ? in_cur / v : 0.0) + (e->avail_kcum - e->cur.kcum);
         /* K falls by T / v per tick: the ticks for which it stays above */
         double room = (k - (d + rise_reserve(e, v) + (TS_MARGIN_TICKS + 1) * e->period_s) / v) * v;
+        /* and the speed cap ahead (ceil_room), which falls by T per tick too */
+        room = fmin(room, ceil_room(e, tau_of(e, e->n), A, J) - d - e->period_s);
         if (!(room > 0) || !isfinite(d))
             return;
         double mr = floor(room / e->period_s) - 2;

@@ -213,7 +213,11 @@ typedef struct {
                                rules (learned, stale).  Default AUTO */
     double max_speed_m_s;   /* chord speed above this is refused (0 = no
                                limit, ENGINE_LIMIT_PROFILE = the profile's:
-                               AUTO 400 m/s).  Default ENGINE_LIMIT_PROFILE */
+                               AUTO 400 m/s); the output never moves faster
+                               than ENGINE_SPEED_CAP times it (the time
+                               scaling slows down where the curve between
+                               the waypoints is faster than their chords).
+                               Default ENGINE_LIMIT_PROFILE */
     double max_accel_m_s2;  /* implied acceleration above this is refused (0 =
                                no limit): the change of mean velocity over two
                                intervals, 2 |v2 - v1| / (dt1 + dt2).  Catches
@@ -286,6 +290,15 @@ void engine_config_default(engine_config_t *cfg);
 /* max_speed_m_s or max_accel_m_s2 left to the profile (any value in
  * [-1, 0) means the same). */
 #define ENGINE_LIMIT_PROFILE (-1.0)
+
+/* The output's speed |k'(s)| x rate never exceeds ENGINE_SPEED_CAP times the
+ * speed limit in force (engine_config_max_speed; none if 0): the acceptance
+ * policy bounds the chords between waypoints, the curve between them may be
+ * faster (a cubic 1.5 times its chord on a rest-to-rest segment, a uniform
+ * B-spline by the ratio of neighbouring intervals), and the time scaling
+ * slows down there (lib/engine/TIMESCALE.md, "Speed cap").  Below the
+ * daemon's default safety bound, twice the limit. */
+#define ENGINE_SPEED_CAP 1.5
 
 /* The limits in force: the field, or the profile's if ENGINE_LIMIT_PROFILE
  * (0 = no limit). */

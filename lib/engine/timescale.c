@@ -183,6 +183,8 @@ double ts_step(ts_state_t *st, double target, double R, double A, double J, doub
     double r = st->rate, a = st->acc, tgt = target, r1, a1, ds, j;
     int lim = 0, crept = 0;
 
+    if (fabs(a) > A)
+        J *= fabs(a) / A; /* the limits shrank (timescale.h): back within A in A/J */
     if (!(tgt > 0))
         tgt = 0;
     if (tgt > TS_RATE_MAX)

@@ -1491,6 +1491,69 @@ static void test_clear_then_stop(void **state)
     }
 }
 
+/* Given the uniform B-spline (the paper's parameterisation: each segment
+ * mapped onto its own interval), max_speed_m_s V and waypoints whose chords
+ * all keep V (the acceptance policy's speed test): eight at rest 20 ms apart,
+ * then 8.7 m in 0.94 s and back, when the track streams tick by tick, then the
+ * output never moves faster than ENGINE_SPEED_CAP x V: the positions' finite
+ * differences |delta pos| / T between ticks against the configured V.  The
+ * curve itself is much faster than its chords (engine_curve, sampled densely
+ * by Horner: over 2 V, the daemon's safety bound, on the 20 ms segments next to
+ * the 0.94 s one), so the test fails if the time scaling does not hold the
+ * speed (it did not: 50 m/s at V = 10 m/s; found by fuzz_engine,
+ * tests/fuzz/regress/fuzz_engine/cubic-speed-beyond-safety-bound). */
+static void test_speed_cap_fast_curve(void **state)
+{
+    (void)state;
+    enum { N = 14 };
+    const double t[N] = {0,    0.02, 0.04, 0.06, 0.08, 0.1,  0.12,
+                         0.14, 1.08, 2.02, 2.04, 2.06, 2.08, 2.1};
+    const double x[N] = {0, 0, 0, 0, 0, 0, 0, 0, 5, 0.5, 0.5, 0.5, 0.5, 0.5};
+    engine_config_t c;
+    engine_config_default(&c);
+    c.method = ENGINE_METHOD_BSPLINE; /* fuzz_engine.c configure(), case 1 */
+    c.param = ENGINE_PARAM_UNIFORM;
+    c.ends = ENGINE_ENDS_MULTIPLE;
+    c.fragment = 8;
+    c.overlap = 4;
+    c.profile = ENGINE_PROFILE_NONE; /* the chord test alone: no learned limit */
+    c.max_speed_m_s = 10;
+    c.max_accel_m_s2 = 0;
+    c.period_ns = 20000000;
+    c.max_gap_s = 1;
+    engine_waypoint_t wp[N];
+    for (int i = 0; i < N; i++)
+        wp[i] = (engine_waypoint_t){.t_s = t[i], .pos_m = {x[i], x[i], x[i]}, .seq = i + 1u};
+    fdiff_seg_t segs[N + 8];
+    size_t nseg = 0;
+    assert_int_equal(engine_curve(&c, wp, N, segs, N + 8, &nseg), 0);
+    double vcurve = curve_vmax(segs, nseg);
+    engine_t *e = mk(&c);
+    for (int i = 0; i < N; i++)
+        assert_int_equal(engine_push(e, &wp[i]), 0);
+    assert_int_equal(engine_finish(e), 0);
+    engine_setpoint_t sp, prev;
+    double fd_max = 0, T = 1e-9 * (double)c.period_ns;
+    int64_t k = 0, have = 0;
+    for (; k < 5000 && (k < 2 || sp.state != ENGINE_STATE_FINISHED); k++) {
+        assert_int_equal(engine_tick(e, k * c.period_ns, &sp), 0);
+        assert_true(finite_sp(&sp));
+        if (have)
+            fd_max = fmax(fd_max, dist3(sp.pos_m, prev.pos_m) / T);
+        prev = sp;
+        have = !(sp.flags & ENGINE_SP_NO_POSITION);
+    }
+    engine_status_t st;
+    engine_status(e, &st);
+    engine_free(e);
+    printf("speed cap: curve %.1f m/s, output %.2f m/s (cap %.1f), %ld ticks\n", vcurve, fd_max,
+           ENGINE_SPEED_CAP * c.max_speed_m_s, (long)k);
+    assert_int_equal(st.accepted, N);
+    assert_int_equal(st.state, ENGINE_STATE_FINISHED);
+    assert_true(vcurve > 2.0 * c.max_speed_m_s);
+    assert_true(fd_max <= ENGINE_SPEED_CAP * c.max_speed_m_s * (1 + 1e-9));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1513,6 +1576,7 @@ int main(void)
         cmocka_unit_test(test_status_stalled),
         cmocka_unit_test(test_uniform_irregular),
         cmocka_unit_test(test_clear_then_stop),
+        cmocka_unit_test(test_speed_cap_fast_curve),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -597,6 +597,35 @@ static void test_jerk_straight_line(void **state)
                   worst_da, worst_dv);
 }
 
+/* Given a ramp that built the rate's acceleration up under the limits of a
+ * slow part of the curve (a = 5 m/s^2, j = 50 m/s^3 converted at the 1 m/s
+ * floor: dr/dt = 4.86 /s at rate 0.55), when the output enters a faster
+ * segment (the same limits converted at 15.5 m/s: A = 0.32 /s, J = 3.2 /s^2),
+ * then the rate still lands on its target 1 and overshoots it by at most the
+ * acceleration it carries times A/J = a/j (the time the jerk takes to bring
+ * it within A again), never beyond TS_RATE_MAX.  The jerk stays within J
+ * times the ratio of that acceleration to A.  (With J alone it took 1.4 s to
+ * bring 4.86 down and the rate rose to 2.5: tests/fuzz/regress/fuzz_engine/
+ * cubic-speed-beyond-safety-bound, where the output then moved at 24.6 m/s.) */
+static void test_limits_shrink_no_overshoot(void **state)
+{
+    (void)state;
+    const double A = 5.0 / 15.5, J = 50.0 / 15.5, T = 0.02, a0 = 4.86;
+    ts_state_t st = {.rate = 0.55, .acc = a0};
+    double rmax = 0, j;
+    for (int i = 0; i < 1000; i++) {
+        double acc = st.acc;
+        (void)ts_step(&st, 1.0, INFINITY, A, J, T, &j, NULL);
+        rmax = fmax(rmax, st.rate);
+        assert_true(fabs(j) <= J * fmax(1.0, fabs(acc) / A) * (1 + 1e-12));
+    }
+    printf("limits shrink: rate at most %.4f (bound %.4f), then %.6f\n", rmax, 1.0 + a0 * A / J,
+           st.rate);
+    assert_true(rmax <= 1.0 + a0 * A / J);
+    assert_true(rmax <= TS_RATE_MAX);
+    assert_true(fabs(st.rate - 1.0) <= 0.0 && fabs(st.acc) <= 0.0); /* landed exactly */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -607,6 +636,7 @@ int main(void)
         cmocka_unit_test(test_override_same_path),
         cmocka_unit_test(test_no_hard_stop_fast_end),
         cmocka_unit_test(test_jerk_straight_line),
+        cmocka_unit_test(test_limits_shrink_no_overshoot),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
