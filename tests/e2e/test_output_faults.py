@@ -193,6 +193,11 @@ class OutputEIO(unittest.TestCase):
         err = errf.read()
         self.assertEqual(rc, EX_IOERR, err)
         self.assertIn("<4>stdout: write failed: %s" % EIO_TEXT, err)
+        # rate-limited: one warning at once, then at most one per 10 s and
+        # one at the end, however many writes failed (one per tick or more)
+        warns = re.findall(r"<4>stdout: write failed: .*\((\d+) failed writes", err)
+        self.assertLessEqual(len(warns), 3, err)
+        self.assertGreaterEqual(int(warns[-1]), 100, err)
 
     def trajreplay_eio(self, args, stdout, name):
         track(os.path.join(self.tmp, "track.csv"), n=3000)

@@ -560,6 +560,8 @@ static void test_path_errors_have_lines(void **state)
         {"start 0 0 0\nstart 1 0 0\n", "p.path:2: path: 'start' given twice"},
         {"line 1 0 0\n", "p.path:1: path: element before 'start'"},
         {"start 0 0 0\nspeed 0\n", "p.path:2: path: value out of range"},
+        {"start 0 0 0\nstep 0\nline 1 0 0\n", "p.path:2: path: value out of range"},
+        {"# s\nstart 0 0 0\nstep 1e-300\nline 100 0 0\n", "p.path:4: path: value out of range"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         track_t t;
