@@ -86,7 +86,8 @@ double ts_dead_band(double J, double T);
  * caller can tell an unscaled output by rate == 1.0 && acc == 0.0.
  * *limited (may be NULL) is set to 1 when R, not target, decided the move.
  * Where the limits shrank under the state (|acc| > A: the engine converts
- * them at the speed of the segment ahead), J is raised by |acc| / A, so that
+ * them at the speed of the segment the output is on, and the next may be
+ * faster), J is raised by |acc| / A, so that
  * |acc| is back within A within A / J and the rate does not overshoot its
  * target (TIMESCALE.md, "Speed cap").
  */
