@@ -227,24 +227,27 @@ void can_port_status2_value(can_port_t *p, unsigned i, const canproto_frame_t *f
     status2_put(p, i, f, 1);
 }
 
-static void refuse_command(can_port_obj_t *o, canproto_cmd_t cmd, uint32_t id)
+static void refuse_command(can_port_obj_t *o, canproto_cmd_t cmd, uint32_t id, int err)
 {
     o->st.cmd_refused++;
     o->st.last_refused = (uint8_t)cmd;
     o->st.last_refused_id = id;
+    o->st.last_refused_err = err;
     event(o, CANPROTO_STERR_REFUSED);
 }
 
 static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, uint32_t id)
 {
+    int err;
+
     if (!((o->cmd_allow >> cmd) & 1u)) {
-        refuse_command(o, cmd, id);
+        refuse_command(o, cmd, id, 0);
         return;
     }
     if (cmd == CANPROTO_CMD_CLEAR && o->ids.cia402_enable && o->drive.held)
         o->reset_req = 1; /* fault reset, then the drives are enabled again */
-    if (o->hooks.command && o->hooks.command(o->ctx, cmd, arg) < 0) {
-        refuse_command(o, cmd, id); /* e.g. an override while held (obj_set_override) */
+    if (o->hooks.command && (err = o->hooks.command(o->ctx, cmd, arg)) < 0) {
+        refuse_command(o, cmd, id, err); /* e.g. an override while held (obj_set_override) */
         return;
     }
     if (cmd == CANPROTO_CMD_CLEAR) {

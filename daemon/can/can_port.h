@@ -130,6 +130,7 @@ typedef struct {
     uint64_t cmd_refused;     /* command frames refused (can_port_allow_commands) */
     uint8_t last_refused;     /* canproto_cmd_t of the last one */
     uint32_t last_refused_id; /* CAN id it came on */
+    int last_refused_err;     /* why: 0 not allowed (not writable), else the hook's -ENGINE_E* */
     canproto_rx_stats_t rx;   /* reassembly counters */
 } can_port_obj_stats_t;
 

@@ -547,12 +547,23 @@ static void log_refused(can_state_t *s, int64_t now_ns)
             s->refused_logged[k] = os.cmd_refused; /* reset counters */
             continue;
         }
+        char why[160];
+        if (os.last_refused_err == 0)
+            snprintf(why, sizeof why,
+                     "the object is not writable (writable = yes in [object.%s] lets CAN "
+                     "command it)",
+                     s->objs[k]->name);
+        else if (os.last_refused_err == -ENGINE_ESTATE)
+            snprintf(why, sizeof why,
+                     "the object is held (a feed hold: a drive's lost heartbeat or a fault); "
+                     "only the command clear releases it");
+        else
+            snprintf(why, sizeof why, "%s", engine_strerror(-os.last_refused_err));
         log_msg(LOG_WARNING,
                 "can: object '%s': %llu command frame(s) refused, the last %s on id 0x%03X: "
-                "the object is not writable (writable = yes in [object.%s] lets CAN command "
-                "it; %llu refused in all)",
+                "%s; %llu refused in all",
                 s->objs[k]->name, (unsigned long long)(os.cmd_refused - s->refused_logged[k]),
-                cmd_name(os.last_refused), (unsigned)os.last_refused_id, s->objs[k]->name,
+                cmd_name(os.last_refused), (unsigned)os.last_refused_id, why,
                 (unsigned long long)os.cmd_refused);
         s->refused_logged[k] = os.cmd_refused;
         s->refused_log_ns = now_ns;

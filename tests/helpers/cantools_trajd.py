@@ -459,6 +459,13 @@ def drive_check(run):
     assert regs("mb_hb_daemon.txt")[0] >= 1
     override, _, _, _, states = regs("mb_hb_after.txt")
     assert override == 50 and not states & 0xC000, (override, hex(states))
+    # ... and on CAN: STATUS2 page 4 flagged the lost heartbeat, page 1 counted the
+    # refused CAN override
+    p4 = [s2.decode(bytes(m.data)) for m in msgs if m.arbitration_id == 0x6D0 and m.data[0] == 4]
+    assert any(val(p["ST2_HbLost"]) == 1 for p in p4), "no STATUS2 page 4 with HbLost"
+    assert val(p4[-1]["ST2_HbLost"]) == 0, p4[-1]
+    p1 = [s2.decode(bytes(m.data)) for m in msgs if m.arbitration_id == 0x6D0 and m.data[0] == 1]
+    assert p1 and val(p1[-1]["ST2_CmdRefused"]) >= 1, p1[-1:]
     # heartbeat consumer: the nodes' NMT state (operational after NMT start) in STATUS2
     ok = [p for p in (s2.decode(bytes(m.data)) for m in msgs if m.arbitration_id == 0x6D0 and m.data[0] == 4)
           if val(p["ST2_StateX"]) == 4]

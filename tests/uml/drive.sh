@@ -93,6 +93,9 @@ if mbpoll -m tcp -p 1502 -a 1 -0 -r 101 -t 4 -1 127.0.0.1 50 > "$out/mb_hb_overr
     fail "override accepted while held: $(cat "$out/mb_hb_override.txt")"
 fi
 grep -qi "illegal data value" "$out/mb_hb_override.txt" || fail "override: $(cat "$out/mb_hb_override.txt")"
+cansend vcan0 680#0400053200000000   # the same override (command 5, 50 %) by CAN: refused
+wait_grep "$out/drive.err" "command frame(s) refused, the last override on id 0x680: the object is held" 2000 ||
+    fail "CAN override during the hold not reported as refused for the hold"
 kill -HUP "$sp"
 wait_ev 2 HEARTBEAT_ON 1 || fail "simulator did not restart its heartbeat"
 cansend vcan0 680#0400030000000000   # command clear: releases the hold
