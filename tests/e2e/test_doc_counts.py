@@ -1,6 +1,9 @@
-"""test_doc_counts.py - the counts in daemon/README.md's trajreplay table and
-lib/spline/README.md's cubic-vs-smooth table are those of a run (issue 14: no
-stale numbers).
+"""test_doc_counts.py - the counts and figures that a deterministic run gives,
+as the docs state them, are those of that run (issue 14: no stale numbers).
+
+Each check reads the number out of the doc's text (so a stale doc fails
+here) and compares it with a real run of the product: trajreplay, the way
+the doc says to run it.
 
 The table under "**Measured.**" in daemon/README.md's trajreplay part gives,
 per bundled track, what `trajreplay --summary -o FILE TRACK` (default
@@ -35,6 +38,27 @@ def table_rows():
         track = cells[0].strip("`")
         rows.append((track, {h: int(re.sub(r"[ ,]", "", c)) for h, c in zip(head[1:], cells[1:])}))
     return rows
+
+
+def read(path):
+    with open(os.path.join(ROOT, path), encoding="utf-8") as f:
+        return f.read()
+
+
+def grab(text, pattern):
+    """The groups of the one match of pattern in text (a doc rephrased so
+    that the claim is gone fails here: remove the check with the claim)."""
+    found = re.findall(pattern, text, re.S)
+    assert len(found) == 1, "%r: %d matches, want 1" % (pattern, len(found))
+    return found[0]
+
+
+def trajreplay(args, cwd=None):
+    """stderr of trajreplay ARGS (relative tests/data paths as from the root)."""
+    args = [os.path.join(ROOT, a) if a.startswith("tests/data/") else a for a in args]
+    r = subprocess.run([os.path.join(BUILD, "bin", "trajreplay")] + args, cwd=cwd,
+                       capture_output=True, text=True, check=True)
+    return r.stderr
 
 
 def summary(track, out):
@@ -78,6 +102,67 @@ class DocCounts(unittest.TestCase):
                        round(float(np.nanpercentile(v, 99)), 2), round(float(np.nanpercentile(a, 99)), 2),
                        round(float(np.nanmax(a)), 2)]
                 self.assertEqual(got, want, "lib/spline/README.md's %s row is stale" % method)
+
+
+class DaemonReadme(unittest.TestCase):
+    """daemon/README.md's trajreplay part."""
+
+    def test_figure_eight_example(self):
+        """The example session (trajreplay at 10 Hz on the figure-eight, then
+        sed on its CSV): every summary line and every row it shows."""
+        doc = read("daemon/README.md").split("\n")
+        start = next(i for i, l in enumerate(doc) if l.startswith("    $ trajreplay --rate 10"))
+        block = []
+        for l in doc[start:]:
+            if not l.startswith("    "):
+                break
+            block.append(l[4:])
+        cmds = [i for i, l in enumerate(block) if l.startswith("$ ")]
+        self.assertEqual(len(cmds), 2)
+        with tempfile.TemporaryDirectory() as tmp:
+            err = trajreplay(block[0][2:].split()[1:] + ["-q"], cwd=tmp)
+            got = dict(re.findall(r"^summary: (\S+) (\S+)$", err, re.M))
+            shown = [re.match(r"summary: (\S+) (\S+)", l).groups()
+                     for l in block[1:cmds[1]] if l.startswith("summary:")]
+            self.assertGreaterEqual(len(shown), 10)
+            for k, v in shown:
+                self.assertEqual(got.get(k), v, "daemon/README.md's example: summary %s is stale" % k)
+            rows = subprocess.run(block[cmds[1]][2:], shell=True, cwd=tmp, capture_output=True,
+                                  text=True, check=True).stdout.split("\n")[:-1]
+            self.assertEqual(rows, block[cmds[1] + 1:], "daemon/README.md's example rows are stale")
+            with open(os.path.join(tmp, "f8.csv"), encoding="utf-8") as f:
+                states = [l.split(",")[12] for l in f.read().split("\n")[1:-1]]
+        # "...: 48 ticks (4.8 s, 24 waypoints at 5 Hz; 66 with the former F=32/O=16 ...)"
+        doc = read("daemon/README.md")
+        now, former = grab(doc, r"end waypoint: (\d+) ticks\s*\(.*?; (\d+) with the former")
+        self.assertEqual(states.index("streaming"), int(now))
+        self.assertEqual(set(states[:int(now)]), {"waiting"})
+        with tempfile.TemporaryDirectory() as tmp:
+            out = os.path.join(tmp, "old.csv")
+            trajreplay(["-q", "--rate", "10", "--fragment", "32", "--overlap", "16", "--start-slack",
+                        "8", "-o", out, "tests/data/n2k_furuno_figure8_src52.csv"])
+            with open(out, encoding="utf-8") as f:
+                states = [l.split(",")[12] for l in f.read().split("\n")[1:-1]]
+        self.assertEqual(states.index("streaming"), int(former))
+
+    def test_flags_listed(self):
+        """'`flags` are `ENGINE_SP_*` of `lib/motion.h`: 1 hold, 2 ...': every
+        flag of lib/motion.h, with its value, and no other."""
+        text = grab(read("daemon/README.md"), r"`flags` are `ENGINE_SP_\*` of `lib/motion.h`:(.*?)\n\n")
+        listed = sorted(int(v) for v in re.findall(r"(?:^|, )(\d+) [a-z]", " ".join(text.split())))
+        defined = sorted(int(v, 16) for v in re.findall(r"#define ENGINE_SP_\w+\s+0x([0-9a-f]+)u",
+                                                        read("lib/motion.h")))
+        self.assertEqual(listed, defined)
+
+    def test_uniform_irregular_example(self):
+        """'... --param uniform ... gpxgo_visnjan.csv` reports 202 such
+        waypoints, the worst 15x at t = 15 s'."""
+        doc = read("daemon/README.md")
+        cmd, n, worst, t = grab(doc, r"`build/bin/(trajreplay [^`]*--param uniform[^`]*)`\s+reports "
+                                     r"(\d+) such\s+waypoints, the worst (\S+)x at t = (\S+) s")
+        err = trajreplay(cmd.split()[1:] + ["--summary"])
+        self.assertIn("summary: uniform_irregular %s\n" % n, err)
+        self.assertIn("(worst %sx, at t = %.3f s)" % (worst, float(t)), err)
 
 
 if __name__ == "__main__":

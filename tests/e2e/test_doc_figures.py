@@ -33,7 +33,7 @@ ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
 DOCS = ["README.md", "config/*.md", "daemon/*.md", "lib/*/*.md", "tests/*/*.md"]
 COMMAND = re.compile(r"`(make|build/|tests/|python3|sh |bash |BUILD=|FUZZ_|trajd|trajreplay|"
                      r"trajsurf|tshark|mbpoll|candump)[^`]*`")
-MACHINE_TALK = re.compile(r"load average|this machine|virtual machine|shared 2-core|2 cores shared|"
+MACHINE_TALK = re.compile(r"load average|this machine|virtual machine|shared 2-core|2 cores shared|\d-CPU machine|"
                           r"other builds|loaded machine|quiet machine|nothing else (running|on)",
                           re.I)
 UNIT_HEADER = re.compile(r"(\bns\b|\bus\b|µs|\bms\b|/s\b)")
