@@ -5,7 +5,9 @@
 #include <inttypes.h>
 #include <stdlib.h>
 #include <string.h>
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "candump.h"
 #include "log.h"
@@ -21,8 +23,10 @@ struct can_logfile {
     int64_t start_ns;
     int64_t now_ns;
     int64_t epoch_ns; /* added to engine time in output stamps */
-    FILE *out;
-    int out_is_stdout;
+    int out_fd;       /* -1: no output */
+    int out_own;      /* close it at the end (not stdout) */
+    char *obuf;       /* CAN_LOGFILE_OUT_BUF bytes of whole lines, written each cycle */
+    size_t olen;
     char ifname[CANDUMP_IFNAME_MAX + 1];
     can_logfile_stats_t st;
     char first_bad_why[64]; /* why the first bad line was refused */
@@ -188,14 +192,19 @@ can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const
         return NULL;
     }
     l->start_ns = start_ns;
+    l->out_fd = -1;
     snprintf(l->ifname, sizeof l->ifname, "%s", ifname && *ifname ? ifname : "can0");
     if (in_path && load(l, in_path, err, errlen) < 0)
         goto fail;
     if (out_path) {
-        if (!strcmp(out_path, "-")) {
-            l->out = stdout;
-            l->out_is_stdout = 1;
-        } else if (!(l->out = fopen(out_path, "w"))) {
+        if (!(l->obuf = malloc(CAN_LOGFILE_OUT_BUF))) {
+            snprintf(err, errlen, "out of memory");
+            goto fail;
+        }
+        l->out_own = strcmp(out_path, "-") != 0;
+        l->out_fd = l->out_own ? open(out_path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644)
+                               : STDOUT_FILENO;
+        if (l->out_fd < 0) {
             snprintf(err, errlen, "%s: %s", out_path, strerror(errno));
             goto fail;
         }
@@ -210,11 +219,10 @@ void can_logfile_close(can_logfile_t *l)
 {
     if (!l)
         return;
-    if (l->out) {
-        fflush(l->out);
-        if (!l->out_is_stdout)
-            fclose(l->out);
-    }
+    can_logfile_flush(l);
+    if (l->out_own && l->out_fd >= 0)
+        close(l->out_fd);
+    free(l->obuf);
     free(l->rec);
     free(l);
 }
@@ -249,13 +257,21 @@ void can_logfile_set_epoch(can_logfile_t *l, int64_t epoch_ns)
 int can_logfile_send(can_logfile_t *l, const canproto_frame_t *f)
 {
     char buf[256];
-    if (!l->out)
+    if (l->out_fd < 0)
         return 0;
     int n = candump_format_line(buf, sizeof buf, (l->now_ns + l->epoch_ns) / 1000, l->ifname, f);
-    if (n < 0 || fwrite(buf, 1, (size_t)n, l->out) != (size_t)n) {
+    if (n < 0) {
         l->st.write_errors++;
         return -EIO;
     }
+    if ((size_t)n > CAN_LOGFILE_OUT_BUF - l->olen)
+        can_logfile_flush(l);
+    if ((size_t)n > CAN_LOGFILE_OUT_BUF - l->olen) { /* a slow reader (EAGAIN) */
+        l->st.frames_lost++;
+        return -EIO;
+    }
+    memcpy(l->obuf + l->olen, buf, (size_t)n);
+    l->olen += (size_t)n;
     l->st.frames_out++;
     return 0;
 }
@@ -265,10 +281,37 @@ int can_logfile_done(const can_logfile_t *l)
     return l->next >= l->n;
 }
 
+/* Lines (newlines) in buf[0..n). */
+static uint64_t count_lines(const char *buf, size_t n)
+{
+    uint64_t k = 0;
+    for (const char *p = buf, *end = buf + n; (p = memchr(p, '\n', (size_t)(end - p))); p++)
+        k++;
+    return k;
+}
+
 void can_logfile_flush(can_logfile_t *l)
 {
-    if (l->out && fflush(l->out) != 0)
+    size_t off = 0;
+    while (l->out_fd >= 0 && off < l->olen) {
+        ssize_t w = write(l->out_fd, l->obuf + off, l->olen - off);
+        if (w > 0) {
+            off += (size_t)w;
+            continue;
+        }
+        if (w < 0 && errno == EINTR)
+            continue;
+        if (w < 0 && (errno == EAGAIN || errno == EWOULDBLOCK))
+            break; /* later; new frames are lost (counted) once the buffer is full */
         l->st.write_errors++;
+        l->st.last_errno = w < 0 ? errno : EIO;
+        l->st.frames_lost += count_lines(l->obuf + off, l->olen - off);
+        off = l->olen;
+    }
+    if (off) {
+        memmove(l->obuf, l->obuf + off, l->olen - off);
+        l->olen -= off;
+    }
 }
 
 void can_logfile_stats(const can_logfile_t *l, can_logfile_stats_t *st)

@@ -29,8 +29,10 @@ typedef struct {
     uint64_t bad_lines;      /* lines refused (skipped): not a frame, too long, NUL byte */
     uint64_t first_bad_line; /* line number of the first, 0 if none */
     uint64_t frames_in;      /* frames loaded */
-    uint64_t frames_out;     /* frames written */
-    uint64_t write_errors;
+    uint64_t frames_out;     /* frames queued for the output */
+    uint64_t frames_lost;    /* of those, never written: a failed write or a full buffer */
+    uint64_t write_errors;   /* failed write calls (not EAGAIN) */
+    int last_errno;          /* of the last failed write */
 } can_logfile_stats_t;
 
 typedef struct can_logfile can_logfile_t;
@@ -38,6 +40,9 @@ typedef struct can_logfile can_logfile_t;
 /* Longest candump line accepted, bytes: a CAN FD frame with a 29-bit id,
  * 64 data bytes, a 20-digit stamp and a 15-character interface is ~190. */
 #define CAN_LOGFILE_LINE_MAX 1024
+/* Output buffer: whole lines, written once per cycle (can_logfile_flush)
+ * with write(2), so a failed write is seen and its frames counted as lost. */
+#define CAN_LOGFILE_OUT_BUF 65536
 /* Bad lines logged one by one per load (then one summary line). */
 #define CAN_LOGFILE_REPORT_MAX 5
 
@@ -88,7 +93,8 @@ void can_logfile_set_epoch(can_logfile_t *l, int64_t epoch_ns);
 /* 1 once every input frame was delivered (or there is no input). */
 int can_logfile_done(const can_logfile_t *l);
 
-/* Flush the output (once per cycle). */
+/* Write what the output buffer holds (once per cycle); a failed write
+ * (not EAGAIN) counts in write_errors and its frames in frames_lost. */
 void can_logfile_flush(can_logfile_t *l);
 
 void can_logfile_stats(const can_logfile_t *l, can_logfile_stats_t *st);

@@ -526,7 +526,65 @@ typedef struct {
     int drive_state_logged[CFG_OBJECTS_MAX];            /* all_enabled as last logged, -1 never */
     uint64_t refused_logged[CFG_OBJECTS_MAX];           /* cmd_refused already logged */
     int64_t refused_log_ns;                             /* when log_refused last logged */
+    can_logfile_stats_t out_seen;   /* log_out counters already put in core stats */
+    can_logfile_stats_t out_logged; /* log_out counters already warned about */
+    int64_t out_log_ns;             /* when report_log_out last warned, 0: never */
 } can_state_t;
+
+/* Warnings about log_out failures: the first at once, then at most one per
+ * CAN_LOG_OUT_WARN_S while frames keep being lost (as csv/stdout). */
+#define CAN_LOG_OUT_WARN_S 10
+
+/* New log_out failures into the core's output-fault counters (as csv does):
+ * the daemon's and each CAN-output object's fault flag, the frames lost as
+ * lines lost (exit status 74), EPIPE on stdout ends the daemon.  No I/O.
+ * objects: 0 at close (the objects may be going). */
+static void log_out_faults(can_state_t *s, int objects)
+{
+    can_logfile_stats_t ls;
+    can_logfile_stats(s->log, &ls);
+    uint64_t errs = ls.write_errors - s->out_seen.write_errors,
+             lost = ls.frames_lost - s->out_seen.frames_lost;
+    stats_t *st = s->c->stats;
+    st->out_lost += lost;
+    if (errs) {
+        st->out_errors += errs;
+        st->out_errno = ls.last_errno;
+        st->out_fault = 1;
+        for (unsigned k = 0; objects && k < s->n; k++)
+            if (cfg_obj_uses(s->objs[k]->cfg, &can_transport) & 2) {
+                s->objs[k]->out_fault = 1;
+                s->objs[k]->out_errors += errs;
+            }
+        if (ls.last_errno == EPIPE && !strcmp(s->cfg->log_out, "-"))
+            st->exit_code = CORE_EXIT_EPIPE;
+    }
+    s->out_seen = ls;
+}
+
+/* Warn about new log_out losses, rate-limited (not from the tick). */
+static void report_log_out(can_state_t *s, int final)
+{
+    const can_logfile_stats_t *ls = &s->out_seen, *was = &s->out_logged;
+    if (ls->frames_lost == was->frames_lost && ls->write_errors == was->write_errors)
+        return;
+    int64_t now = core_mono_ns();
+    if (!final && s->out_log_ns && now - s->out_log_ns < CAN_LOG_OUT_WARN_S * 1000000000LL)
+        return;
+    if (ls->write_errors != was->write_errors)
+        log_msg(LOG_WARNING,
+                "can: log_out %s: write failed: %s (%llu failed writes, %llu frames "
+                "lost so far)",
+                s->cfg->log_out, strerror(ls->last_errno), (unsigned long long)ls->write_errors,
+                (unsigned long long)ls->frames_lost);
+    else
+        log_msg(LOG_WARNING,
+                "can: log_out %s: reader too slow, buffer full: %llu frames lost so "
+                "far",
+                s->cfg->log_out, (unsigned long long)ls->frames_lost);
+    s->out_logged = *ls;
+    s->out_log_ns = now;
+}
 
 static const char *cmd_name(unsigned cmd)
 {
@@ -793,6 +851,8 @@ static void on_timer(loop_t *l, uint64_t exp, void *ctx)
                 s->cfg->interface, strerror(bs.last_errno));
     }
     s->was_up = up;
+    if (s->log)
+        report_log_out(s, 0);
     log_drives(s);
     log_refused(s, core_mono_ns());
     publish_state(s);
@@ -808,6 +868,11 @@ static void close_(void *state, core_t *c)
         loop_del(s->c->loop, s->sock_fd);
     if (s->timer_fd > 0)
         loop_timer_del(s->c->loop, s->timer_fd);
+    if (s->log) { /* the last lines, counted before the counters are read */
+        can_logfile_flush(s->log);
+        log_out_faults(s, 0);
+        report_log_out(s, 1);
+    }
     if (s->port) {
         for (unsigned k = 0; k < s->n; k++) {
             can_port_obj_stats_t os;
@@ -1081,8 +1146,10 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
     if (s->log)
         can_logfile_set_time(s->log, now_ns);
     can_port_cycle(s->port, now_ns, c->late_ns);
-    if (s->log)
+    if (s->log) {
         can_logfile_flush(s->log);
+        log_out_faults(s, 1);
+    }
 }
 
 static int input_done(void *state, const obj_t *o)

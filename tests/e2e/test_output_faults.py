@@ -24,6 +24,10 @@ The real trajd, with faults made by the kernel, observed from outside:
    error), sets out_fault over Modbus, and exits 74; trajreplay, which
    writes to a pty stdout or -o, stops with status 3 ("writing an output
    failed", daemon/doc/trajreplay.1) and a message naming the output.
+7. The CAN output's candump log ([can] log_out) is an output too: on
+   /dev/full a <4> line names it and the error and trajd exits 74 (it
+   exited 0 without a word); log_out = - piped to `head -1` ends trajd with
+   141 long before its track's end (it ran the whole track, exit 0).
 Every wait is bounded; the daemon is stopped by pid.
 """
 import errno
@@ -223,6 +227,58 @@ class OutputEIO(unittest.TestCase):
     def test_trajreplay_output_eio(self):
         # The same with -o naming the pty slave.
         self.trajreplay_eio(["-o", self.pty.name], subprocess.DEVNULL, self.pty.name)
+
+
+class CanLogOutFaults(unittest.TestCase):
+    def setUp(self):
+        self.tmpd = tempfile.TemporaryDirectory()
+        self.tmp = self.tmpd.name
+
+    def tearDown(self):
+        self.tmpd.cleanup()
+
+    def conf(self, log_out, n):
+        track(os.path.join(self.tmp, "track.csv"), n=n)
+        path = os.path.join(self.tmp, "can.conf")
+        with open(path, "w") as f:
+            f.write("[daemon]\nrate_hz = 100\nspeed = 20\nexit_when_done = yes\n"
+                    "status_interval_s = 0\n[can]\nlog_out = %s\nmax_load_percent = 0\n"
+                    "[object.boat]\ninput = replay\nreplay.track = track.csv\noutput = can\n"
+                    % log_out)
+        return path
+
+    def test_log_out_dev_full(self):
+        # Given [can] log_out = /dev/full, when a 40 s track (2 s of wall
+        # time) streams to its end, then a <4> line names log_out and
+        # ENOSPC, and the exit status is 74 with the error line
+        rc, err = run(self.conf("/dev/full", 400))
+        self.assertEqual(rc, EX_IOERR, err)
+        self.assertRegex(err, r"<4>can: log_out /dev/full: write failed: %s \(\d+ failed writes, "
+                         r"\d+ frames lost so far\)" % os.strerror(errno.ENOSPC))
+        self.assertRegex(err, r"<3>\d+ setpoint lines were lost by the outputs, last write "
+                         r"error: " + os.strerror(errno.ENOSPC))
+
+    def test_log_out_stdout_pipe(self):
+        # Given log_out = - and a 2000 s track (100 s of wall time), when
+        # `head -1` has read its line and left, then trajd ends by itself
+        # within WAIT_S with status 141 and says why
+        path = self.conf("-", 20000)
+        p = subprocess.Popen([TRAJD, "-f", "-c", path], stdin=subprocess.DEVNULL,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        try:
+            head = subprocess.run(["head", "-1"], stdin=p.stdout, stdout=subprocess.PIPE,
+                                  timeout=WAIT_S)
+            p.stdout.close()
+            self.assertRegex(head.stdout, rb"^\(\d+\.\d{6}\) can0 [0-9A-F]{3}#")
+            rc = p.wait(WAIT_S)
+        finally:
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+        err = p.stderr.read().decode()
+        p.stderr.close()
+        self.assertEqual(rc, EXIT_EPIPE, err)
+        self.assertIn("reader went away", err)
 
 
 class OutputFaults(unittest.TestCase):
