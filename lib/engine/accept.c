@@ -177,11 +177,15 @@ int accept_offer(accept_t *a, const engine_waypoint_t *wp)
 
 /* lower median of the chord speeds between consecutive waypoints held (and
  * from the anchor to the first), forward intervals only; 0 if none, or if
- * there are fewer than ACCEPT_PACE_CHORDS of them once kept intervals give a
- * recent speed: one outlier among the waypoints held has two chords (into
- * it and out of it), and with two or three chords those are the lower
- * median, so an outlier would set the limit that judges it (a 300 m spike
- * between two fixes of a walk passed as its own pace, 100 m/s) */
+ * there are fewer than ACCEPT_PACE_CHORDS of them (but before any kept
+ * interval in a full window, at the close, or with a window too short to
+ * hold that many: a short track's or window's chords are all there is):
+ * one outlier
+ * among the waypoints held has two chords (into it and out of it), and
+ * with two or three chords those are the lower median, so an outlier would
+ * set the limit that judges it (a 300 m spike between two fixes of a walk
+ * passed as its own pace, 100 m/s; before the first kept interval too,
+ * test_accept test_spike_before_first_interval) */
 static double window_median_speed(accept_t *a)
 {
     double v[ACCEPT_WINDOW_MAX];
@@ -197,7 +201,8 @@ static double window_median_speed(accept_t *a)
         }
         p = q;
     }
-    if (!n || (a->nhist && n < ACCEPT_PACE_CHORDS))
+    if (!n ||
+        ((a->nhist || (!a->full && a->cfg.window > ACCEPT_PACE_CHORDS)) && n < ACCEPT_PACE_CHORDS))
         return 0;
     for (unsigned i = 0; i < n; i++)
         v[i] = chord_speed(a, from[i], to[i]);
@@ -811,6 +816,7 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
     double vlim;
     int r;
 
+    a->full = full; /* window_median_speed */
     if (!n)
         return 0;
     if (a->open && n < 2 && !full)

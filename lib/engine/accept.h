@@ -72,10 +72,14 @@
  *     max(ACCEPT_LEARN_FLOOR_M_S, ACCEPT_LEARN_FACTOR x v_ref), v_ref the
  *     fastest chord of the last ACCEPT_HIST kept intervals or the lower
  *     median chord of the waypoints held, whichever is larger (the window's
- *     median only from ACCEPT_PACE_CHORDS chords once there are kept
- *     intervals: a spike's own two chords never set the limit that judges
- *     it, tests/oracle/test_fault_injection.py test_spike_every_site; before
- *     any, the window's chords are all there is); and a turn is free:
+ *     median only from ACCEPT_PACE_CHORDS chords: a spike's own two chords
+ *     never set the limit that judges it, tests/oracle/test_fault_injection.py
+ *     test_spike_every_site, and before the first kept interval too,
+ *     tests/unit/test_accept.c test_spike_before_first_interval; but before
+ *     any kept interval in a full window, at the close, or with a window of
+ *     at most ACCEPT_PACE_CHORDS waypoints (start_slack 1..4), the chords
+ *     there are: such a window cannot tell a spike before the first kept
+ *     interval by its speed); and a turn is free:
  *     |v2 - v1| may exceed the acceleration allowance by up to
  *     2 min(|v1|, |v2|) (a reversal at the lower of the two speeds), so a
  *     feed-rate-timed corner passes while a change of speed is held to
@@ -176,6 +180,7 @@ typedef struct {
     double vhist[ACCEPT_HIST]; /* chord speeds of the last kept intervals */
     unsigned nhist, hnext;
     double vrecent;      /* the fastest of them (accept_recent_speed) */
+    int full;            /* the last accept_decide judged a full window */
     int have_burst;      /* burst: the last waypoint dropped as a far */
     unsigned char burst; /* burst's slot (since the last kept or started) */
     uint64_t known;      /* bit i: pair[i] is computed */

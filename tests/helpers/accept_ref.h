@@ -3,7 +3,9 @@
  * (lib/engine/accept.c up to commit 61f59e6: every test recomputes its
  * chord speeds and velocities from the waypoints, the window is an array
  * shifted on each verdict; with the early take of a fix that outvotes a
- * spike among the waypoints held, aref_outvotes_held, added to both), kept
+ * spike among the waypoints held, aref_outvotes_held, and the window's
+ * pace from ACCEPT_PACE_CHORDS chords before any kept interval too, added
+ * to both), kept
  * as the reference: test_accept drives it
  * and lib/engine/accept.c with the same random dirty tracks and checks the
  * verdicts are the same, and bench_engine times the two side by side.
@@ -27,6 +29,7 @@ typedef struct {
     int started;
     double vhist[ACCEPT_HIST];
     unsigned nhist, hnext;
+    int full;
     int have_burst;
     engine_waypoint_t burst;
 } aref_t;
@@ -125,7 +128,8 @@ static inline double aref_window_median_speed(const aref_t *a)
             v[n++] = aref_chord_speed(p, q);
         p = q;
     }
-    if (!n || (a->nhist && n < ACCEPT_PACE_CHORDS))
+    if (!n ||
+        ((a->nhist || (!a->full && a->cfg.window > ACCEPT_PACE_CHORDS)) && n < ACCEPT_PACE_CHORDS))
         return 0;
     /* insertion sort: n <= ACCEPT_WINDOW_MAX */
     for (unsigned i = 1; i < n; i++)
@@ -492,6 +496,7 @@ static inline int aref_decide(aref_t *a, int closing, accept_verdict_t *v)
     double vlim;
     int r;
 
+    a->full = full;
     if (!n)
         return 0;
     vlim = aref_speed_limit(a);

@@ -106,13 +106,17 @@ static void test_one_bad_fix_costs_nothing(void **state)
 {
     (void)state;
     static engine_waypoint_t rows[N_FIX + 1];
-    engine_config_t c;
+    engine_config_t c, r;
     engine_config_default(&c);
+    /* the fragment period S = F - O of the default (fragment, overlap auto) */
+    assert_int_equal(engine_config_resolve(&c, &r), 0);
+    unsigned sites = 3 * (r.fragment - r.overlap);
     int bad = 0;
 
+    assert_true(sites >= 3);
     for (int kind = 0; kind < K_COUNT; kind++) {
         int underruns = 0, lost = 0;
-        for (int site = 40; site < 40 + 3 * (int)(c.fragment - c.overlap); site++) {
+        for (int site = 40; site < 40 + (int)sites; site++) {
             engine_status_t st;
             int fin, n = build(rows, site, kind);
             replay(rows, n, &st, &fin);
@@ -128,7 +132,7 @@ static void test_one_bad_fix_costs_nothing(void **state)
             lost += st.accepted != N_FIX;
         }
         print_message("%s: %d of %u sites with an underrun, %d losing good fixes\n",
-                      kind_name[kind], underruns, 3 * (c.fragment - c.overlap), lost);
+                      kind_name[kind], underruns, sites, lost);
     }
     assert_int_equal(bad, 0);
 }
@@ -197,9 +201,30 @@ static int build_moved(engine_waypoint_t *rows, int from, int n, double off)
     return N_FIX;
 }
 
-/* replay as replay() does, also giving the last setpoint */
+/* what replay_sp saw on the way: the fastest setpoint, the refused seqs */
+typedef struct {
+    double vmax;
+    unsigned nrej;
+    uint32_t rej_seq[4];
+} seen_t;
+
+static void see(engine_t *e, const engine_setpoint_t *sp, seen_t *seen)
+{
+    engine_rejection_t r;
+    double v2 = 0;
+    for (int k = 0; k < ENGINE_AXES; k++)
+        v2 += sp->vel_m_s[k] * sp->vel_m_s[k];
+    if (sqrt(v2) > seen->vmax)
+        seen->vmax = sqrt(v2);
+    while (engine_rejection_next(e, &r) == 1)
+        if (seen->nrej++ < 4)
+            seen->rej_seq[seen->nrej - 1] = r.seq;
+}
+
+/* replay as replay() does, also giving the last setpoint (and with seen,
+ * what happened on the way) */
 static void replay_sp(const engine_waypoint_t *rows, int n, engine_status_t *st,
-                      engine_setpoint_t *last)
+                      engine_setpoint_t *last, seen_t *seen)
 {
     engine_config_t c;
     engine_config_default(&c);
@@ -215,6 +240,8 @@ static void replay_sp(const engine_waypoint_t *rows, int n, engine_status_t *st,
                 assert_int_equal(engine_finish(e), 0);
         }
         assert_int_equal(engine_tick(e, k * PERIOD_NS, last), 0);
+        if (seen)
+            see(e, last, seen);
     }
     engine_status(e, st);
     engine_free(e);
@@ -240,7 +267,7 @@ static void test_far_start_needs_confirmation(void **state)
     engine_setpoint_t sp;
 
     int n = build_moved(rows, 100, N_FIX - 100, 1000.0);
-    replay_sp(rows, n, &st, &sp);
+    replay_sp(rows, n, &st, &sp, NULL);
     assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
     assert_int_equal(st.rejected, 0);
     assert_int_equal(st.accepted, N_FIX);
@@ -249,7 +276,7 @@ static void test_far_start_needs_confirmation(void **state)
 
     assert_true(c.confirm >= 2);
     n = build_moved(rows, 100, (int)c.confirm - 1, 1000.0);
-    replay_sp(rows, n, &st, &sp);
+    replay_sp(rows, n, &st, &sp, NULL);
     assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
     assert_int_equal(st.rejected, c.confirm - 1);
     assert_int_equal(st.rejected_by[ENGINE_EUNCONFIRMED], c.confirm - 1);
@@ -576,6 +603,83 @@ static void run_track(unsigned npts, unsigned long *kinds)
     assert_int_equal(accept_pending(&a), 0);
 }
 
+/* a walker at 1.5 m/s, a fix every 5 s (visnjan's pace and rate,
+ * tests/data/ATTRIBUTION.md), on a gentle curve */
+static void walker(engine_waypoint_t *w, int i)
+{
+    memset(w, 0, sizeof *w);
+    w->t_s = i * 5.0;
+    w->pos_m[0] = 300.0 * sin(0.025 * i);
+    w->pos_m[1] = 300.0 * (1.0 - cos(0.025 * i));
+}
+
+/* N_FIX fixes of kind (0: boat, 1: walker) with a spike 300 m off the path
+ * at the middle of the interval after fix `site`, or half an interval
+ * before the first fix (site -1); returns the row count, *spike its seq */
+static int build_early(engine_waypoint_t *rows, int kind, int site, uint32_t *spike)
+{
+    int n = 0;
+    for (int i = -1; i < N_FIX; i++) {
+        engine_waypoint_t a, b;
+        if (i >= 0)
+            (kind ? walker : boat)(&rows[n++], i);
+        if (i != site)
+            continue;
+        (kind ? walker : boat)(&a, i < 0 ? 0 : i);
+        (kind ? walker : boat)(&b, i + 1);
+        for (int k = 0; k < ENGINE_AXES; k++)
+            b.pos_m[k] = i < 0 ? a.pos_m[k] : 0.5 * (a.pos_m[k] + b.pos_m[k]);
+        b.t_s = i < 0 ? a.t_s - 0.5 * (b.t_s - a.t_s) : 0.5 * (a.t_s + b.t_s);
+        b.pos_m[1] += 300.0;
+        rows[n++] = b;
+        *spike = (uint32_t)n; /* its seq (below) */
+    }
+    for (int r = 0; r < n; r++)
+        rows[r].seq = (uint32_t)r + 1;
+    return n;
+}
+
+/*
+ * Issue 12 "keep the good data": a spike before the first kept interval
+ * (nothing kept yet, so no recent speed: the learned limit comes from the
+ * window's chords alone).  Given the boat (5 m/s, 5 Hz) and a walker (1.5
+ * m/s, a fix every 5 s), with one row 300 m off the path in the middle of
+ * the interval after fix 0..9 (the first window and beyond it) or half an
+ * interval before fix 0, when replayed with the default configuration,
+ * then the spike alone is refused (its seq the one refusal), every good
+ * fix is kept, the output never runs faster than twice the object's speed
+ * (a kept spike makes it run at 60..3000 m/s), and it ends finished.
+ */
+static void test_spike_before_first_interval(void **state)
+{
+    (void)state;
+    static engine_waypoint_t rows[N_FIX + 1];
+    static const double speed[2] = {5.0, 1.5}; /* m/s: boat(), walker() */
+    int bad = 0;
+
+    for (int kind = 0; kind < 2; kind++)
+        for (int site = -1; site < 10; site++) {
+            engine_status_t st;
+            engine_setpoint_t last;
+            seen_t seen = {0};
+            uint32_t spike = 0;
+            int n = build_early(rows, kind, site, &spike);
+            replay_sp(rows, n, &st, &last, &seen);
+            if (st.accepted != N_FIX || st.rejected != 1 || seen.nrej != 1 ||
+                seen.rej_seq[0] != spike || seen.vmax > 2.0 * speed[kind] ||
+                last.state != ENGINE_STATE_FINISHED) {
+                print_message("%s, spike after fix %d (seq %u): accepted %llu rejected %llu "
+                              "(first seq %u), fastest setpoint %.1f m/s, %s\n",
+                              kind ? "walker" : "boat", site, spike,
+                              (unsigned long long)st.accepted, (unsigned long long)st.rejected,
+                              seen.nrej ? seen.rej_seq[0] : 0, seen.vmax,
+                              engine_state_name(last.state));
+                bad++;
+            }
+        }
+    assert_int_equal(bad, 0);
+}
+
 /*
  * The pair cache of lib/engine/accept.c (chords and velocities computed once
  * per pair of waypoints held) gives the verdicts of the policy as it was
@@ -612,6 +716,7 @@ int main(void)
         cmocka_unit_test(test_reanchor_after_confirm),
         cmocka_unit_test(test_far_start_needs_confirmation),
         cmocka_unit_test(test_far_burst_unconfirmed),
+        cmocka_unit_test(test_spike_before_first_interval),
         cmocka_unit_test(test_same_verdicts_as_reference),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
