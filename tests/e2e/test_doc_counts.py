@@ -61,6 +61,36 @@ def trajreplay(args, cwd=None):
     return r.stderr
 
 
+_RUNS = {}
+
+
+def replay(track, *opts):
+    """(summary dict, setpoint records) of trajreplay --binary on tests/data/TRACK
+    with OPTS at the default 100 Hz, run once per test process."""
+    import numpy as np
+    key = (track,) + opts
+    if key not in _RUNS:
+        with tempfile.TemporaryDirectory() as tmp:
+            out = os.path.join(tmp, "out.bin")
+            err = trajreplay(["-q", "--summary", "--binary", "-o", out] + list(opts)
+                             + ["tests/data/" + track])
+            dt = np.dtype([("now_ns", "<i8"), ("t_s", "<f8"), ("pos_m", "<f8", 3),
+                           ("vel_m_s", "<f8", 3), ("acc_m_s2", "<f8", 3), ("state", "<u4"),
+                           ("flags", "<u4"), ("cycle", "<u4"), ("track", "<u4"), ("reserved", "<u8")])
+            _RUNS[key] = (replay_summary.parse(err), np.fromfile(out, dtype=dt, offset=64), err)
+    return _RUNS[key]
+
+
+def peak(rows, field, mask=None):
+    """(largest |field| of the rows where mask, its track time)."""
+    import numpy as np
+    mag = np.linalg.norm(rows[field], axis=1)
+    if mask is not None:
+        mag = np.where(mask, mag, 0.0)
+    i = int(np.nanargmax(mag))
+    return float(mag[i]), float(rows["t_s"][i])
+
+
 def summary(track, out):
     r = subprocess.run([os.path.join(BUILD, "bin", "trajreplay"), "--summary", "-q", "-o", out,
                         os.path.join(ROOT, "tests", "data", track)],
@@ -163,6 +193,104 @@ class DaemonReadme(unittest.TestCase):
         err = trajreplay(cmd.split()[1:] + ["--summary"])
         self.assertIn("summary: uniform_irregular %s\n" % n, err)
         self.assertIn("(worst %sx, at t = %.3f s)" % (worst, float(t)), err)
+
+
+class RealTracks(unittest.TestCase):
+    """daemon/README.md "What replaying the real tracks shows" and lib/engine/README.md's
+    underrun counts."""
+    F8, VIS, CER = "n2k_furuno_figure8_src52.csv", "gpxgo_visnjan.gpx", "gpxpy_cerknicko-jezero.csv"
+    FORMER = ("--fragment", "32", "--overlap", "16", "--start-slack", "8")
+
+    @classmethod
+    def setUpClass(cls):
+        doc = read("daemon/README.md")
+        a = doc.index("**What replaying the real tracks shows**")
+        cls.doc = doc[a:doc.index("**Known limits.**", a)]
+
+    def test_jitter(self):
+        import numpy as np
+        v, a, t0, t1, t2, refused, a2, v2, t3, t4, gap = grab(self.doc, (
+            r"\(`--profile none`\)\s+the figure-eight boat peaks at (\S+) m/s and (\S+) m/s² around "
+            r"t = 135 s\. Its log has a late\s+sample there: (\S+) → (\S+) → (\S+) s, so two fixes "
+            r".*? refuses (\S+)\s+\(`rejected_speed 1`\) and the peak there drops to (\S+) m/s² "
+            r"\((\S+) m/s top speed\): the fixes\s+of (\S+) and (\S+) are still (\d+) ms apart"))
+        s, rows, _ = replay(self.F8, "--profile", "none")
+        near = (rows["t_s"] > 134) & (rows["t_s"] < 137)
+        self.assertEqual(s["rejected"], 0)
+        self.assertEqual("%.1f" % peak(rows, "vel_m_s", near)[0], v)
+        self.assertEqual("%.0f" % peak(rows, "acc_m_s2", near)[0], a)
+        s, rows, err = replay(self.F8)
+        self.assertEqual((s["rejected"], s["rejected_speed"]), (1, 1))
+        line = int(re.search(r":(\d+): rejected \(speed\)", err).group(1))
+        with open(os.path.join(ROOT, "tests", "data", self.F8), encoding="utf-8") as f:
+            stamps = [l.split(",")[0] for l in f.read().split("\n")]
+        self.assertEqual(float(stamps[line - 1]), float(refused))
+        i = stamps.index(t0 + "000")
+        # the refused fix is the late one; the two it leaves 81 ms apart follow it
+        self.assertEqual([float(x) for x in stamps[i:i + 4]],
+                         [float(t0), float(t1), float(t2), float(t4)])
+        self.assertEqual((float(t1), float(t2)), (float(refused), float(t3)))
+        self.assertEqual(round((float(t4) - float(t3)) * 1000), int(gap))
+        near = (rows["t_s"] > 134) & (rows["t_s"] < 137)
+        self.assertEqual("%.1f" % peak(rows, "acc_m_s2", near)[0], a2)
+        self.assertEqual("%.1f" % peak(rows, "vel_m_s")[0], v2)
+
+    def test_underruns_visnjan(self):
+        n, ticks = grab(self.doc, r"On visnjan \(fixes 1 to 41 s apart\) it runs dry (\d+) times, "
+                                  r"(\d+) ticks in all")
+        s = replay(self.VIS)[0]
+        self.assertEqual((s["underruns"], s["underrun_ticks"]), (int(n), int(ticks)))
+        s, rows, _ = replay(self.VIS)
+        self.assertEqual(s["hard_stops"], 0)
+        import numpy as np
+        t = np.genfromtxt(os.path.join(ROOT, "tests", "data", "gpxgo_visnjan.csv"), delimiter=",",
+                          names=True)["t_s"]
+        self.assertEqual((np.diff(t).min(), np.diff(t).max()), (1.0, 41.0))
+
+    def test_cerknicko(self):
+        tracks, tv, v, jump, t0, line, n, nspeed, nunc, v10 = grab(self.doc, (
+            r"gaps over 60 s make (\d+)\s+trajectories \(`tracks`\)\. The rest-to-rest transfers "
+            r"between them peak at (\S+) m/s; the\s+fastest setpoint outside them is (\S+) m/s\. "
+            r"Of a GPS jump in the log, (\d+) m in 2 s from\s+t = (\d+) s, the default profile "
+            r"refuses the first fix \(line (\d+), `rejected_speed 1`\)\. With\s+`--max-speed 10`, "
+            r"(\d+) waypoints are rejected \((\d+) for speed, (\d+) unconfirmed\) and the fastest"
+            r"\s+setpoint is (\S+) m/s"))
+        s, rows, err = replay(self.CER)
+        self.assertEqual(s["tracks"], int(tracks))
+        transfer = (rows["flags"] & 8) != 0
+        self.assertEqual("%.1f" % peak(rows, "vel_m_s", transfer)[0], tv)
+        self.assertEqual("%.1f" % peak(rows, "vel_m_s", ~transfer)[0], v)
+        self.assertEqual((s["rejected"], s["rejected_speed"]), (1, 1))
+        self.assertIn("%s:%s: rejected (speed)" % (self.CER, line), err)
+        with open(os.path.join(ROOT, "tests", "data", self.CER), encoding="utf-8") as f:
+            rec = [l.split(",") for l in f.read().split("\n")[int(line) - 1:int(line) + 1]]
+        self.assertEqual(float(rec[0][0]), float(t0))
+        self.assertEqual(float(rec[1][0]) - float(rec[0][0]), 2.0)
+        from pyproj import Geod
+        d = Geod(ellps="WGS84").inv(float(rec[0][2]), float(rec[0][1]), float(rec[1][2]), float(rec[1][1]))[2]
+        self.assertEqual(round(d), int(jump))
+        s, rows, _ = replay(self.CER, "--max-speed", "10")
+        self.assertEqual((s["rejected"], s["rejected_speed"], s["rejected_unconfirmed"]),
+                         (int(n), int(nspeed), int(nunc)))
+        self.assertEqual("%.1f" % peak(rows, "vel_m_s")[0], v10)
+
+    def test_engine_readme_underruns(self):
+        """lib/engine/README.md "start_slack auto": underruns, default against the former F/O/slack."""
+        vis, vis_s, vis0, vis0_s, former, cer, cer0, f8, f8_s, f80 = grab(read("lib/engine/README.md"), (
+            r"`trajreplay --summary` on visnjan counts (\d+)\s+\((\S+) s slowed or held\) instead of "
+            r"(\d+) \((\S+) s\) with the former `([^`]+)`, on cerknicko (\d+) instead of (\d+), on "
+            r"the figure-8 (\d+) \((\S+) s, before its 0.5 s hole\s+at t = 135 s\) instead of (\d+)"))
+        self.assertEqual(tuple(" ".join(former.split()).split()), self.FORMER)
+        for track, now, now_s, old in ((self.VIS, vis, vis_s, vis0), (self.CER, cer, None, cer0),
+                                       (self.F8, f8, f8_s, f80)):
+            s = replay(track)[0]
+            self.assertEqual(s["underruns"], int(now), track)
+            if now_s is not None:
+                self.assertEqual("%g" % (s["underrun_ticks"] / 100), now_s, track)
+            s = replay(track, *self.FORMER)[0]
+            self.assertEqual(s["underruns"], int(old), track)
+            if track == self.VIS:
+                self.assertEqual("%g" % (s["underrun_ticks"] / 100), vis0_s, track)
 
 
 if __name__ == "__main__":
