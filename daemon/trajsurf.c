@@ -15,7 +15,8 @@
  *     differences (lib/spline/surf); "-" or no -o: stdout;
  *   picture (-s): an SVG wireframe in isometric projection, heights
  *     multiplied by ZSCALE, the grid points drawn as dots.
- * Exit status 0, 1 on bad input (message "file:line: what" on stderr), 2 on usage.
+ * Exit status 0, 1 on bad input (message "file:line: what" on stderr), 2 on usage,
+ * 3 when writing an output failed (as trajreplay).
  */
 #include <errno.h>
 #include <getopt.h>
@@ -64,7 +65,8 @@ static void help(void)
           "  -h, --help           this text\n"
           "  -V, --version        version\n"
           "\n"
-          "Exit status: 0 ok, 1 bad input (file:line: what, on stderr), 2 usage.\n",
+          "Exit status: 0 ok, 1 bad input (file:line: what, on stderr), 2 usage, 3 an\n"
+          "output could not be written.\n",
           stdout);
 }
 
@@ -277,6 +279,22 @@ static int far_first(const void *x, const void *y)
  * (blue low, red high).  Good enough for height fields seen from above;
  * a surface folding over itself may show ordering errors (no z-buffer).
  */
+
+/* Flush and close an output (stdout is flushed, not closed): 0, or -1 with
+ * "name: error" on stderr if any write to it failed (a full disk, EIO).  The
+ * caller sets errno = 0 before writing, so a failed write leaves its errno. */
+static int close_output(FILE *f, const char *name)
+{
+    int err = ferror(f) ? (errno ? errno : EIO) : 0; /* a write failed: its errno */
+    if (fflush(f) != 0 && !err)
+        err = errno ? errno : EIO;
+    if (f != stdout && fclose(f) != 0 && !err)
+        err = errno ? errno : EIO;
+    if (!err)
+        return 0;
+    fprintf(stderr, "%s: %s\n", name, strerror(err));
+    return -1;
+}
 /* The (su - 1) x (sv - 1) cells of the sampled surface, farthest first
  * (painter's algorithm). */
 static void sort_cells(cell_t *cells, const double *smp, size_t su, size_t sv)
@@ -296,6 +314,7 @@ static void sort_cells(cell_t *cells, const double *smp, size_t su, size_t sv)
 static int write_svg(const char *path, const grid_t *gr, const double *smp, size_t su, size_t sv,
                      double zscale)
 {
+    errno = 0;
     FILE *f = fopen(path, "w");
     double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY, sc, ox, oy;
     double zlo = INFINITY, zhi = -INFINITY;
@@ -360,11 +379,7 @@ static int write_svg(const char *path, const grid_t *gr, const double *smp, size
         "bicubic B-spline surface through a %zu x %zu grid (dots), isometric view</text>\n</svg>\n",
         gr->m, gr->n);
     free(cells);
-    if (fclose(f) != 0) {
-        fprintf(stderr, "%s: %s\n", path, strerror(errno));
-        return -1;
-    }
-    return 0;
+    return close_output(f, path);
 }
 
 /* Samples of surface s on steps per cell into smp (su x sv, sv = (n - 1) *
@@ -395,6 +410,7 @@ static int sample(const surf_t *s, const grid_t *gr, size_t steps, size_t sv, do
 /* The samples CSV to path ("-": stdout); 0 or -1 with a message. */
 static int write_samples(const char *path, const double *smp, size_t su, size_t sv, long steps)
 {
+    errno = 0;
     FILE *out = strcmp(path, "-") ? fopen(path, "w") : stdout;
     size_t a, b;
     if (!out) {
@@ -408,13 +424,7 @@ static int write_samples(const char *path, const double *smp, size_t su, size_t 
             fprintf(out, "%.17g,%.17g,%.17g,%.17g,%.17g\n", (double)a / steps, (double)b / steps,
                     p[0], p[1], p[2]);
         }
-    if (out != stdout && fclose(out) != 0) {
-        fprintf(stderr, "%s: %s\n", path, strerror(errno));
-        return -1;
-    }
-    if (out == stdout)
-        fflush(stdout);
-    return 0;
+    return close_output(out, out == stdout ? "stdout" : path);
 }
 
 int main(int argc, char **argv)
@@ -481,8 +491,10 @@ int main(int argc, char **argv)
         goto out;
     }
     rc = 1;
-    if (sample(&s, &gr, (size_t)steps, sv, patch, smp) < 0 ||
-        write_samples(out_path, smp, su, sv, steps) < 0)
+    if (sample(&s, &gr, (size_t)steps, sv, patch, smp) < 0)
+        goto out;
+    rc = 3; /* an output could not be written */
+    if (write_samples(out_path, smp, su, sv, steps) < 0)
         goto out;
     if (svg_path && write_svg(svg_path, &gr, smp, su, sv, zscale) < 0)
         goto out;

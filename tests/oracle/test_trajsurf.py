@@ -5,6 +5,7 @@ The samples are checked against scipy: the interpolating bicubic B-spline
 with natural borders is the tensor product of natural cubic splines on
 uniform knots (CubicSpline(bc_type='natural') along rows, then columns).
 """
+import errno
 import os
 import subprocess
 import sys
@@ -126,6 +127,28 @@ class TestTrajsurf(unittest.TestCase):
         self.assertIn("nul.csv:3: NUL byte", run(os.path.join(self.d, "nul.csv")).stderr)
         self.assertEqual(run("-n", "0", "x").returncode, 2)
         self.assertEqual(run().returncode, 2)
+
+    def test_output_failure(self):
+        # Given a full disk (/dev/full) for the samples on stdout, -o or the
+        # -s picture, then exit 3 (an output failed) with a message naming
+        # it and ENOSPC (stdout on /dev/full exited 0 without a word; -o and
+        # -s exited 1, the status of bad input).
+        grid = os.path.join(self.d, "g.csv")
+        with open(grid, "w") as f:
+            f.write("1,2,3\n4,5,6\n7,8,9\n")
+        enospc = os.strerror(errno.ENOSPC)
+        with open("/dev/full", "w") as full:
+            r = subprocess.run([TRAJSURF, "-n", "64", grid], stdout=full, stderr=subprocess.PIPE,
+                               text=True, timeout=60)
+        self.assertEqual(r.returncode, 3, r.stderr)
+        self.assertIn("stdout: " + enospc, r.stderr)
+        for args, name in ((["-o", "/dev/full"], "/dev/full"),
+                           (["-o", os.devnull, "-s", "/dev/full"], "/dev/full")):
+            r = run("-n", "64", *args, grid)
+            self.assertEqual(r.returncode, 3, r.stderr)
+            self.assertIn(name + ": " + enospc, r.stderr)
+        r = run("-n", "64", "-o", os.devnull, grid)
+        self.assertEqual(r.returncode, 0, r.stderr)
 
 
 if __name__ == "__main__":
