@@ -271,6 +271,13 @@ csv.path = %s/fed.csv
                 c.close()
             finally:
                 self.assertEqual(d.stop(), 0, "".join(d.log))
+            # the exit status line says the same: rejected excludes the
+            # buffer-full refusals, which have their own count (issue 11)
+            ex = [ln for ln in d.log if "exit: " in ln]
+            self.assertEqual(len(ex), 1, "".join(d.log))
+            m = re.search(r"; fed \w+ t=[-\d.]+ s, wp \d+ ok (\d+) rejected (\d+) full,", ex[0])
+            self.assertIsNotNone(m, ex[0])
+            self.assertEqual((int(m.group(1)), int(m.group(2))), (ref_rejected, busy), ex[0])
             print("fed %d waypoints, %d busy retries, %d refused, %d Modbus block reads"
                   % (len(wps), busy, refused, len(reads)))
             self.assertGreater(busy, 0)     # flow control was exercised
