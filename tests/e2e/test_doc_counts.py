@@ -293,5 +293,76 @@ class RealTracks(unittest.TestCase):
                 self.assertEqual("%g" % (s["underrun_ticks"] / 100), vis0_s, track)
 
 
+class EngineReadme(unittest.TestCase):
+    """lib/engine/README.md's replays of the real tracks."""
+    TRACKS = {"figure-8": RealTracks.F8, "gpxgo_visnjan": RealTracks.VIS,
+              "gpxpy_cerknicko-jezero": RealTracks.CER}
+
+    def same(self, shown, value, what):
+        """shown (the doc's text of a number, '37 890' or '7.1') is value as rounded there."""
+        shown = shown.replace(" ", "")
+        decimals = len(shown.split(".")[1]) if "." in shown else 0
+        self.assertEqual("%.*f" % (decimals, value), shown, what)
+
+    def test_max_accel_table(self):
+        """'After (engine, `trajreplay` at 100 Hz, transfers excluded; before: `--profile none`,
+        after: `--profile none --max-accel 30`': each row of the table."""
+        import numpy as np
+        doc = read("lib/engine/README.md")
+        before, after = grab(doc, r"transfers excluded; before: `([^`]+)`, after:\s+`([^`]+)`")
+        head = doc.index("| track | waypoints rejected (`rejected_accel`)")
+        rows = doc[head:doc.index("\n\n", head)].split("\n")[2:]
+        self.assertEqual(len(rows), 3)
+        num = r"(\d[\d .]*\d|\d)"
+        for row in rows:
+            name, rej, acc, vel = [c.strip() for c in row.strip("|").split("|")]
+            track = self.TRACKS[name]
+            rb = replay(track, *before.split())[1]
+            sa, ra, err = replay(track, *after.split())
+            n, total = re.match(r"(\d+) of (\d+)", rej).groups()
+            self.assertEqual((sa["rejected_accel"], sa["rejected"], sa["waypoints"]),
+                             (int(n), int(n), int(total)), name)
+            with open(os.path.join(ROOT, "tests", "data", track), encoding="utf-8") as f:
+                stamps = f.read().split("\n")
+            refused = [float(stamps[int(l) - 1].split(",")[0])
+                       for l in re.findall(r":(\d+): rejected \(accel\)", err)]
+            self.assertEqual(refused, [float(t) for t in re.findall(r"[\d.]+", rej.split("(")[1])]
+                             if "(" in rej else [], name)
+
+            def top(rows_, field, near=False):
+                m = (rows_["flags"] & 8) == 0
+                if near:
+                    m &= (rows_["t_s"] > 134) & (rows_["t_s"] < 137)
+                return peak(rows_, field, m)[0]
+
+            v0, v1 = re.findall(r"[\d.]+", vel)
+            self.same(v0, top(rb, "vel_m_s"), name)
+            self.same(v1, top(ra, "vel_m_s"), name)
+            if name != "figure-8":
+                a0, a1 = re.findall(r"[\d.]+", acc)
+                self.same(a0, top(rb, "acc_m_s2"), name)
+                self.same(a1, top(ra, "acc_m_s2"), name)
+                continue
+            # "647 → 7.1 m/s² near 135 s (jerk 37 890 → 70 m/s³); 24.4 overall"
+            a0, a1, j0, j1, overall = grab(acc, num + r" → ([\d.]+) m/s² near 135 s \(jerk " + num
+                                           + r" → " + num + r" m/s³\); ([\d.]+) overall")
+            self.same(a0, top(rb, "acc_m_s2", True), name)
+            self.same(a1, top(ra, "acc_m_s2", True), name)
+            self.same(overall, top(ra, "acc_m_s2"), name)
+            for shown, rr in ((j0, rb), (j1, ra)):
+                m = (rr["t_s"][1:] > 134) & (rr["t_s"][1:] < 137)
+                jerk = np.max(np.abs(np.diff(rr["acc_m_s2"], axis=0)), axis=1)[m].max() / 0.01
+                self.assertEqual(round(jerk, -1), int(shown.replace(" ", "")), name + " jerk")
+
+    def test_start_lookahead_figure8(self):
+        """'the figure-8 boat, up to 9 m/s at 5 Hz: 22 waypoints at 100 Hz instead of 33 before'."""
+        now, before = grab(read("lib/engine/README.md"), r"the figure-8 boat, up to 9 m/s at\s+5\s+Hz:\s+"
+                                                         r"(\d+)\s+waypoints\s+at\s+100\s+Hz\s+instead\s+of\s+(\d+)")
+        for opts, want in (((), now), (RealTracks.FORMER, before)):
+            rows = replay(RealTracks.F8, *opts)[1]
+            first = next(i for i, f in enumerate(rows["flags"]) if f & 2)   # NEW_TRACK: streaming
+            self.assertEqual(first / 20, int(want), opts)   # 100 Hz, 5 Hz waypoints: 20 ticks each
+
+
 if __name__ == "__main__":
     unittest.main(argv=sys.argv[:1])
