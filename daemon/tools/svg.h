@@ -26,7 +26,7 @@
 #include <stdio.h>
 #include "engine.h"
 
-#define SVG_POINTS_DEFAULT 4000 /* curve vertices kept (the file stays ~300 kB) */
+#define SVG_POINTS_DEFAULT 4000 /* curve vertices kept (the size does not grow with the track) */
 #define SVG_POINTS_MIN 16
 #define SVG_WAYPOINTS_DRAWN 5000 /* at most this many waypoint dots */
 #define SVG_UNDERRUNS_DRAWN 256  /* underrun marks drawn (all are counted in the legend) */

@@ -285,9 +285,11 @@ def test_kinds(tmp):
              ("vessel", tr.FIGURE8, "vessel"),
              ("vessel", os.path.join(tr.DATA, "canboat_candumpSample3.log"), "vessel"),
              ("airliner", air, "air"), ("glider", gli, "air"), ("toolpath", gco, "machine")]
+    seen = {}
     for kind, track, profile in kinds:
         for prof in ("auto", profile):
             n, rej, acc, dup = refused(track, ["--profile", prof], tmp)
+            seen[(kind, os.path.basename(track), prof)] = (n, rej)
             frac = rej / n if n > 0 else 1
             print(f"{kind} {os.path.basename(track)} profile {prof}: {rej} of {n} refused "
                   f"({100 * frac:.2f} %), {acc} kept, {dup} duplicates")
@@ -303,7 +305,48 @@ def test_kinds(tmp):
         n, rej, acc, dup = refused(track, ["--profile", "road"], tmp)
         print(f"{kind} profile road (control): {rej} of {n} refused ({100 * rej / n:.2f} %)")
         tr.check(rej > MAX_REFUSED * n, f"{kind} profile road: only {rej} of {n} refused")
+        seen[(kind, "control", "road")] = (n, rej)
+    doc_table_is_this_run(seen)
     return gco
+
+
+BUILT = {"airliner": "airliner.csv", "glider": "glider.igc", "toolpath": "toolpath.csv"}
+
+
+def same_share(shown, n, rej, what):
+    """shown ('0.34 %', '6.3 %', '0 %') is 100 rej / n as rounded there."""
+    num = shown.split()[0]
+    decimals = len(num.split(".")[1]) if "." in num else 0
+    tr.check("%.*f" % (decimals, 100 * rej / n) == num, f"lib/engine/README.md {what}: {shown} "
+             f"stale, the run refuses {rej} of {n}")
+
+
+def doc_table_is_this_run(seen):
+    """lib/engine/README.md's profile table and control sentence are this run's
+    (issue 14: no stale numbers): points, share refused (and the count given
+    in parentheses) per profile."""
+    import re
+    with open(os.path.join(tr.DATA, "..", "..", "lib", "engine", "README.md"), encoding="utf-8") as f:
+        doc = f.read()
+    head = doc.index("| kind | track | points | auto | matching profile |")
+    rows = doc[head:doc.index("\n\n", head)].split("\n")[2:]
+    tr.check(len(rows) == 7, f"lib/engine/README.md profile table: {len(rows)} rows")
+    for row in rows:
+        kind, track, points, auto, match = [c.strip() for c in row.strip("|").split("|")]
+        kind = kind.split()[0]
+        name = BUILT.get(kind, track)
+        prof = match.split()[0]
+        for p, cell in (("auto", auto), (prof, match.split(" ", 1)[1])):
+            n, rej = seen.get((kind, name, p), (-1, -1))
+            tr.check(int(points) == n, f"lib/engine/README.md {kind} {name}: {points} points, run {n}")
+            same_share(cell, n, rej, f"{kind} {name} {p}")
+            count = re.search(r"\((\d+)", cell)
+            tr.check(count is None or int(count.group(1)) == rej,
+                     f"lib/engine/README.md {kind} {name} {p}: {cell}, run refuses {rej}")
+    air, tool = re.search(r"`road`'s absolute limits refuse (\S+ %) of the airliner\s+\(100 m/s\) "
+                          r"and (\S+ %) of the toolpath", doc).groups()
+    same_share(air, *seen[("airliner", "control", "road")], "airliner road")
+    same_share(tool, *seen[("toolpath", "control", "road")], "toolpath road")
 
 
 def test_airliner_stale_then_jumps(tmp):
