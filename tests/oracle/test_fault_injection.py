@@ -48,15 +48,23 @@ fix before them with the next fixes' positions, 2 fixes stamped 0.15 s late,
 line, the rest in --summary's per-reason counts), the NaN rows skipped with
 their lines, every good fix kept, the curve through them against scipy, no
 step, and no underrun but around the frozen hole.
+test_gpx_faults writes stale rows, rows stamped with the fix before them and
+exact copies into the visnjan GPX walk, its every fix jittered, and checks
+against gpsbabel's reading of the same GPX that every good fix is kept and
+passed through; test_spike_rides_through checks that one refused spike costs
+the output no underrun.
 The references are independent: pyproj for the ENU frame, scipy for the curve,
 and the injected rows are known by construction here, not read from the
 program's output.
 """
 import math
 import os
+import datetime
 import random
+import subprocess
 import sys
 import tempfile
+import xml.etree.ElementTree as ET
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -463,7 +471,8 @@ def test_spike_rides_through(tmp):
         for at in RIDE_SITES_S:
             i = int(np.argmin(np.abs(t - at)))
             tm = round((t[i] + t[i + 1]) / 2, 3)
-            spike = (tm, (lat[i] + lat[i + 1]) / 2 + SPIKE_M / M_PER_DEG_LAT, (lon[i] + lon[i + 1]) / 2, alt[i])
+            spike = (tm, (lat[i] + lat[i + 1]) / 2 + SPIKE_M / M_PER_DEG_LAT,
+                     (lon[i] + lon[i + 1]) / 2, alt[i])
             sp, s = ride_replay(tmp, rows0[:i + 1] + [spike] + rows0[i + 1:], "ride", args)
             label = f"visnjan, spike at {tm} s, {cfg}"
             tr.check(s.get("rejected") == s0.get("rejected") + 1 and s.get("accepted") == s0.get("accepted"),
@@ -479,6 +488,155 @@ def test_spike_rides_through(tmp):
               f"clean {int(s0.get('underruns'))} underruns")
 
 
+# GPX faults on the visnjan walk (tests/data/gpxgo_visnjan.gpx): its fixes
+# as gpsbabel reads them, jittered (the good fixes), with bad rows between
+# them.  kind -> the reason trajreplay must give (None: a duplicate, counted
+# as such and not refused).
+GPX_REASONS = {
+    "stale": "stale",          # fix i's position again, halfway to fix i + 1 (frozen receiver)
+    "stale2": "stale",         # two such rows, at 1/3 and 2/3 of the interval
+    "same_time": "same_time",  # fix i + 1's position stamped with fix i's time
+    "dup": None,               # an exact copy of fix i right after it
+}
+GPX_JITTER_M = 1.0    # GNSS noise on every good fix: up to this, north and east (m)
+GPX_JITTER_S = 0.1    # and on its stamp, in steps of 0.1 s (visnjan's intervals are >= 1 s)
+GPX_NS = {"g": "http://www.topografix.com/GPX/1/1"}
+
+
+def gpsbabel_points(src, tmp, tag):
+    """(lat, lon, ele, time string) of every trkpt of the GPX src, in file
+    order, as gpsbabel reads it (converted to its GPX 1.1: 9 decimals, ms)."""
+    out = os.path.join(tmp, tag + "-gpsbabel.gpx")
+    subprocess.run(["gpsbabel", "-i", "gpx", "-f", src, "-o", "gpx,gpxver=1.1", "-F", out], check=True)
+    pts = []
+    for p in ET.parse(out).getroot().iterfind(".//g:trkpt", GPX_NS):
+        pts.append((float(p.get("lat")), float(p.get("lon")), float(p.find("g:ele", GPX_NS).text),
+                    p.find("g:time", GPX_NS).text))
+    return pts
+
+
+def iso_s(text):
+    """Seconds of an ISO 8601 UTC time (Z) since the epoch."""
+    d = datetime.datetime.strptime(text.rstrip("Z"), "%Y-%m-%dT%H:%M:%S.%f" if "." in text else
+                                   "%Y-%m-%dT%H:%M:%S")
+    return d.replace(tzinfo=datetime.timezone.utc).timestamp()
+
+
+def iso_of(sec):
+    """ISO 8601 UTC, milliseconds, of epoch seconds (a multiple of 0.1 s)."""
+    d = datetime.datetime.fromtimestamp(round(sec, 1), datetime.timezone.utc)
+    return d.strftime("%Y-%m-%dT%H:%M:%S.") + "%03dZ" % round(d.microsecond / 1000)
+
+
+def build_gpx(tmp):
+    """Write the jittered walk with the GPX_REASONS rows; return (path,
+    {line: kind}, duplicates, the good fixes' indices in the file's trkpts)."""
+    pts = gpsbabel_points(tr.VISNJAN_GPX, tmp, "visnjan")
+    rnd = random.Random(11)
+    t = [iso_s(p[3]) for p in pts]
+    good = []
+    for i, (la, lo, el, _) in enumerate(pts):
+        steps = round(GPX_JITTER_S * 10)
+        dt = 0.1 * rnd.randint(-steps, steps) if 0 < i < len(pts) - 1 else 0.0
+        north, east = (rnd.uniform(-GPX_JITTER_M, GPX_JITTER_M) for _ in range(2))
+        good.append((la + north / M_PER_DEG_LAT,
+                     lo + east / (M_PER_DEG_LAT * math.cos(math.radians(la))), el, t[i] + dt))
+    kinds = ["stale"] * 4 + ["stale2"] * 2 + ["same_time"] * 3 + ["dup"] * 3
+    rnd.shuffle(kinds)
+    at = dict(zip(pick_sites(rnd, len(kinds), len(pts) - 25, 20), kinds))
+    rows, injected, kept, ndup = [], {}, [], 0
+    for i, g in enumerate(good):
+        kept.append(len(rows))
+        rows.append(g)
+        k = at.get(i)
+        nxt = good[i + 1] if i + 1 < len(good) else g
+        add = {"stale": [(g[0], g[1], g[2], (g[3] + nxt[3]) / 2)],
+               "stale2": [(g[0], g[1], g[2], g[3] + f * (nxt[3] - g[3])) for f in (1 / 3, 2 / 3)],
+               "same_time": [(nxt[0], nxt[1], nxt[2], g[3])],
+               "dup": [g]}.get(k, [])
+        for r in add:
+            injected[len(rows)] = k
+            rows.append((r[0], r[1], r[2], round(r[3], 3)))
+        ndup += k == "dup"
+    path = os.path.join(tmp, "visnjan_faults.gpx")
+    lines = {}
+    with open(path, "w") as f:
+        f.write('<?xml version="1.0" encoding="UTF-8"?>\n'
+                '<gpx version="1.1" creator="test_fault_injection.py" '
+                'xmlns="http://www.topografix.com/GPX/1/1">\n<trk><trkseg>\n')
+        for n, r in enumerate(rows):
+            lines[n] = 4 + n  # one trkpt a line, from line 4
+            f.write('<trkpt lat="%.9f" lon="%.9f"><ele>%.3f</ele><time>%s</time></trkpt>\n'
+                    % (r[0], r[1], r[2], iso_of(r[3])))
+        f.write("</trkseg></trk></gpx>\n")
+    return path, {lines[n]: k for n, k in injected.items()}, ndup, kept
+
+
+def test_gpx_faults(tmp):
+    """Given the visnjan GPX walk as gpsbabel reads it (the reference: an
+    independent GPX reader), every fix jittered (up to 1 m north and east,
+    its stamp by up to 0.1 s: GNSS noise, good fixes all),
+    with bad rows written between them at 12 sites (seeded, 20 fixes apart):
+    4 stale rows (the fix's position again, halfway to the next: a frozen
+    receiver), 2 runs of 2 such rows, 3 rows stamped with the fix's time
+    carrying the next fix's position, 3 exact copies of a fix, when the GPX
+    is replayed by trajreplay (--rate 10: every stamp on the output grid,
+    --start-slack 8), then: exactly the bad rows but the copies are refused,
+    each reported at its trkpt line with its reason (stale, same_time), the
+    copies counted as duplicates; --summary's accepted is the number of good
+    fixes gpsbabel reads; and the output passes through every good fix, at
+    the tick of its time, as gpsbabel reads it (pyproj's ENU) to within 1e-5
+    m (a fix left out is missed by metres), and stops at rest on the last
+    one.  Not yet kept: with 1.5 m and 0.2 s (or 3 m) of jitter, visnjan's
+    third fix (1 m up and 4.6 m across in 0.8 s, right after the 15 s first
+    interval at 0.5 m/s) is refused for speed: the learned limit there is
+    still its 5 m/s floor (lib/engine/accept.h)."""
+    path, injected, ndup, kept = build_gpx(tmp)
+    ref = gpsbabel_points(path, tmp, "faults")
+    refused = {l for l, k in injected.items() if GPX_REASONS[k]}
+    label = "visnjan.gpx with faults"
+    sp, s, p = tr.replay(path, ["--rate", "10"] + SLACK8, tmp, "gpx-faults")
+    reported = {}
+    for line in p.stderr.splitlines():
+        if ": rejected (" in line:
+            where, why = line.split(": rejected (")
+            reported[int(where.rsplit(":", 1)[1])] = why.rstrip(")")
+    print(f"{label}: injected " + ", ".join(f"{injected[l]}@{l}:{reported.get(l)}" for l in sorted(injected)))
+    tr.check(set(reported) == refused, f"{label}: refused lines {sorted(reported)} != {sorted(refused)}")
+    for l in refused:
+        tr.check(reported.get(l) == GPX_REASONS[injected[l]],
+                 f"{label}: line {l} ({injected[l]}): {reported.get(l)}")
+    want = {"accepted": len(kept), "rejected": len(refused), "duplicates": ndup}
+    got = {k: s.get(k) for k in want}
+    tr.check(got == want and len(ref) == len(kept) + len(injected),
+             f"{label}: --summary {got} != {want} (gpsbabel: {len(ref)} trkpts)")
+    lat, lon, ele = (np.array([ref[i][j] for i in kept]) for j in range(3))
+    tk = np.array([iso_s(ref[i][3]) for i in kept]) - iso_s(ref[0][3])
+    ek = tr.enu_pyproj(lat, lon, ele)
+    ts = sp["t_s"]
+    ok = (np.array([x == "streaming" for x in sp["state"]]) & ((sp["flags"] & tr.ENGINE_SP_SCALED) == 0))
+    # hits: the curve at each good fix's time passes through it.  The two
+    # unscaled ticks just before it are on the cubic piece that ends there
+    # (the fix is a knot; 0.1 s apart, the fixes >= 0.8 s): position,
+    # velocity, acceleration and the piece's jerk (acceleration is linear
+    # on it) carried over the last d < 0.1 s give the curve there exactly
+    worst, unhit = 0.0, 0
+    for tf, ef in zip(tk, ek):
+        r = int(np.searchsorted(ts, tf, side="right")) - 1
+        d = tf - ts[r] if r >= 1 else np.inf
+        if r < 1 or not (ok[r] and ok[r - 1]) or not (0 <= d < 0.1 + 1e-9):
+            unhit += 1  # the ramps at rate 0 at the ends, a slow-down (scaled rows)
+            continue
+        jerk = (sp["acc"][r] - sp["acc"][r - 1]) / (ts[r] - ts[r - 1])
+        pred = sp["pos"][r] + sp["vel"][r] * d + sp["acc"][r] * d * d / 2 + jerk * d ** 3 / 6
+        worst = max(worst, float(np.max(np.abs(pred - ef))))
+    tr.check(unhit <= 10, f"{label}: {unhit} good fixes with no unscaled tick just before them")
+    tr.check(worst <= 1e-5, f"{label}: a good fix missed by {worst:g} m")
+    tr.check(np.max(np.abs(sp["pos"][-1] - ek[-1])) < 1e-6, f"{label}: not at rest on the last fix")
+    print(f"{label}: {len(kept)} good fixes kept, the curve through each to {worst:.2g} m "
+          f"({unhit} under the end ramps not checked), {int(s.get('underruns', 0))} underruns")
+
+
 def main():
     if not os.access(tr.TRAJREPLAY, os.X_OK):
         print(f"{tr.TRAJREPLAY} not built")
@@ -488,6 +646,7 @@ def main():
         test_more_faults(tmp)
         test_spike_every_site(tmp)
         test_spike_rides_through(tmp)
+        test_gpx_faults(tmp)
     print(f"test_fault_injection.py: {len(tr.failures)} failure(s)")
     return 1 if tr.failures else 0
 
