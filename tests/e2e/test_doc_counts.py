@@ -10,6 +10,7 @@ per bundled track, what `trajreplay --summary -o FILE TRACK` (default
 settings) reports: waypoints read, accepted, gaps, setpoints, and the CSV's
 size in bytes.  Each row is replayed here and compared exactly.
 """
+import math
 import os
 import re
 import subprocess
@@ -89,6 +90,23 @@ def peak(rows, field, mask=None):
         mag = np.where(mask, mag, 0.0)
     i = int(np.nanargmax(mag))
     return float(mag[i]), float(rows["t_s"][i])
+
+
+def start_lookahead(*opts):
+    """Lookahead in waypoints of trajreplay OPTS on regular input (a 1 Hz circle,
+    100 waypoints): the output starts (lookahead + 1) intervals after the first
+    waypoint (lib/engine/README.md)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        track, out = os.path.join(tmp, "circle.csv"), os.path.join(tmp, "out.csv")
+        with open(track, "w", encoding="utf-8") as f:
+            f.write("t,x,y,z\n" + "".join("%d,%.6f,%.6f,0\n" % (i, 50 * math.cos(i / 20), 50 * math.sin(i / 20))
+                                          for i in range(100)))
+        trajreplay(["-q", "--rate", "10", "-o", out] + list(opts) + [track])
+        with open(out, encoding="utf-8") as f:
+            states = [l.split(",")[12] for l in f.read().split("\n")[1:-1]]
+    start = next(i for i, st in enumerate(states) if st != "waiting")
+    assert start % 10 == 0, start
+    return start // 10 - 1
 
 
 def summary(track, out):
@@ -362,6 +380,34 @@ class EngineReadme(unittest.TestCase):
             rows = replay(RealTracks.F8, *opts)[1]
             first = next(i for i, f in enumerate(rows["flags"]) if f & 2)   # NEW_TRACK: streaming
             self.assertEqual(first / 20, int(want), opts)   # 100 Hz, 5 Hz waypoints: 20 ticks each
+
+
+class Lookahead(unittest.TestCase):
+    def test_fo_table(self):
+        """lib/engine/README.md's F/O table: lookahead (waypoints) and latency at 1 Hz / 5 Hz."""
+        doc = read("lib/engine/README.md")
+        head = doc.index("| F | O | lookahead (waypoints) |")
+        rows = doc[head:doc.index("\n\n", head)].split("\n")[2:]
+        self.assertGreaterEqual(len(rows), 10)
+        for row in rows:
+            f, o, look, lat = [c.strip().strip("*") for c in row.strip("|").split("|")][:4]
+            self.assertEqual(start_lookahead("--fragment", f, "--overlap", o), int(look), row)
+            self.assertEqual(lat, "%d s / %.1f s" % (int(look), int(look) * 0.2), row)
+            if row.startswith("| **"):   # "the bold row today's": the defaults
+                self.assertEqual(start_lookahead(), int(look), row)
+        former = grab(doc, r"The first row is the former default \((\d+) waypoints with its start_slack 8\)")
+        self.assertEqual(start_lookahead("--fragment", "32", "--overlap", "16", "--start-slack", "8"),
+                         int(former))
+
+    def test_spline_readme_smooth(self):
+        """lib/spline/README.md: 'engine defaults, on regular input: 18 waypoints for `cubic`,
+        30 for `smooth` with the default window, 24 with a window of 12'."""
+        cubic, smooth, w, small = grab(read("lib/spline/README.md"), (
+            r"engine defaults, on regular input: (\d+) waypoints for `cubic`, (\d+) for\s+`smooth` "
+            r"with\s+the default window, (\d+) with a window of (\d+)"))
+        self.assertEqual(start_lookahead(), int(cubic))
+        self.assertEqual(start_lookahead("--method", "smooth"), int(smooth))
+        self.assertEqual(start_lookahead("--method", "smooth", "--smooth-window", small), int(w))
 
 
 if __name__ == "__main__":
