@@ -410,5 +410,31 @@ class Lookahead(unittest.TestCase):
         self.assertEqual(start_lookahead("--method", "smooth", "--smooth-window", small), int(w))
 
 
+class BusLoad(unittest.TestCase):
+    def test_protocol_table(self):
+        """config/PROTOCOL.md's bus-load table is what `bench_can_busload` computes
+        (the product's estimate, lib/proto/canproto.h), as the doc rounds it."""
+        doc = read("config/PROTOCOL.md")
+        head = doc.index("| configuration | 125k | 250k | 500k | 1M |")
+        rows = doc[head:doc.index("\n\n", head)].split("\n")[2:]
+        self.assertGreaterEqual(len(rows), 4)
+        r = subprocess.run([os.path.join(BUILD, "tests", "bench_can_busload")], capture_output=True,
+                           text=True, check=True)
+        bench = {}
+        for line in r.stdout.split("\n"):
+            m = re.match(r"(\S.*?)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)$", line)
+            if m:
+                bench[m.group(1)] = [float(x) for x in m.groups()[1:]]
+        for row in rows:
+            cells = [c.strip() for c in row.strip("|").split("|")]
+            name = cells[0].replace("×", "x")
+            self.assertIn(name, bench, row)
+            for shown, value in zip(cells[1:], bench[name]):
+                shown = shown.strip("*% ")
+                unit = 10 ** -len(shown.split(".")[1]) if "." in shown else 1
+                # the bench prints 0.1 %: the doc's rounding of it, within its half unit
+                self.assertLessEqual(abs(float(shown) - value), unit / 2 + 0.05, row)
+
+
 if __name__ == "__main__":
     unittest.main(argv=sys.argv[:1])
