@@ -436,5 +436,30 @@ class BusLoad(unittest.TestCase):
                 self.assertLessEqual(abs(float(shown) - value), unit / 2 + 0.05, row)
 
 
+class OracleFigures(unittest.TestCase):
+    """daemon/README.md's figures that an oracle test prints: the test's own run."""
+
+    def test_gpsbabel_rounding(self):
+        """'(worst 0.926 m north against the 0.932 m bound of 0.0005' rounding)'."""
+        worst, bound = grab(read("daemon/README.md"), r"\(worst ([\d.]+) m north against the ([\d.]+) m bound")
+        r = subprocess.run([os.path.join(BUILD, "tests", "test_track_logs")], cwd=ROOT,
+                           capture_output=True, text=True, check=True)
+        got = re.findall(r"\|d north\| ([\d.]+) m \(([\d.]+)\)", r.stdout + r.stderr)
+        self.assertEqual(len(got), 2, r.stdout + r.stderr)   # NMEA and IGC
+        self.assertEqual(max(got), (worst, bound))
+
+    def test_pyproj(self):
+        """'Compared with pyproj over 2400 points up to 200 km from the origin, the largest
+        difference is 4e-9 m.'"""
+        n, worst = grab(read("daemon/README.md"), r"Compared with pyproj over (\d+) points up to\s+200 km "
+                                                  r"from the origin, the largest difference is (\S+) m\.")
+        r = subprocess.run([sys.executable, os.path.join(ROOT, "tests", "oracle", "test_geo.py")],
+                           capture_output=True, text=True, check=True, env=dict(os.environ, BUILD=BUILD))
+        got_n, got = grab(r.stdout + r.stderr, r"test_geo.py: (\d+) ENU points \+ ECEF points, "
+                                               r"worst difference to pyproj (\S+) m")
+        self.assertEqual(got_n, n)
+        self.assertEqual(float("%.0e" % float(got)), float(worst))
+
+
 if __name__ == "__main__":
     unittest.main(argv=sys.argv[:1])
