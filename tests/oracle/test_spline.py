@@ -365,6 +365,7 @@ def test_real_tracks():
     every waypoint is hit (b: 1e-9 of the extent), the fragments stay within the
     bound of one global solve, nothing is NaN, the velocity is continuous at
     the joins for (b); the velocity jumps of (a) are printed (lib/engine/README.md)."""
+    measured = {}
     for name in ("gpxgo_visnjan.csv", "gpxpy_cerknicko-jezero.csv", "n2k_furuno_figure8_src52.csv"):
         t, xyz = load_track(name)
         ext = np.ptp(xyz, axis=0).max()
@@ -404,6 +405,51 @@ def test_real_tracks():
               % (name, ja.max(), np.median(ja), jb.max(), vmax))
         if name.startswith("gpxgo"):
             check(ja.max() > 1e3 * max(jb.max(), 1e-12), "visnjan: (a) jumps dwarf (b)'s")
+        a64 = engine_curve(BSPLINE, UNIFORM, NATURAL, 64, 32, t, xyz)
+        miss64 = max(np.abs(seg_start(a64) - xyz[:-1]).max(), np.abs(seg_end(a64) - xyz[1:]).max())
+        measured[name.split(".")[0]] = dict(ja=ja.max(), ja_med=np.median(ja), jb=jb.max(), vmax=vmax,
+                                            err_rel=err / ext, missa=missa, missa_rel=missa / ext,
+                                            miss64_rel=miss64 / ext, missag_rel=missag / ext)
+    doc_is_this_run(measured)
+
+
+def doc_is_this_run(m):
+    """lib/engine/README.md's figures of the real tracks are this run's, as the
+    doc rounds them (issue 14: no stale numbers)."""
+    import re
+    with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "lib", "engine",
+                           "README.md"), encoding="utf-8") as f:
+        doc = " ".join(f.read().split())
+
+    def same(shown, value, what):
+        num = re.match(r"[\d.]+(e-?\d+)?", shown).group(0)
+        mant = num.split("e")[0]
+        d = len(mant.split(".")[1]) if "." in mant else 0
+        got = ("%.*e" % (d, value)) if "e" in num else ("%.*f" % (d, value))
+        check(float(got) == float(num), "lib/engine/README.md %s: %s, the run gives %.3g" % (what, shown, value))
+
+    rows = {"gpxgo_visnjan": "| gpxgo_visnjan (", "gpxpy_cerknicko-jezero": "| gpxpy_cerknicko-jezero (",
+            "n2k_furuno_figure8_src52": "| n2k figure-8 ("}
+    for name, start in rows.items():
+        row = doc[doc.index(start):].split(" | ", 1)[1].split(" |")[:3]
+        ja, med = row[0].split(" / ")
+        for shown, key in ((ja, "ja"), (med, "ja_med"), (row[1], "jb"), (row[2], "vmax")):
+            same(shown.strip(), m[name][key], "velocity-jump table %s %s" % (name, key))
+    cer, vis, f8 = re.search(r"error decays more slowly near the jumps: (\S+) of the extent on cerknicko, "
+                             r"(\S+) on visnjan, (\S+) on the figure-8", doc).groups()
+    for shown, name in ((cer, "gpxpy_cerknicko-jezero"), (vis, "gpxgo_visnjan"), (f8, "n2k_furuno_figure8_src52")):
+        same(shown, m[name]["err_rel"], "real-track error " + name)
+    up, cer, vis, f8, g64, gg = re.search(
+        r"misses waypoints near junctions by up to (\S+) of the extent at F=32/O=16 \((\S+ \S+) on "
+        r"cerknicko, (\S+ \S+) on visnjan, (\S+ \S+) on the figure-8\), within 1e-9 of the extent from "
+        r"F=48/O=24 on \(tested on all three tracks; (\S+) at 64/32\); the global \(a\) hits them to "
+        r"(\S+)\.", doc).groups()
+    same(up, max(v["missa_rel"] for v in m.values()), "(a) misses, of the extent")
+    scale = {"cm": 1e-2, "mm": 1e-3, "µm": 1e-6}
+    for shown, name in ((cer, "gpxpy_cerknicko-jezero"), (vis, "gpxgo_visnjan"), (f8, "n2k_furuno_figure8_src52")):
+        same(shown, m[name]["missa"] / scale[shown.split()[1]], "(a) misses " + name)
+    same(g64, max(v["miss64_rel"] for v in m.values()), "(a) misses at 64/32")
+    same(gg, max(v["missag_rel"] for v in m.values()), "(a) global misses")
 
 
 if __name__ == "__main__":
