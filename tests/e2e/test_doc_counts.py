@@ -135,6 +135,7 @@ class DocCounts(unittest.TestCase):
         import numpy as np
         with open(os.path.join(ROOT, "lib", "spline", "README.md"), encoding="utf-8") as f:
             doc = f.read()
+        runs = {}
         with tempfile.TemporaryDirectory() as tmp:
             for method, label in (("cubic", "cubic (exact)"), ("smooth", "smooth (")):
                 row = next(l for l in doc.split("\n") if l.startswith("| " + label))
@@ -150,6 +151,37 @@ class DocCounts(unittest.TestCase):
                        round(float(np.nanpercentile(v, 99)), 2), round(float(np.nanpercentile(a, 99)), 2),
                        round(float(np.nanmax(a)), 2)]
                 self.assertEqual(got, want, "lib/spline/README.md's %s row is stale" % method)
+                runs[method] = d
+        # "At the fixes' own times the smoothed curve is a median 2.5 m from the fix (95 %: 7.4 m,
+        # max 12.8 m)": the fixes are where the exact cubic passes at their times
+        med, p95, worst = grab(doc, r"the smoothed curve is a median (\S+) m from the fix \(95 %:\s+(\S+) m, "
+                                    r"max (\S+) m\)")
+        fixes = np.genfromtxt(os.path.join(ROOT, "tests", "data", "gpxgo_visnjan.csv"), delimiter=",",
+                              names=True)["t_s"]
+
+        def at_fixes(d):
+            d = d[np.isfinite(d["x_m"])]
+            d = d[np.r_[True, np.diff(d["t_s"]) > 0]]
+            return np.c_[np.interp(fixes, d["t_s"], d["x_m"]), np.interp(fixes, d["t_s"], d["y_m"])]
+        dist = np.linalg.norm(at_fixes(runs["smooth"]) - at_fixes(runs["cubic"]), axis=1)
+        self.assertEqual(["%.1f" % x for x in (np.median(dist), np.percentile(dist, 95), dist.max())],
+                         [med, p95, worst], "lib/spline/README.md's distances to the fixes are stale")
+
+    def test_lsq_demo(self):
+        """lib/spline/README.md's table of tests/pictures/make_pictures.py's least-squares demo
+        (the library's cspline and lsq on its seeded track; the pictures are not written)."""
+        doc = read("lib/spline/README.md")
+        want = [re.findall(r"\| ([\d.]+) m", l) for l in doc.split("\n")
+                if l.startswith("| exact cubic spline through every fix |")
+                or l.startswith("| least-squares cubic B-spline, 14 control points")]
+        self.assertEqual([len(w) for w in want], [3, 3])
+        sys.path.insert(0, os.path.join(ROOT, "tests", "pictures"))
+        os.environ.setdefault("BUILD", BUILD)
+        import make_pictures
+        make_pictures.Svg.save = lambda self, name: None
+        se, de, re_, ss, ds, rs = make_pictures.pic_lsq()
+        got = [["%.1f" % se, "%.2f" % de, "%.2f" % re_], ["%.1f" % ss, "%.2f" % ds, "%.2f" % rs]]
+        self.assertEqual(got, want)
 
 
 class DaemonReadme(unittest.TestCase):
