@@ -536,6 +536,17 @@ static int repeats_c(accept_t *a, unsigned q)
     return a->cfg.stale && q != a->pend[0] && pair_dist(a, a->pend[0], q) <= ACCEPT_STALE_POS_M;
 }
 
+/* 1 if c failed the anchor on speed alone while the learned limit rests on
+ * fewer than ACCEPT_PACE_CHORDS kept intervals (at the start of a track:
+ * its floor, or a slow first interval's pace) and the window is not full:
+ * GNSS noise over a short interval may pass for speed then, so c waits for
+ * the full window, whose chords give the pace
+ * (tests/oracle/test_fault_injection.py test_gpx_faults) */
+static int thin_pace(accept_t *a, int r)
+{
+    return r == ENGINE_ESPEED && a->cfg.learned && a->nhist < ACCEPT_PACE_CHORDS && !a->full;
+}
+
 /*
  * 1 if a waypoint held after c continues the anchor (a chain skipping c
  * exists): c, which does not follow the anchor, is then dropped whatever
@@ -851,7 +862,7 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
     /* verdicts the full window would give, as soon as they are certain: a
      * bad fix must not hold the good ones around it for a whole window (the
      * output draws on its start slack meanwhile) */
-    if (r != 0 && continues_anchor(a, pre, vlim)) {
+    if (r != 0 && !thin_pace(a, r) && continues_anchor(a, pre, vlim)) {
         pop(a, v, ACCEPT_DROP, drop_reason(a, pre, vlim, r));
         return 1;
     }

@@ -51,7 +51,9 @@
  * A clean stretch is decided as soon as c and the waypoint after it
  * (ACCEPT_LAG) form a consistent chain with the anchor.  Otherwise the
  * verdict comes as soon as the full window's is certain: c that does not
- * follow the anchor is dropped once a later waypoint does; c that follows
+ * follow the anchor is dropped once a later waypoint does (but for its
+ * speed alone with a learned limit from fewer than ACCEPT_PACE_CHORDS kept
+ * intervals, maybe still its floor: then by the full window); c that follows
  * it is kept once a later waypoint continues it past waypoints that cannot
  * take its place (they do not follow the anchor, or repeat c's position),
  * or once the longest chain through c among the waypoints held is longer

@@ -556,7 +556,9 @@ static inline int aref_decide(aref_t *a, int closing, accept_verdict_t *v)
     /* verdicts the full window would give, as soon as they are certain: a
      * bad fix must not hold the good ones around it for a whole window (the
      * output draws on its start slack meanwhile) */
-    if (r != 0 && aref_continues_anchor(a, pre, vlim)) {
+    if (r != 0 &&
+        !(r == ENGINE_ESPEED && a->cfg.learned && a->nhist < ACCEPT_PACE_CHORDS && !full) &&
+        aref_continues_anchor(a, pre, vlim)) {
         aref_pop(a, v, ACCEPT_DROP, aref_drop_reason(a, pre, vlim, r));
         return 1;
     }
