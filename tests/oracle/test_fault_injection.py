@@ -488,6 +488,41 @@ def test_spike_rides_through(tmp):
               f"clean {int(s0.get('underruns'))} underruns")
 
 
+def test_spike_first_interval(tmp):
+    """Given visnjan (tests/data) with one 300 m spike before its first fix
+    (1 s before) or in its first interval (at 7.5 s of 0..15 s: nothing kept
+    yet, so the learned limit has no recent speed, only the window's
+    chords), when replayed (--rate 10, the defaults otherwise), then the
+    spike alone is refused (reported at its line, for its speed), every
+    good fix is kept and the output runs no faster than the clean replay
+    (within 1 %).  On the old code the spike in the first interval set its
+    own limit (its two chords the lower median of the first window's two):
+    kept, streamed at 58 m/s (tests/unit/test_accept.c
+    test_spike_before_first_interval on synthetic tracks)."""
+    t, lat, lon, alt = tr.read_track(tr.VISNJAN_CSV)
+    rows0 = list(zip(t, lat, lon, alt))
+    args = ["--rate", "10"]
+    sp0, s0 = ride_replay(tmp, rows0, "first-clean", args)
+    north = SPIKE_M / M_PER_DEG_LAT
+    for label, at, spike in (("before the first fix", 0, (t[0] - 1.0, lat[0] + north, lon[0], alt[0])),
+                             ("in the first interval", 1, ((t[0] + t[1]) / 2, (lat[0] + lat[1]) / 2 + north,
+                                                           (lon[0] + lon[1]) / 2, alt[0]))):
+        rows = rows0[:at] + [spike] + rows0[at:]
+        path = os.path.join(tmp, "first.csv")
+        with open(path, "w") as f:
+            f.write("t_s,lat_deg,lon_deg,alt_m\n")
+            for r in rows:
+                f.write("%.3f,%.9f,%.9f,%.3f\n" % r)
+        sp, s, p = tr.replay(path, args, tmp, "first-out")
+        label = f"visnjan, a spike {label}"
+        tr.check(f"first.csv:{at + 2}: rejected (speed)" in p.stderr,
+                 f"{label}: reported {[x for x in p.stderr.splitlines() if 'rejected (' in x]}")
+        tr.check(s.get("rejected") == 1 and s.get("accepted") == len(rows0),
+                 f"{label}: rejected {s.get('rejected')} accepted {s.get('accepted')} of {len(rows0)}")
+        tr.check(s.get("max_speed_m_s") <= 1.01 * s0.get("max_speed_m_s"),
+                 f"{label}: streams at {s.get('max_speed_m_s')} m/s (clean {s0.get('max_speed_m_s')})")
+
+
 # GPX faults on the visnjan walk (tests/data/gpxgo_visnjan.gpx): its fixes
 # as gpsbabel reads them, jittered (the good fixes), with bad rows between
 # them.  kind -> the reason trajreplay must give (None: a duplicate, counted
@@ -648,6 +683,7 @@ def main():
         test_more_faults(tmp)
         test_spike_every_site(tmp)
         test_spike_rides_through(tmp)
+        test_spike_first_interval(tmp)
         test_gpx_faults(tmp)
     print(f"test_fault_injection.py: {len(tr.failures)} failure(s)")
     return 1 if tr.failures else 0
