@@ -595,6 +595,9 @@ static unsigned without_repeats(accept_t *a, const unsigned char *nd, unsigned n
     return m;
 }
 
+static void longest_both(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre,
+                         double vlim, unsigned best[2], double cost[2]);
+
 /*
  * 1 if c (which follows the anchor) is continued by a later waypoint held
  * and the longest chain through c is longer than every chain that skips
@@ -608,8 +611,14 @@ static unsigned without_repeats(accept_t *a, const unsigned char *nd, unsigned n
 static int outvotes_held(accept_t *a, const unsigned char *nd, unsigned pre, double vlim)
 {
     unsigned char nr[ACCEPT_WINDOW_MAX + 1];
-    unsigned n = a->npend, m = without_repeats(a, nd, n, nr);
-    unsigned lw = longest(a, nd, n + 1, pre, 1, 1, vlim, 0, NULL);
+    unsigned n = a->npend, m = without_repeats(a, nd, n, nr), lw;
+    if (m == n + 1) { /* no repeats of c: both searches in one pass */
+        unsigned l[2];
+        double cl[2];
+        longest_both(a, nd, m, pre, vlim, l, cl);
+        return l[0] >= 3 && l[0] > l[1];
+    }
+    lw = longest(a, nd, n + 1, pre, 1, 1, vlim, 0, NULL);
     return lw >= 3 && lw > longest(a, nr, m, pre, 2, m - 1, vlim, 0, NULL);
 }
 
