@@ -493,5 +493,104 @@ class OracleFigures(unittest.TestCase):
         self.assertEqual(float("%.0e" % float(got)), float(worst))
 
 
+_UNITS = {}
+
+
+def setUpModule():
+    # test_clock simulates 24 h (seconds): started now, it runs beside the replays
+    unit_start("test_clock")
+
+
+def unit_start(name):
+    if name not in _UNITS:
+        _UNITS[name] = subprocess.Popen([os.path.join(BUILD, "tests", name)], cwd=ROOT, text=True,
+                                        stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+
+
+def unit_output(name):
+    """What the unit test build/tests/NAME prints (its figures), run once per process."""
+    unit_start(name)
+    if name not in _RUNS:
+        out = _UNITS[name].communicate()[0]
+        assert _UNITS[name].returncode == 0, out
+        _RUNS[name] = out
+    return _RUNS[name]
+
+
+def flat(path):
+    return " ".join(read(path).split())
+
+
+class UnitTestFigures(unittest.TestCase):
+    """lib/engine/TIMESCALE.md, CLOCK.md and README.md quote what the unit tests print:
+    each figure, as the doc rounds it, is that run's."""
+
+    def shown(self, doc_value, run_value, what):
+        decimals = len(doc_value.split(".")[1]) if "." in doc_value else 0
+        self.assertEqual("%.*f" % (decimals, float(run_value)), doc_value, what)
+
+    def test_timescale(self):
+        doc = flat("lib/engine/TIMESCALE.md")
+        out = unit_output("test_timescale")
+        acc, jerk = grab(doc, r"`build/tests/test_timescale`: worst tick (\S+) of the acceleration bound, "
+                              r"(\S+) of the jerk bound\)")
+        got = grab(out, r"worst dv/T (\S+) of the accel limit, da/T (\S+) of the jerk limit")
+        self.shown(acc, got[0], "random stalls, acceleration")
+        self.shown(jerk, got[1], "random stalls, jerk")
+        both = grab(doc, r"on every tick \(worst (\S+) of both: the limits are reached")
+        for v in grab(out, r"straight line, random overrides: worst \|da\| (\S+) of j T, \|dv\| (\S+) of a T"):
+            self.shown(both, v, "straight line")
+        self.shown(grab(doc, r"worst d is (\S+) v·T beyond v²/\(2a\)"),
+                   grab(out, r"beyond v\^2/\(2a\) at most (\S+) v T"), "stop distance")
+
+    def test_property_outputs(self):
+        doc = flat("lib/engine/TIMESCALE.md")
+        out = unit_output("test_property_outputs")
+        n, step, dv, fd, da, third = grab(doc, (
+            r"over (\d+) random sequences of a real-time sender.*?`build/tests/test_property_outputs`: worst "
+            r"(\S+) of the speed bound, (\S+) of the velocity bound, (\S+) by finite differences, (\S+) of "
+            r"the jerk bound in Δacceleration, (\S+) by third differences"))
+        got = grab(out, r"(\d+) random sequences, .*? worst ratios to the limits: step (\S+), dv (\S+), "
+                        r"finite-difference dv (\S+), da (\S+), CSV jerk by third differences (\S+) ")
+        self.assertEqual(n, got[0])
+        for want, run, what in zip((step, dv, fd, da, third), got[1:], ("step", "dv", "fd", "da", "third")):
+            self.shown(want, run, what)
+        self.shown(grab(flat("lib/engine/README.md"), r"`build/tests/test_property_outputs`: worst tick "
+                                                      r"(\S+) of the jerk bound"), got[4], "README da")
+
+    def test_speed_cap(self):
+        curve, out_v, cap = grab(flat("lib/engine/TIMESCALE.md"), r"`build/tests/test_engine`: curve (\S+) m/s, "
+                                                                  r"output at most (\S+) m/s, cap (\S+) m/s")
+        got = grab(unit_output("test_engine"), r"speed cap: curve (\S+) m/s, output (\S+) m/s \(cap (\S+)\)")
+        for want, run in zip((curve, out_v, cap), got):
+            self.shown(want, run, "speed cap")
+
+    def test_clock(self):
+        doc = flat("lib/engine/CLOCK.md")
+        out = unit_output("test_clock")
+        self.shown(grab(doc, r"100 ppm is estimated as (\S+) ppm"),
+                   grab(out, r"eps \+100.0 ppm: estimate \+(\S+) ppm"), "drift")
+        lag, lock = grab(doc, r"fall up to (\S+) s behind and are both locked (\S+) s after the start")
+        for run_lag, run_lock in re.findall(r"lag up to (\S+) s, both locked (\S+) s later", out):
+            self.shown(lag, run_lag, "24 h lag")
+            self.shown(lock, run_lock, "24 h lock")
+        moved = grab(doc, r"uncorrected, it would have moved by (\S+) s over the 23 hours")
+        for a, b in re.findall(r"\(uncorrected (\S+) -> (\S+)\)", out):
+            self.shown(moved, abs(float(b) - float(a)), "uncorrected margin")
+        lag5, lock5, lag1, lock1, da5, da1 = grab(doc, (
+            r"falls (\S+) s behind and is locked (\S+) s after its start \((\S+) s and (\S+) s with a = 1 "
+            r"m/s², j = 5 m/s³\), its \|Δacceleration\| per tick within (\S+) \((\S+)\) of"))
+        runs = re.findall(r"\|da\| (\S+); by finite.*?lag max (\S+) s, locked (\S+) s after the start", out)
+        self.assertEqual(len(runs), 2)
+        for (da, lag, lock), want in zip(runs, ((da5, lag5, lock5), (da1, lag1, lock1))):
+            for w, r in zip(want, (da, lag, lock)):
+                self.shown(w, r.rstrip(";"), "clocked start")
+        rate, jt = grab(doc, r"the rate peaks at (\S+) for a target of 1.05, \|Δacceleration\| per tick at "
+                             r"most (\S+) j T")
+        got = grab(out, r"stall 20 s: rate max (\S+), .*?\|da\| max (\S+) m/s2 per tick")
+        self.shown(rate, got[0], "catch-up rate")
+        self.shown(jt, float(got[1]) / (50 * 0.02), "catch-up jerk (j = 50 m/s3, T = 20 ms)")
+
+
 if __name__ == "__main__":
     unittest.main(argv=sys.argv[:1])
