@@ -305,6 +305,7 @@ def test_default_accuracy_vs_scipy():
     scale (the documented bound, engine.h) and within max_lookahead."""
     fd, od, la = pick()
     check(la <= 18, "defaults: F=%d O=%d, lookahead %d <= 18 waypoints" % (fd, od, la))
+    errs, picks = [], {}
     for seed in (11, 12, 13):
         rng = np.random.default_rng(seed)
         n = 1000
@@ -317,9 +318,11 @@ def test_default_accuracy_vs_scipy():
         err = np.abs(evaluate(s, tq) - ref(tq)).max() / ext
         check(len(s) == n - 1 and err <= 1e-8,
               "seed %d defaults F=%d O=%d vs scipy global: %.1e of extent <= 1e-8" % (seed, fd, od, err))
+        errs.append(err)
         scale = np.abs(ref.c[1]).max() / 3.0 * 0.2 ** 2  # max |c2|/3 in the u form (h = 0.2 s)
         for acc, mla in ((1e-3, 12), (1e-5, 16), (1e-9, 24), (1e-11, 30)):
             f, o, la2 = pick(acc, mla)
+            picks[(acc, mla)] = (f, o)
             check(la2 > 0 and la2 <= mla and 2 * RHO ** (o / 2) <= acc,
                   "accuracy %.0e max_lookahead %d: F=%d O=%d lookahead %d" % (acc, mla, f, o, la2))
             s = engine_curve(CUBIC, TIME, REST, f, o, t, xyz)
@@ -331,6 +334,9 @@ def test_default_accuracy_vs_scipy():
 
 
 # ---------------------------------------------------------------------------
+    defaults_doc_is_this_run(fd, od, la, errs, picks)
+
+
 def load_track(name):
     """Test-only local projection (equirectangular about the first point), and
     the engine's own filtering: drop rows not strictly later than the last kept."""
@@ -411,6 +417,32 @@ def test_real_tracks():
                                             err_rel=err / ext, missa=missa, missa_rel=missa / ext,
                                             miss64_rel=miss64 / ext, missag_rel=missag / ext)
     doc_is_this_run(measured)
+
+
+def defaults_doc_is_this_run(fd, od, la, errs, picks):
+    """lib/engine/README.md's defaults and picks, and tests/bench/RESULTS.md's range of the
+    defaults' error against scipy, are this run's (issue 14: no stale numbers)."""
+    import re
+    here = os.path.dirname(os.path.abspath(__file__))
+    with open(os.path.join(here, "..", "..", "lib", "engine", "README.md"), encoding="utf-8") as f:
+        doc = " ".join(f.read().split())
+    got = re.search(r"max_lookahead 18, give F = (\d+), O = (\d+): (\d+) waypoints of lookahead on "
+                    r"regular input, (\S+) of the extent against one global solve", doc).groups()
+    check((int(got[0]), int(got[1]), int(got[2])) == (fd, od, la) and
+          float(got[3]) == float("%.0e" % np.median(errs)),
+          "lib/engine/README.md defaults: %s, the run F=%d O=%d lookahead %d, %.1e" % (got, fd, od, la,
+                                                                                      np.median(errs)))
+    fo, pairs = re.search(r"(\d+/\d+, \d+/\d+ and \d+/\d+) are what (\(\S+, \d+\), \(\S+, \d+\) and "
+                          r"\(\S+, \d+\)) pick", doc).groups()
+    fo = [tuple(int(x) for x in p.split("/")) for p in re.findall(r"\d+/\d+", fo)]
+    pairs = [(float(a), int(b)) for a, b in re.findall(r"\((\S+), (\d+)\)", pairs)]
+    check([picks.get(p) for p in pairs] == fo, "lib/engine/README.md picks %s for %s, the run %s"
+          % (fo, pairs, [picks.get(p) for p in pairs]))
+    with open(os.path.join(here, "..", "bench", "RESULTS.md"), encoding="utf-8") as f:
+        res = " ".join(f.read().split())
+    lo, hi = re.search(r"\(test_default_accuracy_vs_scipy\) prints (\S+) \.\. (\S+) of the extent", res).groups()
+    check((float(lo), float(hi)) == (float("%.1e" % min(errs)), float("%.1e" % max(errs))),
+          "tests/bench/RESULTS.md: %s .. %s, the run %.1e .. %.1e" % (lo, hi, min(errs), max(errs)))
 
 
 def doc_is_this_run(m):
