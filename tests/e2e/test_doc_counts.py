@@ -529,6 +529,29 @@ class UnitTestFigures(unittest.TestCase):
         decimals = len(doc_value.split(".")[1]) if "." in doc_value else 0
         self.assertEqual("%.*f" % (decimals, float(run_value)), doc_value, what)
 
+    def shown_e(self, doc_value, run_value, what):
+        """doc_value '2.6e-10' is run_value with as many digits."""
+        mant = doc_value.split("e")[0]
+        decimals = len(mant.split(".")[1]) if "." in mant else 0
+        self.assertEqual(float("%.*e" % (decimals, float(run_value))), float(doc_value), what)
+
+    def test_fdiff_drift(self):
+        small, big = grab(flat("lib/engine/README.md"), r"without re-seeding: (\S+) m at 1e3 m, (\S+) m at "
+                                                               r"1e7 m \(test_fdiff.c")
+        got = grab(unit_output("test_fdiff"), r"drift over 600000 steps: pos (\S+) \S+ (\S+) m "
+                                              r"\(\|c0\| 1e3, 5e6, 1e7\)")
+        self.shown_e(small, got[0], "drift at 1e3 m")
+        self.shown_e(big, got[1], "drift at 1e7 m")
+
+    def test_toolkit(self):
+        doc = flat("lib/spline/README.md")
+        self.shown_e(grab(doc, r"max \\\|r − 1\\\| = \*\*(\S+)\*\*"),
+                     grab(unit_output("test_nurbs"), r"seed circle: max \|radius - 1\| = (\S+) over 1e5 points"),
+                     "NURBS circle")
+        self.shown_e(grab(doc, r"forward differences against direct evaluation \(max difference (\S+)\)"),
+                     grab(unit_output("test_surf"), r"surface forward differences: max \|fd - direct\| = (\S+)"),
+                     "surface forward differences")
+
     def test_timescale(self):
         doc = flat("lib/engine/TIMESCALE.md")
         out = unit_output("test_timescale")
