@@ -22,10 +22,11 @@ struct can_logfile {
     size_t n, cap, next;
     int64_t start_ns;
     int64_t now_ns;
-    int64_t epoch_ns; /* added to engine time in output stamps */
-    int out_fd;       /* -1: no output */
-    int out_own;      /* close it at the end (not stdout) */
-    char *obuf;       /* CAN_LOGFILE_OUT_BUF bytes of whole lines, written each cycle */
+    int64_t epoch_ns;   /* added to engine time in output stamps */
+    int out_fd;         /* -1: no output */
+    int out_own;        /* close it at the end (not stdout) */
+    long long out_kept; /* bytes kept in the output file at open, -1: not a regular file */
+    char *obuf;         /* CAN_LOGFILE_OUT_BUF bytes of whole lines, written each cycle */
     size_t olen;
     char ifname[CANDUMP_IFNAME_MAX + 1];
     can_logfile_stats_t st;
@@ -183,8 +184,53 @@ int can_logfile_probe(const char *path, char *why, size_t wl)
     return rc < 0 || read_err || l.n == 0 ? -1 : 0;
 }
 
-can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const char *ifname,
-                                int64_t start_ns, char *err, size_t errlen)
+/* Bytes after the last newline in the regular file at path of size bytes (the
+ * head of a line a full disk cut), or 0; -1 if none of the last
+ * CAN_LOGFILE_LINE_MAX bytes is a newline (not a candump log's tail). */
+static long long torn_tail(const char *path, long long size)
+{
+    char buf[CAN_LOGFILE_LINE_MAX];
+    size_t n = size < (long long)sizeof buf ? (size_t)size : sizeof buf;
+    int fd = open(path, O_RDONLY | O_CLOEXEC); /* the output fd is write-only */
+    ssize_t got = fd < 0 ? -1 : pread(fd, buf, n, (off_t)(size - (long long)n));
+    if (fd >= 0)
+        close(fd);
+    if (n == 0 || got != (ssize_t)n)
+        return 0;
+    for (size_t i = n; i > 0; i--)
+        if (buf[i - 1] == '\n')
+            return (long long)(n - i);
+    return (long long)n == size ? size : -1;
+}
+
+/* Open out_path ("-": stdout) for the output lines; appending, a torn last
+ * line is cut off first so the next line starts on a line of its own. */
+static int open_out(can_logfile_t *l, const char *out_path, int append, char *err, size_t errlen)
+{
+    struct stat sb;
+    l->out_own = strcmp(out_path, "-") != 0;
+    if (!l->out_own) {
+        l->out_fd = STDOUT_FILENO;
+        return 0;
+    }
+    int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (append ? O_APPEND : O_TRUNC);
+    l->out_fd = open(out_path, flags, 0644);
+    if (l->out_fd < 0 || fstat(l->out_fd, &sb) < 0) {
+        snprintf(err, errlen, "%s: %s", out_path, strerror(errno));
+        return -1;
+    }
+    l->out_kept = S_ISREG(sb.st_mode) ? (long long)sb.st_size : -1;
+    long long tail = l->out_kept > 0 ? torn_tail(out_path, l->out_kept) : 0;
+    if (tail > 0 && ftruncate(l->out_fd, (off_t)(l->out_kept - tail)) == 0) {
+        log_msg(LOG_WARNING, "can: log_out %s: %lld bytes of a torn last line cut off", out_path,
+                tail);
+        l->out_kept -= tail;
+    }
+    return 0;
+}
+
+can_logfile_t *can_logfile_open_mode(const char *in_path, const char *out_path, const char *ifname,
+                                     int64_t start_ns, int append, char *err, size_t errlen)
 {
     can_logfile_t *l = calloc(1, sizeof *l);
     if (!l) {
@@ -193,6 +239,7 @@ can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const
     }
     l->start_ns = start_ns;
     l->out_fd = -1;
+    l->out_kept = -1;
     snprintf(l->ifname, sizeof l->ifname, "%s", ifname && *ifname ? ifname : "can0");
     if (in_path && load(l, in_path, err, errlen) < 0)
         goto fail;
@@ -201,18 +248,24 @@ can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const
             snprintf(err, errlen, "out of memory");
             goto fail;
         }
-        l->out_own = strcmp(out_path, "-") != 0;
-        l->out_fd = l->out_own ? open(out_path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644)
-                               : STDOUT_FILENO;
-        if (l->out_fd < 0) {
-            snprintf(err, errlen, "%s: %s", out_path, strerror(errno));
+        if (open_out(l, out_path, append, err, errlen) < 0)
             goto fail;
-        }
     }
     return l;
 fail:
     can_logfile_close(l);
     return NULL;
+}
+
+can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const char *ifname,
+                                int64_t start_ns, char *err, size_t errlen)
+{
+    return can_logfile_open_mode(in_path, out_path, ifname, start_ns, 0, err, errlen);
+}
+
+long long can_logfile_out_kept(const can_logfile_t *l)
+{
+    return l->out_kept;
 }
 
 void can_logfile_close(can_logfile_t *l)

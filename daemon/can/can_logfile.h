@@ -56,6 +56,18 @@ can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const
                                 int64_t start_ns, char *err, size_t errlen);
 
 /*
+ * The same, and with append set the output file is appended to (O_APPEND)
+ * instead of truncated; a torn last line (no newline at its end, a full
+ * disk) is cut off first, with a warning, so every line stays whole.
+ */
+can_logfile_t *can_logfile_open_mode(const char *in_path, const char *out_path, const char *ifname,
+                                     int64_t start_ns, int append, char *err, size_t errlen);
+
+/* Bytes the output file held after opening it (0 if it was truncated or
+ * empty), -1 if it is not a regular file (stdout, a FIFO, /dev/null). */
+long long can_logfile_out_kept(const can_logfile_t *l);
+
+/*
  * Append the frames of a candump log read from fp to l's input (can_logfile_open
  * does this for in_path; tests and the fuzz target use fmemopen).  name is
  * used in messages.  Returns 0, or -1 with a message in err (out of memory,

@@ -40,6 +40,7 @@ static void cfg_default(void *p)
     c->sync_id = CANPROTO_ID_SYNC_DEFAULT;
     c->status_period_ms = 100;
     c->max_late_ms = -1;
+    c->log_out_truncate = -1;
 }
 
 static int get_id(const cfg_kv_t *kv, uint32_t *out, char *why, size_t wl)
@@ -140,6 +141,14 @@ static int cfg_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
         }
         c->log_time_engine = !strcmp(kv->value, "engine");
         return 0;
+    }
+    if (!strcmp(k, "log_out_truncate")) {
+        c->log_out_truncate = -1;
+        if (!strcmp(kv->value, "auto") ||
+            (rc = cfg_get_bool(kv, &c->log_out_truncate, why, wl)) == 0)
+            return 0;
+        snprintf(why, wl, "expected auto, yes or no, got '%s'", kv->value);
+        return rc;
     }
     if (!strcmp(k, "fd"))
         return cfg_get_bool(kv, &c->fd, why, wl);
@@ -962,15 +971,43 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
     return 0;
 }
 
+/* Why log_out is truncated at this open, or NULL: it is appended to.
+ * auto: truncated when stamps are engine time starting from 0 (a start, not
+ * a reload: engine time goes on across a reload), so a log never goes back
+ * in time; wall stamps go on with the clock, appended. */
+static const char *log_out_truncates(const can_state_t *s)
+{
+    if (s->cfg->log_out_truncate >= 0)
+        return s->cfg->log_out_truncate ? "log_out_truncate = yes" : NULL;
+    return s->cfg->log_time_engine && s->c->now_ns == 0
+               ? "log_time = engine: its stamps start again from 0"
+               : NULL;
+}
+
+static void report_log_out_open(can_state_t *s, const char *why_trunc)
+{
+    long long kept = can_logfile_out_kept(s->log);
+    if (why_trunc)
+        log_msg(LOG_INFO, "can: log_out %s: truncated (%s)", s->cfg->log_out, why_trunc);
+    else if (kept > 0)
+        log_msg(LOG_INFO, "can: log_out %s: appending after the %lld bytes already there",
+                s->cfg->log_out, kept);
+    else if (kept == 0)
+        log_msg(LOG_INFO, "can: log_out %s: appending (it was empty)", s->cfg->log_out);
+}
+
 /* The candump logs if configured, else the socket (a missing or down
  * interface is not an error: the port runs DOWN and keeps reopening). */
 static int open_io(can_state_t *s, const uint32_t *rx_ids, unsigned nrx, char *why, size_t wl)
 {
     const can_cfg_t *cfg = s->cfg;
     if (cfg->log_in[0] || cfg->log_out[0]) {
-        s->log = can_logfile_open(cfg->log_in[0] ? cfg->log_in : NULL,
-                                  cfg->log_out[0] ? cfg->log_out : NULL, cfg->log_ifname, 0, why,
-                                  wl);
+        const char *why_trunc = log_out_truncates(s);
+        s->log = can_logfile_open_mode(cfg->log_in[0] ? cfg->log_in : NULL,
+                                       cfg->log_out[0] ? cfg->log_out : NULL, cfg->log_ifname, 0,
+                                       !why_trunc, why, wl);
+        if (s->log && strcmp(cfg->log_out, "-") && cfg->log_out[0])
+            report_log_out_open(s, why_trunc);
         if (s->log && !cfg->log_time_engine) {
             /* epoch stamps: the wall clock now is the engine's now */
             struct timespec ts;

@@ -36,7 +36,8 @@ typedef struct {
     char log_in[PATH_MAX];
     char log_out[PATH_MAX];
     char log_ifname[16];
-    int log_time_engine; /* [can] log_time = engine: log_out stamps from 0, not epoch */
+    int log_time_engine;  /* [can] log_time = engine: log_out stamps from 0, not epoch */
+    int log_out_truncate; /* [can] log_out_truncate: 1 yes, 0 no (append), -1 auto */
     int fd;
     double bitrate;
     double data_bitrate;

@@ -28,6 +28,12 @@ The real trajd, with faults made by the kernel, observed from outside:
    /dev/full a <4> line names it and the error and trajd exits 74 (it
    exited 0 without a word); log_out = - piped to `head -1` ends trajd with
    141 long before its track's end (it ran the whole track, exit 0).
+8. The CAN output's candump log ([can] log_out) is appended to at a restart
+   and at a reload, with no marker line (python-can's CanutilsLogReader
+   reads the whole file; it raises on any other line) and stamps that never
+   go back; log_out_truncate = yes empties it first, and so does
+   log_time = engine at a start (its stamps start again from 0), not at a
+   reload (engine time goes on).
 Every wait is bounded; the daemon is stopped by pid.
 """
 import errno
@@ -476,6 +482,180 @@ class OutputFaults(unittest.TestCase):
         finally:
             p.send_signal(signal.SIGTERM)
             p.wait(WAIT_S)
+
+
+class CanLogOutAppend(unittest.TestCase):
+    """[can] log_out is appended to at start and at reload (issue 11), with
+    no marker line: python-can's CanutilsLogReader (4.1) raises on any
+    line that is not a frame, so the boundary shows only in the stamps."""
+
+    def setUp(self):
+        self.tmpd = tempfile.TemporaryDirectory()
+        self.tmp = self.tmpd.name
+        self.out = os.path.join(self.tmp, "out.log")
+
+    def tearDown(self):
+        self.tmpd.cleanup()
+
+    def conf(self, extra_can="", n=15, done=True):
+        # speed 1: wall stamps run with the wall clock (speed 20 would put
+        # them ahead of it), so a later run's stamps are later
+        track(os.path.join(self.tmp, "track.csv"), n=n)
+        path = os.path.join(self.tmp, "can.conf")
+        with open(path, "w") as f:
+            f.write("[daemon]\nrate_hz = 100\nspeed = 1\nstatus_interval_s = 0\n"
+                    + ("exit_when_done = yes\n" if done else "") +
+                    "[can]\nlog_out = %s\nmax_load_percent = 0\nmax_late_ms = 0\n%s"
+                    "[object.boat]\ninput = replay\nreplay.track = track.csv\noutput = can\n"
+                    % (self.out, extra_can))
+        return path
+
+    def lines(self):
+        with open(self.out) as f:
+            return f.read().splitlines()
+
+    def stamps(self):
+        """python-can reads the whole file (it raises on a non-frame line);
+        the stamps, one per frame, in file order."""
+        msgs = list(can.CanutilsLogReader(self.out))
+        self.assertEqual(len(msgs), len(self.lines()))
+        return [m.timestamp for m in msgs]
+
+    def assert_non_decreasing(self, ts):
+        back = [(i, a, b) for i, (a, b) in enumerate(zip(ts, ts[1:])) if b < a]
+        self.assertEqual(back, [], "stamps go back in time")
+
+    def run_twice(self, path, path2=None):
+        rc, err = run(path)
+        self.assertEqual(rc, 0, err)
+        first = self.lines()
+        self.assertGreater(len(first), 100, err)   # 1.4 s of SYNC-less setpoints at 100 Hz
+        t_between = time.time()
+        rc, err = run(path2 or path)
+        self.assertEqual(rc, 0, err)
+        return first, t_between, err
+
+    def test_restart_appends(self):
+        # Given a log_out written by one run (wall stamps, the default), when
+        # trajd runs again, then the first run's lines are still there, the
+        # second run's frames follow them (no marker line: python-can reads
+        # the whole file), its stamps start after the restart's wall time,
+        # and no stamp goes back; an info line says the file was appended to.
+        first, t_between, err = self.run_twice(self.conf())
+        both = self.lines()
+        self.assertEqual(both[:len(first)], first)
+        self.assertGreater(len(both), len(first) * 3 // 2)   # a whole second run
+        ts = self.stamps()
+        self.assert_non_decreasing(ts)
+        self.assertLessEqual(ts[len(first) - 1], t_between)
+        self.assertGreaterEqual(ts[len(first)], t_between)
+        self.assertRegex(err, r"can: log_out %s: appending" % re.escape(self.out))
+
+    def test_torn_last_line_cut(self):
+        # Given a log_out whose last line was cut short (a full disk), when
+        # trajd appends to it, then the torn head is cut off (a warning says
+        # so), the whole lines before it are kept, and python-can reads the
+        # file: the next run's first frame is on a line of its own.
+        whole = "(1000000000.000000) can0 123#1122\n"
+        torn = "(1000000000.010000) can0 12"
+        with open(self.out, "w") as f:
+            f.write(whole + torn)
+        rc, err = run(self.conf())
+        self.assertEqual(rc, 0, err)
+        rows = self.lines()
+        self.assertEqual(rows[0] + "\n", whole)
+        self.assertGreater(len(rows), 100)
+        ts = self.stamps()
+        self.assert_non_decreasing(ts)
+        self.assertRegex(err, r"<4>can: log_out \S+: %d bytes of a torn last line cut off"
+                         % len(torn))
+
+    def test_truncate_yes(self):
+        # Given a log_out written by one run, when trajd runs again with
+        # log_out_truncate = yes, then only the second run's frames are left
+        # (every stamp after the restart) and an info line says truncated.
+        first, t_between, err = self.run_twice(self.conf(),
+                                                self.conf("log_out_truncate = yes\n"))
+        ts = self.stamps()
+        self.assertGreater(len(ts), 100)
+        self.assertGreaterEqual(min(ts), t_between)
+        self.assertRegex(err, r"can: log_out %s: truncated" % re.escape(self.out))
+
+    def test_engine_stamps_truncate_by_default(self):
+        # Given log_time = engine (stamps from 0 at each start), when trajd
+        # runs twice, then the file holds one run (stamps from 0, never going
+        # back); with log_out_truncate = no it holds both, and the second
+        # run's stamps start again from 0 (why auto truncates).
+        path = self.conf("log_time = engine\n")
+        first, _, err = self.run_twice(path)
+        ts = self.stamps()
+        self.assert_non_decreasing(ts)
+        self.assertLess(ts[0], 1.0)
+        self.assertLess(len(ts), len(first) * 3 // 2)   # one run, not two
+        self.assertRegex(err, r"can: log_out %s: truncated" % re.escape(self.out))
+        second = self.lines()
+        rc, err = run(self.conf("log_time = engine\nlog_out_truncate = no\n"))
+        self.assertEqual(rc, 0, err)
+        both = self.lines()
+        self.assertEqual(both[:len(second)], second)
+        self.assertGreater(len(both), len(second) * 3 // 2)
+        ts = self.stamps()
+        self.assertLess(ts[len(second)], ts[len(second) - 1])
+
+    def reload_run(self, extra_can=""):
+        """Run trajd on a 40 s track, SIGHUP once the log holds 100 lines;
+        the bytes written before the reload, and stderr."""
+        path = self.conf(extra_can, n=400, done=False)
+        p = subprocess.Popen([TRAJD, "-f", "-c", path], stdin=subprocess.DEVNULL,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        try:
+            lines = mbsim.Lines(p.stderr)
+            self.assertIsNotNone(lines.wait_for("started:", WAIT_S), "".join(lines.all))
+            deadline = time.monotonic() + WAIT_S
+            while len(self.lines()) < 100 and time.monotonic() < deadline:
+                lines.wait_for("\0", 0.1)
+            p.send_signal(signal.SIGSTOP)   # nothing written while we read
+            with open(self.out, "rb") as f:
+                before = f.read()
+            p.send_signal(signal.SIGCONT)
+            p.send_signal(signal.SIGHUP)
+            self.assertIsNotNone(lines.wait_for("reloaded", WAIT_S), "".join(lines.all))
+            n = len(self.lines())
+            while len(self.lines()) < n + 100 and time.monotonic() < deadline:
+                lines.wait_for("\0", 0.1)
+        finally:
+            p.send_signal(signal.SIGTERM)
+            p.wait(WAIT_S)
+        lines.wait_for("\0", WAIT_S)   # to EOF
+        p.stderr.close()
+        return before, "".join(lines.all)
+
+    def test_reload_appends(self):
+        # Given trajd writing log_out, when SIGHUP reloads it (the CAN
+        # transport is closed and reopened), then what was written before is
+        # kept, frames go on after it, python-can reads the whole file and no
+        # stamp goes back.
+        before, err = self.reload_run()
+        with open(self.out, "rb") as f:
+            after = f.read()
+        self.assertGreater(len(before), 0)
+        self.assertEqual(after[:len(before)], before)
+        self.assertGreater(len(after.splitlines()), len(before.splitlines()) + 100)
+        self.assert_non_decreasing(self.stamps())
+        self.assertEqual(len(re.findall(r"can: log_out \S+: appending", err)), 2, err)
+
+    def test_reload_engine_stamps_append(self):
+        # Given log_time = engine, when SIGHUP reloads, then the log is kept
+        # and appended to: engine time goes on across a reload
+        # (daemon/README.md), so the stamps do too.
+        before, err = self.reload_run("log_time = engine\n")
+        with open(self.out, "rb") as f:
+            after = f.read()
+        self.assertEqual(after[:len(before)], before)
+        self.assertGreater(len(after.splitlines()), len(before.splitlines()) + 100)
+        ts = self.stamps()
+        self.assert_non_decreasing(ts)
+        self.assertLess(ts[0], 1.0)
 
 
 if __name__ == "__main__":
