@@ -116,7 +116,7 @@ static inline uint64_t slot_pairs(unsigned s)
  * once for both orders: y -> x has the same v, d and vn bit for bit (both
  * differences change sign, exactly) and c of the other sign, so c is kept
  * as |c| (a chord speed is only asked of a later y) */
-static const accept_pair_t *pair(accept_t *a, unsigned x, unsigned y)
+static inline const accept_pair_t *pair(accept_t *a, unsigned x, unsigned y)
 {
     unsigned ix = pair_index(x, y);
     accept_pair_t *q = &a->pair[ix];
@@ -595,8 +595,40 @@ static unsigned without_repeats(accept_t *a, const unsigned char *nd, unsigned n
     return m;
 }
 
+/* the longest chains from the anchor through c (lw, cost cw) and skipping
+ * it (lo, co) among the waypoints held: longest() both ways, computed once
+ * per verdict (outvotes_held, then decide_full on the same window) */
+typedef struct {
+    int known;
+    unsigned lw, lo;
+    double cw, co;
+} chains_t;
+
 static void longest_both(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre,
                          double vlim, unsigned best[2], double cost[2]);
+
+/* ch, computed first if not known (nd: the anchor and the window, slots) */
+static const chains_t *chains(accept_t *a, const unsigned char *nd, unsigned pre, double vlim,
+                              chains_t *ch)
+{
+    unsigned char nr[ACCEPT_WINDOW_MAX + 1];
+    unsigned n = a->npend, m;
+
+    if (ch->known)
+        return ch;
+    m = without_repeats(a, nd, n, nr);
+    if (m == n + 1) { /* no repeats of c: the same waypoints both ways */
+        unsigned l[2];
+        double cl[2];
+        longest_both(a, nd, m, pre, vlim, l, cl);
+        ch->lw = l[0], ch->cw = cl[0], ch->lo = l[1], ch->co = cl[1];
+    } else {
+        ch->lw = longest(a, nd, n + 1, pre, 1, 1, vlim, 0, &ch->cw); /* through c */
+        ch->lo = longest(a, nr, m, pre, 2, m - 1, vlim, 0, &ch->co); /* skipping c */
+    }
+    ch->known = 1;
+    return ch;
+}
 
 /*
  * 1 if c (which follows the anchor) is continued by a later waypoint held
@@ -608,18 +640,11 @@ static void longest_both(accept_t *a, const unsigned char *nd, unsigned m, unsig
  * for the full window (the output drains its start slack meanwhile:
  * visnjan, tests/oracle/test_fault_injection.py test_spike_rides_through).
  */
-static int outvotes_held(accept_t *a, const unsigned char *nd, unsigned pre, double vlim)
+static int outvotes_held(accept_t *a, const unsigned char *nd, unsigned pre, double vlim,
+                         chains_t *ch)
 {
-    unsigned char nr[ACCEPT_WINDOW_MAX + 1];
-    unsigned n = a->npend, m = without_repeats(a, nd, n, nr), lw;
-    if (m == n + 1) { /* no repeats of c: both searches in one pass */
-        unsigned l[2];
-        double cl[2];
-        longest_both(a, nd, m, pre, vlim, l, cl);
-        return l[0] >= 3 && l[0] > l[1];
-    }
-    lw = longest(a, nd, n + 1, pre, 1, 1, vlim, 0, NULL);
-    return lw >= 3 && lw > longest(a, nr, m, pre, 2, m - 1, vlim, 0, NULL);
+    const chains_t *c = chains(a, nd, pre, vlim, ch);
+    return c->lw >= 3 && c->lw > c->lo;
 }
 
 /*
@@ -707,10 +732,11 @@ static void longest_both(accept_t *a, const unsigned char *nd, unsigned m, unsig
         for (unsigned j = i + 1; j < m; j++) {
             double dt = t[j] - t[i];
             int gap = 0;
-            ok[i][j] = time_test(a, dt, 0, &gap) == 0 &&
-                       !(vlim > 0 && (q[i][j] = pair(a, nd[i], nd[j]))->d > vlim * dt);
-            if (ok[i][j])
+            ok[i][j] = 0;
+            if (time_test(a, dt, 0, &gap) == 0) {
                 q[i][j] = pair(a, nd[i], nd[j]);
+                ok[i][j] = !(vlim > 0 && q[i][j]->d > vlim * dt);
+            }
         }
     best[0] = best[1] = 1;
     cost[0] = cost[1] = 0;
@@ -757,22 +783,13 @@ static void longest_both(accept_t *a, const unsigned char *nd, unsigned m, unsig
 /* an open trajectory, the full window's verdict on c (r: c after the
  * anchor, nd: the anchor and the window, slots) */
 static int decide_full(accept_t *a, int closing, double vlim, unsigned pre, int r,
-                       const unsigned char *nd, accept_verdict_t *v)
+                       const unsigned char *nd, chains_t *ch, accept_verdict_t *v)
 {
-    unsigned n = a->npend, k = a->cfg.confirm, lw, lo;
-    unsigned char nr[ACCEPT_WINDOW_MAX + 1];
-    unsigned m = without_repeats(a, nd, n, nr);
-    double cw, co;
+    unsigned n = a->npend, k = a->cfg.confirm;
+    const chains_t *c = chains(a, nd, pre, vlim, ch);
+    unsigned lw = c->lw, lo = c->lo;
+    double cw = c->cw, co = c->co;
 
-    if (m == n + 1) { /* no repeats of c: the same waypoints both ways */
-        unsigned l[2];
-        double cl[2];
-        longest_both(a, nd, m, pre, vlim, l, cl);
-        lw = l[0], cw = cl[0], lo = l[1], co = cl[1];
-    } else {
-        lw = longest(a, nd, n + 1, pre, 1, 1, vlim, 0, &cw); /* through c */
-        lo = longest(a, nr, m, pre, 2, m - 1, vlim, 0, &co); /* skipping c */
-    }
     /* keep c unless a longer chain skips it, or one as long and smoother
      * (of two fixes that cannot both be right, the one that bends the
      * track less) */
@@ -833,6 +850,7 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
     unsigned pre = a->open && a->have_a0 ? a->a0 : NO_SLOT;
     unsigned n = a->npend, k = a->cfg.confirm;
     int full = closing || n >= a->cfg.window;
+    chains_t ch = {0};
     double vlim;
     int r;
 
@@ -875,11 +893,12 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
         pop(a, v, ACCEPT_DROP, drop_reason(a, pre, vlim, r));
         return 1;
     }
-    if (r == 0 && (taken_past_outliers(a, vlim) || (n >= 3 && outvotes_held(a, nd, pre, vlim)))) {
+    if (r == 0 &&
+        (taken_past_outliers(a, vlim) || (n >= 3 && outvotes_held(a, nd, pre, vlim, &ch)))) {
         pop(a, v, ACCEPT_TAKE, 0);
         return 1;
     }
     if (!full)
         return 0;
-    return decide_full(a, closing, vlim, pre, r, nd, v);
+    return decide_full(a, closing, vlim, pre, r, nd, &ch, v);
 }
