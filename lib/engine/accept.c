@@ -186,11 +186,11 @@ int accept_offer(accept_t *a, const engine_waypoint_t *wp)
  * set the limit that judges it (a 300 m spike between two fixes of a walk
  * passed as its own pace, 100 m/s; before the first kept interval too,
  * test_accept test_spike_before_first_interval) */
-static double window_median_speed(accept_t *a)
+static double window_median_speed(accept_t *a, double floor)
 {
     double v[ACCEPT_WINDOW_MAX];
     unsigned char from[ACCEPT_WINDOW_MAX], to[ACCEPT_WINDOW_MAX];
-    unsigned n = 0, p = a->open ? a->a1 : NO_SLOT, mid;
+    unsigned n = 0, p = a->open ? a->a1 : NO_SLOT, mid, above = 0;
 
     for (unsigned i = 0; i < a->npend; i++) {
         unsigned q = a->pend[i];
@@ -204,13 +204,19 @@ static double window_median_speed(accept_t *a)
     if (!n ||
         ((a->nhist || (!a->full && a->cfg.window > ACCEPT_PACE_CHORDS)) && n < ACCEPT_PACE_CHORDS))
         return 0;
-    for (unsigned i = 0; i < n; i++)
+    for (unsigned i = 0; i < n; i++) {
         v[i] = chord_speed(a, from[i], to[i]);
+        above += v[i] > floor;
+    }
+    /* the caller keeps the larger of floor and the median, which is above
+     * floor only if n - mid chords are: else no need to select it */
+    mid = (n - 1) / 2;
+    if (above < n - mid)
+        return floor;
     /* the lower median, v[mid] of v sorted: with two chords, one of them
      * an outlier's, the smaller one.  The chord whose rank spans mid (as
      * many below it as mid at most, and more up to it): no branch on the
      * values to mispredict, as a sort has */
-    mid = (n - 1) / 2;
     for (unsigned i = 0; i < n; i++) {
         unsigned lt = 0, le = 0;
         for (unsigned j = 0; j < n; j++) {
@@ -236,7 +242,7 @@ double accept_speed_limit(accept_t *a)
 
     if (!a->cfg.learned)
         return cap;
-    vref = max_of(a->vrecent, window_median_speed(a));
+    vref = max_of(a->vrecent, window_median_speed(a, a->vrecent));
     learned = max_of(ACCEPT_LEARN_FLOOR_M_S, ACCEPT_LEARN_FACTOR * vref);
     return cap > 0 ? min_of(cap, learned) : learned;
 }
