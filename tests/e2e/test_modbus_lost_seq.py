@@ -1,0 +1,128 @@
+"""test_modbus_lost_seq.py - one bogus sequence number does not count as
+billions of lost waypoints (issue 11, "Counters mean what they say"), seen
+through the running daemon's Modbus server with pymodbus.
+
+A pymodbus client writes whole waypoint blocks (FC 16, lib/proto/mbmap.h
+MBMAP_H_WP: u32 seq, f64 t, x, y, z) for one object: seq 1..20 on a
+straight line 0.1 s apart, then a waypoint on the same line numbered
+0xFFFFFFFF, then 21..40 with 31 left out (the sender lost one). Wanted,
+read back with pymodbus over Modbus (the object's block):
+  - `lost` (MBMAP_O_LOST) is the one number left out, computed here from
+    the numbers sent: steps of 1 lose nothing, 30 -> 32 loses one. Before
+    the plausible window (daemon/modbus/modbus_server.c count_seq) the step
+    20 -> 0xFFFFFFFF alone added 4 294 967 274 (read in a snapshot taken
+    right after it, before the next write: 0 lost wanted there);
+  - `seq_jumps` (MBMAP_O_SEQ_JUMPS) counts the one number outside the
+    window (read once `last_seq` shows the last number written, after
+    FINISH: the block is a snapshot taken each tick);
+  - every write is answered without an exception (the bogus number is the
+    sender's, the waypoint itself is good).
+"""
+import os
+import signal
+import sys
+import tempfile
+import time
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+import mbsim  # noqa: E402
+from mbsim import M, obj_base  # noqa: E402
+
+from pymodbus.client import ModbusTcpClient  # noqa: E402
+from pymodbus.constants import Endian  # noqa: E402
+from pymodbus.payload import BinaryPayloadBuilder, BinaryPayloadDecoder  # noqa: E402
+
+TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
+WAIT_S = 20
+BOGUS = 0xFFFFFFFF
+
+
+def feed():
+    """(seq, t, x, y, z) in the order written: 1..20, the bogus one, 21..40 without 31."""
+    out, i = [], 0
+    for seq in list(range(1, 21)) + [BOGUS] + [n for n in range(21, 41) if n != 31]:
+        i += 1
+        t = 0.1 * i
+        out.append((seq, t, 1.0 * t, 0.5 * t, 1.0))
+    return out
+
+
+def expected_lost(seqs):
+    """Waypoints lost by the sender: d - 1 for each step forward d between
+    consecutive plausible numbers (the bogus one is skipped, not a step)."""
+    good = [s for s in seqs if s != BOGUS]
+    return sum(b - a - 1 for a, b in zip(good, good[1:]))
+
+
+class LostSeq(unittest.TestCase):
+    def setUp(self):
+        self.tmpd = tempfile.TemporaryDirectory()
+        conf = os.path.join(self.tmpd.name, "trajd.conf")
+        with open(conf, "w") as f:
+            f.write("[daemon]\nrate_hz = 100\nstatus_interval_s = 0\nstop_timeout_s = 1\n"
+                    "[modbus]\naddress = 127.0.0.1\nport = 0\nwrites = yes\nsystemd_socket = no\n"
+                    "[object.fed]\ninput = modbus\noutput = csv\ncsv.path = %s\n"
+                    % os.path.join(self.tmpd.name, "fed.csv"))
+        self.p, self.lines, self.port = mbsim.start_trajd([TRAJD, "-f", "-c", conf], WAIT_S)
+
+    def tearDown(self):
+        self.p.send_signal(signal.SIGTERM)
+        self.p.wait(WAIT_S)
+        self.lines.wait_for("\0", 1)
+        self.p.stderr.close()
+        self.tmpd.cleanup()
+
+    def u32(self, c, reg, base=None):
+        rr = c.read_input_registers(obj_base(0) + reg if base is None else reg, 2, slave=1)
+        self.assertFalse(rr.isError(), rr)
+        d = BinaryPayloadDecoder.fromRegisters(rr.registers, byteorder=Endian.Big,
+                                               wordorder=Endian.Big)
+        return d.decode_32bit_uint()
+
+    def test_bogus_seq_is_not_lost(self):
+        c = ModbusTcpClient("127.0.0.1", port=self.port, timeout=WAIT_S)
+        self.assertTrue(c.connect())
+        try:
+            wps = feed()
+            deadline = time.monotonic() + WAIT_S
+            for seq, t, x, y, z in wps:
+                b = BinaryPayloadBuilder(byteorder=Endian.Big, wordorder=Endian.Big)
+                b.add_32bit_uint(seq)
+                for v in (t, x, y, z):
+                    b.add_64bit_float(v)
+                while True:
+                    self.assertLess(time.monotonic(), deadline, "feed too slow")
+                    rq = c.write_registers(obj_base(0) + M["MBMAP_H_WP"], b.to_registers(),
+                                           slave=1)
+                    if not (rq.isError() and rq.exception_code == 6):   # 6: buffer full, retry
+                        break
+                    time.sleep(0.01)
+                self.assertFalse(rq.isError(), "seq %#x: %s" % (seq, rq))
+                if seq == BOGUS:
+                    # a snapshot taken after it: lost counted nothing (the
+                    # old count read 0xFFFFFFFF - 20 - 1 here)
+                    g = self.u32(c, M["MBMAP_D_GEN"], base=0)
+                    while self.u32(c, M["MBMAP_D_GEN"], base=0) < g + 2:
+                        self.assertLess(time.monotonic(), deadline, "no new snapshot")
+                        time.sleep(0.005)
+                    self.assertEqual(self.u32(c, M["MBMAP_O_LOST"]), 0)
+            # end of input, so the engine judges the last waypoint too; the
+            # block is a snapshot taken each tick: wait for one that holds it
+            rq = c.write_register(obj_base(0) + M["MBMAP_H_COMMAND"], M["MBMAP_CMD_FINISH"],
+                                  slave=1)
+            self.assertFalse(rq.isError(), rq)
+            while self.u32(c, M["MBMAP_O_LAST_SEQ"]) != wps[-1][0]:
+                self.assertLess(time.monotonic(), deadline, "last_seq never came")
+                time.sleep(0.01)
+            want = expected_lost([w[0] for w in wps])
+            self.assertEqual(want, 1)
+            self.assertEqual(self.u32(c, M["MBMAP_O_LOST"]), want)
+            self.assertEqual(self.u32(c, M["MBMAP_O_SEQ_JUMPS"]), 1)
+            self.assertEqual(self.u32(c, M["MBMAP_O_LAST_SEQ"]), wps[-1][0])
+        finally:
+            c.close()
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
