@@ -234,6 +234,22 @@ class DaemonReadme(unittest.TestCase):
                                                         read("lib/motion.h")))
         self.assertEqual(listed, defined)
 
+    def test_waypoint_bytes(self):
+        """'the waypoints, which take 44 bytes each (`engine_waypoint_t` and its line number;
+        a geographic track keeps 24 more': lib/motion.h's struct as the C ABI lays it out."""
+        import ctypes
+        each, geo = grab(read("daemon/README.md"), r"the waypoints, which take (\d+) bytes each\s+\("
+                                                   r"`engine_waypoint_t` and its line number; a geographic "
+                                                   r"track keeps (\d+) more")
+        fields = grab(read("lib/motion.h"), r"typedef struct \{\n(    double t_s;.*?)\} engine_waypoint_t;")
+        self.assertEqual(re.findall(r"^    (\w+) (\w+)", fields, re.M),
+                         [("double", "t_s"), ("double", "pos_m"), ("uint32_t", "seq")])
+
+        class Waypoint(ctypes.Structure):
+            _fields_ = [("t_s", ctypes.c_double), ("pos_m", ctypes.c_double * 3), ("seq", ctypes.c_uint32)]
+        self.assertEqual(ctypes.sizeof(Waypoint) + 4, int(each))   # + uint32_t line
+        self.assertEqual(3 * 8, int(geo))                          # double (*geo)[3]
+
     def test_uniform_irregular_example(self):
         """'... --param uniform ... gpxgo_visnjan.csv` reports 202 such
         waypoints, the worst 15x at t = 15 s'."""
@@ -427,6 +443,10 @@ class Lookahead(unittest.TestCase):
             self.assertEqual(lat, "%d s / %.1f s" % (int(look), int(look) * 0.2), row)
             if row.startswith("| **"):   # "the bold row today's": the defaults
                 self.assertEqual(start_lookahead(), int(look), row)
+        # tests/bench/RESULTS.md repeats two rows: "| 32/16 (former default; ...) | 26 |", "| **28/24 (default)** | **18** |"
+        res = read("tests/bench/RESULTS.md")
+        for f, o, look in re.findall(r"^\| \**(\d+)/(\d+) \(.*?\)\** \| \**(\d+)\** \|", res, re.M):
+            self.assertEqual(start_lookahead("--fragment", f, "--overlap", o), int(look), "RESULTS.md " + f + "/" + o)
         former = grab(doc, r"The first row is the former default \((\d+) waypoints with its start_slack 8\)")
         self.assertEqual(start_lookahead("--fragment", "32", "--overlap", "16", "--start-slack", "8"),
                          int(former))
