@@ -109,6 +109,22 @@ def start_lookahead(*opts):
     return start // 10 - 1
 
 
+def enu(path):
+    """(t, east/north/up) of a lat/lon CSV track about its first fix: pyproj's geodetic -> ECEF,
+    then the local rotation (a missing altitude is 0, as trajreplay reads it)."""
+    import numpy as np
+    from pyproj import Transformer
+    d = np.genfromtxt(path, delimiter=",", names=True)
+    lat, lon, alt = d["lat_deg"], d["lon_deg"], np.nan_to_num(d["alt_m"])
+    x, y, z = Transformer.from_crs("EPSG:4979", "EPSG:4978", always_xy=True).transform(lon, lat, alt)
+    p = np.c_[x, y, z] - [x[0], y[0], z[0]]
+    la, lo = np.radians(lat[0]), np.radians(lon[0])
+    rot = np.array([[-np.sin(lo), np.cos(lo), 0],
+                    [-np.sin(la) * np.cos(lo), -np.sin(la) * np.sin(lo), np.cos(la)],
+                    [np.cos(la) * np.cos(lo), np.cos(la) * np.sin(lo), np.sin(la)]])
+    return d["t_s"], p @ rot.T
+
+
 def summary(track, out):
     r = subprocess.run([os.path.join(BUILD, "bin", "trajreplay"), "--summary", "-q", "-o", out,
                         os.path.join(ROOT, "tests", "data", track)],
@@ -419,6 +435,68 @@ class EngineReadme(unittest.TestCase):
                 m = (rr["t_s"][1:] > 134) & (rr["t_s"][1:] < 137)
                 jerk = np.max(np.abs(np.diff(rr["acc_m_s2"], axis=0)), axis=1)[m].max() / 0.01
                 self.assertEqual(round(jerk, -1), int(shown.replace(" ", "")), name + " jerk")
+
+    def test_jitter_data(self):
+        """'Jitter and outliers': the short intervals, the burst and the implied accelerations,
+        recomputed from the files (ENU by pyproj, about the first fix, as trajreplay frames them),
+        and the unlimited replay's peaks."""
+        import numpy as np
+        doc = flat("lib/engine/README.md")
+        a = doc.index("**Jitter and outliers.**")
+        doc = doc[a:doc.index("**Bound**", a)]
+        burst, step, late0, late1, vis, cer = grab(doc, (
+            r"the figure-8 has two, a late burst (\S+ → \S+ → \S+ → \S+ → \S+) s whose positions are "
+            r"evenly spaced \((\S+) m each: the fixes of 134.8 and 135.0 were stamped (\d+) and (\d+) ms "
+            r"late\); visnjan has (\d+) \(.*?\) and cerknicko (\d+) \("))
+        tracks = {}
+        for name, want in ((RealTracks.F8, 2), (RealTracks.VIS.replace(".gpx", ".csv"), int(vis)),
+                           (RealTracks.CER, int(cer))):
+            t, p = enu(os.path.join(ROOT, "tests", "data", name))
+            h = np.diff(t)
+            short = [i for i in range(len(h)) if h[i] < 0.5 * np.median(h[max(0, i - 8):i + 9])]
+            self.assertEqual(len(short), want, name)
+            tracks[name] = (t, p)
+        t, p = tracks[RealTracks.F8]
+        times = [float(x) for x in burst.split(" → ")]
+        i = int(np.argmin(np.abs(t - times[0])))
+        self.assertEqual(list(t[i:i + 5]), times)
+        for k in range(3):   # the steps of the burst proper
+            self.assertEqual("%.2f" % np.linalg.norm(p[i + k + 1] - p[i + k]), step)
+        self.assertEqual((round((t[i + 1] - 134.8) * 1000), round((t[i + 2] - 135.0) * 1000)),
+                         (int(late0), int(late1)))
+
+        def implied(t, p, i, j, k):
+            v1, v2 = (p[j] - p[i]) / (t[j] - t[i]), (p[k] - p[j]) / (t[k] - t[j])
+            return 2 * np.linalg.norm(v2 - v1) / (t[k] - t[i])
+        f8, vis_a, cer_a, j120, j201 = grab(doc, (
+            r"genuine samples reach (\S+) m/s² \(figure-8, GNSS noise at 5 Hz\), (\S+) \(visnjan, its "
+            r"altitude\), (\S+) \(cerknicko\); the jittered ones (\S+) \(135.120\) and (\S+) \(135.201"))
+        self.assertEqual("%.1f" % implied(t, p, i, i + 1, i + 2), j120)
+        self.assertEqual("%.1f" % implied(t, p, i, i + 1, i + 3), j201)
+        burst_idx = set(range(i + 1, i + 4))   # the three fixes stamped in the burst
+        genuine = max(implied(t, p, k - 2, k - 1, k) for k in range(2, len(t))
+                      if not burst_idx & {k - 2, k - 1, k})
+        self.assertEqual("%.1f" % genuine, f8)
+        t, p = tracks[RealTracks.VIS.replace(".gpx", ".csv")]
+        self.assertEqual("%.1f" % max(implied(t, p, k - 2, k - 1, k) for k in range(2, len(t))), vis_a)
+        # cerknicko: every triple but the one ending on the fix refused after its GPS jump (4565 s)
+        t, p = tracks[RealTracks.CER]
+        self.assertEqual("%.1f" % max(implied(t, p, k - 2, k - 1, k) for k in range(2, len(t))
+                                      if t[k] != 4565.0), cer_a)
+        margin = grab(doc, r"30 keeps a (\S+)× margin over the noisiest genuine sample")
+        self.assertEqual("%.1f" % (30 / genuine), margin)
+        # "(`trajreplay --profile none` at 100 Hz) the figure-8 streams 647 m/s² and 37 890 m/s³
+        # at t = 135.12 (a boat that never exceeds 24.4 m/s² elsewhere)"
+        acc, jerk, at, elsewhere = grab(doc, r"the figure-8 streams (\S+) m/s² and (\d[\d ]*\d) m/s³ at t = "
+                                             r"(\S+) \(a boat that never exceeds (\S+) m/s² elsewhere\)")
+        rows = replay(RealTracks.F8, "--profile", "none")[1]
+        mag = np.linalg.norm(rows["acc_m_s2"], axis=1)
+        k = int(np.nanargmax(mag))
+        self.assertEqual(("%.0f" % mag[k], "%.2f" % rows["t_s"][k]), (acc, at))
+        jr = np.max(np.abs(np.diff(rows["acc_m_s2"], axis=0)), axis=1) / 0.01
+        self.assertEqual(round(float(np.nanmax(jr)), -1), int(jerk.replace(" ", "")))
+        far = (rows["t_s"] < 134) | (rows["t_s"] > 137)
+        self.assertEqual("%.1f" % np.nanmax(mag[far]), elsewhere)
 
     def test_start_lookahead_figure8(self):
         """'the figure-8 boat, up to 9 m/s at 5 Hz: 22 waypoints at 100 Hz instead of 33 before'."""
