@@ -756,6 +756,18 @@ class TestRejectionsLogged(unittest.TestCase):
                 more += n
         self.assertEqual(shown + more, 15, log)
         self.assertGreater(more, 0, log)  # the burst of 12 in one second was cut short
+        # daemon/README.md shows this run's lines (issue 14: no stale numbers); how many a
+        # "more" line counts depends on where the wall-clock seconds fall: its form only
+        with open(os.path.join(REPO, "daemon", "README.md"), encoding="utf-8") as f:
+            doc = f.read()
+        start = doc.index("    object 'boat': bad.csv:")
+        example = doc[start:doc.index("\n\n", start)].split("\n")
+        self.assertEqual(len(example), 3)
+        logged = {l.split("<4>")[-1].replace(os.path.join(tmp, ""), "") for l in log.splitlines()}
+        for l in example[:2]:
+            self.assertIn(l.strip(), logged)
+        self.assertRegex(example[2], r"^    object 'boat': (\d+) more rejected waypoints not shown "
+                                     r"\(backwards \1\)$")
 
 
 if __name__ == "__main__":
