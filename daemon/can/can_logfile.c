@@ -22,11 +22,12 @@ struct can_logfile {
     size_t n, cap, next;
     int64_t start_ns;
     int64_t now_ns;
-    int64_t epoch_ns;   /* added to engine time in output stamps */
-    int out_fd;         /* -1: no output */
-    int out_own;        /* close it at the end (not stdout) */
-    long long out_kept; /* bytes kept in the output file at open, -1: not a regular file */
-    char *obuf;         /* CAN_LOGFILE_OUT_BUF bytes of whole lines, written each cycle */
+    int64_t epoch_ns;    /* added to engine time in output stamps */
+    int out_fd;          /* -1: no output */
+    int out_own;         /* close it at the end (not stdout) */
+    long long out_kept;  /* bytes kept in the output file at open, -1: not a regular file */
+    int64_t out_last_us; /* stamp of its last line kept, INT64_MIN: none */
+    char *obuf;          /* CAN_LOGFILE_OUT_BUF bytes of whole lines, written each cycle */
     size_t olen;
     char ifname[CANDUMP_IFNAME_MAX + 1];
     can_logfile_stats_t st;
@@ -184,23 +185,34 @@ int can_logfile_probe(const char *path, char *why, size_t wl)
     return rc < 0 || read_err || l.n == 0 ? -1 : 0;
 }
 
-/* Bytes after the last newline in the regular file at path of size bytes (the
- * head of a line a full disk cut), or 0; -1 if none of the last
- * CAN_LOGFILE_LINE_MAX bytes is a newline (not a candump log's tail). */
-static long long torn_tail(const char *path, long long size)
+/* The end of the regular file at path (size bytes): *torn = the bytes
+ * after its last newline (the head of a line a full disk cut; 0 if none of
+ * the last CAN_LOGFILE_LINE_MAX bytes of a longer file is a newline: not a
+ * candump log's tail), *last_us = the stamp of its last whole line if that
+ * is a stamped frame, else INT64_MIN. */
+static void read_tail(const char *path, long long size, long long *torn, int64_t *last_us)
 {
     char buf[CAN_LOGFILE_LINE_MAX];
-    size_t n = size < (long long)sizeof buf ? (size_t)size : sizeof buf;
+    size_t n = size < (long long)sizeof buf ? (size_t)size : sizeof buf, end = n;
     int fd = open(path, O_RDONLY | O_CLOEXEC); /* the output fd is write-only */
     ssize_t got = fd < 0 ? -1 : pread(fd, buf, n, (off_t)(size - (long long)n));
+    *torn = 0;
+    *last_us = INT64_MIN;
     if (fd >= 0)
         close(fd);
     if (n == 0 || got != (ssize_t)n)
-        return 0;
-    for (size_t i = n; i > 0; i--)
-        if (buf[i - 1] == '\n')
-            return (long long)(n - i);
-    return (long long)n == size ? size : -1;
+        return;
+    while (end > 0 && buf[end - 1] != '\n')
+        end--;
+    *torn = end > 0 ? (long long)(n - end) : (long long)n == size ? size : 0;
+    if (end == 0)
+        return;
+    buf[end - 1] = '\0'; /* the last whole line, whole if it starts after a newline */
+    char *line = memrchr(buf, '\n', end - 1);
+    candump_line_t cl;
+    if ((line || (long long)n == size) && candump_parse_line(line ? line + 1 : buf, &cl) == 0 &&
+        (line ? line[1] : buf[0]) == '(')
+        *last_us = cl.ts_us;
 }
 
 /* Open out_path ("-": stdout) for the output lines; appending, a torn last
@@ -220,7 +232,9 @@ static int open_out(can_logfile_t *l, const char *out_path, int append, char *er
         return -1;
     }
     l->out_kept = S_ISREG(sb.st_mode) ? (long long)sb.st_size : -1;
-    long long tail = l->out_kept > 0 ? torn_tail(out_path, l->out_kept) : 0;
+    long long tail = 0;
+    if (l->out_kept > 0)
+        read_tail(out_path, l->out_kept, &tail, &l->out_last_us);
     if (tail > 0 && ftruncate(l->out_fd, (off_t)(l->out_kept - tail)) == 0) {
         log_msg(LOG_WARNING, "can: log_out %s: %lld bytes of a torn last line cut off", out_path,
                 tail);
@@ -240,6 +254,7 @@ can_logfile_t *can_logfile_open_mode(const char *in_path, const char *out_path, 
     l->start_ns = start_ns;
     l->out_fd = -1;
     l->out_kept = -1;
+    l->out_last_us = INT64_MIN;
     snprintf(l->ifname, sizeof l->ifname, "%s", ifname && *ifname ? ifname : "can0");
     if (in_path && load(l, in_path, err, errlen) < 0)
         goto fail;
@@ -266,6 +281,11 @@ can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const
 long long can_logfile_out_kept(const can_logfile_t *l)
 {
     return l->out_kept;
+}
+
+int64_t can_logfile_out_last_us(const can_logfile_t *l)
+{
+    return l->out_last_us;
 }
 
 void can_logfile_close(can_logfile_t *l)

@@ -67,6 +67,10 @@ can_logfile_t *can_logfile_open_mode(const char *in_path, const char *out_path, 
  * empty), -1 if it is not a regular file (stdout, a FIFO, /dev/null). */
 long long can_logfile_out_kept(const can_logfile_t *l);
 
+/* The stamp (us) of the last line kept in an appended output file, if a
+ * stamped frame; INT64_MIN if none. */
+int64_t can_logfile_out_last_us(const can_logfile_t *l);
+
 /*
  * Append the frames of a candump log read from fp to l's input (can_logfile_open
  * does this for in_path; tests and the fuzz target use fmemopen).  name is

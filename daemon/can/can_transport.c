@@ -984,9 +984,18 @@ static const char *log_out_truncates(const can_state_t *s)
                : NULL;
 }
 
-static void report_log_out_open(can_state_t *s, const char *why_trunc)
+/* Says whether log_out was truncated or appended to; appended, warns if
+ * its last stamp is later than this run's first (first_us): readers see
+ * time go back there (speed > 1 puts wall stamps ahead of the clock). */
+static void report_log_out_open(can_state_t *s, const char *why_trunc, int64_t first_us)
 {
     long long kept = can_logfile_out_kept(s->log);
+    int64_t last_us = can_logfile_out_last_us(s->log);
+    if (!why_trunc && last_us != INT64_MIN && last_us > first_us)
+        log_msg(LOG_WARNING,
+                "can: log_out %s: its last stamp (%.6f) is later than this run's first "
+                "(%.6f): the log goes back in time here (log_out_truncate = yes avoids it)",
+                s->cfg->log_out, (double)last_us / 1e6, (double)first_us / 1e6);
     if (why_trunc)
         log_msg(LOG_INFO, "can: log_out %s: truncated (%s)", s->cfg->log_out, why_trunc);
     else if (kept > 0)
@@ -1006,15 +1015,16 @@ static int open_io(can_state_t *s, const uint32_t *rx_ids, unsigned nrx, char *w
         s->log = can_logfile_open_mode(cfg->log_in[0] ? cfg->log_in : NULL,
                                        cfg->log_out[0] ? cfg->log_out : NULL, cfg->log_ifname, 0,
                                        !why_trunc, why, wl);
-        if (s->log && strcmp(cfg->log_out, "-") && cfg->log_out[0])
-            report_log_out_open(s, why_trunc);
+        int64_t epoch_ns = 0;
         if (s->log && !cfg->log_time_engine) {
             /* epoch stamps: the wall clock now is the engine's now */
             struct timespec ts;
             clock_gettime(CLOCK_REALTIME, &ts);
-            can_logfile_set_epoch(s->log,
-                                  (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec - s->c->now_ns);
+            epoch_ns = (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec - s->c->now_ns;
+            can_logfile_set_epoch(s->log, epoch_ns);
         }
+        if (s->log && strcmp(cfg->log_out, "-") && cfg->log_out[0])
+            report_log_out_open(s, why_trunc, (epoch_ns + s->c->now_ns) / 1000);
         return s->log ? 0 : -EIO;
     }
     s->bus = can_socket_new(cfg->interface, cfg->fd, rx_ids, nrx);

@@ -33,7 +33,9 @@ The real trajd, with faults made by the kernel, observed from outside:
    reads the whole file; it raises on any other line) and stamps that never
    go back; log_out_truncate = yes empties it first, and so does
    log_time = engine at a start (its stamps start again from 0), not at a
-   reload (engine time goes on).
+   reload (engine time goes on).  Appending where the stamps do go back
+   (speed 20 puts wall stamps ahead of the clock) is a warning naming both
+   stamps.
 Every wait is bounded; the daemon is stopped by pid.
 """
 import errno
@@ -497,13 +499,13 @@ class CanLogOutAppend(unittest.TestCase):
     def tearDown(self):
         self.tmpd.cleanup()
 
-    def conf(self, extra_can="", n=15, done=True):
-        # speed 1: wall stamps run with the wall clock (speed 20 would put
-        # them ahead of it), so a later run's stamps are later
+    def conf(self, extra_can="", n=15, done=True, speed=1):
+        # speed 1: wall stamps run with the wall clock (speed 20 puts them
+        # ahead of it), so a later run's stamps are later
         track(os.path.join(self.tmp, "track.csv"), n=n)
         path = os.path.join(self.tmp, "can.conf")
         with open(path, "w") as f:
-            f.write("[daemon]\nrate_hz = 100\nspeed = 1\nstatus_interval_s = 0\n"
+            f.write("[daemon]\nrate_hz = 100\nspeed = %g\nstatus_interval_s = 0\n" % speed
                     + ("exit_when_done = yes\n" if done else "") +
                     "[can]\nlog_out = %s\nmax_load_percent = 0\nmax_late_ms = 0\n%s"
                     "[object.boat]\ninput = replay\nreplay.track = track.csv\noutput = can\n"
@@ -550,6 +552,22 @@ class CanLogOutAppend(unittest.TestCase):
         self.assertLessEqual(ts[len(first) - 1], t_between)
         self.assertGreaterEqual(ts[len(first)], t_between)
         self.assertRegex(err, r"can: log_out %s: appending" % re.escape(self.out))
+        self.assertNotIn("goes back in time", err)
+
+    def test_stamps_back_warned(self):
+        # Given a log_out written at speed 20 (wall stamps run 20 times
+        # faster than the clock: a 40 s track in 2 s), when trajd runs again
+        # at once, then its stamps start before the first run's last: a <4>
+        # line says so with both stamps, as python-can reads them.
+        first, _, err = self.run_twice(self.conf(n=400, speed=20))
+        ts = self.stamps()
+        self.assertGreater(len(ts), len(first))
+        m = re.search(r"<4>can: log_out \S+: its last stamp \(([\d.]+)\) is later than this "
+                      r"run's first \(([\d.]+)\): the log goes back in time here", err)
+        self.assertIsNotNone(m, err)
+        self.assertAlmostEqual(float(m.group(1)), ts[len(first) - 1], delta=1e-6)
+        self.assertAlmostEqual(float(m.group(2)), ts[len(first)], delta=0.011)   # a tick
+        self.assertLess(ts[len(first)], ts[len(first) - 1])
 
     def test_torn_last_line_cut(self):
         # Given a log_out whose last line was cut short (a full disk), when
@@ -601,6 +619,7 @@ class CanLogOutAppend(unittest.TestCase):
         self.assertGreater(len(both), len(second) * 3 // 2)
         ts = self.stamps()
         self.assertLess(ts[len(second)], ts[len(second) - 1])
+        self.assertIn("goes back in time", err)
 
     def reload_run(self, extra_can=""):
         """Run trajd on a 40 s track, SIGHUP once the log holds 100 lines;
