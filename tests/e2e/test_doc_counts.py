@@ -713,5 +713,27 @@ class UnitTestFigures(unittest.TestCase):
         self.shown(jt, float(got[1]) / (50 * 0.02), "catch-up jerk (j = 50 m/s3, T = 20 ms)")
 
 
+class ManPages(unittest.TestCase):
+    def test_numeric_defaults(self):
+        """Every '(default N' of an option in a man page source (daemon/doc/*.1) is what the
+        program's --help says for that option."""
+        checked = 0
+        for page, prog in (("trajreplay.1", "trajreplay"), ("trajsurf.1", "trajsurf")):
+            text = read(os.path.join("daemon", "doc", page)).replace("\\-", "-")
+            r = subprocess.run([os.path.join(BUILD, "bin", prog), "--help"], capture_output=True, text=True)
+            helptext = r.stdout + r.stderr
+            for item in text.split(".TP")[1:]:
+                opt = re.search(r"--([a-z][a-z-]*)", item)
+                for n in re.findall(r"\(default (\d+)", item):
+                    # the option's --help entry: its line and the continuation lines after it
+                    entry = re.search(r"^  (?:-\w, )?--%s\b.*?(?=^  -|\n\n|\Z)" % re.escape(opt.group(1)),
+                                      helptext, re.M | re.S)
+                    self.assertIsNotNone(entry, "%s: --%s not in --help" % (page, opt.group(1)))
+                    self.assertRegex(" ".join(entry.group(0).split()), r"default %s\b" % n,
+                                     "%s --%s" % (page, opt.group(1)))
+                    checked += 1
+        self.assertGreaterEqual(checked, 4)
+
+
 if __name__ == "__main__":
     unittest.main(argv=sys.argv[:1])
