@@ -650,6 +650,12 @@ class UnitTestFigures(unittest.TestCase):
                      grab(unit_output("test_surf"), r"surface forward differences: max \|fd - direct\| = (\S+)"),
                      "surface forward differences")
 
+    def test_csv_fixed_count(self):
+        """daemon/README.md: '`tests/unit/test_csv_fixed.c` compares 1.3 M values with printf'."""
+        shown = grab(read("daemon/README.md"), r"`tests/unit/test_csv_fixed.c` compares (\S+) M values with printf")
+        n = grab(unit_output("test_csv_fixed"), r"(\d+) values compared with printf")
+        self.shown(shown, int(n) / 1e6, "test_csv_fixed's count")
+
     def test_timescale(self):
         doc = flat("lib/engine/TIMESCALE.md")
         out = unit_output("test_timescale")
