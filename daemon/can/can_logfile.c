@@ -225,7 +225,9 @@ static int open_out(can_logfile_t *l, const char *out_path, int append, char *er
         l->out_fd = STDOUT_FILENO;
         return 0;
     }
-    int flags = O_WRONLY | O_CREAT | O_CLOEXEC | (append ? O_APPEND : O_TRUNC);
+    /* O_APPEND always: a torn line is cut off the end (cut_torn), and the
+     * next write must land there, not at an offset past it */
+    int flags = O_WRONLY | O_CREAT | O_CLOEXEC | O_APPEND | (append ? 0 : O_TRUNC);
     l->out_fd = open(out_path, flags, 0644);
     if (l->out_fd < 0 || fstat(l->out_fd, &sb) < 0) {
         snprintf(err, errlen, "%s: %s", out_path, strerror(errno));
@@ -363,6 +365,20 @@ static uint64_t count_lines(const char *buf, size_t n)
     return k;
 }
 
+/* After a failed write: the head of the line a short write left in a
+ * regular file (obuf[0..off) was written) is cut off again, so the file
+ * ends with a whole line (opened O_APPEND: the next write lands there). */
+static void cut_torn(can_logfile_t *l, size_t off)
+{
+    size_t head = 0;
+    struct stat sb;
+    while (head < off && l->obuf[off - head - 1] != '\n')
+        head++;
+    if (head && l->out_kept >= 0 && fstat(l->out_fd, &sb) == 0 && sb.st_size >= (off_t)head &&
+        ftruncate(l->out_fd, sb.st_size - (off_t)head) < 0)
+        l->st.last_errno = errno;
+}
+
 void can_logfile_flush(can_logfile_t *l)
 {
     size_t off = 0;
@@ -378,6 +394,7 @@ void can_logfile_flush(can_logfile_t *l)
             break; /* later; new frames are lost (counted) once the buffer is full */
         l->st.write_errors++;
         l->st.last_errno = w < 0 ? errno : EIO;
+        cut_torn(l, off);
         l->st.frames_lost += count_lines(l->obuf + off, l->olen - off);
         off = l->olen;
     }

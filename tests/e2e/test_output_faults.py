@@ -27,7 +27,9 @@ The real trajd, with faults made by the kernel, observed from outside:
 7. The CAN output's candump log ([can] log_out) is an output too: on
    /dev/full a <4> line names it and the error and trajd exits 74 (it
    exited 0 without a word); log_out = - piped to `head -1` ends trajd with
-   141 long before its track's end (it ran the whole track, exit 0).
+   141 long before its track's end (it ran the whole track, exit 0); on a
+   64 KiB tmpfs the file ends with a whole line and python-can reads all of
+   it (the line a short write cut was left torn at the end).
 8. The CAN output's candump log ([can] log_out) is appended to at a restart
    and at a reload, with no marker line (python-can's CanutilsLogReader
    reads the whole file; it raises on any other line) and stamps that never
@@ -265,6 +267,30 @@ class CanLogOutFaults(unittest.TestCase):
                          r"\d+ frames lost so far\)" % os.strerror(errno.ENOSPC))
         self.assertRegex(err, r"<3>\d+ setpoint lines were lost by the outputs, last write "
                          r"error: " + os.strerror(errno.ENOSPC))
+
+    def test_log_out_small_disk_no_torn_line(self):
+        # Given log_out on a 64 KiB tmpfs, when a 40 s track streams to its
+        # end, then the file ends with a whole line, python-can reads every
+        # line of it (a torn "6A0#11D" at the end raised, or would be read
+        # as a wrong frame), and the exit status is 74.
+        mnt = os.path.join(self.tmp, "small")
+        os.mkdir(mnt)
+        m = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", mnt],
+                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        if m.returncode != 0:
+            self.skipTest("cannot mount a tmpfs here (%s)" % m.stderr.strip())
+        try:
+            out = os.path.join(mnt, "o.log")
+            rc, err = run(self.conf(out, 400))
+            self.assertEqual(rc, EX_IOERR, err)
+            with open(out, "rb") as f:
+                data = f.read()
+            self.assertGreater(len(data), 32 * 1024)      # the disk did fill
+            self.assertTrue(data.endswith(b"\n"), data[-80:])
+            msgs = list(can.CanutilsLogReader(out))
+            self.assertEqual(len(msgs), data.count(b"\n"))
+        finally:
+            subprocess.run(["umount", mnt], check=False)
 
     def test_log_out_stdout_pipe(self):
         # Given log_out = - and a 2000 s track (100 s of wall time), when
