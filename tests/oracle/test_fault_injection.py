@@ -78,6 +78,15 @@ O_DEFAULT = 24  # engine.h: the overlap accuracy 3e-7 picks
 M_PER_DEG_LAT = 111195.0  # a mean metre per degree: the offsets only need to be large
 
 
+def write_latlon(path, rows):
+    """A lat/lon track CSV of rows (t, lat, lon, alt); returns path."""
+    with open(path, "w") as f:
+        f.write("t_s,lat_deg,lon_deg,alt_m\n")
+        for r in rows:
+            f.write("%.3f,%.9f,%.9f,%.3f\n" % r)
+    return path
+
+
 def pick_sites(rnd, n, hi, gap):
     """n fix indices drawn from [25, hi), each at least gap from the others."""
     sites = []
@@ -363,11 +372,7 @@ def test_spike_every_site(tmp):
         args = ["--rate", "10"] + SLACK8
 
         def replay(rows, tag):
-            path = os.path.join(tmp, f"{tag}.csv")
-            with open(path, "w") as f:
-                f.write("t_s,lat_deg,lon_deg,alt_m\n")
-                for r in rows:
-                    f.write("%.3f,%.9f,%.9f,%.3f\n" % r)
+            path = write_latlon(os.path.join(tmp, f"{tag}.csv"), rows)
             sp, s, p = tr.replay(path, args, tmp, tag + "-out")
             rep = {}
             for line in p.stderr.splitlines():
@@ -434,11 +439,7 @@ RIDE_WINDOW_S = 150.0  # track time either side of the spike (the output lags th
 
 def ride_replay(tmp, rows, tag, args):
     """Replay rows (t, lat, lon, alt); the setpoints and --summary."""
-    path = os.path.join(tmp, f"{tag}.csv")
-    with open(path, "w") as f:
-        f.write("t_s,lat_deg,lon_deg,alt_m\n")
-        for r in rows:
-            f.write("%.3f,%.9f,%.9f,%.3f\n" % r)
+    path = write_latlon(os.path.join(tmp, f"{tag}.csv"), rows)
     sp, s, _ = tr.replay(path, args, tmp, tag + "-out")
     return sp, s
 
