@@ -48,12 +48,8 @@ def good(i):
 class FarWaypoint(unittest.TestCase):
     def setUp(self):
         self.tmpd = tempfile.TemporaryDirectory()
-        conf = os.path.join(self.tmpd.name, "trajd.conf")
-        with open(conf, "w") as f:
-            f.write("[daemon]\nrate_hz = 100\nstatus_interval_s = 0\nstop_timeout_s = 1\n"
-                    "[modbus]\naddress = 127.0.0.1\nport = 0\nwrites = yes\nsystemd_socket = no\n"
-                    "[object.fed]\ninput = modbus\noutput = csv\ncsv.path = fed.csv\n")
-        self.p, self.lines, self.port = mbsim.start_trajd([TRAJD, "-f", "-c", conf], WAIT_S)
+        self.p, self.lines, self.port = mbsim.start_fed_trajd(
+            TRAJD, self.tmpd.name, os.path.join(self.tmpd.name, "fed.csv"), WAIT_S)
 
     def tearDown(self):
         self.p.send_signal(signal.SIGTERM)

@@ -96,6 +96,20 @@ def run(path, timeout=WAIT_S):
     return p.returncode, p.stderr
 
 
+def small_tmpfs(test):
+    """A 64 KiB tmpfs mounted on a new directory for the test (unmounted and
+    removed at its cleanups, which run after tearDown); skips the test where
+    no tmpfs can be mounted."""
+    mnt = tempfile.mkdtemp(prefix="trajd-small-")
+    test.addCleanup(os.rmdir, mnt)
+    m = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", mnt],
+                       stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    if m.returncode != 0:
+        test.skipTest("cannot mount a tmpfs here (%s)" % m.stderr.strip())
+    test.addCleanup(subprocess.run, ["umount", mnt], check=False)
+    return mnt
+
+
 class HungUpPty:
     """A pseudo-terminal whose slave is handed to a process; hang_up()
     closes the master so the kernel fails every write to the slave with EIO
@@ -273,24 +287,16 @@ class CanLogOutFaults(unittest.TestCase):
         # end, then the file ends with a whole line, python-can reads every
         # line of it (a torn "6A0#11D" at the end raised, or would be read
         # as a wrong frame), and the exit status is 74.
-        mnt = os.path.join(self.tmp, "small")
-        os.mkdir(mnt)
-        m = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", mnt],
-                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        if m.returncode != 0:
-            self.skipTest("cannot mount a tmpfs here (%s)" % m.stderr.strip())
-        try:
-            out = os.path.join(mnt, "o.log")
-            rc, err = run(self.conf(out, 400))
-            self.assertEqual(rc, EX_IOERR, err)
-            with open(out, "rb") as f:
-                data = f.read()
-            self.assertGreater(len(data), 32 * 1024)      # the disk did fill
-            self.assertTrue(data.endswith(b"\n"), data[-80:])
-            msgs = list(can.CanutilsLogReader(out))
-            self.assertEqual(len(msgs), data.count(b"\n"))
-        finally:
-            subprocess.run(["umount", mnt], check=False)
+        mnt = small_tmpfs(self)
+        out = os.path.join(mnt, "o.log")
+        rc, err = run(self.conf(out, 400))
+        self.assertEqual(rc, EX_IOERR, err)
+        with open(out, "rb") as f:
+            data = f.read()
+        self.assertGreater(len(data), 32 * 1024)      # the disk did fill
+        self.assertTrue(data.endswith(b"\n"), data[-80:])
+        msgs = list(can.CanutilsLogReader(out))
+        self.assertEqual(len(msgs), data.count(b"\n"))
 
     def test_log_out_stdout_pipe(self):
         # Given log_out = - and a 2000 s track (100 s of wall time), when
@@ -407,27 +413,19 @@ class OutputFaults(unittest.TestCase):
         # Given csv.path on a 64 KiB tmpfs, when the track (~40 000 lines)
         # streams to its end (exit_when_done), then every line in the file
         # is whole, the last one too, and the exit status is 74.
-        mnt = os.path.join(self.tmp, "small")
-        os.mkdir(mnt)
-        m = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", mnt],
-                           stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        if m.returncode != 0:
-            self.skipTest("cannot mount a tmpfs here (%s)" % m.stderr.strip())
-        try:
-            out = os.path.join(mnt, "o.csv")
-            rc, err = run(conf(self.tmp, out, extra_daemon="exit_when_done = yes\n"))
-            self.assertEqual(rc, EX_IOERR, err)
-            self.assertIn("No space left on device", err)
-            with open(out, "rb") as f:
-                data = f.read()
-            self.assertGreater(len(data), 32 * 1024)      # the disk did fill
-            self.assertTrue(data.endswith(b"\n"), data[-80:])
-            rows = data.decode().splitlines()
-            self.assertTrue(rows[0].startswith("object,"))
-            for row in rows[1:]:
-                self.assertEqual(len(row.split(",")), FIELDS, row)
-        finally:
-            subprocess.run(["umount", mnt], check=False)
+        mnt = small_tmpfs(self)
+        out = os.path.join(mnt, "o.csv")
+        rc, err = run(conf(self.tmp, out, extra_daemon="exit_when_done = yes\n"))
+        self.assertEqual(rc, EX_IOERR, err)
+        self.assertIn("No space left on device", err)
+        with open(out, "rb") as f:
+            data = f.read()
+        self.assertGreater(len(data), 32 * 1024)      # the disk did fill
+        self.assertTrue(data.endswith(b"\n"), data[-80:])
+        rows = data.decode().splitlines()
+        self.assertTrue(rows[0].startswith("object,"))
+        for row in rows[1:]:
+            self.assertEqual(len(row.split(",")), FIELDS, row)
 
     def test_broken_stdout_pipe_ends_trajd(self):
         # Given `trajd -f -c config/demo.conf | head -1`, when head has read

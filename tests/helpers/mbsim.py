@@ -125,6 +125,18 @@ def port_of(line):
     return int(line.split(" port ")[1].split(",")[0])
 
 
+def start_fed_trajd(trajd, tmpdir, csv_path, timeout=WAIT_S):
+    """trajd at 100 Hz with one object 'fed' (input = modbus, csv to csv_path)
+    and a writable Modbus server on an ephemeral port of 127.0.0.1, its config
+    in tmpdir; as start_trajd."""
+    conf = os.path.join(tmpdir, "trajd.conf")
+    with open(conf, "w") as f:
+        f.write("[daemon]\nrate_hz = 100\nstatus_interval_s = 0\nstop_timeout_s = 1\n"
+                "[modbus]\naddress = 127.0.0.1\nport = 0\nwrites = yes\nsystemd_socket = no\n"
+                "[object.fed]\ninput = modbus\noutput = csv\ncsv.path = %s\n" % csv_path)
+    return start_trajd([trajd, "-f", "-c", conf], timeout)
+
+
 def start_trajd(argv, timeout=WAIT_S, **popen_kw):
     """Start trajd (argv: its command line) and wait up to timeout s for its
     Modbus port.  Returns (process, Lines of its stderr, port); kills it and
