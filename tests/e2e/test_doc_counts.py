@@ -10,6 +10,7 @@ per bundled track, what `trajreplay --summary -o FILE TRACK` (default
 settings) reports: waypoints read, accepted, gaps, setpoints, and the CSV's
 size in bytes.  Each row is replayed here and compared exactly.
 """
+import importlib.util
 import math
 import os
 import re
@@ -655,6 +656,24 @@ class UnitTestFigures(unittest.TestCase):
         shown = grab(read("daemon/README.md"), r"`tests/unit/test_csv_fixed.c` compares (\S+) M values with printf")
         n = grab(unit_output("test_csv_fixed"), r"(\d+) values compared with printf")
         self.shown(shown, int(n) / 1e6, "test_csv_fixed's count")
+
+    def test_csv_shortest_counts(self):
+        """daemon/README.md: test_csv_shortest.c 'reads 6 M values back', test_csv_shortest.py
+        'compares 0.9 M values': the unit test's counts read from its source (it takes 7 s), the
+        oracle's from its own values() (what it sends to the printer)."""
+        doc = flat("daemon/README.md")
+        unit, oracle = grab(doc, r"`tests/unit/test_csv_shortest.c` reads (\S+) M values back.*?"
+                                 r"`tests/oracle/test_csv_shortest.py` compares (\S+) M values")
+        src = read("tests/unit/test_csv_shortest.c")
+        loops = [int(grab(src, r"static void %s\(.*?for \(long i = 0; i < (\d+); i\+\+\)" % f))
+                 for f in ("test_random_bits", "test_typical")]
+        # test_random_bits reads back each (finite) pattern, test_typical two values per turn
+        self.shown(unit, (loops[0] + 2 * loops[1]) / 1e6, "test_csv_shortest.c's count")
+        spec = importlib.util.spec_from_file_location(
+            "oracle_csv_shortest", os.path.join(ROOT, "tests", "oracle", "test_csv_shortest.py"))
+        mod = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(mod)
+        self.shown(oracle, len(mod.values()) / 1e6, "test_csv_shortest.py's count")
 
     def test_timescale(self):
         doc = flat("lib/engine/TIMESCALE.md")
