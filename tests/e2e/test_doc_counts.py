@@ -541,6 +541,48 @@ class Lookahead(unittest.TestCase):
         self.assertEqual(start_lookahead("--method", "smooth", "--smooth-window", small), int(w))
 
 
+class BytesPerRow(unittest.TestCase):
+    """tests/bench/RESULTS.md's bytes/row: the output of the same replay as
+    tests/bench/bench_trajreplay.sh's second table (30 000 waypoints at 1 Hz on a
+    circle, --rate 100: 3 001 918 rows), its size counted through a pipe, over its rows."""
+
+    N = 30000
+    LINE = '{i},{1000*math.cos(i/500):.3f},{1000*math.sin(i/500):.3f},{i%7}\\n'
+
+    def per_row(self, track, *opts):
+        size = 0
+        with subprocess.Popen([os.path.join(BUILD, "bin", "trajreplay"), "-q", "--rate", "100"] + list(opts)
+                              + ["-o", "/dev/stdout", track], stdout=subprocess.PIPE) as p:
+            for block in iter(lambda: p.stdout.read(1 << 20), b""):
+                size += len(block)
+        self.assertEqual(p.returncode, 0)
+        return size / 3001918
+
+    def test_bytes_per_row(self):
+        self.assertIn("f.write(f\"" + self.LINE + "\")", read("tests/bench/bench_trajreplay.sh"),
+                      "the bench's track is the one replayed here")
+        doc = read("tests/bench/RESULTS.md")
+        first = [int(b) for b in grab(doc, r"\| default \(shortest round trip\) \| [^|\n]+\| [^|\n]+\| (\d+) \|\n"
+                                           r"\| `--precision 9` \| [^|\n]+\| [^|\n]+\| (\d+) \|\n"
+                                           r"\| `--binary` \| [^|\n]+\| [^|\n]+\| (\d+) \|")]
+        second = grab(doc, r"\| default \(shortest round trip\) \| [^|\n]+\| [^|\n]+\| (\d+\.\d) \|\n"
+                           r"\| `--precision 9` \| [^|\n]+\| [^|\n]+\| (\d+\.\d) \|\n"
+                           r"\| `--binary` \| [^|\n]+\| [^|\n]+\| (\d+\.\d) \|")
+        prose = grab(" ".join(doc.split()), r"its (\d+) bytes per row cost about \S+ µs of kernel copy each; "
+                                            r"`--precision 9` \((\d+) bytes\)")
+        with tempfile.TemporaryDirectory() as tmp:
+            track = os.path.join(tmp, "rows.csv")
+            with open(track, "w") as f:
+                f.write("t,x,y,z\n")
+                for i in range(self.N):
+                    f.write(f"{i},{1000*math.cos(i/500):.3f},{1000*math.sin(i/500):.3f},{i%7}\n")
+            got = [self.per_row(track), self.per_row(track, "--precision", "9"), self.per_row(track, "--binary")]
+        for form, a, b, g in zip(("default", "--precision 9", "--binary"), first, second, got):
+            self.assertEqual(a, round(g), form + " (first table)")
+            self.assertEqual(b, "%.1f" % g, form + " (second table)")
+        self.assertEqual([int(x) for x in prose], first[:2], "the prose's bytes per row")
+
+
 class BusLoad(unittest.TestCase):
     def test_protocol_table(self):
         """config/PROTOCOL.md's bus-load table is what `bench_can_busload` computes
