@@ -491,17 +491,78 @@ static void bench_accept(void)
     printf("\n");
 }
 
-int main(void)
+/* The F/O table: error of the streamed curve against one global solve, lookahead and (timed)
+ * ns per waypoint.  The errors are deterministic (seeded walks, the bundled figure-8): with
+ * --errors, bench_engine prints this table alone, untimed (nan ns), in about a second;
+ * tests/e2e/test_doc_counts.py checks lib/engine/README.md's error columns against it. */
+static void fo_table(int timed)
 {
-    bench_accept();
-    bench_stepper();
-    bench_fast_ticks();
-    static const long lengths[] = {1000, 10000, 100000, 1000000};
     /* the former default 32/16 first: the reference of the x 32/16 column;
      * then what accuracy/max_lookahead pick: the default 28/24 (3e-7, 18),
      * 16/12 (1e-3, 12), 24/20 (1e-5, 16), 39/34 (1e-9, 24) */
     static const unsigned fo[][2] = {{32, 16}, {8, 4},   {16, 8},  {24, 12}, {32, 8},  {48, 24},
                                      {64, 32}, {32, 30}, {16, 12}, {24, 20}, {28, 24}, {39, 34}};
+    engine_config_t c;
+
+    engine_config_default(&c);
+    enum { NW = 1000 };
+    static engine_waypoint_t walk[NW], reg[NW], fig8[2000];
+    double pos[3] = {0, 0, 0}, rpos[3] = {0, 0, 0};
+    unsigned seed = 3, rseed = 4;
+    for (long i = 0; i < NW; i++) {
+        walk_wp(&walk[i], i, 1.0, &seed, pos);
+        walk[i].t_s += 0.5 * sin((double)i);    /* irregular: 0.0 .. 2.0 s steps */
+        walk_wp(&reg[i], i, 1.0, &rseed, rpos); /* regular: 1 s steps */
+    }
+    size_t n8 = load_figure8(fig8, 1000); /* fragment 0 of F=1024 covers 1000: global */
+    printf("\nerror of the streamed curve against one global solve (max over dense samples)\n");
+    printf("random walk: 1000 waypoints, irregular (0 .. 2 s steps) or regular times; figure8: "
+           "first %zu fixes of n2k_furuno_figure8_src52 (5 Hz)\n\n",
+           n8);
+    printf("lookahead with start_slack auto at its least (1 waypoint: regular input); "
+           "ns/waypoint: push + solve with profile none (no acceptance rules: the solver's "
+           "cost), the fastest batch of 1000 of 1e5 waypoints, best of 3, "
+           "x 32/16 = the former "
+           "default's over this one's, same run\n\n");
+    printf("| F | O | lookahead (waypoints) | latency at 1 Hz / 5 Hz | walk (b) rel. extent | "
+           "walk (a) rel. extent | regular walk (b) rel. extent | figure8 (b) metres | rho^(O/2) | "
+           "ns/waypoint | x 32/16 |\n");
+    printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
+    double ref_ns = 1;
+    for (size_t i = 0; i < sizeof(fo) / sizeof(fo[0]); i++) {
+        double ab, aa, a8, ar, wns = timed ? bench_wp_ns(fo[i][0], fo[i][1]) : NAN;
+        if (i == 0)
+            ref_ns = wns;
+        c.fragment = fo[i][0];
+        c.overlap = fo[i][1];
+        unsigned la = engine_lookahead(&c);
+        double eb = frag_error(walk, NW, ENGINE_METHOD_CUBIC, ENGINE_PARAM_TIME, ENGINE_ENDS_REST,
+                               fo[i][0], fo[i][1], &ab);
+        double ea = frag_error(walk, NW, ENGINE_METHOD_BSPLINE, ENGINE_PARAM_UNIFORM,
+                               ENGINE_ENDS_NATURAL, fo[i][0], fo[i][1], &aa);
+        double e8 = n8 ? (frag_error(fig8, n8, ENGINE_METHOD_CUBIC, ENGINE_PARAM_TIME,
+                                     ENGINE_ENDS_REST, fo[i][0], fo[i][1], &a8),
+                          a8)
+                       : NAN;
+        double er = frag_error(reg, NW, ENGINE_METHOD_CUBIC, ENGINE_PARAM_TIME, ENGINE_ENDS_REST,
+                               fo[i][0], fo[i][1], &ar);
+        printf(
+            "| %u | %u | %u | %u s / %.1f s | %.1e | %.1e | %.1e | %.1e | %.1e | %.0f | %.2f |\n",
+            fo[i][0], fo[i][1], la, la, la / 5.0, eb, ea, er, e8, pow(2 - sqrt(3), fo[i][1] / 2.0),
+            wns, ref_ns / wns);
+    }
+}
+
+int main(int argc, char **argv)
+{
+    if (argc > 1 && strcmp(argv[1], "--errors") == 0) {
+        fo_table(0);
+        return 0;
+    }
+    bench_accept();
+    bench_stepper();
+    bench_fast_ticks();
+    static const long lengths[] = {1000, 10000, 100000, 1000000};
     engine_config_t c, r;
 
     engine_config_default(&c);
@@ -526,53 +587,6 @@ int main(void)
                sp_ns, al, paper_ns, lengths[i] > 10000 ? " (first 1e4 only)" : "", paper_ns / wp_ns,
                gsl_ns, gsl_ns / wp_ns);
     }
-
-    /* accuracy and lookahead */
-    enum { NW = 1000 };
-    static engine_waypoint_t walk[NW], reg[NW], fig8[2000];
-    double pos[3] = {0, 0, 0}, rpos[3] = {0, 0, 0};
-    unsigned seed = 3, rseed = 4;
-    for (long i = 0; i < NW; i++) {
-        walk_wp(&walk[i], i, 1.0, &seed, pos);
-        walk[i].t_s += 0.5 * sin((double)i);    /* irregular: 0.0 .. 2.0 s steps */
-        walk_wp(&reg[i], i, 1.0, &rseed, rpos); /* regular: 1 s steps */
-    }
-    size_t n8 = load_figure8(fig8, 1000); /* fragment 0 of F=1024 covers 1000: global */
-    printf("\nerror of the streamed curve against one global solve (max over dense samples)\n");
-    printf("random walk: 1000 waypoints, irregular (0 .. 2 s steps) or regular times; figure8: "
-           "first %zu fixes of n2k_furuno_figure8_src52 (5 Hz)\n\n",
-           n8);
-    printf("lookahead with start_slack auto at its least (1 waypoint: regular input); "
-           "ns/waypoint: push + solve with profile none (no acceptance rules: the solver's "
-           "cost), the fastest batch of 1000 of 1e5 waypoints, best of 3, "
-           "x 32/16 = the former "
-           "default's over this one's, same run\n\n");
-    printf("| F | O | lookahead (waypoints) | latency at 1 Hz / 5 Hz | walk (b) rel. extent | "
-           "walk (a) rel. extent | regular walk (b) rel. extent | figure8 (b) metres | rho^(O/2) | "
-           "ns/waypoint | x 32/16 |\n");
-    printf("|---|---|---|---|---|---|---|---|---|---|---|\n");
-    double ref_ns = 0;
-    for (size_t i = 0; i < sizeof(fo) / sizeof(fo[0]); i++) {
-        double ab, aa, a8, ar, wns = bench_wp_ns(fo[i][0], fo[i][1]);
-        if (i == 0)
-            ref_ns = wns;
-        c.fragment = fo[i][0];
-        c.overlap = fo[i][1];
-        unsigned la = engine_lookahead(&c);
-        double eb = frag_error(walk, NW, ENGINE_METHOD_CUBIC, ENGINE_PARAM_TIME, ENGINE_ENDS_REST,
-                               fo[i][0], fo[i][1], &ab);
-        double ea = frag_error(walk, NW, ENGINE_METHOD_BSPLINE, ENGINE_PARAM_UNIFORM,
-                               ENGINE_ENDS_NATURAL, fo[i][0], fo[i][1], &aa);
-        double e8 = n8 ? (frag_error(fig8, n8, ENGINE_METHOD_CUBIC, ENGINE_PARAM_TIME,
-                                     ENGINE_ENDS_REST, fo[i][0], fo[i][1], &a8),
-                          a8)
-                       : NAN;
-        double er = frag_error(reg, NW, ENGINE_METHOD_CUBIC, ENGINE_PARAM_TIME, ENGINE_ENDS_REST,
-                               fo[i][0], fo[i][1], &ar);
-        printf(
-            "| %u | %u | %u | %u s / %.1f s | %.1e | %.1e | %.1e | %.1e | %.1e | %.0f | %.2f |\n",
-            fo[i][0], fo[i][1], la, la, la / 5.0, eb, ea, er, e8, pow(2 - sqrt(3), fo[i][1] / 2.0),
-            wns, ref_ns / wns);
-    }
+    fo_table(1);
     return 0;
 }

@@ -526,6 +526,21 @@ class Lookahead(unittest.TestCase):
         res = read("tests/bench/RESULTS.md")
         for f, o, look in re.findall(r"^\| \**(\d+)/(\d+) \(.*?\)\** \| \**(\d+)\** \|", res, re.M):
             self.assertEqual(start_lookahead("--fragment", f, "--overlap", o), int(look), "RESULTS.md " + f + "/" + o)
+        # the error columns (walks, figure-8, rho^(O/2)): bench_engine --errors, deterministic
+        out = subprocess.run([os.path.join(BUILD, "tests", "bench_engine"), "--errors"], cwd=ROOT,
+                             capture_output=True, text=True, check=True).stdout
+        run = {}
+        for line in out.splitlines():
+            if re.match(r"\| \d", line):
+                cells = [c.strip() for c in line.strip("|").split("|")]
+                run[(cells[0], cells[1])] = cells[4:9]
+        for row in rows:
+            cells = [c.strip().strip("*") for c in row.strip("|").split("|")]
+            self.assertEqual(cells[4:9], run[(cells[0], cells[1])], "bench_engine --errors: " + row)
+        for f, o, reg, irr in re.findall(r"^\| \**(\d+)/(\d+) \(.*?\)\** \| \**\d+\** \| \**(\S+?)\** \| "
+                                         r"\**(\S+?)\** \|", res, re.M):
+            want = run[(f, o)]
+            self.assertEqual([float(reg), float(irr)], [float(want[2]), float(want[0])], "RESULTS.md " + f + "/" + o)
         former = grab(doc, r"The first row is the former default \((\d+) waypoints with its start_slack 8\)")
         self.assertEqual(start_lookahead("--fragment", "32", "--overlap", "16", "--start-slack", "8"),
                          int(former))
