@@ -675,6 +675,41 @@ def test_gpx_faults(tmp):
           f"({unhit} under the end ramps not checked), {int(s.get('underruns', 0))} underruns")
 
 
+def test_same_time_run(tmp):
+    """Given visnjan (tests/data) with a run of 5 consecutive fixes all
+    stamped with the first one's time (issue 12 item 6: all-equal
+    timestamps), when replayed (--rate 10), then the 4 later rows of the
+    run alone are refused, each reported at its file:line as same_time,
+    every other fix is kept and the output equals the replay of the track
+    without those 4 rows (the refused rows leave no trace), with no NaN."""
+    t, lat, lon, alt = tr.read_track(tr.VISNJAN_CSV)
+    rows0 = list(zip(t, lat, lon, alt))
+    at = 100
+    rows = [(t[at] if at < i < at + 5 else r[0],) + tuple(r[1:]) for i, r in enumerate(rows0)]
+    refused = {i + 2 for i in range(at + 1, at + 5)}
+    args = ["--rate", "10"]
+    path = write_latlon(os.path.join(tmp, "same_run.csv"), rows)
+    sp, s, p = tr.replay(path, args, tmp, "same_run-out")
+    label = "visnjan, 5 fixes with one timestamp"
+    reported = {}
+    for line in p.stderr.splitlines():
+        if ": rejected (" in line:
+            where, why = line.split(": rejected (")
+            reported[int(where.rsplit(":", 1)[1])] = why.rstrip(")")
+    tr.check(reported == {l: "same_time" for l in refused}, f"{label}: reported {reported}, want {sorted(refused)}")
+    want = {"rejected": 4, "rejected_same_time": 4, "accepted": len(rows0) - 4}
+    got = {k: s.get(k) for k in want}
+    tr.check(got == want, f"{label}: --summary {got} != {want}")
+    ref, _ = ride_replay(tmp, [r for i, r in enumerate(rows) if i + 2 not in refused], "same_run-ref", args)
+    tr.check(len(ref) == len(sp), f"{label}: {len(sp)} setpoints, {len(ref)} without the run's rows")
+    same = len(ref) == len(sp) and np.array_equal(np.isnan(sp["pos"]), np.isnan(ref["pos"]))
+    d = float(np.nanmax(np.abs(sp["pos"] - ref["pos"]))) if same else math.inf
+    tr.check(d == 0.0, f"{label}: differs from the replay without the refused rows by {d:g} m")
+    tr.check(not np.isnan(sp["pos"][(sp["flags"] & tr.SP_NO_POSITION) == 0]).any(), f"{label}: NaN")
+    print(f"{label}: rows {sorted(refused)} refused as same_time, {s.get('accepted')} of "
+          f"{len(rows0)} fixes kept, {d:g} m from the replay without the refused rows")
+
+
 def main():
     if not os.access(tr.TRAJREPLAY, os.X_OK):
         print(f"{tr.TRAJREPLAY} not built")
@@ -686,6 +721,7 @@ def main():
         test_spike_rides_through(tmp)
         test_spike_first_interval(tmp)
         test_gpx_faults(tmp)
+        test_same_time_run(tmp)
     print(f"test_fault_injection.py: {len(tr.failures)} failure(s)")
     return 1 if tr.failures else 0
 
