@@ -352,6 +352,38 @@ class GeoFrames(unittest.TestCase):
             c.close()
         return out
 
+    def test_explicit_origin_centres_the_frame(self):
+        # Given [daemon] origin = 45.27,13.71,0 (not a's first fix, ~400 m away)
+        origin = (45.27, 13.71, 0.0)
+        write(self.conf, self.config("origin = 45.27,13.71,0\n"))
+        p = subprocess.run([TRAJD, "-f", "-c", self.conf], stdin=subprocess.DEVNULL,
+                           capture_output=True, text=True, timeout=4 * WAIT_S, cwd=self.tmp)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        a = [r for r in rows(os.path.join(self.tmp, "a.csv")) if on_curve(r)]
+        self.assertGreater(len(a), 1000)
+        # then a's first fix on its curve is at pyproj's east/north/up of that fix
+        # about the origin (not at 0, 0, 0), and every row's lat/lon/alt is
+        # pyproj's inverse of its east/north/up about the origin
+        about = topo(*origin)
+        # (a comes to its start by a transfer: its first row on the curve is a
+        # fraction of a second into the track, no farther from the fix than the
+        # distance its speed covers in that time)
+        first = min(a, key=lambda r: float(r["t_s"]))
+        ts = float(first["t_s"])
+        self.assertLess(ts, 2.0, first)
+        want = np.array(about.transform(*self.a0))
+        self.assertGreater(math.hypot(want[0], want[1]), 100.0)
+        got = np.array([float(first[k]) for k in ("x_m", "y_m", "z_m")])
+        v = max(math.sqrt(sum(float(r[k]) ** 2 for k in ("vx_m_s", "vy_m_s", "vz_m_s")))
+                for r in a if float(r["t_s"]) <= ts + 1e-9)
+        self.assertLess(np.linalg.norm(got - want), v * ts + TOL_M, (first, want))
+        for r in a:
+            lat, lon, h = about.transform(float(r["x_m"]), float(r["y_m"]), float(r["z_m"]),
+                                          direction="INVERSE")
+            self.assertLess(abs(float(r["lat_deg"]) - lat), 1e-9, r)
+            self.assertLess(abs(float(r["lon_deg"]) - lon), 1e-9, r)
+            self.assertLess(abs(float(r["alt_m"]) - h), 1e-6, r)
+
     def test_datum_move_refused_at_reload(self):
         write(self.conf, self.config().replace("exit_when_done = yes", "exit_when_done = no"))
         p = subprocess.Popen([TRAJD, "-f", "-c", self.conf], stdin=subprocess.DEVNULL,
