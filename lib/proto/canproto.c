@@ -1189,9 +1189,10 @@ int canproto_dbc(char *buf, size_t len)
          CANPROTO_ID_WAYPOINT_BASE, CANPROTO_MUX_TIME, CANPROTO_MUX_X, CANPROTO_MUX_Y,
          CANPROTO_MUX_Z, CANPROTO_MUX_COMMAND);
     emit(buf, len, &pos,
-         "VAL_ %u WP_Command %d \"finish\" %d \"stop\" %d \"clear\" %d \"reset counters\" ;\n",
+         "VAL_ %u WP_Command %d \"finish\" %d \"stop\" %d \"clear\" %d \"reset counters\" %d "
+         "\"feed override\" ;\n",
          CANPROTO_ID_WAYPOINT_BASE, CANPROTO_CMD_FINISH, CANPROTO_CMD_STOP, CANPROTO_CMD_CLEAR,
-         CANPROTO_CMD_RESET_COUNTERS);
+         CANPROTO_CMD_RESET_COUNTERS, CANPROTO_CMD_OVERRIDE);
     emit(buf, len, &pos, "VAL_ %u SP_Axis 0 \"x\" 1 \"y\" 2 \"z\" ;\n", CANPROTO_ID_SETPOINT_BASE);
     emit(buf, len, &pos, "VAL_ %u SP_State %s ;\n", CANPROTO_ID_SETPOINT_BASE, states);
     emit(buf, len, &pos, "VAL_ %u SPFD_State %s ;\n", CANPROTO_ID_SETPOINT_FD_BASE, states);

@@ -19,6 +19,7 @@ import logging
 import math
 import os
 import random
+import re
 import sys
 import tempfile
 import unittest
@@ -357,9 +358,19 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
         LIB.engine_state_name.restype = ctypes.c_char_p
         for v, name in sp.values.items():
             self.assertEqual(LIB.engine_state_name(int(v)).decode(), name)
+        # every command of canproto_cmd_t (lib/proto/canproto.h) is named in
+        # the DBC, and by the same name in the Wireshark dissector
         cmd = frame_of(self.db, 0x680).signal_by_name("WP_Command").values
-        self.assertEqual({int(k): v for k, v in cmd.items()},
-                         {1: "finish", 2: "stop", 3: "clear", 4: "reset counters"})
+        with open(os.path.join(ROOT, "lib", "proto", "canproto.h")) as fh:
+            header = {int(v): k for k, v in
+                      re.findall(r"CANPROTO_CMD_([A-Z_]+) = (\d+),", fh.read())}
+        self.assertEqual(sorted(header), list(range(1, len(header) + 1)))
+        self.assertIn("OVERRIDE", header.values())
+        self.assertEqual(sorted(int(k) for k in cmd), sorted(header))
+        with open(os.path.join(ROOT, "config", "trajd.lua")) as fh:
+            lua = re.search(r"WP_Command = \{(.*?)\}", fh.read(), re.S).group(1)
+        self.assertEqual({int(k): v for k, v in re.findall(r'\[(\d+)\] = "([^"]*)"', lua)},
+                         {int(k): v for k, v in cmd.items()})
         err = frame_of(self.db, 0x6C0).signal_by_name("ST_LastErr").values
         # ok, the 11 engine errors (motion.h), the CAN side's 0x40..0x48
         self.assertEqual(sorted(int(k) for k in err), list(range(12)) + list(range(0x40, 0x49)))
