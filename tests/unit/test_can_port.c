@@ -352,7 +352,8 @@ static void queue_tpdo(uint32_t id, uint16_t sw, int32_t pos)
 /* Given a drive on axis x with feedback (TPDO 0x180 + node 1), inverted, then
  * its statusword gives the state (CiA 402 patterns), its position actual
  * value the position in metres, Operation Enabled is reported once seen, and
- * leaving it (fault) is counted and reported in STATUS (0x47). */
+ * leaving it (fault) is counted and reported in STATUS (0x47); with another
+ * TPDO COB-ID configured, feedback is read there and no longer on 0x181. */
 static void test_cia402_feedback(void **state)
 {
     (void)state;
@@ -386,6 +387,23 @@ static void test_cia402_feedback(void **state)
     assert_int_equal(st.drive_frames, 3);
     assert_int_equal(st.drive_lost, 1);
     assert_int_equal(st.drive_bad, 1);
+
+    /* a TPDO COB-ID other than 0x180 + node (can.cia402_tpdo_x): listened to
+     * there, and 0x181 is no longer the drive's */
+    ids.cia402_tpdo_id[0] = 0x285;
+    assert_int_equal(can_port_set_object(port, 0, &ids, &fe_hooks, &eng), 0);
+    n = can_port_rx_ids(port, rx, 8);
+    assert_int_equal(n, 2);
+    assert_int_equal(rx[1], 0x285);
+    fe_feedbacks = 0;
+    queue_tpdo(0x181, 0x0637, -30000);
+    can_port_rx(port, 0);
+    assert_int_equal(fe_feedbacks, 0);
+    queue_tpdo(0x285, 0x0637, -30000); /* operation enabled, at +3 m (inverted) */
+    can_port_rx(port, 0);
+    assert_int_equal(fe_feedbacks, 1);
+    assert_int_equal(fe_drive.state[0], CIA402_OPERATION_ENABLED);
+    assert_true(fabs(fe_drive.pos_m[0] - 3.0) < 1e-12);
 }
 
 static void queue_sdo_reply(uint8_t node, uint8_t cs, uint16_t index, uint32_t abort_code)

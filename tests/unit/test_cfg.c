@@ -240,7 +240,8 @@ static void test_ids(void **state)
 }
 
 /* CAN: default ids come from the id (never the place in the file); ids above
- * 15 have no defaults; CiA 402 COB-IDs must be given. */
+ * 15 have no defaults; CiA 402 COB-IDs must be given; the drive feedback's
+ * TPDO is 0x180 + node unless can.cia402_tpdo_<axis> gives another. */
 static void test_can_ids(void **state)
 {
     (void)state;
@@ -260,6 +261,16 @@ static void test_can_ids(void **state)
     c = load_ok(CAN_LOG CAN_OBJ("b", "",
                                 "can.cia402 = yes\ncan.cia402_cob_x = 0x201\n"
                                 "can.cia402_cob_y = 0x202\ncan.cia402_cob_z = 0\n"));
+    cfg_free(c);
+    /* the feedback TPDO: 0x180 + node by default, can.cia402_tpdo_<axis> moves it */
+    c = load_ok(CAN_LOG CAN_OBJ("b", "",
+                                "can.cia402 = yes\ncan.cia402_feedback = yes\n"
+                                "can.cia402_cob_x = 0x201\ncan.cia402_cob_y = 0x202\n"
+                                "can.cia402_cob_z = 0\ncan.cia402_tpdo_y = 0x285\n"));
+    can_obj_ids(cfg_obj_transport(&c->obj[0], &can_transport), (unsigned)c->obj[0].id, &ids);
+    assert_int_equal(canproto_cia402_tpdo(&ids, 0), 0x181);
+    assert_int_equal(canproto_cia402_tpdo(&ids, 1), 0x285);
+    assert_int_equal(canproto_cia402_tpdo(&ids, 2), 0);
     cfg_free(c);
 }
 
