@@ -559,7 +559,8 @@ class Lookahead(unittest.TestCase):
 class BytesPerRow(unittest.TestCase):
     """tests/bench/RESULTS.md's bytes/row: the output of the same replay as
     tests/bench/bench_trajreplay.sh's second table (30 000 waypoints at 1 Hz on a
-    circle, --rate 100: 3 001 918 rows), its size counted through a pipe, over its rows."""
+    circle, --rate 100: 3 001 918 rows), its size counted through a pipe, over its rows;
+    every form, the former %.17g default (--precision g17) too."""
 
     N = 30000
     LINE = '{i},{1000*math.cos(i/500):.3f},{1000*math.sin(i/500):.3f},{i%7}\\n'
@@ -580,7 +581,8 @@ class BytesPerRow(unittest.TestCase):
         first = [int(b) for b in grab(doc, r"\| default \(shortest round trip\) \| [^|\n]+\| [^|\n]+\| (\d+) \|\n"
                                            r"\| `--precision 9` \| [^|\n]+\| [^|\n]+\| (\d+) \|\n"
                                            r"\| `--binary` \| [^|\n]+\| [^|\n]+\| (\d+) \|")]
-        second = grab(doc, r"\| default \(shortest round trip\) \| [^|\n]+\| [^|\n]+\| (\d+\.\d) \|\n"
+        second = grab(doc, r"\| former default `%\.17g` \| [^|\n]+\| [^|\n]+\| (\d+\.\d) \|\n"
+                           r"\| default \(shortest round trip\) \| [^|\n]+\| [^|\n]+\| (\d+\.\d) \|\n"
                            r"\| `--precision 9` \| [^|\n]+\| [^|\n]+\| (\d+\.\d) \|\n"
                            r"\| `--binary` \| [^|\n]+\| [^|\n]+\| (\d+\.\d) \|")
         prose = grab(" ".join(doc.split()), r"its (\d+) bytes per row cost about \S+ µs of kernel copy each; "
@@ -591,8 +593,10 @@ class BytesPerRow(unittest.TestCase):
                 f.write("t,x,y,z\n")
                 for i in range(self.N):
                     f.write(f"{i},{1000*math.cos(i/500):.3f},{1000*math.sin(i/500):.3f},{i%7}\n")
+            g17 = self.per_row(track, "--precision", "g17")
             got = [self.per_row(track), self.per_row(track, "--precision", "9"), self.per_row(track, "--binary")]
-        for form, a, b, g in zip(("default", "--precision 9", "--binary"), first, second, got):
+        self.assertEqual(second[0], "%.1f" % g17, "former default %.17g (second table)")
+        for form, a, b, g in zip(("default", "--precision 9", "--binary"), first, second[1:], got):
             self.assertEqual(a, round(g), form + " (first table)")
             self.assertEqual(b, "%.1f" % g, form + " (second table)")
         self.assertEqual([int(x) for x in prose], first[:2], "the prose's bytes per row")
