@@ -681,7 +681,7 @@ static void transfer_peaks(engine_t *e, int64_t *k, int until_waiting, double *v
                            int *ticks)
 {
     const double dt = PERIOD_NS * 1e-9;
-    engine_setpoint_t p0, p1, sp;
+    engine_setpoint_t p0 = {0}, p1 = {0}, sp;
     int have = 0;
     *vmax = *amax = 0;
     *ticks = 0;
