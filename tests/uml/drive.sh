@@ -70,6 +70,10 @@ wait_ev 2 SWITCH_ON_DISABLED 2 || fail "trajd did not disable the object's other
 cansend vcan0 680#0400030000000000   # command clear: fault reset, enable again
 wait_ev 1 OPERATION_ENABLED 2 || fail "node 1 not enabled again after clear"
 wait_ev 2 OPERATION_ENABLED 2 || fail "node 2 not enabled again after clear"
+# the first target after the enable reached both (drive_sim.py FIRST_TARGET: the
+# host checks it was where each stood); a quick stop before it would leave none
+wait_ev 1 FIRST_TARGET 2 || fail "node 1 got no target after the clear"
+wait_ev 2 FIRST_TARGET 2 || fail "node 2 got no target after the clear"
 touch "$out/ok.fault"
 # ---- the drives' own quick stop: trajd disables them (no re-enable without clear)
 kill -USR2 "$sp"
@@ -79,6 +83,8 @@ wait_ev 2 SWITCH_ON_DISABLED 3 || fail "trajd did not disable quick-stopped node
 cansend vcan0 680#0400030000000000
 wait_ev 1 OPERATION_ENABLED 3 || fail "node 1 not enabled again after the quick stop"
 wait_ev 2 OPERATION_ENABLED 3 || fail "node 2 not enabled again after the quick stop"
+wait_ev 1 FIRST_TARGET 3 || fail "node 1 got no target after the quick stop"
+wait_ev 2 FIRST_TARGET 3 || fail "node 2 got no target after the quick stop"
 touch "$out/ok.quickstop"
 # ---- a drive goes silent (node 2's heartbeat stops, its PDOs go on): trajd reports it
 # and holds the object (override 0); an override written by Modbus is refused

@@ -227,6 +227,7 @@ class Drive:
                 if self.last_applied is None:
                     # the first target after Enable operation: how far from where it stands
                     self.log.setdefault("enable_offsets", []).append(abs(t - self.pos))
+                    self.note("FIRST_TARGET", "after enable")
                 else:
                     step = abs(t - self.last_applied)
                     self.log["max_target_step"] = max(self.log["max_target_step"], step)
