@@ -705,8 +705,11 @@ static int decide_closed(accept_t *a, int closing, int full, double vlim, accept
     }
     /* nothing to abandon: at the close, the chain there is will do; a
      * waypoint a plausible gap before the next one is a trajectory of
-     * its own */
-    if ((u >= vbest && (u >= k || closing)) || (n >= 2 && plausible_gap(a, nd[0], nd[1], vlim))) {
+     * its own; a full window with no two waypoints consistent (all
+     * stamped alike, say) has no chain to prefer: the oldest starts it
+     * (the later ones are then judged against it), not whichever is
+     * oldest when the input closes */
+    if ((u >= vbest && (u >= k || closing || vbest <= 1)) || (n >= 2 && plausible_gap(a, nd[0], nd[1], vlim))) {
         pop(a, v, ACCEPT_START, 0);
         return 1;
     }

@@ -63,7 +63,9 @@
  * costs the output no underrun (tests/unit/test_accept.c).  Else the verdict
  * waits until the window is full or the input is closed.  The first trajectory (nothing
  * to abandon) starts on a chain of `confirm` waypoints, or at the close on
- * whatever consistent chain there is.
+ * whatever consistent chain there is, or on the oldest waypoint held when
+ * the window is full and no two of its waypoints are consistent (every fix
+ * stamped alike: the first is kept, the others refused as same_time).
  *
  * The limits (see engine.h, engine_profile_t):
  *   - absolute: chord speed <= max_speed_m_s, implied acceleration

@@ -519,7 +519,7 @@ static inline int aref_decide(aref_t *a, int closing, accept_verdict_t *v)
         /* nothing to abandon: at the close, the chain there is will do; a
          * waypoint a plausible gap before the next one is a trajectory of
          * its own */
-        if ((u >= vbest && (u >= k || closing)) ||
+        if ((u >= vbest && (u >= k || closing || vbest <= 1)) ||
             (n >= 2 && aref_plausible_gap(a, nd[0], nd[1], vlim))) {
             aref_pop(a, v, ACCEPT_START, 0);
             return 1;

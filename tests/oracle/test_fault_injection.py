@@ -710,6 +710,56 @@ def test_same_time_run(tmp):
           f"{len(rows0)} fixes kept, {d:g} m from the replay without the refused rows")
 
 
+def test_all_same_time(tmp):
+    """Given the visnjan walk with every fix stamped with the first one's
+    time (issue 12: a GPX whose timestamps are all equal), as CSV and as GPX
+    (the GPX as gpsbabel reads it back: the reference reader), when replayed,
+    then the first fix alone is kept (the object was there at that time;
+    nothing later can be placed on a curve) and every later row is refused
+    as same_time: the first 20 reported at their file:line, all counted in
+    the summary; the output rests on the first fix (pyproj's ENU) from its
+    first setpoint to its last, with no NaN.  On the old code the first
+    fixes were dropped while the window filled and the first of the last
+    window was kept instead (58 m from the first fix)."""
+    t, lat, lon, alt = tr.read_track(tr.VISNJAN_CSV)
+    rows = [(t[0], a, b, c) for a, b, c in zip(lat, lon, alt)]
+    n = len(rows)
+    csv_path = write_latlon(os.path.join(tmp, "all_same.csv"), rows)
+    gpx_path = os.path.join(tmp, "all_same.gpx")
+    epoch0 = 1408726132.0  # visnjan's first fix (tests/data/gpxgo_visnjan.csv epoch_s)
+    with open(gpx_path, "w") as f:
+        f.write('<?xml version="1.0" encoding="UTF-8"?>\n'
+                '<gpx version="1.1" creator="test_fault_injection.py" '
+                'xmlns="http://www.topografix.com/GPX/1/1">\n<trk><trkseg>\n')
+        for r in rows:  # one trkpt a line, from line 4
+            f.write('<trkpt lat="%.9f" lon="%.9f"><ele>%.3f</ele><time>%s</time></trkpt>\n'
+                    % (r[1], r[2], r[3], iso_of(epoch0)))
+        f.write("</trkseg></trk></gpx>\n")
+    ref = gpsbabel_points(gpx_path, tmp, "all_same")
+    tr.check(len(ref) == n and len({p[3] for p in ref}) == 1, "gpsbabel: not one stamp for all")
+    for path, first_line, ll in ((csv_path, 2, (lat[0], lon[0], alt[0])), (gpx_path, 4, ref[0][:3])):
+        label = "visnjan, every fix at one time (%s)" % path.rsplit(".", 1)[1]
+        sp, s, p = tr.replay(path, ["--rate", "10"], tmp, "all_same-out")
+        reported = {}
+        for line in p.stderr.splitlines():
+            if ": rejected (" in line:
+                where, why = line.split(": rejected (")
+                reported[int(where.rsplit(":", 1)[1])] = why.rstrip(")")
+        want_rep = {first_line + i: "same_time" for i in range(1, 21)}
+        tr.check(reported == want_rep, f"{label}: reported {reported}, want {sorted(want_rep)}")
+        want = {"accepted": 1, "rejected": n - 1, "rejected_same_time": n - 1}
+        got = {k: s.get(k) for k in want}
+        tr.check(got == want, f"{label}: --summary {got} != {want}")
+        e0 = tr.enu_pyproj(np.array([ll[0], lat[0]]), np.array([ll[1], lon[0]]),
+                           np.array([ll[2], alt[0]]))[0] if path == gpx_path else np.zeros(3)
+        pos = sp["pos"][(sp["flags"] & tr.SP_NO_POSITION) == 0]
+        tr.check(len(pos) > 0 and not np.isnan(pos).any(), f"{label}: no position or NaN")
+        d = float(np.max(np.abs(pos - e0))) if len(pos) else math.inf
+        tr.check(d < 1e-6, f"{label}: output {d:g} m from the first fix")
+        print(f"{label}: {s.get('accepted')} of {n} kept, {s.get('rejected_same_time')} refused as "
+              f"same_time, the output {d:.2g} m from the first fix")
+
+
 def main():
     if not os.access(tr.TRAJREPLAY, os.X_OK):
         print(f"{tr.TRAJREPLAY} not built")
@@ -722,6 +772,7 @@ def main():
         test_spike_first_interval(tmp)
         test_gpx_faults(tmp)
         test_same_time_run(tmp)
+        test_all_same_time(tmp)
     print(f"test_fault_injection.py: {len(tr.failures)} failure(s)")
     return 1 if tr.failures else 0
 
