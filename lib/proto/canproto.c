@@ -1188,6 +1188,8 @@ int canproto_dbc(char *buf, size_t len)
     emit(buf, len, &pos, "VAL_ %u WP_Mux %d \"time\" %d \"x\" %d \"y\" %d \"z\" %d \"command\" ;\n",
          CANPROTO_ID_WAYPOINT_BASE, CANPROTO_MUX_TIME, CANPROTO_MUX_X, CANPROTO_MUX_Y,
          CANPROTO_MUX_Z, CANPROTO_MUX_COMMAND);
+    emit(buf, len, &pos, "VAL_ %u WPFD_Mux %d \"whole waypoint\" ;\n", CANPROTO_ID_WAYPOINT_FD_BASE,
+         CANPROTO_MUX_FD_WAYPOINT);
     emit(buf, len, &pos,
          "VAL_ %u WP_Command %d \"finish\" %d \"stop\" %d \"clear\" %d \"reset counters\" %d "
          "\"feed override\" ;\n",

@@ -367,10 +367,21 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
         self.assertEqual(sorted(header), list(range(1, len(header) + 1)))
         self.assertIn("OVERRIDE", header.values())
         self.assertEqual(sorted(int(k) for k in cmd), sorted(header))
+        # every value table of the Wireshark dissector (config/trajd.lua VALS)
+        # is the DBC's, and every signal it names has one in the DBC
         with open(os.path.join(ROOT, "config", "trajd.lua")) as fh:
-            lua = re.search(r"WP_Command = \{(.*?)\}", fh.read(), re.S).group(1)
-        self.assertEqual({int(k): v for k, v in re.findall(r'\[(\d+)\] = "([^"]*)"', lua)},
-                         {int(k): v for k, v in cmd.items()})
+            lua = fh.read()
+        tables = {k: v for k, v in re.findall(r"^local (\w+) = \{(\[.*?)\}$", lua, re.M | re.S)}
+        block = re.search(r"^local VALS = \{\n(.*?)^\}", lua, re.M | re.S).group(1)
+        named = 0
+        for sig, body in re.findall(r"(\w+) = (\{.*?\}|\w+)[,\n]", block, re.S):
+            body = tables[body] if not body.startswith("{") else body
+            want = {int(k): v for k, v in re.findall(r'\[(\d+)\] = "([^"]*)"', body)}
+            fr = next(f for f in self.db.frames if f.signal_by_name(sig))
+            got = {int(k): v for k, v in fr.signal_by_name(sig).values.items()}
+            self.assertEqual(got, want, sig)
+            named += 1
+        self.assertGreaterEqual(named, 10)
         err = frame_of(self.db, 0x6C0).signal_by_name("ST_LastErr").values
         # ok, the 11 engine errors (motion.h), the CAN side's 0x40..0x48
         self.assertEqual(sorted(int(k) for k in err), list(range(12)) + list(range(0x40, 0x49)))
