@@ -16,10 +16,8 @@ unconfirmed (diagnostics block rejected_unconfirmed), and logged with the
 client that wrote it.
 """
 import os
-import signal
 import struct
 import sys
-import tempfile
 import time
 import unittest
 
@@ -45,16 +43,9 @@ def good(i):
     return (t, 1.0 * t, 0.5 * t, 1.0)
 
 
-class FarWaypoint(unittest.TestCase):
-    def setUp(self):
-        self.tmpd = tempfile.TemporaryDirectory()
-        self.p, self.lines, self.port = mbsim.start_fed_trajd(
-            TRAJD, self.tmpd.name, os.path.join(self.tmpd.name, "fed.csv"), WAIT_S)
-
-    def tearDown(self):
-        self.p.send_signal(signal.SIGTERM)
-        self.p.wait(WAIT_S)
-        self.tmpd.cleanup()
+class FarWaypoint(mbsim.FedTrajdCase):
+    TRAJD = TRAJD
+    WAIT_S = WAIT_S
 
     def check(self):
         s = mbsim.connect(self.port)

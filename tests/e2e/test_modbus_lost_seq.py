@@ -19,9 +19,7 @@ read back with pymodbus over Modbus (the object's block):
     sender's, the waypoint itself is good).
 """
 import os
-import signal
 import sys
-import tempfile
 import time
 import unittest
 
@@ -55,18 +53,9 @@ def expected_lost(seqs):
     return sum(b - a - 1 for a, b in zip(good, good[1:]))
 
 
-class LostSeq(unittest.TestCase):
-    def setUp(self):
-        self.tmpd = tempfile.TemporaryDirectory()
-        self.p, self.lines, self.port = mbsim.start_fed_trajd(
-            TRAJD, self.tmpd.name, os.path.join(self.tmpd.name, "fed.csv"), WAIT_S)
-
-    def tearDown(self):
-        self.p.send_signal(signal.SIGTERM)
-        self.p.wait(WAIT_S)
-        self.lines.wait_for("\0", 1)
-        self.p.stderr.close()
-        self.tmpd.cleanup()
+class LostSeq(mbsim.FedTrajdCase):
+    TRAJD = TRAJD
+    WAIT_S = WAIT_S
 
     def u32(self, c, reg, base=None):
         rr = c.read_input_registers(obj_base(0) + reg if base is None else reg, 2, slave=1)

@@ -110,6 +110,24 @@ def small_tmpfs(test):
     return mnt
 
 
+def check_out_lost_on_modbus(test, port):
+    """Object 0's Modbus block, read until it counts lost output lines (bounded),
+    shows the output fault and the lines lost, and the daemon's block the fault;
+    returns the daemon's block."""
+    s = mbsim.connect(port)
+    deadline = time.monotonic() + WAIT_S
+    while True:
+        r = mbsim.read_input(s, obj_base(0), mbsim.BLOCK)
+        if mbsim.u32(r, M["MBMAP_O_OUT_LOST"]) > 0 or time.monotonic() > deadline:
+            break
+    d = mbsim.read_input(s, 0, mbsim.BLOCK)
+    s.close()
+    test.assertEqual(r[M["MBMAP_O_OUT_FAULT"]], 1)
+    test.assertGreater(mbsim.u32(r, M["MBMAP_O_OUT_LOST"]), 0)
+    test.assertEqual(d[M["MBMAP_D_OUT_FAULT"]], 1)
+    return d
+
+
 class HungUpPty:
     """A pseudo-terminal whose slave is handed to a process; hang_up()
     closes the master so the kernel fails every write to the slave with EIO
@@ -175,17 +193,7 @@ class OutputEIO(unittest.TestCase):
             self.assertTrue(warn.startswith("<4>"), warn)
             self.assertIn("object 'o' csv.path %s" % self.pty.name, warn)
             self.assertIsNone(p.poll())                  # runs on, loudly
-            s = mbsim.connect(port)
-            deadline = time.monotonic() + WAIT_S
-            while True:
-                r = mbsim.read_input(s, obj_base(0), mbsim.BLOCK)
-                if mbsim.u32(r, M["MBMAP_O_OUT_LOST"]) > 0 or time.monotonic() > deadline:
-                    break
-            d = mbsim.read_input(s, 0, mbsim.BLOCK)
-            s.close()
-            self.assertEqual(r[M["MBMAP_O_OUT_FAULT"]], 1)
-            self.assertGreater(mbsim.u32(r, M["MBMAP_O_OUT_LOST"]), 0)
-            self.assertEqual(d[M["MBMAP_D_OUT_FAULT"]], 1)
+            check_out_lost_on_modbus(self, port)
         finally:
             p.send_signal(signal.SIGTERM)
             rc = p.wait(WAIT_S)
@@ -349,17 +357,7 @@ class OutputFaults(unittest.TestCase):
             self.assertIn("csv.path /dev/full", warn)
             # Lines are kept for a retry until the buffer is full (256 KiB,
             # about half a second here), then lost: wait for that, bounded.
-            s = mbsim.connect(port)
-            deadline = time.monotonic() + WAIT_S
-            while True:
-                r = mbsim.read_input(s, obj_base(0), mbsim.BLOCK)
-                if mbsim.u32(r, M["MBMAP_O_OUT_LOST"]) > 0 or time.monotonic() > deadline:
-                    break
-            d = mbsim.read_input(s, 0, mbsim.BLOCK)
-            s.close()
-            self.assertEqual(r[M["MBMAP_O_OUT_FAULT"]], 1)
-            self.assertGreater(mbsim.u32(r, M["MBMAP_O_OUT_LOST"]), 0)
-            self.assertEqual(d[M["MBMAP_D_OUT_FAULT"]], 1)
+            d = check_out_lost_on_modbus(self, port)
             self.assertGreater(mbsim.u32(d, M["MBMAP_D_OUT_LOST"]), 0)
         finally:
             p.send_signal(signal.SIGTERM)

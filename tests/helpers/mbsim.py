@@ -12,7 +12,9 @@ import socket
 import struct
 import subprocess
 import threading
+import tempfile
 import time
+import unittest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
@@ -135,6 +137,27 @@ def start_fed_trajd(trajd, tmpdir, csv_path, timeout=WAIT_S):
                 "[modbus]\naddress = 127.0.0.1\nport = 0\nwrites = yes\nsystemd_socket = no\n"
                 "[object.fed]\ninput = modbus\noutput = csv\ncsv.path = %s\n" % csv_path)
     return start_trajd([trajd, "-f", "-c", conf], timeout)
+
+
+class FedTrajdCase(unittest.TestCase):
+    """Each test with its own start_fed_trajd (self.p, self.lines, self.port;
+    its csv at self.csv), stopped by SIGTERM after it.  TRAJD: the binary;
+    WAIT_S: the bound on starting and stopping it."""
+    TRAJD = None
+    WAIT_S = WAIT_S
+
+    def setUp(self):
+        self.tmpd = tempfile.TemporaryDirectory()
+        self.csv = os.path.join(self.tmpd.name, "fed.csv")
+        self.p, self.lines, self.port = start_fed_trajd(self.TRAJD, self.tmpd.name, self.csv,
+                                                        self.WAIT_S)
+
+    def tearDown(self):
+        self.p.send_signal(15)
+        self.p.wait(self.WAIT_S)
+        self.lines.wait_for("\0", 1)
+        self.p.stderr.close()
+        self.tmpd.cleanup()
 
 
 def start_trajd(argv, timeout=WAIT_S, **popen_kw):
