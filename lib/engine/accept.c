@@ -709,7 +709,8 @@ static int decide_closed(accept_t *a, int closing, int full, double vlim, accept
      * stamped alike, say) has no chain to prefer: the oldest starts it
      * (the later ones are then judged against it), not whichever is
      * oldest when the input closes */
-    if ((u >= vbest && (u >= k || closing || vbest <= 1)) || (n >= 2 && plausible_gap(a, nd[0], nd[1], vlim))) {
+    if ((u >= vbest && (u >= k || closing || vbest <= 1)) ||
+        (n >= 2 && plausible_gap(a, nd[0], nd[1], vlim))) {
         pop(a, v, ACCEPT_START, 0);
         return 1;
     }
