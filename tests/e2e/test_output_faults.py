@@ -76,13 +76,16 @@ def track(path, n=400, dt_s=0.1):
             f.write("%.3f,%.3f,%.3f,1.0\n" % (i * dt_s, 2.0 * i * dt_s, 0.5 * i * dt_s))
 
 
-def conf(tmp, csv_path, extra_daemon="", extra_obj="", modbus=False):
+def conf(tmp, csv_path, extra_daemon="", extra_obj="", modbus=False, output="csv", tail=""):
+    """trajd.conf in tmp: object 'o' replays track.csv to output (csv_path
+    for csv; None: no csv.path line); tail: sections appended."""
     text = ("[daemon]\nrate_hz = 100\nspeed = 20\nstatus_interval_s = 1\nstop_timeout_s = 2\n"
             + extra_daemon +
-            "[object.o]\ninput = replay\nreplay.track = track.csv\noutput = csv\n"
-            "csv.path = %s\n" % csv_path + extra_obj)
+            "[object.o]\ninput = replay\nreplay.track = track.csv\noutput = %s\n" % output
+            + ("csv.path = %s\n" % csv_path if csv_path is not None else "") + extra_obj)
     if modbus:
         text += "[modbus]\naddress = 127.0.0.1\nport = 0\n"
+    text += tail
     path = os.path.join(tmp, "trajd.conf")
     with open(path, "w") as f:
         f.write(text)
@@ -108,6 +111,39 @@ def small_tmpfs(test):
         test.skipTest("cannot mount a tmpfs here (%s)" % m.stderr.strip())
     test.addCleanup(subprocess.run, ["umount", mnt], check=False)
     return mnt
+
+
+def started(test, path):
+    """trajd -f -c path, once it says 'started:': (process, Lines of its stderr)."""
+    p = subprocess.Popen([TRAJD, "-f", "-c", path], stdin=subprocess.DEVNULL,
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    lines = mbsim.Lines(p.stderr)
+    if lines.wait_for("started:", WAIT_S) is None:
+        p.kill()
+        p.wait()
+        test.fail("trajd did not start: " + "".join(lines.all))
+    return p, lines
+
+
+def piped_to_head(test, path):
+    """`trajd -f -c path | head -1`: trajd must end by itself once head has
+    left, with status 141 and a line saying why; returns head's line."""
+    p = subprocess.Popen([TRAJD, "-f", "-c", path], stdin=subprocess.DEVNULL,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        head = subprocess.run(["head", "-1"], stdin=p.stdout, stdout=subprocess.PIPE,
+                              timeout=WAIT_S)
+        p.stdout.close()
+        rc = p.wait(WAIT_S)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+    err = p.stderr.read().decode()
+    p.stderr.close()
+    test.assertEqual(rc, EXIT_EPIPE, err)
+    test.assertIn("reader went away", err)
+    return head.stdout
 
 
 def check_out_lost_on_modbus(test, port):
@@ -179,13 +215,8 @@ class OutputEIO(unittest.TestCase):
         # exit status is 74 with an error line saying why.
         track(os.path.join(self.tmp, "track.csv"), n=3000)
         path = conf(self.tmp, self.pty.name, modbus=True)
-        p = subprocess.Popen([TRAJD, "-f", "-c", path], stdin=subprocess.DEVNULL,
-                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        p, lines, port = mbsim.start_trajd([TRAJD, "-f", "-c", path], WAIT_S)
         try:
-            lines = mbsim.Lines(p.stderr)
-            line = lines.wait_for("modbus: TCP on", WAIT_S)
-            self.assertIsNotNone(line, "".join(lines.all))
-            port = mbsim.port_of(line)
             self.assertTrue(self.pty.read_until(b"\no,"), "no setpoint row on the pty")
             self.pty.hang_up(self)
             warn = lines.wait_for(EIO_TEXT, WAIT_S)
@@ -208,11 +239,7 @@ class OutputEIO(unittest.TestCase):
         # pty hangs up mid-stream, then trajd still ends at the track's end
         # with status 74 and a <4> "stdout: write failed: <EIO>" line.
         track(os.path.join(self.tmp, "track.csv"), n=1200)
-        path = conf(self.tmp, "unused", extra_daemon="exit_when_done = yes\n")
-        with open(path) as f:
-            text = f.read().replace("output = csv\ncsv.path = unused\n", "output = stdout\n")
-        with open(path, "w") as f:
-            f.write(text)
+        path = conf(self.tmp, None, extra_daemon="exit_when_done = yes\n", output="stdout")
         errf = tempfile.TemporaryFile(mode="w+")
         self.addCleanup(errf.close)
         p = subprocess.Popen([TRAJD, "-f", "-c", path], stdin=subprocess.DEVNULL,
@@ -310,23 +337,8 @@ class CanLogOutFaults(unittest.TestCase):
         # Given log_out = - and a 2000 s track (100 s of wall time), when
         # `head -1` has read its line and left, then trajd ends by itself
         # within WAIT_S with status 141 and says why
-        path = self.conf("-", 20000)
-        p = subprocess.Popen([TRAJD, "-f", "-c", path], stdin=subprocess.DEVNULL,
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-        try:
-            head = subprocess.run(["head", "-1"], stdin=p.stdout, stdout=subprocess.PIPE,
-                                  timeout=WAIT_S)
-            p.stdout.close()
-            self.assertRegex(head.stdout, rb"^\(\d+\.\d{6}\) can0 [0-9A-F]{3}#")
-            rc = p.wait(WAIT_S)
-        finally:
-            if p.poll() is None:
-                p.kill()
-                p.wait()
-        err = p.stderr.read().decode()
-        p.stderr.close()
-        self.assertEqual(rc, EXIT_EPIPE, err)
-        self.assertIn("reader went away", err)
+        first = piped_to_head(self, self.conf("-", 20000))
+        self.assertRegex(first, rb"^\(\d+\.\d{6}\) can0 [0-9A-F]{3}#")
 
 
 class OutputFaults(unittest.TestCase):
@@ -344,13 +356,8 @@ class OutputFaults(unittest.TestCase):
         # = 1, a <4> (warning) line says "No space left on device"; after
         # SIGTERM the exit status is 74.
         path = conf(self.tmp, "/dev/full", modbus=True)
-        p = subprocess.Popen([TRAJD, "-f", "-c", path], stdin=subprocess.DEVNULL,
-                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        p, lines, port = mbsim.start_trajd([TRAJD, "-f", "-c", path], WAIT_S)
         try:
-            lines = mbsim.Lines(p.stderr)
-            line = lines.wait_for("modbus: TCP on", WAIT_S)
-            self.assertIsNotNone(line, "".join(lines.all))
-            port = mbsim.port_of(line)
             warn = lines.wait_for("No space left on device", WAIT_S)
             self.assertIsNotNone(warn, "".join(lines.all))
             self.assertTrue(warn.startswith("<4>"), warn)
@@ -373,11 +380,8 @@ class OutputFaults(unittest.TestCase):
         # the lines held for /dev/full overflow the output's buffer
         # (CSV_TRANSPORT_BUF_BYTES) while it streams, not only at the exit
         track(os.path.join(self.tmp, "track.csv"), n=1200)
-        path = conf(self.tmp, "/dev/full", extra_daemon="exit_when_done = yes\n")
-        with open(path) as f:
-            text = f.read().replace("output = csv\n", "output = csv, can\n")
-        with open(path, "w") as f:
-            f.write(text + "[can]\nlog_out = %s\nlog_time = engine\nmax_late_ms = 0\n"
+        path = conf(self.tmp, "/dev/full", extra_daemon="exit_when_done = yes\n", output="csv, can",
+                    tail="[can]\nlog_out = %s\nlog_time = engine\nmax_late_ms = 0\n"
                     % os.path.join(self.tmp, "can.log"))
         rc, err = run(path)
         self.assertEqual(rc, EX_IOERR, err)
@@ -429,21 +433,8 @@ class OutputFaults(unittest.TestCase):
         # Given `trajd -f -c config/demo.conf | head -1`, when head has read
         # its line and exits, then trajd ends by itself within the bound,
         # with status 141, and says why.
-        p = subprocess.Popen([TRAJD, "-f", "-c", DEMO], stdin=subprocess.DEVNULL,
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-        try:
-            head = subprocess.run(["head", "-1"], stdin=p.stdout, stdout=subprocess.PIPE,
-                                  timeout=WAIT_S)
-            p.stdout.close()
-            self.assertTrue(head.stdout.startswith(b"object,"), head.stdout)
-            rc = p.wait(WAIT_S)
-        finally:
-            if p.poll() is None:
-                p.kill()
-                p.wait()
-        err = p.stderr.read().decode()
-        self.assertEqual(rc, EXIT_EPIPE, err)
-        self.assertIn("reader went away", err)
+        first = piped_to_head(self, DEMO)
+        self.assertTrue(first.startswith(b"object,"), first)
 
     def test_restart_appends_with_marker(self):
         # Given a CSV file written by one run, when trajd runs again on the
@@ -481,11 +472,8 @@ class OutputFaults(unittest.TestCase):
         # are kept, a marker line follows, and rows go on after it.
         out = os.path.join(self.tmp, "o.csv")
         path = conf(self.tmp, out)
-        p = subprocess.Popen([TRAJD, "-f", "-c", path], stdin=subprocess.DEVNULL,
-                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        p, lines = started(self, path)
         try:
-            lines = mbsim.Lines(p.stderr)
-            self.assertIsNotNone(lines.wait_for("started:", WAIT_S), "".join(lines.all))
             deadline = time.monotonic() + WAIT_S
             while os.path.getsize(out) < 10000 and time.monotonic() < deadline:
                 lines.wait_for("\0", 0.1)
@@ -647,11 +635,8 @@ class CanLogOutAppend(unittest.TestCase):
         """Run trajd on a 40 s track, SIGHUP once the log holds 100 lines;
         the bytes written before the reload, and stderr."""
         path = self.conf(extra_can, n=400, done=False)
-        p = subprocess.Popen([TRAJD, "-f", "-c", path], stdin=subprocess.DEVNULL,
-                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        p, lines = started(self, path)
         try:
-            lines = mbsim.Lines(p.stderr)
-            self.assertIsNotNone(lines.wait_for("started:", WAIT_S), "".join(lines.all))
             deadline = time.monotonic() + WAIT_S
             while len(self.lines()) < 100 and time.monotonic() < deadline:
                 lines.wait_for("\0", 0.1)
