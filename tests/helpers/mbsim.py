@@ -8,11 +8,12 @@ Everything waits for an event with a bounded timeout; nothing sleeps and hopes.
 import os
 import re
 import select
+import signal
 import socket
 import struct
 import subprocess
-import threading
 import tempfile
+import threading
 import time
 import unittest
 
@@ -153,7 +154,7 @@ class FedTrajdCase(unittest.TestCase):
                                                         self.WAIT_S)
 
     def tearDown(self):
-        self.p.send_signal(15)
+        self.p.send_signal(signal.SIGTERM)
         self.p.wait(self.WAIT_S)
         self.lines.wait_for("\0", 1)
         self.p.stderr.close()

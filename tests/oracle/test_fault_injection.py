@@ -87,6 +87,30 @@ def write_latlon(path, rows):
     return path
 
 
+def rejections(stderr):
+    """{line: reason} of trajreplay's 'file:line: rejected (reason)' lines."""
+    reported = {}
+    for line in stderr.splitlines():
+        if ": rejected (" in line:
+            where, why = line.split(": rejected (")
+            reported[int(where.rsplit(":", 1)[1])] = why.rstrip(")")
+    return reported
+
+
+def write_gpx(path, rows):
+    """A GPX 1.1 track of rows (lat, lon, ele, epoch s), one trkpt a line from
+    line 4; returns path."""
+    with open(path, "w") as f:
+        f.write('<?xml version="1.0" encoding="UTF-8"?>\n'
+                '<gpx version="1.1" creator="test_fault_injection.py" '
+                'xmlns="http://www.topografix.com/GPX/1/1">\n<trk><trkseg>\n')
+        for r in rows:
+            f.write('<trkpt lat="%.9f" lon="%.9f"><ele>%.3f</ele><time>%s</time></trkpt>\n'
+                    % (r[0], r[1], r[2], iso_of(r[3])))
+        f.write("</trkseg></trk></gpx>\n")
+    return path
+
+
 def pick_sites(rnd, n, hi, gap):
     """n fix indices drawn from [25, hi), each at least gap from the others."""
     sites = []
@@ -155,11 +179,7 @@ def test_faults(tmp):
     kept, injected, ndup, (t, lat, lon) = build(path)
     label = "figure-8 with faults"
     sp, s, p = tr.replay(path, ["--rate", str(RATE_HZ)] + SLACK8, tmp, "faults")
-    reported = {}
-    for line in p.stderr.splitlines():
-        if ": rejected (" in line:
-            where, why = line.split(": rejected (")
-            reported[int(where.rsplit(":", 1)[1])] = why.rstrip(")")
+    reported = rejections(p.stderr)
     print(f"{label}: injected {len(injected)} rows refused as "
           + ", ".join(f"{injected[l]}@{l}:{reported.get(l)}" for l in sorted(injected)))
     tr.check(set(reported) == set(injected),
@@ -294,12 +314,9 @@ def test_more_faults(tmp):
     kept, injected, nan_lines, (t, lat, lon), first = build_more(path)
     label = "figure-8 with more faults"
     sp, s, p = tr.replay(path, ["--rate", "100", "--skip-bad"], tmp, "more")
-    reported, skipped = {}, set()
+    reported, skipped = rejections(p.stderr), set()
     for line in p.stderr.splitlines():
-        if ": rejected (" in line:
-            where, why = line.split(": rejected (")
-            reported[int(where.rsplit(":", 1)[1])] = why.rstrip(")")
-        elif line.startswith("trajreplay: skipped ") and " bad line" not in line:
+        if line.startswith("trajreplay: skipped ") and " bad line" not in line:
             skipped.add(int(line.split(":")[2]))
     print(f"{label}: injected {len(injected)} rows refused as "
           + ", ".join(f"{injected[l]}@{l}:{reported.get(l)}" for l in sorted(injected))
@@ -374,12 +391,7 @@ def test_spike_every_site(tmp):
         def replay(rows, tag):
             path = write_latlon(os.path.join(tmp, f"{tag}.csv"), rows)
             sp, s, p = tr.replay(path, args, tmp, tag + "-out")
-            rep = {}
-            for line in p.stderr.splitlines():
-                if ": rejected (" in line:
-                    where, why = line.split(": rejected (")
-                    rep[int(where.rsplit(":", 1)[1])] = why.rstrip(")")
-            return sp, s, rep
+            return sp, s, rejections(p.stderr)
 
         sp0, s0, rep0 = replay(rows0, "clean")
         h = np.diff(t)
@@ -594,18 +606,8 @@ def build_gpx(tmp):
             injected[len(rows)] = k
             rows.append((r[0], r[1], r[2], round(r[3], 3)))
         ndup += k == "dup"
-    path = os.path.join(tmp, "visnjan_faults.gpx")
-    lines = {}
-    with open(path, "w") as f:
-        f.write('<?xml version="1.0" encoding="UTF-8"?>\n'
-                '<gpx version="1.1" creator="test_fault_injection.py" '
-                'xmlns="http://www.topografix.com/GPX/1/1">\n<trk><trkseg>\n')
-        for n, r in enumerate(rows):
-            lines[n] = 4 + n  # one trkpt a line, from line 4
-            f.write('<trkpt lat="%.9f" lon="%.9f"><ele>%.3f</ele><time>%s</time></trkpt>\n'
-                    % (r[0], r[1], r[2], iso_of(r[3])))
-        f.write("</trkseg></trk></gpx>\n")
-    return path, {lines[n]: k for n, k in injected.items()}, ndup, kept
+    path = write_gpx(os.path.join(tmp, "visnjan_faults.gpx"), rows)
+    return path, {4 + n: k for n, k in injected.items()}, ndup, kept  # trkpt n on line 4 + n
 
 
 def test_gpx_faults(tmp):
@@ -634,11 +636,7 @@ def test_gpx_faults(tmp):
     refused = {l for l, k in injected.items() if GPX_REASONS[k]}
     label = "visnjan.gpx with faults"
     sp, s, p = tr.replay(path, ["--rate", "10"] + SLACK8, tmp, "gpx-faults")
-    reported = {}
-    for line in p.stderr.splitlines():
-        if ": rejected (" in line:
-            where, why = line.split(": rejected (")
-            reported[int(where.rsplit(":", 1)[1])] = why.rstrip(")")
+    reported = rejections(p.stderr)
     print(f"{label}: injected " + ", ".join(f"{injected[l]}@{l}:{reported.get(l)}" for l in sorted(injected)))
     tr.check(set(reported) == refused, f"{label}: refused lines {sorted(reported)} != {sorted(refused)}")
     for l in refused:
@@ -691,11 +689,7 @@ def test_same_time_run(tmp):
     path = write_latlon(os.path.join(tmp, "same_run.csv"), rows)
     sp, s, p = tr.replay(path, args, tmp, "same_run-out")
     label = "visnjan, 5 fixes with one timestamp"
-    reported = {}
-    for line in p.stderr.splitlines():
-        if ": rejected (" in line:
-            where, why = line.split(": rejected (")
-            reported[int(where.rsplit(":", 1)[1])] = why.rstrip(")")
+    reported = rejections(p.stderr)
     tr.check(reported == {l: "same_time" for l in refused}, f"{label}: reported {reported}, want {sorted(refused)}")
     want = {"rejected": 4, "rejected_same_time": 4, "accepted": len(rows0) - 4}
     got = {k: s.get(k) for k in want}
@@ -725,26 +719,14 @@ def test_all_same_time(tmp):
     rows = [(t[0], a, b, c) for a, b, c in zip(lat, lon, alt)]
     n = len(rows)
     csv_path = write_latlon(os.path.join(tmp, "all_same.csv"), rows)
-    gpx_path = os.path.join(tmp, "all_same.gpx")
     epoch0 = 1408726132.0  # visnjan's first fix (tests/data/gpxgo_visnjan.csv epoch_s)
-    with open(gpx_path, "w") as f:
-        f.write('<?xml version="1.0" encoding="UTF-8"?>\n'
-                '<gpx version="1.1" creator="test_fault_injection.py" '
-                'xmlns="http://www.topografix.com/GPX/1/1">\n<trk><trkseg>\n')
-        for r in rows:  # one trkpt a line, from line 4
-            f.write('<trkpt lat="%.9f" lon="%.9f"><ele>%.3f</ele><time>%s</time></trkpt>\n'
-                    % (r[1], r[2], r[3], iso_of(epoch0)))
-        f.write("</trkseg></trk></gpx>\n")
+    gpx_path = write_gpx(os.path.join(tmp, "all_same.gpx"), [r[1:] + (epoch0,) for r in rows])
     ref = gpsbabel_points(gpx_path, tmp, "all_same")
     tr.check(len(ref) == n and len({p[3] for p in ref}) == 1, "gpsbabel: not one stamp for all")
     for path, first_line, ll in ((csv_path, 2, (lat[0], lon[0], alt[0])), (gpx_path, 4, ref[0][:3])):
         label = "visnjan, every fix at one time (%s)" % path.rsplit(".", 1)[1]
         sp, s, p = tr.replay(path, ["--rate", "10"], tmp, "all_same-out")
-        reported = {}
-        for line in p.stderr.splitlines():
-            if ": rejected (" in line:
-                where, why = line.split(": rejected (")
-                reported[int(where.rsplit(":", 1)[1])] = why.rstrip(")")
+        reported = rejections(p.stderr)
         want_rep = {first_line + i: "same_time" for i in range(1, 21)}
         tr.check(reported == want_rep, f"{label}: reported {reported}, want {sorted(want_rep)}")
         want = {"accepted": 1, "rejected": n - 1, "rejected_same_time": n - 1}

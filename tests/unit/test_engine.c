@@ -672,11 +672,11 @@ static void test_gap_transfer_clear(void **state)
     engine_free(e);
 }
 
+static double xfer_from[3], xfer_to[3]; /* the last transfer's ends (transfer_peaks) */
+
 /* Runs to FINISHED (or WAITING after a clear when until_waiting) and returns
  * the largest speed and acceleration of the ticks flagged TRANSFER, from the
  * positions alone (first and second differences over the period). */
-static double xfer_from[3], xfer_to[3]; /* the last transfer's ends (transfer_peaks) */
-
 static void transfer_peaks(engine_t *e, int64_t *k, int until_waiting, double *vmax, double *amax,
                            int *ticks)
 {
@@ -712,7 +712,8 @@ static void transfer_peaks(engine_t *e, int64_t *k, int until_waiting, double *v
     fail_msg("never finished");
 }
 
-/* Pushes a circle of 60 waypoints (1 s apart) moved by dt_s and dx_m. */
+/* Pushes a circle of 60 waypoints (1 s apart) moved by dt_s, dx_m and dy_m,
+ * its sequence numbers by seq0. */
 static void push_circle(engine_t *e, double dt_s, double dx_m, double dy_m, uint32_t seq0)
 {
     engine_waypoint_t w;
