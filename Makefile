@@ -38,6 +38,7 @@ FUZZ_SECONDS ?=
 FUZZ_EXECS ?=
 FUZZ_JOBS ?= 2
 FUZZ_TARGETS ?=
+COUNTS ?=
 PYTHON ?= /usr/bin/python3
 
 PROGRAMS := trajd trajreplay trajsurf
@@ -83,6 +84,7 @@ BENCHES := $(BENCH_SRC:tests/bench/%.c=$(BUILD)/tests/%)
 # Each fuzz target with a plain main (tests/fuzz/replay.c): a C test that replays
 # tests/fuzz/regress/<target>/ and tests/fuzz/corpus/<target>/.
 REPLAY_BINS := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/tests/test_%)
+UML_HELPERS := $(BUILD)/tests/uml/xstate_preload.so $(BUILD)/tests/uml/xstate_check
 
 # Manual pages (daemon/doc/): hand-written troff with @VERSION@/@DATADIR@, and
 # trajd.conf(5) generated from config/trajd.conf's comments (one source each).
@@ -95,7 +97,7 @@ MANS := $(MAN_SRC:daemon/doc/%=$(BUILD)/man/%) $(BUILD)/man/trajd.conf.5
 .SECONDARY:
 
 all: $(MANS) $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/libtrajdaemon.a $(BINS) $(TEST_BINS) $(BENCHES) \
-     $(REPLAY_BINS)
+     $(REPLAY_BINS) $(UML_HELPERS)
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(@D)
@@ -166,6 +168,15 @@ $(BENCHES): $(BUILD)/tests/%: $(BUILD)/tests/bench/%.o $(BUILD)/libtrajdaemon.a 
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_TEST)
 
+# user-mode-linux on hosts with a large XSAVE area (AVX-512, AMX): the ptrace()
+# wrapper tests/uml/host.sh preloads, and the check of it (test_uml_xstate.sh).
+$(BUILD)/tests/uml/xstate_preload.so: tests/uml/xstate_preload.c
+	@mkdir -p $(@D)
+	$(CC) -std=c11 -D_GNU_SOURCE $(WARN) $(CFLAGS) -shared -fPIC -o $@ $< -ldl
+$(BUILD)/tests/uml/xstate_check: tests/uml/xstate_check.c
+	@mkdir -p $(@D)
+	$(CC) -std=c11 -D_GNU_SOURCE $(WARN) $(CFLAGS) -o $@ $<
+
 $(BUILD)/man/%: daemon/doc/% daemon/core/version.h
 	@mkdir -p $(@D)
 	sed -e 's|@VERSION@|$(VERSION)|g' -e 's|@DATADIR@|$(PREFIX)/share|g' $< > $@
@@ -201,11 +212,17 @@ run: deps-run
 	@$(MAKE) --no-print-directory $(BUILD)/bin/trajd
 	$(BUILD)/bin/trajd -f -c config/demo.conf
 
+# The plain pass and the sanitizer pass both run, whatever the first gives; the
+# last line adds them up (tests/run.sh appends each pass's counts to COUNTS).
+CHECK_COUNTS = $(abspath $(BUILD))/check-counts
 check: deps
 	@$(MAKE) --no-print-directory check-build
 	@$(MAKE) --no-print-directory format-check
-	@BUILD=$(abspath $(BUILD)) PYTHON=$(PYTHON) sh tests/run.sh
-	@$(MAKE) --no-print-directory test-asan
+	@rm -f $(CHECK_COUNTS); \
+	BUILD=$(abspath $(BUILD)) PYTHON=$(PYTHON) COUNTS=$(CHECK_COUNTS) sh tests/run.sh; \
+	$(MAKE) --no-print-directory test-asan COUNTS=$(CHECK_COUNTS); \
+	awk '{p += $$1; f += $$2; s += $$3; n++} END { if (n < 2) f++; \
+		printf "check: %d passed, %d failed, %d skipped\n", p, f, s; exit f > 0 }' $(CHECK_COUNTS)
 
 check-build: all
 
@@ -218,7 +235,7 @@ test-asan:
 	@$(MAKE) --no-print-directory BUILD=$(BUILD)/asan CFLAGS="-O1 -g $(SAN)" \
 		LDFLAGS="$(SAN)" $(TEST_BINS:$(BUILD)/%=$(BUILD)/asan/%) $(BINS:$(BUILD)/%=$(BUILD)/asan/%) \
 		$(REPLAY_BINS:$(BUILD)/%=$(BUILD)/asan/%)
-	@BUILD=$(abspath $(BUILD)/asan) ONLY=c sh tests/run.sh
+	@BUILD=$(abspath $(BUILD)/asan) ONLY=c COUNTS=$(COUNTS) sh tests/run.sh
 
 # ---- static analysis and formatting -----------------------------------------
 # cppcheck (Debian 12: 2.10) on every C file, in the one configuration we build

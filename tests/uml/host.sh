@@ -21,19 +21,44 @@ uml_boot() {
     # without HOME (env -i, some service managers) it panics at boot.  A short
     # temporary path (the socket's name must fit in 108 bytes), removed after.
     umldir=$(mktemp -d) || return 1
+    # UML 6.1 sets its processes' FPU state with a buffer of the older XSAVE
+    # size, which hosts with AVX-512 or AMX refuse (EFAULT: the guest panics
+    # with "ptrace set fp regs failed, errno = 14"): the ptrace() wrapper
+    # retries with the host's full size (tests/uml/xstate_preload.c).
+    local preload=${BUILD:-$PWD/build}/tests/uml/xstate_preload.so
+    [ -f "$preload" ] || { echo "uml: $preload missing (make all builds it)"; rm -rf "$umldir"; return 1; }
     start_ms=$(( $(date +%s%N) / 1000000 ))
     # Host timeout > guest timeout, so a hung scenario still leaves a verdict file.
+    LD_PRELOAD="$preload" TRAJD_XSTATE_LOG="$run/xstate.log" \
     timeout -k 5 $((tmo + 20)) linux.uml uml_dir="$umldir" mem=256M rootfstype=hostfs rootflags=/ ro \
         quiet loglevel=1 init="$PWD/tests/uml/init.sh" trajd_dir="$run" trajd_script="$script" \
         trajd_src="$PWD" trajd_timeout="$tmo" con=null con0=null,fd:1 < /dev/null > "$run/console.log" 2>&1
     rm -rf "$umldir"
     # (shell arithmetic: bc is not on a minimal Debian)
-    echo "uml: boot and $script took $(( $(date +%s%N) / 1000000 - start_ms )) ms"
+    echo "uml: boot and $script took $(( $(date +%s%N) / 1000000 - start_ms )) ms" \
+         "(CAN path: vcan in a user-mode-linux $(linux.uml --version 2>/dev/null | head -1) guest;" \
+         "$(cat "$run/xstate.log" 2>/dev/null || echo "xstate: host size accepted"))"
     cat "$run/guest.log" 2>/dev/null
-    [ -f "$run/rc" ] || { echo "no verdict file: the guest did not finish"; cat "$run/console.log"; return 1; }
+    [ -f "$run/rc" ] || { uml_no_verdict "$run/console.log"; return 1; }
     rc=$(cat "$run/rc")
     echo "uml: guest exit code $rc"
     [ "$rc" = 0 ] && return 0
     for f in "$@"; do echo "== $f"; tail -30 "$f"; done
     return 1
+}
+
+# uml_no_verdict CONSOLE: one line naming why the guest gave no verdict (the
+# console has the whole kernel trace).
+uml_no_verdict() {
+    local why
+    if grep -q 'ptrace set fp regs failed' "$1"; then
+        why="the guest panicked at boot: ptrace set fp regs failed (the host's XSAVE area is larger than UML's and the ptrace wrapper did not widen it)"
+    elif why=$(grep -m1 -o 'Kernel panic.*' "$1"); then
+        why="the guest panicked: $why"
+    elif [ ! -s "$1" ]; then
+        why="linux.uml printed nothing (killed by the host timeout?)"
+    else
+        why="the guest did not finish: $(grep -v '^ *\[<' "$1" | grep . | tail -1)"
+    fi
+    echo "uml: $why (console: $1)"
 }
