@@ -11,7 +11,7 @@
 set -u
 cd "$(dirname "$0")/../.." || exit 1
 : "${BUILD:?BUILD must be set}"
-command -v log2asc > /dev/null || { echo "SKIP: log2asc (can-utils) not installed"; exit 0; }
+command -v log2asc > /dev/null || { echo "FAIL: log2asc (can-utils) not installed (make deps installs it)"; exit 1; }
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
 run() { # log_time value ("" = default) -> $tmp/out.log

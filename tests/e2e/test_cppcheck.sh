@@ -5,7 +5,7 @@
 set -eu
 cd "$(dirname "$0")/../.."
 if ! command -v cppcheck > /dev/null; then
-    echo "SKIP: cppcheck is not installed (make check installs it with DEPS_TEST)"
-    exit 0
+    echo "FAIL: cppcheck is not installed (make check installs it with DEPS_TEST)"
+    exit 1
 fi
 exec make -s --no-print-directory lint BUILD="${BUILD:-build}"

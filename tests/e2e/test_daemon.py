@@ -605,7 +605,6 @@ class TestReloadUnderValgrind(unittest.TestCase):
             self.assertIn("ERROR SUMMARY: 0 errors", vg)
 
 
-@unittest.skipUnless(os.access(TRAJREPLAY, os.X_OK), "trajreplay not built in this tree")
 class TestReplayMatchesTrajreplay(unittest.TestCase):
     def compare(self, name, dl, rl, missed):
         """Every row trajd wrote for object name equals trajreplay's row for

@@ -13,7 +13,7 @@
 set -u
 cd "$(dirname "$0")/../.." || exit 1
 : "${BUILD:?BUILD must be set}"
-command -v pkg-config > /dev/null || { echo "SKIP: pkg-config not installed"; exit 0; }
+command -v pkg-config > /dev/null || { echo "FAIL: pkg-config not installed (make deps installs it)"; exit 1; }
 PREFIX=/usr
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 dest="$tmp/root"

@@ -12,7 +12,7 @@ set -u
 cd "$(dirname "$0")/../.." || exit 1
 : "${BUILD:?BUILD must be set}"
 command -v groff > /dev/null && command -v man > /dev/null ||
-    { echo "SKIP: groff-base and man-db not installed (make deps)"; exit 0; }
+    { echo "FAIL: groff-base and man-db not installed (make deps installs them)"; exit 1; }
 man_dir="$BUILD/man"
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 fail=0

@@ -72,7 +72,6 @@ def rows(data):
     return [l.split(",") for l in lines[1:]]
 
 
-@unittest.skipUnless(os.access(TRAJREPLAY, os.X_OK), "trajreplay not built in this tree")
 class TestGapsAndBounds(unittest.TestCase):
     def setUp(self):
         self.tmpdir = tempfile.TemporaryDirectory()
@@ -238,7 +237,6 @@ class TestGapsAndBounds(unittest.TestCase):
         self.assertAlmostEqual(float(r[-1][3]), 97090.0, delta=1e-6)
 
 
-@unittest.skipUnless(os.access(TRAJREPLAY, os.X_OK), "trajreplay not built in this tree")
 class TestRejectionsReported(unittest.TestCase):
     def setUp(self):
         self.tmpdir = tempfile.TemporaryDirectory()
@@ -331,7 +329,6 @@ class TestRejectionsReported(unittest.TestCase):
         self.assertEqual(p.returncode, 0, p.stderr)
 
 
-@unittest.skipUnless(os.access(TRAJD, os.X_OK), "trajd not built in this tree")
 class TestTrajdNothingUsable(unittest.TestCase):
     def test_exit_when_done(self):
         # Given trajd replaying a track with no usable waypoint (every x is
@@ -369,7 +366,6 @@ class TestTrajdNothingUsable(unittest.TestCase):
             self.assertEqual(rc, 0, err[-500:])
 
 
-@unittest.skipUnless(os.access(TRAJREPLAY, os.X_OK), "trajreplay not built in this tree")
 class TestUniformIrregular(unittest.TestCase):
     def test_warned_once_with_the_numbers(self):
         """Given the Visnjan walk (fixes 1 to 20 s apart, every one kept), when
@@ -401,7 +397,6 @@ class TestUniformIrregular(unittest.TestCase):
         self.assertNotIn("param = uniform", err)
 
 
-@unittest.skipUnless(os.access(TRAJREPLAY, os.X_OK), "trajreplay not built in this tree")
 class TestNoHardStops(unittest.TestCase):
     def test_every_track_method_param(self):
         """Given every real track in tests/data replayed with every method and

@@ -36,7 +36,6 @@ def first_lines(src, dst, n):
         write(dst, "".join(f.readlines()[:n]))
 
 
-@unittest.skipUnless(os.access(TRAJREPLAY, os.X_OK), "trajreplay not built in this tree")
 class TestConfigMode(unittest.TestCase):
     # every engine key set away from its default (a valid combination)
     ENGINE_KEYS = {
