@@ -24,6 +24,7 @@ transport (the same codec and can_port as on a socket, no kernel needed):
 import errno
 import math
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -479,7 +480,14 @@ class CanLogInRefused(unittest.TestCase):
         msg = "%s:%d: [can]: log_in %s: %s" % (path, self.LOG_IN_LINE, os.path.join(d, "wp.log"),
                                                why)
         kw = {"user": user} if user is not None else {}
-        p = subprocess.run([TRAJD, "--check-config", path], capture_output=True, text=True,
+        trajd = TRAJD
+        if user is not None:
+            # the user may not reach the checkout (under a directory only root
+            # may enter, e.g. mktemp -d): run a copy from d, which it can
+            trajd = os.path.join(d, "trajd")
+            shutil.copy(TRAJD, trajd)
+            os.chmod(trajd, 0o755)
+        p = subprocess.run([trajd, "--check-config", path], capture_output=True, text=True,
                            timeout=RUN_TIMEOUT_S, **kw)
         self.assertEqual(p.returncode, 78, p.stdout + p.stderr)
         self.assertIn(msg, p.stderr)
@@ -488,7 +496,7 @@ class CanLogInRefused(unittest.TestCase):
                 text = fh.read().replace("exit_when_done = yes", "exit_when_done = " + when_done)
             with open(path, "w") as fh:
                 fh.write(text)
-            p = subprocess.run([TRAJD, "-f", "-c", path], capture_output=True, text=True,
+            p = subprocess.run([trajd, "-f", "-c", path], capture_output=True, text=True,
                                timeout=RUN_TIMEOUT_S, **kw)
             self.assertEqual(p.returncode, 78, when_done + ": " + p.stderr[-800:])
             self.assertIn(msg, p.stderr)
