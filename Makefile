@@ -86,7 +86,7 @@ BENCHES := $(BENCH_SRC:tests/bench/%.c=$(BUILD)/tests/%)
 REPLAY_BINS := $(FUZZ_SRC:tests/fuzz/%.c=$(BUILD)/tests/test_%)
 UML_HELPERS := $(BUILD)/tests/uml/xstate_preload.so $(BUILD)/tests/uml/xstate_check
 
-# Manual pages (daemon/doc/): hand-written troff with @VERSION@/@DATADIR@, and
+# Manual pages (daemon/doc/): hand-written troff with @VERSION@/@DATADIR@/@PREFIX@, and
 # trajd.conf(5) generated from config/trajd.conf's comments (one source each).
 VERSION := $(shell sed -n 's/^\#define TRAJD_VERSION "\(.*\)"$$/\1/p' daemon/core/version.h)
 MAN_SRC := $(wildcard daemon/doc/*.[1-8])
@@ -179,7 +179,7 @@ $(BUILD)/tests/uml/xstate_check: tests/uml/xstate_check.c
 
 $(BUILD)/man/%: daemon/doc/% daemon/core/version.h
 	@mkdir -p $(@D)
-	sed -e 's|@VERSION@|$(VERSION)|g' -e 's|@DATADIR@|$(PREFIX)/share|g' $< > $@
+	sed -e 's|@VERSION@|$(VERSION)|g' -e 's|@DATADIR@|$(PREFIX)/share|g' -e 's|@PREFIX@|$(PREFIX)|g' $< > $@
 
 $(BUILD)/man/trajd.conf.5: config/trajd.conf daemon/doc/conf2man.awk daemon/core/version.h
 	@mkdir -p $(@D)

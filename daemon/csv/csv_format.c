@@ -160,7 +160,7 @@ void csv_format_bin_header(unsigned char *buf, const char *object)
     put_le(buf + 12, CSV_BIN_RECORD, 4);
     if (object) {
         size_t n = strlen(object);
-        memcpy(buf + 16, object, n < 47 ? n : 47);
+        memcpy(buf + 16, object, n < SPFILE_OBJECT_MAX ? n : SPFILE_OBJECT_MAX);
     }
 }
 

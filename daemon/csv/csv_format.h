@@ -14,6 +14,7 @@
 
 #include <stddef.h>
 #include "engine.h"
+#include "spfile.h"
 
 /* A buffer this size always holds one line (16 doubles at most 24 chars each,
  * integers, a state name and an object name of up to CSV_FORMAT_OBJECT_MAX bytes). */
@@ -62,36 +63,11 @@ int csv_format_add_age(char *buf, size_t len, int n, const engine_setpoint_t *sp
 int csv_format_format_prec(char *buf, size_t len, const char *object, const engine_setpoint_t *sp,
                            int prec);
 
-/*
- * Binary setpoint file (trajreplay --binary): a 64-byte header, then one
- * 112-byte record per setpoint, all little-endian, no padding:
- *
- *   header  offset  0  char[8]   magic "TRAJDSP1"
- *                   8  uint32    header size (64)
- *                  12  uint32    record size (112)
- *                  16  char[48]  object name, NUL padded (CSV_FORMAT_OBJECT_MAX
- *                                characters may not fit: cut at 47)
- *   record  offset  0  int64     now_ns
- *                   8  float64   t_s
- *                  16  float64   x_m, y_m, z_m
- *                  40  float64   vx_m_s, vy_m_s, vz_m_s
- *                  64  float64   ax_m_s2, ay_m_s2, az_m_s2
- *                  88  uint32    state (0 waiting, 1 streaming, 2 underrun, 3 finished)
- *                  92  uint32    flags (ENGINE_SP_*)
- *                  96  uint32    cycle
- *                 100  uint32    track
- *                 104  uint64    reserved (0)
- *
- * numpy reads it with
- *   dt = np.dtype([("now_ns", "<i8"), ("t_s", "<f8"), ("pos_m", "<f8", 3),
- *                  ("vel_m_s", "<f8", 3), ("acc_m_s2", "<f8", 3), ("state", "<u4"),
- *                  ("flags", "<u4"), ("cycle", "<u4"), ("track", "<u4"), ("reserved", "<u8")])
- *   rows = np.fromfile(path, dtype=dt, offset=64)
- * The doubles are the engine's, bit for bit (no rounding to text).
- */
-#define CSV_BIN_MAGIC "TRAJDSP1"
-#define CSV_BIN_HEADER 64
-#define CSV_BIN_RECORD 112
+/* Binary setpoint file (trajreplay --binary): the layout is public, in
+ * lib/format/spfile.h (installed), and in trajreplay(1) "BINARY FORMAT". */
+#define CSV_BIN_MAGIC SPFILE_MAGIC
+#define CSV_BIN_HEADER SPFILE_HEADER
+#define CSV_BIN_RECORD SPFILE_RECORD
 
 /* The header into buf (CSV_BIN_HEADER bytes). */
 void csv_format_bin_header(unsigned char *buf, const char *object);

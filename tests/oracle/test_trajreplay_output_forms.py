@@ -6,7 +6,9 @@ our formatter) of the default CSV's numbers, and numpy.fromfile reading the
 binary layout documented in daemon/csv/csv_format.h.
 Run with /usr/bin/python3 (Debian numpy).
 """
+import ast
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -18,10 +20,20 @@ TRAJREPLAY = os.path.join(BUILD, "bin", "trajreplay")
 DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data")
 TRACKS = [os.path.join(DATA, "n2k_furuno_figure8_src52.csv"), os.path.join(DATA, "gpxgo_visnjan.csv")]
 STATES = {"waiting": 0, "streaming": 1, "underrun": 2, "finished": 3}
-# The record layout of daemon/csv/csv_format.h, as a user would write it.
-DTYPE = np.dtype([("now_ns", "<i8"), ("t_s", "<f8"), ("pos_m", "<f8", 3), ("vel_m_s", "<f8", 3),
-                  ("acc_m_s2", "<f8", 3), ("state", "<u4"), ("flags", "<u4"), ("cycle", "<u4"),
-                  ("track", "<u4"), ("reserved", "<u8")])
+# The record layout as trajreplay(1) "BINARY FORMAT" gives it to a user: its
+# np.dtype line, taken from the man page's source (and the same in
+# lib/format/spfile.h's comment), so the documented reader is what is tested.
+MAN = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "daemon", "doc", "trajreplay.1")
+SPFILE_H = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "lib", "format", "spfile.h")
+
+
+def documented_dtype(path):
+    text = open(path).read()
+    m = re.search(r"np\.dtype\((\[.*?\])\)", text.replace("\n *  ", " ").replace("\n *", " "), re.S)
+    return np.dtype(ast.literal_eval(m.group(1))) if m else None
+
+
+DTYPE = documented_dtype(MAN)
 
 failures = 0
 
@@ -64,6 +76,8 @@ with tempfile.TemporaryDirectory() as tmp:
                   f"{name}: --precision {prec}: {len(got)} rows, {bad} differ from Python's %.{prec}f")
 
         # --binary: numpy.fromfile with the documented layout gives the same doubles.
+        check(DTYPE is not None and documented_dtype(SPFILE_H) == DTYPE,
+              "trajreplay(1) and spfile.h give one numpy dtype")
         out = os.path.join(tmp, "sp.bin")
         check(replay(["--binary", "--object", "boat", track], out) == 0, f"{name}: --binary")
         raw = open(out, "rb").read(64)
