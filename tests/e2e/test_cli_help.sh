@@ -35,5 +35,15 @@ for bin in "$BUILD"/bin/*; do
     [ -s "$tmp/err" ] || bad "$p --no-such-option: no message on stderr"
 done
 [ "$n" -ge 3 ] || bad "only $n programs in $BUILD/bin"
-[ "$fail" -eq 0 ] && echo "ok: $n programs answer --help, -h, --version, -V (version $version) and refuse an unknown option"
+# The Python helpers the docs advertise answer --help too (exit 0, text on stdout).
+PY=${PYTHON:-/usr/bin/python3}
+for h in $(grep -ohE '(tests/helpers|daemon/doc/examples)/[a-z_]+\.py' README.md daemon/README.md \
+           config/PROTOCOL.md daemon/doc/*.md | sort -u); do
+    [ -f "$h" ] || { bad "$h is advertised by the docs but does not exist"; continue; }
+    n=$((n + 1))
+    "$PY" "$h" --help > "$tmp/out" 2> "$tmp/err"; rc=$?
+    [ "$rc" -eq 0 ] || bad "$h --help: exit $rc, want 0: $(tail -c 200 "$tmp/err")"
+    [ -s "$tmp/out" ] || bad "$h --help: nothing on stdout"
+done
+[ "$fail" -eq 0 ] && echo "ok: $n programs and helpers answer --help, -h, --version, -V (version $version) and refuse an unknown option"
 exit "$fail"

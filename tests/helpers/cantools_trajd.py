@@ -5,7 +5,10 @@ same way.  Also a command line for the guest scenarios:
   cantools_trajd.py xyz IN.csv OUT.csv N         lat/lon track -> xyz CSV (6 decimals), first N rows
   cantools_trajd.py wplog IN_xyz.csv OUT.log [--fd] [--foreign CAPTURE]
                                                   waypoint frames as a candump log stamped at t
-  cantools_trajd.py compare SP.log REPLAY.csv     decode setpoints, compare with trajreplay
+  cantools_trajd.py compare SP.log REPLAY.csv [N]  decode setpoints, compare with trajreplay
+  cantools_trajd.py uml-check RUN TRACK.csv REF.csv  the UML CAN scenarios' captures (test_can_uml.sh)
+  cantools_trajd.py drive-check RUN               the UML drive scenario's capture (test_drive_uml.sh)
+  cantools_trajd.py --help                        this text
 """
 import csv
 import decimal
@@ -477,6 +480,9 @@ def drive_check(run):
 
 
 if __name__ == "__main__":
+    if len(sys.argv) < 2 or sys.argv[1] in ("-h", "--help"):
+        print(__doc__.strip())
+        sys.exit(0 if len(sys.argv) >= 2 else 2)
     cmd = sys.argv[1]
     if cmd == "xyz":
         to_xyz(sys.argv[2], sys.argv[3], int(sys.argv[4]))
