@@ -11,6 +11,9 @@
    replays that log ([can] log_in), accepts every waypoint and finishes on
    the last one.  (Its paced mode on a live bus is run in the UML guest:
    tests/uml/daemon.sh.)
+3. config/PROTOCOL.md's canmatrix snippet ("Feeding trajd from a log"), run
+   as written: its frame is the X frame of waypoint 7 at 12.5 m, as the
+   frame layout in that document gives it byte by byte.
 """
 import csv
 import os
@@ -133,6 +136,23 @@ class CanSenderTest(unittest.TestCase):
             self.assertEqual(last["state"], "finished")
             for a, v in zip("xyz", rows[-1][1:]):
                 self.assertAlmostEqual(float(last[a + "_m"]), float(v), delta=1e-6)
+
+
+class ProtocolSnippetTest(unittest.TestCase):
+    def test_canmatrix_snippet(self):
+        text = open(os.path.join(ROOT, "config", "PROTOCOL.md")).read()
+        block = text.split("With canmatrix:\n\n", 1)[1].split("\n\n", 1)[0]
+        code = "\n".join(line[6:] for line in block.splitlines())
+        scope = {}
+        cwd = os.getcwd()
+        os.chdir(ROOT)   # the snippet names config/trajd.dbc from the repository's root
+        try:
+            exec(compile(code, "PROTOCOL.md", "exec"), scope)
+        finally:
+            os.chdir(cwd)
+        # mux 1 (X), seq 7, then the position as int48 little-endian in um
+        want = bytes([1, 7]) + (12500000).to_bytes(6, "little", signed=True)
+        self.assertEqual(scope["data"], want)
 
 
 if __name__ == "__main__":
