@@ -15,9 +15,9 @@ const char *safety_strerror(int fault)
     case SAFETY_OK: return "ok";
     case SAFETY_FNOTFINITE: return "position not finite (or lost after having one)";
     case SAFETY_FTIME: return "tick time did not advance";
-    case SAFETY_FSTEP: return "step above max_step_m";
-    case SAFETY_FSPEED: return "speed above max_speed_m_s";
-    case SAFETY_FACCEL: return "acceleration above max_accel_m_s2";
+    case SAFETY_FSTEP: return "step above safety_max_step_m";
+    case SAFETY_FSPEED: return "speed above safety_max_speed_m_s";
+    case SAFETY_FACCEL: return "acceleration above safety_max_accel_m_s2";
     default: return "unknown safety fault";
     }
 }

@@ -42,9 +42,9 @@ enum safety_fault {
     SAFETY_OK = 0,
     SAFETY_FNOTFINITE = 1, /* a position is NaN or infinite, or lost after having one */
     SAFETY_FTIME = 2,      /* the tick time did not advance */
-    SAFETY_FSTEP = 3,      /* step above max_step_m */
-    SAFETY_FSPEED = 4,     /* step / dt above max_speed_m_s */
-    SAFETY_FACCEL = 5,     /* change of step / dt per dt above max_accel_m_s2 */
+    SAFETY_FSTEP = 3,      /* step above safety_max_step_m */
+    SAFETY_FSPEED = 4,     /* step / dt above safety_max_speed_m_s */
+    SAFETY_FACCEL = 5,     /* change of step / dt per dt above safety_max_accel_m_s2 */
     SAFETY_FAULT_COUNT
 };
 

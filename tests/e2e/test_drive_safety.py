@@ -179,7 +179,10 @@ class DriveSafety(unittest.TestCase):
                 self.assertTrue(r["flags"] & F_FAULT and r["flags"] & F_HOLD, r)
                 self.assertEqual(r["p"], rows[first - 1]["p"])
             # and the daemon says so: a log line and its summary
-            self.assertIn("safety monitor: speed above max_speed_m_s", p.stderr)
+            # naming the key that sets the bound, as config/trajd.conf spells it
+            self.assertIn("safety monitor: speed above safety_max_speed_m_s", p.stderr)
+            conf_text = open(os.path.join(REPO, "config", "trajd.conf")).read()
+            self.assertRegex(conf_text, r"(?m)^#?safety_max_speed_m_s = ")
             self.assertIn("SAFETY FAULT", p.stderr)
             print("safety: held from row %d of %d at %s" % (first, len(rows), rows[first]["p"]),
                   file=sys.stderr)
