@@ -350,7 +350,14 @@ fuzz-merge:
 # config is kept, as dpkg keeps a changed conffile).
 LIB_HEADERS := lib/motion.h $(wildcard lib/*/*.h)
 DOCDIR := $(PREFIX)/share/doc/trajd
-INSTALLED_CONF = sed 's|^replay.track = .*|replay.track = $(PREFIX)/share/trajd/tracks/n2k_furuno_figure8_src52.csv|' config/trajd.conf
+TRACKDIR := $(PREFIX)/share/trajd/tracks
+# Configs as installed: track paths that resolve there (the demo track is
+# installed beside them), and /etc/trajd/trajd.conf kept running as a service:
+# once the demo track has played, the object rests at its end and the Modbus
+# server goes on serving (exit_when_done = no), until it is stopped.
+INSTALLED_TRACK = sed 's|^replay.track = .*/\([^/]*\)$$|replay.track = $(TRACKDIR)/\1|'
+INSTALLED_CONF = $(INSTALLED_TRACK) config/trajd.conf | \
+	sed 's|^exit_when_done = yes$$|exit_when_done = no|; s|^\# This example replays one track once, so it is on here.$$|\# As installed (a service): off, so trajd keeps serving once the demo track has played.|'
 install: $(BINS) $(MANS) $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/trajd.pc
 	install -d $(DESTDIR)$(PREFIX)/share/man/man1 $(DESTDIR)$(PREFIX)/share/man/man5 \
 		$(DESTDIR)$(PREFIX)/share/man/man8
@@ -366,9 +373,14 @@ install: $(BINS) $(MANS) $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/trajd
 	install -m 644 $(BUILD)/trajd.pc $(DESTDIR)$(LIBDIR)/pkgconfig/
 	install -m 644 $(LIB_HEADERS) $(DESTDIR)$(PREFIX)/include/trajd/
 	install -m 644 config/trajd.dbc config/trajd.lua $(DESTDIR)$(PREFIX)/share/trajd/
-	install -m 644 config/trajd.conf config/demo.conf daemon/doc/examples/trajd_client.c \
+	install -m 644 daemon/doc/examples/trajd_client.c \
 		daemon/doc/examples/trajd_can_sender.py daemon/doc/examples/trajd_modbus_hmi.py \
 		$(DESTDIR)$(DOCDIR)/examples/
+	$(INSTALLED_CONF) > $(DESTDIR)$(DOCDIR)/examples/trajd.conf
+	$(INSTALLED_TRACK) config/demo.conf > $(DESTDIR)$(DOCDIR)/examples/demo.conf
+	chmod 644 $(DESTDIR)$(DOCDIR)/examples/trajd.conf $(DESTDIR)$(DOCDIR)/examples/demo.conf
+	install -m 644 README.md config/PROTOCOL.md lib/engine/CLOCK.md lib/engine/TIMESCALE.md $(DESTDIR)$(DOCDIR)/
+	install -m 644 daemon/README.md $(DESTDIR)$(DOCDIR)/REFERENCE.md
 	install -m 644 tests/data/n2k_furuno_figure8_src52.csv tests/data/ATTRIBUTION.md \
 		$(DESTDIR)$(PREFIX)/share/trajd/tracks/
 	test -e $(DESTDIR)$(SYSCONFDIR)/trajd/trajd.conf || { \

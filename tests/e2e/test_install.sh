@@ -48,6 +48,46 @@ cc -std=c11 "$tmp/client.c" -static $(pkg-config --static --cflags --libs trajd)
     fail "static client does not build"
 "$tmp/client_static" > /dev/null || fail "static client run"
 
+for f in share/doc/trajd/PROTOCOL.md share/doc/trajd/README.md share/doc/trajd/REFERENCE.md \
+         share/doc/trajd/CLOCK.md share/doc/trajd/TIMESCALE.md share/doc/trajd/examples/demo.conf \
+         share/trajd/tracks/n2k_furuno_figure8_src52.csv; do
+    [ -e "$dest$PREFIX/$f" ] || fail "missing $PREFIX/$f"
+done
+
+# Installed where it runs (PREFIX and SYSCONFDIR in a directory of the test's,
+# no DESTDIR): every installed config passes the installed trajd's
+# --check-config as it lies (its paths resolve there), and /etc/trajd/trajd.conf
+# runs as a service would: past the end of its demo track it keeps serving.
+live="$tmp/live"
+make --no-print-directory install BUILD="$BUILD" PREFIX="$live" SYSCONFDIR="$live/etc" > "$tmp/log" 2>&1 ||
+    { cat "$tmp/log"; fail "make install PREFIX=$live"; }
+for c in "$live/etc/trajd/trajd.conf" "$live"/share/doc/trajd/examples/*.conf; do
+    # (the output file the service writes in its RuntimeDirectory, here a directory of ours)
+    sed "s|^csv.path = /run/trajd/|csv.path = $tmp/|" "$c" > "$tmp/check.conf"
+    cp "$tmp/check.conf" "$(dirname "$c")/check-$(basename "$c")"
+    "$live/bin/trajd" --check-config "$(dirname "$c")/check-$(basename "$c")" > "$tmp/cc.log" 2>&1 ||
+        { cat "$tmp/cc.log"; fail "installed $(basename "$c") does not pass --check-config"; }
+    rm -f "$(dirname "$c")/check-$(basename "$c")"
+done
+grep -q '^exit_when_done = no$' "$live/etc/trajd/trajd.conf" || fail "the installed trajd.conf exits when its replay ends"
+# At speed 200 the 360 s demo track plays in under 2 s: 4 s later trajd still runs and answers Modbus.
+sed -e "s|^csv.path = /run/trajd/|csv.path = $tmp/|" -e 's|^#speed = 1.0$|speed = 200|' -e 's|^#port = 1502$|port = 0|' \
+    "$live/etc/trajd/trajd.conf" > "$live/etc/trajd/fast.conf"
+"$live/bin/trajd" -f -c "$live/etc/trajd/fast.conf" > "$tmp/svc.out" 2> "$tmp/svc.err" &
+svc=$!
+sleep 6
+kill -0 "$svc" 2> /dev/null || { cat "$tmp/svc.err"; fail "the installed config's trajd exited after its demo track"; }
+port=$(sed -n 's/.*modbus: TCP on [^ ]* port \([0-9][0-9]*\).*/\1/p' "$tmp/svc.err" | head -1)
+# the daemon block's first register: the protocol version (config/PROTOCOL.md), read by mbpoll
+mbpoll -m tcp -p "${port:-0}" -a 1 -t 3 -0 -r 0 -c 1 -1 127.0.0.1 > "$tmp/mb.out" 2>&1 ||
+    { cat "$tmp/mb.out"; kill -TERM "$svc"; fail "the installed config's Modbus server does not answer"; }
+kill -TERM "$svc"; wait "$svc"; rc=$?
+[ "$rc" = 0 ] || { cat "$tmp/svc.err"; fail "SIGTERM: exit $rc"; }
+grep -q 'boat finished' "$tmp/svc.err" || { tail -3 "$tmp/svc.err"; fail "the demo track did not play to its end"; }
+echo "installed config: ran past its track's end, Modbus on port ${port:-?}, exit 0 on SIGTERM"
+make --no-print-directory uninstall BUILD="$BUILD" PREFIX="$live" SYSCONFDIR="$live/etc" > "$tmp/log" 2>&1 ||
+    { cat "$tmp/log"; fail "make uninstall PREFIX=$live"; }
+
 make --no-print-directory uninstall BUILD="$BUILD" DESTDIR="$dest" PREFIX="$PREFIX" > "$tmp/log" 2>&1 ||
     { cat "$tmp/log"; fail "make uninstall"; }
 left=$(find "$dest" ! -type d)
