@@ -355,6 +355,21 @@ static int open_loop(trajd_t *d)
 
 /* Start the core and the housekeeping timers, tell systemd and the waiting
  * parent, run until the stop policy ends the loop: the exit code. */
+/* What the first seconds of output are, per object: holding (state waiting,
+ * no position before its first waypoint) until the lookahead is buffered. */
+static void log_first_seconds(const cfg_t *cfg)
+{
+    for (unsigned i = 0; i < cfg->nobj; i++) {
+        const cfg_obj_t *o = &cfg->obj[i];
+        log_msg(LOG_INFO,
+                "object '%s': holds (state waiting; no position, nan, before its first waypoint)"
+                " until at least %u waypoints are buffered (the solver's lookahead and the start "
+                "slack),"
+                " then streams",
+                o->name, engine_lookahead(&o->engine));
+    }
+}
+
 static int run(trajd_t *d)
 {
     char err[1024];
@@ -373,6 +388,7 @@ static int run(trajd_t *d)
         d->watchdog_fd = loop_timer_add(d->loop, (int64_t)wd_usec * 1000 / 2, on_watchdog, d);
     log_msg(LOG_INFO, "started: %u object(s) at %.6g Hz, speed %.6g, config %s", d->cfg->nobj,
             d->cfg->daemon.rate_hz, d->cfg->daemon.speed, d->conf_path);
+    log_first_seconds(d->cfg);
     sd_notify(0, "READY=1");
     notify_status(d);
     report_ready(d, 0);
