@@ -34,6 +34,7 @@ local VALS = {
     ST_LastErr = {[0] = "ok", [1] = "not finite", [2] = "out of range", [3] = "backwards",
                   [4] = "same time", [5] = "speed", [6] = "full", [7] = "config",
                   [8] = "no memory", [9] = "state", [10] = "numeric", [11] = "acceleration",
+                  [12] = "unconfirmed", [13] = "stale",
                   [64] = "malformed", [65] = "lost", [66] = "out of order",
                   [67] = "setpoints dropped", [68] = "bus down", [69] = "output lost lines",
                   [70] = "safety fault", [71] = "drive not enabled", [72] = "command refused"},

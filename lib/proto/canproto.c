@@ -1126,7 +1126,7 @@ int canproto_dbc(char *buf, size_t len)
          "CM_ SG_ %u WP_Command \"1 finish, 2 stop now, 3 clear, 4 reset counters, 5 feed "
          "override\";\n"
          "CM_ SG_ %u WP_CommandArg \"feed override in percent (0..200) for command 5, else 0\";\n"
-         "CM_ SG_ %u ST_LastErr \"1..11 engine_error of the last rejected waypoint, 0x40 "
+         "CM_ SG_ %u ST_LastErr \"1..13 engine_error of the last rejected waypoint, 0x40 "
          "malformed, 0x41 lost, 0x42 out of order, 0x43 setpoints dropped, 0x44 bus down, 0x45 "
          "csv/stdout output lost lines, 0x46 safety monitor fault (object held until clear), 0x47 "
          "a CiA 402 "
@@ -1200,11 +1200,11 @@ int canproto_dbc(char *buf, size_t len)
     emit(buf, len, &pos, "VAL_ %u SPFD_State %s ;\n", CANPROTO_ID_SETPOINT_FD_BASE, states);
     emit(buf, len, &pos, "VAL_ %u ST_State %s ;\n", CANPROTO_ID_STATUS_BASE, states);
     emit(buf, len, &pos,
-         "VAL_ %u ST_LastErr 0 \"ok\" 1 \"not finite\" 2 \"out of range\" 3 \"backwards\" "
-         "4 \"same time\" 5 \"speed\" 6 \"full\" 7 \"config\" 8 \"no memory\" 9 \"state\" "
-         "10 \"numeric\" 11 \"acceleration\" %d \"malformed\" %d \"lost\" %d \"out of order\" "
-         "%d \"setpoints dropped\" %d \"bus down\" %d \"output lost lines\" %d \"safety fault\" "
-         "%d \"drive not enabled\" %d \"command refused\" ;\n",
+         "VAL_ %u ST_LastErr 0 \"ok\" 1 \"not finite\" 2 \"out of range\" 3 \"backwards\" 4 \"same "
+         "time\" 5 \"speed\" 6 \"full\" 7 \"config\" 8 \"no memory\" 9 \"state\" 10 \"numeric\" 11 "
+         "\"acceleration\" 12 \"unconfirmed\" 13 \"stale\" %d \"malformed\" %d \"lost\" %d \"out "
+         "of order\" %d \"setpoints dropped\" %d \"bus down\" %d \"output lost lines\" %d \"safety "
+         "fault\" %d \"drive not enabled\" %d \"command refused\" ;\n",
          CANPROTO_ID_STATUS_BASE, CANPROTO_STERR_MALFORMED, CANPROTO_STERR_LOST,
          CANPROTO_STERR_OUT_OF_ORDER, CANPROTO_STERR_TX_DROPPED, CANPROTO_STERR_BUS_DOWN,
          CANPROTO_STERR_OUTPUT, CANPROTO_STERR_SAFETY, CANPROTO_STERR_DRIVE,

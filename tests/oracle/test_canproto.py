@@ -384,7 +384,7 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
         self.assertGreaterEqual(named, 10)
         err = frame_of(self.db, 0x6C0).signal_by_name("ST_LastErr").values
         # ok, the 11 engine errors (motion.h), the CAN side's 0x40..0x48
-        self.assertEqual(sorted(int(k) for k in err), list(range(12)) + list(range(0x40, 0x49)))
+        self.assertEqual(sorted(int(k) for k in err), list(range(14)) + list(range(0x40, 0x49)))
 
     # Given per-axis scale, an inverted axis and an offset, then the increments
     # are offset - round(pos * counts_per_m) (exact in Python's integers and
