@@ -530,8 +530,8 @@ static const mbmap_field_t fields[] = {
     F(IO, MBMAP_O_STATE, 1, MBMAP_T_U16, "state", "",
       "0 waiting, 1 streaming, 2 underrun, 3 finished"),
     F(IO, MBMAP_O_FLAGS, 1, MBMAP_T_U16, "flags", "",
-      "bit 0 hold, 1 new track, 2 ticks skipped, 3 transfer, 4 no position yet: x, y, z are NaN, "
-      "do not move (ENGINE_SP_*)"),
+      "bit 0 hold, 1 new track, 2 ticks skipped, 3 transfer, 4 no position yet (x, y, z NaN: "
+      "do not move), 5 safety fault, 6 time-scaled (Setpoint flags)"),
     F(IO, MBMAP_O_CYCLE, 2, MBMAP_T_U32, "cycle", "", "setpoint tick counter"),
     F(IO, MBMAP_O_TRACK, 2, MBMAP_T_U32, "track", "", "trajectory number"),
     F(IO, MBMAP_O_BUFFERED, 2, MBMAP_T_U32, "buffered", "", "waypoints buffered"),
