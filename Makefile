@@ -181,6 +181,15 @@ $(BUILD)/man/%: daemon/doc/% daemon/core/version.h
 	@mkdir -p $(@D)
 	sed -e 's|@VERSION@|$(VERSION)|g' -e 's|@DATADIR@|$(PREFIX)/share|g' -e 's|@PREFIX@|$(PREFIX)|g' $< > $@
 
+# trajreplay(1)'s ENGINE SETTINGS: the options of its --help, one source.
+$(BUILD)/man/trajreplay.1: daemon/doc/trajreplay.1 daemon/doc/help2man.awk daemon/core/version.h \
+		$(BUILD)/bin/trajreplay
+	@mkdir -p $(@D)
+	$(BUILD)/bin/trajreplay --help | awk -f daemon/doc/help2man.awk > $@.opts
+	sed -e 's|@VERSION@|$(VERSION)|g' -e 's|@DATADIR@|$(PREFIX)/share|g' -e 's|@PREFIX@|$(PREFIX)|g' \
+		-e '/@ENGINE_SETTINGS@/{r $@.opts' -e 'd;}' $< > $@
+	rm -f $@.opts
+
 $(BUILD)/man/trajd.conf.5: config/trajd.conf daemon/doc/conf2man.awk daemon/core/version.h
 	@mkdir -p $(@D)
 	awk -v version=$(VERSION) -f daemon/doc/conf2man.awk $< > $@

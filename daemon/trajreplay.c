@@ -1,6 +1,6 @@
 /*
  * trajreplay - replay a logged track through the engine on a virtual clock
- * and write the setpoints the daemon would stream (daemon/csv/csv_format.h format).
+ * and write the setpoints the daemon would stream (the CSV of daemon/csv/csv_format.h).
  *
  * Tick k is at engine time now_ns = k * period_ns; for every tick,
  * replay_feed(now) then engine_tick(now), exactly as the daemon does, so the
@@ -98,7 +98,7 @@ typedef struct {
     unsigned long long max_rows; /* 0 = no bound */
     unsigned progress_after_ms;
     int precision; /* --precision: decimals in fixed notation, or CSV_PREC_* */
-    int binary;    /* --binary: the records of csv_format.h instead of CSV */
+    int binary;    /* --binary: the records of lib/format/spfile.h instead of CSV */
     int geo;       /* --geo: columns lat_deg,lon_deg,alt_m,heading_deg appended */
     double rate_hz;
     int64_t start_ns; /* engine time at which the first waypoint is due */
@@ -169,8 +169,8 @@ static void usage(FILE *f)
         "                       track's setpoint in WGS84) and heading_deg (a heading\n"
         "                       column's axis, wrapped), as trajd's csv.geo = yes\n"
         "  --binary             write little-endian binary records instead of CSV: a\n"
-        "                       64-byte header then 112 bytes per setpoint (layout in\n"
-        "                       daemon/csv/csv_format.h; numpy.fromfile(offset=64))\n"
+        "                       64-byte header then 112 bytes per setpoint (layout and\n"
+        "                       numpy dtype in trajreplay(1), BINARY FORMAT)\n"
         "  --svg FILE           draw waypoints, curve and speed profile\n"
         "  --summary            counters on stderr at the end\n"
         "  -q, --quiet          no progress line\n"
