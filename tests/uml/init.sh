@@ -31,6 +31,13 @@ if [ ! -d "$src/tests/uml" ]; then
 fi
 mkdir -p "$dir"
 mount -t hostfs -o "$dir" none "$dir"
+# Host directories a scenario names in $dir/env (the build, the CANopen peers)
+# may lie under /tmp too (a clone under mktemp -d with shared/ beside it).
+if [ -f "$dir/env" ]; then
+    for p in $(sed -n 's/^\(BUILD\|TRAJD_PEERS\)=//p' "$dir/env"); do
+        [ -d "$p" ] || { mkdir -p "$p" && mount -t hostfs -o "$p" none "$p"; }
+    done
+fi
 {
     echo "guest: $(uname -r)"
     k=/usr/lib/uml/modules/$(uname -r)/kernel
