@@ -60,10 +60,10 @@
  *         RMC's); the date from RMC (before the first RMC: the first RMC's),
  *         midnight without an RMC from a time that runs backwards by > 12 h.
  *         Other sentences are passed over.  AUTO: *.nmea, or a first line
- *         "$...*hh".  Decoder: lib/proto/nmea0183.h.
+ *         "$...*hh".  Decoder: lib/format/nmea0183.h.
  *   igc   IGC B records dated by HFDTE; an earlier time than the last is the
  *         next day; GNSS altitude, none for validity V.  AUTO: *.igc, or an A
- *         record then an H or B record.  Decoder: lib/proto/igc.h.
+ *         record then an H or B record.  Decoder: lib/format/igc.h.
  * A malformed line is a bad line (error, or skipped with TRACK_SKIP_BAD); a
  * well-formed record without a usable fix is counted in track_t.ignored.
  *

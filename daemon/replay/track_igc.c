@@ -1,5 +1,5 @@
 /* track_igc.c - IGC flight logs: B records dated by HFDTE (decoded by
- * lib/proto/igc.h).  See track.h for the rules. */
+ * lib/format/igc.h).  See track.h for the rules. */
 #include "track_loader.h"
 
 #include <ctype.h>

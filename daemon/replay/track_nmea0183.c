@@ -1,5 +1,5 @@
 /* track_nmea0183.c - NMEA 0183 logs: GGA and RMC sentences (decoded by
- * lib/proto/nmea0183.h) into fixes.  See track.h for the rules. */
+ * lib/format/nmea0183.h) into fixes.  See track.h for the rules. */
 #include "track_loader.h"
 
 #include <math.h>

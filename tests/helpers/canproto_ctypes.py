@@ -1,4 +1,4 @@
-"""ctypes view of lib/proto/canproto.h and lib/proto/candump.h (used by the CAN tests).
+"""ctypes view of lib/proto/canproto.h and lib/format/candump.h (used by the CAN tests).
 
 Only the layouts of the structs the tests pass across are mirrored here;
 test_canproto.py checks sizes it can observe (frame length) and everything

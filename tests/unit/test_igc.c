@@ -1,4 +1,4 @@
-/* test_igc.c - IGC date header and B records (lib/proto/igc.h) against the
+/* test_igc.c - IGC date header and B records (lib/format/igc.h) against the
  * example B record of the FAI IGC flight recorder specification (appendix A:
  * "B1101355206343N00006198WA0058700558") and both HFDTE forms. */
 #include "test.h"

@@ -1,4 +1,4 @@
-/* test_nmea0183.c - GGA and RMC sentences (lib/proto/nmea0183.h) against
+/* test_nmea0183.c - GGA and RMC sentences (lib/format/nmea0183.h) against
  * the example sentences every NMEA 0183 primer quotes (with their published
  * checksums *47 and *6A) and gpsbabel's output for tests/data/gpxgo_visnjan.gpx. */
 #include "test.h"
