@@ -357,7 +357,12 @@ fuzz-merge:
 # trajd.pc), as inside the tree.  make uninstall removes exactly these files,
 # and /etc/trajd/trajd.conf only if it is still as installed (a changed
 # config is kept, as dpkg keeps a changed conffile).
-LIB_HEADERS := lib/motion.h $(wildcard lib/*/*.h)
+# Only the client API is installed: the headers that say so ("trajd public API"
+# below their include guard; tests/e2e/test_install.sh builds each alone
+# against the installed set): the engine, the seeds' spline toolkit, the
+# protocol codecs and file formats, geodesy.  The engine's parts (acceptance,
+# time scaling, fragments ...) stay inside.
+LIB_HEADERS := $(shell grep -l '^/\* trajd public API: ' lib/motion.h lib/*/*.h)
 DOCDIR := $(PREFIX)/share/doc/trajd
 TRACKDIR := $(PREFIX)/share/trajd/tracks
 # Configs as installed: track paths that resolve there (the demo track is

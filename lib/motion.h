@@ -8,6 +8,7 @@
  */
 #ifndef TRAJD_MOTION_H
 #define TRAJD_MOTION_H
+/* trajd public API: installed as <trajd/motion.h> (make install; pkg-config trajd). */
 /* The #define tables are read by the tests (tests/helpers/mbsim.py,
  * tests/oracle/test_trajreplay.py) one line each: kept as written. */
 /* clang-format off */

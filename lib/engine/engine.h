@@ -75,6 +75,7 @@
  */
 #ifndef TRAJD_ENGINE_H
 #define TRAJD_ENGINE_H
+/* trajd public API: installed as <trajd/engine.h> (make install; pkg-config trajd). */
 /* The #define tables are read by the tests (tests/helpers/mbsim.py,
  * tests/oracle/test_trajreplay.py) one line each: kept as written. */
 /* clang-format off */

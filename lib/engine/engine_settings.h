@@ -21,6 +21,7 @@
  */
 #ifndef TRAJD_ENGINE_SETTINGS_H
 #define TRAJD_ENGINE_SETTINGS_H
+/* trajd public API: installed as <trajd/engine_settings.h> (make install; pkg-config trajd). */
 
 #include <stddef.h>
 

@@ -23,6 +23,7 @@
  */
 #ifndef TRAJD_FDIFF_H
 #define TRAJD_FDIFF_H
+/* trajd public API: installed as <trajd/fdiff.h> (make install; pkg-config trajd). */
 
 #define FDIFF_AXES 3
 

@@ -14,6 +14,7 @@
  */
 #ifndef TRAJD_CANDUMP_H
 #define TRAJD_CANDUMP_H
+/* trajd public API: installed as <trajd/candump.h> (make install; pkg-config trajd). */
 
 #include <stddef.h>
 #include <stdint.h>

@@ -12,6 +12,7 @@
  */
 #ifndef TRAJD_IGC_H
 #define TRAJD_IGC_H
+/* trajd public API: installed as <trajd/igc.h> (make install; pkg-config trajd). */
 
 #include <stdint.h>
 

@@ -12,6 +12,7 @@
  */
 #ifndef TRAJD_NMEA0183_H
 #define TRAJD_NMEA0183_H
+/* trajd public API: installed as <trajd/nmea0183.h> (make install; pkg-config trajd). */
 
 #include <stdint.h>
 

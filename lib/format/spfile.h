@@ -15,6 +15,7 @@
  */
 #ifndef TRAJD_SPFILE_H
 #define TRAJD_SPFILE_H
+/* trajd public API: installed as <trajd/spfile.h> (make install; pkg-config trajd). */
 
 #include <stdint.h>
 

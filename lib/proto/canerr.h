@@ -20,6 +20,7 @@
  */
 #ifndef TRAJD_CANERR_H
 #define TRAJD_CANERR_H
+/* trajd public API: installed as <trajd/canerr.h> (make install; pkg-config trajd). */
 
 #include <stddef.h>
 #include <stdint.h>

@@ -83,6 +83,7 @@
  */
 #ifndef TRAJD_CANPROTO_H
 #define TRAJD_CANPROTO_H
+/* trajd public API: installed as <trajd/canproto.h> (make install; pkg-config trajd). */
 
 #include <stddef.h>
 #include <stdint.h>

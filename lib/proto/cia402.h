@@ -15,6 +15,7 @@
  */
 #ifndef TRAJD_CIA402_H
 #define TRAJD_CIA402_H
+/* trajd public API: installed as <trajd/cia402.h> (make install; pkg-config trajd). */
 
 #include <stdint.h>
 

@@ -35,6 +35,7 @@
  */
 #ifndef TRAJD_MBMAP_H
 #define TRAJD_MBMAP_H
+/* trajd public API: installed as <trajd/mbmap.h> (make install; pkg-config trajd). */
 /* The #define tables are read by the tests (tests/helpers/mbsim.py,
  * tests/oracle/test_trajreplay.py) one line each: kept as written. */
 /* clang-format off */

@@ -13,6 +13,7 @@
  */
 #ifndef TRAJD_MBRTU_H
 #define TRAJD_MBRTU_H
+/* trajd public API: installed as <trajd/mbrtu.h> (make install; pkg-config trajd). */
 
 #include <stddef.h>
 #include <stdint.h>

@@ -29,6 +29,7 @@
  */
 #ifndef TRAJD_NMEA2000_H
 #define TRAJD_NMEA2000_H
+/* trajd public API: installed as <trajd/nmea2000.h> (make install; pkg-config trajd). */
 
 #include <stddef.h>
 #include <stdint.h>

@@ -20,6 +20,7 @@
  */
 #ifndef TRAJD_BSPLINE_H
 #define TRAJD_BSPLINE_H
+/* trajd public API: installed as <trajd/bspline.h> (make install; pkg-config trajd). */
 
 #include <stddef.h>
 

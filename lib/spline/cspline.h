@@ -26,6 +26,7 @@
  */
 #ifndef TRAJD_CSPLINE_H
 #define TRAJD_CSPLINE_H
+/* trajd public API: installed as <trajd/cspline.h> (make install; pkg-config trajd). */
 
 #include <stddef.h>
 

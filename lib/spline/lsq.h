@@ -32,6 +32,7 @@
  */
 #ifndef TRAJD_LSQ_H
 #define TRAJD_LSQ_H
+/* trajd public API: installed as <trajd/lsq.h> (make install; pkg-config trajd). */
 
 #include <stddef.h>
 #include <stdint.h>

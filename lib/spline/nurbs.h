@@ -20,6 +20,7 @@
  */
 #ifndef TRAJD_NURBS_H
 #define TRAJD_NURBS_H
+/* trajd public API: installed as <trajd/nurbs.h> (make install; pkg-config trajd). */
 
 #include <stddef.h>
 

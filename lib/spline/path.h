@@ -33,6 +33,7 @@
  */
 #ifndef TRAJD_PATH_H
 #define TRAJD_PATH_H
+/* trajd public API: installed as <trajd/path.h> (make install; pkg-config trajd). */
 
 #include <stddef.h>
 

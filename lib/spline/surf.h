@@ -27,6 +27,7 @@
  */
 #ifndef TRAJD_SURF_H
 #define TRAJD_SURF_H
+/* trajd public API: installed as <trajd/surf.h> (make install; pkg-config trajd). */
 
 #include <stddef.h>
 

@@ -16,6 +16,7 @@
  */
 #ifndef TRAJD_ANGLE_H
 #define TRAJD_ANGLE_H
+/* trajd public API: installed as <trajd/angle.h> (make install; pkg-config trajd). */
 
 #include <stddef.h>
 

@@ -14,6 +14,7 @@
  */
 #ifndef TRAJD_GEO_H
 #define TRAJD_GEO_H
+/* trajd public API: installed as <trajd/geo.h> (make install; pkg-config trajd). */
 
 /* WGS84 defining constants (NIMA TR8350.2, table 3.1). */
 #define GEO_WGS84_A_M 6378137.0       /* semi-major axis */

@@ -28,6 +28,20 @@ for f in bin/trajd bin/trajreplay bin/trajsurf share/man/man8/trajd.8 share/man/
          include/trajd/engine.h include/trajd/motion.h; do
     [ -e "$dest$PREFIX/$f" ] || fail "missing $PREFIX/$f"
 done
+# The installed headers are the client API: those that say so, each usable alone
+# with nothing but the installed ones; the engine's parts are not installed.
+inc="$dest$PREFIX/include/trajd"
+want=$(grep -l '^/\* trajd public API: ' lib/motion.h lib/*/*.h | xargs -n1 basename | sort)
+have=$(ls "$inc" | sort)
+[ "$want" = "$have" ] || fail "installed headers differ from the public ones: $(diff <(echo "$want") <(echo "$have") | tr '\n' ' ')"
+for h in accept.h timescale.h tridiag.h frag.h playout.h transfer.h; do
+    [ -e "$inc/$h" ] && fail "internal header $h installed"
+done
+for h in $have; do
+    printf '#include "%s"\nint main(void) { return 0; }\n' "$h" > "$tmp/h.c"
+    cc -std=c11 -Wall -Werror -fsyntax-only -I"$inc" "$tmp/h.c" 2> "$tmp/h.err" ||
+        { cat "$tmp/h.err"; fail "installed $h does not compile alone against the installed headers"; }
+done
 soname=$(readelf -d "$dest$PREFIX/lib/libtrajd.so" | sed -n 's/.*(SONAME).*\[\(.*\)\]/\1/p')
 [ "$soname" = libtrajd.so.0 ] || fail "soname '$soname', want libtrajd.so.0"
 [ "$(readlink "$dest$PREFIX/lib/libtrajd.so")" = libtrajd.so.0 ] || fail "libtrajd.so does not point at libtrajd.so.0"
