@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/timex.h>
 
 #include "can_transport.h"
 #include "core.h"
@@ -19,6 +20,8 @@ typedef struct {
     unsigned nblock;               /* object blocks in the map: the highest object id + 1 */
     int obj_of[MBMAP_MAX_OBJECTS]; /* block (object id) -> core object index, -1 none */
     int rtu_down_logged;
+    int64_t clock_checked_ns; /* when the system clock's sync state was last read */
+    uint16_t clock_unsync;    /* 1: adjtimex says TIME_ERROR (not synchronised) */
 } mbt_t;
 
 static void cfg_default(void *cfg)
@@ -279,6 +282,13 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
     d.can_state = (uint16_t)can_transport_bus(c, &load_permille);
     d.can_load_permille = (uint16_t)(load_permille > 0xffff ? 0xffff : load_permille);
     can_errors(c, &d);
+    int64_t mono = core_mono_ns();
+    if (mono - t->clock_checked_ns >= 1000000000) { /* once a second: a cheap syscall */
+        struct timex tx;
+        memset(&tx, 0, sizeof tx);
+        t->clock_unsync = (uint16_t)(adjtimex(&tx) == TIME_ERROR);
+        t->clock_checked_ns = mono;
+    }
     for (unsigned k = 0; k < t->nblock; k++) {
         if (t->obj_of[k] < 0)
             continue;
@@ -303,6 +313,9 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         o->seq_jumps = 0; /* the server adds its own */
         drive_regs(c, (unsigned)t->obj_of[k], o, &d);
         o->clocked = (uint16_t)(ob->clocked == 1);
+        o->delay_s = c->cfg->daemon.delay_s;
+        o->clock_unsync = t->clock_unsync;
+        o->held = (uint16_t)(ob->held != 0);
         d.clock_objects += o->clocked;
     }
     modbus_server_publish(t->srv, &d, t->objs);

@@ -188,6 +188,31 @@ void mbmap_encode_daemon(uint16_t *regs, const mbmap_daemon_t *d)
     mbmap_put_u32(regs + MBMAP_D_GEN_TAIL, d->generation);
 }
 
+uint16_t mbmap_health(const mbmap_object_t *o)
+{
+    uint16_t h = 0, ds = o->drive_states;
+    if (o->sp.flags & ENGINE_SP_FAULT)
+        h |= MBMAP_HEALTH_SAFETY;
+    for (int a = 0; a < 3; a++) {
+        unsigned st = (ds >> (4 * a)) & 0x0Fu; /* 5 quick stop, 6 fault reaction, 7 fault */
+        if (st >= 5 && st <= 7)
+            h |= MBMAP_HEALTH_DRIVE;
+    }
+    if (ds & 0xC000u) /* heartbeat lost, held until clear */
+        h |= MBMAP_HEALTH_DRIVE;
+    if (o->out_fault)
+        h |= MBMAP_HEALTH_OUTPUT;
+    if (o->sp.state == ENGINE_STATE_UNDERRUN)
+        h |= MBMAP_HEALTH_UNDERRUN;
+    if (o->clocked && o->sp.age_s > o->delay_s + 1.0)
+        h |= MBMAP_HEALTH_STALE;
+    if (o->clocked && o->clock_unsync)
+        h |= MBMAP_HEALTH_CLOCK;
+    if (o->held)
+        h |= MBMAP_HEALTH_HELD;
+    return h;
+}
+
 int mbmap_encode_object(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_object_t *o)
 {
     if (k >= MBMAP_MAX_OBJECTS)
@@ -195,7 +220,11 @@ int mbmap_encode_object(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_ob
     uint16_t *b = regs + MBMAP_OBJ_BASE(k);
     memset(b, 0, MBMAP_BLOCK * sizeof *b);
     mbmap_put_u32(b + MBMAP_O_GEN, gen);
-    b[MBMAP_O_STATE] = (uint16_t)o->sp.state;
+    uint16_t health = mbmap_health(o);
+    b[MBMAP_O_STATE] = health & (MBMAP_HEALTH_SAFETY | MBMAP_HEALTH_DRIVE | MBMAP_HEALTH_HELD)
+                           ? MBMAP_STATE_HELD
+                           : (uint16_t)o->sp.state;
+    b[MBMAP_O_HEALTH] = health;
     b[MBMAP_O_FLAGS] = (uint16_t)(o->sp.flags & 0xffffu);
     mbmap_put_u32(b + MBMAP_O_CYCLE, o->sp.cycle);
     mbmap_put_u32(b + MBMAP_O_TRACK, o->sp.track);
@@ -320,6 +349,27 @@ int mbmap_decode_write(unsigned n, const uint8_t *pdu, size_t len, mbmap_write_t
     return mbmap_decode_write_order(n, MBMAP_ORDER_ABCD, pdu, len, out);
 }
 
+/* The float32 waypoint block (MBMAP_H_WPF). */
+static int decode_wpf(mbmap_order_t o, const uint8_t *val, mbmap_write_t *out)
+{
+    uint16_t r[MBMAP_H_WPF_COUNT];
+    for (unsigned i = 0; i < MBMAP_H_WPF_COUNT; i++)
+        r[i] = (uint16_t)be16(val + 2 * i);
+    for (unsigned i = 0; i < MBMAP_H_WPF_COUNT; i += 2)
+        mbmap_order_value(r + i, 2, o);
+    out->kind = MBMAP_WRITE_WAYPOINT;
+    out->wp.seq = mbmap_get_u32(r + (MBMAP_H_WPF_SEQ - MBMAP_H_WPF));
+    out->wp.t_s = mbmap_get_f32(r + (MBMAP_H_WPF_T_S - MBMAP_H_WPF));
+    if (!isfinite(out->wp.t_s))
+        return -MBMAP_EVALUE;
+    for (int a = 0; a < ENGINE_AXES; a++) {
+        out->wp.pos_m[a] = mbmap_get_f32(r + (MBMAP_H_WPF_POS - MBMAP_H_WPF) + 2 * a);
+        if (!isfinite(out->wp.pos_m[a]))
+            return -MBMAP_EVALUE;
+    }
+    return 0;
+}
+
 int mbmap_decode_write_order(unsigned n, mbmap_order_t o, const uint8_t *pdu, size_t len,
                              mbmap_write_t *out)
 {
@@ -359,6 +409,8 @@ int mbmap_decode_write_order(unsigned n, mbmap_order_t o, const uint8_t *pdu, si
         out->override_pct = pct;
         return 0;
     }
+    if (off == MBMAP_H_WPF && count == MBMAP_H_WPF_COUNT)
+        return decode_wpf(o, val, out);
     if (off == MBMAP_H_WP && count == MBMAP_H_WP_COUNT) {
         uint16_t r[MBMAP_H_WP_COUNT];
         for (unsigned i = 0; i < MBMAP_H_WP_COUNT; i++)
@@ -528,7 +580,7 @@ static const mbmap_field_t fields[] = {
 
     F(IO, MBMAP_O_GEN, 2, MBMAP_T_U32, "generation", "", "snapshot generation of this block"),
     F(IO, MBMAP_O_STATE, 1, MBMAP_T_U16, "state", "",
-      "0 waiting, 1 streaming, 2 underrun, 3 finished"),
+      "0 waiting, 1 streaming, 2 underrun, 3 finished, 4 held (health bit 0, 1 or 6)"),
     F(IO, MBMAP_O_FLAGS, 1, MBMAP_T_U16, "flags", "",
       "bit 0 hold, 1 new track, 2 ticks skipped, 3 transfer, 4 no position yet (x, y, z NaN: "
       "do not move), 5 safety fault, 6 time-scaled (Setpoint flags)"),
@@ -601,6 +653,10 @@ static const mbmap_field_t fields[] = {
       "for relative time"),
     F(IO, MBMAP_O_CLOCKED, 1, MBMAP_T_U16, "clocked", "",
       "1 if played out on the daemon's clock (epoch time), 0 relative"),
+    F(IO, MBMAP_O_HEALTH, 1, MBMAP_T_U16, "health", "",
+      "0 well; bit 0 safety hold, 1 drive fault (fault, quick stop, heartbeat lost), 2 output "
+      "fault, 3 underrun, 4 stale input (on the clock, age > D + 1 s), 5 clock not synchronised "
+      "(on the clock), 6 feed hold until clear"),
     F(IO, MBMAP_O_LAT, 4, MBMAP_T_F64, "lat", "deg",
       "latitude of the setpoint (WGS84), for an object whose track is geographic: its "
       "east/north/up about the daemon's one datum converted back; NaN otherwise or with no "
@@ -662,6 +718,14 @@ static const mbmap_field_t fields[] = {
     F(HO, MBMAP_H_WP_POS + 4, 4, MBMAP_T_F64, "wp_y", "m", "waypoint position"),
     F(HO, MBMAP_H_WP_POS + 8, 4, MBMAP_T_F64, "wp_z", "m",
       "waypoint position; the 18 registers 10..27 go in one FC 16"),
+    F(HO, MBMAP_H_WPF_SEQ, 2, MBMAP_T_U32, "wpf_seq", "",
+      "float32 waypoint (for PLCs without float64): sequence number"),
+    F(HO, MBMAP_H_WPF_T_S, 2, MBMAP_T_F32, "wpf_t", "s",
+      "waypoint time, kept to t x 2^-24 (6 us at 100 s): relative times"),
+    F(HO, MBMAP_H_WPF_POS + 0, 2, MBMAP_T_F32, "wpf_x", "m", "waypoint position, to x x 2^-24"),
+    F(HO, MBMAP_H_WPF_POS + 2, 2, MBMAP_T_F32, "wpf_y", "m", "waypoint position"),
+    F(HO, MBMAP_H_WPF_POS + 4, 2, MBMAP_T_F32, "wpf_z", "m",
+      "waypoint position; the 10 registers 30..39 go in one FC 16"),
 };
 
 const mbmap_field_t *mbmap_fields(size_t *n)

@@ -130,7 +130,7 @@
 
 /* ---- object block, input registers (offset from MBMAP_OBJ_BASE(k)) ------ */
 #define MBMAP_O_GEN 0                /* u32 snapshot generation */
-#define MBMAP_O_STATE 2              /* u16 engine_state_t */
+#define MBMAP_O_STATE 2              /* u16 engine_state_t, or MBMAP_STATE_HELD */
 #define MBMAP_O_FLAGS 3              /* u16 ENGINE_SP_* of the setpoint */
 #define MBMAP_O_CYCLE 4              /* u32 setpoint tick counter */
 #define MBMAP_O_TRACK 6              /* u32 trajectory number */
@@ -168,6 +168,7 @@
 #define MBMAP_O_DRIVE_EMCY 79        /* u16 error code of the last EMCY from the object's drives */
 #define MBMAP_O_AGE_S 80             /* f32 data age: now - t_s on the sender's time base (NaN: relative time) */
 #define MBMAP_O_CLOCKED 82           /* u16 1 if played out on the daemon's clock */
+#define MBMAP_O_HEALTH 83            /* u16 MBMAP_HEALTH_* bits: 0 = nothing to alarm on */
 #define MBMAP_O_LAT 84               /* f64 latitude of the setpoint, degrees (WGS84; NaN: not geographic or no position) */
 #define MBMAP_O_LON 88               /* f64 longitude, degrees */
 #define MBMAP_O_ALT 92               /* f64 height above the WGS84 ellipsoid, m */
@@ -203,6 +204,15 @@
 #define MBMAP_H_WP_T_S 12            /* f64 time, s */
 #define MBMAP_H_WP_POS 16            /* f64 x3 x, y, z, m */
 #define MBMAP_H_WP_COUNT 18          /* the block is written whole, by one FC 16 */
+/* The same waypoint in float32 (for PLCs without float64), written whole by
+ * one FC 16: 24 significant bits, so a time of t s is kept to t * 2^-24 (6 us
+ * at 100 s, 0.5 ms at 8 000 s: relative times only) and a coordinate of x m to
+ * x * 2^-24 (60 um at 1 km). */
+#define MBMAP_H_WPF 30               /* first register of the float32 waypoint block */
+#define MBMAP_H_WPF_SEQ 30           /* u32 sequence number */
+#define MBMAP_H_WPF_T_S 32           /* f32 time, s */
+#define MBMAP_H_WPF_POS 34           /* f32 x3 x, y, z, m */
+#define MBMAP_H_WPF_COUNT 10
 
 /* Commands (holding register MBMAP_H_COMMAND). */
 #define MBMAP_CMD_START 1            /* start now with what is buffered (see config/PROTOCOL.md) */
@@ -210,6 +220,19 @@
 #define MBMAP_CMD_CLEAR 3            /* stop along the path, drop, WAITING (engine_clear) */
 #define MBMAP_CMD_RESET_COUNTERS 4   /* engine_reset_counters + Modbus counters */
 #define MBMAP_CMD_FINISH 5           /* end of input: run to the last waypoint (engine_finish) */
+
+/* The state register while the object is held (a safety fault, a drive
+ * fault or lost, a feed hold until clear): whatever its engine does under it. */
+#define MBMAP_STATE_HELD 4
+
+/* Health bits (MBMAP_O_HEALTH): one per condition an HMI alarms on. */
+#define MBMAP_HEALTH_SAFETY 0x01     /* the safety monitor holds the object (flag ENGINE_SP_FAULT) */
+#define MBMAP_HEALTH_DRIVE 0x02      /* a CiA 402 drive faulted, quick-stopped, lost its heartbeat or is held */
+#define MBMAP_HEALTH_OUTPUT 0x04     /* an output of the object failed to write (lines lost) */
+#define MBMAP_HEALTH_UNDERRUN 0x08   /* underrun: waypoints late, the output slows or holds */
+#define MBMAP_HEALTH_STALE 0x10      /* stale input: on the clock, the data age exceeds D + 1 s */
+#define MBMAP_HEALTH_CLOCK 0x20      /* on the clock, and the system clock is not synchronised */
+#define MBMAP_HEALTH_HELD 0x40       /* feed hold until clear (a drive's heartbeat lost) */
 
 /* CAN bus state (MBMAP_D_CAN_STATE, MBMAP_O_CAN_STATE). */
 #define MBMAP_CAN_NONE 0             /* no CAN on this object / daemon */
@@ -280,10 +303,16 @@ typedef struct {
     /* CiA 402 drives (STATUS2 page 4 on CAN); states 0x0FFF, nmt 0xFF without drives */
     uint16_t drive_states, drive_statusword, drive_nmt, drive_emcy;
     uint16_t clocked;           /* on the daemon's clock (the age is sp.age_s) */
+    double delay_s;             /* the play-out delay D of a clocked object (stale: age > D + 1 s) */
+    uint16_t clock_unsync;      /* the system clock is not synchronised (adjtimex TIME_ERROR) */
+    uint16_t held;              /* feed hold until clear */
     double lat_deg, lon_deg, alt_m; /* the setpoint as WGS84 geodetic (NaN: none) */
     double heading_deg, heading_unwrapped_deg; /* heading axis (NaN: none) */
     uint16_t mb_worst_addr[MBMAP_X_MB_WORST_ADDR_GROUPS]; /* daemon-wide (mbmap_daemon_t's) */
 } mbmap_object_t;
+
+/* The health bits of object o (MBMAP_HEALTH_*). */
+uint16_t mbmap_health(const mbmap_object_t *o);
 
 /* Write the daemon block into regs[0 .. MBMAP_BLOCK-1]. */
 void mbmap_encode_daemon(uint16_t *regs, const mbmap_daemon_t *d);
@@ -347,6 +376,7 @@ double mbmap_get_f64(const uint16_t *r);
 int mbmap_check_request(unsigned n, int writes_enabled, const uint8_t *pdu, size_t len);
 
 typedef enum { MBMAP_WRITE_COMMAND = 1, MBMAP_WRITE_WAYPOINT = 2, MBMAP_WRITE_OVERRIDE = 3 } mbmap_write_kind_t;
+/* (a float32 waypoint block decodes to MBMAP_WRITE_WAYPOINT like the float64 one) */
 
 typedef struct {
     mbmap_write_kind_t kind;

@@ -605,6 +605,92 @@ static void test_crc_and_framing(void **state)
     assert_int_equal(mbmap_rtu_frame_len(f, 7), -1);
 }
 
+/* Each condition sets its health bit; a safety hold, a drive fault and a
+ * feed hold show as state 4 (held), the others keep the engine's state. */
+static void test_health(void **state)
+{
+    (void)state;
+    static uint16_t regs[MBMAP_REGS(1)];
+    struct {
+        const char *what;
+        uint16_t bit;
+        int held;
+    } cases[] = {{"safety", MBMAP_HEALTH_SAFETY, 1},     {"drive fault", MBMAP_HEALTH_DRIVE, 1},
+                 {"hb lost", MBMAP_HEALTH_DRIVE, 1},     {"output", MBMAP_HEALTH_OUTPUT, 0},
+                 {"underrun", MBMAP_HEALTH_UNDERRUN, 0}, {"stale", MBMAP_HEALTH_STALE, 0},
+                 {"clock", MBMAP_HEALTH_CLOCK, 0},       {"feed hold", MBMAP_HEALTH_HELD, 1}};
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        mbmap_object_t o;
+        memset(&o, 0, sizeof o);
+        o.sp.state = ENGINE_STATE_STREAMING;
+        o.drive_states = 0x0444; /* three drives in Operation Enabled */
+        o.delay_s = 2.0;
+        o.sp.age_s = 2.0;
+        switch (c) {
+        case 0: o.sp.flags = ENGINE_SP_FAULT | ENGINE_SP_HOLD; break;
+        case 1: o.drive_states = 0x0474; break; /* y in Fault */
+        case 2: o.drive_states = 0x4444; break;
+        case 3: o.out_fault = 1; break;
+        case 4: o.sp.state = ENGINE_STATE_UNDERRUN; break;
+        case 5:
+            o.clocked = 1;
+            o.sp.age_s = 3.5;
+            break;
+        case 6:
+            o.clocked = 1;
+            o.clock_unsync = 1;
+            break;
+        default: o.held = 1; break;
+        }
+        assert_int_equal(mbmap_health(&o), cases[c].bit);
+        assert_int_equal(mbmap_encode_object(regs, 0, 1, &o), 0);
+        assert_int_equal(regs[MBMAP_OBJ_BASE(0) + MBMAP_O_HEALTH], cases[c].bit);
+        assert_int_equal(regs[MBMAP_OBJ_BASE(0) + MBMAP_O_STATE],
+                         cases[c].held ? MBMAP_STATE_HELD : (unsigned)o.sp.state);
+    }
+    /* well: nothing; not on the clock, an old age and an unsynchronised clock do not count */
+    mbmap_object_t o;
+    memset(&o, 0, sizeof o);
+    o.sp.age_s = 1e9;
+    o.clock_unsync = 1;
+    o.drive_states = 0x0FFF; /* no drives */
+    assert_int_equal(mbmap_health(&o), 0);
+}
+
+/* The float32 waypoint block decodes, in every word order, to the float32 values. */
+static void test_decode_wpf(void **state)
+{
+    (void)state;
+    const float v[4] = {12.25f, 100.123456f, -7.5f, 0.1f};
+    for (int ord = 0; ord < 4; ord++) {
+        uint16_t r[MBMAP_H_WPF_COUNT];
+        mbmap_put_u32(r, 77);
+        for (int k = 0; k < 4; k++)
+            mbmap_put_f32(r + 2 + 2 * k, v[k]);
+        for (unsigned i = 0; i < MBMAP_H_WPF_COUNT; i += 2)
+            mbmap_order_value(r + i, 2, (mbmap_order_t)ord); /* as the client sends it */
+        uint8_t pdu[6 + 2 * MBMAP_H_WPF_COUNT];
+        unsigned a = MBMAP_OBJ_BASE(0) + MBMAP_H_WPF;
+        pdu[0] = MBMAP_FC_WRITE_MULTIPLE;
+        pdu[1] = (uint8_t)(a >> 8);
+        pdu[2] = (uint8_t)a;
+        pdu[3] = 0;
+        pdu[4] = MBMAP_H_WPF_COUNT;
+        pdu[5] = 2 * MBMAP_H_WPF_COUNT;
+        for (unsigned i = 0; i < MBMAP_H_WPF_COUNT; i++) {
+            pdu[6 + 2 * i] = (uint8_t)(r[i] >> 8);
+            pdu[7 + 2 * i] = (uint8_t)r[i];
+        }
+        mbmap_write_t w;
+        assert_int_equal(mbmap_decode_write_order(1, (mbmap_order_t)ord, pdu, sizeof pdu, &w), 0);
+        assert_int_equal(w.kind, MBMAP_WRITE_WAYPOINT);
+        assert_int_equal(w.wp.seq, 77);
+        assert_memory_equal(&(double){v[0]}, &w.wp.t_s, sizeof(double));
+        for (int k = 0; k < 3; k++)
+            assert_memory_equal(&(double){v[k + 1]}, &w.wp.pos_m[k], sizeof(double));
+    }
+}
+
 static int markdown(void)
 {
     size_t n;
@@ -642,6 +728,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_encode_diag),
         cmocka_unit_test(test_encode_diag_worst_addr),
         cmocka_unit_test(test_diag_requests),
+        cmocka_unit_test(test_health),
+        cmocka_unit_test(test_decode_wpf),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
