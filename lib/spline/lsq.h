@@ -20,7 +20,7 @@
  * Why smoothing: a fix standing still jitters by a metre; an exact
  * interpolant must pass through every jittered fix and swings between them,
  * while a least-squares spline with fewer control points than fixes averages
- * them.  See lib/spline/README.md.
+ * them.  See lib/spline/TOOLKIT.md.
  *
  * Pinned ends (LSQ_PIN_ENDS): with clamped knots (lsq_knots) the curve
  * starts at P_0 and ends at P_{n}; pinning sets them to the first and last

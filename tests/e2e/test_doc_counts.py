@@ -147,10 +147,10 @@ class DocCounts(unittest.TestCase):
                 self.assertEqual(got, want, "daemon/README.md's row for %s is stale" % track)
 
     def test_smooth_table(self):
-        """lib/spline/README.md: visnjan at 10 Hz, cubic and smooth: path length,
+        """lib/spline/TOOLKIT.md: visnjan at 10 Hz, cubic and smooth: path length,
         p99 speed, p99 and max acceleration, as the doc rounds them."""
         import numpy as np
-        with open(os.path.join(ROOT, "lib", "spline", "README.md"), encoding="utf-8") as f:
+        with open(os.path.join(ROOT, "lib", "spline", "TOOLKIT.md"), encoding="utf-8") as f:
             doc = f.read()
         runs = {}
         with tempfile.TemporaryDirectory() as tmp:
@@ -167,7 +167,7 @@ class DocCounts(unittest.TestCase):
                 got = [round(float(np.nansum(np.hypot(np.diff(d["x_m"]), np.diff(d["y_m"]))))),
                        round(float(np.nanpercentile(v, 99)), 2), round(float(np.nanpercentile(a, 99)), 2),
                        round(float(np.nanmax(a)), 2)]
-                self.assertEqual(got, want, "lib/spline/README.md's %s row is stale" % method)
+                self.assertEqual(got, want, "lib/spline/TOOLKIT.md's %s row is stale" % method)
                 runs[method] = d
         # "At the fixes' own times the smoothed curve is a median 2.5 m from the fix (95 %: 7.4 m,
         # max 12.8 m)": the fixes are where the exact cubic passes at their times
@@ -182,12 +182,12 @@ class DocCounts(unittest.TestCase):
             return np.c_[np.interp(fixes, d["t_s"], d["x_m"]), np.interp(fixes, d["t_s"], d["y_m"])]
         dist = np.linalg.norm(at_fixes(runs["smooth"]) - at_fixes(runs["cubic"]), axis=1)
         self.assertEqual(["%.1f" % x for x in (np.median(dist), np.percentile(dist, 95), dist.max())],
-                         [med, p95, worst], "lib/spline/README.md's distances to the fixes are stale")
+                         [med, p95, worst], "lib/spline/TOOLKIT.md's distances to the fixes are stale")
 
     def test_lsq_demo(self):
-        """lib/spline/README.md's table of tests/pictures/make_pictures.py's least-squares demo
+        """lib/spline/TOOLKIT.md's table of tests/pictures/make_pictures.py's least-squares demo
         (the library's cspline and lsq on its seeded track; the pictures are not written)."""
-        doc = read("lib/spline/README.md")
+        doc = read("lib/spline/TOOLKIT.md")
         want = [re.findall(r"\| ([\d.]+) m", l) for l in doc.split("\n")
                 if l.startswith("| exact cubic spline through every fix |")
                 or l.startswith("| least-squares cubic B-spline, 14 control points")]
@@ -546,9 +546,9 @@ class Lookahead(unittest.TestCase):
                          int(former))
 
     def test_spline_readme_smooth(self):
-        """lib/spline/README.md: 'engine defaults, on regular input: 18 waypoints for `cubic`,
+        """lib/spline/TOOLKIT.md: 'engine defaults, on regular input: 18 waypoints for `cubic`,
         30 for `smooth` with the default window, 24 with a window of 12'."""
-        cubic, smooth, w, small = grab(read("lib/spline/README.md"), (
+        cubic, smooth, w, small = grab(read("lib/spline/TOOLKIT.md"), (
             r"engine defaults, on regular input: (\d+) waypoints for `cubic`, (\d+) for\s+`smooth` "
             r"with\s+the default window, (\d+) with a window of (\d+)"))
         self.assertEqual(start_lookahead(), int(cubic))
@@ -704,7 +704,7 @@ class UnitTestFigures(unittest.TestCase):
         self.shown_e(big, got[1], "drift at 1e7 m")
 
     def test_toolkit(self):
-        doc = flat("lib/spline/README.md")
+        doc = flat("lib/spline/TOOLKIT.md")
         self.shown_e(grab(doc, r"max \\\|r − 1\\\| = \*\*(\S+)\*\*"),
                      grab(unit_output("test_nurbs"), r"seed circle: max \|radius - 1\| = (\S+) over 1e5 points"),
                      "NURBS circle")

@@ -67,9 +67,9 @@ class TestPathReplay(unittest.TestCase):
         self.assertGreater(on.sum(), 1000)
         err = np.abs(np.hypot(x[on] - 20, y[on] - 10) - 10)
         print("max |r - 10| on the circle: %.2e m" % err.max())
-        # lib/spline/README.md quotes it: this run's (issue 14)
+        # lib/spline/TOOLKIT.md quotes it: this run's (issue 14)
         with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "lib", "spline",
-                               "README.md"), encoding="utf-8") as f:
+                               "TOOLKIT.md"), encoding="utf-8") as f:
             quoted = re.findall(r"finds the streamed setpoints within (\S+) m of the circle",
                                 " ".join(f.read().split()))
         self.assertEqual([float(q) for q in quoted], [float("%.0e" % err.max())])

@@ -168,10 +168,10 @@ class TestEngineSmooth(unittest.TestCase):
         rms_e = math.sqrt(np.mean(np.sum((exact - tru) ** 2, axis=1)))
         print(f"RMS to truth: smooth {rms_s:.3f} m, cubic {rms_e:.3f} m")
         self.assertLess(rms_s, 0.6 * rms_e)
-        # lib/spline/README.md quotes both, as this run gives them (issue 14)
+        # lib/spline/TOOLKIT.md quotes both, as this run gives them (issue 14)
         import re
         with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "lib", "spline",
-                               "README.md"), encoding="utf-8") as f:
+                               "TOOLKIT.md"), encoding="utf-8") as f:
             doc = " ".join(f.read().split())
         quoted = re.findall(r"measures an RMS distance to the truth of (\S+) m for `smooth` against "
                             r"(\S+) m for `cubic`", doc)

@@ -219,10 +219,10 @@ class TestLsq(unittest.TestCase):
                 ref = make_lsq_spline(u, pts, knots, k=order - 1)
                 np.testing.assert_allclose(ctrl, ref.c, atol=TOL_LSQ, rtol=0)
                 worst = max(worst, np.abs(ctrl - ref.c).max())
-        # lib/spline/README.md quotes the agreement: this run's (issue 14)
+        # lib/spline/TOOLKIT.md quotes the agreement: this run's (issue 14)
         print("lsq_fit vs make_lsq_spline: worst %.2g" % worst)
         with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "lib", "spline",
-                               "README.md"), encoding="utf-8") as f:
+                               "TOOLKIT.md"), encoding="utf-8") as f:
             quoted = re.findall(r"agreement with scipy's `make_lsq_spline` is (\S+) on the test data",
                                 " ".join(f.read().split()))
         self.assertEqual([float(q) for q in quoted], [float("%.0e" % worst)])

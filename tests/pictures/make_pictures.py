@@ -5,7 +5,7 @@
 
 Every curve is computed by build/libtrajd.so (ctypes) or build/bin/trajsurf;
 this script only projects and draws.  It also prints the numbers quoted in
-lib/spline/README.md (the least-squares jitter experiment).
+lib/spline/TOOLKIT.md (the least-squares jitter experiment).
 """
 import ctypes as C
 import math
