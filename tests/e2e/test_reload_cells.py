@@ -1,0 +1,134 @@
+#!/usr/bin/python3
+"""test_reload_cells.py - what a reload does to each object, mid-motion
+(issue 23, the reload and end-of-input cells; issue 28 item 2, the reload
+mechanism).  The real trajd binary, its setpoints read from its stdout pipe,
+its log from stderr, systemd's notify protocol from a socket this test binds
+(tests/e2e/test_daemon.py's Daemon).  Continuity is judged against the
+object's own configured limits (max_speed_m_s x the periods elapsed), never
+against trajd's numbers.  Every wait is for an event, bounded.
+"""
+import math
+import os
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import unittest
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import test_daemon as td  # noqa: E402
+
+PERIOD_NS = 10_000_000       # rate_hz = 100
+VMAX = 4.0                   # the object's max_speed_m_s (the track moves at 2 m/s)
+SCALED = 0x40
+
+
+def conf(objs, daemon="", extra=""):
+    return ("[daemon]\nrate_hz = 100\nstatus_interval_s = 1\nstop_timeout_s = 10\n%s%s" % (daemon, extra)
+            + "".join(objs))
+
+
+def obj(name, oid, output="stdout", more=""):
+    return ("[object.%s]\nid = %d\ninput = replay\nreplay.track = circle.csv\noutput = %s\n"
+            "max_speed_m_s = %g\nscale_accel_m_s2 = 1\n%s" % (name, oid, output, VMAX, more))
+
+
+def pos(row):
+    return [float(x) for x in row[3:6]]
+
+
+def vel(row):
+    return [float(x) for x in row[6:9]]
+
+
+class ReloadCells(unittest.TestCase):
+    def setUp(self):
+        self.tmpd = tempfile.TemporaryDirectory()
+        self.tmp = self.tmpd.name
+        td.xyz_track(os.path.join(self.tmp, "circle.csv"), 3000, 0.1)  # 2 m/s for 300 s
+        self.conf = os.path.join(self.tmp, "trajd.conf")
+
+    def tearDown(self):
+        self.tmpd.cleanup()
+
+    def assert_continuous(self, b, a, what):
+        """Row a follows row b (same object) with no step: k periods on in
+        engine time, the position within VMAX x k T of b's."""
+        dt_ns = int(a[1]) - int(b[1])
+        self.assertGreater(dt_ns, 0, what)
+        self.assertEqual(dt_ns % PERIOD_NS, 0, what)
+        k = dt_ns // PERIOD_NS
+        step = math.dist(pos(a), pos(b))
+        self.assertLessEqual(step, VMAX * k * PERIOD_NS * 1e-9 + 1e-6,
+                             "%s: step %.4f m in %d periods\n%s\n%s" % (what, step, k, b, a))
+        return k
+
+    def failed_reload(self, d, text, why):
+        """SIGHUP with text as the config, which cannot open: refused with
+        why, and boat's stream goes on where it was (same trajectory, track
+        time k periods on, no step)."""
+        before = d.line(lambda l: l.startswith("boat,") and ",streaming," in l and
+                        not int(l.split(",")[13]) & SCALED)
+        td.write(self.conf, text)
+        d.p.send_signal(signal.SIGHUP)
+        f, _ = d.msg(lambda f: f.get("READY") == "1")
+        self.assertIn("reload refused", f.get("STATUS", ""))
+        self.assertIn(why, f.get("STATUS", ""))
+        d.err_line(lambda l: "reload refused (cannot open)" in l and why in l)
+        while True:  # the old stdout transport reopens: a header, then the rows go on
+            l = d.line()
+            if l.startswith("object,"):
+                break
+            if l.startswith("boat,"):
+                before = l
+        after = d.line(lambda l: l.startswith("boat,"))
+        b, a = before.split(","), after.split(",")
+        k = self.assert_continuous(b, a, "at the failed reload")
+        self.assertEqual(a[12], "streaming", a)
+        self.assertEqual(a[15], b[15], "a new trajectory: %s / %s" % (b, a))
+        # progress kept: track time k periods on (a restart would begin at 0)
+        self.assertAlmostEqual(float(a[2]) - float(b[2]), k * PERIOD_NS * 1e-9, delta=1e-6)
+        # and from there on, every row continues the last
+        prev = a
+        for _ in range(20):
+            cur = d.line(lambda l: l.startswith("boat,")).split(",")
+            self.assert_continuous(prev, cur, "after the failed reload")
+            prev = cur
+
+    def run_failed_reload(self, make_bad, why):
+        td.write(self.conf, conf([obj("boat", 0)]))
+        d = td.Daemon(self.tmp, self.conf)
+        try:
+            d.msg(lambda f: f.get("READY") == "1", td.START_TIMEOUT_S)
+            self.failed_reload(d, make_bad(), why)
+            # counted where the status is shown
+            d.msg(lambda f: "reloads 1 (1 failed)" in f.get("STATUS", ""), 5)
+            d.p.send_signal(signal.SIGTERM)
+            self.assertEqual(d.wait(20), 0, d.stderr())
+        finally:
+            d.close()
+
+    def test_failed_reload_bad_csv_path(self):
+        # Given boat streaming at 2 m/s, when SIGHUP with a config whose CSV
+        # output lies in a directory that does not exist, then the reload is
+        # refused with the reason, and boat goes on untouched.
+        self.run_failed_reload(lambda: conf([obj("boat", 0, "stdout, csv",
+                                                 "csv.path = no/such/dir/x.csv\n")]),
+                               "no/such/dir")
+
+    def test_failed_reload_busy_modbus_port(self):
+        # The same with a Modbus port another process listens on.
+        busy = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        try:
+            busy.bind(("0.0.0.0", 0))
+            busy.listen(1)
+            port = busy.getsockname()[1]
+            self.run_failed_reload(lambda: conf([obj("boat", 0)], extra="[modbus]\nport = %d\n"
+                                                "systemd_socket = no\n" % port), "modbus")
+        finally:
+            busy.close()
+
+
+if __name__ == "__main__":
+    unittest.main()
