@@ -130,5 +130,68 @@ class ReloadCells(unittest.TestCase):
             busy.close()
 
 
+    def start_two(self):
+        td.write(self.conf, conf([obj("boat", 0), obj("gone", 1)]))
+        d = td.Daemon(self.tmp, self.conf)
+        d.msg(lambda f: f.get("READY") == "1", td.START_TIMEOUT_S)
+        d.line(lambda l: l.startswith("gone,") and ",streaming," in l and
+               not int(l.split(",")[13]) & SCALED)
+        return d
+
+    def test_removed_object_brakes_to_rest(self):
+        # Given boat and gone streaming at 2 m/s, when SIGHUP with gone
+        # removed, then the log says gone brakes to rest from its speed,
+        # gone's rows slow down within its limits (no step, velocity changing
+        # by at most scale_accel_m_s2 + the track's v^2/r per period) and the
+        # last one is at rest; boat goes on.  SIGHUPs sent while gone brakes
+        # are coalesced into one more reload.
+        d = self.start_two()
+        try:
+            td.write(self.conf, conf([obj("boat", 0)]))
+            d.p.send_signal(signal.SIGHUP)
+            l = d.err_line(lambda l: "object 'gone' removed: braking to rest from" in l)
+            v0 = float(l.split("braking to rest from ")[1].split()[0])
+            self.assertAlmostEqual(v0, 2.0, delta=0.1)
+            for _ in range(3):  # while gone brakes (2 s): coalesced
+                d.p.send_signal(signal.SIGHUP)
+                d.err_line(lambda l: "coalesced" in l)
+            d.err_line(lambda l: l.find("reloaded: 1 object(s)") >= 0)
+            d.err_line(lambda l: l.find("reloaded: 1 object(s)") >= 0)  # the coalesced one
+            rows = []  # every stdout line from here on
+            for want in ("object,", "object,", "boat,"):
+                d.line(lambda l: rows.append(l) or l.startswith(want))
+            d.p.send_signal(signal.SIGTERM)
+            rows += d.lines_until_eof(timeout=20)
+            self.assertEqual(d.wait(20), 0, d.stderr())
+        finally:
+            d.close()
+        err = d.stderr()
+        self.assertEqual(err.count("SIGHUP: reloading"), 2, err)
+        gone = [r for r in (l.split(",") for l in rows) if r[0] == "gone"]
+        self.assertNotIn("gone", [r[0] for r in (l.split(",") for l in rows[-5:])])
+        amax = 1.0 + 2.0 ** 2 / 50.0  # scale_accel_m_s2 + the circle's v^2/r
+        for b, a in zip(gone, gone[1:]):
+            k = self.assert_continuous(b, a, "gone braking")
+            dv = math.dist(vel(a), vel(b))
+            self.assertLessEqual(dv, amax * k * PERIOD_NS * 1e-9 + 1e-6, "%s\n%s" % (b, a))
+        self.assertEqual(vel(gone[-1]), [0.0, 0.0, 0.0], gone[-1])
+        self.assertEqual(gone[-1][12], "finished", gone[-1])
+
+    def test_sigterm_while_a_removed_object_brakes(self):
+        # Given a reload waiting for a removed object to rest, when SIGTERM,
+        # then the pending reload is dropped and trajd exits 0.
+        d = self.start_two()
+        try:
+            td.write(self.conf, conf([obj("boat", 0)]))
+            d.p.send_signal(signal.SIGHUP)
+            d.err_line(lambda l: "object 'gone' removed: braking" in l)
+            d.p.send_signal(signal.SIGTERM)
+            d.err_line(lambda l: "the pending reload is dropped" in l)
+            d.lines_until_eof(timeout=20)
+            self.assertEqual(d.wait(20), 0, d.stderr())
+        finally:
+            d.close()
+
+
 if __name__ == "__main__":
     unittest.main()
