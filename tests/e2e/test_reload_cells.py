@@ -193,5 +193,84 @@ class ReloadCells(unittest.TestCase):
             d.close()
 
 
+    def test_fifo_track_in_a_reload_is_refused_and_sigterm_works(self):
+        # Given trajd running, when SIGHUP with a config whose track is a FIFO
+        # (no writer), then the reload is refused at check time with the
+        # reason (it blocked in open() for good, and SIGTERM was then never
+        # read); boat goes on, and SIGTERM ends trajd with 0.
+        fifo = os.path.join(self.tmp, "pipe.csv")
+        os.mkfifo(fifo)
+        td.write(self.conf, conf([obj("boat", 0)]))
+        d = td.Daemon(self.tmp, self.conf)
+        try:
+            d.msg(lambda f: f.get("READY") == "1", td.START_TIMEOUT_S)
+            td.write(self.conf, conf([obj("boat", 0), obj("piped", 1).replace("circle.csv",
+                                                                                "pipe.csv")]))
+            d.p.send_signal(signal.SIGHUP)
+            d.err_line(lambda l: "reload refused" in l and "pipe.csv: not a regular file: a FIFO"
+                       in l)
+            d.line(lambda l: l.startswith("boat,"))
+            d.p.send_signal(signal.SIGTERM)
+            d.lines_until_eof(timeout=20)
+            self.assertEqual(d.wait(20), 0, d.stderr())
+        finally:
+            d.close()
+
+
+def limit_memory():
+    """The child may not read a 1 GiB file into memory (the old code did)."""
+    import resource
+    resource.setrlimit(resource.RLIMIT_AS, (1 << 30, 1 << 30))
+
+
+class CheckTime(unittest.TestCase):
+    """A FIFO, a device or a file above the size cap named as a replay.track
+    or a [can] log_in is refused by --check-config with the reason, before
+    anything is read (issue 28 item 2)."""
+
+    def setUp(self):
+        self.tmpd = tempfile.TemporaryDirectory()
+        self.tmp = self.tmpd.name
+        self.conf = os.path.join(self.tmp, "trajd.conf")
+
+    def tearDown(self):
+        self.tmpd.cleanup()
+
+    def refused(self, text, why):
+        td.write(self.conf, text)
+        r = subprocess.run([td.TRAJD, "--check-config", self.conf], capture_output=True,
+                           text=True, timeout=30, preexec_fn=limit_memory)
+        self.assertEqual(r.returncode, 78, r.stdout + r.stderr)
+        self.assertIn(why, r.stderr)
+
+    def track_conf(self, path):
+        return "[object.boat]\ninput = replay\nreplay.track = %s\noutput = stdout\n" % path
+
+    def log_in_conf(self, path):
+        return ("[can]\nlog_in = %s\nlog_out = out.log\n"
+                "[object.boat]\ninput = can\noutput = can\n" % path)
+
+    def test_fifo(self):
+        fifo = os.path.join(self.tmp, "pipe")
+        os.mkfifo(fifo)
+        self.refused(self.track_conf(fifo), "%s: not a regular file: a FIFO" % fifo)
+        self.refused(self.log_in_conf(fifo), "log_in %s: not a regular file: a FIFO" % fifo)
+
+    def test_device(self):
+        self.refused(self.track_conf("/dev/zero"), "/dev/zero: not a regular file: a character "
+                                                   "device")
+        self.refused(self.log_in_conf("/dev/zero"), "log_in /dev/zero: not a regular file: a "
+                                                    "character device")
+
+    def test_size_cap(self):
+        # a sparse file one byte above 1 GiB (TRACK_FILE_MAX_BYTES,
+        # CAN_LOGFILE_MAX_BYTES): refused from its size, nothing read
+        big = os.path.join(self.tmp, "big.csv")
+        with open(big, "w") as f:
+            f.truncate((1 << 30) + 1)
+        self.refused(self.track_conf(big), "%s: larger than %d bytes" % (big, 1 << 30))
+        self.refused(self.log_in_conf(big), "log_in %s: larger than %d bytes" % (big, 1 << 30))
+
+
 if __name__ == "__main__":
     unittest.main()
