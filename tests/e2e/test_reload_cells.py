@@ -217,6 +217,45 @@ class ReloadCells(unittest.TestCase):
             d.close()
 
 
+    def reload_log(self, d):
+        """SIGHUP; the log lines of that reload, up to 'reloaded:'."""
+        d.p.send_signal(signal.SIGHUP)
+        seen = []
+        d.err_line(lambda l: seen.append(l) or "reloaded:" in l or "reload refused" in l, 60)
+        return seen
+
+    def test_unchanged_track_is_not_parsed_again(self):
+        # Given boat on circle.csv and big on a 1e6-waypoint track, when SIGHUP
+        # with a config whose objects are unchanged, then neither track is
+        # parsed again (the log says so) and both are carried over; when
+        # circle.csv is rewritten and SIGHUP, then only circle.csv is parsed
+        # again and boat is a changed object (not carried over).
+        with open(os.path.join(self.tmp, "big.csv"), "w") as f:
+            f.write("t,x,y,z\n")
+            f.writelines("%d,%d,0,0\n" % (i, i) for i in range(1000000))
+        objs = [obj("boat", 0), obj("big", 1, "csv", "csv.path = big.out\n").replace(
+            "circle.csv", "big.csv")]
+        td.write(self.conf, conf(objs))
+        d = td.Daemon(self.tmp, self.conf)
+        try:
+            d.msg(lambda f: f.get("READY") == "1", td.START_TIMEOUT_S * 3)
+            td.write(self.conf, conf(objs).replace("status_interval_s = 1", "status_interval_s = 2"))
+            log = "\n".join(self.reload_log(d))
+            for name, n in (("circle.csv", 3000), ("big.csv", 1000000)):
+                self.assertIn("%s unchanged (%d waypoints): not parsed again" % (name, n), log)
+            self.assertIn("reloaded: 2 object(s), 2 carried over", log)
+            td.xyz_track(os.path.join(self.tmp, "circle.csv"), 3000, 0.1, radius_m=60.0)
+            log = "\n".join(self.reload_log(d))
+            self.assertNotIn("circle.csv unchanged", log)
+            self.assertIn("big.csv unchanged (1000000 waypoints): not parsed again", log)
+            self.assertIn("reloaded: 2 object(s), 1 carried over", log)
+            d.p.send_signal(signal.SIGTERM)
+            d.lines_until_eof(timeout=30)
+            self.assertEqual(d.wait(30), 0, d.stderr())
+        finally:
+            d.close()
+
+
 def limit_memory():
     """The child may not read a 1 GiB file into memory (the old code did)."""
     import resource
