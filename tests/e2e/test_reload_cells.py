@@ -17,11 +17,14 @@ import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
 import test_daemon as td  # noqa: E402
 
 PERIOD_NS = 10_000_000       # rate_hz = 100
 VMAX = 4.0                   # the object's max_speed_m_s (the track moves at 2 m/s)
 SCALED = 0x40
+NO_POS_M = -214748.3648      # CAN SETPOINT position 0x80000000: no position
+CAN = "[can]\nlog_out = sp.log\nlog_time = wall\nmax_load_percent = 0\n"
 
 
 def conf(objs, daemon="", extra=""):
@@ -97,7 +100,11 @@ class ReloadCells(unittest.TestCase):
             prev = cur
 
     def run_failed_reload(self, make_bad, why):
-        td.write(self.conf, conf([obj("boat", 0)]))
+        """boat writes stdout and CAN (log_out, wall-clock stamps); a reload
+        with make_bad() fails with why.  Then the CAN log, read by python-can
+        and decoded by canmatrix from config/trajd.dbc, has no step anywhere
+        (it had a 36 m one: issue 23)."""
+        td.write(self.conf, conf([obj("boat", 0, "stdout, can")], extra=CAN))
         d = td.Daemon(self.tmp, self.conf)
         try:
             d.msg(lambda f: f.get("READY") == "1", td.START_TIMEOUT_S)
@@ -105,16 +112,26 @@ class ReloadCells(unittest.TestCase):
             # counted where the status is shown
             d.msg(lambda f: "reloads 1 (1 failed)" in f.get("STATUS", ""), 5)
             d.p.send_signal(signal.SIGTERM)
+            d.lines_until_eof(timeout=20)
             self.assertEqual(d.wait(20), 0, d.stderr())
         finally:
             d.close()
+        import cantools_trajd as ct
+        rows, _ = ct.decode_setpoints(os.path.join(self.tmp, "sp.log"))
+        moving = [(t, r) for t, r in rows.items()  # in file order
+                  if all(a in r for a in "xyz") and r["x"] > NO_POS_M + 1]
+        self.assertGreater(len(moving), 100)
+        for (t0, a), (t1, b) in zip(moving, moving[1:]):
+            step = math.dist([a[x] for x in "xyz"], [b[x] for x in "xyz"])
+            self.assertLessEqual(step, VMAX * (t1 - t0) * 1e-9 + 2 * ct.SP_POS_TOL,
+                                 "CAN step at %d ns: %r -> %r" % (t1, a, b))
 
     def test_failed_reload_bad_csv_path(self):
         # Given boat streaming at 2 m/s, when SIGHUP with a config whose CSV
         # output lies in a directory that does not exist, then the reload is
         # refused with the reason, and boat goes on untouched.
-        self.run_failed_reload(lambda: conf([obj("boat", 0, "stdout, csv",
-                                                 "csv.path = no/such/dir/x.csv\n")]),
+        self.run_failed_reload(lambda: conf([obj("boat", 0, "stdout, can, csv",
+                                                 "csv.path = no/such/dir/x.csv\n")], extra=CAN),
                                "no/such/dir")
 
     def test_failed_reload_busy_modbus_port(self):
@@ -124,11 +141,11 @@ class ReloadCells(unittest.TestCase):
             busy.bind(("0.0.0.0", 0))
             busy.listen(1)
             port = busy.getsockname()[1]
-            self.run_failed_reload(lambda: conf([obj("boat", 0)], extra="[modbus]\nport = %d\n"
+            self.run_failed_reload(lambda: conf([obj("boat", 0, "stdout, can")],
+                                                extra=CAN + "[modbus]\nport = %d\n"
                                                 "systemd_socket = no\n" % port), "modbus")
         finally:
             busy.close()
-
 
     def start_two(self):
         td.write(self.conf, conf([obj("boat", 0), obj("gone", 1)]))
