@@ -536,6 +536,7 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
     c->cfg = cfg;
     c->stats = stats;
     c->period_ns = cfg->daemon.period_ns;
+    double max_ppm = stats->drift.max_ppm; /* the running core's, if this one fails */
     stats->drift.max_ppm = cfg->daemon.drift_max_ppm;
     /* engine time goes on from the previous core: carried engines never see
      * it go backwards */
@@ -577,6 +578,8 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
     return 0;
 fail:
     core_close(c);
+    if (prevp && *prevp)
+        stats->drift.max_ppm = max_ppm;
     return rc;
 }
 
