@@ -208,6 +208,8 @@ static void reload_swap(trajd_t *d, cfg_t *nc)
      * even that fails is the old configuration opened from scratch. */
     if (start_core(d, nc, err, sizeof err) < 0) {
         char err2[1024];
+        if (d->core)
+            reload_release_removed(d->core, nc); /* braked for nothing: inputs resume */
         cfg_free(nc);
         if (d->core) {
             reload_refused(d, " (cannot open)", err);

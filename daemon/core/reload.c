@@ -81,6 +81,13 @@ unsigned reload_brake_removed(core_t *c, const cfg_t *nc)
     return n;
 }
 
+void reload_release_removed(core_t *c, const cfg_t *nc)
+{
+    for (unsigned i = 0; i < c->nobj; i++)
+        if (removed(nc, c->obj[i].name) && !c->stopping)
+            c->obj[i].stopping = 0;
+}
+
 int reload_removed_at_rest(const core_t *c, const cfg_t *nc)
 {
     for (unsigned i = 0; i < c->nobj; i++)

@@ -45,6 +45,10 @@ int reload_obj_at_rest(const obj_t *o);
  */
 unsigned reload_brake_removed(core_t *c, const cfg_t *nc);
 
+/* The reload that removed them failed: their inputs are taken again (they
+ * rest, braked; the next waypoint starts a new trajectory by a transfer). */
+void reload_release_removed(core_t *c, const cfg_t *nc);
+
 /* 1 once every object of c that nc removes is at rest. */
 int reload_removed_at_rest(const core_t *c, const cfg_t *nc);
 

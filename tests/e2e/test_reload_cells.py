@@ -194,6 +194,36 @@ class ReloadCells(unittest.TestCase):
         self.assertEqual(vel(gone[-1]), [0.0, 0.0, 0.0], gone[-1])
         self.assertEqual(gone[-1][12], "finished", gone[-1])
 
+    def test_removal_in_a_failed_reload(self):
+        # Given boat and gone streaming, when SIGHUP with gone removed and a
+        # CSV output that cannot open, then gone brakes to rest (the removal
+        # comes first), the reload fails, and gone, still in the running
+        # configuration, takes its input again and leaves its rest by a
+        # transfer: every row of it continuous within its limits.
+        d = self.start_two()
+        try:
+            td.write(self.conf, conf([obj("boat", 0, "stdout, csv",
+                                          "csv.path = no/such/dir/x.csv\n")]))
+            d.p.send_signal(signal.SIGHUP)
+            d.err_line(lambda l: "object 'gone' removed: braking to rest" in l)
+            d.err_line(lambda l: "reload refused (cannot open)" in l)
+            rows = []
+            d.line(lambda l: rows.append(l) or (l.startswith("gone,") and ",streaming," in l and
+                                                 rows and any(",finished," in r for r in rows)),
+                   30)
+            d.p.send_signal(signal.SIGTERM)
+            rows += d.lines_until_eof(timeout=20)
+            self.assertEqual(d.wait(20), 0, d.stderr())
+        finally:
+            d.close()
+        gone = [r for r in (l.split(",") for l in rows) if r[0] == "gone"]
+        states = [r[12] for r in gone]
+        rest = states.index("finished")
+        self.assertIn("streaming", states[rest:])
+        self.assertEqual(vel(gone[rest]), [0.0, 0.0, 0.0])
+        for b, a in zip(gone, gone[1:]):
+            self.assert_continuous(b, a, "gone braked, then resumed")
+
     def test_sigterm_while_a_removed_object_brakes(self):
         # Given a reload waiting for a removed object to rest, when SIGTERM,
         # then the pending reload is dropped and trajd exits 0.
