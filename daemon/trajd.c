@@ -5,6 +5,9 @@
  *
  * Signals (signalfd, in the loop):
  *   SIGHUP           re-read the config; a bad one is refused, the old keeps running
+ *                    (reload.h: what happens to each object); objects it removes
+ *                    brake to rest first, and SIGHUPs arriving meanwhile (or in
+ *                    one batch) are coalesced into one more reload after it
  *   SIGTERM, SIGINT  stop policy of core.h (bring objects to rest, exit 0);
  *                    a second one exits at once (0)
  * Exit status: 0; EX_USAGE, EX_CONFIG, EX_UNAVAILABLE (cannot start), EX_OSERR,
@@ -34,6 +37,7 @@
 #include "core.h"
 #include "log.h"
 #include "loop.h"
+#include "reload.h"
 #include "rt.h"
 #include "version.h"
 
@@ -48,9 +52,15 @@ typedef struct {
     int sig_fd;
     int status_fd; /* 1 s housekeeping timer */
     int watchdog_fd;
-    uint64_t seconds; /* housekeeping ticks */
-    int signals_seen; /* SIGTERM/SIGINT count */
-    int ready_fd;     /* background mode: pipe to the waiting parent, else -1 */
+    uint64_t seconds;            /* housekeeping ticks */
+    int signals_seen;            /* SIGTERM/SIGINT count */
+    int ready_fd;                /* background mode: pipe to the waiting parent, else -1 */
+    cfg_t *pending;              /* a reload waiting for the objects it removes to rest */
+    int pending_fd;              /* its timer (-1: none) */
+    int64_t pending_deadline_ns; /* CLOCK_MONOTONIC: swap anyway after stop_timeout_s */
+    int hup_again;               /* SIGHUP while pending: read the config again after it */
+    uint64_t reloads;            /* SIGHUPs acted on */
+    uint64_t reloads_failed;     /* of those, refused (bad config, cannot open) */
 } trajd_t;
 
 static void usage(FILE *f)
@@ -68,10 +78,19 @@ static void usage(FILE *f)
             "Signals: SIGHUP reloads the config, SIGTERM/SIGINT bring objects to rest and exit.\n");
 }
 
+/* The status line: core_summary, then the reload counts. */
+static void status_line(const trajd_t *d, char *line, size_t len)
+{
+    int n = core_summary(d->core, line, len);
+    if (n >= 0 && (size_t)n < len && d->reloads)
+        snprintf(line + n, len - (size_t)n, ", reloads %llu (%llu failed)",
+                 (unsigned long long)d->reloads, (unsigned long long)d->reloads_failed);
+}
+
 static void notify_status(trajd_t *d)
 {
     char line[1024];
-    core_summary(d->core, line, sizeof line);
+    status_line(d, line, sizeof line);
     sd_notifyf(0, "STATUS=%s", line);
 }
 
@@ -88,7 +107,7 @@ static void on_second(loop_t *l, uint64_t exp, void *ctx)
         uint64_t every = iv < 1 ? 1 : (uint64_t)iv;
         if (d->seconds % every < exp) {
             char line[1024];
-            core_summary(d->core, line, sizeof line);
+            status_line(d, line, sizeof line);
             log_msg(LOG_INFO, "status: %s", line);
             sd_notifyf(0, "STATUS=%s", line);
         }
@@ -166,63 +185,145 @@ static int drop_privileges(const cfg_t *cfg, char *why, size_t wl)
     return 0;
 }
 
+static void reload(trajd_t *d);
+
+/* A reload refused: counted, logged, told to systemd; the old configuration runs on. */
+static void reload_refused(trajd_t *d, const char *what, const char *err)
+{
+    d->reloads_failed++;
+    log_msg(LOG_ERR,
+            "reload refused%s, still running the old configuration (every object as it "
+            "was): %s",
+            what, err);
+    sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
+}
+
+/* Swap in nc (checked), then read the config again if SIGHUPs were coalesced. */
+static void reload_swap(trajd_t *d, cfg_t *nc)
+{
+    char err[1024];
+    /* core_open carries unchanged objects over, closes the old transports
+     * (they may hold a TCP port the new ones need), then opens the new ones.
+     * If that fails, the old core reopens its transports and runs on; only if
+     * even that fails is the old configuration opened from scratch. */
+    if (start_core(d, nc, err, sizeof err) < 0) {
+        char err2[1024];
+        if (d->core)
+            reload_release_removed(d->core, nc); /* braked for nothing: inputs resume */
+        cfg_free(nc);
+        if (d->core) {
+            reload_refused(d, " (cannot open)", err);
+        } else {
+            d->reloads_failed++;
+            log_msg(LOG_CRIT,
+                    "reload refused (cannot open): %s; and the old configuration's "
+                    "transports did not reopen: opening it from scratch",
+                    err);
+            if (start_core(d, d->cfg, err2, sizeof err2) < 0) {
+                log_msg(LOG_CRIT, "cannot reopen the old configuration either: %s", err2);
+                loop_stop(d->loop, EX_SOFTWARE);
+                return;
+            }
+            sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
+        }
+    } else {
+        cfg_free(d->cfg);
+        d->cfg = nc;
+        unsigned kept = 0;
+        for (unsigned i = 0; i < d->core->nobj; i++)
+            kept += (unsigned)d->core->obj[i].carried;
+        log_msg(LOG_NOTICE, "reloaded: %u object(s), %u carried over without interruption",
+                nc->nobj, kept);
+        sd_notify(0, "READY=1");
+        notify_status(d);
+    }
+    if (d->hup_again && d->core && !d->core->stopping) {
+        d->hup_again = 0;
+        reload(d);
+    }
+}
+
+/* Drop a pending reload (SIGTERM, or it swapped). */
+static cfg_t *pending_take(trajd_t *d)
+{
+    cfg_t *nc = d->pending;
+    if (d->pending_fd >= 0)
+        loop_timer_del(d->loop, d->pending_fd);
+    d->pending_fd = -1;
+    d->pending = NULL;
+    return nc;
+}
+
+/* While a reload waits: swap once the objects it removes rest. */
+static void on_pending(loop_t *l, uint64_t exp, void *ctx)
+{
+    trajd_t *d = ctx;
+    (void)l;
+    (void)exp;
+    if (!d->pending || !d->core)
+        return;
+    int rest = reload_removed_at_rest(d->core, d->pending);
+    if (!rest && core_mono_ns() < d->pending_deadline_ns)
+        return;
+    if (!rest)
+        log_msg(LOG_WARNING,
+                "reload: removed objects not at rest after %.1f s "
+                "(stop_timeout_s): reloading anyway",
+                d->cfg->daemon.stop_timeout_s);
+    reload_swap(d, pending_take(d));
+}
+
 static void reload(trajd_t *d)
 {
     char err[1024];
     cfg_t *nc = NULL;
     if (!d->core || d->core->stopping)
         return;
+    if (d->pending) {
+        d->hup_again = 1;
+        log_msg(LOG_NOTICE,
+                "SIGHUP while a reload waits for removed objects to rest: coalesced, "
+                "%s is read again once that reload is done",
+                d->conf_path);
+        return;
+    }
+    d->reloads++;
     sd_notifyf(0, "RELOADING=1\nMONOTONIC_USEC=%llu", (unsigned long long)(core_mono_ns() / 1000));
     log_msg(LOG_NOTICE, "SIGHUP: reloading %s", d->conf_path);
     if (cfg_load(d->conf_path, &nc, err, sizeof err) < 0 ||
         cfg_reload_check(d->cfg, nc, err, sizeof err) < 0) {
-        log_msg(LOG_ERR, "reload refused, still running the old configuration: %s", err);
-        sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
+        reload_refused(d, "", err);
         cfg_free(nc);
         return;
     }
-    /* core_open carries unchanged objects over, closes the old transports
-     * (they may hold a TCP port the new ones need), then opens the new ones.
-     * If that fails, the old configuration is reopened (from scratch if the
-     * old core was already closed). */
-    if (start_core(d, nc, err, sizeof err) < 0) {
-        char err2[1024];
-        cfg_free(nc);
-        if (d->core) { /* failed before touching the old core: it still runs */
-            log_msg(LOG_ERR, "reload refused: %s", err);
-            sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
-            return;
+    if (reload_brake_removed(d->core, nc) > 0) {
+        int64_t tick = (int64_t)((double)d->cfg->daemon.period_ns / d->cfg->daemon.speed);
+        d->pending_fd = loop_timer_add(d->loop, tick > 1000000 ? tick : 1000000, on_pending, d);
+        if (d->pending_fd >= 0) {
+            d->pending = nc;
+            d->pending_deadline_ns = core_mono_ns() +
+                                     (int64_t)(d->cfg->daemon.stop_timeout_s * 1e9);
+            return; /* swapped by on_pending once they rest */
         }
-        log_msg(LOG_ERR, "reload refused (cannot open): %s; reopening the old configuration", err);
-        if (start_core(d, d->cfg, err2, sizeof err2) < 0) {
-            log_msg(LOG_CRIT, "cannot reopen the old configuration either: %s", err2);
-            loop_stop(d->loop, EX_SOFTWARE);
-            return;
-        }
-        sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
-        return;
+        log_msg(LOG_WARNING,
+                "reload: no timer to wait for removed objects to rest (%s): "
+                "reloading now",
+                strerror(-d->pending_fd));
     }
-    cfg_free(d->cfg);
-    d->cfg = nc;
-    unsigned kept = 0;
-    for (unsigned i = 0; i < d->core->nobj; i++)
-        kept += (unsigned)d->core->obj[i].carried;
-    log_msg(LOG_NOTICE, "reloaded: %u object(s), %u carried over without interruption", nc->nobj,
-            kept);
-    sd_notify(0, "READY=1");
-    notify_status(d);
+    reload_swap(d, nc);
 }
 
 static void on_signal(loop_t *l, int fd, uint32_t events, void *ctx)
 {
     trajd_t *d = ctx;
     struct signalfd_siginfo si;
+    int hup = 0;
     (void)events;
     while (read(fd, &si, sizeof si) == (ssize_t)sizeof si) {
         if (!d->core)
             return; /* a failed reload is ending the loop */
         switch (si.ssi_signo) {
-        case SIGHUP: reload(d); break;
+        case SIGHUP: hup++; break; /* one reload for the batch, after it */
         case SIGTERM:
         case SIGINT:
             if (++d->signals_seen > 1) {
@@ -233,11 +334,19 @@ static void on_signal(loop_t *l, int fd, uint32_t events, void *ctx)
             log_msg(LOG_NOTICE, "%s: bringing objects to rest (at most %.1f s)",
                     strsignal((int)si.ssi_signo), d->cfg->daemon.stop_timeout_s);
             sd_notify(0, "STOPPING=1");
+            if (d->pending) {
+                log_msg(LOG_NOTICE, "the pending reload is dropped");
+                cfg_free(pending_take(d));
+            }
             core_stop(d->core);
             break;
         default: break;
         }
     }
+    if (hup > 1)
+        log_msg(LOG_NOTICE, "%d SIGHUPs at once: one reload", hup);
+    if (hup)
+        reload(d);
 }
 
 /* Background mode: the parent waits until the child is ready (or failed). */
@@ -401,7 +510,7 @@ static int run(trajd_t *d)
     if (d->core) {
         char line[1024];
         core_stats_roll(d->core);
-        core_summary(d->core, line, sizeof line);
+        status_line(d, line, sizeof line);
         log_msg(LOG_INFO, "exit: %s", line);
     }
     return rc;
@@ -430,7 +539,8 @@ int main(int argc, char **argv)
                  .sig_fd = -1,
                  .status_fd = -1,
                  .watchdog_fd = -1,
-                 .ready_fd = -1};
+                 .ready_fd = -1,
+                 .pending_fd = -1};
     int foreground = 0, rc;
     const char *check = NULL;
     char err[1024];
@@ -480,6 +590,7 @@ int main(int argc, char **argv)
                 (unsigned long long)d.stats.no_input, CORE_EXIT_NO_INPUT);
         rc = CORE_EXIT_NO_INPUT;
     }
+    cfg_free(pending_take(&d));
     if (d.sig_fd >= 0)
         close(d.sig_fd);
     loop_free(d.loop);

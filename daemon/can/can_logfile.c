@@ -11,6 +11,7 @@
 
 #include "candump.h"
 #include "log.h"
+#include "regfile.h"
 
 typedef struct {
     int64_t ts_us;
@@ -126,11 +127,25 @@ int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, si
     return rc;
 }
 
+/* The log_in at path, read-only, if a regular file within CAN_LOGFILE_MAX_BYTES
+ * (regfile.h: a FIFO or a device is refused), else NULL with why. */
+static FILE *open_in(const char *path, char *why, size_t wl)
+{
+    int fd = regfile_open(path, CAN_LOGFILE_MAX_BYTES, why, wl);
+    FILE *fp = fd < 0 ? NULL : fdopen(fd, "r");
+    if (fd >= 0 && !fp) {
+        snprintf(why, wl, "%s", strerror(errno));
+        close(fd);
+    }
+    return fp;
+}
+
 static int load(can_logfile_t *l, const char *path, char *err, size_t errlen)
 {
-    FILE *fp = fopen(path, "r");
+    char why[256];
+    FILE *fp = open_in(path, why, sizeof why);
     if (!fp) {
-        snprintf(err, errlen, "%s: %s", path, strerror(errno));
+        snprintf(err, errlen, "%s: %s", path, why);
         return -1;
     }
     int rc = can_logfile_load(l, fp, path, err, errlen);
@@ -157,14 +172,9 @@ static void probe_why(const can_logfile_t *l, char *why, size_t wl)
 
 int can_logfile_probe(const char *path, char *why, size_t wl)
 {
-    FILE *fp = fopen(path, "r");
-    struct stat sb;
-    if (!fp || (fstat(fileno(fp), &sb) == 0 && S_ISDIR(sb.st_mode))) {
-        snprintf(why, wl, "%s", strerror(fp ? EISDIR : errno));
-        if (fp)
-            fclose(fp);
+    FILE *fp = open_in(path, why, wl);
+    if (!fp)
         return -1;
-    }
     can_logfile_t l = {0};
     char *line = NULL;
     size_t cap = 0;

@@ -43,6 +43,9 @@ typedef struct can_logfile can_logfile_t;
 /* Output buffer: whole lines, written once per cycle (can_logfile_flush)
  * with write(2), so a failed write is seen and its frames counted as lost. */
 #define CAN_LOGFILE_OUT_BUF 65536
+/* Largest log_in accepted (it is read whole into memory), as for a replayed
+ * track (TRACK_FILE_MAX_BYTES); a FIFO or a device is refused (regfile.h). */
+#define CAN_LOGFILE_MAX_BYTES (1024LL * 1024LL * 1024LL)
 /* Bad lines logged one by one per load (then one summary line). */
 #define CAN_LOGFILE_REPORT_MAX 5
 
@@ -82,7 +85,7 @@ int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, si
 /*
  * Whether the candump log at path can be replayed: 0 once a line holds a
  * frame (read no further), else -1 with why: it cannot be opened, is a
- * directory, cannot be read, is empty, or has no frame line (the count of
+ * directory, a FIFO or a device, is larger than CAN_LOGFILE_MAX_BYTES, cannot be read, is empty, or has no frame line (the count of
  * lines, comments and bad lines, and the first bad line with its reason).
  * For the config check; bad lines met are logged as by the load.
  */

@@ -1095,10 +1095,10 @@ fail:
     return rc ? rc : -EINVAL;
 }
 
-/* log_in delivered its last frame: an object fed by it that accepted no
- * waypoint had nothing usable in it (issue 11), an error as for a replayed
- * track with none: logged, and trajd exits with CORE_EXIT_NO_INPUT. */
-static void nothing_usable(can_state_t *s)
+/* log_in delivered its last frame: it ends as a replayed track does, each object fed by it
+ * runs to its last waypoint (engine_finish, as FINISH; a no-op after one).  One that accepted
+ * no waypoint had nothing usable (issue 11): logged, trajd exits with CORE_EXIT_NO_INPUT. */
+static void log_in_ended(can_state_t *s)
 {
     can_logfile_stats_t ls;
     can_logfile_stats(s->log, &ls);
@@ -1107,6 +1107,8 @@ static void nothing_usable(can_state_t *s)
             continue;
         engine_status_t st;
         engine_status(s->objs[k]->engine, &st);
+        if (st.accepted && !s->objs[k]->stopping)
+            (void)engine_finish(s->objs[k]->engine); /* 0 or ENUMERIC: counted by it */
         if (st.accepted)
             continue;
         can_port_obj_stats_t os;
@@ -1137,7 +1139,7 @@ static void pre_tick(void *state, obj_t *o, int64_t now_ns)
     }
     if (s->port && s->log && s->cfg->log_in[0] && !s->log_ended && can_logfile_done(s->log)) {
         s->log_ended = 1;
-        nothing_usable(s);
+        log_in_ended(s);
     }
 }
 

@@ -13,6 +13,7 @@
 #include "angle.h"
 #include "engine_settings.h"
 #include "log.h"
+#include "reload.h"
 
 /* Private part of the core, after the public struct. */
 typedef struct {
@@ -416,7 +417,8 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
 }
 
 /* A reloaded object that gets a new engine while its old one moves: the old
- * one is kept braking to rest (engine_stop) and hands over there. */
+ * one is kept braking to rest (engine_stop, at reload_commit) and hands over
+ * there.  Borrowed: prev keeps its engines until the reload commits. */
 static void retire_moving(obj_t *o, core_t *prev)
 {
     obj_t *q = prev && !prev->stopping ? core_obj_find(prev, o->name) : NULL;
@@ -424,12 +426,9 @@ static void retire_moving(obj_t *o, core_t *prev)
         return;
     if (q->retiring) { /* still braking from an earlier reload */
         o->retiring = q->retiring;
-        q->retiring = NULL;
     } else if (!o->carried && q->engine && q->sp.cycle != 0 &&
                !(q->sp.flags & (ENGINE_SP_HOLD | ENGINE_SP_NO_POSITION))) {
         o->retiring = q->engine;
-        q->engine = NULL;
-        engine_stop(o->retiring);
     } else {
         return;
     }
@@ -440,7 +439,8 @@ static void retire_moving(obj_t *o, core_t *prev)
     safety_set_limits(&o->safety, &lim);
 }
 
-/* Step 2 of core_open: take the engines of prev's carried objects (cannot fail). */
+/* Step 2 of core_open: borrow the engines of prev's carried objects (cannot
+ * fail; prev untouched: reload_commit or reload_unborrow settles it). */
 static void carry_objects(core_t *c, core_t *prev)
 {
     for (unsigned i = 0; i < c->nobj; i++) {
@@ -450,7 +450,6 @@ static void carry_objects(core_t *c, core_t *prev)
             continue;
         }
         o->engine = q->engine;
-        q->engine = NULL;
         o->sp = q->sp;
         o->status = q->status;
         o->skipped_ticks = q->skipped_ticks;
@@ -493,6 +492,33 @@ static int open_transports(core_priv_t *p, char *why, size_t whylen)
     return 0;
 }
 
+/* Close every open transport of p (reverse order); p may open them again. */
+static void close_transports(core_priv_t *p)
+{
+    for (int t = (int)transport_count() - 1; t >= 0; t--) {
+        if (p->opened[t] && transport_table[t]->close)
+            transport_table[t]->close(p->pub.tstate[t], &p->pub);
+        p->opened[t] = 0;
+        p->pub.tstate[t] = NULL;
+    }
+}
+
+/* A reload could not open the new transports: prev's reopen, its objects
+ * resuming where they are (reload_mark_resume).  0, or -1 (logged; prev is
+ * then closed and *prevp NULL). */
+static int reopen_old(core_t **prevp)
+{
+    core_priv_t *q = (core_priv_t *)*prevp;
+    char w[256] = "";
+    reload_mark_resume(*prevp);
+    if (open_transports(q, w, sizeof w) == 0)
+        return 0;
+    log_msg(LOG_CRIT, "reload: cannot reopen the running configuration's transports: %s", w);
+    core_close(*prevp);
+    *prevp = NULL;
+    return -1;
+}
+
 int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, core_t **out,
               char *why, size_t whylen)
 {
@@ -510,6 +536,7 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
     c->cfg = cfg;
     c->stats = stats;
     c->period_ns = cfg->daemon.period_ns;
+    double max_ppm = stats->drift.max_ppm; /* the running core's, if this one fails */
     stats->drift.max_ppm = cfg->daemon.drift_max_ppm;
     /* engine time goes on from the previous core: carried engines never see
      * it go backwards */
@@ -526,20 +553,33 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
     rc = new_objects(c, prev, why, whylen);
     if (rc < 0)
         goto fail;
-    /* 2. carry engines over (cannot fail), then the old core goes */
+    /* 2. borrow the carried engines (cannot fail; prev untouched) */
     carry_objects(c, prev);
+    /* 3. prev's transports close (one may hold a TCP port the new one
+     * needs), the new ones open; if one cannot, prev's reopen and prev runs
+     * on with its engines as they were */
+    if (prev)
+        close_transports((core_priv_t *)prev);
+    rc = open_transports(p, why, whylen);
+    if (rc < 0) {
+        close_transports(p);
+        reload_unborrow(c);
+        if (prev)
+            (void)reopen_old(prevp);
+        goto fail;
+    }
+    /* 4. commit: the engines are the new core's, the old core goes */
     if (prev) {
+        reload_commit(c, prev);
         core_close(prev);
         *prevp = NULL;
     }
-    /* 3. transports */
-    rc = open_transports(p, why, whylen);
-    if (rc < 0)
-        goto fail;
     *out = c;
     return 0;
 fail:
     core_close(c);
+    if (prevp && *prevp)
+        stats->drift.max_ppm = max_ppm;
     return rc;
 }
 

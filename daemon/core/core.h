@@ -262,14 +262,19 @@ int64_t core_mono_ns(void);
  * the same input keys: the new object takes its engine (position, buffered
  * waypoints, trajectory, counters), so a reload does not interrupt its motion;
  * engine time continues from *prev's clock.  Other objects start afresh
- * (WAITING).  After the new engines exist, *prev's transports are closed and
- * *prev is freed and set to NULL (a transport may hold an exclusive resource,
- * a TCP port, that the new one needs); then the new transports open.
+ * (WAITING), where the old one stood (its old engine brakes to rest first).
+ * The new core borrows *prev's engines; *prev's transports are closed (a
+ * transport may hold an exclusive resource, a TCP port, that the new one
+ * needs); then the new transports open.  If one cannot, the new core is
+ * discarded, *prev's transports are opened again (inputs resume where their
+ * objects are) and *prev runs on with its engines untouched.  On success
+ * *prev is freed and set to NULL (daemon/core/reload.h).
  *
  * Returns 0, or a negative code with a message in why and nothing of the new
  * core left open.  If *prev is still non-NULL after a failure, the old core
- * was not touched and keeps running; if it is NULL, it is gone (and engines
- * carried from it are lost): the caller reopens a config from scratch.
+ * keeps running with every engine as it was; if it is NULL, even reopening
+ * its transports failed (logged) and it is gone: the caller reopens a config
+ * from scratch.
  */
 int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prev, core_t **out,
               char *why, size_t whylen);

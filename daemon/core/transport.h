@@ -36,7 +36,9 @@
  * cfg_uses() says so (an object uses it, or its [T] section is present).
  *   open      after every object's engine exists and before READY=1: open
  *             sockets/files, loop_add() fds to c->loop.  Failure -> trajd does
- *             not start (or a reload is rolled back).  An object with
+ *             not start (or a reload is rolled back: the running core's
+ *             transports, closed for it, are opened again on that same core,
+ *             its objects marked carried, daemon/core/reload.h).  An object with
  *             o->carried set kept its engine over a reload: an input resumes
  *             where it was (replay: after the row the engine accepted last).
  *   pre_tick  for each object whose INPUT is this transport, just before its

@@ -38,19 +38,24 @@ static int obj_key(void *ocfg, const cfg_kv_t *kv, char *why, size_t wl)
     return -CFG_EUNKNOWN;
 }
 
-/* Same input: same file, format and start (the loaded rows follow from these). */
+/* Same input: same file (unchanged: one shared track), format and start. */
 static int obj_same(const void *a, const void *b)
 {
     const replay_transport_obj_cfg_t *x = a, *y = b;
     return strcmp(x->path, y->path) == 0 && x->format == y->format && x->skip_bad == y->skip_bad &&
-           memcmp(&x->start_s, &y->start_s, sizeof x->start_s) == 0;
+           memcmp(&x->start_s, &y->start_s, sizeof x->start_s) == 0 &&
+           (!x->loaded || (x->ref && x->ref == y->ref)); /* the same file, unchanged */
 }
 
 static void obj_fini(void *ocfg)
 {
     replay_transport_obj_cfg_t *r = ocfg;
-    if (r->loaded)
+    if (r->loaded && r->ref)
+        track_cache_put(r->ref);
+    else if (r->loaded)
         track_free(&r->trk);
+    memset(&r->trk, 0, sizeof r->trk);
+    r->ref = NULL;
     r->loaded = 0;
 }
 
@@ -84,12 +89,14 @@ static int set_datum(cfg_t *cfg, int *line, char *why, size_t wl)
         replay_transport_obj_cfg_t *r = o->tcfg[transport_index(&replay_transport)];
         if (o->input != &replay_transport || !r->trk.geographic)
             continue;
-        if (track_reframe(&r->trk, g[0], g[1], g[2]) < 0) {
+        if (track_cache_reframe(&r->ref, &r->trk, g[0], g[1], g[2]) < 0) {
             *line = cfg->datum_line;
             snprintf(why, wl, "object '%s': cannot express its track about the datum", o->name);
             return -CFG_EVALUE;
         }
         o->geographic = 1;
+        o->heading.t_s = r->trk.heading_t; /* a private copy has its own */
+        o->heading.deg = r->trk.heading;
     }
     return 0;
 }
@@ -139,13 +146,20 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
         if (r->loaded)
             continue;
         char err[512];
-        if (track_load_opts(r->path, r->format, r->skip_bad ? TRACK_SKIP_BAD : 0, &r->trk, err,
-                            sizeof err) < 0) {
+        int cached = 0;
+        r->ref = track_cache_get(r->path, r->format, r->skip_bad ? TRACK_SKIP_BAD : 0, &r->trk,
+                                 &cached, err, sizeof err);
+        if (!r->ref) {
             *line = r->line;
             snprintf(why, wl, "object '%s' replay.track: %s", o->name, err);
             return -CFG_EVALUE;
         }
         r->loaded = 1;
+        if (cached)
+            log_msg(LOG_INFO,
+                    "object '%s': replay.track %s unchanged (%zu waypoints): not parsed "
+                    "again",
+                    o->name, r->path, r->trk.n);
         o->heading.t_s = r->trk.heading_t;
         o->heading.deg = r->trk.heading;
         o->heading.n = r->trk.nheading;

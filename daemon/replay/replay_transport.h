@@ -13,20 +13,25 @@
  *   replay.start_s = 0         engine time (s after start) at which the first waypoint is due
  * The track is loaded when the config is checked (start, reload, --check-config),
  * so a missing or bad file rejects the config with its own file:line message.
+ * A reload takes the running configuration's track when the file is unchanged
+ * (track_cache.h): it is not parsed again, and the object is carried over if
+ * nothing else of it changed; a changed file makes it a changed object.
  */
 #ifndef TRAJD_REPLAYIN_H
 #define TRAJD_REPLAYIN_H
 
 #include "track.h"
+#include "track_cache.h"
 #include "transport.h"
 
 typedef struct {
     char path[PATH_MAX];
     track_format_t format;
     double start_s;
-    int skip_bad; /* TRACK_SKIP_BAD */
-    int line;     /* line of replay.track, for messages */
-    track_t trk;  /* loaded by check() */
+    int skip_bad;     /* TRACK_SKIP_BAD */
+    int line;         /* line of replay.track, for messages */
+    track_t trk;      /* loaded by check(): a shallow copy of ref's (track_cache.h) */
+    track_ref_t *ref; /* the shared track (NULL: trk is its own, track_free it) */
     int loaded;
 } replay_transport_obj_cfg_t;
 

@@ -10,9 +10,11 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <unistd.h>
 
 #include "angle.h"
 #include "geo.h"
+#include "regfile.h"
 #include "track_loader.h"
 
 static int looks_like_xml(const char *buf, size_t len)
@@ -250,9 +252,13 @@ int track_load_opts(const char *path, track_format_t fmt, unsigned flags, track_
     if (err && errlen)
         err[0] = '\0';
 
-    FILE *f = fopen(path, "rb");
+    char why[256];
+    int fd = regfile_open(path, TRACK_FILE_MAX_BYTES, why, sizeof why);
+    FILE *f = fd < 0 ? NULL : fdopen(fd, "rb");
     if (!f) {
-        track_loader_fatal(&L, 0, "%s", strerror(errno));
+        track_loader_fatal(&L, 0, "%s", fd < 0 ? why : strerror(errno));
+        if (fd >= 0)
+            close(fd);
         return -1;
     }
     char *buf = NULL;

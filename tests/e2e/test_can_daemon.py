@@ -395,6 +395,30 @@ class CanDaemon(unittest.TestCase):
         self.assertNotEqual(p.returncode, 0)
         self.assertIn("cannot open a CAN socket", p.stderr)
 
+    # Given a candump log_in of the track without the FINISH frame at its
+    # end, when trajd replays it with exit_when_done, then the log's end ends
+    # the object's input as a replayed track's does: it runs to the last
+    # waypoint (the track's own, from the CSV), comes to rest there
+    # (finished, velocity 0) and trajd exits 0 (it stayed in underrun for
+    # ever: issue 23)
+    def test_log_in_without_finish_ends_its_input(self):
+        d = self.sub("nofinish")
+        ct.write_wplog(self.xyz, os.path.join(d, "wp.log"))
+        with open(os.path.join(d, "wp.log")) as fh:
+            lines = fh.read().splitlines(True)
+        with open(os.path.join(d, "wp.log"), "w") as fh:
+            fh.writelines(lines[:-1])  # the FINISH command frame, the last line
+        self.assertNotEqual(lines[-1], lines[-2])
+        p = run_trajd(conf(d, "", "csv.path = sp.csv\n", output="csv"))
+        self.assertEqual(p.returncode, 0, p.stderr[-800:])
+        last = ct.read_replay(os.path.join(d, "sp.csv"))
+        last = last[max(last)]
+        t, x, y, z = ct.read_xyz(self.xyz)[-1]
+        self.assertEqual(last["state"], "finished", last)
+        for ax, want in zip("xyz", (x, y, z)):
+            self.assertAlmostEqual(float(last[ax + "_m"]), float(want), delta=1e-3)
+            self.assertEqual(float(last["v%s_m_s" % ax]), 0.0)
+
 
 class CanLogNothingUsable(unittest.TestCase):
     # Given a candump log_in holding nothing usable for the object, when

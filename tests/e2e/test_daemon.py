@@ -468,8 +468,9 @@ class TestRunning(unittest.TestCase):
     def test_reload_that_cannot_open_falls_back(self):
         # Given a new config that parses but cannot open (its CSV directory
         # does not exist), when SIGHUP, then the reload is refused after the
-        # old transports were closed: the old configuration is reopened and
-        # streams again (a fresh header, then its object's rows).
+        # old transports were closed: the old core reopens them and streams
+        # again (a fresh header, then its object's rows; continuity at that
+        # instant: tests/e2e/test_reload_cells.py).
         write(self.conf, self.config("boat"))
         d = Daemon(self.tmp, self.conf)
         try:
@@ -481,7 +482,7 @@ class TestRunning(unittest.TestCase):
             f, seen = d.msg(lambda f: f.get("READY") == "1")
             self.assertIn("reload refused", f.get("STATUS", ""))
             self.assertIn("no/such/dir", f.get("STATUS", ""))
-            d.err_line(lambda l: "reopening the old configuration" in l)
+            d.err_line(lambda l: "still running the old configuration" in l)
             d.line(lambda l: l.startswith("object,"))   # stdout reopened
             d.line(lambda l: l.startswith("boat,"))
             self.assertIsNone(d.p.poll())

@@ -1,0 +1,24 @@
+/*
+ * regfile.h - open a file the configuration names (a replay track, a CAN
+ * log_in) for reading, at config-check time, only if it is a regular file
+ * of bounded size.  A FIFO would block open() (and the daemon with it, for
+ * good: SIGTERM is read by the same loop) or never end; a device may never
+ * end or act on being opened; a file beyond the cap would be read whole
+ * into memory.  All are refused with the reason, before anything is read.
+ */
+#ifndef TRAJD_REGFILE_H
+#define TRAJD_REGFILE_H
+
+#include <stddef.h>
+
+/*
+ * Open path read-only (O_CLOEXEC, blocking reads) if it is a regular file of
+ * at most max_bytes bytes.  Returns the fd, or -1 with why set to the reason:
+ * strerror of the failure (a directory: strerror(EISDIR)), "not a regular
+ * file: a FIFO" (a character device, a block device, a socket), or "larger
+ * than N bytes".  It is stat()ed before it is opened (a FIFO's open blocks,
+ * a device's may act) and fstat()ed after (it may have been replaced).
+ */
+int regfile_open(const char *path, long long max_bytes, char *why, size_t wl);
+
+#endif

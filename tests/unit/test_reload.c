@@ -1,0 +1,169 @@
+/*
+ * test_reload.c - what a reload does to a moving object, on a real core
+ * (daemon/core/core.h core_open, daemon/core/reload.h) with a replay input
+ * and a CSV output in a temporary directory: no clock, no sockets.  The
+ * engine is stepped here, as the tick would.
+ */
+#include "test.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cfg.h"
+#include "core.h"
+#include "reload.h"
+
+#define PERIOD_NS 10000000LL /* 100 Hz */
+
+static char dir[] = "/tmp/trajd-test-reload-XXXXXX";
+
+static void write_file(const char *name, const char *text)
+{
+    char path[256];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+}
+
+static cfg_t *load(const char *name)
+{
+    char path[256], err[512];
+    cfg_t *c = NULL;
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    if (cfg_load(path, &c, err, sizeof err) < 0)
+        fail_msg("%s", err);
+    return c;
+}
+
+/* A line along x at 1 m/s, one waypoint a second, pushed into o's engine. */
+static void push_line(obj_t *o)
+{
+    for (int i = 0; i < 60; i++) {
+        engine_waypoint_t w;
+        memset(&w, 0, sizeof w);
+        w.t_s = i;
+        w.pos_m[0] = i;
+        w.seq = (uint32_t)i + 1;
+        assert_int_equal(engine_push(o->engine, &w), 0);
+    }
+}
+
+/* Step every engine of c n ticks on, as the tick does (its clock: c->now_ns). */
+static void step(core_t *c, int n)
+{
+    for (int i = 0; i < n; i++) {
+        c->now_ns += PERIOD_NS;
+        for (unsigned k = 0; k < c->nobj; k++) {
+            obj_t *o = &c->obj[k];
+            engine_tick(o->retiring ? o->retiring : o->engine, c->now_ns, &o->sp);
+        }
+    }
+}
+
+static double speed(const obj_t *o)
+{
+    return sqrt(o->sp.vel_m_s[0] * o->sp.vel_m_s[0] + o->sp.vel_m_s[1] * o->sp.vel_m_s[1]);
+}
+
+static const char good[] = "[daemon]\nrate_hz = 100\n"
+                           "[object.boat]\nid = 0\ninput = replay\nreplay.track = t.csv\n"
+                           "output = csv\ncsv.path = out.csv\n";
+
+/* Given boat moving at 1 m/s, when a reload's CSV output cannot open, then
+ * core_open fails with the reason and the running core keeps boat's engine,
+ * untouched: the next setpoint continues the last one (no step, same
+ * trajectory).  When a good config follows, boat is carried over: the new
+ * core has the same engine.  When a config removes it, it brakes to rest
+ * along its path (reload_brake_removed) before anything else. */
+static void test_reload_keeps_the_running_engine(void **state)
+{
+    (void)state;
+    assert_non_null(mkdtemp(dir));
+    write_file("t.csv", "t,x,y,z\n0,0,0,0\n1,1,0,0\n");
+    write_file("good.conf", good);
+    char bad[sizeof good + 64];
+    snprintf(bad, sizeof bad, "%s", good);
+    memcpy(strstr(bad, "out.csv"), "no/dir/x", 8); /* csv.path = no/dir/x (a missing directory) */
+    write_file("bad.conf", bad);
+    write_file("gone.conf", "[daemon]\nrate_hz = 100\n[object.ship]\nid = 1\ninput = replay\n"
+                            "replay.track = t.csv\noutput = csv\ncsv.path = out.csv\n");
+    int err = 0;
+    loop_t *loop = loop_new(&err);
+    assert_non_null(loop);
+    stats_t stats;
+    memset(&stats, 0, sizeof stats);
+    cfg_t *c1 = load("good.conf"), *c2 = load("bad.conf"), *c3 = load("good.conf"),
+          *c4 = load("gone.conf");
+    core_t *c = NULL, *nc = NULL;
+    char why[512];
+    assert_int_equal(core_open(loop, c1, &stats, NULL, &c, why, sizeof why), 0);
+    obj_t *o = &c->obj[0];
+    engine_clear(o->engine); /* the test feeds it, not the replay */
+    push_line(o);
+    step(c, 500);
+    assert_true(speed(o) > 0.9);
+    engine_t *e = o->engine;
+    engine_setpoint_t before = o->sp;
+
+    /* the failed reload */
+    assert_true(core_open(loop, c2, &stats, &c, &nc, why, sizeof why) < 0);
+    assert_non_null(strstr(why, "no/dir/x"));
+    assert_null(nc);
+    assert_non_null(c); /* the old core runs on */
+    o = &c->obj[0];
+    assert_ptr_equal(o->engine, e);
+    assert_null(o->retiring);
+    step(c, 1);
+    /* one period on at the line's 1 m/s (5 %: the curve's entry from rest) */
+    assert_true(fabs(o->sp.pos_m[0] - before.pos_m[0]) <= 1.05 * PERIOD_NS * 1e-9);
+    assert_true(o->sp.pos_m[0] > before.pos_m[0]);
+    assert_int_equal(o->sp.track, before.track);
+    assert_true(speed(o) > 0.9);
+
+    /* a good reload: carried over */
+    assert_int_equal(core_open(loop, c3, &stats, &c, &nc, why, sizeof why), 0);
+    assert_null(c);
+    c = nc;
+    o = &c->obj[0];
+    assert_ptr_equal(o->engine, e);
+    assert_int_equal(o->carried, 1);
+    step(c, 1);
+    assert_true(speed(o) > 0.9);
+
+    /* removed: brakes to rest along x, its speed never rising */
+    assert_int_equal(reload_brake_removed(c, c4), 1);
+    assert_int_equal(o->stopping, 1);
+    assert_int_equal(reload_removed_at_rest(c, c4), 0);
+    double v = speed(o), y0 = o->sp.pos_m[1];
+    for (int i = 0; i < 1000 && !reload_removed_at_rest(c, c4); i++) {
+        step(c, 1);
+        assert_true(speed(o) <= v + 1e-9);
+        assert_true(fabs(o->sp.pos_m[1] - y0) < 1e-9); /* on its path */
+        v = speed(o);
+    }
+    assert_int_equal(reload_removed_at_rest(c, c4), 1);
+    assert_true(speed(o) < 1e-12);
+    assert_int_equal(reload_brake_removed(c, c4), 0); /* at rest: nothing more to brake */
+
+    core_close(c);
+    cfg_free(c1);
+    cfg_free(c2);
+    cfg_free(c3);
+    cfg_free(c4);
+    loop_free(loop);
+    char cmd[128];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    assert_int_equal(system(cmd), 0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_reload_keeps_the_running_engine),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
