@@ -540,14 +540,12 @@ typedef struct {
     int64_t out_log_ns;             /* when report_log_out last warned, 0: never */
 } can_state_t;
 
-/* Warnings about log_out failures: the first at once, then at most one per
- * CAN_LOG_OUT_WARN_S while frames keep being lost (as csv/stdout). */
+/* log_out failures: warned at once, then once per CAN_LOG_OUT_WARN_S while lost (as csv). */
 #define CAN_LOG_OUT_WARN_S 10
 
-/* New log_out failures into the core's output-fault counters (as csv does):
- * the daemon's and each CAN-output object's fault flag, the frames lost as
- * lines lost (exit status 74), EPIPE on stdout ends the daemon.  No I/O.
- * objects: 0 at close (the objects may be going). */
+/* New log_out failures into the core's output-fault counters (as csv does): the daemon's and
+ * each CAN-output object's fault flag, the frames lost as lines lost (exit status 74), EPIPE
+ * on stdout ends the daemon.  No I/O.  objects: 0 at close (the objects may be going). */
 static void log_out_faults(can_state_t *s, int objects)
 {
     can_logfile_stats_t ls;
@@ -984,9 +982,8 @@ static const char *log_out_truncates(const can_state_t *s)
                : NULL;
 }
 
-/* Says whether log_out was truncated or appended to; appended, warns if
- * its last stamp is later than this run's first (first_us): readers see
- * time go back there (speed > 1 puts wall stamps ahead of the clock). */
+/* Says whether log_out was truncated or appended to; appended, warns if its last stamp is later
+ * than this run's first (first_us): time goes back there (speed > 1 puts wall stamps ahead). */
 static void report_log_out_open(can_state_t *s, const char *why_trunc, int64_t first_us)
 {
     long long kept = can_logfile_out_kept(s->log);
