@@ -313,6 +313,9 @@ static char *reader(char *str, int num, void *stream)
         str[n] = 0;
     }
     p->line++;
+    if (p->line == 1 && (unsigned char)str[0] == 0xEF && (unsigned char)str[1] == 0xBB &&
+        (unsigned char)str[2] == 0xBF)
+        memmove(str, str + 3, n - 2); /* a UTF-8 byte order mark (issue 24), and its NUL */
     if (nul) {
         fail(p, CFG_ESYNTAX, p->line, "NUL byte (binary file?)");
         return NULL;
