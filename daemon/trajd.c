@@ -35,6 +35,7 @@
 #include "log.h"
 #include "loop.h"
 #include "rt.h"
+#include "stdfds.h"
 #include "version.h"
 
 #define TRAJD_DEFAULT_CONF "/etc/trajd/trajd.conf"
@@ -419,6 +420,8 @@ int main(int argc, char **argv)
     const char *check = NULL;
     char err[1024];
 
+    if (stdfds_open() < 0)
+        return 71; /* EX_OSERR: no /dev/null */
     if ((rc = parse_args(argc, argv, &d, &foreground, &check)) >= 0)
         return rc;
     if (check)

@@ -44,6 +44,7 @@
 #include "csv_shortest.h"
 #include "geo.h"
 #include "replay_transport.h"
+#include "stdfds.h"
 #include "csv_fixed.h"
 #include "csv_format.h"
 #include "svg.h"
@@ -907,6 +908,8 @@ int main(int argc, char **argv)
 {
     opts_t o;
     run_t run;
+    if (stdfds_open() < 0)
+        return 71; /* EX_OSERR: no /dev/null */
     int rc = parse_args(argc, argv, &o);
     if (rc >= 0)
         return rc;
