@@ -14,6 +14,7 @@
 #include "can_port.h"
 #include "cia402.h"
 #include "core.h"
+#include "gate.h"
 #include "log.h"
 
 #define CAN_MAINTAIN_NS 100000000LL /* housekeeping: reopen, bus state */
@@ -620,6 +621,8 @@ static void log_refused(can_state_t *s, int64_t now_ns)
                      "the object is not writable (writable = yes in [object.%s] lets CAN "
                      "command it)",
                      s->objs[k]->name);
+        else if (os.last_refused_err == -ENGINE_ESTATE && s->objs[k]->stopping)
+            snprintf(why, sizeof why, "the daemon is stopping (SIGTERM)");
         else if (os.last_refused_err == -ENGINE_ESTATE)
             snprintf(why, sizeof why,
                      "the object is held (a feed hold: a drive's lost heartbeat or a fault); "
@@ -692,6 +695,8 @@ static int hk_push(void *ctx, const engine_waypoint_t *wp)
 static int hk_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
 {
     obj_t *o = ((const can_hook_ctx_t *)ctx)->o;
+    if (o->stopping) /* the one gate (gate.h); writable is cmd_mask's */
+        return -ENGINE_ESTATE;
     switch (cmd) {
     case CANPROTO_CMD_FINISH: engine_finish(o->engine); break;
     case CANPROTO_CMD_STOP: engine_stop(o->engine); break;
@@ -928,8 +933,7 @@ static void collect_objects(can_state_t *s, core_t *c)
  */
 static uint32_t cmd_mask(const can_state_t *s, unsigned k)
 {
-    int w = s->objs[k]->cfg->writable;
-    if (w == 1 || (w < 0 && s->is_input[k]))
+    if (obj_gate_writable(s->objs[k], &can_transport)) /* gate.h: Modbus's rule too */
         return CAN_PORT_CMD_ALL;
     return s->is_input[k] ? 1u << CANPROTO_CMD_FINISH : 0;
 }
