@@ -349,6 +349,8 @@ static void port_config(const can_cfg_t *c, int64_t period_ns, can_port_config_t
     pc->sync_overflow = (uint8_t)c->sync_overflow;
     pc->status_period_ns = (int64_t)llround(c->status_period_ms * 1e6);
     pc->max_late_ns = c->max_late_ms < 0 ? period_ns / 2 : (int64_t)llround(c->max_late_ms * 1e6);
+    if (c->log_in[0] || c->log_out[0])
+        pc->max_late_ns = 0; /* a log file: no bus is late, nothing dropped (issue 24) */
 }
 
 /* Ids that must not come from a default: the defaults of an object id above
