@@ -623,6 +623,9 @@ static void log_refused(can_state_t *s, int64_t now_ns)
                      "the object is not writable (writable = yes in [object.%s] lets CAN "
                      "command it)",
                      s->objs[k]->name);
+        else if (os.last_refused_err == -ENGINE_ERANGE &&
+                 os.last_refused == CANPROTO_CMD_OVERRIDE)
+            snprintf(why, sizeof why, "an override above %d %%", CANPROTO_OVERRIDE_MAX_PCT);
         else if (os.last_refused_err == -ENGINE_ESTATE && s->objs[k]->stopping)
             snprintf(why, sizeof why, "the daemon is stopping (SIGTERM)");
         else if (os.last_refused_err == -ENGINE_ESTATE)
@@ -699,6 +702,8 @@ static int hk_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
     obj_t *o = ((const can_hook_ctx_t *)ctx)->o;
     if (o->stopping) /* the one gate (gate.h); writable is cmd_mask's */
         return -ENGINE_ESTATE;
+    if (cmd == CANPROTO_CMD_OVERRIDE && arg > CANPROTO_OVERRIDE_MAX_PCT)
+        return -ENGINE_ERANGE; /* refused and logged as such (log_refused) */
     switch (cmd) {
     case CANPROTO_CMD_FINISH: engine_finish(o->engine); break;
     case CANPROTO_CMD_STOP: engine_stop(o->engine); break;
@@ -890,6 +895,8 @@ static void close_(void *state, core_t *c)
         report_log_out(s, 1);
     }
     if (s->port) {
+        s->refused_log_ns = 0; /* the refusals of the last second, with their reason */
+        log_refused(s, core_mono_ns());
         for (unsigned k = 0; k < s->n; k++) {
             can_port_obj_stats_t os;
             can_port_obj_stats(s->port, k, &os);

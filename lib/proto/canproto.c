@@ -805,7 +805,7 @@ int canproto_rx_frame(canproto_rx_t *rx, const canproto_frame_t *f, int is_fd_id
         if (cmd < CANPROTO_CMD_FINISH || cmd >= CANPROTO_CMD_COUNT)
             return malformed(rx, CANPROTO_EVALUE);
         unsigned arg = f->data[3];
-        if (cmd == CANPROTO_CMD_OVERRIDE ? arg > CANPROTO_OVERRIDE_MAX_PCT : arg != 0)
+        if (cmd != CANPROTO_CMD_OVERRIDE && arg != 0) /* above 200 %: the receiver refuses */
             return malformed(rx, CANPROTO_EVALUE);
         for (unsigned i = 4; i < CANPROTO_WP_DLEN; i++)
             if (f->data[i])

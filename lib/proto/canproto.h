@@ -164,7 +164,9 @@ typedef enum {
     CANPROTO_CMD_CLEAR = 3,          /* engine_clear; sequence numbering restarts */
     CANPROTO_CMD_RESET_COUNTERS = 4, /* engine and CAN counters to zero */
     CANPROTO_CMD_OVERRIDE = 5,       /* feed override: byte 3 = percent, 0 .. 200
-                                        (engine_set_override) */
+                                        (engine_set_override); 201..255 is a
+                                        well-formed command the receiver refuses
+                                        (a refused command, not a malformed frame) */
     CANPROTO_CMD_COUNT
 } canproto_cmd_t;
 
