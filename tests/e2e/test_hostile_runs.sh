@@ -1,0 +1,50 @@
+#!/bin/bash
+# test_hostile_runs.sh - issue 24 items 4 and 9: runs that must not end with
+# exit 0 as if nothing happened.
+#   - ends = clamped with a start or end velocity beyond the speed limit in
+#     force (or, without one, beyond max_abs_m per second) is refused: by
+#     trajreplay (--start-vel 1e10,0,0 streamed 38 177 m/s with exit 0;
+#     1e308 gave NaN rows) and by trajd --check-config;
+#   - a trajd run in which an object ended held by the safety monitor exits
+#     CORE_EXIT_HELD (69), naming the object (the old code exited 0).
+# Each case failed on the old code.
+set -u
+cd "$(dirname "$0")/../.." || exit 1
+: "${BUILD:?BUILD must be set}"
+TR="$BUILD/bin/trajreplay"
+TD="$BUILD/bin/trajd"
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+pass=0; fail=0
+ok() { pass=$((pass + 1)); }
+bad() { fail=$((fail + 1)); echo "FAIL: $*"; }
+TRACK=tests/data/gpxgo_visnjan.csv
+
+for v in 1e10,0,0 1e308,0,0 0,0,-1e50; do
+    "$TR" --ends clamped --start-vel "$v" --max-rows 100000 -o "$tmp/o.csv" "$TRACK" 2> "$tmp/e"; rc=$?
+    [ $rc -eq 2 ] && grep -q "start_vel_m_s/end_vel_m_s: faster than" "$tmp/e" && ok ||
+        { bad "--start-vel $v: exit $rc, want 2:"; cat "$tmp/e"; }
+done
+"$TR" --ends clamped --end-vel 0,401,0 -o "$tmp/o.csv" "$TRACK" 2> "$tmp/e"; rc=$?
+[ $rc -eq 2 ] && ok || bad "--end-vel 0,401,0 (auto: 400 m/s): exit $rc, want 2"
+# within the limit: still a run
+"$TR" --ends clamped --start-vel 3,0,0 --end-vel 0,0,0 -o "$tmp/o.csv" "$TRACK" 2> "$tmp/e"; rc=$?
+[ $rc -eq 0 ] && ok || { bad "--start-vel 3,0,0: exit $rc, want 0"; cat "$tmp/e"; }
+
+printf '[object.boat]\ninput = replay\nreplay.track = %s\noutput = stdout\nends = clamped\nstart_vel_m_s = 1e10,0,0\n' \
+    "$PWD/$TRACK" > "$tmp/sv.conf"
+"$TD" --check-config "$tmp/sv.conf" > "$tmp/e" 2>&1; rc=$?
+[ $rc -ne 0 ] && grep -q "sv.conf:1: .*start_vel_m_s/end_vel_m_s: faster than" "$tmp/e" && ok ||
+    { bad "trajd --check-config start_vel 1e10: exit $rc"; cat "$tmp/e"; }
+
+# an object the safety monitor holds until the end: exit 69, named
+{ echo t,x,y,z; i=0; while [ $i -le 40 ]; do echo "$i,$((2 * i)),0,0"; i=$((i + 1)); done; } > "$tmp/fast.csv"
+printf '[daemon]\nrate_hz = 20\nspeed = 20\nexit_when_done = yes\nstatus_interval_s = 0\n' > "$tmp/h.conf"
+printf '[object.a]\ninput = replay\nreplay.track = fast.csv\noutput = csv\ncsv.path = out.csv\n' >> "$tmp/h.conf"
+printf 'safety_max_speed_m_s = 0.5\n' >> "$tmp/h.conf"
+(cd "$tmp" && "$OLDPWD/$TD" -f -c h.conf 2> err); rc=$?
+[ $rc -eq 69 ] && ok || bad "safety hold: exit $rc, want 69"
+grep -q "object 'a' ended held: speed above max_speed_m_s" "$tmp/err" && ok ||
+    { bad "safety hold not named:"; cat "$tmp/err"; }
+
+echo "test_hostile_runs: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]
