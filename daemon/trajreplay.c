@@ -37,6 +37,7 @@
 #include <unistd.h>
 
 #include "cfg.h"
+#include "cfg_files.h"
 #include "engine.h"
 #include "engine_settings.h"
 #include "replay.h"
@@ -568,6 +569,13 @@ static int run_open(run_t *run, const opts_t *o)
     run->seen_next = (size_t)-1;
     if (engine_config_check(&o->cfg, &why)) {
         fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", why ? why : "?");
+        return EXIT_USAGE;
+    }
+    const char *same = cfg_same_file(o->input, o->output) ? o->output
+                       : cfg_same_file(o->input, o->svg)  ? o->svg
+                                                          : NULL;
+    if (same) { /* by identity (issue 24): writing it would destroy the track */
+        fprintf(stderr, "trajreplay: %s and the track %s are one file\n", same, o->input);
         return EXIT_USAGE;
     }
     if (track_load_opts(o->input, o->format, o->load_flags, &run->trk, err, sizeof err)) {

@@ -1,5 +1,6 @@
 /* can_transport.c - the "can" transport (see can_transport.h). */
 #include "can_transport.h"
+#include "cfg_files.h"
 
 #include <errno.h>
 #include <inttypes.h>
@@ -1220,6 +1221,15 @@ static int input_done(void *state, const obj_t *o)
     return s->log && s->cfg->log_in[0] && can_logfile_done(s->log);
 }
 
+/* [can] log_in is read, log_out written (cfg_files.h). */
+static void files(const cfg_t *cfg, cfg_file_add_fn add, void *ctx)
+{
+    const can_cfg_t *c = cfg_transport(cfg, &can_transport);
+    int line = cfg->tline[transport_index(&can_transport)];
+    add(ctx, c->log_in, 0, line, "[can] log_in");
+    add(ctx, c->log_out, 1, line, "[can] log_out");
+}
+
 const transport_t can_transport = {
     .name = "can",
     .roles = TRANSPORT_INPUT | TRANSPORT_OUTPUT,
@@ -1237,4 +1247,5 @@ const transport_t can_transport = {
     .cycle = cycle,
     .close = close_,
     .input_done = input_done,
+    .files = files,
 };

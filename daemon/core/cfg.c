@@ -6,6 +6,7 @@
  * with no keys, which inih never reports) and stops at the first error.
  */
 #include "cfg.h"
+#include "cfg_files.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -752,6 +753,9 @@ static void check_all(parse_t *p)
             return;
         }
     }
+    int line = 0;
+    if (cfg_files_check(c, &line, why, sizeof why) < 0) /* outputs vs inputs, by identity */
+        fail(p, CFG_EVALUE, line, "%s", why);
 }
 
 static void defaults(cfg_t *c)

@@ -1,5 +1,6 @@
 /* csv_transport.c - csv and stdout output transports (see csv_transport.h). */
 #include "csv_transport.h"
+#include "cfg_files.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -497,6 +498,19 @@ static int summary(const core_t *c, char *buf, size_t len)
     return n ? snprintf(buf, len, ", out dropped %llu", (unsigned long long)n) : 0;
 }
 
+/* Each csv.path is written (cfg_files.h). */
+static void csv_files(const cfg_t *cfg, cfg_file_add_fn add, void *ctx)
+{
+    int ti = transport_index(&csv_transport);
+    for (unsigned i = 0; i < cfg->nobj; i++)
+        if (cfg_obj_uses(&cfg->obj[i], &csv_transport) & 2) {
+            char what[64];
+            snprintf(what, sizeof what, "[object.%s] csv.path", cfg->obj[i].name);
+            const csv_transport_obj_cfg_t *a = cfg->obj[i].tcfg[ti];
+            add(ctx, a->path, 1, cfg->obj[i].line, what);
+        }
+}
+
 const transport_t csv_transport = {
     .name = "csv",
     .roles = TRANSPORT_OUTPUT,
@@ -509,6 +523,7 @@ const transport_t csv_transport = {
     .cycle = cycle,
     .close = close_,
     .summary = summary, /* stdout's count too */
+    .files = csv_files,
 };
 
 const transport_t stdout_transport = {

@@ -46,5 +46,11 @@ printf 'safety_max_speed_m_s = 0.5\n' >> "$tmp/h.conf"
 grep -q "object 'a' ended held: speed above max_speed_m_s" "$tmp/err" && ok ||
     { bad "safety hold not named:"; cat "$tmp/err"; }
 
+# trajreplay -o on its own track by another spelling: refused, the track intact (item 5)
+cp "$TRACK" "$tmp/t.csv"; mkdir -p "$tmp/sub"
+"$TR" -o "$tmp/sub/../t.csv" "$tmp/t.csv" 2> "$tmp/e"; rc=$?
+[ $rc -eq 2 ] && grep -q "are one file" "$tmp/e" && ok || { bad "-o on the track: exit $rc"; cat "$tmp/e"; }
+cmp -s "$TRACK" "$tmp/t.csv" && ok || bad "-o on the track: the track was overwritten"
+
 echo "test_hostile_runs: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -60,10 +60,58 @@ static void test_utf8_bom(void **state)
     load_bad("[daemon]\n\xEF\xBB\xBFrate_hz = 50\n" OBJ, CFG_EUNKNOWN, 2, NULL);
 }
 
+#define VIS "tests/data/gpxgo_visnjan.csv"
+
+/* Given outputs that name an input, or each other, by another text (issue
+ * 24: compared as text, `replay.track = track.csv` with `csv.path =
+ * ./track.csv` and csv.truncate passed --check-config and destroyed its own
+ * input), then the file is refused at check time, naming both keys. */
+static void test_paths_by_identity(void **state)
+{
+    (void)state;
+    /* an output on the track it replays */
+    load_bad("[object.a]\ninput = replay\nreplay.track = " VIS "\noutput = csv\n"
+             "csv.path = tests/data/../data/gpxgo_visnjan.csv\ncsv.truncate = yes\n",
+             CFG_EVALUE, 1, "[object.a] replay.track");
+    assert_non_null(strstr(err, "an output would overwrite an input"));
+    /* two objects on one CSV output, by two spellings (not made yet) */
+    load_bad("[object.a]\nid = 0\ninput = replay\nreplay.track = " VIS "\noutput = csv\n"
+             "csv.path = /tmp/trajd-test-cfg-hostile-a.csv\n"
+             "[object.b]\nid = 1\ninput = replay\nreplay.track = " VIS "\noutput = csv\n"
+             "csv.path = /tmp/./trajd-test-cfg-hostile-a.csv\n",
+             CFG_EVALUE, 7, "two outputs would write it");
+    /* a CAN log_out on a csv.path */
+    load_bad("[can]\nlog_out = /tmp/trajd-test-cfg-hostile-b.csv\n"
+             "[object.a]\ninput = replay\nreplay.track = " VIS "\noutput = csv, can\n"
+             "csv.path = /tmp//trajd-test-cfg-hostile-b.csv\n",
+             CFG_EVALUE, 3, "[can] log_out");
+    /* a symbolic link to the track as the output */
+    char cwd[4096], link[64];
+    assert_non_null(getcwd(cwd, sizeof cwd));
+    snprintf(link, sizeof link, "/tmp/trajd-test-cfg-hostile-%d.csv", (int)getpid());
+    char target[4200];
+    snprintf(target, sizeof target, "%s/" VIS, cwd);
+    unlink(link);
+    assert_int_equal(symlink(target, link), 0);
+    char text[512];
+    snprintf(text, sizeof text,
+             "[object.a]\ninput = replay\nreplay.track = " VIS "\noutput = csv\ncsv.path = %s\n",
+             link);
+    load_bad(text, CFG_EVALUE, 1, "an output would overwrite an input");
+    unlink(link);
+    /* two inputs on one file are fine, and so are distinct outputs */
+    cfg_t *c = load_ok("[object.a]\nid = 0\ninput = replay\nreplay.track = " VIS "\noutput = csv\n"
+                       "csv.path = /tmp/trajd-test-cfg-hostile-c.csv\n"
+                       "[object.b]\nid = 1\ninput = replay\nreplay.track = ./" VIS "\n"
+                       "output = csv\ncsv.path = /tmp/trajd-test-cfg-hostile-d.csv\n");
+    cfg_free(c);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_utf8_bom),
+        cmocka_unit_test(test_paths_by_identity),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
