@@ -488,7 +488,7 @@ int main(int argc, char **argv)
     } else if (rc == 0 && d.stats.no_input) {
         log_msg(LOG_ERR,
                 "a replayed track or candump log ended %llu time(s) with no usable waypoint for "
-                "an object (a reload replays it again): exit status %d",
+                "an object: exit status %d",
                 (unsigned long long)d.stats.no_input, CORE_EXIT_NO_INPUT);
         rc = CORE_EXIT_NO_INPUT;
     } else if (rc == 0 && held) {

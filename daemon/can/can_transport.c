@@ -1,6 +1,5 @@
 /* can_transport.c - the "can" transport (see can_transport.h). */
 #include "can_transport.h"
-#include "cfg_files.h"
 
 #include <errno.h>
 #include <inttypes.h>
@@ -12,6 +11,7 @@
 
 #include "can_socket.h"
 #include "can_logfile.h"
+#include "can_refused.h"
 #include "can_port.h"
 #include "cia402.h"
 #include "core.h"
@@ -619,22 +619,8 @@ static void log_refused(can_state_t *s, int64_t now_ns)
             continue;
         }
         char why[160];
-        if (os.last_refused_err == 0)
-            snprintf(why, sizeof why,
-                     "the object is not writable (writable = yes in [object.%s] lets CAN "
-                     "command it)",
-                     s->objs[k]->name);
-        else if (os.last_refused_err == -ENGINE_ERANGE &&
-                 os.last_refused == CANPROTO_CMD_OVERRIDE)
-            snprintf(why, sizeof why, "an override above %d %%", CANPROTO_OVERRIDE_MAX_PCT);
-        else if (os.last_refused_err == -ENGINE_ESTATE && s->objs[k]->stopping)
-            snprintf(why, sizeof why, "the daemon is stopping (SIGTERM)");
-        else if (os.last_refused_err == -ENGINE_ESTATE)
-            snprintf(why, sizeof why,
-                     "the object is held (a feed hold: a drive's lost heartbeat or a fault); "
-                     "only the command clear releases it");
-        else
-            snprintf(why, sizeof why, "%s", engine_strerror(-os.last_refused_err));
+        can_refused_why(why, sizeof why, os.last_refused_err, os.last_refused,
+                        s->objs[k]->stopping, s->objs[k]->name);
         log_msg(LOG_WARNING,
                 "can: object '%s': %llu command frame(s) refused, the last %s on id 0x%03X: "
                 "%s; %llu refused in all",
@@ -890,6 +876,8 @@ static void close_(void *state, core_t *c)
         loop_del(s->c->loop, s->sock_fd);
     if (s->timer_fd > 0)
         loop_timer_del(s->c->loop, s->timer_fd);
+    if (s->log && s->cfg->log_in[0]) /* a reload goes on from here (log_in_resume) */
+        can_logfile_keep_pos(s->log, s->cfg->log_in);
     if (s->log) { /* the last lines, counted before the counters are read */
         can_logfile_flush(s->log);
         log_out_faults(s, 0);
@@ -1019,6 +1007,18 @@ static void report_log_out_open(can_state_t *s, const char *why_trunc, int64_t f
         log_msg(LOG_INFO, "can: log_out %s: appending (it was empty)", s->cfg->log_out);
 }
 
+/* A reload that carries a CAN-input object over goes on where log_in stopped. */
+static void log_in_resume(can_state_t *s)
+{
+    int carried = 0;
+    for (unsigned k = 0; k < s->n; k++)
+        carried |= s->is_input[k] && s->objs[k]->carried;
+    size_t pos = can_logfile_resume(s->log, carried ? s->cfg->log_in : NULL);
+    if (pos)
+        log_msg(LOG_INFO, "can: log_in %s: going on after its %zu frames already played",
+                s->cfg->log_in, pos);
+}
+
 /* The candump logs if configured, else the socket (a missing or down
  * interface is not an error: the port runs DOWN and keeps reopening). */
 static int open_io(can_state_t *s, const uint32_t *rx_ids, unsigned nrx, char *why, size_t wl)
@@ -1039,6 +1039,8 @@ static int open_io(can_state_t *s, const uint32_t *rx_ids, unsigned nrx, char *w
         }
         if (s->log && strcmp(cfg->log_out, "-") && cfg->log_out[0])
             report_log_out_open(s, why_trunc, (epoch_ns + s->c->now_ns) / 1000);
+        if (s->log && cfg->log_in[0])
+            log_in_resume(s);
         return s->log ? 0 : -EIO;
     }
     s->bus = can_socket_new(cfg->interface, cfg->fd, rx_ids, nrx);
@@ -1221,15 +1223,6 @@ static int input_done(void *state, const obj_t *o)
     return s->log && s->cfg->log_in[0] && can_logfile_done(s->log);
 }
 
-/* [can] log_in is read, log_out written (cfg_files.h). */
-static void files(const cfg_t *cfg, cfg_file_add_fn add, void *ctx)
-{
-    const can_cfg_t *c = cfg_transport(cfg, &can_transport);
-    int line = cfg->tline[transport_index(&can_transport)];
-    add(ctx, c->log_in, 0, line, "[can] log_in");
-    add(ctx, c->log_out, 1, line, "[can] log_out");
-}
-
 const transport_t can_transport = {
     .name = "can",
     .roles = TRANSPORT_INPUT | TRANSPORT_OUTPUT,
@@ -1247,5 +1240,5 @@ const transport_t can_transport = {
     .cycle = cycle,
     .close = close_,
     .input_done = input_done,
-    .files = files,
+    .files = can_transport_files,
 };
