@@ -10,6 +10,7 @@
 #include <time.h>
 
 #include "can_socket.h"
+#include "can_box.h"
 #include "can_logfile.h"
 #include "can_refused.h"
 #include "can_port.h"
@@ -503,7 +504,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
         }
     }
     can_port_free(p);
-    return rc;
+    return rc ? rc : can_box_check(cfg, line, why, wl); /* fields vs box and speed */
 }
 
 /* ---- runtime ---- */
@@ -538,6 +539,7 @@ typedef struct {
     can_port_obj_stats_t drive_logged[CFG_OBJECTS_MAX]; /* drive counters already logged */
     int drive_state_logged[CFG_OBJECTS_MAX];            /* all_enabled as last logged, -1 never */
     uint64_t refused_logged[CFG_OBJECTS_MAX];           /* cmd_refused already logged */
+    uint64_t clamped_logged[CFG_OBJECTS_MAX];           /* tx_clamped already logged */
     int64_t refused_log_ns;                             /* when log_refused last logged */
     can_logfile_stats_t out_seen;   /* log_out counters already put in core stats */
     can_logfile_stats_t out_logged; /* log_out counters already warned about */
@@ -614,6 +616,15 @@ static void log_refused(can_state_t *s, int64_t now_ns)
     for (unsigned k = 0; k < s->n; k++) {
         can_port_obj_stats_t os;
         can_port_obj_stats(s->port, k, &os);
+        if (os.tx_clamped > s->clamped_logged[k]) { /* can_box.h; the same 1 s limit */
+            log_msg(LOG_WARNING,
+                    "can: object '%s': %llu setpoint(s) sent with a value clipped to its field "
+                    "(velocity beyond the SETPOINT frame's +-32.767 m/s); %llu in all",
+                    s->objs[k]->name, (unsigned long long)(os.tx_clamped - s->clamped_logged[k]),
+                    (unsigned long long)os.tx_clamped);
+            s->refused_log_ns = now_ns;
+        }
+        s->clamped_logged[k] = os.tx_clamped;
         if (os.cmd_refused <= s->refused_logged[k]) {
             s->refused_logged[k] = os.cmd_refused; /* reset counters */
             continue;
@@ -830,6 +841,7 @@ int can_transport_drive(const core_t *c, unsigned obj, can_drive_info_t *out)
     out->sdo_aborts = st.sdo_aborts;
     out->last_abort = st.last_abort;
     out->hb_lost = st.heartbeat_lost;
+    out->tx_clamped = st.tx_clamped;
     return can_port_drive_summary(s->port, k, &out->d);
 }
 

@@ -6,6 +6,7 @@
  * with no keys, which inih never reports) and stops at the first error.
  */
 #include "cfg.h"
+#include "cfg_box.h"
 #include "cfg_files.h"
 
 #include <ctype.h>
@@ -550,6 +551,8 @@ static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size
     }
     if (strncmp(kv->key, "safety_", 7) == 0 || strcmp(kv->key, "initial_position") == 0)
         return key_obj_drive(o, kv, why, wl);
+    if (strncmp(kv->key, "position_m", 10) == 0)
+        return cfg_box_key(o, kv, why, wl);
     if (strcmp(kv->key, "writable") == 0)
         return cfg_get_bool(kv, &o->writable, why, wl);
     if (strcmp(kv->key, "id") == 0) {
@@ -740,6 +743,11 @@ static void check_all(parse_t *p)
     check_ids(p);
     if (p->err)
         return;
+    int bline = 0;
+    if (cfg_box_check(c, &bline, why, sizeof why) < 0) {
+        fail(p, CFG_EVALUE, bline, "%s", why);
+        return;
+    }
     for (unsigned t = 0; transport_table[t]; t++) {
         const transport_t *tr = transport_table[t];
         if (!tr->check || !cfg_uses(c, tr))

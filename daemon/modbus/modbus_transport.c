@@ -248,6 +248,7 @@ static void drive_regs(const core_t *c, unsigned k, mbmap_object_t *o, mbmap_dae
     o->drive_statusword = di.d.statusword;
     o->drive_nmt = di.d.nmt;
     o->drive_emcy = di.d.emcy;
+    o->tx_clamped = di.tx_clamped;
     d->drive_emcy += di.emcy;
     d->drive_sdo_aborts += di.sdo_aborts;
     d->drive_hb_lost += di.hb_lost;

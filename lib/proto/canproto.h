@@ -200,6 +200,7 @@ typedef enum {
 
 /* STATUS byte 0 */
 #define CANPROTO_ST_STATE_MASK 0x07u
+#define CANPROTO_ST_CLAMPED 0x08u /* a setpoint value was clipped to its field (tx_clamped) */
 #define CANPROTO_ST_BUS_DOWN 0x10u
 #define CANPROTO_ST_TX_DROP 0x20u
 #define CANPROTO_ST_OUT_FAULT 0x40u /* a csv/stdout output of the object lost lines or failed */

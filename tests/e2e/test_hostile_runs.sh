@@ -52,5 +52,41 @@ cp "$TRACK" "$tmp/t.csv"; mkdir -p "$tmp/sub"
 [ $rc -eq 2 ] && grep -q "are one file" "$tmp/e" && ok || { bad "-o on the track: exit $rc"; cat "$tmp/e"; }
 cmp -s "$TRACK" "$tmp/t.csv" && ok || bad "-o on the track: the track was overwritten"
 
+# CiA 402 at 1e7 increments/m (int32: +-214.748 m) on a track to 325 m (item 2):
+# no target goes out clipped to INT32_MAX (the old code sent 0x7FFFFFFF and
+# held the drive there silently, exit 0); the safety monitor holds the object
+# at the edge of the derived box, names it, and the run exits 69.
+{ echo t,x,y,z; i=0; while [ $i -le 325 ]; do echo "$i,$i,0,0"; i=$((i + 1)); done; } > "$tmp/road.csv"
+cat > "$tmp/c.conf" <<CONF
+[daemon]
+rate_hz = 20
+speed = 50
+exit_when_done = yes
+status_interval_s = 0
+[can]
+log_out = out.log
+[object.car]
+input = replay
+replay.track = road.csv
+output = can
+profile = road
+can.own = no
+can.cia402 = yes
+can.cia402_cob_x = 0x201
+can.cia402_cob_y = 0
+can.cia402_cob_z = 0
+can.cia402_counts_per_m = 1e7
+CONF
+(cd "$tmp" && "$OLDPWD/$TD" -f -c c.conf 2> err); rc=$?
+[ $rc -eq 69 ] && ok || bad "CiA 402 beyond int32: exit $rc, want 69"
+grep -q "object 'car' ended held: position outside position_min_m .. position_max_m" "$tmp/err" && ok ||
+    { bad "CiA 402 beyond int32: not named"; cat "$tmp/err"; }
+n=$(grep -c " 201#" "$tmp/out.log"); top=$(grep -c " 201#FFFFFF7F" "$tmp/out.log")
+[ "$n" -gt 1000 ] && [ "$top" -eq 0 ] && ok || bad "RPDO targets: $top of $n at INT32_MAX"
+
+# the README's drive config still passes --check-config (its box is derived)
+awk '/<!-- drive-config:/{f=1;next} f&&/^$/{exit} f{sub(/^    /,"");print}' README.md > "$tmp/drive.conf"
+"$TD" --check-config "$tmp/drive.conf" > "$tmp/e" 2>&1 && ok || { bad "README drive config"; cat "$tmp/e"; }
+
 echo "test_hostile_runs: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

@@ -107,9 +107,46 @@ static void test_paths_by_identity(void **state)
     cfg_free(c);
 }
 
+#define CIA "[can]\nlog_out = /tmp/trajd-test-cfg-hostile.log\n"                               \
+            "[object.a]\ninput = replay\nreplay.track = " VIS "\noutput = can\ncan.own = no\n"  \
+            "can.cia402 = yes\ncan.cia402_cob_x = 0x201\ncan.cia402_cob_y = 0x202\n"             \
+            "can.cia402_cob_z = 0\ncan.cia402_counts_per_m = 1e7\n"
+
+/* Given CiA 402 targets at 1e7 increments per metre (int32: +-214.748 m),
+ * then a box of +-300 m is refused at its line, naming the field; +-200 m is
+ * taken as given; without a box, one is derived from int32 (x and y at
+ * INT32_MAX / 1e7 minus half a count, z free), so the safety monitor holds the
+ * object at the edge instead of the target being clipped (issue 24: 13 886 of
+ * 35 713 targets went out as INT32_MAX). */
+static void test_cia402_box(void **state)
+{
+    (void)state;
+    load_bad(CIA "position_min_m = -300,-300,0\nposition_max_m = 300,300,0\n", CFG_EVALUE, 14,
+             "does not fit the CiA 402 target's int32 increments");
+    cfg_t *c = load_ok(CIA "position_min_m = -200,-200,-1\nposition_max_m = 200,200,1\n");
+    assert_int_equal(c->obj[0].box, 1);
+    assert_true(fabs(c->obj[0].box_max_m[0] - 200) <= 0.0);
+    cfg_free(c);
+    c = load_ok(CIA);
+    const cfg_obj_t *o = &c->obj[0];
+    assert_int_equal(o->box, 2);
+    double edge = (2147483647.0 - 0.5) / 1e7;
+    assert_true(fabs(o->box_max_m[0] - edge) < 1e-9 && fabs(o->box_min_m[0] + edge + 1e-7) < 1e-9);
+    assert_true(fabs(o->box_max_m[1] - edge) < 1e-9);
+    assert_true(isinf(o->box_max_m[2]) && isinf(o->box_min_m[2]));
+    cfg_free(c);
+    /* the keys go together, min <= max, within max_abs_m */
+    load_bad(OBJ "position_min_m = 0,0,0\n", CFG_EVALUE, 5, "without position_max_m");
+    load_bad(OBJ "position_min_m = 0,0,0\nposition_max_m = 1,-1,1\n", CFG_EVALUE, 6,
+             "min must not exceed max");
+    load_bad(OBJ "position_min_m = 0,0,0\nposition_max_m = 1,1,2e7\n", CFG_EVALUE, 6,
+             "max_abs_m");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_cia402_box),
         cmocka_unit_test(test_utf8_bom),
         cmocka_unit_test(test_paths_by_identity),
     };
