@@ -64,7 +64,7 @@ local MSG = {
         {"SPFD_VX", 128, 32, true, 1e-6, "m/s"}, {"SPFD_VY", 160, 32, true, 1e-6, "m/s"},
         {"SPFD_VZ", 192, 32, true, 1e-6, "m/s"}, {"SPFD_State", 224, 8},
         {"SPFD_Flags", 232, 8}, {"SPFD_Track", 240, 16}},
-    STATUS = {{"ST_State", 0, 3}, {"ST_BusDown", 4, 1}, {"ST_TxDrop", 5, 1},
+    STATUS = {{"ST_State", 0, 3}, {"ST_Clamped", 3, 1}, {"ST_BusDown", 4, 1}, {"ST_TxDrop", 5, 1},
         {"ST_OutFault", 6, 1}, {"ST_SafetyFault", 7, 1}, {"ST_LastSeq", 8, 8},
         {"ST_Free", 16, 8}, {"ST_Lost", 24, 8}, {"ST_Rejected", 32, 8},
         {"ST_Malformed", 40, 8}, {"ST_Dropped", 48, 8}, {"ST_LastErr", 56, 8}},

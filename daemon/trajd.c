@@ -12,7 +12,9 @@
  *                    a second one exits at once (0)
  * Exit status: 0; EX_USAGE, EX_CONFIG, EX_UNAVAILABLE (cannot start), EX_OSERR,
  * EX_SOFTWARE; CORE_EXIT_OUTPUT_LOST (74) if any setpoint line was lost by an
- * output; CORE_EXIT_EPIPE (141) when stdout's reader went away.
+ * output; CORE_EXIT_EPIPE (141) when stdout's reader went away; CORE_EXIT_NO_INPUT
+ * (65) if a replayed track or log_in had no usable waypoint; CORE_EXIT_HELD (69)
+ * if an object ended held (safety fault, drive fault, lost heartbeat).
  * systemd (sd_notify; no-ops without NOTIFY_SOCKET):
  *   READY=1 once every input and output is open and the clock runs;
  *   RELOADING=1 ... READY=1 around a reload; STOPPING=1 at SIGTERM;
@@ -33,12 +35,14 @@
 #include <systemd/sd-daemon.h>
 #include <unistd.h>
 
+#include "can_transport.h"
 #include "cfg.h"
 #include "core.h"
 #include "log.h"
 #include "loop.h"
 #include "reload.h"
 #include "rt.h"
+#include "stdfds.h"
 #include "version.h"
 
 #define TRAJD_DEFAULT_CONF "/etc/trajd/trajd.conf"
@@ -533,6 +537,27 @@ static uint64_t engine_faults(const core_t *c, const stats_t *st)
     return n;
 }
 
+/* Objects that end the run held: a safety fault, a feed hold (a drive's
+ * heartbeat lost) or CiA 402 drives held after a fault; each named in a log
+ * line.  Their count (issue 24: the run exits CORE_EXIT_HELD). */
+static unsigned held_objects(const core_t *c)
+{
+    unsigned n = 0;
+    for (unsigned i = 0; c && i < c->nobj; i++) {
+        const obj_t *o = &c->obj[i];
+        can_drive_info_t di;
+        int drive = can_transport_drive(c, i, &di) && di.d.held;
+        if (!safety_fault(&o->safety) && !o->held && !drive)
+            continue;
+        n++;
+        log_msg(LOG_ERR, "object '%s' ended held: %s", o->name,
+                safety_fault(&o->safety) ? safety_strerror(safety_fault(&o->safety))
+                : o->held                ? "feed hold (a drive's heartbeat was lost)"
+                                         : "its drives left Operation Enabled");
+    }
+    return n;
+}
+
 int main(int argc, char **argv)
 {
     trajd_t d = {.conf_path = TRAJD_DEFAULT_CONF,
@@ -545,6 +570,8 @@ int main(int argc, char **argv)
     const char *check = NULL;
     char err[1024];
 
+    if (stdfds_open() < 0)
+        return 71; /* EX_OSERR: no /dev/null */
     if ((rc = parse_args(argc, argv, &d, &foreground, &check)) >= 0)
         return rc;
     if (check)
@@ -564,6 +591,7 @@ int main(int argc, char **argv)
         rc = run(&d);
     report_ready(&d, (char)(rc ? rc : EX_SOFTWARE));
     uint64_t faults = engine_faults(d.core, &d.stats);
+    unsigned held = held_objects(d.core);
     core_close(d.core); /* outputs drain here: lines left over count as lost */
     if (d.stats.exit_code == CORE_EXIT_EPIPE) {
         log_msg(LOG_NOTICE, "stdout: the reader went away, exiting with status %d",
@@ -586,9 +614,12 @@ int main(int argc, char **argv)
     } else if (rc == 0 && d.stats.no_input) {
         log_msg(LOG_ERR,
                 "a replayed track or candump log ended %llu time(s) with no usable waypoint for "
-                "an object (a reload replays it again): exit status %d",
+                "an object: exit status %d",
                 (unsigned long long)d.stats.no_input, CORE_EXIT_NO_INPUT);
         rc = CORE_EXIT_NO_INPUT;
+    } else if (rc == 0 && held) {
+        log_msg(LOG_ERR, "%u object(s) ended held: exit status %d", held, CORE_EXIT_HELD);
+        rc = CORE_EXIT_HELD;
     }
     cfg_free(pending_take(&d));
     if (d.sig_fd >= 0)

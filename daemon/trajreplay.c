@@ -37,6 +37,7 @@
 #include <unistd.h>
 
 #include "cfg.h"
+#include "cfg_files.h"
 #include "engine.h"
 #include "engine_settings.h"
 #include "replay.h"
@@ -44,6 +45,7 @@
 #include "csv_shortest.h"
 #include "geo.h"
 #include "replay_transport.h"
+#include "stdfds.h"
 #include "csv_fixed.h"
 #include "csv_format.h"
 #include "svg.h"
@@ -531,6 +533,7 @@ typedef struct {
     size_t first_rejected; /* index of the first one */
     uint64_t skipped_gaps; /* gaps jumped over (not --keep-gaps) */
     uint64_t skipped_ticks;
+    uint64_t nonfinite; /* rows with a NaN or infinite value: flagged ENGINE_SP_FAULT */
     size_t seen_next; /* run_report_rejections: r.next and replay_done at */
     int seen_done;    /* its last look (verdicts come only with a push or the close) */
     char *rows;       /* rows formatted in place, written ROWS_BUF bytes at a time */
@@ -566,6 +569,13 @@ static int run_open(run_t *run, const opts_t *o)
     run->seen_next = (size_t)-1;
     if (engine_config_check(&o->cfg, &why)) {
         fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", why ? why : "?");
+        return EXIT_USAGE;
+    }
+    const char *same = cfg_same_file(o->input, o->output) ? o->output
+                       : cfg_same_file(o->input, o->svg)  ? o->svg
+                                                          : NULL;
+    if (same) { /* by identity (issue 24): writing it would destroy the track */
+        fprintf(stderr, "trajreplay: %s and the track %s are one file\n", same, o->input);
         return EXIT_USAGE;
     }
     if (track_load_opts(o->input, o->format, o->load_flags, &run->trk, err, sizeof err)) {
@@ -825,6 +835,12 @@ static int run_ticks(run_t *run)
         (void)engine_tick(run->e, now, &sp);
         if (skipped)
             sp.flags |= ENGINE_SP_SKIPPED;
+        if (!(sp.flags & ENGINE_SP_NO_POSITION) &&
+            !isfinite(sp.pos_m[0] + sp.pos_m[1] + sp.pos_m[2] + sp.vel_m_s[0] + sp.vel_m_s[1] +
+                      sp.vel_m_s[2] + sp.acc_m_s2[0] + sp.acc_m_s2[1] + sp.acc_m_s2[2])) {
+            sp.flags |= ENGINE_SP_FAULT; /* never an unflagged NaN row (issue 24) */
+            run->nonfinite++;
+        }
         run_emit(run, &sp);
         if (replay_done(&run->r) && (sp.flags & ENGINE_SP_HOLD)) {
             engine_status(run->e, &run->st);
@@ -907,6 +923,8 @@ int main(int argc, char **argv)
 {
     opts_t o;
     run_t run;
+    if (stdfds_open() < 0)
+        return 71; /* EX_OSERR: no /dev/null */
     int rc = parse_args(argc, argv, &o);
     if (rc >= 0)
         return rc;
@@ -942,6 +960,13 @@ int main(int argc, char **argv)
                 "trajreplay: %s: warning: %" PRIu64 " hard stop%s (velocity to 0 in one tick: "
                 "the solved curve ended under a moving output)\n",
                 o.input, hard, hard == 1 ? "" : "s");
+    if (run.nonfinite && status != EXIT_OUTPUT && status != EXIT_MEMORY) {
+        fprintf(stderr,
+                "trajreplay: %s: internal fault: %" PRIu64 " rows with a NaN or infinite value "
+                "(flagged %#x): a defect of trajd; please report it with the track (exit %d)\n",
+                o.input, run.nonfinite, ENGINE_SP_FAULT, EXIT_INTERNAL);
+        status = EXIT_INTERNAL;
+    }
     if (numeric && status != EXIT_OUTPUT && status != EXIT_MEMORY) {
         fprintf(stderr,
                 "trajreplay: %s: internal fault: %" PRIu64 " numeric refusal%s of finite "

@@ -27,6 +27,7 @@
 #include <unistd.h>
 
 #include "surf.h"
+#include "stdfds.h"
 #include "version.h"
 
 #define DIM 3
@@ -450,6 +451,8 @@ int main(int argc, char **argv)
         {NULL, 0, NULL, 0},
     };
 
+    if (stdfds_open() < 0)
+        return 71; /* EX_OSERR: no /dev/null */
     while ((opt = getopt_long(argc, argv, "n:o:s:x:y:z:hV", lopts, NULL)) != -1) {
         char *end = NULL;
         switch (opt) {

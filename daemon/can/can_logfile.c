@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <inttypes.h>
+#include <limits.h>
 #include <stdlib.h>
 #include <string.h>
 #include <fcntl.h>
@@ -327,6 +328,31 @@ int can_logfile_recv(can_logfile_t *l, int64_t now_ns, canproto_frame_t *f)
         return 0;
     *f = l->rec[l->next++].f;
     return 1;
+}
+
+/* Where the input last kept stopped (one daemon per process). */
+static struct {
+    int set;
+    size_t pos;
+    char path[PATH_MAX];
+} kept;
+
+void can_logfile_keep_pos(const can_logfile_t *l, const char *path)
+{
+    kept.set = 1;
+    kept.pos = l->next;
+    snprintf(kept.path, sizeof kept.path, "%s", path);
+}
+
+size_t can_logfile_resume(can_logfile_t *l, const char *path)
+{
+    size_t pos = 0;
+    if (kept.set && path && !strcmp(kept.path, path)) {
+        pos = kept.pos < l->n ? kept.pos : l->n;
+        l->next = pos;
+    }
+    kept.set = 0;
+    return pos;
 }
 
 void can_logfile_set_time(can_logfile_t *l, int64_t now_ns)

@@ -97,6 +97,16 @@ void can_logfile_close(can_logfile_t *l);
 /* Next input frame due at or before now_ns: 1 (in f), 0 (none yet or no more). */
 int can_logfile_recv(can_logfile_t *l, int64_t now_ns, canproto_frame_t *f);
 
+/* A reload (issue 24): keep where l's input, read from path, stopped (the
+ * frames delivered so far), before l is closed. */
+void can_logfile_keep_pos(const can_logfile_t *l, const char *path);
+
+/* If the position kept last is of path: l goes on from there, so nothing
+ * already played is played again; returns the frames skipped (0: none).
+ * path NULL (the reload carried no object over): start afresh.  Forgets the
+ * kept position either way. */
+size_t can_logfile_resume(can_logfile_t *l, const char *path);
+
 /* Write f as a log line stamped with the last now_ns given to can_logfile_recv /
  * can_logfile_set_time.  Returns 0 or -EIO. */
 int can_logfile_send(can_logfile_t *l, const canproto_frame_t *f);

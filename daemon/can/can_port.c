@@ -476,8 +476,10 @@ static int send_setpoint(can_port_t *p, can_port_obj_t *o, int own)
                 rc = canproto_encode_cia402_cw(&o->ids, a, o->sp.pos_m[a], rpdo_cw(o, a), &f[n++]);
                 clamped |= rc == CANPROTO_CLAMPED;
             }
-    if (clamped)
+    if (clamped) { /* counted, flagged (STATUS bit 3), logged by can_transport */
         o->st.tx_clamped++;
+        o->flags_since |= CANPROTO_ST_CLAMPED;
+    }
     for (unsigned k = 0; k < n; k++)
         if ((rc = p->io.send(p->io_ctx, &f[k])) < 0)
             return rc;

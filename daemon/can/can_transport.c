@@ -10,10 +10,13 @@
 #include <time.h>
 
 #include "can_socket.h"
+#include "can_box.h"
 #include "can_logfile.h"
+#include "can_refused.h"
 #include "can_port.h"
 #include "cia402.h"
 #include "core.h"
+#include "gate.h"
 #include "log.h"
 
 #define CAN_MAINTAIN_NS 100000000LL /* housekeeping: reopen, bus state */
@@ -348,6 +351,8 @@ static void port_config(const can_cfg_t *c, int64_t period_ns, can_port_config_t
     pc->sync_overflow = (uint8_t)c->sync_overflow;
     pc->status_period_ns = (int64_t)llround(c->status_period_ms * 1e6);
     pc->max_late_ns = c->max_late_ms < 0 ? period_ns / 2 : (int64_t)llround(c->max_late_ms * 1e6);
+    if (c->log_in[0] || c->log_out[0])
+        pc->max_late_ns = 0; /* a log file: no bus is late, nothing dropped (issue 24) */
 }
 
 /* Ids that must not come from a default: the defaults of an object id above
@@ -499,7 +504,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
         }
     }
     can_port_free(p);
-    return rc;
+    return rc ? rc : can_box_check(cfg, line, why, wl); /* fields vs box and speed */
 }
 
 /* ---- runtime ---- */
@@ -534,6 +539,7 @@ typedef struct {
     can_port_obj_stats_t drive_logged[CFG_OBJECTS_MAX]; /* drive counters already logged */
     int drive_state_logged[CFG_OBJECTS_MAX];            /* all_enabled as last logged, -1 never */
     uint64_t refused_logged[CFG_OBJECTS_MAX];           /* cmd_refused already logged */
+    uint64_t clamped_logged[CFG_OBJECTS_MAX];           /* tx_clamped already logged */
     int64_t refused_log_ns;                             /* when log_refused last logged */
     can_logfile_stats_t out_seen;   /* log_out counters already put in core stats */
     can_logfile_stats_t out_logged; /* log_out counters already warned about */
@@ -608,22 +614,22 @@ static void log_refused(can_state_t *s, int64_t now_ns)
     for (unsigned k = 0; k < s->n; k++) {
         can_port_obj_stats_t os;
         can_port_obj_stats(s->port, k, &os);
+        if (os.tx_clamped > s->clamped_logged[k]) { /* can_box.h; the same 1 s limit */
+            log_msg(LOG_WARNING,
+                    "can: object '%s': %llu setpoint(s) sent with a value clipped to its field "
+                    "(velocity beyond the SETPOINT frame's +-32.767 m/s); %llu in all",
+                    s->objs[k]->name, (unsigned long long)(os.tx_clamped - s->clamped_logged[k]),
+                    (unsigned long long)os.tx_clamped);
+            s->refused_log_ns = now_ns;
+        }
+        s->clamped_logged[k] = os.tx_clamped;
         if (os.cmd_refused <= s->refused_logged[k]) {
             s->refused_logged[k] = os.cmd_refused; /* reset counters */
             continue;
         }
         char why[160];
-        if (os.last_refused_err == 0)
-            snprintf(why, sizeof why,
-                     "the object is not writable (writable = yes in [object.%s] lets CAN "
-                     "command it)",
-                     s->objs[k]->name);
-        else if (os.last_refused_err == -ENGINE_ESTATE)
-            snprintf(why, sizeof why,
-                     "the object is held (a feed hold: a drive's lost heartbeat or a fault); "
-                     "only the command clear releases it");
-        else
-            snprintf(why, sizeof why, "%s", engine_strerror(-os.last_refused_err));
+        can_refused_why(why, sizeof why, os.last_refused_err, os.last_refused,
+                        s->objs[k]->stopping, s->objs[k]->name);
         log_msg(LOG_WARNING,
                 "can: object '%s': %llu command frame(s) refused, the last %s on id 0x%03X: "
                 "%s; %llu refused in all",
@@ -690,6 +696,10 @@ static int hk_push(void *ctx, const engine_waypoint_t *wp)
 static int hk_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
 {
     obj_t *o = ((const can_hook_ctx_t *)ctx)->o;
+    if (o->stopping) /* the one gate (gate.h); writable is cmd_mask's */
+        return -ENGINE_ESTATE;
+    if (cmd == CANPROTO_CMD_OVERRIDE && arg > CANPROTO_OVERRIDE_MAX_PCT)
+        return -ENGINE_ERANGE; /* refused and logged as such (log_refused) */
     switch (cmd) {
     case CANPROTO_CMD_FINISH: engine_finish(o->engine); break;
     case CANPROTO_CMD_STOP: engine_stop(o->engine); break;
@@ -829,6 +839,7 @@ int can_transport_drive(const core_t *c, unsigned obj, can_drive_info_t *out)
     out->sdo_aborts = st.sdo_aborts;
     out->last_abort = st.last_abort;
     out->hb_lost = st.heartbeat_lost;
+    out->tx_clamped = st.tx_clamped;
     return can_port_drive_summary(s->port, k, &out->d);
 }
 
@@ -875,12 +886,16 @@ static void close_(void *state, core_t *c)
         loop_del(s->c->loop, s->sock_fd);
     if (s->timer_fd > 0)
         loop_timer_del(s->c->loop, s->timer_fd);
+    if (s->log && s->cfg->log_in[0]) /* a reload goes on from here (log_in_resume) */
+        can_logfile_keep_pos(s->log, s->cfg->log_in);
     if (s->log) { /* the last lines, counted before the counters are read */
         can_logfile_flush(s->log);
         log_out_faults(s, 0);
         report_log_out(s, 1);
     }
     if (s->port) {
+        s->refused_log_ns = 0; /* the refusals of the last second, with their reason */
+        log_refused(s, core_mono_ns());
         for (unsigned k = 0; k < s->n; k++) {
             can_port_obj_stats_t os;
             can_port_obj_stats(s->port, k, &os);
@@ -926,8 +941,7 @@ static void collect_objects(can_state_t *s, core_t *c)
  */
 static uint32_t cmd_mask(const can_state_t *s, unsigned k)
 {
-    int w = s->objs[k]->cfg->writable;
-    if (w == 1 || (w < 0 && s->is_input[k]))
+    if (obj_gate_writable(s->objs[k], &can_transport)) /* gate.h: Modbus's rule too */
         return CAN_PORT_CMD_ALL;
     return s->is_input[k] ? 1u << CANPROTO_CMD_FINISH : 0;
 }
@@ -1002,6 +1016,18 @@ static void report_log_out_open(can_state_t *s, const char *why_trunc, int64_t f
         log_msg(LOG_INFO, "can: log_out %s: appending (it was empty)", s->cfg->log_out);
 }
 
+/* A reload that carries a CAN-input object over goes on where log_in stopped. */
+static void log_in_resume(can_state_t *s)
+{
+    int carried = 0;
+    for (unsigned k = 0; k < s->n; k++)
+        carried |= s->is_input[k] && s->objs[k]->carried;
+    size_t pos = can_logfile_resume(s->log, carried ? s->cfg->log_in : NULL);
+    if (pos)
+        log_msg(LOG_INFO, "can: log_in %s: going on after its %zu frames already played",
+                s->cfg->log_in, pos);
+}
+
 /* The candump logs if configured, else the socket (a missing or down
  * interface is not an error: the port runs DOWN and keeps reopening). */
 static int open_io(can_state_t *s, const uint32_t *rx_ids, unsigned nrx, char *why, size_t wl)
@@ -1022,6 +1048,8 @@ static int open_io(can_state_t *s, const uint32_t *rx_ids, unsigned nrx, char *w
         }
         if (s->log && strcmp(cfg->log_out, "-") && cfg->log_out[0])
             report_log_out_open(s, why_trunc, (epoch_ns + s->c->now_ns) / 1000);
+        if (s->log && cfg->log_in[0])
+            log_in_resume(s);
         return s->log ? 0 : -EIO;
     }
     s->bus = can_socket_new(cfg->interface, cfg->fd, rx_ids, nrx);
@@ -1223,4 +1251,5 @@ const transport_t can_transport = {
     .cycle = cycle,
     .close = close_,
     .input_done = input_done,
+    .files = can_transport_files,
 };

@@ -93,6 +93,7 @@ typedef struct {
     uint64_t sdo_aborts;
     uint32_t last_abort; /* abort code of the last SDO abort, 0 = none */
     uint64_t hb_lost;    /* heartbeat consumer timeouts */
+    uint64_t tx_clamped; /* setpoints with a value clipped to its field (can_box.h) */
 } can_drive_info_t;
 
 /* Object obj's drives (config index).  Returns 1 if it has CiA 402 drives trajd

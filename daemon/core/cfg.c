@@ -6,6 +6,8 @@
  * with no keys, which inih never reports) and stops at the first error.
  */
 #include "cfg.h"
+#include "cfg_box.h"
+#include "cfg_files.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -313,6 +315,9 @@ static char *reader(char *str, int num, void *stream)
         str[n] = 0;
     }
     p->line++;
+    if (p->line == 1 && (unsigned char)str[0] == 0xEF && (unsigned char)str[1] == 0xBB &&
+        (unsigned char)str[2] == 0xBF)
+        memmove(str, str + 3, n - 2); /* a UTF-8 byte order mark (issue 24), and its NUL */
     if (nul) {
         fail(p, CFG_ESYNTAX, p->line, "NUL byte (binary file?)");
         return NULL;
@@ -546,6 +551,8 @@ static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size
     }
     if (strncmp(kv->key, "safety_", 7) == 0 || strcmp(kv->key, "initial_position") == 0)
         return key_obj_drive(o, kv, why, wl);
+    if (strncmp(kv->key, "position_m", 10) == 0)
+        return cfg_box_key(o, kv, why, wl);
     if (strcmp(kv->key, "writable") == 0)
         return cfg_get_bool(kv, &o->writable, why, wl);
     if (strcmp(kv->key, "id") == 0) {
@@ -736,6 +743,11 @@ static void check_all(parse_t *p)
     check_ids(p);
     if (p->err)
         return;
+    int bline = 0;
+    if (cfg_box_check(c, &bline, why, sizeof why) < 0) {
+        fail(p, CFG_EVALUE, bline, "%s", why);
+        return;
+    }
     for (unsigned t = 0; transport_table[t]; t++) {
         const transport_t *tr = transport_table[t];
         if (!tr->check || !cfg_uses(c, tr))
@@ -749,6 +761,9 @@ static void check_all(parse_t *p)
             return;
         }
     }
+    int line = 0;
+    if (cfg_files_check(c, &line, why, sizeof why) < 0) /* outputs vs inputs, by identity */
+        fail(p, CFG_EVALUE, line, "%s", why);
 }
 
 static void defaults(cfg_t *c)

@@ -104,6 +104,9 @@ void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim)
     lim->max_accel_m_s2 = o->safety_max_accel_m_s2 >= 0 ? o->safety_max_accel_m_s2
                                                         : obj_safety_accel(&o->engine);
     lim->tol_m = SAFETY_TOL_M_DEFAULT;
+    lim->box = o->box; /* position_min_m .. position_max_m (cfg_box.h) */
+    memcpy(lim->box_min_m, o->box_min_m, sizeof lim->box_min_m);
+    memcpy(lim->box_max_m, o->box_max_m, sizeof lim->box_max_m);
 }
 
 /* The setpoint as latitude/longitude/height (geographic objects, about the

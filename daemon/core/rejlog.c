@@ -62,6 +62,18 @@ static const char *name_of(int reason)
     return n ? n : engine_strerror(reason);
 }
 
+/* x as "%.3f" (the usual metres and seconds), or "%.6g" from 1e9 up (and NaN,
+ * infinities): a hostile 1e300 takes 12 characters, not 300, and never cuts
+ * the line (issue 24). */
+static const char *num(char buf[32], double x)
+{
+    if (fabs(x) < 1e9)
+        snprintf(buf, 32, "%.3f", x);
+    else
+        snprintf(buf, 32, "%.6g", x);
+    return buf;
+}
+
 unsigned rejlog_flush(rejlog_t *l, const char *name, void (*emit)(void *ctx, const char *line),
                       void *ctx)
 {
@@ -69,10 +81,11 @@ unsigned rejlog_flush(rejlog_t *l, const char *name, void (*emit)(void *ctx, con
     unsigned n = 0;
     for (unsigned i = 0; i < l->npend; i++, n++) {
         const engine_rejection_t *r = &l->pend[i].rej;
+        char t[32], x[32], y[32], z[32];
         snprintf(line, sizeof line,
-                 "object '%s': %s: rejected (%s) seq %" PRIu32 " t=%.3f s at (%.3f, %.3f, %.3f)",
-                 name, l->pend[i].src, name_of(r->reason), r->seq, r->t_s, r->pos_m[0], r->pos_m[1],
-                 r->pos_m[2]);
+                 "object '%s': %s: rejected (%s) seq %" PRIu32 " t=%s s at (%s, %s, %s)", name,
+                 l->pend[i].src, name_of(r->reason), r->seq, num(t, r->t_s), num(x, r->pos_m[0]),
+                 num(y, r->pos_m[1]), num(z, r->pos_m[2]));
         emit(ctx, line);
     }
     l->shown += l->npend;

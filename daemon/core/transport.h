@@ -123,6 +123,13 @@ typedef struct transport {
      * still hold counters from before a reload): c->tstate[its index] is NULL
      * when it is not open.  Not in the tick. */
     int (*summary)(const struct core *c, char *buf, size_t len);
+
+    /* The files cfg makes this transport read or write: add(ctx, path,
+     * output, line, what) for each (cfg_files.h compares them by identity at
+     * check time).  NULL: none. */
+    void (*files)(const cfg_t *cfg,
+                  void (*add)(void *ctx, const char *path, int output, int line, const char *what),
+                  void *ctx);
 } transport_t;
 
 /* Every transport, NULL-terminated; a transport's index is its position.

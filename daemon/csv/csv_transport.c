@@ -1,5 +1,7 @@
 /* csv_transport.c - csv and stdout output transports (see csv_transport.h). */
 #include "csv_transport.h"
+#include "cfg_files.h"
+#include "csv_tail.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -66,8 +68,15 @@ static int csv_obj_key(void *ocfg, const cfg_kv_t *kv, char *why, size_t wl)
         return cfg_get_path(kv, c->path, sizeof c->path, why, wl);
     if (strcmp(kv->key, "header") == 0)
         return cfg_get_bool(kv, &c->header, why, wl);
-    if (strcmp(kv->key, "truncate") == 0)
+    if (strcmp(kv->key, "truncate") == 0) { /* no | yes (at start) | always (and at reloads) */
+        static const char *const always[] = {"always", NULL};
+        int k;
+        if (cfg_get_enum(kv, always, &k, why, wl) == 0) {
+            c->truncate = CSV_TRUNCATE_ALWAYS;
+            return 0;
+        }
         return cfg_get_bool(kv, &c->truncate, why, wl);
+    }
     if (strcmp(kv->key, "geo") == 0)
         return cfg_get_bool(kv, &c->geo, why, wl);
     if (strcmp(kv->key, "age") == 0)
@@ -305,6 +314,12 @@ static void header(csv_transport_t *st, stream_t *s)
     put(st, s, NULL, line, n);
 }
 
+/* Fields of s's lines: 16, + 4 with csv.geo, + 1 with age_s (csv_tail.h). */
+static int columns(const stream_t *s)
+{
+    return 16 + (s->geo ? 4 : 0) + (s->age ? 1 : 0);
+}
+
 /* The line that marks where a restart or a reload appended to a file that
  * was not empty ("#": not a row; pandas: comment='#'). */
 static void marker(csv_transport_t *st, stream_t *s)
@@ -366,9 +381,11 @@ static int csv_open(core_t *c, void **state, char *why, size_t wl)
         /* O_NONBLOCK matters for a FIFO; a regular file ignores it.  O_APPEND
          * always: a torn line is cut off the end (flush), and the next write
          * must land there, not at an offset past it. */
+        /* a reload (ticks ran) empties the file only with csv.truncate = always */
+        int trunc = oc->truncate == CSV_TRUNCATE_ALWAYS || (oc->truncate && !c->stats->ticks);
+        int tail = trunc ? 0 : csv_tail_fields(oc->path); /* before anything is written */
         int fd = open(oc->path,
-                      O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | O_NONBLOCK |
-                          (oc->truncate ? O_TRUNC : 0),
+                      O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | O_NONBLOCK | (trunc ? O_TRUNC : 0),
                       0644);
         if (fd < 0) {
             rc = -errno;
@@ -387,10 +404,13 @@ static int csv_open(core_t *c, void **state, char *why, size_t wl)
         sm->age = oc->age;
         snprintf(sm->what, sizeof sm->what, "object '%s' csv.path %s", o->name, oc->path);
         struct stat sb;
-        if (sm->regular && fstat(fd, &sb) == 0 && sb.st_size > 0)
-            marker(st, sm); /* appending: no second header */
-        else if (oc->header)
+        if (sm->regular && fstat(fd, &sb) == 0 && sb.st_size > 0) {
+            marker(st, sm); /* appending: no second header, unless the columns change */
+            if (oc->header && tail && tail != columns(sm))
+                header(st, sm);
+        } else if (oc->header) {
             header(st, sm);
+        }
     }
     rc = loop_timer_add(c->loop, 1000000000, on_timer, st);
     if (rc < 0) {
@@ -497,6 +517,19 @@ static int summary(const core_t *c, char *buf, size_t len)
     return n ? snprintf(buf, len, ", out dropped %llu", (unsigned long long)n) : 0;
 }
 
+/* Each csv.path is written (cfg_files.h). */
+static void csv_files(const cfg_t *cfg, cfg_file_add_fn add, void *ctx)
+{
+    int ti = transport_index(&csv_transport);
+    for (unsigned i = 0; i < cfg->nobj; i++)
+        if (cfg_obj_uses(&cfg->obj[i], &csv_transport) & 2) {
+            char what[64];
+            snprintf(what, sizeof what, "[object.%s] csv.path", cfg->obj[i].name);
+            const csv_transport_obj_cfg_t *a = cfg->obj[i].tcfg[ti];
+            add(ctx, a->path, 1, cfg->obj[i].line, what);
+        }
+}
+
 const transport_t csv_transport = {
     .name = "csv",
     .roles = TRANSPORT_OUTPUT,
@@ -509,6 +542,7 @@ const transport_t csv_transport = {
     .cycle = cycle,
     .close = close_,
     .summary = summary, /* stdout's count too */
+    .files = csv_files,
 };
 
 const transport_t stdout_transport = {

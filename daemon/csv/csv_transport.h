@@ -8,7 +8,10 @@
  *             csv.header = yes    write the header line first (into an empty file)
  *             csv.truncate = no   at start and at each reload, append to the file, after a
  *                                 marker line "# trajd: appended at <UTC time> (start or
- *                                 reload)" if it was not empty; yes: empty it first
+ *                                 reload)" if it was not empty, and a new header line if
+ *                                 its last line has other columns (csv.geo or csv.age
+ *                                 changed: csv_tail.h); yes: empty it at start only;
+ *                                 always: at start and at each reload
  *             csv.age = no        yes: one more column at the end, age_s, the data age
  *                                 of the setpoint (lib/engine/CLOCK.md; nan for relative
  *                                 time), so readers of the 16 columns are not broken
@@ -44,11 +47,12 @@
 #include "transport.h"
 
 #define CSV_TRANSPORT_BUF_BYTES (256u * 1024u)
+#define CSV_TRUNCATE_ALWAYS 2
 
 typedef struct {
     char path[PATH_MAX];
     int header;
-    int truncate;
+    int truncate; /* 0 no, 1 yes (at start), CSV_TRUNCATE_ALWAYS (at reloads too) */
     int geo; /* csv.geo = yes: columns lat_deg,lon_deg,alt_m,heading_deg appended */
     int age; /* append the column age_s (csv_format_add_age) */
 } csv_transport_obj_cfg_t;

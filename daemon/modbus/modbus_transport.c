@@ -9,6 +9,7 @@
 
 #include "can_transport.h"
 #include "core.h"
+#include "gate.h"
 #include "log.h"
 #include "mbmap.h"
 #include "modbus_server.h"
@@ -77,12 +78,13 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
     return 0;
 }
 
-/* Whether Modbus may change object o (commands, waypoints): writable = yes,
- * or, not given, only an object fed by Modbus itself.  So writes = yes no
- * longer lets a client STOP or CLEAR an object fed by replay or CAN. */
-static int obj_writable(const obj_t *o)
+/* The one gate of commands and override (gate.h) in Modbus terms: 0, the
+ * hook's "no such address" (exception 02: not writable), or -ENGINE_ESTATE
+ * (exception 03: the daemon is stopping). */
+static int gate(const obj_t *o)
 {
-    return o->cfg->writable == 1 || (o->cfg->writable < 0 && o->cfg->input == &modbus_transport);
+    int g = obj_gate(o, &modbus_transport);
+    return g == OBJ_GATE_NOT_WRITABLE ? MODBUS_SERVER_HOOK_EADDRESS : g;
 }
 
 /* The object whose block is k (its id = k), or NULL: no object has that id. */
@@ -99,7 +101,7 @@ static int hook_waypoint(void *ctx, unsigned k, const engine_waypoint_t *wp)
     obj_t *o = obj_at(t, k);
     if (!o)
         return MODBUS_SERVER_HOOK_EADDRESS;
-    if (o->cfg->input != &modbus_transport || !obj_writable(o))
+    if (o->cfg->input != &modbus_transport || !obj_gate_writable(o, &modbus_transport))
         return MODBUS_SERVER_HOOK_EADDRESS;
     char src[REJLOG_SRC_LEN];
     snprintf(src, sizeof src, "modbus %s", t->srv ? modbus_server_peer(t->srv) : "");
@@ -112,10 +114,9 @@ static int hook_command(void *ctx, unsigned k, unsigned cmd)
     obj_t *o = obj_at(t, k);
     if (!o)
         return MODBUS_SERVER_HOOK_EADDRESS;
-    if (!obj_writable(o))
-        return MODBUS_SERVER_HOOK_EADDRESS;
-    if (o->stopping || t->core->stopping)
-        return -ENGINE_ESTATE;
+    int g = gate(o);
+    if (g)
+        return g;
     engine_status_t st;
     switch (cmd) {
     case MBMAP_CMD_START:
@@ -139,7 +140,8 @@ static int hook_override(void *ctx, unsigned k, unsigned percent)
     obj_t *o = obj_at(t, k);
     if (!o)
         return MODBUS_SERVER_HOOK_EADDRESS;
-    return obj_set_override(o, percent);
+    int g = gate(o);
+    return g ? g : obj_set_override(o, percent);
 }
 
 static void on_ready(loop_t *l, int fd, uint32_t events, void *ctx)
@@ -249,6 +251,7 @@ static void drive_regs(const core_t *c, unsigned k, mbmap_object_t *o, mbmap_dae
     o->drive_statusword = di.d.statusword;
     o->drive_nmt = di.d.nmt;
     o->drive_emcy = di.d.emcy;
+    o->tx_clamped = di.tx_clamped;
     d->drive_emcy += di.emcy;
     d->drive_sdo_aborts += di.sdo_aborts;
     d->drive_hb_lost += di.hb_lost;

@@ -1,5 +1,6 @@
 /* replay_transport.c - replay input transport (see replay_transport.h). */
 #include "replay_transport.h"
+#include "cfg_files.h"
 
 #include <inttypes.h>
 #include <math.h>
@@ -291,6 +292,18 @@ static void close_(void *state, core_t *c)
     free(s);
 }
 
+/* Each replay.track is read (cfg_files.h). */
+static void files(const cfg_t *cfg, cfg_file_add_fn add, void *ctx)
+{
+    for (unsigned i = 0; i < cfg->nobj; i++)
+        if (cfg_obj_uses(&cfg->obj[i], &replay_transport) & 1) {
+            char what[64];
+            snprintf(what, sizeof what, "[object.%s] replay.track", cfg->obj[i].name);
+            const replay_transport_obj_cfg_t *r = cfg_obj_transport(&cfg->obj[i], &replay_transport);
+            add(ctx, r->path, 0, cfg->obj[i].line, what);
+        }
+}
+
 const transport_t replay_transport = {
     .name = "replay",
     .roles = TRANSPORT_INPUT,
@@ -304,4 +317,5 @@ const transport_t replay_transport = {
     .pre_tick = pre_tick,
     .close = close_,
     .input_done = input_done,
+    .files = files,
 };

@@ -95,6 +95,13 @@ typedef enum {
 
 /* Largest file accepted (the whole file is read into memory). */
 #define TRACK_FILE_MAX_BYTES (1024L * 1024L * 1024L)
+/* Most waypoints a .path file may expand to (its `step` and lines): 16 Mi,
+ * 704 MiB of waypoints and line numbers, below the track file limit above.
+ * Counted before anything is made (track_path.c). */
+#define TRACK_PATH_WAYPOINTS_MAX (16UL * 1024UL * 1024UL)
+/* Largest |heading| a track may give, degrees: 10^7 (27 777 turns, where a
+ * double still resolves 2e-9 degree); 1e300 is a bad line, not an axis. */
+#define TRACK_HEADING_MAX_DEG 1e7
 /* Skipped lines whose message is kept in track_t.reports (the count is in
  * skipped): the caller prints them, so a log says which lines were lost. */
 #define TRACK_REPORT_MAX 10

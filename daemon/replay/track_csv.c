@@ -188,6 +188,9 @@ static int csv_row(csv_t *c, char **field, int nf, unsigned long lineno)
         (track_field_num(field[c->col[COL_HDG]], &vh, &empty) || isinf(vh)))
         return track_loader_bad(L, lineno, "heading '%s' is not a number",
                                 track_field_show(field[c->col[COL_HDG]]).s);
+    if (fabs(vh) > TRACK_HEADING_MAX_DEG) /* NaN (empty) passes */
+        return track_loader_bad(L, lineno, "heading '%s' beyond +-%g degrees",
+                                track_field_show(field[c->col[COL_HDG]]).s, TRACK_HEADING_MAX_DEG);
     if (track_loader_add_row(L, t, va, vb, vc, lineno) < 0)
         return -1;
     L->rows[L->n - 1].h = vh;

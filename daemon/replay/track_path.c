@@ -73,7 +73,14 @@ static int read_elems(track_loader_t *L, const char *buf, size_t len, elems_t *E
 static int expand(track_loader_t *L, const elems_t *E, size_t *el_end, track_t *trk)
 {
     size_t nw = 0, bad = 0;
-    int rc = path_expand_ex(E->el, E->n, NULL, 0, &nw, el_end, &bad);
+    int rc = path_expand_ex(E->el, E->n, NULL, TRACK_PATH_WAYPOINTS_MAX, &nw, el_end, &bad);
+    if (rc == -PATH_EFULL) {
+        track_loader_fatal(L, E->el_line[bad],
+                           "the path would expand to more than %lu waypoints (a smaller step, "
+                           "or longer lines; the limit is TRACK_PATH_WAYPOINTS_MAX)",
+                           (unsigned long)TRACK_PATH_WAYPOINTS_MAX);
+        return -1;
+    }
     if (rc < 0) {
         track_loader_fatal(L, E->el_line[bad], "%s", path_strerror(rc));
         return -1;

@@ -413,8 +413,9 @@ void canproto_encode_status(uint32_t id, const canproto_status_t *st, canproto_f
 {
     frame_init(out, id, CANPROTO_STATUS_DLEN, 0);
     out->data[0] = (uint8_t)((st->state & CANPROTO_ST_STATE_MASK) |
-                             (st->flags & (CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP |
-                                           CANPROTO_ST_OUT_FAULT | CANPROTO_ST_FAULT)));
+                             (st->flags & (CANPROTO_ST_CLAMPED | CANPROTO_ST_BUS_DOWN |
+                                           CANPROTO_ST_TX_DROP | CANPROTO_ST_OUT_FAULT |
+                                           CANPROTO_ST_FAULT)));
     out->data[1] = (uint8_t)st->last_seq;
     out->data[2] = sat8(st->free);
     out->data[3] = (uint8_t)st->lost;
@@ -638,8 +639,8 @@ int canproto_decode_status(const canproto_frame_t *f, canproto_status_t *out)
         (f->flags & (CANPROTO_F_RTR | CANPROTO_F_ERR | CANPROTO_F_EFF)))
         return -CANPROTO_ELEN;
     out->state = f->data[0] & CANPROTO_ST_STATE_MASK;
-    out->flags = f->data[0] & (CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP | CANPROTO_ST_OUT_FAULT |
-                               CANPROTO_ST_FAULT);
+    out->flags = f->data[0] & (CANPROTO_ST_CLAMPED | CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP |
+                               CANPROTO_ST_OUT_FAULT | CANPROTO_ST_FAULT);
     out->last_seq = f->data[1];
     out->free = f->data[2];
     out->lost = f->data[3];
@@ -805,7 +806,7 @@ int canproto_rx_frame(canproto_rx_t *rx, const canproto_frame_t *f, int is_fd_id
         if (cmd < CANPROTO_CMD_FINISH || cmd >= CANPROTO_CMD_COUNT)
             return malformed(rx, CANPROTO_EVALUE);
         unsigned arg = f->data[3];
-        if (cmd == CANPROTO_CMD_OVERRIDE ? arg > CANPROTO_OVERRIDE_MAX_PCT : arg != 0)
+        if (cmd != CANPROTO_CMD_OVERRIDE && arg != 0) /* above 200 %: the receiver refuses */
             return malformed(rx, CANPROTO_EVALUE);
         for (unsigned i = 4; i < CANPROTO_WP_DLEN; i++)
             if (f->data[i])
@@ -991,7 +992,8 @@ static const canproto_signal_t sig_spfd[] = {
     SIG_U("SPFD_Track", -1, 240, 16, 1, ""),
 };
 static const canproto_signal_t sig_st[] = {
-    SIG_U("ST_State", -1, 0, 3, 1, ""),       SIG_U("ST_BusDown", -1, 4, 1, 1, ""),
+    SIG_U("ST_State", -1, 0, 3, 1, ""),       SIG_U("ST_Clamped", -1, 3, 1, 1, ""),
+    SIG_U("ST_BusDown", -1, 4, 1, 1, ""),
     SIG_U("ST_TxDrop", -1, 5, 1, 1, ""),      SIG_U("ST_OutFault", -1, 6, 1, 1, ""),
     SIG_U("ST_SafetyFault", -1, 7, 1, 1, ""), SIG_U("ST_LastSeq", -1, 8, 8, 1, ""),
     SIG_U("ST_Free", -1, 16, 8, 1, ""),       SIG_U("ST_Lost", -1, 24, 8, 1, ""),

@@ -165,7 +165,9 @@ typedef enum {
     CANPROTO_CMD_CLEAR = 3,          /* engine_clear; sequence numbering restarts */
     CANPROTO_CMD_RESET_COUNTERS = 4, /* engine and CAN counters to zero */
     CANPROTO_CMD_OVERRIDE = 5,       /* feed override: byte 3 = percent, 0 .. 200
-                                        (engine_set_override) */
+                                        (engine_set_override); 201..255 is a
+                                        well-formed command the receiver refuses
+                                        (a refused command, not a malformed frame) */
     CANPROTO_CMD_COUNT
 } canproto_cmd_t;
 
@@ -199,6 +201,7 @@ typedef enum {
 
 /* STATUS byte 0 */
 #define CANPROTO_ST_STATE_MASK 0x07u
+#define CANPROTO_ST_CLAMPED 0x08u /* a setpoint value was clipped to its field (tx_clamped) */
 #define CANPROTO_ST_BUS_DOWN 0x10u
 #define CANPROTO_ST_TX_DROP 0x20u
 #define CANPROTO_ST_OUT_FAULT 0x40u /* a csv/stdout output of the object lost lines or failed */

@@ -283,6 +283,7 @@ int mbmap_encode_diag(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_obje
             mbmap_put_u32(b + MBMAP_X_REJECTED_BY + 2 * (c - 1), lo32(o->st.rejected_by[c]));
     mbmap_put_f64(b + MBMAP_X_HEADING, o->heading_deg);
     mbmap_put_f64(b + MBMAP_X_HEADING_UNWRAPPED, o->heading_unwrapped_deg);
+    mbmap_put_u32(b + MBMAP_X_TX_CLAMPED, lo32(o->tx_clamped));
     for (unsigned i = 0; i < MBMAP_X_MB_WORST_ADDR_GROUPS; i++)
         b[MBMAP_X_MB_WORST_ADDR + i] = o->mb_worst_addr[i];
     mbmap_put_u32(b + MBMAP_X_GEN_TAIL, gen);
@@ -692,6 +693,9 @@ static const mbmap_field_t fields[] = {
       "unwrapped, monotone cubic, lib/util/angle.h); NaN without one"),
     F(IX, MBMAP_X_HEADING_UNWRAPPED, 4, MBMAP_T_F64, "heading_unwrapped", "deg",
       "the same heading, continuous across +-180 (turns counted): the target of a rotary axis"),
+    F(IX, MBMAP_X_TX_CLAMPED, 2, MBMAP_T_U32, "tx_clamped", "",
+      "CAN setpoints sent with a value clipped to its field (the SETPOINT frame's velocity "
+      "beyond +-32.767 m/s: can.fd = yes carries more); also STATUS bit 3 and a log line"),
     F(IX, MBMAP_X_MB_WORST_ADDR, 1, MBMAP_T_U16, "mb_worst_addr0", "",
       "the daemon's worst Modbus client (daemon mb_worst_*), its address as 8 groups of 16 bits "
       "in the order IPv6 text writes them (RFC 4291 2.2): group 0; an IPv4 client as "

@@ -191,6 +191,7 @@
 #define MBMAP_X_REJ_STALE 26         /* u32 ENGINE_ESTALE (13) */
 #define MBMAP_X_HEADING 50           /* f64 heading axis, degrees in (-180, 180] (NaN: none) */
 #define MBMAP_X_HEADING_UNWRAPPED 54 /* f64 the same, continuous (no jump at +-180): for a rotary axis */
+#define MBMAP_X_TX_CLAMPED 58       /* u32 setpoints sent on CAN with a value clipped to its field (speed beyond the SETPOINT frame's +-32.767 m/s ...) */
 #define MBMAP_X_MB_WORST_ADDR 62     /* u16 x8 the daemon's worst Modbus client (mb_worst_*): its address as 8 groups of 16 bits in IPv6 text order (RFC 4291 2.2), an IPv4 client as ::ffff:a.b.c.d (2.5.5.2); all 0: none; the same in every diagnostics block */
 #define MBMAP_X_MB_WORST_ADDR_GROUPS 8
 #define MBMAP_X_GEN_TAIL 98          /* u32 copy of GEN */
@@ -308,6 +309,7 @@ typedef struct {
     uint16_t held;              /* feed hold until clear */
     double lat_deg, lon_deg, alt_m; /* the setpoint as WGS84 geodetic (NaN: none) */
     double heading_deg, heading_unwrapped_deg; /* heading axis (NaN: none) */
+    uint64_t tx_clamped;        /* CAN setpoints with a value clipped to its field */
     uint16_t mb_worst_addr[MBMAP_X_MB_WORST_ADDR_GROUPS]; /* daemon-wide (mbmap_daemon_t's) */
 } mbmap_object_t;
 

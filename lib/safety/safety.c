@@ -18,6 +18,7 @@ const char *safety_strerror(int fault)
     case SAFETY_FSTEP: return "step above safety_max_step_m";
     case SAFETY_FSPEED: return "speed above safety_max_speed_m_s";
     case SAFETY_FACCEL: return "acceleration above safety_max_accel_m_s2";
+    case SAFETY_FBOX: return "position outside position_min_m .. position_max_m";
     default: return "unknown safety fault";
     }
 }
@@ -40,6 +41,9 @@ void safety_set_limits(safety_t *s, const safety_limits_t *lim)
     s->lim.max_speed_m_s = bound(lim->max_speed_m_s);
     s->lim.max_accel_m_s2 = bound(lim->max_accel_m_s2);
     s->lim.tol_m = bound(lim->tol_m) > 0 ? lim->tol_m : SAFETY_TOL_M_DEFAULT;
+    s->lim.box = lim->box;
+    memcpy(s->lim.box_min_m, lim->box_min_m, sizeof s->lim.box_min_m);
+    memcpy(s->lim.box_max_m, lim->box_max_m, sizeof s->lim.box_max_m);
 }
 
 static double norm3(const double *v)
@@ -64,6 +68,20 @@ static void hold(safety_t *s, engine_setpoint_t *sp)
     s->last_dt = 0;
 }
 
+/* 1 if a finite position of sp is outside the box: *value the coordinate,
+ * *limit the bound it passed. */
+static int outside_box(const safety_limits_t *l, const engine_setpoint_t *sp, double *value,
+                       double *limit)
+{
+    for (int k = 0; l->box && k < AX; k++)
+        if (sp->pos_m[k] < l->box_min_m[k] || sp->pos_m[k] > l->box_max_m[k]) {
+            *value = sp->pos_m[k];
+            *limit = sp->pos_m[k] < l->box_min_m[k] ? l->box_min_m[k] : l->box_max_m[k];
+            return 1;
+        }
+    return 0;
+}
+
 /* First violation of sp against the last output, with its value and bound. */
 static int judge(const safety_t *s, const engine_setpoint_t *sp, double *value, double *limit,
                  double vel[AX])
@@ -82,6 +100,8 @@ static int judge(const safety_t *s, const engine_setpoint_t *sp, double *value, 
             *limit = 0;
             return SAFETY_FNOTFINITE;
         }
+    if (outside_box(l, sp, value, limit))
+        return SAFETY_FBOX;
     if (sp->now_ns <= s->last_ns) {
         *value = (double)(sp->now_ns - s->last_ns) * 1e-9;
         *limit = 0;
@@ -130,18 +150,24 @@ int safety_check(safety_t *s, engine_setpoint_t *sp)
         if (sp->flags & ENGINE_SP_NO_POSITION)
             return SAFETY_OK;
         s->checked++;
-        for (int k = 0; k < AX; k++)
+        f = SAFETY_OK;
+        for (int k = 0; k < AX && !f; k++)
             if (!isfinite(sp->pos_m[k])) {
-                /* nothing to hold on: send it as "no position" */
-                s->violations++;
-                s->by[SAFETY_FNOTFINITE]++;
-                s->last_value = sp->pos_m[k];
-                s->last_limit = 0;
-                for (int j = 0; j < AX; j++)
-                    sp->pos_m[j] = NAN;
-                sp->flags |= ENGINE_SP_NO_POSITION | ENGINE_SP_FAULT | ENGINE_SP_HOLD;
-                return SAFETY_FNOTFINITE;
+                f = SAFETY_FNOTFINITE;
+                value = sp->pos_m[k];
             }
+        if (!f && outside_box(&s->lim, sp, &value, &limit))
+            f = SAFETY_FBOX;
+        if (f) { /* nothing to hold on: send it as "no position" */
+            s->violations++;
+            s->by[f]++;
+            s->last_value = value;
+            s->last_limit = limit;
+            for (int j = 0; j < AX; j++)
+                sp->pos_m[j] = NAN;
+            sp->flags |= ENGINE_SP_NO_POSITION | ENGINE_SP_FAULT | ENGINE_SP_HOLD;
+            return f;
+        }
         s->have_pos = 1;
         s->last_ns = sp->now_ns;
         memcpy(s->last_pos, sp->pos_m, sizeof s->last_pos);

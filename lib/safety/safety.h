@@ -45,6 +45,7 @@ enum safety_fault {
     SAFETY_FSTEP = 3,      /* step above safety_max_step_m */
     SAFETY_FSPEED = 4,     /* step / dt above safety_max_speed_m_s */
     SAFETY_FACCEL = 5,     /* change of step / dt per dt above safety_max_accel_m_s2 */
+    SAFETY_FBOX = 6,       /* a position outside the box (box_min_m .. box_max_m) */
     SAFETY_FAULT_COUNT
 };
 
@@ -58,6 +59,9 @@ typedef struct {
     double tol_m;          /* added to every bound after converting it to metres per
                                output (rounding of positions of up to 1e7 m: 1e-8 m
                                default, SAFETY_TOL_M_DEFAULT) */
+    int box;                          /* 1: every position within box_min_m .. box_max_m
+                                       * per axis (soft limits; +-inf: that axis free) */
+    double box_min_m[ENGINE_AXES], box_max_m[ENGINE_AXES];
 } safety_limits_t;
 
 #define SAFETY_TOL_M_DEFAULT 1e-8

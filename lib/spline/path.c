@@ -171,6 +171,9 @@ static int steps_for(const walker_t *w, double len, double *dur, unsigned long *
     if (!isfinite(s) || s > PATH_STEPS_MAX)
         return -PATH_ERANGE;
     *k = s < 1.0 ? 1ul : (unsigned long)s;
+    /* counting with a bound: refused before the walk (path_expand) */
+    if (!w->out && w->cap && *k > w->cap - (w->n < w->cap ? w->n : w->cap))
+        return -PATH_EFULL;
     return 0;
 }
 

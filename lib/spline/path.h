@@ -88,7 +88,10 @@ int path_parse_line(const char *line, path_elem_t *el);
 
 /*
  * Expand elements into waypoints (seq = 1, 2, ...).  With out == NULL only
- * counts.  *n_out receives the number of waypoints (also on -PATH_EFULL:
+ * counts, and cap > 0 bounds the count: a line or arc that would take it
+ * above cap is refused with -PATH_EFULL before it is walked (a step of 1e-6
+ * m cannot make 1e7 points to count), *n_out then the count before it.
+ * Otherwise *n_out receives the number of waypoints (also on -PATH_EFULL:
  * the number that would be needed).
  * Returns 0, -PATH_ENOSTART, -PATH_ETWICE, -PATH_ERANGE, -PATH_ETIME,
  * -PATH_EFULL.

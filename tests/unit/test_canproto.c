@@ -185,14 +185,16 @@ static void test_malformed(void **state)
     assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_EVALUE);
     assert_int_equal(canproto_encode_override(ID, 201, &g), -CANPROTO_EVALUE);
     canproto_encode_override(ID, 200, &g);
-    g.data[3] = 201; /* above 200 % */
-    assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), -CANPROTO_EVALUE);
+    g.data[3] = 201; /* above 200 %: a well-formed command the receiver refuses (issue 24) */
+    assert_int_equal(canproto_rx_frame(&rx, &g, 0, &out), CANPROTO_RX_COMMAND);
+    assert_int_equal(out.cmd, CANPROTO_CMD_OVERRIDE);
+    assert_int_equal(out.cmd_arg, 201);
     /* classic frame on the FD id */
     assert_int_equal(canproto_rx_frame(&rx, &f[0], 1, &out), -CANPROTO_ELEN);
-    assert_int_equal(rx.st.malformed, 11);
+    assert_int_equal(rx.st.malformed, 10);
     assert_int_equal(rx.st.malformed_by[CANPROTO_ELEN], 5);
     assert_int_equal(rx.st.malformed_by[CANPROTO_EMUX], 1);
-    assert_int_equal(rx.st.malformed_by[CANPROTO_EVALUE], 5);
+    assert_int_equal(rx.st.malformed_by[CANPROTO_EVALUE], 4);
     /* nothing was half-assembled by the bad frames */
     assert_int_equal(feed(&w, NULL, &out), CANPROTO_RX_WAYPOINT);
     assert_int_equal(rx.st.duplicates, 0);

@@ -53,7 +53,7 @@ static void test_hold_refuses_override_until_clear(void **state)
     memset(&o, 0, sizeof o);
     o.engine = engine_new(&c, NULL);
     assert_non_null(o.engine);
-    safety_limits_t lim = {0, 0, 0, SAFETY_TOL_M_DEFAULT};
+    safety_limits_t lim = {.tol_m = SAFETY_TOL_M_DEFAULT};
     safety_init(&o.safety, &lim);
     push_line(&o, 0.0, 1);
     engine_setpoint_t sp = run(&o, 0, 500);

@@ -292,7 +292,7 @@ static void run_seed(unsigned seed, worst_t *w)
     engine_t *e = engine_new(&c, &err);
     assert_non_null(e);
     safety_t sf;
-    safety_limits_t slim = {0, l.speed, 0, SAFETY_TOL_M_DEFAULT};
+    safety_limits_t slim = {.max_speed_m_s = l.speed, .tol_m = SAFETY_TOL_M_DEFAULT};
     safety_init(&sf, &slim);
     canproto_ids_t ids;
     canproto_ids_default(&ids, 0);

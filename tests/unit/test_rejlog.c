@@ -155,6 +155,36 @@ static void test_unknown_source(void **state)
 /* Given two sources offering the same seq at different times (two Modbus
  * clients numbering from 1), then the refusal is named by the one whose
  * waypoint it was. */
+/* Given a waypoint at x = 1e300 and t = -1e300 (refused), when its line is
+ * logged, then the numbers take a bounded width: the whole line fits (it
+ * ends with its closing parenthesis) and names 1e+300 (issue 24; with %.3f
+ * 1e300 took 301 digits and the line was cut). */
+static void test_huge_numbers_bounded(void **state)
+{
+    (void)state;
+    engine_t *e = new_engine();
+    rejlog_t l;
+    rejlog_init(&l);
+    engine_waypoint_t wp = circle(0);
+    wp.t_s = -1e300;
+    wp.pos_m[0] = 1e300;
+    wp.pos_m[1] = -1e300;
+    wp.pos_m[2] = 1e300;
+    char src[REJLOG_SRC_LEN];
+    memset(src, 'a', sizeof src - 1);
+    src[sizeof src - 1] = '\0';
+    rejlog_offered(&l, &wp, src);
+    (void)engine_push(e, &wp);
+    rejlog_drain(&l, e);
+    lines_t out = {.n = 0};
+    assert_int_equal(rejlog_flush(&l, "object-name-of-31-characters-xx", collect, &out), 1);
+    size_t n = strlen(out.line[0]);
+    assert_true(n < REJLOG_LINE_MAX - 1);
+    assert_int_equal(out.line[0][n - 1], ')');
+    assert_non_null(strstr(out.line[0], "t=-1e+300 s at (1e+300, -1e+300, 1e+300)"));
+    engine_free(e);
+}
+
 static void test_same_seq_two_sources(void **state)
 {
     (void)state;
@@ -182,6 +212,7 @@ int main(void)
         cmocka_unit_test(test_rate_limited),
         cmocka_unit_test(test_unknown_source),
         cmocka_unit_test(test_same_seq_two_sources),
+        cmocka_unit_test(test_huge_numbers_bounded),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

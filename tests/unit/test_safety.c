@@ -27,7 +27,7 @@ static engine_setpoint_t at(int64_t k, double x)
 static safety_t mk(double step, double speed, double accel)
 {
     safety_t s;
-    safety_limits_t l = {step, speed, accel, 0};
+    safety_limits_t l = {.max_step_m = step, .max_speed_m_s = speed, .max_accel_m_s2 = accel};
     safety_init(&s, &l);
     return s;
 }
@@ -190,9 +190,42 @@ static void test_bad_limits_off(void **state)
     assert_int_equal(safety_check(&s, &sp), SAFETY_OK);
 }
 
+/* Given a box x in [-1, 2] m (y, z free), when the output walks x = 0, 1, 2,
+ * 2.5, then 2 m is sent (on the bound), 2.5 m is not: the output holds at 2,
+ * flagged, with the box as the fault; a first position outside the box is
+ * sent as "no position" (issue 24: a CiA 402 target is held, never clipped). */
+static void test_box(void **state)
+{
+    (void)state;
+    safety_limits_t l = {.box = 1,
+                         .box_min_m = {-1, -INFINITY, -INFINITY},
+                         .box_max_m = {2, INFINITY, INFINITY}};
+    safety_t s;
+    safety_init(&s, &l);
+    engine_setpoint_t sp = at(0, 0);
+    sp.pos_m[1] = 1e9;
+    assert_int_equal(safety_check(&s, &sp), SAFETY_OK);
+    sp = at(1, 1);
+    assert_int_equal(safety_check(&s, &sp), SAFETY_OK);
+    sp = at(2, 2);
+    assert_int_equal(safety_check(&s, &sp), SAFETY_OK);
+    sp = at(3, 2.5);
+    assert_int_equal(safety_check(&s, &sp), SAFETY_FBOX);
+    assert_true(fabs(sp.pos_m[0] - 2.0) <= 0.0);
+    assert_true(sp.flags & ENGINE_SP_FAULT);
+    assert_true(fabs(s.last_value - 2.5) <= 0.0 && fabs(s.last_limit - 2.0) <= 0.0);
+    assert_string_equal(safety_strerror(SAFETY_FBOX),
+                        "position outside position_min_m .. position_max_m");
+    safety_init(&s, &l);
+    sp = at(0, -1.5);
+    assert_int_equal(safety_check(&s, &sp), SAFETY_FBOX);
+    assert_true((sp.flags & ENGINE_SP_NO_POSITION) && isnan(sp.pos_m[0]));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_box),
         cmocka_unit_test(test_speed_violation_holds_and_latches),
         cmocka_unit_test(test_accel_exact),
         cmocka_unit_test(test_accel_across_skipped_ticks),

@@ -1,0 +1,154 @@
+/* test_cfg_hostile.c - config files a hostile or careless author writes
+ * (issue 24): each is refused at check time with "name:line: ..." naming
+ * the rule, or, where it is harmless, read as meant.  Run from the
+ * repository root (tests/run.sh does). */
+#include "test.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "cfg.h"
+
+#define TRACK "tests/data/n2k_furuno_figure8_src52.csv"
+#define OBJ "[object.boat]\ninput = replay\nreplay.track = " TRACK "\noutput = stdout\n"
+
+static char err[1024];
+
+static cfg_t *load_ok(const char *text)
+{
+    cfg_t *c = NULL;
+    err[0] = 0;
+    int rc = cfg_load_string(text, "t.conf", ".", &c, err, sizeof err);
+    if (rc != 0)
+        fail_msg("expected success, got %d: %s", rc, err);
+    return c;
+}
+
+/* Expect failure code, and err to start with "t.conf:LINE:" and contain needle. */
+static void load_bad(const char *text, int code, int line, const char *needle)
+{
+    cfg_t *c = (cfg_t *)1;
+    char prefix[64];
+    err[0] = 0;
+    int rc = cfg_load_string(text, "t.conf", ".", &c, err, sizeof err);
+    assert_null(c);
+    if (rc != -code)
+        fail_msg("expected -%d, got %d: %s", code, rc, err);
+    if (line > 0)
+        snprintf(prefix, sizeof prefix, "t.conf:%d: ", line);
+    else
+        snprintf(prefix, sizeof prefix, "t.conf: ");
+    if (strncmp(err, prefix, strlen(prefix)) != 0)
+        fail_msg("expected prefix '%s', got '%s'", prefix, err);
+    if (needle && !strstr(err, needle))
+        fail_msg("expected '%s' in '%s'", needle, err);
+}
+
+/* Given a file that starts with a UTF-8 byte order mark (as some Windows
+ * editors write it), then it is read as without it: the section on line 1
+ * is a section (it was "line 2: key before any [section]"). */
+static void test_utf8_bom(void **state)
+{
+    (void)state;
+    cfg_t *c = load_ok("\xEF\xBB\xBF[daemon]\nrate_hz = 50\n" OBJ);
+    assert_true(fabs(c->daemon.rate_hz - 50) < 1e-12);
+    cfg_free(c);
+    /* only at the start of the file: elsewhere it is a syntax error as before */
+    load_bad("[daemon]\n\xEF\xBB\xBFrate_hz = 50\n" OBJ, CFG_EUNKNOWN, 2, NULL);
+}
+
+#define VIS "tests/data/gpxgo_visnjan.csv"
+
+/* Given outputs that name an input, or each other, by another text (issue
+ * 24: compared as text, `replay.track = track.csv` with `csv.path =
+ * ./track.csv` and csv.truncate passed --check-config and destroyed its own
+ * input), then the file is refused at check time, naming both keys. */
+static void test_paths_by_identity(void **state)
+{
+    (void)state;
+    /* an output on the track it replays */
+    load_bad("[object.a]\ninput = replay\nreplay.track = " VIS "\noutput = csv\n"
+             "csv.path = tests/data/../data/gpxgo_visnjan.csv\ncsv.truncate = yes\n",
+             CFG_EVALUE, 1, "[object.a] replay.track");
+    assert_non_null(strstr(err, "an output would overwrite an input"));
+    /* two objects on one CSV output, by two spellings (not made yet) */
+    load_bad("[object.a]\nid = 0\ninput = replay\nreplay.track = " VIS "\noutput = csv\n"
+             "csv.path = /tmp/trajd-test-cfg-hostile-a.csv\n"
+             "[object.b]\nid = 1\ninput = replay\nreplay.track = " VIS "\noutput = csv\n"
+             "csv.path = /tmp/./trajd-test-cfg-hostile-a.csv\n",
+             CFG_EVALUE, 7, "two outputs would write it");
+    /* a CAN log_out on a csv.path */
+    load_bad("[can]\nlog_out = /tmp/trajd-test-cfg-hostile-b.csv\n"
+             "[object.a]\ninput = replay\nreplay.track = " VIS "\noutput = csv, can\n"
+             "csv.path = /tmp//trajd-test-cfg-hostile-b.csv\n",
+             CFG_EVALUE, 3, "[can] log_out");
+    /* a symbolic link to the track as the output */
+    char cwd[4096], link[64];
+    assert_non_null(getcwd(cwd, sizeof cwd));
+    snprintf(link, sizeof link, "/tmp/trajd-test-cfg-hostile-%d.csv", (int)getpid());
+    char target[4200];
+    snprintf(target, sizeof target, "%s/" VIS, cwd);
+    unlink(link);
+    assert_int_equal(symlink(target, link), 0);
+    char text[512];
+    snprintf(text, sizeof text,
+             "[object.a]\ninput = replay\nreplay.track = " VIS "\noutput = csv\ncsv.path = %s\n",
+             link);
+    load_bad(text, CFG_EVALUE, 1, "an output would overwrite an input");
+    unlink(link);
+    /* two inputs on one file are fine, and so are distinct outputs */
+    cfg_t *c = load_ok("[object.a]\nid = 0\ninput = replay\nreplay.track = " VIS "\noutput = csv\n"
+                       "csv.path = /tmp/trajd-test-cfg-hostile-c.csv\n"
+                       "[object.b]\nid = 1\ninput = replay\nreplay.track = ./" VIS "\n"
+                       "output = csv\ncsv.path = /tmp/trajd-test-cfg-hostile-d.csv\n");
+    cfg_free(c);
+}
+
+#define CIA "[can]\nlog_out = /tmp/trajd-test-cfg-hostile.log\n"                               \
+            "[object.a]\ninput = replay\nreplay.track = " VIS "\noutput = can\ncan.own = no\n"  \
+            "can.cia402 = yes\ncan.cia402_cob_x = 0x201\ncan.cia402_cob_y = 0x202\n"             \
+            "can.cia402_cob_z = 0\ncan.cia402_counts_per_m = 1e7\n"
+
+/* Given CiA 402 targets at 1e7 increments per metre (int32: +-214.748 m),
+ * then a box of +-300 m is refused at its line, naming the field; +-200 m is
+ * taken as given; without a box, one is derived from int32 (x and y at
+ * INT32_MAX / 1e7 minus half a count, z free), so the safety monitor holds the
+ * object at the edge instead of the target being clipped (issue 24: 13 886 of
+ * 35 713 targets went out as INT32_MAX). */
+static void test_cia402_box(void **state)
+{
+    (void)state;
+    load_bad(CIA "position_min_m = -300,-300,0\nposition_max_m = 300,300,0\n", CFG_EVALUE, 14,
+             "does not fit the CiA 402 target's int32 increments");
+    cfg_t *c = load_ok(CIA "position_min_m = -200,-200,-1\nposition_max_m = 200,200,1\n");
+    assert_int_equal(c->obj[0].box, 1);
+    assert_true(fabs(c->obj[0].box_max_m[0] - 200) <= 0.0);
+    cfg_free(c);
+    c = load_ok(CIA);
+    const cfg_obj_t *o = &c->obj[0];
+    assert_int_equal(o->box, 2);
+    double edge = (2147483647.0 - 0.5) / 1e7;
+    assert_true(fabs(o->box_max_m[0] - edge) < 1e-9 && fabs(o->box_min_m[0] + edge + 1e-7) < 1e-9);
+    assert_true(fabs(o->box_max_m[1] - edge) < 1e-9);
+    assert_true(isinf(o->box_max_m[2]) && isinf(o->box_min_m[2]));
+    cfg_free(c);
+    /* the keys go together, min <= max, within max_abs_m */
+    load_bad(OBJ "position_min_m = 0,0,0\n", CFG_EVALUE, 5, "without position_max_m");
+    load_bad(OBJ "position_min_m = 0,0,0\nposition_max_m = 1,-1,1\n", CFG_EVALUE, 6,
+             "min must not exceed max");
+    load_bad(OBJ "position_min_m = 0,0,0\nposition_max_m = 1,1,2e7\n", CFG_EVALUE, 6,
+             "max_abs_m");
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_cia402_box),
+        cmocka_unit_test(test_utf8_bom),
+        cmocka_unit_test(test_paths_by_identity),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

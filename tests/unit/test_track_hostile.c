@@ -1,0 +1,75 @@
+/* test_track_hostile.c - tracks a hostile or careless author writes (issue
+ * 24): a .path whose `step` would expand a few lines into tens of millions
+ * of waypoints is refused, counted before anything is made, at the line that
+ * crosses the limit; a heading of 1e300 is a bad line, not an axis. */
+#include "test.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "track.h"
+
+static int parse(const char *name, const char *text, unsigned flags, track_t *t, char *err,
+                 size_t errlen)
+{
+    return track_parse(name, text, strlen(text), TRACK_FMT_AUTO, flags, t, err, errlen);
+}
+
+/* Given the 91-byte .path of the issue (step 1e-6 s and five 9.9 m lines at
+ * 1 m/s: 49.5 million waypoints, 2.1 GB), then it is refused at the line
+ * whose waypoints cross TRACK_PATH_WAYPOINTS_MAX (the second: 9.9 M + 9.9 M
+ * > 16.8 M), and nothing is made.  The old code expanded it all. */
+static void test_path_expansion_bounded(void **state)
+{
+    (void)state;
+    const char *text = "start 0 0 0\nstep 1e-6\nline 9.9 0 0\nline 0 0 0\nline 9.9 0 0\n"
+                       "line 0 0 0\nline 9.9 0 0\n";
+    track_t t;
+    char err[256];
+    assert_int_equal(parse("p.path", text, 0, &t, err, sizeof err), -1);
+    if (!strstr(err, "p.path:4: ") || !strstr(err, "more than 16777216 waypoints"))
+        fail_msg("got '%s'", err);
+    assert_int_equal(t.n, 0);
+    /* just at the limit is still made: the start and 16 Mi - 1 steps of two
+     * lines (one element makes at most 10^7) */
+    char ok[128];
+    snprintf(ok, sizeof ok, "start 0 0 0\nstep 1\nline 8388607 0 0\nline %lu 0 0\n",
+             (unsigned long)TRACK_PATH_WAYPOINTS_MAX - 1);
+    assert_int_equal(parse("q.path", ok, 0, &t, err, sizeof err), 0);
+    assert_int_equal(t.n, TRACK_PATH_WAYPOINTS_MAX);
+    track_free(&t);
+    snprintf(ok, sizeof ok, "start 0 0 0\nstep 1\nline 8388607 0 0\nline %lu 0 0\n",
+             (unsigned long)TRACK_PATH_WAYPOINTS_MAX);
+    assert_int_equal(parse("q.path", ok, 0, &t, err, sizeof err), -1);
+    assert_non_null(strstr(err, "q.path:4: "));
+}
+
+/* Given a CSV whose heading column holds 1e300 on one row, then that row is
+ * a bad line (refused, or skipped and counted with TRACK_SKIP_BAD), as a
+ * heading no axis can turn to; 1e6 degrees (2778 turns) is still a heading. */
+static void test_heading_absurd(void **state)
+{
+    (void)state;
+    const char *text = "t,x,y,heading\n0,0,0,10\n1,1,0,1e300\n2,2,0,1e6\n3,3,0,-1e6\n";
+    track_t t;
+    char err[256];
+    assert_int_equal(parse("h.csv", text, 0, &t, err, sizeof err), -1);
+    if (!strstr(err, "h.csv:3: ") || !strstr(err, "heading"))
+        fail_msg("got '%s'", err);
+    assert_int_equal(parse("h.csv", text, TRACK_SKIP_BAD, &t, err, sizeof err), 0);
+    assert_int_equal(t.n, 3);
+    assert_int_equal(t.skipped, 1);
+    assert_int_equal(t.nheading, 3);
+    track_free(&t);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_path_expansion_bounded),
+        cmocka_unit_test(test_heading_absurd),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
