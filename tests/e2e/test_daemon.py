@@ -154,13 +154,20 @@ class Daemon:
         raise AssertionError("no matching stderr line; got:\n" + "\n".join(self.err_lines))
 
     def stderr(self):
+        """stderr so far; once the process has exited, all of it (read to its
+        end by the pump thread, bounded: under load the thread lags behind)."""
+        exited = self.p.poll() is not None and not getattr(self, "err_eof", False)
+        end = time.monotonic() + EVENT_TIMEOUT_S
         while True:
             try:
-                l = self.err.get_nowait()
+                l = self.err.get(timeout=max(0.0, end - time.monotonic())) if exited \
+                    else self.err.get_nowait()
             except queue.Empty:
                 break
-            if l is not None:
-                self.err_lines.append(l)
+            if l is None:
+                self.err_eof = True
+                break
+            self.err_lines.append(l)
         return "\n".join(self.err_lines)
 
     def wait(self, timeout):
