@@ -438,7 +438,6 @@ int main(int argc, char **argv)
     size_t su, sv;
     surf_t s;
     int opt, rc = 1;
-
     static const struct option lopts[] = {
         {"steps", required_argument, NULL, 'n'},
         {"output", required_argument, NULL, 'o'},
@@ -450,7 +449,6 @@ int main(int argc, char **argv)
         {"version", no_argument, NULL, 'V'},
         {NULL, 0, NULL, 0},
     };
-
     if (stdfds_open() < 0)
         return 71; /* EX_OSERR: no /dev/null */
     while ((opt = getopt_long(argc, argv, "n:o:s:x:y:z:hV", lopts, NULL)) != -1) {

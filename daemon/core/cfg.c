@@ -684,6 +684,51 @@ static void check_ids(parse_t *p)
 }
 
 /* Rules that need the whole file. */
+/* The checks of object i alone; -1 when one failed (p->err set). */
+static int check_obj(parse_t *p, unsigned i)
+{
+    cfg_t *c = p->c;
+    cfg_obj_t *o = &c->obj[i];
+    for (unsigned j = 0; j < i; j++)
+        if (strcmp(c->obj[j].name, o->name) == 0) {
+            fail(p, CFG_EDUP, o->line, "[object.%s]: object given twice", o->name);
+            return -1;
+        }
+    if (!o->input) {
+        fail(p, CFG_EMISSING, o->line, "[object.%s]: 'input' is missing", o->name);
+        return -1;
+    }
+    if (!o->noutput) {
+        fail(p, CFG_EMISSING, o->line, "[object.%s]: 'output' is missing", o->name);
+        return -1;
+    }
+    for (unsigned t = 0; transport_table[t]; t++)
+        if (p->tkey_line[i][t] && !cfg_obj_uses(o, transport_table[t])) {
+            fail(p, CFG_EVALUE, p->tkey_line[i][t],
+                 "[object.%s] %s.*: keys for transport '%s', which this object does not "
+                 "use (input or output)",
+                 o->name, transport_table[t]->name, transport_table[t]->name);
+            return -1;
+        }
+    o->engine.period_ns = c->daemon.period_ns;
+    const char *ewhy = NULL;
+    if (engine_config_check(&o->engine, &ewhy) < 0) {
+        fail(p, CFG_EVALUE, o->line, "[object.%s]: engine settings: %s", o->name,
+             ewhy ? ewhy : "invalid");
+        return -1;
+    }
+    if (o->has_initial_position)
+        for (int a = 0; a < ENGINE_AXES; a++)
+            if (fabs(o->initial_position_m[a]) > o->engine.max_abs_m) {
+                /* engine_set_position would refuse it when the daemon starts */
+                fail(p, CFG_EVALUE, o->initial_position_line,
+                     "[object.%s] initial_position: |%c| = %g m is above max_abs_m (%g m)", o->name,
+                     "xyz"[a], fabs(o->initial_position_m[a]), o -> engine.max_abs_m);
+                return -1;
+            }
+    return 0;
+}
+
 static void check_all(parse_t *p)
 {
     cfg_t *c = p->c;
@@ -700,46 +745,9 @@ static void check_all(parse_t *p)
         fail(p, CFG_EMISSING, 0, "no [object.NAME] section: nothing to do");
         return;
     }
-    for (unsigned i = 0; i < c->nobj; i++) {
-        cfg_obj_t *o = &c->obj[i];
-        for (unsigned j = 0; j < i; j++)
-            if (strcmp(c->obj[j].name, o->name) == 0) {
-                fail(p, CFG_EDUP, o->line, "[object.%s]: object given twice", o->name);
-                return;
-            }
-        if (!o->input) {
-            fail(p, CFG_EMISSING, o->line, "[object.%s]: 'input' is missing", o->name);
+    for (unsigned i = 0; i < c->nobj; i++)
+        if (check_obj(p, i) < 0)
             return;
-        }
-        if (!o->noutput) {
-            fail(p, CFG_EMISSING, o->line, "[object.%s]: 'output' is missing", o->name);
-            return;
-        }
-        for (unsigned t = 0; transport_table[t]; t++)
-            if (p->tkey_line[i][t] && !cfg_obj_uses(o, transport_table[t])) {
-                fail(p, CFG_EVALUE, p->tkey_line[i][t],
-                     "[object.%s] %s.*: keys for transport '%s', which this object does not "
-                     "use (input or output)",
-                     o->name, transport_table[t]->name, transport_table[t]->name);
-                return;
-            }
-        o->engine.period_ns = c->daemon.period_ns;
-        const char *ewhy = NULL;
-        if (engine_config_check(&o->engine, &ewhy) < 0) {
-            fail(p, CFG_EVALUE, o->line, "[object.%s]: engine settings: %s", o->name,
-                 ewhy ? ewhy : "invalid");
-            return;
-        }
-        if (o->has_initial_position)
-            for (int a = 0; a < ENGINE_AXES; a++)
-                if (fabs(o->initial_position_m[a]) > o->engine.max_abs_m) {
-                    /* engine_set_position would refuse it when the daemon starts */
-                    fail(p, CFG_EVALUE, o->initial_position_line,
-                         "[object.%s] initial_position: |%c| = %g m is above max_abs_m (%g m)",
-                         o->name, "xyz"[a], fabs(o->initial_position_m[a]), o -> engine.max_abs_m);
-                    return;
-                }
-    }
     check_ids(p);
     if (p->err)
         return;

@@ -7,7 +7,7 @@ set -u
 cd "$(dirname "$0")/../.." || exit 1
 BUILD=${BUILD:-build}
 TR="$BUILD/bin/trajreplay"
-TD="$BUILD/bin/trajd"
+TD="$(cd "$(dirname "$BUILD/bin/trajd")" && pwd)/trajd"  # absolute: run from other directories
 TS="$BUILD/bin/trajsurf"
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 pass=0; fail=0
@@ -51,7 +51,7 @@ replay.track = walk.csv
 output = csv
 csv.path = d.csv
 CONF
-(cd "$tmp" && "$OLDPWD/$TD" -f -c d.conf 0<&- 1>&- 2>&-); rc=$?
+(cd "$tmp" && "$TD" -f -c d.conf 0<&- 1>&- 2>&-); rc=$?
 [ $rc -eq 0 ] && ok || bad "trajd exit $rc, want 0"
 [ -s "$tmp/d.csv" ] && ok || bad "trajd: no rows"
 rows_only "$tmp/d.csv" "trajd 0<&- 1>&- 2>&-"

@@ -3,6 +3,7 @@
  * the rule, or, where it is harmless, read as meant.  Run from the
  * repository root (tests/run.sh does). */
 #include "test.h"
+#include "cfg_test.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -15,37 +16,6 @@
 #define TRACK "tests/data/n2k_furuno_figure8_src52.csv"
 #define OBJ "[object.boat]\ninput = replay\nreplay.track = " TRACK "\noutput = stdout\n"
 
-static char err[1024];
-
-static cfg_t *load_ok(const char *text)
-{
-    cfg_t *c = NULL;
-    err[0] = 0;
-    int rc = cfg_load_string(text, "t.conf", ".", &c, err, sizeof err);
-    if (rc != 0)
-        fail_msg("expected success, got %d: %s", rc, err);
-    return c;
-}
-
-/* Expect failure code, and err to start with "t.conf:LINE:" and contain needle. */
-static void load_bad(const char *text, int code, int line, const char *needle)
-{
-    cfg_t *c = (cfg_t *)1;
-    char prefix[64];
-    err[0] = 0;
-    int rc = cfg_load_string(text, "t.conf", ".", &c, err, sizeof err);
-    assert_null(c);
-    if (rc != -code)
-        fail_msg("expected -%d, got %d: %s", code, rc, err);
-    if (line > 0)
-        snprintf(prefix, sizeof prefix, "t.conf:%d: ", line);
-    else
-        snprintf(prefix, sizeof prefix, "t.conf: ");
-    if (strncmp(err, prefix, strlen(prefix)) != 0)
-        fail_msg("expected prefix '%s', got '%s'", prefix, err);
-    if (needle && !strstr(err, needle))
-        fail_msg("expected '%s' in '%s'", needle, err);
-}
 
 /* Given a file that starts with a UTF-8 byte order mark (as some Windows
  * editors write it), then it is read as without it: the section on line 1
