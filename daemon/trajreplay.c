@@ -534,10 +534,10 @@ typedef struct {
     uint64_t skipped_gaps; /* gaps jumped over (not --keep-gaps) */
     uint64_t skipped_ticks;
     uint64_t nonfinite; /* rows with a NaN or infinite value: flagged ENGINE_SP_FAULT */
-    size_t seen_next; /* run_report_rejections: r.next and replay_done at */
-    int seen_done;    /* its last look (verdicts come only with a push or the close) */
-    char *rows;       /* rows formatted in place, written ROWS_BUF bytes at a time */
-    size_t nrows;     /* bytes of them not written yet */
+    size_t seen_next;   /* run_report_rejections: r.next and replay_done at */
+    int seen_done;      /* its last look (verdicts come only with a push or the close) */
+    char *rows;         /* rows formatted in place, written ROWS_BUF bytes at a time */
+    size_t nrows;       /* bytes of them not written yet */
 } run_t;
 
 /* Rows are formatted straight into one buffer and handed to stdio a buffer

@@ -138,7 +138,7 @@ typedef struct {
     unsigned box_keys;
     int box, box_line;
     double box_min_m[ENGINE_AXES], box_max_m[ENGINE_AXES];
-    int writable;                /* writable = yes/no: commands and waypoints
+    int writable; /* writable = yes/no: commands and waypoints
                                                  * from outside (Modbus) may change it;
                                                  * -1 not given (the input decides) */
 } cfg_obj_t;

@@ -299,7 +299,8 @@ static void files(const cfg_t *cfg, cfg_file_add_fn add, void *ctx)
         if (cfg_obj_uses(&cfg->obj[i], &replay_transport) & 1) {
             char what[64];
             snprintf(what, sizeof what, "[object.%s] replay.track", cfg->obj[i].name);
-            const replay_transport_obj_cfg_t *r = cfg_obj_transport(&cfg->obj[i], &replay_transport);
+            const replay_transport_obj_cfg_t *r = cfg_obj_transport(&cfg->obj[i],
+                                                                    &replay_transport);
             add(ctx, r->path, 0, cfg->obj[i].line, what);
         }
 }

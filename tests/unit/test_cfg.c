@@ -22,7 +22,6 @@
 #define TRACK "tests/data/n2k_furuno_figure8_src52.csv"
 #define OBJ "[object.boat]\ninput = replay\nreplay.track = " TRACK "\noutput = stdout\n"
 
-
 /* Given a minimal file, then defaults are filled and the object is wired. */
 static void test_minimal(void **state)
 {
