@@ -32,6 +32,7 @@
 
 #include "cfg.h"
 #include "core.h"
+#include "ctl.h"
 #include "log.h"
 #include "loop.h"
 #include "rt.h"
@@ -51,6 +52,7 @@ typedef struct {
     uint64_t seconds; /* housekeeping ticks */
     int signals_seen; /* SIGTERM/SIGINT count */
     int ready_fd;     /* background mode: pipe to the waiting parent, else -1 */
+    ctl_t *ctl;       /* the control socket (trajctl), NULL if it could not open */
 } trajd_t;
 
 static void usage(FILE *f)
@@ -83,6 +85,7 @@ static void on_second(loop_t *l, uint64_t exp, void *ctx)
         return; /* a failed reload is ending the loop */
     d->seconds += exp;
     core_stats_roll(d->core);
+    ctl_housekeeping(d->ctl);
     double iv = d->cfg->daemon.status_interval_s;
     if (iv > 0) {
         uint64_t every = iv < 1 ? 1 : (uint64_t)iv;
@@ -114,11 +117,15 @@ static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
     if (rc < 0)
         return rc;
     d->core = nc;
+    if (d->ctl)
+        ctl_set_core(d->ctl, d->core);
     rc = core_start(d->core);
     if (rc < 0) {
         snprintf(why, wl, "output clock: %s", strerror(-rc));
         core_close(d->core);
         d->core = NULL;
+        if (d->ctl)
+            ctl_set_core(d->ctl, NULL);
         return rc;
     }
     log_set_level(cfg->daemon.log_level);
@@ -166,41 +173,43 @@ static int drop_privileges(const cfg_t *cfg, char *why, size_t wl)
     return 0;
 }
 
-static void reload(trajd_t *d)
+/* SIGHUP, or trajctl reload (from): 0, or -1 with the reason in why. */
+static int reload(trajd_t *d, const char *from, char *err, size_t errlen)
 {
-    char err[1024];
     cfg_t *nc = NULL;
-    if (!d->core || d->core->stopping)
-        return;
+    if (!d->core || d->core->stopping) {
+        snprintf(err, errlen, "trajd is stopping");
+        return -1;
+    }
     sd_notifyf(0, "RELOADING=1\nMONOTONIC_USEC=%llu", (unsigned long long)(core_mono_ns() / 1000));
-    log_msg(LOG_NOTICE, "SIGHUP: reloading %s", d->conf_path);
-    if (cfg_load(d->conf_path, &nc, err, sizeof err) < 0 ||
-        cfg_reload_check(d->cfg, nc, err, sizeof err) < 0) {
+    log_msg(LOG_NOTICE, "%s: reloading %s", from, d->conf_path);
+    if (cfg_load(d->conf_path, &nc, err, errlen) < 0 ||
+        cfg_reload_check(d->cfg, nc, err, errlen) < 0) {
         log_msg(LOG_ERR, "reload refused, still running the old configuration: %s", err);
         sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
         cfg_free(nc);
-        return;
+        return -1;
     }
     /* core_open carries unchanged objects over, closes the old transports
      * (they may hold a TCP port the new ones need), then opens the new ones.
      * If that fails, the old configuration is reopened (from scratch if the
      * old core was already closed). */
-    if (start_core(d, nc, err, sizeof err) < 0) {
+    if (start_core(d, nc, err, errlen) < 0) {
         char err2[1024];
         cfg_free(nc);
         if (d->core) { /* failed before touching the old core: it still runs */
             log_msg(LOG_ERR, "reload refused: %s", err);
             sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
-            return;
+            return -1;
         }
         log_msg(LOG_ERR, "reload refused (cannot open): %s; reopening the old configuration", err);
         if (start_core(d, d->cfg, err2, sizeof err2) < 0) {
             log_msg(LOG_CRIT, "cannot reopen the old configuration either: %s", err2);
             loop_stop(d->loop, EX_SOFTWARE);
-            return;
+            return -1;
         }
         sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
-        return;
+        return -1;
     }
     cfg_free(d->cfg);
     d->cfg = nc;
@@ -211,6 +220,12 @@ static void reload(trajd_t *d)
             kept);
     sd_notify(0, "READY=1");
     notify_status(d);
+    return 0;
+}
+
+static int ctl_reload(void *ctx, char *why, size_t wl)
+{
+    return reload(ctx, "trajctl", why, wl);
 }
 
 static void on_signal(loop_t *l, int fd, uint32_t events, void *ctx)
@@ -222,7 +237,11 @@ static void on_signal(loop_t *l, int fd, uint32_t events, void *ctx)
         if (!d->core)
             return; /* a failed reload is ending the loop */
         switch (si.ssi_signo) {
-        case SIGHUP: reload(d); break;
+        case SIGHUP: {
+            char err[1024];
+            (void)reload(d, "SIGHUP", err, sizeof err);
+            break;
+        }
         case SIGTERM:
         case SIGINT:
             if (++d->signals_seen > 1) {
@@ -353,6 +372,30 @@ static int open_loop(trajd_t *d)
     return 0;
 }
 
+/*
+ * The control socket (daemon/ctl/ctl.h), opened before privileges drop (it
+ * may be under /run).  Set in the config ([daemon] control_socket): it must
+ * open, or trajd does not start.  Left to its default place: if there is
+ * none, or another trajd answers there, trajd runs without one and says so.
+ */
+static int open_control(trajd_t *d)
+{
+    char why[512], path[PATH_MAX];
+    int configured = ctl_socket_path(&d->cfg->daemon, path, sizeof path, why, sizeof why) > 0;
+    int rc = ctl_open(&d->ctl, d->loop, d->cfg, ctl_reload, d, why, sizeof why);
+    if (rc == 0) {
+        ctl_set_core(d->ctl, d->core);
+        return 0;
+    }
+    if (configured) {
+        log_msg(LOG_ERR, "cannot start: control socket: %s", why);
+        return -1;
+    }
+    log_msg(LOG_WARNING, "running WITHOUT a control socket (trajctl cannot reach this trajd): %s",
+            why);
+    return 0;
+}
+
 /* Start the core and the housekeeping timers, tell systemd and the waiting
  * parent, run until the stop policy ends the loop: the exit code. */
 static int run(trajd_t *d)
@@ -363,6 +406,8 @@ static int run(trajd_t *d)
         log_msg(LOG_ERR, "cannot start: %s", err);
         return EX_UNAVAILABLE;
     }
+    if (open_control(d) < 0)
+        return EX_UNAVAILABLE;
     if (drop_privileges(d->cfg, err, sizeof err) < 0) {
         log_msg(LOG_ERR, "cannot start: %s", err);
         return EX_NOPERM;
@@ -438,6 +483,7 @@ int main(int argc, char **argv)
         rc = run(&d);
     report_ready(&d, (char)(rc ? rc : EX_SOFTWARE));
     uint64_t faults = engine_faults(d.core, &d.stats);
+    ctl_close(d.ctl);   /* watchers get what is queued, then a goodbye */
     core_close(d.core); /* outputs drain here: lines left over count as lost */
     if (d.stats.exit_code == CORE_EXIT_EPIPE) {
         log_msg(LOG_NOTICE, "stdout: the reader went away, exiting with status %d",

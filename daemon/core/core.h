@@ -235,6 +235,12 @@ typedef struct core {
     int stopping;                     /* SIGTERM received: bringing objects to rest */
     stats_t *stats;                   /* survives reloads */
     void *tstate[CFG_TRANSPORTS_MAX]; /* each open transport's state (NULL if not open) */
+    /* A tap the tick calls last (after step 4), with every object's setpoint
+     * of this tick: the control socket's setpoint subscriptions (daemon/ctl/,
+     * set by trajd.c after each core_open).  Runs in the tick: copies only,
+     * no system call that blocks, no allocation, no logging.  NULL: none. */
+    void (*tap)(void *ctx, const struct core *c);
+    void *tap_ctx;
 } core_t;
 
 /* Object by name, or NULL. */
