@@ -344,7 +344,6 @@ static void on_client(loop_t *l, int fd, uint32_t events, void *ctx)
         serve_lines(t, cl); /* lines held back while the replies had no room */
 }
 
-/* cppcheck-suppress constParameterCallback ; loop_fn */
 static void on_listen(loop_t *l, int fd, uint32_t events, void *ctx)
 {
     ctl_t *t = ctx;
