@@ -183,10 +183,10 @@ class TestCommands(TrajctlTest):
         out, err = p.communicate(timeout=TIMEOUT_S)
         self.assertEqual(p.returncode, 0, err)
         self.d.err_line(lambda l: "control: override 50 %% 'boat' from pid %d" % p.pid in l)
-        c = Client(self.sock)
-        self.assertEqual(c.status("boat")[1]["boat"]["override"], 0.5)
         # the engine runs at half speed once the ramp is done (the circle's 5 m/s)
         self.wait_for(lambda m: abs(math.hypot(*m["vel"]) - 2.5) < 0.05, "slowed to 2.5 m/s")
+        c = Client(self.sock)
+        self.assertEqual(c.status("boat")[1]["boat"]["override"], 0.5)
         self.assertEqual(self.ctl("override", "100", "boat").returncode, 0)
         # stop: brought to rest along its path, never a jump: the velocity
         # changes by little from tick to tick (scale_accel_m_s2 5 plus the
@@ -348,6 +348,47 @@ class TestWatch(TrajctlTest):
                 self.assertEqual(ticks[k] - ticks[k - 1], PERIOD_NS, got[k])
         moving = sum(1 for l in got if l.split(",")[12] == "streaming")
         self.assertGreater(moving, n // 2)
+
+    def test_slow_watcher_overflows_its_own_ring(self):
+        """A watcher that does not read: its ring fills, the newest setpoints
+        are dropped, counted, logged and told where; the tick goes on, and so
+        does another watcher, complete."""
+        slow = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        slow.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+        slow.settimeout(TIMEOUT_S)
+        slow.connect(self.sock)
+        slow.sendall(b"watch boat\n")
+        fast_out = open(os.path.join(self.tmp, "fast.csv"), "w+")
+        fast = subprocess.Popen([TRAJCTL, "-s", self.sock, "watch", "-c", "10000", "boat"],
+                                stdout=fast_out, stderr=subprocess.PIPE, text=True)
+        # the ring holds 8192 setpoints, 8.2 s at 1 kHz: then trajd says so
+        self.d.err_line(lambda l: "reads 'boat' too slowly" in l, timeout=3 * TIMEOUT_S)
+        f = slow.makefile("r")
+        lines = [json.loads(f.readline()) for _ in range(12000)]
+        f.close()
+        slow.close()
+        _, err = fast.communicate(timeout=TIMEOUT_S)
+        self.assertEqual(fast.returncode, 0, err)
+        fast_out.seek(0)
+        out = fast_out.read()
+        fast_out.close()
+        self.assertEqual((lines[0]["reply"], lines[1]["reply"]), ("hello", "ok"))
+        over = next(i for i, m in enumerate(lines) if "overflow" in m)
+        m = lines[over]
+        self.assertGreater(m["lost"], 0)
+        self.assertEqual(m["ring"], 8192)
+        before, after = lines[over - 1], lines[over + 1]
+        gap = after["tick"] - before["tick"]
+        skipped = sum(1 for x in lines[over - 8192:over + 2] if "sp" in x and x["flags"] & SKIPPED)
+        if not skipped:
+            self.assertEqual(gap, m["lost"] + 1)  # exactly the ticks it was told of
+        # the fast watcher got every tick of that time (its rows are contiguous)
+        rows = [l.split(",") for l in out.splitlines()[1:]]
+        ticks = [int(r[1]) for r in rows if r[0] == "boat"]
+        for k in range(1, len(ticks)):
+            if not int(rows[k][13]) & SKIPPED:
+                self.assertEqual(ticks[k] - ticks[k - 1], PERIOD_NS)
+        self.assertEqual(len(ticks), 10000)
 
     def test_spark(self):
         self.wait_for(self.moving, "moved")
