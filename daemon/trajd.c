@@ -10,6 +10,8 @@
  * Exit status: 0; EX_USAGE, EX_CONFIG, EX_UNAVAILABLE (cannot start), EX_OSERR,
  * EX_SOFTWARE; CORE_EXIT_OUTPUT_LOST (74) if any setpoint line was lost by an
  * output; CORE_EXIT_EPIPE (141) when stdout's reader went away.
+ * Control socket (daemon/ctl/ctl.h, for trajctl): opened before privileges
+ * drop, kept across reloads (each new core is handed to it), closed last.
  * systemd (sd_notify; no-ops without NOTIFY_SOCKET):
  *   READY=1 once every input and output is open and the clock runs;
  *   RELOADING=1 ... READY=1 around a reload; STOPPING=1 at SIGTERM;
@@ -114,8 +116,11 @@ static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
     char rtwhy[256];
     core_t *nc = NULL;
     int rc = core_open(d->loop, cfg, &d->stats, &d->core, &nc, why, wl);
-    if (rc < 0)
+    if (rc < 0) {
+        if (d->ctl && !d->core) /* the old core was closed: none runs now */
+            ctl_set_core(d->ctl, NULL);
         return rc;
+    }
     d->core = nc;
     if (d->ctl)
         ctl_set_core(d->ctl, d->core);

@@ -443,12 +443,12 @@ static int key_daemon(cfg_t *c, parse_t *p, const cfg_kv_t *kv, char *why, size_
     if (strcmp(kv->key, "clock_window_s") == 0)
         return cfg_get_double(kv, 1, 1e9, &d->clock_window_s, why, wl);
     if (strcmp(kv->key, "control_socket") == 0) /* 108: sizeof sockaddr_un.sun_path */
-        return cfg_get_path(kv, d->control_socket, 108, why, wl) < 0
-                   ? why_set(why, wl, "expected a path of 1 to 107 bytes (a Unix socket's)")
-                   : 0;
+        return !kv->value[0] || cfg_get_path(kv, d->control_socket, 108, why, wl) == 0
+                   ? 0
+                   : why_set(why, wl, "expected a path of at most 107 bytes (a Unix socket's)");
     if (strcmp(kv->key, "control_group") == 0) {
-        if (!kv->value[0] || strlen(kv->value) >= sizeof d->control_group)
-            return why_set(why, wl, "expected a group name of 1 to %zu characters",
+        if (strlen(kv->value) >= sizeof d->control_group)
+            return why_set(why, wl, "expected a group name of at most %zu characters",
                            sizeof d->control_group - 1);
         snprintf(d->control_group, sizeof d->control_group, "%s", kv->value);
         return 0;

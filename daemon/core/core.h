@@ -20,6 +20,7 @@
  *        breaks the object's bounds: no output ever sees a refused setpoint
  *   3. for each object, for each of its outputs: output->setpoint(state, o, &o->sp)
  *   4. for each open transport: cycle(state, core, now_ns)
+ *   4b. the tap, if set (core_t.tap: the control socket's watchers)
  *   5. lateness (wake-up time - the oldest deadline not yet served, so a
  *      skip counts as lateness >= one period) goes into the histogram; an
  *      overrun is counted if the work ended after the next deadline.
