@@ -388,10 +388,8 @@ static int open_control(trajd_t *d)
     char why[512], path[PATH_MAX];
     int configured = ctl_socket_path(&d->cfg->daemon, path, sizeof path, why, sizeof why) > 0;
     int rc = ctl_open(&d->ctl, d->loop, d->cfg, ctl_reload, d, why, sizeof why);
-    if (rc == 0) {
-        ctl_set_core(d->ctl, d->core);
-        return 0;
-    }
+    if (rc == 0)
+        return 0; /* start_core hands it the core */
     if (configured) {
         log_msg(LOG_ERR, "cannot start: control socket: %s", why);
         return -1;
@@ -407,12 +405,12 @@ static int run(trajd_t *d)
 {
     char err[1024];
     d->stats.start_mono_ns = core_mono_ns();
+    if (open_control(d) < 0) /* first: the clock starts with nothing left to open */
+        return EX_UNAVAILABLE;
     if (start_core(d, d->cfg, err, sizeof err) < 0) {
         log_msg(LOG_ERR, "cannot start: %s", err);
         return EX_UNAVAILABLE;
     }
-    if (open_control(d) < 0)
-        return EX_UNAVAILABLE;
     if (drop_privileges(d->cfg, err, sizeof err) < 0) {
         log_msg(LOG_ERR, "cannot start: %s", err);
         return EX_NOPERM;
