@@ -23,6 +23,7 @@ import sys
 import tempfile
 import time
 import unittest
+from unittest import mock
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from test_daemon import Daemon, write  # noqa: E402
@@ -164,6 +165,25 @@ class TestStatus(TrajctlTest):
         self.d.err_line(lambda l: "control: client" in l and "pid %d uid %d gid %d" %
                         (os.getpid(), os.getuid(), os.getgid()) in l)
 
+    def test_status_watch_redraws(self):
+        # -w: the table again and again, each after a clear screen, until stopped
+        p = subprocess.Popen([TRAJCTL, "-s", self.sock, "status", "-w", "-n", "0.2"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        seen = b""
+        while seen.count(b"\033[H\033[2J") < 3:
+            chunk = p.stdout.read1(65536)
+            if not chunk:
+                self.fail("trajctl status -w ended: %r" % p.stderr.read())
+            seen += chunk
+        p.send_signal(signal.SIGINT)
+        p.wait(TIMEOUT_S)
+        p.stdout.close()
+        p.stderr.close()
+        frames = seen.split(b"\033[H\033[2J")[1:3]
+        for f in frames:
+            self.assertIn(b"boat", f)
+            self.assertIn(b"OBJECT", f)
+
     def test_unknown_object_and_request(self):
         r = self.ctl("status", "nosuch")
         self.assertEqual(r.returncode, 1)
@@ -283,6 +303,84 @@ class TestReach(unittest.TestCase):
         for args in ([], ["stop"], ["override", "boat"], ["frob"], ["watch", "-c", "0", "boat"]):
             r = subprocess.run([TRAJCTL] + args, capture_output=True, text=True, timeout=TIMEOUT_S)
             self.assertEqual(r.returncode, 64, args)
+
+
+class TestPlace(unittest.TestCase):
+    """Where the socket goes, and two trajd on one socket."""
+
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp()
+        self.daemons = []
+
+    def tearDown(self):
+        for d in self.daemons:
+            d.close()
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def start(self, text, env=None):
+        conf = os.path.join(self.tmp, "t%d.conf" % len(self.daemons))
+        write(conf, text)
+        with mock.patch.dict(os.environ, env or {}):
+            d = Daemon(self.tmp, conf)
+        self.daemons.append(d)
+        return d
+
+    def test_systemd_runtime_directory(self):
+        # Given RuntimeDirectory= (systemd sets $RUNTIME_DIRECTORY) and no
+        # control_socket, then the socket is $RUNTIME_DIRECTORY/control
+        rundir = os.path.join(self.tmp, "run")
+        os.mkdir(rundir)
+        text = config(self.tmp).replace("control_socket = %s\n" % os.path.join(self.tmp, "ctl.sock"), "")
+        d = self.start(text, {"RUNTIME_DIRECTORY": rundir})
+        d.msg(lambda f: f.get("READY") == "1", timeout=TIMEOUT_S)
+        r = subprocess.run([TRAJCTL, "-s", os.path.join(rundir, "control"), "status"],
+                           capture_output=True, text=True, timeout=TIMEOUT_S)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        r = subprocess.run([TRAJCTL, "status"], capture_output=True, text=True, timeout=TIMEOUT_S,
+                           env=dict(os.environ, TRAJCTL_SOCKET=os.path.join(rundir, "control")))
+        self.assertEqual(r.returncode, 0, r.stderr)
+        # gone with trajd
+        d.p.send_signal(signal.SIGTERM)
+        self.assertEqual(d.wait(TIMEOUT_S), 0)
+        self.assertFalse(os.path.exists(os.path.join(rundir, "control")))
+
+    def test_second_trajd_on_a_configured_socket(self):
+        # Given a trajd answering on its configured socket, a second one
+        # configured with the same socket does not start, and says why
+        first = self.start(config(self.tmp))
+        first.msg(lambda f: f.get("READY") == "1", timeout=TIMEOUT_S)
+        second = self.start(config(self.tmp))
+        self.assertEqual(second.wait(TIMEOUT_S), 69)
+        self.assertIn("another trajd answers on it", second.stderr())
+        r = subprocess.run([TRAJCTL, "-s", os.path.join(self.tmp, "ctl.sock"), "status"],
+                           capture_output=True, text=True, timeout=TIMEOUT_S)
+        self.assertEqual(r.returncode, 0, r.stderr)  # the first one still has it
+        self.assertIn("pid %d" % first.p.pid, r.stdout)
+
+    def test_second_trajd_on_the_default_socket(self):
+        # Given a trajd on the default place, a second one left to the default
+        # runs without a control socket and warns
+        rundir = os.path.join(self.tmp, "run")
+        os.mkdir(rundir)
+        text = config(self.tmp).replace("control_socket = %s\n" % os.path.join(self.tmp, "ctl.sock"), "")
+        first = self.start(text, {"RUNTIME_DIRECTORY": rundir})
+        first.msg(lambda f: f.get("READY") == "1", timeout=TIMEOUT_S)
+        second = self.start(text, {"RUNTIME_DIRECTORY": rundir})
+        second.msg(lambda f: f.get("READY") == "1", timeout=TIMEOUT_S)
+        second.err_line(lambda l: "running WITHOUT a control socket" in l)
+
+    def test_stale_socket_replaced(self):
+        # Given a socket file a dead trajd left (nobody listens), then trajd
+        # replaces it and says so
+        s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        s.bind(os.path.join(self.tmp, "ctl.sock"))
+        s.close()
+        d = self.start(config(self.tmp))
+        d.msg(lambda f: f.get("READY") == "1", timeout=TIMEOUT_S)
+        d.err_line(lambda l: "replaced the stale socket" in l)
+        r = subprocess.run([TRAJCTL, "-s", os.path.join(self.tmp, "ctl.sock"), "status"],
+                           capture_output=True, text=True, timeout=TIMEOUT_S)
+        self.assertEqual(r.returncode, 0, r.stderr)
 
 
 def as_nobody(tmp, args):
