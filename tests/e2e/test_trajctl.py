@@ -184,6 +184,25 @@ class TestStatus(TrajctlTest):
             self.assertIn(b"boat", f)
             self.assertIn(b"OBJECT", f)
 
+    def test_too_many_clients(self):
+        # 16 connections at once; the 17th is told "busy" and closed (logged),
+        # trajctl says trajd cannot be reached; once one leaves, it can
+        cs = [Client(self.sock) for _ in range(16)]
+        r = self.ctl("status")
+        self.assertEqual(r.returncode, 69)
+        self.assertIn("too many control clients", r.stderr)
+        self.d.err_line(lambda l: "control: refused pid" in l and "16 clients already" in l)
+        cs.pop().close()
+        cs[0].status()  # the others are served meanwhile
+        r = None
+        for _ in range(100):  # its slot frees when trajd reads the end of that connection
+            r = self.ctl("status")
+            if r.returncode == 0:
+                break
+        self.assertEqual(r.returncode, 0, r.stderr)
+        for c in cs:
+            c.close()
+
     def test_unknown_object_and_request(self):
         r = self.ctl("status", "nosuch")
         self.assertEqual(r.returncode, 1)
