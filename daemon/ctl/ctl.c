@@ -216,6 +216,7 @@ static void tap(void *ctx, const core_t *c)
         if (cl->head - cl->tail >= CTL_RING) {
             cl->pending_lost++; /* keep what is queued: the newest is dropped */
             cl->lost++;
+            t->watch_lost++;
             continue;
         }
         ctl_sp_t *e = &cl->ring[cl->head % CTL_RING];

@@ -76,6 +76,7 @@ struct ctl {
     int flush_fd; /* the CTL_FLUSH_NS timer while someone watches, else -1 */
     unsigned watchers;
     uint64_t busy_refused;
+    uint64_t watch_lost; /* setpoints dropped from watchers' full rings, since start */
 };
 
 /* Handle one request line (no '\n'): replies are appended to cl->out. */

@@ -190,6 +190,7 @@ class TestStatus(TrajctlTest):
         cs = [Client(self.sock) for _ in range(16)]
         r = self.ctl("status")
         self.assertEqual(r.returncode, 69)
+        self.assertEqual(cs[0].status()[0]["busy_refused"], 1)
         self.assertIn("too many control clients", r.stderr)
         self.d.err_line(lambda l: "control: refused pid" in l and "16 clients already" in l)
         cs.pop().close()
@@ -494,6 +495,9 @@ class TestWatch(TrajctlTest):
         m = lines[over]
         self.assertGreater(m["lost"], 0)
         self.assertEqual(m["ring"], 8192)
+        c = Client(self.sock)  # and counted in the daemon's status
+        self.assertGreaterEqual(c.status()[0]["watch_lost"], m["lost_total"])
+        c.close()
         before, after = lines[over - 1], lines[over + 1]
         gap = after["tick"] - before["tick"]
         skipped = sum(1 for x in lines[over - 8192:over + 2] if "sp" in x and x["flags"] & SKIPPED)
