@@ -41,7 +41,7 @@ FUZZ_TARGETS ?=
 COUNTS ?=
 PYTHON ?= /usr/bin/python3
 
-PROGRAMS := trajd trajreplay trajsurf
+PROGRAMS := trajd trajctl trajreplay trajsurf
 
 WARN := -Wall -Wextra -Wshadow -Wfloat-equal -Wstrict-prototypes \
         -Wmissing-prototypes -Wpointer-arith -Wformat=2 -Wvla -Wundef

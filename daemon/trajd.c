@@ -15,6 +15,8 @@
  * output; CORE_EXIT_EPIPE (141) when stdout's reader went away; CORE_EXIT_NO_INPUT
  * (65) if a replayed track or log_in had no usable waypoint; CORE_EXIT_HELD (69)
  * if an object ended held (safety fault, drive fault, lost heartbeat).
+ * Control socket (daemon/ctl/ctl.h, for trajctl): opened before privileges
+ * drop, kept across reloads (each new core is handed to it), closed last.
  * systemd (sd_notify; no-ops without NOTIFY_SOCKET):
  *   READY=1 once every input and output is open and the clock runs;
  *   RELOADING=1 ... READY=1 around a reload; STOPPING=1 at SIGTERM;
@@ -38,6 +40,7 @@
 #include "can_transport.h"
 #include "cfg.h"
 #include "core.h"
+#include "ctl.h"
 #include "log.h"
 #include "loop.h"
 #include "reload.h"
@@ -65,6 +68,7 @@ typedef struct {
     int hup_again;               /* SIGHUP while pending: read the config again after it */
     uint64_t reloads;            /* SIGHUPs acted on */
     uint64_t reloads_failed;     /* of those, refused (bad config, cannot open) */
+    ctl_t *ctl;                  /* the control socket (trajctl), NULL if it could not open */
 } trajd_t;
 
 static void usage(FILE *f)
@@ -106,6 +110,7 @@ static void on_second(loop_t *l, uint64_t exp, void *ctx)
         return; /* a failed reload is ending the loop */
     d->seconds += exp;
     core_stats_roll(d->core);
+    ctl_housekeeping(d->ctl);
     double iv = d->cfg->daemon.status_interval_s;
     if (iv > 0) {
         uint64_t every = iv < 1 ? 1 : (uint64_t)iv;
@@ -134,14 +139,21 @@ static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
     char rtwhy[256];
     core_t *nc = NULL;
     int rc = core_open(d->loop, cfg, &d->stats, &d->core, &nc, why, wl);
-    if (rc < 0)
+    if (rc < 0) {
+        if (d->ctl && !d->core) /* the old core was closed: none runs now */
+            ctl_set_core(d->ctl, NULL);
         return rc;
+    }
     d->core = nc;
+    if (d->ctl)
+        ctl_set_core(d->ctl, d->core);
     rc = core_start(d->core);
     if (rc < 0) {
         snprintf(why, wl, "output clock: %s", strerror(-rc));
         core_close(d->core);
         d->core = NULL;
+        if (d->ctl)
+            ctl_set_core(d->ctl, NULL);
         return rc;
     }
     log_set_level(cfg->daemon.log_level);
@@ -189,7 +201,7 @@ static int drop_privileges(const cfg_t *cfg, char *why, size_t wl)
     return 0;
 }
 
-static void reload(trajd_t *d);
+static int reload(trajd_t *d, const char *from, char *err, size_t errlen);
 
 /* A reload refused: counted, logged, told to systemd; the old configuration runs on. */
 static void reload_refused(trajd_t *d, const char *what, const char *err)
@@ -202,16 +214,18 @@ static void reload_refused(trajd_t *d, const char *what, const char *err)
     sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
 }
 
-/* Swap in nc (checked), then read the config again if SIGHUPs were coalesced. */
-static void reload_swap(trajd_t *d, cfg_t *nc)
+/* Swap in nc (checked), then read the config again if SIGHUPs were coalesced.
+ * 0, or -1 with the reason in err. */
+static int reload_swap(trajd_t *d, cfg_t *nc, char *err, size_t errlen)
 {
-    char err[1024];
+    int rc = 0;
     /* core_open carries unchanged objects over, closes the old transports
      * (they may hold a TCP port the new ones need), then opens the new ones.
      * If that fails, the old core reopens its transports and runs on; only if
      * even that fails is the old configuration opened from scratch. */
-    if (start_core(d, nc, err, sizeof err) < 0) {
+    if (start_core(d, nc, err, errlen) < 0) {
         char err2[1024];
+        rc = -1;
         if (d->core)
             reload_release_removed(d->core, nc); /* braked for nothing: inputs resume */
         cfg_free(nc);
@@ -226,7 +240,7 @@ static void reload_swap(trajd_t *d, cfg_t *nc)
             if (start_core(d, d->cfg, err2, sizeof err2) < 0) {
                 log_msg(LOG_CRIT, "cannot reopen the old configuration either: %s", err2);
                 loop_stop(d->loop, EX_SOFTWARE);
-                return;
+                return -1;
             }
             sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
         }
@@ -242,9 +256,11 @@ static void reload_swap(trajd_t *d, cfg_t *nc)
         notify_status(d);
     }
     if (d->hup_again && d->core && !d->core->stopping) {
+        char err2[1024];
         d->hup_again = 0;
-        reload(d);
+        (void)reload(d, "SIGHUP", err2, sizeof err2);
     }
+    return rc;
 }
 
 /* Drop a pending reload (SIGTERM, or it swapped). */
@@ -274,31 +290,35 @@ static void on_pending(loop_t *l, uint64_t exp, void *ctx)
                 "reload: removed objects not at rest after %.1f s "
                 "(stop_timeout_s): reloading anyway",
                 d->cfg->daemon.stop_timeout_s);
-    reload_swap(d, pending_take(d));
+    char err[1024];
+    (void)reload_swap(d, pending_take(d), err, sizeof err); /* logged there */
 }
 
-static void reload(trajd_t *d)
+/* SIGHUP, or trajctl reload (from): 0 when taken (done, or waiting for removed objects
+ * to rest), or -1 with the reason in err. */
+static int reload(trajd_t *d, const char *from, char *err, size_t errlen)
 {
-    char err[1024];
     cfg_t *nc = NULL;
-    if (!d->core || d->core->stopping)
-        return;
+    if (!d->core || d->core->stopping) {
+        snprintf(err, errlen, "trajd is stopping");
+        return -1;
+    }
     if (d->pending) {
         d->hup_again = 1;
         log_msg(LOG_NOTICE,
-                "SIGHUP while a reload waits for removed objects to rest: coalesced, "
+                "%s while a reload waits for removed objects to rest: coalesced, "
                 "%s is read again once that reload is done",
-                d->conf_path);
-        return;
+                from, d->conf_path);
+        return 0;
     }
     d->reloads++;
     sd_notifyf(0, "RELOADING=1\nMONOTONIC_USEC=%llu", (unsigned long long)(core_mono_ns() / 1000));
-    log_msg(LOG_NOTICE, "SIGHUP: reloading %s", d->conf_path);
-    if (cfg_load(d->conf_path, &nc, err, sizeof err) < 0 ||
-        cfg_reload_check(d->cfg, nc, err, sizeof err) < 0) {
+    log_msg(LOG_NOTICE, "%s: reloading %s", from, d->conf_path);
+    if (cfg_load(d->conf_path, &nc, err, errlen) < 0 ||
+        cfg_reload_check(d->cfg, nc, err, errlen) < 0) {
         reload_refused(d, "", err);
         cfg_free(nc);
-        return;
+        return -1;
     }
     if (reload_brake_removed(d->core, nc) > 0) {
         int64_t tick = (int64_t)((double)d->cfg->daemon.period_ns / d->cfg->daemon.speed);
@@ -307,14 +327,19 @@ static void reload(trajd_t *d)
             d->pending = nc;
             d->pending_deadline_ns = core_mono_ns() +
                                      (int64_t)(d->cfg->daemon.stop_timeout_s * 1e9);
-            return; /* swapped by on_pending once they rest */
+            return 0; /* swapped by on_pending once they rest */
         }
         log_msg(LOG_WARNING,
                 "reload: no timer to wait for removed objects to rest (%s): "
                 "reloading now",
                 strerror(-d->pending_fd));
     }
-    reload_swap(d, nc);
+    return reload_swap(d, nc, err, errlen);
+}
+
+static int ctl_reload(void *ctx, char *why, size_t wl)
+{
+    return reload(ctx, "trajctl", why, wl);
 }
 
 static void on_signal(loop_t *l, int fd, uint32_t events, void *ctx)
@@ -349,8 +374,10 @@ static void on_signal(loop_t *l, int fd, uint32_t events, void *ctx)
     }
     if (hup > 1)
         log_msg(LOG_NOTICE, "%d SIGHUPs at once: one reload", hup);
-    if (hup)
-        reload(d);
+    if (hup) {
+        char err[1024];
+        (void)reload(d, "SIGHUP", err, sizeof err); /* logged there */
+    }
 }
 
 /* Background mode: the parent waits until the child is ready (or failed). */
@@ -466,6 +493,28 @@ static int open_loop(trajd_t *d)
     return 0;
 }
 
+/*
+ * The control socket (daemon/ctl/ctl.h), opened before privileges drop (it
+ * may be under /run).  Set in the config ([daemon] control_socket): it must
+ * open, or trajd does not start.  Left to its default place: if there is
+ * none, or another trajd answers there, trajd runs without one and says so.
+ */
+static int open_control(trajd_t *d)
+{
+    char why[512], path[PATH_MAX];
+    int configured = ctl_socket_path(&d->cfg->daemon, path, sizeof path, why, sizeof why) > 0;
+    int rc = ctl_open(&d->ctl, d->loop, d->cfg, ctl_reload, d, why, sizeof why);
+    if (rc == 0)
+        return 0; /* start_core hands it the core */
+    if (configured) {
+        log_msg(LOG_ERR, "cannot start: control socket: %s", why);
+        return -1;
+    }
+    log_msg(LOG_WARNING, "running WITHOUT a control socket (trajctl cannot reach this trajd): %s",
+            why);
+    return 0;
+}
+
 /* Start the core and the housekeeping timers, tell systemd and the waiting
  * parent, run until the stop policy ends the loop: the exit code. */
 /* What the first seconds of output are, per object: holding (state waiting,
@@ -487,6 +536,8 @@ static int run(trajd_t *d)
 {
     char err[1024];
     d->stats.start_mono_ns = core_mono_ns();
+    if (open_control(d) < 0) /* first: the clock starts with nothing left to open */
+        return EX_UNAVAILABLE;
     if (start_core(d, d->cfg, err, sizeof err) < 0) {
         log_msg(LOG_ERR, "cannot start: %s", err);
         return EX_UNAVAILABLE;
@@ -592,6 +643,7 @@ int main(int argc, char **argv)
     report_ready(&d, (char)(rc ? rc : EX_SOFTWARE));
     uint64_t faults = engine_faults(d.core, &d.stats);
     unsigned held = held_objects(d.core);
+    ctl_close(d.ctl);   /* watchers get what is queued, then a goodbye */
     core_close(d.core); /* outputs drain here: lines left over count as lost */
     if (d.stats.exit_code == CORE_EXIT_EPIPE) {
         log_msg(LOG_NOTICE, "stdout: the reader went away, exiting with status %d",

@@ -27,112 +27,6 @@
  * split and misparsed silently, so they are refused. */
 #define CFG_LINE_MAX INI_MAX_LINE
 
-static const char *const cfg_errors[] = {
-    [CFG_OK] = "ok",
-    [CFG_EUNKNOWN] = "unknown section or key",
-    [CFG_EVALUE] = "bad value",
-    [CFG_EMISSING] = "missing key or section",
-    [CFG_EIO] = "cannot read the file",
-    [CFG_ENOMEM] = "out of memory",
-    [CFG_ESYNTAX] = "syntax error",
-    [CFG_EDUP] = "given twice",
-};
-
-const char *cfg_strerror(int err)
-{
-    if (err < 0)
-        err = -err;
-    if (err >= CFG_ERROR_COUNT)
-        return "unknown error";
-    return cfg_errors[err];
-}
-
-/* ---- value helpers ---------------------------------------------------- */
-
-static int why_set(char *why, size_t whylen, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-static int why_set(char *why, size_t whylen, const char *fmt, ...)
-{
-    if (why && whylen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(why, whylen, fmt, ap);
-        va_end(ap);
-    }
-    return -CFG_EVALUE;
-}
-
-int cfg_get_double(const cfg_kv_t *kv, double lo, double hi, double *out, char *why, size_t whylen)
-{
-    char *end;
-    errno = 0;
-    double v = strtod(kv->value, &end);
-    if (end == kv->value || *end || errno == ERANGE || !isfinite(v) || v < lo || v > hi)
-        return why_set(why, whylen, "expected a number in [%g, %g], got '%s'", lo, hi, kv->value);
-    *out = v;
-    return 0;
-}
-
-int cfg_get_int(const cfg_kv_t *kv, long long lo, long long hi, long long *out, char *why,
-                size_t whylen)
-{
-    char *end;
-    errno = 0;
-    const char *s = kv->value;
-    int base = (s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) ? 16 : 10;
-    long long v = strtoll(s, &end, base);
-    if (end == s || *end || errno == ERANGE || v < lo || v > hi)
-        return why_set(why, whylen, "expected an integer in [%lld, %lld], got '%s'", lo, hi,
-                       kv->value);
-    *out = v;
-    return 0;
-}
-
-int cfg_get_bool(const cfg_kv_t *kv, int *out, char *why, size_t whylen)
-{
-    static const char *const yes[] = {"yes", "true", "on", "1", NULL};
-    static const char *const no[] = {"no", "false", "off", "0", NULL};
-    for (int i = 0; yes[i]; i++) {
-        if (strcasecmp(kv->value, yes[i]) == 0) {
-            *out = 1;
-            return 0;
-        }
-        if (strcasecmp(kv->value, no[i]) == 0) {
-            *out = 0;
-            return 0;
-        }
-    }
-    return why_set(why, whylen, "expected yes or no, got '%s'", kv->value);
-}
-
-int cfg_get_enum(const cfg_kv_t *kv, const char *const *names, int *out, char *why, size_t whylen)
-{
-    char list[160] = "";
-    for (int i = 0; names[i]; i++) {
-        if (strcmp(kv->value, names[i]) == 0) {
-            *out = i;
-            return 0;
-        }
-        size_t n = strlen(list);
-        snprintf(list + n, sizeof list - n, "%s%s", i ? ", " : "", names[i]);
-    }
-    return why_set(why, whylen, "expected one of %s, got '%s'", list, kv->value);
-}
-
-int cfg_get_path(const cfg_kv_t *kv, char *out, size_t outlen, char *why, size_t whylen)
-{
-    int n;
-    if (!kv->value[0])
-        return why_set(why, whylen, "empty path");
-    if (kv->value[0] == '/' || !kv->dir || !kv->dir[0])
-        n = snprintf(out, outlen, "%s", kv->value);
-    else
-        n = snprintf(out, outlen, "%s/%s", kv->dir, kv->value);
-    if (n < 0 || (size_t)n >= outlen)
-        return why_set(why, whylen, "path too long");
-    return 0;
-}
-
 /* ---- parser state ---------------------------------------------------- */
 
 enum sec_kind { SEC_NONE, SEC_DAEMON, SEC_RT, SEC_OBJ, SEC_TRANSPORT };
@@ -389,7 +283,7 @@ static int get_cpus(const cfg_kv_t *kv, cpu_set_t *set, char *why, size_t whylen
     if (any)
         return 0;
 bad:
-    return why_set(why, whylen, "expected a CPU list like 1 or 0,2-3, got '%s'", kv->value);
+    return cfg_why(why, whylen, "expected a CPU list like 1 or 0,2-3, got '%s'", kv->value);
 }
 
 /* origin = lat,lon,alt */
@@ -401,13 +295,13 @@ static int get_origin(cfg_daemon_t *d, const cfg_kv_t *kv, char *why, size_t wl)
     for (int a = 0; a < 3; a++) {
         d->origin[a] = strtod(q, &end);
         if (end == q || (a < 2 ? *end != ',' : *end != '\0'))
-            return why_set(why, wl, "expected lat,lon,alt (degrees, degrees, metres), got '%s'",
+            return cfg_why(why, wl, "expected lat,lon,alt (degrees, degrees, metres), got '%s'",
                            kv->value);
         q = end + 1;
     }
     rc = geo_check(d->origin[0], d->origin[1], d->origin[2]);
     if (rc < 0)
-        return why_set(why, wl, "%s", geo_strerror(rc));
+        return cfg_why(why, wl, "%s", geo_strerror(rc));
     d->origin_given = 1;
     d->origin_line = kv->line;
     return 0;
@@ -447,9 +341,20 @@ static int key_daemon(cfg_t *c, parse_t *p, const cfg_kv_t *kv, char *why, size_
         return cfg_get_double(kv, 0, 1000, &d->drift_max_ppm, why, wl);
     if (strcmp(kv->key, "clock_window_s") == 0)
         return cfg_get_double(kv, 1, 1e9, &d->clock_window_s, why, wl);
+    if (strcmp(kv->key, "control_socket") == 0) /* 108: sizeof sockaddr_un.sun_path */
+        return !kv->value[0] || cfg_get_path(kv, d->control_socket, 108, why, wl) == 0
+                   ? 0
+                   : cfg_why(why, wl, "expected a path of at most 107 bytes (a Unix socket's)");
+    if (strcmp(kv->key, "control_group") == 0) {
+        if (strlen(kv->value) >= sizeof d->control_group)
+            return cfg_why(why, wl, "expected a group name of at most %zu characters",
+                           sizeof d->control_group - 1);
+        snprintf(d->control_group, sizeof d->control_group, "%s", kv->value);
+        return 0;
+    }
     if (strcmp(kv->key, "user") == 0) {
         if (strlen(kv->value) >= sizeof d->user)
-            return why_set(why, wl, "expected a user name of at most %zu characters",
+            return cfg_why(why, wl, "expected a user name of at most %zu characters",
                            sizeof d->user - 1);
         snprintf(d->user, sizeof d->user, "%s", kv->value);
         return 0;
@@ -518,7 +423,7 @@ static int key_obj_drive(cfg_obj_t *o, const cfg_kv_t *kv, char *why, size_t wl)
             v[a] = strtod(q, &end);
             if (end == q || !isfinite(v[a]) || fabs(v[a]) > 1e9 ||
                 (a < ENGINE_AXES - 1 ? *end != ',' : *end != '\0'))
-                return why_set(why, wl, "expected x,y,z in metres, got '%s'", kv->value);
+                return cfg_why(why, wl, "expected x,y,z in metres, got '%s'", kv->value);
             q = end + 1;
         }
         memcpy(o->initial_position_m, v, sizeof v);
@@ -569,7 +474,7 @@ static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size
         if (!t || !(t->roles & TRANSPORT_INPUT)) {
             char list[160];
             transport_names(TRANSPORT_INPUT, list, sizeof list);
-            return why_set(why, wl, "expected one of %s, got '%s'", list, kv->value);
+            return cfg_why(why, wl, "expected one of %s, got '%s'", list, kv->value);
         }
         o->input = t;
         return 0;
@@ -584,17 +489,17 @@ static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size
             if (!t || !(t->roles & TRANSPORT_OUTPUT)) {
                 char list[160];
                 transport_names(TRANSPORT_OUTPUT, list, sizeof list);
-                return why_set(why, wl, "unknown output '%s' (outputs: %s)", tok, list);
+                return cfg_why(why, wl, "unknown output '%s' (outputs: %s)", tok, list);
             }
             for (unsigned k = 0; k < o->noutput; k++)
                 if (o->output[k] == t)
-                    return why_set(why, wl, "output '%s' listed twice", tok);
+                    return cfg_why(why, wl, "output '%s' listed twice", tok);
             if (o->noutput == CFG_OUTPUTS_MAX)
-                return why_set(why, wl, "more than %d outputs", CFG_OUTPUTS_MAX);
+                return cfg_why(why, wl, "more than %d outputs", CFG_OUTPUTS_MAX);
             o->output[o->noutput++] = t;
         }
         if (!o->noutput)
-            return why_set(why, wl, "expected at least one output");
+            return cfg_why(why, wl, "expected at least one output");
         return 0;
     }
     /* engine settings: lib/engine/engine_settings.h's table */

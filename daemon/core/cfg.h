@@ -83,13 +83,16 @@ typedef struct {
     int origin_given;         /* origin = lat,lon,alt: the datum of every geographic object */
     double origin[3];         /* degrees, degrees, metres above the WGS84 ellipsoid */
     int origin_line;
-    int clock;             /* CFG_CLOCK_*: one clock for epoch-stamped objects (CLOCK.md) */
-    double delay_s;        /* play-out delay D: clocked objects stand at now - D */
-    double catchup;        /* most the rate rises above the clock's to win back a lag */
-    double drift_max_ppm;  /* sender clock drift absorbed at most */
-    double clock_window_s; /* auto: epoch when the first time is this close to now */
-    char user[64];         /* started as root: drop to this user once the sockets are
+    int clock;                     /* CFG_CLOCK_*: one clock for epoch-stamped objects (CLOCK.md) */
+    double delay_s;                /* play-out delay D: clocked objects stand at now - D */
+    double catchup;                /* most the rate rises above the clock's to win back a lag */
+    double drift_max_ppm;          /* sender clock drift absorbed at most */
+    double clock_window_s;         /* auto: epoch when the first time is this close to now */
+    char user[64];                 /* started as root: drop to this user once the sockets are
                                  * open ("" = stay, with a warning outside systemd) */
+    char control_socket[PATH_MAX]; /* the control socket (daemon/ctl/ctl.h); "" = the
+                                    * default place (ctl_socket_path) */
+    char control_group[64];        /* its group ("" = trajd's own), mode 0660 */
 } cfg_daemon_t;
 
 /* [realtime] (all off by default) */
@@ -202,6 +205,9 @@ int cfg_uses(const cfg_t *c, const struct transport *t);
 int cfg_obj_uses(const cfg_obj_t *o, const struct transport *t);
 
 /* ---- value helpers for key functions: 0, or -CFG_EVALUE with why filled ---- */
+
+/* why (if not NULL) receives the message; returns -CFG_EVALUE (daemon/core/cfg_value.c). */
+int cfg_why(char *why, size_t whylen, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 
 /* Finite decimal number in [lo, hi]. */
 int cfg_get_double(const cfg_kv_t *kv, double lo, double hi, double *out, char *why, size_t whylen);

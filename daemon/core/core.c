@@ -312,6 +312,8 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
     for (unsigned t = 0; transport_table[t]; t++)
         if (p->opened[t] && transport_table[t]->cycle)
             transport_table[t]->cycle(c->tstate[t], c, now_ns);
+    if (c->tap)
+        c->tap(c->tap_ctx, c);
 
     stats_t *s = c->stats;
     s->ticks++;

@@ -20,6 +20,7 @@
  *        breaks the object's bounds: no output ever sees a refused setpoint
  *   3. for each object, for each of its outputs: output->setpoint(state, o, &o->sp)
  *   4. for each open transport: cycle(state, core, now_ns)
+ *   4b. the tap, if set (core_t.tap: the control socket's watchers)
  *   5. lateness (wake-up time - the oldest deadline not yet served, so a
  *      skip counts as lateness >= one period) goes into the histogram; an
  *      overrun is counted if the work ended after the next deadline.
@@ -238,6 +239,12 @@ typedef struct core {
     int stopping;                     /* SIGTERM received: bringing objects to rest */
     stats_t *stats;                   /* survives reloads */
     void *tstate[CFG_TRANSPORTS_MAX]; /* each open transport's state (NULL if not open) */
+    /* A tap the tick calls last (after step 4), with every object's setpoint
+     * of this tick: the control socket's setpoint subscriptions (daemon/ctl/,
+     * set by trajd.c after each core_open).  Runs in the tick: copies only,
+     * no system call that blocks, no allocation, no logging.  NULL: none. */
+    void (*tap)(void *ctx, const struct core *c);
+    void *tap_ctx;
 } core_t;
 
 /* Object by name, or NULL. */

@@ -20,8 +20,8 @@ dest="$tmp/root"
 fail() { echo "FAIL: $*"; exit 1; }
 make --no-print-directory install BUILD="$BUILD" DESTDIR="$dest" PREFIX="$PREFIX" > "$tmp/log" 2>&1 ||
     { cat "$tmp/log"; fail "make install"; }
-for f in bin/trajd bin/trajreplay bin/trajsurf share/man/man8/trajd.8 share/man/man5/trajd.conf.5 \
-         share/man/man1/trajreplay.1 share/man/man1/trajsurf.1 share/trajd/trajd.dbc share/trajd/trajd.lua \
+for f in bin/trajd bin/trajctl bin/trajreplay bin/trajsurf share/man/man8/trajd.8 share/man/man5/trajd.conf.5 \
+         share/man/man1/trajctl.1 share/man/man1/trajreplay.1 share/man/man1/trajsurf.1 share/trajd/trajd.dbc share/trajd/trajd.lua \
          share/doc/trajd/examples/trajd.conf share/doc/trajd/examples/trajd_client.c \
          share/doc/trajd/examples/trajd_can_sender.py share/doc/trajd/examples/trajd_modbus_hmi.py \
          lib/libtrajd.a lib/libtrajd.so lib/libtrajd.so.0 lib/pkgconfig/trajd.pc \

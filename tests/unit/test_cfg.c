@@ -296,6 +296,27 @@ static void test_reload_check(void **state)
     cfg_free(old);
 }
 
+/* Given [daemon] control_socket and control_group, then a relative path is
+ * made absolute against the file's directory, empty means the default, and
+ * a path a Unix socket cannot hold (107 bytes at most) is refused at its line. */
+static void test_control_socket_keys(void **state)
+{
+    (void)state;
+    cfg_t *c = load_ok("[daemon]\ncontrol_socket = run/ctl\ncontrol_group = adm\n" OBJ);
+    assert_string_equal(c->daemon.control_socket, "./run/ctl");
+    assert_string_equal(c->daemon.control_group, "adm");
+    cfg_free(c);
+    c = load_ok("[daemon]\ncontrol_socket =\ncontrol_group =\n" OBJ);
+    assert_string_equal(c->daemon.control_socket, "");
+    assert_string_equal(c->daemon.control_group, "");
+    cfg_free(c);
+    char text[512];
+    snprintf(text, sizeof text, "[daemon]\ncontrol_socket = /%0107d\n" OBJ, 0);
+    load_bad(text, CFG_EVALUE, 2, "107 bytes");
+    snprintf(text, sizeof text, "[daemon]\ncontrol_socket = /%0106d\n" OBJ, 0);
+    cfg_free(load_ok(text)); /* 107 bytes: the most */
+}
+
 /* Given config/trajd.conf with every documented "#key = default" uncommented,
  * then it is still accepted (each documented key exists and its documented
  * default is a valid value), and the file as shipped is accepted too. */
@@ -400,15 +421,11 @@ static void test_safety_defaults(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_minimal),
-        cmocka_unit_test(test_values),
-        cmocka_unit_test(test_errors),
-        cmocka_unit_test(test_clock_keys),
-        cmocka_unit_test(test_documented_conf),
-        cmocka_unit_test(test_missing_file),
-        cmocka_unit_test(test_ids),
-        cmocka_unit_test(test_safety_defaults),
-        cmocka_unit_test(test_can_ids),
+        cmocka_unit_test(test_minimal),         cmocka_unit_test(test_values),
+        cmocka_unit_test(test_errors),          cmocka_unit_test(test_clock_keys),
+        cmocka_unit_test(test_documented_conf), cmocka_unit_test(test_control_socket_keys),
+        cmocka_unit_test(test_missing_file),    cmocka_unit_test(test_ids),
+        cmocka_unit_test(test_safety_defaults), cmocka_unit_test(test_can_ids),
         cmocka_unit_test(test_reload_check),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
