@@ -691,13 +691,15 @@ static int hk_push(void *ctx, const engine_waypoint_t *wp)
 
 static int hk_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
 {
-    obj_t *o = ((const can_hook_ctx_t *)ctx)->o;
-    switch (cmd) {
-    case CANPROTO_CMD_FINISH: engine_finish(o->engine); break;
-    case CANPROTO_CMD_STOP: engine_stop(o->engine); break;
-    case CANPROTO_CMD_CLEAR: obj_clear(o); break;
+    const can_hook_ctx_t *h = ctx;
+    obj_t *o = h->o;
+    switch (cmd) { /* through the object's owner, logged with the peer (objlife.c) */
+    case CANPROTO_CMD_FINISH: return obj_command(o, LC_EV_END_OF_INPUT, 0, h->src);
+    case CANPROTO_CMD_STOP: return obj_command(o, LC_EV_STOP, 0, h->src);
+    case CANPROTO_CMD_START: return obj_command(o, LC_EV_START, 0, h->src);
+    case CANPROTO_CMD_CLEAR: return obj_command(o, LC_EV_CLEAR, 0, h->src);
     case CANPROTO_CMD_RESET_COUNTERS: obj_reset_counters(o); break;
-    case CANPROTO_CMD_OVERRIDE: return obj_set_override(o, arg);
+    case CANPROTO_CMD_OVERRIDE: return obj_command(o, LC_EV_OVERRIDE, arg, h->src);
     default: break;
     }
     return 0;
