@@ -1425,6 +1425,7 @@ static void start_transfer(engine_t *e, const double *target, double gap_s)
     double dur = xfer_duration(e, target, gap_s, &capped);
 
     memset(&e->cur, 0, sizeof(e->cur));
+    e->xfer_from_t = e->out_track ? e->out_t : NAN;
     e->cur.kind = QE_SEG;
     transfer_segment(&e->cur.seg, e->pos, target, dur);
     e->cur.vmax = seg_speed_max(&e->cur.seg);
@@ -1943,6 +1944,25 @@ static engine_state_t out_state(const engine_t *e)
     return e->finished ? ENGINE_STATE_FINISHED : ENGINE_STATE_WAITING;
 }
 
+/* A transfer's track time: from where the output's time stood when it began
+ * to the start of the trajectory it joins, in proportion to the transfer
+ * done (from that start less the transfer's duration if the output had no
+ * time before), so t_s and the data age say what the object does and reach
+ * that start as it does. */
+static void xfer_track_time(engine_t *e)
+{
+    const qent_t *h = e->qlen ? &e->q[e->qhead] : NULL; /* q_head, read only */
+    if (!h || !(e->cur_t1 > 0))
+        return;
+    double t = e->scaled ? e->s : tau_of(e, e->n), u = t / e->cur_t1;
+    double to = h->kind == QE_END ? h->t1_s : h->seg.t0_s;
+    u = u < 0 ? 0 : u > 1 ? 1 : u;
+    if (isnan(e->xfer_from_t))
+        e->out_t = to - (1.0 - u) * e->cur_t1;
+    else
+        e->out_t = e->xfer_from_t + (to - e->xfer_from_t) * u;
+}
+
 static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
     engine_state_t s = out_state(e);
@@ -1967,6 +1987,8 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
         if (h || e->in_open)
             e->have_pos = 1;
     }
+    if (e->mode == OUT_XFER)
+        xfer_track_time(e);
     sp->t_s = e->out_t;
     memcpy(sp->pos_m, e->pos, sizeof(sp->pos_m));
     if (!e->have_pos)

@@ -120,7 +120,8 @@ struct engine {
     int64_t seg_n0;  /* tick at which cur was seeded */
     double origin_t; /* absolute track time of tick 0 of the trajectory */
     double pos[AX], vel[AX], acc[AX];
-    double out_t; /* track time of the output */
+    double out_t;       /* track time of the output */
+    double xfer_from_t; /* out_t when the transfer under way began (NAN: none before) */
     uint32_t out_track;
     uint32_t cycle;
     uint32_t flags_pending;

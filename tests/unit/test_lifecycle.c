@@ -681,6 +681,56 @@ static void test_clock_step(void **state)
     sim_free(&s);
 }
 
+/* Given two trajectories 5 s apart in time and 40 m apart in space, then
+ * during the transfer between them t_s says where the object is heading: it
+ * runs on towards the second's first time and reaches it as the transfer
+ * ends, never standing at a time of the first trajectory. */
+static void test_transfer_t_s(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    config(&c);
+    engine_t *e = engine_new(&c, NULL);
+    assert_non_null(e);
+    engine_waypoint_t w;
+    for (int i = 0; i <= 40; i++) {
+        memset(&w, 0, sizeof w);
+        w.t_s = 0.1 * i;
+        w.pos_m[0] = 0.1 * i;
+        assert_int_equal(engine_push(e, &w), 0);
+    }
+    for (int i = 0; i <= 40; i++) {
+        memset(&w, 0, sizeof w);
+        w.t_s = 9.0 + 0.1 * i;
+        w.pos_m[0] = 44.0 + 0.1 * i;
+        assert_true(engine_push(e, &w) >= 0);
+    }
+    assert_int_equal(engine_finish(e), 0);
+    engine_setpoint_t sp;
+    double last_t = -1, first_xfer_t = NAN, end_xfer_t = NAN;
+    int in_xfer = 0, n_xfer = 0;
+    for (int64_t k = 0; k < 5000; k++) {
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+        if (sp.flags & ENGINE_SP_TRANSFER) {
+            if (!in_xfer)
+                first_xfer_t = sp.t_s;
+            in_xfer = 1;
+            n_xfer++;
+            assert_true(sp.t_s >= last_t - 1e-9); /* runs on */
+            assert_true(sp.t_s <= 9.0 + 1e-9);    /* towards the second's start */
+            end_xfer_t = sp.t_s;
+        } else if (in_xfer) {
+            break;
+        }
+        last_t = sp.t_s;
+    }
+    assert_true(n_xfer > 100);
+    assert_true(first_xfer_t < 9.0 - 1.0);      /* the transfer's time ahead */
+    assert_true(fabs(end_xfer_t - 9.0) < 0.05); /* reached as it ends */
+    assert_true(fabs(sp.t_s - 9.0) < 0.05);     /* and the track goes on */
+    engine_free(e);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -692,6 +742,7 @@ int main(void)
         cmocka_unit_test(test_stall_clocked_catches_up),
         cmocka_unit_test(test_drive_lost_reanchors_at_drive),
         cmocka_unit_test(test_clock_step),
+        cmocka_unit_test(test_transfer_t_s),
         cmocka_unit_test(test_every_cell_directed),
         cmocka_unit_test(test_property_every_cell),
     };
