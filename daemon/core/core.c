@@ -320,6 +320,10 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
          * changed) stands where its output stood: the new engine starts there
          * and reaches its first trajectory by a transfer, never a step. */
         obj_t *q = prev && !prev->stopping ? core_obj_find(prev, o->name) : NULL;
+        if (q) { /* its holds and a stop's latch stay (lib/engine/LIFECYCLE.md) */
+            lc_inherit(&o->lc, &q->lc);
+            o->held = q->held;
+        }
         if (q && q->sp.cycle != 0 && !(q->sp.flags & ENGINE_SP_NO_POSITION)) {
             if (engine_set_position(o->engine, q->sp.pos_m) < 0) {
                 snprintf(why, whylen, "object '%s': its position is outside the new max_abs_m",

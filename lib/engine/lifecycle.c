@@ -218,6 +218,27 @@ void lc_free(lifecycle_t *lc)
     lc->cap = lc->len = lc->head = 0;
 }
 
+void lc_inherit(lifecycle_t *lc, const lifecycle_t *from)
+{
+    lc->n = from->n;
+    lc->n.events[LC_EV_RELOAD_CHANGED]++;
+    lc->n.dropped_full += from->len;
+    lc->hold = from->hold;
+    lc->latched = from->latched;
+    lc->end_pending = from->end_pending;
+    lc->drive_pos = from->drive_pos;
+    lc->have_reported = from->have_reported;
+    memcpy(lc->reported, from->reported, sizeof lc->reported);
+    lc->sent = from->sent;
+    lc->have_sent = from->have_sent;
+    lc->newest_t = from->newest_t;
+    lc->delay_s = from->delay_s;
+    if (lc->hold & LC_HOLD_FEED)
+        (void)engine_set_override(lc->engine, 0.0);
+    if (lc->drive_pos)
+        engine_require_position(lc->engine, 1);
+}
+
 unsigned lc_buffered(const lifecycle_t *lc)
 {
     return lc->len;

@@ -212,6 +212,15 @@ int lc_set_position(lifecycle_t *lc, const double pos_m[ENGINE_AXES]);
  */
 int lc_tick(lifecycle_t *lc, int64_t now_ns, const engine_clock_t *clk, engine_setpoint_t *sp);
 
+/*
+ * A reload gave the object a new curve (LC_EV_RELOAD_CHANGED): lc, freshly
+ * lc_init'ed on it, takes from's holds, latch, commanded state as sent and
+ * counters (the buffered waypoints are not carried: counted as dropped), so
+ * a stopped object stays stopped and a held one held.  The caller sets the
+ * new curve's position (the one sent).
+ */
+void lc_inherit(lifecycle_t *lc, const lifecycle_t *from);
+
 /* Waypoints in the latch buffer now. */
 unsigned lc_buffered(const lifecycle_t *lc);
 

@@ -731,6 +731,47 @@ static void test_transfer_t_s(void **state)
     engine_free(e);
 }
 
+/* Given a stopped object and a held one, when a reload gives each a new
+ * curve (its settings changed), then the new owner keeps the latch and the
+ * hold, standing where the old one was sent: the sender going on does not
+ * move it, and only start / clear do (as LIFECYCLE.md's reload row says). */
+static void test_reload_keeps_latch_and_hold(void **state)
+{
+    (void)state;
+    for (int held = 0; held < 2; held++) {
+        sim_t s;
+        sim_init(&s, 0, NULL);
+        run(&s, 800);
+        fire(&s, held ? LC_EV_DRIVE_LOST : LC_EV_STOP, 0);
+        engine_setpoint_t at = run(&s, 400);
+        assert_int_equal(lc_state(&s.lc), held ? LC_HELD : LC_STOPPED);
+        /* the reload: a new engine and owner, from the old one */
+        engine_t *e2 = engine_new(&s.cfg, NULL);
+        assert_non_null(e2);
+        lifecycle_t lc2;
+        assert_int_equal(lc_init(&lc2, e2, &s.sf, PERIOD_NS, 0), 0);
+        lc_inherit(&lc2, &s.lc);
+        assert_int_equal(engine_set_position(e2, at.pos_m), 0);
+        lc_free(&s.lc);
+        engine_free(s.e);
+        s.e = e2;
+        s.lc = lc2;
+        engine_setpoint_t b = run(&s, 500);
+        assert_int_equal(lc_state(&s.lc), held ? LC_HELD : LC_STOPPED);
+        assert_true(dist(b.pos_m, at.pos_m) < 1e-12);
+        if (held) {
+            s.drive_lost = 0;
+            assert_int_equal(lc_set_position(&s.lc, at.pos_m), 0);
+            fire(&s, LC_EV_CLEAR, 0);
+        } else {
+            fire(&s, LC_EV_START, 0);
+        }
+        b = run(&s, 1500);
+        assert_true(dist(b.pos_m, at.pos_m) > 1.0); /* moving again */
+        sim_free(&s);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -743,6 +784,7 @@ int main(void)
         cmocka_unit_test(test_drive_lost_reanchors_at_drive),
         cmocka_unit_test(test_clock_step),
         cmocka_unit_test(test_transfer_t_s),
+        cmocka_unit_test(test_reload_keeps_latch_and_hold),
         cmocka_unit_test(test_every_cell_directed),
         cmocka_unit_test(test_property_every_cell),
     };
