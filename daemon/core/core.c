@@ -115,8 +115,9 @@ obj_t *core_obj_find(core_t *c, const char *name)
 
 /* Clocked inputs, then every engine, at engine time now_ns; real_ns is
  * CLOCK_REALTIME at the deadline, from which the play-out clock (one for all
- * objects on it, lib/engine/CLOCK.md) is advanced. */
-static void step_engines(core_t *c, int64_t now_ns, int64_t real_ns)
+ * objects on it, lib/engine/CLOCK.md) is advanced.  sent: this deadline's
+ * setpoints go out (the others, stepped over, are neither judged nor sent). */
+static void step_engines(core_t *c, int64_t now_ns, int64_t real_ns, int sent)
 {
     stats_t *s = c->stats;
     if (!c->stopping)
@@ -132,7 +133,10 @@ static void step_engines(core_t *c, int64_t now_ns, int64_t real_ns)
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i];
         if (!o->retiring) { /* the owner: one period of the curve, judged, sent */
-            lc_tick(obj_lc(o), now_ns, o->clocked == 1 ? &clk : NULL, &o->sp);
+            if (sent)
+                lc_tick(obj_lc(o), now_ns, o->clocked == 1 ? &clk : NULL, &o->sp);
+            else
+                lc_step_unsent(obj_lc(o), now_ns, o->clocked == 1 ? &clk : NULL);
             continue;
         }
         if (o->clocked == 1)
@@ -203,7 +207,7 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
     int64_t rt_off = real_offset(p);
     for (uint64_t j = from; j <= k; j++)
         step_engines(c, c->t0_ns + (int64_t)j * c->period_ns,
-                     p->wall_base_ns + (int64_t)j * p->wall_period_ns + rt_off);
+                     p->wall_base_ns + (int64_t)j * p->wall_period_ns + rt_off, j == k);
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i];
         if (k > k0) {

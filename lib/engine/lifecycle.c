@@ -604,6 +604,24 @@ static void held_sp(lifecycle_t *lc, int64_t now_ns, engine_setpoint_t *sp)
     }
 }
 
+void lc_step_unsent(lifecycle_t *lc, int64_t now_ns, const engine_clock_t *clk)
+{
+    engine_setpoint_t sp;
+    if (lc->have_tick && now_ns < lc->last_now_ns)
+        return;
+    clock_watch(lc, now_ns, clk);
+    lc->last_now_ns = now_ns;
+    if (frozen(lc)) {
+        lc->have_tick = 1;
+        return;
+    }
+    lc->eng_ns = lc->have_tick ? lc->eng_ns + lc->period_ns : now_ns;
+    lc->have_tick = 1;
+    if (clk)
+        (void)engine_set_clock(lc->engine, clk);
+    engine_tick(lc->engine, lc->eng_ns, &sp);
+}
+
 int lc_tick(lifecycle_t *lc, int64_t now_ns, const engine_clock_t *clk, engine_setpoint_t *sp)
 {
     if (lc->have_tick && now_ns < lc->last_now_ns) {

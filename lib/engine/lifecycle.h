@@ -221,6 +221,14 @@ int lc_tick(lifecycle_t *lc, int64_t now_ns, const engine_clock_t *clk, engine_s
  */
 void lc_inherit(lifecycle_t *lc, const lifecycle_t *from);
 
+/*
+ * A deadline the caller steps over without output (a replay faster than
+ * real time, which stays identical to trajreplay by stepping every missed
+ * deadline): the curve advances one period as lc_tick would, but nothing is
+ * judged or sent, and the commanded state stays the last one sent.
+ */
+void lc_step_unsent(lifecycle_t *lc, int64_t now_ns, const engine_clock_t *clk);
+
 /* Waypoints in the latch buffer now. */
 unsigned lc_buffered(const lifecycle_t *lc);
 

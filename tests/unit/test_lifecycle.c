@@ -772,6 +772,36 @@ static void test_reload_keeps_latch_and_hold(void **state)
     }
 }
 
+/* Given a moving object in a replay faster than real time, when the caller
+ * steps over 5 deadlines (lc_step_unsent) and serves the 6th, then nothing
+ * is judged or sent for the 5 (the commanded state stays the last sent), and
+ * the 6th is where the curve is 6 periods on (as trajreplay's row for that
+ * tick), judged once against the last one sent over the 6 periods. */
+static void test_unsent_steps(void **state)
+{
+    (void)state;
+    sim_t s;
+    sim_init(&s, 0, NULL);
+    engine_setpoint_t a = run(&s, 800);
+    uint64_t checked = s.sf.checked;
+    for (int i = 0; i < 5; i++) {
+        send_due(&s);
+        lc_step_unsent(&s.lc, s.now, NULL);
+        s.now += PERIOD_NS;
+    }
+    assert_int_equal(s.sf.checked, checked);
+    assert_true(dist(s.lc.sent.pos_m, a.pos_m) < 1e-12);
+    engine_setpoint_t b;
+    send_due(&s);
+    assert_int_equal(lc_tick(&s.lc, s.now, NULL, &b), 0);
+    assert_int_equal(s.sf.checked, checked + 1);
+    assert_int_equal(s.sf.by[SAFETY_FSPEED] + s.sf.by[SAFETY_FACCEL], 0);
+    double d = dist(a.pos_m, b.pos_m);
+    assert_true(d > 5.5 * 2.0 * T_S && d < 6.5 * 2.0 * T_S); /* 6 periods at 2 m/s */
+    assert_int_equal(s.lc.n.events[LC_EV_STALL], 0);
+    sim_free(&s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -785,6 +815,7 @@ int main(void)
         cmocka_unit_test(test_clock_step),
         cmocka_unit_test(test_transfer_t_s),
         cmocka_unit_test(test_reload_keeps_latch_and_hold),
+        cmocka_unit_test(test_unsent_steps),
         cmocka_unit_test(test_every_cell_directed),
         cmocka_unit_test(test_property_every_cell),
     };
