@@ -28,7 +28,7 @@ local VALS = {
     WP_Mux = {[0] = "time", [1] = "x", [2] = "y", [3] = "z", [4] = "command"},
     WPFD_Mux = {[5] = "whole waypoint"},
     WP_Command = {[1] = "finish", [2] = "stop", [3] = "clear", [4] = "reset counters",
-                  [5] = "feed override"},
+                  [5] = "feed override", [6] = "start"},
     SP_Axis = {[0] = "x", [1] = "y", [2] = "z"},
     SP_State = STATE, SPFD_State = STATE, ST_State = STATE,
     ST_LastErr = {[0] = "ok", [1] = "not finite", [2] = "out of range", [3] = "backwards",

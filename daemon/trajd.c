@@ -37,7 +37,6 @@
 #include <systemd/sd-daemon.h>
 #include <unistd.h>
 
-#include "can_transport.h"
 #include "cfg.h"
 #include "core.h"
 #include "ctl.h"
@@ -596,15 +595,14 @@ static unsigned held_objects(const core_t *c)
     unsigned n = 0;
     for (unsigned i = 0; c && i < c->nobj; i++) {
         const obj_t *o = &c->obj[i];
-        can_drive_info_t di;
-        int drive = can_transport_drive(c, i, &di) && di.d.held;
-        if (!safety_fault(&o->safety) && !o->held && !drive)
+        unsigned hold = o->lc.hold; /* the lifecycle's (lib/engine/lifecycle.h) */
+        if (!safety_fault(&o->safety) && !hold && !o->held)
             continue;
         n++;
         log_msg(LOG_ERR, "object '%s' ended held: %s", o->name,
                 safety_fault(&o->safety) ? safety_strerror(safety_fault(&o->safety))
-                : o->held                ? "feed hold (a drive's heartbeat was lost)"
-                                         : "its drives left Operation Enabled");
+                : (hold & LC_HOLD_DRIVE) ? "its drives left Operation Enabled"
+                                         : "feed hold (a drive's heartbeat was lost)");
     }
     return n;
 }

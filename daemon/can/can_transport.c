@@ -695,17 +695,19 @@ static int hk_push(void *ctx, const engine_waypoint_t *wp)
 
 static int hk_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
 {
-    obj_t *o = ((const can_hook_ctx_t *)ctx)->o;
+    const can_hook_ctx_t *h = ctx;
+    obj_t *o = h->o;
     if (o->stopping) /* the one gate (gate.h); writable is cmd_mask's */
         return -ENGINE_ESTATE;
     if (cmd == CANPROTO_CMD_OVERRIDE && arg > CANPROTO_OVERRIDE_MAX_PCT)
         return -ENGINE_ERANGE; /* refused and logged as such (log_refused) */
-    switch (cmd) {
-    case CANPROTO_CMD_FINISH: engine_finish(o->engine); break;
-    case CANPROTO_CMD_STOP: engine_stop(o->engine); break;
-    case CANPROTO_CMD_CLEAR: obj_clear(o); break;
+    switch (cmd) {             /* through the object's owner, logged with the peer (objlife.c) */
+    case CANPROTO_CMD_FINISH: return obj_command(o, LC_EV_END_OF_INPUT, 0, h->src);
+    case CANPROTO_CMD_STOP: return obj_command(o, LC_EV_STOP, 0, h->src);
+    case CANPROTO_CMD_START: return obj_command(o, LC_EV_START, 0, h->src);
+    case CANPROTO_CMD_CLEAR: return obj_command(o, LC_EV_CLEAR, 0, h->src);
     case CANPROTO_CMD_RESET_COUNTERS: obj_reset_counters(o); break;
-    case CANPROTO_CMD_OVERRIDE: return obj_set_override(o, arg);
+    case CANPROTO_CMD_OVERRIDE: return obj_command(o, LC_EV_OVERRIDE, arg, h->src);
     default: break;
     }
     return 0;

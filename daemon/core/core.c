@@ -43,37 +43,6 @@ int64_t core_real_ns(void)
     return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
 }
 
-/* One clock (lib/engine/CLOCK.md): an undecided object's first waypoint
- * decides whether its times are epoch time (within clock_window_s of now). */
-static void obj_clock_decide(obj_t *o, const engine_waypoint_t *wp, int64_t real_ns)
-{
-    if (o->clocked >= 0 || !isfinite(wp->t_s))
-        return;
-    o->clocked = fabs(wp->t_s - (double)real_ns * 1e-9) <= o->clock_window_s;
-    log_msg(LOG_INFO, "object '%s': first waypoint at t = %.3f s: %s", o->name, wp->t_s,
-            o->clocked ? "epoch time, played out on the daemon's clock"
-                       : "relative time, the object keeps its own origin");
-}
-
-int obj_push_from(obj_t *o, const engine_waypoint_t *wp, const char *src)
-{
-    if (o->stopping)
-        return -ENGINE_ESTATE;
-    int64_t real_ns = o->clocked ? core_real_ns() : 0;
-    obj_clock_decide(o, wp, real_ns);
-    rejlog_offered(&o->rejlog, wp, src);
-    int rc = engine_push(o->engine, wp);
-    rejlog_drain(&o->rejlog, o->engine);
-    if (rc == 0 && o->clocked == 1 && o->drift)
-        playout_drift_add(o->drift, real_ns, wp->t_s);
-    return rc;
-}
-
-int obj_push(obj_t *o, const engine_waypoint_t *wp)
-{
-    return obj_push_from(o, wp, NULL);
-}
-
 void obj_reset_counters(obj_t *o)
 {
     engine_reset_counters(o->engine);
@@ -137,59 +106,6 @@ const double *core_obj_geo(const core_t *c, obj_t *o)
     return o->geo;
 }
 
-/* Rearm the monitor once the engine stands on the held position. */
-static void obj_try_rearm(obj_t *o)
-{
-    double held[ENGINE_AXES];
-    if (!o->safety_rearm)
-        return;
-    if (safety_held(&o->safety, held) < 0 || engine_set_position(o->engine, held) == 0) {
-        safety_rearm(&o->safety);
-        o->safety_rearm = 0;
-    }
-}
-
-void obj_clear(obj_t *o)
-{
-    engine_clear(o->engine);
-    if (o->held) { /* the operator's: the feed back at 100 % */
-        o->held = 0;
-        engine_set_override(o->engine, 1.0);
-    }
-    if (safety_fault(&o->safety)) {
-        o->safety_rearm = 1;
-        obj_try_rearm(o);
-    }
-}
-
-void obj_hold(obj_t *o)
-{
-    o->held = 1;
-    engine_set_override(o->engine, 0.0);
-}
-
-int obj_set_override(obj_t *o, unsigned percent)
-{
-    if (o->held && percent > 0)
-        return -ENGINE_ESTATE; /* moving again after a hold is clear's */
-    return engine_set_override(o->engine, percent / 100.0);
-}
-
-int obj_set_position(obj_t *o, const double pos_m[ENGINE_AXES])
-{
-    int rc = engine_set_position(o->engine, pos_m);
-    if (rc == 0)
-        safety_forget(&o->safety); /* the next output is its first: judged from there */
-    return rc;
-}
-
-void obj_drive_lost(obj_t *o)
-{
-    obj_clear(o);
-    engine_require_position(o->engine, 1);
-    safety_forget(&o->safety);
-}
-
 obj_t *core_obj_find(core_t *c, const char *name)
 {
     for (unsigned i = 0; i < c->nobj; i++)
@@ -203,8 +119,9 @@ obj_t *core_obj_find(core_t *c, const char *name)
 
 /* Clocked inputs, then every engine, at engine time now_ns; real_ns is
  * CLOCK_REALTIME at the deadline, from which the play-out clock (one for all
- * objects on it, lib/engine/CLOCK.md) is advanced. */
-static void step_engines(core_t *c, int64_t now_ns, int64_t real_ns)
+ * objects on it, lib/engine/CLOCK.md) is advanced.  sent: this deadline's
+ * setpoints go out (the others, stepped over, are neither judged nor sent). */
+static void step_engines(core_t *c, int64_t now_ns, int64_t real_ns, int sent)
 {
     stats_t *s = c->stats;
     if (!c->stopping)
@@ -219,13 +136,15 @@ static void step_engines(core_t *c, int64_t now_ns, int64_t real_ns)
                           s->clock_rate, c->cfg->daemon.catchup};
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i];
-        engine_t *e = o->retiring ? o->retiring : o->engine;
-        if (o->clocked == 1)
-            (void)engine_set_clock(e, &clk); /* cannot fail: cfg bounds */
-        if (!o->retiring) {
-            engine_tick(o->engine, now_ns, &o->sp);
+        if (!o->retiring) { /* the owner: one period of the curve, judged, sent */
+            if (sent)
+                lc_tick(obj_lc(o), now_ns, o->clocked == 1 ? &clk : NULL, &o->sp);
+            else
+                lc_step_unsent(obj_lc(o), now_ns, o->clocked == 1 ? &clk : NULL);
             continue;
         }
+        if (o->clocked == 1)
+            (void)engine_set_clock(o->retiring, &clk); /* cannot fail: cfg bounds */
         /* the predecessor brakes; once at rest the new engine starts there */
         engine_tick(o->retiring, now_ns, &o->sp);
         if ((o->sp.flags & ENGINE_SP_HOLD) && o->sp.state != ENGINE_STATE_STREAMING &&
@@ -264,12 +183,15 @@ static int64_t real_offset(core_priv_t *p)
 }
 
 /*
- * Serve deadline k; deadlines k0 .. k-1 were missed.  Inputs and engines are
- * stepped through each missed deadline too (nothing is output for them), so
- * every engine sees each waypoint at the same tick as trajreplay does and the
- * setpoints stay identical to it; only deadline k's setpoints go out, flagged
- * ENGINE_SP_SKIPPED.  Cost: one engine step per missed deadline, which the
- * engine would otherwise have made inside one call.
+ * Serve deadline k; deadlines k0 .. k-1 were missed.  In real time (speed 1)
+ * the objects move on by one period from the last setpoint sent, never by
+ * the periods missed (lifecycle.h, LC_EV_STALL: a stall of N periods is no
+ * step of N periods; the lag is won back by the clock's catch-up, or
+ * reported).  Faster or slower than real time (a replay: nothing physical
+ * follows) inputs and engines are stepped through each missed deadline
+ * (nothing is output for them), so every engine sees each waypoint at the
+ * same tick as trajreplay does and the setpoints stay identical to it; only
+ * deadline k's setpoints go out, flagged ENGINE_SP_SKIPPED.
  */
 static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64_t late_ns)
 {
@@ -284,10 +206,12 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
     /* after a long stall (suspend) the engines step over the oldest deadlines
      * inside one call instead: bounded work, exactness kept for ordinary misses */
     uint64_t from = k - k0 > CORE_CATCHUP_MAX ? k - CORE_CATCHUP_MAX : k0;
+    if (!(fabs(c->cfg->daemon.speed - 1.0) > 0))
+        from = k; /* real time: a stall is no step */
     int64_t rt_off = real_offset(p);
     for (uint64_t j = from; j <= k; j++)
         step_engines(c, c->t0_ns + (int64_t)j * c->period_ns,
-                     p->wall_base_ns + (int64_t)j * p->wall_period_ns + rt_off);
+                     p->wall_base_ns + (int64_t)j * p->wall_period_ns + rt_off, j == k);
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i];
         if (k > k0) {
@@ -297,8 +221,8 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
         rejlog_drain(&o->rejlog, o->engine); /* verdicts given by a finish or a tick */
         engine_status(o->engine, &o->status);
         o->status.skipped_ticks += o->skipped_ticks;
-        obj_try_rearm(o);
-        safety_check(&o->safety, &o->sp);
+        if (o->retiring) /* the owner judged its own setpoint (lc_tick) */
+            safety_check(&o->safety, &o->sp);
         obj_frames(c->cfg, o);
     }
     for (unsigned i = 0; i < c->nobj; i++) {
@@ -394,8 +318,9 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
         if (carry_source(prev, cfg, o->cfg))
             continue;
         o->engine = engine_new(&cfg->obj[i].engine, &err);
-        if (!o->engine) {
-            snprintf(why, whylen, "object '%s': engine: %s", o->name, engine_strerror(err));
+        if (!o->engine || lc_init(&o->lc, o->engine, &o->safety, c->period_ns, 0) < 0) {
+            snprintf(why, whylen, "object '%s': engine: %s", o->name,
+                     engine_strerror(o->engine ? ENGINE_ENOMEM : err));
             return -ENOMEM;
         }
         safety_limits_t lim;
@@ -405,6 +330,10 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
          * changed) stands where its output stood: the new engine starts there
          * and reaches its first trajectory by a transfer, never a step. */
         obj_t *q = prev && !prev->stopping ? core_obj_find(prev, o->name) : NULL;
+        if (q) { /* its holds and a stop's latch stay (lib/engine/LIFECYCLE.md) */
+            lc_inherit(&o->lc, &q->lc);
+            o->held = q->held;
+        }
         if (q && q->sp.cycle != 0 && !(q->sp.flags & ENGINE_SP_NO_POSITION)) {
             if (engine_set_position(o->engine, q->sp.pos_m) < 0) {
                 snprintf(why, whylen, "object '%s': its position is outside the new max_abs_m",
@@ -463,7 +392,6 @@ static void carry_objects(core_t *c, core_t *prev)
         obj_safety_limits(o->cfg, &lim);
         safety_set_limits(&o->safety, &lim); /* the new config's bounds */
         o->safety_logged = q->safety_logged;
-        o->safety_rearm = q->safety_rearm;
         o->born_ns = q->born_ns;
         if (o->clocked != 0)
             o->clocked = q->clocked; /* its engine stays on the clock, or decided */
@@ -474,6 +402,10 @@ static void carry_objects(core_t *c, core_t *prev)
         o->out_errors = q->out_errors;
         o->held = q->held; /* its engine keeps the override 0 */
         o->carried = 1;
+        o->lc = q->lc; /* the owner goes with its engine: latch, holds, commanded state */
+        q->lc.buf = NULL;
+        q->lc.cap = q->lc.len = 0;
+        (void)obj_lc(o);
         retire_moving(o, prev);
     }
 }
@@ -628,7 +560,7 @@ void core_stop(core_t *c)
     p->ticks_at_stop = c->stats->ticks;
     for (unsigned i = 0; i < c->nobj; i++) {
         c->obj[i].stopping = 1;
-        engine_stop(c->obj[i].engine);
+        (void)lc_event(obj_lc(&c->obj[i]), LC_EV_SHUTDOWN, NULL);
         if (c->obj[i].retiring)
             engine_stop(c->obj[i].retiring);
     }
@@ -648,7 +580,9 @@ int core_done(const core_t *c)
             return 0;
         for (unsigned i = 0; i < c->nobj; i++) {
             engine_state_t s = c->obj[i].status.state;
-            if ((s != ENGINE_STATE_FINISHED && s != ENGINE_STATE_WAITING) || c->obj[i].retiring)
+            int held = lc_state(&c->obj[i].lc) == LC_HELD; /* frozen at rest */
+            if ((s != ENGINE_STATE_FINISHED && s != ENGINE_STATE_WAITING && !held) ||
+                c->obj[i].retiring)
                 return 0;
         }
         return 1;
@@ -661,9 +595,11 @@ int core_done(const core_t *c)
         if (!in->input_done || !in->input_done(c->tstate[transport_index(in)], o))
             return 0;
         /* at rest on its last waypoint, or waiting with nothing buffered
-         * (its input gave nothing usable: nothing more can happen) */
+         * (its input gave nothing usable: nothing more can happen), or held
+         * by a fault (frozen at rest: only a clear moves it again) */
         if ((o->status.state != ENGINE_STATE_FINISHED &&
-             !(o->status.state == ENGINE_STATE_WAITING && o->status.buffered == 0)) ||
+             !(o->status.state == ENGINE_STATE_WAITING && o->status.buffered == 0) &&
+             lc_state(&o->lc) != LC_HELD) ||
             o->retiring)
             return 0;
     }
@@ -689,6 +625,7 @@ void core_close(core_t *c)
     if (c->obj)
         for (unsigned i = 0; i < c->nobj; i++) {
             engine_free(c->obj[i].engine);
+            lc_free(&c->obj[i].lc);
             engine_free(c->obj[i].retiring);
         }
     free(c->obj);
@@ -785,6 +722,18 @@ int core_summary(const core_t *c, char *buf, size_t len)
         if (o->clocked == 1 && isfinite(o->sp.age_s) && n < len) { /* lib/engine/CLOCK.md */
             m = snprintf(buf + n, len - n, ", data age %.3f s", o->sp.age_s);
             n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+        }
+        lc_state_t ls = lc_state(&o->lc);
+        if ((ls == LC_STOPPED || ls == LC_STOPPING || ls == LC_HELD || o->lc.n.stalled_periods) &&
+            n < len) { /* lib/engine/LIFECYCLE.md */
+            m = snprintf(buf + n, len - n, ", %s, %u waypoints buffered, %llu stalled periods",
+                         lc_state_name(ls), lc_buffered(&o->lc),
+                         (unsigned long long)o->lc.n.stalled_periods);
+            n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+            if (o->clocked != 1 && o->lc.n.lag_s > 0 && n < len) {
+                m = snprintf(buf + n, len - n, ", lag %.3f s", o->lc.n.lag_s);
+                n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+            }
         }
         if (o->out_lost && n < len) {
             m = snprintf(buf + n, len - n, ", %s%llu lines lost by outputs",

@@ -33,7 +33,7 @@
  * it brakes along its path to rest (a category-1 stop by the time scaling,
  * lib/engine/TIMESCALE.md) and stays there (FINISHED), the outputs keep
  * streaming meanwhile; the daemon exits 0 when every object is
- * FINISHED or WAITING (nothing to finish), or after [daemon] stop_timeout_s,
+ * FINISHED or WAITING (nothing to finish) or held by a fault, or after [daemon] stop_timeout_s,
  * whichever comes first.  A second signal exits at once (still 0).
  */
 #ifndef TRAJD_CORE_H
@@ -44,6 +44,7 @@
 #include "cfg.h"
 #include "engine.h"
 #include "latency.h"
+#include "lifecycle.h"
 #include "loop.h"
 #include "playout.h"
 #include "rejlog.h"
@@ -76,8 +77,6 @@ typedef struct obj {
     safety_t safety;              /* the last check of o->sp before any output sees it
                                      * (kept when carried) */
     uint64_t safety_logged;       /* safety violations already logged */
-    int safety_rearm;             /* a clear asked to rearm the monitor: done once the
-                                     * engine stands on the held position */
     int uniform_warned;           /* param = uniform met irregular intervals: warned once */
     rejlog_t rejlog;              /* sources of the last waypoints offered, and the refusals
                                      * to log (rejlog.h; kept when carried) */
@@ -97,8 +96,33 @@ typedef struct obj {
     playout_drift_t *drift;       /* the daemon's drift estimate (stats_t), fed with the
                                      * arrivals of a clocked object's waypoints */
     int held;                     /* feed hold (obj_hold, e.g. a CiA 402 drive's heartbeat
-                                     * lost): an override > 0 is refused until obj_clear */
+                                     * lost): an override > 0 is refused until obj_clear
+                                     * (mirrors lc.hold & LC_HOLD_FEED) */
+    lifecycle_t lc;               /* the one owner of its motion (lib/engine/lifecycle.h):
+                                     * every command and tick goes through it (kept when
+                                     * carried) */
+    int64_t cmd_log_s;            /* commands logged: the second of the last one */
+    unsigned cmd_log_n;           /* ... how many in it */
+    uint64_t cmd_log_dropped;     /* ... and lines not logged (more than
+                                     * OBJ_CMD_LOG_PER_S in a second) */
 } obj_t;
+
+/* The owner of o's motion, bound to o's engine and monitor (an obj_t built
+ * by hand, as the tests do, gets an owner with no latch buffer). */
+lifecycle_t *obj_lc(obj_t *o);
+
+/* Command lines logged per object and second at most (the rest are counted
+ * and said in the next line). */
+#define OBJ_CMD_LOG_PER_S 10
+
+/*
+ * A command to o (CAN and Modbus; the daemon's signals use core_stop):
+ * LC_EV_STOP, LC_EV_START, LC_EV_CLEAR, LC_EV_END_OF_INPUT, LC_EV_OVERRIDE
+ * (arg: percent, 0 .. 200) through the owner's table (lifecycle.h), logged
+ * with the object and peer (NULL: unknown).  Returns 0, or -ENGINE_ESTATE
+ * (refused in this state: the caller counts it), -ENGINE_ERANGE.
+ */
+int obj_command(obj_t *o, lc_event_t ev, unsigned arg, const char *peer);
 
 /*
  * The safety monitor's bounds for object o: its safety_* keys, and where a
@@ -121,46 +145,53 @@ void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim);
 double obj_safety_accel(const engine_config_t *e);
 
 /*
- * Clear o (CAN and Modbus command "clear"): engine_clear, and if the safety
- * monitor holds o faulted, make the engine stand where the output is held
- * (engine_set_position) and rearm the monitor, so motion resumes from there
- * by a transfer.  The only way out of a safety fault.
+ * Clear o (CAN and Modbus command "clear"): LC_EV_CLEAR.  Moving, a
+ * controlled stop along its path that drops what is buffered; held (safety
+ * monitor, drive), the curve re-anchors at rest where the output was held
+ * (or at the drives' reported position) and the monitor is rearmed, so
+ * motion resumes from there by a transfer.  Releases every hold and a stop's
+ * latch: the only way out of a fault.
  */
 void obj_clear(obj_t *o);
 
 /*
- * Hold o (a CiA 402 drive's heartbeat lost): feed override 0, a controlled
- * stop along its path by the time scaling; until obj_clear, every source's
- * override above 0 is refused (obj_set_override).  The one owner of the hold.
+ * Hold o (a CiA 402 drive's heartbeat lost): LC_EV_HEARTBEAT_LOST, feed
+ * override 0, a controlled stop along its path by the time scaling; until
+ * obj_clear, every source's override above 0 is refused (obj_set_override).
  */
 void obj_hold(obj_t *o);
 
 /*
- * Feed override in percent (CAN and Modbus): engine_set_override, or
- * -ENGINE_ESTATE (refused, the caller counts it) while o is held and
+ * Feed override in percent (CAN and Modbus): LC_EV_OVERRIDE(_ZERO), or
+ * -ENGINE_ESTATE (refused, the caller counts it) while o is feed-held and
  * percent > 0.  obj_clear releases the hold and sets the feed back to 100 %.
  */
 int obj_set_override(obj_t *o, unsigned percent);
 
 /*
- * Where o really stands (a drive's position actual value): the engine holds
- * there (engine_set_position) and the safety monitor judges from there.
- * Returns what engine_set_position returns.
+ * Where o really stands (a drive's position actual value): LC_EV_FIRST_POSITION
+ * or LC_EV_DRIVE_ENABLED.  At rest, the curve stands there and the monitor
+ * judges from there; held, it is noted as where a clear re-anchors; after a
+ * clear of a drive hold, the curve re-anchors there and joins the track by a
+ * transfer.  Returns 0, -ENGINE_ESTATE (moving), -ENGINE_ENOTFINITE, -ENGINE_ERANGE.
  */
 int obj_set_position(obj_t *o, const double pos_m[ENGINE_AXES]);
 
 /*
- * o's drive stopped following (fault, quick stop, disabled): clear o and drop
- * its position (engine_require_position), so nothing a drive would follow is
- * sent until obj_set_position gives it again from the drive.
+ * o's drive stopped following (fault, quick stop, disabled): LC_EV_DRIVE_LOST.
+ * o is held at once (the commanded state stops moving, the curve is not
+ * advanced) until obj_clear; after it, nothing is sent until
+ * obj_set_position gives the drives' position again, unless it was given
+ * while held.
  */
 void obj_drive_lost(obj_t *o);
 
 /*
- * Offer a waypoint to o's engine: the one path every input uses (replay from
- * its pre_tick, CAN and Modbus from their fd callbacks).  Returns what
- * engine_push returns (0, ENGINE_DUPLICATE, -ENGINE_*), or -ENGINE_ESTATE
- * while the daemon is stopping.  The engine counts the outcome (o->status).
+ * Offer a waypoint to o (LC_EV_WAYPOINT): the one path every input uses
+ * (replay from its pre_tick, CAN and Modbus from their fd callbacks).
+ * Returns what engine_push returns (0, ENGINE_DUPLICATE, -ENGINE_*; 0 when
+ * the owner buffers it while stopped or held), or -ENGINE_ESTATE while the
+ * daemon is stopping.  The engine counts the outcome (o->status).
  */
 int obj_push(obj_t *o, const engine_waypoint_t *wp);
 
@@ -299,7 +330,7 @@ int core_start(core_t *c);
 void core_stop(core_t *c);
 
 /* 1 when stopping and every object is at rest or the stop timeout passed,
- * or when exit_when_done is set and every input is done and object finished.
+ * or when exit_when_done is set and every input is done and object finished (or held by a fault).
  * The tick checks it and then calls loop_stop(loop, 0), so loop_run returns 0. */
 int core_done(const core_t *c);
 

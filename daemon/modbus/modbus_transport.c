@@ -114,22 +114,17 @@ static int hook_command(void *ctx, unsigned k, unsigned cmd)
     obj_t *o = obj_at(t, k);
     if (!o)
         return MODBUS_SERVER_HOOK_EADDRESS;
-    int g = gate(o);
+    int g = gate(o); /* writable, stopping (gate.h) */
     if (g)
         return g;
-    engine_status_t st;
-    switch (cmd) {
-    case MBMAP_CMD_START:
-        engine_status(o->engine, &st);
-        if (st.state != ENGINE_STATE_WAITING)
-            return 0;
-        if (st.buffered == 0)
-            return -ENGINE_ESTATE;
-        return engine_finish(o->engine);
-    case MBMAP_CMD_STOP: return engine_stop(o->engine);
-    case MBMAP_CMD_CLEAR: obj_clear(o); return 0;
+    char peer[REJLOG_SRC_LEN];
+    snprintf(peer, sizeof peer, "modbus %s", t->srv ? modbus_server_peer(t->srv) : "");
+    switch (cmd) { /* through the object's owner, logged with the peer (objlife.c) */
+    case MBMAP_CMD_START: return obj_command(o, LC_EV_START, 0, peer);
+    case MBMAP_CMD_STOP: return obj_command(o, LC_EV_STOP, 0, peer);
+    case MBMAP_CMD_CLEAR: return obj_command(o, LC_EV_CLEAR, 0, peer);
     case MBMAP_CMD_RESET_COUNTERS: obj_reset_counters(o); return 0;
-    case MBMAP_CMD_FINISH: return engine_finish(o->engine);
+    case MBMAP_CMD_FINISH: return obj_command(o, LC_EV_END_OF_INPUT, 0, peer);
     default: return -ENGINE_ESTATE;
     }
 }
@@ -141,7 +136,11 @@ static int hook_override(void *ctx, unsigned k, unsigned percent)
     if (!o)
         return MODBUS_SERVER_HOOK_EADDRESS;
     int g = gate(o);
-    return g ? g : obj_set_override(o, percent);
+    if (g)
+        return g;
+    char peer[REJLOG_SRC_LEN];
+    snprintf(peer, sizeof peer, "modbus %s", t->srv ? modbus_server_peer(t->srv) : "");
+    return obj_command(o, LC_EV_OVERRIDE, percent, peer);
 }
 
 static void on_ready(loop_t *l, int fd, uint32_t events, void *ctx)

@@ -15,6 +15,7 @@
  * All memory is taken in engine_new; push, tick, finish, clear never allocate.
  */
 #include "engine.h"
+#include "engine_int.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -28,155 +29,6 @@
 #include "lsq.h"
 #include "timescale.h"
 #include "transfer.h"
-
-#define AX ENGINE_AXES
-
-enum { QE_SEG = 0, QE_END = 1 };
-
-/* One queued entry: a segment to stream, or the rest point ending a trajectory. */
-typedef struct {
-    int kind;
-    int first;       /* first entry of its trajectory */
-    double t1_s;     /* segment end (absolute track time); END: rest time */
-    uint64_t node;   /* SEG: index of its first node in the trajectory */
-    uint64_t traj;   /* input trajectory it belongs to (engine.in_traj) */
-    fdiff_seg_t seg; /* END: c[k][0] is the rest position, t0_s = t1_s */
-    double gap_s;    /* first entry: track time since the previous trajectory's
-                             end when a gap separates them, else 0 */
-    double vmax;     /* SEG: bound on the curve's speed |k'| over it (m/s) */
-    double kcum;     /* SEG: braking capacity of its trajectory up to its end,
-                        the sum of dur / max(vmax, floor) (see remaining()) */
-    double ucum;     /* SEG: the rises of 1 / max(vmax, floor) from each segment
-                          of its trajectory to the next, summed up to it */
-    double ceil;     /* SEG: the highest rate at which it keeps the speed cap
-                        (ENGINE_SPEED_CAP; INFINITY if none) */
-} qent_t;
-
-/* The lowest speed cap rate: below the time scaling's dead band (at most
- * TS_DEAD_BAND_MAX) the output would never leave rest before such a segment. */
-#define ENGINE_CEIL_MIN 0.01
-
-enum { OUT_HOLD = 0, OUT_XFER = 1, OUT_STREAM = 2 };
-enum { STOP_NONE = 0, STOP_STOP = 1, STOP_CLEAR = 2 };
-
-struct engine {
-    engine_config_t cfg; /* resolved: fragment and overlap never ENGINE_AUTO */
-    unsigned lookahead;
-    unsigned la_steady;   /* what the solver needs far from the start (steady_lookahead) */
-    int slack_auto;       /* start_slack auto (engine.h) */
-    unsigned slack_learn; /* start_slack auto: one more per underrun seen */
-    unsigned slack_more;  /* start_slack auto: the most it adds to lookahead
-                             (ENGINE_SLACK_AUTO_MAX - MIN, less if capacity is short) */
-    double span_max;      /* start_slack auto: longest time spanned by la_steady + 1
-                           intervals of the input, decaying by 1/256 per node */
-    double vmax_in;       /* start_slack auto: fastest chord speed of the input,
-                           decaying the same way */
-    int pstar;            /* unknowns are Hoang control points (BSPLINE + UNIFORM) */
-    int held;             /* HELD or MULTIPLE: first and last segments not emitted */
-    int mult;             /* MULTIPLE: end points entered three times */
-    int smooth;           /* SMOOTH: waypoints pass through the lsq smoother first */
-    lsq_smooth_t sm;
-    double *sm_mem;
-    double first_r[AX]; /* first waypoint of the current trajectory */
-    double period_s;
-
-    /* ---- input: the trajectory being received ---- */
-    int in_open;
-    uint64_t nodes;    /* nodes of the current trajectory (copies included) */
-    uint64_t seg_next; /* next segment index to build */
-    size_t ring;       /* nodes kept */
-    double *node_t;    /* ring */
-    double *node_r;    /* ring x AX */
-    frag_t *fw;
-    int in_emitted;       /* a segment of this trajectory was queued */
-    int in_first_pending; /* the next queued entry is the trajectory's first */
-    double last_t;        /* last accepted waypoint of the current trajectory */
-    double last_r[AX];
-    int have_prev; /* prev_t/prev_r hold the waypoint before last (same trajectory) */
-    double prev_t; /* for the acceleration check */
-    double prev_r[AX];
-    double end_r[AX]; /* end of the last queued segment */
-    double end_t;
-    double end_speed; /* speed at the end of the last queued segment */
-    double in_kcum;   /* capacity queued so far of the trajectory (qent_t kcum) */
-    double in_inv;    /* 1 / max(vmax, floor) of its last queued segment */
-    double in_ucum;   /* qent_t ucum so far */
-    uint64_t in_traj; /* +1 per trajectory opened */
-    double in_gap_s;  /* gap before the trajectory being received (0: none) */
-
-    /* ---- acceptance (accept.h) and transfers (transfer.h) ---- */
-    accept_t policy;
-    transfer_config_t xcfg;
-    transfer_motion_t motion;
-    engine_rejection_t rej[ENGINE_REJECTIONS_KEPT];
-    unsigned rej_head, rej_len;
-
-    /* ---- the queue ---- */
-    qent_t *q;
-    size_t qcap, qhead, qlen;
-    size_t qends; /* END entries in the queue */
-
-    /* ---- output ---- */
-    int mode;
-    int have_pos; /* the output stands somewhere real: set by engine_set_position,
-                             or the first waypoint adopted as the last resort.  From then on
-                             the output only moves by streaming or by a transfer */
-    int need_pos; /* engine_require_position: no first-waypoint fallback */
-    int finished; /* the last trajectory ran to its end */
-    int underrun;
-    qent_t cur;            /* segment (or transfer) being stepped */
-    double cur_t0, cur_t1; /* its start and end relative to base */
-    fdiff_t fd;
-    int64_t n;       /* ticks since base */
-    int64_t seg_n0;  /* tick at which cur was seeded */
-    double origin_t; /* absolute track time of tick 0 of the trajectory */
-    double pos[AX], vel[AX], acc[AX];
-    double out_t; /* track time of the output */
-    uint32_t out_track;
-    uint32_t cycle;
-    uint32_t flags_pending;
-    int have_now;
-    int64_t last_now;
-    engine_setpoint_t last_sp;
-
-    /* ---- time scaling (timescale.h, TIMESCALE.md) ---- */
-    ts_state_t ts;     /* rate ds/dt and its derivative */
-    int scaled;        /* off the unit grid: the output's track time is s */
-    double s;          /* scaled: track time of the output, relative to origin_t */
-    double s_off;      /* unit grid: track time = tick_time(n) + s_off */
-    double cspeed;     /* |k'(s)|: the curve's own speed at the output */
-    double override;   /* feed override 0 .. 2 */
-    int stop_req;      /* STOP_*: braking to rest, then drop */
-    size_t drop_n;     /* queue entries to drop once at rest */
-    uint64_t out_traj; /* trajectory the output streams */
-    double avail_t;    /* end of its solved curve (absolute track time) */
-    double avail_kcum; /* braking capacity up to there (qent_t kcum) */
-    double avail_ucum; /* ... and the rises of the limits (qent_t ucum) */
-    int avail_closed;  /* its END is queued */
-    int avail_rest;    /* ... and the curve ends at rest there */
-    int end_brake;     /* braking to rest before an end that is not at rest */
-    size_t *slow;      /* ring (qcap): the queue slots, in queue order, of the
-                     segments whose speed cap holds the rate below TS_RATE_MAX */
-    size_t slow_head, slow_len;
-
-    /* ---- one clock (engine_set_clock, CLOCK.md) ---- */
-    int clocked;          /* the output follows the caller's clock */
-    int locked;           /* its track time is exactly the play time */
-    int64_t clk_now_ns;   /* now on the sender's time base (last call) */
-    int64_t clk_delay_ns; /* play-out delay D */
-    double clk_rate;      /* d now / dt */
-    double clk_catchup;   /* most the rate rises above clk_rate */
-    int64_t play_ns;      /* now - D at the step being made */
-
-    /* ---- fast ticks (fast_window, fast_tick) ---- */
-    int64_t fast_left; /* ticks ahead that are certainly plain unit-grid steps */
-    int fast_off;      /* engine_set_fast_ticks(e, 0): every tick the full way */
-    int fast_last;     /* the last tick was fast: last_sp and cspeed not yet written */
-
-    engine_status_t st;
-};
-
-static void fast_close(engine_t *e);
 
 /* Output and curve start closer than this need no transfer (metres). */
 #define ENGINE_TRANSFER_TOL_M 1e-9
@@ -1060,7 +912,7 @@ static int reject_wp(engine_t *e, int code, const engine_waypoint_t *wp)
 
 int engine_rejection_next(engine_t *e, engine_rejection_t *r)
 {
-    fast_close(e); /* whatever it changes, the next tick looks again */
+    engine_fast_close(e); /* whatever it changes, the next tick looks again */
     if (!e->rej_len)
         return 0;
     *r = e->rej[e->rej_head];
@@ -1181,7 +1033,7 @@ int engine_waypoint_check(const engine_config_t *cfg, const engine_waypoint_t *w
 
 int engine_push(engine_t *e, const engine_waypoint_t *wp)
 {
-    fast_close(e); /* whatever it changes, the next tick looks again */
+    engine_fast_close(e); /* whatever it changes, the next tick looks again */
     int rc = engine_waypoint_check(&e->cfg, wp);
 
     if (rc < 0)
@@ -1201,7 +1053,7 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
 
 int engine_finish(engine_t *e)
 {
-    fast_close(e); /* whatever it changes, the next tick looks again */
+    engine_fast_close(e); /* whatever it changes, the next tick looks again */
     int rj = judge(e, 1);
     int rc = close_input(e);
 
@@ -1209,123 +1061,6 @@ int engine_finish(engine_t *e)
     if (!e->qlen && e->mode == OUT_HOLD && !e->in_open)
         e->finished = 1; /* nothing left to stream: the input is over */
     return rc < 0 ? rc : rj < 0 ? rj : 0;
-}
-
-/* Forget the trajectory being received: the next waypoint opens a new one. */
-static void drop_input(engine_t *e)
-{
-    accept_reset(&e->policy);
-    e->in_open = 0;
-    e->nodes = 0;
-    e->seg_next = 0;
-    frag_reset(e->fw);
-    if (e->smooth)
-        lsq_smooth_reset(&e->sm);
-}
-
-/*
- * Stop or clear: the input is dropped now; an output that stands still
- * drops the queue now too, a moving one brakes along its path (target rate
- * 0 in the time scaling) and drops what was queued at this call once at
- * rest (stop_at_rest).
- */
-static void request_stop(engine_t *e, int kind)
-{
-    drop_input(e);
-    e->underrun = 0;
-    if (e->mode == OUT_HOLD) {
-        e->qhead = 0;
-        e->qlen = 0;
-        e->slow_len = 0;
-        e->qends = 0;
-        e->finished = kind == STOP_STOP;
-        e->stop_req = STOP_NONE;
-        e->drop_n = 0;
-        return;
-    }
-    e->finished = 0;
-    e->stop_req = kind; /* the later command decides the state at rest, as when holding */
-    e->drop_n = e->qlen;
-}
-
-int engine_stop(engine_t *e)
-{
-    fast_close(e); /* whatever it changes, the next tick looks again */
-    request_stop(e, STOP_STOP);
-    return 0;
-}
-
-void engine_clear(engine_t *e)
-{
-    fast_close(e); /* whatever it changes, the next tick looks again */
-    request_stop(e, STOP_CLEAR);
-}
-
-int engine_set_override(engine_t *e, double ratio)
-{
-    fast_close(e); /* whatever it changes, the next tick looks again */
-    if (!(ratio >= 0 && ratio <= TS_RATE_MAX))
-        return -ENGINE_ERANGE;
-    e->override = ratio;
-    return 0;
-}
-
-int engine_set_clock(engine_t *e, const engine_clock_t *clk)
-{
-    fast_close(e); /* whatever it changes, the next tick looks again */
-    if (!(clk->delay_ns >= 0) || !(fabs(clk->rate - 1.0) <= ENGINE_CLOCK_RATE_TOL) ||
-        !(clk->catchup >= 0 && clk->catchup <= 1))
-        return -ENGINE_ERANGE;
-    e->clocked = 1;
-    e->clk_now_ns = clk->now_ns;
-    e->clk_delay_ns = clk->delay_ns;
-    e->clk_rate = clk->rate;
-    e->clk_catchup = clk->catchup;
-    e->play_ns = clk->now_ns - clk->delay_ns;
-    return 0;
-}
-
-int engine_set_position(engine_t *e, const double pos_m[ENGINE_AXES])
-{
-    fast_close(e); /* whatever it changes, the next tick looks again */
-    for (int k = 0; k < AX; k++) {
-        if (!isfinite(pos_m[k]))
-            return -ENGINE_ENOTFINITE;
-        if (fabs(pos_m[k]) > e->cfg.max_abs_m)
-            return -ENGINE_ERANGE;
-    }
-    if (e->mode != OUT_HOLD)
-        return -ENGINE_ESTATE;
-    for (int k = 0; k < AX; k++) {
-        e->pos[k] = pos_m[k];
-        e->vel[k] = e->acc[k] = 0.0;
-    }
-    e->have_pos = 1;
-    return 0;
-}
-
-void engine_require_position(engine_t *e, int on)
-{
-    fast_close(e); /* whatever it changes, the next tick looks again */
-    e->need_pos = on != 0;
-    /* holding: the position it had is not trusted any more */
-    if (e->need_pos && e->mode == OUT_HOLD)
-        e->have_pos = 0;
-}
-
-int engine_has_position(const engine_t *e)
-{
-    return e->have_pos;
-}
-
-void engine_reset_counters(engine_t *e)
-{
-    fast_close(e); /* whatever it changes, the next tick looks again */
-    uint32_t last_seq = e->st.last_seq;
-
-    memset(&e->st, 0, sizeof(e->st));
-    e->st.last_seq = last_seq;
-    e->st.lookahead = e->lookahead + e->slack_learn;
 }
 
 /* ---- output side --------------------------------------------------------- */
@@ -1704,6 +1439,7 @@ static void start_transfer(engine_t *e, const double *target, double gap_s)
     double dur = xfer_duration(e, target, gap_s, &capped);
 
     memset(&e->cur, 0, sizeof(e->cur));
+    e->xfer_from_t = e->out_track ? e->out_t : NAN;
     e->cur.kind = QE_SEG;
     transfer_segment(&e->cur.seg, e->pos, target, dur);
     e->cur.vmax = seg_speed_max(&e->cur.seg);
@@ -2222,6 +1958,25 @@ static engine_state_t out_state(const engine_t *e)
     return e->finished ? ENGINE_STATE_FINISHED : ENGINE_STATE_WAITING;
 }
 
+/* A transfer's track time: from where the output's time stood when it began
+ * to the start of the trajectory it joins, in proportion to the transfer
+ * done (from that start less the transfer's duration if the output had no
+ * time before), so t_s and the data age say what the object does and reach
+ * that start as it does. */
+static void xfer_track_time(engine_t *e)
+{
+    const qent_t *h = e->qlen ? &e->q[e->qhead] : NULL; /* q_head, read only */
+    if (!h || !(e->cur_t1 > 0))
+        return;
+    double t = e->scaled ? e->s : tau_of(e, e->n), u = t / e->cur_t1;
+    double to = h->kind == QE_END ? h->t1_s : h->seg.t0_s;
+    u = u < 0 ? 0 : u > 1 ? 1 : u;
+    if (isnan(e->xfer_from_t))
+        e->out_t = to - (1.0 - u) * e->cur_t1;
+    else
+        e->out_t = e->xfer_from_t + (to - e->xfer_from_t) * u;
+}
+
 static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
     engine_state_t s = out_state(e);
@@ -2246,6 +2001,8 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
         if (h || e->in_open)
             e->have_pos = 1;
     }
+    if (e->mode == OUT_XFER)
+        xfer_track_time(e);
     sp->t_s = e->out_t;
     memcpy(sp->pos_m, e->pos, sizeof(sp->pos_m));
     if (!e->have_pos)
@@ -2410,7 +2167,7 @@ static int fast_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     return 1;
 }
 
-static void fast_close(engine_t *e)
+void engine_fast_close(engine_t *e)
 {
     e->fast_left = 0;
     fast_sync(e);
@@ -2418,7 +2175,7 @@ static void fast_close(engine_t *e)
 
 void engine_set_fast_ticks(engine_t *e, int on)
 {
-    fast_close(e);
+    engine_fast_close(e);
     e->fast_off = !on;
 }
 

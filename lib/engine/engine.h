@@ -442,6 +442,17 @@ int engine_stop(engine_t *e);
 int engine_set_position(engine_t *e, const double pos_m[ENGINE_AXES]);
 
 /*
+ * Stand at pos_m at rest now, whatever the output was doing: every
+ * waypoint and segment buffered is dropped, the state is WAITING and the
+ * next waypoint starts a new trajectory, reached by a transfer.  Only for
+ * an output that was not sent (the lifecycle owner froze it: a safety or
+ * drive hold, lifecycle.h), so stopping it is no step of what went out.
+ * Returns 0, -ENGINE_ENOTFINITE or -ENGINE_ERANGE (|coordinate| >
+ * max_abs_m; the engine is then unchanged).
+ */
+int engine_halt(engine_t *e, const double pos_m[ENGINE_AXES]);
+
+/*
  * on = 1: no first-waypoint fallback; the output stays without a position
  * (ENGINE_SP_NO_POSITION, WAITING) and buffers waypoints until
  * engine_set_position gives one (e.g. the drive's position actual value is

@@ -1125,8 +1125,8 @@ int canproto_dbc(char *buf, size_t len)
          "layout sent with can.cia402_controlword = yes, shown on the RPDO2 ids 0x301..0x303; "
          "TPDO1: the drive feedback trajd reads, statusword 0x6041 and position actual value "
          "0x6064). Setpoint positions 0x80000000: no position yet, do not move.\";\n"
-         "CM_ SG_ %u WP_Command \"1 finish, 2 stop now, 3 clear, 4 reset counters, 5 feed "
-         "override\";\n"
+         "CM_ SG_ %u WP_Command \"1 finish, 2 stop now (latched until start or clear), 3 "
+         "clear, 4 reset counters, 5 feed override, 6 start\";\n"
          "CM_ SG_ %u WP_CommandArg \"feed override in percent (0..200) for command 5, else 0\";\n"
          "CM_ SG_ %u ST_LastErr \"1..13 engine_error of the last rejected waypoint, 0x40 "
          "malformed, 0x41 lost, 0x42 out of order, 0x43 setpoints dropped, 0x44 bus down, 0x45 "
@@ -1194,9 +1194,9 @@ int canproto_dbc(char *buf, size_t len)
          CANPROTO_MUX_FD_WAYPOINT);
     emit(buf, len, &pos,
          "VAL_ %u WP_Command %d \"finish\" %d \"stop\" %d \"clear\" %d \"reset counters\" %d "
-         "\"feed override\" ;\n",
+         "\"feed override\" %d \"start\" ;\n",
          CANPROTO_ID_WAYPOINT_BASE, CANPROTO_CMD_FINISH, CANPROTO_CMD_STOP, CANPROTO_CMD_CLEAR,
-         CANPROTO_CMD_RESET_COUNTERS, CANPROTO_CMD_OVERRIDE);
+         CANPROTO_CMD_RESET_COUNTERS, CANPROTO_CMD_OVERRIDE, CANPROTO_CMD_START);
     emit(buf, len, &pos, "VAL_ %u SP_Axis 0 \"x\" 1 \"y\" 2 \"z\" ;\n", CANPROTO_ID_SETPOINT_BASE);
     emit(buf, len, &pos, "VAL_ %u SP_State %s ;\n", CANPROTO_ID_SETPOINT_BASE, states);
     emit(buf, len, &pos, "VAL_ %u SPFD_State %s ;\n", CANPROTO_ID_SETPOINT_FD_BASE, states);

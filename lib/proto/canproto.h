@@ -161,13 +161,15 @@ enum canproto_mux {
 #define CANPROTO_OVERRIDE_MAX_PCT 200
 typedef enum {
     CANPROTO_CMD_FINISH = 1,         /* end of input: run to the last waypoint (engine_finish) */
-    CANPROTO_CMD_STOP = 2,           /* engine_stop: stop now along the path, then drop */
+    CANPROTO_CMD_STOP = 2,           /* stop now along the path, latched until START or CLEAR */
     CANPROTO_CMD_CLEAR = 3,          /* engine_clear; sequence numbering restarts */
     CANPROTO_CMD_RESET_COUNTERS = 4, /* engine and CAN counters to zero */
     CANPROTO_CMD_OVERRIDE = 5,       /* feed override: byte 3 = percent, 0 .. 200
                                         (engine_set_override); 201..255 is a
                                         well-formed command the receiver refuses
                                         (a refused command, not a malformed frame) */
+    CANPROTO_CMD_START = 6,          /* start: release a stop's latch and join the live
+                                        track by a transfer (lib/engine/LIFECYCLE.md) */
     CANPROTO_CMD_COUNT
 } canproto_cmd_t;
 

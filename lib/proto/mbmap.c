@@ -712,7 +712,8 @@ static const mbmap_field_t fields[] = {
       "copy of generation (whole-block reads)"),
 
     F(HO, MBMAP_H_COMMAND, 1, MBMAP_T_U16, "command", "",
-      "1 start, 2 stop now, 3 clear, 4 reset counters, 5 finish"),
+      "1 start, 2 stop now (latched until start or clear), 3 clear, 4 reset counters, 5 "
+      "finish"),
     F(HO, MBMAP_H_OVERRIDE, 1, MBMAP_T_U16, "override", "%",
       "feed override 0..200: the same path at this % of the solved speed, ramped "
       "(lib/engine/TIMESCALE.md)"),

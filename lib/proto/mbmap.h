@@ -216,8 +216,9 @@
 #define MBMAP_H_WPF_COUNT 10
 
 /* Commands (holding register MBMAP_H_COMMAND). */
-#define MBMAP_CMD_START 1            /* start now with what is buffered (see config/PROTOCOL.md) */
-#define MBMAP_CMD_STOP 2             /* stop now along the path, then drop (engine_stop) */
+#define MBMAP_CMD_START 1            /* release a stop's latch and join the live track by a
+                                        transfer; waiting: start with what is buffered */
+#define MBMAP_CMD_STOP 2             /* stop now along the path, latched until START or CLEAR */
 #define MBMAP_CMD_CLEAR 3            /* stop along the path, drop, WAITING (engine_clear) */
 #define MBMAP_CMD_RESET_COUNTERS 4   /* engine_reset_counters + Modbus counters */
 #define MBMAP_CMD_FINISH 5           /* end of input: run to the last waypoint (engine_finish) */

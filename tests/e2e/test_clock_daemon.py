@@ -24,7 +24,12 @@ entered at rate 0, behind the clock, and catches up until it locks on it
     gives;
   - the exit status line gives each object's data age, as its last CSV row.
 Nothing here measures time: the age and the skew are the engine's, exact
-whatever the load.
+whatever the load.  But a loaded machine may make trajd miss deadlines: an
+object then goes on from its last setpoint, behind the clock, and wins the
+lag back by its catch-up (a stall is no step: lib/engine/LIFECYCLE.md), so
+it is off the clock for a while.  The snapshots compared are those with no
+deadline missed since both objects (re)locked, and the CSV rows from the
+lock to the next row flagged SKIPPED (4), per stretch.
 """
 import csv
 import math
@@ -48,7 +53,8 @@ TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
 WAIT_S = 60
 D = 2.5
 STREAMING = 1
-TRACK_S = 30.0  # each start locks within about 20 s: its lag won back, the last of it
+TRACK_S = 60.0  # each start locks within about 20 s (and again after a missed deadline,
+# which a loaded machine may make: room for both): its lag won back, the last of it
 # decaying with a time constant of 1 s down to 1 us
 # Locked, the age is D to the rounding of t_s (a double epoch time: 1.2e-7 s); the
 # last ticks before the lock are 0.8e-6 s behind or more (ENGINE_CLOCK_LOCK_S, 1e-6)
@@ -106,6 +112,7 @@ class OneClock(unittest.TestCase):
                 self.assertIsNone(rc, "object %d waypoint %d: exception %r" % (k, i, rc))
         base0, base1 = obj_base(0), obj_base(1)
         tid = self.wait_locked(s, tid)
+        missed = self.missed(s, tid)
         first = base0 + M["MBMAP_O_STATE"]
         last = base1 + M["MBMAP_O_T_S"] + 4
         both = 0
@@ -113,6 +120,11 @@ class OneClock(unittest.TestCase):
         while both < 30 and time.monotonic() < deadline:
             tid += 1
             r = mbsim.read_input(s, first, last - first, tid)
+            tid += 1
+            if self.missed(s, tid) != missed:  # off the clock a while: wait for the lock
+                tid = self.wait_locked(s, tid)
+                missed = self.missed(s, tid)
+                continue
             st0 = r[base0 + M["MBMAP_O_STATE"] - first]
             st1 = r[base1 + M["MBMAP_O_STATE"] - first]
             ts0 = mbsim.f64(r, base0 + M["MBMAP_O_T_S"] - first)
@@ -147,12 +159,19 @@ class OneClock(unittest.TestCase):
             # SIGTERM stops along the path (the age then grows): rows before it
             streaming = [r for r in rd[1:]
                          if r[12] == "streaming" and int(r[14]) <= before_stop]
-            at_d = [abs(float(r[16]) - D) <= AT_D for r in streaming]
-            lock = next(i for i in range(len(at_d) - 1) if at_d[i] and at_d[i + 1])
-            locked = streaming[lock:]
+            # per stretch between missed deadlines (rows flagged 4)
+            cuts = [0] + [i for i, r in enumerate(streaming) if int(r[13]) & 4] + [len(streaming)]
+            locked = []
+            for a, b in zip(cuts, cuts[1:]):
+                part = streaming[a:b]
+                at_d = [abs(float(r[16]) - D) <= AT_D for r in part]
+                lock = next((i for i in range(len(at_d) - 1) if at_d[i] and at_d[i + 1]), None)
+                if lock is None:
+                    continue
+                for r in part[lock:]:
+                    self.assertAlmostEqual(float(r[16]), D, delta=AT_D, msg=repr(r))
+                locked += part[lock:]
             self.assertGreater(len(locked), 30)
-            for r in locked:
-                self.assertAlmostEqual(float(r[16]), D, delta=AT_D, msg=repr(r))
             rows[name] = {r[14]: r[2] for r in locked}
         common = set(rows["a"]) & set(rows["b"])
         self.assertGreater(len(common), 30)
@@ -171,6 +190,10 @@ class OneClock(unittest.TestCase):
             self.assertIsNotNone(m, ex[0])
             self.assertAlmostEqual(float(m.group(1)), float(last[16]), delta=0.0005 + 1e-9)
         self.check_status2_clock(drift_ppm)
+
+    def missed(self, s, tid):
+        """The daemon's missed deadlines so far."""
+        return mbsim.u32(mbsim.read_input(s, M["MBMAP_D_MISSED_TICKS"], 2, tid), 0)
 
     def wait_locked(self, s, tid):
         """Wait until both objects have been locked on the clock (data age D)

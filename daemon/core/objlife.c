@@ -1,0 +1,137 @@
+/* objlife.c - an object's inputs and commands, through the one owner of its
+ * motion (lib/engine/lifecycle.h): waypoints, stop, start, clear, override,
+ * holds, drive positions (core.h). */
+#include <math.h>
+#include <stdio.h>
+
+#include "core.h"
+#include "log.h"
+
+lifecycle_t *obj_lc(obj_t *o)
+{
+    /* bound here, not at creation only: an object carried over a reload, or
+     * one a test builds by hand, keeps one owner for its engine */
+    o->lc.engine = o->engine;
+    o->lc.safety = &o->safety;
+    if (o->lc.period_ns <= 0)
+        o->lc.period_ns = 1;
+    return &o->lc;
+}
+
+/* One clock (lib/engine/CLOCK.md): an undecided object's first waypoint
+ * decides whether its times are epoch time (within clock_window_s of now). */
+static void obj_clock_decide(obj_t *o, const engine_waypoint_t *wp, int64_t real_ns)
+{
+    if (o->clocked >= 0 || !isfinite(wp->t_s))
+        return;
+    o->clocked = fabs(wp->t_s - (double)real_ns * 1e-9) <= o->clock_window_s;
+    log_msg(LOG_INFO, "object '%s': first waypoint at t = %.3f s: %s", o->name, wp->t_s,
+            o->clocked ? "epoch time, played out on the daemon's clock"
+                       : "relative time, the object keeps its own origin");
+}
+
+int obj_push_from(obj_t *o, const engine_waypoint_t *wp, const char *src)
+{
+    if (o->stopping)
+        return -ENGINE_ESTATE;
+    int64_t real_ns = o->clocked ? core_real_ns() : 0;
+    obj_clock_decide(o, wp, real_ns);
+    rejlog_offered(&o->rejlog, wp, src);
+    int rc = lc_push(obj_lc(o), wp);
+    rejlog_drain(&o->rejlog, o->engine);
+    if (rc == 0 && o->clocked == 1 && o->drift)
+        playout_drift_add(o->drift, real_ns, wp->t_s);
+    return rc;
+}
+
+int obj_push(obj_t *o, const engine_waypoint_t *wp)
+{
+    return obj_push_from(o, wp, NULL);
+}
+
+static void sync_held(obj_t *o)
+{
+    o->held = (o->lc.hold & LC_HOLD_FEED) != 0;
+}
+
+void obj_clear(obj_t *o)
+{
+    (void)lc_event(obj_lc(o), LC_EV_CLEAR, NULL);
+    sync_held(o);
+}
+
+void obj_hold(obj_t *o)
+{
+    (void)lc_event(obj_lc(o), LC_EV_HEARTBEAT_LOST, NULL);
+    sync_held(o);
+}
+
+int obj_set_override(obj_t *o, unsigned percent)
+{
+    lc_arg_t a = {percent / 100.0, NULL, NULL};
+    if (percent > 200)
+        return -ENGINE_ERANGE;
+    return lc_event(obj_lc(o), percent ? LC_EV_OVERRIDE : LC_EV_OVERRIDE_ZERO, &a);
+}
+
+int obj_set_position(obj_t *o, const double pos_m[ENGINE_AXES])
+{
+    return lc_set_position(obj_lc(o), pos_m);
+}
+
+void obj_drive_lost(obj_t *o)
+{
+    (void)lc_event(obj_lc(o), LC_EV_DRIVE_LOST, NULL);
+}
+
+/* One line per command, at most OBJ_CMD_LOG_PER_S a second per object. */
+static void log_command(obj_t *o, lc_event_t ev, unsigned arg, const char *peer, lc_state_t from,
+                        int rc)
+{
+    int64_t s = core_mono_ns() / 1000000000;
+    if (s != o->cmd_log_s) {
+        o->cmd_log_s = s;
+        o->cmd_log_n = 0;
+    }
+    if (o->cmd_log_n >= OBJ_CMD_LOG_PER_S) {
+        o->cmd_log_dropped++;
+        return;
+    }
+    o->cmd_log_n++;
+    char more[64] = "";
+    if (o->cmd_log_dropped)
+        snprintf(more, sizeof more, " (%llu command lines not shown before)",
+                 (unsigned long long)o->cmd_log_dropped);
+    o->cmd_log_dropped = 0;
+    char val[96] = "";
+    if (ev == LC_EV_OVERRIDE || ev == LC_EV_OVERRIDE_ZERO)
+        snprintf(val, sizeof val, " %u %%", arg);
+    else if (ev == LC_EV_START || ev == LC_EV_CLEAR)
+        snprintf(val, sizeof val, " (waypoints while stopped or held: %llu buffered, %llu dropped)",
+                 (unsigned long long)o->lc.n.buffered,
+                 (unsigned long long)(o->lc.n.dropped_past + o->lc.n.dropped_full));
+    log_at(__FILE__, __LINE__, __func__, o->name, peer ? peer : "unknown", LOG_NOTICE,
+           "object '%s': command %s%s from %s in state %s: %s -> %s%s", o->name, lc_event_name(ev),
+           val, peer ? peer : "an unknown peer", lc_state_name(from),
+           rc < 0 ? "refused" : lc_action_name((lc_action_t)lc_table[from][ev].action),
+           lc_state_name(lc_state(&o->lc)), more);
+}
+
+int obj_command(obj_t *o, lc_event_t ev, unsigned arg, const char *peer)
+{
+    lifecycle_t *lc = obj_lc(o);
+    lc_state_t from = lc_state(lc);
+    int rc;
+    switch (ev) {
+    case LC_EV_OVERRIDE:
+    case LC_EV_OVERRIDE_ZERO: rc = obj_set_override(o, arg); break;
+    case LC_EV_STOP:
+    case LC_EV_START:
+    case LC_EV_CLEAR:
+    case LC_EV_END_OF_INPUT: rc = lc_event(lc, ev, NULL); break;
+    default: rc = -ENGINE_ERANGE; break;
+    }
+    sync_held(o);
+    log_command(o, ev, arg, peer, from, rc);
+    return rc;
+}

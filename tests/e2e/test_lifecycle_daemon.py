@@ -1,0 +1,289 @@
+"""test_lifecycle_daemon.py - the lifecycle owner (lib/engine/LIFECYCLE.md) in trajd,
+seen from outside: its setpoint rows and a Modbus client's commands.
+
+- Stall: trajd replaying a track moving at 2 m/s in real time is frozen for 1 s
+  (SIGSTOP). Its next setpoint goes on from the last one sent: no step between two
+  rows beyond one period of motion at the object's speed bound (1.5 max_speed_m_s,
+  engine.h). Before the owner, trajd stepped the engine through every missed
+  deadline and sent a target a whole second ahead.
+- Stop now, latched: a Modbus client streams a track, sends STOP, and goes on
+  sending waypoints for 6 s. The object stays at rest (not one row moves) until
+  START, then moves again, with no step. Before, the sender's next waypoints
+  restarted the object about 2.5 s after the stop.
+- Clear after a safety hold: the monitor's speed bound is below the track's speed,
+  so the object is held; the client sends CLEAR and a slower track. The object
+  resumes from the held position by a transfer (rows move again, none refused).
+  Before, the engine kept moving while the output was held, and after the clear
+  the monitor refused the jump back to the engine and held the object to the end.
+Every command received is logged with the object and the client.
+"""
+import math
+import os
+import signal
+import struct
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+import mbsim  # noqa: E402
+from mbsim import M, obj_base  # noqa: E402
+
+TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
+WAIT_S = 30
+PERIOD_S = 0.01
+MAX_SPEED = 5.0
+STEP_MAX = 1.5 * MAX_SPEED * PERIOD_S * 1.0001 + 1e-9  # engine.h ENGINE_SPEED_CAP
+
+
+def circle(t):
+    return (10.0 * math.cos(0.2 * t), 10.0 * math.sin(0.2 * t), 0.0)
+
+
+class Rows:
+    """Setpoint rows (object,now_ns,t_s,x,y,z,...,state,flags,...) from a stream,
+    read by a thread."""
+
+    def __init__(self, stream):
+        self.rows = []
+        self.cv = threading.Condition()
+        threading.Thread(target=self._run, args=(stream,), daemon=True).start()
+
+    def _run(self, stream):
+        for line in stream:
+            f = line.strip().split(",")
+            if len(f) < 14 or not f[1].isdigit():
+                continue
+            with self.cv:
+                self.rows.append((int(f[1]), float(f[2]), float(f[3]), float(f[4]),
+                                  float(f[5]), f[12], int(f[13])))
+                self.cv.notify_all()
+
+    def wait(self, n, timeout=WAIT_S):
+        """Wait until at least n rows; returns them all."""
+        end = time.monotonic() + timeout
+        with self.cv:
+            while len(self.rows) < n:
+                left = end - time.monotonic()
+                if left <= 0:
+                    raise AssertionError("only %d of %d rows" % (len(self.rows), n))
+                self.cv.wait(left)
+            return list(self.rows)
+
+
+class FileRows(Rows):
+    """Rows of a CSV file trajd writes, followed as it grows."""
+
+    def __init__(self, path):
+        self.path = path
+        super().__init__(self._follow())
+
+    def _follow(self):
+        while not os.path.exists(self.path):
+            time.sleep(0.01)
+        with open(self.path) as f:
+            buf = ""
+            while True:
+                chunk = f.readline()
+                if not chunk:
+                    time.sleep(0.01)
+                    continue
+                buf += chunk
+                if buf.endswith("\n"):
+                    yield buf
+                    buf = ""
+
+
+def step(a, b):
+    return math.dist(a[2:5], b[2:5])
+
+
+def max_step(rows):
+    return max((step(a, b), i) for i, (a, b) in enumerate(zip(rows, rows[1:])))
+
+
+class Stall(unittest.TestCase):
+    def test_stall_goes_on_from_last_sent(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            track = os.path.join(tmp, "circle.csv")
+            with open(track, "w") as f:
+                f.write("t,x,y,z\n")
+                for i in range(600):
+                    f.write("%.1f,%.6f,%.6f,%.6f\n" % ((0.1 * i,) + circle(0.1 * i)))
+            conf = os.path.join(tmp, "trajd.conf")
+            with open(conf, "w") as f:
+                f.write("[daemon]\nrate_hz = 100\nstatus_interval_s = 0\nstop_timeout_s = 2\n"
+                        "[object.boat]\ninput = replay\nreplay.track = %s\noutput = stdout\n"
+                        "max_speed_m_s = %g\n" % (track, MAX_SPEED))
+            p = subprocess.Popen([TRAJD, "-f", "-c", conf], stdin=subprocess.DEVNULL,
+                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            try:
+                rows = Rows(p.stdout)
+                # Given the object moving (rows flagged neither hold nor waiting),
+                r = rows.wait(1)
+                end = time.monotonic() + WAIT_S
+                while not (r[-1][5] == "streaming" and step(r[-2], r[-1]) > 0.01):
+                    self.assertLess(time.monotonic(), end, "never moving")
+                    r = rows.wait(len(r) + 1)
+                n0 = len(r)
+                # when trajd is frozen for 1 s (100 periods),
+                p.send_signal(signal.SIGSTOP)
+                time.sleep(1.0)  # the fault itself, not a wait for an event
+                p.send_signal(signal.SIGCONT)
+                r = rows.wait(n0 + 200)
+                # then the rows skip deadlines (now_ns jumps) but never a position
+                gaps = [b[0] - a[0] for a, b in zip(r[n0 - 5:], r[n0 - 4:])]
+                self.assertGreaterEqual(max(gaps), 50 * 10 ** 7, gaps)
+                s, i = max_step(r[n0 - 5:])
+                self.assertLessEqual(s, STEP_MAX, "step %.4f m at row %d" % (s, i))
+                # and the object goes on moving
+                self.assertGreater(step(r[n0 - 5], r[-1]), 1.0)
+            finally:
+                p.send_signal(signal.SIGTERM)
+                p.wait(WAIT_S)
+                p.stderr.close()
+
+
+def write_wp(s, seq, t, pos, tid):
+    regs = struct.pack(">Idddd", seq, t, *pos)
+    n = len(regs) // 2
+    pdu = struct.pack(">BHHB", 16, obj_base(0) + M["MBMAP_H_WP"], n, len(regs)) + regs
+    rsp = mbsim.transact(s, pdu, tid)
+    return None if rsp[0] == 16 else rsp[1]
+
+
+def command(s, cmd, tid):
+    pdu = struct.pack(">BHH", 6, obj_base(0) + M["MBMAP_H_COMMAND"], cmd)
+    rsp = mbsim.transact(s, pdu, tid)
+    return None if rsp[0] == 6 else rsp[1]
+
+
+def start_modbus_trajd(tmp, obj_extra=""):
+    csv = os.path.join(tmp, "fed.csv")
+    conf = os.path.join(tmp, "trajd.conf")
+    with open(conf, "w") as f:
+        f.write("[daemon]\nrate_hz = 100\nstatus_interval_s = 0\nstop_timeout_s = 1\n"
+                "[modbus]\naddress = 127.0.0.1\nport = 0\nwrites = yes\nsystemd_socket = no\n"
+                "[object.fed]\ninput = modbus\noutput = csv\ncsv.path = %s\nmax_speed_m_s = %g\n%s"
+                % (csv, MAX_SPEED, obj_extra))
+    p, lines, port = mbsim.start_trajd([TRAJD, "-f", "-c", conf], WAIT_S)
+    return p, lines, port, csv
+
+
+class Commands(unittest.TestCase):
+    def setUp(self):
+        self.tmpd = tempfile.TemporaryDirectory()
+        self.p = None
+
+    def tearDown(self):
+        if self.p:
+            self.p.send_signal(signal.SIGTERM)
+            self.p.wait(WAIT_S)
+            self.p.stderr.close()
+        self.tmpd.cleanup()
+
+    def wait_moving(self, rows, n=0):
+        r = rows.wait(n + 2)
+        end = time.monotonic() + WAIT_S
+        while not (step(r[-2], r[-1]) > 0.005 and not r[-1][6] & 0x20):
+            self.assertLess(time.monotonic(), end, "never moving")
+            r = rows.wait(len(r) + 1)
+        return r
+
+    def test_stop_latches_until_start(self):
+        self.p, lines, port, csv = start_modbus_trajd(self.tmpd.name)
+        s = mbsim.connect(port)
+        tid = 0
+        # Given a client streaming a track, 6 s of it at once,
+        seq = 0
+        for i in range(60):
+            seq += 1
+            tid += 1
+            self.assertIsNone(write_wp(s, seq, 0.1 * i, circle(0.1 * i), tid))
+        rows = FileRows(csv)
+        r = self.wait_moving(rows)
+        # when it sends STOP and goes on sending the track for 6 s,
+        tid += 1
+        self.assertIsNone(command(s, M["MBMAP_CMD_STOP"], tid))
+        n_stop = len(rows.wait(1))
+        for i in range(60, 120):
+            seq += 1
+            tid += 1
+            self.assertIsNone(write_wp(s, seq, 0.1 * i, circle(0.1 * i), tid))
+            time.sleep(0.1)  # a sender in real time: the fault is its going on
+        i = 120
+        r = rows.wait(n_stop + 600)
+        # then the object came to rest and stays there: the last 300 rows (3 s)
+        # do not move, though waypoints kept coming
+        tail = r[-300:]
+        self.assertLessEqual(max_step(tail)[0], 1e-9, "moved while stopped")
+        self.assertLessEqual(max_step(r[n_stop - 2:])[0], STEP_MAX)
+        # and START joins the live track by a transfer (flag 0x08), no step
+        n_start = len(r)
+        tid += 1
+        self.assertIsNone(command(s, M["MBMAP_CMD_START"], tid))
+        for _ in range(40):
+            seq += 1
+            tid += 1
+            self.assertIsNone(write_wp(s, seq, 0.1 * i, circle(0.1 * i), tid))
+            i += 1
+        r = self.wait_moving(rows, n_start)
+        self.assertTrue(any(row[6] & 0x08 for row in r[n_start:]), "no transfer")
+        self.assertLessEqual(max_step(r[n_stop - 2:])[0], STEP_MAX)
+        # every command logged with the object and the client
+        me = "modbus %s:%d" % s.getsockname()[:2]
+        line = lines.wait_for("object 'fed': command start", WAIT_S)
+        self.assertIsNotNone(line, "".join(lines.all))
+        self.assertIn(" from %s in state stopped" % me, line)
+        self.assertTrue(any("object 'fed': command stop from %s" % me in l for l in lines.all))
+        s.close()
+
+    def test_clear_after_safety_hold_resumes(self):
+        self.p, lines, port, csv = start_modbus_trajd(
+            self.tmpd.name, "safety_max_speed_m_s = 1.5\ntransfer_speed_m_s = 1\ntransfer_accel_m_s2 = 1\n")
+        s = mbsim.connect(port)
+        tid = 0
+        # Given a track at 2 m/s, faster than the monitor's 1.5 m/s,
+        seq = 0
+        for i in range(40):
+            seq += 1
+            tid += 1
+            self.assertIsNone(write_wp(s, seq, 0.1 * i, (0.2 * i, 0.0, 0.0), tid))
+        rows = FileRows(csv)
+        # when the monitor holds the object (flag 0x20),
+        r = rows.wait(1)
+        end = time.monotonic() + WAIT_S
+        while not r[-1][6] & 0x20:
+            self.assertLess(time.monotonic(), end, "never held")
+            r = rows.wait(len(r) + 1)
+        held = r[-1]
+        self.assertIsNotNone(lines.wait_for("safety monitor", WAIT_S))
+        # and the client clears it and sends a track at 1 m/s from there,
+        tid += 1
+        self.assertIsNone(command(s, M["MBMAP_CMD_CLEAR"], tid))
+        n_clear = len(rows.wait(1))
+        for i in range(60):
+            seq += 1
+            tid += 1
+            self.assertIsNone(write_wp(s, seq, 20.0 + 0.1 * i,
+                                       (held[2] + 1.0 + 0.1 * i, 0.0, 0.0), tid))
+        # then it resumes from the held position (rows without the fault flag
+        # that move), joined by a transfer, and is never refused again
+        r = rows.wait(n_clear + 1)
+        end = time.monotonic() + WAIT_S
+        while not (r[-1][2] > held[2] + 2.0):
+            self.assertLess(time.monotonic(), end, "never resumed: %r" % (r[-1],))
+            r = rows.wait(len(r) + 1)
+        after = r[n_clear + 2:]
+        self.assertFalse(any(row[6] & 0x20 for row in after), "refused again")
+        self.assertTrue(any(row[6] & 0x08 for row in after), "no transfer")
+        self.assertLessEqual(max_step(r[n_clear - 1:])[0], 1.5 * PERIOD_S * 1.0001 + 1e-9)
+        self.assertLessEqual(abs(r[n_clear][2] - held[2]), 1e-6)  # from where it was held
+        s.close()
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
