@@ -10,7 +10,7 @@
  * Exit status: 0; EX_USAGE, EX_CONFIG, EX_UNAVAILABLE (cannot start), EX_OSERR,
  * EX_SOFTWARE; CORE_EXIT_OUTPUT_LOST (74) if any setpoint line was lost by an
  * output; CORE_EXIT_EPIPE (141) when stdout's reader went away; CORE_EXIT_NO_INPUT
- * (65) if a replayed track or log_in had no usable waypoint; CORE_EXIT_HELD (69)
+ * (65) if a replayed track or log_in had no usable waypoint; CORE_EXIT_HELD (75)
  * if an object ended held (safety fault, drive fault, lost heartbeat).
  * systemd (sd_notify; no-ops without NOTIFY_SOCKET):
  *   READY=1 once every input and output is open and the clock runs;
@@ -32,7 +32,6 @@
 #include <systemd/sd-daemon.h>
 #include <unistd.h>
 
-#include "can_transport.h"
 #include "cfg.h"
 #include "core.h"
 #include "log.h"
@@ -413,22 +412,22 @@ static uint64_t engine_faults(const core_t *c, const stats_t *st)
 }
 
 /* Objects that end the run held: a safety fault, a feed hold (a drive's
- * heartbeat lost) or CiA 402 drives held after a fault; each named in a log
- * line.  Their count (issue 24: the run exits CORE_EXIT_HELD). */
+ * heartbeat lost), or no position after waypoints were accepted (a CiA 402
+ * drive left Operation Enabled: obj_drive_lost); each named in a log line.
+ * Their count (issue 24: the run exits CORE_EXIT_HELD). */
 static unsigned held_objects(const core_t *c)
 {
     unsigned n = 0;
     for (unsigned i = 0; c && i < c->nobj; i++) {
         const obj_t *o = &c->obj[i];
-        can_drive_info_t di;
-        int drive = can_transport_drive(c, i, &di) && di.d.held;
-        if (!safety_fault(&o->safety) && !o->held && !drive)
+        int lost = (o->sp.flags & ENGINE_SP_NO_POSITION) && o->status.accepted > 0;
+        if (!safety_fault(&o->safety) && !o->held && !lost)
             continue;
         n++;
         log_msg(LOG_ERR, "object '%s' ended held: %s", o->name,
                 safety_fault(&o->safety) ? safety_strerror(safety_fault(&o->safety))
                 : o->held                ? "feed hold (a drive's heartbeat was lost)"
-                                         : "its drives left Operation Enabled");
+                                         : "no position (its drives left Operation Enabled)");
     }
     return n;
 }

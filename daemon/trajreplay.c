@@ -534,10 +534,10 @@ typedef struct {
     uint64_t skipped_gaps; /* gaps jumped over (not --keep-gaps) */
     uint64_t skipped_ticks;
     uint64_t nonfinite; /* rows with a NaN or infinite value: flagged ENGINE_SP_FAULT */
-    size_t seen_next; /* run_report_rejections: r.next and replay_done at */
-    int seen_done;    /* its last look (verdicts come only with a push or the close) */
-    char *rows;       /* rows formatted in place, written ROWS_BUF bytes at a time */
-    size_t nrows;     /* bytes of them not written yet */
+    size_t seen_next;   /* run_report_rejections: r.next and replay_done at */
+    int seen_done;      /* its last look (verdicts come only with a push or the close) */
+    char *rows;         /* rows formatted in place, written ROWS_BUF bytes at a time */
+    size_t nrows;       /* bytes of them not written yet */
 } run_t;
 
 /* Rows are formatted straight into one buffer and handed to stdio a buffer
@@ -771,6 +771,11 @@ static void run_report_rejected_total(const run_t *run)
             "trajreplay: %s: rejected %" PRIu64 " of %zu waypoints (%s), the first at "
             "line %" PRIu32 "\n",
             run->o->input, run->rejected, run->trk.n, reasons, run->trk.line[run->first_rejected]);
+    if (run->rejected * 10 > run->trk.n) /* issue 24: never a quiet exit 0 for a lost track */
+        fprintf(stderr,
+                "trajreplay: %s: warning: %.1f %% of the track's fixes were refused (more than "
+                "10 %%): check the profile, the time column and the units (--strict: exit 6)\n",
+                run->o->input, 100.0 * (double)run->rejected / (double)run->trk.n);
 }
 
 /*

@@ -55,8 +55,8 @@ static void speed_warning(const cfg_obj_t *o, const canproto_ids_t *ids)
             "object '%s': its speed may reach %s%g m/s, beyond the SETPOINT frame's +-%g m/s: "
             "faster values are clipped, counted (tx_clamped), flagged and logged; can.fd = yes "
             "carries +-2147 m/s, max_speed_m_s <= %g keeps within it",
-            o->name, v > 0 ? "" : "any speed (no speed limit), not only ", v > 0 ? v : field,
-            field, field / ENGINE_SPEED_CAP);
+            o->name, v > 0 ? "" : "any speed (no speed limit), not only ", v > 0 ? v : field, field,
+            field / ENGINE_SPEED_CAP);
 }
 
 int can_box_check(cfg_t *cfg, int *line, char *why, size_t wl)
@@ -79,7 +79,7 @@ int can_box_check(cfg_t *cfg, int *line, char *why, size_t wl)
                 snprintf(why, wl,
                          "object '%s': position_min_m .. position_max_m: %c from %g to %g m does "
                          "not fit %s, which holds %g .. %g m",
-                         o->name, "xyz"[a], o->box_min_m[a], o->box_max_m[a], what[a], lo[a],
+                         o->name, "xyz"[a], o -> box_min_m[a], o -> box_max_m[a], what[a], lo[a],
                          hi[a]);
                 return -CFG_EVALUE;
             }

@@ -630,8 +630,8 @@ static void log_refused(can_state_t *s, int64_t now_ns)
             continue;
         }
         char why[160];
-        can_refused_why(why, sizeof why, os.last_refused_err, os.last_refused,
-                        s->objs[k]->stopping, s->objs[k]->name);
+        can_refused_why(why, sizeof why, os.last_refused_err, os.last_refused, s->objs[k]->stopping,
+                        s->objs[k]->name);
         log_msg(LOG_WARNING,
                 "can: object '%s': %llu command frame(s) refused, the last %s on id 0x%03X: "
                 "%s; %llu refused in all",

@@ -53,8 +53,8 @@ typedef struct {
     char path[PATH_MAX];
     int header;
     int truncate; /* 0 no, 1 yes (at start), CSV_TRUNCATE_ALWAYS (at reloads too) */
-    int geo; /* csv.geo = yes: columns lat_deg,lon_deg,alt_m,heading_deg appended */
-    int age; /* append the column age_s (csv_format_add_age) */
+    int geo;      /* csv.geo = yes: columns lat_deg,lon_deg,alt_m,heading_deg appended */
+    int age;      /* append the column age_s (csv_format_add_age) */
 } csv_transport_obj_cfg_t;
 
 extern const transport_t csv_transport;

@@ -259,6 +259,12 @@ static void pre_tick(void *state, obj_t *o, int64_t now_ns)
                 "will exit with status %d",
                 o->cfg->name, rc->path, r->trk->n, CORE_EXIT_NO_INPUT);
         s->c->stats->no_input++;
+    } else if (st.rejected * 10 > r->trk->n) { /* issue 24: more than 10 % refused */
+        const replay_transport_obj_cfg_t *rc = cfg_obj_transport(o->cfg, &replay_transport);
+        log_msg(LOG_WARNING,
+                "object %s: replay.track %s: %.1f %% of its %zu fixes were refused (more than "
+                "10 %%): check the profile, the time column and the units",
+                o->cfg->name, rc->path, 100.0 * (double)st.rejected / (double)r->trk->n, r->trk->n);
     }
 }
 
@@ -285,7 +291,8 @@ static void files(const cfg_t *cfg, cfg_file_add_fn add, void *ctx)
         if (cfg_obj_uses(&cfg->obj[i], &replay_transport) & 1) {
             char what[64];
             snprintf(what, sizeof what, "[object.%s] replay.track", cfg->obj[i].name);
-            const replay_transport_obj_cfg_t *r = cfg_obj_transport(&cfg->obj[i], &replay_transport);
+            const replay_transport_obj_cfg_t *r = cfg_obj_transport(&cfg->obj[i],
+                                                                    &replay_transport);
             add(ctx, r->path, 0, cfg->obj[i].line, what);
         }
 }

@@ -413,9 +413,9 @@ void canproto_encode_status(uint32_t id, const canproto_status_t *st, canproto_f
 {
     frame_init(out, id, CANPROTO_STATUS_DLEN, 0);
     out->data[0] = (uint8_t)((st->state & CANPROTO_ST_STATE_MASK) |
-                             (st->flags & (CANPROTO_ST_CLAMPED | CANPROTO_ST_BUS_DOWN |
-                                           CANPROTO_ST_TX_DROP | CANPROTO_ST_OUT_FAULT |
-                                           CANPROTO_ST_FAULT)));
+                             (st->flags &
+                              (CANPROTO_ST_CLAMPED | CANPROTO_ST_BUS_DOWN | CANPROTO_ST_TX_DROP |
+                               CANPROTO_ST_OUT_FAULT | CANPROTO_ST_FAULT)));
     out->data[1] = (uint8_t)st->last_seq;
     out->data[2] = sat8(st->free);
     out->data[3] = (uint8_t)st->lost;
@@ -992,13 +992,13 @@ static const canproto_signal_t sig_spfd[] = {
     SIG_U("SPFD_Track", -1, 240, 16, 1, ""),
 };
 static const canproto_signal_t sig_st[] = {
-    SIG_U("ST_State", -1, 0, 3, 1, ""),       SIG_U("ST_Clamped", -1, 3, 1, 1, ""),
-    SIG_U("ST_BusDown", -1, 4, 1, 1, ""),
-    SIG_U("ST_TxDrop", -1, 5, 1, 1, ""),      SIG_U("ST_OutFault", -1, 6, 1, 1, ""),
-    SIG_U("ST_SafetyFault", -1, 7, 1, 1, ""), SIG_U("ST_LastSeq", -1, 8, 8, 1, ""),
-    SIG_U("ST_Free", -1, 16, 8, 1, ""),       SIG_U("ST_Lost", -1, 24, 8, 1, ""),
-    SIG_U("ST_Rejected", -1, 32, 8, 1, ""),   SIG_U("ST_Malformed", -1, 40, 8, 1, ""),
-    SIG_U("ST_Dropped", -1, 48, 8, 1, ""),    SIG_U("ST_LastErr", -1, 56, 8, 1, ""),
+    SIG_U("ST_State", -1, 0, 3, 1, ""),      SIG_U("ST_Clamped", -1, 3, 1, 1, ""),
+    SIG_U("ST_BusDown", -1, 4, 1, 1, ""),    SIG_U("ST_TxDrop", -1, 5, 1, 1, ""),
+    SIG_U("ST_OutFault", -1, 6, 1, 1, ""),   SIG_U("ST_SafetyFault", -1, 7, 1, 1, ""),
+    SIG_U("ST_LastSeq", -1, 8, 8, 1, ""),    SIG_U("ST_Free", -1, 16, 8, 1, ""),
+    SIG_U("ST_Lost", -1, 24, 8, 1, ""),      SIG_U("ST_Rejected", -1, 32, 8, 1, ""),
+    SIG_U("ST_Malformed", -1, 40, 8, 1, ""), SIG_U("ST_Dropped", -1, 48, 8, 1, ""),
+    SIG_U("ST_LastErr", -1, 56, 8, 1, ""),
 };
 static const canproto_signal_t sig_st2[] = {
     SIG_U("ST2_Page", -2, 0, 8, 1, ""),

@@ -59,8 +59,9 @@ typedef struct {
     double tol_m;          /* added to every bound after converting it to metres per
                                output (rounding of positions of up to 1e7 m: 1e-8 m
                                default, SAFETY_TOL_M_DEFAULT) */
-    int box;                          /* 1: every position within box_min_m .. box_max_m
-                                       * per axis (soft limits; +-inf: that axis free) */
+    /* box 1: every position within box_min_m .. box_max_m per axis (soft
+     * limits; +-inf: that axis free) */
+    int box;
     double box_min_m[ENGINE_AXES], box_max_m[ENGINE_AXES];
 } safety_limits_t;
 

@@ -9,6 +9,7 @@ BUILD=${BUILD:-build}
 TR="$BUILD/bin/trajreplay"
 TD="$BUILD/bin/trajd"
 TS="$BUILD/bin/trajsurf"
+case $TD in /*) ;; *) TD=$PWD/$TD ;; esac
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 pass=0; fail=0
 ok() { pass=$((pass + 1)); }
@@ -51,7 +52,7 @@ replay.track = walk.csv
 output = csv
 csv.path = d.csv
 CONF
-(cd "$tmp" && "$OLDPWD/$TD" -f -c d.conf 0<&- 1>&- 2>&-); rc=$?
+(cd "$tmp" && "$TD" -f -c d.conf 0<&- 1>&- 2>&-); rc=$?
 [ $rc -eq 0 ] && ok || bad "trajd exit $rc, want 0"
 [ -s "$tmp/d.csv" ] && ok || bad "trajd: no rows"
 rows_only "$tmp/d.csv" "trajd 0<&- 1>&- 2>&-"

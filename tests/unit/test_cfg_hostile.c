@@ -107,10 +107,11 @@ static void test_paths_by_identity(void **state)
     cfg_free(c);
 }
 
-#define CIA "[can]\nlog_out = /tmp/trajd-test-cfg-hostile.log\n"                               \
-            "[object.a]\ninput = replay\nreplay.track = " VIS "\noutput = can\ncan.own = no\n"  \
-            "can.cia402 = yes\ncan.cia402_cob_x = 0x201\ncan.cia402_cob_y = 0x202\n"             \
-            "can.cia402_cob_z = 0\ncan.cia402_counts_per_m = 1e7\n"
+#define CIA                                                                                        \
+    "[can]\nlog_out = /tmp/trajd-test-cfg-hostile.log\n"                                           \
+    "[object.a]\ninput = replay\nreplay.track = " VIS "\noutput = can\ncan.own = no\n"             \
+    "can.cia402 = yes\ncan.cia402_cob_x = 0x201\ncan.cia402_cob_y = 0x202\n"                       \
+    "can.cia402_cob_z = 0\ncan.cia402_counts_per_m = 1e7\n"
 
 /* Given CiA 402 targets at 1e7 increments per metre (int32: +-214.748 m),
  * then a box of +-300 m is refused at its line, naming the field; +-200 m is
@@ -139,8 +140,7 @@ static void test_cia402_box(void **state)
     load_bad(OBJ "position_min_m = 0,0,0\n", CFG_EVALUE, 5, "without position_max_m");
     load_bad(OBJ "position_min_m = 0,0,0\nposition_max_m = 1,-1,1\n", CFG_EVALUE, 6,
              "min must not exceed max");
-    load_bad(OBJ "position_min_m = 0,0,0\nposition_max_m = 1,1,2e7\n", CFG_EVALUE, 6,
-             "max_abs_m");
+    load_bad(OBJ "position_min_m = 0,0,0\nposition_max_m = 1,1,2e7\n", CFG_EVALUE, 6, "max_abs_m");
 }
 
 int main(void)

@@ -208,10 +208,8 @@ static void test_same_seq_two_sources(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_spike_named_by_its_line),
-        cmocka_unit_test(test_rate_limited),
-        cmocka_unit_test(test_unknown_source),
-        cmocka_unit_test(test_same_seq_two_sources),
+        cmocka_unit_test(test_spike_named_by_its_line), cmocka_unit_test(test_rate_limited),
+        cmocka_unit_test(test_unknown_source),          cmocka_unit_test(test_same_seq_two_sources),
         cmocka_unit_test(test_huge_numbers_bounded),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

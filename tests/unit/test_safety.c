@@ -197,9 +197,8 @@ static void test_bad_limits_off(void **state)
 static void test_box(void **state)
 {
     (void)state;
-    safety_limits_t l = {.box = 1,
-                         .box_min_m = {-1, -INFINITY, -INFINITY},
-                         .box_max_m = {2, INFINITY, INFINITY}};
+    safety_limits_t l = {
+        .box = 1, .box_min_m = {-1, -INFINITY, -INFINITY}, .box_max_m = {2, INFINITY, INFINITY}};
     safety_t s;
     safety_init(&s, &l);
     engine_setpoint_t sp = at(0, 0);
