@@ -40,7 +40,8 @@
 /* What was violated (the first one found, in this order). */
 enum safety_fault {
     SAFETY_OK = 0,
-    SAFETY_FNOTFINITE = 1, /* a position is NaN or infinite, or lost after having one */
+    SAFETY_FNOTFINITE = 1, /* a position, velocity or acceleration is NaN or infinite, or
+                            * the position lost after having one */
     SAFETY_FTIME = 2,      /* the tick time did not advance */
     SAFETY_FSTEP = 3,      /* step above max_step_m */
     SAFETY_FSPEED = 4,     /* step / dt above max_speed_m_s */

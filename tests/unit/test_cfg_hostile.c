@@ -17,35 +17,28 @@
 
 static char err[1024];
 
-static cfg_t *load_ok(const char *text)
+/* Load text as "t.conf": code 0 expects success (the config is returned);
+ * else the failure code, err starting with "t.conf:LINE: " (line > 0) and
+ * holding needle (NULL: any), and NULL returned. */
+static cfg_t *load(const char *text, int code, int line, const char *needle)
 {
     cfg_t *c = NULL;
     err[0] = 0;
     int rc = cfg_load_string(text, "t.conf", ".", &c, err, sizeof err);
-    if (rc != 0)
-        fail_msg("expected success, got %d: %s", rc, err);
-    return c;
+    if (rc != -code)
+        fail_msg("expected %d, got %d: %s", -code, rc, err);
+    if (!code)
+        return c;
+    assert_null(c);
+    char prefix[64];
+    snprintf(prefix, sizeof prefix, line > 0 ? "t.conf:%d: " : "t.conf: ", line);
+    if (strncmp(err, prefix, strlen(prefix)) != 0 || (needle && !strstr(err, needle)))
+        fail_msg("expected '%s...%s', got '%s'", prefix, needle ? needle : "", err);
+    return NULL;
 }
 
-/* Expect failure code, and err to start with "t.conf:LINE:" and contain needle. */
-static void load_bad(const char *text, int code, int line, const char *needle)
-{
-    cfg_t *c = (cfg_t *)1;
-    char prefix[64];
-    err[0] = 0;
-    int rc = cfg_load_string(text, "t.conf", ".", &c, err, sizeof err);
-    assert_null(c);
-    if (rc != -code)
-        fail_msg("expected -%d, got %d: %s", code, rc, err);
-    if (line > 0)
-        snprintf(prefix, sizeof prefix, "t.conf:%d: ", line);
-    else
-        snprintf(prefix, sizeof prefix, "t.conf: ");
-    if (strncmp(err, prefix, strlen(prefix)) != 0)
-        fail_msg("expected prefix '%s', got '%s'", prefix, err);
-    if (needle && !strstr(err, needle))
-        fail_msg("expected '%s' in '%s'", needle, err);
-}
+#define load_ok(text) load(text, 0, 0, NULL)
+#define load_bad(text, code, line, needle) (void)load(text, code, line, needle)
 
 /* Given a file that starts with a UTF-8 byte order mark (as some Windows
  * editors write it), then it is read as without it: the section on line 1
