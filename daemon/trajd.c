@@ -13,7 +13,7 @@
  * Exit status: 0; EX_USAGE, EX_CONFIG, EX_UNAVAILABLE (cannot start), EX_OSERR,
  * EX_SOFTWARE; CORE_EXIT_OUTPUT_LOST (74) if any setpoint line was lost by an
  * output; CORE_EXIT_EPIPE (141) when stdout's reader went away; CORE_EXIT_NO_INPUT
- * (65) if a replayed track or log_in had no usable waypoint; CORE_EXIT_HELD (69)
+ * (65) if a replayed track or log_in had no usable waypoint; CORE_EXIT_HELD (75)
  * if an object ended held (safety fault, drive fault, lost heartbeat).
  * Control socket (daemon/ctl/ctl.h, for trajctl): opened before privileges
  * drop, kept across reloads (each new core is handed to it), closed last.
@@ -588,8 +588,9 @@ static uint64_t engine_faults(const core_t *c, const stats_t *st)
 }
 
 /* Objects that end the run held: a safety fault, a feed hold (a drive's
- * heartbeat lost) or CiA 402 drives held after a fault; each named in a log
- * line.  Their count (issue 24: the run exits CORE_EXIT_HELD). */
+ * heartbeat lost), or no position after waypoints were accepted (a CiA 402
+ * drive left Operation Enabled: obj_drive_lost); each named in a log line.
+ * Their count (issue 24: the run exits CORE_EXIT_HELD). */
 static unsigned held_objects(const core_t *c)
 {
     unsigned n = 0;

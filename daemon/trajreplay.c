@@ -771,6 +771,11 @@ static void run_report_rejected_total(const run_t *run)
             "trajreplay: %s: rejected %" PRIu64 " of %zu waypoints (%s), the first at "
             "line %" PRIu32 "\n",
             run->o->input, run->rejected, run->trk.n, reasons, run->trk.line[run->first_rejected]);
+    if (run->rejected * 10 > run->trk.n) /* issue 24: never a quiet exit 0 for a lost track */
+        fprintf(stderr,
+                "trajreplay: %s: warning: %.1f %% of the track's fixes were refused (more than "
+                "10 %%): check the profile, the time column and the units (--strict: exit 6)\n",
+                run->o->input, 100.0 * (double)run->rejected / (double)run->trk.n);
 }
 
 /*

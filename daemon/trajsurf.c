@@ -428,6 +428,18 @@ static int write_samples(const char *path, const double *smp, size_t su, size_t 
     return close_output(out, out == stdout ? "stdout" : path);
 }
 
+static const struct option lopts[] = {
+    {"steps", required_argument, NULL, 'n'},
+    {"output", required_argument, NULL, 'o'},
+    {"svg", required_argument, NULL, 's'},
+    {"dx", required_argument, NULL, 'x'},
+    {"dy", required_argument, NULL, 'y'},
+    {"zscale", required_argument, NULL, 'z'},
+    {"help", no_argument, NULL, 'h'},
+    {"version", no_argument, NULL, 'V'},
+    {NULL, 0, NULL, 0},
+};
+
 int main(int argc, char **argv)
 {
     const char *out_path = "-", *svg_path = NULL;
@@ -438,17 +450,7 @@ int main(int argc, char **argv)
     size_t su, sv;
     surf_t s;
     int opt, rc = 1;
-    static const struct option lopts[] = {
-        {"steps", required_argument, NULL, 'n'},
-        {"output", required_argument, NULL, 'o'},
-        {"svg", required_argument, NULL, 's'},
-        {"dx", required_argument, NULL, 'x'},
-        {"dy", required_argument, NULL, 'y'},
-        {"zscale", required_argument, NULL, 'z'},
-        {"help", no_argument, NULL, 'h'},
-        {"version", no_argument, NULL, 'V'},
-        {NULL, 0, NULL, 0},
-    };
+
     if (stdfds_open() < 0)
         return 71; /* EX_OSERR: no /dev/null */
     while ((opt = getopt_long(argc, argv, "n:o:s:x:y:z:hV", lopts, NULL)) != -1) {

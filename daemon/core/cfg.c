@@ -588,7 +588,6 @@ static void check_ids(parse_t *p)
     }
 }
 
-/* Rules that need the whole file. */
 /* The checks of object i alone; -1 when one failed (p->err set). */
 static int check_obj(parse_t *p, unsigned i)
 {
@@ -634,6 +633,25 @@ static int check_obj(parse_t *p, unsigned i)
     return 0;
 }
 
+/* Position boxes (cfg_box.h), before the transports derive theirs: 1 on failure. */
+static int check_boxes(parse_t *p)
+{
+    char why[CFG_WHY_MAX];
+    int line = 0;
+    if (cfg_box_check(p->c, &line, why, sizeof why) < 0)
+        fail(p, CFG_EVALUE, line, "%s", why);
+    return p->err != 0;
+}
+
+/* Outputs against inputs and each other, by identity (cfg_files.h). */
+static void check_files(parse_t *p)
+{
+    char why[CFG_WHY_MAX];
+    int line = 0;
+    if (cfg_files_check(p->c, &line, why, sizeof why) < 0)
+        fail(p, CFG_EVALUE, line, "%s", why);
+}
+
 static void check_all(parse_t *p)
 {
     cfg_t *c = p->c;
@@ -654,13 +672,8 @@ static void check_all(parse_t *p)
         if (check_obj(p, i) < 0)
             return;
     check_ids(p);
-    if (p->err)
+    if (p->err || check_boxes(p))
         return;
-    int bline = 0;
-    if (cfg_box_check(c, &bline, why, sizeof why) < 0) {
-        fail(p, CFG_EVALUE, bline, "%s", why);
-        return;
-    }
     for (unsigned t = 0; transport_table[t]; t++) {
         const transport_t *tr = transport_table[t];
         if (!tr->check || !cfg_uses(c, tr))
@@ -674,9 +687,7 @@ static void check_all(parse_t *p)
             return;
         }
     }
-    int line = 0;
-    if (cfg_files_check(c, &line, why, sizeof why) < 0) /* outputs vs inputs, by identity */
-        fail(p, CFG_EVALUE, line, "%s", why);
+    check_files(p);
 }
 
 static void defaults(cfg_t *c)

@@ -134,6 +134,9 @@ typedef struct {
     } heading;                   /* set by its input (a replay track with a heading column) */
     int geographic;              /* its positions are east/north/up about the daemon's datum
                      * (a geographic replay track): outputs give lat/lon/alt */
+    int writable;                /* writable = yes/no: commands and waypoints
+                                                 * from outside (Modbus) may change it;
+                                                 * -1 not given (the input decides) */
     /* position_min_m / position_max_m = x,y,z (cfg_box.h): the box the
      * safety monitor keeps the object in (soft limits).  box_keys: bit 0 min
      * given, bit 1 max; box: 0 none, 1 given, 2 derived by an output whose
@@ -141,9 +144,6 @@ typedef struct {
     unsigned box_keys;
     int box, box_line;
     double box_min_m[ENGINE_AXES], box_max_m[ENGINE_AXES];
-    int writable; /* writable = yes/no: commands and waypoints
-                                                 * from outside (Modbus) may change it;
-                                                 * -1 not given (the input decides) */
 } cfg_obj_t;
 
 typedef struct cfg {

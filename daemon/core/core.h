@@ -244,9 +244,9 @@ typedef struct {
 /* Exit statuses of trajd beyond sysexits.h (daemon/README.md "Output faults are errors"). */
 #define CORE_EXIT_OUTPUT_LOST 74 /* EX_IOERR: setpoint lines were lost by an output */
 #define CORE_EXIT_NO_INPUT 65    /* EX_DATAERR: a replayed track or log_in had no usable waypoint */
-#define CORE_EXIT_HELD                                                                             \
-    69 /* EX_UNAVAILABLE: an object ended held (safety fault, drive fault or
-                           * lost heartbeat): the run did not deliver its motion */
+/* EX_TEMPFAIL: an object ended held (safety fault, drive fault or lost
+ * heartbeat): the run did not deliver its motion */
+#define CORE_EXIT_HELD 75
 #define CORE_EXIT_EPIPE                                                                            \
     141 /* stdout's reader went away (128 + SIGPIPE, what a shell
                                      * reports for a filter ended by SIGPIPE) */

@@ -62,12 +62,12 @@ static const char *name_of(int reason)
     return n ? n : engine_strerror(reason);
 }
 
-/* x as "%.3f" (metres, and seconds up to epoch times and beyond: 20 characters
- * at most), or "%.6g" from 1e15 up (and NaN, infinities): a hostile 1e300 takes
- * 12 characters, not 300, and never cuts the line (issue 24). */
+/* x as "%.3f" (the usual metres and seconds), or "%.6g" from 1e12 up (and NaN,
+ * infinities): a hostile 1e300 takes 12 characters, not 300, and never cuts
+ * the line (issue 24). */
 static const char *num(char buf[32], double x)
 {
-    if (fabs(x) < 1e15)
+    if (fabs(x) < 1e12)
         snprintf(buf, 32, "%.3f", x);
     else
         snprintf(buf, 32, "%.6g", x);

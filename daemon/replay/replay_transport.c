@@ -273,6 +273,12 @@ static void pre_tick(void *state, obj_t *o, int64_t now_ns)
                 "will exit with status %d",
                 o->cfg->name, rc->path, r->trk->n, CORE_EXIT_NO_INPUT);
         s->c->stats->no_input++;
+    } else if (st.rejected * 10 > r->trk->n) { /* issue 24: more than 10 % refused */
+        const replay_transport_obj_cfg_t *rc = cfg_obj_transport(o->cfg, &replay_transport);
+        log_msg(LOG_WARNING,
+                "object %s: replay.track %s: %.1f %% of its %zu fixes were refused (more than "
+                "10 %%): check the profile, the time column and the units",
+                o->cfg->name, rc->path, 100.0 * (double)st.rejected / (double)r->trk->n, r->trk->n);
     }
 }
 

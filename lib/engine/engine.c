@@ -23,6 +23,7 @@
 
 #include "accept.h"
 #include "cubic.h"
+#include "ends.h"
 #include "fdiff.h"
 #include "frag.h"
 #include "hoang.h"
@@ -175,17 +176,6 @@ double engine_config_max_accel(const engine_config_t *cfg)
 {
     return cfg->max_accel_m_s2 < 0 ? profile_limits[profile_of(cfg)].accel_m_s2
                                    : cfg->max_accel_m_s2;
-}
-
-/* ends = clamped: the given start and end speeds within the speed limit in
- * force, or without one within max_abs_m per second (issue 24: 1e50 m/s ran
- * beyond max_abs_m, 1e308 gave NaN). */
-static int ends_within_limit(const engine_config_t *cfg)
-{
-    double lim = engine_config_max_speed(cfg) > 0 ? engine_config_max_speed(cfg) : cfg->max_abs_m;
-    const double *v = cfg->start_vel_m_s, *u = cfg->end_vel_m_s;
-    return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) <= lim &&
-           sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]) <= lim;
 }
 
 static int uses_pstar(const engine_config_t *cfg)
@@ -429,7 +419,7 @@ int engine_config_check(const engine_config_t *cfg_in, const char **why)
                isfinite(cfg->start_vel_m_s[2]) && isfinite(cfg->end_vel_m_s[0]) &&
                isfinite(cfg->end_vel_m_s[1]) && isfinite(cfg->end_vel_m_s[2])))
         w = "start_vel_m_s/end_vel_m_s: must be finite";
-    else if (cfg->ends == ENGINE_ENDS_CLAMPED && !ends_within_limit(cfg))
+    else if (cfg->ends == ENGINE_ENDS_CLAMPED && !engine_ends_within_limit(cfg))
         w = "start_vel_m_s/end_vel_m_s: faster than max_speed_m_s in force (without a speed "
             "limit: than max_abs_m per second)";
     if (!w) {

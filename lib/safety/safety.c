@@ -13,7 +13,9 @@ const char *safety_strerror(int fault)
 {
     switch (fault < 0 ? -fault : fault) {
     case SAFETY_OK: return "ok";
-    case SAFETY_FNOTFINITE: return "position not finite (or lost after having one)";
+    case SAFETY_FNOTFINITE:
+        return "position, velocity or acceleration not finite (or the position lost after "
+               "having one)";
     case SAFETY_FTIME: return "tick time did not advance";
     case SAFETY_FSTEP: return "step above safety_max_step_m";
     case SAFETY_FSPEED: return "speed above safety_max_speed_m_s";
@@ -95,8 +97,11 @@ static int judge(const safety_t *s, const engine_setpoint_t *sp, double *value, 
         return SAFETY_FNOTFINITE; /* a position was sent before: it cannot be lost */
     }
     for (int k = 0; k < AX; k++)
-        if (!isfinite(sp->pos_m[k])) {
-            *value = sp->pos_m[k];
+        if (!isfinite(sp->pos_m[k]) || !isfinite(sp->vel_m_s[k]) || !isfinite(sp->acc_m_s2[k])) {
+            /* a NaN velocity or acceleration goes out too (csv, Modbus): never unflagged */
+            *value = !isfinite(sp->pos_m[k])     ? sp->pos_m[k]
+                     : !isfinite(sp->vel_m_s[k]) ? sp->vel_m_s[k]
+                                                 : sp->acc_m_s2[k];
             *limit = 0;
             return SAFETY_FNOTFINITE;
         }

@@ -40,7 +40,8 @@
 /* What was violated (the first one found, in this order). */
 enum safety_fault {
     SAFETY_OK = 0,
-    SAFETY_FNOTFINITE = 1, /* a position is NaN or infinite, or lost after having one */
+    SAFETY_FNOTFINITE = 1, /* a position, velocity or acceleration is NaN or infinite, or
+                            * the position lost after having one */
     SAFETY_FTIME = 2,      /* the tick time did not advance */
     SAFETY_FSTEP = 3,      /* step above safety_max_step_m */
     SAFETY_FSPEED = 4,     /* step / dt above safety_max_speed_m_s */
@@ -59,8 +60,9 @@ typedef struct {
     double tol_m;          /* added to every bound after converting it to metres per
                                output (rounding of positions of up to 1e7 m: 1e-8 m
                                default, SAFETY_TOL_M_DEFAULT) */
-    int box;               /* 1: every position within box_min_m .. box_max_m
-                                       * per axis (soft limits; +-inf: that axis free) */
+    /* box 1: every position within box_min_m .. box_max_m per axis (soft
+     * limits; +-inf: that axis free) */
+    int box;
     double box_min_m[ENGINE_AXES], box_max_m[ENGINE_AXES];
 } safety_limits_t;
 

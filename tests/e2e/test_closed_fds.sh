@@ -9,6 +9,7 @@ BUILD=${BUILD:-build}
 TR="$BUILD/bin/trajreplay"
 TD="$(cd "$(dirname "$BUILD/bin/trajd")" && pwd)/trajd"  # absolute: run from other directories
 TS="$BUILD/bin/trajsurf"
+case $TD in /*) ;; *) TD=$PWD/$TD ;; esac
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 pass=0; fail=0
 ok() { pass=$((pass + 1)); }

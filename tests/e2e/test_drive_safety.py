@@ -165,8 +165,9 @@ class DriveSafety(unittest.TestCase):
         with tempfile.TemporaryDirectory() as tmp:
             # Given a speed bound of 1 m/s on a boat that runs at about 4 m/s
             p, rows = run(tmp, "safety_max_speed_m_s = 1\n")
-            # a run in which an object ended held is an error (EX_UNAVAILABLE, trajd(8))
-            self.assertEqual(p.returncode, 69, p.stderr)
+            # (it ends held: exit 75, CORE_EXIT_HELD, naming it - issue 24)
+            self.assertEqual(p.returncode, 75, p.stderr)
+            self.assertIn("object 'boat' ended held: speed above max_speed_m_s", p.stderr)
             # then no row ever moved faster than 1 m/s (+ the 1e-8 m tolerance)
             for a, b in zip(rows, rows[1:]):
                 if a["flags"] & F_NOPOS:

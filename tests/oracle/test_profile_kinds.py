@@ -406,7 +406,7 @@ def test_machine_curve(tmp, gco):
     with open(gco) as f:
         next(f)
         pts = np.array([[float(x) for x in line.split(",")] for line in f])
-    sp, s, _ = tr.replay(gco, ["--profile", "machine"], tmp, "toolpath_setpoints")  # not toolpath.csv: the track itself
+    sp, s, _ = tr.replay(gco, ["--profile", "machine"], tmp, "toolpath_machine")  # not over its own input
     tr.check_positions(sp, "toolpath machine")
     ok = np.array([x == "streaming" for x in sp["state"]]) & ((sp["flags"] & tr.ENGINE_SP_SCALED) == 0)
     cs = CubicSpline(pts[:, 0], pts[:, 1:], bc_type="clamped")

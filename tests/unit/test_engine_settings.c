@@ -242,7 +242,7 @@ static void test_trajd_conf_documents_every_key(void **state)
             continue; /* a transport's key, or the object's wiring */
         if (strncmp(key, "safety_", 7) == 0 || strncmp(key, "position_m", 10) == 0 ||
             strcmp(key, "writable") == 0)
-            continue; /* the safety monitor's bounds and box, and writable: not engine
+            continue; /* the safety monitor's bounds and box, writable: not engine
                          settings (cfg.h, lib/safety; their defaults are test_cfg's) */
         const engine_setting_t *s = engine_setting_find(key);
         if (!s || (s->flags & ENGINE_SETTING_DERIVED))

@@ -221,9 +221,31 @@ static void test_box(void **state)
     assert_true((sp.flags & ENGINE_SP_NO_POSITION) && isnan(sp.pos_m[0]));
 }
 
+/* Given finite positions, when the engine's velocity or acceleration of a
+ * setpoint is NaN or infinite, then it is held and flagged like a NaN
+ * position: no output row carries an unflagged NaN (issue 24). */
+static void test_nonfinite_velocity(void **state)
+{
+    (void)state;
+    safety_t s = mk(0, 0, 0);
+    engine_setpoint_t sp = at(0, 0);
+    assert_int_equal(safety_check(&s, &sp), SAFETY_OK);
+    sp = at(1, 0.01);
+    sp.vel_m_s[1] = NAN;
+    assert_int_equal(safety_check(&s, &sp), SAFETY_FNOTFINITE);
+    assert_true(sp.flags & ENGINE_SP_FAULT);
+    safety_t u = mk(0, 0, 0);
+    sp = at(0, 0);
+    assert_int_equal(safety_check(&u, &sp), SAFETY_OK);
+    sp = at(1, 0.01);
+    sp.acc_m_s2[2] = INFINITY;
+    assert_int_equal(safety_check(&u, &sp), SAFETY_FNOTFINITE);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_nonfinite_velocity),
         cmocka_unit_test(test_box),
         cmocka_unit_test(test_speed_violation_holds_and_latches),
         cmocka_unit_test(test_accel_exact),
