@@ -167,7 +167,7 @@ class DriveSafety(unittest.TestCase):
             p, rows = run(tmp, "safety_max_speed_m_s = 1\n")
             # (it ends held: exit 75, CORE_EXIT_HELD, naming it - issue 24)
             self.assertEqual(p.returncode, 75, p.stderr)
-            self.assertIn("object 'boat' ended held: speed above max_speed_m_s", p.stderr)
+            self.assertIn("object 'boat' ended held: speed above safety_max_speed_m_s", p.stderr)
             # then no row ever moved faster than 1 m/s (+ the 1e-8 m tolerance)
             for a, b in zip(rows, rows[1:]):
                 if a["flags"] & F_NOPOS:
