@@ -114,6 +114,10 @@ static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
     if (rc < 0)
         return rc;
     d->core = nc;
+    /* before the clock starts: mlockall faults every page in (seconds for
+     * 1024 objects), which must not count as ticks missed */
+    if (rt_apply(&cfg->rt, rtwhy, sizeof rtwhy) < 0)
+        log_msg(LOG_WARNING, "realtime settings not applied (running without them): %s", rtwhy);
     rc = core_start(d->core);
     if (rc < 0) {
         snprintf(why, wl, "output clock: %s", strerror(-rc));
@@ -122,8 +126,6 @@ static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
         return rc;
     }
     log_set_level(cfg->daemon.log_level);
-    if (rt_apply(&cfg->rt, rtwhy, sizeof rtwhy) < 0)
-        log_msg(LOG_WARNING, "realtime settings not applied (running without them): %s", rtwhy);
     return 0;
 }
 

@@ -188,6 +188,8 @@ typedef struct {
     uint64_t overruns;     /* ticks whose work ended after the next deadline */
     lat_hist_t late_hist;  /* lateness since start / reset, us */
     lat_summary_t late;    /* summary of late_hist, refreshed every second */
+    lat_hist_t work_hist;  /* each tick's own CPU time (CLOCK_THREAD_CPUTIME_ID), us */
+    lat_summary_t work;    /* summary of work_hist, refreshed every second */
     /* Counters a transport keeps across reloads (a reload rebuilds its state):
      * tcount[transport_index(t)][0 .. STATS_TCOUNT_MAX - 1], meaning defined by
      * transport t, printed by its summary callback. */

@@ -38,7 +38,8 @@ typedef struct {
     int geo; /* csv.geo: lat_deg,lon_deg,alt_m,heading_deg appended to every line */
     int age; /* lines carry the age_s column */
     size_t len;
-    char *buf; /* CSV_TRANSPORT_BUF_BYTES */
+    char *buf;   /* CSV_TRANSPORT_BUF_BYTES */
+    int stalled; /* the last write did not take everything (EAGAIN, an error) */
     /* written by the writer, read by the loop thread */
     _Atomic uint64_t w_errors;  /* failed write calls */
     _Atomic uint64_t w_dropped; /* lines dropped: the buffer was full */
@@ -209,6 +210,7 @@ static int flush(csv_transport_t *st, stream_t *s)
             err = EIO;
         break; /* EAGAIN: later (the buffer fills and new lines are dropped, counted) */
     }
+    s->stalled = off < s->len;
     if (err) {
         size_t tail = torn_tail(s->buf, off);
         if (tail && s->regular && cut_tail(s->fd, tail) == 0)
@@ -223,9 +225,14 @@ static int flush(csv_transport_t *st, stream_t *s)
 }
 
 /* Queue one line of object index oi (-1: the header or a marker) in the
- * stream's buffer; a line that does not fit is lost, counted. */
-static void put(csv_transport_t *st, stream_t *s, int oi, const char *line, int n)
+ * stream's buffer; a line that does not fit is lost, counted.  From the
+ * writer (may_write): a full buffer is written first unless the last write
+ * stalled (a slow reader, a failing disk: then the line is lost, as at the
+ * tick before, and the failed writes are not multiplied by the lines). */
+static void put(csv_transport_t *st, stream_t *s, int oi, const char *line, int n, int may_write)
 {
+    if (n >= 0 && (size_t)n > CSV_TRANSPORT_BUF_BYTES - s->len && may_write && !s->stalled)
+        flush(st, s);
     if (n < 0 || (size_t)n > CSV_TRANSPORT_BUF_BYTES - s->len) {
         atomic_fetch_add_explicit(&s->w_dropped, 1, memory_order_relaxed);
         if (oi >= 0)
@@ -256,7 +263,7 @@ static void format_rec(csv_transport_t *st, const rec_t *r)
     }
     if (s->age && n > 0)
         n = csv_format_add_age(line, sizeof line, n, &r->sp);
-    put(st, s, (int)r->obj, line, n);
+    put(st, s, (int)r->obj, line, n, 1);
 }
 
 /* At the end: write what is left, waiting at most CSV_TRANSPORT_DRAIN_MS for a
@@ -439,7 +446,7 @@ static void header(csv_transport_t *st, stream_t *s)
         n = csv_format_append(line, sizeof line, n, ",lat_deg,lon_deg,alt_m,heading_deg");
     if (s->age && n > 0)
         n = csv_format_add_age(line, sizeof line, n, NULL);
-    put(st, s, -1, line, n);
+    put(st, s, -1, line, n, 0);
 }
 
 /* The line that marks where a restart or a reload appended to a file that
@@ -452,7 +459,7 @@ static void marker(csv_transport_t *st, stream_t *s)
     if (clock_gettime(CLOCK_REALTIME, &ts) == 0 && gmtime_r(&ts.tv_sec, &tm))
         strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%SZ", &tm);
     int n = snprintf(line, sizeof line, "# trajd: appended at %s (start or reload)\n", when);
-    put(st, s, -1, line, n < (int)sizeof line ? n : -1);
+    put(st, s, -1, line, n < (int)sizeof line ? n : -1, 0);
 }
 
 static void close_(void *state, core_t *c)
