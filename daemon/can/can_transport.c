@@ -878,7 +878,7 @@ static void close_(void *state, core_t *c)
     if (s->timer_fd > 0)
         loop_timer_del(s->c->loop, s->timer_fd);
     if (s->log) { /* the last lines, counted before the counters are read */
-        can_logfile_flush(s->log);
+        can_logfile_finish(s->log);
         log_out_faults(s, 0);
         report_log_out(s, 1);
     }

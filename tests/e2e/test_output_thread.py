@@ -4,7 +4,8 @@ Seen from outside, by the kernel's own accounts:
 1. Under strace -f, every write(2) to the csv file and to stdout comes from a
    thread other than the one that runs the clock (trajd's main thread, the
    one that reads the clock's timerfd), and the output is whole: one line per
-   tick, the header first.
+   tick, the header first.  The same for the CAN output's candump log
+   ([can] log_out), whose every line python-can reads back.
 2. With [realtime] fifo_priority (as root), the main thread runs SCHED_FIFO
    and the writer thread ("trajd-out") SCHED_OTHER (field 41 of
    /proc/PID/task/TID/stat, proc(5)), so the writer never takes the tick's CPU
@@ -34,15 +35,51 @@ def track(path, n, dt_s=0.1):
             f.write("%.3f,%.3f,%.3f,1.0\n" % (i * dt_s, 2.0 * i * dt_s, 0.5 * i * dt_s))
 
 
-def write_conf(tmp, n, rt="", done=True):
+def write_conf(tmp, n, rt="", done=True, can=False):
     track(os.path.join(tmp, "track.csv"), n)
     path = os.path.join(tmp, "trajd.conf")
     with open(path, "w") as f:
         f.write("[daemon]\nrate_hz = 100\nspeed = 10\nstatus_interval_s = 0\nstop_timeout_s = 1\n"
                 "exit_when_done = %s\n" % ("yes" if done else "no") + rt +
-                "[object.a]\ninput = replay\nreplay.track = track.csv\noutput = csv stdout\n"
-                "csv.path = out.csv\n")
+                ("[can]\nlog_out = can.log\nmax_load_percent = 0\n" if can else "") +
+                "[object.a]\ninput = replay\nreplay.track = track.csv\noutput = csv stdout%s\n"
+                "csv.path = out.csv\n" % (" can" if can else ""))
     return path
+
+
+def strace_run(test, tmp, conf):
+    """trajd under strace -f: (its exit line's match, stdout, {fd: writer
+    tids}, the clock readers' tids, the main tid, {path suffix: fd})."""
+    trace = os.path.join(tmp, "trace.txt")
+    p = subprocess.run(["strace", "-f", "-qq", "-o", trace,
+                        "-e", "trace=openat,write,timerfd_create,read,close",
+                        TRAJD, "-f", "-c", conf], cwd=tmp, stdin=subprocess.DEVNULL,
+                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                       timeout=WAIT_S)
+    test.assertEqual(p.returncode, 0, p.stderr)
+    with open(trace) as f:
+        calls = [ln.split(None, 1) for ln in f if ln[:1].isdigit()]
+    main = int(calls[0][0])   # the first line is trajd's execve's thread
+    fds, writers, clock_readers, timer_fds = {}, {}, set(), set()
+    for pid, call in calls:
+        pid = int(pid)
+        m = re.match(r'openat\(AT_FDCWD, "[^"]*/?(out\.csv|can\.log)", O_WRONLY.*\)\s+= (\d+)',
+                     call)
+        if m:
+            fds[m.group(1)] = int(m.group(2))
+        m = re.match(r"timerfd_create\(.*\)\s+= (\d+)", call)
+        if m:
+            timer_fds.add(int(m.group(1)))
+        m = re.match(r"close\((\d+)\)", call)
+        if m:
+            timer_fds.discard(int(m.group(1)))
+        m = re.match(r"read\((\d+), .*, 8\)\s+= 8", call)
+        if m and int(m.group(1)) in timer_fds:
+            clock_readers.add(pid)
+        m = re.match(r"write\((\d+), ", call)
+        if m:
+            writers.setdefault(int(m.group(1)), set()).add(pid)
+    return p, writers, clock_readers, main, fds
 
 
 def task_stat(pid, tid):
@@ -54,37 +91,8 @@ def task_stat(pid, tid):
 class OutputThreadTest(unittest.TestCase):
     def test_writes_off_the_clock_thread(self):
         with tempfile.TemporaryDirectory() as tmp:
-            conf = write_conf(tmp, 60)
-            trace = os.path.join(tmp, "trace.txt")
-            p = subprocess.run(["strace", "-f", "-qq", "-o", trace,
-                                "-e", "trace=openat,write,timerfd_create,read,close",
-                                TRAJD, "-f", "-c", conf], cwd=tmp, stdin=subprocess.DEVNULL,
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               timeout=WAIT_S)
-            self.assertEqual(p.returncode, 0, p.stderr)
-            with open(trace) as f:
-                calls = [ln.split(None, 1) for ln in f if ln[:1].isdigit()]
-            main = int(calls[0][0])   # the first line is trajd's execve's thread
-            csv_fd = None
-            writers, clock_readers = {}, set()
-            timer_fds = set()
-            for pid, call in calls:
-                pid = int(pid)
-                m = re.match(r'openat\(AT_FDCWD, "[^"]*out\.csv", .*\)\s+= (\d+)', call)
-                if m:
-                    csv_fd = int(m.group(1))
-                m = re.match(r"timerfd_create\(.*\)\s+= (\d+)", call)
-                if m:
-                    timer_fds.add(int(m.group(1)))
-                m = re.match(r"close\((\d+)\)", call)
-                if m:
-                    timer_fds.discard(int(m.group(1)))
-                m = re.match(r"read\((\d+), .*, 8\)\s+= 8", call)
-                if m and int(m.group(1)) in timer_fds:
-                    clock_readers.add(pid)
-                m = re.match(r"write\((\d+), ", call)
-                if m and int(m.group(1)) in (csv_fd, 1):
-                    writers.setdefault(int(m.group(1)), set()).add(pid)
+            p, writers, clock_readers, main, fds = strace_run(self, tmp, write_conf(tmp, 60))
+            csv_fd = fds.get("out.csv")
             self.assertIsNotNone(csv_fd)
             # Given the clock read by the main thread only, then neither the
             # csv file nor stdout is ever written by it.
@@ -101,6 +109,23 @@ class OutputThreadTest(unittest.TestCase):
             self.assertTrue(rows[0].startswith("object,"))
             self.assertEqual(len(rows) - 1, int(m.group(1)))
             self.assertEqual(p.stdout.splitlines(), rows)
+
+    def test_can_log_out_off_the_clock_thread(self):
+        import can   # python-can (Debian python3-can), an independent reader
+        with tempfile.TemporaryDirectory() as tmp:
+            p, writers, clock_readers, main, fds = strace_run(self, tmp,
+                                                              write_conf(tmp, 60, can=True))
+            log_fd = fds.get("can.log")
+            self.assertIsNotNone(log_fd)
+            self.assertEqual(clock_readers, {main})
+            self.assertIn(log_fd, writers)
+            self.assertNotIn(main, writers[log_fd])
+            with open(os.path.join(tmp, "can.log")) as f:
+                lines = f.read().splitlines()
+            msgs = list(can.CanutilsLogReader(os.path.join(tmp, "can.log")))
+            self.assertGreater(len(msgs), 100)
+            self.assertEqual(len(msgs), len(lines))
+            # (nothing was lost: strace_run saw exit status 0, not 74)
 
     @unittest.skipUnless(os.geteuid() == 0, "SCHED_FIFO needs root")
     def test_writer_thread_sched_other(self):
