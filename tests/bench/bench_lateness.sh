@@ -12,8 +12,10 @@
 # oldest deadline not yet served), missed ticks (count and share of the
 # deadlines), the tick's own CPU time at p99.9 (CLOCK_THREAD_CPUTIME_ID,
 # the exit line's "tick CPU"), trajd's CPU share over the measured window
-# (/proc/PID/stat), cyclictest's p99 at the same rate, policy and CPU for the
-# same time right after, and the ratio trajd p99 / cyclictest p99.  The
+# (/proc/PID/stat), cyclictest's p99 at the same rate, policy and CPU, run
+# at the same time as trajd (so both meet the same noise of a shared machine:
+# one sleeping thread each, a few us of work per period), and the ratio
+# trajd p99 / cyclictest p99.  The
 # previous values (the same row of tests/bench/RESULTS.md, between its
 # lateness:begin/end marks) stand beside the new ones.  Nothing is asserted.
 #   DURATION_S   measured seconds per run (default 10)
@@ -48,9 +50,11 @@ conf() { # $1 = objects, $2 = rate_hz, $3 = extra [realtime] lines
     } > "$tmp/bench.conf"
 }
 
-# trajd for DURATION_S after its start-up; prints
-# "ticks p50 p99 p999 max missed tickcpu999 cpu%"
-run() { # $1 = objects
+# trajd for DURATION_S after its start-up, cyclictest (options $2..) at the
+# same time; prints "ticks p50 p99 p999 max missed tickcpu999 cpu%" and
+# leaves cyclictest's p99 in $tmp/cyc
+run() { # $1 = period us, $2.. = cyclictest options
+    local period=$1; shift
     rm -f "$tmp"/o*.csv
     "$TRAJD" -f -c "$tmp/bench.conf" > /dev/null 2> "$tmp/err" & pid=$!
     local i
@@ -62,8 +66,10 @@ run() { # $1 = objects
     kill -0 "$pid" 2> /dev/null || { grep -v '^<6>object' "$tmp/err" | head -n 5 >&2; }
     local c0 c1
     c0=$(awk '{ print $14 + $15 }' "/proc/$pid/stat" 2> /dev/null || echo 0)
+    cyclic_p99 "$period" "$@" > "$tmp/cyc" & local cyc=$!
     sleep "$DURATION_S"
     c1=$(awk '{ print $14 + $15 }' "/proc/$pid/stat" 2> /dev/null || echo 0)
+    wait "$cyc" || true
     kill -TERM "$pid"; wait "$pid" 2> /dev/null || true; pid=""
     grep 'exit:' "$tmp/err" | tail -n 1 | awk -v c="$((c1 - c0))" -v hz="$hz" -v dur="$DURATION_S" '{
         match($0, /ticks [0-9]+/); ticks = substr($0, RSTART + 6, RLENGTH - 6);
@@ -99,8 +105,8 @@ row() { # $1 = objects, $2 = rate, $3 = condition label, $4 = [realtime] lines, 
     local objs=$1 rate=$2 label=$3 rt=$4 cpu=$5; shift 5
     conf "$objs" "$rate" "$rt"
     local r c p
-    r=$(run "$objs")
-    if [ -n "$cpu" ]; then c=$(cyclic_p99 $((1000000 / rate)) -a "$cpu" "$@"); else c=$(cyclic_p99 $((1000000 / rate)) "$@"); fi
+    if [ -n "$cpu" ]; then r=$(run $((1000000 / rate)) -a "$cpu" "$@"); else r=$(run $((1000000 / rate)) "$@"); fi
+    c=$(cat "$tmp/cyc")
     p=$(prev "$objs x $rate Hz" "$label")
     echo "$r $c $p" | awk -v w="$objs x $rate Hz" -v l="$label" '{
         ticks = $1; p99 = $3; missed = $6; ratio = ($9 + 0 > 0) ? sprintf("%.2f", p99 / $9) : "-";
@@ -113,7 +119,7 @@ busy_on() { taskset -c 1 sh -c 'while :; do :; done' & busy=$!; }
 busy_off() { kill "$busy"; wait "$busy" 2> /dev/null || true; busy=""; }
 
 echo "trajd tick lateness against cyclictest, ${DURATION_S} s per run, $ncpu CPUs, $(uname -r)"
-echo "x cyclictest: trajd's p99 over cyclictest's p99 in the same condition and policy, this run;"
+echo "x cyclictest: trajd's p99 over cyclictest's p99, run at the same time, same policy and CPUs;"
 echo "was: the same row of tests/bench/RESULTS.md"
 echo "<!-- lateness:begin -->"
 echo "| workload | condition | trajd p99 us | cyclictest p99 us | x cyclictest | was | trajd p50/p99.9/max us | missed | missed % | was | tick CPU p99.9 us | was | trajd CPU % |"
