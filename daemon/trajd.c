@@ -361,6 +361,9 @@ static int run(trajd_t *d)
 {
     char err[1024];
     d->stats.start_mono_ns = core_mono_ns();
+    /* from here (detached: after the fork) lines go through the log thread */
+    if (log_async_start() < 0)
+        log_msg(LOG_WARNING, "log thread not started: lines are written by the loop");
     if (start_core(d, d->cfg, err, sizeof err) < 0) {
         log_msg(LOG_ERR, "cannot start: %s", err);
         return EX_UNAVAILABLE;
@@ -470,5 +473,6 @@ int main(int argc, char **argv)
         close(d.sig_fd);
     loop_free(d.loop);
     cfg_free(d.cfg);
+    log_async_stop(); /* every line queued is written before the exit */
     return rc;
 }

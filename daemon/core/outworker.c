@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <sched.h>
+#include <signal.h>
 #include <stdint.h>
 #include <sys/eventfd.h>
 #include <unistd.h>
@@ -24,8 +25,14 @@ int outworker_start(outworker_t *w, void *(*fn)(void *), void *arg, const char *
         rc = pthread_attr_setschedpolicy(&a, SCHED_OTHER);
     if (!rc)
         rc = pthread_attr_setschedparam(&a, &sp);
+    /* the thread takes no signal (the loop's signalfd does): created with
+     * every signal blocked, the creator's mask put back after */
+    sigset_t all, old;
+    sigfillset(&all);
+    pthread_sigmask(SIG_SETMASK, &all, &old);
     if (!rc)
         rc = pthread_create(&w->th, &a, fn, arg);
+    pthread_sigmask(SIG_SETMASK, &old, NULL);
     pthread_attr_destroy(&a);
     if (rc) {
         close(w->efd);

@@ -23,8 +23,8 @@ typedef struct {
     _Atomic int stop;
 } outworker_t;
 
-/* Start fn(arg) on a new SCHED_OTHER thread named name (at most 15 chars).
- * 0 or -errno. */
+/* Start fn(arg) on a new SCHED_OTHER thread named name (at most 15 chars),
+ * every signal blocked in it.  0 or -errno. */
 int outworker_start(outworker_t *w, void *(*fn)(void *), void *arg, const char *name);
 
 /* Tick side: wake the thread if it sleeps.  Never blocks. */

@@ -6,13 +6,19 @@ Seen from outside, by the kernel's own accounts:
    one that reads the clock's timerfd), and the output is whole: one line per
    tick, the header first.  The same for the CAN output's candump log
    ([can] log_out), whose every line python-can reads back.
-2. With [realtime] fifo_priority (as root), the main thread runs SCHED_FIFO
+2. A stderr nobody reads (a pipe of 4 KiB, F_SETPIPE_SZ, full after a few
+   status lines) does not stop the clock: the csv file keeps growing by one
+   line per tick while the pipe is full (the loop wrote its log lines itself
+   and blocked in write(2) until someone read); once the pipe is read again,
+   the lines queued meanwhile come out whole and in order.
+3. With [realtime] fifo_priority (as root), the main thread runs SCHED_FIFO
    and the writer thread ("trajd-out") SCHED_OTHER (field 41 of
    /proc/PID/task/TID/stat, proc(5)), so the writer never takes the tick's CPU
    from it.
 """
 import os
 import re
+import fcntl
 import signal
 import subprocess
 import sys
@@ -60,24 +66,27 @@ def strace_run(test, tmp, conf):
     with open(trace) as f:
         calls = [ln.split(None, 1) for ln in f if ln[:1].isdigit()]
     main = int(calls[0][0])   # the first line is trajd's execve's thread
-    fds, writers, clock_readers, timer_fds = {}, {}, set(), set()
+    # fd numbers are reused: a write counts for a file only while its fd is open
+    fds, writers, clock_readers, timer_fds, open_now = {}, {}, set(), set(), {1: 1}
     for pid, call in calls:
         pid = int(pid)
         m = re.match(r'openat\(AT_FDCWD, "[^"]*/?(out\.csv|can\.log)", O_WRONLY.*\)\s+= (\d+)',
                      call)
         if m:
             fds[m.group(1)] = int(m.group(2))
+            open_now[int(m.group(2))] = int(m.group(2))
         m = re.match(r"timerfd_create\(.*\)\s+= (\d+)", call)
         if m:
             timer_fds.add(int(m.group(1)))
         m = re.match(r"close\((\d+)\)", call)
         if m:
             timer_fds.discard(int(m.group(1)))
+            open_now.pop(int(m.group(1)), None)
         m = re.match(r"read\((\d+), .*, 8\)\s+= 8", call)
         if m and int(m.group(1)) in timer_fds:
             clock_readers.add(pid)
         m = re.match(r"write\((\d+), ", call)
-        if m:
+        if m and int(m.group(1)) in open_now:
             writers.setdefault(int(m.group(1)), set()).add(pid)
     return p, writers, clock_readers, main, fds
 
@@ -126,6 +135,52 @@ class OutputThreadTest(unittest.TestCase):
             self.assertGreater(len(msgs), 100)
             self.assertEqual(len(msgs), len(lines))
             # (nothing was lost: strace_run saw exit status 0, not 74)
+
+    def test_unread_stderr_does_not_stop_the_clock(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            track(os.path.join(tmp, "track.csv"), 3000)
+            conf = os.path.join(tmp, "trajd.conf")
+            with open(conf, "w") as f:
+                f.write("[daemon]\nrate_hz = 100\nstatus_interval_s = 1\nstop_timeout_s = 0\n"
+                        "[object.a]\nid = 0\ninput = replay\nreplay.track = track.csv\n"
+                        "output = csv\ncsv.path = a.csv\n")
+                for i in range(1, 41):   # a long status line: ~3 KB a second
+                    f.write("[object.o%02d]\nid = %d\ninput = replay\nreplay.track = track.csv\n"
+                            "output = stdout\n" % (i, i))
+            r, w = os.pipe()
+            fcntl.fcntl(w, fcntl.F_SETPIPE_SZ, 4096)
+            p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=tmp, stdin=subprocess.DEVNULL,
+                                 stdout=subprocess.DEVNULL, stderr=w)
+            os.close(w)
+            out = []
+            try:
+                def rows():
+                    try:
+                        with open(os.path.join(tmp, "a.csv")) as f:
+                            return sum(1 for _ in f)
+                    except FileNotFoundError:
+                        return 0
+                # Given stderr unread for 4 s (the pipe is full within 2) ...
+                time.sleep(4)
+                n0, t0 = rows(), time.monotonic()
+                time.sleep(3)
+                n1, t1 = rows(), time.monotonic()
+                # ... then the clock ran on: at least half the ticks of those 3 s
+                # were written (a blocked loop writes none).
+                self.assertGreater(n1 - n0, 0.5 * 100 * (t1 - t0), (n0, n1))
+            finally:
+                p.send_signal(signal.SIGTERM)
+                with os.fdopen(r, "r", errors="replace") as f:
+                    out = f.read()   # until trajd exits (EOF)
+                rc = p.wait(WAIT_S)
+            self.assertEqual(rc, 0, out[-2000:])
+            # The lines queued while nobody read came out after, whole and in order
+            # (fewer than the queue holds: none dropped).
+            ups = [int(u) for u in re.findall(r"^<6>status: up (\d+) s", out, re.M)]
+            self.assertGreaterEqual(len(ups), 5, out[-2000:])
+            self.assertEqual(ups, list(range(ups[0], ups[0] + len(ups))))
+            self.assertNotIn("log lines dropped", out)
+            self.assertIn("<6>exit:", out)
 
     @unittest.skipUnless(os.geteuid() == 0, "SCHED_FIFO needs root")
     def test_writer_thread_sched_other(self):
