@@ -146,6 +146,10 @@ static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
     d->core = nc;
     if (d->ctl)
         ctl_set_core(d->ctl, d->core);
+    /* before the clock starts: mlockall faults every page in (seconds for
+     * 1024 objects), which must not count as ticks missed */
+    if (rt_apply(&cfg->rt, rtwhy, sizeof rtwhy) < 0)
+        log_msg(LOG_WARNING, "realtime settings not applied (running without them): %s", rtwhy);
     rc = core_start(d->core);
     if (rc < 0) {
         snprintf(why, wl, "output clock: %s", strerror(-rc));
@@ -156,8 +160,6 @@ static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
         return rc;
     }
     log_set_level(cfg->daemon.log_level);
-    if (rt_apply(&cfg->rt, rtwhy, sizeof rtwhy) < 0)
-        log_msg(LOG_WARNING, "realtime settings not applied (running without them): %s", rtwhy);
     return 0;
 }
 
@@ -537,6 +539,9 @@ static int run(trajd_t *d)
     d->stats.start_mono_ns = core_mono_ns();
     if (open_control(d) < 0) /* first: the clock starts with nothing left to open */
         return EX_UNAVAILABLE;
+    /* from here (detached: after the fork) lines go through the log thread */
+    if (log_async_start() < 0)
+        log_msg(LOG_WARNING, "log thread not started: lines are written by the loop");
     if (start_core(d, d->cfg, err, sizeof err) < 0) {
         log_msg(LOG_ERR, "cannot start: %s", err);
         return EX_UNAVAILABLE;
@@ -677,5 +682,6 @@ int main(int argc, char **argv)
         close(d.sig_fd);
     loop_free(d.loop);
     cfg_free(d.cfg);
+    log_async_stop(); /* every line queued is written before the exit */
     return rc;
 }

@@ -13,11 +13,19 @@
 #include "candump.h"
 #include "log.h"
 #include "regfile.h"
+#include "outworker.h"
+#include "spsc.h"
 
 typedef struct {
     int64_t ts_us;
     canproto_frame_t f;
 } can_logfile_rec_t;
+
+/* Output frames queued for the writer thread (issue 28): the lines of this
+ * many frames (a SYNC, STATUS and setpoints per object and tick). */
+#define CAN_LOGFILE_QUEUE 4096
+
+static void *writer(void *arg);
 
 struct can_logfile {
     can_logfile_rec_t *rec;
@@ -29,11 +37,20 @@ struct can_logfile {
     int out_own;         /* close it at the end (not stdout) */
     long long out_kept;  /* bytes kept in the output file at open, -1: not a regular file */
     int64_t out_last_us; /* stamp of its last line kept, INT64_MIN: none */
-    char *obuf;          /* CAN_LOGFILE_OUT_BUF bytes of whole lines, written each cycle */
+    char *obuf;          /* CAN_LOGFILE_OUT_BUF bytes of whole lines (the writer's) */
     size_t olen;
+    int stalled; /* the writer's last write did not take everything */
     char ifname[CANDUMP_IFNAME_MAX + 1];
     can_logfile_stats_t st;
     char first_bad_why[64]; /* why the first bad line was refused */
+    /* The output: the tick queues frames (can_logfile_send), publishes them
+     * and wakes the writer once per cycle (can_logfile_flush); the writer
+     * formats and writes them and counts its faults in these atomics,
+     * which can_logfile_stats adds to st. */
+    spsc_t q;
+    outworker_t w;
+    _Atomic uint64_t w_lost, w_errors;
+    _Atomic int w_errno;
 };
 
 /* One bad line: counted; the first CAN_LOGFILE_REPORT_MAX are logged with
@@ -278,6 +295,13 @@ can_logfile_t *can_logfile_open_mode(const char *in_path, const char *out_path, 
         }
         if (open_out(l, out_path, append, err, errlen) < 0)
             goto fail;
+        int rc = spsc_init(&l->q, sizeof(can_logfile_rec_t), CAN_LOGFILE_QUEUE);
+        if (rc == 0)
+            rc = outworker_start(&l->w, writer, l, "trajd-canout");
+        if (rc < 0) {
+            snprintf(err, errlen, "%s: writer thread: %s", out_path, strerror(-rc));
+            goto fail;
+        }
     }
     return l;
 fail:
@@ -301,11 +325,20 @@ int64_t can_logfile_out_last_us(const can_logfile_t *l)
     return l->out_last_us;
 }
 
+void can_logfile_finish(can_logfile_t *l)
+{
+    if (!l || !l->w.started)
+        return;
+    spsc_publish(&l->q);
+    outworker_stop(&l->w); /* it takes every frame published, writes, then returns */
+}
+
 void can_logfile_close(can_logfile_t *l)
 {
     if (!l)
         return;
-    can_logfile_flush(l);
+    can_logfile_finish(l);
+    spsc_fini(&l->q);
     if (l->out_own && l->out_fd >= 0)
         close(l->out_fd);
     free(l->obuf);
@@ -367,22 +400,16 @@ void can_logfile_set_epoch(can_logfile_t *l, int64_t epoch_ns)
 
 int can_logfile_send(can_logfile_t *l, const canproto_frame_t *f)
 {
-    char buf[256];
     if (l->out_fd < 0)
         return 0;
-    int n = candump_format_line(buf, sizeof buf, (l->now_ns + l->epoch_ns) / 1000, l->ifname, f);
-    if (n < 0) {
-        l->st.write_errors++;
-        return -EIO;
-    }
-    if ((size_t)n > CAN_LOGFILE_OUT_BUF - l->olen)
-        can_logfile_flush(l);
-    if ((size_t)n > CAN_LOGFILE_OUT_BUF - l->olen) { /* a slow reader (EAGAIN) */
+    can_logfile_rec_t *r = l->w.started ? spsc_slot(&l->q) : NULL;
+    if (!r) { /* the writer is behind: the queue is full */
         l->st.frames_lost++;
         return -EIO;
     }
-    memcpy(l->obuf + l->olen, buf, (size_t)n);
-    l->olen += (size_t)n;
+    r->ts_us = (l->now_ns + l->epoch_ns) / 1000;
+    r->f = *f;
+    spsc_push(&l->q);
     l->st.frames_out++;
     return 0;
 }
@@ -412,12 +439,15 @@ static void cut_torn(can_logfile_t *l, size_t off)
         head++;
     if (head && l->out_kept >= 0 && fstat(l->out_fd, &sb) == 0 && sb.st_size >= (off_t)head &&
         ftruncate(l->out_fd, sb.st_size - (off_t)head) < 0)
-        l->st.last_errno = errno;
+        atomic_store_explicit(&l->w_errno, errno, memory_order_relaxed);
 }
 
-void can_logfile_flush(can_logfile_t *l)
+/* The writer: what the buffer holds, without waiting for a slow reader
+ * (EAGAIN: later); a failed write counts and its frames are lost. */
+static void out_write(can_logfile_t *l)
 {
     size_t off = 0;
+    l->stalled = 0;
     while (l->out_fd >= 0 && off < l->olen) {
         ssize_t w = write(l->out_fd, l->obuf + off, l->olen - off);
         if (w > 0) {
@@ -426,12 +456,15 @@ void can_logfile_flush(can_logfile_t *l)
         }
         if (w < 0 && errno == EINTR)
             continue;
+        l->stalled = 1;
         if (w < 0 && (errno == EAGAIN || errno == EWOULDBLOCK))
             break; /* later; new frames are lost (counted) once the buffer is full */
-        l->st.write_errors++;
-        l->st.last_errno = w < 0 ? errno : EIO;
+        int e = w < 0 ? errno : EIO;
+        atomic_store_explicit(&l->w_errno, e, memory_order_relaxed);
         cut_torn(l, off);
-        l->st.frames_lost += count_lines(l->obuf + off, l->olen - off);
+        atomic_fetch_add_explicit(&l->w_lost, count_lines(l->obuf + off, l->olen - off),
+                                  memory_order_relaxed);
+        atomic_fetch_add_explicit(&l->w_errors, 1, memory_order_relaxed);
         off = l->olen;
     }
     if (off) {
@@ -440,7 +473,64 @@ void can_logfile_flush(can_logfile_t *l)
     }
 }
 
+/* The writer: one queued frame as a line into the buffer (written first
+ * when full, unless the last write stalled: then the frame is lost). */
+static void out_line(can_logfile_t *l, const can_logfile_rec_t *r)
+{
+    char buf[256];
+    int n = candump_format_line(buf, sizeof buf, r->ts_us, l->ifname, &r->f);
+    if (n >= 0 && (size_t)n > CAN_LOGFILE_OUT_BUF - l->olen && !l->stalled)
+        out_write(l);
+    if (n < 0 || (size_t)n > CAN_LOGFILE_OUT_BUF - l->olen) {
+        atomic_fetch_add_explicit(&l->w_lost, 1, memory_order_relaxed);
+        return;
+    }
+    memcpy(l->obuf + l->olen, buf, (size_t)n);
+    l->olen += (size_t)n;
+}
+
+static int queue_idle(void *arg)
+{
+    can_logfile_t *l = arg;
+    return spsc_avail(&l->q) == 0;
+}
+
+static void *writer(void *arg)
+{
+    can_logfile_t *l = arg;
+    for (;;) {
+        int stop = outworker_stopping(&l->w);
+        size_t n = spsc_avail(&l->q);
+        for (size_t i = 0; i < n; i++)
+            out_line(l, spsc_at(&l->q, i));
+        spsc_release(&l->q, n);
+        if (n || stop)
+            out_write(l);
+        if (stop)
+            break;
+        if (!n)
+            outworker_wait(&l->w, queue_idle, l);
+    }
+    if (l->olen) { /* left unwritten at the end (a reader that stopped reading) */
+        atomic_fetch_add_explicit(&l->w_lost, count_lines(l->obuf, l->olen), memory_order_relaxed);
+        l->olen = 0;
+    }
+    return NULL;
+}
+
+void can_logfile_flush(can_logfile_t *l)
+{
+    if (!l->w.started)
+        return;
+    spsc_publish(&l->q);
+    outworker_wake(&l->w);
+}
+
 void can_logfile_stats(const can_logfile_t *l, can_logfile_stats_t *st)
 {
+    can_logfile_t *m = (can_logfile_t *)l; /* atomic loads take a non-const pointer */
     *st = l->st;
+    st->frames_lost += atomic_load_explicit(&m->w_lost, memory_order_relaxed);
+    st->write_errors = atomic_load_explicit(&m->w_errors, memory_order_relaxed);
+    st->last_errno = atomic_load_explicit(&m->w_errno, memory_order_relaxed);
 }

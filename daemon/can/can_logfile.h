@@ -40,7 +40,7 @@ typedef struct can_logfile can_logfile_t;
 /* Longest candump line accepted, bytes: a CAN FD frame with a 29-bit id,
  * 64 data bytes, a 20-digit stamp and a 15-character interface is ~190. */
 #define CAN_LOGFILE_LINE_MAX 1024
-/* Output buffer: whole lines, written once per cycle (can_logfile_flush)
+/* Output buffer: whole lines, written by the writer thread after each batch
  * with write(2), so a failed write is seen and its frames counted as lost. */
 #define CAN_LOGFILE_OUT_BUF 65536
 /* Largest log_in accepted (it is read whole into memory), as for a replayed
@@ -91,7 +91,12 @@ int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, si
  */
 int can_logfile_probe(const char *path, char *why, size_t wl);
 
-/* Flush and close; NULL is a no-op. */
+/* The output's writer thread (below) takes every frame queued, writes them,
+ * counts what is left unwritten as lost, and ends; read the stats after it.
+ * A no-op without output, or once done.  NULL is a no-op. */
+void can_logfile_finish(can_logfile_t *l);
+
+/* Finish and close; NULL is a no-op. */
 void can_logfile_close(can_logfile_t *l);
 
 /* Next input frame due at or before now_ns: 1 (in f), 0 (none yet or no more). */
@@ -107,8 +112,11 @@ void can_logfile_keep_pos(const can_logfile_t *l, const char *path);
  * kept position either way. */
 size_t can_logfile_resume(can_logfile_t *l, const char *path);
 
-/* Write f as a log line stamped with the last now_ns given to can_logfile_recv /
- * can_logfile_set_time.  Returns 0 or -EIO. */
+/* Queue f for the output as a log line stamped with the last now_ns given to
+ * can_logfile_recv / can_logfile_set_time.  In the tick: a copy into a
+ * bounded ring (daemon/core/spsc.h), no formatting, no write, no allocation.
+ * Returns 0, or -EIO if the ring is full (the writer is behind: counted in
+ * frames_lost). */
 int can_logfile_send(can_logfile_t *l, const canproto_frame_t *f);
 
 /* Set the time stamped on output lines (engine time, ns). */
@@ -122,8 +130,11 @@ void can_logfile_set_epoch(can_logfile_t *l, int64_t epoch_ns);
 /* 1 once every input frame was delivered (or there is no input). */
 int can_logfile_done(const can_logfile_t *l);
 
-/* Write what the output buffer holds (once per cycle); a failed write
- * (not EAGAIN) counts in write_errors and its frames in frames_lost. */
+/* Once per cycle: hand the frames queued to the output's writer thread
+ * (daemon/core/outworker.h, SCHED_OTHER, started at open with an output),
+ * which formats them into a buffer of whole lines and writes it; a failed
+ * write (not EAGAIN) counts in write_errors and its frames in frames_lost,
+ * as does a frame that finds the buffer full behind a slow reader. */
 void can_logfile_flush(can_logfile_t *l);
 
 void can_logfile_stats(const can_logfile_t *l, can_logfile_stats_t *st);

@@ -891,7 +891,7 @@ static void close_(void *state, core_t *c)
     if (s->log && s->cfg->log_in[0]) /* a reload goes on from here (log_in_resume) */
         can_logfile_keep_pos(s->log, s->cfg->log_in);
     if (s->log) { /* the last lines, counted before the counters are read */
-        can_logfile_flush(s->log);
+        can_logfile_finish(s->log);
         log_out_faults(s, 0);
         report_log_out(s, 1);
     }

@@ -26,7 +26,10 @@
  *      overrun is counted if the work ended after the next deadline.
  * All of it runs in the one loop thread: a transport's fd callbacks and the
  * tick never run at the same time, so a callback sees o->sp and o->status of
- * the last complete tick (a consistent snapshot) without locking.
+ * the last complete tick (a consistent snapshot) without locking.  A
+ * transport may hand its file output to a thread of its own through a ring
+ * (csv_transport.h: spsc.h, outworker.h); its counts come back through the
+ * transport's cycle, so core_t, stats_t and obj_t are written by this thread only.
  *
  * Stop policy (SIGTERM/SIGINT, core_stop): inputs stop (no pre_tick,
  * obj_push refuses with -ENGINE_ESTATE), every engine gets engine_stop() so
@@ -217,6 +220,8 @@ typedef struct {
     uint64_t overruns;     /* ticks whose work ended after the next deadline */
     lat_hist_t late_hist;  /* lateness since start / reset, us */
     lat_summary_t late;    /* summary of late_hist, refreshed every second */
+    lat_hist_t work_hist;  /* each tick's own CPU time (CLOCK_THREAD_CPUTIME_ID), us */
+    lat_summary_t work;    /* summary of work_hist, refreshed every second */
     /* Counters a transport keeps across reloads (a reload rebuilds its state):
      * tcount[transport_index(t)][0 .. STATS_TCOUNT_MAX - 1], meaning defined by
      * transport t, printed by its summary callback. */

@@ -1,6 +1,7 @@
 /* log.c - log lines to a terminal, journald's stream or syslog (see log.h). */
 #include "log.h"
 
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -10,6 +11,9 @@
 #define SD_JOURNAL_SUPPRESS_LOCATION
 #include <systemd/sd-journal.h>
 #include <unistd.h>
+
+#include "outworker.h"
+#include "spsc.h"
 
 static int log_level = LOG_INFO;
 static log_mode_t log_mode = LOG_MODE_AUTO;
@@ -101,22 +105,17 @@ static int journal_send(const char *file, int line, const char *func, const char
     return sd_journal_sendv(iov, n);
 }
 
-void log_at(const char *file, int line, const char *func, const char *object, const char *peer,
-            int prio, const char *fmt, ...)
+/* One line, its text formatted, to where mode says. */
+static void emit(log_mode_t mode, const char *file, int line, const char *func, const char *object,
+                 const char *peer, int prio, const char *msg)
 {
-    if (prio > log_level)
-        return;
     char buf[1024];
-    log_mode_t mode = log_get_mode();
-    va_list ap;
     /* sd_journal_sendv drops lines silently when journald is not running:
      * only when its socket is there (else the "<N>" line below) */
     if (mode == LOG_MODE_PREFIX && stderr_is_journal() &&
         access("/run/systemd/journal/socket", W_OK) == 0) {
-        va_start(ap, fmt);
-        int m = vsnprintf(buf, sizeof buf, fmt, ap);
-        va_end(ap);
-        size_t len = m < 0 ? 0 : (size_t)m < sizeof buf ? (size_t)m : sizeof buf - 1;
+        size_t len = strnlen(msg, sizeof buf - 1);
+        memcpy(buf, msg, len);
         while (len && buf[len - 1] == '\n')
             len--;
         buf[len] = '\0';
@@ -124,18 +123,14 @@ void log_at(const char *file, int line, const char *func, const char *object, co
             return;
     }
     if (mode == LOG_MODE_SYSLOG) {
-        va_start(ap, fmt);
-        vsyslog(prio & 7, fmt, ap);
-        va_end(ap);
+        syslog(prio & 7, "%s", msg);
         return;
     }
     int n = mode == LOG_MODE_PREFIX     ? snprintf(buf, sizeof buf, "<%d>", prio & 7)
             : (prio & 7) <= LOG_ERR     ? snprintf(buf, sizeof buf, "error: ")
             : (prio & 7) == LOG_WARNING ? snprintf(buf, sizeof buf, "warning: ")
                                         : 0;
-    va_start(ap, fmt);
-    int m = vsnprintf(buf + n, sizeof buf - (size_t)n - 1, fmt, ap);
-    va_end(ap);
+    int m = snprintf(buf + n, sizeof buf - (size_t)n - 1, "%s", msg);
     if (m < 0)
         m = 0;
     size_t len = (size_t)n +
@@ -145,4 +140,129 @@ void log_at(const char *file, int line, const char *func, const char *object, co
     /* One write: a line is never interleaved with another process's line. */
     ssize_t w = write(STDERR_FILENO, buf, len);
     (void)w;
+}
+
+/* ---- the log thread (log_async_start) ---------------------------------- */
+
+#define LOG_QUEUE 256 /* lines waiting for the log thread */
+
+typedef struct {
+    log_mode_t mode;
+    const char *file, *func; /* string literals (__FILE__, __func__) */
+    int line, prio, has_object, has_peer;
+    char object[64], peer[96];
+    char msg[1024];
+} log_rec_t;
+
+static spsc_t log_q;
+static outworker_t log_w;
+static pthread_mutex_t log_mu = PTHREAD_MUTEX_INITIALIZER; /* producers (never the tick) */
+static int log_async;
+static _Atomic unsigned long long log_dropped;
+
+static int log_idle(void *arg)
+{
+    (void)arg;
+    return spsc_avail(&log_q) == 0;
+}
+
+static void *log_thread(void *arg)
+{
+    unsigned long long told = 0;
+    (void)arg;
+    for (;;) {
+        int stop = outworker_stopping(&log_w);
+        size_t n = spsc_avail(&log_q);
+        for (size_t i = 0; i < n; i++) {
+            const log_rec_t *r = spsc_at(&log_q, i);
+            emit(r->mode, r->file, r->line, r->func, r->has_object ? r->object : NULL,
+                 r->has_peer ? r->peer : NULL, r->prio, r->msg);
+        }
+        spsc_release(&log_q, n);
+        unsigned long long d = atomic_load(&log_dropped);
+        if (d != told) {
+            char msg[160];
+            snprintf(msg, sizeof msg,
+                     "%llu log lines dropped: the log's reader (stderr, the journal) was too slow "
+                     "(%llu so far)",
+                     d - told, d);
+            emit(log_get_mode(), __FILE__, __LINE__, __func__, NULL, NULL, LOG_WARNING, msg);
+            told = d;
+        }
+        if (stop)
+            break;
+        if (!n)
+            outworker_wait(&log_w, log_idle, NULL);
+    }
+    return NULL;
+}
+
+int log_async_start(void)
+{
+    if (log_async)
+        return 0;
+    int rc = spsc_init(&log_q, sizeof(log_rec_t), LOG_QUEUE);
+    if (rc == 0)
+        rc = outworker_start(&log_w, log_thread, NULL, "trajd-log");
+    if (rc < 0) {
+        spsc_fini(&log_q);
+        return rc;
+    }
+    log_async = 1;
+    return 0;
+}
+
+void log_async_stop(void)
+{
+    if (!log_async)
+        return;
+    pthread_mutex_lock(&log_mu);
+    log_async = 0;
+    pthread_mutex_unlock(&log_mu);
+    outworker_stop(&log_w); /* it writes every line queued first */
+    spsc_fini(&log_q);
+}
+
+unsigned long long log_dropped_count(void)
+{
+    return atomic_load(&log_dropped);
+}
+
+void log_at(const char *file, int line, const char *func, const char *object, const char *peer,
+            int prio, const char *fmt, ...)
+{
+    if (prio > log_level)
+        return;
+    va_list ap;
+    pthread_mutex_lock(&log_mu);
+    if (log_async) {
+        log_rec_t *r = spsc_slot(&log_q);
+        if (!r) {
+            atomic_fetch_add(&log_dropped, 1);
+        } else {
+            r->mode = log_get_mode();
+            r->file = file;
+            r->func = func;
+            r->line = line;
+            r->prio = prio;
+            r->has_object = object != NULL;
+            r->has_peer = peer != NULL;
+            snprintf(r->object, sizeof r->object, "%s", object ? object : "");
+            snprintf(r->peer, sizeof r->peer, "%s", peer ? peer : "");
+            va_start(ap, fmt);
+            vsnprintf(r->msg, sizeof r->msg, fmt, ap);
+            va_end(ap);
+            spsc_push(&log_q);
+            spsc_publish(&log_q);
+            outworker_wake(&log_w);
+        }
+        pthread_mutex_unlock(&log_mu);
+        return;
+    }
+    pthread_mutex_unlock(&log_mu);
+    char msg[1024];
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    emit(log_get_mode(), file, line, func, object, peer, prio, msg);
 }

@@ -11,8 +11,13 @@
  *   LOG_MODE_SYSLOG   detached (trajd without -f, once it is ready):
  *                     syslog(3), ident "trajd", facility LOG_DAEMON.
  *
- * Not for the tick: stderr may block when journald is slow.  The tick counts
- * events; a housekeeping timer logs them.
+ * Not for the tick: the tick counts events; a housekeeping timer logs them.
+ * Once log_async_start() ran (trajd, once detached), lines are formatted by
+ * the caller and queued (a bounded ring, daemon/core/spsc.h) for a log thread
+ * (SCHED_OTHER) that writes them, so a slow journald or a stderr nobody
+ * reads never holds the loop up; a full queue drops the line, counted, and
+ * the log thread says how many once it can write again.  log_async_stop()
+ * writes every line queued and ends the thread (at exit).
  */
 #ifndef TRAJD_LOG_H
 #define TRAJD_LOG_H
@@ -44,6 +49,13 @@ log_mode_t log_get_mode(void);
  */
 void log_at(const char *file, int line, const char *func, const char *object, const char *peer,
             int prio, const char *fmt, ...) __attribute__((format(printf, 7, 8)));
+/* Start / stop the log thread (above).  0 or -errno (lines are then written
+ * by the caller, as before). */
+int log_async_start(void);
+void log_async_stop(void);
+/* Lines dropped because the queue was full, since start. */
+unsigned long long log_dropped_count(void);
+
 #define log_msg(prio, ...) log_at(__FILE__, __LINE__, __func__, NULL, NULL, prio, __VA_ARGS__)
 /* A line about one object (OBJECT=name), or one peer (PEER=address). */
 #define log_obj(prio, object, ...)                                                                 \

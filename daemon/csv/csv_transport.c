@@ -17,30 +17,60 @@
 #include "csv_format.h"
 #include "csv_shortest.h"
 #include "log.h"
+#include "outworker.h"
+#include "spsc.h"
 
 #define CSV_TRANSPORT_LINE_MAX 1024 /* one csv_format line: 16 numbers at most ~25 chars + name */
 
+/*
+ * Two threads (issue 28).  The tick only copies each setpoint into a record
+ * of a ring (spsc.h) and publishes the ring once per tick; the writer thread
+ * (outworker.h, SCHED_OTHER) formats the records into each stream's buffer
+ * and writes it.  The writer's counters are atomics the tick folds into the
+ * daemon's (stats_t, obj_t) in its cycle hook: those keep one writer, the
+ * loop thread.
+ */
 typedef struct {
+    /* the writer's (the loop thread's before the writer starts and after it is joined) */
     int fd;
     int own;           /* close at the end */
     int restore_flags; /* fcntl flags to put back (stdout), or -1 */
     int regular;       /* a regular file: a torn line can be cut off again */
     int is_stdout;
-    int geo;    /* csv.geo: lat_deg,lon_deg,alt_m,heading_deg appended to every line */
-    int age;    /* lines carry the age_s column */
-    obj_t *obj; /* csv: the one object writing here; stdout: NULL (all of them) */
+    int geo; /* csv.geo: lat_deg,lon_deg,alt_m,heading_deg appended to every line */
+    int age; /* lines carry the age_s column */
     size_t len;
-    char *buf;                               /* CSV_TRANSPORT_BUF_BYTES */
+    char *buf;   /* CSV_TRANSPORT_BUF_BYTES */
+    int stalled; /* the last write did not take everything (EAGAIN, an error) */
+    /* written by the writer, read by the loop thread */
+    _Atomic uint64_t w_errors;  /* failed write calls */
+    _Atomic uint64_t w_dropped; /* lines dropped: the buffer was full */
+    _Atomic uint64_t w_left;    /* lines left in the buffer at the end */
+    _Atomic int w_errno;        /* of the last failed write */
+    _Atomic int w_epipe;        /* stdout's reader left */
+    /* the loop thread's */
+    obj_t *obj;                              /* csv: the one object writing here; stdout: NULL */
     char what[PATH_MAX + CFG_NAME_MAX + 32]; /* for the log: "object 'boat' csv.path /x" */
-    int last_errno;                          /* of the last failed write */
-    uint64_t errors;                         /* failed write calls */
-    uint64_t lost;                           /* lines lost */
+    uint64_t seen_errors, seen_dropped, seen_left; /* writer counts folded so far */
+    uint64_t errors;                               /* failed write calls (folded) */
+    uint64_t lost;                                 /* lines lost (folded, and queue full) */
     uint64_t errors_logged, lost_logged;
     int64_t logged_ns; /* CLOCK_MONOTONIC of the last warning, 0: none yet */
 } stream_t;
 
 /* This transport's row of stats_t.tcount (survives reloads). */
-enum { TCOUNT_DROPPED = 0 }; /* lines dropped: the buffer was full */
+enum { TCOUNT_DROPPED = 0 }; /* lines dropped: the buffer or the queue was full */
+
+/* One setpoint on its way to the writer. */
+typedef struct {
+    unsigned stream, obj; /* indices: st->s, st->names */
+    double geo[4];        /* lat, lon, alt, heading (streams with geo) */
+    engine_setpoint_t sp;
+} rec_t;
+
+/* The queue holds this many ticks of every object's lines (at least CSV_QUEUE_MIN). */
+#define CSV_QUEUE_TICKS 16
+#define CSV_QUEUE_MIN 4096
 
 typedef struct {
     core_t *core;
@@ -48,6 +78,14 @@ typedef struct {
     unsigned n;
     stream_t *s;  /* csv: one per object index (fd -1 if unused); stdout: one */
     int timer_fd; /* the 1 s housekeeping timer that logs faults, or -1 */
+    unsigned nobj;
+    char (*names)[CFG_NAME_MAX];   /* object names by index (the writer's copy) */
+    _Atomic uint64_t *obj_dropped; /* per object: lines the writer dropped */
+    uint64_t *obj_seen;            /* the same, folded into obj_t.out_lost */
+    _Atomic uint64_t events;       /* bumped by the writer at every count */
+    uint64_t events_seen;
+    spsc_t q;
+    outworker_t w;
 } csv_transport_t;
 
 /* Warnings about one output: the first at once (within a second), then at
@@ -142,28 +180,18 @@ static int cut_tail(int fd, size_t tail)
     return ftruncate(fd, sb.st_size - (off_t)tail) < 0 ? -errno : 0;
 }
 
-/* A write failed with err (not EAGAIN): count it, flag the objects writing
- * here; EPIPE on stdout ends the daemon (the tick sees stats.exit_code). */
+/* ---- the writer thread ------------------------------------------------ */
+
+/* A write failed with err (not EAGAIN): counted; the loop thread folds it
+ * into the daemon's counters and flags (fold), and EPIPE on stdout ends the
+ * daemon (CORE_EXIT_EPIPE). */
 static void fault(csv_transport_t *st, stream_t *s, int err)
 {
-    s->errors++;
-    s->last_errno = err;
-    stats_t *stats = st->core->stats;
-    stats->out_errors++;
-    stats->out_errno = err;
-    stats->out_fault = 1;
-    if (s->obj) {
-        s->obj->out_fault = 1;
-        s->obj->out_errors++;
-    } else {
-        for (unsigned i = 0; i < st->core->nobj; i++)
-            if (cfg_obj_uses(st->core->obj[i].cfg, &stdout_transport) & 2) {
-                st->core->obj[i].out_fault = 1;
-                st->core->obj[i].out_errors++;
-            }
-    }
+    atomic_store_explicit(&s->w_errno, err, memory_order_relaxed);
     if (err == EPIPE && s->is_stdout)
-        stats->exit_code = CORE_EXIT_EPIPE;
+        atomic_store_explicit(&s->w_epipe, 1, memory_order_relaxed);
+    atomic_fetch_add_explicit(&s->w_errors, 1, memory_order_relaxed);
+    atomic_fetch_add_explicit(&st->events, 1, memory_order_release);
 }
 
 /*
@@ -191,6 +219,7 @@ static int flush(csv_transport_t *st, stream_t *s)
             err = EIO;
         break; /* EAGAIN: later (the buffer fills and new lines are dropped, counted) */
     }
+    s->stalled = off < s->len;
     if (err) {
         size_t tail = torn_tail(s->buf, off);
         if (tail && s->regular && cut_tail(s->fd, tail) == 0)
@@ -204,55 +233,51 @@ static int flush(csv_transport_t *st, stream_t *s)
     return err;
 }
 
-/* Queue one line of object o (NULL: the header); a line that does not fit
- * is lost, counted for the stream, the object and the daemon. */
-static void put(csv_transport_t *st, stream_t *s, obj_t *o, const char *line, int n)
+/* Queue one line of object index oi (-1: the header or a marker) in the
+ * stream's buffer; a line that does not fit is lost, counted.  From the
+ * writer (may_write): a full buffer is written first unless the last write
+ * stalled (a slow reader, a failing disk: then the line is lost, as at the
+ * tick before, and the failed writes are not multiplied by the lines). */
+static void put(csv_transport_t *st, stream_t *s, int oi, const char *line, int n, int may_write)
 {
+    if (n >= 0 && (size_t)n > CSV_TRANSPORT_BUF_BYTES - s->len && may_write && !s->stalled)
+        flush(st, s);
     if (n < 0 || (size_t)n > CSV_TRANSPORT_BUF_BYTES - s->len) {
-        (*st->dropped)++;
-        st->core->stats->out_lost++;
-        s->lost++;
-        if (o)
-            o->out_lost++;
+        atomic_fetch_add_explicit(&s->w_dropped, 1, memory_order_relaxed);
+        if (oi >= 0)
+            atomic_fetch_add_explicit(&st->obj_dropped[oi], 1, memory_order_relaxed);
+        atomic_fetch_add_explicit(&st->events, 1, memory_order_release);
         return;
     }
     memcpy(s->buf + s->len, line, (size_t)n);
     s->len += (size_t)n;
 }
 
-/* Warn about new losses or errors of s, rate-limited (not from the tick). */
-static void report(stream_t *s, int final)
+/* One record as a line into its stream's buffer: the csv_format line, then
+ * the geo columns (csv.geo) in the same number form, then age_s. */
+static void format_rec(csv_transport_t *st, const rec_t *r)
 {
-    if (s->lost == s->lost_logged && s->errors == s->errors_logged)
-        return;
-    int64_t now = core_mono_ns();
-    if (!final && s->logged_ns && now - s->logged_ns < CSV_TRANSPORT_LOG_EVERY_S * 1000000000LL)
-        return;
-    if (s->errors != s->errors_logged)
-        log_msg(LOG_WARNING, "%s: write failed: %s (%llu failed writes, %llu lines lost so far)",
-                s->what, strerror(s->last_errno), (unsigned long long)s->errors,
-                (unsigned long long)s->lost);
-    else
-        log_msg(LOG_WARNING, "%s: reader too slow, buffer full: %llu lines lost so far", s->what,
-                (unsigned long long)s->lost);
-    s->lost_logged = s->lost;
-    s->errors_logged = s->errors;
-    s->logged_ns = now;
+    stream_t *s = &st->s[r->stream];
+    char line[CSV_TRANSPORT_LINE_MAX];
+    int n = csv_format_format(line, sizeof line, st->names[r->obj], &r->sp);
+    if (n > 0 && s->geo) {
+        char extra[4 * (CSV_SHORTEST_MAX + 1) + 1];
+        size_t m = 0;
+        for (int k = 0; k < 4; k++) {
+            extra[m++] = ',';
+            m += (size_t)csv_shortest(extra + m, r->geo[k]);
+        }
+        extra[m] = '\0';
+        n = csv_format_append(line, sizeof line, n, extra);
+    }
+    if (s->age && n > 0)
+        n = csv_format_add_age(line, sizeof line, n, &r->sp);
+    put(st, s, (int)r->obj, line, n, 1);
 }
 
-static void on_timer(loop_t *l, uint64_t exp, void *ctx)
-{
-    csv_transport_t *st = ctx;
-    (void)l;
-    (void)exp;
-    for (unsigned i = 0; i < st->n; i++)
-        if (st->s[i].fd >= 0)
-            report(&st->s[i], 0);
-}
-
-/* At close: write what is left, waiting at most CSV_TRANSPORT_DRAIN_MS for a slow
- * reader (a reader that never reads must not keep trajd from exiting).  Lines
- * left over are lost and counted (not per object: the objects are going). */
+/* At the end: write what is left, waiting at most CSV_TRANSPORT_DRAIN_MS for a
+ * slow reader (a reader that never reads must not keep trajd from exiting).
+ * Lines left over are lost and counted (not per object: the objects are going). */
 #define CSV_TRANSPORT_DRAIN_MS 1000
 static void drain(csv_transport_t *st, stream_t *s)
 {
@@ -272,13 +297,127 @@ static void drain(csv_transport_t *st, stream_t *s)
     uint64_t left = 0;
     for (size_t i = 0; i < s->len; i++)
         left += s->buf[i] == '\n';
-    s->lost += left;
-    *st->dropped += left;
-    st->core->stats->out_lost += left;
     s->len = 0;
-    report(s, 1);
-    if (s->restore_flags >= 0)
-        fcntl(s->fd, F_SETFL, s->restore_flags);
+    if (left) {
+        atomic_fetch_add_explicit(&s->w_left, left, memory_order_relaxed);
+        atomic_fetch_add_explicit(&st->events, 1, memory_order_release);
+    }
+}
+
+static int queue_idle(void *arg)
+{
+    csv_transport_t *st = arg;
+    return spsc_avail(&st->q) == 0;
+}
+
+/* The writer: format what the tick published, write each stream once per
+ * batch (as the tick did once per tick), sleep when there is nothing; at the
+ * stop, take what was published before it, then drain every stream. */
+static void *writer(void *arg)
+{
+    csv_transport_t *st = arg;
+    for (;;) {
+        int stop = outworker_stopping(&st->w);
+        size_t n = spsc_avail(&st->q);
+        for (size_t i = 0; i < n; i++)
+            format_rec(st, spsc_at(&st->q, i));
+        spsc_release(&st->q, n);
+        if (n)
+            for (unsigned i = 0; i < st->n; i++)
+                if (st->s[i].fd >= 0 && st->s[i].len)
+                    flush(st, &st->s[i]);
+        if (stop)
+            break;
+        if (!n)
+            outworker_wait(&st->w, queue_idle, st);
+    }
+    for (unsigned i = 0; i < st->n; i++)
+        drain(st, &st->s[i]);
+    return NULL;
+}
+
+/* ---- the loop thread ---------------------------------------------------- */
+
+/*
+ * The writer's counts since the last call into the daemon's: failed writes
+ * set the fault flag of the objects writing there and stats.out_fault;
+ * dropped lines count for the stream, the object and the daemon (the lines
+ * left at the end not per object); EPIPE on stdout ends the daemon (the tick
+ * sees stats.exit_code).  In the tick (cycle) and at close: no blocking, no
+ * allocation; a scan only when the writer counted something.
+ */
+static void fold(csv_transport_t *st)
+{
+    uint64_t ev = atomic_load_explicit(&st->events, memory_order_acquire);
+    if (ev == st->events_seen)
+        return;
+    st->events_seen = ev;
+    stats_t *stats = st->core->stats;
+    for (unsigned i = 0; i < st->n; i++) {
+        stream_t *s = &st->s[i];
+        uint64_t e = atomic_load_explicit(&s->w_errors, memory_order_relaxed);
+        uint64_t d = atomic_load_explicit(&s->w_dropped, memory_order_relaxed);
+        uint64_t l = atomic_load_explicit(&s->w_left, memory_order_relaxed);
+        uint64_t de = e - s->seen_errors, dl = d - s->seen_dropped + (l - s->seen_left);
+        s->seen_errors = e;
+        s->seen_dropped = d;
+        s->seen_left = l;
+        if (de) {
+            s->errors += de;
+            stats->out_errors += de;
+            stats->out_errno = atomic_load_explicit(&s->w_errno, memory_order_relaxed);
+            stats->out_fault = 1;
+            for (unsigned k = 0; k < st->core->nobj; k++) {
+                obj_t *o = &st->core->obj[k];
+                if (s->obj ? o == s->obj : (cfg_obj_uses(o->cfg, &stdout_transport) & 2) != 0) {
+                    o->out_fault = 1;
+                    o->out_errors += de;
+                }
+            }
+        }
+        if (dl) {
+            s->lost += dl;
+            *st->dropped += dl;
+            stats->out_lost += dl;
+        }
+        if (s->is_stdout && atomic_load_explicit(&s->w_epipe, memory_order_relaxed))
+            stats->exit_code = CORE_EXIT_EPIPE;
+    }
+    for (unsigned k = 0; k < st->nobj && k < st->core->nobj; k++) {
+        uint64_t d = atomic_load_explicit(&st->obj_dropped[k], memory_order_relaxed);
+        st->core->obj[k].out_lost += d - st->obj_seen[k];
+        st->obj_seen[k] = d;
+    }
+}
+
+/* Warn about new losses or errors of s, rate-limited (not from the tick). */
+static void report(stream_t *s, int final)
+{
+    if (s->lost == s->lost_logged && s->errors == s->errors_logged)
+        return;
+    int64_t now = core_mono_ns();
+    if (!final && s->logged_ns && now - s->logged_ns < CSV_TRANSPORT_LOG_EVERY_S * 1000000000LL)
+        return;
+    if (s->errors != s->errors_logged)
+        log_msg(LOG_WARNING, "%s: write failed: %s (%llu failed writes, %llu lines lost so far)",
+                s->what, strerror(atomic_load(&s->w_errno)), (unsigned long long)s->errors,
+                (unsigned long long)s->lost);
+    else
+        log_msg(LOG_WARNING, "%s: reader too slow, buffer full: %llu lines lost so far", s->what,
+                (unsigned long long)s->lost);
+    s->lost_logged = s->lost;
+    s->errors_logged = s->errors;
+    s->logged_ns = now;
+}
+
+static void on_timer(loop_t *l, uint64_t exp, void *ctx)
+{
+    csv_transport_t *st = ctx;
+    (void)l;
+    (void)exp;
+    for (unsigned i = 0; i < st->n; i++)
+        if (st->s[i].fd >= 0)
+            report(&st->s[i], 0);
 }
 
 static int stream_init(stream_t *s, int fd, int own)
@@ -293,9 +432,14 @@ static int stream_init(stream_t *s, int fd, int own)
     return s->buf ? 0 : -ENOMEM;
 }
 
-static void stream_fini(csv_transport_t *st, stream_t *s)
+/* After the writer was joined (or never started) and its counts folded. */
+static void stream_fini(stream_t *s)
 {
-    drain(st, s);
+    if (s->fd >= 0) {
+        report(s, 1);
+        if (s->restore_flags >= 0)
+            fcntl(s->fd, F_SETFL, s->restore_flags);
+    }
     if (s->own && s->fd >= 0)
         close(s->fd);
     free(s->buf);
@@ -311,7 +455,7 @@ static void header(csv_transport_t *st, stream_t *s)
         n = csv_format_append(line, sizeof line, n, ",lat_deg,lon_deg,alt_m,heading_deg");
     if (s->age && n > 0)
         n = csv_format_add_age(line, sizeof line, n, NULL);
-    put(st, s, NULL, line, n);
+    put(st, s, -1, line, n, 0);
 }
 
 /* Fields of s's lines: 16, + 4 with csv.geo, + 1 with age_s (csv_tail.h). */
@@ -330,7 +474,7 @@ static void marker(csv_transport_t *st, stream_t *s)
     if (clock_gettime(CLOCK_REALTIME, &ts) == 0 && gmtime_r(&ts.tv_sec, &tm))
         strftime(when, sizeof when, "%Y-%m-%dT%H:%M:%SZ", &tm);
     int n = snprintf(line, sizeof line, "# trajd: appended at %s (start or reload)\n", when);
-    put(st, s, NULL, line, n < (int)sizeof line ? n : -1);
+    put(st, s, -1, line, n < (int)sizeof line ? n : -1, 0);
 }
 
 static void close_(void *state, core_t *c)
@@ -340,8 +484,20 @@ static void close_(void *state, core_t *c)
         return;
     if (st->timer_fd >= 0)
         loop_timer_del(c->loop, st->timer_fd);
+    if (st->w.started) {
+        spsc_publish(&st->q);
+        outworker_stop(&st->w); /* it takes what was published, then drains */
+    } else {
+        for (unsigned i = 0; i < st->n; i++)
+            drain(st, &st->s[i]); /* lines put at open; the writer never started */
+    }
+    fold(st);
     for (unsigned i = 0; i < st->n; i++)
-        stream_fini(st, &st->s[i]);
+        stream_fini(&st->s[i]);
+    spsc_fini(&st->q);
+    free(st->names);
+    free(st->obj_dropped);
+    free(st->obj_seen);
     free(st->s);
     free(st);
 }
@@ -355,14 +511,68 @@ static csv_transport_t *alloc_state(core_t *c, const transport_t *t, unsigned n)
     st->dropped = &c->stats->tcount[transport_index(t)][TCOUNT_DROPPED];
     st->n = n;
     st->timer_fd = -1;
+    st->nobj = c->nobj;
     st->s = calloc(n, sizeof *st->s);
-    if (!st->s) {
+    st->names = calloc(c->nobj ? c->nobj : 1, sizeof *st->names);
+    st->obj_dropped = calloc(c->nobj ? c->nobj : 1, sizeof *st->obj_dropped);
+    st->obj_seen = calloc(c->nobj ? c->nobj : 1, sizeof *st->obj_seen);
+    size_t cap = (size_t)c->nobj * CSV_QUEUE_TICKS;
+    if (!st->s || !st->names || !st->obj_dropped || !st->obj_seen ||
+        spsc_init(&st->q, sizeof(rec_t), cap > CSV_QUEUE_MIN ? cap : CSV_QUEUE_MIN) < 0) {
+        spsc_fini(&st->q);
+        free(st->names);
+        free(st->obj_dropped);
+        free(st->obj_seen);
+        free(st->s);
         free(st);
         return NULL;
     }
+    for (unsigned i = 0; i < c->nobj; i++)
+        snprintf(st->names[i], sizeof st->names[i], "%s", c->obj[i].name);
     for (unsigned i = 0; i < n; i++)
         st->s[i].fd = -1;
     return st;
+}
+
+/* The timer that logs faults, and the writer.  0 or -errno with why. */
+static int start(csv_transport_t *st, core_t *c, const char *what, char *why, size_t wl)
+{
+    int rc = loop_timer_add(c->loop, 1000000000, on_timer, st);
+    if (rc < 0) {
+        snprintf(why, wl, "%s: timer: %s", what, strerror(-rc));
+        return rc;
+    }
+    st->timer_fd = rc;
+    rc = outworker_start(&st->w, writer, st, "trajd-out");
+    if (rc < 0)
+        snprintf(why, wl, "%s: writer thread: %s", what, strerror(-rc));
+    return rc;
+}
+
+/* In the tick: one setpoint into the queue (copied, formatted by the writer);
+ * a full queue loses the line, counted for the stream, the object and the
+ * daemon.  Published in cycle. */
+static void push(csv_transport_t *st, unsigned si, obj_t *o, const engine_setpoint_t *sp)
+{
+    rec_t *r = spsc_slot(&st->q);
+    if (!r) {
+        (*st->dropped)++;
+        st->core->stats->out_lost++;
+        st->s[si].lost++;
+        o->out_lost++;
+        return;
+    }
+    r->stream = si;
+    r->obj = o->index;
+    r->sp = *sp;
+    if (st->s[si].geo) {
+        const double *geo = core_obj_geo(st->core, o);
+        r->geo[0] = geo[0];
+        r->geo[1] = geo[1];
+        r->geo[2] = geo[2];
+        r->geo[3] = o->heading_deg;
+    }
+    spsc_push(&st->q);
 }
 
 static int csv_open(core_t *c, void **state, char *why, size_t wl)
@@ -412,12 +622,9 @@ static int csv_open(core_t *c, void **state, char *why, size_t wl)
             header(st, sm);
         }
     }
-    rc = loop_timer_add(c->loop, 1000000000, on_timer, st);
-    if (rc < 0) {
-        snprintf(why, wl, "csv: timer: %s", strerror(-rc));
+    rc = start(st, c, "csv", why, wl);
+    if (rc < 0)
         goto fail;
-    }
-    st->timer_fd = rc;
     *state = st;
     return 0;
 fail:
@@ -455,58 +662,34 @@ static int stdout_open(core_t *c, void **state, char *why, size_t wl)
         }
     if (want_header)
         header(st, &st->s[0]);
-    int rc = loop_timer_add(c->loop, 1000000000, on_timer, st);
+    int rc = start(st, c, "stdout", why, wl);
     if (rc < 0) {
-        snprintf(why, wl, "stdout: timer: %s", strerror(-rc));
         close_(st, c);
         return rc;
     }
-    st->timer_fd = rc;
     *state = st;
     return 0;
 }
 
 static void csv_setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
 {
-    csv_transport_t *st = state;
-    char line[CSV_TRANSPORT_LINE_MAX];
-    int n = csv_format_format(line, sizeof line, o->name, sp);
-    if (n > 0 && st->s[o->index].geo) {
-        /* the same number form as the other columns (csv_shortest.h) */
-        char extra[4 * (CSV_SHORTEST_MAX + 1) + 1];
-        const double *geo = core_obj_geo(st->core, o);
-        const double v[4] = {geo[0], geo[1], geo[2], o->heading_deg};
-        size_t m = 0;
-        for (int k = 0; k < 4; k++) {
-            extra[m++] = ',';
-            m += (size_t)csv_shortest(extra + m, v[k]);
-        }
-        extra[m] = '\0';
-        n = csv_format_append(line, sizeof line, n, extra);
-    }
-    if (st->s[o->index].age && n > 0)
-        n = csv_format_add_age(line, sizeof line, n, sp);
-    put(st, &st->s[o->index], o, line, n);
+    push(state, o->index, o, sp);
 }
 
 static void stdout_setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
 {
-    csv_transport_t *st = state;
-    char line[CSV_TRANSPORT_LINE_MAX];
-    int n = csv_format_format(line, sizeof line, o->name, sp);
-    if (st->s[0].age && n > 0)
-        n = csv_format_add_age(line, sizeof line, n, sp);
-    put(st, &st->s[0], o, line, n);
+    push(state, 0, o, sp);
 }
 
+/* Once per tick: what the tick queued goes to the writer; its counts come back. */
 static void cycle(void *state, core_t *c, int64_t now_ns)
 {
     csv_transport_t *st = state;
     (void)c;
     (void)now_ns;
-    for (unsigned i = 0; i < st->n; i++)
-        if (st->s[i].fd >= 0 && st->s[i].len)
-            flush(st, &st->s[i]);
+    spsc_publish(&st->q);
+    outworker_wake(&st->w);
+    fold(st);
 }
 
 /* Lines dropped by csv and stdout together, as one status item. */

@@ -20,12 +20,18 @@
  *             stdout.header = yes (the header is written if any object asks)
  *             stdout.age = no     (the age_s column, for every line if any object asks)
  *
- * Never stalls the tick: lines go into a fixed buffer per stream
- * (CSV_TRANSPORT_BUF_BYTES); the buffer is written once per tick (cycle hook) with
- * non-blocking writes (O_NONBLOCK is set on a pipe/tty stdout and restored at
- * close).  If the reader is slow and the buffer is full, the line is dropped
- * and counted ("out dropped" on the status line, the object's out_lost and
- * the daemon's stats.out_lost; a gap in the cycle column shows where).
+ * Never stalls the tick: the tick only copies each setpoint into a bounded ring
+ * (daemon/core/spsc.h, CSV_QUEUE_TICKS ticks of every object's lines, allocated
+ * at open) and wakes the output's writer thread once per tick
+ * (daemon/core/outworker.h, SCHED_OTHER).  The writer formats the lines into a
+ * fixed buffer per stream (CSV_TRANSPORT_BUF_BYTES) and writes each buffer once
+ * per batch with non-blocking writes (O_NONBLOCK is set on a pipe/tty stdout and
+ * restored at close).  A full ring, or a full buffer (a slow reader), loses the
+ * line, counted ("out dropped" on the status line, the object's out_lost and
+ * the daemon's stats.out_lost; a gap in the cycle column shows where).  The
+ * writer's counts are folded into the daemon's by the tick (cycle), so those
+ * keep one writer.  At close the writer takes every line published before
+ * it, drains, and is joined.
  *
  * Faults: a write that fails (ENOSPC, EIO, EPIPE on a FIFO, ...) sets the
  * fault flag of the objects writing there and stats.out_fault, is counted
@@ -36,8 +42,8 @@
  * then new lines are lost and counted.  EPIPE on stdout ends the daemon with
  * CORE_EXIT_EPIPE, as a Unix filter whose reader left; any line lost makes
  * trajd exit with CORE_EXIT_OUTPUT_LOST at the end (core.h).
- * Limit: a regular file on a slow disk can still block in write(); that is
- * the kernel's page cache's call, not ours.
+ * A regular file on a slow disk can still block in write(): the writer
+ * thread waits then, not the tick; the ring fills and lines are lost, counted.
  */
 #ifndef TRAJD_CSVOUT_H
 #define TRAJD_CSVOUT_H

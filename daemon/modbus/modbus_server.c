@@ -16,11 +16,11 @@
 #include <sys/epoll.h>
 #include <sys/socket.h>
 #include <sys/timerfd.h>
-#include <systemd/sd-daemon.h>
 #include <time.h>
 #include <unistd.h>
 
 #include "log.h"
+#include "modbus_accept.h"
 
 /* Two whole TCP ADUs: a client may pipeline a second request behind the first. */
 #define CLIENT_BUF (2 * MBMAP_TCP_ADU_MAX)
@@ -28,7 +28,7 @@
 #define LISTEN_BACKLOG 128
 #define ACCEPTS_PER_EVENT 16
 
-enum tag { TAG_LISTEN = 1, TAG_HOUSEKEEPING, TAG_RTU, TAG_SILENCE, TAG_CLIENT };
+enum tag { TAG_LISTEN = 1, TAG_HOUSEKEEPING, TAG_RTU, TAG_SILENCE, TAG_CLIENT, TAG_BACKOFF };
 
 typedef struct {
     int family; /* AF_INET or AF_INET6 */
@@ -104,6 +104,7 @@ struct modbus_server {
     int64_t peer_logged_ns; /* when the last summary ran */
     mbmap_daemon_t worst;   /* the mb_peers / mb_worst_* fields, refreshed by housekeeping */
     modbus_server_stats_t st;
+    mb_accept_t acc; /* out of fds: the reserve fd and the back-off (modbus_accept.h) */
 };
 
 static int64_t now_ns(void)
@@ -374,17 +375,6 @@ int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const
     return rc;
 }
 
-static int systemd_listener(void)
-{
-    int n = sd_listen_fds(0);
-    for (int i = 0; i < n; i++) {
-        int fd = SD_LISTEN_FDS_START + i;
-        if (sd_is_socket(fd, AF_UNSPEC, SOCK_STREAM, 1) > 0)
-            return fd;
-    }
-    return -1;
-}
-
 static int tcp_listen(modbus_server_t *s, const modbus_server_config_t *cfg, char *err,
                       size_t errlen)
 {
@@ -395,7 +385,7 @@ static int tcp_listen(modbus_server_t *s, const modbus_server_config_t *cfg, cha
     char port[16];
     int fd = -1, rc, one = 1;
 
-    if (cfg->systemd_socket && (fd = systemd_listener()) >= 0) {
+    if (cfg->systemd_socket && (fd = mb_systemd_listener()) >= 0) {
         s->lfd = fd;
         s->from_systemd = 1;
         goto bound;
@@ -548,11 +538,12 @@ modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg,
         .it_value = {0, MODBUS_SERVER_HOUSEKEEPING_MS * 1000000L},
     };
     if (timerfd_settime(s->hkfd, 0, &hk, NULL) < 0 ||
-        ep_add(s->ep, s->hkfd, tag(TAG_HOUSEKEEPING, 0)) < 0) {
+        ep_add(s->ep, s->hkfd, tag(TAG_HOUSEKEEPING, 0)) < 0 || mb_accept_init(&s->acc) < 0 ||
+        ep_add(s->ep, s->acc.timer_fd, tag(TAG_BACKOFF, 0)) < 0) {
         msg(err, errlen, "modbus: timer: %s", strerror(errno));
         goto fail;
     }
-    if ((cfg->tcp_address[0] || (cfg->systemd_socket && systemd_listener() >= 0)) &&
+    if ((cfg->tcp_address[0] || (cfg->systemd_socket && mb_systemd_listener() >= 0)) &&
         tcp_listen(s, cfg, err, errlen) < 0)
         goto fail;
     if (cfg->rtu_device[0] && rtu_open(s, cfg, err, errlen) < 0)
@@ -732,6 +723,7 @@ void modbus_server_free(modbus_server_t *s)
         close(s->hkfd);
     if (s->silfd >= 0)
         close(s->silfd);
+    mb_accept_fini(&s->acc);
     if (s->ep >= 0)
         close(s->ep);
     if (s->map)
@@ -1094,9 +1086,9 @@ static void do_accept(modbus_server_t *s)
     for (int i = 0; i < ACCEPTS_PER_EVENT; i++) {
         struct sockaddr_storage ss;
         socklen_t sl = sizeof ss;
-        int fd = accept4(s->lfd, (struct sockaddr *)&ss, &sl, SOCK_NONBLOCK | SOCK_CLOEXEC);
+        int fd = mb_accept(&s->acc, s->ep, s->lfd, (struct sockaddr *)&ss, &sl, &s->st.refused);
         if (fd < 0)
-            return; /* EAGAIN, or a connection reset before accept */
+            return; /* EAGAIN, a connection reset before accept, out of fds (modbus_accept.h) */
         if (!allowed(s, &ss)) {
             s->st.refused++;
             close(fd);
@@ -1131,6 +1123,7 @@ static void housekeeping(modbus_server_t *s)
     }
     peer_worst(s);
     peer_log(s, now);
+    mb_accept_report(&s->acc, 0);
 }
 
 /* ---- RTU ---------------------------------------------------------------- */
@@ -1198,6 +1191,7 @@ int modbus_server_process(modbus_server_t *s)
         case TAG_HOUSEKEEPING: housekeeping(s); break;
         case TAG_RTU: rtu_read(s); break;
         case TAG_SILENCE: rtu_silence(s); break;
+        case TAG_BACKOFF: mb_accept_resume(&s->acc, s->ep, s->lfd, tag(TAG_LISTEN, 0)); break;
         case TAG_CLIENT:
             if (idx < s->max_clients && s->clients[idx].fd >= 0)
                 client_read(s, &s->clients[idx]);

@@ -46,6 +46,11 @@
  *    So a client that polls keeps its slot against silent, slow and newly
  *    connected ones.  Only when every client is within its grace period is
  *    the newcomer closed (counted in refused, as are allow-list refusals).
+ *  - Out of file descriptors (accept EMFILE/ENFILE): the pending connections
+ *    are accepted through a reserved fd and closed at once (counted in
+ *    refused), the listener is not polled for a back-off of 100 ms doubling
+ *    to 1 s, and a warning with the counts is logged at most once a second
+ *    (modbus_accept.h); the loop never spins on the readable listener.
  *  - A client that sends faster than it reads its answers is closed when an
  *    answer cannot be written (dropped); each readiness event handles at
  *    most one buffer (2 ADUs read) of one client, and epoll serves ready
@@ -139,7 +144,7 @@ typedef struct {
 typedef struct {
     uint64_t requests; /* answered (normal or exception) */
     uint64_t exceptions;
-    uint64_t refused;     /* connections refused: allow-list or max_clients */
+    uint64_t refused;     /* connections refused: allow-list, max_clients or out of fds */
     uint64_t dropped;     /* connections closed for bad framing, idleness, or answers
                                  * not read; and slow ones (also counted in slow) */
     uint64_t slow;        /* closed: a request not whole within request_timeout_ms */

@@ -94,8 +94,8 @@
 #define MBMAP_D_CAN_LOAD 19          /* u16 bus load, 0.1 % */
 #define MBMAP_D_MB_REQUESTS 20       /* u32 Modbus requests answered */
 #define MBMAP_D_MB_EXCEPTIONS 22     /* u32 exception responses sent */
-#define MBMAP_D_MB_REFUSED 24        /* u32 connections refused (allow-list; max clients, see
-                                      * modbus_server.h's connection policy) */
+#define MBMAP_D_MB_REFUSED 24        /* u32 connections refused (allow-list; max clients; out
+                                      * of fds; see modbus_server.h's connection policy) */
 #define MBMAP_D_MB_CLIENTS 26        /* u16 TCP clients connected now */
 #define MBMAP_D_MB_EVICTED 28        /* u32 clients evicted at max_clients to admit a newcomer */
 #define MBMAP_D_MB_SLOW 30           /* u32 clients dropped: a request not whole within request_timeout_ms */
