@@ -34,7 +34,10 @@
  *     fewer than `confirm` fixes 1 km off, consistent among themselves: each
  *     is unconfirmed, while a lone spike, consistent with nothing held, keeps
  *     its ESPEED or EACCEL);
- *   - dropped as ENGINE_ESTALE if it repeats the anchor's position (within
+ *   - (the former policy, ACCEPT_RULES_FORMER; with the rules of issue 27
+ *     the repeats of the anchor are a run judged by stops.c: stale or a
+ *     stop, see ACCEPT_RULE_STOPS below)
+ *     dropped as ENGINE_ESTALE if it repeats the anchor's position (within
  *     ACCEPT_STALE_POS_M) although the object was moving (at least
  *     ACCEPT_STALE_MIN_SPEED_M_S into the anchor) and the next waypoint with
  *     a new position is consistent with the anchor and shows the object kept
@@ -87,8 +90,16 @@
  *     |v2 - v1| may exceed the acceleration allowance by up to
  *     2 min(|v1|, |v2|) (a reversal at the lower of the two speeds), so a
  *     feed-rate-timed corner passes while a change of speed is held to
- *     max_accel_m_s2.  The bound becomes 3 (max_accel_m_s2 +
- *     4 min(|v1|, |v2|) / (dt1 + dt2)) per kept triple.
+ *     max_accel_m_s2 (with ACCEPT_RULE_VECTOR: | |v2| - |v1| | within the
+ *     allowance itself, so a change of speed along the track is not a turn:
+ *     the 100 m / 280 m chords of a jittered ADS-B line passed as one).
+ *     The bound becomes 3 (max_accel_m_s2 + 4 min(|v1|, |v2|) / (dt1 +
+ *     dt2)) per kept triple.
+ * With the rules of issue 27 (accept_config_t.rules, ACCEPT_RULE_*: the
+ * engine's, but for profile none) a fix about to be dropped for its speed
+ * or acceleration whose position lies on its neighbours' path is kept with
+ * its stamp re-estimated (retime.c), and a repeat of a fix dropped for its
+ * position is dropped too (it cannot return by repetition).
  */
 #ifndef TRAJD_ACCEPT_H
 #define TRAJD_ACCEPT_H

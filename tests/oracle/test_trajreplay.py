@@ -528,13 +528,47 @@ def test_progress(tmp):
               f"progress line {k} not cleared before the next output: {part[:120]!r}")
 
 
+def test_hard_stop_reported(tmp):
+    """Given the cerknicko hike converted to east/north/up metres (pyproj's
+    ENU, t,x,y,z) in file order and replayed at 10 Hz (issue 27: there the
+    output's velocity dropped from 0.13 m/s to 0 in one tick, and the
+    warning named no time, position or line), then every hard stop --summary
+    counts is reported as 'FILE:LINE: warning: hard stop at t = T s,
+    position (X, Y, Z) m: V m/s to 0 in one tick', LINE a waypoint line of
+    the file, and the output has that row: at track time T, at (X, Y, Z),
+    at rest, after a row moving at V."""
+    import re
+    t, lat, lon, alt = read_track(CERKNICA)
+    enu = enu_pyproj(lat, lon, alt)
+    src = os.path.join(tmp, "cerknicko_enu.csv")
+    with open(src, "w") as f:
+        f.write("t,x,y,z\n")
+        for ti, p in zip(t, enu):
+            f.write("%r,%r,%r,%r\n" % (ti, p[0], p[1], p[2]))
+    sp, s, p = replay(src, ["--rate", "10"], tmp, "hard")
+    pat = (r"^(\S+):(\d+): warning: hard stop at t = (\S+) s, position \((\S+), (\S+), (\S+)\) m: "
+           r"(\S+) m/s to 0 in one tick")
+    warns = re.findall(pat, p.stderr, re.M)
+    print(f"cerknicko ENU at 10 Hz: {int(s.get('hard_stops', -1))} hard stops, reported: {warns}")
+    check(len(warns) == s.get("hard_stops"), f"hard stops {s.get('hard_stops')}, reported {warns}")
+    speed = np.linalg.norm(sp["vel"], axis=1)
+    for name, line, ts, x, y, z, v in warns:
+        check(name == src and 2 <= int(line) <= len(t) + 1, f"hard stop line {name}:{line}")
+        k = np.where((np.abs(sp["t_s"] - float(ts)) < 5e-4) & (speed == 0))[0]
+        k = [j for j in k if j > 0 and speed[j - 1] > 0 and
+             np.max(np.abs(sp["pos"][j] - [float(x), float(y), float(z)])) < 5e-4]
+        check(len(k) == 1 and abs(speed[k[0] - 1] - float(v)) <= 5e-3 * float(v),
+              f"hard stop at t = {ts}: no such output row")
+
+
 def main():
     if not os.access(TRAJREPLAY, os.X_OK):
         print(f"{TRAJREPLAY} not built")
         return 1
     with tempfile.TemporaryDirectory(prefix="trajreplay-test-") as tmp:
         for test in (test_errors, test_gpx_equals_csv, test_svg, test_counts_real_and_injected,
-                     test_spline_agreement, test_jitter_figure8, test_progress):
+                     test_spline_agreement, test_jitter_figure8, test_progress,
+                     test_hard_stop_reported):
             print(f"== {test.__name__}")
             test(tmp)
     print(f"test_trajreplay.py: {len(failures)} failure(s)")
