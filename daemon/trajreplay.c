@@ -508,6 +508,12 @@ static void print_summary(const track_t *trk, const replay_t *r, const engine_st
             "summary: uniform_ratio_max %.6g\n",
             r->retries, st->underruns, st->underrun_ticks, st->hard_stops, st->gaps, st->tracks,
             ticks, max_v, max_a, st->uniform_irregular, st->uniform_ratio_max);
+    fprintf(stderr,
+            "summary: stops %" PRIu64 "\n"
+            "summary: stop_fixes %" PRIu64 "\n"
+            "summary: retimed %" PRIu64 "\n"
+            "summary: retime_max_s %.6g\n",
+            st->stops, st->stop_fixes, st->retimed, st->retime_max_s);
 }
 
 /* One replay: its inputs, outputs and what was seen. */
@@ -521,7 +527,9 @@ typedef struct {
     FILE *out;
     double span_s; /* track time from first to last waypoint */
     double max_v, max_a;
-    uint64_t written; /* setpoint rows */
+    double last_v;      /* speed of the previous setpoint (hard stop reports) */
+    uint64_t hard_seen; /* hard stops reported so far */
+    uint64_t written;   /* setpoint rows */
     engine_status_t st;
     geo_enu_t frame;          /* --geo: the track's east/north/up origin */
     size_t heading_hint;      /* --geo: interval of the last heading evaluation */
@@ -673,6 +681,25 @@ static int append_geo(run_t *run, const engine_setpoint_t *sp, char *line, size_
 }
 
 /* Write one setpoint row and keep its statistics. */
+/* A hard stop (engine_status hard_stops: the velocity set to 0 in one tick)
+ * is reported where it happened (issue 27): the track time, the position,
+ * the speed lost, and the input line of the last waypoint read then. */
+static void run_report_hard_stop(run_t *run, const engine_setpoint_t *sp)
+{
+    engine_status_t st;
+    engine_status(run->e, &st);
+    if (st.hard_stops <= run->hard_seen)
+        return;
+    run->hard_seen = st.hard_stops;
+    run_clear_progress(run);
+    fprintf(stderr,
+            "%s:%" PRIu32 ": warning: hard stop at t = %.3f s, position (%.3f, %.3f, %.3f) m: "
+            "%.3g m/s to 0 in one tick (the solved curve ended under a moving output; the "
+            "line is the last waypoint read)\n",
+            run->o->input, run->r.next ? run->trk.line[run->r.next - 1] : 0, sp->t_s, sp->pos_m[0],
+            sp->pos_m[1], sp->pos_m[2], run->last_v);
+}
+
 static void run_emit(run_t *run, const engine_setpoint_t *sp)
 {
     if (run->nrows > ROWS_BUF - ROW_MAX)
@@ -700,6 +727,9 @@ static void run_emit(run_t *run, const engine_setpoint_t *sp)
         run->max_a = a;
     if (run->plot)
         svg_plot_setpoint(run->plot, sp);
+    if (!(v > 0) && run->last_v > 0)
+        run_report_hard_stop(run, sp);
+    run->last_v = v;
 }
 
 /* "file:line: rejected (reason)" for each waypoint the engine rejected since

@@ -148,6 +148,10 @@ typedef struct {
     double uniform_ratio_max;       /* param uniform: the largest ratio of a kept waypoint's two
                                        intervals (longer / shorter; 0 until there are two) */
     double uniform_ratio_t_s;       /* ... and that waypoint's time */
+    uint64_t stops;                 /* runs of repeats kept as a stop: the curve rests there */
+    uint64_t stop_fixes;            /* repeats kept as the dwell of a stop (in accepted) */
+    uint64_t retimed;               /* fixes kept with their stamp re-estimated (jitter) */
+    double retime_max_s;            /* the largest such shift, seconds */
 } engine_status_t;
 
 /* clang-format on */

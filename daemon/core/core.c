@@ -741,6 +741,12 @@ int core_summary(const core_t *c, char *buf, size_t len)
                 n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
             }
         }
+        if ((o->status.stops || o->status.retimed) && n < len) { /* issue 27 */
+            m = snprintf(buf + n, len - n, ", %llu stops, %llu re-stamped (largest %.3f s)",
+                         (unsigned long long)o->status.stops, (unsigned long long)o->status.retimed,
+                         o->status.retime_max_s);
+            n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+        }
         if (o->out_lost && n < len) {
             m = snprintf(buf + n, len - n, ", %s%llu lines lost by outputs",
                          o->out_fault ? "FAULT, " : "", (unsigned long long)o->out_lost);

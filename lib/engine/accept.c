@@ -16,24 +16,7 @@
 #include <math.h>
 #include <string.h>
 
-/* Timestamps closer than this are "the same time" (seconds), as in engine.c. */
-#define ACCEPT_SAME_TIME_S 1e-9
-/* Positions closer than this at the same time are a duplicate (metres). */
-#define ACCEPT_SAME_POS_M 1e-9
-/* No slot (no waypoint before p in a test). */
-#define NO_SLOT 0xffu
-
-/* fmax and fmin (NaN: the other), inline instead of libm's calls; of two
- * zeros either (the callers compare non-negative values) */
-static inline double max_of(double x, double y)
-{
-    return isnan(x) ? y : (y > x ? y : x);
-}
-
-static inline double min_of(double x, double y)
-{
-    return isnan(x) ? y : (y < x ? y : x);
-}
+#include "accept_int.h"
 
 void accept_init(accept_t *a, const accept_config_t *cfg)
 {
@@ -47,6 +30,9 @@ void accept_init(accept_t *a, const accept_config_t *cfg)
         a->cfg.confirm = 1;
     if (a->cfg.confirm > a->cfg.window)
         a->cfg.confirm = a->cfg.window;
+    a->cfg.rules = cfg->rules & ACCEPT_RULES_FORMER ? 0u
+                   : cfg->rules                     ? cfg->rules
+                                                    : ACCEPT_RULES_ALL;
 }
 
 void accept_reset(accept_t *a)
@@ -55,6 +41,8 @@ void accept_reset(accept_t *a)
     a->open = 0;
     a->have_a0 = 0;
     a->have_burst = 0;
+    a->run_n = a->run_head = 0;
+    a->run_verdict = a->standing = a->have_refused = 0;
 }
 
 void accept_close(accept_t *a)
@@ -62,9 +50,11 @@ void accept_close(accept_t *a)
     a->open = 0;
     a->have_a0 = 0;
     a->have_burst = 0;
+    a->run_n = a->run_head = 0; /* judged at the close (engine_finish) */
+    a->run_verdict = a->standing = 0;
 }
 
-static double dist(const engine_waypoint_t *p, const engine_waypoint_t *q)
+double accept_dist(const engine_waypoint_t *p, const engine_waypoint_t *q)
 {
     double d2 = 0;
     for (int k = 0; k < ENGINE_AXES; k++)
@@ -74,69 +64,7 @@ static double dist(const engine_waypoint_t *p, const engine_waypoint_t *q)
 
 static int same(const engine_waypoint_t *p, const engine_waypoint_t *q)
 {
-    return fabs(p->t_s - q->t_s) <= ACCEPT_SAME_TIME_S && dist(p, q) <= ACCEPT_SAME_POS_M;
-}
-
-/* what the tests need of p -> b: dist(), the velocity and its norm as the
- * acceleration test writes them ((b - p) / dt per axis; |v| for the free
- * turn's sqrt(fmin(s1, s2)), which is fmin of the norms: sqrt is monotonic) */
-static void pair_of(const engine_waypoint_t *p, const engine_waypoint_t *b, accept_pair_t *q)
-{
-    double dt = b->t_s - p->t_s, d2 = 0, s = 0;
-    for (int k = 0; k < ENGINE_AXES; k++) {
-        double dk = b->pos_m[k] - p->pos_m[k];
-        d2 += dk * dk;
-        q->v[k] = dk / dt;
-        s += q->v[k] * q->v[k];
-    }
-    q->d = sqrt(d2);
-    q->vn = sqrt(s);
-    q->c = q->d / dt;
-}
-
-/* index of the pair of slots x != y in accept_t.pair: either order */
-static inline unsigned pair_index(unsigned x, unsigned y)
-{
-    unsigned lo = x < y ? x : y, hi = x < y ? y : x;
-    return hi * (hi - 1) / 2 + lo;
-}
-
-/* the bits of accept_t.known of the pairs with slot s */
-static inline uint64_t slot_pairs(unsigned s)
-{
-    uint64_t m = 0;
-    for (unsigned x = 0; x < s; x++) /* pairs (x, s): s (s - 1) / 2 + x */
-        m |= (uint64_t)1 << (s * (s - 1) / 2 + x);
-    for (unsigned y = s + 1; y < ACCEPT_SLOTS; y++) /* pairs (s, y) */
-        m |= (uint64_t)1 << (y * (y - 1) / 2 + s);
-    return m;
-}
-
-/* the pair x -> y (slots, y offered after x), computed on first use.  Kept
- * once for both orders: y -> x has the same v, d and vn bit for bit (both
- * differences change sign, exactly) and c of the other sign, so c is kept
- * as |c| (a chord speed is only asked of a later y) */
-static inline const accept_pair_t *pair(accept_t *a, unsigned x, unsigned y)
-{
-    unsigned ix = pair_index(x, y);
-    accept_pair_t *q = &a->pair[ix];
-    if (!(a->known >> ix & 1u)) {
-        pair_of(&a->wp[x], &a->wp[y], q);
-        q->c = fabs(q->c);
-        a->known |= (uint64_t)1 << ix;
-    }
-    return q;
-}
-
-static double pair_dist(accept_t *a, unsigned x, unsigned y)
-{
-    return pair(a, x, y)->d;
-}
-
-/* chord speed x -> y; only for y later than x */
-static double chord_speed(accept_t *a, unsigned x, unsigned y)
-{
-    return pair(a, x, y)->c;
+    return fabs(p->t_s - q->t_s) <= ACCEPT_SAME_TIME_S && accept_dist(p, q) <= ACCEPT_SAME_POS_M;
 }
 
 /* a free slot for the waypoint offered: none of the window, the anchor (a0,
@@ -164,6 +92,9 @@ int accept_offer(accept_t *a, const engine_waypoint_t *wp)
 
     if (a->open && same(&a->wp[a->a1], wp))
         return ENGINE_DUPLICATE;
+    if (a->run_n > a->run_head && fabs(a->run_t[a->run_n - 1] - wp->t_s) <= ACCEPT_SAME_TIME_S &&
+        accept_dist(&a->wp[a->a1], wp) <= ACCEPT_SAME_POS_M)
+        return ENGINE_DUPLICATE; /* the last repeat of a run again */
     for (unsigned i = 0; i < a->npend; i++)
         if (same(&a->wp[a->pend[i]], wp))
             return ENGINE_DUPLICATE;
@@ -245,88 +176,6 @@ double accept_speed_limit(accept_t *a)
     vref = max_of(a->vrecent, window_median_speed(a, a->vrecent));
     learned = max_of(ACCEPT_LEARN_FLOOR_M_S, ACCEPT_LEARN_FACTOR * vref);
     return cap > 0 ? min_of(cap, learned) : learned;
-}
-
-/* the time order of b after p (dt = t_b - t_p): 0, or EBACKWARDS, ESAMETIME,
- * EUNCONFIRMED for an interval above max_gap_s unless gaps_ok; *gap: above */
-static inline int time_test(const accept_t *a, double dt, int gaps_ok, int *gap)
-{
-    if (dt < -ACCEPT_SAME_TIME_S)
-        return ENGINE_EBACKWARDS;
-    if (dt <= ACCEPT_SAME_TIME_S)
-        return ENGINE_ESAMETIME;
-    *gap = dt > a->cfg.max_gap_s;
-    return *gap && !gaps_ok ? ENGINE_EUNCONFIRMED : 0;
-}
-
-/* |v2 - v1| across p (q1: pre -> p, q2: p -> b) */
-static inline double dv_norm(const accept_pair_t *q1, const accept_pair_t *q2)
-{
-    double dv2 = 0;
-    for (int k = 0; k < ENGINE_AXES; k++)
-        dv2 += (q2->v[k] - q1->v[k]) * (q2->v[k] - q1->v[k]);
-    return sqrt(dv2);
-}
-
-/* the acceleration test of pre -> p -> b (d1, dt: the two intervals, dvn:
- * dv_norm): 2 |v2 - v1| / (d1 + dt) <= amax, plus a free turn when learned */
-static inline int accel_test(const accept_t *a, const accept_pair_t *q1, const accept_pair_t *q2,
-                             double d1, double dt, double dvn)
-{
-    double allow = a->cfg.max_accel_m_s2 * 0.5 * (d1 + dt);
-    if (a->cfg.learned)
-        allow += 2.0 * min_of(q1->vn, q2->vn);
-    return dvn > allow ? ENGINE_EACCEL : 0;
-}
-
-/*
- * The test of b following p (slots; pre: the slot before p, or NO_SLOT), as
- * accept_check, and with gaps_ok an interval above max_gap_s passes too
- * (time order and speed only: an acceleration over a gap means nothing).
- * That is what "mutually consistent" means for waypoints that confirm a new
- * trajectory: a sparse or slipped track (every interval a gap) still
- * confirms itself, a lone waypoint at t = 1e9 among waypoints at t ~ 100
- * does not (they are earlier than it).  With cost, a passed test also gives
- * the implied acceleration of pre -> p -> b, gap or not (0 without pre).
- */
-static inline int judge(accept_t *a, unsigned pre, unsigned p, unsigned b, double vlim, int gaps_ok,
-                        double *cost)
-{
-    double dt = a->wp[b].t_s - a->wp[p].t_s, d1, dvn;
-    int gap = 0, r = time_test(a, dt, gaps_ok, &gap), acc;
-    const accept_pair_t *q1, *q2;
-
-    if (r)
-        return r;
-    q2 = pair(a, p, b);
-    if (vlim > 0 && q2->d > vlim * dt)
-        return ENGINE_ESPEED;
-    acc = a->cfg.max_accel_m_s2 > 0 && !gap;
-    if (pre == NO_SLOT || (!acc && !cost)) {
-        if (cost)
-            *cost = 0;
-        return 0;
-    }
-    /* pre is earlier than p by more than 1 ns: it was checked so */
-    q1 = pair(a, pre, p);
-    d1 = a->wp[p].t_s - a->wp[pre].t_s;
-    dvn = dv_norm(q1, q2);
-    if (acc && accel_test(a, q1, q2, d1, dt, dvn))
-        return ENGINE_EACCEL;
-    if (cost)
-        *cost = 2.0 * dvn / (d1 + dt);
-    return 0;
-}
-
-static int check(accept_t *a, unsigned pre, unsigned p, unsigned b, double vlim, int gaps_ok)
-{
-    return judge(a, pre, p, b, vlim, gaps_ok, NULL);
-}
-
-/* accept_check's test, between slots: an interval above max_gap_s fails */
-static int check0(accept_t *a, unsigned pre, unsigned p, unsigned b, double vlim)
-{
-    return judge(a, pre, p, b, vlim, 0, NULL);
 }
 
 int accept_check(const accept_t *a, const engine_waypoint_t *pre, const engine_waypoint_t *p,
@@ -440,6 +289,14 @@ static void pop(accept_t *a, accept_verdict_t *v, accept_kind_t kind, int reason
     for (unsigned i = 0; i < a->npend; i++)
         a->pend[i] = a->pend[i + 1];
     a->have_burst = kind == ACCEPT_DROP && reason == ENGINE_EUNCONFIRMED;
+    if (kind == ACCEPT_DROP &&
+        (reason == ENGINE_ESPEED || reason == ENGINE_EACCEL || reason == ENGINE_EUNCONFIRMED)) {
+        a->have_refused = 1; /* ACCEPT_RULE_NORETURN: refused for its position */
+        a->refused_reason = reason;
+        a->refused = a->wp[c];
+    } else if (kind == ACCEPT_START) {
+        a->have_refused = 0;
+    }
     if (a->have_burst)
         a->burst = (unsigned char)c;
     if (kind == ACCEPT_TAKE) {
@@ -460,7 +317,7 @@ static void pop(accept_t *a, accept_verdict_t *v, accept_kind_t kind, int reason
 }
 
 /* lower median of the chord speeds of the last kept intervals (0 if none) */
-static double recent_median_speed(const accept_t *a)
+double accept_recent_median(const accept_t *a)
 {
     double v[ACCEPT_HIST];
     unsigned n = a->nhist;
@@ -509,7 +366,7 @@ static int stale_verdict(accept_t *a, int full, double vlim)
      * moored boat is no pace); beyond ACCEPT_STALE_STOP_M_S2 no vehicle
      * does that, a frozen receiver does (the anchor's own interval, so every
      * repeat of the run gets the same verdict) */
-    v_in = recent_median_speed(a);
+    v_in = accept_recent_median(a);
     return v_in >= ACCEPT_STALE_MIN_SPEED_M_S &&
            v_in / (a->wp[a1].t_s - a->wp[a->a0].t_s) > ACCEPT_STALE_STOP_M_S2;
 }
@@ -790,6 +647,8 @@ static void longest_both(accept_t *a, const unsigned char *nd, unsigned m, unsig
         }
 }
 
+static int drop(accept_t *a, unsigned pre, double vlim, int reason, accept_verdict_t *v);
+
 /* an open trajectory, the full window's verdict on c (r: c after the
  * anchor, nd: the anchor and the window, slots) */
 static int decide_full(accept_t *a, int closing, double vlim, unsigned pre, int r,
@@ -824,8 +683,7 @@ static int decide_full(accept_t *a, int closing, double vlim, unsigned pre, int 
         r = check0(a, nd[0], nd[1], nd[2], vlim);
     if (r == 0 && lo == lw)
         r = ENGINE_EACCEL; /* as long a chain bends less without it */
-    pop(a, v, ACCEPT_DROP, r ? r : ENGINE_EUNCONFIRMED);
-    return 1;
+    return drop(a, pre, vlim, r ? r : ENGINE_EUNCONFIRMED, v);
 }
 
 /*
@@ -854,6 +712,34 @@ static int decide_one(accept_t *a, accept_verdict_t *v)
     return 0;
 }
 
+void accept_anchor_at(accept_t *a, const engine_waypoint_t *wp)
+{
+    unsigned s;
+    a->have_a0 = 0; /* the slot of a0 may be taken */
+    a->open = 0;
+    s = new_slot(a);
+    a->wp[s] = *wp;
+    a->a1 = (unsigned char)s;
+    a->open = 1;
+    a->have_refused = 0;
+}
+
+/* drop c (an open trajectory) for reason, unless its position follows the
+ * path and only its stamp is off: then it is kept re-stamped (retime) */
+static int drop(accept_t *a, unsigned pre, double vlim, int reason, accept_verdict_t *v)
+{
+    double shift = 0;
+    if ((a->cfg.rules & ACCEPT_RULE_RETIME) && (reason == ENGINE_ESPEED || reason == ENGINE_EACCEL))
+        shift = accept_retime(a, pre, vlim);
+    if (shift > 0 || shift < 0) {
+        pop(a, v, ACCEPT_TAKE, 0);
+        v->shift_s = shift;
+        return 1;
+    }
+    pop(a, v, ACCEPT_DROP, reason);
+    return 1;
+}
+
 int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
 {
     unsigned char nd[ACCEPT_WINDOW_MAX + 1];
@@ -865,8 +751,23 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
     int r;
 
     a->full = full; /* window_median_speed */
+    if (a->cfg.rules & ACCEPT_RULE_STOPS) {
+        int rr = accept_run_decide(a, closing, v);
+        if (rr >= 0)
+            return rr;
+        n = a->npend;
+        full = closing || n >= a->cfg.window;
+        a->full = full;
+    }
     if (!n)
         return 0;
+    if ((a->cfg.rules & ACCEPT_RULE_NORETURN) && a->open && a->have_refused &&
+        a->wp[a->pend[0]].t_s - a->refused.t_s > ACCEPT_SAME_TIME_S &&
+        accept_dist(&a->refused, &a->wp[a->pend[0]]) <= ACCEPT_STALE_POS_M) {
+        int why = a->refused_reason; /* a refused fix does not return by repetition */
+        pop(a, v, ACCEPT_DROP, why);
+        return 1;
+    }
     if (a->open && n < 2 && !full)
         return decide_one(a, v);
     vlim = accept_speed_limit(a);
@@ -899,10 +800,8 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
     /* verdicts the full window would give, as soon as they are certain: a
      * bad fix must not hold the good ones around it for a whole window (the
      * output draws on its start slack meanwhile) */
-    if (r != 0 && !thin_pace(a, r) && continues_anchor(a, pre, vlim)) {
-        pop(a, v, ACCEPT_DROP, drop_reason(a, pre, vlim, r));
-        return 1;
-    }
+    if (r != 0 && !thin_pace(a, r) && continues_anchor(a, pre, vlim))
+        return drop(a, pre, vlim, drop_reason(a, pre, vlim, r), v);
     if (r == 0 &&
         (taken_past_outliers(a, vlim) || (n >= 3 && outvotes_held(a, nd, pre, vlim, &ch)))) {
         pop(a, v, ACCEPT_TAKE, 0);

@@ -34,7 +34,10 @@
  *     fewer than `confirm` fixes 1 km off, consistent among themselves: each
  *     is unconfirmed, while a lone spike, consistent with nothing held, keeps
  *     its ESPEED or EACCEL);
- *   - dropped as ENGINE_ESTALE if it repeats the anchor's position (within
+ *   - (the former policy, ACCEPT_RULES_FORMER; with the rules of issue 27
+ *     the repeats of the anchor are a run judged by stops.c: stale or a
+ *     stop, see ACCEPT_RULE_STOPS below)
+ *     dropped as ENGINE_ESTALE if it repeats the anchor's position (within
  *     ACCEPT_STALE_POS_M) although the object was moving (at least
  *     ACCEPT_STALE_MIN_SPEED_M_S into the anchor) and the next waypoint with
  *     a new position is consistent with the anchor and shows the object kept
@@ -87,8 +90,16 @@
  *     |v2 - v1| may exceed the acceleration allowance by up to
  *     2 min(|v1|, |v2|) (a reversal at the lower of the two speeds), so a
  *     feed-rate-timed corner passes while a change of speed is held to
- *     max_accel_m_s2.  The bound becomes 3 (max_accel_m_s2 +
- *     4 min(|v1|, |v2|) / (dt1 + dt2)) per kept triple.
+ *     max_accel_m_s2 (with ACCEPT_RULE_VECTOR: | |v2| - |v1| | within the
+ *     allowance itself, so a change of speed along the track is not a turn:
+ *     the 100 m / 280 m chords of a jittered ADS-B line passed as one).
+ *     The bound becomes 3 (max_accel_m_s2 + 4 min(|v1|, |v2|) / (dt1 +
+ *     dt2)) per kept triple.
+ * With the rules of issue 27 (accept_config_t.rules, ACCEPT_RULE_*: the
+ * engine's, but for profile none) a fix about to be dropped for its speed
+ * or acceleration whose position lies on its neighbours' path is kept with
+ * its stamp re-estimated (retime.c), and a repeat of a fix dropped for its
+ * position is dropped too (it cannot return by repetition).
  */
 #ifndef TRAJD_ACCEPT_H
 #define TRAJD_ACCEPT_H
@@ -135,6 +146,49 @@
  * moored boat whose 10 Hz messages repeat a 1 Hz fix has no pace (its
  * chords are mostly 0): their repeats are kept. */
 #define ACCEPT_STALE_STOP_M_S2 9.81
+/* ACCEPT_RULE_STOPS: a run of repeats as long as the window, with no new
+ * position yet, is taken as a stop at once (the output comes to rest on
+ * it instead of running out of curve) if stopping dead there from the
+ * recent pace within the anchor's interval takes at most this (m/s^2,
+ * 2 g: a machine axis or a robot stops so; a boat, a car or an aircraft
+ * does not: 5 m/s at 5 Hz is 25, while a machine at 1 m/s and 10 Hz is
+ * 10); else the run waits for the next new position (stops.c). */
+#define ACCEPT_STOP_MAX_M_S2 19.62
+/* Repeats of the anchor held for one verdict at most (stops.c): a longer
+ * run with no new position yet is judged there and then. */
+#define ACCEPT_RUN_MAX 256
+/* Stamp re-estimation (rules ACCEPT_RULE_RETIME): a fix's stamp moves by
+ * at most this many times the lower median interval of the waypoints it is
+ * judged with (from the anchor),
+ * staying between its neighbours, and only for a fix on their path: its
+ * detour from the chord of its neighbours at most ACCEPT_RETIME_DETOUR of
+ * that chord (a spike off the path is no jitter).  The figure-8's fix
+ * stamped 0.296 s late at 5 Hz is 1.5 intervals off. */
+#define ACCEPT_RETIME_FRAC 2.0
+#define ACCEPT_RETIME_DETOUR 0.25
+
+/* The rules of issue 27 (accept_config_t.rules; the engine sets them all,
+ * 0 is the former policy, which tests/helpers/accept_ref.h keeps):
+ *   STOPS   a run of repeats of the anchor is a stop (the trajectory ends at
+ *           rest at the anchor, a new one starts from rest at the last
+ *           repeat) unless the next new position shows the object kept
+ *           moving (then the repeats are stale): stops.c;
+ *   VECTOR  the free turn frees the direction of the velocity only: the
+ *           change of speed along it stays within max_accel_m_s2;
+ *   RETIME  a fix whose position is consistent but whose stamp is not
+ *           (jitter) is kept with its stamp re-estimated from the local
+ *           pace, within ACCEPT_RETIME_FRAC of its intervals;
+ *   NORETURN a repeat of a refused fix's position is refused too. */
+#define ACCEPT_RULE_STOPS 1u
+#define ACCEPT_RULE_VECTOR 2u
+#define ACCEPT_RULE_RETIME 4u
+#define ACCEPT_RULE_NORETURN 8u
+#define ACCEPT_RULES_ALL 15u
+/* accept_config_t.rules: none of them (the former policy, for the test that
+ * compares it with tests/helpers/accept_ref.h); 0 means all */
+#define ACCEPT_RULES_FORMER 0x80000000u
+/* the engine's: all of them, none for profile none (the solver alone) */
+#define ACCEPT_RULES_OF(none) ((none) ? ACCEPT_RULES_FORMER : 0u)
 
 typedef struct {
     double max_speed_m_s;  /* absolute speed limit, 0 = none */
@@ -144,18 +198,28 @@ typedef struct {
     int stale;             /* drop stale repeats */
     unsigned window;       /* waypoints held for judgement, confirm..ACCEPT_WINDOW_MAX */
     unsigned confirm;      /* mutually consistent waypoints that start a new trajectory */
+    unsigned rules;        /* ACCEPT_RULE_*; 0 = all (the engine's), ACCEPT_RULES_FORMER = none */
 } accept_config_t;
 
 typedef enum {
     ACCEPT_TAKE = 0,  /* append to the open trajectory */
     ACCEPT_START = 1, /* close the open trajectory (if any), start a new one with it */
     ACCEPT_DROP = 2,  /* refused: reason says why */
+    ACCEPT_HALT = 3,  /* a stop: end the open trajectory at rest on its last
+                         waypoint; wp (a repeat of it) is kept as the dwell */
+    ACCEPT_DWELL = 4, /* kept as the dwell of a stop (no knot) */
 } accept_kind_t;
 
 typedef struct {
-    accept_kind_t kind;
-    int reason; /* ACCEPT_DROP: an engine_error */
-    int gap;    /* ACCEPT_START: the interval from the anchor exceeds max_gap_s */
+    int kind;       /* accept_kind_t */
+    int reason;     /* ACCEPT_DROP: an engine_error */
+    int gap;        /* ACCEPT_START: the interval from the anchor exceeds max_gap_s */
+    int stop;       /* ACCEPT_START of a stop (accept_decide_counted): ACCEPT_STOP_ONE (a
+                   run of one repeat: this one starts the next trajectory, the open one
+                   ends at rest), ACCEPT_STOP_AFTER (after a HALT), ACCEPT_STOP_HALT (a
+                   HALT: the open trajectory ends at rest, wp is dwell, not a knot) */
+    double shift_s; /* ACCEPT_TAKE: wp.t_s minus the stamp it came with
+                       (ACCEPT_RULE_RETIME; 0 if kept as stamped) */
     engine_waypoint_t wp;
 } accept_verdict_t;
 
@@ -190,6 +254,16 @@ typedef struct {
     uint64_t known;      /* bit i: pair[i] is computed */
     /* the pairs of slots x < y, at y (y - 1) / 2 + x (accept.c) */
     accept_pair_t pair[ACCEPT_SLOTS * (ACCEPT_SLOTS - 1) / 2];
+    /* ACCEPT_RULE_STOPS (stops.c): repeats of the anchor's position, older
+     * than every waypoint in the window, awaiting their verdict */
+    double run_t[ACCEPT_RUN_MAX];
+    uint32_t run_seq[ACCEPT_RUN_MAX];
+    unsigned run_n, run_head; /* members, and the first not yet judged */
+    int run_verdict;          /* 0 undecided, 1 stale, 2 stop */
+    int standing;             /* the trajectory ended at rest on the anchor (HALT) */
+    /* ACCEPT_RULE_NORETURN: the last fix refused for its position */
+    int have_refused, refused_reason;
+    engine_waypoint_t refused;
 } accept_t;
 
 /* Set up with cfg (window and confirm clamped to 1..ACCEPT_WINDOW_MAX,
@@ -204,10 +278,10 @@ void accept_reset(accept_t *a);
  * kept starts a new one. */
 void accept_close(accept_t *a);
 
-/* Waypoints held. */
+/* Waypoints held (the window and a run of repeats awaiting its verdict). */
 static inline unsigned accept_pending(const accept_t *a)
 {
-    return a->npend;
+    return a->npend + (a->run_n - a->run_head);
 }
 
 /* The oldest waypoint held, or NULL. */
@@ -249,6 +323,29 @@ int accept_check(const accept_t *a, const engine_waypoint_t *pre, const engine_w
 /* The speed limit now in force (m/s, 0 = none): max_speed_m_s, and with
  * `learned` the learned limit from the recent speeds and the window. */
 double accept_speed_limit(accept_t *a);
+
+/* stops.c (ACCEPT_RULE_STOPS): 1 if wp joins the run of repeats of the
+ * anchor (not held in the window); the verdict on the oldest run member
+ * if it can be given now (1, *v filled), 0 if the run waits, -1 if there
+ * is no run (accept_decide goes on with the window). */
+int accept_run_offer(accept_t *a, const engine_waypoint_t *wp);
+int accept_run_decide(accept_t *a, int closing, accept_verdict_t *v);
+/* Count a verdict's share of engine_status (stops, stop_fixes, retimed). */
+void accept_count(engine_status_t *st, const accept_verdict_t *v);
+/* accept_decide for the engine: the verdict counted into st (accept_count),
+ * DWELL verdicts taken here (counted, nothing else to do), HALT given as
+ * ACCEPT_START with stop = ACCEPT_STOP_HALT; so the engine sees TAKE, START
+ * and DROP only. */
+#define ACCEPT_STOP_ONE 1
+#define ACCEPT_STOP_AFTER 2
+#define ACCEPT_STOP_HALT 3
+int accept_decide_counted(accept_t *a, int closing, accept_verdict_t *v, engine_status_t *st);
+/* accept.c, for stops.c: make wp the anchor of a trajectory started at it
+ * (no waypoint before it); the distance between two waypoints */
+void accept_anchor_at(accept_t *a, const engine_waypoint_t *wp);
+double accept_dist(const engine_waypoint_t *p, const engine_waypoint_t *q);
+/* the chord speeds kept: lower median of the last ACCEPT_HIST (0 if none) */
+double accept_recent_median(const accept_t *a);
 
 /* Fastest chord speed of the last ACCEPT_HIST kept intervals (m/s, 0 if none). */
 static inline double accept_recent_speed(const accept_t *a)

@@ -479,9 +479,9 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
             .max_gap_s = cfg->max_gap_s,
             .learned = cfg->profile == ENGINE_PROFILE_AUTO,
             .stale = cfg->profile != ENGINE_PROFILE_MACHINE && cfg->profile != ENGINE_PROFILE_NONE,
-            /* judged within the start slack: no latency beyond the solver's */
             .window = cfg->start_slack < ACCEPT_WINDOW_MAX ? cfg->start_slack : ACCEPT_WINDOW_MAX,
             .confirm = cfg->confirm,
+            .rules = ACCEPT_RULES_OF(cfg->profile == ENGINE_PROFILE_NONE), /* accept.h */
         };
         if (ac.window < ac.confirm)
             ac.window = ac.confirm;
@@ -979,7 +979,7 @@ static int judge(engine_t *e, int closing)
     accept_verdict_t v;
     int rc = 0;
 
-    while (accept_decide(&e->policy, closing, &v)) {
+    while (accept_decide_counted(&e->policy, closing, &v, &e->st)) { /* stops.c */
         switch (v.kind) {
         case ACCEPT_TAKE:
             if (keep(e, &v.wp) < 0)
@@ -991,13 +991,13 @@ static int judge(engine_t *e, int closing)
                 if (v.gap) {
                     e->st.gaps++;
                     e->in_gap_s = v.wp.t_s - e->last_t;
-                } else {
+                } else if (!v.stop) {
                     e->st.reanchors++;
                 }
                 if (close_input(e) < 0)
                     rc = -ENGINE_ENUMERIC;
             }
-            if (keep(e, &v.wp) < 0)
+            if (v.stop != ACCEPT_STOP_HALT && keep(e, &v.wp) < 0)
                 rc = -ENGINE_ENUMERIC;
             break;
         case ACCEPT_DROP: reject_wp(e, v.reason, &v.wp); break;

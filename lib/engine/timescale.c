@@ -130,7 +130,7 @@ static double creep(double R, double A, double J, double T, double *j, double *r
         double rr, aa, dd;
         jj *= 0.5;
         dd = integrate(0.0, 0.0, jj, T, &rr, &aa);
-        if (ts_stop_dist(rr, aa, A, J) <= R - dd) {
+        if (ts_stop_dist(rr, aa, A, J) + rr * T <= R - dd) {
             *j = jj;
             *r1 = rr;
             *a1 = aa;

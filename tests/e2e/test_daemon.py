@@ -777,5 +777,50 @@ class TestRejectionsLogged(unittest.TestCase):
                                      r"\(backwards \1\)$")
 
 
+class TestStopsAndRestampsOnStatus(unittest.TestCase):
+    def test_status_line_counts_stops_and_restamps(self):
+        """Given two replay objects, a machine that moves 1 m/s along x at
+        10 Hz, stands 10 s (its position repeated), and moves on, and a
+        straight line whose 1 s chords alternate 100 m / 280 m (ADS-B
+        arrival-time stamps), when trajd replays them, then its exit status
+        line says '1 stops, 0 re-stamped' for the first and '0 stops, N
+        re-stamped (largest X s)' for the second, N and X as trajreplay
+        --summary counts them (issue 27)."""
+        with tempfile.TemporaryDirectory() as tmp:
+            stop = ["t,x,y,z"] + ["%.1f,%r,0,0" % (k / 10, k / 10 if k <= 100 else 10.0 if k <= 200
+                                                   else 10.0 + (k - 200) / 10) for k in range(301)]
+            write(os.path.join(tmp, "stop.csv"), "\n".join(stop) + "\n")
+            x, jit = 0.0, ["t,x,y,z"]
+            for k in range(60):
+                jit.append("%d,%r,0,0" % (k, x))
+                x += 100.0 if k % 2 == 0 else 280.0
+            write(os.path.join(tmp, "jit.csv"), "\n".join(jit) + "\n")
+            conf = os.path.join(tmp, "t.conf")
+            write(conf, "[daemon]\nrate_hz = 100\nspeed = 20\nexit_when_done = yes\n"
+                        "status_interval_s = 0\n"
+                        "[object.m]\nid = 1\ninput = replay\nreplay.track = stop.csv\noutput = csv\n"
+                        "csv.path = m.csv\n"
+                        "[object.j]\nid = 2\ninput = replay\nreplay.track = jit.csv\noutput = csv\n"
+                        "csv.path = j.csv\n")
+            d = Daemon(tmp, conf)
+            try:
+                self.assertEqual(d.wait(120), 0, d.stderr())
+                log = d.stderr()
+            finally:
+                d.close()
+            r = subprocess.run([TRAJREPLAY, "-q", "--summary", "-o", os.devnull,
+                                os.path.join(tmp, "jit.csv")], capture_output=True, text=True,
+                               timeout=120)
+        summ = dict(l.split()[1:3] for l in r.stderr.splitlines() if l.startswith("summary: "))
+        exit_line = [l for l in log.splitlines() if "exit: " in l]
+        self.assertEqual(len(exit_line), 1, log)
+        self.assertIn("; m ", exit_line[0])
+        m_part = exit_line[0].split("; m ")[1].split(";")[0]
+        j_part = exit_line[0].split("; j ")[1].split(";")[0]
+        self.assertIn(", 1 stops, 0 re-stamped", m_part, exit_line[0])
+        self.assertIn(", 0 stops, %d re-stamped (largest %.3f s)"
+                      % (int(summ["retimed"]), float(summ["retime_max_s"])), j_part, exit_line[0])
+
+
 if __name__ == "__main__":
     unittest.main(verbosity=2)

@@ -291,29 +291,24 @@ class RealTracks(unittest.TestCase):
         cls.doc = doc[a:doc.index("**Known limits.**", a)]
 
     def test_jitter(self):
-        import numpy as np
-        v, a, t0, t1, t2, refused, a2, v2, t3, t4, gap = grab(self.doc, (
+        v, a, t0, t1, t2, n, shift, a2, v2 = grab(self.doc, (
             r"\(`--profile none`\)\s+the figure-eight boat peaks at (\S+) m/s and (\S+) m/s² around "
             r"t = 135 s\. Its log has a late\s+sample there: (\S+) → (\S+) → (\S+) s, so two fixes "
-            r".*? refuses (\S+)\s+\(`rejected_speed 1`\) and the peak there drops to (\S+) m/s² "
-            r"\((\S+) m/s top speed\): the fixes\s+of (\S+) and (\S+) are still (\d+) ms apart"))
+            r".*? keeps both with their\s+stamps re-estimated from the pace around them "
+            r"\(`retimed (\d+)`, `retime_max_s (\S+)`: the\s+positions say 134.8 and 135.0\) and "
+            r"the peak there drops to (\S+) m/s² \((\S+) m/s top speed\)"))
         s, rows, _ = replay(self.F8, "--profile", "none")
         near = (rows["t_s"] > 134) & (rows["t_s"] < 137)
         self.assertEqual(s["rejected"], 0)
         self.assertEqual("%.1f" % peak(rows, "vel_m_s", near)[0], v)
         self.assertEqual("%.0f" % peak(rows, "acc_m_s2", near)[0], a)
-        s, rows, err = replay(self.F8)
-        self.assertEqual((s["rejected"], s["rejected_speed"]), (1, 1))
-        line = int(re.search(r":(\d+): rejected \(speed\)", err).group(1))
         with open(os.path.join(ROOT, "tests", "data", self.F8), encoding="utf-8") as f:
             stamps = [l.split(",")[0] for l in f.read().split("\n")]
-        self.assertEqual(float(stamps[line - 1]), float(refused))
         i = stamps.index(t0 + "000")
-        # the refused fix is the late one; the two it leaves 81 ms apart follow it
-        self.assertEqual([float(x) for x in stamps[i:i + 4]],
-                         [float(t0), float(t1), float(t2), float(t4)])
-        self.assertEqual((float(t1), float(t2)), (float(refused), float(t3)))
-        self.assertEqual(round((float(t4) - float(t3)) * 1000), int(gap))
+        self.assertEqual([float(x) for x in stamps[i:i + 3]], [float(t0), float(t1), float(t2)])
+        s, rows, err = replay(self.F8)
+        self.assertEqual((s["rejected"], s["retimed"]), (0, int(n)))
+        self.assertEqual("%.3f" % s["retime_max_s"], shift)
         near = (rows["t_s"] > 134) & (rows["t_s"] < 137)
         self.assertEqual("%.1f" % peak(rows, "acc_m_s2", near)[0], a2)
         self.assertEqual("%.1f" % peak(rows, "vel_m_s")[0], v2)

@@ -355,8 +355,10 @@ def test_airliner_stale_then_jumps(tmp):
     fix before them (lat, lon and altitude: what a receiver re-sends when the
     aircraft's position stops updating) with their own stamps.  Replayed at
     10 Hz with the default and with profile air: exit 0, exactly the repeats
-    refused (as stale, every reported line one of theirs), every good fix
-    kept, none of the fixes the runs repeat (the frozen copies, stamped later,
+    refused (as stale, every stale line one of theirs), every good fix kept
+    (>= 99 % with the default profile since issue 27: it holds changes of
+    speed to 30 m/s^2, and re-stamps most jittered fixes but not all), none
+    of the fixes the runs repeat refused (the frozen copies, stamped later,
     outvoted the fix they copy: 4 good fixes were refused, 'accel')."""
     air = os.path.join(tmp, "airliner.csv")
     frozen_path = os.path.join(tmp, "airliner_frozen.csv")
@@ -391,10 +393,17 @@ def test_airliner_stale_then_jumps(tmp):
               f"{int(s.get('rejected_stale', -1))} of {len(repeat_lines)} repeats refused as stale, "
               f"{int(s.get('rejected', -1))} refused in all")
         tr.check(p.returncode == 0, f"{label}: exit {p.returncode}: {p.stderr[-300:]}")
-        tr.check(s.get("accepted") == good and s.get("rejected") == len(repeat_lines) and
-                 s.get("rejected_stale") == len(repeat_lines), f"{label}: --summary {s}")
-        tr.check(lines and all(l in repeat_lines and w == "stale" for l, w in lines.items()),
-                 f"{label}: reported {lines}")
+        # issue 27: the default profile holds a change of speed along the
+        # track to max_accel_m_s2 (turns stay free) and re-stamps a fix whose
+        # stamp is off; of the good fixes >= 99 % are kept (a few whose
+        # jitter, 0..0.2 s at 1 Hz, no re-stamping absorbs are refused)
+        tr.check(s.get("accepted") >= 0.99 * good and
+                 s.get("rejected_stale") == len(repeat_lines) and
+                 s.get("accepted") + s.get("rejected") == len(out), f"{label}: --summary {s}")
+        stale = {l for l, w in lines.items() if w == "stale"}
+        tr.check(lines and stale <= repeat_lines, f"{label}: reported {lines}")
+        sources = {min(repeat_lines, key=lambda l: abs(l - (i + 2))) - 1 for i in runs}
+        tr.check(not sources & set(lines), f"{label}: a fix a run repeats was refused: {lines}")
 
 
 def test_machine_curve(tmp, gco):

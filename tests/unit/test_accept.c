@@ -518,6 +518,7 @@ static void random_config(accept_config_t *c)
     c->stale = (int)rndn(2);
     c->window = rndn(ACCEPT_WINDOW_MAX + 2); /* 0 and 9: clamped */
     c->confirm = rndn(ACCEPT_WINDOW_MAX + 2);
+    c->rules = ACCEPT_RULES_FORMER; /* the reference is the policy before issue 27 */
 }
 
 static int same_wp(const engine_waypoint_t *p, const engine_waypoint_t *q)
