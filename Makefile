@@ -211,7 +211,8 @@ check-build: all
 
 # Long scenarios, beside `make check`: the drive events at 20 and 100 Hz (issue 23).
 check-long: all
-	@BUILD=$(abspath $(BUILD)) PYTHON=$(PYTHON) RATES="20 100" TESTS="test_drive_events_uml.sh" \
+	@BUILD=$(abspath $(BUILD)) PYTHON=$(PYTHON) RATES="20 100" STALL=1 DRIVE_STALLS=fail \
+		TESTS="test_drive_events_uml.sh" \
 		sh tests/run.sh
 
 test: all

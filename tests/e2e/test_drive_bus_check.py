@@ -151,6 +151,16 @@ class DriveBusCheck(unittest.TestCase):
         self.assertEqual(log.run().returncode, 0)
         log.cycle(p, sw=FAULT, pos=p)    # ... but a SYNC after it: trajd was alive
         self.assertEqual(log.run().returncode, 1)
+        # unless the SYNCs had stopped for the consumer time (3 s) before it: a
+        # killed trajd, and a new one after
+        log2, p = self.clean()
+        log2.t += 3.0
+        log2.emcy(0x8130)
+        log2.frame(0x181, struct.pack("<Hi", FAULT, p))
+        log2.c = 0
+        log2.cycle(p, cw=0, sw=FAULT, pos=p)
+        self.assertEqual(log2.run("--consumer-s", "3").returncode, 0)
+        self.assertEqual(log2.run("--consumer-s", "5").returncode, 1)
 
 
 if __name__ == "__main__":

@@ -2,7 +2,7 @@
 # Issue 23, the drive side: every drive-facing event while the object moves, on
 # three simulated CiA 402 drives on vcan inside user-mode-linux (one guest
 # boot: tests/uml/drive_events.sh, at each rate of RATES, default 20 Hz; make
-# check-long runs 20 and 100 Hz):
+# check-long runs 20 and 100 Hz, and a 2 s stall of trajd mid-motion):
 # fault, quick stop, boot-up, heartbeat loss (each then clear), trajd
 # restarted, trajd killed.  The config is README.md's drive config (three
 # axes, node 2 inverted, the drives at 2.3 m, -0.9 m and 0.4 m).  The verdict
@@ -18,10 +18,13 @@ set -u
 cd "$(dirname "$0")/../.." || exit 1
 : "${BUILD:=$PWD/build}"
 PY=${PYTHON:-/usr/bin/python3}
-RATES=${RATES:-20}   # make check-long: RATES="20 100"
-# DRIVE_STALLS=report: steps after trajd's own stalls (a SYNC more than 1.5 periods
-# late) are listed, not failed (rule 4 of the checker; the engine's to avoid)
-STALLS=${DRIVE_STALLS:-fail}
+RATES=${RATES:-20}   # make check-long: RATES="20 100" STALL=1 (trajd stopped 2 s mid-motion)
+# Steps at trajd's own stalls (a SYNC more than 1.5 periods late, and the next)
+# are listed, not failed (DRIVE_STALLS=report, the default), or failed
+# (DRIVE_STALLS=fail, make check-long): after a stall the targets must go on
+# from the last one sent (issue 23), which is the engine's to do; a loaded
+# host stalls the guest's trajd for a period or two at times
+STALLS=${DRIVE_STALLS:-report}
 peers=${TRAJD_PEERS:-$PWD/../shared/peers}
 if [ ! -d "$peers/python-canopen/canopen" ]; then
     echo "SKIP: python-canopen not found at $peers/python-canopen (the drive simulator runs on it; set TRAJD_PEERS)"
@@ -30,7 +33,7 @@ fi
 . tests/uml/host.sh
 run=$BUILD/uml-drive-events
 rm -rf "$run"; mkdir -p "$run"
-{ echo "BUILD=$BUILD"; echo "TRAJD_PEERS=$(cd "$peers" && pwd)"; } > "$run/env"
+{ echo "BUILD=$BUILD"; echo "TRAJD_PEERS=$(cd "$peers" && pwd)"; echo "STALL=${STALL:-0}"; } > "$run/env"
 echo "$RATES" > "$run/rates"
 # the track: a circle of radius 1.5 m about the origin at 1 m/s in x, y, with
 # z = 0.3 sin: 1.02 m/s, 68 % of max_speed_m_s; 20 waypoints/s for 150 s
@@ -80,7 +83,7 @@ for rate in $RATES; do
     echo "== $rate Hz"
     $PY tests/helpers/drive_bus_check.py "$run/ev$rate.log" --period-s "$period" --vmax "$VMAX" \
         --amax "$AMAX" --node 1:10000 --node 2:10000 --node 3:10000 --allow-emcy 0xFF00 \
-        --stalls "$STALLS" \
+        --stalls "$STALLS" --consumer-s 3 \
         --json "$run/check$rate.json" || rc=1
     $PY - "$run" "$rate" <<'PYEOF' || rc=1
 import json, sys

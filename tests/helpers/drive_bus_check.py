@@ -26,7 +26,8 @@ knows nothing, so its first target to each drive is a "first" one (rule 2).
      the bound: the drive applies one target per SYNC;
   5. no drive fault caused by trajd: every EMCY code is one the test injected
      (--allow-emcy), or 0x8130 (heartbeat consumer: the master is gone) after
-     the last SYNC of the log (trajd killed, never before).
+     the last SYNC of the log, or with --consumer-s S after S seconds without
+     SYNC (trajd killed, never while it runs).
 Exits 0 if no rule is broken, 1 else; prints a JSON summary (and the first
 violations).
 
@@ -91,7 +92,7 @@ class Drive:
         return None, None
 
 
-def check(path, period_s, vmax, amax, nodes, tol=1, allow_emcy=(), stalls="fail"):
+def check(path, period_s, vmax, amax, nodes, tol=1, allow_emcy=(), stalls="fail", consumer_s=None):
     drives = {n: Drive(n, cpm) for n, cpm in nodes.items()}
     bad = []
     sync_index = 0
@@ -102,15 +103,18 @@ def check(path, period_s, vmax, amax, nodes, tol=1, allow_emcy=(), stalls="fail"
     frames = masters = 0
 
     stalled = []
+    stall_until = -1   # the SYNCs whose steps follow from trajd's last stall
 
     def violate(t, node, rule, text):
         v = {"t": round(t, 4), "node": node, "rule": rule, "what": text}
         if rule == 4 and sync_dt > 1.5 * period_s:   # say why, if trajd stalled
             v["what"] += " after %.0f ms without SYNC (trajd stalled %.1f periods)" % (
                 sync_dt * 1e3, sync_dt / period_s)
-            if stalls == "report":
-                stalled.append(v)
-                return
+        elif rule == 4 and sync_index <= stall_until:
+            v["what"] += " (the SYNC after trajd's stall)"
+        if rule == 4 and sync_index <= stall_until and stalls == "report":
+            stalled.append(v)
+            return
         bad.append(v)
 
     for msg in can.CanutilsLogReader(path):
@@ -122,6 +126,8 @@ def check(path, period_s, vmax, amax, nodes, tol=1, allow_emcy=(), stalls="fail"
             sync_index += 1
             sync_dt = t - last_sync_t if last_sync_t is not None else 0.0
             last_sync_t = t
+            if sync_dt > 1.5 * period_s:
+                stall_until = sync_index + 1
             c = data[0] if data else None
             if c == 1 and counter is not None and counter != 240:
                 masters += 1    # the counter starts again: a new master (trajd restarted)
@@ -140,8 +146,10 @@ def check(path, period_s, vmax, amax, nodes, tol=1, allow_emcy=(), stalls="fail"
             d.tpdo(sw, pos, sync_index, t)
         elif fn == 0x080 and len(data) == 8:
             code = struct.unpack_from("<H", data)[0]
+            silent = last_sync_t is None or (consumer_s is not None and
+                                             t - last_sync_t >= 0.9 * consumer_s)
             if code:
-                emcys.append((t, node, code))
+                emcys.append((t, node, code, silent))
         elif fn == 0x200 and len(data) in (4, 6):
             d.st["rpdo"] += 1
             cw = struct.unpack_from("<H", data)[0] if len(data) == 6 else None
@@ -185,16 +193,16 @@ def check(path, period_s, vmax, amax, nodes, tol=1, allow_emcy=(), stalls="fail"
                 if s2 > step2_max:
                     violate(t, node, 4, "step change %d counts in one SYNC (%.2f m/s^2, bound %.2f)"
                             % (s2, s2 / d.cpm / period_s ** 2, amax))
-    for t, node, code in emcys:
+    for t, node, code, silent in emcys:
         if code in allow_emcy:
             continue
-        if code == 0x8130 and last_sync_t is not None and t > last_sync_t:
+        if code == 0x8130 and (silent or (last_sync_t is not None and t > last_sync_t)):
             continue
         violate(t, node, 5, "drive fault: EMCY 0x%04X" % code)
     return {"frames": frames, "syncs": sync_index, "masters": masters + (sync_index > 0),
             "violations": len(bad),
             "by_rule": {r: sum(1 for b in bad if b["rule"] == r) for r in range(1, 6)},
-            "first": bad[:20], "stalls": len(stalled), "stalls_first": stalled[:5], "emcy": [[round(t, 4), n, "0x%04X" % c] for t, n, c in emcys],
+            "first": bad[:20], "stalls": len(stalled), "stalls_first": stalled[:5], "emcy": [[round(t, 4), n, "0x%04X" % c] for t, n, c, _ in emcys],
             "drives": {n: d.st for n, d in drives.items()}}
 
 
@@ -208,12 +216,15 @@ def main():
     ap.add_argument("--tol", type=int, default=1)
     ap.add_argument("--allow-emcy", default="")
     ap.add_argument("--stalls", choices=("fail", "report"), default="fail",
-                    help="report: rule 4 after a SYNC late by > 1.5 periods is listed, not failed")
+                    help="report: rule 4 at a SYNC late by > 1.5 periods and the next one is "
+                         "listed, not failed")
+    ap.add_argument("--consumer-s", type=float,
+                    help="the drives' heartbeat consumer time: 0x8130 after that long without SYNC")
     ap.add_argument("--json")
     a = ap.parse_args()
     nodes = {int(n, 0): float(c) for n, c in (x.split(":") for x in a.node)}
     allow = tuple(int(x, 0) for x in a.allow_emcy.split(",") if x)
-    s = check(a.log, a.period_s, a.vmax, a.amax, nodes, a.tol, allow, a.stalls)
+    s = check(a.log, a.period_s, a.vmax, a.amax, nodes, a.tol, allow, a.stalls, a.consumer_s)
     text = json.dumps(s, indent=1)
     if a.json:
         with open(a.json, "w") as f:

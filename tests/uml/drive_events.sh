@@ -6,7 +6,8 @@
 # config ev<RATE>.conf each (README.md's drive config, three axes):
 #   fault of node 1, quick stop of node 2, boot-up of node 3, node 2's
 #   heartbeat lost (each held by trajd, then the command clear); trajd
-#   restarted (SIGTERM, a new trajd adopts the running drives); trajd killed
+#   restarted (SIGTERM, a new trajd adopts the running drives); with STALL=1
+#   in $out/env, trajd stopped for 2 s (SIGSTOP); trajd killed
 #   (kill -9): the drives, consuming trajd's heartbeat (0x1016), fault by
 #   themselves.
 # Everything on the bus goes to ev<RATE>.log (candump -L); the verdict is the
@@ -110,6 +111,23 @@ for rate in $(cat "$out/rates"); do
     for n in 1 2 3; do
         wait_grep "$run/sim_events.txt" "^[0-9.]* $n MASTER_LOST " 2000 || fail "node $n kept running"
     done
+    # ---- (STALL=1, make check-long) a third trajd: it resets the faults the
+    # drives stopped with, enables and adopts them; then it stalls 2 s
+    # mid-motion (SIGSTOP): not a lost heartbeat (the consumer time is 1.5 s:
+    # the stall is excused); the checker judges the targets after it (rule 4:
+    # they go on from the last one sent, never 2 s ahead)
+    if [ "${STALL:-0}" = 1 ]; then
+        start_trajd
+        for n in 1 2 3; do wait_ev $n OPERATION_ENABLED 3 || fail "node $n not enabled again"; done
+        moving stall; mark stall
+        nhb=$(grep -c "heartbeat was not heard" "$out/ev$rate.err")
+        kill -STOP "$tp"; sleep 2; kill -CONT "$tp"
+        mark stalled
+        sleep 1
+        [ "$(grep -c "heartbeat was not heard" "$out/ev$rate.err")" = "$nhb" ] ||
+            fail "trajd's own stall taken for a lost heartbeat"
+        kill -TERM "$tp"; wait "$tp"; tp=
+    fi
     kill "$pp" 2>/dev/null; wait "$pp"; pp=
     kill -TERM "$sp"; wait "$sp"; sp=
     kill "$cp"; wait "$cp" 2>/dev/null; cp=
