@@ -476,6 +476,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
 typedef struct {
     obj_t *o;
     char src[48];
+    int rest_asked; /* hk_feedback asked the moving engine to come to rest */
 } can_hook_ctx_t;
 
 typedef struct {
@@ -699,12 +700,14 @@ static void hk_hold(void *ctx)
  */
 static int hk_feedback(void *ctx, const can_port_drive_t *d)
 {
-    obj_t *o = ((const can_hook_ctx_t *)ctx)->o;
-    if (!d->need_anchor)
-        return 0;
-    if (obj_set_position(o, d->anchor_m) == 0)
-        return 1;
-    obj_drive_lost(o);
+    can_hook_ctx_t *h = ctx;
+    if (!d->need_anchor || obj_set_position(h->o, d->anchor_m) == 0) {
+        h->rest_asked = 0;
+        return d->need_anchor;
+    }
+    if (!h->rest_asked) /* once: then wait for the rest, frame by frame */
+        obj_drive_lost(h->o);
+    h->rest_asked = 1;
     return 0;
 }
 

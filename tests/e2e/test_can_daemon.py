@@ -193,6 +193,9 @@ class CanDaemon(unittest.TestCase):
                                               "can.cia402_cob_z = 0x203\n",
                            output="can, csv"))
         self.assertEqual(p.returncode, 0, p.stderr)
+        # no drive to ask where it stands: the log says where it is taken to be
+        self.assertIn("no drive feedback (can.cia402_feedback = no): the drives are taken to "
+                      "stand at initial_position", p.stderr)
         log = os.path.join(d, "sp.log")
         logged, ref = self.reference(d)
         for a, (ax, cob) in enumerate(zip("xyz", (0x201, 0x202, 0x203))):

@@ -43,6 +43,7 @@ then writes OUT/drive_sim.json (what each drive saw).  Commands besides the
 signals: a line "fault N", "quickstop N", "bootup N" or "heartbeat N" (toggle)
 written to OUT/sim_cmd (a new file each time: it is read and removed).
 """
+import faulthandler
 import json
 import logging
 import os
@@ -348,7 +349,11 @@ def main():
     drives = [Drive(net, n, s, events) for n, s in specs]
     attach_sync(net, drives)
     done = threading.Event()
-    signal.signal(signal.SIGTERM, lambda *a: done.set())
+    def on_term(*a):
+        done.set()
+        # a shutdown that hangs says where (every thread's stack on stderr), and ends
+        faulthandler.dump_traceback_later(10, exit=True)
+    signal.signal(signal.SIGTERM, on_term)
     signal.signal(signal.SIGUSR1, lambda *a: drives[0].fault("injected"))
     signal.signal(signal.SIGUSR2, lambda *a: [d.quick_stop("local quick stop") for d in drives])
     signal.signal(signal.SIGHUP, lambda *a: drives[1].toggle_heartbeat())
