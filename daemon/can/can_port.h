@@ -113,8 +113,9 @@ typedef struct {
     uint8_t hb_node;          /* trajd's own heartbeat (CiA 301 producer, NMT state
                                * operational) on 0x700 + hb_node; 0 = none */
     int64_t hb_period_ns;     /* its period (default 100 ms) */
-    int64_t period_ns;        /* the cycle's period: a longer gap between two cycles is
-                               * trajd's own stall, excused from heartbeat ages (0: none) */
+    int64_t period_ns;        /* the cycle's period (in the now_ns of can_port_cycle): a
+                               * longer gap between two cycles is trajd's own stall,
+                               * excused from heartbeat ages (0: none) */
 } can_port_config_t;
 
 void can_port_config_default(can_port_config_t *c);

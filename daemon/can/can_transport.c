@@ -304,7 +304,6 @@ static void port_config(const can_cfg_t *c, int64_t period_ns, can_port_config_t
     pc->status_period_ns = (int64_t)llround(c->status_period_ms * 1e6);
     pc->max_late_ns = c->max_late_ms < 0 ? period_ns / 2 : (int64_t)llround(c->max_late_ms * 1e6);
     pc->hb_node = (uint8_t)c->heartbeat_node;
-    pc->period_ns = period_ns;
     pc->hb_period_ns = (int64_t)c->heartbeat_ms * 1000000;
 }
 
@@ -1052,6 +1051,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     }
     can_port_config_t pc;
     port_config(cfg, (int64_t)llround((double)c->period_ns / c->cfg->daemon.speed), &pc);
+    pc.period_ns = c->period_ns; /* engine time per tick, as the now_ns the port gets */
     can_port_io_t io = {io_send, io_recv, io_maintain, io_is_up};
     s->port = can_port_new(&pc, &io, s, s->n);
     if (!s->port) {
