@@ -92,7 +92,7 @@ VERSION := $(shell sed -n 's/^\#define TRAJD_VERSION "\(.*\)"$$/\1/p' daemon/cor
 MAN_SRC := $(wildcard daemon/doc/*.[1-8])
 MANS := $(MAN_SRC:daemon/doc/%=$(BUILD)/man/%) $(BUILD)/man/trajd.conf.5
 
-.PHONY: all run check uninstall check-build test test-asan bench fuzz fuzz-merge install deps deps-run clean
+.PHONY: all run check check-long uninstall check-build test test-asan bench fuzz fuzz-merge install deps deps-run clean
 .DELETE_ON_ERROR:
 .SECONDARY:
 
@@ -234,6 +234,12 @@ check: deps
 		printf "check: %d passed, %d failed, %d skipped\n", p, f, s; exit f > 0 }' $(CHECK_COUNTS)
 
 check-build: all
+
+# Long scenarios, beside `make check`: the drive events at 20 and 100 Hz (issue 23).
+check-long: all
+	@BUILD=$(abspath $(BUILD)) PYTHON=$(PYTHON) RATES="20 100" STALL=1 DRIVE_STALLS=fail \
+		TESTS="test_drive_events_uml.sh" \
+		sh tests/run.sh
 
 test: all
 	@BUILD=$(abspath $(BUILD)) PYTHON=$(PYTHON) sh tests/run.sh

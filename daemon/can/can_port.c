@@ -2,8 +2,11 @@
 #include "can_port.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "can_axis.h"
 
 #define CAN_PORT_RX_BATCH 256 /* frames handled per can_port_rx call: do not starve the loop */
 
@@ -26,7 +29,7 @@ typedef struct {
     int last_state; /* engine state in the last STATUS (-1: none yet) */
     can_port_drive_t drive;
     /* bring-up (ids.cia402_enable) */
-    int nmt_sent;
+    unsigned nmt_done; /* bit per axis: NMT start sent (since its last boot-up) */
     unsigned sdo_next[CANPROTO_CIA402_AXES]; /* next configuration SDO */
     int sdo_wait[CANPROTO_CIA402_AXES];      /* 1 config SDO, 2 controlword, in flight */
     int64_t sdo_sent_ns[CANPROTO_CIA402_AXES];
@@ -38,6 +41,19 @@ typedef struct {
     int hb_hold;   /* a drive's heartbeat was lost: feed hold until CLEAR */
     int64_t hb_last_ns[CANPROTO_CIA402_AXES];
     int hb_lost[CANPROTO_CIA402_AXES];
+    int hb_watch[CANPROTO_CIA402_AXES]; /* its producer time is known > 0: set or read back */
+    int hb_armed[CANPROTO_CIA402_AXES]; /* and a heartbeat was heard since */
+    int hb_read[CANPROTO_CIA402_AXES];  /* 0x1017 read back (or set by the list) */
+    int64_t look_ns;                    /* when the bring-up last looked at the heartbeats */
+    /* issue 23: each axis' target, and the drives' losses */
+    can_axis_t ax[CANPROTO_CIA402_AXES];
+    int32_t pos_inc[CANPROTO_CIA402_AXES]; /* 0x6064 as last heard, in increments */
+    int axis_oe[CANPROTO_CIA402_AXES];     /* in Operation Enabled as last heard */
+    int axis_held[CANPROTO_CIA402_AXES];   /* left Operation Enabled: disabled until CLEAR */
+    int lost;           /* a drive of the object left Operation Enabled: the others brake with
+                       * the object (hold), then every axis holds until all are re-anchored */
+    int eng_rest;       /* the last setpoint was at rest (or had no position) */
+    can_axis_log_t chg; /* every state change, until logged */
     int64_t now_ns;
     uint32_t cmd_allow;                       /* can_port_allow_commands */
     canproto_frame_t st2[CANPROTO_ST2_PAGES]; /* STATUS2 pages as last given */
@@ -56,7 +72,9 @@ struct can_port {
     canproto_ids_t *ids; /* copy of each object's ids, contiguous (bus load) */
     uint8_t sync_counter;
     can_port_stats_t st;
-    canerr_bus_t err; /* bus state and counters from error frames */
+    canerr_bus_t err;   /* bus state and counters from error frames */
+    int64_t hb_sent_ns; /* trajd's own heartbeat (cfg.hb_node), last sent */
+    int hb_any;
 };
 
 void can_port_config_default(can_port_config_t *c)
@@ -67,13 +85,15 @@ void can_port_config_default(can_port_config_t *c)
     c->sync_overflow = 0;
     c->status_period_ns = 100000000LL;
     c->max_late_ns = 0;
+    c->hb_period_ns = 100000000LL;
 }
 
 can_port_t *can_port_new(const can_port_config_t *cfg, const can_port_io_t *io, void *io_ctx,
                          unsigned nobj)
 {
     if (!cfg || !io || !io->send || !io->recv || !io->is_up || nobj == 0 ||
-        cfg->sync_id > CANPROTO_SFF_MASK || cfg->sync_overflow == 1 || cfg->sync_overflow > 240)
+        cfg->sync_id > CANPROTO_SFF_MASK || cfg->sync_overflow == 1 || cfg->sync_overflow > 240 ||
+        cfg->hb_node > CIA402_NODE_MAX)
         return NULL;
     can_port_t *p = calloc(1, sizeof *p);
     if (!p)
@@ -120,6 +140,9 @@ int can_port_set_object(can_port_t *p, unsigned i, const canproto_ids_t *ids,
     unsigned n = canproto_ids_in_use(ids, mine);
     for (unsigned k = 0; k < n; k++)
         if (p->cfg.sync && mine[k] == p->cfg.sync_id)
+            return -CANPROTO_ECONFIG;
+    for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) /* trajd's heartbeat is not a drive's */
+        if (p->cfg.hb_node && canproto_cia402_node(ids, a) == p->cfg.hb_node)
             return -CANPROTO_ECONFIG;
     for (unsigned j = 0; j < p->nobj; j++) {
         if (j == i || !p->obj[j].set)
@@ -262,6 +285,63 @@ static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, 
     o->status_due = 1;
 }
 
+/* Axis a of object o changed state (from its TPDO, or to CIA402_STATE_UNKNOWN
+ * at its boot-up): the change is kept for the log; leaving Operation Enabled
+ * is a loss: that drive is disabled until CLEAR (with the bring-up), and the
+ * object is held (its other axes brake along the path, then every axis holds). */
+static void axis_state(can_port_obj_t *o, unsigned a, cia402_state_t to, uint16_t sw)
+{
+    can_port_drive_t *d = &o->drive;
+    if (to == d->state[a] && to != CIA402_STATE_UNKNOWN)
+        return;
+    can_axis_change_t c = {
+        o->now_ns,   (uint8_t)a, (uint8_t)canproto_cia402_node(&o->ids, a), (uint8_t)d->state[a],
+        (uint8_t)to, sw};
+    can_axis_log_put(&o->chg, &c);
+    d->state[a] = to;
+    if (to == CIA402_OPERATION_ENABLED) {
+        o->axis_oe[a] = 1;
+        o->axis_held[a] = 0;
+        return;
+    }
+    if (!o->axis_oe[a])
+        return;
+    o->axis_oe[a] = 0;
+    o->st.drive_lost++;
+    event(o, CANPROTO_STERR_DRIVE);
+    if (o->ids.cia402_enable)
+        o->axis_held[a] = 1; /* re-enabling is the operator's decision: CLEAR */
+    if (!o->lost) {
+        o->lost = 1;
+        if (o->hooks.hold)
+            o->hooks.hold(o->ctx);
+    }
+}
+
+/* The summary flags of o's drives, and what the engine must re-anchor at. */
+static void drive_summary(can_port_obj_t *o)
+{
+    can_port_drive_t *d = &o->drive;
+    d->all_seen = d->all_enabled = 1;
+    d->held = 0;
+    int live = 1;
+    for (unsigned k = 0; k < CANPROTO_CIA402_AXES; k++)
+        if (o->ids.cia402_cob_id[k]) {
+            d->all_seen &= (d->seen >> k) & 1u;
+            d->all_enabled &= d->state[k] == CIA402_OPERATION_ENABLED;
+            d->held |= o->axis_held[k];
+            live &= o->ax[k].live;
+            d->anchor_m[k] = canproto_cia402_pos_m(&o->ids, k,
+                                                   can_axis_anchor(&o->ax[k], o->pos_inc[k]));
+        }
+    d->all_enabled &= d->all_seen;
+    d->need_anchor = d->all_enabled && !live;
+    if (d->all_enabled) {
+        o->reset_req = 0;
+        o->lost = 0;
+    }
+}
+
 /* A feedback TPDO of axis a of object o. */
 static void drive_feedback(can_port_obj_t *o, unsigned a, const canproto_frame_t *f)
 {
@@ -275,29 +355,45 @@ static void drive_feedback(can_port_obj_t *o, unsigned a, const canproto_frame_t
     }
     o->st.drive_frames++;
     d->statusword[a] = sw;
-    d->state[a] = cia402_state(sw);
+    o->pos_inc[a] = inc;
     d->pos_m[a] = canproto_cia402_pos_m(&o->ids, a, inc);
     d->seen |= 1u << a;
-    d->all_seen = d->all_enabled = 1;
-    for (unsigned k = 0; k < CANPROTO_CIA402_AXES; k++)
-        if (o->ids.cia402_cob_id[k]) {
-            d->all_seen &= (d->seen >> k) & 1u;
-            d->all_enabled &= d->state[k] == CIA402_OPERATION_ENABLED;
-        }
-    d->all_enabled &= d->all_seen;
-    if (d->was_enabled && !d->all_enabled) {
-        o->st.drive_lost++;
-        event(o, CANPROTO_STERR_DRIVE);
-        if (o->ids.cia402_enable)
-            d->held = 1; /* re-enabling is the operator's decision: CLEAR */
+    axis_state(o, a, cia402_state(sw), sw);
+    drive_summary(o);
+    if (o->hooks.feedback && o->hooks.feedback(o->ctx, d) > 0 && d->need_anchor) {
+        for (unsigned k = 0; k < CANPROTO_CIA402_AXES; k++)
+            if (o->ids.cia402_cob_id[k])
+                can_axis_anchored(&o->ax[k]);
+        d->need_anchor = 0;
     }
-    if (d->all_enabled) {
-        d->held = 0;
-        o->reset_req = 0;
-    }
-    if (o->hooks.feedback)
-        o->hooks.feedback(o->ctx, d);
     d->was_enabled = d->all_enabled;
+}
+
+/* A heartbeat or boot-up of axis a's node. */
+static void drive_heartbeat(can_port_obj_t *o, unsigned a, const canproto_frame_t *f)
+{
+    uint8_t n, st;
+    if (cia402_decode_heartbeat(f, &n, &st) < 0)
+        return;
+    o->hb_last_ns[a] = o->now_ns;
+    o->hb_lost[a] = 0;
+    o->hb_armed[a] = o->hb_watch[a] && st != CIA402_HB_BOOTUP;
+    o->drive.nmt[a] = st;
+    o->drive.hb_lost &= ~(1u << a);
+    if (st == CIA402_HB_BOOTUP) {
+        /* this drive (re)booted: it alone is brought up again from NMT
+         * on; it is no longer enabled (a loss if it was), and is not
+         * heard until its next TPDO */
+        o->nmt_done &= ~(1u << a);
+        o->sdo_next[a] = 0;
+        o->sdo_wait[a] = 0;
+        o->cw_known[a] = 0;
+        o->sdo_failed[a] = 0;
+        o->hb_read[a] = o->hb_watch[a] = 0;
+        axis_state(o, a, CIA402_STATE_UNKNOWN, 0);
+        o->drive.seen &= ~(1u << a);
+        drive_summary(o);
+    }
 }
 
 /* Frames of the bring-up: SDO replies, heartbeats, EMCY of o's nodes; 1 if taken. */
@@ -319,6 +415,17 @@ static int drive_frame(can_port_obj_t *o, const canproto_frame_t *f)
                 o->st.sdo_stale++;
                 return 1;
             }
+            if (r.index == 0x1017 && r.sub == 0) { /* the producer time, set or read back */
+                uint32_t v = o->sdo_wait[a] == 3 ? r.value
+                                                 : (uint32_t)(o->sdo_frame[a].data[4] |
+                                                              o->sdo_frame[a].data[5] << 8);
+                o->hb_read[a] = 1;
+                o->hb_watch[a] = r.kind != CIA402_SDO_ABORT && v > 0;
+            }
+            if (r.kind == CIA402_SDO_ABORT && o->sdo_wait[a] == 3) {
+                o->sdo_wait[a] = 0; /* no 0x1017 to read: no heartbeat to watch */
+                return 1;
+            }
             if (r.kind == CIA402_SDO_ABORT) {
                 o->st.sdo_aborts++;
                 o->st.last_abort = r.abort_code;
@@ -333,20 +440,7 @@ static int drive_frame(can_port_obj_t *o, const canproto_frame_t *f)
             return 1;
         }
         if (f->id == 0x700u + node) {
-            uint8_t n, st;
-            if (cia402_decode_heartbeat(f, &n, &st) == 0) {
-                o->hb_last_ns[a] = o->now_ns;
-                o->hb_lost[a] = 0;
-                o->drive.nmt[a] = st;
-                o->drive.hb_lost &= ~(1u << a);
-                if (st == CIA402_HB_BOOTUP) {
-                    /* the drive (re)booted: bring it up again from NMT on */
-                    o->nmt_sent = 0;
-                    memset(o->sdo_next, 0, sizeof o->sdo_next);
-                    memset(o->sdo_wait, 0, sizeof o->sdo_wait);
-                    memset(o->cw_known, 0, sizeof o->cw_known);
-                }
-            }
+            drive_heartbeat(o, a, f);
             return 1;
         }
         if (f->id == 0x080u + node) {
@@ -410,6 +504,8 @@ int can_port_rx(can_port_t *p, int64_t now_ns)
 {
     canproto_frame_t f;
     int n = 0;
+    for (unsigned i = 0; i < p->nobj; i++)
+        p->obj[i].now_ns = now_ns; /* stamps of heartbeats and state changes */
     while (n < CAN_PORT_RX_BATCH) {
         int rc = p->io.recv(p->io_ctx, now_ns, &f);
         if (rc == 0)
@@ -448,7 +544,25 @@ static uint16_t rpdo_cw(const can_port_obj_t *o, unsigned a)
 {
     if (!o->ids.cia402_enable)
         return o->ids.cia402_controlword_value;
-    return o->cw_known[a] ? o->cw_sent[a] : CIA402_CW_DISABLE_VOLTAGE;
+    /* before it wrote any (a drive found running by a restarted trajd): the
+     * one that keeps the drive where it is, never Disable voltage to a
+     * drive in Operation Enabled */
+    return o->cw_known[a] ? o->cw_sent[a] : cia402_controlword_hold(o->drive.state[a]);
+}
+
+/* Axis a's target this cycle (can_axis.h): 1 with *inc, 0 = no RPDO. */
+static int axis_target(can_port_obj_t *o, unsigned a, int32_t *inc, int *clamped)
+{
+    int eng_ok = !(o->sp.flags & ENGINE_SP_NO_POSITION);
+    can_axis_in_t in = {o->ids.cia402_feedback || o->ids.cia402_enable,
+                        (o->drive.seen >> a) & 1u,
+                        o->drive.state[a],
+                        o->pos_inc[a],
+                        eng_ok,
+                        eng_ok ? canproto_cia402_counts(&o->ids, a, o->sp.pos_m[a], clamped) : 0,
+                        o->eng_rest,
+                        !(o->lost && o->eng_rest)};
+    return can_axis_target(&o->ax[a], &in, inc);
 }
 
 /* Send object o's frames for this cycle (own frames only if own); 0 or the
@@ -468,14 +582,21 @@ static int send_setpoint(can_port_t *p, can_port_obj_t *o, int own)
         }
         clamped |= rc == CANPROTO_CLAMPED;
     }
-    /* no valid position yet: nothing a drive would follow (own frames carry
-     * the n/a marker instead) */
-    if (o->ids.cia402 && !(o->sp.flags & ENGINE_SP_NO_POSITION))
-        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
-            if (o->ids.cia402_cob_id[a]) {
-                rc = canproto_encode_cia402_cw(&o->ids, a, o->sp.pos_m[a], rpdo_cw(o, a), &f[n++]);
-                clamped |= rc == CANPROTO_CLAMPED;
-            }
+    /* each drive its own target (can_axis.h): none before a position or
+     * before the drive is heard; a drive not in Operation Enabled its own
+     * 0x6064; the first after an enable its 0x6064 (own frames carry the n/a
+     * marker without a position) */
+    o->eng_rest = 1;
+    for (unsigned a = 0; a < ENGINE_AXES; a++)
+        if (!(o->sp.flags & ENGINE_SP_NO_POSITION) && fabs(o->sp.vel_m_s[a]) > 1e-9)
+            o->eng_rest = 0;
+    if (o->ids.cia402)
+        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
+            int32_t inc;
+            if (o->ids.cia402_cob_id[a] && axis_target(o, a, &inc, &clamped))
+                can_axis_rpdo(o->ids.cia402_cob_id[a], o->ids.cia402_controlword, rpdo_cw(o, a),
+                              inc, &f[n++]);
+        }
     if (clamped) { /* counted, flagged (STATUS bit 3), logged by can_transport */
         o->st.tx_clamped++;
         o->flags_since |= CANPROTO_ST_CLAMPED;
@@ -583,7 +704,8 @@ static void update_status2_drive(can_port_t *p, unsigned i)
 static uint16_t wanted_cw(const can_port_obj_t *o, unsigned a)
 {
     cia402_state_t st = o->drive.state[a];
-    if (o->sdo_failed[a] || o->sdo_next[a] < o->ids.cia402_nsdo || (o->drive.held && !o->reset_req))
+    if (o->sdo_failed[a] || o->sdo_next[a] < o->ids.cia402_nsdo ||
+        (o->axis_held[a] && !o->reset_req))
         return CIA402_CW_DISABLE_VOLTAGE;
     if (st == CIA402_FAULT)
         /* fault reset acts on the rising edge of bit 7: 0x0000 first, then 0x0080 */
@@ -593,39 +715,79 @@ static uint16_t wanted_cw(const can_port_obj_t *o, unsigned a)
     return cia402_controlword_towards_enabled(st, 0);
 }
 
-/* One step of object o's bring-up: NMT start, configuration SDOs, controlword. */
+/* Axis a's heartbeat (consumer, cia402_heartbeat_ms): watched only once its
+ * producer time is known to be set (0x1017 written by the list or read back
+ * > 0) and a heartbeat was heard since; a loss holds the object. */
+static void watch_heartbeat(can_port_obj_t *o, unsigned a, int64_t now_ns)
+{
+    if (!o->ids.cia402_heartbeat_ms || !o->hb_armed[a] || o->hb_lost[a] ||
+        now_ns - o->hb_last_ns[a] <= (int64_t)o->ids.cia402_heartbeat_ms * 1000000)
+        return;
+    o->hb_lost[a] = 1;
+    o->drive.hb_lost |= 1u << a;
+    o->st.heartbeat_lost++;
+    event(o, CANPROTO_STERR_DRIVE);
+    if (!o->hb_hold && o->hooks.hold) {
+        /* a drive that went silent may not follow: feed hold (override
+         * 0), a controlled stop along the path by the time scaling,
+         * every axis together; held until a CLEAR command (obj_hold) */
+        o->hb_hold = 1;
+        o->hooks.hold(o->ctx);
+    }
+}
+
+/* The next SDO request of axis a (into o->sdo_frame[a]): 1 configuration, 2
+ * controlword, 3 read of 0x1017; 0 none now. */
+static int next_sdo(can_port_obj_t *o, unsigned a, uint8_t node)
+{
+    if (o->sdo_next[a] < o->ids.cia402_nsdo) {
+        unsigned k = o->sdo_next[a];
+        cia402_encode_sdo_download(node, o->ids.cia402_sdo[k].index, o->ids.cia402_sdo[k].sub,
+                                   o->ids.cia402_sdo[k].value, o->ids.cia402_sdo[k].size,
+                                   &o->sdo_frame[a]);
+        return 1;
+    }
+    if (o->ids.cia402_heartbeat_ms && !o->hb_read[a] && !can_axis_list_writes(&o->ids, 0x1017, 0)) {
+        o->hb_read[a] = 1; /* once per bring-up: is there a heartbeat to watch? */
+        cia402_encode_sdo_upload(node, 0x1017, 0, &o->sdo_frame[a]);
+        return 3;
+    }
+    if (!(o->drive.seen & (1u << a)))
+        return 0; /* no statusword yet: nothing to decide */
+    uint16_t cw = wanted_cw(o, a);
+    if (o->cw_known[a] && cw == o->cw_sent[a])
+        return 0;
+    cia402_encode_sdo_download(node, CIA402_OBJ_CONTROLWORD, 0, cw, 2, &o->sdo_frame[a]);
+    o->cw_sent[a] = cw;
+    o->cw_known[a] = 1;
+    return 2;
+}
+
+/* One step of object o's bring-up: NMT start (per node, again after its
+ * boot-up), configuration SDOs, controlword. */
 static void bring_up(can_port_t *p, can_port_obj_t *o, int64_t now_ns)
 {
     canproto_frame_t f;
     o->now_ns = now_ns;
-    if (!o->nmt_sent) {
+    /* trajd's own stall is not a drive's silence: the time the loop could not
+     * look is excused (heartbeats queued meanwhile are read with later stamps) */
+    int64_t gap = o->look_ns ? now_ns - o->look_ns : 0;
+    if (p->cfg.period_ns > 0 && gap > 2 * p->cfg.period_ns)
         for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
-            if (canproto_cia402_node(&o->ids, a)) {
-                cia402_encode_nmt(CIA402_NMT_START, (uint8_t)canproto_cia402_node(&o->ids, a), &f);
-                if (p->io.send(p->io_ctx, &f) < 0)
-                    return; /* try again next cycle */
-                o->hb_last_ns[a] = now_ns;
-            }
-        o->nmt_sent = 1;
-    }
+            o->hb_last_ns[a] += gap - p->cfg.period_ns;
+    o->look_ns = now_ns;
     for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
         uint8_t node = (uint8_t)canproto_cia402_node(&o->ids, a);
         if (!node)
             continue;
-        if (o->ids.cia402_heartbeat_ms && !o->hb_lost[a] &&
-            now_ns - o->hb_last_ns[a] > (int64_t)o->ids.cia402_heartbeat_ms * 1000000) {
-            o->hb_lost[a] = 1;
-            o->drive.hb_lost |= 1u << a;
-            o->st.heartbeat_lost++;
-            event(o, CANPROTO_STERR_DRIVE);
-            if (!o->hb_hold && o->hooks.hold) {
-                /* a drive that went silent may not follow: feed hold (override
-                 * 0), a controlled stop along the path by the time scaling,
-                 * every axis together; held until a CLEAR command (obj_hold) */
-                o->hb_hold = 1;
-                o->hooks.hold(o->ctx);
-            }
+        if (!(o->nmt_done & (1u << a))) {
+            cia402_encode_nmt(CIA402_NMT_START, node, &f);
+            if (p->io.send(p->io_ctx, &f) < 0)
+                continue; /* try again next cycle */
+            o->nmt_done |= 1u << a;
+            o->hb_last_ns[a] = now_ns;
         }
+        watch_heartbeat(o, a, now_ns);
         if (o->sdo_wait[a]) {
             if (now_ns - o->sdo_sent_ns[a] < CAN_PORT_SDO_TIMEOUT_NS)
                 continue;
@@ -634,30 +796,31 @@ static void bring_up(can_port_t *p, can_port_obj_t *o, int64_t now_ns)
                 o->sdo_sent_ns[a] = now_ns;
             continue;
         }
-        int kind = 0;
-        if (o->sdo_next[a] < o->ids.cia402_nsdo) {
-            unsigned k = o->sdo_next[a];
-            cia402_encode_sdo_download(node, o->ids.cia402_sdo[k].index, o->ids.cia402_sdo[k].sub,
-                                       o->ids.cia402_sdo[k].value, o->ids.cia402_sdo[k].size,
-                                       &o->sdo_frame[a]);
-            kind = 1;
-        } else if (o->drive.seen & (1u << a)) {
-            uint16_t cw = wanted_cw(o, a);
-            if (o->cw_known[a] && cw == o->cw_sent[a])
-                continue;
-            cia402_encode_sdo_download(node, CIA402_OBJ_CONTROLWORD, 0, cw, 2, &o->sdo_frame[a]);
-            o->cw_sent[a] = cw;
-            o->cw_known[a] = 1;
-            kind = 2;
-        } else {
-            continue; /* no statusword yet: nothing to decide */
-        }
+        int kind = next_sdo(o, a, node);
+        if (!kind)
+            continue;
         if (p->io.send(p->io_ctx, &o->sdo_frame[a]) == 0) {
             o->sdo_wait[a] = kind;
             o->sdo_sent_ns[a] = now_ns;
         } else if (kind == 2) {
             o->cw_known[a] = 0; /* not sent: decide again next cycle */
+        } else if (kind == 3) {
+            o->hb_read[a] = 0;
         }
+    }
+}
+
+/* trajd's own heartbeat as CANopen master (cfg.hb_node): the drives' consumers
+ * (0x1016) see trajd alive, and stop by themselves when it is not. */
+static void master_heartbeat(can_port_t *p, int64_t now_ns)
+{
+    if (!p->cfg.hb_node || (p->hb_any && now_ns - p->hb_sent_ns < p->cfg.hb_period_ns))
+        return;
+    canproto_frame_t f;
+    can_axis_heartbeat(p->cfg.hb_node, &f);
+    if (p->io.send(p->io_ctx, &f) == 0) {
+        p->hb_any = 1;
+        p->hb_sent_ns = now_ns;
     }
 }
 
@@ -690,6 +853,7 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
         else
             p->st.sync_dropped++;
     }
+    master_heartbeat(p, now_ns);
     for (unsigned i = 0; i < p->nobj; i++)
         if (p->obj[i].set && p->obj[i].ids.cia402_enable)
             bring_up(p, &p->obj[i], now_ns);
@@ -746,6 +910,18 @@ void can_port_stats(const can_port_t *p, can_port_stats_t *st)
 const canerr_bus_t *can_port_bus_errors(const can_port_t *p)
 {
     return &p->err;
+}
+
+int can_port_drive_change(can_port_t *p, unsigned i, can_axis_change_t *c, uint64_t *dropped)
+{
+    if (i >= p->nobj)
+        return 0;
+    can_axis_log_t *l = &p->obj[i].chg;
+    if (dropped) {
+        *dropped = l->dropped;
+        l->dropped = 0;
+    }
+    return can_axis_log_take(l, c);
 }
 
 const can_port_drive_t *can_port_drive(const can_port_t *p, unsigned i)

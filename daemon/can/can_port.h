@@ -44,6 +44,7 @@
 #define TRAJD_CANPORT_H
 
 #include <stdint.h>
+#include "can_axis.h"
 #include "canerr.h"
 #include "canproto.h"
 #include "cia402.h"
@@ -73,10 +74,16 @@ typedef struct {
     int all_seen;                               /* every axis with a COB-id was heard from */
     int all_enabled;                            /* and every one is in Operation Enabled */
     int was_enabled; /* all were enabled, until this frame (a loss is this and !all_enabled) */
-    int held;        /* bring-up: the drives left Operation Enabled; they stay disabled
+    int held;        /* bring-up: a drive left Operation Enabled; it stays disabled
                              * until a CLEAR command asks for a fault reset and re-enable */
     uint8_t nmt[CANPROTO_CIA402_AXES]; /* last heartbeat NMT state (CANPROTO_S2_NMT_NONE: none) */
     unsigned hb_lost;                  /* bit per axis: heartbeat not heard in time (consumer) */
+    /* Every axis is in Operation Enabled but not every one takes the engine's
+     * targets yet: the engine must stand at anchor_m (the drives' 0x6064 for a
+     * drive just enabled, else the target it holds), at rest, before they do
+     * (the feedback hook gives it: obj_set_position). */
+    int need_anchor;
+    double anchor_m[CANPROTO_CIA402_AXES];
 } can_port_drive_t;
 
 typedef struct {
@@ -87,10 +94,13 @@ typedef struct {
     int (*command)(void *ctx, canproto_cmd_t cmd, unsigned arg);
     /* Current engine status (state, last_seq, free). */
     void (*status)(void *ctx, engine_status_t *st);
-    /* A feedback TPDO of one of the object's drives arrived (may be NULL). */
-    void (*feedback)(void *ctx, const can_port_drive_t *d);
-    /* A drive's heartbeat was lost: hold the object (feed override 0 until a
-     * CLEAR command; may be NULL). */
+    /* A feedback TPDO of one of the object's drives arrived (may be NULL).
+     * Returns 1 if it re-anchored the engine at d->anchor_m (d->need_anchor:
+     * the engine stands there, at rest), else 0. */
+    int (*feedback)(void *ctx, const can_port_drive_t *d);
+    /* A drive's heartbeat was lost, or a drive left Operation Enabled (fault,
+     * quick stop, disabled, boot-up): hold the object (feed override 0, a
+     * controlled stop of the other axes, until a CLEAR command; may be NULL). */
     void (*hold)(void *ctx);
 } can_port_hooks_t;
 
@@ -100,6 +110,12 @@ typedef struct {
     uint8_t sync_overflow;    /* 0: SYNC with DLC 0; 2..240: DLC 1, counter 1..overflow */
     int64_t status_period_ns; /* STATUS period, default 100 ms; 0 = only on events */
     int64_t max_late_ns;      /* cycle later than this is not sent; <= 0 = never drop */
+    uint8_t hb_node;          /* trajd's own heartbeat (CiA 301 producer, NMT state
+                               * operational) on 0x700 + hb_node; 0 = none */
+    int64_t hb_period_ns;     /* its period (default 100 ms) */
+    int64_t period_ns;        /* the cycle's period (in the now_ns of can_port_cycle): a
+                               * longer gap between two cycles is trajd's own stall,
+                               * excused from heartbeat ages (0: none) */
 } can_port_config_t;
 
 void can_port_config_default(can_port_config_t *c);
@@ -220,6 +236,12 @@ void can_port_stats(const can_port_t *p, can_port_stats_t *st);
  * (socket: CAN_RAW_ERR_FILTER; log input: "2000xxxx#" lines). */
 const canerr_bus_t *can_port_bus_errors(const can_port_t *p);
 void can_port_obj_stats(const can_port_t *p, unsigned i, can_port_obj_stats_t *st);
+
+/* The oldest state change of object i's drives not yet taken (every one, in
+ * order, also those shorter than a status period): 1 and *c, 0 if none.
+ * *dropped: changes lost since the last call because more than
+ * CAN_AXIS_LOG_MAX came between two calls (may be NULL). */
+int can_port_drive_change(can_port_t *p, unsigned i, can_axis_change_t *c, uint64_t *dropped);
 
 /* What object i's drives last reported (NULL if i is out of range). */
 const can_port_drive_t *can_port_drive(const can_port_t *p, unsigned i);

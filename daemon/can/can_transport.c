@@ -9,6 +9,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "can_drive_cfg.h"
 #include "can_socket.h"
 #include "can_box.h"
 #include "can_logfile.h"
@@ -44,6 +45,7 @@ static void cfg_default(void *p)
     c->status_period_ms = 100;
     c->max_late_ms = -1;
     c->log_out_truncate = -1;
+    c->heartbeat_ms = 100;
 }
 
 static int get_id(const cfg_kv_t *kv, uint32_t *out, char *why, size_t wl)
@@ -63,57 +65,6 @@ static int get_str(const cfg_kv_t *kv, char *out, size_t len, char *why, size_t 
     }
     snprintf(out, len, "%s", kv->value);
     return 0;
-}
-
-/* "0x6060:0=8/1, 0x60C2:1=10/1, 0x60C2:2=-3/1": index:sub=value/size bytes. */
-static int get_sdo_list(const cfg_kv_t *kv, canproto_ids_t *ids, char *why, size_t wl)
-{
-    const char *q = kv->value;
-    unsigned n = 0;
-    while (*q) {
-        char *end;
-        while (*q == ' ' || *q == ',')
-            q++;
-        if (!*q)
-            break;
-        if (n == CANPROTO_CIA402_SDO_MAX) {
-            snprintf(why, wl, "at most %d SDO writes", CANPROTO_CIA402_SDO_MAX);
-            return -CFG_EVALUE;
-        }
-        unsigned long idx = strtoul(q, &end, 0);
-        if (end == q || *end != ':' || idx > 0xFFFF)
-            goto bad;
-        q = end + 1;
-        unsigned long sub = strtoul(q, &end, 0);
-        if (end == q || *end != '=' || sub > 0xFF)
-            goto bad;
-        q = end + 1;
-        long long val = strtoll(q, &end, 0);
-        if (end == q || *end != '/')
-            goto bad;
-        q = end + 1;
-        unsigned long size = strtoul(q, &end, 0);
-        if (end == q || (size != 1 && size != 2 && size != 4))
-            goto bad;
-        long long lo = size == 4 ? INT32_MIN : -(1LL << (8 * size - 1));
-        long long hi = size == 4 ? UINT32_MAX : (1LL << (8 * size)) - 1;
-        if (val < lo || val > hi)
-            goto bad;
-        q = end;
-        ids->cia402_sdo[n].index = (uint16_t)idx;
-        ids->cia402_sdo[n].sub = (uint8_t)sub;
-        ids->cia402_sdo[n].size = (uint8_t)size;
-        ids->cia402_sdo[n].value = (uint32_t)val; /* two's complement for negative values */
-        n++;
-    }
-    ids->cia402_nsdo = n;
-    return 0;
-bad:
-    snprintf(why, wl,
-             "expected index:sub=value/size (size 1, 2 or 4 bytes), comma separated, "
-             "got '%s'",
-             kv->value);
-    return -CFG_EVALUE;
 }
 
 static int cfg_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
@@ -179,6 +130,8 @@ static int cfg_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
         return cfg_get_double(kv, 0, 60000, &c->status_period_ms, why, wl);
     if (!strcmp(k, "max_late_ms"))
         return cfg_get_double(kv, -1, 1000, &c->max_late_ms, why, wl);
+    if (!strcmp(k, "heartbeat_node") || !strcmp(k, "heartbeat_ms"))
+        return can_cfg_heartbeat(kv, &c->heartbeat_node, &c->heartbeat_ms, why, wl);
     return -CFG_EUNKNOWN;
 }
 
@@ -254,8 +207,10 @@ static int obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
         return cfg_get_double(kv, 1e-3, 1e9, &ids->cia402_counts_per_m, why, wl);
     if (!strcmp(k, "cia402_controlword"))
         return cfg_get_bool(kv, &ids->cia402_controlword, why, wl);
-    if (!strcmp(k, "cia402_feedback"))
+    if (!strcmp(k, "cia402_feedback")) {
+        oc->feedback_given = 1;
         return cfg_get_bool(kv, &ids->cia402_feedback, why, wl);
+    }
     if (!strcmp(k, "cia402_enable"))
         return cfg_get_bool(kv, &ids->cia402_enable, why, wl);
     if (!strcmp(k, "cia402_heartbeat_ms")) {
@@ -264,7 +219,7 @@ static int obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
         return rc;
     }
     if (!strcmp(k, "cia402_sdo"))
-        return get_sdo_list(kv, ids, why, wl);
+        return can_cfg_sdo_list(kv, ids, why, wl);
     return -CFG_EUNKNOWN;
 }
 
@@ -297,7 +252,7 @@ void can_obj_ids(const can_obj_cfg_t *oc, unsigned obj_id, canproto_ids_t *ids)
            sizeof ids->cia402_axis_counts_per_m);
     memcpy(ids->cia402_invert, g->cia402_invert, sizeof ids->cia402_invert);
     memcpy(ids->cia402_offset, g->cia402_offset, sizeof ids->cia402_offset);
-    ids->cia402_feedback = g->cia402_feedback;
+    ids->cia402_feedback = oc->feedback_given ? g->cia402_feedback : g->cia402; /* default yes */
     memcpy(ids->cia402_tpdo_id, g->cia402_tpdo_id, sizeof ids->cia402_tpdo_id);
     ids->cia402_enable = g->cia402_enable;
     memcpy(ids->cia402_sdo, g->cia402_sdo, sizeof ids->cia402_sdo);
@@ -353,6 +308,8 @@ static void port_config(const can_cfg_t *c, int64_t period_ns, can_port_config_t
     pc->max_late_ns = c->max_late_ms < 0 ? period_ns / 2 : (int64_t)llround(c->max_late_ms * 1e6);
     if (c->log_in[0] || c->log_out[0])
         pc->max_late_ns = 0; /* a log file: no bus is late, nothing dropped (issue 24) */
+    pc->hb_node = (uint8_t)c->heartbeat_node;
+    pc->hb_period_ns = (int64_t)c->heartbeat_ms * 1000000;
 }
 
 /* Ids that must not come from a default: the defaults of an object id above
@@ -479,6 +436,15 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
             *line = o->line;
             snprintf(why, wl, "object '%s': %s", o->name, rule);
             rc = -CFG_EVALUE;
+        } else if (ids.cia402 && !ids.cia402_feedback && !ids.cia402_enable &&
+                   !o->has_initial_position) {
+            *line = o->line;
+            snprintf(why, wl,
+                     "object '%s': can.cia402 without drive feedback (can.cia402_feedback = no) "
+                     "needs initial_position: where the drives stand is never taken from a "
+                     "waypoint",
+                     o->name);
+            rc = -CFG_EVALUE;
         } else if (ids.fd && !c->fd && !c->log_out[0] && !c->log_in[0]) {
             *line = o->line;
             snprintf(why, wl, "object '%s': can.fd = yes needs [can] fd = yes", o->name);
@@ -514,6 +480,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
 typedef struct {
     obj_t *o;
     char src[48];
+    int rest_asked; /* hk_feedback asked the moving engine to come to rest */
 } can_hook_ctx_t;
 
 typedef struct {
@@ -662,6 +629,17 @@ static void log_drives(can_state_t *s)
                     "can: object '%s': a drive's heartbeat was not heard in time (%llu): feed "
                     "hold, the object stops along its path; command clear resumes",
                     name, (unsigned long long)os.heartbeat_lost);
+        can_axis_change_t ch;
+        uint64_t lost = 0, more;
+        while (can_port_drive_change(s->port, k, &ch, &more) && (lost += more, 1))
+            log_msg(ch.to == CIA402_OPERATION_ENABLED ? LOG_INFO : LOG_WARNING,
+                    "can: object '%s': drive %c (node %u): %s -> %s (statusword 0x%04X) at %.3f s",
+                    name, "xyz"[ch.axis % 3], ch.node, cia402_state_name(ch.from),
+                    ch.to == CIA402_STATE_UNKNOWN ? "boot-up" : cia402_state_name(ch.to),
+                    ch.statusword, (double)ch.t_ns / 1e9);
+        if ((lost += more) > 0)
+            log_msg(LOG_WARNING, "can: object '%s': %llu drive state changes not logged (too many)",
+                    name, (unsigned long long)lost);
         if (os.sdo_timeouts != was->sdo_timeouts)
             log_msg(LOG_WARNING, "can: object '%s': SDO request unanswered, resent (%llu)", name,
                     (unsigned long long)os.sdo_timeouts);
@@ -674,7 +652,8 @@ static void log_drives(can_state_t *s)
             else if (s->drive_state_logged[k] == 1)
                 log_msg(LOG_ERR,
                         "can: object '%s': a drive left Operation Enabled (x: %s, y: %s, "
-                        "z: %s): object cleared, no target sent%s",
+                        "z: %s): object held, a drive not enabled gets its own position as "
+                        "target%s",
                         name, d->seen & 1 ? cia402_state_name(d->state[0]) : "-",
                         d->seen & 2 ? cia402_state_name(d->state[1]) : "-",
                         d->seen & 4 ? cia402_state_name(d->state[2]) : "-",
@@ -719,22 +698,26 @@ static void hk_hold(void *ctx)
 }
 
 /*
- * A drive's feedback for one axis.  The object moves only while every axis
- * it drives is in Operation Enabled: until then (and again after a drive
- * fault or quick stop) the output has no position, so no target is sent
- * (a drive being enabled takes its own position as target); when all are
- * enabled, the engine starts from their position actual values and reaches
- * the track by a transfer.
+ * A drive's feedback for one axis.  Each drive gets the engine's targets only
+ * once the engine stands where the drive does (can_axis.h): when every drive
+ * of the object is in Operation Enabled and one is not yet following (at
+ * start, after a fault, a quick stop or a boot-up and the clear), the engine
+ * is re-anchored at rest there (the drives' 0x6064, or the target a drive
+ * held), and reaches the track by a transfer.  An engine still moving is
+ * brought to rest first (obj_drive_lost), and re-anchored at a later frame.
+ * The loss itself holds the object (hk_hold).
  */
-static void hk_feedback(void *ctx, const can_port_drive_t *d)
+static int hk_feedback(void *ctx, const can_port_drive_t *d)
 {
-    obj_t *o = ((const can_hook_ctx_t *)ctx)->o;
-    if (d->all_seen && d->all_enabled) {
-        if (!engine_has_position(o->engine))
-            obj_set_position(o, d->pos_m);
-    } else if (engine_has_position(o->engine) && d->was_enabled) {
-        obj_drive_lost(o);
+    can_hook_ctx_t *h = ctx;
+    if (!d->need_anchor || obj_set_position(h->o, d->anchor_m) == 0) {
+        h->rest_asked = 0;
+        return d->need_anchor;
     }
+    if (!h->rest_asked) /* once: then wait for the rest, frame by frame */
+        obj_drive_lost(h->o);
+    h->rest_asked = 1;
+    return 0;
 }
 
 static void hk_status(void *ctx, engine_status_t *st)
@@ -960,6 +943,11 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
         s->drive_state_logged[k] = -1;
         if (ids.cia402 && (ids.cia402_feedback || ids.cia402_enable) && !s->objs[k]->carried)
             engine_require_position(s->objs[k]->engine, 1); /* the drive says where it is */
+        else if (ids.cia402 && !s->objs[k]->carried)        /* check(): initial_position given */
+            log_msg(LOG_NOTICE,
+                    "can: object '%s': no drive feedback (can.cia402_feedback = no): the drives "
+                    "are taken to stand at initial_position, and are sent targets from there",
+                    s->objs[k]->name);
         s->hctx[k].o = s->objs[k];
         snprintf(s->hctx[k].src, sizeof s->hctx[k].src, "can %s id 0x%03" PRIX32,
                  s->cfg->log_in[0] || s->cfg->log_out[0] ? s->cfg->log_ifname : s->cfg->interface,
@@ -1090,6 +1078,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     }
     can_port_config_t pc;
     port_config(cfg, (int64_t)llround((double)c->period_ns / c->cfg->daemon.speed), &pc);
+    pc.period_ns = c->period_ns; /* engine time per tick, as the now_ns the port gets */
     can_port_io_t io = {io_send, io_recv, io_maintain, io_is_up};
     s->port = can_port_new(&pc, &io, s, s->n);
     if (!s->port) {

@@ -16,12 +16,14 @@
  *   sync = no, sync_id = 0x080, sync_overflow = 0    SYNC frame per cycle (CiA 301)
  *   status_period_ms = 100      STATUS frame period per object (also sent on events)
  *   max_late_ms = -1            a cycle woken later than this is not sent (-1: half a period, 0: never)
+ *   heartbeat_node = 0, heartbeat_ms = 100   trajd's heartbeat as CANopen master (0: none)
  * [object.NAME] keys:
  *   can.index = <object index>  n for the default ids (0x680+n ...)
  *   can.waypoint_id, can.waypoint_fd_id, can.setpoint_id, can.setpoint_fd_id, can.status_id
  *   can.fd = no, can.brs = no, can.own = yes
  *   can.cia402 = no, can.cia402_cob_x / _y / _z (0 = axis not sent),
- *   can.cia402_counts_per_m = 10000, can.cia402_controlword = no
+ *   can.cia402_counts_per_m = 10000, can.cia402_controlword = no,
+ *   can.cia402_feedback = yes with can.cia402 (no: needs initial_position)
  */
 #ifndef TRAJD_CAN_TRANSPORT_H
 #define TRAJD_CAN_TRANSPORT_H
@@ -49,12 +51,15 @@ typedef struct {
     double status_period_ms;
     double max_late_ms;
     int line_log_in;
+    int heartbeat_node; /* trajd's heartbeat as CANopen master: 0x700 + this, 0 = none */
+    int heartbeat_ms;   /* its period, default 100 */
 } can_cfg_t;
 
 typedef struct {
     int index; /* -1 = the object's index */
     canproto_ids_t ids;
-    unsigned given; /* bit per id key given explicitly */
+    unsigned given;     /* bit per id key given explicitly */
+    int feedback_given; /* can.cia402_feedback given (else: yes with can.cia402) */
 } can_obj_cfg_t;
 
 extern const transport_t can_transport;

@@ -72,6 +72,16 @@ uint16_t cia402_controlword_towards_enabled(cia402_state_t s, int reset)
     }
 }
 
+uint16_t cia402_controlword_hold(cia402_state_t s)
+{
+    switch (s) {
+    case CIA402_READY: return CIA402_CW_SHUTDOWN;
+    case CIA402_SWITCHED_ON: return CIA402_CW_SWITCH_ON;
+    case CIA402_OPERATION_ENABLED: return CIA402_CW_ENABLE_OPERATION;
+    default: return CIA402_CW_DISABLE_VOLTAGE;
+    }
+}
+
 void cia402_encode_nmt(uint8_t cmd, uint8_t node, canproto_frame_t *out)
 {
     frame(out, CIA402_COB_NMT, 2);
@@ -92,6 +102,18 @@ int cia402_encode_sdo_download(uint8_t node, uint16_t index, uint8_t sub, uint32
     out->data[3] = sub;
     for (unsigned i = 0; i < size; i++)
         out->data[4 + i] = (uint8_t)(value >> (8 * i));
+    return 0;
+}
+
+int cia402_encode_sdo_upload(uint8_t node, uint16_t index, uint8_t sub, canproto_frame_t *out)
+{
+    if (node < 1 || node > CIA402_NODE_MAX)
+        return -CANPROTO_EVALUE;
+    frame(out, CIA402_COB_SDO_RX + node, 8);
+    out->data[0] = 0x40; /* initiate upload request, CiA 301 7.2.4.3.6 */
+    out->data[1] = (uint8_t)index;
+    out->data[2] = (uint8_t)(index >> 8);
+    out->data[3] = sub;
     return 0;
 }
 

@@ -96,6 +96,15 @@ const char *cia402_state_name(cia402_state_t s);
  */
 uint16_t cia402_controlword_towards_enabled(cia402_state_t s, int reset);
 
+/*
+ * The controlword that keeps a drive in state s where it is (no transition of
+ * CiA 402-2 figure 13): Enable operation in Operation Enabled, Switch on in
+ * Switched on, Shutdown in Ready to switch on, Disable voltage else.  What a
+ * master that has not decided anything yet sends (a restarted trajd adopting
+ * running drives: never Disable voltage to a drive in Operation Enabled).
+ */
+uint16_t cia402_controlword_hold(cia402_state_t s);
+
 /* ---- encoders ---- */
 
 /* NMT command cmd to node (0 = all nodes): id 0x000, 2 bytes. */
@@ -108,6 +117,12 @@ void cia402_encode_nmt(uint8_t cmd, uint8_t node, canproto_frame_t *out);
  */
 int cia402_encode_sdo_download(uint8_t node, uint16_t index, uint8_t sub, uint32_t value,
                                unsigned size, canproto_frame_t *out);
+
+/*
+ * Expedited SDO upload (read) request of index:sub on node: id 0x600 + node,
+ * 8 bytes, command 0x40.  Returns 0 or -CANPROTO_EVALUE (node invalid).
+ */
+int cia402_encode_sdo_upload(uint8_t node, uint16_t index, uint8_t sub, canproto_frame_t *out);
 
 /* ---- decoders (frames from the drive) ---- */
 

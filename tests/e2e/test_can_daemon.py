@@ -184,12 +184,19 @@ class CanDaemon(unittest.TestCase):
     def test_cia402_rpdo(self):
         d = self.sub("cia402")
         ct.write_wplog(self.xyz, os.path.join(d, "wp.log"))
+        with open(self.xyz) as fh:  # no drive feedback: trajd starts where the track does
+            start = fh.read().splitlines()[1].split(",")[1:4]
         p = run_trajd(conf(d, "sync = yes\n", "can.own = no\ncan.cia402 = yes\n"
+                                              "can.cia402_feedback = no\n"
+                                              "initial_position = %s\n" % ",".join(start) +
                                               "can.cia402_counts_per_m = 1000\ncsv.path = sp.csv\n"
                                               "can.cia402_cob_x = 0x201\ncan.cia402_cob_y = 0x202\n"
                                               "can.cia402_cob_z = 0x203\n",
                            output="can, csv"))
         self.assertEqual(p.returncode, 0, p.stderr)
+        # no drive to ask where it stands: the log says where it is taken to be
+        self.assertIn("no drive feedback (can.cia402_feedback = no): the drives are taken to "
+                      "stand at initial_position", p.stderr)
         log = os.path.join(d, "sp.log")
         logged, ref = self.reference(d)
         for a, (ax, cob) in enumerate(zip("xyz", (0x201, 0x202, 0x203))):
@@ -355,6 +362,7 @@ class CanDaemon(unittest.TestCase):
         def bits(n):  # worst-case classic 11-bit frame, with IFS
             return 8 * n + 47 + (34 + 8 * n - 1) // 4
         objs = "".join("[object.o%d]\nid = %d\ninput = can\noutput = can\ncan.cia402 = yes\n"
+                       "can.cia402_feedback = no\ninitial_position = 0,0,0\n"
                        "can.cia402_cob_x = 0x%x\ncan.cia402_cob_y = 0x%x\ncan.cia402_cob_z = 0x%x\n"
                        % (i, i, 0x201 + 3 * i, 0x202 + 3 * i, 0x203 + 3 * i) for i in range(4))
         path = os.path.join(d, "load.conf")

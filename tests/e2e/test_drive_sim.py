@@ -8,7 +8,13 @@ virtual bus, no kernel needed.
   its own transition table (CiA 402-2 figure 13), reading the statusword and
   decoding it with its own bit masks (table 30): the simulator's statusword
   patterns and transitions are what a real master expects;
-- boot-up (0x700 + node, 0x00) and the heartbeat of 0x1017 come from the node;
+- boot-up (0x700 + node, 0x00) comes from the node, and a heartbeat only once
+  the master set 0x1017 (the CiA 301 default is none);
+- the heartbeat consumer 0x1016:1 faults an enabled drive (EMCY 0x8130) when
+  the master's heartbeat stops, armed by its first one;
+- a boot-up (NMT reset node) puts every object back to its default;
+- the SYNC counter: two missed SYNCs fault, a counter starting again at 1 (a
+  restarted master) does not;
 - an expedited SDO write to an object the drive does not have is refused with
   abort 0x06020000;
 - in CSP the drive applies 0x607A at SYNC, and faults (EMCY, FAULT) on a
@@ -108,11 +114,16 @@ class DriveSim(unittest.TestCase):
         self.assertEqual(self.node.state, "OPERATION ENABLED")
 
     def test_bring_up_by_base_node_402(self):
-        # the simulator's own power-on: boot-up, then a heartbeat from pre-operational
+        # the simulator's own power-on: boot-up; no heartbeat at the CiA 301
+        # default (0x1017 = 0) until the master sets one
         self.assertTrue(wait_for(lambda: 0x705 in self.ids()))
         with self.lock:
             hb = [d for i, d in self.frames if i == 0x705]
         self.assertEqual(hb[0], b"\x00")
+        self.assertEqual(self.node.sdo[0x1017].raw, 0)
+        time.sleep(0.2)
+        self.assertEqual(self.ids().count(0x705), 1)
+        self.node.sdo[0x1017].raw = 20
         self.assertTrue(wait_for(lambda: self.ids().count(0x705) >= 3))
         with self.lock:
             self.assertEqual([d for i, d in self.frames if i == 0x705][-1], b"\x7f")
@@ -185,6 +196,49 @@ class DriveSim(unittest.TestCase):
             if wait_for(lambda: self.drive.state == "FAULT", 0.2):
                 break
         self.assertEqual([w for _, w in self.drive.log["faults"]], ["following error"])
+
+    def test_consumer_faults_when_the_master_stops(self):
+        self.enable()
+        self.node.sdo[0x1016][1].raw = (127 << 16) | 150   # node 127, 150 ms
+        time.sleep(0.4)
+        self.assertEqual(self.drive.state, "OPERATION ENABLED")   # not armed: none heard yet
+        for _ in range(5):                                        # the master's heartbeat
+            self.master.send_message(0x77F, b"\x05")
+            self.drive.check_consumer()
+            time.sleep(0.05)
+        self.assertEqual(self.drive.state, "OPERATION ENABLED")
+        time.sleep(0.2)                                           # then silence
+        self.drive.check_consumer()
+        self.assertTrue(wait_for(lambda: self.drive.state == "FAULT"))
+        self.assertEqual([w for _, w in self.drive.log["faults"]], ["heartbeat"])
+        self.assertTrue(wait_for(lambda: 0x085 in self.ids()))
+        with self.lock:
+            emcy = [d for i, d in self.frames if i == 0x085]
+        self.assertEqual(struct.unpack("<H", emcy[0][:2])[0], 0x8130)
+
+    def test_bootup_resets_the_node(self):
+        self.enable()
+        self.node.sdo[0x1017].raw = 20
+        self.node.sdo[0x6060].raw = 8
+        self.target(1400)
+        self.sync()
+        n = self.ids().count(0x705)
+        self.drive.bootup()
+        self.assertEqual(self.drive.state, "SWITCH ON DISABLED")
+        self.assertEqual(self.drive.node.nmt.state, "PRE-OPERATIONAL")
+        self.assertEqual(self.node.sdo[0x6060].raw, 0)   # defaults again
+        self.assertEqual(self.node.sdo[0x1017].raw, 0)
+        self.assertEqual(self.node.sdo[0x6064].raw, 1400)  # the position is kept
+        with self.lock:
+            self.assertEqual([d for i, d in self.frames if i == 0x705][n], b"\x00")
+
+    def test_sync_counter_restart_is_a_new_master(self):
+        self.enable()
+        self.sync()
+        self.sync()
+        self.counter = 0    # a restarted master counts from 1 again
+        self.sync()
+        self.assertEqual(self.drive.state, "OPERATION ENABLED")
 
     def test_fault_after_two_missed_syncs(self):
         self.enable()

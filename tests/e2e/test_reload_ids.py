@@ -59,8 +59,10 @@ def track(path, offset_m):
 def obj(name, oid, cob=0x201):
     extra = ""
     if name == "a":  # a drives a CiA 402 node: its COB-ID is explicit
+        # no drive feedback: trajd takes the drive to stand where it starts (initial_position)
         extra = "can.cia402 = yes\ncan.cia402_cob_x = 0x%X\ncan.cia402_cob_y = 0\n" \
-                "can.cia402_cob_z = 0\ncan.cia402_counts_per_m = 10\n" % cob
+                "can.cia402_cob_z = 0\ncan.cia402_counts_per_m = 10\ncan.cia402_feedback = no\n" \
+                "initial_position = %g,0,1\n" % (cob, 1000.0 * OWNER[name] + 50)
     return ("[object.%s]\nid = %d\ninput = replay\nreplay.track = %s.csv\noutput = can\n%s"
             % (name, oid, name, extra))
 

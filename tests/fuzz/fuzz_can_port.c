@@ -106,12 +106,13 @@ static void obj_status(void *ctx, engine_status_t *st)
     *st = ((obj_t *)ctx)->st;
 }
 
-static void obj_feedback(void *ctx, const can_port_drive_t *d)
+static int obj_feedback(void *ctx, const can_port_drive_t *d)
 {
     (void)ctx;
     for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
         if (d->state[a] > CIA402_STATE_UNKNOWN)
             abort();
+    return d->need_anchor; /* the engine re-anchored at once */
 }
 
 static const can_port_hooks_t obj_hooks = {obj_push, obj_command, obj_status, obj_feedback, NULL};

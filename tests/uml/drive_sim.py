@@ -14,9 +14,19 @@ a drive here faults (state FAULT, EMCY) on
     (it moves at most max_step increments per SYNC);
   - a step: two consecutive targets further apart than step_limit increments
     per interpolation period (0x60C2) over the time between their SYNCs;
-  - two missed SYNCs in a row (the SYNC counter, CiA 301, jumps by 3 or more);
+  - two missed SYNCs in a row (the SYNC counter, CiA 301, jumps by 3 or more
+    between two SYNCs of one producer; a counter that starts again at 1 is a
+    new producer, a restarted master: its silence is the consumer's to judge);
+  - its master's heartbeat not heard within the consumer time of 0x1016:1
+    (CiA 301: node-id in bits 16..22, time in ms in bits 0..15; 0 = none),
+    watched from the first heartbeat heard on (EMCY 0x8130, "heartbeat");
   - a fault injected by the test (SIGUSR1: node 1; SIGUSR2: every node's quick
     stop, as from a local quick-stop input).
+The object dictionary starts at the CiA 301 defaults: no heartbeat (0x1017 =
+0), no consumer, no SYNC period (0x1006 = 0) until the master writes them.
+A boot-up (the command file, below) resets the node as NMT Reset node does:
+every object back to its default, boot-up message, pre-operational, state
+Switch on disabled; the position is kept (an absolute encoder).
 SIGHUP silences node 2's heartbeat (python-canopen's NmtSlave.stop_heartbeat; its
 PDOs go on, as from a drive whose heartbeat producer failed), the next SIGHUP
 starts it again at 0x1017's period; each logged as HEARTBEAT_OFF / HEARTBEAT_ON.
@@ -29,8 +39,11 @@ abort 0x06020000 (python-canopen's SDO server), as by a real drive.
 Usage: drive_sim.py OUT NODE:START_INC [NODE:START_INC ...]
 Writes OUT/drive_sim.ready once listening, one line per state change to
 OUT/sim_events.txt ("<t> <node> <STATE> <why>"), and runs until SIGTERM,
-then writes OUT/drive_sim.json (what each drive saw).
+then writes OUT/drive_sim.json (what each drive saw).  Commands besides the
+signals: a line "fault N", "quickstop N", "bootup N" or "heartbeat N" (toggle)
+written to OUT/sim_cmd (a new file each time: it is read and removed).
 """
+import faulthandler
 import json
 import logging
 import os
@@ -52,7 +65,8 @@ SW = {"NOT READY TO SWITCH ON": 0x0000, "SWITCH ON DISABLED": 0x0040,
       "QUICK STOP ACTIVE": 0x0007, "FAULT REACTION ACTIVE": 0x000F, "FAULT": 0x0008}
 REMOTE = 0x0200          # statusword bit 9: controlled over the network
 SYNC_OVERFLOW = 240      # the SYNC counter runs 1..240 (trajd: can.sync_overflow = 240)
-EMCY = {"following error": 0x8611, "step": 0x8612, "sync lost": 0x8700, "injected": 0xFF00}
+EMCY = {"following error": 0x8611, "step": 0x8612, "sync lost": 0x8700, "injected": 0xFF00,
+        "heartbeat": 0x8130}
 log = logging.getLogger("drive_sim")
 
 
@@ -75,10 +89,14 @@ class Drive:
         self.max_step = max_step
         self.step_limit = step_limit
         self.last_cw = 0
+        self.in_flight = 0       # SYNCs left in which a target may predate a change
         self.last_counter = None
         self.last_sync_ts = None
+        self.master_hb = None    # monotonic time of the master's last heartbeat (armed)
+        self.subscribed = set()
         self.log = {"node": node_id, "start_inc": start_inc, "states": [], "faults": [],
                     "syncs": 0, "rpdo": 0, "rpdo_not_enabled": 0, "rpdo_before_enabled": 0,
+                    "rpdo_not_enabled_off": 0,
                     "max_target_step": 0, "max_sync_gap": 0, "targets": [], "cw": [],
                     "sdo": []}
         self.t0 = time.monotonic()
@@ -92,6 +110,46 @@ class Drive:
 
     def now(self):
         return round(time.monotonic() - self.t0, 4)
+
+    def consumer(self):
+        """(master node, consumer time in s) of 0x1016:1, or (0, 0)."""
+        v = self.node.sdo[0x1016][1].raw
+        return (v >> 16) & 0x7F, (v & 0xFFFF) / 1000.0
+
+    def on_master_heartbeat(self, cob, data, ts):
+        with self.lock:
+            if (cob & 0x7F) == self.consumer()[0] and self.consumer()[1] > 0:
+                if self.master_hb is None:
+                    self.note("CONSUMER_ARMED", "first master heartbeat")
+                self.master_hb = time.monotonic()
+
+    def check_consumer(self):
+        with self.lock:
+            node, tmo = self.consumer()
+            if not tmo or self.master_hb is None or time.monotonic() - self.master_hb <= tmo:
+                return
+            self.master_hb = None    # once, until the master is heard again
+            self.note("MASTER_LOST", "no heartbeat from node %d for %g s" % (node, tmo))
+            if self.state in ("FAULT", "FAULT REACTION ACTIVE", "NOT READY TO SWITCH ON",
+                              "SWITCH ON DISABLED"):
+                return
+            self.fault("heartbeat")
+
+    def bootup(self, why="reset node"):
+        """NMT Reset node, as by a power glitch or a local reset: defaults, boot-up."""
+        with self.lock:
+            self.node.nmt.stop_heartbeat()
+            self.node.data_store.clear()      # every object back to its default
+            self.target = None
+            self.last_applied = None
+            self.last_counter = None
+            self.master_hb = None
+            self.last_cw = 0
+            self.note("BOOTUP", why)
+            self.node.nmt.send_command(0x81)  # boot-up message
+            self.node.nmt.send_command(0x80)  # pre-operational (heartbeat of 0x1017: none)
+            self.enter("NOT READY TO SWITCH ON", why)
+            self.enter("SWITCH ON DISABLED", "self test done")
 
     def statusword(self):
         return SW[self.state] | REMOTE
@@ -111,6 +169,8 @@ class Drive:
                 f.write("%.4f %d %s %s\n" % (self.now(), self.id, what, why.replace(" ", "_")))
 
     def enter(self, state, why=""):
+        if self.state == "OPERATION ENABLED":
+            self.in_flight = 2    # SYNCs until a target must follow the change
         self.state = state
         self.log["states"].append([self.now(), state, why])
         self.note(state.replace(" ", "_"), why)
@@ -149,6 +209,13 @@ class Drive:
     # controlword (CiA 402-2 table 28; the transitions of figure 13)
     def on_write(self, index, subindex, od, data):
         self.log["sdo"].append([self.now(), index, subindex, int.from_bytes(data, "little")])
+        if index == 0x1016:
+            master = (int.from_bytes(data, "little") >> 16) & 0x7F
+            if master and master not in self.subscribed:
+                self.subscribed.add(master)
+                self.net.subscribe(0x700 + master, self.on_master_heartbeat)
+            self.master_hb = None    # watched again from its next heartbeat
+            return
         if index != 0x6040:
             return
         self.controlword(int.from_bytes(data, "little"))
@@ -192,12 +259,19 @@ class Drive:
     def on_rpdo(self, cob, data, ts):
         with self.lock:
             self.log["rpdo"] += 1
-            if self.state != "OPERATION ENABLED":
-                self.log["rpdo_not_enabled"] += 1
-                if not any(st == "OPERATION ENABLED" for _, st, _ in self.log["states"]):
-                    self.log["rpdo_before_enabled"] += 1
             raw = bytes(data)
             self.target = struct.unpack("<i", raw[-4:])[0]
+            if self.state != "OPERATION ENABLED":
+                self.log["rpdo_not_enabled"] += 1
+                # a target for a drive not enabled: only its own position is harmless
+                # (but for the ones the master sent before it could know: it reads
+                # the bus at the start of its cycle, and a change handled here just
+                # after a SYNC may have reached the bus before it: two SYNCs' grace)
+                if not self.in_flight:
+                    self.log["rpdo_not_enabled_off"] = max(self.log["rpdo_not_enabled_off"],
+                                                           abs(self.target - int(self.pos)))
+                if not any(st == "OPERATION ENABLED" for _, st, _ in self.log["states"]):
+                    self.log["rpdo_before_enabled"] += 1
             if len(raw) == 6:    # controlword, then target (trajd's can.cia402_controlword)
                 cw = struct.unpack("<H", raw[:2])[0]
                 self.log.setdefault("rpdo_cw", []).append([cw, self.state])
@@ -210,11 +284,12 @@ class Drive:
     def on_sync(self, counter, ts=None):
         with self.lock:
             self.log["syncs"] += 1
+            self.in_flight = max(0, self.in_flight - 1)
             # time since the last SYNC as the bus saw it (a master that missed a
             # deadline sends the next SYNC and target later, and further ahead)
             dt = None if ts is None or self.last_sync_ts is None else ts - self.last_sync_ts
             self.last_sync_ts = ts
-            if self.last_counter is not None and counter:
+            if self.last_counter is not None and counter and counter != 1:
                 gap = (counter - self.last_counter) % SYNC_OVERFLOW
                 self.log["max_sync_gap"] = max(self.log["max_sync_gap"], gap)
                 if gap >= 3 and self.state == "OPERATION ENABLED":
@@ -262,7 +337,8 @@ def main():
                         format="%(relativeCreated)d %(name)s %(levelname)s %(message)s")
     specs = [(int(n), int(s)) for n, s in (a.split(":") for a in sys.argv[2:])]
     # only what a drive listens to: NMT, SYNC, EMCY/SYNC range, its RPDO and SDO
-    filters = [{"can_id": 0x000, "can_mask": 0x7FF}, {"can_id": 0x080, "can_mask": 0x7FF}]
+    filters = [{"can_id": 0x000, "can_mask": 0x7FF}, {"can_id": 0x080, "can_mask": 0x7FF},
+               {"can_id": 0x700, "can_mask": 0x780}]    # heartbeats: the master's
     for n, _ in specs:
         filters += [{"can_id": 0x200 + n, "can_mask": 0x7FF}, {"can_id": 0x600 + n, "can_mask": 0x7FF}]
     net = canopen.Network()
@@ -273,14 +349,32 @@ def main():
     drives = [Drive(net, n, s, events) for n, s in specs]
     attach_sync(net, drives)
     done = threading.Event()
-    signal.signal(signal.SIGTERM, lambda *a: done.set())
+    def on_term(*a):
+        done.set()
+        # a shutdown that hangs says where (every thread's stack on stderr), and ends
+        faulthandler.dump_traceback_later(10, exit=True)
+    signal.signal(signal.SIGTERM, on_term)
     signal.signal(signal.SIGUSR1, lambda *a: drives[0].fault("injected"))
     signal.signal(signal.SIGUSR2, lambda *a: [d.quick_stop("local quick stop") for d in drives])
     signal.signal(signal.SIGHUP, lambda *a: drives[1].toggle_heartbeat())
     with open(os.path.join(out, "drive_sim.ready"), "w") as f:
         f.write("ready\n")
-    while not done.wait(0.05):
-        pass
+    cmd = os.path.join(out, "sim_cmd")
+    by_node = {d.id: d for d in drives}
+    actions = {"fault": lambda d: d.fault("injected"),
+               "quickstop": lambda d: d.quick_stop("local quick stop"),
+               "bootup": lambda d: d.bootup(), "heartbeat": lambda d: d.toggle_heartbeat()}
+    while not done.wait(0.02):
+        for d in drives:
+            d.check_consumer()
+        if os.path.exists(cmd):
+            with open(cmd) as f:
+                lines = f.read().split("\n")
+            os.unlink(cmd)
+            for line in lines:
+                w = line.split()
+                if len(w) == 2 and w[0] in actions and int(w[1]) in by_node:
+                    actions[w[0]](by_node[int(w[1])])
     for d in drives:
         d.log["final_inc"] = d.pos
         d.log["final_state"] = d.state

@@ -114,11 +114,12 @@ static void fe_status(void *ctx, engine_status_t *st)
 static can_port_drive_t fe_drive;
 static unsigned fe_feedbacks;
 
-static void fe_feedback(void *ctx, const can_port_drive_t *d)
+static int fe_feedback(void *ctx, const can_port_drive_t *d)
 {
     (void)ctx;
     fe_drive = *d;
     fe_feedbacks++;
+    return 0;
 }
 
 static const can_port_hooks_t fe_hooks = {fe_push, fe_command, fe_status, fe_feedback, fe_hold};
@@ -528,7 +529,18 @@ static void enable_with_controlword_rpdo(void)
     ids.cia402_controlword = 1;
     ids.cia402_heartbeat_ms = 100;
     ids.cia402_cob_id[1] = ids.cia402_cob_id[2] = 0;
+    ids.cia402_sdo[0].index = 0x1017;
+    ids.cia402_sdo[0].size = 2;
+    ids.cia402_sdo[0].value = 20;
+    ids.cia402_nsdo = 1; /* the producer time set: its heartbeat is watched */
     assert_int_equal(can_port_set_object(port, 0, &ids, &fe_hooks, &eng), 0);
+    unsigned mark = io.nout;
+    run_cycle(0, 0);
+    uint16_t index = 0;
+    assert_int_equal(last_sdo(1, mark, &index), 20);
+    assert_int_equal(index, 0x1017);
+    queue_sdo_reply(1, 0x60, 0x1017, 0);
+    can_port_rx(port, 0);
 }
 
 /* Given cia402_enable with the controlword in the RPDO, then the RPDO carries
@@ -542,8 +554,10 @@ static void test_cia402_rpdo_controlword_follows_bring_up(void **state)
     enable_with_controlword_rpdo();
     unsigned mark = io.nout;
     run_cycle(0, 0);
-    assert_int_equal(last_rpdo_cw(mark), 0x0000); /* nothing written yet */
+    assert_int_equal(last_rpdo_cw(mark), -1); /* the drive not heard yet: no RPDO */
+    mark = io.nout;
     assert_int_equal(step_drive(0x0250, 1), 0x0006);
+    assert_int_equal(last_rpdo_cw(mark), 0x0006);
     assert_int_equal(step_drive(0x0231, 2), 0x0007);
     mark = io.nout;
     assert_int_equal(step_drive(0x0233, 3), 0x000F);

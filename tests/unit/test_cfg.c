@@ -241,6 +241,34 @@ static void test_can_ids(void **state)
     assert_int_equal(canproto_cia402_tpdo(&ids, 1), 0x285);
     assert_int_equal(canproto_cia402_tpdo(&ids, 2), 0);
     cfg_free(c);
+    /* feedback is the default with can.cia402 (issue 23): 0x180 + node */
+    c = load_ok(CAN_LOG CAN_OBJ("b", "",
+                                "can.cia402 = yes\ncan.cia402_cob_x = 0x201\n"
+                                "can.cia402_cob_y = 0\ncan.cia402_cob_z = 0\n"));
+    can_obj_ids(cfg_obj_transport(&c->obj[0], &can_transport), (unsigned)c->obj[0].id, &ids);
+    assert_int_equal(ids.cia402_feedback, 1);
+    assert_int_equal(canproto_cia402_tpdo(&ids, 0), 0x181);
+    cfg_free(c);
+    /* without feedback, where the drives stand must be given: initial_position */
+    load_bad(
+        CAN_LOG CAN_OBJ("b", "",
+                        "can.cia402 = yes\ncan.cia402_feedback = no\n"
+                        "can.cia402_cob_x = 0x201\ncan.cia402_cob_y = 0\ncan.cia402_cob_z = 0\n"),
+        CFG_EVALUE, 4, "needs initial_position");
+    c = load_ok(CAN_LOG CAN_OBJ("b", "initial_position = 1,2,0\n",
+                                "can.cia402 = yes\ncan.cia402_feedback = no\n"
+                                "can.cia402_cob_x = 0x201\ncan.cia402_cob_y = 0\n"
+                                "can.cia402_cob_z = 0\n"));
+    cfg_free(c);
+    /* trajd's heartbeat as master: node 1..127, period 10..60000 ms */
+    c = load_ok("[can]\nlog_out = /dev/null\nheartbeat_node = 127\nheartbeat_ms = 50\n" CAN_OBJ(
+        "b", "", ""));
+    const can_cfg_t *cc = cfg_transport(c, &can_transport);
+    assert_int_equal(cc->heartbeat_node, 127);
+    assert_int_equal(cc->heartbeat_ms, 50);
+    cfg_free(c);
+    load_bad("[can]\nlog_out = /dev/null\nheartbeat_node = 128\n" CAN_OBJ("b", "", ""), CFG_EVALUE,
+             3, "heartbeat_node");
 }
 
 /* Reload: reordering objects that keep their ids is accepted; a moved id, CAN
