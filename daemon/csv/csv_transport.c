@@ -367,9 +367,13 @@ static void fold(csv_transport_t *st)
             stats->out_errors += de;
             stats->out_errno = atomic_load_explicit(&s->w_errno, memory_order_relaxed);
             stats->out_fault = 1;
-            for (unsigned k = 0; k < st->core->nobj; k++) {
+            if (s->obj) {
+                s->obj->out_fault = 1;
+                s->obj->out_errors += de;
+            }
+            for (unsigned k = 0; !s->obj && k < st->core->nobj; k++) {
                 obj_t *o = &st->core->obj[k];
-                if (s->obj ? o == s->obj : (cfg_obj_uses(o->cfg, &stdout_transport) & 2) != 0) {
+                if (cfg_obj_uses(o->cfg, &stdout_transport) & 2) {
                     o->out_fault = 1;
                     o->out_errors += de;
                 }
