@@ -143,8 +143,16 @@ typedef enum {
  *   MACHINE  no limits, no stale rule: a feed-rate-timed toolpath changes
  *            velocity instantly at corners and may dwell on a point; every
  *            point is kept (acceleration limits are the CNC planner's job).
- *   NONE     no limits, no stale rule (time order and gaps only).
+ *   NONE     no limits, no stale rule (time order and gaps only), none of
+ *            the rules below: the solver alone.
  * Every profile keeps the time rules and the confirmation of new trajectories.
+ * All but NONE (issue 27, accept.h ACCEPT_RULE_*): a run of repeats is a stop
+ * (the curve rests there) unless the next new position shows the object
+ * kept moving (then stale, where stale fixes are dropped); a fix refused for
+ * its speed or acceleration whose position lies on the path is kept with
+ * its stamp re-estimated; a repeat of a fix refused for its position is
+ * refused too; with AUTO's free turns a change of speed along the track is
+ * held to max_accel_m_s2.
  */
 typedef enum {
     ENGINE_PROFILE_AUTO = 0,

@@ -125,16 +125,22 @@ static double integrate(double r, double a, double j, double T, double *r1, doub
 #define TS_CREEP_HALVINGS 10
 static double creep(double R, double A, double J, double T, double *j, double *r1, double *a1)
 {
-    double jj = J;
-    for (int i = 0; i < TS_CREEP_HALVINGS; i++) {
-        double rr, aa, dd;
-        jj *= 0.5;
-        dd = integrate(0.0, 0.0, jj, T, &rr, &aa);
-        if (ts_stop_dist(rr, aa, A, J) + rr * T <= R - dd) {
-            *j = jj;
-            *r1 = rr;
-            *a1 = aa;
-            return dd;
+    /* first with a tick's travel at the new rate to spare (the stop it
+     * plans is continuous, the ticks are not: without it the creep up to
+     * the end of the solved curve could reach it moving, issue 27), else
+     * without (so that a long period still creeps on) */
+    for (int spare = 1; spare >= 0; spare--) {
+        double jj = J;
+        for (int i = 0; i < TS_CREEP_HALVINGS; i++) {
+            double rr, aa, dd;
+            jj *= 0.5;
+            dd = integrate(0.0, 0.0, jj, T, &rr, &aa);
+            if (ts_stop_dist(rr, aa, A, J) + spare * rr * T <= R - dd) {
+                *j = jj;
+                *r1 = rr;
+                *a1 = aa;
+                return dd;
+            }
         }
     }
     return 0.0;
