@@ -704,7 +704,7 @@ static void hk_hold(void *ctx)
  * start, after a fault, a quick stop or a boot-up and the clear), the engine
  * is re-anchored at rest there (the drives' 0x6064, or the target a drive
  * held), and reaches the track by a transfer.  An engine still moving is
- * brought to rest first (obj_drive_lost), and re-anchored at a later frame.
+ * brought to rest first (a clear), and re-anchored at a later frame.
  * The loss itself holds the object (hk_hold).
  */
 static int hk_feedback(void *ctx, const can_port_drive_t *d)
@@ -714,8 +714,8 @@ static int hk_feedback(void *ctx, const can_port_drive_t *d)
         h->rest_asked = 0;
         return d->need_anchor;
     }
-    if (!h->rest_asked) /* once: then wait for the rest, frame by frame */
-        obj_drive_lost(h->o);
+    if (!h->rest_asked) /* once: to rest along its path (a clear), re-anchored later */
+        (void)obj_command(h->o, LC_EV_CLEAR, 0, "can: drives enabled again, re-anchoring");
     h->rest_asked = 1;
     return 0;
 }

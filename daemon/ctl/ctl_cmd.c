@@ -98,29 +98,24 @@ static int ctl_writable(const obj_t *o)
 
 /*
  * Every command of the control socket goes through here, and only here: the
- * gate (writable, the daemon or the object stopping), then the core's own
- * entry points as the CAN transport's command hook calls them
- * (can_transport.c hk_command; start as Modbus MBMAP_CMD_START).  Returns 0
- * or a negative code (-CTL_ENOTWRITABLE, -ENGINE_*).
+ * gate (writable as above, then the daemon or the object stopping), then the
+ * object's owner (obj_command, daemon/core/objlife.c: the lifecycle table of
+ * lib/engine/LIFECYCLE.md, as the CAN and Modbus commands), logged there with
+ * the peer.  Returns 0 or a negative code (-CTL_ENOTWRITABLE, -ENGINE_*).
  */
-static int ctl_command(core_t *c, obj_t *o, ctl_cmd_t cmd, unsigned arg)
+static int ctl_command(core_t *c, obj_t *o, ctl_cmd_t cmd, unsigned arg, const char *peer)
 {
-    engine_status_t st;
+    char src[96];
     if (!ctl_writable(o))
         return -CTL_ENOTWRITABLE;
     if (o->stopping || c->stopping)
         return -ENGINE_ESTATE;
+    snprintf(src, sizeof src, "control %s", peer);
     switch (cmd) {
-    case CTL_STOP: return engine_stop(o->engine);
-    case CTL_CLEAR: obj_clear(o); return 0;
-    case CTL_OVERRIDE: return obj_set_override(o, arg);
-    case CTL_START:
-        engine_status(o->engine, &st);
-        if (st.state != ENGINE_STATE_WAITING)
-            return 0;
-        if (st.buffered == 0)
-            return -ENGINE_ESTATE;
-        return engine_finish(o->engine);
+    case CTL_STOP: return obj_command(o, LC_EV_STOP, 0, src);
+    case CTL_CLEAR: return obj_command(o, LC_EV_CLEAR, 0, src);
+    case CTL_OVERRIDE: return obj_command(o, LC_EV_OVERRIDE, arg, src);
+    case CTL_START: return obj_command(o, LC_EV_START, 0, src);
     }
     return -ENGINE_ESTATE;
 }
@@ -210,8 +205,11 @@ static void status_obj(ctl_sb_t *sb, const core_t *c, const obj_t *o)
     ctl_sb_printf(sb, "{\"object\":");
     ctl_sb_str(sb, o->name);
     ctl_sb_printf(
-        sb, ",\"id\":%d,\"input\":\"%s\",\"writable\":%s,\"state\":\"%s\",\"health\":", o->cfg->id,
-        o->cfg->input->name, ctl_writable(o) ? "true" : "false", engine_state_name(sp->state));
+        sb,
+        ",\"id\":%d,\"input\":\"%s\",\"writable\":%s,\"state\":\"%s\",\"lifecycle\":\"%s\","
+        "\"health\":",
+        o->cfg->id, o->cfg->input->name, ctl_writable(o) ? "true" : "false",
+        engine_state_name(sp->state), lc_state_name(lc_state(&o->lc)));
     health(sb, c, o);
     ctl_sb_printf(sb, ",\"tick\":%lld,\"t_s\":", (long long)(sp->now_ns / c->period_ns));
     ctl_sb_num(sb, sp->t_s);
@@ -374,7 +372,7 @@ static void do_command(ctl_t *t, ctl_client_t *cl, ctl_cmd_t cmd, char **w, int 
     obj_t *o = find_obj(t, cl, name, w[1]);
     if (!o)
         return;
-    int rc = ctl_command(t->core, o, cmd, arg);
+    int rc = ctl_command(t->core, o, cmd, arg, cl->peer);
     char what[32] = "";
     if (cmd == CTL_OVERRIDE)
         snprintf(what, sizeof what, " %u %%", arg);

@@ -134,6 +134,8 @@ static int check_usable(const cfg_obj_t *o, const replay_transport_obj_cfg_t *r,
 /* Load every replayed object's track, so a bad file rejects the config. */
 static int check(cfg_t *cfg, int *line, char *why, size_t wl)
 {
+    const engine_waypoint_t *mine[CFG_OBJECTS_MAX]; /* tracks this config loaded itself */
+    unsigned nmine = 0;
     for (unsigned i = 0; i < cfg->nobj; i++) {
         cfg_obj_t *o = &cfg->obj[i];
         if (o->input != &replay_transport)
@@ -156,7 +158,12 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
             return -CFG_EVALUE;
         }
         r->loaded = 1;
-        if (cached)
+        int shared = 0; /* with an object of this config: nothing to say */
+        for (unsigned k = 0; k < nmine && !shared; k++)
+            shared = mine[k] == r->trk.wp;
+        if (!shared && nmine < CFG_OBJECTS_MAX)
+            mine[nmine++] = r->trk.wp; /* said once per track and configuration */
+        if (cached && !shared)         /* a running configuration's, kept by a reload */
             log_msg(LOG_INFO,
                     "object '%s': replay.track %s unchanged (%zu waypoints): not parsed "
                     "again",

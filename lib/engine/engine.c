@@ -2186,10 +2186,10 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
         /* one period since the last call, as the division below would round */
         int64_t d = now_ns - e->last_now, p = e->cfg.period_ns;
         if (d >= p - p / 2 && d < 2 * p - p / 2 && fast_tick(e, now_ns, sp))
-            return 0;
+            return positive_zeros(sp, 0);
         e->fast_left = 0;
     }
-    return tick_full(e, now_ns, sp);
+    return positive_zeros(sp, tick_full(e, now_ns, sp));
 }
 
 __attribute__((noinline)) static int tick_full(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)

@@ -170,4 +170,16 @@ struct engine {
  * every call that changes the engine makes it first. */
 void engine_fast_close(engine_t *e);
 
+/* A zero is +0.0 (-0.0 + 0.0 = +0.0): a setpoint at rest reads 0, not -0, in
+ * every output (CSV, binary, Modbus, CAN), all of them alike.  Returns rc. */
+static inline int positive_zeros(engine_setpoint_t *sp, int rc)
+{
+    for (int a = 0; a < ENGINE_AXES; a++) {
+        sp->pos_m[a] += 0.0;
+        sp->vel_m_s[a] += 0.0;
+        sp->acc_m_s2[a] += 0.0;
+    }
+    return rc;
+}
+
 #endif

@@ -70,10 +70,17 @@ class JournalFields(unittest.TestCase):
     def test_native_fields(self):
         with tempfile.TemporaryDirectory() as tmp:
             conf = os.path.join(tmp, "t.conf")
+            # the track with one row stamped before the row it follows: refused
+            # (backwards) and logged with its object, as a warning
+            track = os.path.join(tmp, "track.csv")
+            with open(TRACK) as f, open(track, "w") as g:
+                rows = f.read().splitlines()
+                rows.insert(200, rows[150])
+                g.write("\n".join(rows) + "\n")
             with open(conf, "w") as f:
                 f.write("[daemon]\nrate_hz = 20\nspeed = 400\nexit_when_done = yes\n"
                         "status_interval_s = 0\n[object.boat]\ninput = replay\n"
-                        "replay.track = %s\noutput = csv\ncsv.path = %s/b.csv\n" % (TRACK, tmp))
+                        "replay.track = %s\noutput = csv\ncsv.path = %s/b.csv\n" % (track, tmp))
             out = subprocess.run(["unshare", "-m", sys.executable, "-c", INNER, TRAJD, conf],
                                  capture_output=True, text=True, timeout=120)
             self.assertEqual(out.returncode, 0, out.stderr)

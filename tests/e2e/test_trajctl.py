@@ -250,6 +250,13 @@ class TestCommands(TrajctlTest):
             self.fail("boat never came to rest")
         w.close()
         self.d.err_line(lambda l: "control: stop 'boat'" in l)
+        # the stop is latched by the object's owner (lib/engine/LIFECYCLE.md): its input
+        # goes on, yet it stays at rest, stopped, until start or clear
+        for _ in range(20):
+            st = c.status("boat")[1]["boat"]
+            self.assertEqual(st["lifecycle"], "stopped", st)
+            self.assertEqual(st["speed"], 0, st)
+            time.sleep(0.05)
         # the other object was not touched
         self.assertEqual(c.status("ro")[1]["ro"]["state"], "streaming")
         # clear: the object takes waypoints again and moves on (a transfer)

@@ -849,7 +849,7 @@ def test_stamp_faults(tmp):
         idx = [idx[j] for j in keep]
         src = write_latlon(os.path.join(tmp, "stamps.csv"), rows)
         label = f"figure-8 {label0}"
-        sp, s, _ = tr.replay(src, [], tmp, "stamps")
+        sp, s, _ = tr.replay(src, [], tmp, "stamps_setpoints")  # not stamps.csv: the track itself
         e = enu[idx]
         vtrue = np.max(np.linalg.norm(np.diff(e, axis=0), axis=1) / np.diff(t[idx]))
         streaming = np.array([x == "streaming" for x in sp["state"]])

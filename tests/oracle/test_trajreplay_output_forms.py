@@ -62,6 +62,10 @@ with tempfile.TemporaryDirectory() as tmp:
             header = f.readline()
             rows = [l.rstrip("\n").split(",") for l in f]
         check(len(rows) > 3000, f"{name}: {len(rows)} rows")
+        # a zero is written 0.0, never -0.0 (the engine's setpoints carry +0.0: make run
+        # showed -0.0 for velocities at rest)
+        negzero = sum(1 for r in rows for v in r[2:12] if v == "-0.0")
+        check(negzero == 0, f"{name}: no '-0.0' field ({negzero})")
 
         # --precision N: every number is Python's "%.Nf" of the default's double.
         for prec in (0, 3, 9, 17):
