@@ -2,7 +2,9 @@
 # fresh_debian.sh - the README's two commands on a fresh Debian 12: a minimal
 # bookworm chroot (debootstrap --variant=minbase: no make, no git, no procps),
 # the README's step 0, a clone of this repository, `make check` twice (timed:
-# first with the installs) and a 15 s `make run` that must stream setpoints.
+# first with the installs), a 15 s `make run` that must stream setpoints, and
+# `make install PREFIX=/usr` whose /etc/trajd/trajd.conf passes its check and
+# runs as the service would (still serving Modbus 20 s later, exit 0 on SIGTERM).
 # Not part of `make check` (it needs root, debootstrap and Debian's archive;
 # ~4 min).  Usage, as root:  sh tests/fresh_debian.sh [BRANCH]
 #   FRESH_DIR   where the chroot is made (default /var/tmp/trajd-fresh; removed first)
@@ -58,7 +60,18 @@ echo '== timeout -s INT 15 make run'
 run /root/ci/run.log timeout -s INT 15 make run
 n=\$(grep -c ',streaming,' /root/ci/run.log)
 echo \"setpoints streamed: \$n\"; grep '^<' /root/ci/run.log | tail -1
-[ \$rc1 -eq 0 ] && [ \$rc2 -eq 0 ] && [ \$n -gt 100 ]
+echo '== make install (PREFIX=/usr), then the installed config as the service runs it'
+run /root/ci/install.log make install PREFIX=/usr; rci=\$?
+/usr/bin/trajd --check-config /etc/trajd/trajd.conf; rcc=\$?
+mkdir -p /run/trajd
+/usr/bin/trajd -f -c /etc/trajd/trajd.conf > /root/ci/svc.out 2> /root/ci/svc.err &
+svc=\$!; sleep 20
+kill -0 \$svc 2> /dev/null; alive=\$?
+mbpoll -m tcp -p 1502 -a 1 -t 3 -0 -r 0 -c 1 -1 127.0.0.1 > /root/ci/mb.out 2>&1; rcm=\$?
+kill -TERM \$svc; wait \$svc; rcs=\$?
+echo \"installed: install \$rci, check-config \$rcc, running after 20 s \$alive, Modbus \$rcm, SIGTERM exit \$rcs\"
+[ \$rc1 -eq 0 ] && [ \$rc2 -eq 0 ] && [ \$n -gt 100 ] && [ \$rci -eq 0 ] && [ \$rcc -eq 0 ] &&
+    [ \$alive -eq 0 ] && [ \$rcm -eq 0 ] && [ \$rcs -eq 0 ]
 " && rc=0 || rc=$?
 echo "fresh_debian: logs in $R/root/ci/; exit $rc"
 exit $rc
