@@ -375,10 +375,6 @@ void canproto_encode_sync(uint32_t id, uint8_t counter, canproto_frame_t *out);
  */
 int canproto_encode_cia402(const canproto_ids_t *ids, unsigned axis, double pos_m,
                            canproto_frame_t *out);
-/* The same with the controlword cw in the RPDO (if ids->cia402_controlword)
- * instead of ids->cia402_controlword_value: the bring-up's current command. */
-int canproto_encode_cia402_cw(const canproto_ids_t *ids, unsigned axis, double pos_m, uint16_t cw,
-                              canproto_frame_t *out);
 
 /* STATUS frame contents. */
 typedef struct {
@@ -616,43 +612,5 @@ typedef struct {
  */
 double canproto_busload(const canproto_ids_t *ids, unsigned nobj, int sync, unsigned sync_dlen,
                         const canproto_traffic_t *tr, double bitrate, double data_bitrate);
-
-/* ---- description tables (DBC generation, docs, tests) ----------------------------- */
-
-typedef struct {
-    const char *name;   /* DBC signal name */
-    int mux;            /* -1: not multiplexed, -2: the multiplexer, >= 0: mux value */
-    unsigned start_bit; /* Intel (little-endian) start bit */
-    unsigned bits;
-    int is_signed;
-    double factor;
-    double offset;
-    double min, max;
-    const char *unit;
-} canproto_signal_t;
-
-typedef struct {
-    const char *name; /* DBC message name */
-    uint32_t id;      /* default id for object 0 */
-    unsigned dlen;
-    int fd;
-    const char *sender;
-    const canproto_signal_t *signals;
-    unsigned nsignals;
-} canproto_message_t;
-
-/*
- * The messages of object 0 with default ids: WAYPOINT, WAYPOINT_FD, SETPOINT,
- * SETPOINT_FD, STATUS, SYNC and the CiA 402 RPDOs of nodes 1..3 (target
- * position only, in increments).
- */
-const canproto_message_t *canproto_messages(unsigned *count);
-
-/*
- * Write config/trajd.dbc (the DBC text for canproto_messages()) into buf.
- * Returns the length it needs (like snprintf: the text is complete if the
- * return is < len).
- */
-int canproto_dbc(char *buf, size_t len);
 
 #endif

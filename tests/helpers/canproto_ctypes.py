@@ -90,7 +90,6 @@ def load():
     build = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
     lib = ctypes.CDLL(os.path.join(build, "libtrajd.so"))
     P = ctypes.POINTER
-    lib.canproto_dbc.argtypes = [ctypes.c_char_p, ctypes.c_size_t]
     lib.canproto_encode_waypoint.argtypes = [ctypes.c_uint32, P(Waypoint), P(Frame)]
     lib.canproto_encode_waypoint_fd.argtypes = [ctypes.c_uint32, P(Waypoint), P(Frame)]
     lib.canproto_encode_setpoint.argtypes = [ctypes.c_uint32, P(Setpoint), P(Frame)]

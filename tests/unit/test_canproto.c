@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "canproto.h"
+#include "canproto_dbc.h"
 
 #define ID 0x680u
 #define FDID 0x690u
