@@ -264,8 +264,8 @@ typedef struct {
     int own;                                      /* 1: send trajd's own setpoint frames */
     int cia402;                                   /* 1: send CiA 402 RPDOs */
     uint32_t cia402_cob_id[CANPROTO_CIA402_AXES]; /* 0 = axis not sent */
-    double cia402_counts_per_m;                   /* target position increments per metre (> 0) */
-    int cia402_controlword;            /* 1: RPDO = controlword (2 bytes) + target (4 bytes) */
+    double cia402_counts_per_m; /* target increments per metre (> 0, finite: the caller's check) */
+    int cia402_controlword;     /* 1: RPDO = controlword (2 bytes) + target (4 bytes) */
     uint16_t cia402_controlword_value; /* default 0x000F: enable operation */
     /* Per axis (a drive's own scale, direction and zero):
      *   increments = offset + (invert ? -1 : 1) * round(pos_m * counts_per_m)

@@ -72,12 +72,6 @@ int canproto_ids_check(const canproto_ids_t *ids, const char **why)
                 w = "an object uses the same CAN id twice";
     }
     if (!w && ids->cia402) {
-        /* > 0 and finite; also excludes NaN, for which both comparisons fail */
-        if (!(ids->cia402_counts_per_m > 0 && ids->cia402_counts_per_m < 1e12))
-            w = "cia402 counts per metre must be > 0 and finite";
-        for (unsigned a = 0; a < CANPROTO_CIA402_AXES && !w; a++)
-            if (!(ids->cia402_axis_counts_per_m[a] >= 0 && ids->cia402_axis_counts_per_m[a] < 1e12))
-                w = "cia402 counts per metre of an axis must be > 0 and finite (0: the object's)";
         unsigned any = 0;
         for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
             any |= ids->cia402_cob_id[a] != 0;
