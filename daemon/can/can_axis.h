@@ -32,7 +32,7 @@ typedef struct {
 } can_axis_t;
 
 typedef struct {
-    int feedback;         /* the drive is heard (cia402_feedback or cia402_enable) */
+    int feedback;         /* the drive is heard (cia402 feedback or managed) */
     int seen;             /* heard since trajd started (or since its boot-up) */
     cia402_state_t state; /* as last heard */
     int32_t pos_inc;      /* its 0x6064 as last heard */

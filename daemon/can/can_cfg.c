@@ -10,6 +10,7 @@
 #include "can_drive_cfg.h"
 #include "can_logfile.h"
 #include "can_transport.h"
+#include "log.h"
 
 /* can.cia402_counts_per_m[_x/_y/_z]: its one check (canproto_ids_check does not repeat it). */
 #define CAN_COUNTS_MIN 1e-3
@@ -133,7 +134,48 @@ void can_obj_cfg_default(void *p)
     can_obj_cfg_t *oc = p;
     memset(oc, 0, sizeof *oc);
     oc->index = -1;
+    oc->cia402_feedback = 1;
     canproto_ids_default(&oc->ids, 0);
+}
+
+/* A key of the former form, still read: one line in the log. */
+static void deprecated(const cfg_kv_t *kv, const char *instead)
+{
+    log_msg(LOG_NOTICE, "%s:%d: can.%s = %s is deprecated: write %s",
+            kv->file ? kv->file : "config", kv->line, kv->key, kv->value, instead);
+}
+
+/* can.cia402 = off | targets (RPDOs only) | feedback (and the drives' TPDOs) | managed (and
+ * their bring-up: NMT, SDO, controlword, heartbeat); yes / no: the former boolean (yes: feedback
+ * unless can.cia402_feedback = no), still read. */
+static int cia402_mode(const cfg_kv_t *kv, can_obj_cfg_t *oc, char *why, size_t wl)
+{
+    static const char *const modes[] = {"off", "targets", "feedback", "managed"};
+    for (int m = CANPROTO_CIA402_OFF; m <= CANPROTO_CIA402_MANAGED; m++)
+        if (!strcmp(kv->value, modes[m])) {
+            oc->cia402_on = m != CANPROTO_CIA402_OFF;
+            oc->cia402_feedback = m >= CANPROTO_CIA402_FEEDBACK;
+            oc->cia402_enable = m == CANPROTO_CIA402_MANAGED;
+            return 0;
+        }
+    int rc = cfg_get_bool(kv, &oc->cia402_on, why, wl);
+    if (rc < 0)
+        snprintf(why, wl, "expected off, targets, feedback or managed, got '%s'", kv->value);
+    else if (oc->cia402_on)
+        deprecated(kv, "can.cia402 = feedback (targets without can.cia402_feedback, managed "
+                       "with can.cia402_enable)");
+    return rc;
+}
+
+/* The one mode of the keys read: can.cia402 and the former cia402_feedback (yes unless given)
+ * and cia402_enable (implies feedback). */
+static canproto_cia402_mode_t cia402_mode_of(const can_obj_cfg_t *oc)
+{
+    if (!oc->cia402_on)
+        return CANPROTO_CIA402_OFF;
+    if (oc->cia402_enable)
+        return CANPROTO_CIA402_MANAGED;
+    return oc->cia402_feedback ? CANPROTO_CIA402_FEEDBACK : CANPROTO_CIA402_TARGETS;
 }
 
 int can_obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
@@ -196,18 +238,20 @@ int can_obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
     if (!strcmp(k, "own"))
         return cfg_get_bool(kv, &ids->own, why, wl);
     if (!strcmp(k, "cia402"))
-        return cfg_get_bool(kv, &ids->cia402, why, wl);
+        return cia402_mode(kv, oc, why, wl);
     if (!strcmp(k, "cia402_counts_per_m"))
         return cfg_get_double(kv, CAN_COUNTS_MIN, CAN_COUNTS_MAX, &ids->cia402_counts_per_m, why,
                               wl);
     if (!strcmp(k, "cia402_controlword"))
         return cfg_get_bool(kv, &ids->cia402_controlword, why, wl);
     if (!strcmp(k, "cia402_feedback")) {
-        oc->feedback_given = 1;
-        return cfg_get_bool(kv, &ids->cia402_feedback, why, wl);
+        deprecated(kv, "can.cia402 = feedback or targets");
+        return cfg_get_bool(kv, &oc->cia402_feedback, why, wl);
     }
-    if (!strcmp(k, "cia402_enable"))
-        return cfg_get_bool(kv, &ids->cia402_enable, why, wl);
+    if (!strcmp(k, "cia402_enable")) {
+        deprecated(kv, "can.cia402 = managed");
+        return cfg_get_bool(kv, &oc->cia402_enable, why, wl);
+    }
     if (!strcmp(k, "cia402_heartbeat_ms")) {
         rc = cfg_get_int(kv, 0, 60000, &v, why, wl);
         ids->cia402_heartbeat_ms = (uint32_t)v;
@@ -240,16 +284,14 @@ void can_obj_ids(const can_obj_cfg_t *oc, unsigned obj_id, canproto_ids_t *ids)
     ids->fd = g->fd;
     ids->brs = g->brs;
     ids->own = g->own;
-    ids->cia402 = g->cia402;
+    ids->cia402 = cia402_mode_of(oc);
     ids->cia402_counts_per_m = g->cia402_counts_per_m;
     ids->cia402_controlword = g->cia402_controlword;
     memcpy(ids->cia402_axis_counts_per_m, g->cia402_axis_counts_per_m,
            sizeof ids->cia402_axis_counts_per_m);
     memcpy(ids->cia402_invert, g->cia402_invert, sizeof ids->cia402_invert);
     memcpy(ids->cia402_offset, g->cia402_offset, sizeof ids->cia402_offset);
-    ids->cia402_feedback = oc->feedback_given ? g->cia402_feedback : g->cia402; /* default yes */
     memcpy(ids->cia402_tpdo_id, g->cia402_tpdo_id, sizeof ids->cia402_tpdo_id);
-    ids->cia402_enable = g->cia402_enable;
     memcpy(ids->cia402_sdo, g->cia402_sdo, sizeof ids->cia402_sdo);
     ids->cia402_nsdo = g->cia402_nsdo;
     ids->cia402_heartbeat_ms = g->cia402_heartbeat_ms;
@@ -323,7 +365,7 @@ static int ids_explicit(const cfg_obj_t *o, char *why, size_t wl)
                  o->name, o->id, CAN_INDEX_MAX, CAN_INDEX_MAX);
         return -CFG_EVALUE;
     }
-    if (oc->ids.cia402 && (oc->given & cobs) != cobs) {
+    if (oc->cia402_on && (oc->given & cobs) != cobs) {
         snprintf(why, wl,
                  "object '%s': can.cia402 = yes needs every COB-ID explicit (can.cia402_cob_x, "
                  "can.cia402_cob_y, can.cia402_cob_z; 0 = axis not sent): they name the drives' "
@@ -431,8 +473,7 @@ int can_cfg_check(cfg_t *cfg, int *line, char *why, size_t wl)
             *line = o->line;
             snprintf(why, wl, "object '%s': %s", o->name, rule);
             rc = -CFG_EVALUE;
-        } else if (ids.cia402 && !ids.cia402_feedback && !ids.cia402_enable &&
-                   !o->has_initial_position) {
+        } else if (ids.cia402 == CANPROTO_CIA402_TARGETS && !o->has_initial_position) {
             *line = o->line;
             snprintf(why, wl,
                      "object '%s': can.cia402 without drive feedback (can.cia402_feedback = no) "

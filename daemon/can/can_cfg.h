@@ -20,9 +20,10 @@
  *   can.index = <object index>  n for the default ids (0x680+n ...)
  *   can.waypoint_id, can.waypoint_fd_id, can.setpoint_id, can.setpoint_fd_id, can.status_id
  *   can.fd = no, can.brs = no, can.own = yes
- *   can.cia402 = no, can.cia402_cob_x / _y / _z (0 = axis not sent),
- *   can.cia402_counts_per_m = 10000, can.cia402_controlword = no,
- *   can.cia402_feedback = yes with can.cia402 (no: needs initial_position)
+ *   can.cia402 = off | targets | feedback | managed (targets: needs initial_position),
+ *   can.cia402_cob_x / _y / _z (0 = axis not sent),
+ *   can.cia402_counts_per_m = 10000, can.cia402_controlword = no
+ *   deprecated, still read: can.cia402 = yes / no, can.cia402_feedback, can.cia402_enable
  */
 #ifndef TRAJD_CAN_CFG_H
 #define TRAJD_CAN_CFG_H
@@ -62,8 +63,10 @@ typedef struct {
 typedef struct {
     int index; /* -1 = the object's index */
     canproto_ids_t ids;
-    unsigned given;     /* bit per id key given explicitly */
-    int feedback_given; /* can.cia402_feedback given (else: yes with can.cia402) */
+    unsigned given; /* bit per id key given explicitly */
+    /* can.cia402 as read, into ids.cia402 by can_obj_ids: on (not off), and the former keys
+     * cia402_feedback (default yes) and cia402_enable, which the modes set too */
+    int cia402_on, cia402_feedback, cia402_enable;
 } can_obj_cfg_t;
 
 /* The transport's cfg_default, cfg_key, obj_cfg_default, obj_key (transport.h). */

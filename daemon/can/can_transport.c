@@ -490,7 +490,7 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
         can_port_hooks_t hk = {s->is_input[k] ? hk_push : hk_push_refuse, hk_command, hk_status,
                                hk_feedback, hk_hold};
         s->drive_state_logged[k] = -1;
-        if (ids.cia402 && (ids.cia402_feedback || ids.cia402_enable) && !s->objs[k]->carried)
+        if (ids.cia402 >= CANPROTO_CIA402_FEEDBACK && !s->objs[k]->carried)
             engine_require_position(s->objs[k]->engine, 1); /* the drive says where it is */
         else if (ids.cia402 && !s->objs[k]->carried)        /* check(): initial_position given */
             log_msg(LOG_NOTICE,

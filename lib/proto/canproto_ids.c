@@ -50,8 +50,8 @@ unsigned canproto_cia402_node(const canproto_ids_t *ids, unsigned axis)
 
 uint32_t canproto_cia402_tpdo(const canproto_ids_t *ids, unsigned axis)
 {
-    if (!ids->cia402 || !(ids->cia402_feedback || ids->cia402_enable) ||
-        axis >= CANPROTO_CIA402_AXES || !ids->cia402_cob_id[axis])
+    if (ids->cia402 < CANPROTO_CIA402_FEEDBACK || axis >= CANPROTO_CIA402_AXES ||
+        !ids->cia402_cob_id[axis])
         return 0;
     return ids->cia402_tpdo_id[axis]
                ? ids->cia402_tpdo_id[axis]
@@ -75,8 +75,9 @@ int canproto_ids_check(const canproto_ids_t *ids, const char **why)
         unsigned any = 0;
         for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
             any |= ids->cia402_cob_id[a] != 0;
-            if (ids->cia402_enable && ids->cia402_cob_id[a] && !(ids->cia402_cob_id[a] & 0x7Fu))
-                w = "cia402_enable: the node-id (low 7 bits of a COB-id) must be 1..127";
+            if (ids->cia402 == CANPROTO_CIA402_MANAGED && ids->cia402_cob_id[a] &&
+                !(ids->cia402_cob_id[a] & 0x7Fu))
+                w = "cia402 managed: the node-id (low 7 bits of a COB-id) must be 1..127";
         }
         if (!w && !any)
             w = "cia402 enabled but no axis has a COB-id";
@@ -107,7 +108,7 @@ unsigned canproto_ids_rx(const canproto_ids_t *ids, uint32_t *out, unsigned max)
         }
     for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
         unsigned node = canproto_cia402_node(ids, a);
-        if (!ids->cia402_enable || !node)
+        if (ids->cia402 != CANPROTO_CIA402_MANAGED || !node)
             continue;
         const uint32_t bring[3] = {0x580u + node, 0x700u + node, 0x080u + node};
         for (unsigned k = 0; k < 3; k++) {
