@@ -594,8 +594,8 @@ static int send_setpoint(can_port_t *p, can_port_obj_t *o, int own)
         for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
             int32_t inc;
             if (o->ids.cia402_cob_id[a] && axis_target(o, a, &inc, &clamped))
-                can_axis_rpdo(o->ids.cia402_cob_id[a], o->ids.cia402_controlword, rpdo_cw(o, a),
-                              inc, &f[n++]);
+                cia402_encode_rpdo(o->ids.cia402_cob_id[a], o->ids.cia402_controlword,
+                                   rpdo_cw(o, a), inc, &f[n++]);
         }
     if (clamped) { /* counted, flagged (STATUS bit 3), logged by can_transport */
         o->st.tx_clamped++;
@@ -817,7 +817,7 @@ static void master_heartbeat(can_port_t *p, int64_t now_ns)
     if (!p->cfg.hb_node || (p->hb_any && now_ns - p->hb_sent_ns < p->cfg.hb_period_ns))
         return;
     canproto_frame_t f;
-    can_axis_heartbeat(p->cfg.hb_node, &f);
+    cia402_encode_heartbeat(p->cfg.hb_node, &f);
     if (p->io.send(p->io_ctx, &f) == 0) {
         p->hb_any = 1;
         p->hb_sent_ns = now_ns;

@@ -4,6 +4,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "cia402.h"
+
 static const char *const canproto_errors[CANPROTO_ERROR_COUNT] = {
     [CANPROTO_OK] = "ok",
     [CANPROTO_ELEN] = "wrong frame length or kind for this id",
@@ -262,15 +264,9 @@ int canproto_encode_cia402(const canproto_ids_t *ids, unsigned axis, double pos_
     int clamped = 0;
     if (axis >= CANPROTO_CIA402_AXES || !ids->cia402_cob_id[axis])
         return -CANPROTO_ECONFIG;
-    int64_t inc = canproto_cia402_counts(ids, axis, pos_m, &clamped);
-    if (ids->cia402_controlword) {
-        frame_init(out, ids->cia402_cob_id[axis], 6, 0);
-        put_le(&out->data[0], 2, ids->cia402_controlword_value);
-        put_le(&out->data[2], 4, (uint64_t)inc);
-    } else {
-        frame_init(out, ids->cia402_cob_id[axis], 4, 0);
-        put_le(&out->data[0], 4, (uint64_t)inc);
-    }
+    int32_t inc = canproto_cia402_counts(ids, axis, pos_m, &clamped);
+    cia402_encode_rpdo(ids->cia402_cob_id[axis], ids->cia402_controlword,
+                       ids->cia402_controlword_value, inc, out);
     return clamped ? CANPROTO_CLAMPED : 0;
 }
 
