@@ -366,11 +366,12 @@ static int ids_explicit(const cfg_obj_t *o, char *why, size_t wl)
         return -CFG_EVALUE;
     }
     if (oc->cia402_on && (oc->given & cobs) != cobs) {
-        snprintf(why, wl,
-                 "object '%s': can.cia402 = yes needs every COB-ID explicit (can.cia402_cob_x, "
-                 "can.cia402_cob_y, can.cia402_cob_z; 0 = axis not sent): they name the drives' "
-                 "nodes and never follow the object's id or place in the file",
-                 o->name);
+        snprintf(
+            why, wl,
+            "object '%s': can.cia402 other than off needs every COB-ID explicit (can.cia402_cob_x, "
+            "can.cia402_cob_y, can.cia402_cob_z; 0 = axis not sent): they name the drives' "
+            "nodes and never follow the object's id or place in the file",
+            o->name);
         return -CFG_EVALUE;
     }
     return 0;
@@ -476,7 +477,7 @@ int can_cfg_check(cfg_t *cfg, int *line, char *why, size_t wl)
         } else if (ids.cia402 == CANPROTO_CIA402_TARGETS && !o->has_initial_position) {
             *line = o->line;
             snprintf(why, wl,
-                     "object '%s': can.cia402 without drive feedback (can.cia402_feedback = no) "
+                     "object '%s': can.cia402 = targets (no drive feedback) "
                      "needs initial_position: where the drives stand is never taken from a "
                      "waypoint",
                      o->name);

@@ -494,7 +494,7 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
             engine_require_position(s->objs[k]->engine, 1); /* the drive says where it is */
         else if (ids.cia402 && !s->objs[k]->carried)        /* check(): initial_position given */
             log_msg(LOG_NOTICE,
-                    "can: object '%s': no drive feedback (can.cia402_feedback = no): the drives "
+                    "can: object '%s': no drive feedback (can.cia402 = targets): the drives "
                     "are taken to stand at initial_position, and are sent targets from there",
                     s->objs[k]->name);
         s->hctx[k].o = s->objs[k];
