@@ -69,6 +69,11 @@ DAEMON_SRC := $(wildcard daemon/*/*.c)
 # exceptions or RTTI, so nothing links libstdc++.
 DAEMON_CXX_SRC := $(wildcard daemon/*/*.cc)
 TEST_SRC := $(wildcard tests/unit/test_*.c)
+# Test scaffolding in C (tests/helpers/*.c, not in the product): linked into the
+# C tests; a *_main.c there is a build-time tool $(BUILD)/tests/<name>.
+HELPER_SRC := $(filter-out %_main.c,$(wildcard tests/helpers/*.c))
+HELPER_OBJ := $(HELPER_SRC:%.c=$(BUILD)/%.o)
+TOOLS := $(patsubst tests/helpers/%_main.c,$(BUILD)/tests/%,$(wildcard tests/helpers/*_main.c))
 BENCH_SRC := $(wildcard tests/bench/bench_*.c)
 FUZZ_SRC := $(wildcard tests/fuzz/fuzz_*.c)
 
@@ -97,7 +102,7 @@ MANS := $(MAN_SRC:daemon/doc/%=$(BUILD)/man/%) $(BUILD)/man/trajd.conf.5
 .SECONDARY:
 
 all: $(MANS) $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/libtrajdaemon.a $(BINS) $(TEST_BINS) $(BENCHES) \
-     $(REPLAY_BINS) $(UML_HELPERS)
+     $(REPLAY_BINS) $(UML_HELPERS) $(TOOLS)
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(@D)
@@ -151,9 +156,19 @@ $(BUILD)/bin/%: $(BUILD)/daemon/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_DAEMON)
 
-$(TEST_BINS): $(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.a
+$(BUILD)/libtrajdtest.a: $(HELPER_OBJ)
+	@rm -f $@
+	$(AR) rcs $@ $^
+
+$(TEST_BINS): $(BUILD)/tests/%: $(BUILD)/tests/unit/%.o $(BUILD)/libtrajdtest.a $(BUILD)/libtrajdaemon.a \
+		$(BUILD)/libtrajd.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_TEST)
+
+# config/trajd.dbc: $(BUILD)/tests/canproto_dbc prints it (tests/oracle/test_canproto.py).
+$(TOOLS): $(BUILD)/tests/%: $(BUILD)/tests/helpers/%_main.o $(BUILD)/libtrajdtest.a $(BUILD)/libtrajd.a
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ -lm
 
 $(BUILD)/tests/fuzz/replay-%.o: tests/fuzz/replay.c
 	@mkdir -p $(@D)
@@ -261,7 +276,7 @@ test-asan:
 # redundant.  Run by tests/run.sh as tests/e2e/test_cppcheck.sh.  A false
 # positive is suppressed on its line with a reason:
 #   /* cppcheck-suppress <id> ; why it cannot happen */
-CPPCHECK_SRC := lib daemon tests/unit tests/bench tests/fuzz
+CPPCHECK_SRC := lib daemon tests/unit tests/helpers tests/bench tests/fuzz
 lint: $(GEN_TABLE)
 	@echo "cppcheck: $(CPPCHECK_SRC) $(GEN_TABLE)"
 	@cppcheck -q --std=c11 -D_GNU_SOURCE -DFUZZ_NAME='"fuzz"' --enable=warning,portability,performance \

@@ -2,7 +2,6 @@
 #include "can_axis.h"
 
 #include <stdlib.h>
-#include <string.h>
 
 static int32_t hold(can_axis_t *x, int32_t t)
 {
@@ -42,35 +41,12 @@ int can_axis_target(can_axis_t *x, const can_axis_in_t *in, int32_t *out)
     return 1;
 }
 
-void can_axis_rpdo(uint32_t cob, int with_cw, uint16_t cw, int32_t target, canproto_frame_t *out)
-{
-    uint32_t t = (uint32_t)target;
-    unsigned k = 0;
-    memset(out, 0, sizeof *out);
-    out->id = cob;
-    if (with_cw) {
-        out->data[k++] = (uint8_t)cw;
-        out->data[k++] = (uint8_t)(cw >> 8);
-    }
-    for (unsigned b = 0; b < 4; b++)
-        out->data[k++] = (uint8_t)(t >> (8 * b));
-    out->len = (uint8_t)k;
-}
-
 void can_axis_anchored(can_axis_t *x)
 {
     if (x->fresh || !x->have_tgt)
         x->pending = 1;
     else
         x->live = 1;
-}
-
-void can_axis_heartbeat(uint8_t node, canproto_frame_t *out)
-{
-    memset(out, 0, sizeof *out);
-    out->id = CIA402_COB_HEARTBEAT + node;
-    out->len = 1;
-    out->data[0] = CIA402_HB_OPERATIONAL;
 }
 
 int can_axis_list_writes(const canproto_ids_t *ids, uint16_t index, uint8_t sub)

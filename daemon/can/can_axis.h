@@ -32,7 +32,7 @@ typedef struct {
 } can_axis_t;
 
 typedef struct {
-    int feedback;         /* the drive is heard (cia402_feedback or cia402_enable) */
+    int feedback;         /* the drive is heard (cia402 feedback or managed) */
     int seen;             /* heard since trajd started (or since its boot-up) */
     cia402_state_t state; /* as last heard */
     int32_t pos_inc;      /* its 0x6064 as last heard */
@@ -45,16 +45,10 @@ typedef struct {
 /* The target for this cycle: 1 with *out, 0 = send no RPDO. */
 int can_axis_target(can_axis_t *x, const can_axis_in_t *in, int32_t *out);
 
-/* The RPDO on cob: the controlword cw (if with_cw) then the target, LE. */
-void can_axis_rpdo(uint32_t cob, int with_cw, uint16_t cw, int32_t target, canproto_frame_t *out);
-
 /* The engine was re-anchored at can_axis_anchor (obj_set_position): its
  * targets pass from the next cycle (after the first target = 0x6064, if
  * that is still to be sent). */
 void can_axis_anchored(can_axis_t *x);
-
-/* trajd's heartbeat as master: 0x700 + node, 1 byte, operational (0x05). */
-void can_axis_heartbeat(uint8_t node, canproto_frame_t *out);
 
 /* 1 if the configuration list of ids writes index:sub. */
 int can_axis_list_writes(const canproto_ids_t *ids, uint16_t index, uint8_t sub);

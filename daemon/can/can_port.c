@@ -28,7 +28,7 @@ typedef struct {
     uint8_t last_err;
     int last_state; /* engine state in the last STATUS (-1: none yet) */
     can_port_drive_t drive;
-    /* bring-up (ids.cia402_enable) */
+    /* bring-up (ids.cia402 managed) */
     unsigned nmt_done; /* bit per axis: NMT start sent (since its last boot-up) */
     unsigned sdo_next[CANPROTO_CIA402_AXES]; /* next configuration SDO */
     int sdo_wait[CANPROTO_CIA402_AXES];      /* 1 config SDO, 2 controlword, in flight */
@@ -267,7 +267,7 @@ static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, 
         refuse_command(o, cmd, id, 0);
         return;
     }
-    if (cmd == CANPROTO_CMD_CLEAR && o->ids.cia402_enable && o->drive.held)
+    if (cmd == CANPROTO_CMD_CLEAR && o->ids.cia402 == CANPROTO_CIA402_MANAGED && o->drive.held)
         o->reset_req = 1; /* fault reset, then the drives are enabled again */
     if (o->hooks.command && (err = o->hooks.command(o->ctx, cmd, arg)) < 0) {
         refuse_command(o, cmd, id, err); /* e.g. an override while held (obj_set_override) */
@@ -309,7 +309,7 @@ static void axis_state(can_port_obj_t *o, unsigned a, cia402_state_t to, uint16_
     o->axis_oe[a] = 0;
     o->st.drive_lost++;
     event(o, CANPROTO_STERR_DRIVE);
-    if (o->ids.cia402_enable)
+    if (o->ids.cia402 == CANPROTO_CIA402_MANAGED)
         o->axis_held[a] = 1; /* re-enabling is the operator's decision: CLEAR */
     if (!o->lost) {
         o->lost = 1;
@@ -399,7 +399,7 @@ static void drive_heartbeat(can_port_obj_t *o, unsigned a, const canproto_frame_
 /* Frames of the bring-up: SDO replies, heartbeats, EMCY of o's nodes; 1 if taken. */
 static int drive_frame(can_port_obj_t *o, const canproto_frame_t *f)
 {
-    if (!o->ids.cia402_enable)
+    if (o->ids.cia402 != CANPROTO_CIA402_MANAGED)
         return 0;
     for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
         unsigned node = canproto_cia402_node(&o->ids, a);
@@ -542,7 +542,7 @@ static int is_full(int rc)
  * transition 16); without it, the configured value. */
 static uint16_t rpdo_cw(const can_port_obj_t *o, unsigned a)
 {
-    if (!o->ids.cia402_enable)
+    if (o->ids.cia402 != CANPROTO_CIA402_MANAGED)
         return o->ids.cia402_controlword_value;
     /* before it wrote any (a drive found running by a restarted trajd): the
      * one that keeps the drive where it is, never Disable voltage to a
@@ -554,7 +554,7 @@ static uint16_t rpdo_cw(const can_port_obj_t *o, unsigned a)
 static int axis_target(can_port_obj_t *o, unsigned a, int32_t *inc, int *clamped)
 {
     int eng_ok = !(o->sp.flags & ENGINE_SP_NO_POSITION);
-    can_axis_in_t in = {o->ids.cia402_feedback || o->ids.cia402_enable,
+    can_axis_in_t in = {o->ids.cia402 >= CANPROTO_CIA402_FEEDBACK,
                         (o->drive.seen >> a) & 1u,
                         o->drive.state[a],
                         o->pos_inc[a],
@@ -594,8 +594,8 @@ static int send_setpoint(can_port_t *p, can_port_obj_t *o, int own)
         for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
             int32_t inc;
             if (o->ids.cia402_cob_id[a] && axis_target(o, a, &inc, &clamped))
-                can_axis_rpdo(o->ids.cia402_cob_id[a], o->ids.cia402_controlword, rpdo_cw(o, a),
-                              inc, &f[n++]);
+                cia402_encode_rpdo(o->ids.cia402_cob_id[a], o->ids.cia402_controlword,
+                                   rpdo_cw(o, a), inc, &f[n++]);
         }
     if (clamped) { /* counted, flagged (STATUS bit 3), logged by can_transport */
         o->st.tx_clamped++;
@@ -817,7 +817,7 @@ static void master_heartbeat(can_port_t *p, int64_t now_ns)
     if (!p->cfg.hb_node || (p->hb_any && now_ns - p->hb_sent_ns < p->cfg.hb_period_ns))
         return;
     canproto_frame_t f;
-    can_axis_heartbeat(p->cfg.hb_node, &f);
+    cia402_encode_heartbeat(p->cfg.hb_node, &f);
     if (p->io.send(p->io_ctx, &f) == 0) {
         p->hb_any = 1;
         p->hb_sent_ns = now_ns;
@@ -855,7 +855,7 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
     }
     master_heartbeat(p, now_ns);
     for (unsigned i = 0; i < p->nobj; i++)
-        if (p->obj[i].set && p->obj[i].ids.cia402_enable)
+        if (p->obj[i].set && p->obj[i].ids.cia402 == CANPROTO_CIA402_MANAGED)
             bring_up(p, &p->obj[i], now_ns);
     for (unsigned i = 0; i < p->nobj; i++) {
         can_port_obj_t *o = &p->obj[i];
@@ -938,7 +938,7 @@ int can_port_drive_summary(const can_port_t *p, unsigned i, canproto_status2_dri
     if (!p || i >= p->nobj || !p->obj[i].set)
         return 0;
     const can_port_obj_t *o = &p->obj[i];
-    if (!o->ids.cia402 || !(o->ids.cia402_feedback || o->ids.cia402_enable))
+    if (o->ids.cia402 < CANPROTO_CIA402_FEEDBACK)
         return 0;
     int pick = -1;
     for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {

@@ -29,7 +29,7 @@
  *      rejection, a loss, a malformed frame or a change of engine state, at
  *      most one per object per cycle); for an object with CiA 402 drives,
  *      STATUS2 page 4 is one of its pages, and a change of it makes a STATUS due.
- * With cia402_enable and cia402_controlword, the RPDO's controlword is the one
+ * With cia402 managed and cia402_controlword, the RPDO's controlword is the one
  * the bring-up last wrote to 0x6040 (Enable operation only while it enables
  * the drive; Disable voltage before any), never a fixed value.
  * A frame the transport cannot take (queue full, interface down) is dropped

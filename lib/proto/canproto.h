@@ -253,6 +253,14 @@ int canproto_fd_len_valid(unsigned len);
 #define CANPROTO_CIA402_AXES ENGINE_AXES
 #define CANPROTO_CIA402_SDO_MAX 8 /* configuration SDO writes per object */
 
+/* What trajd does with an object's CiA 402 drives: each mode does what the one before does. */
+typedef enum {
+    CANPROTO_CIA402_OFF = 0,  /* no drives */
+    CANPROTO_CIA402_TARGETS,  /* RPDOs: target position 0x607A (and the controlword) */
+    CANPROTO_CIA402_FEEDBACK, /* and each drive's feedback TPDO (statusword, position) */
+    CANPROTO_CIA402_MANAGED,  /* and their bring-up: NMT, SDO, controlword, heartbeat */
+} canproto_cia402_mode_t;
+
 typedef struct {
     uint32_t waypoint_id;    /* classic waypoint frames in */
     uint32_t waypoint_fd_id; /* FD waypoint frames in (used if fd) */
@@ -262,10 +270,10 @@ typedef struct {
     int fd;                                       /* 1: FD setpoints out and FD waypoints in */
     int brs;                                      /* 1: FD frames with bit-rate switch */
     int own;                                      /* 1: send trajd's own setpoint frames */
-    int cia402;                                   /* 1: send CiA 402 RPDOs */
+    canproto_cia402_mode_t cia402;                /* CANPROTO_CIA402_*: OFF = no RPDOs */
     uint32_t cia402_cob_id[CANPROTO_CIA402_AXES]; /* 0 = axis not sent */
-    double cia402_counts_per_m;                   /* target position increments per metre (> 0) */
-    int cia402_controlword;            /* 1: RPDO = controlword (2 bytes) + target (4 bytes) */
+    double cia402_counts_per_m; /* target increments per metre (> 0, finite: the caller's check) */
+    int cia402_controlword;     /* 1: RPDO = controlword (2 bytes) + target (4 bytes) */
     uint16_t cia402_controlword_value; /* default 0x000F: enable operation */
     /* Per axis (a drive's own scale, direction and zero):
      *   increments = offset + (invert ? -1 : 1) * round(pos_m * counts_per_m)
@@ -273,17 +281,15 @@ typedef struct {
     double cia402_axis_counts_per_m[CANPROTO_CIA402_AXES];
     int cia402_invert[CANPROTO_CIA402_AXES];
     int32_t cia402_offset[CANPROTO_CIA402_AXES];
-    /* Drive feedback: a TPDO per axis with statusword 0x6041 (u16) then
-     * position actual value 0x6064 (i32) on cia402_tpdo_id (0 = 0x180 + the
-     * node of the axis' COB-id, its low 7 bits). */
-    int cia402_feedback;
+    /* Drive feedback (FEEDBACK, MANAGED): a TPDO per axis with statusword
+     * 0x6041 (u16) then position actual value 0x6064 (i32) on cia402_tpdo_id
+     * (0 = 0x180 + the node of the axis' COB-id, its low 7 bits). */
     uint32_t cia402_tpdo_id[CANPROTO_CIA402_AXES];
-    /* Bring-up (implies feedback): NMT start, the SDO writes below to each
-     * axis' node (node = low 7 bits of its COB-id), then the controlword
-     * written by SDO (0x6040) from the statusword: Shutdown, Switch on,
-     * Enable operation.  Heartbeats (consumer time heartbeat_ms, 0 = not
-     * watched), EMCY and SDO aborts are reported. */
-    int cia402_enable;
+    /* Bring-up (MANAGED): NMT start, the SDO writes below to each axis' node
+     * (node = low 7 bits of its COB-id), then the controlword written by SDO
+     * (0x6040) from the statusword: Shutdown, Switch on, Enable operation.
+     * Heartbeats (consumer time heartbeat_ms, 0 = not watched), EMCY and SDO
+     * aborts are reported. */
     struct {
         uint16_t index;
         uint8_t sub;
@@ -375,10 +381,6 @@ void canproto_encode_sync(uint32_t id, uint8_t counter, canproto_frame_t *out);
  */
 int canproto_encode_cia402(const canproto_ids_t *ids, unsigned axis, double pos_m,
                            canproto_frame_t *out);
-/* The same with the controlword cw in the RPDO (if ids->cia402_controlword)
- * instead of ids->cia402_controlword_value: the bring-up's current command. */
-int canproto_encode_cia402_cw(const canproto_ids_t *ids, unsigned axis, double pos_m, uint16_t cw,
-                              canproto_frame_t *out);
 
 /* STATUS frame contents. */
 typedef struct {
@@ -616,43 +618,5 @@ typedef struct {
  */
 double canproto_busload(const canproto_ids_t *ids, unsigned nobj, int sync, unsigned sync_dlen,
                         const canproto_traffic_t *tr, double bitrate, double data_bitrate);
-
-/* ---- description tables (DBC generation, docs, tests) ----------------------------- */
-
-typedef struct {
-    const char *name;   /* DBC signal name */
-    int mux;            /* -1: not multiplexed, -2: the multiplexer, >= 0: mux value */
-    unsigned start_bit; /* Intel (little-endian) start bit */
-    unsigned bits;
-    int is_signed;
-    double factor;
-    double offset;
-    double min, max;
-    const char *unit;
-} canproto_signal_t;
-
-typedef struct {
-    const char *name; /* DBC message name */
-    uint32_t id;      /* default id for object 0 */
-    unsigned dlen;
-    int fd;
-    const char *sender;
-    const canproto_signal_t *signals;
-    unsigned nsignals;
-} canproto_message_t;
-
-/*
- * The messages of object 0 with default ids: WAYPOINT, WAYPOINT_FD, SETPOINT,
- * SETPOINT_FD, STATUS, SYNC and the CiA 402 RPDOs of nodes 1..3 (target
- * position only, in increments).
- */
-const canproto_message_t *canproto_messages(unsigned *count);
-
-/*
- * Write config/trajd.dbc (the DBC text for canproto_messages()) into buf.
- * Returns the length it needs (like snprintf: the text is complete if the
- * return is < len).
- */
-int canproto_dbc(char *buf, size_t len);
 
 #endif

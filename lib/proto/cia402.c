@@ -89,6 +89,26 @@ void cia402_encode_nmt(uint8_t cmd, uint8_t node, canproto_frame_t *out)
     out->data[1] = node;
 }
 
+void cia402_encode_rpdo(uint32_t cob, int with_cw, uint16_t cw, int32_t target,
+                        canproto_frame_t *out)
+{
+    uint32_t t = (uint32_t)target;
+    unsigned k = 0;
+    frame(out, cob, with_cw ? 6 : 4);
+    if (with_cw) {
+        out->data[k++] = (uint8_t)cw;
+        out->data[k++] = (uint8_t)(cw >> 8);
+    }
+    for (unsigned b = 0; b < 4; b++)
+        out->data[k++] = (uint8_t)(t >> (8 * b));
+}
+
+void cia402_encode_heartbeat(uint8_t node, canproto_frame_t *out)
+{
+    frame(out, CIA402_COB_HEARTBEAT + node, 1);
+    out->data[0] = CIA402_HB_OPERATIONAL;
+}
+
 int cia402_encode_sdo_download(uint8_t node, uint16_t index, uint8_t sub, uint32_t value,
                                unsigned size, canproto_frame_t *out)
 {

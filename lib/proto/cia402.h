@@ -110,6 +110,14 @@ uint16_t cia402_controlword_hold(cia402_state_t s);
 /* NMT command cmd to node (0 = all nodes): id 0x000, 2 bytes. */
 void cia402_encode_nmt(uint8_t cmd, uint8_t node, canproto_frame_t *out);
 
+/* The RPDO on cob: the controlword cw (if with_cw: 6 bytes) then the target
+ * position 0x607A (4 bytes), little-endian. */
+void cia402_encode_rpdo(uint32_t cob, int with_cw, uint16_t cw, int32_t target,
+                        canproto_frame_t *out);
+
+/* A heartbeat as NMT master: 0x700 + node, 1 byte, operational (0x05). */
+void cia402_encode_heartbeat(uint8_t node, canproto_frame_t *out);
+
 /*
  * Expedited SDO download (write) of size bytes (1, 2 or 4) of value to
  * index:sub on node: id 0x600 + node, 8 bytes, command 0x2F/0x2B/0x23.

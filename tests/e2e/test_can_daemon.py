@@ -195,7 +195,7 @@ class CanDaemon(unittest.TestCase):
                            output="can, csv"))
         self.assertEqual(p.returncode, 0, p.stderr)
         # no drive to ask where it stands: the log says where it is taken to be
-        self.assertIn("no drive feedback (can.cia402_feedback = no): the drives are taken to "
+        self.assertIn("no drive feedback (can.cia402 = targets): the drives are taken to "
                       "stand at initial_position", p.stderr)
         log = os.path.join(d, "sp.log")
         logged, ref = self.reference(d)

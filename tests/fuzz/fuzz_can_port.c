@@ -123,11 +123,11 @@ static void configure(canproto_ids_t *ids, uint8_t b)
     ids->fd = (b >> 7) & 1;
     if (!(b & 3))
         return; /* no drives: waypoints and commands only */
-    ids->cia402 = 1;
     for (unsigned a = b & 3; a < CANPROTO_CIA402_AXES; a++)
         ids->cia402_cob_id[a] = 0;
-    ids->cia402_feedback = (b >> 2) & 1;
-    ids->cia402_enable = (b >> 3) & 1;
+    ids->cia402 = (b >> 3) & 1   ? CANPROTO_CIA402_MANAGED
+                  : (b >> 2) & 1 ? CANPROTO_CIA402_FEEDBACK
+                                 : CANPROTO_CIA402_TARGETS;
     ids->cia402_controlword = (b >> 4) & 1;
     ids->cia402_heartbeat_ms = (b & 0x20) ? 50 : 0;
     if (b & 0x40) {

@@ -46,14 +46,13 @@ class Ids(ctypes.Structure):
     _fields_ = [("waypoint_id", ctypes.c_uint32), ("waypoint_fd_id", ctypes.c_uint32),
                 ("setpoint_id", ctypes.c_uint32), ("setpoint_fd_id", ctypes.c_uint32),
                 ("status_id", ctypes.c_uint32), ("fd", ctypes.c_int), ("brs", ctypes.c_int),
-                ("own", ctypes.c_int), ("cia402", ctypes.c_int),
+                ("own", ctypes.c_int), ("cia402", ctypes.c_int),  # canproto_cia402_mode_t
                 ("cia402_cob_id", ctypes.c_uint32 * AXES),
                 ("cia402_counts_per_m", ctypes.c_double), ("cia402_controlword", ctypes.c_int),
                 ("cia402_controlword_value", ctypes.c_uint16),
                 ("cia402_axis_counts_per_m", ctypes.c_double * AXES),
                 ("cia402_invert", ctypes.c_int * AXES), ("cia402_offset", ctypes.c_int32 * AXES),
-                ("cia402_feedback", ctypes.c_int), ("cia402_tpdo_id", ctypes.c_uint32 * AXES),
-                ("cia402_enable", ctypes.c_int), ("cia402_sdo", CiaSdo * 8),
+                ("cia402_tpdo_id", ctypes.c_uint32 * AXES), ("cia402_sdo", CiaSdo * 8),
                 ("cia402_nsdo", ctypes.c_uint), ("cia402_heartbeat_ms", ctypes.c_uint32),
                 ("status2_id", ctypes.c_uint32)]
 
@@ -90,7 +89,6 @@ def load():
     build = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
     lib = ctypes.CDLL(os.path.join(build, "libtrajd.so"))
     P = ctypes.POINTER
-    lib.canproto_dbc.argtypes = [ctypes.c_char_p, ctypes.c_size_t]
     lib.canproto_encode_waypoint.argtypes = [ctypes.c_uint32, P(Waypoint), P(Frame)]
     lib.canproto_encode_waypoint_fd.argtypes = [ctypes.c_uint32, P(Waypoint), P(Frame)]
     lib.canproto_encode_setpoint.argtypes = [ctypes.c_uint32, P(Setpoint), P(Frame)]

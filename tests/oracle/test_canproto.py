@@ -1,7 +1,8 @@
 """CAN protocol against independent decoders.
 
-- config/trajd.dbc is exactly what canproto_dbc() writes from lib/proto/canproto.h's
-  tables (so the two cannot drift); `--write-dbc` regenerates it.
+- config/trajd.dbc is exactly what canproto_dbc() (tests/helpers/canproto_dbc.c, the tool
+  $BUILD/tests/canproto_dbc) writes from the layouts of lib/proto/canproto.h (so the two
+  cannot drift); `--write-dbc` regenerates it.
 - Frames built by our C encoders decode in canmatrix (which reads only the
   DBC) to the values we encoded, and frames built by canmatrix from the DBC
   are reassembled by our decoder to the same values: the DBC tables and the
@@ -20,6 +21,7 @@ import math
 import os
 import random
 import re
+import subprocess
 import sys
 import tempfile
 import unittest
@@ -46,10 +48,9 @@ WP_TOL = 0.505e-6
 
 
 def dbc_text():
-    n = LIB.canproto_dbc(None, 0)
-    buf = ctypes.create_string_buffer(n + 1)
-    LIB.canproto_dbc(buf, n + 1)
-    return buf.value.decode()
+    build = os.environ.get("BUILD", os.path.join(ROOT, "build"))
+    return subprocess.run([os.path.join(build, "tests", "canproto_dbc")], check=True,
+                          stdout=subprocess.PIPE).stdout.decode()
 
 
 def load_db():
@@ -81,7 +82,7 @@ def raw(fr, name, phys):
 
 
 class DbcAgreesWithHeader(unittest.TestCase):
-    # Given the tables in lib/proto/canproto.c, when the DBC text is generated,
+    # Given the tables in tests/helpers/canproto_dbc.c, when the DBC text is generated,
     # then it is byte for byte the checked-in config/trajd.dbc.
     def test_checked_in_dbc_is_generated(self):
         with open(DBC) as fh:

@@ -40,6 +40,7 @@ LIB.cia402_controlword_towards_enabled.argtypes = [ctypes.c_int, ctypes.c_int]
 LIB.cia402_controlword_towards_enabled.restype = ctypes.c_uint16
 LIB.cia402_encode_sdo_download.argtypes = [ctypes.c_uint8, ctypes.c_uint16, ctypes.c_uint8,
                                            ctypes.c_uint32, ctypes.c_uint, P(cp.Frame)]
+LIB.cia402_encode_heartbeat.argtypes = [ctypes.c_uint8, P(cp.Frame)]
 LIB.cia402_sdo_abort_text.argtypes = [ctypes.c_uint32]
 LIB.cia402_sdo_abort_text.restype = ctypes.c_char_p
 
@@ -129,6 +130,19 @@ class Sdo(unittest.TestCase):
     def test_every_abort_code_has_a_text(self):
         for code in SdoAbortedError.CODES:
             self.assertNotEqual(LIB.cia402_sdo_abort_text(code), b"unknown abort code", hex(code))
+
+
+class Heartbeat(unittest.TestCase):
+    # Given trajd's heartbeat as NMT master (node 127), when canopen's heartbeat
+    # consumer of that node hears the frame, then it reads the node as OPERATIONAL.
+    def test_master_heartbeat_is_operational(self):
+        f = cp.Frame()
+        LIB.cia402_encode_heartbeat(127, ctypes.byref(f))
+        network = canopen.Network()
+        node = canopen.RemoteNode(127, canopen.ObjectDictionary())
+        network.add_node(node)
+        network.notify(f.id, bytearray(f.payload()), 0.0)
+        self.assertEqual(node.nmt.state, "OPERATIONAL")
 
 
 if __name__ == "__main__":

@@ -123,9 +123,7 @@ static void three_axes(int enable, uint32_t hb_ms)
 {
     canproto_ids_t ids;
     canproto_ids_default(&ids, 0);
-    ids.cia402 = 1;
-    ids.cia402_feedback = 1;
-    ids.cia402_enable = enable;
+    ids.cia402 = enable ? CANPROTO_CIA402_MANAGED : CANPROTO_CIA402_FEEDBACK;
     ids.cia402_controlword = enable;
     ids.cia402_cob_id[0] = 0x201;
     ids.cia402_cob_id[1] = 0x202;
@@ -308,7 +306,8 @@ static void test_bootup_of_one_drive(void **state)
     new_port(0, 0);
     canproto_ids_t ids;
     canproto_ids_default(&ids, 0);
-    ids.cia402 = ids.cia402_feedback = ids.cia402_enable = ids.cia402_controlword = 1;
+    ids.cia402 = CANPROTO_CIA402_MANAGED;
+    ids.cia402_controlword = 1;
     ids.cia402_cob_id[0] = 0x201;
     ids.cia402_cob_id[1] = 0x202;
     ids.cia402_cob_id[2] = 0x203;
@@ -397,7 +396,7 @@ static void test_heartbeat_stall_excused(void **state)
     new_port(50000000, 0);
     canproto_ids_t ids;
     canproto_ids_default(&ids, 0);
-    ids.cia402 = ids.cia402_feedback = ids.cia402_enable = 1;
+    ids.cia402 = CANPROTO_CIA402_MANAGED;
     ids.cia402_cob_id[1] = ids.cia402_cob_id[2] = 0;
     ids.cia402_heartbeat_ms = 100;
     ids.cia402_sdo[0].index = 0x1017;
@@ -440,7 +439,7 @@ static void test_master_heartbeat(void **state)
     assert_int_equal(n, 5);
     canproto_ids_t ids;
     canproto_ids_default(&ids, 0);
-    ids.cia402 = 1;
+    ids.cia402 = CANPROTO_CIA402_TARGETS;
     ids.cia402_cob_id[0] = 0x200 + 127; /* a drive on trajd's own node: refused */
     assert_int_equal(can_port_set_object(port, 0, &ids, &hooks, NULL), -CANPROTO_ECONFIG);
 }

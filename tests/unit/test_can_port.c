@@ -305,7 +305,7 @@ static void test_cia402_no_position_and_late(void **state)
     (void)state;
     canproto_ids_t ids;
     canproto_ids_default(&ids, 0);
-    ids.cia402 = 1;
+    ids.cia402 = CANPROTO_CIA402_TARGETS;
     assert_int_equal(can_port_set_object(port, 0, &ids, &fe_hooks, &eng), 0);
     engine_setpoint_t sp = sp_at(0, NAN);
     sp.pos_m[1] = sp.pos_m[2] = NAN;
@@ -360,8 +360,7 @@ static void test_cia402_feedback(void **state)
     (void)state;
     canproto_ids_t ids;
     canproto_ids_default(&ids, 0);
-    ids.cia402 = 1;
-    ids.cia402_feedback = 1;
+    ids.cia402 = CANPROTO_CIA402_FEEDBACK;
     ids.cia402_cob_id[1] = ids.cia402_cob_id[2] = 0;
     ids.cia402_invert[0] = 1;
     assert_int_equal(can_port_set_object(port, 0, &ids, &fe_hooks, &eng), 0);
@@ -462,7 +461,7 @@ static void heartbeat_to_switched_on(void)
     step_drive(0x0233, 3);
 }
 
-/* Given cia402_enable with one configuration SDO (0x6060 = 8), then trajd
+/* Given CiA 402 managed with one configuration SDO (0x6060 = 8), then trajd
  * starts the node (NMT), writes the SDO, and drives the controlword from the
  * statusword: Shutdown, Switch on, Enable operation (CiA 402 patterns); a
  * drive fault gets Disable voltage and stays so until CLEAR, which resets it
@@ -472,8 +471,7 @@ static void test_cia402_bring_up(void **state)
     (void)state;
     canproto_ids_t ids;
     canproto_ids_default(&ids, 0);
-    ids.cia402 = 1;
-    ids.cia402_enable = 1;
+    ids.cia402 = CANPROTO_CIA402_MANAGED;
     ids.cia402_cob_id[1] = ids.cia402_cob_id[2] = 0;
     ids.cia402_sdo[0].index = 0x6060;
     ids.cia402_sdo[0].sub = 0;
@@ -524,8 +522,7 @@ static void enable_with_controlword_rpdo(void)
 {
     canproto_ids_t ids;
     canproto_ids_default(&ids, 0);
-    ids.cia402 = 1;
-    ids.cia402_enable = 1;
+    ids.cia402 = CANPROTO_CIA402_MANAGED;
     ids.cia402_controlword = 1;
     ids.cia402_heartbeat_ms = 100;
     ids.cia402_cob_id[1] = ids.cia402_cob_id[2] = 0;
@@ -543,7 +540,7 @@ static void enable_with_controlword_rpdo(void)
     can_port_rx(port, 0);
 }
 
-/* Given cia402_enable with the controlword in the RPDO, then the RPDO carries
+/* Given CiA 402 managed with the controlword in the RPDO, then the RPDO carries
  * the command the bring-up last wrote by SDO, never a fixed Enable operation:
  * Disable voltage before the drive is enabled, Enable operation once it is,
  * Disable voltage again after a fault and for a drive in quick stop (which
@@ -579,8 +576,7 @@ static void test_cia402_sdo_stale_reply_ignored(void **state)
     (void)state;
     canproto_ids_t ids;
     canproto_ids_default(&ids, 0);
-    ids.cia402 = 1;
-    ids.cia402_enable = 1;
+    ids.cia402 = CANPROTO_CIA402_MANAGED;
     ids.cia402_cob_id[1] = ids.cia402_cob_id[2] = 0;
     ids.cia402_sdo[0].index = 0x6060;
     ids.cia402_sdo[0].size = 1;
@@ -708,8 +704,7 @@ static void test_cia402_sdo_abort(void **state)
     (void)state;
     canproto_ids_t ids;
     canproto_ids_default(&ids, 0);
-    ids.cia402 = 1;
-    ids.cia402_enable = 1;
+    ids.cia402 = CANPROTO_CIA402_MANAGED;
     ids.cia402_cob_id[1] = ids.cia402_cob_id[2] = 0;
     ids.cia402_sdo[0].index = 0x6060;
     ids.cia402_sdo[0].size = 1;

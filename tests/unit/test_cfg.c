@@ -246,9 +246,45 @@ static void test_can_ids(void **state)
                                 "can.cia402 = yes\ncan.cia402_cob_x = 0x201\n"
                                 "can.cia402_cob_y = 0\ncan.cia402_cob_z = 0\n"));
     can_obj_ids(cfg_obj_transport(&c->obj[0], &can_transport), (unsigned)c->obj[0].id, &ids);
-    assert_int_equal(ids.cia402_feedback, 1);
+    assert_int_equal(ids.cia402, CANPROTO_CIA402_FEEDBACK);
     assert_int_equal(canproto_cia402_tpdo(&ids, 0), 0x181);
     cfg_free(c);
+    /* the one mode (issue 25) and the former keys it replaces, read to the same ids */
+    static const struct {
+        const char *keys;
+        canproto_cia402_mode_t mode;
+    } modes[] = {
+        {"can.cia402 = managed\n", CANPROTO_CIA402_MANAGED},
+        {"can.cia402 = yes\ncan.cia402_enable = yes\n", CANPROTO_CIA402_MANAGED},
+        {"can.cia402 = yes\ncan.cia402_feedback = no\ncan.cia402_enable = yes\n",
+         CANPROTO_CIA402_MANAGED},
+        {"can.cia402 = feedback\n", CANPROTO_CIA402_FEEDBACK},
+        {"can.cia402 = targets\n", CANPROTO_CIA402_TARGETS},
+        {"can.cia402 = yes\ncan.cia402_feedback = no\n", CANPROTO_CIA402_TARGETS},
+        {"can.cia402 = off\ncan.own = yes\n", CANPROTO_CIA402_OFF},
+        {"can.cia402 = no\ncan.cia402_enable = yes\n", CANPROTO_CIA402_OFF},
+    };
+    for (size_t i = 0; i < sizeof modes / sizeof modes[0]; i++) {
+        char obj[512];
+        snprintf(obj, sizeof obj,
+                 "%scan.cia402_cob_x = 0x201\ncan.cia402_cob_y = 0\n"
+                 "can.cia402_cob_z = 0\n",
+                 modes[i].keys);
+        char text[1024];
+        snprintf(text, sizeof text, CAN_LOG CAN_OBJ("b", "initial_position = 1,2,0\n", "%s"), obj);
+        c = load_ok(text);
+        can_obj_ids(cfg_obj_transport(&c->obj[0], &can_transport), (unsigned)c->obj[0].id, &ids);
+        assert_int_equal(ids.cia402, modes[i].mode);
+        cfg_free(c);
+    }
+    load_bad(CAN_LOG CAN_OBJ("b", "",
+                             "can.cia402 = drives\ncan.cia402_cob_x = 0x201\n"
+                             "can.cia402_cob_y = 0\ncan.cia402_cob_z = 0\n"),
+             CFG_EVALUE, 8, "expected off, targets, feedback or managed");
+    load_bad(CAN_LOG CAN_OBJ("b", "",
+                             "can.cia402 = targets\ncan.cia402_cob_x = 0x201\n"
+                             "can.cia402_cob_y = 0\ncan.cia402_cob_z = 0\n"),
+             CFG_EVALUE, 4, "needs initial_position");
     /* without feedback, where the drives stand must be given: initial_position */
     load_bad(
         CAN_LOG CAN_OBJ("b", "",

@@ -296,7 +296,7 @@ static void run_seed(unsigned seed, worst_t *w)
     safety_init(&sf, &slim);
     canproto_ids_t ids;
     canproto_ids_default(&ids, 0);
-    ids.cia402 = 1;
+    ids.cia402 = CANPROTO_CIA402_TARGETS;
     ids.cia402_invert[1] = 1;
     ids.cia402_offset[2] = 1234;
     track_t tr[OUT_N];
