@@ -178,30 +178,14 @@ static canproto_cia402_mode_t cia402_mode_of(const can_obj_cfg_t *oc)
     return oc->cia402_feedback ? CANPROTO_CIA402_FEEDBACK : CANPROTO_CIA402_TARGETS;
 }
 
-int can_obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
+/* The per-axis keys (cia402_cob_x, ..._tpdo_, ..._counts_per_m_, ..._invert_,
+ * ..._offset_); -CFG_EUNKNOWN if kv is none of them. */
+static int axis_key(can_obj_cfg_t *oc, const cfg_kv_t *kv, char *why, size_t wl)
 {
-    can_obj_cfg_t *oc = p;
     canproto_ids_t *ids = &oc->ids;
     const char *k = kv->key;
     long long v;
     int rc;
-    static const struct {
-        const char *key;
-        size_t off;
-        unsigned bit;
-    } idkeys[] = {
-        {"waypoint_id", offsetof(canproto_ids_t, waypoint_id), GIVEN_WP},
-        {"waypoint_fd_id", offsetof(canproto_ids_t, waypoint_fd_id), GIVEN_WPFD},
-        {"setpoint_id", offsetof(canproto_ids_t, setpoint_id), GIVEN_SP},
-        {"setpoint_fd_id", offsetof(canproto_ids_t, setpoint_fd_id), GIVEN_SPFD},
-        {"status_id", offsetof(canproto_ids_t, status_id), GIVEN_ST},
-        {"status2_id", offsetof(canproto_ids_t, status2_id), GIVEN_ST2},
-    };
-    for (size_t i = 0; i < sizeof idkeys / sizeof idkeys[0]; i++)
-        if (!strcmp(k, idkeys[i].key)) {
-            oc->given |= idkeys[i].bit;
-            return get_id(kv, (uint32_t *)(void *)((char *)ids + idkeys[i].off), why, wl);
-        }
     for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
         char name[32];
         snprintf(name, sizeof name, "cia402_cob_%c", "xyz"[a]);
@@ -226,6 +210,36 @@ int can_obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
             return rc;
         }
     }
+    return -CFG_EUNKNOWN;
+}
+
+int can_obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
+{
+    can_obj_cfg_t *oc = p;
+    canproto_ids_t *ids = &oc->ids;
+    const char *k = kv->key;
+    long long v;
+    int rc;
+    static const struct {
+        const char *key;
+        size_t off;
+        unsigned bit;
+    } idkeys[] = {
+        {"waypoint_id", offsetof(canproto_ids_t, waypoint_id), GIVEN_WP},
+        {"waypoint_fd_id", offsetof(canproto_ids_t, waypoint_fd_id), GIVEN_WPFD},
+        {"setpoint_id", offsetof(canproto_ids_t, setpoint_id), GIVEN_SP},
+        {"setpoint_fd_id", offsetof(canproto_ids_t, setpoint_fd_id), GIVEN_SPFD},
+        {"status_id", offsetof(canproto_ids_t, status_id), GIVEN_ST},
+        {"status2_id", offsetof(canproto_ids_t, status2_id), GIVEN_ST2},
+    };
+    for (size_t i = 0; i < sizeof idkeys / sizeof idkeys[0]; i++)
+        if (!strcmp(k, idkeys[i].key)) {
+            oc->given |= idkeys[i].bit;
+            return get_id(kv, (uint32_t *)(void *)((char *)ids + idkeys[i].off), why, wl);
+        }
+    rc = axis_key(oc, kv, why, wl);
+    if (rc != -CFG_EUNKNOWN)
+        return rc;
     if (!strcmp(k, "index")) {
         rc = cfg_get_int(kv, 0, CAN_INDEX_MAX, &v, why, wl);
         oc->index = (int)v;

@@ -353,7 +353,8 @@ class CanDaemon(unittest.TestCase):
         self.assertIn(3, states[:-1])  # stopped before the end of the track
         self.assertNotIn("command frame(s) refused", p.stderr)
         st2 = ct.decode_by_id(os.path.join(d, "sp.log"), 0x6D0)
-        self.assertEqual(int(st2[-1][1]["ST2_CmdRefused"]), 0)
+        page1 = [f for _, f in st2 if int(f["ST2_Page"]) == 1]   # the faults page, last sent
+        self.assertEqual(int(page1[-1]["ST2_CmdRefused"]), 0)
 
     # Given 4 objects at 1 kHz with own frames and CiA 402 RPDOs at 500 kbit/s,
     # then --check-config refuses with the computed load, which agrees with
