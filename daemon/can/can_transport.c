@@ -743,6 +743,8 @@ static void setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
         can_port_status2(s->port, k, &f);
         status2_clock(s, o, sp, &f);
         can_port_status2_value(s->port, k, &f);
+        canproto_encode_status2_time(0, sp->t_s, &f); /* page 6: beside the waypoints */
+        can_port_status2_value(s->port, k, &f);
         can_port_setpoint(s->port, k, sp);
     }
 }

@@ -356,6 +356,29 @@ void canproto_encode_status2_clock(uint32_t id, const canproto_st2_clock_t *p,
     out->data[6] = p->clocked;
 }
 
+void canproto_encode_status2_time(uint32_t id, double t_s, canproto_frame_t *out)
+{
+    frame_init(out, id, CANPROTO_STATUS2_DLEN, 0);
+    out->data[0] = CANPROTO_ST2_TIME;
+    int64_t us = isfinite(t_s)
+                     ? sat_signed(t_s, CANPROTO_ST2_TIME_S_PER_BIT, -(CANPROTO_ST2_TIME_NA + 1))
+                     : CANPROTO_ST2_TIME_NA;
+    put_le(&out->data[1], 7, (uint64_t)us & 0xFFFFFFFFFFFFFFull);
+}
+
+int canproto_decode_status2_time(const canproto_frame_t *f, double *t_s)
+{
+    *t_s = NAN;
+    int page = canproto_status2_page(f);
+    if (page < 0)
+        return page;
+    if (page != CANPROTO_ST2_TIME)
+        return -CANPROTO_EMUX;
+    int64_t us = sext(get_le(&f->data[1], 7), 56);
+    *t_s = us == CANPROTO_ST2_TIME_NA ? NAN : (double)us * CANPROTO_ST2_TIME_S_PER_BIT;
+    return 0;
+}
+
 int canproto_decode_status2_clock(const canproto_frame_t *f, canproto_st2_clock_t *out)
 {
     memset(out, 0, sizeof *out);

@@ -142,6 +142,7 @@ typedef enum {
     CANPROTO_ST2_CLOCK = 3,    /* data age and sender clock drift (canproto_st2_clock_t) */
     CANPROTO_ST2_DRIVE = 4,    /* the object's CiA 402 drives (canproto_status2_drive_t) */
     CANPROTO_ST2_BUS = 5,      /* CAN bus state from error frames (canproto_st2_bus_t) */
+    CANPROTO_ST2_TIME = 6,     /* track time t_s of the setpoint (canproto_encode_status2_time) */
     CANPROTO_ST2_PAGES = 8     /* pages are 1 .. CANPROTO_ST2_PAGES - 1 */
 } canproto_st2_page_t;
 
@@ -488,6 +489,16 @@ void canproto_encode_status2_clock(uint32_t id, const canproto_st2_clock_t *p,
 /* Decode STATUS2 page 3: age and drift as the field's value times its LSB,
  * NaN for the n/a codes.  Returns 0, -CANPROTO_ELEN, or -CANPROTO_EMUX. */
 int canproto_decode_status2_clock(const canproto_frame_t *f, canproto_st2_clock_t *out);
+
+/* STATUS2 page 6, TIME: bytes 1..7 the setpoint's track time t_s as int56 in
+ * us (the unit of the waypoint TIME frame; seconds since the epoch fit), so a
+ * setpoint frame can be put beside the waypoint it passes; a page of values. */
+#define CANPROTO_ST2_TIME_NA (-36028797018963968LL) /* int56 minimum: no time (NaN) */
+#define CANPROTO_ST2_TIME_S_PER_BIT 1e-6
+void canproto_encode_status2_time(uint32_t id, double t_s, canproto_frame_t *out);
+/* Decode STATUS2 page 6: t_s (NaN for the n/a code).  Returns 0, -CANPROTO_ELEN,
+ * or -CANPROTO_EMUX (another page). */
+int canproto_decode_status2_time(const canproto_frame_t *f, double *t_s);
 
 /* STATUS2 page 2, REJECTED: waypoints refused per reason (uint8, saturating). */
 typedef struct {

@@ -216,6 +216,13 @@ class CanDaemon(unittest.TestCase):
         rows, others = ct.decode_setpoints(log)
         self.assertEqual(rows, {})  # own frames off
         self.assertGreater(others.get(0x080, 0), 0)
+        # STATUS2 page 6 (decoded by canmatrix with the DBC): the track time of that
+        # tick's setpoint, as trajd's own CSV has it, to the microsecond
+        page6 = [(n, g) for n, g in ct.decode_by_id(log, 0x6D0) if int(g["ST2_Page"]) == 6]
+        self.assertGreater(len(page6), 10)
+        for now_ns, sig in page6:
+            t = float(logged[now_ns]["t_s"])
+            self.assertLessEqual(abs(float(sig["ST2_TimeT"]) - t), 0.5e-6 + 1e-6 * 1e-9 * abs(t))
 
     # Given faults in the input: waypoint 50 missing (gap), 60 sent twice, a
     # short frame and an unknown multiplexer, then STATUS reports 1 lost and 2

@@ -103,6 +103,8 @@ def load():
     lib.canproto_decode_status2_rejected.argtypes = [P(Frame), P(St2Rejected)]
     lib.canproto_encode_status2_clock.argtypes = [ctypes.c_uint32, P(St2Clock), P(Frame)]
     lib.canproto_decode_status2_clock.argtypes = [P(Frame), P(St2Clock)]
+    lib.canproto_encode_status2_time.argtypes = [ctypes.c_uint32, ctypes.c_double, P(Frame)]
+    lib.canproto_decode_status2_time.argtypes = [P(Frame), P(ctypes.c_double)]
     lib.canproto_encode_cia402.argtypes = [P(Ids), ctypes.c_uint, ctypes.c_double, P(Frame)]
     lib.canproto_cia402_pos_m.argtypes = [P(Ids), ctypes.c_uint, ctypes.c_int32]
     lib.canproto_cia402_pos_m.restype = ctypes.c_double

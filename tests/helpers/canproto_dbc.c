@@ -94,6 +94,7 @@ static const canproto_signal_t sig_st2[] = {
     SIG_S("ST2_Age", CANPROTO_ST2_CLOCK, 8, 24, CANPROTO_ST2_AGE_S_PER_BIT, "s"),
     SIG_S("ST2_Drift", CANPROTO_ST2_CLOCK, 32, 16, CANPROTO_ST2_DRIFT_PPM_PER_BIT, "ppm"),
     SIG_U("ST2_Clocked", CANPROTO_ST2_CLOCK, 48, 8, 1, ""),
+    SIG_S("ST2_TimeT", CANPROTO_ST2_TIME, 8, 56, CANPROTO_ST2_TIME_S_PER_BIT, "s"),
     SIG_U("ST2_StateX", CANPROTO_ST2_DRIVE, 8, 4, 1, ""),
     SIG_U("ST2_StateY", CANPROTO_ST2_DRIVE, 12, 4, 1, ""),
     SIG_U("ST2_StateZ", CANPROTO_ST2_DRIVE, 16, 4, 1, ""),
@@ -238,6 +239,8 @@ int canproto_dbc(char *buf, size_t len)
          "sender fast), one estimate per daemon; -3276.8: none\";\n"
          "CM_ SG_ %u ST2_Clocked \"page 3: 0 relative time, 1 on the daemon's clock, 2 "
          "undecided (clock = auto: the first waypoint decides)\";\n"
+         "CM_ SG_ %u ST2_TimeT \"page 6: track time t_s of the setpoint (the waypoints' time "
+         "base, as WP_Time), -36028797018.963968: none\";\n"
          "CM_ SG_ %u ST2_Statusword \"page 4: statusword 0x6041 of the first drive axis not in "
          "Operation Enabled, else of the first\";\n"
          "CM_ SG_ %u ST2_Nmt \"page 4: heartbeat NMT state of the same node\";\n"
@@ -249,7 +252,7 @@ int canproto_dbc(char *buf, size_t len)
          "none\";\n",
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
-         CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE);
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE);
     emit(buf, len, &pos,
          "BA_DEF_ BO_ \"VFrameFormat\" ENUM \"StandardCAN\",\"ExtendedCAN\",\"reserved\","
          "\"J1939PG\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\","
@@ -286,9 +289,10 @@ int canproto_dbc(char *buf, size_t len)
          CANPROTO_STERR_OUTPUT, CANPROTO_STERR_SAFETY, CANPROTO_STERR_DRIVE,
          CANPROTO_STERR_REFUSED);
     emit(buf, len, &pos,
-         "VAL_ %u ST2_Page %d \"faults\" %d \"rejected\" %d \"clock\" %d \"drive\" %d \"bus\" ;\n",
+         "VAL_ %u ST2_Page %d \"faults\" %d \"rejected\" %d \"clock\" %d \"drive\" %d \"bus\" "
+         "%d \"time\" ;\n",
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ST2_FAULTS, CANPROTO_ST2_REJECTED, CANPROTO_ST2_CLOCK,
-         CANPROTO_ST2_DRIVE, CANPROTO_ST2_BUS);
+         CANPROTO_ST2_DRIVE, CANPROTO_ST2_BUS, CANPROTO_ST2_TIME);
     emit(buf, len, &pos,
          "VAL_ %u ST2_Clocked %d \"relative\" %d \"on the clock\" %d \"undecided\" ;\n",
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ST2_CLOCK_RELATIVE, CANPROTO_ST2_CLOCK_ON,

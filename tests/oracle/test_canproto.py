@@ -329,6 +329,40 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
         g.data[0] = 2
         self.assertLess(LIB.canproto_decode_status2_clock(ctypes.byref(g), ctypes.byref(q)), 0)
 
+    # Given a setpoint's track time, then STATUS2 page 6 carries it in us as canmatrix reads
+    # it with the DBC (relative times, epoch times, NaN), and canmatrix's frame decodes back.
+    def test_status2_time(self):
+        fr = frame_of(self.db, 0x6D0)
+        page = fr.signal_by_name("ST2_Page")
+        self.assertEqual(str(page.values.get(6, page.values.get("6"))), "time")
+        na = -(1 << 55)
+        cases = [(0.0, 0), (0.1, 100000), (-2.5, -2500000), (1795887035.686163, 1795887035686163),
+                 (1e-7, 0), (float("nan"), na)]
+        cases += [(self.rng.uniform(-1e9, 2e9), None) for _ in range(50)]
+        for t, want in cases:
+            if want is None:  # half-way cases have probability 0
+                want = round(t / 1e-6)  # value / LSB, as every field of the codec
+            f = cp.Frame()
+            LIB.canproto_encode_status2_time(0x6D0, ctypes.c_double(t), ctypes.byref(f))
+            self.assertEqual((f.id, f.len), (0x6D0, 8))
+            d = decode(self.db, f)
+            self.assertEqual(d["ST2_Page"], 6)
+            if want == na:  # beyond a double's integers as canmatrix scales it: the bytes
+                self.assertEqual(int.from_bytes(bytes(f.data[1:8]), "little", signed=True), na)
+            else:  # to the LSB (1 us): llround and Python's round differ at half-way values
+                self.assertAlmostEqual(float(d["ST2_TimeT"]), want * 1e-6,
+                                       delta=1.01e-6 + abs(t) * 4e-16, msg=t)
+            data = fr.encode({"ST2_Page": 6, "ST2_TimeT": want})
+            g = status2_frame(data)
+            q = ctypes.c_double()
+            self.assertEqual(LIB.canproto_decode_status2_time(ctypes.byref(g), ctypes.byref(q)), 0)
+            if want == na:
+                self.assertTrue(math.isnan(q.value))
+            else:
+                self.assertAlmostEqual(q.value, want / 1e6, delta=1e-9 * max(1.0, abs(t)))
+        g.data[0] = 2
+        self.assertLess(LIB.canproto_decode_status2_time(ctypes.byref(g), ctypes.byref(q)), 0)
+
     # Given a CiA 402 axis, then canmatrix reads the target position in increments.
     def test_cia402(self):
         ids = cp.Ids()
