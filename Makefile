@@ -97,7 +97,7 @@ MANS := $(MAN_SRC:daemon/doc/%=$(BUILD)/man/%) $(BUILD)/man/trajd.conf.5
 .SECONDARY:
 
 all: $(MANS) $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/libtrajdaemon.a $(BINS) $(TEST_BINS) $(BENCHES) \
-     $(REPLAY_BINS) $(UML_HELPERS)
+     $(REPLAY_BINS) $(UML_HELPERS) $(BUILD)/libtrajd_test.so
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(@D)
@@ -135,6 +135,11 @@ $(BUILD)/libtrajd.a: $(LIB_OBJ)
 SOVERSION := 0
 $(BUILD)/libtrajd.so: $(PIC_OBJ) Makefile
 	$(CC) -shared -Wl,-soname,libtrajd.so.$(SOVERSION) -o $@ $(filter %.o,$^) -lm
+
+# For the Python oracle tests only (never installed): libtrajd and the ctypes
+# shims of tests/helpers/ctypes_shims.c (the engine with flat arguments).
+$(BUILD)/libtrajd_test.so: $(PIC_OBJ) $(BUILD)/pic/tests/helpers/ctypes_shims.o Makefile
+	$(CC) -shared -o $@ $(filter %.o,$^) -lm
 
 $(BUILD)/trajd.pc: Makefile daemon/core/version.h
 	@mkdir -p $(@D)
@@ -261,7 +266,7 @@ test-asan:
 # redundant.  Run by tests/run.sh as tests/e2e/test_cppcheck.sh.  A false
 # positive is suppressed on its line with a reason:
 #   /* cppcheck-suppress <id> ; why it cannot happen */
-CPPCHECK_SRC := lib daemon tests/unit tests/bench tests/fuzz
+CPPCHECK_SRC := lib daemon tests/unit tests/bench tests/fuzz tests/helpers
 lint: $(GEN_TABLE)
 	@echo "cppcheck: $(CPPCHECK_SRC) $(GEN_TABLE)"
 	@cppcheck -q --std=c11 -D_GNU_SOURCE -DFUZZ_NAME='"fuzz"' --enable=warning,portability,performance \

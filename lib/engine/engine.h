@@ -543,16 +543,6 @@ unsigned engine_lookahead(const engine_config_t *cfg);
 int engine_config_resolve(const engine_config_t *cfg, engine_config_t *out);
 
 /*
- * For Python ctypes: F and O picked for method/param, accuracy and
- * max_lookahead (the defaults otherwise), and the lookahead that results
- * (start_slack auto at its least); 0 if none fits.
- */
-unsigned engine_pick_flat(int method, int param, double accuracy,
-                          unsigned max_lookahead, unsigned *fragment,
-                          unsigned *overlap);
-
-
-/*
  * Offline: the curve the engine streams for a whole track, built by the same
  * code as engine_push/engine_finish (the queue drained after every push), as
  * cubic segments in absolute track time (see fdiff.h).  For tests, benches
@@ -563,19 +553,6 @@ unsigned engine_pick_flat(int method, int param, double accuracy,
  */
 int engine_curve(const engine_config_t *cfg, const engine_waypoint_t *wp,
                  size_t n, fdiff_seg_t *seg, size_t max_seg, size_t *nseg);
-
-/*
- * engine_curve with flat arguments, for Python ctypes: the default
- * configuration with method, param, ends, fragment, overlap given (0:
- * auto, as the default),
- * max_speed_m_s = 0, max_accel_m_s2 = 0 (every waypoint kept) and
- * max_gap_s = 1e9 (one trajectory).  t_s: n times,
- * xyz: n x 3; seg_out: max_seg x 14 doubles (t0_s, dur_s, then c[axis][0..3]
- * for x, y, z).  Returns the number of segments, or a negated engine_error.
- */
-long engine_curve_flat(int method, int param, int ends, unsigned fragment,
-                       unsigned overlap, size_t n, const double *t_s,
-                       const double *xyz, double *seg_out, size_t max_seg);
 
 /* clang-format on */
 #endif
