@@ -247,23 +247,11 @@ typedef struct {
                                FDIFF_RESEED_STEPS, so drift does not grow with
                                the segment).  Default 60 s (= max_gap_s) */
     unsigned start_slack;   /* waypoints buffered beyond what the solver needs
-                               before a trajectory's output starts: absorbs
-                               irregular input timing.  ENGINE_AUTO (the
-                               default): adapts to the input, from
-                               ENGINE_SLACK_AUTO_MIN to ENGINE_SLACK_AUTO_MAX:
-                               the output starts once the waypoints buffered
-                               span in time the longest stretch of lookahead
-                               + 1 intervals measured so far (so a regular
-                               input waits one waypoint more than the solver,
-                               an irregular one as much more as its intervals
-                               vary), plus one per underrun seen (late
-                               arrivals); the most it adds is also bounded by
-                               what capacity leaves beyond lookahead +
-                               fragment + 8.  A number fixes it (the former
-                               default was 8: no underrun replaying the
-                               irregular gpxgo_visnjan track with F=64/O=32;
-                               2 were enough for the regular 5 Hz figure-8).
-                               Adds to engine_lookahead */
+                               before a trajectory's output starts; adds to
+                               engine_lookahead.  ENGINE_AUTO (default): from
+                               the input's timing, ENGINE_SLACK_AUTO_MIN ..
+                               _MAX (lib/engine/README.md "start_slack
+                               auto"); a number fixes it */
     unsigned smooth_window; /* SMOOTH only: waypoints per local least-squares fit,
                                4 .. ENGINE_SMOOTH_WINDOW_MAX.  Default 24 */
     unsigned smooth_ctrl;   /* SMOOTH only: control points per fit,
