@@ -186,20 +186,6 @@ uint32_t modbus_server_generation(const modbus_server_t *s);
 
 void modbus_server_stats(const modbus_server_t *s, modbus_server_stats_t *st);
 
-/* One TCP client's counters. */
-typedef struct {
-    char peer[64];        /* "address:port" */
-    int64_t connected_ns; /* CLOCK_MONOTONIC at accept */
-    uint64_t requests;    /* answered (normal or exception) */
-    uint64_t exceptions;
-    uint64_t bytes_in;
-    int64_t pending_since_ns; /* first byte of a partial request, 0 if none */
-    int64_t last_request_ns;  /* last complete request (connected_ns if none) */
-} modbus_server_client_t;
-
-/* Client slot i (0 .. max_clients-1): 0 and *out, or -ENOENT if free. */
-int modbus_server_client(const modbus_server_t *s, unsigned i, modbus_server_client_t *out);
-
 /*
  * Serve an already connected stream socket as a TCP client (the fuzz target
  * and tests use a socketpair).  Takes ownership of fd.  At max_clients a

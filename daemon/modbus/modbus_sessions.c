@@ -267,22 +267,6 @@ static void peer_log(modbus_server_t *s, int64_t now)
     }
 }
 
-int modbus_server_client(const modbus_server_t *s, unsigned i, modbus_server_client_t *out)
-{
-    if (i >= s->max_clients || s->clients[i].fd < 0)
-        return -ENOENT;
-    const client_t *c = &s->clients[i];
-    memset(out, 0, sizeof *out);
-    snprintf(out->peer, sizeof out->peer, "%s", c->peer);
-    out->connected_ns = c->connected_ns;
-    out->requests = c->requests;
-    out->exceptions = c->exceptions;
-    out->bytes_in = c->bytes_in;
-    out->pending_since_ns = c->pending_ns;
-    out->last_request_ns = c->last_ns;
-    return 0;
-}
-
 /* A notice about a client, at most MODBUS_SERVER_LOG_PER_S a second (the
  * rest counted and reported with the next one that passes). */
 static void client_note(modbus_server_t *s, const client_t *c, const char *what, int64_t now)
