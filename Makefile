@@ -102,7 +102,7 @@ MANS := $(MAN_SRC:daemon/doc/%=$(BUILD)/man/%) $(BUILD)/man/trajd.conf.5
 .SECONDARY:
 
 all: $(MANS) $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/libtrajdaemon.a $(BINS) $(TEST_BINS) $(BENCHES) \
-     $(REPLAY_BINS) $(UML_HELPERS) $(TOOLS)
+     $(REPLAY_BINS) $(UML_HELPERS) $(TOOLS) $(BUILD)/libtrajd_test.so
 
 $(BUILD)/%.o: %.c
 	@mkdir -p $(@D)
@@ -140,6 +140,11 @@ $(BUILD)/libtrajd.a: $(LIB_OBJ)
 SOVERSION := 0
 $(BUILD)/libtrajd.so: $(PIC_OBJ) Makefile
 	$(CC) -shared -Wl,-soname,libtrajd.so.$(SOVERSION) -o $@ $(filter %.o,$^) -lm
+
+# For the Python oracle tests only (never installed): libtrajd and the ctypes
+# shims of tests/helpers/ctypes_shims.c (the engine with flat arguments).
+$(BUILD)/libtrajd_test.so: $(PIC_OBJ) $(BUILD)/pic/tests/helpers/ctypes_shims.o Makefile
+	$(CC) -shared -o $@ $(filter %.o,$^) -lm
 
 $(BUILD)/trajd.pc: Makefile daemon/core/version.h
 	@mkdir -p $(@D)

@@ -5,6 +5,8 @@
  * (lib/proto/) and the path toolkit (lib/spline/path.h) include this header
  * rather than each other, so a codec never depends on the engine for a struct.
  * The names keep the engine_ prefix: they are the engine's interface types.
+ * Their names (engine_strerror, engine_reason_name, engine_state_name) are in
+ * motion.c, so a codec that names a refusal links no engine.
  */
 #ifndef TRAJD_MOTION_H
 #define TRAJD_MOTION_H

@@ -309,12 +309,6 @@ fail:
     return NULL;
 }
 
-can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const char *ifname,
-                                int64_t start_ns, char *err, size_t errlen)
-{
-    return can_logfile_open_mode(in_path, out_path, ifname, start_ns, 0, err, errlen);
-}
-
 long long can_logfile_out_kept(const can_logfile_t *l)
 {
     return l->out_kept;

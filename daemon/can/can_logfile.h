@@ -6,7 +6,7 @@
  * without a kernel, and logged bus traffic can be replayed.
  *
  * Input timing: frame k is due at engine time start_ns + (ts_k - ts_0); the
- * whole file is read at can_logfile_open (never in the tick).  Frames with ids
+ * whole file is read at can_logfile_open_mode (never in the tick).  Frames with ids
  * that are not ours are delivered too: can_port counts them as foreign.
  *
  * Lines are read whole, of any length (getline).  A line that is not a
@@ -53,15 +53,10 @@ typedef struct can_logfile can_logfile_t;
  * Open.  in_path: candump log to replay (NULL: no input); out_path: file to
  * write (NULL: no output; "-" = stdout).  ifname: interface name written in
  * output lines.  start_ns: engine time at which the first input frame is due.
+ * append: 1 appends to the output file (O_APPEND) instead of truncating it; a
+ * torn last line (no newline at its end, a full disk) is cut off first, with
+ * a warning, so every line stays whole.
  * Returns NULL with a message in err on failure (file missing, unreadable).
- */
-can_logfile_t *can_logfile_open(const char *in_path, const char *out_path, const char *ifname,
-                                int64_t start_ns, char *err, size_t errlen);
-
-/*
- * The same, and with append set the output file is appended to (O_APPEND)
- * instead of truncated; a torn last line (no newline at its end, a full
- * disk) is cut off first, with a warning, so every line stays whole.
  */
 can_logfile_t *can_logfile_open_mode(const char *in_path, const char *out_path, const char *ifname,
                                      int64_t start_ns, int append, char *err, size_t errlen);
@@ -75,7 +70,7 @@ long long can_logfile_out_kept(const can_logfile_t *l);
 int64_t can_logfile_out_last_us(const can_logfile_t *l);
 
 /*
- * Append the frames of a candump log read from fp to l's input (can_logfile_open
+ * Append the frames of a candump log read from fp to l's input (can_logfile_open_mode
  * does this for in_path; tests and the fuzz target use fmemopen).  name is
  * used in messages.  Returns 0, or -1 with a message in err (out of memory,
  * read error); bad lines are not errors (see above).

@@ -15,6 +15,7 @@
 #include "can_logfile.h"
 #include "can_refused.h"
 #include "can_port.h"
+#include "can_publish.h"
 #include "cia402.h"
 #include "core.h"
 #include "gate.h"
@@ -326,7 +327,7 @@ static void sync_fd(can_state_t *s)
         s->sock_fd = fd;
 }
 
-/* Refresh what other transports read through can_transport_bus (Modbus). */
+/* Refresh the bus state the cycle publishes to the core (can_publish.h). */
 static void publish_state(can_state_t *s)
 {
     const canerr_bus_t *e = can_port_bus_errors(s->port);
@@ -340,41 +341,6 @@ static void publish_state(can_state_t *s)
                 (unsigned long long)e->frames, e->tx_err, e->rx_err,
                 (unsigned long long)e->bus_offs, (unsigned long long)e->restarts);
     s->err = *e;
-}
-
-void can_transport_bus_errors(const core_t *c, canerr_bus_t *out)
-{
-    const can_state_t *s = c->tstate[transport_index(&can_transport)];
-    if (s && s->port)
-        *out = s->err;
-    else
-        memset(out, 0, sizeof *out);
-}
-
-can_bus_state_t can_transport_bus(const core_t *c, uint32_t *load_permille)
-{
-    const can_state_t *s = c->tstate[transport_index(&can_transport)];
-    *load_permille = s ? s->load_permille : 0;
-    return s && s->port ? s->bus_state : CAN_BUS_UNUSED;
-}
-
-int can_transport_drive(const core_t *c, unsigned obj, can_drive_info_t *out)
-{
-    const can_state_t *s = c->tstate[transport_index(&can_transport)];
-    memset(out, 0, sizeof *out);
-    if (!s || !s->port || obj >= CFG_OBJECTS_MAX || s->port_index[obj] < 0) {
-        can_port_drive_summary(NULL, 0, &out->d);
-        return 0;
-    }
-    unsigned k = (unsigned)s->port_index[obj];
-    can_port_obj_stats_t st;
-    can_port_obj_stats(s->port, k, &st);
-    out->emcy = st.emcy;
-    out->sdo_aborts = st.sdo_aborts;
-    out->last_abort = st.last_abort;
-    out->hb_lost = st.heartbeat_lost;
-    out->tx_clamped = st.tx_clamped;
-    return can_port_drive_summary(s->port, k, &out->d);
 }
 
 static void on_readable(loop_t *l, int fd, uint32_t ev, void *ctx)
@@ -766,6 +732,7 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         can_logfile_flush(s->log);
         log_out_faults(s, 1);
     }
+    can_publish(c, s->port, s->port_index, s->bus_state, s->load_permille, &s->err);
 }
 
 static int input_done(void *state, const obj_t *o)

@@ -850,14 +850,6 @@ int cfg_uses(const cfg_t *c, const transport_t *t)
     return 0;
 }
 
-const cfg_obj_t *cfg_obj_by_id(const cfg_t *c, int id)
-{
-    for (unsigned k = 0; k < c->nobj; k++)
-        if (c->obj[k].id == id)
-            return &c->obj[k];
-    return NULL;
-}
-
 const cfg_obj_t *cfg_obj_by_name(const cfg_t *c, const char *name)
 {
     for (unsigned k = 0; k < c->nobj; k++)

@@ -183,9 +183,6 @@ int cfg_load_string(const char *text, const char *name, const char *dir, cfg_t *
  */
 int cfg_reload_check(const cfg_t *old, const cfg_t *nw, char *err, size_t errlen);
 
-/* Object by id, or NULL. */
-const cfg_obj_t *cfg_obj_by_id(const cfg_t *c, int id);
-
 /* Object by name, or NULL. */
 const cfg_obj_t *cfg_obj_by_name(const cfg_t *c, const char *name);
 

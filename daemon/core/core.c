@@ -480,6 +480,7 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
     c->period_ns = cfg->daemon.period_ns;
     double max_ppm = stats->drift.max_ppm; /* the running core's, if this one fails */
     stats->drift.max_ppm = cfg->daemon.drift_max_ppm;
+    memset(&stats->bus, 0, sizeof stats->bus); /* until this core's transports publish */
     /* engine time goes on from the previous core: carried engines never see
      * it go backwards */
     c->t0_ns = prev ? prev->now_ns + prev->period_ns : 0;

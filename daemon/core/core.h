@@ -32,7 +32,7 @@
  * transport's cycle, so core_t, stats_t and obj_t are written by this thread only.
  *
  * Stop policy (SIGTERM/SIGINT, core_stop): inputs stop (no pre_tick,
- * obj_push refuses with -ENGINE_ESTATE), every engine gets engine_stop() so
+ * obj_push_from refuses with -ENGINE_ESTATE), every engine gets engine_stop() so
  * it brakes along its path to rest (a category-1 stop by the time scaling,
  * lib/engine/TIMESCALE.md) and stays there (FINISHED), the outputs keep
  * streaming meanwhile; the daemon exits 0 when every object is
@@ -54,6 +54,45 @@
 #include "safety.h"
 #include "transport.h"
 
+/* A field bus's state as the transport that runs it publishes it into
+ * stats_t.bus, for the other transports and the control socket to read
+ * (values follow linux/can/netlink.h, plus DOWN). */
+#define CORE_BUS_UNUSED 0 /* no transport publishes a bus */
+#define CORE_BUS_ACTIVE 1 /* error-active */
+#define CORE_BUS_WARNING 2
+#define CORE_BUS_PASSIVE 3
+#define CORE_BUS_OFF 4
+#define CORE_BUS_DOWN 5 /* interface down or gone; reopening */
+typedef struct {
+    unsigned state;         /* CORE_BUS_*, as of the publisher's last housekeeping */
+    uint32_t load_permille; /* worst-case load of the configured traffic, 0.1 % */
+    uint64_t err_frames;    /* error frames; entries into warning, passive, bus-off */
+    uint64_t warnings, passives, bus_offs;
+    uint64_t restarts;       /* controller restarts */
+    uint64_t bus_errors;     /* error frames with a bus-error class */
+    uint64_t overflows;      /* controller buffer overflows */
+    unsigned tx_err, rx_err; /* last TX/RX error counters the controller reported */
+} core_bus_t;
+
+/* An object's drives as the transport that drives them publishes them into
+ * obj_t.drive every tick. */
+#define CORE_DRIVE_NONE 0x0Fu     /* state of an axis without a drive */
+#define CORE_DRIVE_NMT_NONE 0xFFu /* no heartbeat heard */
+typedef struct {
+    int published; /* 1: a transport drives this object (else read every state as NONE) */
+    uint8_t state[ENGINE_AXES]; /* CiA 402 state per axis (8: not heard yet), or NONE */
+    int hb_lost;                /* a drive's heartbeat not heard in time */
+    int held;                   /* a drive left Operation Enabled; held until clear */
+    uint16_t statusword;  /* of the first drive axis not in Operation Enabled, else the first */
+    uint8_t nmt;          /* heartbeat NMT state of that axis' node, or NMT_NONE */
+    uint16_t emcy;        /* error code of the last EMCY, 0 = none */
+    uint64_t emcy_frames; /* EMCY frames from its drives */
+    uint64_t sdo_aborts;
+    uint32_t last_abort;  /* abort code of the last SDO abort, 0 = none */
+    uint64_t hb_timeouts; /* heartbeat consumer timeouts */
+    uint64_t tx_clamped;  /* setpoints with a value clipped to its field */
+} core_drive_t;
+
 /* One moving object. */
 typedef struct obj {
     char name[CFG_NAME_MAX];
@@ -68,7 +107,7 @@ typedef struct obj {
     engine_status_t status;       /* engine status after the last tick */
     uint64_t skipped_ticks;       /* missed deadlines this object was stepped through with
                                      * no output (added into status.skipped_ticks) */
-    int stopping;                 /* the daemon is stopping: obj_push refuses */
+    int stopping;                 /* the daemon is stopping: obj_push_from refuses */
     int carried;                  /* 1 if engine (and counters) were carried over a reload */
     int64_t born_ns;              /* engine time when its engine was created (0 at start;
                                      * kept when carried): replay due times count from here */
@@ -108,6 +147,8 @@ typedef struct obj {
     unsigned cmd_log_n;           /* ... how many in it */
     uint64_t cmd_log_dropped;     /* ... and lines not logged (more than
                                      * OBJ_CMD_LOG_PER_S in a second) */
+    core_drive_t drive;           /* its drives, published by the transport that drives
+                                   * them in its cycle (zero if none does) */
 } obj_t;
 
 /* The owner of o's motion, bound to o's engine and monitor (an obj_t built
@@ -191,18 +232,13 @@ void obj_drive_lost(obj_t *o);
 
 /*
  * Offer a waypoint to o (LC_EV_WAYPOINT): the one path every input uses
- * (replay from its pre_tick, CAN and Modbus from their fd callbacks).
+ * (replay from its pre_tick, CAN and Modbus from their fd callbacks).  src
+ * says where it came from (replay "file:line", Modbus "modbus PEER", CAN
+ * "can IFACE id 0xID seq N"; NULL: unknown): a refusal is logged with it
+ * (rejlog.h), rate-limited, once a second by core_stats_roll.
  * Returns what engine_push returns (0, ENGINE_DUPLICATE, -ENGINE_*; 0 when
  * the owner buffers it while stopped or held), or -ENGINE_ESTATE while the
  * daemon is stopping.  The engine counts the outcome (o->status).
- */
-int obj_push(obj_t *o, const engine_waypoint_t *wp);
-
-/*
- * obj_push, naming where the waypoint came from (replay "file:line", Modbus
- * "modbus PEER", CAN "can IFACE id 0xID seq N"; NULL: unknown): a refusal
- * is logged with it (rejlog.h), rate-limited, once a second by
- * core_stats_roll.
  */
 int obj_push_from(obj_t *o, const engine_waypoint_t *wp, const char *src);
 
@@ -241,6 +277,9 @@ typedef struct {
     /* times a replayed track or CAN log_in ended with no usable waypoint for an
      * object: trajd exits with CORE_EXIT_NO_INPUT at the end */
     uint64_t no_input;
+    /* The field bus, published by the transport that runs it in its cycle;
+     * zeroed when a core opens (CORE_BUS_UNUSED until a transport publishes). */
+    core_bus_t bus;
     /* nonzero: a transport asks the daemon to end now with this status
      * (stdout's reader left: CORE_EXIT_EPIPE); the tick stops the loop with it */
     int exit_code;
@@ -257,7 +296,9 @@ typedef struct {
                                      * reports for a filter ended by SIGPIPE) */
 
 /* The daemon core. Fields are read-only for transports except their own stats->tcount row,
- * stats->out_* and exit_code, and obj_t.out_lost/.out_fault. */
+ * stats->out_*, exit_code and bus (its publisher), and obj_t.out_lost/.out_fault/.drive.
+ * Transports' cycles run in transport_table order (path order: daemon/can before
+ * daemon/modbus), so a later one reads what an earlier one published this tick. */
 typedef struct core {
     loop_t *loop;     /* the event loop: loop_add your fds here */
     const cfg_t *cfg; /* the running configuration */

@@ -53,24 +53,6 @@ void log_set_level(int level)
     log_level = level;
 }
 
-int log_get_level(void)
-{
-    return log_level;
-}
-
-int log_level_parse(const char *s)
-{
-    static const struct {
-        const char *name;
-        int level;
-    } t[] = {{"err", LOG_ERR},       {"error", LOG_ERR}, {"warning", LOG_WARNING},
-             {"notice", LOG_NOTICE}, {"info", LOG_INFO}, {"debug", LOG_DEBUG}};
-    for (size_t i = 0; i < sizeof t / sizeof t[0]; i++)
-        if (strcmp(s, t[i].name) == 0)
-            return t[i].level;
-    return -1;
-}
-
 /* One "NAME=value" field into iov[*n] from buf (truncated to buf's size). */
 static void field(struct iovec *iov, int *n, char *buf, size_t size, const char *fmt, ...)
     __attribute__((format(printf, 5, 6)));

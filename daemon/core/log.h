@@ -26,10 +26,6 @@
 
 /* Lines with a priority above (less urgent than) level are dropped.  Default LOG_INFO. */
 void log_set_level(int level);
-int log_get_level(void);
-
-/* Parse "err", "warning", "notice", "info", "debug"; returns the LOG_* value or -1. */
-int log_level_parse(const char *s);
 
 typedef enum { LOG_MODE_AUTO = 0, LOG_MODE_TTY, LOG_MODE_PREFIX, LOG_MODE_SYSLOG } log_mode_t;
 

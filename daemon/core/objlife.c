@@ -44,11 +44,6 @@ int obj_push_from(obj_t *o, const engine_waypoint_t *wp, const char *src)
     return rc;
 }
 
-int obj_push(obj_t *o, const engine_waypoint_t *wp)
-{
-    return obj_push_from(o, wp, NULL);
-}
-
 static void sync_held(obj_t *o)
 {
     o->held = (o->lc.hold & LC_HOLD_FEED) != 0;

@@ -41,7 +41,7 @@ void reload_mark_resume(core_t *prev)
             prev->obj[i].carried = 1;
 }
 
-int reload_obj_at_rest(const obj_t *o)
+static int reload_obj_at_rest(const obj_t *o)
 {
     const engine_setpoint_t *sp = &o->sp;
     if (o->retiring)

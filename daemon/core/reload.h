@@ -35,12 +35,9 @@ void reload_unborrow(core_t *c);
  * engine accepted last). */
 void reload_mark_resume(core_t *prev);
 
-/* 1 if object o is at rest (or has never moved): nothing to brake. */
-int reload_obj_at_rest(const obj_t *o);
-
 /*
  * Objects of the running core c that the new configuration nc removes and
- * that move: each brakes to rest along its path (engine_stop; obj_push then
+ * that move: each brakes to rest along its path (engine_stop; obj_push_from then
  * refuses its input) and the log says so.  Returns how many brake.
  */
 unsigned reload_brake_removed(core_t *c, const cfg_t *nc);

@@ -44,7 +44,7 @@
  *   pre_tick  for each object whose INPUT is this transport, just before its
  *             engine_tick: feed waypoints that are due by engine time (replay).
  *             Event-driven inputs (CAN frames, Modbus writes) do not need it.
- *             Every input offers its waypoints through obj_push() (core.h),
+ *             Every input offers its waypoints through obj_push_from() (core.h),
  *             from pre_tick or from its fd callbacks, never engine_push.
  *   setpoint  for each object that has this transport among its OUTPUTS,
  *             right after its engine_tick, with the new setpoint.
@@ -52,7 +52,7 @@
  *             transport: one CAN SYNC frame, one Modbus snapshot publish,
  *             flushing buffered output.
  *   stop      SIGTERM received: objects are being brought to rest; inputs
- *             should stop accepting new waypoints (obj_push refuses anyway).
+ *             should stop accepting new waypoints (obj_push_from refuses anyway).
  *   close     at exit or before a reload: flush, close fds (loop_del first).
  * pre_tick, setpoint and cycle run in the tick: no allocation, no blocking
  * call, no logging (count, and log from a loop_timer_add housekeeping timer).

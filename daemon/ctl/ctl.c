@@ -197,11 +197,6 @@ int ctl_open(ctl_t **out, loop_t *loop, const cfg_t *cfg, ctl_reload_fn reload, 
     return 0;
 }
 
-const char *ctl_path(const ctl_t *t)
-{
-    return t->path;
-}
-
 /* ---- the tick's part: copy, nothing else ---- */
 
 static void tap(void *ctx, const core_t *c)

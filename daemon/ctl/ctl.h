@@ -68,9 +68,6 @@ int ctl_open(ctl_t **out, loop_t *loop, const cfg_t *cfg, ctl_reload_fn reload, 
 /* The running core (after each start: sets c->tap); NULL while there is none. */
 void ctl_set_core(ctl_t *t, core_t *c);
 
-/* The socket's path. */
-const char *ctl_path(const ctl_t *t);
-
 /* Log subscribers' losses (rate-limited): trajd's 1 s housekeeping. */
 void ctl_housekeeping(ctl_t *t);
 

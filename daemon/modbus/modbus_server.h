@@ -1,66 +1,26 @@
 /*
  * modbus_server.h - trajd's Modbus server (libmodbus), TCP and RTU, inside the
- * daemon's one event loop.  The register map is lib/proto/mbmap.h.
+ * daemon's one event loop.  The register map is lib/proto/mbmap.h; the
+ * connection policy, RTU framing and counters are config/PROTOCOL.md "Modbus".
  *
- * Loop integration: the server keeps its sockets, serial port and timers in
- * an epoll set of its own and exposes that set as ONE file descriptor
- * (modbus_server_fd).  The daemon adds it to its loop for EPOLLIN and calls
- * modbus_server_process() when it is readable.  Each call handles at most
- * MODBUS_SERVER_EVENTS_PER_CALL events and never blocks (non-blocking sockets, whole
- * requests assembled in per-client buffers, framing by the MBAP length or the
- * RTU function code), so a tick due meanwhile waits at most one bounded
- * batch (measured in tests/bench/bench_modbus_server_load.py).
- *
- * Requests are answered by libmodbus (modbus_reply / modbus_reply_exception
- * on a modbus_mapping_t) after mbmap_check_request / mbmap_decode_write have
- * validated them; libmodbus is used for the reply path only, never for
- * receiving, because modbus_receive() blocks until a request is whole.
- *
- * Snapshot: the daemon's per-cycle hook calls modbus_server_publish() once per tick;
- * it rewrites the input registers in place.  Requests and publishing run in
- * the same thread, one after the other, so one request is always answered
- * from one tick's image (never torn); see the generation registers in mbmap.h.
- *
- * RTU: bytes are read as they come (non-blocking); a request is complete when
- * as many bytes as its function code implies have arrived and its CRC checks.
- * Function codes whose length cannot be known from the header, and garbage,
- * are delimited by line silence: MODBUS_SERVER_RTU_SILENCE_MS (at least 3.5
- * characters) after the last byte the buffer is examined and dropped.  The
- * trade-off: no thread and no lock, at the cost of resynchronising only at a
- * silence after a corrupted frame (the client's retry is then answered).
- * Requests to another unit id are skipped; broadcasts (unit 0) are ignored
- * (a write must be acknowledged to be trusted).
- *
- * TCP connection policy (no client can lock the others out):
- *  - Deadline per request, not per byte: a request must arrive whole within
- *    request_timeout_ms of its first byte, else the client is closed
- *    (counted in slow).  A client with no partial request is closed after
- *    idle_timeout_ms without a complete request (counted in dropped).
- *  - At max_clients a newcomer is admitted by evicting one client (counted
- *    in evicted), never refused for want of a slot while an older client is
- *    there.  The victim, among clients connected for at least
- *    MODBUS_SERVER_EVICT_GRACE_MS: clients that never completed a request
- *    before those that did; within each group the stalest, i.e. the one
- *    waiting longest since the first byte of its pending partial request if
- *    it has one, else since its last complete request (or its connection).
- *    So a client that polls keeps its slot against silent, slow and newly
- *    connected ones.  Only when every client is within its grace period is
- *    the newcomer closed (counted in refused, as are allow-list refusals).
- *  - Out of file descriptors (accept EMFILE/ENFILE): the pending connections
- *    are accepted through a reserved fd and closed at once (counted in
- *    refused), the listener is not polled for a back-off of 100 ms doubling
- *    to 1 s, and a warning with the counts is logged at most once a second
- *    (modbus_accept.h); the loop never spins on the readable listener.
- *  - A client that sends faster than it reads its answers is closed when an
- *    answer cannot be written (dropped); each readiness event handles at
- *    most one buffer (2 ADUs read) of one client, and epoll serves ready
- *    clients in turn, so a flooding client costs others one bounded batch.
- *  - Per client: peer address, connection time, requests, exceptions and
- *    bytes (modbus_server_client); evictions and drops are logged at notice
- *    level with them, at most MODBUS_SERVER_LOG_PER_S lines a second.
- *  Limit: a connection flood that completes requests (or comes from many
- *  addresses faster than clients poll) still churns the slots; the allow-list
- *  and a firewall's rate limit are the tools for that.
+ * Loop: the server keeps its sockets, serial port and timers in an epoll set
+ * of its own, exposed as ONE descriptor (modbus_server_fd) for EPOLLIN; the
+ * daemon calls modbus_server_process() when it is readable, which never
+ * blocks and handles at most MODBUS_SERVER_EVENTS_PER_CALL events.
+ * Requests: assembled without blocking (framing: modbus_framing.c), checked
+ * by mbmap_check_request and mbmap_decode_write_order, answered by libmodbus
+ * (modbus_reply / modbus_reply_exception), which is never used to receive.
+ * Snapshot: modbus_server_publish() rewrites the input registers once per
+ * tick in the same thread, so every request is answered from one tick's image.
+ * RTU: a request ends where its function code says, else at
+ * MODBUS_SERVER_RTU_SILENCE_MS of line silence; other unit ids and broadcasts
+ * are not answered.
+ * TCP: a request must be whole within request_timeout_ms of its first byte
+ * (slow), an idle client is closed after idle_timeout_ms (dropped); at
+ * max_clients a newcomer evicts the stalest client connected for at least
+ * MODBUS_SERVER_EVICT_GRACE_MS (evicted), else it is refused; out of file
+ * descriptors the listener backs off (modbus_accept.h).  Client notices: at
+ * most MODBUS_SERVER_LOG_PER_S lines a second.
  */
 #ifndef TRAJD_MBSRV_H
 #define TRAJD_MBSRV_H
@@ -225,20 +185,6 @@ void modbus_server_publish(modbus_server_t *s, const mbmap_daemon_t *d, const mb
 uint32_t modbus_server_generation(const modbus_server_t *s);
 
 void modbus_server_stats(const modbus_server_t *s, modbus_server_stats_t *st);
-
-/* One TCP client's counters. */
-typedef struct {
-    char peer[64];        /* "address:port" */
-    int64_t connected_ns; /* CLOCK_MONOTONIC at accept */
-    uint64_t requests;    /* answered (normal or exception) */
-    uint64_t exceptions;
-    uint64_t bytes_in;
-    int64_t pending_since_ns; /* first byte of a partial request, 0 if none */
-    int64_t last_request_ns;  /* last complete request (connected_ns if none) */
-} modbus_server_client_t;
-
-/* Client slot i (0 .. max_clients-1): 0 and *out, or -ENOENT if free. */
-int modbus_server_client(const modbus_server_t *s, unsigned i, modbus_server_client_t *out);
 
 /*
  * Serve an already connected stream socket as a TCP client (the fuzz target

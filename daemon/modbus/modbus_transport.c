@@ -7,7 +7,6 @@
 #include <string.h>
 #include <sys/timex.h>
 
-#include "can_transport.h"
 #include "core.h"
 #include "gate.h"
 #include "log.h"
@@ -216,46 +215,45 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     return 0;
 }
 
-/* The register map publishes the CAN transport's bus state as is. */
-_Static_assert(MBMAP_CAN_NONE == CAN_BUS_UNUSED && MBMAP_CAN_ACTIVE == CAN_BUS_ERROR_ACTIVE &&
-                   MBMAP_CAN_WARNING == CAN_BUS_ERROR_WARNING &&
-                   MBMAP_CAN_PASSIVE == CAN_BUS_ERROR_PASSIVE && MBMAP_CAN_BUS_OFF == CAN_BUS_OFF &&
-                   MBMAP_CAN_DOWN == CAN_BUS_DOWN,
-               "mbmap.h MBMAP_CAN_* and can_transport.h can_bus_state_t disagree");
+/* The register map publishes the bus state the core holds (core.h) as is. */
+_Static_assert(MBMAP_CAN_NONE == CORE_BUS_UNUSED && MBMAP_CAN_ACTIVE == CORE_BUS_ACTIVE &&
+                   MBMAP_CAN_WARNING == CORE_BUS_WARNING && MBMAP_CAN_PASSIVE == CORE_BUS_PASSIVE &&
+                   MBMAP_CAN_BUS_OFF == CORE_BUS_OFF && MBMAP_CAN_DOWN == CORE_BUS_DOWN,
+               "mbmap.h MBMAP_CAN_* and core.h CORE_BUS_* disagree");
 
-/* The CAN bus's error-frame counters into the daemon block. */
-static void can_errors(const core_t *c, mbmap_daemon_t *d)
+/* The bus's state, load and error-frame counters (stats_t.bus) into the daemon block. */
+static void bus_regs(const core_bus_t *b, mbmap_daemon_t *d)
 {
-    canerr_bus_t e;
-    can_transport_bus_errors(c, &e);
-    d->can_err_frames = e.frames;
-    d->can_warnings = e.warnings;
-    d->can_passives = e.passives;
-    d->can_bus_offs = e.bus_offs;
-    d->can_restarts = e.restarts;
-    d->can_bus_errors = e.bus_errors;
-    d->can_overflows = e.overflows;
-    d->can_tx_err = e.tx_err;
-    d->can_rx_err = e.rx_err;
+    d->can_state = (uint16_t)b->state;
+    d->can_load_permille = (uint16_t)(b->load_permille > 0xffff ? 0xffff : b->load_permille);
+    d->can_err_frames = b->err_frames;
+    d->can_warnings = b->warnings;
+    d->can_passives = b->passives;
+    d->can_bus_offs = b->bus_offs;
+    d->can_restarts = b->restarts;
+    d->can_bus_errors = b->bus_errors;
+    d->can_overflows = b->overflows;
+    d->can_tx_err = (uint16_t)b->tx_err;
+    d->can_rx_err = (uint16_t)b->rx_err;
 }
 
-/* Object k's CiA 402 drives into its block, and the daemon's totals. */
-static void drive_regs(const core_t *c, unsigned k, mbmap_object_t *o, mbmap_daemon_t *d)
+/* An object's drives (obj_t.drive) into its block, and the daemon's totals. */
+static void drive_regs(const core_drive_t *dr, mbmap_object_t *o, mbmap_daemon_t *d)
 {
-    can_drive_info_t di;
-    can_transport_drive(c, k, &di);
-    o->drive_states = (uint16_t)((di.d.state[0] & 0x0F) | (di.d.state[1] & 0x0F) << 4 |
-                                 (di.d.state[2] & 0x0F) << 8 | (di.d.hb_lost ? 0x4000 : 0) |
-                                 (di.d.held ? 0x8000 : 0));
-    o->drive_statusword = di.d.statusword;
-    o->drive_nmt = di.d.nmt;
-    o->drive_emcy = di.d.emcy;
-    o->tx_clamped = di.tx_clamped;
-    d->drive_emcy += di.emcy;
-    d->drive_sdo_aborts += di.sdo_aborts;
-    d->drive_hb_lost += di.hb_lost;
-    if (di.sdo_aborts)
-        d->drive_last_abort = di.last_abort;
+    unsigned st[ENGINE_AXES];
+    for (unsigned a = 0; a < ENGINE_AXES; a++)
+        st[a] = dr->published ? dr->state[a] : CORE_DRIVE_NONE;
+    o->drive_states = (uint16_t)((st[0] & 0x0F) | (st[1] & 0x0F) << 4 | (st[2] & 0x0F) << 8 |
+                                 (dr->hb_lost ? 0x4000 : 0) | (dr->held ? 0x8000 : 0));
+    o->drive_statusword = dr->statusword;
+    o->drive_nmt = dr->published ? dr->nmt : CORE_DRIVE_NMT_NONE;
+    o->drive_emcy = dr->emcy;
+    o->tx_clamped = dr->tx_clamped;
+    d->drive_emcy += dr->emcy_frames;
+    d->drive_sdo_aborts += dr->sdo_aborts;
+    d->drive_hb_lost += dr->hb_timeouts;
+    if (dr->sdo_aborts)
+        d->drive_last_abort = dr->last_abort;
 }
 
 /* In the tick: no allocation, no blocking call, no logging. */
@@ -280,10 +278,7 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
     d.clock_drift_ppm = s->clock_rate > 0 ? (s->clock_rate - 1.0) * 1e6 : 0;
     d.clock_delay_s = c->cfg->daemon.delay_s;
     d.clock_mode = (uint16_t)c->cfg->daemon.clock;
-    uint32_t load_permille;
-    d.can_state = (uint16_t)can_transport_bus(c, &load_permille);
-    d.can_load_permille = (uint16_t)(load_permille > 0xffff ? 0xffff : load_permille);
-    can_errors(c, &d);
+    bus_regs(&s->bus, &d);
     int64_t mono = core_mono_ns();
     if (mono - t->clock_checked_ns >= 1000000000) { /* once a second: a cheap syscall */
         struct timex tx;
@@ -313,7 +308,7 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         o->out_lost = ob->out_lost;
         o->out_fault = (uint16_t)(ob->out_fault != 0);
         o->seq_jumps = 0; /* the server adds its own */
-        drive_regs(c, (unsigned)t->obj_of[k], o, &d);
+        drive_regs(&ob->drive, o, &d);
         o->clocked = (uint16_t)(ob->clocked == 1);
         o->delay_s = c->cfg->daemon.delay_s;
         o->clock_unsync = t->clock_unsync;

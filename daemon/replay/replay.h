@@ -69,7 +69,7 @@ typedef int (*replay_push_fn)(void *ctx, const engine_waypoint_t *wp);
 
 /*
  * replay_feed, offering each waypoint through push(ctx, wp) instead of
- * engine_push(e, wp): the daemon passes obj_push, the path every input takes.
+ * engine_push(e, wp): the daemon passes obj_push_from, the path every input takes.
  * e is still the engine that push feeds (engine_finish is called on it).
  */
 int replay_feed_via(replay_t *r, replay_push_fn push, void *ctx, engine_t *e, int64_t now_ns);

@@ -76,57 +76,6 @@ static double seg_speed_max(const fdiff_seg_t *seg)
     return (hi + sqrt(b2) / (2.0 * ENGINE_SPEED_SAMPLES)) / seg->dur_s;
 }
 
-const char *engine_strerror(int err)
-{
-    switch (err < 0 ? -err : err) {
-    case ENGINE_OK: return "success";
-    case ENGINE_ENOTFINITE: return "time or coordinate is NaN or infinite";
-    case ENGINE_ERANGE: return "coordinate above max_abs_m or time absurd";
-    case ENGINE_EBACKWARDS: return "timestamp earlier than the previous waypoint";
-    case ENGINE_ESAMETIME: return "same timestamp as the previous waypoint, different position";
-    case ENGINE_ESPEED: return "implied speed from the previous waypoint above max_speed_m_s";
-    case ENGINE_EFULL: return "waypoint buffer full: retry later";
-    case ENGINE_ECONFIG: return "invalid engine configuration";
-    case ENGINE_ENOMEM: return "out of memory";
-    case ENGINE_ESTATE: return "call not valid in this state";
-    case ENGINE_ENUMERIC: return "solver failed (singular system)";
-    case ENGINE_EACCEL:
-        return "implied acceleration from the previous two waypoints above max_accel_m_s2";
-    case ENGINE_EUNCONFIRMED:
-        return "far from the trajectory in time or space, or at odds with its neighbours, "
-               "and not confirmed by consistent waypoints";
-    case ENGINE_ESTALE: return "stale: the same position again while the object was moving";
-    default: return "unknown engine error";
-    }
-}
-
-const char *engine_reason_name(int err)
-{
-    switch (err < 0 ? -err : err) {
-    case ENGINE_ENOTFINITE: return "not_finite";
-    case ENGINE_ERANGE: return "range";
-    case ENGINE_EBACKWARDS: return "backwards";
-    case ENGINE_ESAMETIME: return "same_time";
-    case ENGINE_ESPEED: return "speed";
-    case ENGINE_ENUMERIC: return "numeric";
-    case ENGINE_EACCEL: return "accel";
-    case ENGINE_EUNCONFIRMED: return "unconfirmed";
-    case ENGINE_ESTALE: return "stale";
-    default: return NULL;
-    }
-}
-
-const char *engine_state_name(engine_state_t s)
-{
-    switch (s) {
-    case ENGINE_STATE_WAITING: return "waiting";
-    case ENGINE_STATE_STREAMING: return "streaming";
-    case ENGINE_STATE_UNDERRUN: return "underrun";
-    case ENGINE_STATE_FINISHED: return "finished";
-    default: return "unknown";
-    }
-}
-
 void engine_config_default(engine_config_t *cfg)
 {
     memset(cfg, 0, sizeof(*cfg));
@@ -326,25 +275,6 @@ unsigned engine_lookahead(const engine_config_t *cfg)
 
     if (engine_config_resolve(cfg, &r) < 0)
         return 0;
-    return lookahead_of(&r);
-}
-
-unsigned engine_pick_flat(int method, int param, double accuracy, unsigned max_lookahead,
-                          unsigned *fragment, unsigned *overlap)
-{
-    engine_config_t c, r;
-
-    engine_config_default(&c);
-    c.method = (engine_method_t)method;
-    c.param = (engine_param_t)param;
-    if (accuracy > 0)
-        c.accuracy = accuracy;
-    if (max_lookahead > 0)
-        c.max_lookahead = max_lookahead;
-    if (engine_config_resolve(&c, &r) < 0)
-        return 0;
-    *fragment = r.fragment;
-    *overlap = r.overlap;
     return lookahead_of(&r);
 }
 
@@ -2303,50 +2233,4 @@ out:
     *nseg = out;
     engine_free(e);
     return rc;
-}
-
-long engine_curve_flat(int method, int param, int ends, unsigned fragment, unsigned overlap,
-                       size_t n, const double *t_s, const double *xyz, double *seg_out,
-                       size_t max_seg)
-{
-    engine_config_t cfg;
-    engine_waypoint_t *wp;
-    fdiff_seg_t *segs;
-    size_t i, nseg = 0;
-    int rc;
-
-    engine_config_default(&cfg);
-    cfg.method = (engine_method_t)method;
-    cfg.param = (engine_param_t)param;
-    cfg.ends = (engine_ends_t)ends;
-    if (fragment)
-        cfg.fragment = fragment;
-    if (overlap)
-        cfg.overlap = overlap;
-    cfg.profile = ENGINE_PROFILE_NONE;
-    cfg.max_gap_s = 1e9;
-    wp = calloc(n ? n : 1, sizeof(*wp));
-    segs = calloc(max_seg ? max_seg : 1, sizeof(*segs));
-    if (!wp || !segs) {
-        free(wp);
-        free(segs);
-        return -ENGINE_ENOMEM;
-    }
-    for (i = 0; i < n; i++) {
-        wp[i].t_s = t_s[i];
-        for (int k = 0; k < AX; k++)
-            wp[i].pos_m[k] = xyz[i * AX + k];
-    }
-    rc = engine_curve(&cfg, wp, n, segs, max_seg, &nseg);
-    for (i = 0; i < nseg; i++) {
-        double *o = seg_out + i * 14;
-        o[0] = segs[i].t0_s;
-        o[1] = segs[i].dur_s;
-        for (int k = 0; k < AX; k++)
-            for (int m = 0; m < 4; m++)
-                o[2 + k * 4 + m] = segs[i].c[k][m];
-    }
-    free(wp);
-    free(segs);
-    return rc < 0 ? rc : (long)nseg;
 }

@@ -255,23 +255,11 @@ typedef struct {
                                FDIFF_RESEED_STEPS, so drift does not grow with
                                the segment).  Default 60 s (= max_gap_s) */
     unsigned start_slack;   /* waypoints buffered beyond what the solver needs
-                               before a trajectory's output starts: absorbs
-                               irregular input timing.  ENGINE_AUTO (the
-                               default): adapts to the input, from
-                               ENGINE_SLACK_AUTO_MIN to ENGINE_SLACK_AUTO_MAX:
-                               the output starts once the waypoints buffered
-                               span in time the longest stretch of lookahead
-                               + 1 intervals measured so far (so a regular
-                               input waits one waypoint more than the solver,
-                               an irregular one as much more as its intervals
-                               vary), plus one per underrun seen (late
-                               arrivals); the most it adds is also bounded by
-                               what capacity leaves beyond lookahead +
-                               fragment + 8.  A number fixes it (the former
-                               default was 8: no underrun replaying the
-                               irregular gpxgo_visnjan track with F=64/O=32;
-                               2 were enough for the regular 5 Hz figure-8).
-                               Adds to engine_lookahead */
+                               before a trajectory's output starts; adds to
+                               engine_lookahead.  ENGINE_AUTO (default): from
+                               the input's timing, ENGINE_SLACK_AUTO_MIN ..
+                               _MAX (lib/engine/README.md "start_slack
+                               auto"); a number fixes it */
     unsigned smooth_window; /* SMOOTH only: waypoints per local least-squares fit,
                                4 .. ENGINE_SMOOTH_WINDOW_MAX.  Default 24 */
     unsigned smooth_ctrl;   /* SMOOTH only: control points per fit,
@@ -551,16 +539,6 @@ unsigned engine_lookahead(const engine_config_t *cfg);
 int engine_config_resolve(const engine_config_t *cfg, engine_config_t *out);
 
 /*
- * For Python ctypes: F and O picked for method/param, accuracy and
- * max_lookahead (the defaults otherwise), and the lookahead that results
- * (start_slack auto at its least); 0 if none fits.
- */
-unsigned engine_pick_flat(int method, int param, double accuracy,
-                          unsigned max_lookahead, unsigned *fragment,
-                          unsigned *overlap);
-
-
-/*
  * Offline: the curve the engine streams for a whole track, built by the same
  * code as engine_push/engine_finish (the queue drained after every push), as
  * cubic segments in absolute track time (see fdiff.h).  For tests, benches
@@ -571,19 +549,6 @@ unsigned engine_pick_flat(int method, int param, double accuracy,
  */
 int engine_curve(const engine_config_t *cfg, const engine_waypoint_t *wp,
                  size_t n, fdiff_seg_t *seg, size_t max_seg, size_t *nseg);
-
-/*
- * engine_curve with flat arguments, for Python ctypes: the default
- * configuration with method, param, ends, fragment, overlap given (0:
- * auto, as the default),
- * max_speed_m_s = 0, max_accel_m_s2 = 0 (every waypoint kept) and
- * max_gap_s = 1e9 (one trajectory).  t_s: n times,
- * xyz: n x 3; seg_out: max_seg x 14 doubles (t0_s, dur_s, then c[axis][0..3]
- * for x, y, z).  Returns the number of segments, or a negated engine_error.
- */
-long engine_curve_flat(int method, int param, int ends, unsigned fragment,
-                       unsigned overlap, size_t n, const double *t_s,
-                       const double *xyz, double *seg_out, size_t max_seg);
 
 /* clang-format on */
 #endif

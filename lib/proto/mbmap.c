@@ -345,11 +345,6 @@ int mbmap_check_request(unsigned n, int writes_enabled, const uint8_t *pdu, size
     return 0;
 }
 
-int mbmap_decode_write(unsigned n, const uint8_t *pdu, size_t len, mbmap_write_t *out)
-{
-    return mbmap_decode_write_order(n, MBMAP_ORDER_ABCD, pdu, len, out);
-}
-
 /* The float32 waypoint block (MBMAP_H_WPF). */
 static int decode_wpf(mbmap_order_t o, const uint8_t *val, mbmap_write_t *out)
 {

@@ -371,7 +371,7 @@ double mbmap_get_f64(const uint16_t *r);
  * map for n objects, in the order the standard gives (function, then count
  * and length, then address).  writes_enabled 0 refuses FC 06 and 16.
  * Returns 0 if the request may be answered (reads: by modbus_reply on the
- * mapping; writes: after mbmap_decode_write), or -MBMAP_EFUNCTION,
+ * mapping; writes: after mbmap_decode_write_order), or -MBMAP_EFUNCTION,
  * -MBMAP_EVALUE (count 0 or above the limit, byte count or PDU length
  * inconsistent), -MBMAP_EADDRESS (range outside the table).
  * A PDU shorter than 1 byte returns -MBMAP_EVALUE.
@@ -399,9 +399,8 @@ typedef struct {
  * waypoint block or a write spanning two fields), -MBMAP_EVALUE (unknown
  * command; NaN or infinite time or coordinate), -MBMAP_EFUNCTION (not a
  * write).  Time order and ranges are the engine's to check (engine_push).
+ * o: the word order the client writes u32/f32/f64 values in (ABCD: as the map).
  */
-int mbmap_decode_write(unsigned n, const uint8_t *pdu, size_t len, mbmap_write_t *out);
-/* As mbmap_decode_write, for a client that writes in word order o. */
 int mbmap_decode_write_order(unsigned n, mbmap_order_t o, const uint8_t *pdu, size_t len,
                              mbmap_write_t *out);
 

@@ -1,6 +1,6 @@
 /*
  * mbrtu.h - Modbus RTU request framing on a serial byte stream (pure: bytes
- * and line silences in, whole frames out), used by daemon/modbus/modbus_server.c.
+ * and line silences in, whole frames out), used by daemon/modbus/modbus_framing.c.
  *
  * A frame's end is known from its function code (mbmap_rtu_frame_len) and
  * checked by its CRC.  A frame that fails its CRC, or cannot fit, makes every

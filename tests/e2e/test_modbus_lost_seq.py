@@ -9,7 +9,7 @@ straight line 0.1 s apart, then a waypoint on the same line numbered
 read back with pymodbus over Modbus (the object's block):
   - `lost` (MBMAP_O_LOST) is the one number left out, computed here from
     the numbers sent: steps of 1 lose nothing, 30 -> 32 loses one. Before
-    the plausible window (daemon/modbus/modbus_server.c count_seq) the step
+    the plausible window (daemon/modbus/modbus_dispatch.c count_seq) the step
     20 -> 0xFFFFFFFF alone added 4 294 967 274 (read in a snapshot taken
     right after it, before the next write: 0 lost wanted there);
   - `seq_jumps` (MBMAP_O_SEQ_JUMPS) counts the one number outside the

@@ -4,7 +4,8 @@ edits no core file, and every input reaches its engine the same way.
 
 Given the sources, when the core (daemon/core/, daemon/trajd.c) is read with
 comments and strings blanked, then it names no transport and includes no
-header of a transport family; and transport_table[] is generated from the
+header of a transport family; no transport family includes another's header;
+and transport_table[] is generated from the
 `const transport_t NAME_transport = {` definitions of daemon/*/*_transport.c,
 in path order, including one in a new file.
 """
@@ -71,14 +72,33 @@ class Seam(unittest.TestCase):
             for word in ("OBJ_SRC", "stats_can", "STATS_CAN", "modbus", "replay"):
                 self.assertFalse(word in code, f"{rel}: '{word}' outside comments")
 
+    def test_no_transport_includes_another(self):
+        # Given every source of a transport family (a folder holding a
+        # <name>_transport.c), then none includes a header of another family:
+        # what one transport shows of another (Modbus of the CAN bus and
+        # drives) goes through the core (stats_t.bus, obj_t.drive).
+        families = {os.path.basename(os.path.dirname(f)) for f in transport_files()} - {"core"}
+        self.assertTrue({"can", "modbus"} <= families, families)
+        breaches = []
+        for fam in sorted(families):
+            for path in sorted(glob.glob(os.path.join(ROOT, "daemon", fam, "*.[ch]")) +
+                               glob.glob(os.path.join(ROOT, "daemon", fam, "*.cc"))):
+                for inc in re.findall(r'^\s*#\s*include\s+"([^"]+)"', read(path), re.M):
+                    for h in glob.glob(os.path.join(ROOT, "daemon", "*", inc)):
+                        other = os.path.basename(os.path.dirname(h))
+                        if other in families and other != fam:
+                            breaches.append(f"{os.path.relpath(path, ROOT)} includes {inc} "
+                                            f"of daemon/{other}/")
+        self.assertEqual(breaches, [], "a transport includes another transport's header")
+
     def test_inputs_push_through_obj_push(self):
         # Given every transport file, then none offers waypoints to an engine
-        # directly: the one push path is obj_push / obj_push_from (replay included).
+        # directly: the one push path is obj_push_from (replay included).
         for f in transport_files():
             code = blank(read(f))
-            self.assertNotIn("engine_push(", code, f"{os.path.relpath(f, ROOT)}: use obj_push")
+            self.assertNotIn("engine_push(", code, f"{os.path.relpath(f, ROOT)}: use obj_push_from")
         self.assertRegex(blank(read(os.path.join(ROOT, "daemon", "replay", "replay_transport.c"))),
-                         r"\bobj_push(_from)?\(")
+                         r"\bobj_push_from\(")
 
     def test_table_is_every_definition_in_path_order(self):
         files = transport_files()

@@ -59,7 +59,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         pos += len;
     }
 
-    can_logfile_t *l = can_logfile_open(NULL, NULL, "vcan0", 0, err, sizeof err);
+    can_logfile_t *l = can_logfile_open_mode(NULL, NULL, "vcan0", 0, 0, err, sizeof err);
     if (!l)
         abort();
     FILE *fp = fmemopen((void *)data, size, "r");

@@ -1,7 +1,7 @@
 /*
  * fuzz_modbus_rtu.c - libFuzzer target for Modbus RTU request framing on a
  * serial byte stream (lib/proto/mbrtu.c, the RTU read path of
- * daemon/modbus/modbus_server.c).  The input is a sequence of records
+ * daemon/modbus/modbus_framing.c).  The input is a sequence of records
  * [ctl, bytes...]: ctl & 31 bytes arrive in one read, then (ctl & 0x80) the
  * line is silent.
  *

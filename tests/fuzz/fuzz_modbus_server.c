@@ -1,7 +1,7 @@
 /*
  * fuzz_modbus_server.c - libFuzzer target for the Modbus request path: bytes arrive
  * on a TCP client connection (a socketpair adopted by the server), go through
- * MBAP framing, mbmap_check_request / mbmap_decode_write, the write hooks and
+ * MBAP framing, mbmap_check_request / mbmap_decode_write_order, the write hooks and
  * libmodbus's modbus_reply on the mapping.  The pure codec functions also get
  * the raw input (as a PDU and as an RTU frame).
  *
@@ -101,7 +101,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     /* Pure paths on the raw bytes. */
     mbmap_write_t w;
     mbmap_check_request(NOBJ, 1, data, size);
-    mbmap_decode_write(NOBJ, data, size, &w);
+    mbmap_decode_write_order(NOBJ, MBMAP_ORDER_ABCD, data, size, &w);
     int fl = mbmap_rtu_frame_len(data, size);
     if (fl > 2 && (size_t)fl <= size)
         mbmap_crc16(data, (size_t)fl - 2);

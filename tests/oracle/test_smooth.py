@@ -17,7 +17,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline, make_lsq_spline
 
 BUILD = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
-lib = C.CDLL(os.path.join(BUILD, "libtrajd.so"))
+lib = C.CDLL(os.path.join(BUILD, "libtrajd_test.so"))
 dp = C.POINTER(C.c_double)
 SZ = C.c_size_t
 

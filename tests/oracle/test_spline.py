@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Oracle tests of the engine's curves against scipy (independent references).
 
-Run with Debian's /usr/bin/python3 (scipy, numpy); loads $BUILD/libtrajd.so.
+Run with Debian's /usr/bin/python3 (scipy, numpy); loads $BUILD/libtrajd_test.so (libtrajd and
+the ctypes shims of tests/helpers/ctypes_shims.c).
 
 * hoang_curve (global exact B-spline, the paper's ends) against a banded solve
   (scipy.linalg.solve_banded) fed to scipy.interpolate.BSpline on uniform knots;
@@ -26,7 +27,7 @@ from scipy.linalg import solve_banded
 
 BUILD = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
 HERE = os.path.dirname(os.path.abspath(__file__))
-lib = ctypes.CDLL(os.path.join(BUILD, "libtrajd.so"))
+lib = ctypes.CDLL(os.path.join(BUILD, "libtrajd_test.so"))
 D = ctypes.POINTER(ctypes.c_double)
 SZ = ctypes.c_size_t
 

@@ -17,7 +17,7 @@
 static can_logfile_t *load_text(const char *text, char *log, size_t loglen)
 {
     char err[256];
-    can_logfile_t *l = can_logfile_open(NULL, NULL, "can0", 0, err, sizeof err);
+    can_logfile_t *l = can_logfile_open_mode(NULL, NULL, "can0", 0, 0, err, sizeof err);
     assert_non_null(l);
     FILE *in = fmemopen((void *)text, strlen(text), "r");
     assert_non_null(in);
@@ -159,7 +159,7 @@ static void test_nul_byte_refused(void **state)
     (void)state;
     static const char text[] = "(0.1) can0 100#00\n(0.2) can0 101#00\0garbage\n";
     char err[256], log[1024];
-    can_logfile_t *l = can_logfile_open(NULL, NULL, "can0", 0, err, sizeof err);
+    can_logfile_t *l = can_logfile_open_mode(NULL, NULL, "can0", 0, 0, err, sizeof err);
     FILE *in = fmemopen((void *)text, sizeof text - 1, "r");
     fflush(stderr);
     int saved = dup(2);

@@ -980,8 +980,8 @@ static void test_can_logfile_real_capture(void **state)
 {
     (void)state;
     char err[256];
-    can_logfile_t *l = can_logfile_open("tests/data/canboat_candumpSample3.log", NULL, "can0", 0,
-                                        err, sizeof err);
+    can_logfile_t *l = can_logfile_open_mode("tests/data/canboat_candumpSample3.log", NULL, "can0",
+                                             0, 0, err, sizeof err);
     assert_non_null(l);
     can_logfile_stats_t ls;
     can_logfile_stats(l, &ls);
@@ -1014,7 +1014,7 @@ static void test_can_logfile_output(void **state)
     int fd = mkstemp(path);
     assert_true(fd >= 0);
     close(fd);
-    can_logfile_t *l = can_logfile_open(NULL, path, "vcan0", 0, err, sizeof err);
+    can_logfile_t *l = can_logfile_open_mode(NULL, path, "vcan0", 0, 0, err, sizeof err);
     assert_non_null(l);
     engine_setpoint_t sp = sp_at(7, 1.5);
     canproto_frame_t f[3];

@@ -291,7 +291,8 @@ static void test_diag_requests(void **state)
     assert_int_equal(mbmap_check_request(MBMAP_MAX_OBJECTS, 0, p,
                                          read_pdu(p, 4, MBMAP_X_BASE(MBMAP_MAX_OBJECTS) - 2, 2)),
                      0);
-    assert_int_equal(mbmap_decode_write(NOBJ, p, write_pdu(p, MBMAP_X_BASE(0), 1, v), &w),
+    assert_int_equal(mbmap_decode_write_order(NOBJ, MBMAP_ORDER_ABCD, p,
+                                              write_pdu(p, MBMAP_X_BASE(0), 1, v), &w),
                      -MBMAP_EADDRESS);
 }
 
@@ -496,10 +497,10 @@ static void test_decode_write(void **state)
     mbmap_write_t w;
 
     wp_regs(r, 4000000000u, 12.345678901234, -1e5, 0.1, 7);
-    assert_int_equal(
-        mbmap_decode_write(NOBJ, p,
-                           write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP, MBMAP_H_WP_COUNT, r), &w),
-        0);
+    assert_int_equal(mbmap_decode_write_order(
+                         NOBJ, MBMAP_ORDER_ABCD, p,
+                         write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP, MBMAP_H_WP_COUNT, r), &w),
+                     0);
     assert_int_equal(w.kind, MBMAP_WRITE_WAYPOINT);
     assert_int_equal(w.object, 1);
     assert_int_equal(w.wp.seq, 4000000000u);
@@ -507,68 +508,74 @@ static void test_decode_write(void **state)
     assert_true(exact(w.wp.pos_m[0], -1e5) && exact(w.wp.pos_m[1], 0.1) && exact(w.wp.pos_m[2], 7));
 
     /* Part of the block, or one register too many: not applied. */
+    assert_int_equal(mbmap_decode_write_order(
+                         NOBJ, MBMAP_ORDER_ABCD, p,
+                         write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP, MBMAP_H_WP_COUNT - 1, r), &w),
+                     -MBMAP_EADDRESS);
+    assert_int_equal(mbmap_decode_write_order(
+                         NOBJ, MBMAP_ORDER_ABCD, p,
+                         write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP, MBMAP_H_WP_COUNT + 1, r), &w),
+                     -MBMAP_EADDRESS);
     assert_int_equal(
-        mbmap_decode_write(
-            NOBJ, p, write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP, MBMAP_H_WP_COUNT - 1, r), &w),
-        -MBMAP_EADDRESS);
-    assert_int_equal(
-        mbmap_decode_write(
-            NOBJ, p, write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP, MBMAP_H_WP_COUNT + 1, r), &w),
-        -MBMAP_EADDRESS);
-    assert_int_equal(
-        mbmap_decode_write(NOBJ, p, write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP + 2, 4, r), &w),
+        mbmap_decode_write_order(NOBJ, MBMAP_ORDER_ABCD, p,
+                                 write_pdu(p, MBMAP_OBJ_BASE(1) + MBMAP_H_WP + 2, 4, r), &w),
         -MBMAP_EADDRESS);
     /* NaN and infinity refused. */
     wp_regs(r, 1, 1, NAN, 0, 0);
-    assert_int_equal(
-        mbmap_decode_write(NOBJ, p,
-                           write_pdu(p, MBMAP_OBJ_BASE(0) + MBMAP_H_WP, MBMAP_H_WP_COUNT, r), &w),
-        -MBMAP_EVALUE);
+    assert_int_equal(mbmap_decode_write_order(
+                         NOBJ, MBMAP_ORDER_ABCD, p,
+                         write_pdu(p, MBMAP_OBJ_BASE(0) + MBMAP_H_WP, MBMAP_H_WP_COUNT, r), &w),
+                     -MBMAP_EVALUE);
     assert_int_equal(w.object, 0);
     wp_regs(r, 1, INFINITY, 0, 0, 0);
-    assert_int_equal(
-        mbmap_decode_write(NOBJ, p,
-                           write_pdu(p, MBMAP_OBJ_BASE(0) + MBMAP_H_WP, MBMAP_H_WP_COUNT, r), &w),
-        -MBMAP_EVALUE);
+    assert_int_equal(mbmap_decode_write_order(
+                         NOBJ, MBMAP_ORDER_ABCD, p,
+                         write_pdu(p, MBMAP_OBJ_BASE(0) + MBMAP_H_WP, MBMAP_H_WP_COUNT, r), &w),
+                     -MBMAP_EVALUE);
     /* Commands by FC 06 and FC 16. */
     uint8_t s6[5] = {6, (uint8_t)(MBMAP_OBJ_BASE(2) >> 8), (uint8_t)MBMAP_OBJ_BASE(2), 0,
                      MBMAP_CMD_CLEAR};
-    assert_int_equal(mbmap_decode_write(NOBJ, s6, 5, &w), 0);
+    assert_int_equal(mbmap_decode_write_order(NOBJ, MBMAP_ORDER_ABCD, s6, 5, &w), 0);
     assert_int_equal(w.kind, MBMAP_WRITE_COMMAND);
     assert_int_equal(w.object, 2);
     assert_int_equal(w.command, MBMAP_CMD_CLEAR);
     uint16_t c = MBMAP_CMD_RESET_COUNTERS;
-    assert_int_equal(mbmap_decode_write(NOBJ, p, write_pdu(p, MBMAP_OBJ_BASE(0), 1, &c), &w), 0);
+    assert_int_equal(mbmap_decode_write_order(NOBJ, MBMAP_ORDER_ABCD, p,
+                                              write_pdu(p, MBMAP_OBJ_BASE(0), 1, &c), &w),
+                     0);
     assert_int_equal(w.command, MBMAP_CMD_RESET_COUNTERS);
     for (unsigned bad = 0; bad < 65536; bad += (bad < 10 ? 1 : 997)) {
         if (bad >= MBMAP_CMD_START && bad <= MBMAP_CMD_FINISH)
             continue;
         s6[3] = (uint8_t)(bad >> 8);
         s6[4] = (uint8_t)bad;
-        assert_int_equal(mbmap_decode_write(NOBJ, s6, 5, &w), -MBMAP_EVALUE);
+        assert_int_equal(mbmap_decode_write_order(NOBJ, MBMAP_ORDER_ABCD, s6, 5, &w),
+                         -MBMAP_EVALUE);
     }
     /* Read-only places: the daemon block, other registers of an object. */
     s6[1] = 0;
     s6[2] = 5;
     s6[3] = 0;
     s6[4] = 1;
-    assert_int_equal(mbmap_decode_write(NOBJ, s6, 5, &w), -MBMAP_EADDRESS);
+    assert_int_equal(mbmap_decode_write_order(NOBJ, MBMAP_ORDER_ABCD, s6, 5, &w), -MBMAP_EADDRESS);
     s6[1] = 0;
     s6[2] = 102;
-    assert_int_equal(mbmap_decode_write(NOBJ, s6, 5, &w), -MBMAP_EADDRESS);
+    assert_int_equal(mbmap_decode_write_order(NOBJ, MBMAP_ORDER_ABCD, s6, 5, &w), -MBMAP_EADDRESS);
     /* The feed override: 0..200 %, one register. */
     s6[1] = 0;
     s6[2] = 100 + MBMAP_H_OVERRIDE;
     s6[3] = 0;
     s6[4] = 150;
-    assert_int_equal(mbmap_decode_write(NOBJ, s6, 5, &w), 0);
+    assert_int_equal(mbmap_decode_write_order(NOBJ, MBMAP_ORDER_ABCD, s6, 5, &w), 0);
     assert_int_equal(w.kind, MBMAP_WRITE_OVERRIDE);
     assert_int_equal(w.object, 0);
     assert_int_equal(w.override_pct, 150);
     s6[4] = 201;
-    assert_int_equal(mbmap_decode_write(NOBJ, s6, 5, &w), -MBMAP_EVALUE);
+    assert_int_equal(mbmap_decode_write_order(NOBJ, MBMAP_ORDER_ABCD, s6, 5, &w), -MBMAP_EVALUE);
     /* A read is not a write. */
-    assert_int_equal(mbmap_decode_write(NOBJ, p, read_pdu(p, 3, 100, 1), &w), -MBMAP_EFUNCTION);
+    assert_int_equal(
+        mbmap_decode_write_order(NOBJ, MBMAP_ORDER_ABCD, p, read_pdu(p, 3, 100, 1), &w),
+        -MBMAP_EFUNCTION);
 }
 
 /* Engine results map to the documented exceptions. */

@@ -1,0 +1,102 @@
+/* modbus_dispatch.c - one whole Modbus request answered: checked, a write
+ * applied through the daemon's hooks, the reply by libmodbus. */
+#include "modbus_server_int.h"
+
+#include <string.h>
+
+/*
+ * Sequence numbers are the sender's (0 = not numbered): a step forward of d
+ * within MODBUS_SERVER_SEQ_WINDOW means d - 1 waypoints it sent never
+ * reached us.  A number outside the window (a bogus 0xFFFFFFFF, a sender
+ * that restarted its numbering, a repeat or an older one) is not a loss: it
+ * is counted in seq_jumps and remembered; the numbering it starts is adopted
+ * as soon as the next waypoint continues it, else the old one is kept.
+ * Modular arithmetic, so a wrap from 0xFFFFFFFF to 1 is a step of 2.
+ */
+static void count_seq(modbus_server_t *s, unsigned k, uint32_t seq)
+{
+    uint32_t last = s->last_seq[k], alt = s->alt_seq[k];
+    if (!seq)
+        return;
+    if (!last) {
+        s->last_seq[k] = seq;
+        return;
+    }
+    uint32_t d = seq - last;
+    if (d >= 1 && d <= MODBUS_SERVER_SEQ_WINDOW) {
+        s->lost[k] += d - 1;
+    } else if (alt && seq - alt >= 1 && seq - alt <= MODBUS_SERVER_SEQ_WINDOW) {
+        s->lost[k] += seq - alt - 1; /* the new numbering continues: adopt it */
+    } else {
+        s->seq_jumps[k]++;
+        s->alt_seq[k] = seq;
+        return;
+    }
+    s->last_seq[k] = seq;
+    s->alt_seq[k] = 0;
+}
+
+/* Apply a validated write; returns 0 or -MBMAP_E*. */
+static int apply_write(modbus_server_t *s, const mbmap_write_t *w)
+{
+    int r;
+    if (w->kind == MBMAP_WRITE_WAYPOINT) {
+        r = s->hooks.waypoint ? s->hooks.waypoint(s->hooks.ctx, w->object, &w->wp) : -ENGINE_ESTATE;
+        if (r == MODBUS_SERVER_HOOK_EADDRESS)
+            return -MBMAP_EADDRESS;
+        if (r == 0)
+            count_seq(s, w->object, w->wp.seq);
+        return mbmap_from_engine(r);
+    }
+    if (w->kind == MBMAP_WRITE_OVERRIDE) {
+        r = s->hooks.override ? s->hooks.override(s->hooks.ctx, w->object, w->override_pct)
+                              : -ENGINE_ESTATE;
+        if (r == MODBUS_SERVER_HOOK_EADDRESS)
+            return -MBMAP_EADDRESS;
+        return mbmap_from_engine(r);
+    }
+    if (w->command == MBMAP_CMD_RESET_COUNTERS) {
+        s->mb_rejected[w->object] = 0;
+        s->lost[w->object] = 0;
+        s->seq_jumps[w->object] = 0;
+    }
+    if (w->command == MBMAP_CMD_CLEAR) {
+        s->last_seq[w->object] = 0;
+        s->alt_seq[w->object] = 0;
+    }
+    r = s->hooks.command ? s->hooks.command(s->hooks.ctx, w->object, w->command) : -ENGINE_ESTATE;
+    if (r == MODBUS_SERVER_HOOK_EADDRESS)
+        return -MBMAP_EADDRESS;
+    return mbmap_from_engine(r);
+}
+
+/*
+ * Answer one whole request.  req/req_len is the ADU as libmodbus expects it
+ * (MBAP or address first, no CRC checked here), pdu/pdu_len its PDU.
+ * Returns what libmodbus returned (< 0: the peer could not be written to).
+ */
+int mbs_serve(modbus_server_t *s, modbus_t *ctx, int writes, const uint8_t *req, int req_len,
+              const uint8_t *pdu, size_t pdu_len)
+{
+    int rc = mbmap_check_request(s->n_objects, writes, pdu, pdu_len);
+    if (rc == 0 && (pdu[0] == MBMAP_FC_WRITE_SINGLE || pdu[0] == MBMAP_FC_WRITE_MULTIPLE)) {
+        mbmap_write_t w;
+        memset(&w, 0, sizeof w);
+        w.object = s->n_objects;
+        rc = mbmap_decode_write_order(s->n_objects, s->order, pdu, pdu_len, &w);
+        if (rc == 0)
+            rc = apply_write(s, &w);
+        if (rc == -MBMAP_EVALUE && w.object < s->n_objects)
+            s->mb_rejected[w.object]++;
+    }
+    s->st.requests++;
+    if (rc < 0) {
+        s->st.exceptions++;
+        return modbus_reply_exception(ctx, req, (unsigned)-rc);
+    }
+    /* Validated above, so libmodbus takes none of its error paths (some of
+     * which sleep for the response timeout and flush the socket). */
+    if (pdu[0] == MBMAP_FC_READ_HOLDING && (((unsigned)pdu[1] << 8) | pdu[2]) >= MBMAP_MIRROR_BASE)
+        return modbus_reply(ctx, req, req_len, &s->mirror);
+    return modbus_reply(ctx, req, req_len, s->map);
+}
