@@ -27,5 +27,4 @@ typedef enum {
     CAN_BUS_DOWN = 5, /* interface down or gone; reopening */
 } can_bus_state_t;
 
-
 #endif
