@@ -61,6 +61,10 @@ echo '== make check (second)'
 run /root/ci/check2.log make check; rc2=\$?
 grep -E '^FAIL|check:' /root/ci/check2.log
 fi
+if [ '$STEPS' != all ]; then
+    echo '== make deps-run and the build (make check did both)'
+    run /root/ci/build.log sh -c 'make deps-run && make -j2 build/bin/trajd' || exit 1
+fi
 echo '== timeout -s INT 15 make run'
 run /root/ci/run.log timeout -s INT 15 make run
 [ '$STEPS' = all ] || sh tests/deps.sh mbpoll > /dev/null
