@@ -6,6 +6,7 @@
 #   PYTHON  interpreter that sees Debian's scipy (default /usr/bin/python3)
 #   ONLY    "c" to run only the cmocka binaries (the sanitizer pass)
 #   TESTS   space-separated names to run only those (e.g. TESTS="test_tridiag test_replay.py")
+#   TEST_TIMEOUT_S  the most one test program may take (default 900 s; then it fails)
 #   COUNTS  a file to which the three counts are appended ("passed failed skipped"), so
 #           that `make check` can add up the plain and the sanitizer pass
 # A test skips by exiting 77 (as in automake), or by exiting 0 with a first line
@@ -39,7 +40,8 @@ run_one() { # name, command...
     want "$name" || return 0
     start=$(date +%s)
     log="$log_dir/$name.log"
-    "$@" > "$log" 2>&1
+    # bounded: a test that hangs fails (124) instead of holding up the run
+    timeout -k 10 "${TEST_TIMEOUT_S:-900}" "$@" > "$log" 2>&1
     rc=$?
     secs=$(( $(date +%s) - start ))
     if [ $rc = 77 ] || { [ $rc = 0 ] && head -n 1 "$log" | grep -q '^SKIP'; }; then

@@ -52,7 +52,7 @@ replay.track = walk.csv
 output = csv
 csv.path = d.csv
 CONF
-(cd "$tmp" && "$TD" -f -c d.conf 0<&- 1>&- 2>&-); rc=$?
+(cd "$tmp" && timeout -k 5 120 "$TD" -f -c d.conf 0<&- 1>&- 2>&-); rc=$?  # bounded: a hang fails
 [ $rc -eq 0 ] && ok || bad "trajd exit $rc, want 0"
 [ -s "$tmp/d.csv" ] && ok || bad "trajd: no rows"
 rows_only "$tmp/d.csv" "trajd 0<&- 1>&- 2>&-"

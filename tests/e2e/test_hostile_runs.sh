@@ -42,7 +42,7 @@ printf '[object.boat]\ninput = replay\nreplay.track = %s\noutput = stdout\nends 
 printf '[daemon]\nrate_hz = 20\nspeed = 20\nexit_when_done = yes\nstatus_interval_s = 0\n' > "$tmp/h.conf"
 printf '[object.a]\ninput = replay\nreplay.track = fast.csv\noutput = csv\ncsv.path = out.csv\n' >> "$tmp/h.conf"
 printf 'safety_max_speed_m_s = 0.5\n' >> "$tmp/h.conf"
-(cd "$tmp" && "$TD" -f -c h.conf 2> err); rc=$?
+(cd "$tmp" && timeout -k 5 120 "$TD" -f -c h.conf 2> err); rc=$?  # bounded: a hang fails
 [ $rc -eq 75 ] && ok || bad "safety hold: exit $rc, want 75"
 grep -q "object 'a' ended held: speed above safety_max_speed_m_s" "$tmp/err" && ok ||
     { bad "safety hold not named:"; cat "$tmp/err"; }
@@ -79,7 +79,7 @@ can.cia402_cob_y = 0
 can.cia402_cob_z = 0
 can.cia402_counts_per_m = 1e7
 CONF
-(cd "$tmp" && "$TD" -f -c c.conf 2> err); rc=$?
+(cd "$tmp" && timeout -k 5 120 "$TD" -f -c c.conf 2> err); rc=$?  # bounded: a hang fails
 [ $rc -eq 75 ] && ok || bad "CiA 402 beyond int32: exit $rc, want 75"
 grep -q "object 'car' ended held: position outside position_min_m .. position_max_m" "$tmp/err" && ok ||
     { bad "CiA 402 beyond int32: not named"; cat "$tmp/err"; }
@@ -96,7 +96,7 @@ n=$(grep -c " 201#" "$tmp/out.log"); top=$(grep -c " 201#FFFFFF7F" "$tmp/out.log
     ok || { bad "trajreplay >10 % refused: exit $rc, no warning"; cat "$tmp/e"; }
 printf '[daemon]\nrate_hz = 20\nspeed = 50\nexit_when_done = yes\nstatus_interval_s = 0\n' > "$tmp/s.conf"
 printf '[object.a]\ninput = replay\nreplay.track = spiky.csv\noutput = csv\ncsv.path = s.csv\n' >> "$tmp/s.conf"
-(cd "$tmp" && "$TD" -f -c s.conf 2> err); rc=$?
+(cd "$tmp" && timeout -k 5 120 "$TD" -f -c s.conf 2> err); rc=$?  # bounded: a hang fails
 grep -q "<4>object a: replay.track .*spiky.csv: 1[0-9].[0-9] % of its 61 fixes were refused" "$tmp/err" &&
     ok || { bad "trajd >10 % refused: no warning (exit $rc)"; cat "$tmp/err"; }
 
