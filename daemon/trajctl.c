@@ -297,12 +297,29 @@ static int refused(const char *line)
     return EXIT_REFUSED;
 }
 
+/* The next answer if it is "ok", else NULL with *rc the exit status (unreachable,
+ * refused, or an answer not understood). */
+static char *answer_ok(trajctl_t *c, int *rc)
+{
+    char v[64];
+    char *line = answer(c, rc);
+    if (!line)
+        return NULL;
+    if ((*rc = refused(line)) != 0)
+        return NULL;
+    if (strcmp(jstr(line, "reply", v, sizeof v), "ok") != 0) {
+        fprintf(stderr, "trajctl: unexpected answer: %.200s\n", line);
+        *rc = EX_PROTOCOL;
+        return NULL;
+    }
+    return line;
+}
+
 /* ---- commands ---- */
 
 static int cmd_simple(trajctl_t *c, char **argv, int argc)
 {
     int rc = 0;
-    char v[64];
     if (argc == 3)
         rc = send_line(c, "%s %s %s", argv[0], argv[1], argv[2]);
     else if (argc == 2)
@@ -311,15 +328,9 @@ static int cmd_simple(trajctl_t *c, char **argv, int argc)
         rc = send_line(c, "%s", argv[0]);
     if (rc < 0)
         return unreachable(c, "the connection was lost");
-    char *line = answer(c, &rc);
+    char *line = answer_ok(c, &rc);
     if (!line)
         return rc;
-    if ((rc = refused(line)) != 0)
-        return rc;
-    if (strcmp(jstr(line, "reply", v, sizeof v), "ok") != 0) {
-        fprintf(stderr, "trajctl: unexpected answer: %.200s\n", line);
-        return EX_PROTOCOL;
-    }
     return 0;
 }
 
@@ -534,15 +545,9 @@ static int cmd_watch(trajctl_t *c, const char *object)
     char v[64];
     if (send_line(c, "watch %s", object) < 0)
         return unreachable(c, "the connection was lost");
-    char *line = answer(c, &rc);
+    char *line = answer_ok(c, &rc);
     if (!line)
         return rc;
-    if ((rc = refused(line)) != 0)
-        return rc;
-    if (strcmp(jstr(line, "reply", v, sizeof v), "ok") != 0) {
-        fprintf(stderr, "trajctl: unexpected answer: %.200s\n", line);
-        return EX_PROTOCOL;
-    }
     return watch_loop(c, jstr(line, "object", v, sizeof v), jnum(line, "rate_hz"));
 }
 
