@@ -85,7 +85,7 @@ class OneClock(unittest.TestCase):
             f.write("[daemon]\nrate_hz = 50\nstatus_interval_s = 0\nstop_timeout_s = 1\n"
                     "clock = epoch\ndelay_s = %g\n"
                     "[modbus]\naddress = 127.0.0.1\nport = 0\nwrites = yes\nsystemd_socket = no\n"
-                    "[can]\nlog_out = %s\nlog_time = engine\nmax_late_ms = 0\n"
+                    "[can]\nlog_out = %s\nlog_time = engine\nmax_late_ms = 0\nstatus_period_ms = 40\n"  # STATUS2 pages go in turn: page 3 often enough
                     "[object.a]\nid = 0\ninput = modbus\noutput = csv, can\ncsv.path = a.csv\n"
                     "csv.age = yes\nfragment = 8\noverlap = 4\nstart_slack = 2\n"
                     "[object.b]\nid = 1\ninput = modbus\noutput = csv, can\ncsv.path = b.csv\n"
