@@ -28,13 +28,6 @@ TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
 WAIT_S = 20
 
 
-def track(path, n=3000, dt_s=0.1):
-    with open(path, "w") as f:
-        f.write("t,x,y,z\n")
-        for i in range(n):
-            f.write("%.3f,%.3f,%.3f,1.0\n" % (i * dt_s, 2.0 * i * dt_s, 0.5 * i * dt_s))
-
-
 # The operated object brakes at 0.05 m/s^2 (scale_accel_m_s2): from 2 m/s a
 # stop takes 40 s, inside stop_timeout_s, so the daemon is stopping, not gone,
 # while the test writes.
@@ -69,7 +62,7 @@ class Gate(unittest.TestCase):
     def setUp(self):
         self.tmpd = tempfile.TemporaryDirectory()
         self.tmp = self.tmpd.name
-        track(os.path.join(self.tmp, "track.csv"))
+        mbsim.line_track(os.path.join(self.tmp, "track.csv"))
         self.p = None
 
     def start(self, extra):

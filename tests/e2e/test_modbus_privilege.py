@@ -28,13 +28,6 @@ TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
 WAIT_S = 20
 
 
-def track(path, n=3000, dt_s=0.1):
-    with open(path, "w") as f:
-        f.write("t,x,y,z\n")
-        for i in range(n):
-            f.write("%.3f,%.3f,%.3f,1.0\n" % (i * dt_s, 2.0 * i * dt_s, 0.5 * i * dt_s))
-
-
 class Trajd:
     def __init__(self, tmp, text, env=None):
         self.conf = os.path.join(tmp, "trajd.conf")
@@ -94,7 +87,7 @@ class Scope(unittest.TestCase):
     def setUp(self):
         self.tmpd = tempfile.TemporaryDirectory()
         self.tmp = self.tmpd.name
-        track(os.path.join(self.tmp, "track.csv"))
+        mbsim.line_track(os.path.join(self.tmp, "track.csv"))
 
     def tearDown(self):
         self.tmpd.cleanup()
@@ -143,7 +136,7 @@ class Root(unittest.TestCase):
     def setUp(self):
         self.tmpd = tempfile.TemporaryDirectory()
         self.tmp = self.tmpd.name
-        track(os.path.join(self.tmp, "track.csv"))
+        mbsim.line_track(os.path.join(self.tmp, "track.csv"))
         # outside systemd: no INVOCATION_ID, no NOTIFY_SOCKET
         self.env = {k: v for k, v in os.environ.items()
                     if k not in ("INVOCATION_ID", "NOTIFY_SOCKET")}

@@ -69,11 +69,8 @@ EIO_TEXT = os.strerror(errno.EIO)   # "Input/output error", from Python's libc
 FIELDS = 16            # columns of a setpoint line (daemon/csv/csv_format.c)
 
 
-def track(path, n=400, dt_s=0.1):
-    with open(path, "w") as f:
-        f.write("t,x,y,z\n")
-        for i in range(n):
-            f.write("%.3f,%.3f,%.3f,1.0\n" % (i * dt_s, 2.0 * i * dt_s, 0.5 * i * dt_s))
+def track(path, n=400):
+    mbsim.line_track(path, n)
 
 
 def conf(tmp, csv_path, extra_daemon="", extra_obj="", modbus=False, output="csv", tail=""):

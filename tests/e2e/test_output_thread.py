@@ -34,15 +34,8 @@ WAIT_S = 60
 SCHED_OTHER, SCHED_FIFO = 0, 1
 
 
-def track(path, n, dt_s=0.1):
-    with open(path, "w") as f:
-        f.write("t,x,y,z\n")
-        for i in range(n):
-            f.write("%.3f,%.3f,%.3f,1.0\n" % (i * dt_s, 2.0 * i * dt_s, 0.5 * i * dt_s))
-
-
 def write_conf(tmp, n, rt="", done=True, can=False):
-    track(os.path.join(tmp, "track.csv"), n)
+    mbsim.line_track(os.path.join(tmp, "track.csv"), n)
     path = os.path.join(tmp, "trajd.conf")
     with open(path, "w") as f:
         f.write("[daemon]\nrate_hz = 100\nspeed = 10\nstatus_interval_s = 0\nstop_timeout_s = 1\n"
@@ -138,7 +131,7 @@ class OutputThreadTest(unittest.TestCase):
 
     def test_unread_stderr_does_not_stop_the_clock(self):
         with tempfile.TemporaryDirectory() as tmp:
-            track(os.path.join(tmp, "track.csv"), 3000)
+            mbsim.line_track(os.path.join(tmp, "track.csv"), 3000)
             conf = os.path.join(tmp, "trajd.conf")
             with open(conf, "w") as f:
                 f.write("[daemon]\nrate_hz = 100\nstatus_interval_s = 1\nstop_timeout_s = 0\n"

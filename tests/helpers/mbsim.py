@@ -175,6 +175,15 @@ def start_trajd(argv, timeout=WAIT_S, **popen_kw):
     return p, lines, port_of(line)
 
 
+def line_track(path, n=3000, dt_s=0.1):
+    """A straight line at 2.06 m/s (x 2 m/s, y 0.5 m/s, z = 1), n fixes dt_s apart,
+    as CSV t,x,y,z: the track of the daemon tests that need one."""
+    with open(path, "w") as f:
+        f.write("t,x,y,z\n")
+        for i in range(n):
+            f.write("%.3f,%.3f,%.3f,1.0\n" % (i * dt_s, 2.0 * i * dt_s, 0.5 * i * dt_s))
+
+
 # ---- raw Modbus/TCP ----------------------------------------------------------
 
 def connect(port):
