@@ -45,14 +45,9 @@ VMAX=2.0 AMAX=12
 for rate in $RATES; do
     $PY - README.md "$run/ev$rate.conf" "$rate" "$VMAX" "$AMAX" <<'PYEOF' || exit 1
 import sys
-lines = open(sys.argv[1]).read().splitlines()
-i = next(k for k, l in enumerate(lines) if l.startswith("<!-- drive-config:"))
-block = []
-for l in lines[i + 1:]:
-    if not l.startswith("    "):
-        break
-    block.append(l[4:])
-conf = "\n".join(block) + "\n"
+sys.path.insert(0, "tests/helpers")
+from readme_conf import drive_config
+conf = drive_config(sys.argv[1])
 rate, vmax, amax = int(sys.argv[3]), sys.argv[4], sys.argv[5]
 period_us = 1000000 // rate
 def sub(a, b):

@@ -26,14 +26,9 @@ $PY tests/helpers/cantools_trajd.py wplog "$run/dtrack.csv" "$run/dwp.log" > /de
 # server the guest reads with mbpoll and writes arm's feed override to.
 $PY - README.md "$run/drive.conf" <<'PYEOF' || exit 1
 import sys
-lines = open(sys.argv[1]).read().splitlines()
-i = next(k for k, l in enumerate(lines) if l.startswith("<!-- drive-config:"))
-block = []
-for l in lines[i + 1:]:
-    if not l.startswith("    "):
-        break
-    block.append(l[4:])
-conf = "\n".join(block) + "\n"
+sys.path.insert(0, "tests/helpers")
+from readme_conf import drive_config
+conf = drive_config(sys.argv[1])
 assert "interface = can0\n" in conf and "[can]\n" in conf, conf
 conf = conf.replace("interface = can0\n", "interface = vcan0\n")
 conf = conf.replace("[can]\n", "[can]\nmax_late_ms = 0.001\n")
