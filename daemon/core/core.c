@@ -586,7 +586,8 @@ int core_done(const core_t *c)
             return 0;
         for (unsigned i = 0; i < c->nobj; i++) {
             engine_state_t s = c->obj[i].status.state;
-            int held = lc_state(&c->obj[i].lc) == LC_HELD; /* frozen at rest */
+            /* frozen by the monitor's hold; a drive's hold brakes to rest (FINISHED) */
+            int held = (c->obj[i].lc.hold & LC_HOLD_SAFETY) != 0;
             if ((s != ENGINE_STATE_FINISHED && s != ENGINE_STATE_WAITING && !held) ||
                 c->obj[i].retiring)
                 return 0;
@@ -602,10 +603,11 @@ int core_done(const core_t *c)
             return 0;
         /* at rest on its last waypoint, or waiting with nothing buffered
          * (its input gave nothing usable: nothing more can happen), or held
-         * by a fault (frozen at rest: only a clear moves it again) */
+         * by the monitor (frozen: only a clear moves it again; a drive's hold
+         * brakes to rest, FINISHED) */
         if ((o->status.state != ENGINE_STATE_FINISHED &&
              !(o->status.state == ENGINE_STATE_WAITING && o->status.buffered == 0) &&
-             lc_state(&o->lc) != LC_HELD) ||
+             !(o->lc.hold & LC_HOLD_SAFETY)) ||
             o->retiring)
             return 0;
     }

@@ -27,10 +27,13 @@
     [LC_EV_RELOAD_CHANGED] = C(RELOAD_NEW, SAME), [LC_EV_RELOAD_REMOVED] = C(RETIRE, LC_FINISHED), \
     [LC_EV_RELOAD_ADDED] = C(NOTE, SAME), [LC_EV_RELOAD_FAILED] = C(KEEP, SAME),                   \
     [LC_EV_SHUTDOWN] = C(SHUTDOWN, LC_FINISHED), [LC_EV_RESTART] = C(NOTE, SAME)
-/* The drive and fault columns of a state whose output moves or may move. */
+/* The drive and fault columns of a state whose output moves or may move: the
+ * monitor's refusal freezes at once (its own hold); a drive that no longer
+ * follows holds the object too, but the other axes brake to rest along the
+ * path within the object's limits (issue 23). */
 #define FAULTS_FREEZE                                                                              \
-    [LC_EV_SAFETY] = C(FREEZE, LC_HELD), [LC_EV_DRIVE_LOST] = C(FREEZE, LC_HELD),                  \
-    [LC_EV_DRIVE_BOOTUP] = C(FREEZE, LC_HELD), [LC_EV_HEARTBEAT_BACK] = C(NOTE, SAME)
+    [LC_EV_SAFETY] = C(FREEZE, LC_HELD), [LC_EV_DRIVE_LOST] = C(DRIVE_HOLD, LC_HELD),              \
+    [LC_EV_DRIVE_BOOTUP] = C(DRIVE_HOLD, LC_HELD), [LC_EV_HEARTBEAT_BACK] = C(NOTE, SAME)
 
 /* clang-format off */
 const lc_cell_t lc_table[LC_STATE_COUNT][LC_EV_COUNT] = {
@@ -128,8 +131,8 @@ const lc_cell_t lc_table[LC_STATE_COUNT][LC_EV_COUNT] = {
         [LC_EV_STOP] = C(NOTE, SAME),              [LC_EV_START] = C(REFUSE, SAME),
         [LC_EV_CLEAR] = C(REANCHOR, CURVE),
         [LC_EV_OVERRIDE_ZERO] = C(RATE, SAME),     [LC_EV_OVERRIDE] = C(RATE, SAME),
-        [LC_EV_SAFETY] = C(NOTE, SAME),            [LC_EV_DRIVE_LOST] = C(FREEZE, SAME),
-        [LC_EV_DRIVE_ENABLED] = C(POSITION, SAME), [LC_EV_DRIVE_BOOTUP] = C(FREEZE, SAME),
+        [LC_EV_SAFETY] = C(FREEZE, SAME),          [LC_EV_DRIVE_LOST] = C(DRIVE_HOLD, SAME),
+        [LC_EV_DRIVE_ENABLED] = C(POSITION, SAME), [LC_EV_DRIVE_BOOTUP] = C(DRIVE_HOLD, SAME),
         [LC_EV_HEARTBEAT_LOST] = C(FEED_HOLD, SAME), [LC_EV_HEARTBEAT_BACK] = C(NOTE, SAME),
         [LC_EV_STALL] = C(NOTE, SAME),             [LC_EV_CLOCK_STEP] = C(NOTE, SAME),
         RELOADS_KEPT,
@@ -173,7 +176,7 @@ static const char *const event_names[LC_EV_COUNT] = {
 static const char *const action_names[LC_ACTION_COUNT] = {
     "undefined", "curve",      "adopt",  "buffer", "note",   "stop",      "start",    "play",
     "clear",     "reanchor",   "rate",   "refuse", "freeze", "feed hold", "position", "one step",
-    "clock",     "reload new", "retire", "keep",   "fresh",  "shutdown",  "restart"};
+    "clock",     "reload new", "retire", "keep",   "fresh",  "shutdown",  "restart",  "drive hold"};
 
 const char *lc_state_name(lc_state_t s)
 {
@@ -226,6 +229,7 @@ void lc_inherit(lifecycle_t *lc, const lifecycle_t *from)
     lc->hold = from->hold;
     lc->latched = from->latched;
     lc->end_pending = from->end_pending;
+    lc->clear_pending = from->clear_pending;
     lc->drive_pos = from->drive_pos;
     lc->have_reported = from->have_reported;
     memcpy(lc->reported, from->reported, sizeof lc->reported);
@@ -244,15 +248,29 @@ unsigned lc_buffered(const lifecycle_t *lc)
     return lc->len;
 }
 
+/* The monitor's hold: the curve is not advanced. */
 static int frozen(const lifecycle_t *lc)
 {
+    return (lc->hold & LC_HOLD_SAFETY) != 0;
+}
+
+/* A fault holds: the monitor's (frozen), or a drive's (braking to rest). */
+static int held(const lifecycle_t *lc)
+{
     return (lc->hold & (LC_HOLD_SAFETY | LC_HOLD_DRIVE)) != 0;
+}
+
+static int curve_moving(const lifecycle_t *lc)
+{
+    engine_status_t st;
+    engine_status(lc->engine, &st);
+    return st.state == ENGINE_STATE_STREAMING || st.state == ENGINE_STATE_UNDERRUN;
 }
 
 lc_state_t lc_state(const lifecycle_t *lc)
 {
     engine_status_t st;
-    if (frozen(lc))
+    if (held(lc))
         return LC_HELD;
     engine_status(lc->engine, &st);
     int moving = st.state == ENGINE_STATE_STREAMING || st.state == ENGINE_STATE_UNDERRUN;
@@ -397,6 +415,11 @@ static void act_clear(lifecycle_t *lc)
 static int act_reanchor(lifecycle_t *lc)
 {
     unsigned was = lc->hold;
+    if (!frozen(lc) && (was & LC_HOLD_DRIVE) && curve_moving(lc)) {
+        lc->clear_pending = 1; /* a drive hold still brakes: re-anchored once at rest */
+        return 0;
+    }
+    lc->clear_pending = 0;
     double p[AXN];
     int have = 0;
     if (lc->have_reported) {
@@ -424,6 +447,8 @@ static int act_reanchor(lifecycle_t *lc)
          * frozen curve stops where it was sent, then forgets that position */
         if (lc->have_sent)
             (void)engine_halt(lc->engine, lc->sent.pos_m);
+        if (lc->safety)
+            safety_forget(lc->safety); /* the next position is the drives': judged from there */
         lc->drive_pos = 1;
         engine_require_position(lc->engine, 1);
         return 0;
@@ -436,17 +461,30 @@ static int act_reanchor(lifecycle_t *lc)
     return 0;
 }
 
-static int act_freeze(lifecycle_t *lc, lc_event_t ev)
+static int act_freeze(lifecycle_t *lc)
 {
-    if (!frozen(lc))
+    if (!held(lc))
         note_delay(lc);
-    lc->hold |= ev == LC_EV_SAFETY ? LC_HOLD_SAFETY : LC_HOLD_DRIVE;
-    if (ev != LC_EV_SAFETY)
-        lc->have_reported = 0; /* where the drives are must come again */
-    /* the freeze itself is the hold (a fault's stop at once, which the drive
-     * does not follow, or the monitor's own): what resumes is judged afresh */
+    lc->hold |= LC_HOLD_SAFETY;
+    /* the freeze itself is the hold (the monitor's own stop at once): what
+     * resumes is judged afresh */
     if (lc->safety && !safety_fault(lc->safety))
         safety_forget(lc->safety);
+    return 0;
+}
+
+/* A drive no longer follows (it left Operation Enabled, or booted): the
+ * caller gives that drive its own position; the object brakes to rest along
+ * its path within its limits (the other axes stop as a stop stops them) and
+ * is held until clear, which re-anchors at the drives' position. */
+static int act_drive_hold(lifecycle_t *lc)
+{
+    if (!held(lc))
+        note_delay(lc);
+    lc->hold |= LC_HOLD_DRIVE;
+    lc->have_reported = 0; /* where the drives are must come again */
+    if (!frozen(lc))
+        (void)engine_stop(lc->engine);
     return 0;
 }
 
@@ -508,7 +546,8 @@ static int run_action(lifecycle_t *lc, lc_action_t a, lc_event_t ev, const lc_ar
         }
         return engine_set_override(lc->engine, arg->ratio);
     case LC_A_REFUSE: lc->n.refused++; return -ENGINE_ESTATE;
-    case LC_A_FREEZE: return act_freeze(lc, ev);
+    case LC_A_FREEZE: return act_freeze(lc);
+    case LC_A_DRIVE_HOLD: return act_drive_hold(lc);
     case LC_A_FEED_HOLD: lc->hold |= LC_HOLD_FEED; return engine_set_override(lc->engine, 0.0);
     case LC_A_POSITION:
         if (!arg || !pos_ok(lc, arg->pos_m))
@@ -611,6 +650,8 @@ void lc_step_unsent(lifecycle_t *lc, int64_t now_ns, const engine_clock_t *clk)
         return;
     clock_watch(lc, now_ns, clk);
     lc->last_now_ns = now_ns;
+    if (lc->clear_pending && !frozen(lc) && !curve_moving(lc))
+        (void)act_reanchor(lc);
     if (frozen(lc)) {
         lc->have_tick = 1;
         return;
@@ -631,6 +672,8 @@ int lc_tick(lifecycle_t *lc, int64_t now_ns, const engine_clock_t *clk, engine_s
     int64_t skip = missed(lc, now_ns);
     clock_watch(lc, now_ns, clk);
     lc->last_now_ns = now_ns;
+    if (lc->clear_pending && !frozen(lc) && !curve_moving(lc))
+        (void)act_reanchor(lc); /* the clear that came while a drive hold braked */
     if (frozen(lc)) {
         lc->have_tick = 1;
         held_sp(lc, now_ns, sp);

@@ -46,7 +46,7 @@ typedef enum {
     LC_TRANSFER = 4,    /* moving to a trajectory's start (joining a track) */
     LC_STOPPING = 5,    /* a stop: braking along the path, latched */
     LC_STOPPED = 6,     /* at rest after a stop, latched until start or clear */
-    LC_HELD = 7,        /* a fault (safety monitor, drive): frozen at once */
+    LC_HELD = 7,        /* a fault: the monitor's frozen at once, a drive's braked to rest */
     LC_FEED_HELD = 8,   /* a feed hold (heartbeat lost): override 0 until clear */
     LC_FINISHED = 9,    /* the input ended and the output rests on its end */
     LC_STATE_COUNT
@@ -110,6 +110,9 @@ typedef enum {
     LC_A_FRESH,      /* a new object: no position until given (initial_position, drives) */
     LC_A_SHUTDOWN,   /* controlled stop to rest, FINISHED */
     LC_A_RESTART,    /* adopt the drives' positions (bumpless) or initial_position */
+    LC_A_DRIVE_HOLD, /* a drive no longer follows (it gets its own 0x6064, the caller's): the
+                           others brake to rest along the path within the limits, held until
+                           clear; clear re-anchors at the drives' position */
     LC_ACTION_COUNT
 } lc_action_t;
 
@@ -153,6 +156,7 @@ typedef struct {
     unsigned hold;     /* LC_HOLD_* */
     int latched;       /* a stop holds until start or clear */
     int end_pending;   /* end of input came while latched or held */
+    int clear_pending; /* clear came while a drive hold still braked: done at rest */
     int drive_pos;     /* the position must come from the drives (after a drive
                                 hold): NO_POSITION until LC_EV_DRIVE_ENABLED */
     int have_reported; /* reported[] holds the drives' position since the hold */

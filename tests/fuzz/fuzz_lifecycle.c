@@ -9,9 +9,11 @@
  *  - no step beyond v T (v = ENGINE_SPEED_CAP x max_speed_m_s, one period T,
  *    also right after a stall);
  *  - no change of velocity (finite differences) beyond a T, a = 3
- *    max_accel_m_s2 + scale_accel_m_s2, except on the tick a fault freezes;
+ *    max_accel_m_s2 + scale_accel_m_s2, except on the tick the monitor's fault
+ *    freezes (a drive's fault or boot-up brakes the object to rest);
  *  - the first setpoint after a re-anchor at the drives is their position;
- *  - held or stopped, not one nanometre of motion;
+ *  - held by the monitor, held at rest after a drive's brake, or stopped, not
+ *    one nanometre of motion;
  *  - the safety monitor with those limits never refuses a setpoint.
  */
 #include <math.h>
@@ -86,13 +88,15 @@ static void tick(fz_t *f)
             v[k] = d / T_S;
             dv2 += (v[k] - f->pv[k]) * (v[k] - f->pv[k]);
         }
-        int frozen_now = st == LC_HELD && f->prev_state != LC_HELD;
+        int frozen_now = st == LC_HELD && f->prev_state != LC_HELD && (f->lc.hold & LC_HOLD_SAFETY);
+        int at_rest = fabs(f->pv[0]) + fabs(f->pv[1]) + fabs(f->pv[2]) <= 1e-9;
         if (sqrt(d2) > f->vlim * T_S * 1.0001 + 1e-9)
             abort(); /* a step */
         if (f->nprev > 1 && !frozen_now && !f->freeze_ok &&
             sqrt(dv2) > f->alim * T_S * 1.0001 + 1e-6)
             abort(); /* a velocity step */
-        if (((st == LC_HELD && f->prev_state == LC_HELD) ||
+        if (((st == LC_HELD && f->prev_state == LC_HELD &&
+              ((f->lc.hold & LC_HOLD_SAFETY) || at_rest)) ||
              (st == LC_STOPPED && f->prev_state == LC_STOPPED)) &&
             sqrt(d2) > 1e-9)
             abort(); /* moved while held or latched */
@@ -138,7 +142,7 @@ static void event(fz_t *f, lc_event_t ev, uint8_t arg)
         f->anchor_pending = 0;
         f->drive[arg % 3] += (arg - 128) * 0.004; /* it coasted on */
     }
-    if (ev == LC_EV_DRIVE_LOST || ev == LC_EV_DRIVE_BOOTUP || ev == LC_EV_SAFETY)
+    if (ev == LC_EV_SAFETY) /* the monitor's own hold; a drive's brakes (issue 23) */
         f->freeze_ok = 1;
     if ((ev == LC_EV_DRIVE_ENABLED || ev == LC_EV_FIRST_POSITION) && rc == 0 &&
         (st == LC_HELD || (st == LC_NO_POSITION && (f->drive_lost || !f->lc.have_sent)))) {

@@ -9,11 +9,13 @@
  * configured limits, and the positions alone, by finite differences as the
  * safety monitor judges them):
  *   - no step beyond v T (one period T, also after a stall of N periods),
- *   - no change of velocity beyond a T, except on the tick a fault freezes
- *     the commanded state (the hold of a safety or drive fault, lifecycle.h),
+ *   - no change of velocity beyond a T, except on the tick the monitor's
+ *     fault freezes the commanded state (its own hold, lifecycle.h); a drive
+ *     fault or boot-up brakes the object to rest within its limits,
  *   - the first setpoint after a re-anchor at the drives is their reported
  *     position,
- *   - held or stopped (latched), the position does not move,
+ *   - held (by the monitor, or at rest after a drive's) or stopped
+ *     (latched), the position does not move,
  *   - the safety monitor, set to those limits, never refuses a setpoint.
  * Every cell (state x event) of the table is hit.
  * v = max_speed_m_s; a = 3 max_accel_m_s2 + scale_accel_m_s2 (the curve
@@ -157,7 +159,7 @@ static void fire(sim_t *s, lc_event_t ev, double ratio)
         s->anchor_pending = 1;
         memcpy(s->anchor, s->drive, sizeof s->anchor);
     }
-    if (ev == LC_EV_DRIVE_LOST || ev == LC_EV_DRIVE_BOOTUP || ev == LC_EV_SAFETY)
+    if (ev == LC_EV_SAFETY) /* the monitor's own hold; a drive's brakes (issue 23) */
         s->freeze_ok = 1;
     if ((ev == LC_EV_DRIVE_LOST || ev == LC_EV_DRIVE_BOOTUP) && lc_state(&s->lc) == LC_HELD)
         s->anchor_pending = 0; /* where the drives are must come again */
@@ -257,14 +259,18 @@ static void tick_check(sim_t *s)
         if (step > s->vlim * T_S * 1.0001 + TOL_M)
             fail_msg("step %.6g m > v T = %.6g m (state %s -> %s, tick %llu)", step, s->vlim * T_S,
                      lc_state_name(s->prev_state), lc_state_name(st), (unsigned long long)s->ticks);
-        int frozen_now = st == LC_HELD && s->prev_state != LC_HELD;
+        int frozen_now = st == LC_HELD && s->prev_state != LC_HELD && (s->lc.hold & LC_HOLD_SAFETY);
         if (s->nprev > 1 && !frozen_now && !s->freeze_ok && dv > s->alim * T_S * 1.0001 + 1e-6)
             fail_msg("velocity change %.6g m/s > a T = %.6g m/s (state %s -> %s, tick %llu)", dv,
                      s->alim * T_S, lc_state_name(s->prev_state), lc_state_name(st),
                      (unsigned long long)s->ticks);
-        if ((st == LC_HELD && s->prev_state == LC_HELD) ||
+        /* held by the monitor, held at rest after a drive's brake, or latched:
+         * not one nanometre */
+        int at_rest = fabs(s->pv[0]) + fabs(s->pv[1]) + fabs(s->pv[2]) <= 1e-9;
+        if ((st == LC_HELD && s->prev_state == LC_HELD &&
+             ((s->lc.hold & LC_HOLD_SAFETY) || at_rest)) ||
             (st == LC_STOPPED && s->prev_state == LC_STOPPED))
-            assert_true(step <= TOL_M); /* held or latched: not one nanometre */
+            assert_true(step <= TOL_M);
         s->max_step = fmax(s->max_step, step);
         if (s->nprev > 1 && !frozen_now && !s->freeze_ok)
             s->max_dv = fmax(s->max_dv, dv);
@@ -352,8 +358,8 @@ static int reach(sim_t *s, lc_state_t st)
     case LC_NO_POSITION:
         fire(s, LC_EV_DRIVE_LOST, 0);
         run(s, 5);
-        fire(s, LC_EV_CLEAR, 0);
-        break;
+        fire(s, LC_EV_CLEAR, 0); /* carried out once the object braked to rest */
+        return run_until(s, LC_NO_POSITION, 1000);
     case LC_WAITING:
         s->pause_until = s->now + 600 * 1000000000LL;
         fire(s, LC_EV_CLEAR, 0);
@@ -620,24 +626,77 @@ static void test_stall_clocked_catches_up(void **state)
     sim_free(&s);
 }
 
+/* Given an object moving at 2 m/s, when one of its drives leaves Operation
+ * Enabled (or boots), then the object is held and its commanded state brakes
+ * to rest along the path within its limits (tick_check: no velocity change
+ * beyond a T on any tick, the monitor never steps in), within the stopping
+ * distance, and stays there while waypoints keep coming (buffered) -- not
+ * frozen at once, a step the other axes' drives could not follow (issue 23). */
+static void test_drive_lost_brakes_within_limits(void **state)
+{
+    (void)state;
+    for (int boot = 0; boot < 2; boot++) {
+        sim_t s;
+        sim_init(&s, boot, NULL);
+        engine_setpoint_t sp = run(&s, 800);
+        double v = sqrt(sp.vel_m_s[0] * sp.vel_m_s[0] + sp.vel_m_s[1] * sp.vel_m_s[1] +
+                        sp.vel_m_s[2] * sp.vel_m_s[2]);
+        assert_true(v > 1.5);
+        fire(&s, boot ? LC_EV_DRIVE_BOOTUP : LC_EV_DRIVE_LOST, 0);
+        assert_int_equal(lc_state(&s.lc), LC_HELD);
+        engine_setpoint_t h = run(&s, 1);
+        assert_true(dist(h.pos_m, sp.pos_m) > 0.5 * v * T_S); /* braking, not frozen */
+        h = run(&s, 300);
+        assert_int_equal(lc_state(&s.lc), LC_HELD);
+        assert_true(fabs(h.vel_m_s[0]) + fabs(h.vel_m_s[1]) + fabs(h.vel_m_s[2]) < 1e-9);
+        double a = s.cfg.scale_accel_m_s2;
+        assert_true(dist(h.pos_m, sp.pos_m) <= v * v / (2 * a) + 2 * v * T_S + 0.05);
+        engine_setpoint_t later = run(&s, 300);
+        assert_true(dist(later.pos_m, h.pos_m) < 1e-12); /* held at rest */
+        assert_true(lc_buffered(&s.lc) > 0);
+        sim_free(&s);
+    }
+}
+
 /* Given an object moving, when one of its drives leaves Operation Enabled,
- * then the commanded state stops at once (no further motion); the drive's
- * reported position (0.3 m off) is accepted while held; after clear the
- * first setpoint is that position, and the object joins the track by a
- * transfer from there.  Without a position given while held, clear waits
- * for one (NO_POSITION: nothing sent) and re-anchors there. */
+ * then the commanded state brakes to rest and is held; the drive's reported
+ * position (0.3 m off) is accepted while held; after clear the first
+ * setpoint is that position, and the object joins the track by a transfer
+ * from there.  Without a position given while held, clear waits for one
+ * (NO_POSITION: nothing sent) and re-anchors there.  A clear while it still
+ * brakes is carried out at rest. */
 static void test_drive_lost_reanchors_at_drive(void **state)
 {
     (void)state;
-    for (int given_before_clear = 0; given_before_clear < 2; given_before_clear++) {
+    for (int given_before_clear = 0; given_before_clear < 3; given_before_clear++) {
         sim_t s;
         sim_init(&s, 0, NULL);
-        engine_setpoint_t sp = run(&s, 800);
+        run(&s, 800);
         fire(&s, LC_EV_DRIVE_LOST, 0);
-        engine_setpoint_t h = run(&s, 1);
-        assert_true(dist(h.pos_m, sp.pos_m) < 1e-12); /* not one more period of motion */
         s.drive_lost = 1;
         s.drive[0] += 0.3;
+        engine_setpoint_t h;
+        if (given_before_clear == 2) { /* clear at once, while it brakes */
+            lc_arg_t none = {0, NULL, NULL};
+            assert_int_equal(lc_event(&s.lc, LC_EV_CLEAR, &none), 0);
+            assert_int_equal(lc_state(&s.lc), LC_HELD);
+            h = run(&s, 1);
+            assert_true(fabs(h.vel_m_s[0]) + fabs(h.vel_m_s[1]) > 0.5); /* still braking */
+            h = run(&s, 300);
+            assert_true(h.flags & ENGINE_SP_NO_POSITION); /* at rest: cleared, the drives awaited */
+            assert_int_equal(lc_state(&s.lc), LC_NO_POSITION);
+            assert_int_equal(lc_set_position(&s.lc, s.drive), 0);
+            s.anchor_pending = 1;
+            memcpy(s.anchor, s.drive, sizeof s.anchor);
+            run(&s, 1);
+            assert_int_equal(s.anchor_pending, 0);
+            assert_true(run_until(&s, LC_STREAMING, 3000)); /* joined the track */
+            sim_free(&s);
+            continue;
+        }
+        h = run(&s, 300);
+        assert_true(fabs(h.vel_m_s[0]) + fabs(h.vel_m_s[1]) + fabs(h.vel_m_s[2]) < 1e-9);
+        engine_setpoint_t sp = h;
         h = run(&s, 200);
         assert_true(dist(h.pos_m, sp.pos_m) < 1e-12);
         lc_arg_t none = {0, NULL, NULL};
@@ -816,6 +875,7 @@ int main(void)
         cmocka_unit_test(test_stop_latches_until_start),
         cmocka_unit_test(test_stall_goes_on_from_last_sent),
         cmocka_unit_test(test_stall_clocked_catches_up),
+        cmocka_unit_test(test_drive_lost_brakes_within_limits),
         cmocka_unit_test(test_drive_lost_reanchors_at_drive),
         cmocka_unit_test(test_clock_step),
         cmocka_unit_test(test_transfer_t_s),
