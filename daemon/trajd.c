@@ -594,7 +594,7 @@ static uint64_t engine_faults(const core_t *c, const stats_t *st)
 
 /* Objects that end the run held: a safety fault, a feed hold (a drive's
  * heartbeat lost), or no position after waypoints were accepted (a CiA 402
- * drive left Operation Enabled: obj_drive_lost); each named in a log line.
+ * drive left Operation Enabled: obj_drive_event); each named in a log line.
  * Their count (issue 24: the run exits CORE_EXIT_HELD). */
 static unsigned held_objects(const core_t *c)
 {

@@ -49,6 +49,12 @@ void can_axis_anchored(can_axis_t *x)
         x->live = 1;
 }
 
+void can_axis_refresh(can_axis_t *x)
+{
+    x->live = x->pending = 0;
+    x->fresh = 1;
+}
+
 int can_axis_list_writes(const canproto_ids_t *ids, uint16_t index, uint8_t sub)
 {
     for (unsigned k = 0; k < ids->cia402_nsdo; k++)

@@ -50,6 +50,11 @@ int can_axis_target(can_axis_t *x, const can_axis_in_t *in, int32_t *out);
  * that is still to be sent). */
 void can_axis_anchored(can_axis_t *x);
 
+/* A clear after a drive hold: the axis re-anchors at its drive's 0x6064 (its
+ * next target in Operation Enabled is that, and the engine's pass only after
+ * can_axis_anchored), not at the target it held. */
+void can_axis_refresh(can_axis_t *x);
+
 /* 1 if the configuration list of ids writes index:sub. */
 int can_axis_list_writes(const canproto_ids_t *ids, uint16_t index, uint8_t sub);
 

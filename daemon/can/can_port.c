@@ -39,6 +39,7 @@ typedef struct {
     uint16_t cw_sent[CANPROTO_CIA402_AXES];
     int reset_req; /* CLEAR: fault reset and re-enable */
     int hb_hold;   /* a drive's heartbeat was lost: feed hold until CLEAR */
+    int drv_hold;  /* a drive was lost or booted: the object held until CLEAR */
     int64_t hb_last_ns[CANPROTO_CIA402_AXES];
     int hb_lost[CANPROTO_CIA402_AXES];
     int hb_watch[CANPROTO_CIA402_AXES]; /* its producer time is known > 0: set or read back */
@@ -259,6 +260,8 @@ static void refuse_command(can_port_obj_t *o, canproto_cmd_t cmd, uint32_t id, i
     event(o, CANPROTO_STERR_REFUSED);
 }
 
+static void reanchor_at_drives(can_port_obj_t *o);
+
 static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, uint32_t id)
 {
     int err;
@@ -275,6 +278,8 @@ static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, 
     }
     if (cmd == CANPROTO_CMD_CLEAR) {
         o->hb_hold = 0; /* the clear released the object's hold: a new loss holds again */
+        if (o->drv_hold)
+            reanchor_at_drives(o);
         canproto_rx_restart(&o->rx);
     }
     if (cmd == CANPROTO_CMD_RESET_COUNTERS) {
@@ -287,13 +292,14 @@ static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, 
 
 /* Axis a of object o changed state (from its TPDO, or to CIA402_STATE_UNKNOWN
  * at its boot-up): the change is kept for the log; leaving Operation Enabled
- * is a loss: that drive is disabled until CLEAR (with the bring-up), and the
- * object is held (its other axes brake along the path, then every axis holds). */
-static void axis_state(can_port_obj_t *o, unsigned a, cia402_state_t to, uint16_t sw)
+ * is a loss (returns 1): that drive is disabled until CLEAR (with the
+ * bring-up); the caller tells the owner, which holds the object (its other
+ * axes brake along the path, then every axis holds). */
+static int axis_state(can_port_obj_t *o, unsigned a, cia402_state_t to, uint16_t sw)
 {
     can_port_drive_t *d = &o->drive;
     if (to == d->state[a] && to != CIA402_STATE_UNKNOWN)
-        return;
+        return 0;
     can_axis_change_t c = {
         o->now_ns,   (uint8_t)a, (uint8_t)canproto_cia402_node(&o->ids, a), (uint8_t)d->state[a],
         (uint8_t)to, sw};
@@ -302,20 +308,26 @@ static void axis_state(can_port_obj_t *o, unsigned a, cia402_state_t to, uint16_
     if (to == CIA402_OPERATION_ENABLED) {
         o->axis_oe[a] = 1;
         o->axis_held[a] = 0;
-        return;
+        return 0;
     }
     if (!o->axis_oe[a])
-        return;
+        return 0;
     o->axis_oe[a] = 0;
     o->st.drive_lost++;
     event(o, CANPROTO_STERR_DRIVE);
     if (o->ids.cia402 == CANPROTO_CIA402_MANAGED)
         o->axis_held[a] = 1; /* re-enabling is the operator's decision: CLEAR */
-    if (!o->lost) {
-        o->lost = 1;
-        if (o->hooks.hold)
-            o->hooks.hold(o->ctx);
-    }
+    o->lost = 1;
+    return 1;
+}
+
+/* Tell the object's owner (lib/engine/LIFECYCLE.md's drive events). */
+static void drive_event(can_port_obj_t *o, lc_event_t ev)
+{
+    if (ev == LC_EV_DRIVE_LOST || ev == LC_EV_DRIVE_BOOTUP)
+        o->drv_hold = 1;
+    if (o->hooks.drive_event)
+        o->hooks.drive_event(o->ctx, ev);
 }
 
 /* The summary flags of o's drives, and what the engine must re-anchor at. */
@@ -342,6 +354,34 @@ static void drive_summary(can_port_obj_t *o)
     }
 }
 
+/* What o's drives report to the owner; with need_anchor, the drives enabled
+ * again at anchor_m: the axes take the engine's targets once it stands there. */
+static void offer_feedback(can_port_obj_t *o)
+{
+    can_port_drive_t *d = &o->drive;
+    if (o->hooks.feedback && o->hooks.feedback(o->ctx, d) > 0 && d->need_anchor) {
+        for (unsigned k = 0; k < CANPROTO_CIA402_AXES; k++)
+            if (o->ids.cia402_cob_id[k])
+                can_axis_anchored(&o->ax[k]);
+        d->need_anchor = 0;
+    }
+}
+
+/* A CLEAR after a drive hold: every axis re-anchors at its drive's 0x6064
+ * (issue 23), not at a target it held: its next target in Operation Enabled
+ * is its 0x6064 again, and the engine is given those positions as soon as
+ * every drive is enabled (now, if they are). */
+static void reanchor_at_drives(can_port_obj_t *o)
+{
+    o->drv_hold = 0;
+    for (unsigned k = 0; k < CANPROTO_CIA402_AXES; k++)
+        if (o->ids.cia402_cob_id[k])
+            can_axis_refresh(&o->ax[k]);
+    drive_summary(o);
+    if (o->drive.need_anchor)
+        offer_feedback(o);
+}
+
 /* A feedback TPDO of axis a of object o. */
 static void drive_feedback(can_port_obj_t *o, unsigned a, const canproto_frame_t *f)
 {
@@ -358,14 +398,10 @@ static void drive_feedback(can_port_obj_t *o, unsigned a, const canproto_frame_t
     o->pos_inc[a] = inc;
     d->pos_m[a] = canproto_cia402_pos_m(&o->ids, a, inc);
     d->seen |= 1u << a;
-    axis_state(o, a, cia402_state(sw), sw);
+    if (axis_state(o, a, cia402_state(sw), sw))
+        drive_event(o, LC_EV_DRIVE_LOST);
     drive_summary(o);
-    if (o->hooks.feedback && o->hooks.feedback(o->ctx, d) > 0 && d->need_anchor) {
-        for (unsigned k = 0; k < CANPROTO_CIA402_AXES; k++)
-            if (o->ids.cia402_cob_id[k])
-                can_axis_anchored(&o->ax[k]);
-        d->need_anchor = 0;
-    }
+    offer_feedback(o);
     d->was_enabled = d->all_enabled;
 }
 
@@ -375,6 +411,7 @@ static void drive_heartbeat(can_port_obj_t *o, unsigned a, const canproto_frame_
     uint8_t n, st;
     if (cia402_decode_heartbeat(f, &n, &st) < 0)
         return;
+    int back = o->hb_lost[a], known = o->drive.state[a] != CIA402_STATE_UNKNOWN;
     o->hb_last_ns[a] = o->now_ns;
     o->hb_lost[a] = 0;
     o->hb_armed[a] = o->hb_watch[a] && st != CIA402_HB_BOOTUP;
@@ -390,10 +427,14 @@ static void drive_heartbeat(can_port_obj_t *o, unsigned a, const canproto_frame_
         o->cw_known[a] = 0;
         o->sdo_failed[a] = 0;
         o->hb_read[a] = o->hb_watch[a] = 0;
-        axis_state(o, a, CIA402_STATE_UNKNOWN, 0);
+        (void)axis_state(o, a, CIA402_STATE_UNKNOWN, 0);
         o->drive.seen &= ~(1u << a);
         drive_summary(o);
+        if (known) /* a drive trajd commanded lost its state */
+            drive_event(o, LC_EV_DRIVE_BOOTUP);
     }
+    if (back)
+        drive_event(o, LC_EV_HEARTBEAT_BACK);
 }
 
 /* Frames of the bring-up: SDO replies, heartbeats, EMCY of o's nodes; 1 if taken. */
@@ -727,12 +768,12 @@ static void watch_heartbeat(can_port_obj_t *o, unsigned a, int64_t now_ns)
     o->drive.hb_lost |= 1u << a;
     o->st.heartbeat_lost++;
     event(o, CANPROTO_STERR_DRIVE);
-    if (!o->hb_hold && o->hooks.hold) {
+    if (!o->hb_hold) {
         /* a drive that went silent may not follow: feed hold (override
          * 0), a controlled stop along the path by the time scaling,
-         * every axis together; held until a CLEAR command (obj_hold) */
+         * every axis together; held until a CLEAR command */
         o->hb_hold = 1;
-        o->hooks.hold(o->ctx);
+        drive_event(o, LC_EV_HEARTBEAT_LOST);
     }
 }
 

@@ -49,6 +49,7 @@
 #include "canproto.h"
 #include "cia402.h"
 #include "engine.h"
+#include "lifecycle.h"
 
 /* Slots per object for interleaved waypoint frames (see canproto_rx_init). */
 #define CAN_PORT_RX_SLOTS 2
@@ -94,14 +95,18 @@ typedef struct {
     int (*command)(void *ctx, canproto_cmd_t cmd, unsigned arg);
     /* Current engine status (state, last_seq, free). */
     void (*status)(void *ctx, engine_status_t *st);
-    /* A feedback TPDO of one of the object's drives arrived (may be NULL).
-     * Returns 1 if it re-anchored the engine at d->anchor_m (d->need_anchor:
-     * the engine stands there, at rest), else 0. */
+    /* A feedback TPDO of one of the object's drives arrived, or a CLEAR after
+     * a drive hold made every axis re-anchor at its 0x6064 (may be NULL).
+     * With d->need_anchor, the drives are enabled again (LC_EV_DRIVE_ENABLED
+     * at d->anchor_m).  Returns 1 if the engine now stands at d->anchor_m, at
+     * rest (the owner adopted it), else 0 (e.g. held: noted only). */
     int (*feedback)(void *ctx, const can_port_drive_t *d);
-    /* A drive's heartbeat was lost, or a drive left Operation Enabled (fault,
-     * quick stop, disabled, boot-up): hold the object (feed override 0, a
-     * controlled stop of the other axes, until a CLEAR command; may be NULL). */
-    void (*hold)(void *ctx);
+    /* An event of the object's drives for its owner (may be NULL;
+     * lib/engine/LIFECYCLE.md): LC_EV_DRIVE_LOST (a drive left Operation
+     * Enabled: fault, quick stop, disabled), LC_EV_DRIVE_BOOTUP (a drive
+     * heard before sent its boot-up), LC_EV_HEARTBEAT_LOST (once until a
+     * CLEAR), LC_EV_HEARTBEAT_BACK. */
+    void (*drive_event)(void *ctx, lc_event_t ev);
 } can_port_hooks_t;
 
 typedef struct {

@@ -242,9 +242,12 @@ static int hk_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
     return 0;
 }
 
-static void hk_hold(void *ctx)
+/* The drives' events to the object's owner (lib/engine/LIFECYCLE.md): a drive
+ * lost or booted is a drive hold (the object brakes to rest within its
+ * limits, held until clear), a heartbeat lost a feed hold. */
+static void hk_drive_event(void *ctx, lc_event_t ev)
 {
-    obj_hold(((const can_hook_ctx_t *)ctx)->o);
+    (void)obj_drive_event(((const can_hook_ctx_t *)ctx)->o, ev, NULL);
 }
 
 /*
@@ -255,14 +258,19 @@ static void hk_hold(void *ctx)
  * is re-anchored at rest there (the drives' 0x6064, or the target a drive
  * held), and reaches the track by a transfer.  An engine still moving is
  * brought to rest first (a clear), and re-anchored at a later frame.
- * The loss itself holds the object (hk_hold).
+ * The loss itself holds the object (hk_drive_event).  While the object is
+ * held, the position is only noted (a clear re-anchors there): the drives
+ * keep their own targets until the engine really stands there.
  */
 static int hk_feedback(void *ctx, const can_port_drive_t *d)
 {
     can_hook_ctx_t *h = ctx;
-    if (!d->need_anchor || obj_set_position(h->o, d->anchor_m) == 0) {
+    if (!d->need_anchor)
+        return 0;
+    int rc = obj_drive_event(h->o, LC_EV_DRIVE_ENABLED, d->anchor_m);
+    if (rc >= 0) {
         h->rest_asked = 0;
-        return d->need_anchor;
+        return rc; /* 1: adopted; 0: noted while held */
     }
     if (!h->rest_asked) /* once: to rest along its path (a clear), re-anchored later */
         (void)obj_command(h->o, LC_EV_CLEAR, 0, "can: drives enabled again, re-anchoring");
@@ -454,7 +462,7 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
         can_obj_ids(cfg_obj_transport(s->objs[k]->cfg, &can_transport),
                     (unsigned)s->objs[k]->cfg->id, &ids);
         can_port_hooks_t hk = {s->is_input[k] ? hk_push : hk_push_refuse, hk_command, hk_status,
-                               hk_feedback, hk_hold};
+                               hk_feedback, hk_drive_event};
         s->drive_state_logged[k] = -1;
         if (ids.cia402 >= CANPROTO_CIA402_FEEDBACK && !s->objs[k]->carried)
             engine_require_position(s->objs[k]->engine, 1); /* the drive says where it is */

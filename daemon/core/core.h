@@ -222,13 +222,18 @@ int obj_set_override(obj_t *o, unsigned percent);
 int obj_set_position(obj_t *o, const double pos_m[ENGINE_AXES]);
 
 /*
- * o's drive stopped following (fault, quick stop, disabled): LC_EV_DRIVE_LOST.
- * o is held at once (the commanded state stops moving, the curve is not
- * advanced) until obj_clear; after it, nothing is sent until
- * obj_set_position gives the drives' position again, unless it was given
- * while held.
+ * An event of o's drives (daemon/can raises them; lib/engine/LIFECYCLE.md):
+ *   LC_EV_DRIVE_LOST, LC_EV_DRIVE_BOOTUP: a drive no longer follows; o brakes
+ *     to rest along its path within its limits and is held until obj_clear,
+ *     after which nothing is sent until the drives give their position;
+ *   LC_EV_DRIVE_ENABLED (pos_m: where the drives stand): every drive follows
+ *     again; o adopts pos_m if it may (no position, or at rest), notes it
+ *     while held (where a clear re-anchors), refuses it while moving;
+ *   LC_EV_HEARTBEAT_LOST (feed hold, as obj_hold), LC_EV_HEARTBEAT_BACK.
+ * Returns 1 if o now stands at pos_m (LC_EV_DRIVE_ENABLED adopted), 0 if not
+ * (noted, or another event), < 0 refused (-ENGINE_ESTATE: moving).
  */
-void obj_drive_lost(obj_t *o);
+int obj_drive_event(obj_t *o, lc_event_t ev, const double *pos_m);
 
 /*
  * Offer a waypoint to o (LC_EV_WAYPOINT): the one path every input uses

@@ -74,9 +74,16 @@ int obj_set_position(obj_t *o, const double pos_m[ENGINE_AXES])
     return lc_set_position(obj_lc(o), pos_m);
 }
 
-void obj_drive_lost(obj_t *o)
+int obj_drive_event(obj_t *o, lc_event_t ev, const double *pos_m)
 {
-    (void)lc_event(obj_lc(o), LC_EV_DRIVE_LOST, NULL);
+    lifecycle_t *lc = obj_lc(o);
+    lc_state_t from = lc_state(lc);
+    lc_arg_t a = {0, NULL, pos_m};
+    int rc = lc_event(lc, ev, &a);
+    sync_held(o);
+    if (rc < 0)
+        return rc;
+    return ev == LC_EV_DRIVE_ENABLED && lc_table[from][ev].action == LC_A_ADOPT;
 }
 
 /* One line per command, at most OBJ_CMD_LOG_PER_S a second per object. */

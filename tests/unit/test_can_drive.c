@@ -4,7 +4,9 @@
  * position, never a moving target; after it is enabled again its first target
  * is its 0x6064 and the engine is re-anchored there; a restarted trajd adopts
  * running drives (Enable operation, target = 0x6064); one drive's boot-up
- * re-initialises that drive only; the heartbeat watch arms only for a
+ * re-initialises that drive only; the drive events go to the object's owner
+ * (lost, boot-up, heartbeat lost and back); after a clear each axis
+ * re-anchors at its 0x6064; the heartbeat watch arms only for a
  * producer time set or read back, from the first heartbeat, and excuses
  * trajd's own stall; trajd's own heartbeat; every state change kept. */
 #include "test.h"
@@ -52,9 +54,11 @@ static int fake_up(const void *p)
 
 static const can_port_io_t fake_ops = {fake_send, fake_recv, NULL, fake_up};
 
-/* The fake object: holds counted, and a re-anchor done at once when asked
- * (as obj_set_position at rest), its position recorded. */
+/* The fake object: the drive events counted (nhold: those that hold it), and
+ * a re-anchor done at once when asked (as the owner adopting the drives'
+ * position at rest), its position recorded. */
 static struct {
+    unsigned ev[LC_EV_COUNT];
     unsigned nhold;
     unsigned nanchor;
     double anchor_m[3];
@@ -83,13 +87,16 @@ static int fo_feedback(void *ctx, const can_port_drive_t *d)
     return 1;
 }
 
-static void fo_hold(void *ctx)
+static void fo_drive_event(void *ctx, lc_event_t ev)
 {
     (void)ctx;
-    obj.nhold++;
+    assert_true(ev == LC_EV_DRIVE_LOST || ev == LC_EV_DRIVE_BOOTUP || ev == LC_EV_HEARTBEAT_LOST ||
+                ev == LC_EV_HEARTBEAT_BACK);
+    obj.ev[ev]++;
+    obj.nhold += ev != LC_EV_HEARTBEAT_BACK;
 }
 
-static const can_port_hooks_t hooks = {fo_push, NULL, fo_status, fo_feedback, fo_hold};
+static const can_port_hooks_t hooks = {fo_push, NULL, fo_status, fo_feedback, fo_drive_event};
 
 #define OE 0x0237
 #define FAULT 0x0218
@@ -227,6 +234,7 @@ static void test_fault_mid_motion(void **state)
     assert_int_equal(rpdo(1, mark, NULL), 17100);
     assert_int_equal(rpdo(2, mark, NULL), 8000); /* y, z follow the engine */
     assert_int_equal(obj.nhold, 1);
+    assert_int_equal(obj.ev[LC_EV_DRIVE_LOST], 1); /* the owner's drive hold: it brakes */
     p[0] += 0.02;
     mark = io.nout;
     cycle(600, p, 0); /* at rest */
@@ -258,6 +266,49 @@ static void test_fault_mid_motion(void **state)
     cycle(750, q, 0.1); /* the engine's targets pass again */
     assert_int_equal(rpdo(1, mark, NULL), 17110);
     assert_int_equal(rpdo(2, mark, NULL), 7980);
+}
+
+/* Given three drives following the object (y's 0x6064 3 counts off the target
+ * it holds), when node 1 faults mid-motion, the object is cleared (CLEAR
+ * command) and node 1 is enabled again, then each axis re-anchors at its own
+ * 0x6064 (issue 23: "After clear, each axis re-anchors at its 0x6064"), not at
+ * the target it held: the engine is given y's 0x6064 and y's first target
+ * after the clear is its 0x6064. */
+static void test_clear_reanchors_each_axis_at_its_0x6064(void **state)
+{
+    (void)state;
+    new_port(0, 0);
+    three_axes(0, 0);
+    tpdo(1, OE, 12000);
+    tpdo(2, OE, 8000);
+    tpdo(3, OE, 3000);
+    double p[3] = {1.2, -0.8, 0.3};
+    cycle(0, p, 0);
+    for (uint32_t k = 1; k <= 4; k++) {
+        p[0] = 1.2 + 0.05 * k;
+        cycle(50 * k, p, 1.0);
+    }
+    tpdo(2, OE, 8003); /* y stands 3 counts off its target */
+    tpdo(1, FAULT, 13900);
+    cycle(250, p, 0.5); /* the object brakes */
+    cycle(300, p, 0);   /* at rest, held */
+    unsigned mark = io.nout;
+    cycle(350, p, 0);
+    assert_int_equal(rpdo(2, mark, NULL), 8000); /* held where it was sent */
+    canproto_encode_command(0x680, CANPROTO_CMD_CLEAR, &io.in[io.nin++]);
+    cycle(400, p, 0);
+    tpdo(1, OE, 13900); /* enabled again */
+    can_port_rx(port, 450000000);
+    assert_int_equal(obj.nanchor, 2);
+    assert_true(fabs(obj.anchor_m[0] - 1.39) < 1e-9);
+    assert_true(fabs(obj.anchor_m[1] + 0.8003) < 1e-9); /* y's 0x6064, not its held target */
+    assert_true(fabs(obj.anchor_m[2] - 0.3) < 1e-9);
+    double q[3] = {1.39, -0.8003, 0.3};
+    mark = io.nout;
+    cycle(450, q, 0);
+    assert_int_equal(rpdo(1, mark, NULL), 13900);
+    assert_int_equal(rpdo(2, mark, NULL), 8003);
+    assert_int_equal(rpdo(3, mark, NULL), 3000);
 }
 
 /* Given the bring-up with the controlword in the RPDO and drives already in
@@ -331,6 +382,8 @@ static void test_bootup_of_one_drive(void **state)
     unsigned mark = io.nout;
     cycle(150, p, 1.0);
     assert_int_equal(obj.nhold, 1);
+    assert_int_equal(obj.ev[LC_EV_DRIVE_BOOTUP], 1); /* a boot-up, not a loss */
+    assert_int_equal(obj.ev[LC_EV_DRIVE_LOST], 0);
     unsigned nmt = 0, sdo[4] = {0};
     for (unsigned i = mark; i < io.nout; i++) {
         if (io.out[i].id == 0x000) {
@@ -383,6 +436,10 @@ static void test_heartbeat_watch_armed(void **state)
         cycle(1100, p, 0);
         cycle(1250, p, 0);
         assert_int_equal(obj.nhold, (unsigned)produces);
+        assert_int_equal(obj.ev[LC_EV_HEARTBEAT_LOST], (unsigned)produces);
+        heartbeat(1, 0x7F); /* heard again */
+        cycle(1300, p, 0);
+        assert_int_equal(obj.ev[LC_EV_HEARTBEAT_BACK], (unsigned)produces);
         free_port(NULL);
     }
 }
@@ -485,6 +542,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_teardown(test_fault_mid_motion, free_port),
+        cmocka_unit_test_teardown(test_clear_reanchors_each_axis_at_its_0x6064, free_port),
         cmocka_unit_test_teardown(test_restart_adopts_running_drives, free_port),
         cmocka_unit_test_teardown(test_bootup_of_one_drive, free_port),
         cmocka_unit_test(test_heartbeat_watch_armed),

@@ -98,9 +98,10 @@ static int fe_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
     return e->cmd_answer;
 }
 
-static void fe_hold(void *ctx)
+static void fe_drive_event(void *ctx, lc_event_t ev)
 {
-    ((fake_engine_t *)ctx)->nhold++;
+    if (ev != LC_EV_HEARTBEAT_BACK)
+        ((fake_engine_t *)ctx)->nhold++;
 }
 
 static void fe_status(void *ctx, engine_status_t *st)
@@ -122,7 +123,8 @@ static int fe_feedback(void *ctx, const can_port_drive_t *d)
     return 0;
 }
 
-static const can_port_hooks_t fe_hooks = {fe_push, fe_command, fe_status, fe_feedback, fe_hold};
+static const can_port_hooks_t fe_hooks = {fe_push, fe_command, fe_status, fe_feedback,
+                                          fe_drive_event};
 
 static fake_io_t io;
 static fake_engine_t eng;

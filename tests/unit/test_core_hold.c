@@ -1,7 +1,8 @@
 /*
  * test_core_hold.c - the feed hold of an object (daemon/core/core.h obj_hold,
  * obj_set_override, obj_clear): the one owner of the hold a CiA 402 drive's
- * lost heartbeat asks for, whichever source (CAN, Modbus) writes the override.
+ * lost heartbeat asks for, whichever source (CAN, Modbus) writes the override;
+ * and the drive events daemon/can raises (obj_drive_event).
  * Driven with a real engine, no clock, no sockets.
  */
 #include "test.h"
@@ -79,10 +80,79 @@ static void test_hold_refuses_override_until_clear(void **state)
     engine_free(o.engine);
 }
 
+/* Tick through the owner (lc_tick) from tick k0 for n ticks. */
+static engine_setpoint_t run_lc(obj_t *o, int64_t k0, int n)
+{
+    engine_setpoint_t sp;
+    memset(&sp, 0, sizeof sp);
+    for (int64_t k = k0; k < k0 + n; k++)
+        assert_int_equal(lc_tick(obj_lc(o), k * PERIOD_NS, NULL, &sp), 0);
+    return sp;
+}
+
+/* Given an object moving at 1 m/s with CiA 402 drives, when a drive is lost
+ * (obj_drive_event LC_EV_DRIVE_LOST, as daemon/can raises it), then the
+ * object is held and brakes to rest along its path (not frozen at once); the
+ * drives enabled again while it is held are noted only (obj_drive_event
+ * returns 0: the CAN side must not hand the drives the engine's targets),
+ * and after clear the first setpoint is where they reported.  After a drive
+ * hold cleared before the drives report, nothing is sent until they do, and
+ * their position is adopted (returns 1). */
+static void test_drive_events_through_the_owner(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_config_default(&c);
+    obj_t o;
+    memset(&o, 0, sizeof o);
+    o.engine = engine_new(&c, NULL);
+    assert_non_null(o.engine);
+    o.lc.period_ns = PERIOD_NS;
+    safety_limits_t lim = {.tol_m = SAFETY_TOL_M_DEFAULT};
+    safety_init(&o.safety, &lim);
+    push_line(&o, 0.0, 1);
+    engine_setpoint_t sp = run_lc(&o, 0, 500);
+    assert_true(sp.vel_m_s[0] > 0.5);
+    assert_int_equal(obj_drive_event(&o, LC_EV_DRIVE_LOST, NULL), 0);
+    assert_int_equal(lc_state(&o.lc), LC_HELD);
+    engine_setpoint_t b = run_lc(&o, 500, 1);
+    assert_true(b.vel_m_s[0] > 0.5 * sp.vel_m_s[0]); /* braking, not frozen */
+    b = run_lc(&o, 501, 500);
+    assert_true(fabs(b.vel_m_s[0]) < 1e-9);
+    assert_int_equal(lc_state(&o.lc), LC_HELD);
+    double at[ENGINE_AXES] = {b.pos_m[0] - 0.004, 0.0, 0.0};
+    assert_int_equal(obj_drive_event(&o, LC_EV_DRIVE_ENABLED, at), 0); /* noted */
+    b = run_lc(&o, 1001, 10);
+    assert_true(fabs(b.pos_m[0] - at[0]) > 1e-3); /* still held where it braked */
+    obj_clear(&o);
+    b = run_lc(&o, 1011, 1);
+    assert_true(fabs(b.pos_m[0] - at[0]) < 1e-12); /* re-anchored at the drives */
+    /* again, cleared before the drives report */
+    assert_int_equal(obj_drive_event(&o, LC_EV_DRIVE_LOST, NULL), 0);
+    b = run_lc(&o, 1012, 300);
+    obj_clear(&o);
+    b = run_lc(&o, 1312, 10);
+    assert_true(b.flags & ENGINE_SP_NO_POSITION);
+    at[0] += 0.002;
+    assert_int_equal(obj_drive_event(&o, LC_EV_DRIVE_ENABLED, at), 1); /* adopted */
+    b = run_lc(&o, 1322, 1);
+    assert_true(fabs(b.pos_m[0] - at[0]) < 1e-12);
+    /* the heartbeat: a feed hold, released by clear */
+    assert_int_equal(obj_drive_event(&o, LC_EV_HEARTBEAT_LOST, NULL), 0);
+    assert_int_equal(o.held, 1);
+    assert_int_equal(obj_drive_event(&o, LC_EV_HEARTBEAT_BACK, NULL), 0);
+    assert_int_equal(o.held, 1);
+    obj_clear(&o);
+    assert_int_equal(o.held, 0);
+    lc_free(&o.lc);
+    engine_free(o.engine);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_hold_refuses_override_until_clear),
+        cmocka_unit_test(test_drive_events_through_the_owner),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
