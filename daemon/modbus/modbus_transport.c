@@ -313,6 +313,9 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         o->delay_s = c->cfg->daemon.delay_s;
         o->clock_unsync = t->clock_unsync;
         o->held = (uint16_t)(ob->held != 0);
+        /* the lifecycle's (lib/engine/LIFECYCLE.md): held for a fault, or a stop latched */
+        o->fault_held = (uint16_t)((ob->lc.hold & (LC_HOLD_SAFETY | LC_HOLD_DRIVE)) != 0);
+        o->latched = (uint16_t)(ob->lc.latched != 0);
         d.clock_objects += o->clocked;
     }
     modbus_server_publish(t->srv, &d, t->objs);

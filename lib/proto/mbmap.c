@@ -221,9 +221,11 @@ int mbmap_encode_object(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_ob
     memset(b, 0, MBMAP_BLOCK * sizeof *b);
     mbmap_put_u32(b + MBMAP_O_GEN, gen);
     uint16_t health = mbmap_health(o);
-    b[MBMAP_O_STATE] = health & (MBMAP_HEALTH_SAFETY | MBMAP_HEALTH_DRIVE | MBMAP_HEALTH_HELD)
+    b[MBMAP_O_STATE] = o->fault_held || (health & (MBMAP_HEALTH_SAFETY | MBMAP_HEALTH_DRIVE |
+                                                   MBMAP_HEALTH_HELD))
                            ? MBMAP_STATE_HELD
-                           : (uint16_t)o->sp.state;
+                       : o->latched ? MBMAP_STATE_STOPPED
+                                    : (uint16_t)o->sp.state;
     b[MBMAP_O_HEALTH] = health;
     b[MBMAP_O_FLAGS] = (uint16_t)(o->sp.flags & 0xffffu);
     mbmap_put_u32(b + MBMAP_O_CYCLE, o->sp.cycle);
@@ -576,7 +578,8 @@ static const mbmap_field_t fields[] = {
 
     F(IO, MBMAP_O_GEN, 2, MBMAP_T_U32, "generation", "", "snapshot generation of this block"),
     F(IO, MBMAP_O_STATE, 1, MBMAP_T_U16, "state", "",
-      "0 waiting, 1 streaming, 2 underrun, 3 finished, 4 held (health bit 0, 1 or 6)"),
+      "0 waiting, 1 streaming, 2 underrun, 3 finished, 4 held until clear (a fault or a feed hold: "
+      "health bit 0, 1 or 6), 5 stopped (a stop latched until start or clear)"),
     F(IO, MBMAP_O_FLAGS, 1, MBMAP_T_U16, "flags", "",
       "bit 0 hold, 1 new track, 2 ticks skipped, 3 transfer, 4 no position yet (x, y, z NaN: "
       "do not move), 5 safety fault, 6 time-scaled (Setpoint flags)"),

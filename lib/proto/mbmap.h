@@ -226,6 +226,7 @@
 /* The state register while the object is held (a safety fault, a drive
  * fault or lost, a feed hold until clear): whatever its engine does under it. */
 #define MBMAP_STATE_HELD 4
+#define MBMAP_STATE_STOPPED 5 /* a stop latched until start or clear (braking, then at rest) */
 
 /* Health bits (MBMAP_O_HEALTH): one per condition an HMI alarms on. */
 #define MBMAP_HEALTH_SAFETY 0x01     /* the safety monitor holds the object (flag ENGINE_SP_FAULT) */
@@ -308,6 +309,8 @@ typedef struct {
     double delay_s;             /* the play-out delay D of a clocked object (stale: age > D + 1 s) */
     uint16_t clock_unsync;      /* the system clock is not synchronised (adjtimex TIME_ERROR) */
     uint16_t held;              /* feed hold until clear */
+    uint16_t fault_held;        /* the lifecycle holds it for a fault (monitor, drive) until clear */
+    uint16_t latched;           /* a stop latched until start or clear (lifecycle stopping/stopped) */
     double lat_deg, lon_deg, alt_m; /* the setpoint as WGS84 geodetic (NaN: none) */
     double heading_deg, heading_unwrapped_deg; /* heading axis (NaN: none) */
     uint64_t tx_clamped;        /* CAN setpoints with a value clipped to its field */

@@ -665,6 +665,36 @@ static void test_health(void **state)
 }
 
 /* The float32 waypoint block decodes, in every word order, to the float32 values. */
+/* The state register tells the lifecycle's states apart (LIFECYCLE.md): a stop
+ * latched until start or clear is 5 stopped, not the engine's finished (3) or
+ * streaming (1, while it brakes); a fault hold of the lifecycle (a drive's
+ * hold braking to rest, with no drive state in 5..7) is 4 held; a hold wins
+ * over a latch. */
+static void test_state_register_lifecycle(void **state)
+{
+    (void)state;
+    static uint16_t regs[MBMAP_REGS(1)];
+    static const struct {
+        unsigned eng, latched, fault_held, want;
+    } cases[] = {
+        {ENGINE_STATE_FINISHED, 0, 0, ENGINE_STATE_FINISHED},
+        {ENGINE_STATE_FINISHED, 1, 0, MBMAP_STATE_STOPPED},
+        {ENGINE_STATE_STREAMING, 1, 0, MBMAP_STATE_STOPPED},
+        {ENGINE_STATE_STREAMING, 0, 1, MBMAP_STATE_HELD},
+        {ENGINE_STATE_FINISHED, 1, 1, MBMAP_STATE_HELD},
+    };
+    for (unsigned c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        mbmap_object_t o;
+        memset(&o, 0, sizeof o);
+        o.drive_states = 0x0FFF; /* no drives */
+        o.sp.state = (engine_state_t)cases[c].eng;
+        o.latched = (uint16_t)cases[c].latched;
+        o.fault_held = (uint16_t)cases[c].fault_held;
+        assert_int_equal(mbmap_encode_object(regs, 0, 1, &o), 0);
+        assert_int_equal(regs[MBMAP_OBJ_BASE(0) + MBMAP_O_STATE], cases[c].want);
+    }
+}
+
 static void test_decode_wpf(void **state)
 {
     (void)state;
@@ -736,6 +766,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_encode_diag_worst_addr),
         cmocka_unit_test(test_diag_requests),
         cmocka_unit_test(test_health),
+        cmocka_unit_test(test_state_register_lifecycle),
         cmocka_unit_test(test_decode_wpf),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
