@@ -2,11 +2,11 @@
 #include "can_port.h"
 
 #include <errno.h>
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "can_axis.h"
+#include "can_drive.h"
 
 #define CAN_PORT_RX_BATCH 256 /* frames handled per can_port_rx call: do not starve the loop */
 
@@ -27,35 +27,8 @@ typedef struct {
     int out_fault_seen;
     uint8_t last_err;
     int last_state; /* engine state in the last STATUS (-1: none yet) */
-    can_port_drive_t drive;
-    /* bring-up (ids.cia402 managed) */
-    unsigned nmt_done; /* bit per axis: NMT start sent (since its last boot-up) */
-    unsigned sdo_next[CANPROTO_CIA402_AXES]; /* next configuration SDO */
-    int sdo_wait[CANPROTO_CIA402_AXES];      /* 1 config SDO, 2 controlword, in flight */
-    int64_t sdo_sent_ns[CANPROTO_CIA402_AXES];
-    canproto_frame_t sdo_frame[CANPROTO_CIA402_AXES];
-    int sdo_failed[CANPROTO_CIA402_AXES]; /* a configuration SDO was aborted */
-    int cw_known[CANPROTO_CIA402_AXES];
-    uint16_t cw_sent[CANPROTO_CIA402_AXES];
-    int reset_req; /* CLEAR: fault reset and re-enable */
-    int hb_hold;   /* a drive's heartbeat was lost: feed hold until CLEAR */
-    int drv_hold;  /* a drive was lost or booted: the object held until CLEAR */
-    int64_t hb_last_ns[CANPROTO_CIA402_AXES];
-    int hb_lost[CANPROTO_CIA402_AXES];
-    int hb_watch[CANPROTO_CIA402_AXES]; /* its producer time is known > 0: set or read back */
-    int hb_armed[CANPROTO_CIA402_AXES]; /* and a heartbeat was heard since */
-    int hb_read[CANPROTO_CIA402_AXES];  /* 0x1017 read back (or set by the list) */
-    int64_t look_ns;                    /* when the bring-up last looked at the heartbeats */
-    /* issue 23: each axis' target, and the drives' losses */
-    can_axis_t ax[CANPROTO_CIA402_AXES];
-    int32_t pos_inc[CANPROTO_CIA402_AXES]; /* 0x6064 as last heard, in increments */
-    int axis_oe[CANPROTO_CIA402_AXES];     /* in Operation Enabled as last heard */
-    int axis_held[CANPROTO_CIA402_AXES];   /* left Operation Enabled: disabled until CLEAR */
-    int lost;           /* a drive of the object left Operation Enabled: the others brake with
-                       * the object (hold), then every axis holds until all are re-anchored */
-    int eng_rest;       /* the last setpoint was at rest (or had no position) */
-    can_axis_log_t chg; /* every state change, until logged */
-    int64_t now_ns;
+    struct can_port *port;
+    can_drive_t drv;                          /* its CiA 402 drives (can_drive.h) */
     uint32_t cmd_allow;                       /* can_port_allow_commands */
     canproto_frame_t st2[CANPROTO_ST2_PAGES]; /* STATUS2 pages as last given */
     uint32_t st2_have;                        /* bit per page given */
@@ -73,10 +46,45 @@ struct can_port {
     canproto_ids_t *ids; /* copy of each object's ids, contiguous (bus load) */
     uint8_t sync_counter;
     can_port_stats_t st;
-    canerr_bus_t err;   /* bus state and counters from error frames */
-    int64_t hb_sent_ns; /* trajd's own heartbeat (cfg.hb_node), last sent */
-    int hb_any;
+    canerr_bus_t err;          /* bus state and counters from error frames */
+    can_drive_master_t master; /* trajd's own heartbeat (cfg.hb_node) */
 };
+
+/* ---- what the drives (can_drive.c) need from the port: can_drive_ops_t ---- */
+
+static void event(can_port_obj_t *o, uint8_t err);
+
+static int drv_send(void *ctx, const canproto_frame_t *f)
+{
+    const can_port_obj_t *o = ctx;
+    return o->port->io.send(o->port->io_ctx, f);
+}
+
+static void drv_status_event(void *ctx, uint8_t err)
+{
+    event(ctx, err);
+}
+
+static int drv_feedback(void *ctx, const can_port_drive_t *d)
+{
+    can_port_obj_t *o = ctx;
+    return o->hooks.feedback ? o->hooks.feedback(o->ctx, d) : 0;
+}
+
+static void drv_drive_event(void *ctx, lc_event_t ev)
+{
+    can_port_obj_t *o = ctx;
+    if (o->hooks.drive_event)
+        o->hooks.drive_event(o->ctx, ev);
+}
+
+static const can_drive_ops_t drv_ops = {drv_send, drv_status_event, drv_feedback, drv_drive_event};
+
+static int port_send(void *ctx, const canproto_frame_t *f)
+{
+    const can_port_t *p = ctx;
+    return p->io.send(p->io_ctx, f);
+}
 
 void can_port_config_default(can_port_config_t *c)
 {
@@ -113,11 +121,11 @@ can_port_t *can_port_new(const can_port_config_t *cfg, const can_port_io_t *io, 
     for (unsigned i = 0; i < nobj; i++) {
         canproto_rx_init(&p->obj[i].rx, p->obj[i].slots, CAN_PORT_RX_SLOTS);
         p->obj[i].last_state = -1;
-        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
-            p->obj[i].drive.state[a] = CIA402_STATE_UNKNOWN;
-            p->obj[i].drive.nmt[a] = CANPROTO_S2_NMT_NONE;
-        }
+        p->obj[i].port = p;
+        can_drive_init(&p->obj[i].drv);
     }
+    p->master.node = cfg->hb_node;
+    p->master.period_ns = cfg->hb_period_ns;
     return p;
 }
 
@@ -160,6 +168,7 @@ int can_port_set_object(can_port_t *p, unsigned i, const canproto_ids_t *ids,
     o->ids = *ids;
     o->hooks = *hooks;
     o->ctx = ctx;
+    can_drive_setup(&o->drv, ids, &drv_ops, o);
     p->ids[i] = *ids;
     return 0;
 }
@@ -260,8 +269,6 @@ static void refuse_command(can_port_obj_t *o, canproto_cmd_t cmd, uint32_t id, i
     event(o, CANPROTO_STERR_REFUSED);
 }
 
-static void reanchor_at_drives(can_port_obj_t *o);
-
 static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, uint32_t id)
 {
     int err;
@@ -270,236 +277,26 @@ static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, 
         refuse_command(o, cmd, id, 0);
         return;
     }
-    if (cmd == CANPROTO_CMD_CLEAR && o->ids.cia402 == CANPROTO_CIA402_MANAGED && o->drive.held)
-        o->reset_req = 1; /* fault reset, then the drives are enabled again */
+    if (cmd == CANPROTO_CMD_CLEAR)
+        can_drive_clear_asked(&o->drv); /* a held drive: fault reset, enabled again */
     if (o->hooks.command && (err = o->hooks.command(o->ctx, cmd, arg)) < 0) {
         refuse_command(o, cmd, id, err); /* e.g. an override while held (obj_set_override) */
         return;
     }
     if (cmd == CANPROTO_CMD_CLEAR) {
-        o->hb_hold = 0; /* the clear released the object's hold: a new loss holds again */
-        if (o->drv_hold)
-            reanchor_at_drives(o);
+        can_drive_cleared(&o->drv); /* the holds released; after a drive's, re-anchored */
         canproto_rx_restart(&o->rx);
     }
     if (cmd == CANPROTO_CMD_RESET_COUNTERS) {
         memset(&o->st, 0, sizeof o->st);
+        memset(&o->drv.st, 0, sizeof o->drv.st);
         memset(&o->rx.st, 0, sizeof o->rx.st);
         o->last_err = CANPROTO_STERR_OK;
     }
     o->status_due = 1;
 }
 
-/* Axis a of object o changed state (from its TPDO, or to CIA402_STATE_UNKNOWN
- * at its boot-up): the change is kept for the log; leaving Operation Enabled
- * is a loss (returns 1): that drive is disabled until CLEAR (with the
- * bring-up); the caller tells the owner, which holds the object (its other
- * axes brake along the path, then every axis holds). */
-static int axis_state(can_port_obj_t *o, unsigned a, cia402_state_t to, uint16_t sw)
-{
-    can_port_drive_t *d = &o->drive;
-    if (to == d->state[a] && to != CIA402_STATE_UNKNOWN)
-        return 0;
-    can_axis_change_t c = {
-        o->now_ns,   (uint8_t)a, (uint8_t)canproto_cia402_node(&o->ids, a), (uint8_t)d->state[a],
-        (uint8_t)to, sw};
-    can_axis_log_put(&o->chg, &c);
-    d->state[a] = to;
-    if (to == CIA402_OPERATION_ENABLED) {
-        o->axis_oe[a] = 1;
-        o->axis_held[a] = 0;
-        return 0;
-    }
-    if (!o->axis_oe[a])
-        return 0;
-    o->axis_oe[a] = 0;
-    o->st.drive_lost++;
-    event(o, CANPROTO_STERR_DRIVE);
-    if (o->ids.cia402 == CANPROTO_CIA402_MANAGED)
-        o->axis_held[a] = 1; /* re-enabling is the operator's decision: CLEAR */
-    o->lost = 1;
-    return 1;
-}
-
-/* Tell the object's owner (lib/engine/LIFECYCLE.md's drive events). */
-static void drive_event(can_port_obj_t *o, lc_event_t ev)
-{
-    if (ev == LC_EV_DRIVE_LOST || ev == LC_EV_DRIVE_BOOTUP)
-        o->drv_hold = 1;
-    if (o->hooks.drive_event)
-        o->hooks.drive_event(o->ctx, ev);
-}
-
-/* The summary flags of o's drives, and what the engine must re-anchor at. */
-static void drive_summary(can_port_obj_t *o)
-{
-    can_port_drive_t *d = &o->drive;
-    d->all_seen = d->all_enabled = 1;
-    d->held = 0;
-    int live = 1;
-    for (unsigned k = 0; k < CANPROTO_CIA402_AXES; k++)
-        if (o->ids.cia402_cob_id[k]) {
-            d->all_seen &= (d->seen >> k) & 1u;
-            d->all_enabled &= d->state[k] == CIA402_OPERATION_ENABLED;
-            d->held |= o->axis_held[k];
-            live &= o->ax[k].live;
-            d->anchor_m[k] = canproto_cia402_pos_m(&o->ids, k,
-                                                   can_axis_anchor(&o->ax[k], o->pos_inc[k]));
-        }
-    d->all_enabled &= d->all_seen;
-    d->need_anchor = d->all_enabled && !live;
-    if (d->all_enabled) {
-        o->reset_req = 0;
-        o->lost = 0;
-    }
-}
-
-/* What o's drives report to the owner; with need_anchor, the drives enabled
- * again at anchor_m: the axes take the engine's targets once it stands there. */
-static void offer_feedback(can_port_obj_t *o)
-{
-    can_port_drive_t *d = &o->drive;
-    if (o->hooks.feedback && o->hooks.feedback(o->ctx, d) > 0 && d->need_anchor) {
-        for (unsigned k = 0; k < CANPROTO_CIA402_AXES; k++)
-            if (o->ids.cia402_cob_id[k])
-                can_axis_anchored(&o->ax[k]);
-        d->need_anchor = 0;
-    }
-}
-
-/* A CLEAR after a drive hold: every axis re-anchors at its drive's 0x6064
- * (issue 23), not at a target it held: its next target in Operation Enabled
- * is its 0x6064 again, and the engine is given those positions as soon as
- * every drive is enabled (now, if they are). */
-static void reanchor_at_drives(can_port_obj_t *o)
-{
-    o->drv_hold = 0;
-    for (unsigned k = 0; k < CANPROTO_CIA402_AXES; k++)
-        if (o->ids.cia402_cob_id[k])
-            can_axis_refresh(&o->ax[k]);
-    drive_summary(o);
-    if (o->drive.need_anchor)
-        offer_feedback(o);
-}
-
-/* A feedback TPDO of axis a of object o. */
-static void drive_feedback(can_port_obj_t *o, unsigned a, const canproto_frame_t *f)
-{
-    can_port_drive_t *d = &o->drive;
-    uint16_t sw;
-    int32_t inc;
-    if (cia402_decode_feedback(f, &sw, &inc) < 0) {
-        o->st.drive_bad++;
-        event(o, CANPROTO_STERR_MALFORMED);
-        return;
-    }
-    o->st.drive_frames++;
-    d->statusword[a] = sw;
-    o->pos_inc[a] = inc;
-    d->pos_m[a] = canproto_cia402_pos_m(&o->ids, a, inc);
-    d->seen |= 1u << a;
-    if (axis_state(o, a, cia402_state(sw), sw))
-        drive_event(o, LC_EV_DRIVE_LOST);
-    drive_summary(o);
-    offer_feedback(o);
-    d->was_enabled = d->all_enabled;
-}
-
-/* A heartbeat or boot-up of axis a's node. */
-static void drive_heartbeat(can_port_obj_t *o, unsigned a, const canproto_frame_t *f)
-{
-    uint8_t n, st;
-    if (cia402_decode_heartbeat(f, &n, &st) < 0)
-        return;
-    int back = o->hb_lost[a], known = o->drive.state[a] != CIA402_STATE_UNKNOWN;
-    o->hb_last_ns[a] = o->now_ns;
-    o->hb_lost[a] = 0;
-    o->hb_armed[a] = o->hb_watch[a] && st != CIA402_HB_BOOTUP;
-    o->drive.nmt[a] = st;
-    o->drive.hb_lost &= ~(1u << a);
-    if (st == CIA402_HB_BOOTUP) {
-        /* this drive (re)booted: it alone is brought up again from NMT
-         * on; it is no longer enabled (a loss if it was), and is not
-         * heard until its next TPDO */
-        o->nmt_done &= ~(1u << a);
-        o->sdo_next[a] = 0;
-        o->sdo_wait[a] = 0;
-        o->cw_known[a] = 0;
-        o->sdo_failed[a] = 0;
-        o->hb_read[a] = o->hb_watch[a] = 0;
-        (void)axis_state(o, a, CIA402_STATE_UNKNOWN, 0);
-        o->drive.seen &= ~(1u << a);
-        drive_summary(o);
-        if (known) /* a drive trajd commanded lost its state */
-            drive_event(o, LC_EV_DRIVE_BOOTUP);
-    }
-    if (back)
-        drive_event(o, LC_EV_HEARTBEAT_BACK);
-}
-
-/* Frames of the bring-up: SDO replies, heartbeats, EMCY of o's nodes; 1 if taken. */
-static int drive_frame(can_port_obj_t *o, const canproto_frame_t *f)
-{
-    if (o->ids.cia402 != CANPROTO_CIA402_MANAGED)
-        return 0;
-    for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
-        unsigned node = canproto_cia402_node(&o->ids, a);
-        if (!node)
-            continue;
-        if (f->id == 0x580u + node) {
-            cia402_sdo_reply_t r;
-            if (cia402_decode_sdo_reply((uint8_t)node, f, &r) < 0 || !o->sdo_wait[a] ||
-                r.index != (uint16_t)(o->sdo_frame[a].data[1] | o->sdo_frame[a].data[2] << 8) ||
-                r.sub != o->sdo_frame[a].data[3]) {
-                /* not the answer to the request in flight (e.g. a late answer to one
-                 * that was resent and answered already): ignored */
-                o->st.sdo_stale++;
-                return 1;
-            }
-            if (r.index == 0x1017 && r.sub == 0) { /* the producer time, set or read back */
-                uint32_t v = o->sdo_wait[a] == 3 ? r.value
-                                                 : (uint32_t)(o->sdo_frame[a].data[4] |
-                                                              o->sdo_frame[a].data[5] << 8);
-                o->hb_read[a] = 1;
-                o->hb_watch[a] = r.kind != CIA402_SDO_ABORT && v > 0;
-            }
-            if (r.kind == CIA402_SDO_ABORT && o->sdo_wait[a] == 3) {
-                o->sdo_wait[a] = 0; /* no 0x1017 to read: no heartbeat to watch */
-                return 1;
-            }
-            if (r.kind == CIA402_SDO_ABORT) {
-                o->st.sdo_aborts++;
-                o->st.last_abort = r.abort_code;
-                o->st.last_abort_index = r.index;
-                event(o, CANPROTO_STERR_DRIVE);
-                if (o->sdo_wait[a] == 1)
-                    o->sdo_failed[a] = 1; /* not configured as asked: never enabled */
-            }
-            if (o->sdo_wait[a] == 1)
-                o->sdo_next[a]++;
-            o->sdo_wait[a] = 0;
-            return 1;
-        }
-        if (f->id == 0x700u + node) {
-            drive_heartbeat(o, a, f);
-            return 1;
-        }
-        if (f->id == 0x080u + node) {
-            uint8_t n, reg;
-            uint16_t code;
-            if (cia402_decode_emcy(f, &n, &code, &reg) == 0) {
-                o->st.emcy++;
-                o->st.last_emcy = code;
-                if (code)
-                    event(o, CANPROTO_STERR_DRIVE);
-            }
-            return 1;
-        }
-    }
-    return 0;
-}
-
-static void dispatch(can_port_t *p, const canproto_frame_t *f)
+static void dispatch(can_port_t *p, const canproto_frame_t *f, int64_t now_ns)
 {
     if (f->flags & CANPROTO_F_ERR) {
         canerr_bus_frame(&p->err, f->id, f->data, f->len);
@@ -511,12 +308,7 @@ static void dispatch(can_port_t *p, const canproto_frame_t *f)
             int is_fd;
             if (!o->set)
                 continue;
-            for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
-                if (f->id == canproto_cia402_tpdo(&o->ids, a)) {
-                    drive_feedback(o, a, f);
-                    return;
-                }
-            if (drive_frame(o, f))
+            if (can_drive_rx(&o->drv, f, now_ns)) /* its drives' TPDO, SDO, heartbeat, EMCY */
                 return;
             if (f->id == o->ids.waypoint_id)
                 is_fd = 0;
@@ -545,8 +337,6 @@ int can_port_rx(can_port_t *p, int64_t now_ns)
 {
     canproto_frame_t f;
     int n = 0;
-    for (unsigned i = 0; i < p->nobj; i++)
-        p->obj[i].now_ns = now_ns; /* stamps of heartbeats and state changes */
     while (n < CAN_PORT_RX_BATCH) {
         int rc = p->io.recv(p->io_ctx, now_ns, &f);
         if (rc == 0)
@@ -556,7 +346,7 @@ int can_port_rx(can_port_t *p, int64_t now_ns)
             return n ? n : rc;
         }
         p->st.rx_frames++;
-        dispatch(p, &f);
+        dispatch(p, &f, now_ns);
         n++;
     }
     return n;
@@ -577,35 +367,6 @@ static int is_full(int rc)
     return rc == -ENOBUFS || rc == -EAGAIN;
 }
 
-/* The controlword of axis a's RPDO: with the bring-up, the command it last
- * wrote (Disable voltage before any), so that the RPDO never enables a drive
- * the bring-up does not (a quick-stopped drive would take Enable operation as
- * transition 16); without it, the configured value. */
-static uint16_t rpdo_cw(const can_port_obj_t *o, unsigned a)
-{
-    if (o->ids.cia402 != CANPROTO_CIA402_MANAGED)
-        return o->ids.cia402_controlword_value;
-    /* before it wrote any (a drive found running by a restarted trajd): the
-     * one that keeps the drive where it is, never Disable voltage to a
-     * drive in Operation Enabled */
-    return o->cw_known[a] ? o->cw_sent[a] : cia402_controlword_hold(o->drive.state[a]);
-}
-
-/* Axis a's target this cycle (can_axis.h): 1 with *inc, 0 = no RPDO. */
-static int axis_target(can_port_obj_t *o, unsigned a, int32_t *inc, int *clamped)
-{
-    int eng_ok = !(o->sp.flags & ENGINE_SP_NO_POSITION);
-    can_axis_in_t in = {o->ids.cia402 >= CANPROTO_CIA402_FEEDBACK,
-                        (o->drive.seen >> a) & 1u,
-                        o->drive.state[a],
-                        o->pos_inc[a],
-                        eng_ok,
-                        eng_ok ? canproto_cia402_counts(&o->ids, a, o->sp.pos_m[a], clamped) : 0,
-                        o->eng_rest,
-                        !(o->lost && o->eng_rest)};
-    return can_axis_target(&o->ax[a], &in, inc);
-}
-
 /* Send object o's frames for this cycle (own frames only if own); 0 or the
  * first failure. */
 static int send_setpoint(can_port_t *p, can_port_obj_t *o, int own)
@@ -623,21 +384,9 @@ static int send_setpoint(can_port_t *p, can_port_obj_t *o, int own)
         }
         clamped |= rc == CANPROTO_CLAMPED;
     }
-    /* each drive its own target (can_axis.h): none before a position or
-     * before the drive is heard; a drive not in Operation Enabled its own
-     * 0x6064; the first after an enable its 0x6064 (own frames carry the n/a
+    /* each drive its own target (can_drive.h; own frames carry the n/a
      * marker without a position) */
-    o->eng_rest = 1;
-    for (unsigned a = 0; a < ENGINE_AXES; a++)
-        if (!(o->sp.flags & ENGINE_SP_NO_POSITION) && fabs(o->sp.vel_m_s[a]) > 1e-9)
-            o->eng_rest = 0;
-    if (o->ids.cia402)
-        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
-            int32_t inc;
-            if (o->ids.cia402_cob_id[a] && axis_target(o, a, &inc, &clamped))
-                cia402_encode_rpdo(o->ids.cia402_cob_id[a], o->ids.cia402_controlword,
-                                   rpdo_cw(o, a), inc, &f[n++]);
-        }
+    n += can_drive_rpdos(&o->drv, &o->sp, &f[n], &clamped);
     if (clamped) { /* counted, flagged (STATUS bit 3), logged by can_transport */
         o->st.tx_clamped++;
         o->flags_since |= CANPROTO_ST_CLAMPED;
@@ -739,132 +488,6 @@ static void update_status2_drive(can_port_t *p, unsigned i)
         o->status_due = 1;
 }
 
-#define CAN_PORT_SDO_TIMEOUT_NS 500000000LL /* an SDO request unanswered this long is resent */
-
-/* The controlword axis a's drive needs now (bring-up). */
-static uint16_t wanted_cw(const can_port_obj_t *o, unsigned a)
-{
-    cia402_state_t st = o->drive.state[a];
-    if (o->sdo_failed[a] || o->sdo_next[a] < o->ids.cia402_nsdo ||
-        (o->axis_held[a] && !o->reset_req))
-        return CIA402_CW_DISABLE_VOLTAGE;
-    if (st == CIA402_FAULT)
-        /* fault reset acts on the rising edge of bit 7: 0x0000 first, then 0x0080 */
-        return o->cw_known[a] && o->cw_sent[a] == CIA402_CW_DISABLE_VOLTAGE
-                   ? CIA402_CW_FAULT_RESET
-                   : CIA402_CW_DISABLE_VOLTAGE;
-    return cia402_controlword_towards_enabled(st, 0);
-}
-
-/* Axis a's heartbeat (consumer, cia402_heartbeat_ms): watched only once its
- * producer time is known to be set (0x1017 written by the list or read back
- * > 0) and a heartbeat was heard since; a loss holds the object. */
-static void watch_heartbeat(can_port_obj_t *o, unsigned a, int64_t now_ns)
-{
-    if (!o->ids.cia402_heartbeat_ms || !o->hb_armed[a] || o->hb_lost[a] ||
-        now_ns - o->hb_last_ns[a] <= (int64_t)o->ids.cia402_heartbeat_ms * 1000000)
-        return;
-    o->hb_lost[a] = 1;
-    o->drive.hb_lost |= 1u << a;
-    o->st.heartbeat_lost++;
-    event(o, CANPROTO_STERR_DRIVE);
-    if (!o->hb_hold) {
-        /* a drive that went silent may not follow: feed hold (override
-         * 0), a controlled stop along the path by the time scaling,
-         * every axis together; held until a CLEAR command */
-        o->hb_hold = 1;
-        drive_event(o, LC_EV_HEARTBEAT_LOST);
-    }
-}
-
-/* The next SDO request of axis a (into o->sdo_frame[a]): 1 configuration, 2
- * controlword, 3 read of 0x1017; 0 none now. */
-static int next_sdo(can_port_obj_t *o, unsigned a, uint8_t node)
-{
-    if (o->sdo_next[a] < o->ids.cia402_nsdo) {
-        unsigned k = o->sdo_next[a];
-        cia402_encode_sdo_download(node, o->ids.cia402_sdo[k].index, o->ids.cia402_sdo[k].sub,
-                                   o->ids.cia402_sdo[k].value, o->ids.cia402_sdo[k].size,
-                                   &o->sdo_frame[a]);
-        return 1;
-    }
-    if (o->ids.cia402_heartbeat_ms && !o->hb_read[a] && !can_axis_list_writes(&o->ids, 0x1017, 0)) {
-        o->hb_read[a] = 1; /* once per bring-up: is there a heartbeat to watch? */
-        cia402_encode_sdo_upload(node, 0x1017, 0, &o->sdo_frame[a]);
-        return 3;
-    }
-    if (!(o->drive.seen & (1u << a)))
-        return 0; /* no statusword yet: nothing to decide */
-    uint16_t cw = wanted_cw(o, a);
-    if (o->cw_known[a] && cw == o->cw_sent[a])
-        return 0;
-    cia402_encode_sdo_download(node, CIA402_OBJ_CONTROLWORD, 0, cw, 2, &o->sdo_frame[a]);
-    o->cw_sent[a] = cw;
-    o->cw_known[a] = 1;
-    return 2;
-}
-
-/* One step of object o's bring-up: NMT start (per node, again after its
- * boot-up), configuration SDOs, controlword. */
-static void bring_up(can_port_t *p, can_port_obj_t *o, int64_t now_ns)
-{
-    canproto_frame_t f;
-    o->now_ns = now_ns;
-    /* trajd's own stall is not a drive's silence: the time the loop could not
-     * look is excused (heartbeats queued meanwhile are read with later stamps) */
-    int64_t gap = o->look_ns ? now_ns - o->look_ns : 0;
-    if (p->cfg.period_ns > 0 && gap > 2 * p->cfg.period_ns)
-        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
-            o->hb_last_ns[a] += gap - p->cfg.period_ns;
-    o->look_ns = now_ns;
-    for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
-        uint8_t node = (uint8_t)canproto_cia402_node(&o->ids, a);
-        if (!node)
-            continue;
-        if (!(o->nmt_done & (1u << a))) {
-            cia402_encode_nmt(CIA402_NMT_START, node, &f);
-            if (p->io.send(p->io_ctx, &f) < 0)
-                continue; /* try again next cycle */
-            o->nmt_done |= 1u << a;
-            o->hb_last_ns[a] = now_ns;
-        }
-        watch_heartbeat(o, a, now_ns);
-        if (o->sdo_wait[a]) {
-            if (now_ns - o->sdo_sent_ns[a] < CAN_PORT_SDO_TIMEOUT_NS)
-                continue;
-            o->st.sdo_timeouts++;
-            if (p->io.send(p->io_ctx, &o->sdo_frame[a]) == 0)
-                o->sdo_sent_ns[a] = now_ns;
-            continue;
-        }
-        int kind = next_sdo(o, a, node);
-        if (!kind)
-            continue;
-        if (p->io.send(p->io_ctx, &o->sdo_frame[a]) == 0) {
-            o->sdo_wait[a] = kind;
-            o->sdo_sent_ns[a] = now_ns;
-        } else if (kind == 2) {
-            o->cw_known[a] = 0; /* not sent: decide again next cycle */
-        } else if (kind == 3) {
-            o->hb_read[a] = 0;
-        }
-    }
-}
-
-/* trajd's own heartbeat as CANopen master (cfg.hb_node): the drives' consumers
- * (0x1016) see trajd alive, and stop by themselves when it is not. */
-static void master_heartbeat(can_port_t *p, int64_t now_ns)
-{
-    if (!p->cfg.hb_node || (p->hb_any && now_ns - p->hb_sent_ns < p->cfg.hb_period_ns))
-        return;
-    canproto_frame_t f;
-    cia402_encode_heartbeat(p->cfg.hb_node, &f);
-    if (p->io.send(p->io_ctx, &f) == 0) {
-        p->hb_any = 1;
-        p->hb_sent_ns = now_ns;
-    }
-}
-
 void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
 {
     p->st.cycles++;
@@ -894,10 +517,10 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
         else
             p->st.sync_dropped++;
     }
-    master_heartbeat(p, now_ns);
+    can_drive_master_heartbeat(&p->master, now_ns, port_send, p);
     for (unsigned i = 0; i < p->nobj; i++)
-        if (p->obj[i].set && p->obj[i].ids.cia402 == CANPROTO_CIA402_MANAGED)
-            bring_up(p, &p->obj[i], now_ns);
+        if (p->obj[i].set)
+            can_drive_cycle(&p->obj[i].drv, now_ns, p->cfg.period_ns); /* the bring-up */
     for (unsigned i = 0; i < p->nobj; i++) {
         can_port_obj_t *o = &p->obj[i];
         if (!o->set || !o->have_sp)
@@ -957,47 +580,24 @@ int can_port_drive_change(can_port_t *p, unsigned i, can_axis_change_t *c, uint6
 {
     if (i >= p->nobj)
         return 0;
-    can_axis_log_t *l = &p->obj[i].chg;
-    if (dropped) {
-        *dropped = l->dropped;
-        l->dropped = 0;
-    }
-    return can_axis_log_take(l, c);
+    return can_drive_change(&p->obj[i].drv, c, dropped);
 }
 
 const can_port_drive_t *can_port_drive(const can_port_t *p, unsigned i)
 {
-    return i < p->nobj ? &p->obj[i].drive : NULL;
+    return i < p->nobj ? &p->obj[i].drv.drive : NULL;
 }
 
 int can_port_drive_summary(const can_port_t *p, unsigned i, canproto_status2_drive_t *out)
 {
-    memset(out, 0, sizeof *out);
-    for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
-        out->state[a] = CANPROTO_S2_NO_DRIVE;
-    out->nmt = CANPROTO_S2_NMT_NONE;
-    if (!p || i >= p->nobj || !p->obj[i].set)
+    if (!p || i >= p->nobj || !p->obj[i].set) {
+        memset(out, 0, sizeof *out);
+        for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++)
+            out->state[a] = CANPROTO_S2_NO_DRIVE;
+        out->nmt = CANPROTO_S2_NMT_NONE;
         return 0;
-    const can_port_obj_t *o = &p->obj[i];
-    if (o->ids.cia402 < CANPROTO_CIA402_FEEDBACK)
-        return 0;
-    int pick = -1;
-    for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {
-        if (!o->ids.cia402_cob_id[a])
-            continue;
-        out->state[a] = (uint8_t)o->drive.state[a];
-        if (pick < 0 || (o->drive.state[pick] == CIA402_OPERATION_ENABLED &&
-                         o->drive.state[a] != CIA402_OPERATION_ENABLED))
-            pick = (int)a;
     }
-    if (pick >= 0) {
-        out->statusword = o->drive.statusword[pick];
-        out->nmt = o->drive.nmt[pick];
-    }
-    out->held = o->drive.held;
-    out->hb_lost = o->drive.hb_lost != 0;
-    out->emcy = o->st.last_emcy;
-    return 1;
+    return can_drive_summary(&p->obj[i].drv, out);
 }
 
 void can_port_obj_stats(const can_port_t *p, unsigned i, can_port_obj_stats_t *st)
@@ -1005,8 +605,20 @@ void can_port_obj_stats(const can_port_t *p, unsigned i, can_port_obj_stats_t *s
     memset(st, 0, sizeof *st);
     if (i >= p->nobj)
         return;
+    const can_drive_stats_t *d = &p->obj[i].drv.st;
     *st = p->obj[i].st;
     st->rx = p->obj[i].rx.st;
+    st->drive_frames = d->drive_frames;
+    st->drive_lost = d->drive_lost;
+    st->drive_bad = d->drive_bad;
+    st->sdo_aborts = d->sdo_aborts;
+    st->sdo_timeouts = d->sdo_timeouts;
+    st->sdo_stale = d->sdo_stale;
+    st->emcy = d->emcy;
+    st->heartbeat_lost = d->heartbeat_lost;
+    st->last_abort = d->last_abort;
+    st->last_abort_index = d->last_abort_index;
+    st->last_emcy = d->last_emcy;
 }
 
 void can_port_reset_counters(can_port_t *p)
@@ -1014,6 +626,7 @@ void can_port_reset_counters(can_port_t *p)
     memset(&p->st, 0, sizeof p->st);
     for (unsigned i = 0; i < p->nobj; i++) {
         memset(&p->obj[i].st, 0, sizeof p->obj[i].st);
+        memset(&p->obj[i].drv.st, 0, sizeof p->obj[i].drv.st);
         memset(&p->obj[i].rx.st, 0, sizeof p->obj[i].rx.st);
     }
 }

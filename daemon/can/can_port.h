@@ -7,7 +7,9 @@
  *  - can_port_io_t: send / recv / maintain of a transport (can_socket.h, can_logfile.h,
  *    or a fake in the tests);
  *  - can_port_hooks_t: what to do with a waypoint or command for an object
- *    (the daemon calls obj_push / engine_*; tests use fakes).
+ *    (the daemon calls obj_push / engine_*; tests use fakes);
+ *  - each object's CiA 402 drives are can_drive.h's (bring-up, feedback,
+ *    heartbeats, RPDO targets): this port calls them, they send through it.
  *
  * Per cycle (can_port_cycle, called once per tick after every object's
  * setpoint was handed over with can_port_setpoint):
@@ -45,6 +47,7 @@
 
 #include <stdint.h>
 #include "can_axis.h"
+#include "can_drive.h"
 #include "canerr.h"
 #include "canproto.h"
 #include "cia402.h"
@@ -64,28 +67,6 @@ typedef struct {
     /* 1 if usable now. */
     int (*is_up)(const void *io);
 } can_port_io_t;
-
-/* What the drives of one object report (CiA 402 feedback TPDOs). */
-typedef struct {
-    uint16_t statusword[CANPROTO_CIA402_AXES];
-    cia402_state_t state[CANPROTO_CIA402_AXES]; /* CIA402_STATE_UNKNOWN until heard */
-    double pos_m[CANPROTO_CIA402_AXES];         /* position actual values (0x6064) in metres (scale,
-                                          * sign and offset undone); 0 for axes without a drive */
-    unsigned seen;                              /* bit per axis heard from */
-    int all_seen;                               /* every axis with a COB-id was heard from */
-    int all_enabled;                            /* and every one is in Operation Enabled */
-    int was_enabled; /* all were enabled, until this frame (a loss is this and !all_enabled) */
-    int held;        /* bring-up: a drive left Operation Enabled; it stays disabled
-                             * until a CLEAR command asks for a fault reset and re-enable */
-    uint8_t nmt[CANPROTO_CIA402_AXES]; /* last heartbeat NMT state (CANPROTO_S2_NMT_NONE: none) */
-    unsigned hb_lost;                  /* bit per axis: heartbeat not heard in time (consumer) */
-    /* Every axis is in Operation Enabled but not every one takes the engine's
-     * targets yet: the engine must stand at anchor_m (the drives' 0x6064 for a
-     * drive just enabled, else the target it holds), at rest, before they do
-     * (the feedback hook gives it: obj_set_position). */
-    int need_anchor;
-    double anchor_m[CANPROTO_CIA402_AXES];
-} can_port_drive_t;
 
 typedef struct {
     /* Offer a waypoint; returns what engine_push returns. */
