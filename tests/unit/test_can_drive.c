@@ -16,43 +16,10 @@
 #include <string.h>
 
 #include "can_port.h"
+#include "fake_can_io.h"
 
-#define FAKE_MAX 4096
-typedef struct {
-    canproto_frame_t in[FAKE_MAX];
-    unsigned nin, next;
-    canproto_frame_t out[FAKE_MAX];
-    unsigned nout;
-} fake_io_t;
-
-static fake_io_t io;
+static fake_can_io_t io; /* tests/helpers/fake_can_io.h */
 static can_port_t *port;
-
-static int fake_send(void *p, const canproto_frame_t *f)
-{
-    fake_io_t *x = p;
-    assert_true(x->nout < FAKE_MAX);
-    x->out[x->nout++] = *f;
-    return 0;
-}
-
-static int fake_recv(void *p, int64_t now_ns, canproto_frame_t *f)
-{
-    (void)now_ns;
-    fake_io_t *x = p;
-    if (x->next >= x->nin)
-        return 0;
-    *f = x->in[x->next++];
-    return 1;
-}
-
-static int fake_up(const void *p)
-{
-    (void)p;
-    return 1;
-}
-
-static const can_port_io_t fake_ops = {fake_send, fake_recv, NULL, fake_up};
 
 /* The fake object: the drive events counted (nhold: those that hold it), and
  * a re-anchor done at once when asked (as the owner adopting the drives'
@@ -105,14 +72,14 @@ static const can_port_hooks_t hooks = {fo_push, NULL, fo_status, fo_feedback, fo
 static void new_port(int64_t period_ns, uint8_t hb_node)
 {
     can_port_config_t cfg;
-    memset(&io, 0, sizeof io);
+    fake_can_reset(&io);
     memset(&obj, 0, sizeof obj);
     can_port_config_default(&cfg);
     cfg.sync = 1;
     cfg.status_period_ns = 0;
     cfg.period_ns = period_ns;
     cfg.hb_node = hb_node;
-    port = can_port_new(&cfg, &fake_ops, &io, 1);
+    port = can_port_new(&cfg, &fake_can_ops, &io, 1);
     assert_non_null(port);
 }
 

@@ -14,58 +14,9 @@
 #include "candump.h"
 #include "can_logfile.h"
 #include "can_port.h"
+#include "fake_can_io.h"
 
-/* ---- fake transport ---- */
-#define FAKE_MAX 4096
-typedef struct {
-    canproto_frame_t in[FAKE_MAX];
-    unsigned nin, next;
-    canproto_frame_t out[FAKE_MAX];
-    unsigned nout;
-    int up;
-    int fail_with; /* send returns this (negative) while set */
-    int reopen_ok;
-} fake_io_t;
-
-static int fake_send(void *io, const canproto_frame_t *f)
-{
-    fake_io_t *x = io;
-    if (!x->up)
-        return -ENETDOWN;
-    if (x->fail_with)
-        return x->fail_with;
-    assert_true(x->nout < FAKE_MAX);
-    x->out[x->nout++] = *f;
-    return 0;
-}
-
-static int fake_recv(void *io, int64_t now_ns, canproto_frame_t *f)
-{
-    (void)now_ns;
-    fake_io_t *x = io;
-    if (x->next >= x->nin)
-        return 0;
-    *f = x->in[x->next++];
-    return 1;
-}
-
-static int fake_maintain(void *io, int64_t now_ns)
-{
-    (void)now_ns;
-    fake_io_t *x = io;
-    if (!x->up && x->reopen_ok) {
-        x->up = 1;
-        return 1;
-    }
-    return 0;
-}
-
-static int fake_is_up(const void *io)
-{
-    return ((const fake_io_t *)io)->up;
-}
-
-static const can_port_io_t fake_ops = {fake_send, fake_recv, fake_maintain, fake_is_up};
+/* ---- fake transport: tests/helpers/fake_can_io.h ---- */
 
 /* ---- fake engine ---- */
 typedef struct {
@@ -126,7 +77,7 @@ static int fe_feedback(void *ctx, const can_port_drive_t *d)
 static const can_port_hooks_t fe_hooks = {fe_push, fe_command, fe_status, fe_feedback,
                                           fe_drive_event};
 
-static fake_io_t io;
+static fake_can_io_t io;
 static fake_engine_t eng;
 static can_port_t *port;
 
@@ -135,16 +86,15 @@ static int setup(void **state)
     (void)state;
     can_port_config_t cfg;
     canproto_ids_t ids;
-    memset(&io, 0, sizeof io);
+    fake_can_reset(&io);
     memset(&eng, 0, sizeof eng);
-    io.up = 1;
     eng.free_slots = 40;
     can_port_config_default(&cfg);
     cfg.sync = 1;
     cfg.sync_overflow = 3;
     cfg.status_period_ns = 0; /* status only on events (and the first) */
     cfg.max_late_ns = 500000;
-    port = can_port_new(&cfg, &fake_ops, &io, 1);
+    port = can_port_new(&cfg, &fake_can_ops, &io, 1);
     assert_non_null(port);
     canproto_ids_default(&ids, 0);
     assert_int_equal(can_port_set_object(port, 0, &ids, &fe_hooks, &eng), 0);
@@ -958,7 +908,7 @@ static void test_id_clash(void **state)
     can_port_config_t cfg;
     canproto_ids_t a, b;
     can_port_config_default(&cfg);
-    can_port_t *p = can_port_new(&cfg, &fake_ops, &io, 2);
+    can_port_t *p = can_port_new(&cfg, &fake_can_ops, &io, 2);
     canproto_ids_default(&a, 0);
     canproto_ids_default(&b, 1);
     b.status_id = a.setpoint_id;
