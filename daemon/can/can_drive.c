@@ -91,19 +91,17 @@ static void offer_feedback(can_drive_t *o)
     }
 }
 
-/* A CLEAR after a drive hold: every axis re-anchors at its drive's 0x6064
- * (issue 23), not at a target it held: its next target in Operation Enabled
- * is its 0x6064 again, and the engine is given those positions as soon as
- * every drive is enabled (now, if they are). */
+/* A CLEAR after a drive hold, once the engine's setpoint is at rest: every
+ * axis re-anchors at its drive's 0x6064 (issue 23), not at a target it held:
+ * its next target in Operation Enabled is its 0x6064 again, and the engine is
+ * given those positions at the first TPDO with every drive enabled. */
 static void reanchor_at_drives(can_drive_t *o)
 {
-    o->drv_hold = 0;
+    o->refresh = 0;
     for (unsigned k = 0; k < CANPROTO_CIA402_AXES; k++)
         if (o->ids.cia402_cob_id[k])
             can_axis_refresh(&o->ax[k]);
-    drive_summary(o);
-    if (o->drive.need_anchor)
-        offer_feedback(o);
+    drive_summary(o); /* need_anchor: offered at the drives' next TPDO */
 }
 
 /* A feedback TPDO of axis a of object o. */
@@ -401,7 +399,8 @@ void can_drive_cleared(can_drive_t *o)
 {
     o->hb_hold = 0; /* the clear released the object's hold: a new loss holds again */
     if (o->drv_hold)
-        reanchor_at_drives(o);
+        o->refresh = 1; /* at rest (can_drive_rpdos): a moving axis keeps following */
+    o->drv_hold = 0;
 }
 
 void can_drive_cycle(can_drive_t *o, int64_t now_ns, int64_t period_ns)
@@ -421,6 +420,8 @@ unsigned can_drive_rpdos(can_drive_t *o, const engine_setpoint_t *sp, canproto_f
     for (unsigned a = 0; a < ENGINE_AXES; a++)
         if (!(sp->flags & ENGINE_SP_NO_POSITION) && fabs(sp->vel_m_s[a]) > 1e-9)
             o->eng_rest = 0;
+    if (o->refresh && o->eng_rest)
+        reanchor_at_drives(o);
     if (!o->ids.cia402)
         return 0;
     for (unsigned a = 0; a < CANPROTO_CIA402_AXES; a++) {

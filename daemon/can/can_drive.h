@@ -90,6 +90,8 @@ typedef struct {
     int reset_req; /* CLEAR: fault reset and re-enable */
     int hb_hold;   /* a drive's heartbeat was lost: feed hold until CLEAR */
     int drv_hold;  /* a drive was lost or booted: the object held until CLEAR */
+    int refresh;   /* cleared after a drive hold: every axis re-anchors at its 0x6064 once
+                    * the engine's setpoint is at rest */
     int64_t hb_last_ns[CANPROTO_CIA402_AXES];
     int hb_lost[CANPROTO_CIA402_AXES];
     int hb_watch[CANPROTO_CIA402_AXES]; /* its producer time is known > 0: set or read back */

@@ -145,7 +145,8 @@ static void event(fz_t *f, lc_event_t ev, uint8_t arg)
     if (ev == LC_EV_SAFETY) /* the monitor's own hold; a drive's brakes (issue 23) */
         f->freeze_ok = 1;
     if ((ev == LC_EV_DRIVE_ENABLED || ev == LC_EV_FIRST_POSITION) && rc == 0 &&
-        (st == LC_HELD || (st == LC_NO_POSITION && (f->drive_lost || !f->lc.have_sent)))) {
+        ((st == LC_HELD && f->lc.have_reported) ||
+         (st == LC_NO_POSITION && (f->drive_lost || !f->lc.have_sent)))) {
         f->anchor_pending = 1;
         memcpy(f->anchor, f->drive, sizeof f->anchor);
     }

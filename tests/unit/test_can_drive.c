@@ -278,6 +278,40 @@ static void test_clear_reanchors_each_axis_at_its_0x6064(void **state)
     assert_int_equal(rpdo(3, mark, NULL), 3000);
 }
 
+/* Given three drives following the object, y's 0x6064 30 counts behind its
+ * moving target, when node 1 faults and the CLEAR comes while the object
+ * still brakes, then y and z go on following the braking engine (no step to
+ * their 0x6064 mid-motion: that is for the rest), and once the engine's
+ * setpoint is at rest each re-anchors at its 0x6064. */
+static void test_clear_while_braking_keeps_axes_following(void **state)
+{
+    (void)state;
+    new_port(0, 0);
+    three_axes(0, 0);
+    tpdo(1, OE, 12000);
+    tpdo(2, OE, 8000);
+    tpdo(3, OE, 3000);
+    double p[3] = {1.2, -0.8, 0.3};
+    cycle(0, p, 0);
+    for (uint32_t k = 1; k <= 4; k++) {
+        p[0] = 1.2 + 0.05 * k;
+        p[1] = -0.8 - 0.01 * k; /* y moves too: 8000 + 100 k counts */
+        cycle(50 * k, p, 1.0);
+    }
+    tpdo(2, OE, 8370); /* 30 counts behind its target */
+    tpdo(1, FAULT, 13900);
+    canproto_encode_command(0x680, CANPROTO_CMD_CLEAR, &io.in[io.nin++]);
+    p[1] = -0.845;
+    unsigned mark = io.nout;
+    cycle(250, p, 0.5);                          /* still braking */
+    assert_int_equal(rpdo(2, mark, NULL), 8450); /* the engine's, not its 0x6064 */
+    p[1] = -0.846;
+    mark = io.nout;
+    cycle(300, p, 0);                            /* at rest */
+    assert_int_equal(rpdo(2, mark, NULL), 8370); /* now its 0x6064 */
+    assert_int_equal(rpdo(1, mark, NULL), 13900);
+}
+
 /* Given the bring-up with the controlword in the RPDO and drives already in
  * Operation Enabled (trajd restarted while they run), then trajd never sends
  * them Disable voltage: the first RPDO carries Enable operation and target =
@@ -510,6 +544,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_teardown(test_fault_mid_motion, free_port),
         cmocka_unit_test_teardown(test_clear_reanchors_each_axis_at_its_0x6064, free_port),
+        cmocka_unit_test_teardown(test_clear_while_braking_keeps_axes_following, free_port),
         cmocka_unit_test_teardown(test_restart_adopts_running_drives, free_port),
         cmocka_unit_test_teardown(test_bootup_of_one_drive, free_port),
         cmocka_unit_test(test_heartbeat_watch_armed),
