@@ -228,7 +228,8 @@ int obj_set_position(obj_t *o, const double pos_m[ENGINE_AXES]);
  *     after which nothing is sent until the drives give their position;
  *   LC_EV_DRIVE_ENABLED (pos_m: where the drives stand): every drive follows
  *     again; o adopts pos_m if it may (no position, or at rest), notes it
- *     while held (where a clear re-anchors), refuses it while moving;
+ *     while held by the monitor (where a clear re-anchors; a drive hold's
+ *     clear waits for it afresh), refuses it while moving;
  *   LC_EV_HEARTBEAT_LOST (feed hold, as obj_hold), LC_EV_HEARTBEAT_BACK.
  * Returns 1 if o now stands at pos_m (LC_EV_DRIVE_ENABLED adopted), 0 if not
  * (noted, or another event), < 0 refused (-ENGINE_ESTATE: moving).

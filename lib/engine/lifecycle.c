@@ -552,8 +552,9 @@ static int run_action(lifecycle_t *lc, lc_action_t a, lc_event_t ev, const lc_ar
     case LC_A_POSITION:
         if (!arg || !pos_ok(lc, arg->pos_m))
             return -ENGINE_ENOTFINITE;
-        if (!frozen(lc) && curve_moving(lc))
-            return 0; /* a drive hold still brakes: the drives do not stand there yet */
+        if (lc->hold & LC_HOLD_DRIVE)
+            return 0; /* a drive hold: after its clear the drives report afresh (each axis
+                         at its 0x6064); while it brakes they do not stand there yet */
         memcpy(lc->reported, arg->pos_m, sizeof lc->reported);
         lc->have_reported = 1;
         return 0;

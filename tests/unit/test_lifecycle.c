@@ -665,12 +665,12 @@ static void test_drive_lost_brakes_within_limits(void **state)
 }
 
 /* Given an object moving, when one of its drives leaves Operation Enabled,
- * then the commanded state brakes to rest and is held; the drive's reported
- * position (0.3 m off) is accepted while held; after clear the first
- * setpoint is that position, and the object joins the track by a transfer
- * from there.  Without a position given while held, clear waits for one
- * (NO_POSITION: nothing sent) and re-anchors there.  A clear while it still
- * brakes is carried out at rest. */
+ * then the commanded state brakes to rest and is held; a position the
+ * drives report while held is not kept (each axis re-anchors at its 0x6064
+ * as reported after the clear); after clear nothing is sent (NO_POSITION)
+ * until the drives report (0.3 m off), the first setpoint is that position,
+ * and the object joins the track by a transfer from there.  A clear while
+ * it still brakes is carried out at rest. */
 static void test_drive_lost_reanchors_at_drive(void **state)
 {
     (void)state;
@@ -706,15 +706,16 @@ static void test_drive_lost_reanchors_at_drive(void **state)
         h = run(&s, 200);
         assert_true(dist(h.pos_m, sp.pos_m) < 1e-12);
         lc_arg_t none = {0, NULL, NULL};
-        if (given_before_clear)
-            assert_int_equal(lc_set_position(&s.lc, s.drive), 0); /* accepted while held */
-        assert_int_equal(lc_event(&s.lc, LC_EV_CLEAR, &none), 0);
-        if (!given_before_clear) {
-            h = run(&s, 50);
-            assert_true(h.flags & ENGINE_SP_NO_POSITION); /* nothing a drive would follow */
-            assert_int_equal(lc_state(&s.lc), LC_NO_POSITION);
-            assert_int_equal(lc_set_position(&s.lc, s.drive), 0);
+        if (given_before_clear) {
+            double stale[3] = {s.drive[0] - 0.2, s.drive[1], s.drive[2]};
+            assert_int_equal(lc_set_position(&s.lc, stale), 0); /* taken, not kept */
+            assert_int_equal(s.lc.have_reported, 0);
         }
+        assert_int_equal(lc_event(&s.lc, LC_EV_CLEAR, &none), 0);
+        h = run(&s, 50);
+        assert_true(h.flags & ENGINE_SP_NO_POSITION); /* nothing a drive would follow */
+        assert_int_equal(lc_state(&s.lc), LC_NO_POSITION);
+        assert_int_equal(lc_set_position(&s.lc, s.drive), 0);
         s.anchor_pending = 1;
         memcpy(s.anchor, s.drive, sizeof s.anchor);
         run(&s, 1); /* tick_check: exactly at the drive's position */
@@ -829,10 +830,11 @@ static void test_reload_keeps_latch_and_hold(void **state)
         engine_setpoint_t b = run(&s, 500);
         assert_int_equal(lc_state(&s.lc), held ? LC_HELD : LC_STOPPED);
         assert_true(dist(b.pos_m, at.pos_m) < 1e-12);
-        if (held) {
+        if (held) { /* a drive hold: after clear, the drives' position */
             s.drive_lost = 0;
-            assert_int_equal(lc_set_position(&s.lc, at.pos_m), 0);
             fire(&s, LC_EV_CLEAR, 0);
+            assert_int_equal(lc_state(&s.lc), LC_NO_POSITION);
+            assert_int_equal(lc_set_position(&s.lc, at.pos_m), 0);
         } else {
             fire(&s, LC_EV_START, 0);
         }
