@@ -244,8 +244,10 @@ run: deps-run
 # The plain pass and the sanitizer pass both run, whatever the first gives; the
 # last line adds them up (tests/run.sh appends each pass's counts to COUNTS).
 CHECK_COUNTS = $(abspath $(BUILD))/check-counts
+# the builds of `make check` use every CPU, whatever -j the caller gave
+NPROC := $(shell nproc 2>/dev/null || echo 1)
 check: deps
-	@$(MAKE) --no-print-directory check-build
+	@$(MAKE) --no-print-directory -j$(NPROC) check-build
 	@$(MAKE) --no-print-directory format-check
 	@rm -f $(CHECK_COUNTS); \
 	BUILD=$(abspath $(BUILD)) PYTHON=$(PYTHON) COUNTS=$(CHECK_COUNTS) sh tests/run.sh; \
@@ -267,7 +269,7 @@ test: all
 # The C unit tests again under AddressSanitizer + UndefinedBehaviorSanitizer.
 SAN := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 test-asan:
-	@$(MAKE) --no-print-directory BUILD=$(BUILD)/asan CFLAGS="-O1 -g $(SAN)" \
+	@$(MAKE) --no-print-directory -j$(NPROC) BUILD=$(BUILD)/asan CFLAGS="-O1 -g $(SAN)" \
 		LDFLAGS="$(SAN)" $(TEST_BINS:$(BUILD)/%=$(BUILD)/asan/%) $(BINS:$(BUILD)/%=$(BUILD)/asan/%) \
 		$(REPLAY_BINS:$(BUILD)/%=$(BUILD)/asan/%)
 	@BUILD=$(abspath $(BUILD)/asan) ONLY=c COUNTS=$(COUNTS) sh tests/run.sh
