@@ -4,6 +4,7 @@
 # each, the skipped listed with their reasons, the same verdicts whether the
 # programs run one at a time or side by side, and COUNTS appended.
 set -u
+unset TESTS COUNTS JOBS ONLY  # run.sh itself may have set them for this program
 cd "$(dirname "$0")/../.." || exit 1
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
