@@ -420,7 +420,7 @@ install: $(BINS) $(MANS) $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/trajd
 	$(INSTALLED_TRACK) config/demo.conf > $(DESTDIR)$(DOCDIR)/examples/demo.conf
 	chmod 644 $(DESTDIR)$(DOCDIR)/examples/trajd.conf $(DESTDIR)$(DOCDIR)/examples/demo.conf
 	install -m 644 README.md config/PROTOCOL.md lib/engine/CLOCK.md lib/engine/TIMESCALE.md $(DESTDIR)$(DOCDIR)/
-	install -m 644 daemon/README.md $(DESTDIR)$(DOCDIR)/REFERENCE.md
+	install -m 644 daemon/REFERENCE.md $(DESTDIR)$(DOCDIR)/REFERENCE.md
 	install -m 644 tests/data/n2k_furuno_figure8_src52.csv tests/data/ATTRIBUTION.md \
 		$(DESTDIR)$(PREFIX)/share/trajd/tracks/
 	test -e $(DESTDIR)$(SYSCONFDIR)/trajd/trajd.conf || { \

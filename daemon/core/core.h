@@ -184,7 +184,7 @@ void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim);
  * time scaling adds at most scale_accel_m_s2: lib/engine/TIMESCALE.md).  0
  * (not checked) without an acceleration limit (profiles air, machine, none)
  * and with param = uniform (the paper's parameterisation steps the velocity
- * at waypoints by design: lib/engine/README.md).
+ * at waypoints by design: lib/engine/DESIGN.md).
  */
 double obj_safety_accel(const engine_config_t *e);
 
@@ -285,7 +285,7 @@ typedef struct {
     int exit_code;
 } stats_t;
 
-/* Exit statuses of trajd beyond sysexits.h (daemon/README.md "Output faults are errors"). */
+/* Exit statuses of trajd beyond sysexits.h (daemon/REFERENCE.md "Output faults are errors"). */
 #define CORE_EXIT_OUTPUT_LOST 74 /* EX_IOERR: setpoint lines were lost by an output */
 #define CORE_EXIT_NO_INPUT 65    /* EX_DATAERR: a replayed track or log_in had no usable waypoint */
 /* EX_TEMPFAIL: an object ended held (safety fault, drive fault or lost

@@ -1,6 +1,6 @@
 /*
  * hoang.h - exact interpolation with a uniform cubic B-spline (Hoang Thai Ho
- * 2016, seed 003; maths notes in lib/engine/README.md).
+ * 2016, seed 003; maths notes in lib/engine/DESIGN.md).
  *
  * Control points P*(j) solve, for every interior node j,
  *

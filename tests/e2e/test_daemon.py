@@ -763,9 +763,9 @@ class TestRejectionsLogged(unittest.TestCase):
                 more += n
         self.assertEqual(shown + more, 15, log)
         self.assertGreater(more, 0, log)  # the burst of 12 in one second was cut short
-        # daemon/README.md shows this run's lines (issue 14: no stale numbers); how many a
+        # daemon/REFERENCE.md shows this run's lines (issue 14: no stale numbers); how many a
         # "more" line counts depends on where the wall-clock seconds fall: its form only
-        with open(os.path.join(REPO, "daemon", "README.md"), encoding="utf-8") as f:
+        with open(os.path.join(REPO, "daemon", "REFERENCE.md"), encoding="utf-8") as f:
             doc = f.read()
         start = doc.index("    object 'boat': bad.csv:")
         example = doc[start:doc.index("\n\n", start)].split("\n")

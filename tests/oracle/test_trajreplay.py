@@ -34,7 +34,7 @@ VISNJAN_GPX = os.path.join(DATA, "gpxgo_visnjan.gpx")
 CERKNICA = os.path.join(DATA, "gpxpy_cerknicko-jezero.csv")
 FIGURE8 = os.path.join(DATA, "n2k_furuno_figure8_src52.csv")
 
-# The fragment bound (lib/engine/frag.h, lib/engine/README.md "Fragments"): with the junction average, the
+# The fragment bound (lib/engine/frag.h, lib/engine/DESIGN.md "Fragments"): with the junction average, the
 # solved values differ from one global solve by about 0.268^(O/2) relative
 # to the track's scale.  With F=64, O=32 that is 7e-10.  Position, velocity
 # and acceleration are linear in those values, so each is compared relative
