@@ -717,6 +717,11 @@ int core_summary(const core_t *c, char *buf, size_t len)
                      (unsigned long long)s->out_errors, strerror(s->out_errno));
         n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
     }
+    unsigned long long dropped = log_dropped_count(); /* never silent: log.h */
+    if (dropped && n < len) {
+        m = snprintf(buf + n, len - n, ", log lines dropped %llu", dropped);
+        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+    }
     for (unsigned i = 0; i < c->nobj && n < len; i++) {
         const obj_t *o = &c->obj[i];
         m = snprintf(buf + n, len - n,

@@ -264,12 +264,13 @@ static void status_head(const ctl_t *t, ctl_client_t *cl)
                   ",\"speed\":%g,\"objects\":%u,\"stopping\":%s,\"ticks\":%llu,"
                   "\"missed_ticks\":%llu,\"overruns\":%llu,\"late_p99_us\":%u,\"late_max_us\":%u,"
                   "\"out_lost\":%llu,\"clients\":%u,\"watchers\":%u,\"watch_lost\":%llu,"
-                  "\"busy_refused\":%llu,\"config\":",
+                  "\"busy_refused\":%llu,\"log_dropped\":%llu,\"config\":",
                   c->cfg->daemon.speed, c->nobj, c->stopping ? "true" : "false",
                   (unsigned long long)s->ticks, (unsigned long long)s->missed_ticks,
                   (unsigned long long)s->overruns, s->late.p99_us, s->late.max_us,
                   (unsigned long long)s->out_lost, clients, t->watchers,
-                  (unsigned long long)t->watch_lost, (unsigned long long)t->busy_refused);
+                  (unsigned long long)t->watch_lost, (unsigned long long)t->busy_refused,
+                  log_dropped_count());
     ctl_sb_str(&sb, c->cfg->path);
     ctl_sb_printf(&sb, "}\n");
     ctl_out_commit(cl, &sb);
