@@ -53,7 +53,16 @@ void obj_reset_counters(obj_t *o)
     engine_status(o->engine, &o->status);
 }
 
-double obj_safety_accel(const engine_config_t *e)
+/*
+ * The derived acceleration bound (m/s^2): 2 x max(3 a_w + scale_accel_m_s2,
+ * transfer_accel_m_s2), a_w = max_accel_m_s2 in force (the curve through
+ * waypoints whose implied acceleration is at most a_w stays within 3 a_w, the
+ * time scaling adds at most scale_accel_m_s2: lib/engine/TIMESCALE.md).  0
+ * (not checked) without an acceleration limit (profiles air, machine, none)
+ * and with param = uniform (the paper's parameterisation steps the velocity
+ * at waypoints by design: lib/engine/DESIGN.md).
+ */
+static double obj_safety_accel(const engine_config_t *e)
 {
     double aw = engine_config_max_accel(e);
     if (e->param != ENGINE_PARAM_TIME || !(aw > 0))

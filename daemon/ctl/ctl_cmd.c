@@ -31,7 +31,8 @@ void ctl_sb_printf(ctl_sb_t *s, const char *fmt, ...)
         s->len += (size_t)n;
 }
 
-void ctl_sb_num(ctl_sb_t *s, double x)
+/* A double in the shortest round-trip form (csv_shortest.h), null when not finite. */
+static void ctl_sb_num(ctl_sb_t *s, double x)
 {
     if (s->over)
         return;
