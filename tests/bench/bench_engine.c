@@ -31,6 +31,7 @@
 #include "engine.h"
 #include "fdiff.h"
 #include "fdiff_aos.h"
+#include "global_curve.h"
 #include "hoang.h"
 
 /* ---- allocation counter ---------------------------------------------------- */

@@ -17,6 +17,7 @@
 #include "engine.h"
 #include "fdiff.h"
 #include "fdiff_aos.h"
+#include "global_curve.h"
 #include "frag.h"
 
 /* The longest segment the engine may stream: max_gap_s (60 s by default)
