@@ -340,6 +340,7 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
         safety_limits_t lim;
         obj_safety_limits(o->cfg, &lim);
         safety_init(&o->safety, &lim);
+        rejlog_init(&o->rejlog); /* a carried object keeps its own (carry_objects) */
         /* An object of the same name that was not carried over (its settings
          * changed) stands where its output stood: the new engine starts there
          * and reaches its first trajectory by a transfer, never a step. */
@@ -487,6 +488,10 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
     c->cfg = cfg;
     c->stats = stats;
     c->period_ns = cfg->daemon.period_ns;
+    if (!prev) { /* the daemon's first core: its drift estimate and play-out clock start here */
+        playout_drift_init(&stats->drift, cfg->daemon.drift_max_ppm);
+        playout_clock_init(&stats->pclock);
+    }
     double max_ppm = stats->drift.max_ppm; /* the running core's, if this one fails */
     stats->drift.max_ppm = cfg->daemon.drift_max_ppm;
     memset(&stats->bus, 0, sizeof stats->bus); /* until this core's transports publish */
