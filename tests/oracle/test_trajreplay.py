@@ -422,6 +422,11 @@ def test_svg(tmp):
     curve = root.find(f".//{ns}path[@id='curve']").get("d")
     vertices = curve.count("L") + curve.count("M")
     check(100 < vertices <= 4001, f"svg: curve has {vertices} vertices")
+    # the title says how the setpoints were decimated for drawing
+    title = root.find(f"{ns}title").text
+    m = re.search(r"setpoints drawn: 1 in (\d+) \((\d+)\)$", title)
+    check(m is not None and int(m.group(2)) <= 4000 and int(m.group(1)) & (int(m.group(1)) - 1) == 0,
+          f"svg: title {title!r}")
     check(os.path.getsize(svg) < 400000, f"svg: {os.path.getsize(svg)} bytes")
 
 
