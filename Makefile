@@ -141,9 +141,11 @@ SOVERSION := 0
 $(BUILD)/libtrajd.so: $(PIC_OBJ) Makefile
 	$(CC) -shared -Wl,-soname,libtrajd.so.$(SOVERSION) -o $@ $(filter %.o,$^) -lm
 
-# For the Python oracle tests only (never installed): libtrajd and the ctypes
-# shims of tests/helpers/ctypes_shims.c (the engine with flat arguments).
-$(BUILD)/libtrajd_test.so: $(PIC_OBJ) $(BUILD)/pic/tests/helpers/ctypes_shims.o Makefile
+# For the Python oracle tests only (never installed): libtrajd, the ctypes
+# shims of tests/helpers/ctypes_shims.c (the engine with flat arguments) and
+# the global solves of tests/helpers/global_curve.c.
+$(BUILD)/libtrajd_test.so: $(PIC_OBJ) $(BUILD)/pic/tests/helpers/ctypes_shims.o \
+		$(BUILD)/pic/tests/helpers/global_curve.o Makefile
 	$(CC) -shared -o $@ $(filter %.o,$^) -lm
 
 $(BUILD)/trajd.pc: Makefile daemon/core/version.h
@@ -184,7 +186,8 @@ $(REPLAY_BINS): $(BUILD)/tests/test_%: $(BUILD)/tests/fuzz/%.o $(BUILD)/tests/fu
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_DAEMON)
 
-$(BENCHES): $(BUILD)/tests/%: $(BUILD)/tests/bench/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.a
+$(BENCHES): $(BUILD)/tests/%: $(BUILD)/tests/bench/%.o $(BUILD)/libtrajdtest.a $(BUILD)/libtrajdaemon.a \
+		$(BUILD)/libtrajd.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_TEST)
 
@@ -422,7 +425,7 @@ install: $(BINS) $(MANS) $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/trajd
 	$(INSTALLED_TRACK) config/demo.conf > $(DESTDIR)$(DOCDIR)/examples/demo.conf
 	chmod 644 $(DESTDIR)$(DOCDIR)/examples/trajd.conf $(DESTDIR)$(DOCDIR)/examples/demo.conf
 	install -m 644 README.md config/PROTOCOL.md lib/engine/CLOCK.md lib/engine/TIMESCALE.md $(DESTDIR)$(DOCDIR)/
-	install -m 644 daemon/README.md $(DESTDIR)$(DOCDIR)/REFERENCE.md
+	install -m 644 daemon/REFERENCE.md $(DESTDIR)$(DOCDIR)/REFERENCE.md
 	install -m 644 tests/data/n2k_furuno_figure8_src52.csv tests/data/ATTRIBUTION.md \
 		$(DESTDIR)$(PREFIX)/share/trajd/tracks/
 	test -e $(DESTDIR)$(SYSCONFDIR)/trajd/trajd.conf || { \

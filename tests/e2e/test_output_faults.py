@@ -670,7 +670,7 @@ class CanLogOutAppend(unittest.TestCase):
     def test_reload_engine_stamps_append(self):
         # Given log_time = engine, when SIGHUP reloads, then the log is kept
         # and appended to: engine time goes on across a reload
-        # (daemon/README.md), so the stamps do too.
+        # (daemon/REFERENCE.md), so the stamps do too.
         before, err = self.reload_run("log_time = engine\n")
         with open(self.out, "rb") as f:
             after = f.read()
