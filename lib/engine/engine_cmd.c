@@ -1,8 +1,8 @@
 /*
  * engine_cmd.c - the commands an engine takes between ticks (engine.h):
  * stop, clear, halt, override, clock, position, counters.  The lifecycle
- * owner (lifecycle.h) is the one caller in the daemon; engine.c keeps the
- * input, the queue and the output stepping.
+ * owner (lifecycle.h) is the one caller in the daemon; the stages they act on are in
+ * engine_input.c, engine_solve.c, engine_tick.c, engine_scale.c (engine.c).
  */
 #include <math.h>
 #include <string.h>

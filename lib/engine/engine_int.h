@@ -1,8 +1,12 @@
 /*
  * engine_int.h - the engine's state, shared by the files that make up the
- * engine (engine.c: input, queue and output; engine_cmd.c: the commands the
- * lifecycle owner gives it, lifecycle.h).  Not part of the client API: only
- * the engine's own files in lib/engine include it.
+ * engine, one per stage (engine.c says which owns what): engine_settings.c
+ * (configuration), engine_input.c (input and acceptance), engine_solve.c
+ * (solver, fragments, the queue), engine_tick.c (play-out), engine_scale.c
+ * (its time scaling), engine_xfer.c (transfers), engine_cmd.c (the commands
+ * the lifecycle owner gives it, lifecycle.h); engine.c creates an engine.
+ * Not part of the client API: only the engine's own files in lib/engine
+ * include it.
  */
 #ifndef TRAJD_ENGINE_INT_H
 #define TRAJD_ENGINE_INT_H
@@ -34,12 +38,19 @@ typedef struct {
                              end when a gap separates them, else 0 */
     double vmax;     /* SEG: bound on the curve's speed |k'| over it (m/s) */
     double kcum;     /* SEG: braking capacity of its trajectory up to its end,
-                        the sum of dur / max(vmax, floor) (see remaining()) */
+                        the sum of dur / max(vmax, floor) (see scale_remaining()) */
     double ucum;     /* SEG: the rises of 1 / max(vmax, floor) from each segment
                           of its trajectory to the next, summed up to it */
     double ceil;     /* SEG: the highest rate at which it keeps the speed cap
                         (ENGINE_SPEED_CAP; INFINITY if none) */
 } qent_t;
+
+/* Below this speed (m/s) the curve's end counts as at rest. */
+#define ENGINE_REST_SPEED_M_S 1e-6
+/* The time scaling's limits are converted to rate units at the curve's speed,
+ * but never at less than this (m/s): where the curve stands nearly still the
+ * rate may change fast, but not without bound (TIMESCALE.md). */
+#define ENGINE_SCALE_V_FLOOR_M_S 1.0
 
 /* The lowest speed cap rate: below the time scaling's dead band (at most
  * TS_DEAD_BAND_MAX) the output would never leave rest before such a segment. */
@@ -166,9 +177,124 @@ struct engine {
     engine_status_t st;
 };
 
-/* The fast-tick window closed and its deferred copies made (engine.c):
+/* ---- configuration (engine_settings.c): what a resolved one implies ---- */
+
+/* engine_lookahead of a resolved configuration */
+unsigned engine_cfg_lookahead(const engine_config_t *cfg);
+/* most waypoints beyond a segment the solver needs, far from the start */
+unsigned engine_cfg_steady_lookahead(const engine_config_t *cfg);
+/* SMOOTH: the waypoints the smoother holds back (0 otherwise) */
+unsigned engine_cfg_smooth_extra(const engine_config_t *cfg);
+/* start offset of the fragment grid (frag.h) */
+unsigned engine_cfg_frag_delta(const engine_config_t *cfg);
+/* 1: the unknowns are Hoang control points (BSPLINE + UNIFORM) */
+int engine_cfg_uses_pstar(const engine_config_t *cfg);
+
+/* ---- input (engine_input.c) ---- */
+
+/* Waypoints held anywhere between engine_push and the queue, and entries
+ * queued: what the capacity counts. */
+size_t input_buffered(const engine_t *e);
+
+/* ---- solver and queue (engine_solve.c) ---- */
+
+/* Upper bound on the speed |k'| over a segment (m/s). */
+double solve_seg_speed_max(const fdiff_seg_t *seg);
+/* A new trajectory; a node appended (0 or -ENGINE_ENUMERIC); SMOOTH's ready
+ * waypoints turned into nodes; the trajectory closed (end row, last
+ * segments, END entry); or ended on a failure with what is queued. */
+void solve_open(engine_t *e);
+int solve_add_node(engine_t *e, double t, const double *r);
+int solve_drain(engine_t *e);
+int solve_close(engine_t *e);
+void solve_abort(engine_t *e);
+/* The queue head taken off. */
+void queue_pop(engine_t *e);
+
+/* ---- play-out (engine_tick.c) ---- */
+
+engine_state_t play_state(const engine_t *e);
+/* 1 if further steps cannot change anything until new input arrives. */
+int play_stalled(const engine_t *e);
+void play_count_underrun(engine_t *e);
+void play_seed_cur(engine_t *e, int64_t n);
+void play_take_segment(engine_t *e);
+void play_start(engine_t *e, int new_flag);
+void play_stop_at_rest(engine_t *e);
+void play_rest_at_end(engine_t *e, const qent_t *h);
+void play_finish_here(engine_t *e);
+/* The fast-tick window closed and its deferred copies made (engine_tick.c):
  * every call that changes the engine makes it first. */
 void engine_fast_close(engine_t *e);
+
+/* ---- time scaling of the play-out (engine_scale.c) ---- */
+
+void scale_eval(engine_t *e);
+void scale_rest(engine_t *e);
+double scale_conv_speed(const engine_t *e);
+double scale_rise_reserve(const engine_t *e, double v);
+double scale_remaining(const engine_t *e, double s);
+double scale_ceil_room(const engine_t *e, double s, double A, double J);
+double scale_ceil_here(const engine_t *e);
+void scale_limits(const engine_t *e, double *A, double *J);
+double scale_target(const engine_t *e);
+int scale_moves(const engine_t *e, double R, double A, double J);
+void scale_step(engine_t *e, double target, double R, double A, double J);
+void scale_clocked_step(engine_t *e, double R, double A, double J);
+
+/* ---- transfers (engine_xfer.c) ---- */
+
+double xfer_duration(const engine_t *e, const double *target, double gap_s, int *capped);
+void xfer_start(engine_t *e, const double *target, double gap_s);
+void xfer_track_time(engine_t *e);
+
+/* ---- shared small helpers ---- */
+
+/* node j of the ring: its position and its time */
+static inline double *nr(engine_t *e, uint64_t j)
+{
+    return e->node_r + (size_t)(j % e->ring) * AX;
+}
+
+static inline double nt(const engine_t *e, uint64_t j)
+{
+    return e->node_t[j % e->ring];
+}
+
+/* parameter step of interval j (M form) */
+static inline double hpar(const engine_t *e, uint64_t j)
+{
+    return e->cfg.param == ENGINE_PARAM_TIME ? nt(e, j + 1) - nt(e, j) : 1.0;
+}
+
+static inline qent_t *q_head(engine_t *e)
+{
+    return e->qlen ? &e->q[e->qhead] : NULL;
+}
+
+/* Exact comparisons of the time scaling's state (it lands on its targets
+ * exactly, see ts_step), written without == for -Wfloat-equal. */
+static inline int is_exactly(double x, double v)
+{
+    return !(x < v || x > v);
+}
+
+static inline int at_rest(const engine_t *e)
+{
+    return is_exactly(e->ts.rate, 0.0) && is_exactly(e->ts.acc, 0.0);
+}
+
+static inline double tick_time(const engine_t *e, int64_t n)
+{
+    return (double)(n * e->cfg.period_ns) * 1e-9;
+}
+
+/* Track time of tick n on the unit grid (relative to origin_t); s_off is 0
+ * until the time scaling first moved the output off the grid. */
+static inline double tau_of(const engine_t *e, int64_t n)
+{
+    return tick_time(e, n) + e->s_off;
+}
 
 /* A zero is +0.0 (-0.0 + 0.0 = +0.0): a setpoint at rest reads 0, not -0, in
  * every output (CSV, binary, Modbus, CAN), all of them alike.  Returns rc. */

@@ -1,0 +1,94 @@
+/*
+ * engine_xfer.c - the transfer stage: a trajectory that does not start where
+ * the output stands is reached by a rest-to-rest transfer (transfer.h).  Its
+ * duration from the distance, the object's recent motion (noted by the
+ * input stage) and the speed of the trajectory it joins; its start as the
+ * output's current segment; and the track time a transfer reports.  It owns
+ * the transfers' configuration and what they learned (engine_int.h, xcfg,
+ * motion, xfer_from_t).
+ */
+#include "engine.h"
+#include "engine_int.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "fdiff.h"
+#include "transfer.h"
+
+/* Fastest chord speed of the first queued segments of the trajectory at the
+ * queue head: how the object moves where the transfer takes it. */
+static double head_speed(const engine_t *e)
+{
+    double v = 0;
+
+    for (size_t i = 0; i < e->qlen && i < TRANSFER_HIST; i++) {
+        const qent_t *q = &e->q[(e->qhead + i) % e->qcap];
+        double d2 = 0;
+        if (q->kind != QE_SEG || (i > 0 && q->first))
+            break;
+        for (int k = 0; k < AX; k++) {
+            double d = q->seg.c[k][1] + q->seg.c[k][2] + q->seg.c[k][3];
+            d2 += d * d;
+        }
+        v = fmax(v, sqrt(d2) / q->seg.dur_s);
+    }
+    return v;
+}
+
+/* How long a transfer from the output position to target takes (transfer.h). */
+double xfer_duration(const engine_t *e, const double *target, double gap_s, int *capped)
+{
+    double dist = 0, v_obj;
+
+    for (int i = 0; i < AX; i++)
+        dist += (target[i] - e->pos[i]) * (target[i] - e->pos[i]);
+    dist = sqrt(dist);
+    v_obj = fmax(transfer_motion_speed(&e->motion), head_speed(e));
+    return transfer_duration(&e->xcfg, dist, v_obj, transfer_motion_accel(&e->motion), gap_s,
+                             capped);
+}
+
+/* Start a transfer from the output position to target (transfer.h). */
+void xfer_start(engine_t *e, const double *target, double gap_s)
+{
+    int capped = 0;
+    double dur = xfer_duration(e, target, gap_s, &capped);
+
+    memset(&e->cur, 0, sizeof(e->cur));
+    e->xfer_from_t = e->out_track ? e->out_t : NAN;
+    e->cur.kind = QE_SEG;
+    transfer_segment(&e->cur.seg, e->pos, target, dur);
+    e->cur.vmax = solve_seg_speed_max(&e->cur.seg);
+    e->cur_t0 = 0;
+    e->cur_t1 = e->cur.seg.dur_s;
+    e->n = 0;
+    e->seg_n0 = 0;
+    e->s_off = 0.0;
+    e->out_track++;
+    e->flags_pending |= ENGINE_SP_NEW_TRACK;
+    e->mode = OUT_XFER;
+    e->st.transfers++;
+    e->st.transfer_s += dur;
+    e->st.transfers_capped += (uint64_t)capped;
+    play_seed_cur(e, 0);
+}
+
+/* A transfer's track time: from where the output's time stood when it began
+ * to the start of the trajectory it joins, in proportion to the transfer
+ * done (from that start less the transfer's duration if the output had no
+ * time before), so t_s and the data age say what the object does and reach
+ * that start as it does. */
+void xfer_track_time(engine_t *e)
+{
+    const qent_t *h = e->qlen ? &e->q[e->qhead] : NULL; /* q_head, read only */
+    if (!h || !(e->cur_t1 > 0))
+        return;
+    double t = e->scaled ? e->s : tau_of(e, e->n), u = t / e->cur_t1;
+    double to = h->kind == QE_END ? h->t1_s : h->seg.t0_s;
+    u = u < 0 ? 0 : u > 1 ? 1 : u;
+    if (isnan(e->xfer_from_t))
+        e->out_t = to - (1.0 - u) * e->cur_t1;
+    else
+        e->out_t = e->xfer_from_t + (to - e->xfer_from_t) * u;
+}
