@@ -64,10 +64,10 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
     e->mult = cfg->ends == ENGINE_ENDS_MULTIPLE;
     e->smooth = cfg->method == ENGINE_METHOD_SMOOTH;
     if (e->smooth) {
-        e->sm_mem = calloc(lsq_smooth_mem_len(cfg->smooth_window, cfg->smooth_ctrl, AX),
-                           sizeof(double));
-        if (!e->sm_mem ||
-            lsq_smooth_init(&e->sm, cfg->smooth_window, cfg->smooth_ctrl, AX, e->sm_mem) < 0)
+        e->solve.sm_mem = calloc(lsq_smooth_mem_len(cfg->smooth_window, cfg->smooth_ctrl, AX),
+                                 sizeof(double));
+        if (!e->solve.sm_mem || lsq_smooth_init(&e->solve.sm, cfg->smooth_window, cfg->smooth_ctrl,
+                                                AX, e->solve.sm_mem) < 0)
             goto nomem;
     }
     e->period_s = (double)cfg->period_ns * 1e-9;
@@ -84,7 +84,7 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
         };
         if (ac.window < ac.confirm)
             ac.window = ac.confirm;
-        accept_init(&e->policy, &ac);
+        accept_init(&e->in.policy, &ac);
     }
     e->xcfg.speed_m_s = cfg->transfer_speed_m_s;
     e->xcfg.accel_m_s2 = cfg->transfer_accel_m_s2;
@@ -96,16 +96,16 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
      * plus the copies of MULTIPLE) to the newest, with margin */
     while (ring < 2 * ((size_t)cfg->fragment + e->lookahead + e->slack_more) + 16)
         ring *= 2;
-    e->ring = ring;
-    e->node_t = calloc(ring, sizeof(double));
-    e->node_r = calloc(ring * AX, sizeof(double));
-    e->fw = frag_new(cfg->fragment, cfg->overlap, engine_cfg_frag_delta(cfg), ring);
+    e->solve.ring = ring;
+    e->solve.node_t = calloc(ring, sizeof(double));
+    e->solve.node_r = calloc(ring * AX, sizeof(double));
+    e->solve.fw = frag_new(cfg->fragment, cfg->overlap, engine_cfg_frag_delta(cfg), ring);
     /* each accepted waypoint yields at most one segment, each trajectory
      * one END: twice the capacity always fits */
     e->qcap = 2 * (size_t)cfg->capacity + 8;
     e->q = calloc(e->qcap, sizeof(qent_t));
     e->slow = calloc(e->qcap, sizeof(size_t));
-    if (!e->node_t || !e->node_r || !e->fw || !e->q || !e->slow)
+    if (!e->solve.node_t || !e->solve.node_r || !e->solve.fw || !e->q || !e->slow)
         goto nomem;
     e->st.lookahead = e->lookahead;
     e->ts.rate = 1.0;
@@ -124,12 +124,12 @@ void engine_free(engine_t *e)
 {
     if (!e)
         return;
-    free(e->node_t);
-    free(e->node_r);
-    frag_free(e->fw);
+    free(e->solve.node_t);
+    free(e->solve.node_r);
+    frag_free(e->solve.fw);
     free(e->q);
     free(e->slow);
-    free(e->sm_mem);
+    free(e->solve.sm_mem);
     free(e);
 }
 
@@ -145,7 +145,7 @@ void engine_status(const engine_t *e, engine_status_t *st)
     st->stalled = (uint32_t)play_stalled(e);
     st->rate = e->mode == OUT_HOLD ? 0.0 : e->ts.rate;
     st->override = e->override;
-    st->judging = accept_pending(&e->policy);
+    st->judging = accept_pending(&e->in.policy);
     st->ahead_s = 0;
     if (e->qlen) {
         const qent_t *tail = &e->q[(e->qhead + e->qlen - 1) % e->qcap];

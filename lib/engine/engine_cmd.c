@@ -13,13 +13,13 @@
 /* Forget the trajectory being received: the next waypoint opens a new one. */
 static void drop_input(engine_t *e)
 {
-    accept_reset(&e->policy);
-    e->in_open = 0;
-    e->nodes = 0;
-    e->seg_next = 0;
-    frag_reset(e->fw);
+    accept_reset(&e->in.policy);
+    e->in.open = 0;
+    e->solve.nodes = 0;
+    e->solve.seg_next = 0;
+    frag_reset(e->solve.fw);
     if (e->smooth)
-        lsq_smooth_reset(&e->sm);
+        lsq_smooth_reset(&e->solve.sm);
 }
 
 /*

@@ -30,25 +30,26 @@
 
 size_t input_buffered(const engine_t *e)
 {
-    return e->qlen + (size_t)(e->nodes - e->seg_next) +
-           (e->smooth ? (size_t)lsq_smooth_pending(&e->sm) : 0) + accept_pending(&e->policy);
+    return e->qlen + (size_t)(e->solve.nodes - e->solve.seg_next) +
+           (e->smooth ? (size_t)lsq_smooth_pending(&e->solve.sm) : 0) +
+           accept_pending(&e->in.policy);
 }
 
 /* Close the input trajectory: its last segments and END entry (the solver). */
 static int close_input(engine_t *e)
 {
-    if (!e->in_open)
+    if (!e->in.open)
         return 0;
-    e->in_open = 0;
+    e->in.open = 0;
     return solve_close(e);
 }
 
 static void open_input(engine_t *e, const engine_waypoint_t *wp)
 {
-    e->in_open = 1;
+    e->in.open = 1;
     e->st.tracks++;
     e->finished = 0;
-    memcpy(e->first_r, wp->pos_m, sizeof(e->first_r));
+    memcpy(e->in.first_r, wp->pos_m, sizeof(e->in.first_r));
     solve_open(e);
 }
 
@@ -63,11 +64,11 @@ static void open_input(engine_t *e, const engine_waypoint_t *wp)
  */
 static double implied_accel(const engine_t *e, const engine_waypoint_t *wp, double dt)
 {
-    double d1 = e->last_t - e->prev_t, a2 = 0;
+    double d1 = e->in.last_t - e->in.prev_t, a2 = 0;
 
     for (int k = 0; k < AX; k++) {
-        double v1 = (e->last_r[k] - e->prev_r[k]) / d1;
-        double v2 = (wp->pos_m[k] - e->last_r[k]) / dt;
+        double v1 = (e->in.last_r[k] - e->in.prev_r[k]) / d1;
+        double v2 = (wp->pos_m[k] - e->in.last_r[k]) / dt;
         double a = 2.0 * (v2 - v1) / (d1 + dt);
         a2 += a * a;
     }
@@ -91,14 +92,14 @@ static int reject_wp(engine_t *e, int code, const engine_waypoint_t *wp)
 {
     engine_rejection_t *r;
 
-    if (e->rej_len == ENGINE_REJECTIONS_KEPT) {
+    if (e->in.rej_len == ENGINE_REJECTIONS_KEPT) {
         /* the oldest unread one makes room (its count stays in rejected_by) */
-        e->rej_head = (e->rej_head + 1) % ENGINE_REJECTIONS_KEPT;
-        e->rej_len--;
+        e->in.rej_head = (e->in.rej_head + 1) % ENGINE_REJECTIONS_KEPT;
+        e->in.rej_len--;
         e->st.rejections_unreported++;
     }
-    r = &e->rej[(e->rej_head + e->rej_len) % ENGINE_REJECTIONS_KEPT];
-    e->rej_len++;
+    r = &e->in.rej[(e->in.rej_head + e->in.rej_len) % ENGINE_REJECTIONS_KEPT];
+    e->in.rej_len++;
     r->seq = wp->seq;
     r->reason = code;
     r->t_s = wp->t_s;
@@ -109,11 +110,11 @@ static int reject_wp(engine_t *e, int code, const engine_waypoint_t *wp)
 int engine_rejection_next(engine_t *e, engine_rejection_t *r)
 {
     engine_fast_close(e); /* whatever it changes, the next tick looks again */
-    if (!e->rej_len)
+    if (!e->in.rej_len)
         return 0;
-    *r = e->rej[e->rej_head];
-    e->rej_head = (e->rej_head + 1) % ENGINE_REJECTIONS_KEPT;
-    e->rej_len--;
+    *r = e->in.rej[e->in.rej_head];
+    e->in.rej_head = (e->in.rej_head + 1) % ENGINE_REJECTIONS_KEPT;
+    e->in.rej_len--;
     return 1;
 }
 
@@ -126,7 +127,7 @@ static void note_uniform(engine_t *e, double h1, double h2)
         return; /* cannot happen: kept intervals are positive */
     if (r > e->st.uniform_ratio_max) {
         e->st.uniform_ratio_max = r;
-        e->st.uniform_ratio_t_s = e->last_t;
+        e->st.uniform_ratio_t_s = e->in.last_t;
     }
     if (r > ENGINE_UNIFORM_RATIO_WARN)
         e->st.uniform_irregular++;
@@ -137,30 +138,30 @@ static int keep(engine_t *e, const engine_waypoint_t *wp)
 {
     int rc;
 
-    if (!e->in_open) {
+    if (!e->in.open) {
         open_input(e, wp);
-        e->have_prev = 0;
+        e->in.have_prev = 0;
     } else {
-        double d1 = wp->t_s - e->last_t, v2 = 0;
+        double d1 = wp->t_s - e->in.last_t, v2 = 0;
         for (int k = 0; k < AX; k++)
-            v2 += (wp->pos_m[k] - e->last_r[k]) * (wp->pos_m[k] - e->last_r[k]);
+            v2 += (wp->pos_m[k] - e->in.last_r[k]) * (wp->pos_m[k] - e->in.last_r[k]);
         transfer_motion_note(&e->motion, sqrt(v2) / d1,
-                             e->have_prev ? implied_accel(e, wp, d1) : 0.0);
-        if (e->have_prev && e->cfg.param == ENGINE_PARAM_UNIFORM)
-            note_uniform(e, e->last_t - e->prev_t, d1);
-        e->have_prev = 1;
-        e->prev_t = e->last_t;
-        memcpy(e->prev_r, e->last_r, sizeof(e->prev_r));
+                             e->in.have_prev ? implied_accel(e, wp, d1) : 0.0);
+        if (e->in.have_prev && e->cfg.param == ENGINE_PARAM_UNIFORM)
+            note_uniform(e, e->in.last_t - e->in.prev_t, d1);
+        e->in.have_prev = 1;
+        e->in.prev_t = e->in.last_t;
+        memcpy(e->in.prev_r, e->in.last_r, sizeof(e->in.prev_r));
     }
-    e->last_t = wp->t_s;
-    memcpy(e->last_r, wp->pos_m, sizeof(e->last_r));
+    e->in.last_t = wp->t_s;
+    memcpy(e->in.last_r, wp->pos_m, sizeof(e->in.last_r));
     if (e->smooth) {
-        lsq_smooth_push(&e->sm, wp->t_s, wp->pos_m);
+        lsq_smooth_push(&e->solve.sm, wp->t_s, wp->pos_m);
         rc = solve_drain(e);
     } else {
         rc = solve_add_node(e, wp->t_s, wp->pos_m);
     }
-    if (rc == 0 && e->mult && e->nodes == 1) {
+    if (rc == 0 && e->mult && e->solve.nodes == 1) {
         /* the first point twice more */
         if ((rc = solve_add_node(e, wp->t_s, wp->pos_m)) == 0)
             rc = solve_add_node(e, wp->t_s, wp->pos_m);
@@ -168,9 +169,9 @@ static int keep(engine_t *e, const engine_waypoint_t *wp)
     if (rc < 0) {
         /* cannot happen with finite data (diagonally dominant systems);
          * end the trajectory with what is queued rather than stream garbage */
-        e->in_open = 0;
+        e->in.open = 0;
         solve_abort(e);
-        accept_close(&e->policy);
+        accept_close(&e->in.policy);
         return reject_wp(e, -rc, wp);
     }
     e->st.accepted++;
@@ -184,18 +185,18 @@ static int judge(engine_t *e, int closing)
     accept_verdict_t v;
     int rc = 0;
 
-    while (accept_decide_counted(&e->policy, closing, &v, &e->st)) { /* stops.c */
+    while (accept_decide_counted(&e->in.policy, closing, &v, &e->st)) { /* stops.c */
         switch (v.kind) {
         case ACCEPT_TAKE:
             if (keep(e, &v.wp) < 0)
                 rc = -ENGINE_ENUMERIC;
             break;
         case ACCEPT_START:
-            e->in_gap_s = 0;
-            if (e->in_open) {
+            e->in.gap_s = 0;
+            if (e->in.open) {
                 if (v.gap) {
                     e->st.gaps++;
-                    e->in_gap_s = v.wp.t_s - e->last_t;
+                    e->in.gap_s = v.wp.t_s - e->in.last_t;
                 } else if (!v.stop) {
                     e->st.reanchors++;
                 }
@@ -236,7 +237,7 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
     /* room for this waypoint (and for the copies MULTIPLE adds) */
     if (input_buffered(e) + 1 + (e->mult ? 4 : 0) > e->cfg.capacity)
         return reject(e, ENGINE_EFULL);
-    rc = accept_offer(&e->policy, wp);
+    rc = accept_offer(&e->in.policy, wp);
     if (rc == ENGINE_DUPLICATE) {
         e->st.duplicates++;
         return ENGINE_DUPLICATE;
@@ -252,8 +253,8 @@ int engine_finish(engine_t *e)
     int rj = judge(e, 1);
     int rc = close_input(e);
 
-    accept_close(&e->policy);
-    if (!e->qlen && e->mode == OUT_HOLD && !e->in_open)
+    accept_close(&e->in.policy);
+    if (!e->qlen && e->mode == OUT_HOLD && !e->in.open)
         e->finished = 1; /* nothing left to stream: the input is over */
     return rc < 0 ? rc : rj < 0 ? rj : 0;
 }

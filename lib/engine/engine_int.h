@@ -32,7 +32,7 @@ typedef struct {
     int first;       /* first entry of its trajectory */
     double t1_s;     /* segment end (absolute track time); END: rest time */
     uint64_t node;   /* SEG: index of its first node in the trajectory */
-    uint64_t traj;   /* input trajectory it belongs to (engine.in_traj) */
+    uint64_t traj;   /* input trajectory it belongs to (engine.solve.traj) */
     fdiff_seg_t seg; /* END: c[k][0] is the rest position, t0_s = t1_s */
     double gap_s;    /* first entry: track time since the previous trajectory's
                              end when a gap separates them, else 0 */
@@ -59,7 +59,48 @@ typedef struct {
 enum { OUT_HOLD = 0, OUT_XFER = 1, OUT_STREAM = 2 };
 enum { STOP_NONE = 0, STOP_STOP = 1, STOP_CLEAR = 2 };
 
+/* ---- input and acceptance (engine_input.c): the trajectory being received ---- */
+typedef struct {
+    int open;           /* a trajectory is being received */
+    double first_r[AX]; /* its first waypoint */
+    double last_t;      /* its last accepted waypoint */
+    double last_r[AX];
+    int have_prev; /* prev_t/prev_r hold the waypoint before last (same trajectory) */
+    double prev_t; /* for the acceleration check */
+    double prev_r[AX];
+    double gap_s; /* gap before the trajectory being received (0: none) */
+    accept_t policy;
+    engine_rejection_t rej[ENGINE_REJECTIONS_KEPT];
+    unsigned rej_head, rej_len;
+} engine_input_t;
+
+/* ---- solver (engine_solve.c): nodes, fragments, segments queued ---- */
+typedef struct {
+    uint64_t nodes;    /* nodes of the current trajectory (copies included) */
+    uint64_t seg_next; /* next segment index to build */
+    size_t ring;       /* nodes kept */
+    double *node_t;    /* ring */
+    double *node_r;    /* ring x AX */
+    frag_t *fw;
+    lsq_smooth_t sm; /* SMOOTH: the smoother the waypoints pass first */
+    double *sm_mem;
+    int emitted;       /* a segment of this trajectory was queued */
+    int first_pending; /* the next queued entry is the trajectory's first */
+    double end_r[AX];  /* end of the last queued segment */
+    double end_t;
+    double end_speed; /* speed at the end of the last queued segment */
+    double kcum;      /* capacity queued so far of the trajectory (qent_t kcum) */
+    double inv;       /* 1 / max(vmax, floor) of its last queued segment */
+    double ucum;      /* qent_t ucum so far */
+    uint64_t traj;    /* +1 per trajectory opened */
+    double span_max;  /* start_slack auto: longest time spanned by la_steady + 1
+                         intervals of the input, decaying by 1/256 per node */
+    double vmax_in;   /* start_slack auto: fastest chord speed of the input,
+                         decaying the same way */
+} engine_solve_t;
+
 struct engine {
+    /* ---- configuration (engine_settings.c) and what it implies ---- */
     engine_config_t cfg; /* resolved: fragment and overlap never ENGINE_AUTO */
     unsigned lookahead;
     unsigned la_steady;   /* what the solver needs far from the start (steady_lookahead) */
@@ -67,49 +108,18 @@ struct engine {
     unsigned slack_learn; /* start_slack auto: one more per underrun seen */
     unsigned slack_more;  /* start_slack auto: the most it adds to lookahead
                              (ENGINE_SLACK_AUTO_MAX - MIN, less if capacity is short) */
-    double span_max;      /* start_slack auto: longest time spanned by la_steady + 1
-                           intervals of the input, decaying by 1/256 per node */
-    double vmax_in;       /* start_slack auto: fastest chord speed of the input,
-                           decaying the same way */
     int pstar;            /* unknowns are Hoang control points (BSPLINE + UNIFORM) */
     int held;             /* HELD or MULTIPLE: first and last segments not emitted */
     int mult;             /* MULTIPLE: end points entered three times */
     int smooth;           /* SMOOTH: waypoints pass through the lsq smoother first */
-    lsq_smooth_t sm;
-    double *sm_mem;
-    double first_r[AX]; /* first waypoint of the current trajectory */
     double period_s;
 
-    /* ---- input: the trajectory being received ---- */
-    int in_open;
-    uint64_t nodes;    /* nodes of the current trajectory (copies included) */
-    uint64_t seg_next; /* next segment index to build */
-    size_t ring;       /* nodes kept */
-    double *node_t;    /* ring */
-    double *node_r;    /* ring x AX */
-    frag_t *fw;
-    int in_emitted;       /* a segment of this trajectory was queued */
-    int in_first_pending; /* the next queued entry is the trajectory's first */
-    double last_t;        /* last accepted waypoint of the current trajectory */
-    double last_r[AX];
-    int have_prev; /* prev_t/prev_r hold the waypoint before last (same trajectory) */
-    double prev_t; /* for the acceleration check */
-    double prev_r[AX];
-    double end_r[AX]; /* end of the last queued segment */
-    double end_t;
-    double end_speed; /* speed at the end of the last queued segment */
-    double in_kcum;   /* capacity queued so far of the trajectory (qent_t kcum) */
-    double in_inv;    /* 1 / max(vmax, floor) of its last queued segment */
-    double in_ucum;   /* qent_t ucum so far */
-    uint64_t in_traj; /* +1 per trajectory opened */
-    double in_gap_s;  /* gap before the trajectory being received (0: none) */
+    engine_input_t in;
+    engine_solve_t solve;
 
-    /* ---- acceptance (accept.h) and transfers (transfer.h) ---- */
-    accept_t policy;
+    /* ---- transfers (transfer.h) ---- */
     transfer_config_t xcfg;
     transfer_motion_t motion;
-    engine_rejection_t rej[ENGINE_REJECTIONS_KEPT];
-    unsigned rej_head, rej_len;
 
     /* ---- the queue ---- */
     qent_t *q;
@@ -253,12 +263,12 @@ void xfer_track_time(engine_t *e);
 /* node j of the ring: its position and its time */
 static inline double *nr(engine_t *e, uint64_t j)
 {
-    return e->node_r + (size_t)(j % e->ring) * AX;
+    return e->solve.node_r + (size_t)(j % e->solve.ring) * AX;
 }
 
 static inline double nt(const engine_t *e, uint64_t j)
 {
-    return e->node_t[j % e->ring];
+    return e->solve.node_t[j % e->solve.ring];
 }
 
 /* parameter step of interval j (M form) */

@@ -56,10 +56,10 @@ static qent_t *q_push(engine_t *e)
         return NULL; /* cannot happen: see qcap */
     q = &e->q[(e->qhead + e->qlen) % e->qcap];
     e->qlen++;
-    q->first = e->in_first_pending;
-    q->traj = e->in_traj;
-    q->gap_s = q->first ? e->in_gap_s : 0;
-    e->in_first_pending = 0;
+    q->first = e->solve.first_pending;
+    q->traj = e->solve.traj;
+    q->gap_s = q->first ? e->in.gap_s : 0;
+    e->solve.first_pending = 0;
     return q;
 }
 
@@ -94,21 +94,21 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
     if (is_slow(q)) /* every queued slot has room: so has the ring */
         e->slow[(e->slow_head + e->slow_len++) % e->qcap] = (size_t)(q - e->q);
     double inv = 1.0 / fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
-    if (e->in_emitted && inv > e->in_inv)
-        e->in_ucum += inv - e->in_inv; /* the limits rise from the last one to this */
-    e->in_inv = inv;
-    q->ucum = e->in_ucum;
-    e->in_kcum += seg->dur_s * inv;
-    q->kcum = e->in_kcum;
-    e->in_emitted = 1;
-    e->end_t = q->t1_s;
+    if (e->solve.emitted && inv > e->solve.inv)
+        e->solve.ucum += inv - e->solve.inv; /* the limits rise from the last one to this */
+    e->solve.inv = inv;
+    q->ucum = e->solve.ucum;
+    e->solve.kcum += seg->dur_s * inv;
+    q->kcum = e->solve.kcum;
+    e->solve.emitted = 1;
+    e->solve.end_t = q->t1_s;
     double v2 = 0;
     for (int k = 0; k < AX; k++) {
         double v = (seg->c[k][1] + 2 * seg->c[k][2] + 3 * seg->c[k][3]) / seg->dur_s;
-        e->end_r[k] = seg->c[k][0] + seg->c[k][1] + seg->c[k][2] + seg->c[k][3];
+        e->solve.end_r[k] = seg->c[k][0] + seg->c[k][1] + seg->c[k][2] + seg->c[k][3];
         v2 += v * v;
     }
-    e->end_speed = sqrt(v2);
+    e->solve.end_speed = sqrt(v2);
     if (e->mode != OUT_HOLD && q->traj == e->out_traj) {
         e->avail_t = q->t1_s; /* more curve for the output (see scale_remaining()) */
         e->avail_kcum = q->kcum;
@@ -125,12 +125,12 @@ static void queue_end(engine_t *e)
     q->kind = QE_END;
     e->qends++;
     memset(&q->seg, 0, sizeof(q->seg));
-    q->t1_s = e->in_emitted ? e->end_t : e->last_t;
+    q->t1_s = e->solve.emitted ? e->solve.end_t : e->in.last_t;
     q->seg.t0_s = q->t1_s;
     for (int k = 0; k < AX; k++)
-        q->seg.c[k][0] = e->in_emitted ? e->end_r[k] : e->last_r[k];
+        q->seg.c[k][0] = e->solve.emitted ? e->solve.end_r[k] : e->in.last_r[k];
     /* END: c[0][1] is the speed at which the curve arrives (0 at rest) */
-    q->seg.c[0][1] = e->in_emitted ? e->end_speed : 0.0;
+    q->seg.c[0][1] = e->solve.emitted ? e->solve.end_speed : 0.0;
     if (e->mode != OUT_HOLD && q->traj == e->out_traj) {
         e->avail_t = q->t1_s;
         e->avail_closed = 1;
@@ -156,7 +156,7 @@ void queue_pop(engine_t *e)
 static void end_vel_param(const engine_t *e, int at_end, double *v)
 {
     const double *src = at_end ? e->cfg.end_vel_m_s : e->cfg.start_vel_m_s;
-    uint64_t j = at_end ? e->nodes - 2 : 0;
+    uint64_t j = at_end ? e->solve.nodes - 2 : 0;
     double dur = nt(e, j + 1) - nt(e, j);
     double scale = e->pstar ? dur : dur / hpar(e, j);
 
@@ -167,15 +167,15 @@ static void end_vel_param(const engine_t *e, int at_end, double *v)
 /* Build and queue every segment whose control values are final. */
 static void build_segments(engine_t *e)
 {
-    uint64_t fin = e->fw->final_rows, last = e->nodes - 1;
-    int closed = e->fw->done;
+    uint64_t fin = e->solve.fw->final_rows, last = e->solve.nodes - 1;
+    int closed = e->solve.fw->done;
 
     for (;;) {
-        uint64_t j = e->seg_next;
+        uint64_t j = e->solve.seg_next;
         fdiff_seg_t seg;
         double dur;
 
-        if (j + 1 >= e->nodes)
+        if (j + 1 >= e->solve.nodes)
             break;
         if (e->pstar) {
             if (!(j + 3 <= fin || (closed && j + 2 == fin && j + 1 == last)))
@@ -183,7 +183,7 @@ static void build_segments(engine_t *e)
         } else if (j + 2 > fin) {
             break;
         }
-        e->seg_next = j + 1;
+        e->solve.seg_next = j + 1;
         dur = nt(e, j + 1) - nt(e, j);
         if (!(dur > 0))
             continue; /* between copies of one point (MULTIPLE): a loop, never motion */
@@ -194,22 +194,25 @@ static void build_segments(engine_t *e)
             const double *p0, *p3;
             if (j == 0) {
                 end_vel_param(e, 0, v);
-                hoang_ghost_start(e->cfg.ends, frag_x(e->fw, 0), frag_x(e->fw, 1), v, g0);
+                hoang_ghost_start(e->cfg.ends, frag_x(e->solve.fw, 0), frag_x(e->solve.fw, 1), v,
+                                  g0);
                 p0 = g0;
             } else {
-                p0 = frag_x(e->fw, j - 1);
+                p0 = frag_x(e->solve.fw, j - 1);
             }
             if (j + 1 == last) {
                 end_vel_param(e, 1, v);
-                hoang_ghost_end(e->cfg.ends, frag_x(e->fw, last - 1), frag_x(e->fw, last), v, g1);
+                hoang_ghost_end(e->cfg.ends, frag_x(e->solve.fw, last - 1),
+                                frag_x(e->solve.fw, last), v, g1);
                 p3 = g1;
             } else {
-                p3 = frag_x(e->fw, j + 2);
+                p3 = frag_x(e->solve.fw, j + 2);
             }
-            hoang_segment(p0, frag_x(e->fw, j), frag_x(e->fw, j + 1), p3, nt(e, j), dur, &seg);
+            hoang_segment(p0, frag_x(e->solve.fw, j), frag_x(e->solve.fw, j + 1), p3, nt(e, j), dur,
+                          &seg);
         } else {
-            cubic_segment(nr(e, j), nr(e, j + 1), frag_x(e->fw, j), frag_x(e->fw, j + 1),
-                          hpar(e, j), nt(e, j), dur, &seg);
+            cubic_segment(nr(e, j), nr(e, j + 1), frag_x(e->solve.fw, j),
+                          frag_x(e->solve.fw, j + 1), hpar(e, j), nt(e, j), dur, &seg);
         }
         queue_segment(e, &seg, j);
     }
@@ -227,26 +230,26 @@ static void measure_input(engine_t *e, uint64_t j)
         d2 += (nr(e, j)[k] - nr(e, j - 1)[k]) * (nr(e, j)[k] - nr(e, j - 1)[k]);
     if (dt > 0) {
         double v = sqrt(d2) / dt;
-        e->vmax_in = fmax(v, e->vmax_in * decay);
+        e->solve.vmax_in = fmax(v, e->solve.vmax_in * decay);
     }
     if (j > e->la_steady) {
         /* how far ahead of the output this node must have been sent to be
          * built on time (see enough_ahead) */
         double w = nt(e, j) - nt(e, j - e->la_steady - 1);
-        e->span_max = fmax(w, e->span_max * decay);
+        e->solve.span_max = fmax(w, e->solve.span_max * decay);
     }
 }
 
 /* Append a node; push the row it completes (row nodes-1 before it). */
 int solve_add_node(engine_t *e, double t, const double *r)
 {
-    uint64_t j = e->nodes;
+    uint64_t j = e->solve.nodes;
     frag_row_t row;
     int rc = 0;
 
-    e->node_t[j % e->ring] = t;
+    e->solve.node_t[j % e->solve.ring] = t;
     memcpy(nr(e, j), r, sizeof(double) * AX);
-    e->nodes = j + 1;
+    e->solve.nodes = j + 1;
     if (e->slack_auto && j >= 1)
         measure_input(e, j);
     if (j >= 1) {
@@ -261,7 +264,7 @@ int solve_add_node(engine_t *e, double t, const double *r)
             } else {
                 hoang_row_interior(nr(e, i), &row);
             }
-            rc = frag_push(e->fw, &row, nr(e, i));
+            rc = frag_push(e->solve.fw, &row, nr(e, i));
         } else {
             if (i == 0) {
                 double v[AX];
@@ -271,7 +274,7 @@ int solve_add_node(engine_t *e, double t, const double *r)
                 cubic_row_interior(hpar(e, i - 1), hpar(e, i), nr(e, i - 1), nr(e, i), nr(e, i + 1),
                                    &row);
             }
-            rc = frag_push(e->fw, &row, zero3);
+            rc = frag_push(e->solve.fw, &row, zero3);
         }
         if (rc < 0)
             return -ENGINE_ENUMERIC;
@@ -286,7 +289,7 @@ int solve_drain(engine_t *e)
     double t, r[AX];
     int rc;
 
-    while (lsq_smooth_pop(&e->sm, &t, r) == 1)
+    while (lsq_smooth_pop(&e->solve.sm, &t, r) == 1)
         if ((rc = solve_add_node(e, t, r)) < 0)
             return rc;
     return 0;
@@ -299,33 +302,33 @@ int solve_close(engine_t *e)
     int rc = 0;
 
     if (e->smooth) {
-        lsq_smooth_finish(&e->sm);
+        lsq_smooth_finish(&e->solve.sm);
         if ((rc = solve_drain(e)) < 0)
             goto end;
     }
     if (e->mult) {
         /* the last point twice more (it is in already once) */
         double r[AX];
-        memcpy(r, e->last_r, sizeof(r));
-        if ((rc = solve_add_node(e, e->last_t, r)) < 0 ||
-            (rc = solve_add_node(e, e->last_t, r)) < 0)
+        memcpy(r, e->in.last_r, sizeof(r));
+        if ((rc = solve_add_node(e, e->in.last_t, r)) < 0 ||
+            (rc = solve_add_node(e, e->in.last_t, r)) < 0)
             goto end;
     }
-    if (e->nodes >= 2) {
-        uint64_t l = e->nodes - 1;
+    if (e->solve.nodes >= 2) {
+        uint64_t l = e->solve.nodes - 1;
         double v[AX];
         end_vel_param(e, 1, v);
         if (e->pstar)
             hoang_row_end(e->mult ? ENGINE_ENDS_HELD : e->cfg.ends, nr(e, l), v, &row);
         else
             cubic_row_end(e->cfg.ends, hpar(e, l - 1), nr(e, l - 1), nr(e, l), v, &row);
-        if (frag_finish(e->fw, &row) < 0)
+        if (frag_finish(e->solve.fw, &row) < 0)
             rc = -ENGINE_ENUMERIC;
         else
             build_segments(e);
     }
 end:
-    e->seg_next = e->nodes; /* nothing pending any more */
+    e->solve.seg_next = e->solve.nodes; /* nothing pending any more */
     queue_end(e);
     return rc;
 }
@@ -333,22 +336,22 @@ end:
 /* A new trajectory: no node yet, its first queued entry marked as such. */
 void solve_open(engine_t *e)
 {
-    frag_reset(e->fw);
-    e->nodes = 0;
-    e->seg_next = 0;
-    e->in_emitted = 0;
-    e->in_kcum = 0.0;
-    e->in_ucum = 0.0;
-    e->in_first_pending = 1;
-    e->in_traj++;
+    frag_reset(e->solve.fw);
+    e->solve.nodes = 0;
+    e->solve.seg_next = 0;
+    e->solve.emitted = 0;
+    e->solve.kcum = 0.0;
+    e->solve.ucum = 0.0;
+    e->solve.first_pending = 1;
+    e->solve.traj++;
     if (e->smooth)
-        lsq_smooth_reset(&e->sm);
+        lsq_smooth_reset(&e->solve.sm);
 }
 
 /* The solver failed (cannot happen with finite data): the trajectory ends
  * with what is queued, nothing more built of it. */
 void solve_abort(engine_t *e)
 {
-    e->seg_next = e->nodes;
+    e->solve.seg_next = e->solve.nodes;
     queue_end(e);
 }

@@ -27,7 +27,7 @@
 /* The newest interval of the input (0: fewer than two nodes). */
 static double last_interval(const engine_t *e)
 {
-    return e->nodes >= 2 ? nt(e, e->nodes - 1) - nt(e, e->nodes - 2) : 0.0;
+    return e->solve.nodes >= 2 ? nt(e, e->solve.nodes - 1) - nt(e, e->solve.nodes - 2) : 0.0;
 }
 
 /* start_slack auto: the curve kept ahead of the output beyond what the
@@ -36,7 +36,8 @@ static double last_interval(const engine_t *e)
  * newest interval once per underrun seen. */
 static double brake_s(const engine_t *e)
 {
-    double v = e->vmax_in > ENGINE_SCALE_V_FLOOR_M_S ? e->vmax_in : ENGINE_SCALE_V_FLOOR_M_S;
+    double v = e->solve.vmax_in > ENGINE_SCALE_V_FLOOR_M_S ? e->solve.vmax_in
+                                                           : ENGINE_SCALE_V_FLOOR_M_S;
     return 2.0 * ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / v, e->cfg.scale_jerk_m_s3 / v) +
            (TS_MARGIN_TICKS + 2) * e->period_s + e->slack_learn * last_interval(e);
 }
@@ -45,8 +46,8 @@ static double brake_s(const engine_t *e)
  * newest node, or a waypoint the acceptance policy still holds (-inf: none). */
 static double newest_t(const engine_t *e)
 {
-    double t = e->nodes > 0 ? nt(e, e->nodes - 1) : -INFINITY;
-    const engine_waypoint_t *held = accept_last(&e->policy);
+    double t = e->solve.nodes > 0 ? nt(e, e->solve.nodes - 1) : -INFINITY;
+    const engine_waypoint_t *held = accept_last(&e->in.policy);
     if (held && held->t_s > t)
         t = held->t_s;
     return t;
@@ -59,8 +60,8 @@ static double newest_t(const engine_t *e)
  * as the hole. */
 static int rebuffering(const engine_t *e, double s)
 {
-    uint64_t in = e->nodes + (e->smooth ? lsq_smooth_pending(&e->sm) : 0) +
-                  accept_pending(&e->policy);
+    uint64_t in = e->solve.nodes + (e->smooth ? lsq_smooth_pending(&e->solve.sm) : 0) +
+                  accept_pending(&e->in.policy);
 
     if (e->avail_closed || e->cur.kind != QE_SEG ||
         in >= e->cur.node + 2 + e->lookahead + e->slack_more)
@@ -68,9 +69,9 @@ static int rebuffering(const engine_t *e, double s)
     /* the curve is built at least up to the node la_steady + 1 before the
      * newest one, whatever the fragment phase */
     uint64_t back = (uint64_t)e->la_steady + 1;
-    if (e->nodes <= back)
+    if (e->solve.nodes <= back)
         return 1;
-    return !(nt(e, e->nodes - 1 - back) - (e->origin_t + s) >=
+    return !(nt(e, e->solve.nodes - 1 - back) - (e->origin_t + s) >=
              brake_s(e) - e->slack_learn * last_interval(e));
 }
 
@@ -96,8 +97,8 @@ static int enough_ahead(const engine_t *e, const qent_t *h)
     /* waypoints received: nodes, plus those the smoother still holds (SMOOTH) */
     /* and those the acceptance policy still judges: their verdicts come
      * within the start slack, so they count as lookahead (accept.h) */
-    uint64_t in = e->nodes + (e->smooth ? lsq_smooth_pending(&e->sm) : 0) +
-                  accept_pending(&e->policy);
+    uint64_t in = e->solve.nodes + (e->smooth ? lsq_smooth_pending(&e->solve.sm) : 0) +
+                  accept_pending(&e->in.policy);
 
     if (e->qends > 0 || h->kind != QE_SEG)
         return 1;
@@ -112,7 +113,7 @@ static int enough_ahead(const engine_t *e, const qent_t *h)
      * rate at the input's top speed, so that the time scaling can brake
      * if the input stops (timescale.h; twice that: the curve may be faster than
      * its chords).  Regular slow input: at once. */
-    return newest_t(e) - h->seg.t0_s >= e->span_max + brake_s(e);
+    return newest_t(e) - h->seg.t0_s >= e->solve.span_max + brake_s(e);
 }
 
 static void hold_here(engine_t *e)
@@ -446,7 +447,7 @@ engine_state_t play_state(const engine_t *e)
         return e->underrun ? ENGINE_STATE_UNDERRUN : ENGINE_STATE_STREAMING;
     if (e->mode == OUT_XFER)
         return ENGINE_STATE_STREAMING;
-    if (e->in_open || e->qlen || accept_pending(&e->policy))
+    if (e->in.open || e->qlen || accept_pending(&e->in.policy))
         return ENGINE_STATE_WAITING;
     return e->finished ? ENGINE_STATE_FINISHED : ENGINE_STATE_WAITING;
 }
@@ -464,15 +465,15 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
         if (h)
             for (int k = 0; k < AX; k++)
                 e->pos[k] = h->seg.c[k][0];
-        else if (e->in_open && e->nodes)
+        else if (e->in.open && e->solve.nodes)
             memcpy(e->pos, nr(e, 0), sizeof(e->pos));
-        else if (e->in_open) /* SMOOTH: no node yet, the first waypoint as received */
-            memcpy(e->pos, e->first_r, sizeof(e->pos));
+        else if (e->in.open) /* SMOOTH: no node yet, the first waypoint as received */
+            memcpy(e->pos, e->in.first_r, sizeof(e->pos));
         if (h)
             e->out_t = h->seg.t0_s;
-        else if (e->in_open && e->nodes)
+        else if (e->in.open && e->solve.nodes)
             e->out_t = nt(e, 0);
-        if (h || e->in_open)
+        if (h || e->in.open)
             e->have_pos = 1;
     }
     if (e->mode == OUT_XFER)
