@@ -86,12 +86,12 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
             ac.window = ac.confirm;
         accept_init(&e->in.policy, &ac);
     }
-    e->xcfg.speed_m_s = cfg->transfer_speed_m_s;
-    e->xcfg.accel_m_s2 = cfg->transfer_accel_m_s2;
-    e->xcfg.max_s = cfg->max_gap_s;
-    e->xcfg.vmax_m_s = engine_config_max_speed(cfg);
-    e->xcfg.period_s = e->period_s;
-    transfer_motion_reset(&e->motion);
+    e->xfer.cfg.speed_m_s = cfg->transfer_speed_m_s;
+    e->xfer.cfg.accel_m_s2 = cfg->transfer_accel_m_s2;
+    e->xfer.cfg.max_s = cfg->max_gap_s;
+    e->xfer.cfg.vmax_m_s = engine_config_max_speed(cfg);
+    e->xfer.cfg.period_s = e->period_s;
+    transfer_motion_reset(&e->xfer.motion);
     /* nodes from the oldest unbuilt segment (lags the newest by the lookahead
      * plus the copies of MULTIPLE) to the newest, with margin */
     while (ring < 2 * ((size_t)cfg->fragment + e->lookahead + e->slack_more) + 16)

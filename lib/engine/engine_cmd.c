@@ -75,12 +75,12 @@ int engine_set_clock(engine_t *e, const engine_clock_t *clk)
     if (!(clk->delay_ns >= 0) || !(fabs(clk->rate - 1.0) <= ENGINE_CLOCK_RATE_TOL) ||
         !(clk->catchup >= 0 && clk->catchup <= 1))
         return -ENGINE_ERANGE;
-    e->clocked = 1;
-    e->clk_now_ns = clk->now_ns;
-    e->clk_delay_ns = clk->delay_ns;
-    e->clk_rate = clk->rate;
-    e->clk_catchup = clk->catchup;
-    e->play_ns = clk->now_ns - clk->delay_ns;
+    e->clk.on = 1;
+    e->clk.now_ns = clk->now_ns;
+    e->clk.delay_ns = clk->delay_ns;
+    e->clk.rate = clk->rate;
+    e->clk.catchup = clk->catchup;
+    e->clk.play_ns = clk->now_ns - clk->delay_ns;
     return 0;
 }
 
@@ -149,7 +149,7 @@ int engine_halt(engine_t *e, const double pos_m[ENGINE_AXES])
     e->s_off = 0.0;
     e->ts.rate = 1.0;
     e->ts.acc = 0.0;
-    e->locked = 0;
+    e->clk.locked = 0;
     for (int k = 0; k < AX; k++) {
         e->pos[k] = pos_m[k];
         e->vel[k] = e->acc[k] = 0.0;

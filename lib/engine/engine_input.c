@@ -145,7 +145,7 @@ static int keep(engine_t *e, const engine_waypoint_t *wp)
         double d1 = wp->t_s - e->in.last_t, v2 = 0;
         for (int k = 0; k < AX; k++)
             v2 += (wp->pos_m[k] - e->in.last_r[k]) * (wp->pos_m[k] - e->in.last_r[k]);
-        transfer_motion_note(&e->motion, sqrt(v2) / d1,
+        transfer_motion_note(&e->xfer.motion, sqrt(v2) / d1,
                              e->in.have_prev ? implied_accel(e, wp, d1) : 0.0);
         if (e->in.have_prev && e->cfg.param == ENGINE_PARAM_UNIFORM)
             note_uniform(e, e->in.last_t - e->in.prev_t, d1);

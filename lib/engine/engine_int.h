@@ -99,6 +99,31 @@ typedef struct {
                          decaying the same way */
 } engine_solve_t;
 
+/* ---- transfers (engine_xfer.c, transfer.h) ---- */
+typedef struct {
+    transfer_config_t cfg;
+    transfer_motion_t motion; /* the object's recent motion (noted by the input) */
+    double from_t;            /* out_t when the transfer under way began (NAN: none before) */
+} engine_xfer_t;
+
+/* ---- one clock (engine_set_clock, CLOCK.md; engine_scale.c) ---- */
+typedef struct {
+    int on;           /* the output follows the caller's clock */
+    int locked;       /* its track time is exactly the play time */
+    int64_t now_ns;   /* now on the sender's time base (last call) */
+    int64_t delay_ns; /* play-out delay D */
+    double rate;      /* d now / dt */
+    double catchup;   /* most the rate rises above rate */
+    int64_t play_ns;  /* now - D at the step being made */
+} engine_clk_t;
+
+/* ---- fast ticks (engine_tick.c: fast_window, fast_tick) ---- */
+typedef struct {
+    int64_t left; /* ticks ahead that are certainly plain unit-grid steps */
+    int off;      /* engine_set_fast_ticks(e, 0): every tick the full way */
+    int last;     /* the last tick was fast: last_sp and cspeed not yet written */
+} engine_fast_t;
+
 struct engine {
     /* ---- configuration (engine_settings.c) and what it implies ---- */
     engine_config_t cfg; /* resolved: fragment and overlap never ENGINE_AUTO */
@@ -116,10 +141,9 @@ struct engine {
 
     engine_input_t in;
     engine_solve_t solve;
-
-    /* ---- transfers (transfer.h) ---- */
-    transfer_config_t xcfg;
-    transfer_motion_t motion;
+    engine_xfer_t xfer;
+    engine_clk_t clk;
+    engine_fast_t fast;
 
     /* ---- the queue ---- */
     qent_t *q;
@@ -141,8 +165,7 @@ struct engine {
     int64_t seg_n0;  /* tick at which cur was seeded */
     double origin_t; /* absolute track time of tick 0 of the trajectory */
     double pos[AX], vel[AX], acc[AX];
-    double out_t;       /* track time of the output */
-    double xfer_from_t; /* out_t when the transfer under way began (NAN: none before) */
+    double out_t; /* track time of the output */
     uint32_t out_track;
     uint32_t cycle;
     uint32_t flags_pending;
@@ -169,20 +192,6 @@ struct engine {
     size_t *slow;      /* ring (qcap): the queue slots, in queue order, of the
                      segments whose speed cap holds the rate below TS_RATE_MAX */
     size_t slow_head, slow_len;
-
-    /* ---- one clock (engine_set_clock, CLOCK.md) ---- */
-    int clocked;          /* the output follows the caller's clock */
-    int locked;           /* its track time is exactly the play time */
-    int64_t clk_now_ns;   /* now on the sender's time base (last call) */
-    int64_t clk_delay_ns; /* play-out delay D */
-    double clk_rate;      /* d now / dt */
-    double clk_catchup;   /* most the rate rises above clk_rate */
-    int64_t play_ns;      /* now - D at the step being made */
-
-    /* ---- fast ticks (fast_window, fast_tick) ---- */
-    int64_t fast_left; /* ticks ahead that are certainly plain unit-grid steps */
-    int fast_off;      /* engine_set_fast_ticks(e, 0): every tick the full way */
-    int fast_last;     /* the last tick was fast: last_sp and cspeed not yet written */
 
     engine_status_t st;
 };

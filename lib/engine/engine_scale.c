@@ -26,12 +26,12 @@
  * in long double from the integer nanoseconds. */
 static double play_abs(const engine_t *e)
 {
-    return (double)((long double)e->play_ns * 1e-9L);
+    return (double)((long double)e->clk.play_ns * 1e-9L);
 }
 
 static double play_rel(const engine_t *e)
 {
-    return (double)((long double)e->play_ns * 1e-9L - (long double)e->origin_t);
+    return (double)((long double)e->clk.play_ns * 1e-9L - (long double)e->origin_t);
 }
 
 /* Scaled output: the curve at s by Horner, then the chain rule
@@ -331,7 +331,7 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
             rest_handover(e);
         return;
     }
-    if (!e->clocked && is_exactly(e->ts.rate, 1.0) && is_exactly(e->ts.acc, 0.0) &&
+    if (!e->clk.on && is_exactly(e->ts.rate, 1.0) && is_exactly(e->ts.acc, 0.0) &&
         is_exactly(target, 1.0)) {
         /* back on a grid of whole periods, shifted by the time lost */
         e->s_off = e->s - tick_time(e, e->n);
@@ -349,12 +349,12 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
  */
 void scale_clocked_step(engine_t *e, double R, double A, double J)
 {
-    double s = e->scaled ? e->s : tau_of(e, e->n), p = play_rel(e), rho = e->clk_rate;
+    double s = e->scaled ? e->s : tau_of(e, e->n), p = play_rel(e), rho = e->clk.rate;
     double T = e->period_s;
     int free_run = !e->stop_req && !e->end_brake && e->override >= 1.0;
 
     double Rm = fmin(R, scale_ceil_room(e, s, A, J));
-    if (e->locked && free_run && fabs(p - s - rho * T) <= ENGINE_CLOCK_LOCK_S && p > s &&
+    if (e->clk.locked && free_run && fabs(p - s - rho * T) <= ENGINE_CLOCK_LOCK_S && p > s &&
         rho <= scale_ceil_here(e) && (isinf(Rm) || ts_stop_dist(rho, 0.0, A, J) < Rm - rho * T)) {
         e->ts.rate = rho;
         e->ts.acc = 0.0;
@@ -364,13 +364,13 @@ void scale_clocked_step(engine_t *e, double R, double A, double J)
             e->out_t = play_abs(e);
         return;
     }
-    e->locked = 0;
+    e->clk.locked = 0;
     double target = 0.0;
     if (!e->stop_req && !e->end_brake) {
         /* the lag left after this tick if it ran at the clock's rate */
         double lead = ENGINE_CLOCK_GAIN * (p - s - rho * T);
-        if (lead > e->clk_catchup)
-            lead = e->clk_catchup;
+        if (lead > e->clk.catchup)
+            lead = e->clk.catchup;
         target = rho + lead;
         if (target < 0)
             target = 0;
@@ -381,5 +381,5 @@ void scale_clocked_step(engine_t *e, double R, double A, double J)
     scale_step(e, target, R, A, J);
     if (e->mode == OUT_STREAM && free_run && fabs(p - e->s) <= ENGINE_CLOCK_LOCK_S &&
         fabs(e->ts.rate - rho) <= ENGINE_CLOCK_LOCK_S * ENGINE_CLOCK_GAIN + 1e-9)
-        e->locked = 1;
+        e->clk.locked = 1;
 }

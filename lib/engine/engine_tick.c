@@ -240,7 +240,7 @@ static void find_avail(engine_t *e)
 static void clock_start(engine_t *e)
 {
     scale_rest(e);
-    e->locked = 0;
+    e->clk.locked = 0;
     scale_eval(e);
     e->out_t = e->origin_t;
 }
@@ -272,7 +272,7 @@ void play_start(engine_t *e, int new_flag)
     out_eval(e);
     e->out_t = e->origin_t;
     e->mode = OUT_STREAM;
-    if (e->clocked) {
+    if (e->clk.on) {
         clock_start(e);
     } else if (e->scaled) {
         /* from a scaled transfer: go on scaled from the start */
@@ -374,7 +374,7 @@ static void step_once(engine_t *e)
         for (int k = 0; k < AX; k++)
             d2 += (h->seg.c[k][0] - e->pos[k]) * (h->seg.c[k][0] - e->pos[k]);
         int xfer = sqrt(d2) > ENGINE_TRANSFER_TOL_M;
-        if (e->clocked) {
+        if (e->clk.on) {
             /* one clock: not before the play time reaches the start, less
              * the transfer that leads there */
             double lead = 0.0, target[AX];
@@ -383,7 +383,7 @@ static void step_once(engine_t *e)
                 target[k] = h->seg.c[k][0];
             if (xfer)
                 lead = xfer_duration(e, target, h->gap_s, &capped);
-            if ((long double)e->play_ns * 1e-9L < (long double)h->seg.t0_s - lead) {
+            if ((long double)e->clk.play_ns * 1e-9L < (long double)h->seg.t0_s - lead) {
                 hold_here(e);
                 return;
             }
@@ -398,7 +398,7 @@ static void step_once(engine_t *e)
             e->n++;
             scale_eval(e);
         } else {
-            if (!e->clocked)
+            if (!e->clk.on)
                 scale_rest(e);
             play_start(e, 1);
         }
@@ -416,7 +416,7 @@ static void step_once(engine_t *e)
          * less curve left than one tick of motion and its stop need, no input
          * can come to lengthen it: finish here, not wait for ever */
         e->end_brake = 1;
-    if (e->clocked && e->mode == OUT_STREAM) {
+    if (e->clk.on && e->mode == OUT_STREAM) {
         scale_clocked_step(e, R, A, J);
         return;
     }
@@ -501,8 +501,8 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     sp->cycle = e->cycle;
     sp->track = e->out_track;
     sp->age_s = NAN;
-    if (e->clocked && e->have_pos)
-        sp->age_s = (double)((long double)e->clk_now_ns * 1e-9L - (long double)e->out_t);
+    if (e->clk.on && e->have_pos)
+        sp->age_s = (double)((long double)e->clk.now_ns * 1e-9L - (long double)e->out_t);
 }
 
 /* 1 if further steps cannot change anything until new input arrives. */
@@ -541,8 +541,8 @@ int play_stalled(const engine_t *e)
  */
 static void fast_window(engine_t *e)
 {
-    e->fast_left = 0;
-    if (e->fast_off || e->mode != OUT_STREAM || e->scaled || e->clocked || e->underrun ||
+    e->fast.left = 0;
+    if (e->fast.off || e->mode != OUT_STREAM || e->scaled || e->clk.on || e->underrun ||
         !e->have_pos || e->stop_req || e->end_brake || e->flags_pending ||
         !is_exactly(e->override, 1.0) || !is_exactly(e->ts.rate, 1.0) ||
         !is_exactly(e->ts.acc, 0.0) || scale_ceil_here(e) < 1.0)
@@ -572,7 +572,7 @@ static void fast_window(engine_t *e)
         if (mr < (double)m)
             m = (int64_t)mr;
     }
-    e->fast_left = m > 0 ? m : 0;
+    e->fast.left = m > 0 ? m : 0;
 }
 
 /* One tick as step_once + fill_sp would make it inside the window; 0 (and
@@ -597,7 +597,7 @@ static void fast_fill_from(const engine_t *e, int64_t now_ns, engine_setpoint_t 
  * (a square root only the full path reads), both from the same doubles. */
 static void fast_sync(engine_t *e)
 {
-    if (!e->fast_last)
+    if (!e->fast.last)
         return;
     for (int k = 0; k < AX; k++) { /* out_eval, deferred by fast_tick */
         e->pos[k] = e->fd.p0[k];
@@ -609,7 +609,7 @@ static void fast_sync(engine_t *e)
         v2 += e->vel[k] * e->vel[k];
     e->cspeed = sqrt(v2);
     fast_fill_from(e, e->last_now, &e->last_sp, e->pos, e->vel, e->acc);
-    e->fast_last = 0;
+    e->fast.last = 0;
 }
 
 /*
@@ -627,11 +627,11 @@ static int fast_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     int64_t n = e->n + 1;
     double tau = tau_of(e, n);
     if (!(tau < e->cur_t1)) {
-        e->fast_left = 0;
+        e->fast.left = 0;
         return 0;
     }
-    e->fast_left--;
-    e->fast_last = 1;
+    e->fast.left--;
+    e->fast.last = 1;
     e->cycle++;
     e->n = n;
     e->last_now = now_ns;
@@ -646,14 +646,14 @@ static int fast_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 
 void engine_fast_close(engine_t *e)
 {
-    e->fast_left = 0;
+    e->fast.left = 0;
     fast_sync(e);
 }
 
 void engine_set_fast_ticks(engine_t *e, int on)
 {
     engine_fast_close(e);
-    e->fast_off = !on;
+    e->fast.off = !on;
 }
 
 static int tick_full(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
@@ -669,12 +669,12 @@ static int tick_full(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
  */
 int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
-    if (e->fast_left > 0) {
+    if (e->fast.left > 0) {
         /* one period since the last call, as the division below would round */
         int64_t d = now_ns - e->last_now, p = e->cfg.period_ns;
         if (d >= p - p / 2 && d < 2 * p - p / 2 && fast_tick(e, now_ns, sp))
             return positive_zeros(sp, 0);
-        e->fast_left = 0;
+        e->fast.left = 0;
     }
     return positive_zeros(sp, tick_full(e, now_ns, sp));
 }
@@ -701,10 +701,10 @@ __attribute__((noinline)) static int tick_full(engine_t *e, int64_t now_ns, engi
     e->have_now = 1;
     e->last_now = now_ns;
     for (i = 0; i < k; i++) {
-        if (e->clocked) /* the play time of each step, the last one's given */
-            e->play_ns = e->clk_now_ns - e->clk_delay_ns -
-                         (int64_t)llround((double)(k - 1 - i) * e->clk_rate *
-                                          (double)e->cfg.period_ns);
+        if (e->clk.on) /* the play time of each step, the last one's given */
+            e->clk.play_ns = e->clk.now_ns - e->clk.delay_ns -
+                             (int64_t)llround((double)(k - 1 - i) * e->clk.rate *
+                                              (double)e->cfg.period_ns);
         step_once(e);
         if (i + 1 < k && play_stalled(e)) {
             /* Nothing can change before the next push: the remaining steps

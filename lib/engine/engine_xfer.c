@@ -4,8 +4,8 @@
  * duration from the distance, the object's recent motion (noted by the
  * input stage) and the speed of the trajectory it joins; its start as the
  * output's current segment; and the track time a transfer reports.  It owns
- * the transfers' configuration and what they learned (engine_int.h, xcfg,
- * motion, xfer_from_t).
+ * engine_xfer_t (engine_int.h): the transfers' configuration, the object's
+ * recent motion and where the transfer under way began.
  */
 #include "engine.h"
 #include "engine_int.h"
@@ -44,9 +44,9 @@ double xfer_duration(const engine_t *e, const double *target, double gap_s, int 
     for (int i = 0; i < AX; i++)
         dist += (target[i] - e->pos[i]) * (target[i] - e->pos[i]);
     dist = sqrt(dist);
-    v_obj = fmax(transfer_motion_speed(&e->motion), head_speed(e));
-    return transfer_duration(&e->xcfg, dist, v_obj, transfer_motion_accel(&e->motion), gap_s,
-                             capped);
+    v_obj = fmax(transfer_motion_speed(&e->xfer.motion), head_speed(e));
+    return transfer_duration(&e->xfer.cfg, dist, v_obj, transfer_motion_accel(&e->xfer.motion),
+                             gap_s, capped);
 }
 
 /* Start a transfer from the output position to target (transfer.h). */
@@ -56,7 +56,7 @@ void xfer_start(engine_t *e, const double *target, double gap_s)
     double dur = xfer_duration(e, target, gap_s, &capped);
 
     memset(&e->cur, 0, sizeof(e->cur));
-    e->xfer_from_t = e->out_track ? e->out_t : NAN;
+    e->xfer.from_t = e->out_track ? e->out_t : NAN;
     e->cur.kind = QE_SEG;
     transfer_segment(&e->cur.seg, e->pos, target, dur);
     e->cur.vmax = solve_seg_speed_max(&e->cur.seg);
@@ -87,8 +87,8 @@ void xfer_track_time(engine_t *e)
     double t = e->scaled ? e->s : tau_of(e, e->n), u = t / e->cur_t1;
     double to = h->kind == QE_END ? h->t1_s : h->seg.t0_s;
     u = u < 0 ? 0 : u > 1 ? 1 : u;
-    if (isnan(e->xfer_from_t))
+    if (isnan(e->xfer.from_t))
         e->out_t = to - (1.0 - u) * e->cur_t1;
     else
-        e->out_t = e->xfer_from_t + (to - e->xfer_from_t) * u;
+        e->out_t = e->xfer.from_t + (to - e->xfer.from_t) * u;
 }
