@@ -102,14 +102,14 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
     e->solve.fw = frag_new(cfg->fragment, cfg->overlap, engine_cfg_frag_delta(cfg), ring);
     /* each accepted waypoint yields at most one segment, each trajectory
      * one END: twice the capacity always fits */
-    e->qcap = 2 * (size_t)cfg->capacity + 8;
-    e->q = calloc(e->qcap, sizeof(qent_t));
-    e->slow = calloc(e->qcap, sizeof(size_t));
-    if (!e->solve.node_t || !e->solve.node_r || !e->solve.fw || !e->q || !e->slow)
+    e->queue.cap = 2 * (size_t)cfg->capacity + 8;
+    e->queue.ent = calloc(e->queue.cap, sizeof(qent_t));
+    e->queue.slow = calloc(e->queue.cap, sizeof(size_t));
+    if (!e->solve.node_t || !e->solve.node_r || !e->solve.fw || !e->queue.ent || !e->queue.slow)
         goto nomem;
     e->st.lookahead = e->lookahead;
-    e->ts.rate = 1.0;
-    e->override = 1.0;
+    e->scale.ts.rate = 1.0;
+    e->scale.override = 1.0;
     if (err)
         *err = 0;
     return e;
@@ -127,8 +127,8 @@ void engine_free(engine_t *e)
     free(e->solve.node_t);
     free(e->solve.node_r);
     frag_free(e->solve.fw);
-    free(e->q);
-    free(e->slow);
+    free(e->queue.ent);
+    free(e->queue.slow);
     free(e->solve.sm_mem);
     free(e);
 }
@@ -143,13 +143,13 @@ void engine_status(const engine_t *e, engine_status_t *st)
     st->free = b >= e->cfg.capacity ? 0 : (uint32_t)(e->cfg.capacity - b);
     st->lookahead = e->lookahead + e->slack_learn;
     st->stalled = (uint32_t)play_stalled(e);
-    st->rate = e->mode == OUT_HOLD ? 0.0 : e->ts.rate;
-    st->override = e->override;
+    st->rate = e->out.mode == OUT_HOLD ? 0.0 : e->scale.ts.rate;
+    st->override = e->scale.override;
     st->judging = accept_pending(&e->in.policy);
     st->ahead_s = 0;
-    if (e->qlen) {
-        const qent_t *tail = &e->q[(e->qhead + e->qlen - 1) % e->qcap];
-        double ahead = tail->t1_s - e->out_t;
+    if (e->queue.len) {
+        const qent_t *tail = &e->queue.ent[(e->queue.head + e->queue.len - 1) % e->queue.cap];
+        double ahead = tail->t1_s - e->out.t;
         st->ahead_s = ahead > 0 ? ahead : 0;
     }
 }
@@ -176,7 +176,7 @@ int engine_curve(const engine_config_t *cfg, const engine_waypoint_t *wp, size_t
         } else {
             engine_finish(e);
         }
-        while (e->qlen) {
+        while (e->queue.len) {
             qent_t *h = q_head(e);
             if (h->kind == QE_SEG) {
                 if (out == max_seg) {

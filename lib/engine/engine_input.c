@@ -5,9 +5,10 @@
  * verdict carried out: a waypoint kept goes on to the solver stage
  * (engine_solve.c) as the next node of the trajectory being received; a gap,
  * re-anchor or stop closes it and opens the next; a refusal is counted and
- * kept for engine_rejection_next.  It owns the trajectory being received
- * (open, its last two waypoints), the acceptance policy, the rejections and
- * what the transfers learn of the object's motion (transfer_motion_note).
+ * kept for engine_rejection_next.  It owns engine_input_t (engine_int.h: the
+ * trajectory being received, its last two waypoints, the acceptance policy,
+ * the rejections kept) and notes the object's motion for the transfers
+ * (transfer_motion_note).
  */
 #include "engine.h"
 #include "engine_int.h"
@@ -30,7 +31,7 @@
 
 size_t input_buffered(const engine_t *e)
 {
-    return e->qlen + (size_t)(e->solve.nodes - e->solve.seg_next) +
+    return e->queue.len + (size_t)(e->solve.nodes - e->solve.seg_next) +
            (e->smooth ? (size_t)lsq_smooth_pending(&e->solve.sm) : 0) +
            accept_pending(&e->in.policy);
 }
@@ -48,7 +49,7 @@ static void open_input(engine_t *e, const engine_waypoint_t *wp)
 {
     e->in.open = 1;
     e->st.tracks++;
-    e->finished = 0;
+    e->out.finished = 0;
     memcpy(e->in.first_r, wp->pos_m, sizeof(e->in.first_r));
     solve_open(e);
 }
@@ -254,7 +255,7 @@ int engine_finish(engine_t *e)
     int rc = close_input(e);
 
     accept_close(&e->in.policy);
-    if (!e->qlen && e->mode == OUT_HOLD && !e->in.open)
-        e->finished = 1; /* nothing left to stream: the input is over */
+    if (!e->queue.len && e->out.mode == OUT_HOLD && !e->in.open)
+        e->out.finished = 1; /* nothing left to stream: the input is over */
     return rc < 0 ? rc : rj < 0 ? rj : 0;
 }

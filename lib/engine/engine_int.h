@@ -99,11 +99,66 @@ typedef struct {
                          decaying the same way */
 } engine_solve_t;
 
+/* ---- the queue of finished segments: the solver fills it, the play-out
+ * takes from it (engine_solve.c) ---- */
+typedef struct {
+    qent_t *ent;
+    size_t cap, head, len;
+    size_t ends;  /* END entries in the queue */
+    size_t *slow; /* ring (cap): the queue slots, in queue order, of the
+                          segments whose speed cap holds the rate below TS_RATE_MAX */
+    size_t slow_head, slow_len;
+} engine_queue_t;
+
+/* ---- play-out (engine_tick.c): the output ---- */
+typedef struct {
+    int mode;     /* OUT_* */
+    int have_pos; /* the output stands somewhere real: set by engine_set_position,
+                     or the first waypoint adopted as the last resort.  From then on
+                     the output only moves by streaming or by a transfer */
+    int need_pos; /* engine_require_position: no first-waypoint fallback */
+    int finished; /* the last trajectory ran to its end */
+    int underrun;
+    uint64_t traj;         /* trajectory the output streams */
+    qent_t cur;            /* segment (or transfer) being stepped */
+    double cur_t0, cur_t1; /* its start and end relative to origin_t */
+    fdiff_t fd;
+    int64_t n;       /* ticks since origin_t */
+    int64_t seg_n0;  /* tick at which cur was seeded */
+    double origin_t; /* absolute track time of tick 0 of the trajectory */
+    double pos[AX], vel[AX], acc[AX];
+    double t; /* track time of the output */
+    uint32_t track;
+    uint32_t cycle;
+    uint32_t flags_pending;
+    int have_now;
+    int64_t last_now;
+    engine_setpoint_t last_sp;
+} engine_out_t;
+
+/* ---- time scaling of the play-out (engine_scale.c, timescale.h, TIMESCALE.md) ---- */
+typedef struct {
+    ts_state_t ts;     /* rate ds/dt and its derivative */
+    int on;            /* off the unit grid: the output's track time is s */
+    double s;          /* on: track time of the output, relative to origin_t */
+    double s_off;      /* unit grid: track time = tick_time(n) + s_off */
+    double cspeed;     /* |k'(s)|: the curve's own speed at the output */
+    double override;   /* feed override 0 .. 2 */
+    int stop_req;      /* STOP_*: braking to rest, then drop */
+    size_t drop_n;     /* queue entries to drop once at rest */
+    double avail_t;    /* end of the output trajectory's solved curve (absolute track time) */
+    double avail_kcum; /* braking capacity up to there (qent_t kcum) */
+    double avail_ucum; /* ... and the rises of the limits (qent_t ucum) */
+    int avail_closed;  /* its END is queued */
+    int avail_rest;    /* ... and the curve ends at rest there */
+    int end_brake;     /* braking to rest before an end that is not at rest */
+} engine_scale_t;
+
 /* ---- transfers (engine_xfer.c, transfer.h) ---- */
 typedef struct {
     transfer_config_t cfg;
     transfer_motion_t motion; /* the object's recent motion (noted by the input) */
-    double from_t;            /* out_t when the transfer under way began (NAN: none before) */
+    double from_t;            /* out.t when the transfer under way began (NAN: none before) */
 } engine_xfer_t;
 
 /* ---- one clock (engine_set_clock, CLOCK.md; engine_scale.c) ---- */
@@ -143,55 +198,10 @@ struct engine {
     engine_solve_t solve;
     engine_xfer_t xfer;
     engine_clk_t clk;
+    engine_queue_t queue;
+    engine_out_t out;
+    engine_scale_t scale;
     engine_fast_t fast;
-
-    /* ---- the queue ---- */
-    qent_t *q;
-    size_t qcap, qhead, qlen;
-    size_t qends; /* END entries in the queue */
-
-    /* ---- output ---- */
-    int mode;
-    int have_pos; /* the output stands somewhere real: set by engine_set_position,
-                             or the first waypoint adopted as the last resort.  From then on
-                             the output only moves by streaming or by a transfer */
-    int need_pos; /* engine_require_position: no first-waypoint fallback */
-    int finished; /* the last trajectory ran to its end */
-    int underrun;
-    qent_t cur;            /* segment (or transfer) being stepped */
-    double cur_t0, cur_t1; /* its start and end relative to base */
-    fdiff_t fd;
-    int64_t n;       /* ticks since base */
-    int64_t seg_n0;  /* tick at which cur was seeded */
-    double origin_t; /* absolute track time of tick 0 of the trajectory */
-    double pos[AX], vel[AX], acc[AX];
-    double out_t; /* track time of the output */
-    uint32_t out_track;
-    uint32_t cycle;
-    uint32_t flags_pending;
-    int have_now;
-    int64_t last_now;
-    engine_setpoint_t last_sp;
-
-    /* ---- time scaling (timescale.h, TIMESCALE.md) ---- */
-    ts_state_t ts;     /* rate ds/dt and its derivative */
-    int scaled;        /* off the unit grid: the output's track time is s */
-    double s;          /* scaled: track time of the output, relative to origin_t */
-    double s_off;      /* unit grid: track time = tick_time(n) + s_off */
-    double cspeed;     /* |k'(s)|: the curve's own speed at the output */
-    double override;   /* feed override 0 .. 2 */
-    int stop_req;      /* STOP_*: braking to rest, then drop */
-    size_t drop_n;     /* queue entries to drop once at rest */
-    uint64_t out_traj; /* trajectory the output streams */
-    double avail_t;    /* end of its solved curve (absolute track time) */
-    double avail_kcum; /* braking capacity up to there (qent_t kcum) */
-    double avail_ucum; /* ... and the rises of the limits (qent_t ucum) */
-    int avail_closed;  /* its END is queued */
-    int avail_rest;    /* ... and the curve ends at rest there */
-    int end_brake;     /* braking to rest before an end that is not at rest */
-    size_t *slow;      /* ring (qcap): the queue slots, in queue order, of the
-                     segments whose speed cap holds the rate below TS_RATE_MAX */
-    size_t slow_head, slow_len;
 
     engine_status_t st;
 };
@@ -288,7 +298,7 @@ static inline double hpar(const engine_t *e, uint64_t j)
 
 static inline qent_t *q_head(engine_t *e)
 {
-    return e->qlen ? &e->q[e->qhead] : NULL;
+    return e->queue.len ? &e->queue.ent[e->queue.head] : NULL;
 }
 
 /* Exact comparisons of the time scaling's state (it lands on its targets
@@ -300,7 +310,7 @@ static inline int is_exactly(double x, double v)
 
 static inline int at_rest(const engine_t *e)
 {
-    return is_exactly(e->ts.rate, 0.0) && is_exactly(e->ts.acc, 0.0);
+    return is_exactly(e->scale.ts.rate, 0.0) && is_exactly(e->scale.ts.acc, 0.0);
 }
 
 static inline double tick_time(const engine_t *e, int64_t n)
@@ -312,7 +322,7 @@ static inline double tick_time(const engine_t *e, int64_t n)
  * until the time scaling first moved the output off the grid. */
 static inline double tau_of(const engine_t *e, int64_t n)
 {
-    return tick_time(e, n) + e->s_off;
+    return tick_time(e, n) + e->scale.s_off;
 }
 
 /* A zero is +0.0 (-0.0 + 0.0 = +0.0): a setpoint at rest reads 0, not -0, in

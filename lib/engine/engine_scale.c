@@ -4,9 +4,9 @@
  * each tick within the limits converted at the curve's speed, the braking
  * capacity left on the solved curve, the speed cap ahead, stops and clears
  * braked to rest, handovers at rate 0, and one clock (locked on the play
- * time or catching up).  It owns the rate and the scaled track time (ts, s,
- * s_off, scaled), the override, the stop request, what is known of the
- * curve ahead (avail_*) and the clock (clk_*, locked, play_ns).
+ * time or catching up).  It owns engine_scale_t (engine_int.h: the rate, the
+ * scaled track time, the override, the stop request, what is known of the
+ * curve ahead) and engine_clk_t (the clock).
  */
 #include "engine.h"
 #include "engine_int.h"
@@ -31,27 +31,27 @@ static double play_abs(const engine_t *e)
 
 static double play_rel(const engine_t *e)
 {
-    return (double)((long double)e->clk.play_ns * 1e-9L - (long double)e->origin_t);
+    return (double)((long double)e->clk.play_ns * 1e-9L - (long double)e->out.origin_t);
 }
 
 /* Scaled output: the curve at s by Horner, then the chain rule
  * (timescale.h): v = k' r, a = k'' r^2 + k' dr/dt. */
 void scale_eval(engine_t *e)
 {
-    double u = (e->s - e->cur_t0) / e->cur.seg.dur_s, cv[AX], ca[AX], v2 = 0;
-    double r = e->ts.rate, ra = e->ts.acc;
+    double u = (e->scale.s - e->out.cur_t0) / e->out.cur.seg.dur_s, cv[AX], ca[AX], v2 = 0;
+    double r = e->scale.ts.rate, ra = e->scale.ts.acc;
 
     if (u < 0)
         u = 0;
     if (u > 1)
         u = 1;
-    fdiff_eval(&e->cur.seg, u, e->pos, cv, ca);
+    fdiff_eval(&e->out.cur.seg, u, e->out.pos, cv, ca);
     for (int k = 0; k < AX; k++) {
-        e->vel[k] = cv[k] * r;
-        e->acc[k] = ca[k] * r * r + cv[k] * ra;
+        e->out.vel[k] = cv[k] * r;
+        e->out.acc[k] = ca[k] * r * r + cv[k] * ra;
         v2 += cv[k] * cv[k];
     }
-    e->cspeed = sqrt(v2);
+    e->scale.cspeed = sqrt(v2);
 }
 
 /* The speed (m/s) at which the scaling's limits are converted outside a
@@ -61,7 +61,7 @@ void scale_eval(engine_t *e)
  * the jerk can take the rate's acceleration back: the rate overshot 1.) */
 double scale_conv_speed(const engine_t *e)
 {
-    return fmax(e->cur.vmax, ENGINE_SCALE_V_FLOOR_M_S);
+    return fmax(e->out.cur.vmax, ENGINE_SCALE_V_FLOOR_M_S);
 }
 
 /* Track time (per unit of rate, in the units of the limits converted at v)
@@ -72,7 +72,7 @@ double scale_conv_speed(const engine_t *e)
  * r^2/2; so much per rise of A ahead, summed (ucum), is kept in reserve. */
 double scale_rise_reserve(const engine_t *e, double v)
 {
-    double du = e->avail_ucum - e->cur.ucum;
+    double du = e->scale.avail_ucum - e->out.cur.ucum;
     return du > 0 ? 0.5 * e->cfg.scale_accel_m_s2 / e->cfg.scale_jerk_m_s3 * v * du : 0.0;
 }
 
@@ -95,14 +95,14 @@ double scale_rise_reserve(const engine_t *e, double v)
  */
 double scale_remaining(const engine_t *e, double s)
 {
-    if (e->mode == OUT_XFER)
-        return e->cur_t1 - s; /* left at rate 0 (handover) */
+    if (e->out.mode == OUT_XFER)
+        return e->out.cur_t1 - s; /* left at rate 0 (handover) */
     /* the braking capacity left, in the units of the limits here */
-    double in_cur = e->cur_t1 - s, v = scale_conv_speed(e), k;
-    k = (in_cur > 0 ? in_cur / v : 0.0) + (e->avail_kcum - e->cur.kcum);
+    double in_cur = e->out.cur_t1 - s, v = scale_conv_speed(e), k;
+    k = (in_cur > 0 ? in_cur / v : 0.0) + (e->scale.avail_kcum - e->out.cur.kcum);
     /* the margin scales with the rate: standing still needs none, so a
      * buffer shorter than the margin never deadlocks the output */
-    return v * k - e->ts.rate * (scale_rise_reserve(e, v) + TS_MARGIN_TICKS * e->period_s);
+    return v * k - e->scale.ts.rate * (scale_rise_reserve(e, v) + TS_MARGIN_TICKS * e->period_s);
 }
 
 /*
@@ -119,14 +119,14 @@ double scale_ceil_room(const engine_t *e, double s, double A, double J)
 {
     double R = INFINITY;
 
-    if (e->mode != OUT_STREAM || !e->slow_len)
+    if (e->out.mode != OUT_STREAM || !e->queue.slow_len)
         return R;
-    double in_cur = e->cur_t1 - s, v = scale_conv_speed(e);
-    double k0 = (in_cur > 0 ? in_cur / v : 0.0) - e->cur.kcum;
-    double res = e->ts.rate * (scale_rise_reserve(e, v) + TS_MARGIN_TICKS * e->period_s);
-    for (size_t i = 0; i < e->slow_len; i++) {
-        const qent_t *q = &e->q[e->slow[(e->slow_head + i) % e->qcap]];
-        if (q->traj != e->out_traj)
+    double in_cur = e->out.cur_t1 - s, v = scale_conv_speed(e);
+    double k0 = (in_cur > 0 ? in_cur / v : 0.0) - e->out.cur.kcum;
+    double res = e->scale.ts.rate * (scale_rise_reserve(e, v) + TS_MARGIN_TICKS * e->period_s);
+    for (size_t i = 0; i < e->queue.slow_len; i++) {
+        const qent_t *q = &e->queue.ent[e->queue.slow[(e->queue.slow_head + i) % e->queue.cap]];
+        if (q->traj != e->out.traj)
             break;
         double kstart = q->kcum - q->seg.dur_s / fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
         R = fmin(R, v * (k0 + kstart) - res + ts_stop_dist(q->ceil, -A, A, J));
@@ -137,7 +137,7 @@ double scale_ceil_room(const engine_t *e, double s, double A, double J)
 /* The rate the speed cap allows on the current segment. */
 double scale_ceil_here(const engine_t *e)
 {
-    return e->mode == OUT_STREAM ? e->cur.ceil : INFINITY;
+    return e->out.mode == OUT_STREAM ? e->out.cur.ceil : INFINITY;
 }
 
 /* The jerk of a stop or clear (m/s^3): at least a / T, so that the braking
@@ -160,10 +160,10 @@ void scale_limits(const engine_t *e, double *A, double *J)
 {
     double v, jerk = e->cfg.scale_jerk_m_s3;
 
-    if (e->stop_req) {
+    if (e->scale.stop_req) {
         double floor = fmin(ENGINE_SCALE_V_FLOOR_M_S, e->cfg.scale_accel_m_s2 * e->period_s);
         jerk = stop_jerk(e);
-        v = e->cspeed > floor ? e->cspeed : floor;
+        v = e->scale.cspeed > floor ? e->scale.cspeed : floor;
     } else {
         v = scale_conv_speed(e);
     }
@@ -174,7 +174,8 @@ void scale_limits(const engine_t *e, double *A, double *J)
 /* The rate the output is asked for, before the buffer's limit. */
 double scale_target(const engine_t *e)
 {
-    return e->stop_req || e->end_brake ? 0.0 : fmin(e->override, scale_ceil_here(e));
+    return e->scale.stop_req || e->scale.end_brake ? 0.0
+                                                   : fmin(e->scale.override, scale_ceil_here(e));
 }
 
 /* 1 if the time scaling's next tick would set the output moving (tried on a
@@ -183,10 +184,10 @@ double scale_target(const engine_t *e)
  * the track time's last bit, repeats for ever on a curve that cannot grow). */
 int scale_moves(const engine_t *e, double R, double A, double J)
 {
-    ts_state_t ts = e->ts;
+    ts_state_t ts = e->scale.ts;
     int lim = 0;
     double ds = ts_step(&ts, scale_target(e), R, A, J, e->period_s, NULL, &lim);
-    return e->s + ds > e->s && !(is_exactly(ts.rate, 0.0) && is_exactly(ts.acc, 0.0));
+    return e->scale.s + ds > e->scale.s && !(is_exactly(ts.rate, 0.0) && is_exactly(ts.acc, 0.0));
 }
 
 /* Scaled, at rate 0 at the start of cur (s = 0).  Every transfer and every
@@ -197,10 +198,10 @@ int scale_moves(const engine_t *e, double R, double A, double J)
  * by k'' (TIMESCALE.md, "Handovers"). */
 void scale_rest(engine_t *e)
 {
-    e->scaled = 1;
-    e->s = 0.0;
-    e->ts.rate = 0.0;
-    e->ts.acc = 0.0;
+    e->scale.on = 1;
+    e->scale.s = 0.0;
+    e->scale.ts.rate = 0.0;
+    e->scale.ts.acc = 0.0;
 }
 
 /* The output stands within ENGINE_HANDOVER_TOL_M of p. */
@@ -208,7 +209,7 @@ static int near_here(const engine_t *e, const double *p)
 {
     double d2 = 0;
     for (int k = 0; k < AX; k++)
-        d2 += (p[k] - e->pos[k]) * (p[k] - e->pos[k]);
+        d2 += (p[k] - e->out.pos[k]) * (p[k] - e->out.pos[k]);
     return d2 <= ENGINE_HANDOVER_TOL_M * ENGINE_HANDOVER_TOL_M;
 }
 
@@ -222,34 +223,34 @@ static int near_here(const engine_t *e, const double *p)
 static void rest_handover(engine_t *e)
 {
     double A, J, target = scale_target(e), end[AX];
-    ts_state_t probe = e->ts;
+    ts_state_t probe = e->scale.ts;
 
     if (!(target > 0))
         return; /* at rest by the override */
     scale_limits(e, &A, &J);
-    (void)ts_step(&probe, target, scale_remaining(e, e->s), A, J, e->period_s, NULL, NULL);
+    (void)ts_step(&probe, target, scale_remaining(e, e->scale.s), A, J, e->period_s, NULL, NULL);
     if (probe.rate > 0)
         return; /* the next tick moves on (its advance from rest alone may be a
                  * rounding residue of 1e-22: not a move) */
-    if (e->mode == OUT_XFER) {
-        fdiff_eval(&e->cur.seg, 1.0, end, NULL, NULL);
+    if (e->out.mode == OUT_XFER) {
+        fdiff_eval(&e->out.cur.seg, 1.0, end, NULL, NULL);
         if (near_here(e, end))
             play_start(e, 0);
         return;
     }
-    if (e->mode != OUT_STREAM || !e->avail_closed)
+    if (e->out.mode != OUT_STREAM || !e->scale.avail_closed)
         return; /* an underrun: resumes when waypoints come */
     const qent_t *h = NULL;
-    for (size_t i = 0; i < e->qlen && !h; i++) {
-        const qent_t *q = &e->q[(e->qhead + i) % e->qcap];
-        if (q->traj != e->out_traj)
+    for (size_t i = 0; i < e->queue.len && !h; i++) {
+        const qent_t *q = &e->queue.ent[(e->queue.head + i) % e->queue.cap];
+        if (q->traj != e->out.traj)
             break;
         if (q->kind == QE_END)
             h = q;
     }
     for (int k = 0; k < AX; k++)
         end[k] = h ? h->seg.c[k][0] : NAN;
-    if (!e->avail_rest || !near_here(e, end)) {
+    if (!e->scale.avail_rest || !near_here(e, end)) {
         /* an end not at rest (as end_brake would), or one that the braking
          * cannot reach (the curve ahead too fast to stop on from any move):
          * finish where the output stands, never a jump */
@@ -267,8 +268,8 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim);
 void scale_step(engine_t *e, double target, double R, double A, double J)
 {
     int lim = 0;
-    double s = e->scaled ? e->s : tau_of(e, e->n), Rc = scale_ceil_room(e, s, A, J);
-    double ds = ts_step(&e->ts, target, fmin(R, Rc), A, J, e->period_s, NULL, &lim);
+    double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n), Rc = scale_ceil_room(e, s, A, J);
+    double ds = ts_step(&e->scale.ts, target, fmin(R, Rc), A, J, e->period_s, NULL, &lim);
 
     /* held back by the speed cap ahead, not by the curve running short */
     scaled_advance(e, s + ds, target, lim && !(Rc < R));
@@ -278,66 +279,66 @@ void scale_step(engine_t *e, double target, double R, double A, double J)
  * the queued segments, and update the states that depend on it. */
 static void scaled_advance(engine_t *e, double s1, double target, int lim)
 {
-    e->scaled = 1;
-    e->n++;
-    while (s1 >= e->cur_t1) {
-        if (e->mode == OUT_XFER) {
+    e->scale.on = 1;
+    e->out.n++;
+    while (s1 >= e->out.cur_t1) {
+        if (e->out.mode == OUT_XFER) {
             /* a transfer ends at rest, braked to rate 0 (scale_remaining()) */
-            s1 = e->cur_t1;
-            e->ts.rate = e->ts.acc = 0.0;
-            if (e->stop_req)
+            s1 = e->out.cur_t1;
+            e->scale.ts.rate = e->scale.ts.acc = 0.0;
+            if (e->scale.stop_req)
                 break; /* stop on its end */
             play_start(e, 0);
-            if (e->mode != OUT_STREAM)
+            if (e->out.mode != OUT_STREAM)
                 return;
             s1 = 0.0;
             continue;
         }
         qent_t *h = q_head(e);
-        if (h && h->traj == e->out_traj && h->kind == QE_END) {
+        if (h && h->traj == e->out.traj && h->kind == QE_END) {
             play_rest_at_end(e, h);
             return;
         }
-        if (!h || h->traj != e->out_traj) {
+        if (!h || h->traj != e->out.traj) {
             /* cannot happen while scale_remaining() is right: see unit_step */
-            s1 = e->cur_t1;
-            if (e->ts.rate > 0)
+            s1 = e->out.cur_t1;
+            if (e->scale.ts.rate > 0)
                 e->st.hard_stops++;
-            e->ts.rate = e->ts.acc = 0.0;
+            e->scale.ts.rate = e->scale.ts.acc = 0.0;
             break;
         }
         play_take_segment(e);
     }
-    e->s = s1;
+    e->scale.s = s1;
     scale_eval(e);
-    e->out_t = e->origin_t + s1;
+    e->out.t = e->out.origin_t + s1;
 
-    if (lim && !e->stop_req && !e->avail_closed && e->mode == OUT_STREAM) {
-        if (!e->underrun)
+    if (lim && !e->scale.stop_req && !e->scale.avail_closed && e->out.mode == OUT_STREAM) {
+        if (!e->out.underrun)
             play_count_underrun(e);
-        e->underrun = 1;
-    } else if (e->underrun && !lim && e->ts.rate >= target) {
-        e->underrun = 0;
+        e->out.underrun = 1;
+    } else if (e->out.underrun && !lim && e->scale.ts.rate >= target) {
+        e->out.underrun = 0;
     }
-    if (e->underrun)
+    if (e->out.underrun)
         e->st.underrun_ticks++;
 
     if (at_rest(e)) {
-        if (e->stop_req)
+        if (e->scale.stop_req)
             play_stop_at_rest(e);
-        else if (e->end_brake)
+        else if (e->scale.end_brake)
             play_finish_here(e);
         else
             rest_handover(e);
         return;
     }
-    if (!e->clk.on && is_exactly(e->ts.rate, 1.0) && is_exactly(e->ts.acc, 0.0) &&
+    if (!e->clk.on && is_exactly(e->scale.ts.rate, 1.0) && is_exactly(e->scale.ts.acc, 0.0) &&
         is_exactly(target, 1.0)) {
         /* back on a grid of whole periods, shifted by the time lost */
-        e->s_off = e->s - tick_time(e, e->n);
-        e->seg_n0 = e->n;
-        play_seed_cur(e, e->n);
-        e->scaled = 0;
+        e->scale.s_off = e->scale.s - tick_time(e, e->out.n);
+        e->out.seg_n0 = e->out.n;
+        play_seed_cur(e, e->out.n);
+        e->scale.on = 0;
     }
 }
 
@@ -349,24 +350,24 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
  */
 void scale_clocked_step(engine_t *e, double R, double A, double J)
 {
-    double s = e->scaled ? e->s : tau_of(e, e->n), p = play_rel(e), rho = e->clk.rate;
+    double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n), p = play_rel(e), rho = e->clk.rate;
     double T = e->period_s;
-    int free_run = !e->stop_req && !e->end_brake && e->override >= 1.0;
+    int free_run = !e->scale.stop_req && !e->scale.end_brake && e->scale.override >= 1.0;
 
     double Rm = fmin(R, scale_ceil_room(e, s, A, J));
     if (e->clk.locked && free_run && fabs(p - s - rho * T) <= ENGINE_CLOCK_LOCK_S && p > s &&
         rho <= scale_ceil_here(e) && (isinf(Rm) || ts_stop_dist(rho, 0.0, A, J) < Rm - rho * T)) {
-        e->ts.rate = rho;
-        e->ts.acc = 0.0;
-        e->n++;
+        e->scale.ts.rate = rho;
+        e->scale.ts.acc = 0.0;
+        e->out.n++;
         scaled_advance(e, p, rho, 0);
-        if (e->mode == OUT_STREAM)
-            e->out_t = play_abs(e);
+        if (e->out.mode == OUT_STREAM)
+            e->out.t = play_abs(e);
         return;
     }
     e->clk.locked = 0;
     double target = 0.0;
-    if (!e->stop_req && !e->end_brake) {
+    if (!e->scale.stop_req && !e->scale.end_brake) {
         /* the lag left after this tick if it ran at the clock's rate */
         double lead = ENGINE_CLOCK_GAIN * (p - s - rho * T);
         if (lead > e->clk.catchup)
@@ -374,12 +375,12 @@ void scale_clocked_step(engine_t *e, double R, double A, double J)
         target = rho + lead;
         if (target < 0)
             target = 0;
-        if (e->override < 1.0)
-            target *= e->override;
+        if (e->scale.override < 1.0)
+            target *= e->scale.override;
         target = fmin(target, scale_ceil_here(e));
     }
     scale_step(e, target, R, A, J);
-    if (e->mode == OUT_STREAM && free_run && fabs(p - e->s) <= ENGINE_CLOCK_LOCK_S &&
-        fabs(e->ts.rate - rho) <= ENGINE_CLOCK_LOCK_S * ENGINE_CLOCK_GAIN + 1e-9)
+    if (e->out.mode == OUT_STREAM && free_run && fabs(p - e->scale.s) <= ENGINE_CLOCK_LOCK_S &&
+        fabs(e->scale.ts.rate - rho) <= ENGINE_CLOCK_LOCK_S * ENGINE_CLOCK_GAIN + 1e-9)
         e->clk.locked = 1;
 }

@@ -5,9 +5,10 @@
  * SMOOTH through the lsq smoother first); every segment whose control
  * values are all final is turned into a cubic per axis (fdiff_seg_t), with
  * its speed bound, speed cap and braking capacity, and queued; a closed
- * trajectory queues an END entry where it rests.  It owns the nodes, the
- * fragment window, the smoother and the queue of finished segments, which
- * the play-out stage (engine_tick.c) consumes.
+ * trajectory queues an END entry where it rests.  It owns engine_solve_t
+ * (engine_int.h: the nodes, the fragment window, the smoother) and the
+ * queue of finished segments, engine_queue_t, which the play-out stage
+ * (engine_tick.c) consumes.
  */
 #include "engine.h"
 #include "engine_int.h"
@@ -52,10 +53,10 @@ static qent_t *q_push(engine_t *e)
 {
     qent_t *q;
 
-    if (e->qlen == e->qcap)
-        return NULL; /* cannot happen: see qcap */
-    q = &e->q[(e->qhead + e->qlen) % e->qcap];
-    e->qlen++;
+    if (e->queue.len == e->queue.cap)
+        return NULL; /* cannot happen: see queue.cap */
+    q = &e->queue.ent[(e->queue.head + e->queue.len) % e->queue.cap];
+    e->queue.len++;
     q->first = e->solve.first_pending;
     q->traj = e->solve.traj;
     q->gap_s = q->first ? e->in.gap_s : 0;
@@ -92,7 +93,8 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
     q->vmax = solve_seg_speed_max(seg);
     q->ceil = seg_ceiling(e, q->vmax);
     if (is_slow(q)) /* every queued slot has room: so has the ring */
-        e->slow[(e->slow_head + e->slow_len++) % e->qcap] = (size_t)(q - e->q);
+        e->queue.slow[(e->queue.slow_head + e->queue.slow_len++) % e->queue.cap] =
+            (size_t)(q - e->queue.ent);
     double inv = 1.0 / fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
     if (e->solve.emitted && inv > e->solve.inv)
         e->solve.ucum += inv - e->solve.inv; /* the limits rise from the last one to this */
@@ -109,10 +111,10 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
         v2 += v * v;
     }
     e->solve.end_speed = sqrt(v2);
-    if (e->mode != OUT_HOLD && q->traj == e->out_traj) {
-        e->avail_t = q->t1_s; /* more curve for the output (see scale_remaining()) */
-        e->avail_kcum = q->kcum;
-        e->avail_ucum = q->ucum;
+    if (e->out.mode != OUT_HOLD && q->traj == e->out.traj) {
+        e->scale.avail_t = q->t1_s; /* more curve for the output (see scale_remaining()) */
+        e->scale.avail_kcum = q->kcum;
+        e->scale.avail_ucum = q->ucum;
     }
 }
 
@@ -123,7 +125,7 @@ static void queue_end(engine_t *e)
     if (!q)
         return;
     q->kind = QE_END;
-    e->qends++;
+    e->queue.ends++;
     memset(&q->seg, 0, sizeof(q->seg));
     q->t1_s = e->solve.emitted ? e->solve.end_t : e->in.last_t;
     q->seg.t0_s = q->t1_s;
@@ -131,25 +133,25 @@ static void queue_end(engine_t *e)
         q->seg.c[k][0] = e->solve.emitted ? e->solve.end_r[k] : e->in.last_r[k];
     /* END: c[0][1] is the speed at which the curve arrives (0 at rest) */
     q->seg.c[0][1] = e->solve.emitted ? e->solve.end_speed : 0.0;
-    if (e->mode != OUT_HOLD && q->traj == e->out_traj) {
-        e->avail_t = q->t1_s;
-        e->avail_closed = 1;
-        e->avail_rest = q->seg.c[0][1] <= ENGINE_REST_SPEED_M_S;
+    if (e->out.mode != OUT_HOLD && q->traj == e->out.traj) {
+        e->scale.avail_t = q->t1_s;
+        e->scale.avail_closed = 1;
+        e->scale.avail_rest = q->seg.c[0][1] <= ENGINE_REST_SPEED_M_S;
     }
 }
 
 void queue_pop(engine_t *e)
 {
-    if (e->drop_n)
-        e->drop_n--;
-    if (e->q[e->qhead].kind == QE_END)
-        e->qends--;
-    if (is_slow(&e->q[e->qhead])) { /* the ring's head */
-        e->slow_head = (e->slow_head + 1) % e->qcap;
-        e->slow_len--;
+    if (e->scale.drop_n)
+        e->scale.drop_n--;
+    if (e->queue.ent[e->queue.head].kind == QE_END)
+        e->queue.ends--;
+    if (is_slow(&e->queue.ent[e->queue.head])) { /* the ring's head */
+        e->queue.slow_head = (e->queue.slow_head + 1) % e->queue.cap;
+        e->queue.slow_len--;
     }
-    e->qhead = (e->qhead + 1) % e->qcap;
-    e->qlen--;
+    e->queue.head = (e->queue.head + 1) % e->queue.cap;
+    e->queue.len--;
 }
 
 /* end velocities in the unknowns' parameter (dk/du for P*, dk/ds for M) */

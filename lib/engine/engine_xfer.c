@@ -22,8 +22,8 @@ static double head_speed(const engine_t *e)
 {
     double v = 0;
 
-    for (size_t i = 0; i < e->qlen && i < TRANSFER_HIST; i++) {
-        const qent_t *q = &e->q[(e->qhead + i) % e->qcap];
+    for (size_t i = 0; i < e->queue.len && i < TRANSFER_HIST; i++) {
+        const qent_t *q = &e->queue.ent[(e->queue.head + i) % e->queue.cap];
         double d2 = 0;
         if (q->kind != QE_SEG || (i > 0 && q->first))
             break;
@@ -42,7 +42,7 @@ double xfer_duration(const engine_t *e, const double *target, double gap_s, int 
     double dist = 0, v_obj;
 
     for (int i = 0; i < AX; i++)
-        dist += (target[i] - e->pos[i]) * (target[i] - e->pos[i]);
+        dist += (target[i] - e->out.pos[i]) * (target[i] - e->out.pos[i]);
     dist = sqrt(dist);
     v_obj = fmax(transfer_motion_speed(&e->xfer.motion), head_speed(e));
     return transfer_duration(&e->xfer.cfg, dist, v_obj, transfer_motion_accel(&e->xfer.motion),
@@ -55,19 +55,19 @@ void xfer_start(engine_t *e, const double *target, double gap_s)
     int capped = 0;
     double dur = xfer_duration(e, target, gap_s, &capped);
 
-    memset(&e->cur, 0, sizeof(e->cur));
-    e->xfer.from_t = e->out_track ? e->out_t : NAN;
-    e->cur.kind = QE_SEG;
-    transfer_segment(&e->cur.seg, e->pos, target, dur);
-    e->cur.vmax = solve_seg_speed_max(&e->cur.seg);
-    e->cur_t0 = 0;
-    e->cur_t1 = e->cur.seg.dur_s;
-    e->n = 0;
-    e->seg_n0 = 0;
-    e->s_off = 0.0;
-    e->out_track++;
-    e->flags_pending |= ENGINE_SP_NEW_TRACK;
-    e->mode = OUT_XFER;
+    memset(&e->out.cur, 0, sizeof(e->out.cur));
+    e->xfer.from_t = e->out.track ? e->out.t : NAN;
+    e->out.cur.kind = QE_SEG;
+    transfer_segment(&e->out.cur.seg, e->out.pos, target, dur);
+    e->out.cur.vmax = solve_seg_speed_max(&e->out.cur.seg);
+    e->out.cur_t0 = 0;
+    e->out.cur_t1 = e->out.cur.seg.dur_s;
+    e->out.n = 0;
+    e->out.seg_n0 = 0;
+    e->scale.s_off = 0.0;
+    e->out.track++;
+    e->out.flags_pending |= ENGINE_SP_NEW_TRACK;
+    e->out.mode = OUT_XFER;
     e->st.transfers++;
     e->st.transfer_s += dur;
     e->st.transfers_capped += (uint64_t)capped;
@@ -81,14 +81,14 @@ void xfer_start(engine_t *e, const double *target, double gap_s)
  * that start as it does. */
 void xfer_track_time(engine_t *e)
 {
-    const qent_t *h = e->qlen ? &e->q[e->qhead] : NULL; /* q_head, read only */
-    if (!h || !(e->cur_t1 > 0))
+    const qent_t *h = e->queue.len ? &e->queue.ent[e->queue.head] : NULL; /* q_head, read only */
+    if (!h || !(e->out.cur_t1 > 0))
         return;
-    double t = e->scaled ? e->s : tau_of(e, e->n), u = t / e->cur_t1;
+    double t = e->scale.on ? e->scale.s : tau_of(e, e->out.n), u = t / e->out.cur_t1;
     double to = h->kind == QE_END ? h->t1_s : h->seg.t0_s;
     u = u < 0 ? 0 : u > 1 ? 1 : u;
     if (isnan(e->xfer.from_t))
-        e->out_t = to - (1.0 - u) * e->cur_t1;
+        e->out.t = to - (1.0 - u) * e->out.cur_t1;
     else
-        e->out_t = e->xfer.from_t + (to - e->xfer.from_t) * u;
+        e->out.t = e->xfer.from_t + (to - e->xfer.from_t) * u;
 }
