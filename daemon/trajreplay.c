@@ -919,7 +919,7 @@ int main(int argc, char **argv)
         status = EXIT_STRICT;
     }
     uint64_t hard = run.st.hard_stops, numeric = run.st.rejected_by[ENGINE_ENUMERIC];
-    if (hard) /* the time scaling brakes in time (engine.c remaining()): loud should it not */
+    if (hard) /* the time scaling brakes in time (engine_scale.c scale_remaining()): loud should it not */
         fprintf(stderr,
                 "trajreplay: %s: warning: %" PRIu64 " hard stop%s (velocity to 0 in one tick: "
                 "the solved curve ended under a moving output)\n",
