@@ -109,6 +109,7 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
         goto nomem;
     e->st.lookahead = e->lookahead;
     e->scale.ts.rate = 1.0;
+    e->scale.stop_dv = -1.0; /* set by each scaled tick */
     e->scale.override = 1.0;
     if (err)
         *err = 0;

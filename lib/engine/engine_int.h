@@ -139,6 +139,7 @@ typedef struct {
 /* ---- time scaling of the play-out (engine_scale.c, timescale.h, TIMESCALE.md) ---- */
 typedef struct {
     ts_state_t ts;     /* rate ds/dt and its derivative */
+    double stop_dv;    /* this tick: the rate it may stop from within the limits (A T) */
     int on;            /* off the unit grid: the output's track time is s */
     double s;          /* on: track time of the output, relative to origin_t */
     double s_off;      /* unit grid: track time = tick_time(n) + s_off */

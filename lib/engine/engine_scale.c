@@ -269,10 +269,14 @@ void scale_step(engine_t *e, double target, double R, double A, double J)
 {
     int lim = 0;
     double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n), Rc = scale_ceil_room(e, s, A, J);
+    double r0 = e->scale.ts.rate;
     double ds = ts_step(&e->scale.ts, target, fmin(R, Rc), A, J, e->period_s, NULL, &lim);
 
+    /* the rate this tick starts from, if a stop within it keeps to A */
+    e->scale.stop_dv = r0 <= A * e->period_s ? r0 : -1.0;
     /* held back by the speed cap ahead, not by the curve running short */
     scaled_advance(e, s + ds, target, lim && !(Rc < R));
+    e->scale.stop_dv = -1.0;
 }
 
 /* Move the scaled output to track time s1 (relative to origin_t), through
@@ -300,9 +304,12 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
             return;
         }
         if (!h || h->traj != e->out.traj) {
-            /* cannot happen while scale_remaining() is right: see unit_step */
+            /* cannot happen while scale_remaining() is right: see unit_step.
+             * Landing on the end from a rate a tick at A brings to 0 (a creep
+             * up to the end of the solved curve at 10 Hz: 7.8 mm/s) is a stop
+             * within the limits, not a hard one */
             s1 = e->out.cur_t1;
-            if (e->scale.ts.rate > 0)
+            if (e->scale.ts.rate > 0 && !(e->scale.stop_dv >= 0))
                 e->st.hard_stops++;
             e->scale.ts.rate = e->scale.ts.acc = 0.0;
             break;

@@ -456,6 +456,37 @@ class TestNoHardStops(unittest.TestCase):
                     self.assertIn("summary: hard_stops 0\n", err)
                     self.assertNotIn("hard stop", err)
 
+    def test_stop_track_low_rates(self):
+        """Given the stop track (10 Hz fixes, 1 m/s along x for 10 s, standing 10 s,
+        on again) replayed at 10, 20 and 50 Hz: the output waits for the verdict
+        on the repeats short of the stop and creeps up to the end of its solved
+        curve; that creep ends at rest with no tick changing the velocity by more
+        than scale_accel_m_s2 (5) x T, and no hard stop is counted (it was, at
+        7.8 mm/s, 8.6 mm/s and 0.7 mm/s)."""
+        import numpy as np
+        with tempfile.TemporaryDirectory() as tmp:
+            track = os.path.join(tmp, "stop.csv")
+            with open(track, "w") as f:
+                f.write("t,x,y,z\n")
+                for i in range(301):
+                    t = i / 10
+                    x = t if i <= 100 else 10.0 if i <= 200 else t - 10.0
+                    f.write("%.1f,%.3f,0,0\n" % (t, x))
+            for rate in (10, 20, 50):
+                with self.subTest(rate=rate):
+                    out = os.path.join(tmp, "out.csv")
+                    rc, _, err = bounded_run([TRAJREPLAY, "-q", "--summary", "--rate", str(rate),
+                                              "-o", out, track])
+                    self.assertEqual(rc, 0, err[-500:])
+                    self.assertIn("summary: hard_stops 0\n", err)
+                    d = np.genfromtxt(out, delimiter=",", names=True, dtype=None, encoding=None)
+                    # the creep lies between t_s = 5 and 9 s, where the curve itself runs at
+                    # 1 m/s: every change of velocity there is the time scaling's
+                    v = d["vx_m_s"][(d["t_s"] > 5.0) & (d["t_s"] < 9.0)]
+                    self.assertGreater(len(v), 4 * rate)
+                    self.assertLessEqual(np.max(np.abs(np.diff(v))), 5.0 / rate * (1 + 1e-9))
+                    self.assertGreaterEqual(np.min(d["vx_m_s"]), 0.0)
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)
