@@ -141,9 +141,11 @@ SOVERSION := 0
 $(BUILD)/libtrajd.so: $(PIC_OBJ) Makefile
 	$(CC) -shared -Wl,-soname,libtrajd.so.$(SOVERSION) -o $@ $(filter %.o,$^) -lm
 
-# For the Python oracle tests only (never installed): libtrajd and the ctypes
-# shims of tests/helpers/ctypes_shims.c (the engine with flat arguments).
-$(BUILD)/libtrajd_test.so: $(PIC_OBJ) $(BUILD)/pic/tests/helpers/ctypes_shims.o Makefile
+# For the Python oracle tests only (never installed): libtrajd, the ctypes
+# shims of tests/helpers/ctypes_shims.c (the engine with flat arguments) and
+# the global solves of tests/helpers/global_curve.c.
+$(BUILD)/libtrajd_test.so: $(PIC_OBJ) $(BUILD)/pic/tests/helpers/ctypes_shims.o \
+		$(BUILD)/pic/tests/helpers/global_curve.o Makefile
 	$(CC) -shared -o $@ $(filter %.o,$^) -lm
 
 $(BUILD)/trajd.pc: Makefile daemon/core/version.h
@@ -184,7 +186,8 @@ $(REPLAY_BINS): $(BUILD)/tests/test_%: $(BUILD)/tests/fuzz/%.o $(BUILD)/tests/fu
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_DAEMON)
 
-$(BENCHES): $(BUILD)/tests/%: $(BUILD)/tests/bench/%.o $(BUILD)/libtrajdaemon.a $(BUILD)/libtrajd.a
+$(BENCHES): $(BUILD)/tests/%: $(BUILD)/tests/bench/%.o $(BUILD)/libtrajdtest.a $(BUILD)/libtrajdaemon.a \
+		$(BUILD)/libtrajd.a
 	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) $(LDFLAGS) -o $@ $^ $(LDLIBS_TEST)
 
@@ -244,8 +247,10 @@ run: deps-run
 # The plain pass and the sanitizer pass both run, whatever the first gives; the
 # last line adds them up (tests/run.sh appends each pass's counts to COUNTS).
 CHECK_COUNTS = $(abspath $(BUILD))/check-counts
+# the builds of `make check` use every CPU, whatever -j the caller gave
+NPROC := $(shell nproc 2>/dev/null || echo 1)
 check: deps
-	@$(MAKE) --no-print-directory check-build
+	@$(MAKE) --no-print-directory -j$(NPROC) check-build
 	@$(MAKE) --no-print-directory format-check
 	@rm -f $(CHECK_COUNTS); \
 	BUILD=$(abspath $(BUILD)) PYTHON=$(PYTHON) COUNTS=$(CHECK_COUNTS) sh tests/run.sh; \
@@ -267,7 +272,7 @@ test: all
 # The C unit tests again under AddressSanitizer + UndefinedBehaviorSanitizer.
 SAN := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 test-asan:
-	@$(MAKE) --no-print-directory BUILD=$(BUILD)/asan CFLAGS="-O1 -g $(SAN)" \
+	@$(MAKE) --no-print-directory -j$(NPROC) BUILD=$(BUILD)/asan CFLAGS="-O1 -g $(SAN)" \
 		LDFLAGS="$(SAN)" $(TEST_BINS:$(BUILD)/%=$(BUILD)/asan/%) $(BINS:$(BUILD)/%=$(BUILD)/asan/%) \
 		$(REPLAY_BINS:$(BUILD)/%=$(BUILD)/asan/%)
 	@BUILD=$(abspath $(BUILD)/asan) ONLY=c COUNTS=$(COUNTS) sh tests/run.sh
@@ -420,7 +425,7 @@ install: $(BINS) $(MANS) $(BUILD)/libtrajd.a $(BUILD)/libtrajd.so $(BUILD)/trajd
 	$(INSTALLED_TRACK) config/demo.conf > $(DESTDIR)$(DOCDIR)/examples/demo.conf
 	chmod 644 $(DESTDIR)$(DOCDIR)/examples/trajd.conf $(DESTDIR)$(DOCDIR)/examples/demo.conf
 	install -m 644 README.md config/PROTOCOL.md lib/engine/CLOCK.md lib/engine/TIMESCALE.md $(DESTDIR)$(DOCDIR)/
-	install -m 644 daemon/README.md $(DESTDIR)$(DOCDIR)/REFERENCE.md
+	install -m 644 daemon/REFERENCE.md $(DESTDIR)$(DOCDIR)/REFERENCE.md
 	install -m 644 tests/data/n2k_furuno_figure8_src52.csv tests/data/ATTRIBUTION.md \
 		$(DESTDIR)$(PREFIX)/share/trajd/tracks/
 	test -e $(DESTDIR)$(SYSCONFDIR)/trajd/trajd.conf || { \

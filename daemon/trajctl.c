@@ -352,9 +352,10 @@ static void print_head(const char *l)
                                                                                     : "",
            jstr(l, "config", cfgp, sizeof cfgp));
     printf("ticks %lld, missed %lld, overruns %lld, late p99 %lld us (max %lld), lines lost %lld, "
-           "%lld clients, watch setpoints lost %lld\n",
+           "%lld clients, watch setpoints lost %lld, log lines dropped %lld\n",
            jint(l, "ticks"), jint(l, "missed_ticks"), jint(l, "overruns"), jint(l, "late_p99_us"),
-           jint(l, "late_max_us"), jint(l, "out_lost"), jint(l, "clients"), jint(l, "watch_lost"));
+           jint(l, "late_max_us"), jint(l, "out_lost"), jint(l, "clients"), jint(l, "watch_lost"),
+           jint(l, "log_dropped"));
     printf("%-12s %4s %-9s %10s %9s %8s %8s %8s %8s %4s %4s %7s %5s %5s %5s  %s\n", "OBJECT", "ID",
            "STATE", "T_S", "SPEED", "AGE", "DELAY", "LAG", "AHEAD", "OVR%", "BUF", "ACCEPT", "REJ",
            "UNDR", "LOST", "HEALTH");

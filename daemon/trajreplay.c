@@ -841,10 +841,15 @@ static int run_svg(run_t *run)
         svg_plot_waypoint(run->plot, run->trk.wp[i].pos_m[0], run->trk.wp[i].pos_m[1],
                           i < run->r.next && run->results[i] >= 0);
     char title[512];
-    snprintf(title, sizeof title, "%s: %zu waypoints, %s %s, F=%u O=%u, %g Hz", o->input,
-             run->trk.n, engine_setting_enum_name(engine_setting_find("method"), o->cfg.method),
-             engine_setting_enum_name(engine_setting_find("param"), o->cfg.param), o->cfg.fragment,
-             o->cfg.overlap, o->rate_hz);
+    engine_config_t rc = o->cfg; /* fragment and overlap as resolved from auto */
+    if (engine_config_resolve(&o->cfg, &rc) < 0)
+        rc = o->cfg;
+    snprintf(title, sizeof title,
+             "%s: %zu waypoints, %s %s, F=%u O=%u, %g Hz; setpoints drawn: 1 in %zu (%zu)",
+             o->input, run->trk.n,
+             engine_setting_enum_name(engine_setting_find("method"), o->cfg.method),
+             engine_setting_enum_name(engine_setting_find("param"), o->cfg.param), rc.fragment,
+             rc.overlap, o->rate_hz, svg_plot_stride(run->plot), svg_plot_kept(run->plot));
     FILE *f = fopen(o->svg, "w");
     if (!f) {
         fprintf(stderr, "trajreplay: %s: %s\n", o->svg, strerror(errno));
@@ -914,7 +919,7 @@ int main(int argc, char **argv)
         status = EXIT_STRICT;
     }
     uint64_t hard = run.st.hard_stops, numeric = run.st.rejected_by[ENGINE_ENUMERIC];
-    if (hard) /* the time scaling brakes in time (engine.c remaining()): loud should it not */
+    if (hard) /* the time scaling brakes in time (engine_scale.c scale_remaining()): loud should it not */
         fprintf(stderr,
                 "trajreplay: %s: warning: %" PRIu64 " hard stop%s (velocity to 0 in one tick: "
                 "the solved curve ended under a moving output)\n",

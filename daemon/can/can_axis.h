@@ -45,7 +45,7 @@ typedef struct {
 /* The target for this cycle: 1 with *out, 0 = send no RPDO. */
 int can_axis_target(can_axis_t *x, const can_axis_in_t *in, int32_t *out);
 
-/* The engine was re-anchored at can_axis_anchor (obj_set_position): its
+/* The engine was re-anchored at can_axis_anchor (obj_drive_event, LC_EV_DRIVE_ENABLED): its
  * targets pass from the next cycle (after the first target = 0x6064, if
  * that is still to be sent). */
 void can_axis_anchored(can_axis_t *x);

@@ -37,7 +37,7 @@ typedef struct {
     /* Every axis is in Operation Enabled but not every one takes the engine's
      * targets yet: the engine must stand at anchor_m (the drives' 0x6064 for a
      * drive just enabled, else the target it holds), at rest, before they do
-     * (the feedback hook gives it: obj_set_position). */
+     * (the feedback hook gives it: obj_drive_event). */
     int need_anchor;
     double anchor_m[CANPROTO_CIA402_AXES];
 } can_port_drive_t;

@@ -280,7 +280,7 @@ static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, 
     if (cmd == CANPROTO_CMD_CLEAR)
         can_drive_clear_asked(&o->drv); /* a held drive: fault reset, enabled again */
     if (o->hooks.command && (err = o->hooks.command(o->ctx, cmd, arg)) < 0) {
-        refuse_command(o, cmd, id, err); /* e.g. an override while held (obj_set_override) */
+        refuse_command(o, cmd, id, err); /* e.g. an override while held (obj_command) */
         return;
     }
     if (cmd == CANPROTO_CMD_CLEAR) {

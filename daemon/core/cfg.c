@@ -37,9 +37,7 @@ typedef struct {
 
 typedef struct {
     cfg_t *c;
-    const char *text; /* in-memory source (cfg_load_string) */
-    size_t pos;
-    FILE *fp;     /* file source (cfg_load) */
+    FILE *fp;     /* the source (cfg_load_stream) */
     int line;     /* lines read so far */
     int indented; /* the line just read starts with blanks (inih: a continuation) */
     /* current section */
@@ -185,29 +183,17 @@ static char *reader(char *str, int num, void *stream)
         return NULL; /* stop at the first error */
     size_t n = 0;
     int nul = 0;
-    if (p->fp) {
-        /* byte by byte (not fgets): a NUL byte must not hide the rest of its line */
-        int ch;
-        while (n + 1 < (size_t)num && (ch = getc(p->fp)) != EOF) {
-            nul |= ch == '\0';
-            str[n++] = (char)ch;
-            if (ch == '\n')
-                break;
-        }
-        str[n] = 0;
-        if (n == 0)
-            return NULL;
-    } else {
-        if (!p->text[p->pos])
-            return NULL;
-        while (n + 1 < (size_t)num && p->text[p->pos]) {
-            char ch = p->text[p->pos++];
-            str[n++] = ch;
-            if (ch == '\n')
-                break;
-        }
-        str[n] = 0;
+    /* byte by byte (not fgets): a NUL byte must not hide the rest of its line */
+    int ch;
+    while (n + 1 < (size_t)num && (ch = getc(p->fp)) != EOF) {
+        nul |= ch == '\0';
+        str[n++] = (char)ch;
+        if (ch == '\n')
+            break;
     }
+    str[n] = 0;
+    if (n == 0)
+        return NULL;
     p->line++;
     if (p->line == 1 && (unsigned char)str[0] == 0xEF && (unsigned char)str[1] == 0xBB &&
         (unsigned char)str[2] == 0xBF)
@@ -216,7 +202,7 @@ static char *reader(char *str, int num, void *stream)
         fail(p, CFG_ESYNTAX, p->line, "NUL byte (binary file?)");
         return NULL;
     }
-    int at_eof = p->fp ? feof(p->fp) || (ungetc(getc(p->fp), p->fp) == EOF) : !p->text[p->pos];
+    int at_eof = feof(p->fp) || (ungetc(getc(p->fp), p->fp) == EOF);
     if (n && str[n - 1] != '\n' && !at_eof) {
         fail(p, CFG_ESYNTAX, p->line, "line longer than %d characters", CFG_LINE_MAX - 2);
         return NULL;
@@ -749,16 +735,23 @@ static int parse(parse_t *p, const char *name, const char *dir, cfg_t **out, cha
     return 0;
 }
 
-int cfg_load_string(const char *text, const char *name, const char *dir, cfg_t **out, char *err,
+int cfg_load_stream(FILE *fp, const char *name, const char *dir, cfg_t **out, char *err,
                     size_t errlen)
 {
+    *out = NULL;
     parse_t *p = calloc(1, sizeof *p);
     if (!p) {
         snprintf(err, errlen, "%s: out of memory", name);
         return -CFG_ENOMEM;
     }
-    p->text = text;
+    p->fp = fp;
     int rc = parse(p, name, dir ? dir : ".", out, err, errlen);
+    if (rc == 0 && ferror(fp)) {
+        snprintf(err, errlen, "%s: read error", name);
+        cfg_free(*out);
+        *out = NULL;
+        rc = -CFG_EIO;
+    }
     free(p);
     return rc;
 }
@@ -779,22 +772,8 @@ int cfg_load(const char *path, cfg_t **out, char *err, size_t errlen)
         snprintf(dir, sizeof dir, "/");
     else
         snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
-    parse_t *p = calloc(1, sizeof *p);
-    if (!p) {
-        fclose(fp);
-        snprintf(err, errlen, "%s: out of memory", path);
-        return -CFG_ENOMEM;
-    }
-    p->fp = fp;
-    int rc = parse(p, path, dir, out, err, errlen);
-    if (rc == 0 && ferror(fp)) {
-        snprintf(err, errlen, "%s: read error", path);
-        cfg_free(*out);
-        *out = NULL;
-        rc = -CFG_EIO;
-    }
+    int rc = cfg_load_stream(fp, path, dir, out, err, errlen);
     fclose(fp);
-    free(p);
     return rc;
 }
 

@@ -29,6 +29,7 @@
 #include <sched.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "engine.h"
 #include "geo.h"
@@ -171,8 +172,9 @@ typedef struct cfg {
  */
 int cfg_load(const char *path, cfg_t **out, char *err, size_t errlen);
 
-/* The same from text in memory; name is used in messages, dir for relative paths. */
-int cfg_load_string(const char *text, const char *name, const char *dir, cfg_t **out, char *err,
+/* The same from an open stream (read to its end, not closed); name is used in
+ * messages, dir for relative paths (NULL: "."). */
+int cfg_load_stream(FILE *fp, const char *name, const char *dir, cfg_t **out, char *err,
                     size_t errlen);
 
 /*

@@ -53,7 +53,16 @@ void obj_reset_counters(obj_t *o)
     engine_status(o->engine, &o->status);
 }
 
-double obj_safety_accel(const engine_config_t *e)
+/*
+ * The derived acceleration bound (m/s^2): 2 x max(3 a_w + scale_accel_m_s2,
+ * transfer_accel_m_s2), a_w = max_accel_m_s2 in force (the curve through
+ * waypoints whose implied acceleration is at most a_w stays within 3 a_w, the
+ * time scaling adds at most scale_accel_m_s2: lib/engine/TIMESCALE.md).  0
+ * (not checked) without an acceleration limit (profiles air, machine, none)
+ * and with param = uniform (the paper's parameterisation steps the velocity
+ * at waypoints by design: lib/engine/DESIGN.md).
+ */
+static double obj_safety_accel(const engine_config_t *e)
 {
     double aw = engine_config_max_accel(e);
     if (e->param != ENGINE_PARAM_TIME || !(aw > 0))
@@ -331,6 +340,7 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
         safety_limits_t lim;
         obj_safety_limits(o->cfg, &lim);
         safety_init(&o->safety, &lim);
+        rejlog_init(&o->rejlog); /* a carried object keeps its own (carry_objects) */
         /* An object of the same name that was not carried over (its settings
          * changed) stands where its output stood: the new engine starts there
          * and reaches its first trajectory by a transfer, never a step. */
@@ -478,6 +488,10 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
     c->cfg = cfg;
     c->stats = stats;
     c->period_ns = cfg->daemon.period_ns;
+    if (!prev) { /* the daemon's first core: its drift estimate and play-out clock start here */
+        playout_drift_init(&stats->drift, cfg->daemon.drift_max_ppm);
+        playout_clock_init(&stats->pclock);
+    }
     double max_ppm = stats->drift.max_ppm; /* the running core's, if this one fails */
     stats->drift.max_ppm = cfg->daemon.drift_max_ppm;
     memset(&stats->bus, 0, sizeof stats->bus); /* until this core's transports publish */
@@ -717,6 +731,11 @@ int core_summary(const core_t *c, char *buf, size_t len)
     if (s->out_fault && n < len) {
         m = snprintf(buf + n, len - n, ", OUTPUT FAULT (%llu failed writes, last: %s)",
                      (unsigned long long)s->out_errors, strerror(s->out_errno));
+        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+    }
+    unsigned long long dropped = log_dropped_count(); /* never silent: log.h */
+    if (dropped && n < len) {
+        m = snprintf(buf + n, len - n, ", log lines dropped %llu", dropped);
         n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
     }
     for (unsigned i = 0; i < c->nobj && n < len; i++) {

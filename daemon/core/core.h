@@ -138,7 +138,7 @@ typedef struct obj {
     playout_drift_t *drift;       /* the daemon's drift estimate (stats_t), fed with the
                                      * arrivals of a clocked object's waypoints */
     int held;                     /* feed hold (obj_hold, e.g. a CiA 402 drive's heartbeat
-                                     * lost): an override > 0 is refused until obj_clear
+                                     * lost): an override > 0 is refused until a clear
                                      * (mirrors lc.hold & LC_HOLD_FEED) */
     lifecycle_t lc;               /* the one owner of its motion (lib/engine/lifecycle.h):
                                      * every command and tick goes through it (kept when
@@ -160,11 +160,22 @@ lifecycle_t *obj_lc(obj_t *o);
 #define OBJ_CMD_LOG_PER_S 10
 
 /*
- * A command to o (CAN and Modbus; the daemon's signals use core_stop):
- * LC_EV_STOP, LC_EV_START, LC_EV_CLEAR, LC_EV_END_OF_INPUT, LC_EV_OVERRIDE
- * (arg: percent, 0 .. 200) through the owner's table (lifecycle.h), logged
- * with the object and peer (NULL: unknown).  Returns 0, or -ENGINE_ESTATE
- * (refused in this state: the caller counts it), -ENGINE_ERANGE.
+ * A command to o (CAN, Modbus and the control socket; the daemon's signals
+ * use core_stop): LC_EV_STOP, LC_EV_START, LC_EV_CLEAR, LC_EV_END_OF_INPUT,
+ * LC_EV_OVERRIDE (arg: percent, 0 .. 200) through the owner's table
+ * (lifecycle.h), logged with the object and peer (NULL: unknown).  Returns
+ * 0, or -ENGINE_ESTATE (refused in this state: the caller counts it),
+ * -ENGINE_ERANGE.
+ *
+ * LC_EV_CLEAR: moving, a controlled stop along its path that drops what is
+ * buffered; held (safety monitor, drive), the curve re-anchors at rest where
+ * the output was held (or at the drives' reported position) and the monitor
+ * is rearmed, so motion resumes from there by a transfer.  Releases every
+ * hold and a stop's latch: the only way out of a fault.
+ *
+ * LC_EV_OVERRIDE: the feed in percent (LC_EV_OVERRIDE_ZERO for 0); refused
+ * (-ENGINE_ESTATE) while o is feed-held and percent > 0.  A clear releases
+ * the hold and sets the feed back to 100 %.
  */
 int obj_command(obj_t *o, lc_event_t ev, unsigned arg, const char *peer);
 
@@ -173,59 +184,23 @@ int obj_command(obj_t *o, lc_event_t ev, unsigned arg, const char *peer);
  * key is not given, derived from its engine limits (the ones in force, the
  * profile's included): speed 2 x max_speed_m_s (the engine's transfer peaks
  * at 1.5 x; no speed limit leaves it unchecked), no absolute step bound,
- * acceleration obj_safety_accel().
+ * acceleration derived as core.c's obj_safety_accel says.
  */
 void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim);
 
 /*
- * The derived acceleration bound (m/s^2): 2 x max(3 a_w + scale_accel_m_s2,
- * transfer_accel_m_s2), a_w = max_accel_m_s2 in force (the curve through
- * waypoints whose implied acceleration is at most a_w stays within 3 a_w, the
- * time scaling adds at most scale_accel_m_s2: lib/engine/TIMESCALE.md).  0
- * (not checked) without an acceleration limit (profiles air, machine, none)
- * and with param = uniform (the paper's parameterisation steps the velocity
- * at waypoints by design: lib/engine/README.md).
- */
-double obj_safety_accel(const engine_config_t *e);
-
-/*
- * Clear o (CAN and Modbus command "clear"): LC_EV_CLEAR.  Moving, a
- * controlled stop along its path that drops what is buffered; held (safety
- * monitor, drive), the curve re-anchors at rest where the output was held
- * (or at the drives' reported position) and the monitor is rearmed, so
- * motion resumes from there by a transfer.  Releases every hold and a stop's
- * latch: the only way out of a fault.
- */
-void obj_clear(obj_t *o);
-
-/*
  * Hold o (a CiA 402 drive's heartbeat lost): LC_EV_HEARTBEAT_LOST, feed
  * override 0, a controlled stop along its path by the time scaling; until
- * obj_clear, every source's override above 0 is refused (obj_set_override).
+ * a clear (obj_command), every source's override above 0 is refused.
  */
 void obj_hold(obj_t *o);
 
 /*
- * Feed override in percent (CAN and Modbus): LC_EV_OVERRIDE(_ZERO), or
- * -ENGINE_ESTATE (refused, the caller counts it) while o is feed-held and
- * percent > 0.  obj_clear releases the hold and sets the feed back to 100 %.
- */
-int obj_set_override(obj_t *o, unsigned percent);
-
-/*
- * Where o really stands (a drive's position actual value): LC_EV_FIRST_POSITION
- * or LC_EV_DRIVE_ENABLED.  At rest, the curve stands there and the monitor
- * judges from there; held, it is noted as where a clear re-anchors; after a
- * clear of a drive hold, the curve re-anchors there and joins the track by a
- * transfer.  Returns 0, -ENGINE_ESTATE (moving), -ENGINE_ENOTFINITE, -ENGINE_ERANGE.
- */
-int obj_set_position(obj_t *o, const double pos_m[ENGINE_AXES]);
-
-/*
  * An event of o's drives (daemon/can raises them; lib/engine/LIFECYCLE.md):
  *   LC_EV_DRIVE_LOST, LC_EV_DRIVE_BOOTUP: a drive no longer follows; o brakes
- *     to rest along its path within its limits and is held until obj_clear,
- *     after which nothing is sent until the drives give their position;
+ *     to rest along its path within its limits and is held until a clear
+ *     (obj_command), after which nothing is sent until the drives give their
+ *     position;
  *   LC_EV_DRIVE_ENABLED (pos_m: where the drives stand): every drive follows
  *     again; o adopts pos_m if it may (no position, or at rest), notes it
  *     while held by the monitor (where a clear re-anchors; a drive hold's
@@ -291,7 +266,7 @@ typedef struct {
     int exit_code;
 } stats_t;
 
-/* Exit statuses of trajd beyond sysexits.h (daemon/README.md "Output faults are errors"). */
+/* Exit statuses of trajd beyond sysexits.h (daemon/REFERENCE.md "Output faults are errors"). */
 #define CORE_EXIT_OUTPUT_LOST 74 /* EX_IOERR: setpoint lines were lost by an output */
 #define CORE_EXIT_NO_INPUT 65    /* EX_DATAERR: a replayed track or log_in had no usable waypoint */
 /* EX_TEMPFAIL: an object ended held (safety fault, drive fault or lost

@@ -39,7 +39,8 @@ void log_set_mode(log_mode_t mode)
     log_mode = mode;
 }
 
-log_mode_t log_get_mode(void)
+/* The mode the next line would use (LOG_MODE_AUTO resolved). */
+static log_mode_t log_get_mode(void)
 {
     if (log_mode != LOG_MODE_AUTO)
         return log_mode;

@@ -32,8 +32,6 @@ typedef enum { LOG_MODE_AUTO = 0, LOG_MODE_TTY, LOG_MODE_PREFIX, LOG_MODE_SYSLOG
 /* Choose the destination; LOG_MODE_AUTO: decide again from stderr and
  * JOURNAL_STREAM at the next line.  LOG_MODE_SYSLOG opens syslog. */
 void log_set_mode(log_mode_t mode);
-/* The mode the next line would use (LOG_MODE_AUTO resolved). */
-log_mode_t log_get_mode(void);
 
 /*
  * One line (printf format; a trailing '\n' is not needed), with where it was

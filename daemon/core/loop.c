@@ -23,7 +23,6 @@ struct loop {
     int epfd;
     loop_entry_t *e;
     unsigned n, cap; /* slots used (high-water), allocated */
-    unsigned count;  /* registered fds */
     int stop, code;
 };
 
@@ -99,7 +98,6 @@ static int add_entry(loop_t *l, int fd, uint32_t events, loop_fn fn, void *ctx, 
     e->ctx = ctx;
     e->timer_fn = tfn;
     e->timer_ctx = tctx;
-    l->count++;
     return 0;
 }
 
@@ -131,7 +129,6 @@ int loop_del(loop_t *l, int fd)
         rc = 0;
     l->e[i].fd = -1;
     l->e[i].gen++;
-    l->count--;
     return rc;
 }
 
@@ -202,9 +199,4 @@ void loop_stop(loop_t *l, int code)
 {
     l->stop = 1;
     l->code = code;
-}
-
-unsigned loop_count(const loop_t *l)
-{
-    return l->count;
 }

@@ -67,7 +67,4 @@ int loop_run(loop_t *l);
 /* Make loop_run return code after the current batch of callbacks. */
 void loop_stop(loop_t *l, int code);
 
-/* Registered fds (for tests and leak checks). */
-unsigned loop_count(const loop_t *l);
-
 #endif

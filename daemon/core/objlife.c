@@ -49,29 +49,19 @@ static void sync_held(obj_t *o)
     o->held = (o->lc.hold & LC_HOLD_FEED) != 0;
 }
 
-void obj_clear(obj_t *o)
-{
-    (void)lc_event(obj_lc(o), LC_EV_CLEAR, NULL);
-    sync_held(o);
-}
-
 void obj_hold(obj_t *o)
 {
     (void)lc_event(obj_lc(o), LC_EV_HEARTBEAT_LOST, NULL);
     sync_held(o);
 }
 
-int obj_set_override(obj_t *o, unsigned percent)
+/* The feed override in percent (core.h obj_command, LC_EV_OVERRIDE). */
+static int obj_set_override(obj_t *o, unsigned percent)
 {
     lc_arg_t a = {percent / 100.0, NULL, NULL};
     if (percent > 200)
         return -ENGINE_ERANGE;
     return lc_event(obj_lc(o), percent ? LC_EV_OVERRIDE : LC_EV_OVERRIDE_ZERO, &a);
-}
-
-int obj_set_position(obj_t *o, const double pos_m[ENGINE_AXES])
-{
-    return lc_set_position(obj_lc(o), pos_m);
 }
 
 int obj_drive_event(obj_t *o, lc_event_t ev, const double *pos_m)

@@ -1,5 +1,5 @@
 /*
- * reload.h - what a reload does to each object (SIGHUP, daemon/README.md
+ * reload.h - what a reload does to each object (SIGHUP, daemon/REFERENCE.md
  * "Reload"), beside core_open (core.h), which builds the new core:
  *
  *   unchanged object  carried over: the new core takes its engine, motion

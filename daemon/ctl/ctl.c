@@ -225,6 +225,8 @@ static void tap(void *ctx, const core_t *c)
 
 /* ---- clients ---- */
 
+static void ctl_sub_end(ctl_t *t, ctl_client_t *cl);
+
 static void client_close(ctl_t *t, ctl_client_t *cl, const char *why)
 {
     if (cl->fd < 0)
@@ -423,7 +425,8 @@ int ctl_sub_start(ctl_t *t, ctl_client_t *cl, int obj_index, const char *name)
     return 0;
 }
 
-void ctl_sub_end(ctl_t *t, ctl_client_t *cl)
+/* End a subscription (logged with its counts): its ring freed, the flush timer gone with the last. */
+static void ctl_sub_end(ctl_t *t, ctl_client_t *cl)
 {
     if (cl->sub_obj >= 0) {
         log_peer(cl->lost ? LOG_WARNING : LOG_INFO, cl->peer,

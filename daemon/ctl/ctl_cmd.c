@@ -31,7 +31,8 @@ void ctl_sb_printf(ctl_sb_t *s, const char *fmt, ...)
         s->len += (size_t)n;
 }
 
-void ctl_sb_num(ctl_sb_t *s, double x)
+/* A double in the shortest round-trip form (csv_shortest.h), null when not finite. */
+static void ctl_sb_num(ctl_sb_t *s, double x)
 {
     if (s->over)
         return;
@@ -264,12 +265,13 @@ static void status_head(const ctl_t *t, ctl_client_t *cl)
                   ",\"speed\":%g,\"objects\":%u,\"stopping\":%s,\"ticks\":%llu,"
                   "\"missed_ticks\":%llu,\"overruns\":%llu,\"late_p99_us\":%u,\"late_max_us\":%u,"
                   "\"out_lost\":%llu,\"clients\":%u,\"watchers\":%u,\"watch_lost\":%llu,"
-                  "\"busy_refused\":%llu,\"config\":",
+                  "\"busy_refused\":%llu,\"log_dropped\":%llu,\"config\":",
                   c->cfg->daemon.speed, c->nobj, c->stopping ? "true" : "false",
                   (unsigned long long)s->ticks, (unsigned long long)s->missed_ticks,
                   (unsigned long long)s->overruns, s->late.p99_us, s->late.max_us,
                   (unsigned long long)s->out_lost, clients, t->watchers,
-                  (unsigned long long)t->watch_lost, (unsigned long long)t->busy_refused);
+                  (unsigned long long)t->watch_lost, (unsigned long long)t->busy_refused,
+                  log_dropped_count());
     ctl_sb_str(&sb, c->cfg->path);
     ctl_sb_printf(&sb, "}\n");
     ctl_out_commit(cl, &sb);

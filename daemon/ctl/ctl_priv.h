@@ -24,8 +24,6 @@ typedef struct {
 } ctl_sb_t;
 
 void ctl_sb_printf(ctl_sb_t *s, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-/* A double in the shortest round-trip form (csv_shortest.h), null when not finite. */
-void ctl_sb_num(ctl_sb_t *s, double x);
 /* A JSON string, quoted and escaped. */
 void ctl_sb_str(ctl_sb_t *s, const char *str);
 
@@ -93,8 +91,7 @@ ctl_sb_t ctl_out_sb(ctl_client_t *cl);
 /* Keep what was appended through sb (unless it overflowed: then nothing). */
 int ctl_out_commit(ctl_client_t *cl, const ctl_sb_t *sb);
 
-/* Start / end a subscription (allocation and the flush timer). */
+/* Start a subscription (allocation and the flush timer; ctl.c ends it). */
 int ctl_sub_start(ctl_t *t, ctl_client_t *cl, int obj_index, const char *name);
-void ctl_sub_end(ctl_t *t, ctl_client_t *cl);
 
 #endif

@@ -298,11 +298,6 @@ int track_load_opts(const char *path, track_format_t fmt, unsigned flags, track_
     return rc;
 }
 
-int track_load(const char *path, track_format_t fmt, track_t *trk, char *err, size_t errlen)
-{
-    return track_load_opts(path, fmt, 0, trk, err, errlen);
-}
-
 int track_format_parse(const char *s, track_format_t *fmt)
 {
     if (!s)

@@ -139,13 +139,9 @@ typedef struct {
  * (err may be NULL; errlen 0 is fine).  On success trk owns memory to
  * release with track_free; on failure trk is zeroed.
  * A track with no waypoint is an error ("no waypoints").
- */
-int track_load(const char *path, track_format_t fmt, track_t *trk, char *err, size_t errlen);
-
-/*
- * As track_load, with flags (TRACK_SKIP_BAD).  When lines were skipped,
- * trk->skipped counts them and err holds the message of the first one
- * even though the call succeeded.
+ * flags: 0 or TRACK_SKIP_BAD.  When lines were skipped, trk->skipped counts
+ * them and err holds the message of the first one even though the call
+ * succeeded.
  */
 int track_load_opts(const char *path, track_format_t fmt, unsigned flags, track_t *trk, char *err,
                     size_t errlen);

@@ -84,9 +84,6 @@ typedef struct {
 void track_lines_init(track_lines_t *it, const char *buf, size_t len);
 int track_lines_next(track_loader_t *L, track_lines_t *it);
 
-/* Days from 1970-01-01 to y-m-d in the proleptic Gregorian calendar. */
-int64_t track_days_from_civil(int64_t y, int m, int d);
-
 /* The parsers, one file each (track_<format>.c). */
 int track_csv_parse(track_loader_t *L, const char *buf, size_t len, track_format_t fmt,
                     track_format_t *got);

@@ -7,7 +7,8 @@
 
 /* Days from 1970-01-01 to y-m-d in the proleptic Gregorian calendar
  * (H. Hinnant's days_from_civil; exact for every year in int range). */
-int64_t track_days_from_civil(int64_t y, int m, int d)
+/* Days from 1970-01-01 to y-m-d in the proleptic Gregorian calendar. */
+static int64_t track_days_from_civil(int64_t y, int m, int d)
 {
     y -= m <= 2;
     int64_t era = (y >= 0 ? y : y - 399) / 400;

@@ -55,7 +55,8 @@ int svg_plot_setpoint(svg_plot_t *p, const engine_setpoint_t *sp);
  */
 int svg_plot_write(const svg_plot_t *p, FILE *f, const char *title);
 
-/* Setpoints currently kept, and the decimation stride (for tests). */
+/* Setpoints currently kept, and the decimation stride (trajreplay's title
+ * says them: the drawing is not the CSV). */
 size_t svg_plot_kept(const svg_plot_t *p);
 size_t svg_plot_stride(const svg_plot_t *p);
 

@@ -330,9 +330,8 @@ double accept_speed_limit(accept_t *a);
  * is no run (accept_decide goes on with the window). */
 int accept_run_offer(accept_t *a, const engine_waypoint_t *wp);
 int accept_run_decide(accept_t *a, int closing, accept_verdict_t *v);
-/* Count a verdict's share of engine_status (stops, stop_fixes, retimed). */
-void accept_count(engine_status_t *st, const accept_verdict_t *v);
-/* accept_decide for the engine: the verdict counted into st (accept_count),
+/* accept_decide for the engine: the verdict counted into st (its share of
+ * engine_status: stops, stop_fixes, retimed),
  * DWELL verdicts taken here (counted, nothing else to do), HALT given as
  * ACCEPT_START with stop = ACCEPT_STOP_HALT; so the engine sees TAKE, START
  * and DROP only. */

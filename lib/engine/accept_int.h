@@ -10,7 +10,7 @@
 
 #include "accept.h"
 
-/* Timestamps closer than this are "the same time" (seconds), as in engine.c. */
+/* Timestamps closer than this are "the same time" (seconds), as in engine_input.c. */
 #define ACCEPT_SAME_TIME_S 1e-9
 /* Positions closer than this at the same time are a duplicate (metres). */
 #define ACCEPT_SAME_POS_M 1e-9

@@ -1,10 +1,6 @@
 /* cubic.c - C2 cubic spline in second-derivative form; see cubic.h. */
 #include "cubic.h"
 
-#include <stdlib.h>
-
-#include "tridiag.h"
-
 #define AX FRAG_AXES
 
 static double vel_s(engine_ends_t ends, const double *v, int k)
@@ -70,57 +66,4 @@ void cubic_segment(const double *r0, const double *r1, const double *m0, const d
         seg->c[k][2] = 3.0 * q * m0[k];
         seg->c[k][3] = q * (m1[k] - m0[k]);
     }
-}
-
-int cubic_curve(size_t n, const double *t_s, const double *r, engine_param_t param,
-                engine_ends_t ends, const double *v0, const double *v1, fdiff_seg_t *segs,
-                size_t max_seg, size_t *nseg)
-{
-    double *mem, *a, *b, *c, *m, *scr, v0s[AX], v1s[AX];
-    frag_row_t row;
-    size_t i;
-    int rc = 0;
-
-    *nseg = 0;
-    if (n < 2 || max_seg + 1 < n || ends == ENGINE_ENDS_HELD || ends == ENGINE_ENDS_MULTIPLE)
-        return -ENGINE_ECONFIG;
-    mem = malloc(sizeof(double) * n * (4 + AX));
-    if (!mem)
-        return -ENGINE_ENOMEM;
-    a = mem;
-    b = a + n;
-    c = b + n;
-    scr = c + n;
-    m = scr + n;
-#define H(j) (param == ENGINE_PARAM_TIME ? t_s[(j) + 1] - t_s[(j)] : 1.0)
-    for (int k = 0; k < AX; k++) {
-        v0s[k] = (v0 ? v0[k] : 0.0) * (t_s[1] - t_s[0]) / H(0);
-        v1s[k] = (v1 ? v1[k] : 0.0) * (t_s[n - 1] - t_s[n - 2]) / H(n - 2);
-    }
-    for (i = 0; i < n; i++) {
-        if (i == 0)
-            cubic_row_start(ends, H(0), r, r + AX, v0s, &row);
-        else if (i == n - 1)
-            cubic_row_end(ends, H(n - 2), r + (n - 2) * AX, r + (n - 1) * AX, v1s, &row);
-        else
-            cubic_row_interior(H(i - 1), H(i), r + (i - 1) * AX, r + i * AX, r + (i + 1) * AX,
-                               &row);
-        a[i] = row.a;
-        b[i] = row.b;
-        c[i] = row.c;
-        for (int k = 0; k < AX; k++)
-            m[i * AX + k] = row.d[k];
-    }
-    if (tridiag_solve(n, AX, a, b, c, m, m, scr) < 0) {
-        rc = -ENGINE_ENUMERIC;
-        goto out;
-    }
-    for (i = 0; i + 1 < n; i++)
-        cubic_segment(r + i * AX, r + (i + 1) * AX, m + i * AX, m + (i + 1) * AX, H(i), t_s[i],
-                      t_s[i + 1] - t_s[i], &segs[i]);
-#undef H
-    *nseg = n - 1;
-out:
-    free(mem);
-    return rc;
 }

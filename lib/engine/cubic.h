@@ -52,15 +52,4 @@ void cubic_row_end(engine_ends_t ends, double h, const double *rm, const double 
 void cubic_segment(const double *r0, const double *r1, const double *m0, const double *m1, double h,
                    double t0_s, double dur_s, fdiff_seg_t *seg);
 
-/*
- * The whole curve through N timed waypoints (t strictly increasing) by one
- * global solve.  v0, v1: end velocities in m/s (CLAMPED; may be NULL).
- * segs: room for N-1.  Allocates its work memory.
- * Returns 0, -ENGINE_ECONFIG (n < 2, max_seg too small, HELD or MULTIPLE),
- * -ENGINE_ENOMEM, -ENGINE_ENUMERIC.
- */
-int cubic_curve(size_t n, const double *t_s, const double *r, engine_param_t param,
-                engine_ends_t ends, const double *v0, const double *v1, fdiff_seg_t *segs,
-                size_t max_seg, size_t *nseg);
-
 #endif

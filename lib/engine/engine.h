@@ -54,7 +54,7 @@
  * point, except for HELD ends and SMOOTH).
  * Waypoint times may restart (e.g. from 0) with each new trajectory.
  *
- * Method and parameterisation (see hoang.h, cubic.h, lib/engine/README.md):
+ * Method and parameterisation (see hoang.h, cubic.h, lib/engine/DESIGN.md):
  *   (a) ENGINE_PARAM_UNIFORM  the paper: uniform B-spline, each segment
  *       mapped linearly onto its own time interval.  Physical velocity jumps
  *       at every waypoint whose neighbouring intervals differ (measured on
@@ -196,13 +196,13 @@ typedef struct {
                                error against one global solve is at most
                                2 rho^(O/2) of the curvature scale max|k''|/6
                                (rho = 2 - sqrt(3)); F - O sets the lookahead
-                               and the work: see lib/engine/README.md */
+                               and the work: see lib/engine/DESIGN.md */
     double accuracy;        /* overlap auto: the smallest even O with
                                2 rho^(O/2) <= accuracy, the error bound
                                against one global solve relative to the
                                curvature scale.  Default 3e-7: O = 24,
                                measured 2e-9 .. 3e-9 of a random walk's
-                               extent (lib/engine/README.md) */
+                               extent (lib/engine/DESIGN.md) */
     unsigned max_lookahead; /* fragment auto: the largest S = F - O (the least
                                work per waypoint) whose lookahead, with one
                                waypoint of slack, is at most this many
@@ -238,7 +238,7 @@ typedef struct {
                                30 m/s^2, with free turns: see accept.h).
                                Default ENGINE_LIMIT_PROFILE.  Measured on the real
                                tracks: legit samples reach 11.4 at 5 Hz, the
-                               figure-8's jittered ones 117 and 44 (lib/engine/README.md
+                               figure-8's jittered ones 117 and 44 (lib/engine/DESIGN.md
                                "Jitter and outliers").  Position noise alone
                                implies ~4 noise / dt^2 */
     unsigned confirm;       /* mutually consistent waypoints needed before a
@@ -258,7 +258,7 @@ typedef struct {
                                before a trajectory's output starts; adds to
                                engine_lookahead.  ENGINE_AUTO (default): from
                                the input's timing, ENGINE_SLACK_AUTO_MIN ..
-                               _MAX (lib/engine/README.md "start_slack
+                               _MAX (lib/engine/DESIGN.md "start_slack
                                auto"); a number fixes it */
     unsigned smooth_window; /* SMOOTH only: waypoints per local least-squares fit,
                                4 .. ENGINE_SMOOTH_WINDOW_MAX.  Default 24 */

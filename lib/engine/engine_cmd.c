@@ -1,8 +1,8 @@
 /*
  * engine_cmd.c - the commands an engine takes between ticks (engine.h):
  * stop, clear, halt, override, clock, position, counters.  The lifecycle
- * owner (lifecycle.h) is the one caller in the daemon; engine.c keeps the
- * input, the queue and the output stepping.
+ * owner (lifecycle.h) is the one caller in the daemon; the stages they act on are in
+ * engine_input.c, engine_solve.c, engine_tick.c, engine_scale.c (engine.c).
  */
 #include <math.h>
 #include <string.h>
@@ -13,13 +13,13 @@
 /* Forget the trajectory being received: the next waypoint opens a new one. */
 static void drop_input(engine_t *e)
 {
-    accept_reset(&e->policy);
-    e->in_open = 0;
-    e->nodes = 0;
-    e->seg_next = 0;
-    frag_reset(e->fw);
+    accept_reset(&e->in.policy);
+    e->in.open = 0;
+    e->solve.nodes = 0;
+    e->solve.seg_next = 0;
+    frag_reset(e->solve.fw);
     if (e->smooth)
-        lsq_smooth_reset(&e->sm);
+        lsq_smooth_reset(&e->solve.sm);
 }
 
 /*
@@ -31,20 +31,20 @@ static void drop_input(engine_t *e)
 static void request_stop(engine_t *e, int kind)
 {
     drop_input(e);
-    e->underrun = 0;
-    if (e->mode == OUT_HOLD) {
-        e->qhead = 0;
-        e->qlen = 0;
-        e->slow_len = 0;
-        e->qends = 0;
-        e->finished = kind == STOP_STOP;
-        e->stop_req = STOP_NONE;
-        e->drop_n = 0;
+    e->out.underrun = 0;
+    if (e->out.mode == OUT_HOLD) {
+        e->queue.head = 0;
+        e->queue.len = 0;
+        e->queue.slow_len = 0;
+        e->queue.ends = 0;
+        e->out.finished = kind == STOP_STOP;
+        e->scale.stop_req = STOP_NONE;
+        e->scale.drop_n = 0;
         return;
     }
-    e->finished = 0;
-    e->stop_req = kind; /* the later command decides the state at rest, as when holding */
-    e->drop_n = e->qlen;
+    e->out.finished = 0;
+    e->scale.stop_req = kind; /* the later command decides the state at rest, as when holding */
+    e->scale.drop_n = e->queue.len;
 }
 
 int engine_stop(engine_t *e)
@@ -65,7 +65,7 @@ int engine_set_override(engine_t *e, double ratio)
     engine_fast_close(e); /* whatever it changes, the next tick looks again */
     if (!(ratio >= 0 && ratio <= TS_RATE_MAX))
         return -ENGINE_ERANGE;
-    e->override = ratio;
+    e->scale.override = ratio;
     return 0;
 }
 
@@ -75,12 +75,12 @@ int engine_set_clock(engine_t *e, const engine_clock_t *clk)
     if (!(clk->delay_ns >= 0) || !(fabs(clk->rate - 1.0) <= ENGINE_CLOCK_RATE_TOL) ||
         !(clk->catchup >= 0 && clk->catchup <= 1))
         return -ENGINE_ERANGE;
-    e->clocked = 1;
-    e->clk_now_ns = clk->now_ns;
-    e->clk_delay_ns = clk->delay_ns;
-    e->clk_rate = clk->rate;
-    e->clk_catchup = clk->catchup;
-    e->play_ns = clk->now_ns - clk->delay_ns;
+    e->clk.on = 1;
+    e->clk.now_ns = clk->now_ns;
+    e->clk.delay_ns = clk->delay_ns;
+    e->clk.rate = clk->rate;
+    e->clk.catchup = clk->catchup;
+    e->clk.play_ns = clk->now_ns - clk->delay_ns;
     return 0;
 }
 
@@ -93,28 +93,28 @@ int engine_set_position(engine_t *e, const double pos_m[ENGINE_AXES])
         if (fabs(pos_m[k]) > e->cfg.max_abs_m)
             return -ENGINE_ERANGE;
     }
-    if (e->mode != OUT_HOLD)
+    if (e->out.mode != OUT_HOLD)
         return -ENGINE_ESTATE;
     for (int k = 0; k < AX; k++) {
-        e->pos[k] = pos_m[k];
-        e->vel[k] = e->acc[k] = 0.0;
+        e->out.pos[k] = pos_m[k];
+        e->out.vel[k] = e->out.acc[k] = 0.0;
     }
-    e->have_pos = 1;
+    e->out.have_pos = 1;
     return 0;
 }
 
 void engine_require_position(engine_t *e, int on)
 {
     engine_fast_close(e); /* whatever it changes, the next tick looks again */
-    e->need_pos = on != 0;
+    e->out.need_pos = on != 0;
     /* holding: the position it had is not trusted any more */
-    if (e->need_pos && e->mode == OUT_HOLD)
-        e->have_pos = 0;
+    if (e->out.need_pos && e->out.mode == OUT_HOLD)
+        e->out.have_pos = 0;
 }
 
 int engine_has_position(const engine_t *e)
 {
-    return e->have_pos;
+    return e->out.have_pos;
 }
 
 void engine_reset_counters(engine_t *e)
@@ -137,23 +137,23 @@ int engine_halt(engine_t *e, const double pos_m[ENGINE_AXES])
             return -ENGINE_ERANGE;
     }
     drop_input(e);
-    e->qhead = e->qlen = e->qends = 0;
-    e->slow_head = e->slow_len = 0;
-    e->stop_req = STOP_NONE;
-    e->drop_n = 0;
-    e->mode = OUT_HOLD;
-    e->finished = 0;
-    e->underrun = 0;
-    e->end_brake = 0;
-    e->scaled = 0;
-    e->s_off = 0.0;
-    e->ts.rate = 1.0;
-    e->ts.acc = 0.0;
-    e->locked = 0;
+    e->queue.head = e->queue.len = e->queue.ends = 0;
+    e->queue.slow_head = e->queue.slow_len = 0;
+    e->scale.stop_req = STOP_NONE;
+    e->scale.drop_n = 0;
+    e->out.mode = OUT_HOLD;
+    e->out.finished = 0;
+    e->out.underrun = 0;
+    e->scale.end_brake = 0;
+    e->scale.on = 0;
+    e->scale.s_off = 0.0;
+    e->scale.ts.rate = 1.0;
+    e->scale.ts.acc = 0.0;
+    e->clk.locked = 0;
     for (int k = 0; k < AX; k++) {
-        e->pos[k] = pos_m[k];
-        e->vel[k] = e->acc[k] = 0.0;
+        e->out.pos[k] = pos_m[k];
+        e->out.vel[k] = e->out.acc[k] = 0.0;
     }
-    e->have_pos = 1;
+    e->out.have_pos = 1;
     return 0;
 }

@@ -1,8 +1,12 @@
 /*
  * engine_int.h - the engine's state, shared by the files that make up the
- * engine (engine.c: input, queue and output; engine_cmd.c: the commands the
- * lifecycle owner gives it, lifecycle.h).  Not part of the client API: only
- * the engine's own files in lib/engine include it.
+ * engine, one per stage (engine.c says which owns what): engine_settings.c
+ * (configuration), engine_input.c (input and acceptance), engine_solve.c
+ * (solver, fragments, the queue), engine_tick.c (play-out), engine_scale.c
+ * (its time scaling), engine_xfer.c (transfers), engine_cmd.c (the commands
+ * the lifecycle owner gives it, lifecycle.h); engine.c creates an engine.
+ * Not part of the client API: only the engine's own files in lib/engine
+ * include it.
  */
 #ifndef TRAJD_ENGINE_INT_H
 #define TRAJD_ENGINE_INT_H
@@ -28,18 +32,25 @@ typedef struct {
     int first;       /* first entry of its trajectory */
     double t1_s;     /* segment end (absolute track time); END: rest time */
     uint64_t node;   /* SEG: index of its first node in the trajectory */
-    uint64_t traj;   /* input trajectory it belongs to (engine.in_traj) */
+    uint64_t traj;   /* input trajectory it belongs to (engine.solve.traj) */
     fdiff_seg_t seg; /* END: c[k][0] is the rest position, t0_s = t1_s */
     double gap_s;    /* first entry: track time since the previous trajectory's
                              end when a gap separates them, else 0 */
     double vmax;     /* SEG: bound on the curve's speed |k'| over it (m/s) */
     double kcum;     /* SEG: braking capacity of its trajectory up to its end,
-                        the sum of dur / max(vmax, floor) (see remaining()) */
+                        the sum of dur / max(vmax, floor) (see scale_remaining()) */
     double ucum;     /* SEG: the rises of 1 / max(vmax, floor) from each segment
                           of its trajectory to the next, summed up to it */
     double ceil;     /* SEG: the highest rate at which it keeps the speed cap
                         (ENGINE_SPEED_CAP; INFINITY if none) */
 } qent_t;
+
+/* Below this speed (m/s) the curve's end counts as at rest. */
+#define ENGINE_REST_SPEED_M_S 1e-6
+/* The time scaling's limits are converted to rate units at the curve's speed,
+ * but never at less than this (m/s): where the curve stands nearly still the
+ * rate may change fast, but not without bound (TIMESCALE.md). */
+#define ENGINE_SCALE_V_FLOOR_M_S 1.0
 
 /* The lowest speed cap rate: below the time scaling's dead band (at most
  * TS_DEAD_BAND_MAX) the output would never leave rest before such a segment. */
@@ -48,7 +59,129 @@ typedef struct {
 enum { OUT_HOLD = 0, OUT_XFER = 1, OUT_STREAM = 2 };
 enum { STOP_NONE = 0, STOP_STOP = 1, STOP_CLEAR = 2 };
 
+/* ---- input and acceptance (engine_input.c): the trajectory being received ---- */
+typedef struct {
+    int open;           /* a trajectory is being received */
+    double first_r[AX]; /* its first waypoint */
+    double last_t;      /* its last accepted waypoint */
+    double last_r[AX];
+    int have_prev; /* prev_t/prev_r hold the waypoint before last (same trajectory) */
+    double prev_t; /* for the acceleration check */
+    double prev_r[AX];
+    double gap_s; /* gap before the trajectory being received (0: none) */
+    accept_t policy;
+    engine_rejection_t rej[ENGINE_REJECTIONS_KEPT];
+    unsigned rej_head, rej_len;
+} engine_input_t;
+
+/* ---- solver (engine_solve.c): nodes, fragments, segments queued ---- */
+typedef struct {
+    uint64_t nodes;    /* nodes of the current trajectory (copies included) */
+    uint64_t seg_next; /* next segment index to build */
+    size_t ring;       /* nodes kept */
+    double *node_t;    /* ring */
+    double *node_r;    /* ring x AX */
+    frag_t *fw;
+    lsq_smooth_t sm; /* SMOOTH: the smoother the waypoints pass first */
+    double *sm_mem;
+    int emitted;       /* a segment of this trajectory was queued */
+    int first_pending; /* the next queued entry is the trajectory's first */
+    double end_r[AX];  /* end of the last queued segment */
+    double end_t;
+    double end_speed; /* speed at the end of the last queued segment */
+    double kcum;      /* capacity queued so far of the trajectory (qent_t kcum) */
+    double inv;       /* 1 / max(vmax, floor) of its last queued segment */
+    double ucum;      /* qent_t ucum so far */
+    uint64_t traj;    /* +1 per trajectory opened */
+    double span_max;  /* start_slack auto: longest time spanned by la_steady + 1
+                         intervals of the input, decaying by 1/256 per node */
+    double vmax_in;   /* start_slack auto: fastest chord speed of the input,
+                         decaying the same way */
+} engine_solve_t;
+
+/* ---- the queue of finished segments: the solver fills it, the play-out
+ * takes from it (engine_solve.c) ---- */
+typedef struct {
+    qent_t *ent;
+    size_t cap, head, len;
+    size_t ends;  /* END entries in the queue */
+    size_t *slow; /* ring (cap): the queue slots, in queue order, of the
+                          segments whose speed cap holds the rate below TS_RATE_MAX */
+    size_t slow_head, slow_len;
+} engine_queue_t;
+
+/* ---- play-out (engine_tick.c): the output ---- */
+typedef struct {
+    int mode;     /* OUT_* */
+    int have_pos; /* the output stands somewhere real: set by engine_set_position,
+                     or the first waypoint adopted as the last resort.  From then on
+                     the output only moves by streaming or by a transfer */
+    int need_pos; /* engine_require_position: no first-waypoint fallback */
+    int finished; /* the last trajectory ran to its end */
+    int underrun;
+    uint64_t traj;         /* trajectory the output streams */
+    qent_t cur;            /* segment (or transfer) being stepped */
+    double cur_t0, cur_t1; /* its start and end relative to origin_t */
+    fdiff_t fd;
+    int64_t n;       /* ticks since origin_t */
+    int64_t seg_n0;  /* tick at which cur was seeded */
+    double origin_t; /* absolute track time of tick 0 of the trajectory */
+    double pos[AX], vel[AX], acc[AX];
+    double t; /* track time of the output */
+    uint32_t track;
+    uint32_t cycle;
+    uint32_t flags_pending;
+    int have_now;
+    int64_t last_now;
+    engine_setpoint_t last_sp;
+} engine_out_t;
+
+/* ---- time scaling of the play-out (engine_scale.c, timescale.h, TIMESCALE.md) ---- */
+typedef struct {
+    ts_state_t ts;     /* rate ds/dt and its derivative */
+    double stop_dv;    /* this tick: the rate it may stop from within the limits (A T) */
+    int on;            /* off the unit grid: the output's track time is s */
+    double s;          /* on: track time of the output, relative to origin_t */
+    double s_off;      /* unit grid: track time = tick_time(n) + s_off */
+    double cspeed;     /* |k'(s)|: the curve's own speed at the output */
+    double override;   /* feed override 0 .. 2 */
+    int stop_req;      /* STOP_*: braking to rest, then drop */
+    size_t drop_n;     /* queue entries to drop once at rest */
+    double avail_t;    /* end of the output trajectory's solved curve (absolute track time) */
+    double avail_kcum; /* braking capacity up to there (qent_t kcum) */
+    double avail_ucum; /* ... and the rises of the limits (qent_t ucum) */
+    int avail_closed;  /* its END is queued */
+    int avail_rest;    /* ... and the curve ends at rest there */
+    int end_brake;     /* braking to rest before an end that is not at rest */
+} engine_scale_t;
+
+/* ---- transfers (engine_xfer.c, transfer.h) ---- */
+typedef struct {
+    transfer_config_t cfg;
+    transfer_motion_t motion; /* the object's recent motion (noted by the input) */
+    double from_t;            /* out.t when the transfer under way began (NAN: none before) */
+} engine_xfer_t;
+
+/* ---- one clock (engine_set_clock, CLOCK.md; engine_scale.c) ---- */
+typedef struct {
+    int on;           /* the output follows the caller's clock */
+    int locked;       /* its track time is exactly the play time */
+    int64_t now_ns;   /* now on the sender's time base (last call) */
+    int64_t delay_ns; /* play-out delay D */
+    double rate;      /* d now / dt */
+    double catchup;   /* most the rate rises above rate */
+    int64_t play_ns;  /* now - D at the step being made */
+} engine_clk_t;
+
+/* ---- fast ticks (engine_tick.c: fast_window, fast_tick) ---- */
+typedef struct {
+    int64_t left; /* ticks ahead that are certainly plain unit-grid steps */
+    int off;      /* engine_set_fast_ticks(e, 0): every tick the full way */
+    int last;     /* the last tick was fast: last_sp and cspeed not yet written */
+} engine_fast_t;
+
 struct engine {
+    /* ---- configuration (engine_settings.c) and what it implies ---- */
     engine_config_t cfg; /* resolved: fragment and overlap never ENGINE_AUTO */
     unsigned lookahead;
     unsigned la_steady;   /* what the solver needs far from the start (steady_lookahead) */
@@ -56,119 +189,142 @@ struct engine {
     unsigned slack_learn; /* start_slack auto: one more per underrun seen */
     unsigned slack_more;  /* start_slack auto: the most it adds to lookahead
                              (ENGINE_SLACK_AUTO_MAX - MIN, less if capacity is short) */
-    double span_max;      /* start_slack auto: longest time spanned by la_steady + 1
-                           intervals of the input, decaying by 1/256 per node */
-    double vmax_in;       /* start_slack auto: fastest chord speed of the input,
-                           decaying the same way */
     int pstar;            /* unknowns are Hoang control points (BSPLINE + UNIFORM) */
     int held;             /* HELD or MULTIPLE: first and last segments not emitted */
     int mult;             /* MULTIPLE: end points entered three times */
     int smooth;           /* SMOOTH: waypoints pass through the lsq smoother first */
-    lsq_smooth_t sm;
-    double *sm_mem;
-    double first_r[AX]; /* first waypoint of the current trajectory */
     double period_s;
 
-    /* ---- input: the trajectory being received ---- */
-    int in_open;
-    uint64_t nodes;    /* nodes of the current trajectory (copies included) */
-    uint64_t seg_next; /* next segment index to build */
-    size_t ring;       /* nodes kept */
-    double *node_t;    /* ring */
-    double *node_r;    /* ring x AX */
-    frag_t *fw;
-    int in_emitted;       /* a segment of this trajectory was queued */
-    int in_first_pending; /* the next queued entry is the trajectory's first */
-    double last_t;        /* last accepted waypoint of the current trajectory */
-    double last_r[AX];
-    int have_prev; /* prev_t/prev_r hold the waypoint before last (same trajectory) */
-    double prev_t; /* for the acceleration check */
-    double prev_r[AX];
-    double end_r[AX]; /* end of the last queued segment */
-    double end_t;
-    double end_speed; /* speed at the end of the last queued segment */
-    double in_kcum;   /* capacity queued so far of the trajectory (qent_t kcum) */
-    double in_inv;    /* 1 / max(vmax, floor) of its last queued segment */
-    double in_ucum;   /* qent_t ucum so far */
-    uint64_t in_traj; /* +1 per trajectory opened */
-    double in_gap_s;  /* gap before the trajectory being received (0: none) */
-
-    /* ---- acceptance (accept.h) and transfers (transfer.h) ---- */
-    accept_t policy;
-    transfer_config_t xcfg;
-    transfer_motion_t motion;
-    engine_rejection_t rej[ENGINE_REJECTIONS_KEPT];
-    unsigned rej_head, rej_len;
-
-    /* ---- the queue ---- */
-    qent_t *q;
-    size_t qcap, qhead, qlen;
-    size_t qends; /* END entries in the queue */
-
-    /* ---- output ---- */
-    int mode;
-    int have_pos; /* the output stands somewhere real: set by engine_set_position,
-                             or the first waypoint adopted as the last resort.  From then on
-                             the output only moves by streaming or by a transfer */
-    int need_pos; /* engine_require_position: no first-waypoint fallback */
-    int finished; /* the last trajectory ran to its end */
-    int underrun;
-    qent_t cur;            /* segment (or transfer) being stepped */
-    double cur_t0, cur_t1; /* its start and end relative to base */
-    fdiff_t fd;
-    int64_t n;       /* ticks since base */
-    int64_t seg_n0;  /* tick at which cur was seeded */
-    double origin_t; /* absolute track time of tick 0 of the trajectory */
-    double pos[AX], vel[AX], acc[AX];
-    double out_t;       /* track time of the output */
-    double xfer_from_t; /* out_t when the transfer under way began (NAN: none before) */
-    uint32_t out_track;
-    uint32_t cycle;
-    uint32_t flags_pending;
-    int have_now;
-    int64_t last_now;
-    engine_setpoint_t last_sp;
-
-    /* ---- time scaling (timescale.h, TIMESCALE.md) ---- */
-    ts_state_t ts;     /* rate ds/dt and its derivative */
-    int scaled;        /* off the unit grid: the output's track time is s */
-    double s;          /* scaled: track time of the output, relative to origin_t */
-    double s_off;      /* unit grid: track time = tick_time(n) + s_off */
-    double cspeed;     /* |k'(s)|: the curve's own speed at the output */
-    double override;   /* feed override 0 .. 2 */
-    int stop_req;      /* STOP_*: braking to rest, then drop */
-    size_t drop_n;     /* queue entries to drop once at rest */
-    uint64_t out_traj; /* trajectory the output streams */
-    double avail_t;    /* end of its solved curve (absolute track time) */
-    double avail_kcum; /* braking capacity up to there (qent_t kcum) */
-    double avail_ucum; /* ... and the rises of the limits (qent_t ucum) */
-    int avail_closed;  /* its END is queued */
-    int avail_rest;    /* ... and the curve ends at rest there */
-    int end_brake;     /* braking to rest before an end that is not at rest */
-    size_t *slow;      /* ring (qcap): the queue slots, in queue order, of the
-                     segments whose speed cap holds the rate below TS_RATE_MAX */
-    size_t slow_head, slow_len;
-
-    /* ---- one clock (engine_set_clock, CLOCK.md) ---- */
-    int clocked;          /* the output follows the caller's clock */
-    int locked;           /* its track time is exactly the play time */
-    int64_t clk_now_ns;   /* now on the sender's time base (last call) */
-    int64_t clk_delay_ns; /* play-out delay D */
-    double clk_rate;      /* d now / dt */
-    double clk_catchup;   /* most the rate rises above clk_rate */
-    int64_t play_ns;      /* now - D at the step being made */
-
-    /* ---- fast ticks (fast_window, fast_tick) ---- */
-    int64_t fast_left; /* ticks ahead that are certainly plain unit-grid steps */
-    int fast_off;      /* engine_set_fast_ticks(e, 0): every tick the full way */
-    int fast_last;     /* the last tick was fast: last_sp and cspeed not yet written */
+    engine_input_t in;
+    engine_solve_t solve;
+    engine_xfer_t xfer;
+    engine_clk_t clk;
+    engine_queue_t queue;
+    engine_out_t out;
+    engine_scale_t scale;
+    engine_fast_t fast;
 
     engine_status_t st;
 };
 
-/* The fast-tick window closed and its deferred copies made (engine.c):
+/* ---- configuration (engine_settings.c): what a resolved one implies ---- */
+
+/* engine_lookahead of a resolved configuration */
+unsigned engine_cfg_lookahead(const engine_config_t *cfg);
+/* most waypoints beyond a segment the solver needs, far from the start */
+unsigned engine_cfg_steady_lookahead(const engine_config_t *cfg);
+/* SMOOTH: the waypoints the smoother holds back (0 otherwise) */
+unsigned engine_cfg_smooth_extra(const engine_config_t *cfg);
+/* start offset of the fragment grid (frag.h) */
+unsigned engine_cfg_frag_delta(const engine_config_t *cfg);
+/* 1: the unknowns are Hoang control points (BSPLINE + UNIFORM) */
+int engine_cfg_uses_pstar(const engine_config_t *cfg);
+
+/* ---- input (engine_input.c) ---- */
+
+/* Waypoints held anywhere between engine_push and the queue, and entries
+ * queued: what the capacity counts. */
+size_t input_buffered(const engine_t *e);
+
+/* ---- solver and queue (engine_solve.c) ---- */
+
+/* Upper bound on the speed |k'| over a segment (m/s). */
+double solve_seg_speed_max(const fdiff_seg_t *seg);
+/* A new trajectory; a node appended (0 or -ENGINE_ENUMERIC); SMOOTH's ready
+ * waypoints turned into nodes; the trajectory closed (end row, last
+ * segments, END entry); or ended on a failure with what is queued. */
+void solve_open(engine_t *e);
+int solve_add_node(engine_t *e, double t, const double *r);
+int solve_drain(engine_t *e);
+int solve_close(engine_t *e);
+void solve_abort(engine_t *e);
+/* The queue head taken off. */
+void queue_pop(engine_t *e);
+
+/* ---- play-out (engine_tick.c) ---- */
+
+engine_state_t play_state(const engine_t *e);
+/* 1 if further steps cannot change anything until new input arrives. */
+int play_stalled(const engine_t *e);
+void play_count_underrun(engine_t *e);
+void play_seed_cur(engine_t *e, int64_t n);
+void play_take_segment(engine_t *e);
+void play_start(engine_t *e, int new_flag);
+void play_stop_at_rest(engine_t *e);
+void play_rest_at_end(engine_t *e, const qent_t *h);
+void play_finish_here(engine_t *e);
+/* The fast-tick window closed and its deferred copies made (engine_tick.c):
  * every call that changes the engine makes it first. */
 void engine_fast_close(engine_t *e);
+
+/* ---- time scaling of the play-out (engine_scale.c) ---- */
+
+void scale_eval(engine_t *e);
+void scale_rest(engine_t *e);
+double scale_conv_speed(const engine_t *e);
+double scale_rise_reserve(const engine_t *e, double v);
+double scale_remaining(const engine_t *e, double s);
+double scale_ceil_room(const engine_t *e, double s, double A, double J);
+double scale_ceil_here(const engine_t *e);
+void scale_limits(const engine_t *e, double *A, double *J);
+double scale_target(const engine_t *e);
+int scale_moves(const engine_t *e, double R, double A, double J);
+void scale_step(engine_t *e, double target, double R, double A, double J);
+void scale_clocked_step(engine_t *e, double R, double A, double J);
+
+/* ---- transfers (engine_xfer.c) ---- */
+
+double xfer_duration(const engine_t *e, const double *target, double gap_s, int *capped);
+void xfer_start(engine_t *e, const double *target, double gap_s);
+void xfer_track_time(engine_t *e);
+
+/* ---- shared small helpers ---- */
+
+/* node j of the ring: its position and its time */
+static inline double *nr(engine_t *e, uint64_t j)
+{
+    return e->solve.node_r + (size_t)(j % e->solve.ring) * AX;
+}
+
+static inline double nt(const engine_t *e, uint64_t j)
+{
+    return e->solve.node_t[j % e->solve.ring];
+}
+
+/* parameter step of interval j (M form) */
+static inline double hpar(const engine_t *e, uint64_t j)
+{
+    return e->cfg.param == ENGINE_PARAM_TIME ? nt(e, j + 1) - nt(e, j) : 1.0;
+}
+
+static inline qent_t *q_head(engine_t *e)
+{
+    return e->queue.len ? &e->queue.ent[e->queue.head] : NULL;
+}
+
+/* Exact comparisons of the time scaling's state (it lands on its targets
+ * exactly, see ts_step), written without == for -Wfloat-equal. */
+static inline int is_exactly(double x, double v)
+{
+    return !(x < v || x > v);
+}
+
+static inline int at_rest(const engine_t *e)
+{
+    return is_exactly(e->scale.ts.rate, 0.0) && is_exactly(e->scale.ts.acc, 0.0);
+}
+
+static inline double tick_time(const engine_t *e, int64_t n)
+{
+    return (double)(n * e->cfg.period_ns) * 1e-9;
+}
+
+/* Track time of tick n on the unit grid (relative to origin_t); s_off is 0
+ * until the time scaling first moved the output off the grid. */
+static inline double tau_of(const engine_t *e, int64_t n)
+{
+    return tick_time(e, n) + e->scale.s_off;
+}
 
 /* A zero is +0.0 (-0.0 + 0.0 = +0.0): a setpoint at rest reads 0, not -0, in
  * every output (CSV, binary, Modbus, CAN), all of them alike.  Returns rc. */

@@ -1,5 +1,14 @@
-/* engine_settings.c - the table of engine settings (see engine_settings.h). */
+/*
+ * engine_settings.c - the configuration stage: the table of the engine's
+ * settings (engine_settings.h: names, ranges, parsing, formatting) and the
+ * resolution of a configuration (engine.h): the defaults, the profiles'
+ * limits, fragment and overlap picked for accuracy and max_lookahead, the
+ * lookahead they imply and the check of a whole configuration.  It owns
+ * engine_config_t and what a resolved one implies for an engine's sizes
+ * (engine_cfg_*, engine_int.h, read by engine_new).
+ */
 #include "engine_settings.h"
+#include "engine_int.h"
 
 #include <errno.h>
 #include <math.h>
@@ -9,6 +18,11 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+
+#include "accept.h"
+#include "ends.h"
+#include "frag.h"
+#include "lsq.h"
 
 static const char *const method_names[] = {
     [ENGINE_METHOD_BSPLINE] = "bspline",
@@ -321,4 +335,296 @@ int engine_config_same(const engine_config_t *a, const engine_config_t *b)
         if (!engine_setting_same(&engine_settings[i], a, b))
             return 0;
     return 1;
+}
+
+/* ---- resolution of a configuration (engine.h) ---------------------------- */
+
+/* Capacity accepted at most (memory is sized from it). */
+#define ENGINE_CAPACITY_MAX (1u << 20)
+
+void engine_config_default(engine_config_t *cfg)
+{
+    memset(cfg, 0, sizeof(*cfg));
+    cfg->method = ENGINE_METHOD_CUBIC;
+    cfg->param = ENGINE_PARAM_TIME;
+    cfg->ends = ENGINE_ENDS_REST;
+    cfg->fragment = ENGINE_AUTO;
+    cfg->overlap = ENGINE_AUTO;
+    cfg->accuracy = 3e-7;
+    cfg->max_lookahead = 18;
+    cfg->period_ns = 10000000;
+    cfg->capacity = 4096;
+    cfg->max_gap_s = 60.0;
+    cfg->max_abs_m = 1e7;
+    cfg->profile = ENGINE_PROFILE_AUTO;
+    cfg->max_speed_m_s = ENGINE_LIMIT_PROFILE;
+    cfg->max_accel_m_s2 = ENGINE_LIMIT_PROFILE;
+    cfg->confirm = 3;
+    cfg->max_segment_s = 60.0;
+    cfg->start_slack = ENGINE_AUTO;
+    cfg->smooth_window = 24;
+    cfg->smooth_ctrl = 6;
+    cfg->scale_accel_m_s2 = 5.0;
+    cfg->scale_jerk_m_s3 = 50.0;
+}
+
+/* The numbers and where they come from: engine.h, engine_profile_t. */
+static const struct {
+    double speed_m_s, accel_m_s2;
+} profile_limits[ENGINE_PROFILE_COUNT] = {
+    [ENGINE_PROFILE_AUTO] = {400.0, 30.0}, [ENGINE_PROFILE_VESSEL] = {40.0, 30.0},
+    [ENGINE_PROFILE_ROAD] = {100.0, 30.0}, [ENGINE_PROFILE_AIR] = {400.0, 0.0},
+    [ENGINE_PROFILE_MACHINE] = {0.0, 0.0}, [ENGINE_PROFILE_NONE] = {0.0, 0.0},
+};
+
+static engine_profile_t profile_of(const engine_config_t *cfg)
+{
+    return (unsigned)cfg->profile < ENGINE_PROFILE_COUNT ? cfg->profile : ENGINE_PROFILE_AUTO;
+}
+
+double engine_config_max_speed(const engine_config_t *cfg)
+{
+    return cfg->max_speed_m_s < 0 ? profile_limits[profile_of(cfg)].speed_m_s : cfg->max_speed_m_s;
+}
+
+double engine_config_max_accel(const engine_config_t *cfg)
+{
+    return cfg->max_accel_m_s2 < 0 ? profile_limits[profile_of(cfg)].accel_m_s2
+                                   : cfg->max_accel_m_s2;
+}
+
+int engine_cfg_uses_pstar(const engine_config_t *cfg)
+{
+    return cfg->method == ENGINE_METHOD_BSPLINE && cfg->param == ENGINE_PARAM_UNIFORM;
+}
+
+/*
+ * largest lookahead over segments j in [j0, j1) for start offset delta, in
+ * waypoints received.  SMOOTH (toolkit): node n exists once waypoint
+ * max(n + extra, first) is in (extra = smooth_window/2, first =
+ * smooth_window - 1); otherwise extra = first = 0 and nodes are waypoints.
+ */
+static unsigned scan_lookahead(unsigned f, unsigned o, unsigned delta, unsigned need, uint64_t j0,
+                               uint64_t j1, uint64_t extra, uint64_t first)
+{
+    unsigned best = 0;
+    uint64_t j, n = 0, raw;
+
+    /* Row r is pushed when node r+1 arrives; segment j (waypoint j to j+1)
+     * is built once frag_final_after(rows pushed) reaches x[j + need - 1].
+     * frag_final_after is non-decreasing in r and the bound rises with j, so
+     * the least n of segment j + 1 is not below segment j's: one pass (the
+     * search from j + 1 for every j cost O(F^2) a scan, and engine_config_
+     * resolve scans for up to 500 fragment sizes: 0.7 s for overlap = 828) */
+    for (j = j0; j < j1; j++) {
+        if (n < j + 1)
+            n = j + 1;
+        while (frag_final_after(f, o, delta, n - 1) < j + need)
+            n++;
+        raw = n + extra > first ? n + extra : first;
+        if (raw - (j + 1) > best)
+            best = (unsigned)(raw - (j + 1));
+    }
+    return best;
+}
+
+static int config_sizes_ok(const engine_config_t *cfg)
+{
+    return cfg->fragment >= ENGINE_FRAGMENT_MIN && cfg->fragment <= ENGINE_FRAGMENT_MAX &&
+           cfg->overlap >= 2 && cfg->overlap % 2 == 0 && cfg->overlap < cfg->fragment;
+}
+
+/* most waypoints beyond a segment the solver needs, far from the start */
+unsigned engine_cfg_steady_lookahead(const engine_config_t *cfg)
+{
+    unsigned f = cfg->fragment, o = cfg->overlap, s = f - o;
+    unsigned need = engine_cfg_uses_pstar(cfg) ? 3 : 2; /* x[j + need - 1] final for segment j */
+
+    /* the pattern repeats every S segments */
+    return scan_lookahead(f, o, 0, need, 2u * f, 2u * f + 2u * s, 0, 0);
+}
+
+/*
+ * Start offset of the fragment grid: the first fragment is cut short so that
+ * its first segment is final no later than the output wants to start
+ * (steady-state lookahead + start_slack) instead of after F - 1 waypoints;
+ * never beyond S - 1 (see frag.h).
+ */
+/* start_slack in waypoints (auto: its least) */
+static unsigned slack_of(const engine_config_t *cfg)
+{
+    return cfg->start_slack == ENGINE_AUTO ? ENGINE_SLACK_AUTO_MIN : cfg->start_slack;
+}
+
+unsigned engine_cfg_frag_delta(const engine_config_t *cfg)
+{
+    unsigned f = cfg->fragment, dmax = frag_delta_max(f, cfg->overlap);
+    unsigned want = engine_cfg_steady_lookahead(cfg) + slack_of(cfg);
+    unsigned d = f - 1 > want ? f - 1 - want : 0;
+
+    return d < dmax ? d : dmax;
+}
+
+unsigned engine_cfg_smooth_extra(const engine_config_t *cfg)
+{
+    /* SMOOTH: the smoother holds smooth_window/2 waypoints back (lsq.h) */
+    int sm = cfg->method == ENGINE_METHOD_SMOOTH && cfg->smooth_window >= 1;
+    return sm ? lsq_smooth_delay(cfg->smooth_window) : 0;
+}
+
+/* engine_lookahead of a resolved configuration */
+unsigned engine_cfg_lookahead(const engine_config_t *cfg)
+{
+    unsigned f = cfg->fragment, o = cfg->overlap, la, want;
+    int sm = cfg->method == ENGINE_METHOD_SMOOTH && cfg->smooth_window >= 1;
+    unsigned extra = engine_cfg_smooth_extra(cfg);
+    unsigned first = sm ? cfg->smooth_window - 1 : 0;
+
+    if (!config_sizes_ok(cfg) || slack_of(cfg) > ENGINE_FRAGMENT_MAX)
+        return 0;
+    /* what the solver needs, from the start on (a few periods cover it) ... */
+    la = scan_lookahead(f, o, engine_cfg_frag_delta(cfg), engine_cfg_uses_pstar(cfg) ? 3 : 2, 0,
+                        4u * f, extra, first) +
+         ACCEPT_LAG; /* a waypoint becomes a node once its next neighbour is in */
+    /* ... and what the output waits for */
+    want = engine_cfg_steady_lookahead(cfg) + extra + slack_of(cfg);
+    return la > want ? la : want;
+}
+
+/* overlap auto: the smallest even O with 2 rho^(O/2) <= accuracy (frag.h) */
+static unsigned auto_overlap(double accuracy)
+{
+    const double rho = 2.0 - sqrt(3.0);
+    double bound = 2.0 * rho;
+    unsigned o = 2;
+
+    while (bound > accuracy && o + 2 < ENGINE_FRAGMENT_MAX) {
+        o += 2;
+        bound *= rho;
+    }
+    return o;
+}
+
+int engine_config_resolve(const engine_config_t *cfg, engine_config_t *out)
+{
+    *out = *cfg;
+    if (cfg->overlap == ENGINE_AUTO) {
+        if (!(cfg->accuracy > 0) || !isfinite(cfg->accuracy))
+            return -ENGINE_ECONFIG;
+        out->overlap = auto_overlap(cfg->accuracy);
+    }
+    if (cfg->fragment == ENGINE_AUTO) {
+        unsigned o = out->overlap;
+        if (o < 2 || o % 2 || o >= ENGINE_FRAGMENT_MAX) {
+            out->fragment = ENGINE_FRAGMENT_MAX; /* engine_config_check: "overlap" */
+            return 0;
+        }
+        /* the largest S (least work: about 2F/S rows per waypoint) that fits;
+         * beyond S = O the work hardly falls */
+        for (unsigned s = o; s >= 1; s--) {
+            if (o + s > ENGINE_FRAGMENT_MAX)
+                continue;
+            out->fragment = o + s;
+            /* SMOOTH's smoother holds smooth_window/2 more back: not counted */
+            unsigned la = engine_cfg_lookahead(out);
+            if (la && la - engine_cfg_smooth_extra(out) <= cfg->max_lookahead)
+                return 0;
+        }
+        out->fragment = o + 1;
+        return -ENGINE_ECONFIG;
+    }
+    return 0;
+}
+
+unsigned engine_lookahead(const engine_config_t *cfg)
+{
+    engine_config_t r;
+
+    if (engine_config_resolve(cfg, &r) < 0)
+        return 0;
+    return engine_cfg_lookahead(&r);
+}
+
+int engine_config_check(const engine_config_t *cfg_in, const char **why)
+{
+    const char *w = NULL;
+    unsigned la;
+    engine_config_t r;
+    const engine_config_t *cfg = &r;
+
+    if (cfg_in->overlap == ENGINE_AUTO &&
+        (!(cfg_in->accuracy > 0 && cfg_in->accuracy < 1) || !isfinite(cfg_in->accuracy)))
+        w = "accuracy: must be within (0, 1)";
+    else if (engine_config_resolve(cfg_in, &r) < 0)
+        w = "max_lookahead: too short for the overlap accuracy asks plus start_slack: no "
+            "fragment fits; raise max_lookahead or accuracy, or lower start_slack";
+    if (w) {
+        if (why)
+            *why = w;
+        return -ENGINE_ECONFIG;
+    }
+
+    if (cfg->method != ENGINE_METHOD_BSPLINE && cfg->method != ENGINE_METHOD_CUBIC &&
+        cfg->method != ENGINE_METHOD_SMOOTH)
+        w = "method: unknown";
+    else if (cfg->method == ENGINE_METHOD_SMOOTH &&
+             (cfg->smooth_window < 4 || cfg->smooth_window > ENGINE_SMOOTH_WINDOW_MAX))
+        w = "smooth_window: must be within 4..ENGINE_SMOOTH_WINDOW_MAX";
+    else if (cfg->method == ENGINE_METHOD_SMOOTH &&
+             (cfg->smooth_ctrl < 4 || cfg->smooth_ctrl > cfg->smooth_window))
+        w = "smooth_ctrl: must be at least 4 and at most smooth_window";
+    else if (cfg->param != ENGINE_PARAM_UNIFORM && cfg->param != ENGINE_PARAM_TIME)
+        w = "param: unknown";
+    else if ((unsigned)cfg->ends > ENGINE_ENDS_REST)
+        w = "ends: unknown";
+    else if ((cfg->ends == ENGINE_ENDS_HELD || cfg->ends == ENGINE_ENDS_MULTIPLE) &&
+             !engine_cfg_uses_pstar(cfg))
+        w = "ends: held and multiple are the paper's B-spline control-polygon ends: "
+            "they need method bspline with param uniform";
+    else if (cfg->fragment < ENGINE_FRAGMENT_MIN || cfg->fragment > ENGINE_FRAGMENT_MAX)
+        w = "fragment: must be within ENGINE_FRAGMENT_MIN..ENGINE_FRAGMENT_MAX";
+    else if (cfg->overlap < 2 || cfg->overlap % 2 || cfg->overlap >= cfg->fragment)
+        w = "overlap: must be even, at least 2 and below fragment";
+    else if (cfg->period_ns < ENGINE_PERIOD_NS_MIN || cfg->period_ns > ENGINE_PERIOD_NS_MAX)
+        w = "period_ns: must be within ENGINE_PERIOD_NS_MIN..ENGINE_PERIOD_NS_MAX";
+    else if (!(cfg->max_gap_s > 0) || !isfinite(cfg->max_gap_s))
+        w = "max_gap_s: must be positive and finite";
+    else if (!(cfg->max_abs_m > 0) || !isfinite(cfg->max_abs_m))
+        w = "max_abs_m: must be positive and finite";
+    else if (!(cfg->max_speed_m_s >= ENGINE_LIMIT_PROFILE) || !isfinite(cfg->max_speed_m_s))
+        w = "max_speed_m_s: must be -1 (the profile's), 0 (no limit) or positive and finite";
+    else if (!(cfg->max_accel_m_s2 >= ENGINE_LIMIT_PROFILE) || !isfinite(cfg->max_accel_m_s2))
+        w = "max_accel_m_s2: must be -1 (the profile's), 0 (no limit) or positive and finite";
+    else if ((unsigned)cfg->profile >= ENGINE_PROFILE_COUNT)
+        w = "profile: unknown";
+    else if (cfg->confirm < 1 || cfg->confirm > ACCEPT_WINDOW_MAX)
+        w = "confirm: must be within 1..8";
+    else if (!(cfg->transfer_speed_m_s >= 0) || !isfinite(cfg->transfer_speed_m_s))
+        w = "transfer_speed_m_s: must be 0 (derived) or positive and finite";
+    else if (!(cfg->transfer_accel_m_s2 >= 0) || !isfinite(cfg->transfer_accel_m_s2))
+        w = "transfer_accel_m_s2: must be 0 (derived) or positive and finite";
+    else if (!(cfg->max_segment_s >= 0) || !isfinite(cfg->max_segment_s))
+        w = "max_segment_s: must be 0 or positive and finite";
+    else if (!(cfg->scale_accel_m_s2 > 0) || !isfinite(cfg->scale_accel_m_s2))
+        w = "scale_accel_m_s2: must be positive and finite";
+    else if (!(cfg->scale_jerk_m_s3 > 0) || !isfinite(cfg->scale_jerk_m_s3))
+        w = "scale_jerk_m_s3: must be positive and finite";
+    else if (cfg->start_slack > ENGINE_FRAGMENT_MAX && cfg->start_slack != ENGINE_AUTO)
+        w = "start_slack: at most ENGINE_FRAGMENT_MAX waypoints";
+    else if (cfg->ends == ENGINE_ENDS_CLAMPED &&
+             !(isfinite(cfg->start_vel_m_s[0]) && isfinite(cfg->start_vel_m_s[1]) &&
+               isfinite(cfg->start_vel_m_s[2]) && isfinite(cfg->end_vel_m_s[0]) &&
+               isfinite(cfg->end_vel_m_s[1]) && isfinite(cfg->end_vel_m_s[2])))
+        w = "start_vel_m_s/end_vel_m_s: must be finite";
+    else if (cfg->ends == ENGINE_ENDS_CLAMPED && !engine_ends_within_limit(cfg))
+        w = "start_vel_m_s/end_vel_m_s: faster than max_speed_m_s in force (without a speed "
+            "limit: than max_abs_m per second)";
+    if (!w) {
+        la = engine_cfg_lookahead(cfg);
+        if (cfg->capacity < la + cfg->fragment + 8 || cfg->capacity > ENGINE_CAPACITY_MAX)
+            w = "capacity: must be at least lookahead + fragment + 8 and at most 2^20";
+    }
+    if (why)
+        *why = w;
+    return w ? -ENGINE_ECONFIG : 0;
 }

@@ -14,7 +14,7 @@
  *     field of engine_config_t (a field missing here would be kept stale
  *     across a reload), that config/trajd.conf documents every key with its
  *     real default and that trajreplay --help lists every option.
- * Adding a setting: the field and its default in engine.h/engine.c, its
+ * Adding a setting: the field and its default in engine.h/engine_settings.c, its
  * entry in engine_settings.c, its documented line in config/trajd.conf.
  *
  * Pure: parsing and formatting of text only, no I/O.

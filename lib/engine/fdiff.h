@@ -1,5 +1,5 @@
 /*
- * fdiff.h - forward-difference stepper for piecewise cubics (maths notes: lib/engine/README.md).
+ * fdiff.h - forward-difference stepper for piecewise cubics (maths notes: lib/engine/DESIGN.md).
  *
  * Every segment the engine streams, whatever the method (Hoang B-spline,
  * second-derivative cubic spline, smoothstep transfer), is one cubic per axis

@@ -1,5 +1,5 @@
 /*
- * frag.h - sliding window of overlapping fragments (maths notes: lib/engine/README.md).
+ * frag.h - sliding window of overlapping fragments (maths notes: lib/engine/DESIGN.md).
  *
  * One tridiagonal system per coordinate, rows arriving one at a time (one per
  * node), is solved in fragments of F rows overlapping by O (S = F - O):

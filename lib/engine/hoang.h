@@ -1,6 +1,6 @@
 /*
  * hoang.h - exact interpolation with a uniform cubic B-spline (Hoang Thai Ho
- * 2016, seed 003; maths notes in lib/engine/README.md).
+ * 2016, seed 003; maths notes in lib/engine/DESIGN.md).
  *
  * Control points P*(j) solve, for every interior node j,
  *
@@ -27,8 +27,9 @@
  *            rows 4P*(0) + 2P*(1) = 6R(0) + 2vT, ghosts P*(-1) = P*(1) - 2vT.
  *   REST     CLAMPED with v = 0.
  *
- * The row helpers are shared by the global solve here and by the engine's
- * fragment window, so both solve the same system.
+ * The row helpers are shared by the engine's fragment window and the global
+ * solve the tests compare it with (tests/helpers/global_curve.h), so both
+ * solve the same system.
  */
 #ifndef TRAJD_HOANG_H
 #define TRAJD_HOANG_H
@@ -59,26 +60,5 @@ void hoang_ghost_end(engine_ends_t ends, const double *pm, const double *pl, con
 /* Segment from the four control points p[0..3] = P*(j-1 .. j+2). */
 void hoang_segment(const double *p0, const double *p1, const double *p2, const double *p3,
                    double t0_s, double dur_s, fdiff_seg_t *seg);
-
-/*
- * The paper's global approach: solve every control point of N nodes at once
- * (Thomas on the whole system).  r: n x 3; p: n x 3 out (P*(0..N-1)).
- * v0_u, v1_u: end velocities in u units (CLAMPED; may be NULL otherwise).
- * scratch: 4n doubles.  Returns 0, -ENGINE_ECONFIG (n < 2), -ENGINE_ENUMERIC.
- */
-int hoang_solve(size_t n, const double *r, engine_ends_t ends, const double *v0_u,
-                const double *v1_u, double *p, double *scratch);
-
-/*
- * The whole curve through N timed waypoints (t strictly increasing), with
- * the multiplicity expansion and the segments actually emitted, by one
- * global solve.  v0, v1: end velocities in m/s (CLAMPED; may be NULL).
- * segs: room for max_seg (N+3 always suffices); *nseg receives the count.
- * Allocates its work memory (not for a periodic path).
- * Returns 0, -ENGINE_ECONFIG (n < 2 or max_seg too small), -ENGINE_ENOMEM,
- * -ENGINE_ENUMERIC.
- */
-int hoang_curve(size_t n, const double *t_s, const double *r, engine_ends_t ends, const double *v0,
-                const double *v1, fdiff_seg_t *segs, size_t max_seg, size_t *nseg);
 
 #endif

@@ -164,7 +164,8 @@ int accept_run_decide(accept_t *a, int closing, accept_verdict_t *v)
     return 1;
 }
 
-void accept_count(engine_status_t *st, const accept_verdict_t *v)
+/* Count a verdict's share of engine_status (stops, stop_fixes, retimed). */
+static void accept_count(engine_status_t *st, const accept_verdict_t *v)
 {
     if (v->kind == ACCEPT_HALT || v->kind == ACCEPT_DWELL) {
         st->accepted++; /* kept: the dwell of a stop */

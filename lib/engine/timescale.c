@@ -206,8 +206,11 @@ double ts_step(ts_state_t *st, double target, double R, double A, double J, doub
         tgt = 0; /* dead band: a rate this low comes to rest exactly */
     j = track_jerk(r, a, tgt, A, J, T);
     ds = integrate(r, a, j, T, &r1, &a1);
-    if (!isinf(R) && r1 > 0 && ts_stop_dist(r1, a1, A, J) > R - ds) {
-        /* the move would leave too little to stop: brake as hard as allowed */
+    if (!isinf(R) && r1 > 0 && ts_stop_dist(r1, a1, A, J) + r1 * T > R - ds) {
+        /* the move would leave too little to stop: brake as hard as allowed.
+         * With a tick's travel at the new rate to spare, as creep() keeps:
+         * the stop planned is continuous, the ticks are not, and a creep
+         * towards the end of the solved curve reached it at 0.13 m/s (issue 27) */
         tgt = 0;
         j = track_jerk(r, a, tgt, A, J, T);
         ds = integrate(r, a, j, T, &r1, &a1);

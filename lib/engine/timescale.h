@@ -44,7 +44,7 @@
 /* Highest rate (feed override 200 %). */
 #define TS_RATE_MAX 2.0
 /* Track time kept in reserve before the end of the solved curve, in ticks at
- * the current rate (the engine's remaining()): absorbs the discretisation of
+ * the current rate (the engine's scale_remaining()): absorbs the discretisation of
  * the braking (the continuous-time stopping distance is exact to O(r T) per
  * tick); none at rest, so a buffer shorter than the margin cannot deadlock. */
 #define TS_MARGIN_TICKS 2.0

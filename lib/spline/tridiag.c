@@ -3,16 +3,6 @@
 
 #include <math.h>
 
-const char *tridiag_strerror(int err)
-{
-    switch (err < 0 ? -err : err) {
-    case TRIDIAG_OK: return "success";
-    case TRIDIAG_ESIZE: return "tridiagonal system has no rows or is full";
-    case TRIDIAG_ESINGULAR: return "tridiagonal system is singular or not finite";
-    default: return "unknown tridiag error";
-    }
-}
-
 /* A pivot is usable if it is finite and not negligible against its row. */
 static int pivot_ok(double piv, double a, double b, double c)
 {

@@ -25,9 +25,6 @@ enum tridiag_error {
 /* A pivot smaller than this times the row's absolute sum is treated as zero. */
 #define TRIDIAG_PIVOT_REL_MIN 1e-12
 
-/* Human-readable text for a tridiag_error (positive or negated). */
-const char *tridiag_strerror(int err);
-
 /*
  * Solve the system for nrhs right-hand sides at once.
  * d and x are n x nrhs, row-major (d[i*nrhs + k]); x may alias d.

@@ -1,20 +1,14 @@
 /* latency.c - fixed lateness histogram (see latency.h). */
 #include "latency.h"
 
-#include <string.h>
-
-void lat_reset(lat_hist_t *h)
-{
-    memset(h, 0, sizeof *h);
-}
-
 /* Index of the highest set bit of v > 0. */
 static unsigned msb(uint64_t v)
 {
     return 63u - (unsigned)__builtin_clzll(v);
 }
 
-unsigned lat_bucket_of(uint64_t us)
+/* Bucket index of a value. */
+static unsigned lat_bucket_of(uint64_t us)
 {
     if (us < LAT_LINEAR_US)
         return (unsigned)us;
@@ -27,7 +21,8 @@ unsigned lat_bucket_of(uint64_t us)
     return LAT_LINEAR_US + o * LAT_SUB + (unsigned)((us - lo) / width);
 }
 
-void lat_bucket_range(unsigned b, uint64_t *lo_us, uint64_t *hi_us)
+/* The [lo, hi] range of values bucket b holds. */
+static void lat_bucket_range(unsigned b, uint64_t *lo_us, uint64_t *hi_us)
 {
     if (b < LAT_LINEAR_US) {
         *lo_us = *hi_us = b;
@@ -52,18 +47,6 @@ void lat_add(lat_hist_t *h, uint64_t us)
     h->sum_us += us;
     if (us > h->max_us)
         h->max_us = us;
-}
-
-void lat_merge(lat_hist_t *dst, const lat_hist_t *src)
-{
-    for (unsigned b = 0; b < LAT_BUCKETS; b++) {
-        uint64_t s = (uint64_t)dst->bucket[b] + src->bucket[b];
-        dst->bucket[b] = s > UINT32_MAX ? UINT32_MAX : (uint32_t)s;
-    }
-    dst->count += src->count;
-    dst->sum_us += src->sum_us;
-    if (src->max_us > dst->max_us)
-        dst->max_us = src->max_us;
 }
 
 uint64_t lat_quantile(const lat_hist_t *h, double q)

@@ -38,14 +38,10 @@ typedef struct {
     uint32_t mean_us;
 } lat_summary_t;
 
-/* Empty the histogram. */
-void lat_reset(lat_hist_t *h);
+/* A histogram all zero (static, calloc, memset) is empty. */
 
 /* Add one sample (us).  Never fails; values >= LAT_MAX_US land in the last bucket. */
 void lat_add(lat_hist_t *h, uint64_t us);
-
-/* Add every sample of src to dst. */
-void lat_merge(lat_hist_t *dst, const lat_hist_t *src);
 
 /*
  * Quantile q in [0, 1] by nearest rank: the smallest bucket upper edge below
@@ -56,9 +52,5 @@ uint64_t lat_quantile(const lat_hist_t *h, double q);
 
 /* p50, p99, p99.9, max and mean of h. Values above UINT32_MAX saturate. */
 void lat_summarize(const lat_hist_t *h, lat_summary_t *s);
-
-/* Bucket index of a value and the [lo, hi] range of values it holds (for tests). */
-unsigned lat_bucket_of(uint64_t us);
-void lat_bucket_range(unsigned b, uint64_t *lo_us, uint64_t *hi_us);
 
 #endif

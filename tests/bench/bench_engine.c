@@ -1,5 +1,5 @@
 /*
- * bench_engine.c - prints the engine's numbers (lib/engine/README.md).
+ * bench_engine.c - prints the engine's numbers (lib/engine/DESIGN.md).
  *
  *  1. ns per waypoint (engine_push: validation + incremental fragment solve +
  *     segment building) and ns per 3-axis setpoint (engine_tick) for tracks
@@ -31,6 +31,7 @@
 #include "engine.h"
 #include "fdiff.h"
 #include "fdiff_aos.h"
+#include "global_curve.h"
 #include "hoang.h"
 
 /* ---- allocation counter ---------------------------------------------------- */
@@ -494,7 +495,7 @@ static void bench_accept(void)
 /* The F/O table: error of the streamed curve against one global solve, lookahead and (timed)
  * ns per waypoint.  The errors are deterministic (seeded walks, the bundled figure-8): with
  * --errors, bench_engine prints this table alone, untimed (nan ns), in about a second;
- * tests/e2e/test_doc_counts.py checks lib/engine/README.md's error columns against it. */
+ * tests/e2e/test_doc_counts.py checks lib/engine/DESIGN.md's error columns against it. */
 static void fo_table(int timed)
 {
     /* the former default 32/16 first: the reference of the x 32/16 column;

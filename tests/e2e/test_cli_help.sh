@@ -37,7 +37,7 @@ done
 [ "$n" -ge 3 ] || bad "only $n programs in $BUILD/bin"
 # The Python helpers the docs advertise answer --help too (exit 0, text on stdout).
 PY=${PYTHON:-/usr/bin/python3}
-for h in $(grep -ohE '(tests/helpers|daemon/doc/examples)/[a-z_]+\.py' README.md daemon/README.md \
+for h in $(grep -ohE '(tests/helpers|daemon/doc/examples)/[a-z_]+\.py' README.md daemon/REFERENCE.md \
            config/PROTOCOL.md daemon/doc/*.md | sort -u); do
     [ -f "$h" ] || { bad "$h is advertised by the docs but does not exist"; continue; }
     n=$((n + 1))

@@ -51,7 +51,7 @@ def xyz_track(path, n, dt_s, speed_m_s=2.0, radius_m=50.0):
 class Daemon:
     """trajd with a notify socket, stdout/stderr read by threads into queues."""
 
-    def __init__(self, tmp, conf, watchdog_usec=None, wrapper=(), read_stdout=True):
+    def __init__(self, tmp, conf, watchdog_usec=None, wrapper=(), read_stdout=True, read_stderr=True):
         self.tmp = tmp
         self.sock_path = os.path.join(tmp, "notify-%d.sock" % id(self))
         self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
@@ -70,12 +70,18 @@ class Daemon:
         for stream, q in ((self.p.stdout, self.out), (self.p.stderr, self.err)):
             if stream is self.p.stdout and not read_stdout:
                 continue  # a reader that never reads
+            if stream is self.p.stderr and not read_stderr:
+                continue  # a reader that reads late: read_stderr_now()
             threading.Thread(target=self._pump, args=(stream, q), daemon=True).start()
         # Read the notify socket all the time, as systemd does: sd_notify()
         # blocks when a datagram socket's queue is full.
         self.sock.settimeout(0.2)
         self.closing = False
         threading.Thread(target=self._pump_notify, daemon=True).start()
+
+    def read_stderr_now(self):
+        """Start reading stderr (a Daemon made with read_stderr=False)."""
+        threading.Thread(target=self._pump, args=(self.p.stderr, self.err), daemon=True).start()
 
     def _pump_notify(self):
         while not self.closing:
@@ -763,9 +769,9 @@ class TestRejectionsLogged(unittest.TestCase):
                 more += n
         self.assertEqual(shown + more, 15, log)
         self.assertGreater(more, 0, log)  # the burst of 12 in one second was cut short
-        # daemon/README.md shows this run's lines (issue 14: no stale numbers); how many a
+        # daemon/REFERENCE.md shows this run's lines (issue 14: no stale numbers); how many a
         # "more" line counts depends on where the wall-clock seconds fall: its form only
-        with open(os.path.join(REPO, "daemon", "README.md"), encoding="utf-8") as f:
+        with open(os.path.join(REPO, "daemon", "REFERENCE.md"), encoding="utf-8") as f:
             doc = f.read()
         start = doc.index("    object 'boat': bad.csv:")
         example = doc[start:doc.index("\n\n", start)].split("\n")

@@ -5,7 +5,7 @@ Each check reads the number out of the doc's text (so a stale doc fails
 here) and compares it with a real run of the product: trajreplay, the way
 the doc says to run it.
 
-The table under "**Measured.**" in daemon/README.md's trajreplay part gives,
+The table under "**Measured.**" in daemon/REFERENCE.md's trajreplay part gives,
 per bundled track, what `trajreplay --summary -o FILE TRACK` (default
 settings) reports: waypoints read, accepted, gaps, setpoints, and the CSV's
 size in bytes.  Each row is replayed here and compared exactly.
@@ -28,7 +28,7 @@ BUILD = os.environ.get("BUILD", os.path.join(ROOT, "build"))
 
 def table_rows():
     """[(track, {column: int})] of the table whose header starts '| track | read |'."""
-    with open(os.path.join(ROOT, "daemon", "README.md"), encoding="utf-8") as f:
+    with open(os.path.join(ROOT, "daemon", "REFERENCE.md"), encoding="utf-8") as f:
         lines = f.read().split("\n")
     start = next(i for i, l in enumerate(lines) if l.startswith("| track | read |"))
     head = [c.strip() for c in lines[start].strip("|").split("|")]
@@ -96,7 +96,7 @@ def peak(rows, field, mask=None):
 def start_lookahead(*opts):
     """Lookahead in waypoints of trajreplay OPTS on regular input (a 1 Hz circle,
     100 waypoints): the output starts (lookahead + 1) intervals after the first
-    waypoint (lib/engine/README.md)."""
+    waypoint (lib/engine/DESIGN.md)."""
     with tempfile.TemporaryDirectory() as tmp:
         track, out = os.path.join(tmp, "circle.csv"), os.path.join(tmp, "out.csv")
         with open(track, "w", encoding="utf-8") as f:
@@ -144,7 +144,7 @@ class DocCounts(unittest.TestCase):
                 got = {"read": int(s["waypoints"]), "accepted": int(s["accepted"]),
                        "gaps": int(s["gaps"]), "setpoints": int(s["setpoints"]),
                        "CSV bytes": os.path.getsize(out)}
-                self.assertEqual(got, want, "daemon/README.md's row for %s is stale" % track)
+                self.assertEqual(got, want, "daemon/REFERENCE.md's row for %s is stale" % track)
 
     def test_smooth_table(self):
         """lib/spline/TOOLKIT.md: visnjan at 10 Hz, cubic and smooth: path length,
@@ -202,12 +202,12 @@ class DocCounts(unittest.TestCase):
 
 
 class DaemonReadme(unittest.TestCase):
-    """daemon/README.md's trajreplay part."""
+    """daemon/REFERENCE.md's trajreplay part."""
 
     def test_figure_eight_example(self):
         """The example session (trajreplay at 10 Hz on the figure-eight, then
         sed on its CSV): every summary line and every row it shows."""
-        doc = read("daemon/README.md").split("\n")
+        doc = read("daemon/REFERENCE.md").split("\n")
         start = next(i for i, l in enumerate(doc) if l.startswith("    $ trajreplay --rate 10"))
         block = []
         for l in doc[start:]:
@@ -223,14 +223,14 @@ class DaemonReadme(unittest.TestCase):
                      for l in block[1:cmds[1]] if l.startswith("summary:")]
             self.assertGreaterEqual(len(shown), 10)
             for k, v in shown:
-                self.assertEqual(got.get(k), v, "daemon/README.md's example: summary %s is stale" % k)
+                self.assertEqual(got.get(k), v, "daemon/REFERENCE.md's example: summary %s is stale" % k)
             rows = subprocess.run(block[cmds[1]][2:], shell=True, cwd=tmp, capture_output=True,
                                   text=True, check=True).stdout.split("\n")[:-1]
-            self.assertEqual(rows, block[cmds[1] + 1:], "daemon/README.md's example rows are stale")
+            self.assertEqual(rows, block[cmds[1] + 1:], "daemon/REFERENCE.md's example rows are stale")
             with open(os.path.join(tmp, "f8.csv"), encoding="utf-8") as f:
                 states = [l.split(",")[12] for l in f.read().split("\n")[1:-1]]
         # "...: 48 ticks (4.8 s, 24 waypoints at 5 Hz; 66 with the former F=32/O=16 ...)"
-        doc = read("daemon/README.md")
+        doc = read("daemon/REFERENCE.md")
         now, former = grab(doc, r"end waypoint: (\d+) ticks\s*\(.*?; (\d+) with the former")
         self.assertEqual(states.index("streaming"), int(now))
         self.assertEqual(set(states[:int(now)]), {"waiting"})
@@ -245,7 +245,7 @@ class DaemonReadme(unittest.TestCase):
     def test_flags_listed(self):
         """'`flags` are `ENGINE_SP_*` of `lib/motion.h`: 1 hold, 2 ...': every
         flag of lib/motion.h, with its value, and no other."""
-        text = grab(read("daemon/README.md"), r"`flags` are `ENGINE_SP_\*` of `lib/motion.h`:(.*?)\n\n")
+        text = grab(read("daemon/REFERENCE.md"), r"`flags` are `ENGINE_SP_\*` of `lib/motion.h`:(.*?)\n\n")
         listed = sorted(int(v) for v in re.findall(r"(?:^|, )(\d+) [a-z]", " ".join(text.split())))
         defined = sorted(int(v, 16) for v in re.findall(r"#define ENGINE_SP_\w+\s+0x([0-9a-f]+)u",
                                                         read("lib/motion.h")))
@@ -255,7 +255,7 @@ class DaemonReadme(unittest.TestCase):
         """'the waypoints, which take 44 bytes each (`engine_waypoint_t` and its line number;
         a geographic track keeps 24 more': lib/motion.h's struct as the C ABI lays it out."""
         import ctypes
-        each, geo = grab(read("daemon/README.md"), r"the waypoints, which take (\d+) bytes each\s+\("
+        each, geo = grab(read("daemon/REFERENCE.md"), r"the waypoints, which take (\d+) bytes each\s+\("
                                                    r"`engine_waypoint_t` and its line number; a geographic "
                                                    r"track keeps (\d+) more")
         fields = grab(read("lib/motion.h"), r"typedef struct \{\n(    double t_s;.*?)\} engine_waypoint_t;")
@@ -270,7 +270,7 @@ class DaemonReadme(unittest.TestCase):
     def test_uniform_irregular_example(self):
         """'... --param uniform ... gpxgo_visnjan.csv` reports 202 such
         waypoints, the worst 15x at t = 15 s'."""
-        doc = read("daemon/README.md")
+        doc = read("daemon/REFERENCE.md")
         cmd, n, worst, t = grab(doc, r"`build/bin/(trajreplay [^`]*--param uniform[^`]*)`\s+reports "
                                      r"(\d+) such\s+waypoints, the worst (\S+)x at t = (\S+) s")
         err = trajreplay(cmd.split()[1:] + ["--summary"])
@@ -279,14 +279,14 @@ class DaemonReadme(unittest.TestCase):
 
 
 class RealTracks(unittest.TestCase):
-    """daemon/README.md "What replaying the real tracks shows" and lib/engine/README.md's
+    """daemon/REFERENCE.md "What replaying the real tracks shows" and lib/engine/DESIGN.md's
     underrun counts."""
     F8, VIS, CER = "n2k_furuno_figure8_src52.csv", "gpxgo_visnjan.gpx", "gpxpy_cerknicko-jezero.csv"
     FORMER = ("--fragment", "32", "--overlap", "16", "--start-slack", "8")
 
     @classmethod
     def setUpClass(cls):
-        doc = read("daemon/README.md")
+        doc = read("daemon/REFERENCE.md")
         a = doc.index("**What replaying the real tracks shows**")
         cls.doc = doc[a:doc.index("**Known limits.**", a)]
 
@@ -353,8 +353,8 @@ class RealTracks(unittest.TestCase):
         self.assertEqual("%.1f" % peak(rows, "vel_m_s")[0], v10)
 
     def test_engine_readme_underruns(self):
-        """lib/engine/README.md "start_slack auto": underruns, default against the former F/O/slack."""
-        vis, vis_s, vis0, vis0_s, former, cer, cer0, f8, f8_s, f80 = grab(read("lib/engine/README.md"), (
+        """lib/engine/DESIGN.md "start_slack auto": underruns, default against the former F/O/slack."""
+        vis, vis_s, vis0, vis0_s, former, cer, cer0, f8, f8_s, f80 = grab(read("lib/engine/DESIGN.md"), (
             r"`trajreplay --summary` on visnjan counts (\d+)\s+\((\S+) s slowed or held\) instead of "
             r"(\d+) \((\S+) s\) with the former `([^`]+)`, on cerknicko (\d+) instead of (\d+), on "
             r"the figure-8 (\d+) \((\S+) s, before its 0.5 s hole\s+at t = 135 s\) instead of (\d+)"))
@@ -372,7 +372,7 @@ class RealTracks(unittest.TestCase):
 
 
 class EngineReadme(unittest.TestCase):
-    """lib/engine/README.md's replays of the real tracks."""
+    """lib/engine/DESIGN.md's replays of the real tracks."""
     TRACKS = {"figure-8": RealTracks.F8, "gpxgo_visnjan": RealTracks.VIS,
               "gpxpy_cerknicko-jezero": RealTracks.CER}
 
@@ -386,7 +386,7 @@ class EngineReadme(unittest.TestCase):
         """'After (engine, `trajreplay` at 100 Hz, transfers excluded; before: `--profile none`,
         after: `--profile none --max-accel 30`': each row of the table."""
         import numpy as np
-        doc = read("lib/engine/README.md")
+        doc = read("lib/engine/DESIGN.md")
         before, after = grab(doc, r"transfers excluded; before: `([^`]+)`, after:\s+`([^`]+)`")
         head = doc.index("| track | waypoints rejected (`rejected_accel`)")
         rows = doc[head:doc.index("\n\n", head)].split("\n")[2:]
@@ -437,7 +437,7 @@ class EngineReadme(unittest.TestCase):
         recomputed from the files (ENU by pyproj, about the first fix, as trajreplay frames them),
         and the unlimited replay's peaks."""
         import numpy as np
-        doc = flat("lib/engine/README.md")
+        doc = flat("lib/engine/DESIGN.md")
         a = doc.index("**Jitter and outliers.**")
         doc = doc[a:doc.index("**Bound**", a)]
         burst, step, late0, late1, vis, cer = grab(doc, (
@@ -496,7 +496,7 @@ class EngineReadme(unittest.TestCase):
 
     def test_start_lookahead_figure8(self):
         """'the figure-8 boat, up to 9 m/s at 5 Hz: 22 waypoints at 100 Hz instead of 33 before'."""
-        now, before = grab(read("lib/engine/README.md"), r"the figure-8 boat, up to 9 m/s at\s+5\s+Hz:\s+"
+        now, before = grab(read("lib/engine/DESIGN.md"), r"the figure-8 boat, up to 9 m/s at\s+5\s+Hz:\s+"
                                                          r"(\d+)\s+waypoints\s+at\s+100\s+Hz\s+instead\s+of\s+(\d+)")
         for opts, want in (((), now), (RealTracks.FORMER, before)):
             rows = replay(RealTracks.F8, *opts)[1]
@@ -506,8 +506,8 @@ class EngineReadme(unittest.TestCase):
 
 class Lookahead(unittest.TestCase):
     def test_fo_table(self):
-        """lib/engine/README.md's F/O table: lookahead (waypoints) and latency at 1 Hz / 5 Hz."""
-        doc = read("lib/engine/README.md")
+        """lib/engine/DESIGN.md's F/O table: lookahead (waypoints) and latency at 1 Hz / 5 Hz."""
+        doc = read("lib/engine/DESIGN.md")
         head = doc.index("| F | O | lookahead (waypoints) |")
         rows = doc[head:doc.index("\n\n", head)].split("\n")[2:]
         self.assertGreaterEqual(len(rows), 10)
@@ -624,11 +624,11 @@ class BusLoad(unittest.TestCase):
 
 
 class OracleFigures(unittest.TestCase):
-    """daemon/README.md's figures that an oracle test prints: the test's own run."""
+    """daemon/REFERENCE.md's figures that an oracle test prints: the test's own run."""
 
     def test_gpsbabel_rounding(self):
         """'(worst 0.926 m north against the 0.932 m bound of 0.0005' rounding)'."""
-        worst, bound = grab(read("daemon/README.md"), r"\(worst ([\d.]+) m north against the ([\d.]+) m bound")
+        worst, bound = grab(read("daemon/REFERENCE.md"), r"\(worst ([\d.]+) m north against the ([\d.]+) m bound")
         r = subprocess.run([os.path.join(BUILD, "tests", "test_track_logs")], cwd=ROOT,
                            capture_output=True, text=True, check=True)
         got = re.findall(r"\|d north\| ([\d.]+) m \(([\d.]+)\)", r.stdout + r.stderr)
@@ -638,7 +638,7 @@ class OracleFigures(unittest.TestCase):
     def test_pyproj(self):
         """'Compared with pyproj over 2400 points up to 200 km from the origin, the largest
         difference is 4e-9 m.'"""
-        n, worst = grab(read("daemon/README.md"), r"Compared with pyproj over (\d+) points up to\s+200 km "
+        n, worst = grab(read("daemon/REFERENCE.md"), r"Compared with pyproj over (\d+) points up to\s+200 km "
                                                   r"from the origin, the largest difference is (\S+) m\.")
         r = subprocess.run([sys.executable, os.path.join(ROOT, "tests", "oracle", "test_geo.py")],
                            capture_output=True, text=True, check=True, env=dict(os.environ, BUILD=BUILD))
@@ -691,7 +691,7 @@ class UnitTestFigures(unittest.TestCase):
         self.assertEqual(float("%.*e" % (decimals, float(run_value))), float(doc_value), what)
 
     def test_fdiff_drift(self):
-        small, big = grab(flat("lib/engine/README.md"), r"without re-seeding: (\S+) m at 1e3 m, (\S+) m at "
+        small, big = grab(flat("lib/engine/DESIGN.md"), r"without re-seeding: (\S+) m at 1e3 m, (\S+) m at "
                                                                r"1e7 m \(test_fdiff.c")
         got = grab(unit_output("test_fdiff"), r"drift over 600000 steps: pos (\S+) \S+ (\S+) m "
                                               r"\(\|c0\| 1e3, 5e6, 1e7\)")
@@ -708,16 +708,16 @@ class UnitTestFigures(unittest.TestCase):
                      "surface forward differences")
 
     def test_csv_fixed_count(self):
-        """daemon/README.md: '`tests/unit/test_csv_fixed.c` compares 1.3 M values with printf'."""
-        shown = grab(read("daemon/README.md"), r"`tests/unit/test_csv_fixed.c` compares (\S+) M values with printf")
+        """daemon/REFERENCE.md: '`tests/unit/test_csv_fixed.c` compares 1.3 M values with printf'."""
+        shown = grab(read("daemon/REFERENCE.md"), r"`tests/unit/test_csv_fixed.c` compares (\S+) M values with printf")
         n = grab(unit_output("test_csv_fixed"), r"(\d+) values compared with printf")
         self.shown(shown, int(n) / 1e6, "test_csv_fixed's count")
 
     def test_csv_shortest_counts(self):
-        """daemon/README.md: test_csv_shortest.c 'reads 6 M values back', test_csv_shortest.py
+        """daemon/REFERENCE.md: test_csv_shortest.c 'reads 6 M values back', test_csv_shortest.py
         'compares 0.9 M values': the unit test's counts read from its source (it takes 7 s), the
         oracle's from its own values() (what it sends to the printer)."""
-        doc = flat("daemon/README.md")
+        doc = flat("daemon/REFERENCE.md")
         unit, oracle = grab(doc, r"`tests/unit/test_csv_shortest.c` reads (\S+) M values back.*?"
                                  r"`tests/oracle/test_csv_shortest.py` compares (\S+) M values")
         src = read("tests/unit/test_csv_shortest.c")
@@ -757,7 +757,7 @@ class UnitTestFigures(unittest.TestCase):
         self.assertEqual(n, got[0])
         for want, run, what in zip((step, dv, fd, da, third), got[1:], ("step", "dv", "fd", "da", "third")):
             self.shown(want, run, what)
-        self.shown(grab(flat("lib/engine/README.md"), r"`build/tests/test_property_outputs`: worst tick "
+        self.shown(grab(flat("lib/engine/DESIGN.md"), r"`build/tests/test_property_outputs`: worst tick "
                                                       r"(\S+) of the jerk bound"), got[4], "README da")
 
     def test_speed_cap(self):

@@ -6,19 +6,20 @@ themselves, not a list kept here:
    commented or indented, and `can.a, can.b` lists) in its section is
    accepted by `trajd --check-config` there (any verdict but "unknown key");
    every `section.key` and `key = value` cited in backticks in README.md,
-   config/PROTOCOL.md and daemon/README.md is such a key.  Back: every string
+   config/PROTOCOL.md and daemon/REFERENCE.md is such a key.  Back: every string
    literal of the daemon's and the engine's sources that trajd accepts as a
    key in some section is documented in trajd.conf (a key `..._x` documents
    its `_y` and `_z`).
 2. command-line options.  Every `--option` the man pages, README.md and
-   daemon/README.md cite is in some program's --help; every option of a
+   daemon/REFERENCE.md cite is in some program's --help; every option of a
    program's --help is in its man page.
 3. setpoint flags.  Every ENGINE_SP_* bit of lib/motion.h is in
    config/PROTOCOL.md's flags table, and every bit the table names exists.
 4. error codes.  Every engine_error_t code of lib/motion.h is in the DBC's
    ST_LastErr value table and in PROTOCOL.md's STATUS last-error list.
 5. paths.  Every repository path README.md, config/PROTOCOL.md,
-   daemon/README.md and the folders' README.md files cite exists.
+   daemon/REFERENCE.md, lib/engine/DESIGN.md and the folders' README.md files
+   cite exists.
 (Modbus registers: tests/e2e/test_mbmap_readme.sh; CAN ids and layouts: the
 DBC, test_canproto.py.)
 """
@@ -35,7 +36,7 @@ BUILD = os.environ.get("BUILD", os.path.join(ROOT, "build"))
 BIN = os.path.join(BUILD, "bin")
 TRAJD = os.path.join(BIN, "trajd")
 TRACK = os.path.join(ROOT, "tests", "data", "gpxgo_visnjan.csv")
-DOCS = [os.path.join(ROOT, p) for p in ("README.md", "config/PROTOCOL.md", "daemon/README.md")]
+DOCS = [os.path.join(ROOT, p) for p in ("README.md", "config/PROTOCOL.md", "daemon/REFERENCE.md")]
 SECTIONS = ("daemon", "realtime", "modbus", "can")
 PREFIXES = ("", "csv.", "replay.", "can.", "modbus.")
 
@@ -252,7 +253,8 @@ class Paths(unittest.TestCase):
     def test_cited_paths_exist(self):
         docs = DOCS + glob.glob(os.path.join(ROOT, "lib", "*", "README.md")) + \
             glob.glob(os.path.join(ROOT, "daemon", "*", "README.md")) + \
-            glob.glob(os.path.join(ROOT, "tests", "*", "README.md"))
+            glob.glob(os.path.join(ROOT, "tests", "*", "README.md")) + \
+            [os.path.join(ROOT, p) for p in ("daemon/README.md", "lib/engine/DESIGN.md")]
         bad = []
         for path in docs:
             for p in set(re.findall(r"(?<![\w/.-])((?:lib|daemon|config|tests|systemd)/[\w./-]*\w)", read(path))):

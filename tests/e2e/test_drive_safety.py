@@ -119,7 +119,7 @@ class DriveSafety(unittest.TestCase):
             # (engine_stop) before the new one starts there (the old code held
             # at once: 6 m/s to 0 in one tick, 600 m/s^2).  Bound: the engine's
             # own, 3 max_accel_m_s2 + scale_accel_m_s2 = 95 m/s^2 (profile auto,
-            # daemon/core/core.h obj_safety_accel), from the rows alone
+            # daemon/core/core.c obj_safety_accel), from the rows alone
             acc = 0.0
             for a, b, c in zip(rows, rows[1:], rows[2:]):
                 if a["flags"] & F_NOPOS or not (c["now"] > b["now"] > a["now"]):

@@ -573,7 +573,9 @@ class CanLogOutAppend(unittest.TestCase):
                       r"run's first \(([\d.]+)\): the log goes back in time here", err)
         self.assertIsNotNone(m, err)
         self.assertAlmostEqual(float(m.group(1)), ts[len(first) - 1], delta=1e-6)
-        self.assertAlmostEqual(float(m.group(2)), ts[len(first)], delta=0.011)   # a tick
+        # within a few ticks: at speed 20 a wall stamp moves 20 ms per ms of delay
+        # between the open and the first frame, which a busy machine stretches
+        self.assertAlmostEqual(float(m.group(2)), ts[len(first)], delta=0.1)
         self.assertLess(ts[len(first)], ts[len(first) - 1])
 
     def test_torn_last_line_cut(self):
@@ -670,7 +672,7 @@ class CanLogOutAppend(unittest.TestCase):
     def test_reload_engine_stamps_append(self):
         # Given log_time = engine, when SIGHUP reloads, then the log is kept
         # and appended to: engine time goes on across a reload
-        # (daemon/README.md), so the stamps do too.
+        # (daemon/REFERENCE.md), so the stamps do too.
         before, err = self.reload_run("log_time = engine\n")
         with open(self.out, "rb") as f:
             after = f.read()

@@ -64,9 +64,9 @@ score=$(cd "$tmp/units" && systemd-analyze security --offline=true ./trajd.servi
 [ -n "$score" ] || fail "no exposure score"
 echo "systemd-analyze security trajd.service: exposure $score (max $MAX_EXPOSURE)"
 awk -v s="$score" -v m="$MAX_EXPOSURE" 'BEGIN { exit !(s < m) }' || fail "exposure $score >= $MAX_EXPOSURE"
-# daemon/README.md quotes the score: it is this run's (issue 14: no stale numbers)
-doc=$(sed -n 's/.*`systemd-analyze security --offline=true` rates it \*\*\([0-9.]*\) OK\*\*.*/\1/p' daemon/README.md)
-[ "$doc" = "$score" ] || fail "daemon/README.md says exposure '$doc', systemd-analyze says $score"
+# daemon/REFERENCE.md quotes the score: it is this run's (issue 14: no stale numbers)
+doc=$(sed -n 's/.*`systemd-analyze security --offline=true` rates it \*\*\([0-9.]*\) OK\*\*.*/\1/p' daemon/REFERENCE.md)
+[ "$doc" = "$score" ] || fail "daemon/REFERENCE.md says exposure '$doc', systemd-analyze says $score"
 grep -q '^Type=notify$' "$tmp/units/trajd.service" || fail "not Type=notify"
 grep -q '^WatchdogSec=' "$tmp/units/trajd.service" || fail "no WatchdogSec"
 echo "ok"

@@ -310,6 +310,48 @@ class TestCommands(TrajctlTest):
         self.assertIn("bad.conf:2:", r.stderr)
 
 
+class TestLogDropped(TrajctlTest):
+    """Log lines the log thread could not queue (its reader, stderr here,
+    stopped reading) are counted and the count is shown: trajctl status, the
+    status line (the log's and systemd's STATUS=) and the exit line."""
+
+    def setUp(self):
+        self.tmp = tempfile.mkdtemp()
+        self.sock = os.path.join(self.tmp, "ctl.sock")
+        self.conf = os.path.join(self.tmp, "t.conf")
+        write(self.conf, config(self.tmp).replace("status_interval_s = 0", "status_interval_s = 1"))
+        self.d = Daemon(self.tmp, self.conf, read_stderr=False)
+        self.d.msg(lambda f: f.get("READY") == "1", timeout=TIMEOUT_S)
+
+    def test_dropped_lines_are_counted_and_shown(self):
+        # Refused commands, one warning line each, while nobody reads stderr:
+        # the pipe fills, then the log thread's queue, then lines are dropped.
+        c = Client(self.sock)
+        for _ in range(30):
+            c.send("\n".join(["stop ro"] * 100))
+            for _ in range(100):
+                self.assertEqual(c.read()["reply"], "error")
+        head, _ = c.status()
+        c.close()
+        self.assertGreater(head["log_dropped"], 0, head)
+        r = self.ctl("status")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        shown = [int(w) for w in r.stdout.split("log lines dropped ")[1:2] for w in [w.split()[0]]]
+        self.assertTrue(shown and shown[0] >= head["log_dropped"], r.stdout)
+        fields, _ = self.d.msg(lambda f: "log lines dropped" in f.get("STATUS", ""), timeout=TIMEOUT_S)
+        self.assertRegex(fields["STATUS"], r", log lines dropped [1-9]\d*")
+        # Read again: the log thread says how many it dropped, the status
+        # lines carry the count, and so does the exit line.
+        self.d.read_stderr_now()
+        self.d.err_line(lambda l: "log lines dropped: the log's reader" in l)
+        self.d.err_line(lambda l: "status: " in l and "log lines dropped" in l)
+        self.d.p.send_signal(signal.SIGTERM)
+        self.assertEqual(self.d.wait(TIMEOUT_S), 0)
+        last = self.d.err_line(lambda l: "exit: " in l)
+        n = int(last.split(", log lines dropped ")[1].split()[0].rstrip(",;"))
+        self.assertGreaterEqual(n, head["log_dropped"])
+
+
 class TestReach(unittest.TestCase):
     def test_unreachable(self):
         with tempfile.TemporaryDirectory() as tmp:

@@ -15,6 +15,7 @@ are wrong in the ways real logs are (issues 11 and 12):
 Every process is bounded: output is read through a pipe with a byte limit
 and the process is killed by its pid past it.
 """
+import csv
 import os
 import re
 import subprocess
@@ -420,6 +421,71 @@ class TestNoHardStops(unittest.TestCase):
                         self.assertEqual(rc, 0, err[-500:])
                         self.assertIn("summary: hard_stops 0\n", err)
                         self.assertNotIn("hard stop", err)
+
+    def test_cerknicko_east_north_10hz(self):
+        """Given the cerknicko hike converted to east/north/up metres about its
+        first fix (pyproj: WGS84 to ECEF, then the local ENU rotation), as t,x,y,z
+        in file order, replayed with the defaults at 10, 20 and 100 Hz: its
+        underruns end the creep towards the end of the solved curve at rest,
+        not moving (at 10 Hz it reached the end at 0.133 m/s and was set to 0
+        in one tick, a hard stop at t = 2974 s)."""
+        import math
+        import pyproj
+        rows = list(csv.DictReader(open(os.path.join(DATA, "gpxpy_cerknicko-jezero.csv"))))
+        ecef = pyproj.Transformer.from_crs("EPSG:4979", "EPSG:4978", always_xy=True)
+        lat0, lon0 = math.radians(float(rows[0]["lat_deg"])), math.radians(float(rows[0]["lon_deg"]))
+        x0 = ecef.transform(float(rows[0]["lon_deg"]), float(rows[0]["lat_deg"]),
+                            float(rows[0]["alt_m"]))
+        sl, cl, so, co = math.sin(lat0), math.cos(lat0), math.sin(lon0), math.cos(lon0)
+        with tempfile.TemporaryDirectory() as tmp:
+            track = os.path.join(tmp, "cerknicko_enu.csv")
+            with open(track, "w") as f:
+                f.write("t,x,y,z\n")
+                for r in rows:
+                    x = ecef.transform(float(r["lon_deg"]), float(r["lat_deg"]), float(r["alt_m"]))
+                    d = [x[i] - x0[i] for i in range(3)]
+                    east = -so * d[0] + co * d[1]
+                    north = -sl * co * d[0] - sl * so * d[1] + cl * d[2]
+                    up = cl * co * d[0] + cl * so * d[1] + sl * d[2]
+                    f.write("%s,%.4f,%.4f,%.4f\n" % (r["t_s"], east, north, up))
+            for rate in (10, 20, 100):
+                with self.subTest(rate=rate):
+                    rc, _, err = bounded_run([TRAJREPLAY, "-q", "--summary", "--rate", str(rate),
+                                              "-o", os.devnull, track])
+                    self.assertEqual(rc, 0, err[-500:])
+                    self.assertIn("summary: hard_stops 0\n", err)
+                    self.assertNotIn("hard stop", err)
+
+    def test_stop_track_low_rates(self):
+        """Given the stop track (10 Hz fixes, 1 m/s along x for 10 s, standing 10 s,
+        on again) replayed at 10, 20 and 50 Hz: the output waits for the verdict
+        on the repeats short of the stop and creeps up to the end of its solved
+        curve; that creep ends at rest with no tick changing the velocity by more
+        than scale_accel_m_s2 (5) x T, and no hard stop is counted (it was, at
+        7.8 mm/s, 8.6 mm/s and 0.7 mm/s)."""
+        import numpy as np
+        with tempfile.TemporaryDirectory() as tmp:
+            track = os.path.join(tmp, "stop.csv")
+            with open(track, "w") as f:
+                f.write("t,x,y,z\n")
+                for i in range(301):
+                    t = i / 10
+                    x = t if i <= 100 else 10.0 if i <= 200 else t - 10.0
+                    f.write("%.1f,%.3f,0,0\n" % (t, x))
+            for rate in (10, 20, 50):
+                with self.subTest(rate=rate):
+                    out = os.path.join(tmp, "out.csv")
+                    rc, _, err = bounded_run([TRAJREPLAY, "-q", "--summary", "--rate", str(rate),
+                                              "-o", out, track])
+                    self.assertEqual(rc, 0, err[-500:])
+                    self.assertIn("summary: hard_stops 0\n", err)
+                    d = np.genfromtxt(out, delimiter=",", names=True, dtype=None, encoding=None)
+                    # the creep lies between t_s = 5 and 9 s, where the curve itself runs at
+                    # 1 m/s: every change of velocity there is the time scaling's
+                    v = d["vx_m_s"][(d["t_s"] > 5.0) & (d["t_s"] < 9.0)]
+                    self.assertGreater(len(v), 4 * rate)
+                    self.assertLessEqual(np.max(np.abs(np.diff(v))), 5.0 / rate * (1 + 1e-9))
+                    self.assertGreaterEqual(np.min(d["vx_m_s"]), 0.0)
 
 
 if __name__ == "__main__":

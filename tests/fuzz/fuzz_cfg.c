@@ -1,4 +1,4 @@
-/* fuzz_cfg.c - libFuzzer target for the config parser (cfg_load_string):
+/* fuzz_cfg.c - libFuzzer target for the config parser (cfg_load_stream):
  * any text must give either a config or an error message that starts with
  * the file name and, for a line error, a line number within the text;
  * never a crash, a leak or an out-of-bounds access (ASan/UBSan).
@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cfg.h"
+#include "cfg_string.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 

@@ -34,7 +34,7 @@ typedef struct {
     engine_waypoint_t burst;
 } aref_t;
 
-/* Timestamps closer than this are "the same time" (seconds), as in engine.c. */
+/* Timestamps closer than this are "the same time" (seconds), as in engine_input.c. */
 #define AREF_SAME_TIME_S 1e-9
 /* Positions closer than this at the same time are a duplicate (metres). */
 #define AREF_SAME_POS_M 1e-9

@@ -292,8 +292,9 @@ def uml_check(run, xyz, ref1k):
     # no position yet: the n/a marker with flags bit 4 (ENGINE_SP_NO_POSITION)
     for r in fdrows.values():
         assert (r["x"] == -2**31 * 1e-4) == bool(r["flags"] & 0x10), r
-    fd_pts = [(r["x"], r["y"]) for t, r in sorted(fdrows.items())
-              if t / 1e9 <= finished_at and not r["flags"] & 0x10]
+    # every positioned row, not only those before object 0 finished: its waypoints
+    # come from another sender in the guest, which a busy host may delay by seconds
+    fd_pts = [(r["x"], r["y"]) for t, r in sorted(fdrows.items()) if not r["flags"] & 0x10]
     assert len(fd_pts) > 0.5 * len(pts), (len(fd_pts), len(pts))
     fd_worst = 0.0
     for (px, py) in fd_pts:

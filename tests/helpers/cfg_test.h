@@ -9,7 +9,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "cfg.h"
+#include "cfg_string.h"
 #include "test.h"
 
 static char err[1024];

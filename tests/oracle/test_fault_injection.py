@@ -35,7 +35,7 @@ grid), the test asserts:
   - no underrun with a start slack of 8: each bad row's verdict comes within
     the start slack (the acceptance policy holds at most 8 rows), so the
     output never waits for it.  The default start_slack auto starts with one
-    waypoint of slack on clean regular input (lib/engine/README.md), so there
+    waypoint of slack on clean regular input (lib/engine/DESIGN.md), so there
     a held row drains the buffer: smooth slow-downs of the time scaling,
     counted as underruns; this file replays with --start-slack 8 (and
     --max-lookahead 25 for room) to test the policy's promise.

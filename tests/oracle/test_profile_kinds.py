@@ -317,20 +317,20 @@ def same_share(shown, n, rej, what):
     """shown ('0.34 %', '6.3 %', '0 %') is 100 rej / n as rounded there."""
     num = shown.split()[0]
     decimals = len(num.split(".")[1]) if "." in num else 0
-    tr.check("%.*f" % (decimals, 100 * rej / n) == num, f"lib/engine/README.md {what}: {shown} "
+    tr.check("%.*f" % (decimals, 100 * rej / n) == num, f"lib/engine/DESIGN.md {what}: {shown} "
              f"stale, the run refuses {rej} of {n}")
 
 
 def doc_table_is_this_run(seen):
-    """lib/engine/README.md's profile table and control sentence are this run's
+    """lib/engine/DESIGN.md's profile table and control sentence are this run's
     (issue 14: no stale numbers): points, share refused (and the count given
     in parentheses) per profile."""
     import re
-    with open(os.path.join(tr.DATA, "..", "..", "lib", "engine", "README.md"), encoding="utf-8") as f:
+    with open(os.path.join(tr.DATA, "..", "..", "lib", "engine", "DESIGN.md"), encoding="utf-8") as f:
         doc = f.read()
     head = doc.index("| kind | track | points | auto | matching profile |")
     rows = doc[head:doc.index("\n\n", head)].split("\n")[2:]
-    tr.check(len(rows) == 7, f"lib/engine/README.md profile table: {len(rows)} rows")
+    tr.check(len(rows) == 7, f"lib/engine/DESIGN.md profile table: {len(rows)} rows")
     for row in rows:
         kind, track, points, auto, match = [c.strip() for c in row.strip("|").split("|")]
         kind = kind.split()[0]
@@ -338,11 +338,11 @@ def doc_table_is_this_run(seen):
         prof = match.split()[0]
         for p, cell in (("auto", auto), (prof, match.split(" ", 1)[1])):
             n, rej = seen.get((kind, name, p), (-1, -1))
-            tr.check(int(points) == n, f"lib/engine/README.md {kind} {name}: {points} points, run {n}")
+            tr.check(int(points) == n, f"lib/engine/DESIGN.md {kind} {name}: {points} points, run {n}")
             same_share(cell, n, rej, f"{kind} {name} {p}")
             count = re.search(r"\((\d+)", cell)
             tr.check(count is None or int(count.group(1)) == rej,
-                     f"lib/engine/README.md {kind} {name} {p}: {cell}, run refuses {rej}")
+                     f"lib/engine/DESIGN.md {kind} {name} {p}: {cell}, run refuses {rej}")
     air, tool = re.search(r"`road`'s absolute limits refuse (\S+ %) of the airliner\s+\(100 m/s\) "
                           r"and (\S+ %) of the toolpath", doc).groups()
     same_share(air, *seen[("airliner", "control", "road")], "airliner road")

@@ -42,7 +42,7 @@ lib.engine_curve_flat.restype = C.c_long
 lib.engine_curve_flat.argtypes = [C.c_int] * 3 + [C.c_uint] * 2 + [SZ, dp, dp, dp, SZ]
 
 METHOD_SMOOTH, METHOD_CUBIC, PARAM_TIME, ENDS_REST = 2, 1, 1, 4
-# engine_config_default's smoothing settings (lib/engine/engine.c), which
+# engine_config_default's smoothing settings (lib/engine/engine_settings.c), which
 # engine_curve_flat uses.
 DEFAULT_WINDOW, DEFAULT_CTRL = 24, 6
 # Two least-squares solvers (banded Cholesky vs scipy's) on windows of <= 40

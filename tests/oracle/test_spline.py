@@ -53,7 +53,7 @@ RHO = 2.0 - math.sqrt(3.0)
 TOL_ORACLE_REL = 1e-12
 # Documented fragment bound: |streamed - global| <= FRAG_K * rho^(O/2) * max|c2|/3
 # (c2/3 = k''/6 scale of the error injected at an artificial fragment end);
-# measured K <= 1.4 over random walks and several (F, O), see lib/engine/README.md.
+# measured K <= 1.4 over random walks and several (F, O), see lib/engine/DESIGN.md.
 FRAG_K = 2.0
 # On the real tracks, whose intervals jump (cerknicko switches between 7 s
 # and 2 s steps, visnjan has 1-41 s), an artificial end's error decays more
@@ -297,14 +297,14 @@ def test_fragments_vs_global():
                       "seed %d m%d p%d e%d F=%d O=%d: %.1e of extent (bound %.1e)"
                       % (seed, method, param, ends, f, o, err / ext, bound / ext))
                 worst_k = max(worst_k, err / (RHO ** (o / 2) * scale))
-    # lib/engine/README.md: "the measured factor is <= 1.3 instead of 2, tested for 7 (F,O) pairs"
+    # lib/engine/DESIGN.md: "the measured factor is <= 1.3 instead of 2, tested for 7 (F,O) pairs"
     import re
     with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "lib", "engine",
-                           "README.md"), encoding="utf-8") as f:
+                           "DESIGN.md"), encoding="utf-8") as f:
         k, pairs = re.search(r"the measured factor is ≤ (\S+) instead of 2, tested for (\d+) \(F,O\) pairs",
                              " ".join(f.read().split())).groups()
     check(float(k) == float("%.1f" % worst_k) and int(pairs) == 7,
-          "lib/engine/README.md: factor <= %s over %s (F,O) pairs, the run %.2f over 7" % (k, pairs, worst_k))
+          "lib/engine/DESIGN.md: factor <= %s over %s (F,O) pairs, the run %.2f over 7" % (k, pairs, worst_k))
 
 
 def test_default_accuracy_vs_scipy():
@@ -381,7 +381,7 @@ def test_real_tracks():
     the paper's uniform B-spline (F=32, O=16), then:
     every waypoint is hit (b: 1e-9 of the extent), the fragments stay within the
     bound of one global solve, nothing is NaN, the velocity is continuous at
-    the joins for (b); the velocity jumps of (a) are printed (lib/engine/README.md)."""
+    the joins for (b); the velocity jumps of (a) are printed (lib/engine/DESIGN.md)."""
     measured = {}
     for name in ("gpxgo_visnjan.csv", "gpxpy_cerknicko-jezero.csv", "n2k_furuno_figure8_src52.csv"):
         t, xyz = load_track(name)
@@ -431,23 +431,23 @@ def test_real_tracks():
 
 
 def defaults_doc_is_this_run(fd, od, la, errs, picks):
-    """lib/engine/README.md's defaults and picks, and tests/bench/RESULTS.md's range of the
+    """lib/engine/DESIGN.md's defaults and picks, and tests/bench/RESULTS.md's range of the
     defaults' error against scipy, are this run's (issue 14: no stale numbers)."""
     import re
     here = os.path.dirname(os.path.abspath(__file__))
-    with open(os.path.join(here, "..", "..", "lib", "engine", "README.md"), encoding="utf-8") as f:
+    with open(os.path.join(here, "..", "..", "lib", "engine", "DESIGN.md"), encoding="utf-8") as f:
         doc = " ".join(f.read().split())
     got = re.search(r"max_lookahead 18, give F = (\d+), O = (\d+): (\d+) waypoints of lookahead on "
                     r"regular input, (\S+) of the extent against one global solve", doc).groups()
     check((int(got[0]), int(got[1]), int(got[2])) == (fd, od, la) and
           float(got[3]) == float("%.0e" % np.median(errs)),
-          "lib/engine/README.md defaults: %s, the run F=%d O=%d lookahead %d, %.1e" % (got, fd, od, la,
+          "lib/engine/DESIGN.md defaults: %s, the run F=%d O=%d lookahead %d, %.1e" % (got, fd, od, la,
                                                                                       np.median(errs)))
     fo, pairs = re.search(r"(\d+/\d+, \d+/\d+ and \d+/\d+) are what (\(\S+, \d+\), \(\S+, \d+\) and "
                           r"\(\S+, \d+\)) pick", doc).groups()
     fo = [tuple(int(x) for x in p.split("/")) for p in re.findall(r"\d+/\d+", fo)]
     pairs = [(float(a), int(b)) for a, b in re.findall(r"\((\S+), (\d+)\)", pairs)]
-    check([picks.get(p) for p in pairs] == fo, "lib/engine/README.md picks %s for %s, the run %s"
+    check([picks.get(p) for p in pairs] == fo, "lib/engine/DESIGN.md picks %s for %s, the run %s"
           % (fo, pairs, [picks.get(p) for p in pairs]))
     with open(os.path.join(here, "..", "bench", "RESULTS.md"), encoding="utf-8") as f:
         res = " ".join(f.read().split())
@@ -457,11 +457,11 @@ def defaults_doc_is_this_run(fd, od, la, errs, picks):
 
 
 def doc_is_this_run(m):
-    """lib/engine/README.md's figures of the real tracks are this run's, as the
+    """lib/engine/DESIGN.md's figures of the real tracks are this run's, as the
     doc rounds them (issue 14: no stale numbers)."""
     import re
     with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "lib", "engine",
-                           "README.md"), encoding="utf-8") as f:
+                           "DESIGN.md"), encoding="utf-8") as f:
         doc = " ".join(f.read().split())
 
     def same(shown, value, what):
@@ -469,7 +469,7 @@ def doc_is_this_run(m):
         mant = num.split("e")[0]
         d = len(mant.split(".")[1]) if "." in mant else 0
         got = ("%.*e" % (d, value)) if "e" in num else ("%.*f" % (d, value))
-        check(float(got) == float(num), "lib/engine/README.md %s: %s, the run gives %.3g" % (what, shown, value))
+        check(float(got) == float(num), "lib/engine/DESIGN.md %s: %s, the run gives %.3g" % (what, shown, value))
 
     rows = {"gpxgo_visnjan": "| gpxgo_visnjan (", "gpxpy_cerknicko-jezero": "| gpxpy_cerknicko-jezero (",
             "n2k_furuno_figure8_src52": "| n2k figure-8 ("}

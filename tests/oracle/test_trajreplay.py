@@ -34,7 +34,7 @@ VISNJAN_GPX = os.path.join(DATA, "gpxgo_visnjan.gpx")
 CERKNICA = os.path.join(DATA, "gpxpy_cerknicko-jezero.csv")
 FIGURE8 = os.path.join(DATA, "n2k_furuno_figure8_src52.csv")
 
-# The fragment bound (lib/engine/frag.h, lib/engine/README.md "Fragments"): with the junction average, the
+# The fragment bound (lib/engine/frag.h, lib/engine/DESIGN.md "Fragments"): with the junction average, the
 # solved values differ from one global solve by about 0.268^(O/2) relative
 # to the track's scale.  With F=64, O=32 that is 7e-10.  Position, velocity
 # and acceleration are linear in those values, so each is compared relative
@@ -422,6 +422,11 @@ def test_svg(tmp):
     curve = root.find(f".//{ns}path[@id='curve']").get("d")
     vertices = curve.count("L") + curve.count("M")
     check(100 < vertices <= 4001, f"svg: curve has {vertices} vertices")
+    # the title says how the setpoints were decimated for drawing
+    title = root.find(f"{ns}title").text
+    m = re.search(r"setpoints drawn: 1 in (\d+) \((\d+)\)$", title)
+    check(m is not None and int(m.group(2)) <= 4000 and int(m.group(1)) & (int(m.group(1)) - 1) == 0,
+          f"svg: title {title!r}")
     check(os.path.getsize(svg) < 400000, f"svg: {os.path.getsize(svg)} bytes")
 
 

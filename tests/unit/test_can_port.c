@@ -26,7 +26,7 @@ typedef struct {
     unsigned cmds[8];
     unsigned args[8];
     unsigned ncmd;
-    int cmd_answer; /* what command returns (< 0: refused, as obj_set_override) */
+    int cmd_answer; /* what command returns (< 0: refused, as obj_command) */
     unsigned nhold; /* hold requests */
     uint32_t free_slots;
 } fake_engine_t;
@@ -612,8 +612,8 @@ static void test_cia402_status2_drive_page(void **state)
 /* Given a drive with a heartbeat consumer (100 ms) whose heartbeat stops,
  * then the object is asked once to hold (obj_hold: feed override 0, a
  * controlled stop along the path by the time scaling); a command the object
- * refuses (obj_set_override while held) is counted as refused, and a CLEAR
- * (which releases the object's hold, obj_clear) passes. */
+ * refuses (an override while held) is counted as refused, and a CLEAR
+ * (which releases the object's hold) passes. */
 static void test_cia402_heartbeat_lost_holds(void **state)
 {
     (void)state;

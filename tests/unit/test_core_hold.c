@@ -1,8 +1,9 @@
 /*
  * test_core_hold.c - the feed hold of an object (daemon/core/core.h obj_hold,
- * obj_set_override, obj_clear): the one owner of the hold a CiA 402 drive's
- * lost heartbeat asks for, whichever source (CAN, Modbus) writes the override;
- * and the drive events daemon/can raises (obj_drive_event).
+ * and obj_command's override and clear, as CAN and Modbus send them): the one
+ * owner of the hold a CiA 402 drive's lost heartbeat asks for, whichever
+ * source (CAN, Modbus) writes the override; and the drive events daemon/can
+ * raises (obj_drive_event).
  * Driven with a real engine, no clock, no sockets.
  */
 #include "test.h"
@@ -38,10 +39,16 @@ static engine_setpoint_t run(obj_t *o, int64_t k0, int n)
     return sp;
 }
 
+/* The override command, as a CAN frame or a Modbus write gives it. */
+static int override(obj_t *o, unsigned percent)
+{
+    return obj_command(o, percent ? LC_EV_OVERRIDE : LC_EV_OVERRIDE_ZERO, percent, "test");
+}
+
 /* Given an object moving at 1 m/s, when it is held (a drive's heartbeat
  * lost, obj_hold), then it comes to rest on its path; an override to move
  * again (as a Modbus override register write or a CAN override frame makes
- * it, obj_set_override) is refused with -ENGINE_ESTATE (Modbus: exception 03,
+ * it, obj_command) is refused with -ENGINE_ESTATE (Modbus: exception 03,
  * counted in mb_rejected; CAN: cmd_refused) and the object stays at rest; an
  * override 0 is taken; the clear releases the hold and the feed is back at
  * 100 %: a new track moves the object again. */
@@ -65,18 +72,18 @@ static void test_hold_refuses_override_until_clear(void **state)
     assert_true(fabs(sp.vel_m_s[0]) < 1e-9);
     double x_held = sp.pos_m[0];
     assert_true(x_held > x_at_hold && x_held < 19.0); /* stopped on the path, short of its end */
-    assert_int_equal(obj_set_override(&o, 100), -ENGINE_ESTATE);
-    assert_int_equal(obj_set_override(&o, 1), -ENGINE_ESTATE);
-    assert_int_equal(obj_set_override(&o, 0), 0);
+    assert_int_equal(override(&o, 100), -ENGINE_ESTATE);
+    assert_int_equal(override(&o, 1), -ENGINE_ESTATE);
+    assert_int_equal(override(&o, 0), 0);
     sp = run(&o, 1000, 300);
     assert_true(fabs(sp.pos_m[0] - x_held) < 1e-9); /* still at rest */
-    obj_clear(&o);
+    assert_int_equal(obj_command(&o, LC_EV_CLEAR, 0, "test"), 0);
     assert_int_equal(o.held, 0);
     sp = run(&o, 1300, 10);
     push_line(&o, sp.pos_m[0], 100);
     sp = run(&o, 1310, 500);
     assert_true(sp.pos_m[0] > x_held + 1.0); /* moving again at the feed */
-    assert_int_equal(obj_set_override(&o, 50), 0);
+    assert_int_equal(override(&o, 50), 0);
     engine_free(o.engine);
 }
 
@@ -123,7 +130,7 @@ static void test_drive_events_through_the_owner(void **state)
     assert_int_equal(obj_drive_event(&o, LC_EV_DRIVE_ENABLED, at), 0); /* not adopted */
     b = run_lc(&o, 1001, 10);
     assert_true(fabs(b.pos_m[0] - at[0]) > 1e-3); /* still held where it braked */
-    obj_clear(&o);
+    (void)obj_command(&o, LC_EV_CLEAR, 0, NULL);
     b = run_lc(&o, 1011, 10);
     assert_true(b.flags & ENGINE_SP_NO_POSITION); /* the drives' position awaited afresh */
     at[0] += 0.002;
@@ -135,7 +142,7 @@ static void test_drive_events_through_the_owner(void **state)
     assert_int_equal(o.held, 1);
     assert_int_equal(obj_drive_event(&o, LC_EV_HEARTBEAT_BACK, NULL), 0);
     assert_int_equal(o.held, 1);
-    obj_clear(&o);
+    (void)obj_command(&o, LC_EV_CLEAR, 0, NULL);
     assert_int_equal(o.held, 0);
     lc_free(&o.lc);
     engine_free(o.engine);

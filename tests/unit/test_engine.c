@@ -307,8 +307,8 @@ static void test_stream_underrun_finish(void **state)
      * holds for its next neighbour (accept.h, ACCEPT_LAG) leaves the buffer
      * one interval thinner after the catch-up: scaled slow-downs (U, S) may
      * follow while it is thin, never a hard stop (below).  The buffer's
-     * braking capacity counts every segment at its fastest (remaining() in
-     * engine.c), so on these irregular intervals two such slow-downs follow */
+     * braking capacity counts every segment at its fastest (scale_remaining() in
+     * engine_scale.c), so on these irregular intervals two such slow-downs follow */
     assert_true(st.underruns >= 1 && st.underruns <= 3);
     assert_int_equal(transitions, 3 + 2 * (int)st.underruns);
     assert_int_equal(st.hard_stops, 0); /* the time scaling braked in time */
@@ -1509,7 +1509,7 @@ static void test_status_stalled(void **state)
 
 /* Given a caller whose clock jitters around the period grid (each now_ns
  * within +-24 % of a period of its scheduled tick, so two calls are 0.52 to
- * 1.48 periods apart), then every call is one tick (engine.c: periods since
+ * 1.48 periods apart), then every call is one tick (engine_tick.c: periods since
  * the last call, rounded), never a repeat or a
  * skip: the setpoints are bitwise those of an engine ticked exactly on the
  * grid, apart from now_ns, and no SKIPPED flag is raised.  (Truncating would

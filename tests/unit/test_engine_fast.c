@@ -1,5 +1,5 @@
 /*
- * test_engine_fast.c - engine_tick's fast ticks (engine.c fast_window,
+ * test_engine_fast.c - engine_tick's fast ticks (engine_tick.c fast_window,
  * fast_tick) against the full state machine: two engines with the same
  * configuration, one with engine_set_fast_ticks(e, 0), get the same calls
  * (pushes between ticks, finish, override changes, stop, clear, a position,

@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "cfg.h"
+#include "cfg_string.h"
 #include "engine_settings.h"
 
 static size_t type_size(engine_setting_type_t t)

@@ -17,6 +17,7 @@
 #include "engine.h"
 #include "fdiff.h"
 #include "fdiff_aos.h"
+#include "global_curve.h"
 #include "frag.h"
 
 /* The longest segment the engine may stream: max_gap_s (60 s by default)
@@ -224,7 +225,7 @@ static void test_frag_bookkeeping(void **state)
  * system (its rows, an artificial start row x = pin at its first row when it
  * is not fragment 0, an artificial end row x = pin at its last) solved by
  * GSL's tridiagonal solver, assembled by the rule of lib/engine/frag.h and
- * lib/engine/README.md ("Fragments"): fragment k owns the rows after junction J(k-1) up to before J(k),
+ * lib/engine/DESIGN.md ("Fragments"): fragment k owns the rows after junction J(k-1) up to before J(k),
  * x at each junction is the MEAN of the two fragments that share it, and at
  * the end the oldest open fragment takes the true end row and owns every row
  * to the end.  J(k) = (k+1)S - delta + O/2.

@@ -21,7 +21,7 @@
 
 #define PERIOD_NS 10000000LL
 #define T_S 0.01
-/* lib/engine/engine.c ENGINE_SCALE_V_FLOOR_M_S, documented in TIMESCALE.md */
+/* lib/engine/engine_int.h ENGINE_SCALE_V_FLOOR_M_S, documented in TIMESCALE.md */
 #define V_FLOOR_M_S 1.0
 /* Setpoint vs Horner at its own track time (as test_engine.c). */
 #define TOL_HORNER_M 1e-9

@@ -30,8 +30,8 @@ static void test_visnjan_gpx_equals_csv(void **state)
     (void)state;
     track_t a, b;
     char err[256];
-    assert_int_equal(track_load(VISNJAN_CSV, TRACK_FMT_AUTO, &a, err, sizeof err), 0);
-    assert_int_equal(track_load(VISNJAN_GPX, TRACK_FMT_AUTO, &b, err, sizeof err), 0);
+    assert_int_equal(track_load_opts(VISNJAN_CSV, TRACK_FMT_AUTO, 0, &a, err, sizeof err), 0);
+    assert_int_equal(track_load_opts(VISNJAN_GPX, TRACK_FMT_AUTO, 0, &b, err, sizeof err), 0);
     assert_int_equal(a.n, VISNJAN_N);
     assert_int_equal(b.n, VISNJAN_N);
     assert_int_equal(a.format, TRACK_FMT_LATLON);
@@ -421,7 +421,7 @@ static void test_iso8601(void **state)
     /* visnjan: GPX t + epoch of the first point == CSV epoch_s, every row. */
     track_t g;
     char err[256];
-    assert_int_equal(track_load(VISNJAN_GPX, TRACK_FMT_GPX, &g, err, sizeof err), 0);
+    assert_int_equal(track_load_opts(VISNJAN_GPX, TRACK_FMT_GPX, 0, &g, err, sizeof err), 0);
     FILE *f = fopen(VISNJAN_CSV, "r");
     assert_non_null(f);
     char line[512];
@@ -495,9 +495,10 @@ static void test_missing_file(void **state)
     (void)state;
     track_t t;
     char err[256];
-    assert_int_equal(track_load("/nonexistent/x.csv", TRACK_FMT_AUTO, &t, err, sizeof err), -1);
+    assert_int_equal(track_load_opts("/nonexistent/x.csv", TRACK_FMT_AUTO, 0, &t, err, sizeof err),
+                     -1);
     assert_string_equal(err, "/nonexistent/x.csv: No such file or directory");
-    assert_int_equal(track_load("/nonexistent/x.csv", TRACK_FMT_AUTO, &t, NULL, 0), -1);
+    assert_int_equal(track_load_opts("/nonexistent/x.csv", TRACK_FMT_AUTO, 0, &t, NULL, 0), -1);
 }
 
 /* Given the real tracks, when loaded, then the row counts of ATTRIBUTION.md. */
@@ -514,7 +515,7 @@ static void test_real_tracks(void **state)
     for (size_t k = 0; k < 2; k++) {
         track_t t;
         char err[256];
-        assert_int_equal(track_load(tr[k].path, TRACK_FMT_AUTO, &t, err, sizeof err), 0);
+        assert_int_equal(track_load_opts(tr[k].path, TRACK_FMT_AUTO, 0, &t, err, sizeof err), 0);
         assert_int_equal(t.n, tr[k].n);
         assert_int_equal(t.skipped, 0);
         track_free(&t);
@@ -524,9 +525,9 @@ static void test_real_tracks(void **state)
      * tests/oracle/test_n2k_candump.py by an independent decode). */
     track_t t;
     char err[256];
-    assert_int_equal(
-        track_load("tests/data/canboat_candumpSample3.log", TRACK_FMT_AUTO, &t, err, sizeof err),
-        0);
+    assert_int_equal(track_load_opts("tests/data/canboat_candumpSample3.log", TRACK_FMT_AUTO, 0, &t,
+                                     err, sizeof err),
+                     0);
     assert_int_equal(t.format, TRACK_FMT_N2K);
     assert_int_equal(t.n, 165);
     assert_true(t.geographic);

@@ -51,8 +51,8 @@ static void compare_with_gpx(const char *path, track_format_t want, double alt_t
 {
     track_t g, x;
     char err[512];
-    assert_int_equal(track_load(VISNJAN_GPX, TRACK_FMT_AUTO, &g, err, sizeof err), 0);
-    if (track_load(path, TRACK_FMT_AUTO, &x, err, sizeof err) != 0)
+    assert_int_equal(track_load_opts(VISNJAN_GPX, TRACK_FMT_AUTO, 0, &g, err, sizeof err), 0);
+    if (track_load_opts(path, TRACK_FMT_AUTO, 0, &x, err, sizeof err) != 0)
         fail_msg("%s", err);
     assert_int_equal(x.format, want);
     assert_int_equal(x.n, VISNJAN_N);

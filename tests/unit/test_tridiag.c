@@ -90,7 +90,6 @@ static void test_singular(void **state)
     b[0] = NAN;
     assert_int_equal(tridiag_solve(2, 1, a, b, c, d, x, s), -TRIDIAG_ESINGULAR);
     assert_int_equal(tridiag_solve(0, 1, a, b, c, d, x, s), -TRIDIAG_ESIZE);
-    assert_non_null(tridiag_strerror(-TRIDIAG_ESINGULAR));
 }
 
 int main(void)

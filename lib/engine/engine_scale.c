@@ -1,0 +1,393 @@
+/*
+ * engine_scale.c - the time scaling stage of the play-out (timescale.h,
+ * TIMESCALE.md, CLOCK.md): the output off the unit grid, its rate chosen
+ * each tick within the limits converted at the curve's speed, the braking
+ * capacity left on the solved curve, the speed cap ahead, stops and clears
+ * braked to rest, handovers at rate 0, and one clock (locked on the play
+ * time or catching up).  It owns engine_scale_t (engine_int.h: the rate, the
+ * scaled track time, the override, the stop request, what is known of the
+ * curve ahead) and engine_clk_t (the clock).
+ */
+#include "engine.h"
+#include "engine_int.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "fdiff.h"
+#include "timescale.h"
+
+/* A transfer's or REST end's point closer than this to where the output
+ * came to rest is taken as reached (rest_handover; metres). */
+#define ENGINE_HANDOVER_TOL_M 1e-6
+
+/* The play time (now - D), absolute, and relative to origin_t: epoch
+ * seconds in a double are only good to 2.4e-7 s, so the difference is taken
+ * in long double from the integer nanoseconds. */
+static double play_abs(const engine_t *e)
+{
+    return (double)((long double)e->clk.play_ns * 1e-9L);
+}
+
+static double play_rel(const engine_t *e)
+{
+    return (double)((long double)e->clk.play_ns * 1e-9L - (long double)e->out.origin_t);
+}
+
+/* Scaled output: the curve at s by Horner, then the chain rule
+ * (timescale.h): v = k' r, a = k'' r^2 + k' dr/dt. */
+void scale_eval(engine_t *e)
+{
+    double u = (e->scale.s - e->out.cur_t0) / e->out.cur.seg.dur_s, cv[AX], ca[AX], v2 = 0;
+    double r = e->scale.ts.rate, ra = e->scale.ts.acc;
+
+    if (u < 0)
+        u = 0;
+    if (u > 1)
+        u = 1;
+    fdiff_eval(&e->out.cur.seg, u, e->out.pos, cv, ca);
+    for (int k = 0; k < AX; k++) {
+        e->out.vel[k] = cv[k] * r;
+        e->out.acc[k] = ca[k] * r * r + cv[k] * ra;
+        v2 += cv[k] * cv[k];
+    }
+    e->scale.cspeed = sqrt(v2);
+}
+
+/* The speed (m/s) at which the scaling's limits are converted outside a
+ * stop: the largest the curve reaches on the current segment (seg_speed_max;
+ * a transfer's: 1.5 D / T_x), at least the floor.  (Converted at the speed
+ * here, the limits shrink as a ramp speeds up along a transfer faster than
+ * the jerk can take the rate's acceleration back: the rate overshot 1.) */
+double scale_conv_speed(const engine_t *e)
+{
+    return fmax(e->out.cur.vmax, ENGINE_SCALE_V_FLOOR_M_S);
+}
+
+/* Track time (per unit of rate, in the units of the limits converted at v)
+ * kept for the rises of the limits ahead.  Where the output brakes into a
+ * segment with larger limits (a slower one: A = a / v), its deceleration must
+ * ramp up to the new A at the jerk J: a stop then needs up to
+ * r (A_new - A_old)^2 / (2 J_new) <= r dA a / (2 j) of capacity more than
+ * r^2/2; so much per rise of A ahead, summed (ucum), is kept in reserve. */
+double scale_rise_reserve(const engine_t *e, double v)
+{
+    double du = e->scale.avail_ucum - e->out.cur.ucum;
+    return du > 0 ? 0.5 * e->cfg.scale_accel_m_s2 / e->cfg.scale_jerk_m_s3 * v * du : 0.0;
+}
+
+/*
+ * Track time still available ahead of s (relative) before the output must
+ * be at rest, with TS_MARGIN_TICKS in reserve; INFINITY when the curve ahead
+ * ends at rest anyway (a transfer, a closed trajectory with rest ends).
+ *
+ * Not the plain track time left: the limits are a / v in rate units, so
+ * braking on a part of the curve at speed v removes r^2/2 at a / v per unit
+ * of track time (d(r^2/2)/ds = dr/dt).  What the curve ahead can absorb is
+ * the capacity K = sum of dur / v over it (each segment at its fastest,
+ * seg_speed_max, so K is a lower bound), and the output can stop within
+ * it from r iff r^2/2 <= a K.  Expressed for ts_step, whose limits are
+ * converted at the speed here, that is track time v_here K: more than is
+ * left where the curve ahead is slower, less where it is faster.  With the
+ * plain track time, a curve speeding up 8x in its last solved segment
+ * (bspline + uniform on gpxpy_cerknicko-jezero.csv) was reached at 0.8 of
+ * its rate and ended under the moving output (a hard stop).
+ */
+double scale_remaining(const engine_t *e, double s)
+{
+    if (e->out.mode == OUT_XFER)
+        return e->out.cur_t1 - s; /* left at rate 0 (handover) */
+    /* the braking capacity left, in the units of the limits here */
+    double in_cur = e->out.cur_t1 - s, v = scale_conv_speed(e), k;
+    k = (in_cur > 0 ? in_cur / v : 0.0) + (e->scale.avail_kcum - e->out.cur.kcum);
+    /* the margin scales with the rate: standing still needs none, so a
+     * buffer shorter than the margin never deadlocks the output */
+    return v * k - e->scale.ts.rate * (scale_rise_reserve(e, v) + TS_MARGIN_TICKS * e->period_s);
+}
+
+/*
+ * The speed cap ahead (ENGINE_SPEED_CAP, TIMESCALE.md "Speed cap"), as a
+ * distance for ts_step like scale_remaining(): the output must enter each slow
+ * segment ahead (rate ceiling c) at a rate of at most c.  The braking that
+ * comes to rest within the track time D to its start plus what a braking at
+ * -A from c still needs, ts_stop_dist(c, -A), passes c within D (it passes c
+ * decelerating at most at A, and needs at least that much more from there).
+ * D as in scale_remaining(): the capacity to the segment's start at the limits
+ * here, less the same reserve.  INFINITY if no slow segment is ahead.
+ */
+double scale_ceil_room(const engine_t *e, double s, double A, double J)
+{
+    double R = INFINITY;
+
+    if (e->out.mode != OUT_STREAM || !e->queue.slow_len)
+        return R;
+    double in_cur = e->out.cur_t1 - s, v = scale_conv_speed(e);
+    double k0 = (in_cur > 0 ? in_cur / v : 0.0) - e->out.cur.kcum;
+    double res = e->scale.ts.rate * (scale_rise_reserve(e, v) + TS_MARGIN_TICKS * e->period_s);
+    for (size_t i = 0; i < e->queue.slow_len; i++) {
+        const qent_t *q = &e->queue.ent[e->queue.slow[(e->queue.slow_head + i) % e->queue.cap]];
+        if (q->traj != e->out.traj)
+            break;
+        double kstart = q->kcum - q->seg.dur_s / fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
+        R = fmin(R, v * (k0 + kstart) - res + ts_stop_dist(q->ceil, -A, A, J));
+    }
+    return R;
+}
+
+/* The rate the speed cap allows on the current segment. */
+double scale_ceil_here(const engine_t *e)
+{
+    return e->out.mode == OUT_STREAM ? e->out.cur.ceil : INFINITY;
+}
+
+/* The jerk of a stop or clear (m/s^3): at least a / T, so that the braking
+ * reaches its full deceleration within one tick and the stop ends within
+ * v^2/(2 a) + v T of path (a jerk j adds v a/(2 j) of onset: TIMESCALE.md,
+ * "Stop distance"). */
+static double stop_jerk(const engine_t *e)
+{
+    return fmax(e->cfg.scale_jerk_m_s3, e->cfg.scale_accel_m_s2 / e->period_s);
+}
+
+/* The time scaling's limits in rate units at the curve's speed: outside a
+ * stop at the largest speed the curve reaches on the current segment and the
+ * next one (conv_speed), so that k' dr/dt stays within a over the ticks ahead
+ * also where the curve speeds up (a REST start, entered at rate 0).  A stop
+ * converts them at the curve's speed here, down to a T (not the 1 m/s floor):
+ * below the floor a slow object would brake at less than a, and a stop from v
+ * must end within v^2/(2 a) + v T. */
+void scale_limits(const engine_t *e, double *A, double *J)
+{
+    double v, jerk = e->cfg.scale_jerk_m_s3;
+
+    if (e->scale.stop_req) {
+        double floor = fmin(ENGINE_SCALE_V_FLOOR_M_S, e->cfg.scale_accel_m_s2 * e->period_s);
+        jerk = stop_jerk(e);
+        v = e->scale.cspeed > floor ? e->scale.cspeed : floor;
+    } else {
+        v = scale_conv_speed(e);
+    }
+    *A = e->cfg.scale_accel_m_s2 / v;
+    *J = jerk / v;
+}
+
+/* The rate the output is asked for, before the buffer's limit. */
+double scale_target(const engine_t *e)
+{
+    return e->scale.stop_req || e->scale.end_brake ? 0.0
+                                                   : fmin(e->scale.override, scale_ceil_here(e));
+}
+
+/* 1 if the time scaling's next tick would set the output moving (tried on a
+ * copy of its state): it advances and is not back at rest at the tick's end
+ * (a tick that brakes back to rest within itself, or advances by less than
+ * the track time's last bit, repeats for ever on a curve that cannot grow). */
+int scale_moves(const engine_t *e, double R, double A, double J)
+{
+    ts_state_t ts = e->scale.ts;
+    int lim = 0;
+    double ds = ts_step(&ts, scale_target(e), R, A, J, e->period_s, NULL, &lim);
+    return e->scale.s + ds > e->scale.s && !(is_exactly(ts.rate, 0.0) && is_exactly(ts.acc, 0.0));
+}
+
+/* Scaled, at rate 0 at the start of cur (s = 0).  Every transfer and every
+ * trajectory is entered at rate 0 and every transfer and REST end left at
+ * rate 0: there the curve rests (k' = 0) with its own k'' != 0 (the
+ * smoothstep's 6 D / T_x^2, a REST end's M), and the output's acceleration
+ * k'' r^2 + k' dr/dt is 0 on both sides of the handover instead of stepping
+ * by k'' (TIMESCALE.md, "Handovers"). */
+void scale_rest(engine_t *e)
+{
+    e->scale.on = 1;
+    e->scale.s = 0.0;
+    e->scale.ts.rate = 0.0;
+    e->scale.ts.acc = 0.0;
+}
+
+/* The output stands within ENGINE_HANDOVER_TOL_M of p. */
+static int near_here(const engine_t *e, const double *p)
+{
+    double d2 = 0;
+    for (int k = 0; k < AX; k++)
+        d2 += (p[k] - e->out.pos[k]) * (p[k] - e->out.pos[k]);
+    return d2 <= ENGINE_HANDOVER_TOL_M * ENGINE_HANDOVER_TOL_M;
+}
+
+/* At rest (rate 0) within the dead band of the end of a transfer or of a
+ * trajectory's REST end (asked to move, the next tick could not: no move of
+ * one tick would leave room to stop, ts_step's creep included): the curve is
+ * as good as there.  A closed trajectory whose end is not at rest finishes
+ * where it stands (finish_here, as its end braking does) (its speed
+ * vanishes at the end, the position within k'' d^2 / 2 of it, d the track
+ * time left): hand over from its end. */
+static void rest_handover(engine_t *e)
+{
+    double A, J, target = scale_target(e), end[AX];
+    ts_state_t probe = e->scale.ts;
+
+    if (!(target > 0))
+        return; /* at rest by the override */
+    scale_limits(e, &A, &J);
+    (void)ts_step(&probe, target, scale_remaining(e, e->scale.s), A, J, e->period_s, NULL, NULL);
+    if (probe.rate > 0)
+        return; /* the next tick moves on (its advance from rest alone may be a
+                 * rounding residue of 1e-22: not a move) */
+    if (e->out.mode == OUT_XFER) {
+        fdiff_eval(&e->out.cur.seg, 1.0, end, NULL, NULL);
+        if (near_here(e, end))
+            play_start(e, 0);
+        return;
+    }
+    if (e->out.mode != OUT_STREAM || !e->scale.avail_closed)
+        return; /* an underrun: resumes when waypoints come */
+    const qent_t *h = NULL;
+    for (size_t i = 0; i < e->queue.len && !h; i++) {
+        const qent_t *q = &e->queue.ent[(e->queue.head + i) % e->queue.cap];
+        if (q->traj != e->out.traj)
+            break;
+        if (q->kind == QE_END)
+            h = q;
+    }
+    for (int k = 0; k < AX; k++)
+        end[k] = h ? h->seg.c[k][0] : NAN;
+    if (!e->scale.avail_rest || !near_here(e, end)) {
+        /* an end not at rest (as end_brake would), or one that the braking
+         * cannot reach (the curve ahead too fast to stop on from any move):
+         * finish where the output stands, never a jump */
+        play_finish_here(e);
+        return;
+    }
+    while (q_head(e)->kind == QE_SEG)
+        queue_pop(e);
+    play_rest_at_end(e, q_head(e));
+}
+
+static void scaled_advance(engine_t *e, double s1, double target, int lim);
+
+/* One tick off the unit grid: the time scaling chooses the advance. */
+void scale_step(engine_t *e, double target, double R, double A, double J)
+{
+    int lim = 0;
+    double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n), Rc = scale_ceil_room(e, s, A, J);
+    double r0 = e->scale.ts.rate;
+    double ds = ts_step(&e->scale.ts, target, fmin(R, Rc), A, J, e->period_s, NULL, &lim);
+
+    /* the rate this tick starts from, if a stop within it keeps to A */
+    e->scale.stop_dv = r0 <= A * e->period_s ? r0 : -1.0;
+    /* held back by the speed cap ahead, not by the curve running short */
+    scaled_advance(e, s + ds, target, lim && !(Rc < R));
+    e->scale.stop_dv = -1.0;
+}
+
+/* Move the scaled output to track time s1 (relative to origin_t), through
+ * the queued segments, and update the states that depend on it. */
+static void scaled_advance(engine_t *e, double s1, double target, int lim)
+{
+    e->scale.on = 1;
+    e->out.n++;
+    while (s1 >= e->out.cur_t1) {
+        if (e->out.mode == OUT_XFER) {
+            /* a transfer ends at rest, braked to rate 0 (scale_remaining()) */
+            s1 = e->out.cur_t1;
+            e->scale.ts.rate = e->scale.ts.acc = 0.0;
+            if (e->scale.stop_req)
+                break; /* stop on its end */
+            play_start(e, 0);
+            if (e->out.mode != OUT_STREAM)
+                return;
+            s1 = 0.0;
+            continue;
+        }
+        qent_t *h = q_head(e);
+        if (h && h->traj == e->out.traj && h->kind == QE_END) {
+            play_rest_at_end(e, h);
+            return;
+        }
+        if (!h || h->traj != e->out.traj) {
+            /* cannot happen while scale_remaining() is right: see unit_step.
+             * Landing on the end from a rate a tick at A brings to 0 (a creep
+             * up to the end of the solved curve at 10 Hz: 7.8 mm/s) is a stop
+             * within the limits, not a hard one */
+            s1 = e->out.cur_t1;
+            if (e->scale.ts.rate > 0 && !(e->scale.stop_dv >= 0))
+                e->st.hard_stops++;
+            e->scale.ts.rate = e->scale.ts.acc = 0.0;
+            break;
+        }
+        play_take_segment(e);
+    }
+    e->scale.s = s1;
+    scale_eval(e);
+    e->out.t = e->out.origin_t + s1;
+
+    if (lim && !e->scale.stop_req && !e->scale.avail_closed && e->out.mode == OUT_STREAM) {
+        if (!e->out.underrun)
+            play_count_underrun(e);
+        e->out.underrun = 1;
+    } else if (e->out.underrun && !lim && e->scale.ts.rate >= target) {
+        e->out.underrun = 0;
+    }
+    if (e->out.underrun)
+        e->st.underrun_ticks++;
+
+    if (at_rest(e)) {
+        if (e->scale.stop_req)
+            play_stop_at_rest(e);
+        else if (e->scale.end_brake)
+            play_finish_here(e);
+        else
+            rest_handover(e);
+        return;
+    }
+    if (!e->clk.on && is_exactly(e->scale.ts.rate, 1.0) && is_exactly(e->scale.ts.acc, 0.0) &&
+        is_exactly(target, 1.0)) {
+        /* back on a grid of whole periods, shifted by the time lost */
+        e->scale.s_off = e->scale.s - tick_time(e, e->out.n);
+        e->out.seg_n0 = e->out.n;
+        play_seed_cur(e, e->out.n);
+        e->scale.on = 0;
+    }
+}
+
+/*
+ * One tick of a clocked trajectory (CLOCK.md): locked on the play time while
+ * it advances by one tick and the curve ahead is long enough to stop in;
+ * else the time scaling with the target rate + GAIN * lag, the lag's part
+ * bounded by catchup above (a bounded catch-up) and by rest below.
+ */
+void scale_clocked_step(engine_t *e, double R, double A, double J)
+{
+    double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n), p = play_rel(e), rho = e->clk.rate;
+    double T = e->period_s;
+    int free_run = !e->scale.stop_req && !e->scale.end_brake && e->scale.override >= 1.0;
+
+    double Rm = fmin(R, scale_ceil_room(e, s, A, J));
+    if (e->clk.locked && free_run && fabs(p - s - rho * T) <= ENGINE_CLOCK_LOCK_S && p > s &&
+        rho <= scale_ceil_here(e) && (isinf(Rm) || ts_stop_dist(rho, 0.0, A, J) < Rm - rho * T)) {
+        e->scale.ts.rate = rho;
+        e->scale.ts.acc = 0.0;
+        e->out.n++;
+        scaled_advance(e, p, rho, 0);
+        if (e->out.mode == OUT_STREAM)
+            e->out.t = play_abs(e);
+        return;
+    }
+    e->clk.locked = 0;
+    double target = 0.0;
+    if (!e->scale.stop_req && !e->scale.end_brake) {
+        /* the lag left after this tick if it ran at the clock's rate */
+        double lead = ENGINE_CLOCK_GAIN * (p - s - rho * T);
+        if (lead > e->clk.catchup)
+            lead = e->clk.catchup;
+        target = rho + lead;
+        if (target < 0)
+            target = 0;
+        if (e->scale.override < 1.0)
+            target *= e->scale.override;
+        target = fmin(target, scale_ceil_here(e));
+    }
+    scale_step(e, target, R, A, J);
+    if (e->out.mode == OUT_STREAM && free_run && fabs(p - e->scale.s) <= ENGINE_CLOCK_LOCK_S &&
+        fabs(e->scale.ts.rate - rho) <= ENGINE_CLOCK_LOCK_S * ENGINE_CLOCK_GAIN + 1e-9)
+        e->clk.locked = 1;
+}

@@ -1,0 +1,359 @@
+/*
+ * engine_solve.c - the solver stage: waypoints kept (engine_input.c) become
+ * nodes; each node completes a row of the spline's system, pushed into the
+ * fragment window (frag.h: cubic.h's rows, or hoang.h's for control points,
+ * SMOOTH through the lsq smoother first); every segment whose control
+ * values are all final is turned into a cubic per axis (fdiff_seg_t), with
+ * its speed bound, speed cap and braking capacity, and queued; a closed
+ * trajectory queues an END entry where it rests.  It owns engine_solve_t
+ * (engine_int.h: the nodes, the fragment window, the smoother) and the
+ * queue of finished segments, engine_queue_t, which the play-out stage
+ * (engine_tick.c) consumes.
+ */
+#include "engine.h"
+#include "engine_int.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "cubic.h"
+#include "fdiff.h"
+#include "frag.h"
+#include "hoang.h"
+#include "lsq.h"
+#include "timescale.h"
+
+/* Samples of a segment's speed for its bounds (seg_speed_max). */
+#define ENGINE_SPEED_SAMPLES 8
+
+/* Upper bound on the speed |k'| over a segment (m/s): the largest of
+ * ENGINE_SPEED_SAMPLES + 1 evenly spaced samples, widened by what |k''| can
+ * change between a sample and the point halfway to the next (|k''(u)| <=
+ * 2|c2| + 6|c3| per axis, in units of u). */
+double solve_seg_speed_max(const fdiff_seg_t *seg)
+{
+    double hi = 0, b2 = 0;
+
+    for (int k = 0; k < AX; k++) {
+        double b = 2 * fabs(seg->c[k][2]) + 6 * fabs(seg->c[k][3]);
+        b2 += b * b;
+    }
+    for (int i = 0; i <= ENGINE_SPEED_SAMPLES; i++) {
+        double u = (double)i / ENGINE_SPEED_SAMPLES, v2 = 0;
+        for (int k = 0; k < AX; k++) {
+            double d = seg->c[k][1] + u * (2 * seg->c[k][2] + 3 * u * seg->c[k][3]);
+            v2 += d * d;
+        }
+        hi = fmax(hi, sqrt(v2));
+    }
+    return (hi + sqrt(b2) / (2.0 * ENGINE_SPEED_SAMPLES)) / seg->dur_s;
+}
+
+static qent_t *q_push(engine_t *e)
+{
+    qent_t *q;
+
+    if (e->queue.len == e->queue.cap)
+        return NULL; /* cannot happen: see queue.cap */
+    q = &e->queue.ent[(e->queue.head + e->queue.len) % e->queue.cap];
+    e->queue.len++;
+    q->first = e->solve.first_pending;
+    q->traj = e->solve.traj;
+    q->gap_s = q->first ? e->in.gap_s : 0;
+    e->solve.first_pending = 0;
+    return q;
+}
+
+/* The highest rate at which a segment whose speed is at most vmax keeps the
+ * speed cap (ENGINE_SPEED_CAP x the speed limit), at least ENGINE_CEIL_MIN. */
+static double seg_ceiling(const engine_t *e, double vmax)
+{
+    double v = engine_config_max_speed(&e->cfg);
+    if (!(v > 0) || !(vmax > 0))
+        return INFINITY;
+    return fmax(ENGINE_SPEED_CAP * v / vmax, ENGINE_CEIL_MIN);
+}
+
+/* A queued segment whose speed cap holds the rate below TS_RATE_MAX. */
+static int is_slow(const qent_t *q)
+{
+    return q->kind == QE_SEG && q->ceil < TS_RATE_MAX;
+}
+
+static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
+{
+    qent_t *q = q_push(e);
+
+    if (!q)
+        return;
+    q->kind = QE_SEG;
+    q->node = node;
+    q->seg = *seg;
+    q->t1_s = seg->t0_s + seg->dur_s;
+    q->vmax = solve_seg_speed_max(seg);
+    q->ceil = seg_ceiling(e, q->vmax);
+    if (is_slow(q)) /* every queued slot has room: so has the ring */
+        e->queue.slow[(e->queue.slow_head + e->queue.slow_len++) % e->queue.cap] =
+            (size_t)(q - e->queue.ent);
+    double inv = 1.0 / fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
+    if (e->solve.emitted && inv > e->solve.inv)
+        e->solve.ucum += inv - e->solve.inv; /* the limits rise from the last one to this */
+    e->solve.inv = inv;
+    q->ucum = e->solve.ucum;
+    e->solve.kcum += seg->dur_s * inv;
+    q->kcum = e->solve.kcum;
+    e->solve.emitted = 1;
+    e->solve.end_t = q->t1_s;
+    double v2 = 0;
+    for (int k = 0; k < AX; k++) {
+        double v = (seg->c[k][1] + 2 * seg->c[k][2] + 3 * seg->c[k][3]) / seg->dur_s;
+        e->solve.end_r[k] = seg->c[k][0] + seg->c[k][1] + seg->c[k][2] + seg->c[k][3];
+        v2 += v * v;
+    }
+    e->solve.end_speed = sqrt(v2);
+    if (e->out.mode != OUT_HOLD && q->traj == e->out.traj) {
+        e->scale.avail_t = q->t1_s; /* more curve for the output (see scale_remaining()) */
+        e->scale.avail_kcum = q->kcum;
+        e->scale.avail_ucum = q->ucum;
+    }
+}
+
+static void queue_end(engine_t *e)
+{
+    qent_t *q = q_push(e);
+
+    if (!q)
+        return;
+    q->kind = QE_END;
+    e->queue.ends++;
+    memset(&q->seg, 0, sizeof(q->seg));
+    q->t1_s = e->solve.emitted ? e->solve.end_t : e->in.last_t;
+    q->seg.t0_s = q->t1_s;
+    for (int k = 0; k < AX; k++)
+        q->seg.c[k][0] = e->solve.emitted ? e->solve.end_r[k] : e->in.last_r[k];
+    /* END: c[0][1] is the speed at which the curve arrives (0 at rest) */
+    q->seg.c[0][1] = e->solve.emitted ? e->solve.end_speed : 0.0;
+    if (e->out.mode != OUT_HOLD && q->traj == e->out.traj) {
+        e->scale.avail_t = q->t1_s;
+        e->scale.avail_closed = 1;
+        e->scale.avail_rest = q->seg.c[0][1] <= ENGINE_REST_SPEED_M_S;
+    }
+}
+
+void queue_pop(engine_t *e)
+{
+    if (e->scale.drop_n)
+        e->scale.drop_n--;
+    if (e->queue.ent[e->queue.head].kind == QE_END)
+        e->queue.ends--;
+    if (is_slow(&e->queue.ent[e->queue.head])) { /* the ring's head */
+        e->queue.slow_head = (e->queue.slow_head + 1) % e->queue.cap;
+        e->queue.slow_len--;
+    }
+    e->queue.head = (e->queue.head + 1) % e->queue.cap;
+    e->queue.len--;
+}
+
+/* end velocities in the unknowns' parameter (dk/du for P*, dk/ds for M) */
+static void end_vel_param(const engine_t *e, int at_end, double *v)
+{
+    const double *src = at_end ? e->cfg.end_vel_m_s : e->cfg.start_vel_m_s;
+    uint64_t j = at_end ? e->solve.nodes - 2 : 0;
+    double dur = nt(e, j + 1) - nt(e, j);
+    double scale = e->pstar ? dur : dur / hpar(e, j);
+
+    for (int k = 0; k < AX; k++)
+        v[k] = src[k] * scale;
+}
+
+/* Build and queue every segment whose control values are final. */
+static void build_segments(engine_t *e)
+{
+    uint64_t fin = e->solve.fw->final_rows, last = e->solve.nodes - 1;
+    int closed = e->solve.fw->done;
+
+    for (;;) {
+        uint64_t j = e->solve.seg_next;
+        fdiff_seg_t seg;
+        double dur;
+
+        if (j + 1 >= e->solve.nodes)
+            break;
+        if (e->pstar) {
+            if (!(j + 3 <= fin || (closed && j + 2 == fin && j + 1 == last)))
+                break;
+        } else if (j + 2 > fin) {
+            break;
+        }
+        e->solve.seg_next = j + 1;
+        dur = nt(e, j + 1) - nt(e, j);
+        if (!(dur > 0))
+            continue; /* between copies of one point (MULTIPLE): a loop, never motion */
+        if (e->held && (j == 0 || (closed && j + 1 == last)))
+            continue; /* held ends: not part of the curve */
+        if (e->pstar) {
+            double g0[AX], g1[AX], v[AX];
+            const double *p0, *p3;
+            if (j == 0) {
+                end_vel_param(e, 0, v);
+                hoang_ghost_start(e->cfg.ends, frag_x(e->solve.fw, 0), frag_x(e->solve.fw, 1), v,
+                                  g0);
+                p0 = g0;
+            } else {
+                p0 = frag_x(e->solve.fw, j - 1);
+            }
+            if (j + 1 == last) {
+                end_vel_param(e, 1, v);
+                hoang_ghost_end(e->cfg.ends, frag_x(e->solve.fw, last - 1),
+                                frag_x(e->solve.fw, last), v, g1);
+                p3 = g1;
+            } else {
+                p3 = frag_x(e->solve.fw, j + 2);
+            }
+            hoang_segment(p0, frag_x(e->solve.fw, j), frag_x(e->solve.fw, j + 1), p3, nt(e, j), dur,
+                          &seg);
+        } else {
+            cubic_segment(nr(e, j), nr(e, j + 1), frag_x(e->solve.fw, j),
+                          frag_x(e->solve.fw, j + 1), hpar(e, j), nt(e, j), dur, &seg);
+        }
+        queue_segment(e, &seg, j);
+    }
+}
+
+static const double zero3[AX] = {0, 0, 0};
+
+/* start_slack auto: what node j says about the input's timing and speed */
+static void measure_input(engine_t *e, uint64_t j)
+{
+    const double decay = 1.0 - 1.0 / 256;
+    double dt = nt(e, j) - nt(e, j - 1), d2 = 0;
+
+    for (int k = 0; k < AX; k++)
+        d2 += (nr(e, j)[k] - nr(e, j - 1)[k]) * (nr(e, j)[k] - nr(e, j - 1)[k]);
+    if (dt > 0) {
+        double v = sqrt(d2) / dt;
+        e->solve.vmax_in = fmax(v, e->solve.vmax_in * decay);
+    }
+    if (j > e->la_steady) {
+        /* how far ahead of the output this node must have been sent to be
+         * built on time (see enough_ahead) */
+        double w = nt(e, j) - nt(e, j - e->la_steady - 1);
+        e->solve.span_max = fmax(w, e->solve.span_max * decay);
+    }
+}
+
+/* Append a node; push the row it completes (row nodes-1 before it). */
+int solve_add_node(engine_t *e, double t, const double *r)
+{
+    uint64_t j = e->solve.nodes;
+    frag_row_t row;
+    int rc = 0;
+
+    e->solve.node_t[j % e->solve.ring] = t;
+    memcpy(nr(e, j), r, sizeof(double) * AX);
+    e->solve.nodes = j + 1;
+    if (e->slack_auto && j >= 1)
+        measure_input(e, j);
+    if (j >= 1) {
+        uint64_t i = j - 1; /* the row now complete */
+        if (e->pstar) {
+            if (i == 0) {
+                double v[AX];
+                end_vel_param(e, 0, v);
+                hoang_row_start(e->cfg.ends == ENGINE_ENDS_MULTIPLE ? ENGINE_ENDS_HELD
+                                                                    : e->cfg.ends,
+                                nr(e, 0), v, &row);
+            } else {
+                hoang_row_interior(nr(e, i), &row);
+            }
+            rc = frag_push(e->solve.fw, &row, nr(e, i));
+        } else {
+            if (i == 0) {
+                double v[AX];
+                end_vel_param(e, 0, v);
+                cubic_row_start(e->cfg.ends, hpar(e, 0), nr(e, 0), nr(e, 1), v, &row);
+            } else {
+                cubic_row_interior(hpar(e, i - 1), hpar(e, i), nr(e, i - 1), nr(e, i), nr(e, i + 1),
+                                   &row);
+            }
+            rc = frag_push(e->solve.fw, &row, zero3);
+        }
+        if (rc < 0)
+            return -ENGINE_ENUMERIC;
+        build_segments(e);
+    }
+    return 0;
+}
+
+/* SMOOTH: turn every smoothed waypoint that is ready into a node. */
+int solve_drain(engine_t *e)
+{
+    double t, r[AX];
+    int rc;
+
+    while (lsq_smooth_pop(&e->solve.sm, &t, r) == 1)
+        if ((rc = solve_add_node(e, t, r)) < 0)
+            return rc;
+    return 0;
+}
+
+/* The trajectory being received is closed: end row, last segments, END entry. */
+int solve_close(engine_t *e)
+{
+    frag_row_t row;
+    int rc = 0;
+
+    if (e->smooth) {
+        lsq_smooth_finish(&e->solve.sm);
+        if ((rc = solve_drain(e)) < 0)
+            goto end;
+    }
+    if (e->mult) {
+        /* the last point twice more (it is in already once) */
+        double r[AX];
+        memcpy(r, e->in.last_r, sizeof(r));
+        if ((rc = solve_add_node(e, e->in.last_t, r)) < 0 ||
+            (rc = solve_add_node(e, e->in.last_t, r)) < 0)
+            goto end;
+    }
+    if (e->solve.nodes >= 2) {
+        uint64_t l = e->solve.nodes - 1;
+        double v[AX];
+        end_vel_param(e, 1, v);
+        if (e->pstar)
+            hoang_row_end(e->mult ? ENGINE_ENDS_HELD : e->cfg.ends, nr(e, l), v, &row);
+        else
+            cubic_row_end(e->cfg.ends, hpar(e, l - 1), nr(e, l - 1), nr(e, l), v, &row);
+        if (frag_finish(e->solve.fw, &row) < 0)
+            rc = -ENGINE_ENUMERIC;
+        else
+            build_segments(e);
+    }
+end:
+    e->solve.seg_next = e->solve.nodes; /* nothing pending any more */
+    queue_end(e);
+    return rc;
+}
+
+/* A new trajectory: no node yet, its first queued entry marked as such. */
+void solve_open(engine_t *e)
+{
+    frag_reset(e->solve.fw);
+    e->solve.nodes = 0;
+    e->solve.seg_next = 0;
+    e->solve.emitted = 0;
+    e->solve.kcum = 0.0;
+    e->solve.ucum = 0.0;
+    e->solve.first_pending = 1;
+    e->solve.traj++;
+    if (e->smooth)
+        lsq_smooth_reset(&e->solve.sm);
+}
+
+/* The solver failed (cannot happen with finite data): the trajectory ends
+ * with what is queued, nothing more built of it. */
+void solve_abort(engine_t *e)
+{
+    e->solve.seg_next = e->solve.nodes;
+    queue_end(e);
+}

@@ -1,0 +1,735 @@
+/*
+ * engine_tick.c - the play-out stage: engine_tick.  The output's state
+ * machine walks the queued cubics (engine_solve.c) with the forward-
+ * difference stepper (fdiff.h) on the period grid: it waits for enough
+ * lookahead (start_slack auto learns how much), starts a trajectory
+ * directly or through a transfer (engine_xfer.c), steps on the unit grid
+ * while nothing asks for another rate (else the time scaling,
+ * engine_scale.c), rests at a trajectory's end, counts underruns, fills the
+ * setpoint, and takes the fast ticks.  It owns engine_out_t (engine_int.h:
+ * mode, position, current segment and stepper, tick count, cycle, track,
+ * flags, the last setpoint) and engine_fast_t (the fast-tick window).
+ */
+#include "engine.h"
+#include "engine_int.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "accept.h"
+#include "fdiff.h"
+#include "lsq.h"
+#include "timescale.h"
+
+/* Output and curve start closer than this need no transfer (metres). */
+#define ENGINE_TRANSFER_TOL_M 1e-9
+
+/* The newest interval of the input (0: fewer than two nodes). */
+static double last_interval(const engine_t *e)
+{
+    return e->solve.nodes >= 2 ? nt(e, e->solve.nodes - 1) - nt(e, e->solve.nodes - 2) : 0.0;
+}
+
+/* start_slack auto: the curve kept ahead of the output beyond what the
+ * solver needs, track seconds: twice a stop from full rate at the input's
+ * top speed (the curve may be faster than its chords), a few ticks, and the
+ * newest interval once per underrun seen. */
+static double brake_s(const engine_t *e)
+{
+    double v = e->solve.vmax_in > ENGINE_SCALE_V_FLOOR_M_S ? e->solve.vmax_in
+                                                           : ENGINE_SCALE_V_FLOOR_M_S;
+    return 2.0 * ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / v, e->cfg.scale_jerk_m_s3 / v) +
+           (TS_MARGIN_TICKS + 2) * e->period_s + e->slack_learn * last_interval(e);
+}
+
+/* Time of the newest waypoint received for the current trajectory: the
+ * newest node, or a waypoint the acceptance policy still holds (-inf: none). */
+static double newest_t(const engine_t *e)
+{
+    double t = e->solve.nodes > 0 ? nt(e, e->solve.nodes - 1) : -INFINITY;
+    const engine_waypoint_t *held = accept_last(&e->in.policy);
+    if (held && held->t_s > t)
+        t = held->t_s;
+    return t;
+}
+
+/* start_slack auto: an output stopped by an underrun at s stays stopped
+ * until the curve surely built ahead of it is longer than brake_s (or the
+ * buffer holds the most slack, or the input is closed).  Not span_max, as
+ * at a start: after a long hole in the input that would hold it for as long
+ * as the hole. */
+static int rebuffering(const engine_t *e, double s)
+{
+    uint64_t in = e->solve.nodes + (e->smooth ? lsq_smooth_pending(&e->solve.sm) : 0) +
+                  accept_pending(&e->in.policy);
+
+    if (e->scale.avail_closed || e->out.cur.kind != QE_SEG ||
+        in >= e->out.cur.node + 2 + e->lookahead + e->slack_more)
+        return 0;
+    /* the curve is built at least up to the node la_steady + 1 before the
+     * newest one, whatever the fragment phase */
+    uint64_t back = (uint64_t)e->la_steady + 1;
+    if (e->solve.nodes <= back)
+        return 1;
+    return !(nt(e, e->solve.nodes - 1 - back) - (e->out.origin_t + s) >=
+             brake_s(e) - e->slack_learn * last_interval(e));
+}
+
+/* An underrun: counted, and (start_slack auto) the next start waits one
+ * waypoint more, up to ENGINE_SLACK_AUTO_MAX: the input came later than its
+ * timestamps said. */
+void play_count_underrun(engine_t *e)
+{
+    e->st.underruns++;
+
+    if (e->slack_auto && e->slack_learn < e->slack_more) {
+        e->slack_learn++;
+        e->st.lookahead = e->lookahead + e->slack_learn;
+    }
+}
+
+/*
+ * The output may start (or resume after an underrun) on the segment h only
+ * once the lookahead is buffered beyond it, or its trajectory is closed.
+ */
+static int enough_ahead(const engine_t *e, const qent_t *h)
+{
+    /* waypoints received: nodes, plus those the smoother still holds (SMOOTH) */
+    /* and those the acceptance policy still judges: their verdicts come
+     * within the start slack, so they count as lookahead (accept.h) */
+    uint64_t in = e->solve.nodes + (e->smooth ? lsq_smooth_pending(&e->solve.sm) : 0) +
+                  accept_pending(&e->in.policy);
+
+    if (e->queue.ends > 0 || h->kind != QE_SEG)
+        return 1;
+    if (in < h->node + 2 + e->lookahead + e->slack_learn)
+        return 0;
+    if (!e->slack_auto || in >= h->node + 2 + e->lookahead + e->slack_more)
+        return 1;
+    /* start_slack auto.  Starting at t0 with the newest node at t_m puts
+     * the output D = t_m - t0 behind the input; the curve built ahead of it
+     * is then always longer than D - span_max (span_max: the longest time of
+     * la_steady + 1 intervals), and must stay longer than a stop from full
+     * rate at the input's top speed, so that the time scaling can brake
+     * if the input stops (timescale.h; twice that: the curve may be faster than
+     * its chords).  Regular slow input: at once. */
+    return newest_t(e) - h->seg.t0_s >= e->solve.span_max + brake_s(e);
+}
+
+static void hold_here(engine_t *e)
+{
+    for (int k = 0; k < AX; k++)
+        e->out.vel[k] = e->out.acc[k] = 0.0;
+}
+
+/* Back on the unit grid with rate 1 (every start from HOLD). */
+static void unit_reset(engine_t *e)
+{
+    e->scale.on = 0;
+    e->scale.s_off = 0.0;
+    e->scale.ts.rate = 1.0;
+    e->scale.ts.acc = 0.0;
+    e->scale.end_brake = 0;
+}
+
+/* A stop or clear has brought the output to rest: drop what was queued at
+ * the request, stand here (FINISHED after a stop, WAITING after a clear). */
+void play_stop_at_rest(engine_t *e)
+{
+    while (e->scale.drop_n && e->queue.len)
+        queue_pop(e);
+    e->scale.drop_n = 0;
+    e->out.mode = OUT_HOLD;
+    hold_here(e);
+    e->out.finished = e->scale.stop_req == STOP_STOP;
+    e->scale.stop_req = STOP_NONE;
+    e->out.underrun = 0;
+    unit_reset(e);
+}
+
+/* The queue head is a trajectory's end marker: rest on its point, FINISHED. */
+void play_rest_at_end(engine_t *e, const qent_t *h)
+{
+    for (int k = 0; k < AX; k++)
+        e->out.pos[k] = h->seg.c[k][0];
+    e->out.t = h->t1_s;
+    queue_pop(e);
+    hold_here(e);
+    e->out.mode = OUT_HOLD;
+    e->out.finished = 1;
+    e->out.underrun = 0;
+    if (e->scale.stop_req)
+        play_stop_at_rest(e);
+}
+
+/* A closed trajectory whose curve does not end at rest, braked to rest just
+ * before its end: finish here, where the output stands (no jump to the end). */
+void play_finish_here(engine_t *e)
+{
+    while (e->queue.len) {
+        int end = q_head(e)->kind == QE_END && q_head(e)->traj == e->out.traj;
+        queue_pop(e);
+        if (end)
+            break;
+    }
+    e->out.mode = OUT_HOLD;
+    hold_here(e);
+    e->out.finished = 1;
+    e->out.underrun = 0;
+    unit_reset(e);
+}
+
+static void out_eval(engine_t *e)
+{
+    double v2 = 0;
+
+    fdiff_get(&e->out.fd, e->out.pos, e->out.vel, e->out.acc);
+    for (int k = 0; k < AX; k++)
+        v2 += e->out.vel[k] * e->out.vel[k];
+    e->scale.cspeed = sqrt(v2); /* rate 1: the curve's own speed */
+}
+
+/* Seed cur at tick n (relative time tau in [cur_t0, cur_t1)). */
+void play_seed_cur(engine_t *e, int64_t n)
+{
+    double tau = tau_of(e, n);
+    double u0 = (tau - e->out.cur_t0) / e->out.cur.seg.dur_s;
+    fdiff_seed(&e->out.fd, &e->out.cur.seg, u0, e->period_s / e->out.cur.seg.dur_s);
+}
+
+/* Make the queue head (a SEG) the current segment, relative to origin_t. */
+void play_take_segment(engine_t *e)
+{
+    e->out.cur = *q_head(e);
+    queue_pop(e);
+    e->out.cur_t0 = e->out.cur.seg.t0_s - e->out.origin_t;
+    e->out.cur_t1 = e->out.cur.t1_s - e->out.origin_t;
+}
+
+/* Where the solved curve of the output's trajectory ends, from the queue
+ * (once per trajectory; queue_segment and queue_end keep it up to date). */
+static void find_avail(engine_t *e)
+{
+    e->scale.avail_t = e->out.cur.t1_s;
+    e->scale.avail_kcum = e->out.cur.kcum;
+    e->scale.avail_ucum = e->out.cur.ucum;
+    e->scale.avail_closed = 0;
+    e->scale.avail_rest = 0;
+    for (size_t i = 0; i < e->queue.len; i++) {
+        const qent_t *q = &e->queue.ent[(e->queue.head + i) % e->queue.cap];
+        if (q->traj != e->out.traj)
+            break;
+        e->scale.avail_t = q->t1_s;
+        if (q->kind == QE_SEG) {
+            e->scale.avail_kcum = q->kcum;
+            e->scale.avail_ucum = q->ucum;
+        }
+        if (q->kind == QE_END) {
+            e->scale.avail_closed = 1;
+            e->scale.avail_rest = q->seg.c[0][1] <= ENGINE_REST_SPEED_M_S;
+            break;
+        }
+    }
+}
+
+/* One clock: a trajectory is entered at rate 0 like every other
+ * (scaled_rest, TIMESCALE.md "Handovers": locked at once, its acceleration
+ * would step by k''(0) rho^2), behind the play time by the sub-tick phase
+ * past its first waypoint (and by what the waypoints came late); the
+ * catch-up of clocked_step wins the lag back and locks on the clock. */
+static void clock_start(engine_t *e)
+{
+    scale_rest(e);
+    e->clk.locked = 0;
+    scale_eval(e);
+    e->out.t = e->out.origin_t;
+}
+
+/* Begin streaming the trajectory at the queue head (tick 0 of it). */
+void play_start(engine_t *e, int new_flag)
+{
+    qent_t *h = q_head(e);
+
+    if (new_flag) {
+        e->out.track++;
+        e->out.flags_pending |= ENGINE_SP_NEW_TRACK;
+    }
+    e->out.have_pos = 1;
+    e->out.underrun = 0;
+    if (h->kind == QE_END) {
+        /* a trajectory with no segment: rest on its point */
+        play_rest_at_end(e, h);
+        return;
+    }
+    e->out.origin_t = h->seg.t0_s;
+    e->out.traj = h->traj;
+    play_take_segment(e);
+    find_avail(e);
+    e->out.n = 0;
+    e->out.seg_n0 = 0;
+    e->scale.s_off = 0.0;
+    play_seed_cur(e, 0);
+    out_eval(e);
+    e->out.t = e->out.origin_t;
+    e->out.mode = OUT_STREAM;
+    if (e->clk.on) {
+        clock_start(e);
+    } else if (e->scale.on) {
+        /* from a scaled transfer: go on scaled from the start */
+        e->scale.s = 0.0;
+        scale_eval(e);
+    }
+}
+
+/* One forward step of cur (with a re-seed at deterministic ticks). */
+static void step_cur(engine_t *e, int64_t n)
+{
+    if ((uint64_t)(n - e->out.seg_n0) % FDIFF_RESEED_STEPS == 0)
+        play_seed_cur(e, n);
+    else
+        fdiff_step(&e->out.fd);
+    out_eval(e);
+}
+
+/* One tick on the unit grid (rate 1): the forward-difference stepper. */
+static void unit_step(engine_t *e)
+{
+    if (e->out.mode == OUT_XFER) {
+        int64_t n = e->out.n + 1;
+        if (tau_of(e, n) >= e->out.cur_t1) {
+            /* not reached: scale_remaining() brakes the transfer to rate 0 before its
+             * end; should it be, the trajectory is entered at rate 0 as well */
+            scale_rest(e);
+            play_start(e, 0); /* the transfer ends exactly on its start */
+        } else {
+            e->out.n = n;
+            step_cur(e, n);
+        }
+        return;
+    }
+    int64_t n = e->out.n + 1;
+    double tau = tau_of(e, n);
+    if (tau < e->out.cur_t1) {
+        e->out.n = n;
+        step_cur(e, n);
+        e->out.t = e->out.origin_t + tau;
+        e->out.underrun = 0;
+        return;
+    }
+    for (;;) {
+        qent_t *h = q_head(e);
+        if (h && h->traj != e->out.traj)
+            h = NULL;
+        if (!h) {
+            /* the solved curve ended under a moving output: cannot happen
+             * while scale_remaining() is right (the scaling brakes before); hold
+             * and go on scaled from rest */
+            if (!e->out.underrun)
+                play_count_underrun(e);
+            e->out.underrun = 1;
+            e->st.underrun_ticks++;
+            e->st.hard_stops++;
+            hold_here(e);
+            e->scale.on = 1;
+            e->scale.s = tau_of(e, e->out.n);
+            e->scale.ts.rate = 0.0;
+            e->scale.ts.acc = 0.0;
+            return;
+        }
+        if (h->kind == QE_END) {
+            play_rest_at_end(e, h);
+            return;
+        }
+        play_take_segment(e);
+        if (tau < e->out.cur_t1)
+            break;
+        /* shorter than a period: no tick falls in it */
+    }
+    e->out.n = n;
+    e->out.seg_n0 = n;
+    play_seed_cur(e, n);
+    out_eval(e);
+    e->out.t = e->out.origin_t + tau;
+    e->out.underrun = 0;
+}
+
+/* One tick of the output state machine. */
+static void step_once(engine_t *e)
+{
+    e->out.cycle++;
+    if (e->out.mode == OUT_HOLD) {
+        qent_t *h = q_head(e);
+        if (!h || !h->first || !enough_ahead(e, h) || (!e->out.have_pos && e->out.need_pos)) {
+            hold_here(e);
+            return;
+        }
+        if (!e->out.have_pos) {
+            /* no position known and none required: the start is the last resort */
+            for (int k = 0; k < AX; k++)
+                e->out.pos[k] = h->seg.c[k][0];
+            e->out.t = h->seg.t0_s;
+            e->out.have_pos = 1;
+        }
+        double d2 = 0;
+        for (int k = 0; k < AX; k++)
+            d2 += (h->seg.c[k][0] - e->out.pos[k]) * (h->seg.c[k][0] - e->out.pos[k]);
+        int xfer = sqrt(d2) > ENGINE_TRANSFER_TOL_M;
+        if (e->clk.on) {
+            /* one clock: not before the play time reaches the start, less
+             * the transfer that leads there */
+            double lead = 0.0, target[AX];
+            int capped = 0;
+            for (int k = 0; k < AX; k++)
+                target[k] = h->seg.c[k][0];
+            if (xfer)
+                lead = xfer_duration(e, target, h->gap_s, &capped);
+            if ((long double)e->clk.play_ns * 1e-9L < (long double)h->seg.t0_s - lead) {
+                hold_here(e);
+                return;
+            }
+        }
+        unit_reset(e);
+        if (xfer) {
+            double target[AX];
+            for (int k = 0; k < AX; k++)
+                target[k] = h->seg.c[k][0];
+            xfer_start(e, target, h->gap_s);
+            scale_rest(e);
+            e->out.n++;
+            scale_eval(e);
+        } else {
+            if (!e->clk.on)
+                scale_rest(e);
+            play_start(e, 1);
+        }
+        return;
+    }
+    /* moving (a transfer or a trajectory): on the unit grid while nothing
+     * asks for another rate and the curve ahead is long enough to stop in */
+    double A, J, s = e->scale.on ? e->scale.s : tau_of(e, e->out.n), R;
+    scale_limits(e, &A, &J);
+    R = scale_remaining(e, s);
+    if (e->out.mode == OUT_STREAM && e->scale.avail_closed && !e->scale.avail_rest &&
+        !e->scale.end_brake &&
+        (ts_stop_dist(e->scale.ts.rate, e->scale.ts.acc, A, J) >=
+             R - e->scale.ts.rate * e->period_s ||
+         (e->scale.on && at_rest(e) && !scale_moves(e, R, A, J))))
+        /* the curve does not end at rest: brake before its end; at rest with
+         * less curve left than one tick of motion and its stop need, no input
+         * can come to lengthen it: finish here, not wait for ever */
+        e->scale.end_brake = 1;
+    if (e->clk.on && e->out.mode == OUT_STREAM) {
+        scale_clocked_step(e, R, A, J);
+        return;
+    }
+    double target = scale_target(e);
+    /* start_slack auto: an output stopped by an underrun resumes once it is
+     * as far behind the newest waypoint as at the start (enough_ahead) */
+    if (e->slack_auto && e->out.underrun && e->out.mode == OUT_STREAM && !(e->scale.ts.rate > 0) &&
+        target > 0 && rebuffering(e, s)) {
+        scale_step(e, 0.0, R, A, J);
+        if (!e->out.underrun) { /* still in the same underrun */
+            e->out.underrun = 1;
+            e->st.underrun_ticks++;
+        }
+        return;
+    }
+    double Rm = fmin(R, scale_ceil_room(e, s, A, J)); /* the speed cap ahead too */
+    if (!e->scale.on && is_exactly(target, 1.0) &&
+        (isinf(Rm) || ts_stop_dist(1.0, 0.0, A, J) < Rm - e->period_s)) {
+        unit_step(e);
+        return;
+    }
+    scale_step(e, target, R, A, J);
+}
+
+engine_state_t play_state(const engine_t *e)
+{
+    if (e->out.mode == OUT_STREAM)
+        return e->out.underrun ? ENGINE_STATE_UNDERRUN : ENGINE_STATE_STREAMING;
+    if (e->out.mode == OUT_XFER)
+        return ENGINE_STATE_STREAMING;
+    if (e->in.open || e->queue.len || accept_pending(&e->in.policy))
+        return ENGINE_STATE_WAITING;
+    return e->out.finished ? ENGINE_STATE_FINISHED : ENGINE_STATE_WAITING;
+}
+
+static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    engine_state_t s = play_state(e);
+
+    sp->now_ns = now_ns;
+    /* No position known yet: the first waypoint is the last resort (unless a
+     * position is required), adopted once and for all, so the output never
+     * jumps from it to somewhere else (a new start is reached by a transfer). */
+    if (!e->out.have_pos && e->out.mode == OUT_HOLD && !e->out.need_pos) {
+        qent_t *h = q_head(e);
+        if (h)
+            for (int k = 0; k < AX; k++)
+                e->out.pos[k] = h->seg.c[k][0];
+        else if (e->in.open && e->solve.nodes)
+            memcpy(e->out.pos, nr(e, 0), sizeof(e->out.pos));
+        else if (e->in.open) /* SMOOTH: no node yet, the first waypoint as received */
+            memcpy(e->out.pos, e->in.first_r, sizeof(e->out.pos));
+        if (h)
+            e->out.t = h->seg.t0_s;
+        else if (e->in.open && e->solve.nodes)
+            e->out.t = nt(e, 0);
+        if (h || e->in.open)
+            e->out.have_pos = 1;
+    }
+    if (e->out.mode == OUT_XFER)
+        xfer_track_time(e);
+    sp->t_s = e->out.t;
+    memcpy(sp->pos_m, e->out.pos, sizeof(sp->pos_m));
+    if (!e->out.have_pos)
+        for (int k = 0; k < AX; k++)
+            sp->pos_m[k] = NAN; /* not a position: see ENGINE_SP_NO_POSITION */
+    memcpy(sp->vel_m_s, e->out.vel, sizeof(sp->vel_m_s));
+    memcpy(sp->acc_m_s2, e->out.acc, sizeof(sp->acc_m_s2));
+    sp->state = s;
+    sp->flags = e->out.flags_pending;
+    e->out.flags_pending = 0;
+    if (e->out.mode == OUT_HOLD || (e->scale.on && at_rest(e)))
+        sp->flags |= ENGINE_SP_HOLD;
+    else if (s != ENGINE_STATE_STREAMING && s != ENGINE_STATE_UNDERRUN)
+        sp->flags |= ENGINE_SP_HOLD;
+    if (e->out.mode == OUT_XFER)
+        sp->flags |= ENGINE_SP_TRANSFER;
+    if (!e->out.have_pos)
+        sp->flags |= ENGINE_SP_NO_POSITION;
+    if (e->out.mode != OUT_HOLD && e->scale.on)
+        sp->flags |= ENGINE_SP_SCALED;
+    sp->cycle = e->out.cycle;
+    sp->track = e->out.track;
+    sp->age_s = NAN;
+    if (e->clk.on && e->out.have_pos)
+        sp->age_s = (double)((long double)e->clk.now_ns * 1e-9L - (long double)e->out.t);
+}
+
+/* 1 if further steps cannot change anything until new input arrives. */
+int play_stalled(const engine_t *e)
+{
+    const qent_t *h = e->queue.len ? &e->queue.ent[e->queue.head] : NULL; /* q_head, read only */
+
+    if (e->out.mode == OUT_HOLD)
+        return !h || !h->first || !enough_ahead(e, h);
+    if (e->out.mode == OUT_STREAM && e->scale.on && at_rest(e) && !e->scale.stop_req &&
+        !e->scale.end_brake) {
+        double A, J, target = scale_target(e);
+        if (!(target > 0))
+            return 1;
+        scale_limits(e, &A, &J);
+        return ts_rate_max(scale_remaining(e, e->scale.s), A, J) < ts_dead_band(J, e->period_s);
+    }
+    return 0;
+}
+
+/*
+ * Fast ticks.  Most ticks are a plain step on the unit grid inside the
+ * current segment: step_once then only re-derives, every tick, that nothing
+ * asks for another rate (two divisions, the stopping distance ts_stop_dist
+ * against the buffer's remaining time) and engine_tick divides for the
+ * number of periods.  fast_window decides once, after a full tick, for how
+ * many ticks ahead that answer cannot change: until the next re-seed, and
+ * while the stopping distance stays short of the remaining capacity
+ * (scale_remaining()) with two ticks to spare, at the segment's lower bound on the
+ * curve's speed (seg_speed_max): the check each of those ticks would make
+ * passes at any speed above it (see fast_window).  Every public call that
+ * changes the engine (push, finish, stop, clear, override, clock, position)
+ * closes the window.
+ * fast_tick then does what the full path does for such a tick, to the same
+ * doubles in the same order: tests/unit/test_engine_fast.c compares both
+ * paths setpoint for setpoint (engine_set_fast_ticks).
+ */
+static void fast_window(engine_t *e)
+{
+    e->fast.left = 0;
+    if (e->fast.off || e->out.mode != OUT_STREAM || e->scale.on || e->clk.on || e->out.underrun ||
+        !e->out.have_pos || e->scale.stop_req || e->scale.end_brake || e->out.flags_pending ||
+        !is_exactly(e->scale.override, 1.0) || !is_exactly(e->scale.ts.rate, 1.0) ||
+        !is_exactly(e->scale.ts.acc, 0.0) || scale_ceil_here(e) < 1.0)
+        return;
+    /* the ticks before the next re-seed (step_cur) */
+    int64_t m = (int64_t)(FDIFF_RESEED_STEPS -
+                          (uint64_t)(e->out.n - e->out.seg_n0) % FDIFF_RESEED_STEPS) -
+                1;
+    { /* scale_remaining() is finite: a REST end too is left at rate 0 */
+        /* step_once's check, ts_stop_dist(1, 0, a/v, j/v) < v K - (margin + 1) T
+         * with v = conv_speed (the same on every tick of the window: a push
+         * closes it) and K the capacity left (scale_remaining()) */
+        double v = scale_conv_speed(e);
+
+        double A = e->cfg.scale_accel_m_s2 / v, J = e->cfg.scale_jerk_m_s3 / v;
+        double d = ts_stop_dist(1.0, 0.0, A, J) * (1 + 1e-9);
+        double in_cur = e->out.cur_t1 - tau_of(e, e->out.n);
+        double k = (in_cur > 0 ? in_cur / v : 0.0) + (e->scale.avail_kcum - e->out.cur.kcum);
+        /* K falls by T / v per tick: the ticks for which it stays above */
+        double room = (k -
+                       (d + scale_rise_reserve(e, v) + (TS_MARGIN_TICKS + 1) * e->period_s) / v) *
+                      v;
+        /* and the speed cap ahead (ceil_room), which falls by T per tick too */
+        room = fmin(room, scale_ceil_room(e, tau_of(e, e->out.n), A, J) - d - e->period_s);
+        if (!(room > 0) || !isfinite(d))
+            return;
+        double mr = floor(room / e->period_s) - 2;
+        if (mr < (double)m)
+            m = (int64_t)mr;
+    }
+    e->fast.left = m > 0 ? m : 0;
+}
+
+/* One tick as step_once + fill_sp would make it inside the window; 0 (and
+ * nothing changed) at the end of the segment. */
+static void fast_fill_from(const engine_t *e, int64_t now_ns, engine_setpoint_t *sp,
+                           const double *pos, const double *vel, const double *acc)
+{
+    sp->now_ns = now_ns; /* fill_sp: streaming, no flags */
+    sp->t_s = e->out.t;
+    memcpy(sp->pos_m, pos, sizeof(sp->pos_m));
+    memcpy(sp->vel_m_s, vel, sizeof(sp->vel_m_s));
+    memcpy(sp->acc_m_s2, acc, sizeof(sp->acc_m_s2));
+    sp->state = ENGINE_STATE_STREAMING;
+    sp->flags = 0;
+    sp->cycle = e->out.cycle;
+    sp->track = e->out.track;
+    sp->age_s = NAN;
+}
+
+/* What a fast tick left for later: the setpoint kept for a repeated call
+ * (last_sp, 120 bytes copied every tick otherwise) and the curve's speed
+ * (a square root only the full path reads), both from the same doubles. */
+static void fast_sync(engine_t *e)
+{
+    if (!e->fast.last)
+        return;
+    for (int k = 0; k < AX; k++) { /* out_eval, deferred by fast_tick */
+        e->out.pos[k] = e->out.fd.p0[k];
+        e->out.vel[k] = e->out.fd.v0[k];
+        e->out.acc[k] = e->out.fd.a0[k];
+    }
+    double v2 = 0;
+    for (int k = 0; k < AX; k++) /* as out_eval */
+        v2 += e->out.vel[k] * e->out.vel[k];
+    e->scale.cspeed = sqrt(v2);
+    fast_fill_from(e, e->out.last_now, &e->out.last_sp, e->out.pos, e->out.vel, e->out.acc);
+    e->fast.last = 0;
+}
+
+/*
+ * One tick as step_once + fill_sp would make it inside the window; 0 (and
+ * nothing changed) at the end of the segment.  What is left per setpoint
+ * (gcc -O2, x86-64 baseline SSE2): the tick's time (an integer multiply and
+ * two floating additions), one compare with the segment's end, the step as
+ * 12 packed addpd over the fdiff_t rows, and 18 stores of the 9 doubles into
+ * the engine and the setpoint; the full path added two divisions and
+ * ts_stop_dist's branches (step_once), a 64-bit idiv (engine_tick's count of
+ * periods), out_state/fill_sp's flag logic, a sqrt and a 120-byte copy.
+ */
+static int fast_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    int64_t n = e->out.n + 1;
+    double tau = tau_of(e, n);
+    if (!(tau < e->out.cur_t1)) {
+        e->fast.left = 0;
+        return 0;
+    }
+    e->fast.left--;
+    e->fast.last = 1;
+    e->out.cycle++;
+    e->out.n = n;
+    e->out.last_now = now_ns;
+    fdiff_step(&e->out.fd);
+    /* out_eval's copies into e->out.pos, vel, acc wait for fast_sync: the
+     * setpoint is filled from the stepper itself (9 stores a tick fewer) */
+    e->out.t = e->out.origin_t + tau;
+    fast_fill_from(e, now_ns, sp, e->out.fd.p0, e->out.fd.v0, e->out.fd.a0);
+    e->st.setpoints++;
+    return 1;
+}
+
+void engine_fast_close(engine_t *e)
+{
+    e->fast.left = 0;
+    fast_sync(e);
+}
+
+void engine_set_fast_ticks(engine_t *e, int on)
+{
+    engine_fast_close(e);
+    e->fast.off = !on;
+}
+
+static int tick_full(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
+
+/*
+ * The fast tick stays out of the full tick's frame: with both in one
+ * function the compiler saved six registers and set up a 200-byte frame
+ * (push x6, sub $0xc8,%rsp at the entry of engine_tick, objdump -d) before
+ * the fast path's first test; apart, a fast tick is a leaf-like run of
+ * loads, one imul, cvtsi2sd, mulsd, the step's addpd and the setpoint's
+ * stores: 9.5 -> 7.9 ns per setpoint at 1 kHz with the copies fast_sync now
+ * defers (the fastest chunk of 10000 ticks, tests/bench/RESULTS.md).
+ */
+int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    if (e->fast.left > 0) {
+        /* one period since the last call, as the division below would round */
+        int64_t d = now_ns - e->out.last_now, p = e->cfg.period_ns;
+        if (d >= p - p / 2 && d < 2 * p - p / 2 && fast_tick(e, now_ns, sp))
+            return positive_zeros(sp, 0);
+        e->fast.left = 0;
+    }
+    return positive_zeros(sp, tick_full(e, now_ns, sp));
+}
+
+__attribute__((noinline)) static int tick_full(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    int64_t k = 1, i;
+
+    fast_sync(e);
+    if (e->out.have_now) {
+        if (now_ns < e->out.last_now) {
+            *sp = e->out.last_sp;
+            return -ENGINE_ESTATE;
+        }
+        /* ticks on the period grid since the last call (rounded) */
+        k = (now_ns - e->out.last_now + e->cfg.period_ns / 2) / e->cfg.period_ns;
+        if (k == 0) {
+            *sp = e->out.last_sp;
+            sp->now_ns = now_ns;
+            e->st.setpoints++;
+            return 0;
+        }
+    }
+    e->out.have_now = 1;
+    e->out.last_now = now_ns;
+    for (i = 0; i < k; i++) {
+        if (e->clk.on) /* the play time of each step, the last one's given */
+            e->clk.play_ns = e->clk.now_ns - e->clk.delay_ns -
+                             (int64_t)llround((double)(k - 1 - i) * e->clk.rate *
+                                              (double)e->cfg.period_ns);
+        step_once(e);
+        if (i + 1 < k && play_stalled(e)) {
+            /* Nothing can change before the next push: the remaining steps
+             * are identical holds.  Count them instead of looping (a clock
+             * jump of hours must not cost hours of steps). */
+            int64_t rest = k - 1 - i;
+            e->out.cycle += (uint32_t)rest;
+            if (e->out.mode != OUT_HOLD && e->scale.on)
+                e->out.n += rest; /* as each scaled step at rest would (the grid of s_off) */
+            if (e->out.mode == OUT_STREAM && e->out.underrun)
+                e->st.underrun_ticks += (uint64_t)rest;
+            break;
+        }
+    }
+    if (k > 1) {
+        e->st.skipped_ticks += (uint64_t)(k - 1);
+        e->out.flags_pending |= ENGINE_SP_SKIPPED;
+    }
+    fill_sp(e, now_ns, sp);
+    e->st.setpoints++;
+    e->out.last_sp = *sp;
+    fast_window(e);
+    return 0;
+}

@@ -1,0 +1,94 @@
+/*
+ * engine_xfer.c - the transfer stage: a trajectory that does not start where
+ * the output stands is reached by a rest-to-rest transfer (transfer.h).  Its
+ * duration from the distance, the object's recent motion (noted by the
+ * input stage) and the speed of the trajectory it joins; its start as the
+ * output's current segment; and the track time a transfer reports.  It owns
+ * engine_xfer_t (engine_int.h): the transfers' configuration, the object's
+ * recent motion and where the transfer under way began.
+ */
+#include "engine.h"
+#include "engine_int.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "fdiff.h"
+#include "transfer.h"
+
+/* Fastest chord speed of the first queued segments of the trajectory at the
+ * queue head: how the object moves where the transfer takes it. */
+static double head_speed(const engine_t *e)
+{
+    double v = 0;
+
+    for (size_t i = 0; i < e->queue.len && i < TRANSFER_HIST; i++) {
+        const qent_t *q = &e->queue.ent[(e->queue.head + i) % e->queue.cap];
+        double d2 = 0;
+        if (q->kind != QE_SEG || (i > 0 && q->first))
+            break;
+        for (int k = 0; k < AX; k++) {
+            double d = q->seg.c[k][1] + q->seg.c[k][2] + q->seg.c[k][3];
+            d2 += d * d;
+        }
+        v = fmax(v, sqrt(d2) / q->seg.dur_s);
+    }
+    return v;
+}
+
+/* How long a transfer from the output position to target takes (transfer.h). */
+double xfer_duration(const engine_t *e, const double *target, double gap_s, int *capped)
+{
+    double dist = 0, v_obj;
+
+    for (int i = 0; i < AX; i++)
+        dist += (target[i] - e->out.pos[i]) * (target[i] - e->out.pos[i]);
+    dist = sqrt(dist);
+    v_obj = fmax(transfer_motion_speed(&e->xfer.motion), head_speed(e));
+    return transfer_duration(&e->xfer.cfg, dist, v_obj, transfer_motion_accel(&e->xfer.motion),
+                             gap_s, capped);
+}
+
+/* Start a transfer from the output position to target (transfer.h). */
+void xfer_start(engine_t *e, const double *target, double gap_s)
+{
+    int capped = 0;
+    double dur = xfer_duration(e, target, gap_s, &capped);
+
+    memset(&e->out.cur, 0, sizeof(e->out.cur));
+    e->xfer.from_t = e->out.track ? e->out.t : NAN;
+    e->out.cur.kind = QE_SEG;
+    transfer_segment(&e->out.cur.seg, e->out.pos, target, dur);
+    e->out.cur.vmax = solve_seg_speed_max(&e->out.cur.seg);
+    e->out.cur_t0 = 0;
+    e->out.cur_t1 = e->out.cur.seg.dur_s;
+    e->out.n = 0;
+    e->out.seg_n0 = 0;
+    e->scale.s_off = 0.0;
+    e->out.track++;
+    e->out.flags_pending |= ENGINE_SP_NEW_TRACK;
+    e->out.mode = OUT_XFER;
+    e->st.transfers++;
+    e->st.transfer_s += dur;
+    e->st.transfers_capped += (uint64_t)capped;
+    play_seed_cur(e, 0);
+}
+
+/* A transfer's track time: from where the output's time stood when it began
+ * to the start of the trajectory it joins, in proportion to the transfer
+ * done (from that start less the transfer's duration if the output had no
+ * time before), so t_s and the data age say what the object does and reach
+ * that start as it does. */
+void xfer_track_time(engine_t *e)
+{
+    const qent_t *h = e->queue.len ? &e->queue.ent[e->queue.head] : NULL; /* q_head, read only */
+    if (!h || !(e->out.cur_t1 > 0))
+        return;
+    double t = e->scale.on ? e->scale.s : tau_of(e, e->out.n), u = t / e->out.cur_t1;
+    double to = h->kind == QE_END ? h->t1_s : h->seg.t0_s;
+    u = u < 0 ? 0 : u > 1 ? 1 : u;
+    if (isnan(e->xfer.from_t))
+        e->out.t = to - (1.0 - u) * e->out.cur_t1;
+    else
+        e->out.t = e->xfer.from_t + (to - e->xfer.from_t) * u;
+}
