@@ -268,6 +268,7 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
     mbmap_daemon_t d;
     memset(&d, 0, sizeof d);
     d.out_lost = s->out_lost;
+    d.log_dropped = log_dropped_count(); /* never silent: log.h */
     d.out_fault = (uint16_t)(s->out_fault != 0);
     d.uptime_s = up_s;
     d.period_us = (uint32_t)(c->period_ns / 1000);

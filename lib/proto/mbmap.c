@@ -158,6 +158,7 @@ void mbmap_encode_daemon(uint16_t *regs, const mbmap_daemon_t *d)
     mbmap_put_u32(regs + MBMAP_D_MB_EVICTED, lo32(d->mb_evicted));
     mbmap_put_u32(regs + MBMAP_D_MB_SLOW, lo32(d->mb_slow));
     mbmap_put_u32(regs + MBMAP_D_OUT_LOST, lo32(d->out_lost));
+    mbmap_put_u32(regs + MBMAP_D_LOG_DROPPED, lo32(d->log_dropped));
     regs[MBMAP_D_OUT_FAULT] = d->out_fault ? 1 : 0;
     mbmap_put_u32(regs + MBMAP_D_DRIVE_EMCY, lo32(d->drive_emcy));
     mbmap_put_u32(regs + MBMAP_D_DRIVE_LAST_ABORT, d->drive_last_abort);
@@ -573,6 +574,8 @@ static const mbmap_field_t fields[] = {
       "CAN TX error counter, as last reported by the controller"),
     F(ID, MBMAP_D_CAN_RX_ERR, 1, MBMAP_T_U16, "can_rx_err", "",
       "CAN RX error counter, as last reported by the controller"),
+    F(ID, MBMAP_D_LOG_DROPPED, 2, MBMAP_T_U32, "log_dropped", "",
+      "log lines dropped: the log thread's queue was full"),
     F(ID, MBMAP_D_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "",
       "copy of generation (whole-block reads)"),
 

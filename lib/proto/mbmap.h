@@ -126,6 +126,7 @@
 #define MBMAP_D_CAN_OVERFLOWS 76     /* u32 controller RX/TX buffer overflows */
 #define MBMAP_D_CAN_TX_ERR 78        /* u16 TX error counter, last reported */
 #define MBMAP_D_CAN_RX_ERR 79        /* u16 RX error counter, last reported */
+#define MBMAP_D_LOG_DROPPED 80       /* u32 log lines dropped: the log thread's queue was full */
 #define MBMAP_D_GEN_TAIL 98          /* u32 copy of GEN */
 
 /* ---- object block, input registers (offset from MBMAP_OBJ_BASE(k)) ------ */
@@ -277,6 +278,7 @@ typedef struct {
     uint64_t mb_evicted, mb_slow;
     uint64_t out_lost;
     uint16_t out_fault;
+    uint64_t log_dropped;
     uint64_t mb_connections, mb_dropped;
     uint16_t mb_peers, mb_worst_family;
     uint32_t mb_worst_ipv4;

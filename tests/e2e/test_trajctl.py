@@ -319,7 +319,12 @@ class TestLogDropped(TrajctlTest):
         self.tmp = tempfile.mkdtemp()
         self.sock = os.path.join(self.tmp, "ctl.sock")
         self.conf = os.path.join(self.tmp, "t.conf")
-        write(self.conf, config(self.tmp).replace("status_interval_s = 0", "status_interval_s = 1"))
+        probe = socket.socket()
+        probe.bind(("127.0.0.1", 0))
+        self.mb_port = probe.getsockname()[1]   # free now; trajd binds it below
+        probe.close()
+        write(self.conf, config(self.tmp).replace("status_interval_s = 0", "status_interval_s = 1") +
+              "\n[modbus]\naddress = 127.0.0.1\nport = %d\nsystemd_socket = no\n" % self.mb_port)
         self.d = Daemon(self.tmp, self.conf, read_stderr=False)
         self.d.msg(lambda f: f.get("READY") == "1", timeout=TIMEOUT_S)
 
@@ -340,6 +345,15 @@ class TestLogDropped(TrajctlTest):
         self.assertTrue(shown and shown[0] >= head["log_dropped"], r.stdout)
         fields, _ = self.d.msg(lambda f: "log lines dropped" in f.get("STATUS", ""), timeout=TIMEOUT_S)
         self.assertRegex(fields["STATUS"], r", log lines dropped [1-9]\d*")
+        # and Modbus's daemon block (lib/proto/mbmap.h MBMAP_D_LOG_DROPPED)
+        sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+        import mbsim
+        m = mbsim.connect(self.mb_port)
+        try:
+            regs = mbsim.read_input(m, mbsim.M["MBMAP_D_LOG_DROPPED"], 2)
+        finally:
+            m.close()
+        self.assertGreaterEqual(mbsim.u32(regs, 0), head["log_dropped"])
         # Read again: the log thread says how many it dropped, the status
         # lines carry the count, and so does the exit line.
         self.d.read_stderr_now()
