@@ -235,6 +235,27 @@ static void test_fault_mid_motion(void **state)
     assert_int_equal(rpdo(2, mark, NULL), 7980);
 }
 
+/* Three drives in Operation Enabled at 12000, 8000 and 3000 counts following
+ * the object for four cycles of 50 ms: x at +0.05 m a cycle, y at -vy m a
+ * cycle; p is left at the last setpoint sent. */
+static void three_following(double *p, double vy)
+{
+    new_port(0, 0);
+    three_axes(0, 0);
+    tpdo(1, OE, 12000);
+    tpdo(2, OE, 8000);
+    tpdo(3, OE, 3000);
+    p[0] = 1.2;
+    p[1] = -0.8;
+    p[2] = 0.3;
+    cycle(0, p, 0);
+    for (uint32_t k = 1; k <= 4; k++) {
+        p[0] = 1.2 + 0.05 * k;
+        p[1] = -0.8 - vy * k;
+        cycle(50 * k, p, 1.0);
+    }
+}
+
 /* Given three drives following the object (y's 0x6064 3 counts off the target
  * it holds), when node 1 faults mid-motion, the object is cleared (CLEAR
  * command) and node 1 is enabled again, then each axis re-anchors at its own
@@ -244,17 +265,8 @@ static void test_fault_mid_motion(void **state)
 static void test_clear_reanchors_each_axis_at_its_0x6064(void **state)
 {
     (void)state;
-    new_port(0, 0);
-    three_axes(0, 0);
-    tpdo(1, OE, 12000);
-    tpdo(2, OE, 8000);
-    tpdo(3, OE, 3000);
-    double p[3] = {1.2, -0.8, 0.3};
-    cycle(0, p, 0);
-    for (uint32_t k = 1; k <= 4; k++) {
-        p[0] = 1.2 + 0.05 * k;
-        cycle(50 * k, p, 1.0);
-    }
+    double p[3];
+    three_following(p, 0.0);
     tpdo(2, OE, 8003); /* y stands 3 counts off its target */
     tpdo(1, FAULT, 13900);
     cycle(250, p, 0.5); /* the object brakes */
@@ -286,19 +298,9 @@ static void test_clear_reanchors_each_axis_at_its_0x6064(void **state)
 static void test_clear_while_braking_keeps_axes_following(void **state)
 {
     (void)state;
-    new_port(0, 0);
-    three_axes(0, 0);
-    tpdo(1, OE, 12000);
-    tpdo(2, OE, 8000);
-    tpdo(3, OE, 3000);
-    double p[3] = {1.2, -0.8, 0.3};
-    cycle(0, p, 0);
-    for (uint32_t k = 1; k <= 4; k++) {
-        p[0] = 1.2 + 0.05 * k;
-        p[1] = -0.8 - 0.01 * k; /* y moves too: 8000 + 100 k counts */
-        cycle(50 * k, p, 1.0);
-    }
-    tpdo(2, OE, 8370); /* 30 counts behind its target */
+    double p[3];
+    three_following(p, 0.01); /* y moves too: 8000 + 100 k counts */
+    tpdo(2, OE, 8370);        /* 30 counts behind its target */
     tpdo(1, FAULT, 13900);
     canproto_encode_command(0x680, CANPROTO_CMD_CLEAR, &io.in[io.nin++]);
     p[1] = -0.845;

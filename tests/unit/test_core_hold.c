@@ -45,6 +45,19 @@ static int override(obj_t *o, unsigned percent)
     return obj_command(o, percent ? LC_EV_OVERRIDE : LC_EV_OVERRIDE_ZERO, percent, "test");
 }
 
+/* An object with the default engine and safety monitor, given the straight
+ * line from t = 0 (push_line). */
+static void moving_obj(obj_t *o)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    memset(o, 0, sizeof *o);
+    o->engine = engine_new(&c, NULL);
+    assert_non_null(o->engine);
+    safety_limits_t lim = {.tol_m = SAFETY_TOL_M_DEFAULT};
+    safety_init(&o->safety, &lim);
+    push_line(o, 0.0, 1);
+}
 /* Given an object moving at 1 m/s, when it is held (a drive's heartbeat
  * lost, obj_hold), then it comes to rest on its path; an override to move
  * again (as a Modbus override register write or a CAN override frame makes
@@ -55,15 +68,8 @@ static int override(obj_t *o, unsigned percent)
 static void test_hold_refuses_override_until_clear(void **state)
 {
     (void)state;
-    engine_config_t c;
-    engine_config_default(&c);
     obj_t o;
-    memset(&o, 0, sizeof o);
-    o.engine = engine_new(&c, NULL);
-    assert_non_null(o.engine);
-    safety_limits_t lim = {.tol_m = SAFETY_TOL_M_DEFAULT};
-    safety_init(&o.safety, &lim);
-    push_line(&o, 0.0, 1);
+    moving_obj(&o);
     engine_setpoint_t sp = run(&o, 0, 500);
     assert_true(sp.vel_m_s[0] > 0.5);
     double x_at_hold = sp.pos_m[0];
@@ -107,16 +113,9 @@ static engine_setpoint_t run_lc(obj_t *o, int64_t k0, int n)
 static void test_drive_events_through_the_owner(void **state)
 {
     (void)state;
-    engine_config_t c;
-    engine_config_default(&c);
     obj_t o;
-    memset(&o, 0, sizeof o);
-    o.engine = engine_new(&c, NULL);
-    assert_non_null(o.engine);
+    moving_obj(&o);
     o.lc.period_ns = PERIOD_NS;
-    safety_limits_t lim = {.tol_m = SAFETY_TOL_M_DEFAULT};
-    safety_init(&o.safety, &lim);
-    push_line(&o, 0.0, 1);
     engine_setpoint_t sp = run_lc(&o, 0, 500);
     assert_true(sp.vel_m_s[0] > 0.5);
     assert_int_equal(obj_drive_event(&o, LC_EV_DRIVE_LOST, NULL), 0);
