@@ -38,6 +38,7 @@
 #include <unistd.h>
 
 #include "cfg.h"
+#include "cfgload.h"
 #include "core.h"
 #include "ctl.h"
 #include "log.h"
@@ -64,7 +65,8 @@ typedef struct {
     cfg_t *pending;              /* a reload waiting for the objects it removes to rest */
     int pending_fd;              /* its timer (-1: none) */
     int64_t pending_deadline_ns; /* CLOCK_MONOTONIC: swap anyway after stop_timeout_s */
-    int hup_again;               /* SIGHUP while pending: read the config again after it */
+    int hup_again;               /* SIGHUP while loading or pending: read the config again after */
+    cfgload_t *load;             /* a reload being read and checked on its worker, or NULL */
     uint64_t reloads;            /* SIGHUPs acted on */
     uint64_t reloads_failed;     /* of those, refused (bad config, cannot open) */
     ctl_t *ctl;                  /* the control socket (trajctl), NULL if it could not open */
@@ -137,6 +139,10 @@ static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
 {
     char rtwhy[256];
     core_t *nc = NULL;
+    const cfg_rt_t *was = d->core ? &d->cfg->rt : NULL; /* a reload: the running one's */
+    int rt_same = was && was->fifo_priority == cfg->rt.fifo_priority &&
+                  was->mlockall == cfg->rt.mlockall && was->affinity_set == cfg->rt.affinity_set &&
+                  CPU_EQUAL(&was->affinity, &cfg->rt.affinity);
     int rc = core_open(d->loop, cfg, &d->stats, &d->core, &nc, why, wl);
     if (rc < 0) {
         if (d->ctl && !d->core) /* the old core was closed: none runs now */
@@ -147,8 +153,9 @@ static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
     if (d->ctl)
         ctl_set_core(d->ctl, d->core);
     /* before the clock starts: mlockall faults every page in (seconds for
-     * 1024 objects), which must not count as ticks missed */
-    if (rt_apply(&cfg->rt, rtwhy, sizeof rtwhy) < 0)
+     * 1024 objects), which must not count as ticks missed.  A reload keeps
+     * the clock's phase (core_start): applied again only if [realtime] changed */
+    if (!rt_same && rt_apply(&cfg->rt, rtwhy, sizeof rtwhy) < 0)
         log_msg(LOG_WARNING, "realtime settings not applied (running without them): %s", rtwhy);
     rc = core_start(d->core);
     if (rc < 0) {
@@ -215,6 +222,16 @@ static void reload_refused(trajd_t *d, const char *what, const char *err)
     sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
 }
 
+/* SIGHUPs were coalesced while a reload was under way: read the config again. */
+static void reload_again(trajd_t *d)
+{
+    if (d->hup_again && d->core && !d->core->stopping && !d->load && !d->pending) {
+        char err[1024];
+        d->hup_again = 0;
+        (void)reload(d, "SIGHUP", err, sizeof err); /* logged there */
+    }
+}
+
 /* Swap in nc (checked), then read the config again if SIGHUPs were coalesced.
  * 0, or -1 with the reason in err. */
 static int reload_swap(trajd_t *d, cfg_t *nc, char *err, size_t errlen)
@@ -246,7 +263,7 @@ static int reload_swap(trajd_t *d, cfg_t *nc, char *err, size_t errlen)
             sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
         }
     } else {
-        cfg_free(d->cfg);
+        cfgload_retire(d->cfg); /* freed on a thread: its tracks may be large */
         d->cfg = nc;
         unsigned kept = 0;
         for (unsigned i = 0; i < d->core->nobj; i++)
@@ -256,11 +273,7 @@ static int reload_swap(trajd_t *d, cfg_t *nc, char *err, size_t errlen)
         sd_notify(0, "READY=1");
         notify_status(d);
     }
-    if (d->hup_again && d->core && !d->core->stopping) {
-        char err2[1024];
-        d->hup_again = 0;
-        (void)reload(d, "SIGHUP", err2, sizeof err2);
-    }
+    reload_again(d);
     return rc;
 }
 
@@ -295,30 +308,15 @@ static void on_pending(loop_t *l, uint64_t exp, void *ctx)
     (void)reload_swap(d, pending_take(d), err, sizeof err); /* logged there */
 }
 
-/* SIGHUP, or trajctl reload (from): 0 when taken (done, or waiting for removed objects
- * to rest), or -1 with the reason in err. */
-static int reload(trajd_t *d, const char *from, char *err, size_t errlen)
+/* The new configuration read and checked (rc 0, nc), or refused (rc < 0, err):
+ * swapped in now, or once the objects it removes rest (on_pending).  0 when
+ * taken, or -1 with the reason in err. */
+static int reload_loaded(trajd_t *d, cfg_t *nc, int rc, char *err, size_t errlen)
 {
-    cfg_t *nc = NULL;
-    if (!d->core || d->core->stopping) {
-        snprintf(err, errlen, "trajd is stopping");
-        return -1;
-    }
-    if (d->pending) {
-        d->hup_again = 1;
-        log_msg(LOG_NOTICE,
-                "%s while a reload waits for removed objects to rest: coalesced, "
-                "%s is read again once that reload is done",
-                from, d->conf_path);
-        return 0;
-    }
-    d->reloads++;
-    sd_notifyf(0, "RELOADING=1\nMONOTONIC_USEC=%llu", (unsigned long long)(core_mono_ns() / 1000));
-    log_msg(LOG_NOTICE, "%s: reloading %s", from, d->conf_path);
-    if (cfg_load(d->conf_path, &nc, err, errlen) < 0 ||
-        cfg_reload_check(d->cfg, nc, err, errlen) < 0) {
+    if (rc < 0) {
         reload_refused(d, "", err);
         cfg_free(nc);
+        reload_again(d);
         return -1;
     }
     if (reload_brake_removed(d->core, nc) > 0) {
@@ -336,6 +334,75 @@ static int reload(trajd_t *d, const char *from, char *err, size_t errlen)
                 strerror(-d->pending_fd));
     }
     return reload_swap(d, nc, err, errlen);
+}
+
+/* The reload's worker is done (its eventfd): take its result, between two ticks. */
+static void on_loaded(loop_t *l, int fd, uint32_t events, void *ctx)
+{
+    trajd_t *d = ctx;
+    char err[1024] = "";
+    cfg_t *nc = NULL;
+    (void)events;
+    loop_del(l, fd);
+    int rc = cfgload_finish(d->load, &nc, err, sizeof err);
+    d->load = NULL;
+    rc = reload_loaded(d, nc, rc, err, sizeof err);
+    ctl_reload_done(d->ctl, rc, err);
+}
+
+/* SIGTERM while a reload is read: its parse is cancelled, its result dropped (counted). */
+static void load_drop(trajd_t *d, const char *why)
+{
+    if (!d->load)
+        return;
+    if (d->loop)
+        loop_del(d->loop, cfgload_fd(d->load));
+    cfgload_drop(d->load);
+    d->load = NULL;
+    d->reloads_failed++;
+    log_msg(LOG_NOTICE, "the reload being read is dropped (its parse cancelled): %s", why);
+    ctl_reload_done(d->ctl, -1, why);
+}
+
+/* SIGHUP, or trajctl reload (from): 0 when taken (done, or waiting for removed
+ * objects to rest), 1 when being read on the reload's worker (on_loaded takes
+ * it), or -1 with the reason in err. */
+static int reload(trajd_t *d, const char *from, char *err, size_t errlen)
+{
+    cfg_t *nc = NULL;
+    if (!d->core || d->core->stopping) {
+        snprintf(err, errlen, "trajd is stopping");
+        return -1;
+    }
+    if (d->load || d->pending) {
+        d->hup_again = 1;
+        log_msg(LOG_NOTICE,
+                "%s while a reload is %s: coalesced, %s is read again once that reload is "
+                "done",
+                from, d->load ? "being read" : "waiting for removed objects to rest", d->conf_path);
+        return 0;
+    }
+    d->reloads++;
+    sd_notifyf(0, "RELOADING=1\nMONOTONIC_USEC=%llu", (unsigned long long)(core_mono_ns() / 1000));
+    log_msg(LOG_NOTICE, "%s: reloading %s", from, d->conf_path);
+    /* read, parsed and checked on a worker beside the running configuration
+     * (cfgload.h): the ticks go on meanwhile */
+    int e = 0;
+    d->load = cfgload_start(d->conf_path, d->cfg, &e);
+    if (d->load && (e = loop_add(d->loop, cfgload_fd(d->load), EPOLLIN, on_loaded, d)) == 0)
+        return 1;
+    if (d->load) {
+        cfgload_drop(d->load);
+        d->load = NULL;
+    }
+    log_msg(LOG_WARNING,
+            "reload: no worker thread (%s): the configuration is read in the loop, "
+            "ticks wait for it",
+            strerror(-e));
+    int rc = cfg_load(d->conf_path, &nc, err, errlen);
+    if (rc == 0)
+        rc = cfg_reload_check(d->cfg, nc, err, errlen);
+    return reload_loaded(d, nc, rc, err, errlen);
 }
 
 static int ctl_reload(void *ctx, char *why, size_t wl)
@@ -368,6 +435,7 @@ static void on_signal(loop_t *l, int fd, uint32_t events, void *ctx)
                 log_msg(LOG_NOTICE, "the pending reload is dropped");
                 cfg_free(pending_take(d));
             }
+            load_drop(d, "trajd is stopping");
             core_stop(d->core);
             break;
         default: break;
@@ -645,6 +713,7 @@ int main(int argc, char **argv)
     if (rc == 0)
         rc = run(&d);
     report_ready(&d, (char)(rc ? rc : EX_SOFTWARE));
+    load_drop(&d, "trajd is exiting"); /* before the control socket and d.cfg go */
     uint64_t faults = engine_faults(d.core, &d.stats);
     unsigned held = held_objects(d.core);
     ctl_close(d.ctl);   /* watchers get what is queued, then a goodbye */
@@ -682,6 +751,7 @@ int main(int argc, char **argv)
         close(d.sig_fd);
     loop_free(d.loop);
     cfg_free(d.cfg);
+    cfgload_retire_join();
     log_async_stop(); /* every line queued is written before the exit */
     return rc;
 }

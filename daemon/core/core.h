@@ -349,7 +349,11 @@ int64_t core_mono_ns(void);
 int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prev, core_t **out,
               char *why, size_t whylen);
 
-/* Arm the output clock: first deadline one period from now. Returns 0 or -errno. */
+/* Arm the output clock: first deadline one period from now; a core that
+ * replaced another (core_open with *prev) keeps its phase instead: its first
+ * deadline is the one *prev was to serve next, so a reload never restarts the
+ * clock and every deadline that passes while it swaps is counted in
+ * stats.missed_ticks (issue 28 item 2).  Returns 0 or -errno. */
 int core_start(core_t *c);
 
 /*
