@@ -26,6 +26,7 @@
 #include <errno.h>
 #include <getopt.h>
 #include <grp.h>
+#include <poll.h>
 #include <pwd.h>
 #include <signal.h>
 #include <stdio.h>
@@ -534,6 +535,73 @@ static int check_config(const char *path)
     return 0;
 }
 
+/* The signals trajd takes from a signalfd (blocked from the first read of
+ * the configuration on). */
+static void trajd_signals(sigset_t *mask)
+{
+    sigemptyset(mask);
+    sigaddset(mask, SIGHUP);
+    sigaddset(mask, SIGTERM);
+    sigaddset(mask, SIGINT);
+}
+
+/* Signals while the configuration is first read: SIGTERM/SIGINT cancel the
+ * parse (1), a SIGHUP is ignored (the file is being read now), logged. */
+static int start_signals(int sfd)
+{
+    struct signalfd_siginfo si;
+    while (read(sfd, &si, sizeof si) == (ssize_t)sizeof si) {
+        if (si.ssi_signo == SIGHUP) {
+            log_msg(LOG_NOTICE, "SIGHUP while the configuration is first read: ignored (it is "
+                                "being read now)");
+            continue;
+        }
+        log_msg(LOG_NOTICE,
+                "%s while the configuration is first read: its parse cancelled, "
+                "exiting",
+                strsignal((int)si.ssi_signo));
+        return 1;
+    }
+    return 0;
+}
+
+/*
+ * The configuration at start, read and its tracks parsed on the reload's
+ * worker (cfgload.h) while this thread waits for it or for a signal:
+ * SIGTERM/SIGINT cancel the parse and trajd exits 0 (-1), as in every later
+ * state.  0 with d->cfg, -1 (stopped), or EX_CONFIG (logged).
+ */
+static int load_at_start(trajd_t *d)
+{
+    char err[1024] = "";
+    sigset_t mask;
+    trajd_signals(&mask);
+    sigprocmask(SIG_BLOCK, &mask, NULL); /* open_loop's signalfd takes them from here on */
+    int e = 0, rc = 1, sfd = signalfd(-1, &mask, SFD_NONBLOCK | SFD_CLOEXEC);
+    cfgload_t *l = sfd >= 0 ? cfgload_start(d->conf_path, NULL, &e) : NULL;
+    if (!l) /* no worker: read here (a SIGTERM waits for the loop) */
+        rc = cfg_load(d->conf_path, &d->cfg, err, sizeof err);
+    while (rc == 1) {
+        struct pollfd p[2] = {{cfgload_fd(l), POLLIN, 0}, {sfd, POLLIN, 0}};
+        if (poll(p, 2, -1) < 0)
+            continue; /* EINTR */
+        if (p[0].revents) {
+            rc = cfgload_finish(l, &d->cfg, err, sizeof err);
+        } else if (start_signals(sfd)) {
+            cfgload_drop(l);
+            close(sfd);
+            return -1;
+        }
+    }
+    if (sfd >= 0)
+        close(sfd);
+    if (rc < 0) {
+        log_msg(LOG_ERR, "%s", err);
+        return EX_CONFIG;
+    }
+    return 0;
+}
+
 /* The event loop, with SIGHUP/SIGTERM/SIGINT delivered to it by a signalfd:
  * 0 or an exit code (logged). */
 static int open_loop(trajd_t *d)
@@ -542,10 +610,7 @@ static int open_loop(trajd_t *d)
      * ends the daemon cleanly with CORE_EXIT_EPIPE (csv_transport.h). */
     signal(SIGPIPE, SIG_IGN);
     sigset_t mask;
-    sigemptyset(&mask);
-    sigaddset(&mask, SIGHUP);
-    sigaddset(&mask, SIGTERM);
-    sigaddset(&mask, SIGINT);
+    trajd_signals(&mask);
     sigprocmask(SIG_BLOCK, &mask, NULL);
 
     int e = 0;
@@ -691,7 +756,6 @@ int main(int argc, char **argv)
                  .pending_fd = -1};
     int foreground = 0, rc;
     const char *check = NULL;
-    char err[1024];
 
     if (stdfds_open() < 0)
         return 71; /* EX_OSERR: no /dev/null */
@@ -700,10 +764,8 @@ int main(int argc, char **argv)
     if (check)
         return check_config(check);
 
-    if (cfg_load(d.conf_path, &d.cfg, err, sizeof err) < 0) {
-        log_msg(LOG_ERR, "%s", err);
-        return EX_CONFIG;
-    }
+    if ((rc = load_at_start(&d)) != 0)
+        return rc < 0 ? 0 : rc; /* < 0: SIGTERM while it was read */
     log_set_level(d.cfg->daemon.log_level);
     if (!foreground && detach(&d) < 0) {
         log_msg(LOG_ERR, "cannot detach: %s", strerror(errno));

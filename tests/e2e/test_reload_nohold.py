@@ -17,6 +17,9 @@ and the Modbus/CAN status show them).
    output clock kept its phase: not restarted by the reload).
 3. SIGTERM while a reload parses a 1e6-waypoint track: trajd brings its
    objects to rest and exits 0 at once; the reload is dropped, never swapped.
+4. SIGHUPs while a reload parses: coalesced into one more reload after it.
+5. SIGTERM while the configuration is first read (the 1e6-waypoint track
+   parsed at start): the parse is cancelled, trajd exits 0.
 
 Before this work the parse ran in the event loop and core_start restarted the
 clock: test 1 counted about 70 % of the deadlines, test 2 lost the parse's
@@ -236,6 +239,42 @@ class ReloadNoHold(unittest.TestCase):
         self.assertIn("dropped", log)
         self.assertLess(took, 5.0, log)
         os.unlink(long_track)
+
+    def test_sighup_storm_coalesced(self):
+        d, conf = self.start(self.big)
+        now = time.time()
+        os.utime(self.big, (now, now + 100))  # changed: parsed again
+        d.p.send_signal(signal.SIGHUP)
+        d.wait_for("SIGHUP: reloading")
+        for _ in range(5):  # while it parses: one more reload after it
+            d.p.send_signal(signal.SIGHUP)
+            time.sleep(0.01)
+        d.wait_for("reloaded:")
+        d.wait_for("reloaded:")
+        time.sleep(0.5)
+        self.assertEqual(d.stop(), 0)
+        log = "\n".join(d.rest())
+        self.assertEqual(log.count("SIGHUP: reloading"), 2, log)
+        self.assertEqual(log.count("reloaded:"), 2, log)
+        # each signal that arrived while the first one parsed is logged as coalesced
+        # (signals arriving together are one read: "N SIGHUPs at once")
+        self.assertGreaterEqual(log.count("coalesced"), 1, log)
+
+    def test_sigterm_during_start_parse(self):
+        conf = os.path.join(self.tmp, "start.conf")
+        write(conf, config(self.tmp, self.big))
+        d = Trajd(self.tmp, conf)
+        self.addCleanup(d.stop)
+        time.sleep(0.1)  # reading the 1e6-waypoint track
+        t0 = time.monotonic()
+        d.p.send_signal(signal.SIGTERM)
+        rc = d.p.wait(WAIT_S)
+        took = time.monotonic() - t0
+        log = "\n".join(d.rest())
+        print("SIGTERM while the configuration is first read: exit %d after %.2f s" % (rc, took))
+        self.assertEqual(rc, 0, log)
+        self.assertIn("its parse cancelled", log)
+        self.assertNotIn("started:", log)
 
 
 if __name__ == "__main__":
