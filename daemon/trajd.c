@@ -4,12 +4,15 @@
  * wires them together.
  *
  * Signals (signalfd, in the loop):
- *   SIGHUP           re-read the config; a bad one is refused, the old keeps running
+ *   SIGHUP           re-read the config on a worker thread (cfgload.h) while the
+ *                    old one ticks on; a bad one is refused, the old keeps running
  *                    (reload.h: what happens to each object); objects it removes
- *                    brake to rest first, and SIGHUPs arriving meanwhile (or in
- *                    one batch) are coalesced into one more reload after it
- *   SIGTERM, SIGINT  stop policy of core.h (bring objects to rest, exit 0);
- *                    a second one exits at once (0)
+ *                    brake to rest first, and SIGHUPs arriving meanwhile (or while
+ *                    it is read, or in one batch) are coalesced into one more
+ *                    reload after it; the clock keeps its phase across the swap
+ *   SIGTERM, SIGINT  stop policy of core.h (bring objects to rest, exit 0), a reload
+ *                    being read dropped; a second one exits at once (0); while
+ *                    the config is first read: its parse cancelled, exit 0
  * Exit status: 0; EX_USAGE, EX_CONFIG, EX_UNAVAILABLE (cannot start), EX_OSERR,
  * EX_SOFTWARE; CORE_EXIT_OUTPUT_LOST (74) if any setpoint line was lost by an
  * output; CORE_EXIT_EPIPE (141) when stdout's reader went away; CORE_EXIT_NO_INPUT

@@ -42,11 +42,11 @@ TRAJD = os.path.join(BUILD, "bin", "trajd")
 RATE_HZ = 100
 N_BIG = 1_000_000
 WAIT_S = 30
-# A machine shared with other work stalls any process now and then (a
-# hypervisor's steal time; without reloads trajd missed 0 to 13 of 240
-# deadlines on a 2-CPU guest at a load of 6): test 1 gives the <= 1 % of
-# missed deadlines three attempts, and prints each.  Ticks + missed >= 97 % is
-# required of every attempt (a deadline lost uncounted is trajd's fault).
+# Whatever else runs beside trajd may stall it now and then, reload or not
+# (even at SCHED_FIFO, a CPU taken from the whole guest): test 1 gives the
+# <= 1 % of missed deadlines three attempts, and prints each.  Ticks + missed
+# >= 97 % is required of every attempt (a deadline lost uncounted is trajd's
+# fault, whatever stalled it).
 ATTEMPTS = 3
 
 
