@@ -27,8 +27,6 @@ typedef struct {
     int opened[CFG_TRANSPORTS_MAX];
     int64_t rt_off_ns; /* CLOCK_REALTIME - CLOCK_MONOTONIC (real_offset) */
     int have_rt_off;
-    int64_t phase_ns; /* a reload's core: CLOCK_MONOTONIC of the running core's next
-                       * deadline, its first (0: none, the clock starts one period on) */
 } core_priv_t;
 
 int64_t core_mono_ns(void)
@@ -527,12 +525,9 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
             (void)reopen_old(prevp);
         goto fail;
     }
-    /* 4. commit: the engines are the new core's, the old core goes; the
-     * clock goes on in its phase (core_start): no deadline is skipped uncounted */
+    /* 4. commit: the engines are the new core's, the old core goes (its
+     * clock's phase kept in stats->clock_next_ns for core_start) */
     if (prev) {
-        const core_priv_t *q = (const core_priv_t *)prev;
-        if (q->clock_fd >= 0)
-            p->phase_ns = q->wall_base_ns + (int64_t)q->next_k * q->wall_period_ns;
         reload_commit(c, prev);
         core_close(prev);
         *prevp = NULL;
@@ -559,7 +554,8 @@ int core_start(core_t *c)
     /* a reload's core: its first deadline is the running core's next one,
      * even if it passed while the reload swapped (the timerfd then counts it,
      * and each one after it, as expired: on_clock counts them missed) */
-    p->wall_base_ns = p->phase_ns ? p->phase_ns : core_mono_ns() + p->wall_period_ns;
+    int64_t phase_ns = c->stats->clock_next_ns;
+    p->wall_base_ns = phase_ns ? phase_ns : core_mono_ns() + p->wall_period_ns;
     p->next_k = 0;
     struct itimerspec its = {
         .it_value = {.tv_sec = p->wall_base_ns / 1000000000,
@@ -642,7 +638,8 @@ void core_close(core_t *c)
     if (!c)
         return;
     core_priv_t *p = (core_priv_t *)c;
-    if (p->clock_fd >= 0) {
+    if (p->clock_fd >= 0) { /* the next core goes on in its phase (core_start) */
+        c->stats->clock_next_ns = p->wall_base_ns + (int64_t)p->next_k * p->wall_period_ns;
         loop_del(c->loop, p->clock_fd);
         close(p->clock_fd);
     }
