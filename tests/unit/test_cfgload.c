@@ -18,16 +18,6 @@
 
 static char dir[] = "/tmp/trajd-test-cfgload-XXXXXX";
 
-static void write_file(const char *name, const char *text)
-{
-    char path[256];
-    snprintf(path, sizeof path, "%s/%s", dir, name);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fputs(text, f);
-    fclose(f);
-}
-
 static void write_track(const char *name, int rows)
 {
     char path[256];
@@ -47,7 +37,7 @@ static void write_conf(const char *name, int id, const char *track)
              "[daemon]\nrate_hz = 100\n[object.a]\nid = %d\ninput = replay\nreplay.track = %s\n"
              "output = csv\ncsv.path = out.csv\n",
              id, track);
-    write_file(name, text);
+    test_write_file(dir, name, text);
 }
 
 /* Start loading name (checked against running), wait for the eventfd, take it. */
@@ -74,7 +64,7 @@ static void test_good_bad_and_refused(void **state)
     assert_non_null(run);
     assert_int_equal(run->nobj, 1);
 
-    write_file("bad.conf", "[daemon]\nrate_hz = fast\n");
+    test_write_file(dir, "bad.conf", "[daemon]\nrate_hz = fast\n");
     assert_true(load("bad.conf", run, &nc, err, sizeof err) < 0);
     assert_null(nc);
     assert_non_null(strstr(err, "bad.conf:2"));
