@@ -4,12 +4,15 @@
  * wires them together.
  *
  * Signals (signalfd, in the loop):
- *   SIGHUP           re-read the config; a bad one is refused, the old keeps running
+ *   SIGHUP           re-read the config on a worker thread (cfgload.h) while the
+ *                    old one ticks on; a bad one is refused, the old keeps running
  *                    (reload.h: what happens to each object); objects it removes
- *                    brake to rest first, and SIGHUPs arriving meanwhile (or in
- *                    one batch) are coalesced into one more reload after it
- *   SIGTERM, SIGINT  stop policy of core.h (bring objects to rest, exit 0);
- *                    a second one exits at once (0)
+ *                    brake to rest first, and SIGHUPs arriving meanwhile (or while
+ *                    it is read, or in one batch) are coalesced into one more
+ *                    reload after it; the clock keeps its phase across the swap
+ *   SIGTERM, SIGINT  stop policy of core.h (bring objects to rest, exit 0), a reload
+ *                    being read dropped; a second one exits at once (0); while
+ *                    the config is first read: its parse cancelled, exit 0
  * Exit status: 0; EX_USAGE, EX_CONFIG, EX_UNAVAILABLE (cannot start), EX_OSERR,
  * EX_SOFTWARE; CORE_EXIT_OUTPUT_LOST (74) if any setpoint line was lost by an
  * output; CORE_EXIT_EPIPE (141) when stdout's reader went away; CORE_EXIT_NO_INPUT
@@ -26,6 +29,7 @@
 #include <errno.h>
 #include <getopt.h>
 #include <grp.h>
+#include <poll.h>
 #include <pwd.h>
 #include <signal.h>
 #include <stdio.h>
@@ -38,6 +42,7 @@
 #include <unistd.h>
 
 #include "cfg.h"
+#include "cfgload.h"
 #include "core.h"
 #include "ctl.h"
 #include "log.h"
@@ -64,7 +69,8 @@ typedef struct {
     cfg_t *pending;              /* a reload waiting for the objects it removes to rest */
     int pending_fd;              /* its timer (-1: none) */
     int64_t pending_deadline_ns; /* CLOCK_MONOTONIC: swap anyway after stop_timeout_s */
-    int hup_again;               /* SIGHUP while pending: read the config again after it */
+    int hup_again;               /* SIGHUP while loading or pending: read the config again after */
+    cfgload_t *load;             /* a reload being read and checked on its worker, or NULL */
     uint64_t reloads;            /* SIGHUPs acted on */
     uint64_t reloads_failed;     /* of those, refused (bad config, cannot open) */
     ctl_t *ctl;                  /* the control socket (trajctl), NULL if it could not open */
@@ -137,6 +143,10 @@ static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
 {
     char rtwhy[256];
     core_t *nc = NULL;
+    const cfg_rt_t *was = d->core ? &d->cfg->rt : NULL; /* a reload: the running one's */
+    int rt_same = was && was->fifo_priority == cfg->rt.fifo_priority &&
+                  was->mlockall == cfg->rt.mlockall && was->affinity_set == cfg->rt.affinity_set &&
+                  CPU_EQUAL(&was->affinity, &cfg->rt.affinity);
     int rc = core_open(d->loop, cfg, &d->stats, &d->core, &nc, why, wl);
     if (rc < 0) {
         if (d->ctl && !d->core) /* the old core was closed: none runs now */
@@ -147,8 +157,9 @@ static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
     if (d->ctl)
         ctl_set_core(d->ctl, d->core);
     /* before the clock starts: mlockall faults every page in (seconds for
-     * 1024 objects), which must not count as ticks missed */
-    if (rt_apply(&cfg->rt, rtwhy, sizeof rtwhy) < 0)
+     * 1024 objects), which must not count as ticks missed.  A reload keeps
+     * the clock's phase (core_start): applied again only if [realtime] changed */
+    if (!rt_same && rt_apply(&cfg->rt, rtwhy, sizeof rtwhy) < 0)
         log_msg(LOG_WARNING, "realtime settings not applied (running without them): %s", rtwhy);
     rc = core_start(d->core);
     if (rc < 0) {
@@ -215,6 +226,16 @@ static void reload_refused(trajd_t *d, const char *what, const char *err)
     sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
 }
 
+/* SIGHUPs were coalesced while a reload was under way: read the config again. */
+static void reload_again(trajd_t *d)
+{
+    if (d->hup_again && d->core && !d->core->stopping && !d->load && !d->pending) {
+        char err[1024];
+        d->hup_again = 0;
+        (void)reload(d, "SIGHUP", err, sizeof err); /* logged there */
+    }
+}
+
 /* Swap in nc (checked), then read the config again if SIGHUPs were coalesced.
  * 0, or -1 with the reason in err. */
 static int reload_swap(trajd_t *d, cfg_t *nc, char *err, size_t errlen)
@@ -246,7 +267,7 @@ static int reload_swap(trajd_t *d, cfg_t *nc, char *err, size_t errlen)
             sd_notifyf(0, "READY=1\nSTATUS=reload refused: %s", err);
         }
     } else {
-        cfg_free(d->cfg);
+        cfgload_retire(d->cfg); /* freed on a thread: its tracks may be large */
         d->cfg = nc;
         unsigned kept = 0;
         for (unsigned i = 0; i < d->core->nobj; i++)
@@ -256,11 +277,7 @@ static int reload_swap(trajd_t *d, cfg_t *nc, char *err, size_t errlen)
         sd_notify(0, "READY=1");
         notify_status(d);
     }
-    if (d->hup_again && d->core && !d->core->stopping) {
-        char err2[1024];
-        d->hup_again = 0;
-        (void)reload(d, "SIGHUP", err2, sizeof err2);
-    }
+    reload_again(d);
     return rc;
 }
 
@@ -295,30 +312,15 @@ static void on_pending(loop_t *l, uint64_t exp, void *ctx)
     (void)reload_swap(d, pending_take(d), err, sizeof err); /* logged there */
 }
 
-/* SIGHUP, or trajctl reload (from): 0 when taken (done, or waiting for removed objects
- * to rest), or -1 with the reason in err. */
-static int reload(trajd_t *d, const char *from, char *err, size_t errlen)
+/* The new configuration read and checked (rc 0, nc), or refused (rc < 0, err):
+ * swapped in now, or once the objects it removes rest (on_pending).  0 when
+ * taken, or -1 with the reason in err. */
+static int reload_loaded(trajd_t *d, cfg_t *nc, int rc, char *err, size_t errlen)
 {
-    cfg_t *nc = NULL;
-    if (!d->core || d->core->stopping) {
-        snprintf(err, errlen, "trajd is stopping");
-        return -1;
-    }
-    if (d->pending) {
-        d->hup_again = 1;
-        log_msg(LOG_NOTICE,
-                "%s while a reload waits for removed objects to rest: coalesced, "
-                "%s is read again once that reload is done",
-                from, d->conf_path);
-        return 0;
-    }
-    d->reloads++;
-    sd_notifyf(0, "RELOADING=1\nMONOTONIC_USEC=%llu", (unsigned long long)(core_mono_ns() / 1000));
-    log_msg(LOG_NOTICE, "%s: reloading %s", from, d->conf_path);
-    if (cfg_load(d->conf_path, &nc, err, errlen) < 0 ||
-        cfg_reload_check(d->cfg, nc, err, errlen) < 0) {
+    if (rc < 0) {
         reload_refused(d, "", err);
         cfg_free(nc);
+        reload_again(d);
         return -1;
     }
     if (reload_brake_removed(d->core, nc) > 0) {
@@ -336,6 +338,75 @@ static int reload(trajd_t *d, const char *from, char *err, size_t errlen)
                 strerror(-d->pending_fd));
     }
     return reload_swap(d, nc, err, errlen);
+}
+
+/* The reload's worker is done (its eventfd): take its result, between two ticks. */
+static void on_loaded(loop_t *l, int fd, uint32_t events, void *ctx)
+{
+    trajd_t *d = ctx;
+    char err[1024] = "";
+    cfg_t *nc = NULL;
+    (void)events;
+    loop_del(l, fd);
+    int rc = cfgload_finish(d->load, &nc, err, sizeof err);
+    d->load = NULL;
+    rc = reload_loaded(d, nc, rc, err, sizeof err);
+    ctl_reload_done(d->ctl, rc, err);
+}
+
+/* SIGTERM while a reload is read: its parse is cancelled, its result dropped (counted). */
+static void load_drop(trajd_t *d, const char *why)
+{
+    if (!d->load)
+        return;
+    if (d->loop)
+        loop_del(d->loop, cfgload_fd(d->load));
+    cfgload_drop(d->load);
+    d->load = NULL;
+    d->reloads_failed++;
+    log_msg(LOG_NOTICE, "the reload being read is dropped (its parse cancelled): %s", why);
+    ctl_reload_done(d->ctl, -1, why);
+}
+
+/* SIGHUP, or trajctl reload (from): 0 when taken (done, or waiting for removed
+ * objects to rest), 1 when being read on the reload's worker (on_loaded takes
+ * it), or -1 with the reason in err. */
+static int reload(trajd_t *d, const char *from, char *err, size_t errlen)
+{
+    cfg_t *nc = NULL;
+    if (!d->core || d->core->stopping) {
+        snprintf(err, errlen, "trajd is stopping");
+        return -1;
+    }
+    if (d->load || d->pending) {
+        d->hup_again = 1;
+        log_msg(LOG_NOTICE,
+                "%s while a reload is %s: coalesced, %s is read again once that reload is "
+                "done",
+                from, d->load ? "being read" : "waiting for removed objects to rest", d->conf_path);
+        return 0;
+    }
+    d->reloads++;
+    sd_notifyf(0, "RELOADING=1\nMONOTONIC_USEC=%llu", (unsigned long long)(core_mono_ns() / 1000));
+    log_msg(LOG_NOTICE, "%s: reloading %s", from, d->conf_path);
+    /* read, parsed and checked on a worker beside the running configuration
+     * (cfgload.h): the ticks go on meanwhile */
+    int e = 0;
+    d->load = cfgload_start(d->conf_path, d->cfg, &e);
+    if (d->load && (e = loop_add(d->loop, cfgload_fd(d->load), EPOLLIN, on_loaded, d)) == 0)
+        return 1;
+    if (d->load) {
+        cfgload_drop(d->load);
+        d->load = NULL;
+    }
+    log_msg(LOG_WARNING,
+            "reload: no worker thread (%s): the configuration is read in the loop, "
+            "ticks wait for it",
+            strerror(-e));
+    int rc = cfg_load(d->conf_path, &nc, err, errlen);
+    if (rc == 0)
+        rc = cfg_reload_check(d->cfg, nc, err, errlen);
+    return reload_loaded(d, nc, rc, err, errlen);
 }
 
 static int ctl_reload(void *ctx, char *why, size_t wl)
@@ -368,6 +439,7 @@ static void on_signal(loop_t *l, int fd, uint32_t events, void *ctx)
                 log_msg(LOG_NOTICE, "the pending reload is dropped");
                 cfg_free(pending_take(d));
             }
+            load_drop(d, "trajd is stopping");
             core_stop(d->core);
             break;
         default: break;
@@ -466,6 +538,73 @@ static int check_config(const char *path)
     return 0;
 }
 
+/* The signals trajd takes from a signalfd (blocked from the first read of
+ * the configuration on). */
+static void trajd_signals(sigset_t *mask)
+{
+    sigemptyset(mask);
+    sigaddset(mask, SIGHUP);
+    sigaddset(mask, SIGTERM);
+    sigaddset(mask, SIGINT);
+}
+
+/* Signals while the configuration is first read: SIGTERM/SIGINT cancel the
+ * parse (1), a SIGHUP is ignored (the file is being read now), logged. */
+static int start_signals(int sfd)
+{
+    struct signalfd_siginfo si;
+    while (read(sfd, &si, sizeof si) == (ssize_t)sizeof si) {
+        if (si.ssi_signo == SIGHUP) {
+            log_msg(LOG_NOTICE, "SIGHUP while the configuration is first read: ignored (it is "
+                                "being read now)");
+            continue;
+        }
+        log_msg(LOG_NOTICE,
+                "%s while the configuration is first read: its parse cancelled, "
+                "exiting",
+                strsignal((int)si.ssi_signo));
+        return 1;
+    }
+    return 0;
+}
+
+/*
+ * The configuration at start, read and its tracks parsed on the reload's
+ * worker (cfgload.h) while this thread waits for it or for a signal:
+ * SIGTERM/SIGINT cancel the parse and trajd exits 0 (-1), as in every later
+ * state.  0 with d->cfg, -1 (stopped), or EX_CONFIG (logged).
+ */
+static int load_at_start(trajd_t *d)
+{
+    char err[1024] = "";
+    sigset_t mask;
+    trajd_signals(&mask);
+    sigprocmask(SIG_BLOCK, &mask, NULL); /* open_loop's signalfd takes them from here on */
+    int e = 0, rc = 1, sfd = signalfd(-1, &mask, SFD_NONBLOCK | SFD_CLOEXEC);
+    cfgload_t *l = sfd >= 0 ? cfgload_start(d->conf_path, NULL, &e) : NULL;
+    if (!l) /* no worker: read here (a SIGTERM waits for the loop) */
+        rc = cfg_load(d->conf_path, &d->cfg, err, sizeof err);
+    while (rc == 1) {
+        struct pollfd p[2] = {{cfgload_fd(l), POLLIN, 0}, {sfd, POLLIN, 0}};
+        if (poll(p, 2, -1) < 0)
+            continue; /* EINTR */
+        if (p[0].revents) {
+            rc = cfgload_finish(l, &d->cfg, err, sizeof err);
+        } else if (start_signals(sfd)) {
+            cfgload_drop(l);
+            close(sfd);
+            return -1;
+        }
+    }
+    if (sfd >= 0)
+        close(sfd);
+    if (rc < 0) {
+        log_msg(LOG_ERR, "%s", err);
+        return EX_CONFIG;
+    }
+    return 0;
+}
+
 /* The event loop, with SIGHUP/SIGTERM/SIGINT delivered to it by a signalfd:
  * 0 or an exit code (logged). */
 static int open_loop(trajd_t *d)
@@ -474,10 +613,7 @@ static int open_loop(trajd_t *d)
      * ends the daemon cleanly with CORE_EXIT_EPIPE (csv_transport.h). */
     signal(SIGPIPE, SIG_IGN);
     sigset_t mask;
-    sigemptyset(&mask);
-    sigaddset(&mask, SIGHUP);
-    sigaddset(&mask, SIGTERM);
-    sigaddset(&mask, SIGINT);
+    trajd_signals(&mask);
     sigprocmask(SIG_BLOCK, &mask, NULL);
 
     int e = 0;
@@ -623,7 +759,6 @@ int main(int argc, char **argv)
                  .pending_fd = -1};
     int foreground = 0, rc;
     const char *check = NULL;
-    char err[1024];
 
     if (stdfds_open() < 0)
         return 71; /* EX_OSERR: no /dev/null */
@@ -632,10 +767,8 @@ int main(int argc, char **argv)
     if (check)
         return check_config(check);
 
-    if (cfg_load(d.conf_path, &d.cfg, err, sizeof err) < 0) {
-        log_msg(LOG_ERR, "%s", err);
-        return EX_CONFIG;
-    }
+    if ((rc = load_at_start(&d)) != 0)
+        return rc < 0 ? 0 : rc; /* < 0: SIGTERM while it was read */
     log_set_level(d.cfg->daemon.log_level);
     if (!foreground && detach(&d) < 0) {
         log_msg(LOG_ERR, "cannot detach: %s", strerror(errno));
@@ -645,6 +778,7 @@ int main(int argc, char **argv)
     if (rc == 0)
         rc = run(&d);
     report_ready(&d, (char)(rc ? rc : EX_SOFTWARE));
+    load_drop(&d, "trajd is exiting"); /* before the control socket and d.cfg go */
     uint64_t faults = engine_faults(d.core, &d.stats);
     unsigned held = held_objects(d.core);
     ctl_close(d.ctl);   /* watchers get what is queued, then a goodbye */
@@ -682,6 +816,7 @@ int main(int argc, char **argv)
         close(d.sig_fd);
     loop_free(d.loop);
     cfg_free(d.cfg);
+    cfgload_retire_join();
     log_async_stop(); /* every line queued is written before the exit */
     return rc;
 }

@@ -525,7 +525,8 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
             (void)reopen_old(prevp);
         goto fail;
     }
-    /* 4. commit: the engines are the new core's, the old core goes */
+    /* 4. commit: the engines are the new core's, the old core goes (its
+     * clock's phase kept in stats->clock_next_ns for core_start) */
     if (prev) {
         reload_commit(c, prev);
         core_close(prev);
@@ -550,7 +551,11 @@ int core_start(core_t *c)
     p->clock_fd = timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
     if (p->clock_fd < 0)
         return -errno;
-    p->wall_base_ns = core_mono_ns() + p->wall_period_ns;
+    /* a reload's core: its first deadline is the running core's next one,
+     * even if it passed while the reload swapped (the timerfd then counts it,
+     * and each one after it, as expired: on_clock counts them missed) */
+    int64_t phase_ns = c->stats->clock_next_ns;
+    p->wall_base_ns = phase_ns ? phase_ns : core_mono_ns() + p->wall_period_ns;
     p->next_k = 0;
     struct itimerspec its = {
         .it_value = {.tv_sec = p->wall_base_ns / 1000000000,
@@ -635,7 +640,8 @@ void core_close(core_t *c)
     if (!c)
         return;
     core_priv_t *p = (core_priv_t *)c;
-    if (p->clock_fd >= 0) {
+    if (p->clock_fd >= 0) { /* the next core goes on in its phase (core_start) */
+        c->stats->clock_next_ns = p->wall_base_ns + (int64_t)p->next_k * p->wall_period_ns;
         loop_del(c->loop, p->clock_fd);
         close(p->clock_fd);
     }

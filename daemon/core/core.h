@@ -234,6 +234,8 @@ typedef struct {
     int64_t start_mono_ns; /* CLOCK_MONOTONIC at start (uptime = now - this) */
     uint64_t ticks;        /* ticks run */
     uint64_t missed_ticks; /* deadlines skipped (timerfd expirations - 1, summed) */
+    int64_t clock_next_ns; /* CLOCK_MONOTONIC of the next deadline of the last clock that
+                            * stopped (core_close), 0 before: the next core's first */
     uint64_t overruns;     /* ticks whose work ended after the next deadline */
     lat_hist_t late_hist;  /* lateness since start / reset, us */
     lat_summary_t late;    /* summary of late_hist, refreshed every second */
@@ -347,7 +349,12 @@ int64_t core_mono_ns(void);
 int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prev, core_t **out,
               char *why, size_t whylen);
 
-/* Arm the output clock: first deadline one period from now. Returns 0 or -errno. */
+/* Arm the output clock: first deadline one period from now; a later core
+ * (a reload's, or the old configuration opened from scratch after a failed
+ * one) keeps the phase of the clock closed before it instead: its first
+ * deadline is the one that clock was to serve next (stats.clock_next_ns), so
+ * a reload never restarts the clock and every deadline that passes while it
+ * swaps is counted in stats.missed_ticks (issue 28 item 2).  Returns 0 or -errno. */
 int core_start(core_t *c);
 
 /*

@@ -4,7 +4,9 @@
  * stopped.  Everything the daemon does happens in callbacks of this loop, in
  * one thread: the output clock (a timerfd, see core.h), signals (signalfd),
  * CAN sockets, Modbus clients, periodic housekeeping timers.  Callbacks must
- * not block: use non-blocking fds and come back on the next event.
+ * not block: use non-blocking fds and come back on the next event.  Work that
+ * would (a configuration's tracks parsed at a reload) runs on a thread of its
+ * own and meets the loop through an fd (cfgload.h: an eventfd).
  *
  * Safe to call loop_add/loop_mod/loop_del from inside a callback, including
  * deleting the fd being served or another fd whose event is already pending in

@@ -273,7 +273,7 @@ static void pump(ctl_t *t, ctl_client_t *cl)
     }
     if (cl->fd < 0)
         return;
-    if (cl->closing && cl->outlen == 0 && cl->status_next < 0) {
+    if (cl->closing && cl->outlen == 0 && cl->status_next < 0 && t->reload_waiter != cl->id) {
         client_close(t, cl, "closed");
         return;
     }
@@ -283,6 +283,11 @@ static void pump(ctl_t *t, ctl_client_t *cl)
     int room = cl->outlen + CTL_REPLY_MAX <= CTL_OUT_BYTES && cl->status_next < 0 && !cl->closing &&
                !cl->eof;
     set_events(t, cl, (room ? EPOLLIN : 0u) | (more ? EPOLLOUT : 0u));
+}
+
+void ctl_client_pump(ctl_t *t, ctl_client_t *cl)
+{
+    pump(t, cl);
 }
 
 /* Complete lines in cl->in, while replies have room. */

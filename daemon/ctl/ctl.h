@@ -44,8 +44,10 @@
 
 typedef struct ctl ctl_t;
 
-/* Reload the configuration as SIGHUP does: 0, or -1 with why (refused, the
- * old one runs on).  Given by trajd.c; it calls ctl_set_core itself. */
+/* Reload the configuration as SIGHUP does: 0 (taken), -1 with why (refused,
+ * the old one runs on), or 1: being read and checked on a worker thread
+ * (cfgload.h), the answer comes with ctl_reload_done.  Given by trajd.c; it
+ * calls ctl_set_core itself. */
 typedef int (*ctl_reload_fn)(void *ctx, char *why, size_t whylen);
 
 /*
@@ -67,6 +69,10 @@ int ctl_open(ctl_t **out, loop_t *loop, const cfg_t *cfg, ctl_reload_fn reload, 
 
 /* The running core (after each start: sets c->tap); NULL while there is none. */
 void ctl_set_core(ctl_t *t, core_t *c);
+
+/* The reload that answered 1 is done: its client (if still connected) gets
+ * ok (rc >= 0) or the refusal with why.  NULL t is a no-op. */
+void ctl_reload_done(ctl_t *t, int rc, const char *why);
 
 /* Log subscribers' losses (rate-limited): trajd's 1 s housekeeping. */
 void ctl_housekeeping(ctl_t *t);

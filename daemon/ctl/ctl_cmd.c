@@ -434,12 +434,36 @@ static void do_reload(ctl_t *t, ctl_client_t *cl)
 {
     char why[1024] = "";
     log_peer(LOG_NOTICE, cl->peer, "control: reload asked by %s", cl->peer);
-    if (!t->reload || t->reload(t->reload_ctx, why, sizeof why) < 0) {
+    int rc = t->reload ? t->reload(t->reload_ctx, why, sizeof why) : -1;
+    if (rc < 0) {
         reply_error(cl, "reload", NULL, "refused", "reload refused: %s",
                     why[0] ? why : "not possible now");
         return;
     }
+    if (rc > 0) { /* read and checked on a worker: ctl_reload_done answers */
+        t->reload_waiter = cl->id;
+        return;
+    }
     reply_ok(cl, "reload", NULL);
+}
+
+void ctl_reload_done(ctl_t *t, int rc, const char *why)
+{
+    if (!t || !t->reload_waiter)
+        return;
+    uint64_t id = t->reload_waiter;
+    t->reload_waiter = 0;
+    for (unsigned i = 0; i < CTL_CLIENTS_MAX; i++) {
+        ctl_client_t *cl = &t->cl[i];
+        if (cl->fd < 0 || cl->id != id)
+            continue;
+        if (rc < 0)
+            reply_error(cl, "reload", NULL, "refused", "reload refused: %s",
+                        why && why[0] ? why : "not possible now");
+        else
+            reply_ok(cl, "reload", NULL);
+        ctl_client_pump(t, cl);
+    }
 }
 
 #define CTL_WORDS_MAX 4

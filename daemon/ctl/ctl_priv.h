@@ -71,7 +71,8 @@ struct ctl {
     void *reload_ctx;
     ctl_client_t cl[CTL_CLIENTS_MAX];
     uint64_t next_id;
-    int flush_fd; /* the CTL_FLUSH_NS timer while someone watches, else -1 */
+    uint64_t reload_waiter; /* the client whose reload is being read (0: none) */
+    int flush_fd;           /* the CTL_FLUSH_NS timer while someone watches, else -1 */
     unsigned watchers;
     uint64_t busy_refused;
     uint64_t watch_lost; /* setpoints dropped from watchers' full rings, since start */
@@ -85,6 +86,10 @@ void ctl_status_more(ctl_t *t, ctl_client_t *cl);
 
 /* Append setpoint lines from the ring while room remains. */
 void ctl_sub_more(ctl_t *t, ctl_client_t *cl);
+
+/* Send what cl->out holds (a reply made outside a request: ctl_reload_done),
+ * then watch for what comes next; cl may be closed (fd -1) after it. */
+void ctl_client_pump(ctl_t *t, ctl_client_t *cl);
 
 /* Room left in cl->out for appending. */
 ctl_sb_t ctl_out_sb(ctl_client_t *cl);

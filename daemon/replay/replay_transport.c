@@ -224,11 +224,9 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
             /* Reload with the engine kept: resume after the row it accepted
              * last (rows carry their 1-based row number as seq).  Limit: rows
              * after it that were refused as bad data are offered again. */
-            for (size_t k = 0; k < rc->trk.n; k++)
-                if (rc->trk.wp[k].seq == o->status.last_seq) {
-                    r->next = k + 1;
-                    break;
-                }
+            size_t k = (size_t)o->status.last_seq - 1; /* row k has seq k + 1 (track.c) */
+            if (o->status.last_seq >= 1 && k < rc->trk.n && rc->trk.wp[k].seq == o->status.last_seq)
+                r->next = k + 1; /* in the loop, between two ticks: no scan of the track */
             if (r->next >= rc->trk.n)
                 r->finished = 1; /* the old replay called engine_finish already */
         }

@@ -1,6 +1,7 @@
 /* track_cache.c - loaded tracks shared by the live configurations (see track_cache.h). */
 #include "track_cache.h"
 
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,6 +19,8 @@ struct track_ref {
 };
 
 static track_ref_t *cache; /* the live references */
+/* cache and every refs: the loop drops references while a reload's worker takes them */
+static pthread_mutex_t mu = PTHREAD_MUTEX_INITIALIZER;
 
 static int same_file(const struct stat *a, const struct stat *b)
 {
@@ -32,14 +35,17 @@ track_ref_t *track_cache_get(const char *path, track_format_t fmt, unsigned flag
     struct stat st;
     int have = stat(path, &st) == 0 && S_ISREG(st.st_mode);
     *cached = 0;
+    pthread_mutex_lock(&mu);
     for (track_ref_t *r = cache; have && r; r = r->next)
         if (r->have_st && r->fmt == fmt && r->flags == flags && strcmp(r->path, path) == 0 &&
             same_file(&r->st, &st)) {
             r->refs++;
             *trk = r->trk;
             *cached = 1;
+            pthread_mutex_unlock(&mu);
             return r;
         }
+    pthread_mutex_unlock(&mu);
     track_ref_t *r = calloc(1, sizeof *r);
     if (r)
         r->path = strdup(path);
@@ -60,21 +66,29 @@ track_ref_t *track_cache_get(const char *path, track_format_t fmt, unsigned flag
     r->flags = flags;
     r->st = st;
     r->have_st = have;
+    pthread_mutex_lock(&mu);
     r->next = cache;
     cache = r;
+    pthread_mutex_unlock(&mu);
     *trk = r->trk;
     return r;
 }
 
 void track_cache_put(track_ref_t *ref)
 {
-    if (!ref || --ref->refs > 0)
+    if (!ref)
         return;
+    pthread_mutex_lock(&mu);
+    if (--ref->refs > 0) {
+        pthread_mutex_unlock(&mu);
+        return;
+    }
     for (track_ref_t **p = &cache; *p; p = &(*p)->next)
         if (*p == ref) {
             *p = ref->next;
             break;
         }
+    pthread_mutex_unlock(&mu);
     track_free(&ref->trk);
     free(ref->path);
     free(ref);
@@ -129,7 +143,10 @@ int track_cache_reframe(track_ref_t **refp, track_t *trk, double lat0, double lo
 {
     if (same_frame(trk, lat0, lon0, alt0))
         return 0;
-    if (*refp && (*refp)->refs == 1) {
+    pthread_mutex_lock(&mu);
+    int alone = *refp && (*refp)->refs == 1;
+    pthread_mutex_unlock(&mu);
+    if (alone) {
         if (track_reframe(&(*refp)->trk, lat0, lon0, alt0) < 0)
             return -1;
         *trk = (*refp)->trk;

@@ -11,7 +11,8 @@
  * object; the last put frees it.  Geographic tracks are re-expressed about
  * the configuration's datum (track_reframe): track_cache_private makes a
  * configuration's copy first when that datum differs, so a running
- * configuration never sees its waypoints move.  One thread (the loop's).
+ * configuration never sees its waypoints move.  Thread-safe: a reload's
+ * worker (cfgload.h) takes references while the loop drops others.
  */
 #ifndef TRAJD_TRACK_CACHE_H
 #define TRAJD_TRACK_CACHE_H

@@ -1,6 +1,7 @@
 /* track_loader.c - rows, messages and fields shared by the track parsers.
  * See track_loader.h. */
 #include "track_loader.h"
+#include "cfgload.h"
 
 #include <errno.h>
 #include <math.h>
@@ -65,6 +66,10 @@ int track_loader_bad(track_loader_t *L, unsigned long line, const char *fmt, ...
 int track_loader_add_row(track_loader_t *L, double t_s, double a, double b, double c,
                          unsigned long line)
 {
+    if ((L->n & 0xffffu) == 0xffffu && cfgload_cancelled()) { /* SIGTERM: cfgload.h */
+        track_loader_fatal(L, line, "cancelled (trajd is stopping)");
+        return -1;
+    }
     if (L->n == L->cap) {
         size_t cap = L->cap ? L->cap * 2 : 1024;
         track_row_t *r = realloc(L->rows, cap * sizeof *r);

@@ -7,7 +7,8 @@
  *     test owns (an LCG: the same numbers on every machine and libc, so a
  *     failure can be replayed; not for anything but test data);
  *   - now_s(), CLOCK_MONOTONIC in seconds, for the benchmarks only (tests
- *     make no timed assertions).
+ *     make no timed assertions);
+ *   - test_write_file(), a file of given text in a test's temporary directory.
  * Header-only (static inline): a file that uses none of them pays nothing.
  */
 #ifndef TRAJD_TEST_H
@@ -19,6 +20,7 @@
 #include <setjmp.h>
 #include <cmocka.h>
 
+#include <stdio.h>
 #include <time.h>
 
 /* Next number of the sequence seeded by *s, uniform in [0, 1] in steps of 1/65535. */
@@ -26,6 +28,18 @@ static inline double urand(unsigned *s)
 {
     *s = *s * 1103515245u + 12345u;
     return ((*s >> 8) & 0xffff) / 65535.0;
+}
+
+/* Write text to the file dir/name (tests that make files in a temporary
+ * directory: configurations, tracks); a failure fails the test. */
+static inline void test_write_file(const char *dir, const char *name, const char *text)
+{
+    char path[256];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
 }
 
 /* Monotonic time in seconds (benchmarks). */

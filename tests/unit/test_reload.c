@@ -19,16 +19,6 @@
 
 static char dir[] = "/tmp/trajd-test-reload-XXXXXX";
 
-static void write_file(const char *name, const char *text)
-{
-    char path[256];
-    snprintf(path, sizeof path, "%s/%s", dir, name);
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fputs(text, f);
-    fclose(f);
-}
-
 static cfg_t *load(const char *name)
 {
     char path[256], err[512];
@@ -83,14 +73,15 @@ static void test_reload_keeps_the_running_engine(void **state)
 {
     (void)state;
     assert_non_null(mkdtemp(dir));
-    write_file("t.csv", "t,x,y,z\n0,0,0,0\n1,1,0,0\n");
-    write_file("good.conf", good);
+    test_write_file(dir, "t.csv", "t,x,y,z\n0,0,0,0\n1,1,0,0\n");
+    test_write_file(dir, "good.conf", good);
     char bad[sizeof good + 64];
     snprintf(bad, sizeof bad, "%s", good);
     memcpy(strstr(bad, "out.csv"), "no/dir/x", 8); /* csv.path = no/dir/x (a missing directory) */
-    write_file("bad.conf", bad);
-    write_file("gone.conf", "[daemon]\nrate_hz = 100\n[object.ship]\nid = 1\ninput = replay\n"
-                            "replay.track = t.csv\noutput = csv\ncsv.path = out.csv\n");
+    test_write_file(dir, "bad.conf", bad);
+    test_write_file(dir, "gone.conf",
+                    "[daemon]\nrate_hz = 100\n[object.ship]\nid = 1\ninput = replay\n"
+                    "replay.track = t.csv\noutput = csv\ncsv.path = out.csv\n");
     int err = 0;
     loop_t *loop = loop_new(&err);
     assert_non_null(loop);

@@ -1,0 +1,186 @@
+/* cfgload.c - a reload's configuration loaded on a worker thread (see cfgload.h). */
+#include "cfgload.h"
+
+#include <errno.h>
+#include <pthread.h>
+#include <sched.h>
+#include <signal.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/eventfd.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include "log.h"
+
+struct cfgload {
+    pthread_t th;
+    int efd;
+    char *path;
+    const cfg_t *running;
+    cfg_t *out; /* the result, NULL if refused */
+    int rc;
+    char err[1024];
+};
+
+static atomic_int cancel_flag;
+
+int cfgload_cancelled(void)
+{
+    return atomic_load(&cancel_flag);
+}
+
+/* A thread at SCHED_OTHER whatever the loop's policy ([realtime]
+ * fifo_priority), niced (CFGLOAD_NICE) so that the loop wins the CPU it
+ * shares, with every signal blocked (the loop's signalfd takes them).
+ * 0 or an error number. */
+static int spawn(pthread_t *th, void *(*fn)(void *), void *arg, const char *name)
+{
+    pthread_attr_t a;
+    struct sched_param sp = {.sched_priority = 0};
+    int rc = pthread_attr_init(&a);
+    if (!rc)
+        rc = pthread_attr_setinheritsched(&a, PTHREAD_EXPLICIT_SCHED);
+    if (!rc)
+        rc = pthread_attr_setschedpolicy(&a, SCHED_OTHER);
+    if (!rc)
+        rc = pthread_attr_setschedparam(&a, &sp);
+    sigset_t all, old;
+    sigfillset(&all);
+    pthread_sigmask(SIG_SETMASK, &all, &old); /* the creator's mask put back after */
+    if (!rc)
+        rc = pthread_create(th, &a, fn, arg);
+    pthread_sigmask(SIG_SETMASK, &old, NULL);
+    pthread_attr_destroy(&a);
+    if (!rc)
+        pthread_setname_np(*th, name);
+    return rc;
+}
+
+static void nice_self(void)
+{
+    /* this thread only (a Linux thread is its own scheduling entity) */
+    id_t tid = (id_t)syscall(SYS_gettid);
+    errno = 0;
+    int cur = getpriority(PRIO_PROCESS, tid);
+    int want = (errno ? 0 : cur) + CFGLOAD_NICE;
+    if (setpriority(PRIO_PROCESS, tid, want > 19 ? 19 : want) < 0)
+        log_msg(LOG_INFO, "reload worker: nice +%d not set (%s): it runs at the loop's nice",
+                CFGLOAD_NICE, strerror(errno));
+}
+
+static void *work(void *arg)
+{
+    cfgload_t *l = arg;
+    nice_self();
+    l->rc = cfg_load(l->path, &l->out, l->err, sizeof l->err);
+    if (l->rc == 0 && l->running)
+        l->rc = cfg_reload_check(l->running, l->out, l->err, sizeof l->err);
+    if (l->rc < 0) {
+        cfg_free(l->out);
+        l->out = NULL;
+    }
+    uint64_t one = 1;
+    ssize_t n = write(l->efd, &one, sizeof one); /* the loop takes it (cfgload_finish) */
+    (void)n;
+    return NULL;
+}
+
+static void free_load(cfgload_t *l)
+{
+    if (l->efd >= 0)
+        close(l->efd);
+    cfg_free(l->out);
+    free(l->path);
+    free(l);
+}
+
+cfgload_t *cfgload_start(const char *path, const cfg_t *running, int *err)
+{
+    cfgload_t *l = calloc(1, sizeof *l);
+    if (!l) {
+        *err = -ENOMEM;
+        return NULL;
+    }
+    l->efd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+    l->path = strdup(path);
+    l->running = running;
+    if (l->efd < 0 || !l->path) {
+        *err = l->efd < 0 ? -errno : -ENOMEM;
+        free_load(l);
+        return NULL;
+    }
+    atomic_store(&cancel_flag, 0);
+    int rc = spawn(&l->th, work, l, "trajd-reload");
+    if (rc) {
+        *err = -rc;
+        free_load(l);
+        return NULL;
+    }
+    return l;
+}
+
+int cfgload_fd(const cfgload_t *l)
+{
+    return l->efd;
+}
+
+int cfgload_finish(cfgload_t *l, cfg_t **out, char *err, size_t errlen)
+{
+    pthread_join(l->th, NULL);
+    int rc = l->rc;
+    *out = l->out;
+    l->out = NULL;
+    if (rc < 0)
+        snprintf(err, errlen, "%s", l->err);
+    free_load(l);
+    return rc;
+}
+
+void cfgload_drop(cfgload_t *l)
+{
+    if (!l)
+        return;
+    atomic_store(&cancel_flag, 1);
+    pthread_join(l->th, NULL);
+    atomic_store(&cancel_flag, 0);
+    free_load(l);
+}
+
+static pthread_t freer; /* cfgload_retire's thread, while freer_on */
+static int freer_on;
+
+static void *free_work(void *arg)
+{
+    nice_self();
+    cfg_free(arg);
+    return NULL;
+}
+
+void cfgload_retire(cfg_t *old)
+{
+    if (!old)
+        return;
+    cfgload_retire_join(); /* the previous one: done long ago */
+    int rc = spawn(&freer, free_work, old, "trajd-free");
+    if (rc) { /* counted nowhere else: said, then done here */
+        log_msg(LOG_WARNING,
+                "reload: no thread to free the old configuration (%s): freed in "
+                "the loop",
+                strerror(rc));
+        cfg_free(old);
+        return;
+    }
+    freer_on = 1;
+}
+
+void cfgload_retire_join(void)
+{
+    if (freer_on)
+        pthread_join(freer, NULL);
+    freer_on = 0;
+}
