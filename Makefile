@@ -97,7 +97,7 @@ VERSION := $(shell sed -n 's/^\#define TRAJD_VERSION "\(.*\)"$$/\1/p' daemon/cor
 MAN_SRC := $(wildcard daemon/doc/*.[1-8])
 MANS := $(MAN_SRC:daemon/doc/%=$(BUILD)/man/%) $(BUILD)/man/trajd.conf.5
 
-.PHONY: all run check check-long uninstall check-build test test-asan bench fuzz fuzz-merge install deps deps-run clean
+.PHONY: FORCE all run check check-long uninstall check-build test test-asan bench fuzz fuzz-merge install deps deps-run clean
 .DELETE_ON_ERROR:
 .SECONDARY:
 
@@ -148,12 +148,17 @@ $(BUILD)/libtrajd_test.so: $(PIC_OBJ) $(BUILD)/pic/tests/helpers/ctypes_shims.o 
 		$(BUILD)/pic/tests/helpers/global_curve.o Makefile
 	$(CC) -shared -o $@ $(filter %.o,$^) -lm
 
-$(BUILD)/trajd.pc: Makefile daemon/core/version.h
+# Written again whenever PREFIX or LIBDIR differ from the last make's (make all,
+# then make install PREFIX=/usr): each run writes it aside, and replaces it if changed.
+$(BUILD)/trajd.pc: Makefile daemon/core/version.h FORCE
 	@mkdir -p $(@D)
-	printf '%s\n' 'prefix=$(PREFIX)' 'libdir=$(LIBDIR)' 'includedir=$${prefix}/include' '' \
+	@printf '%s\n' 'prefix=$(PREFIX)' 'libdir=$(LIBDIR)' 'includedir=$${prefix}/include' '' \
 		'Name: trajd' 'Description: trajd engine: streaming spline interpolation of timed waypoints (pure, no I/O)' \
 		'Version: $(VERSION)' 'Cflags: -I$${includedir}/trajd' 'Libs: -L$${libdir} -ltrajd' \
-		'Libs.private: -lm' > $@
+		'Libs.private: -lm' > $@.new
+	@if cmp -s $@.new $@; then rm -f $@.new; else mv $@.new $@; echo "wrote $@ (prefix $(PREFIX))"; fi
+
+FORCE:
 
 $(BUILD)/libtrajdaemon.a: $(DAEMON_OBJ)
 	@rm -f $@
