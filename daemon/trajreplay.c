@@ -38,6 +38,7 @@
 
 #include "cfg.h"
 #include "cfg_files.h"
+#include "delay.h"
 #include "engine.h"
 #include "engine_settings.h"
 #include "replay.h"
@@ -436,8 +437,27 @@ static void print_summary(const track_t *trk, const replay_t *r, const engine_st
             "summary: stops %" PRIu64 "\n"
             "summary: stop_fixes %" PRIu64 "\n"
             "summary: retimed %" PRIu64 "\n"
-            "summary: retime_max_s %.6g\n",
-            st->stops, st->stop_fixes, st->retimed, st->retime_max_s);
+            "summary: retime_max_s %.6g\n"
+            "summary: silent_ends %" PRIu64 "\n",
+            st->stops, st->stop_fixes, st->retimed, st->retime_max_s, st->silent_ends);
+}
+
+/* The play-out delay D the engine held and its parts (lib/engine/delay.h):
+ * the input's interval and top speed as it measured them. */
+static void print_delay(const engine_t *e)
+{
+    engine_delay_t d;
+    if (!e)
+        return;
+    engine_delay(e, &d);
+    fprintf(stderr,
+            "summary: delay_s %.9g\n"
+            "summary: delay_lookahead_s %.9g\n"
+            "summary: delay_slack_s %.9g\n"
+            "summary: delay_stop_s %.9g\n"
+            "summary: delay_interval_s %.9g\n"
+            "summary: delay_speed_m_s %.9g\n",
+            d.delay_s, d.lookahead_s, d.slack_s, d.stop_s, d.interval_s, d.speed_m_s);
 }
 
 /* One replay: its inputs, outputs and what was seen. */
@@ -501,6 +521,10 @@ static int run_open(run_t *run, const opts_t *o)
     run->seen_next = (size_t)-1;
     if (engine_config_check(&o->cfg, &why)) {
         fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", why ? why : "?");
+        return EXIT_USAGE;
+    }
+    if (engine_delay_check(&o->cfg, 0.0, err, sizeof err)) {
+        fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", err);
         return EXIT_USAGE;
     }
     const char *same = cfg_same_file(o->input, o->output) ? o->output
@@ -909,6 +933,7 @@ int main(int argc, char **argv)
         print_summary(&run.trk, &run.r, &run.st, run.max_v, run.max_a, run.written);
         fprintf(stderr, "summary: skipped_gaps %" PRIu64 "\nsummary: skipped_ticks %" PRIu64 "\n",
                 run.skipped_gaps, run.skipped_ticks);
+        print_delay(run.e);
     }
     if (!status && o.strict && (run.rejected || run.trk.skipped)) {
         fprintf(stderr,

@@ -154,6 +154,8 @@ typedef struct {
     uint64_t stop_fixes;            /* repeats kept as the dwell of a stop (in accepted) */
     uint64_t retimed;               /* fixes kept with their stamp re-estimated (jitter) */
     double retime_max_s;            /* the largest such shift, seconds */
+    uint64_t silent_ends;           /* trajectories closed after a silence of the input
+                                       (lib/engine/silence.h): played out to their end */
 } engine_status_t;
 
 /* clang-format on */

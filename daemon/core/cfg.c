@@ -6,6 +6,7 @@
  * with no keys, which inih never reports) and stops at the first error.
  */
 #include "cfg.h"
+#include "delay.h"
 #include "cfg_box.h"
 #include "cfg_files.h"
 
@@ -605,6 +606,11 @@ static int check_obj(parse_t *p, unsigned i)
     if (engine_config_check(&o->engine, &ewhy) < 0) {
         fail(p, CFG_EVALUE, o->line, "[object.%s]: engine settings: %s", o->name,
              ewhy ? ewhy : "invalid");
+        return -1;
+    }
+    char dwhy[320];
+    if (engine_delay_check(&o->engine, 0.0, dwhy, sizeof dwhy) < 0) { /* issue 26 */
+        fail(p, CFG_EVALUE, o->line, "[object.%s]: engine settings: %s", o->name, dwhy);
         return -1;
     }
     if (o->has_initial_position)

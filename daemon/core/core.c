@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "angle.h"
+#include "delay.h"
 #include "engine_settings.h"
 #include "log.h"
 #include "reload.h"
@@ -471,6 +472,22 @@ static int reopen_old(core_t **prevp)
     return -1;
 }
 
+/* Issue 26: every object's play-out delay D and its parts (lib/engine/delay.h),
+ * at start and at each reload: what its engine holds (a carried engine: the D
+ * it stated), or what its settings need before any input. */
+static void log_delays(const core_t *c)
+{
+    for (unsigned i = 0; i < c->nobj; i++) {
+        engine_delay_t d;
+        char line[400];
+        if (!c->obj[i].engine)
+            continue;
+        engine_delay(c->obj[i].engine, &d);
+        engine_delay_format(&d, line, sizeof line);
+        log_msg(LOG_INFO, "object '%s': play-out delay %s", c->obj[i].name, line);
+    }
+}
+
 int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, core_t **out,
               char *why, size_t whylen)
 {
@@ -532,6 +549,7 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
         core_close(prev);
         *prevp = NULL;
     }
+    log_delays(c);
     *out = c;
     return 0;
 fail:
@@ -773,6 +791,11 @@ int core_summary(const core_t *c, char *buf, size_t len)
             m = snprintf(buf + n, len - n, ", %llu stops, %llu re-stamped (largest %.3f s)",
                          (unsigned long long)o->status.stops, (unsigned long long)o->status.retimed,
                          o->status.retime_max_s);
+            n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+        }
+        if (o->status.silent_ends && n < len) { /* issue 26: lib/engine/silence.h */
+            m = snprintf(buf + n, len - n, ", %llu silent ends",
+                         (unsigned long long)o->status.silent_ends);
             n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
         }
         if (o->out_lost && n < len) {

@@ -15,6 +15,9 @@
  *          forward-difference stepper (fdiff.h) on the period grid; waits,
  *          underruns, finishes; its time scaling (engine_scale.c) and its
  *          transfers to a new trajectory's start (engine_xfer.c);
+ *          its start waits until the output will stand the play-out delay
+ *          D behind the input (delay_run.c, delay.h), and a silence of the
+ *          input ends the trajectory so that its tail plays out (silence.c);
  *   commands (engine_cmd.c): stop, clear, halt, override, clock, position.
  *
  * This file creates and frees an engine, reports its status and computes

@@ -37,8 +37,11 @@
  * to stream; pushing again starts a new one).
  *
  * Trajectories, gaps and transfers.  A trajectory is the waypoints between
- * two ends: engine_finish/engine_stop, engine_clear, or a gap (an interval
- * above max_gap_s).  A gap ends the current trajectory exactly as
+ * two ends: engine_finish/engine_stop, engine_clear, a gap (an interval
+ * above max_gap_s), or a silence of the input longer than the play-out
+ * delay D less its lookahead (silence.h: counted in silent_ends; the
+ * arrival is the first tick time after a push).  A gap ends the current
+ * trajectory exactly as
  * engine_finish does (the configured end condition on its last waypoint; the
  * default REST stops there at rest) and the waypoint after the gap starts a
  * new one.  Setpoints never jump: when a new trajectory starts where the
@@ -278,6 +281,13 @@ typedef struct {
                                rate, j this or, in a stop, max(j, a / T)):
                                every trajectory and transfer is entered and
                                left at rate 0 (TIMESCALE.md, "Handovers") */
+    double delay_s;         /* play-out delay D, s (delay.h): 0 (the default)
+                               = what the settings and the input need
+                               (lookahead + jitter slack + stop reserve,
+                               measured on the input); above 0, the output is
+                               held this far behind the newest waypoint
+                               (engine_delay_check refuses less than the
+                               settings need) */
 } engine_config_t;
 
 /* Fill cfg with working defaults (each one commented above; documented in

@@ -18,6 +18,7 @@
 
 #include "accept.h"
 #include "lsq.h"
+#include "silence.h"
 #include "transfer.h"
 
 /* Timestamps closer than this are "the same time" (seconds). */
@@ -238,6 +239,7 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
     /* room for this waypoint (and for the copies MULTIPLE adds) */
     if (input_buffered(e) + 1 + (e->mult ? 4 : 0) > e->cfg.capacity)
         return reject(e, ENGINE_EFULL);
+    engine_silence_push(e, wp); /* issue 26: its arrival (silence.h) */
     rc = accept_offer(&e->in.policy, wp);
     if (rc == ENGINE_DUPLICATE) {
         e->st.duplicates++;

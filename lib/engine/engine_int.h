@@ -4,7 +4,9 @@
  * (configuration), engine_input.c (input and acceptance), engine_solve.c
  * (solver, fragments, the queue), engine_tick.c (play-out), engine_scale.c
  * (its time scaling), engine_xfer.c (transfers), engine_cmd.c (the commands
- * the lifecycle owner gives it, lifecycle.h); engine.c creates an engine.
+ * the lifecycle owner gives it, lifecycle.h), delay_run.c (the delay D
+ * stated, delay.h), silence.c (silent ends, silence.h); engine.c creates an
+ * engine.
  * Not part of the client API: only the engine's own files in lib/engine
  * include it.
  */
@@ -15,6 +17,7 @@
 #include <stdint.h>
 
 #include "accept.h"
+#include "delay.h"
 #include "engine.h"
 #include "fdiff.h"
 #include "frag.h"
@@ -180,6 +183,24 @@ typedef struct {
     int last;     /* the last tick was fast: last_sp and cspeed not yet written */
 } engine_fast_t;
 
+/* ---- the play-out delay D stated (delay_run.c, delay.h; issue 26) ---- */
+typedef struct {
+    engine_delay_t d; /* D at the last start of an output */
+    int noted;        /* d holds one */
+} engine_delay_state_t;
+
+/* ---- silent ends of the input (silence.c, silence.h; issue 26) ---- */
+typedef struct {
+    int arrived;        /* arrival_ns holds the newest waypoint's arrival */
+    int64_t arrival_ns; /* the first tick time after its push */
+    int fresh;          /* pushed since the last tick */
+    int closed;         /* the input trajectory was closed by a silence */
+    uint64_t traj;      /* the trajectory the fields below measure (solve.traj) */
+    uint64_t n;         /* its waypoints pushed */
+    double last_t;      /* its newest waypoint time */
+    double int_max;     /* its longest interval */
+} engine_silence_t;
+
 struct engine {
     /* ---- configuration (engine_settings.c) and what it implies ---- */
     engine_config_t cfg; /* resolved: fragment and overlap never ENGINE_AUTO */
@@ -203,6 +224,8 @@ struct engine {
     engine_out_t out;
     engine_scale_t scale;
     engine_fast_t fast;
+    engine_delay_state_t delay;
+    engine_silence_t sil;
 
     engine_status_t st;
 };

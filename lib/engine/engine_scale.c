@@ -270,7 +270,11 @@ void scale_step(engine_t *e, double target, double R, double A, double J)
     int lim = 0;
     double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n), Rc = scale_ceil_room(e, s, A, J);
     double r0 = e->scale.ts.rate;
+    ts_state_t free_ts = e->scale.ts; /* issue 26: held back only if the move differs */
     double ds = ts_step(&e->scale.ts, target, fmin(R, Rc), A, J, e->period_s, NULL, &lim);
+    if (lim && !(ds < ts_step(&free_ts, target, INFINITY, A, J, e->period_s, NULL, NULL)))
+        lim = 0; /* the curve ahead is short of a stop from the target, but the
+                  * move is the one without it (a ramp from rest): no underrun */
 
     /* the rate this tick starts from, if a stop within it keeps to A */
     e->scale.stop_dv = r0 <= A * e->period_s ? r0 : -1.0;
@@ -296,6 +300,9 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
             if (e->out.mode != OUT_STREAM)
                 return;
             s1 = 0.0;
+            lim = 0; /* the transfer's own end held this tick back (its creep
+                      * onto the start, ts_step), not the trajectory's curve:
+                      * no underrun of the trajectory entered at rest */
             continue;
         }
         qent_t *h = q_head(e);

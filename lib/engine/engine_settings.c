@@ -120,6 +120,9 @@ const engine_setting_t engine_settings[] = {
       "time scaling (stop, clear, underrun, override): acceleration it adds, m/s^2"),
     S(scale_jerk_m_s3, "scale-jerk", DOUBLE, 0, 1e-6, 1e9, NULL, "M_S3",
       "time scaling: jerk it adds, m/s^3"),
+    /* issue 26: the play-out delay D, stated (delay.h) */
+    S(delay_s, "delay", DOUBLE, 0, 0, 3600, NULL, "S",
+      "play-out delay D, s (0 = what the settings and the input need)"),
 };
 
 const size_t engine_settings_count = sizeof engine_settings / sizeof engine_settings[0];
@@ -611,6 +614,8 @@ int engine_config_check(const engine_config_t *cfg_in, const char **why)
         w = "scale_jerk_m_s3: must be positive and finite";
     else if (cfg->start_slack > ENGINE_FRAGMENT_MAX && cfg->start_slack != ENGINE_AUTO)
         w = "start_slack: at most ENGINE_FRAGMENT_MAX waypoints";
+    else if (!(cfg->delay_s >= 0) || !isfinite(cfg->delay_s)) /* issue 26 */
+        w = "delay_s: must be 0 (auto) or positive and finite";
     else if (cfg->ends == ENGINE_ENDS_CLAMPED &&
              !(isfinite(cfg->start_vel_m_s[0]) && isfinite(cfg->start_vel_m_s[1]) &&
                isfinite(cfg->start_vel_m_s[2]) && isfinite(cfg->end_vel_m_s[0]) &&

@@ -252,7 +252,7 @@ int solve_add_node(engine_t *e, double t, const double *r)
     e->solve.node_t[j % e->solve.ring] = t;
     memcpy(nr(e, j), r, sizeof(double) * AX);
     e->solve.nodes = j + 1;
-    if (e->slack_auto && j >= 1)
+    if ((e->slack_auto || e->cfg.delay_s > 0) && j >= 1) /* issue 26: delay_s too */
         measure_input(e, j);
     if (j >= 1) {
         uint64_t i = j - 1; /* the row now complete */

@@ -19,6 +19,7 @@
 #include "accept.h"
 #include "fdiff.h"
 #include "lsq.h"
+#include "silence.h"
 #include "timescale.h"
 
 /* Output and curve start closer than this need no transfer (metres). */
@@ -40,17 +41,6 @@ static double brake_s(const engine_t *e)
                                                            : ENGINE_SCALE_V_FLOOR_M_S;
     return 2.0 * ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / v, e->cfg.scale_jerk_m_s3 / v) +
            (TS_MARGIN_TICKS + 2) * e->period_s + e->slack_learn * last_interval(e);
-}
-
-/* Time of the newest waypoint received for the current trajectory: the
- * newest node, or a waypoint the acceptance policy still holds (-inf: none). */
-static double newest_t(const engine_t *e)
-{
-    double t = e->solve.nodes > 0 ? nt(e, e->solve.nodes - 1) : -INFINITY;
-    const engine_waypoint_t *held = accept_last(&e->in.policy);
-    if (held && held->t_s > t)
-        t = held->t_s;
-    return t;
 }
 
 /* start_slack auto: an output stopped by an underrun at s stays stopped
@@ -104,16 +94,9 @@ static int enough_ahead(const engine_t *e, const qent_t *h)
         return 1;
     if (in < h->node + 2 + e->lookahead + e->slack_learn)
         return 0;
-    if (!e->slack_auto || in >= h->node + 2 + e->lookahead + e->slack_more)
-        return 1;
-    /* start_slack auto.  Starting at t0 with the newest node at t_m puts
-     * the output D = t_m - t0 behind the input; the curve built ahead of it
-     * is then always longer than D - span_max (span_max: the longest time of
-     * la_steady + 1 intervals), and must stay longer than a stop from full
-     * rate at the input's top speed, so that the time scaling can brake
-     * if the input stops (timescale.h; twice that: the curve may be faster than
-     * its chords).  Regular slow input: at once. */
-    return newest_t(e) - h->seg.t0_s >= e->solve.span_max + brake_s(e);
+    /* issue 26: start_slack auto, or delay_s: once the output will stand D
+     * behind the newest waypoint after its ramp from rest (delay.h) */
+    return !(e->slack_auto || e->cfg.delay_s > 0) || engine_delay_ready(e);
 }
 
 static void hold_here(engine_t *e)
@@ -389,6 +372,7 @@ static void step_once(engine_t *e)
             }
         }
         unit_reset(e);
+        engine_delay_note(e); /* issue 26: the D this start holds */
         if (xfer) {
             double target[AX];
             for (int k = 0; k < AX; k++)
@@ -512,6 +496,8 @@ int play_stalled(const engine_t *e)
 {
     const qent_t *h = e->queue.len ? &e->queue.ent[e->queue.head] : NULL; /* q_head, read only */
 
+    if (engine_silence_pending(e))
+        return 0; /* issue 26: a silent end may come without a push (silence.h) */
     if (e->out.mode == OUT_HOLD)
         return !h || !h->first || !enough_ahead(e, h);
     if (e->out.mode == OUT_STREAM && e->scale.on && at_rest(e) && !e->scale.stop_req &&
@@ -704,6 +690,7 @@ __attribute__((noinline)) static int tick_full(engine_t *e, int64_t now_ns, engi
     }
     e->out.have_now = 1;
     e->out.last_now = now_ns;
+    engine_silence_tick(e, now_ns); /* issue 26: a silent end (silence.h) */
     for (i = 0; i < k; i++) {
         if (e->clk.on) /* the play time of each step, the last one's given */
             e->clk.play_ns = e->clk.now_ns - e->clk.delay_ns -

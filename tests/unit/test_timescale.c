@@ -184,7 +184,7 @@ static void check_pair(check_t *ck, const engine_setpoint_t *p, const engine_set
 }
 
 /*
- * Property: given random stalls of the sender (it pauses for 0 .. 8 s at
+ * Property: given random stalls of the sender (it pauses for 0 .. 4 intervals at
  * random waypoints, then sends what it owes at once) and, in half of the
  * runs, random feed overrides (0 .. 2), then on every output |delta
  * velocity| per tick <= accel limit * T and |delta acceleration| per tick
@@ -231,7 +231,12 @@ static void test_property_random_stalls(void **state)
                 if (++next == N)
                     engine_finish(e);
                 else if (ur() < 0.05) {
-                    double pause = 8 * ur();
+                    /* pauses within the sender's own timing (6 intervals,
+                     * silence.h): a longer one ends the trajectory, which
+                     * tests/unit/test_silence.c checks.  Between two
+                     * arrivals: the pause, or an interval plus the lag it
+                     * adds, and a tick: at most 4 + 1 intervals + T */
+                    double pause = 4 * dt * ur();
                     pause_until = now_s + pause;
                     lag += pause * ur(); /* owes some, then catches up */
                 }
@@ -519,7 +524,10 @@ static void test_no_hard_stop_fast_end(void **state)
             engine_free(e); /* stalled before its lookahead was in: never moved */
             continue;
         }
-        assert_int_equal(sp.state, ENGINE_STATE_UNDERRUN);
+        /* at rest at the end of the solved curve (UNDERRUN), or, once the
+         * silence outlasted the input's timing, on its last waypoint
+         * (FINISHED: the tail played out, silence.h) */
+        assert_true(sp.state == ENGINE_STATE_UNDERRUN || sp.state == ENGINE_STATE_FINISHED);
         assert_true(norm3(sp.vel_m_s) <= 0.0);
         hard += st.hard_stops;
         ran++;

@@ -1,0 +1,87 @@
+/* delay.c - the play-out delay D, stated (see delay.h). */
+#include "delay.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "timescale.h"
+
+/* The time scaling's limits are converted at no less than this speed (m/s):
+ * engine_int.h's ENGINE_SCALE_V_FLOOR_M_S. */
+#define DELAY_V_FLOOR_M_S 1.0
+
+double engine_delay_stop_s(const engine_config_t *cfg, double speed_m_s)
+{
+    double v = speed_m_s > DELAY_V_FLOOR_M_S ? speed_m_s : DELAY_V_FLOOR_M_S;
+    double T = (double)cfg->period_ns * 1e-9;
+    return ts_stop_dist(1.0, 0.0, cfg->scale_accel_m_s2 / v, cfg->scale_jerk_m_s3 / v) +
+           TS_MARGIN_TICKS * T;
+}
+
+int engine_delay_of(const engine_config_t *cfg, double interval_s, double speed_m_s,
+                    engine_delay_t *d)
+{
+    engine_config_t r;
+    unsigned la;
+
+    memset(d, 0, sizeof *d);
+    if (engine_config_resolve(cfg, &r) < 0 || !(la = engine_lookahead(&r)))
+        return -ENGINE_ECONFIG;
+    d->slack_n = r.start_slack == ENGINE_AUTO ? ENGINE_SLACK_AUTO_MIN : r.start_slack;
+    d->lookahead_n = la - (d->slack_n < la ? d->slack_n : la) + 1;
+    d->interval_s = interval_s > 0 && isfinite(interval_s) ? interval_s : 0.0;
+    if (!(speed_m_s > 0)) {
+        speed_m_s = engine_config_max_speed(&r);
+        if (!(speed_m_s > 0))
+            speed_m_s = DELAY_V_FLOOR_M_S;
+    }
+    d->speed_m_s = speed_m_s;
+    d->lookahead_s = d->lookahead_n * d->interval_s;
+    d->slack_s = d->slack_n * d->interval_s;
+    d->stop_s = engine_delay_stop_s(&r, speed_m_s);
+    d->need_s = d->lookahead_s + d->slack_s + d->stop_s;
+    d->delay_s = r.delay_s > d->need_s ? r.delay_s : d->need_s;
+    return 0;
+}
+
+int engine_delay_check(const engine_config_t *cfg, double interval_s, char *why, size_t whylen)
+{
+    engine_delay_t d;
+
+    if (!(cfg->delay_s > 0))
+        return 0;
+    if (engine_delay_of(cfg, interval_s, 0.0, &d) < 0)
+        return 0; /* engine_config_check says why */
+    if (cfg->delay_s >= d.need_s)
+        return 0;
+    if (why && whylen)
+        snprintf(why, whylen,
+                 "delay_s %g s is shorter than the settings need: %.3g s = stop reserve %.3g s "
+                 "(from %g m/s at scale_accel_m_s2 %g) + %u input intervals (lookahead %u, "
+                 "slack %u)%s; raise delay_s, or lower max_speed_m_s",
+                 cfg->delay_s, d.need_s, d.stop_s, d.speed_m_s, cfg->scale_accel_m_s2,
+                 d.lookahead_n + d.slack_n, d.lookahead_n, d.slack_n,
+                 d.interval_s > 0 ? "" : " x the interval");
+    return -ENGINE_ECONFIG;
+}
+
+int engine_delay_format(const engine_delay_t *d, char *buf, size_t len)
+{
+    char need[160];
+    if (d->interval_s > 0)
+        snprintf(need, sizeof need,
+                 "lookahead %u x %.3g s + slack %u x %.3g s + stop reserve %.3f s (from %.3g "
+                 "m/s)",
+                 d->lookahead_n, d->interval_s, d->slack_n, d->interval_s, d->stop_s, d->speed_m_s);
+    else
+        snprintf(need, sizeof need,
+                 "%u input intervals (lookahead %u, slack %u) + stop reserve %.3f s (from %.3g "
+                 "m/s)",
+                 d->lookahead_n + d->slack_n, d->lookahead_n, d->slack_n, d->stop_s, d->speed_m_s);
+    if (d->delay_s > d->need_s)
+        return snprintf(buf, len, "D %.3f s (delay_s; the settings need %s)", d->delay_s, need);
+    if (d->interval_s > 0)
+        return snprintf(buf, len, "D %.3f s = %s", d->delay_s, need);
+    return snprintf(buf, len, "D = %s", need);
+}

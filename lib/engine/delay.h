@@ -1,0 +1,92 @@
+/*
+ * delay.h - the play-out delay D of an engine, stated (issue 26): how far the
+ * output trails the input in steady streaming, and what it is made of.
+ *
+ * On regular input of interval h the output stands D behind the newest
+ * waypoint received, where
+ *
+ *     D = (L + 1) h     lookahead: the solver makes a segment final once L
+ *                       more waypoints are in (engine_lookahead less the
+ *                       start slack); the output at a segment's start
+ *                       therefore waits L + 1 intervals
+ *       + S h           jitter slack: start_slack waypoints (auto: its least,
+ *                       ENGINE_SLACK_AUTO_MIN; one more per underrun seen,
+ *                       up to ENGINE_SLACK_AUTO_MAX)
+ *       + B             stop reserve: the curve kept solved ahead of the
+ *                       output so that, should the input stop, the time
+ *                       scaling brings it to rest on data: a stop from rate
+ *                       1 at the top speed v, within scale_accel_m_s2 a and
+ *                       scale_jerk_m_s3 j: v/(2a) + a/(2j) (ts_stop_dist),
+ *                       plus TS_MARGIN_TICKS periods
+ *
+ * The engine starts a trajectory's output once it is D behind less what the
+ * ramp from rest to rate 1 loses (a start from rest loses exactly a stop's
+ * track time: the ramp itself builds the stop reserve), so the steady delay
+ * is D.  With delay_s set (engine_config_t), D is delay_s: it must be at
+ * least what the settings need (engine_delay_check).
+ *
+ * Pure: no clock, no I/O.
+ */
+#ifndef TRAJD_DELAY_H
+#define TRAJD_DELAY_H
+
+#include <stddef.h>
+
+#include "engine.h"
+
+typedef struct {
+    double interval_s;    /* h: the input's interval (0: unknown) */
+    double speed_m_s;     /* v: the top speed the stop reserve is for */
+    unsigned lookahead_n; /* L + 1: intervals of lookahead */
+    unsigned slack_n;     /* S: intervals of jitter slack */
+    double lookahead_s;   /* (L + 1) h */
+    double slack_s;       /* S h */
+    double stop_s;        /* B */
+    double need_s;        /* (L + 1) h + S h + B: what the settings need */
+    double delay_s;       /* D: need_s, or delay_s when set (>= need_s then) */
+} engine_delay_t;
+
+/*
+ * The delay of configuration cfg (resolved or not) for input of interval
+ * interval_s (0: unknown, the interval parts are 0) and top speed speed_m_s
+ * (<= 0: the speed limit in force, engine_config_max_speed: the profile's or
+ * the configured one; without a limit, 1 m/s).  Returns 0, or
+ * -ENGINE_ECONFIG (cfg does not resolve; *d zeroed).
+ */
+int engine_delay_of(const engine_config_t *cfg, double interval_s, double speed_m_s,
+                    engine_delay_t *d);
+
+/* The stop reserve alone: B above for top speed v (>= 1 m/s is used). */
+double engine_delay_stop_s(const engine_config_t *cfg, double speed_m_s);
+
+/*
+ * delay_s against what the settings need: 0 if delay_s is 0 (auto) or at
+ * least the stop reserve at the speed limit in force plus the lookahead and
+ * slack at interval_s (0: unknown, not counted); else -ENGINE_ECONFIG with
+ * why holding the numbers, e.g. "delay_s 2 s is shorter than the settings
+ * need: 40.1 s = stop reserve 40.1 s (from 400 m/s at scale_accel_m_s2 5)
+ * + 19 input intervals (lookahead 18, slack 1); raise delay_s or lower
+ * max_speed_m_s".
+ */
+int engine_delay_check(const engine_config_t *cfg, double interval_s, char *why, size_t whylen);
+
+/* One line: "D 2.53 s = lookahead 18 x 0.1 s + slack 1 x 0.1 s + stop
+ * reserve 0.627 s (5.76 m/s)"; returns snprintf's length. */
+int engine_delay_format(const engine_delay_t *d, char *buf, size_t len);
+
+/*
+ * The D an engine holds its output at (delay_run.c): the one it stated when
+ * its last trajectory's output started, or, before any start, what its
+ * settings and the input measured so far need.  The interval and the top
+ * speed are measured on the input (the longest recent interval, the fastest
+ * recent chord).
+ */
+void engine_delay(const engine_t *e, engine_delay_t *d);
+
+/* Engine-internal (engine_tick.c): 1 once the output of the trajectory at the
+ * queue head (a segment) may start and stand D behind the newest waypoint
+ * after its ramp from rest; engine_delay_note records the D of a start. */
+int engine_delay_ready(const engine_t *e);
+void engine_delay_note(engine_t *e);
+
+#endif

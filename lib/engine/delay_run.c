@@ -1,0 +1,182 @@
+/*
+ * delay_run.c - the engine's own play-out delay (delay.h, issue 26): D from
+ * its settings and what it measured of the input, the start it holds until
+ * the output will stand D behind the newest waypoint, and the D it stated.
+ */
+#include "delay.h"
+#include "engine_int.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "accept.h"
+#include "timescale.h"
+
+/* Steps of the start's ramp simulated at most (ramp_lag). */
+#define DELAY_RAMP_STEPS_MAX 100000
+/* Queue entries looked at for the fastest segment ahead (head_vmax). */
+#define DELAY_HEAD_SCAN 256
+
+/* D now: the settings with the input's interval and top speed as measured
+ * (start_slack auto: span_max, the longest time of la_steady + 1 intervals,
+ * and vmax_in, its fastest chord, both decaying; with delay_s set they are
+ * measured too). */
+static void delay_measured(const engine_t *e, engine_delay_t *d)
+{
+    double h = e->solve.span_max > 0 ? e->solve.span_max / (e->la_steady + 1) : 0.0;
+    (void)engine_delay_of(&e->cfg, h, e->solve.vmax_in, d);
+    if (e->slack_auto)
+        d->slack_n = ENGINE_SLACK_AUTO_MIN + e->slack_learn;
+    d->slack_s = d->slack_n * d->interval_s;
+    d->need_s = d->lookahead_s + d->slack_s + d->stop_s;
+    d->delay_s = e->cfg.delay_s > d->need_s ? e->cfg.delay_s : d->need_s;
+}
+
+/* Time of the newest waypoint received for the current trajectory (as
+ * enough_ahead in engine_tick.c did before issue 26): the newest node, or one the acceptance policy holds. */
+static double newest(const engine_t *e)
+{
+    double t = e->solve.nodes > 0 ? nt(e, e->solve.nodes - 1) : -INFINITY;
+    const engine_waypoint_t *held = accept_last(&e->in.policy);
+    if (held && held->t_s > t)
+        t = held->t_s;
+    return t;
+}
+
+static const qent_t *qat(const engine_t *e, size_t i)
+{
+    return &e->queue.ent[(e->queue.head + i) % e->queue.cap];
+}
+
+/* The fastest queued segment of the head's trajectory (m/s, at least 1). */
+static double head_vmax(const engine_t *e)
+{
+    double v = 1.0;
+    for (size_t i = 0; i < e->queue.len && i < DELAY_HEAD_SCAN; i++) {
+        const qent_t *q = qat(e, i);
+        if (q->kind != QE_SEG || q->traj != qat(e, 0)->traj)
+            break;
+        v = fmax(v, q->vmax);
+    }
+    return v;
+}
+
+/*
+ * Track time the start's ramp from rest to rate 1 loses against the clock:
+ * the time scaling's steps (ts_step) from rate 0 with the limits converted
+ * at each queued segment's speed bound, as the output will make them, with
+ * the curve solved ahead growing as the input keeps coming (one second of
+ * track a second).  A ramp from rest loses what a stop from rate 1 at
+ * the speeds of the curve where it ramps needs: it builds the stop reserve
+ * (a REST start's curve overshoots the waypoints' speed to catch up with
+ * them, so the reserve is often more than a stop at their top speed).
+ * strict: INFINITY if the curve ahead would hold the ramp back on the way:
+ * the start waits until it does not, so that the ramp, and the track-time grid
+ * after it, do not depend on the tick at which each waypoint arrives.
+ */
+static double ramp_lag(const engine_t *e, int strict)
+{
+    ts_state_t st = {0.0, 0.0};
+    size_t i = 0;
+    const qent_t *q = qat(e, 0);
+    double t0 = q->seg.t0_s, s = 0.0, lag = 0.0, T = e->period_s, ahead = t0;
+    double h = e->solve.span_max > 0 ? e->solve.span_max / (e->la_steady + 1) : 0.0;
+    double lag_grow = (double)(e->cfg.fragment - e->cfg.overlap) * h;
+
+    for (size_t k = 0; k < e->queue.len; k++) {
+        const qent_t *p = qat(e, k);
+        if (p->traj != q->traj)
+            break;
+        ahead = p->t1_s;
+    }
+    ahead -= t0;
+    for (int n = 0; n < DELAY_RAMP_STEPS_MAX; n++) {
+        while (s >= q->t1_s - t0 && i + 1 < e->queue.len) {
+            const qent_t *nq = qat(e, i + 1);
+            if (nq->kind != QE_SEG || nq->traj != q->traj)
+                break;
+            i++;
+            q = nq;
+        }
+        /* the curve grows as the input comes, a fragment's S segments at a
+         * time: at worst S intervals late */
+        double grown = fmax(n * T - lag_grow, 0.0);
+        double v = fmax(q->vmax, 1.0), R = ahead + grown - s - (TS_MARGIN_TICKS + 1) * T;
+        double A = e->cfg.scale_accel_m_s2 / v, J = e->cfg.scale_jerk_m_s3 / v;
+        ts_state_t free_st = st;
+        double ds = ts_step(&st, 1.0, R, A, J, T, NULL, NULL);
+        if (strict && ds < ts_step(&free_st, 1.0, INFINITY, A, J, T, NULL, NULL))
+            return INFINITY; /* held back by the curve ahead: the ramp would
+                              * depend on when each waypoint comes (wait) */
+        s += ds;
+        lag += T - ds;
+        if (!(st.rate < 1.0 || st.rate > 1.0) && !(st.acc < 0.0 || st.acc > 0.0))
+            break;
+    }
+    return lag;
+}
+
+/* The output of the head's trajectory starting now: the D it will hold
+ * (the time waited plus the ramp's loss, *lag; NAN: not simulated, the wait
+ * short of D by more than any ramp loses) into d; returns the time waited. */
+static double delay_if_started(const engine_t *e, engine_delay_t *d, double *lag)
+{
+    delay_measured(e, d);
+    *lag = NAN;
+    if (!e->queue.len || qat(e, 0)->kind != QE_SEG)
+        return 0.0;
+    double waited = newest(e) - qat(e, 0)->seg.t0_s;
+    /* the ramp loses at most a stop at the fastest speed ahead */
+    if (waited < d->delay_s - engine_delay_stop_s(&e->cfg, head_vmax(e)))
+        return waited;
+    *lag = ramp_lag(e, 1);
+    /* what the ramp loses if it started now anyway (held back: more) */
+    double loss = isfinite(*lag) ? *lag : ramp_lag(e, 0);
+    if (waited + loss > d->delay_s + 0.5 * d->interval_s) {
+        /* the wait the lookahead needs plus the ramp exceed D (by more than
+         * the half interval a start is rounded to): D is that */
+        d->delay_s = waited + loss;
+        d->stop_s = d->delay_s - d->lookahead_s - d->slack_s;
+        d->need_s = d->delay_s;
+    }
+    return waited;
+}
+
+int engine_delay_ready(const engine_t *e)
+{
+    engine_delay_t d;
+    double lag;
+
+    if (!e->queue.len || qat(e, 0)->kind != QE_SEG)
+        return 1;
+    /* a buffer that cannot take the input D needs: start, rather than wait
+     * for waypoints the sender cannot give (ENGINE_EFULL) */
+    if (input_buffered(e) + e->cfg.fragment + 8 >= e->cfg.capacity)
+        return 1;
+    delay_measured(e, &d);
+    double waited = newest(e) - qat(e, 0)->seg.t0_s;
+    if (waited >= d.delay_s)
+        return 1;
+    /* the ramp loses at most a stop at the fastest speed ahead */
+    if (waited < d.delay_s - engine_delay_stop_s(&e->cfg, head_vmax(e)))
+        return 0;
+    /* the first tick at which the output, after a ramp the curve ahead does
+     * not hold back, stands within half an interval of D */
+    lag = ramp_lag(e, 1);
+    return isfinite(lag) && waited + lag >= d.delay_s - 0.5 * d.interval_s;
+}
+
+void engine_delay_note(engine_t *e)
+{
+    double lag;
+    (void)delay_if_started(e, &e->delay.d, &lag);
+    e->delay.noted = 1;
+}
+
+void engine_delay(const engine_t *e, engine_delay_t *d)
+{
+    if (e->delay.noted)
+        *d = e->delay.d;
+    else
+        delay_measured(e, d);
+}

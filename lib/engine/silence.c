@@ -1,0 +1,80 @@
+/* silence.c - a trajectory's tail plays out after a silence (see silence.h). */
+#include "silence.h"
+
+#include <math.h>
+
+#include "delay.h"
+#include "engine_int.h"
+
+void engine_silence_push(engine_t *e, const engine_waypoint_t *wp)
+{
+    int gap = e->sil.n && wp->t_s - e->sil.last_t > e->cfg.max_gap_s;
+    if (e->sil.closed && gap)
+        e->st.gaps++; /* the trajectory a silence ended was ended by a gap too */
+    if (e->sil.closed || gap || (e->in.open && e->sil.traj != e->solve.traj)) {
+        /* a new trajectory (or the first): its timing starts afresh */
+        e->sil.n = 0;
+        e->sil.int_max = 0.0;
+        e->sil.closed = 0;
+    }
+    e->sil.traj = e->in.open ? e->solve.traj : e->solve.traj + 1;
+    if (e->sil.n && wp->t_s > e->sil.last_t && wp->t_s - e->sil.last_t <= e->cfg.max_gap_s)
+        e->sil.int_max = fmax(e->sil.int_max, wp->t_s - e->sil.last_t); /* a gap is none */
+    if (!e->sil.n || wp->t_s > e->sil.last_t) {
+        e->sil.last_t = wp->t_s;
+        e->sil.n++;
+    }
+    /* arrived by the next tick (engine_silence_tick); before the first
+     * tick the caller loads waypoints, it does not stream them */
+    e->sil.fresh = e->out.have_now;
+}
+
+/* The trajectory has the lookahead's intervals (la_steady + 1): its timing
+ * is known (span_max measures as many), and its output may have started. */
+static int engine_silence_judged(const engine_t *e)
+{
+    return e->sil.n >= (uint64_t)e->la_steady + 2;
+}
+
+double engine_silence_limit_s(const engine_t *e)
+{
+    engine_delay_t d;
+    /* too little of the trajectory to tell its timing: a gap decides */
+    if (!engine_silence_judged(e))
+        return INFINITY;
+    engine_delay(e, &d);
+    /* the output stands D behind the newest waypoint and needs the
+     * lookahead's waypoints to go on: what is left of D is the slack and
+     * the stop reserve; and never within the input's own timing (its
+     * longest interval so far, SILENCE_INTERVALS times: a late fix of a
+     * jittery sender, a walk's long pause) */
+    double s = fmax(d.delay_s - d.lookahead_s, SILENCE_INTERVALS * e->sil.int_max);
+    return fmin(s, e->cfg.max_gap_s);
+}
+
+int engine_silence_pending(const engine_t *e)
+{
+    return e->in.open && (e->sil.arrived || e->sil.fresh) && !e->clk.on && engine_silence_judged(e);
+}
+
+int engine_silence_tick(engine_t *e, int64_t now_ns)
+{
+    if (e->sil.fresh) {
+        /* pushed since the last tick: arrived by this one (never earlier:
+         * a caller late by a stall pushes what came meanwhile first, and
+         * its own lateness is no silence of the sender) */
+        e->sil.fresh = 0;
+        e->sil.arrived = 1;
+        e->sil.arrival_ns = now_ns;
+        return 0;
+    }
+    if (!engine_silence_pending(e) || now_ns <= e->sil.arrival_ns)
+        return 0;
+    if ((double)(now_ns - e->sil.arrival_ns) * 1e-9 <= engine_silence_limit_s(e))
+        return 0;
+    e->sil.arrived = 0;
+    e->sil.closed = 1;
+    e->st.silent_ends++;
+    (void)engine_finish(e); /* -ENGINE_ENUMERIC cannot happen with finite data */
+    return 1;
+}

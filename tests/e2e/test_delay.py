@@ -1,0 +1,188 @@
+#!/usr/bin/python3
+"""test_delay.py - issue 26: the play-out delay D is one number, stated and
+honoured (lib/engine/delay.h).
+
+trajreplay replays a track with each waypoint arriving at its own time, so
+the output's delay behind the input is now - t_s.  On a regular 10 Hz track
+(x = 10 sin(0.05 i), y = 10 cos(0.03 i), t = 0.1 i) with the defaults:
+  - trajreplay --summary states D and its parts (delay_s = lookahead +
+    slack + stop reserve);
+  - the steady delay (now - t_s while streaming, away from the start and
+    the end) equals D within one interval;
+  - D keeps a stop from the track's top speed in reserve (never run past the
+    data) and is at most the lookahead and slack (19 intervals) plus the
+    ramp from rest at the start, a stop from the speed of the curve there
+    (the REST start overshoots the waypoints' speed to catch up with them:
+    the speed is scipy's clamped cubic spline's, an independent reference);
+  - no underrun.
+With delay_s set, the output is held that far behind, and a delay_s shorter
+than the settings need is refused with the numbers.
+"""
+import csv
+import io
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+import replay_summary  # noqa: E402
+
+BUILD = os.environ.get("BUILD", os.path.abspath("build"))
+TRAJREPLAY = os.path.join(BUILD, "bin", "trajreplay")
+H = 0.1          # the input interval, s
+A, J = 5.0, 50.0  # scale_accel_m_s2, scale_jerk_m_s3 (defaults)
+T = 0.01         # output period (100 Hz)
+
+
+def track(n=600):
+    i = np.arange(n)
+    return H * i, 10 * np.sin(0.05 * i), 10 * np.cos(0.03 * i)
+
+
+def write_track(path, t, x, y):
+    with open(path, "w") as f:
+        f.write("t,x,y\n")
+        for a, b, c in zip(t, x, y):
+            f.write("%.1f,%.12f,%.12f\n" % (a, b, c))
+
+
+def stop_s(v):
+    """Track time of a jerk-limited stop from rate 1 at speed v (S-curve):
+    v/(2a) + a/(2j)."""
+    return v / (2 * A) + A / (2 * J)  # D adds 2 periods of margin (TS_MARGIN_TICKS)
+
+
+def replay(path, *args):
+    p = subprocess.run([TRAJREPLAY, "-q", "--summary", *args, path], capture_output=True,
+                       text=True, timeout=300)
+    return p
+
+
+def steady_delays(out, lo, hi):
+    rows = csv.DictReader(io.StringIO(out))
+    d = []
+    for r in rows:
+        now = int(r["now_ns"]) * 1e-9
+        if r["state"] == "streaming" and lo <= now <= hi:
+            d.append(now - float(r["t_s"]))
+    return np.array(d)
+
+
+class TestDelayStated(unittest.TestCase):
+    def setUp(self):
+        self.tmp = tempfile.TemporaryDirectory()
+        self.path = os.path.join(self.tmp.name, "reg.csv")
+        write_track(self.path, *track())
+
+    def tearDown(self):
+        self.tmp.cleanup()
+
+    def test_steady_delay_is_the_stated_d(self):
+        p = replay(self.path)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        s = replay_summary.parse(p.stderr)
+        D = s["delay_s"]
+        # the parts add up
+        self.assertAlmostEqual(D, s["delay_lookahead_s"] + s["delay_slack_s"] + s["delay_stop_s"],
+                               places=6)
+        self.assertAlmostEqual(s["delay_lookahead_s"] + s["delay_slack_s"], 19 * H, places=6)
+        d = steady_delays(p.stdout, 10.0, 55.0)
+        self.assertGreater(len(d), 1000)
+        self.assertLessEqual(abs(np.median(d) - D), H, "steady %.4f vs D %.4f" % (np.median(d), D))
+        self.assertLessEqual(d.max() - d.min(), H)
+        # a stop from the track's top speed (analytic: |(5 cos 0.5t, -3 sin 0.3t)|)
+        tt = np.arange(0, 60, 1e-4)
+        vtop = np.hypot(5 * np.cos(0.5 * tt), 3 * np.sin(0.3 * tt)).max()
+        self.assertGreaterEqual(s["delay_stop_s"], stop_s(vtop))
+        # at most 19 intervals + the ramp from rest where the curve starts,
+        # converted at a bound on the curve's speed there (engine.c
+        # seg_speed_max: samples widened by |k''|: up to an interval more)
+        t, x, y = track()
+        cs = CubicSpline(t, np.c_[x, y], bc_type=((1, [0, 0]), (1, [0, 0])))
+        u = np.linspace(0, 1.0, 10001)
+        vstart = np.hypot(*cs(u, 1).T).max()
+        self.assertLessEqual(D, 19 * H + stop_s(vstart) + 2 * T + H)
+        # and far below the 34 intervals it was (3.43 s)
+        self.assertLess(D, 28 * H)
+        self.assertEqual(s["underruns"], 0)
+        self.assertEqual(s["hard_stops"], 0)
+
+    def test_delay_s_holds_the_output_that_far_behind(self):
+        for want in (4.0, 7.5):
+            p = replay(self.path, "--max-speed", "10", "--delay", "%g" % want)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            s = replay_summary.parse(p.stderr)
+            self.assertAlmostEqual(s["delay_s"], want, places=9)
+            d = steady_delays(p.stdout, 20.0, 55.0)
+            self.assertLessEqual(abs(np.median(d) - want), H,
+                                 "steady %.4f vs delay_s %g" % (np.median(d), want))
+            self.assertEqual(s["underruns"], 0)
+
+    def test_delay_s_shorter_than_the_settings_need_is_refused(self):
+        # a stop from the profile's 400 m/s at 5 m/s^2 alone takes 40 s
+        p = replay(self.path, "--delay", "2")
+        self.assertEqual(p.returncode, 2, p.stderr)
+        self.assertIn("delay_s 2 s is shorter than the settings need", p.stderr)
+        self.assertIn("from 400 m/s", p.stderr)
+        self.assertIn("stop reserve 40.1 s", p.stderr)
+
+
+class TestTailPlaysOut(unittest.TestCase):
+    """Issue 26 item 2 (lib/engine/silence.h): 10 Hz for 30 s, silence for
+    300 s, 30 s more, each waypoint arriving at its time.  Before: the output
+    stopped at t_s 28.04 of 29.9 and stood in UNDERRUN from 31.5 s to 331 s."""
+
+    def test_gap_track(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "gap.csv")
+            t, x, y = track()
+            t = np.where(np.arange(len(t)) >= 300, t + 300.0, t)
+            write_track(path, t, x, y)
+            p = replay(path, "--keep-gaps")
+            self.assertEqual(p.returncode, 0, p.stderr)
+            s = replay_summary.parse(p.stderr)
+            rows = list(csv.DictReader(io.StringIO(p.stdout)))
+        first = [r for r in rows if r["track"] == "1"]
+        last = first[-1]
+        self.assertAlmostEqual(float(last["t_s"]), 29.9, places=9)
+        self.assertAlmostEqual(float(last["x_m"]), x[299], places=9)
+        self.assertAlmostEqual(float(last["y_m"]), y[299], places=9)
+        reach = next(int(r["now_ns"]) * 1e-9 for r in first
+                     if abs(float(r["t_s"]) - 29.9) < 1e-9)
+        self.assertLessEqual(reach - 29.9, 10.0)
+        self.assertEqual(s["underruns"], 0)
+        self.assertEqual(s["hard_stops"], 0)
+        self.assertEqual(s["silent_ends"], 1)
+        self.assertEqual(s["tracks"], 2)
+        self.assertFalse(any(r["state"] == "underrun" for r in rows))
+        # the second piece streams to its own end
+        self.assertAlmostEqual(float(rows[-1]["t_s"]), 359.9, places=9)
+        self.assertEqual(rows[-1]["state"], "finished")
+
+    def test_real_tracks_end_only_at_gaps(self):
+        """The real tracks' pauses are within their own timing (silence.h
+        SILENCE_INTERVALS): a silence ends a trajectory only where a gap
+        (above max_gap_s) follows, and every gap is still counted."""
+        data = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data")
+        want = {"gpxgo_visnjan.csv": 0, "n2k_furuno_figure8_src52.csv": 0,
+                "gpxpy_cerknicko-jezero.csv": 18}
+        for name, gaps in want.items():
+            t = np.genfromtxt(os.path.join(data, name), delimiter=",", names=True)["t_s"]
+            self.assertEqual(int((np.diff(t) > 60).sum()), gaps, name)
+            p = replay(os.path.join(data, name))
+            self.assertEqual(p.returncode, 0, p.stderr)
+            s = replay_summary.parse(p.stderr)
+            self.assertEqual(s["gaps"], gaps, name)
+            self.assertLessEqual(s["silent_ends"], gaps, name)
+            self.assertEqual(s["tracks"], gaps + 1, name)  # no trajectory more
+            self.assertEqual(s["hard_stops"], 0, name)
+
+
+if __name__ == "__main__":
+    unittest.main()

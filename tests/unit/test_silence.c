@@ -1,0 +1,158 @@
+/*
+ * test_silence.c - a trajectory's tail plays out (issue 26 item 2,
+ * lib/engine/silence.h), and the delay D the engine states (delay.h).
+ *
+ * A synthetic track at 10 Hz (x = 10 sin(0.05 i), y = 10 cos(0.03 i),
+ * t = 0.1 i) is pushed on a virtual clock when its time comes, the output
+ * ticking at 100 Hz with the default configuration, as trajreplay and the
+ * daemon do; engine_finish is never called.  Before: the output stopped
+ * short of the first piece's end (t_s 28.04 of 29.9) and stood in UNDERRUN
+ * through the silence until the next piece came.
+ */
+#include "test.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "delay.h"
+#include "engine.h"
+
+#define PERIOD_NS 10000000LL
+
+static engine_waypoint_t wp_at(int i, double t)
+{
+    engine_waypoint_t w;
+    memset(&w, 0, sizeof w);
+    w.t_s = t;
+    w.pos_m[0] = 10 * sin(0.05 * i);
+    w.pos_m[1] = 10 * cos(0.03 * i);
+    w.seq = (uint32_t)i + 1;
+    return w;
+}
+
+typedef struct {
+    double reach_s;  /* now when the output first stood on the first piece's last waypoint */
+    double t_first;  /* the largest t_s of the first piece */
+    int under_ticks; /* setpoints in UNDERRUN */
+    engine_status_t st;
+    engine_delay_t d;
+} run_t;
+
+/* Two pieces of n waypoints each, the second after a silence of gap_s
+ * (arrival = timestamp); ticks until end_s. */
+static void run(int n, double gap_s, double end_s, run_t *r)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    int err = -1, next = 0;
+    engine_t *e = engine_new(&c, &err);
+    assert_non_null(e);
+    memset(r, 0, sizeof *r);
+    r->reach_s = NAN;
+    engine_waypoint_t w[2000];
+    assert_true(2 * n <= 2000);
+    for (int i = 0; i < 2 * n; i++)
+        w[i] = wp_at(i, 0.1 * i + (i >= n ? gap_s : 0.0));
+    engine_waypoint_t last = wp_at(n - 1, 0.1 * (n - 1));
+    for (int64_t k = 0; (double)k * PERIOD_NS * 1e-9 <= end_s; k++) {
+        double now_s = (double)(k * PERIOD_NS) * 1e-9;
+        while (next < 2 * n && w[next].t_s <= now_s + 1e-9)
+            assert_true(engine_push(e, &w[next++]) >= 0);
+        engine_setpoint_t sp;
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+        if (sp.state == ENGINE_STATE_UNDERRUN)
+            r->under_ticks++;
+        if (sp.track == 1 && sp.t_s > r->t_first)
+            r->t_first = sp.t_s;
+        if (isnan(r->reach_s) && sp.track == 1 &&
+            hypot(sp.pos_m[0] - last.pos_m[0], sp.pos_m[1] - last.pos_m[1]) < 1e-9 &&
+            fabs(sp.t_s - last.t_s) < 1e-9)
+            r->reach_s = now_s;
+    }
+    engine_status(e, &r->st);
+    engine_delay(e, &r->d);
+    engine_free(e);
+}
+
+/* Given 30 s at 10 Hz, 300 s of silence and 30 s more, then the first
+ * piece plays out to its last waypoint within 10 s of its arrival, one
+ * silent end is counted, no underrun, and the second piece starts a new
+ * trajectory. */
+static void test_tail_plays_out(void **state)
+{
+    (void)state;
+    run_t r;
+    run(300, 300.0, 370.0, &r);
+    assert_true(r.t_first >= 29.9 - 1e-9);
+    assert_false(isnan(r.reach_s));
+    assert_true(r.reach_s - 29.9 <= 10.0);
+    /* the output plays on at once: the silence limit (D less the
+     * lookahead) and the tail (the lookahead) are within D */
+    assert_true(r.reach_s - 29.9 <= r.d.delay_s + 1.5);
+    assert_int_equal(r.st.underruns, 0);
+    assert_int_equal(r.under_ticks, 0);
+    assert_int_equal(r.st.hard_stops, 0);
+    assert_true(r.st.silent_ends >= 1);
+    assert_int_equal(r.st.tracks, 2);
+}
+
+/* Given a regular track whose input never pauses for longer than an
+ * interval, then no silent end: one trajectory, streamed as before. */
+static void test_no_silent_end_while_regular(void **state)
+{
+    (void)state;
+    run_t r;
+    run(300, 0.0, 58.0, &r);
+    assert_int_equal(r.st.silent_ends, 0);
+    assert_int_equal(r.st.tracks, 1);
+    assert_int_equal(r.st.underruns, 0);
+}
+
+/* Given the regular track, then the D the engine states is its lookahead
+ * (18 intervals), its slack (1) and a stop reserve of at least a stop from
+ * the track's speed (5 m/s at the start: 5/(2*5) + 5/(2*50) s). */
+static void test_delay_stated(void **state)
+{
+    (void)state;
+    run_t r;
+    run(300, 0.0, 40.0, &r);
+    assert_int_equal(r.d.lookahead_n, 18);
+    assert_int_equal(r.d.slack_n, 1);
+    assert_true(fabs(r.d.interval_s - 0.1) < 1e-9);
+    assert_true(r.d.stop_s >= 4.9 / 10.0 + 0.05);
+    assert_true(fabs(r.d.delay_s - (r.d.lookahead_s + r.d.slack_s + r.d.stop_s)) < 1e-9);
+}
+
+/* Given the default configuration, then engine_delay_of states 19
+ * intervals and a stop from the profile's 400 m/s; delay_s = 2 is refused
+ * by engine_delay_check with the numbers, delay_s = 60 is accepted. */
+static void test_delay_of_config(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_delay_t d;
+    char why[400];
+    engine_config_default(&c);
+    assert_int_equal(engine_delay_of(&c, 0.1, 0.0, &d), 0);
+    assert_int_equal(d.lookahead_n + d.slack_n, 19);
+    assert_true(fabs(d.stop_s - (40.0 + 0.05 + 0.02)) < 1e-9);
+    assert_true(fabs(d.delay_s - (1.9 + d.stop_s)) < 1e-9);
+    assert_int_equal(engine_delay_check(&c, 0.0, why, sizeof why), 0);
+    c.delay_s = 2;
+    assert_int_equal(engine_delay_check(&c, 0.0, why, sizeof why), -ENGINE_ECONFIG);
+    assert_non_null(strstr(why, "delay_s 2 s is shorter than the settings need"));
+    c.delay_s = 60;
+    assert_int_equal(engine_delay_check(&c, 0.0, why, sizeof why), 0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_tail_plays_out),
+        cmocka_unit_test(test_no_silent_end_while_regular),
+        cmocka_unit_test(test_delay_stated),
+        cmocka_unit_test(test_delay_of_config),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
