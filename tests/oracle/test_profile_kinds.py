@@ -406,6 +406,39 @@ def test_airliner_stale_then_jumps(tmp):
         tr.check(not sources & set(lines), f"{label}: a fix a run repeats was refused: {lines}")
 
 
+# lib/engine/engine_settings.c profile_limits (engine.h engine_profile_t):
+# speed m/s, acceleration m/s^2
+LIMITS = {"auto": (400.0, 30.0), "air": (400.0, 30.0)}
+
+
+def test_airliner_streamed_within_limits(tmp):
+    """Issue 27: the built airliner, replayed with the default profile and
+    with profile air, streams within the profile's numbers: peak speed and
+    peak acceleration (the norms of the output's vx/vy/vz and ax/ay/az
+    columns, every row) at most the profile's limits, and >= 99 % of its
+    fixes kept (every one is good).  Its stamps are times of arrival (0..0.2 s
+    late): forced through each fix at its stamp, the curve reached 111.7
+    m/s^2 (auto, 5 refused) and 255.7 (air); the fixes are re-stamped at the
+    pace of the track instead (retime.c, ACCEPT_RULE_SMOOTH)."""
+    air = os.path.join(tmp, "airliner.csv")
+    n = airliner(air)
+    for prof in ("auto", "air"):
+        vmax, amax = LIMITS[prof]
+        sp, s, _ = tr.replay(air, ["--profile", prof], tmp, "airliner_" + prof)
+        label = f"airliner streamed, profile {prof}"
+        tr.check_positions(sp, label)
+        acc = float(np.max(np.linalg.norm(sp["acc"], axis=1)))
+        spd = float(np.max(np.linalg.norm(sp["vel"], axis=1)))
+        kept = int(s.get("accepted", -1))
+        print(f"{label}: peak speed {spd:.1f} m/s (limit {vmax:g}), "
+              f"peak acceleration {acc:.1f} m/s^2 (limit {amax:g}), "
+              f"{kept} of {n} fixes kept, {int(s.get('retimed', -1))} re-stamped "
+              f"(at most {s.get('retime_max_s', -1):.3f} s)")
+        tr.check(spd <= vmax, f"{label}: peak speed {spd:.1f} m/s > {vmax:g}")
+        tr.check(acc <= amax, f"{label}: peak acceleration {acc:.1f} m/s^2 > {amax:g}")
+        tr.check(kept >= 0.99 * n, f"{label}: {kept} of {n} fixes kept")
+
+
 def test_machine_curve(tmp, gco):
     """profile machine: the curve passes through every toolpath point: scipy's
     CubicSpline through all of them (rest ends) on every streamed row the
@@ -442,6 +475,7 @@ def main():
         gco = test_kinds(tmp)
         test_machine_curve(tmp, gco)
         test_airliner_stale_then_jumps(tmp)
+        test_airliner_streamed_within_limits(tmp)
     print(f"test_profile_kinds.py: {len(tr.failures)} failure(s)")
     return 1 if tr.failures else 0
 
