@@ -422,6 +422,18 @@ def test_airliner_streamed_within_limits(tmp):
     pace of the track instead (retime.c, ACCEPT_RULE_SMOOTH)."""
     air = os.path.join(tmp, "airliner.csv")
     n = airliner(air)
+    # the floor the positions set: scipy's spline through the fixes at their
+    # true times (whole seconds: the floor of the stamps), east/north/up
+    # about the first fix (printed, not checked: the CPR grid and the 25 ft
+    # steps alone bend the curve so much; lib/engine/DESIGN.md "Profiles")
+    fx = np.genfromtxt(air, delimiter=",", names=True)
+    enu = pyproj.Proj(proj="aeqd", lat_0=fx["lat_deg"][0], lon_0=fx["lon_deg"][0], datum="WGS84")
+    east, north = enu(fx["lon_deg"], fx["lat_deg"])
+    cs = CubicSpline(np.floor(fx["t_s"]), np.c_[east, north, fx["alt_m"]])
+    tt = np.arange(np.floor(fx["t_s"][0]), np.floor(fx["t_s"][-1]), 0.01)
+    a_true = np.linalg.norm(cs(tt, 2), axis=1)
+    print(f"airliner: scipy CubicSpline through its fixes at their true times peaks at "
+          f"{a_true.max():.1f} m/s^2 (t = {tt[a_true.argmax()]:.0f} s)")
     for prof in ("auto", "air"):
         vmax, amax = LIMITS[prof]
         sp, s, _ = tr.replay(air, ["--profile", prof], tmp, "airliner_" + prof)
