@@ -755,9 +755,7 @@ static int drop(accept_t *a, unsigned pre, double vlim, int reason, accept_verdi
     double shift = 0;
     if ((a->cfg.rules & ACCEPT_RULE_RETIME) &&
         (reason == ENGINE_ESPEED || reason == ENGINE_EACCEL)) {
-        shift = accept_retime_soft(a, pre, vlim); /* at the pace kept, if any */
-        if (!(shift > 0 || shift < 0))
-            shift = accept_retime(a, pre, vlim);
+        shift = accept_retime_either(a, pre, vlim);
     }
     if (shift > 0 || shift < 0) {
         a->shift_now = shift;

@@ -187,3 +187,39 @@ double accept_retime_soft(accept_t *a, unsigned pre, double vlim)
     a->known &= ~slot_pairs(c);
     return 0;
 }
+
+/* c's time set to tc + shift (its pairs forgotten) */
+static void set_time(accept_t *a, unsigned c, double t)
+{
+    a->wp[c].t_s = t;
+    a->known &= ~slot_pairs(c);
+}
+
+/*
+ * A fix about to be refused for its speed or acceleration (drop()): both
+ * estimates, accept_retime_soft's (the pace kept) and accept_retime's (the
+ * pace of the waypoints held), and of those that keep it, the one that
+ * bends the pace at the anchor less.  Returns the shift (0: refused).
+ */
+double accept_retime_either(accept_t *a, unsigned pre, double vlim)
+{
+    unsigned c = a->pend[0];
+    double tc = a->wp[c].t_s, s1 = accept_retime_soft(a, pre, vlim), s2, b1 = 0, b2;
+
+    if (!(s1 > 0 || s1 < 0))
+        return accept_retime(a, pre, vlim);
+    if (pre == NO_SLOT)
+        return s1;
+    b1 = speed_change(a, pre, a->a1, c);
+    set_time(a, c, tc);
+    s2 = accept_retime(a, pre, vlim);
+    if (!(s2 > 0 || s2 < 0)) {
+        set_time(a, c, tc + s1);
+        return s1;
+    }
+    b2 = speed_change(a, pre, a->a1, c);
+    if (b2 < b1)
+        return s2;
+    set_time(a, c, tc + s1);
+    return s1;
+}
