@@ -59,7 +59,7 @@ void obj_reset_counters(obj_t *o)
  * transfer_accel_m_s2), a_w = max_accel_m_s2 in force (the curve through
  * waypoints whose implied acceleration is at most a_w stays within 3 a_w, the
  * time scaling adds at most scale_accel_m_s2: lib/engine/TIMESCALE.md).  0
- * (not checked) without an acceleration limit (profiles air, machine, none)
+ * (not checked) without an acceleration limit (profiles machine, none)
  * and with param = uniform (the paper's parameterisation steps the velocity
  * at waypoints by design: lib/engine/DESIGN.md).
  */

@@ -43,6 +43,7 @@ void accept_reset(accept_t *a)
     a->have_burst = 0;
     a->run_n = a->run_head = 0;
     a->run_verdict = a->standing = a->have_refused = 0;
+    a->npace = 0;
 }
 
 void accept_close(accept_t *a)
@@ -52,6 +53,7 @@ void accept_close(accept_t *a)
     a->have_burst = 0;
     a->run_n = a->run_head = 0; /* judged at the close (engine_finish) */
     a->run_verdict = a->standing = 0;
+    a->npace = 0;
 }
 
 double accept_dist(const engine_waypoint_t *p, const engine_waypoint_t *q)
@@ -299,6 +301,16 @@ static void pop(accept_t *a, accept_verdict_t *v, accept_kind_t kind, int reason
     }
     if (a->have_burst)
         a->burst = (unsigned char)c;
+    if (kind == ACCEPT_TAKE || kind == ACCEPT_START) {
+        /* ACCEPT_RULE_SMOOTH: the path length kept (retime.c kept_pace) */
+        unsigned k = a->npace % (ACCEPT_RETIME_PACE + 1);
+        double s0 = a->npace ? a->pace_s[(a->npace - 1) % (ACCEPT_RETIME_PACE + 1)] : 0;
+        if (kind == ACCEPT_START)
+            a->npace = 0, k = 0, s0 = 0;
+        a->pace_t[k] = a->wp[c].t_s - a->shift_now; /* as stamped */
+        a->pace_s[k] = kind == ACCEPT_TAKE && a->npace ? s0 + pair_dist(a, a->a1, c) : 0;
+        a->npace++;
+    }
     if (kind == ACCEPT_TAKE) {
         a->vhist[a->hnext] = chord_speed(a, a->a1, c);
         a->hnext = (a->hnext + 1) % ACCEPT_HIST;
@@ -649,6 +661,17 @@ static void longest_both(accept_t *a, const unsigned char *nd, unsigned m, unsig
 
 static int drop(accept_t *a, unsigned pre, double vlim, int reason, accept_verdict_t *v);
 
+/* keep c, re-stamped if its stamp bends the pace (ACCEPT_RULE_SMOOTH) */
+static int take(accept_t *a, unsigned pre, double vlim, accept_verdict_t *v)
+{
+    double shift = accept_retime_soft(a, pre, vlim);
+    a->shift_now = shift;
+    pop(a, v, ACCEPT_TAKE, 0);
+    a->shift_now = 0;
+    v->shift_s = shift;
+    return 1;
+}
+
 /* an open trajectory, the full window's verdict on c (r: c after the
  * anchor, nd: the anchor and the window, slots) */
 static int decide_full(accept_t *a, int closing, double vlim, unsigned pre, int r,
@@ -662,10 +685,8 @@ static int decide_full(accept_t *a, int closing, double vlim, unsigned pre, int 
     /* keep c unless a longer chain skips it, or one as long and smoother
      * (of two fixes that cannot both be right, the one that bends the
      * track less) */
-    if (r == 0 && (!better(lo, co, lw, cw) || (lw >= lo && repeated_later(a)))) {
-        pop(a, v, ACCEPT_TAKE, 0);
-        return 1;
-    }
+    if (r == 0 && (!better(lo, co, lw, cw) || (lw >= lo && repeated_later(a))))
+        return take(a, pre, vlim, v);
     if (lo < 2) {
         /* nothing held continues the anchor: re-anchor on k consistent */
         unsigned u = longest(a, nd + 1, n, NO_SLOT, 1, n, vlim, 1, NULL);
@@ -722,6 +743,9 @@ void accept_anchor_at(accept_t *a, const engine_waypoint_t *wp)
     a->a1 = (unsigned char)s;
     a->open = 1;
     a->have_refused = 0;
+    a->pace_t[0] = wp->t_s; /* ACCEPT_RULE_SMOOTH: the pace starts here */
+    a->pace_s[0] = 0;
+    a->npace = 1;
 }
 
 /* drop c (an open trajectory) for reason, unless its position follows the
@@ -729,10 +753,14 @@ void accept_anchor_at(accept_t *a, const engine_waypoint_t *wp)
 static int drop(accept_t *a, unsigned pre, double vlim, int reason, accept_verdict_t *v)
 {
     double shift = 0;
-    if ((a->cfg.rules & ACCEPT_RULE_RETIME) && (reason == ENGINE_ESPEED || reason == ENGINE_EACCEL))
-        shift = accept_retime(a, pre, vlim);
+    if ((a->cfg.rules & ACCEPT_RULE_RETIME) &&
+        (reason == ENGINE_ESPEED || reason == ENGINE_EACCEL)) {
+        shift = accept_retime_either(a, pre, vlim);
+    }
     if (shift > 0 || shift < 0) {
+        a->shift_now = shift;
         pop(a, v, ACCEPT_TAKE, 0);
+        a->shift_now = 0;
         v->shift_s = shift;
         return 1;
     }
@@ -784,10 +812,8 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
     }
     nd[0] = a->a1;
     memcpy(nd + 1, a->pend, n);
-    if (n >= 2 && chain_all(a, nd, n + 1, pre, vlim, 0)) {
-        pop(a, v, ACCEPT_TAKE, 0);
-        return 1;
-    }
+    if (n >= 2 && chain_all(a, nd, n + 1, pre, vlim, 0))
+        return take(a, pre, vlim, v);
     r = check0(a, pre, nd[0], nd[1], vlim);
     if (r == ENGINE_EUNCONFIRMED && a->wp[nd[1]].t_s > a->wp[nd[0]].t_s && n >= k &&
         chain_all(a, nd + 1, k, NO_SLOT, vlim, 1)) {
@@ -803,10 +829,8 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
     if (r != 0 && !thin_pace(a, r) && continues_anchor(a, pre, vlim))
         return drop(a, pre, vlim, drop_reason(a, pre, vlim, r), v);
     if (r == 0 &&
-        (taken_past_outliers(a, vlim) || (n >= 3 && outvotes_held(a, nd, pre, vlim, &ch)))) {
-        pop(a, v, ACCEPT_TAKE, 0);
-        return 1;
-    }
+        (taken_past_outliers(a, vlim) || (n >= 3 && outvotes_held(a, nd, pre, vlim, &ch))))
+        return take(a, pre, vlim, v);
     if (!full)
         return 0;
     return decide_full(a, closing, vlim, pre, r, nd, &ch, v);

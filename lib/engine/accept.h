@@ -98,8 +98,10 @@
  * With the rules of issue 27 (accept_config_t.rules, ACCEPT_RULE_*: the
  * engine's, but for profile none) a fix about to be dropped for its speed
  * or acceleration whose position lies on its neighbours' path is kept with
- * its stamp re-estimated (retime.c), and a repeat of a fix dropped for its
- * position is dropped too (it cannot return by repetition).
+ * its stamp re-estimated (retime.c), a fast object's fix whose stamp bends
+ * the pace is re-stamped at the pace of the path (ACCEPT_RULE_SMOOTH), and a
+ * repeat of a fix dropped for its position is dropped too (it cannot return
+ * by repetition).
  */
 #ifndef TRAJD_ACCEPT_H
 #define TRAJD_ACCEPT_H
@@ -166,6 +168,25 @@
  * stamped 0.296 s late at 5 Hz is 1.5 intervals off. */
 #define ACCEPT_RETIME_FRAC 2.0
 #define ACCEPT_RETIME_DETOUR 0.25
+/* ACCEPT_RULE_SMOOTH (retime.c accept_retime_soft): a fix about to be kept,
+ * at a pace of at least ACCEPT_RETIME_SOFT_SPEED_M_S (m/s: there a stamp's
+ * jitter moves a fix far more than its position's noise; 0.1 s at 250 m/s
+ * is 25 m, at a boat's 5 m/s 0.5 m), whose stamp implies a change of speed
+ * above ACCEPT_RETIME_SOFT x max_accel_m_s2 (the curve through kept triples
+ * stays within 3 x their implied acceleration, and jitter is not motion),
+ * is re-stamped: at the pace of the last ACCEPT_RETIME_PACE kept intervals
+ * (their path length over their stamps), pulled ACCEPT_RETIME_GAIN of the
+ * way towards the time its own stamp and the later stamps held tell for it
+ * (their jitter averages out over about 1 / ACCEPT_RETIME_GAIN fixes); kept
+ * so if that moves it by at most ACCEPT_RETIME_SOFT_SHIFT of its shorter
+ * interval (ADS-B's latency is 0..0.2 s at 1 Hz).  Tuned on the built
+ * airliner of tests/oracle/test_profile_kinds.py (lib/engine/DESIGN.md
+ * "Profiles"). */
+#define ACCEPT_RETIME_SOFT (1.0 / 6.0)
+#define ACCEPT_RETIME_PACE 10u
+#define ACCEPT_RETIME_GAIN 0.25
+#define ACCEPT_RETIME_SOFT_SHIFT 0.25
+#define ACCEPT_RETIME_SOFT_SPEED_M_S 50.0
 
 /* The rules of issue 27 (accept_config_t.rules; the engine sets them all,
  * 0 is the former policy, which tests/helpers/accept_ref.h keeps):
@@ -178,12 +199,18 @@
  *   RETIME  a fix whose position is consistent but whose stamp is not
  *           (jitter) is kept with its stamp re-estimated from the local
  *           pace, within ACCEPT_RETIME_FRAC of its intervals;
- *   NORETURN a repeat of a refused fix's position is refused too. */
+ *   NORETURN a repeat of a refused fix's position is refused too;
+ *   SMOOTH   a fast object's fix (an aircraft's: ADS-B stamps are times of
+ *           arrival) whose stamp implies a change of speed above
+ *           ACCEPT_RETIME_SOFT x max_accel_m_s2 is re-stamped at the pace
+ *           of the last kept intervals, kept or refused alike: retime.c
+ *           accept_retime_soft. */
 #define ACCEPT_RULE_STOPS 1u
 #define ACCEPT_RULE_VECTOR 2u
 #define ACCEPT_RULE_RETIME 4u
 #define ACCEPT_RULE_NORETURN 8u
-#define ACCEPT_RULES_ALL 15u
+#define ACCEPT_RULE_SMOOTH 16u
+#define ACCEPT_RULES_ALL 31u
 /* accept_config_t.rules: none of them (the former policy, for the test that
  * compares it with tests/helpers/accept_ref.h); 0 means all */
 #define ACCEPT_RULES_FORMER 0x80000000u
@@ -264,6 +291,12 @@ typedef struct {
     /* ACCEPT_RULE_NORETURN: the last fix refused for its position */
     int have_refused, refused_reason;
     engine_waypoint_t refused;
+    /* ACCEPT_RULE_SMOOTH: the time and the path length along the open
+     * trajectory of its last ACCEPT_RETIME_PACE + 1 waypoints (a ring at
+     * npace % that; npace counts them since its start) */
+    double pace_t[ACCEPT_RETIME_PACE + 1], pace_s[ACCEPT_RETIME_PACE + 1];
+    unsigned npace;
+    double shift_now; /* the shift of the waypoint being kept (pop) */
 } accept_t;
 
 /* Set up with cfg (window and confirm clamped to 1..ACCEPT_WINDOW_MAX,

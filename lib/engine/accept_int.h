@@ -179,5 +179,9 @@ static inline int check0(accept_t *a, unsigned pre, unsigned p, unsigned b, doub
 
 /* accept.c: the stamp re-estimate of c (retime.c), for drop() */
 double accept_retime(accept_t *a, unsigned pre, double vlim);
+/* accept.c: the smoothing re-estimate of c about to be kept (retime.c) */
+double accept_retime_soft(accept_t *a, unsigned pre, double vlim);
+/* accept.c: the better of the two for a fix about to be refused (retime.c) */
+double accept_retime_either(accept_t *a, unsigned pre, double vlim);
 
 #endif

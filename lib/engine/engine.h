@@ -139,10 +139,13 @@ typedef enum {
  *            fixes dropped.
  *   ROAD     100 m/s (360 km/h), 30 m/s^2 (3 g: far above any road vehicle,
  *            it catches timestamp jitter, not driving), stale fixes dropped.
- *   AIR      400 m/s (as AUTO), no acceleration limit (ADS-B positions carry
- *            the receiver's time of arrival: at 222 m/s a 0.1 s error is 22 m,
- *            so implied accelerations of tens of m/s^2 are noise, not
- *            motion), stale fixes dropped.
+ *   AIR      400 m/s (as AUTO), 30 m/s^2 (about 3 g: a transport aircraft's
+ *            +2.5 g limit load in a level turn is 22.5 m/s^2, an airliner
+ *            stays under 0.5 g; aerobatics need it set higher), stale fixes
+ *            dropped.  ADS-B stamps are the receiver's times of arrival: at
+ *            222 m/s a 0.1 s error is 22 m, so a fast object's fixes are
+ *            re-stamped at the pace of the path (accept.h
+ *            ACCEPT_RULE_SMOOTH; lib/engine/DESIGN.md "Profiles").
  *   MACHINE  no limits, no stale rule: a feed-rate-timed toolpath changes
  *            velocity instantly at corners and may dwell on a point; every
  *            point is kept (acceleration limits are the CNC planner's job).
@@ -153,8 +156,8 @@ typedef enum {
  * (the curve rests there) unless the next new position shows the object
  * kept moving (then stale, where stale fixes are dropped); a fix refused for
  * its speed or acceleration whose position lies on the path is kept with
- * its stamp re-estimated; a repeat of a fix refused for its position is
- * refused too; with AUTO's free turns a change of speed along the track is
+ * its stamp re-estimated, and so is a fast object's fix whose stamp bends
+ * the pace; a repeat of a fix refused for its position is refused too; with AUTO's free turns a change of speed along the track is
  * held to max_accel_m_s2.
  */
 typedef enum {

@@ -376,7 +376,7 @@ static const struct {
     double speed_m_s, accel_m_s2;
 } profile_limits[ENGINE_PROFILE_COUNT] = {
     [ENGINE_PROFILE_AUTO] = {400.0, 30.0}, [ENGINE_PROFILE_VESSEL] = {40.0, 30.0},
-    [ENGINE_PROFILE_ROAD] = {100.0, 30.0}, [ENGINE_PROFILE_AIR] = {400.0, 0.0},
+    [ENGINE_PROFILE_ROAD] = {100.0, 30.0}, [ENGINE_PROFILE_AIR] = {400.0, 30.0},
     [ENGINE_PROFILE_MACHINE] = {0.0, 0.0}, [ENGINE_PROFILE_NONE] = {0.0, 0.0},
 };
 

@@ -476,7 +476,8 @@ static void test_safety_defaults(void **state)
     assert_true(fabs(v - 40) < 1e-9);
     assert_true(fabs(safety_of("max_accel_m_s2 = 1\ntransfer_accel_m_s2 = 50\n", &v) - 100) < 1e-9);
     assert_true(safety_of("profile = machine\n", &v) <= 0);
-    assert_true(safety_of("profile = air\n", &v) <= 0);
+    /* profile air: 30 m/s^2 since issue 27, so checked as auto */
+    assert_true(fabs(safety_of("profile = air\n", &v) - 2 * (3 * 30 + 5)) < 1e-9);
     assert_true(safety_of("method = bspline\nparam = uniform\n", &v) <= 0);
     assert_true(fabs(safety_of("safety_max_accel_m_s2 = 0\n", &v)) <= 0);
     assert_true(fabs(safety_of("safety_max_accel_m_s2 = 12\n", &v) - 12) < 1e-9);

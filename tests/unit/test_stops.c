@@ -242,6 +242,51 @@ static void test_jittered_line(void **state)
     assert_true(r.finished);
 }
 
+/*
+ * ACCEPT_RULE_SMOOTH (issue 27): a line flown at 250 m/s, a fix every second
+ * stamped on arrival 0..0.2 s late (a fixed pseudo-random sequence), 300
+ * fixes, under auto and air: every fix kept, most re-stamped (by at most a
+ * quarter of the interval) and the output's acceleration within 30 m/s^2
+ * (the stamps alone, forced through, make ~100).  The same line at 5 m/s
+ * (a boat: 0.2 s is 1 m there, no more than its position's noise) is left
+ * as stamped.
+ */
+static void test_arrival_stamps(void **state)
+{
+    (void)state;
+    static engine_waypoint_t w[300];
+    static const engine_profile_t prof[] = {ENGINE_PROFILE_AUTO, ENGINE_PROFILE_AIR};
+    static const double speed[] = {250.0, 5.0};
+    for (int s = 0; s < 2; s++)
+        for (int p = 0; p < 2; p++) {
+            uint32_t seed = 12345;
+            for (int k = 0; k < 300; k++) {
+                seed = seed * 1664525u + 1013904223u;
+                memset(&w[k], 0, sizeof w[k]);
+                w[k].t_s = k + 0.2 * (seed >> 8) / 16777216.0;
+                w[k].pos_m[0] = speed[s] * k;
+                w[k].seq = (uint32_t)k + 1;
+            }
+            run_t r;
+            replay(w, 300, prof[p], 0.0, &r);
+            print_message("line at %.0f m/s, arrival stamps, profile %s: kept %llu of 300, "
+                          "retimed %llu (largest shift %.3f s), max |a| %.1f m/s^2, "
+                          "max |v| %.1f m/s\n",
+                          speed[s], p ? "air" : "auto", (unsigned long long)r.st.accepted,
+                          (unsigned long long)r.st.retimed, r.st.retime_max_s, r.a_max, r.v_max);
+            assert_int_equal(r.st.accepted, 300);
+            assert_true(r.finished);
+            if (s == 0) {
+                assert_true(r.st.retimed >= 150);
+                assert_true(r.st.retime_max_s <= 0.25);
+                assert_true(r.a_max <= 30.0);
+                assert_true(r.v_max <= 400.0);
+            } else {
+                assert_int_equal(r.st.retimed, 0);
+            }
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -249,6 +294,7 @@ int main(void)
         cmocka_unit_test(test_ais_rereceptions),
         cmocka_unit_test(test_refused_fix_does_not_return),
         cmocka_unit_test(test_jittered_line),
+        cmocka_unit_test(test_arrival_stamps),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
