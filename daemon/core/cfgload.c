@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "log.h"
+#include "outworker.h"
 
 struct cfgload {
     pthread_t th;
@@ -32,33 +33,6 @@ static atomic_int cancel_flag;
 int cfgload_cancelled(void)
 {
     return atomic_load(&cancel_flag);
-}
-
-/* A thread at SCHED_OTHER whatever the loop's policy ([realtime]
- * fifo_priority), niced (CFGLOAD_NICE) so that the loop wins the CPU it
- * shares, with every signal blocked (the loop's signalfd takes them).
- * 0 or an error number. */
-static int spawn(pthread_t *th, void *(*fn)(void *), void *arg, const char *name)
-{
-    pthread_attr_t a;
-    struct sched_param sp = {.sched_priority = 0};
-    int rc = pthread_attr_init(&a);
-    if (!rc)
-        rc = pthread_attr_setinheritsched(&a, PTHREAD_EXPLICIT_SCHED);
-    if (!rc)
-        rc = pthread_attr_setschedpolicy(&a, SCHED_OTHER);
-    if (!rc)
-        rc = pthread_attr_setschedparam(&a, &sp);
-    sigset_t all, old;
-    sigfillset(&all);
-    pthread_sigmask(SIG_SETMASK, &all, &old); /* the creator's mask put back after */
-    if (!rc)
-        rc = pthread_create(th, &a, fn, arg);
-    pthread_sigmask(SIG_SETMASK, &old, NULL);
-    pthread_attr_destroy(&a);
-    if (!rc)
-        pthread_setname_np(*th, name);
-    return rc;
 }
 
 static void nice_self(void)
@@ -115,7 +89,7 @@ cfgload_t *cfgload_start(const char *path, const cfg_t *running, int *err)
         return NULL;
     }
     atomic_store(&cancel_flag, 0);
-    int rc = spawn(&l->th, work, l, "trajd-reload");
+    int rc = worker_spawn(&l->th, work, l, "trajd-reload");
     if (rc) {
         *err = -rc;
         free_load(l);
@@ -166,7 +140,7 @@ void cfgload_retire(cfg_t *old)
     if (!old)
         return;
     cfgload_retire_join(); /* the previous one: done long ago */
-    int rc = spawn(&freer, free_work, old, "trajd-free");
+    int rc = worker_spawn(&freer, free_work, old, "trajd-free");
     if (rc) { /* counted nowhere else: said, then done here */
         log_msg(LOG_WARNING,
                 "reload: no thread to free the old configuration (%s): freed in "

@@ -8,14 +8,8 @@
 #include <sys/eventfd.h>
 #include <unistd.h>
 
-int outworker_start(outworker_t *w, void *(*fn)(void *), void *arg, const char *name)
+int worker_spawn(pthread_t *th, void *(*fn)(void *), void *arg, const char *name)
 {
-    w->started = 0;
-    atomic_init(&w->sleeping, 0);
-    atomic_init(&w->stop, 0);
-    w->efd = eventfd(0, EFD_CLOEXEC);
-    if (w->efd < 0)
-        return -errno;
     pthread_attr_t a;
     struct sched_param sp = {.sched_priority = 0};
     int rc = pthread_attr_init(&a);
@@ -31,15 +25,28 @@ int outworker_start(outworker_t *w, void *(*fn)(void *), void *arg, const char *
     sigfillset(&all);
     pthread_sigmask(SIG_SETMASK, &all, &old);
     if (!rc)
-        rc = pthread_create(&w->th, &a, fn, arg);
+        rc = pthread_create(th, &a, fn, arg);
     pthread_sigmask(SIG_SETMASK, &old, NULL);
     pthread_attr_destroy(&a);
+    if (!rc)
+        pthread_setname_np(*th, name);
+    return rc;
+}
+
+int outworker_start(outworker_t *w, void *(*fn)(void *), void *arg, const char *name)
+{
+    w->started = 0;
+    atomic_init(&w->sleeping, 0);
+    atomic_init(&w->stop, 0);
+    w->efd = eventfd(0, EFD_CLOEXEC);
+    if (w->efd < 0)
+        return -errno;
+    int rc = worker_spawn(&w->th, fn, arg, name);
     if (rc) {
         close(w->efd);
         w->efd = -1;
         return -rc;
     }
-    pthread_setname_np(w->th, name);
     w->started = 1;
     return 0;
 }

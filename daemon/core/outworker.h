@@ -23,6 +23,10 @@ typedef struct {
     _Atomic int stop;
 } outworker_t;
 
+/* fn(arg) on a new SCHED_OTHER thread named name (at most 15 chars), whatever
+ * the creator's policy, every signal blocked in it.  0 or an error number. */
+int worker_spawn(pthread_t *th, void *(*fn)(void *), void *arg, const char *name);
+
 /* Start fn(arg) on a new SCHED_OTHER thread named name (at most 15 chars),
  * every signal blocked in it.  0 or -errno. */
 int outworker_start(outworker_t *w, void *(*fn)(void *), void *arg, const char *name);
