@@ -68,7 +68,7 @@ int engine_delay_check(const engine_config_t *cfg, double interval_s, char *why,
 
 int engine_delay_format(const engine_delay_t *d, char *buf, size_t len)
 {
-    char need[160];
+    char need[240];
     if (d->interval_s > 0)
         snprintf(need, sizeof need,
                  "lookahead %u x %.3g s + slack %u x %.3g s + stop reserve %.3f s (from %.3g "
@@ -76,8 +76,9 @@ int engine_delay_format(const engine_delay_t *d, char *buf, size_t len)
                  d->lookahead_n, d->interval_s, d->slack_n, d->interval_s, d->stop_s, d->speed_m_s);
     else
         snprintf(need, sizeof need,
-                 "%u input intervals (lookahead %u, slack %u) + stop reserve %.3f s (from %.3g "
-                 "m/s)",
+                 "%u input intervals (lookahead %u, slack %u) + stop reserve at most %.3f s "
+                 "(from the speed limit, %.3g m/s; the input's own top speed sets it once "
+                 "waypoints come)",
                  d->lookahead_n + d->slack_n, d->lookahead_n, d->slack_n, d->stop_s, d->speed_m_s);
     if (d->delay_s > d->need_s)
         return snprintf(buf, len, "D %.3f s (delay_s; the settings need %s)", d->delay_s, need);
