@@ -621,16 +621,6 @@ void can_port_obj_stats(const can_port_t *p, unsigned i, can_port_obj_stats_t *s
     st->last_emcy = d->last_emcy;
 }
 
-void can_port_reset_counters(can_port_t *p)
-{
-    memset(&p->st, 0, sizeof p->st);
-    for (unsigned i = 0; i < p->nobj; i++) {
-        memset(&p->obj[i].st, 0, sizeof p->obj[i].st);
-        memset(&p->obj[i].drv.st, 0, sizeof p->obj[i].drv.st);
-        memset(&p->obj[i].rx.st, 0, sizeof p->obj[i].rx.st);
-    }
-}
-
 double can_port_busload(const can_port_t *p, double rate_hz, double waypoint_hz, double bitrate,
                         double data_bitrate)
 {

@@ -241,9 +241,6 @@ const can_port_drive_t *can_port_drive(const can_port_t *p, unsigned i);
  */
 int can_port_drive_summary(const can_port_t *p, unsigned i, canproto_status2_drive_t *out);
 
-/* Reset every counter (CAN command RESET_COUNTERS does it for its object). */
-void can_port_reset_counters(can_port_t *p);
-
 /*
  * Worst-case bus load of this port's configuration: rate_hz setpoint
  * cycles, status as configured, waypoint_hz expected waypoints per object.
