@@ -71,10 +71,17 @@ def strace_run(test, tmp, conf):
         m = re.match(r"timerfd_create\(.*\)\s+= (\d+)", call)
         if m:
             timer_fds.add(int(m.group(1)))
-        m = re.match(r"close\((\d+)\)", call)
+        # "close(5 <unfinished ...>" too (strace -f splits calls that
+        # another thread interrupts), and an fd number taken again by any
+        # other call (an eventfd of a worker) is no timer any more
+        m = re.match(r"close\((\d+)", call)
         if m:
             timer_fds.discard(int(m.group(1)))
             open_now.pop(int(m.group(1)), None)
+        m = re.match(r"(eventfd2?|signalfd4?|epoll_create1?|socket|accept4?|pipe2?|dup[23]?)\(.*\)\s+= (\d+)",
+                     call)
+        if m:
+            timer_fds.discard(int(m.group(2)))
         m = re.match(r"read\((\d+), .*, 8\)\s+= 8", call)
         if m and int(m.group(1)) in timer_fds:
             clock_readers.add(pid)
