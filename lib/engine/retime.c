@@ -27,6 +27,21 @@ static int on_path(accept_t *a, unsigned p, unsigned q, unsigned r)
     return pair_dist(a, p, q) + pair_dist(a, q, r) - d <= ACCEPT_RETIME_DETOUR * d;
 }
 
+/* c's time set to t (its pairs forgotten) */
+static void set_time(accept_t *a, unsigned c, double t)
+{
+    a->wp[c].t_s = t;
+    a->known &= ~slot_pairs(c);
+}
+
+/* q, held after prev, goes on c's run: later than prev and within max_gap_s
+ * of the anchor's time t0 */
+static int run_goes_on(const accept_t *a, unsigned prev, unsigned q, double t0)
+{
+    return a->wp[q].t_s - a->wp[prev].t_s > ACCEPT_SAME_TIME_S &&
+           a->wp[q].t_s - t0 <= a->cfg.max_gap_s;
+}
+
 /*
  * c's (slot pend[0]) time re-estimated at the local pace, into *tp: the
  * path length from the anchor through the waypoints held in time order
@@ -44,8 +59,7 @@ static int estimate(accept_t *a, double *tp)
     h[0] = tc - t0;
     for (unsigned i = 1; i < a->npend; i++) {
         unsigned q = a->pend[i];
-        if (a->wp[q].t_s - a->wp[prev].t_s <= ACCEPT_SAME_TIME_S ||
-            a->wp[q].t_s - t0 > a->cfg.max_gap_s)
+        if (!run_goes_on(a, prev, q, t0))
             break;
         tot += pair_dist(a, prev, q);
         h[m++] = a->wp[q].t_s - a->wp[prev].t_s;
@@ -92,8 +106,7 @@ double accept_retime(accept_t *a, unsigned pre, double vlim)
 
     if (!estimate(a, &t))
         return 0;
-    a->wp[c].t_s = t;
-    a->known &= ~slot_pairs(c);
+    set_time(a, c, t);
     /* c then follows the anchor (the waypoint after it, if any, is judged
      * on its own: its stamp may be off too); or, where the anchor's own
      * stamp was off within the limits, c follows the anchor at the speed
@@ -102,8 +115,7 @@ double accept_retime(accept_t *a, unsigned pre, double vlim)
                                              check(a, a1, c, a->pend[1], vlim, 0) == 0)) {
         return t - tc;
     }
-    a->wp[c].t_s = tc;
-    a->known &= ~slot_pairs(c);
+    set_time(a, c, tc);
     return 0;
 }
 
@@ -164,8 +176,7 @@ double accept_retime_soft(accept_t *a, unsigned pre, double vlim)
         double path = 0, meas = tc;
         for (unsigned i = 1; i < a->npend; i++) {
             unsigned q = a->pend[i];
-            if (a->wp[q].t_s - a->wp[prev].t_s <= ACCEPT_SAME_TIME_S ||
-                a->wp[q].t_s - t0 > a->cfg.max_gap_s)
+            if (!run_goes_on(a, prev, q, t0))
                 break;
             path += pair_dist(a, prev, q);
             meas += a->wp[q].t_s - path / pace;
@@ -179,20 +190,11 @@ double accept_retime_soft(accept_t *a, unsigned pre, double vlim)
     if (!(fabs(t - tc) > ACCEPT_SAME_TIME_S) || !(fabs(t - tc) <= ACCEPT_RETIME_SOFT_SHIFT * dt) ||
         !(t - t0 > ACCEPT_SAME_TIME_S) || !(a->wp[n1].t_s - t > ACCEPT_SAME_TIME_S))
         return 0;
-    a->wp[c].t_s = t;
-    a->known &= ~slot_pairs(c);
+    set_time(a, c, t);
     if (check0(a, pre, a1, c, vlim) == 0)
         return t - tc;
-    a->wp[c].t_s = tc;
-    a->known &= ~slot_pairs(c);
+    set_time(a, c, tc);
     return 0;
-}
-
-/* c's time set to tc + shift (its pairs forgotten) */
-static void set_time(accept_t *a, unsigned c, double t)
-{
-    a->wp[c].t_s = t;
-    a->known &= ~slot_pairs(c);
 }
 
 /*
