@@ -28,21 +28,28 @@ int engine_delay_of(const engine_config_t *cfg, double interval_s, double speed_
     memset(d, 0, sizeof *d);
     if (engine_config_resolve(cfg, &r) < 0 || !(la = engine_lookahead(&r)))
         return -ENGINE_ECONFIG;
-    d->slack_n = r.start_slack == ENGINE_AUTO ? ENGINE_SLACK_AUTO_MIN : r.start_slack;
+    engine_delay_parts(&r, la, interval_s, speed_m_s, d);
+    return 0;
+}
+
+void engine_delay_parts(const engine_config_t *r, unsigned la, double interval_s, double speed_m_s,
+                        engine_delay_t *d)
+{
+    memset(d, 0, sizeof *d);
+    d->slack_n = r->start_slack == ENGINE_AUTO ? ENGINE_SLACK_AUTO_MIN : r->start_slack;
     d->lookahead_n = la - (d->slack_n < la ? d->slack_n : la) + 1;
     d->interval_s = interval_s > 0 && isfinite(interval_s) ? interval_s : 0.0;
     if (!(speed_m_s > 0)) {
-        speed_m_s = engine_config_max_speed(&r);
+        speed_m_s = engine_config_max_speed(r);
         if (!(speed_m_s > 0))
             speed_m_s = DELAY_V_FLOOR_M_S;
     }
     d->speed_m_s = speed_m_s;
     d->lookahead_s = d->lookahead_n * d->interval_s;
     d->slack_s = d->slack_n * d->interval_s;
-    d->stop_s = engine_delay_stop_s(&r, speed_m_s);
+    d->stop_s = engine_delay_stop_s(r, speed_m_s);
     d->need_s = d->lookahead_s + d->slack_s + d->stop_s;
-    d->delay_s = r.delay_s > d->need_s ? r.delay_s : d->need_s;
-    return 0;
+    d->delay_s = r->delay_s > d->need_s ? r->delay_s : d->need_s;
 }
 
 int engine_delay_check(const engine_config_t *cfg, double interval_s, char *why, size_t whylen)

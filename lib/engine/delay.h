@@ -56,6 +56,11 @@ typedef struct {
 int engine_delay_of(const engine_config_t *cfg, double interval_s, double speed_m_s,
                     engine_delay_t *d);
 
+/* engine_delay_of for a resolved configuration r whose lookahead
+ * (engine_lookahead) is la: what an engine, which holds both, uses. */
+void engine_delay_parts(const engine_config_t *r, unsigned la, double interval_s, double speed_m_s,
+                        engine_delay_t *d);
+
 /* The stop reserve alone: B above for top speed v (>= 1 m/s is used). */
 double engine_delay_stop_s(const engine_config_t *cfg, double speed_m_s);
 

@@ -17,14 +17,23 @@
 /* Queue entries looked at for the fastest segment ahead (head_vmax). */
 #define DELAY_HEAD_SCAN 256
 
+/* The input's interval as measured: span_max (the longest time of
+ * la_steady + 1 intervals) over their count; 0 before it is measured. */
+static double input_interval(const engine_t *e)
+{
+    return e->solve.span_max > 0 ? e->solve.span_max / (e->la_steady + 1) : 0.0;
+}
+
 /* D now: the settings with the input's interval and top speed as measured
  * (start_slack auto: span_max, the longest time of la_steady + 1 intervals,
  * and vmax_in, its fastest chord, both decaying; with delay_s set they are
  * measured too). */
 static void delay_measured(const engine_t *e, engine_delay_t *d)
 {
-    double h = e->solve.span_max > 0 ? e->solve.span_max / (e->la_steady + 1) : 0.0;
-    (void)engine_delay_of(&e->cfg, h, e->solve.vmax_in, d);
+    double h = input_interval(e);
+    /* e->cfg is resolved and e->lookahead its lookahead (engine_new): not
+     * resolved again at every tick that asks */
+    engine_delay_parts(&e->cfg, e->lookahead, h, e->solve.vmax_in, d);
     if (e->slack_auto)
         d->slack_n = ENGINE_SLACK_AUTO_MIN + e->slack_learn;
     d->slack_s = d->slack_n * d->interval_s;
@@ -43,18 +52,13 @@ static double newest(const engine_t *e)
     return t;
 }
 
-static const qent_t *qat(const engine_t *e, size_t i)
-{
-    return &e->queue.ent[(e->queue.head + i) % e->queue.cap];
-}
-
 /* The fastest queued segment of the head's trajectory (m/s, at least 1). */
 static double head_vmax(const engine_t *e)
 {
     double v = 1.0;
     for (size_t i = 0; i < e->queue.len && i < DELAY_HEAD_SCAN; i++) {
-        const qent_t *q = qat(e, i);
-        if (q->kind != QE_SEG || q->traj != qat(e, 0)->traj)
+        const qent_t *q = queue_at(e, i);
+        if (q->kind != QE_SEG || q->traj != queue_at(e, 0)->traj)
             break;
         v = fmax(v, q->vmax);
     }
@@ -78,13 +82,13 @@ static double ramp_lag(const engine_t *e, int strict)
 {
     ts_state_t st = {0.0, 0.0};
     size_t i = 0;
-    const qent_t *q = qat(e, 0);
+    const qent_t *q = queue_at(e, 0);
     double t0 = q->seg.t0_s, s = 0.0, lag = 0.0, T = e->period_s, ahead = t0;
-    double h = e->solve.span_max > 0 ? e->solve.span_max / (e->la_steady + 1) : 0.0;
+    double h = input_interval(e);
     double lag_grow = (double)(e->cfg.fragment - e->cfg.overlap) * h;
 
     for (size_t k = 0; k < e->queue.len; k++) {
-        const qent_t *p = qat(e, k);
+        const qent_t *p = queue_at(e, k);
         if (p->traj != q->traj)
             break;
         ahead = p->t1_s;
@@ -92,7 +96,7 @@ static double ramp_lag(const engine_t *e, int strict)
     ahead -= t0;
     for (int n = 0; n < DELAY_RAMP_STEPS_MAX; n++) {
         while (s >= q->t1_s - t0 && i + 1 < e->queue.len) {
-            const qent_t *nq = qat(e, i + 1);
+            const qent_t *nq = queue_at(e, i + 1);
             if (nq->kind != QE_SEG || nq->traj != q->traj)
                 break;
             i++;
@@ -123,9 +127,9 @@ static double delay_if_started(const engine_t *e, engine_delay_t *d, double *lag
 {
     delay_measured(e, d);
     *lag = NAN;
-    if (!e->queue.len || qat(e, 0)->kind != QE_SEG)
+    if (!e->queue.len || queue_at(e, 0)->kind != QE_SEG)
         return 0.0;
-    double waited = newest(e) - qat(e, 0)->seg.t0_s;
+    double waited = newest(e) - queue_at(e, 0)->seg.t0_s;
     /* the ramp loses at most a stop at the fastest speed ahead */
     if (waited < d->delay_s - engine_delay_stop_s(&e->cfg, head_vmax(e)))
         return waited;
@@ -147,14 +151,14 @@ int engine_delay_ready(const engine_t *e)
     engine_delay_t d;
     double lag;
 
-    if (!e->queue.len || qat(e, 0)->kind != QE_SEG)
+    if (!e->queue.len || queue_at(e, 0)->kind != QE_SEG)
         return 1;
     /* a buffer that cannot take the input D needs: start, rather than wait
      * for waypoints the sender cannot give (ENGINE_EFULL) */
     if (input_buffered(e) + e->cfg.fragment + 8 >= e->cfg.capacity)
         return 1;
     delay_measured(e, &d);
-    double waited = newest(e) - qat(e, 0)->seg.t0_s;
+    double waited = newest(e) - queue_at(e, 0)->seg.t0_s;
     if (waited >= d.delay_s)
         return 1;
     /* the ramp loses at most a stop at the fastest speed ahead */

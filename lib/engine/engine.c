@@ -152,7 +152,7 @@ void engine_status(const engine_t *e, engine_status_t *st)
     st->judging = accept_pending(&e->in.policy);
     st->ahead_s = 0;
     if (e->queue.len) {
-        const qent_t *tail = &e->queue.ent[(e->queue.head + e->queue.len - 1) % e->queue.cap];
+        const qent_t *tail = queue_at(e, e->queue.len - 1);
         double ahead = tail->t1_s - e->out.t;
         st->ahead_s = ahead > 0 ? ahead : 0;
     }

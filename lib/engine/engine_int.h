@@ -320,6 +320,12 @@ static inline double hpar(const engine_t *e, uint64_t j)
     return e->cfg.param == ENGINE_PARAM_TIME ? nt(e, j + 1) - nt(e, j) : 1.0;
 }
 
+/* the i-th queued entry from the head (i < queue.len) */
+static inline const qent_t *queue_at(const engine_t *e, size_t i)
+{
+    return &e->queue.ent[(e->queue.head + i) % e->queue.cap];
+}
+
 static inline qent_t *q_head(engine_t *e)
 {
     return e->queue.len ? &e->queue.ent[e->queue.head] : NULL;

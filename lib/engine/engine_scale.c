@@ -242,7 +242,7 @@ static void rest_handover(engine_t *e)
         return; /* an underrun: resumes when waypoints come */
     const qent_t *h = NULL;
     for (size_t i = 0; i < e->queue.len && !h; i++) {
-        const qent_t *q = &e->queue.ent[(e->queue.head + i) % e->queue.cap];
+        const qent_t *q = queue_at(e, i);
         if (q->traj != e->out.traj)
             break;
         if (q->kind == QE_END)

@@ -199,7 +199,7 @@ static void find_avail(engine_t *e)
     e->scale.avail_closed = 0;
     e->scale.avail_rest = 0;
     for (size_t i = 0; i < e->queue.len; i++) {
-        const qent_t *q = &e->queue.ent[(e->queue.head + i) % e->queue.cap];
+        const qent_t *q = queue_at(e, i);
         if (q->traj != e->out.traj)
             break;
         e->scale.avail_t = q->t1_s;

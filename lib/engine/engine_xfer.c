@@ -23,7 +23,7 @@ static double head_speed(const engine_t *e)
     double v = 0;
 
     for (size_t i = 0; i < e->queue.len && i < TRANSFER_HIST; i++) {
-        const qent_t *q = &e->queue.ent[(e->queue.head + i) % e->queue.cap];
+        const qent_t *q = queue_at(e, i);
         double d2 = 0;
         if (q->kind != QE_SEG || (i > 0 && q->first))
             break;
