@@ -70,6 +70,14 @@ def small_csv(path, n=3000, dt=0.1):
     write(path, "\n".join(rows) + "\n")
 
 
+def sigterm(d):
+    """SIGTERM to trajd d: its exit status, the seconds it took and its log."""
+    t0 = time.monotonic()
+    d.p.send_signal(signal.SIGTERM)
+    rc = d.p.wait(WAIT_S)
+    return rc, time.monotonic() - t0, "\n".join(d.rest())
+
+
 class Trajd:
     """trajd -f with its stderr read by a thread (lines with their arrival time)."""
 
@@ -227,11 +235,7 @@ class ReloadNoHold(unittest.TestCase):
         write(conf, config(self.tmp, long_track, "long"))
         d.p.send_signal(signal.SIGHUP)
         d.wait_for("reloading")
-        t0 = time.monotonic()
-        d.p.send_signal(signal.SIGTERM)
-        rc = d.p.wait(WAIT_S)
-        took = time.monotonic() - t0
-        log = "\n".join(d.rest())
+        rc, took, log = sigterm(d)
         print("SIGTERM during a reload's parse: exit %d after %.2f s" % (rc, took))
         self.assertEqual(rc, 0, log)
         self.assertIn("bringing objects to rest", log)
@@ -266,11 +270,7 @@ class ReloadNoHold(unittest.TestCase):
         d = Trajd(self.tmp, conf)
         self.addCleanup(d.stop)
         time.sleep(0.1)  # reading the 1e6-waypoint track
-        t0 = time.monotonic()
-        d.p.send_signal(signal.SIGTERM)
-        rc = d.p.wait(WAIT_S)
-        took = time.monotonic() - t0
-        log = "\n".join(d.rest())
+        rc, took, log = sigterm(d)
         print("SIGTERM while the configuration is first read: exit %d after %.2f s" % (rc, took))
         self.assertEqual(rc, 0, log)
         self.assertIn("its parse cancelled", log)
