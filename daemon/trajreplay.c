@@ -438,8 +438,11 @@ static void print_summary(const track_t *trk, const replay_t *r, const engine_st
             "summary: stop_fixes %" PRIu64 "\n"
             "summary: retimed %" PRIu64 "\n"
             "summary: retime_max_s %.6g\n"
-            "summary: silent_ends %" PRIu64 "\n",
-            st->stops, st->stop_fixes, st->retimed, st->retime_max_s, st->silent_ends);
+            "summary: silent_ends %" PRIu64 "\n"
+            "summary: catchups %" PRIu64 "\n"
+            "summary: lag_s %.6g\n",
+            st->stops, st->stop_fixes, st->retimed, st->retime_max_s, st->silent_ends, st->catchups,
+            st->lag_s);
 }
 
 /* The play-out delay D the engine held and its parts (lib/engine/delay.h):

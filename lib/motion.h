@@ -156,6 +156,9 @@ typedef struct {
     double retime_max_s;            /* the largest such shift, seconds */
     uint64_t silent_ends;           /* trajectories closed after a silence of the input
                                        (lib/engine/silence.h): played out to their end */
+    double lag_s;                   /* relative time: how far the output trails its delay D
+                                       (lib/engine/catchup.h; < 0: ahead; 0: none known) */
+    uint64_t catchups;              /* lags won back (or given back) by the rate */
 } engine_status_t;
 
 /* clang-format on */

@@ -338,6 +338,8 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
                      engine_strerror(o->engine ? ENGINE_ENOMEM : err));
             return -ENOMEM;
         }
+        /* relative time too wins back its lag at [daemon] catchup (catchup.h) */
+        (void)engine_set_catchup(o->engine, cfg->daemon.catchup); /* cfg bounds: 0 .. 1 */
         safety_limits_t lim;
         obj_safety_limits(o->cfg, &lim);
         safety_init(&o->safety, &lim);
@@ -791,6 +793,11 @@ int core_summary(const core_t *c, char *buf, size_t len)
             m = snprintf(buf + n, len - n, ", %llu stops, %llu re-stamped (largest %.3f s)",
                          (unsigned long long)o->status.stops, (unsigned long long)o->status.retimed,
                          o->status.retime_max_s);
+            n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+        }
+        if (o->status.catchups && n < len) { /* issue 26: lib/engine/catchup.h */
+            m = snprintf(buf + n, len - n, ", %llu lags won back (now %+.3f s)",
+                         (unsigned long long)o->status.catchups, o->status.lag_s);
             n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
         }
         if (o->status.silent_ends && n < len) { /* issue 26: lib/engine/silence.h */

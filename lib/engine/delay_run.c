@@ -122,7 +122,11 @@ static double ramp_lag(const engine_t *e, int strict)
 
 /* The output of the head's trajectory starting now: the D it will hold
  * (the time waited plus the ramp's loss, *lag; NAN: not simulated, the wait
- * short of D by more than any ramp loses) into d; returns the time waited. */
+ * short of D by more than any ramp loses) into d; returns the time waited.
+ * A ramp that loses more than D less the wait (a REST start's curve faster
+ * than its waypoints) sets D: the output stands there after it, and that is
+ * no lag to win back (catchup.h): the track-time grid after a start does not
+ * depend on when each waypoint came. */
 static double delay_if_started(const engine_t *e, engine_delay_t *d, double *lag)
 {
     delay_measured(e, d);
@@ -175,6 +179,7 @@ void engine_delay_note(engine_t *e)
     double lag;
     (void)delay_if_started(e, &e->delay.d, &lag);
     e->delay.noted = 1;
+    e->delay.learnt = e->slack_learn;
 }
 
 void engine_delay(const engine_t *e, engine_delay_t *d)

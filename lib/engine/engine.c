@@ -26,6 +26,7 @@
  */
 #include "engine.h"
 #include "engine_int.h"
+#include "catchup.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -114,6 +115,7 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
     e->scale.ts.rate = 1.0;
     e->scale.stop_dv = -1.0; /* set by each scaled tick */
     e->scale.override = 1.0;
+    e->clk.catchup = CATCHUP_DEFAULT; /* relative time too (catchup.h) */
     if (err)
         *err = 0;
     return e;

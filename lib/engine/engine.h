@@ -521,6 +521,17 @@ typedef struct {
 int engine_set_clock(engine_t *e, const engine_clock_t *clk);
 
 /*
+ * Relative time (no engine_set_clock): the output follows its own estimate
+ * of the sender's time from the arrivals of its waypoints, and wins back a
+ * lag beyond D (an underrun, a transfer) or follows a sender whose clock
+ * runs fast or slow at most `catchup` faster or slower than the curve
+ * (lib/engine/catchup.h; default 0.05; 0: never steered).  Also the
+ * catch-up of engine_set_clock until that is called.  Returns 0, or
+ * -ENGINE_ERANGE (outside 0 .. 1).
+ */
+int engine_set_catchup(engine_t *e, double catchup);
+
+/*
  * Fast ticks (on by default): engine_tick steps the ticks it can prove are
  * plain steps inside the current segment without the full state machine,
  * with the same results.  0 makes every tick take the full way: for the

@@ -84,6 +84,15 @@ int engine_set_clock(engine_t *e, const engine_clock_t *clk)
     return 0;
 }
 
+int engine_set_catchup(engine_t *e, double catchup)
+{
+    engine_fast_close(e); /* whatever it changes, the next tick looks again */
+    if (!(catchup >= 0 && catchup <= 1))
+        return -ENGINE_ERANGE;
+    e->clk.catchup = catchup;
+    return 0;
+}
+
 int engine_set_position(engine_t *e, const double pos_m[ENGINE_AXES])
 {
     engine_fast_close(e); /* whatever it changes, the next tick looks again */

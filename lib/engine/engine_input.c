@@ -18,6 +18,7 @@
 
 #include "accept.h"
 #include "lsq.h"
+#include "catchup.h"
 #include "silence.h"
 #include "transfer.h"
 
@@ -239,7 +240,8 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
     /* room for this waypoint (and for the copies MULTIPLE adds) */
     if (input_buffered(e) + 1 + (e->mult ? 4 : 0) > e->cfg.capacity)
         return reject(e, ENGINE_EFULL);
-    engine_silence_push(e, wp); /* issue 26: its arrival (silence.h) */
+    engine_silence_push(e, wp);  /* issue 26: its arrival (silence.h) */
+    engine_lag_push(e, wp->t_s); /* ... and a sample of the sender's time (catchup.h) */
     rc = accept_offer(&e->in.policy, wp);
     if (rc == ENGINE_DUPLICATE) {
         e->st.duplicates++;

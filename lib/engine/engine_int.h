@@ -187,6 +187,7 @@ typedef struct {
 typedef struct {
     engine_delay_t d; /* D at the last start of an output */
     int noted;        /* d holds one */
+    unsigned learnt;  /* slack_learn then (start_slack auto) */
 } engine_delay_state_t;
 
 /* ---- silent ends of the input (silence.c, silence.h; issue 26) ---- */
@@ -200,6 +201,21 @@ typedef struct {
     double last_t;      /* its newest waypoint time */
     double int_max;     /* its longest interval */
 } engine_silence_t;
+
+/* ---- the lag won back (catchup.c, catchup.h; issue 26) ---- */
+typedef struct {
+    int pending;       /* waypoints pushed since the last tick: */
+    double pend_max;   /* ... their newest stamp */
+    uint64_t traj;     /* the input trajectory sampled (solve.traj) */
+    int have;          /* off_s holds a sample of traj */
+    double off_s;      /* the sender's time less ours, least-delayed arrival */
+    int64_t off_at_ns; /* when that sample came */
+    int64_t seen_ns;   /* the last tick that brought a sample */
+    double off_first;  /* the trajectory's first sample */
+    int64_t first_ns;  /* ... and when it came */
+    int ahead;         /* the trajectory's stamps came ahead of time (an upload) */
+    int steer;         /* winning back (or giving back) a lag */
+} engine_lag_t;
 
 struct engine {
     /* ---- configuration (engine_settings.c) and what it implies ---- */
@@ -226,6 +242,7 @@ struct engine {
     engine_fast_t fast;
     engine_delay_state_t delay;
     engine_silence_t sil;
+    engine_lag_t lag;
 
     engine_status_t st;
 };

@@ -17,6 +17,7 @@
 #include <string.h>
 
 #include "accept.h"
+#include "catchup.h"
 #include "fdiff.h"
 #include "lsq.h"
 #include "silence.h"
@@ -419,6 +420,7 @@ static void step_once(engine_t *e)
         return;
     }
     double Rm = fmin(R, scale_ceil_room(e, s, A, J)); /* the speed cap ahead too */
+    target = engine_lag_target(e, target, Rm, A, J);  /* a lag won back (catchup.h) */
     if (!e->scale.on && is_exactly(target, 1.0) &&
         (isinf(Rm) || ts_stop_dist(1.0, 0.0, A, J) < Rm - e->period_s)) {
         unit_step(e);
@@ -534,7 +536,7 @@ static void fast_window(engine_t *e)
     if (e->fast.off || e->out.mode != OUT_STREAM || e->scale.on || e->clk.on || e->out.underrun ||
         !e->out.have_pos || e->scale.stop_req || e->scale.end_brake || e->out.flags_pending ||
         !is_exactly(e->scale.override, 1.0) || !is_exactly(e->scale.ts.rate, 1.0) ||
-        !is_exactly(e->scale.ts.acc, 0.0) || scale_ceil_here(e) < 1.0)
+        !is_exactly(e->scale.ts.acc, 0.0) || scale_ceil_here(e) < 1.0 || engine_lag_pending(e))
         return;
     /* the ticks before the next re-seed (step_cur) */
     int64_t m = (int64_t)(FDIFF_RESEED_STEPS -
@@ -690,6 +692,7 @@ __attribute__((noinline)) static int tick_full(engine_t *e, int64_t now_ns, engi
     }
     e->out.have_now = 1;
     e->out.last_now = now_ns;
+    engine_lag_note(e, now_ns);     /* issue 26: the sender's time (catchup.h) */
     engine_silence_tick(e, now_ns); /* issue 26: a silent end (silence.h) */
     for (i = 0; i < k; i++) {
         if (e->clk.on) /* the play time of each step, the last one's given */

@@ -42,7 +42,9 @@ def last_row(path):
     deadline = time.monotonic() + 30
     while True:   # the CSV is buffered: wait (bounded) for a finished row
         with open(path) as f:
-            rows = list(csv.DictReader(f))
+            # a row the writer has not finished yet (read mid-write) has no
+            # state: not the last one
+            rows = [r for r in csv.DictReader(f) if r.get("state")]
         if (rows and rows[-1]["state"] == "finished") or time.monotonic() > deadline:
             return rows[-1]
         time.sleep(0.1)

@@ -687,7 +687,10 @@ def test_gpx_faults(tmp):
         jerk = (sp["acc"][r] - sp["acc"][r - 1]) / (ts[r] - ts[r - 1])
         pred = sp["pos"][r] + sp["vel"][r] * d + sp["acc"][r] * d * d / 2 + jerk * d ** 3 / 6
         worst = max(worst, float(np.max(np.abs(pred - ef))))
-    tr.check(unhit <= 10, f"{label}: {unhit} good fixes with no unscaled tick just before them")
+    # at most one in twenty: the ramps at the ends, the slow-downs at the
+    # walk's holes and the lag won back after them (lib/engine/catchup.h)
+    tr.check(unhit <= max(10, len(kept) // 20),
+             f"{label}: {unhit} of {len(kept)} good fixes with no unscaled tick just before them")
     tr.check(worst <= 1e-5, f"{label}: a good fix missed by {worst:g} m")
     tr.check(np.max(np.abs(sp["pos"][-1] - ek[-1])) < 1e-6, f"{label}: not at rest on the last fix")
     print(f"{label}: {len(kept)} good fixes kept, the curve through each to {worst:.2g} m "

@@ -368,7 +368,10 @@ def test_jitter_figure8(tmp):
         for k, e in err.items():
             check(e <= tol, f"figure-8 {profile}: {k} differs from the grid-time "
                             f"CubicSpline by {e:g}")
-        off = float(np.max(np.abs(sp["pos"][streaming & near] - cs(sp["t_s"][streaming & near]))))
+        # the position is the curve's at t_s on a time-scaled row too (a lag
+        # won back after the hole at 135 s plays it faster: catchup.h)
+        on = np.array([x == "streaming" for x in sp["state"]]) & near
+        off = float(np.max(np.abs(sp["pos"][on] - cs(sp["t_s"][on]))))
         check(off < 0.05, f"figure-8 {profile}: {off:g} m from the grid-time spline near 135 s")
         inner = streaming & (sp["t_s"] > t[0] + 2) & (sp["t_s"] < t[-1] - 2)
         a_axis = np.max(np.abs(sp["acc"][inner]))

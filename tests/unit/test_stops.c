@@ -20,6 +20,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "catchup.h"
 #include "engine.h"
 
 #define PERIOD_NS 10000000LL
@@ -181,7 +182,9 @@ static void test_ais_rereceptions(void **state)
  * ahead and whose receiver repeats that message at t = 101 s instead of
  * the true one.  Given that track, when replayed with the default profile,
  * then both copies are refused and every other fix kept, and the output
- * stays within 1 % of 200 m/s and under 30 m/s^2.  The former policy
+ * stays within 1 % of 200 m/s (of 1.05 x 200 m/s while it wins back the
+ * lag of its start's ramp from rest, lib/engine/catchup.h) and under
+ * 30 m/s^2.  The former policy
  * refused the spike and kept its repeat (250 m/s from the fix before it,
  * within the free turn's allowance): 287 m/s and 231 m/s^2 streamed.
  */
@@ -203,7 +206,7 @@ static void test_refused_fix_does_not_return(void **state)
                   r.a_max);
     assert_int_equal(r.st.accepted, 198);
     assert_int_equal(r.st.rejected, 2);
-    assert_true(r.v_max <= 202.0);
+    assert_true(r.v_max <= 200.0 * (1.0 + CATCHUP_DEFAULT) * 1.01);
     assert_true(r.a_max <= 30.0);
     assert_true(r.finished);
 }

@@ -1,0 +1,156 @@
+/* catchup.c - the lag won back (see catchup.h). */
+#include "catchup.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "delay.h"
+#include "engine_int.h"
+#include "timescale.h"
+
+/* A new input trajectory (or a sender that began afresh): no sample yet. */
+static void lag_reset(engine_t *e)
+{
+    e->lag.traj = e->solve.traj;
+    e->lag.have = 0;
+    e->lag.ahead = 0;
+    e->lag.steer = 0;
+}
+
+void engine_lag_push(engine_t *e, double t_s)
+{
+    engine_lag_t *l = &e->lag;
+    if (!l->pending || t_s > l->pend_max)
+        l->pend_max = t_s;
+    l->pending = 1;
+}
+
+/* The least-delayed sample, aged to the tick at_ns (catchup.h). */
+static double offset_at(const engine_t *e, int64_t at_ns)
+{
+    double age = (double)(at_ns - e->lag.off_at_ns) * 1e-9;
+    return e->lag.off_s - CATCHUP_DECAY_PPM * 1e-6 * (age > 0 ? age : 0.0);
+}
+
+/* The input's interval as the delay measures it (0: not yet). */
+static double interval_of(const engine_t *e)
+{
+    engine_delay_t d;
+    engine_delay(e, &d);
+    return d.interval_s;
+}
+
+void engine_lag_note(engine_t *e, int64_t now_ns)
+{
+    engine_lag_t *l = &e->lag;
+
+    if (l->traj != e->solve.traj)
+        lag_reset(e);
+    if (!l->pending)
+        return;
+    /* the newest stamp pushed since the last tick, arrived by this one: a
+     * sample of the sender's time (relative to this tick's own time: both
+     * may be large on an epoch time base, their difference is what counts).
+     * Every row that passed engine_waypoint_check counts, kept or refused:
+     * its stamp is the sender's clock whatever its position, and the output
+     * then does not depend on when the acceptance gives its verdicts */
+    double off = l->pend_max - (double)now_ns * 1e-9;
+    l->pending = 0;
+    if (!l->have) {
+        l->off_first = off;
+        l->first_ns = now_ns;
+    } else if (off - l->off_first >
+               fmax(CATCHUP_SWING_S, CATCHUP_SWING_INTERVALS * interval_of(e)) +
+                   CATCHUP_DECAY_PPM * 1e-6 * (double)(now_ns - l->first_ns) * 1e-9) {
+        /* the stamps run ahead of their arrivals by more than latency and
+         * drift swing: a program uploaded or a buffer filled ahead of time,
+         * not a live sender; nothing to win back, its output plays at rate 1 */
+        l->ahead = 1;
+    }
+    if (!l->have || off > offset_at(e, now_ns)) {
+        l->off_s = off;
+        l->off_at_ns = now_ns;
+    }
+    l->have = 1;
+    l->seen_ns = now_ns;
+}
+
+/* The lag beyond D now (catchup.h); 0 when none is told: no sample of the
+ * trajectory played, stamps ahead of time, its input closed, or a start
+ * not governed by D (start_slack set, delay_s not) or D not measured. */
+static double lag_now(const engine_t *e)
+{
+    engine_delay_t d;
+
+    /* only while the sender goes on: a closed trajectory's tail plays out
+     * as it was stamped (the sender's time runs on through the silence) */
+    if (!e->lag.have || e->lag.ahead || e->lag.traj != e->out.traj || !e->out.have_now ||
+        !e->in.open || !(e->slack_auto || e->cfg.delay_s > 0) || !e->delay.noted)
+        return 0.0;
+    engine_delay(e, &d);
+    if (!(d.interval_s > 0))
+        return 0.0;
+    double now = (double)e->out.last_now * 1e-9;
+    /* aged to the last tick that brought a sample, not to now: the lag then
+     * changes only at ticks a push closed the fast window for, the same
+     * with fast ticks or without */
+    /* D as stated at the start, and an interval more for each underrun
+     * since (start_slack auto learns them: the input comes later than its
+     * stamps say, the slack it kept was too short) */
+    double D = d.delay_s + (double)(e->slack_learn - e->delay.learnt) * d.interval_s;
+    return (now + offset_at(e, e->lag.seen_ns) - D) - e->out.t;
+}
+
+double engine_lag_s(const engine_t *e)
+{
+    return lag_now(e);
+}
+
+/* The band beyond which a lag is won back: half an input interval, two
+ * ticks at least. */
+static double band_on(const engine_t *e)
+{
+    return fmax(0.5 * interval_of(e), 2.0 * e->period_s);
+}
+
+int engine_lag_pending(const engine_t *e)
+{
+    if (e->lag.steer)
+        return 1;
+    if (!e->lag.have || e->out.mode != OUT_STREAM)
+        return 0;
+    return fabs(lag_now(e)) > band_on(e);
+}
+
+double engine_lag_target(engine_t *e, double target, double R, double A, double J)
+{
+    if (!(target >= 1.0 && target <= 1.0) || e->out.mode != OUT_STREAM || e->out.underrun) {
+        e->lag.steer = 0;
+        return target;
+    }
+    double lag = lag_now(e), T = e->period_s;
+    e->st.lag_s = lag;
+    if (!e->lag.steer) {
+        /* from the unit grid only: a ramp (a start, a resume) is on its way
+         * to rate 1 and would be steered by a lag it is itself winning */
+        if (e->scale.on || !(fabs(lag) > band_on(e)))
+            return target;
+    } else if (fabs(lag) < 0.1 * T) {
+        e->lag.steer = 0;
+        return target;
+    }
+    double c = e->clk.catchup, lead = ENGINE_CLOCK_GAIN * lag;
+    lead = lead > c ? c : lead < -c ? -c : lead;
+    double r = target + lead;
+    /* faster only where the curve ahead holds a stop from r, the slack and
+     * a tick besides: winning back never runs into the data */
+    engine_delay_t d;
+    engine_delay(e, &d);
+    if (r > target && !(isinf(R) || ts_stop_dist(r, 0.0, A, J) + d.slack_s + r * T < R))
+        return target;
+    if (!e->lag.steer) {
+        e->lag.steer = 1;
+        e->st.catchups++;
+    }
+    return r;
+}
