@@ -443,28 +443,39 @@ int can_cfg_reload_check(const cfg_t *old, const cfg_t *nw, int *line, char *why
     return 0;
 }
 
-/* A log_in that cannot be read or holds no frame: refused at its line (it
- * would be accepted, then replay nothing). */
-static int check_log_in(const can_cfg_t *c, int *line, char *why, size_t wl)
+void can_cfg_fini(void *p)
 {
-    char probe[512];
-    if (!c->log_in[0] || can_logfile_probe(c->log_in, probe, sizeof probe) == 0)
+    can_cfg_t *c = p;
+    can_logfile_input_free(c->log_in_frames);
+    c->log_in_frames = NULL;
+}
+
+/* The log_in read whole into c->log_in_frames, here on the configuration's worker
+ * (cfgload.h): the transport's open, in the loop at the swap, only adopts them.  One
+ * that cannot be read or holds no frame is refused at its line (it would be accepted,
+ * then replay nothing). */
+static int read_log_in(can_cfg_t *c, int *line, char *why, size_t wl)
+{
+    char read_why[512];
+    can_cfg_fini(c); /* checked again: read again */
+    if (!c->log_in[0] ||
+        (c->log_in_frames = can_logfile_input_read(c->log_in, read_why, sizeof read_why)))
         return 0;
     *line = c->line_log_in;
-    snprintf(why, wl, "log_in %s: %s", c->log_in, probe);
+    snprintf(why, wl, "log_in %s: %s", c->log_in, read_why);
     return -CFG_EVALUE;
 }
 
 int can_cfg_check(cfg_t *cfg, int *line, char *why, size_t wl)
 {
-    const can_cfg_t *c = cfg_transport(cfg, &can_transport);
+    can_cfg_t *c = cfg->tcfg[transport_index(&can_transport)]; /* read_log_in fills it */
     unsigned n = 0, idx[CFG_OBJECTS_MAX];
     for (unsigned i = 0; i < cfg->nobj; i++)
         if (can_cfg_uses(&cfg->obj[i]))
             idx[n++] = i;
     if (!n)
         return 0;
-    if (check_log_in(c, line, why, wl) < 0)
+    if (read_log_in(c, line, why, wl) < 0)
         return -CFG_EVALUE;
     can_port_config_t pc;
     can_cfg_port(c, (int64_t)llround((double)cfg->daemon.period_ns / cfg->daemon.speed), &pc);

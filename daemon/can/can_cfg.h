@@ -31,6 +31,7 @@
 #include <limits.h>
 #include <stdint.h>
 
+#include "can_logfile.h"
 #include "can_port.h"
 #include "canproto.h"
 #include "cfg.h"
@@ -56,6 +57,10 @@ typedef struct {
     double status_period_ms;
     double max_late_ms;
     int line_log_in;
+    /* log_in read whole by the check (can_cfg_check, on the configuration's worker,
+     * cfgload.h), owned by this configuration; the transport's open replays it without
+     * reading the file again.  NULL: no log_in, or no object uses CAN. */
+    can_logfile_input_t *log_in_frames;
     int heartbeat_node; /* trajd's heartbeat as CANopen master: 0x700 + this, 0 = none */
     int heartbeat_ms;   /* its period, default 100 */
 } can_cfg_t;
@@ -74,9 +79,11 @@ void can_cfg_default(void *p);
 int can_cfg_key(void *p, const cfg_kv_t *kv, char *why, size_t wl);
 void can_obj_cfg_default(void *p);
 int can_obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl);
+/* The transport's cfg_fini: frees log_in_frames. */
+void can_cfg_fini(void *p);
 
-/* Its check (ids, clashes, drives, bus load, then can_box.h) and reload_check (no CAN id of
- * an object that stays may move). */
+/* Its check (log_in read whole into log_in_frames, ids, clashes, drives, bus load, then
+ * can_box.h) and reload_check (no CAN id of an object that stays may move). */
 int can_cfg_check(cfg_t *cfg, int *line, char *why, size_t wl);
 int can_cfg_reload_check(const cfg_t *old, const cfg_t *nw, int *line, char *why, size_t wl);
 

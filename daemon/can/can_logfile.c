@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "candump.h"
+#include "cfgload.h"
 #include "log.h"
 #include "regfile.h"
 #include "outworker.h"
@@ -27,9 +28,19 @@ typedef struct {
 
 static void *writer(void *arg);
 
-struct can_logfile {
+/* A log_in read whole: its frames, and the load's counts (lines, comments,
+ * bad_lines, first_bad_line, frames_in of can_logfile_stats_t). */
+struct can_logfile_input {
     can_logfile_rec_t *rec;
-    size_t n, cap, next;
+    size_t n, cap;
+    can_logfile_stats_t st;
+    char first_bad_why[64]; /* why the first bad line was refused */
+};
+
+struct can_logfile {
+    can_logfile_input_t own;       /* frames read by can_logfile_load */
+    const can_logfile_input_t *in; /* &own, or a log_in read before (can_logfile_open_input) */
+    size_t next;                   /* the next input frame to deliver */
     int64_t start_ns;
     int64_t now_ns;
     int64_t epoch_ns;    /* added to engine time in output stamps */
@@ -41,8 +52,7 @@ struct can_logfile {
     size_t olen;
     int stalled; /* the writer's last write did not take everything */
     char ifname[CANDUMP_IFNAME_MAX + 1];
-    can_logfile_stats_t st;
-    char first_bad_why[64]; /* why the first bad line was refused */
+    can_logfile_stats_t st; /* the output's counts (the input's are in->st) */
     /* The output: the tick queues frames (can_logfile_send), publishes them
      * and wakes the writer once per cycle (can_logfile_flush); the writer
      * formats and writes them and counts its faults in these atomics,
@@ -55,7 +65,7 @@ struct can_logfile {
 
 /* One bad line: counted; the first CAN_LOGFILE_REPORT_MAX are logged with
  * name:line and the reason, the rest summed up at the end of the load. */
-static void bad_line(can_logfile_t *l, const char *name, uint64_t lineno, const char *why)
+static void bad_line(can_logfile_input_t *l, const char *name, uint64_t lineno, const char *why)
 {
     if (!l->st.first_bad_line) {
         l->st.first_bad_line = lineno;
@@ -65,7 +75,7 @@ static void bad_line(can_logfile_t *l, const char *name, uint64_t lineno, const 
         log_msg(LOG_WARNING, "can: %s:%" PRIu64 ": %s: line not replayed", name, lineno, why);
 }
 
-static int add_frame(can_logfile_t *l, const candump_line_t *cl)
+static int add_frame(can_logfile_input_t *l, const candump_line_t *cl)
 {
     if (l->n == l->cap) {
         size_t cap = l->cap ? 2 * l->cap : 256;
@@ -82,7 +92,7 @@ static int add_frame(can_logfile_t *l, const candump_line_t *cl)
 }
 
 /* One whole line (len bytes, '\n' included if present). */
-static int load_line(can_logfile_t *l, const char *name, uint64_t lineno, const char *line,
+static int load_line(can_logfile_input_t *l, const char *name, uint64_t lineno, const char *line,
                      size_t len)
 {
     candump_line_t cl;
@@ -117,7 +127,9 @@ static int load_line(can_logfile_t *l, const char *name, uint64_t lineno, const 
     return add_frame(l, &cl);
 }
 
-int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, size_t errlen)
+/* Every line of fp into l; 0, or -1 with why (out of memory, a read error,
+ * the load cancelled: cfgload.h, a SIGTERM while a configuration is read). */
+static int load_fp(can_logfile_input_t *l, FILE *fp, const char *name, char *why, size_t wl)
 {
     char *line = NULL;
     size_t cap = 0;
@@ -125,15 +137,21 @@ int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, si
     uint64_t lineno = 0;
     int rc = 0;
     while ((len = getline(&line, &cap, fp)) >= 0) {
-        if (load_line(l, name, ++lineno, line, (size_t)len) < 0) {
-            snprintf(err, errlen, "%s: out of memory", name);
+        if ((++lineno & 0xffffu) == 0 && cfgload_cancelled()) {
+            snprintf(why, wl, "cancelled (trajd is stopping)");
+            rc = -1;
+            break;
+        }
+        if (load_line(l, name, lineno, line, (size_t)len) < 0) {
+            snprintf(why, wl, "out of memory");
             rc = -1;
             break;
         }
     }
+    int read_err = ferror(fp) ? errno : 0;
     free(line);
-    if (rc == 0 && ferror(fp)) {
-        snprintf(err, errlen, "%s: read error", name);
+    if (rc == 0 && read_err) {
+        snprintf(why, wl, "read error: %s", strerror(read_err));
         rc = -1;
     }
     if (l->st.bad_lines > CAN_LOGFILE_REPORT_MAX)
@@ -143,6 +161,20 @@ int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, si
                 name, l->st.bad_lines, l->st.first_bad_line, CAN_LOGFILE_REPORT_MAX);
     l->st.frames_in = l->n;
     return rc;
+}
+
+int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, size_t errlen)
+{
+    char why[128];
+    if (l->in != &l->own) {
+        snprintf(err, errlen, "%s: the input was read before", name);
+        return -1;
+    }
+    if (load_fp(&l->own, fp, name, why, sizeof why) < 0) {
+        snprintf(err, errlen, "%s: %s", name, why);
+        return -1;
+    }
+    return 0;
 }
 
 /* The log_in at path, read-only, if a regular file within CAN_LOGFILE_MAX_BYTES
@@ -158,21 +190,8 @@ static FILE *open_in(const char *path, char *why, size_t wl)
     return fp;
 }
 
-static int load(can_logfile_t *l, const char *path, char *err, size_t errlen)
-{
-    char why[256];
-    FILE *fp = open_in(path, why, sizeof why);
-    if (!fp) {
-        snprintf(err, errlen, "%s: %s", path, why);
-        return -1;
-    }
-    int rc = can_logfile_load(l, fp, path, err, errlen);
-    fclose(fp);
-    return rc;
-}
-
-/* What a probe that found no frame saw in the file, into why. */
-static void probe_why(const can_logfile_t *l, char *why, size_t wl)
+/* What a load that found no frame saw in the file, into why. */
+static void no_frame_why(const can_logfile_input_t *l, char *why, size_t wl)
 {
     if (!l->st.lines) {
         snprintf(why, wl, "empty: no CAN frame in it");
@@ -188,29 +207,40 @@ static void probe_why(const can_logfile_t *l, char *why, size_t wl)
                  l->st.first_bad_line, l->first_bad_why);
 }
 
-int can_logfile_probe(const char *path, char *why, size_t wl)
+void can_logfile_input_free(can_logfile_input_t *in)
+{
+    if (!in)
+        return;
+    free(in->rec);
+    free(in);
+}
+
+can_logfile_input_t *can_logfile_input_read(const char *path, char *why, size_t wl)
 {
     FILE *fp = open_in(path, why, wl);
     if (!fp)
-        return -1;
-    can_logfile_t l = {0};
-    char *line = NULL;
-    size_t cap = 0;
-    ssize_t len;
-    int rc = 0;
-    while (!rc && l.n == 0 && (len = getline(&line, &cap, fp)) >= 0)
-        rc = load_line(&l, path, l.st.lines + 1, line, (size_t)len);
-    int read_err = ferror(fp) ? errno : 0;
-    free(line);
-    free(l.rec);
+        return NULL;
+    can_logfile_input_t *in = calloc(1, sizeof *in);
+    int rc = in ? load_fp(in, fp, path, why, wl) : -1;
     fclose(fp);
-    if (rc < 0)
+    if (!in)
         snprintf(why, wl, "out of memory");
-    else if (read_err)
-        snprintf(why, wl, "read error: %s", strerror(read_err));
-    else if (l.n == 0)
-        probe_why(&l, why, wl);
-    return rc < 0 || read_err || l.n == 0 ? -1 : 0;
+    else if (rc == 0 && in->n == 0) {
+        no_frame_why(in, why, wl);
+        rc = -1;
+    }
+    if (rc < 0) {
+        can_logfile_input_free(in);
+        return NULL;
+    }
+    if (in->n < in->cap) { /* kept for as long as its configuration: no slack */
+        can_logfile_rec_t *r = realloc(in->rec, in->n * sizeof *r);
+        if (r) {
+            in->rec = r;
+            in->cap = in->n;
+        }
+    }
+    return in;
 }
 
 /* The end of the regular file at path (size bytes): *torn = the bytes
@@ -276,18 +306,40 @@ static int open_out(can_logfile_t *l, const char *out_path, int append, char *er
 can_logfile_t *can_logfile_open_mode(const char *in_path, const char *out_path, const char *ifname,
                                      int64_t start_ns, int append, char *err, size_t errlen)
 {
+    char why[256];
+    can_logfile_input_t *in = NULL;
+    if (in_path && !(in = can_logfile_input_read(in_path, why, sizeof why))) {
+        snprintf(err, errlen, "%s: %s", in_path, why);
+        return NULL;
+    }
+    can_logfile_t *l = can_logfile_open_input(in, out_path, ifname, start_ns, append, err, errlen);
+    if (!l) {
+        can_logfile_input_free(in);
+        return NULL;
+    }
+    if (in) { /* its own: freed with it */
+        l->own = *in;
+        l->in = &l->own;
+        free(in);
+    }
+    return l;
+}
+
+can_logfile_t *can_logfile_open_input(const can_logfile_input_t *in, const char *out_path,
+                                      const char *ifname, int64_t start_ns, int append, char *err,
+                                      size_t errlen)
+{
     can_logfile_t *l = calloc(1, sizeof *l);
     if (!l) {
         snprintf(err, errlen, "out of memory");
         return NULL;
     }
+    l->in = in ? in : &l->own;
     l->start_ns = start_ns;
     l->out_fd = -1;
     l->out_kept = -1;
     l->out_last_us = INT64_MIN;
     snprintf(l->ifname, sizeof l->ifname, "%s", ifname && *ifname ? ifname : "can0");
-    if (in_path && load(l, in_path, err, errlen) < 0)
-        goto fail;
     if (out_path) {
         if (!(l->obuf = malloc(CAN_LOGFILE_OUT_BUF))) {
             snprintf(err, errlen, "out of memory");
@@ -336,24 +388,25 @@ void can_logfile_close(can_logfile_t *l)
     if (l->out_own && l->out_fd >= 0)
         close(l->out_fd);
     free(l->obuf);
-    free(l->rec);
+    free(l->own.rec);
     free(l);
 }
 
 int can_logfile_recv(can_logfile_t *l, int64_t now_ns, canproto_frame_t *f)
 {
+    const can_logfile_input_t *in = l->in;
     l->now_ns = now_ns;
-    if (l->next >= l->n)
+    if (l->next >= in->n)
         return 0;
     /* due = start + (ts_k - ts_0) us; candump_parse_line bounds ts_us below
      * 1e18, so the difference fits, and the product is checked */
-    int64_t d_us = l->rec[l->next].ts_us - l->rec[0].ts_us;
+    int64_t d_us = in->rec[l->next].ts_us - in->rec[0].ts_us;
     int64_t due = d_us <= 0 ? l->start_ns /* stamped before the first: due with it */
                   : d_us > (INT64_MAX / 2 - l->start_ns) / 1000 ? INT64_MAX
                                                                 : l->start_ns + d_us * 1000;
     if (due > now_ns)
         return 0;
-    *f = l->rec[l->next++].f;
+    *f = in->rec[l->next++].f;
     return 1;
 }
 
@@ -375,7 +428,7 @@ size_t can_logfile_resume(can_logfile_t *l, const char *path)
 {
     size_t pos = 0;
     if (kept.set && path && !strcmp(kept.path, path)) {
-        pos = kept.pos < l->n ? kept.pos : l->n;
+        pos = kept.pos < l->in->n ? kept.pos : l->in->n;
         l->next = pos;
     }
     kept.set = 0;
@@ -410,7 +463,7 @@ int can_logfile_send(can_logfile_t *l, const canproto_frame_t *f)
 
 int can_logfile_done(const can_logfile_t *l)
 {
-    return l->next >= l->n;
+    return l->next >= l->in->n;
 }
 
 /* Lines (newlines) in buf[0..n). */
@@ -524,6 +577,11 @@ void can_logfile_stats(const can_logfile_t *l, can_logfile_stats_t *st)
 {
     can_logfile_t *m = (can_logfile_t *)l; /* atomic loads take a non-const pointer */
     *st = l->st;
+    st->lines = l->in->st.lines;
+    st->comments = l->in->st.comments;
+    st->bad_lines = l->in->st.bad_lines;
+    st->first_bad_line = l->in->st.first_bad_line;
+    st->frames_in = l->in->st.frames_in;
     st->frames_lost += atomic_load_explicit(&m->w_lost, memory_order_relaxed);
     st->write_errors = atomic_load_explicit(&m->w_errors, memory_order_relaxed);
     st->last_errno = atomic_load_explicit(&m->w_errno, memory_order_relaxed);

@@ -6,8 +6,11 @@
  * without a kernel, and logged bus traffic can be replayed.
  *
  * Input timing: frame k is due at engine time start_ns + (ts_k - ts_0); the
- * whole file is read at can_logfile_open_mode (never in the tick).  Frames with ids
- * that are not ours are delivered too: can_port counts them as foreign.
+ * whole file is read before (never in the tick): by can_logfile_input_read,
+ * which the daemon's config check calls on the configuration's worker
+ * (daemon/core/cfgload.h), the frames then adopted by can_logfile_open_input
+ * at the swap; or at can_logfile_open_mode.  Frames with ids that are not
+ * ours are delivered too: can_port counts them as foreign.
  *
  * Lines are read whole, of any length (getline).  A line that is not a
  * candump frame, holds a NUL byte or is longer than CAN_LOGFILE_LINE_MAX is
@@ -36,6 +39,8 @@ typedef struct {
 } can_logfile_stats_t;
 
 typedef struct can_logfile can_logfile_t;
+/* A candump log read whole into memory (can_logfile_input_read). */
+typedef struct can_logfile_input can_logfile_input_t;
 
 /* Longest candump line accepted, bytes: a CAN FD frame with a 29-bit id,
  * 64 data bytes, a 20-digit stamp and a 15-character interface is ~190. */
@@ -50,14 +55,41 @@ typedef struct can_logfile can_logfile_t;
 #define CAN_LOGFILE_REPORT_MAX 5
 
 /*
- * Open.  in_path: candump log to replay (NULL: no input); out_path: file to
+ * Read the candump log at path whole: its frames, and the counts of its
+ * lines, comments and bad lines (logged as they are met, see above).  NULL
+ * with why if it cannot be opened, is a directory, a FIFO or a device, is
+ * larger than CAN_LOGFILE_MAX_BYTES (regfile.h: refused before anything is
+ * read), cannot be read, is empty or has no frame line (the count of lines,
+ * comments and bad lines, and the first bad line with its reason), or if the
+ * read was cancelled (cfgload_cancelled: a SIGTERM while a configuration is
+ * read; polled every 65536 lines) or ran out of memory.  For the config
+ * check, on the configuration's worker: never in the loop.
+ */
+can_logfile_input_t *can_logfile_input_read(const char *path, char *why, size_t wl);
+
+/* Free it (NULL: no-op), after every logfile opened on it was closed. */
+void can_logfile_input_free(can_logfile_input_t *in);
+
+/*
+ * Open.  in: the frames to replay, read before (NULL: no input), only read
+ * from (several logfiles may replay one input, one after the other: a reload
+ * rolled back reopens the running configuration's); it must outlive the
+ * logfile.  The open reads no input file: no more than the output's open
+ * (below) and a thread start, at a configuration's swap.  out_path: file to
  * write (NULL: no output; "-" = stdout).  ifname: interface name written in
  * output lines.  start_ns: engine time at which the first input frame is due.
  * append: 1 appends to the output file (O_APPEND) instead of truncating it; a
  * torn last line (no newline at its end, a full disk) is cut off first, with
  * a warning, so every line stays whole.
- * Returns NULL with a message in err on failure (file missing, unreadable).
+ * Returns NULL with a message in err on failure (the output cannot be opened,
+ * out of memory, no writer thread).
  */
+can_logfile_t *can_logfile_open_input(const can_logfile_input_t *in, const char *out_path,
+                                      const char *ifname, int64_t start_ns, int append, char *err,
+                                      size_t errlen);
+
+/* can_logfile_open_input on the candump log at in_path (NULL: no input), read
+ * whole now (can_logfile_input_read; its message in err as "in_path: why"). */
 can_logfile_t *can_logfile_open_mode(const char *in_path, const char *out_path, const char *ifname,
                                      int64_t start_ns, int append, char *err, size_t errlen);
 
@@ -70,21 +102,13 @@ long long can_logfile_out_kept(const can_logfile_t *l);
 int64_t can_logfile_out_last_us(const can_logfile_t *l);
 
 /*
- * Append the frames of a candump log read from fp to l's input (can_logfile_open_mode
- * does this for in_path; tests and the fuzz target use fmemopen).  name is
- * used in messages.  Returns 0, or -1 with a message in err (out of memory,
- * read error); bad lines are not errors (see above).
+ * Append the frames of a candump log read from fp to l's own input (tests
+ * and the fuzz target use fmemopen; l opened with no input, or its own).
+ * name is used in messages.  Returns 0, or -1 with a message in err (out of
+ * memory, read error, an input l was given); bad lines are not errors (see
+ * above).
  */
 int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, size_t errlen);
-
-/*
- * Whether the candump log at path can be replayed: 0 once a line holds a
- * frame (read no further), else -1 with why: it cannot be opened, is a
- * directory, a FIFO or a device, is larger than CAN_LOGFILE_MAX_BYTES, cannot be read, is empty, or has no frame line (the count of
- * lines, comments and bad lines, and the first bad line with its reason).
- * For the config check; bad lines met are logged as by the load.
- */
-int can_logfile_probe(const char *path, char *why, size_t wl);
 
 /* The output's writer thread (below) takes every frame queued, writes them,
  * counts what is left unwritten as lost, and ends; read the stats after it.

@@ -542,15 +542,21 @@ static void log_in_resume(can_state_t *s)
 }
 
 /* The candump logs if configured, else the socket (a missing or down
- * interface is not an error: the port runs DOWN and keeps reopening). */
+ * interface is not an error: the port runs DOWN and keeps reopening).  log_in
+ * is not read here, in the loop: the check read it on the configuration's
+ * worker (can_cfg.h log_in_frames), and the log replays those frames. */
 static int open_io(can_state_t *s, const uint32_t *rx_ids, unsigned nrx, char *why, size_t wl)
 {
     const can_cfg_t *cfg = s->cfg;
     if (cfg->log_in[0] || cfg->log_out[0]) {
         const char *why_trunc = log_out_truncates(s);
-        s->log = can_logfile_open_mode(cfg->log_in[0] ? cfg->log_in : NULL,
-                                       cfg->log_out[0] ? cfg->log_out : NULL, cfg->log_ifname, 0,
-                                       !why_trunc, why, wl);
+        if (cfg->log_in[0] && !cfg->log_in_frames) { /* the check reads it: never here */
+            snprintf(why, wl, "can: log_in %s: not read by the configuration's check", cfg->log_in);
+            return -EINVAL;
+        }
+        s->log = can_logfile_open_input(cfg->log_in[0] ? cfg->log_in_frames : NULL,
+                                        cfg->log_out[0] ? cfg->log_out : NULL, cfg->log_ifname, 0,
+                                        !why_trunc, why, wl);
         int64_t epoch_ns = 0;
         if (s->log && !cfg->log_time_engine) {
             /* epoch stamps: the wall clock now is the engine's now */
@@ -757,6 +763,7 @@ const transport_t can_transport = {
     .cfg_size = sizeof(can_cfg_t),
     .cfg_default = can_cfg_default,
     .cfg_key = can_cfg_key,
+    .cfg_fini = can_cfg_fini,
     .obj_cfg_size = sizeof(can_obj_cfg_t),
     .obj_cfg_default = can_obj_cfg_default,
     .obj_key = can_obj_key,
