@@ -164,12 +164,6 @@ void can_port_free(can_port_t *p);
 int can_port_set_object(can_port_t *p, unsigned i, const canproto_ids_t *ids,
                         const can_port_hooks_t *hooks, void *ctx);
 
-/*
- * The ids to receive over all objects (for CAN_RAW_FILTER).  Writes at most
- * max, returns how many there are.
- */
-unsigned can_port_rx_ids(const can_port_t *p, uint32_t *out, unsigned max);
-
 /* Read and handle every frame available now.  Returns frames handled or -errno. */
 int can_port_rx(can_port_t *p, int64_t now_ns);
 
