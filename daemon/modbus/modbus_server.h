@@ -181,9 +181,6 @@ int modbus_server_process(modbus_server_t *s);
  */
 void modbus_server_publish(modbus_server_t *s, const mbmap_daemon_t *d, const mbmap_object_t *objs);
 
-/* The generation of the last publish (0 before the first). */
-uint32_t modbus_server_generation(const modbus_server_t *s);
-
 void modbus_server_stats(const modbus_server_t *s, modbus_server_stats_t *st);
 
 /*
