@@ -210,6 +210,7 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns);
 /* Housekeeping (reopen a down transport).  Returns 1 if it came up now. */
 int can_port_maintain(can_port_t *p, int64_t now_ns);
 
+/* The port's own counters (the CAN transport logs them when it closes). */
 void can_port_stats(const can_port_t *p, can_port_stats_t *st);
 
 /* The bus state and error counters decoded from the error frames received
