@@ -117,7 +117,10 @@ static int load_line(can_logfile_t *l, const char *name, uint64_t lineno, const 
     return add_frame(l, &cl);
 }
 
-int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, size_t errlen)
+/* Append the frames of the candump log read from fp to l's input; name is
+ * used in messages.  Returns 0, or -1 with a message in err (out of memory,
+ * read error); bad lines are not errors (see can_logfile.h). */
+static int load_fp(can_logfile_t *l, FILE *fp, const char *name, char *err, size_t errlen)
 {
     char *line = NULL;
     size_t cap = 0;
@@ -166,7 +169,7 @@ static int load(can_logfile_t *l, const char *path, char *err, size_t errlen)
         snprintf(err, errlen, "%s: %s", path, why);
         return -1;
     }
-    int rc = can_logfile_load(l, fp, path, err, errlen);
+    int rc = load_fp(l, fp, path, err, errlen);
     fclose(fp);
     return rc;
 }

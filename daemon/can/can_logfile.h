@@ -70,14 +70,6 @@ long long can_logfile_out_kept(const can_logfile_t *l);
 int64_t can_logfile_out_last_us(const can_logfile_t *l);
 
 /*
- * Append the frames of a candump log read from fp to l's input (can_logfile_open_mode
- * does this for in_path; tests and the fuzz target use fmemopen).  name is
- * used in messages.  Returns 0, or -1 with a message in err (out of memory,
- * read error); bad lines are not errors (see above).
- */
-int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, size_t errlen);
-
-/*
  * Whether the candump log at path can be replayed: 0 once a line holds a
  * frame (read no further), else -1 with why: it cannot be opened, is a
  * directory, a FIFO or a device, is larger than CAN_LOGFILE_MAX_BYTES, cannot be read, is empty, or has no frame line (the count of
