@@ -184,14 +184,6 @@ void modbus_server_publish(modbus_server_t *s, const mbmap_daemon_t *d, const mb
 void modbus_server_stats(const modbus_server_t *s, modbus_server_stats_t *st);
 
 /*
- * Serve an already connected stream socket as a TCP client (the fuzz target
- * and tests use a socketpair).  Takes ownership of fd.  At max_clients a
- * client is evicted as for accept.  Returns 0, or -EMFILE when no slot could
- * be had (fd closed).
- */
-int modbus_server_adopt(modbus_server_t *s, int fd);
-
-/*
  * Parse an allow-list (see modbus_server_config_t.allow) to check it at config load.
  * Returns the number of entries, or -EINVAL with the offending entry in err.
  */
