@@ -279,7 +279,10 @@ static int open_out(can_logfile_t *l, const char *out_path, int append, char *er
 can_logfile_t *can_logfile_open_mode(const char *in_path, const char *out_path, const char *ifname,
                                      int64_t start_ns, int append, char *err, size_t errlen)
 {
-    can_logfile_t *l = calloc(1, sizeof *l);
+    /* its queue's counters are _Alignas(64) (spsc.h): more than malloc gives */
+    can_logfile_t *l = aligned_alloc(_Alignof(can_logfile_t), sizeof *l);
+    if (l)
+        memset(l, 0, sizeof *l);
     if (!l) {
         snprintf(err, errlen, "out of memory");
         return NULL;
