@@ -172,11 +172,6 @@ typedef struct cfg {
  */
 int cfg_load(const char *path, cfg_t **out, char *err, size_t errlen);
 
-/* The same from an open stream (read to its end, not closed); name is used in
- * messages, dir for relative paths (NULL: "."). */
-int cfg_load_stream(FILE *fp, const char *name, const char *dir, cfg_t **out, char *err,
-                    size_t errlen);
-
 /*
  * Whether nw may replace the running old at a reload: no object present in
  * both (by name) may change its id, nor any address a transport derives for it
