@@ -38,7 +38,7 @@ struct can_logfile_input {
 };
 
 struct can_logfile {
-    can_logfile_input_t own;       /* frames read by can_logfile_load */
+    can_logfile_input_t own;       /* its own frames (can_logfile_open_mode) */
     const can_logfile_input_t *in; /* &own, or a log_in read before (can_logfile_open_input) */
     size_t next;                   /* the next input frame to deliver */
     int64_t start_ns;
@@ -161,20 +161,6 @@ static int load_fp(can_logfile_input_t *l, FILE *fp, const char *name, char *why
                 name, l->st.bad_lines, l->st.first_bad_line, CAN_LOGFILE_REPORT_MAX);
     l->st.frames_in = l->n;
     return rc;
-}
-
-int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, size_t errlen)
-{
-    char why[128];
-    if (l->in != &l->own) {
-        snprintf(err, errlen, "%s: the input was read before", name);
-        return -1;
-    }
-    if (load_fp(&l->own, fp, name, why, sizeof why) < 0) {
-        snprintf(err, errlen, "%s: %s", name, why);
-        return -1;
-    }
-    return 0;
 }
 
 /* The log_in at path, read-only, if a regular file within CAN_LOGFILE_MAX_BYTES
@@ -329,7 +315,10 @@ can_logfile_t *can_logfile_open_input(const can_logfile_input_t *in, const char 
                                       const char *ifname, int64_t start_ns, int append, char *err,
                                       size_t errlen)
 {
-    can_logfile_t *l = calloc(1, sizeof *l);
+    /* its queue's counters are _Alignas(64) (spsc.h): more than malloc gives */
+    can_logfile_t *l = aligned_alloc(_Alignof(can_logfile_t), sizeof *l);
+    if (l)
+        memset(l, 0, sizeof *l);
     if (!l) {
         snprintf(err, errlen, "out of memory");
         return NULL;

@@ -101,15 +101,6 @@ long long can_logfile_out_kept(const can_logfile_t *l);
  * stamped frame; INT64_MIN if none. */
 int64_t can_logfile_out_last_us(const can_logfile_t *l);
 
-/*
- * Append the frames of a candump log read from fp to l's own input (tests
- * and the fuzz target use fmemopen; l opened with no input, or its own).
- * name is used in messages.  Returns 0, or -1 with a message in err (out of
- * memory, read error, an input l was given); bad lines are not errors (see
- * above).
- */
-int can_logfile_load(can_logfile_t *l, FILE *fp, const char *name, char *err, size_t errlen);
-
 /* The output's writer thread (below) takes every frame queued, writes them,
  * counts what is left unwritten as lost, and ends; read the stats after it.
  * A no-op without output, or once done.  NULL is a no-op. */

@@ -173,21 +173,6 @@ int can_port_set_object(can_port_t *p, unsigned i, const canproto_ids_t *ids,
     return 0;
 }
 
-unsigned can_port_rx_ids(const can_port_t *p, uint32_t *out, unsigned max)
-{
-    unsigned n = 0;
-    for (unsigned i = 0; i < p->nobj; i++) {
-        uint32_t ids[24];
-        if (!p->obj[i].set)
-            continue;
-        unsigned k = canproto_ids_rx(&p->obj[i].ids, ids, 24);
-        for (unsigned j = 0; j < k; j++, n++)
-            if (n < max)
-                out[n] = ids[j];
-    }
-    return n;
-}
-
 static void event(can_port_obj_t *o, uint8_t err)
 {
     o->last_err = err;

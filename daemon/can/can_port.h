@@ -164,12 +164,6 @@ void can_port_free(can_port_t *p);
 int can_port_set_object(can_port_t *p, unsigned i, const canproto_ids_t *ids,
                         const can_port_hooks_t *hooks, void *ctx);
 
-/*
- * The ids to receive over all objects (for CAN_RAW_FILTER).  Writes at most
- * max, returns how many there are.
- */
-unsigned can_port_rx_ids(const can_port_t *p, uint32_t *out, unsigned max);
-
 /* Read and handle every frame available now.  Returns frames handled or -errno. */
 int can_port_rx(can_port_t *p, int64_t now_ns);
 
@@ -216,6 +210,7 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns);
 /* Housekeeping (reopen a down transport).  Returns 1 if it came up now. */
 int can_port_maintain(can_port_t *p, int64_t now_ns);
 
+/* The port's own counters (the CAN transport logs them when it closes). */
 void can_port_stats(const can_port_t *p, can_port_stats_t *st);
 
 /* The bus state and error counters decoded from the error frames received

@@ -384,6 +384,21 @@ static void on_timer(loop_t *l, uint64_t exp, void *ctx)
     publish_state(s);
 }
 
+/* The bus side's counters at close: what came in, the SYNCs, the cycles. */
+static void log_port(const can_state_t *s)
+{
+    can_port_stats_t ps;
+    can_port_stats(s->port, &ps);
+    log_msg(LOG_INFO,
+            "can: %s: frames received %llu (%llu for no object, %llu errors); SYNC sent %llu,"
+            " dropped %llu; cycles %llu (%llu down), reopens %llu",
+            s->log ? "candump logs" : s->cfg->interface, (unsigned long long)ps.rx_frames,
+            (unsigned long long)ps.rx_foreign, (unsigned long long)ps.rx_errors,
+            (unsigned long long)ps.sync_sent, (unsigned long long)ps.sync_dropped,
+            (unsigned long long)ps.cycles, (unsigned long long)ps.down_cycles,
+            (unsigned long long)ps.reopens);
+}
+
 static void close_(void *state, core_t *c)
 {
     can_state_t *s = state;
@@ -404,6 +419,7 @@ static void close_(void *state, core_t *c)
     if (s->port) {
         s->refused_log_ns = 0; /* the refusals of the last second, with their reason */
         log_refused(s, core_mono_ns());
+        log_port(s);
         for (unsigned k = 0; k < s->n; k++) {
             can_port_obj_stats_t os;
             can_port_obj_stats(s->port, k, &os);

@@ -38,7 +38,7 @@ typedef struct {
 
 typedef struct {
     cfg_t *c;
-    FILE *fp;     /* the source (cfg_load_stream) */
+    FILE *fp;     /* the source (load_stream) */
     int line;     /* lines read so far */
     int indented; /* the line just read starts with blanks (inih: a continuation) */
     /* current section */
@@ -741,8 +741,10 @@ static int parse(parse_t *p, const char *name, const char *dir, cfg_t **out, cha
     return 0;
 }
 
-int cfg_load_stream(FILE *fp, const char *name, const char *dir, cfg_t **out, char *err,
-                    size_t errlen)
+/* cfg_load from the open stream fp (read to its end, not closed); name is
+ * used in messages, dir for relative paths. */
+static int load_stream(FILE *fp, const char *name, const char *dir, cfg_t **out, char *err,
+                       size_t errlen)
 {
     *out = NULL;
     parse_t *p = calloc(1, sizeof *p);
@@ -751,7 +753,7 @@ int cfg_load_stream(FILE *fp, const char *name, const char *dir, cfg_t **out, ch
         return -CFG_ENOMEM;
     }
     p->fp = fp;
-    int rc = parse(p, name, dir ? dir : ".", out, err, errlen);
+    int rc = parse(p, name, dir, out, err, errlen);
     if (rc == 0 && ferror(fp)) {
         snprintf(err, errlen, "%s: read error", name);
         cfg_free(*out);
@@ -778,7 +780,7 @@ int cfg_load(const char *path, cfg_t **out, char *err, size_t errlen)
         snprintf(dir, sizeof dir, "/");
     else
         snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
-    int rc = cfg_load_stream(fp, path, dir, out, err, errlen);
+    int rc = load_stream(fp, path, dir, out, err, errlen);
     fclose(fp);
     return rc;
 }

@@ -122,7 +122,7 @@ typedef struct {
     void *tcfg[CFG_TRANSPORTS_MAX]; /* per-object block of each transport, by index */
     /* The safety monitor's bounds (lib/safety/safety.h), keys safety_max_step_m,
      * safety_max_speed_m_s, safety_max_accel_m_s2: < 0 = derived from the
-     * engine's limits (obj_safety_limits in core.h), 0 = not checked. */
+     * engine's limits (obj_safety_limits in core.c), 0 = not checked. */
     double safety_max_step_m, safety_max_speed_m_s, safety_max_accel_m_s2;
     /* initial_position = x,y,z: where the object stands at start (the output
      * holds there and reaches the first trajectory by a transfer) */
@@ -171,11 +171,6 @@ typedef struct cfg {
  * error found; line 0 is left out for whole-file errors).
  */
 int cfg_load(const char *path, cfg_t **out, char *err, size_t errlen);
-
-/* The same from an open stream (read to its end, not closed); name is used in
- * messages, dir for relative paths (NULL: "."). */
-int cfg_load_stream(FILE *fp, const char *name, const char *dir, cfg_t **out, char *err,
-                    size_t errlen);
 
 /*
  * Whether nw may replace the running old at a reload: no object present in

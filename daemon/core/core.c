@@ -74,7 +74,15 @@ static double obj_safety_accel(const engine_config_t *e)
     return 2.0 * fmax(3.0 * aw + e->scale_accel_m_s2, e->transfer_accel_m_s2);
 }
 
-void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim)
+/*
+ * The safety monitor's bounds for object o (core_open sets them, a reload
+ * again): its safety_* keys, and where a key is not given, derived from its
+ * engine limits (the ones in force, the profile's included): speed 2 x
+ * max_speed_m_s (the engine's transfer peaks at 1.5 x; no speed limit leaves
+ * it unchecked), no absolute step bound, acceleration derived as
+ * obj_safety_accel says.
+ */
+static void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim)
 {
     memset(lim, 0, sizeof *lim);
     lim->max_step_m = o->safety_max_step_m >= 0 ? o->safety_max_step_m : 0;

@@ -180,15 +180,6 @@ lifecycle_t *obj_lc(obj_t *o);
 int obj_command(obj_t *o, lc_event_t ev, unsigned arg, const char *peer);
 
 /*
- * The safety monitor's bounds for object o: its safety_* keys, and where a
- * key is not given, derived from its engine limits (the ones in force, the
- * profile's included): speed 2 x max_speed_m_s (the engine's transfer peaks
- * at 1.5 x; no speed limit leaves it unchecked), no absolute step bound,
- * acceleration derived as core.c's obj_safety_accel says.
- */
-void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim);
-
-/*
  * Hold o (a CiA 402 drive's heartbeat lost): LC_EV_HEARTBEAT_LOST, feed
  * override 0, a controlled stop along its path by the time scaling; until
  * a clear (obj_command), every source's override above 0 is refused.

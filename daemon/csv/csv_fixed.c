@@ -7,13 +7,6 @@
 #include <stdio.h>
 #include <string.h>
 
-static unsigned long slow_calls;
-
-unsigned long csv_fixed_slow_calls(void)
-{
-    return slow_calls;
-}
-
 static const double pow10_tab[CSV_FIXED_PREC_MAX + 1] = {
     1e0, 1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,
     1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17,
@@ -39,7 +32,6 @@ static void two_product(double a, double b, double *p, double *e)
 static int slow(char *out, double x, int prec)
 {
     char tmp[CSV_FIXED_MAX + 8];
-    slow_calls++;
     int n = snprintf(tmp, sizeof tmp, "%.*f", prec, x);
     if (n < 0)
         return 0;

@@ -28,7 +28,4 @@
  * terminating NUL written).  prec in 0..40.  Returns the length. */
 int csv_fixed(char *out, double x, int prec);
 
-/* Counters of the calls that took snprintf (for tests and the benchmark). */
-unsigned long csv_fixed_slow_calls(void);
-
 #endif

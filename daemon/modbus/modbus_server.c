@@ -369,11 +369,6 @@ int modbus_server_tcp_from_systemd(const modbus_server_t *s)
     return s->from_systemd;
 }
 
-uint32_t modbus_server_generation(const modbus_server_t *s)
-{
-    return s->gen;
-}
-
 void modbus_server_stats(const modbus_server_t *s, modbus_server_stats_t *st)
 {
     *st = s->st;

@@ -181,18 +181,7 @@ int modbus_server_process(modbus_server_t *s);
  */
 void modbus_server_publish(modbus_server_t *s, const mbmap_daemon_t *d, const mbmap_object_t *objs);
 
-/* The generation of the last publish (0 before the first). */
-uint32_t modbus_server_generation(const modbus_server_t *s);
-
 void modbus_server_stats(const modbus_server_t *s, modbus_server_stats_t *st);
-
-/*
- * Serve an already connected stream socket as a TCP client (the fuzz target
- * and tests use a socketpair).  Takes ownership of fd.  At max_clients a
- * client is evicted as for accept.  Returns 0, or -EMFILE when no slot could
- * be had (fd closed).
- */
-int modbus_server_adopt(modbus_server_t *s, int fd);
 
 /*
  * Parse an allow-list (see modbus_server_config_t.allow) to check it at config load.

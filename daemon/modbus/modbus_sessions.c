@@ -88,15 +88,15 @@ static int allowed(const modbus_server_t *s, const struct sockaddr_storage *ss)
     return !s->n_allow || in_list(s->allow, s->n_allow, ss);
 }
 
-/* Writes for a client at ss (NULL: an adopted socket, RTU): writes = yes,
- * and the client in write_allow if there is one. */
+/* Writes for a client at ss: writes = yes, and the client in write_allow if
+ * there is one. */
 static int may_write(const modbus_server_t *s, const struct sockaddr_storage *ss)
 {
     if (!s->writes_enabled)
         return 0;
     if (!s->n_wallow)
         return 1;
-    return ss && in_list(s->wallow, s->n_wallow, ss);
+    return in_list(s->wallow, s->n_wallow, ss);
 }
 
 static int in_list(const allow_t *list, unsigned n, const struct sockaddr_storage *ss)
@@ -316,19 +316,11 @@ static client_t *eviction_victim(modbus_server_t *s, int64_t now)
     return best;
 }
 
-static void peer_name(int fd, const struct sockaddr_storage *ss, char *out, size_t len)
+/* "host:port" of the client at ss ("" if neither IPv4 nor IPv6). */
+static void peer_name(const struct sockaddr_storage *ss, char *out, size_t len)
 {
     char host[INET6_ADDRSTRLEN] = "?";
     unsigned port = 0;
-    struct sockaddr_storage tmp;
-    if (!ss) {
-        socklen_t sl = sizeof tmp;
-        if (getpeername(fd, (struct sockaddr *)&tmp, &sl) < 0) {
-            out[0] = 0;
-            return;
-        }
-        ss = &tmp;
-    }
     if (ss->ss_family == AF_INET) {
         const struct sockaddr_in *a = (const struct sockaddr_in *)ss;
         inet_ntop(AF_INET, &a->sin_addr, host, sizeof host);
@@ -343,8 +335,6 @@ static void peer_name(int fd, const struct sockaddr_storage *ss, char *out, size
     }
     snprintf(out, len, "%s:%u", host, port);
 }
-
-static void reap_hung_up(modbus_server_t *s);
 
 static int client_add(modbus_server_t *s, int fd, const struct sockaddr_storage *ss)
 {
@@ -372,7 +362,7 @@ static int client_add(modbus_server_t *s, int fd, const struct sockaddr_storage 
     c->connected_ns = now;
     c->last_ns = now;
     c->may_write = may_write(s, ss);
-    peer_name(fd, ss, c->peer, sizeof c->peer);
+    peer_name(ss, c->peer, sizeof c->peer);
     s->st.clients++;
     s->st.connections++;
     char host[sizeof c->peer];
@@ -386,13 +376,6 @@ static int client_add(modbus_server_t *s, int fd, const struct sockaddr_storage 
         s->peers[c->peer_idx].last_ns = now;
     }
     return 0;
-}
-
-int modbus_server_adopt(modbus_server_t *s, int fd)
-{
-    if (s->st.clients >= s->max_clients)
-        reap_hung_up(s);
-    return client_add(s, fd, NULL);
 }
 
 /*

@@ -194,8 +194,11 @@ static int rows_to_track(track_loader_t *L, int geographic, track_t *trk)
     return 0;
 }
 
-int track_parse(const char *name, const char *buf, size_t len, track_format_t fmt, unsigned flags,
-                track_t *trk, char *err, size_t errlen)
+/* Parse the track of len bytes at buf (need not be NUL-terminated; NUL bytes
+ * are an error); name is used in messages and, with TRACK_FMT_AUTO, for the
+ * .gpx extension.  Results as track_load_opts. */
+static int parse(const char *name, const char *buf, size_t len, track_format_t fmt, unsigned flags,
+                 track_t *trk, char *err, size_t errlen)
 {
     track_loader_t L;
     memset(&L, 0, sizeof L);
@@ -293,7 +296,7 @@ int track_load_opts(const char *path, track_format_t fmt, unsigned flags, track_
     }
     fclose(f);
     if (rc == 0)
-        rc = track_parse(path, buf, len, fmt, flags, trk, err, errlen);
+        rc = parse(path, buf, len, fmt, flags, trk, err, errlen);
     free(buf);
     return rc;
 }

@@ -147,14 +147,6 @@ int track_load_opts(const char *path, track_format_t fmt, unsigned flags, track_
                     size_t errlen);
 
 /*
- * Parse a track held in memory (buf need not be NUL-terminated; NUL bytes
- * are an error).  name is used in messages and, with TRACK_FMT_AUTO, for
- * the .gpx extension.  Same results as track_load_opts.
- */
-int track_parse(const char *name, const char *buf, size_t len, track_format_t fmt, unsigned flags,
-                track_t *trk, char *err, size_t errlen);
-
-/*
  * Re-express a geographic track's waypoints as east/north/up about another
  * origin (a daemon's one datum, so all its objects share one frame) instead
  * of its first point; rows without altitude get east/north at alt0_m and

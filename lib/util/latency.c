@@ -49,12 +49,12 @@ void lat_add(lat_hist_t *h, uint64_t us)
         h->max_us = us;
 }
 
-uint64_t lat_quantile(const lat_hist_t *h, double q)
+/* Quantile q in (0, 1] of h by nearest rank (latency.h: lat_summarize). */
+static uint64_t quantile(const lat_hist_t *h, double q)
 {
     if (h->count == 0)
         return 0;
-    /* Nearest rank: the smallest value v with #(samples <= v) >= ceil(q n).
-     * Rank at least 1 so q <= 0 gives the first non-empty bucket. */
+    /* Nearest rank: the smallest value v with #(samples <= v) >= ceil(q n). */
     double r = q * (double)h->count;
     uint64_t rank = (uint64_t)r;
     if ((double)rank < r)
@@ -69,8 +69,6 @@ uint64_t lat_quantile(const lat_hist_t *h, double q)
         if (seen >= rank) {
             uint64_t lo, hi;
             lat_bucket_range(b, &lo, &hi);
-            if (q <= 0)
-                return lo;
             return hi < h->max_us ? hi : h->max_us;
         }
     }
@@ -85,9 +83,9 @@ static uint32_t sat32(uint64_t v)
 void lat_summarize(const lat_hist_t *h, lat_summary_t *s)
 {
     s->count = h->count;
-    s->p50_us = sat32(lat_quantile(h, 0.50));
-    s->p99_us = sat32(lat_quantile(h, 0.99));
-    s->p999_us = sat32(lat_quantile(h, 0.999));
+    s->p50_us = sat32(quantile(h, 0.50));
+    s->p99_us = sat32(quantile(h, 0.99));
+    s->p999_us = sat32(quantile(h, 0.999));
     s->max_us = sat32(h->max_us);
     s->mean_us = h->count ? sat32(h->sum_us / h->count) : 0;
 }

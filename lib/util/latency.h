@@ -43,14 +43,10 @@ typedef struct {
 /* Add one sample (us).  Never fails; values >= LAT_MAX_US land in the last bucket. */
 void lat_add(lat_hist_t *h, uint64_t us);
 
-/*
- * Quantile q in [0, 1] by nearest rank: the smallest bucket upper edge below
- * which at least ceil(q * count) samples lie, clipped to max_us.  q <= 0 gives
- * the lower edge of the first non-empty bucket; an empty histogram gives 0.
- */
-uint64_t lat_quantile(const lat_hist_t *h, double q);
-
-/* p50, p99, p99.9, max and mean of h. Values above UINT32_MAX saturate. */
+/* p50, p99, p99.9, max and mean of h.  A quantile q is by nearest rank: the
+ * smallest bucket upper edge below which at least ceil(q * count) samples
+ * lie, clipped to max_us.  An empty histogram gives all 0.  Values above
+ * UINT32_MAX saturate. */
 void lat_summarize(const lat_hist_t *h, lat_summary_t *s);
 
 #endif

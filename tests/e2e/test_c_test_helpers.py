@@ -5,7 +5,7 @@ Given tests/unit/*.c, tests/bench/*.c and tests/fuzz/*.c, then none includes
 cmocka.h itself (tests/helpers/test.h does, with what it needs first), and
 no function of more than one statement is defined with the same body in two
 of them: a helper copied between tests belongs in tests/helpers/test.h.  A
-one-statement forwarding wrapper (e.g. a file's parse() around track_parse)
+one-statement forwarding wrapper (e.g. a file's parse() around track_load_text)
 may repeat: sharing it would tie test.h to that module's header.
 """
 import collections

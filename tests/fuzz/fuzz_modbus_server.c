@@ -1,6 +1,8 @@
 /*
  * fuzz_modbus_server.c - libFuzzer target for the Modbus request path: bytes arrive
- * on a TCP client connection (a socketpair adopted by the server), go through
+ * on a TCP client connection (to the server's listener on 127.0.0.1, a port
+ * of its choosing; one connection per input, accepted as trajd accepts one:
+ * Linux reuses a loopback port in TIME_WAIT, net.ipv4.tcp_tw_reuse), go through
  * MBAP framing, mbmap_check_request / mbmap_decode_write_order, the write hooks and
  * libmodbus's modbus_reply on the mapping.  The pure codec functions also get
  * the raw input (as a PDU and as an RTU frame).
@@ -12,10 +14,13 @@
  * (needs a tty); its framing function is fuzzed directly.
  */
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -79,6 +84,19 @@ static void check_responses(const uint8_t *b, size_t n)
     }
 }
 
+/* A client connected to the server's listener, non-blocking. */
+static int connect_client(void)
+{
+    struct sockaddr_in a = {.sin_family = AF_INET,
+                            .sin_port = htons((uint16_t)modbus_server_tcp_port(srv)),
+                            .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
+    int fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    if (fd < 0 || connect(fd, (const struct sockaddr *)&a, sizeof a) < 0 ||
+        fcntl(fd, F_SETFL, O_NONBLOCK) < 0)
+        abort();
+    return fd;
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -86,7 +104,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (!srv) {
         modbus_server_config_t cfg;
         modbus_server_config_default(&cfg);
-        cfg.tcp_address[0] = 0;
+        snprintf(cfg.tcp_address, sizeof cfg.tcp_address, "127.0.0.1");
+        cfg.tcp_port = 0;   /* a free port, read back below */
+        cfg.peer_log_s = 0; /* no per-address notices: every input connects from here */
         cfg.writes_enabled = 1;
         cfg.n_objects = NOBJ;
         cfg.max_clients = 2;
@@ -117,31 +137,35 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     modbus_server_publish(srv, &d, objs);
 
-    /* The request path over a real socket. */
-    int sv[2];
-    if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK, 0, sv) < 0)
-        abort();
-    if (modbus_server_adopt(srv, sv[0]) < 0)
+    /* The request path over a real connection, accepted (bounded). */
+    int cl = connect_client();
+    modbus_server_stats_t st;
+    for (int i = 0; i < 16; i++) {
+        modbus_server_process(srv);
+        modbus_server_stats(srv, &st);
+        if (st.clients == 1)
+            break;
+    }
+    if (st.clients != 1)
         abort();
     size_t off = 0;
     static uint8_t out[1 << 20];
     size_t got = 0;
     for (int round = 0; round < 64 && (off < size || round < 2); round++) {
         if (off < size) {
-            ssize_t n = send(sv[1], data + off, size - off, MSG_DONTWAIT | MSG_NOSIGNAL);
+            ssize_t n = send(cl, data + off, size - off, MSG_DONTWAIT | MSG_NOSIGNAL);
             if (n > 0)
                 off += (size_t)n;
         }
         if (modbus_server_process(srv) < 0)
             abort();
-        ssize_t r = got < sizeof out ? recv(sv[1], out + got, sizeof out - got, MSG_DONTWAIT) : 0;
+        ssize_t r = got < sizeof out ? recv(cl, out + got, sizeof out - got, MSG_DONTWAIT) : 0;
         if (r > 0)
             got += (size_t)r;
     }
     check_responses(out, got);
-    close(sv[1]);
+    close(cl);
     /* The server sees EOF and lets the client go (bounded). */
-    modbus_server_stats_t st;
     for (int i = 0; i < 16; i++) {
         modbus_server_process(srv);
         modbus_server_stats(srv, &st);

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 
 #include "track.h"
+#include "track_text.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -19,8 +20,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     unsigned flags = (data[0] & 0x10) ? TRACK_SKIP_BAD : 0;
     track_t t;
     char err[256];
-    if (track_parse("fuzz", (const char *)data + 1, size - 1, fmt, flags, &t, err, sizeof err) ==
-        0) {
+    if (track_load_text("fuzz", (const char *)data + 1, size - 1, fmt, flags, &t, err,
+                        sizeof err) == 0) {
         for (size_t i = 0; i < t.n; i++)
             if (!isfinite(t.wp[i].t_s) || !isfinite(t.wp[i].pos_m[0]) ||
                 !isfinite(t.wp[i].pos_m[1]) || !isfinite(t.wp[i].pos_m[2]))

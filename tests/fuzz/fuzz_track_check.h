@@ -13,12 +13,13 @@
 #include <stdlib.h>
 
 #include "track.h"
+#include "track_text.h"
 
 static inline void fuzz_track_check(const char *buf, size_t len, track_format_t fmt, unsigned flags)
 {
     track_t t;
     char err[256];
-    if (track_parse("fuzz", buf, len, fmt, flags, &t, err, sizeof err) != 0)
+    if (track_load_text("fuzz", buf, len, fmt, flags, &t, err, sizeof err) != 0)
         return;
     if (t.n == 0 || t.format != fmt)
         abort();

@@ -12,31 +12,41 @@
 #include "candump.h"
 #include "can_logfile.h"
 
-/* Load text through can_logfile_load (fmemopen: no temp file) with stderr
- * captured into log (NUL-terminated). */
-static can_logfile_t *load_text(const char *text, char *log, size_t loglen)
+/* Replay len bytes of text as trajd does a log_in file: written to mem.log
+ * in a temporary directory and opened with can_logfile_open_mode, with
+ * stderr captured into log (NUL-terminated). */
+static can_logfile_t *load_bytes(const char *text, size_t len, char *log, size_t loglen)
 {
-    char err[256];
-    can_logfile_t *l = can_logfile_open_mode(NULL, NULL, "can0", 0, 0, err, sizeof err);
-    assert_non_null(l);
-    FILE *in = fmemopen((void *)text, strlen(text), "r");
+    char dir[] = "/tmp/test_can_logfile.XXXXXX", path[64], err[256];
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/mem.log", dir);
+    FILE *in = fopen(path, "w");
     assert_non_null(in);
+    assert_int_equal(fwrite(text, 1, len, in), len);
+    assert_int_equal(fclose(in), 0);
     FILE *cap = tmpfile();
     assert_non_null(cap);
     fflush(stderr);
     int saved = dup(2);
     assert_true(saved >= 0);
     assert_true(dup2(fileno(cap), 2) >= 0);
-    int rc = can_logfile_load(l, in, "mem.log", err, sizeof err);
+    can_logfile_t *l = can_logfile_open_mode(path, NULL, "can0", 0, 0, err, sizeof err);
     assert_true(dup2(saved, 2) >= 0);
     close(saved);
-    assert_int_equal(rc, 0);
-    fclose(in);
+    unlink(path);
+    rmdir(dir);
+    if (!l)
+        fail_msg("%s", err);
     rewind(cap);
     size_t n = fread(log, 1, loglen - 1, cap);
     log[n] = '\0';
     fclose(cap);
     return l;
+}
+
+static can_logfile_t *load_text(const char *text, char *log, size_t loglen)
+{
+    return load_bytes(text, strlen(text), log, loglen);
 }
 
 static unsigned count_lines_with(const char *log, const char *needle)
@@ -158,20 +168,8 @@ static void test_nul_byte_refused(void **state)
 {
     (void)state;
     static const char text[] = "(0.1) can0 100#00\n(0.2) can0 101#00\0garbage\n";
-    char err[256], log[1024];
-    can_logfile_t *l = can_logfile_open_mode(NULL, NULL, "can0", 0, 0, err, sizeof err);
-    FILE *in = fmemopen((void *)text, sizeof text - 1, "r");
-    fflush(stderr);
-    int saved = dup(2);
-    FILE *cap = tmpfile();
-    dup2(fileno(cap), 2);
-    assert_int_equal(can_logfile_load(l, in, "mem.log", err, sizeof err), 0);
-    dup2(saved, 2);
-    close(saved);
-    rewind(cap);
-    log[fread(log, 1, sizeof log - 1, cap)] = '\0';
-    fclose(cap);
-    fclose(in);
+    char log[1024];
+    can_logfile_t *l = load_bytes(text, sizeof text - 1, log, sizeof log);
     can_logfile_stats_t st;
     can_logfile_stats(l, &st);
     assert_int_equal(st.bad_lines, 1);

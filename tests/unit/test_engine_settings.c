@@ -189,7 +189,7 @@ static void test_cfg_reads_every_key(void **state)
                  "tests/data/n2k_furuno_figure8_src52.csv\noutput = stdout\n%s = %s\n",
                  s->name, val);
         cfg_t *c = NULL;
-        int rc = cfg_load_string(text, "t.conf", ".", &c, err, sizeof err);
+        int rc = cfg_load_string(text, "t.conf", &c, err, sizeof err);
         if (s->flags & ENGINE_SETTING_DERIVED) {
             assert_int_equal(rc, -CFG_EUNKNOWN);
             continue;
@@ -202,10 +202,11 @@ static void test_cfg_reads_every_key(void **state)
                  "[object.b]\ninput = replay\nreplay.track = "
                  "tests/data/n2k_furuno_figure8_src52.csv\noutput = stdout\n%s = bogus\n",
                  s->name);
-        rc = cfg_load_string(text, "t.conf", ".", &c, err, sizeof err);
+        rc = cfg_load_string(text, "t.conf", &c, err, sizeof err);
         assert_int_equal(rc, -CFG_EVALUE);
-        char prefix[128];
-        snprintf(prefix, sizeof prefix, "t.conf:5: [object.b] %s: expected", s->name);
+        char path[sizeof cfg_string_dir + 256], prefix[sizeof path + 128];
+        cfg_string_path("t.conf", path, sizeof path);
+        snprintf(prefix, sizeof prefix, "%s:5: [object.b] %s: expected", path, s->name);
         if (strncmp(err, prefix, strlen(prefix)) != 0)
             fail_msg("expected '%s...', got '%s'", prefix, err);
     }

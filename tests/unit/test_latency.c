@@ -1,5 +1,8 @@
 /* test_latency.c - lateness histogram against an exact reference: the samples
- * kept, sorted with qsort, and the nearest-rank quantile read off directly. */
+ * kept, sorted with qsort, and the nearest-rank quantile read off directly.
+ * The histogram is read as the daemon reads it, through lat_summarize (p50,
+ * p99, p99.9, max, mean); any other rank through its p50, the histogram
+ * padded so that the rank asked for is the middle one (rank_of). */
 #include "test.h"
 
 #include <math.h>
@@ -33,17 +36,65 @@ static uint64_t rnd(uint64_t *s)
     return *s;
 }
 
-/* The [lo, hi] range of the bucket that holds us, read through the API: one
- * sample's quantile 0 is its bucket's lower edge, and with the exact maximum
- * lifted out of the way its quantile 1 is the bucket's upper edge. */
-static void range_of(uint64_t us, uint64_t *lo, uint64_t *hi)
+static lat_summary_t summary(const lat_hist_t *h)
+{
+    lat_summary_t sm;
+    lat_summarize(h, &sm);
+    return sm;
+}
+
+/* Sample r (1 .. count, nearest rank) of h as its p50 reads it: h padded
+ * with count - 2r samples of 0, which sort below every sample, or with
+ * 2r - count copies of its maximum, which sort above (neither changes the
+ * maximum a quantile is clipped to), so that sample r is the middle one. */
+static uint64_t rank_of(const lat_hist_t *h, uint64_t r)
+{
+    static lat_hist_t p;
+    p = *h;
+    for (uint64_t k = 2 * r; k < h->count; k++)
+        lat_add(&p, 0);
+    for (uint64_t k = h->count; k < 2 * r; k++)
+        lat_add(&p, h->max_us);
+    return summary(&p).p50_us;
+}
+
+/* The nearest-rank quantile q of h as the daemon's would be at that q: the
+ * sample of rank ceil(q count), at least 1 (rank_of). */
+static uint64_t quantile(const lat_hist_t *h, double q)
+{
+    uint64_t r = (uint64_t)ceil(q * (double)h->count);
+    return rank_of(h, r < 1 ? 1 : r);
+}
+
+/* The upper edge of the bucket that holds us, read through the API: one
+ * sample's p50, with the exact maximum lifted out of the way, is its bucket's
+ * upper edge (UINT64_MAX for the last bucket, which the summary saturates to
+ * UINT32_MAX: every other edge lies below LAT_MAX_US). */
+static uint64_t upper_edge(uint64_t us)
 {
     static lat_hist_t h;
     memset(&h, 0, sizeof h);
     lat_add(&h, us);
-    *lo = lat_quantile(&h, 0);
     h.max_us = UINT64_MAX;
-    *hi = lat_quantile(&h, 1);
+    uint32_t hi = summary(&h).p50_us;
+    return hi == UINT32_MAX ? UINT64_MAX : hi;
+}
+
+/* The [lo, hi] range of the bucket that holds us: hi its upper edge, lo the
+ * least value with the same upper edge (a bisection: upper edges never go
+ * down as the value goes up, which test_buckets_tile sees). */
+static void range_of(uint64_t us, uint64_t *lo, uint64_t *hi)
+{
+    *hi = upper_edge(us);
+    uint64_t a = 0, b = us; /* lo in [a, b] */
+    while (a < b) {
+        uint64_t m = a + (b - a) / 2;
+        if (upper_edge(m) == *hi)
+            b = m;
+        else
+            a = m + 1;
+    }
+    *lo = a;
 }
 
 /* Given the buckets read from 0 up, each from the value after the last one's
@@ -98,13 +149,13 @@ static void test_quantiles_match_sorted(void **state)
         sum += v[i];
     }
     qsort(v, NSAMP, sizeof v[0], cmp_u64);
-    const double qs[] = {0.0, 0.01, 0.5, 0.9, 0.98, 0.99, 0.995, 0.999, 1.0};
+    lat_summary_t sm = summary(&h);
+    const double qs[] = {0.01, 0.5, 0.9, 0.98, 0.99, 0.995, 0.999, 1.0};
     for (size_t k = 0; k < sizeof qs / sizeof qs[0]; k++) {
-        uint64_t ex = exact_q(v, NSAMP, qs[k]), got = lat_quantile(&h, qs[k]);
-        if (qs[k] <= 0) { /* lower edge of the first bucket: <= the minimum */
-            assert_true(got <= v[0]);
-            continue;
-        }
+        uint64_t ex = exact_q(v, NSAMP, qs[k]), got = quantile(&h, qs[k]);
+        /* the daemon's own three (qs[1], qs[4], qs[6]), as lat_summarize gives them */
+        if (k == 1 || k == 4 || k == 6)
+            assert_int_equal(got, k == 1 ? sm.p50_us : k == 4 ? sm.p99_us : sm.p999_us);
         assert_true(got >= ex);
         if (ex < LAT_LINEAR_US)
             assert_int_equal(got, ex);
@@ -113,8 +164,6 @@ static void test_quantiles_match_sorted(void **state)
         else
             assert_true(got <= v[NSAMP - 1]);
     }
-    lat_summary_t sm;
-    lat_summarize(&h, &sm);
     assert_int_equal(sm.count, NSAMP);
     assert_int_equal(sm.max_us, v[NSAMP - 1] > UINT32_MAX ? UINT32_MAX : v[NSAMP - 1]);
     assert_int_equal(sm.mean_us, sum / NSAMP);
@@ -132,7 +181,9 @@ static void test_empty(void **state)
     assert_int_equal(sm.count, 0);
     assert_int_equal(sm.p99_us, 0);
     assert_int_equal(sm.max_us, 0);
-    assert_int_equal(lat_quantile(&h, 0.5), 0);
+    assert_int_equal(sm.p50_us, 0);
+    assert_int_equal(sm.p999_us, 0);
+    assert_int_equal(sm.mean_us, 0);
 }
 
 /* Given small sample counts, where q * n is not a whole number (20000
@@ -156,16 +207,21 @@ static void test_quantile_rank_rounds_up(void **state)
         /* cppcheck-suppress uninitvar ; ns[i] >= 1: the loop above set v[0 .. ns[i] - 1] */
         qsort(v, ns[i], sizeof v[0], cmp_u64);
         for (size_t k = 0; k < sizeof qs / sizeof qs[0]; k++)
-            assert_int_equal(lat_quantile(&h, qs[k]), exact_q(v, ns[i], qs[k]));
+            assert_int_equal(quantile(&h, qs[k]), exact_q(v, ns[i], qs[k]));
+        /* and the daemon's three straight from lat_summarize */
+        lat_summary_t sm = summary(&h);
+        assert_int_equal(sm.p50_us, exact_q(v, ns[i], 0.5));
+        assert_int_equal(sm.p99_us, exact_q(v, ns[i], 0.99));
+        assert_int_equal(sm.p999_us, exact_q(v, ns[i], 0.999));
     }
     /* the cases spelled out: 10 distinct samples 0..9 */
     lat_hist_t h10;
     memset(&h10, 0, sizeof h10);
     for (uint64_t j = 0; j < 10; j++)
         lat_add(&h10, j);
-    assert_int_equal(lat_quantile(&h10, 0.99), 9);
-    assert_int_equal(lat_quantile(&h10, 0.5), 4);
-    assert_int_equal(lat_quantile(&h10, 0.55), 5);
+    assert_int_equal(summary(&h10).p99_us, 9);
+    assert_int_equal(summary(&h10).p50_us, 4);
+    assert_int_equal(quantile(&h10, 0.55), 5);
 }
 
 int main(void)

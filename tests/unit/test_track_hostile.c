@@ -10,11 +10,12 @@
 #include <string.h>
 
 #include "track.h"
+#include "track_text.h"
 
 static int parse(const char *name, const char *text, unsigned flags, track_t *t, char *err,
                  size_t errlen)
 {
-    return track_parse(name, text, strlen(text), TRACK_FMT_AUTO, flags, t, err, errlen);
+    return track_load_text(name, text, strlen(text), TRACK_FMT_AUTO, flags, t, err, errlen);
 }
 
 /* Given the 91-byte .path of the issue (step 1e-6 s and five 9.9 m lines at

@@ -14,6 +14,7 @@
 
 #include "geo.h"
 #include "track.h"
+#include "track_text.h"
 
 #define VISNJAN_GPX "tests/data/gpxgo_visnjan.gpx"
 #define VISNJAN_N 413
@@ -33,7 +34,7 @@
 static int parse(const char *name, const char *text, track_format_t fmt, unsigned flags, track_t *t,
                  char *err, size_t errlen)
 {
-    return track_parse(name, text, strlen(text), fmt, flags, t, err, errlen);
+    return track_load_text(name, text, strlen(text), fmt, flags, t, err, errlen);
 }
 
 /* Waypoint i of b expressed in a's ENU frame (b's origin placed in a's frame). */
