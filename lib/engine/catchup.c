@@ -22,6 +22,8 @@ void engine_lag_push(engine_t *e, double t_s)
     engine_lag_t *l = &e->lag;
     if (!l->pending || t_s > l->pend_max)
         l->pend_max = t_s;
+    if (!l->pending || t_s < l->pend_min)
+        l->pend_min = t_s;
     l->pending = 1;
 }
 
@@ -56,12 +58,16 @@ void engine_lag_note(engine_t *e, int64_t now_ns)
      * then does not depend on when the acceptance gives its verdicts */
     double off = l->pend_max - (double)now_ns * 1e-9;
     l->pending = 0;
+    double swing = fmax(CATCHUP_SWING_S, CATCHUP_SWING_INTERVALS * interval_of(e));
     if (!l->have) {
         l->off_first = off;
         l->first_ns = now_ns;
+        /* a first batch whose stamps span more than the swing came at once:
+         * loaded, not sent as it went */
+        if (l->pend_max - l->pend_min > swing)
+            l->ahead = 1;
     } else if (off - l->off_first >
-               fmax(CATCHUP_SWING_S, CATCHUP_SWING_INTERVALS * interval_of(e)) +
-                   CATCHUP_DECAY_PPM * 1e-6 * (double)(now_ns - l->first_ns) * 1e-9) {
+               swing + CATCHUP_DECAY_PPM * 1e-6 * (double)(now_ns - l->first_ns) * 1e-9) {
         /* the stamps run ahead of their arrivals by more than latency and
          * drift swing: a program uploaded or a buffer filled ahead of time,
          * not a live sender; nothing to win back, its output plays at rate 1 */

@@ -206,6 +206,7 @@ typedef struct {
 typedef struct {
     int pending;       /* waypoints pushed since the last tick: */
     double pend_max;   /* ... their newest stamp */
+    double pend_min;   /* ... and their oldest */
     uint64_t traj;     /* the input trajectory sampled (solve.traj) */
     int have;          /* off_s holds a sample of traj */
     double off_s;      /* the sender's time less ours, least-delayed arrival */

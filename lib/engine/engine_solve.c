@@ -64,14 +64,39 @@ static qent_t *q_push(engine_t *e)
     return q;
 }
 
-/* The highest rate at which a segment whose speed is at most vmax keeps the
- * speed cap (ENGINE_SPEED_CAP x the speed limit), at least ENGINE_CEIL_MIN. */
-static double seg_ceiling(const engine_t *e, double vmax)
+/* The largest |k''| over a segment (m/s^2 at rate 1): k'' is linear in u on
+ * a cubic, so its norm peaks at an end. */
+static double seg_accel_max(const fdiff_seg_t *seg)
 {
-    double v = engine_config_max_speed(&e->cfg);
-    if (!(v > 0) || !(vmax > 0))
-        return INFINITY;
-    return fmax(ENGINE_SPEED_CAP * v / vmax, ENGINE_CEIL_MIN);
+    double a0 = 0, a1 = 0;
+    for (int k = 0; k < AX; k++) {
+        double c2 = 2 * seg->c[k][2], c3 = 6 * seg->c[k][3];
+        a0 += c2 * c2;
+        a1 += (c2 + c3) * (c2 + c3);
+    }
+    return sqrt(fmax(a0, a1)) / (seg->dur_s * seg->dur_s);
+}
+
+/* The highest rate at which a segment keeps the speed cap (ENGINE_SPEED_CAP
+ * x the speed limit, vmax its speed) and, with the profile's acceleration
+ * limit (issue 27: max_accel_m_s2 left to the profile), that limit: the
+ * output's acceleration k'' r^2 + k' dr/dt stays within it when k'' r^2
+ * keeps to the limit less scale_accel_m_s2, which bounds k' dr/dt (the time
+ * scaling's limits are converted at the segment's fastest speed).  A
+ * configured max_accel_m_s2 bounds the chords only (the curve may reach 3
+ * times it: engine.h).  At least ENGINE_CEIL_MIN; INFINITY with no limit. */
+static double seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax)
+{
+    double v = engine_config_max_speed(&e->cfg), c = INFINITY;
+    if (v > 0 && vmax > 0)
+        c = ENGINE_SPEED_CAP * v / vmax;
+    if (e->cfg.max_accel_m_s2 < 0) {
+        double room = engine_config_max_accel(&e->cfg) - e->cfg.scale_accel_m_s2;
+        double kdd = room > 0 ? seg_accel_max(seg) : 0.0;
+        if (kdd > room)
+            c = fmin(c, sqrt(room / kdd));
+    }
+    return isinf(c) ? c : fmax(c, ENGINE_CEIL_MIN);
 }
 
 /* A queued segment whose speed cap holds the rate below TS_RATE_MAX. */
@@ -91,7 +116,7 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
     q->seg = *seg;
     q->t1_s = seg->t0_s + seg->dur_s;
     q->vmax = solve_seg_speed_max(seg);
-    q->ceil = seg_ceiling(e, q->vmax);
+    q->ceil = seg_ceiling(e, seg, q->vmax);
     if (is_slow(q)) /* every queued slot has room: so has the ring */
         e->queue.slow[(e->queue.slow_head + e->queue.slow_len++) % e->queue.cap] =
             (size_t)(q - e->queue.ent);
