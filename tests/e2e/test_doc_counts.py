@@ -816,5 +816,57 @@ class ManPages(unittest.TestCase):
         self.assertGreaterEqual(checked, 4)
 
 
+class DelayMeasured(unittest.TestCase):
+    """lib/engine/DESIGN.md "The delay measured" (issue 26 item 5): its table is the one
+    tests/bench/bench_delay.py prints (D per configuration on three synthetic tracks, the
+    steady delay, underruns, the distance to scipy's CubicSpline), line for line, and the
+    figures of the paragraphs below it are that run's (about 30 trajreplay runs of at most
+    3600 s of input each, --binary: about a second)."""
+    maxDiff = None
+
+    def test_delay_table(self):
+        spec = importlib.util.spec_from_file_location(
+            "bench_delay", os.path.join(ROOT, "tests", "bench", "bench_delay.py"))
+        bench = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(bench)
+        exe = os.path.join(BUILD, "bin", "trajreplay")
+        doc = read("lib/engine/DESIGN.md")
+        a = doc.index("| track | configuration | D s |")
+        shown = doc[a:doc.index("\n\n", doc.index("\n\n(1) ", a) + 2)].split("\n")
+        with tempfile.TemporaryDirectory() as tmp:
+            self.assertEqual(shown, bench.table_a(exe, tmp), "DESIGN.md's delay table is stale")
+
+            def m(track, *opts):
+                return bench.measure(exe, track, opts, tmp)
+            text = flat("lib/engine/DESIGN.md")
+            text = text[text.index("**The delay measured**"):text.index("**Forward differences.**")]
+            one, ten, raised, median, held = grab(text, (
+                r"\+(\S+) s at 1 Hz, \+(\S+) s at 10 Hz with `--delay`.*D is raised to the need "
+                r"\((\S+) s\).*\(median (\S+) s\); with `--capacity 8192` the steady delay is (\S+) s"))
+            for shown, d in ((one, m("1 Hz")), (ten, m("10 Hz", "--max-speed", "10", "--delay", "5"))):
+                # the difference of the table's two columns, as rounded there
+                self.assertEqual("%.3f" % (float("%.3f" % d["steady"]) - float("%.3f" % d["D"])), shown)
+            self.assertEqual("%.3f" % m("1 Hz", "--max-speed", "10", "--delay", "5")["D"], raised)
+            self.assertEqual("%.3f" % m("200 Hz", "--max-speed", "10", "--delay", "25")["steady"], median)
+            self.assertEqual("%.3f" % m("200 Hz", "--max-speed", "10", "--delay", "25", "--capacity",
+                                        "8192")["steady"], held)
+            # the lag over the track with gaps
+            s, _, pieces = bench.lag_trace(exe, tmp)
+        d1, d2, start, won, end, last, cost = grab(text, (
+            r"The first piece streams at its D, (\S+) s,.*D (\S+) s for the others\. Each later piece "
+            r"starts (\S+) s behind after its transfer and ramp, wins back (\S+) s at 5 % until its "
+            r"input ends and closes its tail, and ends (\S+) s behind \(the last (\S+) s\): 40 s at 5 % "
+            r"do not win back a transfer's (\S+) s"))
+        self.assertEqual(("%.3f" % pieces[0]["D"], "%.3f" % pieces[0]["start"]), (d1, d1))
+        self.assertEqual(s["underruns"], 1)
+        later = pieces[1:]
+        for what, want in (("D", d2), ("start", start), ("end", end)):
+            self.assertEqual({"%.3f" % p[what] for p in later[:-1]}, {want}, what)
+        self.assertEqual("%.3f" % later[-1]["end"], last)
+        self.assertEqual({"%.3f" % (p["start"] - p["end"]) for p in later[:-1]}, {won})
+        self.assertEqual({"%.3f" % (p["start"] - p["D"]) for p in later}, {cost})
+        self.assertEqual(len({"%.3f" % p["start"] for p in later}), 1)   # the lag does not add up
+
+
 if __name__ == "__main__":
     unittest.main(argv=sys.argv[:1])
