@@ -58,6 +58,7 @@ static void drive_event(can_drive_t *o, lc_event_t ev)
 static void drive_summary(can_drive_t *o)
 {
     can_port_drive_t *d = &o->drive;
+    int before = d->all_enabled;
     d->all_seen = d->all_enabled = 1;
     d->held = 0;
     int live = 1;
@@ -71,6 +72,10 @@ static void drive_summary(can_drive_t *o)
                                                    can_axis_anchor(&o->ax[k], o->pos_inc[k]));
         }
     d->all_enabled &= d->all_seen;
+    if (d->all_enabled && !before)
+        d->enabled_n++;
+    else if (!d->all_enabled && before)
+        d->lost_n++;
     d->need_anchor = d->all_enabled && !live;
     if (d->all_enabled) {
         o->reset_req = 0;

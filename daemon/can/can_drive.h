@@ -29,8 +29,11 @@ typedef struct {
     unsigned seen;                              /* bit per axis heard from */
     int all_seen;                               /* every axis with a COB-id was heard from */
     int all_enabled;                            /* and every one is in Operation Enabled */
-    int was_enabled; /* all were enabled, until this frame (a loss is this and !all_enabled) */
-    int held;        /* bring-up: a drive left Operation Enabled; it stays disabled
+    int was_enabled;    /* all were enabled, until this frame (a loss is this and !all_enabled) */
+    unsigned enabled_n; /* times all_enabled became 1 (the log tells each, even when
+                           the loop polls it after it was lost again) */
+    unsigned lost_n;    /* ... and became 0 */
+    int held;           /* bring-up: a drive left Operation Enabled; it stays disabled
                              * until a CLEAR command asks for a fault reset and re-enable */
     uint8_t nmt[CANPROTO_CIA402_AXES]; /* last heartbeat NMT state (CANPROTO_S2_NMT_NONE: none) */
     unsigned hb_lost;                  /* bit per axis: heartbeat not heard in time (consumer) */

@@ -54,7 +54,8 @@ typedef struct {
     canerr_bus_t err;          /* error-frame counters as of the same timer */
     uint32_t load_permille;    /* worst-case bus load of the configured traffic, 0.1 % */
     can_port_obj_stats_t drive_logged[CFG_OBJECTS_MAX]; /* drive counters already logged */
-    int drive_state_logged[CFG_OBJECTS_MAX];            /* all_enabled as last logged, -1 never */
+    unsigned drive_en_logged[CFG_OBJECTS_MAX];          /* the drives' enabled_n as last logged */
+    unsigned drive_lost_logged[CFG_OBJECTS_MAX];        /* ... and lost_n */
     uint64_t refused_logged[CFG_OBJECTS_MAX];           /* cmd_refused already logged */
     uint64_t clamped_logged[CFG_OBJECTS_MAX];           /* tx_clamped already logged */
     int64_t refused_log_ns;                             /* when log_refused last logged */
@@ -193,22 +194,25 @@ static void log_drives(can_state_t *s)
         if (os.sdo_timeouts != was->sdo_timeouts)
             log_msg(LOG_WARNING, "can: object '%s': SDO request unanswered, resent (%llu)", name,
                     (unsigned long long)os.sdo_timeouts);
-        if (d && d->all_seen && d->all_enabled != s->drive_state_logged[k]) {
-            if (d->all_enabled)
-                log_msg(LOG_NOTICE,
-                        "can: object '%s': drives in Operation Enabled, starting from "
-                        "(%.4f, %.4f, %.4f)",
-                        name, d->pos_m[0], d->pos_m[1], d->pos_m[2]);
-            else if (s->drive_state_logged[k] == 1)
-                log_msg(LOG_ERR,
-                        "can: object '%s': a drive left Operation Enabled (x: %s, y: %s, "
-                        "z: %s): object held, a drive not enabled gets its own position as "
-                        "target%s",
-                        name, d->seen & 1 ? cia402_state_name(d->state[0]) : "-",
-                        d->seen & 2 ? cia402_state_name(d->state[1]) : "-",
-                        d->seen & 4 ? cia402_state_name(d->state[2]) : "-",
-                        d->held ? "; command clear resets and re-enables it" : "");
-            s->drive_state_logged[k] = d->all_enabled;
+        /* each loss and each enable once, in that order, even when both came
+         * between two polls (a fault cleared within one: counted in can_drive.c) */
+        if (d && d->lost_n != s->drive_lost_logged[k]) {
+            s->drive_lost_logged[k] = d->lost_n;
+            log_msg(LOG_ERR,
+                    "can: object '%s': a drive left Operation Enabled (x: %s, y: %s, "
+                    "z: %s): object held, a drive not enabled gets its own position as "
+                    "target%s",
+                    name, d->seen & 1 ? cia402_state_name(d->state[0]) : "-",
+                    d->seen & 2 ? cia402_state_name(d->state[1]) : "-",
+                    d->seen & 4 ? cia402_state_name(d->state[2]) : "-",
+                    d->held ? "; command clear resets and re-enables it" : "");
+        }
+        if (d && d->enabled_n != s->drive_en_logged[k]) {
+            s->drive_en_logged[k] = d->enabled_n;
+            log_msg(LOG_NOTICE,
+                    "can: object '%s': drives in Operation Enabled, starting from "
+                    "(%.4f, %.4f, %.4f)",
+                    name, d->pos_m[0], d->pos_m[1], d->pos_m[2]);
         }
         *was = os;
     }
@@ -479,7 +483,7 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
                     (unsigned)s->objs[k]->cfg->id, &ids);
         can_port_hooks_t hk = {s->is_input[k] ? hk_push : hk_push_refuse, hk_command, hk_status,
                                hk_feedback, hk_drive_event};
-        s->drive_state_logged[k] = -1;
+        s->drive_en_logged[k] = s->drive_lost_logged[k] = 0;
         if (ids.cia402 >= CANPROTO_CIA402_FEEDBACK && !s->objs[k]->carried)
             engine_require_position(s->objs[k]->engine, 1); /* the drive says where it is */
         else if (ids.cia402 && !s->objs[k]->carried)        /* check(): initial_position given */

@@ -29,6 +29,7 @@ static struct {
     unsigned nhold;
     unsigned nanchor;
     double anchor_m[3];
+    unsigned enabled_n, lost_n; /* the drives' episodes, as the feedback gave them */
 } obj;
 
 static int fo_push(void *ctx, const engine_waypoint_t *wp)
@@ -47,6 +48,8 @@ static void fo_status(void *ctx, engine_status_t *st)
 static int fo_feedback(void *ctx, const can_port_drive_t *d)
 {
     (void)ctx;
+    obj.enabled_n = d->enabled_n;
+    obj.lost_n = d->lost_n;
     if (!d->need_anchor)
         return 0;
     obj.nanchor++;
@@ -188,6 +191,8 @@ static void test_fault_mid_motion(void **state)
     assert_int_equal(rpdo(2, mark, NULL), 8000);
     assert_int_equal(obj.nanchor, 1);
     assert_true(fabs(obj.anchor_m[1] + 0.8) < 1e-9);
+    assert_int_equal(obj.enabled_n, 1); /* one episode each, whenever the log polls it */
+    assert_int_equal(obj.lost_n, 0);
     for (uint32_t k = 1; k <= 10; k++) { /* moving in x at 1 m/s, 50 ms cycles */
         p[0] = 1.2 + 0.05 * k;
         mark = io.nout;
@@ -219,6 +224,10 @@ static void test_fault_mid_motion(void **state)
     tpdo(1, OE, 17100);
     can_port_rx(port, 700000000); /* read before the tick: re-anchored at once */
     assert_int_equal(obj.nanchor, 2);
+    /* lost once, enabled again once: counted, so that a log that polls only
+     * now still tells both (can_transport.c; before, it compared the level) */
+    assert_int_equal(obj.lost_n, 1);
+    assert_int_equal(obj.enabled_n, 2);
     assert_true(fabs(obj.anchor_m[0] - 1.71) < 1e-9); /* where node 1 stands */
     assert_true(fabs(obj.anchor_m[1] + 0.8) < 1e-9);  /* the target y held */
     assert_true(fabs(obj.anchor_m[2] - 0.3) < 1e-9);
