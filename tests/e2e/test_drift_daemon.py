@@ -1,0 +1,118 @@
+#!/usr/bin/python3
+"""A relative-time sender whose clock runs fast or slow, through the real
+daemon (issue 26 item 3, lib/engine/catchup.h): trajd replays a candump
+log_in of waypoint frames, each logged at its arrival on trajd's clock, at
+speed 200: 30 minutes of a 2 Hz GNSS-like track (x = 300 sin(t/60),
+y = 200 sin(t/97)) from a sender whose clock runs 500 ppm fast or slow,
+each waypoint arriving 20..80 ms late (the issue's 24 h run, shortened;
+500 ppm is drift_max_ppm's default).  With 1 % of the waypoints lost as
+well, a lost one is a hole of two intervals against the start's slack of
+one: the first such holes are underruns, after which start_slack auto has
+learnt the slack and D holds it (printed, not asserted).
+
+Given that log, when trajd plays the object out (relative time, [daemon]
+catchup at its default 5 %), then the delay on the sender's clock at the end
+is the delay at the start within one input interval and no waypoint-late
+underrun occurs while the sender sends; with catchup = 0 (the old pace of
+the stamps) the fast sender's delay grows by its drift (0.9 s) instead, so
+the test can fail.  canmatrix encodes the frames from config/trajd.dbc."""
+import csv
+import decimal
+import math
+import os
+import random
+import subprocess
+import sys
+import tempfile
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+import cantools_trajd as ct  # noqa: E402
+
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+BUILD = os.environ.get("BUILD", os.path.join(ROOT, "build"))
+TRAJD = os.path.join(BUILD, "bin", "trajd")
+H = 0.5           # the sender's interval, s
+N = 3600          # 30 minutes
+SPEED = 200
+RATE_HZ = 10
+
+
+def write_log(path, ppm, loss=0.0, seed=7):
+    rnd = random.Random(seed)
+    db = ct.load_db()
+    lines = []
+    for i in range(N):
+        t = H * i
+        if rnd.random() < loss and 0 < i < N - 1:
+            continue  # lost
+        x, y = 300 * math.sin(t / 60), 200 * math.sin(t / 97)
+        arrive = t / (1 + ppm * 1e-6) + rnd.uniform(0.02, 0.08)
+        dec = [decimal.Decimal("%.6f" % v) for v in (t, x, y, 0.0)]
+        for can_id, data, is_fd in ct.waypoint_frames(db, i + 1, *dec):
+            lines.append("(%.6f) can0 %s\n" % (arrive, ct.fmt_frame(can_id, data, is_fd)))
+    with open(path, "w") as fh:
+        fh.write("# a sender %+g ppm off, %g %% lost, 20..80 ms late\n" % (ppm, 100 * loss))
+        fh.writelines(lines)
+
+
+def run(d, ppm, catchup):
+    conf = os.path.join(d, "t.conf")
+    with open(conf, "w") as fh:
+        fh.write("[daemon]\nrate_hz = %d\nspeed = %d\nclock = relative\nexit_when_done = yes\n"
+                 "status_interval_s = 0\nstop_timeout_s = 1\n%s"
+                 "[can]\nlog_in = wp.log\nlog_ifname = vcan0\nmax_late_ms = 0\n"
+                 "[object.gnss]\ninput = can\noutput = csv\ncsv.path = sp.csv\n"
+                 % (RATE_HZ, SPEED, "catchup = %g\n" % catchup if catchup is not None else ""))
+    p = subprocess.run([TRAJD, "-f", "-c", conf], cwd=d, capture_output=True, text=True,
+                       timeout=120)
+    rows = []
+    with open(os.path.join(d, "sp.csv")) as fh:
+        for r in csv.DictReader(fh):
+            rows.append((int(r["now_ns"]) * 1e-9, float(r["t_s"]), r["state"]))
+    return p, rows
+
+
+def delays(rows, ppm, lo, hi):
+    """now - t_s on the sender's clock (what D is stated in), streaming rows
+    with now in [lo, hi)."""
+    d = sorted(now * (1 + ppm * 1e-6) - t for now, t, st in rows
+               if st == "streaming" and lo <= now < hi)
+    return d[len(d) // 2] if d else float("nan")
+
+
+class DriftDaemon(unittest.TestCase):
+    def check(self, ppm, catchup=None, loss=0.0):
+        with tempfile.TemporaryDirectory() as d:
+            write_log(os.path.join(d, "wp.log"), ppm, loss)
+            p, rows = run(d, ppm, catchup)
+        self.assertEqual(p.returncode, 0, p.stderr[-2000:])
+        end_in = (N - 1) * H / (1 + ppm * 1e-6)
+        start, end = delays(rows, ppm, 120, 300), delays(rows, ppm, end_in - 200, end_in - 20)
+        late = sum(1 for now, t, st in rows if st == "underrun" and now < end_in)
+        print("sender %+d ppm, %g %% lost, catchup %s: delay %.3f s at 2..5 min, %.3f s at the end; "
+              "%d underrun rows while it sends" % (ppm, 100 * loss, catchup, start, end, late), file=sys.stderr)
+        return start, end, late, p.stderr
+
+    def test_fast_sender_followed(self):
+        start, end, late, err = self.check(500)
+        self.assertLessEqual(abs(end - start), H)
+        self.assertEqual(late, 0)
+        self.assertIn("lags won back", err)
+
+    def test_slow_sender_followed(self):
+        start, end, late, _ = self.check(-500)
+        self.assertLessEqual(abs(end - start), H)
+        self.assertEqual(late, 0)
+
+    def test_lost_waypoints_printed(self):
+        start, end, late, _ = self.check(500, loss=0.01)
+        self.assertLessEqual(abs(end - start), 2.5 * H)  # D grows by the slack learnt
+
+    def test_without_catchup_the_drift_is_lag(self):
+        start, end, _, _ = self.check(500, catchup=0)
+        self.assertGreater(end - start, 0.7)  # 500 ppm of 30 min: 0.9 s
+
+
+if __name__ == "__main__":
+    unittest.main()
