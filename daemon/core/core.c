@@ -200,6 +200,28 @@ static int64_t real_offset(core_priv_t *p)
     return p->rt_off_ns;
 }
 
+/* Issue 26: the D a trajectory's output holds, logged as it starts streaming
+ * (lib/engine/delay.h): the first OBJ_DELAY_LOG_FIRST trajectories of an
+ * object, then every OBJ_DELAY_LOG_EVERY-th (a sender that starts one a
+ * second does not flood the log; the status and trajreplay --summary show
+ * the last). */
+#define OBJ_DELAY_LOG_FIRST 20
+#define OBJ_DELAY_LOG_EVERY 100
+static void obj_log_track_delay(obj_t *o)
+{
+    if (o->sp.track == o->delay_track || o->sp.state != ENGINE_STATE_STREAMING)
+        return;
+    o->delay_track = o->sp.track;
+    if (o->delay_logs++ >= OBJ_DELAY_LOG_FIRST && o->sp.track % OBJ_DELAY_LOG_EVERY)
+        return;
+    engine_delay_t d;
+    char line[400];
+    engine_delay(o->engine, &d);
+    engine_delay_format(&d, line, sizeof line);
+    log_msg(LOG_INFO, "object '%s': trajectory %u streams: play-out delay %s", o->name,
+            (unsigned)o->sp.track, line);
+}
+
 /*
  * Serve deadline k; deadlines k0 .. k-1 were missed.  In real time (speed 1)
  * the objects move on by one period from the last setpoint sent, never by
@@ -239,6 +261,7 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
         rejlog_drain(&o->rejlog, o->engine); /* verdicts given by a finish or a tick */
         engine_status(o->engine, &o->status);
         o->status.skipped_ticks += o->skipped_ticks;
+        obj_log_track_delay(o);
         if (o->retiring) /* the owner judged its own setpoint (lc_tick) */
             safety_check(&o->safety, &o->sp);
         obj_frames(c->cfg, o);

@@ -149,6 +149,8 @@ typedef struct obj {
                                      * OBJ_CMD_LOG_PER_S in a second) */
     core_drive_t drive;           /* its drives, published by the transport that drives
                                    * them in its cycle (zero if none does) */
+    uint32_t delay_track;         /* the trajectory whose D was logged last (issue 26) */
+    uint64_t delay_logs;          /* ... how many were logged */
 } obj_t;
 
 /* The owner of o's motion, bound to o's engine and monitor (an obj_t built

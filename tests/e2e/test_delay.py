@@ -35,6 +35,7 @@ import replay_summary  # noqa: E402
 
 BUILD = os.environ.get("BUILD", os.path.abspath("build"))
 TRAJREPLAY = os.path.join(BUILD, "bin", "trajreplay")
+TRAJD = os.path.join(BUILD, "bin", "trajd")
 H = 0.1          # the input interval, s
 A, J = 5.0, 50.0  # scale_accel_m_s2, scale_jerk_m_s3 (defaults)
 T = 0.01         # output period (100 Hz)
@@ -259,6 +260,39 @@ class TestLagWonBack(unittest.TestCase):
             self.assertLess(ends[k], starts[k] - 0.5, "piece %d: %.3f -> %.3f" % (k + 2, starts[k], ends[k]))
             self.assertGreater(ends[k], D - H)
         self.assertLessEqual(max(starts) - min(starts), H)
+
+
+
+class TestDaemonStatesD(unittest.TestCase):
+    """Issue 26 item 1: trajd logs the D each trajectory's output holds as it
+    starts streaming (before: only at start and at each reload, from the
+    settings).  The gap track of TestTailPlaysOut replayed by trajd at speed
+    50: two trajectories, each logged with its D and parts, the same D that
+    trajreplay's --summary states for the track."""
+
+    def test_each_trajectory_logged(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "gap.csv")
+            t, x, y = track()
+            t = np.where(np.arange(len(t)) >= 300, t + 300.0, t)
+            write_track(path, t, x, y)
+            conf = os.path.join(tmp, "t.conf")
+            with open(conf, "w") as f:
+                f.write("[daemon]\nrate_hz = 100\nspeed = 50\nexit_when_done = yes\n"
+                        "status_interval_s = 0\n[object.a]\ninput = replay\n"
+                        "replay.track = %s\noutput = csv\ncsv.path = %s\n"
+                        % (path, os.path.join(tmp, "a.csv")))
+            p = subprocess.run([TRAJD, "-f", "-c", conf], capture_output=True, text=True,
+                               timeout=120)
+            self.assertEqual(p.returncode, 0, p.stderr[-2000:])
+            s = replay_summary.parse(replay(path).stderr)
+        lines = [l for l in p.stderr.splitlines() if "streams: play-out delay" in l]
+        self.assertEqual(len(lines), 2, p.stderr[-2000:])
+        for k, l in enumerate(lines):
+            self.assertIn("object 'a': trajectory %d streams: play-out delay D " % (k + 1), l)
+            self.assertIn("lookahead 18 x 0.1 s + slack 1 x 0.1 s + stop reserve", l)
+        d = float(lines[-1].split("play-out delay D ")[1].split()[0])
+        self.assertAlmostEqual(d, s["delay_s"], places=3)
 
 
 if __name__ == "__main__":
