@@ -53,6 +53,16 @@ def write_track(path, t, x, y):
             f.write("%.1f,%.12f,%.12f\n" % (a, b, c))
 
 
+def gap_track(tmp):
+    """The track with a silence of 300 s after its first 300 waypoints, into
+    tmp/gap.csv: its path and the positions."""
+    path = os.path.join(tmp, "gap.csv")
+    t, x, y = track()
+    t = np.where(np.arange(len(t)) >= 300, t + 300.0, t)
+    write_track(path, t, x, y)
+    return path, x, y
+
+
 def stop_s(v):
     """Track time of a jerk-limited stop from rate 1 at speed v (S-curve):
     v/(2a) + a/(2j)."""
@@ -141,10 +151,7 @@ class TestTailPlaysOut(unittest.TestCase):
 
     def test_gap_track(self):
         with tempfile.TemporaryDirectory() as tmp:
-            path = os.path.join(tmp, "gap.csv")
-            t, x, y = track()
-            t = np.where(np.arange(len(t)) >= 300, t + 300.0, t)
-            write_track(path, t, x, y)
+            path, x, y = gap_track(tmp)
             p = replay(path, "--keep-gaps")
             self.assertEqual(p.returncode, 0, p.stderr)
             s = replay_summary.parse(p.stderr)
@@ -272,10 +279,7 @@ class TestDaemonStatesD(unittest.TestCase):
 
     def test_each_trajectory_logged(self):
         with tempfile.TemporaryDirectory() as tmp:
-            path = os.path.join(tmp, "gap.csv")
-            t, x, y = track()
-            t = np.where(np.arange(len(t)) >= 300, t + 300.0, t)
-            write_track(path, t, x, y)
+            path, x, y = gap_track(tmp)
             conf = os.path.join(tmp, "t.conf")
             with open(conf, "w") as f:
                 f.write("[daemon]\nrate_hz = 100\nspeed = 50\nexit_when_done = yes\n"
