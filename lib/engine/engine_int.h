@@ -137,6 +137,13 @@ typedef struct {
     int have_now;
     int64_t last_now;
     engine_setpoint_t last_sp;
+    /* the underrun under way began with the newest waypoint at und_t of the
+     * input trajectory und_traj (silence.h), and taught start_slack auto an
+     * interval (und_learnt): a silent end with nothing newer says it was the
+     * input's end, not a late waypoint (engine_silence_tick) */
+    double und_t;
+    uint64_t und_traj;
+    int und_learnt;
 } engine_out_t;
 
 /* ---- time scaling of the play-out (engine_scale.c, timescale.h, TIMESCALE.md) ---- */

@@ -72,10 +72,14 @@ static int rebuffering(const engine_t *e, double s)
 void play_count_underrun(engine_t *e)
 {
     e->st.underruns++;
+    e->out.und_t = e->sil.last_t;
+    e->out.und_traj = e->sil.traj;
+    e->out.und_learnt = 0;
 
     if (e->slack_auto && e->slack_learn < e->slack_more) {
         e->slack_learn++;
         e->st.lookahead = e->lookahead + e->slack_learn;
+        e->out.und_learnt = 1;
     }
 }
 

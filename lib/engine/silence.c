@@ -75,6 +75,17 @@ int engine_silence_tick(engine_t *e, int64_t now_ns)
     e->sil.arrived = 0;
     e->sil.closed = 1;
     e->st.silent_ends++;
+    if (e->out.underrun && e->out.und_traj == e->sil.traj && !(e->sil.last_t > e->out.und_t)) {
+        /* the output ran short with no waypoint since: that was the input's
+         * end, now known, not a late waypoint: no underrun, nothing learnt
+         * (its ticks stay counted in underrun_ticks, as they were sent) */
+        e->st.underruns--;
+        if (e->out.und_learnt) {
+            e->slack_learn--;
+            e->st.lookahead = e->lookahead + e->slack_learn;
+        }
+        e->out.und_learnt = 0;
+    }
     (void)engine_finish(e); /* -ENGINE_ENUMERIC cannot happen with finite data */
     return 1;
 }

@@ -97,6 +97,29 @@ static void test_tail_plays_out(void **state)
     assert_int_equal(r.st.tracks, 2);
 }
 
+/* Given 40 s at 10 Hz that stop at 2.9 m/s with no FINISH, 15 s of silence
+ * and 40 s more, then the output, which runs short of solved curve before
+ * the silence is long enough to tell an end (it brakes on its stop reserve),
+ * counts no underrun once the silence ends the trajectory: nothing newer had
+ * come, so it was the input's end, and start_slack auto learns nothing from
+ * it (the lookahead stays 18; before: 1 underrun, lookahead 19, and D an
+ * interval longer for the next piece). */
+static void test_end_is_no_underrun(void **state)
+{
+    (void)state;
+    run_t r;
+    run(400, 15.0, 100.0, &r);
+    print_message("end at speed: %llu underruns, %d underrun ticks, %llu silent ends, "
+                  "lookahead %u\n",
+                  (unsigned long long)r.st.underruns, r.under_ticks,
+                  (unsigned long long)r.st.silent_ends, r.st.lookahead);
+    assert_int_equal(r.st.underruns, 0);
+    assert_int_equal(r.st.lookahead, 18);
+    assert_true(r.st.silent_ends >= 1);
+    assert_int_equal(r.st.tracks, 2);
+    assert_int_equal(r.st.hard_stops, 0);
+}
+
 /* Given a regular track whose input never pauses for longer than an
  * interval, then no silent end: one trajectory, streamed as before. */
 static void test_no_silent_end_while_regular(void **state)
@@ -150,6 +173,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_tail_plays_out),
+        cmocka_unit_test(test_end_is_no_underrun),
         cmocka_unit_test(test_no_silent_end_while_regular),
         cmocka_unit_test(test_delay_stated),
         cmocka_unit_test(test_delay_of_config),
