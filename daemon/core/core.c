@@ -207,6 +207,17 @@ static int64_t real_offset(core_priv_t *p)
  * the last). */
 #define OBJ_DELAY_LOG_FIRST 20
 #define OBJ_DELAY_LOG_EVERY 100
+
+/* One line: "object 'a': <what>play-out delay D ..." (delay.h's format). */
+static void obj_log_delay(const obj_t *o, const char *what)
+{
+    engine_delay_t d;
+    char line[400];
+    engine_delay(o->engine, &d);
+    engine_delay_format(&d, line, sizeof line);
+    log_msg(LOG_INFO, "object '%s': %splay-out delay %s", o->name, what, line);
+}
+
 static void obj_log_track_delay(obj_t *o)
 {
     if (o->sp.track == o->delay_track || o->sp.state != ENGINE_STATE_STREAMING)
@@ -214,12 +225,9 @@ static void obj_log_track_delay(obj_t *o)
     o->delay_track = o->sp.track;
     if (o->delay_logs++ >= OBJ_DELAY_LOG_FIRST && o->sp.track % OBJ_DELAY_LOG_EVERY)
         return;
-    engine_delay_t d;
-    char line[400];
-    engine_delay(o->engine, &d);
-    engine_delay_format(&d, line, sizeof line);
-    log_msg(LOG_INFO, "object '%s': trajectory %u streams: play-out delay %s", o->name,
-            (unsigned)o->sp.track, line);
+    char what[48];
+    snprintf(what, sizeof what, "trajectory %u streams: ", (unsigned)o->sp.track);
+    obj_log_delay(o, what);
 }
 
 /*
@@ -510,15 +518,9 @@ static int reopen_old(core_t **prevp)
  * it stated), or what its settings need before any input. */
 static void log_delays(const core_t *c)
 {
-    for (unsigned i = 0; i < c->nobj; i++) {
-        engine_delay_t d;
-        char line[400];
-        if (!c->obj[i].engine)
-            continue;
-        engine_delay(c->obj[i].engine, &d);
-        engine_delay_format(&d, line, sizeof line);
-        log_msg(LOG_INFO, "object '%s': play-out delay %s", c->obj[i].name, line);
-    }
+    for (unsigned i = 0; i < c->nobj; i++)
+        if (c->obj[i].engine)
+            obj_log_delay(&c->obj[i], "");
 }
 
 int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, core_t **out,

@@ -81,51 +81,47 @@ void engine_lag_note(engine_t *e, int64_t now_ns)
     l->seen_ns = now_ns;
 }
 
-/* The lag beyond D now (catchup.h); 0 when none is told: no sample of the
- * trajectory played, stamps ahead of time, its input closed, or a start
- * not governed by D (start_slack set, delay_s not) or D not measured. */
-static double lag_now(const engine_t *e)
+/* The lag beyond D now (catchup.h), with the D stated in *d; 0 (and *d
+ * unread) when none is told: no sample of the trajectory played, stamps
+ * ahead of time, its input closed, or a start not governed by D
+ * (start_slack set, delay_s not) or D not measured. */
+static double lag_now(const engine_t *e, engine_delay_t *d)
 {
-    engine_delay_t d;
-
     /* only while the sender goes on: a closed trajectory's tail plays out
      * as it was stamped (the sender's time runs on through the silence) */
     if (!e->lag.have || e->lag.ahead || e->lag.traj != e->out.traj || !e->out.have_now ||
         !e->in.open || !(e->slack_auto || e->cfg.delay_s > 0) || !e->delay.noted)
         return 0.0;
-    engine_delay(e, &d);
-    if (!(d.interval_s > 0))
+    engine_delay(e, d);
+    if (!(d->interval_s > 0))
         return 0.0;
     double now = (double)e->out.last_now * 1e-9;
-    /* aged to the last tick that brought a sample, not to now: the lag then
-     * changes only at ticks a push closed the fast window for, the same
-     * with fast ticks or without */
     /* D as stated at the start, and an interval more for each underrun
      * since (start_slack auto learns them: the input comes later than its
-     * stamps say, the slack it kept was too short) */
-    double D = d.delay_s + (double)(e->slack_learn - e->delay.learnt) * d.interval_s;
+     * stamps say, the slack it kept was too short).  The sender's time is
+     * aged to the last tick that brought a sample, not to now: the lag then
+     * changes only at ticks a push closed the fast window for, the same
+     * with fast ticks or without */
+    double D = d->delay_s + (double)(e->slack_learn - e->delay.learnt) * d->interval_s;
     return (now + offset_at(e, e->lag.seen_ns) - D) - e->out.t;
 }
 
-double engine_lag_s(const engine_t *e)
+/* Beyond this lag it is won back: half an input interval of d, two ticks at
+ * least. */
+static double band_on(const engine_t *e, const engine_delay_t *d)
 {
-    return lag_now(e);
-}
-
-/* The band beyond which a lag is won back: half an input interval, two
- * ticks at least. */
-static double band_on(const engine_t *e)
-{
-    return fmax(0.5 * interval_of(e), 2.0 * e->period_s);
+    return fmax(0.5 * d->interval_s, 2.0 * e->period_s);
 }
 
 int engine_lag_pending(const engine_t *e)
 {
+    engine_delay_t d;
     if (e->lag.steer)
         return 1;
     if (!e->lag.have || e->out.mode != OUT_STREAM)
         return 0;
-    return fabs(lag_now(e)) > band_on(e);
+    double lag = lag_now(e, &d);
+    return lag < 0.0 || lag > 0.0 ? fabs(lag) > band_on(e, &d) : 0;
 }
 
 double engine_lag_target(engine_t *e, double target, double R, double A, double J)
@@ -134,12 +130,17 @@ double engine_lag_target(engine_t *e, double target, double R, double A, double 
         e->lag.steer = 0;
         return target;
     }
-    double lag = lag_now(e), T = e->period_s;
+    engine_delay_t d;
+    double lag = lag_now(e, &d), T = e->period_s;
     e->st.lag_s = lag;
+    if (!(lag < 0.0 || lag > 0.0)) {
+        e->lag.steer = 0; /* none told (lag_now): d unread */
+        return target;
+    }
     if (!e->lag.steer) {
         /* from the unit grid only: a ramp (a start, a resume) is on its way
          * to rate 1 and would be steered by a lag it is itself winning */
-        if (e->scale.on || !(fabs(lag) > band_on(e)))
+        if (e->scale.on || !(fabs(lag) > band_on(e, &d)))
             return target;
     } else if (fabs(lag) < 0.1 * T) {
         e->lag.steer = 0;
@@ -150,8 +151,6 @@ double engine_lag_target(engine_t *e, double target, double R, double A, double 
     double r = target + lead;
     /* faster only where the curve ahead holds a stop from r, the slack and
      * a tick besides: winning back never runs into the data */
-    engine_delay_t d;
-    engine_delay(e, &d);
     if (r > target && !(isinf(R) || ts_stop_dist(r, 0.0, A, J) + d.slack_s + r * T < R))
         return target;
     if (!e->lag.steer) {

@@ -60,7 +60,4 @@ double engine_lag_target(engine_t *e, double target, double R, double A, double 
  * every tick then goes the full way (no fast ticks). */
 int engine_lag_pending(const engine_t *e);
 
-/* The current lag beyond D (s; 0: none known). */
-double engine_lag_s(const engine_t *e);
-
 #endif
