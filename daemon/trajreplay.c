@@ -461,6 +461,8 @@ static void print_delay(const engine_t *e)
             "summary: delay_interval_s %.9g\n"
             "summary: delay_speed_m_s %.9g\n",
             d.delay_s, d.lookahead_s, d.slack_s, d.stop_s, d.interval_s, d.speed_m_s);
+    const char *m = engine_setting_enum_name(engine_setting_find("method"), d.method);
+    fprintf(stderr, "summary: method %s\n", m ? m : "?");
 }
 
 /* One replay: its inputs, outputs and what was seen. */

@@ -54,6 +54,9 @@ typedef struct {
     double t_s;                  /* waypoint time, seconds, sender's track clock */
     double pos_m[ENGINE_AXES];   /* x, y, z (east, north, up for geographic input), metres */
     uint32_t seq;                /* transport sequence number (0 if none) */
+    uint32_t has_vel;            /* 1: vel_m_s is the source's velocity at t_s */
+    double vel_m_s[ENGINE_AXES]; /* m/s, same axes; read only with has_vel (zero-initialise
+                                    waypoints: {0} or calloc), only by the local methods */
 } engine_waypoint_t;
 
 /* A waypoint the engine refused, as reported by engine_rejection_next: the

@@ -50,6 +50,7 @@ void engine_delay_parts(const engine_config_t *r, unsigned la, double interval_s
     d->stop_s = engine_delay_stop_s(r, speed_m_s);
     d->need_s = d->lookahead_s + d->slack_s + d->stop_s;
     d->delay_s = r->delay_s > d->need_s ? r->delay_s : d->need_s;
+    d->method = (int)r->method;
 }
 
 int engine_delay_check(const engine_config_t *cfg, double interval_s, char *why, size_t whylen)
@@ -75,18 +76,24 @@ int engine_delay_check(const engine_config_t *cfg, double interval_s, char *why,
 
 int engine_delay_format(const engine_delay_t *d, char *buf, size_t len)
 {
-    char need[240];
+    char need[280];
+    /* the local methods (issue 31) are named: max_lookahead picked them */
+    const char *m = d->method == ENGINE_METHOD_HERMITE           ? " (method hermite)"
+                    : d->method == ENGINE_METHOD_HERMITE_CENTRED ? " (method hermite-centred)"
+                                                                 : "";
     if (d->interval_s > 0)
         snprintf(need, sizeof need,
-                 "lookahead %u x %.3g s + slack %u x %.3g s + stop reserve %.3f s (from %.3g "
+                 "lookahead %u x %.3g s%s + slack %u x %.3g s + stop reserve %.3f s (from %.3g "
                  "m/s)",
-                 d->lookahead_n, d->interval_s, d->slack_n, d->interval_s, d->stop_s, d->speed_m_s);
+                 d->lookahead_n, d->interval_s, m, d->slack_n, d->interval_s, d->stop_s,
+                 d->speed_m_s);
     else
         snprintf(need, sizeof need,
-                 "%u input intervals (lookahead %u, slack %u) + stop reserve at most %.3f s "
+                 "%u input intervals (lookahead %u%s, slack %u) + stop reserve at most %.3f s "
                  "(from the speed limit, %.3g m/s; the input's own top speed sets it once "
                  "waypoints come)",
-                 d->lookahead_n + d->slack_n, d->lookahead_n, d->slack_n, d->stop_s, d->speed_m_s);
+                 d->lookahead_n + d->slack_n, d->lookahead_n, m, d->slack_n, d->stop_s,
+                 d->speed_m_s);
     if (d->delay_s > d->need_s)
         return snprintf(buf, len, "D %.3f s (delay_s; the settings need %s)", d->delay_s, need);
     if (d->interval_s > 0)

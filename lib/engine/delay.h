@@ -44,6 +44,8 @@ typedef struct {
     double stop_s;        /* B */
     double need_s;        /* (L + 1) h + S h + B: what the settings need */
     double delay_s;       /* D: need_s, or delay_s when set (>= need_s then) */
+    int method;           /* engine_method_t resolved: the local methods' (issue 31) where
+                             max_lookahead is too short for any fragment */
 } engine_delay_t;
 
 /*

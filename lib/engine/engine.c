@@ -67,6 +67,7 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
     e->held = cfg->ends == ENGINE_ENDS_HELD || cfg->ends == ENGINE_ENDS_MULTIPLE;
     e->mult = cfg->ends == ENGINE_ENDS_MULTIPLE;
     e->smooth = cfg->method == ENGINE_METHOD_SMOOTH;
+    e->local = engine_cfg_local(cfg);
     if (e->smooth) {
         e->solve.sm_mem = calloc(lsq_smooth_mem_len(cfg->smooth_window, cfg->smooth_ctrl, AX),
                                  sizeof(double));
@@ -103,13 +104,16 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
     e->solve.ring = ring;
     e->solve.node_t = calloc(ring, sizeof(double));
     e->solve.node_r = calloc(ring * AX, sizeof(double));
+    e->solve.node_v = calloc(ring * AX, sizeof(double));
+    e->solve.node_vk = calloc(ring, 1);
     e->solve.fw = frag_new(cfg->fragment, cfg->overlap, engine_cfg_frag_delta(cfg), ring);
     /* each accepted waypoint yields at most one segment, each trajectory
      * one END: twice the capacity always fits */
     e->queue.cap = 2 * (size_t)cfg->capacity + 8;
     e->queue.ent = calloc(e->queue.cap, sizeof(qent_t));
     e->queue.slow = calloc(e->queue.cap, sizeof(size_t));
-    if (!e->solve.node_t || !e->solve.node_r || !e->solve.fw || !e->queue.ent || !e->queue.slow)
+    if (!e->solve.node_t || !e->solve.node_r || !e->solve.node_v || !e->solve.node_vk ||
+        !e->solve.fw || !e->queue.ent || !e->queue.slow)
         goto nomem;
     e->st.lookahead = e->lookahead;
     e->scale.ts.rate = 1.0;
@@ -132,6 +136,8 @@ void engine_free(engine_t *e)
         return;
     free(e->solve.node_t);
     free(e->solve.node_r);
+    free(e->solve.node_v);
+    free(e->solve.node_vk);
     frag_free(e->solve.fw);
     free(e->queue.ent);
     free(e->queue.slow);

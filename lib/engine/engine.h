@@ -174,7 +174,26 @@ typedef enum {
     ENGINE_METHOD_BSPLINE = 0, /* exact interpolation, Hoang control points */
     ENGINE_METHOD_CUBIC = 1,   /* exact interpolation, second-derivative system (seed 002) */
     ENGINE_METHOD_SMOOTH = 2,  /* least-squares B-spline over the window (not exact) */
+    ENGINE_METHOD_HERMITE = 3, /* exact, local: C1 cubic Hermite, velocities from the
+                                  source or from each waypoint and the two before */
+    ENGINE_METHOD_HERMITE_CENTRED = 4, /* exact, local: as HERMITE, velocities estimated
+                                          from the waypoints either side */
 } engine_method_t;
+
+/*
+ * The local methods (lib/engine/hermite.h, issue 31): each segment is the
+ * cubic Hermite between its two waypoints and their velocities, the
+ * source's (engine_waypoint_t has_vel) or estimated; no system is solved,
+ * so a segment is final once its end waypoint (HERMITE) or the one after it
+ * (HERMITE_CENTRED) is kept: 2 and 3 waypoints of lookahead with the
+ * acceptance's 1, instead of the fragments' 8 or more.  Exact through every
+ * waypoint, velocity continuous, acceleration not (C1).  A max_lookahead
+ * too short for any fragment picks them (engine_config_resolve): 2 HERMITE,
+ * 3 or more HERMITE_CENTRED.  ends: rest and clamped start and, for
+ * HERMITE_CENTRED, end at the given velocity; natural with zero
+ * acceleration; HERMITE's last segment is final before the input is known
+ * to end, so its end is braked to along the path (the time scaling).
+ */
 
 /*
  * ENGINE_METHOD_SMOOTH (lib/spline/lsq.h, lsq_smooth_*): each waypoint's position
@@ -388,7 +407,10 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp);
 
 /*
  * The checks engine_push makes on wp alone, before any neighbour is seen:
- * 0, -ENGINE_ENOTFINITE or -ENGINE_ERANGE (cfg->max_abs_m, |t_s| > 1e12 s).
+ * 0, -ENGINE_ENOTFINITE or -ENGINE_ERANGE (cfg->max_abs_m, |t_s| > 1e12 s),
+ * or, for the source's velocity (has_vel), -ENGINE_ENOTFINITE or
+ * -ENGINE_ESPEED (faster than the speed limit in force; without one, than
+ * max_abs_m per second).
  * A waypoint that fails them is refused by every engine with cfg; one that
  * passes may still be refused with its neighbours.  Pure (config checks:
  * a track none of whose waypoints passes has nothing usable).

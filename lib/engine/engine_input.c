@@ -162,12 +162,12 @@ static int keep(engine_t *e, const engine_waypoint_t *wp)
         lsq_smooth_push(&e->solve.sm, wp->t_s, wp->pos_m);
         rc = solve_drain(e);
     } else {
-        rc = solve_add_node(e, wp->t_s, wp->pos_m);
+        rc = solve_add_node(e, wp->t_s, wp->pos_m, wp->has_vel == 1 ? wp->vel_m_s : NULL);
     }
     if (rc == 0 && e->mult && e->solve.nodes == 1) {
         /* the first point twice more */
-        if ((rc = solve_add_node(e, wp->t_s, wp->pos_m)) == 0)
-            rc = solve_add_node(e, wp->t_s, wp->pos_m);
+        if ((rc = solve_add_node(e, wp->t_s, wp->pos_m, NULL)) == 0)
+            rc = solve_add_node(e, wp->t_s, wp->pos_m, NULL);
     }
     if (rc < 0) {
         /* cannot happen with finite data (diagonally dominant systems);
@@ -222,6 +222,20 @@ int engine_waypoint_check(const engine_config_t *cfg, const engine_waypoint_t *w
             return -ENGINE_ENOTFINITE;
     if (!isfinite(wp->t_s))
         return -ENGINE_ENOTFINITE;
+    if (wp->has_vel == 1) {
+        /* the source's velocity (the local methods): finite, and no faster
+         * than the speed limit in force (without one: max_abs_m per second) */
+        double v2 = 0, lim = engine_config_max_speed(cfg);
+        for (int k = 0; k < AX; k++) {
+            if (!isfinite(wp->vel_m_s[k]))
+                return -ENGINE_ENOTFINITE;
+            v2 += wp->vel_m_s[k] * wp->vel_m_s[k];
+        }
+        if (!(lim > 0))
+            lim = cfg->max_abs_m;
+        if (sqrt(v2) > lim)
+            return -ENGINE_ESPEED;
+    }
     for (int k = 0; k < AX; k++)
         if (fabs(wp->pos_m[k]) > cfg->max_abs_m)
             return -ENGINE_ERANGE;

@@ -79,11 +79,13 @@ typedef struct {
 
 /* ---- solver (engine_solve.c): nodes, fragments, segments queued ---- */
 typedef struct {
-    uint64_t nodes;    /* nodes of the current trajectory (copies included) */
-    uint64_t seg_next; /* next segment index to build */
-    size_t ring;       /* nodes kept */
-    double *node_t;    /* ring */
-    double *node_r;    /* ring x AX */
+    uint64_t nodes;         /* nodes of the current trajectory (copies included) */
+    uint64_t seg_next;      /* next segment index to build */
+    size_t ring;            /* nodes kept */
+    double *node_t;         /* ring */
+    double *node_r;         /* ring x AX */
+    double *node_v;         /* local methods: ring x AX, each node's velocity ... */
+    unsigned char *node_vk; /* ... ring: 0 none yet, 1 the source's, 2 computed */
     frag_t *fw;
     lsq_smooth_t sm; /* SMOOTH: the smoother the waypoints pass first */
     double *sm_mem;
@@ -238,6 +240,7 @@ struct engine {
     int held;             /* HELD or MULTIPLE: first and last segments not emitted */
     int mult;             /* MULTIPLE: end points entered three times */
     int smooth;           /* SMOOTH: waypoints pass through the lsq smoother first */
+    int local;            /* local method (hermite.h): 1 HERMITE, 2 HERMITE_CENTRED */
     double period_s;
 
     engine_input_t in;
@@ -261,6 +264,7 @@ struct engine {
 unsigned engine_cfg_lookahead(const engine_config_t *cfg);
 /* most waypoints beyond a segment the solver needs, far from the start */
 unsigned engine_cfg_steady_lookahead(const engine_config_t *cfg);
+int engine_cfg_local(const engine_config_t *cfg);
 /* SMOOTH: the waypoints the smoother holds back (0 otherwise) */
 unsigned engine_cfg_smooth_extra(const engine_config_t *cfg);
 /* start offset of the fragment grid (frag.h) */
@@ -282,7 +286,7 @@ double solve_seg_speed_max(const fdiff_seg_t *seg);
  * waypoints turned into nodes; the trajectory closed (end row, last
  * segments, END entry); or ended on a failure with what is queued. */
 void solve_open(engine_t *e);
-int solve_add_node(engine_t *e, double t, const double *r);
+int solve_add_node(engine_t *e, double t, const double *r, const double *vel);
 int solve_drain(engine_t *e);
 int solve_close(engine_t *e);
 void solve_abort(engine_t *e);

@@ -28,6 +28,8 @@ static const char *const method_names[] = {
     [ENGINE_METHOD_BSPLINE] = "bspline",
     [ENGINE_METHOD_CUBIC] = "cubic",
     [ENGINE_METHOD_SMOOTH] = "smooth",
+    [ENGINE_METHOD_HERMITE] = "hermite",
+    [ENGINE_METHOD_HERMITE_CENTRED] = "hermite-centred",
     NULL,
 };
 static const char *const param_names[] = {
@@ -71,7 +73,8 @@ _Static_assert(ENGINE_AXES == 3, "VEC3 settings are written x,y,z");
  * fragment, smooth_ctrl <= smooth_window, ...) are engine_config_check's. */
 const engine_setting_t engine_settings[] = {
     S(method, "method", ENUM, 0, 0, 0, method_names, "M",
-      "bspline | cubic | smooth (least squares, not exact)"),
+      "bspline | cubic | smooth (least squares, not exact) | hermite | hermite-centred (local, "
+      "C1)"),
     S(param, "param", ENUM, 0, 0, 0, param_names, "P",
       "uniform (the paper) | time (knots at the timestamps)"),
     S(ends, "ends", ENUM, 0, 0, 0, ends_names, "E",
@@ -437,9 +440,19 @@ static int config_sizes_ok(const engine_config_t *cfg)
            cfg->overlap >= 2 && cfg->overlap % 2 == 0 && cfg->overlap < cfg->fragment;
 }
 
+/* The local methods (hermite.h): 1 HERMITE, 2 HERMITE_CENTRED, else 0 */
+int engine_cfg_local(const engine_config_t *cfg)
+{
+    return cfg->method == ENGINE_METHOD_HERMITE           ? 1
+           : cfg->method == ENGINE_METHOD_HERMITE_CENTRED ? 2
+                                                          : 0;
+}
+
 /* most waypoints beyond a segment the solver needs, far from the start */
 unsigned engine_cfg_steady_lookahead(const engine_config_t *cfg)
 {
+    if (engine_cfg_local(cfg)) /* segment j is built once node j + local is in */
+        return (unsigned)engine_cfg_local(cfg);
     unsigned f = cfg->fragment, o = cfg->overlap, s = f - o;
     unsigned need = engine_cfg_uses_pstar(cfg) ? 3 : 2; /* x[j + need - 1] final for segment j */
 
@@ -485,6 +498,13 @@ unsigned engine_cfg_lookahead(const engine_config_t *cfg)
 
     if (!config_sizes_ok(cfg) || slack_of(cfg) > ENGINE_FRAGMENT_MAX)
         return 0;
+    if (engine_cfg_local(cfg)) {
+        /* no system: the segment's own nodes (and, centred, the next), each
+         * a node once its next neighbour is in (ACCEPT_LAG) */
+        la = engine_cfg_steady_lookahead(cfg) + ACCEPT_LAG;
+        want = engine_cfg_steady_lookahead(cfg) + slack_of(cfg);
+        return la > want ? la : want;
+    }
     /* what the solver needs, from the start on (a few periods cover it) ... */
     la = scan_lookahead(f, o, engine_cfg_frag_delta(cfg), engine_cfg_uses_pstar(cfg) ? 3 : 2, 0,
                         4u * f, extra, first) +
@@ -508,6 +528,32 @@ static unsigned auto_overlap(double accuracy)
     return o;
 }
 
+/*
+ * No fragment fits within max_lookahead (issue 31): an exact method that
+ * solves a system (CUBIC, BSPLINE with natural, clamped or rest ends) gives
+ * way to the local one that fits, HERMITE_CENTRED if it does, else HERMITE;
+ * -ENGINE_ECONFIG if neither does (start_slack too long) or the method and
+ * ends have no local counterpart.
+ */
+static int resolve_local(const engine_config_t *cfg, engine_config_t *out)
+{
+    static const engine_method_t local[] = {ENGINE_METHOD_HERMITE_CENTRED, ENGINE_METHOD_HERMITE};
+    engine_config_t r = *out;
+
+    if ((cfg->method != ENGINE_METHOD_CUBIC && cfg->method != ENGINE_METHOD_BSPLINE) ||
+        cfg->ends == ENGINE_ENDS_HELD || cfg->ends == ENGINE_ENDS_MULTIPLE)
+        return -ENGINE_ECONFIG;
+    for (size_t i = 0; i < sizeof local / sizeof local[0]; i++) {
+        r.method = local[i];
+        unsigned la = engine_cfg_lookahead(&r);
+        if (la && la <= cfg->max_lookahead) {
+            *out = r;
+            return 0;
+        }
+    }
+    return -ENGINE_ECONFIG;
+}
+
 int engine_config_resolve(const engine_config_t *cfg, engine_config_t *out)
 {
     *out = *cfg;
@@ -515,6 +561,10 @@ int engine_config_resolve(const engine_config_t *cfg, engine_config_t *out)
         if (!(cfg->accuracy > 0) || !isfinite(cfg->accuracy))
             return -ENGINE_ECONFIG;
         out->overlap = auto_overlap(cfg->accuracy);
+    }
+    if (cfg->fragment == ENGINE_AUTO && engine_cfg_local(cfg)) {
+        out->fragment = out->overlap + 1; /* no fragments: valid sizes, unused */
+        return 0;
     }
     if (cfg->fragment == ENGINE_AUTO) {
         unsigned o = out->overlap;
@@ -534,7 +584,7 @@ int engine_config_resolve(const engine_config_t *cfg, engine_config_t *out)
                 return 0;
         }
         out->fragment = o + 1;
-        return -ENGINE_ECONFIG;
+        return resolve_local(cfg, out);
     }
     return 0;
 }
@@ -560,7 +610,8 @@ int engine_config_check(const engine_config_t *cfg_in, const char **why)
         w = "accuracy: must be within (0, 1)";
     else if (engine_config_resolve(cfg_in, &r) < 0)
         w = "max_lookahead: too short for the overlap accuracy asks plus start_slack: no "
-            "fragment fits; raise max_lookahead or accuracy, or lower start_slack";
+            "fragment fits, nor a local method (2 waypoints, start_slack 1, ends not held or "
+            "multiple); raise max_lookahead or accuracy, or lower start_slack";
     if (w) {
         if (why)
             *why = w;
@@ -568,7 +619,7 @@ int engine_config_check(const engine_config_t *cfg_in, const char **why)
     }
 
     if (cfg->method != ENGINE_METHOD_BSPLINE && cfg->method != ENGINE_METHOD_CUBIC &&
-        cfg->method != ENGINE_METHOD_SMOOTH)
+        cfg->method != ENGINE_METHOD_SMOOTH && !engine_cfg_local(cfg))
         w = "method: unknown";
     else if (cfg->method == ENGINE_METHOD_SMOOTH &&
              (cfg->smooth_window < 4 || cfg->smooth_window > ENGINE_SMOOTH_WINDOW_MAX))

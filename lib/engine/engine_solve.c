@@ -19,6 +19,7 @@
 #include "cubic.h"
 #include "fdiff.h"
 #include "frag.h"
+#include "hermite.h"
 #include "hoang.h"
 #include "lsq.h"
 #include "timescale.h"
@@ -245,6 +246,72 @@ static void build_segments(engine_t *e)
     }
 }
 
+/*
+ * Local methods (hermite.h): node i's velocity, the source's or computed
+ * once it can be (and kept, so that both segments at the node share it:
+ * C1); 0 while it cannot be yet.  HERMITE: backward from nodes i-2..i (the
+ * chord at node 1); HERMITE_CENTRED: from nodes i-1..i+1, the last node's
+ * from the end condition once the trajectory is closed.  Node 0: the start
+ * condition (rest 0, clamped start_vel_m_s, natural zero acceleration).
+ */
+static int local_vel(engine_t *e, uint64_t i, int closed, const double **out)
+{
+    size_t slot = (size_t)(i % e->solve.ring);
+    double *v = e->solve.node_v + slot * AX;
+    uint64_t last = e->solve.nodes - 1;
+
+    *out = v;
+    if (e->solve.node_vk[slot] && !(i == 0 && e->cfg.ends != ENGINE_ENDS_NATURAL))
+        return 1;
+    if (i == 0 || (e->local == 2 && i == last)) { /* an end of the trajectory */
+        if (i == 0 && last < 1)
+            return 0;
+        if (i == last && !closed)
+            return 0;
+        const double *src = i == 0 ? e->cfg.start_vel_m_s : e->cfg.end_vel_m_s;
+        if (e->cfg.ends == ENGINE_ENDS_REST || e->cfg.ends == ENGINE_ENDS_CLAMPED) {
+            for (int k = 0; k < AX; k++)
+                v[k] = e->cfg.ends == ENGINE_ENDS_REST ? 0.0 : src[k];
+        } else if (last == 1 && (e->local == 2 || i == 1)) {
+            hermite_vel_chord(nt(e, 0), nr(e, 0), nt(e, 1), nr(e, 1), v); /* both ends natural */
+        } else {
+            const double *vo;
+            uint64_t o = i == 0 ? 1 : i - 1; /* the segment's other node */
+            if (!local_vel(e, o, closed, &vo))
+                return 0;
+            hermite_vel_natural(nt(e, i), nr(e, i), nt(e, o), nr(e, o), vo, v);
+        }
+    } else if (e->local == 1) {
+        if (i == 1)
+            hermite_vel_chord(nt(e, 0), nr(e, 0), nt(e, 1), nr(e, 1), v);
+        else
+            hermite_vel_backward(nt(e, i - 2), nr(e, i - 2), nt(e, i - 1), nr(e, i - 1), nt(e, i),
+                                 nr(e, i), v);
+    } else {
+        hermite_vel_centred(nt(e, i - 1), nr(e, i - 1), nt(e, i), nr(e, i), nt(e, i + 1),
+                            nr(e, i + 1), v);
+    }
+    e->solve.node_vk[slot] = 2;
+    return 1;
+}
+
+/* Local methods: build and queue every segment whose two velocities are known. */
+static void build_local(engine_t *e, int closed)
+{
+    for (;;) {
+        uint64_t j = e->solve.seg_next;
+        const double *v0, *v1;
+        fdiff_seg_t seg;
+
+        if (j + 1 >= e->solve.nodes || !local_vel(e, j + 1, closed, &v1) ||
+            !local_vel(e, j, closed, &v0))
+            break;
+        e->solve.seg_next = j + 1;
+        hermite_segment(nr(e, j), v0, nr(e, j + 1), v1, nt(e, j), nt(e, j + 1) - nt(e, j), &seg);
+        queue_segment(e, &seg, j);
+    }
+}
+
 static const double zero3[AX] = {0, 0, 0};
 
 /* start_slack auto: what node j says about the input's timing and speed */
@@ -268,7 +335,7 @@ static void measure_input(engine_t *e, uint64_t j)
 }
 
 /* Append a node; push the row it completes (row nodes-1 before it). */
-int solve_add_node(engine_t *e, double t, const double *r)
+int solve_add_node(engine_t *e, double t, const double *r, const double *vel)
 {
     uint64_t j = e->solve.nodes;
     frag_row_t row;
@@ -279,6 +346,14 @@ int solve_add_node(engine_t *e, double t, const double *r)
     e->solve.nodes = j + 1;
     if ((e->slack_auto || e->cfg.delay_s > 0) && j >= 1) /* issue 26: delay_s too */
         measure_input(e, j);
+    if (e->local) {
+        size_t slot = (size_t)(j % e->solve.ring);
+        e->solve.node_vk[slot] = vel != NULL;
+        if (vel)
+            memcpy(e->solve.node_v + slot * AX, vel, sizeof(double) * AX);
+        build_local(e, 0);
+        return 0;
+    }
     if (j >= 1) {
         uint64_t i = j - 1; /* the row now complete */
         if (e->pstar) {
@@ -317,7 +392,7 @@ int solve_drain(engine_t *e)
     int rc;
 
     while (lsq_smooth_pop(&e->solve.sm, &t, r) == 1)
-        if ((rc = solve_add_node(e, t, r)) < 0)
+        if ((rc = solve_add_node(e, t, r, NULL)) < 0)
             return rc;
     return 0;
 }
@@ -337,11 +412,13 @@ int solve_close(engine_t *e)
         /* the last point twice more (it is in already once) */
         double r[AX];
         memcpy(r, e->in.last_r, sizeof(r));
-        if ((rc = solve_add_node(e, e->in.last_t, r)) < 0 ||
-            (rc = solve_add_node(e, e->in.last_t, r)) < 0)
+        if ((rc = solve_add_node(e, e->in.last_t, r, NULL)) < 0 ||
+            (rc = solve_add_node(e, e->in.last_t, r, NULL)) < 0)
             goto end;
     }
-    if (e->solve.nodes >= 2) {
+    if (e->local) {
+        build_local(e, 1);
+    } else if (e->solve.nodes >= 2) {
         uint64_t l = e->solve.nodes - 1;
         double v[AX];
         end_vel_param(e, 1, v);

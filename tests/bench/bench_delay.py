@@ -48,8 +48,10 @@ DTYPE = np.dtype([("now_ns", "<i8"), ("t_s", "<f8"), ("pos_m", "<f8", 3), ("vel_
                   ("track", "<u4"), ("reserved", "<u8")])
 
 TRACKS = ("10 Hz", "1 Hz", "200 Hz")
-CONFIGS = ((), ("--max-lookahead", "8"), ("--max-lookahead", "12"), ("--max-lookahead", "18"),
-           ("--max-lookahead", "12", "--accuracy", "1e-4"), ("--delay", "5"),
+CONFIGS = ((), ("--max-lookahead", "2"), ("--max-lookahead", "3"), ("--max-lookahead", "8"),
+           ("--max-lookahead", "6", "--accuracy", "0.1"), ("--max-lookahead", "8", "--accuracy", "3e-3"),
+           ("--max-lookahead", "12", "--accuracy", "1e-4"), ("--max-lookahead", "18"),
+           ("--delay", "5"),
            ("--max-speed", "10", "--delay", "5"), ("--max-speed", "10", "--delay", "25"))
 
 
@@ -97,7 +99,7 @@ def replay(exe, path, opts, tmp):
     for line in p.stderr.splitlines():
         if line.startswith("summary: "):
             k, v = line[len("summary: "):].split(" ", 1)
-            s[k] = float(v)
+            s[k] = float(v) if k != "method" else v.strip()
     rows = np.fromfile(out, dtype=DTYPE, offset=64) if p.returncode == 0 else None
     return p.returncode, s, rows, p.stderr
 
@@ -129,7 +131,8 @@ def measure(exe, name, opts, tmp):
     return {"D": s["delay_s"], "lookahead": s["delay_lookahead_s"], "slack": s["delay_slack_s"],
             "stop": s["delay_stop_s"], "interval": s["delay_interval_s"], "speed": s["delay_speed_m_s"],
             "steady": med, "spread": float(np.max(np.abs(d - med))), "rows": int(mid.sum()),
-            "underruns": int(s["underruns"]), "catchups": int(s["catchups"]), "err_m": err_m}
+            "underruns": int(s["underruns"]), "catchups": int(s["catchups"]), "err_m": err_m,
+            "method": s.get("method", "?")}
 
 
 def opts_text(opts):
@@ -138,8 +141,8 @@ def opts_text(opts):
 
 def table_a(exe, tmp, tracks=TRACKS, configs=CONFIGS):
     """The lines of table (a), markdown, then the notes: each refusal's message once."""
-    lines = ["| track | configuration | D s | lookahead + slack + stop s | steady delay s "
-             "(max off) | underruns | max error m |", "|---|---|---|---|---|---|---|"]
+    lines = ["| track | configuration | method | D s | lookahead + slack + stop s | steady delay s "
+             "(max off) | underruns | max error m |", "|---|---|---|---|---|---|---|---|"]
     why = []
     for name in tracks:
         for opts in configs:
@@ -148,10 +151,10 @@ def table_a(exe, tmp, tracks=TRACKS, configs=CONFIGS):
             if "refused" in m:
                 if m["refused"] not in why:
                     why.append(m["refused"])
-                lines.append("| %s | %s | refused (%d) | | | | |" % (name, cfg, why.index(m["refused"]) + 1))
+                lines.append("| %s | %s | | refused (%d) | | | | |" % (name, cfg, why.index(m["refused"]) + 1))
                 continue
-            lines.append("| %s | %s | %.3f | %.3f + %.3f + %.3f | %.3f (%.3f) | %d | %.1e |" % (
-                name, cfg, m["D"], m["lookahead"], m["slack"], m["stop"], m["steady"], m["spread"],
+            lines.append("| %s | %s | %s | %.3f | %.3f + %.3f + %.3f | %.3f (%.3f) | %d | %.1e |" % (
+                name, cfg, m["method"], m["D"], m["lookahead"], m["slack"], m["stop"], m["steady"], m["spread"],
                 m["underruns"], m["err_m"]))
     return lines + [""] + ["(%d) %s" % (k + 1, w) for k, w in enumerate(why)]
 

@@ -252,18 +252,21 @@ class DaemonReadme(unittest.TestCase):
         self.assertEqual(listed, defined)
 
     def test_waypoint_bytes(self):
-        """'the waypoints, which take 44 bytes each (`engine_waypoint_t` and its line number;
+        """'the waypoints, which take 68 bytes each (`engine_waypoint_t` ... and its line number;
         a geographic track keeps 24 more': lib/motion.h's struct as the C ABI lays it out."""
         import ctypes
         each, geo = grab(read("daemon/REFERENCE.md"), r"the waypoints, which take (\d+) bytes each\s+\("
-                                                   r"`engine_waypoint_t` and its line number; a geographic "
+                                                   r"`engine_waypoint_t`, with room for the source's velocity, "
+                                                   r"and its line number; a geographic\s+"
                                                    r"track keeps (\d+) more")
         fields = grab(read("lib/motion.h"), r"typedef struct \{\n(    double t_s;.*?)\} engine_waypoint_t;")
         self.assertEqual(re.findall(r"^    (\w+) (\w+)", fields, re.M),
-                         [("double", "t_s"), ("double", "pos_m"), ("uint32_t", "seq")])
+                         [("double", "t_s"), ("double", "pos_m"), ("uint32_t", "seq"),
+                          ("uint32_t", "has_vel"), ("double", "vel_m_s")])
 
         class Waypoint(ctypes.Structure):
-            _fields_ = [("t_s", ctypes.c_double), ("pos_m", ctypes.c_double * 3), ("seq", ctypes.c_uint32)]
+            _fields_ = [("t_s", ctypes.c_double), ("pos_m", ctypes.c_double * 3), ("seq", ctypes.c_uint32),
+                        ("has_vel", ctypes.c_uint32), ("vel_m_s", ctypes.c_double * 3)]
         self.assertEqual(ctypes.sizeof(Waypoint) + 4, int(each))   # + uint32_t line
         self.assertEqual(3 * 8, int(geo))                          # double (*geo)[3]
 
@@ -831,7 +834,7 @@ class DelayMeasured(unittest.TestCase):
         spec.loader.exec_module(bench)
         exe = os.path.join(BUILD, "bin", "trajreplay")
         doc = read("lib/engine/DESIGN.md")
-        a = doc.index("| track | configuration | D s |")
+        a = doc.index("| track | configuration | method | D s |")
         shown = doc[a:doc.index("\n\n", doc.index("\n\n(1) ", a) + 2)].split("\n")
         with tempfile.TemporaryDirectory() as tmp:
             self.assertEqual(shown, bench.table_a(exe, tmp), "DESIGN.md's delay table is stale")

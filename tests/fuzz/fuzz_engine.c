@@ -162,7 +162,7 @@ static void tick(run_t *r, int64_t k)
 static void configure(engine_config_t *c, uint8_t b0, uint8_t b1)
 {
     engine_config_default(c);
-    switch (b0 % 5) {
+    switch (b0 % 7) {
     case 1:
         c->method = ENGINE_METHOD_BSPLINE;
         c->param = ENGINE_PARAM_UNIFORM;
@@ -190,6 +190,13 @@ static void configure(engine_config_t *c, uint8_t b0, uint8_t b1)
         c->smooth_window = 8;
         c->smooth_ctrl = 4;
         break;
+    case 5: /* the local methods (issue 31) */
+        c->method = ENGINE_METHOD_HERMITE;
+        c->ends = ENGINE_ENDS_NATURAL;
+        break;
+    case 6:
+        c->max_lookahead = 3; /* too short for any fragment: HERMITE_CENTRED */
+        break;
     default:
         c->fragment = 8 + (b0 >> 4);
         c->overlap = 2 * (1 + (b0 >> 6));
@@ -201,7 +208,9 @@ static void configure(engine_config_t *c, uint8_t b0, uint8_t b1)
     c->period_ns = (b1 & 8) ? 100000000 : 20000000;
     c->max_gap_s = 1;
     c->max_abs_m = 20;
-    c->capacity = engine_lookahead(c) + c->fragment + 8 + ((b1 >> 4) & 7);
+    engine_config_t r; /* fragment auto (case 6): the one resolved */
+    unsigned f = engine_config_resolve(c, &r) == 0 ? r.fragment : c->fragment;
+    c->capacity = engine_lookahead(c) + f + 8 + ((b1 >> 4) & 7);
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
@@ -245,6 +254,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                 w.t_s = take_double(&p, end);
                 for (int k = 0; k < 3; k++)
                     w.pos_m[k] = take_double(&p, end);
+                if (op & 0x40) { /* with the source's velocity (the local methods) */
+                    w.has_vel = 1;
+                    for (int k = 0; k < 3; k++)
+                        w.vel_m_s[k] = take_double(&p, end);
+                }
             } else {
                 t += (op >> 3) * 0.02;
                 w.t_s = t;

@@ -17,16 +17,46 @@ unsigned engine_pick_flat(int method, int param, double accuracy, unsigned max_l
         c.accuracy = accuracy;
     if (max_lookahead > 0)
         c.max_lookahead = max_lookahead;
-    if (engine_config_resolve(&c, &r) < 0)
-        return 0;
+    if (engine_config_resolve(&c, &r) < 0 || r.method != c.method)
+        return 0; /* no fragment fits (a local method may: engine_method_flat) */
     *fragment = r.fragment;
     *overlap = r.overlap;
     return engine_lookahead(&r);
 }
 
+static long curve_flat(int method, int param, int ends, unsigned fragment, unsigned overlap,
+                       size_t n, const double *t_s, const double *xyz, const double *vel,
+                       double *seg_out, size_t max_seg);
+
 long engine_curve_flat(int method, int param, int ends, unsigned fragment, unsigned overlap,
                        size_t n, const double *t_s, const double *xyz, double *seg_out,
                        size_t max_seg)
+{
+    return curve_flat(method, param, ends, fragment, overlap, n, t_s, xyz, NULL, seg_out, max_seg);
+}
+
+long engine_curve_vel_flat(int method, int ends, size_t n, const double *t_s, const double *xyz,
+                           const double *vel, double *seg_out, size_t max_seg)
+{
+    return curve_flat(method, ENGINE_PARAM_TIME, ends, 0, 0, n, t_s, xyz, vel, seg_out, max_seg);
+}
+
+int engine_method_flat(unsigned max_lookahead, int ends, unsigned *lookahead)
+{
+    engine_config_t c, r;
+
+    engine_config_default(&c);
+    c.max_lookahead = max_lookahead;
+    c.ends = (engine_ends_t)ends;
+    if (engine_config_check(&c, NULL) < 0 || engine_config_resolve(&c, &r) < 0)
+        return -1;
+    *lookahead = engine_lookahead(&r);
+    return (int)r.method;
+}
+
+static long curve_flat(int method, int param, int ends, unsigned fragment, unsigned overlap,
+                       size_t n, const double *t_s, const double *xyz, const double *vel,
+                       double *seg_out, size_t max_seg)
 {
     engine_config_t cfg;
     engine_waypoint_t *wp;
@@ -55,6 +85,11 @@ long engine_curve_flat(int method, int param, int ends, unsigned fragment, unsig
         wp[i].t_s = t_s[i];
         for (int k = 0; k < ENGINE_AXES; k++)
             wp[i].pos_m[k] = xyz[i * ENGINE_AXES + k];
+        if (vel) {
+            wp[i].has_vel = 1;
+            for (int k = 0; k < ENGINE_AXES; k++)
+                wp[i].vel_m_s[k] = vel[i * ENGINE_AXES + k];
+        }
     }
     rc = engine_curve(&cfg, wp, n, segs, max_seg, &nseg);
     for (i = 0; i < nseg; i++) {

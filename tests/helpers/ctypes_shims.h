@@ -11,7 +11,8 @@
 /*
  * F and O picked for method/param, accuracy and
  * max_lookahead (the defaults otherwise), and the lookahead that results
- * (start_slack auto at its least); 0 if none fits.
+ * (start_slack auto at its least); 0 if none fits (resolving then picks a
+ * local method, engine_method_flat, or refuses).
  */
 unsigned engine_pick_flat(int method, int param, double accuracy, unsigned max_lookahead,
                           unsigned *fragment, unsigned *overlap);
@@ -28,5 +29,15 @@ unsigned engine_pick_flat(int method, int param, double accuracy, unsigned max_l
 long engine_curve_flat(int method, int param, int ends, unsigned fragment, unsigned overlap,
                        size_t n, const double *t_s, const double *xyz, double *seg_out,
                        size_t max_seg);
+
+/* engine_curve_flat with param time and fragment, overlap auto, and the
+ * source's velocities (n x 3, each waypoint has_vel; NULL: none). */
+long engine_curve_vel_flat(int method, int ends, size_t n, const double *t_s, const double *xyz,
+                           const double *vel, double *seg_out, size_t max_seg);
+
+/* The method the default configuration with max_lookahead and ends
+ * resolves to (engine_method_t), its lookahead in *lookahead; -1 if
+ * refused. */
+int engine_method_flat(unsigned max_lookahead, int ends, unsigned *lookahead);
 
 #endif

@@ -1,5 +1,5 @@
 """The `summary: KEY VALUE` lines that `trajreplay --summary` writes to stderr
-(daemon/replay/replay.c), as a dict of floats."""
+(daemon/replay/replay.c), as a dict of floats (the method's name as text)."""
 
 
 def parse(stderr):
@@ -7,5 +7,5 @@ def parse(stderr):
     for line in stderr.splitlines():
         if line.startswith("summary: "):
             k, v = line[len("summary: "):].split(" ", 1)
-            out[k] = float(v)
+            out[k] = float(v) if k != "method" else v.strip()
     return out

@@ -137,7 +137,8 @@ static void test_engine_smooth_runs(void **state)
     assert_non_null(e);
     for (i = 0; i < 400; i++) {
         double a = i / 20.0, n1 = (urand(&seed) - 0.5), n2 = (urand(&seed) - 0.5);
-        engine_waypoint_t wp = {i * 1.0, {20 * cos(a) + n1, 20 * sin(a) + n2, 0}, (uint32_t)i};
+        engine_waypoint_t wp = {
+            .t_s = i * 1.0, .pos_m = {20 * cos(a) + n1, 20 * sin(a) + n2, 0}, .seq = (uint32_t)i};
         raw_err += fabs(hypot(wp.pos_m[0], wp.pos_m[1]) - 20);
         assert_int_equal(engine_push(e, &wp), 0);
         for (int k = 0; k < 100; k++, now += cfg.period_ns) {

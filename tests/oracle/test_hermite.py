@@ -1,0 +1,195 @@
+#!/usr/bin/python3
+"""Oracle tests of the local methods (issue 31, lib/engine/hermite.h) against scipy.
+
+Run with Debian's /usr/bin/python3 (scipy, numpy); loads $BUILD/libtrajd_test.so.
+
+* the engine's HERMITE and HERMITE_CENTRED curves (engine_curve, the same solver stage the
+  daemon streams from) against scipy.interpolate.CubicHermiteSpline fed with velocities the
+  test estimates on its own: the slope at t_i of the parabola numpy.polyfit puts through the
+  waypoints i-2..i (backward) or i-1..i+1 (centred), and, at the ends, zero (rest) or the
+  slope that makes the end's second derivative zero (natural, found by scipy from two
+  probes: the second derivative is linear in the end slope);
+* with the source's velocities (engine_waypoint_t has_vel): the curve is CubicHermiteSpline
+  of exactly those velocities;
+* every waypoint hit within 1e-9 of the track's extent, the velocity continuous at every
+  join (C1), measured on the segments themselves;
+* max_lookahead too short for any fragment picks the local methods (2: HERMITE, 3:
+  HERMITE_CENTRED), and the default still picks the fragments (CUBIC).
+"""
+import ctypes
+import os
+import sys
+
+import numpy as np
+from scipy.interpolate import CubicHermiteSpline
+
+BUILD = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
+lib = ctypes.CDLL(os.path.join(BUILD, "libtrajd_test.so"))
+D = ctypes.POINTER(ctypes.c_double)
+SZ = ctypes.c_size_t
+
+# engine.h enums
+BSPLINE, CUBIC, SMOOTH, HERMITE, CENTRED = 0, 1, 2, 3, 4
+HELD, MULTIPLE, NATURAL, CLAMPED, REST = 0, 1, 2, 3, 4
+
+lib.engine_curve_vel_flat.restype = ctypes.c_long
+lib.engine_curve_vel_flat.argtypes = [ctypes.c_int, ctypes.c_int, SZ, D, D, D, D, SZ]
+lib.engine_method_flat.restype = ctypes.c_int
+lib.engine_method_flat.argtypes = [ctypes.c_uint, ctypes.c_int, ctypes.POINTER(ctypes.c_uint)]
+
+# Both sides evaluate the same cubics in double precision in different operation orders
+# (Horner on c[0..3] against scipy's PPoly): 1e-9 of the track's extent is far above that
+# rounding (~1e-14) and far below any wrong velocity (a slope off by 1e-6 m/s moves a
+# 1 s segment's middle by ~1e-7 m).
+TOL_REL = 1e-9
+
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what)
+    if not cond:
+        failures.append(what)
+
+
+def ptr(a):
+    return a.ctypes.data_as(D) if a is not None else None
+
+
+def engine_curve(method, ends, t, xyz, vel=None):
+    t = np.ascontiguousarray(t, dtype=float)
+    xyz = np.ascontiguousarray(xyz, dtype=float)
+    v = np.ascontiguousarray(vel, dtype=float) if vel is not None else None
+    out = np.zeros((len(t) + 8, 14))
+    n = lib.engine_curve_vel_flat(method, ends, len(t), ptr(t), ptr(xyz), ptr(v), ptr(out),
+                                  len(out))
+    assert n >= 0, "engine_curve_vel_flat failed: %d" % n
+    return out[:n]
+
+
+def evaluate(segs, tq, der=0):
+    """The engine's segments (t0, dur, c[3][4]) at times tq; der 0/1 in seconds."""
+    i = np.clip(np.searchsorted(segs[:, 0], tq, side="right") - 1, 0, len(segs) - 1)
+    dur = segs[i, 1][:, None]
+    u = ((tq - segs[i, 0]) / segs[i, 1])[:, None]
+    c = segs[i, 2:].reshape(-1, 3, 4)
+    if der == 0:
+        return c[:, :, 0] + u * (c[:, :, 1] + u * (c[:, :, 2] + u * c[:, :, 3]))
+    return (c[:, :, 1] + u * (2 * c[:, :, 2] + 3 * u * c[:, :, 3])) / dur
+
+
+def random_track(seed, n, dt=(0.5, 2.0)):
+    rng = np.random.default_rng(seed)
+    t = np.cumsum(rng.uniform(dt[0], dt[1], n))
+    t -= t[0]
+    xyz = np.cumsum(rng.normal(0, 10, (n, 3)), axis=0)
+    return t, xyz
+
+
+def parabola_slope(t, x, at):
+    """Slope at t[at] of the parabola through the three points (numpy.polyfit)."""
+    tt = t - t[at]
+    return np.array([np.polyfit(tt, x[:, k], 2)[1] for k in range(3)])
+
+
+def natural_slope(t0, x0, t1, x1, v1, at_start):
+    """The end slope that makes the end's second derivative zero: scipy's spline of two
+    probes, the second derivative being linear in that slope."""
+    def d2(s):
+        v = np.array([s, v1]) if at_start else np.array([v1, s])
+        sp = CubicHermiteSpline([t0, t1], [x0, x1], v)
+        return sp(t0 if at_start else t1, 2)
+    a, b = d2(0.0), d2(1.0)
+    return -a / (b - a)
+
+
+def reference_velocities(t, xyz, method, ends):
+    n = len(t)
+    v = np.zeros((n, 3))
+    for i in range(1, n):
+        if method == HERMITE:
+            v[i] = (xyz[1] - xyz[0]) / (t[1] - t[0]) if i == 1 else \
+                parabola_slope(t[i - 2:i + 1], xyz[i - 2:i + 1], 2)
+        elif i < n - 1:
+            v[i] = parabola_slope(t[i - 1:i + 2], xyz[i - 1:i + 2], 1)
+    if ends == NATURAL:
+        v[0] = [natural_slope(t[0], xyz[0, k], t[1], xyz[1, k], v[1, k], True) for k in range(3)]
+        if method == CENTRED:
+            v[-1] = [natural_slope(t[-2], xyz[-2, k], t[-1], xyz[-1, k], v[-2, k], False)
+                     for k in range(3)]
+    return v  # rest: zero at the ends (v[0], and CENTRED's v[-1]) as left
+
+
+def check_curve(name, segs, t, xyz, ref):
+    ext = np.ptp(xyz, axis=0).max()
+    check(len(segs) == len(t) - 1, "%s: %d segments for %d waypoints" % (name, len(segs), len(t)))
+    tq = np.sort(np.concatenate([np.linspace(t[0], t[-1], 4000), t]))
+    err = np.abs(evaluate(segs, tq) - ref(tq)).max()
+    check(err <= TOL_REL * ext, "%s: against scipy CubicHermiteSpline, max error %.2e m "
+          "(extent %.0f m)" % (name, err, ext))
+    hit = max(np.abs(segs[:, 2:].reshape(-1, 3, 4)[:, :, 0] - xyz[:-1]).max(),
+              np.abs(segs[:, 2:].reshape(-1, 3, 4).sum(axis=2) - xyz[1:]).max())
+    check(hit <= TOL_REL * ext, "%s: every waypoint hit, max miss %.2e m" % (name, hit))
+    c = segs[:, 2:].reshape(-1, 3, 4)
+    v_end = (c[:, :, 1] + 2 * c[:, :, 2] + 3 * c[:, :, 3]) / segs[:, 1][:, None]
+    v_start = c[:, :, 1] / segs[:, 1][:, None]
+    jump = np.abs(v_end[:-1] - v_start[1:]).max()
+    vmax = np.abs(v_start).max()
+    check(jump <= 1e-9 * vmax, "%s: velocity continuous at every join (C1), max step %.2e m/s"
+          % (name, jump))
+
+
+def test_estimated_velocities():
+    for seed in (1, 2, 3):
+        t, xyz = random_track(seed, 60)
+        for method in (HERMITE, CENTRED):
+            for ends in (NATURAL, REST):
+                name = "seed %d %s ends %s" % (seed, "hermite" if method == HERMITE else
+                                               "hermite-centred",
+                                               "natural" if ends == NATURAL else "rest")
+                segs = engine_curve(method, ends, t, xyz)
+                sp = CubicHermiteSpline(t, xyz, reference_velocities(t, xyz, method, ends))
+                check_curve(name, segs, t, xyz, sp)
+
+
+def test_source_velocities():
+    """The source's velocities, used as sent (ends natural: the start's too)."""
+    rng = np.random.default_rng(7)
+    t, xyz = random_track(7, 50)
+    vel = rng.normal(0, 3, (len(t), 3))
+    for method in (HERMITE, CENTRED):
+        segs = engine_curve(method, NATURAL, t, xyz, vel)
+        check_curve("source velocities, method %d" % method, segs, t, xyz,
+                    CubicHermiteSpline(t, xyz, vel))
+    # A helix sampled with its exact velocity: the curve stays within the cubic Hermite's
+    # error bound h^4/384 max|x''''| of the true path
+    tt = np.arange(0, 20, 0.5)
+    w = 0.4
+    path = np.stack([10 * np.cos(w * tt), 10 * np.sin(w * tt), tt], axis=1)
+    pvel = np.stack([-10 * w * np.sin(w * tt), 10 * w * np.cos(w * tt), np.ones_like(tt)], axis=1)
+    segs = engine_curve(HERMITE, NATURAL, tt, path, pvel)
+    tq = np.linspace(0, tt[-1], 5000)
+    true = np.stack([10 * np.cos(w * tq), 10 * np.sin(w * tq), tq], axis=1)
+    err = np.linalg.norm(evaluate(segs, tq) - true, axis=1).max()
+    bound = 0.5 ** 4 / 384 * 10 * w ** 4 * np.sqrt(2)
+    check(err <= bound, "helix with its exact velocities: %.2e m from the true path (bound %.2e)"
+          % (err, bound))
+
+
+def test_picked_by_lookahead():
+    la = ctypes.c_uint(0)
+    for mla, want, want_la in ((2, HERMITE, 2), (3, CENTRED, 3), (18, CUBIC, None)):
+        m = lib.engine_method_flat(mla, REST, ctypes.byref(la))
+        check(m == want and (want_la is None or la.value == want_la),
+              "max_lookahead %d picks method %d (want %d), lookahead %d" % (mla, m, want,
+                                                                           la.value))
+    m = lib.engine_method_flat(2, HELD, ctypes.byref(la))
+    check(m == -1, "max_lookahead 2 with ends held (the paper's control polygon): refused (%d)" % m)
+
+
+if __name__ == "__main__":
+    test_estimated_velocities()
+    test_source_velocities()
+    test_picked_by_lookahead()
+    print("%d failure(s)" % len(failures))
+    sys.exit(1 if failures else 0)
