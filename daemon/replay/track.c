@@ -82,10 +82,37 @@ void track_free(track_t *trk)
     free(trk->wp);
     free(trk->line);
     free(trk->geo);
+    free(trk->geo_vel);
     free(trk->heading_t);
     free(trk->heading);
     free(trk->reports);
     memset(trk, 0, sizeof *trk);
+}
+
+/* The east, north, up unit vectors at (lat, lon) in ECEF axes (the
+ * ellipsoid's normal: geodetic latitude). */
+static void enu_axes(double lat_deg, double lon_deg, double ax[3][3])
+{
+    double p = lat_deg * (M_PI / 180.0), l = lon_deg * (M_PI / 180.0);
+    double sp = sin(p), cp = cos(p), sl = sin(l), cl = cos(l);
+    double e[3] = {-sl, cl, 0.0}, n[3] = {-sp * cl, -sp * sl, cp}, u[3] = {cp * cl, cp * sl, sp};
+    memcpy(ax[0], e, sizeof e);
+    memcpy(ax[1], n, sizeof n);
+    memcpy(ax[2], u, sizeof u);
+}
+
+/* A velocity east, north, up at the fix (lat, lon) in the axes of the frame
+ * at (lat0, lon0): through ECEF. */
+static void vel_to_frame(double lat, double lon, const double *v, double lat0, double lon0,
+                         double *out)
+{
+    double a[3][3], b[3][3], ecef[3];
+    enu_axes(lat, lon, a);
+    enu_axes(lat0, lon0, b);
+    for (int k = 0; k < 3; k++)
+        ecef[k] = v[0] * a[0][k] + v[1] * a[1][k] + v[2] * a[2][k];
+    for (int j = 0; j < 3; j++)
+        out[j] = ecef[0] * b[j][0] + ecef[1] * b[j][1] + ecef[2] * b[j][2];
 }
 
 int track_reframe(track_t *trk, double lat0_deg, double lon0_deg, double alt0_m)
@@ -104,6 +131,9 @@ int track_reframe(track_t *trk, double lat0_deg, double lon0_deg, double alt0_m)
         trk->wp[i].pos_m[0] = enu[0];
         trk->wp[i].pos_m[1] = enu[1];
         trk->wp[i].pos_m[2] = no_alt ? 0.0 : enu[2];
+        if (trk->geo_vel && !isnan(trk->geo_vel[i][0]))
+            vel_to_frame(g[0], g[1], trk->geo_vel[i], lat0_deg, lon0_deg, trk->wp[i].vel_m_s),
+                trk->wp[i].has_vel = 1;
     }
     return 0;
 }
@@ -157,6 +187,13 @@ static int rows_to_track(track_loader_t *L, int geographic, track_t *trk)
             track_loader_fatal(L, 0, "out of memory");
             return -1;
         }
+        size_t nv = 0;
+        for (size_t i = 0; i < L->n; i++)
+            nv += L->rows[i].has_v != 0;
+        if (nv && !(trk->geo_vel = calloc(L->n, sizeof *trk->geo_vel))) {
+            track_loader_fatal(L, 0, "out of memory");
+            return -1;
+        }
     }
     for (size_t i = 0; i < L->n; i++) {
         const track_row_t *r = &L->rows[i];
@@ -168,7 +205,15 @@ static int rows_to_track(track_loader_t *L, int geographic, track_t *trk)
             trk->geo[i][0] = r->a;
             trk->geo[i][1] = r->b;
             trk->geo[i][2] = r->c; /* NaN: no altitude */
+            if (trk->geo_vel) {
+                for (int k = 0; k < 3; k++)
+                    trk->geo_vel[i][k] = r->has_v ? r->v[k] : NAN;
+            }
         } else {
+            if (r->has_v) {
+                w->has_vel = 1;
+                memcpy(w->vel_m_s, r->v, sizeof w->vel_m_s);
+            }
             w->pos_m[0] = r->a;
             w->pos_m[1] = r->b;
             w->pos_m[2] = isnan(r->c) ? 0.0 : r->c;

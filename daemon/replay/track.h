@@ -124,6 +124,10 @@ typedef struct {
     size_t nheading;
     double (*geo)[3];                  /* n rows lat, lon (deg), alt (m, NaN: none) when
                                  * geographic, else NULL */
+    double (*geo_vel)[3];              /* geographic rows with the source's velocity: east,
+                                 * north, up at the fix (m/s; NaN: none), turned into
+                                 * the frame's axes by track_reframe; NULL if no row
+                                 * has one (metric rows: in wp[].vel_m_s directly) */
     size_t skipped;                    /* bad lines skipped (TRACK_SKIP_BAD) */
     size_t ignored;                    /* well-formed records that give no waypoint: N2K
                                  position n/a, no fix, a fast packet missing a

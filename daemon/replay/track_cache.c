@@ -122,11 +122,13 @@ static int make_private(track_ref_t **refp, track_t *trk)
     c.wp = NULL;
     c.line = NULL;
     c.geo = NULL;
+    c.geo_vel = NULL;
     c.heading_t = c.heading = NULL;
     c.reports = NULL;
     if (dup_array(&c.wp, trk->wp, trk->n, sizeof *trk->wp) < 0 ||
         dup_array(&c.line, trk->line, trk->n, sizeof *trk->line) < 0 ||
         dup_array(&c.geo, trk->geo, trk->n, sizeof *trk->geo) < 0 ||
+        dup_array(&c.geo_vel, trk->geo_vel, trk->geo_vel ? trk->n : 0, sizeof *trk->geo_vel) < 0 ||
         dup_array(&c.heading_t, trk->heading_t, trk->nheading, sizeof *trk->heading_t) < 0 ||
         dup_array(&c.heading, trk->heading, trk->nheading, sizeof *trk->heading) < 0 ||
         dup_array(&c.reports, trk->reports, trk->nreports, sizeof *trk->reports) < 0) {

@@ -9,7 +9,20 @@
 
 #include "geo.h"
 
-enum { COL_T, COL_X, COL_Y, COL_Z, COL_LAT, COL_LON, COL_ALT, COL_HDG, COL_COUNT };
+enum {
+    COL_T,
+    COL_X,
+    COL_Y,
+    COL_Z,
+    COL_LAT,
+    COL_LON,
+    COL_ALT,
+    COL_HDG,
+    COL_VX,
+    COL_VY,
+    COL_VZ,
+    COL_COUNT
+};
 
 static const char *const col_names[COL_COUNT][5] = {
     [COL_T] = {"t", "t_s", "time", "time_s", NULL},
@@ -20,6 +33,10 @@ static const char *const col_names[COL_COUNT][5] = {
     [COL_LON] = {"lon", "lon_deg", "lng", "longitude", NULL},
     [COL_ALT] = {"alt", "alt_m", "ele", "altitude", NULL},
     [COL_HDG] = {"heading", "heading_deg", "yaw", "yaw_deg", NULL},
+    /* the source's velocity (issue 31): x,y,z, or east,north,up at a fix */
+    [COL_VX] = {"vx", "vx_m_s", "ve", "ve_m_s", NULL},
+    [COL_VY] = {"vy", "vy_m_s", "vn", "vn_m_s", NULL},
+    [COL_VZ] = {"vz", "vz_m_s", "vu", "vu_m_s", NULL},
 };
 
 #define MAX_FIELDS 64
@@ -191,9 +208,33 @@ static int csv_row(csv_t *c, char **field, int nf, unsigned long lineno)
     if (fabs(vh) > TRACK_HEADING_MAX_DEG) /* NaN (empty) passes */
         return track_loader_bad(L, lineno, "heading '%s' beyond +-%g degrees",
                                 track_field_show(field[c->col[COL_HDG]]).s, TRACK_HEADING_MAX_DEG);
+    double vel[3] = {0, 0, 0};
+    int nv = 0;
+    if (c->col[COL_VX] >= 0 && c->col[COL_VY] >= 0) { /* vz alone is no velocity */
+        static const int vc3[3] = {COL_VX, COL_VY, COL_VZ};
+        for (int k = 0; k < 3; k++) {
+            int i = c->col[vc3[k]];
+            double v = NAN;
+            if (i < 0 || i >= nf)
+                continue;
+            if (track_field_num(field[i], &v, &empty) || isinf(v))
+                return track_loader_bad(L, lineno, "velocity '%s' is not a number",
+                                        track_field_show(field[i]).s);
+            if (!isnan(v)) { /* an empty cell: none */
+                vel[k] = v;
+                nv += k < 2;
+            }
+        }
+        if (nv == 1)
+            return track_loader_bad(L, lineno, "velocity: vx given without vy or vy without vx");
+    }
     if (track_loader_add_row(L, t, va, vb, vc, lineno) < 0)
         return -1;
     L->rows[L->n - 1].h = vh;
+    if (nv == 2) {
+        L->rows[L->n - 1].has_v = 1;
+        memcpy(L->rows[L->n - 1].v, vel, sizeof vel);
+    }
     return 0;
 }
 

@@ -87,6 +87,7 @@ int track_loader_add_row(track_loader_t *L, double t_s, double a, double b, doub
     r->b = b;
     r->c = c;
     r->h = NAN;
+    r->has_v = 0;
     r->line = line > UINT32_MAX ? UINT32_MAX : (uint32_t)line;
     return 0;
 }

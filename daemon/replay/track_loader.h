@@ -21,6 +21,8 @@ typedef struct {
     double t_s;
     double a, b, c; /* x,y,z or lat,lon,alt (c NaN: no altitude / z) */
     double h;       /* heading, degrees (NaN: none) */
+    double v[3];    /* the source's velocity, m/s: x,y,z or east,north,up at the fix */
+    int has_v;      /* v given (issue 31: CSV vx,vy[,vz]) */
     uint32_t line;
 } track_row_t;
 

@@ -14,13 +14,21 @@ Run with Debian's /usr/bin/python3 (scipy, numpy); loads $BUILD/libtrajd_test.so
 * every waypoint hit within 1e-9 of the track's extent, the velocity continuous at every
   join (C1), measured on the segments themselves;
 * max_lookahead too short for any fragment picks the local methods (2: HERMITE, 3:
-  HERMITE_CENTRED), and the default still picks the fragments (CUBIC).
+  HERMITE_CENTRED), and the default still picks the fragments (CUBIC);
+* end to end, trajreplay on CSV tracks with velocity columns (vx,vy,vz; for lat/lon tracks
+  east, north, up at each fix): every streamed row on CubicHermiteSpline of the given
+  velocities, those of a geographic track turned into the axes of the track's frame by
+  PROJ (cart + topocentric at the fix, then at the origin: pyproj), not by our code.
 """
+import csv
 import ctypes
 import os
+import subprocess
 import sys
+import tempfile
 
 import numpy as np
+import pyproj
 from scipy.interpolate import CubicHermiteSpline
 
 BUILD = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
@@ -187,9 +195,88 @@ def test_picked_by_lookahead():
     check(m == -1, "max_lookahead 2 with ends held (the paper's control polygon): refused (%d)" % m)
 
 
+def replay(path, *opts):
+    """Streaming rows of trajreplay (not transfers): t_s and x, y, z."""
+    out = path + ".out.csv"
+    exe = os.path.join(BUILD, "bin", "trajreplay")
+    p = subprocess.run([exe, "-q", "--profile", "none", "--ends", "natural", "--rate", "50",
+                        "-o", out] + list(opts) + [path], capture_output=True, text=True,
+                       timeout=120)
+    assert p.returncode == 0, p.stderr
+    rows = [r for r in csv.DictReader(open(out)) if r["state"] == "streaming"
+            and not int(r["flags"]) & 0x10]  # ENGINE_SP_TRANSFER
+    t = np.array([float(r["t_s"]) for r in rows])
+    xyz = np.array([[float(r[k]) for k in ("x_m", "y_m", "z_m")] for r in rows])
+    return t, xyz
+
+
+def proj_enu(lat0, lon0, h0):
+    return pyproj.Transformer.from_pipeline(
+        "+proj=pipeline +step +proj=axisswap +order=2,1 "
+        "+step +proj=unitconvert +xy_in=deg +xy_out=rad "
+        "+step +proj=cart +ellps=WGS84 "
+        f"+step +proj=topocentric +ellps=WGS84 +lat_0={lat0!r} +lon_0={lon0!r} +h_0={h0!r}")
+
+
+def test_csv_velocities():
+    """trajreplay reads vx,vy,vz and streams the Hermite of exactly those velocities."""
+    with tempfile.TemporaryDirectory() as tmp:
+        t = np.arange(0.0, 40.0, 1.0)
+        w = 0.15
+        xyz = np.stack([30 * np.cos(w * t), 30 * np.sin(w * t), 0.5 * t], axis=1)
+        vel = np.stack([-30 * w * np.sin(w * t), 30 * w * np.cos(w * t), 0.5 + 0 * t], axis=1)
+        path = os.path.join(tmp, "helix.csv")
+        with open(path, "w") as f:
+            f.write("t,x,y,z,vx,vy,vz\n")
+            for i in range(len(t)):
+                f.write(",".join(repr(float(v)) for v in (t[i], *xyz[i], *vel[i])) + "\n")
+        for method in ("hermite", "hermite-centred"):
+            ts, got = replay(path, "--method", method)
+            err = np.abs(got - CubicHermiteSpline(t, xyz, vel)(ts)).max()
+            check(len(ts) > 1000 and err <= 1e-9 * 60,
+                  "trajreplay --method %s, CSV vx,vy,vz: %d rows on CubicHermiteSpline of the "
+                  "given velocities, max %.2e m" % (method, len(ts), err))
+
+        # lat/lon over 20 km: each fix's velocity east, north, up at the fix
+        lat0, lon0, h0 = 45.5, 13.7, 100.0
+        n = 25
+        tg = np.arange(n) * 10.0
+        lat = lat0 + 0.008 * np.arange(n) + 0.001 * np.sin(0.3 * np.arange(n))
+        lon = lon0 + 0.006 * np.arange(n)
+        alt = h0 + 0 * tg
+        rng = np.random.default_rng(11)
+        v_local = np.c_[rng.normal(60, 5, n), rng.normal(90, 5, n), np.zeros(n)]
+        gpath = os.path.join(tmp, "geo.csv")
+        with open(gpath, "w") as f:
+            f.write("t,lat,lon,alt,ve,vn,vu\n")
+            for i in range(n):
+                f.write(",".join(repr(float(v)) for v in (tg[i], lat[i], lon[i], alt[i],
+                                                          *v_local[i])) + "\n")
+        origin = proj_enu(lat[0], lon[0], alt[0])
+        pos = np.array(origin.transform(lat, lon, alt)).T
+        vref = np.zeros((n, 3))
+        eps = 1.0
+        for i in range(n):
+            at = proj_enu(lat[i], lon[i], alt[i])
+            ends = []
+            for sgn in (1, -1):
+                la, lo, h = at.transform(*(sgn * eps * v_local[i]), direction="INVERSE")
+                ends.append(np.array(origin.transform(la, lo, h)))
+            vref[i] = (ends[0] - ends[1]) / (2 * eps)
+        ts, got = replay(gpath, "--method", "hermite")
+        ref = CubicHermiteSpline(tg, pos, vref)(ts)
+        err = np.abs(got - ref).max()
+        naive = np.abs(got - CubicHermiteSpline(tg, pos, v_local)(ts)).max()
+        check(err <= 1e-5 and naive > 100 * max(err, 1e-6),
+              "lat/lon track with ve,vn,vu: streamed rows within %.2e m of the Hermite of the "
+              "velocities PROJ turns into the origin's axes (%.2e m from the unturned ones)"
+              % (err, naive))
+
+
 if __name__ == "__main__":
     test_estimated_velocities()
     test_source_velocities()
     test_picked_by_lookahead()
+    test_csv_velocities()
     print("%d failure(s)" % len(failures))
     sys.exit(1 if failures else 0)
