@@ -1,5 +1,7 @@
 /* track_nmea0183.c - NMEA 0183 logs: GGA and RMC sentences (decoded by
- * lib/format/nmea0183.h) into fixes.  See track.h for the rules. */
+ * lib/format/nmea0183.h) into fixes, with the velocity of RMC's speed and
+ * course, or of a VTG's that follows a time of the epoch (issue 31: a
+ * velocity only with the fix of its own epoch).  See track.h for the rules. */
 #include "track_loader.h"
 
 #include <math.h>
@@ -22,6 +24,8 @@ typedef struct {
     int from_gga;
     double lat, lon, alt;
     unsigned long line;
+    int has_vel; /* RMC's of this time, else a VTG's after it */
+    double sog, cog;
 } epoch_t;
 
 typedef struct {
@@ -53,7 +57,17 @@ static int flush(nmea_t *N)
         N->frac0 = frac;
     }
     double t = (double)(sec - N->sec0) + (frac - N->frac0);
-    return track_loader_add_row(N->L, t, e->lat, e->lon, e->alt, e->line);
+    if (track_loader_add_row(N->L, t, e->lat, e->lon, e->alt, e->line) < 0)
+        return -1;
+    if (e->has_vel) { /* east, north, up at the fix */
+        track_row_t *r = &N->L->rows[N->L->n - 1];
+        double c = e->cog * (M_PI / 180.0);
+        r->has_v = 1;
+        r->v[0] = e->sog * sin(c);
+        r->v[1] = e->sog * cos(c);
+        r->v[2] = 0.0;
+    }
+    return 0;
 }
 
 static int sentence(nmea_t *N, const nmea0183_fix_t *f, unsigned long lineno)
@@ -61,6 +75,14 @@ static int sentence(nmea_t *N, const nmea0183_fix_t *f, unsigned long lineno)
     epoch_t *e = &N->e;
     if (f->kind == NMEA0183_OTHER)
         return 0;
+    if (f->kind == NMEA0183_VTG) { /* no time: of the epoch being read, if any */
+        if (e->active && f->has_vel && !e->has_vel) {
+            e->has_vel = 1;
+            e->sog = f->sog_m_s;
+            e->cog = f->cog_deg;
+        }
+        return 0;
+    }
     if (f->has_date)
         N->day = f->days;
     else if (f->tod_s < N->last_tod - 43200.0)
@@ -75,6 +97,11 @@ static int sentence(nmea_t *N, const nmea0183_fix_t *f, unsigned long lineno)
         e->tod_s = f->tod_s;
         e->day = N->day;
         e->alt = NAN;
+    }
+    if (f->kind == NMEA0183_RMC && f->valid && f->has_vel) {
+        e->has_vel = 1; /* RMC's own: aligned with its time (before a VTG's) */
+        e->sog = f->sog_m_s;
+        e->cog = f->cog_deg;
     }
     if (!f->valid || !f->has_pos || (e->have && e->from_gga))
         return 0;

@@ -131,6 +131,37 @@ static int split(const char *line, char *buf, char **f, int *nf)
     }
 }
 
+/* Speed (sog, in unit m/s per unit) and course (cog, degrees true) of an
+ * RMC or VTG: has_vel once both are there (a speed of 0 needs no course). */
+static int velocity(const char *sog, double unit, const char *cog, nmea0183_fix_t *o)
+{
+    double s, c = 0.0;
+    if (!sog[0])
+        return 0;
+    if (num(sog, &s) < 0 || (cog[0] && num(cog, &c) < 0))
+        return -NMEA0183_ESYNTAX;
+    if (!(s >= 0 && s < 1e6) || !(c >= 0 && c <= 360))
+        return -NMEA0183_ERANGE;
+    if (!cog[0] && s > 0)
+        return 0; /* a speed without a course: no velocity */
+    o->has_vel = 1;
+    o->sog_m_s = s * unit;
+    o->cog_deg = c;
+    return 0;
+}
+
+static int parse_vtg(char **f, int nf, nmea0183_fix_t *o)
+{
+    o->kind = NMEA0183_VTG;
+    if (nf < 9)
+        return -NMEA0183_ESYNTAX;
+    if (nf >= 10 && strcmp(f[9], "N") == 0)
+        return 0; /* mode: not valid */
+    if (f[5][0])
+        return velocity(f[5], 1852.0 / 3600.0, f[1], o);
+    return velocity(f[7], 1000.0 / 3600.0, f[1], o);
+}
+
 static int parse_gga(char **f, int nf, nmea0183_fix_t *o)
 {
     int rc;
@@ -173,7 +204,7 @@ static int parse_rmc(char **f, int nf, nmea0183_fix_t *o)
             return rc;
         o->has_date = 1;
     }
-    return 0;
+    return velocity(f[7], 1852.0 / 3600.0, f[8], o);
 }
 
 int nmea0183_parse(const char *line, nmea0183_fix_t *out)
@@ -193,5 +224,7 @@ int nmea0183_parse(const char *line, nmea0183_fix_t *out)
         return parse_gga(f, nf, out);
     if (strcmp(type, "RMC") == 0)
         return parse_rmc(f, nf, out);
+    if (strcmp(type, "VTG") == 0)
+        return parse_vtg(f, nf, out);
     return 0;
 }

@@ -18,7 +18,9 @@ Run with Debian's /usr/bin/python3 (scipy, numpy); loads $BUILD/libtrajd_test.so
 * end to end, trajreplay on CSV tracks with velocity columns (vx,vy,vz; for lat/lon tracks
   east, north, up at each fix): every streamed row on CubicHermiteSpline of the given
   velocities, those of a geographic track turned into the axes of the track's frame by
-  PROJ (cart + topocentric at the fix, then at the origin: pyproj), not by our code.
+  PROJ (cart + topocentric at the fix, then at the origin: pyproj), not by our code;
+* NMEA 0183 logs whose RMC (or, with GGA, VTG) sentences carry speed and course: the
+  streamed rows on the Hermite of the speed and course gpsbabel reads from the same log.
 """
 import csv
 import ctypes
@@ -273,10 +275,91 @@ def test_csv_velocities():
               % (err, naive))
 
 
+def nmea_sentence(body):
+    x = 0
+    for ch in body:
+        x ^= ord(ch)
+    return "$%s*%02X" % (body, x)
+
+
+def nmea_dm(v, width):
+    d = int(abs(v))
+    return ("%0" + str(width) + "d%07.4f") % (d, (abs(v) - d) * 60)
+
+
+def geo_reference(lat, lon, alt, sog, cog):
+    """Positions in the frame of the first fix and the velocities of speed/course (east,
+    north at each fix) turned into its axes, by pyproj."""
+    origin = proj_enu(lat[0], lon[0], alt[0])
+    pos = np.array(origin.transform(lat, lon, alt)).T
+    vel = np.zeros((len(lat), 3))
+    for i in range(len(lat)):
+        at = proj_enu(lat[i], lon[i], alt[i])
+        v = sog[i] * np.array([np.sin(np.radians(cog[i])), np.cos(np.radians(cog[i])), 0.0])
+        ends = [np.array(origin.transform(*at.transform(*(sgn * v), direction="INVERSE")))
+                for sgn in (1, -1)]
+        vel[i] = (ends[0] - ends[1]) / 2
+    return pos, vel
+
+
+def test_nmea_velocities():
+    """RMC's speed and course (and VTG's with GGA) against gpsbabel's reading of the log."""
+    rng = np.random.default_rng(5)
+    n = 30
+    lat = 45.5 + 0.0001 * np.arange(n) + 0.00003 * np.sin(0.4 * np.arange(n))
+    lon = 13.7 + 0.00012 * np.arange(n)
+    kn = rng.uniform(8, 14, n)
+    cog = rng.uniform(20, 80, n)
+    with tempfile.TemporaryDirectory() as tmp:
+        for form in ("rmc", "gga+vtg"):
+            path = os.path.join(tmp, form.replace("+", "_") + ".nmea")
+            with open(path, "w") as f:
+                for i in range(n):
+                    tod = "%06d.00" % (120000 + i)
+                    ll = "%s,N,%s,E" % (nmea_dm(lat[i], 2), nmea_dm(lon[i], 3))
+                    if form == "rmc":
+                        f.write(nmea_sentence("GPRMC,%s,A,%s,%.2f,%.1f,281126,,,A" %
+                                              (tod, ll, kn[i], cog[i])) + "\n")
+                    else:
+                        f.write(nmea_sentence("GPGGA,%s,%s,1,08,0.9,100.0,M,47.0,M,," %
+                                              (tod, ll)) + "\n")
+                        f.write(nmea_sentence("GPVTG,%.1f,T,,M,%.2f,N,%.2f,K,A" %
+                                              (cog[i], kn[i], kn[i] * 1.852)) + "\n")
+            # GGA has no date: gpsbabel needs one given
+            p = subprocess.run(["gpsbabel", "-t", "-i", "nmea" if form == "rmc" else
+                                "nmea,date=20261128", "-f", path, "-o", "unicsv",
+                                "-F", "-"], capture_output=True, text=True, timeout=60)
+            rows = list(csv.DictReader(p.stdout.splitlines()))
+            check(len(rows) == n and "Speed" in rows[0] and "Course" in rows[0],
+                  "%s: gpsbabel reads %d fixes with speed and course" % (form, len(rows)))
+            if len(rows) != n or "Speed" not in rows[0]:
+                continue
+            glat = np.array([float(r["Latitude"]) for r in rows])
+            glon = np.array([float(r["Longitude"]) for r in rows])
+            alt = np.full(n, 100.0 if form != "rmc" else 0.0)
+            sog = np.array([float(r["Speed"]) for r in rows])  # m/s, 2 decimals
+            gcog = np.array([float(r["Course"]) for r in rows])
+            pos, vel = geo_reference(glat, glon, alt, sog, gcog)
+            if form == "rmc":
+                pos[:, 2] = 0.0  # no altitude: z 0
+            ts, got = replay(path, "--method", "hermite")
+            t = np.arange(n, dtype=float)
+            err = np.abs(got - CubicHermiteSpline(t, pos, vel)(ts)).max()
+            est = np.abs(got - CubicHermiteSpline(t, pos, reference_velocities(
+                t, pos, HERMITE, NATURAL))(ts)).max()
+            # gpsbabel prints the speed to 0.01 m/s and the lat/lon to 1e-6 deg (0.1 m):
+            # the positions are compared at the fixes' own rounding, the curve between
+            # them at what 0.01 m/s and 0.1 degree move it in 1 s (< 0.02 m)
+            check(err <= 0.15 and est > 3 * err,
+                  "%s: streamed rows within %.3f m of the Hermite of gpsbabel's speed and "
+                  "course (%.3f m from the estimated velocities')" % (form, err, est))
+
+
 if __name__ == "__main__":
     test_estimated_velocities()
     test_source_velocities()
     test_picked_by_lookahead()
     test_csv_velocities()
+    test_nmea_velocities()
     print("%d failure(s)" % len(failures))
     sys.exit(1 if failures else 0)

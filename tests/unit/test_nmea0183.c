@@ -1,4 +1,4 @@
-/* test_nmea0183.c - GGA and RMC sentences (lib/format/nmea0183.h) against
+/* test_nmea0183.c - GGA, RMC and VTG sentences (lib/format/nmea0183.h) against
  * the example sentences every NMEA 0183 primer quotes (with their published
  * checksums *47 and *6A) and gpsbabel's output for tests/data/gpxgo_visnjan.gpx. */
 #include "test.h"
@@ -55,6 +55,44 @@ static void test_rmc_example(void **state)
     assert_true(isnan(f.sep_m));
 }
 
+/* Given the classic RMC example's speed and course (022.4 knots, 084.4
+ * degrees true) and the classic VTG example with its published checksum *48
+ * (054.7 T, 005.5 knots, 010.2 km/h), then speed in m/s (1 knot = 1852 m per
+ * 3600 s) and the course; VTG's mode N is no velocity; km/h serves without
+ * knots; a speed without a course is none, except a speed of 0; a course
+ * beyond 360 is out of range. */
+static void test_velocity(void **state)
+{
+    (void)state;
+    nmea0183_fix_t f;
+    assert_int_equal(
+        nmea0183_parse("$GPRMC,123519,A,4807.038,N,01131.000,E,022.4,084.4,230394,003.1,W*6A", &f),
+        0);
+    assert_true(f.has_vel);
+    assert_true(fabs(f.sog_m_s - 22.4 * 1852.0 / 3600.0) < 1e-12);
+    assert_true(fabs(f.cog_deg - 84.4) < 1e-12);
+    assert_int_equal(nmea0183_parse("$GPVTG,054.7,T,034.4,M,005.5,N,010.2,K*48", &f), 0);
+    assert_int_equal(f.kind, NMEA0183_VTG);
+    assert_true(f.has_vel);
+    assert_true(fabs(f.sog_m_s - 5.5 * 1852.0 / 3600.0) < 1e-12);
+    assert_true(fabs(f.cog_deg - 54.7) < 1e-12);
+    assert_int_equal(nmea0183_parse("$GPVTG,054.7,T,034.4,M,005.5,N,010.2,K,N*2A", &f), 0);
+    assert_false(f.has_vel);
+    assert_int_equal(nmea0183_parse("$GPVTG,054.7,T,034.4,M,,N,010.2,K,A*0B", &f), 0);
+    assert_true(f.has_vel);
+    assert_true(fabs(f.sog_m_s - 10.2 / 3.6) < 1e-12);
+    assert_int_equal(
+        nmea0183_parse("$GPRMC,123519,A,4807.038,N,01131.000,E,022.4,,230394,003.1,W*4C", &f), 0);
+    assert_false(f.has_vel);
+    assert_int_equal(
+        nmea0183_parse("$GPRMC,123519,A,4807.038,N,01131.000,E,0.0,,230394,003.1,W*48", &f), 0);
+    assert_true(f.has_vel);
+    assert_true(fabs(f.sog_m_s) < 1e-300);
+    assert_int_equal(
+        nmea0183_parse("$GPRMC,123519,A,4807.038,N,01131.000,E,022.4,400.0,230394,003.1,W*66", &f),
+        -NMEA0183_ERANGE);
+}
+
 /* Given a wrong, a missing or a malformed checksum, then refused; other
  * sentences with a good checksum are OTHER; broken fields are refused. */
 static void test_refused(void **state)
@@ -89,6 +127,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_gga_example),
         cmocka_unit_test(test_rmc_example),
+        cmocka_unit_test(test_velocity),
         cmocka_unit_test(test_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
