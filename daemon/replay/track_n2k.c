@@ -1,6 +1,9 @@
 /* track_n2k.c - NMEA 2000 positions from a candump log (PGN 129025 Position
  * Rapid Update, PGN 129029 GNSS Position Data over fast packets; decoders in
- * lib/proto/nmea2000.h).  See track.h for the rules. */
+ * lib/proto/nmea2000.h), each with the velocity of the PGN 129026 COG & SOG
+ * of its own epoch where there is one (issue 31): for 129029 the same source
+ * and SID within N2K_EPOCH_US of log time, for 129025 (no SID) the same
+ * source within N2K_SAME_STAMP_US; COG true only.  See track.h. */
 #include "track_loader.h"
 
 #include <math.h>
@@ -11,6 +14,19 @@
 #include "geo.h"
 #include "nmea2000.h"
 
+/* 129026 of a 129029's epoch: its SID within this much log time (SIDs wrap
+ * at 252, and an epoch's messages go out within a period) */
+#define N2K_EPOCH_US 1000000
+/* 129026 of a 129025's epoch (no SID): logged at the same time, to this */
+#define N2K_SAME_STAMP_US 1000
+
+/* One PGN 129026 as read. */
+typedef struct {
+    int64_t ts_us;
+    double cog_deg, sog_m_s;
+    uint8_t src, sid;
+} cogsog_t;
+
 /* One position as read, of any stream. */
 typedef struct {
     int64_t sec; /* whole seconds (log stamp, or 129029 date and time) */
@@ -19,6 +35,8 @@ typedef struct {
     uint32_t line;
     uint32_t pgn;
     uint8_t src;
+    uint8_t sid;   /* 129029's */
+    int64_t ts_us; /* log time */
 } fix_t;
 
 typedef struct {
@@ -28,8 +46,26 @@ typedef struct {
     int nfast;
     fix_t *fix;
     size_t n, cap;
+    cogsog_t *cs; /* the 129026 messages with COG true, in log order */
+    size_t ncs, capcs;
     size_t frames; /* candump frames read */
 } n2k_t;
+
+static int add_cogsog(n2k_t *N, const cogsog_t *c)
+{
+    if (N->ncs == N->capcs) {
+        size_t cap = N->capcs ? 2 * N->capcs : 256;
+        cogsog_t *nc = realloc(N->cs, cap * sizeof *nc);
+        if (!nc) {
+            track_loader_fatal(N->L, 0, "out of memory");
+            return -1;
+        }
+        N->cs = nc;
+        N->capcs = cap;
+    }
+    N->cs[N->ncs++] = *c;
+    return 0;
+}
 
 static int add_fix(n2k_t *N, const fix_t *f)
 {
@@ -62,6 +98,8 @@ static int position(n2k_t *N, int rc, const n2k_position_t *p, const n2k_id_t *i
                .alt = p->alt_m,
                .pgn = id->pgn,
                .src = id->source,
+               .sid = p->sid,
+               .ts_us = ts_us,
                .line = lineno > UINT32_MAX ? UINT32_MAX : (uint32_t)lineno};
     if (id->pgn == N2K_PGN_GNSS_POSITION) {
         double whole = floor(p->tod_s);
@@ -86,6 +124,17 @@ static int frame(n2k_t *N, const candump_line_t *cl, unsigned long lineno)
     if (id.pgn == N2K_PGN_POSITION_RAPID)
         return position(N, n2k_decode_position_rapid(fr->data, fr->len, &p), &p, &id, cl->ts_us,
                         lineno);
+    if (id.pgn == N2K_PGN_COG_SOG_RAPID) {
+        n2k_cog_sog_t v;
+        if (n2k_decode_cog_sog(fr->data, fr->len, &v) < 0 || v.ref != 0)
+            return 0; /* not available, or magnetic: no velocity from it */
+        cogsog_t c = {.ts_us = cl->ts_us,
+                      .cog_deg = v.cog_deg,
+                      .sog_m_s = v.sog_m_s,
+                      .src = id.source,
+                      .sid = v.sid};
+        return add_cogsog(N, &c);
+    }
     if (id.pgn != N2K_PGN_GNSS_POSITION)
         return 0;
     n2k_fast_t *f = N->fast[id.source];
@@ -141,10 +190,30 @@ static void choose(const n2k_t *N, uint32_t *pgn, int *src)
     }
 }
 
+/* The 129026 of fix f's epoch (see the top), NULL if none; *j: where the
+ * search of the next fix (later in the log) may start. */
+static const cogsog_t *epoch_velocity(const n2k_t *N, const fix_t *f, size_t *j)
+{
+    int64_t win = f->pgn == N2K_PGN_GNSS_POSITION ? N2K_EPOCH_US : N2K_SAME_STAMP_US;
+    const cogsog_t *best = NULL;
+    while (*j < N->ncs && N->cs[*j].ts_us < f->ts_us - N2K_EPOCH_US)
+        (*j)++;
+    for (size_t k = *j; k < N->ncs && N->cs[k].ts_us <= f->ts_us + win; k++) {
+        const cogsog_t *c = &N->cs[k];
+        int64_t d = c->ts_us > f->ts_us ? c->ts_us - f->ts_us : f->ts_us - c->ts_us;
+        if (c->src != f->src || d > win || (f->pgn == N2K_PGN_GNSS_POSITION && c->sid != f->sid))
+            continue;
+        if (!best || d < (best->ts_us > f->ts_us ? best->ts_us - f->ts_us : f->ts_us - best->ts_us))
+            best = c;
+    }
+    return best;
+}
+
 static int rows(n2k_t *N)
 {
     uint32_t pgn;
     int src;
+    size_t j = 0;
     choose(N, &pgn, &src);
     const fix_t *f0 = NULL;
     for (size_t i = 0; i < N->n; i++) {
@@ -158,6 +227,15 @@ static int rows(n2k_t *N)
         double t = (double)(f->sec - f0->sec) + (f->frac - f0->frac);
         if (track_loader_add_row(N->L, t, f->lat, f->lon, f->alt, f->line))
             return -1;
+        const cogsog_t *v = epoch_velocity(N, f, &j);
+        if (v) { /* east, north, up at the fix */
+            track_row_t *r = &N->L->rows[N->L->n - 1];
+            double c = v->cog_deg * (M_PI / 180.0);
+            r->has_v = 1;
+            r->v[0] = v->sog_m_s * sin(c);
+            r->v[1] = v->sog_m_s * cos(c);
+            r->v[2] = 0.0;
+        }
     }
     return 0;
 }
@@ -201,6 +279,7 @@ out:
     for (int k = 0; k < N.nfast; k++)
         free(N.fast[N.fast_src[k]]);
     free(N.fix);
+    free(N.cs);
     return rc;
 }
 

@@ -117,6 +117,7 @@ int n2k_decode_gnss_position(const uint8_t *data, size_t len, n2k_position_t *ou
     int64_t lat = (int64_t)le_u64(data + 7), lon = (int64_t)le_u64(data + 15);
     int64_t alt = (int64_t)le_u64(data + 23);
     out->method = data[31] >> 4;
+    out->sid = data[0];
     if (lat == INT64_MAX || lon == INT64_MAX)
         return -N2K_ENA;
     if (out->method == 0)
@@ -134,4 +135,21 @@ int n2k_decode_gnss_position(const uint8_t *data, size_t len, n2k_position_t *ou
         out->tod_s = tod * 1e-4;
     }
     return check_ll(out);
+}
+
+int n2k_decode_cog_sog(const uint8_t *data, size_t len, n2k_cog_sog_t *out)
+{
+    memset(out, 0, sizeof *out);
+    if (len < 8)
+        return -N2K_ELEN;
+    uint16_t cog = (uint16_t)(data[2] | data[3] << 8), sog = (uint16_t)(data[4] | data[5] << 8);
+    out->sid = data[0];
+    out->ref = data[1] & 3u;
+    if (cog == 0xffffu || sog == 0xffffu)
+        return -N2K_ENA;
+    if (cog > 62832u) /* 2 pi in 1e-4 rad, rounded up */
+        return -N2K_ERANGE;
+    out->cog_deg = cog * 1e-4 * (180.0 / M_PI);
+    out->sog_m_s = sog * 1e-2;
+    return 0;
 }

@@ -14,6 +14,9 @@
  *     31    GNSS type (bits 0..3), method (bits 4..7: 0 no fix, 1 GNSS fix, 2 DGNSS,
  *           3 precise, 4 RTK fixed, 5 RTK float, 6 estimated, 7 manual, 8 simulated)
  *     32..42 integrity, satellites, HDOP, PDOP, geoidal separation, stations
+ *   129026 COG & SOG, Rapid Update (single frame, 8 bytes)
+ *     0     SID      1  COG reference (bits 0..1: 0 true, 1 magnetic)
+ *     2..3  COG uint16, 1e-4 rad        4..5  SOG uint16, 1e-2 m/s
  *   "Not available" is the largest positive value of a signed field
  *   (0x7FFFFFFF, 0x7FFF...FF) and all ones of an unsigned one.
  *
@@ -36,6 +39,7 @@
 
 #define N2K_PGN_POSITION_RAPID 129025u
 #define N2K_PGN_GNSS_POSITION 129029u
+#define N2K_PGN_COG_SOG_RAPID 129026u
 /* Fast-packet payload limit: 6 + 31 * 7 bytes. */
 #define N2K_FAST_MAX 223
 /* 129029 without reference stations. */
@@ -93,12 +97,24 @@ typedef struct {
     int64_t days;   /* since 1970-01-01 */
     double tod_s;   /* seconds since midnight, [0, 86400) */
     uint8_t method; /* 129029 method (bits 4..7 of byte 31) */
+    uint8_t sid;    /* 129029: sequence id (byte 0), ties data of one epoch; 0 for 129025 */
 } n2k_position_t;
+
+typedef struct {
+    uint8_t sid;    /* sequence id: the 129029 of the same epoch has the same */
+    uint8_t ref;    /* COG reference: 0 true north, 1 magnetic */
+    double cog_deg; /* course over ground, degrees, [0, 360) */
+    double sog_m_s; /* speed over ground, m/s */
+} n2k_cog_sog_t;
 
 /* Decode 129025.  Returns 0, -N2K_ELEN, -N2K_ENA, -N2K_ERANGE. */
 int n2k_decode_position_rapid(const uint8_t *data, size_t len, n2k_position_t *out);
 
 /* Decode 129029.  Returns 0, -N2K_ELEN, -N2K_ENA, -N2K_ERANGE, -N2K_ENOFIX. */
 int n2k_decode_gnss_position(const uint8_t *data, size_t len, n2k_position_t *out);
+
+/* Decode 129026.  Returns 0, -N2K_ELEN, -N2K_ENA (COG or SOG not available),
+ * -N2K_ERANGE (COG beyond 2 pi). */
+int n2k_decode_cog_sog(const uint8_t *data, size_t len, n2k_cog_sog_t *out);
 
 #endif

@@ -20,7 +20,11 @@ Run with Debian's /usr/bin/python3 (scipy, numpy); loads $BUILD/libtrajd_test.so
   velocities, those of a geographic track turned into the axes of the track's frame by
   PROJ (cart + topocentric at the fix, then at the origin: pyproj), not by our code;
 * NMEA 0183 logs whose RMC (or, with GGA, VTG) sentences carry speed and course: the
-  streamed rows on the Hermite of the speed and course gpsbabel reads from the same log.
+  streamed rows on the Hermite of the speed and course gpsbabel reads from the same log;
+* NMEA 2000 candump logs: PGN 129029 fixes with the PGN 129026 COG & SOG of the same source
+  and SID, encoded and decoded here from canboat's field layout; decoys (another SID, a
+  magnetic course) not used; the real capture tests/data/canboat_candumpSample3.log, whose
+  129026 are logged 40 ms and more from any 129025, streams as without velocities.
 """
 import csv
 import ctypes
@@ -199,14 +203,19 @@ def test_picked_by_lookahead():
 
 def replay(path, *opts):
     """Streaming rows of trajreplay (not transfers): t_s and x, y, z."""
-    out = path + ".out.csv"
+    fd, out = tempfile.mkstemp(suffix=".csv")
+    os.close(fd)
     exe = os.path.join(BUILD, "bin", "trajreplay")
     p = subprocess.run([exe, "-q", "--profile", "none", "--ends", "natural", "--rate", "50",
                         "-o", out] + list(opts) + [path], capture_output=True, text=True,
                        timeout=120)
-    assert p.returncode == 0, p.stderr
-    rows = [r for r in csv.DictReader(open(out)) if r["state"] == "streaming"
-            and not int(r["flags"]) & 0x10]  # ENGINE_SP_TRANSFER
+    try:
+        assert p.returncode == 0, p.stderr
+        with open(out) as f:
+            rows = [r for r in csv.DictReader(f) if r["state"] == "streaming"
+                    and not int(r["flags"]) & 0x10]  # ENGINE_SP_TRANSFER
+    finally:
+        os.unlink(out)
     t = np.array([float(r["t_s"]) for r in rows])
     xyz = np.array([[float(r[k]) for k in ("x_m", "y_m", "z_m")] for r in rows])
     return t, xyz
@@ -355,11 +364,107 @@ def test_nmea_velocities():
                   "course (%.3f m from the estimated velocities')" % (form, err, est))
 
 
+def n2k_line(t_us, can_id, data):
+    return "(%d.%06d) can0 %08X#%s" % (t_us // 10**6, t_us % 10**6, can_id, data.hex().upper())
+
+
+def n2k_gnss(sid, day, tod_s, lat, lon):
+    """PGN 129029, 43 bytes, as canboat defines it (alt not available, method 1)."""
+    b = bytes([sid]) + day.to_bytes(2, "little") + int(round(tod_s * 1e4)).to_bytes(4, "little")
+    b += int(round(lat * 1e16)).to_bytes(8, "little", signed=True)
+    b += int(round(lon * 1e16)).to_bytes(8, "little", signed=True)
+    b += (0x7FFFFFFFFFFFFFFF).to_bytes(8, "little") + bytes([0x10, 0xFC, 12])
+    b += (80).to_bytes(2, "little") + (150).to_bytes(2, "little") + bytes(5)
+    return b
+
+
+def n2k_fast(seq, msg):
+    out = [bytes([(seq & 7) << 5, len(msg)]) + msg[:6]]
+    rest, k = msg[6:], 1
+    while rest:
+        out.append(bytes([((seq & 7) << 5) | k]) + rest[:7] + b"\xff" * (7 - len(rest[:7])))
+        rest, k = rest[7:], k + 1
+    return out
+
+
+def n2k_cogsog(sid, ref, cog_rad, sog_m_s):
+    """PGN 129026: SID, reference (2 bits), COG 1e-4 rad, SOG 1e-2 m/s, reserved."""
+    return bytes([sid, 0xFC | ref]) + int(round(cog_rad * 1e4)).to_bytes(2, "little") + \
+        int(round(sog_m_s * 100)).to_bytes(2, "little") + b"\xff\xff"
+
+
+def test_n2k_velocities():
+    """129029 fixes take the 129026 of their source and SID; decoys are left."""
+    n = 30
+    rng = np.random.default_rng(9)
+    lat = 45.5 + 0.0002 * np.arange(n) + 0.00005 * np.sin(0.5 * np.arange(n))
+    lon = 13.7 + 0.0001 * np.arange(n)
+    cog = rng.uniform(0.3, 1.2, n)  # rad
+    sog = rng.uniform(15, 25, n)
+    day = 20000
+    gid, vid = (3 << 26) | (129029 << 8) | 7, (2 << 26) | (129026 << 8) | 7
+    lines = []
+    t = 1_700_000_000_000_000
+    for i in range(n):
+        sid = i % 250
+        lines.append(n2k_line(t - 20_000, vid, n2k_cogsog(sid, 0, cog[i], sog[i])))
+        lines.append(n2k_line(t - 10_000, vid, n2k_cogsog(sid, 1, 3.0, 1.0)))  # magnetic
+        for k, fr in enumerate(n2k_fast(i, n2k_gnss(sid, day, 3600.0 + i, lat[i], lon[i]))):
+            lines.append(n2k_line(t + 100 * k, gid, fr))
+        lines.append(n2k_line(t + 300_000, vid, n2k_cogsog((sid + 1) % 250, 0, 2.5, 3.0)))
+        t += 1_000_000
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "n2k.log")
+        with open(path, "w") as f:
+            f.write("\n".join(lines) + "\n")
+        # the decode, here: 1e-16 deg, 1e-4 rad, 1e-2 m/s
+        qlat = np.array([int(round(v * 1e16)) * 1e-16 for v in lat])
+        qlon = np.array([int(round(v * 1e16)) * 1e-16 for v in lon])
+        qcog = np.degrees([int(round(c * 1e4)) * 1e-4 for c in cog])
+        qsog = np.array([int(round(v * 100)) * 1e-2 for v in sog])
+        pos, vel = geo_reference(qlat, qlon, np.zeros(n), qsog, qcog)
+        pos[:, 2] = 0.0  # no altitude: z 0
+        ts, got = replay(path, "--method", "hermite")
+        tt = np.arange(n, dtype=float)
+        err = np.abs(got - CubicHermiteSpline(tt, pos, vel)(ts)).max()
+        est = np.abs(got - CubicHermiteSpline(tt, pos, reference_velocities(
+            tt, pos, HERMITE, NATURAL))(ts)).max()
+        check(err <= 1e-6 and est > 1e4 * max(err, 1e-9),
+              "NMEA 2000 129029 + 129026 of its SID: streamed rows within %.2e m of the Hermite "
+              "of the decoded COG and SOG (%.3f m from the estimated velocities')" % (err, est))
+        sample = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data",
+                              "canboat_candumpSample3.log")
+        ts1, got1 = replay(sample, "--method", "hermite")
+        rows = []
+        for line in open(sample):
+            if not line.startswith("("):
+                continue
+            ident, data = line.split()[2].split("#")
+            ident = int(ident, 16)
+            if (ident >> 8) & 0x3FFFF != 129025:
+                continue
+            b = bytes.fromhex(data)
+            sec, us = line[1:line.index(")")].split(".")
+            rows.append((int(sec), int(us), int.from_bytes(b[0:4], "little", signed=True) * 1e-7,
+                         int.from_bytes(b[4:8], "little", signed=True) * 1e-7))
+        dec = os.path.join(tmp, "dec.csv")
+        with open(dec, "w") as f:
+            f.write("t_s,lat_deg,lon_deg\n")
+            for sec, us, la, lo in rows:
+                f.write("%r,%r,%r\n" % (float(sec - rows[0][0]) + (us * 1e-6 - rows[0][1] * 1e-6),
+                                         la, lo))
+        ts2, got2 = replay(dec, "--method", "hermite")
+        check(len(ts1) == len(ts2) and np.array_equal(ts1, ts2) and np.array_equal(got1, got2),
+              "the real capture's 129026, logged apart from every 129025, give no velocity: "
+              "%d rows as the decoded positions alone" % len(ts1))
+
+
 if __name__ == "__main__":
     test_estimated_velocities()
     test_source_velocities()
     test_picked_by_lookahead()
     test_csv_velocities()
     test_nmea_velocities()
+    test_n2k_velocities()
     print("%d failure(s)" % len(failures))
     sys.exit(1 if failures else 0)

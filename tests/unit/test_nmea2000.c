@@ -145,6 +145,36 @@ static void test_gnss_no_fix(void **state)
     assert_int_equal(n2k_decode_gnss_position(m, 42, &p), -N2K_ELEN);
 }
 
+/* Given PGN 129026 frames laid out as canboat defines them (SID, reference
+ * in bits 0..1, COG 1e-4 rad, SOG 1e-2 m/s): the real capture's
+ * (tests/data/canboat_candumpSample3.log, FF00000001000000: SID 255, true,
+ * COG 0, SOG 0.01 m/s), a course of 1.5708 rad magnetic at 12.34 m/s, one
+ * without SOG and one beyond 2 pi, then decoded, refused as not available,
+ * and out of range. */
+static void test_cog_sog(void **state)
+{
+    (void)state;
+    n2k_cog_sog_t v;
+    static const uint8_t sample[8] = {0xFF, 0x00, 0x00, 0x00, 0x01, 0x00, 0x00, 0x00};
+    assert_int_equal(n2k_decode_cog_sog(sample, 8, &v), 0);
+    assert_int_equal(v.sid, 255);
+    assert_int_equal(v.ref, 0);
+    assert_true(fabs(v.cog_deg) < 1e-12);
+    assert_true(fabs(v.sog_m_s - 0.01) < 1e-12);
+    /* 15708 = 0x3D5C, 1234 = 0x04D2 */
+    static const uint8_t mag[8] = {7, 0xFD, 0x5C, 0x3D, 0xD2, 0x04, 0xFF, 0xFF};
+    assert_int_equal(n2k_decode_cog_sog(mag, 8, &v), 0);
+    assert_int_equal(v.sid, 7);
+    assert_int_equal(v.ref, 1);
+    assert_true(fabs(v.cog_deg - 1.5708 * 180.0 / M_PI) < 1e-9);
+    assert_true(fabs(v.sog_m_s - 12.34) < 1e-12);
+    static const uint8_t na[8] = {7, 0xFC, 0x5C, 0x3D, 0xFF, 0xFF, 0xFF, 0xFF};
+    assert_int_equal(n2k_decode_cog_sog(na, 8, &v), -N2K_ENA);
+    static const uint8_t big[8] = {7, 0xFC, 0x00, 0xF6, 0x01, 0x00, 0xFF, 0xFF}; /* 62976 */
+    assert_int_equal(n2k_decode_cog_sog(big, 8, &v), -N2K_ERANGE);
+    assert_int_equal(n2k_decode_cog_sog(sample, 7, &v), -N2K_ELEN);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -153,6 +183,7 @@ int main(void)
         cmocka_unit_test(test_identifier),
         cmocka_unit_test(test_position_rapid),
         cmocka_unit_test(test_gnss_no_fix),
+        cmocka_unit_test(test_cog_sog),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
