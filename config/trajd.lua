@@ -25,8 +25,8 @@ local p = Proto("trajd", "trajd trajectory daemon")
 
 local STATE = {[0] = "waiting", [1] = "streaming", [2] = "underrun", [3] = "finished"}
 local VALS = {
-    WP_Mux = {[0] = "time", [1] = "x", [2] = "y", [3] = "z", [4] = "command"},
-    WPFD_Mux = {[5] = "whole waypoint"},
+    WP_Mux = {[0] = "time", [1] = "x", [2] = "y", [3] = "z", [4] = "command", [6] = "velocity"},
+    WPFD_Mux = {[5] = "whole waypoint", [7] = "whole waypoint with velocity"},
     WP_Command = {[1] = "finish", [2] = "stop", [3] = "clear", [4] = "reset counters",
                   [5] = "feed override", [6] = "start"},
     SP_Axis = {[0] = "x", [1] = "y", [2] = "z"},
@@ -51,10 +51,14 @@ local MSG = {
     WAYPOINT = {mux = "WP_Mux", {"WP_Mux", 0, 8}, {"WP_Seq", 8, 8},
         {"WP_Time", 16, 48, false, 1e-6, "s", 0}, {"WP_X", 16, 48, true, 1e-6, "m", 1},
         {"WP_Y", 16, 48, true, 1e-6, "m", 2}, {"WP_Z", 16, 48, true, 1e-6, "m", 3},
-        {"WP_Command", 16, 8, false, 1, "", 4}, {"WP_CommandArg", 24, 8, false, 1, "%", 4}},
-    WAYPOINT_FD = {{"WPFD_Mux", 0, 8}, {"WPFD_Seq", 8, 8},
+        {"WP_Command", 16, 8, false, 1, "", 4}, {"WP_CommandArg", 24, 8, false, 1, "%", 4},
+        {"WP_VX", 16, 16, true, 0.01, "m/s", 6}, {"WP_VY", 32, 16, true, 0.01, "m/s", 6},
+        {"WP_VZ", 48, 16, true, 0.01, "m/s", 6}},
+    WAYPOINT_FD = {mux = "WPFD_Mux", {"WPFD_Mux", 0, 8}, {"WPFD_Seq", 8, 8},
         {"WPFD_Time", 16, 48, false, 1e-6, "s"}, {"WPFD_X", 64, 48, true, 1e-6, "m"},
-        {"WPFD_Y", 112, 48, true, 1e-6, "m"}, {"WPFD_Z", 160, 48, true, 1e-6, "m"}},
+        {"WPFD_Y", 112, 48, true, 1e-6, "m"}, {"WPFD_Z", 160, 48, true, 1e-6, "m"},
+        {"WPFD_VX", 208, 16, true, 0.01, "m/s", 7}, {"WPFD_VY", 224, 16, true, 0.01, "m/s", 7},
+        {"WPFD_VZ", 240, 16, true, 0.01, "m/s", 7}},
     SETPOINT = {mux = "SP_Axis", {"SP_Axis", 0, 2}, {"SP_State", 4, 3}, {"SP_Hold", 7, 1},
         {"SP_Cycle", 8, 8},
         {"SP_X_Pos", 16, 32, true, 1e-4, "m", 0}, {"SP_X_Vel", 48, 16, true, 1e-3, "m/s", 0},

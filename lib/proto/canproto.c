@@ -136,6 +136,33 @@ int canproto_encode_waypoint(uint32_t id, const engine_waypoint_t *wp,
     return rc;
 }
 
+/* wp's velocity in VELOCITY's int16 fields (never -32768, "not available"). */
+static int velocity_raw(const engine_waypoint_t *wp, int16_t v[ENGINE_AXES])
+{
+    int clamped = 0;
+    for (unsigned a = 0; a < ENGINE_AXES; a++) {
+        if (!isfinite(wp->vel_m_s[a]))
+            return -CANPROTO_EVALUE;
+        v[a] = (int16_t)quantize(wp->vel_m_s[a], CANPROTO_WP_VEL_M_S_PER_BIT, -32767, 32767,
+                                 &clamped);
+    }
+    return clamped ? CANPROTO_CLAMPED : 0;
+}
+
+int canproto_encode_waypoint_vel(uint32_t id, const engine_waypoint_t *wp, canproto_frame_t *out)
+{
+    int16_t v[ENGINE_AXES];
+    int rc = velocity_raw(wp, v);
+    if (rc < 0)
+        return rc;
+    frame_init(out, id, CANPROTO_WP_DLEN, 0);
+    out->data[0] = CANPROTO_MUX_VELOCITY;
+    out->data[1] = (uint8_t)wp->seq;
+    for (unsigned a = 0; a < ENGINE_AXES; a++)
+        put_le(&out->data[2 + 2 * a], 2, (uint16_t)v[a]);
+    return rc;
+}
+
 int canproto_encode_waypoint_fd(uint32_t id, const engine_waypoint_t *wp, canproto_frame_t *out)
 {
     uint64_t t_us;
@@ -149,6 +176,16 @@ int canproto_encode_waypoint_fd(uint32_t id, const engine_waypoint_t *wp, canpro
     put_le(&out->data[2], 6, t_us);
     for (unsigned a = 0; a < ENGINE_AXES; a++)
         put_le(&out->data[8 + 6 * a], 6, (uint64_t)pos[a]);
+    if (wp->has_vel == 1) {
+        int16_t v[ENGINE_AXES];
+        int rv = velocity_raw(wp, v);
+        if (rv < 0)
+            return rv;
+        out->data[0] = CANPROTO_MUX_FD_WAYPOINT_VEL;
+        for (unsigned a = 0; a < ENGINE_AXES; a++)
+            put_le(&out->data[26 + 2 * a], 2, (uint16_t)v[a]);
+        rc = rc ? rc : rv;
+    }
     return rc;
 }
 
@@ -611,9 +648,15 @@ static int seq_old(canproto_rx_t *rx, uint8_t seq8)
 }
 
 static void fill_out(const canproto_rx_t *rx, uint8_t seq8, uint64_t t_us,
-                     const int64_t pos_um[ENGINE_AXES], canproto_rx_out_t *out)
+                     const int64_t pos_um[ENGINE_AXES], const int16_t *vel_cm_s,
+                     canproto_rx_out_t *out)
 {
     memset(out, 0, sizeof *out);
+    if (vel_cm_s) {
+        out->wp.has_vel = 1;
+        for (unsigned a = 0; a < ENGINE_AXES; a++)
+            out->wp.vel_m_s[a] = (double)vel_cm_s[a] / CANPROTO_WP_VEL_BITS_PER_M_S;
+    }
     /* Divide by the exact 1e6 rather than multiply by the inexact 1e-6: the
      * result is then the correctly rounded value of the decimal number, the
      * same double strtod gives for a track file with 6 decimals, so CAN input
@@ -668,11 +711,15 @@ int canproto_rx_frame(canproto_rx_t *rx, const canproto_frame_t *f, int is_fd_id
     if (is_fd_id) {
         if (!(f->flags & CANPROTO_F_FD) || f->len != CANPROTO_WP_FD_DLEN)
             return malformed(rx, CANPROTO_ELEN);
-        if (f->data[0] != CANPROTO_MUX_FD_WAYPOINT)
+        int with_vel = f->data[0] == CANPROTO_MUX_FD_WAYPOINT_VEL;
+        if (f->data[0] != CANPROTO_MUX_FD_WAYPOINT && !with_vel)
             return malformed(rx, CANPROTO_EMUX);
-        for (unsigned i = 26; i < CANPROTO_WP_FD_DLEN; i++)
-            if (f->data[i])
+        int16_t vel[ENGINE_AXES];
+        for (unsigned a = 0; a < ENGINE_AXES; a++) {
+            vel[a] = (int16_t)get_le(&f->data[26 + 2 * a], 2);
+            if (with_vel ? vel[a] == INT16_MIN : vel[a] != 0)
                 return malformed(rx, CANPROTO_EVALUE);
+        }
         int64_t pos[ENGINE_AXES];
         for (unsigned a = 0; a < ENGINE_AXES; a++) {
             pos[a] = sext(get_le(&f->data[8 + 6 * a], 6), 48);
@@ -682,7 +729,7 @@ int canproto_rx_frame(canproto_rx_t *rx, const canproto_frame_t *f, int is_fd_id
         uint8_t seq8 = f->data[1];
         if (seq_old(rx, seq8))
             return CANPROTO_RX_NONE;
-        fill_out(rx, seq8, get_le(&f->data[2], 6), pos, out);
+        fill_out(rx, seq8, get_le(&f->data[2], 6), pos, with_vel ? vel : NULL, out);
         rx->st.completed++;
         return CANPROTO_RX_WAYPOINT;
     }
@@ -706,11 +753,17 @@ int canproto_rx_frame(canproto_rx_t *rx, const canproto_frame_t *f, int is_fd_id
         rx->st.commands++;
         return CANPROTO_RX_COMMAND;
     }
-    if (mux > CANPROTO_MUX_Z)
+    if (mux > CANPROTO_MUX_Z && mux != CANPROTO_MUX_VELOCITY)
         return malformed(rx, CANPROTO_EMUX);
     uint64_t raw = get_le(&f->data[2], 6);
-    if (mux != CANPROTO_MUX_TIME && sext(raw, 48) == CANPROTO_I48_MIN)
+    int16_t vel[ENGINE_AXES];
+    if (mux == CANPROTO_MUX_VELOCITY) {
+        for (unsigned a = 0; a < ENGINE_AXES; a++)
+            if ((vel[a] = (int16_t)get_le(&f->data[2 + 2 * a], 2)) == INT16_MIN)
+                return malformed(rx, CANPROTO_EVALUE);
+    } else if (mux != CANPROTO_MUX_TIME && sext(raw, 48) == CANPROTO_I48_MIN) {
         return malformed(rx, CANPROTO_EVALUE);
+    }
 
     uint8_t seq8 = f->data[1];
     if (seq_old(rx, seq8))
@@ -722,11 +775,15 @@ int canproto_rx_frame(canproto_rx_t *rx, const canproto_frame_t *f, int is_fd_id
     s->have |= (uint8_t)bit;
     if (mux == CANPROTO_MUX_TIME)
         s->t_us = raw;
+    else if (mux == CANPROTO_MUX_VELOCITY)
+        memcpy(s->vel_cm_s, vel, sizeof vel);
     else
         s->pos_um[mux - 1] = sext(raw, 48);
-    if (s->have != (1u << CANPROTO_WP_PARTS) - 1)
+    unsigned all = (1u << CANPROTO_WP_PARTS) - 1;
+    if ((s->have & all) != all)
         return CANPROTO_RX_NONE;
-    fill_out(rx, seq8, s->t_us, s->pos_um, out);
+    fill_out(rx, seq8, s->t_us, s->pos_um,
+             s->have & (1u << CANPROTO_MUX_VELOCITY) ? s->vel_cm_s : NULL, out);
     memset(s, 0, sizeof *s);
     rx->st.completed++;
     return CANPROTO_RX_WAYPOINT;

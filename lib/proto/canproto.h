@@ -14,16 +14,22 @@
  * connection set leaves unused, so trajd can share a bus with CiA 402 drives):
  *
  *  WAYPOINT (in, classic, DLC 8, default 0x680+n), multiplexed by byte 0:
- *    byte 0       mux: 0 TIME, 1 X, 2 Y, 3 Z, 4 COMMAND
+ *    byte 0       mux: 0 TIME, 1 X, 2 Y, 3 Z, 4 COMMAND, 6 VELOCITY
  *    byte 1       seq: waypoint sequence number, low 8 bits
  *    bytes 2..7   TIME: t, uint48, 1 us per bit (sender's track clock)
  *                 X/Y/Z: position, int48, 1 um per bit
  *                 COMMAND: byte 2 = canproto_cmd_t, bytes 3..7 zero
+ *                 VELOCITY: vx, vy, vz, int16 each, 1 cm/s per bit
+ *                 (+-327.67 m/s; -32768 is refused): the source's
+ *                 velocity at t (issue 31, the local methods)
  *    A waypoint is the four frames TIME, X, Y, Z with the same seq, in any
- *    order; it is complete when the fourth arrives.
+ *    order; it is complete when the fourth arrives.  A VELOCITY frame of that
+ *    seq belongs to it if it comes before the fourth (send it first); after,
+ *    it is a frame of a waypoint already handed out (counted as such).
  *  WAYPOINT_FD (in, CAN FD, length 32, default 0x690+n): one whole waypoint
  *    byte 0 mux 5, byte 1 seq, 2..7 t (uint48 us), 8..13 x, 14..19 y,
- *    20..25 z (int48 um), 26..31 zero.
+ *    20..25 z (int48 um), 26..31 zero; or mux 7, with 26..31 vx, vy, vz as
+ *    in VELOCITY.
  *  SETPOINT (out, classic, DLC 8, default 0x6A0+n), 3 frames per cycle:
  *    byte 0       bits 0..1 axis (0 x, 1 y, 2 z), bits 4..6 engine state,
  *                 bit 7 HOLD
@@ -154,7 +160,11 @@ enum canproto_mux {
     CANPROTO_MUX_Z = 3,
     CANPROTO_MUX_COMMAND = 4,
     CANPROTO_MUX_FD_WAYPOINT = 5,
+    CANPROTO_MUX_VELOCITY = 6,        /* classic: the source's velocity of waypoint seq */
+    CANPROTO_MUX_FD_WAYPOINT_VEL = 7, /* FD: a whole waypoint with its velocity */
 };
+#define CANPROTO_WP_VEL_M_S_PER_BIT 0.01 /* int16, VELOCITY and WAYPOINT_FD mux 7 */
+#define CANPROTO_WP_VEL_BITS_PER_M_S 100.0
 #define CANPROTO_WP_PARTS 4 /* TIME, X, Y, Z */
 
 /* Commands (WAYPOINT frame, mux COMMAND, byte 2; byte 3 the argument of
@@ -351,8 +361,13 @@ unsigned canproto_ids_rx(const canproto_ids_t *ids, uint32_t *out, unsigned max)
 int canproto_encode_waypoint(uint32_t id, const engine_waypoint_t *wp,
                              canproto_frame_t out[CANPROTO_WP_PARTS]);
 
-/* Same, as one CAN FD frame.  Same returns. */
+/* Same, as one CAN FD frame (mux 7 with wp's velocity when wp->has_vel).
+ * Same returns. */
 int canproto_encode_waypoint_fd(uint32_t id, const engine_waypoint_t *wp, canproto_frame_t *out);
+
+/* The VELOCITY frame of wp (wp->vel_m_s, seq = wp->seq & 0xFF): send it
+ * before wp's four frames.  Same returns. */
+int canproto_encode_waypoint_vel(uint32_t id, const engine_waypoint_t *wp, canproto_frame_t *out);
 
 /* A COMMAND frame on the waypoint id.  Returns 0 or -CANPROTO_EVALUE. */
 int canproto_encode_command(uint32_t id, canproto_cmd_t cmd, canproto_frame_t *out);
@@ -526,9 +541,10 @@ int canproto_decode_status2_rejected(const canproto_frame_t *f, canproto_st2_rej
 typedef struct {
     int used;
     uint8_t seq8;
-    uint8_t have; /* bit per part (1 << mux) */
+    uint8_t have; /* bit per part (1 << mux; VELOCITY's too) */
     uint64_t t_us;
     int64_t pos_um[ENGINE_AXES];
+    int16_t vel_cm_s[ENGINE_AXES];
     uint32_t stamp; /* order in which slots were opened (oldest is evicted) */
 } canproto_slot_t;
 

@@ -21,7 +21,8 @@ class Frame(ctypes.Structure):
 
 class Waypoint(ctypes.Structure):
     _fields_ = [("t_s", ctypes.c_double), ("pos_m", ctypes.c_double * AXES),
-                ("seq", ctypes.c_uint32)]
+                ("seq", ctypes.c_uint32), ("has_vel", ctypes.c_uint32),
+                ("vel_m_s", ctypes.c_double * AXES)]
 
 
 class Setpoint(ctypes.Structure):
@@ -91,6 +92,7 @@ def load():
     P = ctypes.POINTER
     lib.canproto_encode_waypoint.argtypes = [ctypes.c_uint32, P(Waypoint), P(Frame)]
     lib.canproto_encode_waypoint_fd.argtypes = [ctypes.c_uint32, P(Waypoint), P(Frame)]
+    lib.canproto_encode_waypoint_vel.argtypes = [ctypes.c_uint32, P(Waypoint), P(Frame)]
     lib.canproto_encode_setpoint.argtypes = [ctypes.c_uint32, P(Setpoint), P(Frame)]
     lib.canproto_encode_setpoint_fd.argtypes = [ctypes.c_uint32, ctypes.c_int, P(Setpoint),
                                                 P(Frame)]
@@ -128,7 +130,7 @@ class Rx:
     def __init__(self, lib, nslots=2):
         self.lib = lib
         self.mem = ctypes.create_string_buffer(4096)
-        self.slots = ctypes.create_string_buffer(64 * nslots)
+        self.slots = ctypes.create_string_buffer(128 * nslots)
         lib.canproto_rx_init(self.mem, self.slots, nslots)
 
     def frame(self, f, is_fd_id=0):

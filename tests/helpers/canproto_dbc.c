@@ -32,14 +32,20 @@ static const canproto_signal_t sig_wp[] = {
     SIG_S("WP_Z", CANPROTO_MUX_Z, 16, 48, CANPROTO_WP_POS_M_PER_BIT, "m"),
     SIG_U("WP_Command", CANPROTO_MUX_COMMAND, 16, 8, 1, ""),
     SIG_U("WP_CommandArg", CANPROTO_MUX_COMMAND, 24, 8, 1, "%"),
+    SIG_S("WP_VX", CANPROTO_MUX_VELOCITY, 16, 16, CANPROTO_WP_VEL_M_S_PER_BIT, "m/s"),
+    SIG_S("WP_VY", CANPROTO_MUX_VELOCITY, 32, 16, CANPROTO_WP_VEL_M_S_PER_BIT, "m/s"),
+    SIG_S("WP_VZ", CANPROTO_MUX_VELOCITY, 48, 16, CANPROTO_WP_VEL_M_S_PER_BIT, "m/s"),
 };
 static const canproto_signal_t sig_wpfd[] = {
-    SIG_U("WPFD_Mux", -1, 0, 8, 1, ""),
+    SIG_U("WPFD_Mux", -2, 0, 8, 1, ""),
     SIG_U("WPFD_Seq", -1, 8, 8, 1, ""),
     SIG_U("WPFD_Time", -1, 16, 48, CANPROTO_WP_T_S_PER_BIT, "s"),
     SIG_S("WPFD_X", -1, 64, 48, CANPROTO_WP_POS_M_PER_BIT, "m"),
     SIG_S("WPFD_Y", -1, 112, 48, CANPROTO_WP_POS_M_PER_BIT, "m"),
     SIG_S("WPFD_Z", -1, 160, 48, CANPROTO_WP_POS_M_PER_BIT, "m"),
+    SIG_S("WPFD_VX", CANPROTO_MUX_FD_WAYPOINT_VEL, 208, 16, CANPROTO_WP_VEL_M_S_PER_BIT, "m/s"),
+    SIG_S("WPFD_VY", CANPROTO_MUX_FD_WAYPOINT_VEL, 224, 16, CANPROTO_WP_VEL_M_S_PER_BIT, "m/s"),
+    SIG_S("WPFD_VZ", CANPROTO_MUX_FD_WAYPOINT_VEL, 240, 16, CANPROTO_WP_VEL_M_S_PER_BIT, "m/s"),
 };
 static const canproto_signal_t sig_sp[] = {
     SIG_U("SP_Axis", -2, 0, 2, 1, ""),
@@ -264,11 +270,13 @@ int canproto_dbc(char *buf, size_t len)
             emit(buf, len, &pos, "BA_ \"VFrameFormat\" BO_ %u 14;\n", (unsigned)m[i].id);
     /* value tables of every enum field, from the enums of canproto.h / motion.h */
     const char *states = "0 \"waiting\" 1 \"streaming\" 2 \"underrun\" 3 \"finished\"";
-    emit(buf, len, &pos, "VAL_ %u WP_Mux %d \"time\" %d \"x\" %d \"y\" %d \"z\" %d \"command\" ;\n",
+    emit(buf, len, &pos,
+         "VAL_ %u WP_Mux %d \"time\" %d \"x\" %d \"y\" %d \"z\" %d \"command\" %d \"velocity\" ;\n",
          CANPROTO_ID_WAYPOINT_BASE, CANPROTO_MUX_TIME, CANPROTO_MUX_X, CANPROTO_MUX_Y,
-         CANPROTO_MUX_Z, CANPROTO_MUX_COMMAND);
-    emit(buf, len, &pos, "VAL_ %u WPFD_Mux %d \"whole waypoint\" ;\n", CANPROTO_ID_WAYPOINT_FD_BASE,
-         CANPROTO_MUX_FD_WAYPOINT);
+         CANPROTO_MUX_Z, CANPROTO_MUX_COMMAND, CANPROTO_MUX_VELOCITY);
+    emit(buf, len, &pos,
+         "VAL_ %u WPFD_Mux %d \"whole waypoint\" %d \"whole waypoint with velocity\" ;\n",
+         CANPROTO_ID_WAYPOINT_FD_BASE, CANPROTO_MUX_FD_WAYPOINT, CANPROTO_MUX_FD_WAYPOINT_VEL);
     emit(buf, len, &pos,
          "VAL_ %u WP_Command %d \"finish\" %d \"stop\" %d \"clear\" %d \"reset counters\" %d "
          "\"feed override\" %d \"start\" ;\n",

@@ -45,6 +45,8 @@ SPFD_VEL_TOL = 0.5e-6
 # Waypoints: half a bit plus the rounding of x / 1e-6 in double for |x| <= 1e7 m
 # (1e13 raw units x 2^-52 relative = 2e-3 bit): 0.505e-6 m.
 WP_TOL = 0.505e-6
+# The source velocity (issue 31): int16 at 1 cm/s, rounded to the nearest code.
+WP_VEL_TOL = 0.505e-2
 
 
 def dbc_text():
@@ -164,6 +166,23 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
             self.assertAlmostEqual(d["WPFD_Time"], wp.t_s, delta=WP_TOL)
             for a, ax in enumerate("XYZ"):
                 self.assertAlmostEqual(d["WPFD_" + ax], wp.pos_m[a], delta=WP_TOL)
+            # with the source's velocity (issue 31): the VELOCITY frame, FD mux 7
+            wp.has_vel = 1
+            for a in range(3):
+                wp.vel_m_s[a] = self.rng.uniform(-300, 300)
+            v = cp.Frame()
+            self.assertEqual(LIB.canproto_encode_waypoint_vel(0x680, ctypes.byref(wp),
+                                                              ctypes.byref(v)), 0)
+            d = decode(self.db, v)
+            self.assertEqual((d["WP_Mux"], d["WP_Seq"]), (6, wp.seq))
+            for a, ax in enumerate("XYZ"):
+                self.assertAlmostEqual(d["WP_V" + ax], wp.vel_m_s[a], delta=WP_VEL_TOL)
+            LIB.canproto_encode_waypoint_fd(0x690, ctypes.byref(wp), ctypes.byref(f))
+            d = decode(self.db, f)
+            self.assertEqual(d["WPFD_Mux"], 7)
+            for a, ax in enumerate("XYZ"):
+                self.assertAlmostEqual(d["WPFD_" + ax], wp.pos_m[a], delta=WP_TOL)
+                self.assertAlmostEqual(d["WPFD_V" + ax], wp.vel_m_s[a], delta=WP_VEL_TOL)
 
     # Given a status, then canmatrix decodes every field.
     def test_status(self):
@@ -551,12 +570,17 @@ class CanmatrixEncodesOurDecoderReads(unittest.TestCase):
             t = round(rng.uniform(0, 1e5), 6)
             pos = [round(rng.uniform(-1e6, 1e6), 6) for _ in range(3)]
             use_fd = seq % 3 == 0
+            # every other waypoint with the source's velocity (issue 31): FD mux 7, or a
+            # classic VELOCITY frame sent first
+            vel = [round(rng.uniform(-300, 300), 2) for _ in range(3)] if seq % 2 else None
             if use_fd:
-                payload = fd.encode({"WPFD_Mux": 5, "WPFD_Seq": seq,
-                                     "WPFD_Time": raw(fd, "WPFD_Time", t),
-                                     **{"WPFD_" + ax: raw(fd, "WPFD_" + ax, pos[a])
-                                        for a, ax in enumerate("XYZ")}})
-                frames = [(0x690, bytes(payload), cp.F_FD)]
+                sig = {"WPFD_Mux": 7 if vel else 5, "WPFD_Seq": seq,
+                       "WPFD_Time": raw(fd, "WPFD_Time", t),
+                       **{"WPFD_" + ax: raw(fd, "WPFD_" + ax, pos[a]) for a, ax in enumerate("XYZ")}}
+                if vel:
+                    sig.update({"WPFD_V" + ax: raw(fd, "WPFD_V" + ax, vel[a])
+                                for a, ax in enumerate("XYZ")})
+                frames = [(0x690, bytes(fd.encode(sig)), cp.F_FD)]
             else:
                 frames = [(0x680, bytes(fr.encode({"WP_Mux": 0, "WP_Seq": seq,
                                                    "WP_Time": raw(fr, "WP_Time", t)})), 0)]
@@ -564,6 +588,10 @@ class CanmatrixEncodesOurDecoderReads(unittest.TestCase):
                     frames.append((0x680, bytes(fr.encode({"WP_Mux": a + 1, "WP_Seq": seq,
                                                            "WP_" + ax: raw(fr, "WP_" + ax, pos[a])})), 0))
                 rng.shuffle(frames)
+                if vel:
+                    frames.insert(0, (0x680, bytes(fr.encode(
+                        {"WP_Mux": 6, "WP_Seq": seq,
+                         **{"WP_V" + ax: raw(fr, "WP_V" + ax, vel[a]) for a, ax in enumerate("XYZ")}})), 0))
             results = []
             for can_id, data, flags in frames:
                 f = cp.Frame(can_id, len(data), flags)
@@ -576,6 +604,9 @@ class CanmatrixEncodesOurDecoderReads(unittest.TestCase):
             self.assertAlmostEqual(out.wp.t_s, t, delta=WP_TOL)
             for a in range(3):
                 self.assertAlmostEqual(out.wp.pos_m[a], pos[a], delta=WP_TOL)
+            self.assertEqual(out.wp.has_vel, 1 if vel else 0)
+            for a in range(3 if vel else 0):
+                self.assertAlmostEqual(out.wp.vel_m_s[a], vel[a], delta=WP_VEL_TOL)
             rx.consume(out)
 
 

@@ -248,6 +248,56 @@ static void test_fd_waypoint(void **state)
     assert_int_equal(rx.st.malformed_by[CANPROTO_EVALUE], 4);
 }
 
+/* Given a waypoint with the source's velocity (issue 31): its VELOCITY frame
+ * sent first, then its four frames in any order, then it comes out with the
+ * velocity (1 cm/s per bit); a VELOCITY after the fourth frame is a frame of a
+ * waypoint already handed out (a duplicate), never merged into the next; the
+ * int16 n/a code is refused; as one FD frame, mux 7 carries it, mux 5 none. */
+static void test_velocity(void **state)
+{
+    (void)state;
+    canproto_frame_t f[4], v, g;
+    canproto_rx_out_t out;
+    engine_waypoint_t w = wpt(9, 1.5, 10, 20, 30);
+    w.has_vel = 1;
+    w.vel_m_s[0] = 12.345;
+    w.vel_m_s[1] = -250.0;
+    w.vel_m_s[2] = 0.004;
+    assert_int_equal(canproto_encode_waypoint_vel(ID, &w, &v), 0);
+    assert_int_equal(v.data[0], CANPROTO_MUX_VELOCITY);
+    assert_int_equal(canproto_rx_frame(&rx, &v, 0, &out), CANPROTO_RX_NONE);
+    assert_int_equal(canproto_encode_waypoint(ID, &w, f), 0);
+    const int order[4] = {3, 1, 0, 2};
+    for (int k = 0; k < 3; k++)
+        assert_int_equal(canproto_rx_frame(&rx, &f[order[k]], 0, &out), CANPROTO_RX_NONE);
+    assert_int_equal(canproto_rx_frame(&rx, &f[order[3]], 0, &out), CANPROTO_RX_WAYPOINT);
+    assert_int_equal(out.wp.has_vel, 1);
+    assert_true(fabs(out.wp.vel_m_s[0] - 12.35) < 1e-12 || fabs(out.wp.vel_m_s[0] - 12.34) < 1e-12);
+    assert_true(fabs(out.wp.vel_m_s[1] + 250.0) < 1e-12);
+    assert_true(fabs(out.wp.vel_m_s[2]) < 1e-12);
+    canproto_rx_consume(&rx, &out);
+    uint64_t dup = rx.st.duplicates;
+    assert_int_equal(canproto_rx_frame(&rx, &v, 0, &out), CANPROTO_RX_NONE); /* late */
+    assert_int_equal(rx.st.duplicates, dup + 1);
+    engine_waypoint_t w2 = wpt(10, 1.6, 11, 21, 31); /* the next: no velocity */
+    assert_int_equal(feed(&w2, NULL, &out), CANPROTO_RX_WAYPOINT);
+    assert_int_equal(out.wp.has_vel, 0);
+    canproto_rx_consume(&rx, &out);
+    v.data[1] = 11;
+    v.data[2] = 0x00; /* vx = INT16_MIN: n/a, refused */
+    v.data[3] = 0x80;
+    assert_int_equal(canproto_rx_frame(&rx, &v, 0, &out), -CANPROTO_EVALUE);
+    w.seq = 11;
+    assert_int_equal(canproto_encode_waypoint_fd(FDID, &w, &g), 0);
+    assert_int_equal(g.data[0], CANPROTO_MUX_FD_WAYPOINT_VEL);
+    assert_int_equal(canproto_rx_frame(&rx, &g, 1, &out), CANPROTO_RX_WAYPOINT);
+    assert_int_equal(out.wp.has_vel, 1);
+    assert_true(fabs(out.wp.vel_m_s[1] + 250.0) < 1e-12);
+    g.data[26] = 0x00;
+    g.data[27] = 0x80;
+    assert_int_equal(canproto_rx_frame(&rx, &g, 1, &out), -CANPROTO_EVALUE);
+}
+
 /* Given out-of-range and NaN values, then encoders clamp and say so; a NaN
  * waypoint is refused (a sender must not send it). */
 static void test_clamping(void **state)
@@ -428,6 +478,7 @@ int main(void)
         cmocka_unit_test_setup(test_malformed, setup),
         cmocka_unit_test_setup(test_command, setup),
         cmocka_unit_test_setup(test_fd_waypoint, setup),
+        cmocka_unit_test_setup(test_velocity, setup),
         cmocka_unit_test(test_clamping),
         cmocka_unit_test(test_classic_frame_bits),
         cmocka_unit_test(test_fd_frame_time),
