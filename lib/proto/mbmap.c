@@ -369,6 +369,38 @@ static int decode_wpf(mbmap_order_t o, const uint8_t *val, mbmap_write_t *out)
     return 0;
 }
 
+/* The float64 waypoint block (MBMAP_H_WP), or with the velocity (MBMAP_H_WPV):
+ * the same layout from the block's start, then vx, vy, vz. */
+static int decode_wp(mbmap_order_t o, const uint8_t *val, int with_vel, mbmap_write_t *out)
+{
+    uint16_t r[MBMAP_H_WPV_COUNT];
+    unsigned count = with_vel ? MBMAP_H_WPV_COUNT : MBMAP_H_WP_COUNT;
+    for (unsigned i = 0; i < count; i++)
+        r[i] = (uint16_t)be16(val + 2 * i);
+    mbmap_order_value(r, 2, o); /* seq, then f64 from register 2 on */
+    for (unsigned i = 2; i < count; i += 4)
+        mbmap_order_value(r + i, 4, o);
+    out->kind = MBMAP_WRITE_WAYPOINT;
+    out->wp.seq = mbmap_get_u32(r + (MBMAP_H_WP_SEQ - MBMAP_H_WP));
+    out->wp.t_s = mbmap_get_f64(r + (MBMAP_H_WP_T_S - MBMAP_H_WP));
+    if (!isfinite(out->wp.t_s))
+        return -MBMAP_EVALUE;
+    for (int a = 0; a < ENGINE_AXES; a++) {
+        out->wp.pos_m[a] = mbmap_get_f64(r + (MBMAP_H_WP_POS - MBMAP_H_WP) + 4 * a);
+        if (!isfinite(out->wp.pos_m[a]))
+            return -MBMAP_EVALUE;
+    }
+    if (!with_vel)
+        return 0;
+    out->wp.has_vel = 1;
+    for (int a = 0; a < ENGINE_AXES; a++) {
+        out->wp.vel_m_s[a] = mbmap_get_f64(r + (MBMAP_H_WPV_VEL - MBMAP_H_WPV) + 4 * a);
+        if (!isfinite(out->wp.vel_m_s[a]))
+            return -MBMAP_EVALUE;
+    }
+    return 0;
+}
+
 int mbmap_decode_write_order(unsigned n, mbmap_order_t o, const uint8_t *pdu, size_t len,
                              mbmap_write_t *out)
 {
@@ -410,26 +442,10 @@ int mbmap_decode_write_order(unsigned n, mbmap_order_t o, const uint8_t *pdu, si
     }
     if (off == MBMAP_H_WPF && count == MBMAP_H_WPF_COUNT)
         return decode_wpf(o, val, out);
-    if (off == MBMAP_H_WP && count == MBMAP_H_WP_COUNT) {
-        uint16_t r[MBMAP_H_WP_COUNT];
-        for (unsigned i = 0; i < MBMAP_H_WP_COUNT; i++)
-            r[i] = (uint16_t)be16(val + 2 * i);
-        mbmap_order_value(r + (MBMAP_H_WP_SEQ - MBMAP_H_WP), 2, o);
-        mbmap_order_value(r + (MBMAP_H_WP_T_S - MBMAP_H_WP), 4, o);
-        for (int a = 0; a < ENGINE_AXES; a++)
-            mbmap_order_value(r + (MBMAP_H_WP_POS - MBMAP_H_WP) + 4 * a, 4, o);
-        out->kind = MBMAP_WRITE_WAYPOINT;
-        out->wp.seq = mbmap_get_u32(r + (MBMAP_H_WP_SEQ - MBMAP_H_WP));
-        out->wp.t_s = mbmap_get_f64(r + (MBMAP_H_WP_T_S - MBMAP_H_WP));
-        if (!isfinite(out->wp.t_s))
-            return -MBMAP_EVALUE;
-        for (int a = 0; a < ENGINE_AXES; a++) {
-            out->wp.pos_m[a] = mbmap_get_f64(r + (MBMAP_H_WP_POS - MBMAP_H_WP) + 4 * a);
-            if (!isfinite(out->wp.pos_m[a]))
-                return -MBMAP_EVALUE;
-        }
-        return 0;
-    }
+    if (off == MBMAP_H_WP && count == MBMAP_H_WP_COUNT)
+        return decode_wp(o, val, 0, out);
+    if (off == MBMAP_H_WPV && count == MBMAP_H_WPV_COUNT)
+        return decode_wp(o, val, 1, out);
     return -MBMAP_EADDRESS;
 }
 
@@ -732,6 +748,17 @@ static const mbmap_field_t fields[] = {
     F(HO, MBMAP_H_WPF_POS + 2, 2, MBMAP_T_F32, "wpf_y", "m", "waypoint position"),
     F(HO, MBMAP_H_WPF_POS + 4, 2, MBMAP_T_F32, "wpf_z", "m",
       "waypoint position; the 10 registers 30..39 go in one FC 16"),
+    F(HO, MBMAP_H_WPV_SEQ, 2, MBMAP_T_U32, "wpv_seq", "",
+      "waypoint with the source's velocity (the local methods, method = hermite): sequence "
+      "number"),
+    F(HO, MBMAP_H_WPV_T_S, 4, MBMAP_T_F64, "wpv_t", "s", "waypoint time"),
+    F(HO, MBMAP_H_WPV_POS + 0, 4, MBMAP_T_F64, "wpv_x", "m", "waypoint position"),
+    F(HO, MBMAP_H_WPV_POS + 4, 4, MBMAP_T_F64, "wpv_y", "m", "waypoint position"),
+    F(HO, MBMAP_H_WPV_POS + 8, 4, MBMAP_T_F64, "wpv_z", "m", "waypoint position"),
+    F(HO, MBMAP_H_WPV_VEL + 0, 4, MBMAP_T_F64, "wpv_vx", "m/s", "velocity at the waypoint"),
+    F(HO, MBMAP_H_WPV_VEL + 4, 4, MBMAP_T_F64, "wpv_vy", "m/s", "velocity at the waypoint"),
+    F(HO, MBMAP_H_WPV_VEL + 8, 4, MBMAP_T_F64, "wpv_vz", "m/s",
+      "velocity at the waypoint; the 30 registers 40..69 go in one FC 16"),
 };
 
 const mbmap_field_t *mbmap_fields(size_t *n)

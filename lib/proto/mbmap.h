@@ -215,6 +215,14 @@
 #define MBMAP_H_WPF_T_S 32           /* f32 time, s */
 #define MBMAP_H_WPF_POS 34           /* f32 x3 x, y, z, m */
 #define MBMAP_H_WPF_COUNT 10
+/* A waypoint with the source's velocity (issue 31: the local methods pass
+ * through it at that velocity), float64, written whole by one FC 16. */
+#define MBMAP_H_WPV 40               /* first register of the waypoint-with-velocity block */
+#define MBMAP_H_WPV_SEQ 40           /* u32 sequence number */
+#define MBMAP_H_WPV_T_S 42           /* f64 time, s */
+#define MBMAP_H_WPV_POS 46           /* f64 x3 x, y, z, m */
+#define MBMAP_H_WPV_VEL 58           /* f64 x3 vx, vy, vz, m/s */
+#define MBMAP_H_WPV_COUNT 30
 
 /* Commands (holding register MBMAP_H_COMMAND). */
 #define MBMAP_CMD_START 1            /* release a stop's latch and join the live track by a
