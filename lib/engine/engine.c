@@ -105,15 +105,17 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
     e->solve.node_t = calloc(ring, sizeof(double));
     e->solve.node_r = calloc(ring * AX, sizeof(double));
     e->solve.node_v = calloc(ring * AX, sizeof(double));
+    e->solve.node_a = calloc(ring * AX, sizeof(double));
     e->solve.node_vk = calloc(ring, 1);
     e->solve.fw = frag_new(cfg->fragment, cfg->overlap, engine_cfg_frag_delta(cfg), ring);
-    /* each accepted waypoint yields at most one segment, each trajectory
-     * one END: twice the capacity always fits */
-    e->queue.cap = 2 * (size_t)cfg->capacity + 8;
+    /* each accepted waypoint yields at most one segment (the C2 local
+     * methods three), each trajectory one END: twice (four times) the
+     * capacity always fits */
+    e->queue.cap = (e->local >= 3 ? 4 : 2) * (size_t)cfg->capacity + 8;
     e->queue.ent = calloc(e->queue.cap, sizeof(qent_t));
     e->queue.slow = calloc(e->queue.cap, sizeof(size_t));
-    if (!e->solve.node_t || !e->solve.node_r || !e->solve.node_v || !e->solve.node_vk ||
-        !e->solve.fw || !e->queue.ent || !e->queue.slow)
+    if (!e->solve.node_t || !e->solve.node_r || !e->solve.node_v || !e->solve.node_a ||
+        !e->solve.node_vk || !e->solve.fw || !e->queue.ent || !e->queue.slow)
         goto nomem;
     e->st.lookahead = e->lookahead;
     e->scale.ts.rate = 1.0;
@@ -137,6 +139,7 @@ void engine_free(engine_t *e)
     free(e->solve.node_t);
     free(e->solve.node_r);
     free(e->solve.node_v);
+    free(e->solve.node_a);
     free(e->solve.node_vk);
     frag_free(e->solve.fw);
     free(e->queue.ent);

@@ -178,6 +178,9 @@ typedef enum {
                                   source or from each waypoint and the two before */
     ENGINE_METHOD_HERMITE_CENTRED = 4, /* exact, local: as HERMITE, velocities estimated
                                           from the waypoints either side */
+    ENGINE_METHOD_HERMITE_C2 = 5,      /* exact, local, C2: position, velocity and
+                                          acceleration at each waypoint (hermite.h) */
+    ENGINE_METHOD_HERMITE_C2_CENTRED = 6, /* as HERMITE_C2, estimates from either side */
 } engine_method_t;
 
 /*
@@ -187,9 +190,12 @@ typedef enum {
  * so a segment is final once its end waypoint (HERMITE) or the one after it
  * (HERMITE_CENTRED) is kept: 2 and 3 waypoints of lookahead with the
  * acceptance's 1, instead of the fragments' 8 or more.  Exact through every
- * waypoint, velocity continuous, acceleration not (C1).  A max_lookahead
- * too short for any fragment picks them (engine_config_resolve): 2 HERMITE,
- * 3 or more HERMITE_CENTRED.  ends: rest and clamped start and, for
+ * waypoint, velocity continuous, acceleration not (C1).  HERMITE_C2 and
+ * HERMITE_C2_CENTRED also match an acceleration at each waypoint (the
+ * parabola's through the same three), continuous (C2): three cubics per
+ * interval in place of the quintic Hermite.  A max_lookahead too short for
+ * any fragment picks one (engine_config_resolve): 2 HERMITE_C2, 3 or more
+ * HERMITE_C2_CENTRED.  ends: rest and clamped start and, for
  * HERMITE_CENTRED, end at the given velocity; natural with zero
  * acceleration; HERMITE's last segment is final before the input is known
  * to end, so its end is braked to along the path (the time scaling).

@@ -33,7 +33,9 @@
 
 size_t input_buffered(const engine_t *e)
 {
-    return e->queue.len + (size_t)(e->solve.nodes - e->solve.seg_next) +
+    /* the C2 local methods queue three pieces per interval */
+    size_t q = e->local >= 3 ? (e->queue.len + 2) / 3 : e->queue.len;
+    return q + (size_t)(e->solve.nodes - e->solve.seg_next) +
            (e->smooth ? (size_t)lsq_smooth_pending(&e->solve.sm) : 0) +
            accept_pending(&e->in.policy);
 }

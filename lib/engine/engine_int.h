@@ -85,6 +85,7 @@ typedef struct {
     double *node_t;         /* ring */
     double *node_r;         /* ring x AX */
     double *node_v;         /* local methods: ring x AX, each node's velocity ... */
+    double *node_a;         /* ... and (C2) acceleration ... */
     unsigned char *node_vk; /* ... ring: 0 none yet, 1 the source's, 2 computed */
     frag_t *fw;
     lsq_smooth_t sm; /* SMOOTH: the smoother the waypoints pass first */
@@ -240,7 +241,8 @@ struct engine {
     int held;             /* HELD or MULTIPLE: first and last segments not emitted */
     int mult;             /* MULTIPLE: end points entered three times */
     int smooth;           /* SMOOTH: waypoints pass through the lsq smoother first */
-    int local;            /* local method (hermite.h): 1 HERMITE, 2 HERMITE_CENTRED */
+    int local;            /* local method (engine_cfg_local): 1, 3 backward, 2, 4 centred;
+                             3, 4 C2 (three queued pieces per interval) */
     double period_s;
 
     engine_input_t in;

@@ -30,6 +30,8 @@ static const char *const method_names[] = {
     [ENGINE_METHOD_SMOOTH] = "smooth",
     [ENGINE_METHOD_HERMITE] = "hermite",
     [ENGINE_METHOD_HERMITE_CENTRED] = "hermite-centred",
+    [ENGINE_METHOD_HERMITE_C2] = "hermite-c2",
+    [ENGINE_METHOD_HERMITE_C2_CENTRED] = "hermite-c2-centred",
     NULL,
 };
 static const char *const param_names[] = {
@@ -74,7 +76,7 @@ _Static_assert(ENGINE_AXES == 3, "VEC3 settings are written x,y,z");
 const engine_setting_t engine_settings[] = {
     S(method, "method", ENUM, 0, 0, 0, method_names, "M",
       "bspline | cubic | smooth (least squares, not exact) | hermite | hermite-centred (local, "
-      "C1)"),
+      "C1) | hermite-c2 | hermite-c2-centred (local, C2)"),
     S(param, "param", ENUM, 0, 0, 0, param_names, "P",
       "uniform (the paper) | time (knots at the timestamps)"),
     S(ends, "ends", ENUM, 0, 0, 0, ends_names, "E",
@@ -440,19 +442,24 @@ static int config_sizes_ok(const engine_config_t *cfg)
            cfg->overlap >= 2 && cfg->overlap % 2 == 0 && cfg->overlap < cfg->fragment;
 }
 
-/* The local methods (hermite.h): 1 HERMITE, 2 HERMITE_CENTRED, else 0 */
+/* The local methods (hermite.h): 1 HERMITE, 2 HERMITE_CENTRED, 3
+ * HERMITE_C2, 4 HERMITE_C2_CENTRED, else 0 */
 int engine_cfg_local(const engine_config_t *cfg)
 {
-    return cfg->method == ENGINE_METHOD_HERMITE           ? 1
-           : cfg->method == ENGINE_METHOD_HERMITE_CENTRED ? 2
-                                                          : 0;
+    switch (cfg->method) {
+    case ENGINE_METHOD_HERMITE: return 1;
+    case ENGINE_METHOD_HERMITE_CENTRED: return 2;
+    case ENGINE_METHOD_HERMITE_C2: return 3;
+    case ENGINE_METHOD_HERMITE_C2_CENTRED: return 4;
+    default: return 0;
+    }
 }
 
 /* most waypoints beyond a segment the solver needs, far from the start */
 unsigned engine_cfg_steady_lookahead(const engine_config_t *cfg)
 {
-    if (engine_cfg_local(cfg)) /* segment j is built once node j + local is in */
-        return (unsigned)engine_cfg_local(cfg);
+    if (engine_cfg_local(cfg)) /* segment j is built once node j + 1 (centred: j + 2) is in */
+        return engine_cfg_local(cfg) % 2 ? 1u : 2u;
     unsigned f = cfg->fragment, o = cfg->overlap, s = f - o;
     unsigned need = engine_cfg_uses_pstar(cfg) ? 3 : 2; /* x[j + need - 1] final for segment j */
 
@@ -537,7 +544,8 @@ static unsigned auto_overlap(double accuracy)
  */
 static int resolve_local(const engine_config_t *cfg, engine_config_t *out)
 {
-    static const engine_method_t local[] = {ENGINE_METHOD_HERMITE_CENTRED, ENGINE_METHOD_HERMITE};
+    static const engine_method_t local[] = {ENGINE_METHOD_HERMITE_C2_CENTRED,
+                                            ENGINE_METHOD_HERMITE_C2};
     engine_config_t r = *out;
 
     if ((cfg->method != ENGINE_METHOD_CUBIC && cfg->method != ENGINE_METHOD_BSPLINE) ||

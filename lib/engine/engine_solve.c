@@ -247,68 +247,93 @@ static void build_segments(engine_t *e)
 }
 
 /*
- * Local methods (hermite.h): node i's velocity, the source's or computed
- * once it can be (and kept, so that both segments at the node share it:
- * C1); 0 while it cannot be yet.  HERMITE: backward from nodes i-2..i (the
- * chord at node 1); HERMITE_CENTRED: from nodes i-1..i+1, the last node's
- * from the end condition once the trajectory is closed.  Node 0: the start
- * condition (rest 0, clamped start_vel_m_s, natural zero acceleration).
+ * Local methods (hermite.h): node i's velocity (and, C2, acceleration), the
+ * source's velocity or computed once it can be, and kept so that both
+ * segments at the node share them (C1, C2); 0 while they cannot be yet.
+ * Backward (local 1, 3): from nodes i-2..i (the chord and no acceleration at
+ * node 1); centred (2, 4): from nodes i-1..i+1, the last node's from the end
+ * condition once the trajectory is closed.  Node 0: the start condition
+ * (rest 0, clamped start_vel_m_s, natural zero acceleration); the C2
+ * methods' acceleration is 0 at either end.
  */
-static int local_vel(engine_t *e, uint64_t i, int closed, const double **out)
+static int local_state(engine_t *e, uint64_t i, int closed, const double **vout,
+                       const double **aout)
 {
     size_t slot = (size_t)(i % e->solve.ring);
-    double *v = e->solve.node_v + slot * AX;
+    double *v = e->solve.node_v + slot * AX, *a = e->solve.node_a + slot * AX;
     uint64_t last = e->solve.nodes - 1;
+    int centred = e->local % 2 == 0, given = e->solve.node_vk[slot] == 1;
 
-    *out = v;
-    if (e->solve.node_vk[slot] && !(i == 0 && e->cfg.ends != ENGINE_ENDS_NATURAL))
+    *vout = v;
+    *aout = a;
+    if (e->solve.node_vk[slot] == 2 || (given && e->local < 3 && i > 0))
         return 1;
-    if (i == 0 || (e->local == 2 && i == last)) { /* an end of the trajectory */
-        if (i == 0 && last < 1)
+    if (i == 0 || (centred && i == last)) { /* an end of the trajectory */
+        if ((i == 0 && last < 1) || (i == last && !closed))
             return 0;
-        if (i == last && !closed)
-            return 0;
+        memset(a, 0, sizeof(double) * AX);
         const double *src = i == 0 ? e->cfg.start_vel_m_s : e->cfg.end_vel_m_s;
-        if (e->cfg.ends == ENGINE_ENDS_REST || e->cfg.ends == ENGINE_ENDS_CLAMPED) {
+        int fixed = e->cfg.ends == ENGINE_ENDS_REST || e->cfg.ends == ENGINE_ENDS_CLAMPED;
+        if (fixed && (i == 0 || !given)) { /* a start at the condition, even past the source */
             for (int k = 0; k < AX; k++)
                 v[k] = e->cfg.ends == ENGINE_ENDS_REST ? 0.0 : src[k];
-        } else if (last == 1 && (e->local == 2 || i == 1)) {
+        } else if (given) {
+            /* the source's velocity as sent */
+        } else if (last == 1 && (centred || i == 1)) {
             hermite_vel_chord(nt(e, 0), nr(e, 0), nt(e, 1), nr(e, 1), v); /* both ends natural */
         } else {
-            const double *vo;
+            const double *vo, *ao;
             uint64_t o = i == 0 ? 1 : i - 1; /* the segment's other node */
-            if (!local_vel(e, o, closed, &vo))
+            if (!local_state(e, o, closed, &vo, &ao))
                 return 0;
             hermite_vel_natural(nt(e, i), nr(e, i), nt(e, o), nr(e, o), vo, v);
         }
-    } else if (e->local == 1) {
-        if (i == 1)
-            hermite_vel_chord(nt(e, 0), nr(e, 0), nt(e, 1), nr(e, 1), v);
-        else
-            hermite_vel_backward(nt(e, i - 2), nr(e, i - 2), nt(e, i - 1), nr(e, i - 1), nt(e, i),
-                                 nr(e, i), v);
+    } else if (!centred) {
+        if (i == 1) {
+            if (!given)
+                hermite_vel_chord(nt(e, 0), nr(e, 0), nt(e, 1), nr(e, 1), v);
+            memset(a, 0, sizeof(double) * AX);
+        } else {
+            if (!given)
+                hermite_vel_backward(nt(e, i - 2), nr(e, i - 2), nt(e, i - 1), nr(e, i - 1),
+                                     nt(e, i), nr(e, i), v);
+            hermite_acc_parabola(nt(e, i - 2), nr(e, i - 2), nt(e, i - 1), nr(e, i - 1), nt(e, i),
+                                 nr(e, i), a);
+        }
     } else {
-        hermite_vel_centred(nt(e, i - 1), nr(e, i - 1), nt(e, i), nr(e, i), nt(e, i + 1),
-                            nr(e, i + 1), v);
+        if (!given)
+            hermite_vel_centred(nt(e, i - 1), nr(e, i - 1), nt(e, i), nr(e, i), nt(e, i + 1),
+                                nr(e, i + 1), v);
+        hermite_acc_parabola(nt(e, i - 1), nr(e, i - 1), nt(e, i), nr(e, i), nt(e, i + 1),
+                             nr(e, i + 1), a);
     }
     e->solve.node_vk[slot] = 2;
     return 1;
 }
 
-/* Local methods: build and queue every segment whose two velocities are known. */
+/* Local methods: build and queue every segment whose two end states are
+ * known (C2: as its three pieces). */
 static void build_local(engine_t *e, int closed)
 {
     for (;;) {
         uint64_t j = e->solve.seg_next;
-        const double *v0, *v1;
-        fdiff_seg_t seg;
+        const double *v0, *v1, *a0, *a1;
+        fdiff_seg_t seg[3];
 
-        if (j + 1 >= e->solve.nodes || !local_vel(e, j + 1, closed, &v1) ||
-            !local_vel(e, j, closed, &v0))
+        if (j + 1 >= e->solve.nodes || !local_state(e, j + 1, closed, &v1, &a1) ||
+            !local_state(e, j, closed, &v0, &a0))
             break;
         e->solve.seg_next = j + 1;
-        hermite_segment(nr(e, j), v0, nr(e, j + 1), v1, nt(e, j), nt(e, j + 1) - nt(e, j), &seg);
-        queue_segment(e, &seg, j);
+        if (e->local < 3) {
+            hermite_segment(nr(e, j), v0, nr(e, j + 1), v1, nt(e, j), nt(e, j + 1) - nt(e, j),
+                            &seg[0]);
+            queue_segment(e, &seg[0], j);
+            continue;
+        }
+        hermite_c2_segments(nr(e, j), v0, a0, nr(e, j + 1), v1, a1, nt(e, j),
+                            nt(e, j + 1) - nt(e, j), seg);
+        for (int k = 0; k < 3; k++)
+            queue_segment(e, &seg[k], j);
     }
 }
 

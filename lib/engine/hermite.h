@@ -48,4 +48,26 @@ void hermite_vel_natural(double t0, const double *p0, double t1, const double *p
 void hermite_segment(const double *p0, const double *v0, const double *p1, const double *v1,
                      double t0, double dur, fdiff_seg_t *seg);
 
+/* a = the second derivative of the parabola through three waypoints
+ * (2 (d2 - d1) / (h1 + h2)): the acceleration estimate of the C2 methods. */
+void hermite_acc_parabola(double t0, const double *p0, double t1, const double *p1, double t2,
+                          const double *p2, double *a);
+
+/*
+ * The C2 methods (HERMITE_C2, HERMITE_C2_CENTRED): the curve from (t0, p0,
+ * v0, a0) to (t0 + dur, p1, v1, a1) as three cubics of dur/3, each of
+ * constant jerk, continuous in position, velocity and acceleration at the
+ * two inner joins: the same data and continuity as the quintic Hermite,
+ * carried by the cubic stepper (a cubic spline with two inner knots, the
+ * only one such for the six end conditions).  In units of the piece, tau =
+ * dur/3, V = v tau, A = a tau^2, J = j tau^3, the end state after three
+ * pieces is affine in J1..J3; with ra = A1 - A0, rv = V1 - V0 - 3 A0, rp =
+ * P1 - P0 - 3 V0 - 9/2 A0:
+ *     J1 = rp - rv + ra/3,  J2 = 3 rv - 2 rp - 7/6 ra,  J3 = rp - 2 rv + 11/6 ra.
+ * seg[3] receives the pieces.
+ */
+void hermite_c2_segments(const double *p0, const double *v0, const double *a0, const double *p1,
+                         const double *v1, const double *a1, double t0, double dur,
+                         fdiff_seg_t seg[3]);
+
 #endif

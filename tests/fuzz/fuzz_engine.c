@@ -191,11 +191,11 @@ static void configure(engine_config_t *c, uint8_t b0, uint8_t b1)
         c->smooth_ctrl = 4;
         break;
     case 5: /* the local methods (issue 31) */
-        c->method = ENGINE_METHOD_HERMITE;
+        c->method = (b0 & 0x10) ? ENGINE_METHOD_HERMITE_C2 : ENGINE_METHOD_HERMITE;
         c->ends = ENGINE_ENDS_NATURAL;
         break;
     case 6:
-        c->max_lookahead = 3; /* too short for any fragment: HERMITE_CENTRED */
+        c->max_lookahead = 3; /* too short for any fragment: HERMITE_C2_CENTRED */
         break;
     default:
         c->fragment = 8 + (b0 >> 4);
