@@ -440,9 +440,11 @@ static void print_summary(const track_t *trk, const replay_t *r, const engine_st
             "summary: retime_max_s %.6g\n"
             "summary: silent_ends %" PRIu64 "\n"
             "summary: catchups %" PRIu64 "\n"
-            "summary: lag_s %.6g\n",
+            "summary: lag_s %.6g\n"
+            "summary: axis_lost_s %.6g\n"
+            "summary: axis_slowed %" PRIu64 "\n",
             st->stops, st->stop_fixes, st->retimed, st->retime_max_s, st->silent_ends, st->catchups,
-            st->lag_s);
+            st->lag_s, st->axis_lost_s, st->axis_slowed);
 }
 
 /* The play-out delay D the engine held and its parts (lib/engine/delay.h):
@@ -737,6 +739,21 @@ static void run_report_uniform(run_t *run)
             run->st.uniform_ratio_max, run->st.uniform_ratio_t_s);
 }
 
+/* issue 32: a track that persistently exceeds the per-axis limits, whose
+ * lag therefore grows: say so once, with the time lost. */
+#define AXIS_LOST_WARN_FRAC 0.1
+static void run_report_axis(run_t *run)
+{
+    engine_status(run->e, &run->st);
+    if (!(run->st.axis_lost_s > AXIS_LOST_WARN_FRAC * run->span_s))
+        return;
+    fprintf(stderr,
+            "trajreplay: %s: warning: the track exceeds the per-axis limits (axis_max_*) "
+            "persistently: the time scaling slowed %" PRIu64
+            " segments and lost %.1f s over %.1f s of track (its lag grows by that)\n",
+            run->o->input, run->st.axis_slowed, run->st.axis_lost_s, run->span_s);
+}
+
 /* The per-reason count of rejections, if any. */
 static void run_report_rejected_total(const run_t *run)
 {
@@ -934,6 +951,7 @@ int main(int argc, char **argv)
         status = EXIT_OUTPUT;
     run_report_rejected_total(&run);
     run_report_uniform(&run);
+    run_report_axis(&run);
     if (o.summary) {
         print_summary(&run.trk, &run.r, &run.st, run.max_v, run.max_a, run.written);
         fprintf(stderr, "summary: skipped_gaps %" PRIu64 "\nsummary: skipped_ticks %" PRIu64 "\n",

@@ -162,6 +162,10 @@ typedef struct {
     double lag_s;                   /* relative time: how far the output trails its delay D
                                        (lib/engine/catchup.h; < 0: ahead; 0: none known) */
     uint64_t catchups;              /* lags won back (or given back) by the rate */
+    double axis_lost_s;             /* time lost to the per-axis limits (issue 32): the
+                                       sum of (1 - rate) x period over the ticks streamed
+                                       in, or braking for, a segment they slow */
+    uint64_t axis_slowed;           /* segments the per-axis limits slow */
 } engine_status_t;
 
 /* clang-format on */

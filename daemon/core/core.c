@@ -82,6 +82,8 @@ static double obj_safety_accel(const engine_config_t *e)
  * it unchecked), no absolute step bound, acceleration derived as
  * obj_safety_accel says.
  */
+#define SAFETY_AXIS_MARGIN 1.1
+
 static void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim)
 {
     memset(lim, 0, sizeof *lim);
@@ -94,6 +96,13 @@ static void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim)
     lim->box = o->box; /* position_min_m .. position_max_m (cfg_box.h) */
     memcpy(lim->box_min_m, o->box_min_m, sizeof lim->box_min_m);
     memcpy(lim->box_max_m, o->box_max_m, sizeof lim->box_max_m);
+    /* issue 32: the engine keeps the per-axis limits along the path; the
+     * monitor holds them independently, SAFETY_AXIS_MARGIN above (the
+     * finite differences of the setpoints it measures by) */
+    for (int k = 0; k < ENGINE_AXES; k++) {
+        lim->axis_speed_m_s[k] = SAFETY_AXIS_MARGIN * o->engine.axis_max_speed_m_s[k];
+        lim->axis_accel_m_s2[k] = SAFETY_AXIS_MARGIN * o->engine.axis_max_accel_m_s2[k];
+    }
 }
 
 /* The setpoint as latitude/longitude/height (geographic objects, about the
@@ -836,6 +845,11 @@ int core_summary(const core_t *c, char *buf, size_t len)
         if (o->status.silent_ends && n < len) { /* issue 26: lib/engine/silence.h */
             m = snprintf(buf + n, len - n, ", %llu silent ends",
                          (unsigned long long)o->status.silent_ends);
+            n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+        }
+        if (o->status.axis_slowed && n < len) { /* issue 32: per-axis limits */
+            m = snprintf(buf + n, len - n, ", %.1f s lost to the per-axis limits (%llu segments)",
+                         o->status.axis_lost_s, (unsigned long long)o->status.axis_slowed);
             n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
         }
         if (o->out_lost && n < len) {

@@ -316,6 +316,19 @@ typedef struct {
                                held this far behind the newest waypoint
                                (engine_delay_check refuses less than the
                                settings need) */
+    /* Per-axis limits (issue 32), each x, y, z; 0 = that axis free (the
+     * default).  The time scaling slows the output along its path so that
+     * |v_k| <= axis_max_speed_m_s[k], |a_k| <= axis_max_accel_m_s2[k] and the
+     * curve's own jerk |k_k'''| r^3 <= axis_max_jerk_m_s3[k] / 2: each queued
+     * segment's rate is capped (engine_solve.c seg_ceiling), and with an
+     * acceleration (jerk) limit the scaling's own scale_accel_m_s2
+     * (scale_jerk_m_s3) is taken down to a third (half) of the smallest
+     * (resolve), the share its dr/dt term may add.  Transfers last long enough for every
+     * axis.  The path is never left; the time lost is axis_lost_s
+     * (engine_status_t). */
+    double axis_max_speed_m_s[ENGINE_AXES];
+    double axis_max_accel_m_s2[ENGINE_AXES];
+    double axis_max_jerk_m_s3[ENGINE_AXES];
 } engine_config_t;
 
 /* Fill cfg with working defaults (each one commented above; documented in

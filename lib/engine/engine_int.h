@@ -46,6 +46,7 @@ typedef struct {
                           of its trajectory to the next, summed up to it */
     double ceil;     /* SEG: the highest rate at which it keeps the speed cap
                         (ENGINE_SPEED_CAP; INFINITY if none) */
+    int ceil_axis;   /* SEG: ceil is the per-axis limits' and below 1 (issue 32) */
 } qent_t;
 
 /* Below this speed (m/s) the curve's end counts as at rest. */

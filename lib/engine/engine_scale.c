@@ -276,6 +276,11 @@ void scale_step(engine_t *e, double target, double R, double A, double J)
         lim = 0; /* the curve ahead is short of a stop from the target, but the
                   * move is the one without it (a ramp from rest): no underrun */
 
+    /* issue 32: time lost in a segment the per-axis limits slow, or braking
+     * for one ahead (the speed caps ahead held the rate back) */
+    if (e->out.mode == OUT_STREAM && e->scale.ts.rate < 1.0 &&
+        (e->out.cur.ceil_axis || (Rc < R && e->st.axis_slowed)))
+        e->st.axis_lost_s += (1.0 - e->scale.ts.rate) * e->period_s;
     /* the rate this tick starts from, if a stop within it keeps to A */
     e->scale.stop_dv = r0 <= A * e->period_s ? r0 : -1.0;
     /* held back by the speed cap ahead, not by the curve running short */

@@ -128,6 +128,13 @@ const engine_setting_t engine_settings[] = {
     /* issue 26: the play-out delay D, stated (delay.h) */
     S(delay_s, "delay", DOUBLE, 0, 0, 3600, NULL, "S",
       "play-out delay D, s (0 = what the settings and the input need)"),
+    /* issue 32: per-axis limits, kept by the time scaling along the path */
+    S(axis_max_speed_m_s, "axis-max-speed", VEC3, 0, 0, 0, NULL, "VX,VY,VZ",
+      "per-axis speed limits, m/s (0: that axis free)"),
+    S(axis_max_accel_m_s2, "axis-max-accel", VEC3, 0, 0, 0, NULL, "AX,AY,AZ",
+      "per-axis acceleration limits, m/s^2 (0: that axis free)"),
+    S(axis_max_jerk_m_s3, "axis-max-jerk", VEC3, 0, 0, 0, NULL, "JX,JY,JZ",
+      "per-axis jerk limits, m/s^3 (0: that axis free)"),
 };
 
 const size_t engine_settings_count = sizeof engine_settings / sizeof engine_settings[0];
@@ -535,6 +542,38 @@ static unsigned auto_overlap(double accuracy)
     return o;
 }
 
+/* issue 32: every per-axis limit 0 (free) or positive and finite */
+static int axis_limits_ok(const engine_config_t *cfg)
+{
+    for (int k = 0; k < ENGINE_AXES; k++) {
+        const double v[3] = {cfg->axis_max_speed_m_s[k], cfg->axis_max_accel_m_s2[k],
+                             cfg->axis_max_jerk_m_s3[k]};
+        for (int i = 0; i < 3; i++)
+            if (!(v[i] >= 0) || !isfinite(v[i]))
+                return 0;
+    }
+    return 1;
+}
+
+/* issue 32: with per-axis acceleration (jerk) limits the time scaling's own
+ * share, scale_accel_m_s2, is at most ENGINE_AXIS_SCALE_SHARE of the
+ * smallest (scale_jerk_m_s3 at most half): the rest is the curve's k'' r^2.
+ * On the figure-8 of tests/oracle/test_axis_limits.py the run's length
+ * hardly depends on the share (99 to 102 s from 1/4 to 1/2). */
+#define ENGINE_AXIS_SCALE_SHARE (1.0 / 3.0)
+
+static void resolve_axis_limits(engine_config_t *out)
+{
+    for (int k = 0; k < ENGINE_AXES; k++) {
+        if (out->axis_max_accel_m_s2[k] > 0 &&
+            out->scale_accel_m_s2 > ENGINE_AXIS_SCALE_SHARE * out->axis_max_accel_m_s2[k])
+            out->scale_accel_m_s2 = ENGINE_AXIS_SCALE_SHARE * out->axis_max_accel_m_s2[k];
+        if (out->axis_max_jerk_m_s3[k] > 0 &&
+            out->scale_jerk_m_s3 > 0.5 * out->axis_max_jerk_m_s3[k])
+            out->scale_jerk_m_s3 = 0.5 * out->axis_max_jerk_m_s3[k];
+    }
+}
+
 /*
  * No fragment fits within max_lookahead (issue 31): an exact method that
  * solves a system (CUBIC, BSPLINE with natural, clamped or rest ends) gives
@@ -565,6 +604,7 @@ static int resolve_local(const engine_config_t *cfg, engine_config_t *out)
 int engine_config_resolve(const engine_config_t *cfg, engine_config_t *out)
 {
     *out = *cfg;
+    resolve_axis_limits(out);
     if (cfg->overlap == ENGINE_AUTO) {
         if (!(cfg->accuracy > 0) || !isfinite(cfg->accuracy))
             return -ENGINE_ECONFIG;
@@ -675,6 +715,9 @@ int engine_config_check(const engine_config_t *cfg_in, const char **why)
         w = "start_slack: at most ENGINE_FRAGMENT_MAX waypoints";
     else if (!(cfg->delay_s >= 0) || !isfinite(cfg->delay_s)) /* issue 26 */
         w = "delay_s: must be 0 (auto) or positive and finite";
+    else if (!axis_limits_ok(cfg)) /* issue 32 */
+        w = "axis_max_speed_m_s/axis_max_accel_m_s2/axis_max_jerk_m_s3: each must be 0 (that "
+            "axis free) or positive and finite";
     else if (cfg->ends == ENGINE_ENDS_CLAMPED &&
              !(isfinite(cfg->start_vel_m_s[0]) && isfinite(cfg->start_vel_m_s[1]) &&
                isfinite(cfg->start_vel_m_s[2]) && isfinite(cfg->end_vel_m_s[0]) &&

@@ -86,17 +86,65 @@ static double seg_accel_max(const fdiff_seg_t *seg)
  * scaling's limits are converted at the segment's fastest speed).  A
  * configured max_accel_m_s2 bounds the chords only (the curve may reach 3
  * times it: engine.h).  At least ENGINE_CEIL_MIN; INFINITY with no limit. */
-static double seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax)
+/* Upper bound on axis k's speed |k_k'| over a segment at rate 1 (m/s): as
+ * solve_seg_speed_max, for one axis. */
+static double axis_speed_max(const fdiff_seg_t *seg, int k)
 {
-    double v = engine_config_max_speed(&e->cfg), c = INFINITY;
+    double hi = 0, b = 2 * fabs(seg->c[k][2]) + 6 * fabs(seg->c[k][3]);
+    for (int i = 0; i <= ENGINE_SPEED_SAMPLES; i++) {
+        double u = (double)i / ENGINE_SPEED_SAMPLES;
+        hi = fmax(hi, fabs(seg->c[k][1] + u * (2 * seg->c[k][2] + 3 * u * seg->c[k][3])));
+    }
+    return (hi + b / (2.0 * ENGINE_SPEED_SAMPLES)) / seg->dur_s;
+}
+
+/*
+ * issue 32: the highest rate r at which a segment keeps the per-axis limits
+ * (engine.h axis_max_*): |k_k'| r within the speed limit; |k_k''| r^2 within
+ * the acceleration limit less scale_accel_m_s2 (resolved to at most half of
+ * it), which bounds the scaling's k_k' dr/dt; |k_k'''| r^3 within half the
+ * jerk limit.  k'' is linear on a cubic: its largest |.| is at an end.
+ * INFINITY where no axis is limited.
+ */
+static double axis_ceiling(const engine_t *e, const fdiff_seg_t *seg)
+{
+    double c = INFINITY, T = seg->dur_s;
+    for (int k = 0; k < AX; k++) {
+        double vl = e->cfg.axis_max_speed_m_s[k], al = e->cfg.axis_max_accel_m_s2[k];
+        double jl = e->cfg.axis_max_jerk_m_s3[k];
+        if (vl > 0) {
+            double v = axis_speed_max(seg, k);
+            if (v > 0)
+                c = fmin(c, vl / v);
+        }
+        if (al > 0) {
+            double c2 = 2 * seg->c[k][2], c3 = 6 * seg->c[k][3];
+            double kdd = fmax(fabs(c2), fabs(c2 + c3)) / (T * T);
+            if (kdd > 0)
+                c = fmin(c, sqrt(fmax(al - e->cfg.scale_accel_m_s2, 0.0) / kdd));
+        }
+        if (jl > 0) {
+            double kddd = fabs(6 * seg->c[k][3]) / (T * T * T);
+            if (kddd > 0)
+                c = fmin(c, cbrt(0.5 * jl / kddd));
+        }
+    }
+    return c;
+}
+
+static double seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax, int *axis)
+{
+    double v = engine_config_max_speed(&e->cfg), axis_c = axis_ceiling(e, seg), c = axis_c;
+    *axis = axis_c < 1.0;
     if (v > 0 && vmax > 0)
-        c = ENGINE_SPEED_CAP * v / vmax;
+        c = fmin(c, ENGINE_SPEED_CAP * v / vmax);
     if (e->cfg.max_accel_m_s2 < 0) {
         double room = engine_config_max_accel(&e->cfg) - e->cfg.scale_accel_m_s2;
         double kdd = room > 0 ? seg_accel_max(seg) : 0.0;
         if (kdd > room)
             c = fmin(c, sqrt(room / kdd));
     }
+    *axis = *axis && c >= axis_c;
     return isinf(c) ? c : fmax(c, ENGINE_CEIL_MIN);
 }
 
@@ -117,7 +165,8 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
     q->seg = *seg;
     q->t1_s = seg->t0_s + seg->dur_s;
     q->vmax = solve_seg_speed_max(seg);
-    q->ceil = seg_ceiling(e, seg, q->vmax);
+    q->ceil = seg_ceiling(e, seg, q->vmax, &q->ceil_axis);
+    e->st.axis_slowed += (uint64_t)q->ceil_axis;
     if (is_slow(q)) /* every queued slot has room: so has the ring */
         e->queue.slow[(e->queue.slow_head + e->queue.slow_len++) % e->queue.cap] =
             (size_t)(q - e->queue.ent);

@@ -45,8 +45,24 @@ double xfer_duration(const engine_t *e, const double *target, double gap_s, int 
         dist += (target[i] - e->out.pos[i]) * (target[i] - e->out.pos[i]);
     dist = sqrt(dist);
     v_obj = fmax(transfer_motion_speed(&e->xfer.motion), head_speed(e));
-    return transfer_duration(&e->xfer.cfg, dist, v_obj, transfer_motion_accel(&e->xfer.motion),
-                             gap_s, capped);
+    double dur = transfer_duration(&e->xfer.cfg, dist, v_obj,
+                                   transfer_motion_accel(&e->xfer.motion), gap_s, capped);
+    /* issue 32: long enough for every axis's limits (engine.h axis_max_*):
+     * the smoothstep's peak speed 1.5 D/T, acceleration 6 D/T^2, jerk 12 D/T^3
+     * per axis, the jerk within half the limit as on the curve */
+    double dur0 = dur;
+    for (int k = 0; k < AX; k++) {
+        double d = fabs(target[k] - e->out.pos[k]);
+        if (e->cfg.axis_max_speed_m_s[k] > 0)
+            dur = fmax(dur, 1.5 * d / e->cfg.axis_max_speed_m_s[k]);
+        if (e->cfg.axis_max_accel_m_s2[k] > 0)
+            dur = fmax(dur, sqrt(6.0 * d / e->cfg.axis_max_accel_m_s2[k]));
+        if (e->cfg.axis_max_jerk_m_s3[k] > 0)
+            dur = fmax(dur, cbrt(24.0 * d / e->cfg.axis_max_jerk_m_s3[k]));
+    }
+    if (dur > dur0) /* whole periods, as transfer_duration's */
+        dur = ceil(dur / e->period_s) * e->period_s;
+    return dur;
 }
 
 /* Start a transfer from the output position to target (transfer.h). */

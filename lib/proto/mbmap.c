@@ -284,6 +284,8 @@ int mbmap_encode_diag(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_obje
     for (int c = 1; c < ENGINE_ERROR_COUNT; c++)
         if (engine_reason_name(c)) /* reasons for data only: EFULL is full */
             mbmap_put_u32(b + MBMAP_X_REJECTED_BY + 2 * (c - 1), lo32(o->st.rejected_by[c]));
+    mbmap_put_f64(b + MBMAP_X_AXIS_LOST_S, o->st.axis_lost_s);
+    mbmap_put_u32(b + MBMAP_X_AXIS_SLOWED, lo32(o->st.axis_slowed));
     mbmap_put_f64(b + MBMAP_X_HEADING, o->heading_deg);
     mbmap_put_f64(b + MBMAP_X_HEADING_UNWRAPPED, o->heading_unwrapped_deg);
     mbmap_put_u32(b + MBMAP_X_TX_CLAMPED, lo32(o->tx_clamped));
@@ -705,6 +707,11 @@ static const mbmap_field_t fields[] = {
       "refused: far from the trajectory or at odds with its neighbours, not confirmed (12)"),
     F(IX, MBMAP_X_REJ_STALE, 2, MBMAP_T_U32, "rejected_stale", "",
       "refused: the same position again while the object was moving (13)"),
+    F(IX, MBMAP_X_AXIS_LOST_S, 4, MBMAP_T_F64, "axis_lost_s", "s",
+      "time lost to the per-axis limits (axis_max_*): the time scaling slowed the output "
+      "along its path"),
+    F(IX, MBMAP_X_AXIS_SLOWED, 2, MBMAP_T_U32, "axis_slowed", "",
+      "segments the per-axis limits slow"),
     F(IX, MBMAP_X_HEADING, 4, MBMAP_T_F64, "heading", "deg",
       "heading axis at the setpoint's track time, wrapped to (-180, 180] (a track column heading: "
       "unwrapped, monotone cubic, lib/util/angle.h); NaN without one"),

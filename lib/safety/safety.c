@@ -21,6 +21,7 @@ const char *safety_strerror(int fault)
     case SAFETY_FSPEED: return "speed above safety_max_speed_m_s";
     case SAFETY_FACCEL: return "acceleration above safety_max_accel_m_s2";
     case SAFETY_FBOX: return "position outside position_min_m .. position_max_m";
+    case SAFETY_FAXIS: return "one axis's speed or acceleration above its per-axis bound";
     default: return "unknown safety fault";
     }
 }
@@ -46,6 +47,10 @@ void safety_set_limits(safety_t *s, const safety_limits_t *lim)
     s->lim.box = lim->box;
     memcpy(s->lim.box_min_m, lim->box_min_m, sizeof s->lim.box_min_m);
     memcpy(s->lim.box_max_m, lim->box_max_m, sizeof s->lim.box_max_m);
+    for (int k = 0; k < ENGINE_AXES; k++) {
+        s->lim.axis_speed_m_s[k] = bound(lim->axis_speed_m_s[k]);
+        s->lim.axis_accel_m_s2[k] = bound(lim->axis_accel_m_s2[k]);
+    }
 }
 
 static double norm3(const double *v)
@@ -127,6 +132,20 @@ static int judge(const safety_t *s, const engine_setpoint_t *sp, double *value, 
         *value = step / dt;
         *limit = l->max_speed_m_s;
         return SAFETY_FSPEED;
+    }
+    for (int k = 0; k < AX; k++) { /* issue 32: per axis, as the norms above */
+        double span = s->last_dt > 0 ? 0.5 * (s->last_dt + dt) : dt;
+        if (l->axis_speed_m_s[k] > 0 && fabs(d[k]) > l->axis_speed_m_s[k] * dt + l->tol_m) {
+            *value = fabs(d[k]) / dt;
+            *limit = l->axis_speed_m_s[k];
+            return SAFETY_FAXIS;
+        }
+        if (l->axis_accel_m_s2[k] > 0 && s->have_vel &&
+            fabs(vel[k] - s->last_vel[k]) * span > l->axis_accel_m_s2[k] * span * span + l->tol_m) {
+            *value = fabs(vel[k] - s->last_vel[k]) / span;
+            *limit = l->axis_accel_m_s2[k];
+            return SAFETY_FAXIS;
+        }
     }
     if (l->max_accel_m_s2 > 0 && s->have_vel) {
         double dv[AX];

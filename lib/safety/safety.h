@@ -47,6 +47,7 @@ enum safety_fault {
     SAFETY_FSPEED = 4,     /* step / dt above safety_max_speed_m_s */
     SAFETY_FACCEL = 5,     /* change of step / dt per dt above safety_max_accel_m_s2 */
     SAFETY_FBOX = 6,       /* a position outside the box (box_min_m .. box_max_m) */
+    SAFETY_FAXIS = 7,      /* one axis's speed or acceleration above its bound */
     SAFETY_FAULT_COUNT
 };
 
@@ -64,6 +65,9 @@ typedef struct {
      * limits; +-inf: that axis free) */
     int box;
     double box_min_m[ENGINE_AXES], box_max_m[ENGINE_AXES];
+    /* per axis (issue 32): |step_k| / dt and the change of it per dt; 0 =
+     * that axis not checked */
+    double axis_speed_m_s[ENGINE_AXES], axis_accel_m_s2[ENGINE_AXES];
 } safety_limits_t;
 
 #define SAFETY_TOL_M_DEFAULT 1e-8

@@ -67,7 +67,7 @@ def frames(db, seq, t, p, v, obj, fd):
 def rows(path):
     with open(path) as fh:
         r = [x for x in csv.DictReader(fh) if x["state"] == "streaming"
-             and not int(x["flags"]) & 0x10]  # not a transfer
+             and not int(x["flags"]) & 0x08]  # not a transfer (ENGINE_SP_TRANSFER)
     return (np.array([float(x["t_s"]) for x in r]),
             np.array([[float(x[k]) for k in ("x_m", "y_m", "z_m")] for x in r]))
 

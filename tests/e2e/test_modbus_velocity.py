@@ -44,7 +44,7 @@ def helix():
 def streamed(path):
     with open(path) as f:
         rows = [r for r in csv.DictReader(f)]
-    st = [r for r in rows if r["state"] == "streaming" and not int(r["flags"]) & 0x10]
+    st = [r for r in rows if r["state"] == "streaming" and not int(r["flags"]) & 0x08]  # ENGINE_SP_TRANSFER
     return (rows[-1]["state"] if rows else "", np.array([float(r["t_s"]) for r in st]),
             np.array([[float(r[k]) for k in ("x_m", "y_m", "z_m")] for r in st]))
 

@@ -301,7 +301,7 @@ def replay(path, *opts):
         assert p.returncode == 0, p.stderr
         with open(out) as f:
             rows = [r for r in csv.DictReader(f) if r["state"] == "streaming"
-                    and not int(r["flags"]) & 0x10]  # ENGINE_SP_TRANSFER
+                    and not int(r["flags"]) & 0x08]  # ENGINE_SP_TRANSFER
     finally:
         os.unlink(out)
     t = np.array([float(r["t_s"]) for r in rows])

@@ -242,6 +242,42 @@ static void test_nonfinite_velocity(void **state)
     assert_int_equal(safety_check(&u, &sp), SAFETY_FNOTFINITE);
 }
 
+/* Given per-axis bounds of 1 m/s and 1 m/s^2 on y only (issue 32) and no
+ * Euclidean one, when the motion runs 1.5 m/s along x, then y stays
+ * unchecked and it passes; when y then moves 1.2 cm in a tick (1.2 m/s), the
+ * axis's speed bound holds it; and a y velocity changing by 2 cm/s per tick
+ * (2 m/s^2) breaks the acceleration bound. */
+static void test_axis_bounds(void **state)
+{
+    (void)state;
+    safety_t s;
+    safety_limits_t l = {.axis_speed_m_s = {0, 1.0, 0}, .axis_accel_m_s2 = {0, 1.0, 0}};
+    engine_setpoint_t sp;
+    safety_init(&s, &l);
+    for (int k = 0; k <= 5; k++) {
+        sp = at(k, 0.015 * k);
+        assert_int_equal(safety_check(&s, &sp), SAFETY_OK);
+    }
+    sp = at(6, 0.015 * 6);
+    sp.pos_m[1] = 0.012;
+    assert_int_equal(safety_check(&s, &sp), SAFETY_FAXIS);
+    assert_true(fabs(s.last_value - 1.2) < 1e-9 && fabs(s.last_limit - 1.0) <= 0.0);
+    safety_init(&s, &l);
+    double y = 0, v = 0;
+    int f = SAFETY_OK, k;
+    for (k = 0; k < 20 && f == SAFETY_OK; k++) {
+        sp = at(k, 0.0);
+        sp.pos_m[1] = y;
+        f = safety_check(&s, &sp);
+        v += 0.02; /* m/s per tick: 2 m/s^2 */
+        y += v * T_S;
+    }
+    assert_int_equal(f, SAFETY_FAXIS);
+    assert_true(fabs(s.last_value - 2.0) < 1e-6 && fabs(s.last_limit - 1.0) <= 0.0);
+    assert_string_equal(safety_strerror(SAFETY_FAXIS),
+                        "one axis's speed or acceleration above its per-axis bound");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -253,6 +289,7 @@ int main(void)
         cmocka_unit_test(test_skipped_ticks_and_step),
         cmocka_unit_test(test_positions_and_time),
         cmocka_unit_test(test_bad_limits_off),
+        cmocka_unit_test(test_axis_bounds),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,152 @@
+#!/usr/bin/python3
+"""Per-axis limits kept along the path (issue 32 item 1).
+
+The figure-8 x = 20 sin 0.2t, y = 10 sin 0.4t at 10 Hz for 60 s (up to 4 m/s per axis and
+0.8, 1.6 m/s^2) with axis_max_speed_m_s = 3,3,3 and axis_max_accel_m_s2 = 0.6,1.2,1:
+
+* every axis within 1 % of its limits, measured by finite differences of the streamed
+  positions (not the velocities the engine reports), in trajreplay and in trajd;
+* the path within 1 mm of the unlimited run's: each limited row against the unlimited run
+  (1 kHz) at the same track time t_s, interpolated;
+* slower than the unlimited run (the limits bind), and no underrun or hard stop;
+* trajd with the same object: its safety monitor, which holds the per-axis limits on its
+  own (lib/safety/safety.h, SAFETY_FAXIS), never trips;
+* a transfer between two trajectories lasts long enough for every axis: the two pieces of
+  a track 15 m apart on x, with a per-axis acceleration limit of 0.05 m/s^2 on x.
+
+The run's length against the time-optimal one is measured by tests/bench/bench_axis.py.
+"""
+import csv
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+BUILD = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
+TRAJREPLAY = os.path.join(BUILD, "bin", "trajreplay")
+TRAJD = os.path.join(BUILD, "bin", "trajd")
+VLIM = (3.0, 3.0, 3.0)
+ALIM = (0.6, 1.2, 1.0)
+# Finite differences of 100 Hz positions against the analytic peaks: the engine's own
+# margin is below 0.1 % (measured); 1 % is the issue's.
+TOL = 1.01
+
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what)
+    if not cond:
+        failures.append(what)
+
+
+def figure8(path):
+    t = np.arange(0, 60.0001, 0.1)
+    with open(path, "w") as f:
+        f.write("t,x,y,z\n")
+        for a, b, c in zip(t, 20 * np.sin(0.2 * t), 10 * np.sin(0.4 * t)):
+            f.write("%r,%r,%r,0\n" % (a, b, c))
+
+
+def rows(path):
+    with open(path) as f:
+        r = [x for x in csv.DictReader(f) if x["state"] in ("streaming", "finished")]
+    now = np.array([int(x["now_ns"]) * 1e-9 for x in r])
+    t = np.array([float(x["t_s"]) for x in r])
+    p = np.array([[float(x[k]) for k in ("x_m", "y_m", "z_m")] for x in r])
+    flags = np.array([int(x["flags"]) for x in r])
+    return now, t, p, flags
+
+
+def peaks(now, p):
+    dt = np.diff(now)
+    v = np.diff(p, axis=0) / dt[:, None]
+    a = np.diff(v, axis=0) / (0.5 * (dt[1:] + dt[:-1]))[:, None]
+    return np.abs(v).max(axis=0), np.abs(a).max(axis=0)
+
+
+def replay(src, out, *opts):
+    p = subprocess.run([TRAJREPLAY, "-q", "--summary", "--profile", "machine", "-o", out]
+                       + list(opts) + [src], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    return {l.split()[1]: l.split()[2] for l in p.stderr.splitlines()
+            if l.startswith("summary: ")}
+
+
+def main():
+    lim = ["--axis-max-speed", "3,3,3", "--axis-max-accel", "0.6,1.2,1"]
+    with tempfile.TemporaryDirectory() as d:
+        src = os.path.join(d, "f8.csv")
+        figure8(src)
+        s = replay(src, os.path.join(d, "lim.csv"), "--rate", "100", *lim)
+        replay(src, os.path.join(d, "free.csv"), "--rate", "1000")
+        now, t, p, flags = rows(os.path.join(d, "lim.csv"))
+        fnow, ft, fp, fflags = rows(os.path.join(d, "free.csv"))
+        v, a = peaks(now, p)
+        for k, ax in enumerate("xy"):
+            check(v[k] <= TOL * VLIM[k], "trajreplay: peak |v%s| %.4f m/s, limit %g" % (
+                ax, v[k], VLIM[k]))
+            check(a[k] <= TOL * ALIM[k], "trajreplay: peak |a%s| %.4f m/s^2, limit %g" % (
+                ax, a[k], ALIM[k]))
+        on = (flags & 0x08) == 0  # not ENGINE_SP_TRANSFER
+        m = on & (t >= ft[0]) & (t <= ft[-1])
+        ref = np.stack([np.interp(t[m], ft, fp[:, k]) for k in range(3)], axis=1)
+        dev = np.abs(p[m] - ref).max()
+        check(m.sum() > 5000 and dev <= 1e-3, "path within 1 mm of the unlimited run at the "
+              "same track time: %.2e m over %d rows" % (dev, m.sum()))
+        check(now[-1] - now[0] > 1.2 * (fnow[-1] - fnow[0]),
+              "slower than unlimited: %.1f s against %.1f s" % (now[-1] - now[0],
+                                                                fnow[-1] - fnow[0]))
+        check(s.get("underruns") == "0" and s.get("hard_stops") == "0",
+              "no underrun, no hard stop (%s, %s)" % (s.get("underruns"), s.get("hard_stops")))
+        lost = float(s.get("axis_lost_s", "nan"))
+        check(lost > 0.5 * ((now[-1] - now[0]) - (fnow[-1] - fnow[0])),
+              "the time lost to the per-axis limits reported: axis_lost_s %.1f s" % lost)
+
+        # trajd with the same object: the monitor holds the limits too, and never trips
+        conf = os.path.join(d, "t.conf")
+        with open(conf, "w") as f:
+            f.write("[daemon]\nrate_hz = 100\nspeed = 20\nexit_when_done = yes\n"
+                    "status_interval_s = 0\nstop_timeout_s = 1\n"
+                    "[object.f8]\ninput = replay\nreplay.track = %s\noutput = csv\n"
+                    "csv.path = %s\nprofile = machine\naxis_max_speed_m_s = 3,3,3\n"
+                    "axis_max_accel_m_s2 = 0.6,1.2,1\n" % (src, os.path.join(d, "trajd.csv")))
+        p2 = subprocess.run([TRAJD, "-f", "-c", conf], cwd=d, capture_output=True, text=True,
+                            timeout=120)
+        now2, _, pos2, flags2 = rows(os.path.join(d, "trajd.csv"))
+        v2, a2 = peaks(now2, pos2)
+        check(p2.returncode == 0 and not (flags2 & 0x20).any(),  # ENGINE_SP_FAULT
+              "trajd: exit %d, no setpoint held by the safety monitor" % p2.returncode)
+        check(all(v2[k] <= TOL * VLIM[k] and a2[k] <= TOL * ALIM[k] for k in range(2)),
+              "trajd: peaks |v| %s, |a| %s within the limits" % (np.round(v2[:2], 4),
+                                                                   np.round(a2[:2], 4)))
+
+        # a transfer: two pieces 15 m apart on x after a gap
+        tr = os.path.join(d, "gap.csv")
+        with open(tr, "w") as f:
+            f.write("t,x,y,z\n")
+            for i in range(50):
+                f.write("%r,0,%r,0\n" % (0.1 * i, 0.01 * i))
+            for i in range(50):
+                f.write("%r,15,%r,0\n" % (200 + 0.1 * i, 0.01 * i))
+        # the transfer's own limits would take it in 3 s (peak 10 m/s^2); the axis's in 42 s
+        replay(tr, os.path.join(d, "gap_out.csv"), "--rate", "100", "--axis-max-accel",
+               "0.05,0,0", "--transfer-speed", "10", "--transfer-accel", "10")
+        replay(tr, os.path.join(d, "gap_free.csv"), "--rate", "100", "--transfer-speed", "10",
+               "--transfer-accel", "10")
+        pk = []
+        for name in ("gap_out.csv", "gap_free.csv"):
+            now3, _, p3, fl3 = rows(os.path.join(d, name))
+            x = (fl3 & 0x08) != 0  # the transfer's rows (ENGINE_SP_TRANSFER)
+            pk.append((peaks(now3[x], p3[x])[1][0], x.sum()))
+        check(pk[0][1] > 100 and pk[0][0] <= TOL * 0.05 and pk[1][0] > 2 * 0.05,
+              "transfer of 15 m on x: peak |ax| %.4f m/s^2 within 0.05 (%d rows; %.3f without "
+              "the axis limit)" % (pk[0][0], pk[0][1], pk[1][0]))
+    print("%d failure(s)" % len(failures))
+    sys.exit(1 if failures else 0)
+
+
+if __name__ == "__main__":
+    main()
