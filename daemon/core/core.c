@@ -775,6 +775,36 @@ void core_stats_roll(core_t *c)
     lat_summarize(&s->work_hist, &s->work);
 }
 
+/* core_summary's part of an object's motion: stops and re-stamps (issue 27),
+ * lags won back and silent ends (issue 26), time lost to the per-axis limits
+ * (issue 32); n characters are in buf already, the new count returned. */
+static size_t summary_motion(const obj_t *o, char *buf, size_t len, size_t n)
+{
+    int m;
+    if ((o->status.stops || o->status.retimed) && n < len) { /* issue 27 */
+        m = snprintf(buf + n, len - n, ", %llu stops, %llu re-stamped (largest %.3f s)",
+                     (unsigned long long)o->status.stops, (unsigned long long)o->status.retimed,
+                     o->status.retime_max_s);
+        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+    }
+    if (o->status.catchups && n < len) { /* issue 26: lib/engine/catchup.h */
+        m = snprintf(buf + n, len - n, ", %llu lags won back (now %+.3f s)",
+                     (unsigned long long)o->status.catchups, o->status.lag_s);
+        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+    }
+    if (o->status.silent_ends && n < len) { /* issue 26: lib/engine/silence.h */
+        m = snprintf(buf + n, len - n, ", %llu silent ends",
+                     (unsigned long long)o->status.silent_ends);
+        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+    }
+    if (o->status.axis_slowed && n < len) { /* issue 32: per-axis limits */
+        m = snprintf(buf + n, len - n, ", %.1f s lost to the per-axis limits (%llu segments)",
+                     o->status.axis_lost_s, (unsigned long long)o->status.axis_slowed);
+        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+    }
+    return n;
+}
+
 int core_summary(const core_t *c, char *buf, size_t len)
 {
     const stats_t *s = c->stats;
@@ -831,27 +861,7 @@ int core_summary(const core_t *c, char *buf, size_t len)
                 n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
             }
         }
-        if ((o->status.stops || o->status.retimed) && n < len) { /* issue 27 */
-            m = snprintf(buf + n, len - n, ", %llu stops, %llu re-stamped (largest %.3f s)",
-                         (unsigned long long)o->status.stops, (unsigned long long)o->status.retimed,
-                         o->status.retime_max_s);
-            n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
-        }
-        if (o->status.catchups && n < len) { /* issue 26: lib/engine/catchup.h */
-            m = snprintf(buf + n, len - n, ", %llu lags won back (now %+.3f s)",
-                         (unsigned long long)o->status.catchups, o->status.lag_s);
-            n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
-        }
-        if (o->status.silent_ends && n < len) { /* issue 26: lib/engine/silence.h */
-            m = snprintf(buf + n, len - n, ", %llu silent ends",
-                         (unsigned long long)o->status.silent_ends);
-            n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
-        }
-        if (o->status.axis_slowed && n < len) { /* issue 32: per-axis limits */
-            m = snprintf(buf + n, len - n, ", %.1f s lost to the per-axis limits (%llu segments)",
-                         o->status.axis_lost_s, (unsigned long long)o->status.axis_slowed);
-            n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
-        }
+        n = summary_motion(o, buf, len, n);
         if (o->out_lost && n < len) {
             m = snprintf(buf + n, len - n, ", %s%llu lines lost by outputs",
                          o->out_fault ? "FAULT, " : "", (unsigned long long)o->out_lost);
