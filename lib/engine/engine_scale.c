@@ -129,7 +129,14 @@ double scale_ceil_room(const engine_t *e, double s, double A, double J)
         if (q->traj != e->out.traj)
             break;
         double kstart = q->kcum - q->seg.dur_s / fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
-        R = fmin(R, v * (k0 + kstart) - res + ts_stop_dist(q->ceil, -A, A, J));
+        double to = v * (k0 + kstart) - res;
+        /* the distance to a segment's start grows along the queue and the
+         * stop term is >= 0: past the nearest that binds, none can (the
+         * per-axis limits cap most segments of a track, and a replay may
+         * queue thousands: without this every tick looked at each) */
+        if (to >= R)
+            break;
+        R = fmin(R, to + ts_stop_dist(q->ceil, -A, A, J));
     }
     return R;
 }
