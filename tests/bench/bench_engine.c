@@ -336,6 +336,8 @@ static void bench_stepper(void)
 /* ns per engine_tick of the fastest chunk of 10000 ticks in the last
  * bench_ticks (the chunks no other process interrupted) */
 static double best_chunk_ns;
+/* runs of each bench_ticks, the best taken (bench_engine --ticks REPS) */
+static int tick_reps = 5;
 
 /* ns per engine_tick while streaming a prefilled walk (waypoints every
  * 0.1 s), the full state machine every tick or with fast ticks, best of 5. */
@@ -343,11 +345,16 @@ static double bench_ticks(int64_t period_ns, int fast)
 {
     double best = 1e30, sink = 0;
     best_chunk_ns = 1e30;
-    for (int rep = 0; rep < 5; rep++) {
+    for (int rep = 0; rep < tick_reps; rep++) {
         engine_config_t c;
         engine_config_default(&c);
         c.capacity = 8192;
         c.period_ns = period_ns;
+        /* no acceleration limit (issue 27's profile limit): the walk's
+         * white-noise velocity would cap the rate of most segments (their
+         * speed cap, seg_ceiling), and every tick would look through the
+         * thousands of capped segments queued ahead (scale_ceil_room) */
+        c.max_accel_m_s2 = 0;
         engine_t *e = engine_new(&c, NULL);
         engine_set_fast_ticks(e, fast);
         engine_waypoint_t w = {0};
@@ -558,6 +565,12 @@ int main(int argc, char **argv)
 {
     if (argc > 1 && strcmp(argv[1], "--errors") == 0) {
         fo_table(0);
+        return 0;
+    }
+    if (argc > 1 && strcmp(argv[1], "--ticks") == 0) {
+        if (argc > 2)
+            tick_reps = atoi(argv[2]) > 0 ? atoi(argv[2]) : 1;
+        bench_fast_ticks(); /* the tick table alone (REPS runs each, default 5) */
         return 0;
     }
     bench_accept();
