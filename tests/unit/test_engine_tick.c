@@ -1,15 +1,20 @@
 /*
- * test_engine_fast.c - engine_tick's fast ticks (engine_tick.c fast_window,
- * fast_tick) against the full state machine: two engines with the same
- * configuration, one with engine_set_fast_ticks(e, 0), get the same calls
- * (pushes between ticks, finish, override changes, stop, clear, a position,
+ * test_engine_tick.c - engine_tick's one path: the rate decision step_once
+ * keeps for the ticks ahead (engine_tick.c plain_window, plain_holds)
+ * against making it every tick.  Two engines with the same configuration,
+ * one deciding every tick and following that decision
+ * (engine_plain_check(e, 2), engine_int.h), the other keeping the decision
+ * and recomputing it on every kept tick to count where it would differ
+ * (engine_plain_check(e, 1)), get the same calls
+ * (pushes between ticks, finish, override changes, stop, clear, halt,
  * clocks that jitter within a period, skip periods, repeat or go back) and
- * must return the same codes, the same setpoints bit for bit (NaN included)
- * and the same status.  Several methods, periods and speeds (so the
- * stopping-distance bound of the window is met and missed), long enough to
- * cross re-seeds (FDIFF_RESEED_STEPS).  Checked to fail when fast_tick
- * skips the cycle count, when the window ignores the re-seed or the
- * stopping distance, or when it runs two score ticks too long.
+ * must return the same codes, the same setpoints bit for bit (NaN
+ * included) and the same status (but lag_s, which a kept tick does not
+ * refresh); no kept decision may be wrong, and plain streams must keep
+ * most.  Several methods, periods and speeds (so the stopping-distance
+ * bound of the window is met and missed), long enough to cross re-seeds
+ * (FDIFF_RESEED_STEPS).  Checked to fail when the window runs two score
+ * ticks too long, and when plain_holds ignores the queue or the override.
  */
 #include "test.h"
 
@@ -19,9 +24,10 @@
 #include <string.h>
 
 #include "engine.h"
+#include "engine_int.h"
 
 typedef struct {
-    engine_t *e[2]; /* [0] full path only, [1] fast ticks on */
+    engine_t *e[2]; /* [0] deciding every tick, [1] keeping the decision (checked) */
     unsigned long setpoints, compared;
 } pair_t;
 
@@ -32,20 +38,29 @@ static void pair_new(pair_t *p, const engine_config_t *c)
         int err = 0;
         p->e[i] = engine_new(c, &err);
         assert_non_null(p->e[i]);
-        engine_set_fast_ticks(p->e[i], i);
+        engine_plain_check(p->e[i], i ? 1 : 2, NULL, NULL);
     }
 }
 
-static void pair_free(pair_t *p)
+/* returns the decisions kept */
+static uint64_t pair_free(pair_t *p)
 {
     engine_status_t s0, s1;
+    uint64_t kept = 0, wrong = 0;
     memset(&s0, 0, sizeof s0);
     memset(&s1, 0, sizeof s1);
     engine_status(p->e[0], &s0);
     engine_status(p->e[1], &s1);
+    s0.lag_s = s1.lag_s = 0; /* a kept tick leaves it as the last decision told it */
     assert_memory_equal(&s0, &s1, sizeof s0);
+    engine_plain_check(p->e[1], 1, &kept, &wrong);
+    if (wrong)
+        print_error("%llu of %llu kept decisions wrong\n", (unsigned long long)wrong,
+                    (unsigned long long)kept);
+    assert_int_equal(wrong, 0);
     engine_free(p->e[0]);
     engine_free(p->e[1]);
+    return kept;
 }
 
 static void pair_tick(pair_t *p, int64_t now)
@@ -56,7 +71,7 @@ static void pair_tick(pair_t *p, int64_t now)
     int ra = engine_tick(p->e[0], now, &a), rb = engine_tick(p->e[1], now, &b);
     assert_int_equal(ra, rb);
     if (memcmp(&a, &b, sizeof a) != 0) {
-        print_error("now %lld: full t %.17g x %.17g v %.17g state %d flags %u cycle %u | fast t "
+        print_error("now %lld: decided t %.17g x %.17g v %.17g state %d flags %u cycle %u | kept t "
                     "%.17g x %.17g v %.17g state %d flags %u cycle %u\n",
                     (long long)now, a.t_s, a.pos_m[0], a.vel_m_s[0], a.state, a.flags, a.cycle,
                     b.t_s, b.pos_m[0], b.vel_m_s[0], b.state, b.flags, b.cycle);
@@ -72,8 +87,8 @@ static void pair_push(pair_t *p, const engine_waypoint_t *w)
 
 /* One random scenario: a walk of n waypoints at dt (irregular), pushed a few
  * at a time between ticks, with the calls above at random ticks. */
-static void scenario(unsigned seed, engine_method_t m, int64_t period_ns, double dt, double step_m,
-                     int events)
+static uint64_t scenario(unsigned seed, engine_method_t m, int64_t period_ns, double dt,
+                         double step_m, int events)
 {
     engine_config_t c;
     engine_config_default(&c);
@@ -129,6 +144,9 @@ static void scenario(unsigned seed, engine_method_t m, int64_t period_ns, double
             } else if (r < 0.095) {
                 assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1]));
                 t += 5 * dt; /* the next waypoints open a new trajectory */
+            } else if (r < 0.097) {
+                double at[3] = {pos[0], pos[1] + 1.0, pos[2]};
+                assert_int_equal(engine_halt(p.e[0], at), engine_halt(p.e[1], at));
             }
         }
     }
@@ -137,17 +155,19 @@ static void scenario(unsigned seed, engine_method_t m, int64_t period_ns, double
         now += period_ns;
         pair_tick(&p, now);
     }
-    pair_free(&p);
+    return pair_free(&p);
 }
 
 static void test_plain_streams(void **state)
 {
     (void)state;
-    scenario(1, ENGINE_METHOD_CUBIC, 1000000, 0.2, 2.0, 0);    /* 1 kHz, 5 Hz input */
-    scenario(2, ENGINE_METHOD_CUBIC, 10000000, 0.1, 1.0, 0);   /* 100 Hz */
-    scenario(3, ENGINE_METHOD_BSPLINE, 1000000, 0.1, 50.0, 0); /* fast: window bound short */
-    scenario(4, ENGINE_METHOD_SMOOTH, 2000000, 0.25, 0.5, 0);  /* smoother */
-    scenario(5, ENGINE_METHOD_CUBIC, 100000, 0.25, 0.01, 0);   /* 10 kHz: re-seeds in a segment */
+    uint64_t kept = 0;
+    kept += scenario(1, ENGINE_METHOD_CUBIC, 1000000, 0.2, 2.0, 0);    /* 1 kHz, 5 Hz input */
+    kept += scenario(2, ENGINE_METHOD_CUBIC, 10000000, 0.1, 1.0, 0);   /* 100 Hz */
+    kept += scenario(3, ENGINE_METHOD_BSPLINE, 1000000, 0.1, 50.0, 0); /* quick: bound short */
+    kept += scenario(4, ENGINE_METHOD_SMOOTH, 2000000, 0.25, 0.5, 0);  /* smoother */
+    kept += scenario(5, ENGINE_METHOD_CUBIC, 100000, 0.25, 0.01, 0);   /* 10 kHz: re-seeds */
+    assert_true(kept > 1000000); /* the plain streams keep the decision on most ticks */
 }
 
 static void test_with_events(void **state)
