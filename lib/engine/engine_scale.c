@@ -62,7 +62,10 @@ void scale_eval(engine_t *e)
  * the jerk can take the rate's acceleration back: the rate overshot 1.) */
 double scale_conv_speed(const engine_t *e)
 {
-    return fmax(e->out.cur.vmax, ENGINE_SCALE_V_FLOOR_M_S);
+    /* fmax without the libm call (x86-64 baseline): the same for every
+     * vmax, NaN included (the floor) */
+    double v = e->out.cur.vmax;
+    return v > ENGINE_SCALE_V_FLOOR_M_S ? v : ENGINE_SCALE_V_FLOOR_M_S;
 }
 
 /* Track time (per unit of rate, in the units of the limits converted at v)

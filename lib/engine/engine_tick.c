@@ -292,7 +292,7 @@ void play_start(engine_t *e, int new_flag)
 }
 
 /* One forward step of cur (with a re-seed at deterministic ticks). */
-static void step_cur(engine_t *e, int64_t n)
+static inline void step_cur(engine_t *e, int64_t n)
 {
     if ((uint64_t)(n - e->out.seg_n0) % FDIFF_RESEED_STEPS == 0)
         play_seed_cur(e, n);
@@ -301,13 +301,29 @@ static void step_cur(engine_t *e, int64_t n)
     out_eval(e);
 }
 
+static int unit_cross(engine_t *e, int64_t n, double tau);
+
 /* One tick on the unit grid (rate 1): the forward-difference stepper.
  * Returns 1 if it left the current segment (or transfer). */
-static int unit_step(engine_t *e)
+static inline int unit_step(engine_t *e)
+{
+    int64_t n = e->out.n + 1;
+    double tau = tau_of(e, n);
+    if (e->out.mode == OUT_STREAM && tau < e->out.cur_t1) {
+        e->out.n = n;
+        step_cur(e, n);
+        e->out.t = e->out.origin_t + tau;
+        e->out.underrun = 0;
+        return 0;
+    }
+    return unit_cross(e, n, tau);
+}
+
+/* unit_step at the end of a segment, or of a transfer. */
+__attribute__((noinline)) static int unit_cross(engine_t *e, int64_t n, double tau)
 {
     if (e->out.mode == OUT_XFER) {
-        int64_t n = e->out.n + 1;
-        if (tau_of(e, n) >= e->out.cur_t1) {
+        if (tau >= e->out.cur_t1) {
             /* not reached: scale_remaining() brakes the transfer to rate 0 before its
              * end; should it be, the trajectory is entered at rate 0 as well */
             scale_rest(e);
@@ -316,15 +332,6 @@ static int unit_step(engine_t *e)
         }
         e->out.n = n;
         step_cur(e, n);
-        return 0;
-    }
-    int64_t n = e->out.n + 1;
-    double tau = tau_of(e, n);
-    if (tau < e->out.cur_t1) {
-        e->out.n = n;
-        step_cur(e, n);
-        e->out.t = e->out.origin_t + tau;
-        e->out.underrun = 0;
         return 0;
     }
     for (;;) {
@@ -485,8 +492,10 @@ static inline int plain_holds(const engine_t *e)
 
 /* Test hook: the decision made again on a kept tick, its side effects
  * undone, and counted wrong unless it is a plain step as kept. */
-static void plain_verify(engine_t *e)
+__attribute__((noinline)) static void plain_verify(engine_t *e)
 {
+    if (e->out.plain_check != 1)
+        return;
     int end_brake = e->scale.end_brake, steer = e->lag.steer;
     double lag_s = e->st.lag_s;
     uint64_t catchups = e->st.catchups;
@@ -529,20 +538,34 @@ static int step_decided(engine_t *e)
     return 1;
 }
 
-/* One tick of the output state machine. */
-static void step_once(engine_t *e)
+/* A step whose rate decision is kept (plain_holds): a plain step on the
+ * unit grid, the window decided again once it leaves the segment. */
+static inline void step_kept(engine_t *e)
 {
     e->out.cycle++;
-    if (plain_holds(e)) {
-        if (e->out.plain_check == 1)
-            plain_verify(e);
-        /* (test hook 2: the decision made anyway, and followed) */
+    if (__builtin_expect(e->out.plain_check != 0, 0)) {
+        plain_verify(e);
+        /* test hook 2: the decision made anyway, and followed */
         if (e->out.plain_check == 2 ? step_decided(e) : unit_step(e))
-            plain_window(e); /* a new segment: decided again for it */
+            plain_window(e);
         else
             e->out.plain_left--;
         return;
     }
+    if (unit_step(e))
+        plain_window(e); /* a new segment: decided again for it */
+    else
+        e->out.plain_left--;
+}
+
+/* One tick of the output state machine. */
+static void step_once(engine_t *e)
+{
+    if (plain_holds(e)) {
+        step_kept(e);
+        return;
+    }
+    e->out.cycle++;
     e->out.plain_left = 0;
     if (e->out.mode == OUT_HOLD) {
         qent_t *h = q_head(e);
@@ -614,9 +637,11 @@ static void put_sp(const engine_t *e, engine_setpoint_t *sp, int64_t now_ns, con
 {
     sp->now_ns = now_ns;
     sp->t_s = e->out.t;
-    memcpy(sp->pos_m, pos, sizeof(sp->pos_m));
-    memcpy(sp->vel_m_s, vel, sizeof(sp->vel_m_s));
-    memcpy(sp->acc_m_s2, acc, sizeof(sp->acc_m_s2));
+    for (int k = 0; k < AX; k++) { /* + 0.0: a zero is +0.0 (positive_zeros) */
+        sp->pos_m[k] = pos[k] + 0.0;
+        sp->vel_m_s[k] = vel[k] + 0.0;
+        sp->acc_m_s2[k] = acc[k] + 0.0;
+    }
     sp->state = s;
     sp->flags = flags;
     sp->cycle = e->out.cycle;
@@ -632,14 +657,24 @@ static int plain_sp(const engine_t *e)
            !e->scale.on && !e->clk.on && e->out.have_pos;
 }
 
-static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+static void fill_sp_flags(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
+
+/* The setpoint of this tick (put_sp; positive zeros). */
+static inline void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
-    if (plain_sp(e)) { /* what the flag logic below makes of it */
+    if (plain_sp(e)) { /* what fill_sp_flags would make of it */
         put_sp(e, sp, now_ns, e->out.fd.p0, e->out.fd.v0, e->out.fd.a0, ENGINE_STATE_STREAMING, 0,
                NAN);
         e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
         return;
     }
+    fill_sp_flags(e, now_ns, sp);
+}
+
+/* fill_sp with the state and flags worked out. */
+__attribute__((noinline)) static void fill_sp_flags(engine_t *e, int64_t now_ns,
+                                                    engine_setpoint_t *sp)
+{
     engine_state_t s = play_state(e);
 
     /* No position known yet: the first waypoint is the last resort (unless a
@@ -721,46 +756,66 @@ int play_stalled(const engine_t *e)
     return 0;
 }
 
+static int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t *sp);
+
 /*
  * One tick, one path: the periods since the last call counted (one period,
  * the usual case, without the 64-bit division), the steps made (step_once,
  * whose rate decision is kept while it holds: plain_window) and the
- * setpoint filled (fill_sp, its flag logic skipped for a plain one).
+ * setpoint filled (fill_sp, its flag logic skipped for a plain one).  A step
+ * that keeps its decision inside its segment, one period on with nothing
+ * pushed since, is made here (step_kept, as step_once makes it), without
+ * the frame of tick_steps: a leaf-like run of loads, one imul, the
+ * stepper's additions and the setpoint's stores.
  */
 int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
-    int64_t k = 1, i;
+    int64_t k = 1;
 
     if (e->out.have_now) {
         int64_t d = now_ns - e->out.last_now, p = e->cfg.period_ns;
-        if (d < 0) {
+        /* ticks on the period grid since the last call (rounded): one if d
+         * is in [p - p/2, 2 p - p/2), as the division would round */
+        if (__builtin_expect(d >= p - p / 2 && d < 2 * p - p / 2, 1)) {
+            if (plain_holds(e) && !e->lag.pending && !e->sil.fresh &&
+                tau_of(e, e->out.n + 1) < e->out.cur_t1) {
+                /* lag_note has nothing to note (no push since), and a silent
+                 * end is noticed at the next tick that decides, as it always
+                 * was (checked every tick, the silent ends of 2 of the 30
+                 * frozen outputs, gpxpy_cerknicko-jezero smooth, come a few
+                 * ticks earlier) */
+                e->out.last_now = now_ns;
+                step_kept(e);
+                fill_sp(e, now_ns, sp);
+                e->st.setpoints++;
+                return 0;
+            }
+        } else if (d < 0) {
             last_setpoint(e, sp);
-            return positive_zeros(sp, -ENGINE_ESTATE);
-        }
-        /* ticks on the period grid since the last call (rounded): one if
-         * d is in [p - p/2, 2 p - p/2), as the division would round */
-        if (!(d >= p - p / 2 && d < 2 * p - p / 2))
+            return -ENGINE_ESTATE;
+        } else {
             k = (d + p / 2) / p;
+        }
         if (k == 0) {
             last_setpoint(e, sp);
             sp->now_ns = now_ns;
             e->st.setpoints++;
-            return positive_zeros(sp, 0);
+            return 0;
         }
     }
+    return tick_steps(e, now_ns, k, sp);
+}
+
+/* engine_tick's k steps, with what each tick notes first. */
+__attribute__((noinline)) static int tick_steps(engine_t *e, int64_t now_ns, int64_t k,
+                                                engine_setpoint_t *sp)
+{
+    int64_t i;
+
     e->out.have_now = 1;
     e->out.last_now = now_ns;
-    if (!(k == 1 && !e->lag.pending && !e->sil.fresh && plain_holds(e) &&
-          tau_of(e, e->out.n + 1) < e->out.cur_t1)) {
-        /* not on a tick inside a segment that keeps its rate decision, with
-         * nothing pushed since the last one (a new sample of the sender's
-         * time, a new arrival): lag_note has nothing to note there, and a
-         * silent end is noticed at the next tick that decides, as it always
-         * was (checked every tick, the silent ends of 2 of the 30 frozen
-         * outputs, gpxpy_cerknicko-jezero smooth, come a few ticks earlier) */
-        engine_lag_note(e, now_ns);     /* issue 26: the sender's time (catchup.h) */
-        engine_silence_tick(e, now_ns); /* issue 26: a silent end (silence.h) */
-    }
+    engine_lag_note(e, now_ns);     /* issue 26: the sender's time (catchup.h) */
+    engine_silence_tick(e, now_ns); /* issue 26: a silent end (silence.h) */
     for (i = 0; i < k; i++) {
         if (e->clk.on) /* the play time of each step, the last one's given */
             e->clk.play_ns = e->clk.now_ns - e->clk.delay_ns -
@@ -786,5 +841,5 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     }
     fill_sp(e, now_ns, sp);
     e->st.setpoints++;
-    return positive_zeros(sp, 0);
+    return 0;
 }
