@@ -46,6 +46,8 @@ typedef struct {
                           of its trajectory to the next, summed up to it */
     double ceil;     /* SEG: the highest rate at which it keeps the speed cap
                         (ENGINE_SPEED_CAP; INFINITY if none) */
+    double stop1;    /* SEG: ts_stop_dist(1, 0, A, J) at the limits converted at
+                        its conv_speed (plain_window) */
 } qent_t;
 
 /* Below this speed (m/s) the curve's end counts as at rest. */

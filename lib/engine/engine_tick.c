@@ -463,21 +463,23 @@ static void plain_window(engine_t *e)
      * with v = conv_speed (the same on every tick of the window: the
      * segment's) and K the capacity left (scale_remaining()) */
     double v = scale_conv_speed(e);
-    double A = e->cfg.scale_accel_m_s2 / v, J = e->cfg.scale_jerk_m_s3 / v;
-    double d = ts_stop_dist(1.0, 0.0, A, J) * (1 + 1e-9);
+    double d = e->out.cur.stop1 * (1 + 1e-9); /* queue_segment's, at v */
     double in_cur = e->out.cur_t1 - tau_of(e, e->out.n);
     double k = (in_cur > 0 ? in_cur / v : 0.0) + (e->scale.avail_kcum - e->out.cur.kcum);
     /* K falls by T / v per tick: the ticks for which it stays above */
     double room = (k - (d + scale_rise_reserve(e, v) + (TS_MARGIN_TICKS + 1) * e->period_s) / v) *
                   v;
     /* and the speed cap ahead (ceil_room), which falls by T per tick too */
-    room = fmin(room, scale_ceil_room(e, tau_of(e, e->out.n), A, J) - d - e->period_s);
+    if (e->queue.slow_len) { /* (INFINITY without one) */
+        double A = e->cfg.scale_accel_m_s2 / v, J = e->cfg.scale_jerk_m_s3 / v;
+        room = fmin(room, scale_ceil_room(e, tau_of(e, e->out.n), A, J) - d - e->period_s);
+    }
     if (!(room > 0) || !isfinite(d))
         return;
-    double m = floor(room / e->period_s) - 2;
-    if (!(m > 0))
+    double x = room / e->period_s; /* floor(x) - 2 ticks, x > 0: floor is the cast */
+    if (!(x >= 3.0))
         return;
-    e->out.plain_left = m < (double)INT64_MAX / 2 ? (int64_t)m : INT64_MAX / 2;
+    e->out.plain_left = x < 0x1p62 ? (int64_t)x - 2 : INT64_MAX / 2;
     e->out.plain_qlen = e->queue.len;
     e->out.plain_seen = e->lag.seen_ns;
 }
@@ -659,16 +661,20 @@ static int plain_sp(const engine_t *e)
 
 static void fill_sp_flags(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
 
+/* A plain setpoint (plain_sp): what fill_sp_flags would make of it. */
+static inline void fill_plain(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    put_sp(e, sp, now_ns, e->out.fd.p0, e->out.fd.v0, e->out.fd.a0, ENGINE_STATE_STREAMING, 0, NAN);
+    e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
+}
+
 /* The setpoint of this tick (put_sp; positive zeros). */
 static inline void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
-    if (plain_sp(e)) { /* what fill_sp_flags would make of it */
-        put_sp(e, sp, now_ns, e->out.fd.p0, e->out.fd.v0, e->out.fd.a0, ENGINE_STATE_STREAMING, 0,
-               NAN);
-        e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
-        return;
-    }
-    fill_sp_flags(e, now_ns, sp);
+    if (plain_sp(e))
+        fill_plain(e, now_ns, sp);
+    else
+        fill_sp_flags(e, now_ns, sp);
 }
 
 /* fill_sp with the state and flags worked out. */
@@ -786,7 +792,14 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
                  * ticks earlier) */
                 e->out.last_now = now_ns;
                 step_kept(e);
-                fill_sp(e, now_ns, sp);
+                /* plain_sp holds: a kept step inside its segment is on the
+                 * grid (on_fd), leaves no underrun and no flag pending (the
+                 * last fill took them), and the key holds the rest (the test
+                 * hooks' steps are checked the long way) */
+                if (__builtin_expect(e->out.plain_check != 0, 0))
+                    fill_sp(e, now_ns, sp);
+                else
+                    fill_plain(e, now_ns, sp);
                 e->st.setpoints++;
                 return 0;
             }

@@ -178,11 +178,107 @@ static void test_with_events(void **state)
                  s % 5 == 0 ? 80.0 : 1.5, 1);
 }
 
+/* A walk loaded before the first tick (an upload: no lag to win back, so
+ * the decision is kept), then every call that changes an engine made
+ * between ticks at random, most of them in the middle of a kept window;
+ * returns the decisions kept. */
+static uint64_t calls_mid_window(unsigned seed, int64_t period_ns)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    c.period_ns = period_ns;
+    c.capacity = 4096;
+    c.max_accel_m_s2 = 0; /* the walk's rate not capped (its speed cap: seg_ceiling) */
+    pair_t p;
+    pair_new(&p, &c);
+    double pos[3] = {0, 0, 0}, t = 0;
+    uint32_t seq = 0;
+    int64_t now = 0;
+    for (int i = 0; i < 300; i++, t += 0.1) {
+        engine_waypoint_t w = {.t_s = t, .seq = seq};
+        seq++;
+        for (int k = 0; k < 3; k++)
+            w.pos_m[k] = pos[k] += (urand(&seed) - 0.5) * 2.0;
+        pair_push(&p, &w);
+    }
+    for (int round = 0; round < 300; round++) {
+        int nticks = 20 + (int)(urand(&seed) * 400);
+        for (int i = 0; i < nticks; i++)
+            pair_tick(&p, now += period_ns);
+        int r = (int)(urand(&seed) * 16);
+        engine_rejection_t rj;
+        double at[3] = {pos[0], pos[1], pos[2] + 1.0};
+        switch (r) {
+        case 0:
+        case 1:
+        case 2: /* more of the walk, ahead of time (an upload: no lag), now and then
+                 * a burst or a sharp turn */
+            for (int i = 0; i < 1 + (int)(urand(&seed) * 8) || t < (double)now * 1e-9 + 20;
+                 i++, t += 0.1) {
+                engine_waypoint_t w = {.t_s = t, .seq = seq};
+                seq++;
+                double step = urand(&seed) < 0.1 ? 30.0 : 2.0;
+                for (int k = 0; k < 3; k++)
+                    w.pos_m[k] = pos[k] += (urand(&seed) - 0.5) * step;
+                pair_push(&p, &w);
+            }
+            break;
+        case 3: { /* a feed override for a while, then back to 1 */
+            double ov = urand(&seed) * 1.5;
+            assert_int_equal(engine_set_override(p.e[0], ov), engine_set_override(p.e[1], ov));
+            for (int i = 0; i < 50; i++)
+                pair_tick(&p, now += period_ns);
+            assert_int_equal(engine_set_override(p.e[0], 1.0), engine_set_override(p.e[1], 1.0));
+            break;
+        }
+        case 4: assert_int_equal(engine_stop(p.e[0]), engine_stop(p.e[1])); break;
+        case 5:
+            engine_clear(p.e[0]);
+            engine_clear(p.e[1]);
+            break;
+        case 6: assert_int_equal(engine_halt(p.e[0], at), engine_halt(p.e[1], at)); break;
+        case 7: assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1])); break;
+        case 8:
+            assert_int_equal(engine_set_catchup(p.e[0], 0.1), engine_set_catchup(p.e[1], 0.1));
+            break;
+        case 9:
+            engine_reset_counters(p.e[0]);
+            engine_reset_counters(p.e[1]);
+            break;
+        case 10:
+            assert_int_equal(engine_rejection_next(p.e[0], &rj),
+                             engine_rejection_next(p.e[1], &rj));
+            break;
+        case 11: /* the same time again, and back */
+            pair_tick(&p, now);
+            pair_tick(&p, now - period_ns / 3);
+            break;
+        default: break;
+        }
+        if (r == 4 || r == 5 || r == 6 || r == 7) /* a new trajectory after a while */
+            t += 2.0;
+    }
+    assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1]));
+    for (int i = 0; i < 100000; i++)
+        pair_tick(&p, now += period_ns);
+    return pair_free(&p);
+}
+
+static void test_calls_mid_window(void **state)
+{
+    (void)state;
+    uint64_t kept = 0;
+    for (unsigned s = 30; s < 36; s++)
+        kept += calls_mid_window(s, s % 2 ? 1000000 : 10000000);
+    assert_true(kept > 5000); /* most of the time the output waits between trajectories */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_plain_streams),
         cmocka_unit_test(test_with_events),
+        cmocka_unit_test(test_calls_mid_window),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
