@@ -13,8 +13,13 @@
  * refresh); no kept decision may be wrong, and plain streams must keep
  * most.  Several methods, periods and speeds (so the stopping-distance
  * bound of the window is met and missed), long enough to cross re-seeds
- * (FDIFF_RESEED_STEPS).  Checked to fail when the window runs two score
- * ticks too long, and when plain_holds ignores the queue or the override.
+ * (FDIFF_RESEED_STEPS).  And a walk loaded ahead, with every call that
+ * changes an engine made between ticks, mostly inside a kept window.
+ * Checked to fail when the window runs 20 or 40 ticks too long, and when
+ * plain_holds leaves the stop request or the override out of its key
+ * (leaving out the queue length, the lag's sample or the mode is not caught:
+ * the cases made here are covered by the rest of the key or the window's
+ * margin).
  */
 #include "test.h"
 
