@@ -100,8 +100,8 @@ static double lag_now(const engine_t *e, engine_delay_t *d)
      * since (start_slack auto learns them: the input comes later than its
      * stamps say, the slack it kept was too short).  The sender's time is
      * aged to the last tick that brought a sample, not to now: the lag then
-     * changes only at ticks a push closed the fast window for, the same
-     * with fast ticks or without */
+     * changes only at ticks after a push, which end the rate decision kept
+     * (plain_window, engine_tick.c) */
     double D = d->delay_s + (double)(e->slack_learn - e->delay.learnt) * d->interval_s;
     return (now + offset_at(e, e->lag.seen_ns) - D) - e->out.t;
 }

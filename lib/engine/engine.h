@@ -572,14 +572,6 @@ int engine_set_clock(engine_t *e, const engine_clock_t *clk);
  */
 int engine_set_catchup(engine_t *e, double catchup);
 
-/*
- * Fast ticks (on by default): engine_tick steps the ticks it can prove are
- * plain steps inside the current segment without the full state machine,
- * with the same results.  0 makes every tick take the full way: for the
- * tests that compare the two and for make bench.
- */
-void engine_set_fast_ticks(engine_t *e, int on);
-
 /* Zero every counter of engine_status (state and last_seq are kept). */
 void engine_reset_counters(engine_t *e);
 

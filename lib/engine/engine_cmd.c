@@ -49,20 +49,17 @@ static void request_stop(engine_t *e, int kind)
 
 int engine_stop(engine_t *e)
 {
-    engine_fast_close(e); /* whatever it changes, the next tick looks again */
     request_stop(e, STOP_STOP);
     return 0;
 }
 
 void engine_clear(engine_t *e)
 {
-    engine_fast_close(e); /* whatever it changes, the next tick looks again */
     request_stop(e, STOP_CLEAR);
 }
 
 int engine_set_override(engine_t *e, double ratio)
 {
-    engine_fast_close(e); /* whatever it changes, the next tick looks again */
     if (!(ratio >= 0 && ratio <= TS_RATE_MAX))
         return -ENGINE_ERANGE;
     e->scale.override = ratio;
@@ -71,7 +68,6 @@ int engine_set_override(engine_t *e, double ratio)
 
 int engine_set_clock(engine_t *e, const engine_clock_t *clk)
 {
-    engine_fast_close(e); /* whatever it changes, the next tick looks again */
     if (!(clk->delay_ns >= 0) || !(fabs(clk->rate - 1.0) <= ENGINE_CLOCK_RATE_TOL) ||
         !(clk->catchup >= 0 && clk->catchup <= 1))
         return -ENGINE_ERANGE;
@@ -86,7 +82,6 @@ int engine_set_clock(engine_t *e, const engine_clock_t *clk)
 
 int engine_set_catchup(engine_t *e, double catchup)
 {
-    engine_fast_close(e); /* whatever it changes, the next tick looks again */
     if (!(catchup >= 0 && catchup <= 1))
         return -ENGINE_ERANGE;
     e->clk.catchup = catchup;
@@ -95,7 +90,6 @@ int engine_set_catchup(engine_t *e, double catchup)
 
 int engine_set_position(engine_t *e, const double pos_m[ENGINE_AXES])
 {
-    engine_fast_close(e); /* whatever it changes, the next tick looks again */
     for (int k = 0; k < AX; k++) {
         if (!isfinite(pos_m[k]))
             return -ENGINE_ENOTFINITE;
@@ -104,6 +98,7 @@ int engine_set_position(engine_t *e, const double pos_m[ENGINE_AXES])
     }
     if (e->out.mode != OUT_HOLD)
         return -ENGINE_ESTATE;
+    out_sync(e); /* written here, not in the stepper (engine_out_t) */
     for (int k = 0; k < AX; k++) {
         e->out.pos[k] = pos_m[k];
         e->out.vel[k] = e->out.acc[k] = 0.0;
@@ -114,7 +109,6 @@ int engine_set_position(engine_t *e, const double pos_m[ENGINE_AXES])
 
 void engine_require_position(engine_t *e, int on)
 {
-    engine_fast_close(e); /* whatever it changes, the next tick looks again */
     e->out.need_pos = on != 0;
     /* holding: the position it had is not trusted any more */
     if (e->out.need_pos && e->out.mode == OUT_HOLD)
@@ -128,7 +122,6 @@ int engine_has_position(const engine_t *e)
 
 void engine_reset_counters(engine_t *e)
 {
-    engine_fast_close(e); /* whatever it changes, the next tick looks again */
     uint32_t last_seq = e->st.last_seq;
 
     memset(&e->st, 0, sizeof(e->st));
@@ -138,7 +131,6 @@ void engine_reset_counters(engine_t *e)
 
 int engine_halt(engine_t *e, const double pos_m[ENGINE_AXES])
 {
-    engine_fast_close(e); /* whatever it changes, the next tick looks again */
     for (int k = 0; k < AX; k++) {
         if (!isfinite(pos_m[k]))
             return -ENGINE_ENOTFINITE;
@@ -159,6 +151,7 @@ int engine_halt(engine_t *e, const double pos_m[ENGINE_AXES])
     e->scale.ts.rate = 1.0;
     e->scale.ts.acc = 0.0;
     e->clk.locked = 0;
+    out_sync(e); /* written here, not in the stepper (engine_out_t) */
     for (int k = 0; k < AX; k++) {
         e->out.pos[k] = pos_m[k];
         e->out.vel[k] = e->out.acc[k] = 0.0;

@@ -114,7 +114,6 @@ static int reject_wp(engine_t *e, int code, const engine_waypoint_t *wp)
 
 int engine_rejection_next(engine_t *e, engine_rejection_t *r)
 {
-    engine_fast_close(e); /* whatever it changes, the next tick looks again */
     if (!e->in.rej_len)
         return 0;
     *r = e->in.rej[e->in.rej_head];
@@ -248,7 +247,6 @@ int engine_waypoint_check(const engine_config_t *cfg, const engine_waypoint_t *w
 
 int engine_push(engine_t *e, const engine_waypoint_t *wp)
 {
-    engine_fast_close(e); /* whatever it changes, the next tick looks again */
     int rc = engine_waypoint_check(&e->cfg, wp);
 
     if (rc < 0)
@@ -270,7 +268,6 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
 
 int engine_finish(engine_t *e)
 {
-    engine_fast_close(e); /* whatever it changes, the next tick looks again */
     int rj = judge(e, 1);
     int rc = close_input(e);
 

@@ -47,6 +47,8 @@ typedef struct {
     double ceil;     /* SEG: the highest rate at which it keeps the speed cap
                         (ENGINE_SPEED_CAP; INFINITY if none) */
     int ceil_axis;   /* SEG: ceil is the per-axis limits' and below 1 (issue 32) */
+    double stop1;    /* SEG: ts_stop_dist(1, 0, A, J) at the limits converted at
+                        its conv_speed (plain_window) */
 } qent_t;
 
 /* Below this speed (m/s) the curve's end counts as at rest. */
@@ -133,13 +135,31 @@ typedef struct {
     int64_t n;       /* ticks since origin_t */
     int64_t seg_n0;  /* tick at which cur was seeded */
     double origin_t; /* absolute track time of tick 0 of the trajectory */
+    /* The output's position, velocity and acceleration: on the unit grid
+     * (on_fd, out_eval) they are the stepper's rows fd.p0, v0, a0, copied
+     * here only when something needs them here (out_sync: a hold keeps the
+     * position); else (scaled, held) here.  Read them through out_pos,
+     * out_vel, out_acc; whoever writes them here clears on_fd. */
     double pos[AX], vel[AX], acc[AX];
-    double t; /* track time of the output */
+    int on_fd;
+    /* The rate decision of step_once kept for the ticks ahead (plain_window,
+     * engine_tick.c): plain_left ticks are plain unit-grid steps while the
+     * key below still matches the engine (plain_holds) */
+    int64_t plain_left;
+    size_t plain_qlen;                /* key: queue.len then */
+    int64_t plain_seen;               /* key: lag.seen_ns then (a push since: a new sample) */
+    int plain_check;                  /* test hook (engine_plain_check) */
+    uint64_t plain_kept, plain_wrong; /* test hook: kept ticks, and those wrong */
+    double t;                         /* track time of the output */
     uint32_t track;
     uint32_t cycle;
     uint32_t flags_pending;
     int have_now;
     int64_t last_now;
+    /* the setpoint of the last call that stepped, for a call at the same
+     * time or before: a plain one (streaming on the unit grid, no flags) is
+     * rebuilt from the stepper (last_setpoint), any other kept here */
+    int last_plain;
     engine_setpoint_t last_sp;
     /* the underrun under way began with the newest waypoint at und_t of the
      * input trajectory und_traj (silence.h), and taught start_slack auto an
@@ -186,13 +206,6 @@ typedef struct {
     double catchup;   /* most the rate rises above rate */
     int64_t play_ns;  /* now - D at the step being made */
 } engine_clk_t;
-
-/* ---- fast ticks (engine_tick.c: fast_window, fast_tick) ---- */
-typedef struct {
-    int64_t left; /* ticks ahead that are certainly plain unit-grid steps */
-    int off;      /* engine_set_fast_ticks(e, 0): every tick the full way */
-    int last;     /* the last tick was fast: last_sp and cspeed not yet written */
-} engine_fast_t;
 
 /* ---- the play-out delay D stated (delay_run.c, delay.h; issue 26) ---- */
 typedef struct {
@@ -253,7 +266,6 @@ struct engine {
     engine_queue_t queue;
     engine_out_t out;
     engine_scale_t scale;
-    engine_fast_t fast;
     engine_delay_state_t delay;
     engine_silence_t sil;
     engine_lag_t lag;
@@ -308,9 +320,15 @@ void play_start(engine_t *e, int new_flag);
 void play_stop_at_rest(engine_t *e);
 void play_rest_at_end(engine_t *e, const qent_t *h);
 void play_finish_here(engine_t *e);
-/* The fast-tick window closed and its deferred copies made (engine_tick.c):
- * every call that changes the engine makes it first. */
-void engine_fast_close(engine_t *e);
+/* The output's pos, vel, acc copied out of the stepper (on_fd cleared). */
+void out_sync(engine_t *e);
+/* |k'|: the curve's own speed at the output (scale.cspeed off the grid). */
+double out_cspeed(const engine_t *e);
+/* Test hook (tests/unit/test_engine_tick.c): on 1, every tick whose rate
+ * decision is kept (plain_window) recomputes it too (undoing its side
+ * effects); on 2, makes it anyway and follows it; 0 as in use.  *kept and *wrong (either may be NULL)
+ * count the kept ticks checked and those where the recomputed one differs. */
+void engine_plain_check(engine_t *e, int on, uint64_t *kept, uint64_t *wrong);
 
 /* ---- time scaling of the play-out (engine_scale.c) ---- */
 
@@ -373,6 +391,22 @@ static inline int is_exactly(double x, double v)
 static inline int at_rest(const engine_t *e)
 {
     return is_exactly(e->scale.ts.rate, 0.0) && is_exactly(e->scale.ts.acc, 0.0);
+}
+
+/* The output's position, velocity, acceleration (see engine_out_t). */
+static inline const double *out_pos(const engine_t *e)
+{
+    return e->out.on_fd ? e->out.fd.p0 : e->out.pos;
+}
+
+static inline const double *out_vel(const engine_t *e)
+{
+    return e->out.on_fd ? e->out.fd.v0 : e->out.vel;
+}
+
+static inline const double *out_acc(const engine_t *e)
+{
+    return e->out.on_fd ? e->out.fd.a0 : e->out.acc;
 }
 
 static inline double tick_time(const engine_t *e, int64_t n)

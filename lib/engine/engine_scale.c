@@ -45,6 +45,7 @@ void scale_eval(engine_t *e)
         u = 0;
     if (u > 1)
         u = 1;
+    e->out.on_fd = 0; /* the output is written here (engine_out_t) */
     fdiff_eval(&e->out.cur.seg, u, e->out.pos, cv, ca);
     for (int k = 0; k < AX; k++) {
         e->out.vel[k] = cv[k] * r;
@@ -61,7 +62,10 @@ void scale_eval(engine_t *e)
  * the jerk can take the rate's acceleration back: the rate overshot 1.) */
 double scale_conv_speed(const engine_t *e)
 {
-    return fmax(e->out.cur.vmax, ENGINE_SCALE_V_FLOOR_M_S);
+    /* fmax without the libm call (x86-64 baseline): the same for every
+     * vmax, NaN included (the floor) */
+    double v = e->out.cur.vmax;
+    return v > ENGINE_SCALE_V_FLOOR_M_S ? v : ENGINE_SCALE_V_FLOOR_M_S;
 }
 
 /* Track time (per unit of rate, in the units of the limits converted at v)
@@ -170,7 +174,8 @@ void scale_limits(const engine_t *e, double *A, double *J)
     if (e->scale.stop_req) {
         double floor = fmin(ENGINE_SCALE_V_FLOOR_M_S, e->cfg.scale_accel_m_s2 * e->period_s);
         jerk = stop_jerk(e);
-        v = e->scale.cspeed > floor ? e->scale.cspeed : floor;
+        double cspeed = out_cspeed(e);
+        v = cspeed > floor ? cspeed : floor;
     } else {
         v = scale_conv_speed(e);
     }
@@ -216,7 +221,7 @@ static int near_here(const engine_t *e, const double *p)
 {
     double d2 = 0;
     for (int k = 0; k < AX; k++)
-        d2 += (p[k] - e->out.pos[k]) * (p[k] - e->out.pos[k]);
+        d2 += (p[k] - out_pos(e)[k]) * (p[k] - out_pos(e)[k]);
     return d2 <= ENGINE_HANDOVER_TOL_M * ENGINE_HANDOVER_TOL_M;
 }
 

@@ -167,6 +167,11 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
     q->vmax = solve_seg_speed_max(seg);
     q->ceil = seg_ceiling(e, seg, q->vmax, &q->ceil_axis);
     e->st.axis_slowed += (uint64_t)q->ceil_axis;
+    { /* the stop from rate 1 at its limits, as the tick would work it out
+       * (plain_window: scale_conv_speed, scale_limits) */
+        double v = q->vmax > ENGINE_SCALE_V_FLOOR_M_S ? q->vmax : ENGINE_SCALE_V_FLOOR_M_S;
+        q->stop1 = ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / v, e->cfg.scale_jerk_m_s3 / v);
+    }
     if (is_slow(q)) /* every queued slot has room: so has the ring */
         e->queue.slow[(e->queue.slow_head + e->queue.slow_len++) % e->queue.cap] =
             (size_t)(q - e->queue.ent);
@@ -222,10 +227,11 @@ void queue_pop(engine_t *e)
     if (e->queue.ent[e->queue.head].kind == QE_END)
         e->queue.ends--;
     if (is_slow(&e->queue.ent[e->queue.head])) { /* the ring's head */
-        e->queue.slow_head = (e->queue.slow_head + 1) % e->queue.cap;
+        e->queue.slow_head = e->queue.slow_head + 1 == e->queue.cap ? 0 : e->queue.slow_head + 1;
         e->queue.slow_len--;
     }
-    e->queue.head = (e->queue.head + 1) % e->queue.cap;
+    /* (h + 1) % cap without the division (a tick takes a segment here) */
+    e->queue.head = e->queue.head + 1 == e->queue.cap ? 0 : e->queue.head + 1;
     e->queue.len--;
 }
 

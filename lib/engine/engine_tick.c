@@ -5,10 +5,11 @@
  * lookahead (start_slack auto learns how much), starts a trajectory
  * directly or through a transfer (engine_xfer.c), steps on the unit grid
  * while nothing asks for another rate (else the time scaling,
- * engine_scale.c), rests at a trajectory's end, counts underruns, fills the
- * setpoint, and takes the fast ticks.  It owns engine_out_t (engine_int.h:
- * mode, position, current segment and stepper, tick count, cycle, track,
- * flags, the last setpoint) and engine_fast_t (the fast-tick window).
+ * engine_scale.c), rests at a trajectory's end, counts underruns and fills
+ * the setpoint, one path for every tick: the rate decision of a plain step is
+ * kept for the ticks it provably holds (plain_window).  It owns engine_out_t
+ * (engine_int.h: mode, position, current segment and stepper, tick count,
+ * cycle, track, flags, the last setpoint, the decision kept).
  */
 #include "engine.h"
 #include "engine_int.h"
@@ -104,8 +105,31 @@ static int enough_ahead(const engine_t *e, const qent_t *h)
     return !(e->slack_auto || e->cfg.delay_s > 0) || engine_delay_ready(e);
 }
 
+/* out_eval leaves the output in the stepper's rows (on_fd): copied here
+ * for whoever writes them or holds (engine_out_t), with the curve's speed
+ * as out_eval computed it every tick before. */
+void out_sync(engine_t *e)
+{
+    if (!e->out.on_fd)
+        return;
+    fdiff_get(&e->out.fd, e->out.pos, e->out.vel, e->out.acc);
+    e->scale.cspeed = out_cspeed(e);
+    e->out.on_fd = 0;
+}
+
+double out_cspeed(const engine_t *e)
+{
+    if (!e->out.on_fd)
+        return e->scale.cspeed; /* scale_eval's (or out_sync's) */
+    double v2 = 0;
+    for (int k = 0; k < AX; k++) /* rate 1: the curve's own speed */
+        v2 += e->out.fd.v0[k] * e->out.fd.v0[k];
+    return sqrt(v2);
+}
+
 static void hold_here(engine_t *e)
 {
+    out_sync(e); /* the position stays */
     for (int k = 0; k < AX; k++)
         e->out.vel[k] = e->out.acc[k] = 0.0;
 }
@@ -138,6 +162,7 @@ void play_stop_at_rest(engine_t *e)
 /* The queue head is a trajectory's end marker: rest on its point, FINISHED. */
 void play_rest_at_end(engine_t *e, const qent_t *h)
 {
+    out_sync(e);
     for (int k = 0; k < AX; k++)
         e->out.pos[k] = h->seg.c[k][0];
     e->out.t = h->t1_s;
@@ -167,14 +192,11 @@ void play_finish_here(engine_t *e)
     unit_reset(e);
 }
 
+/* The output is the stepper's (engine_out_t): no copies, and the curve's
+ * speed only where it is read (out_cspeed). */
 static void out_eval(engine_t *e)
 {
-    double v2 = 0;
-
-    fdiff_get(&e->out.fd, e->out.pos, e->out.vel, e->out.acc);
-    for (int k = 0; k < AX; k++)
-        v2 += e->out.vel[k] * e->out.vel[k];
-    e->scale.cspeed = sqrt(v2); /* rate 1: the curve's own speed */
+    e->out.on_fd = 1;
 }
 
 /* Seed cur at tick n (relative time tau in [cur_t0, cur_t1)). */
@@ -270,7 +292,7 @@ void play_start(engine_t *e, int new_flag)
 }
 
 /* One forward step of cur (with a re-seed at deterministic ticks). */
-static void step_cur(engine_t *e, int64_t n)
+static inline void step_cur(engine_t *e, int64_t n)
 {
     if ((uint64_t)(n - e->out.seg_n0) % FDIFF_RESEED_STEPS == 0)
         play_seed_cur(e, n);
@@ -279,30 +301,38 @@ static void step_cur(engine_t *e, int64_t n)
     out_eval(e);
 }
 
-/* One tick on the unit grid (rate 1): the forward-difference stepper. */
-static void unit_step(engine_t *e)
+static int unit_cross(engine_t *e, int64_t n, double tau);
+
+/* One tick on the unit grid (rate 1): the forward-difference stepper.
+ * Returns 1 if it left the current segment (or transfer). */
+static inline int unit_step(engine_t *e)
 {
-    if (e->out.mode == OUT_XFER) {
-        int64_t n = e->out.n + 1;
-        if (tau_of(e, n) >= e->out.cur_t1) {
-            /* not reached: scale_remaining() brakes the transfer to rate 0 before its
-             * end; should it be, the trajectory is entered at rate 0 as well */
-            scale_rest(e);
-            play_start(e, 0); /* the transfer ends exactly on its start */
-        } else {
-            e->out.n = n;
-            step_cur(e, n);
-        }
-        return;
-    }
     int64_t n = e->out.n + 1;
     double tau = tau_of(e, n);
-    if (tau < e->out.cur_t1) {
+    if (e->out.mode == OUT_STREAM && tau < e->out.cur_t1) {
         e->out.n = n;
         step_cur(e, n);
         e->out.t = e->out.origin_t + tau;
         e->out.underrun = 0;
-        return;
+        return 0;
+    }
+    return unit_cross(e, n, tau);
+}
+
+/* unit_step at the end of a segment, or of a transfer. */
+__attribute__((noinline)) static int unit_cross(engine_t *e, int64_t n, double tau)
+{
+    if (e->out.mode == OUT_XFER) {
+        if (tau >= e->out.cur_t1) {
+            /* not reached: scale_remaining() brakes the transfer to rate 0 before its
+             * end; should it be, the trajectory is entered at rate 0 as well */
+            scale_rest(e);
+            play_start(e, 0); /* the transfer ends exactly on its start */
+            return 1;
+        }
+        e->out.n = n;
+        step_cur(e, n);
+        return 0;
     }
     for (;;) {
         qent_t *h = q_head(e);
@@ -322,11 +352,11 @@ static void unit_step(engine_t *e)
             e->scale.s = tau_of(e, e->out.n);
             e->scale.ts.rate = 0.0;
             e->scale.ts.acc = 0.0;
-            return;
+            return 1;
         }
         if (h->kind == QE_END) {
             play_rest_at_end(e, h);
-            return;
+            return 1;
         }
         play_take_segment(e);
         if (tau < e->out.cur_t1)
@@ -339,12 +369,206 @@ static void unit_step(engine_t *e)
     out_eval(e);
     e->out.t = e->out.origin_t + tau;
     e->out.underrun = 0;
+    return 1;
+}
+
+/* A moving output's tick, as the rate decision goes. */
+enum { GO_UNIT, GO_CLOCKED, GO_REBUFFER, GO_SCALED };
+
+typedef struct {
+    double s, A, J, R, target;
+} decision_t;
+
+/*
+ * The rate decision of a moving output (a transfer or a trajectory): on the
+ * unit grid while nothing asks for another rate and the curve ahead is long
+ * enough to stop in (GO_UNIT), else the time scaling (GO_SCALED, the target
+ * rate in d), one clock (GO_CLOCKED) or a rebuffering after an underrun.
+ * Sets end_brake where the curve's end must be braked for, and steers a lag
+ * (engine_lag_target): plain_verify undoes both.
+ */
+static int decide(engine_t *e, decision_t *d)
+{
+    double A, J, s = e->scale.on ? e->scale.s : tau_of(e, e->out.n), R;
+    scale_limits(e, &A, &J);
+    R = scale_remaining(e, s);
+    d->s = s;
+    d->A = A;
+    d->J = J;
+    d->R = R;
+    if (e->out.mode == OUT_STREAM && e->scale.avail_closed && !e->scale.avail_rest &&
+        !e->scale.end_brake &&
+        (ts_stop_dist(e->scale.ts.rate, e->scale.ts.acc, A, J) >=
+             R - e->scale.ts.rate * e->period_s ||
+         (e->scale.on && at_rest(e) && !scale_moves(e, R, A, J))))
+        /* the curve does not end at rest: brake before its end; at rest with
+         * less curve left than one tick of motion and its stop need, no input
+         * can come to lengthen it: finish here, not wait for ever */
+        e->scale.end_brake = 1;
+    if (e->clk.on && e->out.mode == OUT_STREAM)
+        return GO_CLOCKED;
+    double target = scale_target(e);
+    /* start_slack auto: an output stopped by an underrun resumes once it is
+     * as far behind the newest waypoint as at the start (enough_ahead) */
+    if (e->slack_auto && e->out.underrun && e->out.mode == OUT_STREAM && !(e->scale.ts.rate > 0) &&
+        target > 0 && rebuffering(e, s))
+        return GO_REBUFFER;
+    double Rm = fmin(R, scale_ceil_room(e, s, A, J)); /* the speed cap ahead too */
+    target = engine_lag_target(e, target, Rm, A, J);  /* a lag won back (catchup.h) */
+    d->target = target;
+    if (!e->scale.on && is_exactly(target, 1.0) &&
+        (isinf(Rm) || ts_stop_dist(1.0, 0.0, A, J) < Rm - e->period_s))
+        return GO_UNIT;
+    return GO_SCALED;
+}
+
+/*
+ * The rate decision kept.  On the unit grid inside a segment, decide()
+ * re-derives every tick that nothing asks for another rate: two divisions
+ * and the stopping distance ts_stop_dist against the buffer's remaining
+ * capacity (scale_remaining()) and the speed cap ahead (scale_ceil_room()).
+ * plain_window decides once, after a tick, for how many ticks ahead that
+ * answer cannot change: while the stopping distance stays short of the
+ * remaining capacity with two ticks to spare, at the segment's bound on the
+ * curve's speed (conv_speed): the check each of those ticks would make
+ * passes at any speed above it.  The last tick of the window may leave the
+ * segment (its decision is made before, inside it); after it the window is
+ * decided again for the next segment.
+ *
+ * The answer is keyed on the engine's state, not closed by each call that
+ * changes it: a change counter bumped by every call would need every call,
+ * present and future, to bump it, and a forgotten one would be a wrong
+ * setpoint.  The decision reads, besides what the tick itself advances (n,
+ * s, the segment: the window counts them), only state that a call between
+ * ticks can change in one of these ways: the queue grows or is emptied (a
+ * push, a finish, a silent end, a clear, a halt: queue.len), a waypoint's
+ * stamp is a new sample of the sender's time and so of the lag (every push
+ * that passes engine_waypoint_check: lag.seen_ns at the next tick), a stop
+ * or clear (stop_req), the override, one clock (clk.on), a halt (the mode).
+ * plain_holds compares exactly those, so no call can forget to close the
+ * window.  A new input of the decision must be added there: the test hook
+ * engine_plain_check recomputes the decision on every kept tick
+ * (tests/unit/test_engine_tick.c).
+ */
+static void plain_window(engine_t *e)
+{
+    e->out.plain_left = 0;
+    if (e->out.mode != OUT_STREAM || e->scale.on || e->clk.on || e->out.underrun ||
+        !e->out.have_pos || e->scale.stop_req || e->scale.end_brake ||
+        !is_exactly(e->scale.override, 1.0) || !is_exactly(e->scale.ts.rate, 1.0) ||
+        !is_exactly(e->scale.ts.acc, 0.0) || scale_ceil_here(e) < 1.0 || engine_lag_pending(e))
+        return;
+    /* scale_remaining() is finite: a REST end too is left at rate 0 */
+    /* decide's check, ts_stop_dist(1, 0, a/v, j/v) < v K - (margin + 1) T
+     * with v = conv_speed (the same on every tick of the window: the
+     * segment's) and K the capacity left (scale_remaining()) */
+    double v = scale_conv_speed(e);
+    double d = e->out.cur.stop1 * (1 + 1e-9); /* queue_segment's, at v */
+    double in_cur = e->out.cur_t1 - tau_of(e, e->out.n);
+    double k = (in_cur > 0 ? in_cur / v : 0.0) + (e->scale.avail_kcum - e->out.cur.kcum);
+    /* K falls by T / v per tick: the ticks for which it stays above */
+    double room = (k - (d + scale_rise_reserve(e, v) + (TS_MARGIN_TICKS + 1) * e->period_s) / v) *
+                  v;
+    /* and the speed cap ahead (ceil_room), which falls by T per tick too */
+    if (e->queue.slow_len) { /* (INFINITY without one) */
+        double A = e->cfg.scale_accel_m_s2 / v, J = e->cfg.scale_jerk_m_s3 / v;
+        room = fmin(room, scale_ceil_room(e, tau_of(e, e->out.n), A, J) - d - e->period_s);
+    }
+    if (!(room > 0) || !isfinite(d))
+        return;
+    double x = room / e->period_s; /* floor(x) - 2 ticks, x > 0: floor is the cast */
+    if (!(x >= 3.0))
+        return;
+    e->out.plain_left = x < 0x1p62 ? (int64_t)x - 2 : INT64_MAX / 2;
+    e->out.plain_qlen = e->queue.len;
+    e->out.plain_seen = e->lag.seen_ns;
+}
+
+/* The decision plain_window kept still holds (see there). */
+static inline int plain_holds(const engine_t *e)
+{
+    return e->out.plain_left > 0 && e->out.plain_qlen == e->queue.len &&
+           e->out.plain_seen == e->lag.seen_ns && e->out.mode == OUT_STREAM && !e->scale.stop_req &&
+           !e->clk.on && is_exactly(e->scale.override, 1.0);
+}
+
+/* Test hook: the decision made again on a kept tick, its side effects
+ * undone, and counted wrong unless it is a plain step as kept. */
+__attribute__((noinline)) static void plain_verify(engine_t *e)
+{
+    if (e->out.plain_check != 1)
+        return;
+    int end_brake = e->scale.end_brake, steer = e->lag.steer;
+    double lag_s = e->st.lag_s;
+    uint64_t catchups = e->st.catchups;
+    decision_t d;
+    e->out.plain_kept++;
+    if (decide(e, &d) != GO_UNIT || e->scale.end_brake != end_brake || e->lag.steer != steer)
+        e->out.plain_wrong++;
+    e->scale.end_brake = end_brake;
+    e->lag.steer = steer;
+    e->st.lag_s = lag_s;
+    e->st.catchups = catchups;
+}
+
+void engine_plain_check(engine_t *e, int on, uint64_t *kept, uint64_t *wrong)
+{
+    e->out.plain_check = on;
+    if (kept)
+        *kept = e->out.plain_kept;
+    if (wrong)
+        *wrong = e->out.plain_wrong;
+}
+
+/* A moving output's step as decide() says; 1 unless a plain step that
+ * stayed in its segment. */
+static int step_decided(engine_t *e)
+{
+    decision_t d;
+    switch (decide(e, &d)) {
+    case GO_UNIT: return unit_step(e);
+    case GO_CLOCKED: scale_clocked_step(e, d.R, d.A, d.J); break;
+    case GO_REBUFFER:
+        scale_step(e, 0.0, d.R, d.A, d.J);
+        if (!e->out.underrun) { /* still in the same underrun */
+            e->out.underrun = 1;
+            e->st.underrun_ticks++;
+        }
+        break;
+    default: scale_step(e, d.target, d.R, d.A, d.J); break;
+    }
+    return 1;
+}
+
+/* A step whose rate decision is kept (plain_holds): a plain step on the
+ * unit grid, the window decided again once it leaves the segment. */
+static inline void step_kept(engine_t *e)
+{
+    e->out.cycle++;
+    if (__builtin_expect(e->out.plain_check != 0, 0)) {
+        plain_verify(e);
+        /* test hook 2: the decision made anyway, and followed */
+        if (e->out.plain_check == 2 ? step_decided(e) : unit_step(e))
+            plain_window(e);
+        else
+            e->out.plain_left--;
+        return;
+    }
+    if (unit_step(e))
+        plain_window(e); /* a new segment: decided again for it */
+    else
+        e->out.plain_left--;
 }
 
 /* One tick of the output state machine. */
 static void step_once(engine_t *e)
 {
+    if (plain_holds(e)) {
+        step_kept(e);
+        return;
+    }
     e->out.cycle++;
+    e->out.plain_left = 0;
     if (e->out.mode == OUT_HOLD) {
         qent_t *h = q_head(e);
         if (!h || !h->first || !enough_ahead(e, h) || (!e->out.have_pos && e->out.need_pos)) {
@@ -393,44 +617,8 @@ static void step_once(engine_t *e)
         }
         return;
     }
-    /* moving (a transfer or a trajectory): on the unit grid while nothing
-     * asks for another rate and the curve ahead is long enough to stop in */
-    double A, J, s = e->scale.on ? e->scale.s : tau_of(e, e->out.n), R;
-    scale_limits(e, &A, &J);
-    R = scale_remaining(e, s);
-    if (e->out.mode == OUT_STREAM && e->scale.avail_closed && !e->scale.avail_rest &&
-        !e->scale.end_brake &&
-        (ts_stop_dist(e->scale.ts.rate, e->scale.ts.acc, A, J) >=
-             R - e->scale.ts.rate * e->period_s ||
-         (e->scale.on && at_rest(e) && !scale_moves(e, R, A, J))))
-        /* the curve does not end at rest: brake before its end; at rest with
-         * less curve left than one tick of motion and its stop need, no input
-         * can come to lengthen it: finish here, not wait for ever */
-        e->scale.end_brake = 1;
-    if (e->clk.on && e->out.mode == OUT_STREAM) {
-        scale_clocked_step(e, R, A, J);
-        return;
-    }
-    double target = scale_target(e);
-    /* start_slack auto: an output stopped by an underrun resumes once it is
-     * as far behind the newest waypoint as at the start (enough_ahead) */
-    if (e->slack_auto && e->out.underrun && e->out.mode == OUT_STREAM && !(e->scale.ts.rate > 0) &&
-        target > 0 && rebuffering(e, s)) {
-        scale_step(e, 0.0, R, A, J);
-        if (!e->out.underrun) { /* still in the same underrun */
-            e->out.underrun = 1;
-            e->st.underrun_ticks++;
-        }
-        return;
-    }
-    double Rm = fmin(R, scale_ceil_room(e, s, A, J)); /* the speed cap ahead too */
-    target = engine_lag_target(e, target, Rm, A, J);  /* a lag won back (catchup.h) */
-    if (!e->scale.on && is_exactly(target, 1.0) &&
-        (isinf(Rm) || ts_stop_dist(1.0, 0.0, A, J) < Rm - e->period_s)) {
-        unit_step(e);
-        return;
-    }
-    scale_step(e, target, R, A, J);
+    step_decided(e);
+    plain_window(e);
 }
 
 engine_state_t play_state(const engine_t *e)
@@ -444,11 +632,57 @@ engine_state_t play_state(const engine_t *e)
     return e->out.finished ? ENGINE_STATE_FINISHED : ENGINE_STATE_WAITING;
 }
 
-static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+/* The setpoint's fields, as fill_sp and last_setpoint give them. */
+static void put_sp(const engine_t *e, engine_setpoint_t *sp, int64_t now_ns, const double *pos,
+                   const double *vel, const double *acc, engine_state_t s, uint32_t flags,
+                   double age_s)
+{
+    sp->now_ns = now_ns;
+    sp->t_s = e->out.t;
+    for (int k = 0; k < AX; k++) { /* + 0.0: a zero is +0.0 (positive_zeros) */
+        sp->pos_m[k] = pos[k] + 0.0;
+        sp->vel_m_s[k] = vel[k] + 0.0;
+        sp->acc_m_s2[k] = acc[k] + 0.0;
+    }
+    sp->state = s;
+    sp->flags = flags;
+    sp->cycle = e->out.cycle;
+    sp->track = e->out.track;
+    sp->age_s = age_s;
+}
+
+/* A plain setpoint: streaming on the unit grid, no flag, no clock; all of
+ * it is in the stepper and the output's counters (last_setpoint). */
+static int plain_sp(const engine_t *e)
+{
+    return e->out.on_fd && e->out.mode == OUT_STREAM && !e->out.flags_pending && !e->out.underrun &&
+           !e->scale.on && !e->clk.on && e->out.have_pos;
+}
+
+static void fill_sp_flags(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
+
+/* A plain setpoint (plain_sp): what fill_sp_flags would make of it. */
+static inline void fill_plain(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    put_sp(e, sp, now_ns, e->out.fd.p0, e->out.fd.v0, e->out.fd.a0, ENGINE_STATE_STREAMING, 0, NAN);
+    e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
+}
+
+/* The setpoint of this tick (put_sp; positive zeros). */
+static inline void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    if (plain_sp(e))
+        fill_plain(e, now_ns, sp);
+    else
+        fill_sp_flags(e, now_ns, sp);
+}
+
+/* fill_sp with the state and flags worked out. */
+__attribute__((noinline)) static void fill_sp_flags(engine_t *e, int64_t now_ns,
+                                                    engine_setpoint_t *sp)
 {
     engine_state_t s = play_state(e);
 
-    sp->now_ns = now_ns;
     /* No position known yet: the first waypoint is the last resort (unless a
      * position is required), adopted once and for all, so the output never
      * jumps from it to somewhere else (a new start is reached by a transfer). */
@@ -470,31 +704,42 @@ static void fill_sp(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     }
     if (e->out.mode == OUT_XFER)
         xfer_track_time(e);
-    sp->t_s = e->out.t;
-    memcpy(sp->pos_m, e->out.pos, sizeof(sp->pos_m));
+    uint32_t flags = e->out.flags_pending;
+    e->out.flags_pending = 0;
+    if (e->out.mode == OUT_HOLD || (e->scale.on && at_rest(e)))
+        flags |= ENGINE_SP_HOLD;
+    else if (s != ENGINE_STATE_STREAMING && s != ENGINE_STATE_UNDERRUN)
+        flags |= ENGINE_SP_HOLD;
+    if (e->out.mode == OUT_XFER)
+        flags |= ENGINE_SP_TRANSFER;
+    if (!e->out.have_pos)
+        flags |= ENGINE_SP_NO_POSITION;
+    if (e->out.mode != OUT_HOLD && e->scale.on)
+        flags |= ENGINE_SP_SCALED;
+    double age_s = NAN;
+    if (e->clk.on && e->out.have_pos)
+        age_s = (double)((long double)e->clk.now_ns * 1e-9L - (long double)e->out.t);
+    put_sp(e, sp, now_ns, out_pos(e), out_vel(e), out_acc(e), s, flags, age_s);
     if (!e->out.have_pos)
         for (int k = 0; k < AX; k++)
             sp->pos_m[k] = NAN; /* not a position: see ENGINE_SP_NO_POSITION */
-    memcpy(sp->vel_m_s, e->out.vel, sizeof(sp->vel_m_s));
-    memcpy(sp->acc_m_s2, e->out.acc, sizeof(sp->acc_m_s2));
-    sp->state = s;
-    sp->flags = e->out.flags_pending;
-    e->out.flags_pending = 0;
-    if (e->out.mode == OUT_HOLD || (e->scale.on && at_rest(e)))
-        sp->flags |= ENGINE_SP_HOLD;
-    else if (s != ENGINE_STATE_STREAMING && s != ENGINE_STATE_UNDERRUN)
-        sp->flags |= ENGINE_SP_HOLD;
-    if (e->out.mode == OUT_XFER)
-        sp->flags |= ENGINE_SP_TRANSFER;
-    if (!e->out.have_pos)
-        sp->flags |= ENGINE_SP_NO_POSITION;
-    if (e->out.mode != OUT_HOLD && e->scale.on)
-        sp->flags |= ENGINE_SP_SCALED;
-    sp->cycle = e->out.cycle;
-    sp->track = e->out.track;
-    sp->age_s = NAN;
-    if (e->clk.on && e->out.have_pos)
-        sp->age_s = (double)((long double)e->clk.now_ns * 1e-9L - (long double)e->out.t);
+    e->out.last_plain = 0;
+    e->out.last_sp = *sp;
+}
+
+/* The setpoint of the last call that stepped (fill_sp): a plain one made
+ * again from the stepper, which no call between ticks moves (a halt
+ * writes pos, not the stepper's rows; the tick counters and out.t only a
+ * tick changes); any other as kept: the 120-byte copy is not made on every
+ * plain tick. */
+static void last_setpoint(const engine_t *e, engine_setpoint_t *sp)
+{
+    if (!e->out.last_plain) {
+        *sp = e->out.last_sp;
+        return;
+    }
+    put_sp(e, sp, e->out.last_now, e->out.fd.p0, e->out.fd.v0, e->out.fd.a0, ENGINE_STATE_STREAMING,
+           0, NAN);
 }
 
 /* 1 if further steps cannot change anything until new input arrives. */
@@ -517,183 +762,69 @@ int play_stalled(const engine_t *e)
     return 0;
 }
 
-/*
- * Fast ticks.  Most ticks are a plain step on the unit grid inside the
- * current segment: step_once then only re-derives, every tick, that nothing
- * asks for another rate (two divisions, the stopping distance ts_stop_dist
- * against the buffer's remaining time) and engine_tick divides for the
- * number of periods.  fast_window decides once, after a full tick, for how
- * many ticks ahead that answer cannot change: until the next re-seed, and
- * while the stopping distance stays short of the remaining capacity
- * (scale_remaining()) with two ticks to spare, at the segment's lower bound on the
- * curve's speed (seg_speed_max): the check each of those ticks would make
- * passes at any speed above it (see fast_window).  Every public call that
- * changes the engine (push, finish, stop, clear, override, clock, position)
- * closes the window.
- * fast_tick then does what the full path does for such a tick, to the same
- * doubles in the same order: tests/unit/test_engine_fast.c compares both
- * paths setpoint for setpoint (engine_set_fast_ticks).
- */
-static void fast_window(engine_t *e)
-{
-    e->fast.left = 0;
-    if (e->fast.off || e->out.mode != OUT_STREAM || e->scale.on || e->clk.on || e->out.underrun ||
-        !e->out.have_pos || e->scale.stop_req || e->scale.end_brake || e->out.flags_pending ||
-        !is_exactly(e->scale.override, 1.0) || !is_exactly(e->scale.ts.rate, 1.0) ||
-        !is_exactly(e->scale.ts.acc, 0.0) || scale_ceil_here(e) < 1.0 || engine_lag_pending(e))
-        return;
-    /* the ticks before the next re-seed (step_cur) */
-    int64_t m = (int64_t)(FDIFF_RESEED_STEPS -
-                          (uint64_t)(e->out.n - e->out.seg_n0) % FDIFF_RESEED_STEPS) -
-                1;
-    { /* scale_remaining() is finite: a REST end too is left at rate 0 */
-        /* step_once's check, ts_stop_dist(1, 0, a/v, j/v) < v K - (margin + 1) T
-         * with v = conv_speed (the same on every tick of the window: a push
-         * closes it) and K the capacity left (scale_remaining()) */
-        double v = scale_conv_speed(e);
-
-        double A = e->cfg.scale_accel_m_s2 / v, J = e->cfg.scale_jerk_m_s3 / v;
-        double d = ts_stop_dist(1.0, 0.0, A, J) * (1 + 1e-9);
-        double in_cur = e->out.cur_t1 - tau_of(e, e->out.n);
-        double k = (in_cur > 0 ? in_cur / v : 0.0) + (e->scale.avail_kcum - e->out.cur.kcum);
-        /* K falls by T / v per tick: the ticks for which it stays above */
-        double room = (k -
-                       (d + scale_rise_reserve(e, v) + (TS_MARGIN_TICKS + 1) * e->period_s) / v) *
-                      v;
-        /* and the speed cap ahead (ceil_room), which falls by T per tick too */
-        room = fmin(room, scale_ceil_room(e, tau_of(e, e->out.n), A, J) - d - e->period_s);
-        if (!(room > 0) || !isfinite(d))
-            return;
-        double mr = floor(room / e->period_s) - 2;
-        if (mr < (double)m)
-            m = (int64_t)mr;
-    }
-    e->fast.left = m > 0 ? m : 0;
-}
-
-/* One tick as step_once + fill_sp would make it inside the window; 0 (and
- * nothing changed) at the end of the segment. */
-static void fast_fill_from(const engine_t *e, int64_t now_ns, engine_setpoint_t *sp,
-                           const double *pos, const double *vel, const double *acc)
-{
-    sp->now_ns = now_ns; /* fill_sp: streaming, no flags */
-    sp->t_s = e->out.t;
-    memcpy(sp->pos_m, pos, sizeof(sp->pos_m));
-    memcpy(sp->vel_m_s, vel, sizeof(sp->vel_m_s));
-    memcpy(sp->acc_m_s2, acc, sizeof(sp->acc_m_s2));
-    sp->state = ENGINE_STATE_STREAMING;
-    sp->flags = 0;
-    sp->cycle = e->out.cycle;
-    sp->track = e->out.track;
-    sp->age_s = NAN;
-}
-
-/* What a fast tick left for later: the setpoint kept for a repeated call
- * (last_sp, 120 bytes copied every tick otherwise) and the curve's speed
- * (a square root only the full path reads), both from the same doubles. */
-static void fast_sync(engine_t *e)
-{
-    if (!e->fast.last)
-        return;
-    for (int k = 0; k < AX; k++) { /* out_eval, deferred by fast_tick */
-        e->out.pos[k] = e->out.fd.p0[k];
-        e->out.vel[k] = e->out.fd.v0[k];
-        e->out.acc[k] = e->out.fd.a0[k];
-    }
-    double v2 = 0;
-    for (int k = 0; k < AX; k++) /* as out_eval */
-        v2 += e->out.vel[k] * e->out.vel[k];
-    e->scale.cspeed = sqrt(v2);
-    fast_fill_from(e, e->out.last_now, &e->out.last_sp, e->out.pos, e->out.vel, e->out.acc);
-    e->fast.last = 0;
-}
+static int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t *sp);
 
 /*
- * One tick as step_once + fill_sp would make it inside the window; 0 (and
- * nothing changed) at the end of the segment.  What is left per setpoint
- * (gcc -O2, x86-64 baseline SSE2): the tick's time (an integer multiply and
- * two floating additions), one compare with the segment's end, the step as
- * 12 packed addpd over the fdiff_t rows, and 18 stores of the 9 doubles into
- * the engine and the setpoint; the full path added two divisions and
- * ts_stop_dist's branches (step_once), a 64-bit idiv (engine_tick's count of
- * periods), out_state/fill_sp's flag logic, a sqrt and a 120-byte copy.
- */
-static int fast_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
-{
-    int64_t n = e->out.n + 1;
-    double tau = tau_of(e, n);
-    if (!(tau < e->out.cur_t1)) {
-        e->fast.left = 0;
-        return 0;
-    }
-    e->fast.left--;
-    e->fast.last = 1;
-    e->out.cycle++;
-    e->out.n = n;
-    e->out.last_now = now_ns;
-    fdiff_step(&e->out.fd);
-    /* out_eval's copies into e->out.pos, vel, acc wait for fast_sync: the
-     * setpoint is filled from the stepper itself (9 stores a tick fewer) */
-    e->out.t = e->out.origin_t + tau;
-    fast_fill_from(e, now_ns, sp, e->out.fd.p0, e->out.fd.v0, e->out.fd.a0);
-    e->st.setpoints++;
-    return 1;
-}
-
-void engine_fast_close(engine_t *e)
-{
-    e->fast.left = 0;
-    fast_sync(e);
-}
-
-void engine_set_fast_ticks(engine_t *e, int on)
-{
-    engine_fast_close(e);
-    e->fast.off = !on;
-}
-
-static int tick_full(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
-
-/*
- * The fast tick stays out of the full tick's frame: with both in one
- * function the compiler saved six registers and set up a 200-byte frame
- * (push x6, sub $0xc8,%rsp at the entry of engine_tick, objdump -d) before
- * the fast path's first test; apart, a fast tick is a leaf-like run of
- * loads, one imul, cvtsi2sd, mulsd, the step's addpd and the setpoint's
- * stores: 9.5 -> 7.9 ns per setpoint at 1 kHz with the copies fast_sync now
- * defers (the fastest chunk of 10000 ticks, tests/bench/RESULTS.md).
+ * One tick, one path: the periods since the last call counted (one period,
+ * the usual case, without the 64-bit division), the steps made (step_once,
+ * whose rate decision is kept while it holds: plain_window) and the
+ * setpoint filled (fill_sp, its flag logic skipped for a plain one).  A step
+ * that keeps its decision inside its segment, one period on with nothing
+ * pushed since, is made here (step_kept, as step_once makes it), without
+ * the frame of tick_steps: a leaf-like run of loads, one imul, the
+ * stepper's additions and the setpoint's stores.
  */
 int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
-    if (e->fast.left > 0) {
-        /* one period since the last call, as the division below would round */
-        int64_t d = now_ns - e->out.last_now, p = e->cfg.period_ns;
-        if (d >= p - p / 2 && d < 2 * p - p / 2 && fast_tick(e, now_ns, sp))
-            return positive_zeros(sp, 0);
-        e->fast.left = 0;
-    }
-    return positive_zeros(sp, tick_full(e, now_ns, sp));
-}
+    int64_t k = 1;
 
-__attribute__((noinline)) static int tick_full(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
-{
-    int64_t k = 1, i;
-
-    fast_sync(e);
     if (e->out.have_now) {
-        if (now_ns < e->out.last_now) {
-            *sp = e->out.last_sp;
+        int64_t d = now_ns - e->out.last_now, p = e->cfg.period_ns;
+        /* ticks on the period grid since the last call (rounded): one if d
+         * is in [p - p/2, 2 p - p/2), as the division would round */
+        if (__builtin_expect(d >= p - p / 2 && d < 2 * p - p / 2, 1)) {
+            if (plain_holds(e) && !e->lag.pending && !e->sil.fresh &&
+                tau_of(e, e->out.n + 1) < e->out.cur_t1) {
+                /* lag_note has nothing to note (no push since), and a silent
+                 * end is noticed at the next tick that decides, as it always
+                 * was (checked every tick, the silent ends of 2 of the 30
+                 * frozen outputs, gpxpy_cerknicko-jezero smooth, come a few
+                 * ticks earlier) */
+                e->out.last_now = now_ns;
+                step_kept(e);
+                /* plain_sp holds: a kept step inside its segment is on the
+                 * grid (on_fd), leaves no underrun and no flag pending (the
+                 * last fill took them), and the key holds the rest (the test
+                 * hooks' steps are checked the long way) */
+                if (__builtin_expect(e->out.plain_check != 0, 0))
+                    fill_sp(e, now_ns, sp);
+                else
+                    fill_plain(e, now_ns, sp);
+                e->st.setpoints++;
+                return 0;
+            }
+        } else if (d < 0) {
+            last_setpoint(e, sp);
             return -ENGINE_ESTATE;
+        } else {
+            k = (d + p / 2) / p;
         }
-        /* ticks on the period grid since the last call (rounded) */
-        k = (now_ns - e->out.last_now + e->cfg.period_ns / 2) / e->cfg.period_ns;
         if (k == 0) {
-            *sp = e->out.last_sp;
+            last_setpoint(e, sp);
             sp->now_ns = now_ns;
             e->st.setpoints++;
             return 0;
         }
     }
+    return tick_steps(e, now_ns, k, sp);
+}
+
+/* engine_tick's k steps, with what each tick notes first. */
+__attribute__((noinline)) static int tick_steps(engine_t *e, int64_t now_ns, int64_t k,
+                                                engine_setpoint_t *sp)
+{
+    int64_t i;
+
     e->out.have_now = 1;
     e->out.last_now = now_ns;
     engine_lag_note(e, now_ns);     /* issue 26: the sender's time (catchup.h) */
@@ -723,7 +854,5 @@ __attribute__((noinline)) static int tick_full(engine_t *e, int64_t now_ns, engi
     }
     fill_sp(e, now_ns, sp);
     e->st.setpoints++;
-    e->out.last_sp = *sp;
-    fast_window(e);
     return 0;
 }

@@ -42,7 +42,7 @@ double xfer_duration(const engine_t *e, const double *target, double gap_s, int 
     double dist = 0, v_obj;
 
     for (int i = 0; i < AX; i++)
-        dist += (target[i] - e->out.pos[i]) * (target[i] - e->out.pos[i]);
+        dist += (target[i] - out_pos(e)[i]) * (target[i] - out_pos(e)[i]);
     dist = sqrt(dist);
     v_obj = fmax(transfer_motion_speed(&e->xfer.motion), head_speed(e));
     double dur = transfer_duration(&e->xfer.cfg, dist, v_obj,
@@ -52,7 +52,7 @@ double xfer_duration(const engine_t *e, const double *target, double gap_s, int 
      * per axis, the jerk within half the limit as on the curve */
     double dur0 = dur;
     for (int k = 0; k < AX; k++) {
-        double d = fabs(target[k] - e->out.pos[k]);
+        double d = fabs(target[k] - out_pos(e)[k]);
         if (e->cfg.axis_max_speed_m_s[k] > 0)
             dur = fmax(dur, 1.5 * d / e->cfg.axis_max_speed_m_s[k]);
         if (e->cfg.axis_max_accel_m_s2[k] > 0)
@@ -74,7 +74,7 @@ void xfer_start(engine_t *e, const double *target, double gap_s)
     memset(&e->out.cur, 0, sizeof(e->out.cur));
     e->xfer.from_t = e->out.track ? e->out.t : NAN;
     e->out.cur.kind = QE_SEG;
-    transfer_segment(&e->out.cur.seg, e->out.pos, target, dur);
+    transfer_segment(&e->out.cur.seg, out_pos(e), target, dur);
     e->out.cur.vmax = solve_seg_speed_max(&e->out.cur.seg);
     e->out.cur_t0 = 0;
     e->out.cur_t1 = e->out.cur.seg.dur_s;

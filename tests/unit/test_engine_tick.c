@@ -1,0 +1,289 @@
+/*
+ * test_engine_tick.c - engine_tick's one path: the rate decision step_once
+ * keeps for the ticks ahead (engine_tick.c plain_window, plain_holds)
+ * against making it every tick.  Two engines with the same configuration,
+ * one deciding every tick and following that decision
+ * (engine_plain_check(e, 2), engine_int.h), the other keeping the decision
+ * and recomputing it on every kept tick to count where it would differ
+ * (engine_plain_check(e, 1)), get the same calls
+ * (pushes between ticks, finish, override changes, stop, clear, halt,
+ * clocks that jitter within a period, skip periods, repeat or go back) and
+ * must return the same codes, the same setpoints bit for bit (NaN
+ * included) and the same status (but lag_s, which a kept tick does not
+ * refresh); no kept decision may be wrong, and plain streams must keep
+ * most.  Several methods, periods and speeds (so the stopping-distance
+ * bound of the window is met and missed), long enough to cross re-seeds
+ * (FDIFF_RESEED_STEPS).  And a walk loaded ahead, with every call that
+ * changes an engine made between ticks, mostly inside a kept window.
+ * Checked to fail when the window runs 20 or 40 ticks too long, and when
+ * plain_holds leaves the stop request or the override out of its key
+ * (leaving out the queue length, the lag's sample or the mode is not caught:
+ * the cases made here are covered by the rest of the key or the window's
+ * margin).
+ */
+#include "test.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "engine.h"
+#include "engine_int.h"
+
+typedef struct {
+    engine_t *e[2]; /* [0] deciding every tick, [1] keeping the decision (checked) */
+    unsigned long setpoints, compared;
+} pair_t;
+
+static void pair_new(pair_t *p, const engine_config_t *c)
+{
+    memset(p, 0, sizeof *p);
+    for (int i = 0; i < 2; i++) {
+        int err = 0;
+        p->e[i] = engine_new(c, &err);
+        assert_non_null(p->e[i]);
+        engine_plain_check(p->e[i], i ? 1 : 2, NULL, NULL);
+    }
+}
+
+/* returns the decisions kept */
+static uint64_t pair_free(pair_t *p)
+{
+    engine_status_t s0, s1;
+    uint64_t kept = 0, wrong = 0;
+    memset(&s0, 0, sizeof s0);
+    memset(&s1, 0, sizeof s1);
+    engine_status(p->e[0], &s0);
+    engine_status(p->e[1], &s1);
+    s0.lag_s = s1.lag_s = 0; /* a kept tick leaves it as the last decision told it */
+    assert_memory_equal(&s0, &s1, sizeof s0);
+    engine_plain_check(p->e[1], 1, &kept, &wrong);
+    if (wrong)
+        print_error("%llu of %llu kept decisions wrong\n", (unsigned long long)wrong,
+                    (unsigned long long)kept);
+    assert_int_equal(wrong, 0);
+    engine_free(p->e[0]);
+    engine_free(p->e[1]);
+    return kept;
+}
+
+static void pair_tick(pair_t *p, int64_t now)
+{
+    engine_setpoint_t a, b;
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
+    int ra = engine_tick(p->e[0], now, &a), rb = engine_tick(p->e[1], now, &b);
+    assert_int_equal(ra, rb);
+    if (memcmp(&a, &b, sizeof a) != 0) {
+        print_error("now %lld: decided t %.17g x %.17g v %.17g state %d flags %u cycle %u | kept t "
+                    "%.17g x %.17g v %.17g state %d flags %u cycle %u\n",
+                    (long long)now, a.t_s, a.pos_m[0], a.vel_m_s[0], a.state, a.flags, a.cycle,
+                    b.t_s, b.pos_m[0], b.vel_m_s[0], b.state, b.flags, b.cycle);
+        fail();
+    }
+    p->compared++;
+}
+
+static void pair_push(pair_t *p, const engine_waypoint_t *w)
+{
+    assert_int_equal(engine_push(p->e[0], w), engine_push(p->e[1], w));
+}
+
+/* One random scenario: a walk of n waypoints at dt (irregular), pushed a few
+ * at a time between ticks, with the calls above at random ticks. */
+static uint64_t scenario(unsigned seed, engine_method_t m, int64_t period_ns, double dt,
+                         double step_m, int events)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    c.method = m;
+    c.period_ns = period_ns;
+    pair_t p;
+    pair_new(&p, &c);
+    double pos[3] = {0, 0, 0}, t = 0;
+    int64_t now = 0;
+    uint32_t seq = 0;
+    for (int round = 0; round < 400; round++) {
+        int npush = (int)(urand(&seed) * 4);
+        for (int i = 0; i < npush; i++) {
+            engine_waypoint_t w = {.t_s = t};
+            w.seq = seq++;
+            for (int k = 0; k < 3; k++) {
+                pos[k] += (urand(&seed) - 0.5) * step_m;
+                w.pos_m[k] = pos[k];
+            }
+            pair_push(&p, &w);
+            t += dt * (0.7 + 0.6 * urand(&seed));
+        }
+        int nticks = (int)(dt / ((double)period_ns * 1e-9) * (1 + urand(&seed) * 2));
+        for (int i = 0; i < nticks; i++) {
+            double r = urand(&seed);
+            int64_t d = period_ns;
+            if (events && r < 0.02)
+                d = (int64_t)(period_ns * (0.5 + urand(&seed))); /* jitter within rounding */
+            else if (events && r < 0.025)
+                d = period_ns * (2 + (int64_t)(urand(&seed) * 5)); /* skipped periods */
+            else if (events && r < 0.027)
+                d = 0; /* the same time again */
+            else if (events && r < 0.028)
+                d = -period_ns; /* backwards: refused, last setpoint */
+            now += d;
+            pair_tick(&p, now);
+            if (d < 0)
+                now -= d;
+        }
+        if (events) {
+            double r = urand(&seed);
+            if (r < 0.05) {
+                double ov = urand(&seed) * 1.5;
+                assert_int_equal(engine_set_override(p.e[0], ov), engine_set_override(p.e[1], ov));
+            } else if (r < 0.08) {
+                assert_int_equal(engine_set_override(p.e[0], 1.0),
+                                 engine_set_override(p.e[1], 1.0));
+            } else if (r < 0.085) {
+                assert_int_equal(engine_stop(p.e[0]), engine_stop(p.e[1]));
+            } else if (r < 0.09) {
+                engine_clear(p.e[0]);
+                engine_clear(p.e[1]);
+            } else if (r < 0.095) {
+                assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1]));
+                t += 5 * dt; /* the next waypoints open a new trajectory */
+            } else if (r < 0.097) {
+                double at[3] = {pos[0], pos[1] + 1.0, pos[2]};
+                assert_int_equal(engine_halt(p.e[0], at), engine_halt(p.e[1], at));
+            }
+        }
+    }
+    assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1]));
+    for (int i = 0; i < 200000; i++) {
+        now += period_ns;
+        pair_tick(&p, now);
+    }
+    return pair_free(&p);
+}
+
+static void test_plain_streams(void **state)
+{
+    (void)state;
+    uint64_t kept = 0;
+    kept += scenario(1, ENGINE_METHOD_CUBIC, 1000000, 0.2, 2.0, 0);    /* 1 kHz, 5 Hz input */
+    kept += scenario(2, ENGINE_METHOD_CUBIC, 10000000, 0.1, 1.0, 0);   /* 100 Hz */
+    kept += scenario(3, ENGINE_METHOD_BSPLINE, 1000000, 0.1, 50.0, 0); /* quick: bound short */
+    kept += scenario(4, ENGINE_METHOD_SMOOTH, 2000000, 0.25, 0.5, 0);  /* smoother */
+    kept += scenario(5, ENGINE_METHOD_CUBIC, 100000, 0.25, 0.01, 0);   /* 10 kHz: re-seeds */
+    assert_true(kept > 1000000); /* the plain streams keep the decision on most ticks */
+}
+
+static void test_with_events(void **state)
+{
+    (void)state;
+    for (unsigned s = 10; s < 22; s++)
+        scenario(s, (engine_method_t)(s % 3), s % 2 ? 1000000 : 10000000, 0.1 + 0.05 * (s % 4),
+                 s % 5 == 0 ? 80.0 : 1.5, 1);
+}
+
+/* A walk loaded before the first tick (an upload: no lag to win back, so
+ * the decision is kept), then every call that changes an engine made
+ * between ticks at random, most of them in the middle of a kept window;
+ * returns the decisions kept. */
+static uint64_t calls_mid_window(unsigned seed, int64_t period_ns)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    c.period_ns = period_ns;
+    c.capacity = 4096;
+    c.max_accel_m_s2 = 0; /* the walk's rate not capped (its speed cap: seg_ceiling) */
+    pair_t p;
+    pair_new(&p, &c);
+    double pos[3] = {0, 0, 0}, t = 0;
+    uint32_t seq = 0;
+    int64_t now = 0;
+    for (int i = 0; i < 300; i++, t += 0.1) {
+        engine_waypoint_t w = {.t_s = t, .seq = seq};
+        seq++;
+        for (int k = 0; k < 3; k++)
+            w.pos_m[k] = pos[k] += (urand(&seed) - 0.5) * 2.0;
+        pair_push(&p, &w);
+    }
+    for (int round = 0; round < 300; round++) {
+        int nticks = 20 + (int)(urand(&seed) * 400);
+        for (int i = 0; i < nticks; i++)
+            pair_tick(&p, now += period_ns);
+        int r = (int)(urand(&seed) * 16);
+        engine_rejection_t rj;
+        double at[3] = {pos[0], pos[1], pos[2] + 1.0};
+        switch (r) {
+        case 0:
+        case 1:
+        case 2: /* more of the walk, ahead of time (an upload: no lag), now and then
+                 * a burst or a sharp turn */
+            for (int i = 0; i < 1 + (int)(urand(&seed) * 8) || t < (double)now * 1e-9 + 20;
+                 i++, t += 0.1) {
+                engine_waypoint_t w = {.t_s = t, .seq = seq};
+                seq++;
+                double step = urand(&seed) < 0.1 ? 30.0 : 2.0;
+                for (int k = 0; k < 3; k++)
+                    w.pos_m[k] = pos[k] += (urand(&seed) - 0.5) * step;
+                pair_push(&p, &w);
+            }
+            break;
+        case 3: { /* a feed override for a while, then back to 1 */
+            double ov = urand(&seed) * 1.5;
+            assert_int_equal(engine_set_override(p.e[0], ov), engine_set_override(p.e[1], ov));
+            for (int i = 0; i < 50; i++)
+                pair_tick(&p, now += period_ns);
+            assert_int_equal(engine_set_override(p.e[0], 1.0), engine_set_override(p.e[1], 1.0));
+            break;
+        }
+        case 4: assert_int_equal(engine_stop(p.e[0]), engine_stop(p.e[1])); break;
+        case 5:
+            engine_clear(p.e[0]);
+            engine_clear(p.e[1]);
+            break;
+        case 6: assert_int_equal(engine_halt(p.e[0], at), engine_halt(p.e[1], at)); break;
+        case 7: assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1])); break;
+        case 8:
+            assert_int_equal(engine_set_catchup(p.e[0], 0.1), engine_set_catchup(p.e[1], 0.1));
+            break;
+        case 9:
+            engine_reset_counters(p.e[0]);
+            engine_reset_counters(p.e[1]);
+            break;
+        case 10:
+            assert_int_equal(engine_rejection_next(p.e[0], &rj),
+                             engine_rejection_next(p.e[1], &rj));
+            break;
+        case 11: /* the same time again, and back */
+            pair_tick(&p, now);
+            pair_tick(&p, now - period_ns / 3);
+            break;
+        default: break;
+        }
+        if (r == 4 || r == 5 || r == 6 || r == 7) /* a new trajectory after a while */
+            t += 2.0;
+    }
+    assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1]));
+    for (int i = 0; i < 100000; i++)
+        pair_tick(&p, now += period_ns);
+    return pair_free(&p);
+}
+
+static void test_calls_mid_window(void **state)
+{
+    (void)state;
+    uint64_t kept = 0;
+    for (unsigned s = 30; s < 36; s++)
+        kept += calls_mid_window(s, s % 2 ? 1000000 : 10000000);
+    assert_true(kept > 5000); /* most of the time the output waits between trajectories */
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_plain_streams),
+        cmocka_unit_test(test_with_events),
+        cmocka_unit_test(test_calls_mid_window),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
