@@ -442,9 +442,10 @@ static void print_summary(const track_t *trk, const replay_t *r, const engine_st
             "summary: catchups %" PRIu64 "\n"
             "summary: lag_s %.6g\n"
             "summary: axis_lost_s %.6g\n"
-            "summary: axis_slowed %" PRIu64 "\n",
+            "summary: axis_slowed %" PRIu64 "\n"
+            "summary: axis_lag_stops %" PRIu64 "\n",
             st->stops, st->stop_fixes, st->retimed, st->retime_max_s, st->silent_ends, st->catchups,
-            st->lag_s, st->axis_lost_s, st->axis_slowed);
+            st->lag_s, st->axis_lost_s, st->axis_slowed, st->axis_lag_stops);
 }
 
 /* The play-out delay D the engine held and its parts (lib/engine/delay.h):
@@ -838,6 +839,8 @@ static int run_ticks(run_t *run)
         replay_feed(&run->r, run->e, now);
         run_report_rejections(run);
         (void)engine_tick(run->e, now, &sp);
+        if (engine_axis_lag_over(run->e)) /* max_lag_s passed: stop on the path (issue 32) */
+            (void)engine_stop(run->e);
         if (skipped)
             sp.flags |= ENGINE_SP_SKIPPED;
         if (!(sp.flags & ENGINE_SP_NO_POSITION) &&

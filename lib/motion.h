@@ -166,6 +166,9 @@ typedef struct {
                                        sum of (1 - rate) x period over the ticks streamed
                                        in, or braking for, a segment they slow */
     uint64_t axis_slowed;           /* segments the per-axis limits slow */
+    double axis_lag_s;              /* while the per-axis limits hold the rate: how far the
+                                       output trails the newest waypoint beyond D */
+    uint64_t axis_lag_stops;        /* stops because axis_lag_s passed max_lag_s */
 } engine_status_t;
 
 /* clang-format on */

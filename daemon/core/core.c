@@ -741,12 +741,38 @@ static void warn_uniform(obj_t *o)
             o->status.uniform_ratio_max, o->status.uniform_ratio_t_s);
 }
 
+/* issue 32: the per-axis limits, said once each: a track that exceeds them
+ * (its lag grows: more than a tenth of the time streamed lost to them), and
+ * each stop because the lag passed max_lag_s (the lifecycle's lag event). */
+static void warn_axis(obj_t *o)
+{
+    const engine_status_t *st = &o->status;
+    double streamed_s = (double)st->setpoints * (double)o->cfg->engine.period_ns * 1e-9;
+    if (!o->axis_warned && st->axis_lost_s > 1.0 && st->axis_lost_s > 0.1 * streamed_s) {
+        o->axis_warned = 1;
+        log_msg(LOG_WARNING,
+                "object '%s': its track exceeds the per-axis limits (axis_max_*): %.1f s lost "
+                "to them so far over %llu segments; its output lags its input by %.1f s beyond "
+                "D and the lag grows while the track does",
+                o->name, st->axis_lost_s, (unsigned long long)st->axis_slowed, st->axis_lag_s);
+    }
+    if (st->axis_lag_stops != o->axis_stops_logged) {
+        o->axis_stops_logged = st->axis_lag_stops;
+        log_msg(LOG_ERR,
+                "object '%s': stopped on its path: the per-axis limits made it lag its input "
+                "by more than max_lag_s %g s beyond D (lifecycle event 'lag beyond max_lag_s', "
+                "%llu so far); latched until start or clear",
+                o->name, o->cfg->engine.max_lag_s, (unsigned long long)st->axis_lag_stops);
+    }
+}
+
 /* Log the refusals of each object read since the last call (rejlog.h). */
 static void log_rejections(core_t *c)
 {
     for (unsigned i = 0; i < c->nobj; i++)
         if (c->obj[i].engine) {
             warn_uniform(&c->obj[i]);
+            warn_axis(&c->obj[i]);
             rejlog_drain(&c->obj[i].rejlog, c->obj[i].engine);
             rejlog_flush(&c->obj[i].rejlog, c->obj[i].name, log_rejection, (void *)c->obj[i].name);
         }

@@ -169,6 +169,13 @@ void engine_status(const engine_t *e, engine_status_t *st)
     }
 }
 
+int engine_axis_lag_over(engine_t *e)
+{
+    int over = e->axis_lag_over;
+    e->axis_lag_over = 0;
+    return over;
+}
+
 /* ---- offline ------------------------------------------------------------- */
 
 int engine_curve(const engine_config_t *cfg, const engine_waypoint_t *wp, size_t n,

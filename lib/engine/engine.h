@@ -329,6 +329,12 @@ typedef struct {
     double axis_max_speed_m_s[ENGINE_AXES];
     double axis_max_accel_m_s2[ENGINE_AXES];
     double axis_max_jerk_m_s3[ENGINE_AXES];
+    double max_lag_s; /* the most the per-axis limits may make a trajectory's output
+                         lag: trail its newest waypoint beyond D (axis_lag_s,
+                         engine_status_t, while its input is open): beyond it the object
+                         stops on its path and holds, latched until start or clear
+                         (engine_axis_lag_over; the lifecycle's "lag" event).  0 (the
+                         default): not bounded, counted and warned of only */
 } engine_config_t;
 
 /* Fill cfg with working defaults (each one commented above; documented in
@@ -379,6 +385,11 @@ typedef struct engine engine_t;
  * err (may be NULL) receives 0, ENGINE_ECONFIG or ENGINE_ENOMEM.
  */
 engine_t *engine_new(const engine_config_t *cfg, int *err);
+
+/* 1 once each time a trajectory's lag from the per-axis limits passes
+ * max_lag_s (issue 32), then 0 until the next: the caller stops the object
+ * (the lifecycle: LC_EV_LAG; trajreplay: engine_stop). */
+int engine_axis_lag_over(engine_t *e);
 
 /* Free; NULL is a no-op. */
 void engine_free(engine_t *e);

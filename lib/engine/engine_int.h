@@ -246,16 +246,20 @@ struct engine {
     /* ---- configuration (engine_settings.c) and what it implies ---- */
     engine_config_t cfg; /* resolved: fragment and overlap never ENGINE_AUTO */
     unsigned lookahead;
-    unsigned la_steady;   /* what the solver needs far from the start (steady_lookahead) */
-    int slack_auto;       /* start_slack auto (engine.h) */
-    unsigned slack_learn; /* start_slack auto: one more per underrun seen */
-    unsigned slack_more;  /* start_slack auto: the most it adds to lookahead
+    unsigned la_steady;      /* what the solver needs far from the start (steady_lookahead) */
+    int slack_auto;          /* start_slack auto (engine.h) */
+    unsigned slack_learn;    /* start_slack auto: one more per underrun seen */
+    unsigned slack_more;     /* start_slack auto: the most it adds to lookahead
                              (ENGINE_SLACK_AUTO_MAX - MIN, less if capacity is short) */
-    int pstar;            /* unknowns are Hoang control points (BSPLINE + UNIFORM) */
-    int held;             /* HELD or MULTIPLE: first and last segments not emitted */
-    int mult;             /* MULTIPLE: end points entered three times */
-    int smooth;           /* SMOOTH: waypoints pass through the lsq smoother first */
-    int local;            /* local method (engine_cfg_local): 1, 3 backward, 2, 4 centred;
+    int pstar;               /* unknowns are Hoang control points (BSPLINE + UNIFORM) */
+    int held;                /* HELD or MULTIPLE: first and last segments not emitted */
+    int mult;                /* MULTIPLE: end points entered three times */
+    int smooth;              /* SMOOTH: waypoints pass through the lsq smoother first */
+    uint32_t axis_lag_track; /* issue 32: the output track axis_lag_s counts for ... */
+    int axis_lag_over;       /* ... and its max_lag_s passed, not yet told */
+    int axis_lag_told;       /* ... and told (once per trajectory) */
+    int axis_episode;        /* the per-axis limits hold the rate below 1 */
+    int local;               /* local method (engine_cfg_local): 1, 3 backward, 2, 4 centred;
                              3, 4 C2 (three queued pieces per interval) */
     double period_s;
 

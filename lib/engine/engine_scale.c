@@ -276,6 +276,27 @@ static void rest_handover(engine_t *e)
 
 static void scaled_advance(engine_t *e, double s1, double target, int lim);
 
+/* issue 32: while the per-axis limits hold the rate, how far the output
+ * trails the newest waypoint of the trajectory it streams beyond its D
+ * (only while that trajectory is still being received: a closed input's
+ * newest waypoint stands still); past max_lag_s it is told once per
+ * trajectory (engine_axis_lag_over). */
+static void axis_lag(engine_t *e)
+{
+    if (e->axis_lag_track != e->out.track) { /* a new trajectory: its own lag */
+        e->axis_lag_track = e->out.track;
+        e->axis_lag_told = 0;
+    }
+    if (!e->in.open || e->out.traj != e->solve.traj || !e->solve.nodes || !e->delay.noted)
+        return;
+    double lag = nt(e, e->solve.nodes - 1) - e->out.t - e->delay.d.delay_s;
+    e->st.axis_lag_s = lag > 0 ? lag : 0.0;
+    if (e->cfg.max_lag_s > 0 && lag > e->cfg.max_lag_s && !e->axis_lag_told) {
+        e->axis_lag_told = e->axis_lag_over = 1;
+        e->st.axis_lag_stops++;
+    }
+}
+
 /* One tick off the unit grid: the time scaling chooses the advance. */
 void scale_step(engine_t *e, double target, double R, double A, double J)
 {
@@ -288,11 +309,19 @@ void scale_step(engine_t *e, double target, double R, double A, double J)
         lim = 0; /* the curve ahead is short of a stop from the target, but the
                   * move is the one without it (a ramp from rest): no underrun */
 
-    /* issue 32: time lost in a segment the per-axis limits slow, or braking
-     * for one ahead (the speed caps ahead held the rate back) */
-    if (e->out.mode == OUT_STREAM && e->scale.ts.rate < 1.0 &&
-        (e->out.cur.ceil_axis || (Rc < R && e->st.axis_slowed)))
+    /* issue 32: time lost to the per-axis limits: from where they first hold
+     * the rate (at the ceiling of a segment they slow, or braking for a
+     * capped one ahead) until it is back at 1 (not a ramp that has not
+     * reached its ceiling yet: that is the start's, in D) */
+    if (e->out.mode != OUT_STREAM || !(e->scale.ts.rate < 0.999))
+        e->axis_episode = 0;
+    else if ((e->out.cur.ceil_axis && e->scale.ts.rate >= 0.999 * e->out.cur.ceil) ||
+             (lim && Rc < R && e->st.axis_slowed))
+        e->axis_episode = 1;
+    if (e->axis_episode) {
         e->st.axis_lost_s += (1.0 - e->scale.ts.rate) * e->period_s;
+        axis_lag(e);
+    }
     /* the rate this tick starts from, if a stop within it keeps to A */
     e->scale.stop_dv = r0 <= A * e->period_s ? r0 : -1.0;
     /* held back by the speed cap ahead, not by the curve running short */

@@ -135,6 +135,8 @@ const engine_setting_t engine_settings[] = {
       "per-axis acceleration limits, m/s^2 (0: that axis free)"),
     S(axis_max_jerk_m_s3, "axis-max-jerk", VEC3, 0, 0, 0, NULL, "JX,JY,JZ",
       "per-axis jerk limits, m/s^3 (0: that axis free)"),
+    S(max_lag_s, "max-lag", DOUBLE, 0, 0, 1e6, NULL, "S",
+      "the lag the per-axis limits may cause, s: beyond it the object stops (0: unbounded)"),
 };
 
 const size_t engine_settings_count = sizeof engine_settings / sizeof engine_settings[0];

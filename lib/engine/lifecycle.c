@@ -51,6 +51,7 @@ const lc_cell_t lc_table[LC_STATE_COUNT][LC_EV_COUNT] = {
         [LC_EV_RELOAD_CHANGED] = C(RELOAD_NEW, SAME), [LC_EV_RELOAD_REMOVED] = C(RETIRE, LC_FINISHED),
         [LC_EV_RELOAD_ADDED] = C(FRESH, SAME),     [LC_EV_RELOAD_FAILED] = C(KEEP, SAME),
         [LC_EV_SHUTDOWN] = C(SHUTDOWN, LC_FINISHED), [LC_EV_RESTART] = C(RESTART, CURVE),
+        [LC_EV_LAG] = C(NOTE, SAME),
     },
     [LC_WAITING] = {
         [LC_EV_FIRST_POSITION] = C(ADOPT, SAME),   [LC_EV_WAYPOINT] = C(CURVE, CURVE),
@@ -63,6 +64,7 @@ const lc_cell_t lc_table[LC_STATE_COUNT][LC_EV_COUNT] = {
         [LC_EV_HEARTBEAT_LOST] = C(FEED_HOLD, LC_FEED_HELD),
         [LC_EV_STALL] = C(ONE_STEP, SAME),         [LC_EV_CLOCK_STEP] = C(CLOCK, SAME),
         RELOADS_MOVING,
+        [LC_EV_LAG] = C(NOTE, SAME),
     },
     [LC_STREAMING] = {
         [LC_EV_FIRST_POSITION] = C(REFUSE, SAME),  [LC_EV_WAYPOINT] = C(CURVE, CURVE),
@@ -75,6 +77,7 @@ const lc_cell_t lc_table[LC_STATE_COUNT][LC_EV_COUNT] = {
         [LC_EV_HEARTBEAT_LOST] = C(FEED_HOLD, LC_FEED_HELD),
         [LC_EV_STALL] = C(ONE_STEP, SAME),         [LC_EV_CLOCK_STEP] = C(CLOCK, SAME),
         RELOADS_MOVING,
+        [LC_EV_LAG] = C(STOP, LC_STOPPING),
     },
     [LC_UNDERRUN] = {
         [LC_EV_FIRST_POSITION] = C(REFUSE, SAME),  [LC_EV_WAYPOINT] = C(CURVE, CURVE),
@@ -87,6 +90,7 @@ const lc_cell_t lc_table[LC_STATE_COUNT][LC_EV_COUNT] = {
         [LC_EV_HEARTBEAT_LOST] = C(FEED_HOLD, LC_FEED_HELD),
         [LC_EV_STALL] = C(ONE_STEP, SAME),         [LC_EV_CLOCK_STEP] = C(CLOCK, SAME),
         RELOADS_MOVING,
+        [LC_EV_LAG] = C(STOP, LC_STOPPING),
     },
     [LC_TRANSFER] = {
         [LC_EV_FIRST_POSITION] = C(REFUSE, SAME),  [LC_EV_WAYPOINT] = C(CURVE, SAME),
@@ -99,6 +103,7 @@ const lc_cell_t lc_table[LC_STATE_COUNT][LC_EV_COUNT] = {
         [LC_EV_HEARTBEAT_LOST] = C(FEED_HOLD, LC_FEED_HELD),
         [LC_EV_STALL] = C(ONE_STEP, SAME),         [LC_EV_CLOCK_STEP] = C(CLOCK, SAME),
         RELOADS_MOVING,
+        [LC_EV_LAG] = C(NOTE, SAME),
     },
     [LC_STOPPING] = {
         [LC_EV_FIRST_POSITION] = C(REFUSE, SAME),  [LC_EV_WAYPOINT] = C(BUFFER, SAME),
@@ -111,6 +116,7 @@ const lc_cell_t lc_table[LC_STATE_COUNT][LC_EV_COUNT] = {
         [LC_EV_HEARTBEAT_LOST] = C(FEED_HOLD, SAME),
         [LC_EV_STALL] = C(ONE_STEP, SAME),         [LC_EV_CLOCK_STEP] = C(CLOCK, SAME),
         RELOADS_KEPT,
+        [LC_EV_LAG] = C(NOTE, SAME),
     },
     [LC_STOPPED] = {
         [LC_EV_FIRST_POSITION] = C(ADOPT, SAME),   [LC_EV_WAYPOINT] = C(BUFFER, SAME),
@@ -123,6 +129,7 @@ const lc_cell_t lc_table[LC_STATE_COUNT][LC_EV_COUNT] = {
         [LC_EV_HEARTBEAT_LOST] = C(FEED_HOLD, SAME),
         [LC_EV_STALL] = C(ONE_STEP, SAME),         [LC_EV_CLOCK_STEP] = C(CLOCK, SAME),
         RELOADS_KEPT,
+        [LC_EV_LAG] = C(NOTE, SAME),
     },
     [LC_HELD] = {
         [LC_EV_FIRST_POSITION] = C(POSITION, SAME), [LC_EV_WAYPOINT] = C(BUFFER, SAME),
@@ -136,6 +143,7 @@ const lc_cell_t lc_table[LC_STATE_COUNT][LC_EV_COUNT] = {
         [LC_EV_HEARTBEAT_LOST] = C(FEED_HOLD, SAME), [LC_EV_HEARTBEAT_BACK] = C(NOTE, SAME),
         [LC_EV_STALL] = C(NOTE, SAME),             [LC_EV_CLOCK_STEP] = C(NOTE, SAME),
         RELOADS_KEPT,
+        [LC_EV_LAG] = C(NOTE, SAME),
     },
     [LC_FEED_HELD] = {
         [LC_EV_FIRST_POSITION] = C(REFUSE, SAME),  [LC_EV_WAYPOINT] = C(CURVE, SAME),
@@ -148,6 +156,7 @@ const lc_cell_t lc_table[LC_STATE_COUNT][LC_EV_COUNT] = {
         [LC_EV_HEARTBEAT_LOST] = C(NOTE, SAME),
         [LC_EV_STALL] = C(ONE_STEP, SAME),         [LC_EV_CLOCK_STEP] = C(CLOCK, SAME),
         RELOADS_KEPT,
+        [LC_EV_LAG] = C(NOTE, SAME),
     },
     [LC_FINISHED] = {
         [LC_EV_FIRST_POSITION] = C(ADOPT, SAME),   [LC_EV_WAYPOINT] = C(CURVE, CURVE),
@@ -160,6 +169,7 @@ const lc_cell_t lc_table[LC_STATE_COUNT][LC_EV_COUNT] = {
         [LC_EV_HEARTBEAT_LOST] = C(FEED_HOLD, LC_FEED_HELD),
         [LC_EV_STALL] = C(ONE_STEP, SAME),         [LC_EV_CLOCK_STEP] = C(CLOCK, SAME),
         RELOADS_KEPT,
+        [LC_EV_LAG] = C(NOTE, SAME),
     },
 };
 /* clang-format on */
@@ -172,7 +182,7 @@ static const char *const event_names[LC_EV_COUNT] = {
     "stop",           "start",         "clear",         "override 0",     "override",
     "safety",         "drive lost",    "drive enabled", "drive boot-up",  "heartbeat lost",
     "heartbeat back", "stall",         "clock step",    "reload changed", "reload removed",
-    "reload added",   "reload failed", "shutdown",      "restart"};
+    "reload added",   "reload failed", "shutdown",      "restart",        "lag beyond max_lag_s"};
 static const char *const action_names[LC_ACTION_COUNT] = {
     "undefined", "curve",      "adopt",  "buffer", "note",   "stop",      "start",    "play",
     "clear",     "reanchor",   "rate",   "refuse", "freeze", "feed hold", "position", "one step",
@@ -688,6 +698,8 @@ int lc_tick(lifecycle_t *lc, int64_t now_ns, const engine_clock_t *clk, engine_s
     if (clk)
         (void)engine_set_clock(lc->engine, clk); /* bounds: the caller's */
     engine_tick(lc->engine, lc->eng_ns, sp);
+    if (engine_axis_lag_over(lc->engine)) /* issue 32: stop on the path, latched */
+        (void)lc_event(lc, LC_EV_LAG, NULL);
     if (skip)
         sp->flags |= ENGINE_SP_SKIPPED;
     if ((sp->flags & ENGINE_SP_NEW_TRACK) && !lc->have_clk)

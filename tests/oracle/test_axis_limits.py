@@ -14,6 +14,11 @@ The figure-8 x = 20 sin 0.2t, y = 10 sin 0.4t at 10 Hz for 60 s (up to 4 m/s per
 * a transfer between two trajectories lasts long enough for every axis: the two pieces of
   a track 15 m apart on x, with a per-axis acceleration limit of 0.05 m/s^2 on x.
 
+* with max_lag_s = 5 the object stops on its path once its lag from the limits passes 5 s:
+  in trajreplay the output comes to rest short of the track's end, still on the path; in
+  trajd the lifecycle logs "lag beyond max_lag_s" and the object is stopped, latched (its
+  output holds at rest until the run ends).
+
 The run's length against the time-optimal one is measured by tests/bench/bench_axis.py.
 """
 import csv
@@ -122,6 +127,32 @@ def main():
         check(all(v2[k] <= TOL * VLIM[k] and a2[k] <= TOL * ALIM[k] for k in range(2)),
               "trajd: peaks |v| %s, |a| %s within the limits" % (np.round(v2[:2], 4),
                                                                    np.round(a2[:2], 4)))
+
+        # max_lag_s: the object stops on its path
+        s5 = replay(src, os.path.join(d, "lag.csv"), "--rate", "100", "--max-lag", "5", *lim)
+        now5, t5, p5, fl5 = rows(os.path.join(d, "lag.csv"))
+        # the trajectory it stopped in (trajreplay has no lifecycle to buffer what comes
+        # after: the rest of the track starts trajectories of its own)
+        first = np.cumsum((fl5 & 0x02) != 0) <= 1  # up to the second ENGINE_SP_NEW_TRACK
+        stop_t = t5[first][-1]
+        t5, p5, fl5 = t5[first], p5[first], fl5[first]
+        m5 = ((fl5 & 0x08) == 0) & (t5 >= ft[0]) & (t5 <= ft[-1])
+        ref5 = np.stack([np.interp(t5[m5], ft, fp[:, k]) for k in range(3)], axis=1)
+        check(int(s5.get("axis_lag_stops", "0")) >= 1 and stop_t < 59.0 and
+              np.abs(p5[m5] - ref5).max() <= 1e-3,
+              "trajreplay --max-lag 5: %s stop(s), at rest at t_s %.1f of 60 s, on the path "
+              "(%.1e m)" % (s5.get("axis_lag_stops"), stop_t, np.abs(p5[m5] - ref5).max()))
+        conf5 = os.path.join(d, "t5.conf")
+        with open(conf5, "w") as f:
+            f.write(open(conf).read().replace("trajd.csv", "trajd5.csv") + "max_lag_s = 5\n")
+        p6 = subprocess.run([TRAJD, "-f", "-c", conf5], cwd=d, capture_output=True, text=True,
+                            timeout=120)
+        with open(os.path.join(d, "trajd5.csv")) as f:
+            last = list(csv.DictReader(f))[-1]
+        check("'lag beyond max_lag_s'" in p6.stderr and float(last["t_s"]) < 59.0 and
+              float(last["vx_m_s"]) == 0.0 and float(last["vy_m_s"]) == 0.0,
+              "trajd max_lag_s = 5: the lifecycle's lag event logged, the object at rest at "
+              "t_s %s (exit %d)" % (last["t_s"], p6.returncode))
 
         # a transfer: two pieces 15 m apart on x after a gap
         tr = os.path.join(d, "gap.csv")
