@@ -175,3 +175,13 @@ int track_lines_next(track_loader_t *L, track_lines_t *it)
             return -1;
     }
 }
+
+void track_loader_course_speed(track_loader_t *L, double cog_deg, double sog_m_s)
+{
+    track_row_t *r = &L->rows[L->n - 1];
+    double c = cog_deg * (M_PI / 180.0);
+    r->has_v = 1;
+    r->v[0] = sog_m_s * sin(c);
+    r->v[1] = sog_m_s * cos(c);
+    r->v[2] = 0.0;
+}

@@ -57,6 +57,11 @@ int track_loader_bad(track_loader_t *L, unsigned long line, const char *fmt, ...
 int track_loader_add_row(track_loader_t *L, double t_s, double a, double b, double c,
                          unsigned long line);
 
+/* The last row added gets the source's velocity of a speed over ground
+ * (m/s) and a course over ground (degrees true): east, north, up at the fix
+ * (issue 31: NMEA 0183 RMC/VTG, NMEA 2000 PGN 129026). */
+void track_loader_course_speed(track_loader_t *L, double cog_deg, double sog_m_s);
+
 /* Parse a whole field as a double.  Leading/trailing blanks allowed.
  * An empty field gives NaN with *empty set (empty may be NULL: then an
  * empty field is an error).  Returns 0 or -1. */

@@ -228,14 +228,8 @@ static int rows(n2k_t *N)
         if (track_loader_add_row(N->L, t, f->lat, f->lon, f->alt, f->line))
             return -1;
         const cogsog_t *v = epoch_velocity(N, f, &j);
-        if (v) { /* east, north, up at the fix */
-            track_row_t *r = &N->L->rows[N->L->n - 1];
-            double c = v->cog_deg * (M_PI / 180.0);
-            r->has_v = 1;
-            r->v[0] = v->sog_m_s * sin(c);
-            r->v[1] = v->sog_m_s * cos(c);
-            r->v[2] = 0.0;
-        }
+        if (v)
+            track_loader_course_speed(N->L, v->cog_deg, v->sog_m_s);
     }
     return 0;
 }

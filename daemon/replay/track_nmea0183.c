@@ -59,14 +59,8 @@ static int flush(nmea_t *N)
     double t = (double)(sec - N->sec0) + (frac - N->frac0);
     if (track_loader_add_row(N->L, t, e->lat, e->lon, e->alt, e->line) < 0)
         return -1;
-    if (e->has_vel) { /* east, north, up at the fix */
-        track_row_t *r = &N->L->rows[N->L->n - 1];
-        double c = e->cog * (M_PI / 180.0);
-        r->has_v = 1;
-        r->v[0] = e->sog * sin(c);
-        r->v[1] = e->sog * cos(c);
-        r->v[2] = 0.0;
-    }
+    if (e->has_vel)
+        track_loader_course_speed(N->L, e->cog, e->sog);
     return 0;
 }
 

@@ -13,6 +13,9 @@ import sys
 
 import pyproj
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+from oracle_util import proj_enu  # noqa: E402
+
 # Both sides compute exact formulas in double precision on ~6.4e6 m ECEF
 # values (ulp ~1e-9 m); PROJ's topocentric step differs only in operation
 # order.  1e-6 m leaves a factor 1000 above rounding and 1000 below the
@@ -30,14 +33,6 @@ lib.geo_from_enu.argtypes = [ctypes.POINTER(Frame), ctypes.POINTER(Vec3)] + [cty
 lib.geo_from_ecef.argtypes = [ctypes.POINTER(Vec3)] + [ctypes.POINTER(D)] * 3
 # The inverse (ENU/ECEF -> geodetic): 1e-9 degree is 0.1 mm on the ground.
 TOL_DEG = 1e-9
-
-
-def proj_enu(lat0, lon0, h0):
-    return pyproj.Transformer.from_pipeline(
-        "+proj=pipeline +step +proj=axisswap +order=2,1 "
-        "+step +proj=unitconvert +xy_in=deg +xy_out=rad "
-        "+step +proj=cart +ellps=WGS84 "
-        f"+step +proj=topocentric +ellps=WGS84 +lat_0={lat0!r} +lon_0={lon0!r} +h_0={h0!r}")
 
 
 def main():

@@ -38,8 +38,10 @@ import sys
 import tempfile
 
 import numpy as np
-import pyproj
 from scipy.interpolate import CubicHermiteSpline
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+from oracle_util import evaluate, proj_enu  # noqa: E402
 
 BUILD = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
 lib = ctypes.CDLL(os.path.join(BUILD, "libtrajd_test.so"))
@@ -83,17 +85,6 @@ def engine_curve(method, ends, t, xyz, vel=None):
                                   len(out))
     assert n >= 0, "engine_curve_vel_flat failed: %d" % n
     return out[:n]
-
-
-def evaluate(segs, tq, der=0):
-    """The engine's segments (t0, dur, c[3][4]) at times tq; der 0/1 in seconds."""
-    i = np.clip(np.searchsorted(segs[:, 0], tq, side="right") - 1, 0, len(segs) - 1)
-    dur = segs[i, 1][:, None]
-    u = ((tq - segs[i, 0]) / segs[i, 1])[:, None]
-    c = segs[i, 2:].reshape(-1, 3, 4)
-    if der == 0:
-        return c[:, :, 0] + u * (c[:, :, 1] + u * (c[:, :, 2] + u * c[:, :, 3]))
-    return (c[:, :, 1] + u * (2 * c[:, :, 2] + 3 * u * c[:, :, 3])) / dur
 
 
 def random_track(seed, n, dt=(0.5, 2.0)):
@@ -307,14 +298,6 @@ def replay(path, *opts):
     t = np.array([float(r["t_s"]) for r in rows])
     xyz = np.array([[float(r[k]) for k in ("x_m", "y_m", "z_m")] for r in rows])
     return t, xyz
-
-
-def proj_enu(lat0, lon0, h0):
-    return pyproj.Transformer.from_pipeline(
-        "+proj=pipeline +step +proj=axisswap +order=2,1 "
-        "+step +proj=unitconvert +xy_in=deg +xy_out=rad "
-        "+step +proj=cart +ellps=WGS84 "
-        f"+step +proj=topocentric +ellps=WGS84 +lat_0={lat0!r} +lon_0={lon0!r} +h_0={h0!r}")
 
 
 def test_csv_velocities():

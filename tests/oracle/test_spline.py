@@ -25,6 +25,9 @@ import numpy as np
 from scipy.interpolate import BSpline, CubicSpline, make_interp_spline
 from scipy.linalg import solve_banded
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+from oracle_util import evaluate  # noqa: E402
+
 BUILD = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
 HERE = os.path.dirname(os.path.abspath(__file__))
 lib = ctypes.CDLL(os.path.join(BUILD, "libtrajd_test.so"))
@@ -116,19 +119,6 @@ def cubic_curve(t, xyz, param, ends, v0=None, v1=None):
                          ptr(out), len(out), ctypes.byref(n))
     assert rc == 0, rc
     return out[:n.value]
-
-
-def evaluate(segs, tq, der=0):
-    """Horner evaluation of the curve (t0, dur, c[3][4]) at times tq; der 0/1/2 in seconds."""
-    i = np.clip(np.searchsorted(segs[:, 0], tq, side="right") - 1, 0, len(segs) - 1)
-    dur = segs[i, 1][:, None]
-    u = ((tq - segs[i, 0]) / segs[i, 1])[:, None]
-    c = segs[i, 2:].reshape(-1, 3, 4)
-    if der == 0:
-        return c[:, :, 0] + u * (c[:, :, 1] + u * (c[:, :, 2] + u * c[:, :, 3]))
-    if der == 1:
-        return (c[:, :, 1] + u * (2 * c[:, :, 2] + 3 * u * c[:, :, 3])) / dur
-    return (2 * c[:, :, 2] + 6 * u * c[:, :, 3]) / dur ** 2
 
 
 def seg_end(segs):
