@@ -134,17 +134,21 @@ static double axis_ceiling(const engine_t *e, const fdiff_seg_t *seg)
 
 static double seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax, int *axis)
 {
-    double v = engine_config_max_speed(&e->cfg), axis_c = axis_ceiling(e, seg), c = axis_c;
-    *axis = axis_c < 1.0;
+    double v = engine_config_max_speed(&e->cfg), axis_c = axis_ceiling(e, seg), c = INFINITY;
     if (v > 0 && vmax > 0)
-        c = fmin(c, ENGINE_SPEED_CAP * v / vmax);
+        c = ENGINE_SPEED_CAP * v / vmax;
     if (e->cfg.max_accel_m_s2 < 0) {
         double room = engine_config_max_accel(&e->cfg) - e->cfg.scale_accel_m_s2;
         double kdd = room > 0 ? seg_accel_max(seg) : 0.0;
         if (kdd > room)
             c = fmin(c, sqrt(room / kdd));
     }
-    *axis = *axis && c >= axis_c;
+    /* the per-axis limits too stop at the floor: below it the output would
+     * never leave rest; a track more than 1 / ENGINE_CEIL_MIN times faster
+     * on an axis than its limit exceeds it there (fuzz_engine: 2.5 m/s on a
+     * 2 m/s axis), which the daemon's monitor holds (SAFETY_FAXIS) */
+    *axis = axis_c < 1.0 && axis_c <= c;
+    c = fmin(c, axis_c);
     return isinf(c) ? c : fmax(c, ENGINE_CEIL_MIN);
 }
 
