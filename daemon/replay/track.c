@@ -89,30 +89,16 @@ void track_free(track_t *trk)
     memset(trk, 0, sizeof *trk);
 }
 
-/* The east, north, up unit vectors at (lat, lon) in ECEF axes (the
- * ellipsoid's normal: geodetic latitude). */
-static void enu_axes(double lat_deg, double lon_deg, double ax[3][3])
-{
-    double p = lat_deg * (M_PI / 180.0), l = lon_deg * (M_PI / 180.0);
-    double sp = sin(p), cp = cos(p), sl = sin(l), cl = cos(l);
-    double e[3] = {-sl, cl, 0.0}, n[3] = {-sp * cl, -sp * sl, cp}, u[3] = {cp * cl, cp * sl, sp};
-    memcpy(ax[0], e, sizeof e);
-    memcpy(ax[1], n, sizeof n);
-    memcpy(ax[2], u, sizeof u);
-}
-
-/* A velocity east, north, up at the fix (lat, lon) in the axes of the frame
- * at (lat0, lon0): through ECEF. */
-static void vel_to_frame(double lat, double lon, const double *v, double lat0, double lon0,
+/* A velocity east, north, up at the fix (lat, lon) in the axes of frame
+ * (lib/util/geo.h): through ECEF. */
+static void vel_to_frame(double lat, double lon, const double *v, const geo_enu_t *frame,
                          double *out)
 {
-    double a[3][3], b[3][3], ecef[3];
-    enu_axes(lat, lon, a);
-    enu_axes(lat0, lon0, b);
-    for (int k = 0; k < 3; k++)
-        ecef[k] = v[0] * a[0][k] + v[1] * a[1][k] + v[2] * a[2][k];
-    for (int j = 0; j < 3; j++)
-        out[j] = ecef[0] * b[j][0] + ecef[1] * b[j][1] + ecef[2] * b[j][2];
+    geo_enu_t at;
+    double ecef[3];
+    (void)geo_enu_init(lat, lon, 0.0, &at); /* checked as the rows were read */
+    geo_vec_from_enu(&at, v, ecef);
+    geo_vec_to_enu(frame, ecef, out);
 }
 
 int track_reframe(track_t *trk, double lat0_deg, double lon0_deg, double alt0_m)
@@ -131,9 +117,10 @@ int track_reframe(track_t *trk, double lat0_deg, double lon0_deg, double alt0_m)
         trk->wp[i].pos_m[0] = enu[0];
         trk->wp[i].pos_m[1] = enu[1];
         trk->wp[i].pos_m[2] = no_alt ? 0.0 : enu[2];
-        if (trk->geo_vel && !isnan(trk->geo_vel[i][0]))
-            vel_to_frame(g[0], g[1], trk->geo_vel[i], lat0_deg, lon0_deg, trk->wp[i].vel_m_s),
-                trk->wp[i].has_vel = 1;
+        if (trk->geo_vel && !isnan(trk->geo_vel[i][0])) {
+            vel_to_frame(g[0], g[1], trk->geo_vel[i], &frame, trk->wp[i].vel_m_s);
+            trk->wp[i].has_vel = 1;
+        }
     }
     return 0;
 }

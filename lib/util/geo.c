@@ -74,16 +74,32 @@ int geo_to_enu(const geo_enu_t *frame, double lat_deg, double lon_deg, double al
     int rc = geo_to_ecef(lat_deg, lon_deg, alt_m, p);
     if (rc)
         return rc;
-    double dx = p[0] - frame->ecef0_m[0];
-    double dy = p[1] - frame->ecef0_m[1];
-    double dz = p[2] - frame->ecef0_m[2];
+    const double d[3] = {p[0] - frame->ecef0_m[0], p[1] - frame->ecef0_m[1],
+                         p[2] - frame->ecef0_m[2]};
+    geo_vec_to_enu(frame, d, enu_m);
+    return 0;
+}
+
+void geo_vec_to_enu(const geo_enu_t *frame, const double ecef[3], double enu[3])
+{
+    const double dx = ecef[0], dy = ecef[1], dz = ecef[2];
     const double sl = frame->sin_lat, cl = frame->cos_lat;
     const double so = frame->sin_lon, co = frame->cos_lon;
     /* Rows of the ECEF -> ENU rotation: east, north, up unit vectors. */
-    enu_m[0] = -so * dx + co * dy;
-    enu_m[1] = -sl * co * dx - sl * so * dy + cl * dz;
-    enu_m[2] = cl * co * dx + cl * so * dy + sl * dz;
-    return 0;
+    enu[0] = -so * dx + co * dy;
+    enu[1] = -sl * co * dx - sl * so * dy + cl * dz;
+    enu[2] = cl * co * dx + cl * so * dy + sl * dz;
+}
+
+void geo_vec_from_enu(const geo_enu_t *frame, const double enu[3], double ecef[3])
+{
+    const double e = enu[0], n = enu[1], u = enu[2];
+    const double sl = frame->sin_lat, cl = frame->cos_lat;
+    const double so = frame->sin_lon, co = frame->cos_lon;
+    /* the transpose of geo_vec_to_enu's rotation */
+    ecef[0] = -so * e - sl * co * n + cl * co * u;
+    ecef[1] = co * e - sl * so * n + cl * so * u;
+    ecef[2] = cl * n + sl * u;
 }
 
 int geo_from_ecef(const double ecef_m[3], double *lat_deg, double *lon_deg, double *alt_m)
@@ -120,14 +136,11 @@ int geo_from_ecef(const double ecef_m[3], double *lat_deg, double *lon_deg, doub
 int geo_from_enu(const geo_enu_t *frame, const double enu_m[3], double *lat_deg, double *lon_deg,
                  double *alt_m)
 {
-    const double e = enu_m[0], n = enu_m[1], u = enu_m[2];
-    if (!isfinite(e) || !isfinite(n) || !isfinite(u))
+    if (!isfinite(enu_m[0]) || !isfinite(enu_m[1]) || !isfinite(enu_m[2]))
         return -GEO_ENOTFINITE;
-    const double sl = frame->sin_lat, cl = frame->cos_lat;
-    const double so = frame->sin_lon, co = frame->cos_lon;
-    /* the transpose of geo_to_enu's rotation */
-    double p[3] = {frame->ecef0_m[0] - so * e - sl * co * n + cl * co * u,
-                   frame->ecef0_m[1] + co * e - sl * so * n + cl * so * u,
-                   frame->ecef0_m[2] + cl * n + sl * u};
+    double p[3];
+    geo_vec_from_enu(frame, enu_m, p);
+    for (int k = 0; k < 3; k++)
+        p[k] += frame->ecef0_m[k];
     return geo_from_ecef(p, lat_deg, lon_deg, alt_m);
 }

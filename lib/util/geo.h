@@ -68,6 +68,11 @@ int geo_enu_init(double lat0_deg, double lon0_deg, double alt0_m, geo_enu_t *fra
 int geo_to_enu(const geo_enu_t *frame, double lat_deg, double lon_deg, double alt_m,
                double enu_m[3]);
 
+/* A vector (a velocity, a difference of positions) between ECEF axes and the
+ * frame's east/north/up axes: the rotation geo_to_enu applies, and back. */
+void geo_vec_to_enu(const geo_enu_t *frame, const double ecef[3], double enu[3]);
+void geo_vec_from_enu(const geo_enu_t *frame, const double enu[3], double ecef[3]);
+
 /*
  * ECEF metres to geodetic (degrees in [-90, 90] and (-180, 180], metres
  * above the ellipsoid): Bowring's parametric-latitude iteration (B. R.
