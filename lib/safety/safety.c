@@ -133,8 +133,10 @@ static int judge(const safety_t *s, const engine_setpoint_t *sp, double *value, 
         *limit = l->max_speed_m_s;
         return SAFETY_FSPEED;
     }
-    for (int k = 0; k < AX; k++) { /* issue 32: per axis, as the norms above */
-        double span = s->last_dt > 0 ? 0.5 * (s->last_dt + dt) : dt;
+    /* the velocities belong to the middles of their intervals: after a
+     * skipped tick they are (dt_prev + dt)/2 apart, not dt */
+    double span = s->last_dt > 0 ? 0.5 * (s->last_dt + dt) : dt;
+    for (int k = 0; k < AX; k++) { /* issue 32: per axis, as the norms */
         if (l->axis_speed_m_s[k] > 0 && fabs(d[k]) > l->axis_speed_m_s[k] * dt + l->tol_m) {
             *value = fabs(d[k]) / dt;
             *limit = l->axis_speed_m_s[k];
@@ -151,9 +153,6 @@ static int judge(const safety_t *s, const engine_setpoint_t *sp, double *value, 
         double dv[AX];
         for (int k = 0; k < AX; k++)
             dv[k] = vel[k] - s->last_vel[k];
-        /* the velocities belong to the middles of their intervals: after a
-         * skipped tick they are (dt_prev + dt)/2 apart, not dt */
-        double span = s->last_dt > 0 ? 0.5 * (s->last_dt + dt) : dt;
         /* |dv| * span is the change of step a constant acceleration bound allows, in metres */
         if (norm3(dv) * span > l->max_accel_m_s2 * span * span + l->tol_m) {
             *value = norm3(dv) / span;
