@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "engine_settings.h"
 #include "timescale.h"
 
 /* The time scaling's limits are converted at no less than this speed (m/s):
@@ -77,10 +78,12 @@ int engine_delay_check(const engine_config_t *cfg, double interval_s, char *why,
 int engine_delay_format(const engine_delay_t *d, char *buf, size_t len)
 {
     char need[280];
-    /* the local methods (issue 31) are named: max_lookahead picked them */
-    const char *m = d->method == ENGINE_METHOD_HERMITE           ? " (method hermite)"
-                    : d->method == ENGINE_METHOD_HERMITE_CENTRED ? " (method hermite-centred)"
-                                                                 : "";
+    /* the local methods (issue 31) are named: max_lookahead may have picked
+     * them (the settings table's names) */
+    char m[48] = "";
+    if (d->method >= ENGINE_METHOD_HERMITE)
+        snprintf(m, sizeof m, " (method %s)",
+                 engine_setting_enum_name(engine_setting_find("method"), d->method));
     if (d->interval_s > 0)
         snprintf(need, sizeof need,
                  "lookahead %u x %.3g s%s + slack %u x %.3g s + stop reserve %.3f s (from %.3g "

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "cfg_string.h"
+#include "delay.h"
 #include "engine_settings.h"
 
 static size_t type_size(engine_setting_type_t t)
@@ -301,6 +302,32 @@ static void test_trajreplay_help_lists_every_setting(void **state)
     }
 }
 
+/* Given a max_lookahead too short for any fragment, which picks a local
+ * method (issue 31), then the stated D says which, by the name the settings
+ * table gives it (hermite-c2 at 2, hermite-c2-centred at 3); with the
+ * fragments (18) no method is named. */
+static void test_delay_names_a_picked_local_method(void **state)
+{
+    (void)state;
+    static const struct {
+        unsigned la;
+        const char *want;
+    } cases[] = {{2, " (method hermite-c2) "}, {3, " (method hermite-c2-centred) "}, {18, NULL}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        engine_config_t c;
+        engine_delay_t d;
+        char line[400];
+        engine_config_default(&c);
+        c.max_lookahead = cases[i].la;
+        assert_int_equal(engine_delay_of(&c, 0.1, 5.0, &d), 0);
+        engine_delay_format(&d, line, sizeof line);
+        if (cases[i].want)
+            assert_non_null(strstr(line, cases[i].want));
+        else
+            assert_null(strstr(line, "(method"));
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -311,6 +338,7 @@ int main(void)
         cmocka_unit_test(test_cfg_reads_every_key),
         cmocka_unit_test(test_trajd_conf_documents_every_key),
         cmocka_unit_test(test_trajreplay_help_lists_every_setting),
+        cmocka_unit_test(test_delay_names_a_picked_local_method),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
