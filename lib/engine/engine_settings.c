@@ -579,7 +579,8 @@ static void resolve_axis_limits(engine_config_t *out)
 /*
  * No fragment fits within max_lookahead (issue 31): an exact method that
  * solves a system (CUBIC, BSPLINE with natural, clamped or rest ends) gives
- * way to the local one that fits, HERMITE_CENTRED if it does, else HERMITE;
+ * way to the local one that fits, HERMITE_C2_CENTRED if it does, else
+ * HERMITE_C2;
  * -ENGINE_ECONFIG if neither does (start_slack too long) or the method and
  * ends have no local counterpart.
  */

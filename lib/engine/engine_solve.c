@@ -78,14 +78,6 @@ static double seg_accel_max(const fdiff_seg_t *seg)
     return sqrt(fmax(a0, a1)) / (seg->dur_s * seg->dur_s);
 }
 
-/* The highest rate at which a segment keeps the speed cap (ENGINE_SPEED_CAP
- * x the speed limit, vmax its speed) and, with the profile's acceleration
- * limit (issue 27: max_accel_m_s2 left to the profile), that limit: the
- * output's acceleration k'' r^2 + k' dr/dt stays within it when k'' r^2
- * keeps to the limit less scale_accel_m_s2, which bounds k' dr/dt (the time
- * scaling's limits are converted at the segment's fastest speed).  A
- * configured max_accel_m_s2 bounds the chords only (the curve may reach 3
- * times it: engine.h).  At least ENGINE_CEIL_MIN; INFINITY with no limit. */
 /* Upper bound on axis k's speed |k_k'| over a segment at rate 1 (m/s): as
  * solve_seg_speed_max, for one axis. */
 static double axis_speed_max(const fdiff_seg_t *seg, int k)
@@ -101,8 +93,8 @@ static double axis_speed_max(const fdiff_seg_t *seg, int k)
 /*
  * issue 32: the highest rate r at which a segment keeps the per-axis limits
  * (engine.h axis_max_*): |k_k'| r within the speed limit; |k_k''| r^2 within
- * the acceleration limit less scale_accel_m_s2 (resolved to at most half of
- * it), which bounds the scaling's k_k' dr/dt; |k_k'''| r^3 within half the
+ * the acceleration limit less scale_accel_m_s2 (resolved to at most a third
+ * of it), which bounds the scaling's k_k' dr/dt; |k_k'''| r^3 within half the
  * jerk limit.  k'' is linear on a cubic: its largest |.| is at an end.
  * INFINITY where no axis is limited.
  */
@@ -132,6 +124,15 @@ static double axis_ceiling(const engine_t *e, const fdiff_seg_t *seg)
     return c;
 }
 
+/* The highest rate at which a segment keeps the speed cap (ENGINE_SPEED_CAP
+ * x the speed limit, vmax its speed); with the profile's acceleration limit
+ * (issue 27: max_accel_m_s2 left to the profile), that limit: the output's
+ * acceleration k'' r^2 + k' dr/dt stays within it when k'' r^2 keeps to the
+ * limit less scale_accel_m_s2, which bounds k' dr/dt (the time scaling's
+ * limits are converted at the segment's fastest speed); and the per-axis
+ * limits (axis_ceiling; *axis: they are what holds it below 1).  A
+ * configured max_accel_m_s2 bounds the chords only (the curve may reach 3
+ * times it: engine.h).  At least ENGINE_CEIL_MIN; INFINITY with no limit. */
 static double seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax, int *axis)
 {
     double v = engine_config_max_speed(&e->cfg), axis_c = axis_ceiling(e, seg), c = INFINITY;
