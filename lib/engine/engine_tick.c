@@ -582,17 +582,17 @@ static void step_once(engine_t *e)
             e->out.t = h->seg.t0_s;
             e->out.have_pos = 1;
         }
-        double d2 = 0;
-        for (int k = 0; k < AX; k++)
-            d2 += (h->seg.c[k][0] - e->out.pos[k]) * (h->seg.c[k][0] - e->out.pos[k]);
+        double d2 = 0, target[AX]; /* the trajectory's start */
+        for (int k = 0; k < AX; k++) {
+            target[k] = h->seg.c[k][0];
+            d2 += (target[k] - e->out.pos[k]) * (target[k] - e->out.pos[k]);
+        }
         int xfer = sqrt(d2) > ENGINE_TRANSFER_TOL_M;
         if (e->clk.on) {
             /* one clock: not before the play time reaches the start, less
              * the transfer that leads there */
-            double lead = 0.0, target[AX];
+            double lead = 0.0;
             int capped = 0;
-            for (int k = 0; k < AX; k++)
-                target[k] = h->seg.c[k][0];
             if (xfer)
                 lead = xfer_duration(e, target, h->gap_s, &capped);
             if ((long double)e->clk.play_ns * 1e-9L < (long double)h->seg.t0_s - lead) {
@@ -603,9 +603,6 @@ static void step_once(engine_t *e)
         unit_reset(e);
         engine_delay_note(e); /* issue 26: the D this start holds */
         if (xfer) {
-            double target[AX];
-            for (int k = 0; k < AX; k++)
-                target[k] = h->seg.c[k][0];
             xfer_start(e, target, h->gap_s);
             scale_rest(e);
             e->out.n++;
