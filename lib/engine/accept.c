@@ -733,6 +733,37 @@ static int decide_one(accept_t *a, accept_verdict_t *v)
     return 0;
 }
 
+/* 1 if fixes p and b both carry the source's velocity and their chord
+ * disagrees with its mean beyond ACCEPT_VEL_* (accept.h) */
+static int vel_disagrees(const accept_t *a, unsigned p, unsigned b)
+{
+    const engine_waypoint_t *P = &a->wp[p], *B = &a->wp[b];
+    double dt = B->t_s - P->t_s, e2 = 0;
+
+    if (P->has_vel != 1 || B->has_vel != 1 || !(dt > 0))
+        return 0;
+    for (int k = 0; k < ENGINE_AXES; k++) {
+        double d = (B->pos_m[k] - P->pos_m[k]) / dt - 0.5 * (P->vel_m_s[k] + B->vel_m_s[k]);
+        e2 += d * d;
+    }
+    double amax = a->cfg.max_accel_m_s2 > 0 ? a->cfg.max_accel_m_s2 : ACCEPT_VEL_ACCEL_M_S2;
+    double tol = 0.25 * amax * dt + 2.0 * ACCEPT_VEL_POS_NOISE_M / dt + ACCEPT_VEL_NOISE_M_S;
+    return sqrt(e2) > tol;
+}
+
+/* decide_one with at_arrival: c kept now if it follows the anchor and agrees
+ * with the source's velocity (accept.h); else as decide_one */
+static int decide_arrival(accept_t *a, accept_verdict_t *v)
+{
+    unsigned pre = a->have_a0 ? a->a0 : NO_SLOT, c = a->pend[0];
+    double vlim = accept_speed_limit(a);
+
+    if (stale_verdict(a, 0, vlim) == 0 && pair_dist(a, a->a1, c) > ACCEPT_STALE_POS_M &&
+        check0(a, pre, a->a1, c, vlim) == 0 && !vel_disagrees(a, a->a1, c))
+        return take(a, pre, vlim, v);
+    return decide_one(a, v);
+}
+
 void accept_anchor_at(accept_t *a, const engine_waypoint_t *wp)
 {
     unsigned s;
@@ -797,7 +828,7 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
         return 1;
     }
     if (a->open && n < 2 && !full)
-        return decide_one(a, v);
+        return a->cfg.at_arrival ? decide_arrival(a, v) : decide_one(a, v);
     vlim = accept_speed_limit(a);
     if (!a->open)
         return decide_closed(a, closing, full, vlim, v);

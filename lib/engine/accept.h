@@ -52,7 +52,13 @@
  *     stamped when the position was fixed), even where a chain through a
  *     repeat would bend the track less.
  * A clean stretch is decided as soon as c and the waypoint after it
- * (ACCEPT_LAG) form a consistent chain with the anchor.  Otherwise the
+ * (ACCEPT_LAG) form a consistent chain with the anchor; with at_arrival
+ * (max_lookahead 1) as soon as c alone follows the anchor and, where c and
+ * the anchor both carry the source's velocity, their chord agrees with it
+ * (ACCEPT_VEL_*): the velocity is the second signal that lets a fix be kept
+ * before its neighbour confirms it.  A fix that does not is judged as
+ * without at_arrival, with its neighbours: the velocity alone refuses
+ * nothing (decimetre noise at 10 Hz is metres per second of chord).  Otherwise the
  * verdict comes as soon as the full window's is certain: c that does not
  * follow the anchor is dropped once a later waypoint does (but for its
  * speed alone with a learned limit from fewer than ACCEPT_PACE_CHORDS kept
@@ -113,6 +119,13 @@
 
 /* Waypoints after c that a clean verdict waits for (its next neighbour). */
 #define ACCEPT_LAG 1
+/* The source's velocity as a second signal (issue 31, at_arrival): the chord
+ * of two fixes that both carry one may differ from the mean of the two by
+ * a_max dt / 4 (a_max: max_accel_m_s2, or this without one, m/s^2) plus
+ * the noise of two positions over dt and of the velocities. */
+#define ACCEPT_VEL_ACCEL_M_S2 10.0
+#define ACCEPT_VEL_POS_NOISE_M 0.5
+#define ACCEPT_VEL_NOISE_M_S 0.5
 /* Waypoints judged at once, at most. */
 #define ACCEPT_WINDOW_MAX 8
 /* Kept intervals whose chord speeds the learned limit looks back on. */
@@ -226,6 +239,8 @@ typedef struct {
     unsigned window;       /* waypoints held for judgement, confirm..ACCEPT_WINDOW_MAX */
     unsigned confirm;      /* mutually consistent waypoints that start a new trajectory */
     unsigned rules;        /* ACCEPT_RULE_*; 0 = all (the engine's), ACCEPT_RULES_FORMER = none */
+    int at_arrival;        /* 1: a fix that follows the anchor is kept as it arrives (no
+                              ACCEPT_LAG; max_lookahead 1, issue 31): see accept_decide */
 } accept_config_t;
 
 typedef enum {

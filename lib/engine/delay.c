@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "engine_int.h"
 #include "engine_settings.h"
 #include "timescale.h"
 
@@ -37,7 +38,7 @@ void engine_delay_parts(const engine_config_t *r, unsigned la, double interval_s
                         engine_delay_t *d)
 {
     memset(d, 0, sizeof *d);
-    d->slack_n = r->start_slack == ENGINE_AUTO ? ENGINE_SLACK_AUTO_MIN : r->start_slack;
+    d->slack_n = r->start_slack == ENGINE_AUTO ? engine_cfg_slack_min(r) : r->start_slack;
     d->lookahead_n = la - (d->slack_n < la ? d->slack_n : la) + 1;
     d->interval_s = interval_s > 0 && isfinite(interval_s) ? interval_s : 0.0;
     if (!(speed_m_s > 0)) {

@@ -35,7 +35,7 @@ static void delay_measured(const engine_t *e, engine_delay_t *d)
      * resolved again at every tick that asks */
     engine_delay_parts(&e->cfg, e->lookahead, h, e->solve.vmax_in, d);
     if (e->slack_auto)
-        d->slack_n = ENGINE_SLACK_AUTO_MIN + e->slack_learn;
+        d->slack_n = engine_cfg_slack_min(&e->cfg) + e->slack_learn;
     d->slack_s = d->slack_n * d->interval_s;
     d->need_s = d->lookahead_s + d->slack_s + d->stop_s;
     d->delay_s = e->cfg.delay_s > d->need_s ? e->cfg.delay_s : d->need_s;

@@ -59,7 +59,7 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
     {
         /* the slack must fit the buffer: capacity >= lookahead + F + 8 (checked) */
         unsigned room = cfg->capacity - (e->lookahead + cfg->fragment + 8);
-        e->slack_more = ENGINE_SLACK_AUTO_MAX - ENGINE_SLACK_AUTO_MIN;
+        e->slack_more = ENGINE_SLACK_AUTO_MAX - engine_cfg_slack_min(cfg);
         if (room < e->slack_more)
             e->slack_more = room;
     }
@@ -86,6 +86,7 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
             .window = cfg->start_slack < ACCEPT_WINDOW_MAX ? cfg->start_slack : ACCEPT_WINDOW_MAX,
             .confirm = cfg->confirm,
             .rules = ACCEPT_RULES_OF(cfg->profile == ENGINE_PROFILE_NONE), /* accept.h */
+            .at_arrival = engine_cfg_accept_lag(cfg) == 0, /* max_lookahead 1 (issue 31) */
         };
         if (ac.window < ac.confirm)
             ac.window = ac.confirm;

@@ -194,8 +194,10 @@ typedef enum {
  * HERMITE_C2_CENTRED also match an acceleration at each waypoint (the
  * parabola's through the same three), continuous (C2): three cubics per
  * interval in place of the quintic Hermite.  A max_lookahead too short for
- * any fragment picks one (engine_config_resolve): 2 HERMITE_C2, 3 or more
- * HERMITE_C2_CENTRED.  ends: rest and clamped start and, for
+ * any fragment picks one (engine_config_resolve): 1 or 2 HERMITE_C2, 3 or
+ * more HERMITE_C2_CENTRED.  max_lookahead 1 (a local method): a waypoint
+ * that follows the one kept before is kept as it arrives, not once its next
+ * neighbour is in (accept.h at_arrival), and start_slack auto starts at 0.  ends: rest and clamped start and, for
  * HERMITE_CENTRED, end at the given velocity; natural with zero
  * acceleration; HERMITE's last segment is final before the input is known
  * to end, so its end is braked to along the path (the time scaling).

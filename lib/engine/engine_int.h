@@ -284,6 +284,12 @@ unsigned engine_cfg_lookahead(const engine_config_t *cfg);
 /* most waypoints beyond a segment the solver needs, far from the start */
 unsigned engine_cfg_steady_lookahead(const engine_config_t *cfg);
 int engine_cfg_local(const engine_config_t *cfg);
+/* waypoints after a fix its verdict waits for: ACCEPT_LAG, or 0 for a local
+ * method with max_lookahead 1 (accept.h at_arrival, issue 31) */
+unsigned engine_cfg_accept_lag(const engine_config_t *cfg);
+/* start_slack auto's least: ENGINE_SLACK_AUTO_MIN, or 0 with no accept lag
+ * (the slack is learnt from underruns from 0 then) */
+unsigned engine_cfg_slack_min(const engine_config_t *cfg);
 /* SMOOTH: the waypoints the smoother holds back (0 otherwise) */
 unsigned engine_cfg_smooth_extra(const engine_config_t *cfg);
 /* start offset of the fragment grid (frag.h) */

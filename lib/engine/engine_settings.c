@@ -91,7 +91,7 @@ const engine_setting_t engine_settings[] = {
       "waypoints shared by two fragments (even, < fragment; auto: from accuracy)"),
     S(accuracy, "accuracy", DOUBLE, 0, 1e-300, 0.999, NULL, "A",
       "overlap auto: error bound against one global solve, of the curvature scale"),
-    S(max_lookahead, "max-lookahead", UNSIGNED, 0, 2, ENGINE_FRAGMENT_MAX, NULL, "N",
+    S(max_lookahead, "max-lookahead", UNSIGNED, 0, 1, ENGINE_FRAGMENT_MAX, NULL, "N",
       "fragment auto: lookahead at most, waypoints (regular input, slack included)"),
     S(period_ns, NULL, INT64, ENGINE_SETTING_DERIVED, 0, 0, NULL, NULL,
       "output period, ns: 1e9 / rate_hz of [daemon] (trajreplay --rate)"),
@@ -464,6 +464,16 @@ int engine_cfg_local(const engine_config_t *cfg)
     }
 }
 
+unsigned engine_cfg_accept_lag(const engine_config_t *cfg)
+{
+    return engine_cfg_local(cfg) && cfg->max_lookahead == 1 ? 0u : ACCEPT_LAG;
+}
+
+unsigned engine_cfg_slack_min(const engine_config_t *cfg)
+{
+    return engine_cfg_accept_lag(cfg) ? ENGINE_SLACK_AUTO_MIN : 0u;
+}
+
 /* most waypoints beyond a segment the solver needs, far from the start */
 unsigned engine_cfg_steady_lookahead(const engine_config_t *cfg)
 {
@@ -485,7 +495,7 @@ unsigned engine_cfg_steady_lookahead(const engine_config_t *cfg)
 /* start_slack in waypoints (auto: its least) */
 static unsigned slack_of(const engine_config_t *cfg)
 {
-    return cfg->start_slack == ENGINE_AUTO ? ENGINE_SLACK_AUTO_MIN : cfg->start_slack;
+    return cfg->start_slack == ENGINE_AUTO ? engine_cfg_slack_min(cfg) : cfg->start_slack;
 }
 
 unsigned engine_cfg_frag_delta(const engine_config_t *cfg)
@@ -516,8 +526,9 @@ unsigned engine_cfg_lookahead(const engine_config_t *cfg)
         return 0;
     if (engine_cfg_local(cfg)) {
         /* no system: the segment's own nodes (and, centred, the next), each
-         * a node once its next neighbour is in (ACCEPT_LAG) */
-        la = engine_cfg_steady_lookahead(cfg) + ACCEPT_LAG;
+         * a node once its next neighbour is in (ACCEPT_LAG; max_lookahead 1:
+         * as it comes, engine_cfg_accept_lag) */
+        la = engine_cfg_steady_lookahead(cfg) + engine_cfg_accept_lag(cfg);
         want = engine_cfg_steady_lookahead(cfg) + slack_of(cfg);
         return la > want ? la : want;
     }
@@ -580,7 +591,8 @@ static void resolve_axis_limits(engine_config_t *out)
  * No fragment fits within max_lookahead (issue 31): an exact method that
  * solves a system (CUBIC, BSPLINE with natural, clamped or rest ends) gives
  * way to the local one that fits, HERMITE_C2_CENTRED if it does, else
- * HERMITE_C2;
+ * HERMITE_C2 (max_lookahead 1: its fixes kept as they arrive,
+ * engine_cfg_accept_lag);
  * -ENGINE_ECONFIG if neither does (start_slack too long) or the method and
  * ends have no local counterpart.
  */
@@ -661,8 +673,8 @@ int engine_config_check(const engine_config_t *cfg_in, const char **why)
         w = "accuracy: must be within (0, 1)";
     else if (engine_config_resolve(cfg_in, &r) < 0)
         w = "max_lookahead: too short for the overlap accuracy asks plus start_slack: no "
-            "fragment fits, nor a local method (2 waypoints, start_slack 1, ends not held or "
-            "multiple); raise max_lookahead or accuracy, or lower start_slack";
+            "fragment fits, nor a local method (1 waypoint with start_slack auto or 0, ends not "
+            "held or multiple); raise max_lookahead or accuracy, or lower start_slack";
     if (w) {
         if (why)
             *why = w;

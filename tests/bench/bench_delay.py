@@ -48,8 +48,8 @@ DTYPE = np.dtype([("now_ns", "<i8"), ("t_s", "<f8"), ("pos_m", "<f8", 3), ("vel_
                   ("track", "<u4"), ("reserved", "<u8")])
 
 TRACKS = ("10 Hz", "1 Hz", "200 Hz")
-CONFIGS = ((), ("--max-lookahead", "2"), ("--max-lookahead", "3"), ("--method", "hermite"),
-           ("--method", "hermite-centred"),
+CONFIGS = ((), ("--max-lookahead", "1"), ("--max-lookahead", "2"), ("--max-lookahead", "3"),
+           ("--method", "hermite"), ("--method", "hermite-centred"),
            ("--max-lookahead", "6", "--accuracy", "0.1"), ("--max-lookahead", "8", "--accuracy", "3e-3"),
            ("--max-lookahead", "12", "--accuracy", "1e-4"), ("--max-lookahead", "18"),
            ("--delay", "5"),

@@ -197,7 +197,9 @@ static void configure(engine_config_t *c, uint8_t b0, uint8_t b1)
         c->ends = ENGINE_ENDS_NATURAL;
         break;
     case 6:
-        c->max_lookahead = 3; /* too short for any fragment: HERMITE_C2_CENTRED */
+        /* too short for any fragment: HERMITE_C2_CENTRED, or at 1 HERMITE_C2
+         * with each fix kept as it arrives (issue 31, accept.h at_arrival) */
+        c->max_lookahead = (b0 & 0x10) ? 1 : 3;
         break;
     default:
         c->fragment = 8 + (b0 >> 4);

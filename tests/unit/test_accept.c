@@ -77,11 +77,16 @@ static int build(engine_waypoint_t *rows, int site, int kind)
     return n;
 }
 
+/* max_lookahead of replay's engine (0: the default) */
+static unsigned replay_max_lookahead;
+
 /* replay rows on a virtual clock; status at the end */
 static void replay(const engine_waypoint_t *rows, int n, engine_status_t *st, int *finished)
 {
     engine_config_t c;
     engine_config_default(&c);
+    if (replay_max_lookahead)
+        c.max_lookahead = replay_max_lookahead;
     int err = -1, next = 0;
     engine_t *e = engine_new(&c, &err);
     engine_setpoint_t sp;
@@ -135,6 +140,109 @@ static void test_one_bad_fix_costs_nothing(void **state)
                       kind_name[kind], underruns, sites, lost);
     }
     assert_int_equal(bad, 0);
+}
+
+/*
+ * Issue 31: max_lookahead 1 keeps a fix as it arrives when it follows the
+ * anchor (accept.h at_arrival).  The same bad rows at every site (one
+ * fragment period is moot here: no fragments) must still be refused alone,
+ * every good fix kept, with no underrun and no hard stop: a bad row waits
+ * for its neighbour as before, and the good fix after it, judged against
+ * the anchor, is kept as it arrives.
+ */
+static void test_at_arrival_one_bad_fix(void **state)
+{
+    (void)state;
+    static engine_waypoint_t rows[N_FIX + 1];
+    int bad = 0;
+
+    replay_max_lookahead = 1;
+    for (int kind = 0; kind < K_COUNT; kind++)
+        for (int site = 40; site < 46; site++) {
+            engine_status_t st;
+            int fin, n = build(rows, site, kind);
+            replay(rows, n, &st, &fin);
+            if (st.underruns || st.accepted != N_FIX || st.rejected != 1 || st.hard_stops || !fin) {
+                print_message("max_lookahead 1, %s after fix %d: accepted %llu rejected %llu "
+                              "underruns %llu hard stops %llu finished %d\n",
+                              kind_name[kind], site, (unsigned long long)st.accepted,
+                              (unsigned long long)st.rejected, (unsigned long long)st.underruns,
+                              (unsigned long long)st.hard_stops, fin);
+                bad++;
+            }
+        }
+    replay_max_lookahead = 0;
+    assert_int_equal(bad, 0);
+}
+
+/* kept so far (engine_status accepted) */
+static uint64_t kept(engine_t *e)
+{
+    engine_status_t st;
+    engine_status(e, &st);
+    return st.accepted;
+}
+
+/*
+ * When a fix is kept (issue 31): the boat's fixes pushed one at a time,
+ * each kept as it is pushed with max_lookahead 1 (resolved to a local
+ * method, the acceptance at_arrival), one push later with max_lookahead 2
+ * (the next neighbour confirms it).  With the source's velocity on every
+ * fix, fix 40 reporting 20 m/s north on a boat at 5 m/s (the second signal
+ * disagrees with its chord, and then with the chord after it) waits for its
+ * neighbour, and so does fix 41 after it; both are then kept: the velocity
+ * alone refuses nothing.
+ */
+static void test_at_arrival_when_kept(void **state)
+{
+    (void)state;
+    for (unsigned ml = 1; ml <= 2; ml++)
+        for (int vel = 0; vel < 2; vel++) {
+            engine_config_t c;
+            engine_config_default(&c);
+            c.max_lookahead = ml;
+            engine_t *e = engine_new(&c, NULL);
+            assert_non_null(e);
+            unsigned all = 0, waited = 0, first_wait = 0;
+            for (int i = 0; i < 60; i++) {
+                engine_waypoint_t w;
+                boat(&w, i);
+                if (vel) {
+                    w.has_vel = 1; /* d/dt of boat() */
+                    w.vel_m_s[0] = 50.0 * 0.02 / DT_S * cos(0.02 * i);
+                    w.vel_m_s[1] = 50.0 * 0.02 / DT_S * sin(0.02 * i);
+                    if (i == 40) {
+                        w.vel_m_s[0] = 0;
+                        w.vel_m_s[1] = 20.0;
+                    }
+                }
+                assert_int_equal(engine_push(e, &w), 0);
+                if (i < 10)
+                    continue; /* past the first trajectory's confirmation */
+                if (kept(e) == (uint64_t)i + 1) {
+                    all++; /* every fix pushed so far kept */
+                } else {
+                    waited++;
+                    if (!first_wait)
+                        first_wait = (unsigned)i;
+                }
+            }
+            engine_status_t st;
+            engine_status(e, &st);
+            print_message("max_lookahead %u%s: %u pushes found every fix kept, %u found one "
+                          "waiting (the first: fix %u); rejected %llu\n",
+                          ml, vel ? ", velocities" : "", all, waited, first_wait,
+                          (unsigned long long)st.rejected);
+            assert_int_equal(st.rejected, 0);
+            if (ml == 1) {
+                assert_int_equal(waited, vel ? 2 : 0);
+                if (vel)
+                    assert_int_equal(first_wait, 40);
+            } else {
+                assert_int_equal(all, 0);
+            }
+            engine_free(e);
+        }
 }
 
 /*
@@ -713,6 +821,8 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_one_bad_fix_costs_nothing),
+        cmocka_unit_test(test_at_arrival_one_bad_fix),
+        cmocka_unit_test(test_at_arrival_when_kept),
         cmocka_unit_test(test_long_frozen_run),
         cmocka_unit_test(test_reanchor_after_confirm),
         cmocka_unit_test(test_far_start_needs_confirmation),
