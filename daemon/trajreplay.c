@@ -45,6 +45,7 @@
 #include "angle.h"
 #include "csv_shortest.h"
 #include "geo.h"
+#include "replay_summary.h"
 #include "replay_transport.h"
 #include "stdfds.h"
 #include "csv_fixed.h"
@@ -398,76 +399,6 @@ static int64_t mono_ns(void)
     return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
 }
 
-/* One "summary: name value" line each, so scripts can read them.  rejected
- * counts bad data only: ENGINE_EFULL refusals are flow control, retried by
- * the replay, and shown as full_retries. */
-static void print_summary(const track_t *trk, const replay_t *r, const engine_status_t *st,
-                          double max_v, double max_a, uint64_t ticks)
-{
-    uint64_t rejected = 0;
-    for (int e = 1; e < ENGINE_ERROR_COUNT; e++)
-        if (e != ENGINE_EFULL)
-            rejected += st->rejected_by[e];
-    fprintf(stderr,
-            "summary: waypoints %zu\n"
-            "summary: skipped_lines %zu\n"
-            "summary: accepted %" PRIu64 "\n"
-            "summary: duplicates %" PRIu64 "\n"
-            "summary: rejected %" PRIu64 "\n",
-            trk->n, trk->skipped, st->accepted, st->duplicates, rejected);
-    for (int e = 1; e < ENGINE_ERROR_COUNT; e++)
-        if (e != ENGINE_EFULL && engine_reason_name(e))
-            fprintf(stderr, "summary: rejected_%s %" PRIu64 "\n", engine_reason_name(e),
-                    st->rejected_by[e]);
-    fprintf(stderr,
-            "summary: full_retries %" PRIu64 "\n"
-            "summary: underruns %" PRIu64 "\n"
-            "summary: underrun_ticks %" PRIu64 "\n"
-            "summary: hard_stops %" PRIu64 "\n"
-            "summary: gaps %" PRIu64 "\n"
-            "summary: tracks %" PRIu64 "\n"
-            "summary: setpoints %" PRIu64 "\n"
-            "summary: max_speed_m_s %.6g\n"
-            "summary: max_acc_m_s2 %.6g\n"
-            "summary: uniform_irregular %" PRIu64 "\n"
-            "summary: uniform_ratio_max %.6g\n",
-            r->retries, st->underruns, st->underrun_ticks, st->hard_stops, st->gaps, st->tracks,
-            ticks, max_v, max_a, st->uniform_irregular, st->uniform_ratio_max);
-    fprintf(stderr,
-            "summary: stops %" PRIu64 "\n"
-            "summary: stop_fixes %" PRIu64 "\n"
-            "summary: retimed %" PRIu64 "\n"
-            "summary: retime_max_s %.6g\n"
-            "summary: silent_ends %" PRIu64 "\n"
-            "summary: catchups %" PRIu64 "\n"
-            "summary: lag_s %.6g\n"
-            "summary: axis_lost_s %.6g\n"
-            "summary: axis_slowed %" PRIu64 "\n"
-            "summary: axis_lag_stops %" PRIu64 "\n",
-            st->stops, st->stop_fixes, st->retimed, st->retime_max_s, st->silent_ends, st->catchups,
-            st->lag_s, st->axis_lost_s, st->axis_slowed, st->axis_lag_stops);
-}
-
-/* The play-out delay D the engine held and its parts (lib/engine/delay.h):
- * the input's interval and top speed as it measured them. */
-static void print_delay(const engine_t *e)
-{
-    engine_delay_t d;
-    if (!e)
-        return;
-    engine_delay(e, &d);
-    fprintf(stderr,
-            "summary: delay_s %.9g\n"
-            "summary: delay_lookahead_s %.9g\n"
-            "summary: delay_slack_s %.9g\n"
-            "summary: delay_stop_s %.9g\n"
-            "summary: delay_interval_s %.9g\n"
-            "summary: delay_speed_m_s %.9g\n",
-            d.delay_s, d.lookahead_s, d.slack_s, d.stop_s, d.interval_s, d.speed_m_s);
-    const char *m = engine_setting_enum_name(engine_setting_find("method"), d.method);
-    fprintf(stderr, "summary: method %s\n", m ? m : "?");
-}
-
 /* One replay: its inputs, outputs and what was seen. */
 typedef struct {
     const opts_t *o;
@@ -481,6 +412,9 @@ typedef struct {
     double max_v, max_a;
     double last_v;      /* speed of the previous setpoint (hard stop reports) */
     uint64_t hard_seen; /* hard stops reported so far */
+    double und_t;       /* underrun_t_s of the last underrun reported (NaN: none) */
+    uint64_t und_n;     /* underruns reported */
+    size_t und_next;    /* r.next when they were last looked at */
     uint64_t written;   /* setpoint rows */
     engine_status_t st;
     geo_enu_t frame;          /* --geo: the track's east/north/up origin */
@@ -527,6 +461,7 @@ static int run_open(run_t *run, const opts_t *o)
     run->out = stdout;
     run->rows = rows;
     run->seen_next = (size_t)-1;
+    run->und_t = NAN;
     if (engine_config_check(&o->cfg, &why)) {
         fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", why ? why : "?");
         return EXIT_USAGE;
@@ -654,6 +589,32 @@ static void run_report_hard_stop(run_t *run, const engine_setpoint_t *sp)
             "line is the last waypoint read)\n",
             run->o->input, run->r.next ? run->trk.line[run->r.next - 1] : 0, sp->t_s, sp->pos_m[0],
             sp->pos_m[1], sp->pos_m[2], run->last_v);
+}
+
+/* Each underrun once the silence it met ended (issue 26), or at the end,
+ * the line that of the last waypoint read then: where and why
+ * (engine_underrun_format), the first REJECT_SHOW_FIRST, then one in
+ * REJECT_SHOW_EVERY (all counted in the summary).  Looked at only when
+ * waypoints were pushed: a silence ends with one. */
+static void run_report_underrun(run_t *run, int at_end)
+{
+    engine_status_t st;
+    char msg[320];
+    if (run->r.next == run->und_next && !at_end)
+        return;
+    run->und_next = run->r.next;
+    engine_status(run->e, &st);
+    if (!st.underruns || !isfinite(st.underrun_t_s) ||
+        !(isnan(run->und_t) || st.underrun_t_s < run->und_t || st.underrun_t_s > run->und_t) ||
+        (!isfinite(st.underrun_next_t_s) && !at_end))
+        return;
+    run->und_t = st.underrun_t_s;
+    if (++run->und_n > REJECT_SHOW_FIRST && run->und_n % REJECT_SHOW_EVERY)
+        return;
+    (void)engine_underrun_format(&st, msg, sizeof msg);
+    run_clear_progress(run);
+    fprintf(stderr, "%s:%" PRIu32 ": %s\n", run->o->input,
+            run->r.next ? run->trk.line[run->r.next - 1] : 0, msg);
 }
 
 static void run_emit(run_t *run, const engine_setpoint_t *sp)
@@ -839,6 +800,7 @@ static int run_ticks(run_t *run)
         replay_feed(&run->r, run->e, now);
         run_report_rejections(run);
         (void)engine_tick(run->e, now, &sp);
+        run_report_underrun(run, 0);
         if (engine_axis_lag_over(run->e)) /* max_lag_s passed: stop on the path (issue 32) */
             (void)engine_stop(run->e);
         if (skipped)
@@ -952,14 +914,15 @@ int main(int argc, char **argv)
     }
     if (run.plot && run_svg(&run))
         status = EXIT_OUTPUT;
+    run_report_underrun(&run, 1);
     run_report_rejected_total(&run);
     run_report_uniform(&run);
     run_report_axis(&run);
     if (o.summary) {
-        print_summary(&run.trk, &run.r, &run.st, run.max_v, run.max_a, run.written);
+        replay_print_summary(&run.trk, &run.r, &run.st, run.max_v, run.max_a, run.written);
         fprintf(stderr, "summary: skipped_gaps %" PRIu64 "\nsummary: skipped_ticks %" PRIu64 "\n",
                 run.skipped_gaps, run.skipped_ticks);
-        print_delay(run.e);
+        replay_print_delay(run.e);
     }
     if (!status && o.strict && (run.rejected || run.trk.skipped)) {
         fprintf(stderr,

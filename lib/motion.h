@@ -169,6 +169,18 @@ typedef struct {
     double axis_lag_s;              /* while the per-axis limits hold the rate: how far the
                                        output trails the newest waypoint beyond D */
     uint64_t axis_lag_stops;        /* stops because axis_lag_s passed max_lag_s */
+    /* The last underrun (issue 26), for its log line; NaN before any: */
+    double underrun_t_s;            /* the output's track time when it began */
+    double underrun_newest_t_s;     /* the newest waypoint's stamp then */
+    double underrun_next_t_s;       /* the stamp of the first waypoint after it (NaN: none
+                                       yet); the silence is the difference */
+    double underrun_slack_s;        /* what D held for a late waypoint then: the input's
+                                       interval and the jitter slack (delay.h) */
+    double underrun_curve_t_s;      /* where the solved curve ended then */
+    double underrun_lookahead_s;    /* D's lookahead part then: the time the waypoints the
+                                       solver needs beyond its curve may span */
+    uint64_t delay_grown;           /* D stated anew, longer, at an underrun: the input's
+                                       intervals grew beyond what D was sized for */
 } engine_status_t;
 
 /* clang-format on */

@@ -766,6 +766,41 @@ static void warn_axis(obj_t *o)
     }
 }
 
+/* issue 26: each underrun once the silence it met ended, where and why
+ * (engine_underrun_format): the first UNDERRUN_LOG_FIRST of an object, then
+ * one in UNDERRUN_LOG_EVERY.  One whose input never resumed is the input's
+ * end: a silent end takes it back (lib/engine/silence.h), unlogged. */
+#define UNDERRUN_LOG_FIRST 20
+#define UNDERRUN_LOG_EVERY 100
+static void log_underrun(obj_t *o)
+{
+    const engine_status_t *st = &o->status;
+    char msg[320];
+    if (!st->underruns || !isfinite(st->underrun_t_s) || !isfinite(st->underrun_next_t_s) ||
+        (o->und_logged && !(st->underrun_t_s < o->und_t || st->underrun_t_s > o->und_t)))
+        return;
+    o->und_t = st->underrun_t_s;
+    if (++o->und_logged > UNDERRUN_LOG_FIRST && o->und_logged % UNDERRUN_LOG_EVERY)
+        return;
+    (void)engine_underrun_format(st, msg, sizeof msg);
+    log_msg(LOG_WARNING, "object '%s': %s (%llu underruns so far)", o->name, msg,
+            (unsigned long long)st->underruns);
+}
+
+/* issue 26: D stated anew, longer, because the input's intervals grew
+ * (engine_delay_grow): the new D and its parts, the first
+ * UNDERRUN_LOG_FIRST growths of an object, then one in UNDERRUN_LOG_EVERY. */
+static void log_delay_grown(obj_t *o)
+{
+    uint64_t n = o->status.delay_grown;
+    if (n == o->grown_logged)
+        return;
+    o->grown_logged = n;
+    if (n > UNDERRUN_LOG_FIRST && n % UNDERRUN_LOG_EVERY)
+        return;
+    obj_log_delay(o, "its input's intervals grew: ");
+}
+
 /* Log the refusals of each object read since the last call (rejlog.h). */
 static void log_rejections(core_t *c)
 {
@@ -773,6 +808,8 @@ static void log_rejections(core_t *c)
         if (c->obj[i].engine) {
             warn_uniform(&c->obj[i]);
             warn_axis(&c->obj[i]);
+            log_underrun(&c->obj[i]);
+            log_delay_grown(&c->obj[i]);
             rejlog_drain(&c->obj[i].rejlog, c->obj[i].engine);
             rejlog_flush(&c->obj[i].rejlog, c->obj[i].name, log_rejection, (void *)c->obj[i].name);
         }

@@ -121,6 +121,9 @@ typedef struct obj {
     uint64_t safety_logged;       /* safety violations already logged */
     int axis_warned;              /* issue 32: the per-axis limits' warning given */
     uint64_t axis_stops_logged;   /* ... and the max_lag_s stops logged */
+    double und_t;                 /* issue 26: underrun_t_s of the last underrun logged */
+    uint64_t und_logged;          /* ... and how many were (0: und_t unset) */
+    uint64_t grown_logged;        /* issue 26: D's growths logged (engine delay_grown) */
     int uniform_warned;           /* param = uniform met irregular intervals: warned once */
     rejlog_t rejlog;              /* sources of the last waypoints offered, and the refusals
                                      * to log (rejlog.h; kept when carried) */

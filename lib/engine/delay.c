@@ -76,6 +76,40 @@ int engine_delay_check(const engine_config_t *cfg, double interval_s, char *why,
     return -ENGINE_ECONFIG;
 }
 
+int engine_underrun_format(const engine_status_t *st, char *buf, size_t len)
+{
+    if (len)
+        buf[0] = 0;
+    if (!isfinite(st->underrun_t_s) || !isfinite(st->underrun_newest_t_s))
+        return 0;
+    double hold = st->underrun_slack_s, newest = st->underrun_newest_t_s;
+    double gap = st->underrun_next_t_s - newest, span = newest - st->underrun_curve_t_s;
+    int n = snprintf(buf, len, "underrun at t = %.3f s: ", st->underrun_t_s);
+    size_t off = n > 0 && (size_t)n < len ? (size_t)n : len;
+    if (gap > hold) /* (NaN: none came yet) */
+        n = snprintf(buf + off, len - off,
+                     "no waypoint after t = %.3f s until t = %.3f s, a silence of %.3g s, longer "
+                     "than the %.3g s D holds for a late one (the interval and the jitter slack)",
+                     newest, st->underrun_next_t_s, gap, hold);
+    else if (span > st->underrun_lookahead_s)
+        n = snprintf(buf + off, len - off,
+                     "the waypoints the solver needs beyond its curve (t = %.3f .. %.3f s) spanned "
+                     "%.3g s, more than the %.3g s of lookahead D was sized for (intervals "
+                     "longer than measured at the start)",
+                     st->underrun_curve_t_s, newest, span, st->underrun_lookahead_s);
+    else if (isfinite(gap))
+        n = snprintf(buf + off, len - off,
+                     "no waypoint after t = %.3f s until t = %.3f s, a silence of %.3g s, within "
+                     "the %.3g s D holds for a late one: the output was late on its D",
+                     newest, st->underrun_next_t_s, gap, hold);
+    else
+        n = snprintf(buf + off, len - off,
+                     "no waypoint after t = %.3f s until the input's end (D holds %.3g s for a "
+                     "late one)",
+                     newest, hold);
+    return n < 0 ? n : (int)off + n;
+}
+
 int engine_delay_format(const engine_delay_t *d, char *buf, size_t len)
 {
     char need[280];

@@ -82,6 +82,16 @@ int engine_delay_check(const engine_config_t *cfg, double interval_s, char *why,
 int engine_delay_format(const engine_delay_t *d, char *buf, size_t len);
 
 /*
+ * The last underrun of status st (engine_status_t underrun_*) in one line:
+ * "underrun at t = 12.345 s: no waypoint after t = 12.2 s until t = 12.8 s,
+ * a silence of 0.6 s, longer than the 0.4 s D holds for one (the interval
+ * and the jitter slack)"; "... until now" while none came; "within the ..."
+ * where the silence was shorter (D too short for this input's timing).
+ * Returns snprintf's length, 0 (buf "") before any underrun.
+ */
+int engine_underrun_format(const engine_status_t *st, char *buf, size_t len);
+
+/*
  * The D an engine holds its output at (delay_run.c): the one it stated when
  * its last trajectory's output started, or, before any start, what its
  * settings and the input measured so far need.  The interval and the top
@@ -95,5 +105,9 @@ void engine_delay(const engine_t *e, engine_delay_t *d);
  * after its ramp from rest; engine_delay_note records the D of a start. */
 int engine_delay_ready(const engine_t *e);
 void engine_delay_note(engine_t *e);
+/* Engine-internal (an underrun, play_count_underrun): the D the input
+ * measured now, if longer than the D stated, is stated instead (intervals
+ * longer than at the start): the output then stands that far behind. */
+void engine_delay_grow(engine_t *e);
 
 #endif

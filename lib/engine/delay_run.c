@@ -182,6 +182,62 @@ void engine_delay_note(engine_t *e)
     e->delay.learnt = e->slack_learn;
 }
 
+/* The input's interval as D is grown to it (engine_delay_grow): of the
+ * last intervals (engine_solve_t iv), the longest time of la_steady + 1 in a
+ * row, each with its longest interval taken as the median instead, over
+ * their count: a sender that slows down counts, a hole of a few lost
+ * fixes does not (it is an underrun once, logged, not a longer D for good).
+ * 0 before there are enough. */
+static double interval_robust(const engine_t *e)
+{
+    double v[ENGINE_IV_RING], med;
+    unsigned n = e->solve.iv_n, w = e->la_steady + 1, k = n / 2;
+    if (n < w || w > ENGINE_IV_RING)
+        return 0.0;
+    memcpy(v, e->solve.iv, n * sizeof v[0]);
+    for (unsigned i = 0; i <= k; i++) /* the median: a selection, n <= 64 */
+        for (unsigned j = i + 1; j < n; j++)
+            if (v[j] < v[i]) {
+                double x = v[i];
+                v[i] = v[j];
+                v[j] = x;
+            }
+    med = v[k];
+    double best = 0.0;
+    for (unsigned s = 0; s + w <= n; s++) { /* windows of the ring in arrival order */
+        double sum = 0.0, mx = 0.0;
+        for (unsigned i = 0; i < w; i++) {
+            double x =
+                e->solve.iv[(e->solve.iv_next + ENGINE_IV_RING - n + s + i) % ENGINE_IV_RING];
+            sum += x;
+            mx = fmax(mx, x);
+        }
+        best = fmax(best, sum - mx + med);
+    }
+    return best / w;
+}
+
+void engine_delay_grow(engine_t *e)
+{
+    engine_delay_t d;
+    if (!e->delay.noted)
+        return;
+    /* the interval D is sized for: the one measured, its longest interval
+     * the median's (interval_robust) */
+    double h = fmin(input_interval(e), interval_robust(e));
+    engine_delay_parts(&e->cfg, e->lookahead, h, e->solve.vmax_in, &d);
+    if (e->slack_auto)
+        d.slack_n = engine_cfg_slack_min(&e->cfg) + e->slack_learn;
+    d.slack_s = d.slack_n * d.interval_s;
+    d.need_s = d.lookahead_s + d.slack_s + d.stop_s;
+    d.delay_s = e->cfg.delay_s > d.need_s ? e->cfg.delay_s : d.need_s;
+    if (d.delay_s > e->delay.d.delay_s + 1e-9) {
+        e->delay.d = d;
+        e->delay.learnt = e->slack_learn;
+        e->st.delay_grown++;
+    }
+}
+
 void engine_delay(const engine_t *e, engine_delay_t *d)
 {
     if (e->delay.noted)

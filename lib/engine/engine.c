@@ -119,6 +119,7 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
         !e->solve.node_vk || !e->solve.fw || !e->queue.ent || !e->queue.slow)
         goto nomem;
     e->st.lookahead = e->lookahead;
+    engine_status_underrun_none(&e->st);
     e->scale.ts.rate = 1.0;
     e->scale.stop_dv = -1.0; /* set by each scaled tick */
     e->scale.override = 1.0;

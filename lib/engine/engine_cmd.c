@@ -127,6 +127,7 @@ void engine_reset_counters(engine_t *e)
     memset(&e->st, 0, sizeof(e->st));
     e->st.last_seq = last_seq;
     e->st.lookahead = e->lookahead + e->slack_learn;
+    engine_status_underrun_none(&e->st);
 }
 
 int engine_halt(engine_t *e, const double pos_m[ENGINE_AXES])

@@ -13,6 +13,7 @@
 #ifndef TRAJD_ENGINE_INT_H
 #define TRAJD_ENGINE_INT_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -26,6 +27,11 @@
 #include "transfer.h"
 
 #define AX ENGINE_AXES
+
+/* Intervals of the input kept for the interval D grows to (delay.h
+ * engine_delay_grow): its upper quartile, where a hole of a few lost fixes is
+ * an outlier and a sender that slows down is not. */
+#define ENGINE_IV_RING 64
 
 enum { QE_SEG = 0, QE_END = 1 };
 
@@ -97,15 +103,17 @@ typedef struct {
     int first_pending; /* the next queued entry is the trajectory's first */
     double end_r[AX];  /* end of the last queued segment */
     double end_t;
-    double end_speed; /* speed at the end of the last queued segment */
-    double kcum;      /* capacity queued so far of the trajectory (qent_t kcum) */
-    double inv;       /* 1 / max(vmax, floor) of its last queued segment */
-    double ucum;      /* qent_t ucum so far */
-    uint64_t traj;    /* +1 per trajectory opened */
-    double span_max;  /* start_slack auto: longest time spanned by la_steady + 1
+    double end_speed;          /* speed at the end of the last queued segment */
+    double kcum;               /* capacity queued so far of the trajectory (qent_t kcum) */
+    double inv;                /* 1 / max(vmax, floor) of its last queued segment */
+    double ucum;               /* qent_t ucum so far */
+    uint64_t traj;             /* +1 per trajectory opened */
+    double span_max;           /* start_slack auto: longest time spanned by la_steady + 1
                          intervals of the input, decaying by 1/256 per node */
-    double vmax_in;   /* start_slack auto: fastest chord speed of the input,
+    double vmax_in;            /* start_slack auto: fastest chord speed of the input,
                          decaying the same way */
+    double iv[ENGINE_IV_RING]; /* the input's last intervals (engine_delay_grow) */
+    unsigned iv_n, iv_next;
 } engine_solve_t;
 
 /* ---- the queue of finished segments: the solver fills it, the play-out
@@ -276,6 +284,13 @@ struct engine {
 
     engine_status_t st;
 };
+
+/* No underrun yet: its record NaN (engine_status_t underrun_*). */
+static inline void engine_status_underrun_none(engine_status_t *st)
+{
+    st->underrun_t_s = st->underrun_newest_t_s = st->underrun_next_t_s = NAN;
+    st->underrun_slack_s = st->underrun_curve_t_s = st->underrun_lookahead_s = NAN;
+}
 
 /* ---- configuration (engine_settings.c): what a resolved one implies ---- */
 

@@ -410,12 +410,18 @@ static void measure_input(engine_t *e, uint64_t j)
     if (dt > 0) {
         double v = sqrt(d2) / dt;
         e->solve.vmax_in = fmax(v, e->solve.vmax_in * decay);
+        e->solve.iv[e->solve.iv_next] = dt;
+        e->solve.iv_next = (e->solve.iv_next + 1) % ENGINE_IV_RING;
+        if (e->solve.iv_n < ENGINE_IV_RING)
+            e->solve.iv_n++;
     }
     if (j > e->la_steady) {
         /* how far ahead of the output this node must have been sent to be
          * built on time (see enough_ahead) */
         double w = nt(e, j) - nt(e, j - e->la_steady - 1);
         e->solve.span_max = fmax(w, e->solve.span_max * decay);
+        if (w >= e->solve.span_max)
+            engine_delay_grow(e); /* longer than any kept: D may need more (delay.h) */
     }
 }
 

@@ -76,6 +76,17 @@ void play_count_underrun(engine_t *e)
     e->out.und_t = e->sil.last_t;
     e->out.und_traj = e->sil.traj;
     e->out.und_learnt = 0;
+    /* what its log line tells (engine_status_t underrun_*) */
+    engine_delay_t d;
+    engine_delay(e, &d);
+    e->st.underrun_t_s = e->out.t;
+    e->st.underrun_newest_t_s = e->sil.last_t;
+    e->st.underrun_next_t_s = NAN;
+    e->st.underrun_slack_s = d.interval_s + d.slack_s;
+    e->st.underrun_curve_t_s = e->scale.avail_t;
+    e->st.underrun_lookahead_s = d.lookahead_s;
+    if (e->slack_auto || e->cfg.delay_s > 0)
+        engine_delay_grow(e); /* D as the input now needs (delay.h) */
 
     if (e->slack_auto && e->slack_learn < e->slack_more) {
         e->slack_learn++;

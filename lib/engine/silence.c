@@ -21,6 +21,9 @@ void engine_silence_push(engine_t *e, const engine_waypoint_t *wp)
     if (e->sil.n && wp->t_s > e->sil.last_t && wp->t_s - e->sil.last_t <= e->cfg.max_gap_s)
         e->sil.int_max = fmax(e->sil.int_max, wp->t_s - e->sil.last_t); /* a gap is none */
     if (!e->sil.n || wp->t_s > e->sil.last_t) {
+        if (e->st.underruns && isnan(e->st.underrun_next_t_s) &&
+            wp->t_s > e->st.underrun_newest_t_s)
+            e->st.underrun_next_t_s = wp->t_s; /* the silence the last underrun met ends */
         e->sil.last_t = wp->t_s;
         e->sil.n++;
     }

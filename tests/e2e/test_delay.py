@@ -299,5 +299,93 @@ class TestDaemonStatesD(unittest.TestCase):
         self.assertAlmostEqual(d, s["delay_s"], places=3)
 
 
+class TestUnderrunsTold(unittest.TestCase):
+    """Issue 26 "Never silent": every underrun is told with its time and its
+    cause (lib/engine/delay.h engine_underrun_format), by trajreplay as
+    file:line and by trajd in its log; and a sender whose interval grows
+    makes D grow with it (engine_delay_grow) instead of underrunning at every
+    fragment.  Before: the underruns were only counted."""
+
+    def hole(self, tmp):
+        """The 10 Hz track with the fixes after t = 20.0 s up to 20.9 s lost
+        (a hole longer than D holds for a late fix, shorter than a silence
+        that ends the trajectory): its path and the CSV line of the fix at
+        t = 20.9 s (header on line 1)."""
+        path = os.path.join(tmp, "hole.csv")
+        t, x, y = track(900)
+        keep = ~((t > 20.05) & (t < 20.85))
+        t, x, y = t[keep], x[keep], y[keep]
+        write_track(path, t, x, y)
+        return path, int(np.nonzero(np.isclose(t, 20.9))[0][0]) + 2
+
+    def test_hole_told_by_trajreplay(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            path, line = self.hole(tmp)
+            p = replay(path)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        told = [l for l in p.stderr.splitlines() if ": underrun at t = " in l]
+        self.assertEqual(len(told), 1, p.stderr)
+        self.assertTrue(told[0].startswith("%s:%d: underrun at t = " % (path, line)), told[0])
+        self.assertIn("no waypoint after t = 20.000 s until t = 20.900 s, a silence of 0.9 s, "
+                      "longer than the", told[0])
+        at = float(told[0].split("underrun at t = ")[1].split()[0])
+        # the output was then within D of the newest fix, and past the fix before the hole
+        # by less than the stop reserve (it braked on the curve it had)
+        s = replay_summary.parse(p.stderr)
+        self.assertLess(20.0 - at, s["delay_s"])
+        self.assertEqual(s["underruns"], 1)
+
+    def test_hole_told_by_trajd(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            path, _ = self.hole(tmp)
+            conf = os.path.join(tmp, "t.conf")
+            with open(conf, "w") as f:
+                f.write("[daemon]\nrate_hz = 100\nspeed = 20\nexit_when_done = yes\n"
+                        "status_interval_s = 0\n[object.a]\ninput = replay\n"
+                        "replay.track = %s\noutput = csv\ncsv.path = %s\n"
+                        % (path, os.path.join(tmp, "a.csv")))
+            p = subprocess.run([TRAJD, "-f", "-c", conf], capture_output=True, text=True,
+                               timeout=120)
+        self.assertEqual(p.returncode, 0, p.stderr[-2000:])
+        told = [l for l in p.stderr.splitlines() if "object 'a': underrun at t = " in l]
+        self.assertEqual(len(told), 1, p.stderr[-2000:])
+        self.assertIn("no waypoint after t = 20.000 s until t = 20.900 s, a silence of 0.9 s",
+                      told[0])
+
+    def test_interval_grows(self):
+        """The sender slows from 10 Hz to 6.25 Hz at t = 30 s: D grows to at least
+        19 of the new intervals plus a stop from the track's top speed (closed
+        form), the output stands at the D stated over the last 40 s (within
+        one interval), with no underrun after the first 15 s of the new rate;
+        each underrun on the way is told with a cause.  Before: D stayed sized
+        for 10 Hz and the output underran every few fixes to the end."""
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "slow.csv")
+            t = np.concatenate([H * np.arange(300), 29.9 + 0.16 * np.arange(1, 600)])
+            x, y = 10 * np.sin(0.5 * t), 10 * np.cos(0.3 * t)
+            with open(path, "w") as f:
+                f.write("t,x,y\n")
+                for a, b, c in zip(t, x, y):
+                    f.write("%.3f,%.12f,%.12f\n" % (a, b, c))
+            p = replay(path)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        s = replay_summary.parse(p.stderr)
+        v = (np.hypot(np.diff(x), np.diff(y)) / np.diff(t)).max()
+        self.assertGreaterEqual(s["delay_s"], 19 * 0.16 + stop_s(v) - 1e-6)
+        self.assertGreaterEqual(s.get("delay_grown", 0), 1)
+        rows = list(csv.DictReader(io.StringIO(p.stdout)))
+        now = np.array([int(r["now_ns"]) * 1e-9 for r in rows])
+        tail = [int(r["now_ns"]) * 1e-9 - float(r["t_s"]) for r, n in zip(rows, now)
+                if r["state"] == "streaming" and t[-1] - 40 <= n < t[-1]]
+        self.assertLessEqual(np.max(np.abs(np.array(tail) - s["delay_s"])), 0.16)
+        late = [n for r, n in zip(rows, now) if r["state"] == "underrun" and n > 45.0]
+        self.assertEqual(late, [], "underrun rows after 45 s")
+        told = [l for l in p.stderr.splitlines() if ": underrun at t = " in l]
+        self.assertEqual(len(told), s["underruns"])
+        for l in told:
+            self.assertTrue("longer than the" in l or "more than the" in l or
+                            "late on its D" in l, l)
+
+
 if __name__ == "__main__":
     unittest.main()
