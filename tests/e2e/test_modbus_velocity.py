@@ -7,6 +7,7 @@ A helix 0.2 s apart with its exact velocity goes to an object with `method = her
 FINISH. Every streamed row lies on scipy's CubicHermiteSpline of the velocities as written
 (to 1e-9 m), and far from the Hermite of velocities estimated from the positions (what the
 float64 block without velocity gives; a write of it to a second object checks that too).
+ArrivalVerdict: with max_lookahead = 1 each written waypoint is accepted as it is written.
 """
 import csv
 import os
@@ -109,6 +110,54 @@ class VelocityBlock(unittest.TestCase):
             self.assertLess(off[0], 1e-9, "the block's velocities shape the curve: %.2e m" % off[0])
             self.assertGreater(off[1], 1e4 * max(off[0], 1e-12),
                                "without them the curve differs (%.2e m)" % off[1])
+
+
+class ArrivalVerdict(unittest.TestCase):
+    """max_lookahead = 1 through the daemon (issue 31, lib/engine/accept.h at_arrival): the
+    helix written with its velocities, one waypoint at a time, to an object with
+    max_lookahead 1 and to one with 2.  After each write (and a few ticks) the accepted
+    count the object's Modbus block shows includes the waypoint just written with 1, and
+    lags by one with 2 (its next neighbour confirms it); past the first trajectory's
+    confirmation, for every write."""
+
+    def test_kept_as_written(self):
+        t, pos, vel = helix()
+        with tempfile.TemporaryDirectory() as d:
+            conf = os.path.join(d, "trajd.conf")
+            with open(conf, "w") as f:
+                f.write("[daemon]\nrate_hz = 100\nstatus_interval_s = 0\nstop_timeout_s = 1\n"
+                        "[modbus]\naddress = 127.0.0.1\nport = 0\nwrites = yes\n"
+                        "systemd_socket = no\n")
+                for k, ml in enumerate((1, 2)):
+                    f.write("[object.o%d]\nid = %d\ninput = modbus\noutput = csv\n"
+                            "csv.path = %s\nmax_lookahead = %d\n"
+                            % (k, k, os.path.join(d, "o%d.csv" % k), ml))
+            p, lines, port = mbsim.start_trajd([TRAJD, "-f", "-c", conf], WAIT_S)
+            seen = {0: [], 1: []}
+            try:
+                c = ModbusTcpClient("127.0.0.1", port=port, timeout=WAIT_S)
+                self.assertTrue(c.connect())
+                for i in range(N):
+                    b = BinaryPayloadBuilder(byteorder=Endian.Big, wordorder=Endian.Big)
+                    b.add_32bit_uint(i + 1)
+                    for v in (t[i], *pos[i], *vel[i]):
+                        b.add_64bit_float(float(v))
+                    regs = b.to_registers()
+                    for k in range(2):
+                        rq = c.write_registers(obj_base(k) + M["MBMAP_H_WPV"], regs, slave=1)
+                        self.assertFalse(rq.isError(), rq)
+                    time.sleep(0.05)  # a few ticks: the blocks show the verdicts
+                    for k in range(2):
+                        r = c.read_input_registers(obj_base(k), mbsim.BLOCK, slave=1).registers
+                        seen[k].append(mbsim.u32(r, M["MBMAP_O_ACCEPTED"]))
+                c.close()
+            finally:
+                p.terminate()
+                p.wait(WAIT_S)
+                p.stderr.close()
+        late = [(i, seen[0][i], seen[1][i]) for i in range(10, N)
+                if seen[0][i] != i + 1 or seen[1][i] != i]
+        self.assertEqual(late, [], "writes whose count was not (i + 1, i): (i, ml 1, ml 2)")
 
 
 if __name__ == "__main__":
