@@ -23,7 +23,9 @@
  *     where it leaves the old and meets the new (sampled JOIN_SAMPLES + 1
  *     times per piece);
  *   - the acceleration (linear on a piece: its ends bound it) within
- *     max(scale_accel_m_s2, |a| at either end);
+ *     max(scale_accel_m_s2, |a| where it leaves the old curve): the new
+ *     curve's own at t_m too (so not near its start from rest, where its
+ *     own acceleration is the rest end's);
  *   - the jerk (constant on a piece) within scale_jerk_m_s3;
  *   - on each axis with per-axis limits (engine.h axis_max_*): |v_k|,
  *     |a_k| within them and |j_k| within half axis_max_jerk_m_s3, as on the
@@ -69,6 +71,13 @@
  * duration added so far (a few hundred candidates at most). */
 #define JOIN_STEP_TICKS 50
 #define JOIN_GROWTH 0.05
+/* The new curve is met beyond its first intervals: its start from rest
+ * shapes the curve there (with rest ends a C2 spline's start decays by
+ * 2 - sqrt(3) per node: to 2 % after 3). */
+#define JOIN_SETTLE_INTERVALS 3
+/* ... and where its own acceleration stays within the join's limit for
+ * this long (track seconds, of what is queued). */
+#define JOIN_AHEAD_S 1.0
 /* A join keeps at least this fraction of the lower of the two curves'
  * speeds (issue 32: "it does not drop below 50 %"); one that would not is
  * no join that keeps moving: the stop and transfer. */
@@ -80,7 +89,7 @@ typedef struct {
     size_t iend, inew; /* queue indices */
     double t_end;      /* the old curve's end */
     double t_last_ivl; /* where its last interval begins */
-    double t_first;    /* the end of the new trajectory's first interval */
+    double t_first;    /* the end of the new trajectory's first intervals */
     double t_last;     /* the end of the new trajectory's queued curve */
     int closed;        /* the new trajectory's END is queued */
 } join_find_t;
@@ -141,17 +150,24 @@ static int join_find(const engine_t *e, join_find_t *f, int *never)
         *never = 1;
         return 0;
     }
-    f->t_first = n->t1_s;
-    for (size_t j = i + 1; j < e->queue.len; j++) {
-        const qent_t *q = queue_at(e, j);
-        if (q->kind != QE_SEG || q->node != n->node)
-            break;
-        f->t_first = q->t1_s;
-    }
     size_t k = traj_past(e, i, n->traj); /* past the new trajectory's queued entries */
     const qent_t *l = queue_at(e, k - 1);
     f->closed = l->kind == QE_END;
     f->t_last = l->t1_s;
+    /* the end of its first JOIN_SETTLE_INTERVALS intervals */
+    int settled = 0;
+    f->t_first = n->t1_s;
+    for (size_t j = i; j < k && queue_at(e, j)->kind == QE_SEG; j++) {
+        if (queue_at(e, j)->node >= n->node + JOIN_SETTLE_INTERVALS) {
+            settled = 1;
+            break;
+        }
+        f->t_first = queue_at(e, j)->t1_s;
+    }
+    if (!settled) { /* not queued yet; or too short a trajectory to join */
+        *never = f->closed;
+        return 0;
+    }
     return 1;
 }
 
@@ -216,6 +232,25 @@ static const qent_t *seg_at(const engine_t *e, const join_find_t *f, double t, s
         }
     }
     return NULL;
+}
+
+/* The largest |k''| of the new curve from t (in the queued segment idx) on,
+ * over the segments that begin before t + h (k'' is linear on a segment:
+ * its ends bound it). */
+static double acc_ahead(const engine_t *e, size_t idx, double t, double h)
+{
+    double amax = 0, a[AX];
+    uint64_t traj = queue_at(e, idx)->traj;
+    for (size_t j = idx; j < e->queue.len; j++) {
+        const qent_t *q = queue_at(e, j);
+        if (q->kind != QE_SEG || q->traj != traj || (j > idx && q->seg.t0_s >= t + h))
+            break;
+        fdiff_eval(&q->seg, j == idx ? (t - q->seg.t0_s) / q->seg.dur_s : 0.0, NULL, NULL, a);
+        amax = fmax(amax, norm3(a));
+        fdiff_eval(&q->seg, 1.0, NULL, NULL, a);
+        amax = fmax(amax, norm3(a));
+    }
+    return amax;
 }
 
 /* The cubic s restricted to its u in [u0, 1], as a cubic over that part. */
@@ -377,8 +412,13 @@ int join_try(engine_t *e)
         fdiff_seg_t pc[3];
         fdiff_eval(&q->seg, (t_m - q->seg.t0_s) / q->seg.dur_s, p1, v1, a1);
         hermite_c2_segments(p0, v0, a0, p1, v1, a1, t_now, T, pc);
-        double alim = fmax(e->cfg.scale_accel_m_s2, fmax(norm3(a0), norm3(a1)));
-        fits = fits && q->ceil >= 1.0;
+        /* not the new curve's own where it is larger, at t_m (the piece's
+         * end) and for JOIN_AHEAD_S after it: near its start from rest the
+         * scaling would have ramped through it; t_m moves on to where it
+         * has settled */
+        double alim = fmax(e->cfg.scale_accel_m_s2, norm3(a0));
+        int settled = acc_ahead(e, idx, t_m, JOIN_AHEAD_S) <= alim;
+        fits = fits && settled && q->ceil >= 1.0;
         /* it keeps moving: at least JOIN_KEEP of the lower of the two
          * curves' own speeds, where it leaves the old and meets the new */
         double vmin = JOIN_KEEP * fmin(out_cspeed(e), norm3(v1));
@@ -390,11 +430,12 @@ int join_try(engine_t *e)
             return 1;
         }
         double d[AX] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-        if (t_m < t_now + T && norm3(d) < vmin * T) {
+        if (t_m < t_now + T && (norm3(d) < vmin * T || !settled)) {
             /* behind its data, a longer join only covers the same track
-             * more slowly, and this one's mean speed is below the least it
-             * may keep already; more of the new curve may come by the
-             * next tick */
+             * more slowly (and meets the curve at the same t_m), and this
+             * one's mean speed is below the least it may keep already (or
+             * the curve there has not settled); more of the new curve may
+             * come by the next tick */
             short_queue = !f.closed;
             break;
         }

@@ -278,12 +278,108 @@ static void test_stop_and_clear_on_join(void **state)
         }
 }
 
+/* Random re-anchors: a line of 1..21 m/s at 1, 5 or 10 Hz, every method,
+ * loaded ahead or live, 100 Hz or 1 kHz output, re-anchored 3..30 m aside
+ * and turned up to 1.5 rad.  On every join, from the state it leaves (|a0|)
+ * until 1 s of track time after it has met the new curve, the acceleration
+ * stays within max(scale_accel_m_s2, |a0|), and the time scaling's own 5
+ * m/s^2 more where it scales; the jerk on the join within scale_jerk_m_s3;
+ * onto, on and off it no step (trapezoid residuals).
+ * (Before the join waited for the new curve's start from rest to settle, a
+ * 20 m/s line met it where its own acceleration was 49 m/s^2.)  Also: no
+ * hard stop. */
+static void test_random_reanchors(void **state)
+{
+    (void)state;
+    unsigned seed = 4242, joins = 0, reanchored = 0;
+    for (int run = 0; run < 120; run++) {
+        engine_config_t c;
+        engine_config_default(&c);
+        c.profile = ENGINE_PROFILE_NONE;
+        c.max_accel_m_s2 = 0;
+        double v = 1 + urand(&seed) * 20, hz = urand(&seed) < 0.5 ? 10 : urand(&seed) < 0.5 ? 1 : 5;
+        c.max_speed_m_s = v * (1.02 + urand(&seed) * 0.1);
+        c.method = (engine_method_t)(int)(urand(&seed) * 6.99);
+        c.period_ns = urand(&seed) < 0.3 ? 1000000 : 10000000;
+        int ahead = urand(&seed) < 0.5;
+        double off = 3 + urand(&seed) * 27, ang = (urand(&seed) - 0.5) * 3.0;
+        int err = 0;
+        engine_t *e = engine_new(&c, &err);
+        assert_non_null(e);
+        double dt = 1 / hz, T = (double)c.period_ns * 1e-9;
+        int n = (int)(60 * hz), nj = (int)(20 * hz), k = 0;
+        engine_setpoint_t sp, pv;
+        memset(&pv, 0, sizeof pv);
+        double alim = 0, watch_until = -1, pe = 0, ve = 0;
+        int was_join = 0;
+        for (int64_t tick = 0; tick < (int64_t)(200.0 / T); tick++) {
+            while (k < n && (ahead || k * dt <= (double)tick * T)) {
+                engine_waypoint_t w;
+                memset(&w, 0, sizeof w);
+                w.t_s = k * dt;
+                if (k < nj) {
+                    w.pos_m[0] = v * w.t_s;
+                } else {
+                    double d = v * (k - nj) * dt;
+                    w.pos_m[0] = v * nj * dt + 0.3 * off + d * cos(ang);
+                    w.pos_m[1] = off + d * sin(ang);
+                }
+                engine_push(e, &w);
+                if (++k == n)
+                    engine_finish(e);
+            }
+            assert_int_equal(engine_tick(e, tick * c.period_ns, &sp), 0);
+            int on = e->out.mode == OUT_STREAM && e->out.cur.join;
+            double a = hypot(sp.acc_m_s2[0], sp.acc_m_s2[1]);
+            if (on && !was_join) { /* a join begins: from the state it leaves */
+                alim = fmax(c.scale_accel_m_s2, hypot(pv.acc_m_s2[0], pv.acc_m_s2[1]));
+                joins++;
+            }
+            if (on)
+                watch_until = sp.t_s + 1.0;
+            if (on || sp.t_s <= watch_until) {
+                double bound = alim + ((sp.flags & ENGINE_SP_SCALED) ? c.scale_accel_m_s2 : 0.0);
+                if (a > bound * (1 + 1e-6) + 1e-9)
+                    fail_msg("run %d: |a| %.3f m/s^2 at t_s %.3f beyond %.3f on or after a join",
+                             run, a, sp.t_s, bound);
+                double da = hypot(sp.acc_m_s2[0] - pv.acc_m_s2[0], sp.acc_m_s2[1] - pv.acc_m_s2[1]);
+                if (on && was_join && da > c.scale_jerk_m_s3 * T * (1 + 1e-6) + 1e-12 &&
+                    !(sp.flags & ENGINE_SP_SCALED))
+                    fail_msg("run %d: jerk %.2f m/s^3 on a join", run, da / T);
+            }
+            if ((on || was_join) && !isnan(pv.pos_m[0])) /* onto, on and off a join */
+                for (int ax = 0; ax < 2; ax++) {
+                    pe = fmax(pe, fabs(sp.pos_m[ax] - pv.pos_m[ax] -
+                                       0.5 * (sp.vel_m_s[ax] + pv.vel_m_s[ax]) * T));
+                    ve = fmax(ve, fabs(sp.vel_m_s[ax] - pv.vel_m_s[ax] -
+                                       0.5 * (sp.acc_m_s2[ax] + pv.acc_m_s2[ax]) * T));
+                }
+            was_join = on;
+            pv = sp;
+        }
+        engine_status_t st;
+        engine_status(e, &st);
+        reanchored += st.reanchors > 0;
+        assert_int_equal(st.hard_stops, 0);
+        /* the curves' own and the scaling's jerk, not a step (a C1 method's
+         * acceleration steps at its nodes: within 30 m/s^2 here) */
+        /* onto, on and off the joins: no step; the join's jerk (50 m/s^3,
+         * the scaling's where it scales) leaves j T^3 / 12 and j T^2 / 12 */
+        assert_true(pe < 1e-5);
+        assert_true(ve < 2e-3);
+        engine_free(e);
+    }
+    print_message("%u joins in %u re-anchoring runs of 120\n", joins, reanchored);
+    assert_true(joins >= reanchored / 4);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_ahead_keeps_speed), cmocka_unit_test(test_live_keeps_half_speed),
         cmocka_unit_test(test_other_way_stops),   cmocka_unit_test(test_axis_limit),
         cmocka_unit_test(test_gap_rests),         cmocka_unit_test(test_stop_and_clear_on_join),
+        cmocka_unit_test(test_random_reanchors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
