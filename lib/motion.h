@@ -84,7 +84,8 @@ const char *engine_state_name(engine_state_t s);
 #define ENGINE_SP_NEW_TRACK 0x02u /* first setpoint of a new trajectory (after a gap or clear) */
 #define ENGINE_SP_SKIPPED   0x04u /* ticks were skipped before this one (trajd: missed
                                          deadlines; trajreplay: a gap not written) */
-#define ENGINE_SP_TRANSFER  0x08u /* rest-to-rest transfer to a new trajectory's start */
+#define ENGINE_SP_TRANSFER  0x08u /* transfer to a new trajectory: rest-to-rest to its start,
+                                   * or a join that keeps moving (lib/engine/join.c) */
 /* No valid position exists yet (nothing received, or a required position not
  * yet given): pos_m[] is NaN and is NOT a setpoint.  A subscriber must not
  * move; CiA 402 RPDOs are not sent at all while it is set. */
@@ -181,6 +182,9 @@ typedef struct {
                                        solver needs beyond its curve may span */
     uint64_t delay_grown;           /* D stated anew, longer, at an underrun: the input's
                                        intervals grew beyond what D was sized for */
+    uint64_t transfers_moving;      /* re-anchors joined moving (lib/engine/join.c): the
+                                       output met the new trajectory's curve without
+                                       braking to rest; not in transfers */
 } engine_status_t;
 
 /* clang-format on */

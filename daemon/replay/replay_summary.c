@@ -56,6 +56,11 @@ void replay_print_summary(const track_t *trk, const replay_t *r, const engine_st
             "summary: delay_grown %" PRIu64 "\n",
             st->stops, st->stop_fixes, st->retimed, st->retime_max_s, st->silent_ends, st->catchups,
             st->lag_s, st->axis_lost_s, st->axis_slowed, st->axis_lag_stops, st->delay_grown);
+    fprintf(stderr,
+            "summary: reanchors %" PRIu64 "\n"
+            "summary: transfers %" PRIu64 "\n"
+            "summary: transfers_moving %" PRIu64 "\n",
+            st->reanchors, st->transfers, st->transfers_moving);
 }
 
 /* The play-out delay D the engine held and its parts (lib/engine/delay.h):

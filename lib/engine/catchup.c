@@ -126,7 +126,10 @@ int engine_lag_pending(const engine_t *e)
 
 double engine_lag_target(engine_t *e, double target, double R, double A, double J)
 {
-    if (!(target >= 1.0 && target <= 1.0) || e->out.mode != OUT_STREAM || e->out.underrun) {
+    /* not on a join (join.c): it is made for rate 1, and its track time
+     * is the warped one; the lag it leaves is won back after it */
+    if (!(target >= 1.0 && target <= 1.0) || e->out.mode != OUT_STREAM || e->out.underrun ||
+        e->out.cur.join) {
         e->lag.steer = 0;
         return target;
     }

@@ -55,7 +55,14 @@ typedef struct {
     int ceil_axis;   /* SEG: ceil is the per-axis limits' and below 1 (issue 32) */
     double stop1;    /* SEG: ts_stop_dist(1, 0, A, J) at the limits converted at
                         its conv_speed (plain_window) */
+    int join;        /* SEG: a piece of a join that keeps moving (join.c) */
+    double shift;    /* SEG: added to the output's origin_t when it is taken: the
+                        curve a join met, where the join took longer than the
+                        track time it covered (join.c; 0 otherwise) */
 } qent_t;
+
+/* Output and curve start closer than this need no transfer (metres). */
+#define ENGINE_TRANSFER_TOL_M 1e-9
 
 /* Below this speed (m/s) the curve's end counts as at rest. */
 #define ENGINE_REST_SPEED_M_S 1e-6
@@ -129,7 +136,11 @@ typedef struct {
 
 /* ---- play-out (engine_tick.c): the output ---- */
 typedef struct {
-    int mode;     /* OUT_* */
+    int mode;                          /* OUT_* */
+    double join_t0, join_tm, join_dur; /* the join under way (cur.join): its start
+                                          and meeting track times, its duration */
+    uint64_t join_refused;             /* traj + 1 of a trajectory whose end joins the next
+                              one by the stop and transfer, not moving (join.c) */
     int have_pos; /* the output stands somewhere real: set by engine_set_position,
                      or the first waypoint adopted as the last resort.  From then on
                      the output only moves by streaming or by a transfer */
@@ -322,6 +333,9 @@ size_t input_buffered(const engine_t *e);
 
 /* Upper bound on the speed |k'| over a segment (m/s). */
 double solve_seg_speed_max(const fdiff_seg_t *seg);
+/* The highest rate at which a segment keeps the speed cap and the
+ * per-axis limits (qent_t ceil; *axis: qent_t ceil_axis). */
+double solve_seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax, int *axis);
 /* A new trajectory; a node appended (0 or -ENGINE_ENUMERIC); SMOOTH's ready
  * waypoints turned into nodes; the trajectory closed (end row, last
  * segments, END entry); or ended on a failure with what is queued. */
@@ -345,6 +359,8 @@ void play_start(engine_t *e, int new_flag);
 void play_stop_at_rest(engine_t *e);
 void play_rest_at_end(engine_t *e, const qent_t *h);
 void play_finish_here(engine_t *e);
+/* Where the solved curve of the output's trajectory ends (scale.avail_*). */
+void play_find_avail(engine_t *e);
 /* The output's pos, vel, acc copied out of the stepper (on_fd cleared). */
 void out_sync(engine_t *e);
 /* |k'|: the curve's own speed at the output (scale.cspeed off the grid). */
@@ -375,6 +391,20 @@ void scale_clocked_step(engine_t *e, double R, double A, double J);
 double xfer_duration(const engine_t *e, const double *target, double gap_s, int *capped);
 void xfer_start(engine_t *e, const double *target, double gap_s);
 void xfer_track_time(engine_t *e);
+
+/* ---- transfers that keep moving (join.c) ---- */
+
+/* 1 if the output may join the next trajectory moving (cheap checks only). */
+int join_wanted(const engine_t *e);
+/* Join the next trajectory moving from this tick if it is due and a join
+ * fits (1: the output is on it); else 0, and the old way goes on. */
+int join_try(engine_t *e);
+/* Unit-grid ticks before a join may be due (plain_window keeps no
+ * decision beyond them); INT64_MAX if none can be. */
+int64_t join_ticks_left(const engine_t *e);
+/* The output's track time on a join: from its start to the meeting time on
+ * the new curve, in proportion to the join done. */
+void join_track_time(engine_t *e);
 
 /* ---- shared small helpers ---- */
 

@@ -61,6 +61,8 @@ static qent_t *q_push(engine_t *e)
     q->first = e->solve.first_pending;
     q->traj = e->solve.traj;
     q->gap_s = q->first ? e->in.gap_s : 0;
+    q->join = 0;
+    q->shift = 0.0;
     e->solve.first_pending = 0;
     return q;
 }
@@ -151,6 +153,11 @@ static double seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax
     *axis = axis_c < 1.0 && axis_c <= c;
     c = fmin(c, axis_c);
     return isinf(c) ? c : fmax(c, ENGINE_CEIL_MIN);
+}
+
+double solve_seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax, int *axis)
+{
+    return seg_ceiling(e, seg, vmax, axis);
 }
 
 /* A queued segment whose speed cap holds the rate below TS_RATE_MAX. */

@@ -24,9 +24,6 @@
 #include "silence.h"
 #include "timescale.h"
 
-/* Output and curve start closer than this need no transfer (metres). */
-#define ENGINE_TRANSFER_TOL_M 1e-9
-
 /* The newest interval of the input (0: fewer than two nodes). */
 static double last_interval(const engine_t *e)
 {
@@ -223,13 +220,15 @@ void play_take_segment(engine_t *e)
 {
     e->out.cur = *q_head(e);
     queue_pop(e);
+    if (!is_exactly(e->out.cur.shift, 0.0))
+        e->out.origin_t += e->out.cur.shift; /* where a join met it (join.c) */
     e->out.cur_t0 = e->out.cur.seg.t0_s - e->out.origin_t;
     e->out.cur_t1 = e->out.cur.t1_s - e->out.origin_t;
 }
 
 /* Where the solved curve of the output's trajectory ends, from the queue
  * (once per trajectory; queue_segment and queue_end keep it up to date). */
-static void find_avail(engine_t *e)
+void play_find_avail(engine_t *e)
 {
     e->scale.avail_t = e->out.cur.t1_s;
     e->scale.avail_kcum = e->out.cur.kcum;
@@ -285,7 +284,7 @@ void play_start(engine_t *e, int new_flag)
     e->out.origin_t = h->seg.t0_s;
     e->out.traj = h->traj;
     play_take_segment(e);
-    find_avail(e);
+    play_find_avail(e);
     e->out.n = 0;
     e->out.seg_n0 = 0;
     e->scale.s_off = 0.0;
@@ -465,7 +464,7 @@ static void plain_window(engine_t *e)
 {
     e->out.plain_left = 0;
     if (e->out.mode != OUT_STREAM || e->scale.on || e->clk.on || e->out.underrun ||
-        !e->out.have_pos || e->scale.stop_req || e->scale.end_brake ||
+        !e->out.have_pos || e->scale.stop_req || e->scale.end_brake || e->out.cur.join ||
         !is_exactly(e->scale.override, 1.0) || !is_exactly(e->scale.ts.rate, 1.0) ||
         !is_exactly(e->scale.ts.acc, 0.0) || scale_ceil_here(e) < 1.0 || engine_lag_pending(e))
         return;
@@ -491,6 +490,10 @@ static void plain_window(engine_t *e)
     if (!(x >= 3.0))
         return;
     e->out.plain_left = x < 0x1p62 ? (int64_t)x - 2 : INT64_MAX / 2;
+    if (e->scale.avail_closed) { /* not past where a join may be due (join.c) */
+        int64_t j = join_ticks_left(e);
+        e->out.plain_left = j < e->out.plain_left ? j : e->out.plain_left;
+    }
     e->out.plain_qlen = e->queue.len;
     e->out.plain_seen = e->lag.seen_ns;
 }
@@ -625,7 +628,11 @@ static void step_once(engine_t *e)
         }
         return;
     }
+    if (join_wanted(e)) /* issue 32: a re-anchor joined moving (join.c) */
+        (void)join_try(e);
     step_decided(e);
+    if (e->out.cur.join) /* a join's setpoints are a transfer's (fill_sp_flags) */
+        e->out.flags_pending |= ENGINE_SP_TRANSFER;
     plain_window(e);
 }
 
@@ -712,13 +719,15 @@ __attribute__((noinline)) static void fill_sp_flags(engine_t *e, int64_t now_ns,
     }
     if (e->out.mode == OUT_XFER)
         xfer_track_time(e);
+    else if (e->out.mode == OUT_STREAM && e->out.cur.join)
+        join_track_time(e);
     uint32_t flags = e->out.flags_pending;
     e->out.flags_pending = 0;
     if (e->out.mode == OUT_HOLD || (e->scale.on && at_rest(e)))
         flags |= ENGINE_SP_HOLD;
     else if (s != ENGINE_STATE_STREAMING && s != ENGINE_STATE_UNDERRUN)
         flags |= ENGINE_SP_HOLD;
-    if (e->out.mode == OUT_XFER)
+    if (e->out.mode == OUT_XFER || (e->out.mode == OUT_STREAM && e->out.cur.join))
         flags |= ENGINE_SP_TRANSFER;
     if (!e->out.have_pos)
         flags |= ENGINE_SP_NO_POSITION;

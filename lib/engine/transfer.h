@@ -1,7 +1,8 @@
 /*
  * transfer.h - how the output moves to a trajectory's start when it does not
  * stand there: after a gap, a re-anchor, a clear, or from the initial
- * position.  One rest-to-rest smoothstep per transfer,
+ * position (a re-anchor met while moving is joined without resting where a
+ * join fits: lib/engine/join.c).  One rest-to-rest smoothstep per transfer,
  *     k(u) = A + (B - A)(3u^2 - 2u^3),  u in [0, 1] over T seconds,
  * whose peak speed is 1.5 D / T and peak acceleration 6 D / T^2 (D = |B - A|).
  *

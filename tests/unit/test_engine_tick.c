@@ -278,12 +278,63 @@ static void test_calls_mid_window(void **state)
     assert_true(kept > 5000); /* most of the time the output waits between trajectories */
 }
 
+/* issue 32: re-anchors joined moving (join.c): a line at 5 m/s, a waypoint
+ * every dt, with jumps aside every 200 waypoints that the speed limit makes
+ * the acceptance re-anchor on (at 1 Hz the old curve's last interval is
+ * longer than a stop: the window would run past where the join is due),
+ * loaded ahead or pushed as it comes; the window kept must end where a join
+ * may be due (join_ticks_left), and the joins must be made.  Returns the
+ * decisions kept. */
+static uint64_t reanchors(int ahead, int64_t period_ns, double dt, double aside)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    c.period_ns = period_ns;
+    c.profile = ENGINE_PROFILE_NONE;
+    c.max_speed_m_s = 5.2;
+    c.max_accel_m_s2 = 0;
+    pair_t p;
+    pair_new(&p, &c);
+    int n = 1000, k = 0;
+    double span_s = (n + 40) * dt;
+    int64_t now = 0;
+    for (int64_t tick = 0; tick < (int64_t)(span_s * 1e9) / period_ns; tick++, now += period_ns) {
+        while (k < n && (ahead || k * dt <= (double)now * 1e-9)) {
+            engine_waypoint_t w = {.t_s = k * dt, .seq = (uint32_t)k};
+            w.pos_m[0] = 5.0 * dt * k;
+            w.pos_m[1] = aside * (k / 200);
+            pair_push(&p, &w);
+            if (++k == n)
+                assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1]));
+        }
+        pair_tick(&p, now);
+    }
+    engine_status_t st;
+    engine_status(p.e[1], &st);
+    assert_int_equal(st.reanchors, 4);
+    assert_int_equal(st.transfers_moving, 4);
+    return pair_free(&p);
+}
+
+static void test_reanchors_joined(void **state)
+{
+    (void)state;
+    uint64_t kept = 0;
+    for (int ahead = 0; ahead < 2; ahead++) {
+        kept += reanchors(ahead, 10000000, 0.1, 1.5);
+        kept += reanchors(ahead, 1000000, 0.1, 1.5);
+        kept += reanchors(ahead, 10000000, 1.0, 15.0);
+    }
+    assert_true(kept > 100000);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_plain_streams),
         cmocka_unit_test(test_with_events),
         cmocka_unit_test(test_calls_mid_window),
+        cmocka_unit_test(test_reanchors_joined),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,474 @@
+/*
+ * join.c - transfers that keep moving (issue 32): when the trajectory the
+ * output streams ends in a re-anchor (its END queued and the next
+ * trajectory's first segment behind it, no gap beyond max_gap_s), the output
+ * does not brake to rest at the old curve's end and then transfer rest to
+ * rest: where the old curve's last interval begins (or where its end would
+ * have to be braked for, if that is earlier), it leaves the old curve from
+ * the state it is in (position, velocity and acceleration of the tick just
+ * sent) and meets the new trajectory's curve at a time t_m on it, matching
+ * its position, velocity and acceleration there.  The join is C2: three
+ * cubics of constant jerk each (hermite_c2_segments), played by the stepper
+ * as ordinary segments of the new trajectory at rate 1, spliced in at the
+ * queue's head in front of the new curve cut at t_m; its setpoints carry
+ * ENGINE_SP_TRANSFER and a new track.  Not where the new trajectory starts
+ * where the old one ends (no transfer is needed: the curves rest there, a
+ * stop as the data says).
+ *
+ * Its duration T is the shortest whole number of periods, from the end of
+ * the new trajectory's first interval on (its curve there has left its
+ * start, at rest with rest ends), for which the join keeps, on every piece:
+ *   - the speed within ENGINE_SPEED_CAP x the speed limit in force (if any),
+ *     and at least JOIN_KEEP of the lower of the two curves' own speeds
+ *     where it leaves the old and meets the new (sampled JOIN_SAMPLES + 1
+ *     times per piece);
+ *   - the acceleration (linear on a piece: its ends bound it) within
+ *     max(scale_accel_m_s2, |a| where it leaves the old curve): the new
+ *     curve's own at t_m too (so not near its start from rest, where its
+ *     own acceleration is the rest end's);
+ *   - the jerk (constant on a piece) within scale_jerk_m_s3;
+ *   - on each axis with per-axis limits (engine.h axis_max_*): |v_k|,
+ *     |a_k| within them and |j_k| within half axis_max_jerk_m_s3, as on the
+ *     curve;
+ * and the new curve at t_m within its speed cap at rate 1, and the curve
+ * ahead once on it (the pieces and what is queued beyond t_m) long enough
+ * to stop in from rate 1.  t_m is the join's start + T, the track time it
+ * covers, where the new curve is queued that far; else as far as it is
+ * queued (a live sender: the new curve is solved a lookahead behind its
+ * newest waypoint): the join then takes longer than the track time it
+ * covers, the output falls behind its data by the difference (origin_t
+ * shifted by it where the join meets the curve, qent_t shift; less than a
+ * stop and transfer would), and its t_s runs from the join's start to t_m
+ * (join_track_time).  The candidates grow by one period, then by
+ * JOIN_GROWTH of the duration added, up to xfer.cfg.max_s (max_gap_s)
+ * beyond the first; a candidate behind its data whose mean speed is below
+ * the least it may keep ends the search (longer ones are slower still), and
+ * it is tried again at the next tick, when more may be queued.  When none
+ * fits (or the output reaches the old curve's end first), the old way is
+ * the fallback: the output brakes to rest at the old curve's end and a
+ * rest-to-rest transfer takes it to the new start (engine_xfer.c).
+ *
+ * Not joined moving: with one clock (CLOCK.md: a trajectory is entered at
+ * rate 0 on the play time), under a feed override other than 1, during a
+ * stop or clear, after a gap beyond max_gap_s, in an underrun.  The catch-up
+ * (catchup.h) does not steer a join; the lag it leaves is won back after it.
+ */
+#include "engine.h"
+#include "engine_int.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "fdiff.h"
+#include "hermite.h"
+#include "timescale.h"
+
+/* Speed samples per join piece (the speed is a quadratic per axis). */
+#define JOIN_SAMPLES 32
+/* Shortest join, in periods. */
+#define JOIN_MIN_TICKS 3
+/* Candidates beyond the first JOIN_STEP_TICKS grow by this fraction of the
+ * duration added so far (a few hundred candidates at most). */
+#define JOIN_STEP_TICKS 50
+#define JOIN_GROWTH 0.05
+/* The new curve is met beyond its first intervals: its start from rest
+ * shapes the curve there (with rest ends a C2 spline's start decays by
+ * 2 - sqrt(3) per node: to 2 % after 3). */
+#define JOIN_SETTLE_INTERVALS 3
+/* ... and where its own acceleration stays within the join's limit for
+ * this long (track seconds, of what is queued). */
+#define JOIN_AHEAD_S 1.0
+/* A join keeps at least this fraction of the lower of the two curves'
+ * speeds (issue 32: "it does not drop below 50 %"); one that would not is
+ * no join that keeps moving: the stop and transfer. */
+#define JOIN_KEEP 0.5
+
+/* What the queue holds for a join: the old trajectory's END at index iend,
+ * the new trajectory's first entry after it. */
+typedef struct {
+    size_t iend, inew; /* queue indices */
+    double t_end;      /* the old curve's end */
+    double t_last_ivl; /* where its last interval begins */
+    double t_first;    /* the end of the new trajectory's first intervals */
+    double t_last;     /* the end of the new trajectory's queued curve */
+    int closed;        /* the new trajectory's END is queued */
+} join_find_t;
+
+int join_wanted(const engine_t *e)
+{
+    return e->out.mode == OUT_STREAM && e->scale.avail_closed && e->queue.ends > 0 && !e->clk.on &&
+           e->out.join_refused != e->out.traj + 1 && !e->scale.stop_req && !e->out.underrun &&
+           is_exactly(e->scale.override, 1.0) && e->out.have_pos;
+}
+
+/* The first queue index at or after i0 whose trajectory is past traj (the
+ * queue holds the trajectories in order): a binary search. */
+static size_t traj_past(const engine_t *e, size_t i0, uint64_t traj)
+{
+    size_t lo = i0, hi = e->queue.len;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (queue_at(e, mid)->traj > traj)
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    return lo;
+}
+
+/* The old trajectory's end and the new one behind it (0: no join possible
+ * now; *never: not for this trajectory). */
+static int join_find(const engine_t *e, join_find_t *f, int *never)
+{
+    *never = 0;
+    size_t i = traj_past(e, 0, e->out.traj);
+    if (i == 0 || i >= e->queue.len || queue_at(e, i - 1)->kind != QE_END)
+        return 0; /* not closed, or the next trajectory may still come */
+    f->iend = i - 1;
+    f->inew = i;
+    f->t_end = queue_at(e, i - 1)->t1_s;
+    /* where the last interval (its node's pieces) begins */
+    f->t_last_ivl = e->out.cur.seg.t0_s;
+    if (f->iend > 0) {
+        uint64_t node = queue_at(e, f->iend - 1)->node;
+        size_t j = f->iend;
+        while (j > 0 && queue_at(e, j - 1)->node == node)
+            j--;
+        f->t_last_ivl = j > 0 || e->out.cur.node != node ? queue_at(e, j)->seg.t0_s
+                                                         : e->out.cur.seg.t0_s;
+    }
+    const qent_t *n = queue_at(e, i), *end = queue_at(e, i - 1);
+    double d2 = 0;
+    for (int k = 0; k < AX; k++)
+        d2 += (n->seg.c[k][0] - end->seg.c[k][0]) * (n->seg.c[k][0] - end->seg.c[k][0]);
+    /* a gap beyond max_gap_s still rests (TIMESCALE.md), and so does a
+     * trajectory with no segment or one whose time does not run on; one
+     * that starts where the old one ends needs no transfer: the curves rest
+     * there (a stop, issue 27), as the data says */
+    if (n->kind != QE_SEG || !n->first || n->gap_s > 0 || n->seg.t0_s < f->t_end - 1e-9 ||
+        n->seg.t0_s - f->t_end > e->cfg.max_gap_s || !(sqrt(d2) > ENGINE_TRANSFER_TOL_M)) {
+        *never = 1;
+        return 0;
+    }
+    size_t k = traj_past(e, i, n->traj); /* past the new trajectory's queued entries */
+    const qent_t *l = queue_at(e, k - 1);
+    f->closed = l->kind == QE_END;
+    f->t_last = l->t1_s;
+    /* the end of its first JOIN_SETTLE_INTERVALS intervals */
+    int settled = 0;
+    f->t_first = n->t1_s;
+    for (size_t j = i; j < k && queue_at(e, j)->kind == QE_SEG; j++) {
+        if (queue_at(e, j)->node >= n->node + JOIN_SETTLE_INTERVALS) {
+            settled = 1;
+            break;
+        }
+        f->t_first = queue_at(e, j)->t1_s;
+    }
+    if (!settled) { /* not queued yet; or too short a trajectory to join */
+        *never = f->closed;
+        return 0;
+    }
+    return 1;
+}
+
+/* 1 if the piece keeps the join's limits (see above). */
+static int piece_fits(const engine_t *e, const fdiff_seg_t *s, double vlim, double vmin,
+                      double alim, double jlim)
+{
+    double id = 1.0 / s->dur_s, j2 = 0, a02 = 0, a12 = 0;
+
+    for (int k = 0; k < AX; k++) {
+        const double *c = s->c[k];
+        double jk = 6.0 * c[3] * id * id * id, a0 = 2.0 * c[2] * id * id,
+               a1 = (2.0 * c[2] + 6.0 * c[3]) * id * id;
+        j2 += jk * jk;
+        a02 += a0 * a0;
+        a12 += a1 * a1;
+        if (e->cfg.axis_max_jerk_m_s3[k] > 0 && fabs(jk) > 0.5 * e->cfg.axis_max_jerk_m_s3[k])
+            return 0;
+        if (e->cfg.axis_max_accel_m_s2[k] > 0 &&
+            fmax(fabs(a0), fabs(a1)) > e->cfg.axis_max_accel_m_s2[k])
+            return 0;
+        if (e->cfg.axis_max_speed_m_s[k] > 0) {
+            double v0 = fabs(c[1]), v1 = fabs(c[1] + 2 * c[2] + 3 * c[3]), vm = fmax(v0, v1);
+            if (fabs(c[3]) > 0) { /* the vertex of k'(u), if inside */
+                double u = -c[2] / (3.0 * c[3]);
+                if (u > 0 && u < 1)
+                    vm = fmax(vm, fabs(c[1] + u * (2 * c[2] + u * 3 * c[3])));
+            }
+            if (vm * id > e->cfg.axis_max_speed_m_s[k])
+                return 0;
+        }
+    }
+    if (sqrt(j2) > jlim || sqrt(fmax(a02, a12)) > alim)
+        return 0;
+    double v[AX];
+    for (int i = 0; i <= JOIN_SAMPLES; i++) {
+        double v2 = 0;
+        fdiff_eval(s, (double)i / JOIN_SAMPLES, NULL, v, NULL);
+        for (int k = 0; k < AX; k++)
+            v2 += v[k] * v[k];
+        if ((vlim > 0 && v2 > vlim * vlim) || v2 < vmin * vmin)
+            return 0;
+    }
+    return 1;
+}
+
+static double norm3(const double *x)
+{
+    return sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+}
+
+/* The queued segment of the new trajectory holding track time t. */
+static const qent_t *seg_at(const engine_t *e, const join_find_t *f, double t, size_t *idx)
+{
+    for (size_t j = f->inew; j < e->queue.len; j++) {
+        const qent_t *q = queue_at(e, j);
+        if (q->kind != QE_SEG || q->traj != queue_at(e, f->inew)->traj)
+            break;
+        if (t < q->t1_s) {
+            *idx = j;
+            return q;
+        }
+    }
+    return NULL;
+}
+
+/* The largest |k''| of the new curve from t (in the queued segment idx) on,
+ * over the segments that begin before t + h (k'' is linear on a segment:
+ * its ends bound it). */
+static double acc_ahead(const engine_t *e, size_t idx, double t, double h)
+{
+    double amax = 0, a[AX];
+    uint64_t traj = queue_at(e, idx)->traj;
+    for (size_t j = idx; j < e->queue.len; j++) {
+        const qent_t *q = queue_at(e, j);
+        if (q->kind != QE_SEG || q->traj != traj || (j > idx && q->seg.t0_s >= t + h))
+            break;
+        fdiff_eval(&q->seg, j == idx ? (t - q->seg.t0_s) / q->seg.dur_s : 0.0, NULL, NULL, a);
+        amax = fmax(amax, norm3(a));
+        fdiff_eval(&q->seg, 1.0, NULL, NULL, a);
+        amax = fmax(amax, norm3(a));
+    }
+    return amax;
+}
+
+/* The cubic s restricted to its u in [u0, 1], as a cubic over that part. */
+static void seg_cut(fdiff_seg_t *s, double u0)
+{
+    double w = 1.0 - u0;
+    for (int k = 0; k < AX; k++) {
+        double *c = s->c[k];
+        double d0 = c[0] + u0 * (c[1] + u0 * (c[2] + u0 * c[3]));
+        double d1 = w * (c[1] + u0 * (2.0 * c[2] + 3.0 * c[3] * u0));
+        double d2 = w * w * (c[2] + 3.0 * c[3] * u0);
+        double d3 = w * w * w * c[3];
+        c[0] = d0;
+        c[1] = d1;
+        c[2] = d2;
+        c[3] = d3;
+    }
+}
+
+/* The join in the queue: the old trajectory's rest and the new one's curve
+ * before t_m dropped, the segment holding t_m cut there, the pieces in
+ * front of it (their capacities and rises as queue_segment counts them). */
+static void join_splice(engine_t *e, size_t ihead, double t_m, double t_j, const fdiff_seg_t pc[3])
+{
+    for (size_t i = 0; i < ihead; i++)
+        queue_pop(e);
+    qent_t *h = q_head(e);
+    double u0 = (t_m - h->seg.t0_s) / h->seg.dur_s;
+    if (u0 > 0) {
+        seg_cut(&h->seg, u0);
+        h->seg.dur_s = h->t1_s - t_m;
+        h->seg.t0_s = t_m;
+    }
+    h->first = 0;
+    h->gap_s = 0;
+    h->shift = t_m - t_j; /* the join's end, t_j on its pieces, is t_m on the curve */
+    uint64_t traj = h->traj, node = h->node;
+    /* capacity (kcum) and rises (ucum) back from the head, as queued */
+    double kcum = h->kcum - h->seg.dur_s / fmax(h->vmax, ENGINE_SCALE_V_FLOOR_M_S);
+    double ucum = h->ucum, inv_next = 1.0 / fmax(h->vmax, ENGINE_SCALE_V_FLOOR_M_S);
+    for (int i = 2; i >= 0; i--) {
+        e->queue.head = (e->queue.head + e->queue.cap - 1) % e->queue.cap;
+        e->queue.len++;
+        qent_t *q = &e->queue.ent[e->queue.head];
+        memset(q, 0, sizeof(*q));
+        q->kind = QE_SEG;
+        q->join = 1;
+        q->node = node;
+        q->traj = traj;
+        q->seg = pc[i];
+        q->t1_s = pc[i].t0_s + pc[i].dur_s;
+        q->vmax = solve_seg_speed_max(&pc[i]);
+        q->ceil = solve_seg_ceiling(e, &pc[i], q->vmax, &q->ceil_axis);
+        double v = fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S), inv = 1.0 / v;
+        q->stop1 = ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / v, e->cfg.scale_jerk_m_s3 / v);
+        q->kcum = kcum;
+        kcum -= pc[i].dur_s * inv;
+        if (inv_next > inv)
+            ucum -= inv_next - inv;
+        q->ucum = ucum;
+        inv_next = inv;
+        if (q->ceil < TS_RATE_MAX) { /* the slow ring, in queue order */
+            e->queue.slow_head = (e->queue.slow_head + e->queue.cap - 1) % e->queue.cap;
+            e->queue.slow[e->queue.slow_head] = e->queue.head;
+            e->queue.slow_len++;
+        }
+    }
+}
+
+/* The output on the join's first piece from this tick on (n: the tick just
+ * sent, the join's start), on the unit grid at rate 1, streaming the new
+ * trajectory: a new track, as a transfer's. */
+static void join_begin(engine_t *e, double t0, double t_m, double T)
+{
+    e->out.join_t0 = t0;
+    e->out.join_tm = t_m;
+    e->out.join_dur = T;
+    if (e->scale.on) { /* the grid through the track time reached */
+        e->scale.s_off = e->scale.s - tick_time(e, e->out.n);
+        e->scale.on = 0;
+    }
+    e->scale.ts.rate = 1.0;
+    e->scale.ts.acc = 0.0;
+    e->scale.end_brake = 0;
+    e->out.traj = q_head(e)->traj;
+    play_take_segment(e);
+    e->out.seg_n0 = e->out.n;
+    play_seed_cur(e, e->out.n);
+    e->out.on_fd = 1;
+    play_find_avail(e);
+    e->out.finished = 0;
+    e->out.track++;
+    e->out.flags_pending |= ENGINE_SP_NEW_TRACK;
+    e->st.transfers_moving++;
+    e->out.flags_pending |= ENGINE_SP_TRANSFER;
+}
+
+int join_try(engine_t *e)
+{
+    join_find_t f;
+    int never;
+
+    if (!join_find(e, &f, &never)) {
+        if (never)
+            e->out.join_refused = e->out.traj + 1;
+        return 0;
+    }
+    double P = e->period_s, s = e->scale.on ? e->scale.s : tau_of(e, e->out.n);
+    double t_now = e->out.origin_t + s, A, J;
+    if (e->scale.on && !(e->scale.ts.rate > 0))
+        return 0; /* at rest: the transfer's (or the old curve's own end) */
+    scale_limits(e, &A, &J);
+    /* leave the old curve where its last interval begins, or where the
+     * time scaling begins to brake for its end (decide's test, a few ticks
+     * early), whichever is first */
+    if (t_now < f.t_last_ivl && !e->scale.end_brake &&
+        ts_stop_dist(1.0, 0.0, A, J) < scale_remaining(e, s) - (TS_MARGIN_TICKS + 2) * P)
+        return 0;
+    if (t_now >= f.t_end)
+        return 0;
+
+    double p0[AX], v0[AX], a0[AX];
+    memcpy(p0, out_pos(e), sizeof(p0));
+    memcpy(v0, out_vel(e), sizeof(v0));
+    memcpy(a0, out_acc(e), sizeof(a0));
+    double vlim = engine_config_max_speed(&e->cfg);
+    vlim = vlim > 0 ? ENGINE_SPEED_CAP * vlim : 0.0;
+    double T0 = ceil((f.t_first - t_now) / P - 1e-9) * P;
+    if (T0 < JOIN_MIN_TICKS * P)
+        T0 = JOIN_MIN_TICKS * P;
+    double T_hi = T0 + e->xfer.cfg.max_s;
+    int64_t ticks = llround(T0 / P), step = 1;
+    int short_queue = 0;
+
+    for (int c = 0;; c++) {
+        double T = (double)ticks * P;
+        if (T > T_hi)
+            break;
+        /* on the new curve as far as its track time ran (t_now + T), or
+         * as far as it is queued: then the join takes longer than the
+         * track time it covers (the output falls behind its data by the
+         * difference, less than a stop and transfer would) */
+        double t_m = fmin(t_now + T, f.t_last - P);
+        size_t idx;
+        const qent_t *q = t_m >= f.t_first ? seg_at(e, &f, t_m, &idx) : NULL;
+        if (!q) {
+            short_queue = !f.closed;
+            break;
+        }
+        /* the curve ahead once on it (the pieces, and the new curve queued
+         * beyond t_m) long enough to stop in at rate 1 */
+        double vq = fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
+        double need = ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / vq,
+                                   e->cfg.scale_jerk_m_s3 / vq) +
+                      (TS_MARGIN_TICKS + 2) * P;
+        int fits = (f.closed || T + (f.t_last - t_m) >= need) &&
+                   e->queue.len + 3 <= e->queue.cap + idx; /* room for the pieces */
+        double p1[AX], v1[AX], a1[AX];
+        fdiff_seg_t pc[3];
+        fdiff_eval(&q->seg, (t_m - q->seg.t0_s) / q->seg.dur_s, p1, v1, a1);
+        hermite_c2_segments(p0, v0, a0, p1, v1, a1, t_now, T, pc);
+        /* not the new curve's own where it is larger, at t_m (the piece's
+         * end) and for JOIN_AHEAD_S after it: near its start from rest the
+         * scaling would have ramped through it; t_m moves on to where it
+         * has settled */
+        double alim = fmax(e->cfg.scale_accel_m_s2, norm3(a0));
+        int settled = acc_ahead(e, idx, t_m, JOIN_AHEAD_S) <= alim;
+        fits = fits && settled && q->ceil >= 1.0;
+        /* it keeps moving: at least JOIN_KEEP of the lower of the two
+         * curves' own speeds, where it leaves the old and meets the new */
+        double vmin = JOIN_KEEP * fmin(out_cspeed(e), norm3(v1));
+        for (int i = 0; i < 3 && fits; i++)
+            fits = piece_fits(e, &pc[i], vlim, vmin, alim, e->cfg.scale_jerk_m_s3);
+        if (fits) {
+            join_splice(e, idx, t_m, t_now + T, pc);
+            join_begin(e, t_now, t_m, T);
+            return 1;
+        }
+        double d[AX] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+        if (t_m < t_now + T && (norm3(d) < vmin * T || !settled)) {
+            /* behind its data, a longer join only covers the same track
+             * more slowly (and meets the curve at the same t_m), and this
+             * one's mean speed is below the least it may keep already (or
+             * the curve there has not settled); more of the new curve may
+             * come by the next tick */
+            short_queue = !f.closed;
+            break;
+        }
+        if (c >= JOIN_STEP_TICKS) {
+            step = llround(JOIN_GROWTH * (T - T0) / P);
+            step = step < 1 ? 1 : step;
+        }
+        ticks += step;
+    }
+    if (!short_queue)
+        e->out.join_refused = e->out.traj + 1; /* the stop's, as before */
+    return 0;
+}
+
+int64_t join_ticks_left(const engine_t *e)
+{
+    join_find_t f;
+    int never;
+
+    if (!join_wanted(e) || !join_find(e, &f, &never))
+        return INT64_MAX; /* a push that brings one ends the window (its key) */
+    /* the braking for the end: plain_window keeps no decision beyond its
+     * start already (decide's test) */
+    double x = (f.t_last_ivl - (e->out.origin_t + tau_of(e, e->out.n))) / e->period_s;
+    if (!(x > 2))
+        return 0;
+    return x < 0x1p62 ? (int64_t)x - 2 : INT64_MAX / 2;
+}
+
+void join_track_time(engine_t *e)
+{
+    double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n);
+    double u = (e->out.origin_t + s - e->out.join_t0) / e->out.join_dur;
+    u = u < 0 ? 0 : u > 1 ? 1 : u;
+    e->out.t = e->out.join_t0 + (e->out.join_tm - e->out.join_t0) * u;
+}

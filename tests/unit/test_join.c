@@ -1,0 +1,385 @@
+/*
+ * test_join.c - transfers that keep moving (issue 32 item 2, lib/engine/join.c).
+ *
+ * The track: a straight line at 5 m/s along x, 10 Hz, for 40 s; from t = 20 s
+ * on it lies 1.5 m to the side (y = 1.5), with a speed limit of 5.2 m/s
+ * (profile none): no waypoint after the jump is within the limit from the
+ * last one before it, so the acceptance re-anchors on `confirm` of them
+ * (accept.h ACCEPT_START): two trajectories moving the same way.
+ *
+ * Every tick is checked against the setpoints before it, from the
+ * positions, velocities and accelerations the engine sends (no number of
+ * the engine's own taken as a reference): the position moves as the
+ * velocities say (trapezoid rule, to the jerk's T^3 term), the velocity as
+ * the accelerations say, the speed within 1.5 x the limit, the acceleration
+ * within the time scaling's 5 m/s^2 and the curve's own, its change per tick
+ * within the join's jerk (scale_jerk_m_s3) while on the join, within a
+ * stop's (max(j, a / T)) anywhere.
+ *
+ *   - loaded ahead, the join is made where the old curve's last interval
+ *     begins: the speed stays above 95 % of 5 m/s (fails on the old code:
+ *     the output braked to rest at the old curve's end, speed 0);
+ *   - pushed as it comes (each waypoint at its own time): the speed stays
+ *     above 50 % of 5 m/s (the issue's "done when"; fails on the old code);
+ *   - the new track moving the other way: no join keeps half the speed
+ *     (it must pass through rest), so the stop and rest-to-rest transfer as
+ *     before (transfers 1, transfers_moving 0, the speed 0 between);
+ *   - a per-axis speed limit of 0.3 m/s on y: pushed as it comes, no join
+ *     fits (the stop and transfer as before); loaded ahead, a long one does;
+ *   - a gap beyond max_gap_s in the data (moving on the same line): it
+ *     rests, as before;
+ *   - stop and clear in the middle of the join: the output brakes to rest
+ *     along it within the limits, and stands (stopped; waiting after the
+ *     clear).
+ * The curve the output meets is compared with scipy in
+ * tests/oracle/test_join.py.
+ */
+#include "test.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "engine.h"
+#include "engine_int.h"
+
+#define PERIOD_NS 10000000LL
+#define T_S 0.01
+#define V 5.0
+#define JUMP_T 20.0
+#define END_T 40.0
+
+typedef struct {
+    int ahead;      /* push every waypoint before the first tick */
+    double off_y;   /* the new track's offset */
+    double dir;     /* the new track's direction along x (+1 or -1) */
+    double gap_s;   /* a gap in the data at JUMP_T (the line goes on) */
+    double max_gap; /* max_gap_s (0: default) */
+    double axis_vy; /* y's axis_max_speed_m_s (0: free) */
+    int event;      /* 1 stop, 2 clear: made on the join, 20 ticks in */
+} opts_t;
+
+typedef struct {
+    double vmin;                 /* least speed between 5 s and the jump + 8 s */
+    double vmax, amax;           /* largest speed, acceleration */
+    double amax_join, jmax_join; /* largest acceleration and jerk on the join */
+    double pos_err, vel_err;     /* trapezoid residuals */
+    double jerk_any;             /* largest change of acceleration per second */
+    uint64_t moving, transfers, reanchors, hard;
+    int event_done, final_state;
+    double final_speed;
+} result_t;
+
+static double wp_x(const opts_t *o, double t)
+{
+    if (t < JUMP_T)
+        return V * t;
+    return V * JUMP_T + o->dir * V * (t - JUMP_T);
+}
+
+static void run(const opts_t *o, result_t *r)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    c.profile = ENGINE_PROFILE_NONE;
+    c.max_speed_m_s = 5.2;
+    c.max_accel_m_s2 = 0;
+    if (o->max_gap > 0)
+        c.max_gap_s = o->max_gap;
+    c.axis_max_speed_m_s[1] = o->axis_vy;
+    int err = 0;
+    engine_t *e = engine_new(&c, &err);
+    assert_non_null(e);
+    memset(r, 0, sizeof *r);
+    r->vmin = INFINITY;
+    int n = (int)lround(END_T * 10), k = 0, started = 0, join_ticks = 0;
+    engine_setpoint_t sp, pv;
+    memset(&pv, 0, sizeof pv);
+    for (int64_t tick = 0; tick < 20000; tick++) {
+        double now = (double)tick * T_S;
+        while (k < n && !r->event_done) { /* after a stop or clear the sender stops too */
+            double t = k * 0.1 + (k * 0.1 >= JUMP_T - 1e-9 ? o->gap_s : 0.0);
+            if (!o->ahead && t > now + 1e-9)
+                break;
+            engine_waypoint_t w;
+            memset(&w, 0, sizeof w);
+            w.t_s = t;
+            w.pos_m[0] = o->gap_s > 0 ? V * t : wp_x(o, k * 0.1);
+            w.pos_m[1] = k * 0.1 >= JUMP_T - 1e-9 ? o->off_y : 0.0;
+            assert_int_equal(engine_push(e, &w), 0);
+            if (++k == n)
+                assert_int_equal(engine_finish(e), 0);
+        }
+        int on_join = e->out.mode == OUT_STREAM && e->out.cur.join; /* the tick before */
+        assert_int_equal(engine_tick(e, tick * PERIOD_NS, &sp), 0);
+        double v = hypot(sp.vel_m_s[0], sp.vel_m_s[1]), a = hypot(sp.acc_m_s2[0], sp.acc_m_s2[1]);
+        if (tick > 0 && !isnan(pv.pos_m[0]) && !isnan(sp.pos_m[0])) {
+            for (int ax = 0; ax < 3; ax++) {
+                double dp = sp.pos_m[ax] - pv.pos_m[ax];
+                double pe = fabs(dp - 0.5 * (sp.vel_m_s[ax] + pv.vel_m_s[ax]) * T_S);
+                double ve = fabs(sp.vel_m_s[ax] - pv.vel_m_s[ax] -
+                                 0.5 * (sp.acc_m_s2[ax] + pv.acc_m_s2[ax]) * T_S);
+                r->pos_err = fmax(r->pos_err, pe);
+                r->vel_err = fmax(r->vel_err, ve);
+            }
+            double da = hypot(sp.acc_m_s2[0] - pv.acc_m_s2[0], sp.acc_m_s2[1] - pv.acc_m_s2[1]);
+            r->jerk_any = fmax(r->jerk_any, da / T_S);
+            if (on_join && e->out.cur.join && !r->event_done) { /* both ticks on it */
+                r->jmax_join = fmax(r->jmax_join, da / T_S);
+                r->amax_join = fmax(r->amax_join, a);
+            }
+        }
+        if (v > V - 0.01)
+            started = 1;
+        if (started && sp.t_s > 5 && sp.t_s < JUMP_T + 8 && !o->event)
+            r->vmin = fmin(r->vmin, v);
+        r->vmax = fmax(r->vmax, v);
+        r->amax = fmax(r->amax, a);
+        if (o->event && !r->event_done && e->out.cur.join && ++join_ticks == 20) {
+            if (o->event == 1)
+                assert_int_equal(engine_stop(e), 0);
+            else
+                engine_clear(e);
+            r->event_done = 1;
+        }
+        pv = sp;
+    }
+    r->final_state = sp.state;
+    r->final_speed = hypot(sp.vel_m_s[0], sp.vel_m_s[1]);
+    engine_status_t st;
+    engine_status(e, &st);
+    r->moving = st.transfers_moving;
+    r->transfers = st.transfers;
+    r->reanchors = st.reanchors;
+    r->hard = st.hard_stops;
+    engine_free(e);
+    print_message(
+        "ahead %d off %.1f dir %+.0f gap %.0f axis_vy %.2f event %d: vmin %.4f vmax %.4f "
+        "amax %.3f join %.3f jerk join %.2f any %.1f pos_err %.2g vel_err %.2g moving %llu "
+        "transfers %llu reanchors %llu\n",
+        o->ahead, o->off_y, o->dir, o->gap_s, o->axis_vy, o->event, r->vmin, r->vmax, r->amax,
+        r->amax_join, r->jmax_join, r->jerk_any, r->pos_err, r->vel_err,
+        (unsigned long long)r->moving, (unsigned long long)r->transfers,
+        (unsigned long long)r->reanchors);
+}
+
+/* What every run keeps, tick by tick. */
+static void check_limits(const result_t *r)
+{
+    /* no position step: a stop's jerk 500 m/s^3 leaves 500 T^3 / 12 = 4e-5 m */
+    assert_true(r->pos_err < 1e-4);
+    assert_true(r->vel_err < 1e-2);    /* no velocity step: 500 T^2 / 12 = 4e-3 m/s */
+    assert_true(r->vmax <= 1.5 * 5.2); /* ENGINE_SPEED_CAP x the limit */
+    /* the acceleration of the curves' rest ends with the scaling's ramps
+     * (the old code's too: 7.3 m/s^2 on this track); a stop's jerk
+     * max(j, a / T) = 500 m/s^3 with the curve's own */
+    assert_true(r->amax <= 8.0);
+    assert_true(r->jerk_any <= 500.0 + 100.0);
+    /* on the join: within scale_accel_m_s2 (or the state it left) and
+     * scale_jerk_m_s3 (50), tick to tick */
+    assert_true(r->amax_join <= 5.5);
+    assert_true(r->jmax_join <= 50.0 + 1e-6);
+    assert_int_equal(r->hard, 0);
+}
+
+static void test_ahead_keeps_speed(void **state)
+{
+    (void)state;
+    opts_t o = {.ahead = 1, .off_y = 1.5, .dir = 1};
+    result_t r;
+    run(&o, &r);
+    check_limits(&r);
+    assert_int_equal(r.reanchors, 1);
+    assert_int_equal(r.moving, 1);
+    assert_int_equal(r.transfers, 0);
+    assert_true(r.vmin > 0.95 * V);
+}
+
+static void test_live_keeps_half_speed(void **state)
+{
+    (void)state;
+    opts_t o = {.ahead = 0, .off_y = 1.5, .dir = 1};
+    result_t r;
+    run(&o, &r);
+    check_limits(&r);
+    assert_int_equal(r.reanchors, 1);
+    assert_int_equal(r.moving, 1);
+    assert_int_equal(r.transfers, 0);
+    assert_true(r.vmin >= 0.5 * V); /* issue 32: not below 50 % of the lower speed */
+}
+
+static void test_other_way_stops(void **state)
+{
+    (void)state;
+    for (int ahead = 0; ahead < 2; ahead++) {
+        opts_t o = {.ahead = ahead, .off_y = 10.0, .dir = -1};
+        result_t r;
+        run(&o, &r);
+        check_limits(&r);
+        assert_int_equal(r.reanchors, 1);
+        assert_int_equal(r.moving, 0);
+        assert_int_equal(r.transfers, 1);
+        assert_true(r.vmin < 1e-9); /* at rest between the two */
+    }
+}
+
+static void test_axis_limit(void **state)
+{
+    (void)state;
+    /* y held to 0.3 m/s: the join needs 1.5 x 1.5 m / 0.3 m/s = 7.5 s at
+     * least; pushed as it comes, no such join is queued while the old
+     * curve's end nears: the stop and transfer */
+    opts_t o = {.ahead = 0, .off_y = 1.5, .dir = 1, .axis_vy = 0.3};
+    result_t r;
+    run(&o, &r);
+    check_limits(&r);
+    assert_int_equal(r.reanchors, 1);
+    assert_int_equal(r.moving, 0);
+    assert_int_equal(r.transfers, 1);
+    assert_true(r.vmin < 1e-9);
+    /* loaded ahead, the long join is there: it keeps the speed and y's limit */
+    o.ahead = 1;
+    run(&o, &r);
+    check_limits(&r);
+    assert_int_equal(r.moving, 1);
+    assert_int_equal(r.transfers, 0);
+    assert_true(r.vmin > 0.5 * V);
+}
+
+static void test_gap_rests(void **state)
+{
+    (void)state;
+    for (int ahead = 0; ahead < 2; ahead++) {
+        opts_t o = {.ahead = ahead, .dir = 1, .gap_s = 5.0, .max_gap = 2.0};
+        result_t r;
+        run(&o, &r);
+        check_limits(&r);
+        assert_int_equal(r.moving, 0);
+        assert_true(r.vmin < 1e-9);
+    }
+}
+
+static void test_stop_and_clear_on_join(void **state)
+{
+    (void)state;
+    for (int ev = 1; ev <= 2; ev++)
+        for (int ahead = 0; ahead < 2; ahead++) {
+            opts_t o = {.ahead = ahead, .off_y = 1.5, .dir = 1, .event = ev};
+            result_t r;
+            run(&o, &r);
+            check_limits(&r);
+            assert_int_equal(r.event_done, 1);
+            assert_int_equal(r.moving, 1);
+            assert_true(r.final_speed < 1e-12);
+            if (ev == 1)
+                assert_int_equal(r.final_state, ENGINE_STATE_FINISHED);
+            else
+                assert_int_equal(r.final_state, ENGINE_STATE_WAITING);
+        }
+}
+
+/* Random re-anchors: a line of 1..21 m/s at 1, 5 or 10 Hz, every method,
+ * loaded ahead or live, 100 Hz or 1 kHz output, re-anchored 3..30 m aside
+ * and turned up to 1.5 rad.  On every join, from the state it leaves (|a0|)
+ * until 1 s of track time after it has met the new curve, the acceleration
+ * stays within max(scale_accel_m_s2, |a0|), and the time scaling's own 5
+ * m/s^2 more where it scales; the jerk on the join within scale_jerk_m_s3;
+ * onto, on and off it no step (trapezoid residuals).
+ * (Before the join waited for the new curve's start from rest to settle, a
+ * 20 m/s line met it where its own acceleration was 49 m/s^2.)  Also: no
+ * hard stop. */
+static void test_random_reanchors(void **state)
+{
+    (void)state;
+    unsigned seed = 4242, joins = 0, reanchored = 0;
+    for (int run = 0; run < 120; run++) {
+        engine_config_t c;
+        engine_config_default(&c);
+        c.profile = ENGINE_PROFILE_NONE;
+        c.max_accel_m_s2 = 0;
+        double v = 1 + urand(&seed) * 20, hz = urand(&seed) < 0.5 ? 10 : urand(&seed) < 0.5 ? 1 : 5;
+        c.max_speed_m_s = v * (1.02 + urand(&seed) * 0.1);
+        c.method = (engine_method_t)(int)(urand(&seed) * 6.99);
+        c.period_ns = urand(&seed) < 0.3 ? 1000000 : 10000000;
+        int ahead = urand(&seed) < 0.5;
+        double off = 3 + urand(&seed) * 27, ang = (urand(&seed) - 0.5) * 3.0;
+        int err = 0;
+        engine_t *e = engine_new(&c, &err);
+        assert_non_null(e);
+        double dt = 1 / hz, T = (double)c.period_ns * 1e-9;
+        int n = (int)(60 * hz), nj = (int)(20 * hz), k = 0;
+        engine_setpoint_t sp, pv;
+        memset(&pv, 0, sizeof pv);
+        double alim = 0, watch_until = -1, pe = 0, ve = 0;
+        int was_join = 0;
+        for (int64_t tick = 0; tick < (int64_t)(200.0 / T); tick++) {
+            while (k < n && (ahead || k * dt <= (double)tick * T)) {
+                engine_waypoint_t w;
+                memset(&w, 0, sizeof w);
+                w.t_s = k * dt;
+                if (k < nj) {
+                    w.pos_m[0] = v * w.t_s;
+                } else {
+                    double d = v * (k - nj) * dt;
+                    w.pos_m[0] = v * nj * dt + 0.3 * off + d * cos(ang);
+                    w.pos_m[1] = off + d * sin(ang);
+                }
+                engine_push(e, &w);
+                if (++k == n)
+                    engine_finish(e);
+            }
+            assert_int_equal(engine_tick(e, tick * c.period_ns, &sp), 0);
+            int on = e->out.mode == OUT_STREAM && e->out.cur.join;
+            double a = hypot(sp.acc_m_s2[0], sp.acc_m_s2[1]);
+            if (on && !was_join) { /* a join begins: from the state it leaves */
+                alim = fmax(c.scale_accel_m_s2, hypot(pv.acc_m_s2[0], pv.acc_m_s2[1]));
+                joins++;
+            }
+            if (on)
+                watch_until = sp.t_s + 1.0;
+            if (on || sp.t_s <= watch_until) {
+                double bound = alim + ((sp.flags & ENGINE_SP_SCALED) ? c.scale_accel_m_s2 : 0.0);
+                if (a > bound * (1 + 1e-6) + 1e-9)
+                    fail_msg("run %d: |a| %.3f m/s^2 at t_s %.3f beyond %.3f on or after a join",
+                             run, a, sp.t_s, bound);
+                double da = hypot(sp.acc_m_s2[0] - pv.acc_m_s2[0], sp.acc_m_s2[1] - pv.acc_m_s2[1]);
+                if (on && was_join && da > c.scale_jerk_m_s3 * T * (1 + 1e-6) + 1e-12 &&
+                    !(sp.flags & ENGINE_SP_SCALED))
+                    fail_msg("run %d: jerk %.2f m/s^3 on a join", run, da / T);
+            }
+            if ((on || was_join) && !isnan(pv.pos_m[0])) /* onto, on and off a join */
+                for (int ax = 0; ax < 2; ax++) {
+                    pe = fmax(pe, fabs(sp.pos_m[ax] - pv.pos_m[ax] -
+                                       0.5 * (sp.vel_m_s[ax] + pv.vel_m_s[ax]) * T));
+                    ve = fmax(ve, fabs(sp.vel_m_s[ax] - pv.vel_m_s[ax] -
+                                       0.5 * (sp.acc_m_s2[ax] + pv.acc_m_s2[ax]) * T));
+                }
+            was_join = on;
+            pv = sp;
+        }
+        engine_status_t st;
+        engine_status(e, &st);
+        reanchored += st.reanchors > 0;
+        assert_int_equal(st.hard_stops, 0);
+        /* the curves' own and the scaling's jerk, not a step (a C1 method's
+         * acceleration steps at its nodes: within 30 m/s^2 here) */
+        /* onto, on and off the joins: no step; the join's jerk (50 m/s^3,
+         * the scaling's where it scales) leaves j T^3 / 12 and j T^2 / 12 */
+        assert_true(pe < 1e-5);
+        assert_true(ve < 2e-3);
+        engine_free(e);
+    }
+    print_message("%u joins in %u re-anchoring runs of 120\n", joins, reanchored);
+    assert_true(joins >= reanchored / 4);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_ahead_keeps_speed), cmocka_unit_test(test_live_keeps_half_speed),
+        cmocka_unit_test(test_other_way_stops),   cmocka_unit_test(test_axis_limit),
+        cmocka_unit_test(test_gap_rests),         cmocka_unit_test(test_stop_and_clear_on_join),
+        cmocka_unit_test(test_random_reanchors),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
