@@ -69,6 +69,17 @@ def stop_s(v):
     return v / (2 * A) + A / (2 * J)  # D adds 2 periods of margin (TS_MARGIN_TICKS)
 
 
+def run_trajd(tmp, path, speed):
+    """trajd replaying path as object 'a' at speed (CSV output in tmp); its run."""
+    conf = os.path.join(tmp, "t.conf")
+    with open(conf, "w") as f:
+        f.write("[daemon]\nrate_hz = 100\nspeed = %d\nexit_when_done = yes\n"
+                "status_interval_s = 0\n[object.a]\ninput = replay\n"
+                "replay.track = %s\noutput = csv\ncsv.path = %s\n"
+                % (speed, path, os.path.join(tmp, "a.csv")))
+    return subprocess.run([TRAJD, "-f", "-c", conf], capture_output=True, text=True, timeout=120)
+
+
 def replay(path, *args):
     p = subprocess.run([TRAJREPLAY, "-q", "--summary", *args, path], capture_output=True,
                        text=True, timeout=300)
@@ -280,14 +291,7 @@ class TestDaemonStatesD(unittest.TestCase):
     def test_each_trajectory_logged(self):
         with tempfile.TemporaryDirectory() as tmp:
             path, x, y = gap_track(tmp)
-            conf = os.path.join(tmp, "t.conf")
-            with open(conf, "w") as f:
-                f.write("[daemon]\nrate_hz = 100\nspeed = 50\nexit_when_done = yes\n"
-                        "status_interval_s = 0\n[object.a]\ninput = replay\n"
-                        "replay.track = %s\noutput = csv\ncsv.path = %s\n"
-                        % (path, os.path.join(tmp, "a.csv")))
-            p = subprocess.run([TRAJD, "-f", "-c", conf], capture_output=True, text=True,
-                               timeout=120)
+            p = run_trajd(tmp, path, 50)
             self.assertEqual(p.returncode, 0, p.stderr[-2000:])
             s = replay_summary.parse(replay(path).stderr)
         lines = [l for l in p.stderr.splitlines() if "streams: play-out delay" in l]
@@ -338,14 +342,7 @@ class TestUnderrunsTold(unittest.TestCase):
     def test_hole_told_by_trajd(self):
         with tempfile.TemporaryDirectory() as tmp:
             path, _ = self.hole(tmp)
-            conf = os.path.join(tmp, "t.conf")
-            with open(conf, "w") as f:
-                f.write("[daemon]\nrate_hz = 100\nspeed = 20\nexit_when_done = yes\n"
-                        "status_interval_s = 0\n[object.a]\ninput = replay\n"
-                        "replay.track = %s\noutput = csv\ncsv.path = %s\n"
-                        % (path, os.path.join(tmp, "a.csv")))
-            p = subprocess.run([TRAJD, "-f", "-c", conf], capture_output=True, text=True,
-                               timeout=120)
+            p = run_trajd(tmp, path, 20)
         self.assertEqual(p.returncode, 0, p.stderr[-2000:])
         told = [l for l in p.stderr.splitlines() if "object 'a': underrun at t = " in l]
         self.assertEqual(len(told), 1, p.stderr[-2000:])

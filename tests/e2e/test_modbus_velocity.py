@@ -33,6 +33,9 @@ WAIT_S = 30
 N = 40
 DT = 0.2
 W = 0.6
+# trajd.conf before the objects: Modbus writes on an ephemeral port
+CONF_HEAD = ("[daemon]\nrate_hz = 100\nstatus_interval_s = 0\nstop_timeout_s = 1\n"
+             "[modbus]\naddress = 127.0.0.1\nport = 0\nwrites = yes\nsystemd_socket = no\n")
 
 
 def helix():
@@ -56,9 +59,7 @@ class VelocityBlock(unittest.TestCase):
         with tempfile.TemporaryDirectory() as d:
             conf = os.path.join(d, "trajd.conf")
             with open(conf, "w") as f:
-                f.write("[daemon]\nrate_hz = 100\nstatus_interval_s = 0\nstop_timeout_s = 1\n"
-                        "[modbus]\naddress = 127.0.0.1\nport = 0\nwrites = yes\n"
-                        "systemd_socket = no\n")
+                f.write(CONF_HEAD)
                 for k in range(2):
                     f.write("[object.o%d]\nid = %d\ninput = modbus\noutput = csv\n"
                             "csv.path = %s\nmethod = hermite\nends = natural\nprofile = none\n"
@@ -125,9 +126,7 @@ class ArrivalVerdict(unittest.TestCase):
         with tempfile.TemporaryDirectory() as d:
             conf = os.path.join(d, "trajd.conf")
             with open(conf, "w") as f:
-                f.write("[daemon]\nrate_hz = 100\nstatus_interval_s = 0\nstop_timeout_s = 1\n"
-                        "[modbus]\naddress = 127.0.0.1\nport = 0\nwrites = yes\n"
-                        "systemd_socket = no\n")
+                f.write(CONF_HEAD)
                 for k, ml in enumerate((1, 2)):
                     f.write("[object.o%d]\nid = %d\ninput = modbus\noutput = csv\n"
                             "csv.path = %s\nmax_lookahead = %d\n"
