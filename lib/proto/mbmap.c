@@ -286,6 +286,8 @@ int mbmap_encode_diag(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_obje
             mbmap_put_u32(b + MBMAP_X_REJECTED_BY + 2 * (c - 1), lo32(o->st.rejected_by[c]));
     mbmap_put_f64(b + MBMAP_X_AXIS_LOST_S, o->st.axis_lost_s);
     mbmap_put_u32(b + MBMAP_X_AXIS_SLOWED, lo32(o->st.axis_slowed));
+    mbmap_put_u32(b + MBMAP_X_TRANSFERS_MOVING, lo32(o->st.transfers_moving));
+    mbmap_put_u32(b + MBMAP_X_DELAY_GROWN, lo32(o->st.delay_grown));
     mbmap_put_f64(b + MBMAP_X_HEADING, o->heading_deg);
     mbmap_put_f64(b + MBMAP_X_HEADING_UNWRAPPED, o->heading_unwrapped_deg);
     mbmap_put_u32(b + MBMAP_X_TX_CLAMPED, lo32(o->tx_clamped));
@@ -712,6 +714,11 @@ static const mbmap_field_t fields[] = {
       "along its path"),
     F(IX, MBMAP_X_AXIS_SLOWED, 2, MBMAP_T_U32, "axis_slowed", "",
       "segments the per-axis limits slow"),
+    F(IX, MBMAP_X_TRANSFERS_MOVING, 2, MBMAP_T_U32, "transfers_moving", "",
+      "re-anchors joined moving: the output met the new trajectory without braking to rest "
+      "(lib/engine/join.c)"),
+    F(IX, MBMAP_X_DELAY_GROWN, 2, MBMAP_T_U32, "delay_grown", "",
+      "times the play-out delay D grew with the input's intervals (lib/engine/delay.h)"),
     F(IX, MBMAP_X_HEADING, 4, MBMAP_T_F64, "heading", "deg",
       "heading axis at the setpoint's track time, wrapped to (-180, 180] (a track column heading: "
       "unwrapped, monotone cubic, lib/util/angle.h); NaN without one"),

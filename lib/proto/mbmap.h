@@ -192,6 +192,8 @@
 #define MBMAP_X_REJ_STALE 26         /* u32 ENGINE_ESTALE (13) */
 #define MBMAP_X_AXIS_LOST_S 40       /* f64 time lost to the per-axis limits, s (engine_status_t axis_lost_s) */
 #define MBMAP_X_AXIS_SLOWED 44       /* u32 segments the per-axis limits slow */
+#define MBMAP_X_TRANSFERS_MOVING 46  /* u32 re-anchors joined moving (engine_status_t transfers_moving) */
+#define MBMAP_X_DELAY_GROWN 48       /* u32 times D grew with the input's intervals (delay_grown) */
 #define MBMAP_X_HEADING 50           /* f64 heading axis, degrees in (-180, 180] (NaN: none) */
 #define MBMAP_X_HEADING_UNWRAPPED 54 /* f64 the same, continuous (no jump at +-180): for a rotary axis */
 #define MBMAP_X_TX_CLAMPED 58       /* u32 setpoints sent on CAN with a value clipped to its field (speed beyond the SETPOINT frame's +-32.767 m/s ...) */
