@@ -865,6 +865,16 @@ static size_t summary_motion(const obj_t *o, char *buf, size_t len, size_t n)
                      o->status.axis_lost_s, (unsigned long long)o->status.axis_slowed);
         n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
     }
+    if (o->status.transfers_moving && n < len) { /* issue 32: lib/engine/join.c */
+        m = snprintf(buf + n, len - n, ", %llu re-anchors joined moving",
+                     (unsigned long long)o->status.transfers_moving);
+        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+    }
+    if (o->status.delay_grown && n < len) { /* issue 26: engine_delay_grow */
+        m = snprintf(buf + n, len - n, ", D grown %llu times",
+                     (unsigned long long)o->status.delay_grown);
+        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+    }
     return n;
 }
 

@@ -163,6 +163,9 @@ def main():
         r2 = rows(os.path.join(d, "trajd.csv"))
         check(p2.returncode == 0 and not (r2[3] & 0x20).any(),  # ENGINE_SP_FAULT
               "trajd: exit %d, no setpoint held by the safety monitor" % p2.returncode)
+        ex = [ln for ln in p2.stderr.splitlines() if "exit: " in ln]
+        check(len(ex) == 1 and "1 re-anchors joined moving" in ex[0],
+              "trajd: its exit line tells the join: %s" % (ex[0][-200:] if ex else p2.stderr[-300:]))
         check_join("trajd", *r2, wt, wp, timed=True)
 
         # the other way, 10 m aside: the stop and transfer, as before
