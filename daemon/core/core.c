@@ -80,10 +80,9 @@ static double obj_safety_accel(const engine_config_t *e)
  * engine limits (the ones in force, the profile's included): speed 2 x
  * max_speed_m_s (the engine's transfer peaks at 1.5 x; no speed limit leaves
  * it unchecked), no absolute step bound, acceleration derived as
- * obj_safety_accel says.
+ * obj_safety_accel says; per axis SAFETY_AXIS_MARGIN (safety.h) above the
+ * engine's per-axis limits.
  */
-#define SAFETY_AXIS_MARGIN 1.1
-
 static void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim)
 {
     memset(lim, 0, sizeof *lim);

@@ -64,9 +64,12 @@
  *       gpxgo_visnjan: up to 9.0 m/s on a walk), by their ratio: such
  *       waypoints (ratio above ENGINE_UNIFORM_RATIO_WARN) are counted in
  *       engine_status_t uniform_irregular, and trajd and trajreplay warn.
- *   (b) ENGINE_PARAM_TIME     knots at the timestamps: C2 in physical time
- *       (jumps only from the fragment junctions, 4.0e-6 m/s on the same track
- *       with the defaults, F=28, O=24).  The default, because motion controllers follow
+ *   (b) ENGINE_PARAM_TIME     knots at the timestamps: C2 in physical time,
+ *       but at the nodes about a fragment junction, which are joined in
+ *       velocity (cubic_join) and step in acceleration by the junction's
+ *       residual (before the join, they stepped in velocity: 4.0e-6 m/s on
+ *       the same track with the defaults, F=28, O=24; 196 m/s on a 90 m/s
+ *       zig-zag at F=6, O=2).  The default, because motion controllers follow
  *       velocity and acceleration, and real tracks are irregular.
  * METHOD_BSPLINE with PARAM_TIME is the non-uniform cubic B-spline
  * interpolant on the timestamps, which is the same curve as METHOD_CUBIC with

@@ -193,6 +193,7 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
     for (int k = 0; k < AX; k++) {
         double v = (seg->c[k][1] + 2 * seg->c[k][2] + 3 * seg->c[k][3]) / seg->dur_s;
         e->solve.end_r[k] = seg->c[k][0] + seg->c[k][1] + seg->c[k][2] + seg->c[k][3];
+        e->solve.end_v[k] = v;
         v2 += v * v;
     }
     e->solve.end_speed = sqrt(v2);
@@ -301,6 +302,11 @@ static void build_segments(engine_t *e)
         } else {
             cubic_segment(nr(e, j), nr(e, j + 1), frag_x(e->solve.fw, j),
                           frag_x(e->solve.fw, j + 1), hpar(e, j), nt(e, j), dur, &seg);
+            /* knots at the timestamps: continuous in velocity at the
+             * fragments' junctions too (cubic_join; the uniform
+             * parameterisation steps there by design, DESIGN.md (a)) */
+            if (e->solve.emitted && e->cfg.param == ENGINE_PARAM_TIME)
+                (void)cubic_join(&seg, e->solve.end_v);
         }
         queue_segment(e, &seg, j);
     }
