@@ -443,9 +443,10 @@ static void print_summary(const track_t *trk, const replay_t *r, const engine_st
             "summary: lag_s %.6g\n"
             "summary: axis_lost_s %.6g\n"
             "summary: axis_slowed %" PRIu64 "\n"
-            "summary: axis_lag_stops %" PRIu64 "\n",
+            "summary: axis_lag_stops %" PRIu64 "\n"
+            "summary: axis_beyond %" PRIu64 "\n",
             st->stops, st->stop_fixes, st->retimed, st->retime_max_s, st->silent_ends, st->catchups,
-            st->lag_s, st->axis_lost_s, st->axis_slowed, st->axis_lag_stops);
+            st->lag_s, st->axis_lost_s, st->axis_slowed, st->axis_lag_stops, st->axis_beyond);
 }
 
 /* The play-out delay D the engine held and its parts (lib/engine/delay.h):
@@ -746,6 +747,11 @@ static void run_report_uniform(run_t *run)
 static void run_report_axis(run_t *run)
 {
     engine_status(run->e, &run->st);
+    if (run->st.axis_beyond) /* stopped on the path there (engine_axis_lag_over) */
+        fprintf(stderr,
+                "trajreplay: %s: error: stopped before a segment over 100 times faster "
+                "on an axis than its axis_max_*\n",
+                run->o->input);
     if (!(run->st.axis_lost_s > AXIS_LOST_WARN_FRAC * run->span_s))
         return;
     fprintf(stderr,

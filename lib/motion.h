@@ -169,6 +169,10 @@ typedef struct {
     double axis_lag_s;              /* while the per-axis limits hold the rate: how far the
                                        output trails the newest waypoint beyond D */
     uint64_t axis_lag_stops;        /* stops because axis_lag_s passed max_lag_s */
+    uint64_t axis_beyond;           /* stops before a segment the per-axis limits cannot
+                                       follow: it would need a rate below ENGINE_CEIL_MIN
+                                       (the track over 100 times faster on an axis than
+                                       its limit); told as the lag is */
 } engine_status_t;
 
 /* clang-format on */

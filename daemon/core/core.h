@@ -121,6 +121,7 @@ typedef struct obj {
     uint64_t safety_logged;       /* safety violations already logged */
     int axis_warned;              /* issue 32: the per-axis limits' warning given */
     uint64_t axis_stops_logged;   /* ... and the max_lag_s stops logged */
+    uint64_t axis_beyond_logged;  /* ... and the stops before a segment beyond the axes */
     int uniform_warned;           /* param = uniform met irregular intervals: warned once */
     rejlog_t rejlog;              /* sources of the last waypoints offered, and the refusals
                                      * to log (rejlog.h; kept when carried) */

@@ -328,7 +328,9 @@ typedef struct {
      * (scale_jerk_m_s3) is taken down to a third (half) of the smallest
      * (resolve), the share its dr/dt term may add.  Transfers last long enough for every
      * axis.  The path is never left; the time lost is axis_lost_s
-     * (engine_status_t). */
+     * (engine_status_t).  A segment that would need a rate below 1/100 (over 100
+     * times faster on an axis than its limit) is not entered: the output rests
+     * before it and the owner is told to stop (engine_axis_lag_over, axis_beyond). */
     double axis_max_speed_m_s[ENGINE_AXES];
     double axis_max_accel_m_s2[ENGINE_AXES];
     double axis_max_jerk_m_s3[ENGINE_AXES];
@@ -390,7 +392,9 @@ typedef struct engine engine_t;
 engine_t *engine_new(const engine_config_t *cfg, int *err);
 
 /* 1 once each time a trajectory's lag from the per-axis limits passes
- * max_lag_s (issue 32), then 0 until the next: the caller stops the object
+ * max_lag_s (issue 32), or its output stands at rest before a segment the
+ * per-axis limits cannot follow (engine_status_t axis_beyond: it would need a
+ * rate below 1/100), then 0 until the next: the caller stops the object
  * (the lifecycle: LC_EV_LAG; trajreplay: engine_stop). */
 int engine_axis_lag_over(engine_t *e);
 

@@ -3,7 +3,7 @@
  * item 1): the curve is continuous in velocity where fragments meet, and a
  * track far faster on an axis than its limit never takes the output past it.
  *
- * The track: a zig-zag in y of +-9 m every 0.2 s (90 m/s chords, a turn at
+ * The track (items 1, 2): a zig-zag in y of +-9 m every 0.2 s (90 m/s chords, a turn at
  * every waypoint) drifting 0.5 m per waypoint in x, solved in fragments of 6
  * overlapping by 2 with natural ends (fuzz_engine's configuration 2).  The
  * second derivatives about a junction come from two fragments whose values
@@ -183,11 +183,88 @@ static void test_axis_limits_across_junctions(void **state)
     stream(ENGINE_METHOD_BSPLINE, 20);
 }
 
+/* Given a track along x at 1 m/s for 10 s, then at 10 m/s (a sprint), and
+ * x limited to 0.05 m/s and 1 m/s^2: the slow part is 20 times faster than
+ * x may go (rate 1/30 at the cubic's 1.5), the sprint 200 times, beyond the
+ * lowest rate the output may stand at (ENGINE_CEIL_MIN, 1/100).  When it
+ * streams, every tick through lib/safety with the daemon's per-axis bounds,
+ * the owner stopping the object when told (engine_axis_lag_over, as the
+ * lifecycle and trajreplay do), then it follows the slow part, stands at
+ * rest before the sprint, is told once (axis_beyond 1), stops there
+ * (FINISHED) and never exceeds an axis's bound.  Before: the ceilings stopped
+ * at 1/100, and the monitor refused the output entering the sprint (x 10.007
+ * m, 0.0552 m/s against 0.055). */
+static void test_track_beyond_the_axes_stops_before(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_t *e;
+    safety_t mon;
+    safety_limits_t lim;
+    engine_setpoint_t sp;
+    engine_status_t st;
+    int64_t now = 0;
+    int told = 0;
+    double x_told = NAN, v_told = NAN;
+
+    engine_config_default(&c);
+    c.period_ns = PERIOD_NS;
+    c.max_speed_m_s = 20;
+    c.axis_max_speed_m_s[0] = 0.05;
+    c.axis_max_accel_m_s2[0] = 1;
+    e = engine_new(&c, NULL);
+    assert_non_null(e);
+    memset(&lim, 0, sizeof lim);
+    lim.axis_speed_m_s[0] = SAFETY_AXIS_MARGIN * c.axis_max_speed_m_s[0];
+    lim.axis_accel_m_s2[0] = SAFETY_AXIS_MARGIN * c.axis_max_accel_m_s2[0];
+    safety_init(&mon, &lim);
+    double x = 0;
+    for (int i = 0; i <= 20; i++) {
+        engine_waypoint_t w;
+        memset(&w, 0, sizeof w);
+        w.t_s = i;
+        w.pos_m[0] = x;
+        w.seq = (uint32_t)i + 1;
+        assert_int_equal(engine_push(e, &w), 0);
+        x += i < 10 ? 1.0 : 10.0;
+    }
+    assert_int_equal(engine_finish(e), 0);
+    for (long ticks = 0; ticks < 1000000; ticks++) {
+        now += PERIOD_NS;
+        assert_int_equal(engine_tick(e, now, &sp), 0);
+        int rc = safety_check(&mon, &sp);
+        if (rc != SAFETY_OK)
+            fail_msg("tick at %.2f s (t_s %.4f, x %.4f) refused: %s (%.3g, bound %.3g)",
+                     (double)now * 1e-9, sp.t_s, sp.pos_m[0], safety_strerror(rc), mon.last_value,
+                     mon.last_limit);
+        if (engine_axis_lag_over(e)) {
+            told++;
+            x_told = sp.pos_m[0];
+            v_told = sp.vel_m_s[0];
+            (void)engine_stop(e);
+        }
+        engine_status(e, &st);
+        if (st.state == ENGINE_STATE_FINISHED)
+            break;
+    }
+    print_message("told at x %.4f m (the sprint starts at 10 m), v %.3g m/s, %.1f s; FINISHED "
+                  "at x %.4f\n",
+                  x_told, v_told, (double)now * 1e-9, sp.pos_m[0]);
+    assert_int_equal(st.state, ENGINE_STATE_FINISHED);
+    assert_int_equal(told, 1);
+    assert_int_equal(st.axis_beyond, 1);
+    assert_true(x_told > 5.0 && x_told < 10.0); /* followed the slow part, not the sprint */
+    assert_true(fabs(v_told) < 1e-12);          /* at rest when told */
+    assert_true(fabs(sp.pos_m[0] - x_told) < 1e-9);
+    engine_free(e);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_junctions_continuous_in_velocity),
         cmocka_unit_test(test_axis_limits_across_junctions),
+        cmocka_unit_test(test_track_beyond_the_axes_stops_before),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
