@@ -333,6 +333,8 @@ void scale_step(engine_t *e, double target, double R, double A, double J)
     double r0 = e->scale.ts.rate;
     ts_state_t free_ts = e->scale.ts; /* issue 26: held back only if the move differs */
     double ds = ts_step(&e->scale.ts, target, fmin(R, Rc), A, J, e->period_s, NULL, &lim);
+    if (e->out.mode == OUT_XFER && !(ds > 0) && at_rest(e) && target > 0)
+        ds = ts_creep(&e->scale.ts, fmin(R, Rc), A, J, e->period_s); /* its end, short of it */
     if (lim && !(ds < ts_step(&free_ts, target, INFINITY, A, J, e->period_s, NULL, NULL)))
         lim = 0; /* the curve ahead is short of a stop from the target, but the
                   * move is the one without it (a ramp from rest): no underrun */
