@@ -64,6 +64,8 @@
  *       gpxgo_visnjan: up to 9.0 m/s on a walk), by their ratio: such
  *       waypoints (ratio above ENGINE_UNIFORM_RATIO_WARN) are counted in
  *       engine_status_t uniform_irregular, and trajd and trajreplay warn.
+ *       With a per-axis limit set (axis_max_*) the segments are joined in
+ *       velocity instead (cubic_join): no axis holds its limits across a step.
  *   (b) ENGINE_PARAM_TIME     knots at the timestamps: C2 in physical time,
  *       but at the nodes about a fragment junction, which are joined in
  *       velocity (cubic_join) and step in acceleration by the junction's

@@ -264,6 +264,16 @@ static void end_vel_param(const engine_t *e, int at_end, double *v)
         v[k] = src[k] * scale;
 }
 
+/* issue 32: a per-axis limit is set (engine.h axis_max_*). */
+static int axis_limited(const engine_t *e)
+{
+    for (int k = 0; k < AX; k++)
+        if (e->cfg.axis_max_speed_m_s[k] > 0 || e->cfg.axis_max_accel_m_s2[k] > 0 ||
+            e->cfg.axis_max_jerk_m_s3[k] > 0)
+            return 1;
+    return 0;
+}
+
 /* Build and queue every segment whose control values are final. */
 static void build_segments(engine_t *e)
 {
@@ -313,12 +323,13 @@ static void build_segments(engine_t *e)
         } else {
             cubic_segment(nr(e, j), nr(e, j + 1), frag_x(e->solve.fw, j),
                           frag_x(e->solve.fw, j + 1), hpar(e, j), nt(e, j), dur, &seg);
-            /* knots at the timestamps: continuous in velocity at the
-             * fragments' junctions too (cubic_join; the uniform
-             * parameterisation steps there by design, DESIGN.md (a)) */
-            if (e->solve.emitted && e->cfg.param == ENGINE_PARAM_TIME)
-                (void)cubic_join(&seg, e->solve.end_v);
         }
+        /* continuous in velocity where fragments meet (cubic_join): with knots
+         * at the timestamps; and with per-axis limits at every knot of the
+         * uniform parameterisation too, which steps there by design (DESIGN.md
+         * (a)), for no axis holds its acceleration across a step */
+        if (e->solve.emitted && (e->cfg.param == ENGINE_PARAM_TIME || axis_limited(e)))
+            (void)cubic_join(&seg, e->solve.end_v);
         queue_segment(e, &seg, j);
     }
 }
