@@ -707,6 +707,11 @@ static void run_report_uniform(run_t *run)
 static void run_report_axis(run_t *run)
 {
     engine_status(run->e, &run->st);
+    if (run->st.axis_beyond) /* stopped on the path there (engine_axis_lag_over) */
+        fprintf(stderr,
+                "trajreplay: %s: error: stopped before a segment over 100 times faster "
+                "on an axis than its axis_max_*\n",
+                run->o->input);
     if (!(run->st.axis_lost_s > AXIS_LOST_WARN_FRAC * run->span_s))
         return;
     fprintf(stderr,

@@ -185,6 +185,10 @@ typedef struct {
     uint64_t transfers_moving;      /* re-anchors joined moving (lib/engine/join.c): the
                                        output met the new trajectory's curve without
                                        braking to rest; not in transfers */
+    uint64_t axis_beyond;           /* stops before a segment the per-axis limits cannot
+                                       follow: it would need a rate below ENGINE_CEIL_MIN
+                                       (the track over 100 times faster on an axis than
+                                       its limit); told as the lag is */
 } engine_status_t;
 
 /* clang-format on */

@@ -80,10 +80,9 @@ static double obj_safety_accel(const engine_config_t *e)
  * engine limits (the ones in force, the profile's included): speed 2 x
  * max_speed_m_s (the engine's transfer peaks at 1.5 x; no speed limit leaves
  * it unchecked), no absolute step bound, acceleration derived as
- * obj_safety_accel says.
+ * obj_safety_accel says; per axis SAFETY_AXIS_MARGIN (safety.h) above the
+ * engine's per-axis limits.
  */
-#define SAFETY_AXIS_MARGIN 1.1
-
 static void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim)
 {
     memset(lim, 0, sizeof *lim);
@@ -743,7 +742,8 @@ static void warn_uniform(obj_t *o)
 
 /* issue 32: the per-axis limits, said once each: a track that exceeds them
  * (its lag grows: more than a tenth of the time streamed lost to them), and
- * each stop because the lag passed max_lag_s (the lifecycle's lag event). */
+ * each stop because the lag passed max_lag_s or before a segment beyond the
+ * axes (both the lifecycle's lag event). */
 static void warn_axis(obj_t *o)
 {
     const engine_status_t *st = &o->status;
@@ -763,6 +763,15 @@ static void warn_axis(obj_t *o)
                 "by more than max_lag_s %g s beyond D (lifecycle event 'lag beyond max_lag_s', "
                 "%llu so far); latched until start or clear",
                 o->name, o->cfg->engine.max_lag_s, (unsigned long long)st->axis_lag_stops);
+    }
+    if (st->axis_beyond != o->axis_beyond_logged) {
+        o->axis_beyond_logged = st->axis_beyond;
+        log_msg(LOG_ERR,
+                "object '%s': stopped on its path before a segment its axes cannot follow: "
+                "the track is over 100 times faster there on an axis than its axis_max_* "
+                "(lifecycle event 'lag beyond max_lag_s', %llu so far); latched until start "
+                "or clear",
+                o->name, (unsigned long long)st->axis_beyond);
     }
 }
 

@@ -67,3 +67,21 @@ void cubic_segment(const double *r0, const double *r1, const double *m0, const d
         seg->c[k][3] = q * (m1[k] - m0[k]);
     }
 }
+
+int cubic_join(fdiff_seg_t *seg, const double *v0)
+{
+    int changed = 0;
+
+    for (int k = 0; k < AX; k++) {
+        double *c = seg->c[k], m0 = v0[k] * seg->dur_s;
+        if (!(c[1] < m0 || c[1] > m0)) /* already joined (and no -Wfloat-equal) */
+            continue;
+        double d = c[1] + c[2] + c[3];          /* P1 - P0 */
+        double m1 = c[1] + 2 * c[2] + 3 * c[3]; /* dk/du at the end */
+        c[1] = m0;
+        c[2] = 3 * d - 2 * m0 - m1;
+        c[3] = -2 * d + m0 + m1;
+        changed = 1;
+    }
+    return changed;
+}

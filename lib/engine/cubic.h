@@ -52,4 +52,17 @@ void cubic_row_end(engine_ends_t ends, double h, const double *rm, const double 
 void cubic_segment(const double *r0, const double *r1, const double *m0, const double *m1, double h,
                    double t0_s, double dur_s, fdiff_seg_t *seg);
 
+/*
+ * Join seg to the segment before it: its velocity at the start becomes v0
+ * (m/s), its positions at both ends and its velocity at the end are kept (the
+ * cubic Hermite segment of those four).  Where fragments meet (frag.h), the
+ * second derivatives of the nodes about a junction come from different
+ * fragments and the rows there do not hold exactly: the curve steps in
+ * velocity at those nodes, by about rho^(O/2) of the curvature scale (135 m/s
+ * at overlap 2 on a track of 100 m/s chords).  Joined, it is continuous in
+ * velocity (and steps in acceleration instead, by the same residual).
+ * Returns 1 if seg changed, 0 if it already started at v0.
+ */
+int cubic_join(fdiff_seg_t *seg, const double *v0);
+
 #endif

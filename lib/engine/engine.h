@@ -64,9 +64,14 @@
  *       gpxgo_visnjan: up to 9.0 m/s on a walk), by their ratio: such
  *       waypoints (ratio above ENGINE_UNIFORM_RATIO_WARN) are counted in
  *       engine_status_t uniform_irregular, and trajd and trajreplay warn.
- *   (b) ENGINE_PARAM_TIME     knots at the timestamps: C2 in physical time
- *       (jumps only from the fragment junctions, 4.0e-6 m/s on the same track
- *       with the defaults, F=28, O=24).  The default, because motion controllers follow
+ *       With a per-axis limit set (axis_max_*) the segments are joined in
+ *       velocity instead (cubic_join): no axis holds its limits across a step.
+ *   (b) ENGINE_PARAM_TIME     knots at the timestamps: C2 in physical time,
+ *       but at the nodes about a fragment junction, which are joined in
+ *       velocity (cubic_join) and step in acceleration by the junction's
+ *       residual (before the join, they stepped in velocity: 4.0e-6 m/s on
+ *       the same track with the defaults, F=28, O=24; 196 m/s on a 90 m/s
+ *       zig-zag at F=6, O=2).  The default, because motion controllers follow
  *       velocity and acceleration, and real tracks are irregular.
  * METHOD_BSPLINE with PARAM_TIME is the non-uniform cubic B-spline
  * interpolant on the timestamps, which is the same curve as METHOD_CUBIC with
@@ -327,7 +332,9 @@ typedef struct {
      * (scale_jerk_m_s3) is taken down to a third (half) of the smallest
      * (resolve), the share its dr/dt term may add.  Transfers last long enough for every
      * axis.  The path is never left; the time lost is axis_lost_s
-     * (engine_status_t). */
+     * (engine_status_t).  A segment that would need a rate below 1/100 (over 100
+     * times faster on an axis than its limit) is not entered: the output rests
+     * before it and the owner is told to stop (engine_axis_lag_over, axis_beyond). */
     double axis_max_speed_m_s[ENGINE_AXES];
     double axis_max_accel_m_s2[ENGINE_AXES];
     double axis_max_jerk_m_s3[ENGINE_AXES];
@@ -389,7 +396,9 @@ typedef struct engine engine_t;
 engine_t *engine_new(const engine_config_t *cfg, int *err);
 
 /* 1 once each time a trajectory's lag from the per-axis limits passes
- * max_lag_s (issue 32), then 0 until the next: the caller stops the object
+ * max_lag_s (issue 32), or its output stands at rest before a segment the
+ * per-axis limits cannot follow (engine_status_t axis_beyond: it would need a
+ * rate below 1/100), then 0 until the next: the caller stops the object
  * (the lifecycle: LC_EV_LAG; trajreplay: engine_stop). */
 int engine_axis_lag_over(engine_t *e);
 

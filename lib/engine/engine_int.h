@@ -111,6 +111,7 @@ typedef struct {
     double end_r[AX];  /* end of the last queued segment */
     double end_t;
     double end_speed;          /* speed at the end of the last queued segment */
+    double end_v[AX];          /* its velocity (m/s): the next segment starts with it */
     double kcum;               /* capacity queued so far of the trajectory (qent_t kcum) */
     double inv;                /* 1 / max(vmax, floor) of its last queued segment */
     double ucum;               /* qent_t ucum so far */

@@ -297,6 +297,34 @@ static void axis_lag(engine_t *e)
     }
 }
 
+/* issue 32: at rest before a segment of its trajectory that the per-axis
+ * limits cannot follow at any rate the output leaves rest at (ceiling 0,
+ * seg_ceiling: the track more than 1 / ENGINE_CEIL_MIN times faster on an
+ * axis than its limit), or on one: the owner is told once per trajectory to
+ * stop the object there, as past max_lag_s (engine_axis_lag_over), and it
+ * is counted (axis_beyond).  Told or not, the output stands (the ceiling
+ * holds it at rest), never past an axis's limit. */
+static void axis_beyond(engine_t *e)
+{
+    int held = e->out.mode == OUT_STREAM && e->scale.override > 0 && !(e->out.cur.ceil > 0);
+    for (size_t i = 0; e->out.mode == OUT_STREAM && !held && i < e->queue.slow_len; i++) {
+        const qent_t *q = &e->queue.ent[e->queue.slow[(e->queue.slow_head + i) % e->queue.cap]];
+        if (q->traj != e->out.traj)
+            break;
+        held = e->scale.override > 0 && !(q->ceil > 0);
+    }
+    if (!held)
+        return;
+    if (e->axis_lag_track != e->out.track) { /* a new trajectory: told anew */
+        e->axis_lag_track = e->out.track;
+        e->axis_lag_told = 0;
+    }
+    if (!e->axis_lag_told) {
+        e->axis_lag_told = e->axis_lag_over = 1;
+        e->st.axis_beyond++;
+    }
+}
+
 /* One tick off the unit grid: the time scaling chooses the advance. */
 void scale_step(engine_t *e, double target, double R, double A, double J)
 {
@@ -305,6 +333,8 @@ void scale_step(engine_t *e, double target, double R, double A, double J)
     double r0 = e->scale.ts.rate;
     ts_state_t free_ts = e->scale.ts; /* issue 26: held back only if the move differs */
     double ds = ts_step(&e->scale.ts, target, fmin(R, Rc), A, J, e->period_s, NULL, &lim);
+    if (e->out.mode == OUT_XFER && !(ds > 0) && at_rest(e) && target > 0)
+        ds = ts_creep(&e->scale.ts, fmin(R, Rc), A, J, e->period_s); /* its end, short of it */
     if (lim && !(ds < ts_step(&free_ts, target, INFINITY, A, J, e->period_s, NULL, NULL)))
         lim = 0; /* the curve ahead is short of a stop from the target, but the
                   * move is the one without it (a ramp from rest): no underrun */
@@ -384,12 +414,14 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
         e->st.underrun_ticks++;
 
     if (at_rest(e)) {
-        if (e->scale.stop_req)
+        if (e->scale.stop_req) {
             play_stop_at_rest(e);
-        else if (e->scale.end_brake)
+        } else if (e->scale.end_brake) {
             play_finish_here(e);
-        else
+        } else {
+            axis_beyond(e);
             rest_handover(e);
+        }
         return;
     }
     if (!e->clk.on && is_exactly(e->scale.ts.rate, 1.0) && is_exactly(e->scale.ts.acc, 0.0) &&

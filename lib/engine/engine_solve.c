@@ -80,16 +80,21 @@ static double seg_accel_max(const fdiff_seg_t *seg)
     return sqrt(fmax(a0, a1)) / (seg->dur_s * seg->dur_s);
 }
 
-/* Upper bound on axis k's speed |k_k'| over a segment at rate 1 (m/s): as
- * solve_seg_speed_max, for one axis. */
+/* Axis k's largest speed |k_k'| over a segment at rate 1 (m/s), exactly:
+ * k_k' is a quadratic in u, its largest |.| at an end or at its vertex.  (The
+ * samples widened by |k''| that bound the norm, solve_seg_speed_max, doubled
+ * it on a segment that turns hard: 346 for 168 m/s on a 90 m/s zig-zag,
+ * which put the ceiling under ENGINE_CEIL_MIN where it is not.) */
 static double axis_speed_max(const fdiff_seg_t *seg, int k)
 {
-    double hi = 0, b = 2 * fabs(seg->c[k][2]) + 6 * fabs(seg->c[k][3]);
-    for (int i = 0; i <= ENGINE_SPEED_SAMPLES; i++) {
-        double u = (double)i / ENGINE_SPEED_SAMPLES;
-        hi = fmax(hi, fabs(seg->c[k][1] + u * (2 * seg->c[k][2] + 3 * u * seg->c[k][3])));
+    const double *c = seg->c[k];
+    double hi = fmax(fabs(c[1]), fabs(c[1] + 2 * c[2] + 3 * c[3]));
+    if (fabs(c[3]) > 0) {
+        double u = -c[2] / (3 * c[3]);
+        if (u > 0 && u < 1)
+            hi = fmax(hi, fabs(c[1] + u * (2 * c[2] + 3 * u * c[3])));
     }
-    return (hi + b / (2.0 * ENGINE_SPEED_SAMPLES)) / seg->dur_s;
+    return hi / seg->dur_s;
 }
 
 /*
@@ -134,7 +139,8 @@ static double axis_ceiling(const engine_t *e, const fdiff_seg_t *seg)
  * limits are converted at the segment's fastest speed); and the per-axis
  * limits (axis_ceiling; *axis: they are what holds it below 1).  A
  * configured max_accel_m_s2 bounds the chords only (the curve may reach 3
- * times it: engine.h).  At least ENGINE_CEIL_MIN; INFINITY with no limit. */
+ * times it: engine.h).  At least ENGINE_CEIL_MIN; INFINITY with no limit; 0
+ * where the per-axis limits would need less than ENGINE_CEIL_MIN. */
 static double seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax, int *axis)
 {
     double v = engine_config_max_speed(&e->cfg), axis_c = axis_ceiling(e, seg), c = INFINITY;
@@ -146,10 +152,15 @@ static double seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax
         if (kdd > room)
             c = fmin(c, sqrt(room / kdd));
     }
-    /* the per-axis limits too stop at the floor: below it the output would
-     * never leave rest; a track more than 1 / ENGINE_CEIL_MIN times faster
-     * on an axis than its limit exceeds it there (fuzz_engine: 2.5 m/s on a
-     * 2 m/s axis), which the daemon's monitor holds (SAFETY_FAXIS) */
+    /* a segment the per-axis limits hold below the floor is beyond the
+     * axes: at the floor it exceeded them (fuzz_engine: 2.5 m/s on a 2 m/s
+     * axis), and below it the output would never leave rest before it.  Its
+     * ceiling is 0: the output brakes to rest before it (scale_ceil_room)
+     * and the object is stopped there (axis_beyond, engine_scale.c) */
+    if (axis_c < ENGINE_CEIL_MIN) {
+        *axis = 1;
+        return 0.0;
+    }
     *axis = axis_c < 1.0 && axis_c <= c;
     c = fmin(c, axis_c);
     return isinf(c) ? c : fmax(c, ENGINE_CEIL_MIN);
@@ -200,6 +211,7 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
     for (int k = 0; k < AX; k++) {
         double v = (seg->c[k][1] + 2 * seg->c[k][2] + 3 * seg->c[k][3]) / seg->dur_s;
         e->solve.end_r[k] = seg->c[k][0] + seg->c[k][1] + seg->c[k][2] + seg->c[k][3];
+        e->solve.end_v[k] = v;
         v2 += v * v;
     }
     e->solve.end_speed = sqrt(v2);
@@ -259,6 +271,16 @@ static void end_vel_param(const engine_t *e, int at_end, double *v)
         v[k] = src[k] * scale;
 }
 
+/* issue 32: a per-axis limit is set (engine.h axis_max_*). */
+static int axis_limited(const engine_t *e)
+{
+    for (int k = 0; k < AX; k++)
+        if (e->cfg.axis_max_speed_m_s[k] > 0 || e->cfg.axis_max_accel_m_s2[k] > 0 ||
+            e->cfg.axis_max_jerk_m_s3[k] > 0)
+            return 1;
+    return 0;
+}
+
 /* Build and queue every segment whose control values are final. */
 static void build_segments(engine_t *e)
 {
@@ -309,6 +331,12 @@ static void build_segments(engine_t *e)
             cubic_segment(nr(e, j), nr(e, j + 1), frag_x(e->solve.fw, j),
                           frag_x(e->solve.fw, j + 1), hpar(e, j), nt(e, j), dur, &seg);
         }
+        /* continuous in velocity where fragments meet (cubic_join): with knots
+         * at the timestamps; and with per-axis limits at every knot of the
+         * uniform parameterisation too, which steps there by design (DESIGN.md
+         * (a)), for no axis holds its acceleration across a step */
+        if (e->solve.emitted && (e->cfg.param == ENGINE_PARAM_TIME || axis_limited(e)))
+            (void)cubic_join(&seg, e->solve.end_v);
         queue_segment(e, &seg, j);
     }
 }

@@ -78,7 +78,8 @@ typedef enum {
     LC_EV_RELOAD_FAILED,      /* reload: the new configuration did not open */
     LC_EV_SHUTDOWN,           /* SIGTERM */
     LC_EV_RESTART,            /* the daemon starts while the drives may run */
-    LC_EV_LAG,                /* the per-axis limits made the output lag beyond max_lag_s
+    LC_EV_LAG,                /* the per-axis limits made the output lag beyond max_lag_s,
+                                 or hold it before a segment beyond the axes
                                  (engine_axis_lag_over; the curve's, issue 32) */
     LC_EV_COUNT
 } lc_event_t;

@@ -122,7 +122,7 @@ static double integrate(double r, double a, double j, double T, double *r1, doub
  * halved up to TS_CREEP_HALVINGS times, that does leave room, so that the
  * output creeps on instead of standing still for good with room ahead.
  * Returns the advance (0 and nothing changed if none fits). */
-#define TS_CREEP_HALVINGS 10
+#define TS_CREEP_HALVINGS 30
 static double creep(double R, double A, double J, double T, double *j, double *r1, double *a1)
 {
     /* first with a tick's travel at the new rate to spare (the stop it
@@ -144,6 +144,20 @@ static double creep(double R, double A, double J, double T, double *j, double *r
         }
     }
     return 0.0;
+}
+
+double ts_creep(ts_state_t *st, double R, double A, double J, double T)
+{
+    double j, r1, a1, ds;
+
+    if (st->rate > 0 || st->acc < 0 || st->acc > 0 || !(R > 0) || isinf(R))
+        return 0.0;
+    ds = creep(R, A, J, T, &j, &r1, &a1);
+    if (ds > 0) {
+        st->rate = r1;
+        st->acc = a1;
+    }
+    return ds;
 }
 
 /* Near the target (within a few ticks' jerk): land on it exactly, rate =

@@ -94,4 +94,15 @@ double ts_dead_band(double J, double T);
 double ts_step(ts_state_t *st, double target, double R, double A, double J, double T, double *j_out,
                int *limited);
 
+/*
+ * At rest (rate and acc 0), a creep towards R: the smallest of ts_step's
+ * moves from rest (the jerk halved until the stop after it fits within R,
+ * with a tick's travel to spare) also where R is within the dead band, where
+ * ts_step stands still.  For the engine's transfer, which must end on its
+ * end: at 10 Hz the braking came to rest 1.2e-4 of track time short of it,
+ * 1.3 um away, and stood there for good.  Returns the advance, 0 (and st
+ * unchanged) if none fits or st is not at rest.
+ */
+double ts_creep(ts_state_t *st, double R, double A, double J, double T);
+
 #endif

@@ -71,6 +71,10 @@ typedef struct {
 } safety_limits_t;
 
 #define SAFETY_TOL_M_DEFAULT 1e-8
+/* The daemon's per-axis bounds: this much above the engine's per-axis limits
+ * (axis_max_speed_m_s, axis_max_accel_m_s2), for the finite differences of
+ * the setpoints the monitor measures by (daemon/core/core.c, tests/fuzz). */
+#define SAFETY_AXIS_MARGIN 1.1
 
 typedef struct {
     safety_limits_t lim;

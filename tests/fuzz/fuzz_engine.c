@@ -11,7 +11,8 @@
  *    when the configuration has a speed limit, both ticks holding or
  *    transferring; CURVE_MARGIN times that on the curve (see below);
  *  - lib/safety after the engine, as in the daemon: with the daemon's default
- *    bounds it never refuses a setpoint; with tighter ones (some inputs) what
+ *    bounds (the per-axis ones SAFETY_AXIS_MARGIN above the per-axis limits,
+ *    issue 32) it never refuses a setpoint; with tighter ones (some inputs) what
  *    it lets out keeps them (checked here) and what it refuses is the held
  *    position; rearmed as the daemon does;
  *  - it always finishes: after engine_finish with no further input, the
@@ -248,10 +249,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         lim.max_accel_m_s2 = (p[0] & 0x80) ? 20 : 0;
     } else { /* the daemon's defaults (obj_safety_limits) */
         lim.max_speed_m_s = 2.0 * r.c.max_speed_m_s;
-        /* the per-axis bounds are not judged here: a track over 100 times
-         * faster than an axis exceeds it at the ceiling's floor, and a
-         * velocity step at a low rate trips the acceleration (both open:
-         * the closing note of stop 24) */
+    }
+    /* the per-axis bounds as the daemon holds them (obj_safety_limits,
+     * SAFETY_AXIS_MARGIN above the engine's: the finite differences of the
+     * setpoints it measures by); with the defaults the engine never trips them */
+    for (int k = 0; k < ENGINE_AXES; k++) {
+        lim.axis_speed_m_s[k] = SAFETY_AXIS_MARGIN * r.c.axis_max_speed_m_s[k];
+        lim.axis_accel_m_s2[k] = SAFETY_AXIS_MARGIN * r.c.axis_max_accel_m_s2[k];
     }
     safety_init(&r.mon, &lim);
     p += 2;

@@ -634,6 +634,41 @@ static void test_limits_shrink_no_overshoot(void **state)
     assert_true(fabs(st.rate - 1.0) <= 0.0 && fabs(st.acc) <= 0.0); /* landed exactly */
 }
 
+/* Given the state fuzz_engine's transfer came to rest in at 10 Hz (the
+ * limits converted at its speed: A 0.0042, J 0.126 per s^2, s^3 of rate;
+ * 1.21e-4 s of track time left to its end, the end 1.3 um away), when the
+ * output is asked on at rate 1, then ts_step alone stands still for good
+ * (the room is within the dead band) and ts_creep moves on, until the
+ * output is on the end (a transfer's end takes it at rest: scaled_advance;
+ * it arrives at a rate within the dead band) or within a thousandth of the
+ * room it had (the gap to the end, k'' d^2 / 2, a millionth). */
+static void test_creep_onto_the_end(void **state)
+{
+    (void)state;
+    const double A = 0.0042, J = 0.126, T = 0.1, R0 = 1.21e-4;
+    ts_state_t st = {0};
+    double left = R0;
+    int ticks = 0;
+
+    assert_true(ts_step(&st, 1.0, left, A, J, T, NULL, NULL) <= 0.0);
+    assert_true(st.rate <= 0.0 && fabs(st.acc) <= 0.0);
+    while (left > 1e-3 * R0 && ticks < 1000) {
+        double ds = ts_step(&st, 1.0, left, A, J, T, NULL, NULL);
+        if (!(ds > 0) && !(st.rate > 0))
+            ds = ts_creep(&st, left, A, J, T);
+        ticks++;
+        assert_true(ds >= 0);
+        if (ds >= left) { /* on the end */
+            assert_true(st.rate <= ts_dead_band(J, T));
+            left = 0;
+            break;
+        }
+        left -= ds;
+    }
+    print_message("creep: %.3g of %.3g s of track time left after %d ticks\n", left, R0, ticks);
+    assert_true(left <= 1e-3 * R0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -645,6 +680,7 @@ int main(void)
         cmocka_unit_test(test_no_hard_stop_fast_end),
         cmocka_unit_test(test_jerk_straight_line),
         cmocka_unit_test(test_limits_shrink_no_overshoot),
+        cmocka_unit_test(test_creep_onto_the_end),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
