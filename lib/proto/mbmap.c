@@ -288,6 +288,8 @@ int mbmap_encode_diag(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_obje
     mbmap_put_u32(b + MBMAP_X_AXIS_SLOWED, lo32(o->st.axis_slowed));
     mbmap_put_u32(b + MBMAP_X_TRANSFERS_MOVING, lo32(o->st.transfers_moving));
     mbmap_put_u32(b + MBMAP_X_DELAY_GROWN, lo32(o->st.delay_grown));
+    mbmap_put_u32(b + MBMAP_X_AXIS_LAG_STOPS, lo32(o->st.axis_lag_stops));
+    mbmap_put_u32(b + MBMAP_X_AXIS_BEYOND, lo32(o->st.axis_beyond));
     mbmap_put_f64(b + MBMAP_X_HEADING, o->heading_deg);
     mbmap_put_f64(b + MBMAP_X_HEADING_UNWRAPPED, o->heading_unwrapped_deg);
     mbmap_put_u32(b + MBMAP_X_TX_CLAMPED, lo32(o->tx_clamped));
@@ -727,6 +729,12 @@ static const mbmap_field_t fields[] = {
     F(IX, MBMAP_X_TX_CLAMPED, 2, MBMAP_T_U32, "tx_clamped", "",
       "CAN setpoints sent with a value clipped to its field (the SETPOINT frame's velocity "
       "beyond +-32.767 m/s: can.fd = yes carries more); also STATUS bit 3 and a log line"),
+    F(IX, MBMAP_X_AXIS_LAG_STOPS, 2, MBMAP_T_U32, "axis_lag_stops", "",
+      "stops on the path because the per-axis limits made the output lag its input by more "
+      "than max_lag_s (lifecycle event 'lag beyond max_lag_s')"),
+    F(IX, MBMAP_X_AXIS_BEYOND, 2, MBMAP_T_U32, "axis_beyond", "",
+      "stops before a segment over 100 times faster on an axis than its axis_max_* (it would "
+      "need a rate below ENGINE_CEIL_MIN)"),
     F(IX, MBMAP_X_MB_WORST_ADDR, 1, MBMAP_T_U16, "mb_worst_addr0", "",
       "the daemon's worst Modbus client (daemon mb_worst_*), its address as 8 groups of 16 bits "
       "in the order IPv6 text writes them (RFC 4291 2.2): group 0; an IPv4 client as "
