@@ -150,7 +150,9 @@ double engine_lag_target(engine_t *e, double target, double R, double A, double 
         return target;
     }
     double c = e->clk.catchup, lead = ENGINE_CLOCK_GAIN * lag;
-    lead = lead > c ? c : lead < -c ? -c : lead;
+    /* slower by up to CATCHUP_GIVEBACK x c: an output ahead of its D (a D
+     * that grew) falls back before it runs short */
+    lead = lead > c ? c : lead < -CATCHUP_GIVEBACK * c ? -CATCHUP_GIVEBACK * c : lead;
     double r = target + lead;
     /* faster only where the curve ahead holds a stop from r, the slack and
      * a tick besides: winning back never runs into the data */

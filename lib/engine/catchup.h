@@ -16,8 +16,9 @@
  *     lag = (now + off - D) - t_out      D: the delay (delay.h), as measured
  *
  * Beyond half an input interval (and two ticks), the output's target rate
- * becomes 1 + min(ENGINE_CLOCK_GAIN lag, catchup) (at most catchup below 1
- * when the output is ahead), within the time scaling's limits; within a
+ * becomes 1 + min(ENGINE_CLOCK_GAIN lag, catchup) (at most CATCHUP_GIVEBACK
+ * x catchup below 1 when the output is ahead), within the time scaling's
+ * limits; within a
  * tick's tenth of the lag it goes back to rate 1 on the unit grid.  It
  * speeds up only where the curve ahead still holds a stop from the faster
  * rate plus the jitter slack, so winning back never runs into the data.
@@ -39,6 +40,11 @@
  * sender; its output is not steered. */
 #define CATCHUP_SWING_S 1.0
 #define CATCHUP_SWING_INTERVALS 4.0
+/* An output ahead of its D (lag < 0: a D that grew with the input's
+ * intervals, engine_delay_grow) falls back at up to this many times the
+ * catch-up (slower is never closer to the data): at the default 5 %, 20 %
+ * slower until it stands at D. */
+#define CATCHUP_GIVEBACK 4.0
 /* The catch-up when no clock sets one (engine_set_clock): 5 %, as [daemon]
  * catchup's default. */
 #define CATCHUP_DEFAULT 0.05

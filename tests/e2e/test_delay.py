@@ -349,6 +349,30 @@ class TestUnderrunsTold(unittest.TestCase):
         self.assertIn("no waypoint after t = 20.000 s until t = 20.900 s, a silence of 0.9 s",
                       told[0])
 
+    def test_visnjan_underruns_are_silences(self):
+        """The issue's criterion on a real track: on visnjan (fixes 1 to 41 s apart) every
+        underrun left is a silence of the input longer than D holds for a late fix, logged
+        with its time: each told silence is two consecutive fixes of the file that far apart.
+        Before: D grew mid-track without the output falling back to it in time, and one
+        underrun was an output late on its D (the catch-up gave back at 5 %)."""
+        data = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data")
+        p = replay(os.path.join(data, "gpxgo_visnjan.gpx"))
+        self.assertEqual(p.returncode, 0, p.stderr)
+        told = [l for l in p.stderr.splitlines() if ": underrun at t = " in l]
+        self.assertEqual(len(told), replay_summary.parse(p.stderr)["underruns"])
+        self.assertGreater(len(told), 0)
+        t = np.genfromtxt(os.path.join(data, "gpxgo_visnjan.csv"), delimiter=",",
+                          names=True)["t_s"]
+        for l in told:
+            self.assertIn("longer than the", l)
+            a = float(l.split("no waypoint after t = ")[1].split()[0])
+            b = float(l.split(" s until t = ")[1].split()[0])
+            hold = float(l.split("longer than the ")[1].split()[0])
+            i = int(np.argmin(np.abs(t - a)))
+            self.assertAlmostEqual(t[i], a, places=3)
+            self.assertAlmostEqual(t[i + 1], b, places=3)
+            self.assertGreater(b - a, hold)
+
     def test_interval_grows(self):
         """The sender slows from 10 Hz to 6.25 Hz at t = 30 s: D grows to at least
         19 of the new intervals plus a stop from the track's top speed (closed
