@@ -1,8 +1,18 @@
-"""Pieces the oracle tests share: the engine's segments evaluated by Horner, and PROJ's
-east/north/up frame about a point (pyproj: cart + topocentric), the independent reference
-for anything geographic."""
+"""Pieces the oracle tests share: their checks (check, failures), the engine's segments
+evaluated by Horner, and PROJ's east/north/up frame about a point (pyproj: cart +
+topocentric), the independent reference for anything geographic."""
 import numpy as np
 import pyproj
+
+# what check() found wrong: a test script exits 1 if it is not empty
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what)
+    if not cond:
+        failures.append(what)
+
 
 
 def evaluate(segs, tq, der=0):

@@ -29,6 +29,9 @@ import tempfile
 
 import numpy as np
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+from oracle_util import check, failures  # noqa: E402
+
 BUILD = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
 TRAJREPLAY = os.path.join(BUILD, "bin", "trajreplay")
 TRAJD = os.path.join(BUILD, "bin", "trajd")
@@ -37,14 +40,6 @@ ALIM = (0.6, 1.2, 1.0)
 # Finite differences of 100 Hz positions against the analytic peaks: the engine's own
 # margin is below 0.1 % (measured); 1 % is the issue's.
 TOL = 1.01
-
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what)
-    if not cond:
-        failures.append(what)
 
 
 def figure8(path):

@@ -41,7 +41,7 @@ import numpy as np
 from scipy.interpolate import CubicHermiteSpline, CubicSpline
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
-from oracle_util import evaluate, proj_enu  # noqa: E402
+from oracle_util import check, failures, evaluate, proj_enu  # noqa: E402
 
 BUILD = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
 lib = ctypes.CDLL(os.path.join(BUILD, "libtrajd_test.so"))
@@ -62,14 +62,6 @@ lib.engine_method_flat.argtypes = [ctypes.c_uint, ctypes.c_int, ctypes.POINTER(c
 # rounding (~1e-14) and far below any wrong velocity (a slope off by 1e-6 m/s moves a
 # 1 s segment's middle by ~1e-7 m).
 TOL_REL = 1e-9
-
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what)
-    if not cond:
-        failures.append(what)
 
 
 def ptr(a):

@@ -35,6 +35,9 @@ import tempfile
 import numpy as np
 from scipy.interpolate import CubicSpline
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+from oracle_util import check, failures  # noqa: E402
+
 BUILD = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
 TRAJREPLAY = os.path.join(BUILD, "bin", "trajreplay")
 TRAJD = os.path.join(BUILD, "bin", "trajd")
@@ -45,14 +48,6 @@ OPTS = ["--profile", "none", "--max-speed", "5.2", "--max-accel", "0"]
 # curvature scale, O = 24), with room for the 1e-7 m digits of the CSV
 TOL_M = 1e-6
 T = 0.01
-
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what)
-    if not cond:
-        failures.append(what)
 
 
 def track(path, dy, direction):

@@ -26,7 +26,7 @@ from scipy.interpolate import BSpline, CubicSpline, make_interp_spline
 from scipy.linalg import solve_banded
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
-from oracle_util import evaluate  # noqa: E402
+from oracle_util import check, failures, evaluate  # noqa: E402
 
 BUILD = os.environ.get("BUILD", os.path.join(os.path.dirname(__file__), "..", "..", "build"))
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -64,14 +64,6 @@ FRAG_K = 2.0
 # (cerknicko, F=28/O=24, position) instead of 1.3, so the real-track checks
 # allow FRAG_K_REAL.
 FRAG_K_REAL = 6.0
-
-failures = []
-
-
-def check(cond, what):
-    print(("ok   " if cond else "FAIL ") + what)
-    if not cond:
-        failures.append(what)
 
 
 def ptr(a):
