@@ -24,13 +24,10 @@ static double input_interval(const engine_t *e)
     return e->solve.span_max > 0 ? e->solve.span_max / (e->la_steady + 1) : 0.0;
 }
 
-/* D now: the settings with the input's interval and top speed as measured
- * (start_slack auto: span_max, the longest time of la_steady + 1 intervals,
- * and vmax_in, its fastest chord, both decaying; with delay_s set they are
- * measured too). */
-static void delay_measured(const engine_t *e, engine_delay_t *d)
+/* D for the input's interval h and its top speed as measured (vmax_in, its
+ * fastest chord, decaying), with the slack learnt so far. */
+static void delay_at(const engine_t *e, double h, engine_delay_t *d)
 {
-    double h = input_interval(e);
     /* e->cfg is resolved and e->lookahead its lookahead (engine_new): not
      * resolved again at every tick that asks */
     engine_delay_parts(&e->cfg, e->lookahead, h, e->solve.vmax_in, d);
@@ -39,6 +36,15 @@ static void delay_measured(const engine_t *e, engine_delay_t *d)
     d->slack_s = d->slack_n * d->interval_s;
     d->need_s = d->lookahead_s + d->slack_s + d->stop_s;
     d->delay_s = e->cfg.delay_s > d->need_s ? e->cfg.delay_s : d->need_s;
+}
+
+/* D now: the settings with the input's interval and top speed as measured
+ * (start_slack auto: span_max, the longest time of la_steady + 1 intervals,
+ * and vmax_in, its fastest chord, both decaying; with delay_s set they are
+ * measured too). */
+static void delay_measured(const engine_t *e, engine_delay_t *d)
+{
+    delay_at(e, input_interval(e), d);
 }
 
 /* Time of the newest waypoint received for the current trajectory (as
@@ -223,14 +229,14 @@ void engine_delay_grow(engine_t *e)
     if (!e->delay.noted)
         return;
     /* the interval D is sized for: the one measured, its longest interval
-     * the median's (interval_robust) */
-    double h = fmin(input_interval(e), interval_robust(e));
-    engine_delay_parts(&e->cfg, e->lookahead, h, e->solve.vmax_in, &d);
-    if (e->slack_auto)
-        d.slack_n = engine_cfg_slack_min(&e->cfg) + e->slack_learn;
-    d.slack_s = d.slack_n * d.interval_s;
-    d.need_s = d.lookahead_s + d.slack_s + d.stop_s;
-    d.delay_s = e->cfg.delay_s > d.need_s ? e->cfg.delay_s : d.need_s;
+     * the median's (interval_robust).  D rises with the interval and the
+     * robust one is at most the measured one: if that does not grow D, the
+     * robust one (a selection over the ring, on the push path) is not needed */
+    double h = input_interval(e);
+    delay_at(e, h, &d);
+    if (!(d.delay_s > e->delay.d.delay_s + 1e-9))
+        return;
+    delay_at(e, fmin(h, interval_robust(e)), &d);
     if (d.delay_s > e->delay.d.delay_s + 1e-9) {
         e->delay.d = d;
         e->delay.learnt = e->slack_learn;
