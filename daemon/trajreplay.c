@@ -604,9 +604,7 @@ static void run_report_underrun(run_t *run, int at_end)
         return;
     run->und_next = run->r.next;
     engine_status(run->e, &st);
-    if (!st.underruns || !isfinite(st.underrun_t_s) ||
-        !(isnan(run->und_t) || st.underrun_t_s < run->und_t || st.underrun_t_s > run->und_t) ||
-        (!isfinite(st.underrun_next_t_s) && !at_end))
+    if (!engine_underrun_due(&st, run->und_t, at_end))
         return;
     run->und_t = st.underrun_t_s;
     if (++run->und_n > REJECT_SHOW_FIRST && run->und_n % REJECT_SHOW_EVERY)

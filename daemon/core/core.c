@@ -212,9 +212,16 @@ static int64_t real_offset(core_priv_t *p)
  * (lib/engine/delay.h): the first OBJ_DELAY_LOG_FIRST trajectories of an
  * object, then every OBJ_DELAY_LOG_EVERY-th (a sender that starts one a
  * second does not flood the log; the status and trajreplay --summary show
- * the last). */
+ * the last).  Each underrun and each growth of D are logged at the same
+ * rate (obj_log_nth). */
 #define OBJ_DELAY_LOG_FIRST 20
 #define OBJ_DELAY_LOG_EVERY 100
+
+/* 1 if the n-th (from 1) of an object's events is logged. */
+static int obj_log_nth(uint64_t n)
+{
+    return n <= OBJ_DELAY_LOG_FIRST || n % OBJ_DELAY_LOG_EVERY == 0;
+}
 
 /* One line: "object 'a': <what>play-out delay D ..." (delay.h's format). */
 static void obj_log_delay(const obj_t *o, const char *what)
@@ -776,20 +783,17 @@ static void warn_axis(obj_t *o)
 }
 
 /* issue 26: each underrun once the silence it met ended, where and why
- * (engine_underrun_format): the first UNDERRUN_LOG_FIRST of an object, then
- * one in UNDERRUN_LOG_EVERY.  One whose input never resumed is the input's
- * end: a silent end takes it back (lib/engine/silence.h), unlogged. */
-#define UNDERRUN_LOG_FIRST 20
-#define UNDERRUN_LOG_EVERY 100
+ * (engine_underrun_format), at obj_log_nth's rate.  One whose input never
+ * resumed is the input's end: a silent end takes it back
+ * (lib/engine/silence.h), unlogged. */
 static void log_underrun(obj_t *o)
 {
     const engine_status_t *st = &o->status;
     char msg[320];
-    if (!st->underruns || !isfinite(st->underrun_t_s) || !isfinite(st->underrun_next_t_s) ||
-        (o->und_logged && !(st->underrun_t_s < o->und_t || st->underrun_t_s > o->und_t)))
+    if (!engine_underrun_due(st, o->und_logged ? o->und_t : NAN, 0))
         return;
     o->und_t = st->underrun_t_s;
-    if (++o->und_logged > UNDERRUN_LOG_FIRST && o->und_logged % UNDERRUN_LOG_EVERY)
+    if (!obj_log_nth(++o->und_logged))
         return;
     (void)engine_underrun_format(st, msg, sizeof msg);
     log_msg(LOG_WARNING, "object '%s': %s (%llu underruns so far)", o->name, msg,
@@ -797,15 +801,14 @@ static void log_underrun(obj_t *o)
 }
 
 /* issue 26: D stated anew, longer, because the input's intervals grew
- * (engine_delay_grow): the new D and its parts, the first
- * UNDERRUN_LOG_FIRST growths of an object, then one in UNDERRUN_LOG_EVERY. */
+ * (engine_delay_grow): the new D and its parts, at obj_log_nth's rate. */
 static void log_delay_grown(obj_t *o)
 {
     uint64_t n = o->status.delay_grown;
     if (n == o->grown_logged)
         return;
     o->grown_logged = n;
-    if (n > UNDERRUN_LOG_FIRST && n % UNDERRUN_LOG_EVERY)
+    if (!obj_log_nth(n))
         return;
     obj_log_delay(o, "its input's intervals grew: ");
 }

@@ -76,6 +76,13 @@ int engine_delay_check(const engine_config_t *cfg, double interval_s, char *why,
     return -ENGINE_ECONFIG;
 }
 
+int engine_underrun_due(const engine_status_t *st, double told_t_s, int at_end)
+{
+    double t = st->underrun_t_s;
+    return st->underruns && isfinite(t) && (isnan(told_t_s) || t < told_t_s || t > told_t_s) &&
+           (at_end || isfinite(st->underrun_next_t_s));
+}
+
 int engine_underrun_format(const engine_status_t *st, char *buf, size_t len)
 {
     if (len)

@@ -91,6 +91,11 @@ int engine_delay_format(const engine_delay_t *d, char *buf, size_t len);
  */
 int engine_underrun_format(const engine_status_t *st, char *buf, size_t len);
 
+/* 1 if status st holds an underrun not told yet: its underrun_t_s differs
+ * from told_t_s (NaN: none told), and the silence it met has ended (or
+ * at_end: the replay is over).  What trajd and trajreplay log by. */
+int engine_underrun_due(const engine_status_t *st, double told_t_s, int at_end);
+
 /*
  * The D an engine holds its output at (delay_run.c): the one it stated when
  * its last trajectory's output started, or, before any start, what its
