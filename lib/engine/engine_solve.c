@@ -85,7 +85,7 @@ static double seg_accel_max(const fdiff_seg_t *seg)
  * samples widened by |k''| that bound the norm, solve_seg_speed_max, doubled
  * it on a segment that turns hard: 346 for 168 m/s on a 90 m/s zig-zag,
  * which put the ceiling under ENGINE_CEIL_MIN where it is not.) */
-static double axis_speed_max(const fdiff_seg_t *seg, int k)
+double solve_axis_speed_max(const fdiff_seg_t *seg, int k)
 {
     const double *c = seg->c[k];
     double hi = fmax(fabs(c[1]), fabs(c[1] + 2 * c[2] + 3 * c[3]));
@@ -112,7 +112,7 @@ static double axis_ceiling(const engine_t *e, const fdiff_seg_t *seg)
         double vl = e->cfg.axis_max_speed_m_s[k], al = e->cfg.axis_max_accel_m_s2[k];
         double jl = e->cfg.axis_max_jerk_m_s3[k];
         if (vl > 0) {
-            double v = axis_speed_max(seg, k);
+            double v = solve_axis_speed_max(seg, k);
             if (v > 0)
                 c = fmin(c, vl / v);
         }

@@ -189,16 +189,9 @@ static int piece_fits(const engine_t *e, const fdiff_seg_t *s, double vlim, doub
         if (e->cfg.axis_max_accel_m_s2[k] > 0 &&
             fmax(fabs(a0), fabs(a1)) > e->cfg.axis_max_accel_m_s2[k])
             return 0;
-        if (e->cfg.axis_max_speed_m_s[k] > 0) {
-            double v0 = fabs(c[1]), v1 = fabs(c[1] + 2 * c[2] + 3 * c[3]), vm = fmax(v0, v1);
-            if (fabs(c[3]) > 0) { /* the vertex of k'(u), if inside */
-                double u = -c[2] / (3.0 * c[3]);
-                if (u > 0 && u < 1)
-                    vm = fmax(vm, fabs(c[1] + u * (2 * c[2] + u * 3 * c[3])));
-            }
-            if (vm * id > e->cfg.axis_max_speed_m_s[k])
-                return 0;
-        }
+        if (e->cfg.axis_max_speed_m_s[k] > 0 &&
+            solve_axis_speed_max(s, k) > e->cfg.axis_max_speed_m_s[k])
+            return 0;
     }
     if (sqrt(j2) > jlim || sqrt(fmax(a02, a12)) > alim)
         return 0;
