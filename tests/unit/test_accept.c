@@ -107,10 +107,27 @@ static void replay(const engine_waypoint_t *rows, int n, engine_status_t *st, in
     engine_free(e);
 }
 
+/* The bad row of kind after fix site, replayed (replay): 0 if it alone is
+ * refused, every good fix kept, with no underrun and no hard stop, to the
+ * end; else 1, with a line (label before it).  *st: the status. */
+static int bad_fix_run(const char *label, int kind, int site, engine_status_t *st)
+{
+    static engine_waypoint_t rows[N_FIX + 1];
+    int fin, n = build(rows, site, kind);
+    replay(rows, n, st, &fin);
+    if (!st->underruns && st->accepted == N_FIX && st->rejected == 1 && !st->hard_stops && fin)
+        return 0;
+    print_message("%s%s after fix %d: accepted %llu rejected %llu underruns %llu hard stops %llu "
+                  "finished %d\n",
+                  label, kind_name[kind], site, (unsigned long long)st->accepted,
+                  (unsigned long long)st->rejected, (unsigned long long)st->underruns,
+                  (unsigned long long)st->hard_stops, fin);
+    return 1;
+}
+
 static void test_one_bad_fix_costs_nothing(void **state)
 {
     (void)state;
-    static engine_waypoint_t rows[N_FIX + 1];
     engine_config_t c, r;
     engine_config_default(&c);
     /* the fragment period S = F - O of the default (fragment, overlap auto) */
@@ -123,16 +140,7 @@ static void test_one_bad_fix_costs_nothing(void **state)
         int underruns = 0, lost = 0;
         for (int site = 40; site < 40 + (int)sites; site++) {
             engine_status_t st;
-            int fin, n = build(rows, site, kind);
-            replay(rows, n, &st, &fin);
-            if (st.underruns || st.accepted != N_FIX || st.rejected != 1 || st.hard_stops || !fin) {
-                print_message("%s after fix %d: accepted %llu rejected %llu underruns %llu "
-                              "hard stops %llu finished %d\n",
-                              kind_name[kind], site, (unsigned long long)st.accepted,
-                              (unsigned long long)st.rejected, (unsigned long long)st.underruns,
-                              (unsigned long long)st.hard_stops, fin);
-                bad++;
-            }
+            bad += bad_fix_run("", kind, site, &st);
             underruns += st.underruns != 0;
             lost += st.accepted != N_FIX;
         }
@@ -153,23 +161,13 @@ static void test_one_bad_fix_costs_nothing(void **state)
 static void test_at_arrival_one_bad_fix(void **state)
 {
     (void)state;
-    static engine_waypoint_t rows[N_FIX + 1];
     int bad = 0;
 
     replay_max_lookahead = 1;
     for (int kind = 0; kind < K_COUNT; kind++)
         for (int site = 40; site < 46; site++) {
             engine_status_t st;
-            int fin, n = build(rows, site, kind);
-            replay(rows, n, &st, &fin);
-            if (st.underruns || st.accepted != N_FIX || st.rejected != 1 || st.hard_stops || !fin) {
-                print_message("max_lookahead 1, %s after fix %d: accepted %llu rejected %llu "
-                              "underruns %llu hard stops %llu finished %d\n",
-                              kind_name[kind], site, (unsigned long long)st.accepted,
-                              (unsigned long long)st.rejected, (unsigned long long)st.underruns,
-                              (unsigned long long)st.hard_stops, fin);
-                bad++;
-            }
+            bad += bad_fix_run("max_lookahead 1, ", kind, site, &st);
         }
     replay_max_lookahead = 0;
     assert_int_equal(bad, 0);
