@@ -180,8 +180,13 @@ typedef struct {
     double underrun_curve_t_s;      /* where the solved curve ended then */
     double underrun_lookahead_s;    /* D's lookahead part then: the time the waypoints the
                                        solver needs beyond its curve may span */
-    uint64_t delay_grown;           /* D stated anew, longer, at an underrun: the input's
-                                       intervals grew beyond what D was sized for */
+    uint64_t delay_grown;           /* D stated anew, longer: the input's intervals or its
+                                       top speed grew beyond what D was sized for */
+    uint64_t reserve_slowed;        /* slowdowns of an object faster than the speed D's stop
+                                       reserve was sized for: the curve ahead short of a stop
+                                       while the output stood ahead of its D (which grows
+                                       with the input's top speed, lib/engine/delay.h); the
+                                       data came on time: not underruns */
     uint64_t transfers_moving;      /* re-anchors joined moving (lib/engine/join.c): the
                                        output met the new trajectory's curve without
                                        braking to rest; not in transfers */

@@ -800,17 +800,27 @@ static void log_underrun(obj_t *o)
             (unsigned long long)st->underruns);
 }
 
-/* issue 26: D stated anew, longer, because the input's intervals grew
- * (engine_delay_grow): the new D and its parts, at obj_log_nth's rate. */
+/* issue 26: D stated anew, longer, because the input's intervals or top
+ * speed grew (engine_delay_grow): the new D and its parts, at obj_log_nth's
+ * rate.  A slowdown for D's stop reserve (reserve_slowed) comes with it. */
 static void log_delay_grown(obj_t *o)
 {
-    uint64_t n = o->status.delay_grown;
+    uint64_t n = o->status.delay_grown, r = o->status.reserve_slowed;
+    if (r != o->reserve_logged) {
+        o->reserve_logged = r;
+        if (obj_log_nth(r))
+            log_msg(LOG_NOTICE,
+                    "object '%s': faster than the speed its play-out delay's stop reserve was "
+                    "sized for, on input that came on time: slowed along its path (%llu times "
+                    "so far), D grows to the speed",
+                    o->name, (unsigned long long)r);
+    }
     if (n == o->grown_logged)
         return;
     o->grown_logged = n;
     if (!obj_log_nth(n))
         return;
-    obj_log_delay(o, "its input's intervals grew: ");
+    obj_log_delay(o, "its input's intervals or top speed grew: ");
 }
 
 /* Log the refusals of each object read since the last call (rejlog.h). */
@@ -880,6 +890,11 @@ static size_t summary_motion(const obj_t *o, char *buf, size_t len, size_t n)
     if (o->status.transfers_moving && n < len) { /* issue 32: lib/engine/join.c */
         m = snprintf(buf + n, len - n, ", %llu re-anchors joined moving",
                      (unsigned long long)o->status.transfers_moving);
+        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+    }
+    if (o->status.reserve_slowed && n < len) { /* issue 26: delay.h */
+        m = snprintf(buf + n, len - n, ", slowed %llu times for D's stop reserve",
+                     (unsigned long long)o->status.reserve_slowed);
         n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
     }
     if (o->status.delay_grown && n < len) { /* issue 26: engine_delay_grow */

@@ -110,6 +110,14 @@ void engine_delay(const engine_t *e, engine_delay_t *d);
  * after its ramp from rest; engine_delay_note records the D of a start. */
 int engine_delay_ready(const engine_t *e);
 void engine_delay_note(engine_t *e);
+/* Engine-internal (engine_scale.c): 1 if the output, held back by the curve
+ * ahead, is short of its stop reserve while the input is on time: the
+ * newest waypoint arrived within the interval and slack D holds for one
+ * (and a tick), and the solved curve ends within D's lookahead of it.  The
+ * object then moves faster than the speed the reserve was sized for (D
+ * grows with the input's top speed): a slowdown for the reserve, counted in
+ * reserve_slowed, not an underrun. */
+int engine_delay_reserve_short(const engine_t *e);
 /* Engine-internal (an underrun, play_count_underrun): the D the input
  * measured now, if longer than the D stated, is stated instead (intervals
  * longer than at the start): the output then stands that far behind. */

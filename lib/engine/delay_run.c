@@ -244,6 +244,19 @@ void engine_delay_grow(engine_t *e)
     }
 }
 
+int engine_delay_reserve_short(const engine_t *e)
+{
+    engine_delay_t d;
+    if (!e->sil.arrived || e->sil.traj != e->out.traj || !e->out.have_now)
+        return 0;
+    engine_delay(e, &d);
+    if (!(d.interval_s > 0))
+        return 0;
+    double since = (double)(e->out.last_now - e->sil.arrival_ns) * 1e-9;
+    return since <= d.interval_s + d.slack_s + e->period_s &&
+           e->sil.last_t - e->scale.avail_t <= d.lookahead_s + e->period_s;
+}
+
 void engine_delay(const engine_t *e, engine_delay_t *d)
 {
     if (e->delay.noted)

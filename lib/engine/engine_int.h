@@ -148,6 +148,9 @@ typedef struct {
     int need_pos; /* engine_require_position: no first-waypoint fallback */
     int finished; /* the last trajectory ran to its end */
     int underrun;
+    int reserve_slow;      /* issue 26: slowed, on data that came on time, for a stop reserve
+                         longer than the output stood at (catchup.h engine_lag_ahead):
+                         counted in reserve_slowed, not an underrun */
     uint64_t traj;         /* trajectory the output streams */
     qent_t cur;            /* segment (or transfer) being stepped */
     double cur_t0, cur_t1; /* its start and end relative to origin_t */

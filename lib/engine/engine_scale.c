@@ -14,6 +14,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "delay.h"
 #include "fdiff.h"
 #include "timescale.h"
 
@@ -404,11 +405,20 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
     e->out.t = e->out.origin_t + s1;
 
     if (lim && !e->scale.stop_req && !e->scale.avail_closed && e->out.mode == OUT_STREAM) {
-        if (!e->out.underrun)
-            play_count_underrun(e);
-        e->out.underrun = 1;
-    } else if (e->out.underrun && !lim && e->scale.ts.rate >= target) {
+        if (!e->out.underrun && (e->out.reserve_slow || engine_delay_reserve_short(e))) {
+            /* issue 26: the data came on time, the object is faster than
+             * the speed D's stop reserve was sized for: slowed for it */
+            if (!e->out.reserve_slow)
+                e->st.reserve_slowed++;
+            e->out.reserve_slow = 1;
+        } else {
+            if (!e->out.underrun)
+                play_count_underrun(e);
+            e->out.underrun = 1;
+        }
+    } else if (!lim && e->scale.ts.rate >= target) {
         e->out.underrun = 0;
+        e->out.reserve_slow = 0;
     }
     if (e->out.underrun)
         e->st.underrun_ticks++;

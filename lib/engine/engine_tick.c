@@ -150,6 +150,7 @@ static void unit_reset(engine_t *e)
     e->scale.ts.rate = 1.0;
     e->scale.ts.acc = 0.0;
     e->scale.end_brake = 0;
+    e->out.reserve_slow = 0;
 }
 
 /* A stop or clear has brought the output to rest: drop what was queued at

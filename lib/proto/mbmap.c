@@ -290,6 +290,7 @@ int mbmap_encode_diag(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_obje
     mbmap_put_u32(b + MBMAP_X_DELAY_GROWN, lo32(o->st.delay_grown));
     mbmap_put_u32(b + MBMAP_X_AXIS_LAG_STOPS, lo32(o->st.axis_lag_stops));
     mbmap_put_u32(b + MBMAP_X_AXIS_BEYOND, lo32(o->st.axis_beyond));
+    mbmap_put_u32(b + MBMAP_X_RESERVE_SLOWED, lo32(o->st.reserve_slowed));
     mbmap_put_f64(b + MBMAP_X_HEADING, o->heading_deg);
     mbmap_put_f64(b + MBMAP_X_HEADING_UNWRAPPED, o->heading_unwrapped_deg);
     mbmap_put_u32(b + MBMAP_X_TX_CLAMPED, lo32(o->tx_clamped));
@@ -720,7 +721,8 @@ static const mbmap_field_t fields[] = {
       "re-anchors joined moving: the output met the new trajectory without braking to rest "
       "(lib/engine/join.c)"),
     F(IX, MBMAP_X_DELAY_GROWN, 2, MBMAP_T_U32, "delay_grown", "",
-      "times the play-out delay D grew with the input's intervals (lib/engine/delay.h)"),
+      "times the play-out delay D grew with the input's intervals or top speed "
+      "(lib/engine/delay.h)"),
     F(IX, MBMAP_X_HEADING, 4, MBMAP_T_F64, "heading", "deg",
       "heading axis at the setpoint's track time, wrapped to (-180, 180] (a track column heading: "
       "unwrapped, monotone cubic, lib/util/angle.h); NaN without one"),
@@ -735,6 +737,9 @@ static const mbmap_field_t fields[] = {
     F(IX, MBMAP_X_AXIS_BEYOND, 2, MBMAP_T_U32, "axis_beyond", "",
       "stops before a segment over 100 times faster on an axis than its axis_max_* (it would "
       "need a rate below ENGINE_CEIL_MIN)"),
+    F(IX, MBMAP_X_RESERVE_SLOWED, 2, MBMAP_T_U32, "reserve_slowed", "",
+      "slowdowns along the path of an object faster than the speed D's stop reserve was sized "
+      "for, on input that came on time (not underruns; D grows with it, lib/engine/delay.h)"),
     F(IX, MBMAP_X_MB_WORST_ADDR, 1, MBMAP_T_U16, "mb_worst_addr0", "",
       "the daemon's worst Modbus client (daemon mb_worst_*), its address as 8 groups of 16 bits "
       "in the order IPv6 text writes them (RFC 4291 2.2): group 0; an IPv4 client as "

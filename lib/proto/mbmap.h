@@ -193,9 +193,10 @@
 #define MBMAP_X_AXIS_LOST_S 40       /* f64 time lost to the per-axis limits, s (engine_status_t axis_lost_s) */
 #define MBMAP_X_AXIS_SLOWED 44       /* u32 segments the per-axis limits slow */
 #define MBMAP_X_TRANSFERS_MOVING 46  /* u32 re-anchors joined moving (engine_status_t transfers_moving) */
-#define MBMAP_X_DELAY_GROWN 48       /* u32 times D grew with the input's intervals (delay_grown) */
+#define MBMAP_X_DELAY_GROWN 48       /* u32 times D grew with the input's intervals or top speed (delay_grown) */
 #define MBMAP_X_AXIS_LAG_STOPS 70    /* u32 stops because the per-axis limits' lag passed max_lag_s */
 #define MBMAP_X_AXIS_BEYOND 72       /* u32 stops before a segment the per-axis limits cannot follow */
+#define MBMAP_X_RESERVE_SLOWED 74    /* u32 slowdowns of an object faster than D's stop reserve was sized for */
 #define MBMAP_X_HEADING 50           /* f64 heading axis, degrees in (-180, 180] (NaN: none) */
 #define MBMAP_X_HEADING_UNWRAPPED 54 /* f64 the same, continuous (no jump at +-180): for a rotary axis */
 #define MBMAP_X_TX_CLAMPED 58       /* u32 setpoints sent on CAN with a value clipped to its field (speed beyond the SETPOINT frame's +-32.767 m/s ...) */

@@ -408,5 +408,74 @@ class TestUnderrunsTold(unittest.TestCase):
                             "late on its D" in l, l)
 
 
+class TestFasterThanReserve(unittest.TestCase):
+    """Issue 26 item 1: "an object faster than the speed its reserve was sized
+    for is slowed by the time scaling, counted and shown".  A 200 Hz track
+    (the input interval shorter than a tick, the jitter slack one interval)
+    along x at 1 m/s for 20 s that then speeds up at 1 m/s^2 to 10 m/s: D
+    was sized at the start for 1 m/s, and its stop reserve grows with the
+    speed (v/(2a) + a/(2j), from 0.1 to 1.07 s) faster than the output can
+    fall back to it at the catch-up's pace.  The output slows along its path
+    for the reserve, on input that came on time: counted in reserve_slowed,
+    not an underrun (no waypoint was late, and the output never stops); it
+    ends at the D stated, within a tick (longer than the interval), with D's reserve a stop from
+    the track's top speed (closed form).  Before: counted and logged as an
+    underrun ("the output was late on its D") and the output stood in
+    UNDERRUN for 15 s."""
+
+    H = 0.005
+
+    def speed_up(self, tmp):
+        """The track into tmp/speedup.csv: its path, t and the speed along x."""
+        h = self.H
+        t = h * np.arange(int(80 / h))
+        v = np.clip(1 + np.maximum(t - 20, 0), None, 10)
+        x = np.concatenate([[0], np.cumsum((v[1:] + v[:-1]) / 2 * h)])
+        y = 2 * np.sin(0.2 * t)
+        path = os.path.join(tmp, "speedup.csv")
+        with open(path, "w") as f:
+            f.write("t,x,y\n")
+            for a, b, c in zip(t, x, y):
+                f.write("%.3f,%.12f,%.12f\n" % (a, b, c))
+        return path, t, v
+
+    def test_speed_up_slows_for_the_reserve(self):
+        h = self.H
+        with tempfile.TemporaryDirectory() as tmp:
+            path, t, v = self.speed_up(tmp)
+            p = replay(path)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        s = replay_summary.parse(p.stderr)
+        self.assertEqual(s["underruns"], 0, p.stderr[-1500:])
+        self.assertGreaterEqual(s.get("reserve_slowed", 0), 1)
+        self.assertEqual(s["hard_stops"], 0)
+        vtop = np.hypot(v, 0.4 * np.cos(0.2 * t)).max()
+        self.assertGreaterEqual(s["delay_stop_s"], stop_s(vtop) - 1e-6)
+        rows = list(csv.DictReader(io.StringIO(p.stdout)))
+        now = np.array([int(r["now_ns"]) * 1e-9 for r in rows])
+        ts = np.array([float(r["t_s"]) for r in rows])
+        states = [r["state"] for r in rows]
+        self.assertNotIn("underrun", states)
+        # slowed, never stopped, while streaming between the start's ramp and the end
+        mid = (now[1:] > 10) & (now[1:] < 75)
+        rate = np.diff(ts)[mid] / np.diff(now)[mid]
+        self.assertLess(rate.min(), 1.0)
+        self.assertGreater(rate.min(), 0.5)
+        # (on the tick grid: within a tick, longer than the interval here)
+        tail = (now > 60) & (now < 75)
+        self.assertLessEqual(np.max(np.abs(now[tail] - ts[tail] - s["delay_s"])), max(h, T))
+
+    def test_told_by_trajd(self):
+        """trajd says so in its log (a notice, not an underrun warning)."""
+        with tempfile.TemporaryDirectory() as tmp:
+            path, _, _ = self.speed_up(tmp)
+            p = run_trajd(tmp, path, 20)
+        self.assertEqual(p.returncode, 0, p.stderr[-2000:])
+        self.assertIn("object 'a': faster than the speed its play-out delay's stop reserve was "
+                      "sized for, on input that came on time: slowed along its path (", p.stderr)
+        self.assertRegex(p.stderr, r"0 underruns, .*slowed [1-9][0-9]* times for D's stop reserve")
+        self.assertNotIn("object 'a': underrun at t = ", p.stderr)
+
+
 if __name__ == "__main__":
     unittest.main()

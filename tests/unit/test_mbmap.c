@@ -219,6 +219,7 @@ static void test_encode_diag(void **state)
     o.st.delay_grown = 0x100000000ull + 99;
     o.st.axis_lag_stops = 3; /* issue 32: the per-axis stops */
     o.st.axis_beyond = 4;
+    o.st.reserve_slowed = 0x100000000ull + 5; /* issue 26: slowed for D's reserve */
     assert_int_equal(mbmap_encode_diag(regs, 2, 0xABCD1234u, &o), 0);
     assert_int_equal(mbmap_encode_diag(regs, MBMAP_MAX_OBJECTS, 1, &o), -MBMAP_EADDRESS);
     const uint16_t *b = regs + MBMAP_X_BASE(2);
@@ -243,6 +244,7 @@ static void test_encode_diag(void **state)
     assert_int_equal(read_field(b, field("input diagnostics", "delay_grown")), 99);
     assert_int_equal(read_field(b, field("input diagnostics", "axis_lag_stops")), 3);
     assert_int_equal(read_field(b, field("input diagnostics", "axis_beyond")), 4);
+    assert_int_equal(read_field(b, field("input diagnostics", "reserve_slowed")), 5);
     /* everything before it (object 2's is the last block of the table) */
     for (unsigned i = 0; i < MBMAP_X_BASE(2); i++)
         assert_int_equal(regs[i], 0);
