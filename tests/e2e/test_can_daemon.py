@@ -10,6 +10,8 @@ transport (the same codec and can_port as on a socket, no kernel needed):
   in the classic layout, the FD layout and the CiA 402 RPDO layout;
 - faults in the input (gap, duplicate, wrong length, unknown multiplexer) are
   reported in the STATUS frames and the trajectory carries on;
+- a pause of the input mid-track runs the output short: STATUS2 page 7 counts
+  the underruns the SETPOINT frames' state shows (issue 26);
 - a configuration above the bus-load limit is refused with a clear message,
   and the limit agrees with an independent computation of frame lengths;
 - a log with nothing usable for an object (only foreign frames, or every
