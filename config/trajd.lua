@@ -39,7 +39,7 @@ local VALS = {
                   [67] = "setpoints dropped", [68] = "bus down", [69] = "output lost lines",
                   [70] = "safety fault", [71] = "drive not enabled", [72] = "command refused"},
     ST2_Page = {[1] = "faults", [2] = "rejected", [3] = "clock", [4] = "drive", [5] = "bus",
-                [6] = "time"},
+                [6] = "time", [7] = "motion"},
     ST2_Clocked = {[0] = "relative", [1] = "on the clock", [2] = "undecided"},
     ST2_BusState = {[1] = "error-active", [2] = "error-warning", [3] = "error-passive",
                     [4] = "bus-off", [5] = "down"},
@@ -89,7 +89,10 @@ local MSG = {
         {"ST2_BusState", 8, 8, false, 1, "", 5}, {"ST2_TxErr", 16, 8, false, 1, "", 5},
         {"ST2_RxErr", 24, 8, false, 1, "", 5}, {"ST2_BusOffs", 32, 16, false, 1, "", 5},
         {"ST2_ErrFrames", 48, 16, false, 1, "", 5},
-        {"ST2_TimeT", 8, 56, true, 1e-6, "s", 6}},
+        {"ST2_TimeT", 8, 56, true, 1e-6, "s", 6},
+        {"ST2_Underruns", 8, 16, false, 1, "", 7}, {"ST2_DelayGrown", 24, 8, false, 1, "", 7},
+        {"ST2_TransfersMoving", 32, 16, false, 1, "", 7},
+        {"ST2_AxisBeyond", 48, 8, false, 1, "", 7}, {"ST2_AxisLagStops", 56, 8, false, 1, "", 7}},
 }
 -- Setpoint positions 0x80000000: no position yet (do not move).
 local NO_POSITION = {SP_X_Pos = true, SP_Y_Pos = true, SP_Z_Pos = true, SPFD_X = true,

@@ -17,7 +17,8 @@
  * EX_SOFTWARE; CORE_EXIT_OUTPUT_LOST (74) if any setpoint line was lost by an
  * output; CORE_EXIT_EPIPE (141) when stdout's reader went away; CORE_EXIT_NO_INPUT
  * (65) if a replayed track or log_in had no usable waypoint; CORE_EXIT_HELD (75)
- * if an object ended held (safety fault, drive fault, lost heartbeat).
+ * if an object ended held (safety fault, drive fault, lost heartbeat, or stopped
+ * and latched by the per-axis limits: axis_lag_stops, axis_beyond).
  * Control socket (daemon/ctl/ctl.h, for trajctl): opened before privileges
  * drop, kept across reloads (each new core is handed to it), closed last.
  * systemd (sd_notify; no-ops without NOTIFY_SOCKET):
@@ -729,8 +730,9 @@ static uint64_t engine_faults(const core_t *c, const stats_t *st)
 }
 
 /* Objects that end the run held: a safety fault, a feed hold (a drive's
- * heartbeat lost), or no position after waypoints were accepted (a CiA 402
- * drive left Operation Enabled: obj_drive_event); each named in a log line.
+ * heartbeat lost), no position after waypoints were accepted (a CiA 402
+ * drive left Operation Enabled: obj_drive_event), or latched after the
+ * per-axis limits stopped it on its path (issue 32); each named in a log line.
  * Their count (issue 24: the run exits CORE_EXIT_HELD). */
 static unsigned held_objects(const core_t *c)
 {
@@ -738,9 +740,19 @@ static unsigned held_objects(const core_t *c)
     for (unsigned i = 0; c && i < c->nobj; i++) {
         const obj_t *o = &c->obj[i];
         unsigned hold = o->lc.hold; /* the lifecycle's (lib/engine/lifecycle.h) */
-        if (!safety_fault(&o->safety) && !hold && !o->held)
+        const engine_status_t *st = &o->status;
+        int axis = o->lc.latched && (st->axis_lag_stops || st->axis_beyond); /* issue 32 */
+        if (!safety_fault(&o->safety) && !hold && !o->held && !axis)
             continue;
         n++;
+        if (axis && !safety_fault(&o->safety) && !hold && !o->held) {
+            log_msg(LOG_ERR,
+                    "object '%s' ended held: stopped on its path by the per-axis limits "
+                    "(axis_lag_stops %llu, axis_beyond %llu), latched",
+                    o->name, (unsigned long long)st->axis_lag_stops,
+                    (unsigned long long)st->axis_beyond);
+            continue;
+        }
         log_msg(LOG_ERR, "object '%s' ended held: %s", o->name,
                 safety_fault(&o->safety) ? safety_strerror(safety_fault(&o->safety))
                 : (hold & LC_HOLD_DRIVE) ? "its drives left Operation Enabled"

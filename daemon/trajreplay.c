@@ -64,6 +64,8 @@ enum {
     EXIT_STRICT = 6,   /* --strict: a waypoint was rejected or a line skipped */
     EXIT_INTERNAL = 7, /* a solver refused finite data, which the engine documents cannot
                           happen (a defect to report) */
+    EXIT_AXIS = 8,     /* the per-axis limits stopped the output on its path (issue 32:
+                          axis_lag_stops, axis_beyond): the track was not followed there */
 };
 
 /* Ticks written after the engine reports FINISHED for good: they show the
@@ -410,12 +412,13 @@ typedef struct {
     FILE *out;
     double span_s; /* track time from first to last waypoint */
     double max_v, max_a;
-    double last_v;      /* speed of the previous setpoint (hard stop reports) */
-    uint64_t hard_seen; /* hard stops reported so far */
-    double und_t;       /* underrun_t_s of the last underrun reported (NaN: none) */
-    uint64_t und_n;     /* underruns reported */
-    size_t und_next;    /* r.next when they were last looked at */
-    uint64_t written;   /* setpoint rows */
+    double last_v;        /* speed of the previous setpoint (hard stop reports) */
+    uint64_t hard_seen;   /* hard stops reported so far */
+    double und_t;         /* underrun_t_s of the last underrun reported (NaN: none) */
+    uint64_t und_n;       /* underruns reported */
+    size_t und_next;      /* r.next when they were last looked at */
+    double axis_stop_t_s; /* t_s when the per-axis limits first stopped it (NaN: never) */
+    uint64_t written;     /* setpoint rows */
     engine_status_t st;
     geo_enu_t frame;          /* --geo: the track's east/north/up origin */
     size_t heading_hint;      /* --geo: interval of the last heading evaluation */
@@ -461,7 +464,7 @@ static int run_open(run_t *run, const opts_t *o)
     run->out = stdout;
     run->rows = rows;
     run->seen_next = (size_t)-1;
-    run->und_t = NAN;
+    run->und_t = run->axis_stop_t_s = NAN;
     if (engine_config_check(&o->cfg, &why)) {
         fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", why ? why : "?");
         return EXIT_USAGE;
@@ -705,11 +708,6 @@ static void run_report_uniform(run_t *run)
 static void run_report_axis(run_t *run)
 {
     engine_status(run->e, &run->st);
-    if (run->st.axis_beyond) /* stopped on the path there (engine_axis_lag_over) */
-        fprintf(stderr,
-                "trajreplay: %s: error: stopped before a segment over 100 times faster "
-                "on an axis than its axis_max_*\n",
-                run->o->input);
     if (!(run->st.axis_lost_s > AXIS_LOST_WARN_FRAC * run->span_s))
         return;
     fprintf(stderr,
@@ -804,8 +802,11 @@ static int run_ticks(run_t *run)
         run_report_rejections(run);
         (void)engine_tick(run->e, now, &sp);
         run_report_underrun(run, 0);
-        if (engine_axis_lag_over(run->e)) /* max_lag_s passed: stop on the path (issue 32) */
+        if (engine_axis_lag_over(run->e)) { /* max_lag_s passed: stop on the path (issue 32) */
             (void)engine_stop(run->e);
+            if (isnan(run->axis_stop_t_s))
+                run->axis_stop_t_s = sp.t_s;
+        }
         if (skipped)
             sp.flags |= ENGINE_SP_SKIPPED;
         if (!(sp.flags & ENGINE_SP_NO_POSITION) &&
@@ -927,6 +928,11 @@ int main(int argc, char **argv)
                 run.skipped_gaps, run.skipped_ticks);
         replay_print_delay(run.e);
     }
+    size_t judged = run.r.next > run.st.judging ? run.r.next - run.st.judging : 0;
+    if (replay_report_axis_stop(o.input, &run.trk, run.results, judged, &run.st, run.axis_stop_t_s,
+                                o.cfg.max_lag_s) &&
+        !status)
+        status = EXIT_AXIS;
     if (!status && o.strict && (run.rejected || run.trk.skipped)) {
         fprintf(stderr,
                 "trajreplay: --strict: %" PRIu64 " waypoint%s rejected, %zu line%s "

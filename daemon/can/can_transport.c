@@ -741,6 +741,10 @@ static void setpoint(void *state, obj_t *o, const engine_setpoint_t *sp)
         canproto_st2_rejected_from(o->status.rejected_by, &rj);
         canproto_encode_status2_rejected(0, &rj, &f);
         can_port_status2(s->port, k, &f);
+        canproto_st2_motion_t mo; /* page 7: issues 26, 32 */
+        canproto_st2_motion_from(&o->status, &mo);
+        canproto_encode_status2_motion(0, &mo, &f);
+        can_port_status2(s->port, k, &f);
         status2_clock(s, o, sp, &f);
         can_port_status2_value(s->port, k, &f);
         canproto_encode_status2_time(0, sp->t_s, &f); /* page 6: beside the waypoints */

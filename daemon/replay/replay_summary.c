@@ -85,3 +85,32 @@ void replay_print_delay(const engine_t *e)
     const char *m = engine_setting_enum_name(engine_setting_find("method"), d.method);
     fprintf(stderr, "summary: method %s\n", m ? m : "?");
 }
+
+int replay_report_axis_stop(const char *input, const track_t *trk, const int *results,
+                            size_t judged, const engine_status_t *st, double stop_t_s,
+                            double max_lag_s)
+{
+    if (!st->axis_lag_stops && !st->axis_beyond)
+        return 0;
+    char lag[96];
+    snprintf(lag, sizeof lag,
+             "the per-axis limits made it lag the track by more than max_lag_s %g s", max_lag_s);
+    const char *beyond = "a segment over 100 times faster on an axis than its axis_max_*";
+    const char *why = !st->axis_beyond ? lag : !st->axis_lag_stops ? beyond : "the per-axis limits";
+    size_t i = 0;
+    while (i < trk->n && !(trk->wp[i].t_s > stop_t_s && (i >= judged || results[i] >= 0)))
+        i++;
+    if (i < trk->n)
+        fprintf(stderr,
+                "%s:%" PRIu32 ": error: the output stopped on its path at t = %.3f s, "
+                "short of this waypoint",
+                input, trk->line[i], stop_t_s);
+    else
+        fprintf(stderr, "trajreplay: %s: error: the output stopped on its path at t = %.3f s",
+                input, stop_t_s);
+    fprintf(stderr,
+            ": %s (axis_lag_stops %" PRIu64 ", axis_beyond %" PRIu64
+            "); the track was not followed there\n",
+            why, st->axis_lag_stops, st->axis_beyond);
+    return 1;
+}

@@ -21,4 +21,14 @@ void replay_print_summary(const track_t *trk, const replay_t *r, const engine_st
  * and the method it resolved to. */
 void replay_print_delay(const engine_t *e);
 
+/* The per-axis limits stopped the output on its path (st: axis_lag_stops, a
+ * lag beyond max_lag_s; axis_beyond, a segment over 100 times faster on an
+ * axis than its limit; issue 32): say where on stderr, as "input:line: error:
+ * ..." with the first waypoint it did not reach after stop_t_s (the output's
+ * track time when it was first stopped; results[i] < 0 for i < judged: a
+ * rejected waypoint, passed over).  Returns 1 if it was stopped, else 0. */
+int replay_report_axis_stop(const char *input, const track_t *trk, const int *results,
+                            size_t judged, const engine_status_t *st, double stop_t_s,
+                            double max_lag_s);
+
 #endif

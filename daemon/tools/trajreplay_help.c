@@ -80,6 +80,8 @@ void trajreplay_usage(FILE *f)
           "Exit status: 0 ok, 1 track not loadable or no usable waypoint in it, 2 usage\n"
           "or configuration, 3 output write failed, 4 out of memory, 5 --max-rows\n"
           "reached, 6 --strict and something was rejected, 7 internal fault (a defect:\n"
-          "a solver refused finite data; please report it).\n",
+          "a solver refused finite data; please report it), 8 the per-axis limits\n"
+          "stopped the output on its path (--max-lag passed, or a segment over 100 times\n"
+          "faster on an axis than its --axis-max-*; file:line names the waypoint).\n",
           f);
 }

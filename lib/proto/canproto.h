@@ -149,6 +149,8 @@ typedef enum {
     CANPROTO_ST2_DRIVE = 4,    /* the object's CiA 402 drives (canproto_status2_drive_t) */
     CANPROTO_ST2_BUS = 5,      /* CAN bus state from error frames (canproto_st2_bus_t) */
     CANPROTO_ST2_TIME = 6,     /* track time t_s of the setpoint (canproto_encode_status2_time) */
+    CANPROTO_ST2_MOTION = 7,   /* underruns, D growth, moving joins, per-axis stops
+                                * (canproto_st2_motion_t) */
     CANPROTO_ST2_PAGES = 8     /* pages are 1 .. CANPROTO_ST2_PAGES - 1 */
 } canproto_st2_page_t;
 
@@ -535,6 +537,28 @@ void canproto_encode_status2_rejected(uint32_t id, const canproto_st2_rejected_t
 
 /* Decode STATUS2 page 2.  Returns 0, -CANPROTO_ELEN, or -CANPROTO_EMUX (another page). */
 int canproto_decode_status2_rejected(const canproto_frame_t *f, canproto_st2_rejected_t *out);
+
+/* STATUS2 page 7, MOTION (issues 26, 32): the engine's motion counters
+ * (engine_status_t), each saturating at its field's maximum; a page of events
+ * (a change sends it first).  axis_lost_s is not here: it grows every tick
+ * the per-axis limits slow the output, so the page would change every tick
+ * and take the other pages' turns (Modbus diagnostics and --summary give it). */
+typedef struct {
+    uint64_t underruns;        /* transitions into UNDERRUN (bytes 1..2, uint16) */
+    uint64_t delay_grown;      /* D stated anew, longer, at an underrun (byte 3, uint8) */
+    uint64_t transfers_moving; /* re-anchors joined moving (bytes 4..5, uint16) */
+    uint64_t axis_beyond;      /* stops before a segment beyond the per-axis limits (byte 6) */
+    uint64_t axis_lag_stops;   /* stops because the per-axis lag passed max_lag_s (byte 7) */
+} canproto_st2_motion_t;
+
+/* The page's counters from an engine_status_t. */
+void canproto_st2_motion_from(const engine_status_t *st, canproto_st2_motion_t *out);
+
+void canproto_encode_status2_motion(uint32_t id, const canproto_st2_motion_t *p,
+                                    canproto_frame_t *out);
+
+/* Decode STATUS2 page 7.  Returns 0, -CANPROTO_ELEN, or -CANPROTO_EMUX (another page). */
+int canproto_decode_status2_motion(const canproto_frame_t *f, canproto_st2_motion_t *out);
 
 /* ---- waypoint reassembly ------------------------------------------------------------ */
 

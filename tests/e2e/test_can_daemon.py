@@ -10,6 +10,8 @@ transport (the same codec and can_port as on a socket, no kernel needed):
   in the classic layout, the FD layout and the CiA 402 RPDO layout;
 - faults in the input (gap, duplicate, wrong length, unknown multiplexer) are
   reported in the STATUS frames and the trajectory carries on;
+- a pause of the input mid-track runs the output short: STATUS2 page 7 counts
+  the underruns the SETPOINT frames' state shows (issue 26);
 - a configuration above the bus-load limit is refused with a clear message,
   and the limit agrees with an independent computation of frame lengths;
 - a log with nothing usable for an object (only foreign frames, or every
@@ -362,6 +364,37 @@ class CanDaemon(unittest.TestCase):
         st2 = ct.decode_by_id(os.path.join(d, "sp.log"), 0x6D0)
         page1 = [f for _, f in st2 if int(f["ST2_Page"]) == 1]   # the faults page, last sent
         self.assertEqual(int(page1[-1]["ST2_CmdRefused"]), 0)
+
+    # Given the track's waypoint frames with the second half of the log sent
+    # 1 s late (a pause of the input mid-track, the stamps unchanged), then
+    # the output runs short: each entry into underrun is on the bus in the
+    # SETPOINT frames' state (canmatrix), and STATUS2 page 7 (issues 26, 32)
+    # counts them all, with the delay D grown (once at least) to match.
+    def test_underruns_on_status2(self):
+        d = self.sub("pause")
+        wp = os.path.join(d, "wp.log")
+        ct.write_wplog(self.xyz, wp, iface="vcan0")
+        with open(wp) as fh:
+            lines = fh.read().splitlines()
+        stamp = lambda l: float(l[1:l.index(")")])
+        stamps = [stamp(l) for l in lines if l.startswith("(")]
+        mid = (stamps[0] + stamps[-1]) / 2
+        with open(wp, "w") as fh:
+            fh.writelines("(%.6f)%s\n" % (stamp(l) + 1.0, l[l.index(")") + 1:])
+                          if l.startswith("(") and stamp(l) > mid else l + "\n" for l in lines)
+        p = run_trajd(conf(d))
+        self.assertEqual(p.returncode, 0, p.stderr[-800:])
+        rows, _ = ct.decode_setpoints(os.path.join(d, "sp.log"))
+        states = [rows[k]["state"] for k in sorted(rows)]
+        entered = sum(1 for a, b in zip(states, states[1:]) if b == 2 and a != 2)
+        self.assertGreater(entered, 0)  # the pause did run the output short
+        page7 = [f for _, f in ct.decode_by_id(os.path.join(d, "sp.log"), 0x6D0)
+                 if int(f["ST2_Page"]) == 7]
+        self.assertGreater(len(page7), 0)
+        self.assertEqual(int(page7[-1]["ST2_Underruns"]), entered)
+        self.assertGreater(int(page7[-1]["ST2_DelayGrown"]), 0)
+        self.assertEqual((int(page7[-1]["ST2_AxisBeyond"]), int(page7[-1]["ST2_AxisLagStops"])),
+                         (0, 0))
 
     # Given 4 objects at 1 kHz with own frames and CiA 402 RPDOs at 500 kbit/s,
     # then --check-config refuses with the computed load, which agrees with

@@ -94,6 +94,11 @@ static void check_status(const canproto_frame_t *f)
                f);
     if (found != (page == CANPROTO_ST2_BUS))
         abort();
+    found = 0;
+    ROUND_TRIP(canproto_st2_motion_t, canproto_decode_status2_motion,
+               canproto_encode_status2_motion, 0x6D1, f);
+    if (found != (page == CANPROTO_ST2_MOTION))
+        abort();
 }
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)

@@ -78,6 +78,11 @@ class St2Clock(ctypes.Structure):
                 ("clocked", ctypes.c_uint8)]
 
 
+class St2Motion(ctypes.Structure):
+    _fields_ = [(n, ctypes.c_uint64) for n in ("underruns", "delay_grown", "transfers_moving",
+                                               "axis_beyond", "axis_lag_stops")]
+
+
 class Status(ctypes.Structure):
     _fields_ = [("state", ctypes.c_uint8), ("flags", ctypes.c_uint8),
                 ("last_seq", ctypes.c_uint32), ("free", ctypes.c_uint32),
@@ -107,6 +112,8 @@ def load():
     lib.canproto_decode_status2_clock.argtypes = [P(Frame), P(St2Clock)]
     lib.canproto_encode_status2_time.argtypes = [ctypes.c_uint32, ctypes.c_double, P(Frame)]
     lib.canproto_decode_status2_time.argtypes = [P(Frame), P(ctypes.c_double)]
+    lib.canproto_encode_status2_motion.argtypes = [ctypes.c_uint32, P(St2Motion), P(Frame)]
+    lib.canproto_decode_status2_motion.argtypes = [P(Frame), P(St2Motion)]
     lib.canproto_encode_cia402.argtypes = [P(Ids), ctypes.c_uint, ctypes.c_double, P(Frame)]
     lib.canproto_cia402_pos_m.argtypes = [P(Ids), ctypes.c_uint, ctypes.c_int32]
     lib.canproto_cia402_pos_m.restype = ctypes.c_double

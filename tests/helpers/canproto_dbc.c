@@ -109,6 +109,11 @@ static const canproto_signal_t sig_st2[] = {
     SIG_U("ST2_Statusword", CANPROTO_ST2_DRIVE, 24, 16, 1, ""),
     SIG_U("ST2_Nmt", CANPROTO_ST2_DRIVE, 40, 8, 1, ""),
     SIG_U("ST2_Emcy", CANPROTO_ST2_DRIVE, 48, 16, 1, ""),
+    SIG_U("ST2_Underruns", CANPROTO_ST2_MOTION, 8, 16, 1, ""),
+    SIG_U("ST2_DelayGrown", CANPROTO_ST2_MOTION, 24, 8, 1, ""),
+    SIG_U("ST2_TransfersMoving", CANPROTO_ST2_MOTION, 32, 16, 1, ""),
+    SIG_U("ST2_AxisBeyond", CANPROTO_ST2_MOTION, 48, 8, 1, ""),
+    SIG_U("ST2_AxisLagStops", CANPROTO_ST2_MOTION, 56, 8, 1, ""),
 };
 static const canproto_signal_t sig_rpdo[] = {
     SIG_S("Target_Position_607A", -1, 0, 32, 1, "inc"),
@@ -216,7 +221,7 @@ int canproto_dbc(char *buf, size_t len)
          "drive left Operation Enabled, 0x48 a command refused (object not writable, or held: an "
          "override above 0 during a feed hold)\";\n"
          "CM_ SG_ %u ST2_Page \"STATUS2 page: 1 faults, 2 rejected waypoints per reason, 3 clock, "
-         "4 drive, 5 bus; "
+         "4 drive, 5 bus, 6 time, 7 motion; "
          "counters saturate at their maximum\";\n"
          "CM_ SG_ %u ST2_OutLost \"setpoint lines lost by the object's csv/stdout outputs\";\n"
          "CM_ SG_ %u ST2_OutErrors \"failed writes of the object's csv/stdout outputs\";\n"
@@ -260,6 +265,19 @@ int canproto_dbc(char *buf, size_t len)
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE);
     emit(buf, len, &pos,
+         "CM_ SG_ %u ST2_Underruns \"page 7: transitions into underrun (the newest waypoint "
+         "passed before the next came)\";\n"
+         "CM_ SG_ %u ST2_DelayGrown \"page 7: the delay D stated anew, longer, at an underrun "
+         "(the input's intervals grew beyond what D was sized for)\";\n"
+         "CM_ SG_ %u ST2_TransfersMoving \"page 7: re-anchors joined moving: the output met the "
+         "new trajectory's curve without braking to rest\";\n"
+         "CM_ SG_ %u ST2_AxisBeyond \"page 7: stops before a segment the per-axis limits "
+         "(axis_max_*) cannot follow: over 100 times faster on an axis than its limit\";\n"
+         "CM_ SG_ %u ST2_AxisLagStops \"page 7: stops because the lag the per-axis limits "
+         "made passed max_lag_s (time lost to them: Modbus diagnostics)\";\n",
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE);
+    emit(buf, len, &pos,
          "BA_DEF_ BO_ \"VFrameFormat\" ENUM \"StandardCAN\",\"ExtendedCAN\",\"reserved\","
          "\"J1939PG\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\","
          "\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"StandardCAN_FD\","
@@ -298,9 +316,9 @@ int canproto_dbc(char *buf, size_t len)
          CANPROTO_STERR_REFUSED);
     emit(buf, len, &pos,
          "VAL_ %u ST2_Page %d \"faults\" %d \"rejected\" %d \"clock\" %d \"drive\" %d \"bus\" "
-         "%d \"time\" ;\n",
+         "%d \"time\" %d \"motion\" ;\n",
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ST2_FAULTS, CANPROTO_ST2_REJECTED, CANPROTO_ST2_CLOCK,
-         CANPROTO_ST2_DRIVE, CANPROTO_ST2_BUS, CANPROTO_ST2_TIME);
+         CANPROTO_ST2_DRIVE, CANPROTO_ST2_BUS, CANPROTO_ST2_TIME, CANPROTO_ST2_MOTION);
     emit(buf, len, &pos,
          "VAL_ %u ST2_Clocked %d \"relative\" %d \"on the clock\" %d \"undecided\" ;\n",
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ST2_CLOCK_RELATIVE, CANPROTO_ST2_CLOCK_ON,

@@ -15,14 +15,18 @@ The figure-8 x = 20 sin 0.2t, y = 10 sin 0.4t at 10 Hz for 60 s (up to 4 m/s per
   a track 15 m apart on x, with a per-axis acceleration limit of 0.05 m/s^2 on x.
 
 * with max_lag_s = 5 the object stops on its path once its lag from the limits passes 5 s:
-  in trajreplay the output comes to rest short of the track's end, still on the path; in
+  in trajreplay the output comes to rest short of the track's end, still on the path, and
+  trajreplay exits 8 naming the file line of the first waypoint it stopped short of; in
   trajd the lifecycle logs "lag beyond max_lag_s" and the object is stopped, latched (its
-  output holds at rest until the run ends).
+  output holds at rest until the run ends), and trajd exits 75 (the object ended held);
+* a track over 100 times faster on an axis than its limit (axis_beyond): the output never
+  enters the segment, trajreplay exits 8 naming the segment's end in the file.
 
 The run's length against the time-optimal one is measured by tests/bench/bench_axis.py.
 """
 import csv
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -67,12 +71,36 @@ def peaks(now, p):
     return np.abs(v).max(axis=0), np.abs(a).max(axis=0)
 
 
-def replay(src, out, *opts):
+def replay(src, out, *opts, code=0, err=None):
+    """The --summary counters of a run, which must exit with code; err: a list given
+    the stderr lines that are not summary lines."""
     p = subprocess.run([TRAJREPLAY, "-q", "--summary", "--profile", "machine", "-o", out]
                        + list(opts) + [src], capture_output=True, text=True, timeout=300)
-    assert p.returncode == 0, p.stderr
+    assert p.returncode == code, (p.returncode, p.stderr)
+    if err is not None:
+        err += [l for l in p.stderr.splitlines() if not l.startswith("summary: ")]
     return {l.split()[1]: l.split()[2] for l in p.stderr.splitlines()
             if l.startswith("summary: ")}
+
+
+def stop_line(err, src):
+    """From trajreplay's 'src:LINE: error: the output stopped on its path at t = T s'
+    line: (LINE, T), or None."""
+    for l in err:
+        m = re.match(re.escape(src) + r":(\d+): error: the output stopped on its path at "
+                     r"t = ([-\d.]+) s", l)
+        if m:
+            return int(m.group(1)), float(m.group(2))
+    return None
+
+
+def first_line_after(src, t):
+    """The file line (1-based, the header is line 1) of the first waypoint after t."""
+    with open(src) as f:
+        for n, l in enumerate(f, 1):
+            if n > 1 and float(l.split(",")[0]) > t:
+                return n
+    return None
 
 
 def main():
@@ -123,8 +151,11 @@ def main():
               "trajd: peaks |v| %s, |a| %s within the limits" % (np.round(v2[:2], 4),
                                                                    np.round(a2[:2], 4)))
 
-        # max_lag_s: the object stops on its path
-        s5 = replay(src, os.path.join(d, "lag.csv"), "--rate", "100", "--max-lag", "5", *lim)
+        # max_lag_s: the object stops on its path; trajreplay exits 8 and names the
+        # first waypoint of the file it stopped short of
+        err5 = []
+        s5 = replay(src, os.path.join(d, "lag.csv"), "--rate", "100", "--max-lag", "5", *lim,
+                    code=8, err=err5)
         now5, t5, p5, fl5 = rows(os.path.join(d, "lag.csv"))
         # the trajectory it stopped in (trajreplay has no lifecycle to buffer what comes
         # after: the rest of the track starts trajectories of its own)
@@ -137,6 +168,13 @@ def main():
               np.abs(p5[m5] - ref5).max() <= 1e-3,
               "trajreplay --max-lag 5: %s stop(s), at rest at t_s %.1f of 60 s, on the path "
               "(%.1e m)" % (s5.get("axis_lag_stops"), stop_t, np.abs(p5[m5] - ref5).max()))
+        where = stop_line(err5, src)
+        check(where is not None and where[1] <= stop_t and
+              where[0] == first_line_after(src, where[1]),
+              "trajreplay --max-lag 5: exit 8, stopped at t = %s s (at rest at %.1f s), short of "
+              "the file's line %s (the first waypoint after it: %s)" % (
+                  where and where[1], stop_t, where and where[0],
+                  where and first_line_after(src, where[1])))
         conf5 = os.path.join(d, "t5.conf")
         with open(conf5, "w") as f:
             f.write(open(conf).read().replace("trajd.csv", "trajd5.csv") + "max_lag_s = 5\n")
@@ -148,6 +186,28 @@ def main():
               float(last["vx_m_s"]) == 0.0 and float(last["vy_m_s"]) == 0.0,
               "trajd max_lag_s = 5: the lifecycle's lag event logged, the object at rest at "
               "t_s %s (exit %d)" % (last["t_s"], p6.returncode))
+        check(p6.returncode == 75 and "object 'f8' ended held: stopped on its path by the "
+              "per-axis limits" in p6.stderr,
+              "trajd max_lag_s = 5: exit 75 (EX_TEMPFAIL, the object ended held), got %d" %
+              p6.returncode)
+
+        # a track over 100 times faster on x than its limit from the first segment
+        # (2 m/s against 0.01): the output never enters it, trajreplay exits 8 naming
+        # the end of that segment, the file's second waypoint (line 3)
+        fast = os.path.join(d, "fast.csv")
+        with open(fast, "w") as f:
+            f.write("t,x,y,z\n" + "".join("%d,%d,0,0\n" % (i, 2 * i) for i in range(41)))
+        errb = []
+        sb = replay(fast, os.path.join(d, "fast_out.csv"), "--rate", "10", "--axis-max-speed",
+                    "0.01,0,0", code=8, err=errb)
+        _, _, pb, flb = rows(os.path.join(d, "fast_out.csv"))
+        pb = pb[np.cumsum((flb & 0x02) != 0) <= 1]  # its first trajectory, as above
+        where = stop_line(errb, fast)
+        check(int(sb.get("axis_beyond", "0")) >= 1 and where == (3, 0.0) and len(pb) and
+              np.abs(pb[:, 0]).max() == 0.0,
+              "trajreplay --axis-max-speed 0.01: exit 8, axis_beyond %s, stopped at %s "
+              "(line 3, t = 0 s), x never left 0 in its trajectory (max |x| %g)" % (
+                  sb.get("axis_beyond"), where, np.abs(pb[:, 0]).max() if len(pb) else -1))
 
         # a transfer: two pieces 15 m apart on x after a gap
         tr = os.path.join(d, "gap.csv")

@@ -293,6 +293,48 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
         g.data[0] = 1
         self.assertLess(LIB.canproto_decode_status2_rejected(ctypes.byref(g), ctypes.byref(q)), 0)
 
+    # Given STATUS2 page 7 (motion counters, issues 26 and 32) from our encoder,
+    # then canmatrix decodes each counter through the multiplexor, saturated
+    # at its field's maximum (uint16 underruns and moving joins, uint8 the
+    # rest; never wrapped); the VAL_ table names the page; a page canmatrix
+    # encodes is what our decoder reads; another page, page 0, a page beyond
+    # the last or a short frame is refused.
+    def test_status2_motion(self):
+        fr = frame_of(self.db, 0x6D0)
+        names = ("underruns", "delay_grown", "transfers_moving", "axis_beyond", "axis_lag_stops")
+        sig = {"underruns": "ST2_Underruns", "delay_grown": "ST2_DelayGrown",
+               "transfers_moving": "ST2_TransfersMoving", "axis_beyond": "ST2_AxisBeyond",
+               "axis_lag_stops": "ST2_AxisLagStops"}
+        top = {"underruns": 65535, "delay_grown": 255, "transfers_moving": 65535,
+               "axis_beyond": 255, "axis_lag_stops": 255}
+        page = fr.signal_by_name("ST2_Page")
+        self.assertEqual(str(page.values.get(7, page.values.get("7"))), "motion")
+        for vals in ([0] * 5, [1, 2, 3, 4, 5], [65535, 255, 65535, 255, 255],
+                     [65536, 256, 70000, 256, 1000], [2 ** 40, 2 ** 33, 2 ** 20, 2 ** 9, 2 ** 63],
+                     [300, 254, 256, 1, 0],
+                     [self.rng.randrange(1 << 17) for _ in range(5)]):
+            p = cp.St2Motion(*vals)
+            f = cp.Frame()
+            LIB.canproto_encode_status2_motion(0x6D0, ctypes.byref(p), ctypes.byref(f))
+            self.assertEqual((f.id, f.len), (0x6D0, 8))
+            d = decode(self.db, f)
+            self.assertEqual(d["ST2_Page"], 7)
+            for n, v in zip(names, vals):
+                self.assertEqual(d[sig[n]], min(v, top[n]), n)
+            self.assertNotIn("ST2_OutLost", d)
+            self.assertNotIn("ST2_TimeT", d)
+            data = fr.encode(dict({"ST2_Page": 7},
+                                  **{sig[n]: raw(fr, sig[n], d[sig[n]]) for n in names}))
+            g = status2_frame(data)
+            q = cp.St2Motion()
+            self.assertEqual(LIB.canproto_decode_status2_motion(ctypes.byref(g), ctypes.byref(q)), 0)
+            self.assertEqual([getattr(q, n) for n in names], [d[sig[n]] for n in names])
+        for other in (0, 2, 6, 8):
+            g.data[0] = other
+            self.assertLess(LIB.canproto_decode_status2_motion(ctypes.byref(g), ctypes.byref(q)), 0)
+        g.data[0], g.len = 7, 7
+        self.assertLess(LIB.canproto_decode_status2_motion(ctypes.byref(g), ctypes.byref(q)), 0)
+
     # Given STATUS2 page 3 (clock) from our encoder, then canmatrix decodes
     # through the multiplexor the data age to 1 ms (signed: negative while
     # waiting for the clock; n/a at the field's minimum, saturating at +-its
