@@ -91,7 +91,8 @@ local MSG = {
         {"ST2_ErrFrames", 48, 16, false, 1, "", 5},
         {"ST2_TimeT", 8, 56, true, 1e-6, "s", 6},
         {"ST2_Underruns", 8, 16, false, 1, "", 7}, {"ST2_DelayGrown", 24, 8, false, 1, "", 7},
-        {"ST2_TransfersMoving", 32, 16, false, 1, "", 7},
+        {"ST2_TransfersMoving", 32, 8, false, 1, "", 7},
+        {"ST2_ReserveSlowed", 40, 8, false, 1, "", 7},
         {"ST2_AxisBeyond", 48, 8, false, 1, "", 7}, {"ST2_AxisLagStops", 56, 8, false, 1, "", 7}},
 }
 -- Setpoint positions 0x80000000: no position yet (do not move).

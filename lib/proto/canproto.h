@@ -545,8 +545,9 @@ int canproto_decode_status2_rejected(const canproto_frame_t *f, canproto_st2_rej
  * and take the other pages' turns (Modbus diagnostics and --summary give it). */
 typedef struct {
     uint64_t underruns;        /* transitions into UNDERRUN (bytes 1..2, uint16) */
-    uint64_t delay_grown;      /* D stated anew, longer, at an underrun (byte 3, uint8) */
-    uint64_t transfers_moving; /* re-anchors joined moving (bytes 4..5, uint16) */
+    uint64_t delay_grown;      /* D stated anew, longer (byte 3, uint8) */
+    uint64_t transfers_moving; /* re-anchors joined moving (byte 4, uint8) */
+    uint64_t reserve_slowed;   /* slowdowns for D's stop reserve, input on time (byte 5) */
     uint64_t axis_beyond;      /* stops before a segment beyond the per-axis limits (byte 6) */
     uint64_t axis_lag_stops;   /* stops because the per-axis lag passed max_lag_s (byte 7) */
 } canproto_st2_motion_t;

@@ -26,6 +26,7 @@ void canproto_st2_motion_from(const engine_status_t *st, canproto_st2_motion_t *
     out->underruns = st->underruns;
     out->delay_grown = st->delay_grown;
     out->transfers_moving = st->transfers_moving;
+    out->reserve_slowed = st->reserve_slowed;
     out->axis_beyond = st->axis_beyond;
     out->axis_lag_stops = st->axis_lag_stops;
 }
@@ -39,7 +40,8 @@ void canproto_encode_status2_motion(uint32_t id, const canproto_st2_motion_t *p,
     out->data[0] = CANPROTO_ST2_MOTION;
     put_sat(&out->data[1], 2, p->underruns);
     put_sat(&out->data[3], 1, p->delay_grown);
-    put_sat(&out->data[4], 2, p->transfers_moving);
+    put_sat(&out->data[4], 1, p->transfers_moving);
+    put_sat(&out->data[5], 1, p->reserve_slowed);
     put_sat(&out->data[6], 1, p->axis_beyond);
     put_sat(&out->data[7], 1, p->axis_lag_stops);
 }
@@ -54,7 +56,8 @@ int canproto_decode_status2_motion(const canproto_frame_t *f, canproto_st2_motio
         return -CANPROTO_EMUX;
     out->underruns = get_u(&f->data[1], 2);
     out->delay_grown = f->data[3];
-    out->transfers_moving = get_u(&f->data[4], 2);
+    out->transfers_moving = f->data[4];
+    out->reserve_slowed = f->data[5];
     out->axis_beyond = f->data[6];
     out->axis_lag_stops = f->data[7];
     return 0;

@@ -80,7 +80,7 @@ class St2Clock(ctypes.Structure):
 
 class St2Motion(ctypes.Structure):
     _fields_ = [(n, ctypes.c_uint64) for n in ("underruns", "delay_grown", "transfers_moving",
-                                               "axis_beyond", "axis_lag_stops")]
+                                               "reserve_slowed", "axis_beyond", "axis_lag_stops")]
 
 
 class Status(ctypes.Structure):

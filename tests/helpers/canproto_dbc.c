@@ -111,7 +111,8 @@ static const canproto_signal_t sig_st2[] = {
     SIG_U("ST2_Emcy", CANPROTO_ST2_DRIVE, 48, 16, 1, ""),
     SIG_U("ST2_Underruns", CANPROTO_ST2_MOTION, 8, 16, 1, ""),
     SIG_U("ST2_DelayGrown", CANPROTO_ST2_MOTION, 24, 8, 1, ""),
-    SIG_U("ST2_TransfersMoving", CANPROTO_ST2_MOTION, 32, 16, 1, ""),
+    SIG_U("ST2_TransfersMoving", CANPROTO_ST2_MOTION, 32, 8, 1, ""),
+    SIG_U("ST2_ReserveSlowed", CANPROTO_ST2_MOTION, 40, 8, 1, ""),
     SIG_U("ST2_AxisBeyond", CANPROTO_ST2_MOTION, 48, 8, 1, ""),
     SIG_U("ST2_AxisLagStops", CANPROTO_ST2_MOTION, 56, 8, 1, ""),
 };
@@ -267,16 +268,18 @@ int canproto_dbc(char *buf, size_t len)
     emit(buf, len, &pos,
          "CM_ SG_ %u ST2_Underruns \"page 7: transitions into underrun (the newest waypoint "
          "passed before the next came)\";\n"
-         "CM_ SG_ %u ST2_DelayGrown \"page 7: the delay D stated anew, longer, at an underrun "
-         "(the input's intervals grew beyond what D was sized for)\";\n"
+         "CM_ SG_ %u ST2_DelayGrown \"page 7: the delay D stated anew, longer (the input's "
+         "intervals or top speed grew beyond what D was sized for)\";\n"
          "CM_ SG_ %u ST2_TransfersMoving \"page 7: re-anchors joined moving: the output met the "
          "new trajectory's curve without braking to rest\";\n"
+         "CM_ SG_ %u ST2_ReserveSlowed \"page 7: slowdowns of an object faster than the speed "
+         "the stop reserve of D was sized for, on input that came on time (not underruns)\";\n"
          "CM_ SG_ %u ST2_AxisBeyond \"page 7: stops before a segment the per-axis limits "
          "(axis_max_*) cannot follow: over 100 times faster on an axis than its limit\";\n"
          "CM_ SG_ %u ST2_AxisLagStops \"page 7: stops because the lag the per-axis limits "
          "made passed max_lag_s (time lost to them: Modbus diagnostics)\";\n",
          CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE,
-         CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE);
+         CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE, CANPROTO_ID_STATUS2_BASE);
     emit(buf, len, &pos,
          "BA_DEF_ BO_ \"VFrameFormat\" ENUM \"StandardCAN\",\"ExtendedCAN\",\"reserved\","
          "\"J1939PG\",\"reserved\",\"reserved\",\"reserved\",\"reserved\",\"reserved\","

@@ -295,24 +295,25 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
 
     # Given STATUS2 page 7 (motion counters, issues 26 and 32) from our encoder,
     # then canmatrix decodes each counter through the multiplexor, saturated
-    # at its field's maximum (uint16 underruns and moving joins, uint8 the
-    # rest; never wrapped); the VAL_ table names the page; a page canmatrix
+    # at its field's maximum (uint16 underruns, uint8 the rest; never
+    # wrapped); the VAL_ table names the page; a page canmatrix
     # encodes is what our decoder reads; another page, page 0, a page beyond
     # the last or a short frame is refused.
     def test_status2_motion(self):
         fr = frame_of(self.db, 0x6D0)
-        names = ("underruns", "delay_grown", "transfers_moving", "axis_beyond", "axis_lag_stops")
+        names = ("underruns", "delay_grown", "transfers_moving", "reserve_slowed", "axis_beyond",
+                 "axis_lag_stops")
         sig = {"underruns": "ST2_Underruns", "delay_grown": "ST2_DelayGrown",
-               "transfers_moving": "ST2_TransfersMoving", "axis_beyond": "ST2_AxisBeyond",
-               "axis_lag_stops": "ST2_AxisLagStops"}
-        top = {"underruns": 65535, "delay_grown": 255, "transfers_moving": 65535,
-               "axis_beyond": 255, "axis_lag_stops": 255}
+               "transfers_moving": "ST2_TransfersMoving", "reserve_slowed": "ST2_ReserveSlowed",
+               "axis_beyond": "ST2_AxisBeyond", "axis_lag_stops": "ST2_AxisLagStops"}
+        top = {"underruns": 65535, "delay_grown": 255, "transfers_moving": 255,
+               "reserve_slowed": 255, "axis_beyond": 255, "axis_lag_stops": 255}
         page = fr.signal_by_name("ST2_Page")
         self.assertEqual(str(page.values.get(7, page.values.get("7"))), "motion")
-        for vals in ([0] * 5, [1, 2, 3, 4, 5], [65535, 255, 65535, 255, 255],
-                     [65536, 256, 70000, 256, 1000], [2 ** 40, 2 ** 33, 2 ** 20, 2 ** 9, 2 ** 63],
-                     [300, 254, 256, 1, 0],
-                     [self.rng.randrange(1 << 17) for _ in range(5)]):
+        for vals in ([0] * 6, [1, 2, 3, 4, 5, 6], [65535, 255, 255, 255, 255, 255],
+                     [65536, 256, 70000, 256, 256, 1000],
+                     [2 ** 40, 2 ** 33, 2 ** 20, 2 ** 10, 2 ** 9, 2 ** 63], [300, 254, 256, 3, 1, 0],
+                     [self.rng.randrange(1 << 17) for _ in range(6)]):
             p = cp.St2Motion(*vals)
             f = cp.Frame()
             LIB.canproto_encode_status2_motion(0x6D0, ctypes.byref(p), ctypes.byref(f))
