@@ -24,10 +24,6 @@
 #include "lsq.h"
 #include "timescale.h"
 
-/* The most the per-axis acceleration limits raise the time scaling's
- * acceleration limit A over a / max(vmax, floor) (accel_speed). */
-#define ENGINE_AXIS_GAIN_MAX 8.0
-
 /* Samples of a segment's speed for its bounds (seg_speed_max). */
 #define ENGINE_SPEED_SAMPLES 8
 
@@ -204,18 +200,26 @@ static int axis_accel_limited(const engine_t *e)
  * and likewise for the norm with the profile's acceleration limit
  * (max_accel_m_s2 left to it, seg_ceiling).  The ceiling leaves every limited
  * axis at least a (axis_ceiling), so A is at least a / max(vmax, floor), the
- * old share; at most ENGINE_AXIS_GAIN_MAX times that, so that where the axes
- * barely move the rate still changes within bounds.  On a straight, where
- * k'' is small, the braking into a corner has the whole limit (the
- * time-optimal traversal's), where a / max(vmax, floor) gave it a third.
+ * share as without; at most |(l_x, l_y, l_z)| / max(vmax, floor), l_k the
+ * axis's limit or a on a free axis: the share that all the axes' rooms make
+ * together where they all move, and no more where some barely do (A = room /
+ * max|k_k'| grows without bound as max|k_k'| vanishes) or the curve is slower
+ * than the floor.  On a straight, where k'' is small, the braking into a
+ * corner has the whole limit (the time-optimal traversal's), where
+ * a / max(vmax, floor) gave it a third.  The jerk stays converted at
+ * max(vmax, floor): the scaling's own k' d2r/dt2 within scale_jerk_m_s3.
  */
 static double accel_speed(const engine_t *e, const fdiff_seg_t *seg, double vmax, double ceil)
 {
     double v = vmax > ENGINE_SCALE_V_FLOOR_M_S ? vmax : ENGINE_SCALE_V_FLOOR_M_S;
     if (!axis_accel_limited(e) || !(ceil > 0))
         return v;
-    double a = e->cfg.scale_accel_m_s2, rc = fmin(ceil, TS_RATE_MAX), T = seg->dur_s;
-    double A = ENGINE_AXIS_GAIN_MAX * a / v;
+    double a = e->cfg.scale_accel_m_s2, rc = fmin(ceil, TS_RATE_MAX), T = seg->dur_s, n2 = 0;
+    for (int k = 0; k < AX; k++) {
+        double al = e->cfg.axis_max_accel_m_s2[k];
+        n2 += al > 0 ? al * al : a * a;
+    }
+    double A = sqrt(n2) / v;
     for (int k = 0; k < AX; k++) {
         double vk = solve_axis_speed_max(seg, k), al = e->cfg.axis_max_accel_m_s2[k];
         if (!(vk > 0))
