@@ -351,6 +351,8 @@ size_t input_buffered(const engine_t *e);
 double solve_seg_speed_max(const fdiff_seg_t *seg);
 /* axis k's largest speed |k_k'| over seg at rate 1 (m/s), exactly */
 double solve_axis_speed_max(const fdiff_seg_t *seg, int k);
+/* issue 32: a per-axis limit is set (engine.h axis_max_*). */
+int solve_axis_limited(const engine_t *e);
 /* The highest rate at which a segment keeps the speed cap and the
  * per-axis limits (qent_t ceil; *axis: qent_t ceil_axis). */
 double solve_seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax, int *axis);

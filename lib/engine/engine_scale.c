@@ -155,10 +155,17 @@ double scale_ceil_room(const engine_t *e, double s, double A, double J)
     return R;
 }
 
-/* The rate the speed cap allows on the current segment. */
+/* The rate the speed cap allows on the current segment.  A transfer lasts
+ * long enough for every axis at rate 1 (engine_xfer.c xfer_duration): with
+ * per-axis limits a feed override above 100 % does not speed it up (at 160 %
+ * its smoothstep took an axis limited to 3 m/s to 3.002 m/s, and its
+ * acceleration to 2.56 times the 6 D / T^2 kept within the limit:
+ * tests/unit/test_axis_share.c). */
 double scale_ceil_here(const engine_t *e)
 {
-    return e->out.mode == OUT_STREAM ? e->out.cur.ceil : INFINITY;
+    if (e->out.mode == OUT_STREAM)
+        return e->out.cur.ceil;
+    return e->out.mode == OUT_XFER && solve_axis_limited(e) ? 1.0 : INFINITY;
 }
 
 /* The jerk of a stop or clear (m/s^3): at least a / T, so that the braking

@@ -368,7 +368,7 @@ static void end_vel_param(const engine_t *e, int at_end, double *v)
 }
 
 /* issue 32: a per-axis limit is set (engine.h axis_max_*). */
-static int axis_limited(const engine_t *e)
+int solve_axis_limited(const engine_t *e)
 {
     for (int k = 0; k < AX; k++)
         if (e->cfg.axis_max_speed_m_s[k] > 0 || e->cfg.axis_max_accel_m_s2[k] > 0 ||
@@ -431,7 +431,7 @@ static void build_segments(engine_t *e)
          * at the timestamps; and with per-axis limits at every knot of the
          * uniform parameterisation too, which steps there by design (DESIGN.md
          * (a)), for no axis holds its acceleration across a step */
-        if (e->solve.emitted && (e->cfg.param == ENGINE_PARAM_TIME || axis_limited(e)))
+        if (e->solve.emitted && (e->cfg.param == ENGINE_PARAM_TIME || solve_axis_limited(e)))
             (void)cubic_join(&seg, e->solve.end_v);
         queue_segment(e, &seg, j);
     }
