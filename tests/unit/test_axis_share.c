@@ -12,7 +12,9 @@
  * it).  Random events at random ticks, mostly while the output brakes into or
  * speeds out of a corner with the straight's A: stop, clear, feed override,
  * the sender pausing (the waypoints it skips are lost: the track resumes
- * after a gap, a new trajectory reached by a transfer), the track's end.
+ * after a gap, a new trajectory reached by a transfer) or stalling (what it
+ * holds back comes late, after the trajectory was closed by its silence,
+ * silence.h: a REST end, then a transfer), the track's end.
  *
  * Reference: the limits themselves, on the finite differences of the
  * streamed positions (velocity over one tick, acceleration over two), every
@@ -95,12 +97,12 @@ static void run(unsigned seed, engine_method_t method, int events, worst_t *wo)
     const double T = (double)PERIOD_NS * 1e-9;
     double p[3][3] = {{0}}, t_prev[3] = {0};
     int have = 0, k = 0, pause_to = -1;
-    int64_t now = 0;
+    int64_t now = 0, stall_to = 0;
     engine_setpoint_t sp;
     engine_status_t st;
     for (long tick = 0; tick < 2000000; tick++) {
         now += PERIOD_NS;
-        while (k < n && 0.1 * k <= (double)now * 1e-9) {
+        while (k < n && 0.1 * k <= (double)now * 1e-9 && now >= stall_to) {
             if (k >= pause_to) {
                 engine_waypoint_t w;
                 memset(&w, 0, sizeof w);
@@ -122,8 +124,10 @@ static void run(unsigned seed, engine_method_t method, int events, worst_t *wo)
                 assert_int_equal(engine_set_override(e, r < 0.55 ? 0.5 : 1.6), 0);
             } else if (r < 0.8) {
                 assert_int_equal(engine_set_override(e, 1.0), 0);
-            } else if (pause_to < k) {
+            } else if (r < 0.9 && pause_to < k) {
                 pause_to = k + 5 + (int)(urand(&seed) * 60); /* up to 6.5 s: lost */
+            } else if (stall_to < now) { /* up to 40 s, then sent late: a silent end */
+                stall_to = now + (int64_t)((5 + 35 * urand(&seed)) * 1e9);
             }
             wo->stops++;
         }
