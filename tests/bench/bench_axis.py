@@ -22,7 +22,7 @@ import tempfile
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
-from topp import figure8, optimal_s, rectangle  # noqa: E402
+from topp import figure8, optimal_profile, rectangle  # noqa: E402
 
 GOAL = 1.25
 
@@ -49,6 +49,7 @@ def main():
     print("| path | limits v / a | trajd s | time-optimal s | ratio (goal <= %.2f) | peak |v| "
           "x, y | peak |a| x, y |" % GOAL)
     print("|---|---|---|---|---|---|---|")
+    where = []
     with tempfile.TemporaryDirectory() as d:
         for name, (t, x, y), vl, al in cases:
             src = os.path.join(d, name + ".csv")
@@ -58,8 +59,12 @@ def main():
             subprocess.run(base + ["--rate", "100", "--axis-max-speed", "%g,%g,0" % vl,
                                    "--axis-max-accel", "%g,%g,0" % al, "-o", lim, src],
                            check=True, timeout=600)
-            now, _, p = rows(lim)
-            ref = optimal_s(t, x, y, vl, al)
+            now, ts, p = rows(lim)
+            grid, sd, held = optimal_profile(t, x, y, vl, al)
+            topt = np.concatenate([[0.0], np.cumsum(2 * (grid[1] - grid[0]) /
+                                                    (sd[1:] + sd[:-1] + 1e-300))])
+            ref = topt[-1]
+            where.append((name, where_time(now, ts, grid, topt, held)))
             dur = now[-1] - now[0]
             dt = np.diff(now)
             v = np.abs(np.diff(p, axis=0) / dt[:, None]).max(axis=0)
@@ -67,6 +72,34 @@ def main():
                        (0.5 * (dt[1:] + dt[:-1]))[:, None]).max(axis=0)
             print("| %s | %g,%g / %g,%g | %.1f | %.1f | %.2f | %.3f, %.3f | %.3f, %.3f |" % (
                 name, vl[0], vl[1], al[0], al[1], dur, ref, dur / ref, v[0], v[1], a[0], a[1]))
+    print("\nWhere the time goes, trajd s / time-optimal s: the first and last 2 s of track (the "
+          "start from rest, the end at rest); the rest where the time-optimal rate is held below "
+          "the speed limits (corners, turns); where it is at them")
+    for name, w in where:
+        print("  %s: start and end %.1f / %.1f, corners %.1f / %.1f, at the speed limit "
+              "%.1f / %.1f" % ((name,) + w))
+
+
+def where_time(now, ts, grid, topt, held):
+    """trajd's time and the optimum's (topt: its time at each grid point of track time) over
+    the first and last 2 s of track, the rest of where the optimum is held below the speed
+    limits, and where it is at them."""
+    def trajd(a, b):
+        return np.interp(b, ts, now) - np.interp(a, ts, now)
+
+    def opt(a, b):
+        return np.interp(b, grid, topt) - np.interp(a, grid, topt)
+
+    t0, t1 = grid[0], grid[-1]
+    ends = (trajd(t0, t0 + 2) + trajd(t1 - 2, t1), opt(t0, t0 + 2) + opt(t1 - 2, t1))
+    out = {True: [0.0, 0.0], False: [0.0, 0.0]}
+    cut = np.flatnonzero(np.diff(held.astype(int))) + 1
+    for a, b in zip(np.r_[0, cut], np.r_[cut, len(grid) - 1]):
+        lo, hi = max(grid[a], t0 + 2), min(grid[b], t1 - 2)
+        if hi > lo:
+            out[bool(held[a])][0] += trajd(lo, hi)
+            out[bool(held[a])][1] += opt(lo, hi)
+    return ends + tuple(out[True]) + tuple(out[False])
 
 
 def cost(exe):

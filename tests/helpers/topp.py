@@ -9,6 +9,12 @@ from scipy.interpolate import CubicSpline
 def topp(qd, qdd, vlim, alim, ds):
     """Least time along a path sampled every ds of its parameter (qd, qdd: first and second
     derivatives per axis), |v_k| <= vlim[k], |a_k| <= alim[k], from rest to rest."""
+    sd = topp_rate(qd, qdd, vlim, alim, ds)
+    return float(np.sum(2 * ds / (sd[1:] + sd[:-1] + 1e-300)))
+
+
+def topp_rate(qd, qdd, vlim, alim, ds):
+    """topp's profile: the path's parameter rate at each sample."""
     n, m = qd.shape
 
     def acc_range(i, u):
@@ -44,8 +50,7 @@ def topp(qd, qdd, vlim, alim, ds):
     u[-1] = 0.0
     for i in range(n - 1, 0, -1):
         u[i - 1] = min(u[i - 1], max(u[i] - 2 * ds * acc_range(i, u[i])[0], 0.0))
-    sd = np.sqrt(u)
-    return float(np.sum(2 * ds / (sd[1:] + sd[:-1] + 1e-300)))
+    return np.sqrt(u)
 
 
 def rectangle():
@@ -88,6 +93,17 @@ def optimal_s(t, x, y, vlim, alim):
     """The least time along the curve trajd streams through these waypoints (scipy's
     CubicSpline with rest ends, knots at the timestamps: the curve to 1e-9 of the track's
     extent, lib/engine/DESIGN.md), parametrised by track time on a 1 ms grid, rest to rest."""
+    grid, sd, _ = optimal_profile(t, x, y, vlim, alim)
+    return float(np.sum(2 * (grid[1] - grid[0]) / (sd[1:] + sd[:-1] + 1e-300)))
+
+
+def optimal_profile(t, x, y, vlim, alim):
+    """optimal_s's grid of track time, its rate there, and whether that rate is held below
+    the speed limits (by the acceleration limits: corners, the start and the end)."""
     cs = CubicSpline(t, np.c_[x, y], bc_type=((1, [0, 0]), (1, [0, 0])))
     grid = np.linspace(t[0], t[-1], int(round((t[-1] - t[0]) / 0.001)) + 1)
-    return topp(cs(grid, 1), cs(grid, 2), vlim, alim, grid[1] - grid[0])
+    qd = cs(grid, 1)
+    sd = topp_rate(qd, cs(grid, 2), vlim, alim, grid[1] - grid[0])
+    vcap = np.min([vlim[k] / np.maximum(np.abs(qd[:, k]), 1e-12) for k in range(len(vlim))],
+                  axis=0)
+    return grid, sd, sd < 0.999 * vcap
