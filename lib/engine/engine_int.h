@@ -50,7 +50,7 @@ typedef struct {
                         acceleration limit is converted on it, A = a / av:
                         max(vmax, floor), or below it where per-axis
                         acceleration limits leave the scaling more room
-                        (solve_accel_speed; the jerk is converted at
+                        (engine_solve.c accel_speed; the jerk is converted at
                         max(vmax, floor) always) */
     double kcum;     /* SEG: braking capacity of its trajectory up to its end,
                         the sum of dur / av (see scale_remaining()) */
@@ -128,7 +128,6 @@ typedef struct {
                                   built waits here until the next one is (its av takes
                                   the next one's into account: queue_segment) */
     uint64_t pend_node;        /* ... its first node */
-    double pend_av;            /* ... its own av (solve_accel_speed) */
     fdiff_seg_t pend_seg;      /* ... the segment */
     uint64_t traj;             /* +1 per trajectory opened */
     double span_max;           /* start_slack auto: longest time spanned by la_steady + 1
