@@ -112,7 +112,7 @@ static double ramp_lag(const engine_t *e, int strict)
          * time: at worst S intervals late */
         double grown = fmax(n * T - lag_grow, 0.0);
         double v = fmax(q->vmax, 1.0), R = ahead + grown - s - (TS_MARGIN_TICKS + 1) * T;
-        double A = e->cfg.scale_accel_m_s2 / v, J = e->cfg.scale_jerk_m_s3 / v;
+        double A = e->cfg.scale_accel_m_s2 / q->av, J = e->cfg.scale_jerk_m_s3 / v;
         ts_state_t free_st = st;
         double ds = ts_step(&st, 1.0, R, A, J, T, NULL, NULL);
         if (strict && ds < ts_step(&free_st, 1.0, INFINITY, A, J, T, NULL, NULL))

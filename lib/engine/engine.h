@@ -330,8 +330,11 @@ typedef struct {
      * segment's rate is capped (engine_solve.c seg_ceiling), and with an
      * acceleration (jerk) limit the scaling's own scale_accel_m_s2
      * (scale_jerk_m_s3) is taken down to a third (half) of the smallest
-     * (resolve), the share its dr/dt term may add.  Transfers last long enough for every
-     * axis.  The path is never left; the time lost is axis_lost_s
+     * (resolve), the share its dr/dt term keeps on every segment (a stop's);
+     * outside a stop its dr/dt may take, per segment, what the curve's own
+     * k_k'' r^2 leaves of each axis's acceleration limit (engine_solve.c
+     * accel_speed; lib/engine/TIMESCALE.md "Per-axis limits").  Transfers last
+     * long enough for every axis.  The path is never left; the time lost is axis_lost_s
      * (engine_status_t).  A segment that would need a rate below 1/100 (over 100
      * times faster on an axis than its limit) is not entered: the output rests
      * before it and the owner is told to stop (engine_axis_lag_over, axis_beyond). */

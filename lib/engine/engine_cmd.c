@@ -17,6 +17,7 @@ static void drop_input(engine_t *e)
     e->in.open = 0;
     e->solve.nodes = 0;
     e->solve.seg_next = 0;
+    e->solve.pend = 0; /* a segment held for the next one (queue_segment): dropped too */
     frag_reset(e->solve.fw);
     if (e->smooth)
         lsq_smooth_reset(&e->solve.sm);

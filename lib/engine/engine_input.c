@@ -34,7 +34,8 @@
 size_t input_buffered(const engine_t *e)
 {
     /* the C2 local methods queue three pieces per interval */
-    size_t q = e->local >= 3 ? (e->queue.len + 2) / 3 : e->queue.len;
+    size_t n = e->queue.len + (size_t)e->solve.pend; /* built, held for the next */
+    size_t q = e->local >= 3 ? (n + 2) / 3 : n;
     return q + (size_t)(e->solve.nodes - e->solve.seg_next) +
            (e->smooth ? (size_t)lsq_smooth_pending(&e->solve.sm) : 0) +
            accept_pending(&e->in.policy);

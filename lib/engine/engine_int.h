@@ -46,10 +46,18 @@ typedef struct {
     double gap_s;    /* first entry: track time since the previous trajectory's
                              end when a gap separates them, else 0 */
     double vmax;     /* SEG: bound on the curve's speed |k'| over it (m/s) */
+    double av;       /* SEG: the speed (m/s) at which the time scaling's
+                        acceleration limit is converted on it, A = a / av:
+                        max(vmax, floor), or below it where per-axis
+                        acceleration limits leave the scaling more room
+                        (engine_solve.c accel_speed; the jerk is converted at
+                        max(vmax, floor) always) */
     double kcum;     /* SEG: braking capacity of its trajectory up to its end,
-                        the sum of dur / max(vmax, floor) (see scale_remaining()) */
-    double ucum;     /* SEG: the rises of 1 / max(vmax, floor) from each segment
-                          of its trajectory to the next, summed up to it */
+                        the sum of dur / av (see scale_remaining()) */
+    double ucum;     /* SEG: the rises of 1 / av from each segment of its
+                        trajectory to the next, each times the next one's
+                        max(vmax, floor) / av, summed up to it
+                        (scale_rise_reserve) */
     double ceil;     /* SEG: the highest rate at which it keeps the speed cap
                         (ENGINE_SPEED_CAP; INFINITY if none) */
     int ceil_axis;   /* SEG: ceil is the per-axis limits' and below 1 (issue 32) */
@@ -113,8 +121,14 @@ typedef struct {
     double end_speed;          /* speed at the end of the last queued segment */
     double end_v[AX];          /* its velocity (m/s): the next segment starts with it */
     double kcum;               /* capacity queued so far of the trajectory (qent_t kcum) */
-    double inv;                /* 1 / max(vmax, floor) of its last queued segment */
+    double inv;                /* 1 / av of its last queued segment */
     double ucum;               /* qent_t ucum so far */
+    int queued;                /* a segment of this trajectory was queued */
+    int pend;                  /* with per-axis acceleration limits, the newest segment
+                                  built waits here until the next one is (its av takes
+                                  the next one's into account: queue_segment) */
+    uint64_t pend_node;        /* ... its first node */
+    fdiff_seg_t pend_seg;      /* ... the segment */
     uint64_t traj;             /* +1 per trajectory opened */
     double span_max;           /* start_slack auto: longest time spanned by la_steady + 1
                          intervals of the input, decaying by 1/256 per node */
@@ -339,6 +353,8 @@ size_t input_buffered(const engine_t *e);
 double solve_seg_speed_max(const fdiff_seg_t *seg);
 /* axis k's largest speed |k_k'| over seg at rate 1 (m/s), exactly */
 double solve_axis_speed_max(const fdiff_seg_t *seg, int k);
+/* issue 32: a per-axis limit is set (engine.h axis_max_*). */
+int solve_axis_limited(const engine_t *e);
 /* The highest rate at which a segment keeps the speed cap and the
  * per-axis limits (qent_t ceil; *axis: qent_t ceil_axis). */
 double solve_seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax, int *axis);

@@ -56,17 +56,27 @@ void scale_eval(engine_t *e)
     e->scale.cspeed = sqrt(v2);
 }
 
-/* The speed (m/s) at which the scaling's limits are converted outside a
+/* The speed (m/s) at which the scaling's jerk limit is converted outside a
  * stop: the largest the curve reaches on the current segment (seg_speed_max;
  * a transfer's: 1.5 D / T_x), at least the floor.  (Converted at the speed
  * here, the limits shrink as a ramp speeds up along a transfer faster than
  * the jerk can take the rate's acceleration back: the rate overshot 1.) */
-double scale_conv_speed(const engine_t *e)
+static double scale_jerk_speed(const engine_t *e)
 {
     /* fmax without the libm call (x86-64 baseline): the same for every
      * vmax, NaN included (the floor) */
     double v = e->out.cur.vmax;
     return v > ENGINE_SCALE_V_FLOOR_M_S ? v : ENGINE_SCALE_V_FLOOR_M_S;
+}
+
+/* ... and its acceleration limit, in whose units the braking capacity is
+ * expressed (scale_remaining): the segment's av (qent_t), the same speed
+ * unless per-axis acceleration limits leave the scaling more (issue 32,
+ * engine_solve.c accel_speed); a transfer's is its jerk's. */
+double scale_conv_speed(const engine_t *e)
+{
+    double v = e->out.cur.av;
+    return v > 0 ? v : scale_jerk_speed(e);
 }
 
 /* Track time (per unit of rate, in the units of the limits converted at v)
@@ -133,7 +143,7 @@ double scale_ceil_room(const engine_t *e, double s, double A, double J)
         const qent_t *q = &e->queue.ent[e->queue.slow[(e->queue.slow_head + i) % e->queue.cap]];
         if (q->traj != e->out.traj)
             break;
-        double kstart = q->kcum - q->seg.dur_s / fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
+        double kstart = q->kcum - q->seg.dur_s / q->av;
         double to = v * (k0 + kstart) - res;
         /* the distance to a segment's start grows along the queue and the
          * stop term is >= 0: past the nearest that binds, none can (the
@@ -146,10 +156,17 @@ double scale_ceil_room(const engine_t *e, double s, double A, double J)
     return R;
 }
 
-/* The rate the speed cap allows on the current segment. */
+/* The rate the speed cap allows on the current segment.  A transfer lasts
+ * long enough for every axis at rate 1 (engine_xfer.c xfer_duration): with
+ * per-axis limits a feed override above 100 % does not speed it up (at 160 %
+ * its smoothstep took an axis limited to 3 m/s to 3.002 m/s, and its
+ * acceleration to 2.56 times the 6 D / T^2 kept within the limit:
+ * tests/unit/test_axis_share.c). */
 double scale_ceil_here(const engine_t *e)
 {
-    return e->out.mode == OUT_STREAM ? e->out.cur.ceil : INFINITY;
+    if (e->out.mode == OUT_STREAM)
+        return e->out.cur.ceil;
+    return e->out.mode == OUT_XFER && solve_axis_limited(e) ? 1.0 : INFINITY;
 }
 
 /* The jerk of a stop or clear (m/s^3): at least a / T, so that the braking
@@ -177,10 +194,13 @@ void scale_limits(const engine_t *e, double *A, double *J)
         jerk = stop_jerk(e);
         double cspeed = out_cspeed(e);
         v = cspeed > floor ? cspeed : floor;
+        /* at least the segment's own A: the capacity ahead counts it
+         * (scale_remaining), and it keeps every axis within its limit */
+        *A = fmax(e->cfg.scale_accel_m_s2 / v, e->cfg.scale_accel_m_s2 / scale_conv_speed(e));
     } else {
-        v = scale_conv_speed(e);
+        v = scale_jerk_speed(e);
+        *A = e->cfg.scale_accel_m_s2 / scale_conv_speed(e);
     }
-    *A = e->cfg.scale_accel_m_s2 / v;
     *J = jerk / v;
 }
 

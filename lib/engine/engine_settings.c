@@ -570,9 +570,12 @@ static int axis_limits_ok(const engine_config_t *cfg)
 
 /* issue 32: with per-axis acceleration (jerk) limits the time scaling's own
  * share, scale_accel_m_s2, is at most ENGINE_AXIS_SCALE_SHARE of the
- * smallest (scale_jerk_m_s3 at most half): the rest is the curve's k'' r^2.
- * On the figure-8 of tests/oracle/test_axis_limits.py the run's length
- * hardly depends on the share (99 to 102 s from 1/4 to 1/2). */
+ * smallest (scale_jerk_m_s3 at most half): the rest is the curve's k'' r^2
+ * at the ceilings (engine_solve.c axis_ceiling).  Outside a stop the scaling
+ * takes more where the curve leaves it (engine_solve.c accel_speed).  On the
+ * figure-8 and the rectangle of tests/bench/bench_axis.py the runs take 92.8
+ * and 58.2 s with a quarter, 93.7 and 58.3 s with a third, 99.6 and 60.4 s
+ * with a half. */
 #define ENGINE_AXIS_SCALE_SHARE (1.0 / 3.0)
 
 static void resolve_axis_limits(engine_config_t *out)

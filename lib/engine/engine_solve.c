@@ -177,7 +177,69 @@ static int is_slow(const qent_t *q)
     return q->kind == QE_SEG && q->ceil < TS_RATE_MAX;
 }
 
-static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
+/* issue 32: some axis has an acceleration limit (engine.h axis_max_accel_m_s2). */
+static int axis_accel_limited(const engine_t *e)
+{
+    for (int k = 0; k < AX; k++)
+        if (e->cfg.axis_max_accel_m_s2[k] > 0)
+            return 1;
+    return 0;
+}
+
+/*
+ * issue 32: the speed at which the time scaling's acceleration limit is
+ * converted on a segment (qent_t av): A = a / av, a = scale_accel_m_s2.
+ * Without a per-axis acceleration limit max(vmax, floor), as the jerk's.
+ * With them, what the segment's axes leave at its ceiling c (rc = min(c,
+ * TS_RATE_MAX), the highest rate on it): the scaling's term k_k' dr/dt may
+ * take what the curve's own k_k'' r^2 leaves of the axis's limit,
+ *
+ *     A = min over the axes that move of room_k / max|k_k'|,
+ *     room_k = axis_max_accel_m_s2[k] - max|k_k''| rc^2   (a on a free axis),
+ *
+ * and likewise for the norm with the profile's acceleration limit
+ * (max_accel_m_s2 left to it, seg_ceiling).  The ceiling leaves every limited
+ * axis at least a (axis_ceiling), so A is at least a / max(vmax, floor), the
+ * share as without; at most |(l_x, l_y, l_z)| / max(vmax, floor), l_k the
+ * axis's limit or a on a free axis: the share that all the axes' rooms make
+ * together where they all move, and no more where some barely do (A = room /
+ * max|k_k'| grows without bound as max|k_k'| vanishes) or the curve is slower
+ * than the floor.  On a straight, where k'' is small, the braking into a
+ * corner has the whole limit (the time-optimal traversal's), where
+ * a / max(vmax, floor) gave it a third.  The jerk stays converted at
+ * max(vmax, floor): the scaling's own k' d2r/dt2 within scale_jerk_m_s3.
+ */
+static double accel_speed(const engine_t *e, const fdiff_seg_t *seg, double vmax, double ceil)
+{
+    double v = vmax > ENGINE_SCALE_V_FLOOR_M_S ? vmax : ENGINE_SCALE_V_FLOOR_M_S;
+    if (!axis_accel_limited(e) || !(ceil > 0))
+        return v;
+    double a = e->cfg.scale_accel_m_s2, rc = fmin(ceil, TS_RATE_MAX), T = seg->dur_s, n2 = 0;
+    for (int k = 0; k < AX; k++) {
+        double al = e->cfg.axis_max_accel_m_s2[k];
+        n2 += al > 0 ? al * al : a * a;
+    }
+    double A = sqrt(n2) / v;
+    for (int k = 0; k < AX; k++) {
+        double vk = solve_axis_speed_max(seg, k), al = e->cfg.axis_max_accel_m_s2[k];
+        if (!(vk > 0))
+            continue;
+        double room = a;
+        if (al > 0) {
+            double c2 = 2 * seg->c[k][2], c3 = 6 * seg->c[k][3];
+            room = al - fmax(fabs(c2), fabs(c2 + c3)) / (T * T) * rc * rc;
+        }
+        A = fmin(A, room / vk);
+    }
+    double lim = engine_config_max_accel(&e->cfg);
+    if (e->cfg.max_accel_m_s2 < 0 && lim > 0 && vmax > 0)
+        A = fmin(A, (lim - seg_accel_max(seg) * rc * rc) / vmax);
+    return a / fmax(A, a / v);
+}
+
+/* Queue a built segment, its av at least av_next (the next segment's, 0 if
+ * none): see queue_segment. */
+static void queue_now(engine_t *e, const fdiff_seg_t *seg, uint64_t node, double av_next)
 {
     qent_t *q = q_push(e);
 
@@ -189,24 +251,58 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
     q->t1_s = seg->t0_s + seg->dur_s;
     q->vmax = solve_seg_speed_max(seg);
     q->ceil = seg_ceiling(e, seg, q->vmax, &q->ceil_axis);
+    q->av = fmax(accel_speed(e, seg, q->vmax, q->ceil), av_next);
     e->st.axis_slowed += (uint64_t)q->ceil_axis;
-    { /* the stop from rate 1 at its limits, as the tick would work it out
-       * (plain_window: scale_conv_speed, scale_limits) */
-        double v = q->vmax > ENGINE_SCALE_V_FLOOR_M_S ? q->vmax : ENGINE_SCALE_V_FLOOR_M_S;
-        q->stop1 = ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / v, e->cfg.scale_jerk_m_s3 / v);
-    }
+    /* the jerk's conversion speed (scale_jerk_speed) */
+    double v = q->vmax > ENGINE_SCALE_V_FLOOR_M_S ? q->vmax : ENGINE_SCALE_V_FLOOR_M_S;
+    /* the stop from rate 1 at its limits, as the tick would work it out
+     * (plain_window: scale_conv_speed, scale_limits) */
+    q->stop1 = ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / q->av, e->cfg.scale_jerk_m_s3 / v);
     if (is_slow(q)) /* every queued slot has room: so has the ring */
         e->queue.slow[(e->queue.slow_head + e->queue.slow_len++) % e->queue.cap] =
             (size_t)(q - e->queue.ent);
-    double inv = 1.0 / fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
-    if (e->solve.emitted && inv > e->solve.inv)
-        e->solve.ucum += inv - e->solve.inv; /* the limits rise from the last one to this */
+    double inv = 1.0 / q->av;
+    if (e->solve.queued && inv > e->solve.inv) /* the limits rise from the last one to this: */
+        e->solve.ucum += (inv - e->solve.inv) * (v / q->av); /* its A / J against a / j */
     e->solve.inv = inv;
     q->ucum = e->solve.ucum;
     e->solve.kcum += seg->dur_s * inv;
     q->kcum = e->solve.kcum;
+    e->solve.queued = 1;
+    if (e->out.mode != OUT_HOLD && q->traj == e->out.traj) {
+        e->scale.avail_t = q->t1_s; /* more curve for the output (see scale_remaining()) */
+        e->scale.avail_kcum = q->kcum;
+        e->scale.avail_ucum = q->ucum;
+    }
+}
+
+/*
+ * A segment built: queued, or with per-axis acceleration limits held until
+ * the next one is built, and then queued with the av of whichever of the two
+ * gives the scaling less (A_i = min(A_i, A_i+1)).  The rate's dr/dt then
+ * enters every segment within the A its own axes leave room for
+ * (accel_speed): a braking at a straight's A into a corner, where k'' steps
+ * at a knot the C2 spline does not smooth (cubic_join, the local methods),
+ * would otherwise carry that A onto the corner's k'' r^2.  A segment's A,
+ * queued, never changes: the braking capacity ahead (kcum) only grows.  The
+ * price is one segment of the curve later to the output.
+ */
+static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
+{
+    if (axis_accel_limited(e)) {
+        int ax;
+        double vmax = solve_seg_speed_max(seg);
+        double av = accel_speed(e, seg, vmax, seg_ceiling(e, seg, vmax, &ax));
+        if (e->solve.pend)
+            queue_now(e, &e->solve.pend_seg, e->solve.pend_node, av);
+        e->solve.pend = 1;
+        e->solve.pend_seg = *seg;
+        e->solve.pend_node = node;
+    } else {
+        queue_now(e, seg, node, 0.0);
+    }
     e->solve.emitted = 1;
-    e->solve.end_t = q->t1_s;
+    e->solve.end_t = seg->t0_s + seg->dur_s;
     double v2 = 0;
     for (int k = 0; k < AX; k++) {
         double v = (seg->c[k][1] + 2 * seg->c[k][2] + 3 * seg->c[k][3]) / seg->dur_s;
@@ -215,20 +311,20 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
         v2 += v * v;
     }
     e->solve.end_speed = sqrt(v2);
-    if (e->out.mode != OUT_HOLD && q->traj == e->out.traj) {
-        e->scale.avail_t = q->t1_s; /* more curve for the output (see scale_remaining()) */
-        e->scale.avail_kcum = q->kcum;
-        e->scale.avail_ucum = q->ucum;
-    }
 }
 
 static void queue_end(engine_t *e)
 {
+    if (e->solve.pend) { /* the last segment: its own av (the output rests at its end) */
+        e->solve.pend = 0;
+        queue_now(e, &e->solve.pend_seg, e->solve.pend_node, 0.0);
+    }
     qent_t *q = q_push(e);
 
     if (!q)
         return;
     q->kind = QE_END;
+    q->av = ENGINE_SCALE_V_FLOOR_M_S; /* (read by nothing: not left unset) */
     e->queue.ends++;
     memset(&q->seg, 0, sizeof(q->seg));
     q->t1_s = e->solve.emitted ? e->solve.end_t : e->in.last_t;
@@ -272,7 +368,7 @@ static void end_vel_param(const engine_t *e, int at_end, double *v)
 }
 
 /* issue 32: a per-axis limit is set (engine.h axis_max_*). */
-static int axis_limited(const engine_t *e)
+int solve_axis_limited(const engine_t *e)
 {
     for (int k = 0; k < AX; k++)
         if (e->cfg.axis_max_speed_m_s[k] > 0 || e->cfg.axis_max_accel_m_s2[k] > 0 ||
@@ -335,7 +431,7 @@ static void build_segments(engine_t *e)
          * at the timestamps; and with per-axis limits at every knot of the
          * uniform parameterisation too, which steps there by design (DESIGN.md
          * (a)), for no axis holds its acceleration across a step */
-        if (e->solve.emitted && (e->cfg.param == ENGINE_PARAM_TIME || axis_limited(e)))
+        if (e->solve.emitted && (e->cfg.param == ENGINE_PARAM_TIME || solve_axis_limited(e)))
             (void)cubic_join(&seg, e->solve.end_v);
         queue_segment(e, &seg, j);
     }
@@ -570,6 +666,8 @@ void solve_open(engine_t *e)
     e->solve.nodes = 0;
     e->solve.seg_next = 0;
     e->solve.emitted = 0;
+    e->solve.queued = 0;
+    e->solve.pend = 0;
     e->solve.kcum = 0.0;
     e->solve.ucum = 0.0;
     e->solve.first_pending = 1;

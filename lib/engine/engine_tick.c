@@ -482,7 +482,8 @@ static void plain_window(engine_t *e)
                   v;
     /* and the speed cap ahead (ceil_room), which falls by T per tick too */
     if (e->queue.slow_len) { /* (INFINITY without one) */
-        double A = e->cfg.scale_accel_m_s2 / v, J = e->cfg.scale_jerk_m_s3 / v;
+        double A, J;
+        scale_limits(e, &A, &J); /* not in a stop: a / v and the jerk's */
         room = fmin(room, scale_ceil_room(e, tau_of(e, e->out.n), A, J) - d - e->period_s);
     }
     if (!(room > 0) || !isfinite(d))

@@ -76,6 +76,7 @@ void xfer_start(engine_t *e, const double *target, double gap_s)
     e->out.cur.kind = QE_SEG;
     transfer_segment(&e->out.cur.seg, out_pos(e), target, dur);
     e->out.cur.vmax = solve_seg_speed_max(&e->out.cur.seg);
+    e->out.cur.av = 0.0; /* its limits converted at its speed (scale_conv_speed) */
     e->out.cur_t0 = 0;
     e->out.cur_t1 = e->out.cur.seg.dur_s;
     e->out.n = 0;

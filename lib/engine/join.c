@@ -282,8 +282,10 @@ static void join_splice(engine_t *e, size_t ihead, double t_m, double t_j, const
     h->shift = t_m - t_j; /* the join's end, t_j on its pieces, is t_m on the curve */
     uint64_t traj = h->traj, node = h->node;
     /* capacity (kcum) and rises (ucum) back from the head, as queued */
-    double kcum = h->kcum - h->seg.dur_s / fmax(h->vmax, ENGINE_SCALE_V_FLOOR_M_S);
-    double ucum = h->ucum, inv_next = 1.0 / fmax(h->vmax, ENGINE_SCALE_V_FLOOR_M_S);
+    double kcum = h->kcum - h->seg.dur_s / h->av;
+    double ucum = h->ucum, inv_next = 1.0 / h->av;
+    /* a rise into the next entry counts its A / J against a / j (queue_now) */
+    double g_next = fmax(h->vmax, ENGINE_SCALE_V_FLOOR_M_S) / h->av;
     for (int i = 2; i >= 0; i--) {
         e->queue.head = (e->queue.head + e->queue.cap - 1) % e->queue.cap;
         e->queue.len++;
@@ -298,13 +300,15 @@ static void join_splice(engine_t *e, size_t ihead, double t_m, double t_j, const
         q->vmax = solve_seg_speed_max(&pc[i]);
         q->ceil = solve_seg_ceiling(e, &pc[i], q->vmax, &q->ceil_axis);
         double v = fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S), inv = 1.0 / v;
+        q->av = v; /* a piece's limits: converted at its speed */
         q->stop1 = ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / v, e->cfg.scale_jerk_m_s3 / v);
         q->kcum = kcum;
         kcum -= pc[i].dur_s * inv;
         if (inv_next > inv)
-            ucum -= inv_next - inv;
+            ucum -= (inv_next - inv) * g_next;
         q->ucum = ucum;
         inv_next = inv;
+        g_next = 1.0;
         if (q->ceil < TS_RATE_MAX) { /* the slow ring, in queue order */
             e->queue.slow_head = (e->queue.slow_head + e->queue.cap - 1) % e->queue.cap;
             e->queue.slow[e->queue.slow_head] = e->queue.head;
@@ -396,7 +400,7 @@ int join_try(engine_t *e)
         /* the curve ahead once on it (the pieces, and the new curve queued
          * beyond t_m) long enough to stop in at rate 1 */
         double vq = fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
-        double need = ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / vq,
+        double need = ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / q->av,
                                    e->cfg.scale_jerk_m_s3 / vq) +
                       (TS_MARGIN_TICKS + 2) * P;
         int fits = (f.closed || T + (f.t_last - t_m) >= need) &&
