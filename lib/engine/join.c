@@ -97,8 +97,8 @@ typedef struct {
 int join_wanted(const engine_t *e)
 {
     return e->out.mode == OUT_STREAM && e->scale.avail_closed && e->queue.ends > 0 && !e->clk.on &&
-           e->out.join_refused != e->out.traj + 1 && !e->scale.stop_req && !e->out.underrun &&
-           is_exactly(e->scale.override, 1.0) && e->out.have_pos;
+           e->out.join_refused != e->out.traj + 1 && !e->scale.stop_req && e->scale.override > 0 &&
+           e->out.have_pos;
 }
 
 /* The first queue index at or after i0 whose trajectory is past traj (the
@@ -314,31 +314,58 @@ static void join_splice(engine_t *e, size_t ihead, double t_m, double t_j, const
 }
 
 /* The output on the join's first piece from this tick on (n: the tick just
- * sent, the join's start), on the unit grid at rate 1, streaming the new
- * trajectory: a new track, as a transfer's. */
-static void join_begin(engine_t *e, double t0, double t_m, double T)
+ * sent, the join's start), streaming the new trajectory: a new track, as a
+ * transfer's.  At rate 1 on the unit grid; at another rate rho (an
+ * override) scaled at rho, the rate's own acceleration 0: the pieces hold
+ * the output's state in track time (v / rho, a / rho^2), so v and a go on
+ * as they were sent. */
+static void join_begin(engine_t *e, double t0, double t_m, double Tt, double rho)
 {
+    double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n);
     e->out.join_t0 = t0;
     e->out.join_tm = t_m;
-    e->out.join_dur = T;
-    if (e->scale.on) { /* the grid through the track time reached */
-        e->scale.s_off = e->scale.s - tick_time(e, e->out.n);
+    e->out.join_dur = Tt;
+    int unit = is_exactly(rho, 1.0);
+    if (unit && e->scale.on) { /* the grid through the track time reached */
+        e->scale.s_off = s - tick_time(e, e->out.n);
         e->scale.on = 0;
     }
-    e->scale.ts.rate = 1.0;
+    e->scale.ts.rate = rho;
     e->scale.ts.acc = 0.0;
     e->scale.end_brake = 0;
     e->out.traj = q_head(e)->traj;
     play_take_segment(e);
-    e->out.seg_n0 = e->out.n;
-    play_seed_cur(e, e->out.n);
-    e->out.on_fd = 1;
+    if (unit) {
+        e->out.seg_n0 = e->out.n;
+        play_seed_cur(e, e->out.n);
+        e->out.on_fd = 1;
+    } else {
+        e->scale.on = 1;
+        e->scale.s = s;
+        scale_eval(e);
+    }
     play_find_avail(e);
     e->out.finished = 0;
+    e->out.underrun = 0; /* the new curve is queued beyond the join */
+    e->out.reserve_slow = 0;
     e->out.track++;
     e->out.flags_pending |= ENGINE_SP_NEW_TRACK;
     e->st.transfers_moving++;
     e->out.flags_pending |= ENGINE_SP_TRANSFER;
+}
+
+/* Under an override rho: 1 if each piece's ceiling (queue_segment's, from
+ * the bound on its speed: the speed cap and per-axis limits) lets the time
+ * scaling play it at rho; near its ceiling the scaling brakes for it as for
+ * any segment (scale_ceil_room). */
+static int ceil_clear(const engine_t *e, const fdiff_seg_t pc[3], double rho)
+{
+    for (int i = 0; i < 3; i++) {
+        int ax;
+        if (!(solve_seg_ceiling(e, &pc[i], solve_seg_speed_max(&pc[i]), &ax) >= rho))
+            return 0;
+    }
+    return 1;
 }
 
 int join_try(engine_t *e)
@@ -351,16 +378,20 @@ int join_try(engine_t *e)
             e->out.join_refused = e->out.traj + 1;
         return 0;
     }
+    /* rho: the rate the join is played at and the new curve entered at,
+     * the override (1 on the unit grid) */
     double P = e->period_s, s = e->scale.on ? e->scale.s : tau_of(e, e->out.n);
-    double t_now = e->out.origin_t + s, A, J;
+    double t_now = e->out.origin_t + s, A, J, rho = e->scale.override;
+    int unit = is_exactly(rho, 1.0);
     if (e->scale.on && !(e->scale.ts.rate > 0))
         return 0; /* at rest: the transfer's (or the old curve's own end) */
     scale_limits(e, &A, &J);
     /* leave the old curve where its last interval begins, or where the
      * time scaling begins to brake for its end (decide's test, a few ticks
-     * early), whichever is first */
+     * early, at rate 1 or the override's if higher), whichever is first */
+    double r_hi = fmax(1.0, rho);
     if (t_now < f.t_last_ivl && !e->scale.end_brake &&
-        ts_stop_dist(1.0, 0.0, A, J) < scale_remaining(e, s) - (TS_MARGIN_TICKS + 2) * P)
+        ts_stop_dist(r_hi, 0.0, A, J) < scale_remaining(e, s) - (TS_MARGIN_TICKS + 2) * P * r_hi)
         return 0;
     if (t_now >= f.t_end)
         return 0;
@@ -371,7 +402,10 @@ int join_try(engine_t *e)
     memcpy(a0, out_acc(e), sizeof(a0));
     double vlim = engine_config_max_speed(&e->cfg);
     vlim = vlim > 0 ? ENGINE_SPEED_CAP * vlim : 0.0;
-    double T0 = ceil((f.t_first - t_now) / P - 1e-9) * P;
+    /* the old motion's speed it keeps half of: the old curve's at rho; in
+     * an underrun the output's own (the time scaling has slowed it) */
+    double v_old = e->out.underrun ? norm3(v0) : rho * out_cspeed(e);
+    double T0 = ceil((f.t_first - t_now) / (rho * P) - 1e-9) * P;
     if (T0 < JOIN_MIN_TICKS * P)
         T0 = JOIN_MIN_TICKS * P;
     double T_hi = T0 + e->xfer.cfg.max_s;
@@ -379,14 +413,14 @@ int join_try(engine_t *e)
     int short_queue = 0;
 
     for (int c = 0;; c++) {
-        double T = (double)ticks * P;
+        double T = (double)ticks * P, Tt = rho * T; /* seconds; track time at rho */
         if (T > T_hi)
             break;
-        /* on the new curve as far as its track time ran (t_now + T), or
+        /* on the new curve as far as its track time ran (t_now + Tt), or
          * as far as it is queued: then the join takes longer than the
          * track time it covers (the output falls behind its data by the
          * difference, less than a stop and transfer would) */
-        double t_m = fmin(t_now + T, f.t_last - P);
+        double t_m = fmin(t_now + Tt, f.t_last - P);
         size_t idx;
         const qent_t *q = t_m >= f.t_first ? seg_at(e, &f, t_m, &idx) : NULL;
         if (!q) {
@@ -394,36 +428,49 @@ int join_try(engine_t *e)
             break;
         }
         /* the curve ahead once on it (the pieces, and the new curve queued
-         * beyond t_m) long enough to stop in at rate 1 */
+         * beyond t_m) long enough to stop in from rho */
         double vq = fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
-        double need = ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / vq,
+        double need = ts_stop_dist(r_hi, 0.0, e->cfg.scale_accel_m_s2 / vq,
                                    e->cfg.scale_jerk_m_s3 / vq) +
-                      (TS_MARGIN_TICKS + 2) * P;
-        int fits = (f.closed || T + (f.t_last - t_m) >= need) &&
+                      (TS_MARGIN_TICKS + 2) * P * r_hi;
+        int fits = (f.closed || Tt + (f.t_last - t_m) >= need) &&
                    e->queue.len + 3 <= e->queue.cap + idx; /* room for the pieces */
+        /* the new curve's state at t_m as the output meets it at rho:
+         * velocity rho k', acceleration rho^2 k'' */
         double p1[AX], v1[AX], a1[AX];
         fdiff_seg_t pc[3];
         fdiff_eval(&q->seg, (t_m - q->seg.t0_s) / q->seg.dur_s, p1, v1, a1);
+        for (int k = 0; k < AX; k++) {
+            v1[k] *= rho;
+            a1[k] *= rho * rho;
+        }
         hermite_c2_segments(p0, v0, a0, p1, v1, a1, t_now, T, pc);
         /* not the new curve's own where it is larger, at t_m (the piece's
          * end) and for JOIN_AHEAD_S after it: near its start from rest the
          * scaling would have ramped through it; t_m moves on to where it
          * has settled */
         double alim = fmax(e->cfg.scale_accel_m_s2, norm3(a0));
-        int settled = acc_ahead(e, idx, t_m, JOIN_AHEAD_S) <= alim;
-        fits = fits && settled && q->ceil >= 1.0;
+        int settled = rho * rho * acc_ahead(e, idx, t_m, JOIN_AHEAD_S) <= alim;
+        fits = fits && settled && q->ceil >= rho;
         /* it keeps moving: at least JOIN_KEEP of the lower of the two
-         * curves' own speeds, where it leaves the old and meets the new */
-        double vmin = JOIN_KEEP * fmin(out_cspeed(e), norm3(v1));
+         * motions' speeds, where it leaves the old and meets the new */
+        double vmin = JOIN_KEEP * fmin(v_old, norm3(v1));
         for (int i = 0; i < 3 && fits; i++)
             fits = piece_fits(e, &pc[i], vlim, vmin, alim, e->cfg.scale_jerk_m_s3);
+        /* in track time: the pieces played at rho (their cubics are the
+         * same, their time stretched by rho) */
+        for (int i = 0; i < 3 && !unit; i++) {
+            pc[i].t0_s = t_now + rho * (pc[i].t0_s - t_now);
+            pc[i].dur_s *= rho;
+        }
+        fits = fits && (unit || ceil_clear(e, pc, rho));
         if (fits) {
-            join_splice(e, idx, t_m, t_now + T, pc);
-            join_begin(e, t_now, t_m, T);
+            join_splice(e, idx, t_m, t_now + Tt, pc);
+            join_begin(e, t_now, t_m, Tt, rho);
             return 1;
         }
         double d[AX] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-        if (t_m < t_now + T && (norm3(d) < vmin * T || !settled)) {
+        if (t_m < t_now + Tt && (norm3(d) < vmin * T || !settled)) {
             /* behind its data, a longer join only covers the same track
              * more slowly (and meets the curve at the same t_m), and this
              * one's mean speed is below the least it may keep already (or

@@ -30,7 +30,11 @@
  *     rests, as before;
  *   - stop and clear in the middle of the join: the output brakes to rest
  *     along it within the limits, and stands (stopped; waiting after the
- *     clear).
+ *     clear); at rate 1 and under an override of 0.5;
+ *   - under a feed override of 0.5 and 1.5 the re-anchor is joined moving,
+ *     played at the override's rate (fails on the old code: no join);
+ *   - a re-anchor hit while the output is in an underrun is joined moving
+ *     from the output's actual (slowed) state (fails on the old code).
  * The curve the output meets is compared with scipy in
  * tests/oracle/test_join.py.
  */
@@ -57,17 +61,30 @@ typedef struct {
     double max_gap; /* max_gap_s (0: default) */
     double axis_vy; /* y's axis_max_speed_m_s (0: free) */
     int event;      /* 1 stop, 2 clear: made on the join, 20 ticks in */
+    double ovr;     /* the feed override from the start (0: 1) */
+    double stall;   /* pushed as it comes, but nothing from stall_at on comes
+                     * before stall_at + stall (then all at once) */
+    double stall_at;
+    int method; /* + 1: the method (0: the default) */
 } opts_t;
 
 typedef struct {
     double vmin;                 /* least speed between 5 s and the jump + 8 s */
     double vmax, amax;           /* largest speed, acceleration */
+    double amax_t;               /* where the largest acceleration is */
     double amax_join, jmax_join; /* largest acceleration and jerk on the join */
+    double jmax_scaled;          /* ... jerk where the time scaling moves the rate on it */
     double pos_err, vel_err;     /* trapezoid residuals */
     double jerk_any;             /* largest change of acceleration per second */
     uint64_t moving, transfers, reanchors, hard;
     int event_done, final_state;
     double final_speed;
+    int join_seen;      /* a join began */
+    double vmin_after;  /* least speed from there until the jump + 8 s */
+    int join_underrun;  /* the tick before the join began was in an underrun */
+    double join_rate;   /* ... at this rate of the time scaling */
+    double join_v0;     /* ... at this speed */
+    uint64_t underruns; /* counted */
 } result_t;
 
 static double wp_x(const opts_t *o, double t)
@@ -87,9 +104,13 @@ static void run(const opts_t *o, result_t *r)
     if (o->max_gap > 0)
         c.max_gap_s = o->max_gap;
     c.axis_max_speed_m_s[1] = o->axis_vy;
+    if (o->method)
+        c.method = (engine_method_t)(o->method - 1);
     int err = 0;
     engine_t *e = engine_new(&c, &err);
     assert_non_null(e);
+    double ovr = o->ovr > 0 ? o->ovr : 1.0;
+    assert_int_equal(engine_set_override(e, ovr), 0);
     memset(r, 0, sizeof *r);
     r->vmin = INFINITY;
     int n = (int)lround(END_T * 10), k = 0, started = 0, join_ticks = 0;
@@ -101,6 +122,8 @@ static void run(const opts_t *o, result_t *r)
             double t = k * 0.1 + (k * 0.1 >= JUMP_T - 1e-9 ? o->gap_s : 0.0);
             if (!o->ahead && t > now + 1e-9)
                 break;
+            if (o->stall > 0 && t >= o->stall_at - 1e-9 && now < o->stall_at + o->stall - 1e-9)
+                break; /* the sender stalls: the output runs short of curve */
             engine_waypoint_t w;
             memset(&w, 0, sizeof w);
             w.t_s = t;
@@ -111,7 +134,19 @@ static void run(const opts_t *o, result_t *r)
                 assert_int_equal(engine_finish(e), 0);
         }
         int on_join = e->out.mode == OUT_STREAM && e->out.cur.join; /* the tick before */
+        int und = e->out.mode == OUT_STREAM && e->out.underrun;
+        double rate0 = e->scale.on ? e->scale.ts.rate : 1.0,
+               acc0 = e->scale.on ? e->scale.ts.acc : 0.0;
         assert_int_equal(engine_tick(e, tick * PERIOD_NS, &sp), 0);
+        if (!on_join && e->out.mode == OUT_STREAM && e->out.cur.join && !r->join_seen) {
+            r->join_seen = 1;
+            r->join_underrun = und; /* the state the join left */
+            r->join_rate = e->scale.on ? e->scale.ts.rate : 1.0;
+            r->join_v0 = hypot(pv.vel_m_s[0], pv.vel_m_s[1]);
+            r->vmin_after = INFINITY;
+        }
+        if (r->join_seen && sp.t_s < JUMP_T + 8 && !o->event)
+            r->vmin_after = fmin(r->vmin_after, hypot(sp.vel_m_s[0], sp.vel_m_s[1]));
         double v = hypot(sp.vel_m_s[0], sp.vel_m_s[1]), a = hypot(sp.acc_m_s2[0], sp.acc_m_s2[1]);
         if (tick > 0 && !isnan(pv.pos_m[0]) && !isnan(sp.pos_m[0])) {
             for (int ax = 0; ax < 3; ax++) {
@@ -124,17 +159,29 @@ static void run(const opts_t *o, result_t *r)
             }
             double da = hypot(sp.acc_m_s2[0] - pv.acc_m_s2[0], sp.acc_m_s2[1] - pv.acc_m_s2[1]);
             r->jerk_any = fmax(r->jerk_any, da / T_S);
-            if (on_join && e->out.cur.join && !r->event_done) { /* both ticks on it */
-                r->jmax_join = fmax(r->jmax_join, da / T_S);
+            int steady = !e->scale.on ||
+                         (is_exactly(e->scale.ts.acc, 0.0) && is_exactly(e->scale.ts.rate, rate0) &&
+                          is_exactly(acc0, 0.0));
+            if (on_join && e->out.cur.join && !r->event_done)
                 r->amax_join = fmax(r->amax_join, a);
+            if (on_join && e->out.cur.join && !r->event_done && !steady) /* the rate moves */
+                r->jmax_scaled = fmax(r->jmax_scaled, da / T_S);
+            else if (on_join && e->out.cur.join && !r->event_done) { /* both ticks on it */
+                r->jmax_join = fmax(r->jmax_join, da / T_S);
             }
         }
-        if (v > V - 0.01)
+        if (v > ovr * V - 0.01)
             started = 1;
         if (started && sp.t_s > 5 && sp.t_s < JUMP_T + 8 && !o->event)
             r->vmin = fmin(r->vmin, v);
         r->vmax = fmax(r->vmax, v);
-        r->amax = fmax(r->amax, a);
+        /* a local method's own rest ends (at the track's start and end)
+         * are its own: HERMITE_C2's reach 22 m/s^2 at the start */
+        if (!o->method || (sp.t_s > 5 && sp.t_s < END_T - 5)) {
+            if (a > r->amax)
+                r->amax_t = sp.t_s;
+            r->amax = fmax(r->amax, a);
+        }
         if (o->event && !r->event_done && e->out.cur.join && ++join_ticks == 20) {
             if (o->event == 1)
                 assert_int_equal(engine_stop(e), 0);
@@ -152,15 +199,19 @@ static void run(const opts_t *o, result_t *r)
     r->transfers = st.transfers;
     r->reanchors = st.reanchors;
     r->hard = st.hard_stops;
+    r->underruns = st.underruns;
     engine_free(e);
     print_message(
-        "ahead %d off %.1f dir %+.0f gap %.0f axis_vy %.2f event %d: vmin %.4f vmax %.4f "
-        "amax %.3f join %.3f jerk join %.2f any %.1f pos_err %.2g vel_err %.2g moving %llu "
-        "transfers %llu reanchors %llu\n",
-        o->ahead, o->off_y, o->dir, o->gap_s, o->axis_vy, o->event, r->vmin, r->vmax, r->amax,
-        r->amax_join, r->jmax_join, r->jerk_any, r->pos_err, r->vel_err,
+        "ahead %d off %.1f dir %+.0f gap %.0f axis_vy %.2f event %d override %.2f stall %.2f: "
+        "vmin %.4f vmax %.4f amax %.3f join %.3f jerk join %.2f scaled %.2f any %.1f pos_err %.2g "
+        "vel_err "
+        "%.2g moving %llu transfers %llu reanchors %llu underruns %llu; the join left rate %.3f "
+        "speed %.3f underrun %d, least speed after %.3f; amax at t_s %.3f\n",
+        o->ahead, o->off_y, o->dir, o->gap_s, o->axis_vy, o->event, ovr, o->stall, r->vmin, r->vmax,
+        r->amax, r->amax_join, r->jmax_join, r->jmax_scaled, r->jerk_any, r->pos_err, r->vel_err,
         (unsigned long long)r->moving, (unsigned long long)r->transfers,
-        (unsigned long long)r->reanchors);
+        (unsigned long long)r->reanchors, (unsigned long long)r->underruns, r->join_rate,
+        r->join_v0, r->join_underrun, r->vmin_after, r->amax_t);
 }
 
 /* What every run keeps, tick by tick. */
@@ -179,6 +230,10 @@ static void check_limits(const result_t *r)
      * scale_jerk_m_s3 (50), tick to tick */
     assert_true(r->amax_join <= 5.5);
     assert_true(r->jmax_join <= 50.0 + 1e-6);
+    /* where the time scaling moves the rate on it (the speed cap of a
+     * join at 1.5 x): its own jerk (scale_jerk_m_s3 at most, 50) adds to
+     * the join's, with the cross term 3 k'' r dr/dt (a few m/s^3 here) */
+    assert_true(r->jmax_scaled <= 2 * 50.0 + 10.0);
     assert_int_equal(r->hard, 0);
 }
 
@@ -263,19 +318,82 @@ static void test_stop_and_clear_on_join(void **state)
 {
     (void)state;
     for (int ev = 1; ev <= 2; ev++)
+        for (int ahead = 0; ahead < 2; ahead++)
+            for (int i = 0; i < 2; i++) { /* and under an override of 0.5 */
+                opts_t o = {
+                    .ahead = ahead, .off_y = 1.5, .dir = 1, .event = ev, .ovr = i ? 0.5 : 1};
+                result_t r;
+                run(&o, &r);
+                check_limits(&r);
+                assert_int_equal(r.event_done, 1);
+                assert_int_equal(r.moving, 1);
+                assert_true(r.final_speed < 1e-12);
+                if (ev == 1)
+                    assert_int_equal(r.final_state, ENGINE_STATE_FINISHED);
+                else
+                    assert_int_equal(r.final_state, ENGINE_STATE_WAITING);
+            }
+}
+
+/* issue 32: under a feed override r (0.5 and 1.5) the re-anchor is joined
+ * moving, planned at the output's path speed: from the commanded state onto
+ * the new curve at r times its own velocity (r^2 its acceleration), played
+ * at rate r; the speed stays above 50 % of r x 5 m/s, loaded ahead and (at
+ * 0.5: the output falls behind the data) pushed as it comes; every tick
+ * within the limits (check_limits).  Fails on the old code (no join under
+ * an override other than 1: the stop and transfer, speed 0). */
+static void test_override_keeps_speed(void **state)
+{
+    (void)state;
+    const double ovr[] = {0.5, 1.5};
+    for (int i = 0; i < 2; i++)
         for (int ahead = 0; ahead < 2; ahead++) {
-            opts_t o = {.ahead = ahead, .off_y = 1.5, .dir = 1, .event = ev};
+            if (!ahead && ovr[i] > 1)
+                continue; /* faster than its data: an underrun (below) */
+            opts_t o = {.ahead = ahead, .off_y = 1.5, .dir = 1, .ovr = ovr[i]};
             result_t r;
             run(&o, &r);
             check_limits(&r);
-            assert_int_equal(r.event_done, 1);
+            assert_int_equal(r.reanchors, 1);
             assert_int_equal(r.moving, 1);
-            assert_true(r.final_speed < 1e-12);
-            if (ev == 1)
-                assert_int_equal(r.final_state, ENGINE_STATE_FINISHED);
-            else
-                assert_int_equal(r.final_state, ENGINE_STATE_WAITING);
+            assert_int_equal(r.transfers, 0);
+            assert_true(r.vmin >= 0.5 * ovr[i] * V);
+            assert_true(fabs(r.join_rate - ovr[i]) < 1e-9); /* played at rate r */
         }
+}
+
+/* issue 32: a re-anchor hit while the output is in an underrun: a local
+ * method (HERMITE_C2, a waypoint of lookahead) pushed as it comes runs out
+ * of curve while the acceptance holds the new track's first waypoints for
+ * `confirm`, and the time scaling slows the output (an underrun, counted);
+ * the join leaves from its actual commanded state (the scaled velocity and
+ * acceleration) and keeps at least 50 % of the lower of its speed there and
+ * the new curve's; and so with the sender stalled for 0.6 s just before the
+ * jump as well.  Fails on the old code (no join in an
+ * underrun: the stop and transfer, speed 0). */
+static void test_underrun_keeps_speed(void **state)
+{
+    (void)state;
+    const opts_t cases[] = {
+        {.off_y = 1.5, .dir = 1, .method = ENGINE_METHOD_HERMITE_C2 + 1},
+        {.off_y = 1.5,
+         .dir = 1,
+         .method = ENGINE_METHOD_HERMITE_C2 + 1,
+         .stall = 0.6,
+         .stall_at = 19.6},
+    };
+    for (int i = 0; i < 2; i++) {
+        result_t r;
+        run(&cases[i], &r);
+        check_limits(&r);
+        assert_true(r.underruns > 0);
+        assert_int_equal(r.join_underrun, 1); /* the join began in the underrun */
+        assert_int_equal(r.reanchors, 1);
+        assert_int_equal(r.moving, 1);
+        assert_int_equal(r.transfers, 0);
+        assert_true(r.join_v0 < 0.95 * V); /* slowed by the underrun */
+        assert_true(r.vmin_after >= 0.5 * fmin(r.join_v0, V));
+    }
 }
 
 /* Random re-anchors: a line of 1..21 m/s at 1, 5 or 10 Hz, every method,
@@ -376,10 +494,15 @@ static void test_random_reanchors(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_ahead_keeps_speed), cmocka_unit_test(test_live_keeps_half_speed),
-        cmocka_unit_test(test_other_way_stops),   cmocka_unit_test(test_axis_limit),
-        cmocka_unit_test(test_gap_rests),         cmocka_unit_test(test_stop_and_clear_on_join),
+        cmocka_unit_test(test_ahead_keeps_speed),
+        cmocka_unit_test(test_live_keeps_half_speed),
+        cmocka_unit_test(test_other_way_stops),
+        cmocka_unit_test(test_axis_limit),
+        cmocka_unit_test(test_gap_rests),
+        cmocka_unit_test(test_stop_and_clear_on_join),
         cmocka_unit_test(test_random_reanchors),
+        cmocka_unit_test(test_override_keeps_speed),
+        cmocka_unit_test(test_underrun_keeps_speed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
