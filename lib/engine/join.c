@@ -8,10 +8,11 @@
  * the state it is in (position, velocity and acceleration of the tick just
  * sent) and meets the new trajectory's curve at a time t_m on it, matching
  * its position, velocity and acceleration there.  The join is C2: three
- * cubics of constant jerk each (hermite_c2_segments), played by the stepper
- * as ordinary segments of the new trajectory at rate 1, spliced in at the
- * queue's head in front of the new curve cut at t_m; its setpoints carry
- * ENGINE_SP_TRANSFER and a new track.  Not where the new trajectory starts
+ * cubics of constant jerk each (hermite_c2_segments), played as ordinary
+ * segments of the new trajectory at rate 1 (the stepper) or at the
+ * override's rate (below), spliced in at the queue's head in front of the
+ * new curve cut at t_m; its setpoints carry ENGINE_SP_TRANSFER and a new
+ * track.  Not where the new trajectory starts
  * where the old one ends (no transfer is needed: the curves rest there, a
  * stop as the data says).
  *
@@ -48,10 +49,38 @@
  * the fallback: the output brakes to rest at the old curve's end and a
  * rest-to-rest transfer takes it to the new start (engine_xfer.c).
  *
+ * Under a feed override rho (0 < rho <= 2, engine_set_override) the join is
+ * planned at the output's path speed and played at rate rho: it leaves from
+ * the commanded state as sent (the scaled velocity and acceleration) and
+ * meets the new curve at rho times its velocity and rho^2 its acceleration,
+ * over T seconds (whole periods) that cover rho T of track time; every
+ * check above is made in m/s on that motion (the new curve's own
+ * acceleration ahead at rho^2, its ceiling at least rho, the speed kept at
+ * least JOIN_KEEP of the lower of rho x the two curves' speeds, the stop
+ * from rho); the pieces are the same cubics with their time stretched by
+ * rho, queued in track time, and the time scaling plays them at rate rho,
+ * its own acceleration 0 from the join's start (the pieces hold the state
+ * as sent, v / rho and a / rho^2 in track time, so nothing steps), each
+ * piece's ceiling (speed cap, per-axis limits) at least rho.  A change of
+ * the override during the join is the time scaling's, as on any curve (the
+ * join is C2 in track time too).  At rho = 1 it is the join at rate 1 on
+ * the unit grid, as before.
+ *
+ * In an underrun (the time scaling has slowed the output because the curve
+ * ahead ran short: the re-anchor's own confirmation holds the new track's
+ * first waypoints back, or the sender stalled) the join leaves from the
+ * actual commanded state, the slowed velocity and its acceleration, and
+ * the speed it keeps JOIN_KEEP of is the lower of the output's own there
+ * and the new curve's (x rho): it does not wait for the rate to recover
+ * nor brake to rest.  The underrun ends with the join (the new curve is
+ * queued beyond it).  An output the underrun has brought to rest (rate 0)
+ * is not joined: the transfer, as from any rest.
+ *
  * Not joined moving: with one clock (CLOCK.md: a trajectory is entered at
- * rate 0 on the play time), under a feed override other than 1, during a
- * stop or clear, after a gap beyond max_gap_s, in an underrun.  The catch-up
- * (catchup.h) does not steer a join; the lag it leaves is won back after it.
+ * rate 0 on the play time), during a stop or clear (a stop brakes), under
+ * a feed hold (override 0), after a gap beyond max_gap_s (a new
+ * trajectory), at rest.  The catch-up (catchup.h) does not steer a join;
+ * the lag it leaves is won back after it.
  */
 #include "engine.h"
 #include "engine_int.h"
