@@ -406,10 +406,9 @@ static void test_underrun_keeps_speed(void **state)
  * (Before the join waited for the new curve's start from rest to settle, a
  * 20 m/s line met it where its own acceleration was 49 m/s^2.)  Also: no
  * hard stop. */
-static void test_random_reanchors(void **state)
+static void random_reanchors(int with_ovr)
 {
-    (void)state;
-    unsigned seed = 4242, joins = 0, reanchored = 0;
+    unsigned seed = with_ovr ? 4343 : 4242, joins = 0, reanchored = 0;
     for (int run = 0; run < 120; run++) {
         engine_config_t c;
         engine_config_default(&c);
@@ -424,13 +423,17 @@ static void test_random_reanchors(void **state)
         int err = 0;
         engine_t *e = engine_new(&c, &err);
         assert_non_null(e);
+        if (with_ovr) {
+            static const double r[] = {0.5, 0.75, 1.25, 1.5};
+            assert_int_equal(engine_set_override(e, r[(int)(urand(&seed) * 3.99)]), 0);
+        }
         double dt = 1 / hz, T = (double)c.period_ns * 1e-9;
         int n = (int)(60 * hz), nj = (int)(20 * hz), k = 0;
         engine_setpoint_t sp, pv;
         memset(&pv, 0, sizeof pv);
         double alim = 0, watch_until = -1, pe = 0, ve = 0;
         int was_join = 0;
-        for (int64_t tick = 0; tick < (int64_t)(200.0 / T); tick++) {
+        for (int64_t tick = 0; tick < (int64_t)((with_ovr ? 400.0 : 200.0) / T); tick++) {
             while (k < n && (ahead || k * dt <= (double)tick * T)) {
                 engine_waypoint_t w;
                 memset(&w, 0, sizeof w);
@@ -446,8 +449,14 @@ static void test_random_reanchors(void **state)
                 if (++k == n)
                     engine_finish(e);
             }
+            double rate0 = e->scale.ts.rate, acc0 = e->scale.ts.acc;
             assert_int_equal(engine_tick(e, tick * c.period_ns, &sp), 0);
             int on = e->out.mode == OUT_STREAM && e->out.cur.join;
+            /* the time scaling holds the rate (an override's join is played
+             * at it): the jerk is the join's alone */
+            int steady = !(sp.flags & ENGINE_SP_SCALED) ||
+                         (is_exactly(e->scale.ts.rate, rate0) && is_exactly(acc0, 0.0) &&
+                          is_exactly(e->scale.ts.acc, 0.0));
             double a = hypot(sp.acc_m_s2[0], sp.acc_m_s2[1]);
             if (on && !was_join) { /* a join begins: from the state it leaves */
                 alim = fmax(c.scale_accel_m_s2, hypot(pv.acc_m_s2[0], pv.acc_m_s2[1]));
@@ -461,8 +470,7 @@ static void test_random_reanchors(void **state)
                     fail_msg("run %d: |a| %.3f m/s^2 at t_s %.3f beyond %.3f on or after a join",
                              run, a, sp.t_s, bound);
                 double da = hypot(sp.acc_m_s2[0] - pv.acc_m_s2[0], sp.acc_m_s2[1] - pv.acc_m_s2[1]);
-                if (on && was_join && da > c.scale_jerk_m_s3 * T * (1 + 1e-6) + 1e-12 &&
-                    !(sp.flags & ENGINE_SP_SCALED))
+                if (on && was_join && da > c.scale_jerk_m_s3 * T * (1 + 1e-6) + 1e-12 && steady)
                     fail_msg("run %d: jerk %.2f m/s^3 on a join", run, da / T);
             }
             if ((on || was_join) && !isnan(pv.pos_m[0])) /* onto, on and off a join */
@@ -487,8 +495,25 @@ static void test_random_reanchors(void **state)
         assert_true(ve < 2e-3);
         engine_free(e);
     }
-    print_message("%u joins in %u re-anchoring runs of 120\n", joins, reanchored);
+    print_message("%u joins in %u re-anchoring runs of 120%s\n", joins, reanchored,
+                  with_ovr ? " under an override of 0.5, 0.75, 1.25 or 1.5" : "");
     assert_true(joins >= reanchored / 4);
+}
+
+static void test_random_reanchors(void **state)
+{
+    (void)state;
+    random_reanchors(0);
+}
+
+/* issue 32: the same under a feed override of 0.5, 0.75, 1.25 or 1.5 (the
+ * join played at it, every tick scaled: its jerk checked where the rate
+ * holds; 400 s: at 0.5 the track takes twice as long).  Fails on the old
+ * code (no join under an override: 0 joins). */
+static void test_random_reanchors_override(void **state)
+{
+    (void)state;
+    random_reanchors(1);
 }
 
 int main(void)
@@ -503,6 +528,7 @@ int main(void)
         cmocka_unit_test(test_random_reanchors),
         cmocka_unit_test(test_override_keeps_speed),
         cmocka_unit_test(test_underrun_keeps_speed),
+        cmocka_unit_test(test_random_reanchors_override),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
