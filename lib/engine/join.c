@@ -76,11 +76,18 @@
  * queued beyond it).  An output the underrun has brought to rest (rate 0)
  * is not joined: the transfer, as from any rest.
  *
- * Not joined moving: with one clock (CLOCK.md: a trajectory is entered at
- * rate 0 on the play time), during a stop or clear (a stop brakes), under
- * a feed hold (override 0), after a gap beyond max_gap_s (a new
- * trajectory), at rest.  The catch-up (catchup.h) does not steer a join;
- * the lag it leaves is won back after it.
+ * On one clock (CLOCK.md) the join is played at the clock's rate (slowed
+ * by an override below 1; above it has no effect) as under an override:
+ * locked on the play time, the clocked step samples the pieces at the play
+ * time itself (they are queued in track time), so the output stays locked
+ * through the join; a join behind its data (t_m short of t_now + rho T)
+ * leaves it that much behind the clock, won back by the clock's bounded
+ * catch-up after it, as any lag.
+ *
+ * Not joined moving: during a stop or clear (a stop brakes), under a feed
+ * hold (override 0), after a gap beyond max_gap_s (a new trajectory), at
+ * rest.  The catch-up (catchup.h) does not steer a join; the lag it leaves
+ * is won back after it.
  */
 #include "engine.h"
 #include "engine_int.h"
@@ -125,9 +132,22 @@ typedef struct {
 
 int join_wanted(const engine_t *e)
 {
-    return e->out.mode == OUT_STREAM && e->scale.avail_closed && e->queue.ends > 0 && !e->clk.on &&
+    return e->out.mode == OUT_STREAM && e->scale.avail_closed && e->queue.ends > 0 &&
            e->out.join_refused != e->out.traj + 1 && !e->scale.stop_req && e->scale.override > 0 &&
            e->out.have_pos;
+}
+
+/* The rate a join is played at: the override's; on one clock the clock's,
+ * slowed by an override below 1 (above it has no effect: CLOCK.md). */
+static double join_rate(const engine_t *e)
+{
+    return e->clk.on ? e->clk.rate * fmin(e->scale.override, 1.0) : e->scale.override;
+}
+
+/* A join on the unit grid (else scaled at its rate). */
+static int join_unit(const engine_t *e, double rho)
+{
+    return is_exactly(rho, 1.0) && !e->clk.on;
 }
 
 /* The first queue index at or after i0 whose trajectory is past traj (the
@@ -354,7 +374,7 @@ static void join_begin(engine_t *e, double t0, double t_m, double Tt, double rho
     e->out.join_t0 = t0;
     e->out.join_tm = t_m;
     e->out.join_dur = Tt;
-    int unit = is_exactly(rho, 1.0);
+    int unit = join_unit(e, rho);
     if (unit && e->scale.on) { /* the grid through the track time reached */
         e->scale.s_off = s - tick_time(e, e->out.n);
         e->scale.on = 0;
@@ -410,8 +430,8 @@ int join_try(engine_t *e)
     /* rho: the rate the join is played at and the new curve entered at,
      * the override (1 on the unit grid) */
     double P = e->period_s, s = e->scale.on ? e->scale.s : tau_of(e, e->out.n);
-    double t_now = e->out.origin_t + s, A, J, rho = e->scale.override;
-    int unit = is_exactly(rho, 1.0);
+    double t_now = e->out.origin_t + s, A, J, rho = join_rate(e);
+    int unit = join_unit(e, rho);
     if (e->scale.on && !(e->scale.ts.rate > 0))
         return 0; /* at rest: the transfer's (or the old curve's own end) */
     scale_limits(e, &A, &J);

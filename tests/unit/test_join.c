@@ -52,6 +52,9 @@
 #define V 5.0
 #define JUMP_T 20.0
 #define END_T 40.0
+#define T0_S 1700000000.0 /* one clock: the track's epoch */
+#define T0_NS 1700000000000000000LL
+#define CLOCK_D_NS 3000000000LL
 
 typedef struct {
     int ahead;      /* push every waypoint before the first tick */
@@ -66,6 +69,8 @@ typedef struct {
                      * before stall_at + stall (then all at once) */
     double stall_at;
     int method; /* + 1: the method (0: the default) */
+    int clock;  /* one clock (engine_set_clock): the track stamped from
+                     * T0_S on, the output at now - CLOCK_D_NS */
 } opts_t;
 
 typedef struct {
@@ -85,6 +90,8 @@ typedef struct {
     double join_rate;   /* ... at this rate of the time scaling */
     double join_v0;     /* ... at this speed */
     uint64_t underruns; /* counted */
+    double age_late;    /* one clock: age_s 10 s after the jump */
+    int t_back;         /* ticks whose t_s went back */
 } result_t;
 
 static double wp_x(const opts_t *o, double t)
@@ -113,6 +120,8 @@ static void run(const opts_t *o, result_t *r)
     assert_int_equal(engine_set_override(e, ovr), 0);
     memset(r, 0, sizeof *r);
     r->vmin = INFINITY;
+    r->age_late = NAN;
+    double tb = o->clock ? T0_S : 0.0;
     int n = (int)lround(END_T * 10), k = 0, started = 0, join_ticks = 0;
     engine_setpoint_t sp, pv;
     memset(&pv, 0, sizeof pv);
@@ -126,7 +135,7 @@ static void run(const opts_t *o, result_t *r)
                 break; /* the sender stalls: the output runs short of curve */
             engine_waypoint_t w;
             memset(&w, 0, sizeof w);
-            w.t_s = t;
+            w.t_s = t + tb;
             w.pos_m[0] = o->gap_s > 0 ? V * t : wp_x(o, k * 0.1);
             w.pos_m[1] = k * 0.1 >= JUMP_T - 1e-9 ? o->off_y : 0.0;
             assert_int_equal(engine_push(e, &w), 0);
@@ -137,7 +146,17 @@ static void run(const opts_t *o, result_t *r)
         int und = e->out.mode == OUT_STREAM && e->out.underrun;
         double rate0 = e->scale.on ? e->scale.ts.rate : 1.0,
                acc0 = e->scale.on ? e->scale.ts.acc : 0.0;
+        if (o->clock) {
+            engine_clock_t clk = {T0_NS + tick * PERIOD_NS, CLOCK_D_NS, 1.0, 0.05};
+            assert_int_equal(engine_set_clock(e, &clk), 0);
+        }
         assert_int_equal(engine_tick(e, tick * PERIOD_NS, &sp), 0);
+        double ts = sp.t_s - tb; /* the track's own time */
+        if (tick > 0 && sp.t_s < pv.t_s)
+            r->t_back++;
+        if (o->clock && ts >= JUMP_T + 10 && isnan(r->age_late) &&
+            sp.state == ENGINE_STATE_STREAMING)
+            r->age_late = sp.age_s;
         if (!on_join && e->out.mode == OUT_STREAM && e->out.cur.join && !r->join_seen) {
             r->join_seen = 1;
             r->join_underrun = und; /* the state the join left */
@@ -145,7 +164,7 @@ static void run(const opts_t *o, result_t *r)
             r->join_v0 = hypot(pv.vel_m_s[0], pv.vel_m_s[1]);
             r->vmin_after = INFINITY;
         }
-        if (r->join_seen && sp.t_s < JUMP_T + 8 && !o->event)
+        if (r->join_seen && ts < JUMP_T + 8 && !o->event)
             r->vmin_after = fmin(r->vmin_after, hypot(sp.vel_m_s[0], sp.vel_m_s[1]));
         double v = hypot(sp.vel_m_s[0], sp.vel_m_s[1]), a = hypot(sp.acc_m_s2[0], sp.acc_m_s2[1]);
         if (tick > 0 && !isnan(pv.pos_m[0]) && !isnan(sp.pos_m[0])) {
@@ -172,14 +191,14 @@ static void run(const opts_t *o, result_t *r)
         }
         if (v > ovr * V - 0.01)
             started = 1;
-        if (started && sp.t_s > 5 && sp.t_s < JUMP_T + 8 && !o->event)
+        if (started && ts > 5 && ts < JUMP_T + 8 && !o->event)
             r->vmin = fmin(r->vmin, v);
         r->vmax = fmax(r->vmax, v);
         /* a local method's own rest ends (at the track's start and end)
          * are its own: HERMITE_C2's reach 22 m/s^2 at the start */
-        if (!o->method || (sp.t_s > 5 && sp.t_s < END_T - 5)) {
+        if (!o->method || (ts > 5 && ts < END_T - 5)) {
             if (a > r->amax)
-                r->amax_t = sp.t_s;
+                r->amax_t = ts;
             r->amax = fmax(r->amax, a);
         }
         if (o->event && !r->event_done && e->out.cur.join && ++join_ticks == 20) {
@@ -206,12 +225,12 @@ static void run(const opts_t *o, result_t *r)
         "vmin %.4f vmax %.4f amax %.3f join %.3f jerk join %.2f scaled %.2f any %.1f pos_err %.2g "
         "vel_err "
         "%.2g moving %llu transfers %llu reanchors %llu underruns %llu; the join left rate %.3f "
-        "speed %.3f underrun %d, least speed after %.3f; amax at t_s %.3f\n",
+        "speed %.3f underrun %d, least speed after %.3f; amax at t_s %.3f; clock %d age %.6f\n",
         o->ahead, o->off_y, o->dir, o->gap_s, o->axis_vy, o->event, ovr, o->stall, r->vmin, r->vmax,
         r->amax, r->amax_join, r->jmax_join, r->jmax_scaled, r->jerk_any, r->pos_err, r->vel_err,
         (unsigned long long)r->moving, (unsigned long long)r->transfers,
         (unsigned long long)r->reanchors, (unsigned long long)r->underruns, r->join_rate,
-        r->join_v0, r->join_underrun, r->vmin_after, r->amax_t);
+        r->join_v0, r->join_underrun, r->vmin_after, r->amax_t, o->clock, r->age_late);
 }
 
 /* What every run keeps, tick by tick. */
@@ -235,6 +254,7 @@ static void check_limits(const result_t *r)
      * the join's, with the cross term 3 k'' r dr/dt (a few m/s^3 here) */
     assert_true(r->jmax_scaled <= 2 * 50.0 + 10.0);
     assert_int_equal(r->hard, 0);
+    assert_int_equal(r->t_back, 0); /* t_s never goes back */
 }
 
 static void test_ahead_keeps_speed(void **state)
@@ -396,6 +416,32 @@ static void test_underrun_keeps_speed(void **state)
     }
 }
 
+/* issue 32: on one clock (engine_set_clock, CLOCK.md; D = 3 s) the
+ * re-anchor is joined moving, played at the clock's rate (slowed by an
+ * override below 1): the output stays on the play time through it (or wins
+ * back what a join behind its data lost) and is locked on it again 10 s
+ * after the jump (age_s = D); loaded ahead and as it comes; at override 1
+ * and 0.5.  Fails on the old code (one clock never joined: the stop and
+ * transfer). */
+static void test_clock_keeps_speed(void **state)
+{
+    (void)state;
+    for (int ahead = 0; ahead < 2; ahead++)
+        for (int i = 0; i < 2; i++) {
+            double ovr = i ? 0.5 : 1.0;
+            opts_t o = {.ahead = ahead, .off_y = 1.5, .dir = 1, .clock = 1, .ovr = ovr};
+            result_t r;
+            run(&o, &r);
+            check_limits(&r);
+            assert_int_equal(r.reanchors, 1);
+            assert_int_equal(r.moving, 1);
+            assert_int_equal(r.transfers, 0);
+            assert_true(r.vmin >= 0.5 * ovr * V);
+            if (i == 0) /* on the play time again: age_s = D */
+                assert_true(fabs(r.age_late - 1e-9 * (double)CLOCK_D_NS) < 1e-4);
+        }
+}
+
 /* Random re-anchors: a line of 1..21 m/s at 1, 5 or 10 Hz, every method,
  * loaded ahead or live, 100 Hz or 1 kHz output, re-anchored 3..30 m aside
  * and turned up to 1.5 rad.  On every join, from the state it leaves (|a0|)
@@ -529,6 +575,7 @@ int main(void)
         cmocka_unit_test(test_override_keeps_speed),
         cmocka_unit_test(test_underrun_keeps_speed),
         cmocka_unit_test(test_random_reanchors_override),
+        cmocka_unit_test(test_clock_keeps_speed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
