@@ -92,6 +92,7 @@ typedef struct {
     uint64_t underruns; /* counted */
     double age_late;    /* one clock: age_s 10 s after the jump */
     int t_back;         /* ticks whose t_s went back */
+    double line_dev;    /* largest distance from the new line at t_s */
 } result_t;
 
 static double wp_x(const opts_t *o, double t)
@@ -154,6 +155,13 @@ static void run(const opts_t *o, result_t *r)
         double ts = sp.t_s - tb; /* the track's own time */
         if (tick > 0 && sp.t_s < pv.t_s)
             r->t_back++;
+        /* on the new line (the waypoints' own: every method reproduces
+         * evenly spaced collinear waypoints away from its rest ends) at
+         * the setpoint's t_s, from 5 s after the jump on, off the join */
+        if (o->dir > 0 && !(o->gap_s > 0) && !o->event && ts > JUMP_T + 5 && ts < END_T - 5 &&
+            sp.state == ENGINE_STATE_STREAMING && !(sp.flags & ENGINE_SP_TRANSFER))
+            r->line_dev = fmax(r->line_dev,
+                               hypot(sp.pos_m[0] - wp_x(o, ts), sp.pos_m[1] - o->off_y));
         if (o->clock && ts >= JUMP_T + 10 && isnan(r->age_late) &&
             sp.state == ENGINE_STATE_STREAMING)
             r->age_late = sp.age_s;
@@ -225,12 +233,13 @@ static void run(const opts_t *o, result_t *r)
         "vmin %.4f vmax %.4f amax %.3f join %.3f jerk join %.2f scaled %.2f any %.1f pos_err %.2g "
         "vel_err "
         "%.2g moving %llu transfers %llu reanchors %llu underruns %llu; the join left rate %.3f "
-        "speed %.3f underrun %d, least speed after %.3f; amax at t_s %.3f; clock %d age %.6f\n",
+        "speed %.3f underrun %d, least speed after %.3f; amax at t_s %.3f; clock %d age %.6f; off "
+        "the line %.2g m\n",
         o->ahead, o->off_y, o->dir, o->gap_s, o->axis_vy, o->event, ovr, o->stall, r->vmin, r->vmax,
         r->amax, r->amax_join, r->jmax_join, r->jmax_scaled, r->jerk_any, r->pos_err, r->vel_err,
         (unsigned long long)r->moving, (unsigned long long)r->transfers,
         (unsigned long long)r->reanchors, (unsigned long long)r->underruns, r->join_rate,
-        r->join_v0, r->join_underrun, r->vmin_after, r->amax_t, o->clock, r->age_late);
+        r->join_v0, r->join_underrun, r->vmin_after, r->amax_t, o->clock, r->age_late, r->line_dev);
 }
 
 /* What every run keeps, tick by tick. */
@@ -379,6 +388,7 @@ static void test_override_keeps_speed(void **state)
             assert_int_equal(r.transfers, 0);
             assert_true(r.vmin >= 0.5 * ovr[i] * V);
             assert_true(fabs(r.join_rate - ovr[i]) < 1e-9); /* played at rate r */
+            assert_true(r.line_dev < 1e-9); /* on the new line at its t_s after it */
         }
 }
 
@@ -413,6 +423,7 @@ static void test_underrun_keeps_speed(void **state)
         assert_int_equal(r.transfers, 0);
         assert_true(r.join_v0 < 0.95 * V); /* slowed by the underrun */
         assert_true(r.vmin_after >= 0.5 * fmin(r.join_v0, V));
+        assert_true(r.line_dev < 1e-9);
     }
 }
 
@@ -437,6 +448,9 @@ static void test_clock_keeps_speed(void **state)
             assert_int_equal(r.moving, 1);
             assert_int_equal(r.transfers, 0);
             assert_true(r.vmin >= 0.5 * ovr * V);
+            /* on the new line at its t_s (epoch seconds in a double: to
+             * 2.4e-7 s, 1.2e-6 m at 5 m/s) */
+            assert_true(r.line_dev < 2e-6);
             if (i == 0) /* on the play time again: age_s = D */
                 assert_true(fabs(r.age_late - 1e-9 * (double)CLOCK_D_NS) < 1e-4);
         }
