@@ -61,10 +61,16 @@
  * rho, queued in track time, and the time scaling plays them at rate rho,
  * its own acceleration 0 from the join's start (the pieces hold the state
  * as sent, v / rho and a / rho^2 in track time, so nothing steps), each
- * piece's ceiling (speed cap, per-axis limits) at least rho.  A change of
- * the override during the join is the time scaling's, as on any curve (the
- * join is C2 in track time too).  At rho = 1 it is the join at rate 1 on
- * the unit grid, as before.
+ * piece's ceiling (speed cap, per-axis limits) at least rho.  Where no join
+ * fits at the override's rate and the output runs slower without an
+ * underrun (the curves' ceilings hold it below the override, or it brakes
+ * for the old curve's end), one is sought at the rate it runs at, its
+ * acceleration and jerk checked also at the rate the scaling may take it
+ * to (the override within the pieces' highest ceiling: g = that / rho in
+ * piece_fits); its speed the ceilings keep.  A change of the override
+ * during the join is the time scaling's, as on any curve (the join is C2
+ * in track time too).  At rho = 1 it is the join at rate 1 on the unit
+ * grid, as before.
  *
  * In an underrun (the time scaling has slowed the output because the curve
  * ahead ran short: the re-anchor's own confirmation holds the new track's
@@ -118,6 +124,9 @@
  * speeds (issue 32: "it does not drop below 50 %"); one that would not is
  * no join that keeps moving: the stop and transfer. */
 #define JOIN_KEEP 0.5
+/* Under an override, a rate below this fraction of it is held by the
+ * curves' ceilings (join_try). */
+#define JOIN_HELD 0.999
 
 /* What the queue holds for a join: the old trajectory's END at index iend,
  * the new trajectory's first entry after it. */
@@ -220,16 +229,19 @@ static int join_find(const engine_t *e, join_find_t *f, int *never)
     return 1;
 }
 
-/* 1 if the piece keeps the join's limits (see above). */
+/* 1 if the piece keeps the join's limits (see above); its acceleration and
+ * jerk also where the time scaling plays it g >= 1 times faster than it
+ * was planned for (join_search). */
 static int piece_fits(const engine_t *e, const fdiff_seg_t *s, double vlim, double vmin,
-                      double alim, double jlim)
+                      double alim, double jlim, double g)
 {
     double id = 1.0 / s->dur_s, j2 = 0, a02 = 0, a12 = 0;
 
     for (int k = 0; k < AX; k++) {
         const double *c = s->c[k];
-        double jk = 6.0 * c[3] * id * id * id, a0 = 2.0 * c[2] * id * id,
-               a1 = (2.0 * c[2] + 6.0 * c[3]) * id * id;
+        /* played up to g times faster: acceleration g^2, jerk g^3 */
+        double jk = 6.0 * c[3] * id * id * id * (g * g * g), a0 = 2.0 * c[2] * id * id * (g * g),
+               a1 = (2.0 * c[2] + 6.0 * c[3]) * id * id * (g * g);
         j2 += jk * jk;
         a02 += a0 * a0;
         a12 += a1 * a1;
@@ -403,48 +415,31 @@ static void join_begin(engine_t *e, double t0, double t_m, double Tt, double rho
     e->out.flags_pending |= ENGINE_SP_TRANSFER;
 }
 
-/* Under an override rho: 1 if each piece's ceiling (queue_segment's, from
- * the bound on its speed: the speed cap and per-axis limits) lets the time
- * scaling play it at rho; near its ceiling the scaling brakes for it as for
- * any segment (scale_ceil_room). */
-static int ceil_clear(const engine_t *e, const fdiff_seg_t pc[3], double rho)
+/* The lowest and highest ceiling of the pieces in track time (queue_segment's,
+ * from the bound on their speed: the speed cap and per-axis limits). */
+static void ceilings(const engine_t *e, const fdiff_seg_t pc[3], double *cmin, double *cmax)
 {
+    *cmin = INFINITY;
+    *cmax = 0.0;
     for (int i = 0; i < 3; i++) {
         int ax;
-        if (!(solve_seg_ceiling(e, &pc[i], solve_seg_speed_max(&pc[i]), &ax) >= rho))
-            return 0;
+        double c = solve_seg_ceiling(e, &pc[i], solve_seg_speed_max(&pc[i]), &ax);
+        *cmin = fmin(*cmin, c);
+        *cmax = fmax(*cmax, c);
     }
-    return 1;
 }
 
-int join_try(engine_t *e)
+/* The shortest join at rate rho from the output's state at track time
+ * t_now (see above): spliced in and begun (1), or none (0; *short_queue: one
+ * may fit once more of the new curve is queued). */
+static int join_search(engine_t *e, const join_find_t *fp, double t_now, double rho,
+                       int *short_queue)
 {
-    join_find_t f;
-    int never;
-
-    if (!join_find(e, &f, &never)) {
-        if (never)
-            e->out.join_refused = e->out.traj + 1;
-        return 0;
-    }
-    /* rho: the rate the join is played at and the new curve entered at,
-     * the override (1 on the unit grid) */
-    double P = e->period_s, s = e->scale.on ? e->scale.s : tau_of(e, e->out.n);
-    double t_now = e->out.origin_t + s, A, J, rho = join_rate(e);
+    const join_find_t f = *fp;
+    /* r_max: the rate the scaling takes the new curve to after it (the
+     * override's: a join at a rate the ceilings held is followed by it) */
+    double P = e->period_s, r_max = fmax(rho, join_rate(e)), r_hi = fmax(1.0, r_max);
     int unit = join_unit(e, rho);
-    if (e->scale.on && !(e->scale.ts.rate > 0))
-        return 0; /* at rest: the transfer's (or the old curve's own end) */
-    scale_limits(e, &A, &J);
-    /* leave the old curve where its last interval begins, or where the
-     * time scaling begins to brake for its end (decide's test, a few ticks
-     * early, at rate 1 or the override's if higher), whichever is first */
-    double r_hi = fmax(1.0, rho);
-    if (t_now < f.t_last_ivl && !e->scale.end_brake &&
-        ts_stop_dist(r_hi, 0.0, A, J) < scale_remaining(e, s) - (TS_MARGIN_TICKS + 2) * P * r_hi)
-        return 0;
-    if (t_now >= f.t_end)
-        return 0;
-
     double p0[AX], v0[AX], a0[AX];
     memcpy(p0, out_pos(e), sizeof(p0));
     memcpy(v0, out_vel(e), sizeof(v0));
@@ -459,7 +454,6 @@ int join_try(engine_t *e)
         T0 = JOIN_MIN_TICKS * P;
     double T_hi = T0 + e->xfer.cfg.max_s;
     int64_t ticks = llround(T0 / P), step = 1;
-    int short_queue = 0;
 
     for (int c = 0;; c++) {
         double T = (double)ticks * P, Tt = rho * T; /* seconds; track time at rho */
@@ -473,7 +467,7 @@ int join_try(engine_t *e)
         size_t idx;
         const qent_t *q = t_m >= f.t_first ? seg_at(e, &f, t_m, &idx) : NULL;
         if (!q) {
-            short_queue = !f.closed;
+            *short_queue = !f.closed;
             break;
         }
         /* the curve ahead once on it (the pieces, and the new curve queued
@@ -499,22 +493,33 @@ int join_try(engine_t *e)
          * scaling would have ramped through it; t_m moves on to where it
          * has settled */
         double alim = fmax(e->cfg.scale_accel_m_s2, norm3(a0));
-        int settled = rho * rho * acc_ahead(e, idx, t_m, JOIN_AHEAD_S) <= alim;
+        int settled = r_max * r_max * acc_ahead(e, idx, t_m, JOIN_AHEAD_S) <= alim;
         fits = fits && settled && q->ceil >= rho;
         /* it keeps moving: at least JOIN_KEEP of the lower of the two
          * motions' speeds, where it leaves the old and meets the new */
         double vmin = JOIN_KEEP * fmin(v_old, norm3(v1));
-        for (int i = 0; i < 3 && fits; i++)
-            fits = piece_fits(e, &pc[i], vlim, vmin, alim, e->cfg.scale_jerk_m_s3);
         /* in track time: the pieces played at rho (their cubics are the
-         * same, their time stretched by rho) */
+         * same, their time stretched by rho), each piece's ceiling at
+         * least rho; the scaling plays them at up to the override within
+         * their highest ceiling: g times faster than planned (a join at a
+         * rate the ceilings held: its acceleration and jerk checked at
+         * that rate too; its speed the ceilings keep) */
+        double g = 1.0;
+        fdiff_seg_t tk[3] = {pc[0], pc[1], pc[2]};
         for (int i = 0; i < 3 && !unit; i++) {
-            pc[i].t0_s = t_now + rho * (pc[i].t0_s - t_now);
-            pc[i].dur_s *= rho;
+            tk[i].t0_s = t_now + rho * (pc[i].t0_s - t_now);
+            tk[i].dur_s = rho * pc[i].dur_s;
         }
-        fits = fits && (unit || ceil_clear(e, pc, rho));
+        if (!unit) {
+            double cmin, cmax;
+            ceilings(e, tk, &cmin, &cmax);
+            fits = fits && cmin >= rho;
+            g = fmax(1.0, fmin(join_rate(e), cmax) / rho);
+        }
+        for (int i = 0; i < 3 && fits; i++)
+            fits = piece_fits(e, &pc[i], vlim, vmin, alim, e->cfg.scale_jerk_m_s3, g);
         if (fits) {
-            join_splice(e, idx, t_m, t_now + Tt, pc);
+            join_splice(e, idx, t_m, t_now + Tt, tk);
             join_begin(e, t_now, t_m, Tt, rho);
             return 1;
         }
@@ -525,7 +530,7 @@ int join_try(engine_t *e)
              * one's mean speed is below the least it may keep already (or
              * the curve there has not settled); more of the new curve may
              * come by the next tick */
-            short_queue = !f.closed;
+            *short_queue = !f.closed;
             break;
         }
         if (c >= JOIN_STEP_TICKS) {
@@ -534,7 +539,46 @@ int join_try(engine_t *e)
         }
         ticks += step;
     }
-    if (!short_queue)
+    return 0;
+}
+
+int join_try(engine_t *e)
+{
+    join_find_t f;
+    int never;
+
+    if (!join_find(e, &f, &never)) {
+        if (never)
+            e->out.join_refused = e->out.traj + 1;
+        return 0;
+    }
+    /* rho: the rate the join is played at and the new curve entered at,
+     * the override (1 on the unit grid) */
+    double P = e->period_s, s = e->scale.on ? e->scale.s : tau_of(e, e->out.n);
+    double t_now = e->out.origin_t + s, A, J, rho = join_rate(e);
+    if (e->scale.on && !(e->scale.ts.rate > 0))
+        return 0; /* at rest: the transfer's (or the old curve's own end) */
+    scale_limits(e, &A, &J);
+    /* leave the old curve where its last interval begins, or where the
+     * time scaling begins to brake for its end (decide's test, a few ticks
+     * early, at rate 1 or the override's if higher), whichever is first */
+    double r_hi = fmax(1.0, rho);
+    if (t_now < f.t_last_ivl && !e->scale.end_brake &&
+        ts_stop_dist(r_hi, 0.0, A, J) < scale_remaining(e, s) - (TS_MARGIN_TICKS + 2) * P * r_hi)
+        return 0;
+    if (t_now >= f.t_end)
+        return 0;
+    int short_queue = 0, sq2 = 0;
+    if (join_search(e, &f, t_now, rho, &short_queue))
+        return 1;
+    /* under an override the curves' ceilings (the speed cap, per-axis
+     * limits) hold below (the output's rate lower, not by an underrun): at
+     * that rate */
+    double r = e->scale.ts.rate;
+    if (!join_unit(e, rho) && !e->out.underrun && e->scale.on && r > 0 && r < JOIN_HELD * rho &&
+        join_search(e, &f, t_now, r, &sq2))
+        return 1;
+    if (!short_queue && !sq2)
         e->out.join_refused = e->out.traj + 1; /* the stop's, as before */
     return 0;
 }

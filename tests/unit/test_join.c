@@ -197,7 +197,7 @@ static void run(const opts_t *o, result_t *r)
                 r->jmax_join = fmax(r->jmax_join, da / T_S);
             }
         }
-        if (v > ovr * V - 0.01)
+        if (v > fmin(ovr * V - 0.01, 0.9 * 1.5 * 5.2)) /* (the speed cap's 7.8 m/s) */
             started = 1;
         if (started && ts > 5 && ts < JUMP_T + 8 && !o->event)
             r->vmin = fmin(r->vmin, v);
@@ -369,16 +369,18 @@ static void test_stop_and_clear_on_join(void **state)
  * the new curve at r times its own velocity (r^2 its acceleration), played
  * at rate r; the speed stays above 50 % of r x 5 m/s, loaded ahead and (at
  * 0.5: the output falls behind the data) pushed as it comes; every tick
- * within the limits (check_limits).  Fails on the old code (no join under
- * an override other than 1: the stop and transfer, speed 0). */
+ * within the limits (check_limits).  At 2.0 the speed cap (1.5 x 5.2 m/s)
+ * holds the line at rate 1.56: joined at the rate the output runs at, the
+ * speed above 50 % of 7.8 m/s.  Fails on the old code (no join under an
+ * override other than 1: the stop and transfer, speed 0). */
 static void test_override_keeps_speed(void **state)
 {
     (void)state;
-    const double ovr[] = {0.5, 1.5};
-    for (int i = 0; i < 2; i++)
+    const double ovr[] = {0.5, 1.5, 2.0};
+    for (int i = 0; i < 3; i++)
         for (int ahead = 0; ahead < 2; ahead++) {
             if (!ahead && ovr[i] > 1)
-                continue; /* faster than its data: an underrun (below) */
+                continue; /* faster than its data: it catches up with it */
             opts_t o = {.ahead = ahead, .off_y = 1.5, .dir = 1, .ovr = ovr[i]};
             result_t r;
             run(&o, &r);
@@ -386,8 +388,13 @@ static void test_override_keeps_speed(void **state)
             assert_int_equal(r.reanchors, 1);
             assert_int_equal(r.moving, 1);
             assert_int_equal(r.transfers, 0);
-            assert_true(r.vmin >= 0.5 * ovr[i] * V);
-            assert_true(fabs(r.join_rate - ovr[i]) < 1e-9); /* played at rate r */
+            /* the speed it may run at: r x 5 m/s within the speed cap */
+            double vr = fmin(ovr[i] * V, 1.5 * 5.2);
+            assert_true(r.vmin >= 0.5 * vr);
+            if (ovr[i] < 2)
+                assert_true(fabs(r.join_rate - ovr[i]) < 1e-9); /* played at rate r */
+            else /* held by the cap's ceiling (1.56): at the rate it ran at */
+                assert_true(r.join_rate > 1.4 && r.join_rate < 1.57);
             assert_true(r.line_dev < 1e-9); /* on the new line at its t_s after it */
         }
 }
