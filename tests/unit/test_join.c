@@ -30,9 +30,12 @@
  *     rests, as before;
  *   - stop and clear in the middle of the join: the output brakes to rest
  *     along it within the limits, and stands (stopped; waiting after the
- *     clear); at rate 1 and under an override of 0.5;
+ *     clear); at rate 1, under an override of 0.5 and on one clock;
  *   - under a feed override of 0.5 and 1.5 the re-anchor is joined moving,
- *     played at the override's rate (fails on the old code: no join);
+ *     played at the override's rate; at 2.0, held by the speed cap, at the
+ *     rate the output runs at (fails on the old code: no join);
+ *   - on one clock it is joined moving and the output is on the play time
+ *     again after it (fails on the old code);
  *   - a re-anchor hit while the output is in an underrun is joined moving
  *     from the output's actual (slowed) state (fails on the old code).
  * The curve the output meets is compared with scipy in
@@ -348,9 +351,13 @@ static void test_stop_and_clear_on_join(void **state)
     (void)state;
     for (int ev = 1; ev <= 2; ev++)
         for (int ahead = 0; ahead < 2; ahead++)
-            for (int i = 0; i < 2; i++) { /* and under an override of 0.5 */
-                opts_t o = {
-                    .ahead = ahead, .off_y = 1.5, .dir = 1, .event = ev, .ovr = i ? 0.5 : 1};
+            for (int i = 0; i < 3; i++) { /* and under an override of 0.5, on one clock */
+                opts_t o = {.ahead = ahead,
+                            .off_y = 1.5,
+                            .dir = 1,
+                            .event = ev,
+                            .ovr = i == 1 ? 0.5 : 1,
+                            .clock = i == 2};
                 result_t r;
                 run(&o, &r);
                 check_limits(&r);
