@@ -441,6 +441,105 @@ static void test_underrun_keeps_speed(void **state)
     }
 }
 
+/* issue 32: every state x every event, mid-join: random re-anchors (as in
+ * random_reanchors) with the feed override switched at random ticks among
+ * 0 (a feed hold), 0.5, 1 and 1.5, on one clock or not, so that joins
+ * begin under each and the override changes on them (held, resumed, sped
+ * up).  Onto, on and off every join no position or velocity step
+ * (trapezoid residuals); every tick the speed within the cap; no hard
+ * stop; the output ends at rest (finished) once the override lets it.
+ * Fails on the old code (no join under an override other than 1 nor on
+ * one clock: 26 of the 88 re-anchors joined, not half; and 6 of the 16
+ * clocked runs still streaming after 300 s, behind the clock after their
+ * stops and transfers). */
+static void test_override_switched_on_joins(void **state)
+{
+    (void)state;
+    unsigned seed = 777, joins = 0, reanchored = 0, held_on_join = 0;
+    for (int run = 0; run < 40; run++) {
+        engine_config_t c;
+        engine_config_default(&c);
+        c.profile = ENGINE_PROFILE_NONE;
+        c.max_accel_m_s2 = 0;
+        double v = 2 + urand(&seed) * 15, hz = urand(&seed) < 0.5 ? 10 : 5;
+        c.max_speed_m_s = v * 1.05;
+        c.method = (engine_method_t)(int)(urand(&seed) * 6.99);
+        int ahead = urand(&seed) < 0.5, clocked = urand(&seed) < 0.4;
+        double off = 2 + urand(&seed) * 10, ang = (urand(&seed) - 0.5) * 1.0;
+        int err = 0;
+        engine_t *e = engine_new(&c, &err);
+        assert_non_null(e);
+        double dt = 1 / hz, T = (double)c.period_ns * 1e-9, tb = clocked ? T0_S : 0.0;
+        int n = (int)(60 * hz), k = 0;
+        engine_setpoint_t sp, pv;
+        memset(&sp, 0, sizeof sp);
+        memset(&pv, 0, sizeof pv);
+        double pe = 0, ve = 0, vmax = 0;
+        int was_join = 0;
+        static const double ovr[] = {0.0, 0.5, 1.0, 1.5};
+        for (int64_t tick = 0; tick < (int64_t)(300.0 / T); tick++) {
+            while (k < n && (ahead || k * dt <= (double)tick * T)) {
+                engine_waypoint_t w;
+                memset(&w, 0, sizeof w);
+                w.t_s = tb + k * dt;
+                double t = k * dt;
+                for (int j = 0; j < 3; j++) { /* re-anchored 3 times, each aside */
+                    double tj = 15.0 * (j + 1);
+                    if (t >= tj) {
+                        w.pos_m[1] += off * cos(ang * j);
+                        w.pos_m[2] += 0.2 * off * sin(ang * j);
+                    }
+                }
+                w.pos_m[0] = v * t;
+                engine_push(e, &w);
+                if (++k == n)
+                    engine_finish(e);
+            }
+            /* the override switched about every 2 s; 1 for good after 200 s */
+            if (tick * T > 200.0)
+                engine_set_override(e, 1.0);
+            else if (urand(&seed) < T / 2.0)
+                assert_int_equal(engine_set_override(e, ovr[(int)(urand(&seed) * 3.99)]), 0);
+            if (clocked) {
+                engine_clock_t clk = {T0_NS + tick * c.period_ns, CLOCK_D_NS, 1.0, 0.05};
+                assert_int_equal(engine_set_clock(e, &clk), 0);
+            }
+            assert_int_equal(engine_tick(e, tick * c.period_ns, &sp), 0);
+            int on = e->out.mode == OUT_STREAM && e->out.cur.join;
+            if (on && !was_join)
+                joins++;
+            if (on && !(e->scale.override > 0))
+                held_on_join++;
+            if ((on || was_join) && !isnan(pv.pos_m[0])) /* onto, on and off a join */
+                for (int ax = 0; ax < 3; ax++) {
+                    pe = fmax(pe, fabs(sp.pos_m[ax] - pv.pos_m[ax] -
+                                       0.5 * (sp.vel_m_s[ax] + pv.vel_m_s[ax]) * T));
+                    ve = fmax(ve, fabs(sp.vel_m_s[ax] - pv.vel_m_s[ax] -
+                                       0.5 * (sp.acc_m_s2[ax] + pv.acc_m_s2[ax]) * T));
+                }
+            vmax = fmax(vmax, sqrt(sp.vel_m_s[0] * sp.vel_m_s[0] + sp.vel_m_s[1] * sp.vel_m_s[1] +
+                                   sp.vel_m_s[2] * sp.vel_m_s[2]));
+            was_join = on;
+            pv = sp;
+        }
+        engine_status_t st;
+        engine_status(e, &st);
+        reanchored += (unsigned)st.reanchors;
+        /* the join's jerk (50 m/s^3) and the scaling's leave j T^3 / 12 and j T^2 / 12 */
+        if (st.hard_stops || pe > 1e-5 || ve > 2e-3 || vmax > ENGINE_SPEED_CAP * c.max_speed_m_s ||
+            sp.state != ENGINE_STATE_FINISHED)
+            fail_msg("run %d (v %.1f, %g Hz, method %d, ahead %d, clock %d): hard stops %llu, "
+                     "pos %.2g m, vel %.2g m/s, top speed %.3f, state %d",
+                     run, v, hz, (int)c.method, ahead, clocked, (unsigned long long)st.hard_stops,
+                     pe, ve, vmax, sp.state);
+        engine_free(e);
+    }
+    print_message("override switched: %u joins of %u re-anchors, %u join ticks under a feed hold\n",
+                  joins, reanchored, held_on_join);
+    assert_true(joins >= reanchored / 2); /* 63 of 88 (26 on the old code) */
+    assert_true(held_on_join > 0);
+}
+
 /* issue 32: on one clock (engine_set_clock, CLOCK.md; D = 3 s) the
  * re-anchor is joined moving, played at the clock's rate (slowed by an
  * override below 1): the output stays on the play time through it (or wins
@@ -604,6 +703,7 @@ int main(void)
         cmocka_unit_test(test_underrun_keeps_speed),
         cmocka_unit_test(test_random_reanchors_override),
         cmocka_unit_test(test_clock_keeps_speed),
+        cmocka_unit_test(test_override_switched_on_joins),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
