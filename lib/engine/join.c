@@ -8,10 +8,11 @@
  * the state it is in (position, velocity and acceleration of the tick just
  * sent) and meets the new trajectory's curve at a time t_m on it, matching
  * its position, velocity and acceleration there.  The join is C2: three
- * cubics of constant jerk each (hermite_c2_segments), played by the stepper
- * as ordinary segments of the new trajectory at rate 1, spliced in at the
- * queue's head in front of the new curve cut at t_m; its setpoints carry
- * ENGINE_SP_TRANSFER and a new track.  Not where the new trajectory starts
+ * cubics of constant jerk each (hermite_c2_segments), played as ordinary
+ * segments of the new trajectory at rate 1 (the stepper) or at the
+ * override's rate (below), spliced in at the queue's head in front of the
+ * new curve cut at t_m; its setpoints carry ENGINE_SP_TRANSFER and a new
+ * track.  Not where the new trajectory starts
  * where the old one ends (no transfer is needed: the curves rest there, a
  * stop as the data says).
  *
@@ -48,10 +49,51 @@
  * the fallback: the output brakes to rest at the old curve's end and a
  * rest-to-rest transfer takes it to the new start (engine_xfer.c).
  *
- * Not joined moving: with one clock (CLOCK.md: a trajectory is entered at
- * rate 0 on the play time), under a feed override other than 1, during a
- * stop or clear, after a gap beyond max_gap_s, in an underrun.  The catch-up
- * (catchup.h) does not steer a join; the lag it leaves is won back after it.
+ * Under a feed override rho (0 < rho <= 2, engine_set_override) the join is
+ * planned at the output's path speed and played at rate rho: it leaves from
+ * the commanded state as sent (the scaled velocity and acceleration) and
+ * meets the new curve at rho times its velocity and rho^2 its acceleration,
+ * over T seconds (whole periods) that cover rho T of track time; every
+ * check above is made in m/s on that motion (the new curve's own
+ * acceleration ahead at rho^2, its ceiling at least rho, the speed kept at
+ * least JOIN_KEEP of the lower of rho x the two curves' speeds, the stop
+ * from rho); the pieces are the same cubics with their time stretched by
+ * rho, queued in track time, and the time scaling plays them at rate rho,
+ * its own acceleration 0 from the join's start (the pieces hold the state
+ * as sent, v / rho and a / rho^2 in track time, so nothing steps), each
+ * piece's ceiling (speed cap, per-axis limits) at least rho.  Where no join
+ * fits at the override's rate and the output runs slower without an
+ * underrun (the curves' ceilings hold it below the override, or it brakes
+ * for the old curve's end), one is sought at the rate it runs at, its
+ * acceleration and jerk checked also at the rate the scaling may take it
+ * to (the override within the pieces' highest ceiling: g = that / rho in
+ * piece_fits); its speed the ceilings keep.  A change of the override
+ * during the join is the time scaling's, as on any curve (the join is C2
+ * in track time too).  At rho = 1 it is the join at rate 1 on the unit
+ * grid, as before.
+ *
+ * In an underrun (the time scaling has slowed the output because the curve
+ * ahead ran short: the re-anchor's own confirmation holds the new track's
+ * first waypoints back, or the sender stalled) the join leaves from the
+ * actual commanded state, the slowed velocity and its acceleration, and
+ * the speed it keeps JOIN_KEEP of is the lower of the output's own there
+ * and the new curve's (x rho): it does not wait for the rate to recover
+ * nor brake to rest.  The underrun ends with the join (the new curve is
+ * queued beyond it).  An output the underrun has brought to rest (rate 0)
+ * is not joined: the transfer, as from any rest.
+ *
+ * On one clock (CLOCK.md) the join is played at the clock's rate (slowed
+ * by an override below 1; above it has no effect) as under an override:
+ * locked on the play time, the clocked step samples the pieces at the play
+ * time itself (they are queued in track time), so the output stays locked
+ * through the join; a join behind its data (t_m short of t_now + rho T)
+ * leaves it that much behind the clock, won back by the clock's bounded
+ * catch-up after it, as any lag.
+ *
+ * Not joined moving: during a stop or clear (a stop brakes), under a feed
+ * hold (override 0), after a gap beyond max_gap_s (a new trajectory), at
+ * rest.  The catch-up (catchup.h) does not steer a join; the lag it leaves
+ * is won back after it.
  */
 #include "engine.h"
 #include "engine_int.h"
@@ -82,6 +124,9 @@
  * speeds (issue 32: "it does not drop below 50 %"); one that would not is
  * no join that keeps moving: the stop and transfer. */
 #define JOIN_KEEP 0.5
+/* Under an override, a rate below this fraction of it is held by the
+ * curves' ceilings (join_try). */
+#define JOIN_HELD 0.999
 
 /* What the queue holds for a join: the old trajectory's END at index iend,
  * the new trajectory's first entry after it. */
@@ -96,9 +141,22 @@ typedef struct {
 
 int join_wanted(const engine_t *e)
 {
-    return e->out.mode == OUT_STREAM && e->scale.avail_closed && e->queue.ends > 0 && !e->clk.on &&
-           e->out.join_refused != e->out.traj + 1 && !e->scale.stop_req && !e->out.underrun &&
-           is_exactly(e->scale.override, 1.0) && e->out.have_pos;
+    return e->out.mode == OUT_STREAM && e->scale.avail_closed && e->queue.ends > 0 &&
+           e->out.join_refused != e->out.traj + 1 && !e->scale.stop_req && e->scale.override > 0 &&
+           e->out.have_pos;
+}
+
+/* The rate a join is played at: the override's; on one clock the clock's,
+ * slowed by an override below 1 (above it has no effect: CLOCK.md). */
+static double join_rate(const engine_t *e)
+{
+    return e->clk.on ? e->clk.rate * fmin(e->scale.override, 1.0) : e->scale.override;
+}
+
+/* A join on the unit grid (else scaled at its rate). */
+static int join_unit(const engine_t *e, double rho)
+{
+    return is_exactly(rho, 1.0) && !e->clk.on;
 }
 
 /* The first queue index at or after i0 whose trajectory is past traj (the
@@ -171,16 +229,19 @@ static int join_find(const engine_t *e, join_find_t *f, int *never)
     return 1;
 }
 
-/* 1 if the piece keeps the join's limits (see above). */
+/* 1 if the piece keeps the join's limits (see above); its acceleration and
+ * jerk also where the time scaling plays it g >= 1 times faster than it
+ * was planned for (join_search). */
 static int piece_fits(const engine_t *e, const fdiff_seg_t *s, double vlim, double vmin,
-                      double alim, double jlim)
+                      double alim, double jlim, double g)
 {
     double id = 1.0 / s->dur_s, j2 = 0, a02 = 0, a12 = 0;
 
     for (int k = 0; k < AX; k++) {
         const double *c = s->c[k];
-        double jk = 6.0 * c[3] * id * id * id, a0 = 2.0 * c[2] * id * id,
-               a1 = (2.0 * c[2] + 6.0 * c[3]) * id * id;
+        /* played up to g times faster: acceleration g^2, jerk g^3 */
+        double jk = 6.0 * c[3] * id * id * id * (g * g * g), a0 = 2.0 * c[2] * id * id * (g * g),
+               a1 = (2.0 * c[2] + 6.0 * c[3]) * id * id * (g * g);
         j2 += jk * jk;
         a02 += a0 * a0;
         a12 += a1 * a1;
@@ -318,31 +379,171 @@ static void join_splice(engine_t *e, size_t ihead, double t_m, double t_j, const
 }
 
 /* The output on the join's first piece from this tick on (n: the tick just
- * sent, the join's start), on the unit grid at rate 1, streaming the new
- * trajectory: a new track, as a transfer's. */
-static void join_begin(engine_t *e, double t0, double t_m, double T)
+ * sent, the join's start), streaming the new trajectory: a new track, as a
+ * transfer's.  At rate 1 on the unit grid; at another rate rho (an
+ * override) scaled at rho, the rate's own acceleration 0: the pieces hold
+ * the output's state in track time (v / rho, a / rho^2), so v and a go on
+ * as they were sent. */
+static void join_begin(engine_t *e, double t0, double t_m, double Tt, double rho)
 {
+    double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n);
     e->out.join_t0 = t0;
     e->out.join_tm = t_m;
-    e->out.join_dur = T;
-    if (e->scale.on) { /* the grid through the track time reached */
-        e->scale.s_off = e->scale.s - tick_time(e, e->out.n);
+    e->out.join_dur = Tt;
+    int unit = join_unit(e, rho);
+    if (unit && e->scale.on) { /* the grid through the track time reached */
+        e->scale.s_off = s - tick_time(e, e->out.n);
         e->scale.on = 0;
     }
-    e->scale.ts.rate = 1.0;
+    e->scale.ts.rate = rho;
     e->scale.ts.acc = 0.0;
     e->scale.end_brake = 0;
     e->out.traj = q_head(e)->traj;
     play_take_segment(e);
-    e->out.seg_n0 = e->out.n;
-    play_seed_cur(e, e->out.n);
-    e->out.on_fd = 1;
+    if (unit) {
+        e->out.seg_n0 = e->out.n;
+        play_seed_cur(e, e->out.n);
+        e->out.on_fd = 1;
+    } else {
+        e->scale.on = 1;
+        e->scale.s = s;
+        scale_eval(e);
+    }
     play_find_avail(e);
     e->out.finished = 0;
+    e->out.underrun = 0; /* the new curve is queued beyond the join */
+    e->out.reserve_slow = 0;
     e->out.track++;
     e->out.flags_pending |= ENGINE_SP_NEW_TRACK;
     e->st.transfers_moving++;
     e->out.flags_pending |= ENGINE_SP_TRANSFER;
+}
+
+/* The lowest and highest ceiling of the pieces in track time (queue_segment's,
+ * from the bound on their speed: the speed cap and per-axis limits). */
+static void ceilings(const engine_t *e, const fdiff_seg_t pc[3], double *cmin, double *cmax)
+{
+    *cmin = INFINITY;
+    *cmax = 0.0;
+    for (int i = 0; i < 3; i++) {
+        int ax;
+        double c = solve_seg_ceiling(e, &pc[i], solve_seg_speed_max(&pc[i]), &ax);
+        *cmin = fmin(*cmin, c);
+        *cmax = fmax(*cmax, c);
+    }
+}
+
+/* The shortest join at rate rho from the output's state at track time
+ * t_now (see above): spliced in and begun (1), or none (0; *short_queue: one
+ * may fit once more of the new curve is queued). */
+static int join_search(engine_t *e, const join_find_t *fp, double t_now, double rho,
+                       int *short_queue)
+{
+    const join_find_t f = *fp;
+    /* r_max: the rate the scaling takes the new curve to after it (the
+     * override's: a join at a rate the ceilings held is followed by it) */
+    double P = e->period_s, r_max = fmax(rho, join_rate(e)), r_hi = fmax(1.0, r_max);
+    int unit = join_unit(e, rho);
+    double p0[AX], v0[AX], a0[AX];
+    memcpy(p0, out_pos(e), sizeof(p0));
+    memcpy(v0, out_vel(e), sizeof(v0));
+    memcpy(a0, out_acc(e), sizeof(a0));
+    double vlim = engine_config_max_speed(&e->cfg);
+    vlim = vlim > 0 ? ENGINE_SPEED_CAP * vlim : 0.0;
+    /* the old motion's speed it keeps half of: the old curve's at rho; in
+     * an underrun the output's own (the time scaling has slowed it) */
+    double v_old = e->out.underrun ? norm3(v0) : rho * out_cspeed(e);
+    double T0 = ceil((f.t_first - t_now) / (rho * P) - 1e-9) * P;
+    if (T0 < JOIN_MIN_TICKS * P)
+        T0 = JOIN_MIN_TICKS * P;
+    double T_hi = T0 + e->xfer.cfg.max_s;
+    int64_t ticks = llround(T0 / P), step = 1;
+
+    for (int c = 0;; c++) {
+        double T = (double)ticks * P, Tt = rho * T; /* seconds; track time at rho */
+        if (T > T_hi)
+            break;
+        /* on the new curve as far as its track time ran (t_now + Tt), or
+         * as far as it is queued: then the join takes longer than the
+         * track time it covers (the output falls behind its data by the
+         * difference, less than a stop and transfer would) */
+        double t_m = fmin(t_now + Tt, f.t_last - P);
+        size_t idx;
+        const qent_t *q = t_m >= f.t_first ? seg_at(e, &f, t_m, &idx) : NULL;
+        if (!q) {
+            *short_queue = !f.closed;
+            break;
+        }
+        /* the curve ahead once on it (the pieces, and the new curve queued
+         * beyond t_m) long enough to stop in from rho */
+        double vq = fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
+        double need = ts_stop_dist(r_hi, 0.0, e->cfg.scale_accel_m_s2 / q->av,
+                                   e->cfg.scale_jerk_m_s3 / vq) +
+                      (TS_MARGIN_TICKS + 2) * P * r_hi;
+        int fits = (f.closed || Tt + (f.t_last - t_m) >= need) &&
+                   e->queue.len + 3 <= e->queue.cap + idx; /* room for the pieces */
+        /* the new curve's state at t_m as the output meets it at rho:
+         * velocity rho k', acceleration rho^2 k'' */
+        double p1[AX], v1[AX], a1[AX];
+        fdiff_seg_t pc[3];
+        fdiff_eval(&q->seg, (t_m - q->seg.t0_s) / q->seg.dur_s, p1, v1, a1);
+        for (int k = 0; k < AX; k++) {
+            v1[k] *= rho;
+            a1[k] *= rho * rho;
+        }
+        hermite_c2_segments(p0, v0, a0, p1, v1, a1, t_now, T, pc);
+        /* not the new curve's own where it is larger, at t_m (the piece's
+         * end) and for JOIN_AHEAD_S after it: near its start from rest the
+         * scaling would have ramped through it; t_m moves on to where it
+         * has settled */
+        double alim = fmax(e->cfg.scale_accel_m_s2, norm3(a0));
+        int settled = r_max * r_max * acc_ahead(e, idx, t_m, JOIN_AHEAD_S) <= alim;
+        fits = fits && settled && q->ceil >= rho;
+        /* it keeps moving: at least JOIN_KEEP of the lower of the two
+         * motions' speeds, where it leaves the old and meets the new */
+        double vmin = JOIN_KEEP * fmin(v_old, norm3(v1));
+        /* in track time: the pieces played at rho (their cubics are the
+         * same, their time stretched by rho), each piece's ceiling at
+         * least rho; the scaling plays them at up to the override within
+         * their highest ceiling: g times faster than planned (a join at a
+         * rate the ceilings held: its acceleration and jerk checked at
+         * that rate too; its speed the ceilings keep) */
+        double g = 1.0;
+        fdiff_seg_t tk[3] = {pc[0], pc[1], pc[2]};
+        for (int i = 0; i < 3 && !unit; i++) {
+            tk[i].t0_s = t_now + rho * (pc[i].t0_s - t_now);
+            tk[i].dur_s = rho * pc[i].dur_s;
+        }
+        if (!unit) {
+            double cmin, cmax;
+            ceilings(e, tk, &cmin, &cmax);
+            fits = fits && cmin >= rho;
+            g = fmax(1.0, fmin(join_rate(e), cmax) / rho);
+        }
+        for (int i = 0; i < 3 && fits; i++)
+            fits = piece_fits(e, &pc[i], vlim, vmin, alim, e->cfg.scale_jerk_m_s3, g);
+        if (fits) {
+            join_splice(e, idx, t_m, t_now + Tt, tk);
+            join_begin(e, t_now, t_m, Tt, rho);
+            return 1;
+        }
+        double d[AX] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+        if (t_m < t_now + Tt && (norm3(d) < vmin * T || !settled)) {
+            /* behind its data, a longer join only covers the same track
+             * more slowly (and meets the curve at the same t_m), and this
+             * one's mean speed is below the least it may keep already (or
+             * the curve there has not settled); more of the new curve may
+             * come by the next tick */
+            *short_queue = !f.closed;
+            break;
+        }
+        if (c >= JOIN_STEP_TICKS) {
+            step = llround(JOIN_GROWTH * (T - T0) / P);
+            step = step < 1 ? 1 : step;
+        }
+        ticks += step;
+    }
+    return 0;
 }
 
 int join_try(engine_t *e)
@@ -355,94 +556,33 @@ int join_try(engine_t *e)
             e->out.join_refused = e->out.traj + 1;
         return 0;
     }
+    /* rho: the rate the join is played at and the new curve entered at,
+     * the override (1 on the unit grid) */
     double P = e->period_s, s = e->scale.on ? e->scale.s : tau_of(e, e->out.n);
-    double t_now = e->out.origin_t + s, A, J;
+    double t_now = e->out.origin_t + s, A, J, rho = join_rate(e);
     if (e->scale.on && !(e->scale.ts.rate > 0))
         return 0; /* at rest: the transfer's (or the old curve's own end) */
     scale_limits(e, &A, &J);
     /* leave the old curve where its last interval begins, or where the
      * time scaling begins to brake for its end (decide's test, a few ticks
-     * early), whichever is first */
+     * early, at rate 1 or the override's if higher), whichever is first */
+    double r_hi = fmax(1.0, rho);
     if (t_now < f.t_last_ivl && !e->scale.end_brake &&
-        ts_stop_dist(1.0, 0.0, A, J) < scale_remaining(e, s) - (TS_MARGIN_TICKS + 2) * P)
+        ts_stop_dist(r_hi, 0.0, A, J) < scale_remaining(e, s) - (TS_MARGIN_TICKS + 2) * P * r_hi)
         return 0;
     if (t_now >= f.t_end)
         return 0;
-
-    double p0[AX], v0[AX], a0[AX];
-    memcpy(p0, out_pos(e), sizeof(p0));
-    memcpy(v0, out_vel(e), sizeof(v0));
-    memcpy(a0, out_acc(e), sizeof(a0));
-    double vlim = engine_config_max_speed(&e->cfg);
-    vlim = vlim > 0 ? ENGINE_SPEED_CAP * vlim : 0.0;
-    double T0 = ceil((f.t_first - t_now) / P - 1e-9) * P;
-    if (T0 < JOIN_MIN_TICKS * P)
-        T0 = JOIN_MIN_TICKS * P;
-    double T_hi = T0 + e->xfer.cfg.max_s;
-    int64_t ticks = llround(T0 / P), step = 1;
-    int short_queue = 0;
-
-    for (int c = 0;; c++) {
-        double T = (double)ticks * P;
-        if (T > T_hi)
-            break;
-        /* on the new curve as far as its track time ran (t_now + T), or
-         * as far as it is queued: then the join takes longer than the
-         * track time it covers (the output falls behind its data by the
-         * difference, less than a stop and transfer would) */
-        double t_m = fmin(t_now + T, f.t_last - P);
-        size_t idx;
-        const qent_t *q = t_m >= f.t_first ? seg_at(e, &f, t_m, &idx) : NULL;
-        if (!q) {
-            short_queue = !f.closed;
-            break;
-        }
-        /* the curve ahead once on it (the pieces, and the new curve queued
-         * beyond t_m) long enough to stop in at rate 1 */
-        double vq = fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
-        double need = ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / q->av,
-                                   e->cfg.scale_jerk_m_s3 / vq) +
-                      (TS_MARGIN_TICKS + 2) * P;
-        int fits = (f.closed || T + (f.t_last - t_m) >= need) &&
-                   e->queue.len + 3 <= e->queue.cap + idx; /* room for the pieces */
-        double p1[AX], v1[AX], a1[AX];
-        fdiff_seg_t pc[3];
-        fdiff_eval(&q->seg, (t_m - q->seg.t0_s) / q->seg.dur_s, p1, v1, a1);
-        hermite_c2_segments(p0, v0, a0, p1, v1, a1, t_now, T, pc);
-        /* not the new curve's own where it is larger, at t_m (the piece's
-         * end) and for JOIN_AHEAD_S after it: near its start from rest the
-         * scaling would have ramped through it; t_m moves on to where it
-         * has settled */
-        double alim = fmax(e->cfg.scale_accel_m_s2, norm3(a0));
-        int settled = acc_ahead(e, idx, t_m, JOIN_AHEAD_S) <= alim;
-        fits = fits && settled && q->ceil >= 1.0;
-        /* it keeps moving: at least JOIN_KEEP of the lower of the two
-         * curves' own speeds, where it leaves the old and meets the new */
-        double vmin = JOIN_KEEP * fmin(out_cspeed(e), norm3(v1));
-        for (int i = 0; i < 3 && fits; i++)
-            fits = piece_fits(e, &pc[i], vlim, vmin, alim, e->cfg.scale_jerk_m_s3);
-        if (fits) {
-            join_splice(e, idx, t_m, t_now + T, pc);
-            join_begin(e, t_now, t_m, T);
-            return 1;
-        }
-        double d[AX] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-        if (t_m < t_now + T && (norm3(d) < vmin * T || !settled)) {
-            /* behind its data, a longer join only covers the same track
-             * more slowly (and meets the curve at the same t_m), and this
-             * one's mean speed is below the least it may keep already (or
-             * the curve there has not settled); more of the new curve may
-             * come by the next tick */
-            short_queue = !f.closed;
-            break;
-        }
-        if (c >= JOIN_STEP_TICKS) {
-            step = llround(JOIN_GROWTH * (T - T0) / P);
-            step = step < 1 ? 1 : step;
-        }
-        ticks += step;
-    }
-    if (!short_queue)
+    int short_queue = 0, sq2 = 0;
+    if (join_search(e, &f, t_now, rho, &short_queue))
+        return 1;
+    /* under an override the curves' ceilings (the speed cap, per-axis
+     * limits) hold below (the output's rate lower, not by an underrun): at
+     * that rate */
+    double r = e->scale.ts.rate;
+    if (!join_unit(e, rho) && !e->out.underrun && e->scale.on && r > 0 && r < JOIN_HELD * rho &&
+        join_search(e, &f, t_now, r, &sq2))
+        return 1;
+    if (!short_queue && !sq2)
         e->out.join_refused = e->out.traj + 1; /* the stop's, as before */
     return 0;
 }

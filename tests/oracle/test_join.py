@@ -24,7 +24,16 @@ own time, as trajd streams) and by trajd:
   the wall clock, what is queued when the join is due depends on the machine's load);
 * the new line moving the other way, 10 m to the side: no join keeps half the speed, so
   the stop and rest-to-rest transfer as before (transfers 1, transfers_moving 0, the speed
-  0 between).
+  0 between);
+* in an underrun: a local method (hermite-c2, one waypoint of lookahead) runs out of curve
+  while the acceptance holds the new line's first waypoints for `confirm`, and the time
+  scaling slows the output (an underrun, counted).  The re-anchor is joined moving from the
+  slowed state (transfers_moving 1, no transfer): the speed never drops below 50 % of the
+  lower of the speed where the join leaves and 5 m/s; every tick within the limits; and
+  after the join the output is on the new line itself (x = 100 + 5 (t - 20), y = 1.5: the
+  waypoints' own line, which every exact method reproduces on evenly spaced collinear
+  waypoints away from its rest ends).  On the code before it the output braked to rest
+  and transferred (transfers_moving 0, transfers 1): this fails there.
 """
 import csv
 import os
@@ -133,6 +142,53 @@ def check_join(label, now, t, p, flags, track_no, wt, wp, timed=False):
               "extent)" % (label, m.sum(), name, dev, dev / ext))
 
 
+def check_underrun(d):
+    """The re-anchor hit in an underrun (hermite-c2, as it comes), against the line."""
+    src = os.path.join(d, "line_c2.csv")
+    track(src, 1.5, 1.0)
+    out = os.path.join(d, "c2_out.csv")
+    p = subprocess.run([TRAJREPLAY, "-q", "--summary", "-o", out, "--method", "hermite-c2"] +
+                       OPTS + [src], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    s = {l.split()[1]: l.split()[2] for l in p.stderr.splitlines() if l.startswith("summary: ")}
+    check(s.get("reanchors") == "1" and s.get("transfers_moving") == "1" and
+          s.get("transfers") == "0" and int(s.get("underruns", "0")) >= 1 and
+          s.get("hard_stops") == "0",
+          "underrun: re-anchored %s, underruns %s, joined moving %s, rest-to-rest transfers %s, "
+          "hard stops %s" % (s.get("reanchors"), s.get("underruns"), s.get("transfers_moving"),
+                             s.get("transfers"), s.get("hard_stops")))
+    now, t, pos, flags, track_no = rows(out)
+    ok, sp, acc, jerk = fd(now, pos)
+    ok_a = ok[1:] & ok[:-1]
+    ok_j = ok_a[1:] & ok_a[:-1]
+    on = (flags & 0x08) != 0  # ENGINE_SP_TRANSFER: the join
+    js = np.flatnonzero(on & (t > 10))
+    if not len(js):
+        check(False, "underrun: no join")
+        return
+    i0 = js[0]  # the join's first row: sp[i0 - 1] the speed it leaves at
+    v0 = sp[i0 - 1]
+    m = ok & (np.arange(len(sp)) >= i0 - 1) & (t[1:] < JUMP_T + 8)
+    vmin = sp[m].min()
+    check(0.5 < v0 < 0.95 * V and vmin >= 0.5 * min(v0, V),
+          "underrun: the join leaves at %.3f m/s (moving, slowed), least speed after it %.3f m/s "
+          "(>= 50 %% "
+          "of %.3f)" % (v0, vmin, min(v0, V)))
+    jw = on[1:-1] & on[:-2] & on[2:]
+    jj = on[1:-2] & on[2:-1] & on[:-3] & on[3:]
+    check(acc[ok_a & jw].max() <= 5.0 + 0.05 and jerk[ok_j & jj].max() <= 50.0 * 1.02 and
+          sp[ok].max() <= 1.5 * 5.2,
+          "underrun: on the join |a| at most %.3f m/s^2, jerk %.2f m/s^3; top speed %.3f m/s" % (
+              acc[ok_a & jw].max(), jerk[ok_j & jj].max(), sp[ok].max()))
+    check(np.all(np.diff(t) >= 0), "underrun: t_s never goes back")
+    last = track_no == track_no.max()
+    after = last & ~on & (t > JUMP_T) & (t < 39.0)
+    ref = np.stack([V * JUMP_T + V * (t - JUMP_T), np.full_like(t, 1.5), np.zeros_like(t)], axis=1)
+    dev = np.abs(pos[after] - ref[after]).max()
+    check(after.sum() > 1000 and dev <= TOL_M,
+          "underrun: %d rows after the join on the new line to %.2g m" % (after.sum(), dev))
+
+
 def main():
     with tempfile.TemporaryDirectory() as d:
         src = os.path.join(d, "line.csv")
@@ -175,6 +231,7 @@ def main():
               "the other way: re-anchored %s, joined moving %s, transfers %s, least speed "
               "%.2g m/s" % (s.get("reanchors"), s.get("transfers_moving"), s.get("transfers"),
                             sp[m].min()))
+        check_underrun(d)
     if failures:
         print("test_join.py: %d failure(s)" % len(failures))
         sys.exit(1)

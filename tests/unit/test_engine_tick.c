@@ -312,9 +312,11 @@ static void test_calls_mid_window(void **state)
  * the acceptance re-anchor on (at 1 Hz the old curve's last interval is
  * longer than a stop: the window would run past where the join is due),
  * loaded ahead or pushed as it comes; the window kept must end where a join
- * may be due (join_ticks_left), and the joins must be made.  Returns the
- * decisions kept. */
-static uint64_t reanchors(int ahead, int64_t period_ns, double dt, double aside)
+ * may be due (join_ticks_left), and the joins must be made.  ovr_s > 0: the
+ * feed override switched between 1 and 0.5 every ovr_s seconds (a join
+ * under it is played at 0.5, and no window is kept while it is not 1; the
+ * switches fall mid-window and mid-join).  Returns the decisions kept. */
+static uint64_t reanchors(int ahead, int64_t period_ns, double dt, double aside, double ovr_s)
 {
     engine_config_t c;
     engine_config_default(&c);
@@ -327,6 +329,10 @@ static uint64_t reanchors(int ahead, int64_t period_ns, double dt, double aside)
     int n = 1000, k = 0;
     double span_s = (n + 40) * dt;
     int64_t now = 0;
+    if (ovr_s > 0)
+        span_s *= 1.6; /* half the time at half the speed */
+    int64_t ovr_ticks = (int64_t)(ovr_s * 1e9) / period_ns;
+    int was = 0, under = 0;
     for (int64_t tick = 0; tick < (int64_t)(span_s * 1e9) / period_ns; tick++, now += period_ns) {
         while (k < n && (ahead || k * dt <= (double)now * 1e-9)) {
             engine_waypoint_t w = {.t_s = k * dt, .seq = (uint32_t)k};
@@ -336,12 +342,22 @@ static uint64_t reanchors(int ahead, int64_t period_ns, double dt, double aside)
             if (++k == n)
                 assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1]));
         }
+        if (ovr_ticks > 0 && tick % ovr_ticks == 0) {
+            double r = (tick / ovr_ticks) % 2 ? 0.5 : 1.0;
+            assert_int_equal(engine_set_override(p.e[0], r), engine_set_override(p.e[1], r));
+        }
         pair_tick(&p, now);
+        int on = p.e[1]->out.mode == OUT_STREAM && p.e[1]->out.cur.join;
+        if (on && !was && p.e[1]->scale.override < 1.0)
+            under++; /* a join begun under the override */
+        was = on;
     }
     engine_status_t st;
     engine_status(p.e[1], &st);
     assert_int_equal(st.reanchors, 4);
     assert_int_equal(st.transfers_moving, 4);
+    if (ovr_s > 0)
+        assert_true(under > 0);
     return pair_free(&p);
 }
 
@@ -350,9 +366,11 @@ static void test_reanchors_joined(void **state)
     (void)state;
     uint64_t kept = 0;
     for (int ahead = 0; ahead < 2; ahead++) {
-        kept += reanchors(ahead, 10000000, 0.1, 1.5);
-        kept += reanchors(ahead, 1000000, 0.1, 1.5);
-        kept += reanchors(ahead, 10000000, 1.0, 15.0);
+        kept += reanchors(ahead, 10000000, 0.1, 1.5, 0);
+        kept += reanchors(ahead, 1000000, 0.1, 1.5, 0);
+        kept += reanchors(ahead, 10000000, 1.0, 15.0, 0);
+        kept += reanchors(ahead, 10000000, 0.1, 1.5, 3.7); /* under an override (join.c) */
+        kept += reanchors(ahead, 10000000, 1.0, 15.0, 37.0);
     }
     assert_true(kept > 100000);
 }
