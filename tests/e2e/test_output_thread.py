@@ -78,8 +78,9 @@ def strace_run(test, tmp, conf):
         if m:
             timer_fds.discard(int(m.group(1)))
             open_now.pop(int(m.group(1)), None)
-        m = re.match(r"(eventfd2?|signalfd4?|epoll_create1?|socket|accept4?|pipe2?|dup[23]?)\(.*\)\s+= (\d+)",
-                     call)
+        # (a file opened, a track read on a worker: openat too)
+        m = re.match(r"(eventfd2?|signalfd4?|epoll_create1?|socket|accept4?|pipe2?|dup[23]?|openat)"
+                     r"\(.*\)\s+= (\d+)", call)
         if m:
             timer_fds.discard(int(m.group(2)))
         m = re.match(r"read\((\d+), .*, 8\)\s+= 8", call)
