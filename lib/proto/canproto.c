@@ -1,5 +1,6 @@
 /* canproto.c - trajd's CAN frames (see canproto.h for the layouts). */
 #include "canproto.h"
+#include "canproto_le.h"
 
 #include <math.h>
 #include <string.h>
@@ -30,21 +31,7 @@ int canproto_fd_len_valid(unsigned len)
            len == 64;
 }
 
-/* ---- little-endian fields ---------------------------------------------------- */
-
-static void put_le(uint8_t *p, unsigned nbytes, uint64_t v)
-{
-    for (unsigned i = 0; i < nbytes; i++)
-        p[i] = (uint8_t)(v >> (8 * i));
-}
-
-static uint64_t get_le(const uint8_t *p, unsigned nbytes)
-{
-    uint64_t v = 0;
-    for (unsigned i = 0; i < nbytes; i++)
-        v |= (uint64_t)p[i] << (8 * i);
-    return v;
-}
+/* ---- little-endian fields (canproto_le.h) -------------------------------------- */
 
 /* Sign-extend the low nbits of v. */
 static int64_t sext(uint64_t v, unsigned nbits)

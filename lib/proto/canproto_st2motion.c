@@ -1,5 +1,6 @@
 /* canproto_st2motion.c - STATUS2 page 7, MOTION: the engine's motion counters (canproto.h). */
 #include "canproto.h"
+#include "canproto_le.h"
 
 #include <string.h>
 
@@ -7,18 +8,7 @@
 static void put_sat(uint8_t *p, unsigned nbytes, uint64_t v)
 {
     uint64_t max = (1ull << (8 * nbytes)) - 1;
-    if (v > max)
-        v = max;
-    for (unsigned i = 0; i < nbytes; i++)
-        p[i] = (uint8_t)(v >> (8 * i));
-}
-
-static uint64_t get_u(const uint8_t *p, unsigned nbytes)
-{
-    uint64_t v = 0;
-    for (unsigned i = 0; i < nbytes; i++)
-        v |= (uint64_t)p[i] << (8 * i);
-    return v;
+    put_le(p, nbytes, v > max ? max : v);
 }
 
 void canproto_st2_motion_from(const engine_status_t *st, canproto_st2_motion_t *out)
@@ -54,7 +44,7 @@ int canproto_decode_status2_motion(const canproto_frame_t *f, canproto_st2_motio
         return page;
     if (page != CANPROTO_ST2_MOTION)
         return -CANPROTO_EMUX;
-    out->underruns = get_u(&f->data[1], 2);
+    out->underruns = get_le(&f->data[1], 2);
     out->delay_grown = f->data[3];
     out->transfers_moving = f->data[4];
     out->reserve_slowed = f->data[5];

@@ -452,6 +452,20 @@ static void test_underrun_keeps_speed(void **state)
  * one clock: 26 of the 88 re-anchors joined, not half; and 6 of the 16
  * clocked runs still streaming after 300 s, behind the clock after their
  * stops and transfers). */
+/* The most the step from setpoint a to b, T apart, on axes 0..n-1 differs
+ * from the trapezoid of their velocities (*pe) and accelerations (*ve): no
+ * step in position or velocity, whatever the rate */
+static void trapezoid_err(const engine_setpoint_t *a, const engine_setpoint_t *b, int n, double T,
+                          double *pe, double *ve)
+{
+    for (int ax = 0; ax < n; ax++) {
+        *pe = fmax(*pe,
+                   fabs(b->pos_m[ax] - a->pos_m[ax] - 0.5 * (b->vel_m_s[ax] + a->vel_m_s[ax]) * T));
+        *ve = fmax(*ve, fabs(b->vel_m_s[ax] - a->vel_m_s[ax] -
+                             0.5 * (b->acc_m_s2[ax] + a->acc_m_s2[ax]) * T));
+    }
+}
+
 static void test_override_switched_on_joins(void **state)
 {
     (void)state;
@@ -511,12 +525,7 @@ static void test_override_switched_on_joins(void **state)
             if (on && !(e->scale.override > 0))
                 held_on_join++;
             if ((on || was_join) && !isnan(pv.pos_m[0])) /* onto, on and off a join */
-                for (int ax = 0; ax < 3; ax++) {
-                    pe = fmax(pe, fabs(sp.pos_m[ax] - pv.pos_m[ax] -
-                                       0.5 * (sp.vel_m_s[ax] + pv.vel_m_s[ax]) * T));
-                    ve = fmax(ve, fabs(sp.vel_m_s[ax] - pv.vel_m_s[ax] -
-                                       0.5 * (sp.acc_m_s2[ax] + pv.acc_m_s2[ax]) * T));
-                }
+                trapezoid_err(&pv, &sp, 3, T, &pe, &ve);
             vmax = fmax(vmax, sqrt(sp.vel_m_s[0] * sp.vel_m_s[0] + sp.vel_m_s[1] * sp.vel_m_s[1] +
                                    sp.vel_m_s[2] * sp.vel_m_s[2]));
             was_join = on;
@@ -647,12 +656,7 @@ static void random_reanchors(int with_ovr)
                     fail_msg("run %d: jerk %.2f m/s^3 on a join", run, da / T);
             }
             if ((on || was_join) && !isnan(pv.pos_m[0])) /* onto, on and off a join */
-                for (int ax = 0; ax < 2; ax++) {
-                    pe = fmax(pe, fabs(sp.pos_m[ax] - pv.pos_m[ax] -
-                                       0.5 * (sp.vel_m_s[ax] + pv.vel_m_s[ax]) * T));
-                    ve = fmax(ve, fabs(sp.vel_m_s[ax] - pv.vel_m_s[ax] -
-                                       0.5 * (sp.acc_m_s2[ax] + pv.acc_m_s2[ax]) * T));
-                }
+                trapezoid_err(&pv, &sp, 2, T, &pe, &ve);
             was_join = on;
             pv = sp;
         }
