@@ -269,16 +269,23 @@ static void check_limits(const result_t *r)
     assert_int_equal(r->t_back, 0); /* t_s never goes back */
 }
 
+/* run o into r, within the limits, its one re-anchor joined moving (no
+ * transfer) */
+static void run_joined(const opts_t *o, result_t *r)
+{
+    run(o, r);
+    check_limits(r);
+    assert_int_equal(r->reanchors, 1);
+    assert_int_equal(r->moving, 1);
+    assert_int_equal(r->transfers, 0);
+}
+
 static void test_ahead_keeps_speed(void **state)
 {
     (void)state;
     opts_t o = {.ahead = 1, .off_y = 1.5, .dir = 1};
     result_t r;
-    run(&o, &r);
-    check_limits(&r);
-    assert_int_equal(r.reanchors, 1);
-    assert_int_equal(r.moving, 1);
-    assert_int_equal(r.transfers, 0);
+    run_joined(&o, &r);
     assert_true(r.vmin > 0.95 * V);
 }
 
@@ -287,11 +294,7 @@ static void test_live_keeps_half_speed(void **state)
     (void)state;
     opts_t o = {.ahead = 0, .off_y = 1.5, .dir = 1};
     result_t r;
-    run(&o, &r);
-    check_limits(&r);
-    assert_int_equal(r.reanchors, 1);
-    assert_int_equal(r.moving, 1);
-    assert_int_equal(r.transfers, 0);
+    run_joined(&o, &r);
     assert_true(r.vmin >= 0.5 * V); /* issue 32: not below 50 % of the lower speed */
 }
 
@@ -390,11 +393,7 @@ static void test_override_keeps_speed(void **state)
                 continue; /* faster than its data: it catches up with it */
             opts_t o = {.ahead = ahead, .off_y = 1.5, .dir = 1, .ovr = ovr[i]};
             result_t r;
-            run(&o, &r);
-            check_limits(&r);
-            assert_int_equal(r.reanchors, 1);
-            assert_int_equal(r.moving, 1);
-            assert_int_equal(r.transfers, 0);
+            run_joined(&o, &r);
             /* the speed it may run at: r x 5 m/s within the speed cap */
             double vr = fmin(ovr[i] * V, 1.5 * 5.2);
             assert_true(r.vmin >= 0.5 * vr);
@@ -564,11 +563,7 @@ static void test_clock_keeps_speed(void **state)
             double ovr = i ? 0.5 : 1.0;
             opts_t o = {.ahead = ahead, .off_y = 1.5, .dir = 1, .clock = 1, .ovr = ovr};
             result_t r;
-            run(&o, &r);
-            check_limits(&r);
-            assert_int_equal(r.reanchors, 1);
-            assert_int_equal(r.moving, 1);
-            assert_int_equal(r.transfers, 0);
+            run_joined(&o, &r);
             assert_true(r.vmin >= 0.5 * ovr * V);
             /* on the new line at its t_s (epoch seconds in a double: to
              * 2.4e-7 s, 1.2e-6 m at 5 m/s) */
