@@ -140,6 +140,13 @@ def opts_text(opts):
     return " ".join(opts) if opts else "defaults"
 
 
+# The accuracy/latency frontier the top-level README shows (issue 31): the 10 Hz track,
+# from the local methods to the default lookahead; rows of table (a)
+FRONTIER = (("--max-lookahead", "1"), ("--max-lookahead", "2"), ("--max-lookahead", "3"),
+            ("--max-lookahead", "6", "--accuracy", "0.1"), ("--max-lookahead", "8", "--accuracy", "3e-3"),
+            ("--max-lookahead", "12", "--accuracy", "1e-4"), ())
+
+
 def table_a(exe, tmp, tracks=TRACKS, configs=CONFIGS):
     """The lines of table (a), markdown, then the notes: each refusal's message once."""
     lines = ["| track | configuration | method | D s | lookahead + slack + stop s | steady delay s "

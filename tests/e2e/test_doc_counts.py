@@ -827,6 +827,20 @@ class DelayMeasured(unittest.TestCase):
     3600 s of input each, --binary: about a second)."""
     maxDiff = None
 
+    def test_readme_frontier(self):
+        """The top-level README's accuracy/latency frontier (issue 31): the rows of the
+        delay table for the 10 Hz track at bench_delay.FRONTIER's settings."""
+        spec = importlib.util.spec_from_file_location(
+            "bench_delay", os.path.join(ROOT, "tests", "bench", "bench_delay.py"))
+        bench = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(bench)
+        doc = read("README.md")
+        shown = doc.split("<!-- frontier:begin -->\n")[1].split("\n<!-- frontier:end -->")[0]
+        with tempfile.TemporaryDirectory() as tmp:
+            want = bench.table_a(os.path.join(BUILD, "bin", "trajreplay"), tmp, ("10 Hz",),
+                                 bench.FRONTIER)
+        self.assertEqual(shown.split("\n"), [l for l in want if l], "README.md's frontier is stale")
+
     def test_delay_table(self):
         spec = importlib.util.spec_from_file_location(
             "bench_delay", os.path.join(ROOT, "tests", "bench", "bench_delay.py"))
