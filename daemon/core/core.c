@@ -98,10 +98,7 @@ static void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim)
     /* issue 32: the engine keeps the per-axis limits along the path; the
      * monitor holds them independently, SAFETY_AXIS_MARGIN above (the
      * finite differences of the setpoints it measures by) */
-    for (int k = 0; k < ENGINE_AXES; k++) {
-        lim->axis_speed_m_s[k] = SAFETY_AXIS_MARGIN * o->engine.axis_max_speed_m_s[k];
-        lim->axis_accel_m_s2[k] = SAFETY_AXIS_MARGIN * o->engine.axis_max_accel_m_s2[k];
-    }
+    safety_axis_limits(lim, o->engine.axis_max_speed_m_s, o->engine.axis_max_accel_m_s2);
 }
 
 /* The setpoint as latitude/longitude/height (geographic objects, about the
@@ -800,21 +797,28 @@ static void log_underrun(obj_t *o)
             (unsigned long long)st->underruns);
 }
 
+/* issue 26: a slowdown for D's stop reserve (reserve_slowed, delay.h), at
+ * obj_log_nth's rate. */
+static void log_reserve_slowed(obj_t *o)
+{
+    uint64_t r = o->status.reserve_slowed;
+    if (r == o->reserve_logged)
+        return;
+    o->reserve_logged = r;
+    if (obj_log_nth(r))
+        log_msg(LOG_NOTICE,
+                "object '%s': faster than the speed its play-out delay's stop reserve was sized "
+                "for, on input that came on time: slowed along its path (%llu times so far), D "
+                "grows to the speed",
+                o->name, (unsigned long long)r);
+}
+
 /* issue 26: D stated anew, longer, because the input's intervals or top
  * speed grew (engine_delay_grow): the new D and its parts, at obj_log_nth's
- * rate.  A slowdown for D's stop reserve (reserve_slowed) comes with it. */
+ * rate. */
 static void log_delay_grown(obj_t *o)
 {
-    uint64_t n = o->status.delay_grown, r = o->status.reserve_slowed;
-    if (r != o->reserve_logged) {
-        o->reserve_logged = r;
-        if (obj_log_nth(r))
-            log_msg(LOG_NOTICE,
-                    "object '%s': faster than the speed its play-out delay's stop reserve was "
-                    "sized for, on input that came on time: slowed along its path (%llu times "
-                    "so far), D grows to the speed",
-                    o->name, (unsigned long long)r);
-    }
+    uint64_t n = o->status.delay_grown;
     if (n == o->grown_logged)
         return;
     o->grown_logged = n;
@@ -831,6 +835,7 @@ static void log_rejections(core_t *c)
             warn_uniform(&c->obj[i]);
             warn_axis(&c->obj[i]);
             log_underrun(&c->obj[i]);
+            log_reserve_slowed(&c->obj[i]);
             log_delay_grown(&c->obj[i]);
             rejlog_drain(&c->obj[i].rejlog, c->obj[i].engine);
             rejlog_flush(&c->obj[i].rejlog, c->obj[i].name, log_rejection, (void *)c->obj[i].name);

@@ -32,6 +32,15 @@ static double bound(double v)
     return v > 0 && isfinite(v) ? v : 0.0;
 }
 
+void safety_axis_limits(safety_limits_t *lim, const double speed_m_s[ENGINE_AXES],
+                        const double accel_m_s2[ENGINE_AXES])
+{
+    for (int k = 0; k < ENGINE_AXES; k++) {
+        lim->axis_speed_m_s[k] = SAFETY_AXIS_MARGIN * speed_m_s[k];
+        lim->axis_accel_m_s2[k] = SAFETY_AXIS_MARGIN * accel_m_s2[k];
+    }
+}
+
 void safety_init(safety_t *s, const safety_limits_t *lim)
 {
     memset(s, 0, sizeof *s);

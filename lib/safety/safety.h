@@ -76,6 +76,12 @@ typedef struct {
  * the setpoints the monitor measures by (daemon/core/core.c, tests/fuzz). */
 #define SAFETY_AXIS_MARGIN 1.1
 
+/* lim's per-axis bounds for an engine's per-axis limits (its
+ * axis_max_speed_m_s and axis_max_accel_m_s2; 0: that axis free):
+ * SAFETY_AXIS_MARGIN above each, as the daemon holds them. */
+void safety_axis_limits(safety_limits_t *lim, const double speed_m_s[ENGINE_AXES],
+                        const double accel_m_s2[ENGINE_AXES]);
+
 typedef struct {
     safety_limits_t lim;
     int have_pos; /* a position was sent */

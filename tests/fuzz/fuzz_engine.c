@@ -253,10 +253,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     /* the per-axis bounds as the daemon holds them (obj_safety_limits,
      * SAFETY_AXIS_MARGIN above the engine's: the finite differences of the
      * setpoints it measures by); with the defaults the engine never trips them */
-    for (int k = 0; k < ENGINE_AXES; k++) {
-        lim.axis_speed_m_s[k] = SAFETY_AXIS_MARGIN * r.c.axis_max_speed_m_s[k];
-        lim.axis_accel_m_s2[k] = SAFETY_AXIS_MARGIN * r.c.axis_max_accel_m_s2[k];
-    }
+    safety_axis_limits(&lim, r.c.axis_max_speed_m_s, r.c.axis_max_accel_m_s2);
     safety_init(&r.mon, &lim);
     p += 2;
     r.e = engine_new(&r.c, NULL);

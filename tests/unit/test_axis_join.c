@@ -185,10 +185,7 @@ static void stream(engine_method_t method, int every)
     e = engine_new(&c, NULL);
     assert_non_null(e);
     memset(&lim, 0, sizeof lim);
-    for (int k = 0; k < ENGINE_AXES; k++) {
-        lim.axis_speed_m_s[k] = SAFETY_AXIS_MARGIN * c.axis_max_speed_m_s[k];
-        lim.axis_accel_m_s2[k] = SAFETY_AXIS_MARGIN * c.axis_max_accel_m_s2[k];
-    }
+    safety_axis_limits(&lim, c.axis_max_speed_m_s, c.axis_max_accel_m_s2);
     safety_init(&mon, &lim);
     for (int i = 0; i < NWP; i++) {
         engine_waypoint_t w = zigzag(i);
@@ -255,8 +252,7 @@ static void test_track_beyond_the_axes_stops_before(void **state)
     e = engine_new(&c, NULL);
     assert_non_null(e);
     memset(&lim, 0, sizeof lim);
-    lim.axis_speed_m_s[0] = SAFETY_AXIS_MARGIN * c.axis_max_speed_m_s[0];
-    lim.axis_accel_m_s2[0] = SAFETY_AXIS_MARGIN * c.axis_max_accel_m_s2[0];
+    safety_axis_limits(&lim, c.axis_max_speed_m_s, c.axis_max_accel_m_s2); /* x alone set */
     safety_init(&mon, &lim);
     double x = 0;
     for (int i = 0; i <= 20; i++) {
