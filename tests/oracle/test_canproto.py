@@ -261,6 +261,30 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
         g.data[0] = 1
         self.assertLess(LIB.canproto_decode_status2_bus(ctypes.byref(g), ctypes.byref(q)), 0)
 
+    def counter_page(self, fr, page, Struct, encode, decode_, names, sig, top, vals_list, absent):
+        """STATUS2 page `page` of counters, for each of vals_list: our encoder's frame
+        as canmatrix decodes it (each counter saturated at top[name], the signals of
+        other pages absent), and canmatrix's frame of those values as our decoder
+        reads it.  Returns the last (frame, struct) decoded, for the refusals."""
+        for vals in vals_list:
+            p = Struct(*vals)
+            f = cp.Frame()
+            encode(0x6D0, ctypes.byref(p), ctypes.byref(f))
+            self.assertEqual((f.id, f.len), (0x6D0, 8))
+            d = decode(self.db, f)
+            self.assertEqual(d["ST2_Page"], page)
+            for n, v in zip(names, vals):
+                self.assertEqual(d[sig[n]], min(v, top[n]), n)
+            for a in absent:
+                self.assertNotIn(a, d)
+            data = fr.encode(dict({"ST2_Page": page},
+                                  **{sig[n]: raw(fr, sig[n], d[sig[n]]) for n in names}))
+            g = status2_frame(data)
+            q = Struct()
+            self.assertEqual(decode_(ctypes.byref(g), ctypes.byref(q)), 0)
+            self.assertEqual([getattr(q, n) for n in names], [d[sig[n]] for n in names])
+        return g, q
+
     # Given STATUS2 page 2 (waypoints refused per reason) from our encoder,
     # then canmatrix decodes each reason's counter through the multiplexor,
     # saturated at 255; the VAL_ table names the page; and a page 2 canmatrix
@@ -273,23 +297,11 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
                "unconfirmed": "ST2_RejUnconfirmed", "stale": "ST2_RejStale", "other": "ST2_RejOther"}
         page = fr.signal_by_name("ST2_Page")
         self.assertEqual(str(page.values.get(2, page.values.get("2"))), "rejected")
-        for vals in ([0] * 7, list(range(1, 8)), [255, 256, 1000, 2 ** 40, 0, 254, 7],
-                     [self.rng.randrange(300) for _ in range(7)]):
-            p = cp.St2Rejected(*vals)
-            f = cp.Frame()
-            LIB.canproto_encode_status2_rejected(0x6D0, ctypes.byref(p), ctypes.byref(f))
-            self.assertEqual((f.id, f.len), (0x6D0, 8))
-            d = decode(self.db, f)
-            self.assertEqual(d["ST2_Page"], 2)
-            for n, v in zip(names, vals):
-                self.assertEqual(d[sig[n]], min(v, 255), n)
-            self.assertNotIn("ST2_OutLost", d)
-            data = fr.encode(dict({"ST2_Page": 2},
-                                  **{sig[n]: raw(fr, sig[n], d[sig[n]]) for n in names}))
-            g = status2_frame(data)
-            q = cp.St2Rejected()
-            self.assertEqual(LIB.canproto_decode_status2_rejected(ctypes.byref(g), ctypes.byref(q)), 0)
-            self.assertEqual([getattr(q, n) for n in names], [d[sig[n]] for n in names])
+        g, q = self.counter_page(
+            fr, 2, cp.St2Rejected, LIB.canproto_encode_status2_rejected,
+            LIB.canproto_decode_status2_rejected, names, sig, {n: 255 for n in names},
+            ([0] * 7, list(range(1, 8)), [255, 256, 1000, 2 ** 40, 0, 254, 7],
+             [self.rng.randrange(300) for _ in range(7)]), ("ST2_OutLost",))
         g.data[0] = 1
         self.assertLess(LIB.canproto_decode_status2_rejected(ctypes.byref(g), ctypes.byref(q)), 0)
 
@@ -310,26 +322,13 @@ class OurEncodersCanmatrixDecodes(unittest.TestCase):
                "reserve_slowed": 255, "axis_beyond": 255, "axis_lag_stops": 255}
         page = fr.signal_by_name("ST2_Page")
         self.assertEqual(str(page.values.get(7, page.values.get("7"))), "motion")
-        for vals in ([0] * 6, [1, 2, 3, 4, 5, 6], [65535, 255, 255, 255, 255, 255],
-                     [65536, 256, 70000, 256, 256, 1000],
-                     [2 ** 40, 2 ** 33, 2 ** 20, 2 ** 10, 2 ** 9, 2 ** 63], [300, 254, 256, 3, 1, 0],
-                     [self.rng.randrange(1 << 17) for _ in range(6)]):
-            p = cp.St2Motion(*vals)
-            f = cp.Frame()
-            LIB.canproto_encode_status2_motion(0x6D0, ctypes.byref(p), ctypes.byref(f))
-            self.assertEqual((f.id, f.len), (0x6D0, 8))
-            d = decode(self.db, f)
-            self.assertEqual(d["ST2_Page"], 7)
-            for n, v in zip(names, vals):
-                self.assertEqual(d[sig[n]], min(v, top[n]), n)
-            self.assertNotIn("ST2_OutLost", d)
-            self.assertNotIn("ST2_TimeT", d)
-            data = fr.encode(dict({"ST2_Page": 7},
-                                  **{sig[n]: raw(fr, sig[n], d[sig[n]]) for n in names}))
-            g = status2_frame(data)
-            q = cp.St2Motion()
-            self.assertEqual(LIB.canproto_decode_status2_motion(ctypes.byref(g), ctypes.byref(q)), 0)
-            self.assertEqual([getattr(q, n) for n in names], [d[sig[n]] for n in names])
+        g, q = self.counter_page(
+            fr, 7, cp.St2Motion, LIB.canproto_encode_status2_motion,
+            LIB.canproto_decode_status2_motion, names, sig, top,
+            ([0] * 6, [1, 2, 3, 4, 5, 6], [65535, 255, 255, 255, 255, 255],
+             [65536, 256, 70000, 256, 256, 1000],
+             [2 ** 40, 2 ** 33, 2 ** 20, 2 ** 10, 2 ** 9, 2 ** 63], [300, 254, 256, 3, 1, 0],
+             [self.rng.randrange(1 << 17) for _ in range(6)]), ("ST2_OutLost", "ST2_TimeT"))
         for other in (0, 2, 6, 8):
             g.data[0] = other
             self.assertLess(LIB.canproto_decode_status2_motion(ctypes.byref(g), ctypes.byref(q)), 0)
