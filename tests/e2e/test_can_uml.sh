@@ -24,7 +24,7 @@ $PY tests/helpers/cantools_trajd.py wplog "$run/track.csv" "$run/wp.log" --time-
 uml_line_track "$run/dtrack.csv"
 # Booted with the ptrace wrapper's full-size path forced (tests/uml/xstate_preload.c),
 # so a real kernel runs through it on every host, not only where it is needed.
-TRAJD_XSTATE_FORCE=1 uml_boot "$run" tests/uml/all.sh 230 "$run"/*.out "$run"/trajd.err || exit 1
+TRAJD_XSTATE_FORCE=1 uml_boot "$run" tests/uml/all.sh 230 "$run/*.out" "$run/trajd.err" || exit 1
 grep -q '(forced): ok$' "$run/xstate.log" 2>/dev/null ||
     { echo "FAIL: the guest did not go through the wrapper's full-size path: $(cat "$run/xstate.log" 2>&1)"; exit 1; }
 $PY tests/helpers/cantools_trajd.py uml-check "$run" "$run/track.csv" "$run/ref1k.csv" || exit 1

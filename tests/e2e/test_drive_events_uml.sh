@@ -70,7 +70,7 @@ open(sys.argv[2], "w").write(conf)
 PYEOF
     "$BUILD/bin/trajd" --check-config "$run/ev$rate.conf" || exit 1
 done
-uml_boot "$run" tests/uml/drive_events.sh 400 "$run"/ev*.err "$run"/sim*/sim.err || exit 1
+uml_boot "$run" tests/uml/drive_events.sh 400 "$run/ev*.err" "$run/sim*/sim.err" "$run/sim*/sim_events.txt" || exit 1
 rc=0
 for rate in $RATES; do
     period=$(awk "BEGIN { print 1 / $rate }")
@@ -91,8 +91,9 @@ for d in sim:   # every first target after an enable where the drive stood
     assert d["enable_offsets"] and max(d["enable_offsets"]) <= 1, (d["node"], d["enable_offsets"])
 # (a restart never disabling a running drive: the checker's rule 3)
 ev = dict(l.split()[::-1] for l in open("%s/ev%s.events" % (run, rate)))
-print("%s Hz: faults %s, enable offsets %s, events %s" % (
-    rate, faults, [d["enable_offsets"] for d in sim], sorted(ev, key=lambda k: float(ev[k]))))
+print("%s Hz: faults %s, enable offsets %s, events %s; the simulator read the bus up to %.3f s late" % (
+    rate, faults, [d["enable_offsets"] for d in sim], sorted(ev, key=lambda k: float(ev[k])),
+    max(d["max_lag_s"] for d in sim)))
 PYEOF
 done
 exit $rc

@@ -40,5 +40,5 @@ conf += ("[object.spare]\nid = 1\ninput = can\noutput = can\ncan.own = no\ncan.c
 open(sys.argv[2], "w").write(conf)
 PYEOF
 "$BUILD/bin/trajd" --check-config "$run/drive.conf" || exit 1
-uml_boot "$run" tests/uml/drive.sh 170 "$run"/drive.err "$run"/sim.err || exit 1
+uml_boot "$run" tests/uml/drive.sh 170 "$run/drive.err" "$run/sim.err" || exit 1
 TRAJD_PEERS=$(cd "$peers" && pwd) $PY tests/helpers/cantools_trajd.py drive-check "$run" || exit 1

@@ -92,12 +92,13 @@ class Drive:
         self.in_flight = 0       # SYNCs left in which a target may predate a change
         self.last_counter = None
         self.last_sync_ts = None
-        self.master_hb = None    # monotonic time of the master's last heartbeat (armed)
+        self.master_hb = None    # bus time (s, epoch) of the master's last heartbeat (armed)
         self.subscribed = set()
         self.log = {"node": node_id, "start_inc": start_inc, "states": [], "faults": [],
                     "syncs": 0, "rpdo": 0, "rpdo_not_enabled": 0, "rpdo_before_enabled": 0,
                     "rpdo_not_enabled_off": 0,
                     "max_target_step": 0, "max_sync_gap": 0, "targets": [], "cw": [],
+                    "max_lag_s": 0.0,
                     "sdo": []}
         self.t0 = time.monotonic()
         self.state = "NOT READY TO SWITCH ON"
@@ -116,17 +117,28 @@ class Drive:
         v = self.node.sdo[0x1016][1].raw
         return (v >> 16) & 0x7F, (v & 0xFFFF) / 1000.0
 
+    def lag(self, ts):
+        """The frame's bus time (its receive stamp, s since the epoch) and how
+        far behind the bus this simulator reads (its log's max_lag_s): a slow
+        guest must not make the drive judge its consumer late."""
+        now = time.time()
+        if ts is None:
+            return now
+        self.log["max_lag_s"] = max(self.log["max_lag_s"], round(now - ts, 3))
+        return ts
+
     def on_master_heartbeat(self, cob, data, ts):
         with self.lock:
+            t = self.lag(ts)
             if (cob & 0x7F) == self.consumer()[0] and self.consumer()[1] > 0:
                 if self.master_hb is None:
                     self.note("CONSUMER_ARMED", "first master heartbeat")
-                self.master_hb = time.monotonic()
+                self.master_hb = t
 
     def check_consumer(self):
         with self.lock:
             node, tmo = self.consumer()
-            if not tmo or self.master_hb is None or time.monotonic() - self.master_hb <= tmo:
+            if not tmo or self.master_hb is None or time.time() - self.master_hb <= tmo:
                 return
             self.master_hb = None    # once, until the master is heard again
             self.note("MASTER_LOST", "no heartbeat from node %d for %g s" % (node, tmo))
@@ -284,6 +296,7 @@ class Drive:
     def on_sync(self, counter, ts=None):
         with self.lock:
             self.log["syncs"] += 1
+            self.lag(ts)
             self.in_flight = max(0, self.in_flight - 1)
             # time since the last SYNC as the bus saw it (a master that missed a
             # deadline sends the next SYNC and target later, and further ahead)
@@ -344,7 +357,12 @@ def main():
     net = canopen.Network()
     net.connect(interface="socketcan", channel="vcan0", can_filters=filters)
     # a slow guest must not lose SYNCs in the socket: room for seconds of traffic
-    net.bus.socket.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
+    # (SO_RCVBUFFORCE: root in the guest, past net.core.rmem_max's 208 KiB,
+    # which SO_RCVBUF alone is capped at)
+    try:
+        net.bus.socket.setsockopt(socket.SOL_SOCKET, 33, 4 << 20)   # SO_RCVBUFFORCE
+    except OSError:
+        net.bus.socket.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
     events = os.path.join(out, "sim_events.txt")
     drives = [Drive(net, n, s, events) for n, s in specs]
     attach_sync(net, drives)

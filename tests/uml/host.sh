@@ -12,7 +12,8 @@ uml_line_track() {
 # tests/uml/init.sh running SCRIPT on RUN (a directory of the host, seen by
 # the guest through hostfs); the verdict comes from the file RUN/rc that the
 # guest writes (linux.uml always exits 0).  On failure prints the tail of
-# each LOG (globs allowed) and returns 1.
+# each LOG (globs allowed, quoted: expanded once the guest is done) and
+# returns 1.
 uml_boot() {
     local run=$1 script=$2 tmo=$3 umldir start_ms rc f
     shift 3
@@ -37,13 +38,17 @@ uml_boot() {
     # (shell arithmetic: bc is not on a minimal Debian)
     echo "uml: boot and $script took $(( $(date +%s%N) / 1000000 - start_ms )) ms" \
          "(CAN path: vcan in a user-mode-linux $(linux.uml --version 2>/dev/null | head -1) guest;" \
-         "$(cat "$run/xstate.log" 2>/dev/null || echo "xstate: host size accepted"))"
+         "$([ -s "$run/xstate.log" ] && cat "$run/xstate.log" || echo "xstate: host size accepted"))"
     cat "$run/guest.log" 2>/dev/null
     [ -f "$run/rc" ] || { uml_no_verdict "$run/console.log"; return 1; }
     rc=$(cat "$run/rc")
     echo "uml: guest exit code $rc"
     [ "$rc" = 0 ] && return 0
-    for f in "$@"; do echo "== $f"; tail -30 "$f"; done
+    # the globs expanded now: at the call the guest had written none of them
+    local p
+    for p in "$@"; do
+        for f in $p; do echo "== $f"; tail -30 "$f"; done
+    done
     return 1
 }
 
