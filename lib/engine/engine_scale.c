@@ -138,19 +138,29 @@ double scale_ceil_room(const engine_t *e, double s, double A, double J)
         return R;
     double in_cur = e->out.cur_t1 - s, v = scale_conv_speed(e);
     double k0 = (in_cur > 0 ? in_cur / v : 0.0) - e->out.cur.kcum;
-    double res = e->scale.ts.rate * (scale_rise_reserve(e, v) + TS_MARGIN_TICKS * e->period_s);
+    double margin = e->scale.ts.rate * TS_MARGIN_TICKS * e->period_s;
+    /* the reserve for the rises of the limits: to reach a segment only those
+     * before it count (to its end: its own rise too), not every one to the
+     * queue's end (scale_rise_reserve).  With all of them, on a curve whose
+     * limits alternate piece by piece (the local C2 Hermite's three pieces,
+     * per-axis jerk limits of 2 m/s^3) the next capped piece was always
+     * too near: the output crawled at rate 0.02 (tests/oracle/test_axis_limits.py) */
+    double rfac = e->scale.ts.rate * 0.5 * e->cfg.scale_accel_m_s2 / e->cfg.scale_jerk_m_s3 * v;
+    double res_all = e->scale.ts.rate * scale_rise_reserve(e, v) + margin;
     for (size_t i = 0; i < e->queue.slow_len; i++) {
         const qent_t *q = &e->queue.ent[e->queue.slow[(e->queue.slow_head + i) % e->queue.cap]];
         if (q->traj != e->out.traj)
             break;
-        double kstart = q->kcum - q->seg.dur_s / q->av;
-        double to = v * (k0 + kstart) - res;
-        /* the distance to a segment's start grows along the queue and the
-         * stop term is >= 0: past the nearest that binds, none can (the
-         * per-axis limits cap most segments of a track, and a replay may
-         * queue thousands: without this every tick looked at each) */
-        if (to >= R)
+        double kstart = q->kcum - q->seg.dur_s / q->av, base = v * (k0 + kstart);
+        /* the distance to a segment's start grows along the queue, the
+         * reserve to it is at most res_all, and the stop term is >= 0: past
+         * where even res_all leaves R, none binds (the per-axis limits cap
+         * most segments of a track, and a replay may queue thousands:
+         * without this every tick looked at each) */
+        if (base - res_all >= R)
             break;
+        double du = q->ucum - e->out.cur.ucum;
+        double to = base - (du > 0 ? rfac * du : 0.0) - margin;
         R = fmin(R, to + ts_stop_dist(q->ceil, -A, A, J));
     }
     return R;

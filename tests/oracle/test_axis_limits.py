@@ -57,6 +57,11 @@ TOL = 1.01
 
 # the issue's goal against the time-optimal traversal
 GOAL = 1.25
+# per-axis jerk limits, and how much longer than the speed and acceleration limits'
+# time-optimal traversal a run with them may take (the figure-8 on the cubic spline:
+# 1.43 times at 2 m/s^3)
+JLIM = (2.0, 2.0, 2.0)
+JERK_GOAL = 2.0
 
 
 def write(path, t, x, y):
@@ -86,6 +91,14 @@ def peaks(now, p):
     v = np.diff(p, axis=0) / dt[:, None]
     a = np.diff(v, axis=0) / (0.5 * (dt[1:] + dt[:-1]))[:, None]
     return np.abs(v).max(axis=0), np.abs(a).max(axis=0)
+
+
+def jerks(now, p):
+    """Peak |jerk| per axis: third finite differences of the positions."""
+    dt = np.diff(now)
+    v = np.diff(p, axis=0) / dt[:, None]
+    a = np.diff(v, axis=0) / dt[1:, None]
+    return np.abs(np.diff(a, axis=0) / dt[2:, None]).max(axis=0)
 
 
 def replay(src, out, *opts, code=0, err=None):
@@ -154,6 +167,30 @@ def main():
         lost = float(s.get("axis_lost_s", "nan"))
         check(lost > 0.5 * ((now[-1] - now[0]) - (fnow[-1] - fnow[0])),
               "the time lost to the per-axis limits reported: axis_lost_s %.1f s" % lost)
+
+        # per-axis jerk limits (2 m/s^3) too: every axis within them by third finite
+        # differences, and no crawl: the speed and acceleration limits' time-optimal
+        # traversal, which the jerk limit can only lengthen, at most JERK_GOAL times over.
+        # On the local C2 Hermite curve (three pieces per interval, whose limits alternate)
+        # the reserve for the rises of every limit to the queue's end was held against the
+        # next capped piece: the output crawled at rate 0.02 (1714 s against 110 s)
+        for method in ("cubic", "hermite-c2"):
+            sj = replay(src, os.path.join(d, "jerk.csv"), "--rate", "100", "--method", method,
+                        *lim, "--axis-max-jerk", "%g,%g,%g" % JLIM)
+            jnow, _, jp, jfl = rows(os.path.join(d, "jerk.csv"))
+            jv, ja = peaks(jnow, jp)
+            jj = jerks(jnow, jp)
+            check(all(jv[k] <= TOL * VLIM[k] and ja[k] <= TOL * ALIM[k] and
+                      jj[k] <= TOL * JLIM[k] for k in range(2)) and
+                  sj.get("hard_stops") == "0",
+                  "figure-8, %s, jerk limit %g: peaks |v| %s, |a| %s, |j| %s" % (
+                      method, JLIM[0], np.round(jv[:2], 4), np.round(ja[:2], 4),
+                      np.round(jj[:2], 4)))
+            jon = (jfl & 0x08) == 0
+            jrun = jnow[jon][-1] - jnow[jon][0]
+            check(jrun <= JERK_GOAL * opt, "figure-8, %s, jerk limit %g: %.1f s against the "
+                  "time-optimal %.1f s without it (%.2f, at most %g)" % (
+                      method, JLIM[0], jrun, opt, jrun / opt, JERK_GOAL))
 
         # the rectangle: its corners braked into with what the straights leave of the limits
         rt, rx, ry = rectangle()
