@@ -473,6 +473,9 @@ static int run_open(run_t *run, const opts_t *o)
         fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", err);
         return EXIT_USAGE;
     }
+    const char *caveat = engine_config_caveat(&o->cfg);
+    if (caveat)
+        fprintf(stderr, "trajreplay: warning: %s\n", caveat);
     const char *same = cfg_same_file(o->input, o->output) ? o->output
                        : cfg_same_file(o->input, o->svg)  ? o->svg
                                                           : NULL;

@@ -383,6 +383,13 @@ double engine_config_max_accel(const engine_config_t *cfg);
  */
 int engine_config_check(const engine_config_t *cfg, const char **why);
 
+/* A valid configuration that cannot keep a promise of its own: a sentence
+ * naming the settings and why, for the user (trajd logs it at load,
+ * trajreplay prints it), or NULL.  Today: a per-axis jerk limit on a C1
+ * curve (method hermite, hermite-centred), whose acceleration steps at every
+ * waypoint: no time scaling bounds the jerk there. */
+const char *engine_config_caveat(const engine_config_t *cfg);
+
 
 
 

@@ -134,7 +134,7 @@ const engine_setting_t engine_settings[] = {
     S(axis_max_accel_m_s2, "axis-max-accel", VEC3, 0, 0, 0, NULL, "AX,AY,AZ",
       "per-axis acceleration limits, m/s^2 (0: that axis free)"),
     S(axis_max_jerk_m_s3, "axis-max-jerk", VEC3, 0, 0, 0, NULL, "JX,JY,JZ",
-      "per-axis jerk limits, m/s^3 (0: that axis free)"),
+      "per-axis jerk limits, m/s^3 (0: that axis free; held on C2 curves)"),
     S(max_lag_s, "max-lag", DOUBLE, 0, 0, 1e6, NULL, "S",
       "the lag the per-axis limits may cause, s: beyond it the object stops (0: unbounded)"),
 };
@@ -408,6 +408,18 @@ double engine_config_max_accel(const engine_config_t *cfg)
 {
     return cfg->max_accel_m_s2 < 0 ? profile_limits[profile_of(cfg)].accel_m_s2
                                    : cfg->max_accel_m_s2;
+}
+
+const char *engine_config_caveat(const engine_config_t *cfg)
+{
+    int local = engine_cfg_local(cfg);
+    if ((local == 1 || local == 2) &&
+        (cfg->axis_max_jerk_m_s3[0] > 0 || cfg->axis_max_jerk_m_s3[1] > 0 ||
+         cfg->axis_max_jerk_m_s3[2] > 0))
+        return "axis_max_jerk_m_s3 is not held on this curve: method hermite and hermite-centred "
+               "are C1, their acceleration steps at every waypoint (a jerk of that step per "
+               "tick); a C2 curve keeps it (method cubic, hermite-c2, hermite-c2-centred)";
+    return NULL;
 }
 
 int engine_cfg_uses_pstar(const engine_config_t *cfg)

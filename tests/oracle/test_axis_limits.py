@@ -192,6 +192,25 @@ def main():
                   "time-optimal %.1f s without it (%.2f, at most %g)" % (
                       method, JLIM[0], jrun, opt, jrun / opt, JERK_GOAL))
 
+        # on a C1 curve (method hermite: its acceleration steps at every waypoint) no time
+        # scaling holds a jerk limit: trajreplay and trajd --check-config say so, and not
+        # for a C2 curve
+        for method, told in (("hermite", True), ("cubic", False)):
+            errj = []
+            replay(src, os.path.join(d, "c1.csv"), "--rate", "100", "--method", method,
+                   *lim, "--axis-max-jerk", "2,2,2", err=errj)
+            conf = os.path.join(d, "c1.conf")
+            with open(conf, "w") as f:
+                f.write("[daemon]\nrate_hz = 100\n[object.a]\ninput = replay\n"
+                        "replay.track = %s\noutput = csv\ncsv.path = %s\nmethod = %s\n"
+                        "axis_max_jerk_m_s3 = 2,2,2\n" % (src, os.path.join(d, "c1d.csv"), method))
+            pc = subprocess.run([TRAJD, "--check-config", conf], capture_output=True, text=True,
+                                timeout=60)
+            said = [l for l in errj + pc.stderr.splitlines() if "not held" in l]
+            check(pc.returncode == 0 and len(said) == (2 if told else 0),
+                  "method %s with axis_max_jerk_m_s3: %s (trajd --check-config exit %d)" % (
+                      method, said if said else "no caveat", pc.returncode))
+
         # the rectangle: its corners braked into with what the straights leave of the limits
         rt, rx, ry = rectangle()
         rsrc = os.path.join(d, "rect.csv")
