@@ -450,6 +450,26 @@ static void run_flush_rows(run_t *run)
     run->nrows = 0;
 }
 
+/* The engine settings refused with the reason (0 if accepted); a caveat of
+ * settings that are valid is told as a warning. */
+static int check_engine_config(const engine_config_t *cfg)
+{
+    char err[512];
+    const char *why = NULL;
+    if (engine_config_check(cfg, &why)) {
+        fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", why ? why : "?");
+        return -1;
+    }
+    if (engine_delay_check(cfg, 0.0, err, sizeof err)) {
+        fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", err);
+        return -1;
+    }
+    const char *caveat = engine_config_caveat(cfg);
+    if (caveat)
+        fprintf(stderr, "trajreplay: warning: %s\n", caveat);
+    return 0;
+}
+
 /* Load the track, make the engine and open the outputs.  Returns -1 to go
  * on, else an exit status (run_free releases what was made). */
 static int run_open(run_t *run, const opts_t *o)
@@ -458,24 +478,14 @@ static int run_open(run_t *run, const opts_t *o)
     static char rows[ROWS_BUF];
     char err[512];
     int eng_err = 0;
-    const char *why = NULL;
     memset(run, 0, sizeof *run);
     run->o = o;
     run->out = stdout;
     run->rows = rows;
     run->seen_next = (size_t)-1;
     run->und_t = run->axis_stop_t_s = NAN;
-    if (engine_config_check(&o->cfg, &why)) {
-        fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", why ? why : "?");
+    if (check_engine_config(&o->cfg))
         return EXIT_USAGE;
-    }
-    if (engine_delay_check(&o->cfg, 0.0, err, sizeof err)) {
-        fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", err);
-        return EXIT_USAGE;
-    }
-    const char *caveat = engine_config_caveat(&o->cfg);
-    if (caveat)
-        fprintf(stderr, "trajreplay: warning: %s\n", caveat);
     const char *same = cfg_same_file(o->input, o->output) ? o->output
                        : cfg_same_file(o->input, o->svg)  ? o->svg
                                                           : NULL;
