@@ -329,8 +329,12 @@ typedef struct {
      * curve's own jerk |k_k'''| r^3 <= axis_max_jerk_m_s3[k] / 2: each queued
      * segment's rate is capped (engine_solve.c seg_ceiling), and with an
      * acceleration (jerk) limit the scaling's own scale_accel_m_s2
-     * (scale_jerk_m_s3) is taken down to a third (half) of the smallest
-     * (resolve), the share its dr/dt term keeps on every segment (a stop's);
+     * (scale_jerk_m_s3) is taken down to a third (a quarter) of the smallest
+     * (resolve), the share its dr/dt term keeps on every segment (a stop's,
+     * whose jerk is then scale_jerk_m_s3 too); with a jerk limit each
+     * segment's dr/dt also keeps 3 |k_k''| r |dr/dt| within a quarter of it
+     * (engine_solve.c jerk_rate_accel): the jerk of every axis within its
+     * limit on a C2 curve (engine_config_caveat: not on a C1 one);
      * outside a stop its dr/dt may take, per segment, what the curve's own
      * k_k'' r^2 leaves of each axis's acceleration limit (engine_solve.c
      * accel_speed; lib/engine/TIMESCALE.md "Per-axis limits").  Transfers last

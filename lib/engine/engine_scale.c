@@ -183,8 +183,16 @@ double scale_ceil_here(const engine_t *e)
  * reaches its full deceleration within one tick and the stop ends within
  * v^2/(2 a) + v T of path (a jerk j adds v a/(2 j) of onset: TIMESCALE.md,
  * "Stop distance"). */
+static int axis_jerk_set(const engine_t *e)
+{
+    return e->cfg.axis_max_jerk_m_s3[0] > 0 || e->cfg.axis_max_jerk_m_s3[1] > 0 ||
+           e->cfg.axis_max_jerk_m_s3[2] > 0;
+}
+
 static double stop_jerk(const engine_t *e)
 {
+    if (axis_jerk_set(e)) /* with per-axis jerk limits: the scaling's own */
+        return e->cfg.scale_jerk_m_s3;
     return fmax(e->cfg.scale_jerk_m_s3, e->cfg.scale_accel_m_s2 / e->period_s);
 }
 
@@ -205,8 +213,11 @@ void scale_limits(const engine_t *e, double *A, double *J)
         double cspeed = out_cspeed(e);
         v = cspeed > floor ? cspeed : floor;
         /* at least the segment's own A: the capacity ahead counts it
-         * (scale_remaining), and it keeps every axis within its limit */
-        *A = fmax(e->cfg.scale_accel_m_s2 / v, e->cfg.scale_accel_m_s2 / scale_conv_speed(e));
+         * (scale_remaining), and it keeps every axis within its limit; with
+         * per-axis jerk limits that A alone (engine_solve.c jerk_rate_accel) */
+        *A = e->cfg.scale_accel_m_s2 / scale_conv_speed(e);
+        if (!axis_jerk_set(e))
+            *A = fmax(e->cfg.scale_accel_m_s2 / v, *A);
     } else {
         v = scale_jerk_speed(e);
         *A = e->cfg.scale_accel_m_s2 / scale_conv_speed(e);

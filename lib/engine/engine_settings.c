@@ -582,7 +582,9 @@ static int axis_limits_ok(const engine_config_t *cfg)
 
 /* issue 32: with per-axis acceleration (jerk) limits the time scaling's own
  * share, scale_accel_m_s2, is at most ENGINE_AXIS_SCALE_SHARE of the
- * smallest (scale_jerk_m_s3 at most half): the rest is the curve's k'' r^2
+ * smallest (scale_jerk_m_s3 at most a quarter of the smallest jerk limit,
+ * whose other quarter the scaling's cross term 3 k'' r dr/dt keeps,
+ * engine_solve.c jerk_rate_accel, and half the curve's own): the rest is the curve's k'' r^2
  * at the ceilings (engine_solve.c axis_ceiling).  Outside a stop the scaling
  * takes more where the curve leaves it (engine_solve.c accel_speed).  On the
  * figure-8 and the rectangle of tests/bench/bench_axis.py the runs take 92.8
@@ -597,8 +599,8 @@ static void resolve_axis_limits(engine_config_t *out)
             out->scale_accel_m_s2 > ENGINE_AXIS_SCALE_SHARE * out->axis_max_accel_m_s2[k])
             out->scale_accel_m_s2 = ENGINE_AXIS_SCALE_SHARE * out->axis_max_accel_m_s2[k];
         if (out->axis_max_jerk_m_s3[k] > 0 &&
-            out->scale_jerk_m_s3 > 0.5 * out->axis_max_jerk_m_s3[k])
-            out->scale_jerk_m_s3 = 0.5 * out->axis_max_jerk_m_s3[k];
+            out->scale_jerk_m_s3 > 0.25 * out->axis_max_jerk_m_s3[k])
+            out->scale_jerk_m_s3 = 0.25 * out->axis_max_jerk_m_s3[k];
     }
 }
 

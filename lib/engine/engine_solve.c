@@ -186,6 +186,32 @@ static int axis_accel_limited(const engine_t *e)
     return 0;
 }
 
+static int axis_jerk_limited(const engine_t *e)
+{
+    for (int k = 0; k < AX; k++)
+        if (e->cfg.axis_max_jerk_m_s3[k] > 0)
+            return 1;
+    return 0;
+}
+
+/* The most dr/dt may be on a segment for the scaling's cross term
+ * 3 k_k'' r dr/dt of each axis's jerk to stay within a quarter of its jerk
+ * limit at rates up to rc (the curve's own k_k''' r^3 keeps a half at the
+ * ceiling, axis_ceiling; the scaling's k_k' d2r/dt2 a quarter,
+ * scale_jerk_m_s3): INFINITY without a jerk limit or curvature. */
+static double jerk_rate_accel(const engine_t *e, const fdiff_seg_t *seg, double rc)
+{
+    double A = INFINITY, T = seg->dur_s;
+    for (int k = 0; k < AX; k++) {
+        double jl = e->cfg.axis_max_jerk_m_s3[k];
+        double c2 = 2 * seg->c[k][2], c3 = 6 * seg->c[k][3];
+        double kdd = fmax(fabs(c2), fabs(c2 + c3)) / (T * T);
+        if (jl > 0 && kdd > 0)
+            A = fmin(A, 0.25 * jl / (3 * kdd * rc));
+    }
+    return A;
+}
+
 /*
  * issue 32: the speed at which the time scaling's acceleration limit is
  * converted on a segment (qent_t av): A = a / av, a = scale_accel_m_s2.
@@ -212,9 +238,12 @@ static int axis_accel_limited(const engine_t *e)
 static double accel_speed(const engine_t *e, const fdiff_seg_t *seg, double vmax, double ceil)
 {
     double v = vmax > ENGINE_SCALE_V_FLOOR_M_S ? vmax : ENGINE_SCALE_V_FLOOR_M_S;
-    if (!axis_accel_limited(e) || !(ceil > 0))
+    if (!(ceil > 0) || (!axis_accel_limited(e) && !axis_jerk_limited(e)))
         return v;
     double a = e->cfg.scale_accel_m_s2, rc = fmin(ceil, TS_RATE_MAX), T = seg->dur_s, n2 = 0;
+    double Aj = jerk_rate_accel(e, seg, rc);
+    if (!axis_accel_limited(e))
+        return a / fmin(a / v, Aj);
     for (int k = 0; k < AX; k++) {
         double al = e->cfg.axis_max_accel_m_s2[k];
         n2 += al > 0 ? al * al : a * a;
@@ -234,7 +263,7 @@ static double accel_speed(const engine_t *e, const fdiff_seg_t *seg, double vmax
     double lim = engine_config_max_accel(&e->cfg);
     if (e->cfg.max_accel_m_s2 < 0 && lim > 0 && vmax > 0)
         A = fmin(A, (lim - seg_accel_max(seg) * rc * rc) / vmax);
-    return a / fmax(A, a / v);
+    return a / fmin(fmax(A, a / v), Aj);
 }
 
 /* Queue a built segment, its av at least av_next (the next segment's, 0 if
@@ -289,7 +318,7 @@ static void queue_now(engine_t *e, const fdiff_seg_t *seg, uint64_t node, double
  */
 static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
 {
-    if (axis_accel_limited(e)) {
+    if (axis_accel_limited(e) || axis_jerk_limited(e)) {
         int ax;
         double vmax = solve_seg_speed_max(seg);
         double av = accel_speed(e, seg, vmax, seg_ceiling(e, seg, vmax, &ax));

@@ -17,8 +17,9 @@
  * silence.h: a REST end, then a transfer), the track's end.
  *
  * Reference: the limits themselves, on the finite differences of the
- * streamed positions (velocity over one tick, acceleration over two), every
- * tick, with no exemption; no hard stop (the output never runs past the
+ * streamed positions (velocity over one tick, acceleration over two, and
+ * with a per-axis jerk limit the jerk over three), every tick, with no
+ * exemption; no hard stop (the output never runs past the
  * curve solved); FINISHED and at rest in the end.
  */
 #include "test.h"
@@ -35,6 +36,10 @@
 /* the limits, to what the rate's landing on its ceiling overshoots (3.00008
  * m/s on a 3 m/s axis: as before the per-segment A) */
 #define TOL 1e-4
+/* a per-axis jerk limit (m/s^3), and its tolerance on third differences (1.0
+ * holds too; at 0.5 a stop's landing reaches 0.58: TIMESCALE.md) */
+#define JLIM 2.0
+#define JTOL 1e-3
 
 /* The rectangle's point d metres along its perimeter (cyclic). */
 static void rect_at(double d, double *x, double *y)
@@ -71,12 +76,13 @@ static void rect_at(double d, double *x, double *y)
 
 typedef struct {
     double v, a;    /* worst |v_k| / VLIM, |a_k| / ALIM by finite differences */
+    double j;       /* worst |j_k| / the jerk limit (third differences), if one is set */
     unsigned stops; /* events made */
 } worst_t;
 
 /* One run: n waypoints (the sender pausing at random), events at random
  * ticks; every tick's finite differences against the limits. */
-static void run(unsigned seed, engine_method_t method, int events, worst_t *wo)
+static void run(unsigned seed, engine_method_t method, int events, double jlim, worst_t *wo)
 {
     engine_config_t c;
     engine_config_default(&c);
@@ -89,13 +95,14 @@ static void run(unsigned seed, engine_method_t method, int events, worst_t *wo)
     for (int k = 0; k < 2; k++) {
         c.axis_max_speed_m_s[k] = VLIM;
         c.axis_max_accel_m_s2[k] = ALIM;
+        c.axis_max_jerk_m_s3[k] = jlim;
     }
     engine_t *e = engine_new(&c, NULL);
     assert_non_null(e);
 
     const int n = 1200; /* 120 s of track: most of two laps */
     const double T = (double)PERIOD_NS * 1e-9;
-    double p[3][3] = {{0}}, t_prev[3] = {0};
+    double p[4][3] = {{0}}, t_prev[4] = {0};
     int have = 0, k = 0, pause_to = -1;
     int64_t now = 0, stall_to = 0;
     engine_setpoint_t sp;
@@ -134,34 +141,44 @@ static void run(unsigned seed, engine_method_t method, int events, worst_t *wo)
         assert_int_equal(engine_tick(e, now, &sp), 0);
         /* the last three positions a tick apart (a refused or skipped tick
          * does not happen here: every tick is one period) */
-        for (int i = 0; i < 2; i++) {
+        for (int i = 0; i < 3; i++) {
             memcpy(p[i], p[i + 1], sizeof p[i]);
             t_prev[i] = t_prev[i + 1];
         }
-        memcpy(p[2], sp.pos_m, sizeof p[2]);
-        t_prev[2] = (double)now * 1e-9;
+        memcpy(p[3], sp.pos_m, sizeof p[3]);
+        t_prev[3] = (double)now * 1e-9;
         if (sp.state == ENGINE_STATE_WAITING) {
             have = 0;
             continue;
         }
         if (++have >= 2)
             for (int a = 0; a < 2; a++) {
-                double v = fabs(p[2][a] - p[1][a]) / T;
+                double v = fabs(p[3][a] - p[2][a]) / T;
                 if (v > VLIM * (1 + TOL))
                     fail_msg("seed %u method %d: |v_%c| %.6f m/s at %.2f s (t_s %.3f, state %d, "
                              "flags %#x), limit %g",
-                             seed, (int)method, "xy"[a], v, t_prev[2], sp.t_s, (int)sp.state,
+                             seed, (int)method, "xy"[a], v, t_prev[3], sp.t_s, (int)sp.state,
                              (unsigned)sp.flags, VLIM);
                 wo->v = fmax(wo->v, v / VLIM);
             }
         if (have >= 3)
             for (int a = 0; a < 2; a++) {
-                double acc = (p[2][a] - 2 * p[1][a] + p[0][a]) / (T * T);
+                double acc = (p[3][a] - 2 * p[2][a] + p[1][a]) / (T * T);
                 if (fabs(acc) > ALIM * (1 + TOL))
                     fail_msg("seed %u method %d: |a_%c| %.6f m/s^2 at %.2f s (t_s %.3f), "
                              "limit %g",
-                             seed, (int)method, "xy"[a], fabs(acc), t_prev[2], sp.t_s, ALIM);
+                             seed, (int)method, "xy"[a], fabs(acc), t_prev[3], sp.t_s, ALIM);
                 wo->a = fmax(wo->a, fabs(acc) / ALIM);
+            }
+        if (jlim > 0 && have >= 4)
+            for (int a = 0; a < 2; a++) {
+                double jk = (p[3][a] - 3 * p[2][a] + 3 * p[1][a] - p[0][a]) / (T * T * T);
+                if (fabs(jk) > jlim * (1 + JTOL))
+                    fail_msg("seed %u method %d: |j_%c| %.4f m/s^3 at %.2f s (t_s %.3f, state "
+                             "%d, flags %#x), limit %g",
+                             seed, (int)method, "xy"[a], fabs(jk), t_prev[3], sp.t_s, (int)sp.state,
+                             (unsigned)sp.flags, jlim);
+                wo->j = fmax(wo->j, fabs(jk) / jlim);
             }
         engine_status(e, &st);
         if (k == n && st.state == ENGINE_STATE_FINISHED)
@@ -187,17 +204,36 @@ static void test_rectangle_from_every_state(void **state)
     worst_t wo;
     memset(&wo, 0, sizeof wo);
     for (unsigned s = 1; s <= 12; s++)
-        run(s, methods[s % 3], s > 3, &wo);
+        run(s, methods[s % 3], s > 3, 0.0, &wo);
     print_message("%u events; worst |v| %.6f, |a| %.6f of the limits\n", wo.stops, wo.v, wo.a);
     assert_true(wo.v <= 1 + TOL);
     assert_true(wo.a <= 1 + TOL);
     assert_true(wo.a > 0.999); /* the braking on the straights reaches the limit */
 }
 
+/* Given the rectangle, its limits and a per-axis jerk limit of JLIM, on the
+ * C2 curves (cubic, local C2 Hermite), when it streams in real time with
+ * random stops, clears, overrides and pauses, then on every tick |j_k| <=
+ * JLIM by third differences too (from every state: a stop, the brake of a
+ * clear, a transfer, a handover), besides the speed and acceleration. */
+static void test_rectangle_jerk_from_every_state(void **state)
+{
+    (void)state;
+    static const engine_method_t methods[] = {ENGINE_METHOD_CUBIC, ENGINE_METHOD_HERMITE_C2};
+    worst_t wo;
+    memset(&wo, 0, sizeof wo);
+    for (unsigned s = 1; s <= 8; s++)
+        run(s, methods[s % 2], s > 2, JLIM, &wo);
+    print_message("%u events; worst |v| %.6f, |a| %.6f, |j| %.6f of the limits\n", wo.stops, wo.v,
+                  wo.a, wo.j);
+    assert_true(wo.j <= 1 + JTOL);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_rectangle_from_every_state),
+        cmocka_unit_test(test_rectangle_jerk_from_every_state),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
