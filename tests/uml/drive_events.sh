@@ -22,6 +22,8 @@ export TRAJD_PEERS
 PY=/usr/bin/python3
 fail() {
     echo "FAIL ($rate Hz): $*"
+    [ -n "${sp:-}" ] && { kill -0 "$sp" 2>/dev/null && echo "(the simulator runs)" ||
+        echo "(the simulator is gone: its log is $run/sim.err)"; }
     [ -n "${tp:-}" ] && kill -9 "$tp" 2>/dev/null
     [ -n "${pp:-}" ] && kill "$pp" 2>/dev/null
     [ -n "${sp:-}" ] && { kill "$sp" 2>/dev/null; wait "$sp"; }
@@ -94,6 +96,7 @@ for rate in $(cat "$out/rates"); do
     # ---- trajd restarted while the drives run: adopted as they are
     moving restart; mark restart
     n0=$(grep -c "drives in Operation Enabled" "$out/ev$rate.err")
+    armed=$(for n in 1 2 3; do count_ev $n CONSUMER_ARMED; done)
     kill -TERM "$tp"; wait "$tp" || fail "trajd exit status $?"
     mark restarted
     start_trajd
@@ -105,7 +108,13 @@ for rate in $(cat "$out/rates"); do
         [ "$(count_ev $n OPERATION_ENABLED)" -eq "$(count_ev $n FIRST_TARGET)" ] ||
             wait_ev $n FIRST_TARGET "$(count_ev $n OPERATION_ENABLED)" || fail "no target for $n"
     done
-    # ---- trajd killed mid-motion: the drives stop by themselves (0x1016)
+    # ---- trajd killed mid-motion: the drives stop by themselves (0x1016),
+    # each watching the new trajd's heartbeat since it wrote 0x1016 again
+    set -- $armed
+    for n in 1 2 3; do
+        wait_ev $n CONSUMER_ARMED $(($1 + 1)) || fail "node $n not watching the new trajd"
+        shift
+    done
     moving kill; mark kill
     kill -9 "$tp"; wait "$tp"; tp=
     for n in 1 2 3; do
