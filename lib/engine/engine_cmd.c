@@ -37,6 +37,7 @@ static void request_stop(engine_t *e, int kind)
         e->queue.head = 0;
         e->queue.len = 0;
         e->queue.slow_len = 0;
+        e->queue.beyond = 0;
         e->queue.ends = 0;
         e->out.finished = kind == STOP_STOP;
         e->scale.stop_req = STOP_NONE;
@@ -141,7 +142,7 @@ int engine_halt(engine_t *e, const double pos_m[ENGINE_AXES])
     }
     drop_input(e);
     e->queue.head = e->queue.len = e->queue.ends = 0;
-    e->queue.slow_head = e->queue.slow_len = 0;
+    e->queue.slow_head = e->queue.slow_len = e->queue.beyond = 0;
     e->scale.stop_req = STOP_NONE;
     e->scale.drop_n = 0;
     e->out.mode = OUT_HOLD;

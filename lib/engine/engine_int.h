@@ -147,6 +147,8 @@ typedef struct {
     size_t *slow; /* ring (cap): the queue slots, in queue order, of the
                           segments whose speed cap holds the rate below TS_RATE_MAX */
     size_t slow_head, slow_len;
+    size_t beyond; /* queued segments of ceiling 0 (beyond the per-axis
+                      limits: seg_ceiling), of any trajectory */
 } engine_queue_t;
 
 /* ---- play-out (engine_tick.c): the output ---- */

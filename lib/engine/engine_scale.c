@@ -348,8 +348,13 @@ static void axis_lag(engine_t *e)
  * holds it at rest), never past an axis's limit. */
 static void axis_beyond(engine_t *e)
 {
-    int held = e->out.mode == OUT_STREAM && e->scale.override > 0 && !(e->out.cur.ceil > 0);
-    for (size_t i = 0; e->out.mode == OUT_STREAM && !held && i < e->queue.slow_len; i++) {
+    /* (a feed hold, or no segment beyond the axes queued: nothing to look
+     * for; at rest under a hold every tick looked through every capped
+     * segment queued: bench_engine --hold) */
+    if (e->out.mode != OUT_STREAM || !(e->scale.override > 0))
+        return;
+    int held = !(e->out.cur.ceil > 0);
+    for (size_t i = 0; e->queue.beyond && !held && i < e->queue.slow_len; i++) {
         const qent_t *q = &e->queue.ent[e->queue.slow[(e->queue.slow_head + i) % e->queue.cap]];
         if (q->traj != e->out.traj)
             break;

@@ -290,6 +290,7 @@ static void queue_now(engine_t *e, const fdiff_seg_t *seg, uint64_t node, double
     if (is_slow(q)) /* every queued slot has room: so has the ring */
         e->queue.slow[(e->queue.slow_head + e->queue.slow_len++) % e->queue.cap] =
             (size_t)(q - e->queue.ent);
+    e->queue.beyond += is_slow(q) && !(q->ceil > 0);
     double inv = 1.0 / q->av;
     if (e->solve.queued && inv > e->solve.inv) /* the limits rise from the last one to this: */
         e->solve.ucum += (inv - e->solve.inv) * (v / q->av); /* its A / J against a / j */
@@ -378,6 +379,7 @@ void queue_pop(engine_t *e)
     if (is_slow(&e->queue.ent[e->queue.head])) { /* the ring's head */
         e->queue.slow_head = e->queue.slow_head + 1 == e->queue.cap ? 0 : e->queue.slow_head + 1;
         e->queue.slow_len--;
+        e->queue.beyond -= !(e->queue.ent[e->queue.head].ceil > 0);
     }
     /* (h + 1) % cap without the division (a tick takes a segment here) */
     e->queue.head = e->queue.head + 1 == e->queue.cap ? 0 : e->queue.head + 1;

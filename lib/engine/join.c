@@ -374,6 +374,7 @@ static void join_splice(engine_t *e, size_t ihead, double t_m, double t_j, const
             e->queue.slow_head = (e->queue.slow_head + e->queue.cap - 1) % e->queue.cap;
             e->queue.slow[e->queue.slow_head] = e->queue.head;
             e->queue.slow_len++;
+            e->queue.beyond += !(q->ceil > 0);
         }
     }
 }
