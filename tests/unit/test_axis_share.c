@@ -37,7 +37,8 @@
  * m/s on a 3 m/s axis: as before the per-segment A) */
 #define TOL 1e-4
 /* a per-axis jerk limit (m/s^3), and its tolerance on third differences (1.0
- * holds too; at 0.5 a stop's landing reaches 0.58: TIMESCALE.md) */
+ * holds too; not 0.5, where the landing on a transfer's end steps the
+ * acceleration left: 1.28 times it, TIMESCALE.md "Per-axis limits") */
 #define JLIM 2.0
 #define JTOL 1e-3
 
