@@ -108,6 +108,7 @@ typedef struct {
     int binary;    /* --binary: the records of lib/format/spfile.h instead of CSV */
     int geo;       /* --geo: columns lat_deg,lon_deg,alt_m,heading_deg appended */
     double rate_hz;
+    double override;  /* --override: the feed override, 0.01..2 (engine_set_override) */
     int64_t start_ns; /* engine time at which the first waypoint is due */
     int origin_set;   /* -c: the daemon's datum, about which a geographic track is expressed */
     double origin[3];
@@ -154,6 +155,7 @@ enum {
     OPT_PRECISION,
     OPT_BINARY,
     OPT_GEO,
+    OPT_OVERRIDE,
     OPT_ENGINE = 1024, /* + index in engine_settings[] */
 };
 
@@ -172,6 +174,7 @@ static const struct option fixed_opts[] = {
     {"precision", required_argument, NULL, OPT_PRECISION},
     {"binary", no_argument, NULL, OPT_BINARY},
     {"geo", no_argument, NULL, OPT_GEO},
+    {"override", required_argument, NULL, OPT_OVERRIDE},
     {"output", required_argument, NULL, 'o'},
     {"quiet", no_argument, NULL, 'q'},
     {"help", no_argument, NULL, 'h'},
@@ -190,6 +193,47 @@ static void build_long_opts(struct option *lopts, size_t cap)
             lopts[n++] = (struct option){engine_settings[i].option, required_argument, NULL,
                                          OPT_ENGINE + (int)i};
     lopts[n] = (struct option){NULL, 0, NULL, 0};
+}
+
+/* --max-rows, --precision, --override.  Returns -1 to go on, else an exit status. */
+static int parse_numeric(int c, opts_t *o)
+{
+    switch (c) {
+    case OPT_MAX_ROWS: {
+        char *end;
+        errno = 0;
+        o->max_rows = strtoull(optarg, &end, 10);
+        if (end == optarg || *end || errno || optarg[0] == '-') {
+            fprintf(stderr, "trajreplay: --max-rows: '%s' is not a number of rows\n", optarg);
+            return EXIT_USAGE;
+        }
+        return -1;
+    }
+    case OPT_PRECISION: {
+        unsigned p;
+        if (strcmp(optarg, "g17") == 0) {
+            o->precision = CSV_PREC_G17;
+            return -1;
+        }
+        if (parse_uint(optarg, &p) || p > CSV_FIXED_PREC_MAX) {
+            fprintf(stderr,
+                    "trajreplay: --precision: '%s' is not a number of decimals "
+                    "0..%d, nor g17\n",
+                    optarg, CSV_FIXED_PREC_MAX);
+            return EXIT_USAGE;
+        }
+        o->precision = (int)p;
+        return -1;
+    }
+    case OPT_OVERRIDE:
+        if (parse_double(optarg, &o->override) || !(o->override >= 1 && o->override <= 200)) {
+            fprintf(stderr, "trajreplay: --override: '%s' is not a percentage 1..200\n", optarg);
+            return EXIT_USAGE;
+        }
+        o->override /= 100;
+        return -1;
+    default: return -1;
+    }
 }
 
 /* One option other than an engine setting.  Returns -1 to go on, else an exit status. */
@@ -217,32 +261,9 @@ static int parse_option(int c, char **argv, opts_t *o)
     case OPT_OBJECT: o->object = optarg; return -1;
     case OPT_STRICT: o->strict = 1; return -1;
     case OPT_KEEP_GAPS: o->keep_gaps = 1; return -1;
-    case OPT_MAX_ROWS: {
-        char *end;
-        errno = 0;
-        o->max_rows = strtoull(optarg, &end, 10);
-        if (end == optarg || *end || errno || optarg[0] == '-') {
-            fprintf(stderr, "trajreplay: --max-rows: '%s' is not a number of rows\n", optarg);
-            return EXIT_USAGE;
-        }
-        return -1;
-    }
-    case OPT_PRECISION: {
-        unsigned p;
-        if (strcmp(optarg, "g17") == 0) {
-            o->precision = CSV_PREC_G17;
-            return -1;
-        }
-        if (parse_uint(optarg, &p) || p > CSV_FIXED_PREC_MAX) {
-            fprintf(stderr,
-                    "trajreplay: --precision: '%s' is not a number of decimals "
-                    "0..%d, nor g17\n",
-                    optarg, CSV_FIXED_PREC_MAX);
-            return EXIT_USAGE;
-        }
-        o->precision = (int)p;
-        return -1;
-    }
+    case OPT_MAX_ROWS:
+    case OPT_PRECISION:
+    case OPT_OVERRIDE: return parse_numeric(c, o);
     case OPT_BINARY: o->binary = 1; return -1;
     case OPT_GEO: o->geo = 1; return -1;
     case OPT_PROGRESS_AFTER:
@@ -450,26 +471,6 @@ static void run_flush_rows(run_t *run)
     run->nrows = 0;
 }
 
-/* The engine settings refused with the reason (0 if accepted); a caveat of
- * settings that are valid is told as a warning. */
-static int check_engine_config(const engine_config_t *cfg)
-{
-    char err[512];
-    const char *why = NULL;
-    if (engine_config_check(cfg, &why)) {
-        fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", why ? why : "?");
-        return -1;
-    }
-    if (engine_delay_check(cfg, 0.0, err, sizeof err)) {
-        fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", err);
-        return -1;
-    }
-    const char *caveat = engine_config_caveat(cfg);
-    if (caveat)
-        fprintf(stderr, "trajreplay: warning: %s\n", caveat);
-    return 0;
-}
-
 /* Load the track, make the engine and open the outputs.  Returns -1 to go
  * on, else an exit status (run_free releases what was made). */
 static int run_open(run_t *run, const opts_t *o)
@@ -484,7 +485,7 @@ static int run_open(run_t *run, const opts_t *o)
     run->rows = rows;
     run->seen_next = (size_t)-1;
     run->und_t = run->axis_stop_t_s = NAN;
-    if (check_engine_config(&o->cfg))
+    if (trajreplay_check_config(&o->cfg))
         return EXIT_USAGE;
     const char *same = cfg_same_file(o->input, o->output) ? o->output
                        : cfg_same_file(o->input, o->svg)  ? o->svg
@@ -518,6 +519,8 @@ static int run_open(run_t *run, const opts_t *o)
         fprintf(stderr, "trajreplay: engine: %s\n", engine_strerror(eng_err));
         return EXIT_MEMORY;
     }
+    if (o->override > 0)
+        (void)engine_set_override(run->e, o->override); /* within its range: parsed so */
     run->results = malloc(run->trk.n * sizeof *run->results);
     if (o->svg)
         run->plot = svg_plot_new(SVG_POINTS_DEFAULT, run->trk.geographic);

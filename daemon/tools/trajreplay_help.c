@@ -1,9 +1,11 @@
 /* trajreplay_help.c - trajreplay's --help text: its options, the track formats and
- * the engine settings (from their table, one source), and the exit statuses. */
+ * the engine settings (from their table, one source), and the exit statuses; and
+ * what it tells of the engine settings it is given. */
 #include "trajreplay_help.h"
 
 #include <stdio.h>
 
+#include "delay.h"
 #include "engine_settings.h"
 #include "track.h"
 
@@ -48,6 +50,9 @@ void trajreplay_usage(FILE *f)
         "  --keep-gaps          write hold rows through gaps longer than max_gap_s too\n"
         "                       (default: skip them; the row after a skipped gap has\n"
         "                       flag 4, ENGINE_SP_SKIPPED)\n"
+        "  --override PCT       feed override, 1..200 % of the track's pace (default\n"
+        "                       100): the time scaling plays the curve at that rate, as\n"
+        "                       trajd's Modbus and CAN override command\n"
         "  --max-rows N         stop with exit 5 after N setpoint rows (default\n"
         "                       50000000; 0 = no limit)\n"
         "  --object NAME        value of the object column (default \"replay\"); with -c,\n"
@@ -84,4 +89,22 @@ void trajreplay_usage(FILE *f)
           "stopped the output on its path (--max-lag passed, or a segment over 100 times\n"
           "faster on an axis than its --axis-max-*; file:line names the waypoint).\n",
           f);
+}
+
+int trajreplay_check_config(const engine_config_t *cfg)
+{
+    char err[512];
+    const char *why = NULL;
+    if (engine_config_check(cfg, &why)) {
+        fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", why ? why : "?");
+        return -1;
+    }
+    if (engine_delay_check(cfg, 0.0, err, sizeof err)) {
+        fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", err);
+        return -1;
+    }
+    const char *caveat = engine_config_caveat(cfg);
+    if (caveat)
+        fprintf(stderr, "trajreplay: warning: %s\n", caveat);
+    return 0;
 }

@@ -4,7 +4,13 @@
 
 #include <stdio.h>
 
+#include "engine.h"
+
 /* The usage text, the track formats, every engine setting and the exit statuses. */
 void trajreplay_usage(FILE *f);
+
+/* The engine settings refused with the reason on stderr (-1), or accepted
+ * (0); a caveat of settings that are valid is told as a warning. */
+int trajreplay_check_config(const engine_config_t *cfg);
 
 #endif
