@@ -70,7 +70,28 @@ open(sys.argv[2], "w").write(conf)
 PYEOF
     "$BUILD/bin/trajd" --check-config "$run/ev$rate.conf" || exit 1
 done
-uml_boot "$run" tests/uml/drive_events.sh 400 "$run/ev*.err" "$run/sim*/sim.err" "$run/sim*/sim_events.txt" || exit 1
+# A host whose other load starves the guest, so that trajd in it misses over 2 %
+# of its ticks (its status lines say so), fails the drives' heartbeat watch for
+# no fault of trajd's: the scenario then runs once more from a clean start, and
+# says why.  (A run here misses none; a starved one was seen missing 17 % at
+# 100 Hz, and the drives rightly stopped for want of trajd's heartbeat.)
+starved() {   # the worst share of ticks trajd missed, if over 2 %
+    awk '/status: up/ { t = m = 0
+                        for (i = 1; i < NF; i++) { if ($i == "ticks") t = $(i + 1) + 0
+                                                   if ($i == "missed") m = $(i + 1) + 0 }
+                        if (t + m > 0 && m / (t + m) > w) w = m / (t + m) }
+         END { if (w > 0.02) { printf "%.1f %%", 100 * w; exit 0 } exit 1 }' "$run"/ev*.err 2> /dev/null
+}
+boot() {
+    uml_boot "$run" tests/uml/drive_events.sh 400 "$run/ev*.err" "$run/sim*/sim.err" "$run/sim*/sim_events.txt"
+}
+if ! boot; then
+    why=$(starved) || exit 1
+    echo "uml: the guest was starved (trajd missed $why of its ticks at worst): once more"
+    find "$run" -mindepth 1 -maxdepth 1 ! -name env ! -name rates ! -name 'track.*' \
+        ! -name 'ev*.conf' -exec rm -rf {} +
+    boot || exit 1
+fi
 rc=0
 for rate in $RATES; do
     period=$(awk "BEGIN { print 1 / $rate }")
