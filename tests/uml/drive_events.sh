@@ -117,8 +117,9 @@ for rate in $(cat "$out/rates"); do
     done
     moving kill; mark kill
     kill -9 "$tp"; wait "$tp"; tp=
-    for n in 1 2 3; do
-        wait_grep "$run/sim_events.txt" "^[0-9.]* $n MASTER_LOST " 2000 || fail "node $n kept running"
+    for node in 1 2 3; do   # (not n: wait_grep's own counter, tests/uml/wait.sh)
+        wait_grep "$run/sim_events.txt" "^[0-9.]* $node MASTER_LOST " 2000 ||
+            fail "node $node kept running"
     done
     # ---- (STALL=1, make check-long) a third trajd: it resets the faults the
     # drives stopped with, enables and adopts them; then it stalls 2 s
