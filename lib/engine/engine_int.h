@@ -69,6 +69,13 @@ typedef struct {
                         track time it covered (join.c; 0 otherwise) */
 } qent_t;
 
+/* A built segment's own limits (engine_solve.c seg_limits): qent_t's vmax,
+ * ceil, ceil_axis, and av before the next segment's is taken in. */
+typedef struct {
+    double vmax, ceil, av;
+    int axis;
+} seg_limits_t;
+
 /* Output and curve start closer than this need no transfer (metres). */
 #define ENGINE_TRANSFER_TOL_M 1e-9
 
@@ -129,6 +136,7 @@ typedef struct {
                                   the next one's into account: queue_segment) */
     uint64_t pend_node;        /* ... its first node */
     fdiff_seg_t pend_seg;      /* ... the segment */
+    seg_limits_t pend_lim;     /* ... and its limits */
     uint64_t traj;             /* +1 per trajectory opened */
     double span_max;           /* start_slack auto: longest time spanned by la_steady + 1
                          intervals of the input, decaying by 1/256 per node */
@@ -330,6 +338,8 @@ unsigned engine_cfg_lookahead(const engine_config_t *cfg);
 /* most waypoints beyond a segment the solver needs, far from the start */
 unsigned engine_cfg_steady_lookahead(const engine_config_t *cfg);
 int engine_cfg_local(const engine_config_t *cfg);
+/* issue 32: some axis has a jerk limit (axis_max_jerk_m_s3). */
+int engine_cfg_axis_jerk(const engine_config_t *cfg);
 /* waypoints after a fix its verdict waits for: ACCEPT_LAG, or 0 for a local
  * method with max_lookahead 1 (accept.h at_arrival, issue 31) */
 unsigned engine_cfg_accept_lag(const engine_config_t *cfg);

@@ -84,11 +84,18 @@ double scale_conv_speed(const engine_t *e)
  * segment with larger limits (a slower one: A = a / v), its deceleration must
  * ramp up to the new A at the jerk J: a stop then needs up to
  * r (A_new - A_old)^2 / (2 J_new) <= r dA a / (2 j) of capacity more than
- * r^2/2; so much per rise of A ahead, summed (ucum), is kept in reserve. */
+ * r^2/2; so much per rise of A ahead, summed (ucum), is kept in reserve:
+ * rise_per_u(e, r, v) per unit of ucum, at rate r (scale_rise_reserve's
+ * r 1, times the rate where it is used). */
+static double rise_per_u(const engine_t *e, double r, double v)
+{
+    return r * 0.5 * e->cfg.scale_accel_m_s2 / e->cfg.scale_jerk_m_s3 * v;
+}
+
 double scale_rise_reserve(const engine_t *e, double v)
 {
     double du = e->scale.avail_ucum - e->out.cur.ucum;
-    return du > 0 ? 0.5 * e->cfg.scale_accel_m_s2 / e->cfg.scale_jerk_m_s3 * v * du : 0.0;
+    return du > 0 ? rise_per_u(e, 1.0, v) * du : 0.0;
 }
 
 /*
@@ -145,7 +152,7 @@ double scale_ceil_room(const engine_t *e, double s, double A, double J)
      * limits alternate piece by piece (the local C2 Hermite's three pieces,
      * per-axis jerk limits of 2 m/s^3) the next capped piece was always
      * too near: the output crawled at rate 0.02 (tests/oracle/test_axis_limits.py) */
-    double rfac = e->scale.ts.rate * 0.5 * e->cfg.scale_accel_m_s2 / e->cfg.scale_jerk_m_s3 * v;
+    double rfac = rise_per_u(e, e->scale.ts.rate, v);
     double res_all = e->scale.ts.rate * scale_rise_reserve(e, v) + margin;
     for (size_t i = 0; i < e->queue.slow_len; i++) {
         const qent_t *q = &e->queue.ent[e->queue.slow[(e->queue.slow_head + i) % e->queue.cap]];
@@ -182,16 +189,10 @@ double scale_ceil_here(const engine_t *e)
 /* The jerk of a stop or clear (m/s^3): at least a / T, so that the braking
  * reaches its full deceleration within one tick and the stop ends within
  * v^2/(2 a) + v T of path (a jerk j adds v a/(2 j) of onset: TIMESCALE.md,
- * "Stop distance"). */
-static int axis_jerk_set(const engine_t *e)
-{
-    return e->cfg.axis_max_jerk_m_s3[0] > 0 || e->cfg.axis_max_jerk_m_s3[1] > 0 ||
-           e->cfg.axis_max_jerk_m_s3[2] > 0;
-}
-
+ * "Stop distance"); with per-axis jerk limits the scaling's own, j. */
 static double stop_jerk(const engine_t *e)
 {
-    if (axis_jerk_set(e)) /* with per-axis jerk limits: the scaling's own */
+    if (engine_cfg_axis_jerk(&e->cfg))
         return e->cfg.scale_jerk_m_s3;
     return fmax(e->cfg.scale_jerk_m_s3, e->cfg.scale_accel_m_s2 / e->period_s);
 }
@@ -216,7 +217,7 @@ void scale_limits(const engine_t *e, double *A, double *J)
          * (scale_remaining), and it keeps every axis within its limit; with
          * per-axis jerk limits that A alone (engine_solve.c jerk_rate_accel) */
         *A = e->cfg.scale_accel_m_s2 / scale_conv_speed(e);
-        if (!axis_jerk_set(e))
+        if (!engine_cfg_axis_jerk(&e->cfg))
             *A = fmax(e->cfg.scale_accel_m_s2 / v, *A);
     } else {
         v = scale_jerk_speed(e);

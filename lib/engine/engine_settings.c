@@ -410,12 +410,18 @@ double engine_config_max_accel(const engine_config_t *cfg)
                                    : cfg->max_accel_m_s2;
 }
 
+int engine_cfg_axis_jerk(const engine_config_t *cfg)
+{
+    for (int k = 0; k < ENGINE_AXES; k++)
+        if (cfg->axis_max_jerk_m_s3[k] > 0)
+            return 1;
+    return 0;
+}
+
 const char *engine_config_caveat(const engine_config_t *cfg)
 {
     int local = engine_cfg_local(cfg);
-    if ((local == 1 || local == 2) &&
-        (cfg->axis_max_jerk_m_s3[0] > 0 || cfg->axis_max_jerk_m_s3[1] > 0 ||
-         cfg->axis_max_jerk_m_s3[2] > 0))
+    if ((local == 1 || local == 2) && engine_cfg_axis_jerk(cfg))
         return "axis_max_jerk_m_s3 is not held on this curve: method hermite and hermite-centred "
                "are C1, their acceleration steps at every waypoint (a jerk of that step per "
                "tick); a C2 curve keeps it (method cubic, hermite-c2, hermite-c2-centred)";

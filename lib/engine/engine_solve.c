@@ -97,13 +97,20 @@ double solve_axis_speed_max(const fdiff_seg_t *seg, int k)
     return hi / seg->dur_s;
 }
 
+/* axis k's largest |k_k''| over seg at rate 1 (m/s^2): k'' is linear on a
+ * cubic, so at an end. */
+static double axis_accel_max(const fdiff_seg_t *seg, int k)
+{
+    double c2 = 2 * seg->c[k][2], c3 = 6 * seg->c[k][3], T = seg->dur_s;
+    return fmax(fabs(c2), fabs(c2 + c3)) / (T * T);
+}
+
 /*
  * issue 32: the highest rate r at which a segment keeps the per-axis limits
  * (engine.h axis_max_*): |k_k'| r within the speed limit; |k_k''| r^2 within
  * the acceleration limit less scale_accel_m_s2 (resolved to at most a third
  * of it), which bounds the scaling's k_k' dr/dt; |k_k'''| r^3 within half the
- * jerk limit.  k'' is linear on a cubic: its largest |.| is at an end.
- * INFINITY where no axis is limited.
+ * jerk limit.  INFINITY where no axis is limited.
  */
 static double axis_ceiling(const engine_t *e, const fdiff_seg_t *seg)
 {
@@ -117,8 +124,7 @@ static double axis_ceiling(const engine_t *e, const fdiff_seg_t *seg)
                 c = fmin(c, vl / v);
         }
         if (al > 0) {
-            double c2 = 2 * seg->c[k][2], c3 = 6 * seg->c[k][3];
-            double kdd = fmax(fabs(c2), fabs(c2 + c3)) / (T * T);
+            double kdd = axis_accel_max(seg, k);
             if (kdd > 0)
                 c = fmin(c, sqrt(fmax(al - e->cfg.scale_accel_m_s2, 0.0) / kdd));
         }
@@ -186,14 +192,6 @@ static int axis_accel_limited(const engine_t *e)
     return 0;
 }
 
-static int axis_jerk_limited(const engine_t *e)
-{
-    for (int k = 0; k < AX; k++)
-        if (e->cfg.axis_max_jerk_m_s3[k] > 0)
-            return 1;
-    return 0;
-}
-
 /* The most dr/dt may be on a segment for the scaling's cross term
  * 3 k_k'' r dr/dt of each axis's jerk to stay within a quarter of its jerk
  * limit at rates up to rc (the curve's own k_k''' r^3 keeps a half at the
@@ -201,11 +199,9 @@ static int axis_jerk_limited(const engine_t *e)
  * scale_jerk_m_s3): INFINITY without a jerk limit or curvature. */
 static double jerk_rate_accel(const engine_t *e, const fdiff_seg_t *seg, double rc)
 {
-    double A = INFINITY, T = seg->dur_s;
+    double A = INFINITY;
     for (int k = 0; k < AX; k++) {
-        double jl = e->cfg.axis_max_jerk_m_s3[k];
-        double c2 = 2 * seg->c[k][2], c3 = 6 * seg->c[k][3];
-        double kdd = fmax(fabs(c2), fabs(c2 + c3)) / (T * T);
+        double jl = e->cfg.axis_max_jerk_m_s3[k], kdd = axis_accel_max(seg, k);
         if (jl > 0 && kdd > 0)
             A = fmin(A, 0.25 * jl / (3 * kdd * rc));
     }
@@ -238,9 +234,9 @@ static double jerk_rate_accel(const engine_t *e, const fdiff_seg_t *seg, double 
 static double accel_speed(const engine_t *e, const fdiff_seg_t *seg, double vmax, double ceil)
 {
     double v = vmax > ENGINE_SCALE_V_FLOOR_M_S ? vmax : ENGINE_SCALE_V_FLOOR_M_S;
-    if (!(ceil > 0) || (!axis_accel_limited(e) && !axis_jerk_limited(e)))
+    if (!(ceil > 0) || (!axis_accel_limited(e) && !engine_cfg_axis_jerk(&e->cfg)))
         return v;
-    double a = e->cfg.scale_accel_m_s2, rc = fmin(ceil, TS_RATE_MAX), T = seg->dur_s, n2 = 0;
+    double a = e->cfg.scale_accel_m_s2, rc = fmin(ceil, TS_RATE_MAX), n2 = 0;
     double Aj = jerk_rate_accel(e, seg, rc);
     if (!axis_accel_limited(e))
         return a / fmin(a / v, Aj);
@@ -254,10 +250,8 @@ static double accel_speed(const engine_t *e, const fdiff_seg_t *seg, double vmax
         if (!(vk > 0))
             continue;
         double room = a;
-        if (al > 0) {
-            double c2 = 2 * seg->c[k][2], c3 = 6 * seg->c[k][3];
-            room = al - fmax(fabs(c2), fabs(c2 + c3)) / (T * T) * rc * rc;
-        }
+        if (al > 0)
+            room = al - axis_accel_max(seg, k) * rc * rc;
         A = fmin(A, room / vk);
     }
     double lim = engine_config_max_accel(&e->cfg);
@@ -266,9 +260,18 @@ static double accel_speed(const engine_t *e, const fdiff_seg_t *seg, double vmax
     return a / fmin(fmax(A, a / v), Aj);
 }
 
-/* Queue a built segment, its av at least av_next (the next segment's, 0 if
- * none): see queue_segment. */
-static void queue_now(engine_t *e, const fdiff_seg_t *seg, uint64_t node, double av_next)
+/* A built segment's own limits, worked out once. */
+static void seg_limits(const engine_t *e, const fdiff_seg_t *seg, seg_limits_t *l)
+{
+    l->vmax = solve_seg_speed_max(seg);
+    l->ceil = seg_ceiling(e, seg, l->vmax, &l->axis);
+    l->av = accel_speed(e, seg, l->vmax, l->ceil);
+}
+
+/* Queue a built segment with its limits l, its av at least av_next (the
+ * next segment's, 0 if none): see queue_segment. */
+static void queue_now(engine_t *e, const fdiff_seg_t *seg, uint64_t node, const seg_limits_t *l,
+                      double av_next)
 {
     qent_t *q = q_push(e);
 
@@ -278,9 +281,10 @@ static void queue_now(engine_t *e, const fdiff_seg_t *seg, uint64_t node, double
     q->node = node;
     q->seg = *seg;
     q->t1_s = seg->t0_s + seg->dur_s;
-    q->vmax = solve_seg_speed_max(seg);
-    q->ceil = seg_ceiling(e, seg, q->vmax, &q->ceil_axis);
-    q->av = fmax(accel_speed(e, seg, q->vmax, q->ceil), av_next);
+    q->vmax = l->vmax;
+    q->ceil = l->ceil;
+    q->ceil_axis = l->axis;
+    q->av = fmax(l->av, av_next);
     e->st.axis_slowed += (uint64_t)q->ceil_axis;
     /* the jerk's conversion speed (scale_jerk_speed) */
     double v = q->vmax > ENGINE_SCALE_V_FLOOR_M_S ? q->vmax : ENGINE_SCALE_V_FLOOR_M_S;
@@ -319,17 +323,17 @@ static void queue_now(engine_t *e, const fdiff_seg_t *seg, uint64_t node, double
  */
 static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
 {
-    if (axis_accel_limited(e) || axis_jerk_limited(e)) {
-        int ax;
-        double vmax = solve_seg_speed_max(seg);
-        double av = accel_speed(e, seg, vmax, seg_ceiling(e, seg, vmax, &ax));
+    seg_limits_t l;
+    seg_limits(e, seg, &l);
+    if (axis_accel_limited(e) || engine_cfg_axis_jerk(&e->cfg)) {
         if (e->solve.pend)
-            queue_now(e, &e->solve.pend_seg, e->solve.pend_node, av);
+            queue_now(e, &e->solve.pend_seg, e->solve.pend_node, &e->solve.pend_lim, l.av);
         e->solve.pend = 1;
         e->solve.pend_seg = *seg;
         e->solve.pend_node = node;
+        e->solve.pend_lim = l;
     } else {
-        queue_now(e, seg, node, 0.0);
+        queue_now(e, seg, node, &l, 0.0);
     }
     e->solve.emitted = 1;
     e->solve.end_t = seg->t0_s + seg->dur_s;
@@ -347,7 +351,7 @@ static void queue_end(engine_t *e)
 {
     if (e->solve.pend) { /* the last segment: its own av (the output rests at its end) */
         e->solve.pend = 0;
-        queue_now(e, &e->solve.pend_seg, e->solve.pend_node, 0.0);
+        queue_now(e, &e->solve.pend_seg, e->solve.pend_node, &e->solve.pend_lim, 0.0);
     }
     qent_t *q = q_push(e);
 
