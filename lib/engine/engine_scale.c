@@ -219,6 +219,11 @@ void scale_limits(const engine_t *e, double *A, double *J)
         *A = e->cfg.scale_accel_m_s2 / scale_conv_speed(e);
         if (!engine_cfg_axis_jerk(&e->cfg))
             *A = fmax(e->cfg.scale_accel_m_s2 / v, *A);
+        else /* the jerk at the segment's fastest, as outside a stop: converted
+              * at the speed here, it shrank as a stop went on along a transfer
+              * speeding up, and the braking, released for the larger one, came
+              * to rest with its deceleration left (test_axis_share) */
+            v = fmax(v, scale_jerk_speed(e));
     } else {
         v = scale_jerk_speed(e);
         *A = e->cfg.scale_accel_m_s2 / scale_conv_speed(e);
