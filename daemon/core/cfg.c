@@ -613,9 +613,6 @@ static int check_obj(parse_t *p, unsigned i)
         fail(p, CFG_EVALUE, o->line, "[object.%s]: engine settings: %s", o->name, dwhy);
         return -1;
     }
-    const char *caveat = engine_config_caveat(&o->engine);
-    if (caveat) /* valid, but a promise it cannot keep */
-        log_msg(LOG_WARNING, "%s:%d: [object.%s]: %s", c->path, o->line, o->name, caveat);
     if (o->has_initial_position)
         for (int a = 0; a < ENGINE_AXES; a++)
             if (fabs(o->initial_position_m[a]) > o->engine.max_abs_m) {

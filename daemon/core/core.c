@@ -98,7 +98,8 @@ static void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim)
     /* issue 32: the engine keeps the per-axis limits along the path; the
      * monitor holds them independently, SAFETY_AXIS_MARGIN above (the
      * finite differences of the setpoints it measures by) */
-    safety_axis_limits(lim, o->engine.axis_max_speed_m_s, o->engine.axis_max_accel_m_s2);
+    safety_axis_limits(lim, o->engine.axis_max_speed_m_s, o->engine.axis_max_accel_m_s2,
+                       o->engine.axis_max_jerk_m_s3);
 }
 
 /* The setpoint as latitude/longitude/height (geographic objects, about the

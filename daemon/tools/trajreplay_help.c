@@ -103,8 +103,5 @@ int trajreplay_check_config(const engine_config_t *cfg)
         fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", err);
         return -1;
     }
-    const char *caveat = engine_config_caveat(cfg);
-    if (caveat)
-        fprintf(stderr, "trajreplay: warning: %s\n", caveat);
     return 0;
 }

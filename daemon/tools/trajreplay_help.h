@@ -10,7 +10,7 @@
 void trajreplay_usage(FILE *f);
 
 /* The engine settings refused with the reason on stderr (-1), or accepted
- * (0); a caveat of settings that are valid is told as a warning. */
+ * (0). */
 int trajreplay_check_config(const engine_config_t *cfg);
 
 #endif

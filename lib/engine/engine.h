@@ -334,7 +334,7 @@ typedef struct {
      * whose jerk is then scale_jerk_m_s3 too); with a jerk limit each
      * segment's dr/dt also keeps 3 |k_k''| r |dr/dt| within a quarter of it
      * (engine_solve.c jerk_rate_accel): the jerk of every axis within its
-     * limit on a C2 curve (engine_config_caveat: not on a C1 one);
+     * limit (a C2 curve: on a C1 one engine_config_check refuses it);
      * outside a stop its dr/dt may take, per segment, what the curve's own
      * k_k'' r^2 leaves of each axis's acceleration limit (engine_solve.c
      * accel_speed; lib/engine/TIMESCALE.md "Per-axis limits").  Transfers last
@@ -386,18 +386,6 @@ double engine_config_max_accel(const engine_config_t *cfg);
  * or capacity out of range, non-finite or non-positive limits.
  */
 int engine_config_check(const engine_config_t *cfg, const char **why);
-
-/* A valid configuration that cannot keep a promise of its own: a sentence
- * naming the settings and why, for the user (trajd logs it at load,
- * trajreplay prints it), or NULL.  Today: a per-axis jerk limit on a C1
- * curve (method hermite, hermite-centred), whose acceleration steps at every
- * waypoint: no time scaling bounds the jerk there. */
-const char *engine_config_caveat(const engine_config_t *cfg);
-
-
-
-
-
 
 /* One engine per moving object; not thread-safe: push, tick and the commands
  * of one engine must come from one thread (or be serialised by the caller). */

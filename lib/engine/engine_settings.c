@@ -134,7 +134,7 @@ const engine_setting_t engine_settings[] = {
     S(axis_max_accel_m_s2, "axis-max-accel", VEC3, 0, 0, 0, NULL, "AX,AY,AZ",
       "per-axis acceleration limits, m/s^2 (0: that axis free)"),
     S(axis_max_jerk_m_s3, "axis-max-jerk", VEC3, 0, 0, 0, NULL, "JX,JY,JZ",
-      "per-axis jerk limits, m/s^3 (0: that axis free; held on C2 curves)"),
+      "per-axis jerk limits, m/s^3 (0: that axis free; C2 curves only: refused with hermite)"),
     S(max_lag_s, "max-lag", DOUBLE, 0, 0, 1e6, NULL, "S",
       "the lag the per-axis limits may cause, s: beyond it the object stops (0: unbounded)"),
 };
@@ -416,16 +416,6 @@ int engine_cfg_axis_jerk(const engine_config_t *cfg)
         if (cfg->axis_max_jerk_m_s3[k] > 0)
             return 1;
     return 0;
-}
-
-const char *engine_config_caveat(const engine_config_t *cfg)
-{
-    int local = engine_cfg_local(cfg);
-    if ((local == 1 || local == 2) && engine_cfg_axis_jerk(cfg))
-        return "axis_max_jerk_m_s3 is not held on this curve: method hermite and hermite-centred "
-               "are C1, their acceleration steps at every waypoint (a jerk of that step per "
-               "tick); a C2 curve keeps it (method cubic, hermite-c2, hermite-c2-centred)";
-    return NULL;
 }
 
 int engine_cfg_uses_pstar(const engine_config_t *cfg)
@@ -756,6 +746,11 @@ int engine_config_check(const engine_config_t *cfg_in, const char **why)
     else if (!axis_limits_ok(cfg)) /* issue 32 */
         w = "axis_max_speed_m_s/axis_max_accel_m_s2/axis_max_jerk_m_s3: each must be 0 (that "
             "axis free) or positive and finite";
+    else if ((engine_cfg_local(cfg) == 1 || engine_cfg_local(cfg) == 2) &&
+             engine_cfg_axis_jerk(cfg)) /* the safety monitor holds it: it would trip */
+        w = "axis_max_jerk_m_s3: cannot be held on a C1 curve: method hermite and "
+            "hermite-centred step their acceleration at every waypoint; use a C2 curve (method "
+            "cubic, hermite-c2, hermite-c2-centred) or no jerk limit";
     else if (cfg->ends == ENGINE_ENDS_CLAMPED &&
              !(isfinite(cfg->start_vel_m_s[0]) && isfinite(cfg->start_vel_m_s[1]) &&
                isfinite(cfg->start_vel_m_s[2]) && isfinite(cfg->end_vel_m_s[0]) &&

@@ -21,7 +21,7 @@ const char *safety_strerror(int fault)
     case SAFETY_FSPEED: return "speed above safety_max_speed_m_s";
     case SAFETY_FACCEL: return "acceleration above safety_max_accel_m_s2";
     case SAFETY_FBOX: return "position outside position_min_m .. position_max_m";
-    case SAFETY_FAXIS: return "one axis's speed or acceleration above its per-axis bound";
+    case SAFETY_FAXIS: return "one axis's speed, acceleration or jerk above its per-axis bound";
     default: return "unknown safety fault";
     }
 }
@@ -33,11 +33,12 @@ static double bound(double v)
 }
 
 void safety_axis_limits(safety_limits_t *lim, const double speed_m_s[ENGINE_AXES],
-                        const double accel_m_s2[ENGINE_AXES])
+                        const double accel_m_s2[ENGINE_AXES], const double jerk_m_s3[ENGINE_AXES])
 {
     for (int k = 0; k < ENGINE_AXES; k++) {
         lim->axis_speed_m_s[k] = SAFETY_AXIS_MARGIN * speed_m_s[k];
         lim->axis_accel_m_s2[k] = SAFETY_AXIS_MARGIN * accel_m_s2[k];
+        lim->axis_jerk_m_s3[k] = SAFETY_AXIS_MARGIN * jerk_m_s3[k];
     }
 }
 
@@ -59,6 +60,7 @@ void safety_set_limits(safety_t *s, const safety_limits_t *lim)
     for (int k = 0; k < ENGINE_AXES; k++) {
         s->lim.axis_speed_m_s[k] = bound(lim->axis_speed_m_s[k]);
         s->lim.axis_accel_m_s2[k] = bound(lim->axis_accel_m_s2[k]);
+        s->lim.axis_jerk_m_s3[k] = bound(lim->axis_jerk_m_s3[k]);
     }
 }
 
@@ -82,6 +84,7 @@ static void hold(safety_t *s, engine_setpoint_t *sp)
         s->last_ns = sp->now_ns;
     memset(s->last_vel, 0, sizeof s->last_vel);
     s->last_dt = 0;
+    s->have_acc = 0;
 }
 
 /* 1 if a finite position of sp is outside the box: *value the coordinate,
@@ -96,6 +99,41 @@ static int outside_box(const safety_limits_t *l, const engine_setpoint_t *sp, do
             return 1;
         }
     return 0;
+}
+
+/* The per-axis bounds (issue 32), as the norms: speed, acceleration between
+ * the last two velocities (span apart), jerk between the last two
+ * accelerations (the mean of their spans apart); in metres of change per
+ * output, with the rounding tolerance (twice it for the third differences). */
+static int judge_axes(const safety_t *s, const double *d, const double *vel, double dt, double span,
+                      double *value, double *limit)
+{
+    const safety_limits_t *l = &s->lim;
+    for (int k = 0; k < AX; k++) {
+        if (l->axis_speed_m_s[k] > 0 && fabs(d[k]) > l->axis_speed_m_s[k] * dt + l->tol_m) {
+            *value = fabs(d[k]) / dt;
+            *limit = l->axis_speed_m_s[k];
+            return SAFETY_FAXIS;
+        }
+        if (!s->have_vel)
+            continue;
+        double dv = vel[k] - s->last_vel[k];
+        if (l->axis_accel_m_s2[k] > 0 &&
+            fabs(dv) * span > l->axis_accel_m_s2[k] * span * span + l->tol_m) {
+            *value = fabs(dv) / span;
+            *limit = l->axis_accel_m_s2[k];
+            return SAFETY_FAXIS;
+        }
+        double js = 0.5 * (s->last_span + span);
+        if (l->axis_jerk_m_s3[k] > 0 && s->have_acc &&
+            fabs(dv / span - s->last_acc[k]) * span * js >
+                l->axis_jerk_m_s3[k] * span * js * js + 2.0 * l->tol_m) {
+            *value = fabs(dv / span - s->last_acc[k]) / js;
+            *limit = l->axis_jerk_m_s3[k];
+            return SAFETY_FAXIS;
+        }
+    }
+    return SAFETY_OK;
 }
 
 /* First violation of sp against the last output, with its value and bound. */
@@ -145,19 +183,9 @@ static int judge(const safety_t *s, const engine_setpoint_t *sp, double *value, 
     /* the velocities belong to the middles of their intervals: after a
      * skipped tick they are (dt_prev + dt)/2 apart, not dt */
     double span = s->last_dt > 0 ? 0.5 * (s->last_dt + dt) : dt;
-    for (int k = 0; k < AX; k++) { /* issue 32: per axis, as the norms */
-        if (l->axis_speed_m_s[k] > 0 && fabs(d[k]) > l->axis_speed_m_s[k] * dt + l->tol_m) {
-            *value = fabs(d[k]) / dt;
-            *limit = l->axis_speed_m_s[k];
-            return SAFETY_FAXIS;
-        }
-        if (l->axis_accel_m_s2[k] > 0 && s->have_vel &&
-            fabs(vel[k] - s->last_vel[k]) * span > l->axis_accel_m_s2[k] * span * span + l->tol_m) {
-            *value = fabs(vel[k] - s->last_vel[k]) / span;
-            *limit = l->axis_accel_m_s2[k];
-            return SAFETY_FAXIS;
-        }
-    }
+    int f = judge_axes(s, d, vel, dt, span, value, limit);
+    if (f)
+        return f;
     if (l->max_accel_m_s2 > 0 && s->have_vel) {
         double dv[AX];
         for (int k = 0; k < AX; k++)
@@ -221,9 +249,17 @@ int safety_check(safety_t *s, engine_setpoint_t *sp)
         hold(s, sp);
         return f;
     }
+    double dt = (double)(sp->now_ns - s->last_ns) * 1e-9;
+    if (s->have_vel) { /* the acceleration between the last two velocities */
+        double span = s->last_dt > 0 ? 0.5 * (s->last_dt + dt) : dt;
+        for (int k = 0; k < AX; k++)
+            s->last_acc[k] = (vel[k] - s->last_vel[k]) / span;
+        s->last_span = span;
+        s->have_acc = 1;
+    }
     memcpy(s->last_pos, sp->pos_m, sizeof s->last_pos);
     memcpy(s->last_vel, vel, sizeof s->last_vel);
-    s->last_dt = (double)(sp->now_ns - s->last_ns) * 1e-9;
+    s->last_dt = dt;
     s->have_vel = 1;
     s->last_ns = sp->now_ns;
     return SAFETY_OK;
@@ -233,6 +269,7 @@ void safety_forget(safety_t *s)
 {
     s->have_pos = 0;
     s->have_vel = 0;
+    s->have_acc = 0;
     memset(s->last_vel, 0, sizeof s->last_vel);
     s->last_dt = 0;
 }
@@ -255,4 +292,5 @@ void safety_rearm(safety_t *s)
     s->fault = SAFETY_OK;
     memset(s->last_vel, 0, sizeof s->last_vel);
     s->have_vel = s->have_pos;
+    s->have_acc = 0; /* the jerk judged from the next two accelerations on */
 }

@@ -11,6 +11,9 @@
  *   v_k   = (p_k - p_{k-1}) / dt_k,  dt_k = now_k - now_{k-1}
  *   speed = |v_k|,   accel = |v_k - v_{k-1}| / ((dt_{k-1} + dt_k) / 2)
  *   (the two velocities belong to the middles of their intervals)
+ *   per axis also jerk = |a_k - a_{k-1}| / the time between the two
+ *   accelerations (third differences: p_k - 3 p_{k-1} + 3 p_{k-2} - p_{k-3}
+ *   over dt^3 on a regular grid)
  * dt is the time between two outputs, so skipped ticks are judged over the
  * time that really passed.
  *
@@ -47,7 +50,7 @@ enum safety_fault {
     SAFETY_FSPEED = 4,     /* step / dt above safety_max_speed_m_s */
     SAFETY_FACCEL = 5,     /* change of step / dt per dt above safety_max_accel_m_s2 */
     SAFETY_FBOX = 6,       /* a position outside the box (box_min_m .. box_max_m) */
-    SAFETY_FAXIS = 7,      /* one axis's speed or acceleration above its bound */
+    SAFETY_FAXIS = 7,      /* one axis's speed, acceleration or jerk above its bound */
     SAFETY_FAULT_COUNT
 };
 
@@ -65,22 +68,23 @@ typedef struct {
      * limits; +-inf: that axis free) */
     int box;
     double box_min_m[ENGINE_AXES], box_max_m[ENGINE_AXES];
-    /* per axis (issue 32): |step_k| / dt and the change of it per dt; 0 =
-     * that axis not checked */
-    double axis_speed_m_s[ENGINE_AXES], axis_accel_m_s2[ENGINE_AXES];
+    /* per axis (issue 32): |step_k| / dt, the change of it per dt and the
+     * change of that per dt; 0 = that axis not checked */
+    double axis_speed_m_s[ENGINE_AXES], axis_accel_m_s2[ENGINE_AXES], axis_jerk_m_s3[ENGINE_AXES];
 } safety_limits_t;
 
 #define SAFETY_TOL_M_DEFAULT 1e-8
 /* The daemon's per-axis bounds: this much above the engine's per-axis limits
- * (axis_max_speed_m_s, axis_max_accel_m_s2), for the finite differences of
- * the setpoints the monitor measures by (daemon/core/core.c, tests/fuzz). */
+ * (axis_max_speed_m_s, axis_max_accel_m_s2, axis_max_jerk_m_s3), for the
+ * finite differences of the setpoints the monitor measures by
+ * (daemon/core/core.c, tests/fuzz). */
 #define SAFETY_AXIS_MARGIN 1.1
 
 /* lim's per-axis bounds for an engine's per-axis limits (its
- * axis_max_speed_m_s and axis_max_accel_m_s2; 0: that axis free):
- * SAFETY_AXIS_MARGIN above each, as the daemon holds them. */
+ * axis_max_speed_m_s, axis_max_accel_m_s2 and axis_max_jerk_m_s3; 0: that
+ * axis free): SAFETY_AXIS_MARGIN above each, as the daemon holds them. */
 void safety_axis_limits(safety_limits_t *lim, const double speed_m_s[ENGINE_AXES],
-                        const double accel_m_s2[ENGINE_AXES]);
+                        const double accel_m_s2[ENGINE_AXES], const double jerk_m_s3[ENGINE_AXES]);
 
 typedef struct {
     safety_limits_t lim;
@@ -90,12 +94,16 @@ typedef struct {
     double last_pos[ENGINE_AXES];
     double last_vel[ENGINE_AXES];
     double last_dt;                  /* the interval last_vel was measured over, s (0 = unknown) */
+    int have_acc;                    /* three were sent: last_acc is meaningful */
+    double last_acc[ENGINE_AXES];    /* per axis, between the last two velocities */
+    double last_span;                /* the time between those two velocities, s */
     int fault;                       /* latched safety_fault, 0 = none */
     uint64_t checked;                /* setpoints judged */
     uint64_t violations;             /* setpoints refused while not yet faulted + while faulted */
     uint64_t held;                   /* setpoints replaced by the hold (faulted) */
     uint64_t by[SAFETY_FAULT_COUNT]; /* first violations by reason */
-    double last_value;               /* the violating value of the last violation (m, m/s, m/s^2) */
+    double last_value;               /* the violating value of the last violation (m, m/s, m/s^2,
+                                        m/s^3) */
     double last_limit;               /* and the bound it broke */
 } safety_t;
 

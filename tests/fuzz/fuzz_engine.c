@@ -8,8 +8,9 @@
  *  - every setpoint is finite (from the first position on);
  *  - no position step beyond the speed limit: between two ticks k periods
  *    apart, |delta pos| <= k * period * max_speed_m_s + 1e-9 m (Euclidean)
- *    when the configuration has a speed limit, both ticks holding or
- *    transferring; CURVE_MARGIN times that on the curve (see below);
+ *    when the configuration has a speed limit, both ticks holding;
+ *    ENGINE_SPEED_CAP times that both transferring (a join that keeps moving
+ *    is one, lib/engine/join.c), CURVE_MARGIN times on the curve (see below);
  *  - lib/safety after the engine, as in the daemon: with the daemon's default
  *    bounds (the per-axis ones SAFETY_AXIS_MARGIN above the per-axis limits,
  *    issue 32) it never refuses a setpoint; with tighter ones (some inputs) what
@@ -30,6 +31,7 @@
  * max_abs_m = 20 m and gaps above 1 s so transfers and tracks stay short.
  */
 #include <math.h>
+#include <stdio.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,8 +46,9 @@
  * the cubic may be faster (1.5 x the mean on a rest-to-rest segment).  Steps
  * on the curve are checked against CURVE_MARGIN x the limit, the daemon's
  * default safety bound (daemon/core/core.c obj_safety_limits: the engine must
- * never trip its own monitor); holds and transfers (rest-to-rest at most the
- * limit, engine.h) against the limit itself. */
+ * never trip its own monitor); holds against the limit itself, transfers
+ * (rest-to-rest at most the limit, engine.h; a join that keeps moving at most
+ * ENGINE_SPEED_CAP times it) against ENGINE_SPEED_CAP times it. */
 #ifndef CURVE_MARGIN
 #define CURVE_MARGIN 2.0
 #endif
@@ -88,8 +91,13 @@ static void monitor(run_t *r, const engine_setpoint_t *sp)
         if (memcmp(out.pos_m, sp->pos_m, sizeof out.pos_m) || r->mon.fault)
             abort();
     } else {
-        if (!r->tight)
+        if (!r->tight) {
+            if (getenv("FUZZ_DBG")) /* what tripped it, where */
+                fprintf(stderr, "fault %d: %g against %g, state %d, flags %#x, now %lld ns\n", rc,
+                        r->mon.last_value, r->mon.last_limit, (int)sp->state, (unsigned)sp->flags,
+                        (long long)sp->now_ns);
             abort(); /* the engine tripped the daemon's default monitor */
+        }
         if (!(out.flags & SAFETY_SP_FAULT) || !r->mon.fault)
             abort();
         if (r->have_sent && memcmp(out.pos_m, r->sent.pos_m, sizeof out.pos_m))
@@ -137,8 +145,12 @@ static void tick(run_t *r, int64_t k)
 {
     engine_setpoint_t sp;
     r->now += k * r->c.period_ns;
-    if (engine_tick(r->e, r->now, &sp) != 0)
-        abort();                    /* time went forward: never refused */
+    int rc = engine_tick(r->e, r->now, &sp);
+    if (rc != 0) {
+        if (getenv("FUZZ_DBG"))
+            fprintf(stderr, "engine_tick: %d\n", rc);
+        abort(); /* time went forward: never refused */
+    }
     if (engine_axis_lag_over(r->e)) /* max_lag_s passed: the owner stops (issue 32) */
         (void)engine_stop(r->e);
     monitor(r, &sp);
@@ -151,9 +163,15 @@ static void tick(run_t *r, int64_t k)
         double d2 = 0;
         for (int a = 0; a < ENGINE_AXES; a++)
             d2 += (sp.pos_m[a] - r->last.pos_m[a]) * (sp.pos_m[a] - r->last.pos_m[a]);
+        /* a join that keeps moving is a transfer too (ENGINE_SP_TRANSFER), within
+         * ENGINE_SPEED_CAP x the limit (lib/engine/join.c): a 20-tick step across
+         * one went 5.17 m/s on a 5 m/s limit */
         int exact = (sp.flags & HOLD_OR_TRANSFER) && (r->last.flags & HOLD_OR_TRANSFER);
+        int held = (sp.flags & ENGINE_SP_HOLD) && (r->last.flags & ENGINE_SP_HOLD);
         double bound = (double)k * (double)r->c.period_ns * 1e-9 * r->c.max_speed_m_s *
-                           (exact ? 1 : CURVE_MARGIN) +
+                           (held    ? 1
+                            : exact ? ENGINE_SPEED_CAP
+                                    : CURVE_MARGIN) +
                        1e-9;
         if (sqrt(d2) > bound)
             abort();
@@ -215,10 +233,12 @@ static void configure(engine_config_t *c, uint8_t b0, uint8_t b1)
     c->max_abs_m = 20;
     if (b0 & 0x08) { /* issue 32: per-axis limits (and max_lag_s) */
         const double v[3] = {2, 3, 0}, a[3] = {1, 4, 0}, j[3] = {20, 0, 0};
+        /* no jerk limit on the C1 curve (engine_config_check refuses it) */
+        int c1 = c->method == ENGINE_METHOD_HERMITE;
         for (int k = 0; k < 3; k++) {
             c->axis_max_speed_m_s[k] = v[k];
             c->axis_max_accel_m_s2[k] = a[k];
-            c->axis_max_jerk_m_s3[k] = j[k];
+            c->axis_max_jerk_m_s3[k] = c1 ? 0 : j[k];
         }
         c->max_lag_s = (b1 & 0x40) ? 2 : 0;
     }
@@ -253,7 +273,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     /* the per-axis bounds as the daemon holds them (obj_safety_limits,
      * SAFETY_AXIS_MARGIN above the engine's: the finite differences of the
      * setpoints it measures by); with the defaults the engine never trips them */
-    safety_axis_limits(&lim, r.c.axis_max_speed_m_s, r.c.axis_max_accel_m_s2);
+    safety_axis_limits(&lim, r.c.axis_max_speed_m_s, r.c.axis_max_accel_m_s2,
+                       r.c.axis_max_jerk_m_s3);
     safety_init(&r.mon, &lim);
     p += 2;
     r.e = engine_new(&r.c, NULL);

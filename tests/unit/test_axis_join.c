@@ -185,7 +185,7 @@ static void stream(engine_method_t method, int every)
     e = engine_new(&c, NULL);
     assert_non_null(e);
     memset(&lim, 0, sizeof lim);
-    safety_axis_limits(&lim, c.axis_max_speed_m_s, c.axis_max_accel_m_s2);
+    safety_axis_limits(&lim, c.axis_max_speed_m_s, c.axis_max_accel_m_s2, c.axis_max_jerk_m_s3);
     safety_init(&mon, &lim);
     for (int i = 0; i < NWP; i++) {
         engine_waypoint_t w = zigzag(i);
@@ -252,7 +252,8 @@ static void test_track_beyond_the_axes_stops_before(void **state)
     e = engine_new(&c, NULL);
     assert_non_null(e);
     memset(&lim, 0, sizeof lim);
-    safety_axis_limits(&lim, c.axis_max_speed_m_s, c.axis_max_accel_m_s2); /* x alone set */
+    safety_axis_limits(&lim, c.axis_max_speed_m_s, c.axis_max_accel_m_s2,
+                       c.axis_max_jerk_m_s3); /* x alone set */
     safety_init(&mon, &lim);
     double x = 0;
     for (int i = 0; i <= 20; i++) {
