@@ -92,8 +92,12 @@
  *
  * Not joined moving: during a stop or clear (a stop brakes), under a feed
  * hold (override 0), after a gap beyond max_gap_s (a new trajectory), at
- * rest.  The catch-up (catchup.h) does not steer a join; the lag it leaves
- * is won back after it.
+ * rest.  After a gap the output has played its tail out to rest on the old
+ * trajectory's last waypoint (never past the data), and from rest the
+ * transfer ends on the new trajectory's first waypoint, exact through every
+ * kept one, which a join meeting its curve further on would leave for time
+ * (LIFECYCLE.md's precedence, 3 before 4).  The catch-up (catchup.h) does
+ * not steer a join; the lag it leaves is won back after it.
  */
 #include "engine.h"
 #include "engine_int.h"
