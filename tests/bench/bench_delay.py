@@ -31,6 +31,9 @@ now - t_s (now_ns on the virtual clock, t_s the track time of the setpoint).
     rest at its last fix), with the D stated.  trajreplay has no setting of
     [daemon] catchup (-c reads the object's engine settings only), so the
     trace without the lag won back is not shown.
+(c) The accuracy/latency frontier (issue 31 item 3) on a bundled track as well: the N2K
+    figure-8 at 5 Hz (tests/data/n2k_furuno_figure8_src52.csv), --profile none, its
+    reference scipy's CubicSpline through its fixes in east/north metres by pyproj.
 """
 import os
 import subprocess
@@ -49,15 +52,46 @@ DTYPE = np.dtype([("now_ns", "<i8"), ("t_s", "<f8"), ("pos_m", "<f8", 3), ("vel_
 
 TRACKS = ("10 Hz", "1 Hz", "200 Hz")
 CONFIGS = ((), ("--max-lookahead", "1"), ("--max-lookahead", "2"), ("--max-lookahead", "3"),
-           ("--method", "hermite"), ("--method", "hermite-centred"),
+           ("--max-lookahead", "4"), ("--method", "hermite"), ("--method", "hermite-centred"),
            ("--max-lookahead", "6", "--accuracy", "0.1"), ("--max-lookahead", "8", "--accuracy", "3e-3"),
            ("--max-lookahead", "12", "--accuracy", "1e-4"), ("--max-lookahead", "18"),
            ("--delay", "5"),
            ("--max-speed", "10", "--delay", "5"), ("--max-speed", "10", "--delay", "25"))
 
 
+# A bundled track (issue 31 item 3: "on the bundled tracks and a synthetic one"): the
+# N2K capture of a boat's figure-8 at 5 Hz (tests/data/ATTRIBUTION.md), as recorded, with its
+# 0.5 s hole and a fix 24 ms after the one before.  Replayed with --profile none, so that
+# every fix is in the curve as in the reference: scipy's spline through its waypoints in
+# east/north metres about the first fix, by pyproj (PROJ's cart + topocentric), as
+# tests/oracle/test_trajreplay.py converts them.
+BUNDLED = {"figure-8 5 Hz": "n2k_furuno_figure8_src52.csv"}
+DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data")
+
+
+def bundled(name):
+    """(t, x, y, path) of a bundled track: east/north by pyproj."""
+    import csv
+
+    import pyproj
+    path = os.path.join(DATA, BUNDLED[name])
+    with open(path) as f:
+        r = list(csv.DictReader(f))
+    t = np.array([float(x["t_s"]) for x in r])
+    lat = np.array([float(x["lat_deg"]) for x in r])
+    lon = np.array([float(x["lon_deg"]) for x in r])
+    tr = pyproj.Transformer.from_pipeline(
+        "+proj=pipeline +step +proj=axisswap +order=2,1 "
+        "+step +proj=unitconvert +xy_in=deg +xy_out=rad +step +proj=cart +ellps=WGS84 "
+        f"+step +proj=topocentric +ellps=WGS84 +lat_0={lat[0]!r} +lon_0={lon[0]!r} +h_0=0.0")
+    e, n, _ = tr.transform(lat, lon, np.zeros_like(lat))
+    return t, e, n, path
+
+
 def track(name):
     """(t, x, y) of a track of (a)."""
+    if name in BUNDLED:
+        return bundled(name)[:3]
     if name == "10 Hz":
         i = np.arange(600)
         return 0.1 * i, 10 * np.sin(0.05 * i), 10 * np.cos(0.03 * i)
@@ -113,10 +147,14 @@ def refusal(stderr):
 
 def measure(exe, name, opts, tmp):
     """A row of (a): dict with 'refused' (the reason) or D, its parts and what was measured."""
-    t, x, y = track(name)
-    path = os.path.join(tmp, name.replace(" ", "") + ".csv")
-    if not os.path.exists(path):
-        write_track(path, t, x, y)
+    if name in BUNDLED:
+        t, x, y, path = bundled(name)
+        opts = tuple(opts) + ("--profile", "none")
+    else:
+        t, x, y = track(name)
+        path = os.path.join(tmp, name.replace(" ", "") + ".csv")
+        if not os.path.exists(path):
+            write_track(path, t, x, y)
     rc, s, rows, err = replay(exe, path, opts, tmp)
     if rc != 0:
         return {"refused": refusal(err), "exit": rc}
@@ -140,11 +178,14 @@ def opts_text(opts):
     return " ".join(opts) if opts else "defaults"
 
 
-# The accuracy/latency frontier the top-level README shows (issue 31): the 10 Hz track,
-# from the local methods to the default lookahead; rows of table (a)
+# The accuracy/latency frontier the top-level README shows (issue 31): the 10 Hz track and
+# the bundled figure-8, from the local methods (each of them: the C2 ones max_lookahead
+# picks, the C1 ones by name) to the default lookahead
 FRONTIER = (("--max-lookahead", "1"), ("--max-lookahead", "2"), ("--max-lookahead", "3"),
+            ("--max-lookahead", "4"), ("--method", "hermite"), ("--method", "hermite-centred"),
             ("--max-lookahead", "6", "--accuracy", "0.1"), ("--max-lookahead", "8", "--accuracy", "3e-3"),
             ("--max-lookahead", "12", "--accuracy", "1e-4"), ())
+FRONTIER_TRACKS = ("10 Hz", "figure-8 5 Hz")
 
 
 def table_a(exe, tmp, tracks=TRACKS, configs=CONFIGS):
@@ -229,6 +270,12 @@ def main(exe):
                 p["end"] - p["D"]))
         print()
         print("trajreplay offers no [daemon] catchup setting: the trace without the catch-up is not shown.")
+        print()
+        print("(c) The accuracy/latency frontier on a bundled track (the top-level README shows it")
+        print("with the 10 Hz rows of (a)): the N2K figure-8 at 5 Hz as recorded, --profile none,")
+        print("against scipy's CubicSpline through its waypoints in east/north metres by pyproj.")
+        print()
+        print("\n".join(l for l in table_a(exe, tmp, FRONTIER_TRACKS[1:], FRONTIER) if l))
 
 
 if __name__ == "__main__":
