@@ -9,9 +9,11 @@ LIMIT=1000
 allow=tests/file_size_allow.txt
 fail=0
 declare -A allowed
+listed=0 # (an empty associative array is "unbound" to set -u in bash 5.2)
 while read -r n f; do
     case "$n" in ''|\#*) continue;; esac
     allowed[$f]=$n
+    listed=$((listed + 1))
 done < "$allow"
 for f in $(git ls-files 'lib/*.c' 'daemon/*.c' 2>/dev/null || find lib daemon -name '*.c'); do
     [ -f "$f" ] || continue
@@ -27,8 +29,8 @@ for f in $(git ls-files 'lib/*.c' 'daemon/*.c' 2>/dev/null || find lib daemon -n
         echo "note: $f has $n lines, fewer than its $a in $allow: lower it there"
     fi
 done
-for f in "${!allowed[@]}"; do
+[ "$listed" -gt 0 ] && for f in "${!allowed[@]}"; do
     [ -f "$f" ] || { echo "FAIL: $f is listed in $allow but does not exist: remove it"; fail=1; }
 done
-[ $fail = 0 ] && echo "file sizes: every C file in lib/ and daemon/ within $LIMIT lines or within its allowance (${#allowed[@]} listed)"
+[ $fail = 0 ] && echo "file sizes: every C file in lib/ and daemon/ within $LIMIT lines or within its allowance ($listed listed)"
 exit $fail
