@@ -197,6 +197,33 @@ static double stop_jerk(const engine_t *e)
     return fmax(e->cfg.scale_jerk_m_s3, e->cfg.scale_accel_m_s2 / e->period_s);
 }
 
+/* Queue entries a stop looks through for the fastest segment it may reach. */
+#define STOP_JERK_SCAN 64
+
+/* The speed a stop's jerk is converted at, with per-axis jerk limits: the
+ * fastest of the segments it may still reach (within twice its stopping
+ * distance from the output, the current segment's jerk; at least the current
+ * segment's), as outside a stop the segment's fastest.  The braking's release
+ * is planned on this jerk: one that shrank on the way (a faster segment
+ * entered, or the curve's speed here growing) left its deceleration
+ * unreleased at rest, cleared in one tick (2.25 m/s^3 on a 2 m/s^3 axis where
+ * it shrank by 0.14 %, fuzz_lifecycle).  The window's far end does not move
+ * on as the output brakes towards it: the jerk only grows over a stop. */
+static double stop_jerk_speed(const engine_t *e, double A, double jerk)
+{
+    double v = scale_jerk_speed(e);
+    if (e->out.mode != OUT_STREAM)
+        return v; /* a transfer: one segment */
+    double end = e->out.t + 2.0 * ts_stop_dist(e->scale.ts.rate, e->scale.ts.acc, A, jerk / v);
+    for (size_t i = 0; i < e->queue.len && i < STOP_JERK_SCAN; i++) {
+        const qent_t *q = queue_at(e, i);
+        if (q->kind != QE_SEG || q->traj != e->out.traj || q->seg.t0_s > end)
+            break;
+        v = fmax(v, q->vmax);
+    }
+    return v;
+}
+
 /* The time scaling's limits in rate units at the curve's speed: outside a
  * stop at the largest speed the curve reaches on the current segment and the
  * next one (conv_speed), so that k' dr/dt stays within a over the ticks ahead
@@ -219,11 +246,11 @@ void scale_limits(const engine_t *e, double *A, double *J)
         *A = e->cfg.scale_accel_m_s2 / scale_conv_speed(e);
         if (!engine_cfg_axis_jerk(&e->cfg))
             *A = fmax(e->cfg.scale_accel_m_s2 / v, *A);
-        else /* the jerk at the segment's fastest, as outside a stop: converted
-              * at the speed here, it shrank as a stop went on along a transfer
+        else /* the jerk at the fastest segment it may reach: converted at the
+              * speed here, it shrank as a stop went on along a transfer
               * speeding up, and the braking, released for the larger one, came
               * to rest with its deceleration left (test_axis_share) */
-            v = fmax(v, scale_jerk_speed(e));
+            v = fmax(v, stop_jerk_speed(e, *A, jerk));
     } else {
         v = scale_jerk_speed(e);
         *A = e->cfg.scale_accel_m_s2 / scale_conv_speed(e);

@@ -14,7 +14,9 @@
  *  - the first setpoint after a re-anchor at the drives is their position;
  *  - held by the monitor, held at rest after a drive's brake, or stopped, not
  *    one nanometre of motion;
- *  - the safety monitor with those limits never refuses a setpoint.
+ *  - the safety monitor with those limits never refuses a setpoint; with
+ *    per-axis limits (some inputs; issue 32) it holds them too, the jerk's
+ *    included, SAFETY_AXIS_MARGIN above, as the daemon does.
  */
 #include <math.h>
 #include <stdint.h>
@@ -168,6 +170,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     c.scale_accel_m_s2 = 2.0;
     c.scale_jerk_m_s3 = 20.0;
     c.max_gap_s = 2.0;
+    if (data[0] & 2) { /* issue 32: per-axis limits, the jerk's too, which the monitor holds */
+        for (int k = 0; k < 2; k++) {
+            c.axis_max_speed_m_s[k] = 3.0;
+            c.axis_max_accel_m_s2[k] = 1.0;
+            c.axis_max_jerk_m_s3[k] = 2.0;
+        }
+    }
     memset(&f, 0, sizeof f);
     f.e = engine_new(&c, NULL);
     if (!f.e)
@@ -177,6 +186,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     safety_limits_t lim = {.max_speed_m_s = f.vlim * 1.0001,
                            .max_accel_m_s2 = f.alim * 1.0001,
                            .tol_m = SAFETY_TOL_M_DEFAULT};
+    safety_axis_limits(&lim, c.axis_max_speed_m_s, c.axis_max_accel_m_s2, c.axis_max_jerk_m_s3);
     safety_init(&f.sf, &lim);
     if (lc_init(&f.lc, f.e, &f.sf, PERIOD_NS, 0) < 0)
         abort();
