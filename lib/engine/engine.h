@@ -383,7 +383,9 @@ double engine_config_max_accel(const engine_config_t *cfg);
  * out of range, HELD or MULTIPLE with
  * anything but BSPLINE + UNIFORM (they are the paper's ends of the
  * control polygon, meaningless in the second-derivative form), F, O, period
- * or capacity out of range, non-finite or non-positive limits.
+ * or capacity out of range, non-finite or non-positive limits, a per-axis
+ * jerk limit on a C1 curve (method HERMITE, HERMITE_CENTRED: their
+ * acceleration steps at every waypoint).
  */
 int engine_config_check(const engine_config_t *cfg, const char **why);
 

@@ -201,9 +201,9 @@ static double stop_jerk(const engine_t *e)
 #define STOP_JERK_SCAN 64
 
 /* The speed a stop's jerk is converted at, with per-axis jerk limits: the
- * fastest of the segments it may still reach (within twice its stopping
- * distance from the output, the current segment's jerk; at least the current
- * segment's), as outside a stop the segment's fastest.  The braking's release
+ * fastest of the segments it may still reach (those starting within twice
+ * its stopping distance at the current segment's jerk), at least the current
+ * segment's fastest, as outside a stop.  The braking's release
  * is planned on this jerk: one that shrank on the way (a faster segment
  * entered, or the curve's speed here growing) left its deceleration
  * unreleased at rest, cleared in one tick (2.25 m/s^3 on a 2 m/s^3 axis where
