@@ -15,7 +15,11 @@ catchup at its default 5 %), then the delay on the sender's clock at the end
 is the delay at the start within one input interval and no waypoint-late
 underrun occurs while the sender sends; with catchup = 0 (the old pace of
 the stamps) the fast sender's delay grows by its drift (0.9 s) instead, so
-the test can fail.  canmatrix encodes the frames from config/trajd.dbc."""
+the test can fail.  canmatrix encodes the frames from config/trajd.dbc.
+
+`python3 tests/e2e/test_drift_daemon.py --day` runs the issue's 24 h scenario itself
+(100 ppm, 1 % lost, at speed 100: about 15 minutes; not part of make check) and prints
+its figures (day())."""
 import csv
 import decimal
 import math
@@ -56,7 +60,7 @@ def write_log(path, ppm, loss=0.0, seed=7):
         fh.writelines(lines)
 
 
-def run(d, ppm, catchup):
+def run(d, ppm, catchup, timeout=120):
     conf = os.path.join(d, "t.conf")
     with open(conf, "w") as fh:
         fh.write("[daemon]\nrate_hz = %d\nspeed = %d\nclock = relative\nexit_when_done = yes\n"
@@ -65,7 +69,7 @@ def run(d, ppm, catchup):
                  "[object.gnss]\ninput = can\noutput = csv\ncsv.path = sp.csv\n"
                  % (RATE_HZ, SPEED, "catchup = %g\n" % catchup if catchup is not None else ""))
     p = subprocess.run([TRAJD, "-f", "-c", conf], cwd=d, capture_output=True, text=True,
-                       timeout=120)
+                       timeout=timeout)
     rows = []
     with open(os.path.join(d, "sp.csv")) as fh:
         for r in csv.DictReader(fh):
@@ -114,5 +118,29 @@ class DriftDaemon(unittest.TestCase):
         self.assertGreater(end - start, 0.7)  # 500 ppm of 30 min: 0.9 s
 
 
+def day():
+    """The issue's 24 h run itself (issue 26 item 3), not a test: 172 800 fixes at 0.5 s
+    from a sender 100 ppm fast, 1 % lost, 20..80 ms late, at speed 100 (about 15 minutes),
+    with trajd's log.  Prints the delay at 2..5 min and at the end on the sender's clock,
+    the underrun rows while it sends, and trajd's log lines about D and underruns.
+    Run: BUILD=$PWD/build python3 tests/e2e/test_drift_daemon.py --day"""
+    global N, SPEED
+    N, SPEED, ppm = 172800, 100, 100
+    with tempfile.TemporaryDirectory() as d:
+        write_log(os.path.join(d, "wp.log"), ppm, 0.01)
+        p, rows = run(d, ppm, None, timeout=3600)
+    end_in = (N - 1) * H / (1 + ppm * 1e-6)
+    print("trajd exit %d; delay %.3f s at 2..5 min, %.3f s at the end; %d underrun rows while "
+          "it sends" % (p.returncode, delays(rows, ppm, 120, 300),
+                        delays(rows, ppm, end_in - 200, end_in - 20),
+                        sum(1 for now, t, st in rows if st == "underrun" and now < end_in)))
+    for line in p.stderr.splitlines():
+        if "play-out delay D" in line or "underrun" in line or line.startswith("<6>exit"):
+            print(line)
+
+
 if __name__ == "__main__":
-    unittest.main()
+    if sys.argv[1:] == ["--day"]:
+        day()
+    else:
+        unittest.main()
