@@ -101,14 +101,22 @@ static int outside_box(const safety_limits_t *l, const engine_setpoint_t *sp, do
     return 0;
 }
 
+/* What judge works out of a new position against the last output: the
+ * velocity over the interval dt since it, and (with a velocity before) its
+ * change dv, over span, the time between the two velocities' middles. */
+typedef struct {
+    double vel[AX], dv[AX], dt, span;
+} motion_t;
+
 /* The per-axis bounds (issue 32), as the norms: speed, acceleration between
  * the last two velocities (span apart), jerk between the last two
  * accelerations (the mean of their spans apart); in metres of change per
  * output, with the rounding tolerance (twice it for the third differences). */
-static int judge_axes(const safety_t *s, const double *d, const double *vel, double dt, double span,
-                      double *value, double *limit)
+static int judge_axes(const safety_t *s, const double *d, const motion_t *m, double *value,
+                      double *limit)
 {
     const safety_limits_t *l = &s->lim;
+    double dt = m->dt, span = m->span, js = 0.5 * (s->last_span + span);
     for (int k = 0; k < AX; k++) {
         if (l->axis_speed_m_s[k] > 0 && fabs(d[k]) > l->axis_speed_m_s[k] * dt + l->tol_m) {
             *value = fabs(d[k]) / dt;
@@ -117,14 +125,13 @@ static int judge_axes(const safety_t *s, const double *d, const double *vel, dou
         }
         if (!s->have_vel)
             continue;
-        double dv = vel[k] - s->last_vel[k];
+        double dv = m->dv[k];
         if (l->axis_accel_m_s2[k] > 0 &&
             fabs(dv) * span > l->axis_accel_m_s2[k] * span * span + l->tol_m) {
             *value = fabs(dv) / span;
             *limit = l->axis_accel_m_s2[k];
             return SAFETY_FAXIS;
         }
-        double js = 0.5 * (s->last_span + span);
         if (l->axis_jerk_m_s3[k] > 0 && s->have_acc &&
             fabs(dv / span - s->last_acc[k]) * span * js >
                 l->axis_jerk_m_s3[k] * span * js * js + 2.0 * l->tol_m) {
@@ -138,7 +145,7 @@ static int judge_axes(const safety_t *s, const double *d, const double *vel, dou
 
 /* First violation of sp against the last output, with its value and bound. */
 static int judge(const safety_t *s, const engine_setpoint_t *sp, double *value, double *limit,
-                 double vel[AX])
+                 motion_t *m)
 {
     const safety_limits_t *l = &s->lim;
     double d[AX], dt, step;
@@ -165,9 +172,14 @@ static int judge(const safety_t *s, const engine_setpoint_t *sp, double *value, 
         return SAFETY_FTIME;
     }
     dt = (double)(sp->now_ns - s->last_ns) * 1e-9; /* > 0 */
+    /* the velocities belong to the middles of their intervals: after a
+     * skipped tick they are (dt_prev + dt)/2 apart, not dt */
+    m->dt = dt;
+    m->span = s->last_dt > 0 ? 0.5 * (s->last_dt + dt) : dt;
     for (int k = 0; k < AX; k++) {
         d[k] = sp->pos_m[k] - s->last_pos[k];
-        vel[k] = d[k] / dt;
+        m->vel[k] = d[k] / dt;
+        m->dv[k] = m->vel[k] - s->last_vel[k];
     }
     step = norm3(d);
     if (l->max_step_m > 0 && step > l->max_step_m + l->tol_m) {
@@ -180,29 +192,24 @@ static int judge(const safety_t *s, const engine_setpoint_t *sp, double *value, 
         *limit = l->max_speed_m_s;
         return SAFETY_FSPEED;
     }
-    /* the velocities belong to the middles of their intervals: after a
-     * skipped tick they are (dt_prev + dt)/2 apart, not dt */
-    double span = s->last_dt > 0 ? 0.5 * (s->last_dt + dt) : dt;
-    int f = judge_axes(s, d, vel, dt, span, value, limit);
+    int f = judge_axes(s, d, m, value, limit);
     if (f)
         return f;
-    if (l->max_accel_m_s2 > 0 && s->have_vel) {
-        double dv[AX];
-        for (int k = 0; k < AX; k++)
-            dv[k] = vel[k] - s->last_vel[k];
-        /* |dv| * span is the change of step a constant acceleration bound allows, in metres */
-        if (norm3(dv) * span > l->max_accel_m_s2 * span * span + l->tol_m) {
-            *value = norm3(dv) / span;
-            *limit = l->max_accel_m_s2;
-            return SAFETY_FACCEL;
-        }
+    /* |dv| * span is the change of step a constant acceleration bound allows, in metres */
+    double span = m->span;
+    if (l->max_accel_m_s2 > 0 && s->have_vel &&
+        norm3(m->dv) * span > l->max_accel_m_s2 * span * span + l->tol_m) {
+        *value = norm3(m->dv) / span;
+        *limit = l->max_accel_m_s2;
+        return SAFETY_FACCEL;
     }
     return SAFETY_OK;
 }
 
 int safety_check(safety_t *s, engine_setpoint_t *sp)
 {
-    double value = 0, limit = 0, vel[AX];
+    double value = 0, limit = 0;
+    motion_t m;
     int f;
 
     if (!s->have_pos) {
@@ -239,7 +246,7 @@ int safety_check(safety_t *s, engine_setpoint_t *sp)
         hold(s, sp);
         return s->fault;
     }
-    f = judge(s, sp, &value, &limit, vel);
+    f = judge(s, sp, &value, &limit, &m);
     if (f != SAFETY_OK) {
         s->fault = f;
         s->violations++;
@@ -249,17 +256,15 @@ int safety_check(safety_t *s, engine_setpoint_t *sp)
         hold(s, sp);
         return f;
     }
-    double dt = (double)(sp->now_ns - s->last_ns) * 1e-9;
     if (s->have_vel) { /* the acceleration between the last two velocities */
-        double span = s->last_dt > 0 ? 0.5 * (s->last_dt + dt) : dt;
         for (int k = 0; k < AX; k++)
-            s->last_acc[k] = (vel[k] - s->last_vel[k]) / span;
-        s->last_span = span;
+            s->last_acc[k] = m.dv[k] / m.span;
+        s->last_span = m.span;
         s->have_acc = 1;
     }
     memcpy(s->last_pos, sp->pos_m, sizeof s->last_pos);
-    memcpy(s->last_vel, vel, sizeof s->last_vel);
-    s->last_dt = dt;
+    memcpy(s->last_vel, m.vel, sizeof s->last_vel);
+    s->last_dt = m.dt;
     s->have_vel = 1;
     s->last_ns = sp->now_ns;
     return SAFETY_OK;
