@@ -35,6 +35,8 @@ now - t_s (now_ns on the virtual clock, t_s the track time of the setpoint).
     figure-8 at 5 Hz (tests/data/n2k_furuno_figure8_src52.csv), --profile none, its
     reference scipy's CubicSpline through its fixes in east/north metres by pyproj.
 """
+import csv
+import functools
 import os
 import subprocess
 import sys
@@ -42,6 +44,9 @@ import tempfile
 
 import numpy as np
 from scipy.interpolate import CubicSpline
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+from oracle_util import proj_enu  # noqa: E402
 
 STREAMING = 1                   # lib/motion.h ENGINE_STATE_STREAMING
 SP_TRANSFER, SP_SCALED = 0x08, 0x40
@@ -69,22 +74,17 @@ BUNDLED = {"figure-8 5 Hz": "n2k_furuno_figure8_src52.csv"}
 DATA = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data")
 
 
+@functools.lru_cache(maxsize=None)
 def bundled(name):
-    """(t, x, y, path) of a bundled track: east/north by pyproj."""
-    import csv
-
-    import pyproj
+    """(t, x, y, path) of a bundled track: east/north by pyproj (oracle_util.proj_enu), read
+    once for all the configurations measured on it."""
     path = os.path.join(DATA, BUNDLED[name])
     with open(path) as f:
         r = list(csv.DictReader(f))
     t = np.array([float(x["t_s"]) for x in r])
     lat = np.array([float(x["lat_deg"]) for x in r])
     lon = np.array([float(x["lon_deg"]) for x in r])
-    tr = pyproj.Transformer.from_pipeline(
-        "+proj=pipeline +step +proj=axisswap +order=2,1 "
-        "+step +proj=unitconvert +xy_in=deg +xy_out=rad +step +proj=cart +ellps=WGS84 "
-        f"+step +proj=topocentric +ellps=WGS84 +lat_0={lat[0]!r} +lon_0={lon[0]!r} +h_0=0.0")
-    e, n, _ = tr.transform(lat, lon, np.zeros_like(lat))
+    e, n, _ = proj_enu(lat[0], lon[0], 0.0).transform(lat, lon, np.zeros_like(lat))
     return t, e, n, path
 
 
