@@ -412,6 +412,7 @@ void scale_rest(engine_t *e);
 double scale_conv_speed(const engine_t *e);
 double scale_rise_reserve(const engine_t *e, double v);
 double scale_remaining(const engine_t *e, double s);
+double scale_slowing_reserve(const engine_t *e, double v);
 double scale_ceil_room(const engine_t *e, double s, double A, double J);
 double scale_ceil_here(const engine_t *e);
 void scale_limits(const engine_t *e, double *A, double *J);

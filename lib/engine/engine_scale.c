@@ -98,6 +98,47 @@ double scale_rise_reserve(const engine_t *e, double v)
     return du > 0 ? rise_per_u(e, 1.0, v) * du : 0.0;
 }
 
+/* Queue entries looked through for the slowest-converted segment a braking
+ * may reach. */
+#define SLOW_SCAN 64
+
+/*
+ * The capacity of the curve ahead (scale_remaining) is in the units of the
+ * limits here, v K: right for the r^2/2 that a braking at a / v takes off,
+ * not for the onset and release of that braking at the jerk J (converted at
+ * the segment's fastest speed, not at v), which run through track time at
+ * about the rate.  Entering a segment whose acceleration limit is converted
+ * at a lower speed v' (a larger A in rate units), the room is re-expressed
+ * as v' K, short by (1 - v'/v) of that part: a braking planned to the tick
+ * lost its room at the boundary and reached the curve's end moving (1.39
+ * m/s^2 on a 1 m/s^2 axis, fuzz_lifecycle with per-axis limits).  Kept in
+ * reserve with per-axis limits, where they hold as hard limits: that part of
+ * the stopping distance from the rate here (ts_stop_dist less r^2/(2 A)),
+ * times 1 - v_min/v, v_min the lowest conversion speed of the segments the
+ * braking may reach (those starting within twice its distance).  Without
+ * them the scaling's acceleration is a target the monitor holds only with
+ * its margin, and the play-out is left as it was.
+ */
+double scale_slowing_reserve(const engine_t *e, double v)
+{
+    double r = e->scale.ts.rate, A, J;
+    if (e->out.mode != OUT_STREAM || !(r > 0) || !e->queue.len || !solve_axis_limited(e))
+        return 0.0;
+    scale_limits(e, &A, &J);
+    double d = ts_stop_dist(r, e->scale.ts.acc, A, J), onset = d - 0.5 * r * r / A;
+    if (!(onset > 0))
+        return 0.0;
+    double end = e->out.t + 2.0 * d, vmin = v;
+    for (size_t i = 0; i < e->queue.len && i < SLOW_SCAN; i++) {
+        const qent_t *q = queue_at(e, i);
+        if (q->kind != QE_SEG || q->traj != e->out.traj || q->seg.t0_s > end)
+            break;
+        if (q->av > 0 && q->av < vmin)
+            vmin = q->av;
+    }
+    return (1.0 - vmin / v) * onset;
+}
+
 /*
  * Track time still available ahead of s (relative) before the output must
  * be at rest, with TS_MARGIN_TICKS in reserve; INFINITY when the curve ahead
@@ -124,7 +165,8 @@ double scale_remaining(const engine_t *e, double s)
     k = (in_cur > 0 ? in_cur / v : 0.0) + (e->scale.avail_kcum - e->out.cur.kcum);
     /* the margin scales with the rate: standing still needs none, so a
      * buffer shorter than the margin never deadlocks the output */
-    return v * k - e->scale.ts.rate * (scale_rise_reserve(e, v) + TS_MARGIN_TICKS * e->period_s);
+    return v * k - e->scale.ts.rate * (scale_rise_reserve(e, v) + TS_MARGIN_TICKS * e->period_s) -
+           scale_slowing_reserve(e, v);
 }
 
 /*
