@@ -107,9 +107,12 @@ void engine_delay(const engine_t *e, engine_delay_t *d);
 
 /* Engine-internal (engine_tick.c): 1 once the output of the trajectory at the
  * queue head (a segment) may start and stand D behind the newest waypoint
- * after its ramp from rest; engine_delay_note records the D of a start. */
-int engine_delay_ready(const engine_t *e);
-void engine_delay_note(engine_t *e);
+ * after its ramp from rest; engine_delay_note records the D of a start.
+ * lag (may be NULL): the ramp's loss if engine_delay_ready simulated it, else
+ * NAN; engine_delay_note takes it back on the same tick instead of simulating
+ * the same ramp again (NAN: it does). */
+int engine_delay_ready(const engine_t *e, double *lag);
+void engine_delay_note(engine_t *e, double lag);
 /* Engine-internal (engine_scale.c): 1 if the output, held back by the curve
  * ahead, is short of its stop reserve while the input is on time: the
  * newest waypoint arrived within the interval and slack D holds for one

@@ -96,7 +96,7 @@ void play_count_underrun(engine_t *e)
  * The output may start (or resume after an underrun) on the segment h only
  * once the lookahead is buffered beyond it, or its trajectory is closed.
  */
-static int enough_ahead(const engine_t *e, const qent_t *h)
+static int enough_ahead(const engine_t *e, const qent_t *h, double *lag)
 {
     /* waypoints received: nodes, plus those the smoother still holds (SMOOTH) */
     /* and those the acceptance policy still judges: their verdicts come
@@ -110,7 +110,7 @@ static int enough_ahead(const engine_t *e, const qent_t *h)
         return 0;
     /* issue 26: start_slack auto, or delay_s: once the output will stand D
      * behind the newest waypoint after its ramp from rest (delay.h) */
-    return !(e->slack_auto || e->cfg.delay_s > 0) || engine_delay_ready(e);
+    return !(e->slack_auto || e->cfg.delay_s > 0) || engine_delay_ready(e, lag);
 }
 
 /* out_eval leaves the output in the stepper's rows (on_fd): copied here
@@ -587,7 +587,8 @@ static void step_once(engine_t *e)
     e->out.plain_left = 0;
     if (e->out.mode == OUT_HOLD) {
         qent_t *h = q_head(e);
-        if (!h || !h->first || !enough_ahead(e, h) || (!e->out.have_pos && e->out.need_pos)) {
+        double lag = NAN; /* the start's ramp, if enough_ahead simulated it */
+        if (!h || !h->first || !enough_ahead(e, h, &lag) || (!e->out.have_pos && e->out.need_pos)) {
             hold_here(e);
             return;
         }
@@ -617,7 +618,7 @@ static void step_once(engine_t *e)
             }
         }
         unit_reset(e);
-        engine_delay_note(e); /* issue 26: the D this start holds */
+        engine_delay_note(e, lag); /* issue 26: the D this start holds */
         if (xfer) {
             xfer_start(e, target, h->gap_s);
             scale_rest(e);
@@ -769,7 +770,7 @@ int play_stalled(const engine_t *e)
     if (engine_silence_pending(e))
         return 0; /* issue 26: a silent end may come without a push (silence.h) */
     if (e->out.mode == OUT_HOLD)
-        return !h || !h->first || !enough_ahead(e, h);
+        return !h || !h->first || !enough_ahead(e, h, NULL);
     if (e->out.mode == OUT_STREAM && e->scale.on && at_rest(e) && !e->scale.stop_req &&
         !e->scale.end_brake) {
         double A, J, target = scale_target(e);
