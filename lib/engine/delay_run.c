@@ -119,8 +119,9 @@ static double ramp_lag(const engine_t *e, int strict)
         /* the step without the curve's end differs only where the end
          * limited it, or in a landing on rate 1 (within A T of it), which
          * ts_step makes only if it leaves room: the free step is taken
-         * there alone (both per step: 27 us per object on the tick where
-         * 1 024 objects start at once, tests/bench/RESULTS.md) */
+         * there alone (with both on every step, and the ramp simulated
+         * twice on the start's tick, that tick took 28 us per object:
+         * tests/bench/bench_engine --start, tests/bench/RESULTS.md) */
         if (strict && (lim || fabs(1.0 - free_st.rate) <= A * T) &&
             ds < ts_step(&free_st, 1.0, INFINITY, A, J, T, NULL, NULL))
             return INFINITY; /* held back by the curve ahead: the ramp would

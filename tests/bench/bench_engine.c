@@ -615,8 +615,76 @@ static void fo_table(int timed)
     }
 }
 
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* The tick on which 1 024 engines (defaults, 100 Hz) start at once, each fed
+ * the same 5 Hz figure-8 (x = 50 sin 0.1t, y = 25 sin 0.2t) as it comes, against
+ * their median tick over the 2 s streaming after it: a start simulates the
+ * ramp from rest that its D is stated with (delay_run.c ramp_lag).  Best of
+ * REPS runs (wall time: a preempted tick only adds). */
+#define START_OBJECTS 1024
+#define START_TICKS 600
+static void bench_start(void)
+{
+    static engine_t *e[START_OBJECTS];
+    double best_start = 1e30, best_steady = 1e30;
+    for (int rep = 0; rep < tick_reps; rep++) {
+        engine_config_t c;
+        engine_config_default(&c);
+        c.period_ns = 10000000;
+        for (int i = 0; i < START_OBJECTS; i++)
+            e[i] = engine_new(&c, NULL);
+        double dt[START_TICKS];
+        int64_t next = 0;
+        uint32_t seq = 0;
+        for (int n = 0; n < START_TICKS; n++) {
+            int64_t now = n * c.period_ns;
+            for (; next <= now; next += 200000000) {
+                engine_waypoint_t w = {0};
+                w.t_s = (double)next * 1e-9;
+                w.pos_m[0] = 50 * sin(0.1 * w.t_s);
+                w.pos_m[1] = 25 * sin(0.2 * w.t_s);
+                w.seq = ++seq;
+                for (int i = 0; i < START_OBJECTS; i++)
+                    engine_push(e[i], &w);
+            }
+            double t0 = now_s();
+            for (int i = 0; i < START_OBJECTS; i++) {
+                engine_setpoint_t sp;
+                engine_tick(e[i], now, &sp);
+            }
+            dt[n] = now_s() - t0;
+        }
+        int at = 0;
+        for (int n = 1; n < START_TICKS; n++)
+            at = dt[n] > dt[at] ? n : at;
+        int len = START_TICKS - at - 1 < 200 ? START_TICKS - at - 1 : 200;
+        if (len > 0) {
+            qsort(dt + at + 1, (size_t)len, sizeof dt[0], cmp_double);
+            best_steady = fmin(best_steady, dt[at + 1 + len / 2]);
+        }
+        best_start = fmin(best_start, dt[at]);
+        for (int i = 0; i < START_OBJECTS; i++)
+            engine_free(e[i]);
+    }
+    printf("%d engines starting on one tick at 100 Hz, best of %d: the start tick %.0f us (%.1f us "
+           "per object), the median streaming tick after it %.0f us (%.0fx)\n",
+           START_OBJECTS, tick_reps, best_start * 1e6, best_start * 1e6 / START_OBJECTS,
+           best_steady * 1e6, best_start / best_steady);
+}
+
 int main(int argc, char **argv)
 {
+    if (argc > 1 && strcmp(argv[1], "--start") == 0) {
+        if (argc > 2)
+            tick_reps = atoi(argv[2]) > 0 ? atoi(argv[2]) : 1;
+        bench_start(); /* 1 024 engines starting on one tick (REPS runs, default 5) */
+        return 0;
+    }
     if (argc > 1 && strcmp(argv[1], "--errors") == 0) {
         fo_table(0);
         return 0;
@@ -637,6 +705,7 @@ int main(int argc, char **argv)
     bench_stepper();
     bench_tick_table();
     bench_hold();
+    bench_start();
     static const long lengths[] = {1000, 10000, 100000, 1000000};
     engine_config_t c, r;
 
