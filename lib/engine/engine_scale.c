@@ -179,12 +179,32 @@ double scale_remaining(const engine_t *e, double s)
  * D as in scale_remaining(): the capacity to the segment's start at the limits
  * here, less the same reserve.  INFINITY if no slow segment is ahead.
  */
+static double stop_jerk_speed(const engine_t *e, double A, double jerk);
+
 double scale_ceil_room(const engine_t *e, double s, double A, double J)
 {
-    double R = INFINITY;
+    double R = INFINITY, extra = 0.0;
 
     if (e->out.mode != OUT_STREAM || !e->queue.slow_len)
         return R;
+    if (engine_cfg_axis_jerk(&e->cfg)) {
+        /* with per-axis jerk limits a stop converts its jerk at the fastest
+         * segment it may reach (stop_jerk_speed), which may be less than the
+         * one here: the ceilings ahead are planned for a braking at that jerk,
+         * so that a stop asked for now still meets them.  Planned at the jerk
+         * here, a stop near a trajectory's rest end entered a segment of
+         * ceiling 0.399 at rate 0.58, its deceleration above what the segment
+         * leaves, brought back at 1.76 times the jerk (3.56 m/s^3 on a 2 m/s^3
+         * axis, fuzz_lifecycle).  The braking itself keeps the jerk here: it
+         * starts where the weaker one would need to, and the extra distance
+         * that one needs from the state now is kept in reserve. */
+        double jerk = e->cfg.scale_jerk_m_s3, Jp = jerk / stop_jerk_speed(e, A, jerk);
+        if (Jp < J) {
+            extra = ts_stop_dist(e->scale.ts.rate, e->scale.ts.acc, A, Jp) -
+                    ts_stop_dist(e->scale.ts.rate, e->scale.ts.acc, A, J);
+            J = Jp;
+        }
+    }
     double in_cur = e->out.cur_t1 - s, v = scale_conv_speed(e);
     double k0 = (in_cur > 0 ? in_cur / v : 0.0) - e->out.cur.kcum;
     double margin = e->scale.ts.rate * TS_MARGIN_TICKS * e->period_s;
@@ -212,7 +232,7 @@ double scale_ceil_room(const engine_t *e, double s, double A, double J)
         double to = base - (du > 0 ? rfac * du : 0.0) - margin;
         R = fmin(R, to + ts_stop_dist(q->ceil, -A, A, J));
     }
-    return R;
+    return R - (extra > 0 ? extra : 0.0);
 }
 
 /* The rate the speed cap allows on the current segment.  A transfer lasts

@@ -88,10 +88,10 @@ static double release_in_time(double r, double a, double tgt, double j, double J
  * acceleration wanted for an error e is the one from which, released at
  * full jerk, the rate lands on tgt (sqrt(2 J |e|), corrected for the
  * discrete tick), at most A. */
-static double track_jerk(double r, double a, double tgt, double A, double J, double T)
+static double track_jerk(double r, double a, double tgt, double A, double J, double Jr, double T)
 {
     double e = tgt - r, ae = fabs(e);
-    double want = -0.5 * J * T + sqrt(0.25 * J * J * T * T + 2.0 * J * ae);
+    double want = -0.5 * Jr * T + sqrt(0.25 * Jr * Jr * T * T + 2.0 * Jr * ae);
     double j;
 
     if (want > A)
@@ -103,10 +103,11 @@ static double track_jerk(double r, double a, double tgt, double A, double J, dou
         j = J;
     if (j < -J)
         j = -J;
-    /* and no later release than lands on tgt (both directions) */
-    j = release_in_time(r, a, tgt, j, J, T);
-    j = -release_in_time(-r, -a, -tgt, -j, J, T);
-    return j;
+    /* and no later release than lands on tgt (both directions), planned at
+     * Jr, the jerk the release will have (J may be raised for this tick) */
+    j = release_in_time(r, a, tgt, j, Jr, T);
+    j = -release_in_time(-r, -a, -tgt, -j, Jr, T);
+    return j > J ? J : j < -J ? -J : j;
 }
 
 /* Exact integration over one tick with constant jerk. */
@@ -200,17 +201,23 @@ double ts_dead_band(double J, double T)
 double ts_step(ts_state_t *st, double target, double R, double A, double J, double T, double *j_out,
                int *limited)
 {
-    double r = st->rate, a = st->acc, tgt = target, r1, a1, ds, j;
+    double r = st->rate, a = st->acc, tgt = target, r1, a1, ds, j, Jr = J;
     int lim = 0, crept = 0;
 
+    /* the limits shrank (timescale.h): back within A in A/J.  Only this
+     * tick's jerk is raised: what the rate will do after it (its release,
+     * its stop) is planned at J, the jerk it will have then.  Planned at the
+     * raised one, a release that began as a stop's braking met a segment
+     * with a 2.5 % lower A started a tick late and came to rest with its
+     * deceleration left (2.38 m/s^3 on a 2 m/s^3 axis, fuzz_lifecycle). */
     if (fabs(a) > A)
-        J *= fabs(a) / A; /* the limits shrank (timescale.h): back within A in A/J */
+        J *= fabs(a) / A;
     if (!(tgt > 0))
         tgt = 0;
     if (tgt > TS_RATE_MAX)
         tgt = TS_RATE_MAX;
     if (!isinf(R)) {
-        double rm = ts_rate_max(R, A, J);
+        double rm = ts_rate_max(R, A, Jr);
         if (rm < tgt) {
             tgt = rm;
             lim = 1;
@@ -218,15 +225,15 @@ double ts_step(ts_state_t *st, double target, double R, double A, double J, doub
     }
     if (tgt < ts_dead_band(J, T))
         tgt = 0; /* dead band: a rate this low comes to rest exactly */
-    j = track_jerk(r, a, tgt, A, J, T);
+    j = track_jerk(r, a, tgt, A, J, Jr, T);
     ds = integrate(r, a, j, T, &r1, &a1);
-    if (!isinf(R) && r1 > 0 && ts_stop_dist(r1, a1, A, J) + r1 * T > R - ds) {
+    if (!isinf(R) && r1 > 0 && ts_stop_dist(r1, a1, A, Jr) + r1 * T > R - ds) {
         /* the move would leave too little to stop: brake as hard as allowed.
          * With a tick's travel at the new rate to spare, as creep() keeps:
          * the stop planned is continuous, the ticks are not, and a creep
          * towards the end of the solved curve reached it at 0.13 m/s (issue 27) */
         tgt = 0;
-        j = track_jerk(r, a, tgt, A, J, T);
+        j = track_jerk(r, a, tgt, A, J, Jr, T);
         ds = integrate(r, a, j, T, &r1, &a1);
         lim = 1;
         if (!(r > 0) && !(a < 0 || a > 0) && target > 0) {
@@ -259,7 +266,7 @@ double ts_step(ts_state_t *st, double target, double R, double A, double J, doub
         fabs(a) <= 2.0 * J * T) {
         double lj = j, lds = ds, lr = r1, la = a1;
         land(r, a, tgt, J, T, &lj, &lds, &lr, &la);
-        if (isinf(R) || (lds <= R && (!(lr > 0) || ts_stop_dist(lr, la, A, J) <= R - lds))) {
+        if (isinf(R) || (lds <= R && (!(lr > 0) || ts_stop_dist(lr, la, A, Jr) <= R - lds))) {
             j = lj; /* a landing that leaves room to stop */
             ds = lds;
             r1 = lr;

@@ -87,9 +87,10 @@ double ts_dead_band(double J, double T);
  * *limited (may be NULL) is set to 1 when R, not target, decided the move.
  * Where the limits shrank under the state (|acc| > A: the engine converts
  * them at the speed of the segment the output is on, and the next may be
- * faster), J is raised by |acc| / A, so that
+ * faster), this tick's jerk is raised by |acc| / A, so that
  * |acc| is back within A within A / J and the rate does not overshoot its
- * target (TIMESCALE.md, "Speed cap").
+ * target (TIMESCALE.md, "Speed cap"); what comes after the tick (the
+ * release of the braking, the stop, the room R) is planned at J.
  */
 double ts_step(ts_state_t *st, double target, double R, double A, double J, double T, double *j_out,
                int *limited);
