@@ -115,9 +115,11 @@ double scale_rise_reserve(const engine_t *e, double v)
  * reserve with per-axis limits, where they hold as hard limits: that part of
  * the stopping distance from the rate here (ts_stop_dist less r^2/(2 A)),
  * times 1 - v_min/v, v_min the lowest conversion speed of the segments the
- * braking may reach (those starting within twice its distance).  Without
- * them the scaling's acceleration is a target the monitor holds only with
- * its margin, and the play-out is left as it was.
+ * braking may reach (those starting within twice its distance).  The room
+ * to the ceilings ahead (scale_ceil_room) keeps it too: a stop near a rest end
+ * lost that room at each boundary and entered a segment of ceiling 0.099 at
+ * rate 0.151.  Without per-axis limits the scaling's acceleration is a target
+ * the monitor holds only with its margin, and the play-out is left as it was.
  */
 double scale_slowing_reserve(const engine_t *e, double v)
 {
@@ -232,7 +234,7 @@ double scale_ceil_room(const engine_t *e, double s, double A, double J)
         double to = base - (du > 0 ? rfac * du : 0.0) - margin;
         R = fmin(R, to + ts_stop_dist(q->ceil, -A, A, J));
     }
-    return R - (extra > 0 ? extra : 0.0);
+    return R - (extra > 0 ? extra : 0.0) - scale_slowing_reserve(e, v);
 }
 
 /* The rate the speed cap allows on the current segment.  A transfer lasts
