@@ -98,6 +98,30 @@ double scale_rise_reserve(const engine_t *e, double v)
     return du > 0 ? rise_per_u(e, 1.0, v) * du : 0.0;
 }
 
+static double stop_jerk_speed(const engine_t *e, double A, double jerk);
+
+/* With per-axis jerk limits a stop converts its jerk at the fastest segment
+ * it may reach (stop_jerk_speed), which may be less than the streaming's
+ * jerk here: the rooms ahead (to the curve's end, to each ceiling) are
+ * planned for a braking at that jerk, so that a stop asked for now still
+ * fits them.  The braking itself keeps the jerk here: it starts where the
+ * weaker one would need to, and the extra distance that one needs from the
+ * state now (d: at J) is kept in reserve.  Planned at the jerk here, a stop
+ * near a trajectory's rest end entered a segment of ceiling 0.399 at rate 0.58
+ * (3.56 m/s^3 on a 2 m/s^3 axis), and another reached the rest end itself at
+ * rate 0.03 and handed over there with the curve's acceleration left (3.8
+ * m/s^3 on 2; both fuzz_lifecycle). */
+static double stop_jerk_reserve(const engine_t *e, double A, double J, double d)
+{
+    if (!engine_cfg_axis_jerk(&e->cfg) || e->scale.stop_req)
+        return 0.0;
+    double jerk = e->cfg.scale_jerk_m_s3, Jp = jerk / stop_jerk_speed(e, A, jerk);
+    if (!(Jp < J))
+        return 0.0;
+    double dp = ts_stop_dist(e->scale.ts.rate, e->scale.ts.acc, A, Jp);
+    return dp > d ? dp - d : 0.0;
+}
+
 /* Queue entries looked through for the slowest-converted segment a braking
  * may reach. */
 #define SLOW_SCAN 64
@@ -123,22 +147,23 @@ double scale_rise_reserve(const engine_t *e, double v)
  */
 double scale_slowing_reserve(const engine_t *e, double v)
 {
-    double r = e->scale.ts.rate, A, J;
+    double r = e->scale.ts.rate, A, J, res = 0.0;
     if (e->out.mode != OUT_STREAM || !(r > 0) || !e->queue.len || !solve_axis_limited(e))
         return 0.0;
     scale_limits(e, &A, &J);
     double d = ts_stop_dist(r, e->scale.ts.acc, A, J), onset = d - 0.5 * r * r / A;
-    if (!(onset > 0))
-        return 0.0;
-    double end = e->out.t + 2.0 * d, vmin = v;
-    for (size_t i = 0; i < e->queue.len && i < SLOW_SCAN; i++) {
-        const qent_t *q = queue_at(e, i);
-        if (q->kind != QE_SEG || q->traj != e->out.traj || q->seg.t0_s > end)
-            break;
-        if (q->av > 0 && q->av < vmin)
-            vmin = q->av;
+    if (onset > 0) {
+        double end = e->out.t + 2.0 * d, vmin = v;
+        for (size_t i = 0; i < e->queue.len && i < SLOW_SCAN; i++) {
+            const qent_t *q = queue_at(e, i);
+            if (q->kind != QE_SEG || q->traj != e->out.traj || q->seg.t0_s > end)
+                break;
+            if (q->av > 0 && q->av < vmin)
+                vmin = q->av;
+        }
+        res = (1.0 - vmin / v) * onset;
     }
-    return (1.0 - vmin / v) * onset;
+    return res + stop_jerk_reserve(e, A, J, d);
 }
 
 /*
@@ -181,31 +206,17 @@ double scale_remaining(const engine_t *e, double s)
  * D as in scale_remaining(): the capacity to the segment's start at the limits
  * here, less the same reserve.  INFINITY if no slow segment is ahead.
  */
-static double stop_jerk_speed(const engine_t *e, double A, double jerk);
-
 double scale_ceil_room(const engine_t *e, double s, double A, double J)
 {
-    double R = INFINITY, extra = 0.0;
+    double R = INFINITY;
 
     if (e->out.mode != OUT_STREAM || !e->queue.slow_len)
         return R;
-    if (engine_cfg_axis_jerk(&e->cfg)) {
-        /* with per-axis jerk limits a stop converts its jerk at the fastest
-         * segment it may reach (stop_jerk_speed), which may be less than the
-         * one here: the ceilings ahead are planned for a braking at that jerk,
-         * so that a stop asked for now still meets them.  Planned at the jerk
-         * here, a stop near a trajectory's rest end entered a segment of
-         * ceiling 0.399 at rate 0.58, its deceleration above what the segment
-         * leaves, brought back at 1.76 times the jerk (3.56 m/s^3 on a 2 m/s^3
-         * axis, fuzz_lifecycle).  The braking itself keeps the jerk here: it
-         * starts where the weaker one would need to, and the extra distance
-         * that one needs from the state now is kept in reserve. */
+    if (engine_cfg_axis_jerk(&e->cfg) && !e->scale.stop_req) {
+        /* the ceilings planned for a stop's jerk (stop_jerk_reserve, which
+         * scale_slowing_reserve below includes): passed at that jerk too */
         double jerk = e->cfg.scale_jerk_m_s3, Jp = jerk / stop_jerk_speed(e, A, jerk);
-        if (Jp < J) {
-            extra = ts_stop_dist(e->scale.ts.rate, e->scale.ts.acc, A, Jp) -
-                    ts_stop_dist(e->scale.ts.rate, e->scale.ts.acc, A, J);
-            J = Jp;
-        }
+        J = Jp < J ? Jp : J;
     }
     double in_cur = e->out.cur_t1 - s, v = scale_conv_speed(e);
     double k0 = (in_cur > 0 ? in_cur / v : 0.0) - e->out.cur.kcum;
@@ -234,7 +245,7 @@ double scale_ceil_room(const engine_t *e, double s, double A, double J)
         double to = base - (du > 0 ? rfac * du : 0.0) - margin;
         R = fmin(R, to + ts_stop_dist(q->ceil, -A, A, J));
     }
-    return R - (extra > 0 ? extra : 0.0) - scale_slowing_reserve(e, v);
+    return R - scale_slowing_reserve(e, v);
 }
 
 /* The rate the speed cap allows on the current segment.  A transfer lasts
