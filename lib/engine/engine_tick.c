@@ -473,18 +473,29 @@ static void plain_window(engine_t *e)
     /* decide's check, ts_stop_dist(1, 0, a/v, j/v) < v K - (margin + 1) T
      * with v = conv_speed (the same on every tick of the window: the
      * segment's) and K the capacity left (scale_remaining()) */
+    /* with per-axis jerk limits the rooms keep a reserve for a stop's jerk
+     * (engine_scale.c stop_jerk_reserve) that moves with the segments the
+     * stop may reach: decided on every tick */
+    if (engine_cfg_axis_jerk(&e->cfg))
+        return;
     double v = scale_conv_speed(e);
     double d = e->out.cur.stop1 * (1 + 1e-9); /* queue_segment's, at v */
     double in_cur = e->out.cur_t1 - tau_of(e, e->out.n);
     double k = (in_cur > 0 ? in_cur / v : 0.0) + (e->scale.avail_kcum - e->out.cur.kcum);
+    /* with per-axis limits the rooms keep scale_slowing_reserve, which grows
+     * as slower-converted segments come within reach: at most the onset and
+     * release part of the stop from rate 1, d - v / (2 a), kept whole here
+     * (without it, windows kept rate 1 where decide() braked) */
+    double slow = solve_axis_limited(e) ? fmax(d - 0.5 * v / e->cfg.scale_accel_m_s2, 0.0) : 0.0;
     /* K falls by T / v per tick: the ticks for which it stays above */
     double room = (k - (d + scale_rise_reserve(e, v) + (TS_MARGIN_TICKS + 1) * e->period_s) / v) *
-                  v;
+                      v -
+                  slow;
     /* and the speed cap ahead (ceil_room), which falls by T per tick too */
     if (e->queue.slow_len) { /* (INFINITY without one) */
         double A, J;
         scale_limits(e, &A, &J); /* not in a stop: a / v and the jerk's */
-        room = fmin(room, scale_ceil_room(e, tau_of(e, e->out.n), A, J) - d - e->period_s);
+        room = fmin(room, scale_ceil_room(e, tau_of(e, e->out.n), A, J) - d - e->period_s - slow);
     }
     if (!(room > 0) || !isfinite(d))
         return;

@@ -16,7 +16,10 @@
  *    one nanometre of motion;
  *  - the safety monitor with those limits never refuses a setpoint; with
  *    per-axis limits (some inputs; issue 32) it holds them too, the jerk's
- *    included, SAFETY_AXIS_MARGIN above, as the daemon does.
+ *    included, SAFETY_AXIS_MARGIN above, as the daemon does;
+ *  - every rate decision the engine keeps for the ticks ahead (plain_window,
+ *    engine_tick.c) is the one it would make on each of them
+ *    (engine_plain_check, as tests/unit/test_engine_tick.c checks).
  */
 #include <math.h>
 #include <stdint.h>
@@ -24,6 +27,7 @@
 #include <string.h>
 
 #include "engine.h"
+#include "engine_int.h" /* engine_plain_check, the test hook */
 #include "lifecycle.h"
 #include "safety.h"
 
@@ -188,6 +192,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                            .tol_m = SAFETY_TOL_M_DEFAULT};
     safety_axis_limits(&lim, c.axis_max_speed_m_s, c.axis_max_accel_m_s2, c.axis_max_jerk_m_s3);
     safety_init(&f.sf, &lim);
+    engine_plain_check(f.e, 1, NULL, NULL); /* each kept decision made again */
     if (lc_init(&f.lc, f.e, &f.sf, PERIOD_NS, 0) < 0)
         abort();
     f.clocked = data[0] & 1;
@@ -200,6 +205,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         for (int k = 0; k < 4 + data[i + 2]; k++)
             tick(&f);
     }
+    uint64_t wrong = 0;
+    engine_plain_check(f.e, 1, NULL, &wrong);
+    if (wrong)
+        abort(); /* a kept decision that a tick would not have made */
     lc_free(&f.lc);
     engine_free(f.e);
     return 0;
