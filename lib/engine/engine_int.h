@@ -302,6 +302,8 @@ struct engine {
     int held;                /* HELD or MULTIPLE: first and last segments not emitted */
     int mult;                /* MULTIPLE: end points entered three times */
     int smooth;              /* SMOOTH: waypoints pass through the lsq smoother first */
+    int axis_lim;            /* issue 32: a per-axis limit is set (solve_axis_limited) */
+    int axis_jerk;           /* ... a per-axis jerk limit (engine_cfg_axis_jerk) */
     uint32_t axis_lag_track; /* issue 32: the output track axis_lag_s counts for ... */
     int axis_lag_over;       /* ... and its max_lag_s passed, not yet told */
     int axis_lag_told;       /* ... and told (once per trajectory) */
@@ -365,8 +367,13 @@ size_t input_buffered(const engine_t *e);
 double solve_seg_speed_max(const fdiff_seg_t *seg);
 /* axis k's largest speed |k_k'| over seg at rate 1 (m/s), exactly */
 double solve_axis_speed_max(const fdiff_seg_t *seg, int k);
-/* issue 32: a per-axis limit is set (engine.h axis_max_*). */
-int solve_axis_limited(const engine_t *e);
+/* issue 32: a per-axis limit is set (engine.h axis_max_*; the settings are
+ * the engine's for its life, so engine_new notes it once). */
+static inline int solve_axis_limited(const engine_t *e)
+{
+    return e->axis_lim;
+}
+int solve_cfg_axis_limited(const engine_config_t *cfg);
 /* The highest rate at which a segment keeps the speed cap and the
  * per-axis limits (qent_t ceil; *axis: qent_t ceil_axis). */
 double solve_seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax, int *axis);

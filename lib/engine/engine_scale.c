@@ -113,7 +113,7 @@ static double stop_jerk_speed(const engine_t *e, double A, double jerk);
  * m/s^3 on 2; both fuzz_lifecycle). */
 static double stop_jerk_reserve(const engine_t *e, double A, double J, double d)
 {
-    if (!engine_cfg_axis_jerk(&e->cfg) || e->scale.stop_req)
+    if (!e->axis_jerk || e->scale.stop_req)
         return 0.0;
     double jerk = e->cfg.scale_jerk_m_s3, Jp = jerk / stop_jerk_speed(e, A, jerk);
     if (!(Jp < J))
@@ -212,7 +212,7 @@ double scale_ceil_room(const engine_t *e, double s, double A, double J)
 
     if (e->out.mode != OUT_STREAM || !e->queue.slow_len)
         return R;
-    if (engine_cfg_axis_jerk(&e->cfg) && !e->scale.stop_req) {
+    if (e->axis_jerk && !e->scale.stop_req) {
         /* the ceilings planned for a stop's jerk (stop_jerk_reserve, which
          * scale_slowing_reserve below includes): passed at that jerk too */
         double jerk = e->cfg.scale_jerk_m_s3, Jp = jerk / stop_jerk_speed(e, A, jerk);
@@ -267,7 +267,7 @@ double scale_ceil_here(const engine_t *e)
  * "Stop distance"); with per-axis jerk limits the scaling's own, j. */
 static double stop_jerk(const engine_t *e)
 {
-    if (engine_cfg_axis_jerk(&e->cfg))
+    if (e->axis_jerk)
         return e->cfg.scale_jerk_m_s3;
     return fmax(e->cfg.scale_jerk_m_s3, e->cfg.scale_accel_m_s2 / e->period_s);
 }
@@ -319,7 +319,7 @@ void scale_limits(const engine_t *e, double *A, double *J)
          * (scale_remaining), and it keeps every axis within its limit; with
          * per-axis jerk limits that A alone (engine_solve.c jerk_rate_accel) */
         *A = e->cfg.scale_accel_m_s2 / scale_conv_speed(e);
-        if (!engine_cfg_axis_jerk(&e->cfg))
+        if (!e->axis_jerk)
             *A = fmax(e->cfg.scale_accel_m_s2 / v, *A);
         else /* the jerk at the fastest segment it may reach: converted at the
               * speed here, it shrank as a stop went on along a transfer

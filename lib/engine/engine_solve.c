@@ -234,7 +234,7 @@ static double jerk_rate_accel(const engine_t *e, const fdiff_seg_t *seg, double 
 static double accel_speed(const engine_t *e, const fdiff_seg_t *seg, double vmax, double ceil)
 {
     double v = vmax > ENGINE_SCALE_V_FLOOR_M_S ? vmax : ENGINE_SCALE_V_FLOOR_M_S;
-    if (!(ceil > 0) || (!axis_accel_limited(e) && !engine_cfg_axis_jerk(&e->cfg)))
+    if (!(ceil > 0) || (!axis_accel_limited(e) && !e->axis_jerk))
         return v;
     double a = e->cfg.scale_accel_m_s2, rc = fmin(ceil, TS_RATE_MAX), n2 = 0;
     double Aj = jerk_rate_accel(e, seg, rc);
@@ -325,7 +325,7 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
 {
     seg_limits_t l;
     seg_limits(e, seg, &l);
-    if (axis_accel_limited(e) || engine_cfg_axis_jerk(&e->cfg)) {
+    if (axis_accel_limited(e) || e->axis_jerk) {
         if (e->solve.pend)
             queue_now(e, &e->solve.pend_seg, e->solve.pend_node, &e->solve.pend_lim, l.av);
         e->solve.pend = 1;
@@ -402,12 +402,12 @@ static void end_vel_param(const engine_t *e, int at_end, double *v)
         v[k] = src[k] * scale;
 }
 
-/* issue 32: a per-axis limit is set (engine.h axis_max_*). */
-int solve_axis_limited(const engine_t *e)
+/* issue 32: a per-axis limit is set in cfg (engine.h axis_max_*). */
+int solve_cfg_axis_limited(const engine_config_t *cfg)
 {
     for (int k = 0; k < AX; k++)
-        if (e->cfg.axis_max_speed_m_s[k] > 0 || e->cfg.axis_max_accel_m_s2[k] > 0 ||
-            e->cfg.axis_max_jerk_m_s3[k] > 0)
+        if (cfg->axis_max_speed_m_s[k] > 0 || cfg->axis_max_accel_m_s2[k] > 0 ||
+            cfg->axis_max_jerk_m_s3[k] > 0)
             return 1;
     return 0;
 }

@@ -183,6 +183,10 @@ static size_t traj_past(const engine_t *e, size_t i0, uint64_t traj)
 static int join_find(const engine_t *e, join_find_t *f, int *never)
 {
     *never = 0;
+    /* no later trajectory queued (the usual case, asked at every segment
+     * by plain_window): the search below would find none */
+    if (!e->queue.len || queue_at(e, e->queue.len - 1)->traj <= e->out.traj)
+        return 0;
     size_t i = traj_past(e, 0, e->out.traj);
     if (i == 0 || i >= e->queue.len || queue_at(e, i - 1)->kind != QE_END)
         return 0; /* not closed, or the next trajectory may still come */
