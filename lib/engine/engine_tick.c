@@ -15,6 +15,7 @@
 #include "engine_int.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "accept.h"
@@ -476,7 +477,7 @@ static void plain_window(engine_t *e)
     /* with per-axis jerk limits the rooms keep a reserve for a stop's jerk
      * (engine_scale.c stop_jerk_reserve) that moves with the segments the
      * stop may reach: decided on every tick */
-    if (engine_cfg_axis_jerk(&e->cfg))
+    if (e->axis_jerk)
         return;
     double v = scale_conv_speed(e);
     double d = e->out.cur.stop1 * (1 + 1e-9); /* queue_segment's, at v */
@@ -690,10 +691,47 @@ static int plain_sp(const engine_t *e)
 
 static void fill_sp_flags(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
 
-/* A plain setpoint (plain_sp): what fill_sp_flags would make of it. */
+/* Two doubles, for the stepper's rows (fdiff.h keeps them in lanes). */
+typedef double row2_t __attribute__((vector_size(16)));
+
+static inline row2_t row2_at(const double *p)
+{
+    row2_t v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+
+/* The setpoint's pos_m, vel_m_s and acc_m_s2, one run of nine doubles. */
+_Static_assert(offsetof(engine_setpoint_t, vel_m_s) ==
+                       offsetof(engine_setpoint_t, pos_m) + AX * sizeof(double) &&
+                   offsetof(engine_setpoint_t, acc_m_s2) ==
+                       offsetof(engine_setpoint_t, vel_m_s) + AX * sizeof(double) &&
+                   AX == 3,
+               "put_rows stores pos_m, vel_m_s and acc_m_s2 as one run of nine doubles");
+
+/* put_sp's rows from the stepper, in pairs (+ 0.0 as there): the store
+ * every plain tick makes. */
+static inline void put_rows(engine_setpoint_t *sp, const fdiff_t *fd)
+{
+    const row2_t z = {0.0, 0.0};
+    row2_t r[4] = {row2_at(fd->p0) + z, (row2_t){fd->p0[2], fd->v0[0]} + z, row2_at(fd->v0 + 1) + z,
+                   row2_at(fd->a0) + z};
+    memcpy((char *)sp + offsetof(engine_setpoint_t, pos_m), r, sizeof r);
+    sp->acc_m_s2[2] = fd->a0[2] + 0.0;
+}
+
+/* A plain setpoint (plain_sp): what fill_sp_flags would make of it (put_sp,
+ * its rows by put_rows). */
 static inline void fill_plain(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
-    put_sp(e, sp, now_ns, e->out.fd.p0, e->out.fd.v0, e->out.fd.a0, ENGINE_STATE_STREAMING, 0, NAN);
+    sp->now_ns = now_ns;
+    sp->t_s = e->out.t;
+    put_rows(sp, &e->out.fd);
+    sp->state = ENGINE_STATE_STREAMING;
+    sp->flags = 0;
+    sp->cycle = e->out.cycle;
+    sp->track = e->out.track;
+    sp->age_s = NAN;
     e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
 }
 
@@ -812,8 +850,9 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     if (e->out.have_now) {
         int64_t d = now_ns - e->out.last_now, p = e->cfg.period_ns;
         /* ticks on the period grid since the last call (rounded): one if d
-         * is in [p - p/2, 2 p - p/2), as the division would round */
-        if (__builtin_expect(d >= p - p / 2 && d < 2 * p - p / 2, 1)) {
+         * is in [p - p/2, 2 p - p/2), as the division would round (one
+         * unsigned comparison: d below p - p/2 wraps above p) */
+        if (__builtin_expect((uint64_t)d - (uint64_t)(p - p / 2) < (uint64_t)p, 1)) {
             if (plain_holds(e) && !e->lag.pending && !e->sil.fresh &&
                 tau_of(e, e->out.n + 1) < e->out.cur_t1) {
                 /* lag_note has nothing to note (no push since), and a silent
