@@ -25,9 +25,11 @@ import decimal
 import math
 import os
 import random
+import signal
 import subprocess
 import sys
 import tempfile
+import time
 import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
@@ -42,13 +44,14 @@ SPEED = 200
 RATE_HZ = 10
 
 
-def write_log(path, ppm, loss=0.0, seed=7):
+def write_log(path, ppm, loss=0.0, seed=7, n=None):
     rnd = random.Random(seed)
     db = ct.load_db()
     lines = []
-    for i in range(N):
+    n = N if n is None else n
+    for i in range(n):
         t = H * i
-        if rnd.random() < loss and 0 < i < N - 1:
+        if rnd.random() < loss and 0 < i < n - 1:
             continue  # lost
         x, y = 300 * math.sin(t / 60), 200 * math.sin(t / 97)
         arrive = t / (1 + ppm * 1e-6) + rnd.uniform(0.02, 0.08)
@@ -60,21 +63,32 @@ def write_log(path, ppm, loss=0.0, seed=7):
         fh.writelines(lines)
 
 
-def run(d, ppm, catchup, timeout=120):
+def write_conf(d, catchup=None, speed=None):
     conf = os.path.join(d, "t.conf")
     with open(conf, "w") as fh:
         fh.write("[daemon]\nrate_hz = %d\nspeed = %d\nclock = relative\nexit_when_done = yes\n"
                  "status_interval_s = 0\nstop_timeout_s = 1\n%s"
                  "[can]\nlog_in = wp.log\nlog_ifname = vcan0\nmax_late_ms = 0\n"
                  "[object.gnss]\ninput = can\noutput = csv\ncsv.path = sp.csv\n"
-                 % (RATE_HZ, SPEED, "catchup = %g\n" % catchup if catchup is not None else ""))
-    p = subprocess.run([TRAJD, "-f", "-c", conf], cwd=d, capture_output=True, text=True,
-                       timeout=timeout)
+                 % (RATE_HZ, speed or SPEED,
+                    "catchup = %g\n" % catchup if catchup is not None else ""))
+    return conf
+
+
+def read_rows(d, track=False):
     rows = []
     with open(os.path.join(d, "sp.csv")) as fh:
         for r in csv.DictReader(fh):
-            rows.append((int(r["now_ns"]) * 1e-9, float(r["t_s"]), r["state"]))
-    return p, rows
+            rows.append((int(r["now_ns"]) * 1e-9, float(r["t_s"]), r["state"])
+                        + ((int(r["track"]),) if track else ()))
+    return rows
+
+
+def run(d, ppm, catchup, timeout=120):
+    conf = write_conf(d, catchup)
+    p = subprocess.run([TRAJD, "-f", "-c", conf], cwd=d, capture_output=True, text=True,
+                       timeout=timeout)
+    return p, read_rows(d)
 
 
 def delays(rows, ppm, lo, hi):
@@ -116,6 +130,51 @@ class DriftDaemon(unittest.TestCase):
     def test_without_catchup_the_drift_is_lag(self):
         start, end, _, _ = self.check(500, catchup=0)
         self.assertGreater(end - start, 0.7)  # 500 ppm of 30 min: 0.9 s
+
+
+class MissedDeadlines(unittest.TestCase):
+    """Frames of a log_in due within deadlines trajd missed reach the engine at their own
+    step.  trajd, replaying 5 minutes of the 2 Hz track at speed 50, is stopped (SIGSTOP)
+    for 1 s while it streams: 50 s of the sender's time, five times its D.  On SIGCONT it
+    steps through every deadline it missed (speed != 1), and each step is given the frames
+    due by then: the object streams on, one trajectory, no underrun and no silent end.  With
+    the input drained once per tick instead, those 50 s of frames waited for the next tick,
+    the engine saw a silence longer than its slack and ended the trajectory there (a silent
+    end), and the waypoints then became a second trajectory reached by a transfer."""
+
+    def test_frames_due_in_missed_deadlines(self):
+        n, speed = 600, 50
+        with tempfile.TemporaryDirectory() as d:
+            write_log(os.path.join(d, "wp.log"), 0, n=n)
+            conf = write_conf(d, speed=speed)
+            p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=d, stdout=subprocess.DEVNULL,
+                                 stderr=subprocess.PIPE, text=True)
+            try:
+                time.sleep(2.0)  # 100 s of the sender's time: streaming (D is about 11 s)
+                p.send_signal(signal.SIGSTOP)
+                time.sleep(1.0)
+                p.send_signal(signal.SIGCONT)
+                _, err = p.communicate(timeout=120)
+            finally:
+                if p.poll() is None:
+                    p.kill()
+            rows = read_rows(d, track=True)
+        self.assertEqual(p.returncode, 0, err[-2000:])
+        # the stop came mid-motion: the widest step between rows (trajd writes no rows for
+        # the deadlines it missed) is the stop's, streaming on both sides
+        gaps = [(rows[i + 1][0] - rows[i][0], i) for i in range(len(rows) - 1)]
+        gap, i = max(gaps)
+        print("stopped %.1f s of the sender's time at t_s %.1f; %s" % (
+            gap, rows[i][1], [l for l in err.splitlines() if "exit:" in l][-1][:160]),
+            file=sys.stderr)
+        self.assertGreater(gap, 0.5 * speed, "no deadline missed: the stop did not happen")
+        self.assertTrue(rows[i][2] == "streaming" and rows[i + 1][2] == "streaming",
+                        "not streaming across the stop: %r, %r" % (rows[i], rows[i + 1]))
+        self.assertLess(rows[i][1], (n - 1) * H - gap, "stopped after the input's end")
+        self.assertEqual({r[3] for r in rows if r[2] != "waiting"}, {1}, "one trajectory")
+        self.assertEqual(sum(1 for r in rows if r[2] == "underrun"), 0)
+        self.assertIn(", 0 underruns", err)
+        self.assertNotIn("silent end", err)
 
 
 def day():
