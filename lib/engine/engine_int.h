@@ -421,11 +421,15 @@ double scale_rise_reserve(const engine_t *e, double v);
 double scale_remaining(const engine_t *e, double s);
 double scale_slowing_reserve(const engine_t *e, double v);
 double scale_ceil_room(const engine_t *e, double s, double A, double J);
+/* scale_remaining and scale_ceil_room before scale_slowing_reserve at
+ * scale_conv_speed is taken off (a decision works that out once for both) */
+double scale_remaining_gross(const engine_t *e, double s);
+double scale_ceil_room_gross(const engine_t *e, double s, double A, double J);
 double scale_ceil_here(const engine_t *e);
 void scale_limits(const engine_t *e, double *A, double *J);
 double scale_target(const engine_t *e);
 int scale_moves(const engine_t *e, double R, double A, double J);
-void scale_step(engine_t *e, double target, double R, double A, double J);
+void scale_step(engine_t *e, double target, double R, double Rc, double A, double J);
 void scale_clocked_step(engine_t *e, double R, double A, double J);
 
 /* ---- transfers (engine_xfer.c) ---- */

@@ -185,6 +185,11 @@ double scale_slowing_reserve(const engine_t *e, double v)
  */
 double scale_remaining(const engine_t *e, double s)
 {
+    return scale_remaining_gross(e, s) - scale_slowing_reserve(e, scale_conv_speed(e));
+}
+
+double scale_remaining_gross(const engine_t *e, double s)
+{
     if (e->out.mode == OUT_XFER)
         return e->out.cur_t1 - s; /* left at rate 0 (handover) */
     /* the braking capacity left, in the units of the limits here */
@@ -192,8 +197,7 @@ double scale_remaining(const engine_t *e, double s)
     k = (in_cur > 0 ? in_cur / v : 0.0) + (e->scale.avail_kcum - e->out.cur.kcum);
     /* the margin scales with the rate: standing still needs none, so a
      * buffer shorter than the margin never deadlocks the output */
-    return v * k - e->scale.ts.rate * (scale_rise_reserve(e, v) + TS_MARGIN_TICKS * e->period_s) -
-           scale_slowing_reserve(e, v);
+    return v * k - e->scale.ts.rate * (scale_rise_reserve(e, v) + TS_MARGIN_TICKS * e->period_s);
 }
 
 /*
@@ -208,13 +212,19 @@ double scale_remaining(const engine_t *e, double s)
  */
 double scale_ceil_room(const engine_t *e, double s, double A, double J)
 {
+    return scale_ceil_room_gross(e, s, A, J) - scale_slowing_reserve(e, scale_conv_speed(e));
+}
+
+double scale_ceil_room_gross(const engine_t *e, double s, double A, double J)
+{
     double R = INFINITY;
 
     if (e->out.mode != OUT_STREAM || !e->queue.slow_len)
         return R;
     if (e->axis_jerk && !e->scale.stop_req) {
         /* the ceilings planned for a stop's jerk (stop_jerk_reserve, which
-         * scale_slowing_reserve below includes): passed at that jerk too */
+         * scale_ceil_room's scale_slowing_reserve includes): passed at that
+         * jerk too */
         double jerk = e->cfg.scale_jerk_m_s3, Jp = jerk / stop_jerk_speed(e, A, jerk);
         J = Jp < J ? Jp : J;
     }
@@ -245,7 +255,7 @@ double scale_ceil_room(const engine_t *e, double s, double A, double J)
         double to = base - (du > 0 ? rfac * du : 0.0) - margin;
         R = fmin(R, to + ts_stop_dist(q->ceil, -A, A, J));
     }
-    return R - scale_slowing_reserve(e, v);
+    return R;
 }
 
 /* The rate the speed cap allows on the current segment.  A transfer lasts
@@ -480,11 +490,14 @@ static void axis_beyond(engine_t *e)
     }
 }
 
-/* One tick off the unit grid: the time scaling chooses the advance. */
-void scale_step(engine_t *e, double target, double R, double A, double J)
+/* One tick off the unit grid: the time scaling chooses the advance, within
+ * R (scale_remaining) and Rc (scale_ceil_room, which the caller has worked
+ * out for this state already: with per-axis limits it scans the capped
+ * segments ahead). */
+void scale_step(engine_t *e, double target, double R, double Rc, double A, double J)
 {
     int lim = 0;
-    double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n), Rc = scale_ceil_room(e, s, A, J);
+    double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n);
     double r0 = e->scale.ts.rate;
     ts_state_t free_ts = e->scale.ts; /* issue 26: held back only if the move differs */
     double ds = ts_step(&e->scale.ts, target, fmin(R, Rc), A, J, e->period_s, NULL, &lim);
@@ -611,7 +624,7 @@ void scale_clocked_step(engine_t *e, double R, double A, double J)
     double T = e->period_s;
     int free_run = !e->scale.stop_req && !e->scale.end_brake && e->scale.override >= 1.0;
 
-    double Rm = fmin(R, scale_ceil_room(e, s, A, J));
+    double Rc = scale_ceil_room(e, s, A, J), Rm = fmin(R, Rc);
     if (e->clk.locked && free_run && fabs(p - s - rho * T) <= ENGINE_CLOCK_LOCK_S && p > s &&
         rho <= scale_ceil_here(e) && (isinf(Rm) || ts_stop_dist(rho, 0.0, A, J) < Rm - rho * T)) {
         e->scale.ts.rate = rho;
@@ -636,7 +649,7 @@ void scale_clocked_step(engine_t *e, double R, double A, double J)
             target *= e->scale.override;
         target = fmin(target, scale_ceil_here(e));
     }
-    scale_step(e, target, R, A, J);
+    scale_step(e, target, R, Rc, A, J);
     if (e->out.mode == OUT_STREAM && free_run && fabs(p - e->scale.s) <= ENGINE_CLOCK_LOCK_S &&
         fabs(e->scale.ts.rate - rho) <= ENGINE_CLOCK_LOCK_S * ENGINE_CLOCK_GAIN + 1e-9)
         e->clk.locked = 1;

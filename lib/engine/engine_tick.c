@@ -389,6 +389,7 @@ enum { GO_UNIT, GO_CLOCKED, GO_REBUFFER, GO_SCALED };
 
 typedef struct {
     double s, A, J, R, target;
+    double Rc; /* the speed cap ahead (scale_ceil_room) for GO_SCALED: worked out once */
 } decision_t;
 
 /*
@@ -403,7 +404,10 @@ static int decide(engine_t *e, decision_t *d)
 {
     double A, J, s = e->scale.on ? e->scale.s : tau_of(e, e->out.n), R;
     scale_limits(e, &A, &J);
-    R = scale_remaining(e, s);
+    /* the reserve both rooms keep, worked out once (with per-axis limits it
+     * scans the queue ahead) */
+    double res = scale_slowing_reserve(e, scale_conv_speed(e));
+    R = scale_remaining_gross(e, s) - res;
     d->s = s;
     d->A = A;
     d->J = J;
@@ -425,8 +429,9 @@ static int decide(engine_t *e, decision_t *d)
     if (e->slack_auto && e->out.underrun && e->out.mode == OUT_STREAM && !(e->scale.ts.rate > 0) &&
         target > 0 && rebuffering(e, s))
         return GO_REBUFFER;
-    double Rm = fmin(R, scale_ceil_room(e, s, A, J)); /* the speed cap ahead too */
-    target = engine_lag_target(e, target, Rm, A, J);  /* a lag won back (catchup.h) */
+    d->Rc = scale_ceil_room_gross(e, s, A, J) - res;
+    double Rm = fmin(R, d->Rc);                      /* the speed cap ahead too */
+    target = engine_lag_target(e, target, Rm, A, J); /* a lag won back (catchup.h) */
     d->target = target;
     if (!e->scale.on && is_exactly(target, 1.0) &&
         (isinf(Rm) || ts_stop_dist(1.0, 0.0, A, J) < Rm - e->period_s))
@@ -557,13 +562,13 @@ static int step_decided(engine_t *e)
     case GO_UNIT: return unit_step(e);
     case GO_CLOCKED: scale_clocked_step(e, d.R, d.A, d.J); break;
     case GO_REBUFFER:
-        scale_step(e, 0.0, d.R, d.A, d.J);
+        scale_step(e, 0.0, d.R, scale_ceil_room(e, d.s, d.A, d.J), d.A, d.J);
         if (!e->out.underrun) { /* still in the same underrun */
             e->out.underrun = 1;
             e->st.underrun_ticks++;
         }
         break;
-    default: scale_step(e, d.target, d.R, d.A, d.J); break;
+    default: scale_step(e, d.target, d.R, d.Rc, d.A, d.J); break;
     }
     return 1;
 }
