@@ -309,6 +309,45 @@ static double stop_jerk_speed(const engine_t *e, double A, double jerk)
     return v;
 }
 
+/* Queue entries looked through for a lower acceleration limit ahead. */
+#define ACCEL_AHEAD_SCAN 64
+
+/*
+ * issue 32: with per-axis limits, the most a step that speeds up may take
+ * the rate's acceleration to: the A here, and what each segment ahead leaves
+ * as far as the jerk can take the acceleration down before the output gets
+ * there, A_j + J t_j (t_j the least time to reach segment j, its distance at
+ * TS_RATE_MAX; J the lower of the jerks here and there), never below what
+ * the jerk can take it down to in this tick (a limit learnt late is followed
+ * at the jerk).  Each queued segment's av anticipates only the next
+ * segment's (engine_solve.c queue_now): where the limits shrink over several
+ * segments in a row, a ramp at the A here entered them with ten times their
+ * A (1.16 m/s^2 on a 1 m/s^2 axis, fuzz_engine).  scale_step applies it to
+ * a step that speeds up more only: brakings and rooms keep the A here.
+ */
+static double accel_ahead(const engine_t *e, double A, double J, double acc)
+{
+    if (!e->axis_lim || e->out.mode != OUT_STREAM || e->scale.stop_req)
+        return A;
+    double jerk = e->cfg.scale_jerk_m_s3, a = e->cfg.scale_accel_m_s2, A0 = A;
+    for (size_t i = 0; i < e->queue.len && i < ACCEL_AHEAD_SCAN; i++) {
+        const qent_t *q = queue_at(e, i);
+        if (q->kind != QE_SEG || q->traj != e->out.traj)
+            break;
+        double t = (q->seg.t0_s - e->out.t) / TS_RATE_MAX;
+        if (!(J * t < A))
+            break; /* (beyond, only a jerk lower than here could bind) */
+        double v = q->vmax > ENGINE_SCALE_V_FLOOR_M_S ? q->vmax : ENGINE_SCALE_V_FLOOR_M_S;
+        double Aj = a / q->av + fmin(J, jerk / v) * (t > 0 ? t : 0.0);
+        A = Aj < A ? Aj : A;
+    }
+    /* never below what the jerk can take the acceleration now (acc, before
+     * the step) down to in a tick: a limit learnt late (a segment queued
+     * within reach) is followed at the jerk, not in one step */
+    double down = fabs(acc) - J * e->period_s;
+    return down > A ? fmin(down, A0) : A;
+}
+
 /* The time scaling's limits in rate units at the curve's speed: outside a
  * stop at the largest speed the curve reaches on the current segment and the
  * next one (conv_speed), so that k' dr/dt stays within a over the ticks ahead
@@ -501,6 +540,16 @@ void scale_step(engine_t *e, double target, double R, double Rc, double A, doubl
     double r0 = e->scale.ts.rate;
     ts_state_t free_ts = e->scale.ts; /* issue 26: held back only if the move differs */
     double ds = ts_step(&e->scale.ts, target, fmin(R, Rc), A, J, e->period_s, NULL, &lim);
+    if (e->scale.ts.acc > 0 && e->scale.ts.acc >= free_ts.acc) {
+        /* speeding up more: within what the segments ahead leave too
+         * (accel_ahead); a braking keeps the A here */
+        double Aup = accel_ahead(e, A, J, free_ts.acc);
+        if (e->scale.ts.acc > Aup) {
+            e->scale.ts = free_ts;
+            lim = 0;
+            ds = ts_step(&e->scale.ts, target, fmin(R, Rc), Aup, J, e->period_s, NULL, &lim);
+        }
+    }
     if (e->out.mode == OUT_XFER && !(ds > 0) && at_rest(e) && target > 0)
         ds = ts_creep(&e->scale.ts, fmin(R, Rc), A, J, e->period_s); /* its end, short of it */
     if (lim && !(ds < ts_step(&free_ts, target, INFINITY, A, J, e->period_s, NULL, NULL)))
