@@ -100,6 +100,13 @@ double scale_rise_reserve(const engine_t *e, double v)
 
 static double stop_jerk_speed(const engine_t *e, double A, double jerk);
 
+/* With per-axis jerk limits, a braking to rest: a stop, or a target of 0 (a
+ * feed hold, the curve's end, a rebuffering). */
+static int brakes_to_rest(const engine_t *e)
+{
+    return e->axis_jerk && (e->scale.stop_req || !(scale_target(e) > 0));
+}
+
 /* With per-axis jerk limits a stop converts its jerk at the fastest segment
  * it may reach (stop_jerk_speed), which may be less than the streaming's
  * jerk here: the rooms ahead (to the curve's end, to each ceiling) are
@@ -378,6 +385,8 @@ void scale_limits(const engine_t *e, double *A, double *J)
     } else {
         v = scale_jerk_speed(e);
         *A = e->cfg.scale_accel_m_s2 / scale_conv_speed(e);
+        if (brakes_to_rest(e)) /* planned as a stop's (above; stop_jerk_now) */
+            v = fmax(v, stop_jerk_speed(e, *A, jerk));
     }
     *J = jerk / v;
 }
@@ -529,6 +538,28 @@ static void axis_beyond(engine_t *e)
     }
 }
 
+/*
+ * With per-axis jerk limits a stop's jerk is converted at the fastest segment
+ * it may reach (scale_limits, stop_jerk_speed), and every tick of it is
+ * planned at that J.  This tick may use the jerk of the segments it moves
+ * on, the current one and the next where the tick may reach it: a stop asked
+ * during a ramp whose acceleration the converted jerk takes back 50 times
+ * slower (a segment of 45 m/s queued ahead of one of 0.9 m/s) was still
+ * speeding up when it entered segments whose ceiling it was 10 times above
+ * (fuzz_engine).
+ */
+static double stop_jerk_now(const engine_t *e, double J)
+{
+    if (!brakes_to_rest(e) || e->out.mode != OUT_STREAM)
+        return J;
+    double v = scale_jerk_speed(e);
+    const qent_t *q = e->queue.len ? queue_at(e, 0) : NULL;
+    if (q && q->kind == QE_SEG && q->traj == e->out.traj &&
+        q->seg.t0_s - e->out.t <= 2.0 * TS_RATE_MAX * e->period_s)
+        v = fmax(v, q->vmax); /* the tick may reach the next one */
+    return fmax(J, e->cfg.scale_jerk_m_s3 / v);
+}
+
 /* One tick off the unit grid: the time scaling chooses the advance, within
  * R (scale_remaining) and Rc (scale_ceil_room, which the caller has worked
  * out for this state already: with per-axis limits it scans the capped
@@ -539,7 +570,8 @@ void scale_step(engine_t *e, double target, double R, double Rc, double A, doubl
     double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n);
     double r0 = e->scale.ts.rate;
     ts_state_t free_ts = e->scale.ts; /* issue 26: held back only if the move differs */
-    double ds = ts_step(&e->scale.ts, target, fmin(R, Rc), A, J, e->period_s, NULL, &lim);
+    double ds = ts_step_jerk(&e->scale.ts, target, fmin(R, Rc), A, stop_jerk_now(e, J), J,
+                             e->period_s, NULL, &lim);
     if (e->scale.ts.acc > 0 && e->scale.ts.acc >= free_ts.acc) {
         /* speeding up more: within what the segments ahead leave too
          * (accel_ahead); a braking keeps the A here */

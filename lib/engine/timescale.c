@@ -201,7 +201,14 @@ double ts_dead_band(double J, double T)
 double ts_step(ts_state_t *st, double target, double R, double A, double J, double T, double *j_out,
                int *limited)
 {
+    return ts_step_jerk(st, target, R, A, J, J, T, j_out, limited);
+}
+
+double ts_step_jerk(ts_state_t *st, double target, double R, double A, double J_now, double J,
+                    double T, double *j_out, int *limited)
+{
     double r = st->rate, a = st->acc, tgt = target, r1, a1, ds, j, Jr = J;
+    J = J_now > J ? J_now : J;
     int lim = 0, crept = 0;
 
     /* the limits shrank (timescale.h): back within A in A/J.  Only this

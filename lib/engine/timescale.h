@@ -94,6 +94,12 @@ double ts_dead_band(double J, double T);
  */
 double ts_step(ts_state_t *st, double target, double R, double A, double J, double T, double *j_out,
                int *limited);
+/* ts_step with this tick's jerk J_now (at least J) apart from the jerk J
+ * every later tick is planned at (the release, the stop, the rooms): a
+ * stop whose jerk is converted at a faster segment ahead may use the jerk of
+ * the segment it is on while it is there. */
+double ts_step_jerk(ts_state_t *st, double target, double R, double A, double J_now, double J,
+                    double T, double *j_out, int *limited);
 
 /*
  * At rest (rate and acc 0), a creep towards R: the smallest of ts_step's

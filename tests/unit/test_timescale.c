@@ -669,6 +669,43 @@ static void test_creep_onto_the_end(void **state)
     assert_true(left <= 1e-3 * R0);
 }
 
+/* A stop asked during a ramp (rate 0.36 rising by 0.31 a second), planned at
+ * the jerk of a fast segment ahead (0.11 per s^3 of rate) while the output is
+ * still on a slow one that allows 5: ts_step_jerk takes this tick's jerk from
+ * the segment it is on (the ramp's acceleration down by 5 T in a tick, where
+ * ts_step at the planned jerk takes 0.11 T), plans every later tick at the
+ * planned jerk, and the braking ends exactly at rest with no acceleration
+ * left once the ticks have only the planned jerk (fuzz_engine's
+ * clear-above-ceiling-then-transfer, engine_scale.c stop_jerk_now). */
+static void test_stop_jerk_now(void **state)
+{
+    (void)state;
+    const double A = 0.39, J = 0.11, Jnow = 5.0, T = 0.02;
+    ts_state_t slow = {.rate = 0.36, .acc = 0.31}, st = slow;
+    double j;
+
+    (void)ts_step(&slow, 0.0, INFINITY, A, J, T, &j, NULL);
+    assert_true(slow.acc >= 0.31 - J * T * (1 + 1e-12));
+    (void)ts_step_jerk(&st, 0.0, INFINITY, A, Jnow, J, T, &j, NULL);
+    assert_true(fabs(j) <= Jnow * (1 + 1e-12));
+    assert_true(st.acc <= 0.31 - 0.99 * Jnow * T);
+    double rmax = st.rate;
+    int i;
+    for (i = 1; i < 12; i++) { /* still on the slow segment */
+        (void)ts_step_jerk(&st, 0.0, INFINITY, A, Jnow, J, T, &j, NULL);
+        assert_true(fabs(j) <= Jnow * (1 + 1e-12));
+        rmax = fmax(rmax, st.rate);
+    }
+    for (; i < 100000 && (st.rate > 0 || fabs(st.acc) > 0); i++) { /* on the fast one */
+        double acc = st.acc;
+        (void)ts_step(&st, 0.0, INFINITY, A, J, T, &j, NULL);
+        assert_true(fabs(j) <= J * fmax(1.0, fabs(acc) / A) * (1 + 1e-12));
+    }
+    print_message("stop at this tick's jerk: peak rate %.4f, at rest after %d ticks\n", rmax, i);
+    assert_true(rmax < 0.37);
+    assert_true(st.rate <= 0.0 && fabs(st.acc) <= 0.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -681,6 +718,7 @@ int main(void)
         cmocka_unit_test(test_jerk_straight_line),
         cmocka_unit_test(test_limits_shrink_no_overshoot),
         cmocka_unit_test(test_creep_onto_the_end),
+        cmocka_unit_test(test_stop_jerk_now),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
