@@ -101,7 +101,7 @@ double scale_rise_reserve(const engine_t *e, double v)
 static double stop_jerk_speed(const engine_t *e, double A, double jerk);
 
 /* With per-axis jerk limits, a braking to rest: a stop, or a target of 0 (a
- * feed hold, the curve's end, a rebuffering). */
+ * feed hold, the braking for the curve's end). */
 static int brakes_to_rest(const engine_t *e)
 {
     return e->axis_jerk && (e->scale.stop_req || !(scale_target(e) > 0));
@@ -539,14 +539,15 @@ static void axis_beyond(engine_t *e)
 }
 
 /*
- * With per-axis jerk limits a stop's jerk is converted at the fastest segment
- * it may reach (scale_limits, stop_jerk_speed), and every tick of it is
- * planned at that J.  This tick may use the jerk of the segments it moves
- * on, the current one and the next where the tick may reach it: a stop asked
- * during a ramp whose acceleration the converted jerk takes back 50 times
- * slower (a segment of 45 m/s queued ahead of one of 0.9 m/s) was still
- * speeding up when it entered segments whose ceiling it was 10 times above
- * (fuzz_engine).
+ * With per-axis jerk limits a braking to rest (brakes_to_rest: a stop, a
+ * feed hold, the braking for the curve's end) converts its jerk at the
+ * fastest segment it may reach (scale_limits, stop_jerk_speed), and every
+ * tick of it is planned at that J.  This tick may use the jerk of the
+ * segments it moves on, the current one and the next where the tick may
+ * reach it: a clear asked during a ramp whose acceleration the converted
+ * jerk takes back 50 times slower (a segment of 45 m/s queued ahead of one of
+ * 0.9 m/s) was still speeding up when it entered segments whose ceiling it
+ * was 10 times above (fuzz_engine).
  */
 static double stop_jerk_now(const engine_t *e, double J)
 {
