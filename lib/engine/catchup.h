@@ -62,8 +62,9 @@ void engine_lag_note(engine_t *e, int64_t now_ns);
  * lag is to be won back. */
 double engine_lag_target(engine_t *e, double target, double R, double A, double J);
 
-/* 1 while a lag is being won back or is beyond the band where that begins:
- * no rate decision is then kept for the ticks ahead (plain_window). */
+/* 1 while a lag is being won back or is within a tick of the band where
+ * that begins: no rate decision is then kept for the ticks ahead
+ * (plain_window). */
 int engine_lag_pending(const engine_t *e);
 
 #endif
