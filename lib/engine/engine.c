@@ -69,6 +69,7 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
     e->smooth = cfg->method == ENGINE_METHOD_SMOOTH;
     e->axis_lim = solve_cfg_axis_limited(cfg);
     e->axis_jerk = engine_cfg_axis_jerk(cfg);
+    e->axis_accel = solve_cfg_axis_accel(cfg);
     e->local = engine_cfg_local(cfg);
     if (e->smooth) {
         e->solve.sm_mem = calloc(lsq_smooth_mem_len(cfg->smooth_window, cfg->smooth_ctrl, AX),

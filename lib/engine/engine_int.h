@@ -304,6 +304,7 @@ struct engine {
     int smooth;              /* SMOOTH: waypoints pass through the lsq smoother first */
     int axis_lim;            /* issue 32: a per-axis limit is set (solve_axis_limited) */
     int axis_jerk;           /* ... a per-axis jerk limit (engine_cfg_axis_jerk) */
+    int axis_accel;          /* ... a per-axis acceleration limit (solve_cfg_axis_accel) */
     uint32_t axis_lag_track; /* issue 32: the output track axis_lag_s counts for ... */
     int axis_lag_over;       /* ... and its max_lag_s passed, not yet told */
     int axis_lag_told;       /* ... and told (once per trajectory) */
@@ -374,6 +375,7 @@ static inline int solve_axis_limited(const engine_t *e)
     return e->axis_lim;
 }
 int solve_cfg_axis_limited(const engine_config_t *cfg);
+int solve_cfg_axis_accel(const engine_config_t *cfg);
 /* The highest rate at which a segment keeps the speed cap and the
  * per-axis limits (qent_t ceil; *axis: qent_t ceil_axis). */
 double solve_seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax, int *axis);

@@ -183,11 +183,12 @@ static int is_slow(const qent_t *q)
     return q->kind == QE_SEG && q->ceil < TS_RATE_MAX;
 }
 
-/* issue 32: some axis has an acceleration limit (engine.h axis_max_accel_m_s2). */
-static int axis_accel_limited(const engine_t *e)
+/* issue 32: some axis has an acceleration limit (engine.h axis_max_accel_m_s2;
+ * engine_new notes it once, e->axis_accel). */
+int solve_cfg_axis_accel(const engine_config_t *cfg)
 {
     for (int k = 0; k < AX; k++)
-        if (e->cfg.axis_max_accel_m_s2[k] > 0)
+        if (cfg->axis_max_accel_m_s2[k] > 0)
             return 1;
     return 0;
 }
@@ -234,11 +235,11 @@ static double jerk_rate_accel(const engine_t *e, const fdiff_seg_t *seg, double 
 static double accel_speed(const engine_t *e, const fdiff_seg_t *seg, double vmax, double ceil)
 {
     double v = vmax > ENGINE_SCALE_V_FLOOR_M_S ? vmax : ENGINE_SCALE_V_FLOOR_M_S;
-    if (!(ceil > 0) || (!axis_accel_limited(e) && !e->axis_jerk))
+    if (!(ceil > 0) || (!e->axis_accel && !e->axis_jerk))
         return v;
     double a = e->cfg.scale_accel_m_s2, rc = fmin(ceil, TS_RATE_MAX), n2 = 0;
     double Aj = jerk_rate_accel(e, seg, rc);
-    if (!axis_accel_limited(e))
+    if (!e->axis_accel)
         return a / fmin(a / v, Aj);
     for (int k = 0; k < AX; k++) {
         double al = e->cfg.axis_max_accel_m_s2[k];
@@ -325,7 +326,7 @@ static void queue_segment(engine_t *e, const fdiff_seg_t *seg, uint64_t node)
 {
     seg_limits_t l;
     seg_limits(e, seg, &l);
-    if (axis_accel_limited(e) || e->axis_jerk) {
+    if (e->axis_accel || e->axis_jerk) {
         if (e->solve.pend)
             queue_now(e, &e->solve.pend_seg, e->solve.pend_node, &e->solve.pend_lim, l.av);
         e->solve.pend = 1;
