@@ -100,6 +100,18 @@ double scale_rise_reserve(const engine_t *e, double v)
 
 static double stop_jerk_speed(const engine_t *e, double A, double jerk);
 
+/* Queue entry i, among the first scan, when it is a segment of the output's
+ * trajectory (else NULL): the curve a braking or a ramp may reach, which
+ * scale_slowing_reserve, stop_jerk_speed, accel_ahead and stop_jerk_now look
+ * through. */
+static const qent_t *seg_ahead(const engine_t *e, size_t i, size_t scan)
+{
+    if (i >= e->queue.len || i >= scan)
+        return NULL;
+    const qent_t *q = queue_at(e, i);
+    return q->kind == QE_SEG && q->traj == e->out.traj ? q : NULL;
+}
+
 /* With per-axis jerk limits, a braking to rest: a stop, or a target of 0 (a
  * feed hold, the braking for the curve's end). */
 static int brakes_to_rest(const engine_t *e)
@@ -161,13 +173,10 @@ double scale_slowing_reserve(const engine_t *e, double v)
     double d = ts_stop_dist(r, e->scale.ts.acc, A, J), onset = d - 0.5 * r * r / A;
     if (onset > 0) {
         double end = e->out.t + 2.0 * d, vmin = v;
-        for (size_t i = 0; i < e->queue.len && i < SLOW_SCAN; i++) {
-            const qent_t *q = queue_at(e, i);
-            if (q->kind != QE_SEG || q->traj != e->out.traj || q->seg.t0_s > end)
-                break;
+        const qent_t *q;
+        for (size_t i = 0; (q = seg_ahead(e, i, SLOW_SCAN)) && !(q->seg.t0_s > end); i++)
             if (q->av > 0 && q->av < vmin)
                 vmin = q->av;
-        }
         res = (1.0 - vmin / v) * onset;
     }
     return res + stop_jerk_reserve(e, A, J, d);
@@ -307,12 +316,9 @@ static double stop_jerk_speed(const engine_t *e, double A, double jerk)
     if (e->out.mode != OUT_STREAM)
         return v; /* a transfer: one segment */
     double end = e->out.t + 2.0 * ts_stop_dist(e->scale.ts.rate, e->scale.ts.acc, A, jerk / v);
-    for (size_t i = 0; i < e->queue.len && i < STOP_JERK_SCAN; i++) {
-        const qent_t *q = queue_at(e, i);
-        if (q->kind != QE_SEG || q->traj != e->out.traj || q->seg.t0_s > end)
-            break;
+    const qent_t *q;
+    for (size_t i = 0; (q = seg_ahead(e, i, STOP_JERK_SCAN)) && !(q->seg.t0_s > end); i++)
         v = fmax(v, q->vmax);
-    }
     return v;
 }
 
@@ -337,10 +343,8 @@ static double accel_ahead(const engine_t *e, double A, double J, double acc)
     if (!e->axis_lim || e->out.mode != OUT_STREAM || e->scale.stop_req)
         return A;
     double jerk = e->cfg.scale_jerk_m_s3, a = e->cfg.scale_accel_m_s2, A0 = A;
-    for (size_t i = 0; i < e->queue.len && i < ACCEL_AHEAD_SCAN; i++) {
-        const qent_t *q = queue_at(e, i);
-        if (q->kind != QE_SEG || q->traj != e->out.traj)
-            break;
+    const qent_t *q;
+    for (size_t i = 0; (q = seg_ahead(e, i, ACCEL_AHEAD_SCAN)); i++) {
         double t = (q->seg.t0_s - e->out.t) / TS_RATE_MAX;
         if (!(J * t < A))
             break; /* (beyond, only a jerk lower than here could bind) */
@@ -554,9 +558,8 @@ static double stop_jerk_now(const engine_t *e, double J)
     if (!brakes_to_rest(e) || e->out.mode != OUT_STREAM)
         return J;
     double v = scale_jerk_speed(e);
-    const qent_t *q = e->queue.len ? queue_at(e, 0) : NULL;
-    if (q && q->kind == QE_SEG && q->traj == e->out.traj &&
-        q->seg.t0_s - e->out.t <= 2.0 * TS_RATE_MAX * e->period_s)
+    const qent_t *q = seg_ahead(e, 0, 1);
+    if (q && q->seg.t0_s - e->out.t <= 2.0 * TS_RATE_MAX * e->period_s)
         v = fmax(v, q->vmax); /* the tick may reach the next one */
     return fmax(J, e->cfg.scale_jerk_m_s3 / v);
 }
