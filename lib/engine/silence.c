@@ -27,9 +27,11 @@ void engine_silence_push(engine_t *e, const engine_waypoint_t *wp)
         e->sil.last_t = wp->t_s;
         e->sil.n++;
     }
-    /* arrived by the next tick (engine_silence_tick); before the first
-     * tick the caller loads waypoints, it does not stream them */
-    e->sil.fresh = e->out.have_now;
+    /* arrived by the next tick (engine_silence_tick), the first one too:
+     * waypoints pushed before it (a writer quicker than the daemon's first
+     * deadline, an engine a reload starts while its predecessor brakes)
+     * are the input's as much as any, and its silence ends them too */
+    e->sil.fresh = 1;
 }
 
 /* The trajectory has the lookahead's intervals (la_steady + 1): its timing

@@ -120,6 +120,53 @@ static void test_end_is_no_underrun(void **state)
     assert_int_equal(r.st.hard_stops, 0);
 }
 
+/* Given 4 s of waypoints (a circle of 3 m at 6 m/s, 10 Hz) pushed before
+ * the engine's first tick, as a Modbus writer quicker than trajd's first
+ * deadline after start sends them, or a sender writing into the engine a
+ * reload starts while its predecessor still brakes, and then nothing (no
+ * FINISH), then the silence ends the trajectory as it does for waypoints
+ * pushed between ticks: the output plays out to the last waypoint and
+ * finishes, one silent end, no underrun counted.  Before: waypoints pushed
+ * before the first tick never arrived for the silence, and the output
+ * stood in UNDERRUN short of the tail until the next trajectory came. */
+static void test_tail_plays_out_loaded_before_first_tick(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_config_default(&c);
+    int err = -1;
+    engine_t *e = engine_new(&c, &err);
+    assert_non_null(e);
+    engine_waypoint_t w;
+    for (int i = 0; i < 40; i++) {
+        memset(&w, 0, sizeof w);
+        w.seq = (uint32_t)i + 1;
+        w.t_s = 0.1 * (i + 1);
+        w.pos_m[0] = 3.0 * cos(0.2 * i);
+        w.pos_m[1] = 3.0 * sin(0.2 * i);
+        assert_true(engine_push(e, &w) >= 0);
+    }
+    engine_setpoint_t sp;
+    memset(&sp, 0, sizeof sp);
+    double reach_s = NAN;
+    for (int64_t k = 0; k <= 3000 && isnan(reach_s); k++) {
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+        if (sp.state == ENGINE_STATE_FINISHED)
+            reach_s = (double)k * PERIOD_NS * 1e-9;
+    }
+    engine_status_t st;
+    engine_status(e, &st);
+    engine_free(e);
+    print_message("loaded before the first tick: finished at %.2f s, %llu silent ends\n", reach_s,
+                  (unsigned long long)st.silent_ends);
+    assert_false(isnan(reach_s));
+    assert_true(fabs(sp.pos_m[0] - w.pos_m[0]) < 1e-9 && fabs(sp.pos_m[1] - w.pos_m[1]) < 1e-9);
+    assert_true(fabs(sp.t_s - w.t_s) < 1e-9);
+    assert_int_equal(st.silent_ends, 1);
+    assert_int_equal(st.underruns, 0);
+    assert_int_equal(st.hard_stops, 0);
+}
+
 /* Given a regular track whose input never pauses for longer than an
  * interval, then no silent end: one trajectory, streamed as before. */
 static void test_no_silent_end_while_regular(void **state)
@@ -174,6 +221,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_tail_plays_out),
         cmocka_unit_test(test_end_is_no_underrun),
+        cmocka_unit_test(test_tail_plays_out_loaded_before_first_tick),
         cmocka_unit_test(test_no_silent_end_while_regular),
         cmocka_unit_test(test_delay_stated),
         cmocka_unit_test(test_delay_of_config),
