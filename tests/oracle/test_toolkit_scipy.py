@@ -219,13 +219,17 @@ class TestLsq(unittest.TestCase):
                 ref = make_lsq_spline(u, pts, knots, k=order - 1)
                 np.testing.assert_allclose(ctrl, ref.c, atol=TOL_LSQ, rtol=0)
                 worst = max(worst, np.abs(ctrl - ref.c).max())
-        # lib/spline/TOOLKIT.md quotes the agreement: this run's (issue 14)
+        # lib/spline/TOOLKIT.md quotes the agreement as a bound (issue 14): this
+        # run's is within it, and not ten times below it (a bound that says
+        # something); its last digit moves with the BLAS kernels scipy runs
         print("lsq_fit vs make_lsq_spline: worst %.2g" % worst)
         with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "lib", "spline",
                                "TOOLKIT.md"), encoding="utf-8") as f:
-            quoted = re.findall(r"agreement with scipy's `make_lsq_spline` is (\S+) on the test data",
+            quoted = re.findall(r"agreement with scipy's `make_lsq_spline` is within (\S+) on the test data",
                                 " ".join(f.read().split()))
-        self.assertEqual([float(q) for q in quoted], [float("%.0e" % worst)])
+        self.assertEqual(len(quoted), 1, quoted)
+        self.assertLessEqual(worst, float(quoted[0]))
+        self.assertGreater(worst, float(quoted[0]) / 10)
 
     def test_pinned_ends_vs_lstsq(self):
         # Given LSQ_PIN_ENDS, then the first and last control points are the
