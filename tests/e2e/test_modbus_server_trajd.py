@@ -43,6 +43,12 @@ FEED_RATE_HZ = 10      # output rate for the feed test
 FINE_RATE_HZ = 1000    # the reference curve between the feed test's rows
 FEED_SPEED = 50        # engine time per wall time: the 357 s track streams in ~7 s
 FEED_WAIT_S = 60       # bound on the whole feed + stream
+# D of the fed object and of its references: 0.24 s of wall time at FEED_SPEED that
+# the feed may fall behind before the output slows (D the input needs, 2.7 s, is
+# 54 ms there: a feed held up that long at the start left 14 rows identical)
+FEED_DELAY_S = 12
+FEED_MAX_SPEED = 30    # m/s: a stop reserve short enough for that D (the profile's is 400)
+FEED_SETTINGS = ["--delay", str(FEED_DELAY_S), "--max-speed", str(FEED_MAX_SPEED)]
 
 
 def f32(x):
@@ -189,8 +195,8 @@ class FeedTest(unittest.TestCase):
                     o.write(line)
                     wps.append(tuple(float(v) for v in line.split(",")))
             ref_path = os.path.join(tmp, "ref.csv")
-            p = subprocess.run([TRAJREPLAY, "--rate", str(FEED_RATE_HZ), "-q", "--summary",
-                                "-o", ref_path, xyz], check=True, timeout=60,
+            p = subprocess.run([TRAJREPLAY, "--rate", str(FEED_RATE_HZ)] + FEED_SETTINGS +
+                               ["-q", "--summary", "-o", ref_path, xyz], check=True, timeout=60,
                                capture_output=True, text=True)
             # the waypoints trajreplay refuses: the engine judges each with
             # its neighbours, so a refusal may come after the write was
@@ -216,9 +222,12 @@ systemd_socket = no
 input = modbus
 ; a small buffer, so the feed meets flow control (exception 06) and must pace itself
 capacity = 100
+; D longer than the input needs: the feed may fall that far behind before the output slows
+delay_s = %g
+max_speed_m_s = %g
 output = csv
 csv.path = %s/fed.csv
-""" % (FEED_RATE_HZ, FEED_SPEED, tmp), tmp)
+""" % (FEED_RATE_HZ, FEED_SPEED, FEED_DELAY_S, FEED_MAX_SPEED, tmp), tmp)
             reads = []
             try:
                 c = ModbusTcpClient("127.0.0.1", port=d.port, timeout=mbsim.WAIT_S)
@@ -293,7 +302,8 @@ csv.path = %s/fed.csv
             fed = [r for r in read_csv(os.path.join(tmp, "fed.csv")) if r["state"] in ("1", "streaming")]
             cols = ["x_m", "y_m", "z_m", "vx_m_s", "vy_m_s", "vz_m_s", "ax_m_s2", "ay_m_s2", "az_m_s2"]
             fine_path = os.path.join(tmp, "fine.csv")
-            subprocess.run([TRAJREPLAY, "--rate", str(FINE_RATE_HZ), "-q", "-o", fine_path, xyz],
+            subprocess.run([TRAJREPLAY, "--rate", str(FINE_RATE_HZ)] + FEED_SETTINGS +
+                           ["-q", "-o", fine_path, xyz],
                            check=True, timeout=60, capture_output=True, text=True)
             fine = {r["t_s"]: r for r in read_csv(fine_path)
                     if r["state"] in ("1", "streaming") and not int(r["flags"]) & SCALED}
