@@ -34,8 +34,6 @@ import mbsim  # noqa: E402
 from mbsim import M, obj_base  # noqa: E402
 
 from pymodbus.client import ModbusTcpClient  # noqa: E402
-from pymodbus.constants import Endian  # noqa: E402
-from pymodbus.payload import BinaryPayloadBuilder  # noqa: E402
 
 TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
 WAIT_S = 20
@@ -68,19 +66,10 @@ class Float32Block(mbsim.FedTrajdCase):
         sent = []
         deadline = time.monotonic() + WAIT_S
         for seq, t, x, y, z in wps:
-            b = BinaryPayloadBuilder(byteorder=Endian.Big, wordorder=Endian.Big)
-            b.add_32bit_uint(seq)
-            for v in (t, x, y, z):
-                b.add_32bit_float(v)
-            regs = b.to_registers()
+            regs = mbsim.wp_regs(seq, t, x, y, z, f32=True)
             self.assertEqual(len(regs), M["MBMAP_H_WPF_COUNT"])
-            while True:
-                self.assertLess(time.monotonic(), deadline, "feed too slow")
-                rq = c.write_registers(obj_base(0) + M["MBMAP_H_WPF"], regs, slave=1)
-                if not rq.isError():
-                    break
-                self.assertEqual(rq.exception_code, 6, rq)   # busy: buffer full, retry
-                time.sleep(0.01)
+            rq = mbsim.write_retrying(c, obj_base(0) + M["MBMAP_H_WPF"], regs, deadline)
+            self.assertFalse(rq.isError(), rq)
             sent.append(tuple(float(np.float32(v)) for v in (t, x, y, z)))
         return sent
 

@@ -29,7 +29,7 @@ from mbsim import M, obj_base  # noqa: E402
 
 from pymodbus.client import ModbusTcpClient  # noqa: E402
 from pymodbus.constants import Endian  # noqa: E402
-from pymodbus.payload import BinaryPayloadBuilder, BinaryPayloadDecoder  # noqa: E402
+from pymodbus.payload import BinaryPayloadDecoder  # noqa: E402
 
 TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
 WAIT_S = 20
@@ -71,17 +71,8 @@ class LostSeq(mbsim.FedTrajdCase):
             wps = feed()
             deadline = time.monotonic() + WAIT_S
             for seq, t, x, y, z in wps:
-                b = BinaryPayloadBuilder(byteorder=Endian.Big, wordorder=Endian.Big)
-                b.add_32bit_uint(seq)
-                for v in (t, x, y, z):
-                    b.add_64bit_float(v)
-                while True:
-                    self.assertLess(time.monotonic(), deadline, "feed too slow")
-                    rq = c.write_registers(obj_base(0) + M["MBMAP_H_WP"], b.to_registers(),
-                                           slave=1)
-                    if not (rq.isError() and rq.exception_code == 6):   # 6: buffer full, retry
-                        break
-                    time.sleep(0.01)
+                rq = mbsim.write_retrying(c, obj_base(0) + M["MBMAP_H_WP"],
+                                          mbsim.wp_regs(seq, t, x, y, z), deadline)
                 self.assertFalse(rq.isError(), "seq %#x: %s" % (seq, rq))
                 if seq == BOGUS:
                     # a snapshot taken after it: lost counted nothing (the

@@ -184,6 +184,34 @@ def line_track(path, n=3000, dt_s=0.1):
             f.write("%.3f,%.3f,%.3f,1.0\n" % (i * dt_s, 2.0 * i * dt_s, 0.5 * i * dt_s))
 
 
+# ---- pymodbus clients ----------------------------------------------------------
+
+def wp_regs(seq, t, x, y, z, f32=False):
+    """A waypoint block as pymodbus's BinaryPayloadBuilder encodes it (words and
+    bytes big-endian): u32 seq, then t, x, y, z as float64 (MBMAP_H_WP) or, f32,
+    float32 (MBMAP_H_WPF)."""
+    from pymodbus.constants import Endian
+    from pymodbus.payload import BinaryPayloadBuilder
+    b = BinaryPayloadBuilder(byteorder=Endian.Big, wordorder=Endian.Big)
+    b.add_32bit_uint(seq)
+    for v in (t, x, y, z):
+        (b.add_32bit_float if f32 else b.add_64bit_float)(v)
+    return b.to_registers()
+
+
+def write_retrying(c, addr, regs, deadline):
+    """FC 16 of regs at addr by pymodbus client c, again 10 ms later while trajd
+    answers busy (exception 06: the object's buffer is full), until the
+    monotonic deadline (then AssertionError "feed too slow"); returns the last
+    answer."""
+    while True:
+        assert time.monotonic() < deadline, "feed too slow"
+        rq = c.write_registers(addr, regs, slave=1)
+        if not (rq.isError() and rq.exception_code == 6):
+            return rq
+        time.sleep(0.01)
+
+
 # ---- raw Modbus/TCP ----------------------------------------------------------
 
 def connect(port):
