@@ -140,7 +140,7 @@ static double ramp_lag(const engine_t *e, int strict)
  * A ramp that loses more than D less the wait (a REST start's curve faster
  * than its waypoints) sets D: the output stands there after it, and that is
  * no lag to win back (catchup.h): the track-time grid after a start does not
- * depend on when each waypoint came. */
+ * depend on when each waypoint came.  An upload's D is not raised so. */
 static double delay_if_started(const engine_t *e, engine_delay_t *d, double *lag, double known)
 {
     delay_measured(e, d);
@@ -150,6 +150,11 @@ static double delay_if_started(const engine_t *e, engine_delay_t *d, double *lag
     double waited = newest(e) - queue_at(e, 0)->seg.t0_s;
     /* the ramp loses at most a stop at the fastest speed ahead */
     if (waited < d->delay_s - engine_delay_stop_s(&e->cfg, head_vmax(e)))
+        return waited;
+    /* a batch written ahead of its stamps (an upload) is not steered
+     * (catchup.h): its output stands further behind than any D, and D is
+     * what its input needs, not where the batch left the start */
+    if (e->lag.ahead)
         return waited;
     *lag = isfinite(known) ? known : ramp_lag(e, 1);
     /* what the ramp loses if it started now anyway (held back: more) */

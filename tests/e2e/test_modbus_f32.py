@@ -10,9 +10,11 @@
    (lib/engine/silence.h): the object finishes by itself, with no FINISH,
    at rest on the last waypoint as pymodbus sent it: numpy.float32 of its
    coordinates, to 1e-9 m, not their float64 values; those differ by up to
-   2^-24 of the coordinate, as PROTOCOL.md states.  (Before: waypoints
-   written before the daemon's first tick never counted as arrived, and the
-   object stood in underrun short of its tail for good.)
+   2^-24 of the coordinate, as PROTOCOL.md states, and no row in underrun.
+   (Before: waypoints written before the daemon's first tick never counted
+   as arrived, and the object stood in underrun short of its tail for good;
+   a batch met on one tick stated a D of its whole span, and the output ran
+   short of curve for 0.75 s before the silence ended it.)
 2. The health word reads bit 3 (underrun) with state 2 while the output
    runs short of a late writer's data: the same circle, its first interval
    1.6 s, so that the silence that would end the trajectory (6 intervals)
@@ -105,7 +107,11 @@ class Float32Block(mbsim.FedTrajdCase):
             self.wait_state(c, 3, "never finished after the writer's silence")
         finally:
             c.close()
-        self.assert_rests_on(self.rows_to_end(), sent, waypoints())
+        rows = self.rows_to_end()
+        self.assert_rests_on(rows, sent, waypoints())
+        # the batch's end is no underrun: its D is what the input needs, whichever ticks the
+        # writes met, and the silence comes before the output runs short of curve
+        self.assertEqual(sum(r["state"] == "underrun" for r in rows), 0)
 
     def test_health_underrun(self):
         c = ModbusTcpClient("127.0.0.1", port=self.port, timeout=WAIT_S)

@@ -1396,8 +1396,8 @@ static void test_long_segment_reseeded(void **state)
 }
 
 /* Given a stream that runs dry (a burst of 40 waypoints 1 s apart, then
- * one every 10 s: a sender at a tenth of its timestamps' pace, never silent
- * for long enough to end the trajectory, silence.h), then the output slows down
+ * one every 5 s: a sender at a fifth of its timestamps' pace, never silent
+ * for long enough to end the trajectory, 6 intervals: silence.h), then the output slows down
  * along the curve and comes to rest before the solved curve ends (UNDERRUN,
  * every setpoint on the curve at its own track time, no hard stop, velocity
  * changes bounded); when waypoints then come faster (one per 10 ticks) it
@@ -1436,7 +1436,7 @@ static void test_underrun_rides_through(void **state)
             if (sp.state == ENGINE_STATE_UNDERRUN && (sp.flags & ENGINE_SP_HOLD))
                 break;
             assert_true(k < 100000 && sp.state != ENGINE_STATE_FINISHED);
-            if (k % 1000 == 0)
+            if (k % 500 == 0)
                 assert_int_equal(engine_push(e, &all[pushed++]), 0);
         }
         rested = 1;

@@ -167,6 +167,67 @@ static void test_tail_plays_out_loaded_before_first_tick(void **state)
     assert_int_equal(st.hard_stops, 0);
 }
 
+/* The circle of test_tail_plays_out_loaded_before_first_tick pushed after
+ * the first tick, split over the ticks as given (n1 waypoints on tick 1,
+ * the rest on tick 2), then nothing: the D stated at the start, the ticks
+ * in UNDERRUN, and whether the output finished on the last waypoint. */
+static void upload(int n1, double *delay_s, int *under_ticks, int *finished)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    int err = -1, next = 0;
+    engine_t *e = engine_new(&c, &err);
+    assert_non_null(e);
+    engine_setpoint_t sp;
+    *under_ticks = *finished = 0;
+    *delay_s = NAN;
+    for (int64_t k = 0; k <= 3000 && !*finished; k++) {
+        for (int j = 0; k >= 1 && next < 40 && (k > 1 || j < n1); j++, next++) {
+            engine_waypoint_t w;
+            memset(&w, 0, sizeof w);
+            w.seq = (uint32_t)next + 1;
+            w.t_s = 0.1 * (next + 1);
+            w.pos_m[0] = 3.0 * cos(0.2 * next);
+            w.pos_m[1] = 3.0 * sin(0.2 * next);
+            assert_true(engine_push(e, &w) >= 0);
+        }
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+        *under_ticks += sp.state == ENGINE_STATE_UNDERRUN;
+        *finished = sp.state == ENGINE_STATE_FINISHED;
+        if (k == 3) {
+            engine_delay_t d;
+            engine_delay(e, &d);
+            *delay_s = d.delay_s;
+        }
+    }
+    engine_free(e);
+}
+
+/* Given 4 s of waypoints written at once (a Modbus writer's batch, ahead of
+ * its stamps: an upload, catchup.h), then nothing, then the D the start
+ * states is what the input needs, whether the batch came on one tick or on
+ * two, not where the batch left the start (its span, or the wait plus the
+ * ramp's loss): the output stands further behind than D, unsteered, and the
+ * writer's silence, measured against that D, ends the trajectory before the
+ * output runs short of curve: no tick in UNDERRUN either way.  Before: D was
+ * 4.87 s on one tick against 2.87 s on two (2.57 s is what the input needs),
+ * and on one tick the output stood in UNDERRUN for 0.75 s before the
+ * silence, 2 s later than on two, ended the trajectory. */
+static void test_upload_delay_as_streamed(void **state)
+{
+    (void)state;
+    double d1, d2;
+    int u1, u2, f1, f2;
+    upload(40, &d1, &u1, &f1);
+    upload(20, &d2, &u2, &f2);
+    print_message("batch on one tick: D %.3f s, %d underrun ticks; on two: D %.3f s, %d\n", d1, u1,
+                  d2, u2);
+    assert_true(f1 && f2);
+    assert_true(fabs(d1 - d2) < 0.1);
+    assert_int_equal(u1, 0);
+    assert_int_equal(u2, 0);
+}
+
 /* Given a regular track whose input never pauses for longer than an
  * interval, then no silent end: one trajectory, streamed as before. */
 static void test_no_silent_end_while_regular(void **state)
@@ -222,6 +283,7 @@ int main(void)
         cmocka_unit_test(test_tail_plays_out),
         cmocka_unit_test(test_end_is_no_underrun),
         cmocka_unit_test(test_tail_plays_out_loaded_before_first_tick),
+        cmocka_unit_test(test_upload_delay_as_streamed),
         cmocka_unit_test(test_no_silent_end_while_regular),
         cmocka_unit_test(test_delay_stated),
         cmocka_unit_test(test_delay_of_config),
