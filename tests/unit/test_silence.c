@@ -120,6 +120,19 @@ static void test_end_is_no_underrun(void **state)
     assert_int_equal(r.st.hard_stops, 0);
 }
 
+/* Waypoint i of the 4 s batch the tests below write: a circle of 3 m at
+ * 6 m/s, 10 Hz, from t = 0.1 s. */
+static engine_waypoint_t circle_at(int i)
+{
+    engine_waypoint_t w;
+    memset(&w, 0, sizeof w);
+    w.seq = (uint32_t)i + 1;
+    w.t_s = 0.1 * (i + 1);
+    w.pos_m[0] = 3.0 * cos(0.2 * i);
+    w.pos_m[1] = 3.0 * sin(0.2 * i);
+    return w;
+}
+
 /* Given 4 s of waypoints (a circle of 3 m at 6 m/s, 10 Hz) pushed before
  * the engine's first tick, as a Modbus writer quicker than trajd's first
  * deadline after start sends them, or a sender writing into the engine a
@@ -139,11 +152,7 @@ static void test_tail_plays_out_loaded_before_first_tick(void **state)
     assert_non_null(e);
     engine_waypoint_t w;
     for (int i = 0; i < 40; i++) {
-        memset(&w, 0, sizeof w);
-        w.seq = (uint32_t)i + 1;
-        w.t_s = 0.1 * (i + 1);
-        w.pos_m[0] = 3.0 * cos(0.2 * i);
-        w.pos_m[1] = 3.0 * sin(0.2 * i);
+        w = circle_at(i);
         assert_true(engine_push(e, &w) >= 0);
     }
     engine_setpoint_t sp;
@@ -167,7 +176,7 @@ static void test_tail_plays_out_loaded_before_first_tick(void **state)
     assert_int_equal(st.hard_stops, 0);
 }
 
-/* The circle of test_tail_plays_out_loaded_before_first_tick pushed after
+/* The circle (circle_at) pushed after
  * the first tick, split over the ticks as given (n1 waypoints on tick 1,
  * the rest on tick 2), then nothing: the D stated at the start, the ticks
  * in UNDERRUN, and whether the output finished on the last waypoint. */
@@ -183,12 +192,7 @@ static void upload(int n1, double *delay_s, int *under_ticks, int *finished)
     *delay_s = NAN;
     for (int64_t k = 0; k <= 3000 && !*finished; k++) {
         for (int j = 0; k >= 1 && next < 40 && (k > 1 || j < n1); j++, next++) {
-            engine_waypoint_t w;
-            memset(&w, 0, sizeof w);
-            w.seq = (uint32_t)next + 1;
-            w.t_s = 0.1 * (next + 1);
-            w.pos_m[0] = 3.0 * cos(0.2 * next);
-            w.pos_m[1] = 3.0 * sin(0.2 * next);
+            engine_waypoint_t w = circle_at(next);
             assert_true(engine_push(e, &w) >= 0);
         }
         assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
