@@ -176,6 +176,52 @@ static void test_tail_plays_out_loaded_before_first_tick(void **state)
     assert_int_equal(st.hard_stops, 0);
 }
 
+/* Given the engine a reload starts while its predecessor still brakes
+ * (daemon/core/core.c step_engines: not ticked until then), fed the batch
+ * meanwhile, then handed the predecessor's rest position
+ * (engine_set_position, 2 m off the batch's first waypoint) and ticked, and
+ * nothing more comes, then its silence ends the trajectory as for a batch
+ * pushed between ticks: the output transfers from the position handed over,
+ * plays the batch out to its last waypoint and finishes, one silent end, no
+ * underrun.  Before: the batch never arrived for the silence (pushed before
+ * the engine's first tick), and the output stood in UNDERRUN short of it. */
+static void test_tail_plays_out_after_reload_handover(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_config_default(&c);
+    int err = -1;
+    engine_t *e = engine_new(&c, &err);
+    assert_non_null(e);
+    engine_waypoint_t w;
+    for (int i = 0; i < 40; i++) {
+        w = circle_at(i);
+        assert_true(engine_push(e, &w) >= 0);
+    }
+    const double at[ENGINE_AXES] = {5.0, 0.0, 0.0}; /* where the predecessor came to rest */
+    assert_int_equal(engine_set_position(e, at), 0);
+    engine_setpoint_t sp;
+    memset(&sp, 0, sizeof sp);
+    int finished = 0, under = 0;
+    int64_t k0 = 250; /* the predecessor braked for 2.5 s first */
+    for (int64_t k = k0; k <= k0 + 3000 && !finished; k++) {
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+        if (k == k0) /* the first setpoint stands where the predecessor rests */
+            assert_true(fabs(sp.pos_m[0] - at[0]) < 1e-9 && fabs(sp.pos_m[1]) < 1e-9);
+        under += sp.state == ENGINE_STATE_UNDERRUN;
+        finished = sp.state == ENGINE_STATE_FINISHED;
+    }
+    engine_status_t st;
+    engine_status(e, &st);
+    engine_free(e);
+    assert_true(finished);
+    assert_true(fabs(sp.pos_m[0] - w.pos_m[0]) < 1e-9 && fabs(sp.pos_m[1] - w.pos_m[1]) < 1e-9);
+    assert_int_equal(st.silent_ends, 1);
+    assert_int_equal(st.underruns, 0);
+    assert_int_equal(under, 0);
+    assert_int_equal(st.hard_stops, 0);
+}
+
 /* The circle (circle_at) pushed after
  * the first tick, split over the ticks as given (n1 waypoints on tick 1,
  * the rest on tick 2), then nothing: the D stated at the start, the ticks
@@ -288,6 +334,7 @@ int main(void)
         cmocka_unit_test(test_end_is_no_underrun),
         cmocka_unit_test(test_tail_plays_out_loaded_before_first_tick),
         cmocka_unit_test(test_upload_delay_as_streamed),
+        cmocka_unit_test(test_tail_plays_out_after_reload_handover),
         cmocka_unit_test(test_no_silent_end_while_regular),
         cmocka_unit_test(test_delay_stated),
         cmocka_unit_test(test_delay_of_config),
