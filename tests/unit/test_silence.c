@@ -133,6 +133,22 @@ static engine_waypoint_t circle_at(int i)
     return w;
 }
 
+/* An engine of the default configuration with the batch (circle_at 0..39)
+ * pushed and never ticked; *last: the batch's last waypoint. */
+static engine_t *batch_pushed(engine_waypoint_t *last)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    int err = -1;
+    engine_t *e = engine_new(&c, &err);
+    assert_non_null(e);
+    for (int i = 0; i < 40; i++) {
+        *last = circle_at(i);
+        assert_true(engine_push(e, last) >= 0);
+    }
+    return e;
+}
+
 /* Given 4 s of waypoints (a circle of 3 m at 6 m/s, 10 Hz) pushed before
  * the engine's first tick, as a Modbus writer quicker than trajd's first
  * deadline after start sends them, or a sender writing into the engine a
@@ -145,16 +161,8 @@ static engine_waypoint_t circle_at(int i)
 static void test_tail_plays_out_loaded_before_first_tick(void **state)
 {
     (void)state;
-    engine_config_t c;
-    engine_config_default(&c);
-    int err = -1;
-    engine_t *e = engine_new(&c, &err);
-    assert_non_null(e);
     engine_waypoint_t w;
-    for (int i = 0; i < 40; i++) {
-        w = circle_at(i);
-        assert_true(engine_push(e, &w) >= 0);
-    }
+    engine_t *e = batch_pushed(&w);
     engine_setpoint_t sp;
     memset(&sp, 0, sizeof sp);
     double reach_s = NAN;
@@ -188,16 +196,8 @@ static void test_tail_plays_out_loaded_before_first_tick(void **state)
 static void test_tail_plays_out_after_reload_handover(void **state)
 {
     (void)state;
-    engine_config_t c;
-    engine_config_default(&c);
-    int err = -1;
-    engine_t *e = engine_new(&c, &err);
-    assert_non_null(e);
     engine_waypoint_t w;
-    for (int i = 0; i < 40; i++) {
-        w = circle_at(i);
-        assert_true(engine_push(e, &w) >= 0);
-    }
+    engine_t *e = batch_pushed(&w);
     const double at[ENGINE_AXES] = {5.0, 0.0, 0.0}; /* where the predecessor came to rest */
     assert_int_equal(engine_set_position(e, at), 0);
     engine_setpoint_t sp;
