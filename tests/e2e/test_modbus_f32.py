@@ -53,15 +53,10 @@ class Float32Block(mbsim.FedTrajdCase):
     WAIT_S = WAIT_S
 
     def reg(self, c, off):
-        rr = c.read_input_registers(obj_base(0) + off, 1, slave=1)
-        self.assertFalse(rr.isError(), rr)
-        return rr.registers[0]
+        return mbsim.input_reg(c, obj_base(0) + off)
 
     def wait_state(self, c, state, what):
-        end = time.monotonic() + WAIT_S
-        while self.reg(c, M["MBMAP_O_STATE"]) != state:
-            self.assertLess(time.monotonic(), end, what)
-            time.sleep(0.02)
+        mbsim.wait_input(c, obj_base(0) + M["MBMAP_O_STATE"], state, what, WAIT_S)
 
     def feed(self, c, wps):
         """Write wps as float32 blocks (busy answers retried); returns them as sent."""

@@ -16,7 +16,6 @@ import os
 import signal
 import sys
 import tempfile
-import time
 import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
@@ -82,9 +81,7 @@ class Gate(unittest.TestCase):
         self.tmpd.cleanup()
 
     def reg(self, c, k, off):
-        rr = c.read_input_registers(obj_base(k) + off, 1, slave=1)
-        self.assertFalse(rr.isError(), rr)
-        return rr.registers[0]
+        return mbsim.input_reg(c, obj_base(k) + off)
 
     def override(self, c, k, pct):
         """FC 06 to object k's override register: None if acknowledged, else the exception code."""
@@ -92,9 +89,8 @@ class Gate(unittest.TestCase):
         return rr.exception_code if rr.isError() else None
 
     def wait_streaming(self, c, k):
-        deadline = time.monotonic() + WAIT_S
-        while self.reg(c, k, M["MBMAP_O_STATE"]) != 1:
-            self.assertLess(time.monotonic(), deadline, "object %d never streamed" % k)
+        mbsim.wait_input(c, obj_base(k) + M["MBMAP_O_STATE"], 1, "object %d never streamed" % k,
+                         WAIT_S)
 
     def test_override_needs_writable(self):
         # Given a replayed object that is not writable, streaming,
@@ -111,9 +107,8 @@ class Gate(unittest.TestCase):
         # the writable object takes it.
         self.wait_streaming(c, 1)
         self.assertIsNone(self.override(c, 1, 50))
-        deadline = time.monotonic() + WAIT_S
-        while self.reg(c, 1, M["MBMAP_O_OVERRIDE"]) != 50:
-            self.assertLess(time.monotonic(), deadline)
+        mbsim.wait_input(c, obj_base(1) + M["MBMAP_O_OVERRIDE"], 50, "override 50 never shown",
+                         WAIT_S)
         c.close()
 
     def test_override_needs_write_allow(self):

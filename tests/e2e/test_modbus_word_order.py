@@ -100,12 +100,8 @@ csv.path = %s/fed.csv
         return rr.registers
 
     def wait_state(self, c, k, state):
-        deadline = time.monotonic() + 30
-        while time.monotonic() < deadline:
-            if self.read(c, 4, obj_base(k) + M["MBMAP_O_STATE"], 1) == [state]:
-                return
-            time.sleep(0.05)
-        self.fail("object %d never reached state %d" % (k, state))
+        mbsim.wait_input(c, obj_base(k) + M["MBMAP_O_STATE"], state,
+                         "object %d never reached state %d" % (k, state), 30, 0.05)
 
     def check(self, order, port, tmp):
         bo, wo = ORDERS[order]

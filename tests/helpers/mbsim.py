@@ -199,6 +199,23 @@ def wp_regs(seq, t, x, y, z, f32=False):
     return b.to_registers()
 
 
+def input_reg(c, addr):
+    """Input register addr (FC 04, one register) by pymodbus client c; an exception
+    answer is an AssertionError."""
+    rr = c.read_input_registers(addr, 1, slave=1)
+    assert not rr.isError(), rr
+    return rr.registers[0]
+
+
+def wait_input(c, addr, value, what, timeout=WAIT_S, poll_s=0.02):
+    """Read input register addr by pymodbus client c every poll_s until it reads
+    value, for at most timeout s (then AssertionError what)."""
+    deadline = time.monotonic() + timeout
+    while input_reg(c, addr) != value:
+        assert time.monotonic() < deadline, what
+        time.sleep(poll_s)
+
+
 def write_retrying(c, addr, regs, deadline):
     """FC 16 of regs at addr by pymodbus client c, again 10 ms later while trajd
     answers busy (exception 06: the object's buffer is full), until the
