@@ -112,11 +112,20 @@ static const qent_t *seg_ahead(const engine_t *e, size_t i, size_t scan)
     return q->kind == QE_SEG && q->traj == e->out.traj ? q : NULL;
 }
 
+static double clocked_target(const engine_t *e, double s);
+
 /* With per-axis jerk limits, a braking to rest: a stop, or a target of 0 (a
- * feed hold, the braking for the curve's end). */
+ * feed hold, the braking for the curve's end, or on one clock an output
+ * ahead of its play time by more than the clock's rate over its gain: the
+ * clock stepped back). */
 static int brakes_to_rest(const engine_t *e)
 {
-    return e->axis_jerk && (e->scale.stop_req || !(scale_target(e) > 0));
+    if (!e->axis_jerk)
+        return 0;
+    if (e->scale.stop_req || !(scale_target(e) > 0))
+        return 1;
+    return e->clk.on && e->out.mode == OUT_STREAM &&
+           !(clocked_target(e, e->scale.on ? e->scale.s : tau_of(e, e->out.n)) > 0);
 }
 
 /* With per-axis jerk limits a stop converts its jerk at the fastest segment
@@ -697,6 +706,27 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
     }
 }
 
+/* The rate a clocked trajectory's time scaling is asked for at s (relative):
+ * the clock's rate plus ENGINE_CLOCK_GAIN times the lag left after this tick
+ * if it ran at that rate, the lag's part bounded by catchup above and by rest
+ * below (CLOCK.md); 0 in a stop or at the curve's end. */
+static double clocked_target(const engine_t *e, double s)
+{
+    double rho = e->clk.rate, target = 0.0;
+    if (!e->scale.stop_req && !e->scale.end_brake) {
+        double lead = ENGINE_CLOCK_GAIN * (play_rel(e) - s - rho * e->period_s);
+        if (lead > e->clk.catchup)
+            lead = e->clk.catchup;
+        target = rho + lead;
+        if (target < 0)
+            target = 0;
+        if (e->scale.override < 1.0)
+            target *= e->scale.override;
+        target = fmin(target, scale_ceil_here(e));
+    }
+    return target;
+}
+
 /*
  * One tick of a clocked trajectory (CLOCK.md): locked on the play time while
  * it advances by one tick and the curve ahead is long enough to stop in;
@@ -721,20 +751,7 @@ void scale_clocked_step(engine_t *e, double R, double A, double J)
         return;
     }
     e->clk.locked = 0;
-    double target = 0.0;
-    if (!e->scale.stop_req && !e->scale.end_brake) {
-        /* the lag left after this tick if it ran at the clock's rate */
-        double lead = ENGINE_CLOCK_GAIN * (p - s - rho * T);
-        if (lead > e->clk.catchup)
-            lead = e->clk.catchup;
-        target = rho + lead;
-        if (target < 0)
-            target = 0;
-        if (e->scale.override < 1.0)
-            target *= e->scale.override;
-        target = fmin(target, scale_ceil_here(e));
-    }
-    scale_step(e, target, R, Rc, A, J);
+    scale_step(e, clocked_target(e, s), R, Rc, A, J);
     if (e->out.mode == OUT_STREAM && free_run && fabs(p - e->scale.s) <= ENGINE_CLOCK_LOCK_S &&
         fabs(e->scale.ts.rate - rho) <= ENGINE_CLOCK_LOCK_S * ENGINE_CLOCK_GAIN + 1e-9)
         e->clk.locked = 1;
