@@ -572,15 +572,20 @@ int join_try(engine_t *e)
     if (e->scale.on && !(e->scale.ts.rate > 0))
         return 0; /* at rest: the transfer's (or the old curve's own end) */
     if (e->scale.on && !e->out.underrun &&
-        e->scale.ts.rate > rho / JOIN_HELD + (e->clk.on ? e->clk.catchup : 0.0))
-        return 0; /* not yet down to the join's rate (an override lowered;
-                   * on one clock beyond the lead its catch-up allows): a join
-                   * planned at rho from a state braking from 8 times rho
-                   * started with 2.9 m/s^3 on a 2 m/s^3 axis, and one from 9
-                   * times rho still speeding up, its acceleration not yet
-                   * turned by the jerk, with 3.38 (fuzz_lifecycle); tried
-                   * again once the rate is there, else the old curve's end
-                   * brakes it as it would (not refused) */
+        ((e->scale.ts.acc < 0 &&
+          e->scale.ts.rate > rho / JOIN_HELD + (e->clk.on ? e->clk.catchup : 0.0)) ||
+         (e->scale.ts.acc > 0 && e->scale.ts.rate > rho / JOIN_HELD + e->clk.catchup)))
+        return 0; /* still braking to the join's rate (an override lowered;
+                   * on one clock beyond the lead its catch-up allows), or
+                   * still speeding up beyond it and the lead any catch-up
+                   * allows (a steady rate there is a catch-up's, joined as
+                   * before): a join planned at rho from a state braking from
+                   * 8 times rho started with 2.9 m/s^3 on a 2 m/s^3 axis,
+                   * and one from 9 times rho still speeding up, its
+                   * acceleration not yet turned by the jerk, with 3.38
+                   * (fuzz_lifecycle); tried again once the rate is there,
+                   * else the old curve's end brakes it as it would (not
+                   * refused) */
     scale_limits(e, &A, &J);
     /* leave the old curve where its last interval begins, or where the
      * time scaling begins to brake for its end (decide's test, a few ticks
