@@ -524,6 +524,13 @@ static inline double tau_of(const engine_t *e, int64_t n)
     return tick_time(e, n) + e->scale.s_off;
 }
 
+/* The output's track time now (relative to origin_t): the time scaling's s
+ * while it is on, else the unit grid's at the current tick. */
+static inline double out_s(const engine_t *e)
+{
+    return e->scale.on ? e->scale.s : tau_of(e, e->out.n);
+}
+
 /* A zero is +0.0 (-0.0 + 0.0 = +0.0): a setpoint at rest reads 0, not -0, in
  * every output (CSV, binary, Modbus, CAN), all of them alike.  Returns rc. */
 static inline int positive_zeros(engine_setpoint_t *sp, int rc)

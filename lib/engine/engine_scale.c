@@ -124,8 +124,7 @@ static int brakes_to_rest(const engine_t *e)
         return 0;
     if (e->scale.stop_req || !(scale_target(e) > 0))
         return 1;
-    return e->clk.on && e->out.mode == OUT_STREAM &&
-           !(clocked_target(e, e->scale.on ? e->scale.s : tau_of(e, e->out.n)) > 0);
+    return e->clk.on && e->out.mode == OUT_STREAM && !(clocked_target(e, out_s(e)) > 0);
 }
 
 /* With per-axis jerk limits a stop converts its jerk at the fastest segment
@@ -580,7 +579,7 @@ static double stop_jerk_now(const engine_t *e, double J)
 void scale_step(engine_t *e, double target, double R, double Rc, double A, double J)
 {
     int lim = 0;
-    double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n);
+    double s = out_s(e);
     double r0 = e->scale.ts.rate;
     ts_state_t free_ts = e->scale.ts; /* issue 26: held back only if the move differs */
     double ds = ts_step_jerk(&e->scale.ts, target, fmin(R, Rc), A, stop_jerk_now(e, J), J,
@@ -735,7 +734,7 @@ static double clocked_target(const engine_t *e, double s)
  */
 void scale_clocked_step(engine_t *e, double R, double A, double J)
 {
-    double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n), p = play_rel(e), rho = e->clk.rate;
+    double s = out_s(e), p = play_rel(e), rho = e->clk.rate;
     double T = e->period_s;
     int free_run = !e->scale.stop_req && !e->scale.end_brake && e->scale.override >= 1.0;
 

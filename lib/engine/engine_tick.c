@@ -402,7 +402,7 @@ typedef struct {
  */
 static int decide(engine_t *e, decision_t *d)
 {
-    double A, J, s = e->scale.on ? e->scale.s : tau_of(e, e->out.n), R;
+    double A, J, s = out_s(e), R;
     scale_limits(e, &A, &J);
     /* the reserve both rooms keep, worked out once (with per-axis limits it
      * scans the queue ahead) */

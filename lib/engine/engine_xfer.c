@@ -101,7 +101,7 @@ void xfer_track_time(engine_t *e)
     const qent_t *h = e->queue.len ? &e->queue.ent[e->queue.head] : NULL; /* q_head, read only */
     if (!h || !(e->out.cur_t1 > 0))
         return;
-    double t = e->scale.on ? e->scale.s : tau_of(e, e->out.n), u = t / e->out.cur_t1;
+    double t = out_s(e), u = t / e->out.cur_t1;
     double to = h->kind == QE_END ? h->t1_s : h->seg.t0_s;
     u = u < 0 ? 0 : u > 1 ? 1 : u;
     if (isnan(e->xfer.from_t))

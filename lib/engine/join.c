@@ -395,7 +395,7 @@ static void join_splice(engine_t *e, size_t ihead, double t_m, double t_j, const
  * as they were sent. */
 static void join_begin(engine_t *e, double t0, double t_m, double Tt, double rho)
 {
-    double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n);
+    double s = out_s(e);
     e->out.join_t0 = t0;
     e->out.join_tm = t_m;
     e->out.join_dur = Tt;
@@ -567,7 +567,7 @@ int join_try(engine_t *e)
     }
     /* rho: the rate the join is played at and the new curve entered at,
      * the override (1 on the unit grid) */
-    double P = e->period_s, s = e->scale.on ? e->scale.s : tau_of(e, e->out.n);
+    double P = e->period_s, s = out_s(e);
     double t_now = e->out.origin_t + s, A, J, rho = join_rate(e);
     if (e->scale.on && !(e->scale.ts.rate > 0))
         return 0; /* at rest: the transfer's (or the old curve's own end) */
@@ -628,7 +628,7 @@ int64_t join_ticks_left(const engine_t *e)
 
 void join_track_time(engine_t *e)
 {
-    double s = e->scale.on ? e->scale.s : tau_of(e, e->out.n);
+    double s = out_s(e);
     double u = (e->out.origin_t + s - e->out.join_t0) / e->out.join_dur;
     u = u < 0 ? 0 : u > 1 ? 1 : u;
     e->out.t = e->out.join_t0 + (e->out.join_tm - e->out.join_t0) * u;
