@@ -22,10 +22,11 @@ if [ ! -d "${TRAJD_PEERS:-/nonexistent}/python-canopen/canopen" ]; then
     exit 1
 fi
 export TRAJD_PEERS
+t0=$(uptime_s)
 fail() {
-    echo "FAIL: $*"
+    mark "FAIL: $*" >&2
     [ -n "${tp:-}" ] && kill "$tp" 2>/dev/null
-    [ -n "${sp:-}" ] && { kill "$sp" 2>/dev/null; wait "$sp"; }
+    [ -n "${sp:-}" ] && { kill "$sp" 2>/dev/null; wait_gone "$sp" simulator 1000; }
     exit 1
 }
 # count_ev NODE STATE: how many times the simulated drive NODE entered STATE
@@ -42,10 +43,12 @@ wait_ev() {
 # The configuration is README.md's "Wiring a CiA 402 drive" example (the host
 # test extracts it into drive.conf), with the test's own settings around it.
 [ -f "$out/drive.conf" ] || fail "no drive.conf"
+mark "start"
 timeout 100 candump -r 8000000 -D -L vcan0 > "$out/dcap.log" & cp=$!
 wait_rx vcan0 || fail "candump not ready"
 /usr/bin/python3 tests/uml/drive_sim.py "$out" 1:20000 2:0 3:0 2> "$out/sim.err" & sp=$!
 wait_grep "$out/drive_sim.ready" ready 2000 || fail "simulator not ready"
+mark "simulator ready"
 "$BUILD/bin/trajd" -f -c "$out/drive.conf" 2> "$out/drive.err" & tp=$!
 # ---- power-on to Operation Enabled: NMT start, SDOs, Shutdown, Switch on, Enable operation
 wait_ev 1 OPERATION_ENABLED 1 || fail "node 1 never enabled"
@@ -53,12 +56,12 @@ wait_ev 2 OPERATION_ENABLED 1 || fail "node 2 never enabled"
 wait_grep "$out/drive.err" "drives in Operation Enabled" 2000 || fail "trajd did not report the drives enabled"
 # node 3 refused its configuration: reported, never enabled
 wait_grep "$out/drive.err" "refused SDO write of 0x6071" 2000 || fail "SDO abort not reported"
-touch "$out/ok.bringup"
+touch "$out/ok.bringup"; mark "drives enabled"
 # ---- the track: from 2 m away, smoothly; every cycle late
 canplayer -I "$out/dwp.log" vcan0=can0 || fail "canplayer"
 # STATUS byte 0: engine state in bits 0..2 (3 = finished), flags above (tx-drop: late)
 wait_grep "$out/dcap.log" " 6C0#[0-9A-F]3" 2000 || fail "track never finished"
-touch "$out/ok.track"
+touch "$out/ok.track"; mark "track played"
 # ---- drive fault: trajd holds and reports; clear -> fault reset -> enabled again
 kill -USR1 "$sp"
 wait_ev 1 FAULT 1 || fail "simulator did not fault"
@@ -76,7 +79,7 @@ wait_ev 1 OPERATION_ENABLED 2 || fail "node 1 not enabled again after clear"
 # checks it was where the drive stood)
 wait_ev 1 FIRST_TARGET 2 || fail "node 1 got no target after the clear"
 [ "$(count_ev 2 OPERATION_ENABLED)" = 1 ] || fail "node 2 enabled again: it never left"
-touch "$out/ok.fault"
+touch "$out/ok.fault"; mark "fault and clear"
 # ---- the drives' own quick stop: trajd disables them (no re-enable without clear)
 kill -USR2 "$sp"
 wait_ev 2 QUICK_STOP_ACTIVE 1 || fail "simulator did not quick-stop"
@@ -87,7 +90,7 @@ wait_ev 1 OPERATION_ENABLED 3 || fail "node 1 not enabled again after the quick 
 wait_ev 2 OPERATION_ENABLED 2 || fail "node 2 not enabled again after the quick stop"
 wait_ev 1 FIRST_TARGET 3 || fail "node 1 got no target after the quick stop"
 wait_ev 2 FIRST_TARGET 2 || fail "node 2 got no target after the quick stop"
-touch "$out/ok.quickstop"
+touch "$out/ok.quickstop"; mark "quick stop and clear"
 # ---- a drive goes silent (node 2's heartbeat stops, its PDOs go on): trajd reports it
 # and holds the object (override 0); an override written by Modbus is refused
 # (exception 03) until the clear command releases the hold
@@ -118,12 +121,16 @@ until mbpoll -m tcp -p 1502 -a 1 -0 -r 172 -c 5 -t 3:hex -1 127.0.0.1 > "$out/mb
     i=$((i + 1)); [ $i -lt 100 ] || fail "override in force not 50 %: $(cat "$out/mb_hb_after.txt")"
     sleep 0.1
 done
-touch "$out/ok.heartbeat"
+touch "$out/ok.heartbeat"; mark "heartbeat loss and clear"
 kill -0 $tp || fail "trajd died"
-kill -TERM $tp; wait $tp; rc=$?; tp=
+# each end bounded: trajd brings its objects to rest in at most 5 s, the
+# simulator ends within 10 s of SIGTERM (faulthandler), candump at once
+kill -TERM $tp; wait_gone $tp trajd 1000; rc=$?
 [ $rc -eq 0 ] || fail "trajd exit code $rc"
-kill -TERM $sp; wait $sp; sp=
-kill $cp; wait $cp 2>/dev/null
+tp=; mark "trajd ended"
+kill -TERM $sp; wait_gone $sp simulator 1000 || fail "the simulator did not end"
+sp=; mark "simulator ended"
+kill $cp; wait_gone $cp candump || fail "candump did not end"
 [ -f "$out/drive_sim.json" ] || fail "simulator wrote no log"
-touch "$out/ok.drive"
+touch "$out/ok.drive"; mark "end"
 echo "drive scenario passed in the guest"

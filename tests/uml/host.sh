@@ -39,17 +39,26 @@ uml_boot() {
     echo "uml: boot and $script took $(( $(date +%s%N) / 1000000 - start_ms )) ms" \
          "(CAN path: vcan in a user-mode-linux $(linux.uml --version 2>/dev/null | head -1) guest;" \
          "$([ -s "$run/xstate.log" ] && cat "$run/xstate.log" || echo "xstate: host size accepted"))"
-    cat "$run/guest.log" 2>/dev/null
-    [ -f "$run/rc" ] || { uml_no_verdict "$run/console.log"; return 1; }
+    if [ ! -f "$run/rc" ]; then
+        cat "$run/guest.log" 2>/dev/null
+        uml_no_verdict "$run/console.log"
+        return 1
+    fi
     rc=$(cat "$run/rc")
+    if [ "$rc" != 0 ]; then
+        # the logs first, the guest's own account last: a failure's last lines
+        # (what tests/run.sh shows) say which step failed and how long each took
+        # the globs expanded now: at the call the guest had written none of them
+        local p
+        for p in "$@"; do
+            for f in $p; do echo "== $f"; tail -30 "$f"; done
+        done
+        [ -s "$run/ps.txt" ] && { echo "== $run/ps.txt (the guest's processes 10 s before its timeout)"; cat "$run/ps.txt"; }
+        echo "== $run/guest.log"
+    fi
+    cat "$run/guest.log" 2>/dev/null
     echo "uml: guest exit code $rc"
-    [ "$rc" = 0 ] && return 0
-    # the globs expanded now: at the call the guest had written none of them
-    local p
-    for p in "$@"; do
-        for f in $p; do echo "== $f"; tail -30 "$f"; done
-    done
-    return 1
+    [ "$rc" = 0 ]
 }
 
 # uml_no_verdict CONSOLE: one line naming why the guest gave no verdict (the

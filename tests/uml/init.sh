@@ -19,6 +19,17 @@ for w in $(cat /proc/cmdline); do
         trajd_timeout=*) tmo=${w#trajd_timeout=} ;;
     esac
 done
+# guest_ps: one line per user process: pid, name, state, where it sleeps in
+# the kernel (shell builtins only: a fork per line is slow in the guest)
+guest_ps() {
+    for p in /proc/[0-9]*; do
+        read -r st 2>/dev/null < "$p/stat" || continue
+        set -- $st
+        [ "$1" = 2 ] || [ "$4" = 2 ] && continue   # kthreadd and the kernel's threads
+        w=; read -r w 2>/dev/null < "$p/wchan"
+        echo "$1 $2 $3 ${w:--}"
+    done
+}
 mount -t sysfs sys /sys 2>/dev/null
 grep -q ' /dev ' /proc/mounts || mount -t devtmpfs dev /dev 2>/dev/null
 mkdir -p /dev/pts /dev/shm
@@ -49,8 +60,13 @@ fi
     ip link add dev vcan0 type vcan && ip link set vcan0 mtu 72 up
     cd "$src" || exit 1
     rc=0
+    # 10 s before the timeout, what every process is doing (its state, where
+    # it sleeps in the kernel) goes to $dir/ps.txt: a scenario that hangs says
+    # where, not only that it timed out
+    (sleep $((tmo > 20 ? tmo - 10 : tmo / 2)); guest_ps > "$dir/ps.txt") & wd=$!
     timeout -k 2 "$tmo" sh "$script" "$dir" || rc=$?
-    echo "guest: script exit $rc"
+    kill "$wd" 2>/dev/null
+    echo "guest: script exit $rc$([ "$rc" = 124 ] || [ "$rc" = 137 ] && echo " (timed out after $tmo s; its processes 10 s before: ps.txt)")"
     echo $rc > "$dir/rc"
 } > "$dir/guest.log" 2>&1
 sync

@@ -31,3 +31,28 @@ wait_grep() {
     done
     echo "wait_grep: '$2' not in $1" >&2; return 1
 }
+
+# mark WHAT: a line on the scenario's output (the guest's log) with the
+# seconds since t0 (set t0=$(uptime_s) at the start): a failure's log says how
+# long each step took.
+uptime_s() { cut -d' ' -f1 /proc/uptime; }
+mark() { echo "$(awk -v t0="${t0:-0}" '{printf "%.2f", $1 - t0}' /proc/uptime) s: $*"; }
+
+# wait_gone PID NAME [TRIES]: until process PID has ended (a zombie not yet
+# reaped counts as ended; 20 ms polls, 500 by default), then reaps it (its exit
+# status is wait_gone's); if it has not ended, says where each of its threads
+# sleeps in the kernel and returns 1.
+wait_gone() {
+    i=0; n=${3:-500}
+    while [ $i -lt "$n" ]; do
+        st=$(cut -d' ' -f3 "/proc/$1/stat" 2>/dev/null) || st=Z
+        [ "$st" = Z ] && { wait "$1"; return $?; }
+        i=$((i + 1)); sleep 0.02
+    done
+    echo "wait_gone: $2 (pid $1) has not ended:" >&2
+    for t in /proc/"$1"/task/*; do
+        echo "  thread $(cat "$t/comm" 2>/dev/null): state $(cut -d' ' -f3 "$t/stat" 2>/dev/null)," \
+             "in $(cat "$t/wchan" 2>/dev/null)" >&2
+    done
+    return 1
+}
