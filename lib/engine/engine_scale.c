@@ -310,23 +310,36 @@ static double stop_jerk(const engine_t *e)
 #define STOP_JERK_SCAN 64
 
 /* The speed a stop's jerk is converted at, with per-axis jerk limits: the
- * fastest of the segments it may still reach (those starting within twice
- * its stopping distance at the current segment's jerk), at least the current
- * segment's fastest, as outside a stop.  The braking's release
- * is planned on this jerk: one that shrank on the way (a faster segment
- * entered, or the curve's speed here growing) left its deceleration
+ * fastest of the segments it may still reach, at least the current
+ * segment's fastest, as outside a stop.  Those it may reach start within
+ * its stopping distance at the jerk converted at that speed: the scan takes
+ * each faster segment within the distance and widens the distance for it
+ * (one pass: the speed and the distance only grow), so the stop planned at
+ * that jerk ends within the segments it was converted over.  The braking's
+ * release is planned on this jerk: one that shrank on the way (a faster
+ * segment entered, or the curve's speed here growing) left its deceleration
  * unreleased at rest, cleared in one tick (2.25 m/s^3 on a 2 m/s^3 axis where
  * it shrank by 0.14 %, fuzz_lifecycle).  The window's far end does not move
- * on as the output brakes towards it: the jerk only grows over a stop. */
+ * on as the output brakes towards it: the jerk only grows over a stop.  Its
+ * earlier form, twice the distance at the jerk here, took in segments the
+ * stop here could not reach: a clear on slow pieces with pieces of 87 and
+ * 166 m/s queued just beyond its stop had its jerk cut 87 times, released
+ * its braking for that jerk and entered them at rate 0.133, five times
+ * their ceiling (1.77 m/s^2 on a 1 m/s^2 axis, fuzz_engine
+ * clear-jerk-cut-by-fast-segments-ahead). */
 static double stop_jerk_speed(const engine_t *e, double A, double jerk)
 {
     double v = scale_jerk_speed(e);
     if (e->out.mode != OUT_STREAM)
         return v; /* a transfer: one segment */
-    double end = e->out.t + 2.0 * ts_stop_dist(e->scale.ts.rate, e->scale.ts.acc, A, jerk / v);
+    double r = e->scale.ts.rate, acc = e->scale.ts.acc;
+    double end = e->out.t + ts_stop_dist(r, acc, A, jerk / v);
     const qent_t *q;
     for (size_t i = 0; (q = seg_ahead(e, i, STOP_JERK_SCAN)) && !(q->seg.t0_s > end); i++)
-        v = fmax(v, q->vmax);
+        if (q->vmax > v) {
+            v = q->vmax;
+            end = e->out.t + ts_stop_dist(r, acc, A, jerk / v);
+        }
     return v;
 }
 
