@@ -160,13 +160,17 @@ static double stop_jerk_reserve(const engine_t *e, double A, double J, double d)
  * the segment's fastest speed, not at v), which run through track time at
  * about the rate.  Entering a segment whose acceleration limit is converted
  * at a lower speed v' (a larger A in rate units), the room is re-expressed
- * as v' K, short by (1 - v'/v) of that part: a braking planned to the tick
- * lost its room at the boundary and reached the curve's end moving (1.39
- * m/s^2 on a 1 m/s^2 axis, fuzz_lifecycle with per-axis limits).  Kept in
- * reserve with per-axis limits, where they hold as hard limits: that part of
- * the stopping distance from the rate here (ts_stop_dist less r^2/(2 A)),
- * times 1 - v_min/v, v_min the lowest conversion speed of the segments the
- * braking may reach (those starting within twice its distance).  The room
+ * as v' K, and the need with it but for that part: a braking planned to the
+ * tick lost its room at the boundary and reached the curve's end moving
+ * (1.39 m/s^2 on a 1 m/s^2 axis, fuzz_lifecycle with per-axis limits).  Kept
+ * in reserve with per-axis limits, where they hold as hard limits: that part
+ * of the stopping distance (ts_stop_dist less r^2/(2 A)) at v_min, times
+ * v/v_min, less that part here; v_min the lowest conversion speed of the
+ * segments the braking may reach (those starting within twice its distance).
+ * Kept as that part here times 1 - v_min/v (the shortfall in the units there
+ * taken for the units here), a braking for the curve's end where the
+ * conversion fell from 23 to 4.8 m/s reached the end at 0.68 m/s (21 m/s^2
+ * on a 4 m/s^2 axis, fuzz_engine).  The room
  * to the ceilings ahead (scale_ceil_room) keeps it too: a stop near a rest end
  * lost that room at each boundary and entered a segment of ceiling 0.099 at
  * rate 0.151.  Without per-axis limits the scaling's acceleration is a target
@@ -178,14 +182,18 @@ double scale_slowing_reserve(const engine_t *e, double v)
     if (e->out.mode != OUT_STREAM || !(r > 0) || !e->queue.len || !solve_axis_limited(e))
         return 0.0;
     scale_limits(e, &A, &J);
-    double d = ts_stop_dist(r, e->scale.ts.acc, A, J), onset = d - 0.5 * r * r / A;
-    if (onset > 0) {
-        double end = e->out.t + 2.0 * d, vmin = v;
-        const qent_t *q;
-        for (size_t i = 0; (q = seg_ahead(e, i, SLOW_SCAN)) && !(q->seg.t0_s > end); i++)
-            if (q->av > 0 && q->av < vmin)
-                vmin = q->av;
-        res = (1.0 - vmin / v) * onset;
+    double acc = e->scale.ts.acc, d = ts_stop_dist(r, acc, A, J), onset = d - 0.5 * r * r / A;
+    double end = e->out.t + 2.0 * d, vmin = v;
+    const qent_t *q;
+    for (size_t i = 0; (q = seg_ahead(e, i, SLOW_SCAN)) && !(q->seg.t0_s > end); i++)
+        if (q->av > 0 && q->av < vmin)
+            vmin = q->av;
+    if (vmin < v) {
+        /* there the onset is that segment's (its A, v / vmin times the A
+         * here in rate units, at the jerk here), and the room v K is vmin K:
+         * in the units here it counts v / vmin times */
+        double Aj = A * v / vmin, onset_j = ts_stop_dist(r, acc, Aj, J) - 0.5 * r * r / Aj;
+        res = fmax(onset_j * v / vmin - (onset > 0 ? onset : 0.0), 0.0);
     }
     return res + stop_jerk_reserve(e, A, J, d);
 }
