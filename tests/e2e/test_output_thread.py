@@ -57,7 +57,36 @@ def strace_run(test, tmp, conf):
                        timeout=WAIT_S)
     test.assertEqual(p.returncode, 0, p.stderr)
     with open(trace) as f:
-        calls = [ln.split(None, 1) for ln in f if ln[:1].isdigit()]
+        writers, clock_readers, main, fds = parse_trace(f)
+    return p, writers, clock_readers, main, fds
+
+
+def joined_calls(lines):
+    """[(tid, call)] of strace -f lines, each call whole: a call another
+    thread interrupted is printed in two parts ("read(9,  <unfinished ...>",
+    later "<... read resumed>..., 8) = 8" on the same thread), joined here."""
+    calls, open_part = [], {}
+    for ln in lines:
+        if not ln[:1].isdigit():
+            continue
+        tid, call = ln.split(None, 1)
+        call = call.rstrip("\n")
+        if call.endswith("<unfinished ...>"):
+            open_part[tid] = call[:-len("<unfinished ...>")]
+            continue
+        m = re.match(r"<\.\.\. \w+ resumed>\s?(.*)", call)
+        if m:
+            if tid not in open_part:
+                continue   # its first part came before the trace began
+            call = open_part.pop(tid) + m.group(1)
+        calls.append((tid, call))
+    return calls
+
+
+def parse_trace(lines):
+    """({fd: writer tids}, the clock readers' tids, the main tid, {path
+    suffix: fd}) of an strace -f trace of trajd."""
+    calls = joined_calls(lines)
     main = int(calls[0][0])   # the first line is trajd's execve's thread
     # fd numbers are reused: a write counts for a file only while its fd is open
     fds, writers, clock_readers, timer_fds, open_now = {}, {}, set(), set(), {1: 1}
@@ -89,7 +118,7 @@ def strace_run(test, tmp, conf):
         m = re.match(r"write\((\d+), ", call)
         if m and int(m.group(1)) in open_now:
             writers.setdefault(int(m.group(1)), set()).add(pid)
-    return p, writers, clock_readers, main, fds
+    return writers, clock_readers, main, fds
 
 
 def task_stat(pid, tid):
@@ -99,6 +128,23 @@ def task_stat(pid, tid):
 
 
 class OutputThreadTest(unittest.TestCase):
+    def test_trace_parser_joins_split_calls(self):
+        # Given a trace (strace -f's form) where another thread's write split
+        # the clock's timerfd_create and its reads, as under load
+        trace = ["100   openat(AT_FDCWD, \"/etc/ld.so.cache\", O_RDONLY|O_CLOEXEC) = 3\n",
+                 "100   timerfd_create(CLOCK_MONOTONIC, TFD_CLOEXEC|TFD_NONBLOCK <unfinished ...>\n",
+                 "101   write(2, \"<6>started\"..., 11 <unfinished ...>\n",
+                 "100   <... timerfd_create resumed>) = 9\n",
+                 "101   <... write resumed>)              = 11\n",
+                 "100   read(9,  <unfinished ...>\n",
+                 "102   read(8, \"\\1\\0\\0\\0\\0\\0\\0\\0\", 8) = 8\n",
+                 "100   <... read resumed>\"\\1\\0\\0\\0\\0\\0\\0\\0\", 8) = 8\n"]
+        # then the main thread is the one clock reader (the eventfd 8 of a
+        # writer is no clock); the first parts alone name neither
+        writers, clock_readers, main, fds = parse_trace(trace)
+        self.assertEqual(main, 100)
+        self.assertEqual(clock_readers, {100})
+
     def test_writes_off_the_clock_thread(self):
         with tempfile.TemporaryDirectory() as tmp:
             p, writers, clock_readers, main, fds = strace_run(self, tmp, write_conf(tmp, 60))
