@@ -571,10 +571,10 @@ int join_try(engine_t *e)
     double t_now = e->out.origin_t + s, A, J, rho = join_rate(e);
     if (e->scale.on && !(e->scale.ts.rate > 0))
         return 0; /* at rest: the transfer's (or the old curve's own end) */
-    if (e->scale.on && !e->out.underrun &&
-        ((e->scale.ts.acc < 0 &&
-          e->scale.ts.rate > rho / JOIN_HELD + (e->clk.on ? e->clk.catchup : 0.0)) ||
-         (e->scale.ts.acc > 0 && e->scale.ts.rate > rho / JOIN_HELD + e->clk.catchup)))
+    /* the lead a catch-up allows: on one clock, or to a rate speeding up */
+    double acc = e->scale.ts.acc, lead = acc > 0 || e->clk.on ? e->clk.catchup : 0.0;
+    if (e->scale.on && !e->out.underrun && (acc < 0 || acc > 0) &&
+        e->scale.ts.rate > rho / JOIN_HELD + lead)
         return 0; /* still braking to the join's rate (an override lowered;
                    * on one clock beyond the lead its catch-up allows), or
                    * still speeding up beyond it and the lead any catch-up
