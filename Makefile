@@ -232,7 +232,7 @@ DEPS_TEST := libcmocka-dev libgsl-dev python3 python3-scipy python3-numpy mbpoll
              python3-pymodbus python3-serial python3-serial-asyncio can-utils python3-can python3-canmatrix \
              user-mode-linux busybox-static socat iproute2 clang libclang-rt-14-dev \
              systemd procps valgrind python3-pyproj cppcheck clang-format gpsbabel \
-             groff-base man-db tshark linuxcnc-uspace
+             groff-base man-db tshark linuxcnc-uspace strace gdb
 
 # make bench only: cyclictest (rt-tests), the wakeup-latency reference
 # tests/bench/bench_lateness.sh measures beside trajd's tick lateness.

@@ -2,6 +2,7 @@
 #include "core.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -206,43 +207,6 @@ static int64_t real_offset(core_priv_t *p)
     return p->rt_off_ns;
 }
 
-/* Issue 26: the D a trajectory's output holds, logged as it starts streaming
- * (lib/engine/delay.h): the first OBJ_DELAY_LOG_FIRST trajectories of an
- * object, then every OBJ_DELAY_LOG_EVERY-th (a sender that starts one a
- * second does not flood the log; the status and trajreplay --summary show
- * the last).  Each underrun and each growth of D are logged at the same
- * rate (obj_log_nth). */
-#define OBJ_DELAY_LOG_FIRST 20
-#define OBJ_DELAY_LOG_EVERY 100
-
-/* 1 if the n-th (from 1) of an object's events is logged. */
-static int obj_log_nth(uint64_t n)
-{
-    return n <= OBJ_DELAY_LOG_FIRST || n % OBJ_DELAY_LOG_EVERY == 0;
-}
-
-/* One line: "object 'a': <what>play-out delay D ..." (delay.h's format). */
-static void obj_log_delay(const obj_t *o, const char *what)
-{
-    engine_delay_t d;
-    char line[400];
-    engine_delay(o->engine, &d);
-    engine_delay_format(&d, line, sizeof line);
-    log_msg(LOG_INFO, "object '%s': %splay-out delay %s", o->name, what, line);
-}
-
-static void obj_log_track_delay(obj_t *o)
-{
-    if (o->sp.track == o->delay_track || o->sp.state != ENGINE_STATE_STREAMING)
-        return;
-    o->delay_track = o->sp.track;
-    if (o->delay_logs++ >= OBJ_DELAY_LOG_FIRST && o->sp.track % OBJ_DELAY_LOG_EVERY)
-        return;
-    char what[48];
-    snprintf(what, sizeof what, "trajectory %u streams: ", (unsigned)o->sp.track);
-    obj_log_delay(o, what);
-}
-
 /*
  * Serve deadline k; deadlines k0 .. k-1 were missed.  In real time (speed 1)
  * the objects move on by one period from the last setpoint sent, never by
@@ -282,7 +246,7 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
         rejlog_drain(&o->rejlog, o->engine); /* verdicts given by a finish or a tick */
         engine_status(o->engine, &o->status);
         o->status.skipped_ticks += o->skipped_ticks;
-        obj_log_track_delay(o);
+        objlog_note_start(o);
         if (o->retiring) /* the owner judged its own setpoint (lc_tick) */
             safety_check(&o->safety, &o->sp);
         obj_frames(c->cfg, o);
@@ -526,16 +490,6 @@ static int reopen_old(core_t **prevp)
     return -1;
 }
 
-/* Issue 26: every object's play-out delay D and its parts (lib/engine/delay.h),
- * at start and at each reload: what its engine holds (a carried engine: the D
- * it stated), or what its settings need before any input. */
-static void log_delays(const core_t *c)
-{
-    for (unsigned i = 0; i < c->nobj; i++)
-        if (c->obj[i].engine)
-            obj_log_delay(&c->obj[i], "");
-}
-
 int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, core_t **out,
               char *why, size_t whylen)
 {
@@ -597,7 +551,7 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
         core_close(prev);
         *prevp = NULL;
     }
-    log_delays(c);
+    objlog_delays(c);
     *out = c;
     return 0;
 fail:
@@ -699,8 +653,6 @@ int core_done(const core_t *c)
     return 1;
 }
 
-static void log_rejections(core_t *c);
-
 void core_close(core_t *c)
 {
     if (!c)
@@ -715,7 +667,7 @@ void core_close(core_t *c)
         if (p->opened[t] && transport_table[t]->close)
             transport_table[t]->close(c->tstate[t], c);
     if (c->obj)
-        log_rejections(c); /* engines carried to a new core were taken (NULL) */
+        objlog_roll(c, UINT_MAX); /* engines carried to a new core were taken (NULL) */
     if (c->obj)
         for (unsigned i = 0; i < c->nobj; i++) {
             engine_free(c->obj[i].engine);
@@ -726,127 +678,10 @@ void core_close(core_t *c)
     free(p);
 }
 
-static void log_rejection(void *ctx, const char *line)
-{
-    log_obj(LOG_WARNING, (const char *)ctx, "%s", line); /* ctx: the object's name */
-}
-
-/* param = uniform on irregular intervals (ENGINE_UNIFORM_RATIO_WARN): once per object. */
-static void warn_uniform(obj_t *o)
-{
-    if (o->uniform_warned || !o->status.uniform_irregular)
-        return;
-    o->uniform_warned = 1;
-    log_msg(LOG_WARNING,
-            "object '%s': param = uniform on irregular intervals: %llu waypoints so far between "
-            "intervals differing by more than %.2gx (worst %.3gx, at t = %.3f s): the velocity "
-            "steps by that ratio there (param = time, the default, is C2 in time)",
-            o->name, (unsigned long long)o->status.uniform_irregular, ENGINE_UNIFORM_RATIO_WARN,
-            o->status.uniform_ratio_max, o->status.uniform_ratio_t_s);
-}
-
-/* issue 32: the per-axis limits, said once each: a track that exceeds them
- * (its lag grows: more than a tenth of the time streamed lost to them), and
- * each stop because the lag passed max_lag_s or before a segment beyond the
- * axes (both the lifecycle's lag event). */
-static void warn_axis(obj_t *o)
-{
-    const engine_status_t *st = &o->status;
-    double streamed_s = (double)st->setpoints * (double)o->cfg->engine.period_ns * 1e-9;
-    if (!o->axis_warned && st->axis_lost_s > 1.0 && st->axis_lost_s > 0.1 * streamed_s) {
-        o->axis_warned = 1;
-        log_msg(LOG_WARNING,
-                "object '%s': its track exceeds the per-axis limits (axis_max_*): %.1f s lost "
-                "to them so far over %llu segments; its output lags its input by %.1f s beyond "
-                "D and the lag grows while the track does",
-                o->name, st->axis_lost_s, (unsigned long long)st->axis_slowed, st->axis_lag_s);
-    }
-    if (st->axis_lag_stops != o->axis_stops_logged) {
-        o->axis_stops_logged = st->axis_lag_stops;
-        log_msg(LOG_ERR,
-                "object '%s': stopped on its path: the per-axis limits made it lag its input "
-                "by more than max_lag_s %g s beyond D (lifecycle event 'lag beyond max_lag_s', "
-                "%llu so far); latched until start or clear",
-                o->name, o->cfg->engine.max_lag_s, (unsigned long long)st->axis_lag_stops);
-    }
-    if (st->axis_beyond != o->axis_beyond_logged) {
-        o->axis_beyond_logged = st->axis_beyond;
-        log_msg(LOG_ERR,
-                "object '%s': stopped on its path before a segment its axes cannot follow: "
-                "the track is over 100 times faster there on an axis than its axis_max_* "
-                "(lifecycle event 'lag beyond max_lag_s', %llu so far); latched until start "
-                "or clear",
-                o->name, (unsigned long long)st->axis_beyond);
-    }
-}
-
-/* issue 26: each underrun once the silence it met ended, where and why
- * (engine_underrun_format), at obj_log_nth's rate.  One whose input never
- * resumed is the input's end: a silent end takes it back
- * (lib/engine/silence.h), unlogged. */
-static void log_underrun(obj_t *o)
-{
-    const engine_status_t *st = &o->status;
-    char msg[320];
-    if (!engine_underrun_due(st, o->und_logged ? o->und_t : NAN, 0))
-        return;
-    o->und_t = st->underrun_t_s;
-    if (!obj_log_nth(++o->und_logged))
-        return;
-    (void)engine_underrun_format(st, msg, sizeof msg);
-    log_msg(LOG_WARNING, "object '%s': %s (%llu underruns so far)", o->name, msg,
-            (unsigned long long)st->underruns);
-}
-
-/* issue 26: a slowdown for D's stop reserve (reserve_slowed, delay.h), at
- * obj_log_nth's rate. */
-static void log_reserve_slowed(obj_t *o)
-{
-    uint64_t r = o->status.reserve_slowed;
-    if (r == o->reserve_logged)
-        return;
-    o->reserve_logged = r;
-    if (obj_log_nth(r))
-        log_msg(LOG_NOTICE,
-                "object '%s': faster than the speed its play-out delay's stop reserve was sized "
-                "for, on input that came on time: slowed along its path (%llu times so far), D "
-                "grows to the speed",
-                o->name, (unsigned long long)r);
-}
-
-/* issue 26: D stated anew, longer, because the input's intervals or top
- * speed grew (engine_delay_grow): the new D and its parts, at obj_log_nth's
- * rate. */
-static void log_delay_grown(obj_t *o)
-{
-    uint64_t n = o->status.delay_grown;
-    if (n == o->grown_logged)
-        return;
-    o->grown_logged = n;
-    if (!obj_log_nth(n))
-        return;
-    obj_log_delay(o, "its input's intervals or top speed grew: ");
-}
-
-/* Log the refusals of each object read since the last call (rejlog.h). */
-static void log_rejections(core_t *c)
-{
-    for (unsigned i = 0; i < c->nobj; i++)
-        if (c->obj[i].engine) {
-            warn_uniform(&c->obj[i]);
-            warn_axis(&c->obj[i]);
-            log_underrun(&c->obj[i]);
-            log_reserve_slowed(&c->obj[i]);
-            log_delay_grown(&c->obj[i]);
-            rejlog_drain(&c->obj[i].rejlog, c->obj[i].engine);
-            rejlog_flush(&c->obj[i].rejlog, c->obj[i].name, log_rejection, (void *)c->obj[i].name);
-        }
-}
-
 void core_stats_roll(core_t *c)
 {
     stats_t *s = c->stats;
-    log_rejections(c);
+    objlog_roll(c, OBJLOG_STARTS_PER_ROLL);
     /* safety violations, logged here (once a second at most per object), not in the tick */
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i];

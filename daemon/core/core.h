@@ -45,6 +45,7 @@
 #include <stdint.h>
 
 #include "cfg.h"
+#include "delay.h"
 #include "engine.h"
 #include "latency.h"
 #include "lifecycle.h"
@@ -158,6 +159,11 @@ typedef struct obj {
                                    * them in its cycle (zero if none does) */
     uint32_t delay_track;         /* the trajectory whose D was logged last (issue 26) */
     uint64_t delay_logs;          /* ... how many were logged */
+    int delay_pending;            /* a start noted in the tick, its line not yet logged
+                                   * (core_stats_roll logs it: log.h) */
+    uint32_t delay_pending_track; /* ... its trajectory */
+    engine_delay_t delay_pending_d; /* ... the D it stated */
+    uint64_t delay_superseded;      /* starts noted over a pending one before its line */
 } obj_t;
 
 /* The owner of o's motion, bound to o's engine and monitor (an obj_t built
@@ -373,6 +379,18 @@ void core_close(core_t *c);
 
 /* One-line summary ("12 s, 3 objects: boat streaming ..., late p99 40 us ..."). */
 int core_summary(const core_t *c, char *buf, size_t len);
+
+/* objlog.c, an object's log lines.  In the tick: note a trajectory that
+ * started streaming, with the D it stated (a copy; no line is made there). */
+void objlog_note_start(obj_t *o);
+/* Every object's D and its parts (at start and at each reload). */
+void objlog_delays(const core_t *c);
+/* Housekeeping (core_stats_roll, core_close): each object's lines since the
+ * last call, up to start_budget lines of trajectory starts (the rest the
+ * next time: many objects starting together are not dropped by the log's
+ * queue). */
+#define OBJLOG_STARTS_PER_ROLL 128
+void objlog_roll(core_t *c, unsigned start_budget);
 
 /* Refresh stats->late and log what happened since the last call (refused
  * waypoints, rate-limited; safety faults): called every second by trajd. */
