@@ -466,6 +466,30 @@ static int near_here(const engine_t *e, const double *p)
     return d2 <= ENGINE_HANDOVER_TOL_M * ENGINE_HANDOVER_TOL_M;
 }
 
+static double stop_jerk_now(const engine_t *e, double J);
+
+/* The time scaling's move of this tick from ts (scale_step's, before a
+ * transfer's creep): ts_step within R and the speed cap's room Rc, at the
+ * jerk a stop may use now, and, speeding up more, within the acceleration
+ * the segments ahead leave too (accel_ahead; a braking keeps the A here).
+ * Returns the advance; *lim as ts_step's. */
+static double scale_move(const engine_t *e, ts_state_t *ts, double target, double R, double Rc,
+                         double A, double J, int *lim)
+{
+    ts_state_t free_ts = *ts;
+    double ds = ts_step_jerk(ts, target, fmin(R, Rc), A, stop_jerk_now(e, J), J, e->period_s, NULL,
+                             lim);
+    if (ts->acc > 0 && ts->acc >= free_ts.acc) {
+        double Aup = accel_ahead(e, A, J, free_ts.acc);
+        if (ts->acc > Aup) {
+            *ts = free_ts;
+            *lim = 0;
+            ds = ts_step(ts, target, fmin(R, Rc), Aup, J, e->period_s, NULL, lim);
+        }
+    }
+    return ds;
+}
+
 /* At rest (rate 0) within the dead band of the end of a transfer or of a
  * trajectory's REST end (asked to move, the next tick could not: no move of
  * one tick would leave room to stop, ts_step's creep included): the curve is
@@ -477,11 +501,18 @@ static void rest_handover(engine_t *e)
 {
     double A, J, target = scale_target(e), end[AX];
     ts_state_t probe = e->scale.ts;
+    int lim = 0;
 
     if (!(target > 0))
         return; /* at rest by the override */
     scale_limits(e, &A, &J);
-    (void)ts_step(&probe, target, scale_remaining(e, e->scale.s), A, J, e->period_s, NULL, NULL);
+    /* the move the next tick makes (scale_move, as scale_step: the speed
+     * cap's room and the acceleration the segments ahead leave included;
+     * probed without them, a move from rest that the capped segments ahead
+     * allowed no acceleration for was taken as coming, and the output stood
+     * short of a closed trajectory's end for good: fuzz_engine) */
+    (void)scale_move(e, &probe, target, scale_remaining(e, e->scale.s),
+                     scale_ceil_room(e, e->scale.s, A, J), A, J, &lim);
     if (probe.rate > 0)
         return; /* the next tick moves on (its advance from rest alone may be a
                  * rounding residue of 1e-22: not a move) */
@@ -603,18 +634,7 @@ void scale_step(engine_t *e, double target, double R, double Rc, double A, doubl
     double s = out_s(e);
     double r0 = e->scale.ts.rate;
     ts_state_t free_ts = e->scale.ts; /* issue 26: held back only if the move differs */
-    double ds = ts_step_jerk(&e->scale.ts, target, fmin(R, Rc), A, stop_jerk_now(e, J), J,
-                             e->period_s, NULL, &lim);
-    if (e->scale.ts.acc > 0 && e->scale.ts.acc >= free_ts.acc) {
-        /* speeding up more: within what the segments ahead leave too
-         * (accel_ahead); a braking keeps the A here */
-        double Aup = accel_ahead(e, A, J, free_ts.acc);
-        if (e->scale.ts.acc > Aup) {
-            e->scale.ts = free_ts;
-            lim = 0;
-            ds = ts_step(&e->scale.ts, target, fmin(R, Rc), Aup, J, e->period_s, NULL, &lim);
-        }
-    }
+    double ds = scale_move(e, &e->scale.ts, target, R, Rc, A, J, &lim);
     if (e->out.mode == OUT_XFER && !(ds > 0) && at_rest(e) && target > 0)
         ds = ts_creep(&e->scale.ts, fmin(R, Rc), A, J, e->period_s); /* its end, short of it */
     if (lim && !(ds < ts_step(&free_ts, target, INFINITY, A, J, e->period_s, NULL, NULL)))
