@@ -125,19 +125,28 @@ typedef struct {
     int first_pending; /* the next queued entry is the trajectory's first */
     double end_r[AX];  /* end of the last queued segment */
     double end_t;
-    double end_speed;          /* speed at the end of the last queued segment */
-    double end_v[AX];          /* its velocity (m/s): the next segment starts with it */
-    double kcum;               /* capacity queued so far of the trajectory (qent_t kcum) */
-    double inv;                /* 1 / av of its last queued segment */
-    double ucum;               /* qent_t ucum so far */
-    int queued;                /* a segment of this trajectory was queued */
-    int pend;                  /* with per-axis acceleration limits, the newest segment
+    double end_speed;      /* speed at the end of the last queued segment */
+    double end_v[AX];      /* its velocity (m/s): the next segment starts with it */
+    double kcum;           /* capacity queued so far of the trajectory (qent_t kcum) */
+    double inv;            /* 1 / av of its last queued segment */
+    double ucum;           /* qent_t ucum so far */
+    int queued;            /* a segment of this trajectory was queued */
+    int pend;              /* with per-axis acceleration limits, the newest segment
                                   built waits here until the next one is (its av takes
                                   the next one's into account: queue_segment) */
-    uint64_t pend_node;        /* ... its first node */
-    fdiff_seg_t pend_seg;      /* ... the segment */
-    seg_limits_t pend_lim;     /* ... and its limits */
-    uint64_t traj;             /* +1 per trajectory opened */
+    uint64_t pend_node;    /* ... its first node */
+    fdiff_seg_t pend_seg;  /* ... the segment */
+    seg_limits_t pend_lim; /* ... and its limits */
+    uint64_t traj;         /* +1 per trajectory opened */
+    struct {               /* local backward methods: the last segment's queueing,
+                                  taken back at the close to build it again with the
+                                  trajectory's end condition (engine_solve.c local_end) */
+        int valid;         /* the fields below are those before node's segment */
+        uint64_t node;     /* its first node */
+        int given;         /* its far node's velocity is the source's */
+        int first_pending, queued;
+        double kcum, ucum, inv;
+    } tail;
     double span_max;           /* start_slack auto: longest time spanned by la_steady + 1
                          intervals of the input, decaying by 1/256 per node */
     double vmax_in;            /* start_slack auto: fastest chord speed of the input,

@@ -547,10 +547,21 @@ static void build_local(engine_t *e, int closed)
         const double *v0, *v1, *a0, *a1;
         fdiff_seg_t seg[3];
 
+        int given = j + 1 < e->solve.nodes &&
+                    e->solve.node_vk[(size_t)((j + 1) % e->solve.ring)] == 1;
         if (j + 1 >= e->solve.nodes || !local_state(e, j + 1, closed, &v1, &a1) ||
             !local_state(e, j, closed, &v0, &a0))
             break;
         e->solve.seg_next = j + 1;
+        /* (the state local_end takes back to) */
+        e->solve.tail.valid = !e->solve.pend && !e->axis_accel && !e->axis_jerk;
+        e->solve.tail.node = j;
+        e->solve.tail.given = given;
+        e->solve.tail.first_pending = e->solve.first_pending;
+        e->solve.tail.queued = e->solve.queued;
+        e->solve.tail.kcum = e->solve.kcum;
+        e->solve.tail.ucum = e->solve.ucum;
+        e->solve.tail.inv = e->solve.inv;
         if (e->local < 3) {
             hermite_segment(nr(e, j), v0, nr(e, j + 1), v1, nt(e, j), nt(e, j + 1) - nt(e, j),
                             &seg[0]);
@@ -565,6 +576,130 @@ static void build_local(engine_t *e, int closed)
 }
 
 static const double zero3[AX] = {0, 0, 0};
+
+/* The last segment of a local backward method, queued as node j + 1 came,
+ * built: its pieces (C1: one, C2: three) into seg, their count returned. */
+static int local_pieces(engine_t *e, uint64_t j, const double *v0, const double *a0,
+                        const double *v1, const double *a1, fdiff_seg_t seg[3])
+{
+    double dur = nt(e, j + 1) - nt(e, j);
+    if (e->local < 3) {
+        hermite_segment(nr(e, j), v0, nr(e, j + 1), v1, nt(e, j), dur, &seg[0]);
+        return 1;
+    }
+    hermite_c2_segments(nr(e, j), v0, a0, nr(e, j + 1), v1, a1, nt(e, j), dur, seg);
+    return 3;
+}
+
+/* The queue's k-th entry from its tail (k = 0: the newest). */
+static qent_t *q_from_tail(engine_t *e, size_t k)
+{
+    return &e->queue.ent[(e->queue.head + e->queue.len - 1 - k) % e->queue.cap];
+}
+
+/*
+ * A closed trajectory of a local backward method (HERMITE, HERMITE_C2): its
+ * last segment was built as its last node came, with that node's backward
+ * estimate, so the curve ended moving, and the output braked before its
+ * end and stood short of the last waypoint (2.3 cm on a line at 1 m/s,
+ * 0.13 m on the bundled figure-8: tests/oracle/test_hermite.py
+ * test_ends_on_last_waypoint).  While that segment is still queued, whole,
+ * it is built again with the trajectory's end condition at the last node
+ * (as the centred methods have it there: rest, clamped, or natural; the
+ * acceleration 0), and queued in its place.  Not where the output already
+ * entered it, nor where the new segment would leave the moving output less
+ * room to stop than it stands in (scale_remaining): the old end is kept
+ * then, and braked for as before.
+ */
+static void local_end(engine_t *e)
+{
+    uint64_t last = e->solve.nodes - 1, j = last - 1;
+    size_t sl = (size_t)(last % e->solve.ring), sj = (size_t)(j % e->solve.ring);
+    double *vl = e->solve.node_v + sl * AX, *al = e->solve.node_a + sl * AX;
+    double v1[AX], a1[AX] = {0, 0, 0};
+    fdiff_seg_t seg[3];
+
+    if (e->local % 2 == 0 || e->solve.nodes < 3 || !e->solve.tail.valid ||
+        e->solve.tail.node != j || e->solve.seg_next != last || e->solve.pend ||
+        e->solve.node_vk[sj] != 2)
+        return;
+    if ((e->cfg.ends == ENGINE_ENDS_REST || e->cfg.ends == ENGINE_ENDS_CLAMPED) &&
+        !e->solve.tail.given) {
+        for (int k = 0; k < AX; k++)
+            v1[k] = e->cfg.ends == ENGINE_ENDS_REST ? 0.0 : e->cfg.end_vel_m_s[k];
+    } else if (e->solve.tail.given) {
+        memcpy(v1, vl, sizeof v1); /* the source's velocity, as sent */
+    } else {
+        hermite_vel_natural(nt(e, last), nr(e, last), nt(e, j), nr(e, j), e->solve.node_v + sj * AX,
+                            v1);
+    }
+    if (!memcmp(v1, vl, sizeof v1) && (e->local < 3 || !memcmp(a1, al, sizeof a1)))
+        return; /* the same segment */
+    int n = local_pieces(e, j, e->solve.node_v + sj * AX, e->solve.node_a + sj * AX, v1, a1, seg);
+    if (e->queue.len < (size_t)n)
+        return;
+    for (int i = 0; i < n; i++) {
+        const qent_t *q = q_from_tail(e, (size_t)i);
+        if (q->kind != QE_SEG || q->traj != e->solve.traj || q->node != j)
+            return; /* the output entered it (or its first pieces) */
+    }
+
+    /* what is taken back, kept to be put back as it was */
+    qent_t old[3];
+    size_t slow_old[3], slow_len = e->queue.slow_len, beyond = e->queue.beyond;
+    engine_solve_t solve = e->solve;
+    engine_scale_t scale = e->scale;
+    uint64_t axis_slowed = e->st.axis_slowed;
+    double vl_old[AX], al_old[AX];
+    memcpy(vl_old, vl, sizeof vl_old);
+    memcpy(al_old, al, sizeof al_old);
+    for (int i = 0; i < n; i++)
+        old[i] = *q_from_tail(e, (size_t)(n - 1 - i)); /* in queue order */
+    for (int i = 0; i < 3 && (size_t)i < slow_len; i++)
+        slow_old[i] = e->queue.slow[(e->queue.slow_head + slow_len - 1 - (size_t)i) % e->queue.cap];
+
+    for (int i = n - 1; i >= 0; i--) { /* off the tail */
+        const qent_t *q = &old[i];
+        if (is_slow(q)) {
+            e->queue.slow_len--;
+            e->queue.beyond -= !(q->ceil > 0);
+        }
+        e->st.axis_slowed -= (uint64_t)q->ceil_axis;
+        e->queue.len--;
+    }
+    e->solve.first_pending = e->solve.tail.first_pending;
+    e->solve.queued = e->solve.tail.queued;
+    e->solve.kcum = e->solve.tail.kcum;
+    e->solve.ucum = e->solve.tail.ucum;
+    e->solve.inv = e->solve.tail.inv;
+    memcpy(vl, v1, sizeof v1);
+    memcpy(al, a1, sizeof a1);
+    for (int i = 0; i < n; i++)
+        queue_segment(e, &seg[i], j);
+    q_from_tail(e, (size_t)(n - 1))->gap_s = old[0].gap_s;
+
+    if (e->out.mode == OUT_STREAM && e->out.traj == e->solve.traj && !at_rest(e)) {
+        double A, J;
+        scale_limits(e, &A, &J);
+        if (ts_stop_dist(e->scale.ts.rate, e->scale.ts.acc, A, J) + e->scale.ts.rate * e->period_s <
+            scale_remaining(e, out_s(e)))
+            return;
+    } else {
+        return;
+    }
+    /* less room than the output stands in: the old end, as it was */
+    for (int i = 0; i < n; i++)
+        *q_from_tail(e, (size_t)(n - 1 - i)) = old[i];
+    for (int i = 0; i < 3 && (size_t)i < slow_len; i++)
+        e->queue.slow[(e->queue.slow_head + slow_len - 1 - (size_t)i) % e->queue.cap] = slow_old[i];
+    e->queue.slow_len = slow_len;
+    e->queue.beyond = beyond;
+    e->st.axis_slowed = axis_slowed;
+    e->solve = solve;
+    e->scale = scale;
+    memcpy(vl, vl_old, sizeof vl_old);
+    memcpy(al, al_old, sizeof al_old);
+}
 
 /* start_slack auto: what node j says about the input's timing and speed */
 static void measure_input(engine_t *e, uint64_t j)
@@ -676,6 +811,7 @@ int solve_close(engine_t *e)
     }
     if (e->local) {
         build_local(e, 1);
+        local_end(e);
     } else if (e->solve.nodes >= 2) {
         uint64_t l = e->solve.nodes - 1;
         double v[AX];
