@@ -190,7 +190,8 @@ lifecycle_t *obj_lc(obj_t *o);
  *
  * LC_EV_OVERRIDE: the feed in percent (LC_EV_OVERRIDE_ZERO for 0); refused
  * (-ENGINE_ESTATE) while o is feed-held and percent > 0.  A clear releases
- * the hold and sets the feed back to 100 %.
+ * a feed hold and sets the feed back to 100 % (an operator's override,
+ * given without a hold, stays).
  */
 int obj_command(obj_t *o, lc_event_t ev, unsigned arg, const char *peer);
 

@@ -247,8 +247,15 @@ void lc_inherit(lifecycle_t *lc, const lifecycle_t *from)
     lc->have_sent = from->have_sent;
     lc->newest_t = from->newest_t;
     lc->delay_s = from->delay_s;
-    if (lc->hold & LC_HOLD_FEED)
+    if (lc->hold & LC_HOLD_FEED) {
         (void)engine_set_override(lc->engine, 0.0);
+    } else if (from->engine) {
+        /* the operator's feed override goes with the object too: a reload
+         * that changed its settings had set a paused object off again */
+        engine_status_t st;
+        engine_status(from->engine, &st);
+        (void)engine_set_override(lc->engine, st.override);
+    }
     if (lc->drive_pos)
         engine_require_position(lc->engine, 1);
 }

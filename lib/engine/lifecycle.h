@@ -221,10 +221,11 @@ int lc_tick(lifecycle_t *lc, int64_t now_ns, const engine_clock_t *clk, engine_s
 
 /*
  * A reload gave the object a new curve (LC_EV_RELOAD_CHANGED): lc, freshly
- * lc_init'ed on it, takes from's holds, latch, commanded state as sent and
- * counters (the buffered waypoints are not carried: counted as dropped), so
- * a stopped object stays stopped and a held one held.  The caller sets the
- * new curve's position (the one sent).
+ * lc_init'ed on it, takes from's holds, latch, feed override (from's
+ * curve's), commanded state as sent and counters (the buffered waypoints
+ * are not carried: counted as dropped), so a stopped object stays stopped,
+ * a held one held and a paused one paused.  The caller sets the new curve's
+ * position (the one sent).
  */
 void lc_inherit(lifecycle_t *lc, const lifecycle_t *from);
 

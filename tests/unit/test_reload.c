@@ -151,10 +151,80 @@ static void test_reload_keeps_the_running_engine(void **state)
     assert_int_equal(system(cmd), 0);
 }
 
+/* Given boat paused by its operator (feed override 0) at rest on its path,
+ * when a reload changes its settings (a new engine, started where the old
+ * one stands), then the pause goes with the object: the new engine's
+ * override is 0, and with waypoints pushed it does not set off (a transfer
+ * to them, with no command): the override stays the operator's until they
+ * change it, as the holds and the latch do (lib/engine/LIFECYCLE.md "reload
+ * new").  The operator's 50 % carries over the same way. */
+static void test_reload_keeps_the_override(void **state)
+{
+    (void)state;
+    snprintf(dir, sizeof dir, "/tmp/trajd-test-reload-XXXXXX");
+    assert_non_null(mkdtemp(dir));
+    test_write_file(dir, "t.csv", "t,x,y,z\n0,0,0,0\n1,1,0,0\n");
+    test_write_file(dir, "good.conf", good);
+    char changed[sizeof good + 64];
+    snprintf(changed, sizeof changed, "%sscale_jerk_m_s3 = 40\n", good);
+    test_write_file(dir, "changed.conf", changed);
+    int err = 0;
+    loop_t *loop = loop_new(&err);
+    assert_non_null(loop);
+    stats_t stats;
+    memset(&stats, 0, sizeof stats);
+    cfg_t *c1 = load("good.conf"), *c2 = load("changed.conf"), *c3 = load("good.conf");
+    core_t *c = NULL, *nc = NULL;
+    char why[512];
+    assert_int_equal(core_open(loop, c1, &stats, NULL, &c, why, sizeof why), 0);
+    obj_t *o = &c->obj[0];
+    engine_clear(o->engine);
+    push_line(o);
+    step(c, 500);
+    assert_true(speed(o) > 0.9);
+    assert_int_equal(obj_command(o, LC_EV_OVERRIDE_ZERO, 0, NULL), 0);
+    step(c, 300);
+    assert_true(speed(o) < 1e-12);
+    double x = o->sp.pos_m[0];
+
+    /* the changed reload: a new engine where boat stands, the pause with it */
+    assert_int_equal(core_open(loop, c2, &stats, &c, &nc, why, sizeof why), 0);
+    assert_null(c);
+    c = nc;
+    o = &c->obj[0];
+    assert_int_equal(o->carried, 0);
+    engine_status(o->engine, &o->status);
+    assert_true(!(fabs(o->status.override) > 0));
+    push_line(o); /* its track again, from x = 0: a transfer back, if it moved */
+    for (int i = 0; i < 300; i++) {
+        step(c, 1);
+        assert_true(!(speed(o) > 0));
+        assert_true(!(fabs(o->sp.pos_m[0] - x) > 0));
+    }
+
+    /* the operator's 50 %, through another changed reload (back to good.conf) */
+    assert_int_equal(obj_command(o, LC_EV_OVERRIDE, 50, NULL), 0);
+    assert_int_equal(core_open(loop, c3, &stats, &c, &nc, why, sizeof why), 0);
+    c = nc;
+    o = &c->obj[0];
+    engine_status(o->engine, &o->status);
+    assert_true(!(fabs(o->status.override - 0.5) > 0));
+
+    core_close(c);
+    cfg_free(c1);
+    cfg_free(c2);
+    cfg_free(c3);
+    loop_free(loop);
+    char cmd[128];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    assert_int_equal(system(cmd), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_reload_keeps_the_running_engine),
+        cmocka_unit_test(test_reload_keeps_the_override),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
