@@ -29,7 +29,62 @@ typedef struct {
     int opened[CFG_TRANSPORTS_MAX];
     int64_t rt_off_ns; /* CLOCK_REALTIME - CLOCK_MONOTONIC (real_offset) */
     int have_rt_off;
+    struct gone *gone; /* objects reloads removed, where they came to rest */
+    unsigned ngone;
 } core_priv_t;
+
+/* An object a reload removed (it braked to rest along its path, then went):
+ * where it rests, kept over later reloads while it is gone, so that one of
+ * its name added back starts there, as an object whose settings changed
+ * does, and reaches its track by a transfer, not from its first waypoint (a
+ * fresh object's position: a step of the distance between them). */
+struct gone {
+    char name[CFG_NAME_MAX];
+    double pos[ENGINE_AXES];
+};
+
+static int in_cfg(const cfg_t *cfg, const char *name)
+{
+    for (unsigned i = 0; i < cfg->nobj; i++)
+        if (strcmp(cfg->obj[i].name, name) == 0)
+            return 1;
+    return 0;
+}
+
+/* Where prev's object name went to rest, if a reload removed it; or NULL. */
+static const double *gone_pos(const core_t *prev, const char *name)
+{
+    const core_priv_t *p = (const core_priv_t *)prev;
+    for (unsigned i = 0; prev && !prev->stopping && i < p->ngone; i++)
+        if (strcmp(p->gone[i].name, name) == 0)
+            return p->gone[i].pos;
+    return NULL;
+}
+
+/* c's gone objects: prev's still gone, and prev's objects c does not have
+ * that had a position.  0 or -ENOMEM. */
+static int gone_note(core_t *c, const core_t *prev)
+{
+    core_priv_t *p = (core_priv_t *)c;
+    const core_priv_t *q = (const core_priv_t *)prev;
+    if (!prev || !(q->ngone + prev->nobj))
+        return 0;
+    p->gone = calloc(q->ngone + prev->nobj, sizeof *p->gone);
+    if (!p->gone)
+        return -ENOMEM;
+    for (unsigned i = 0; i < q->ngone; i++)
+        if (!in_cfg(c->cfg, q->gone[i].name))
+            p->gone[p->ngone++] = q->gone[i];
+    for (unsigned i = 0; i < prev->nobj; i++) {
+        const obj_t *o = &prev->obj[i];
+        if (in_cfg(c->cfg, o->name) || o->sp.cycle == 0 || (o->sp.flags & ENGINE_SP_NO_POSITION))
+            continue;
+        struct gone *g = &p->gone[p->ngone++];
+        snprintf(g->name, sizeof g->name, "%s", o->name);
+        memcpy(g->pos, o->sp.pos_m, sizeof g->pos);
+    }
+    return 0;
+}
 
 int64_t core_mono_ns(void)
 {
@@ -368,8 +423,12 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
             lc_inherit(&o->lc, &q->lc);
             o->held = q->held;
         }
-        if (q && q->sp.cycle != 0 && !(q->sp.flags & ENGINE_SP_NO_POSITION)) {
-            if (engine_set_position(o->engine, q->sp.pos_m) < 0) {
+        const double *at = q && q->sp.cycle != 0 && !(q->sp.flags & ENGINE_SP_NO_POSITION)
+                               ? q->sp.pos_m
+                           : q ? NULL
+                               : gone_pos(prev, o->name); /* added back: where it went */
+        if (at) {
+            if (engine_set_position(o->engine, at) < 0) {
                 snprintf(why, whylen, "object '%s': its position is outside the new max_abs_m",
                          o->name);
                 return -EINVAL;
@@ -527,6 +586,8 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
     }
     /* 1. new engines (may fail: prev is still untouched) */
     rc = new_objects(c, prev, why, whylen);
+    if (rc == 0 && (rc = gone_note(c, prev)) < 0)
+        snprintf(why, whylen, "out of memory");
     if (rc < 0)
         goto fail;
     /* 2. borrow the carried engines (cannot fail; prev untouched) */
@@ -675,6 +736,7 @@ void core_close(core_t *c)
             engine_free(c->obj[i].retiring);
         }
     free(c->obj);
+    free(p->gone);
     free(p);
 }
 

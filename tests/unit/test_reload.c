@@ -220,11 +220,85 @@ static void test_reload_keeps_the_override(void **state)
     assert_int_equal(system(cmd), 0);
 }
 
+/* Given boat moving, when a reload removes it (it brakes to rest along its
+ * path, then goes) and a later one adds it back (same name, same settings),
+ * then the new boat starts where the old one came to rest, and reaches its
+ * track by a transfer: no setpoint steps to the track's first waypoint (the
+ * position a fresh object takes), 49 m away in the probe that found it. */
+static void test_readded_object_starts_where_it_went(void **state)
+{
+    (void)state;
+    snprintf(dir, sizeof dir, "/tmp/trajd-test-reload-XXXXXX");
+    assert_non_null(mkdtemp(dir));
+    test_write_file(dir, "t.csv", "t,x,y,z\n0,0,0,0\n1,1,0,0\n");
+    test_write_file(dir, "good.conf", good);
+    test_write_file(dir, "gone.conf",
+                    "[daemon]\nrate_hz = 100\n[object.ship]\nid = 1\ninput = replay\n"
+                    "replay.track = t.csv\noutput = csv\ncsv.path = out2.csv\n");
+    int err = 0;
+    loop_t *loop = loop_new(&err);
+    assert_non_null(loop);
+    stats_t stats;
+    memset(&stats, 0, sizeof stats);
+    cfg_t *c1 = load("good.conf"), *c2 = load("gone.conf"), *c3 = load("good.conf");
+    core_t *c = NULL, *nc = NULL;
+    char why[512];
+    assert_int_equal(core_open(loop, c1, &stats, NULL, &c, why, sizeof why), 0);
+    obj_t *o = &c->obj[0];
+    engine_clear(o->engine);
+    push_line(o);
+    step(c, 500);
+    assert_true(speed(o) > 0.9);
+
+    assert_int_equal(reload_brake_removed(c, c2), 1);
+    for (int i = 0; i < 1000 && !reload_removed_at_rest(c, c2); i++)
+        step(c, 1);
+    assert_int_equal(reload_removed_at_rest(c, c2), 1);
+    double rest[3];
+    memcpy(rest, o->sp.pos_m, sizeof rest);
+    assert_true(rest[0] > 4.0);
+    assert_int_equal(core_open(loop, c2, &stats, &c, &nc, why, sizeof why), 0);
+    c = nc;
+    step(c, 10);
+
+    /* boat again */
+    assert_int_equal(core_open(loop, c3, &stats, &c, &nc, why, sizeof why), 0);
+    c = nc;
+    o = core_obj_find(c, "boat");
+    assert_non_null(o);
+    push_line(o);
+    double prev[3], xmin = rest[0];
+    memcpy(prev, rest, sizeof prev);
+    for (int i = 0; i < 3000; i++) {
+        step(c, 1);
+        if (o->sp.flags & ENGINE_SP_NO_POSITION)
+            fail_msg("tick %d: no position (the old one forgotten)", i);
+        double d = 0;
+        for (int k = 0; k < 3; k++)
+            d += (o->sp.pos_m[k] - prev[k]) * (o->sp.pos_m[k] - prev[k]);
+        if (sqrt(d) > 1.05 * PERIOD_NS * 1e-9 * 2.0) /* above the transfer's top speed */
+            fail_msg("tick %d: a step of %.3f m from (%.3f, %.3f)", i, sqrt(d), prev[0], prev[1]);
+        memcpy(prev, o->sp.pos_m, sizeof prev);
+        xmin = fmin(xmin, o->sp.pos_m[0]);
+    }
+    assert_true(xmin < 0.5); /* the transfer back to the line's start did come */
+
+    core_close(c);
+    cfg_free(c1);
+    cfg_free(c2);
+    cfg_free(c3);
+    loop_free(loop);
+    char cmd[128];
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    assert_int_equal(system(cmd), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_reload_keeps_the_running_engine),
         cmocka_unit_test(test_reload_keeps_the_override),
+        cmocka_unit_test(test_readded_object_starts_where_it_went),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
