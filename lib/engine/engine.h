@@ -107,6 +107,10 @@
 #define ENGINE_FRAGMENT_MAX 1024
 /* fragment, overlap, start_slack: picked by the engine (config text "auto") */
 #define ENGINE_AUTO 0xFFFFFFFFu
+/* accuracy's default.  One tighter that no fragment meets within
+ * max_lookahead is refused; at this one (or a looser one) a max_lookahead
+ * too short for it picks a local method (engine_config_check) */
+#define ENGINE_ACCURACY_DEFAULT 3e-7
 /* start_slack auto: the least and the most waypoints it adds */
 #define ENGINE_SLACK_AUTO_MIN 1
 #define ENGINE_SLACK_AUTO_MAX 8

@@ -367,7 +367,7 @@ void engine_config_default(engine_config_t *cfg)
     cfg->ends = ENGINE_ENDS_REST;
     cfg->fragment = ENGINE_AUTO;
     cfg->overlap = ENGINE_AUTO;
-    cfg->accuracy = 3e-7;
+    cfg->accuracy = ENGINE_ACCURACY_DEFAULT;
     cfg->max_lookahead = 18;
     cfg->period_ns = 10000000;
     cfg->capacity = 4096;
@@ -660,6 +660,11 @@ int engine_config_resolve(const engine_config_t *cfg, engine_config_t *out)
                 return 0;
         }
         out->fragment = o + 1;
+        /* an accuracy tighter than the default that no fragment meets is
+         * refused (engine_config_check says so): a local method would be
+         * far less accurate than asked */
+        if (cfg->accuracy < ENGINE_ACCURACY_DEFAULT)
+            return -ENGINE_ECONFIG;
         return resolve_local(cfg, out);
     }
     return 0;
@@ -684,6 +689,12 @@ int engine_config_check(const engine_config_t *cfg_in, const char **why)
     if (cfg_in->overlap == ENGINE_AUTO &&
         (!(cfg_in->accuracy > 0 && cfg_in->accuracy < 1) || !isfinite(cfg_in->accuracy)))
         w = "accuracy: must be within (0, 1)";
+    else if (engine_config_resolve(cfg_in, &r) < 0 && cfg_in->overlap == ENGINE_AUTO &&
+             cfg_in->fragment == ENGINE_AUTO && cfg_in->accuracy < ENGINE_ACCURACY_DEFAULT)
+        w = "accuracy: tighter than the default 3e-7, and no fragment meets it within "
+            "max_lookahead: raise max_lookahead or accuracy (lib/engine/DESIGN.md tabulates "
+            "the lookahead of each overlap); at the default accuracy, a max_lookahead too "
+            "short for it picks a local method";
     else if (engine_config_resolve(cfg_in, &r) < 0)
         w = "max_lookahead: too short for the overlap accuracy asks plus start_slack: no "
             "fragment fits, nor a local method (1 waypoint with start_slack auto or 0, ends not "
