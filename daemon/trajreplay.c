@@ -297,8 +297,8 @@ static int parse_option(int c, char **argv, opts_t *o)
 
 /*
  * -c FILE: the engine settings and rate of one object of a trajd config,
- * and its replay.track, replay.format and replay.start_s (a TRACK given on
- * the command line wins, with --format).  Returns -1 to go on, else an exit
+ * and its replay.track, replay.format, replay.skip_bad and replay.start_s
+ * (a TRACK given on the command line wins, with --format and --skip-bad).  Returns -1 to go on, else an exit
  * status.
  */
 static int load_config(opts_t *o)
@@ -335,6 +335,8 @@ static int load_config(opts_t *o)
             snprintf(o->track_buf, sizeof o->track_buf, "%s", r->path);
             o->input = o->track_buf;
             o->format = r->format;
+            if (r->skip_bad) /* as trajd reads it */
+                o->load_flags |= TRACK_SKIP_BAD;
         }
         o->start_ns = llround(r->start_s * 1e9);
         if (c->datum_set) {

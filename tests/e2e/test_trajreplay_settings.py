@@ -175,6 +175,27 @@ class TestConfigMode(unittest.TestCase):
         self.assertTrue(got.splitlines()[1].startswith("boat,"))
         self.assertTrue(got == self.out(["--object", "boat", self.track], "ref"))
 
+    def test_config_replay_keys(self):
+        # Given an object whose replay.skip_bad = yes, on a track with a bad
+        # line, then trajreplay -c skips and counts it, as trajd does (it
+        # failed on the bad line: the key was not read), and gives what
+        # --skip-bad gives
+        with open(self.track) as f:
+            lines = f.read().splitlines(True)
+        bad = os.path.join(self.tmp, "badline.csv")
+        write(bad, "".join(lines[:20]) + "1,2\n" + "".join(lines[20:]))
+        conf = os.path.join(self.tmp, "skip.conf")
+        write(conf, "[object.boat]\ninput = replay\nreplay.track = badline.csv\n"
+                    "replay.skip_bad = yes\noutput = stdout\n")
+        p = run(["--summary", "-c", conf, "-o", os.path.join(self.tmp, "skip.csv")])
+        self.assertEqual(p.returncode, 0, p.stderr)
+        ref = run(["--summary", "--skip-bad", "--object", "boat", "-o",
+                   os.path.join(self.tmp, "skipref.csv"), bad])
+        self.assertEqual(ref.returncode, 0, ref.stderr)
+        with open(os.path.join(self.tmp, "skip.csv")) as f, \
+                open(os.path.join(self.tmp, "skipref.csv")) as g:
+            self.assertTrue(f.read() == g.read(), "-c with replay.skip_bad differs from --skip-bad")
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)
