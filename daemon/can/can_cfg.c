@@ -148,15 +148,41 @@ static void deprecated(const cfg_kv_t *kv, const char *instead)
 /* can.cia402 = off | targets (RPDOs only) | feedback (and the drives' TPDOs) | managed (and
  * their bring-up: NMT, SDO, controlword, heartbeat); yes / no: the former boolean (yes: feedback
  * unless can.cia402_feedback = no), still read. */
+static const char *const cia402_modes[] = {"off", "targets", "feedback", "managed"};
+
+/* 0, or -CFG_EVALUE with why if a former key given (can.cia402_feedback, can.cia402_enable)
+ * contradicts the mode given (it set it anew: can.cia402 = targets with
+ * can.cia402_feedback = yes sent no RPDO); the caller's kv is the later of the two. */
+static int cia402_clash(const can_obj_cfg_t *oc, char *why, size_t wl)
+{
+    int m = oc->mode;
+    if (!oc->mode_given || m == CANPROTO_CIA402_OFF)
+        return 0;
+    if (oc->feedback_given && oc->feedback_value != (m >= CANPROTO_CIA402_FEEDBACK))
+        snprintf(why, wl,
+                 "can.cia402_feedback = %s contradicts can.cia402 = %s: write can.cia402 alone "
+                 "(the former key is deprecated)",
+                 oc->feedback_value ? "yes" : "no", cia402_modes[m]);
+    else if (oc->enable_given && oc->enable_value != (m == CANPROTO_CIA402_MANAGED))
+        snprintf(why, wl,
+                 "can.cia402_enable = %s contradicts can.cia402 = %s: write can.cia402 alone "
+                 "(the former key is deprecated)",
+                 oc->enable_value ? "yes" : "no", cia402_modes[m]);
+    else
+        return 0;
+    return -CFG_EVALUE;
+}
+
 static int cia402_mode(const cfg_kv_t *kv, can_obj_cfg_t *oc, char *why, size_t wl)
 {
-    static const char *const modes[] = {"off", "targets", "feedback", "managed"};
     for (int m = CANPROTO_CIA402_OFF; m <= CANPROTO_CIA402_MANAGED; m++)
-        if (!strcmp(kv->value, modes[m])) {
+        if (!strcmp(kv->value, cia402_modes[m])) {
             oc->cia402_on = m != CANPROTO_CIA402_OFF;
             oc->cia402_feedback = m >= CANPROTO_CIA402_FEEDBACK;
             oc->cia402_enable = m == CANPROTO_CIA402_MANAGED;
-            return 0;
+            oc->mode = m;
+            oc->mode_given = 1;
+            return cia402_clash(oc, why, wl);
         }
     int rc = cfg_get_bool(kv, &oc->cia402_on, why, wl);
     if (rc < 0)
@@ -164,6 +190,8 @@ static int cia402_mode(const cfg_kv_t *kv, can_obj_cfg_t *oc, char *why, size_t 
     else if (oc->cia402_on)
         deprecated(kv, "can.cia402 = feedback (targets without can.cia402_feedback, managed "
                        "with can.cia402_enable)");
+    else
+        deprecated(kv, "can.cia402 = off");
     return rc;
 }
 
@@ -260,11 +288,23 @@ int can_obj_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
         return cfg_get_bool(kv, &ids->cia402_controlword, why, wl);
     if (!strcmp(k, "cia402_feedback")) {
         deprecated(kv, "can.cia402 = feedback or targets");
-        return cfg_get_bool(kv, &oc->cia402_feedback, why, wl);
+        if ((rc = cfg_get_bool(kv, &oc->feedback_value, why, wl)) < 0)
+            return rc;
+        oc->feedback_given = 1;
+        if (oc->mode_given) /* the mode given stands; a contradiction is refused */
+            return cia402_clash(oc, why, wl);
+        oc->cia402_feedback = oc->feedback_value;
+        return 0;
     }
     if (!strcmp(k, "cia402_enable")) {
         deprecated(kv, "can.cia402 = managed");
-        return cfg_get_bool(kv, &oc->cia402_enable, why, wl);
+        if ((rc = cfg_get_bool(kv, &oc->enable_value, why, wl)) < 0)
+            return rc;
+        oc->enable_given = 1;
+        if (oc->mode_given)
+            return cia402_clash(oc, why, wl);
+        oc->cia402_enable = oc->enable_value;
+        return 0;
     }
     if (!strcmp(k, "cia402_heartbeat_ms")) {
         rc = cfg_get_int(kv, 0, 60000, &v, why, wl);

@@ -72,6 +72,11 @@ typedef struct {
     /* can.cia402 as read, into ids.cia402 by can_obj_ids: on (not off), and the former keys
      * cia402_feedback (default yes) and cia402_enable, which the modes set too */
     int cia402_on, cia402_feedback, cia402_enable;
+    /* given (1) or not (0): the mode (the new form: off, targets, feedback, managed), and
+     * the former keys, with their values (a former key that contradicts the mode is
+     * refused, in either order).  No line numbers: the struct is compared whole at a
+     * reload (a key moved is no change) */
+    int mode_given, mode, feedback_given, feedback_value, enable_given, enable_value;
 } can_obj_cfg_t;
 
 /* The transport's cfg_default, cfg_key, obj_cfg_default, obj_key (transport.h). */

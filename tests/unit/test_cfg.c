@@ -279,6 +279,26 @@ static void test_can_ids(void **state)
         assert_int_equal(ids.cia402, modes[i].mode);
         cfg_free(c);
     }
+    /* a former key that contradicts the mode given is refused, in either order (it
+     * overrode it: can.cia402 = targets with can.cia402_feedback = yes sent no RPDO) */
+    static const struct {
+        const char *keys;
+        unsigned line;
+    } clash[] = {
+        {"can.cia402 = targets\ncan.cia402_feedback = yes\n", 10},
+        {"can.cia402_feedback = yes\ncan.cia402 = targets\n", 10},
+        {"can.cia402 = managed\ncan.cia402_enable = no\n", 10},
+        {"can.cia402 = feedback\ncan.cia402_feedback = no\n", 10},
+        {"can.cia402_enable = yes\ncan.cia402 = targets\n", 10},
+    };
+    for (size_t i = 0; i < sizeof clash / sizeof clash[0]; i++) {
+        char obj[512], text[1024];
+        snprintf(obj, sizeof obj,
+                 "%scan.cia402_cob_x = 0x201\ncan.cia402_cob_y = 0\ncan.cia402_cob_z = 0\n",
+                 clash[i].keys);
+        snprintf(text, sizeof text, CAN_LOG CAN_OBJ("b", "initial_position = 1,2,0\n", "%s"), obj);
+        load_bad(text, CFG_EVALUE, clash[i].line, "contradicts");
+    }
     load_bad(CAN_LOG CAN_OBJ("b", "",
                              "can.cia402 = drives\ncan.cia402_cob_x = 0x201\n"
                              "can.cia402_cob_y = 0\ncan.cia402_cob_z = 0\n"),
