@@ -640,9 +640,14 @@ static void local_end(engine_t *e)
         return;
     for (int i = 0; i < n; i++) {
         const qent_t *q = q_from_tail(e, (size_t)i);
-        if (q->kind != QE_SEG || q->traj != e->solve.traj || q->node != j)
-            return; /* the output entered it (or its first pieces) */
+        if (q->kind != QE_SEG || q->traj != e->solve.traj || q->node != j || q->join ||
+            q->shift < 0 || q->shift > 0)
+            return; /* the output entered it (or its first pieces), or a join that ends in
+                       it cut it and stands in front (join.c join_splice) */
     }
+    if (q_from_tail(e, (size_t)(n - 1))->seg.t0_s < nt(e, j) ||
+        q_from_tail(e, (size_t)(n - 1))->seg.t0_s > nt(e, j))
+        return; /* (cut) */
 
     /* what is taken back, kept to be put back as it was */
     qent_t old[3];
