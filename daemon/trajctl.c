@@ -622,6 +622,21 @@ static int parse_args(int argc, char **argv, trajctl_t *c)
     return optind;
 }
 
+/* 1 if text is a whole percent 0 .. 200 (override's N) */
+static int percent_ok(const char *text)
+{
+    char *end;
+    long v = strtol(text, &end, 10);
+    return *text && !*end && text[0] != '+' && text[0] != ' ' && v >= 0 && v <= 200;
+}
+
+/* An override's N that is not a whole percent 0 .. 200: said, EX_USAGE. */
+static int bad_percent(const char *text)
+{
+    fprintf(stderr, "trajctl: override N OBJECT: N is a whole percent, 0 to 200, got '%s'\n", text);
+    return EX_USAGE;
+}
+
 /* The command's words: the exit status. */
 static int run(trajctl_t *c, char **w, int n)
 {
@@ -637,6 +652,8 @@ static int run(trajctl_t *c, char **w, int n)
             continue;
         if (n != cmds[k].words && !(k == 0 && n == 2))
             break;
+        if (strcmp(w[0], "override") == 0 && !percent_ok(w[1]))
+            return bad_percent(w[1]);
         int rc = connect_ctl(c);
         if (rc)
             return rc;
@@ -655,6 +672,11 @@ static int run(trajctl_t *c, char **w, int n)
 int main(int argc, char **argv)
 {
     static trajctl_t c = {.fd = -1, .interval_s = 1, .header = 1};
+    /* override -1 OBJECT: a value, not an option (getopt would take it for one) */
+    for (int k = 1; k + 1 < argc; k++)
+        if (strcmp(argv[k], "override") == 0 && argv[k + 1][0] == '-' && argv[k + 1][1] &&
+            strchr("0123456789.", argv[k + 1][1]))
+            return bad_percent(argv[k + 1]);
     int i = parse_args(argc, argv, &c);
     if (i < 0)
         return -i - 1;

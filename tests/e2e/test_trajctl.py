@@ -387,6 +387,17 @@ class TestReach(unittest.TestCase):
             r = subprocess.run([TRAJCTL] + args, capture_output=True, text=True, timeout=TIMEOUT_S)
             self.assertEqual(r.returncode, 64, args)
 
+    def test_override_value(self):
+        # a percent outside 0 .. 200, or not a whole number, is a bad command line (64),
+        # said before any connection, naming the value (it was sent, and trajd's refusal
+        # came back as exit 1; -1 was taken for an option)
+        for n in ("201", "-1", "abc", "50.5", "", "1e2"):
+            r = subprocess.run([TRAJCTL, "-s", "/nonexistent/ctl.sock", "override", n, "boat"],
+                               capture_output=True, text=True, timeout=TIMEOUT_S)
+            self.assertEqual(r.returncode, 64, (n, r.stderr))
+            self.assertIn("override N OBJECT: N is a whole percent, 0 to 200, got '%s'" % n,
+                          r.stderr)
+
 
 class TestPlace(unittest.TestCase):
     """Where the socket goes, and two trajd on one socket."""
