@@ -280,8 +280,14 @@ class TestCommands(TrajctlTest):
         st = c.status("ro")[1]["ro"]
         self.assertEqual((st["state"], st["override"]), ("streaming", 1.0))
         c.close()
-        # out of range and unknown: refused by trajd too
-        self.assertEqual(self.ctl("override", "201", "boat").returncode, 1)
+        # out of range: a bad command line for trajctl (64, TestReach), and refused by
+        # trajd too when it comes by the protocol; unknown: refused by trajd
+        self.assertEqual(self.ctl("override", "201", "boat").returncode, 64)
+        c = Client(self.sock)
+        c.send("override 201 boat")
+        m = c.read()
+        self.assertEqual((m["reply"], m["error"]), ("error", "usage"))
+        c.close()
         self.assertEqual(self.ctl("stop", "nosuch").returncode, 1)
 
     def test_reload(self):
