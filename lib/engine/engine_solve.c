@@ -650,8 +650,8 @@ static void local_end(engine_t *e)
         return; /* (cut) */
 
     /* what is taken back, kept to be put back as it was */
-    qent_t old[3];
-    size_t slow_old[3], slow_len = e->queue.slow_len, beyond = e->queue.beyond;
+    qent_t old[3] = {0};
+    size_t slow_old[3] = {0}, slow_len = e->queue.slow_len, beyond = e->queue.beyond;
     engine_solve_t solve = e->solve;
     engine_scale_t scale = e->scale;
     uint64_t axis_slowed = e->st.axis_slowed;
