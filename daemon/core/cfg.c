@@ -12,8 +12,10 @@
 
 #include <ctype.h>
 #include <errno.h>
+#include <grp.h>
 #include <ini.h>
 #include <math.h>
+#include <pwd.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -294,6 +296,35 @@ static int get_origin(cfg_daemon_t *d, const cfg_kv_t *kv, char *why, size_t wl)
     return 0;
 }
 
+/* [daemon] user and control_group name a user and a group of this system, looked up
+ * when the file is read (and by --check-config), not first when the sockets are open
+ * and privileges dropped (exit 77 then, with no file:line).  Empty: none. */
+static int user_exists(const char *name, char *why, size_t wl)
+{
+    struct passwd pw, *r = NULL;
+    char buf[4096];
+    if (!name[0])
+        return 0;
+    int e = getpwnam_r(name, &pw, buf, sizeof buf, &r);
+    if (r)
+        return 0;
+    return cfg_why(why, wl, "no user '%s' on this system%s%s", name, e ? ": " : "",
+                   e ? strerror(e) : "");
+}
+
+static int group_exists(const char *name, char *why, size_t wl)
+{
+    struct group gr, *r = NULL;
+    char buf[16384];
+    if (!name[0])
+        return 0;
+    int e = getgrnam_r(name, &gr, buf, sizeof buf, &r);
+    if (r)
+        return 0;
+    return cfg_why(why, wl, "no group '%s' on this system%s%s", name, e ? ": " : "",
+                   e ? strerror(e) : "");
+}
+
 static int key_daemon(cfg_t *c, parse_t *p, const cfg_kv_t *kv, char *why, size_t wl)
 {
     cfg_daemon_t *d = &c->daemon;
@@ -337,14 +368,14 @@ static int key_daemon(cfg_t *c, parse_t *p, const cfg_kv_t *kv, char *why, size_
             return cfg_why(why, wl, "expected a group name of at most %zu characters",
                            sizeof d->control_group - 1);
         snprintf(d->control_group, sizeof d->control_group, "%s", kv->value);
-        return 0;
+        return group_exists(d->control_group, why, wl);
     }
     if (strcmp(kv->key, "user") == 0) {
         if (strlen(kv->value) >= sizeof d->user)
             return cfg_why(why, wl, "expected a user name of at most %zu characters",
                            sizeof d->user - 1);
         snprintf(d->user, sizeof d->user, "%s", kv->value);
-        return 0;
+        return user_exists(d->user, why, wl);
     }
     if (strcmp(kv->key, "log_level") == 0) {
         static const char *const lv[] = {"err", "warning", "notice", "info", "debug", NULL};

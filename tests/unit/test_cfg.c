@@ -396,6 +396,13 @@ static void test_control_socket_keys(void **state)
     assert_string_equal(c->daemon.control_socket, want);
     assert_string_equal(c->daemon.control_group, "adm");
     cfg_free(c);
+    /* a user or group this system does not have is refused at its line (it passed the
+     * check and failed the start, exit 77 with no file:line) */
+    load_bad("[daemon]\nuser = nosuchuser-trajd\n" OBJ, CFG_EVALUE, 2,
+             "no user 'nosuchuser-trajd' on this system");
+    load_bad("[daemon]\ncontrol_group = nosuchgroup-trajd\n" OBJ, CFG_EVALUE, 2,
+             "no group 'nosuchgroup-trajd' on this system");
+    cfg_free(load_ok("[daemon]\nuser = root\ncontrol_group = root\n" OBJ));
     c = load_ok("[daemon]\ncontrol_socket =\ncontrol_group =\n" OBJ);
     assert_string_equal(c->daemon.control_socket, "");
     assert_string_equal(c->daemon.control_group, "");
