@@ -142,7 +142,14 @@ static int csv_header(csv_t *c, char **field, int nf, unsigned long lineno)
     }
     for (int i = 0; i < nf; i++) {
         int k = col_lookup(field[i]);
-        if (k >= 0 && col[k] < 0)
+        if (k >= 0 && col[k] >= 0) { /* one of them would be dropped unsaid */
+            track_loader_fatal(c->L, lineno,
+                               "header names one column twice: '%s' (field %d) and '%s' (field "
+                               "%d)",
+                               field[col[k]], col[k] + 1, field[i], i + 1);
+            return -1;
+        }
+        if (k >= 0)
             col[k] = i;
     }
     if (col[COL_T] < 0) {
@@ -151,6 +158,12 @@ static int csv_header(csv_t *c, char **field, int nf, unsigned long lineno)
     }
     int has_ll = col[COL_LAT] >= 0 && col[COL_LON] >= 0;
     int has_xy = col[COL_X] >= 0 && col[COL_Y] >= 0;
+    if (c->fmt == TRACK_FMT_AUTO && has_ll && has_xy) {
+        track_loader_fatal(c->L, lineno,
+                           "header names both x,y and lat,lon: give the format (xyz or latlon) "
+                           "to say which the track is");
+        return -1;
+    }
     if (c->fmt == TRACK_FMT_AUTO)
         c->fmt = has_ll ? TRACK_FMT_LATLON : TRACK_FMT_XYZ;
     if (c->fmt == TRACK_FMT_LATLON && !has_ll) {

@@ -177,6 +177,12 @@ static void test_csv_errors(void **state)
         {"t,lat,lon,alt\n0,45,2,abc\n", "bad.csv:2: altitude 'abc' is not a number"},
         {"a,b,c\n1,2,3\n", "bad.csv:1: header has no time column"},
         {"t,u,v\n1,2,3\n", "bad.csv:1: header names neither"},
+        /* a column named twice, or both frames: one was dropped unsaid */
+        {"t,x,y,x\n0,0,0,100\n", "bad.csv:1: header names one column twice: 'x' (field 2) "
+                                 "and 'x' (field 4)"},
+        {"t,time,x,y\n0,0,1,2\n", "bad.csv:1: header names one column twice: 't' (field 1) "
+                                  "and 'time' (field 2)"},
+        {"t,x,y,lat,lon\n0,0,0,45,13\n", "bad.csv:1: header names both x,y and lat,lon"},
         {"t,x,y\n", "bad.csv: no waypoints"},
         {"", "bad.csv: no waypoints (empty file)"},
         {"# only\n\n", "bad.csv: no waypoints (empty file)"},
@@ -204,6 +210,11 @@ static void test_csv_wrong_format(void **state)
     assert_int_equal(parse("w.csv", "t,x,y\n0,1,2\n", TRACK_FMT_LATLON, 0, &t, err, sizeof err),
                      -1);
     assert_non_null(strstr(err, "w.csv:1: header has no lat and lon columns"));
+    /* both frames named: the format given says which */
+    assert_int_equal(
+        parse("w.csv", "t,x,y,lat,lon\n0,1,2,45,13\n", TRACK_FMT_XYZ, 0, &t, err, sizeof err), 0);
+    assert_int_equal(t.n, 1);
+    track_free(&t);
 }
 
 /* Given bad lines and TRACK_SKIP_BAD, when loaded, then the good rows load,
