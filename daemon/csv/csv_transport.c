@@ -113,7 +113,10 @@ static int csv_obj_key(void *ocfg, const cfg_kv_t *kv, char *why, size_t wl)
             c->truncate = CSV_TRUNCATE_ALWAYS;
             return 0;
         }
-        return cfg_get_bool(kv, &c->truncate, why, wl);
+        int rc = cfg_get_bool(kv, &c->truncate, why, wl);
+        if (rc < 0) /* the three values, not the boolean's two */
+            snprintf(why, wl, "expected no, yes or always, got '%s'", kv->value);
+        return rc;
     }
     if (strcmp(kv->key, "geo") == 0)
         return cfg_get_bool(kv, &c->geo, why, wl);

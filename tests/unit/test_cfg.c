@@ -160,6 +160,10 @@ static void test_errors(void **state)
     load_bad("[object.x]\ninput = replay\nnope.key = 1\n", CFG_EUNKNOWN, 3, "nope.key");
     /* keys for a transport the object does not use */
     load_bad(OBJ "csv.path = x.csv\n", CFG_EVALUE, 5, "does not use");
+    /* csv.truncate's three values, all said */
+    load_bad("[object.x]\ninput = replay\nreplay.track = " TRACK
+             "\noutput = csv\ncsv.path = o.csv\ncsv.truncate = sometimes\n",
+             CFG_EVALUE, 6, "expected no, yes or always, got 'sometimes'");
     /* whole-file rules: reported at the object's header line */
     load_bad("[daemon]\n", CFG_EMISSING, 0, "no [object");
     load_bad("[daemon]\n[object.x]\noutput = stdout\n", CFG_EMISSING, 2, "'input' is missing");
