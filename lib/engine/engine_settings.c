@@ -724,6 +724,11 @@ int engine_config_check(const engine_config_t *cfg_in, const char **why)
             "they need method bspline with param uniform";
     else if (cfg->fragment < ENGINE_FRAGMENT_MIN || cfg->fragment > ENGINE_FRAGMENT_MAX)
         w = "fragment: must be within ENGINE_FRAGMENT_MIN..ENGINE_FRAGMENT_MAX";
+    else if (cfg_in->overlap == ENGINE_AUTO && cfg_in->fragment != ENGINE_AUTO &&
+             cfg->overlap >= cfg->fragment)
+        w = "fragment: must be above the overlap, which accuracy picks when overlap is auto "
+            "(24 at the default 3e-7; lib/engine/DESIGN.md): raise fragment, or give overlap, "
+            "or raise accuracy";
     else if (cfg->overlap < 2 || cfg->overlap % 2 || cfg->overlap >= cfg->fragment)
         w = "overlap: must be even, at least 2 and below fragment";
     else if (cfg->period_ns < ENGINE_PERIOD_NS_MIN || cfg->period_ns > ENGINE_PERIOD_NS_MAX)

@@ -368,6 +368,27 @@ static void test_accuracy_not_met_is_refused(void **state)
     }
 }
 
+/* Given fragment set alone, at or below the overlap accuracy picks, then the
+ * reason names fragment and says overlap is auto from accuracy (it named
+ * overlap, a key the user never set). */
+static void test_fragment_alone_says_why(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    const char *w = NULL;
+    char why[160];
+    engine_config_default(&c);
+    assert_int_equal(
+        engine_setting_parse(engine_setting_find("fragment"), "10", &c, why, sizeof why), 0);
+    assert_int_equal(engine_config_check(&c, &w), -ENGINE_ECONFIG);
+    assert_non_null(strstr(w, "fragment: must be above the overlap, which accuracy picks"));
+    /* both given: the overlap's own rule */
+    assert_int_equal(
+        engine_setting_parse(engine_setting_find("overlap"), "12", &c, why, sizeof why), 0);
+    assert_int_equal(engine_config_check(&c, &w), -ENGINE_ECONFIG);
+    assert_non_null(strstr(w, "overlap: must be even"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -380,6 +401,7 @@ int main(void)
         cmocka_unit_test(test_trajreplay_help_lists_every_setting),
         cmocka_unit_test(test_delay_names_a_picked_local_method),
         cmocka_unit_test(test_accuracy_not_met_is_refused),
+        cmocka_unit_test(test_fragment_alone_says_why),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
