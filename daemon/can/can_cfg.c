@@ -71,9 +71,17 @@ int can_cfg_key(void *p, const cfg_kv_t *kv, char *why, size_t wl)
         return get_str(kv, c->interface, 16, why, wl);
     if (!strcmp(k, "log_in")) {
         c->line_log_in = kv->line;
+        if (!kv->value[0]) { /* empty: the default, none (the socket) */
+            c->log_in[0] = 0;
+            return 0;
+        }
         return cfg_get_path(kv, c->log_in, sizeof c->log_in, why, wl);
     }
     if (!strcmp(k, "log_out")) {
+        if (!kv->value[0]) { /* empty: the default, none */
+            c->log_out[0] = 0;
+            return 0;
+        }
         if (!strcmp(kv->value, "-")) {
             snprintf(c->log_out, sizeof c->log_out, "-");
             return 0;

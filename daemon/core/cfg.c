@@ -281,6 +281,10 @@ static int get_origin(cfg_daemon_t *d, const cfg_kv_t *kv, char *why, size_t wl)
     int rc;
     char *end = NULL;
     const char *q = kv->value;
+    if (!q[0]) { /* empty: the default, the first fix of the lowest id */
+        d->origin_given = 0;
+        return 0;
+    }
     for (int a = 0; a < 3; a++) {
         d->origin[a] = strtod(q, &end);
         if (end == q || (a < 2 ? *end != ',' : *end != '\0'))

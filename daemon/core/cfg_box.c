@@ -14,6 +14,10 @@ int cfg_box_key(cfg_obj_t *o, const cfg_kv_t *kv, char *why, size_t wl)
     double v[ENGINE_AXES];
     char *end = NULL;
     const char *q = kv->value;
+    if (!q[0]) { /* empty: the default, no box on that side */
+        o->box_keys &= max ? ~2u : ~1u;
+        return 0;
+    }
     for (int a = 0; a < ENGINE_AXES; a++) {
         v[a] = strtod(q, &end);
         if (end == q || !isfinite(v[a]) || (a < ENGINE_AXES - 1 ? *end != ',' : *end != '\0')) {

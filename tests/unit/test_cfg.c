@@ -431,8 +431,11 @@ static void test_documented_conf(void **state)
     int uncommented = 0;
     while (fgets(line, sizeof line, f)) {
         const char *l = line;
-        /* "#key = value" with a key character right after '#' */
-        if (line[0] == '#' && line[1] >= 'a' && line[1] <= 'z' && strstr(line, " = ")) {
+        /* "#key = value" with a key character right after '#', or "#key =" (an empty
+         * default: uncommented, it must mean the default too) */
+        size_t len = strlen(line);
+        int empty = len >= 3 && !strcmp(line + len - 3, " =\n");
+        if (line[0] == '#' && line[1] >= 'a' && line[1] <= 'z' && (strstr(line, " = ") || empty)) {
             l = line + 1;
             uncommented++;
         }
