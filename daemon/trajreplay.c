@@ -444,6 +444,7 @@ typedef struct {
     uint64_t written;     /* setpoint rows */
     engine_status_t st;
     geo_enu_t frame;          /* --geo: the track's east/north/up origin */
+    int geo_no_alt;           /* ... no fix with an altitude: up 0 at its height */
     size_t heading_hint;      /* --geo: interval of the last heading evaluation */
     int64_t t_start, t_shown; /* progress line */
     int progress, shown;
@@ -503,8 +504,12 @@ static int run_open(run_t *run, const opts_t *o)
     /* -c: about the daemon's one datum, as trajd writes it */
     if (o->origin_set && run->trk.geographic)
         (void)track_reframe(&run->trk, o->origin[0], o->origin[1], o->origin[2]);
-    if (run->trk.geographic)
+    if (run->trk.geographic) {
         (void)geo_enu_init(run->trk.lat0_deg, run->trk.lon0_deg, run->trk.alt0_m, &run->frame);
+        run->geo_no_alt = 1; /* as trajd's replay transport decides it */
+        for (size_t k = 0; k < run->trk.n && run->geo_no_alt; k++)
+            run->geo_no_alt = isnan(run->trk.geo[k][2]);
+    }
     for (size_t i = 0; i < run->trk.nreports; i++)
         fprintf(stderr, "trajreplay: skipped %s\n", run->trk.reports[i]);
     if (run->trk.ignored)
@@ -576,9 +581,15 @@ static void run_clear_progress(run_t *run)
 static int append_geo(run_t *run, const engine_setpoint_t *sp, char *line, size_t len, int n)
 {
     double v[4] = {NAN, NAN, NAN, NAN};
-    if (run->trk.geographic && isfinite(sp->pos_m[0]) && isfinite(sp->pos_m[1]) &&
-        isfinite(sp->pos_m[2]) && geo_from_enu(&run->frame, sp->pos_m, &v[0], &v[1], &v[2]) < 0)
+    if (run->trk.geographic && run->geo_no_alt) { /* at the frame's height, alt NaN */
+        if (geo_from_enu_at(&run->frame, sp->pos_m[0], sp->pos_m[1], run->frame.alt0_m, &v[0],
+                            &v[1]) < 0)
+            v[0] = v[1] = NAN;
+    } else if (run->trk.geographic && isfinite(sp->pos_m[0]) && isfinite(sp->pos_m[1]) &&
+               isfinite(sp->pos_m[2]) &&
+               geo_from_enu(&run->frame, sp->pos_m, &v[0], &v[1], &v[2]) < 0) {
         v[0] = v[1] = v[2] = NAN;
+    }
     if (run->trk.nheading && isfinite(sp->t_s) && isfinite(sp->pos_m[0]))
         v[3] = angle_wrap_deg(angle_pchip_eval(run->trk.heading_t, run->trk.heading,
                                                run->trk.nheading, sp->t_s, &run->heading_hint));

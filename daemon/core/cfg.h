@@ -135,6 +135,9 @@ typedef struct {
     } heading;                   /* set by its input (a replay track with a heading column) */
     int geographic;              /* its positions are east/north/up about the daemon's datum
                      * (a geographic replay track): outputs give lat/lon/alt */
+    int geo_no_alt;              /* ... and the track has no altitude: up is 0 at the datum's
+                     * height, and outputs give lat/lon at that height, alt NaN
+                     * (geo_from_enu_at) */
     int writable;                /* writable = yes/no: commands and waypoints
                                                  * from outside (Modbus) may change it;
                                                  * -1 not given (the input decides) */

@@ -144,3 +144,24 @@ int geo_from_enu(const geo_enu_t *frame, const double enu_m[3], double *lat_deg,
         p[k] += frame->ecef0_m[k];
     return geo_from_ecef(p, lat_deg, lon_deg, alt_m);
 }
+
+int geo_from_enu_at(const geo_enu_t *frame, double east_m, double north_m, double alt_m,
+                    double *lat_deg, double *lon_deg)
+{
+    if (!isfinite(east_m) || !isfinite(north_m) || !isfinite(alt_m))
+        return -GEO_ENOTFINITE;
+    /* along the frame's up until the height is alt_m: the frame's up leans
+     * from the normal there by the angle between them (d / R), so each round
+     * takes the error down by about (d / R)^2 / 2 */
+    double enu[3] = {east_m, north_m, 0.0}, h = 0.0;
+    for (int i = 0; i < 8; i++) {
+        int rc = geo_from_enu(frame, enu, lat_deg, lon_deg, &h);
+        if (rc < 0)
+            return rc;
+        double d = alt_m - h;
+        if (!(fabs(d) > 1e-9))
+            break;
+        enu[2] += d;
+    }
+    return 0;
+}

@@ -88,4 +88,14 @@ int geo_from_ecef(const double ecef_m[3], double *lat_deg, double *lon_deg, doub
 int geo_from_enu(const geo_enu_t *frame, const double enu_m[3], double *lat_deg, double *lon_deg,
                  double *alt_m);
 
+/* The geodetic latitude and longitude of the point at height alt_m whose
+ * east and north in frame are east_m, north_m: the inverse of geo_to_enu's
+ * first two coordinates at a known height.  A track with no altitude is
+ * expressed at the frame origin's height with up taken as 0; its setpoints
+ * go back to WGS84 this way (geo_from_enu of up = 0 is a point on the
+ * tangent plane, 784 m above the ellipsoid and 12 m off in latitude 100 km
+ * from the origin).  Returns 0, or -GEO_ENOTFINITE. */
+int geo_from_enu_at(const geo_enu_t *frame, double east_m, double north_m, double alt_m,
+                    double *lat_deg, double *lon_deg);
+
 #endif

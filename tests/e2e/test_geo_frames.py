@@ -391,6 +391,39 @@ class GeoFrames(unittest.TestCase):
             self.assertLess(abs(float(r["lon_deg"]) - lon), 1e-9, r)
             self.assertLess(abs(float(r["alt_m"]) - h), 1e-6, r)
 
+    def test_no_altitude_far_from_the_datum(self):
+        # Given a track with no altitude (nan, as the bundled N2K figure-8 has) 100 km
+        # from the datum, then its lat/lon columns are its own fixes' where the curve
+        # passes them (at rest on the first and the last), alt_m is nan (none came in),
+        # and every row's lat/lon is where pyproj puts east/north of the row at the
+        # datum's height.  They were the tangent plane's point under up = 0: 784 m
+        # above the ellipsoid and 12 m off in latitude at 100 km (and alt_m 784).
+        t = np.arange(0.0, 30.0, 0.2)
+        lat = 46.17 + 1e-5 * t
+        lon = 13.71 + 2e-5 * t
+        write(os.path.join(self.tmp, "noalt.csv"), "t,lat,lon,alt\n" + "".join(
+            "%r,%r,%r,nan\n" % (a, b, c) for a, b, c in zip(t, lat, lon)))
+        origin = (45.27, 13.71, 12.0)
+        write(self.conf, "[daemon]\nrate_hz = 50\nspeed = 20\nstatus_interval_s = 0\n"
+                         "exit_when_done = yes\norigin = 45.27,13.71,12\n"
+                         "[object.n]\nid = 0\ninput = replay\nreplay.track = noalt.csv\n"
+                         "output = csv\ncsv.path = n.csv\ncsv.geo = yes\n")
+        p = subprocess.run([TRAJD, "-f", "-c", self.conf], stdin=subprocess.DEVNULL,
+                           capture_output=True, text=True, timeout=4 * WAIT_S, cwd=self.tmp)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        got = [r for r in rows(os.path.join(self.tmp, "n.csv")) if finite(r)]
+        self.assertGreater(len(got), 500)
+        about = topo(*origin)
+        for r in got:
+            self.assertEqual(r["alt_m"], "nan", r)
+            e, n, _ = about.transform(float(r["lat_deg"]), float(r["lon_deg"]), origin[2])
+            self.assertLess(math.hypot(e - float(r["x_m"]), n - float(r["y_m"])), 1e-6, r)
+        for r, (la, lo) in ((got[-1], (lat[-1], lon[-1])),
+                            (next(r for r in got if r["state"] == "streaming"),
+                             (lat[0], lon[0]))):
+            self.assertLess(abs(float(r["lat_deg"]) - la), 1e-9, r)
+            self.assertLess(abs(float(r["lon_deg"]) - lo), 1e-9, r)
+
     def test_datum_move_refused_at_reload(self):
         write(self.conf, self.config().replace("exit_when_done = yes", "exit_when_done = no"))
         p = subprocess.Popen([TRAJD, "-f", "-c", self.conf], stdin=subprocess.DEVNULL,
