@@ -366,6 +366,12 @@ static int finish_opts(opts_t *o)
             return EXIT_USAGE;
         }
     }
+    for (unsigned i = 0; i < o->neng; i++) { /* given, and no effect: said */
+        const char *u = engine_setting_unused(o->eng[i].s, &o->cfg);
+        if (u)
+            fprintf(stderr, "trajreplay: warning: --%s is set but has no effect: %s\n",
+                    o->eng[i].s->option, u);
+    }
     /* 1e9 / rate rounded to whole nanoseconds: the grid is exact in ns. */
     double period = 1e9 / o->rate_hz;
     if (!(period >= (double)ENGINE_PERIOD_NS_MIN && period <= (double)ENGINE_PERIOD_NS_MAX)) {

@@ -637,6 +637,12 @@ static int check_obj(parse_t *p, unsigned i)
             return -1;
         }
     o->engine.period_ns = c->daemon.period_ns;
+    for (size_t k = 0; k < engine_settings_count; k++) { /* set, and no effect: said */
+        const char *u = engine_setting_unused(&engine_settings[k], &o->engine);
+        if (u)
+            log_msg(LOG_WARNING, "%s:%d: [object.%s] %s is set but has no effect: %s", c->path,
+                    o->line, o->name, engine_settings[k].name, u);
+    }
     const char *ewhy = NULL;
     if (engine_config_check(&o->engine, &ewhy) < 0) {
         fail(p, CFG_EVALUE, o->line, "[object.%s]: engine settings: %s", o->name,

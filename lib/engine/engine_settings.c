@@ -346,6 +346,21 @@ int engine_setting_same(const engine_setting_t *s, const engine_config_t *a,
     return memcmp(cfield(s, a), cfield(s, b), s->size) == 0;
 }
 
+const char *engine_setting_unused(const engine_setting_t *s, const engine_config_t *cfg)
+{
+    engine_config_t d;
+    engine_config_default(&d);
+    if (engine_setting_same(s, cfg, &d))
+        return NULL;
+    if ((!strcmp(s->name, "start_vel_m_s") || !strcmp(s->name, "end_vel_m_s")) &&
+        cfg->ends != ENGINE_ENDS_CLAMPED)
+        return "only ends = clamped uses it";
+    if ((!strcmp(s->name, "smooth_window") || !strcmp(s->name, "smooth_ctrl")) &&
+        cfg->method != ENGINE_METHOD_SMOOTH)
+        return "only method = smooth uses it";
+    return NULL;
+}
+
 int engine_config_same(const engine_config_t *a, const engine_config_t *b)
 {
     for (size_t i = 0; i < engine_settings_count; i++)

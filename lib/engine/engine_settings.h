@@ -89,6 +89,12 @@ int engine_setting_format(const engine_setting_t *s, const engine_config_t *cfg,
 const char *engine_setting_enum_name(const engine_setting_t *s, int v);
 
 /* 1 if s's field is the same in a and b (doubles compared bit for bit). */
+/* Why s, set away from its default in cfg, has no effect with cfg's other
+ * settings (start_vel_m_s and end_vel_m_s without ends = clamped,
+ * smooth_window and smooth_ctrl without method = smooth), for a warning; NULL
+ * if it has one or is at its default. */
+const char *engine_setting_unused(const engine_setting_t *s, const engine_config_t *cfg);
+
 int engine_setting_same(const engine_setting_t *s, const engine_config_t *a,
                         const engine_config_t *b);
 

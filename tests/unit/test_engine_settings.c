@@ -389,6 +389,32 @@ static void test_fragment_alone_says_why(void **state)
     assert_non_null(strstr(w, "overlap: must be even"));
 }
 
+/* Given the defaults, then no setting is unused; given start_vel_m_s without
+ * ends = clamped, or smooth_ctrl without method = smooth, then each is said to
+ * have no effect (they were accepted and ignored unsaid), and not once the
+ * setting that uses it is there. */
+static void test_unused_settings_said(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    char why[160];
+    engine_config_default(&c);
+    for (size_t i = 0; i < engine_settings_count; i++)
+        assert_null(engine_setting_unused(&engine_settings[i], &c));
+    const engine_setting_t *sv = engine_setting_find("start_vel_m_s");
+    const engine_setting_t *sc = engine_setting_find("smooth_ctrl");
+    assert_int_equal(engine_setting_parse(sv, "3,0,0", &c, why, sizeof why), 0);
+    assert_int_equal(engine_setting_parse(sc, "5", &c, why, sizeof why), 0);
+    assert_non_null(strstr(engine_setting_unused(sv, &c), "ends = clamped"));
+    assert_non_null(strstr(engine_setting_unused(sc, &c), "method = smooth"));
+    assert_int_equal(
+        engine_setting_parse(engine_setting_find("ends"), "clamped", &c, why, sizeof why), 0);
+    assert_int_equal(
+        engine_setting_parse(engine_setting_find("method"), "smooth", &c, why, sizeof why), 0);
+    assert_null(engine_setting_unused(sv, &c));
+    assert_null(engine_setting_unused(sc, &c));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -402,6 +428,7 @@ int main(void)
         cmocka_unit_test(test_delay_names_a_picked_local_method),
         cmocka_unit_test(test_accuracy_not_met_is_refused),
         cmocka_unit_test(test_fragment_alone_says_why),
+        cmocka_unit_test(test_unused_settings_said),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
