@@ -539,7 +539,14 @@ int can_cfg_check(cfg_t *cfg, int *line, char *why, size_t wl)
         const cfg_obj_t *o = &cfg->obj[idx[k]];
         canproto_ids_t ids;
         const char *rule = NULL;
-        can_obj_ids(cfg_obj_transport(o, &can_transport), (unsigned)o->id, &ids);
+        const can_obj_cfg_t *oc = cfg_obj_transport(o, &can_transport);
+        can_obj_ids(oc, (unsigned)o->id, &ids);
+        if (ids.cia402 == CANPROTO_CIA402_OFF &&
+            (oc->given & ((GIVEN_COB << CANPROTO_CIA402_AXES) - GIVEN_COB))) /* said, not refused */
+            log_msg(LOG_WARNING,
+                    "%s:%d: object '%s': can.cia402_cob_* is set but has no effect: can.cia402 "
+                    "is off (no CiA 402 frames are sent)",
+                    cfg->path, o->line, o->name);
         if (ids_explicit(o, why, wl) < 0) {
             *line = o->line;
             rc = -CFG_EVALUE;

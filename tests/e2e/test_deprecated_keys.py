@@ -1,5 +1,7 @@
 """test_deprecated_keys.py - the former CiA 402 keys (issue 25 item 1) as trajd reads them.
 
+(And a CiA 402 key that has no effect, can.cia402_cob_* with can.cia402 off, is said.)
+
 trajd --check-config on configs written by hand, as a user upgrading one would:
 * each former form (can.cia402 = yes, can.cia402 = no, can.cia402_feedback,
   can.cia402_enable) is still read, and says so: one line, with file:line, naming the
@@ -67,6 +69,16 @@ class Deprecated(unittest.TestCase):
                          "can.cia402_enable = yes\ncan.cia402 = managed\n"):
                 p, _ = check(tmp, keys)
                 self.assertEqual(p.returncode, 0, (keys, p.stderr))
+
+    def test_cob_ids_without_cia402_said(self):
+        # can.cia402_cob_* with can.cia402 off: accepted and ignored unsaid before
+        with tempfile.TemporaryDirectory() as tmp:
+            p, path = check(tmp, "can.cia402 = off\n")
+            self.assertEqual(p.returncode, 0, p.stderr)
+            self.assertIn("%s:4: object 'boat': can.cia402_cob_* is set but has no effect: "
+                          "can.cia402 is off" % path, p.stderr)
+            p, _ = check(tmp, "can.cia402 = feedback\n")
+            self.assertNotIn("has no effect", p.stderr)
 
 
 if __name__ == "__main__":
