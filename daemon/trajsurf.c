@@ -60,8 +60,8 @@ static void help(void)
           "                       1 to 256)\n"
           "  -o, --output FILE    samples CSV \"u,v,x,y,z\" (default stdout; \"-\" = stdout)\n"
           "  -s, --svg FILE       isometric wireframe picture\n"
-          "  -x, --dx DX          column spacing of a height matrix (default 1)\n"
-          "  -y, --dy DY          row spacing of a height matrix (default 1)\n"
+          "  -x, --dx DX          column spacing of a height matrix, > 0 (default 1)\n"
+          "  -y, --dy DY          row spacing of a height matrix, > 0 (default 1)\n"
           "  -z, --zscale Z       height factor in the picture (default 1)\n"
           "  -h, --help           this text\n"
           "  -V, --version        version\n"
@@ -104,8 +104,8 @@ static int parse_row(char *line, double *v, int max)
 /* The rows of the open file f: *indexed = 1 for "i,j,x,y,z" rows (5 numbers
  * each), 0 for a matrix (*ncols numbers each), -1 if there was no row.
  * 0 or -1 with a message; *rows is the caller's to free either way. */
-static int read_rows(FILE *f, const char *path, double **rows, size_t *nrows, size_t *ncols,
-                     int *indexed)
+static int read_rows(FILE *f, const char *path, double **rows, size_t **lines, size_t *nrows,
+                     size_t *ncols, int *indexed)
 {
     char *line = NULL; /* whole lines of any length (a row of GRID_MAX numbers is long) */
     size_t linecap = 0;
@@ -132,7 +132,8 @@ static int read_rows(FILE *f, const char *path, double **rows, size_t *nrows, si
         n = parse_row(line, v, *indexed ? 5 : GRID_MAX);
         if (n <= 0 || (*indexed && n != 5)) {
             fprintf(stderr, "%s:%zu: expected %s\n", path, lineno,
-                    *indexed ? "i,j,x,y,z" : "comma-separated numbers");
+                    *indexed ? "i,j,x,y,z, five finite numbers"
+                             : "finite numbers separated by commas");
             rc = -1;
             break;
         }
@@ -148,15 +149,19 @@ static int read_rows(FILE *f, const char *path, double **rows, size_t *nrows, si
         if (*nrows == cap) {
             size_t nc = cap ? 2 * cap : 64;
             double *r = realloc(*rows, nc * (*indexed ? 5 : *ncols) * sizeof *r);
-            if (!r) {
+            if (r)
+                *rows = r;
+            size_t *l = r ? realloc(*lines, nc * sizeof *l) : NULL;
+            if (!l) {
                 fprintf(stderr, "%s: out of memory\n", path);
                 rc = -1;
                 break;
             }
-            *rows = r;
+            *lines = l;
             cap = nc;
         }
         memcpy(*rows + *nrows * (*indexed ? 5 : *ncols), v, (size_t)n * sizeof *v);
+        (*lines)[*nrows] = lineno;
         (*nrows)++;
     }
     free(line);
@@ -164,7 +169,8 @@ static int read_rows(FILE *f, const char *path, double **rows, size_t *nrows, si
 }
 
 /* The grid from "i,j,x,y,z" rows: every (i, j) of an m x n grid exactly once. */
-static int grid_from_indexed(const double *rows, size_t nrows, const char *path, grid_t *gr)
+static int grid_from_indexed(const double *rows, const size_t *lines, size_t nrows,
+                             const char *path, grid_t *gr)
 {
     size_t m = 0, n = 0, i;
     unsigned char *seen = NULL;
@@ -173,7 +179,10 @@ static int grid_from_indexed(const double *rows, size_t nrows, const char *path,
         double a = rows[i * 5], b = rows[i * 5 + 1];
         if (a < 0 || b < 0 || fabs(a - floor(a)) > 0.0 || fabs(b - floor(b)) > 0.0 ||
             a >= GRID_MAX || b >= GRID_MAX) {
-            fprintf(stderr, "%s: row %zu: bad grid index\n", path, i + 1);
+            fprintf(stderr,
+                    "%s:%zu: bad grid index (%g, %g): i and j are whole numbers from 0, below "
+                    "%d\n",
+                    path, lines[i], a, b, GRID_MAX);
             return -1;
         }
         if ((size_t)a + 1 > m)
@@ -192,8 +201,8 @@ static int grid_from_indexed(const double *rows, size_t nrows, const char *path,
     for (i = 0; i < nrows; i++) {
         size_t k = (size_t)rows[i * 5] * n + (size_t)rows[i * 5 + 1];
         if (seen[k]++) {
-            fprintf(stderr, "%s: grid point (%g, %g) given twice\n", path, rows[i * 5],
-                    rows[i * 5 + 1]);
+            fprintf(stderr, "%s:%zu: grid point (%g, %g) given twice\n", path, lines[i],
+                    rows[i * 5], rows[i * 5 + 1]);
             goto out;
         }
         memcpy(gr->g + k * DIM, rows + i * 5 + 2, DIM * sizeof *gr->g);
@@ -231,16 +240,16 @@ static int read_grid(const char *path, double dx, double dy, grid_t *gr)
 {
     FILE *f = strcmp(path, "-") ? fopen(path, "r") : stdin;
     double *rows = NULL;
-    size_t nrows = 0, ncols = 0;
+    size_t *lines = NULL, nrows = 0, ncols = 0;
     int indexed = -1, rc = -1;
 
     if (!f) {
         fprintf(stderr, "%s: %s\n", path, strerror(errno));
         return -1;
     }
-    if (read_rows(f, path, &rows, &nrows, &ncols, &indexed) < 0)
+    if (read_rows(f, path, &rows, &lines, &nrows, &ncols, &indexed) < 0)
         goto out;
-    if (indexed == 1 ? grid_from_indexed(rows, nrows, path, gr) < 0
+    if (indexed == 1 ? grid_from_indexed(rows, lines, nrows, path, gr) < 0
                      : grid_from_matrix(rows, nrows, ncols, dx, dy, gr) < 0)
         goto out;
     if (gr->m < 2 || gr->n < 2) {
@@ -252,6 +261,7 @@ out:
     if (f != stdin)
         fclose(f);
     free(rows);
+    free(lines);
     return rc;
 }
 
@@ -471,8 +481,8 @@ int main(int argc, char **argv)
             return 2;
         }
     }
-    if (optind != argc - 1 || steps < 1 || steps > SAMPLES_MAX || !isfinite(dx) || !isfinite(dy) ||
-        !isfinite(zscale)) {
+    if (optind != argc - 1 || steps < 1 || steps > SAMPLES_MAX || !(isfinite(dx) && dx > 0) ||
+        !(isfinite(dy) && dy > 0) || !isfinite(zscale)) { /* a spacing of 0 collapses the grid */
         usage(stderr);
         return 2;
     }

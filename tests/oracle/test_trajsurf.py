@@ -127,6 +127,30 @@ class TestTrajsurf(unittest.TestCase):
         self.assertIn("nul.csv:3: NUL byte", run(os.path.join(self.d, "nul.csv")).stderr)
         self.assertEqual(run("-n", "0", "x").returncode, 2)
         self.assertEqual(run().returncode, 2)
+        # the file's line of the point at fault, and what is wrong with it (it said
+        # "row 4" for line 5, and "expected i,j,x,y,z" of a NaN height)
+        for name, text, want in (
+                ("frac.csv", "i,j,x,y,z\n0,0,0,0,0\n0,1,0,1,0\n1,0,1,0,0\n1.7,1,1,1,1\n",
+                 "frac.csv:5: bad grid index (1.7, 1)"),
+                ("twice.csv", "i,j,x,y,z\n0,0,0,0,0\n0,1,0,1,0\n\n1,0,1,0,0\n0,1,0,1,0\n",
+                 "twice.csv:6: grid point (0, 1) given twice"),
+                ("nan.csv", "i,j,x,y,z\n0,0,0,0,0\n0,1,0,1,nan\n",
+                 "nan.csv:3: expected i,j,x,y,z, five finite numbers"),
+                ("spaces.csv", "1 2 3\n4 5 6\n",
+                 "spaces.csv:1: expected finite numbers separated by commas")):
+            p = os.path.join(self.d, name)
+            with open(p, "w") as f:
+                f.write(text)
+            r = run(p)
+            self.assertEqual(r.returncode, 1, name)
+            self.assertIn(want, r.stderr)
+        # a spacing of 0 (or below) collapses the grid: a bad option
+        m = os.path.join(self.d, "m.csv")
+        with open(m, "w") as f:
+            f.write("1,2\n3,4\n")
+        for opt in ("-x", "-y"):
+            self.assertEqual(run(opt, "0", m).returncode, 2, opt)
+            self.assertEqual(run(opt, "-1", m).returncode, 2, opt)
 
     def test_output_failure(self):
         # Given a full disk (/dev/full) for the samples on stdout, -o or the
