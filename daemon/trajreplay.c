@@ -512,9 +512,7 @@ static int run_open(run_t *run, const opts_t *o)
         (void)track_reframe(&run->trk, o->origin[0], o->origin[1], o->origin[2]);
     if (run->trk.geographic) {
         (void)geo_enu_init(run->trk.lat0_deg, run->trk.lon0_deg, run->trk.alt0_m, &run->frame);
-        run->geo_no_alt = 1; /* as trajd's replay transport decides it */
-        for (size_t k = 0; k < run->trk.n && run->geo_no_alt; k++)
-            run->geo_no_alt = isnan(run->trk.geo[k][2]);
+        run->geo_no_alt = track_no_altitude(&run->trk); /* as trajd's replay transport */
     }
     for (size_t i = 0; i < run->trk.nreports; i++)
         fprintf(stderr, "trajreplay: skipped %s\n", run->trk.reports[i]);

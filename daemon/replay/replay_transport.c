@@ -96,10 +96,8 @@ static int set_datum(cfg_t *cfg, int *line, char *why, size_t wl)
             return -CFG_EVALUE;
         }
         o->geographic = 1;
-        o->geo_no_alt = 1; /* no fix with an altitude: up 0 at the datum's height */
-        for (size_t k = 0; k < r->trk.n && o->geo_no_alt; k++)
-            o->geo_no_alt = isnan(r->trk.geo[k][2]);
-        o->heading.t_s = r->trk.heading_t; /* a private copy has its own */
+        o->geo_no_alt = track_no_altitude(&r->trk); /* up 0 at the datum's height */
+        o->heading.t_s = r->trk.heading_t;          /* a private copy has its own */
         o->heading.deg = r->trk.heading;
     }
     return 0;

@@ -354,3 +354,13 @@ const char *track_format_help(track_format_t fmt)
 {
     return (unsigned)fmt < TRACK_FMT_COUNT ? formats[fmt].help : "";
 }
+
+int track_no_altitude(const track_t *trk)
+{
+    if (!trk->geographic || !trk->geo)
+        return 0;
+    for (size_t k = 0; k < trk->n; k++)
+        if (!isnan(trk->geo[k][2]))
+            return 0;
+    return 1;
+}

@@ -159,6 +159,10 @@ int track_load_opts(const char *path, track_format_t fmt, unsigned flags, track_
  */
 int track_reframe(track_t *trk, double lat0_deg, double lon0_deg, double alt0_m);
 
+/* 1 if trk is geographic and no fix has an altitude (each is expressed at the
+ * datum's height, up 0: its setpoints go back at that height, geo_from_enu_at). */
+int track_no_altitude(const track_t *trk);
+
 /* Release; safe on a zeroed or already freed track. */
 void track_free(track_t *trk);
 
