@@ -44,7 +44,9 @@ static int apply_write(modbus_server_t *s, const mbmap_write_t *w)
         r = s->hooks.waypoint ? s->hooks.waypoint(s->hooks.ctx, w->object, &w->wp) : -ENGINE_ESTATE;
         if (r == MODBUS_SERVER_HOOK_EADDRESS)
             return -MBMAP_EADDRESS;
-        if (r == 0)
+        /* it came (taken, or refused for its value: counted in rejected), so its
+         * number is no gap; one the buffer had no room for comes again */
+        if (r != -ENGINE_EFULL)
             count_seq(s, w->object, w->wp.seq);
         return mbmap_from_engine(r);
     }

@@ -98,6 +98,33 @@ class LostSeq(mbsim.FedTrajdCase):
         finally:
             c.close()
 
+    def test_refused_waypoint_is_not_lost(self):
+        # Given seq 1..5, then seq 6 out of range (x = 2e7 m: exception 03, counted in
+        # mb_rejected), then 7..10 good, then `lost` is 0: seq 6 came, and was refused,
+        # not lost (it was counted twice, in rejected and in lost)
+        c = ModbusTcpClient("127.0.0.1", port=self.port, timeout=WAIT_S)
+        self.assertTrue(c.connect())
+        try:
+            deadline = time.monotonic() + WAIT_S
+            for seq in range(1, 11):
+                t = 0.1 * seq
+                x = 2e7 if seq == 6 else 1.0 * t
+                rq = mbsim.write_retrying(c, obj_base(0) + M["MBMAP_H_WP"],
+                                          mbsim.wp_regs(seq, t, x, 0.5 * t, 1.0), deadline)
+                self.assertEqual(rq.isError(), seq == 6, "seq %d: %s" % (seq, rq))
+                if seq == 6:
+                    self.assertEqual(rq.exception_code, 3, rq)
+            rq = c.write_register(obj_base(0) + M["MBMAP_H_COMMAND"], M["MBMAP_CMD_FINISH"],
+                                  slave=1)
+            self.assertFalse(rq.isError(), rq)
+            while self.u32(c, M["MBMAP_O_LAST_SEQ"]) != 10:
+                self.assertLess(time.monotonic(), deadline, "last_seq never came")
+                time.sleep(0.01)
+            self.assertEqual(self.u32(c, M["MBMAP_O_LOST"]), 0)
+            self.assertEqual(self.u32(c, M["MBMAP_O_SEQ_JUMPS"]), 0)
+        finally:
+            c.close()
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)
