@@ -872,6 +872,11 @@ int core_summary(const core_t *c, char *buf, size_t len)
             }
         }
         n = summary_motion(o, buf, len, n);
+        if (o->lc.n.refused && n < len) { /* by the owner or the gate (objlife.c) */
+            m = snprintf(buf + n, len - n, ", %llu commands refused",
+                         (unsigned long long)o->lc.n.refused);
+            n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+        }
         if (o->out_lost && n < len) {
             m = snprintf(buf + n, len - n, ", %s%llu lines lost by outputs",
                          o->out_fault ? "FAULT, " : "", (unsigned long long)o->out_lost);

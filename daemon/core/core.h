@@ -232,6 +232,13 @@ int obj_push_from(obj_t *o, const engine_waypoint_t *wp, const char *src);
 
 /* Reset o's counters: the engine's and the daemon's own (the reset command). */
 void obj_reset_counters(obj_t *o);
+/* The same, asked by peer: logged as a command is (obj_command's rate). */
+void obj_reset_counters_from(obj_t *o, const char *peer);
+/* A command (what: "stop", "override 50 %" ...) from peer that the gate
+ * refused before the owner saw it (why: "not writable", "trajd is
+ * stopping"): counted in the owner's refused and logged at warning level,
+ * at obj_command's rate. */
+void obj_log_refused(obj_t *o, const char *what, const char *peer, const char *why);
 
 /* Counters per transport in stats_t.tcount. */
 #define STATS_TCOUNT_MAX 4

@@ -76,9 +76,10 @@ int obj_drive_event(obj_t *o, lc_event_t ev, const double *pos_m)
     return ev == LC_EV_DRIVE_ENABLED && lc_table[from][ev].action == LC_A_ADOPT;
 }
 
-/* One line per command, at most OBJ_CMD_LOG_PER_S a second per object. */
-static void log_command(obj_t *o, lc_event_t ev, unsigned arg, const char *peer, lc_state_t from,
-                        int rc)
+/* 1 if one more command line of o may be logged this second (at most
+ * OBJ_CMD_LOG_PER_S), with more filled with the count of lines not shown
+ * before ("" if none); 0 (counted) if not. */
+static int cmd_log_allowed(obj_t *o, char *more, size_t len)
 {
     int64_t s = core_mono_ns() / 1000000000;
     if (s != o->cmd_log_s) {
@@ -87,14 +88,44 @@ static void log_command(obj_t *o, lc_event_t ev, unsigned arg, const char *peer,
     }
     if (o->cmd_log_n >= OBJ_CMD_LOG_PER_S) {
         o->cmd_log_dropped++;
-        return;
+        return 0;
     }
     o->cmd_log_n++;
-    char more[64] = "";
+    more[0] = 0;
     if (o->cmd_log_dropped)
-        snprintf(more, sizeof more, " (%llu command lines not shown before)",
+        snprintf(more, len, " (%llu command lines not shown before)",
                  (unsigned long long)o->cmd_log_dropped);
     o->cmd_log_dropped = 0;
+    return 1;
+}
+
+void obj_log_refused(obj_t *o, const char *what, const char *peer, const char *why)
+{
+    char more[64];
+    obj_lc(o)->n.refused++; /* counted with the owner's own refusals */
+    if (cmd_log_allowed(o, more, sizeof more))
+        log_at(__FILE__, __LINE__, __func__, o->name, peer ? peer : "unknown", LOG_WARNING,
+               "object '%s': command %s from %s refused: %s%s", o->name, what,
+               peer ? peer : "an unknown peer", why, more);
+}
+
+void obj_reset_counters_from(obj_t *o, const char *peer)
+{
+    char more[64];
+    obj_reset_counters(o);
+    if (cmd_log_allowed(o, more, sizeof more))
+        log_at(__FILE__, __LINE__, __func__, o->name, peer ? peer : "unknown", LOG_NOTICE,
+               "object '%s': command reset counters from %s: counters reset%s", o->name,
+               peer ? peer : "an unknown peer", more);
+}
+
+/* One line per command, at most OBJ_CMD_LOG_PER_S a second per object. */
+static void log_command(obj_t *o, lc_event_t ev, unsigned arg, const char *peer, lc_state_t from,
+                        int rc)
+{
+    char more[64];
+    if (!cmd_log_allowed(o, more, sizeof more))
+        return;
     char val[96] = "";
     if (ev == LC_EV_OVERRIDE || ev == LC_EV_OVERRIDE_ZERO)
         snprintf(val, sizeof val, " %u %%", arg);

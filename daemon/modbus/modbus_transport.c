@@ -107,22 +107,43 @@ static int hook_waypoint(void *ctx, unsigned k, const engine_waypoint_t *wp)
     return obj_push_from(o, wp, src);
 }
 
+/* The gate's refusal of a command to o from peer, logged and counted
+ * (objlife.c obj_log_refused): the exception alone said nothing per object. */
+static int gate_refused(obj_t *o, int g, const char *what, const char *peer)
+{
+    obj_log_refused(o, what, peer,
+                    g == MODBUS_SERVER_HOOK_EADDRESS ? "not writable" : "trajd is stopping");
+    return g;
+}
+
+static const char *command_name(unsigned cmd)
+{
+    switch (cmd) {
+    case MBMAP_CMD_START: return "start";
+    case MBMAP_CMD_STOP: return "stop";
+    case MBMAP_CMD_CLEAR: return "clear";
+    case MBMAP_CMD_RESET_COUNTERS: return "reset counters";
+    case MBMAP_CMD_FINISH: return "finish";
+    default: return "unknown";
+    }
+}
+
 static int hook_command(void *ctx, unsigned k, unsigned cmd)
 {
     mbt_t *t = ctx;
     obj_t *o = obj_at(t, k);
     if (!o)
         return MODBUS_SERVER_HOOK_EADDRESS;
-    int g = gate(o); /* writable, stopping (gate.h) */
-    if (g)
-        return g;
     char peer[REJLOG_SRC_LEN];
     snprintf(peer, sizeof peer, "modbus %s", t->srv ? modbus_server_peer(t->srv) : "");
+    int g = gate(o); /* writable, stopping (gate.h) */
+    if (g)
+        return gate_refused(o, g, command_name(cmd), peer);
     switch (cmd) { /* through the object's owner, logged with the peer (objlife.c) */
     case MBMAP_CMD_START: return obj_command(o, LC_EV_START, 0, peer);
     case MBMAP_CMD_STOP: return obj_command(o, LC_EV_STOP, 0, peer);
     case MBMAP_CMD_CLEAR: return obj_command(o, LC_EV_CLEAR, 0, peer);
-    case MBMAP_CMD_RESET_COUNTERS: obj_reset_counters(o); return 0;
+    case MBMAP_CMD_RESET_COUNTERS: obj_reset_counters_from(o, peer); return 0;
     case MBMAP_CMD_FINISH: return obj_command(o, LC_EV_END_OF_INPUT, 0, peer);
     default: return -ENGINE_ESTATE;
     }
@@ -134,11 +155,14 @@ static int hook_override(void *ctx, unsigned k, unsigned percent)
     obj_t *o = obj_at(t, k);
     if (!o)
         return MODBUS_SERVER_HOOK_EADDRESS;
-    int g = gate(o);
-    if (g)
-        return g;
     char peer[REJLOG_SRC_LEN];
     snprintf(peer, sizeof peer, "modbus %s", t->srv ? modbus_server_peer(t->srv) : "");
+    int g = gate(o);
+    if (g) {
+        char what[32];
+        snprintf(what, sizeof what, "override %u %%", percent);
+        return gate_refused(o, g, what, peer);
+    }
     return obj_command(o, LC_EV_OVERRIDE, percent, peer);
 }
 

@@ -104,12 +104,30 @@ class Gate(unittest.TestCase):
         self.assertEqual(rr.exception_code, 2)
         self.assertEqual(self.reg(c, 0, M["MBMAP_O_OVERRIDE"]), 100)
         self.assertEqual(self.reg(c, 0, M["MBMAP_O_STATE"]), 1)
-        # the writable object takes it.
+        # each refusal logged with the object, the command and the peer (the
+        # exception alone said nothing per object);
+        for what in ("override 0 %", "stop"):
+            self.assertIsNotNone(self.lines.wait_for(
+                "object 'replayed': command %s from modbus 127.0.0.1" % what, WAIT_S), what)
+        # the writable object takes it,
         self.wait_streaming(c, 1)
         self.assertIsNone(self.override(c, 1, 50))
         mbsim.wait_input(c, obj_base(1) + M["MBMAP_O_OVERRIDE"], 50, "override 50 never shown",
                          WAIT_S)
+        # and its reset counters too, logged as every command is (it was not)
+        rr = c.write_register(obj_base(1) + M["MBMAP_H_COMMAND"],
+                              M["MBMAP_CMD_RESET_COUNTERS"], slave=1)
+        self.assertFalse(rr.isError(), rr)
+        self.assertIsNotNone(self.lines.wait_for(
+            "object 'operated': command reset counters from modbus 127.0.0.1", WAIT_S))
         c.close()
+        # the refusals counted, in the exit line
+        self.p.send_signal(signal.SIGTERM)
+        self.p.send_signal(signal.SIGTERM)
+        self.p.wait(WAIT_S)
+        exit_line = self.lines.wait_for("exit: ", WAIT_S)
+        self.assertIsNotNone(exit_line)
+        self.assertRegex(exit_line, r"replayed [^;]*, 2 commands refused")
 
     def test_override_needs_write_allow(self):
         c = self.start("write_allow = 10.0.0.0/8")
