@@ -33,21 +33,24 @@
  * 2|c2| + 6|c3| per axis, in units of u). */
 double solve_seg_speed_max(const fdiff_seg_t *seg)
 {
-    double hi = 0, b2 = 0;
+    double m2 = 0, b2 = 0;
 
     for (int k = 0; k < AX; k++) {
         double b = 2 * fabs(seg->c[k][2]) + 6 * fabs(seg->c[k][3]);
         b2 += b * b;
     }
+    /* the largest square, then its root: the same double as the largest
+     * root (sqrt is monotonic and correctly rounded), one root instead of
+     * one per sample */
     for (int i = 0; i <= ENGINE_SPEED_SAMPLES; i++) {
         double u = (double)i / ENGINE_SPEED_SAMPLES, v2 = 0;
         for (int k = 0; k < AX; k++) {
             double d = seg->c[k][1] + u * (2 * seg->c[k][2] + 3 * u * seg->c[k][3]);
             v2 += d * d;
         }
-        hi = fmax(hi, sqrt(v2));
+        m2 = v2 > m2 ? v2 : m2;
     }
-    return (hi + sqrt(b2) / (2.0 * ENGINE_SPEED_SAMPLES)) / seg->dur_s;
+    return (sqrt(m2) + sqrt(b2) / (2.0 * ENGINE_SPEED_SAMPLES)) / seg->dur_s;
 }
 
 static qent_t *q_push(engine_t *e)
