@@ -153,15 +153,19 @@ typedef struct obj {
                                      * carried) */
     int64_t cmd_log_s;            /* commands logged: the second of the last one */
     unsigned cmd_log_n;           /* ... how many in it */
-    uint64_t cmd_log_dropped;     /* ... and lines not logged (more than
+    uint64_t cmd_buf_told;        /* the owner's buffered and dropped counts the last
+                                   * start or clear line told (objlife.c): each line says
+                                   * those of its own latch, not the totals */
+    uint64_t cmd_drop_told;
+    uint64_t cmd_log_dropped;       /* ... and lines not logged (more than
                                      * OBJ_CMD_LOG_PER_S in a second) */
-    core_drive_t drive;           /* its drives, published by the transport that drives
+    core_drive_t drive;             /* its drives, published by the transport that drives
                                    * them in its cycle (zero if none does) */
-    uint32_t delay_track;         /* the trajectory whose D was logged last (issue 26) */
-    uint64_t delay_logs;          /* ... how many were logged */
-    int delay_pending;            /* a start noted in the tick, its line not yet logged
+    uint32_t delay_track;           /* the trajectory whose D was logged last (issue 26) */
+    uint64_t delay_logs;            /* ... how many were logged */
+    int delay_pending;              /* a start noted in the tick, its line not yet logged
                                    * (core_stats_roll logs it: log.h) */
-    uint32_t delay_pending_track; /* ... its trajectory */
+    uint32_t delay_pending_track;   /* ... its trajectory */
     engine_delay_t delay_pending_d; /* ... the D it stated */
     uint64_t delay_superseded;      /* starts noted over a pending one before its line */
 } obj_t;

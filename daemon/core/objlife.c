@@ -129,10 +129,21 @@ static void log_command(obj_t *o, lc_event_t ev, unsigned arg, const char *peer,
     char val[96] = "";
     if (ev == LC_EV_OVERRIDE || ev == LC_EV_OVERRIDE_ZERO)
         snprintf(val, sizeof val, " %u %%", arg);
-    else if (ev == LC_EV_START || ev == LC_EV_CLEAR)
-        snprintf(val, sizeof val, " (waypoints while stopped or held: %llu buffered, %llu dropped)",
-                 (unsigned long long)o->lc.n.buffered,
-                 (unsigned long long)(o->lc.n.dropped_past + o->lc.n.dropped_full));
+    else if (ev == LC_EV_START || ev == LC_EV_CLEAR) {
+        /* those since the last such line: this latch's (the totals, on every later start
+         * or clear, read as if each one had buffered them) */
+        uint64_t b = o->lc.n.buffered, d = o->lc.n.dropped_past + o->lc.n.dropped_full;
+        if (b < o->cmd_buf_told || d < o->cmd_drop_told) /* counters reset since */
+            o->cmd_buf_told = o->cmd_drop_told = 0;
+        if (from == LC_STOPPED || from == LC_STOPPING || from == LC_HELD || b > o->cmd_buf_told ||
+            d > o->cmd_drop_told)
+            snprintf(val, sizeof val,
+                     " (waypoints while stopped or held: %llu buffered, %llu dropped)",
+                     (unsigned long long)(b - o->cmd_buf_told),
+                     (unsigned long long)(d - o->cmd_drop_told));
+        o->cmd_buf_told = b;
+        o->cmd_drop_told = d;
+    }
     log_at(__FILE__, __LINE__, __func__, o->name, peer ? peer : "unknown", LOG_NOTICE,
            "object '%s': command %s%s from %s in state %s: %s%s -> %s%s", o->name,
            lc_event_name(ev), val, peer ? peer : "an unknown peer", lc_state_name(from),

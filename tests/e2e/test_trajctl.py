@@ -263,9 +263,15 @@ class TestCommands(TrajctlTest):
         r = self.ctl("clear", "boat")
         self.assertEqual(r.returncode, 0, r.stderr)
         self.wait_for(self.moving, "moved again after clear")
-        # start on a moving object: nothing to do, accepted
+        # the clear released the stop's latch: its line tells what the latch buffered
+        self.d.err_line(lambda l: "object 'boat': command clear" in l and
+                        "waypoints while stopped or held:" in l)
+        # start on a moving object: nothing to do, accepted; its line tells no waypoints
+        # of a latch (it told the stop's again, as if it had buffered them too)
         r = self.ctl("start", "boat")
         self.assertEqual(r.returncode, 0, r.stderr)
+        line = self.d.err_line(lambda l: "object 'boat': command start" in l)
+        self.assertNotIn("waypoints while stopped or held", line)
         c.close()
 
     def test_refused_not_writable(self):
