@@ -63,6 +63,46 @@ static const char good[] = "[daemon]\nrate_hz = 100\n"
                            "[object.boat]\nid = 0\ninput = replay\nreplay.track = t.csv\n"
                            "output = csv\ncsv.path = out.csv\n";
 
+/* A fresh directory with the track and good.conf, a loop and zeroed stats. */
+static loop_t *setup(stats_t *stats)
+{
+    int err = 0;
+    snprintf(dir, sizeof dir, "/tmp/trajd-test-reload-XXXXXX");
+    assert_non_null(mkdtemp(dir));
+    test_write_file(dir, "t.csv", "t,x,y,z\n0,0,0,0\n1,1,0,0\n");
+    test_write_file(dir, "good.conf", good);
+    loop_t *loop = loop_new(&err);
+    assert_non_null(loop);
+    memset(stats, 0, sizeof *stats);
+    return loop;
+}
+
+/* A core on cfg whose boat (the test feeds it, not the replay) moves at 1 m/s. */
+static core_t *moving_boat(loop_t *loop, const cfg_t *cfg, stats_t *stats)
+{
+    core_t *c = NULL;
+    char why[512];
+    assert_int_equal(core_open(loop, cfg, stats, NULL, &c, why, sizeof why), 0);
+    obj_t *o = &c->obj[0];
+    engine_clear(o->engine);
+    push_line(o);
+    step(c, 500);
+    assert_true(speed(o) > 0.9);
+    return c;
+}
+
+/* Close c, free the n configurations and the loop, remove the directory. */
+static void teardown(core_t *c, loop_t *loop, cfg_t **cfgs, int n)
+{
+    char cmd[128];
+    core_close(c);
+    for (int i = 0; i < n; i++)
+        cfg_free(cfgs[i]);
+    loop_free(loop);
+    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
+    assert_int_equal(system(cmd), 0);
+}
+
 /* Given boat moving at 1 m/s, when a reload's CSV output cannot open, then
  * core_open fails with the reason and the running core keeps boat's engine,
  * untouched: the next setpoint continues the last one (no step, same
@@ -72,9 +112,8 @@ static const char good[] = "[daemon]\nrate_hz = 100\n"
 static void test_reload_keeps_the_running_engine(void **state)
 {
     (void)state;
-    assert_non_null(mkdtemp(dir));
-    test_write_file(dir, "t.csv", "t,x,y,z\n0,0,0,0\n1,1,0,0\n");
-    test_write_file(dir, "good.conf", good);
+    stats_t stats;
+    loop_t *loop = setup(&stats);
     char bad[sizeof good + 64];
     snprintf(bad, sizeof bad, "%s", good);
     memcpy(strstr(bad, "out.csv"), "no/dir/x", 8); /* csv.path = no/dir/x (a missing directory) */
@@ -82,21 +121,11 @@ static void test_reload_keeps_the_running_engine(void **state)
     test_write_file(dir, "gone.conf",
                     "[daemon]\nrate_hz = 100\n[object.ship]\nid = 1\ninput = replay\n"
                     "replay.track = t.csv\noutput = csv\ncsv.path = out.csv\n");
-    int err = 0;
-    loop_t *loop = loop_new(&err);
-    assert_non_null(loop);
-    stats_t stats;
-    memset(&stats, 0, sizeof stats);
-    cfg_t *c1 = load("good.conf"), *c2 = load("bad.conf"), *c3 = load("good.conf"),
-          *c4 = load("gone.conf");
-    core_t *c = NULL, *nc = NULL;
+    cfg_t *cfgs[4] = {load("good.conf"), load("bad.conf"), load("good.conf"), load("gone.conf")};
+    cfg_t *c2 = cfgs[1], *c3 = cfgs[2], *c4 = cfgs[3];
+    core_t *c = moving_boat(loop, cfgs[0], &stats), *nc = NULL;
     char why[512];
-    assert_int_equal(core_open(loop, c1, &stats, NULL, &c, why, sizeof why), 0);
     obj_t *o = &c->obj[0];
-    engine_clear(o->engine); /* the test feeds it, not the replay */
-    push_line(o);
-    step(c, 500);
-    assert_true(speed(o) > 0.9);
     engine_t *e = o->engine;
     engine_setpoint_t before = o->sp;
 
@@ -140,15 +169,7 @@ static void test_reload_keeps_the_running_engine(void **state)
     assert_true(speed(o) < 1e-12);
     assert_int_equal(reload_brake_removed(c, c4), 0); /* at rest: nothing more to brake */
 
-    core_close(c);
-    cfg_free(c1);
-    cfg_free(c2);
-    cfg_free(c3);
-    cfg_free(c4);
-    loop_free(loop);
-    char cmd[128];
-    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-    assert_int_equal(system(cmd), 0);
+    teardown(c, loop, cfgs, 4);
 }
 
 /* Given boat paused by its operator (feed override 0) at rest on its path,
@@ -161,34 +182,22 @@ static void test_reload_keeps_the_running_engine(void **state)
 static void test_reload_keeps_the_override(void **state)
 {
     (void)state;
-    snprintf(dir, sizeof dir, "/tmp/trajd-test-reload-XXXXXX");
-    assert_non_null(mkdtemp(dir));
-    test_write_file(dir, "t.csv", "t,x,y,z\n0,0,0,0\n1,1,0,0\n");
-    test_write_file(dir, "good.conf", good);
+    stats_t stats;
+    loop_t *loop = setup(&stats);
     char changed[sizeof good + 64];
     snprintf(changed, sizeof changed, "%sscale_jerk_m_s3 = 40\n", good);
     test_write_file(dir, "changed.conf", changed);
-    int err = 0;
-    loop_t *loop = loop_new(&err);
-    assert_non_null(loop);
-    stats_t stats;
-    memset(&stats, 0, sizeof stats);
-    cfg_t *c1 = load("good.conf"), *c2 = load("changed.conf"), *c3 = load("good.conf");
-    core_t *c = NULL, *nc = NULL;
+    cfg_t *cfgs[3] = {load("good.conf"), load("changed.conf"), load("good.conf")};
+    core_t *c = moving_boat(loop, cfgs[0], &stats), *nc = NULL;
     char why[512];
-    assert_int_equal(core_open(loop, c1, &stats, NULL, &c, why, sizeof why), 0);
     obj_t *o = &c->obj[0];
-    engine_clear(o->engine);
-    push_line(o);
-    step(c, 500);
-    assert_true(speed(o) > 0.9);
     assert_int_equal(obj_command(o, LC_EV_OVERRIDE_ZERO, 0, NULL), 0);
     step(c, 300);
     assert_true(speed(o) < 1e-12);
     double x = o->sp.pos_m[0];
 
     /* the changed reload: a new engine where boat stands, the pause with it */
-    assert_int_equal(core_open(loop, c2, &stats, &c, &nc, why, sizeof why), 0);
+    assert_int_equal(core_open(loop, cfgs[1], &stats, &c, &nc, why, sizeof why), 0);
     assert_null(c);
     c = nc;
     o = &c->obj[0];
@@ -204,20 +213,12 @@ static void test_reload_keeps_the_override(void **state)
 
     /* the operator's 50 %, through another changed reload (back to good.conf) */
     assert_int_equal(obj_command(o, LC_EV_OVERRIDE, 50, NULL), 0);
-    assert_int_equal(core_open(loop, c3, &stats, &c, &nc, why, sizeof why), 0);
+    assert_int_equal(core_open(loop, cfgs[2], &stats, &c, &nc, why, sizeof why), 0);
     c = nc;
     o = &c->obj[0];
     engine_status(o->engine, &o->status);
     assert_true(!(fabs(o->status.override - 0.5) > 0));
-
-    core_close(c);
-    cfg_free(c1);
-    cfg_free(c2);
-    cfg_free(c3);
-    loop_free(loop);
-    char cmd[128];
-    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-    assert_int_equal(system(cmd), 0);
+    teardown(c, loop, cfgs, 3);
 }
 
 /* Given boat moving, when a reload removes it (it brakes to rest along its
@@ -228,27 +229,16 @@ static void test_reload_keeps_the_override(void **state)
 static void test_readded_object_starts_where_it_went(void **state)
 {
     (void)state;
-    snprintf(dir, sizeof dir, "/tmp/trajd-test-reload-XXXXXX");
-    assert_non_null(mkdtemp(dir));
-    test_write_file(dir, "t.csv", "t,x,y,z\n0,0,0,0\n1,1,0,0\n");
-    test_write_file(dir, "good.conf", good);
+    stats_t stats;
+    loop_t *loop = setup(&stats);
     test_write_file(dir, "gone.conf",
                     "[daemon]\nrate_hz = 100\n[object.ship]\nid = 1\ninput = replay\n"
                     "replay.track = t.csv\noutput = csv\ncsv.path = out2.csv\n");
-    int err = 0;
-    loop_t *loop = loop_new(&err);
-    assert_non_null(loop);
-    stats_t stats;
-    memset(&stats, 0, sizeof stats);
-    cfg_t *c1 = load("good.conf"), *c2 = load("gone.conf"), *c3 = load("good.conf");
-    core_t *c = NULL, *nc = NULL;
+    cfg_t *cfgs[3] = {load("good.conf"), load("gone.conf"), load("good.conf")};
+    cfg_t *c2 = cfgs[1], *c3 = cfgs[2];
+    core_t *c = moving_boat(loop, cfgs[0], &stats), *nc = NULL;
     char why[512];
-    assert_int_equal(core_open(loop, c1, &stats, NULL, &c, why, sizeof why), 0);
     obj_t *o = &c->obj[0];
-    engine_clear(o->engine);
-    push_line(o);
-    step(c, 500);
-    assert_true(speed(o) > 0.9);
 
     assert_int_equal(reload_brake_removed(c, c2), 1);
     for (int i = 0; i < 1000 && !reload_removed_at_rest(c, c2); i++)
@@ -283,14 +273,7 @@ static void test_readded_object_starts_where_it_went(void **state)
     }
     assert_true(xmin < 0.5); /* the transfer back to the line's start did come */
 
-    core_close(c);
-    cfg_free(c1);
-    cfg_free(c2);
-    cfg_free(c3);
-    loop_free(loop);
-    char cmd[128];
-    snprintf(cmd, sizeof cmd, "rm -rf %s", dir);
-    assert_int_equal(system(cmd), 0);
+    teardown(c, loop, cfgs, 3);
 }
 
 int main(void)
