@@ -158,6 +158,9 @@ static void unit_reset(engine_t *e)
  * the request, stand here (FINISHED after a stop, WAITING after a clear). */
 void play_stop_at_rest(engine_t *e)
 {
+    if (e->out.mode == OUT_XFER)
+        xfer_track_time(e); /* the track time the transfer showed, kept at rest (its own
+                               time, from 0, stepped t_s back: 5.4 s to 0.1 s) */
     while (e->scale.drop_n && e->queue.len)
         queue_pop(e);
     e->scale.drop_n = 0;

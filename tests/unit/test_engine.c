@@ -600,6 +600,56 @@ static void run_to_finish(engine_t *e, int64_t *k, double max_step, engine_setpo
  * (velocity never changes by more than the curve's own acceleration plus
  * scale_accel_m_s2 per second), WAITING, and the next trajectory again
  * starts with a transfer from there. */
+/* Given an output on a transfer to its track (placed 50 m away), when a clear
+ * brings it to rest midway, then its t_s stays where the transfer showed it:
+ * at rest t_s had fallen to the transfer's own time (1.97 -> 0.14 s in the
+ * Modbus probe that found it), a step back the position did not make. */
+static void test_clear_on_transfer_keeps_t_s(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_config_default(&c);
+    c.max_speed_m_s = 30;
+    engine_t *e = mk(&c);
+    engine_waypoint_t w;
+    engine_setpoint_t sp = {0};
+    int64_t k = 0;
+    for (int i = 0; i < 30; i++) {
+        circle_wp(&w, i, 1.0);
+        assert_int_equal(engine_push(e, &w), 0);
+    }
+    for (; k < 100000 && !(sp.state == ENGINE_STATE_STREAMING && sp.t_s > 5.0); k++)
+        engine_tick(e, k * c.period_ns, &sp);
+    engine_stop(e); /* at rest on its path, then a new trajectory 50 m away: a transfer from
+                       the time the output stood at */
+    for (int i = 0; i < 1000; i++)
+        engine_tick(e, ++k * c.period_ns, &sp);
+    for (int i = 0; i < 60; i++) {
+        circle_wp(&w, i, 1.0);
+        w.t_s += 40.0;
+        w.pos_m[0] += 50.0;
+        assert_int_equal(engine_push(e, &w), 0);
+    }
+    engine_finish(e);
+    int in = 0;
+    for (int i = 0; i < 100000 && in < 50; i++) {
+        engine_tick(e, ++k * c.period_ns, &sp);
+        in = sp.flags & ENGINE_SP_TRANSFER ? in + 1 : 0;
+    }
+    assert_true(sp.flags & ENGINE_SP_TRANSFER); /* 0.5 s into the transfer */
+    engine_clear(e);
+    double last = sp.t_s;
+    for (int i = 0; i < 3000; i++) {
+        engine_tick(e, ++k * c.period_ns, &sp);
+        if (sp.t_s < last - 1e-9)
+            fail_msg("t_s stepped back from %.6f to %.6f (state %d, flags %#x)", last, sp.t_s,
+                     (int)sp.state, (unsigned)sp.flags);
+        last = sp.t_s;
+    }
+    assert_int_equal(sp.state, ENGINE_STATE_WAITING);
+    engine_free(e);
+}
+
 static void test_gap_transfer_clear(void **state)
 {
     (void)state;
@@ -1727,6 +1777,7 @@ int main(void)
         cmocka_unit_test(test_jitter_rejected),
         cmocka_unit_test(test_full_and_retry),
         cmocka_unit_test(test_gap_transfer_clear),
+        cmocka_unit_test(test_clear_on_transfer_keeps_t_s),
         cmocka_unit_test(test_configured_transfer_limits),
         cmocka_unit_test(test_ends),
         cmocka_unit_test(test_all_configs_stream),
