@@ -211,8 +211,12 @@ static void test_reload_keeps_the_override(void **state)
         assert_true(!(fabs(o->sp.pos_m[0] - x) > 0));
     }
 
-    /* the operator's 50 %, through another changed reload (back to good.conf) */
+    /* the operator's 50 %, the object moving again (the transfer back), through
+     * another changed reload (back to good.conf): the old engine brakes, the new
+     * one has 50 % */
     assert_int_equal(obj_command(o, LC_EV_OVERRIDE, 50, NULL), 0);
+    step(c, 300);
+    assert_true(speed(o) > 0.1);
     assert_int_equal(core_open(loop, cfgs[2], &stats, &c, &nc, why, sizeof why), 0);
     c = nc;
     o = &c->obj[0];
