@@ -585,15 +585,8 @@ static void run_clear_progress(run_t *run)
 static int append_geo(run_t *run, const engine_setpoint_t *sp, char *line, size_t len, int n)
 {
     double v[4] = {NAN, NAN, NAN, NAN};
-    if (run->trk.geographic && run->geo_no_alt) { /* at the frame's height, alt NaN */
-        if (geo_from_enu_at(&run->frame, sp->pos_m[0], sp->pos_m[1], run->frame.alt0_m, &v[0],
-                            &v[1]) < 0)
-            v[0] = v[1] = NAN;
-    } else if (run->trk.geographic && isfinite(sp->pos_m[0]) && isfinite(sp->pos_m[1]) &&
-               isfinite(sp->pos_m[2]) &&
-               geo_from_enu(&run->frame, sp->pos_m, &v[0], &v[1], &v[2]) < 0) {
-        v[0] = v[1] = v[2] = NAN;
-    }
+    if (run->trk.geographic)
+        (void)geo_from_enu_track(&run->frame, sp->pos_m, run->geo_no_alt, v);
     if (run->trk.nheading && isfinite(sp->t_s) && isfinite(sp->pos_m[0]))
         v[3] = angle_wrap_deg(angle_pchip_eval(run->trk.heading_t, run->trk.heading,
                                                run->trk.nheading, sp->t_s, &run->heading_hint));

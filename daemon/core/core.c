@@ -180,15 +180,7 @@ const double *core_obj_geo(const core_t *c, obj_t *o)
 {
     if (o->geo_pending) {
         o->geo_pending = 0;
-        const geo_enu_t *d = &c->cfg->datum;
-        if (o->cfg->geo_no_alt) { /* up 0 at the datum's height: back at that height */
-            o->geo[2] = NAN;      /* no altitude came in, none goes out */
-            if (geo_from_enu_at(d, o->sp.pos_m[0], o->sp.pos_m[1], d->alt0_m, &o->geo[0],
-                                &o->geo[1]) < 0)
-                o->geo[0] = o->geo[1] = NAN;
-        } else if (geo_from_enu(d, o->sp.pos_m, &o->geo[0], &o->geo[1], &o->geo[2]) < 0) {
-            o->geo[0] = o->geo[1] = o->geo[2] = NAN;
-        }
+        (void)geo_from_enu_track(&c->cfg->datum, o->sp.pos_m, o->cfg->geo_no_alt, o->geo);
     }
     return o->geo;
 }

@@ -145,6 +145,20 @@ int geo_from_enu(const geo_enu_t *frame, const double enu_m[3], double *lat_deg,
     return geo_from_ecef(p, lat_deg, lon_deg, alt_m);
 }
 
+int geo_from_enu_track(const geo_enu_t *frame, const double enu_m[3], int no_alt, double out[3])
+{
+    int rc;
+    if (no_alt) {
+        out[2] = NAN; /* no altitude came in, none goes out */
+        rc = geo_from_enu_at(frame, enu_m[0], enu_m[1], frame->alt0_m, &out[0], &out[1]);
+    } else {
+        rc = geo_from_enu(frame, enu_m, &out[0], &out[1], &out[2]);
+    }
+    if (rc < 0)
+        out[0] = out[1] = out[2] = NAN;
+    return rc;
+}
+
 int geo_from_enu_at(const geo_enu_t *frame, double east_m, double north_m, double alt_m,
                     double *lat_deg, double *lon_deg)
 {

@@ -98,4 +98,10 @@ int geo_from_enu(const geo_enu_t *frame, const double enu_m[3], double *lat_deg,
 int geo_from_enu_at(const geo_enu_t *frame, double east_m, double north_m, double alt_m,
                     double *lat_deg, double *lon_deg);
 
+/* A setpoint of a track expressed about frame back to geodetic: out = lat,
+ * lon (degrees), alt (metres).  no_alt: the track had no altitude (up 0 at
+ * the frame origin's height): at that height, alt NaN (geo_from_enu_at);
+ * else geo_from_enu.  Returns 0, or -GEO_ENOTFINITE (out then all NaN). */
+int geo_from_enu_track(const geo_enu_t *frame, const double enu_m[3], int no_alt, double out[3]);
+
 #endif
