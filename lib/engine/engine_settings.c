@@ -348,17 +348,18 @@ int engine_setting_same(const engine_setting_t *s, const engine_config_t *a,
 
 const char *engine_setting_unused(const engine_setting_t *s, const engine_config_t *cfg)
 {
-    engine_config_t d;
-    engine_config_default(&d);
-    if (engine_setting_same(s, cfg, &d))
-        return NULL;
+    const char *why = NULL;
     if ((!strcmp(s->name, "start_vel_m_s") || !strcmp(s->name, "end_vel_m_s")) &&
         cfg->ends != ENGINE_ENDS_CLAMPED)
-        return "only ends = clamped uses it";
-    if ((!strcmp(s->name, "smooth_window") || !strcmp(s->name, "smooth_ctrl")) &&
-        cfg->method != ENGINE_METHOD_SMOOTH)
-        return "only method = smooth uses it";
-    return NULL;
+        why = "only ends = clamped uses it";
+    else if ((!strcmp(s->name, "smooth_window") || !strcmp(s->name, "smooth_ctrl")) &&
+             cfg->method != ENGINE_METHOD_SMOOTH)
+        why = "only method = smooth uses it";
+    if (!why)
+        return NULL; /* (the defaults made only for the four it can concern) */
+    engine_config_t d;
+    engine_config_default(&d);
+    return engine_setting_same(s, cfg, &d) ? NULL : why;
 }
 
 int engine_config_same(const engine_config_t *a, const engine_config_t *b)
