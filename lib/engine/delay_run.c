@@ -39,9 +39,8 @@ static void delay_at(const engine_t *e, double h, engine_delay_t *d)
 }
 
 /* D now: the settings with the input's interval and top speed as measured
- * (start_slack auto: span_max, the longest time of la_steady + 1 intervals,
- * and vmax_in, its fastest chord, both decaying; with delay_s set they are
- * measured too). */
+ * (span_max, the longest time of la_steady + 1 intervals, and vmax_in, its
+ * fastest chord, both decaying; measured whatever start_slack is). */
 static void delay_measured(const engine_t *e, engine_delay_t *d)
 {
     delay_at(e, input_interval(e), d);

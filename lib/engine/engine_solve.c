@@ -709,7 +709,7 @@ static void local_end(engine_t *e)
     memcpy(al, al_old, sizeof al_old);
 }
 
-/* start_slack auto: what node j says about the input's timing and speed */
+/* What node j says about the input's timing and speed */
 static void measure_input(engine_t *e, uint64_t j)
 {
     const double decay = 1.0 - 1.0 / 256;
@@ -745,7 +745,10 @@ int solve_add_node(engine_t *e, double t, const double *r, const double *vel)
     e->solve.node_t[j % e->solve.ring] = t;
     memcpy(nr(e, j), r, sizeof(double) * AX);
     e->solve.nodes = j + 1;
-    if ((e->slack_auto || e->cfg.delay_s > 0) && j >= 1) /* issue 26: delay_s too */
+    /* D is measured and stated whatever start_slack is (a fixed one keeps
+     * the count-based start, but the silence that ends a trajectory is
+     * judged by D: engine_silence_limit_s) */
+    if (j >= 1)
         measure_input(e, j);
     if (e->local) {
         size_t slot = (size_t)(j % e->solve.ring);

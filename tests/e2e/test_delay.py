@@ -184,6 +184,31 @@ class TestTailPlaysOut(unittest.TestCase):
         self.assertAlmostEqual(float(rows[-1]["t_s"]), 359.9, places=9)
         self.assertEqual(rows[-1]["state"], "finished")
 
+    def test_gap_track_fixed_slack(self):
+        """A fixed start_slack keeps the count-based start, but D is still
+        measured on the input and stated, and the tail plays out by it.
+        Before: D was stated from the profile's 400 m/s and an unknown
+        interval (40.07 s), and the first piece's tail waited 42.7 s."""
+        for slack in ("1", "4"):
+            with tempfile.TemporaryDirectory() as tmp:
+                path, x, y = gap_track(tmp)
+                p = replay(path, "--keep-gaps", "--start-slack", slack)
+                self.assertEqual(p.returncode, 0, p.stderr)
+                s = replay_summary.parse(p.stderr)
+                rows = list(csv.DictReader(io.StringIO(p.stdout)))
+            self.assertAlmostEqual(s["delay_interval_s"], H, places=9)
+            self.assertAlmostEqual(s["delay_slack_s"], int(slack) * H, places=9)
+            tt = np.arange(0, 60, 1e-4)
+            vtop = np.hypot(5 * np.cos(0.5 * tt), 3 * np.sin(0.3 * tt)).max()
+            self.assertLess(s["delay_speed_m_s"], vtop + 1.0)
+            self.assertLess(s["delay_s"], 28 * H + int(slack) * H)
+            first = [r for r in rows if r["track"] == "1"]
+            reach = next(int(r["now_ns"]) * 1e-9 for r in first
+                         if abs(float(r["t_s"]) - 29.9) < 1e-9)
+            self.assertLessEqual(reach - 29.9, 10.0, "slack %s" % slack)
+            self.assertEqual(s["underruns"], 0)
+            self.assertEqual(s["silent_ends"], 1)
+
     def test_real_tracks_end_only_at_gaps(self):
         """The real tracks' pauses are within their own timing (silence.h
         SILENCE_INTERVALS): a silence ends a trajectory only where a gap
