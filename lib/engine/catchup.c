@@ -106,6 +106,13 @@ static double lag_now(const engine_t *e, engine_delay_t *d)
     return (now + offset_at(e, e->lag.seen_ns) - D) - e->out.t;
 }
 
+double engine_lag_trailing(const engine_t *e)
+{
+    if (!e->lag.have || e->lag.ahead || e->lag.traj != e->out.traj || !e->out.have_now)
+        return NAN;
+    return (double)e->out.last_now * 1e-9 + offset_at(e, e->lag.seen_ns) - e->out.t;
+}
+
 /* Beyond this lag it is won back: half an input interval of d, two ticks at
  * least. */
 static double band_on(const engine_t *e, const engine_delay_t *d)

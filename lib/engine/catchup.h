@@ -62,6 +62,11 @@ void engine_lag_note(engine_t *e, int64_t now_ns);
  * lag is to be won back. */
 double engine_lag_target(engine_t *e, double target, double R, double A, double J);
 
+/* How far the output trails the sender's time now (s): now + off - t_out,
+ * the least-delayed sample's off; NAN without a sample of the trajectory
+ * played, or with stamps ahead of time. */
+double engine_lag_trailing(const engine_t *e);
+
 /* 1 while a lag is being won back or is within a tick of the band where
  * that begins: no rate decision is then kept for the ticks ahead
  * (plain_window). */

@@ -121,6 +121,11 @@ void engine_delay_note(engine_t *e, double lag);
  * grows with the input's top speed): a slowdown for the reserve, counted in
  * reserve_slowed, not an underrun. */
 int engine_delay_reserve_short(const engine_t *e);
+/* Engine-internal (engine_scale.c: the output back at rate 1 after its
+ * start's ramp, an underrun or a slowdown for the reserve): a fixed
+ * start_slack's output is not steered back to D (catchup.h), so the D stated
+ * becomes where it now trails (engine_lag_trailing). */
+void engine_delay_restate(engine_t *e);
 /* Engine-internal (an underrun, play_count_underrun): the D the input
  * measured now, if longer than the D stated, is stated instead (intervals
  * longer than at the start): the output then stands that far behind. */

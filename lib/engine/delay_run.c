@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "accept.h"
+#include "catchup.h"
 #include "timescale.h"
 
 /* Steps of the start's ramp simulated at most (ramp_lag). */
@@ -139,7 +140,8 @@ static double ramp_lag(const engine_t *e, int strict)
  * A ramp that loses more than D less the wait (a REST start's curve faster
  * than its waypoints) sets D: the output stands there after it, and that is
  * no lag to win back (catchup.h): the track-time grid after a start does not
- * depend on when each waypoint came.  An upload's D is not raised so. */
+ * depend on when each waypoint came.  An upload's D is not raised so.  A
+ * fixed start_slack's D is the wait plus the loss, less or more. */
 static double delay_if_started(const engine_t *e, engine_delay_t *d, double *lag, double known)
 {
     delay_measured(e, d);
@@ -147,8 +149,11 @@ static double delay_if_started(const engine_t *e, engine_delay_t *d, double *lag
     if (!e->queue.len || queue_at(e, 0)->kind != QE_SEG)
         return 0.0;
     double waited = newest(e) - queue_at(e, 0)->seg.t0_s;
+    /* a fixed start_slack starts by count and is not steered to D after
+     * (catchup.h): its D is where that start leaves the output */
+    int counted = !(e->slack_auto || e->cfg.delay_s > 0);
     /* the ramp loses at most a stop at the fastest speed ahead */
-    if (waited < d->delay_s - engine_delay_stop_s(&e->cfg, head_vmax(e)))
+    if (!counted && waited < d->delay_s - engine_delay_stop_s(&e->cfg, head_vmax(e)))
         return waited;
     /* a batch written ahead of its stamps (an upload) is not steered
      * (catchup.h): its output stands further behind than any D, and D is
@@ -158,7 +163,7 @@ static double delay_if_started(const engine_t *e, engine_delay_t *d, double *lag
     *lag = isfinite(known) ? known : ramp_lag(e, 1);
     /* what the ramp loses if it started now anyway (held back: more) */
     double loss = isfinite(*lag) ? *lag : ramp_lag(e, 0);
-    if (waited + loss > d->delay_s + 0.5 * d->interval_s) {
+    if (counted || waited + loss > d->delay_s + 0.5 * d->interval_s) {
         /* the wait the lookahead needs plus the ramp exceed D (by more than
          * the half interval a start is rounded to): D is that */
         d->delay_s = waited + loss;
@@ -258,6 +263,17 @@ void engine_delay_grow(engine_t *e)
         e->delay.learnt = e->slack_learn;
         e->st.delay_grown++;
     }
+}
+
+void engine_delay_restate(engine_t *e)
+{
+    if (e->slack_auto || e->cfg.delay_s > 0 || !e->delay.noted)
+        return;
+    double at = engine_lag_trailing(e);
+    if (!isfinite(at))
+        return;
+    e->delay.d.delay_s = e->delay.d.need_s = at;
+    e->delay.d.stop_s = at - e->delay.d.lookahead_s - e->delay.d.slack_s;
 }
 
 int engine_delay_reserve_short(const engine_t *e)

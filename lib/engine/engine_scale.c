@@ -743,6 +743,7 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
         e->out.seg_n0 = e->out.n;
         play_seed_cur(e, e->out.n);
         e->scale.on = 0;
+        engine_delay_restate(e); /* a fixed start_slack: D where it now trails */
     }
 }
 

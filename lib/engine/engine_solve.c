@@ -730,7 +730,7 @@ static void measure_input(engine_t *e, uint64_t j)
          * built on time (see enough_ahead) */
         double w = nt(e, j) - nt(e, j - e->la_steady - 1);
         e->solve.span_max = fmax(w, e->solve.span_max * decay);
-        if (w >= e->solve.span_max)
+        if (w >= e->solve.span_max && (e->slack_auto || e->cfg.delay_s > 0))
             engine_delay_grow(e); /* longer than any kept: D may need more (delay.h) */
     }
 }
