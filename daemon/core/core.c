@@ -224,10 +224,20 @@ static void step_engines(core_t *c, int64_t now_ns, int64_t real_ns, int sent)
         }
         if (o->clocked == 1)
             (void)engine_set_clock(o->retiring, &clk); /* cannot fail: cfg bounds */
-        /* the predecessor brakes; once at rest the new engine starts there */
-        engine_tick(o->retiring, now_ns, &o->sp);
-        if ((o->sp.flags & ENGINE_SP_HOLD) && o->sp.state != ENGINE_STATE_STREAMING &&
-            o->sp.state != ENGINE_STATE_UNDERRUN) {
+        /* the predecessor brakes, one period of its curve a tick as its owner
+         * went (lc_tick: after a stall the next target is one period on) */
+        engine_setpoint_t own;
+        o->retire_ns += c->period_ns;
+        engine_tick(o->retiring, o->retire_ns, &own);
+        o->sp = own;
+        /* what goes out is judged, the setpoint that hands over too (a hold
+         * keeps the held position: the new engine starts there) */
+        if (sent)
+            (void)safety_check(&o->safety, &o->sp);
+        o->sp.now_ns = now_ns;
+        /* once at rest the new engine starts there */
+        if ((own.flags & ENGINE_SP_HOLD) && own.state != ENGINE_STATE_STREAMING &&
+            own.state != ENGINE_STATE_UNDERRUN) {
             if (!(o->sp.flags & ENGINE_SP_NO_POSITION))
                 (void)engine_set_position(o->engine, o->sp.pos_m); /* within max_abs_m: checked */
             engine_free(o->retiring);
@@ -301,8 +311,6 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
         engine_status(o->engine, &o->status);
         o->status.skipped_ticks += o->skipped_ticks;
         objlog_note_start(o);
-        if (o->retiring) /* the owner judged its own setpoint (lc_tick) */
-            safety_check(&o->safety, &o->sp);
         obj_frames(c->cfg, o);
     }
     for (unsigned i = 0; i < c->nobj; i++) {
@@ -452,9 +460,11 @@ static void retire_moving(obj_t *o, core_t *prev)
         return;
     if (q->retiring) { /* still braking from an earlier reload */
         o->retiring = q->retiring;
+        o->retire_ns = q->retire_ns;
     } else if (!o->carried && q->engine && q->sp.cycle != 0 &&
                !(q->sp.flags & (ENGINE_SP_HOLD | ENGINE_SP_NO_POSITION))) {
         o->retiring = q->engine;
+        o->retire_ns = obj_lc(q)->eng_ns; /* its curve's time as its owner left it */
     } else {
         return;
     }

@@ -104,6 +104,9 @@ typedef struct obj {
                                      * one moved: the old one brakes to rest (engine_stop,
                                      * its setpoints go out), then the new one starts where
                                      * it rests (no velocity step); NULL otherwise */
+    int64_t retire_ns;            /* the retiring engine's own time: one period a tick from
+                                     * its owner's last (lifecycle_t eng_ns), as the owner's
+                                     * curve goes (a stall is no step of N periods) */
     engine_setpoint_t sp;         /* setpoint of the last tick (zero before the first) */
     engine_status_t status;       /* engine status after the last tick */
     uint64_t skipped_ticks;       /* missed deadlines this object was stepped through with

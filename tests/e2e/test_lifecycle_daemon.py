@@ -147,6 +147,83 @@ class Stall(unittest.TestCase):
                 p.stderr.close()
 
 
+    def reload_while_moving(self, extra, during=None, wait_rows=300):
+        """trajd replaying a circle (r = 20 m, 4 m/s) to stdout; once it moves at
+        speed, the configuration is rewritten with extra (a changed object: its
+        old engine brakes to rest) and reloaded, during(p) runs, and the rows from
+        shortly before the reload to wait_rows after are returned."""
+        tmp = tempfile.TemporaryDirectory()
+        self.addCleanup(tmp.cleanup)
+        track = os.path.join(tmp.name, "circle.csv")
+        with open(track, "w") as f:
+            f.write("t,x,y,z\n")
+            for i in range(600):
+                t = 0.1 * i
+                f.write("%.1f,%.6f,%.6f,0\n" % (t, 20 * math.cos(0.2 * t), 20 * math.sin(0.2 * t)))
+        conf = os.path.join(tmp.name, "trajd.conf")
+        base = ("[daemon]\nrate_hz = 100\nstatus_interval_s = 0\nstop_timeout_s = 2\n"
+                "[object.boat]\ninput = replay\nreplay.track = %s\noutput = stdout\n"
+                "max_speed_m_s = %g\n" % (track, MAX_SPEED))
+        with open(conf, "w") as f:
+            f.write(base)
+        p = subprocess.Popen([TRAJD, "-f", "-c", conf], stdin=subprocess.DEVNULL,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        reloaded = threading.Event()
+
+        def watch():
+            for line in p.stderr:
+                if "reloaded:" in line:
+                    reloaded.set()
+        threading.Thread(target=watch, daemon=True).start()
+        try:
+            rows = Rows(p.stdout)
+            r = rows.wait(2)
+            end = time.monotonic() + WAIT_S
+            while not (r[-1][5] == "streaming" and step(r[-2], r[-1]) > 0.035):
+                self.assertLess(time.monotonic(), end, "never moving at speed")
+                r = rows.wait(len(r) + 1)
+            n0 = len(r)
+            with open(conf, "w") as f:
+                f.write(base + extra)
+            p.send_signal(signal.SIGHUP)
+            self.assertTrue(reloaded.wait(WAIT_S), "no reload")
+            if during:
+                during(p)
+            return rows.wait(len(rows.rows) + wait_rows)[n0 - 5:]
+        finally:
+            p.send_signal(signal.SIGTERM)
+            p.wait(WAIT_S)
+
+    def test_held_while_a_reload_brakes(self):
+        """The reload changes the object and bounds its acceleration below the old
+        engine's braking (5 m/s^2): the monitor holds the object while the old
+        engine brakes.  Every row from the hold on stays at the held position,
+        also on the tick the old engine comes to rest and hands over.  Before,
+        that tick sent the old engine's rest point, 2.5 m on, and the next went
+        back."""
+        r = self.reload_while_moving("scale_accel_m_s2 = 3\nsafety_max_accel_m_s2 = 2\n",
+                                     wait_rows=250)
+        held = [i for i, row in enumerate(r) if row[6] & 0x20]
+        self.assertTrue(held, "never held")
+        h = held[0]
+        for row in r[h:]:
+            self.assertLessEqual(math.dist(row[2:5], r[h][2:5]), 1e-9, row)
+
+    def test_stall_while_a_reload_brakes(self):
+        """A reload that changes the moving object keeps its old engine braking to
+        rest along its path (daemon/REFERENCE.md); trajd frozen for 0.3 s meanwhile
+        (SIGSTOP): the braking engine also goes on one period from its last setpoint
+        sent.  Before, it was stepped to the newest deadline at once: a step of every
+        period missed in one row (0.1 to 0.6 m at 5 m/s where 0.05 m is one period)."""
+        def freeze(p):
+            p.send_signal(signal.SIGSTOP)
+            time.sleep(0.3)  # the fault itself, not a wait for an event
+            p.send_signal(signal.SIGCONT)
+        r = self.reload_while_moving("scale_accel_m_s2 = 3\n", freeze)
+        s, i = max_step(r)
+        self.assertLessEqual(s, STEP_MAX, "step %.4f m at row %d" % (s, i))
+
+
 def write_wp(s, seq, t, pos, tid):
     regs = struct.pack(">Idddd", seq, t, *pos)
     n = len(regs) // 2
