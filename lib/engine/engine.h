@@ -39,7 +39,8 @@
  * Trajectories, gaps and transfers.  A trajectory is the waypoints between
  * two ends: engine_finish/engine_stop, engine_clear, a gap (an interval
  * above max_gap_s), or a silence of the input longer than the play-out
- * delay D less its lookahead (silence.h: counted in silent_ends; the
+ * delay D less its lookahead, max_gap_s for a trajectory with fewer
+ * intervals than its lookahead (silence.h: counted in silent_ends; the
  * arrival is the first tick time after a push).  A gap ends the current
  * trajectory exactly as
  * engine_finish does (the configured end condition on its last waypoint; the
@@ -256,7 +257,9 @@ typedef struct {
                                + 8 .. 2^20; about 272 bytes each).  Default
                                4096: 68 min at 1 Hz, 1.1 MB */
     double max_gap_s;       /* a longer interval ends the trajectory at rest and
-                               starts a new one.  Default 60 s */
+                               starts a new one; so does a silence this long,
+                               whatever the trajectory's length (silence.h).
+                               Default 60 s */
     double max_abs_m;       /* |coordinate| above this is rejected.  Default 1e7 m
                                (beyond the Earth's radius from any ENU origin) */
     engine_profile_t profile; /* what kind of object: the limits below when

@@ -207,6 +207,11 @@ static int judge(engine_t *e, int closing)
                 }
                 if (close_input(e) < 0)
                     rc = -ENGINE_ENUMERIC;
+            } else if (e->st.tracks > 0 && v.wp.t_s - e->in.last_t > e->cfg.max_gap_s) {
+                /* after a trajectory a silence (or a finish) closed: the gap
+                 * is still the one the transfer crosses (counted at its
+                 * arrival, silence.c) */
+                e->in.gap_s = v.wp.t_s - e->in.last_t;
             }
             if (v.stop != ACCEPT_STOP_HALT && keep(e, &v.wp) < 0)
                 rc = -ENGINE_ENUMERIC;

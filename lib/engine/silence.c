@@ -44,9 +44,11 @@ static int engine_silence_judged(const engine_t *e)
 double engine_silence_limit_s(const engine_t *e)
 {
     engine_delay_t d;
-    /* too little of the trajectory to tell its timing: a gap decides */
+    /* too few intervals to tell its timing (a short move, a lone
+     * waypoint): max_gap_s, after which a waypoint would start a new
+     * trajectory anyway */
     if (!engine_silence_judged(e))
-        return INFINITY;
+        return e->cfg.max_gap_s;
     engine_delay(e, &d);
     /* the output stands D behind the newest waypoint and needs the
      * lookahead's waypoints to go on: what is left of D is the slack and
@@ -59,7 +61,10 @@ double engine_silence_limit_s(const engine_t *e)
 
 int engine_silence_pending(const engine_t *e)
 {
-    return e->in.open && (e->sil.arrived || e->sil.fresh) && !e->clk.on && engine_silence_judged(e);
+    /* (a lone first waypoint is still the acceptance's: the trajectory
+     * opens with its verdict, engine_finish gives it) */
+    return (e->in.open || accept_pending(&e->in.policy)) && (e->sil.arrived || e->sil.fresh) &&
+           !e->clk.on && e->sil.n > 0;
 }
 
 int engine_silence_tick(engine_t *e, int64_t now_ns)

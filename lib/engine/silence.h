@@ -30,8 +30,9 @@
 #include "engine.h"
 
 /* The silence is at least the input's longest interval in the trajectory
- * so far this many times, and only judged once the trajectory has the
- * lookahead's worth of intervals (before, only a gap ends it).  On the real
+ * so far this many times.  Before the trajectory has the lookahead's worth
+ * of intervals (a short move, a stream's start), D is what its intervals
+ * and chords so far give; a lone waypoint's silence is max_gap_s.  On the real
  * tracks (tests/data) the largest ratio of an interval (below max_gap_s) to
  * the longest one before it in its trajectory, from its lookahead's worth on,
  * is 2.7 on gpxgo_visnjan (a 41 s pause of a walk logged every 1 to 15 s),
@@ -52,12 +53,12 @@ void engine_silence_push(engine_t *e, const engine_waypoint_t *wp);
 int engine_silence_tick(engine_t *e, int64_t now_ns);
 
 /* 1 while a silent end may come without a push: the input trajectory is
- * open, has its lookahead's intervals and the engine is not on the
+ * open, has a waypoint and the engine is not on the
  * clock (engine_status's stalled is 0 then: the ticks are not all holds). */
 int engine_silence_pending(const engine_t *e);
 
-/* The silence after which the input trajectory is closed, seconds
- * (INFINITY: too few intervals to tell its timing; a gap decides). */
+/* The silence after which the input trajectory is closed, seconds (at most
+ * max_gap_s). */
 double engine_silence_limit_s(const engine_t *e);
 
 #endif

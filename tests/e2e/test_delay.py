@@ -228,6 +228,65 @@ class TestTailPlaysOut(unittest.TestCase):
             self.assertEqual(s["underruns"], 0)
             self.assertEqual(s["silent_ends"], 1)
 
+    def test_short_trajectory_plays_out(self):
+        """A trajectory too short to tell its timing by (fewer intervals than
+        its lookahead: an operator's short move, a lone waypoint), then
+        silence, is closed after max_gap_s (60 s) of silence at most and
+        plays out to its last waypoint (within 5 s more here); with the
+        lookahead's intervals, by D as any other.  Before:
+        each waited for the next waypoint, here 300 s later."""
+        for n, opts, within in ((1, (), 65.0), (2, (), 65.0), (5, (), 65.0), (17, (), 65.0),
+                                (1, ("--max-lookahead", "2"), 65.0),
+                                (5, ("--max-lookahead", "2"), 10.0),
+                                (17, ("--max-lookahead", "2"), 10.0)):
+            if True:
+                with tempfile.TemporaryDirectory() as tmp:
+                    path = os.path.join(tmp, "short.csv")
+                    i, k = np.arange(n), np.arange(30)
+                    t = np.r_[H * i, 300.0 + H * k]
+                    x = np.r_[0.5 * i, 20.0 + 0.5 * k]
+                    write_track(path, t, x, np.zeros_like(x))
+                    p = replay(path, "--keep-gaps", *opts)
+                    self.assertEqual(p.returncode, 0, p.stderr)
+                    s = replay_summary.parse(p.stderr)
+                    rows = list(csv.DictReader(io.StringIO(p.stdout)))
+                what = "%d waypoints %s" % (n, opts)
+                reach = next((int(r["now_ns"]) * 1e-9 for r in rows
+                              if abs(float(r["x_m"]) - x[n - 1]) < 1e-9 and
+                              abs(float(r["vx_m_s"])) < 1e-9 and float(r["t_s"]) >= t[n - 1] - 1e-9),
+                             None)
+                self.assertIsNotNone(reach, what)
+                self.assertLessEqual(reach - t[n - 1], within, what)
+                self.assertEqual(s["hard_stops"], 0, what)
+                self.assertEqual(s["gaps"], 1, what)
+                # the second piece too, to its end
+                self.assertAlmostEqual(float(rows[-1]["x_m"]), x[-1], places=9)
+                self.assertEqual(rows[-1]["state"], "finished")
+
+    def test_transfer_after_a_silent_end_crosses_the_gap(self):
+        """A trajectory a silence closed, then a gap, then the next one 2 km
+        away, both slow (0.5 m/s): the transfer between them takes the gap's
+        own pace (transfer.h: at most 1.5 x the gap, 450 s here), as after a
+        gap met by an open trajectory.  Before, the silent end lost the gap:
+        the transfer was capped at max_gap_s (60 s), 50 m/s at its peak."""
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "far.csv")
+            k = np.arange(300)
+            t = np.r_[H * k, 330.0 + H * k]
+            x = np.r_[0.05 * k, 2000.0 + 0.05 * k]
+            write_track(path, t, x, np.zeros_like(x))
+            p = replay(path, "--keep-gaps")
+            self.assertEqual(p.returncode, 0, p.stderr)
+            s = replay_summary.parse(p.stderr)
+            rows = list(csv.DictReader(io.StringIO(p.stdout)))
+        self.assertEqual(s["silent_ends"], 1)
+        self.assertEqual(s["gaps"], 1)
+        xfer = [abs(float(r["vx_m_s"])) for r in rows if int(r["flags"]) & 0x08]
+        self.assertTrue(xfer)
+        dist = 2000.0 - 0.05 * 299
+        gap = 330.0 - 29.9
+        self.assertLessEqual(max(xfer), 1.5 * dist / (1.5 * gap) * 1.001)
+
     def test_real_tracks_end_only_at_gaps(self):
         """The real tracks' pauses are within their own timing (silence.h
         SILENCE_INTERVALS): a silence ends a trajectory only where a gap

@@ -1518,11 +1518,13 @@ static void test_underrun_rides_through(void **state)
     }
 }
 
-/* Given fewer waypoints than the lookahead, then the engine holds and
- * reports stalled, and a thousand more ticks change nothing; once the
- * lookahead is there it streams and is not stalled; resting at the end of
- * the trajectory it is stalled again (what trajreplay relies on to skip a
- * gap: nothing can change before the next push). */
+/* Given fewer waypoints than the lookahead, then the engine holds, and a
+ * thousand more ticks change nothing, but it is not stalled: a silence of
+ * max_gap_s closes that trajectory (silence.h), and it then plays out to
+ * its last waypoint and rests there, stalled.  Given the lookahead, it
+ * streams and is not stalled; resting at the end of the trajectory it is
+ * stalled again (what trajreplay relies on to skip a gap: nothing can change
+ * before the next push). */
 static void test_status_stalled(void **state)
 {
     (void)state;
@@ -1541,12 +1543,28 @@ static void test_status_stalled(void **state)
     assert_int_equal(engine_tick(e, k++ * PERIOD_NS, &sp), 0);
     engine_status(e, &st);
     assert_int_equal(st.state, ENGINE_STATE_WAITING);
-    assert_int_equal(st.stalled, 1);
+    assert_int_equal(st.stalled, 0);
     for (int i = 0; i < 1000; i++, k++)
         assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp2), 0);
     assert_memory_equal(sp2.pos_m, sp.pos_m, sizeof sp.pos_m);
     assert_int_equal(sp2.state, ENGINE_STATE_WAITING);
-    for (unsigned i = need / 2; i < need + 8; i++) {
+    engine_status(e, &st);
+    assert_int_equal(st.stalled, 0);
+    /* max_gap_s of silence: closed, played out to its last waypoint */
+    for (int i = 0; i < 200000 && sp2.state != ENGINE_STATE_FINISHED; i++, k++)
+        assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp2), 0);
+    assert_int_equal(sp2.state, ENGINE_STATE_FINISHED);
+    assert_true((double)k * PERIOD_NS * 1e-9 > c.max_gap_s);
+    circle_wp(&w, (int)(need / 2 - 1), 1.0);
+    for (int a = 0; a < 2; a++)
+        assert_true(fabs(sp2.pos_m[a] - w.pos_m[a]) < 1e-9);
+    engine_status(e, &st);
+    assert_int_equal(st.stalled, 1);
+    engine_free(e);
+
+    e = mk(&c);
+    k = 0;
+    for (unsigned i = 0; i < need + 8; i++) {
         circle_wp(&w, (int)i, 1.0);
         assert_int_equal(engine_push(e, &w), 0);
     }
