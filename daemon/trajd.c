@@ -10,6 +10,8 @@
  *                    brake to rest first, and SIGHUPs arriving meanwhile (or while
  *                    it is read, or in one batch) are coalesced into one more
  *                    reload after it; the clock keeps its phase across the swap
+ *   SIGUSR1, SIGUSR2, SIGALRM  logged and ignored (their default would end
+ *                    trajd with its objects moving)
  *   SIGTERM, SIGINT  stop policy of core.h (bring objects to rest, exit 0), a reload
  *                    being read dropped; a second one exits at once (0); while
  *                    the config is first read: its parse cancelled, exit 0
@@ -244,8 +246,9 @@ static int reload_swap(trajd_t *d, cfg_t *nc, char *err, size_t errlen)
     int rc = 0;
     /* core_open carries unchanged objects over, closes the old transports
      * (they may hold a TCP port the new ones need), then opens the new ones.
-     * If that fails, the old core reopens its transports and runs on; only if
-     * even that fails is the old configuration opened from scratch. */
+     * If that fails, the old core reopens its transports and runs on (one
+     * that does not reopen left closed, its outputs counted lost); the old
+     * configuration opened from scratch is a last resort with no old core. */
     if (start_core(d, nc, err, errlen) < 0) {
         char err2[1024];
         rc = -1;
@@ -415,6 +418,17 @@ static int ctl_reload(void *ctx, char *why, size_t wl)
     return reload(ctx, "trajctl", why, wl);
 }
 
+/* A signal trajd does not act on (trajd_signals, its default would end trajd
+ * at once with the objects moving): 1, logged, ignored. */
+static int stray_signal(const struct signalfd_siginfo *si)
+{
+    if (si->ssi_signo != SIGUSR1 && si->ssi_signo != SIGUSR2 && si->ssi_signo != SIGALRM)
+        return 0;
+    log_msg(LOG_WARNING, "%s (from pid %u): ignored (trajd acts on SIGHUP, SIGTERM and SIGINT)",
+            strsignal((int)si->ssi_signo), (unsigned)si->ssi_pid);
+    return 1;
+}
+
 static void on_signal(loop_t *l, int fd, uint32_t events, void *ctx)
 {
     trajd_t *d = ctx;
@@ -443,7 +457,7 @@ static void on_signal(loop_t *l, int fd, uint32_t events, void *ctx)
             load_drop(d, "trajd is stopping");
             core_stop(d->core);
             break;
-        default: break;
+        default: (void)stray_signal(&si); break;
         }
     }
     if (hup > 1)
@@ -547,6 +561,10 @@ static void trajd_signals(sigset_t *mask)
     sigaddset(mask, SIGHUP);
     sigaddset(mask, SIGTERM);
     sigaddset(mask, SIGINT);
+    /* whose default ends the process at once, objects moving: logged, ignored */
+    sigaddset(mask, SIGUSR1);
+    sigaddset(mask, SIGUSR2);
+    sigaddset(mask, SIGALRM);
 }
 
 /* Signals while the configuration is first read: SIGTERM/SIGINT cancel the
@@ -560,6 +578,8 @@ static int start_signals(int sfd)
                                 "being read now)");
             continue;
         }
+        if (stray_signal(&si))
+            continue;
         log_msg(LOG_NOTICE,
                 "%s while the configuration is first read: its parse cancelled, "
                 "exiting",

@@ -196,6 +196,13 @@ obj_t *core_obj_find(core_t *c, const char *name)
 /* Missed deadlines stepped one by one at most (about 20 ms of work for 4 objects). */
 #define CORE_CATCHUP_MAX 100000u
 
+/* 1 if transport t of c is open (a reload's rollback may leave one closed:
+ * reopen_old). */
+static int transport_open(const core_t *c, const transport_t *t)
+{
+    return ((const core_priv_t *)c)->opened[transport_index(t)];
+}
+
 /* Clocked inputs, then every engine, at engine time now_ns; real_ns is
  * CLOCK_REALTIME at the deadline, from which the play-out clock (one for all
  * objects on it, lib/engine/CLOCK.md) is advanced.  sent: this deadline's
@@ -206,7 +213,7 @@ static void step_engines(core_t *c, int64_t now_ns, int64_t real_ns, int sent)
     if (!c->stopping)
         for (unsigned i = 0; i < c->nobj; i++) {
             obj_t *o = &c->obj[i];
-            if (o->cfg->input->pre_tick)
+            if (o->cfg->input->pre_tick && transport_open(c, o->cfg->input))
                 o->cfg->input->pre_tick(c->tstate[transport_index(o->cfg->input)], o, now_ns);
         }
     s->clock_now_ns = playout_clock_now(&s->pclock, real_ns, playout_drift_eps(&s->drift),
@@ -317,8 +324,14 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
         obj_t *o = &c->obj[i];
         for (unsigned j = 0; j < o->cfg->noutput; j++) {
             const transport_t *t = o->cfg->output[j];
-            if (t->setpoint)
+            if (!p->opened[transport_index(t)]) { /* left closed by a reload (reopen_old) */
+                o->out_lost++;
+                o->out_fault = 1;
+                c->stats->out_lost++;
+                c->stats->out_fault = 1;
+            } else if (t->setpoint) {
                 t->setpoint(c->tstate[transport_index(t)], o, &o->sp);
+            }
         }
     }
     for (unsigned t = 0; transport_table[t]; t++)
@@ -512,10 +525,13 @@ static void carry_objects(core_t *c, core_t *prev)
     }
 }
 
-/* Step 3 of core_open: open every transport the config uses, in table order. */
-static int open_transports(core_priv_t *p, char *why, size_t whylen)
+/* Step 3 of core_open: open every transport the config uses, in table order.
+ * all: go on past one that fails (the first failure is returned, the others
+ * logged). */
+static int open_transports(core_priv_t *p, char *why, size_t whylen, int all)
 {
     core_t *c = &p->pub;
+    int first = 0;
     for (unsigned t = 0; transport_table[t]; t++) {
         const transport_t *tr = transport_table[t];
         if (!cfg_uses(c->cfg, tr) || !tr->open)
@@ -523,12 +539,20 @@ static int open_transports(core_priv_t *p, char *why, size_t whylen)
         char w[256] = "";
         int rc = tr->open(c, &c->tstate[t], w, sizeof w);
         if (rc < 0) {
-            snprintf(why, whylen, "%s: %s", tr->name, w[0] ? w : strerror(-rc));
-            return rc;
+            c->tstate[t] = NULL;
+            if (!first)
+                snprintf(why, whylen, "%s: %s", tr->name, w[0] ? w : strerror(-rc));
+            else
+                log_msg(LOG_CRIT, "reload: %s: %s", tr->name, w[0] ? w : strerror(-rc));
+            if (!first)
+                first = rc;
+            if (!all)
+                return rc;
+            continue;
         }
         p->opened[t] = 1;
     }
-    return 0;
+    return first;
 }
 
 /* Close every open transport of p (reverse order); p may open them again. */
@@ -543,19 +567,24 @@ static void close_transports(core_priv_t *p)
 }
 
 /* A reload could not open the new transports: prev's reopen, its objects
- * resuming where they are (reload_mark_resume).  0, or -1 (logged; prev is
- * then closed and *prevp NULL). */
+ * resuming where they are (reload_mark_resume).  One that does not reopen
+ * either (its CSV directory gone, a port taken meanwhile) is left closed:
+ * the objects go on without it, never stopped for a file; an output's
+ * setpoints are then counted lost (exit 74), an input gives nothing more.
+ * 0 (logged). */
 static int reopen_old(core_t **prevp)
 {
     core_priv_t *q = (core_priv_t *)*prevp;
     char w[256] = "";
     reload_mark_resume(*prevp);
-    if (open_transports(q, w, sizeof w) == 0)
+    if (open_transports(q, w, sizeof w, 1) == 0)
         return 0;
-    log_msg(LOG_CRIT, "reload: cannot reopen the running configuration's transports: %s", w);
-    core_close(*prevp);
-    *prevp = NULL;
-    return -1;
+    log_msg(LOG_CRIT,
+            "reload: the running configuration's %s did not reopen: its objects go on without "
+            "it (an output's setpoints counted lost: exit 74; an input gives nothing more) until a "
+            "reload opens it again",
+            w);
+    return 0;
 }
 
 int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, core_t **out,
@@ -606,7 +635,7 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
      * on with its engines as they were */
     if (prev)
         close_transports((core_priv_t *)prev);
-    rc = open_transports(p, why, whylen);
+    rc = open_transports(p, why, whylen, 0);
     if (rc < 0) {
         close_transports(p);
         reload_unborrow(c);
@@ -708,7 +737,8 @@ int core_done(const core_t *c)
     for (unsigned i = 0; i < c->nobj; i++) {
         const obj_t *o = &c->obj[i];
         const transport_t *in = o->cfg->input;
-        if (!in->input_done || !in->input_done(c->tstate[transport_index(in)], o))
+        if (transport_open(c, in) &&
+            (!in->input_done || !in->input_done(c->tstate[transport_index(in)], o)))
             return 0;
         /* at rest on its last waypoint, or waiting with nothing buffered
          * (its input gave nothing usable: nothing more can happen), or held

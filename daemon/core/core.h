@@ -362,10 +362,9 @@ int64_t core_mono_ns(void);
  * *prev is freed and set to NULL (daemon/core/reload.h).
  *
  * Returns 0, or a negative code with a message in why and nothing of the new
- * core left open.  If *prev is still non-NULL after a failure, the old core
- * keeps running with every engine as it was; if it is NULL, even reopening
- * its transports failed (logged) and it is gone: the caller reopens a config
- * from scratch.
+ * core left open.  After a failure *prev keeps running with every engine as
+ * it was; a transport of it that does not reopen is left closed (logged: its
+ * outputs' setpoints are counted lost, its inputs give nothing).
  */
 int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prev, core_t **out,
               char *why, size_t whylen);

@@ -19,6 +19,7 @@ Every command received is logged with the object and the client.
 """
 import math
 import os
+import shutil
 import signal
 import struct
 import subprocess
@@ -147,13 +148,15 @@ class Stall(unittest.TestCase):
                 p.stderr.close()
 
 
-    def reload_while_moving(self, extra, during=None, wait_rows=300):
-        """trajd replaying a circle (r = 20 m, 4 m/s) to stdout; once it moves at
-        speed, the configuration is rewritten with extra (a changed object: its
-        old engine brakes to rest) and reloaded, during(p) runs, and the rows from
-        shortly before the reload to wait_rows after are returned."""
+    def moving_circle(self, extra=""):
+        """trajd replaying a circle (r = 20 m, 4 m/s) to stdout (and extra keys of
+        the object, where "TMP" is its temporary directory), moving at speed:
+        (process, its configuration's path and text, the rows, the log lines,
+        an event set at each "reloaded:" line)."""
         tmp = tempfile.TemporaryDirectory()
         self.addCleanup(tmp.cleanup)
+        self.tmp = tmp.name
+        os.mkdir(os.path.join(tmp.name, "out"))
         track = os.path.join(tmp.name, "circle.csv")
         with open(track, "w") as f:
             f.write("t,x,y,z\n")
@@ -162,27 +165,81 @@ class Stall(unittest.TestCase):
                 f.write("%.1f,%.6f,%.6f,0\n" % (t, 20 * math.cos(0.2 * t), 20 * math.sin(0.2 * t)))
         conf = os.path.join(tmp.name, "trajd.conf")
         base = ("[daemon]\nrate_hz = 100\nstatus_interval_s = 0\nstop_timeout_s = 2\n"
-                "[object.boat]\ninput = replay\nreplay.track = %s\noutput = stdout\n"
-                "max_speed_m_s = %g\n" % (track, MAX_SPEED))
+                "[object.boat]\ninput = replay\nreplay.track = %s\n"
+                "max_speed_m_s = %g\n" % (track, MAX_SPEED)) + extra.replace("TMP", tmp.name)
+        if "output =" not in extra:
+            base += "output = stdout\n"
         with open(conf, "w") as f:
             f.write(base)
         p = subprocess.Popen([TRAJD, "-f", "-c", conf], stdin=subprocess.DEVNULL,
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         reloaded = threading.Event()
+        log = []
 
         def watch():
             for line in p.stderr:
+                log.append(line)
                 if "reloaded:" in line:
                     reloaded.set()
         threading.Thread(target=watch, daemon=True).start()
+        rows = Rows(p.stdout)
+        r = rows.wait(2)
+        end = time.monotonic() + WAIT_S
+        while not (r[-1][5] == "streaming" and step(r[-2], r[-1]) > 0.035):
+            self.assertLess(time.monotonic(), end, "never moving at speed")
+            r = rows.wait(len(r) + 1)
+        return p, conf, base, rows, log, reloaded
+
+    def test_stray_signals_ignored(self):
+        """SIGUSR1, SIGUSR2 and SIGALRM, whose default would end trajd at once with
+        its objects moving (no brake, no exit line), are logged and ignored; the
+        rows go on without a step, and SIGTERM still brings the object to rest."""
+        p, conf, base, rows, log, reloaded = self.moving_circle()
         try:
-            rows = Rows(p.stdout)
-            r = rows.wait(2)
-            end = time.monotonic() + WAIT_S
-            while not (r[-1][5] == "streaming" and step(r[-2], r[-1]) > 0.035):
-                self.assertLess(time.monotonic(), end, "never moving at speed")
-                r = rows.wait(len(r) + 1)
-            n0 = len(r)
+            n0 = len(rows.rows)
+            for sig in (signal.SIGUSR1, signal.SIGUSR2, signal.SIGALRM):
+                p.send_signal(sig)
+            r = rows.wait(n0 + 100)
+            self.assertIsNone(p.poll())
+            s, i = max_step(r[n0 - 5:])
+            self.assertLessEqual(s, STEP_MAX)
+            self.assertGreater(step(r[n0], r[-1]), 1.0)
+            for name in ("User defined signal 1", "User defined signal 2", "Alarm clock"):
+                self.assertTrue(any(name in l and "ignored" in l for l in log), (name, log))
+        finally:
+            p.send_signal(signal.SIGTERM)
+            self.assertEqual(p.wait(WAIT_S), 0)
+
+    def test_reload_whose_output_cannot_reopen(self):
+        """The object writes a CSV besides stdout; its directory is removed and
+        trajd reloaded with the file unchanged: neither configuration can open
+        that output again.  The object goes on moving on stdout with no step,
+        the lost output is logged, and trajd exits 74 (output lost) at SIGTERM.
+        Before, trajd ended at once with exit 70 (internal fault), no brake and
+        no exit line."""
+        p, conf, base, rows, log, reloaded = self.moving_circle(
+            "output = stdout, csv\ncsv.path = TMP/out/boat.csv\n")
+        try:
+            n0 = len(rows.rows)
+            shutil.rmtree(os.path.join(self.tmp, "out"))
+            p.send_signal(signal.SIGHUP)
+            r = rows.wait(n0 + 150)
+            self.assertIsNone(p.poll(), "".join(log))
+            s, i = max_step(r[n0 - 5:])
+            self.assertLessEqual(s, STEP_MAX)
+            self.assertGreater(step(r[n0], r[-1]), 1.0)
+            self.assertTrue(any("did not reopen" in l for l in log), "".join(log))
+        finally:
+            p.send_signal(signal.SIGTERM)
+            self.assertEqual(p.wait(WAIT_S), 74, "".join(log))
+
+    def reload_while_moving(self, extra, during=None, wait_rows=300):
+        """The moving circle; the configuration is rewritten with extra (a changed
+        object: its old engine brakes to rest) and reloaded, during(p) runs, and the
+        rows from shortly before the reload to wait_rows after are returned."""
+        p, conf, base, rows, log, reloaded = self.moving_circle()
+        try:
+            n0 = len(rows.rows)
             with open(conf, "w") as f:
                 f.write(base + extra)
             p.send_signal(signal.SIGHUP)
