@@ -28,11 +28,23 @@ static int axis_state(can_drive_t *o, unsigned a, cia402_state_t to, uint16_t sw
         o->now_ns,   (uint8_t)a, (uint8_t)canproto_cia402_node(&o->ids, a), (uint8_t)d->state[a],
         (uint8_t)to, sw};
     can_axis_log_put(&o->chg, &c);
+    cia402_state_t from = d->state[a];
     d->state[a] = to;
     if (to == CIA402_OPERATION_ENABLED) {
         o->axis_oe[a] = 1;
         o->axis_held[a] = 0;
         return 0;
+    }
+    if (from == CIA402_STATE_UNKNOWN && o->ids.cia402 == CANPROTO_CIA402_MANAGED &&
+        (to == CIA402_FAULT || to == CIA402_FAULT_REACTION)) {
+        /* found in a fault (a restarted trajd, a reload, a drive that
+         * faulted before): resetting it is the operator's decision, as after
+         * a fault seen here: held until CLEAR */
+        o->st.drive_lost++;
+        status_event(o, CANPROTO_STERR_DRIVE);
+        o->axis_held[a] = 1;
+        o->lost = 1;
+        return 1;
     }
     if (!o->axis_oe[a])
         return 0;

@@ -281,6 +281,15 @@ static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, 
     o->status_due = 1;
 }
 
+void can_port_cleared(can_port_t *p, unsigned i)
+{
+    if (i >= p->nobj)
+        return;
+    can_drive_clear_asked(&p->obj[i].drv);
+    can_drive_cleared(&p->obj[i].drv);
+    p->obj[i].status_due = 1;
+}
+
 static void dispatch(can_port_t *p, const canproto_frame_t *f, int64_t now_ns)
 {
     if (f->flags & CANPROTO_F_ERR) {

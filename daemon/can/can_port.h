@@ -207,6 +207,11 @@ void can_port_setpoint(can_port_t *p, unsigned i, const engine_setpoint_t *sp);
  */
 void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns);
 
+/* Object i was cleared by a command from elsewhere (trajctl, Modbus): its
+ * drives as after a CAN CLEAR the object accepted (a held drive is reset
+ * and enabled again, its holds released). */
+void can_port_cleared(can_port_t *p, unsigned i);
+
 /* Housekeeping (reopen a down transport).  Returns 1 if it came up now. */
 int can_port_maintain(can_port_t *p, int64_t now_ns);
 

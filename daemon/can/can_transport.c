@@ -30,7 +30,8 @@
 typedef struct {
     obj_t *o;
     char src[48];
-    int rest_asked; /* hk_feedback asked the moving engine to come to rest */
+    int rest_asked;      /* hk_feedback asked the moving engine to come to rest */
+    unsigned clear_seen; /* o->clear_seq as the drives last saw it */
 } can_hook_ctx_t;
 
 typedef struct {
@@ -184,10 +185,16 @@ static void log_drives(can_state_t *s)
         uint64_t lost = 0, more;
         while (can_port_drive_change(s->port, k, &ch, &more) && (lost += more, 1))
             log_msg(ch.to == CIA402_OPERATION_ENABLED ? LOG_INFO : LOG_WARNING,
-                    "can: object '%s': drive %c (node %u): %s -> %s (statusword 0x%04X) at %.3f s",
+                    "can: object '%s': drive %c (node %u): %s -> %s (statusword 0x%04X) at %.3f "
+                    "s%s",
                     name, "xyz"[ch.axis % 3], ch.node, cia402_state_name(ch.from),
                     ch.to == CIA402_STATE_UNKNOWN ? "boot-up" : cia402_state_name(ch.to),
-                    ch.statusword, (double)ch.t_ns / 1e9);
+                    ch.statusword, (double)ch.t_ns / 1e9,
+                    ch.from == CIA402_STATE_UNKNOWN &&
+                            (ch.to == CIA402_FAULT || ch.to == CIA402_FAULT_REACTION)
+                        ? ": found in a fault, held (the command clear resets it; trajd never "
+                          "resets a fault by itself)"
+                        : "");
         if ((lost += more) > 0)
             log_msg(LOG_WARNING, "can: object '%s': %llu drive state changes not logged (too many)",
                     name, (unsigned long long)lost);
@@ -238,7 +245,11 @@ static int hk_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
     case CANPROTO_CMD_FINISH: return obj_command(o, LC_EV_END_OF_INPUT, 0, h->src);
     case CANPROTO_CMD_STOP: return obj_command(o, LC_EV_STOP, 0, h->src);
     case CANPROTO_CMD_START: return obj_command(o, LC_EV_START, 0, h->src);
-    case CANPROTO_CMD_CLEAR: return obj_command(o, LC_EV_CLEAR, 0, h->src);
+    case CANPROTO_CMD_CLEAR: {
+        int rc = obj_command(o, LC_EV_CLEAR, 0, h->src);
+        ((can_hook_ctx_t *)ctx)->clear_seen = o->clear_seq; /* can_port does the drives' part */
+        return rc;
+    }
     case CANPROTO_CMD_RESET_COUNTERS: obj_reset_counters(o); break;
     case CANPROTO_CMD_OVERRIDE: return obj_command(o, LC_EV_OVERRIDE, arg, h->src);
     default: break;
@@ -492,6 +503,7 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
                     "are taken to stand at initial_position, and are sent targets from there",
                     s->objs[k]->name);
         s->hctx[k].o = s->objs[k];
+        s->hctx[k].clear_seen = s->objs[k]->clear_seq;
         snprintf(s->hctx[k].src, sizeof s->hctx[k].src, "can %s id 0x%03" PRIX32,
                  s->cfg->log_in[0] || s->cfg->log_out[0] ? s->cfg->log_ifname : s->cfg->interface,
                  ids.fd ? ids.waypoint_fd_id : ids.waypoint_id);
@@ -770,6 +782,12 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
     }
     if (s->log)
         can_logfile_set_time(s->log, now_ns);
+    /* a clear from trajctl or Modbus: the drives' part, as a CAN CLEAR's */
+    for (unsigned k = 0; k < s->n; k++)
+        if (s->hctx[k].o && s->hctx[k].clear_seen != s->hctx[k].o->clear_seq) {
+            s->hctx[k].clear_seen = s->hctx[k].o->clear_seq;
+            can_port_cleared(s->port, k);
+        }
     can_port_cycle(s->port, now_ns, c->late_ns);
     if (s->log) {
         can_logfile_flush(s->log);

@@ -112,6 +112,9 @@ typedef struct obj {
     uint64_t skipped_ticks;       /* missed deadlines this object was stepped through with
                                      * no output (added into status.skipped_ticks) */
     int stopping;                 /* the daemon is stopping: obj_push_from refuses */
+    unsigned clear_seq;           /* +1 per clear the object accepted (obj_command), from any
+                                     * source: a transport whose devices hold on their own (a
+                                     * CiA 402 drive's fault, can_transport.c) releases them */
     int carried;                  /* 1 if engine (and counters) were carried over a reload */
     int64_t born_ns;              /* engine time when its engine was created (0 at start;
                                      * kept when carried): replay due times count from here */

@@ -167,6 +167,8 @@ int obj_command(obj_t *o, lc_event_t ev, unsigned arg, const char *peer)
     default: rc = -ENGINE_ERANGE; break;
     }
     sync_held(o);
+    if (ev == LC_EV_CLEAR && rc >= 0)
+        o->clear_seq++;
     log_command(o, ev, arg, peer, from, rc);
     return rc;
 }

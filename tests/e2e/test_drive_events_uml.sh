@@ -4,7 +4,8 @@
 # boot: tests/uml/drive_events.sh, at each rate of RATES, default 20 Hz; make
 # check-long runs 20 and 100 Hz, and a 2 s stall of trajd mid-motion):
 # fault, quick stop, boot-up, heartbeat loss (each then clear), trajd
-# restarted, trajd killed.  The config is README.md's drive config (three
+# restarted, trajd killed, a third trajd (it holds the drives it finds in a
+# fault until clear).  The config is README.md's drive config (three
 # axes, node 2 inverted, the drives at 2.3 m, -0.9 m and 0.4 m).  The verdict
 # comes from the bus log, by tests/helpers/drive_bus_check.py (no code shared
 # with trajd), with the object's configured safety limits: no target to a
@@ -64,7 +65,7 @@ sub("0x1006:0=50000/4", "0x1006:0=%d/4" % period_us)
 # times: the drives' consumer of trajd's heartbeat 3 s, trajd's of theirs 1.5 s
 sub("0x1016:1=0x7F03E8/4", "0x1016:1=0x7F0BB8/4")
 sub("can.cia402_heartbeat_ms = 500 ", "can.cia402_heartbeat_ms = 1500 ")
-sub("[object.arm]\n", "[object.arm]\nmax_speed_m_s = 1.5\nmax_accel_m_s2 = 2\n"
+sub("[object.arm]\n", "[object.arm]\nwritable = yes\nmax_speed_m_s = 1.5\nmax_accel_m_s2 = 2\n"
     "safety_max_speed_m_s = %s\nsafety_max_accel_m_s2 = %s\n" % (vmax, amax))
 open(sys.argv[2], "w").write(conf)
 PYEOF

@@ -4,12 +4,13 @@
 # against three simulated CiA 402 drives (tests/uml/drive_sim.py; node 2 on the
 # inverted y axis; none at position 0), for each rate in $out/rates, one trajd
 # config ev<RATE>.conf each (README.md's drive config, three axes):
-#   fault of node 1, quick stop of node 2, boot-up of node 3, node 2's
-#   heartbeat lost (each held by trajd, then the command clear); trajd
-#   restarted (SIGTERM, a new trajd adopts the running drives); with STALL=1
-#   in $out/env, trajd stopped for 2 s (SIGSTOP); trajd killed
-#   (kill -9): the drives, consuming trajd's heartbeat (0x1016), fault by
-#   themselves.
+#   fault of node 1 (cleared by trajctl), quick stop of node 2, boot-up of
+#   node 3, node 2's heartbeat lost (each held by trajd, then the command clear
+#   on CAN); trajd restarted (SIGTERM, a new trajd adopts the running
+#   drives); trajd killed (kill -9): the drives, consuming trajd's heartbeat
+#   (0x1016), fault by themselves; a third trajd finds them in that fault and
+#   holds them until the command clear; with STALL=1 in $out/env, it is then
+#   stopped for 2 s (SIGSTOP).
 # Everything on the bus goes to ev<RATE>.log (candump -L); the verdict is the
 # host's (tests/helpers/drive_bus_check.py and the simulator's log).  Every
 # wait is for an event with a bound; the times of the events are written to
@@ -66,8 +67,10 @@ for rate in $(cat "$out/rates"); do
     sim "fault 1"
     wait_ev 1 FAULT 1 || fail "no fault"
     wait_grep "$out/ev$rate.err" "left Operation Enabled" 2000 || fail "fault not reported"
-    clear_cmd
-    wait_ev 1 OPERATION_ENABLED 2 || fail "node 1 not enabled after clear"
+    # the clear from trajctl (the control socket): the drive's fault reset as a
+    # CAN clear's (it used to reach only the object, never the drive)
+    "$BUILD/bin/trajctl" clear arm > /dev/null || fail "trajctl clear refused"
+    wait_ev 1 OPERATION_ENABLED 2 || fail "node 1 not enabled after trajctl clear"
     # ---- node 2's quick stop (a local input): disabled, held; clear
     moving quickstop; mark quickstop
     sim "quickstop 2"
@@ -121,14 +124,22 @@ for rate in $(cat "$out/rates"); do
         wait_grep "$run/sim_events.txt" "^[0-9.]* $node MASTER_LOST " 2000 ||
             fail "node $node kept running"
     done
-    # ---- (STALL=1, make check-long) a third trajd: it resets the faults the
-    # drives stopped with, enables and adopts them; then it stalls 2 s
-    # mid-motion (SIGSTOP): not a lost heartbeat (the consumer time is 1.5 s:
-    # the stall is excused); the checker judges the targets after it (rule 4:
-    # they go on from the last one sent, never 2 s ahead)
+    # ---- a third trajd finds the drives in the fault they stopped with: held,
+    # never reset by itself (it used to reset and enable them, and the object
+    # moved with no clear); the command clear resets, enables and adopts them
+    oe=$(for n in 1 2 3; do count_ev $n OPERATION_ENABLED; done)
+    start_trajd
+    wait_grep "$out/ev$rate.err" "found in a fault, held" 2000 || fail "faulted drives not held"
+    sleep 1
+    [ "$(for n in 1 2 3; do count_ev $n OPERATION_ENABLED; done)" = "$oe" ] ||
+        fail "a drive found in a fault was enabled with no clear"
+    clear_cmd
+    for n in 1 2 3; do wait_ev $n OPERATION_ENABLED 3 || fail "node $n not enabled after clear"; done
+    # ---- (STALL=1, make check-long) then it stalls 2 s mid-motion (SIGSTOP):
+    # not a lost heartbeat (the consumer time is 1.5 s: the stall is excused);
+    # the checker judges the targets after it (rule 4: they go on from the last
+    # one sent, never 2 s ahead)
     if [ "${STALL:-0}" = 1 ]; then
-        start_trajd
-        for n in 1 2 3; do wait_ev $n OPERATION_ENABLED 3 || fail "node $n not enabled again"; done
         moving stall; mark stall
         nhb=$(grep -c "heartbeat was not heard" "$out/ev$rate.err")
         kill -STOP "$tp"; sleep 2; kill -CONT "$tp"
@@ -136,8 +147,8 @@ for rate in $(cat "$out/rates"); do
         sleep 1
         [ "$(grep -c "heartbeat was not heard" "$out/ev$rate.err")" = "$nhb" ] ||
             fail "trajd's own stall taken for a lost heartbeat"
-        kill -TERM "$tp"; wait "$tp"; tp=
     fi
+    kill -TERM "$tp"; wait "$tp"; tp=
     kill "$pp" 2>/dev/null; wait "$pp"; pp=
     kill -TERM "$sp"; wait "$sp"; sp=
     kill "$cp"; wait "$cp" 2>/dev/null; cp=
