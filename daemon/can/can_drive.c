@@ -395,6 +395,18 @@ void can_drive_setup(can_drive_t *d, const canproto_ids_t *ids, const can_drive_
     d->ctx = ctx;
 }
 
+int can_drive_adopt(can_drive_t *d, const can_drive_t *old)
+{
+    if (memcmp(&d->ids, &old->ids, sizeof d->ids) != 0)
+        return 0;
+    can_drive_ops_t ops = d->ops;
+    void *ctx = d->ctx;
+    *d = *old;
+    d->ops = ops;
+    d->ctx = ctx;
+    return 1;
+}
+
 int can_drive_rx(can_drive_t *o, const canproto_frame_t *f, int64_t now_ns)
 {
     o->now_ns = now_ns; /* stamps of heartbeats and state changes */

@@ -120,6 +120,11 @@ void can_drive_init(can_drive_t *d);
 void can_drive_setup(can_drive_t *d, const canproto_ids_t *ids, const can_drive_ops_t *ops,
                      void *ctx);
 
+/* A reload's new port: d (set up, can_drive_setup) takes the state old had
+ * (the same drives, running: their states, bring-up done, axes following,
+ * holds), if both have the same ids; 1 if it did, 0 otherwise. */
+int can_drive_adopt(can_drive_t *d, const can_drive_t *old);
+
 /* A frame at now_ns: a feedback TPDO, or (managed) an SDO reply, heartbeat or
  * EMCY of one of the object's nodes: 1 if it was one (handled), else 0. */
 int can_drive_rx(can_drive_t *d, const canproto_frame_t *f, int64_t now_ns);

@@ -281,6 +281,24 @@ static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, 
     o->status_due = 1;
 }
 
+int can_port_adopt(can_port_t *p, unsigned i, const can_drive_t *old, uint8_t sync_counter)
+{
+    if (i >= p->nobj || !p->obj[i].set || !can_drive_adopt(&p->obj[i].drv, old))
+        return 0;
+    p->sync_counter = sync_counter;
+    return 1;
+}
+
+const can_drive_t *can_port_drive_state(const can_port_t *p, unsigned i)
+{
+    return i < p->nobj ? &p->obj[i].drv : NULL;
+}
+
+uint8_t can_port_sync_counter(const can_port_t *p)
+{
+    return p->sync_counter;
+}
+
 void can_port_cleared(can_port_t *p, unsigned i)
 {
     if (i >= p->nobj)

@@ -207,6 +207,14 @@ void can_port_setpoint(can_port_t *p, unsigned i, const engine_setpoint_t *sp);
  */
 void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns);
 
+/* A reload: object i (set) takes the drives' state of the port that ran them
+ * (can_port_drive_state of the old port's object; can_drive_adopt), and the
+ * port the SYNC counter it had reached.  1 if adopted. */
+int can_port_adopt(can_port_t *p, unsigned i, const can_drive_t *old, uint8_t sync_counter);
+/* Object i's drives' state, for can_port_adopt (NULL if i is out of range). */
+const can_drive_t *can_port_drive_state(const can_port_t *p, unsigned i);
+uint8_t can_port_sync_counter(const can_port_t *p);
+
 /* Object i was cleared by a command from elsewhere (trajctl, Modbus): its
  * drives as after a CAN CLEAR the object accepted (a held drive is reset
  * and enabled again, its holds released). */

@@ -225,6 +225,64 @@ static void log_drives(can_state_t *s)
     }
 }
 
+/* The drives of the port a reload closed, for the port it opens next: the
+ * same drives, running, adopted as they are (never brought up again, never
+ * re-anchored while they follow the object).  Filled by close_, taken and
+ * emptied by open_ (a reload's new core, or the old one reopened). */
+static struct {
+    unsigned n;
+    char (*name)[CFG_NAME_MAX];
+    can_drive_t *drv;
+    uint8_t sync;
+} drives_kept;
+
+static void kept_drop(void)
+{
+    free(drives_kept.name);
+    free(drives_kept.drv);
+    memset(&drives_kept, 0, sizeof drives_kept);
+}
+
+static void kept_store(const can_state_t *s)
+{
+    kept_drop();
+    if (!s->port || !s->n)
+        return;
+    drives_kept.name = calloc(s->n, sizeof *drives_kept.name);
+    drives_kept.drv = calloc(s->n, sizeof *drives_kept.drv);
+    if (!drives_kept.name ||
+        !drives_kept.drv) { /* then brought up again, as before a reload kept them */
+        kept_drop();
+        return;
+    }
+    for (unsigned k = 0; k < s->n; k++) {
+        snprintf(drives_kept.name[k], sizeof drives_kept.name[k], "%s", s->objs[k]->name);
+        drives_kept.drv[k] = *can_port_drive_state(s->port, k);
+    }
+    drives_kept.n = s->n;
+    drives_kept.sync = can_port_sync_counter(s->port);
+}
+
+/* Object k of s takes the drives its name had in the port closed before (the
+ * same ids): 1 if it did. */
+static int kept_adopt(can_state_t *s, unsigned k)
+{
+    for (unsigned j = 0; j < drives_kept.n; j++) {
+        if (strcmp(drives_kept.name[j], s->objs[k]->name) != 0)
+            continue;
+        if (!can_port_adopt(s->port, k, &drives_kept.drv[j], drives_kept.sync))
+            return 0;
+        const can_port_drive_t *d = can_port_drive(s->port, k);
+        s->drive_en_logged[k] = d ? d->enabled_n : 0; /* told by the port before */
+        s->drive_lost_logged[k] = d ? d->lost_n : 0;
+        can_port_obj_stats(s->port, k, &s->drive_logged[k]);
+        log_msg(LOG_INFO, "can: object '%s': its drives kept as they run over the reload",
+                s->objs[k]->name);
+        return 1;
+    }
+    return 0;
+}
+
 static int hk_push(void *ctx, const engine_waypoint_t *wp)
 {
     const can_hook_ctx_t *h = ctx;
@@ -417,7 +475,6 @@ static void log_port(const can_state_t *s)
 static void close_(void *state, core_t *c)
 {
     can_state_t *s = state;
-    (void)c;
     if (!s)
         return;
     if (s->sock_fd >= 0)
@@ -453,6 +510,8 @@ static void close_(void *state, core_t *c)
                     (unsigned long long)os.rx.malformed, (unsigned long long)os.cmd_refused);
         }
     }
+    if (c && !c->stopping)
+        kept_store(s); /* the next open (a reload's) adopts them */
     can_port_free(s->port);
     can_socket_free(s->bus);
     can_logfile_close(s->log);
@@ -495,13 +554,6 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
         can_port_hooks_t hk = {s->is_input[k] ? hk_push : hk_push_refuse, hk_command, hk_status,
                                hk_feedback, hk_drive_event};
         s->drive_en_logged[k] = s->drive_lost_logged[k] = 0;
-        if (ids.cia402 >= CANPROTO_CIA402_FEEDBACK && !s->objs[k]->carried)
-            engine_require_position(s->objs[k]->engine, 1); /* the drive says where it is */
-        else if (ids.cia402 && !s->objs[k]->carried)        /* check(): initial_position given */
-            log_msg(LOG_NOTICE,
-                    "can: object '%s': no drive feedback (can.cia402 = targets): the drives "
-                    "are taken to stand at initial_position, and are sent targets from there",
-                    s->objs[k]->name);
         s->hctx[k].o = s->objs[k];
         s->hctx[k].clear_seen = s->objs[k]->clear_seq;
         snprintf(s->hctx[k].src, sizeof s->hctx[k].src, "can %s id 0x%03" PRIX32,
@@ -511,6 +563,16 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
             snprintf(why, wl, "can: object '%s': invalid or clashing ids", s->objs[k]->name);
             return -EINVAL;
         }
+        /* a reload: the drives it ran go on as they are (a changed object's
+         * new engine starts where its output stood: core.c) */
+        int adopted = ids.cia402 >= CANPROTO_CIA402_FEEDBACK && kept_adopt(s, k);
+        if (ids.cia402 >= CANPROTO_CIA402_FEEDBACK && !s->objs[k]->carried && !adopted)
+            engine_require_position(s->objs[k]->engine, 1);      /* the drive says where it is */
+        else if (ids.cia402 && !s->objs[k]->carried && !adopted) /* check(): initial_position */
+            log_msg(LOG_NOTICE,
+                    "can: object '%s': no drive feedback (can.cia402 = targets): the drives "
+                    "are taken to stand at initial_position, and are sent targets from there",
+                    s->objs[k]->name);
         can_port_allow_commands(s->port, k, cmd_mask(s, k));
         uint32_t mine[24];
         /* waypoint ids for inputs and for objects that take commands */
@@ -649,8 +711,9 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     }
     uint32_t rx_ids[CAN_SOCKET_MAX_FILTERS];
     unsigned nrx = 0;
-    if ((rc = set_objects(s, rx_ids, &nrx, why, wl)) < 0 ||
-        (rc = open_io(s, rx_ids, nrx, why, wl)) < 0)
+    rc = set_objects(s, rx_ids, &nrx, why, wl);
+    kept_drop(); /* taken (or not the same drives) */
+    if (rc < 0 || (rc = open_io(s, rx_ids, nrx, why, wl)) < 0)
         goto fail;
     double load = can_port_busload(s->port, c->cfg->daemon.rate_hz, cfg->waypoint_hz, cfg->bitrate,
                                    cfg->data_bitrate);

@@ -96,6 +96,28 @@ for rate in $(cat "$out/rates"); do
     sim "heartbeat 2"
     wait_ev 2 HEARTBEAT_ON 1 || fail "heartbeat not back"
     clear_cmd
+    # ---- SIGHUP, the file unchanged, the drives moving: they go on as they
+    # run, no bring-up again (no NMT start, no SDO list), no stop (the checker:
+    # rule 4).  They used to be stopped dead, then re-anchored by a transfer
+    moving reload; mark reload
+    nmt=$(grep -c "vcan0 000#01" "$out/ev$rate.log")
+    kill -HUP "$tp"
+    wait_grep "$out/ev$rate.err" "reloaded: .* 1 carried over" 2000 || fail "no reload"
+    moving "after the reload"
+    [ "$(grep -c "vcan0 000#01" "$out/ev$rate.log")" = "$nmt" ] ||
+        fail "the reload started the running drives again (NMT)"
+    # ---- SIGHUP with the object changed (max_speed_m_s): its old engine brakes
+    # to rest along the path, the drives following it, and the new one goes on
+    # from there (it used to stop them dead, then jump)
+    moving reload2; mark reload2
+    sed -i 's/^max_speed_m_s = 1.5$/max_speed_m_s = 1.45/' "$out/ev$rate.conf"
+    grep -q "^max_speed_m_s = 1.45$" "$out/ev$rate.conf" || fail "config not changed"
+    kill -HUP "$tp"
+    i=0
+    until [ "$(grep -c "reloaded: .* 0 carried over" "$out/ev$rate.err")" -ge 1 ]; do
+        i=$((i + 1)); [ $i -lt 2000 ] || fail "no changed reload"; sleep 0.02
+    done
+    moving "after the changed reload"
     # ---- trajd restarted while the drives run: adopted as they are
     moving restart; mark restart
     n0=$(grep -c "drives in Operation Enabled" "$out/ev$rate.err")
