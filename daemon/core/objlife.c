@@ -69,7 +69,12 @@ int obj_drive_event(obj_t *o, lc_event_t ev, const double *pos_m)
     lifecycle_t *lc = obj_lc(o);
     lc_state_t from = lc_state(lc);
     lc_arg_t a = {0, NULL, pos_m};
+    /* a drive event the owner does not take now (drives enabled again while
+     * the engine moves: daemon/can brings it to rest first) is no command
+     * refused: not counted as one */
+    uint64_t refused = lc->n.refused;
     int rc = lc_event(lc, ev, &a);
+    lc->n.refused = refused;
     sync_held(o);
     if (rc < 0)
         return rc;

@@ -147,11 +147,32 @@ static void test_drive_events_through_the_owner(void **state)
     engine_free(o.engine);
 }
 
+/* Given an object moving at 1 m/s, when its drives report enabled again
+ * (obj_drive_event LC_EV_DRIVE_ENABLED while the engine moves: not adopted,
+ * daemon/can brings it to rest first), then that is no command refused: the
+ * status line's "commands refused" stays 0 (it read 13 or 29 after a reload
+ * of drives with no command sent). */
+static void test_drive_event_is_no_command(void **state)
+{
+    (void)state;
+    obj_t o;
+    moving_obj(&o);
+    o.lc.period_ns = PERIOD_NS;
+    engine_setpoint_t sp = run_lc(&o, 0, 500);
+    assert_true(sp.vel_m_s[0] > 0.5);
+    double at[ENGINE_AXES] = {sp.pos_m[0], 0.0, 0.0};
+    assert_true(obj_drive_event(&o, LC_EV_DRIVE_ENABLED, at) <= 0); /* not adopted */
+    assert_int_equal(o.lc.n.refused, 0);
+    lc_free(&o.lc);
+    engine_free(o.engine);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_hold_refuses_override_until_clear),
         cmocka_unit_test(test_drive_events_through_the_owner),
+        cmocka_unit_test(test_drive_event_is_no_command),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
