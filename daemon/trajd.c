@@ -751,8 +751,9 @@ static uint64_t engine_faults(const core_t *c, const stats_t *st)
 
 /* Objects that end the run held: a safety fault, a feed hold (a drive's
  * heartbeat lost), no position after waypoints were accepted (a CiA 402
- * drive left Operation Enabled: obj_drive_event), or latched after the
- * per-axis limits stopped it on its path (issue 32); each named in a log line.
+ * drive left Operation Enabled: obj_drive_event), latched after the
+ * per-axis limits stopped it on its path (issue 32), or latched by a stop
+ * command with waypoints it never played; each named in a log line.
  * Their count (issue 24: the run exits CORE_EXIT_HELD). */
 static unsigned held_objects(const core_t *c)
 {
@@ -762,9 +763,18 @@ static unsigned held_objects(const core_t *c)
         unsigned hold = o->lc.hold; /* the lifecycle's (lib/engine/lifecycle.h) */
         const engine_status_t *st = &o->status;
         int axis = o->lc.latched && (st->axis_lag_stops || st->axis_beyond); /* issue 32 */
-        if (!safety_fault(&o->safety) && !hold && !o->held && !axis)
+        /* stopped by a command, with waypoints it never played: not delivered */
+        int stopped = o->lc.latched && !axis && o->lc.len > 0;
+        if (!safety_fault(&o->safety) && !hold && !o->held && !axis && !stopped)
             continue;
         n++;
+        if (stopped && !safety_fault(&o->safety) && !hold && !o->held) {
+            log_msg(LOG_ERR,
+                    "object '%s' ended held: a stop command latched it with %zu waypoints it "
+                    "never played (start releases it)",
+                    o->name, (size_t)o->lc.len);
+            continue;
+        }
         if (axis && !safety_fault(&o->safety) && !hold && !o->held) {
             log_msg(LOG_ERR,
                     "object '%s' ended held: stopped on its path by the per-axis limits "

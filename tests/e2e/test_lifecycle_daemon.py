@@ -148,7 +148,7 @@ class Stall(unittest.TestCase):
                 p.stderr.close()
 
 
-    def moving_circle(self, extra=""):
+    def moving_circle(self, extra="", daemon="", n=600):
         """trajd replaying a circle (r = 20 m, 4 m/s) to stdout (and extra keys of
         the object, where "TMP" is its temporary directory), moving at speed:
         (process, its configuration's path and text, the rows, the log lines,
@@ -160,11 +160,12 @@ class Stall(unittest.TestCase):
         track = os.path.join(tmp.name, "circle.csv")
         with open(track, "w") as f:
             f.write("t,x,y,z\n")
-            for i in range(600):
+            for i in range(n):
                 t = 0.1 * i
                 f.write("%.1f,%.6f,%.6f,0\n" % (t, 20 * math.cos(0.2 * t), 20 * math.sin(0.2 * t)))
         conf = os.path.join(tmp.name, "trajd.conf")
         base = ("[daemon]\nrate_hz = 100\nstatus_interval_s = 0\nstop_timeout_s = 2\n"
+                "control_socket = %s\n" % os.path.join(tmp.name, "ctl.sock") + daemon +
                 "[object.boat]\ninput = replay\nreplay.track = %s\n"
                 "max_speed_m_s = %g\n" % (track, MAX_SPEED)) + extra.replace("TMP", tmp.name)
         if "output =" not in extra:
@@ -232,6 +233,27 @@ class Stall(unittest.TestCase):
         finally:
             p.send_signal(signal.SIGTERM)
             self.assertEqual(p.wait(WAIT_S), 74, "".join(log))
+
+    def test_exit_when_done_with_a_stop_latched(self):
+        """exit_when_done: the operator stops the moving object and the replay gives
+        its last row; the object is latched with waypoints it never played, so its
+        motion was not delivered: trajd ends with exit 75 (an object ended held) and
+        an error line naming it.  Before, it exited 0 with only an info line."""
+        p, conf, base, rows, log, reloaded = self.moving_circle(
+            "writable = yes\n", daemon="exit_when_done = yes\nspeed = 2\n", n=150)
+        try:
+            r = subprocess.run([os.path.join(os.path.dirname(TRAJD), "trajctl"), "-s",
+                                os.path.join(self.tmp, "ctl.sock"), "stop", "boat"],
+                               capture_output=True, text=True, timeout=WAIT_S)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            rc = p.wait(120)
+        finally:
+            if p.poll() is None:
+                p.send_signal(signal.SIGTERM)
+                p.wait(WAIT_S)
+        self.assertEqual(rc, 75, "".join(log))
+        self.assertTrue(any("ended held" in l and "boat" in l and "stop" in l for l in log),
+                        "".join(log))
 
     def reload_while_moving(self, extra, during=None, wait_rows=300):
         """The moving circle; the configuration is rewritten with extra (a changed
