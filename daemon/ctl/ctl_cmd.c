@@ -372,12 +372,20 @@ static void do_command(ctl_t *t, ctl_client_t *cl, ctl_cmd_t cmd, char **w, int 
         return;
     }
     obj_t *o = find_obj(t, cl, name, w[1]);
-    if (!o)
-        return;
-    int rc = ctl_command(t->core, o, cmd, arg, cl->peer);
     char what[32] = "";
     if (cmd == CTL_OVERRIDE)
         snprintf(what, sizeof what, " %u %%", arg);
+    if (!o) { /* refused as a command is, so logged as one (the name as printable text) */
+        char shown[65];
+        size_t k = 0;
+        for (const unsigned char *c = (const unsigned char *)w[1]; *c && k + 1 < sizeof shown; c++)
+            shown[k++] = *c >= 0x20 && *c < 0x7f ? (char)*c : '?';
+        shown[k] = 0;
+        log_peer(LOG_WARNING, cl->peer, "control: %s%s '%s' from %s refused: no such object", name,
+                 what, shown, cl->peer);
+        return;
+    }
+    int rc = ctl_command(t->core, o, cmd, arg, cl->peer);
     if (rc == -CTL_ENOTWRITABLE) {
         log_peer(LOG_WARNING, cl->peer, "control: %s%s '%s' from %s refused: not writable", name,
                  what, o->name, cl->peer);

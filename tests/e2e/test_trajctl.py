@@ -295,6 +295,9 @@ class TestCommands(TrajctlTest):
         self.assertEqual((m["reply"], m["error"]), ("error", "usage"))
         c.close()
         self.assertEqual(self.ctl("stop", "nosuch").returncode, 1)
+        # logged as every refused command is (it was refused with no line)
+        self.d.err_line(lambda l: "control: stop 'nosuch' from pid" in l and
+                        "refused: no such object" in l)
 
     def test_reload(self):
         r = self.ctl("reload")
