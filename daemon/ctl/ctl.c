@@ -315,7 +315,12 @@ static void on_client(loop_t *l, int fd, uint32_t events, void *ctx)
     (void)l;
     (void)fd;
     if (events & EPOLLIN) {
-        ssize_t r = read(cl->fd, cl->in + cl->inlen, sizeof cl->in - cl->inlen);
+        /* (a full buffer of whole lines waits for room in the replies: no
+         * read, which would return 0 and be taken for the client's end) */
+        ssize_t r = -1;
+        errno = EAGAIN;
+        if (cl->inlen < sizeof cl->in)
+            r = read(cl->fd, cl->in + cl->inlen, sizeof cl->in - cl->inlen);
         if (r < 0 && errno != EAGAIN && errno != EINTR) {
             client_close(t, cl, strerror(errno));
             return;
@@ -328,7 +333,8 @@ static void on_client(loop_t *l, int fd, uint32_t events, void *ctx)
             if (cl->sub_obj < 0)
                 cl->closing = 1;
         }
-        if (cl->inlen == sizeof cl->in) { /* a line longer than any request */
+        if (cl->inlen == sizeof cl->in && !memchr(cl->in, '\n', cl->inlen)) {
+            /* a line longer than any request (not whole lines waiting) */
             ctl_sb_t sb = ctl_out_sb(cl);
             ctl_sb_printf(&sb,
                           "{\"reply\":\"error\",\"error\":\"usage\",\"message\":\"request "
@@ -343,8 +349,15 @@ static void on_client(loop_t *l, int fd, uint32_t events, void *ctx)
         return;
     }
     pump(t, cl);
-    if (cl->fd >= 0 && cl->inlen && !cl->closing)
-        serve_lines(t, cl); /* lines held back while the replies had no room */
+    /* lines held back while the replies had no room: served as room comes,
+     * and their replies sent (and watched for) at once */
+    while (cl->fd >= 0 && cl->inlen && !cl->closing && cl->status_next < 0) {
+        size_t before = cl->inlen;
+        serve_lines(t, cl);
+        pump(t, cl);
+        if (cl->inlen == before)
+            break;
+    }
 }
 
 static void on_listen(loop_t *l, int fd, uint32_t events, void *ctx)
