@@ -366,14 +366,12 @@ static int decode_wpf(mbmap_order_t o, const uint8_t *val, mbmap_write_t *out)
     out->kind = MBMAP_WRITE_WAYPOINT;
     out->wp.seq = mbmap_get_u32(r + (MBMAP_H_WPF_SEQ - MBMAP_H_WPF));
     out->wp.t_s = mbmap_get_f32(r + (MBMAP_H_WPF_T_S - MBMAP_H_WPF));
-    if (!isfinite(out->wp.t_s))
-        return -MBMAP_EVALUE;
+    int bad = !isfinite(out->wp.t_s); /* every field decoded: a refusal tells them all */
     for (int a = 0; a < ENGINE_AXES; a++) {
         out->wp.pos_m[a] = mbmap_get_f32(r + (MBMAP_H_WPF_POS - MBMAP_H_WPF) + 2 * a);
-        if (!isfinite(out->wp.pos_m[a]))
-            return -MBMAP_EVALUE;
+        bad |= !isfinite(out->wp.pos_m[a]);
     }
-    return 0;
+    return bad ? -MBMAP_EVALUE : 0;
 }
 
 /* The float64 waypoint block (MBMAP_H_WP), or with the velocity (MBMAP_H_WPV):
@@ -390,22 +388,19 @@ static int decode_wp(mbmap_order_t o, const uint8_t *val, int with_vel, mbmap_wr
     out->kind = MBMAP_WRITE_WAYPOINT;
     out->wp.seq = mbmap_get_u32(r + (MBMAP_H_WP_SEQ - MBMAP_H_WP));
     out->wp.t_s = mbmap_get_f64(r + (MBMAP_H_WP_T_S - MBMAP_H_WP));
-    if (!isfinite(out->wp.t_s))
-        return -MBMAP_EVALUE;
+    int bad = !isfinite(out->wp.t_s); /* every field decoded: a refusal tells them all */
     for (int a = 0; a < ENGINE_AXES; a++) {
         out->wp.pos_m[a] = mbmap_get_f64(r + (MBMAP_H_WP_POS - MBMAP_H_WP) + 4 * a);
-        if (!isfinite(out->wp.pos_m[a]))
-            return -MBMAP_EVALUE;
+        bad |= !isfinite(out->wp.pos_m[a]);
     }
-    if (!with_vel)
-        return 0;
-    out->wp.has_vel = 1;
-    for (int a = 0; a < ENGINE_AXES; a++) {
-        out->wp.vel_m_s[a] = mbmap_get_f64(r + (MBMAP_H_WPV_VEL - MBMAP_H_WPV) + 4 * a);
-        if (!isfinite(out->wp.vel_m_s[a]))
-            return -MBMAP_EVALUE;
+    if (with_vel) {
+        out->wp.has_vel = 1;
+        for (int a = 0; a < ENGINE_AXES; a++) {
+            out->wp.vel_m_s[a] = mbmap_get_f64(r + (MBMAP_H_WPV_VEL - MBMAP_H_WPV) + 4 * a);
+            bad |= !isfinite(out->wp.vel_m_s[a]);
+        }
     }
-    return 0;
+    return bad ? -MBMAP_EVALUE : 0;
 }
 
 int mbmap_decode_write_order(unsigned n, mbmap_order_t o, const uint8_t *pdu, size_t len,

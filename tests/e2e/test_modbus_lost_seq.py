@@ -99,20 +99,23 @@ class LostSeq(mbsim.FedTrajdCase):
             c.close()
 
     def test_refused_waypoint_is_not_lost(self):
-        # Given seq 1..5, then seq 6 out of range (x = 2e7 m: exception 03, counted in
-        # mb_rejected), then 7..10 good, then `lost` is 0: seq 6 came, and was refused,
-        # not lost (it was counted twice, in rejected and in lost)
+        # Given seq 1..10 with seq 6 out of range (x = 2e7 m), seq 3 with x NaN and
+        # seq 8 with t infinite (each exception 03, counted in mb_rejected), then
+        # `lost` is 0: each came, and was refused, not lost (seq 6 was counted twice,
+        # in rejected and in lost; seq 3 and 8 in lost and nowhere else, unlogged).
+        # The non-finite ones are refused by the engine as any other source's:
+        # logged with the peer and their seq (and counted in rejected_not_finite).
+        bad = {3: (0.3, float("nan")), 6: (0.6, 2e7), 8: (float("inf"), 0.8)}
         c = ModbusTcpClient("127.0.0.1", port=self.port, timeout=WAIT_S)
         self.assertTrue(c.connect())
         try:
             deadline = time.monotonic() + WAIT_S
             for seq in range(1, 11):
-                t = 0.1 * seq
-                x = 2e7 if seq == 6 else 1.0 * t
+                t, x = bad.get(seq, (0.1 * seq, 0.1 * seq))
                 rq = mbsim.write_retrying(c, obj_base(0) + M["MBMAP_H_WP"],
-                                          mbsim.wp_regs(seq, t, x, 0.5 * t, 1.0), deadline)
-                self.assertEqual(rq.isError(), seq == 6, "seq %d: %s" % (seq, rq))
-                if seq == 6:
+                                          mbsim.wp_regs(seq, t, x, 0.05 * seq, 1.0), deadline)
+                self.assertEqual(rq.isError(), seq in bad, "seq %d: %s" % (seq, rq))
+                if seq in bad:
                     self.assertEqual(rq.exception_code, 3, rq)
             rq = c.write_register(obj_base(0) + M["MBMAP_H_COMMAND"], M["MBMAP_CMD_FINISH"],
                                   slave=1)
@@ -122,6 +125,10 @@ class LostSeq(mbsim.FedTrajdCase):
                 time.sleep(0.01)
             self.assertEqual(self.u32(c, M["MBMAP_O_LOST"]), 0)
             self.assertEqual(self.u32(c, M["MBMAP_O_SEQ_JUMPS"]), 0)
+            for seq in (3, 8):
+                line = self.lines.wait_for("rejected (not_finite) seq %d " % seq, WAIT_S)
+                self.assertIsNotNone(line, "seq %d not logged" % seq)
+                self.assertIn("modbus 127.0.0.1:", line)
         finally:
             c.close()
 

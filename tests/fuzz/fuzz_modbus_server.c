@@ -37,8 +37,11 @@ static int wp_hook(void *ctx, unsigned k, const engine_waypoint_t *wp)
     (void)ctx;
     if (k >= NOBJ)
         abort(); /* the decoder let a bad object through */
-    if (!isfinite(wp->t_s) || !isfinite(wp->pos_m[0]))
-        abort(); /* NaN must be refused before the engine */
+    int bad = !isfinite(wp->t_s);
+    for (int a = 0; a < ENGINE_AXES; a++)
+        bad |= !isfinite(wp->pos_m[a]) || (wp->has_vel == 1 && !isfinite(wp->vel_m_s[a]));
+    if (bad)
+        return -ENGINE_ENOTFINITE; /* the engine's refusal (engine_push): exception 03 */
     if (wp->t_s < last_t[k])
         return -ENGINE_EBACKWARDS;
     if (buffered[k] >= 8) {

@@ -80,6 +80,12 @@ static int64_t mono_ns(void)
 static int fake_waypoint(void *ctx, unsigned k, const engine_waypoint_t *wp)
 {
     fake_t *f = &((harness_t *)ctx)->fake[k];
+    /* a NaN or infinite value is the engine's to refuse (engine_push) */
+    int bad = !isfinite(wp->t_s);
+    for (int a = 0; a < ENGINE_AXES; a++)
+        bad |= !isfinite(wp->pos_m[a]);
+    if (bad)
+        return -ENGINE_ENOTFINITE;
     if (f->have && wp->t_s < f->last_t)
         return -ENGINE_EBACKWARDS;
     if (f->buffered >= f->capacity)
