@@ -12,8 +12,20 @@
  * that restarted its numbering, a repeat or an older one) is not a loss: it
  * is counted in seq_jumps and remembered; the numbering it starts is adopted
  * as soon as the next waypoint continues it, else the old one is kept.
- * Modular arithmetic, so a wrap from 0xFFFFFFFF to 1 is a step of 2.
+ * Modular arithmetic, so a wrap from 0xFFFFFFFF to 1 is a step of 2.  A
+ * number counted lost that comes late (writers racing, each one's waypoints
+ * in order) is taken back, up to 63 behind the newest (s->missing).
  */
+#define SEQ_MISSING_BITS 64u
+static uint64_t missing_after_step(uint64_t mask, uint32_t d)
+{
+    /* the numbers skipped by a step of d: 1 .. d - 1 behind the new last */
+    uint64_t m = d < SEQ_MISSING_BITS ? mask << d : 0;
+    for (uint32_t i = 1; i < d && i < SEQ_MISSING_BITS; i++)
+        m |= 1ull << i;
+    return m;
+}
+
 static void count_seq(modbus_server_t *s, unsigned k, uint32_t seq)
 {
     uint32_t last = s->last_seq[k], alt = s->alt_seq[k];
@@ -21,13 +33,21 @@ static void count_seq(modbus_server_t *s, unsigned k, uint32_t seq)
         return;
     if (!last) {
         s->last_seq[k] = seq;
+        s->missing[k] = 0;
         return;
     }
-    uint32_t d = seq - last;
+    uint32_t d = seq - last, back = last - seq;
+    if (back >= 1 && back < SEQ_MISSING_BITS && (s->missing[k] >> back) & 1u) {
+        s->missing[k] &= ~(1ull << back); /* counted lost, came late after all */
+        s->lost[k]--;
+        return;
+    }
     if (d >= 1 && d <= MODBUS_SERVER_SEQ_WINDOW) {
         s->lost[k] += d - 1;
+        s->missing[k] = missing_after_step(s->missing[k], d);
     } else if (alt && seq - alt >= 1 && seq - alt <= MODBUS_SERVER_SEQ_WINDOW) {
         s->lost[k] += seq - alt - 1; /* the new numbering continues: adopt it */
+        s->missing[k] = missing_after_step(0, seq - alt);
     } else {
         s->seq_jumps[k]++;
         s->alt_seq[k] = seq;
@@ -76,6 +96,7 @@ static int apply_write(modbus_server_t *s, const mbmap_write_t *w)
     if (w->command == MBMAP_CMD_CLEAR) {
         s->last_seq[w->object] = 0;
         s->alt_seq[w->object] = 0;
+        s->missing[w->object] = 0;
     }
     r = s->hooks.command ? s->hooks.command(s->hooks.ctx, w->object, w->command) : -ENGINE_ESTATE;
     if (r == MODBUS_SERVER_HOOK_EADDRESS)

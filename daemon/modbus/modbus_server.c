@@ -267,10 +267,11 @@ modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg,
     s->lost = calloc(s->n_objects, sizeof *s->lost);
     s->last_seq = calloc(s->n_objects, sizeof *s->last_seq);
     s->alt_seq = calloc(s->n_objects, sizeof *s->alt_seq);
+    s->missing = calloc(s->n_objects, sizeof *s->missing);
     s->seq_jumps = calloc(s->n_objects, sizeof *s->seq_jumps);
     s->map = modbus_mapping_new(0, 0, (int)MBMAP_TABLE_REGS(s->n_objects),
                                 (int)MBMAP_TABLE_REGS(s->n_objects));
-    if (!s->clients || !s->mb_rejected || !s->lost || !s->last_seq || !s->alt_seq ||
+    if (!s->clients || !s->mb_rejected || !s->lost || !s->last_seq || !s->alt_seq || !s->missing ||
         !s->seq_jumps || !s->map) {
         msg(err, errlen, "modbus: out of memory");
         goto fail;
@@ -345,6 +346,7 @@ void modbus_server_free(modbus_server_t *s)
     free(s->lost);
     free(s->last_seq);
     free(s->alt_seq);
+    free(s->missing);
     free(s->seq_jumps);
     free(s);
 }

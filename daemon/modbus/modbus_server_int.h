@@ -93,6 +93,8 @@ struct modbus_server {
     uint64_t *lost;        /* per object, sequence gaps of Modbus waypoints */
     uint32_t *last_seq;    /* per object, of the last waypoint accepted over Modbus */
     uint32_t *alt_seq;     /* per object, the last sequence number outside the window (0: none) */
+    uint64_t *missing;     /* per object, bit i: last_seq - i was counted lost (1 <= i < 64);
+                              it is taken back should it come late (count_seq) */
     uint64_t *seq_jumps;   /* per object, sequence numbers outside the window */
     const char *cur_peer;  /* the peer of the request being served ("" between requests) */
     char rtu_peer[80];     /* "rtu DEVICE unit N" */
