@@ -351,6 +351,27 @@ void modbus_server_free(modbus_server_t *s)
     free(s);
 }
 
+void modbus_server_obj_seq(const modbus_server_t *s, unsigned k, modbus_server_obj_seq_t *out)
+{
+    memset(out, 0, sizeof *out);
+    if (k >= s->n_objects)
+        return;
+    *out = (modbus_server_obj_seq_t){s->mb_rejected[k], s->lost[k],     s->seq_jumps[k],
+                                     s->missing[k],     s->last_seq[k], s->alt_seq[k]};
+}
+
+void modbus_server_set_obj_seq(modbus_server_t *s, unsigned k, const modbus_server_obj_seq_t *in)
+{
+    if (k >= s->n_objects)
+        return;
+    s->mb_rejected[k] = in->mb_rejected;
+    s->lost[k] = in->lost;
+    s->seq_jumps[k] = in->seq_jumps;
+    s->missing[k] = in->missing;
+    s->last_seq[k] = in->last_seq;
+    s->alt_seq[k] = in->alt_seq;
+}
+
 int modbus_server_fd(const modbus_server_t *s)
 {
     return s->ep;

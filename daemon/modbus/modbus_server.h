@@ -151,6 +151,15 @@ modbus_server_t *modbus_server_new(const modbus_server_config_t *cfg,
 /* Close everything; NULL is a no-op. */
 void modbus_server_free(modbus_server_t *s);
 
+/* One object's Modbus counters and sequence numbering (block k), which a
+ * reload carries over to the server it opens (modbus_transport.c). */
+typedef struct {
+    uint64_t mb_rejected, lost, seq_jumps, missing;
+    uint32_t last_seq, alt_seq;
+} modbus_server_obj_seq_t;
+void modbus_server_obj_seq(const modbus_server_t *s, unsigned k, modbus_server_obj_seq_t *out);
+void modbus_server_set_obj_seq(modbus_server_t *s, unsigned k, const modbus_server_obj_seq_t *in);
+
 /* The one descriptor to watch for EPOLLIN in the daemon's loop. */
 int modbus_server_fd(const modbus_server_t *s);
 

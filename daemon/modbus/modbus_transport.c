@@ -183,6 +183,50 @@ static void on_ready(loop_t *l, int fd, uint32_t events, void *ctx)
     }
 }
 
+/* Each object's Modbus counters and numbering as the server a reload closed
+ * left them, by name: an object carried over keeps them in the server the
+ * reload opens (filled by close_, taken and emptied by open_). */
+static struct {
+    unsigned n;
+    char (*name)[CFG_NAME_MAX];
+    modbus_server_obj_seq_t *seq;
+} seq_kept;
+
+static void seq_kept_drop(void)
+{
+    free(seq_kept.name);
+    free(seq_kept.seq);
+    memset(&seq_kept, 0, sizeof seq_kept);
+}
+
+static void seq_kept_store(const mbt_t *t, const core_t *c)
+{
+    seq_kept_drop();
+    seq_kept.name = calloc(c->nobj ? c->nobj : 1, sizeof *seq_kept.name);
+    seq_kept.seq = calloc(c->nobj ? c->nobj : 1, sizeof *seq_kept.seq);
+    if (!seq_kept.name || !seq_kept.seq) { /* then counted afresh, as before */
+        seq_kept_drop();
+        return;
+    }
+    for (unsigned i = 0; i < c->nobj; i++) {
+        snprintf(seq_kept.name[i], sizeof seq_kept.name[i], "%s", c->obj[i].name);
+        modbus_server_obj_seq(t->srv, (unsigned)c->obj[i].cfg->id, &seq_kept.seq[i]);
+    }
+    seq_kept.n = c->nobj;
+}
+
+static void seq_kept_take(mbt_t *t, const core_t *c)
+{
+    for (unsigned i = 0; i < c->nobj; i++) {
+        if (!c->obj[i].carried)
+            continue;
+        for (unsigned j = 0; j < seq_kept.n; j++)
+            if (!strcmp(seq_kept.name[j], c->obj[i].name))
+                modbus_server_set_obj_seq(t->srv, (unsigned)c->obj[i].cfg->id, &seq_kept.seq[j]);
+    }
+    seq_kept_drop();
+}
+
 static int open_(core_t *c, void **state, char *why, size_t wl)
 {
     const modbus_server_config_t *m = cfg_transport(c->cfg, &modbus_transport);
@@ -226,6 +270,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
         free(t);
         return rc;
     }
+    seq_kept_take(t, c); /* a reload: what the carried objects had */
     if (modbus_server_tcp_from_systemd(t->srv))
         log_msg(LOG_INFO, "modbus: TCP on the systemd socket, port %d, writes %s",
                 modbus_server_tcp_port(t->srv), mc.writes_enabled ? "on" : "off");
@@ -352,6 +397,8 @@ static void close_(void *state, core_t *c)
     if (!t)
         return;
     loop_del(c->loop, modbus_server_fd(t->srv));
+    if (!c->stopping)
+        seq_kept_store(t, c); /* the next open (a reload's) takes them */
     modbus_server_free(t->srv);
     free(t->objs);
     free(t);

@@ -132,6 +132,45 @@ class LostSeq(mbsim.FedTrajdCase):
         finally:
             c.close()
 
+    def test_counters_kept_over_a_reload(self):
+        # Given seq 1, 2, 4..7 (3 lost) and 8 out of range (exception 03, mb_rejected),
+        # when trajd is reloaded with its file unchanged ("carried over without
+        # interruption") and the sender goes on at 20..22, then the object keeps its
+        # Modbus counters and its numbering: lost 1 + 11 (9..19 never came) = 12,
+        # mb_rejected 1.  Before, the reload zeroed them all and restarted the
+        # numbering: lost 0, mb_rejected 0.
+        import signal
+        c = ModbusTcpClient("127.0.0.1", port=self.port, timeout=WAIT_S)
+        self.assertTrue(c.connect())
+        deadline = time.monotonic() + WAIT_S
+        for seq in (1, 2, 4, 5, 6, 7, 8):
+            x = 2e7 if seq == 8 else 0.1 * seq
+            rq = mbsim.write_retrying(c, obj_base(0) + M["MBMAP_H_WP"],
+                                      mbsim.wp_regs(seq, 0.1 * seq, x, 0.0, 0.0), deadline)
+            self.assertEqual(rq.isError(), seq == 8, "seq %d: %s" % (seq, rq))
+        c.close()
+        self.p.send_signal(signal.SIGHUP)
+        line = self.lines.wait_for("modbus: TCP on", WAIT_S)  # the server reopened
+        self.assertIsNotNone(line)
+        self.assertIsNotNone(self.lines.wait_for("1 carried over without interruption", WAIT_S))
+        c = ModbusTcpClient("127.0.0.1", port=mbsim.port_of(line), timeout=WAIT_S)
+        self.assertTrue(c.connect())
+        try:
+            for seq in (20, 21, 22):
+                rq = mbsim.write_retrying(c, obj_base(0) + M["MBMAP_H_WP"],
+                                          mbsim.wp_regs(seq, 0.1 * seq, 0.1 * seq, 0.0, 0.0),
+                                          deadline)
+                self.assertFalse(rq.isError(), "seq %d: %s" % (seq, rq))
+            g = self.u32(c, M["MBMAP_D_GEN"], base=0)
+            while self.u32(c, M["MBMAP_D_GEN"], base=0) < g + 2:
+                self.assertLess(time.monotonic(), deadline, "no new snapshot")
+                time.sleep(0.005)
+            self.assertEqual(self.u32(c, M["MBMAP_O_LOST"]), 12)
+            self.assertEqual(self.u32(c, M["MBMAP_O_MB_REJECTED"]), 1)
+            self.assertEqual(self.u32(c, M["MBMAP_O_SEQ_JUMPS"]), 0)
+        finally:
+            c.close()
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)
