@@ -12,6 +12,11 @@ void reload_commit(core_t *c, core_t *prev)
         obj_t *o = &c->obj[i], *q = core_obj_find(prev, o->name);
         if (!q)
             continue;
+        if (o->carried) { /* what its outputs lost as they closed for the reload */
+            o->out_lost = q->out_lost;
+            o->out_fault |= q->out_fault;
+            o->out_errors = q->out_errors;
+        }
         if (o->carried && q->engine == o->engine)
             q->engine = NULL;
         if (!o->retiring)

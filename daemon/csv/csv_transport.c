@@ -345,7 +345,7 @@ static void *writer(void *arg)
  * The writer's counts since the last call into the daemon's: failed writes
  * set the fault flag of the objects writing there and stats.out_fault;
  * dropped lines count for the stream, the object and the daemon (the lines
- * left at the end not per object); EPIPE on stdout ends the daemon (the tick
+ * left at a close for the object whose file it is, not those of stdout); EPIPE on stdout ends the daemon (the tick
  * sees stats.exit_code).  In the tick (cycle) and at close: no blocking, no
  * allocation; a scan only when the writer counted something.
  */
@@ -361,7 +361,8 @@ static void fold(csv_transport_t *st)
         uint64_t e = atomic_load_explicit(&s->w_errors, memory_order_relaxed);
         uint64_t d = atomic_load_explicit(&s->w_dropped, memory_order_relaxed);
         uint64_t l = atomic_load_explicit(&s->w_left, memory_order_relaxed);
-        uint64_t de = e - s->seen_errors, dl = d - s->seen_dropped + (l - s->seen_left);
+        uint64_t de = e - s->seen_errors, dleft = l - s->seen_left,
+                 dl = d - s->seen_dropped + dleft;
         s->seen_errors = e;
         s->seen_dropped = d;
         s->seen_left = l;
@@ -386,6 +387,11 @@ static void fold(csv_transport_t *st)
             s->lost += dl;
             *st->dropped += dl;
             stats->out_lost += dl;
+            /* the lines left at a close (a reload, the end) are its object's
+             * too where the stream is one object's (the dropped ones are
+             * counted per object by the writer: obj_dropped) */
+            if (s->obj)
+                s->obj->out_lost += dleft;
         }
         if (s->is_stdout && atomic_load_explicit(&s->w_epipe, memory_order_relaxed))
             stats->exit_code = CORE_EXIT_EPIPE;

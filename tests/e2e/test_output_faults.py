@@ -42,6 +42,8 @@ Every wait is bounded; the daemon is stopped by pid.
 """
 import errno
 import os
+import socket
+import json
 import re
 import select
 import signal
@@ -367,6 +369,42 @@ class OutputFaults(unittest.TestCase):
             p.send_signal(signal.SIGTERM)
             rc = p.wait(WAIT_S)
         self.assertEqual(rc, EX_IOERR)
+
+    def test_reload_lines_lost_are_the_objects(self):
+        # Given csv.path = /dev/full (lines held for a retry, then lost) and a
+        # reload while lines are held, then after the reload the object's
+        # out_lost equals the daemon's (its CSV is the only output): the lines
+        # its CSV still held when the reload closed it are the object's too.
+        # Before, they went to the daemon's total only (object 0 where the
+        # daemon had 87).
+        track(os.path.join(self.tmp, "track.csv"), n=2000)
+        sock = os.path.join(self.tmp, "ctl.sock")
+        path = conf(self.tmp, "/dev/full", extra_daemon="control_socket = %s\n" % sock)
+        p, lines = started(self, path)
+        try:
+            time.sleep(0.2)  # lines held for the retry (the buffer fills in about 0.5 s)
+            p.send_signal(signal.SIGHUP)
+            self.assertIsNotNone(lines.wait_for("reloaded:", WAIT_S), "".join(lines.all))
+            s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+            s.settimeout(WAIT_S)
+            s.connect(sock)
+            f = s.makefile("r")
+            json.loads(f.readline())  # hello
+            s.sendall(b"status o\n")
+            head = json.loads(f.readline())
+            objs = {}
+            while True:
+                m = json.loads(f.readline())
+                if m.get("reply") == "end":
+                    break
+                objs[m["object"]] = m
+            s.close()
+            self.assertGreater(head["out_lost"], 0, head)
+            self.assertEqual(objs["o"]["out_lost"], head["out_lost"], (head, objs))
+        finally:
+            p.send_signal(signal.SIGTERM)
+            p.wait(WAIT_S)
+            lines.wait_for("\0", 1)
 
     def test_dev_full_on_can_status(self):
         # Given csv.path = /dev/full and the object's CAN output as a
