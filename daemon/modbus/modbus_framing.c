@@ -26,7 +26,12 @@ void mbs_client_read(modbus_server_t *s, client_t *c)
         unsigned length = ((unsigned)c->buf[4] << 8) | c->buf[5];
         if (proto != 0 || length < 2 || length > 1 + MBMAP_PDU_MAX) {
             /* A byte stream with no frame boundary we can trust: drop it. */
+            char what[96];
+            snprintf(what, sizeof what,
+                     "closed, no MBAP frame boundary to trust (protocol id %u, length %u):", proto,
+                     length);
             s->st.dropped++;
+            mbs_client_note(s, c, what, now);
             mbs_client_close_why(s, c, WHY_DROPPED);
             return;
         }
@@ -37,6 +42,7 @@ void mbs_client_read(modbus_server_t *s, client_t *c)
             /* 128..255 is the exception range, not a function: no valid
              * answer exists (libmodbus would wrap fc + 0x80 to a request code). */
             s->st.dropped++;
+            mbs_client_note(s, c, "closed, a function code in the exception range:", now);
             mbs_client_close_why(s, c, WHY_DROPPED);
             return;
         }
@@ -51,6 +57,7 @@ void mbs_client_read(modbus_server_t *s, client_t *c)
         c->last_ns = now;
         if (rc < 0) { /* peer not reading its answers: let it go */
             s->st.dropped++;
+            mbs_client_note(s, c, "closed, not reading its answers:", now);
             mbs_client_close_why(s, c, WHY_DROPPED);
             return;
         }

@@ -318,9 +318,11 @@ void modbus_server_free(modbus_server_t *s)
 {
     if (!s)
         return;
-    if (s->clients)
+    if (s->clients) {
         for (unsigned i = 0; i < s->max_clients; i++)
             mbs_client_close(s, &s->clients[i]);
+        mbs_peer_log_last(s); /* what came since the last summary: told */
+    }
     if (s->tcp)
         modbus_free(s->tcp); /* never connected: its socket is not ours */
     if (s->rtu) {

@@ -153,6 +153,11 @@ void mbs_accept(modbus_server_t *s);
 void mbs_housekeeping(modbus_server_t *s);
 /* Close a client; why: WHY_* counted for its peer (WHY_PEER: the peer hung up). */
 void mbs_client_close_why(modbus_server_t *s, client_t *c, int why);
+/* A notice about client c ("what" then its counts), rate-limited. */
+void mbs_client_note(modbus_server_t *s, const client_t *c, const char *what, int64_t now);
+/* The peer summary now, whatever its interval (the server closes: an exit,
+ * a reload), so that what happened since the last one is told. */
+void mbs_peer_log_last(modbus_server_t *s);
 void mbs_client_close(modbus_server_t *s, client_t *c);
 
 /* modbus_framing.c */

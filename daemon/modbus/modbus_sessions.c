@@ -241,10 +241,12 @@ static void peer_worst(modbus_server_t *s)
 
 /* Every peer_log_s: one notice line per client address that got exceptions
  * or was dropped since the last summary, with those counts and its totals. */
-static void peer_log(modbus_server_t *s, int64_t now)
+static void peer_log(modbus_server_t *s, int64_t now, int last)
 {
-    if (!s->peer_log_ns || now - s->peer_logged_ns < s->peer_log_ns)
+    if (!s->peer_log_ns || (!last && now - s->peer_logged_ns < s->peer_log_ns))
         return;
+    /* the interval, or (the server closing) the time since the last summary */
+    double span_s = last ? (double)(now - s->peer_logged_ns) / 1e9 : (double)s->peer_log_ns / 1e9;
     s->peer_logged_ns = now;
     for (unsigned k = 0; k < s->n_peers; k++) {
         uint64_t n[6], *was = s->peers[k].logged, d[6];
@@ -254,10 +256,10 @@ static void peer_log(modbus_server_t *s, int64_t now)
         if (!d[PEER_EXC] && !d[PEER_EVICTED] && !d[PEER_SLOW] && !d[PEER_DROPPED])
             continue;
         log_msg(LOG_NOTICE,
-                "modbus: client %s in the last %.0f s: %llu connections, %llu requests, %llu "
+                "modbus: client %s in the last %.*f s: %llu connections, %llu requests, %llu "
                 "exceptions, %llu evicted, %llu slow, %llu dropped (since start: %llu requests, "
                 "%llu exceptions, %llu evicted, %llu slow, %llu dropped)",
-                s->peers[k].host, (double)s->peer_log_ns / 1e9, (unsigned long long)d[PEER_CONN],
+                s->peers[k].host, last ? 1 : 0, span_s, (unsigned long long)d[PEER_CONN],
                 (unsigned long long)d[PEER_REQ], (unsigned long long)d[PEER_EXC],
                 (unsigned long long)d[PEER_EVICTED], (unsigned long long)d[PEER_SLOW],
                 (unsigned long long)d[PEER_DROPPED], (unsigned long long)n[PEER_REQ],
@@ -267,9 +269,14 @@ static void peer_log(modbus_server_t *s, int64_t now)
     }
 }
 
+void mbs_peer_log_last(modbus_server_t *s)
+{
+    peer_log(s, now_ns(), 1);
+}
+
 /* A notice about a client, at most MODBUS_SERVER_LOG_PER_S a second (the
  * rest counted and reported with the next one that passes). */
-static void client_note(modbus_server_t *s, const client_t *c, const char *what, int64_t now)
+void mbs_client_note(modbus_server_t *s, const client_t *c, const char *what, int64_t now)
 {
     if (now - s->log_window_ns >= 1000000000) {
         s->log_window_ns = now;
@@ -347,7 +354,7 @@ static int client_add(modbus_server_t *s, int fd, const struct sockaddr_storage 
         c = eviction_victim(s, now);
         if (c) {
             s->st.evicted++;
-            client_note(s, c, "evicted to admit a newcomer:", now);
+            mbs_client_note(s, c, "evicted to admit a newcomer:", now);
             mbs_client_close_why(s, c, WHY_EVICTED);
         }
     }
@@ -428,14 +435,15 @@ void mbs_housekeeping(modbus_server_t *s)
             /* trickling: the deadline is for the whole request, not per byte */
             s->st.slow++;
             s->st.dropped++;
-            client_note(s, c, "closed, request not whole within request_timeout_ms:", now);
+            mbs_client_note(s, c, "closed, request not whole within request_timeout_ms:", now);
             mbs_client_close_why(s, c, WHY_SLOW);
         } else if (!c->pending_ns && s->idle_ns > 0 && now - c->last_ns > s->idle_ns) {
             s->st.dropped++;
+            mbs_client_note(s, c, "closed, idle longer than idle_timeout_ms:", now);
             mbs_client_close_why(s, c, WHY_DROPPED);
         }
     }
     peer_worst(s);
-    peer_log(s, now);
+    peer_log(s, now, 0);
     mb_accept_report(&s->acc, 0);
 }

@@ -132,6 +132,21 @@ class LostSeq(mbsim.FedTrajdCase):
         finally:
             c.close()
 
+    def test_dropped_client_logged(self):
+        # Given a client whose MBAP header has protocol id 7 (no frame boundary
+        # to trust: the server closes it), then a line says so at once, with the
+        # client and why.  Before, it was only in the peer summary every 60 s,
+        # which an exit or a reload dropped: a shorter run never told it.
+        s = mbsim.connect(self.port)
+        s.sendall(bytes([0, 1, 0, 7, 0, 6, 1, 3, 0, 0, 0, 1]))
+        s.settimeout(WAIT_S)
+        self.assertEqual(s.recv(100), b"")  # closed by the server
+        s.close()
+        line = self.lines.wait_for("modbus: closed", 5)
+        self.assertIsNotNone(line, "".join(self.lines.all))
+        self.assertIn("127.0.0.1:", line)
+        self.assertIn("protocol id 7", line)
+
     def test_counters_kept_over_a_reload(self):
         # Given seq 1, 2, 4..7 (3 lost) and 8 out of range (exception 03, mb_rejected),
         # when trajd is reloaded with its file unchanged ("carried over without
