@@ -40,7 +40,7 @@
  *             transports, closed for it, are opened again on that same core,
  *             its objects marked carried, daemon/core/reload.h).  An object with
  *             o->carried set kept its engine over a reload: an input resumes
- *             where it was (replay: after the row the engine accepted last).
+ *             where it was (replay: after the last row it gave).
  *   pre_tick  for each object whose INPUT is this transport, just before its
  *             engine_tick: feed waypoints that are due by engine time (replay).
  *             Event-driven inputs (CAN frames, Modbus writes) do not need it.

@@ -202,6 +202,58 @@ typedef struct {
     core_t *c;
 } replay_transport_t;
 
+/* Where each replay stood when a reload closed it, by object name: a carried
+ * object's replay goes on from the row after the last one it gave (the
+ * acceptance may still hold that one: offering it again would be a duplicate).
+ * Filled by close_, taken and emptied by open_. */
+static struct {
+    unsigned n;
+    char (*name)[CFG_NAME_MAX];
+    size_t *next;
+    int *finished;
+} pos_kept;
+
+static void pos_kept_drop(void)
+{
+    free(pos_kept.name);
+    free(pos_kept.next);
+    free(pos_kept.finished);
+    memset(&pos_kept, 0, sizeof pos_kept);
+}
+
+static void pos_kept_store(const replay_transport_t *s, const core_t *c)
+{
+    pos_kept_drop();
+    unsigned n = s->n < c->nobj ? s->n : c->nobj;
+    pos_kept.name = calloc(n ? n : 1, sizeof *pos_kept.name);
+    pos_kept.next = calloc(n ? n : 1, sizeof *pos_kept.next);
+    pos_kept.finished = calloc(n ? n : 1, sizeof *pos_kept.finished);
+    if (!pos_kept.name || !pos_kept.next || !pos_kept.finished) { /* then by last_seq */
+        pos_kept_drop();
+        return;
+    }
+    for (unsigned i = 0; i < n; i++) {
+        if (c->obj[i].cfg->input != &replay_transport)
+            continue;
+        snprintf(pos_kept.name[pos_kept.n], sizeof pos_kept.name[0], "%s", c->obj[i].name);
+        pos_kept.next[pos_kept.n] = s->r[i].next;
+        pos_kept.finished[pos_kept.n] = s->r[i].finished;
+        pos_kept.n++;
+    }
+}
+
+/* Object o's replay position kept by the reload (1), or 0. */
+static int pos_kept_take(const obj_t *o, size_t *next, int *finished)
+{
+    for (unsigned j = 0; j < pos_kept.n; j++)
+        if (!strcmp(pos_kept.name[j], o->name)) {
+            *next = pos_kept.next[j];
+            *finished = pos_kept.finished[j];
+            return 1;
+        }
+    return 0;
+}
+
 static int open_(core_t *c, void **state, char *why, size_t wl)
 {
     replay_transport_t *s = calloc(1, sizeof *s);
@@ -221,10 +273,16 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
         const replay_transport_obj_cfg_t *rc = cfg_obj_transport(o->cfg, &replay_transport);
         replay_t *r = &s->r[i];
         replay_init(r, &rc->trk, o->born_ns + (int64_t)llround(rc->start_s * 1e9));
-        if (o->carried && o->status.accepted > 0) {
-            /* Reload with the engine kept: resume after the row it accepted
-             * last (rows carry their 1-based row number as seq).  Limit: rows
-             * after it that were refused as bad data are offered again. */
+        size_t next = 0;
+        int fin = 0;
+        if (o->carried && pos_kept_take(o, &next, &fin) && next <= rc->trk.n) {
+            /* Reload with the engine kept: resume after the row the replay
+             * gave last (the same track: a carried object's settings are) */
+            r->next = next;
+            r->finished = fin;
+        } else if (o->carried && o->status.accepted > 0) {
+            /* (its position not kept: after the row the engine accepted
+             * last; rows carry their 1-based row number as seq) */
             size_t k = (size_t)o->status.last_seq - 1; /* row k has seq k + 1 (track.c) */
             if (o->status.last_seq >= 1 && k < rc->trk.n && rc->trk.wp[k].seq == o->status.last_seq)
                 r->next = k + 1; /* in the loop, between two ticks: no scan of the track */
@@ -232,6 +290,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
                 r->finished = 1; /* the old replay called engine_finish already */
         }
     }
+    pos_kept_drop();
     *state = s;
     return 0;
 }
@@ -297,9 +356,10 @@ static int input_done(void *state, const obj_t *o)
 static void close_(void *state, core_t *c)
 {
     replay_transport_t *s = state;
-    (void)c;
     if (!s)
         return;
+    if (c && !c->stopping)
+        pos_kept_store(s, c); /* the next open (a reload's) goes on from there */
     free(s->r);
     free(s);
 }

@@ -19,6 +19,8 @@ Every command received is logged with the object and the client.
 """
 import math
 import os
+import socket
+import json
 import shutil
 import signal
 import struct
@@ -233,6 +235,33 @@ class Stall(unittest.TestCase):
         finally:
             p.send_signal(signal.SIGTERM)
             self.assertEqual(p.wait(WAIT_S), 74, "".join(log))
+
+    def test_reload_offers_no_row_again(self):
+        """Reloads of an unchanged file while the replayed object moves: the
+        replay goes on after the last row it gave, so no row is offered twice
+        (duplicates 0), whatever the acceptance still held.  Before, each reload
+        gave the row after the last one accepted again: duplicates +1 per reload."""
+        p, conf, base, rows, log, reloaded = self.moving_circle()
+        try:
+            for i in range(3):
+                reloaded.clear()
+                p.send_signal(signal.SIGHUP)
+                self.assertTrue(reloaded.wait(WAIT_S), "no reload")
+                rows.wait(len(rows.rows) + 20)
+            s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+            s.settimeout(WAIT_S)
+            s.connect(os.path.join(self.tmp, "ctl.sock"))
+            f = s.makefile("r")
+            json.loads(f.readline())
+            s.sendall(b"status boat\n")
+            json.loads(f.readline())
+            st = json.loads(f.readline())
+            s.close()
+            self.assertEqual(st["duplicates"], 0, st)
+            self.assertEqual(st["rejected"], 0, st)
+        finally:
+            p.send_signal(signal.SIGTERM)
+            p.wait(WAIT_S)
 
     def test_exit_when_done_with_a_stop_latched(self):
         """exit_when_done: the operator stops the moving object and the replay gives
