@@ -794,8 +794,12 @@ void core_stats_roll(core_t *c)
         log_msg(LOG_ERR,
                 "object '%s': safety monitor: %s (%.6g, bound %.6g): setpoints not sent, "
                 "holding at (%.4f, %.4f, %.4f) until 'clear'; %llu refused so far",
-                o->name, safety_strerror(sf->fault ? sf->fault : SAFETY_FNOTFINITE), sf->last_value,
-                sf->last_limit, held[0], held[1], held[2], (unsigned long long)sf->violations);
+                o->name,
+                safety_strerror(sf->fault        ? sf->fault
+                                : sf->last_fault ? sf->last_fault
+                                                 : SAFETY_FNOTFINITE),
+                sf->last_value, sf->last_limit, held[0], held[1], held[2],
+                (unsigned long long)sf->violations);
         o->safety_logged = sf->violations;
     }
     lat_summarize(&s->late_hist, &s->late);

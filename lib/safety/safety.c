@@ -230,6 +230,7 @@ int safety_check(safety_t *s, engine_setpoint_t *sp)
             s->by[f]++;
             s->last_value = value;
             s->last_limit = limit;
+            s->last_fault = f;
             for (int j = 0; j < AX; j++)
                 sp->pos_m[j] = NAN;
             sp->flags |= ENGINE_SP_NO_POSITION | ENGINE_SP_FAULT | ENGINE_SP_HOLD;
@@ -253,6 +254,7 @@ int safety_check(safety_t *s, engine_setpoint_t *sp)
         s->by[f]++;
         s->last_value = value;
         s->last_limit = limit;
+        s->last_fault = f;
         hold(s, sp);
         return f;
     }

@@ -105,6 +105,7 @@ typedef struct {
     double last_value;               /* the violating value of the last violation (m, m/s, m/s^2,
                                         m/s^3) */
     double last_limit;               /* and the bound it broke */
+    int last_fault;                  /* and its safety_fault (kept over safety_rearm) */
 } safety_t;
 
 /*

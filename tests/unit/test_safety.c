@@ -68,6 +68,9 @@ static void test_speed_violation_holds_and_latches(void **state)
     sp = at(13, 0.10 + 0.001); /* 0.1 m/s from rest */
     assert_int_equal(safety_check(&s, &sp), SAFETY_OK);
     assert_int_equal(safety_fault(&s), 0);
+    /* what the last violation was stays told after the clear (the daemon logs
+     * it once a second: it named "not finite" for a speed cleared meanwhile) */
+    assert_int_equal(s.last_fault, SAFETY_FSPEED);
 }
 
 /* Given positions of a constant acceleration a (p = a t^2 / 2), the finite
