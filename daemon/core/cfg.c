@@ -761,8 +761,9 @@ static int parse(parse_t *p, const char *name, const char *dir, cfg_t **out, cha
     int line = ini_parse_stream(reader, p, handler, p);
     if (line > 0 && !p->err)
         fail(p, CFG_ESYNTAX, line, "syntax error (expected [section] or key = value)");
-    else if (line > 0 && line < p->err_line && p->err != CFG_ESYNTAX) {
-        /* inih found a syntax error on an earlier line than ours */
+    else if (line > 0 && line < p->err_line) {
+        /* inih found a syntax error on an earlier line than ours (e.g. a
+         * section header with no ']', and the key after it out of place) */
         p->err = 0;
         fail(p, CFG_ESYNTAX, line, "syntax error (expected [section] or key = value)");
     }

@@ -137,6 +137,9 @@ static void test_errors(void **state)
     load_bad(OBJ "[object.boat]\n", CFG_EDUP, 5, "section given twice");
     load_bad("rate_hz = 100\n" OBJ, CFG_ESYNTAX, 1, "before any");
     load_bad("[daemon]\nthis is not ini\n" OBJ, CFG_ESYNTAX, 2, "syntax");
+    /* the first error is told where it is: an unterminated section header, not
+     * the key after it (it was "line 2: rate_hz: key before any [section]") */
+    load_bad("[daemon\nrate_hz = 100\n" OBJ, CFG_ESYNTAX, 1, "syntax");
     load_bad("[daemon]\nrate_hz = 100\n  speed = 2\n" OBJ, CFG_ESYNTAX, 3, "do not indent");
     load_bad("[daemon]\n\n\n" OBJ "fragment = 4.5\n", CFG_EVALUE, 8, "fragment");
     load_bad(OBJ "method = spline\n", CFG_EVALUE, 5, "bspline, cubic, smooth");
