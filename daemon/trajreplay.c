@@ -782,7 +782,10 @@ static uint64_t run_next_tick(run_t *run, uint64_t k, int64_t now_ns, const engi
         return k + 1; /* holding for a tick between two trajectories, say */
     int64_t due = replay_next_due_ns(&run->r);
     const int64_t period = run->o->cfg.period_ns;
-    if (due == INT64_MAX || (double)(due - now_ns) <= run->o->cfg.max_gap_s * 1e9)
+    int sil = run->st.silence_at_ns < due; /* a short trajectory's silence first */
+    if (sil) /* to the tick before it: the holds skipped, it ends at the tick after */
+        due = run->st.silence_at_ns - period;
+    else if (due == INT64_MAX || (double)(due - now_ns) <= run->o->cfg.max_gap_s * 1e9)
         return k + 1;
     /* due > now_ns >= 0 here, so the division rounds up a positive number */
     uint64_t next = (uint64_t)((due + period - 1) / period);

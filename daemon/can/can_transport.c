@@ -245,6 +245,9 @@ static void kept_drop(void)
 
 static void kept_store(const can_state_t *s)
 {
+    static int registered;
+    if (!registered && atexit(kept_drop) == 0) /* a store the exit leaves: freed */
+        registered = 1;
     kept_drop();
     if (!s->port || !s->n)
         return;

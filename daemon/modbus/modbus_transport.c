@@ -201,6 +201,9 @@ static void seq_kept_drop(void)
 
 static void seq_kept_store(const mbt_t *t, const core_t *c)
 {
+    static int registered;
+    if (!registered && atexit(seq_kept_drop) == 0) /* a store the exit leaves: freed */
+        registered = 1;
     seq_kept_drop();
     seq_kept.name = calloc(c->nobj ? c->nobj : 1, sizeof *seq_kept.name);
     seq_kept.seq = calloc(c->nobj ? c->nobj : 1, sizeof *seq_kept.seq);

@@ -223,6 +223,9 @@ static void pos_kept_drop(void)
 
 static void pos_kept_store(const replay_transport_t *s, const core_t *c)
 {
+    static int registered;
+    if (!registered && atexit(pos_kept_drop) == 0) /* a store the exit leaves: freed */
+        registered = 1;
     pos_kept_drop();
     unsigned n = s->n < c->nobj ? s->n : c->nobj;
     pos_kept.name = calloc(n ? n : 1, sizeof *pos_kept.name);

@@ -26,6 +26,7 @@
  */
 #include "engine.h"
 #include "engine_int.h"
+#include "silence.h"
 #include "catchup.h"
 
 #include <math.h>
@@ -163,6 +164,7 @@ void engine_status(const engine_t *e, engine_status_t *st)
     st->free = b >= e->cfg.capacity ? 0 : (uint32_t)(e->cfg.capacity - b);
     st->lookahead = e->lookahead + e->slack_learn;
     st->stalled = (uint32_t)play_stalled(e);
+    st->silence_at_ns = engine_silence_at_ns(e);
     st->rate = e->out.mode == OUT_HOLD ? 0.0 : e->scale.ts.rate;
     st->override = e->scale.override;
     st->judging = accept_pending(&e->in.policy);

@@ -824,7 +824,7 @@ int play_stalled(const engine_t *e)
 {
     const qent_t *h = e->queue.len ? &e->queue.ent[e->queue.head] : NULL; /* q_head, read only */
 
-    if (engine_silence_pending(e))
+    if (engine_silence_soon(e))
         return 0; /* issue 26: a silent end may come without a push (silence.h) */
     if (e->out.mode == OUT_HOLD)
         return !h || !h->first || !enough_ahead(e, h, NULL);

@@ -41,6 +41,19 @@ static int engine_silence_judged(const engine_t *e)
     return e->sil.n >= (uint64_t)e->la_steady + 2;
 }
 
+int64_t engine_silence_at_ns(const engine_t *e)
+{
+    if (!engine_silence_pending(e) || !e->sil.arrived)
+        return INT64_MAX;
+    double at = (double)e->sil.arrival_ns + engine_silence_limit_s(e) * 1e9;
+    return at < 9e18 ? (int64_t)at + 1 : INT64_MAX; /* the first tick past the limit */
+}
+
+int engine_silence_soon(const engine_t *e)
+{
+    return engine_silence_pending(e) && engine_silence_judged(e);
+}
+
 double engine_silence_limit_s(const engine_t *e)
 {
     engine_delay_t d;

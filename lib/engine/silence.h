@@ -57,6 +57,17 @@ int engine_silence_tick(engine_t *e, int64_t now_ns);
  * clock (engine_status's stalled is 0 then: the ticks are not all holds). */
 int engine_silence_pending(const engine_t *e);
 
+/* The tick time past which the silence closes the input trajectory, should
+ * no waypoint come (engine_status_t silence_at_ns); INT64_MAX if none. */
+int64_t engine_silence_at_ns(const engine_t *e);
+
+/* engine_silence_pending, for a trajectory whose timing is measured (its
+ * silence judged by D, seconds): what keeps an engine from being stalled
+ * (engine_status); a shorter one's, max_gap_s, does not (a caller that
+ * skips idle time to the next waypoint due over max_gap_s later, as
+ * trajreplay does, meets the same end: a gap). */
+int engine_silence_soon(const engine_t *e);
+
 /* The silence after which the input trajectory is closed, seconds (at most
  * max_gap_s). */
 double engine_silence_limit_s(const engine_t *e);
