@@ -74,6 +74,11 @@ static void fail(parse_t *p, int code, int line, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(p->msg, sizeof p->msg, fmt, ap);
     va_end(ap);
+    /* the file's own text in it (a name, a value) as printable text: a log
+     * line must not carry control characters */
+    for (unsigned char *c = (unsigned char *)p->msg; *c; c++)
+        if (*c < 0x20 || *c == 0x7f)
+            *c = '?';
 }
 
 /* Returns 1 if (section, key) was already seen, else records it. */

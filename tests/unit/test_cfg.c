@@ -140,6 +140,8 @@ static void test_errors(void **state)
     /* the first error is told where it is: an unterminated section header, not
      * the key after it (it was "line 2: rate_hz: key before any [section]") */
     load_bad("[daemon\nrate_hz = 100\n" OBJ, CFG_ESYNTAX, 1, "syntax");
+    /* a control character of the file is not echoed into the log as it is */
+    load_bad("[daemon]\n[object.a\001b]\n", CFG_EVALUE, 2, "[object.a?b]: object name");
     load_bad("[daemon]\nrate_hz = 100\n  speed = 2\n" OBJ, CFG_ESYNTAX, 3, "do not indent");
     load_bad("[daemon]\n\n\n" OBJ "fragment = 4.5\n", CFG_EVALUE, 8, "fragment");
     load_bad(OBJ "method = spline\n", CFG_EVALUE, 5, "bspline, cubic, smooth");
