@@ -30,6 +30,7 @@
  *   STATUS=<the status line> every [daemon] status_interval_s.
  */
 #include <errno.h>
+#include <math.h>
 #include <getopt.h>
 #include <grp.h>
 #include <poll.h>
@@ -791,6 +792,27 @@ static unsigned held_objects(const core_t *c)
     return n;
 }
 
+/* Objects whose last setpoint still moved when trajd exited (a second
+ * SIGTERM, stop_timeout_s run out): their motion was cut short, each named
+ * in a log line.  Their count (the run exits CORE_EXIT_HELD). */
+static unsigned moving_objects(const core_t *c)
+{
+    unsigned n = 0;
+    for (unsigned i = 0; c && i < c->nobj; i++) {
+        const obj_t *o = &c->obj[i];
+        const double *v = o->sp.vel_m_s;
+        double speed = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        if (!(o->sp.flags & ENGINE_SP_NO_POSITION) && speed > 0) {
+            log_msg(LOG_ERR,
+                    "object '%s' still moving (%.3f m/s) when trajd exited: its motion was "
+                    "cut short",
+                    o->name, speed);
+            n++;
+        }
+    }
+    return n;
+}
+
 int main(int argc, char **argv)
 {
     trajd_t d = {.conf_path = TRAJD_DEFAULT_CONF,
@@ -823,6 +845,10 @@ int main(int argc, char **argv)
     load_drop(&d, "trajd is exiting"); /* before the control socket and d.cfg go */
     uint64_t faults = engine_faults(d.core, &d.stats);
     unsigned held = held_objects(d.core);
+    /* cut short by a second signal or the stop timeout (stop_timeout_s = 0
+     * asks for no stop: nothing cut short it did not ask for) */
+    if (d.signals_seen > 1 || (d.cfg && d.cfg->daemon.stop_timeout_s > 0))
+        held += moving_objects(d.core);
     ctl_close(d.ctl);   /* watchers get what is queued, then a goodbye */
     core_close(d.core); /* outputs drain here: lines left over count as lost */
     if (d.stats.exit_code == CORE_EXIT_EPIPE) {

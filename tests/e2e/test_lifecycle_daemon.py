@@ -236,6 +236,22 @@ class Stall(unittest.TestCase):
             p.send_signal(signal.SIGTERM)
             self.assertEqual(p.wait(WAIT_S), 74, "".join(log))
 
+    def test_second_sigterm_while_moving(self):
+        """A second SIGTERM exits at once (daemon/doc/trajd.8), here before the
+        object came to rest: the exit status says its motion was cut short (75,
+        with an error line naming it).  Before, it was 0."""
+        p, conf, base, rows, log, reloaded = self.moving_circle()
+        p.send_signal(signal.SIGTERM)
+        end = time.monotonic() + WAIT_S  # (two at once would be one pending signal)
+        while not any("bringing objects to rest" in l for l in log):
+            self.assertLess(time.monotonic(), end, "".join(log))
+            time.sleep(0.005)
+        p.send_signal(signal.SIGTERM)
+        rc = p.wait(WAIT_S)
+        time.sleep(0.2)
+        self.assertEqual(rc, 75, "".join(log))
+        self.assertTrue(any("boat" in l and "still moving" in l for l in log), "".join(log))
+
     def test_reload_offers_no_row_again(self):
         """Reloads of an unchanged file while the replayed object moves: the
         replay goes on after the last row it gave, so no row is offered twice
