@@ -363,7 +363,14 @@ static void print_head(const char *l)
 
 static void print_obj(const char *l)
 {
-    char name[64], state[16], hl[128], t[32], sp[32], age[32], d[32], lag[32], ah[32];
+    char name[64], state[16], lc[16], hl[128], t[32], sp[32], age[32], d[32], lag[32], ah[32];
+    /* the owner's state where the engine's does not tell it (a latched stop
+     * reads "finished" there, a hold "streaming": lib/engine/LIFECYCLE.md) */
+    jstr(l, "state", state, sizeof state);
+    jstr(l, "lifecycle", lc, sizeof lc);
+    if (!strcmp(lc, "stopping") || !strcmp(lc, "stopped") || !strcmp(lc, "held") ||
+        !strcmp(lc, "transfer"))
+        snprintf(state, sizeof state, "%s", lc);
     fmt_s(t, sizeof t, jnum(l, "t_s"), "");
     fmt_s(sp, sizeof sp, jnum(l, "speed"), "");
     fmt_s(age, sizeof age, jnum(l, "age_s"), "");
@@ -371,13 +378,13 @@ static void print_obj(const char *l)
     fmt_s(lag, sizeof lag, jnum(l, "lag_s"), "");
     fmt_s(ah, sizeof ah, jnum(l, "ahead_s"), "");
     jstr(l, "health", hl, sizeof hl);
-    printf(
-        "%-12s %4lld %-9s %10s %9s %8s %8s %8s %8s %4.0f %4lld %7lld %5lld %5lld %5lld  %s%s\n",
-        jstr(l, "object", name, sizeof name), jint(l, "id"), jstr(l, "state", state, sizeof state),
-        t, sp, age, d, lag, ah, jnum(l, "override") * 100, jint(l, "buffered"), jint(l, "accepted"),
-        jint(l, "rejected"), jint(l, "underruns"), jint(l, "out_lost"), hl[0] ? hl : "ok",
-        strncmp(jget(l, "writable") ? jget(l, "writable") : "f", "true", 4) == 0 ? ""
-                                                                                 : " (read-only)");
+    printf("%-12s %4lld %-9s %10s %9s %8s %8s %8s %8s %4.0f %4lld %7lld %5lld %5lld %5lld  %s%s\n",
+           jstr(l, "object", name, sizeof name), jint(l, "id"), state, t, sp, age, d, lag, ah,
+           jnum(l, "override") * 100, jint(l, "buffered"), jint(l, "accepted"), jint(l, "rejected"),
+           jint(l, "underruns"), jint(l, "out_lost"), hl[0] ? hl : "ok",
+           strncmp(jget(l, "writable") ? jget(l, "writable") : "f", "true", 4) == 0
+               ? ""
+               : " (read-only)");
 }
 
 /* One status table: 0 or the exit status. */

@@ -174,12 +174,14 @@ static void greet(const ctl_t *t, ctl_client_t *cl)
 /* The health flags of o, comma-separated ("" when all is well). */
 static void health(ctl_sb_t *sb, const core_t *c, const obj_t *o)
 {
-    const char *f[8];
+    const char *f[10];
     unsigned n = 0;
     if (safety_fault(&o->safety))
         f[n++] = "safety_fault";
-    if (o->held)
+    if (o->held || o->lc.hold) /* a feed hold, a drive's, the monitor's (lifecycle.h) */
         f[n++] = "held";
+    if (o->lc.latched) /* a stop command: at rest until start or clear */
+        f[n++] = "stopped";
     if (o->out_fault || o->out_lost)
         f[n++] = "output_fault";
     if (o->status.state == ENGINE_STATE_UNDERRUN)

@@ -275,6 +275,13 @@ class TestCommands(TrajctlTest):
             self.assertEqual(st["lifecycle"], "stopped", st)
             self.assertEqual(st["speed"], 0, st)
             time.sleep(0.05)
+        # and trajctl's table says so (it showed the engine's "finished", health ok)
+        r = self.ctl("status", "boat")
+        self.assertEqual(r.returncode, 0, r.stderr)
+        row = [l for l in r.stdout.splitlines() if l.startswith("boat ")]
+        self.assertTrue(row, r.stdout)
+        self.assertEqual(row[0].split()[2], "stopped", r.stdout)
+        self.assertIn("stopped", row[0].split("  ")[-1], r.stdout)
         # the other object was not touched
         self.assertEqual(c.status("ro")[1]["ro"]["state"], "streaming")
         # clear: the object takes waypoints again and moves on (a transfer)
