@@ -18,6 +18,7 @@
 #include "can_publish.h"
 #include "cia402.h"
 #include "core.h"
+#include "keep.h"
 #include "gate.h"
 #include "log.h"
 
@@ -225,65 +226,40 @@ static void log_drives(can_state_t *s)
     }
 }
 
-/* The drives of the port a reload closed, for the port it opens next: the
- * same drives, running, adopted as they are (never brought up again, never
- * re-anchored while they follow the object).  Filled by close_, taken and
- * emptied by open_ (a reload's new core, or the old one reopened). */
-static struct {
-    unsigned n;
-    char (*name)[CFG_NAME_MAX];
-    can_drive_t *drv;
+/* The drives of the port a reload closed, for the port it opens next (keep.h):
+ * the same drives, running, adopted as they are (never brought up again,
+ * never re-anchored while they follow the object), with the SYNC counter. */
+typedef struct {
+    can_drive_t drv;
     uint8_t sync;
-} drives_kept;
-
-static void kept_drop(void)
-{
-    free(drives_kept.name);
-    free(drives_kept.drv);
-    memset(&drives_kept, 0, sizeof drives_kept);
-}
+} kept_drives_t;
 
 static void kept_store(const can_state_t *s)
 {
-    static int registered;
-    if (!registered && atexit(kept_drop) == 0) /* a store the exit leaves: freed */
-        registered = 1;
-    kept_drop();
-    if (!s->port || !s->n)
-        return;
-    drives_kept.name = calloc(s->n, sizeof *drives_kept.name);
-    drives_kept.drv = calloc(s->n, sizeof *drives_kept.drv);
-    if (!drives_kept.name ||
-        !drives_kept.drv) { /* then brought up again, as before a reload kept them */
-        kept_drop();
-        return;
+    kept_drives_t k;
+    for (unsigned i = 0; s->port && i < s->n; i++) {
+        memset(&k, 0, sizeof k);
+        k.drv = *can_port_drive_state(s->port, i);
+        k.sync = can_port_sync_counter(s->port);
+        (void)keep_put("can", s->objs[i]->name, &k, sizeof k); /* none kept: brought up again */
     }
-    for (unsigned k = 0; k < s->n; k++) {
-        snprintf(drives_kept.name[k], sizeof drives_kept.name[k], "%s", s->objs[k]->name);
-        drives_kept.drv[k] = *can_port_drive_state(s->port, k);
-    }
-    drives_kept.n = s->n;
-    drives_kept.sync = can_port_sync_counter(s->port);
 }
 
 /* Object k of s takes the drives its name had in the port closed before (the
  * same ids): 1 if it did. */
 static int kept_adopt(can_state_t *s, unsigned k)
 {
-    for (unsigned j = 0; j < drives_kept.n; j++) {
-        if (strcmp(drives_kept.name[j], s->objs[k]->name) != 0)
-            continue;
-        if (!can_port_adopt(s->port, k, &drives_kept.drv[j], drives_kept.sync))
-            return 0;
-        const can_port_drive_t *d = can_port_drive(s->port, k);
-        s->drive_en_logged[k] = d ? d->enabled_n : 0; /* told by the port before */
-        s->drive_lost_logged[k] = d ? d->lost_n : 0;
-        can_port_obj_stats(s->port, k, &s->drive_logged[k]);
-        log_msg(LOG_INFO, "can: object '%s': its drives kept as they run over the reload",
-                s->objs[k]->name);
-        return 1;
-    }
-    return 0;
+    kept_drives_t kd;
+    if (!keep_take("can", s->objs[k]->name, &kd, sizeof kd) ||
+        !can_port_adopt(s->port, k, &kd.drv, kd.sync))
+        return 0;
+    const can_port_drive_t *d = can_port_drive(s->port, k);
+    s->drive_en_logged[k] = d ? d->enabled_n : 0; /* told by the port before */
+    s->drive_lost_logged[k] = d ? d->lost_n : 0;
+    can_port_obj_stats(s->port, k, &s->drive_logged[k]);
+    log_msg(LOG_INFO, "can: object '%s': its drives kept as they run over the reload",
+            s->objs[k]->name);
+    return 1;
 }
 
 static int hk_push(void *ctx, const engine_waypoint_t *wp)
@@ -715,7 +691,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     uint32_t rx_ids[CAN_SOCKET_MAX_FILTERS];
     unsigned nrx = 0;
     rc = set_objects(s, rx_ids, &nrx, why, wl);
-    kept_drop(); /* taken (or not the same drives) */
+    keep_drop("can"); /* taken (or not the same drives) */
     if (rc < 0 || (rc = open_io(s, rx_ids, nrx, why, wl)) < 0)
         goto fail;
     double load = can_port_busload(s->port, c->cfg->daemon.rate_hz, cfg->waypoint_hz, cfg->bitrate,

@@ -8,6 +8,7 @@
 #include <sys/timex.h>
 
 #include "core.h"
+#include "keep.h"
 #include "gate.h"
 #include "log.h"
 #include "mbmap.h"
@@ -184,50 +185,25 @@ static void on_ready(loop_t *l, int fd, uint32_t events, void *ctx)
 }
 
 /* Each object's Modbus counters and numbering as the server a reload closed
- * left them, by name: an object carried over keeps them in the server the
- * reload opens (filled by close_, taken and emptied by open_). */
-static struct {
-    unsigned n;
-    char (*name)[CFG_NAME_MAX];
-    modbus_server_obj_seq_t *seq;
-} seq_kept;
-
-static void seq_kept_drop(void)
-{
-    free(seq_kept.name);
-    free(seq_kept.seq);
-    memset(&seq_kept, 0, sizeof seq_kept);
-}
-
+ * left them, for the server it opens (keep.h): an object carried over keeps
+ * them. */
 static void seq_kept_store(const mbt_t *t, const core_t *c)
 {
-    static int registered;
-    if (!registered && atexit(seq_kept_drop) == 0) /* a store the exit leaves: freed */
-        registered = 1;
-    seq_kept_drop();
-    seq_kept.name = calloc(c->nobj ? c->nobj : 1, sizeof *seq_kept.name);
-    seq_kept.seq = calloc(c->nobj ? c->nobj : 1, sizeof *seq_kept.seq);
-    if (!seq_kept.name || !seq_kept.seq) { /* then counted afresh, as before */
-        seq_kept_drop();
-        return;
-    }
     for (unsigned i = 0; i < c->nobj; i++) {
-        snprintf(seq_kept.name[i], sizeof seq_kept.name[i], "%s", c->obj[i].name);
-        modbus_server_obj_seq(t->srv, (unsigned)c->obj[i].cfg->id, &seq_kept.seq[i]);
+        modbus_server_obj_seq_t q;
+        modbus_server_obj_seq(t->srv, (unsigned)c->obj[i].cfg->id, &q);
+        (void)keep_put("modbus", c->obj[i].name, &q, sizeof q); /* none kept: afresh */
     }
-    seq_kept.n = c->nobj;
 }
 
 static void seq_kept_take(mbt_t *t, const core_t *c)
 {
     for (unsigned i = 0; i < c->nobj; i++) {
-        if (!c->obj[i].carried)
-            continue;
-        for (unsigned j = 0; j < seq_kept.n; j++)
-            if (!strcmp(seq_kept.name[j], c->obj[i].name))
-                modbus_server_set_obj_seq(t->srv, (unsigned)c->obj[i].cfg->id, &seq_kept.seq[j]);
+        modbus_server_obj_seq_t q;
+        if (c->obj[i].carried && keep_take("modbus", c->obj[i].name, &q, sizeof q))
+            modbus_server_set_obj_seq(t->srv, (unsigned)c->obj[i].cfg->id, &q);
     }
-    seq_kept_drop();
+    keep_drop("modbus");
 }
 
 static int open_(core_t *c, void **state, char *why, size_t wl)

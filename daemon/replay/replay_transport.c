@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "core.h"
+#include "keep.h"
 #include "log.h"
 #include "replay.h"
 
@@ -202,59 +203,34 @@ typedef struct {
     core_t *c;
 } replay_transport_t;
 
-/* Where each replay stood when a reload closed it, by object name: a carried
- * object's replay goes on from the row after the last one it gave (the
- * acceptance may still hold that one: offering it again would be a duplicate).
- * Filled by close_, taken and emptied by open_. */
-static struct {
-    unsigned n;
-    char (*name)[CFG_NAME_MAX];
-    size_t *next;
-    int *finished;
-} pos_kept;
-
-static void pos_kept_drop(void)
-{
-    free(pos_kept.name);
-    free(pos_kept.next);
-    free(pos_kept.finished);
-    memset(&pos_kept, 0, sizeof pos_kept);
-}
+/* Where each replay stood when a reload closed it, for the replay the reload
+ * opens (keep.h): a carried object's goes on from the row after the last one
+ * it gave (the acceptance may still hold that one: offering it again would be
+ * a duplicate). */
+typedef struct {
+    size_t next;
+    int finished;
+} kept_pos_t;
 
 static void pos_kept_store(const replay_transport_t *s, const core_t *c)
 {
-    static int registered;
-    if (!registered && atexit(pos_kept_drop) == 0) /* a store the exit leaves: freed */
-        registered = 1;
-    pos_kept_drop();
-    unsigned n = s->n < c->nobj ? s->n : c->nobj;
-    pos_kept.name = calloc(n ? n : 1, sizeof *pos_kept.name);
-    pos_kept.next = calloc(n ? n : 1, sizeof *pos_kept.next);
-    pos_kept.finished = calloc(n ? n : 1, sizeof *pos_kept.finished);
-    if (!pos_kept.name || !pos_kept.next || !pos_kept.finished) { /* then by last_seq */
-        pos_kept_drop();
-        return;
-    }
-    for (unsigned i = 0; i < n; i++) {
+    for (unsigned i = 0; i < s->n && i < c->nobj; i++) {
         if (c->obj[i].cfg->input != &replay_transport)
             continue;
-        snprintf(pos_kept.name[pos_kept.n], sizeof pos_kept.name[0], "%s", c->obj[i].name);
-        pos_kept.next[pos_kept.n] = s->r[i].next;
-        pos_kept.finished[pos_kept.n] = s->r[i].finished;
-        pos_kept.n++;
+        kept_pos_t k = {s->r[i].next, s->r[i].finished};
+        (void)keep_put("replay", c->obj[i].name, &k, sizeof k); /* none kept: by last_seq */
     }
 }
 
 /* Object o's replay position kept by the reload (1), or 0. */
 static int pos_kept_take(const obj_t *o, size_t *next, int *finished)
 {
-    for (unsigned j = 0; j < pos_kept.n; j++)
-        if (!strcmp(pos_kept.name[j], o->name)) {
-            *next = pos_kept.next[j];
-            *finished = pos_kept.finished[j];
-            return 1;
-        }
-    return 0;
+    kept_pos_t k;
+    if (!keep_take("replay", o->name, &k, sizeof k))
+        return 0;
+    *next = k.next;
+    *finished = k.finished;
+    return 1;
 }
 
 static int open_(core_t *c, void **state, char *why, size_t wl)
@@ -293,7 +269,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
                 r->finished = 1; /* the old replay called engine_finish already */
         }
     }
-    pos_kept_drop();
+    keep_drop("replay");
     *state = s;
     return 0;
 }
