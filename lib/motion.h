@@ -135,9 +135,10 @@ typedef struct {
                                      * waypoint is pushed (ticks until then are identical
                                      * holds: trajreplay skips them across a gap) but at
                                      * silence_at_ns */
-    int64_t silence_at_ns;          /* the tick time at which the input's silence closes
-                                     * the trajectory (a short one's: max_gap_s after its
-                                     * last waypoint came, silence.h); INT64_MAX: none */
+    int64_t silence_at_ns;          /* stalled: the tick time at which the input's silence
+                                     * closes the trajectory (a short one's: max_gap_s after
+                                     * its last waypoint came, silence.h); INT64_MAX: none,
+                                     * or not stalled */
     uint64_t hard_stops;            /* the solved curve ended under a moving output
                                        (the time scaling failed to brake in time):
                                        velocity set to 0 in one tick.  Should stay 0 */

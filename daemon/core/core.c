@@ -540,12 +540,12 @@ static int open_transports(core_priv_t *p, char *why, size_t whylen, int all)
         int rc = tr->open(c, &c->tstate[t], w, sizeof w);
         if (rc < 0) {
             c->tstate[t] = NULL;
-            if (!first)
-                snprintf(why, whylen, "%s: %s", tr->name, w[0] ? w : strerror(-rc));
-            else
+            if (first) { /* (all) the first one is in why, the others logged */
                 log_msg(LOG_CRIT, "reload: %s: %s", tr->name, w[0] ? w : strerror(-rc));
-            if (!first)
-                first = rc;
+                continue;
+            }
+            snprintf(why, whylen, "%s: %s", tr->name, w[0] ? w : strerror(-rc));
+            first = rc;
             if (!all)
                 return rc;
             continue;

@@ -164,7 +164,8 @@ void engine_status(const engine_t *e, engine_status_t *st)
     st->free = b >= e->cfg.capacity ? 0 : (uint32_t)(e->cfg.capacity - b);
     st->lookahead = e->lookahead + e->slack_learn;
     st->stalled = (uint32_t)play_stalled(e);
-    st->silence_at_ns = engine_silence_at_ns(e);
+    /* (only what a stalled engine waits for: not worked out on every tick) */
+    st->silence_at_ns = st->stalled ? engine_silence_at_ns(e) : INT64_MAX;
     st->rate = e->out.mode == OUT_HOLD ? 0.0 : e->scale.ts.rate;
     st->override = e->scale.override;
     st->judging = accept_pending(&e->in.policy);
