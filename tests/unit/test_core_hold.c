@@ -103,6 +103,17 @@ static engine_setpoint_t run_lc(obj_t *o, int64_t k0, int n)
     return sp;
 }
 
+/* moving_obj, ticked through its owner (lc_tick) for 5 s: moving at 1 m/s;
+ * the last setpoint. */
+static engine_setpoint_t moving_through_owner(obj_t *o)
+{
+    moving_obj(o);
+    o->lc.period_ns = PERIOD_NS;
+    engine_setpoint_t sp = run_lc(o, 0, 500);
+    assert_true(sp.vel_m_s[0] > 0.5);
+    return sp;
+}
+
 /* Given an object moving at 1 m/s with CiA 402 drives, when a drive is lost
  * (obj_drive_event LC_EV_DRIVE_LOST, as daemon/can raises it), then the
  * object is held and brakes to rest along its path (not frozen at once); the
@@ -114,10 +125,7 @@ static void test_drive_events_through_the_owner(void **state)
 {
     (void)state;
     obj_t o;
-    moving_obj(&o);
-    o.lc.period_ns = PERIOD_NS;
-    engine_setpoint_t sp = run_lc(&o, 0, 500);
-    assert_true(sp.vel_m_s[0] > 0.5);
+    engine_setpoint_t sp = moving_through_owner(&o);
     assert_int_equal(obj_drive_event(&o, LC_EV_DRIVE_LOST, NULL), 0);
     assert_int_equal(lc_state(&o.lc), LC_HELD);
     engine_setpoint_t b = run_lc(&o, 500, 1);
@@ -156,10 +164,7 @@ static void test_drive_event_is_no_command(void **state)
 {
     (void)state;
     obj_t o;
-    moving_obj(&o);
-    o.lc.period_ns = PERIOD_NS;
-    engine_setpoint_t sp = run_lc(&o, 0, 500);
-    assert_true(sp.vel_m_s[0] > 0.5);
+    engine_setpoint_t sp = moving_through_owner(&o);
     double at[ENGINE_AXES] = {sp.pos_m[0], 0.0, 0.0};
     assert_true(obj_drive_event(&o, LC_EV_DRIVE_ENABLED, at) <= 0); /* not adopted */
     assert_int_equal(o.lc.n.refused, 0);
