@@ -2,7 +2,6 @@
  * applied through the daemon's hooks, the reply by libmodbus. */
 #include "modbus_server_int.h"
 
-#include <math.h>
 #include <string.h>
 
 /*
@@ -57,16 +56,6 @@ static void count_seq(modbus_server_t *s, unsigned k, uint32_t seq)
     s->alt_seq[k] = 0;
 }
 
-/* A waypoint the decoder refused for a NaN or infinite value (its time, a
- * coordinate, or a velocity it carries). */
-static int wp_not_finite(const mbmap_write_t *w)
-{
-    int bad = w->kind == MBMAP_WRITE_WAYPOINT && !isfinite(w->wp.t_s);
-    for (int a = 0; a < ENGINE_AXES; a++)
-        bad |= !isfinite(w->wp.pos_m[a]) || (w->wp.has_vel == 1 && !isfinite(w->wp.vel_m_s[a]));
-    return w->kind == MBMAP_WRITE_WAYPOINT && bad;
-}
-
 /* Apply a validated write; returns 0 or -MBMAP_E*. */
 static int apply_write(modbus_server_t *s, const mbmap_write_t *w)
 {
@@ -118,10 +107,12 @@ int mbs_serve(modbus_server_t *s, modbus_t *ctx, int writes, const uint8_t *req,
         memset(&w, 0, sizeof w);
         w.object = s->n_objects;
         rc = mbmap_decode_write_order(s->n_objects, s->order, pdu, pdu_len, &w);
-        /* a NaN or infinite waypoint is the engine's to refuse, as any
-         * source's: counted (rejected_not_finite), logged with its peer and
-         * seq, and its number came (no gap); still exception 03 */
-        if (rc == 0 || (rc == -MBMAP_EVALUE && w.object < s->n_objects && wp_not_finite(&w)))
+        /* a waypoint decoded but refused (a NaN or infinite value: mbmap.h) is
+         * the engine's to refuse, as any source's: counted
+         * (rejected_not_finite), logged with its peer and seq, and its number
+         * came (no gap); still exception 03 */
+        if (rc == 0 ||
+            (rc == -MBMAP_EVALUE && w.kind == MBMAP_WRITE_WAYPOINT && w.object < s->n_objects))
             rc = apply_write(s, &w);
         if (rc == -MBMAP_EVALUE && w.object < s->n_objects)
             s->mb_rejected[w.object]++;

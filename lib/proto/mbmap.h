@@ -417,7 +417,9 @@ typedef struct {
  * +MBMAP_H_WP_COUNT-1 in one FC 16, so it is applied whole or not at all).
  * Returns 0, -MBMAP_EADDRESS (anything else, including a part of the
  * waypoint block or a write spanning two fields), -MBMAP_EVALUE (unknown
- * command; NaN or infinite time or coordinate), -MBMAP_EFUNCTION (not a
+ * command; NaN or infinite time, coordinate or velocity: then out->kind is
+ * MBMAP_WRITE_WAYPOINT and out->wp holds every field as written, the only
+ * refusal that leaves a waypoint decoded), -MBMAP_EFUNCTION (not a
  * write).  Time order and ranges are the engine's to check (engine_push).
  * o: the word order the client writes u32/f32/f64 values in (ABCD: as the map).
  */
