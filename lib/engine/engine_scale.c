@@ -127,6 +127,41 @@ static int brakes_to_rest(const engine_t *e)
     return e->clk.on && e->out.mode == OUT_STREAM && !(clocked_target(e, out_s(e)) > 0);
 }
 
+#define STOP_JERK_SCAN 64 /* queue entries a stop looks through (stop_jerk_speed) */
+
+/*
+ * The reserve of stop_jerk_reserve, grown before it is needed.  A stop whose
+ * braking at the jerk here (J, distance d) would reach a faster segment q
+ * converts its jerk at q's speed and needs dq: the need steps from d to dq
+ * where the output comes within d of q.  Planned for that step only once it
+ * came, a braking for the curve's end reached a segment of ceiling 0 at rate
+ * 0.0165 (3.8 m/s on a 3 m/s axis, fuzz_engine
+ * axis-bound-passed-while-scaled-at-60-s: the stop's jerk fell 2.6 times one
+ * tick before the end braking began, the room fell by 0.015 and 0.0096 was
+ * missing).  So the reserve for q grows at half the output's pace over the
+ * 2 (dq - d) of track before that point, from 0 to dq - d: the braking meets
+ * it without a step.  Each segment faster than every nearer one is looked
+ * at (a slower one beyond a faster one needs less).
+ */
+static double stop_jerk_ahead(const engine_t *e, double A, double J, double d)
+{
+    if (e->out.mode != OUT_STREAM)
+        return 0.0;
+    double jerk = e->cfg.scale_jerk_m_s3, r = e->scale.ts.rate, acc = e->scale.ts.acc;
+    double t = e->out.t, vseen = jerk / J, res = 0.0;
+    const qent_t *q;
+    for (size_t i = 0; (q = seg_ahead(e, i, STOP_JERK_SCAN)); i++) {
+        if (!(q->vmax > vseen))
+            continue; /* one no faster than a nearer one needs less */
+        vseen = q->vmax;
+        double dq = ts_stop_dist(r, acc, A, jerk / vseen);
+        double grown = 0.5 * (t + 2.0 * dq - d - q->seg.t0_s);
+        if (dq > d && grown > 0)
+            res = fmax(res, fmin(dq - d, grown));
+    }
+    return res;
+}
+
 /* With per-axis jerk limits a stop converts its jerk at the fastest segment
  * it may reach (stop_jerk_speed), which may be less than the streaming's
  * jerk here: the rooms ahead (to the curve's end, to each ceiling) are
@@ -142,11 +177,12 @@ static double stop_jerk_reserve(const engine_t *e, double A, double J, double d)
 {
     if (!e->axis_jerk || e->scale.stop_req)
         return 0.0;
-    double jerk = e->cfg.scale_jerk_m_s3, Jp = jerk / stop_jerk_speed(e, A, jerk);
-    if (!(Jp < J))
-        return 0.0;
-    double dp = ts_stop_dist(e->scale.ts.rate, e->scale.ts.acc, A, Jp);
-    return dp > d ? dp - d : 0.0;
+    double jerk = e->cfg.scale_jerk_m_s3, Jp = jerk / stop_jerk_speed(e, A, jerk), res = 0.0;
+    if (Jp < J) {
+        double dp = ts_stop_dist(e->scale.ts.rate, e->scale.ts.acc, A, Jp);
+        res = dp > d ? dp - d : 0.0;
+    }
+    return fmax(res, stop_jerk_ahead(e, A, J, d));
 }
 
 /* Queue entries looked through for the slowest-converted segment a braking
@@ -313,9 +349,6 @@ static double stop_jerk(const engine_t *e)
         return e->cfg.scale_jerk_m_s3;
     return fmax(e->cfg.scale_jerk_m_s3, e->cfg.scale_accel_m_s2 / e->period_s);
 }
-
-/* Queue entries a stop looks through for the fastest segment it may reach. */
-#define STOP_JERK_SCAN 64
 
 /* The speed a stop's jerk is converted at, with per-axis jerk limits: the
  * fastest of the segments it may still reach, at least the current
