@@ -49,6 +49,7 @@
 #include "cfgload.h"
 #include "core.h"
 #include "ctl.h"
+#include "fdlimit.h"
 #include "log.h"
 #include "loop.h"
 #include "reload.h"
@@ -151,6 +152,12 @@ static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
     int rt_same = was && was->fifo_priority == cfg->rt.fifo_priority &&
                   was->mlockall == cfg->rt.mlockall && was->affinity_set == cfg->rt.affinity_set &&
                   CPU_EQUAL(&was->affinity, &cfg->rt.affinity);
+    fdlimit_t f;
+    char fdwhy[320];
+    fdlimit_of(cfg, &f);
+    int fit = fdlimit_fit(&f, fdwhy, sizeof fdwhy);
+    if (fit)
+        log_msg(fit < 0 ? LOG_ERR : LOG_WARNING, "%s", fdwhy);
     int rc = core_open(d->loop, cfg, &d->stats, &d->core, &nc, why, wl);
     if (rc < 0) {
         if (d->ctl && !d->core) /* the old core was closed: none runs now */
@@ -546,6 +553,18 @@ static int check_config(const char *path)
         fprintf(stderr, "%s\n", err);
         return EX_CONFIG;
     }
+    fdlimit_t f;
+    fdlimit_of(cfg, &f);
+    if (fdlimit_check(&f, err, sizeof err) < 0) {
+        fprintf(stderr, "%s: %s\n", path, err);
+        cfg_free(cfg);
+        return EX_CONFIG;
+    }
+    if ((unsigned long long)f.need + f.clients > f.soft)
+        fprintf(stderr,
+                "%s: note: about %u file descriptors (%u more for clients at most), above the "
+                "soft limit of %llu: trajd raises it at start, up to the hard limit of %llu\n",
+                path, f.need, f.clients, f.soft, f.hard);
     printf("%s: ok, %u object(s):", path, cfg->nobj);
     for (unsigned i = 0; i < cfg->nobj; i++)
         printf(" %s", cfg->obj[i].name);

@@ -25,6 +25,17 @@ void can_refused_why(char *buf, size_t len, int err, unsigned cmd, int stopping,
         snprintf(buf, len, "%s", engine_strerror(-err));
 }
 
+unsigned can_transport_fds(const cfg_t *cfg, unsigned *clients)
+{
+    const can_cfg_t *c = cfg_transport(cfg, &can_transport);
+    (void)clients;
+    if (!cfg_uses(cfg, &can_transport))
+        return 0;
+    /* the raw socket (or log_in instead of it), log_out, and a spare for the
+     * socket a reopen makes before the old one closes */
+    return 2u + (c->log_in[0] != 0) + (c->log_out[0] != 0);
+}
+
 void can_transport_files(const cfg_t *cfg, cfg_file_add_fn add, void *ctx)
 {
     const can_cfg_t *c = cfg_transport(cfg, &can_transport);

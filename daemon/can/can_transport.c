@@ -865,4 +865,5 @@ const transport_t can_transport = {
     .close = close_,
     .input_done = input_done,
     .files = can_transport_files,
+    .fds = can_transport_fds,
 };

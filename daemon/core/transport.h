@@ -130,6 +130,12 @@ typedef struct transport {
     void (*files)(const cfg_t *cfg,
                   void (*add)(void *ctx, const char *path, int output, int line, const char *what),
                   void *ctx);
+
+    /* The file descriptors cfg makes this transport hold open while it runs
+     * (sockets and files), and in *clients those its peers may add at most
+     * (connections it accepts): fdlimit.h compares them with RLIMIT_NOFILE.
+     * NULL: none. */
+    unsigned (*fds)(const cfg_t *cfg, unsigned *clients);
 } transport_t;
 
 /* Every transport, NULL-terminated; a transport's index is its position.

@@ -729,6 +729,16 @@ static void csv_files(const cfg_t *cfg, cfg_file_add_fn add, void *ctx)
         }
 }
 
+/* one file per object written (csv_files: two objects never share one) */
+static unsigned csv_fds(const cfg_t *cfg, unsigned *clients)
+{
+    unsigned n = 0;
+    (void)clients;
+    for (unsigned i = 0; i < cfg->nobj; i++)
+        n += (cfg_obj_uses(&cfg->obj[i], &csv_transport) & 2) != 0;
+    return n;
+}
+
 const transport_t csv_transport = {
     .name = "csv",
     .roles = TRANSPORT_OUTPUT,
@@ -742,6 +752,7 @@ const transport_t csv_transport = {
     .close = close_,
     .summary = summary, /* stdout's count too */
     .files = csv_files,
+    .fds = csv_fds,
 };
 
 const transport_t stdout_transport = {

@@ -383,6 +383,18 @@ static void close_(void *state, core_t *c)
     free(t);
 }
 
+/* the listening socket or the serial line, the fd kept in reserve to tell a
+ * client why it is refused (modbus_accept.c), and its clients */
+static unsigned fds(const cfg_t *cfg, unsigned *clients)
+{
+    const modbus_server_config_t *m = cfg_transport(cfg, &modbus_transport);
+    if (!m->enabled || !cfg_uses(cfg, &modbus_transport))
+        return 0;
+    if (m->tcp_address[0])
+        *clients += m->max_clients;
+    return (m->tcp_address[0] ? 2u : 0u) + (m->rtu_device[0] ? 1u : 0u);
+}
+
 const transport_t modbus_transport = {
     .name = "modbus",
     .roles = TRANSPORT_INPUT | TRANSPORT_SERVICE,
@@ -393,4 +405,5 @@ const transport_t modbus_transport = {
     .open = open_,
     .cycle = cycle,
     .close = close_,
+    .fds = fds,
 };
