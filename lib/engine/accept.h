@@ -161,14 +161,20 @@
  * moored boat whose 10 Hz messages repeat a 1 Hz fix has no pace (its
  * chords are mostly 0): their repeats are kept. */
 #define ACCEPT_STALE_STOP_M_S2 9.81
-/* ACCEPT_RULE_STOPS: a run of repeats as long as the window, with no new
+/* ACCEPT_RULE_STOPS: a run of ACCEPT_STOP_RUN repeats, with no new
  * position yet, is taken as a stop at once (the output comes to rest on
  * it instead of running out of curve) if stopping dead there from the
  * recent pace within the anchor's interval takes at most this (m/s^2,
  * 2 g: a machine axis or a robot stops so; a boat, a car or an aircraft
  * does not: 5 m/s at 5 Hz is 25, while a machine at 1 m/s and 10 Hz is
- * 10); else the run waits for the next new position (stops.c). */
+ * 10, a walker at 1.5 m/s and 0.25 Hz 0.4); else the run waits for the next
+ * new position (stops.c). */
 #define ACCEPT_STOP_MAX_M_S2 19.62
+/* ... two repeats: one may be a message received twice (the next new
+ * position then tells it stale), two in a row from an object that could have
+ * stopped are its stop, judged within D's slack (a verdict later than that
+ * ran the output out of curve short of the stop) */
+#define ACCEPT_STOP_RUN 2u
 /* Repeats of the anchor held for one verdict at most (stops.c): a longer
  * run with no new position yet is judged there and then. */
 #define ACCEPT_RUN_MAX 256

@@ -22,12 +22,14 @@
  * detection (profile machine), or if the object was not moving into the
  * anchor (slower than ACCEPT_STALE_MIN_SPEED_M_S, or a trajectory's first
  * waypoint), the run is a stop at once, and the output comes to rest on
- * the anchor without waiting.  Else the verdict waits for the next new
- * position (the output, out of curve, slows down to rest meanwhile as for
- * any late waypoint: an underrun, then it runs on to the stop), or the
- * close (a stop), or ACCEPT_RUN_MAX repeats (stale if stopping dead from
- * the recent pace within the anchor's interval takes more than
- * ACCEPT_STOP_MAX_M_S2, else a stop).
+ * the anchor without waiting.  Else ACCEPT_STOP_RUN repeats with no new
+ * position make it a stop if stopping dead from the recent pace within the
+ * anchor's interval takes at most ACCEPT_STOP_MAX_M_S2 (a standing object
+ * is data: waiting for its next new position, the output ran out of curve
+ * short of the stop and stood in underrun as long as the object stood);
+ * an object that cannot have stopped so waits for the next new position
+ * (the output, out of curve, slows down to rest meanwhile as for any late
+ * waypoint), or the close (a stop), or ACCEPT_RUN_MAX repeats (stale).
  */
 #include "accept.h"
 
@@ -138,6 +140,8 @@ int accept_run_decide(accept_t *a, int closing, accept_verdict_t *v)
             a->run_verdict = cannot_stop(a) ? 1 : 2;
         else if (!moving(a))
             a->run_verdict = 2; /* stale only if the object is known to move */
+        else if (a->run_n >= ACCEPT_STOP_RUN && !cannot_stop(a))
+            a->run_verdict = 2;
         else
             return 0;
     }
