@@ -185,6 +185,8 @@ typedef struct {
     double underrun_curve_t_s;      /* where the solved curve ended then */
     double underrun_lookahead_s;    /* D's lookahead part then: the time the waypoints the
                                        solver needs beyond its curve may span */
+    double underrun_silence_s;      /* the silence that then ended its trajectory
+                                       (lib/engine/silence.h; NaN: none) */
     uint64_t delay_grown;           /* D stated anew, longer: the input's intervals or its
                                        top speed grew beyond what D was sized for */
     uint64_t reserve_slowed;        /* slowdowns of an object faster than the speed D's stop

@@ -7,6 +7,7 @@
 
 #include "engine_int.h"
 #include "engine_settings.h"
+#include "silence.h"
 #include "timescale.h"
 
 /* The time scaling's limits are converted at no less than this speed (m/s):
@@ -79,8 +80,9 @@ int engine_delay_check(const engine_config_t *cfg, double interval_s, char *why,
 int engine_underrun_due(const engine_status_t *st, double told_t_s, int at_end)
 {
     double t = st->underrun_t_s;
-    return st->underruns && isfinite(t) && (isnan(told_t_s) || t < told_t_s || t > told_t_s) &&
-           (at_end || isfinite(st->underrun_next_t_s));
+    return (st->underruns || isfinite(st->underrun_silence_s)) && isfinite(t) &&
+           (isnan(told_t_s) || t < told_t_s || t > told_t_s) &&
+           (at_end || isfinite(st->underrun_next_t_s) || isfinite(st->underrun_silence_s));
 }
 
 int engine_underrun_format(const engine_status_t *st, char *buf, size_t len)
@@ -93,7 +95,14 @@ int engine_underrun_format(const engine_status_t *st, char *buf, size_t len)
     double gap = st->underrun_next_t_s - newest, span = newest - st->underrun_curve_t_s;
     int n = snprintf(buf, len, "underrun at t = %.3f s: ", st->underrun_t_s);
     size_t off = n > 0 && (size_t)n < len ? (size_t)n : len;
-    if (gap > hold) /* (NaN: none came yet) */
+    if (isfinite(st->underrun_silence_s))
+        n = snprintf(buf + off, len - off,
+                     "no waypoint after t = %.3f s: the input fell silent, and after %.3g s of "
+                     "silence (beyond the %.3g s D holds for a late one, and %g times the "
+                     "input's longest interval) that was taken as its end, not a late waypoint "
+                     "(not counted): the output plays on to its last waypoint",
+                     newest, st->underrun_silence_s, hold, SILENCE_INTERVALS);
+    else if (gap > hold) /* (NaN: none came yet) */
         n = snprintf(buf + off, len - off,
                      "no waypoint after t = %.3f s until t = %.3f s, a silence of %.3g s, longer "
                      "than the %.3g s D holds for a late one (the interval and the jitter slack)",

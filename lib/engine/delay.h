@@ -86,14 +86,16 @@ int engine_delay_format(const engine_delay_t *d, char *buf, size_t len);
  * "underrun at t = 12.345 s: no waypoint after t = 12.2 s until t = 12.8 s,
  * a silence of 0.6 s, longer than the 0.4 s D holds for one (the interval
  * and the jitter slack)"; "... until now" while none came; "within the ..."
- * where the silence was shorter (D too short for this input's timing).
+ * where the silence was shorter (D too short for this input's timing); "...
+ * taken as its end" where the silence then ended the trajectory (silence.h).
  * Returns snprintf's length, 0 (buf "") before any underrun.
  */
 int engine_underrun_format(const engine_status_t *st, char *buf, size_t len);
 
 /* 1 if status st holds an underrun not told yet: its underrun_t_s differs
- * from told_t_s (NaN: none told), and the silence it met has ended (or
- * at_end: the replay is over).  What trajd and trajreplay log by. */
+ * from told_t_s (NaN: none told), and the silence it met has ended, or
+ * ended its trajectory (or at_end: the replay is over).  What trajd and
+ * trajreplay log by. */
 int engine_underrun_due(const engine_status_t *st, double told_t_s, int at_end);
 
 /*

@@ -274,6 +274,8 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
 
 int engine_finish(engine_t *e)
 {
+    if (e->out.und_pending)
+        play_underrun_counted(e); /* the output ran short before the end was told */
     int rj = judge(e, 1);
     int rc = close_input(e);
 

@@ -218,12 +218,14 @@ typedef struct {
     int last_plain;
     engine_setpoint_t last_sp;
     /* the underrun under way began with the newest waypoint at und_t of the
-     * input trajectory und_traj (silence.h), and taught start_slack auto an
-     * interval (und_learnt): a silent end with nothing newer says it was the
-     * input's end, not a late waypoint (engine_silence_tick) */
+     * input trajectory und_traj (silence.h).  While the input's silence may
+     * still turn out to be its end (engine_silence_pending) it is counted
+     * only once a newer waypoint comes (und_pending): a silent end with
+     * nothing newer is the input's end, not a late waypoint
+     * (engine_silence_tick), and a counter never goes back */
     double und_t;
     uint64_t und_traj;
-    int und_learnt;
+    int und_pending;
 } engine_out_t;
 
 /* ---- time scaling of the play-out (engine_scale.c, timescale.h, TIMESCALE.md) ---- */
@@ -341,6 +343,7 @@ static inline void engine_status_underrun_none(engine_status_t *st)
 {
     st->underrun_t_s = st->underrun_newest_t_s = st->underrun_next_t_s = NAN;
     st->underrun_slack_s = st->underrun_curve_t_s = st->underrun_lookahead_s = NAN;
+    st->underrun_silence_s = NAN;
 }
 
 /* ---- configuration (engine_settings.c): what a resolved one implies ---- */
@@ -405,6 +408,7 @@ engine_state_t play_state(const engine_t *e);
 /* 1 if further steps cannot change anything until new input arrives. */
 int play_stalled(const engine_t *e);
 void play_count_underrun(engine_t *e);
+void play_underrun_counted(engine_t *e);
 void play_seed_cur(engine_t *e, int64_t n);
 void play_take_segment(engine_t *e);
 void play_start(engine_t *e, int new_flag);

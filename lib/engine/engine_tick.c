@@ -65,15 +65,13 @@ static int rebuffering(const engine_t *e, double s)
              brake_s(e) - e->slack_learn * last_interval(e));
 }
 
-/* An underrun: counted, and (start_slack auto) the next start waits one
- * waypoint more, up to ENGINE_SLACK_AUTO_MAX: the input came later than its
- * timestamps said. */
+/* An underrun begins: what its log line tells; counted now, or (while the
+ * silence may turn out to be the input's end: silence.h) once a newer
+ * waypoint comes (play_underrun_counted). */
 void play_count_underrun(engine_t *e)
 {
-    e->st.underruns++;
     e->out.und_t = e->sil.last_t;
     e->out.und_traj = e->sil.traj;
-    e->out.und_learnt = 0;
     /* what its log line tells (engine_status_t underrun_*) */
     engine_delay_t d;
     engine_delay(e, &d);
@@ -83,13 +81,24 @@ void play_count_underrun(engine_t *e)
     e->st.underrun_slack_s = d.interval_s + d.slack_s;
     e->st.underrun_curve_t_s = e->scale.avail_t;
     e->st.underrun_lookahead_s = d.lookahead_s;
+    e->st.underrun_silence_s = NAN;
+    e->out.und_pending = engine_silence_pending(e);
+    if (!e->out.und_pending)
+        play_underrun_counted(e);
+}
+
+/* The underrun is one (the input came later than its timestamps said):
+ * counted, and (start_slack auto) the next start waits one waypoint more,
+ * up to ENGINE_SLACK_AUTO_MAX. */
+void play_underrun_counted(engine_t *e)
+{
+    e->out.und_pending = 0;
+    e->st.underruns++;
     if (e->slack_auto || e->cfg.delay_s > 0)
         engine_delay_grow(e); /* D as the input now needs (delay.h) */
-
     if (e->slack_auto && e->slack_learn < e->slack_more) {
         e->slack_learn++;
         e->st.lookahead = e->lookahead + e->slack_learn;
-        e->out.und_learnt = 1;
     }
 }
 

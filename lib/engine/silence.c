@@ -21,9 +21,11 @@ void engine_silence_push(engine_t *e, const engine_waypoint_t *wp)
     if (e->sil.n && wp->t_s > e->sil.last_t && wp->t_s - e->sil.last_t <= e->cfg.max_gap_s)
         e->sil.int_max = fmax(e->sil.int_max, wp->t_s - e->sil.last_t); /* a gap is none */
     if (!e->sil.n || wp->t_s > e->sil.last_t) {
-        if (e->st.underruns && isnan(e->st.underrun_next_t_s) &&
+        if ((e->st.underruns || e->out.und_pending) && isnan(e->st.underrun_next_t_s) &&
             wp->t_s > e->st.underrun_newest_t_s)
             e->st.underrun_next_t_s = wp->t_s; /* the silence the last underrun met ends */
+        if (e->out.und_pending && wp->t_s > e->out.und_t)
+            play_underrun_counted(e); /* the waypoint it waited for came: late */
         e->sil.last_t = wp->t_s;
         e->sil.n++;
     }
@@ -95,19 +97,17 @@ int engine_silence_tick(engine_t *e, int64_t now_ns)
         return 0;
     if ((double)(now_ns - e->sil.arrival_ns) * 1e-9 <= engine_silence_limit_s(e))
         return 0;
+    double limit = engine_silence_limit_s(e);
     e->sil.arrived = 0;
     e->sil.closed = 1;
     e->st.silent_ends++;
-    if (e->out.underrun && e->out.und_traj == e->sil.traj && !(e->sil.last_t > e->out.und_t)) {
+    if (e->out.und_pending && e->out.und_traj == e->sil.traj && !(e->sil.last_t > e->out.und_t)) {
         /* the output ran short with no waypoint since: that was the input's
-         * end, now known, not a late waypoint: no underrun, nothing learnt
-         * (its ticks stay counted in underrun_ticks, as they were sent) */
-        e->st.underruns--;
-        if (e->out.und_learnt) {
-            e->slack_learn--;
-            e->st.lookahead = e->lookahead + e->slack_learn;
-        }
-        e->out.und_learnt = 0;
+         * end, now known, not a late waypoint: not counted, nothing learnt
+         * (its ticks are in underrun_ticks, as they were sent); its log line
+         * says so (engine_underrun_format) */
+        e->out.und_pending = 0;
+        e->st.underrun_silence_s = limit;
     }
     (void)engine_finish(e); /* -ENGINE_ENUMERIC cannot happen with finite data */
     return 1;

@@ -35,6 +35,7 @@ typedef struct {
     double reach_s;  /* now when the output first stood on the first piece's last waypoint */
     double t_first;  /* the largest t_s of the first piece */
     int under_ticks; /* setpoints in UNDERRUN */
+    int went_back;   /* ticks after which the underrun count was lower than before */
     engine_status_t st;
     engine_delay_t d;
 } run_t;
@@ -63,6 +64,9 @@ static void run(int n, double gap_s, double end_s, run_t *r)
         assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
         if (sp.state == ENGINE_STATE_UNDERRUN)
             r->under_ticks++;
+        uint64_t before = r->st.underruns;
+        engine_status(e, &r->st);
+        r->went_back += r->st.underruns < before; /* a client reading it saw it go back */
         if (sp.track == 1 && sp.t_s > r->t_first)
             r->t_first = sp.t_s;
         if (isnan(r->reach_s) && sp.track == 1 &&
@@ -103,7 +107,9 @@ static void test_tail_plays_out(void **state)
  * counts no underrun once the silence ends the trajectory: nothing newer had
  * come, so it was the input's end, and start_slack auto learns nothing from
  * it (the lookahead stays 18; before: 1 underrun, lookahead 19, and D an
- * interval longer for the next piece). */
+ * interval longer for the next piece).  Nor is it counted and then taken
+ * back (a Modbus or CAN client saw underruns go 1 then 0), and its log line
+ * is due at the silent end, saying so (trajd logged nothing). */
 static void test_end_is_no_underrun(void **state)
 {
     (void)state;
@@ -114,6 +120,12 @@ static void test_end_is_no_underrun(void **state)
                   (unsigned long long)r.st.underruns, r.under_ticks,
                   (unsigned long long)r.st.silent_ends, r.st.lookahead);
     assert_int_equal(r.st.underruns, 0);
+    assert_int_equal(r.went_back, 0);
+    assert_true(isfinite(r.st.underrun_silence_s));
+    assert_true(engine_underrun_due(&r.st, NAN, 0));
+    char line[400];
+    assert_true(engine_underrun_format(&r.st, line, sizeof line) > 0);
+    assert_non_null(strstr(line, "taken as its end"));
     assert_int_equal(r.st.lookahead, 18);
     assert_true(r.st.silent_ends >= 1);
     assert_int_equal(r.st.tracks, 2);
