@@ -289,6 +289,31 @@ int can_port_adopt(can_port_t *p, unsigned i, const can_drive_t *old, uint8_t sy
     return 1;
 }
 
+void can_port_keep(const can_port_t *p, unsigned i, can_port_kept_t *k)
+{
+    memset(k, 0, sizeof *k);
+    if (i >= p->nobj)
+        return;
+    k->st = p->obj[i].st;
+    k->rx = p->obj[i].rx;
+    k->rx.slots = NULL;
+    memcpy(k->slots, p->obj[i].slots, sizeof k->slots);
+}
+
+void can_port_restore(can_port_t *p, unsigned i, const can_port_kept_t *k)
+{
+    if (i >= p->nobj || !p->obj[i].set)
+        return;
+    can_port_obj_t *o = &p->obj[i];
+    canproto_slot_t *slots = o->rx.slots;
+    unsigned n = o->rx.nslots;
+    o->st = k->st;
+    o->rx = k->rx;
+    o->rx.slots = slots;
+    o->rx.nslots = n;
+    memcpy(o->slots, k->slots, sizeof o->slots);
+}
+
 const can_drive_t *can_port_drive_state(const can_port_t *p, unsigned i)
 {
     return i < p->nobj ? &p->obj[i].drv : NULL;

@@ -211,6 +211,19 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns);
  * (can_port_drive_state of the old port's object; can_drive_adopt), and the
  * port the SYNC counter it had reached.  1 if adopted. */
 int can_port_adopt(can_port_t *p, unsigned i, const can_drive_t *old, uint8_t sync_counter);
+/* What object i's CAN side keeps over a reload (can_transport.c, keep.h):
+ * its counters (STATUS, STATUS2, the exit summary: an ordinary reload must
+ * not zero what peers count by, nor send them a counter that wrapped back)
+ * and its waypoint reassembly (the sequence history and the waypoints in
+ * flight: the first waypoint after it is not counted lost). */
+typedef struct {
+    can_port_obj_stats_t st;
+    canproto_rx_t rx; /* its slots are those below */
+    canproto_slot_t slots[CAN_PORT_RX_SLOTS];
+} can_port_kept_t;
+void can_port_keep(const can_port_t *p, unsigned i, can_port_kept_t *k);
+/* Object i (set) takes what k holds. */
+void can_port_restore(can_port_t *p, unsigned i, const can_port_kept_t *k);
 /* Object i's drives' state, for can_port_adopt (NULL if i is out of range). */
 const can_drive_t *can_port_drive_state(const can_port_t *p, unsigned i);
 uint8_t can_port_sync_counter(const can_port_t *p);

@@ -2,10 +2,12 @@
 #include "can_refused.h"
 
 #include <stdio.h>
+#include <syslog.h>
 
 #include "can_transport.h"
 #include "canproto.h"
 #include "engine.h"
+#include "log.h"
 
 void can_refused_why(char *buf, size_t len, int err, unsigned cmd, int stopping, const char *name)
 {
@@ -23,6 +25,70 @@ void can_refused_why(char *buf, size_t len, int err, unsigned cmd, int stopping,
                  "only the command clear releases it");
     else
         snprintf(buf, len, "%s", engine_strerror(-err));
+}
+
+/* now - was, or now where it went back (reset counters) */
+static uint64_t since(uint64_t now, uint64_t was)
+{
+    return now >= was ? now - was : now;
+}
+
+int can_log_traffic(const char *name, unsigned wp_id, const can_port_obj_stats_t *now,
+                    can_port_obj_stats_t *logged)
+{
+    const canproto_rx_stats_t *r = &now->rx, *w = &logged->rx;
+    int n = 0;
+    uint64_t d = since(r->lost, w->lost);
+    if (d) {
+        log_msg(LOG_WARNING,
+                "can: object '%s': %llu waypoint(s) lost (sequence numbers skipped, or a "
+                "waypoint left incomplete) on id 0x%03X; %llu in all",
+                name, (unsigned long long)d, wp_id, (unsigned long long)r->lost);
+        n++;
+    }
+    d = since(r->malformed, w->malformed);
+    if (d) {
+        char by[160] = "";
+        size_t off = 0;
+        for (int e = 1; e < CANPROTO_ERROR_COUNT && off < sizeof by; e++) {
+            uint64_t k = since(r->malformed_by[e], w->malformed_by[e]);
+            if (k) {
+                int m = snprintf(by + off, sizeof by - off, "%s%llu %s", off ? ", " : "",
+                                 (unsigned long long)k, canproto_strerror(-e));
+                off += m > 0 ? (size_t)m : 0;
+            }
+        }
+        log_msg(LOG_WARNING,
+                "can: object '%s': %llu malformed frame(s) on id 0x%03X (%s); %llu in all", name,
+                (unsigned long long)d, wp_id, by, (unsigned long long)r->malformed);
+        n++;
+    }
+    d = since(r->out_of_order, w->out_of_order);
+    if (d) {
+        log_msg(LOG_WARNING,
+                "can: object '%s': %llu frame(s) of waypoints older than the last one taken "
+                "(sequence 1..128 behind) dropped on id 0x%03X: a sender that restarted its "
+                "numbering is heard again once it passes the last number (or after a clear); "
+                "%llu in all",
+                name, (unsigned long long)d, wp_id, (unsigned long long)r->out_of_order);
+        n++;
+    }
+    uint64_t late = since(now->dropped_late, logged->dropped_late),
+             full = since(now->dropped_full, logged->dropped_full),
+             down = since(now->dropped_down, logged->dropped_down),
+             err = since(now->dropped_error, logged->dropped_error);
+    if (late + full + err) { /* (down: the interface's own line says so) */
+        log_msg(LOG_WARNING,
+                "can: object '%s': %llu setpoint cycle(s) not sent (%llu late, %llu with the "
+                "transmit queue full, %llu down, %llu write errors); %llu in all",
+                name, (unsigned long long)(late + full + down + err), (unsigned long long)late,
+                (unsigned long long)full, (unsigned long long)down, (unsigned long long)err,
+                (unsigned long long)(now->dropped_late + now->dropped_full + now->dropped_down +
+                                     now->dropped_error));
+        n++;
+    }
+    *logged = *now;
+    return n;
 }
 
 unsigned can_transport_fds(const cfg_t *cfg, unsigned *clients)

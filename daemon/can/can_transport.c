@@ -55,12 +55,15 @@ typedef struct {
     can_bus_state_t bus_state; /* as of the last housekeeping timer, for Modbus */
     canerr_bus_t err;          /* error-frame counters as of the same timer */
     uint32_t load_permille;    /* worst-case bus load of the configured traffic, 0.1 % */
-    can_port_obj_stats_t drive_logged[CFG_OBJECTS_MAX]; /* drive counters already logged */
-    unsigned drive_en_logged[CFG_OBJECTS_MAX];          /* the drives' enabled_n as last logged */
-    unsigned drive_lost_logged[CFG_OBJECTS_MAX];        /* ... and lost_n */
-    uint64_t refused_logged[CFG_OBJECTS_MAX];           /* cmd_refused already logged */
-    uint64_t clamped_logged[CFG_OBJECTS_MAX];           /* tx_clamped already logged */
-    int64_t refused_log_ns;                             /* when log_refused last logged */
+    can_port_obj_stats_t drive_logged[CFG_OBJECTS_MAX];   /* drive counters already logged */
+    unsigned drive_en_logged[CFG_OBJECTS_MAX];            /* the drives' enabled_n as last logged */
+    unsigned drive_lost_logged[CFG_OBJECTS_MAX];          /* ... and lost_n */
+    uint64_t refused_logged[CFG_OBJECTS_MAX];             /* cmd_refused already logged */
+    uint64_t clamped_logged[CFG_OBJECTS_MAX];             /* tx_clamped already logged */
+    int64_t refused_log_ns;                               /* when log_refused last logged */
+    can_port_obj_stats_t traffic_logged[CFG_OBJECTS_MAX]; /* can_log_traffic's */
+    unsigned wp_id[CFG_OBJECTS_MAX];                      /* the id each object's waypoints
+                                                           * come on, for the log */
     can_logfile_stats_t out_seen;   /* log_out counters already put in core stats */
     can_logfile_stats_t out_logged; /* log_out counters already warned about */
     int64_t out_log_ns;             /* when report_log_out last warned, 0: never */
@@ -143,6 +146,8 @@ static void log_refused(can_state_t *s, int64_t now_ns)
             s->refused_log_ns = now_ns;
         }
         s->clamped_logged[k] = os.tx_clamped;
+        if (can_log_traffic(s->objs[k]->name, s->wp_id[k], &os, &s->traffic_logged[k]))
+            s->refused_log_ns = now_ns;
         if (os.cmd_refused <= s->refused_logged[k]) {
             s->refused_logged[k] = os.cmd_refused; /* reset counters */
             continue;
@@ -226,32 +231,39 @@ static void log_drives(can_state_t *s)
     }
 }
 
-/* The drives of the port a reload closed, for the port it opens next (keep.h):
- * the same drives, running, adopted as they are (never brought up again,
- * never re-anchored while they follow the object), with the SYNC counter. */
+/* What the port a reload closed had of each object, for the port it opens
+ * next (keep.h): its counters and waypoint reassembly (can_port_kept_t), and
+ * its drives, running, adopted as they are (never brought up again, never
+ * re-anchored while they follow the object), with the SYNC counter. */
 typedef struct {
     can_drive_t drv;
     uint8_t sync;
+    can_port_kept_t port;
 } kept_drives_t;
 
 static void kept_store(const can_state_t *s)
 {
-    kept_drives_t k;
+    static kept_drives_t k; /* (large: not on the stack) */
     for (unsigned i = 0; s->port && i < s->n; i++) {
         memset(&k, 0, sizeof k);
         k.drv = *can_port_drive_state(s->port, i);
         k.sync = can_port_sync_counter(s->port);
+        can_port_keep(s->port, i, &k.port);
         (void)keep_put("can", s->objs[i]->name, &k, sizeof k); /* none kept: brought up again */
     }
 }
 
-/* Object k of s takes the drives its name had in the port closed before (the
- * same ids): 1 if it did. */
-static int kept_adopt(can_state_t *s, unsigned k)
+/* Object k of s takes what its name had in the port closed before (the same
+ * ids: cfg_reload_check): its counters and reassembly, and (drives) the
+ * drives: 1 if it took those. */
+static int kept_adopt(can_state_t *s, unsigned k, int drives)
 {
-    kept_drives_t kd;
-    if (!keep_take("can", s->objs[k]->name, &kd, sizeof kd) ||
-        !can_port_adopt(s->port, k, &kd.drv, kd.sync))
+    static kept_drives_t kd;
+    if (!keep_take("can", s->objs[k]->name, &kd, sizeof kd))
+        return 0;
+    can_port_restore(s->port, k, &kd.port);
+    can_port_obj_stats(s->port, k, &s->traffic_logged[k]); /* logged before the reload */
+    if (!drives || !can_port_adopt(s->port, k, &kd.drv, kd.sync))
         return 0;
     const can_port_drive_t *d = can_port_drive(s->port, k);
     s->drive_en_logged[k] = d ? d->enabled_n : 0; /* told by the port before */
@@ -538,13 +550,14 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
         snprintf(s->hctx[k].src, sizeof s->hctx[k].src, "can %s id 0x%03" PRIX32,
                  s->cfg->log_in[0] || s->cfg->log_out[0] ? s->cfg->log_ifname : s->cfg->interface,
                  ids.fd ? ids.waypoint_fd_id : ids.waypoint_id);
+        s->wp_id[k] = ids.fd ? ids.waypoint_fd_id : ids.waypoint_id;
         if (can_port_set_object(s->port, k, &ids, &hk, &s->hctx[k]) < 0) {
             snprintf(why, wl, "can: object '%s': invalid or clashing ids", s->objs[k]->name);
             return -EINVAL;
         }
         /* a reload: the drives it ran go on as they are (a changed object's
          * new engine starts where its output stood: core.c) */
-        int adopted = ids.cia402 >= CANPROTO_CIA402_FEEDBACK && kept_adopt(s, k);
+        int adopted = kept_adopt(s, k, ids.cia402 >= CANPROTO_CIA402_FEEDBACK);
         if (ids.cia402 >= CANPROTO_CIA402_FEEDBACK && !s->objs[k]->carried && !adopted)
             engine_require_position(s->objs[k]->engine, 1);      /* the drive says where it is */
         else if (ids.cia402 && !s->objs[k]->carried && !adopted) /* check(): initial_position */

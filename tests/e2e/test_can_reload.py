@@ -1,0 +1,92 @@
+"""test_can_reload.py - what a CAN peer counts by survives a reload, and is logged as it comes.
+
+trajd reads a real track (figure eight, NMEA 2000 GNSS) as waypoint frames from a candump
+log ([can] log_in: the same codec and port as on a socket), built by canmatrix from
+config/trajd.dbc, with faults in it: waypoint 50 missing (1 lost), two malformed frames
+beside waypoint 60. It writes its frames to a candump log ([can] log_out), decoded here by
+python-can and canmatrix. Half way, after the faults, it gets a SIGHUP with the file
+unchanged (the object carried over without interruption).
+
+- Every counter of the STATUS frames (lost, malformed, rejected, dropped) never goes back:
+  they wrap at 256 on the wire, and a peer that counts by deltas read a reload that zeroed
+  13 drops as 243 new ones. Before, the reload zeroed them (lost 1 -> 0, malformed 2 -> 0).
+- The loss and the malformed frames are logged while trajd runs, with the frame id, before
+  the reload (before, only the info line of the exit summary or of the reload named them).
+"""
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+import cantools_trajd as ct  # noqa: E402
+
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+BUILD = os.environ.get("BUILD", os.path.join(ROOT, "build"))
+TRAJD = os.path.join(BUILD, "bin", "trajd")
+TRACK = os.path.join(ROOT, "tests", "data", "n2k_furuno_figure8_src52.csv")
+NPOINTS = 150   # 30 s of track
+SPEED = 6       # 5 s of wall time: the faults (waypoints 50, 60: 10 and 12 s) at 2 s
+RELOAD_AT_S = 3.2
+
+
+def faulty_log(xyz, wp):
+    ct.write_wplog(xyz, wp)
+    with open(wp) as fh:
+        lines = fh.read().splitlines()
+    out = []
+    for line in lines:
+        f = line.split()[-1] if not line.startswith("#") else ""
+        if f.startswith("680#") and int(f[6:8], 16) == 50 and f[4:6] != "04":
+            continue  # waypoint 50 lost
+        out.append(line)
+        if f.startswith("680#") and int(f[6:8], 16) == 60 and f[4:6] == "03":
+            ts = line.split()[0]
+            out.append("%s vcan0 680#0011" % ts)            # wrong length
+            out.append("%s vcan0 680#0911000000000000" % ts)  # unknown mux
+    with open(wp, "w") as fh:
+        fh.write("\n".join(out) + "\n")
+
+
+class CanReload(unittest.TestCase):
+    def test_counters_survive_a_reload_and_are_logged(self):
+        with tempfile.TemporaryDirectory() as d:
+            xyz = os.path.join(d, "track.csv")
+            ct.to_xyz(TRACK, xyz, NPOINTS)
+            faulty_log(xyz, os.path.join(d, "wp.log"))
+            conf = os.path.join(d, "t.conf")
+            with open(conf, "w") as fh:
+                fh.write("[daemon]\nrate_hz = 100\nspeed = %d\nexit_when_done = yes\n"
+                         "stop_timeout_s = 1\nstatus_interval_s = 0\n"
+                         "[can]\nlog_in = wp.log\nlog_out = sp.log\nlog_ifname = vcan0\n"
+                         "log_time = engine\nmax_late_ms = 0\n"
+                         "[object.boat]\ninput = can\noutput = can\n" % SPEED)
+            p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=d, stdout=subprocess.DEVNULL,
+                                 stderr=subprocess.PIPE, text=True)
+            time.sleep(RELOAD_AT_S)
+            p.send_signal(signal.SIGHUP)
+            _, err = p.communicate(timeout=60)
+            self.assertEqual(p.returncode, 0, err)
+            lines = err.splitlines()
+            reload_at = next((i for i, l in enumerate(lines) if "reloaded" in l), None)
+            self.assertIsNotNone(reload_at, err)
+            self.assertIn("carried over without interruption", lines[reload_at])
+            # logged as they came, before the reload, with the frame id
+            before = "\n".join(lines[:reload_at])
+            self.assertRegex(before, r"can: object 'boat': .*1 waypoint.* lost.*0x680", err)
+            self.assertRegex(before, r"can: object 'boat': .*2 malformed frame.*0x680", err)
+            st = ct.decode_by_id(os.path.join(d, "sp.log"), 0x6C0)
+            self.assertGreater(len(st), 20)
+            for name in ("ST_Lost", "ST_Malformed", "ST_Rejected", "ST_Dropped"):
+                seq = [int(s[name]) for _, s in st]
+                went_back = [(a, b) for a, b in zip(seq, seq[1:]) if b < a]
+                self.assertEqual(went_back, [], "%s went back: %s" % (name, went_back))
+            self.assertEqual(int(st[-1][1]["ST_Lost"]), 1)
+            self.assertEqual(int(st[-1][1]["ST_Malformed"]), 2)
+
+
+if __name__ == "__main__":
+    unittest.main()
