@@ -249,6 +249,9 @@ static void step_engines(core_t *c, int64_t now_ns, int64_t real_ns, int sent)
                 (void)engine_set_position(o->engine, o->sp.pos_m); /* within max_abs_m: checked */
             engine_free(o->retiring);
             o->retiring = NULL;
+            safety_limits_t lim; /* the new engine's bounds, from rest */
+            obj_safety_limits(o->cfg, &lim);
+            safety_set_limits(&o->safety, &lim);
         }
     }
 }
@@ -482,10 +485,12 @@ static void retire_moving(obj_t *o, core_t *prev)
         return;
     }
     o->sp = q->sp;
-    o->safety = q->safety; /* the braking is judged against what was sent */
-    safety_limits_t lim;
-    obj_safety_limits(o->cfg, &lim);
-    safety_set_limits(&o->safety, &lim);
+    /* the braking is judged against what was sent, and by the bounds it was
+     * planned for: the new configuration's judge the new engine, from rest
+     * (given at the handover, step_engines).  Judged by tighter new ones, the
+     * first braking row was refused and the object frozen in one tick: 4 m/s
+     * to 0 (test_lifecycle_daemon.py) */
+    o->safety = q->safety;
 }
 
 /* Step 2 of core_open: borrow the engines of prev's carried objects (cannot
