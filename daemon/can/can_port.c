@@ -472,6 +472,8 @@ static void send_status2(can_port_t *p, can_port_obj_t *o)
     if (p->io.send(p->io_ctx, &o->st2[page]) == 0) {
         o->st2_changed &= ~(1u << page);
         o->st2_next = (page + 1) % CANPROTO_ST2_PAGES;
+    } else {
+        o->st.status_dropped++;
     }
 }
 
@@ -507,6 +509,8 @@ static void send_status(can_port_t *p, can_port_obj_t *o, const engine_status_t 
         o->sent_status = 1;
         o->last_state = (int)es.state;
         send_status2(p, o);
+    } else {
+        o->st.status_dropped++; /* due again next cycle */
     }
 }
 

@@ -114,6 +114,8 @@ typedef struct {
     uint64_t dropped_error;  /* cycles not sent: other write error (EINVAL: FD on a classic MTU) */
     uint64_t tx_clamped;     /* setpoints with a value clamped to its field */
     uint64_t status_sent;
+    uint64_t status_dropped; /* STATUS and STATUS2 frames the transport refused (queue full,
+                                down): the next one carries the counters on */
     uint64_t waypoints_accepted;
     uint64_t waypoints_rejected; /* engine refused (not EFULL) */
     uint64_t waypoints_full;     /* engine EFULL: not consumed, sender must repeat */

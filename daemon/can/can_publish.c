@@ -35,7 +35,7 @@ static void publish_drive(const can_port_t *port, unsigned k, core_drive_t *dr)
 }
 
 void can_publish(core_t *c, const can_port_t *port, const int *port_index, unsigned bus_state,
-                 uint32_t load_permille, const canerr_bus_t *err)
+                 uint64_t rx_dropped, uint32_t load_permille, const canerr_bus_t *err)
 {
     core_bus_t *b = &c->stats->bus;
     b->state = bus_state;
@@ -47,6 +47,7 @@ void can_publish(core_t *c, const can_port_t *port, const int *port_index, unsig
     b->restarts = err->restarts;
     b->bus_errors = err->bus_errors;
     b->overflows = err->overflows;
+    b->rx_dropped = rx_dropped;
     b->tx_err = err->tx_err;
     b->rx_err = err->rx_err;
     for (unsigned i = 0; i < c->nobj && i < CFG_OBJECTS_MAX; i++)

@@ -20,6 +20,6 @@
  * port_index[i]).  In the transport's cycle, every tick.
  */
 void can_publish(core_t *c, const can_port_t *port, const int *port_index, unsigned bus_state,
-                 uint32_t load_permille, const canerr_bus_t *err);
+                 uint64_t rx_dropped, uint32_t load_permille, const canerr_bus_t *err);
 
 #endif

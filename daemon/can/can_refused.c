@@ -77,12 +77,15 @@ int can_log_traffic(const char *name, unsigned wp_id, const can_port_obj_stats_t
              full = since(now->dropped_full, logged->dropped_full),
              down = since(now->dropped_down, logged->dropped_down),
              err = since(now->dropped_error, logged->dropped_error);
-    if (late + full + err) { /* (down: the interface's own line says so) */
+    uint64_t st_lost = since(now->status_dropped, logged->status_dropped);
+    if (late + full + err + st_lost) { /* (down: the interface's own line says so) */
         log_msg(LOG_WARNING,
                 "can: object '%s': %llu setpoint cycle(s) not sent (%llu late, %llu with the "
-                "transmit queue full, %llu down, %llu write errors); %llu in all",
+                "transmit queue full, %llu down, %llu write errors), %llu STATUS frames not "
+                "sent; %llu cycles in all",
                 name, (unsigned long long)(late + full + down + err), (unsigned long long)late,
                 (unsigned long long)full, (unsigned long long)down, (unsigned long long)err,
+                (unsigned long long)st_lost,
                 (unsigned long long)(now->dropped_late + now->dropped_full + now->dropped_down +
                                      now->dropped_error));
         n++;

@@ -31,9 +31,11 @@ typedef struct {
     uint64_t tx_dropped_down; /* interface down or missing */
     uint64_t tx_errors;       /* other write errors, short writes */
     uint64_t rx_frames;
-    uint64_t rx_errors; /* short reads, error frames */
-    uint64_t downs;     /* transitions UP -> DOWN */
-    uint64_t reopens;   /* transitions DOWN -> UP */
+    uint64_t rx_errors;   /* short reads, error frames */
+    uint64_t rx_overflow; /* frames the kernel dropped, trajd's receive queue full
+                             (SO_RXQ_OVFL: a stall longer than the queue holds) */
+    uint64_t downs;       /* transitions UP -> DOWN */
+    uint64_t reopens;     /* transitions DOWN -> UP */
     int last_errno;
 } can_socket_stats_t;
 

@@ -55,12 +55,14 @@ typedef struct {
     can_bus_state_t bus_state; /* as of the last housekeeping timer, for Modbus */
     canerr_bus_t err;          /* error-frame counters as of the same timer */
     uint32_t load_permille;    /* worst-case bus load of the configured traffic, 0.1 % */
-    can_port_obj_stats_t drive_logged[CFG_OBJECTS_MAX];   /* drive counters already logged */
-    unsigned drive_en_logged[CFG_OBJECTS_MAX];            /* the drives' enabled_n as last logged */
-    unsigned drive_lost_logged[CFG_OBJECTS_MAX];          /* ... and lost_n */
-    uint64_t refused_logged[CFG_OBJECTS_MAX];             /* cmd_refused already logged */
-    uint64_t clamped_logged[CFG_OBJECTS_MAX];             /* tx_clamped already logged */
-    int64_t refused_log_ns;                               /* when log_refused last logged */
+    can_port_obj_stats_t drive_logged[CFG_OBJECTS_MAX]; /* drive counters already logged */
+    unsigned drive_en_logged[CFG_OBJECTS_MAX];          /* the drives' enabled_n as last logged */
+    unsigned drive_lost_logged[CFG_OBJECTS_MAX];        /* ... and lost_n */
+    uint64_t refused_logged[CFG_OBJECTS_MAX];           /* cmd_refused already logged */
+    uint64_t clamped_logged[CFG_OBJECTS_MAX];           /* tx_clamped already logged */
+    int64_t refused_log_ns;                             /* when log_refused last logged */
+    uint64_t rx_dropped;        /* the socket's rx_overflow, as of the last housekeeping */
+    uint64_t rx_dropped_logged; /* ... as last logged */
     can_port_obj_stats_t traffic_logged[CFG_OBJECTS_MAX]; /* can_log_traffic's */
     unsigned wp_id[CFG_OBJECTS_MAX];                      /* the id each object's waypoints
                                                            * come on, for the log */
@@ -68,6 +70,9 @@ typedef struct {
     can_logfile_stats_t out_logged; /* log_out counters already warned about */
     int64_t out_log_ns;             /* when report_log_out last warned, 0: never */
 } can_state_t;
+
+/* The kernel's receive-queue drops of the sockets a reload closed. */
+static uint64_t rx_dropped_closed;
 
 /* log_out failures: warned at once, then once per CAN_LOG_OUT_WARN_S while lost (as csv). */
 #define CAN_LOG_OUT_WARN_S 10
@@ -441,6 +446,21 @@ static void on_timer(loop_t *l, uint64_t exp, void *ctx)
                 s->cfg->interface, strerror(bs.last_errno));
     }
     s->was_up = up;
+    if (s->bus) {
+        can_socket_stats_t bs;
+        can_socket_stats(s->bus, &bs);
+        s->rx_dropped = rx_dropped_closed + bs.rx_overflow;
+    }
+    if (s->rx_dropped != s->rx_dropped_logged &&
+        !(s->refused_log_ns && core_mono_ns() - s->refused_log_ns < 1000000000LL)) {
+        log_msg(LOG_WARNING,
+                "can: %s: %llu frame(s) dropped by the kernel, trajd's receive queue full (a "
+                "stall of trajd): waypoints among them are counted lost; %llu in all",
+                s->cfg->interface, (unsigned long long)(s->rx_dropped - s->rx_dropped_logged),
+                (unsigned long long)s->rx_dropped);
+        s->rx_dropped_logged = s->rx_dropped;
+        s->refused_log_ns = core_mono_ns();
+    }
     if (s->log)
         report_log_out(s, 0);
     log_drives(s);
@@ -454,13 +474,14 @@ static void log_port(const can_state_t *s)
     can_port_stats_t ps;
     can_port_stats(s->port, &ps);
     log_msg(LOG_INFO,
-            "can: %s: frames received %llu (%llu for no object, %llu errors); SYNC sent %llu,"
+            "can: %s: frames received %llu (%llu for no object, %llu errors, %llu dropped by the "
+            "kernel: the receive queue full); SYNC sent %llu,"
             " dropped %llu; cycles %llu (%llu down), reopens %llu",
             s->log ? "candump logs" : s->cfg->interface, (unsigned long long)ps.rx_frames,
             (unsigned long long)ps.rx_foreign, (unsigned long long)ps.rx_errors,
-            (unsigned long long)ps.sync_sent, (unsigned long long)ps.sync_dropped,
-            (unsigned long long)ps.cycles, (unsigned long long)ps.down_cycles,
-            (unsigned long long)ps.reopens);
+            (unsigned long long)s->rx_dropped, (unsigned long long)ps.sync_sent,
+            (unsigned long long)ps.sync_dropped, (unsigned long long)ps.cycles,
+            (unsigned long long)ps.down_cycles, (unsigned long long)ps.reopens);
 }
 
 static void close_(void *state, core_t *c)
@@ -490,7 +511,7 @@ static void close_(void *state, core_t *c)
                     "can: %s: setpoints sent %llu, dropped late %llu / queue full %llu / down %llu"
                     " / error %llu; waypoints %llu accepted, %llu rejected, %llu full, %llu lost,"
                     " %llu duplicate frames, %llu out of order, %llu malformed frames;"
-                    " %llu commands refused",
+                    " %llu commands refused; STATUS frames sent %llu, not sent %llu",
                     s->objs[k]->name, (unsigned long long)os.setpoints_sent,
                     (unsigned long long)os.dropped_late, (unsigned long long)os.dropped_full,
                     (unsigned long long)os.dropped_down, (unsigned long long)os.dropped_error,
@@ -498,11 +519,13 @@ static void close_(void *state, core_t *c)
                     (unsigned long long)os.waypoints_rejected,
                     (unsigned long long)os.waypoints_full, (unsigned long long)os.rx.lost,
                     (unsigned long long)os.rx.duplicates, (unsigned long long)os.rx.out_of_order,
-                    (unsigned long long)os.rx.malformed, (unsigned long long)os.cmd_refused);
+                    (unsigned long long)os.rx.malformed, (unsigned long long)os.cmd_refused,
+                    (unsigned long long)os.status_sent, (unsigned long long)os.status_dropped);
         }
     }
     if (c && !c->stopping)
         kept_store(s); /* the next open (a reload's) adopts them */
+    rx_dropped_closed = s->rx_dropped;
     can_port_free(s->port);
     can_socket_free(s->bus);
     can_logfile_close(s->log);
@@ -678,6 +701,8 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
 {
     const can_cfg_t *cfg = cfg_transport(c->cfg, &can_transport);
     can_state_t *s = calloc(1, sizeof *s);
+    if (s) /* the drops of the sockets before a reload go on counting */
+        s->rx_dropped = s->rx_dropped_logged = rx_dropped_closed;
     int rc = 0;
     if (!s) {
         snprintf(why, wl, "out of memory");
@@ -848,7 +873,7 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         can_logfile_flush(s->log);
         log_out_faults(s, 1);
     }
-    can_publish(c, s->port, s->port_index, s->bus_state, s->load_permille, &s->err);
+    can_publish(c, s->port, s->port_index, s->bus_state, s->rx_dropped, s->load_permille, &s->err);
 }
 
 static int input_done(void *state, const obj_t *o)

@@ -72,6 +72,7 @@ typedef struct {
     uint64_t restarts;       /* controller restarts */
     uint64_t bus_errors;     /* error frames with a bus-error class */
     uint64_t overflows;      /* controller buffer overflows */
+    uint64_t rx_dropped;     /* frames the kernel dropped: trajd's receive queue full */
     unsigned tx_err, rx_err; /* last TX/RX error counters the controller reported */
 } core_bus_t;
 

@@ -281,6 +281,7 @@ static void bus_regs(const core_bus_t *b, mbmap_daemon_t *d)
     d->can_restarts = b->restarts;
     d->can_bus_errors = b->bus_errors;
     d->can_overflows = b->overflows;
+    d->can_rx_dropped = b->rx_dropped;
     d->can_tx_err = (uint16_t)b->tx_err;
     d->can_rx_err = (uint16_t)b->rx_err;
 }

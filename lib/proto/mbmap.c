@@ -184,6 +184,7 @@ void mbmap_encode_daemon(uint16_t *regs, const mbmap_daemon_t *d)
     mbmap_put_u32(regs + MBMAP_D_CAN_RESTARTS, lo32(d->can_restarts));
     mbmap_put_u32(regs + MBMAP_D_CAN_BUS_ERRORS, lo32(d->can_bus_errors));
     mbmap_put_u32(regs + MBMAP_D_CAN_OVERFLOWS, lo32(d->can_overflows));
+    mbmap_put_u32(regs + MBMAP_D_CAN_RX_DROPPED, lo32(d->can_rx_dropped));
     regs[MBMAP_D_CAN_TX_ERR] = d->can_tx_err;
     regs[MBMAP_D_CAN_RX_ERR] = d->can_rx_err;
     mbmap_put_u32(regs + MBMAP_D_GEN_TAIL, d->generation);
@@ -594,6 +595,9 @@ static const mbmap_field_t fields[] = {
       "CAN RX error counter, as last reported by the controller"),
     F(ID, MBMAP_D_LOG_DROPPED, 2, MBMAP_T_U32, "log_dropped", "",
       "log lines dropped: the log thread's queue was full"),
+    F(ID, MBMAP_D_CAN_RX_DROPPED, 2, MBMAP_T_U32, "can_rx_dropped", "",
+      "CAN frames the kernel dropped because trajd's receive queue was full (a stall of trajd); "
+      "waypoints among them count as lost"),
     F(ID, MBMAP_D_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "",
       "copy of generation (whole-block reads)"),
 

@@ -127,6 +127,7 @@
 #define MBMAP_D_CAN_TX_ERR 78        /* u16 TX error counter, last reported */
 #define MBMAP_D_CAN_RX_ERR 79        /* u16 RX error counter, last reported */
 #define MBMAP_D_LOG_DROPPED 80       /* u32 log lines dropped: the log thread's queue was full */
+#define MBMAP_D_CAN_RX_DROPPED 82    /* u32 CAN frames the kernel dropped: trajd's receive queue full */
 #define MBMAP_D_GEN_TAIL 98          /* u32 copy of GEN */
 
 /* ---- object block, input registers (offset from MBMAP_OBJ_BASE(k)) ------ */
@@ -301,6 +302,7 @@ typedef struct {
     uint64_t mb_worst_requests, mb_worst_exceptions, mb_worst_drops;
     uint64_t can_err_frames, can_warnings, can_passives, can_bus_offs, can_restarts;
     uint64_t can_bus_errors, can_overflows;
+    uint64_t can_rx_dropped;
     uint16_t can_tx_err, can_rx_err;
     uint64_t drive_emcy, drive_sdo_aborts, drive_hb_lost;
     uint32_t drive_last_abort;

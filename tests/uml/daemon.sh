@@ -91,6 +91,8 @@ timeout 30 candump -r 8000000 -D -L vcan0 > "$out/cap3.log" & cp=$!
 wait_rx vcan0 || fail "candump 3 not ready"
 # a STATUS with the tx-drop flag (0x2x) gets through the slow queue
 wait_grep "$out/cap3.log" "$(status_re 2.)" 500 || fail "no STATUS reporting dropped setpoints"
+# ... and logged as they come, not only at exit
+wait_grep "$out/trajd.err" "setpoint cycle(s) not sent" 500 || fail "dropped setpoints not logged"
 tc qdisc del dev vcan0 root
 kill -0 $tp || fail "trajd died under ENOBUFS"
 kill $cp; wait $cp 2>/dev/null
@@ -103,8 +105,19 @@ cansend vcan0 680#0011
 cansend vcan0 680#0911000000000000
 # STATUS byte 5 = malformed frames = 2 (bytes 0..4 = 10 hex digits before it)
 wait_grep "$out/cap4.log" " 6C0#[0-9A-F]\{10\}02" || fail "malformed frames not reported"
+wait_grep "$out/trajd.err" "malformed frame(s) on id 0x680" 500 || fail "malformed frames not logged"
 kill $cp; wait $cp 2>/dev/null
 touch "$out/ok.malformed"
+
+# ---- E2: trajd stalled while a peer floods it: the frames the kernel drops
+# from its full receive queue are counted (SO_RXQ_OVFL) and logged
+kill -STOP $tp
+cangen vcan0 -I 680 -L 1 -D 00 -g 0 -n 200000 -i 2>/dev/null
+kill -CONT $tp
+wait_grep "$out/trajd.err" "dropped by the kernel, trajd's receive queue full" 500 ||
+    fail "the kernel's receive-queue drops not logged"
+kill -0 $tp || fail "trajd died after the flood"
+touch "$out/ok.rxdrop"
 
 # ---- stop: SIGTERM, trajd exits 0 -------------------------------------------
 kill -TERM $tp
