@@ -64,7 +64,7 @@ const lc_cell_t lc_table[LC_STATE_COUNT][LC_EV_COUNT] = {
         [LC_EV_HEARTBEAT_LOST] = C(FEED_HOLD, LC_FEED_HELD),
         [LC_EV_STALL] = C(ONE_STEP, SAME),         [LC_EV_CLOCK_STEP] = C(CLOCK, SAME),
         RELOADS_MOVING,
-        [LC_EV_LAG] = C(NOTE, SAME),
+        [LC_EV_LAG] = C(STOP, LC_STOPPED),
     },
     [LC_STREAMING] = {
         [LC_EV_FIRST_POSITION] = C(REFUSE, SAME),  [LC_EV_WAYPOINT] = C(CURVE, CURVE),
@@ -103,7 +103,7 @@ const lc_cell_t lc_table[LC_STATE_COUNT][LC_EV_COUNT] = {
         [LC_EV_HEARTBEAT_LOST] = C(FEED_HOLD, LC_FEED_HELD),
         [LC_EV_STALL] = C(ONE_STEP, SAME),         [LC_EV_CLOCK_STEP] = C(CLOCK, SAME),
         RELOADS_MOVING,
-        [LC_EV_LAG] = C(NOTE, SAME),
+        [LC_EV_LAG] = C(STOP, LC_STOPPING),
     },
     [LC_STOPPING] = {
         [LC_EV_FIRST_POSITION] = C(REFUSE, SAME),  [LC_EV_WAYPOINT] = C(BUFFER, SAME),
@@ -169,7 +169,7 @@ const lc_cell_t lc_table[LC_STATE_COUNT][LC_EV_COUNT] = {
         [LC_EV_HEARTBEAT_LOST] = C(FEED_HOLD, LC_FEED_HELD),
         [LC_EV_STALL] = C(ONE_STEP, SAME),         [LC_EV_CLOCK_STEP] = C(CLOCK, SAME),
         RELOADS_KEPT,
-        [LC_EV_LAG] = C(NOTE, SAME),
+        [LC_EV_LAG] = C(STOP, LC_STOPPED),
     },
 };
 /* clang-format on */
