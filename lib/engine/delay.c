@@ -7,7 +7,6 @@
 
 #include "engine_int.h"
 #include "engine_settings.h"
-#include "silence.h"
 #include "timescale.h"
 
 /* The time scaling's limits are converted at no less than this speed (m/s):
@@ -98,10 +97,11 @@ int engine_underrun_format(const engine_status_t *st, char *buf, size_t len)
     if (isfinite(st->underrun_silence_s))
         n = snprintf(buf + off, len - off,
                      "no waypoint after t = %.3f s: the input fell silent, and after %.3g s of "
-                     "silence (beyond the %.3g s D holds for a late one, and %g times the "
-                     "input's longest interval) that was taken as its end, not a late waypoint "
-                     "(not counted): the output plays on to its last waypoint",
-                     newest, st->underrun_silence_s, hold, SILENCE_INTERVALS);
+                     "silence (D holds %.3g s for a late one; the silence that ends a "
+                     "trajectory is longer: lib/engine/silence.h) that was taken as its end, "
+                     "not a late waypoint (not counted): the output plays on to its last "
+                     "waypoint",
+                     newest, st->underrun_silence_s, hold);
     else if (gap > hold) /* (NaN: none came yet) */
         n = snprintf(buf + off, len - off,
                      "no waypoint after t = %.3f s until t = %.3f s, a silence of %.3g s, longer "

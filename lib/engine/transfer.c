@@ -52,8 +52,13 @@ double transfer_duration(const transfer_config_t *c, double dist_m, double v_obj
             v = fmax(v, dist_m / gap_s);
         v = fmax(v, TRANSFER_SPEED_TINY_M_S);
     }
-    if (!(a > 0))
-        a = fmax(a_obj > 0 ? a_obj : TRANSFER_ACCEL_UNKNOWN_M_S2, TRANSFER_ACCEL_TINY_M_S2);
+    if (!(a > 0)) {
+        /* the object's own, at least what reaches its speed within
+         * TRANSFER_REACH_S: a straight line at constant speed shows none (a
+         * rounding residue of 1e-14 m/s^2 made a 1 m transfer last max_s) */
+        a = fmax(a_obj > 0 ? a_obj : TRANSFER_ACCEL_UNKNOWN_M_S2, v / TRANSFER_REACH_S);
+        a = fmax(a, TRANSFER_ACCEL_TINY_M_S2);
+    }
     /* smoothstep: peak speed 1.5 D / T, peak acceleration 6 D / T^2 */
     dur = fmax(1.5 * dist_m / v, sqrt(6.0 * dist_m / a));
     if (capped)

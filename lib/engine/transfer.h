@@ -16,7 +16,8 @@
  *       D / gap (the object itself covered D in that time);
  *   a = transfer_accel_m_s2 if configured, else derived: the largest recent
  *       implied acceleration of the waypoints kept, or
- *       TRANSFER_ACCEL_UNKNOWN_M_S2 if none is known.
+ *       TRANSFER_ACCEL_UNKNOWN_M_S2 if none is known, and at least v /
+ *       TRANSFER_REACH_S.
  * Bounded in time: a derived transfer never lasts longer than max_s (the
  * engine passes max_gap_s: it never spends longer moving between two
  * trajectories than it would wait for a gap) or, across a gap, 1.5 x the gap
@@ -47,6 +48,11 @@
  * by it): the duration is then capped (max_s). */
 #define TRANSFER_SPEED_TINY_M_S 1e-9
 #define TRANSFER_ACCEL_TINY_M_S2 1e-9
+/* A derived acceleration is at least the transfer's speed over this (s): the
+ * object reaches the speed it moves at within it.  Its recent motion may show
+ * no acceleration at all (a straight line at constant speed: a rounding
+ * residue), which is no limit of the object. */
+#define TRANSFER_REACH_S 2.0
 /* Across a gap a derived transfer may take 1.5 x the gap, at most this many
  * times max_s (1 h with max_gap_s = 60 s: cerknicko's 894 s gap gives 1341 s). */
 #define TRANSFER_GAP_CAP 60.0
