@@ -12,6 +12,7 @@
 
 #include <linux/can.h>
 #include <linux/can/raw.h>
+#include <linux/sock_diag.h>
 
 /* The receive queue asked for (SO_RCVBUFFORCE while trajd may, else
  * SO_RCVBUF up to net.core.rmem_max): about 2 000 frames, 4 s of a busy
@@ -27,7 +28,7 @@ struct can_socket {
     can_socket_state_t state;
     int64_t last_try_ns;
     int tried;
-    uint32_t ovfl; /* SO_RXQ_OVFL's count on this socket, as last read */
+    uint32_t ovfl; /* SK_MEMINFO_DROPS of this socket, as last read */
     can_socket_stats_t st;
 };
 
@@ -118,10 +119,9 @@ int can_socket_open(can_socket_t *b)
         rc = -errno;
         goto out;
     }
-    /* the kernel's drops of a full receive queue, counted (SO_RXQ_OVFL), and
-     * a larger queue (neither refused is fatal: a smaller queue still works) */
+    /* a larger receive queue (refused is not fatal: a smaller one still
+     * works; its drops are counted, can_socket_stats) */
     int rcv = CAN_SOCKET_RCVBUF;
-    (void)setsockopt(s, SOL_SOCKET, SO_RXQ_OVFL, &one, sizeof one);
     if (setsockopt(s, SOL_SOCKET, SO_RCVBUFFORCE, &rcv, sizeof rcv) < 0)
         (void)setsockopt(s, SOL_SOCKET, SO_RCVBUF, &rcv, sizeof rcv);
     b->ovfl = 0;
@@ -233,23 +233,7 @@ int can_socket_recv(can_socket_t *b, canproto_frame_t *f)
     if (b->state != CAN_SOCKET_UP)
         return -ENETDOWN;
     for (;;) {
-        union {
-            char buf[CMSG_SPACE(sizeof(uint32_t))];
-            struct cmsghdr align;
-        } ctl;
-        struct iovec iov = {&cf, sizeof cf};
-        struct msghdr mh = {.msg_iov = &iov,
-                            .msg_iovlen = 1,
-                            .msg_control = ctl.buf,
-                            .msg_controllen = sizeof ctl.buf};
-        ssize_t n = recvmsg(b->sock, &mh, 0);
-        for (struct cmsghdr *c = CMSG_FIRSTHDR(&mh); n >= 0 && c; c = CMSG_NXTHDR(&mh, c))
-            if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
-                uint32_t drops;
-                memcpy(&drops, CMSG_DATA(c), sizeof drops);
-                b->st.rx_overflow += (uint32_t)(drops - b->ovfl); /* (wraps at 2^32) */
-                b->ovfl = drops;
-            }
+        ssize_t n = read(b->sock, &cf, sizeof cf);
         if (n < 0) {
             int e = errno;
             if (e == EAGAIN || e == EINTR)
@@ -295,7 +279,17 @@ int can_socket_recv(can_socket_t *b, canproto_frame_t *f)
     }
 }
 
-void can_socket_stats(const can_socket_t *b, can_socket_stats_t *st)
+void can_socket_stats(can_socket_t *b, can_socket_stats_t *st)
 {
+    /* the frames the kernel dropped, its receive queue full: the socket's own
+     * count (SO_MEMINFO, SK_MEMINFO_DROPS), read now (SO_RXQ_OVFL tells it only
+     * with a frame queued after the drops, and none may come) */
+    uint32_t mi[SK_MEMINFO_VARS];
+    socklen_t len = sizeof mi;
+    if (b->sock >= 0 && getsockopt(b->sock, SOL_SOCKET, SO_MEMINFO, mi, &len) == 0 &&
+        len > SK_MEMINFO_DROPS * sizeof mi[0]) {
+        b->st.rx_overflow += (uint32_t)(mi[SK_MEMINFO_DROPS] - b->ovfl); /* (wraps at 2^32) */
+        b->ovfl = mi[SK_MEMINFO_DROPS];
+    }
     *st = b->st;
 }

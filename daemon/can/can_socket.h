@@ -33,7 +33,7 @@ typedef struct {
     uint64_t rx_frames;
     uint64_t rx_errors;   /* short reads, error frames */
     uint64_t rx_overflow; /* frames the kernel dropped, trajd's receive queue full
-                             (SO_RXQ_OVFL: a stall longer than the queue holds) */
+                             (SO_MEMINFO: a stall longer than the queue holds) */
     uint64_t downs;       /* transitions UP -> DOWN */
     uint64_t reopens;     /* transitions DOWN -> UP */
     int last_errno;
@@ -81,6 +81,6 @@ int can_socket_send(can_socket_t *b, const canproto_frame_t *f);
  */
 int can_socket_recv(can_socket_t *b, canproto_frame_t *f);
 
-void can_socket_stats(const can_socket_t *b, can_socket_stats_t *st);
+void can_socket_stats(can_socket_t *b, can_socket_stats_t *st);
 
 #endif
