@@ -791,8 +791,10 @@ static unsigned held_objects(const core_t *c)
         if (stopped && !safety_fault(&o->safety) && !hold && !o->held) {
             log_msg(LOG_ERR,
                     "object '%s' ended held: a stop command latched it with %zu waypoints it "
-                    "never played (start releases it)",
-                    o->name, (size_t)o->lc.len);
+                    "never played%s (start releases it)",
+                    o->name, (size_t)o->lc.len,
+                    lc_free_room(&o->lc, 1) ? ""
+                                            : ", its buffer full, and more its input still held");
             continue;
         }
         if (axis && !safety_fault(&o->safety) && !hold && !o->held) {

@@ -103,6 +103,7 @@ int64_t core_real_ns(void)
 void obj_reset_counters(obj_t *o)
 {
     engine_reset_counters(o->engine);
+    o->lc.n.refused_full = 0;
     o->skipped_ticks = 0;
     o->out_lost = 0;
     o->out_fault = 0;
@@ -320,6 +321,10 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
         rejlog_drain(&o->rejlog, o->engine); /* verdicts given by a finish or a tick */
         engine_status(o->engine, &o->status);
         o->status.skipped_ticks += o->skipped_ticks;
+        /* stopped or held: the room of the buffer its waypoints go to, and
+         * what it refused full, as the engine's own full buffer counts */
+        o->status.free = lc_free_room(&o->lc, o->status.free);
+        o->status.full += o->lc.n.refused_full;
         objlog_note_start(o);
         obj_frames(c->cfg, o);
     }
@@ -742,8 +747,11 @@ int core_done(const core_t *c)
     for (unsigned i = 0; i < c->nobj; i++) {
         const obj_t *o = &c->obj[i];
         const transport_t *in = o->cfg->input;
+        /* (latched by a stop with its buffer full, its input can give no more
+         * before a start: as done as it gets) */
         if (transport_open(c, in) &&
-            (!in->input_done || !in->input_done(c->tstate[transport_index(in)], o)))
+            (!in->input_done || !in->input_done(c->tstate[transport_index(in)], o)) &&
+            !(o->lc.latched && lc_free_room(&o->lc, 1) == 0))
             return 0;
         /* at rest on its last waypoint, or waiting with nothing buffered
          * (its input gave nothing usable: nothing more can happen), or held

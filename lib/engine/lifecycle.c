@@ -213,8 +213,8 @@ int lc_init(lifecycle_t *lc, engine_t *engine, safety_t *safety, int64_t period_
         engine_status_t st;
         engine_status(engine, &st);
         cap = 2 * (st.lookahead + 1);
-        if (cap < 64)
-            cap = 64;
+        if (cap < LC_LATCH_MIN)
+            cap = LC_LATCH_MIN;
     }
     lc->newest_t = NAN;
     lc->buf = calloc(cap, sizeof *lc->buf);
@@ -231,11 +231,16 @@ void lc_free(lifecycle_t *lc)
     lc->cap = lc->len = lc->head = 0;
 }
 
+static int buf_add(lifecycle_t *lc, const engine_waypoint_t *wp);
+
 void lc_inherit(lifecycle_t *lc, const lifecycle_t *from)
 {
     lc->n = from->n;
     lc->n.events[LC_EV_RELOAD_CHANGED]++;
-    lc->n.dropped_full += from->len;
+    for (unsigned i = 0; i < from->len; i++) /* the waypoints it kept, kept */
+        if (buf_add(lc, &from->buf[(from->head + i) % from->cap]) < 0)
+            lc->n.dropped_full++;
+    lc->n.buffered = from->n.buffered;
     lc->hold = from->hold;
     lc->latched = from->latched;
     lc->end_pending = from->end_pending;
@@ -258,6 +263,15 @@ void lc_inherit(lifecycle_t *lc, const lifecycle_t *from)
     }
     if (lc->drive_pos)
         engine_require_position(lc->engine, 1);
+}
+
+uint32_t lc_free_room(const lifecycle_t *lc, uint32_t free)
+{
+    lc_state_t s = lc_state(lc);
+    if (s != LC_STOPPING && s != LC_STOPPED && s != LC_HELD)
+        return free;
+    uint32_t room = lc->cap > lc->len ? lc->cap - lc->len : 0;
+    return room < free ? room : free;
 }
 
 unsigned lc_buffered(const lifecycle_t *lc)
@@ -308,26 +322,28 @@ lc_state_t lc_state(const lifecycle_t *lc)
 
 /* ---- the latch buffer ---------------------------------------------------- */
 
-static void buf_add(lifecycle_t *lc, const engine_waypoint_t *wp)
+/* Kept for the resume; a full buffer refuses it as the engine's would
+ * (-ENGINE_EFULL: flow control, the sender told, nothing taken and then
+ * lost).  It dropped the oldest: 181 of 200 waypoints written to a stopped
+ * object over Modbus, each acknowledged, were gone at start. */
+static int buf_add(lifecycle_t *lc, const engine_waypoint_t *wp)
 {
-    if (!lc->cap) {
-        lc->n.dropped_full++;
-        return;
-    }
-    if (lc->len == lc->cap) { /* the oldest goes: it is the first in the past */
-        lc->head = (lc->head + 1) % lc->cap;
-        lc->len--;
-        lc->n.dropped_full++;
+    if (lc->len >= lc->cap) {
+        lc->n.refused_full++;
+        return -ENGINE_EFULL;
     }
     lc->buf[(lc->head + lc->len) % lc->cap] = *wp;
     lc->len++;
     lc->n.buffered++;
+    return 0;
 }
 
 /* Waypoints the object would already have passed: on the epoch clock, those
  * before the play time now - D; relative, those further behind the newest
- * than the object ran behind its data when it stopped (delay_s), or, that
- * unknown, all but the newest lookahead + 1 (what the curve needs to start). */
+ * than the object ran behind its data when it stopped (delay_s); none when
+ * that is unknown (the object never streamed: a job written while it was
+ * stopped is played whole; all but the newest lookahead + 1 dropped 181 of
+ * 200). */
 static unsigned buf_past(const lifecycle_t *lc)
 {
     unsigned past = 0;
@@ -343,9 +359,7 @@ static unsigned buf_past(const lifecycle_t *lc)
             past++;
         return past;
     }
-    engine_status_t st;
-    engine_status(lc->engine, &st);
-    return lc->len > st.lookahead + 1 ? lc->len - (st.lookahead + 1) : 0;
+    return 0;
 }
 
 /* How far behind its data the object runs now (kept when it stops). */
@@ -541,8 +555,7 @@ static int run_action(lifecycle_t *lc, lc_action_t a, lc_event_t ev, const lc_ar
             if (rc < 0)
                 return rc;
         }
-        buf_add(lc, arg->wp);
-        return 0;
+        return buf_add(lc, arg->wp);
     case LC_A_STOP:
         note_delay(lc);
         lc->latched = 1;

@@ -145,7 +145,9 @@ typedef struct {
     uint64_t refused;             /* events refused (LC_A_REFUSE) */
     uint64_t buffered;            /* waypoints kept while latched or held */
     uint64_t dropped_past;        /* ... dropped on resume: already in the past */
-    uint64_t dropped_full;        /* ... dropped, the oldest, when the buffer was full */
+    uint64_t dropped_full;        /* ... dropped by a reload into a smaller buffer */
+    uint64_t refused_full;        /* ... refused, the buffer full (-ENGINE_EFULL: the sender
+                                     is told, as by the engine's own full buffer) */
     uint64_t stalled_periods;     /* periods the caller missed (LC_EV_STALL: N each) */
     uint64_t clock_steps;         /* CLOCK_REALTIME steps seen */
     double lag_s;                 /* a relative object: time lost to stalls since its
@@ -189,10 +191,12 @@ typedef struct {
 
 /*
  * Own engine (and safety, may be NULL) with a latch buffer of cap waypoints
- * (0: the lookahead the engine needs, twice, at least 64).  Returns 0 or
+ * (0: the lookahead the engine needs, twice, at least LC_LATCH_MIN; full, it
+ * refuses more with -ENGINE_EFULL).  Returns 0 or
  * -ENGINE_ENOMEM.
  */
 int lc_init(lifecycle_t *lc, engine_t *engine, safety_t *safety, int64_t period_ns, unsigned cap);
+#define LC_LATCH_MIN 256 /* 16 kB an object: a job of 256 waypoints written while stopped */
 void lc_free(lifecycle_t *lc);
 
 /* The state now. */
@@ -239,5 +243,9 @@ void lc_step_unsent(lifecycle_t *lc, int64_t now_ns, const engine_clock_t *clk);
 
 /* Waypoints in the latch buffer now. */
 unsigned lc_buffered(const lifecycle_t *lc);
+/* The room left for waypoints: in a state that keeps them in the latch
+ * buffer (stopping, stopped, held), what is left of it, at most free (the
+ * engine's own); else free. */
+uint32_t lc_free_room(const lifecycle_t *lc, uint32_t free);
 
 #endif

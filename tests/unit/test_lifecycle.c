@@ -586,6 +586,50 @@ static void test_stop_latches_until_start(void **state)
     sim_free(&s);
 }
 
+/* Given an object that never streamed, stopped (a job written while it waits
+ * for its start), when 300 waypoints are written (x 0 .. 29.9 m, 0.1 s apart),
+ * then the latch buffer keeps the first LC_LATCH_MIN and refuses the others
+ * with -ENGINE_EFULL, counted (the sender is told, as by the engine's full
+ * buffer), the room shown is 0; start plays the whole buffered job from its
+ * first waypoint, none dropped as past.  Before, a ring of 64 kept the
+ * newest, every write was taken, and start dropped all but the lookahead's:
+ * of 200 written over Modbus, 181 were gone with no counter. */
+static void test_job_written_while_stopped(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    config(&c);
+    engine_t *e = engine_new(&c, NULL);
+    assert_non_null(e);
+    lifecycle_t lc;
+    assert_int_equal(lc_init(&lc, e, NULL, PERIOD_NS, 0), 0);
+    lc_arg_t none = {0, NULL, NULL};
+    assert_int_equal(lc_event(&lc, LC_EV_STOP, &none), 0);
+    assert_int_equal(lc_state(&lc), LC_STOPPED);
+    for (int i = 0; i < 300; i++) {
+        engine_waypoint_t w = {.t_s = 0.1 * i, .pos_m = {0.1 * i, 0, 0}, .seq = (uint32_t)i + 1};
+        lc_arg_t a = {0, &w, NULL};
+        assert_int_equal(lc_event(&lc, LC_EV_WAYPOINT, &a), i < LC_LATCH_MIN ? 0 : -ENGINE_EFULL);
+    }
+    assert_int_equal(lc.n.refused_full, 300 - LC_LATCH_MIN);
+    assert_int_equal(lc_free_room(&lc, 4096), 0);
+    assert_int_equal(lc_event(&lc, LC_EV_START, &none), 0);
+    assert_int_equal(lc.n.dropped_past, 0);
+    double xmin = INFINITY, xmax = -INFINITY;
+    engine_setpoint_t sp;
+    for (int64_t k = 0; k < 10000; k++) {
+        assert_int_equal(lc_tick(&lc, (1000 + k) * PERIOD_NS, NULL, &sp), 0);
+        if (!(sp.flags & ENGINE_SP_NO_POSITION)) {
+            xmin = fmin(xmin, sp.pos_m[0]);
+            xmax = fmax(xmax, sp.pos_m[0]);
+        }
+    }
+    assert_true(xmin <= 1e-9);
+    assert_true(xmax >= 0.1 * (LC_LATCH_MIN - 1) - 1e-6);
+    lc_free(&lc);
+    engine_free(e);
+}
+
 /* Given an object moving at 2 m/s, when its caller stalls 100 periods (1 s),
  * then the next setpoint goes on from the last one sent (one period of
  * motion, not 100), the stall is counted, and a relative object reports the
@@ -930,6 +974,7 @@ int main(void)
         cmocka_unit_test(test_document_is_the_table),
         cmocka_unit_test(test_clear_after_safety_hold),
         cmocka_unit_test(test_stop_latches_until_start),
+        cmocka_unit_test(test_job_written_while_stopped),
         cmocka_unit_test(test_lag_stop_from_motion),
         cmocka_unit_test(test_stall_goes_on_from_last_sent),
         cmocka_unit_test(test_stall_clocked_catches_up),
