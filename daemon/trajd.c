@@ -52,6 +52,7 @@
 #include "fdlimit.h"
 #include "log.h"
 #include "loop.h"
+#include "regfile.h"
 #include "reload.h"
 #include "rt.h"
 #include "stdfds.h"
@@ -858,6 +859,12 @@ int main(int argc, char **argv)
     if (!foreground && detach(&d) < 0) {
         log_msg(LOG_ERR, "cannot detach: %s", strerror(errno));
         return EX_OSERR;
+    }
+    /* the files trajd makes are the [daemon] user's (regfile.h) */
+    if (geteuid() == 0 && d.cfg->daemon.user[0]) {
+        struct passwd *pw = getpwnam(d.cfg->daemon.user);
+        if (pw)
+            regfile_owner(pw->pw_uid, pw->pw_gid);
     }
     rc = open_loop(&d);
     if (rc == 0)

@@ -272,7 +272,7 @@ static int open_out(can_logfile_t *l, const char *out_path, int append, char *er
     /* O_APPEND always: a torn line is cut off the end (cut_torn), and the
      * next write must land there, not at an offset past it */
     int flags = O_WRONLY | O_CREAT | O_CLOEXEC | O_APPEND | (append ? 0 : O_TRUNC);
-    l->out_fd = open(out_path, flags, 0644);
+    l->out_fd = regfile_create(out_path, flags, 0644); /* the [daemon] user's if made here */
     if (l->out_fd < 0 || fstat(l->out_fd, &sb) < 0) {
         snprintf(err, errlen, "%s: %s", out_path, strerror(errno));
         return -1;

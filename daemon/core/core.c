@@ -587,8 +587,11 @@ static int reopen_old(core_t **prevp)
     core_priv_t *q = (core_priv_t *)*prevp;
     char w[256] = "";
     reload_mark_resume(*prevp);
-    if (open_transports(q, w, sizeof w, 1) == 0)
+    int rc = open_transports(q, w, sizeof w, 1);
+    if (rc == 0)
         return 0;
+    if (!q->pub.stats->out_errno) /* what the exit line names (it said "Success") */
+        q->pub.stats->out_errno = -rc;
     log_msg(LOG_CRIT,
             "reload: the running configuration's %s did not reopen: its objects go on without "
             "it (an output's setpoints counted lost: exit 74; an input gives nothing more) until a "

@@ -58,3 +58,34 @@ int regfile_open(const char *path, long long max_bytes, char *why, size_t wl)
     }
     return fd;
 }
+
+static int owner_set;
+static uid_t owner_uid;
+static gid_t owner_gid;
+
+void regfile_owner(unsigned uid, unsigned gid)
+{
+    owner_set = 1;
+    owner_uid = (uid_t)uid;
+    owner_gid = (gid_t)gid;
+}
+
+int regfile_create(const char *path, int flags, unsigned mode)
+{
+    if (owner_set && (flags & O_CREAT)) {
+        int fd = open(path, flags | O_EXCL, (mode_t)mode);
+        if (fd >= 0) {
+            if (fchown(fd, owner_uid, owner_gid) < 0) { /* (root: cannot fail on a local fs) */
+                int e = errno;
+                close(fd);
+                unlink(path);
+                errno = e;
+                return -1;
+            }
+            return fd;
+        }
+        if (errno != EEXIST)
+            return -1;
+    }
+    return open(path, flags, (mode_t)mode);
+}

@@ -21,4 +21,17 @@
  */
 int regfile_open(const char *path, long long max_bytes, char *why, size_t wl);
 
+/*
+ * Started as root with [daemon] user: the files trajd creates for writing (a
+ * CSV output, a CAN log_out) belong to that user, so that after the drop a
+ * reload can open them again (as root's, the first reload of an unchanged
+ * file was refused and the output closed for good).  regfile_owner sets the
+ * owner (main, before anything is opened); regfile_create opens path with
+ * flags (O_CREAT among them) and mode, giving a file it created (O_EXCL
+ * first) to that owner.  Returns the fd or -1 (errno).  A file that was
+ * there is left as it is.
+ */
+void regfile_owner(unsigned uid, unsigned gid);
+int regfile_create(const char *path, int flags, unsigned mode);
+
 #endif

@@ -18,6 +18,7 @@
 #include "csv_shortest.h"
 #include "log.h"
 #include "outworker.h"
+#include "regfile.h"
 #include "spsc.h"
 
 #define CSV_TRANSPORT_LINE_MAX 1024 /* one csv_format line: 16 numbers at most ~25 chars + name */
@@ -610,9 +611,11 @@ static int csv_open(core_t *c, void **state, char *why, size_t wl)
         /* a reload (ticks ran) empties the file only with csv.truncate = always */
         int trunc = oc->truncate == CSV_TRUNCATE_ALWAYS || (oc->truncate && !c->stats->ticks);
         int tail = trunc ? 0 : csv_tail_fields(oc->path); /* before anything is written */
-        int fd = open(
-            oc->path,
-            O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | O_NONBLOCK | (trunc ? O_TRUNC : 0), 0644);
+        int fd = regfile_create(/* (the [daemon] user's if trajd makes it: regfile.h) */
+                                oc->path,
+                                O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC | O_NONBLOCK |
+                                    (trunc ? O_TRUNC : 0),
+                                0644);
         if (fd < 0) {
             rc = -errno;
             snprintf(why, wl, "object '%s': csv.path %s: %s", o->name, oc->path, strerror(errno));
