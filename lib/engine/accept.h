@@ -170,10 +170,14 @@
  * 10, a walker at 1.5 m/s and 0.25 Hz 0.4); else the run waits for the next
  * new position (stops.c). */
 #define ACCEPT_STOP_MAX_M_S2 19.62
-/* ... two repeats: one may be a message received twice (the next new
- * position then tells it stale), two in a row from an object that could have
- * stopped are its stop, judged within D's slack (a verdict later than that
- * ran the output out of curve short of the stop) */
+/* ... at least this many repeats, and as many as the window holds: shorter
+ * runs may be a message received again or a receiver frozen for a fix or two
+ * (the next new position tells them stale: tests/oracle/test_fault_injection.py),
+ * a run the window's length from an object that could have stopped dead there
+ * within ACCEPT_STALE_STOP_M_S2 is its stop (waiting for the next new position,
+ * the output ran out of curve short of the stop and stood in underrun as long
+ * as the object stood); a faster stop waits for the next new position, as a
+ * frozen receiver's repeats must (stops.c) */
 #define ACCEPT_STOP_RUN 2u
 /* Repeats of the anchor held for one verdict at most (stops.c): a longer
  * run with no new position yet is judged there and then. */

