@@ -519,7 +519,8 @@ static int run_open(run_t *run, const opts_t *o)
     if (run->trk.ignored)
         fprintf(stderr,
                 "trajreplay: ignored %zu record%s without a usable fix (no fix, position "
-                "not available, a fast packet missing a frame, another source)\n",
+                "not available, a fast packet missing a frame, another source, an RMC whose "
+                "GGA was lost in a log with altitudes)\n",
                 run->trk.ignored, run->trk.ignored == 1 ? "" : "s");
     if (run->trk.skipped)
         fprintf(stderr, "trajreplay: skipped %zu bad line%s in all%s, the first: %s\n",

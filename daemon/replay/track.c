@@ -154,8 +154,15 @@ static int rows_heading(track_loader_t *L, track_t *trk)
 static int rows_to_track(track_loader_t *L, int geographic, track_t *trk)
 {
     if (L->n == 0) {
-        track_loader_fatal(L, 0,
-                           L->skipped ? "no waypoints (every data line was bad)" : "no waypoints");
+        if (L->ignored) /* well formed, none with a fix: say so (it said only "no waypoints") */
+            track_loader_fatal(L, 0,
+                               "no waypoints: %zu record%s without a usable fix (no fix, position "
+                               "not available%s)",
+                               L->ignored, L->ignored == 1 ? "" : "s",
+                               L->skipped ? ", and every other data line bad" : "");
+        else
+            track_loader_fatal(
+                L, 0, L->skipped ? "no waypoints (every data line was bad)" : "no waypoints");
         return -1;
     }
     if (L->n > UINT32_MAX) {

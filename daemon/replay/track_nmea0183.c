@@ -31,6 +31,7 @@ typedef struct {
 typedef struct {
     track_loader_t *L;
     epoch_t e;
+    int alt_track;   /* a GGA at (nearly) every time: its fixes have an altitude */
     int64_t day;     /* current date, days since 1970 */
     double last_tod; /* for midnight without an RMC date */
     int have_t0;
@@ -46,6 +47,14 @@ static int flush(nmea_t *N)
     e->active = 0;
     if (!e->have) {
         N->L->ignored++; /* no valid fix at this time (GGA quality 0, RMC status V) */
+        return 0;
+    }
+    if (N->alt_track && !e->from_gga) {
+        /* an RMC whose GGA of the same time was lost (cut, a bad checksum) in a
+         * log that has one at (nearly) every time: its altitude is not known,
+         * and the datum's in its place made a 31 m dip in the curve.  Ignored
+         * as a fix not usable */
+        N->L->ignored++;
         return 0;
     }
     double whole = floor(e->tod_s);
@@ -111,6 +120,22 @@ static int sentence(nmea_t *N, const nmea0183_fix_t *f, unsigned long lineno)
     return 0;
 }
 
+/* 1 if the log has a GGA for at least 9 in 10 of its RMCs (or GGAs only): a
+ * time with an RMC alone lost its GGA (a receiver that sends GGA at a lower
+ * rate than RMC gives its other times no altitude by design). */
+static int gga_every_time(const char *buf, size_t len)
+{
+    size_t gga = 0, rmc = 0;
+    for (const char *p = buf, *end = buf + len; (p = memchr(p, '$', (size_t)(end - p)));) {
+        p++;
+        if ((size_t)(end - p) >= 6) {
+            gga += !memcmp(p + 2, "GGA,", 4);
+            rmc += !memcmp(p + 2, "RMC,", 4);
+        }
+    }
+    return gga > 0 && 10 * gga >= 9 * rmc;
+}
+
 /* The date of the first RMC that has one, so fixes before it are dated too. */
 static int64_t first_date(const char *buf, size_t len)
 {
@@ -133,7 +158,8 @@ static int64_t first_date(const char *buf, size_t len)
 
 int track_nmea0183_parse(track_loader_t *L, const char *buf, size_t len)
 {
-    nmea_t N = {.L = L, .day = first_date(buf, len), .last_tod = -1};
+    nmea_t N = {
+        .L = L, .day = first_date(buf, len), .last_tod = -1, .alt_track = gga_every_time(buf, len)};
     track_lines_t it;
     int r;
     track_lines_init(&it, buf, len);

@@ -117,8 +117,10 @@ static const char nmea_text[] =
     "$GPRMC,000003.000,A,4516.398,N,01342.911,E,0.00,0.00,230814,,*05\n";
 
 /* Given NMEA sentences across midnight (no RMC between), then times run on
- * (2.5 s after the first), an invalid GGA is ignored and counted, an RMC
- * alone gives a fix without altitude; detection by content. */
+ * (2.5 s after the first), an invalid GGA is ignored and counted, and so is
+ * an RMC alone in a log with a GGA at every time (its GGA lost: its altitude
+ * unknown; kept at the datum's height, a lost GGA made a 31 m dip in a
+ * walk's curve); detection by content. */
 static void test_nmea_midnight_and_validity(void **state)
 {
     (void)state;
@@ -126,13 +128,47 @@ static void test_nmea_midnight_and_validity(void **state)
     char err[256];
     assert_int_equal(parse("log.txt", nmea_text, TRACK_FMT_AUTO, 0, &t, err, sizeof err), 0);
     assert_int_equal(t.format, TRACK_FMT_NMEA0183);
-    assert_int_equal(t.n, 3);
-    assert_int_equal(t.ignored, 1);
+    assert_int_equal(t.n, 2);
+    assert_int_equal(t.ignored, 2);
     assert_true(fabs(t.wp[1].t_s - 2.5) < 1e-9);
-    assert_true(fabs(t.wp[2].t_s - 4.0) < 1e-9);
     assert_int_equal(t.line[0], 3); /* the GGA's line: it gave the fix */
-    assert_int_equal(t.line[2], 6);
     track_free(&t);
+}
+
+/* Given RMC at 5 Hz and GGA at 1 Hz (a receiver that sends GGA less often by
+ * design), then every RMC time is a fix: those without a GGA are kept. */
+static void test_nmea_gga_at_a_lower_rate(void **state)
+{
+    (void)state;
+    static const char text[] =
+        "$GPRMC,120000.000,A,4516.395,N,01342.911,E,0.00,0.00,220814,,*09\n"
+        "$GPGGA,120000.000,4516.395,N,01342.911,E,1,00,0.0,271.000,M,0.0,M,,*6F\n"
+        "$GPRMC,120000.200,A,4516.396,N,01342.911,E,0.00,0.00,220814,,*08\n"
+        "$GPRMC,120000.400,A,4516.397,N,01342.911,E,0.00,0.00,220814,,*0F\n"
+        "$GPRMC,120000.600,A,4516.398,N,01342.911,E,0.00,0.00,220814,,*02\n"
+        "$GPRMC,120000.800,A,4516.399,N,01342.911,E,0.00,0.00,220814,,*0D\n";
+    track_t t;
+    char err[256];
+    assert_int_equal(parse("r.nmea", text, TRACK_FMT_AUTO, TRACK_SKIP_BAD, &t, err, sizeof err), 0);
+    assert_int_equal(t.skipped, 0);
+    assert_int_equal(t.n, 5);
+    assert_int_equal(t.ignored, 0);
+    track_free(&t);
+}
+
+/* Given an NMEA log whose every sentence has no fix (GGA quality 0, RMC
+ * status V: gpsbabel's default output), then the refusal says so, with the
+ * count (it said only "no waypoints"). */
+static void test_nmea_no_fix_at_all(void **state)
+{
+    (void)state;
+    static const char text[] =
+        "$GPGGA,235959.000,4516.395,N,01342.911,E,0,00,0.0,271.000,M,0.0,M,,*6C\n"
+        "$GPGGA,000001.500,4516.396,N,01342.911,E,0,00,0.0,272.000,M,0.0,M,,*69\n";
+    track_t t;
+    char err[256];
+    assert_int_equal(parse("v.nmea", text, TRACK_FMT_AUTO, 0, &t, err, sizeof err), -1);
+    assert_non_null(strstr(err, "no waypoints: 2 records without a usable fix"));
 }
 
 /* Given a bad checksum, then an error at its line, or with TRACK_SKIP_BAD a
@@ -149,7 +185,7 @@ static void test_nmea_bad_checksum(void **state)
     assert_non_null(strstr(err, "x.nmea:4: missing or wrong checksum"));
     assert_int_equal(parse("x.nmea", text, TRACK_FMT_AUTO, TRACK_SKIP_BAD, &t, err, sizeof err), 0);
     assert_int_equal(t.skipped, 1);
-    assert_int_equal(t.n, 2);
+    assert_int_equal(t.n, 1); /* (and the RMC alone, its GGA lost: test above) */
     assert_non_null(strstr(t.reports[0], "x.nmea:4:"));
     track_free(&t);
 }
@@ -196,9 +232,13 @@ static void test_format_table(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_gpsbabel_nmea_igc), cmocka_unit_test(test_nmea_midnight_and_validity),
-        cmocka_unit_test(test_nmea_bad_checksum), cmocka_unit_test(test_igc_midnight),
+        cmocka_unit_test(test_gpsbabel_nmea_igc),
+        cmocka_unit_test(test_nmea_midnight_and_validity),
+        cmocka_unit_test(test_nmea_bad_checksum),
+        cmocka_unit_test(test_igc_midnight),
         cmocka_unit_test(test_format_table),
+        cmocka_unit_test(test_nmea_gga_at_a_lower_rate),
+        cmocka_unit_test(test_nmea_no_fix_at_all),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
