@@ -655,7 +655,8 @@ static int check_obj(parse_t *p, unsigned i)
         return -1;
     }
     char dwhy[320];
-    if (engine_delay_check(&o->engine, 0.0, dwhy, sizeof dwhy) < 0) { /* issue 26 */
+    if (engine_delay_check(&o->engine, 0.0, dwhy, sizeof dwhy) < 0 || /* issue 26 */
+        engine_axis_jerk_check(&o->engine, dwhy, sizeof dwhy) < 0) {
         fail(p, CFG_EVALUE, o->line, "[object.%s]: engine settings: %s", o->name, dwhy);
         return -1;
     }

@@ -100,7 +100,8 @@ int trajreplay_check_config(const engine_config_t *cfg)
         fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", why ? why : "?");
         return -1;
     }
-    if (engine_delay_check(cfg, 0.0, err, sizeof err)) {
+    if (engine_delay_check(cfg, 0.0, err, sizeof err) ||
+        engine_axis_jerk_check(cfg, err, sizeof err)) {
         fprintf(stderr, "trajreplay: invalid engine configuration: %s\n", err);
         return -1;
     }

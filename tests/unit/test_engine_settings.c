@@ -389,6 +389,29 @@ static void test_fragment_alone_says_why(void **state)
     assert_non_null(strstr(w, "overlap: must be even"));
 }
 
+/* Given a per-axis jerk limit, then fragment and overlap set by hand below
+ * what accuracy picks are refused with the reason and the overlap to use
+ * (with fragment 6 and overlap 2 the junctions' acceleration steps made 57
+ * m/s^3 on a 2 m/s^3 axis, and trajd's monitor held the object); left auto,
+ * or without a jerk limit, they pass. */
+static void test_axis_jerk_needs_the_accuracy_overlap(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    char why[240];
+    engine_config_default(&c);
+    c.fragment = 6;
+    c.overlap = 2;
+    assert_int_equal(engine_config_check(&c, NULL), 0);
+    assert_int_equal(engine_axis_jerk_check(&c, why, sizeof why), 0); /* no jerk limit */
+    c.axis_max_jerk_m_s3[0] = 2.0;
+    assert_int_equal(engine_axis_jerk_check(&c, why, sizeof why), -ENGINE_ECONFIG);
+    assert_non_null(strstr(why, "axis_max_jerk_m_s3 with overlap 2"));
+    assert_non_null(strstr(why, "leave fragment and overlap auto"));
+    c.fragment = c.overlap = ENGINE_AUTO;
+    assert_int_equal(engine_axis_jerk_check(&c, why, sizeof why), 0);
+}
+
 /* Given the defaults, then no setting is unused; given start_vel_m_s without
  * ends = clamped, or smooth_ctrl without method = smooth, then each is said to
  * have no effect (they were accepted and ignored unsaid), and not once the
@@ -428,6 +451,7 @@ int main(void)
         cmocka_unit_test(test_delay_names_a_picked_local_method),
         cmocka_unit_test(test_accuracy_not_met_is_refused),
         cmocka_unit_test(test_fragment_alone_says_why),
+        cmocka_unit_test(test_axis_jerk_needs_the_accuracy_overlap),
         cmocka_unit_test(test_unused_settings_said),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
