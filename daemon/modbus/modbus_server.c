@@ -58,6 +58,23 @@ static int copy_str(char *dst, size_t len, const char *v)
     return 0;
 }
 
+/* A numeric IPv4 or IPv6 address (what the listener takes: AI_NUMERICHOST),
+ * checked here, at its line: a name or 999.1.1.1 passed --check-config and
+ * the start then failed with exit 69 and no file:line.  0 or -EINVAL. */
+static int set_address(modbus_server_config_t *cfg, const char *value, char *err, size_t errlen)
+{
+    unsigned char a[sizeof(struct in6_addr)];
+    if (copy_str(cfg->tcp_address, sizeof cfg->tcp_address, value) < 0 ||
+        (value[0] && inet_pton(AF_INET, value, a) != 1 && inet_pton(AF_INET6, value, a) != 1)) {
+        msg(err, errlen,
+            "modbus: address '%s' is not a numeric IPv4 or IPv6 address (a name is not "
+            "resolved: 127.0.0.1, 0.0.0.0, ::1, ::)",
+            value);
+        return -EINVAL;
+    }
+    return 0;
+}
+
 int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const char *value,
                              char *err, size_t errlen)
 {
@@ -70,7 +87,7 @@ int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const
     else if (!strcmp(key, "systemd_socket"))
         rc = parse_bool(value, &cfg->systemd_socket);
     else if (!strcmp(key, "address"))
-        rc = copy_str(cfg->tcp_address, sizeof cfg->tcp_address, value);
+        return set_address(cfg, value, err, errlen);
     else if (!strcmp(key, "rtu_device"))
         rc = copy_str(cfg->rtu_device, sizeof cfg->rtu_device, value);
     else if (!strcmp(key, "allow")) {

@@ -16,6 +16,27 @@
 #define TRACK "tests/data/n2k_furuno_figure8_src52.csv"
 #define OBJ "[object.boat]\ninput = replay\nreplay.track = " TRACK "\noutput = stdout\n"
 
+/* Given a [modbus] address that is not a numeric IPv4 or IPv6 address (out of
+ * range, a name), then it is refused at its line (it passed the check, and
+ * the start failed with exit 69 and no file:line); numeric ones of both
+ * families are read. */
+static void test_modbus_address(void **state)
+{
+    (void)state;
+    static const char *const bad[] = {"999.1.1.1", "localhost", "1.2.3", "::g"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        char text[512];
+        snprintf(text, sizeof text, "[modbus]\nport = 1502\naddress = %s\n" OBJ, bad[i]);
+        load_bad(text, CFG_EVALUE, 3, "not a numeric IPv4 or IPv6 address");
+    }
+    static const char *const good[] = {"127.0.0.1", "0.0.0.0", "::1", "::"};
+    for (size_t i = 0; i < sizeof good / sizeof good[0]; i++) {
+        char text[512];
+        snprintf(text, sizeof text, "[modbus]\nport = 1502\naddress = %s\n" OBJ, good[i]);
+        cfg_free(load_ok(text));
+    }
+}
+
 /* Given a file that starts with a UTF-8 byte order mark (as some Windows
  * editors write it), then it is read as without it: the section on line 1
  * is a section (it was "line 2: key before any [section]"). */
@@ -117,6 +138,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cia402_box),
         cmocka_unit_test(test_utf8_bom),
+        cmocka_unit_test(test_modbus_address),
         cmocka_unit_test(test_paths_by_identity),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
