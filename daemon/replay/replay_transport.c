@@ -356,6 +356,25 @@ static void files(const cfg_t *cfg, cfg_file_add_fn add, void *ctx)
         }
 }
 
+/* The status and exit lines: the bad lines skipped (replay.skip_bad) and the
+ * records without a usable fix of the tracks replayed, so that they are not
+ * told only once, in the start's log (core_summary). */
+static int summary(const core_t *c, char *buf, size_t len)
+{
+    size_t skipped = 0, ignored = 0;
+    for (unsigned i = 0; i < c->nobj; i++) {
+        if (c->obj[i].cfg->input != &replay_transport)
+            continue;
+        const replay_transport_obj_cfg_t *r = cfg_obj_transport(c->obj[i].cfg, &replay_transport);
+        skipped += r->trk.skipped;
+        ignored += r->trk.ignored;
+    }
+    if (!skipped && !ignored)
+        return 0;
+    return snprintf(buf, len, ", track lines skipped %zu, records without a fix %zu", skipped,
+                    ignored);
+}
+
 const transport_t replay_transport = {
     .name = "replay",
     .roles = TRANSPORT_INPUT,
@@ -370,4 +389,5 @@ const transport_t replay_transport = {
     .close = close_,
     .input_done = input_done,
     .files = files,
+    .summary = summary,
 };

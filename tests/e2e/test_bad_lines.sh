@@ -47,6 +47,12 @@ printf 'replay.skip_bad = yes\n' >> "$tmp/d.conf"
 [ $rc -eq 0 ] && ok || { bad "trajd skip_bad: exit $rc"; cat "$tmp/e4"; }
 has "$tmp/e4" "rows.csv:3: 3 fields" "trajd skip_bad line 3" && ok
 has "$tmp/e4" "rows.csv:5: 5 fields" "trajd skip_bad line 5" && ok
+# ... and run: the skipped lines are on the exit line too, not only in the start's log
+printf '[daemon]\nspeed = 20\nexit_when_done = yes\nstatus_interval_s = 0\n' > "$tmp/r.conf"
+cat "$tmp/d.conf" >> "$tmp/r.conf"
+"$TD" -f -c "$tmp/r.conf" > /dev/null 2> "$tmp/e7"; rc=$?
+[ $rc -eq 0 ] && ok || { bad "trajd skip_bad run: exit $rc"; cat "$tmp/e7"; }
+has "$tmp/e7" "track lines skipped 2" "trajd skip_bad on the exit line" && ok
 
 # A path with "wait 1e300": refused at its line, not replayed short.
 printf 'start 0 0 0\nline 1 0 0\nwait 1e300\nline 5 0 0\n' > "$tmp/w.path"
