@@ -545,6 +545,17 @@ static int parse_args(int argc, char **argv, trajd_t *d, int *foreground, const 
     return -1;
 }
 
+/* Started as root with [daemon] user: the files trajd makes are that user's
+ * (regfile.h), so that a reload after the drop opens them again. */
+static void files_owner(const cfg_t *cfg)
+{
+    if (geteuid() != 0 || !cfg->daemon.user[0])
+        return;
+    struct passwd *pw = getpwnam(cfg->daemon.user);
+    if (pw)
+        regfile_owner(pw->pw_uid, pw->pw_gid);
+}
+
 /* --check-config FILE: the exit code. */
 static int check_config(const char *path)
 {
@@ -860,12 +871,7 @@ int main(int argc, char **argv)
         log_msg(LOG_ERR, "cannot detach: %s", strerror(errno));
         return EX_OSERR;
     }
-    /* the files trajd makes are the [daemon] user's (regfile.h) */
-    if (geteuid() == 0 && d.cfg->daemon.user[0]) {
-        struct passwd *pw = getpwnam(d.cfg->daemon.user);
-        if (pw)
-            regfile_owner(pw->pw_uid, pw->pw_gid);
-    }
+    files_owner(d.cfg);
     rc = open_loop(&d);
     if (rc == 0)
         rc = run(&d);

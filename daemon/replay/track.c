@@ -149,20 +149,27 @@ static int rows_heading(track_loader_t *L, track_t *trk)
     return 0;
 }
 
+/* A track with no waypoint: why.  Well formed, none with a fix: said so (it
+ * said only "no waypoints"). */
+static void no_waypoints(track_loader_t *L)
+{
+    if (L->ignored)
+        track_loader_fatal(L, 0,
+                           "no waypoints: %zu record%s without a usable fix (no fix, position not "
+                           "available%s)",
+                           L->ignored, L->ignored == 1 ? "" : "s",
+                           L->skipped ? ", and every other data line bad" : "");
+    else
+        track_loader_fatal(L, 0,
+                           L->skipped ? "no waypoints (every data line was bad)" : "no waypoints");
+}
+
 /* Rows read by a parser into trk's waypoints (lat/lon to local metres about
  * the first row when geographic).  Returns 0 or -1 (message in L). */
 static int rows_to_track(track_loader_t *L, int geographic, track_t *trk)
 {
     if (L->n == 0) {
-        if (L->ignored) /* well formed, none with a fix: say so (it said only "no waypoints") */
-            track_loader_fatal(L, 0,
-                               "no waypoints: %zu record%s without a usable fix (no fix, position "
-                               "not available%s)",
-                               L->ignored, L->ignored == 1 ? "" : "s",
-                               L->skipped ? ", and every other data line bad" : "");
-        else
-            track_loader_fatal(
-                L, 0, L->skipped ? "no waypoints (every data line was bad)" : "no waypoints");
+        no_waypoints(L);
         return -1;
     }
     if (L->n > UINT32_MAX) {
