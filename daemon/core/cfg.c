@@ -531,8 +531,12 @@ static int key_obj(parse_t *p, cfg_obj_t *o, const cfg_kv_t *kv, char *why, size
     }
     /* engine settings: lib/engine/engine_settings.h's table */
     const engine_setting_t *es = engine_setting_find(kv->key);
-    if (es && !(es->flags & ENGINE_SETTING_DERIVED))
+    if (es && !(es->flags & ENGINE_SETTING_DERIVED)) {
+        size_t k = (size_t)(es - engine_settings);
+        if (k < CFG_ENGINE_KEYS)
+            o->eng_line[k] = kv->line;
         return engine_setting_parse(es, kv->value, &o->engine, why, wl) < 0 ? -CFG_EVALUE : 0;
+    }
     return -CFG_EUNKNOWN;
 }
 
@@ -616,6 +620,24 @@ static void check_ids(parse_t *p)
 }
 
 /* The checks of object i alone; -1 when one failed (p->err set). */
+/* The line of the engine setting a check's reason starts with ("capacity: must
+ * be ...", "delay_s 2 s is ..."), if given; else the object's section line
+ * (every engine error named the section's line, the key's maybe far below). */
+static int eng_key_line(const cfg_obj_t *o, const char *why)
+{
+    char key[48];
+    size_t n = 0;
+    while (why && n + 1 < sizeof key &&
+           (islower((unsigned char)why[n]) || isdigit((unsigned char)why[n]) || why[n] == '_')) {
+        key[n] = why[n];
+        n++;
+    }
+    key[n] = '\0';
+    const engine_setting_t *es = n ? engine_setting_find(key) : NULL;
+    size_t k = es ? (size_t)(es - engine_settings) : CFG_ENGINE_KEYS;
+    return k < CFG_ENGINE_KEYS && o->eng_line[k] ? o->eng_line[k] : o->line;
+}
+
 static int check_obj(parse_t *p, unsigned i)
 {
     cfg_t *c = p->c;
@@ -650,14 +672,15 @@ static int check_obj(parse_t *p, unsigned i)
     }
     const char *ewhy = NULL;
     if (engine_config_check(&o->engine, &ewhy) < 0) {
-        fail(p, CFG_EVALUE, o->line, "[object.%s]: engine settings: %s", o->name,
+        fail(p, CFG_EVALUE, eng_key_line(o, ewhy), "[object.%s]: engine settings: %s", o->name,
              ewhy ? ewhy : "invalid");
         return -1;
     }
     char dwhy[320];
     if (engine_delay_check(&o->engine, 0.0, dwhy, sizeof dwhy) < 0 || /* issue 26 */
         engine_axis_jerk_check(&o->engine, dwhy, sizeof dwhy) < 0) {
-        fail(p, CFG_EVALUE, o->line, "[object.%s]: engine settings: %s", o->name, dwhy);
+        fail(p, CFG_EVALUE, eng_key_line(o, dwhy), "[object.%s]: engine settings: %s", o->name,
+             dwhy);
         return -1;
     }
     if (o->has_initial_position)

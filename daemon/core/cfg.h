@@ -104,6 +104,10 @@ typedef struct {
     cpu_set_t affinity; /* CPUs the daemon may run on */
 } cfg_rt_t;
 
+/* Engine settings whose line an object remembers (engine_settings_count is less:
+ * test_engine_settings). */
+#define CFG_ENGINE_KEYS 64
+
 /* [object.NAME] */
 typedef struct {
     char name[CFG_NAME_MAX];
@@ -115,6 +119,8 @@ typedef struct {
      * reload may not change it (cfg_reload_check). */
     int id;
     int id_line;                   /* line of the id key, 0 if not given */
+    int eng_line[CFG_ENGINE_KEYS]; /* line of each engine setting given (by its index in
+                                      engine_settings[]), 0 if not: an error names its key's line */
     engine_config_t engine;        /* period_ns = daemon.period_ns */
     const struct transport *input; /* required */
     const struct transport *output[CFG_OUTPUTS_MAX];

@@ -96,7 +96,7 @@ const engine_setting_t engine_settings[] = {
     S(period_ns, NULL, INT64, ENGINE_SETTING_DERIVED, 0, 0, NULL, NULL,
       "output period, ns: 1e9 / rate_hz of [daemon] (trajreplay --rate)"),
     S(capacity, "capacity", UNSIGNED, 0, 1, 1 << 20, NULL, "N",
-      "waypoints buffered at most (>= lookahead + fragment)"),
+      "waypoints buffered at most (>= lookahead + fragment + 8)"),
     S(max_gap_s, "max-gap", DOUBLE, 0, 1e-6, 1e9, NULL, "S",
       "a longer interval ends the trajectory at rest, s"),
     S(max_abs_m, "max-abs", DOUBLE, 0, 1e-6, 1e12, NULL, "M",

@@ -181,8 +181,9 @@ static void test_errors(void **state)
     /* a missing track file: at the replay.track line, with the OS's reason */
     load_bad("[object.x]\ninput = replay\noutput = stdout\n\nreplay.track = /nonexistent.csv\n",
              CFG_EVALUE, 5, "nonexistent.csv");
-    /* engine rule (lib/engine/engine.h: overlap even and < fragment): at the object's line */
-    load_bad("[daemon]\n" OBJ "fragment = 8\noverlap = 8\n", CFG_EVALUE, 2, "engine");
+    /* engine rule (lib/engine/engine.h: overlap even and < fragment): at the line of the key
+     * the reason names (it named the object's line) */
+    load_bad("[daemon]\n" OBJ "fragment = 8\noverlap = 8\n", CFG_EVALUE, 7, "engine");
     /* a line too long for inih is refused, not split */
     char big[600];
     snprintf(big, sizeof big, "[daemon]\nlog_level = %0400d\n" OBJ, 0);

@@ -12,9 +12,22 @@
 #include <unistd.h>
 
 #include "cfg.h"
+#include "engine_settings.h"
 
 #define TRACK "tests/data/n2k_furuno_figure8_src52.csv"
 #define OBJ "[object.boat]\ninput = replay\nreplay.track = " TRACK "\noutput = stdout\n"
+
+/* Given an engine setting refused by the settings' own rules (capacity below
+ * what the lookahead and fragment need, delay_s below what the settings
+ * need), then the error names the key's line, not its section's (it named
+ * line 1 for a key on line 7). */
+static void test_engine_error_at_its_key(void **state)
+{
+    (void)state;
+    assert_true(engine_settings_count <= CFG_ENGINE_KEYS);
+    load_bad(OBJ "max_gap_s = 30\n\ncapacity = 10\n", CFG_EVALUE, 7, "capacity: must be at least");
+    load_bad(OBJ "delay_s = 0.5\n", CFG_EVALUE, 5, "delay_s 0.5 s is shorter");
+}
 
 /* Given a [modbus] address that is not a numeric IPv4 or IPv6 address (out of
  * range, a name), then it is refused at its line (it passed the check, and
@@ -136,9 +149,8 @@ static void test_cia402_box(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_cia402_box),
-        cmocka_unit_test(test_utf8_bom),
-        cmocka_unit_test(test_modbus_address),
+        cmocka_unit_test(test_cia402_box),        cmocka_unit_test(test_utf8_bom),
+        cmocka_unit_test(test_modbus_address),    cmocka_unit_test(test_engine_error_at_its_key),
         cmocka_unit_test(test_paths_by_identity),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
