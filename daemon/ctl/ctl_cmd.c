@@ -398,9 +398,13 @@ static void do_command(ctl_t *t, ctl_client_t *cl, ctl_cmd_t cmd, char **w, int 
         return;
     }
     if (rc < 0) {
+        lc_state_t ls = lc_state(&o->lc);
         const char *why = (o->stopping || t->core->stopping) ? "trajd is stopping"
                           : o->held && cmd == CTL_OVERRIDE
                               ? "the object is held (feed hold): clear it first"
+                          : (ls == LC_HELD || ls == LC_FEED_HELD) && cmd == CTL_START
+                              ? "the object is held (a fault, a drive, a lost heartbeat): only "
+                                "clear releases it"
                               : engine_strerror(rc);
         log_peer(LOG_WARNING, cl->peer, "control: %s%s '%s' from %s refused: %s", name, what,
                  o->name, cl->peer, why);

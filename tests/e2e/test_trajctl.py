@@ -459,6 +459,31 @@ class TestPlace(unittest.TestCase):
         self.daemons.append(d)
         return d
 
+    def test_start_refused_while_held_says_why(self):
+        # Given boat held by its safety monitor (a speed bound below its motion), when
+        # trajctl start is sent, then it is refused (exit 1) naming the hold and the
+        # command that releases it (it said "call not valid in this state")
+        text = config(self.tmp).replace("output = csv\ncsv.path = %s\n" % os.path.join(
+            self.tmp, "boat.csv"), "output = csv\ncsv.path = %s\nsafety_max_speed_m_s = 0.01\n"
+            % os.path.join(self.tmp, "boat.csv"), 1)
+        d = self.start(text)
+        d.msg(lambda f: f.get("READY") == "1", timeout=TIMEOUT_S)
+        sock = os.path.join(self.tmp, "ctl.sock")
+        end = time.monotonic() + TIMEOUT_S
+        while True:
+            c = Client(sock)
+            st = c.status("boat")[1]["boat"]
+            c.close()
+            if st["lifecycle"] == "held":
+                break
+            self.assertLess(time.monotonic(), end, "never held: %s" % st)
+            time.sleep(0.05)
+        r = subprocess.run([TRAJCTL, "-s", sock, "start", "boat"], capture_output=True,
+                           text=True, timeout=TIMEOUT_S)
+        self.assertNotEqual(r.returncode, 0, r.stdout)
+        self.assertIn("the object is held", r.stderr + r.stdout)
+        self.assertIn("only clear releases it", r.stderr + r.stdout)
+
     def test_systemd_runtime_directory(self):
         # Given RuntimeDirectory= (systemd sets $RUNTIME_DIRECTORY) and no
         # control_socket, then the socket is $RUNTIME_DIRECTORY/control
