@@ -231,16 +231,16 @@ void lc_free(lifecycle_t *lc)
     lc->cap = lc->len = lc->head = 0;
 }
 
-static int buf_add(lifecycle_t *lc, const engine_waypoint_t *wp);
-
 void lc_inherit(lifecycle_t *lc, const lifecycle_t *from)
 {
     lc->n = from->n;
     lc->n.events[LC_EV_RELOAD_CHANGED]++;
-    for (unsigned i = 0; i < from->len; i++) /* the waypoints it kept, kept */
-        if (buf_add(lc, &from->buf[(from->head + i) % from->cap]) < 0)
+    for (unsigned i = 0; i < from->len; i++) { /* the waypoints it kept, kept (counted then) */
+        if (lc->len < lc->cap)
+            lc->buf[(lc->head + lc->len++) % lc->cap] = from->buf[(from->head + i) % from->cap];
+        else
             lc->n.dropped_full++;
-    lc->n.buffered = from->n.buffered;
+    }
     lc->hold = from->hold;
     lc->latched = from->latched;
     lc->end_pending = from->end_pending;
