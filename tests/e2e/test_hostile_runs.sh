@@ -34,7 +34,7 @@ done
 printf '[object.boat]\ninput = replay\nreplay.track = %s\noutput = stdout\nends = clamped\nstart_vel_m_s = 1e10,0,0\n' \
     "$PWD/$TRACK" > "$tmp/sv.conf"
 "$TD" --check-config "$tmp/sv.conf" > "$tmp/e" 2>&1; rc=$?
-[ $rc -ne 0 ] && grep -q "sv.conf:1: .*start_vel_m_s/end_vel_m_s: faster than" "$tmp/e" && ok ||
+[ $rc -ne 0 ] && grep -q "sv.conf:6: .*start_vel_m_s/end_vel_m_s: faster than" "$tmp/e" && ok ||
     { bad "trajd --check-config start_vel 1e10: exit $rc"; cat "$tmp/e"; }
 
 # an object the safety monitor holds until the end: exit 75, named

@@ -11,6 +11,7 @@ Needs root (as `make check` runs); skipped otherwise, saying so.
 """
 import os
 import pwd
+import shutil
 import signal
 import subprocess
 import sys
@@ -30,7 +31,10 @@ class UserFiles(unittest.TestCase):
     def test_reload_reopens_a_file_trajd_created(self):
         with tempfile.TemporaryDirectory() as d:
             os.chmod(d, 0o755)
-            track = os.path.join(ROOT, "tests", "data", "n2k_furuno_figure8_src52.csv")
+            # the track beside it: a reload reads it again as nobody, who may not enter
+            # the tree (a clone under a directory only root may enter)
+            track = os.path.join(d, "track.csv")
+            shutil.copy(os.path.join(ROOT, "tests", "data", "n2k_furuno_figure8_src52.csv"), track)
             conf = os.path.join(d, "t.conf")
             out = os.path.join(d, "boat.csv")
             with open(conf, "w") as f:
