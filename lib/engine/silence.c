@@ -95,9 +95,9 @@ int engine_silence_tick(engine_t *e, int64_t now_ns)
     }
     if (!engine_silence_pending(e) || now_ns <= e->sil.arrival_ns)
         return 0;
-    if ((double)(now_ns - e->sil.arrival_ns) * 1e-9 <= engine_silence_limit_s(e))
-        return 0;
     double limit = engine_silence_limit_s(e);
+    if ((double)(now_ns - e->sil.arrival_ns) * 1e-9 <= limit)
+        return 0;
     e->sil.arrived = 0;
     e->sil.closed = 1;
     e->st.silent_ends++;
