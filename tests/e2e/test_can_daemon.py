@@ -231,23 +231,7 @@ class CanDaemon(unittest.TestCase):
     # malformed, the duplicate changes nothing, and the object still finishes.
     def test_faults_reported(self):
         d = self.sub("faults")
-        wp = os.path.join(d, "wp.log")
-        ct.write_wplog(self.xyz, wp)
-        with open(wp) as fh:
-            lines = fh.read().splitlines()
-        out = []
-        for line in lines:
-            f = line.split()[-1] if not line.startswith("#") else ""
-            if f.startswith("680#") and int(f[6:8], 16) == 50 and f[4:6] != "04":
-                continue  # drop waypoint 50
-            out.append(line)
-            if f.startswith("680#") and int(f[6:8], 16) == 60 and f[4:6] == "03":
-                ts = line.split()[0]
-                out += [l for l in lines if l.startswith(ts) and "680#" in l]  # 60 again
-                out.append("%s vcan0 680#0011" % ts)            # wrong length
-                out.append("%s vcan0 680#0911000000000000" % ts)  # unknown mux
-        with open(wp, "w") as fh:
-            fh.write("\n".join(out) + "\n")
+        ct.write_faulty_wplog(self.xyz, os.path.join(d, "wp.log"), repeat_60=True)
         p = run_trajd(conf(d))
         self.assertEqual(p.returncode, 0, p.stderr)
         st = ct.decode_by_id(os.path.join(d, "sp.log"), 0x6C0)

@@ -33,30 +33,12 @@ SPEED = 6       # 5 s of wall time: the faults (waypoints 50, 60: 10 and 12 s) a
 RELOAD_AT_S = 3.2
 
 
-def faulty_log(xyz, wp):
-    ct.write_wplog(xyz, wp)
-    with open(wp) as fh:
-        lines = fh.read().splitlines()
-    out = []
-    for line in lines:
-        f = line.split()[-1] if not line.startswith("#") else ""
-        if f.startswith("680#") and int(f[6:8], 16) == 50 and f[4:6] != "04":
-            continue  # waypoint 50 lost
-        out.append(line)
-        if f.startswith("680#") and int(f[6:8], 16) == 60 and f[4:6] == "03":
-            ts = line.split()[0]
-            out.append("%s vcan0 680#0011" % ts)            # wrong length
-            out.append("%s vcan0 680#0911000000000000" % ts)  # unknown mux
-    with open(wp, "w") as fh:
-        fh.write("\n".join(out) + "\n")
-
-
 class CanReload(unittest.TestCase):
     def test_counters_survive_a_reload_and_are_logged(self):
         with tempfile.TemporaryDirectory() as d:
             xyz = os.path.join(d, "track.csv")
             ct.to_xyz(TRACK, xyz, NPOINTS)
-            faulty_log(xyz, os.path.join(d, "wp.log"))
+            ct.write_faulty_wplog(xyz, os.path.join(d, "wp.log"))
             conf = os.path.join(d, "t.conf")
             with open(conf, "w") as fh:
                 fh.write("[daemon]\nrate_hz = 100\nspeed = %d\nexit_when_done = yes\n"

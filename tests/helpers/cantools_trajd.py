@@ -123,6 +123,29 @@ def write_wplog(xyz, out, fd=False, foreign=None, iface="can0", time_scale=1.0, 
     return len(rows), min(len(rows), len(foreign_lines))
 
 
+def write_faulty_wplog(xyz, out, repeat_60=False):
+    """write_wplog with faults: waypoint 50 missing (1 lost), a frame of wrong
+    length and one of an unknown multiplexer after waypoint 60 (2 malformed),
+    and with repeat_60 waypoint 60's frames sent again (a duplicate)."""
+    write_wplog(xyz, out)
+    with open(out) as fh:
+        lines = fh.read().splitlines()
+    res = []
+    for line in lines:
+        f = line.split()[-1] if not line.startswith("#") else ""
+        if f.startswith("680#") and int(f[6:8], 16) == 50 and f[4:6] != "04":
+            continue  # waypoint 50 lost
+        res.append(line)
+        if f.startswith("680#") and int(f[6:8], 16) == 60 and f[4:6] == "03":
+            ts = line.split()[0]
+            if repeat_60:
+                res += [l for l in lines if l.startswith(ts) and "680#" in l]  # 60 again
+            res.append("%s vcan0 680#0011" % ts)            # wrong length
+            res.append("%s vcan0 680#0911000000000000" % ts)  # unknown mux
+    with open(out, "w") as fh:
+        fh.write("\n".join(res) + "\n")
+
+
 def decode_fd_setpoints(log, sp_id=0x6B0):
     """{now_ns: {"x":.., "vx":.., "state":.., "cycle":..}} from SETPOINT_FD frames."""
     db = load_db()
