@@ -10,7 +10,7 @@ The output brakes to rest before the fast segment (lib/engine/TIMESCALE.md "Per-
 limits"), the engine tells its owner, and the lifecycle's lag event stops the object there,
 latched until start or clear (lib/engine/LIFECYCLE.md). Given no start or clear, the object
 never moves again: every row after it came to rest stands there, and trajd, with
-exit_when_done, ends with exit 75 naming it (daemon/REFERENCE.md). Before, the event came
+exit_when_done, ends with exit 75 naming it (daemon/REFERENCE.md), at rest. Before, the event came
 with the output already at rest (state waiting) and was only noted: the object went on by
 itself, by a transfer of 33 m to the second trajectory, leaving the rest of the first
 unplayed, and trajd exited 0.
@@ -84,7 +84,14 @@ class AxisBeyond(unittest.TestCase):
             self.assertLess(pos[-1][0], 3.9 + 1e-6)
             self.assertGreater(pos[-1][0], 3.8)
             self.assertEqual(max(abs(q[1]) for q in pos), 0.0)
-            self.assertLessEqual(math.dist(pos[-1], pos[-2]), 1e-12)
+            # it ends at rest, come to it on the path: the last row still (the stop's
+            # own), the one before it within a braking tick of it (a_max 2 m/s^2 x
+            # 0.01 s x 0.01 s). Where the stop falls in the crawl before the segment
+            # is the spline's ringing at a rate near 0, so the last step is not 0
+            # on every libm (it was 8.5e-6 m in CI).
+            last = rows[-1]
+            self.assertEqual([float(last[k]) for k in ("vx_m_s", "vy_m_s")], [0.0, 0.0])
+            self.assertLessEqual(math.dist(pos[-1], pos[-2]), 2.0 * 0.01 * 0.01)
 
 
 if __name__ == "__main__":
