@@ -67,7 +67,7 @@ static int set_address(modbus_server_config_t *cfg, const char *value, char *err
     if (copy_str(cfg->tcp_address, sizeof cfg->tcp_address, value) < 0 ||
         (value[0] && inet_pton(AF_INET, value, a) != 1 && inet_pton(AF_INET6, value, a) != 1)) {
         msg(err, errlen,
-            "modbus: address '%s' is not a numeric IPv4 or IPv6 address (a name is not "
+            "'%s' is not a numeric IPv4 or IPv6 address (a name is not "
             "resolved: 127.0.0.1, 0.0.0.0, ::1, ::)",
             value);
         return -EINVAL;
@@ -75,11 +75,56 @@ static int set_address(modbus_server_config_t *cfg, const char *value, char *err
     return 0;
 }
 
+/* The numeric keys of [modbus]: name, least and greatest value. */
+static const struct {
+    const char *key;
+    long lo, hi;
+} num_keys[] = {
+    {"port", 0, 65535},
+    {"rtu_baud", 50, 4000000},
+    {"rtu_data_bits", 7, 8},
+    {"rtu_stop_bits", 1, 2},
+    {"unit_id", 1, 247},
+    {"max_clients", 1, MODBUS_SERVER_MAX_CLIENTS_LIMIT},
+    {"idle_timeout_ms", 0, 86400000},
+    {"request_timeout_ms", 100, 600000},
+    {"peer_log_s", 0, 86400},
+};
+
+/* A numeric key's value into its field. */
+static void set_num(modbus_server_config_t *cfg, unsigned k, long x)
+{
+    switch (k) {
+    case 0: cfg->tcp_port = (int)x; break;
+    case 1: cfg->rtu_baud = (int)x; break;
+    case 2: cfg->rtu_data_bits = (int)x; break;
+    case 3: cfg->rtu_stop_bits = (int)x; break;
+    case 4: cfg->unit_id = (int)x; break;
+    case 5: cfg->max_clients = (unsigned)x; break;
+    case 6: cfg->idle_timeout_ms = (unsigned)x; break;
+    case 7: cfg->request_timeout_ms = (unsigned)x; break;
+    default: cfg->peer_log_s = (unsigned)x; break;
+    }
+}
+
+/* A key of [modbus]; a bad value says what the key takes (the caller puts
+ * the file, line, section and key before it). */
 int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const char *value,
                              char *err, size_t errlen)
 {
     long x = 0;
     int rc = 0;
+    const char *expect = "yes or no";
+    for (unsigned k = 0; k < sizeof num_keys / sizeof num_keys[0]; k++)
+        if (!strcmp(key, num_keys[k].key)) {
+            if (parse_uint(value, num_keys[k].lo, num_keys[k].hi, &x) < 0) {
+                msg(err, errlen, "expected a number in [%ld, %ld], got '%s'", num_keys[k].lo,
+                    num_keys[k].hi, value);
+                return -EINVAL;
+            }
+            set_num(cfg, k, x);
+            return 0;
+        }
     if (!strcmp(key, "enabled"))
         rc = parse_bool(value, &cfg->enabled);
     else if (!strcmp(key, "writes"))
@@ -88,46 +133,23 @@ int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const
         rc = parse_bool(value, &cfg->systemd_socket);
     else if (!strcmp(key, "address"))
         return set_address(cfg, value, err, errlen);
-    else if (!strcmp(key, "rtu_device"))
+    else if (!strcmp(key, "rtu_device")) {
         rc = copy_str(cfg->rtu_device, sizeof cfg->rtu_device, value);
-    else if (!strcmp(key, "allow")) {
+        expect = "a device path (too long)";
+    } else if (!strcmp(key, "allow")) {
         rc = copy_str(cfg->allow, sizeof cfg->allow, value);
         if (rc == 0 && modbus_server_allow_check(value, err, errlen) < 0)
             return -EINVAL;
+        expect = "a list of addresses (too long)";
     } else if (!strcmp(key, "write_allow")) {
         rc = copy_str(cfg->write_allow, sizeof cfg->write_allow, value);
         if (rc == 0 && modbus_server_allow_check(value, err, errlen) < 0)
             return -EINVAL;
-    } else if (!strcmp(key, "port")) {
-        if ((rc = parse_uint(value, 0, 65535, &x)) == 0)
-            cfg->tcp_port = (int)x;
-    } else if (!strcmp(key, "rtu_baud")) {
-        if ((rc = parse_uint(value, 50, 4000000, &x)) == 0)
-            cfg->rtu_baud = (int)x;
-    } else if (!strcmp(key, "rtu_data_bits")) {
-        if ((rc = parse_uint(value, 7, 8, &x)) == 0)
-            cfg->rtu_data_bits = (int)x;
-    } else if (!strcmp(key, "rtu_stop_bits")) {
-        if ((rc = parse_uint(value, 1, 2, &x)) == 0)
-            cfg->rtu_stop_bits = (int)x;
-    } else if (!strcmp(key, "unit_id")) {
-        if ((rc = parse_uint(value, 1, 247, &x)) == 0)
-            cfg->unit_id = (int)x;
-    } else if (!strcmp(key, "max_clients")) {
-        if ((rc = parse_uint(value, 1, MODBUS_SERVER_MAX_CLIENTS_LIMIT, &x)) == 0)
-            cfg->max_clients = (unsigned)x;
-    } else if (!strcmp(key, "idle_timeout_ms")) {
-        if ((rc = parse_uint(value, 0, 86400000, &x)) == 0)
-            cfg->idle_timeout_ms = (unsigned)x;
-    } else if (!strcmp(key, "request_timeout_ms")) {
-        if ((rc = parse_uint(value, 100, 600000, &x)) == 0)
-            cfg->request_timeout_ms = (unsigned)x;
-    } else if (!strcmp(key, "peer_log_s")) {
-        if ((rc = parse_uint(value, 0, 86400, &x)) == 0)
-            cfg->peer_log_s = (unsigned)x;
+        expect = "a list of addresses (too long)";
     } else if (!strcmp(key, "word_order")) {
         if ((cfg->word_order = mbmap_order_parse(value)) < 0)
             rc = -EINVAL, cfg->word_order = MBMAP_ORDER_ABCD;
+        expect = "ABCD, CDAB, BADC or DCBA";
     } else if (!strcmp(key, "rtu_parity")) {
         if (!strcmp(value, "N") || !strcmp(value, "none"))
             cfg->rtu_parity = 'N';
@@ -137,12 +159,13 @@ int modbus_server_config_set(modbus_server_config_t *cfg, const char *key, const
             cfg->rtu_parity = 'O';
         else
             rc = -EINVAL;
+        expect = "N, E or O (none, even, odd)";
     } else {
-        msg(err, errlen, "modbus: unknown key '%s'", key);
+        msg(err, errlen, "unknown key '%s'", key);
         return -ENOENT;
     }
     if (rc < 0)
-        msg(err, errlen, "modbus: bad value '%s' for %s", value, key);
+        msg(err, errlen, "expected %s, got '%s'", expect, value);
     return rc;
 }
 

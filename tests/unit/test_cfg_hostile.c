@@ -50,6 +50,28 @@ static void test_modbus_address(void **state)
     }
 }
 
+/* Given a [modbus] value out of its range or not of its kind, then the
+ * error says what the key takes, as [daemon]'s do ("bad value '65536' for
+ * port" gave no range, after a doubled "modbus: modbus:"). */
+static void test_modbus_value_ranges(void **state)
+{
+    (void)state;
+    static const char *const cases[][2] = {
+        {"port = 65536", "[modbus] port: expected a number in [0, 65535], got '65536'"},
+        {"unit_id = 0", "[modbus] unit_id: expected a number in [1, 247], got '0'"},
+        {"rtu_parity = X", "[modbus] rtu_parity: expected N, E or O (none, even, odd)"},
+        {"word_order = XYZW", "[modbus] word_order: expected ABCD, CDAB, BADC or DCBA"},
+        {"writes = maybe", "[modbus] writes: expected yes or no, got 'maybe'"},
+        {"address = localhost", "[modbus] address: 'localhost' is not a numeric"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char text[512];
+        snprintf(text, sizeof text, "[modbus]\n%s\n" OBJ, cases[i][0]);
+        load_bad(text, CFG_EVALUE, 2, cases[i][1]);
+        assert_null(strstr(err, "modbus: modbus"));
+    }
+}
+
 /* Given a file that starts with a UTF-8 byte order mark (as some Windows
  * editors write it), then it is read as without it: the section on line 1
  * is a section (it was "line 2: key before any [section]"). */
@@ -149,8 +171,11 @@ static void test_cia402_box(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_cia402_box),        cmocka_unit_test(test_utf8_bom),
-        cmocka_unit_test(test_modbus_address),    cmocka_unit_test(test_engine_error_at_its_key),
+        cmocka_unit_test(test_cia402_box),
+        cmocka_unit_test(test_utf8_bom),
+        cmocka_unit_test(test_modbus_address),
+        cmocka_unit_test(test_modbus_value_ranges),
+        cmocka_unit_test(test_engine_error_at_its_key),
         cmocka_unit_test(test_paths_by_identity),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
