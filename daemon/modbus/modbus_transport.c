@@ -71,6 +71,11 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
             return -CFG_EVALUE;
         }
     }
+    if (m->enabled && !m->writes_enabled && m->write_allow[0])
+        log_msg(LOG_WARNING,
+                "%s:%d: [modbus] write_allow is set but has no effect: writes = no (no client "
+                "may write)",
+                cfg->path, *line);
     if (m->enabled && !m->tcp_address[0] && !m->rtu_device[0]) {
         snprintf(why, wl, "modbus: neither address (TCP) nor rtu_device (RTU) is set");
         return -CFG_EVALUE;
