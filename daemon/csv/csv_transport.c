@@ -136,6 +136,29 @@ static int stdout_obj_key(void *ocfg, const cfg_kv_t *kv, char *why, size_t wl)
     return -CFG_EUNKNOWN;
 }
 
+/* A csv.path whose directory is not there (yet) is said at check time: the
+ * start fails on it unless it is made first (a RuntimeDirectory is made by
+ * systemd before the unit's check runs), as the start's error then says. */
+static void dir_said(const cfg_t *cfg, const cfg_obj_t *o, const char *path)
+{
+    char d[PATH_MAX];
+    struct stat sb;
+    snprintf(d, sizeof d, "%s", path);
+    char *slash = strrchr(d, '/');
+    if (!slash)
+        return; /* the working directory */
+    if (slash == d)
+        slash[1] = 0;
+    else
+        *slash = 0;
+    if (stat(d, &sb) == 0 && S_ISDIR(sb.st_mode))
+        return;
+    log_msg(LOG_WARNING,
+            "%s:%d: [object.%s] csv.path %s: its directory %s is not a directory that exists: "
+            "the start fails unless it is made first",
+            cfg->path, o->line, o->name, path, d);
+}
+
 static int csv_check(cfg_t *cfg, int *line, char *why, size_t wl)
 {
     int ti = transport_index(&csv_transport);
@@ -148,6 +171,7 @@ static int csv_check(cfg_t *cfg, int *line, char *why, size_t wl)
             snprintf(why, wl, "object '%s': csv.path is missing", cfg->obj[i].name);
             return -CFG_EMISSING;
         }
+        dir_said(cfg, &cfg->obj[i], a->path);
         for (unsigned j = 0; j < i; j++) {
             if (!(cfg_obj_uses(&cfg->obj[j], &csv_transport) & 2))
                 continue;
@@ -618,7 +642,8 @@ static int csv_open(core_t *c, void **state, char *why, size_t wl)
                                 0644);
         if (fd < 0) {
             rc = -errno;
-            snprintf(why, wl, "object '%s': csv.path %s: %s", o->name, oc->path, strerror(errno));
+            snprintf(why, wl, "%s:%d: [object.%s] csv.path %s: %s", c->cfg->path, o->cfg->line,
+                     o->name, oc->path, strerror(errno));
             goto fail;
         }
         if (stream_init(&st->s[i], fd, 1) < 0) {
