@@ -86,12 +86,13 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: trajd [-f] [-c FILE]\n"
-            "       trajd --check-config FILE\n"
+            "       trajd --check-config [FILE]   (or: trajd -c FILE --check-config)\n"
             "Real-time trajectory interpolation daemon.\n"
             "  -c, --config FILE     configuration (default " TRAJD_DEFAULT_CONF ")\n"
             "  -f, --foreground      stay in the foreground (as under systemd);\n"
             "                        without it trajd detaches once it is ready\n"
-            "      --check-config FILE  check FILE, print the first error as file:line, exit\n"
+            "      --check-config [FILE]  check FILE (none: the -c one), print the first\n"
+            "                        error as file:line, exit\n"
             "  -V, --version         print the version\n"
             "  -h, --help            this text\n"
             "Signals: SIGHUP reloads the config, SIGTERM/SIGINT bring objects to rest and exit.\n");
@@ -521,7 +522,7 @@ static int parse_args(int argc, char **argv, trajd_t *d, int *foreground, const 
     static const struct option opts[] = {
         {"config", required_argument, NULL, 'c'},
         {"foreground", no_argument, NULL, 'f'},
-        {"check-config", required_argument, NULL, 'C'},
+        {"check-config", optional_argument, NULL, 'C'},
         {"version", no_argument, NULL, 'V'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0},
@@ -531,12 +532,16 @@ static int parse_args(int argc, char **argv, trajd_t *d, int *foreground, const 
         switch (c) {
         case 'c': d->conf_path = optarg; break;
         case 'f': *foreground = 1; break;
-        case 'C': *check = optarg; break;
+        case 'C': /* FILE, or -c's (trajd -c FILE --check-config) */
+            *check = optarg ? optarg : "";
+            break;
         case 'V': printf("trajd %s\n", TRAJD_VERSION); return 0;
         case 'h': usage(stdout); return 0;
         default: usage(stderr); return EX_USAGE;
         }
     }
+    if (*check && !(*check)[0]) /* --check-config FILE, or with no FILE the -c one */
+        *check = optind < argc ? argv[optind++] : d->conf_path;
     if (optind < argc) {
         fprintf(stderr, "trajd: unexpected argument '%s'\n", argv[optind]);
         usage(stderr);

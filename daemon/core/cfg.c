@@ -20,6 +20,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <syslog.h>
 
 #include "engine_settings.h"
@@ -841,6 +842,13 @@ int cfg_load(const char *path, cfg_t **out, char *err, size_t errlen)
     FILE *fp = fopen(path, "r");
     if (!fp) {
         snprintf(err, errlen, "%s: %s", path, strerror(errno));
+        return -CFG_EIO;
+    }
+    struct stat sb;
+    if (fstat(fileno(fp), &sb) == 0 && S_ISDIR(sb.st_mode)) {
+        /* read as an empty file, it was "no [object.NAME] section" */
+        snprintf(err, errlen, "%s: %s", path, strerror(EISDIR));
+        fclose(fp);
         return -CFG_EIO;
     }
     char dir[PATH_MAX];

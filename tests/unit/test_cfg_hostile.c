@@ -72,6 +72,19 @@ static void test_modbus_value_ranges(void **state)
     }
 }
 
+/* Given a directory as the file (trajd --check-config /tmp), then it is
+ * refused as one; it was read as an empty file, "no [object.NAME] section:
+ * nothing to do". */
+static void test_directory_as_config(void **state)
+{
+    (void)state;
+    cfg_t *c = (cfg_t *)1;
+    char e[512] = "";
+    assert_int_equal(cfg_load("tests/data", &c, e, sizeof e), -CFG_EIO);
+    assert_null(c);
+    assert_string_equal(e, "tests/data: Is a directory");
+}
+
 /* Given a file that starts with a UTF-8 byte order mark (as some Windows
  * editors write it), then it is read as without it: the section on line 1
  * is a section (it was "line 2: key before any [section]"). */
@@ -171,11 +184,9 @@ static void test_cia402_box(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_cia402_box),
-        cmocka_unit_test(test_utf8_bom),
-        cmocka_unit_test(test_modbus_address),
-        cmocka_unit_test(test_modbus_value_ranges),
-        cmocka_unit_test(test_engine_error_at_its_key),
+        cmocka_unit_test(test_cia402_box),          cmocka_unit_test(test_utf8_bom),
+        cmocka_unit_test(test_modbus_address),      cmocka_unit_test(test_modbus_value_ranges),
+        cmocka_unit_test(test_directory_as_config), cmocka_unit_test(test_engine_error_at_its_key),
         cmocka_unit_test(test_paths_by_identity),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
