@@ -71,6 +71,7 @@ typedef struct {
     int watchdog_fd;
     uint64_t seconds;            /* housekeeping ticks */
     int signals_seen;            /* SIGTERM/SIGINT count */
+    uint64_t lost_said;          /* output lines lost as the exit line counted them */
     int ready_fd;                /* background mode: pipe to the waiting parent, else -1 */
     cfg_t *pending;              /* a reload waiting for the objects it removes to rest */
     int pending_fd;              /* its timer (-1: none) */
@@ -765,6 +766,7 @@ static int run(trajd_t *d)
         core_stats_roll(d->core);
         status_line(d, line, sizeof line);
         log_msg(LOG_INFO, "exit: %s", line);
+        d->lost_said = d->stats.out_lost;
     }
     return rc;
 }
@@ -897,8 +899,15 @@ int main(int argc, char **argv)
     } else if (d.stats.exit_code) {
         rc = d.stats.exit_code;
     } else if (rc == 0 && d.stats.out_lost) {
-        log_msg(LOG_ERR, "%llu setpoint lines were lost by the outputs%s%s: exit status %d",
-                (unsigned long long)d.stats.out_lost,
+        /* the exit line counted those lost before the outputs drained: the
+         * lines still queued to a failing writer then were lost too */
+        char more[96] = "";
+        if (d.stats.out_lost > d.lost_said)
+            snprintf(more, sizeof more,
+                     " (%llu after the exit line: queued as the outputs drained)",
+                     (unsigned long long)(d.stats.out_lost - d.lost_said));
+        log_msg(LOG_ERR, "%llu setpoint lines were lost by the outputs%s%s%s: exit status %d",
+                (unsigned long long)d.stats.out_lost, more,
                 d.stats.out_fault ? ", last write error: " : "",
                 d.stats.out_fault ? strerror(d.stats.out_errno) : "", CORE_EXIT_OUTPUT_LOST);
         rc = CORE_EXIT_OUTPUT_LOST;
