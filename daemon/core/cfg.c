@@ -745,8 +745,12 @@ static void check_all(parse_t *p)
         int line = c->tline[t];
         int rc = tr->check(c, &line, why, sizeof why);
         if (rc < 0) {
-            fail(p, rc == -CFG_EMISSING ? CFG_EMISSING : CFG_EVALUE, line, "[%s]: %s", tr->name,
-                 why[0] ? why : "invalid");
+            /* an object's key names its own section ([object.NAME] key: ...) */
+            if (!strncmp(why, "[object.", 8))
+                fail(p, rc == -CFG_EMISSING ? CFG_EMISSING : CFG_EVALUE, line, "%s", why);
+            else
+                fail(p, rc == -CFG_EMISSING ? CFG_EMISSING : CFG_EVALUE, line, "[%s]: %s", tr->name,
+                     why[0] ? why : "invalid");
             return;
         }
     }

@@ -125,7 +125,7 @@ static int check_usable(const cfg_obj_t *o, const replay_transport_obj_cfg_t *r,
             nf++;
     }
     snprintf(why, wl,
-             "object '%s' replay.track: %s: no usable waypoint: all %zu rejected (%s %zu, %s %zu; "
+             "[object.%s] replay.track: %s: no usable waypoint: all %zu rejected (%s %zu, %s %zu; "
              "max_abs_m = %g), the first at line %u",
              o->name, r->path, r->trk.n, engine_reason_name(ENGINE_ERANGE), nr,
              engine_reason_name(ENGINE_ENOTFINITE), nf, o->engine.max_abs_m,
@@ -145,7 +145,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
         replay_transport_obj_cfg_t *r = o->tcfg[transport_index(&replay_transport)];
         if (!r->path[0]) {
             *line = o->line;
-            snprintf(why, wl, "object '%s': replay.track is missing", o->name);
+            snprintf(why, wl, "[object.%s] replay.track is missing", o->name);
             return -CFG_EMISSING;
         }
         if (r->loaded)
@@ -156,7 +156,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
                                  &cached, err, sizeof err);
         if (!r->ref) {
             *line = r->line;
-            snprintf(why, wl, "object '%s' replay.track: %s", o->name, err);
+            snprintf(why, wl, "[object.%s] replay.track: %s", o->name, err);
             return -CFG_EVALUE;
         }
         r->loaded = 1;
@@ -183,7 +183,7 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
                     r->trk.skipped);
         if (r->trk.n == 0) {
             *line = r->line;
-            snprintf(why, wl, "object '%s' replay.track: %s has no waypoints", o->name, r->path);
+            snprintf(why, wl, "[object.%s] replay.track: %s has no waypoints", o->name, r->path);
             return -CFG_EVALUE;
         }
     }

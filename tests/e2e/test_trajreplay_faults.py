@@ -349,7 +349,7 @@ class TestTrajdNothingUsable(unittest.TestCase):
             write(conf, "[daemon]\nspeed = 100\nexit_when_done = yes\nstatus_interval_s = 0\n"
                         "[object.boat]\ninput = replay\nreplay.track = huge.csv\n"
                         "output = stdout\n")
-            msg = ("%s:7: [replay]: object 'boat' replay.track: %s/huge.csv: no usable waypoint: "
+            msg = ("%s:7: [object.boat] replay.track: %s/huge.csv: no usable waypoint: "
                    "all 60 rejected (range 60, not_finite 0; max_abs_m = 1e+07), the first at "
                    "line 2" % (conf, tmp))
             p = subprocess.run([TRAJD, "--check-config", conf], capture_output=True, text=True,
