@@ -105,10 +105,15 @@ int cfg_get_path(const cfg_kv_t *kv, char *out, size_t outlen, char *why, size_t
     int n;
     if (!kv->value[0])
         return cfg_why(why, whylen, "empty path");
-    if (kv->value[0] == '/' || !kv->dir || !kv->dir[0])
-        n = snprintf(out, outlen, "%s", kv->value);
-    else
-        n = snprintf(out, outlen, "%s/%s", kv->dir, kv->value);
+    const char *v = kv->value;
+    if (v[0] == '/' || !kv->dir || !kv->dir[0]) {
+        n = snprintf(out, outlen, "%s", v);
+    } else {
+        while (v[0] == '.' && v[1] == '/' && v[2]) /* ./a.csv beside the file: not ././a.csv */
+            for (v += 2; v[0] == '/';)
+                v++;
+        n = snprintf(out, outlen, "%s/%s", kv->dir, v);
+    }
     if (n < 0 || (size_t)n >= outlen)
         return cfg_why(why, whylen, "path too long");
     return 0;

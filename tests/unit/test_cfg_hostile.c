@@ -100,6 +100,24 @@ static void test_utf8_bom(void **state)
 
 #define VIS "tests/data/gpxgo_visnjan.csv"
 
+/* Given a relative path written with a leading "./" (csv.path = ./a.csv
+ * beside a.csv), then messages quote it as the file's directory joined to
+ * it once: "<dir>/a.csv", not "<dir>/./a.csv" ("././a.csv" for a file in
+ * the working directory). */
+static void test_dot_slash_paths(void **state)
+{
+    (void)state;
+    load_bad("[object.a]\nid = 0\ninput = replay\nreplay.track = " VIS "\noutput = csv\n"
+             "csv.path = trajd-test-dot-a.csv\n"
+             "[object.b]\nid = 1\ninput = replay\nreplay.track = " VIS "\noutput = csv\n"
+             "csv.path = .//./trajd-test-dot-a.csv\n",
+             CFG_EVALUE, 7, "write the same csv.path");
+    char want[sizeof cfg_string_dir + 64];
+    snprintf(want, sizeof want, "%s/trajd-test-dot-a.csv", cfg_string_dir);
+    assert_non_null(strstr(err, want));
+    assert_null(strstr(err, "/./"));
+}
+
 /* Given outputs that name an input, or each other, by another text (issue
  * 24: compared as text, `replay.track = track.csv` with `csv.path =
  * ./track.csv` and csv.truncate passed --check-config and destroyed its own
@@ -184,9 +202,13 @@ static void test_cia402_box(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_cia402_box),          cmocka_unit_test(test_utf8_bom),
-        cmocka_unit_test(test_modbus_address),      cmocka_unit_test(test_modbus_value_ranges),
-        cmocka_unit_test(test_directory_as_config), cmocka_unit_test(test_engine_error_at_its_key),
+        cmocka_unit_test(test_cia402_box),
+        cmocka_unit_test(test_utf8_bom),
+        cmocka_unit_test(test_modbus_address),
+        cmocka_unit_test(test_modbus_value_ranges),
+        cmocka_unit_test(test_directory_as_config),
+        cmocka_unit_test(test_dot_slash_paths),
+        cmocka_unit_test(test_engine_error_at_its_key),
         cmocka_unit_test(test_paths_by_identity),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
