@@ -218,9 +218,10 @@ $(BUILD)/man/trajreplay.1: daemon/doc/trajreplay.1 daemon/doc/help2man.awk daemo
 		-e '/@ENGINE_SETTINGS@/{r $@.opts' -e 'd;}' $< > $@
 	rm -f $@.opts
 
-$(BUILD)/man/trajd.conf.5: config/trajd.conf daemon/doc/conf2man.awk daemon/core/version.h
+# the page describes /etc/trajd/trajd.conf as `make install` writes it (INSTALLED_CONF)
+$(BUILD)/man/trajd.conf.5: config/trajd.conf daemon/doc/conf2man.awk daemon/core/version.h Makefile
 	@mkdir -p $(@D)
-	awk -v version=$(VERSION) -f daemon/doc/conf2man.awk $< > $@
+	$(INSTALLED_CONF) | awk -v version=$(VERSION) -f daemon/doc/conf2man.awk > $@
 
 # ---- Debian packages ---------------------------------------------------
 # Everything beyond a minimal Debian 12 (debootstrap --variant=minbase, which has

@@ -52,5 +52,11 @@ while read -r k; do
     grep -q "^\\\\fB$(printf %s "$k" | sed 's/\./\\./g')\\\\fR" "$man_dir/trajd.conf.5" ||
         bad "trajd.conf(5) has no entry for key $k"
 done < "$tmp/keys"
+# trajd.conf(5) is the installed file's page (make install writes exit_when_done = no:
+# the page said "yes (as the shipped example sets it)")
+MANWIDTH=200 man -l "$man_dir/trajd.conf.5" 2> /dev/null | tr -s ' ' > "$tmp/conf5"
+grep -q "As installed (a service): off" "$tmp/conf5" ||
+    bad "trajd.conf(5) does not describe exit_when_done as installed (off)"
+grep -q "so it is on here" "$tmp/conf5" && bad "trajd.conf(5) describes the repository's example"
 [ "$fail" -eq 0 ] && echo "ok: $(echo $pages | wc -w) pages render cleanly, document every --help option and $(wc -l < "$tmp/keys") config keys"
 exit "$fail"
