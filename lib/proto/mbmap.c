@@ -730,15 +730,6 @@ static const mbmap_field_t fields[] = {
     F(IX, MBMAP_X_TX_CLAMPED, 2, MBMAP_T_U32, "tx_clamped", "",
       "CAN setpoints sent with a value clipped to its field (the SETPOINT frame's velocity "
       "beyond +-32.767 m/s: can.fd = yes carries more); also STATUS bit 3 and a log line"),
-    F(IX, MBMAP_X_AXIS_LAG_STOPS, 2, MBMAP_T_U32, "axis_lag_stops", "",
-      "stops on the path because the per-axis limits made the output lag its input by more "
-      "than max_lag_s (lifecycle event 'lag beyond max_lag_s')"),
-    F(IX, MBMAP_X_AXIS_BEYOND, 2, MBMAP_T_U32, "axis_beyond", "",
-      "stops before a segment over 100 times faster on an axis than its axis_max_* (it would "
-      "need a rate below ENGINE_CEIL_MIN)"),
-    F(IX, MBMAP_X_RESERVE_SLOWED, 2, MBMAP_T_U32, "reserve_slowed", "",
-      "slowdowns along the path of an object faster than the speed D's stop reserve was sized "
-      "for, on input that came on time (not underruns; D grows with it, lib/engine/delay.h)"),
     F(IX, MBMAP_X_MB_WORST_ADDR, 1, MBMAP_T_U16, "mb_worst_addr0", "",
       "the daemon's worst Modbus client (daemon mb_worst_*), its address as 8 groups of 16 bits "
       "in the order IPv6 text writes them (RFC 4291 2.2): group 0; an IPv4 client as "
@@ -751,6 +742,15 @@ static const mbmap_field_t fields[] = {
       "group 5 (0xffff for an IPv4 client)"),
     F(IX, MBMAP_X_MB_WORST_ADDR + 6, 1, MBMAP_T_U16, "mb_worst_addr6", "", "group 6"),
     F(IX, MBMAP_X_MB_WORST_ADDR + 7, 1, MBMAP_T_U16, "mb_worst_addr7", "", "group 7"),
+    F(IX, MBMAP_X_AXIS_LAG_STOPS, 2, MBMAP_T_U32, "axis_lag_stops", "",
+      "stops on the path because the per-axis limits made the output lag its input by more "
+      "than max_lag_s (lifecycle event 'lag beyond max_lag_s')"),
+    F(IX, MBMAP_X_AXIS_BEYOND, 2, MBMAP_T_U32, "axis_beyond", "",
+      "stops before a segment over 100 times faster on an axis than its axis_max_* (it would "
+      "need a rate below ENGINE_CEIL_MIN)"),
+    F(IX, MBMAP_X_RESERVE_SLOWED, 2, MBMAP_T_U32, "reserve_slowed", "",
+      "slowdowns along the path of an object faster than the speed D's stop reserve was sized "
+      "for, on input that came on time (not underruns; D grows with it, lib/engine/delay.h)"),
     F(IX, MBMAP_X_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "",
       "copy of generation (whole-block reads)"),
 
