@@ -140,6 +140,35 @@ class CanSenderTest(unittest.TestCase):
                 self.assertAlmostEqual(float(last[a + "_m"]), float(v), delta=1e-6)
 
 
+    def test_sender_track_columns(self):
+        # Given a track in degrees (the bundled lat/lon CSV), then the sender refuses it in
+        # one line naming the columns it needs and why (it died with a Python KeyError
+        # traceback); given t,x,y with no z, it sends z = 0.
+        with tempfile.TemporaryDirectory() as tmp:
+            out = subprocess.run([PY, os.path.join(EX, "trajd_can_sender.py"), TRACK, "--log",
+                                  os.path.join(tmp, "wp.log")],
+                                 capture_output=True, text=True, timeout=30)
+            self.assertEqual(out.returncode, 1, out.stderr)
+            self.assertNotIn("Traceback", out.stderr)
+            self.assertIn("needs columns t_s (or t), x_m, y_m", out.stderr)
+            self.assertIn("a track in degrees", out.stderr)
+            xy = os.path.join(tmp, "xy.csv")
+            with open(xy, "w") as f:
+                f.write("t,x,y\n0,0,0\n0.5,1.25,-2\n")
+            log = os.path.join(tmp, "xy.log")
+            out = subprocess.run([PY, os.path.join(EX, "trajd_can_sender.py"), xy, "--log", log],
+                                 capture_output=True, text=True, timeout=30)
+            self.assertEqual(out.returncode, 0, out.stderr)
+            fr = ct.load_db().frame_by_id(canmatrix.ArbitrationId(0x680))
+            reader = can.CanutilsLogReader(log)
+            dec = [{k: float(v.phys_value) for k, v in fr.decode(bytes(m.data)).items()}
+                   for m in reader]
+            reader.stop()
+            self.assertEqual([(d["WP_Mux"], d.get("WP_X", d.get("WP_Y", d.get("WP_Z"))))
+                              for d in dec if d["WP_Mux"] in (1, 2, 3)],
+                             [(1, 0.0), (2, 0.0), (3, 0.0), (1, 1.25), (2, -2.0), (3, 0.0)])
+
+
 class ProtocolSnippetTest(unittest.TestCase):
     def test_canmatrix_snippet(self):
         text = open(os.path.join(ROOT, "config", "PROTOCOL.md")).read()

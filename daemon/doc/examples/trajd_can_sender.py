@@ -2,7 +2,7 @@
 """trajd_can_sender.py - send a track to trajd as CAN waypoint frames, paced by its STATUS.
 
 Needs python3-can (Debian).  The track is a CSV with a header and columns
-t_s, x_m, y_m, z_m (seconds of the sender's track clock, metres).  Frames are
+t_s, x_m, y_m, z_m (or t, x, y[, z]: seconds of the sender's track clock, metres).  Frames are
 config/trajd.dbc's TRAJD_WAYPOINT (0x680 + object): four frames per waypoint,
 byte 0 = 0 TIME (uint48, 1 us), 1 X, 2 Y, 3 Z (int48, 1 um), byte 1 = sequence
 number (low 8 bits); then command FINISH (byte 0 = 4, byte 2 = 1).
@@ -35,9 +35,23 @@ FINISHED = 3
 
 
 def read_track(path):
+    """(t, x, y, z) rows of a CSV in metres: columns t_s or t, x_m or x, y_m or y, and z_m or z
+    (optional, 0); a track in degrees (lat/lon) is refused with what to do instead."""
     with open(path) as f:
-        return [(float(r["t_s"]), float(r["x_m"]), float(r["y_m"]), float(r["z_m"]))
-                for r in csv.DictReader(f)]
+        rd = csv.DictReader(f)
+        cols = set(rd.fieldnames or ())
+
+        def col(*names):
+            return next((n for n in names if n in cols), None)
+        t, x, y, z = col("t_s", "t"), col("x_m", "x"), col("y_m", "y"), col("z_m", "z")
+        if not (t and x and y):
+            geo = (" (a track in degrees: this sender sends metres; convert it first, e.g. to "
+                   "east/north metres of its first fix with pyproj)"
+                   if col("lat", "lat_deg", "latitude") else "")
+            sys.exit("%s: needs columns t_s (or t), x_m, y_m (or x, y) and optionally z_m, in "
+                     "metres; its header has %s%s" % (path, ", ".join(rd.fieldnames or ["none"]),
+                                                      geo))
+        return [(float(r[t]), float(r[x]), float(r[y]), float(r[z]) if z else 0.0) for r in rd]
 
 
 def int48(v):
