@@ -262,8 +262,8 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
         log_msg(LOG_INFO, "modbus: TCP on %s port %d, writes %s", mc.tcp_address,
                 modbus_server_tcp_port(t->srv), mc.writes_enabled ? "on" : "off");
     if (mc.rtu_device[0])
-        log_msg(LOG_INFO, "modbus: RTU on %s %d %c%d%d unit %d", mc.rtu_device, mc.rtu_baud,
-                mc.rtu_parity, mc.rtu_data_bits, mc.rtu_stop_bits, mc.unit_id);
+        log_msg(LOG_INFO, "modbus: RTU on %s %d %d%c%d unit %d", mc.rtu_device, mc.rtu_baud,
+                mc.rtu_data_bits, mc.rtu_parity, mc.rtu_stop_bits, mc.unit_id); /* 8E1 */
     *state = t;
     return 0;
 }

@@ -452,6 +452,9 @@ output = stdout
                     self.assertNotEqual(out.returncode, 0, out.stdout)
                 finally:
                     self.assertEqual(d.stop(), 0, "".join(d.log))
+                # the line as the serial notation writes it: data bits, parity, stop bits
+                # (it read "19200 E81")
+                self.assertIn("modbus: RTU on %s 19200 8E1 unit 5" % ttys[0], "".join(d.log))
         finally:
             socat.terminate()
             socat.wait(timeout=mbsim.WAIT_S)
