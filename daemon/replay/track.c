@@ -341,6 +341,11 @@ int track_load_opts(const char *path, track_format_t fmt, unsigned flags, track_
         }
     }
     fclose(f);
+    /* lines that end in CR alone (classic Mac OS, some loggers' exports): read
+     * as lines (it was one line: "no waypoints") */
+    if (rc == 0 && len && !memchr(buf, '\n', len) && memchr(buf, '\r', len))
+        for (char *p = buf; (p = memchr(p, '\r', len - (size_t)(p - buf))) != NULL;)
+            *p++ = '\n';
     if (rc == 0)
         rc = parse(path, buf, len, fmt, flags, trk, err, errlen);
     free(buf);

@@ -66,11 +66,38 @@ static void test_heading_absurd(void **state)
     track_free(&t);
 }
 
+/* Given CSV tracks (one with a comment line) whose lines end in CR alone (classic Mac OS),
+ * then they read as with LF: the same waypoints (they were one line: "no
+ * waypoints"). */
+static void test_cr_only_lines(void **state)
+{
+    (void)state;
+    static const char *const lf[] = {"t,x,y,z\n0,0,0,0\n0.1,1,0,0\n0.2,2,0.5,0\n",
+                                     "# a comment\nt_s,x_m,y_m\n0,1,2\n1,2,3\n"};
+    for (size_t k = 0; k < sizeof lf / sizeof lf[0]; k++) {
+        char cr[256], err[256];
+        snprintf(cr, sizeof cr, "%s", lf[k]);
+        for (char *p = cr; *p; p++)
+            if (*p == '\n')
+                *p = '\r';
+        track_t a, b;
+        assert_int_equal(parse("lf.csv", lf[k], 0, &a, err, sizeof err), 0);
+        if (parse("cr.csv", cr, 0, &b, err, sizeof err) != 0)
+            fail_msg("CR-only lines refused: %s", err);
+        assert_int_equal(a.n, b.n);
+        assert_true(a.n >= 2);
+        assert_memory_equal(a.wp, b.wp, a.n * sizeof a.wp[0]);
+        track_free(&a);
+        track_free(&b);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_path_expansion_bounded),
         cmocka_unit_test(test_heading_absurd),
+        cmocka_unit_test(test_cr_only_lines),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
