@@ -8,7 +8,8 @@
  * settings.  No sleeping: a long track replays as fast as the CPU allows.
  *
  * Engine options are generated from lib/engine/engine_settings.h's table;
- * -c FILE --object NAME takes an object's settings from a trajd config.
+ * -c FILE --object NAME takes an object's settings from a trajd config
+ * (daemon/tools/trajreplay_cfg.c).
  *
  * Gaps: while the engine holds (waiting, underrun, finished between two
  * trajectories) and the next waypoint is due more than max_gap_s later, the
@@ -36,7 +37,6 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "cfg.h"
 #include "cfg_files.h"
 #include "delay.h"
 #include "engine.h"
@@ -46,27 +46,14 @@
 #include "csv_shortest.h"
 #include "geo.h"
 #include "replay_summary.h"
-#include "replay_transport.h"
 #include "stdfds.h"
 #include "csv_fixed.h"
 #include "csv_format.h"
 #include "svg.h"
 #include "track.h"
+#include "trajreplay_cfg.h"
 #include "trajreplay_help.h"
 #include "version.h"
-
-enum {
-    EXIT_INPUT = 1, /* track not loadable, or nothing in it usable */
-    EXIT_USAGE = 2,
-    EXIT_OUTPUT = 3,
-    EXIT_MEMORY = 4,   /* out of memory (never from the input) */
-    EXIT_MAX_ROWS = 5, /* --max-rows reached: the output is cut */
-    EXIT_STRICT = 6,   /* --strict: a waypoint was rejected or a line skipped */
-    EXIT_INTERNAL = 7, /* a solver refused finite data, which the engine documents cannot
-                          happen (a defect to report) */
-    EXIT_AXIS = 8,     /* the per-axis limits stopped the output on its path (issue 32:
-                          axis_lag_stops, axis_beyond): the track was not followed there */
-};
 
 /* Ticks written after the engine reports FINISHED for good: they show the
  * rest state (zero velocity, the last waypoint) to whoever reads the file. */
@@ -84,43 +71,6 @@ enum {
  * run (--progress-after), at most every PROGRESS_EVERY_NS. */
 #define PROGRESS_AFTER_MS 500
 #define PROGRESS_EVERY_NS 250000000LL
-
-/* Engine options given on the command line, applied in order after the
- * settings of -c's object (so they override them). */
-#define ENGINE_ARGS_MAX 64
-
-typedef struct {
-    const char *input;
-    const char *output;
-    const char *svg;
-    const char *object;
-    const char *config;
-    track_format_t format;
-    unsigned load_flags;
-    int summary;
-    int quiet;
-    int rate_given;
-    int keep_gaps;               /* write hold rows through gaps too */
-    int strict;                  /* any rejection or skipped line: EXIT_STRICT */
-    unsigned long long max_rows; /* 0 = no bound */
-    unsigned progress_after_ms;
-    int precision; /* --precision: decimals in fixed notation, or CSV_PREC_* */
-    int binary;    /* --binary: the records of lib/format/spfile.h instead of CSV */
-    int geo;       /* --geo: columns lat_deg,lon_deg,alt_m,heading_deg appended */
-    double rate_hz;
-    double override;  /* --override: the feed override, 0.01..2 (engine_set_override) */
-    int64_t start_ns; /* engine time at which the first waypoint is due */
-    int origin_set;   /* -c: the daemon's datum, about which a geographic track is expressed */
-    double origin[3];
-    engine_config_t cfg;
-    struct {
-        const engine_setting_t *s;
-        const char *arg;
-    } eng[ENGINE_ARGS_MAX];
-    unsigned neng;
-    char track_buf[PATH_MAX];      /* replay.track of -c's object */
-    char object_buf[CFG_NAME_MAX]; /* -c's object name */
-} opts_t;
 
 static int parse_double(const char *s, double *v)
 {
@@ -196,7 +146,7 @@ static void build_long_opts(struct option *lopts, size_t cap)
 }
 
 /* --max-rows, --precision, --override.  Returns -1 to go on, else an exit status. */
-static int parse_numeric(int c, opts_t *o)
+static int parse_numeric(int c, trajreplay_opts_t *o)
 {
     switch (c) {
     case OPT_MAX_ROWS: {
@@ -237,7 +187,7 @@ static int parse_numeric(int c, opts_t *o)
 }
 
 /* One option other than an engine setting.  Returns -1 to go on, else an exit status. */
-static int parse_option(int c, char **argv, opts_t *o)
+static int parse_option(int c, char **argv, trajreplay_opts_t *o)
 {
     switch (c) {
     case 'c': o->config = optarg; return -1;
@@ -295,69 +245,9 @@ static int parse_option(int c, char **argv, opts_t *o)
     }
 }
 
-/*
- * -c FILE: the engine settings and rate of one object of a trajd config,
- * and its replay.track, replay.format, replay.skip_bad and replay.start_s
- * (a TRACK given on the command line wins, with --format and --skip-bad).  Returns -1 to go on, else an exit
- * status.
- */
-static int load_config(opts_t *o)
-{
-    cfg_t *c = NULL;
-    char err[CFG_WHY_MAX + PATH_MAX];
-    if (cfg_load(o->config, &c, err, sizeof err) < 0) {
-        fprintf(stderr, "trajreplay: %s\n", err);
-        return EXIT_USAGE;
-    }
-    const cfg_obj_t *obj = NULL;
-    char names[CFG_OBJECTS_MAX * (CFG_NAME_MAX + 2)] = "";
-    for (unsigned i = 0; i < c->nobj; i++) {
-        size_t n = strlen(names);
-        snprintf(names + n, sizeof names - n, "%s%s", i ? ", " : "", c->obj[i].name);
-        if (o->object ? strcmp(c->obj[i].name, o->object) == 0 : c->nobj == 1)
-            obj = &c->obj[i];
-    }
-    int rc = -1;
-    if (!obj) {
-        fprintf(stderr, "trajreplay: %s: %s (objects: %s)\n", o->config,
-                o->object ? "no such object" : "several objects: choose one with --object", names);
-        rc = EXIT_USAGE;
-        goto out;
-    }
-    snprintf(o->object_buf, sizeof o->object_buf, "%s", obj->name);
-    o->object = o->object_buf;
-    o->cfg = obj->engine; /* period_ns from the daemon's rate_hz */
-    if (!o->rate_given)
-        o->rate_hz = c->daemon.rate_hz;
-    if (obj->input == &replay_transport) {
-        const replay_transport_obj_cfg_t *r = cfg_obj_transport(obj, &replay_transport);
-        if (!o->input) {
-            snprintf(o->track_buf, sizeof o->track_buf, "%s", r->path);
-            o->input = o->track_buf;
-            o->format = r->format;
-            if (r->skip_bad) /* as trajd reads it */
-                o->load_flags |= TRACK_SKIP_BAD;
-        }
-        o->start_ns = llround(r->start_s * 1e9);
-        if (c->datum_set) {
-            o->origin_set = 1;
-            o->origin[0] = c->datum.lat0_deg;
-            o->origin[1] = c->datum.lon0_deg;
-            o->origin[2] = c->datum.alt0_m;
-        }
-    } else if (!o->input) {
-        fprintf(stderr, "trajreplay: %s: object %s has input = %s, not replay: give a TRACK\n",
-                o->config, obj->name, obj->input->name);
-        rc = EXIT_USAGE;
-    }
-out:
-    cfg_free(c);
-    return rc;
-}
-
 /* Command-line engine settings, the rate, and the object column.  Returns -1
  * to go on, else an exit status. */
-static int finish_opts(opts_t *o)
+static int finish_opts(trajreplay_opts_t *o)
 {
     for (unsigned i = 0; i < o->neng; i++) {
         char why[160];
@@ -394,7 +284,7 @@ static int finish_opts(opts_t *o)
 }
 
 /* Returns -1 to go on, else an exit status. */
-static int parse_args(int argc, char **argv, opts_t *o)
+static int parse_args(int argc, char **argv, trajreplay_opts_t *o)
 {
     struct option lopts[FIXED_OPTS + ENGINE_ARGS_MAX + 1];
     build_long_opts(lopts, sizeof lopts / sizeof lopts[0]);
@@ -416,7 +306,7 @@ static int parse_args(int argc, char **argv, opts_t *o)
     }
     if (optind < argc)
         o->input = argv[optind];
-    if (o->config && (rc = load_config(o)) >= 0)
+    if (o->config && (rc = trajreplay_load_config(o)) >= 0)
         return rc;
     if (!o->object)
         o->object = "replay";
@@ -432,7 +322,7 @@ static int64_t mono_ns(void)
 
 /* One replay: its inputs, outputs and what was seen. */
 typedef struct {
-    const opts_t *o;
+    const trajreplay_opts_t *o;
     track_t trk;
     engine_t *e;
     replay_t r;
@@ -482,7 +372,7 @@ static void run_flush_rows(run_t *run)
 
 /* Load the track, make the engine and open the outputs.  Returns -1 to go
  * on, else an exit status (run_free releases what was made). */
-static int run_open(run_t *run, const opts_t *o)
+static int run_open(run_t *run, const trajreplay_opts_t *o)
 {
     static char outbuf[1 << 20]; /* static: stdout may still use it at exit */
     static char rows[ROWS_BUF];
@@ -881,7 +771,7 @@ static int run_ticks(run_t *run)
 /* The --svg drawing.  Returns 0 or EXIT_OUTPUT. */
 static int run_svg(run_t *run)
 {
-    const opts_t *o = run->o;
+    const trajreplay_opts_t *o = run->o;
     for (size_t i = 0; i < run->trk.n; i++)
         svg_plot_waypoint(run->plot, run->trk.wp[i].pos_m[0], run->trk.wp[i].pos_m[1],
                           i < run->r.next && run->results[i] >= 0);
@@ -930,7 +820,7 @@ static int run_close(run_t *run, int status)
 
 int main(int argc, char **argv)
 {
-    opts_t o;
+    trajreplay_opts_t o;
     run_t run;
     if (stdfds_open() < 0)
         return 71; /* EX_OSERR: no /dev/null */
