@@ -370,6 +370,28 @@ static void run_flush_rows(run_t *run)
     run->nrows = 0;
 }
 
+/* The engine, made as trajd's new_objects makes it: with -c, where the object
+ * stands at start (initial_position: the output holds there and reaches the
+ * first waypoint by a transfer); then --override.  Returns -1 to go on, else
+ * an exit status. */
+static int run_engine(run_t *run, const trajreplay_opts_t *o)
+{
+    int eng_err = 0;
+    run->e = engine_new(&o->cfg, &eng_err);
+    if (!run->e) {
+        fprintf(stderr, "trajreplay: engine: %s\n", engine_strerror(eng_err));
+        return EXIT_MEMORY;
+    }
+    if (o->has_initial_position && engine_set_position(run->e, o->initial_position_m) < 0) {
+        fprintf(stderr, "trajreplay: %s: object %s: initial_position outside max_abs_m\n",
+                o->config, o->object);
+        return EXIT_USAGE;
+    }
+    if (o->override > 0)
+        (void)engine_set_override(run->e, o->override); /* within its range: parsed so */
+    return -1;
+}
+
 /* Load the track, make the engine and open the outputs.  Returns -1 to go
  * on, else an exit status (run_free releases what was made). */
 static int run_open(run_t *run, const trajreplay_opts_t *o)
@@ -377,7 +399,6 @@ static int run_open(run_t *run, const trajreplay_opts_t *o)
     static char outbuf[1 << 20]; /* static: stdout may still use it at exit */
     static char rows[ROWS_BUF];
     char err[512];
-    int eng_err = 0;
     memset(run, 0, sizeof *run);
     run->o = o;
     run->out = stdout;
@@ -416,13 +437,9 @@ static int run_open(run_t *run, const trajreplay_opts_t *o)
         fprintf(stderr, "trajreplay: skipped %zu bad line%s in all%s, the first: %s\n",
                 run->trk.skipped, run->trk.skipped == 1 ? "" : "s",
                 run->trk.skipped > run->trk.nreports ? " (the first ones listed above)" : "", err);
-    run->e = engine_new(&o->cfg, &eng_err);
-    if (!run->e) {
-        fprintf(stderr, "trajreplay: engine: %s\n", engine_strerror(eng_err));
-        return EXIT_MEMORY;
-    }
-    if (o->override > 0)
-        (void)engine_set_override(run->e, o->override); /* within its range: parsed so */
+    int rc = run_engine(run, o);
+    if (rc >= 0)
+        return rc;
     run->results = malloc(run->trk.n * sizeof *run->results);
     if (o->svg)
         run->plot = svg_plot_new(SVG_POINTS_DEFAULT, run->trk.geographic);

@@ -4,9 +4,28 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "can_cfg.h"
+#include "can_transport.h"
 #include "cfg.h"
 #include "replay_transport.h"
 #include "trajreplay_cfg.h"
+
+/* An object whose drives report where they stand (can.cia402 = feedback or
+ * managed): trajd holds it until they are enabled, and starts it there; no
+ * file says where that is, so trajreplay starts without it, and says so. */
+static void notice_drives(const cfg_obj_t *obj)
+{
+    if (!(cfg_obj_uses(obj, &can_transport) & 2))
+        return;
+    canproto_ids_t ids;
+    can_obj_ids(cfg_obj_transport(obj, &can_transport), (unsigned)obj->id, &ids);
+    if (ids.cia402 >= CANPROTO_CIA402_FEEDBACK)
+        fprintf(stderr,
+                "trajreplay: notice: object %s: can.cia402 = %s ignored: where its drives "
+                "stand is not known offline (starts at %s)\n",
+                obj->name, ids.cia402 == CANPROTO_CIA402_MANAGED ? "managed" : "feedback",
+                obj->has_initial_position ? "initial_position" : "the first waypoint");
+}
 
 int trajreplay_load_config(trajreplay_opts_t *o)
 {
@@ -36,6 +55,9 @@ int trajreplay_load_config(trajreplay_opts_t *o)
     o->cfg = obj->engine; /* period_ns from the daemon's rate_hz */
     if (!o->rate_given)
         o->rate_hz = c->daemon.rate_hz;
+    o->has_initial_position = obj->has_initial_position; /* as trajd's new_objects */
+    memcpy(o->initial_position_m, obj->initial_position_m, sizeof o->initial_position_m);
+    notice_drives(obj);
     if (obj->input == &replay_transport) {
         const replay_transport_obj_cfg_t *r = cfg_obj_transport(obj, &replay_transport);
         if (!o->input) {
