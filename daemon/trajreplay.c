@@ -294,6 +294,7 @@ static int parse_args(int argc, char **argv, trajreplay_opts_t *o)
     o->progress_after_ms = PROGRESS_AFTER_MS;
     o->precision = CSV_PREC_SHORTEST;
     o->max_rows = MAX_ROWS_DEFAULT;
+    o->catchup = -1; /* the engine's, unless -c */
     opterr = 0;
     int c, rc;
     while ((c = getopt_long(argc, argv, ":c:o:qhV", lopts, NULL)) != -1)
@@ -370,10 +371,10 @@ static void run_flush_rows(run_t *run)
     run->nrows = 0;
 }
 
-/* The engine, made as trajd's new_objects makes it: with -c, where the object
- * stands at start (initial_position: the output holds there and reaches the
- * first waypoint by a transfer); then --override.  Returns -1 to go on, else
- * an exit status. */
+/* The engine, made as trajd's new_objects makes it: with -c, [daemon] catchup
+ * (cfg bounds: 0 .. 1) and where the object stands at start (initial_position:
+ * the output holds there and reaches the first waypoint by a transfer); then
+ * --override.  Returns -1 to go on, else an exit status. */
 static int run_engine(run_t *run, const trajreplay_opts_t *o)
 {
     int eng_err = 0;
@@ -382,6 +383,8 @@ static int run_engine(run_t *run, const trajreplay_opts_t *o)
         fprintf(stderr, "trajreplay: engine: %s\n", engine_strerror(eng_err));
         return EXIT_MEMORY;
     }
+    if (o->catchup >= 0)
+        (void)engine_set_catchup(run->e, o->catchup);
     if (o->has_initial_position && engine_set_position(run->e, o->initial_position_m) < 0) {
         fprintf(stderr, "trajreplay: %s: object %s: initial_position outside max_abs_m\n",
                 o->config, o->object);

@@ -55,7 +55,8 @@ int trajreplay_load_config(trajreplay_opts_t *o)
     o->cfg = obj->engine; /* period_ns from the daemon's rate_hz */
     if (!o->rate_given)
         o->rate_hz = c->daemon.rate_hz;
-    o->has_initial_position = obj->has_initial_position; /* as trajd's new_objects */
+    o->catchup = c->daemon.catchup; /* as trajd's new_objects: every engine */
+    o->has_initial_position = obj->has_initial_position;
     memcpy(o->initial_position_m, obj->initial_position_m, sizeof o->initial_position_m);
     notice_drives(obj);
     if (obj->input == &replay_transport) {

@@ -56,6 +56,7 @@ typedef struct {
     int64_t start_ns; /* engine time at which the first waypoint is due */
     int origin_set;   /* -c: the daemon's datum, about which a geographic track is expressed */
     double origin[3];
+    double catchup;           /* -c: [daemon] catchup (engine_set_catchup); < 0: the engine's */
     int has_initial_position; /* -c: the object's initial_position, where trajd starts it */
     double initial_position_m[ENGINE_AXES];
     engine_config_t cfg;
@@ -71,8 +72,9 @@ typedef struct {
 /*
  * -c FILE: the engine settings and rate of one object of a trajd config,
  * and its replay.track, replay.format, replay.skip_bad and replay.start_s
- * (a TRACK given on the command line wins, with --format and --skip-bad), and
- * its initial_position (where trajd starts it: the engine's position before
+ * (a TRACK given on the command line wins, with --format and --skip-bad),
+ * [daemon] catchup (the lag won back, in relative time too), and its
+ * initial_position (where trajd starts it: the engine's position before
  * the first waypoint).  Where trajd takes the start from the drives
  * (can.cia402 = feedback or managed), which no file gives, a notice says so.
  * Returns -1 to go on, else an exit status (said on stderr).

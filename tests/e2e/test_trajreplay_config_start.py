@@ -7,6 +7,8 @@ NAME", byte-identical).
   and reaches the first waypoint by a transfer; trajreplay -c writes the same
   rows (it started with NaN rows, flag NO_POSITION, and waited at the first
   waypoint: no transfer, and no word of it);
+- [daemon] catchup (how fast a lag is won back, relative time too):
+  trajreplay -c gives the engine the config's, as trajd does;
 - can.cia402 = feedback or managed (trajd starts the object where its drives
   stand): no file says where that is, so trajreplay says in one line that it
   ignores the key.
@@ -139,6 +141,24 @@ class ConfigStart(unittest.TestCase):
                   file=sys.stderr)
             self.assertLessEqual(worst, bound + 1e-12)
             self.assertGreater(worst, 0.5 * bound)  # it did move at about that speed
+
+    def test_catchup_as_trajd(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            # Given [daemon] catchup = 0 (the lag after the transfer from
+            # initial_position is never won back; the engine's default wins it
+            # back at 5 %), then trajreplay -c writes trajd's rows
+            dl, rl, _ = run_both(tmp, "initial_position = %g,%g,%g\n" % START,
+                                 "catchup = 0\n")
+            n = self.assert_rows_equal(dl, rl)
+            # (and the key does change them: not the same rows as by default)
+            default = os.path.join(tmp, "default.csv")
+            write(os.path.join(tmp, "d.conf"), conf_text("initial_position = %g,%g,%g\n" % START))
+            r = subprocess.run([TRAJREPLAY, "-q", "-c", os.path.join(tmp, "d.conf"), "-o", default],
+                               capture_output=True, text=True, timeout=120)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            with open(default) as f:
+                self.assertNotEqual(f.read().splitlines(), rl)
+            print("catchup = 0: %d rows equal to trajd's" % n, file=sys.stderr)
 
     def test_drive_feedback_noticed(self):
         with tempfile.TemporaryDirectory() as tmp:
