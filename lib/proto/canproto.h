@@ -571,6 +571,7 @@ typedef struct {
     int64_t pos_um[ENGINE_AXES];
     int16_t vel_cm_s[ENGINE_AXES];
     uint32_t stamp; /* order in which slots were opened (oldest is evicted) */
+    uint32_t seen;  /* canproto_rx_t.tick of its last frame (stale: CANPROTO_RX_STALE_FRAMES) */
 } canproto_slot_t;
 
 typedef struct {
@@ -580,9 +581,14 @@ typedef struct {
     uint64_t completed;    /* waypoints reassembled and handed out */
     uint64_t lost;         /* waypoints never handed out (sequence gaps) */
     uint64_t duplicates;   /* frames or waypoints already handed out, ignored */
-    uint64_t out_of_order; /* frames of a waypoint older than the last handed out, dropped */
-    uint64_t incomplete;   /* partial waypoints abandoned (also counted in lost) */
+    uint64_t out_of_order; /* frames of a waypoint older than the last handed out (1..128
+                            * behind, its time not later), dropped */
+    uint64_t incomplete;   /* partial waypoints ahead abandoned (also counted in lost) */
     uint64_t commands;
+    uint64_t resyncs;     /* waypoints behind but later in time, taken: the sender restarted
+                           * its numbering (canproto_rx_frame) */
+    uint8_t resync_seq;   /* the last resync: the waypoint's seq (8 bits) ... */
+    uint8_t resync_after; /* ... and the seq of the waypoint consumed before it */
 } canproto_rx_stats_t;
 
 typedef struct {
@@ -590,7 +596,9 @@ typedef struct {
     unsigned nslots;
     int have_last;     /* a waypoint was consumed since init/restart */
     uint32_t last_seq; /* extended sequence number of the last consumed waypoint */
-    uint32_t stamp;
+    double last_t_s;   /* its time (wp.t_s), if have_last */
+    uint32_t stamp;    /* slots opened */
+    uint32_t tick;     /* classic waypoint frames offered to the slots (their age) */
     canproto_rx_stats_t st;
 } canproto_rx_t;
 
@@ -606,6 +614,8 @@ typedef struct {
     canproto_cmd_t cmd;
     unsigned cmd_arg;     /* byte 3: OVERRIDE percent (0 for the other commands) */
     uint32_t lost_before; /* waypoints missing between the last consumed one and this */
+    uint32_t resync;      /* 1: behind the last consumed one but later in time (a sender
+                           * that restarted its numbering): the tracking restarts from it */
 } canproto_rx_out_t;
 
 /*
@@ -618,20 +628,35 @@ void canproto_rx_init(canproto_rx_t *rx, canproto_slot_t *slots, unsigned nslots
 void canproto_rx_restart(canproto_rx_t *rx);
 
 /*
+ * A slot that had no frame while this many classic waypoint frames were
+ * offered is stale: a frame behind may take it (canproto_rx_frame).
+ */
+#define CANPROTO_RX_STALE_FRAMES 32u
+
+/*
  * Offer one frame received on a waypoint id (is_fd_id: it came on the FD
  * waypoint id).  Sequence numbers are 8 bits on the wire; a waypoint whose
  * seq is 1..127 ahead of the last consumed one is new (a gap of k counts k
- * lost when it is consumed), 0 behind is a duplicate, 1..128 behind is out of
- * order.  A completed waypoint is NOT consumed yet: the caller offers it to
- * the engine and calls canproto_rx_consume() unless the engine answered
- * EFULL, so the sender can repeat it after reading STATUS.
+ * lost when it is consumed), 0 behind is a duplicate.  One 1..128 behind is
+ * judged by its time once complete: later than the last consumed one's, it
+ * is a sender that restarted its numbering (out->resync; the tracking
+ * restarts from it, nothing counted lost, its extended number still goes
+ * forward); else it is out of order, dropped (its frames counted).  So the
+ * frames of a waypoint behind reassemble too, but never at the cost of a
+ * partial waypoint ahead: a frame behind takes a free slot, else a stale one
+ * (CANPROTO_RX_STALE_FRAMES), else the oldest slot behind, else it is
+ * dropped; a frame ahead takes a free slot, else the oldest slot behind,
+ * else the oldest slot.  A completed waypoint is NOT consumed yet: the
+ * caller offers it to the engine and calls canproto_rx_consume() unless the
+ * engine answered EFULL, so the sender can repeat it after reading STATUS.
  * Returns a canproto_rx_kind_t, or a negated canproto_error for a malformed
  * frame (counted, nothing else changed).
  */
 int canproto_rx_frame(canproto_rx_t *rx, const canproto_frame_t *f, int is_fd_id,
                       canproto_rx_out_t *out);
 
-/* Mark the waypoint out->wp (from canproto_rx_frame) as consumed: counts its gap. */
+/* Mark the waypoint out->wp (from canproto_rx_frame) as consumed: counts its
+ * gap, or its resync; partial waypoints at or behind it are abandoned. */
 void canproto_rx_consume(canproto_rx_t *rx, const canproto_rx_out_t *out);
 
 /* ---- bus load ------------------------------------------------------------------ */

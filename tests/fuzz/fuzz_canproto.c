@@ -8,7 +8,10 @@
  *  - a completed waypoint has finite values within the field ranges;
  *  - the counters add up: every frame is counted once as malformed, or
  *    reaches the sequence logic;
- *  - extended sequence numbers of consumed waypoints strictly increase;
+ *  - extended sequence numbers of consumed waypoints strictly increase: by
+ *    lost_before + 1, or for a resync (a sender that restarted its numbering)
+ *    by 128..255 with nothing lost and a time later than the last consumed
+ *    one's, counted once when consumed;
  *  - encode(sp) sends the code nearest to the position / LSB, checked in exact
  *    integer arithmetic (a double tolerance of half an LSB was wrong: at
  *    -130927.96875 m, an exact tie, the decoded double differs by half an LSB
@@ -113,6 +116,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     uint64_t frames = 0;
     int have = 0;
     uint32_t last = 0;
+    double last_t = 0;
     while (i + 3 <= size) {
         canproto_frame_t f;
         memset(&f, 0, sizeof f);
@@ -139,11 +143,23 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
                     abort();
             if (have && (int32_t)(out.wp.seq - last) <= 0)
                 abort();
+            /* a resync: behind in numbering (128..255 ahead, modulo 256), later
+             * in time, nothing lost; else at most 127 ahead */
+            uint32_t step = out.wp.seq - last;
+            if (out.resync &&
+                (!have || step < 128 || step > 255 || out.lost_before || !(out.wp.t_s > last_t)))
+                abort();
+            if (!out.resync && have && step != out.lost_before + 1)
+                abort();
             /* consume most of them, leave some (as after EFULL) */
             if (!(fl & 0x80)) {
+                uint64_t resyncs = rx.st.resyncs;
                 canproto_rx_consume(&rx, &out);
+                if (rx.st.resyncs != resyncs + out.resync)
+                    abort();
                 have = 1;
                 last = out.wp.seq;
+                last_t = out.wp.t_s;
             }
         } else if (rc < 0 && (rc < -CANPROTO_EID)) {
             abort(); /* the reassembler only reports frame errors */

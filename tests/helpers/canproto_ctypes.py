@@ -35,7 +35,7 @@ class Setpoint(ctypes.Structure):
 
 class RxOut(ctypes.Structure):
     _fields_ = [("wp", Waypoint), ("cmd", ctypes.c_int), ("cmd_arg", ctypes.c_uint),
-                ("lost_before", ctypes.c_uint32)]
+                ("lost_before", ctypes.c_uint32), ("resync", ctypes.c_uint32)]
 
 
 class CiaSdo(ctypes.Structure):

@@ -466,6 +466,218 @@ static void test_consume_drops_partial_of_same_seq(void **state)
     assert_int_equal(rx.st.incomplete, 1);
 }
 
+/* ---- a sender that restarted its numbering (K-D3) ---- */
+
+/* The one FD frame of w, offered. */
+static int feed_fd(const engine_waypoint_t *w, canproto_rx_out_t *out)
+{
+    canproto_frame_t g;
+    assert_true(canproto_encode_waypoint_fd(FDID, w, &g) >= 0);
+    return canproto_rx_frame(&rx, &g, 1, out);
+}
+
+static int feed_as(int fd, const engine_waypoint_t *w, canproto_rx_out_t *out)
+{
+    return fd ? feed_fd(w, out) : feed(w, NULL, out);
+}
+
+/* Waypoints seq from..to (8 bits on the wire), 0.1 s apart from t0: each comes
+ * out with nothing lost and is consumed. */
+static void consume_run(int fd, uint32_t from, uint32_t to, double t0)
+{
+    canproto_rx_out_t out;
+    for (uint32_t s = from; s <= to; s++) {
+        engine_waypoint_t w = wpt(s & 0xFF, t0 + 0.1 * (s - from), s, 0, 0);
+        assert_int_equal(feed_as(fd, &w, &out), CANPROTO_RX_WAYPOINT);
+        assert_int_equal(out.lost_before, 0);
+        assert_int_equal(out.wp.seq & 0xFF, s & 0xFF);
+        canproto_rx_consume(&rx, &out);
+    }
+}
+
+/* Given a sender that sent seq 1..60 (0.1 s apart) and restarts at seq 1 with
+ * later times, then every waypoint of the restarted numbering is taken: the
+ * first is a resync (nothing lost, its extended number goes on forward), the
+ * next follow it; a waypoint behind whose time is not later (older, or the
+ * same) is still out of order; a resync the engine answered EFULL comes out
+ * again when repeated and counts once when consumed. */
+static void restart_resyncs_by_time(int fd)
+{
+    canproto_rx_out_t out;
+    unsigned nframes = fd ? 1 : CANPROTO_WP_PARTS;
+    consume_run(fd, 1, 60, 0.1); /* t 0.1 .. 6.0 */
+    uint32_t prev = rx.last_seq;
+    for (uint32_t s = 1; s <= 70; s++) {
+        engine_waypoint_t w = wpt(s, 10.0 + 0.1 * (s - 1), s, 1, 2);
+        assert_int_equal(feed_as(fd, &w, &out), CANPROTO_RX_WAYPOINT);
+        assert_int_equal(out.lost_before, 0);
+        assert_int_equal(out.resync, s == 1);
+        assert_int_equal(out.wp.seq & 0xFF, s);
+        assert_true(out.wp.seq > prev);
+        prev = out.wp.seq;
+        canproto_rx_consume(&rx, &out);
+    }
+    assert_int_equal(rx.st.completed, 130);
+    assert_int_equal(rx.st.lost, 0);
+    assert_int_equal(rx.st.resyncs, 1);
+    assert_int_equal(rx.st.resync_seq, 1);
+    assert_int_equal(rx.st.resync_after, 60);
+    assert_int_equal(rx.st.out_of_order, 0);
+    assert_int_equal(rx.st.incomplete, 0);
+    /* last: seq 70 at 16.9 s.  Truly late: 5 behind, older */
+    engine_waypoint_t late = wpt(65, 16.4, 65, 1, 2);
+    assert_int_equal(feed_as(fd, &late, &out), CANPROTO_RX_NONE);
+    assert_int_equal(rx.st.out_of_order, nframes);
+    /* 1 behind at the very same time: not later, out of order */
+    engine_waypoint_t same = wpt(69, 16.9, 69, 1, 2);
+    assert_int_equal(feed_as(fd, &same, &out), CANPROTO_RX_NONE);
+    assert_int_equal(rx.st.out_of_order, 2 * nframes);
+    /* 128 behind (the farthest), later: a restart too */
+    engine_waypoint_t far = wpt((70 + 128) & 0xFF, 20.0, 0, 0, 0);
+    assert_int_equal(feed_as(fd, &far, &out), CANPROTO_RX_WAYPOINT);
+    assert_int_equal(out.resync, 1);
+    /* not consumed (EFULL): repeated, it comes out again, a resync still */
+    assert_int_equal(feed_as(fd, &far, &out), CANPROTO_RX_WAYPOINT);
+    assert_int_equal(out.resync, 1);
+    assert_int_equal(out.lost_before, 0);
+    canproto_rx_consume(&rx, &out);
+    assert_int_equal(rx.st.resyncs, 2);
+    assert_int_equal(rx.st.resync_seq, 198);
+    assert_int_equal(rx.st.resync_after, 70);
+    assert_int_equal(rx.st.lost, 0);
+    /* and the duplicate of it stays a duplicate */
+    uint64_t dup = rx.st.duplicates;
+    assert_int_equal(feed_as(fd, &far, &out), CANPROTO_RX_NONE);
+    assert_int_equal(rx.st.duplicates, dup + nframes);
+    assert_int_equal(rx.st.completed, 132);
+    assert_int_equal(rx.st.out_of_order, 2 * nframes);
+}
+
+static void test_restart_resyncs_by_time(void **state)
+{
+    (void)state;
+    restart_resyncs_by_time(0);
+}
+
+static void test_restart_resyncs_by_time_fd(void **state)
+{
+    (void)state;
+    restart_resyncs_by_time(1);
+}
+
+/* Given two slots, the last consumed 10 and waypoint 11 partial, when late
+ * frames of older waypoints (7, 8) trickle in among those of 11 and 12, then
+ * none of them costs a waypoint ahead: a frame behind only takes a free slot
+ * or one behind, a frame ahead takes the slot behind first; the late frames
+ * are all counted out of order (when dropped, judged or abandoned), and 11
+ * and 12 come out whole, nothing lost or incomplete. */
+static void test_late_frames_keep_partial_ahead(void **state)
+{
+    (void)state;
+    canproto_rx_out_t out;
+    canproto_frame_t f7[4], f8[4], f11[4], f12[4];
+    engine_waypoint_t w7 = wpt(7, 1.6, 7, 0, 0), w8 = wpt(8, 1.7, 8, 0, 0),
+                      w11 = wpt(11, 2.0, 11, 0, 0), w12 = wpt(12, 2.1, 12, 0, 0);
+    canproto_encode_waypoint(ID, &w7, f7);
+    canproto_encode_waypoint(ID, &w8, f8);
+    canproto_encode_waypoint(ID, &w11, f11);
+    canproto_encode_waypoint(ID, &w12, f12);
+    consume_run(0, 1, 10, 1.0); /* last: 10 at 1.9 s */
+    assert_int_equal(canproto_rx_frame(&rx, &f11[0], 0, &out), CANPROTO_RX_NONE);
+    assert_int_equal(canproto_rx_frame(&rx, &f11[1], 0, &out), CANPROTO_RX_NONE);
+    assert_int_equal(canproto_rx_frame(&rx, &f8[0], 0, &out), CANPROTO_RX_NONE);  /* free slot */
+    assert_int_equal(canproto_rx_frame(&rx, &f12[0], 0, &out), CANPROTO_RX_NONE); /* takes 8's */
+    assert_int_equal(rx.st.out_of_order, 1);
+    assert_int_equal(canproto_rx_frame(&rx, &f7[0], 0, &out), CANPROTO_RX_NONE); /* no room */
+    assert_int_equal(rx.st.out_of_order, 2);
+    assert_int_equal(canproto_rx_frame(&rx, &f11[2], 0, &out), CANPROTO_RX_NONE);
+    assert_int_equal(canproto_rx_frame(&rx, &f11[3], 0, &out), CANPROTO_RX_WAYPOINT);
+    assert_int_equal(out.wp.seq, 11);
+    assert_int_equal(out.lost_before, 0);
+    canproto_rx_consume(&rx, &out);
+    /* a whole late waypoint in the free slot: judged when complete, dropped */
+    for (int k = 0; k < 4; k++)
+        assert_int_equal(canproto_rx_frame(&rx, &f7[k], 0, &out), CANPROTO_RX_NONE);
+    assert_int_equal(rx.st.out_of_order, 6);
+    assert_int_equal(canproto_rx_frame(&rx, &f8[1], 0, &out), CANPROTO_RX_NONE);
+    for (int k = 1; k < 3; k++)
+        assert_int_equal(canproto_rx_frame(&rx, &f12[k], 0, &out), CANPROTO_RX_NONE);
+    assert_int_equal(canproto_rx_frame(&rx, &f12[3], 0, &out), CANPROTO_RX_WAYPOINT);
+    assert_int_equal(out.wp.seq, 12);
+    assert_int_equal(out.lost_before, 0);
+    canproto_rx_consume(&rx, &out); /* 8's partial, behind it: abandoned, out of order */
+    assert_int_equal(rx.st.out_of_order, 7);
+    assert_int_equal(rx.st.incomplete, 0);
+    assert_int_equal(rx.st.lost, 0);
+    assert_int_equal(rx.st.resyncs, 0);
+    assert_int_equal(rx.st.completed, 12);
+}
+
+/* Given a partial classic waypoint 11 ahead, when an FD waypoint behind and
+ * older arrives, then it is out of order (one frame) and leaves the partial
+ * waypoint alone: 11 still completes. */
+static void test_late_fd_keeps_partial_ahead(void **state)
+{
+    (void)state;
+    canproto_rx_out_t out;
+    canproto_frame_t f11[4];
+    engine_waypoint_t w11 = wpt(11, 2.0, 11, 0, 0), late = wpt(8, 1.7, 8, 0, 0);
+    canproto_encode_waypoint(ID, &w11, f11);
+    consume_run(1, 1, 10, 1.0);
+    for (int k = 0; k < 3; k++)
+        assert_int_equal(canproto_rx_frame(&rx, &f11[k], 0, &out), CANPROTO_RX_NONE);
+    assert_int_equal(feed_fd(&late, &out), CANPROTO_RX_NONE);
+    assert_int_equal(rx.st.out_of_order, 1);
+    assert_int_equal(canproto_rx_frame(&rx, &f11[3], 0, &out), CANPROTO_RX_WAYPOINT);
+    assert_int_equal(out.lost_before, 0);
+    canproto_rx_consume(&rx, &out);
+    assert_int_equal(rx.st.incomplete, 0);
+    assert_int_equal(rx.st.lost, 0);
+}
+
+/* Given the old sender gone with both slots holding partial waypoints ahead
+ * (61, 62), when it restarts at seq 1 with later times, then its first frames
+ * find no room, but once the partial ones are stale (no frame for
+ * CANPROTO_RX_STALE_FRAMES frames) they are abandoned (incomplete), and from
+ * then on every waypoint is taken: one resync, nothing lost. */
+static void test_restart_after_stuck_partials(void **state)
+{
+    (void)state;
+    canproto_rx_out_t out;
+    canproto_frame_t f61[4], f62[4];
+    engine_waypoint_t w61 = wpt(61, 6.1, 0, 0, 0), w62 = wpt(62, 6.2, 0, 0, 0);
+    canproto_encode_waypoint(ID, &w61, f61);
+    canproto_encode_waypoint(ID, &w62, f62);
+    consume_run(0, 1, 60, 0.1);
+    for (int k = 0; k < 2; k++) {
+        assert_int_equal(canproto_rx_frame(&rx, &f61[k], 0, &out), CANPROTO_RX_NONE);
+        assert_int_equal(canproto_rx_frame(&rx, &f62[k], 0, &out), CANPROTO_RX_NONE);
+    }
+    uint32_t first = 0;
+    for (uint32_t s = 1; s <= 20; s++) {
+        engine_waypoint_t w = wpt(s, 10.0 + 0.1 * s, s, 0, 0);
+        int rc = feed(&w, NULL, &out);
+        if (first) {
+            assert_int_equal(rc, CANPROTO_RX_WAYPOINT);
+            assert_int_equal(out.resync, 0);
+        }
+        if (rc == CANPROTO_RX_WAYPOINT) {
+            if (!first)
+                assert_int_equal(out.resync, 1);
+            first = first ? first : s;
+            assert_int_equal(out.lost_before, 0);
+            canproto_rx_consume(&rx, &out);
+        }
+    }
+    assert_true(first >= 1 && first <= CANPROTO_RX_STALE_FRAMES / CANPROTO_WP_PARTS + 2);
+    assert_int_equal(rx.st.resyncs, 1);
+    assert_int_equal(rx.st.incomplete, 2);
+    assert_int_equal(rx.st.lost, 0);
+    assert_int_equal(rx.st.completed, 60 + 21 - first);
+    /* every frame of the restarted waypoints not taken was counted */
+    assert_int_equal(rx.st.out_of_order, (first - 1) * CANPROTO_WP_PARTS);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -475,6 +687,11 @@ int main(void)
         cmocka_unit_test_setup(test_sequence_wraps, setup),
         cmocka_unit_test_setup(test_slot_eviction, setup),
         cmocka_unit_test_setup(test_consume_drops_partial_of_same_seq, setup),
+        cmocka_unit_test_setup(test_restart_resyncs_by_time, setup),
+        cmocka_unit_test_setup(test_restart_resyncs_by_time_fd, setup),
+        cmocka_unit_test_setup(test_late_frames_keep_partial_ahead, setup),
+        cmocka_unit_test_setup(test_late_fd_keeps_partial_ahead, setup),
+        cmocka_unit_test_setup(test_restart_after_stuck_partials, setup),
         cmocka_unit_test_setup(test_malformed, setup),
         cmocka_unit_test_setup(test_command, setup),
         cmocka_unit_test_setup(test_fd_waypoint, setup),
