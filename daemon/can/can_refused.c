@@ -67,10 +67,19 @@ int can_log_traffic(const char *name, unsigned wp_id, const can_port_obj_stats_t
     if (d) {
         log_msg(LOG_WARNING,
                 "can: object '%s': %llu frame(s) of waypoints older than the last one taken "
-                "(sequence 1..128 behind) dropped on id 0x%03X: a sender that restarted its "
-                "numbering is heard again once it passes the last number (or after a clear); "
+                "(sequence 1..128 behind, and their time not later) dropped on id 0x%03X; "
                 "%llu in all",
                 name, (unsigned long long)d, wp_id, (unsigned long long)r->out_of_order);
+        n++;
+    }
+    d = since(r->resyncs, w->resyncs);
+    if (d) {
+        log_msg(LOG_NOTICE,
+                "can: object '%s': sender restarted its numbering: waypoint seq %u after %u, "
+                "its time later: resynced on id 0x%03X (%llu time(s) since the last line, the "
+                "last one shown; %llu in all)",
+                name, (unsigned)r->resync_seq, (unsigned)r->resync_after, wp_id,
+                (unsigned long long)d, (unsigned long long)r->resyncs);
         n++;
     }
     uint64_t late = since(now->dropped_late, logged->dropped_late),

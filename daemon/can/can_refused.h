@@ -24,9 +24,10 @@ void can_transport_files(const cfg_t *cfg, cfg_file_add_fn add, void *ctx);
 /* Object name's input refused and output dropped since the last call
  * (*logged: the counters then, updated), one line per kind, with the id
  * the waypoints come on (wp_id): waypoints lost (sequence gaps), malformed
- * frames (by reason), frames out of order (a sender that restarted its
- * numbering: they are dropped until it passes the last one, or until a
- * clear), setpoint cycles dropped (late, queue full, down, error).  Counters
+ * frames (by reason), frames out of order (behind the last waypoint taken and
+ * not later in time), resyncs (a sender that restarted its numbering: a
+ * waypoint behind but later in time, taken; at notice level, with the last
+ * one's numbers), setpoint cycles dropped (late, queue full, down, error).  Counters
  * that went back (reset counters) are taken as they are.  Returns the lines
  * logged.  Not from the tick: the CAN transport's housekeeping, once a second
  * at most. */

@@ -510,7 +510,8 @@ static void close_(void *state, core_t *c)
             log_msg(LOG_INFO,
                     "can: %s: setpoints sent %llu, dropped late %llu / queue full %llu / down %llu"
                     " / error %llu; waypoints %llu accepted, %llu rejected, %llu full, %llu lost,"
-                    " %llu duplicate frames, %llu out of order, %llu malformed frames;"
+                    " %llu duplicate frames, %llu out of order, %llu resynced, %llu malformed"
+                    " frames;"
                     " %llu commands refused; STATUS frames sent %llu, not sent %llu",
                     s->objs[k]->name, (unsigned long long)os.setpoints_sent,
                     (unsigned long long)os.dropped_late, (unsigned long long)os.dropped_full,
@@ -519,8 +520,9 @@ static void close_(void *state, core_t *c)
                     (unsigned long long)os.waypoints_rejected,
                     (unsigned long long)os.waypoints_full, (unsigned long long)os.rx.lost,
                     (unsigned long long)os.rx.duplicates, (unsigned long long)os.rx.out_of_order,
-                    (unsigned long long)os.rx.malformed, (unsigned long long)os.cmd_refused,
-                    (unsigned long long)os.status_sent, (unsigned long long)os.status_dropped);
+                    (unsigned long long)os.rx.resyncs, (unsigned long long)os.rx.malformed,
+                    (unsigned long long)os.cmd_refused, (unsigned long long)os.status_sent,
+                    (unsigned long long)os.status_dropped);
         }
     }
     if (c && !c->stopping)

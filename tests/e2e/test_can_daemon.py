@@ -10,6 +10,9 @@ transport (the same codec and can_port as on a socket, no kernel needed):
   in the classic layout, the FD layout and the CiA 402 RPDO layout;
 - faults in the input (gap, duplicate, wrong length, unknown multiplexer) are
   reported in the STATUS frames and the trajectory carries on;
+- a sender that restarts its numbering mid-track (its times going on) is
+  taken at once (a resync: logged, counted in the exit summary), never
+  dropped as out of order;
 - a pause of the input mid-track runs the output short: STATUS2 page 7 counts
   the underruns the SETPOINT frames' state shows (issue 26);
 - a configuration above the bus-load limit is refused with a clear message,
@@ -242,6 +245,43 @@ class CanDaemon(unittest.TestCase):
         self.assertEqual(int(last["ST_State"]), 3)
         # the loss was reported at once: some STATUS carries last_err LOST (0x41)
         self.assertIn(0x41, [int(s["ST_LastErr"]) for _, s in st])
+
+    # Given a sender that restarts its numbering mid-track (K-D3: waypoints
+    # 81..150 sent as seq 1..70, their times going on), then trajd takes every
+    # waypoint: the setpoints are still trajreplay's to the end, nothing is
+    # lost or out of order, the restart is logged once at notice level with
+    # both numbers and counted in the exit summary, and the last STATUS shows
+    # the sender's own number.  (Before, seq 1..70 after 80 were all dropped as
+    # out of order: the track ended at waypoint 80.)
+    def test_restarted_numbering_resynced(self):
+        d = self.sub("restart")
+        wp = os.path.join(d, "wp.log")
+        n, _ = ct.write_wplog(self.xyz, wp, iface="vcan0")
+        with open(wp) as fh:
+            lines = fh.read().splitlines()
+        for i, line in enumerate(lines):
+            f = line.split()[-1] if not line.startswith("#") else ""
+            if f.startswith("680#") and f[4:6] != "04" and int(f[6:8], 16) > 80:
+                lines[i] = line.replace(f, f[:6] + "%02X" % (int(f[6:8], 16) - 80) + f[8:])
+        with open(wp, "w") as fh:
+            fh.write("\n".join(lines) + "\n")
+        p = run_trajd(conf(d, "", "csv.path = sp.csv\n", output="can, csv"))
+        self.assertEqual(p.returncode, 0, p.stderr)
+        logged, _ = self.reference(d)  # every setpoint trajreplay's
+        end = self.refrows[max(self.refrows)]
+        last_row = logged[max(logged)]
+        self.assertLessEqual(abs(float(last_row["x_m"]) - float(end["x_m"])), 1e-9)
+        last = ct.decode_by_id(os.path.join(d, "sp.log"), 0x6C0)[-1][1]
+        self.assertEqual(int(last["ST_State"]), 3)
+        self.assertEqual(int(last["ST_LastSeq"]), n - 80)
+        self.assertEqual((last["ST_Lost"], last["ST_Rejected"], last["ST_Malformed"]), (0, 0, 0))
+        notes = [l for l in p.stderr.splitlines() if "restarted its numbering" in l]
+        self.assertEqual(len(notes), 1, p.stderr)
+        self.assertIn("object 'boat': sender restarted its numbering: waypoint seq 1 after 80, "
+                      "its time later: resynced on id 0x680", notes[0])
+        summary = [l for l in p.stderr.splitlines() if "setpoints sent" in l][-1]
+        self.assertIn("waypoints %d accepted, 0 rejected" % n, summary)
+        self.assertIn(" 0 lost, 0 duplicate frames, 0 out of order, 1 resynced,", summary)
 
     # Given waypoint 70 of the track moved 500 m east (a position jump no
     # boat makes in 0.2 s), then STATUS counts exactly one rejection,

@@ -735,6 +735,55 @@ static void test_flow_control_efull(void **state)
     assert_int_equal(st.rx.lost, 0);
 }
 
+/* Given a sender that restarted its numbering (seq 1 after 10, its time
+ * later), over a reload (can_port_keep into a new port, can_port_restore),
+ * then the history went over: seq 0 older than the last is still out of
+ * order, seq 1 later is taken as a resync and seq 2 follows it, nothing lost;
+ * the engine sees the extended number go on forward (low 8 bits the wire's),
+ * and STATUS shows the sender its own number. */
+static void test_resync_kept_over_reload(void **state)
+{
+    (void)state;
+    queue_waypoint(9, 0.9);
+    queue_waypoint(10, 1.0);
+    can_port_rx(port, 0);
+    assert_int_equal(eng.n, 2);
+    can_port_kept_t k;
+    can_port_keep(port, 0, &k);
+    can_port_free(port);
+    can_port_config_t cfg;
+    canproto_ids_t ids;
+    can_port_config_default(&cfg);
+    cfg.status_period_ns = 0;
+    port = can_port_new(&cfg, &fake_can_ops, &io, 1);
+    assert_non_null(port);
+    canproto_ids_default(&ids, 0);
+    assert_int_equal(can_port_set_object(port, 0, &ids, &fe_hooks, &eng), 0);
+    can_port_restore(port, 0, &k);
+    queue_waypoint(0, 0.5); /* behind and older: a late one */
+    queue_waypoint(1, 2.0); /* behind and later: the sender restarted */
+    queue_waypoint(2, 2.1);
+    can_port_rx(port, 0);
+    assert_int_equal(eng.n, 4);
+    assert_int_equal(eng.got[2].seq & 0xFF, 1);
+    assert_true(eng.got[2].seq > 10);
+    assert_int_equal(eng.got[3].seq, eng.got[2].seq + 1);
+    can_port_obj_stats_t os;
+    can_port_obj_stats(port, 0, &os);
+    assert_int_equal(os.rx.resyncs, 1);
+    assert_int_equal(os.rx.resync_seq, 1);
+    assert_int_equal(os.rx.resync_after, 10);
+    assert_int_equal(os.rx.out_of_order, CANPROTO_WP_PARTS);
+    assert_int_equal(os.rx.lost, 0);
+    assert_int_equal(os.waypoints_accepted, 4);
+    run_cycle(0, 0);
+    canproto_status_t s;
+    assert_int_equal(io.out[io.nout - 1].id, 0x6C0);
+    canproto_decode_status(&io.out[io.nout - 1], &s);
+    assert_int_equal(s.last_seq, 2);
+    assert_int_equal(s.lost, 0);
+}
+
 /* Given the object's csv/stdout output losing lines (disk full), then the
  * next STATUS goes out at once with the OUT_FAULT flag and error OUTPUT; a
  * later STATUS with nothing new lost has the flag clear again. */
@@ -1013,6 +1062,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_cia402_heartbeat_lost_holds, setup, teardown),
         cmocka_unit_test_setup_teardown(test_rx_paths, setup, teardown),
         cmocka_unit_test_setup_teardown(test_flow_control_efull, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_resync_kept_over_reload, setup, teardown),
         cmocka_unit_test_setup_teardown(test_commands, setup, teardown),
         cmocka_unit_test_setup_teardown(test_output_fault_in_status, setup, teardown),
         cmocka_unit_test_setup_teardown(test_commands_refused, setup, teardown),
