@@ -714,11 +714,21 @@ static int open_control(trajd_t *d)
 /* Start the core and the housekeeping timers, tell systemd and the waiting
  * parent, run until the stop policy ends the loop: the exit code. */
 /* What the first seconds of output are, per object: holding (state waiting,
- * no position before its first waypoint) until the lookahead is buffered. */
+ * no position before its first waypoint, or at rest at its initial_position)
+ * until the lookahead is buffered. */
 static void log_first_seconds(const cfg_t *cfg)
 {
     for (unsigned i = 0; i < cfg->nobj; i++) {
         const cfg_obj_t *o = &cfg->obj[i];
+        const double *p = o->initial_position_m;
+        if (o->has_initial_position) {
+            log_msg(LOG_INFO,
+                    "object '%s': holds (state waiting) at rest at its initial_position %g,%g,%g "
+                    "until at least %u waypoints are buffered (the solver's lookahead and the "
+                    "start slack), then reaches the first by a transfer and streams",
+                    o->name, p[0], p[1], p[2], engine_lookahead(&o->engine));
+            continue;
+        }
         log_msg(LOG_INFO,
                 "object '%s': holds (state waiting; no position, nan, before its first waypoint)"
                 " until at least %u waypoints are buffered (the solver's lookahead and the start "

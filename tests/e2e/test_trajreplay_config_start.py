@@ -51,7 +51,7 @@ def conf_text(obj_keys, daemon_keys=""):
 
 
 def run_both(tmp, obj_keys, daemon_keys=""):
-    """trajd's and trajreplay -c's lines (header first) and trajreplay's stderr."""
+    """trajd's and trajreplay -c's lines (header first), trajreplay's stderr and trajd's."""
     with open(N2K) as f:
         write(os.path.join(tmp, "fig8.csv"), "".join(f.readlines()[:152]))  # its first 30 s
     conf = os.path.join(tmp, "t.conf")
@@ -66,7 +66,7 @@ def run_both(tmp, obj_keys, daemon_keys=""):
         dl = f.read().splitlines()
     with open(ref) as f:
         rl = f.read().splitlines()
-    return dl, rl, r.stderr
+    return dl, rl, r.stderr, d.stderr
 
 
 def rows(lines):
@@ -110,12 +110,17 @@ class ConfigStart(unittest.TestCase):
         with tempfile.TemporaryDirectory() as tmp:
             # Given an object that stands 15 m from its track's first fix at
             # start, with its transfers' speed and acceleration given,
-            dl, rl, err = run_both(tmp, "initial_position = %g,%g,%g\n" % START +
+            dl, rl, err, derr = run_both(tmp, "initial_position = %g,%g,%g\n" % START +
                                    "transfer_speed_m_s = %g\ntransfer_accel_m_s2 = %g\n"
                                    % (TRANSFER_V, TRANSFER_A))
             # (a) then trajreplay -c writes trajd's rows,
             n = self.assert_rows_equal(dl, rl)
             self.assertNotIn("notice", err)
+            # and trajd's log says where it holds (it said "no position, nan, before its
+            # first waypoint" while its rows stood at initial_position)
+            self.assertIn("object 'boat': holds (state waiting) at rest at its initial_position "
+                          "%g,%g,%g" % START, derr)
+            self.assertNotIn("no position, nan", derr)
             rr = rows(rl)
             # (b) the first of which stands at initial_position, at rest,
             # holding, with a position (never NaN, NO_POSITION),
@@ -147,7 +152,7 @@ class ConfigStart(unittest.TestCase):
             # Given [daemon] catchup = 0 (the lag after the transfer from
             # initial_position is never won back; the engine's default wins it
             # back at 5 %), then trajreplay -c writes trajd's rows
-            dl, rl, _ = run_both(tmp, "initial_position = %g,%g,%g\n" % START,
+            dl, rl, _, _ = run_both(tmp, "initial_position = %g,%g,%g\n" % START,
                                  "catchup = 0\n")
             n = self.assert_rows_equal(dl, rl)
             # (and the key does change them: not the same rows as by default)
