@@ -863,6 +863,23 @@ static unsigned moving_objects(const core_t *c)
     return n;
 }
 
+/* Setpoint lines the outputs lost: said, with those lost after the exit
+ * line apart (the exit line counted the lines lost before the outputs
+ * drained; those still queued to a failing writer then were lost too); the
+ * exit status. */
+static int lost_said(const trajd_t *d)
+{
+    char more[96] = "";
+    if (d->stats.out_lost > d->lost_said)
+        snprintf(more, sizeof more, " (%llu after the exit line: queued as the outputs drained)",
+                 (unsigned long long)(d->stats.out_lost - d->lost_said));
+    log_msg(LOG_ERR, "%llu setpoint lines were lost by the outputs%s%s%s: exit status %d",
+            (unsigned long long)d->stats.out_lost, more,
+            d->stats.out_fault ? ", last write error: " : "",
+            d->stats.out_fault ? strerror(d->stats.out_errno) : "", CORE_EXIT_OUTPUT_LOST);
+    return CORE_EXIT_OUTPUT_LOST;
+}
+
 int main(int argc, char **argv)
 {
     trajd_t d = {.conf_path = TRAJD_DEFAULT_CONF,
@@ -909,18 +926,7 @@ int main(int argc, char **argv)
     } else if (d.stats.exit_code) {
         rc = d.stats.exit_code;
     } else if (rc == 0 && d.stats.out_lost) {
-        /* the exit line counted those lost before the outputs drained: the
-         * lines still queued to a failing writer then were lost too */
-        char more[96] = "";
-        if (d.stats.out_lost > d.lost_said)
-            snprintf(more, sizeof more,
-                     " (%llu after the exit line: queued as the outputs drained)",
-                     (unsigned long long)(d.stats.out_lost - d.lost_said));
-        log_msg(LOG_ERR, "%llu setpoint lines were lost by the outputs%s%s%s: exit status %d",
-                (unsigned long long)d.stats.out_lost, more,
-                d.stats.out_fault ? ", last write error: " : "",
-                d.stats.out_fault ? strerror(d.stats.out_errno) : "", CORE_EXIT_OUTPUT_LOST);
-        rc = CORE_EXIT_OUTPUT_LOST;
+        rc = lost_said(&d);
     } else if (rc == 0 && faults) {
         log_msg(LOG_ERR,
                 "internal fault: the engines counted %llu numeric refusals of finite data, which "
