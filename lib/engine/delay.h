@@ -11,7 +11,14 @@
  *                       therefore waits L + 1 intervals
  *       + S h           jitter slack: start_slack waypoints (auto: its least,
  *                       ENGINE_SLACK_AUTO_MIN; one more per underrun seen,
- *                       up to ENGINE_SLACK_AUTO_MAX)
+ *                       up to ENGINE_SLACK_AUTO_MAX).  The least one is the
+ *                       acceptance's verdict lag (ACCEPT_LAG: the lookahead
+ *                       counts the larger of the two, engine_cfg_lookahead):
+ *                       it absorbs arrivals up to an interval late
+ *                       (tests/unit/test_jitter.c), not a hole; a fix lost
+ *                       or refused where the fragments need the most
+ *                       lookahead is one underrun, and the slack then holds
+ *                       one waypoint more
  *       + B             stop reserve: the curve kept solved ahead of the
  *                       output so that, should the input stop, the time
  *                       scaling brings it to rest on data: a stop from rate
