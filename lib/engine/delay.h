@@ -84,18 +84,6 @@ double engine_delay_stop_s(const engine_config_t *cfg, double speed_m_s);
  */
 int engine_delay_check(const engine_config_t *cfg, double interval_s, char *why, size_t whylen);
 
-/*
- * A per-axis jerk limit (axis_max_jerk_m_s3) with fragment or overlap set by
- * hand below what accuracy picks: refused (trajd's configuration check,
- * trajreplay's options).  The fragments' junctions step the curve's
- * acceleration by about rho^(O/2) of its range (DESIGN.md), which the
- * accuracy's own pick keeps below the limit; with fragment 6 and overlap 2
- * the steps made 57 m/s^3 on a 2 m/s^3 axis, and trajd's monitor held the
- * object.  The engine itself (engine_config_check) takes such settings, for
- * the tests that drive it there.  Returns 0, or -ENGINE_ECONFIG with why.
- */
-int engine_axis_jerk_check(const engine_config_t *cfg, char *why, size_t whylen);
-
 /* One line: "D 2.53 s = lookahead 18 x 0.1 s + slack 1 x 0.1 s + stop
  * reserve 0.627 s (5.76 m/s)"; returns snprintf's length. */
 int engine_delay_format(const engine_delay_t *d, char *buf, size_t len);

@@ -800,3 +800,23 @@ int engine_config_check(const engine_config_t *cfg_in, const char **why)
         *why = w;
     return w ? -ENGINE_ECONFIG : 0;
 }
+
+int engine_axis_jerk_check(const engine_config_t *cfg, char *why, size_t whylen)
+{
+    engine_config_t a = *cfg, r;
+    if (!engine_cfg_axis_jerk(cfg) || (cfg->fragment == ENGINE_AUTO && cfg->overlap == ENGINE_AUTO))
+        return 0;
+    a.fragment = a.overlap = ENGINE_AUTO;
+    if (engine_config_resolve(&a, &r) < 0 || engine_cfg_local(&r))
+        return 0; /* (no fragments: the local methods; or refused elsewhere) */
+    unsigned o = cfg->overlap == ENGINE_AUTO ? r.overlap : cfg->overlap;
+    if (o >= r.overlap)
+        return 0;
+    if (why && whylen)
+        snprintf(why, whylen,
+                 "axis_max_jerk_m_s3 with overlap %u: the fragments' junctions step the "
+                 "acceleration by more than the jerk limit takes; the accuracy %g picks overlap "
+                 "%u (leave fragment and overlap auto, or raise overlap to %u)",
+                 o, cfg->accuracy, r.overlap, r.overlap);
+    return -ENGINE_ECONFIG;
+}

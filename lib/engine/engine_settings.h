@@ -101,4 +101,16 @@ int engine_setting_same(const engine_setting_t *s, const engine_config_t *a,
 /* 1 if every field of the table is the same in a and b. */
 int engine_config_same(const engine_config_t *a, const engine_config_t *b);
 
+/*
+ * A per-axis jerk limit (axis_max_jerk_m_s3) with fragment or overlap set by
+ * hand below what accuracy picks: refused (trajd's configuration check,
+ * trajreplay's options).  The fragments' junctions step the curve's
+ * acceleration by about rho^(O/2) of its range (DESIGN.md), which the
+ * accuracy's own pick keeps below the limit; with fragment 6 and overlap 2
+ * the steps made 57 m/s^3 on a 2 m/s^3 axis, and trajd's monitor held the
+ * object.  The engine itself (engine_config_check) takes such settings, for
+ * the tests that drive it there.  Returns 0, or -ENGINE_ECONFIG with why.
+ */
+int engine_axis_jerk_check(const engine_config_t *cfg, char *why, size_t whylen);
+
 #endif
