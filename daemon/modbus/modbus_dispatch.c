@@ -114,8 +114,12 @@ int mbs_serve(modbus_server_t *s, modbus_t *ctx, int writes, const uint8_t *req,
         if (rc == 0 ||
             (rc == -MBMAP_EVALUE && w.kind == MBMAP_WRITE_WAYPOINT && w.object < s->n_objects))
             rc = apply_write(s, &w);
-        if (rc == -MBMAP_EVALUE && w.object < s->n_objects)
+        if (rc == -MBMAP_EVALUE && w.object < s->n_objects) {
             s->mb_rejected[w.object]++;
+            if ((w.kind == MBMAP_WRITE_COMMAND || w.kind == MBMAP_WRITE_OVERRIDE) &&
+                s->hooks.refused)
+                s->hooks.refused(s->hooks.ctx, w.object, &w);
+        }
     }
     s->st.requests++;
     if (rc < 0) {

@@ -99,6 +99,10 @@ typedef struct {
     /* A feed override (percent, 0 .. MBMAP_OVERRIDE_MAX_PCT) was written;
      * NULL: refused with 03.  Returns 0 or a negated engine_error. */
     int (*override)(void *ctx, unsigned object, unsigned percent);
+    /* A command or override refused for its value (exception 03: an unknown
+     * command code, an override above MBMAP_OVERRIDE_MAX_PCT), for the log
+     * and the object's refused commands; NULL: only counted (mb_rejected). */
+    void (*refused)(void *ctx, unsigned object, const mbmap_write_t *w);
 } modbus_server_hooks_t;
 
 typedef struct {

@@ -172,6 +172,28 @@ static int hook_override(void *ctx, unsigned k, unsigned percent)
     return obj_command(o, LC_EV_OVERRIDE, percent, peer);
 }
 
+/* A command or override refused for its value (exception 03): logged with
+ * the object and the client, and counted in the object's refused commands,
+ * as CAN's are (it was counted in mb_rejected alone). */
+static void hook_refused(void *ctx, unsigned k, const mbmap_write_t *w)
+{
+    mbt_t *t = ctx;
+    obj_t *o = obj_at(t, k);
+    if (!o)
+        return;
+    char peer[REJLOG_SRC_LEN], what[48], why[64];
+    snprintf(peer, sizeof peer, "modbus %s", t->srv ? modbus_server_peer(t->srv) : "");
+    if (w->kind == MBMAP_WRITE_OVERRIDE) {
+        snprintf(what, sizeof what, "override %u %%", w->override_pct);
+        snprintf(why, sizeof why, "above %d %% (exception 03)", MBMAP_OVERRIDE_MAX_PCT);
+    } else {
+        snprintf(what, sizeof what, "%u", w->command);
+        snprintf(why, sizeof why, "no such command: %d..%d (exception 03)", MBMAP_CMD_START,
+                 MBMAP_CMD_FINISH);
+    }
+    obj_log_refused(o, what, peer, why);
+}
+
 static void on_ready(loop_t *l, int fd, uint32_t events, void *ctx)
 {
     (void)l;
@@ -236,7 +258,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
         t->objs[k].absent = t->obj_of[k] < 0;
     modbus_server_config_t mc = *m;
     mc.n_objects = t->nblock;
-    modbus_server_hooks_t hooks = {hook_waypoint, hook_command, t, hook_override};
+    modbus_server_hooks_t hooks = {hook_waypoint, hook_command, t, hook_override, hook_refused};
     if (t->objs)
         t->srv = modbus_server_new(&mc, &hooks, why, wl);
     else

@@ -429,19 +429,15 @@ int mbmap_decode_write_order(unsigned n, mbmap_order_t o, const uint8_t *pdu, si
     out->object = k;
     if (off == MBMAP_H_COMMAND && count == 1) {
         unsigned cmd = be16(val);
-        if (cmd < MBMAP_CMD_START || cmd > MBMAP_CMD_FINISH)
-            return -MBMAP_EVALUE;
-        out->kind = MBMAP_WRITE_COMMAND;
+        out->kind = MBMAP_WRITE_COMMAND; /* also when refused: the server logs it */
         out->command = cmd;
-        return 0;
+        return cmd < MBMAP_CMD_START || cmd > MBMAP_CMD_FINISH ? -MBMAP_EVALUE : 0;
     }
     if (off == MBMAP_H_OVERRIDE && count == 1) {
         unsigned pct = be16(val);
-        if (pct > MBMAP_OVERRIDE_MAX_PCT)
-            return -MBMAP_EVALUE;
-        out->kind = MBMAP_WRITE_OVERRIDE;
+        out->kind = MBMAP_WRITE_OVERRIDE; /* also when refused: the server logs it */
         out->override_pct = pct;
-        return 0;
+        return pct > MBMAP_OVERRIDE_MAX_PCT ? -MBMAP_EVALUE : 0;
     }
     if (off == MBMAP_H_WPF && count == MBMAP_H_WPF_COUNT)
         return decode_wpf(o, val, out);

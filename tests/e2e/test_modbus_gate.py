@@ -9,7 +9,9 @@ client (pymodbus, FC 06 write_register):
 2. write_allow without 127.0.0.1: the override gets exception 01;
 3. after SIGTERM (the objects braking to rest), the override of a writable
    object answers exception 03, as its commands do (the old code
-   acknowledged it; config/PROTOCOL.md says 03).
+   acknowledged it; config/PROTOCOL.md says 03);
+4. an unknown command code or an override above 200 % answers exception 03
+   and is logged and counted as a refused command of its object.
 Every wait is bounded; trajd is stopped by pid.
 """
 import os
@@ -128,6 +130,30 @@ class Gate(unittest.TestCase):
         exit_line = self.lines.wait_for("exit: ", WAIT_S)
         self.assertIsNotNone(exit_line)
         self.assertRegex(exit_line, r"replayed [^;]*, 2 commands refused")
+
+    def test_refused_values_logged(self):
+        # Given the writable object streaming, when a client writes an unknown
+        # command code and an override above 200 %, then each gets exception 03,
+        # is logged with the object, the value and the client, and counts in the
+        # object's refused commands on the exit line (they were counted in
+        # mb_rejected alone: the log said nothing per object, as CAN does)
+        c = self.start("")
+        self.wait_streaming(c, 1)
+        rr = c.write_register(obj_base(1) + M["MBMAP_H_COMMAND"], 7, slave=1)
+        self.assertEqual(rr.exception_code if rr.isError() else None, 3)
+        self.assertEqual(self.override(c, 1, 201), 3)
+        self.assertIsNotNone(self.lines.wait_for(
+            "object 'operated': command 7 from modbus 127.0.0.1", WAIT_S))
+        self.assertIsNotNone(self.lines.wait_for(
+            "object 'operated': command override 201 % from modbus 127.0.0.1", WAIT_S))
+        self.assertEqual(self.reg(c, 1, M["MBMAP_O_STATE"]), 1)   # streams on
+        c.close()
+        self.p.send_signal(signal.SIGTERM)
+        self.p.send_signal(signal.SIGTERM)
+        self.p.wait(WAIT_S)
+        exit_line = self.lines.wait_for("exit: ", WAIT_S)
+        self.assertIsNotNone(exit_line)
+        self.assertRegex(exit_line, r"operated [^;]*, 2 commands refused")
 
     def test_override_needs_write_allow(self):
         c = self.start("write_allow = 10.0.0.0/8")

@@ -113,7 +113,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         cfg.writes_enabled = 1;
         cfg.n_objects = NOBJ;
         cfg.max_clients = 2;
-        modbus_server_hooks_t hooks = {wp_hook, cmd_hook, NULL, NULL};
+        modbus_server_hooks_t hooks = {wp_hook, cmd_hook, NULL, NULL, NULL};
         srv = modbus_server_new(&cfg, &hooks, NULL, 0);
         if (!srv)
             abort();

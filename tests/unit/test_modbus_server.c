@@ -220,7 +220,7 @@ static harness_t *harness_new(const hopts_t *o, int with_tcp)
     h->hist = calloc(LATE_BINS, sizeof *h->hist);
     for (unsigned k = 0; k < MBMAP_MAX_OBJECTS; k++)
         h->fake[k].capacity = o->capacity;
-    modbus_server_hooks_t hooks = {fake_waypoint, fake_command, h, NULL};
+    modbus_server_hooks_t hooks = {fake_waypoint, fake_command, h, NULL, NULL};
     h->srv = modbus_server_new(&cfg, &hooks, err, sizeof err);
     if (!h->srv) {
         fprintf(stderr, "%s\n", err);
