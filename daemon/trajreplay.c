@@ -654,6 +654,22 @@ static void run_report_axis(run_t *run)
             run->o->input, run->st.axis_slowed, run->st.axis_lost_s, run->span_s);
 }
 
+/* The same for the object's own speed and acceleration limits (the
+ * profile's max_speed_m_s, max_accel_m_s2): a curve that bends harder than
+ * them throughout (jittery stamps) plays slower than its track. */
+static void run_report_limits(run_t *run)
+{
+    if (!(run->st.limits_lost_s > AXIS_LOST_WARN_FRAC * run->span_s))
+        return;
+    fprintf(stderr,
+            "trajreplay: %s: warning: the curve exceeds the object's speed or acceleration "
+            "limit (max_speed_m_s, max_accel_m_s2: the profile's) persistently: the time "
+            "scaling slowed %" PRIu64 " segments and lost %.1f s over %.1f s of track (its lag "
+            "grows by that; jittery stamps bend the curve: --profile none, or a higher "
+            "max_accel_m_s2)\n",
+            run->o->input, run->st.limits_slowed, run->st.limits_lost_s, run->span_s);
+}
+
 /* The per-reason count of rejections, if any. */
 static void run_report_rejected_total(const run_t *run)
 {
@@ -862,6 +878,7 @@ int main(int argc, char **argv)
     run_report_rejected_total(&run);
     run_report_uniform(&run);
     run_report_axis(&run);
+    run_report_limits(&run);
     if (o.summary) {
         replay_print_summary(&run.trk, &run.r, &run.st, run.max_v, run.max_a, run.written);
         fprintf(stderr, "summary: skipped_gaps %" PRIu64 "\nsummary: skipped_ticks %" PRIu64 "\n",

@@ -201,6 +201,13 @@ typedef struct {
                                        follow: it would need a rate below ENGINE_CEIL_MIN
                                        (the track over 100 times faster on an axis than
                                        its limit); told as the lag is */
+    double limits_lost_s;           /* time lost to the object's own speed and acceleration
+                                       limits (max_speed_m_s, max_accel_m_s2: the
+                                       profile's): as axis_lost_s, over the segments they
+                                       slow and not the per-axis limits; the output trails
+                                       its input by that much more than D, which the
+                                       catch-up does not win back where they slow it */
+    uint64_t limits_slowed;         /* segments those limits slow */
 } engine_status_t;
 
 /* clang-format on */

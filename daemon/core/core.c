@@ -849,6 +849,11 @@ static size_t summary_motion(const obj_t *o, char *buf, size_t len, size_t n)
                      o->status.axis_lost_s, (unsigned long long)o->status.axis_slowed);
         n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
     }
+    if (o->status.limits_lost_s >= 0.05 && n < len) { /* its own speed/acceleration limits */
+        m = snprintf(buf + n, len - n, ", %.1f s lost to its speed/acceleration limits",
+                     o->status.limits_lost_s);
+        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+    }
     if (o->status.transfers_moving && n < len) { /* issue 32: lib/engine/join.c */
         m = snprintf(buf + n, len - n, ", %llu re-anchors joined moving",
                      (unsigned long long)o->status.transfers_moving);

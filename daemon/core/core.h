@@ -128,6 +128,7 @@ typedef struct obj {
                                      * (kept when carried) */
     uint64_t safety_logged;       /* safety violations already logged */
     int axis_warned;              /* issue 32: the per-axis limits' warning given */
+    int limits_warned;            /* ... and the object's own speed/acceleration limits' */
     uint64_t axis_stops_logged;   /* ... and the max_lag_s stops logged */
     double und_t;                 /* issue 26: underrun_t_s of the last underrun logged */
     uint64_t und_logged;          /* ... and how many were (0: und_t unset) */

@@ -55,10 +55,12 @@ void replay_print_summary(const track_t *trk, const replay_t *r, const engine_st
             "summary: axis_lag_stops %" PRIu64 "\n"
             "summary: axis_beyond %" PRIu64 "\n"
             "summary: delay_grown %" PRIu64 "\n"
-            "summary: reserve_slowed %" PRIu64 "\n",
+            "summary: reserve_slowed %" PRIu64 "\n"
+            "summary: limits_lost_s %.6g\n"
+            "summary: limits_slowed %" PRIu64 "\n",
             st->stops, st->stop_fixes, st->retimed, st->retime_max_s, st->silent_ends, st->catchups,
             st->lag_s, st->axis_lost_s, st->axis_slowed, st->axis_lag_stops, st->axis_beyond,
-            st->delay_grown, st->reserve_slowed);
+            st->delay_grown, st->reserve_slowed, st->limits_lost_s, st->limits_slowed);
     fprintf(stderr,
             "summary: reanchors %" PRIu64 "\n"
             "summary: transfers %" PRIu64 "\n"

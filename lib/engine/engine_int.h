@@ -61,6 +61,8 @@ typedef struct {
     double ceil;     /* SEG: the highest rate at which it keeps the speed cap
                         (ENGINE_SPEED_CAP; INFINITY if none) */
     int ceil_axis;   /* SEG: ceil is the per-axis limits' and below 1 (issue 32) */
+    int ceil_own;    /* SEG: ceil is the object's own speed or acceleration limit's
+                        (max_speed_m_s, max_accel_m_s2) and below 1, not ceil_axis */
     double stop1;    /* SEG: ts_stop_dist(1, 0, A, J) at the limits converted at
                         its conv_speed (plain_window) */
     int join;        /* SEG: a piece of a join that keeps moving (join.c) */
@@ -320,6 +322,7 @@ struct engine {
     int axis_lag_over;       /* ... and its max_lag_s passed, not yet told */
     int axis_lag_told;       /* ... and told (once per trajectory) */
     int axis_episode;        /* the per-axis limits hold the rate below 1 */
+    int own_episode;         /* the object's own speed/acceleration limits hold it */
     int local;               /* local method (engine_cfg_local): 1, 3 backward, 2, 4 centred;
                              3, 4 C2 (three queued pieces per interval) */
     double period_s;

@@ -687,6 +687,17 @@ void scale_step(engine_t *e, double target, double R, double Rc, double A, doubl
         e->st.axis_lost_s += (1.0 - e->scale.ts.rate) * e->period_s;
         axis_lag(e);
     }
+    /* the same for the object's own speed and acceleration limits (the
+     * profile's), where they and not the axes slow the segment: their time
+     * lost is counted and told too (it was not: the output fell behind its
+     * input on jittery stamps with nothing counted) */
+    if (e->out.mode != OUT_STREAM || !(e->scale.ts.rate < 0.999) || e->axis_episode)
+        e->own_episode = 0;
+    else if ((e->out.cur.ceil_own && e->scale.ts.rate >= 0.999 * e->out.cur.ceil) ||
+             (lim && Rc < R && e->st.limits_slowed))
+        e->own_episode = 1;
+    if (e->own_episode)
+        e->st.limits_lost_s += (1.0 - e->scale.ts.rate) * e->period_s;
     /* the rate this tick starts from, if a stop within it keeps to A */
     e->scale.stop_dv = r0 <= A * e->period_s ? r0 : -1.0;
     /* held back by the speed cap ahead, not by the curve running short */

@@ -288,8 +288,10 @@ static void queue_now(engine_t *e, const fdiff_seg_t *seg, uint64_t node, const 
     q->vmax = l->vmax;
     q->ceil = l->ceil;
     q->ceil_axis = l->axis;
+    q->ceil_own = !l->axis && q->ceil < 1.0;
     q->av = fmax(l->av, av_next);
     e->st.axis_slowed += (uint64_t)q->ceil_axis;
+    e->st.limits_slowed += (uint64_t)q->ceil_own;
     /* the jerk's conversion speed (scale_jerk_speed) */
     double v = q->vmax > ENGINE_SCALE_V_FLOOR_M_S ? q->vmax : ENGINE_SCALE_V_FLOOR_M_S;
     /* the stop from rate 1 at its limits, as the tick would work it out
@@ -657,7 +659,7 @@ static void local_end(engine_t *e)
     size_t slow_old[3] = {0}, slow_len = e->queue.slow_len, beyond = e->queue.beyond;
     engine_solve_t solve = e->solve;
     engine_scale_t scale = e->scale;
-    uint64_t axis_slowed = e->st.axis_slowed;
+    uint64_t axis_slowed = e->st.axis_slowed, limits_slowed = e->st.limits_slowed;
     double vl_old[AX], al_old[AX];
     memcpy(vl_old, vl, sizeof vl_old);
     memcpy(al_old, al, sizeof al_old);
@@ -673,6 +675,7 @@ static void local_end(engine_t *e)
             e->queue.beyond -= !(q->ceil > 0);
         }
         e->st.axis_slowed -= (uint64_t)q->ceil_axis;
+        e->st.limits_slowed -= (uint64_t)q->ceil_own;
         e->queue.len--;
     }
     e->solve.first_pending = e->solve.tail.first_pending;
@@ -703,6 +706,7 @@ static void local_end(engine_t *e)
     e->queue.slow_len = slow_len;
     e->queue.beyond = beyond;
     e->st.axis_slowed = axis_slowed;
+    e->st.limits_slowed = limits_slowed;
     e->solve = solve;
     e->scale = scale;
     memcpy(vl, vl_old, sizeof vl_old);
