@@ -341,6 +341,13 @@ int track_load_opts(const char *path, track_format_t fmt, unsigned flags, track_
         }
     }
     fclose(f);
+    /* a UTF-8 byte order mark (some Windows editors write one) is no part of
+     * any format: an NMEA 0183 or IGC file with one was refused at line 1 */
+    if (rc == 0 && len >= 3 && (unsigned char)buf[0] == 0xEF && (unsigned char)buf[1] == 0xBB &&
+        (unsigned char)buf[2] == 0xBF) {
+        memmove(buf, buf + 3, len - 3);
+        len -= 3;
+    }
     /* lines that end in CR alone (classic Mac OS, some loggers' exports): read
      * as lines (it was one line: "no waypoints") */
     if (rc == 0 && len && !memchr(buf, '\n', len) && memchr(buf, '\r', len))

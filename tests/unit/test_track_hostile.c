@@ -92,12 +92,41 @@ static void test_cr_only_lines(void **state)
     }
 }
 
+/* Given an NMEA 0183 log and an IGC file that start with a UTF-8 byte order
+ * mark, then they read as without it (they were refused at line 1, "not an
+ * NMEA 0183 sentence" / "not an IGC record"; CSV and GPX took it). */
+static void test_bom_every_format(void **state)
+{
+    (void)state;
+    static const char *const text[][2] = {
+        {"a.nmea", "$GPRMC,120000.00,A,4530.0000,N,01330.0000,E,1.0,90.0,010124,,,A*60\n"
+                   "$GPRMC,120001.00,A,4530.0000,N,01330.0010,E,1.0,90.0,010124,,,A*60\n"},
+        {"a.igc", "AXXX001\nHFDTE010124\nB1200004530000N01330000EA0010000100\n"
+                  "B1200014530000N01330010EA0010000100\n"},
+    };
+    for (size_t k = 0; k < 2; k++) {
+        char bom[512], err[256];
+        snprintf(bom, sizeof bom, "\xEF\xBB\xBF%s", text[k][1]);
+        track_t a, b;
+        if (parse(text[k][0], text[k][1], 0, &a, err, sizeof err) != 0)
+            fail_msg("%s without a BOM: %s", text[k][0], err);
+        if (parse(text[k][0], bom, 0, &b, err, sizeof err) != 0)
+            fail_msg("%s with a BOM refused: %s", text[k][0], err);
+        assert_int_equal(a.n, b.n);
+        assert_true(a.n >= 2);
+        assert_memory_equal(a.wp, b.wp, a.n * sizeof a.wp[0]);
+        track_free(&a);
+        track_free(&b);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_path_expansion_bounded),
         cmocka_unit_test(test_heading_absurd),
         cmocka_unit_test(test_cr_only_lines),
+        cmocka_unit_test(test_bom_every_format),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
