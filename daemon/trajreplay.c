@@ -351,11 +351,12 @@ typedef struct {
     size_t first_rejected; /* index of the first one */
     uint64_t skipped_gaps; /* gaps jumped over (not --keep-gaps) */
     uint64_t skipped_ticks;
-    uint64_t nonfinite; /* rows with a NaN or infinite value: flagged ENGINE_SP_FAULT */
-    size_t seen_next;   /* run_report_rejections: r.next and replay_done at */
-    int seen_done;      /* its last look (verdicts come only with a push or the close) */
-    char *rows;         /* rows formatted in place, written ROWS_BUF bytes at a time */
-    size_t nrows;       /* bytes of them not written yet */
+    uint64_t nonfinite;      /* rows with a NaN or infinite value: flagged ENGINE_SP_FAULT */
+    size_t seen_next;        /* run_report_rejections: r.next and replay_done at */
+    int seen_done;           /* its last look (verdicts come only with a push or the close) */
+    uint64_t reanchors_told; /* run_report_reanchor: re-anchors said so far */
+    char *rows;              /* rows formatted in place, written ROWS_BUF bytes at a time */
+    size_t nrows;            /* bytes of them not written yet */
 } run_t;
 
 /* Rows are formatted straight into one buffer and handed to stdio a buffer
@@ -587,6 +588,27 @@ static void run_emit(run_t *run, const engine_setpoint_t *sp)
     run->last_v = v;
 }
 
+/* A new trajectory begun where nothing continued the current one (the
+ * time stepped back or far ahead, a log recorded twice): said at its line,
+ * with the times (it was only counted, reanchors in --summary). */
+static void run_report_reanchor(run_t *run)
+{
+    if (run->st.reanchors <= run->reanchors_told)
+        return;
+    run->reanchors_told = run->st.reanchors;
+    size_t i = run->st.reanchor_seq ? (size_t)run->st.reanchor_seq - 1 : 0;
+    double d = run->st.reanchor_t_s - run->st.reanchor_from_t_s;
+    run_clear_progress(run);
+    fprintf(stderr,
+            "%s:%" PRIu32 ": a new trajectory: t = %.3f s, %.3f s %s the last waypoint kept "
+            "(%.3f s), and nothing after it continues that one (a clock stepped %s, a log "
+            "recorded twice, a jump): the output reaches it by a transfer (re-anchor %" PRIu64
+            ")\n",
+            run->o->input, i < run->trk.n ? run->trk.line[i] : 0, run->st.reanchor_t_s, fabs(d),
+            d < 0 ? "before" : "after", run->st.reanchor_from_t_s, d < 0 ? "back" : "ahead",
+            run->st.reanchors);
+}
+
 /* "file:line: rejected (reason)" for each waypoint the engine rejected since
  * the last call: the first REJECT_SHOW_FIRST, then one in REJECT_SHOW_EVERY. */
 static void run_report_rejections(run_t *run)
@@ -599,6 +621,7 @@ static void run_report_rejections(run_t *run)
     run->seen_next = run->r.next;
     run->seen_done = done;
     engine_status(run->e, &run->st);
+    run_report_reanchor(run);
     size_t judged = run->r.next > run->st.judging ? run->r.next - run->st.judging : 0;
     for (; run->reported < judged; run->reported++) {
         int rc = run->results[run->reported];

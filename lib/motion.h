@@ -208,6 +208,12 @@ typedef struct {
                                        its input by that much more than D, which the
                                        catch-up does not win back where they slow it */
     uint64_t limits_slowed;         /* segments those limits slow */
+    /* The last re-anchor (reanchors: a new trajectory begun where nothing held
+     * continued the current one: a clock stepped back or far ahead, a log
+     * replayed again, a jump), for its log line: */
+    double reanchor_t_s;            /* the stamp of the waypoint that began it */
+    double reanchor_from_t_s;       /* the last stamp kept before it */
+    uint32_t reanchor_seq;          /* that waypoint's seq */
 } engine_status_t;
 
 /* clang-format on */

@@ -133,6 +133,7 @@ typedef struct obj {
     double und_t;                 /* issue 26: underrun_t_s of the last underrun logged */
     uint64_t und_logged;          /* ... and how many were (0: und_t unset) */
     uint64_t grown_logged;        /* issue 26: D's growths logged (engine delay_grown) */
+    uint64_t reanchors_logged;    /* re-anchors logged (engine reanchors) */
     uint64_t reserve_logged;      /* issue 26: slowdowns for D's reserve logged (reserve_slowed) */
     uint64_t axis_beyond_logged;  /* ... and the stops before a segment beyond the axes */
     int uniform_warned;           /* param = uniform met irregular intervals: warned once */

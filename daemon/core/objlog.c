@@ -199,6 +199,28 @@ static void log_delay_grown(obj_t *o)
     obj_log_delay(o, "its input's intervals or top speed grew: ");
 }
 
+/* A new trajectory begun where nothing continued the current one (engine
+ * reanchors: the input's time stepped back or far ahead, a log recorded
+ * twice), at obj_log_nth's rate: it was only counted. */
+static void log_reanchor(obj_t *o)
+{
+    const engine_status_t *st = &o->status;
+    if (st->reanchors == o->reanchors_logged)
+        return;
+    o->reanchors_logged = st->reanchors;
+    if (!obj_log_nth(st->reanchors))
+        return;
+    double d = st->reanchor_t_s - st->reanchor_from_t_s;
+    log_msg(LOG_NOTICE,
+            "object '%s': a new trajectory at its waypoint seq %lu, t = %.3f s: %.3f s %s the "
+            "last waypoint kept (%.3f s), and nothing after it continues that one (a clock "
+            "stepped %s, a log recorded twice, a jump): reached by a transfer (%llu re-anchors "
+            "so far)",
+            o->name, (unsigned long)st->reanchor_seq, st->reanchor_t_s, fabs(d),
+            d < 0 ? "before" : "after", st->reanchor_from_t_s, d < 0 ? "back" : "ahead",
+            (unsigned long long)st->reanchors);
+}
+
 void objlog_roll(core_t *c, unsigned start_budget)
 {
     for (unsigned i = 0; i < c->nobj; i++) {
@@ -209,6 +231,7 @@ void objlog_roll(core_t *c, unsigned start_budget)
             log_underrun(&c->obj[i]);
             log_reserve_slowed(&c->obj[i]);
             log_delay_grown(&c->obj[i]);
+            log_reanchor(&c->obj[i]);
             rejlog_drain(&c->obj[i].rejlog, c->obj[i].engine);
             rejlog_flush(&c->obj[i].rejlog, c->obj[i].name, log_rejection, (void *)c->obj[i].name);
         }

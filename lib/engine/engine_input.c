@@ -204,6 +204,9 @@ static int judge(engine_t *e, int closing)
                     e->in.gap_s = v.wp.t_s - e->in.last_t;
                 } else if (!v.stop) {
                     e->st.reanchors++;
+                    e->st.reanchor_t_s = v.wp.t_s; /* what its log line tells */
+                    e->st.reanchor_from_t_s = e->in.last_t;
+                    e->st.reanchor_seq = v.wp.seq;
                 }
                 if (close_input(e) < 0)
                     rc = -ENGINE_ENUMERIC;
