@@ -199,7 +199,22 @@ int track_gpx_parse(track_loader_t *L, const char *buf, size_t len, size_t *segm
         size_t n = len - off > chunk ? chunk : len - off;
         int final = off + n == len;
         if (XML_Parse(g.p, buf + off, (int)n, final) == XML_STATUS_ERROR) {
-            if (!L->failed)
+            /* with skip_bad, a file cut off (a logger killed mid-write) or
+             * broken keeps the whole points before the error: the rest is
+             * skipped, said and counted (it kept none) */
+            if (!L->failed && (L->flags & TRACK_SKIP_BAD) && L->n > 0) {
+                track_loader_bad(L, XML_GetCurrentLineNumber(g.p),
+                                 "XML error: %s: the rest of the file is skipped (%zu whole "
+                                 "points kept before it)",
+                                 XML_ErrorString(XML_GetErrorCode(g.p)), L->n);
+                break;
+            }
+            if (!L->failed && L->n > 0)
+                track_loader_fatal(L, XML_GetCurrentLineNumber(g.p),
+                                   "XML error: %s (skip_bad keeps the %zu whole points before "
+                                   "it)",
+                                   XML_ErrorString(XML_GetErrorCode(g.p)), L->n);
+            else if (!L->failed)
                 track_loader_fatal(L, XML_GetCurrentLineNumber(g.p), "XML error: %s",
                                    XML_ErrorString(XML_GetErrorCode(g.p)));
             rc = -1;

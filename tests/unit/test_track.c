@@ -378,6 +378,31 @@ static void test_gpx_skip_bad(void **state)
     track_free(&t);
 }
 
+/* Given a GPX cut off mid-point (a logger killed mid-write), then with
+ * TRACK_SKIP_BAD its whole points before the cut load, the rest counted as
+ * skipped with the XML error at its line (none were kept: "unclosed token",
+ * exit 1, with or without skip_bad); without it, the error says what
+ * skip_bad would keep. */
+static void test_gpx_cut_off(void **state)
+{
+    (void)state;
+    const char *text = "<gpx><trk><trkseg>\n"
+                       "<trkpt lat=\"1\" lon=\"2\"><time>2000-01-01T00:00:00Z</time></trkpt>\n"
+                       "<trkpt lat=\"1.1\" lon=\"2\"><time>2000-01-01T00:00:09Z</time></trkpt>\n"
+                       "<trkpt lat=\"1.2\" lon=\"2\"><time>2000-01-01T00:00:1";
+    track_t t;
+    char err[256];
+    assert_int_equal(parse("c.gpx", text, TRACK_FMT_GPX, TRACK_SKIP_BAD, &t, err, sizeof err), 0);
+    assert_int_equal(t.n, 2);
+    assert_int_equal(t.skipped, 1);
+    assert_true(fabs(t.wp[1].t_s - 9) < 1e-12);
+    assert_non_null(strstr(err, "c.gpx:4: XML error"));
+    assert_non_null(strstr(err, "the rest of the file is skipped (2 whole points kept"));
+    track_free(&t);
+    assert_int_equal(parse("c.gpx", text, TRACK_FMT_GPX, 0, &t, err, sizeof err), -1);
+    assert_non_null(strstr(err, "(skip_bad keeps the 2 whole points before it)"));
+}
+
 /* Given dates, when parsed, then they match libc's timegm (an independent
  * implementation of the same calendar), and the GPX times of visnjan match
  * the epoch_s column recorded in the CSV. */
@@ -625,6 +650,7 @@ int main(void)
         cmocka_unit_test(test_gpx_truncated),
         cmocka_unit_test(test_gpx_errors),
         cmocka_unit_test(test_gpx_skip_bad),
+        cmocka_unit_test(test_gpx_cut_off),
         cmocka_unit_test(test_iso8601),
         cmocka_unit_test(test_garbage),
         cmocka_unit_test(test_missing_file),
