@@ -524,6 +524,19 @@ static void carry_objects(core_t *c, core_t *prev)
         o->out_fault = q->out_fault;
         o->rejlog = q->rejlog;
         o->uniform_warned = q->uniform_warned;
+        /* what was told of the carried counters: not told again (a clear after a
+         * reload repeated the last start's latch figures) */
+        o->cmd_buf_told = q->cmd_buf_told;
+        o->cmd_drop_told = q->cmd_drop_told;
+        o->axis_warned = q->axis_warned;
+        o->limits_warned = q->limits_warned;
+        o->axis_stops_logged = q->axis_stops_logged;
+        o->axis_beyond_logged = q->axis_beyond_logged;
+        o->und_t = q->und_t;
+        o->und_logged = q->und_logged;
+        o->grown_logged = q->grown_logged;
+        o->reanchors_logged = q->reanchors_logged;
+        o->reserve_logged = q->reserve_logged;
         o->out_errors = q->out_errors;
         o->held = q->held; /* its engine keeps the override 0 */
         o->carried = 1;
