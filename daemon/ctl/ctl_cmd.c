@@ -389,6 +389,7 @@ static void do_command(ctl_t *t, ctl_client_t *cl, ctl_cmd_t cmd, char **w, int 
     }
     int rc = ctl_command(t->core, o, cmd, arg, cl->peer);
     if (rc == -CTL_ENOTWRITABLE) {
+        obj_lc(o)->n.refused++; /* counted as CAN's and Modbus's are (the exit line) */
         log_peer(LOG_WARNING, cl->peer, "control: %s%s '%s' from %s refused: not writable", name,
                  what, o->name, cl->peer);
         reply_error(cl, name, o->name, "not-writable",

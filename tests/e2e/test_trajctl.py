@@ -323,6 +323,13 @@ class TestCommands(TrajctlTest):
         # logged as every refused command is (it was refused with no line)
         self.d.err_line(lambda l: "control: stop 'nosuch' from pid" in l and
                         "refused: no such object" in l)
+        # and the four refused for 'ro' counted in its refused commands, as CAN's and
+        # Modbus's are: the exit line (they were logged, not counted)
+        self.d.p.send_signal(signal.SIGTERM)
+        self.d.p.send_signal(signal.SIGTERM)
+        self.d.wait(TIMEOUT_S)
+        last = self.d.err_line(lambda l: "exit: " in l)
+        self.assertRegex(last, r"\bro [^;]*, 4 commands refused")
 
     def test_reload(self):
         r = self.ctl("reload")
