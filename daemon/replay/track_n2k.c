@@ -250,7 +250,13 @@ int track_n2k_parse(track_loader_t *L, const char *buf, size_t len)
         if (prc == -CANDUMP_ESKIP)
             continue;
         if (prc < 0) {
-            if (track_loader_bad(L, it->lineno, "not a candump frame: %s", candump_strerror(prc)))
+            /* (the error's own text is "not a candump frame": not said twice) */
+            if (prc == -CANDUMP_ESYNTAX
+                    ? track_loader_bad(L, it->lineno,
+                                       "not a candump -l frame, \"(SECONDS) IFACE ID#DATA\" (a "
+                                       "log without its time stamps, as candump prints by "
+                                       "default, cannot be replayed: record it with candump -l)")
+                    : track_loader_bad(L, it->lineno, "candump frame: %s", candump_strerror(prc)))
                 goto out;
             continue;
         }

@@ -120,13 +120,28 @@ static void test_bom_every_format(void **state)
     }
 }
 
+/* Given a candump log printed without its time stamps (candump's default)
+ * as an NMEA 2000 track, then the error says a candump -l log is needed,
+ * once ("not a candump frame: not a candump frame" said neither). */
+static void test_candump_without_stamps(void **state)
+{
+    (void)state;
+    const char *text = "  can0  09F80103   [8]  FF FF FF FF FF FF FF FF\n";
+    track_t t;
+    char err[512];
+    assert_int_equal(
+        track_load_text("n.log", text, strlen(text), TRACK_FMT_N2K, 0, &t, err, sizeof err), -1);
+    assert_non_null(strstr(err, "n.log:1: not a candump -l frame"));
+    assert_non_null(strstr(err, "record it with candump -l"));
+    assert_null(strstr(err, "frame: not a candump frame"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_path_expansion_bounded),
-        cmocka_unit_test(test_heading_absurd),
-        cmocka_unit_test(test_cr_only_lines),
-        cmocka_unit_test(test_bom_every_format),
+        cmocka_unit_test(test_path_expansion_bounded), cmocka_unit_test(test_heading_absurd),
+        cmocka_unit_test(test_cr_only_lines),          cmocka_unit_test(test_bom_every_format),
+        cmocka_unit_test(test_candump_without_stamps),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
