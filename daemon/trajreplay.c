@@ -355,6 +355,7 @@ typedef struct {
     size_t seen_next;        /* run_report_rejections: r.next and replay_done at */
     int seen_done;           /* its last look (verdicts come only with a push or the close) */
     uint64_t reanchors_told; /* run_report_reanchor: re-anchors said so far */
+    uint64_t duplicates;     /* exact duplicates met (the first REJECT_SHOW_FIRST said) */
     char *rows;              /* rows formatted in place, written ROWS_BUF bytes at a time */
     size_t nrows;            /* bytes of them not written yet */
 } run_t;
@@ -625,6 +626,13 @@ static void run_report_rejections(run_t *run)
     size_t judged = run->r.next > run->st.judging ? run->r.next - run->st.judging : 0;
     for (; run->reported < judged; run->reported++) {
         int rc = run->results[run->reported];
+        if (rc == ENGINE_DUPLICATE && run->duplicates++ < REJECT_SHOW_FIRST) {
+            run_clear_progress(run); /* counted (duplicates), and said as a rejection is */
+            fprintf(stderr,
+                    "%s:%" PRIu32 ": duplicate of a waypoint before it (same time and "
+                    "position): dropped\n",
+                    run->o->input, run->trk.line[run->reported]);
+        }
         if (rc >= 0)
             continue; /* accepted, or an exact duplicate dropped */
         int e = -rc;

@@ -200,6 +200,8 @@ class TestGapsAndBounds(unittest.TestCase):
             self.assertIn("summary: rejected_numeric 0\n", err, name)
             for word in ("bug", "internal fault"):
                 self.assertNotIn(word, err, name)
+            if name == "duplicates":  # each said at its line, as a rejection is (only counted)
+                self.assertIn(path + ":3: duplicate of a waypoint before it", err)
             if name == "slip":
                 continue
             conf = os.path.join(self.tmp, name + ".conf")
