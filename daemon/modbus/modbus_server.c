@@ -75,35 +75,36 @@ static int set_address(modbus_server_config_t *cfg, const char *value, char *err
     return 0;
 }
 
-/* The numeric keys of [modbus]: name, least and greatest value. */
+/* The numeric keys of [modbus]: name, least and greatest value, and the
+ * field (an int, or an unsigned when is_u) it sets. */
+#define NUM_KEY(k, lo, hi, f, u) {k, lo, hi, offsetof(modbus_server_config_t, f), u}
 static const struct {
     const char *key;
     long lo, hi;
+    size_t off;
+    int is_u;
 } num_keys[] = {
-    {"port", 0, 65535},
-    {"rtu_baud", 50, 4000000},
-    {"rtu_data_bits", 7, 8},
-    {"rtu_stop_bits", 1, 2},
-    {"unit_id", 1, 247},
-    {"max_clients", 1, MODBUS_SERVER_MAX_CLIENTS_LIMIT},
-    {"idle_timeout_ms", 0, 86400000},
-    {"request_timeout_ms", 100, 600000},
-    {"peer_log_s", 0, 86400},
+    NUM_KEY("port", 0, 65535, tcp_port, 0),
+    NUM_KEY("rtu_baud", 50, 4000000, rtu_baud, 0),
+    NUM_KEY("rtu_data_bits", 7, 8, rtu_data_bits, 0),
+    NUM_KEY("rtu_stop_bits", 1, 2, rtu_stop_bits, 0),
+    NUM_KEY("unit_id", 1, 247, unit_id, 0),
+    NUM_KEY("max_clients", 1, MODBUS_SERVER_MAX_CLIENTS_LIMIT, max_clients, 1),
+    NUM_KEY("idle_timeout_ms", 0, 86400000, idle_timeout_ms, 1),
+    NUM_KEY("request_timeout_ms", 100, 600000, request_timeout_ms, 1),
+    NUM_KEY("peer_log_s", 0, 86400, peer_log_s, 1),
 };
 
 /* A numeric key's value into its field. */
 static void set_num(modbus_server_config_t *cfg, unsigned k, long x)
 {
-    switch (k) {
-    case 0: cfg->tcp_port = (int)x; break;
-    case 1: cfg->rtu_baud = (int)x; break;
-    case 2: cfg->rtu_data_bits = (int)x; break;
-    case 3: cfg->rtu_stop_bits = (int)x; break;
-    case 4: cfg->unit_id = (int)x; break;
-    case 5: cfg->max_clients = (unsigned)x; break;
-    case 6: cfg->idle_timeout_ms = (unsigned)x; break;
-    case 7: cfg->request_timeout_ms = (unsigned)x; break;
-    default: cfg->peer_log_s = (unsigned)x; break;
+    char *f = (char *)cfg + num_keys[k].off;
+    if (num_keys[k].is_u) {
+        unsigned u = (unsigned)x;
+        memcpy(f, &u, sizeof u);
+    } else {
+        int i = (int)x;
+        memcpy(f, &i, sizeof i);
     }
 }
 
