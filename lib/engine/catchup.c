@@ -96,13 +96,11 @@ static double lag_now(const engine_t *e, engine_delay_t *d)
     if (!(d->interval_s > 0))
         return 0.0;
     double now = (double)e->out.last_now * 1e-9;
-    /* D as stated at the start, and an interval more for each underrun
-     * since (start_slack auto learns them: the input comes later than its
-     * stamps say, the slack it kept was too short).  The sender's time is
-     * aged to the last tick that brought a sample, not to now: the lag then
-     * changes only at ticks after a push, which end the rate decision kept
-     * (plain_window, engine_tick.c) */
-    double D = d->delay_s + (double)(e->slack_learn - e->delay.learnt) * d->interval_s;
+    /* D as stated (engine_delay: the slack learnt since the start in it).
+     * The sender's time is aged to the last tick that brought a sample, not
+     * to now: the lag then changes only at ticks after a push, which end
+     * the rate decision kept (plain_window, engine_tick.c) */
+    double D = d->delay_s;
     return (now + offset_at(e, e->lag.seen_ns) - D) - e->out.t;
 }
 

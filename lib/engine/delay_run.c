@@ -134,24 +134,10 @@ static double ramp_lag(const engine_t *e, int strict)
     return lag;
 }
 
-/* The output of the head's trajectory starting now: the D it will hold
- * (the time waited plus the ramp's loss, *lag; NAN: not simulated, the wait
- * short of D by more than any ramp loses) into d; returns the time waited.
- * A ramp that loses more than D less the wait (a REST start's curve faster
- * than its waypoints) sets D: the output stands there after it, and that is
- * no lag to win back (catchup.h): the track-time grid after a start does not
- * depend on when each waypoint came.  An upload's D is not raised so.  A
- * fixed start_slack's D is the wait plus the loss, less or more. */
-static double delay_if_started(const engine_t *e, engine_delay_t *d, double *lag, double known)
+/* delay_if_started's D of a start from the wait and the ramp's loss. */
+static double delay_started(const engine_t *e, engine_delay_t *d, double *lag, double known,
+                            double waited, int counted)
 {
-    delay_measured(e, d);
-    *lag = NAN;
-    if (!e->queue.len || queue_at(e, 0)->kind != QE_SEG)
-        return 0.0;
-    double waited = newest(e) - queue_at(e, 0)->seg.t0_s;
-    /* a fixed start_slack starts by count and is not steered to D after
-     * (catchup.h): its D is where that start leaves the output */
-    int counted = !(e->slack_auto || e->cfg.delay_s > 0);
     /* the ramp loses at most a stop at the fastest speed ahead */
     if (!counted && waited < d->delay_s - engine_delay_stop_s(&e->cfg, head_vmax(e)))
         return waited;
@@ -171,6 +157,42 @@ static double delay_if_started(const engine_t *e, engine_delay_t *d, double *lag
         d->need_s = d->delay_s;
     }
     return waited;
+}
+
+/* The output of the head's trajectory starting now: the D it will hold
+ * (the time waited plus the ramp's loss, *lag; NAN: not simulated, the wait
+ * short of D by more than any ramp loses) into d; returns the time waited.
+ * A ramp that loses more than D less the wait (a REST start's curve faster
+ * than its waypoints) sets D: the output stands there after it, and that is
+ * no lag to win back (catchup.h): the track-time grid after a start does not
+ * depend on when each waypoint came.  An upload's D is not raised so.  A
+ * fixed start_slack's D is the wait plus the loss, less or more. */
+static double delay_if_started(const engine_t *e, engine_delay_t *d, double *lag, double known)
+{
+    /* a fixed start_slack starts by count and is not steered to D after
+     * (catchup.h): its D is where that start leaves the output */
+    int counted = !(e->slack_auto || e->cfg.delay_s > 0);
+    /* the D a trajectory before this one stated (d may be e->delay.d) */
+    double before = e->delay.noted && !counted ? e->delay.d.delay_s : 0.0;
+    delay_measured(e, d);
+    double need = d->delay_s;
+    *lag = NAN;
+    if (!e->queue.len || queue_at(e, 0)->kind != QE_SEG)
+        return 0.0;
+    double waited = newest(e) - queue_at(e, 0)->seg.t0_s;
+    double waited_out = delay_started(e, d, lag, known, waited, counted);
+    /* a trajectory after a silence, a gap or a re-anchor: its start makes D
+     * no longer than the D stated before it (or what its input needs, if
+     * more): where the start leaves the output beyond that (the input
+     * buffered while the output played out the last one and transferred)
+     * is lag, won back (catchup.h), not a longer D for good (a 1 s hole at
+     * 10 Hz made D 1 s longer for the rest of the track) */
+    double cap = fmax(before, need);
+    if (before > 0 && !e->lag.ahead && d->delay_s > cap) {
+        d->delay_s = d->need_s = cap;
+        d->stop_s = d->delay_s - d->lookahead_s - d->slack_s;
+    }
+    return waited_out;
 }
 
 int engine_delay_ready(const engine_t *e, double *lag_out)
@@ -291,8 +313,22 @@ int engine_delay_reserve_short(const engine_t *e)
 
 void engine_delay(const engine_t *e, engine_delay_t *d)
 {
-    if (e->delay.noted)
-        *d = e->delay.d;
-    else
+    if (!e->delay.noted) {
         delay_measured(e, d);
+        return;
+    }
+    /* D as stated at the start, and an interval more for each underrun
+     * since (start_slack auto learns them: the input came later than its
+     * stamps said, the slack it kept was too short): what the output is
+     * steered to (catchup.h), so stated (the summary, the log, Modbus) as
+     * well; it stood an interval beyond the D it stated */
+    *d = e->delay.d;
+    if (e->slack_learn > e->delay.learnt) {
+        unsigned more = e->slack_learn - e->delay.learnt;
+        double s = (double)more * d->interval_s;
+        d->slack_n += more;
+        d->slack_s += s;
+        d->need_s += s;
+        d->delay_s += s;
+    }
 }

@@ -336,7 +336,12 @@ class TestLagWonBack(unittest.TestCase):
         self.assertEqual(s["hard_stops"], 0)
         before = steady_delays(p.stdout, 10.0, 19.0)
         after = steady_delays(p.stdout, 32.0, 85.0)
-        self.assertLessEqual(abs(np.median(before) - D), H)
+        # D stated at the end holds the interval the underrun taught the slack
+        # (delay.h; the summary's delay_slack_s beyond the least one, 1 x 0.1 s);
+        # before the hole the output stood at the D stated then
+        learnt = s["delay_slack_s"] - 0.1
+        self.assertAlmostEqual(learnt, 0.1, delta=1e-9)
+        self.assertLessEqual(abs(np.median(before) - (D - learnt)), H)
         self.assertLessEqual(np.max(np.abs(after - D)), H, "after the hole: %.4f .. %.4f vs D %.4f"
                              % (after.min(), after.max(), D))
         cs = CubicSpline(t, np.c_[x, y], bc_type=((1, [0, 0]), (1, [0, 0])))
@@ -349,6 +354,52 @@ class TestLagWonBack(unittest.TestCase):
         curve = np.hypot(*cs(ts, 1).T)
         self.assertLessEqual(np.max(speed - 1.05 * curve), 1e-3)
         self.assertGreaterEqual(s["catchups"], 1)
+
+    def test_silence_keeps_d(self):
+        """The 10 Hz track with 1.0 s of fixes missing after t = 100 s: a silence
+        long enough to end the trajectory (silence.h), so the rest is a second
+        one reached by a transfer. Its start does not make D longer: the
+        summary's D is the one before the hole, and the output stands there
+        again 150 s after the hole (within one interval: the tail played
+        out, the transfer and the input buffered meanwhile leave it 8.5 s
+        behind, which is lag, won back at 5 %: 0.05 s a second). Before,
+        the second trajectory's D was where its start left the output, 1 s
+        longer for good (probe O: 3.726 s against 2.735 s)."""
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "hole.csv")
+            t, x, y = track(3000)
+            keep = ~((t > 100.0) & (t < 101.05))
+            write_track(path, t[keep], x[keep], y[keep])
+            p = replay(path)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            s = replay_summary.parse(p.stderr)
+        self.assertEqual((s["silent_ends"], s["tracks"]), (1, 2))
+        before = np.median(steady_delays(p.stdout, 50.0, 99.0))
+        after = steady_delays(p.stdout, 250.0, 290.0)
+        self.assertLessEqual(abs(s["delay_s"] - before), H)
+        self.assertLessEqual(np.max(np.abs(after - before)), H,
+                             "after the silence: %.4f .. %.4f vs %.4f before"
+                             % (after.min(), after.max(), before))
+
+    def test_learnt_slack_stated(self):
+        """0.6 s of fixes missing after t = 20 s (an underrun, then the slack
+        holds one waypoint more: delay.h): the D the summary states is where
+        the output stands after it (within half an interval), its slack part
+        one interval more. Before, the summary kept the D of the start while
+        the output stood an interval behind it (probe O)."""
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "hole.csv")
+            t, x, y = track(1200)
+            keep = ~((t > 20.0) & (t < 20.65))
+            write_track(path, t[keep], x[keep], y[keep])
+            p = replay(path)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            s = replay_summary.parse(p.stderr)
+        self.assertGreaterEqual(s["underruns"], 1)
+        after = np.median(steady_delays(p.stdout, 60.0, 115.0))
+        self.assertLessEqual(abs(s["delay_s"] - after), 0.5 * H,
+                             "stated %.4f, stands at %.4f" % (s["delay_s"], after))
+        self.assertGreater(s["delay_slack_s"], H + 1e-9)
 
     def test_gaps_do_not_add_up(self):
         """Five 30 s pieces 20 s apart, each starting 3 m beside the last
