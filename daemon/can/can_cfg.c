@@ -446,7 +446,37 @@ static int id_moved(uint32_t was, uint32_t now, int optional)
     return was != now && (!optional || (was && now));
 }
 
-/* A reload may not move a CAN id of an object that stays (same name). */
+/* What of the drives' set-up differs between a (running) and b, whose ids
+ * are the same; NULL: nothing, or no drives before. */
+static const char *drive_changed(const canproto_ids_t *a, const canproto_ids_t *b)
+{
+    if (a->cia402 == CANPROTO_CIA402_OFF)
+        return NULL;
+    if (a->cia402 != b->cia402)
+        return "mode (can.cia402)";
+    if (memcmp(&a->cia402_counts_per_m, &b->cia402_counts_per_m, sizeof a->cia402_counts_per_m) ||
+        memcmp(a->cia402_axis_counts_per_m, b->cia402_axis_counts_per_m,
+               sizeof a->cia402_axis_counts_per_m) != 0)
+        return "scale (can.cia402_counts_per_m*)";
+    if (memcmp(a->cia402_offset, b->cia402_offset, sizeof a->cia402_offset) != 0)
+        return "zero (can.cia402_offset_*)";
+    if (memcmp(a->cia402_invert, b->cia402_invert, sizeof a->cia402_invert) != 0)
+        return "direction (can.cia402_invert_*)";
+    if (a->cia402_controlword != b->cia402_controlword ||
+        a->cia402_controlword_value != b->cia402_controlword_value)
+        return "controlword (can.cia402_controlword*)";
+    if (memcmp(a->cia402_tpdo_id, b->cia402_tpdo_id, sizeof a->cia402_tpdo_id) != 0)
+        return "feedback TPDO ids (can.cia402_tpdo_*)";
+    if (a->cia402_heartbeat_ms != b->cia402_heartbeat_ms)
+        return "heartbeat (can.cia402_heartbeat_ms)";
+    if (a->cia402_nsdo != b->cia402_nsdo ||
+        memcmp(a->cia402_sdo, b->cia402_sdo, a->cia402_nsdo * sizeof a->cia402_sdo[0]) != 0)
+        return "bring-up SDO list (can.cia402_sdo)";
+    return NULL;
+}
+
+/* A reload may not move a CAN id of an object that stays (same name), nor
+ * change the set-up of its running drives. */
 int can_cfg_reload_check(const cfg_t *old, const cfg_t *nw, int *line, char *why, size_t wl)
 {
     for (unsigned k = 0; k < nw->nobj; k++) {
@@ -487,6 +517,17 @@ int can_cfg_reload_check(const cfg_t *old, const cfg_t *nw, int *line, char *why
                          o->name, what[i], (unsigned)va[i], (unsigned)vb[i]);
                 return -CFG_EVALUE;
             }
+        const char *drive = drive_changed(&a, &b);
+        if (drive) {
+            *line = o->line;
+            snprintf(why, wl,
+                     "[object.%s]: its CiA 402 drives' %s would change: a reload keeps running "
+                     "drives only as they were set up (their bring-up again and the old "
+                     "engine's braking in the new units would step them); stop trajd and start "
+                     "it with this file (a start adopts running drives as it finds them)",
+                     o->name, drive);
+            return -CFG_EVALUE;
+        }
     }
     return 0;
 }

@@ -391,6 +391,34 @@ static void test_reload_check(void **state)
     nw = load_ok(text);
     assert_int_equal(cfg_reload_check(old, nw, err, sizeof err), 0);
     cfg_free(nw);
+    /* same ids, the running drives' set-up changed (a zero, a scale, the
+     * heartbeat): refused at a's section, naming it (the drives were brought
+     * up again and the old engine's braking sent in the new units: steps of
+     * 0.64 m in one cycle, probe N); an engine setting alone is not */
+    static const char *const drive[][2] = {
+        {"can.cia402_offset_x = 5000\n", "zero (can.cia402_offset_*)"},
+        {"can.cia402_counts_per_m = 12000\n", "scale (can.cia402_counts_per_m*)"},
+        {"can.cia402_heartbeat_ms = 1400\n", "heartbeat (can.cia402_heartbeat_ms)"},
+        {"can.cia402_invert_x = yes\n", "direction (can.cia402_invert_*)"},
+    };
+    for (size_t i = 0; i < sizeof drive / sizeof drive[0]; i++) {
+        char keys[512];
+        snprintf(keys, sizeof keys, "%s%s", cob, drive[i][0]);
+        snprintf(text, sizeof text,
+                 CAN_LOG CAN_OBJ("a", "id = 0\n", "%s") CAN_OBJ("b", "id = 1\n", ""), keys);
+        nw = load_ok(text);
+        assert_int_equal(cfg_reload_check(old, nw, err, sizeof err), -CFG_EVALUE);
+        if (!strstr(err, "[object.a]: its CiA 402 drives' ") || !strstr(err, drive[i][1]))
+            fail_msg("%s: got '%s'", drive[i][0], err);
+        cfg_free(nw);
+    }
+    snprintf(text, sizeof text,
+             CAN_LOG CAN_OBJ("a", "id = 0\nmax_speed_m_s = 1.45\n", "%s")
+                 CAN_OBJ("b", "id = 1\n", ""),
+             cob);
+    nw = load_ok(text);
+    assert_int_equal(cfg_reload_check(old, nw, err, sizeof err), 0);
+    cfg_free(nw);
     cfg_free(old);
 }
 
