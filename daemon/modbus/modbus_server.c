@@ -77,7 +77,10 @@ static int set_address(modbus_server_config_t *cfg, const char *value, char *err
 
 /* The numeric keys of [modbus]: name, least and greatest value, and the
  * field (an int, or an unsigned when is_u) it sets. */
-#define NUM_KEY(k, lo, hi, f, u) {k, lo, hi, offsetof(modbus_server_config_t, f), u}
+#define NUM_KEY(k, lo, hi, f, u)                                                                   \
+    {                                                                                              \
+        k, lo, hi, offsetof(modbus_server_config_t, f), u                                          \
+    }
 static const struct {
     const char *key;
     long lo, hi;
