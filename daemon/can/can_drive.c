@@ -134,6 +134,7 @@ static void drive_feedback(can_drive_t *o, unsigned a, const canproto_frame_t *f
     }
     o->st.drive_frames++;
     d->statusword[a] = sw;
+    o->still[a] = inc == o->pos_inc[a] ? o->still[a] + 1 : 0;
     o->pos_inc[a] = inc;
     d->pos_m[a] = canproto_cia402_pos_m(&o->ids, a, inc);
     d->seen |= 1u << a;
@@ -238,10 +239,19 @@ static int drive_frame(can_drive_t *o, const canproto_frame_t *f)
     return 0;
 }
 
+/* Feedbacks in a row with 0x6064 unchanged that tell a quick-stopped drive
+ * at rest. */
+#define CAN_DRIVE_STILL_FEEDBACKS 3
+
 /* The controlword axis a's drive needs now (bring-up). */
 static uint16_t wanted_cw(const can_drive_t *o, unsigned a)
 {
     cia402_state_t st = o->drive.state[a];
+    /* a drive in quick stop brakes by its own ramp: kept in it (Quick stop)
+     * until its 0x6064 stands still, then Disable voltage (transition 12);
+     * Disable voltage at once cut its ramp and the axis coasted, 0.05-0.09 m */
+    if (st == CIA402_QUICK_STOP_ACTIVE && o->still[a] < CAN_DRIVE_STILL_FEEDBACKS)
+        return CIA402_CW_QUICK_STOP;
     if (o->sdo_failed[a] || o->sdo_next[a] < o->ids.cia402_nsdo ||
         (o->axis_held[a] && !o->reset_req))
         return CIA402_CW_DISABLE_VOLTAGE;

@@ -104,6 +104,8 @@ typedef struct {
     /* each axis' target, and the drives' losses (issue 23) */
     can_axis_t ax[CANPROTO_CIA402_AXES];
     int32_t pos_inc[CANPROTO_CIA402_AXES]; /* 0x6064 as last heard, in increments */
+    unsigned still[CANPROTO_CIA402_AXES];  /* feedbacks in a row with 0x6064 unchanged (a
+                                            * quick-stopped drive is let finish its ramp) */
     int axis_oe[CANPROTO_CIA402_AXES];     /* in Operation Enabled as last heard */
     int axis_held[CANPROTO_CIA402_AXES];   /* left Operation Enabled: disabled until CLEAR */
     int lost;           /* a drive of the object left Operation Enabled: the others brake with the

@@ -519,6 +519,52 @@ static void test_cia402_rpdo_controlword_follows_bring_up(void **state)
     assert_int_equal(last_rpdo_cw(mark), 0x0000); /* held until clear */
 }
 
+/* Node 1's feedback (statusword sw, 0x6064 = inc), then cycle k: the
+ * controlword the bring-up wrote by SDO then (-1: none). */
+static long step_drive_at(uint16_t sw, int32_t inc, uint32_t k)
+{
+    uint16_t index = 0;
+    queue_tpdo(0x181, sw, inc);
+    can_port_rx(port, 0);
+    unsigned mark = io.nout;
+    run_cycle(k, 0);
+    long cw = last_sdo(1, mark, &index);
+    if (cw >= 0) {
+        assert_int_equal(index, 0x6040);
+        queue_sdo_reply(1, 0x60, 0x6040, 0);
+        can_port_rx(port, 0);
+    }
+    return cw;
+}
+
+/* Given a drive that quick-stops while it moves (a local input: it brakes by
+ * its own ramp), then trajd keeps it in quick stop (controlword Quick stop,
+ * 0x0002, in the SDO and the RPDO) while its 0x6064 still moves, and sends
+ * Disable voltage (transition 12) only once it stands still (3 feedbacks
+ * unchanged); Disable voltage at once cut the ramp and the axis coasted
+ * (0.05-0.09 m, probe N). */
+static void test_cia402_quick_stop_ramp_kept(void **state)
+{
+    (void)state;
+    enable_with_controlword_rpdo();
+    run_cycle(0, 0);
+    assert_int_equal(step_drive_at(0x0250, 0, 1), 0x0006);
+    assert_int_equal(step_drive_at(0x0231, 0, 2), 0x0007);
+    assert_int_equal(step_drive_at(0x0233, 0, 3), 0x000F);
+    assert_int_equal(step_drive_at(0x0237, 100, 4), -1); /* moving, enabled */
+    assert_int_equal(step_drive_at(0x0237, 300, 5), -1);
+    unsigned mark = io.nout;
+    assert_int_equal(step_drive_at(0x0207, 450, 6), 0x0002); /* quick stop, still moving */
+    assert_int_equal(last_rpdo_cw(mark), 0x0002);
+    assert_int_equal(step_drive_at(0x0207, 540, 7), -1); /* kept in it while it brakes */
+    assert_int_equal(step_drive_at(0x0207, 570, 8), -1);
+    assert_int_equal(step_drive_at(0x0207, 570, 9), -1);
+    assert_int_equal(step_drive_at(0x0207, 570, 10), -1);
+    mark = io.nout;
+    assert_int_equal(step_drive_at(0x0207, 570, 11), 0x0000); /* at rest: transition 12 */
+    assert_int_equal(last_rpdo_cw(mark), 0x0000);
+}
+
 /* Given an SDO request resent after no answer, when the late answer to the
  * first and then the answer to the resent one arrive, then only the one for
  * the request in flight counts: the second does not acknowledge the next
@@ -1057,6 +1103,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_cia402_sdo_abort, setup, teardown),
         cmocka_unit_test_setup_teardown(test_cia402_rpdo_controlword_follows_bring_up, setup,
                                         teardown),
+        cmocka_unit_test_setup_teardown(test_cia402_quick_stop_ramp_kept, setup, teardown),
         cmocka_unit_test_setup_teardown(test_cia402_sdo_stale_reply_ignored, setup, teardown),
         cmocka_unit_test_setup_teardown(test_cia402_status2_drive_page, setup, teardown),
         cmocka_unit_test_setup_teardown(test_cia402_heartbeat_lost_holds, setup, teardown),
