@@ -66,6 +66,23 @@ static void test_heading_absurd(void **state)
     track_free(&t);
 }
 
+/* The track in text b (named name) is the one in text a: the same waypoints,
+ * at least two. */
+static void same_track(const char *name, const char *a_text, const char *b_text)
+{
+    char err[256];
+    track_t a, b;
+    if (parse(name, a_text, 0, &a, err, sizeof err) != 0)
+        fail_msg("%s as written: %s", name, err);
+    if (parse(name, b_text, 0, &b, err, sizeof err) != 0)
+        fail_msg("%s refused: %s", name, err);
+    assert_int_equal(a.n, b.n);
+    assert_true(a.n >= 2);
+    assert_memory_equal(a.wp, b.wp, a.n * sizeof a.wp[0]);
+    track_free(&a);
+    track_free(&b);
+}
+
 /* Given CSV tracks (one with a comment line) whose lines end in CR alone (classic Mac OS),
  * then they read as with LF: the same waypoints (they were one line: "no
  * waypoints"). */
@@ -75,20 +92,12 @@ static void test_cr_only_lines(void **state)
     static const char *const lf[] = {"t,x,y,z\n0,0,0,0\n0.1,1,0,0\n0.2,2,0.5,0\n",
                                      "# a comment\nt_s,x_m,y_m\n0,1,2\n1,2,3\n"};
     for (size_t k = 0; k < sizeof lf / sizeof lf[0]; k++) {
-        char cr[256], err[256];
+        char cr[256];
         snprintf(cr, sizeof cr, "%s", lf[k]);
         for (char *p = cr; *p; p++)
             if (*p == '\n')
                 *p = '\r';
-        track_t a, b;
-        assert_int_equal(parse("lf.csv", lf[k], 0, &a, err, sizeof err), 0);
-        if (parse("cr.csv", cr, 0, &b, err, sizeof err) != 0)
-            fail_msg("CR-only lines refused: %s", err);
-        assert_int_equal(a.n, b.n);
-        assert_true(a.n >= 2);
-        assert_memory_equal(a.wp, b.wp, a.n * sizeof a.wp[0]);
-        track_free(&a);
-        track_free(&b);
+        same_track("lf.csv", lf[k], cr);
     }
 }
 
@@ -105,18 +114,9 @@ static void test_bom_every_format(void **state)
                   "B1200014530000N01330010EA0010000100\n"},
     };
     for (size_t k = 0; k < 2; k++) {
-        char bom[512], err[256];
+        char bom[512];
         snprintf(bom, sizeof bom, "\xEF\xBB\xBF%s", text[k][1]);
-        track_t a, b;
-        if (parse(text[k][0], text[k][1], 0, &a, err, sizeof err) != 0)
-            fail_msg("%s without a BOM: %s", text[k][0], err);
-        if (parse(text[k][0], bom, 0, &b, err, sizeof err) != 0)
-            fail_msg("%s with a BOM refused: %s", text[k][0], err);
-        assert_int_equal(a.n, b.n);
-        assert_true(a.n >= 2);
-        assert_memory_equal(a.wp, b.wp, a.n * sizeof a.wp[0]);
-        track_free(&a);
-        track_free(&b);
+        same_track(text[k][0], text[k][1], bom);
     }
 }
 
