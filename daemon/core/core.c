@@ -862,6 +862,11 @@ static size_t summary_motion(const obj_t *o, char *buf, size_t len, size_t n)
                      o->status.axis_lost_s, (unsigned long long)o->status.axis_slowed);
         n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
     }
+    if (o->stop_refused && n < len) { /* obj_push_from while the daemon stops */
+        m = snprintf(buf + n, len - n, ", %llu waypoints refused while stopping",
+                     (unsigned long long)o->stop_refused);
+        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+    }
     if (o->status.limits_lost_s >= 0.05 && n < len) { /* its own speed/acceleration limits */
         m = snprintf(buf + n, len - n, ", %.1f s lost to its speed/acceleration limits",
                      o->status.limits_lost_s);

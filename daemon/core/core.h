@@ -113,6 +113,7 @@ typedef struct obj {
     uint64_t skipped_ticks;       /* missed deadlines this object was stepped through with
                                      * no output (added into status.skipped_ticks) */
     int stopping;                 /* the daemon is stopping: obj_push_from refuses */
+    uint64_t stop_refused;        /* waypoints obj_push_from refused so (logged: the first) */
     unsigned clear_seq;           /* +1 per clear the object accepted (obj_command), from any
                                      * source: a transport whose devices hold on their own (a
                                      * CiA 402 drive's fault, can_transport.c) releases them */

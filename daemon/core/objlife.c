@@ -32,8 +32,16 @@ static void obj_clock_decide(obj_t *o, const engine_waypoint_t *wp, int64_t real
 
 int obj_push_from(obj_t *o, const engine_waypoint_t *wp, const char *src)
 {
-    if (o->stopping)
+    if (o->stopping) {
+        /* counted for the exit line, the first said (they were counted by
+         * their transport alone, as refused, and nothing said why) */
+        if (o->stop_refused++ == 0)
+            log_msg(LOG_NOTICE,
+                    "object '%s': waypoint from %s refused: trajd is stopping (the later ones "
+                    "are counted on the exit line)",
+                    o->name, src ? src : "an unknown source");
         return -ENGINE_ESTATE;
+    }
     int64_t real_ns = o->clocked ? core_real_ns() : 0;
     obj_clock_decide(o, wp, real_ns);
     rejlog_offered(&o->rejlog, wp, src);

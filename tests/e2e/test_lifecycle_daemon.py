@@ -464,6 +464,37 @@ class Commands(unittest.TestCase):
         self.assertTrue(any("object 'fed': command stop from %s" % me in l for l in lines.all))
         s.close()
 
+    def test_waypoints_refused_while_stopping_told(self):
+        # Given a client streaming, when trajd gets SIGTERM (the object braking
+        # to rest, slowly: scale_accel_m_s2 0.2) and the client writes on, then
+        # each waypoint is refused (exception 03, config/PROTOCOL.md), the first
+        # one said with the object and the client, and the count is on the exit
+        # line (the transport counted them as refused and nothing said why)
+        self.p, lines, port, csv = start_modbus_trajd(
+            self.tmpd.name, "scale_accel_m_s2 = 0.2\n")
+        s = mbsim.connect(port)
+        tid, seq = 0, 0
+        for i in range(60):
+            seq, tid = seq + 1, tid + 1
+            self.assertIsNone(write_wp(s, seq, 0.1 * i, circle(0.1 * i), tid))
+        self.wait_moving(FileRows(csv))
+        self.p.send_signal(signal.SIGTERM)
+        self.assertIsNotNone(lines.wait_for("bringing objects to rest", WAIT_S))
+        for i in range(60, 63):
+            seq, tid = seq + 1, tid + 1
+            self.assertEqual(write_wp(s, seq, 0.1 * i, circle(0.1 * i), tid), 3)
+        me = "modbus %s:%d" % s.getsockname()[:2]
+        line = lines.wait_for("object 'fed': waypoint from %s refused: trajd is stopping" % me,
+                              WAIT_S)
+        self.assertIsNotNone(line, "".join(lines.all))
+        s.close()
+        self.p.send_signal(signal.SIGTERM)
+        self.p.wait(WAIT_S)
+        exit_line = lines.wait_for("exit: ", WAIT_S)
+        self.assertRegex(exit_line, r"fed [^;]*, 3 waypoints refused while stopping")
+        self.p.stderr.close()
+        self.p = None
+
     def test_clear_after_safety_hold_resumes(self):
         self.p, lines, port, csv = start_modbus_trajd(
             self.tmpd.name, "safety_max_speed_m_s = 1.5\ntransfer_speed_m_s = 1\ntransfer_accel_m_s2 = 1\n")
