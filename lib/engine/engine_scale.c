@@ -657,6 +657,20 @@ static double stop_jerk_now(const engine_t *e, double J)
     return fmax(J, e->cfg.scale_jerk_m_s3 / v);
 }
 
+/* Whether a kind of limit holds the rate this tick (was: it held it the
+ * tick before): from where it first holds it (at the ceiling of a segment
+ * it caps, capped, or braking for a capped one ahead, braking and some
+ * segment it slows queued) until the rate is back at 1 (not a ramp that
+ * has not reached its ceiling yet: that is the start's, in D). */
+static int limits_hold(const engine_t *e, int was, int capped, uint64_t slowed, int braking)
+{
+    if (e->out.mode != OUT_STREAM || !(e->scale.ts.rate < 0.999))
+        return 0;
+    if ((capped && e->scale.ts.rate >= 0.999 * e->out.cur.ceil) || (braking && slowed))
+        return 1;
+    return was;
+}
+
 /* One tick off the unit grid: the time scaling chooses the advance, within
  * R (scale_remaining) and Rc (scale_ceil_room, which the caller has worked
  * out for this state already: with per-axis limits it scans the capped
@@ -674,28 +688,17 @@ void scale_step(engine_t *e, double target, double R, double Rc, double A, doubl
         lim = 0; /* the curve ahead is short of a stop from the target, but the
                   * move is the one without it (a ramp from rest): no underrun */
 
-    /* issue 32: time lost to the per-axis limits: from where they first hold
-     * the rate (at the ceiling of a segment they slow, or braking for a
-     * capped one ahead) until it is back at 1 (not a ramp that has not
-     * reached its ceiling yet: that is the start's, in D) */
-    if (e->out.mode != OUT_STREAM || !(e->scale.ts.rate < 0.999))
-        e->axis_episode = 0;
-    else if ((e->out.cur.ceil_axis && e->scale.ts.rate >= 0.999 * e->out.cur.ceil) ||
-             (lim && Rc < R && e->st.axis_slowed))
-        e->axis_episode = 1;
+    /* issue 32: time lost to the per-axis limits (and, where they do not
+     * hold it, to the object's own speed and acceleration limits: the
+     * output fell behind its input on jittery stamps with nothing counted) */
+    e->axis_episode = limits_hold(e, e->axis_episode, e->out.cur.ceil_axis, e->st.axis_slowed,
+                                  lim && Rc < R);
+    e->own_episode = !e->axis_episode && limits_hold(e, e->own_episode, e->out.cur.ceil_own,
+                                                     e->st.limits_slowed, lim && Rc < R);
     if (e->axis_episode) {
         e->st.axis_lost_s += (1.0 - e->scale.ts.rate) * e->period_s;
         axis_lag(e);
     }
-    /* the same for the object's own speed and acceleration limits (the
-     * profile's), where they and not the axes slow the segment: their time
-     * lost is counted and told too (it was not: the output fell behind its
-     * input on jittery stamps with nothing counted) */
-    if (e->out.mode != OUT_STREAM || !(e->scale.ts.rate < 0.999) || e->axis_episode)
-        e->own_episode = 0;
-    else if ((e->out.cur.ceil_own && e->scale.ts.rate >= 0.999 * e->out.cur.ceil) ||
-             (lim && Rc < R && e->st.limits_slowed))
-        e->own_episode = 1;
     if (e->own_episode)
         e->st.limits_lost_s += (1.0 - e->scale.ts.rate) * e->period_s;
     /* the rate this tick starts from, if a stop within it keeps to A */
