@@ -135,17 +135,17 @@ static double ramp_lag(const engine_t *e, int strict)
 }
 
 /* delay_if_started's D of a start from the wait and the ramp's loss. */
-static double delay_started(const engine_t *e, engine_delay_t *d, double *lag, double known,
-                            double waited, int counted)
+static void delay_started(const engine_t *e, engine_delay_t *d, double *lag, double known,
+                          double waited, int counted)
 {
     /* the ramp loses at most a stop at the fastest speed ahead */
     if (!counted && waited < d->delay_s - engine_delay_stop_s(&e->cfg, head_vmax(e)))
-        return waited;
+        return;
     /* a batch written ahead of its stamps (an upload) is not steered
      * (catchup.h): its output stands further behind than any D, and D is
      * what its input needs, not where the batch left the start */
     if (e->lag.ahead)
-        return waited;
+        return;
     *lag = isfinite(known) ? known : ramp_lag(e, 1);
     /* what the ramp loses if it started now anyway (held back: more) */
     double loss = isfinite(*lag) ? *lag : ramp_lag(e, 0);
@@ -156,7 +156,6 @@ static double delay_started(const engine_t *e, engine_delay_t *d, double *lag, d
         d->stop_s = d->delay_s - d->lookahead_s - d->slack_s;
         d->need_s = d->delay_s;
     }
-    return waited;
 }
 
 /* The output of the head's trajectory starting now: the D it will hold
@@ -180,7 +179,7 @@ static double delay_if_started(const engine_t *e, engine_delay_t *d, double *lag
     if (!e->queue.len || queue_at(e, 0)->kind != QE_SEG)
         return 0.0;
     double waited = newest(e) - queue_at(e, 0)->seg.t0_s;
-    double waited_out = delay_started(e, d, lag, known, waited, counted);
+    delay_started(e, d, lag, known, waited, counted);
     /* a trajectory after a silence, a gap or a re-anchor: its start makes D
      * no longer than the D stated before it (or what its input needs, if
      * more): where the start leaves the output beyond that (the input
@@ -192,7 +191,7 @@ static double delay_if_started(const engine_t *e, engine_delay_t *d, double *lag
         d->delay_s = d->need_s = cap;
         d->stop_s = d->delay_s - d->lookahead_s - d->slack_s;
     }
-    return waited_out;
+    return waited;
 }
 
 int engine_delay_ready(const engine_t *e, double *lag_out)
