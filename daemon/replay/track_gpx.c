@@ -3,6 +3,7 @@
 #include "track_loader.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include <expat.h>
@@ -209,14 +210,13 @@ int track_gpx_parse(track_loader_t *L, const char *buf, size_t len, size_t *segm
                                  XML_ErrorString(XML_GetErrorCode(g.p)), L->n);
                 break;
             }
-            if (!L->failed && L->n > 0)
-                track_loader_fatal(L, XML_GetCurrentLineNumber(g.p),
-                                   "XML error: %s (skip_bad keeps the %zu whole points before "
-                                   "it)",
-                                   XML_ErrorString(XML_GetErrorCode(g.p)), L->n);
-            else if (!L->failed)
-                track_loader_fatal(L, XML_GetCurrentLineNumber(g.p), "XML error: %s",
-                                   XML_ErrorString(XML_GetErrorCode(g.p)));
+            char keep[80] = ""; /* what skip_bad would keep */
+            if (L->n > 0)
+                snprintf(keep, sizeof keep, " (skip_bad keeps the %zu whole points before it)",
+                         L->n);
+            if (!L->failed)
+                track_loader_fatal(L, XML_GetCurrentLineNumber(g.p), "XML error: %s%s",
+                                   XML_ErrorString(XML_GetErrorCode(g.p)), keep);
             rc = -1;
             break;
         }
