@@ -617,6 +617,8 @@ static void random_config(accept_config_t *c)
     static const double speeds[] = {0.0, 5.0, 40.0, 100.0, 400.0};
     static const double accels[] = {0.0, 3.0, 30.0};
     static const double gaps[] = {0.5, 5.0, 60.0, 1e9};
+    memset(c, 0, sizeof *c); /* at_arrival and any field not set below: off, as the
+                                reference's former policy has them */
     c->max_speed_m_s = speeds[rndn(5)];
     c->max_accel_m_s2 = accels[rndn(3)];
     c->max_gap_s = gaps[rndn(4)];
