@@ -245,6 +245,15 @@ void can_port_status2_value(can_port_t *p, unsigned i, const canproto_frame_t *f
     status2_put(p, i, f, 1);
 }
 
+/* Object o's counters to zero: the reassembly's, the drives', the port's. */
+static void reset_counters(can_port_obj_t *o)
+{
+    memset(&o->st, 0, sizeof o->st);
+    memset(&o->drv.st, 0, sizeof o->drv.st);
+    memset(&o->rx.st, 0, sizeof o->rx.st);
+    o->last_err = CANPROTO_STERR_OK;
+}
+
 static void refuse_command(can_port_obj_t *o, canproto_cmd_t cmd, uint32_t id, int err)
 {
     o->st.cmd_refused++;
@@ -272,12 +281,8 @@ static void handle_command(can_port_obj_t *o, canproto_cmd_t cmd, unsigned arg, 
         can_drive_cleared(&o->drv); /* the holds released; after a drive's, re-anchored */
         canproto_rx_restart(&o->rx);
     }
-    if (cmd == CANPROTO_CMD_RESET_COUNTERS) {
-        memset(&o->st, 0, sizeof o->st);
-        memset(&o->drv.st, 0, sizeof o->drv.st);
-        memset(&o->rx.st, 0, sizeof o->rx.st);
-        o->last_err = CANPROTO_STERR_OK;
-    }
+    if (cmd == CANPROTO_CMD_RESET_COUNTERS)
+        reset_counters(o);
     o->status_due = 1;
 }
 
@@ -322,6 +327,14 @@ const can_drive_t *can_port_drive_state(const can_port_t *p, unsigned i)
 uint8_t can_port_sync_counter(const can_port_t *p)
 {
     return p->sync_counter;
+}
+
+void can_port_reset_counters(can_port_t *p, unsigned i)
+{
+    if (i >= p->nobj)
+        return;
+    reset_counters(&p->obj[i]);
+    p->obj[i].status_due = 1;
 }
 
 void can_port_cleared(can_port_t *p, unsigned i)

@@ -235,6 +235,11 @@ uint8_t can_port_sync_counter(const can_port_t *p);
  * and enabled again, its holds released). */
 void can_port_cleared(can_port_t *p, unsigned i);
 
+/* Object i's counters were reset by a command from elsewhere (trajctl,
+ * Modbus): its CAN counters (reassembly, drives, STATUS) too, as after a CAN
+ * reset-counters command. */
+void can_port_reset_counters(can_port_t *p, unsigned i);
+
 /* Housekeeping (reopen a down transport).  Returns 1 if it came up now. */
 int can_port_maintain(can_port_t *p, int64_t now_ns);
 

@@ -13,7 +13,7 @@ _Static_assert(CORE_BUS_ACTIVE == CAN_BUS_ERROR_ACTIVE &&
                    CANPROTO_CIA402_AXES == ENGINE_AXES,
                "core.h CORE_BUS_* / CORE_DRIVE_* and the CAN values disagree");
 
-static void publish_drive(const can_port_t *port, unsigned k, core_drive_t *dr)
+static void publish_drive(const can_port_t *port, unsigned k, core_drive_t *dr, core_rx_t *rx)
 {
     canproto_status2_drive_t d;
     can_port_obj_stats_t st;
@@ -32,6 +32,8 @@ static void publish_drive(const can_port_t *port, unsigned k, core_drive_t *dr)
     dr->last_abort = st.last_abort;
     dr->hb_timeouts = st.heartbeat_lost;
     dr->tx_clamped = st.tx_clamped;
+    rx->lost = st.rx.lost;
+    rx->resyncs = st.rx.resyncs;
 }
 
 void can_publish(core_t *c, const can_port_t *port, const int *port_index, unsigned bus_state,
@@ -52,5 +54,5 @@ void can_publish(core_t *c, const can_port_t *port, const int *port_index, unsig
     b->rx_err = err->rx_err;
     for (unsigned i = 0; i < c->nobj && i < CFG_OBJECTS_MAX; i++)
         if (port_index[i] >= 0)
-            publish_drive(port, (unsigned)port_index[i], &c->obj[i].drive);
+            publish_drive(port, (unsigned)port_index[i], &c->obj[i].drive, &c->obj[i].rx);
 }

@@ -33,6 +33,7 @@ typedef struct {
     char src[48];
     int rest_asked;      /* hk_feedback asked the moving engine to come to rest */
     unsigned clear_seen; /* o->clear_seq as the drives last saw it */
+    unsigned reset_seen; /* o->reset_seq as the port's counters last saw it */
 } can_hook_ctx_t;
 
 typedef struct {
@@ -304,7 +305,10 @@ static int hk_command(void *ctx, canproto_cmd_t cmd, unsigned arg)
         ((can_hook_ctx_t *)ctx)->clear_seen = o->clear_seq; /* can_port does the drives' part */
         return rc;
     }
-    case CANPROTO_CMD_RESET_COUNTERS: obj_reset_counters(o); break;
+    case CANPROTO_CMD_RESET_COUNTERS: /* can_port resets its own */
+        obj_reset_counters(o);
+        ((can_hook_ctx_t *)ctx)->reset_seen = o->reset_seq;
+        break;
     case CANPROTO_CMD_OVERRIDE: return obj_command(o, LC_EV_OVERRIDE, arg, h->src);
     default: break;
     }
@@ -572,6 +576,7 @@ static int set_objects(can_state_t *s, uint32_t *rx_ids, unsigned *nrx, char *wh
         s->drive_en_logged[k] = s->drive_lost_logged[k] = 0;
         s->hctx[k].o = s->objs[k];
         s->hctx[k].clear_seen = s->objs[k]->clear_seq;
+        s->hctx[k].reset_seen = s->objs[k]->reset_seq;
         snprintf(s->hctx[k].src, sizeof s->hctx[k].src, "can %s id 0x%03" PRIX32,
                  s->cfg->log_in[0] || s->cfg->log_out[0] ? s->cfg->log_ifname : s->cfg->interface,
                  ids.fd ? ids.waypoint_fd_id : ids.waypoint_id);
@@ -869,6 +874,12 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         if (s->hctx[k].o && s->hctx[k].clear_seen != s->hctx[k].o->clear_seq) {
             s->hctx[k].clear_seen = s->hctx[k].o->clear_seq;
             can_port_cleared(s->port, k);
+        }
+    /* ... and a reset of its counters: the port's too */
+    for (unsigned k = 0; k < s->n; k++)
+        if (s->hctx[k].o && s->hctx[k].reset_seen != s->hctx[k].o->reset_seq) {
+            s->hctx[k].reset_seen = s->hctx[k].o->reset_seq;
+            can_port_reset_counters(s->port, k);
         }
     can_port_cycle(s->port, now_ns, c->late_ns);
     if (s->log) {

@@ -103,6 +103,7 @@ int64_t core_real_ns(void)
 void obj_reset_counters(obj_t *o)
 {
     engine_reset_counters(o->engine);
+    o->reset_seq++;
     o->lc.n.refused_full = 0;
     o->skipped_ticks = 0;
     o->out_lost = 0;

@@ -95,6 +95,14 @@ typedef struct {
     uint64_t tx_clamped;  /* setpoints with a value clipped to its field */
 } core_drive_t;
 
+/* What an input that numbers its waypoints (CAN) lost and resynced, as that
+ * transport publishes it into obj_t.rx every tick (zero where none does: a
+ * Modbus-fed object's gaps are the Modbus server's own). */
+typedef struct {
+    uint64_t lost;    /* waypoints never received (gaps in the sequence numbers) */
+    uint64_t resyncs; /* a sender that restarted its numbering, followed */
+} core_rx_t;
+
 /* One moving object. */
 typedef struct obj {
     char name[CFG_NAME_MAX];
@@ -117,6 +125,8 @@ typedef struct obj {
     unsigned clear_seq;           /* +1 per clear the object accepted (obj_command), from any
                                      * source: a transport whose devices hold on their own (a
                                      * CiA 402 drive's fault, can_transport.c) releases them */
+    unsigned reset_seq;           /* +1 per reset of its counters (obj_reset_counters), from
+                                   * any source: a transport's own counters follow */
     int carried;                  /* 1 if engine (and counters) were carried over a reload */
     int64_t born_ns;              /* engine time when its engine was created (0 at start;
                                      * kept when carried): replay due times count from here */
@@ -171,6 +181,7 @@ typedef struct obj {
                                      * OBJ_CMD_LOG_PER_S in a second) */
     core_drive_t drive;             /* its drives, published by the transport that drives
                                    * them in its cycle (zero if none does) */
+    core_rx_t rx;                   /* its input's sequence counters, published the same way */
     uint32_t delay_track;           /* the trajectory whose D was logged last (issue 26) */
     uint64_t delay_logs;            /* ... how many were logged */
     int delay_pending;              /* a start noted in the tick, its line not yet logged

@@ -370,7 +370,9 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         mbmap_object_t *o = &t->objs[k];
         o->sp = ob->sp;
         o->st = ob->status;
-        o->lost = 0; /* sequence gaps are counted by the inputs that number waypoints */
+        /* sequence gaps: the CAN input's here, the server adds its own */
+        o->lost = ob->rx.lost;
+        o->resyncs = ob->rx.resyncs;
         o->late_p99_us = d.late_p99_us;
         o->late_max_us = d.late_max_us;
         o->can_state = d.can_state;

@@ -292,6 +292,9 @@ int mbmap_encode_diag(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_obje
     mbmap_put_u32(b + MBMAP_X_AXIS_LAG_STOPS, lo32(o->st.axis_lag_stops));
     mbmap_put_u32(b + MBMAP_X_AXIS_BEYOND, lo32(o->st.axis_beyond));
     mbmap_put_u32(b + MBMAP_X_RESERVE_SLOWED, lo32(o->st.reserve_slowed));
+    mbmap_put_f64(b + MBMAP_X_LIMITS_LOST_S, o->st.limits_lost_s);
+    mbmap_put_u32(b + MBMAP_X_LIMITS_SLOWED, lo32(o->st.limits_slowed));
+    mbmap_put_u32(b + MBMAP_X_RESYNCS, lo32(o->resyncs));
     mbmap_put_f64(b + MBMAP_X_HEADING, o->heading_deg);
     mbmap_put_f64(b + MBMAP_X_HEADING_UNWRAPPED, o->heading_unwrapped_deg);
     mbmap_put_u32(b + MBMAP_X_TX_CLAMPED, lo32(o->tx_clamped));
@@ -627,7 +630,8 @@ static const mbmap_field_t fields[] = {
     F(IO, MBMAP_O_ACCEPTED, 2, MBMAP_T_U32, "accepted", "", "waypoints accepted"),
     F(IO, MBMAP_O_REJECTED, 2, MBMAP_T_U32, "rejected", "",
       "waypoints rejected by the engine (bad data; a full buffer is in full)"),
-    F(IO, MBMAP_O_LOST, 2, MBMAP_T_U32, "lost", "", "waypoints lost (sequence gaps)"),
+    F(IO, MBMAP_O_LOST, 2, MBMAP_T_U32, "lost", "",
+      "waypoints lost (sequence gaps of its Modbus waypoint blocks or its CAN input)"),
     F(IO, MBMAP_O_UNDERRUNS, 2, MBMAP_T_U32, "underruns", "", "transitions into underrun"),
     F(IO, MBMAP_O_MISSED_TICKS, 2, MBMAP_T_U32, "missed_ticks", "", "ticks stepped over"),
     F(IO, MBMAP_O_DUPLICATES, 2, MBMAP_T_U32, "duplicates", "",
@@ -747,6 +751,14 @@ static const mbmap_field_t fields[] = {
     F(IX, MBMAP_X_RESERVE_SLOWED, 2, MBMAP_T_U32, "reserve_slowed", "",
       "slowdowns along the path of an object faster than the speed D's stop reserve was sized "
       "for, on input that came on time (not underruns; D grows with it, lib/engine/delay.h)"),
+    F(IX, MBMAP_X_LIMITS_LOST_S, 4, MBMAP_T_F64, "limits_lost_s", "s",
+      "time lost to the object's own speed and acceleration limits (max_speed_m_s, "
+      "max_accel_m_s2, the profile's): the time scaling slowed the output along its path and "
+      "the lag is not won back; also on the exit line"),
+    F(IX, MBMAP_X_LIMITS_SLOWED, 2, MBMAP_T_U32, "limits_slowed", "", "segments those limits slow"),
+    F(IX, MBMAP_X_RESYNCS, 2, MBMAP_T_U32, "resyncs", "",
+      "waypoints taken from a CAN sender that restarted its numbering (behind the last one, "
+      "later in time): followed, not lost; also logged and on the exit line"),
     F(IX, MBMAP_X_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "",
       "copy of generation (whole-block reads)"),
 

@@ -147,7 +147,7 @@
 #define MBMAP_O_ACC 34               /* f32 x3 acceleration, m/s^2 */
 #define MBMAP_O_ACCEPTED 40          /* u32 waypoints accepted */
 #define MBMAP_O_REJECTED 42          /* u32 waypoints rejected by the engine (all inputs; not EFULL) */
-#define MBMAP_O_LOST 44              /* u32 waypoints lost (gaps in sequence numbers) */
+#define MBMAP_O_LOST 44              /* u32 waypoints lost (gaps in sequence numbers: Modbus or CAN input) */
 #define MBMAP_O_UNDERRUNS 46         /* u32 transitions into underrun */
 #define MBMAP_O_MISSED_TICKS 48      /* u32 ticks stepped over */
 #define MBMAP_O_DUPLICATES 50        /* u32 exact duplicates dropped */
@@ -198,6 +198,9 @@
 #define MBMAP_X_AXIS_LAG_STOPS 70    /* u32 stops because the per-axis limits' lag passed max_lag_s */
 #define MBMAP_X_AXIS_BEYOND 72       /* u32 stops before a segment the per-axis limits cannot follow */
 #define MBMAP_X_RESERVE_SLOWED 74    /* u32 slowdowns of an object faster than D's stop reserve was sized for */
+#define MBMAP_X_LIMITS_LOST_S 76     /* f64 time lost to the object's own speed/acceleration limits, s (limits_lost_s) */
+#define MBMAP_X_LIMITS_SLOWED 80     /* u32 segments those limits slow (limits_slowed) */
+#define MBMAP_X_RESYNCS 82           /* u32 its CAN sender restarted its numbering, followed (canproto resyncs) */
 #define MBMAP_X_HEADING 50           /* f64 heading axis, degrees in (-180, 180] (NaN: none) */
 #define MBMAP_X_HEADING_UNWRAPPED 54 /* f64 the same, continuous (no jump at +-180): for a rotary axis */
 #define MBMAP_X_TX_CLAMPED 58       /* u32 setpoints sent on CAN with a value clipped to its field (speed beyond the SETPOINT frame's +-32.767 m/s ...) */
@@ -333,6 +336,7 @@ typedef struct {
     double lat_deg, lon_deg, alt_m; /* the setpoint as WGS84 geodetic (NaN: none) */
     double heading_deg, heading_unwrapped_deg; /* heading axis (NaN: none) */
     uint64_t tx_clamped;        /* CAN setpoints with a value clipped to its field */
+    uint64_t resyncs;           /* its CAN sender restarted its numbering, followed */
     uint16_t mb_worst_addr[MBMAP_X_MB_WORST_ADDR_GROUPS]; /* daemon-wide (mbmap_daemon_t's) */
 } mbmap_object_t;
 
