@@ -512,6 +512,10 @@ void modbus_server_publish(modbus_server_t *s, const mbmap_daemon_t *d, const mb
         memcpy(o.mb_worst_addr, dd.mb_worst_addr, sizeof o.mb_worst_addr);
         mbmap_encode_object(ir, k, s->gen, &o);
         mbmap_encode_diag(ir, k, s->gen, &o);
+        /* the override holding register reads the override in force, whoever
+         * set it (trajctl, CAN, a clear), not the last value written here */
+        s->map->tab_registers[MBMAP_OBJ_BASE(k) + MBMAP_H_OVERRIDE] =
+            ir[MBMAP_OBJ_BASE(k) + MBMAP_O_OVERRIDE];
     }
     mbmap_order_image(ir, s->n_objects, s->order);
     mbmap_order_diag(ir, s->n_objects, s->order);

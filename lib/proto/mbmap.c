@@ -767,7 +767,7 @@ static const mbmap_field_t fields[] = {
       "finish"),
     F(HO, MBMAP_H_OVERRIDE, 1, MBMAP_T_U16, "override", "%",
       "feed override 0..200: the same path at this % of the solved speed, ramped "
-      "(lib/engine/TIMESCALE.md)"),
+      "(lib/engine/TIMESCALE.md); reads the override in force, whoever set it"),
     F(HO, MBMAP_H_WP_SEQ, 2, MBMAP_T_U32, "wp_seq", "", "waypoint sequence number"),
     F(HO, MBMAP_H_WP_T_S, 4, MBMAP_T_F64, "wp_t", "s", "waypoint time"),
     F(HO, MBMAP_H_WP_POS + 0, 4, MBMAP_T_F64, "wp_x", "m", "waypoint position"),
