@@ -396,23 +396,43 @@ static int obj_clock_initial(const cfg_t *cfg, const cfg_obj_t *o)
     return cfg->daemon.clock == CFG_CLOCK_EPOCH ? 1 : -1;
 }
 
+/* 1 if object q (of the running config) and o (the new one) have the same
+ * input with the same settings (a replayed track: the same file, unchanged). */
+static int same_input(const obj_t *q, const cfg_obj_t *o)
+{
+    const transport_t *in = o->input;
+    if (q->cfg->input != in)
+        return 0;
+    const void *a = cfg_obj_transport(q->cfg, in), *b = cfg_obj_transport(o, in);
+    return in->obj_cfg_same ? in->obj_cfg_same(a, b)
+                            : !(in->obj_cfg_size && memcmp(a, b, in->obj_cfg_size) != 0);
+}
+
 /* The object of prev that o (in the new config) may take over, or NULL. */
 static obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o)
 {
     if (!prev || prev->stopping)
         return NULL;
     obj_t *q = core_obj_find(prev, o->name);
-    if (!q || !q->engine || q->cfg->input != o->input ||
-        !engine_config_same(&q->cfg->engine, &o->engine))
+    if (!q || !q->engine || !engine_config_same(&q->cfg->engine, &o->engine))
         return NULL;
     if (q->clocked == 1 && obj_clock_initial(cfg, o) == 0)
         return NULL; /* an engine on the clock cannot leave it: a new one */
-    const transport_t *in = o->input;
-    const void *a = cfg_obj_transport(q->cfg, in), *b = cfg_obj_transport(o, in);
-    if (in->obj_cfg_same ? !in->obj_cfg_same(a, b)
-                         : (in->obj_cfg_size && memcmp(a, b, in->obj_cfg_size) != 0))
-        return NULL;
-    return q;
+    return same_input(q, o) ? q : NULL;
+}
+
+/* A changed object (a new engine) whose input stays the same goes on along it
+ * from where its old engine stands (the replay, replay_transport.c: after
+ * that track time, on the old schedule), never from the input's start again:
+ * o->resume_t_s, o->born_ns.  NAN where the old engine had no position. */
+static void resume_input(obj_t *o, core_t *prev)
+{
+    obj_t *q = prev && !prev->stopping ? core_obj_find(prev, o->name) : NULL;
+    if (!q || !same_input(q, o->cfg) || q->sp.cycle == 0 || (q->sp.flags & ENGINE_SP_NO_POSITION) ||
+        !isfinite(q->sp.t_s))
+        return;
+    o->resume_t_s = q->sp.t_s;
+    o->born_ns = q->born_ns;
 }
 
 /* Step 1 of core_open: an object per config entry, a new engine unless one is
@@ -430,8 +450,10 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
         o->drift = &c->stats->drift;
         o->clock_window_s = cfg->daemon.clock_window_s;
         o->clocked = obj_clock_initial(cfg, o->cfg);
+        o->resume_t_s = NAN;
         if (carry_source(prev, cfg, o->cfg))
             continue;
+        resume_input(o, prev);
         o->engine = engine_new(&cfg->obj[i].engine, &err);
         if (!o->engine || lc_init(&o->lc, o->engine, &o->safety, c->period_ns, 0) < 0) {
             snprintf(why, whylen, "object '%s': engine: %s", o->name,

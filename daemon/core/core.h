@@ -128,6 +128,9 @@ typedef struct obj {
     unsigned reset_seq;           /* +1 per reset of its counters (obj_reset_counters), from
                                    * any source: a transport's own counters follow */
     int carried;                  /* 1 if engine (and counters) were carried over a reload */
+    double resume_t_s;            /* a reload gave it a new engine, its input the same: the
+                                   * input goes on after this track time, where the old
+                                   * engine stood (core.c resume_input; NAN: from its start) */
     int64_t born_ns;              /* engine time when its engine was created (0 at start;
                                      * kept when carried): replay due times count from here */
     uint64_t out_lost;            /* setpoint lines of this object that never reached one of

@@ -198,7 +198,9 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
 }
 
 typedef struct {
-    replay_t *r; /* per object index (NULL if not replayed) */
+    replay_t *r;    /* per object index (NULL if not replayed) */
+    double *resume; /* per object index: a changed object's replay goes on after this
+                     * track time once its old engine rests (obj_t resume_t_s); NAN */
     unsigned n;
     core_t *c;
 } replay_transport_t;
@@ -236,9 +238,15 @@ static int pos_kept_take(const obj_t *o, size_t *next, int *finished)
 static int open_(core_t *c, void **state, char *why, size_t wl)
 {
     replay_transport_t *s = calloc(1, sizeof *s);
-    if (s)
+    if (s) {
         s->r = calloc(c->nobj, sizeof *s->r);
-    if (!s || !s->r) {
+        s->resume = calloc(c->nobj, sizeof *s->resume);
+    }
+    if (!s || !s->r || !s->resume) {
+        if (s) {
+            free(s->r);
+            free(s->resume);
+        }
         free(s);
         snprintf(why, wl, "out of memory");
         return -12; /* -ENOMEM */
@@ -247,6 +255,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     s->c = c;
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i];
+        s->resume[i] = NAN;
         if (o->cfg->input != &replay_transport)
             continue;
         const replay_transport_obj_cfg_t *rc = cfg_obj_transport(o->cfg, &replay_transport);
@@ -267,6 +276,13 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
                 r->next = k + 1; /* in the loop, between two ticks: no scan of the track */
             if (r->next >= rc->trk.n)
                 r->finished = 1; /* the old replay called engine_finish already */
+        } else if (!o->carried && isfinite(o->resume_t_s)) {
+            s->resume[i] = o->resume_t_s; /* a changed object: pre_tick resumes it */
+            log_msg(LOG_NOTICE,
+                    "object '%s': its replay resumes after t = %.3f s, where its old engine "
+                    "stands (or, braking, comes to rest): a reload that changed its settings "
+                    "never plays its track again",
+                    o->name, o->resume_t_s);
         }
     }
     keep_drop("replay");
@@ -297,10 +313,44 @@ static int push_obj(void *ctx, const engine_waypoint_t *wp)
     return obj_push_from(p->o, wp, src);
 }
 
+/* The first row of track trk later than t_s (rows in time order: a row out
+ * of order only moves where the search lands). */
+static size_t row_after(const track_t *trk, double t_s)
+{
+    size_t lo = 0, hi = trk->n;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (trk->wp[mid].t_s > t_s)
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    return lo;
+}
+
+/* A changed object's replay (s->resume): nothing while its old engine brakes
+ * (core.c: the new engine starts where it rests), then on from the first row
+ * after where it rests, on the old schedule (obj_t born_ns): the object goes on
+ * along its track, never back to its start.  1 while it waits. */
+static int resume_wait(replay_transport_t *s, obj_t *o)
+{
+    double t = s->resume[o->index];
+    if (o->retiring)
+        return 1;
+    if (o->sp.cycle != 0 && !(o->sp.flags & ENGINE_SP_NO_POSITION) && isfinite(o->sp.t_s))
+        t = o->sp.t_s; /* where the old engine came to rest (handed over on the last tick) */
+    replay_t *r = &s->r[o->index];
+    r->next = row_after(r->trk, t);
+    s->resume[o->index] = NAN;
+    return 0;
+}
+
 static void pre_tick(void *state, obj_t *o, int64_t now_ns)
 {
     replay_transport_t *s = state;
     replay_t *r = &s->r[o->index];
+    if (!isnan(s->resume[o->index]) && resume_wait(s, o))
+        return;
     int was_done = replay_done(r);
     push_ctx_t ctx = {o, cfg_obj_transport(o->cfg, &replay_transport)};
     (void)replay_feed_via(r, push_obj, &ctx, o->engine, now_ns);
@@ -339,6 +389,7 @@ static void close_(void *state, core_t *c)
         return;
     if (c && !c->stopping)
         pos_kept_store(s, c); /* the next open (a reload's) goes on from there */
+    free(s->resume);
     free(s->r);
     free(s);
 }

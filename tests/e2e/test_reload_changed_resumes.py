@@ -1,0 +1,121 @@
+"""test_reload_changed_resumes.py - a reload that changes only the engine settings of a
+replayed object goes on along its track: the object never drives back to the track's start
+to play it all again.
+
+The real trajd replays a 10 Hz track (60 s, 2.5 m/s along a circle of radius 20 m) into a
+CSV file at speed 4. While the object streams, one engine key is added to its section
+(method = bspline) and trajd is sent SIGHUP: the object is a changed one (not carried over),
+its old engine brakes to rest along the path, and the new engine takes over there. Judged
+from the CSV rows alone:
+- no row after the reload goes back along the track: every streaming row's t_s is at least
+  the t_s the old engine reached (the old code went back to t_s 0 and played the track again);
+- the new engine reaches the track from where the old one rested by a short transfer: no row
+  is farther than 1 m from that rest point before the new trajectory streams (the old code
+  drove 17 m back to the first waypoint);
+- consecutive rows move at most max_speed_m_s x the periods between them (no step);
+- the last row rests on the track's last waypoint, and the log says where the replay resumed.
+Every wait is bounded; trajd is stopped by pid.
+"""
+import csv
+import io
+import math
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import unittest
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+import mbsim  # noqa: E402
+
+TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
+WAIT_S = 60
+R, V, H, N = 20.0, 2.5, 0.1, 600  # radius m, speed m/s, interval s, waypoints
+VMAX = 4.0                        # max_speed_m_s
+PERIOD_S = 0.01
+TRANSFER = 0x08                   # ENGINE_SP_TRANSFER (lib/motion.h)
+
+
+def rows_of(path):
+    with open(path) as f:
+        text = [ln for ln in f if not ln.startswith("#") and not ln.startswith("object,")]
+    with open(path) as f:
+        header = next(ln for ln in f if ln.startswith("object,")).strip().split(",")
+    return list(csv.DictReader(io.StringIO("".join(text)), fieldnames=header))
+
+
+class ReloadChangedResumes(unittest.TestCase):
+    def test_changed_object_goes_on_along_its_track(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            with open(os.path.join(tmp, "circle.csv"), "w") as f:
+                f.write("t,x,y\n")
+                for i in range(N):
+                    a = V * H * i / R
+                    f.write("%.1f,%.9f,%.9f\n" % (H * i, R * math.cos(a), R * math.sin(a)))
+            conf = os.path.join(tmp, "trajd.conf")
+            text = ("[daemon]\nrate_hz = 100\nspeed = 4\nexit_when_done = yes\n"
+                    "status_interval_s = 0\ncontrol_socket = %s/ctl\n"
+                    "[object.a]\ninput = replay\nreplay.track = circle.csv\n"
+                    "max_speed_m_s = %g\noutput = csv\ncsv.path = a.csv\n" % (tmp, VMAX))
+            with open(conf, "w") as f:
+                f.write(text)
+            out = os.path.join(tmp, "a.csv")
+            p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=tmp, stdin=subprocess.DEVNULL,
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            try:
+                deadline = time.monotonic() + WAIT_S
+                while True:  # streaming 20 s into the track
+                    time.sleep(0.1)
+                    self.assertLess(time.monotonic(), deadline, "never streamed to t_s 20")
+                    try:
+                        rows = rows_of(out)
+                    except (OSError, StopIteration):
+                        continue
+                    if any(r["state"] == "streaming" and float(r["t_s"]) > 20.0 for r in rows):
+                        break
+                with open(conf, "w") as f:
+                    f.write(text + "method = bspline\n")
+                p.send_signal(signal.SIGHUP)
+                _, err = p.communicate(timeout=WAIT_S)
+            finally:
+                if p.poll() is None:
+                    p.kill()
+                    p.wait()
+            self.assertEqual(p.returncode, 0, err[-3000:])
+            self.assertIn("0 carried over", err)
+            rows = rows_of(out)
+            # the old engine's rows: up to the new engine's first, which waits or
+            # transfers (ENGINE_SP_TRANSFER) after the old one rested
+            moving = next(i for i, r in enumerate(rows) if float(r["t_s"]) > 20.0)
+            first_new = next(i for i in range(moving, len(rows))
+                             if rows[i]["state"] == "waiting" or int(rows[i]["flags"]) & TRANSFER)
+            rest = rows[first_new - 1]
+            t_rest = float(rest["t_s"])
+            self.assertGreater(t_rest, 19.0)
+            p0 = (float(rest["x_m"]), float(rest["y_m"]))
+            streamed = False
+            for r in rows[first_new:]:
+                if r["state"] == "streaming" and not int(r["flags"]) & TRANSFER:
+                    streamed = True
+                    self.assertGreaterEqual(float(r["t_s"]), t_rest - 1e-9, r)
+                elif not streamed:
+                    d = math.hypot(float(r["x_m"]) - p0[0], float(r["y_m"]) - p0[1])
+                    self.assertLessEqual(d, 1.0, ("the transfer went %.2f m from where the old "
+                                                  "engine rested" % d, r))
+            self.assertTrue(streamed, "the new engine never streamed")
+            placed = [r for r in rows if not math.isnan(float(r["x_m"]))]
+            for b, a in zip(placed, placed[1:]):
+                k = round((int(a["now_ns"]) - int(b["now_ns"])) * 1e-9 / PERIOD_S)
+                d = math.hypot(float(a["x_m"]) - float(b["x_m"]), float(a["y_m"]) - float(b["y_m"]))
+                self.assertLessEqual(d, VMAX * PERIOD_S * max(k, 1) + 1e-9, (b, a))
+            last = rows[-1]
+            a_end = V * H * (N - 1) / R
+            self.assertLessEqual(math.hypot(float(last["x_m"]) - R * math.cos(a_end),
+                                            float(last["y_m"]) - R * math.sin(a_end)), 1e-6)
+            self.assertRegex(err, r"object 'a': its replay resumes after t = [\d.]+ s")
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
