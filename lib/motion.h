@@ -129,8 +129,9 @@ typedef struct {
     uint64_t gaps;                  /* trajectories ended by a gap */
     uint64_t tracks;                /* trajectories started */
     uint64_t setpoints;             /* ticks answered */
-    uint64_t full;                  /* offers refused with ENGINE_EFULL: flow control, the
-                                     * sender retries; not in rejected */
+    uint64_t full;                  /* waypoints refused with ENGINE_EFULL: flow control, the
+                                     * sender retries (the same waypoint offered again is not
+                                     * counted again); not in rejected */
     uint32_t stalled;               /* 1: holding, and nothing can change before the next
                                      * waypoint is pushed (ticks until then are identical
                                      * holds: trajreplay skips them across a gap) but at

@@ -786,11 +786,13 @@ int core_done(const core_t *c)
     for (unsigned i = 0; i < c->nobj; i++) {
         const obj_t *o = &c->obj[i];
         const transport_t *in = o->cfg->input;
-        /* (latched by a stop with its buffer full, its input can give no more
-         * before a start: as done as it gets) */
+        /* (latched by a stop, or held for a fault, with its buffer full: its
+         * input can give no more before a start or a clear: as done as it
+         * gets; a replay offered the next row at every tick for ever) */
         if (transport_open(c, in) &&
             (!in->input_done || !in->input_done(c->tstate[transport_index(in)], o)) &&
-            !(o->lc.latched && lc_free_room(&o->lc, 1) == 0))
+            !((o->lc.latched || (o->lc.hold & (LC_HOLD_SAFETY | LC_HOLD_DRIVE))) &&
+              lc_free_room(&o->lc, 1) == 0))
             return 0;
         /* at rest on its last waypoint, or waiting with nothing buffered
          * (its input gave nothing usable: nothing more can happen), or held

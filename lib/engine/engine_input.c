@@ -261,8 +261,17 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
     if (rc < 0)
         return reject_wp(e, -rc, wp);
     /* room for this waypoint (and for the copies MULTIPLE adds) */
-    if (input_buffered(e) + 1 + (e->mult ? 4 : 0) > e->cfg.capacity)
+    if (input_buffered(e) + 1 + (e->mult ? 4 : 0) > e->cfg.capacity) {
+        int again = e->in.full_told && e->in.full_seq == wp->seq &&
+                    memcmp(&e->in.full_t, &wp->t_s, sizeof wp->t_s) == 0;
+        e->in.full_told = 1;
+        e->in.full_seq = wp->seq;
+        e->in.full_t = wp->t_s;
+        if (again)
+            return -ENGINE_EFULL; /* the same waypoint offered again: counted once */
         return reject(e, ENGINE_EFULL);
+    }
+    e->in.full_told = 0;
     engine_silence_push(e, wp);  /* issue 26: its arrival (silence.h) */
     engine_lag_push(e, wp->t_s); /* ... and a sample of the sender's time (catchup.h) */
     rc = accept_offer(&e->in.policy, wp);

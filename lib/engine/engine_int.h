@@ -104,7 +104,10 @@ typedef struct {
     int have_prev; /* prev_t/prev_r hold the waypoint before last (same trajectory) */
     double prev_t; /* for the acceleration check */
     double prev_r[AX];
-    double gap_s; /* gap before the trajectory being received (0: none) */
+    double gap_s;      /* gap before the trajectory being received (0: none) */
+    int full_told;     /* st.full counted the waypoint full_seq, full_t: offered again, */
+    uint32_t full_seq; /* it is not another refusal */
+    double full_t;
     accept_t policy;
     engine_rejection_t rej[ENGINE_REJECTIONS_KEPT];
     unsigned rej_head, rej_len;

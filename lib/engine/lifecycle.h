@@ -146,7 +146,8 @@ typedef struct {
     uint64_t buffered;            /* waypoints kept while latched or held */
     uint64_t dropped_past;        /* ... dropped on resume: already in the past */
     uint64_t dropped_full;        /* ... dropped by a reload into a smaller buffer */
-    uint64_t refused_full;        /* ... refused, the buffer full (-ENGINE_EFULL: the sender
+    uint64_t refused_full;        /* ... refused, the buffer full, each waypoint once
+                                     (offered again, not counted again; -ENGINE_EFULL: the sender
                                      is told, as by the engine's own full buffer) */
     uint64_t stalled_periods;     /* periods the caller missed (LC_EV_STALL: N each) */
     uint64_t clock_steps;         /* CLOCK_REALTIME steps seen */
@@ -179,6 +180,9 @@ typedef struct {
                                 far behind its data the object ran (relative objects) */
     engine_waypoint_t *buf; /* the latch buffer (ring) */
     unsigned cap, head, len;
+    int full_told;     /* refused_full counted the waypoint full_seq, full_t: */
+    uint32_t full_seq; /* the sender offering it again is not another refusal */
+    double full_t;
     lc_counts_t n;
 } lifecycle_t;
 
