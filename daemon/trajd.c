@@ -332,6 +332,8 @@ static void on_pending(loop_t *l, uint64_t exp, void *ctx)
  * taken, or -1 with the reason in err. */
 static int reload_loaded(trajd_t *d, cfg_t *nc, int rc, char *err, size_t errlen)
 {
+    if (rc == 0)
+        rc = reload_rate_check(d->core, nc, err, errlen);
     if (rc < 0) {
         reload_refused(d, "", err);
         cfg_free(nc);

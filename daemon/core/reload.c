@@ -2,6 +2,7 @@
 #include "reload.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "log.h"
@@ -55,6 +56,24 @@ static int reload_obj_at_rest(const obj_t *o)
         return 1;
     return (sp->flags & ENGINE_SP_HOLD) && sp->state != ENGINE_STATE_STREAMING &&
            sp->state != ENGINE_STATE_UNDERRUN;
+}
+
+int reload_rate_check(const core_t *c, const cfg_t *nc, char *err, size_t errlen)
+{
+    if (nc->daemon.period_ns == c->cfg->daemon.period_ns)
+        return 0;
+    for (unsigned i = 0; i < c->nobj; i++) {
+        if (reload_obj_at_rest(&c->obj[i]))
+            continue;
+        snprintf(err, errlen,
+                 "%s: [daemon] rate_hz %g, running at %g: not while object '%s' moves (its "
+                 "braking runs on the period its engine was built for): stop the objects "
+                 "first (trajctl stop), or restart trajd",
+                 nc->path, 1e9 / (double)nc->daemon.period_ns,
+                 1e9 / (double)c->cfg->daemon.period_ns, c->obj[i].name);
+        return -1;
+    }
+    return 0;
 }
 
 static int removed(const cfg_t *nc, const char *name)

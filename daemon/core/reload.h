@@ -46,6 +46,14 @@ unsigned reload_brake_removed(core_t *c, const cfg_t *nc);
  * rest, braked; the next waypoint starts a new trajectory by a transfer). */
 void reload_release_removed(core_t *c, const cfg_t *nc);
 
+/*
+ * 0 if nc keeps c's output rate, or every object of c is at rest; else -1
+ * with the reason in err: a changed object's old engine brakes on the period
+ * it was built for, one period a tick, so a new rate would step it (the
+ * monitor froze it: 977 m/s^2 against 70).  Stop the objects, or restart.
+ */
+int reload_rate_check(const core_t *c, const cfg_t *nc, char *err, size_t errlen);
+
 /* 1 once every object of c that nc removes is at rest. */
 int reload_removed_at_rest(const core_t *c, const cfg_t *nc);
 

@@ -198,9 +198,10 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
 }
 
 typedef struct {
-    replay_t *r;    /* per object index (NULL if not replayed) */
-    double *resume; /* per object index: a changed object's replay goes on after this
+    replay_t *r;            /* per object index (NULL if not replayed) */
+    double *resume;         /* per object index: a changed object's replay goes on after this
                      * track time once its old engine rests (obj_t resume_t_s); NAN */
+    unsigned char *resumed; /* ... and went on so: the rows before were its old engine's */
     unsigned n;
     core_t *c;
 } replay_transport_t;
@@ -241,11 +242,13 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     if (s) {
         s->r = calloc(c->nobj, sizeof *s->r);
         s->resume = calloc(c->nobj, sizeof *s->resume);
+        s->resumed = calloc(c->nobj, sizeof *s->resumed);
     }
-    if (!s || !s->r || !s->resume) {
+    if (!s || !s->r || !s->resume || !s->resumed) {
         if (s) {
             free(s->r);
             free(s->resume);
+            free(s->resumed);
         }
         free(s);
         snprintf(why, wl, "out of memory");
@@ -342,6 +345,7 @@ static int resume_wait(replay_transport_t *s, obj_t *o)
     replay_t *r = &s->r[o->index];
     r->next = row_after(r->trk, t);
     s->resume[o->index] = NAN;
+    s->resumed[o->index] = 1;
     return 0;
 }
 
@@ -360,7 +364,7 @@ static void pre_tick(void *state, obj_t *o, int64_t now_ns)
      * waits with nothing buffered, which exit_when_done counts as done). */
     engine_status_t st;
     engine_status(o->engine, &st);
-    if (st.accepted == 0) {
+    if (st.accepted == 0 && !s->resumed[o->index]) { /* (resumed at its end: all played) */
         const replay_transport_obj_cfg_t *rc = cfg_obj_transport(o->cfg, &replay_transport);
         log_msg(LOG_ERR,
                 "object %s: replay.track %s: no usable waypoint: all %zu rejected; trajd "
@@ -390,6 +394,7 @@ static void close_(void *state, core_t *c)
     if (c && !c->stopping)
         pos_kept_store(s, c); /* the next open (a reload's) goes on from there */
     free(s->resume);
+    free(s->resumed);
     free(s->r);
     free(s);
 }
