@@ -342,6 +342,9 @@ static int resume_wait(replay_transport_t *s, obj_t *o)
         return 1;
     if (o->sp.cycle != 0 && !(o->sp.flags & ENGINE_SP_NO_POSITION) && isfinite(o->sp.t_s))
         t = o->sp.t_s; /* where the old engine came to rest (handed over on the last tick) */
+    double kept = lc_buffered_newest_t(&o->lc);
+    if (kept > t) /* a stop's latch kept the rows up to there (lc_inherit): not twice */
+        t = kept;
     replay_t *r = &s->r[o->index];
     r->next = row_after(r->trk, t);
     s->resume[o->index] = NAN;

@@ -279,6 +279,17 @@ unsigned lc_buffered(const lifecycle_t *lc)
     return lc->len;
 }
 
+double lc_buffered_newest_t(const lifecycle_t *lc)
+{
+    double t = NAN;
+    for (unsigned i = 0; i < lc->len; i++) { /* (in the order offered: the latest time) */
+        double ti = lc->buf[(lc->head + i) % lc->cap].t_s;
+        if (!(ti <= t))
+            t = ti;
+    }
+    return t;
+}
+
 /* The monitor's hold: the curve is not advanced. */
 static int frozen(const lifecycle_t *lc)
 {

@@ -247,6 +247,8 @@ void lc_step_unsent(lifecycle_t *lc, int64_t now_ns, const engine_clock_t *clk);
 
 /* Waypoints in the latch buffer now. */
 unsigned lc_buffered(const lifecycle_t *lc);
+/* The time of the newest waypoint the latch buffer keeps (NAN: none). */
+double lc_buffered_newest_t(const lifecycle_t *lc);
 /* The room left for waypoints: in a state that keeps them in the latch
  * buffer (stopping, stopped, held), what is left of it, at most free (the
  * engine's own); else free. */

@@ -20,6 +20,7 @@ import csv
 import io
 import math
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -115,6 +116,76 @@ class ReloadChangedResumes(unittest.TestCase):
             self.assertLessEqual(math.hypot(float(last["x_m"]) - R * math.cos(a_end),
                                             float(last["y_m"]) - R * math.sin(a_end)), 1e-6)
             self.assertRegex(err, r"object 'a': its replay resumes after t = [\d.]+ s")
+
+
+class ReloadChangedWhileStopped(unittest.TestCase):
+    def test_latched_rows_are_not_offered_again(self):
+        """Stopped (latched) first, then the changed reload, then start: the rows the latch
+        kept are played once, and the replay goes on after the newest of them (before: the
+        replay began again at row 1 beside them: 'a clock stepped back', the object went
+        back to the track's start)."""
+        with tempfile.TemporaryDirectory() as tmp:
+            with open(os.path.join(tmp, "circle.csv"), "w") as f:
+                f.write("t,x,y\n")
+                for i in range(N):
+                    a = V * H * i / R
+                    f.write("%.1f,%.9f,%.9f\n" % (H * i, R * math.cos(a), R * math.sin(a)))
+            conf, ctl = os.path.join(tmp, "trajd.conf"), os.path.join(tmp, "ctl")
+            text = ("[daemon]\nrate_hz = 100\nspeed = 4\nexit_when_done = yes\n"
+                    "status_interval_s = 0\ncontrol_socket = %s\n"
+                    "[object.a]\ninput = replay\nreplay.track = circle.csv\nwritable = yes\n"
+                    "max_speed_m_s = %g\noutput = csv\ncsv.path = a.csv\n" % (ctl, VMAX))
+            with open(conf, "w") as f:
+                f.write(text)
+            out = os.path.join(tmp, "a.csv")
+            trajctl = os.path.join(os.path.dirname(TRAJD), "trajctl")
+            p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=tmp, stdin=subprocess.DEVNULL,
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            try:
+                deadline = time.monotonic() + WAIT_S
+
+                def wait_row(pred, what):
+                    while True:
+                        time.sleep(0.05)
+                        self.assertLess(time.monotonic(), deadline, what)
+                        try:
+                            rows = rows_of(out)
+                        except (OSError, StopIteration):
+                            continue
+                        if rows and pred(rows[-1]):
+                            return rows
+
+                wait_row(lambda r: r["state"] == "streaming" and float(r["t_s"]) > 10.0,
+                         "never streamed to t_s 10")
+                subprocess.run([trajctl, "-s", ctl, "stop", "a"], check=True, timeout=WAIT_S)
+                rows = wait_row(lambda r: r["state"] == "finished", "never stopped")  # at rest
+                t_stop = float(rows[-1]["t_s"])
+                time.sleep(1.0)  # the latch keeps the rows that come meanwhile
+                with open(conf, "w") as f:
+                    f.write(text + "method = bspline\n")
+                p.send_signal(signal.SIGHUP)
+                time.sleep(0.2)  # soon: the rows kept and any offered again lie within D
+                subprocess.run([trajctl, "-s", ctl, "start", "a"], check=True, timeout=WAIT_S)
+                _, err = p.communicate(timeout=WAIT_S)
+            finally:
+                if p.poll() is None:
+                    p.kill()
+                    p.wait()
+            self.assertEqual(p.returncode, 0, err[-3000:])
+            self.assertIn("0 carried over", err)
+            self.assertNotIn("stepped back", err)
+            m = re.search(r"; a [^;]*? t=[-\d.]+ s, wp (\d+) ok (\d+) rejected", err)
+            self.assertIsNotNone(m, err[-3000:])
+            self.assertEqual(int(m.group(2)), 0, "a row offered twice is refused: " + m.group(0))
+            rows = rows_of(out)
+            i0 = next(i for i, r in enumerate(rows) if r["state"] == "finished")
+            for r in rows[i0:]:
+                if r["state"] == "streaming" and not int(r["flags"]) & TRANSFER:
+                    self.assertGreaterEqual(float(r["t_s"]), t_stop - 1e-9, r)
+            last = rows[-1]
+            a_end = V * H * (N - 1) / R
+            self.assertLessEqual(math.hypot(float(last["x_m"]) - R * math.cos(a_end),
+                                            float(last["y_m"]) - R * math.sin(a_end)), 1e-6)
 
 
 if __name__ == "__main__":
