@@ -660,9 +660,12 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
     double max_ppm = stats->drift.max_ppm; /* the running core's, if this one fails */
     stats->drift.max_ppm = cfg->daemon.drift_max_ppm;
     memset(&stats->bus, 0, sizeof stats->bus); /* until this core's transports publish */
-    /* engine time goes on from the previous core: carried engines never see
-     * it go backwards */
-    c->t0_ns = prev ? prev->now_ns + prev->period_ns : 0;
+    /* engine time goes on from the previous core, at its next deadline not
+     * served (the one its clock's phase keeps: stats->clock_next_ns): carried
+     * engines never see it go backwards, and a core closed before its clock
+     * ever ticked (two reloads swapped one after the other) loses no period
+     * (prev->now_ns + period was one period on: now_ns jumped two unflagged) */
+    c->t0_ns = prev ? prev->t0_ns + (int64_t)((core_priv_t *)prev)->next_k * prev->period_ns : 0;
     c->now_ns = c->t0_ns;
     c->nobj = cfg->nobj;
     c->obj = calloc(cfg->nobj, sizeof *c->obj);
