@@ -103,6 +103,9 @@ typedef struct {
     uint64_t resyncs; /* a sender that restarted its numbering, followed */
 } core_rx_t;
 
+/* obj_t stopping: a reload removes the object (it brakes to rest, then goes). */
+#define OBJ_STOPPING_REMOVED 2
+
 /* One moving object. */
 typedef struct obj {
     char name[CFG_NAME_MAX];
@@ -120,7 +123,8 @@ typedef struct obj {
     engine_status_t status;       /* engine status after the last tick */
     uint64_t skipped_ticks;       /* missed deadlines this object was stepped through with
                                      * no output (added into status.skipped_ticks) */
-    int stopping;                 /* the daemon is stopping: obj_push_from refuses */
+    int stopping;                 /* obj_push_from refuses: 1 the daemon is stopping,
+                                   * OBJ_STOPPING_REMOVED a reload removes the object */
     uint64_t stop_refused;        /* waypoints obj_push_from refused so (logged: the first) */
     unsigned clear_seq;           /* +1 per clear the object accepted (obj_command), from any
                                      * source: a transport whose devices hold on their own (a

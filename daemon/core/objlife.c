@@ -36,10 +36,12 @@ int obj_push_from(obj_t *o, const engine_waypoint_t *wp, const char *src)
         /* counted for the exit line, the first said (they were counted by
          * their transport alone, as refused, and nothing said why) */
         if (o->stop_refused++ == 0)
-            log_msg(LOG_NOTICE,
-                    "object '%s': waypoint from %s refused: trajd is stopping (the later ones "
-                    "are counted on the exit line)",
-                    o->name, src ? src : "an unknown source");
+            log_msg(LOG_NOTICE, "object '%s': waypoint from %s refused: %s", o->name,
+                    src ? src : "an unknown source",
+                    o->stopping == OBJ_STOPPING_REMOVED
+                        ? "a reload removes the object (it brakes to rest; the later ones are "
+                          "counted, and said once it is gone)"
+                        : "trajd is stopping (the later ones are counted on the exit line)");
         return -ENGINE_ESTATE;
     }
     int64_t real_ns = o->clocked ? core_real_ns() : 0;

@@ -9,6 +9,13 @@
 
 void reload_commit(core_t *c, core_t *prev)
 {
+    for (unsigned i = 0; i < prev->nobj; i++) { /* removed: what it refused while it braked */
+        const obj_t *q = &prev->obj[i];
+        if (q->stop_refused && !core_obj_find(c, q->name))
+            log_msg(LOG_NOTICE,
+                    "object '%s' removed: %llu waypoint(s) refused while it braked to rest",
+                    q->name, (unsigned long long)q->stop_refused);
+    }
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i], *q = core_obj_find(prev, o->name);
         if (!q)
@@ -96,7 +103,7 @@ unsigned reload_brake_removed(core_t *c, const cfg_t *nc)
                 "object '%s' removed: braking to rest from %.3f m/s along its path before the "
                 "reload",
                 o->name, sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
-        o->stopping = 1; /* its input is refused from now on */
+        o->stopping = OBJ_STOPPING_REMOVED; /* its input is refused from now on */
         if (o->retiring)
             engine_stop(o->retiring);
         engine_stop(o->engine);

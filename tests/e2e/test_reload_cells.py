@@ -162,7 +162,9 @@ class ReloadCells(unittest.TestCase):
         # gone's rows slow down within its limits (no step, velocity changing
         # by at most scale_accel_m_s2 + the track's v^2/r per period) and the
         # last one is at rest; boat goes on.  SIGHUPs sent while gone brakes
-        # are coalesced into one more reload.
+        # are coalesced into one more reload.  gone's replay, refused
+        # meanwhile, is said for what it is (not "trajd is stopping", which it
+        # said before) and counted once gone is gone (the count was lost).
         d = self.start_two()
         try:
             td.write(self.conf, conf([obj("boat", 0)]))
@@ -185,6 +187,11 @@ class ReloadCells(unittest.TestCase):
             d.close()
         err = d.stderr()
         self.assertEqual(err.count("SIGHUP: reloading"), 2, err)
+        self.assertIn("object 'gone': waypoint from ", err)
+        self.assertIn("refused: a reload removes the object", err)
+        self.assertNotIn("trajd is stopping", err.split("SIGTERM")[0])
+        self.assertRegex(err, r"object 'gone' removed: [1-9]\d* waypoint\(s\) refused while it "
+                              r"braked to rest")
         gone = [r for r in (l.split(",") for l in rows) if r[0] == "gone"]
         self.assertNotIn("gone", [r[0] for r in (l.split(",") for l in rows[-5:])])
         amax = 1.0 + 2.0 ** 2 / 50.0  # scale_accel_m_s2 + the circle's v^2/r
