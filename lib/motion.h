@@ -118,7 +118,8 @@ typedef struct {
     uint32_t buffered;              /* waypoints held, not yet passed by the output */
     uint32_t free;                  /* waypoints that can still be pushed */
     uint32_t lookahead;             /* waypoints needed ahead of the output (from F, O) */
-    double ahead_s;                 /* track time buffered ahead of the output */
+    double ahead_s;                 /* track time of the solved curve ahead of the output
+                                     * (the waypoints beyond it are in buffered) */
     uint64_t accepted;
     uint64_t duplicates;
     uint64_t rejected;              /* sum of rejected_by[]: bad data only (not EFULL) */

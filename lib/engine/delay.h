@@ -27,9 +27,13 @@
  *                       plus TS_MARGIN_TICKS periods
  *
  * The engine starts a trajectory's output once it is D behind less what the
- * ramp from rest to rate 1 loses (a start from rest loses exactly a stop's
- * track time: the ramp itself builds the stop reserve), so the steady delay
- * is D.  With delay_s set (engine_config_t), D is delay_s: it must be at
+ * ramp from rest to rate 1 loses (a start from rest loses a stop's track
+ * time: the ramp itself builds the stop reserve), so the steady delay is D.
+ * Where the ramp loses more than B (the curve where it ramps is faster than
+ * the top speed measured so far, or bends harder: the limits are converted
+ * at its speed bound), the start's wait plus that loss is D, and the part
+ * stated as B is that loss (delay_run.c delay_started): 0.833 s on the
+ * 10 Hz track of tests/e2e/test_delay.py, where B is 0.646 s.  With delay_s set (engine_config_t), D is delay_s: it must be at
  * least what the settings need (engine_delay_check).
  *
  * Pure: no clock, no I/O.

@@ -614,7 +614,8 @@ static const mbmap_field_t fields[] = {
     F(IO, MBMAP_O_LOOKAHEAD, 2, MBMAP_T_U32, "lookahead_needed", "",
       "waypoints of lookahead needed to stream"),
     F(IO, MBMAP_O_AHEAD_S, 2, MBMAP_T_F32, "lookahead_available", "s",
-      "track time buffered ahead of the output"),
+      "track time of the solved curve ahead of the output (the waypoints beyond it, which "
+      "the solver's lookahead still needs, are in buffered)"),
     F(IO, MBMAP_O_LAST_SEQ, 2, MBMAP_T_U32, "last_seq", "",
       "sequence number of the last accepted waypoint"),
     F(IO, MBMAP_O_T_S, 4, MBMAP_T_F64, "t", "s", "track time of the setpoint"),
