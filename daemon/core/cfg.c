@@ -572,6 +572,14 @@ static int handler(void *user, const char *section, const char *name, const char
         fail(p, CFG_EDUP, p->line, "[%s] %s: given twice", p->sec_name, name);
         return 0;
     }
+    const char *hash = strstr(value, " #");
+    if (!hash)
+        hash = strstr(value, "\t#");
+    if (hash) /* a path takes it whole: said, not silently part of a file name */
+        log_msg(LOG_WARNING,
+                "%s:%d: [%s] %s: '%s' is taken whole, '#' and all: a comment after a value "
+                "starts with ' ;' ('#' starts a comment only at the start of a line)",
+                c->path, p->line, p->sec_name, name, value);
     switch (p->kind) {
     case SEC_DAEMON: rc = key_daemon(c, p, &kv, why, sizeof why); break;
     case SEC_RT: rc = key_rt(c, &kv, why, sizeof why); break;

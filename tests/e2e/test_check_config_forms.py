@@ -50,6 +50,25 @@ class CheckConfigForms(unittest.TestCase):
             self.assertEqual(p.returncode, 64, p.stderr)
             self.assertIn("unexpected argument 'other'", p.stderr)
 
+    def test_hash_after_a_value_said(self):
+        """'#' starts a comment only at the start of a line (trajd.conf's first lines): a
+        path written 'out.csv   # the output file' is taken whole, and the check says so
+        at its line.  It passed with nothing said, and trajd wrote a file of that name."""
+        with tempfile.TemporaryDirectory() as tmp:
+            mbsim.line_track(os.path.join(tmp, "track.csv"), 20)
+            conf = os.path.join(tmp, "h.conf")
+            with open(conf, "w") as f:
+                f.write(GOOD.replace("csv.path = a.csv", "csv.path = a.csv   # the output"))
+            p = run("--check-config", conf, cwd=tmp)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            self.assertIn("%s:5: [object.a] csv.path: 'a.csv   # the output' is taken whole"
+                          % conf, p.stderr)
+            with open(conf, "w") as f:
+                f.write(GOOD.replace("csv.path = a.csv", "csv.path = a.csv ; the output"))
+            p = run("--check-config", conf, cwd=tmp)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            self.assertNotIn("taken whole", p.stderr)
+
 
 if __name__ == "__main__":
     unittest.main()
