@@ -100,6 +100,17 @@ int64_t core_real_ns(void)
     return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
 }
 
+double obj_delay_s(const core_t *c, const obj_t *o)
+{
+    if (o->clocked == 1)
+        return c->cfg->daemon.delay_s;
+    if (!o->engine)
+        return NAN;
+    engine_delay_t d;
+    engine_delay(o->engine, &d);
+    return d.delay_s;
+}
+
 void obj_reset_counters(obj_t *o)
 {
     engine_reset_counters(o->engine);
@@ -888,6 +899,11 @@ static size_t summary_motion(const obj_t *o, char *buf, size_t len, size_t n)
     if (o->status.axis_slowed && n < len) { /* issue 32: per-axis limits */
         m = snprintf(buf + n, len - n, ", %.1f s lost to the per-axis limits (%llu segments)",
                      o->status.axis_lost_s, (unsigned long long)o->status.axis_slowed);
+        n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
+    }
+    if (o->status.dropped && n < len) { /* taken, then dropped unplayed by a stop or clear */
+        m = snprintf(buf + n, len - n, ", %llu waypoints dropped by a stop or clear",
+                     (unsigned long long)o->status.dropped);
         n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
     }
     if (o->stop_refused && n < len) { /* obj_push_from while the daemon stops */

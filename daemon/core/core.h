@@ -202,6 +202,11 @@ typedef struct obj {
  * by hand, as the tests do, gets an owner with no latch buffer). */
 lifecycle_t *obj_lc(obj_t *o);
 
+/* The play-out delay D object o's output holds (s): the daemon's delay_s on
+ * its clock, else its engine's (delay.h engine_delay: stated at its last
+ * start, or what its settings and input need so far). */
+double obj_delay_s(const struct core *c, const obj_t *o);
+
 /* Command lines logged per object and second at most (the rest are counted
  * and said in the next line). */
 #define OBJ_CMD_LOG_PER_S 10

@@ -204,7 +204,7 @@ static void status_obj(ctl_sb_t *sb, const core_t *c, const obj_t *o)
     const engine_setpoint_t *sp = &o->sp;
     double speed = sqrt(sp->vel_m_s[0] * sp->vel_m_s[0] + sp->vel_m_s[1] * sp->vel_m_s[1] +
                         sp->vel_m_s[2] * sp->vel_m_s[2]);
-    double delay = o->clocked == 1 ? c->cfg->daemon.delay_s : NAN;
+    double delay = obj_delay_s(c, o);
     ctl_sb_printf(sb, "{\"object\":");
     ctl_sb_str(sb, o->name);
     ctl_sb_printf(
@@ -227,8 +227,8 @@ static void status_obj(ctl_sb_t *sb, const core_t *c, const obj_t *o)
     ctl_sb_num(sb, sp->age_s);
     ctl_sb_printf(sb, ",\"delay_s\":");
     ctl_sb_num(sb, delay);
-    ctl_sb_printf(sb, ",\"lag_s\":");
-    ctl_sb_num(sb, sp->age_s - delay);
+    ctl_sb_printf(sb, ",\"lag_s\":"); /* relative: the lag the catch-up wins back */
+    ctl_sb_num(sb, o->clocked == 1 ? sp->age_s - delay : st->lag_s);
     ctl_sb_printf(sb, ",\"ahead_s\":");
     ctl_sb_num(sb, st->ahead_s);
     ctl_sb_printf(sb, ",\"override\":");
@@ -237,16 +237,18 @@ static void status_obj(ctl_sb_t *sb, const core_t *c, const obj_t *o)
     ctl_sb_num(sb, st->rate);
     ctl_sb_printf(sb,
                   ",\"flags\":%u,\"track\":%u,\"buffered\":%u,\"lookahead\":%u,\"accepted\":%llu,"
-                  "\"rejected\":%llu,\"duplicates\":%llu,\"full\":%llu,\"underruns\":%llu,"
+                  "\"rejected\":%llu,\"duplicates\":%llu,\"full\":%llu,\"dropped\":%llu,"
+                  "\"underruns\":%llu,"
                   "\"skipped_ticks\":%llu,\"gaps\":%llu,\"tracks\":%llu,\"hard_stops\":%llu,"
                   "\"setpoints\":%llu,\"out_lost\":%llu,\"out_errors\":%llu}\n",
                   sp->flags, sp->track, st->buffered, st->lookahead,
                   (unsigned long long)st->accepted, (unsigned long long)st->rejected,
                   (unsigned long long)st->duplicates, (unsigned long long)st->full,
-                  (unsigned long long)st->underruns, (unsigned long long)st->skipped_ticks,
-                  (unsigned long long)st->gaps, (unsigned long long)st->tracks,
-                  (unsigned long long)st->hard_stops, (unsigned long long)st->setpoints,
-                  (unsigned long long)o->out_lost, (unsigned long long)o->out_errors);
+                  (unsigned long long)st->dropped, (unsigned long long)st->underruns,
+                  (unsigned long long)st->skipped_ticks, (unsigned long long)st->gaps,
+                  (unsigned long long)st->tracks, (unsigned long long)st->hard_stops,
+                  (unsigned long long)st->setpoints, (unsigned long long)o->out_lost,
+                  (unsigned long long)o->out_errors);
 }
 
 static void status_head(const ctl_t *t, ctl_client_t *cl)

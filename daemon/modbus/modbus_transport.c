@@ -390,6 +390,7 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
         drive_regs(&ob->drive, o, &d);
         o->clocked = (uint16_t)(ob->clocked == 1);
         o->delay_s = c->cfg->daemon.delay_s;
+        o->play_delay_s = obj_delay_s(c, ob);
         o->clock_unsync = t->clock_unsync;
         o->held = (uint16_t)(ob->held != 0);
         /* the lifecycle's (lib/engine/LIFECYCLE.md): held for a fault, or a stop latched */

@@ -10,9 +10,14 @@
 #include "engine.h"
 #include "engine_int.h"
 
-/* Forget the trajectory being received: the next waypoint opens a new one. */
+/* Forget the trajectory being received: the next waypoint opens a new one.
+ * Its waypoints not in the queue yet (nodes, the smoother's, those still
+ * being judged) are counted dropped. */
 static void drop_input(engine_t *e)
 {
+    e->st.dropped += (uint64_t)(e->solve.nodes - e->solve.seg_next) +
+                     (e->smooth ? (uint64_t)lsq_smooth_pending(&e->solve.sm) : 0) +
+                     accept_pending(&e->in.policy);
     accept_reset(&e->in.policy);
     e->in.open = 0;
     e->solve.nodes = 0;
@@ -34,6 +39,7 @@ static void request_stop(engine_t *e, int kind)
     drop_input(e);
     e->out.underrun = 0;
     if (e->out.mode == OUT_HOLD) {
+        e->st.dropped += queue_waypoints(e, 0, e->queue.len);
         e->queue.head = 0;
         e->queue.len = 0;
         e->queue.slow_len = 0;
@@ -141,6 +147,7 @@ int engine_halt(engine_t *e, const double pos_m[ENGINE_AXES])
             return -ENGINE_ERANGE;
     }
     drop_input(e);
+    e->st.dropped += queue_waypoints(e, 0, e->queue.len);
     e->queue.head = e->queue.len = e->queue.ends = 0;
     e->queue.slow_head = e->queue.slow_len = e->queue.beyond = 0;
     e->scale.stop_req = STOP_NONE;

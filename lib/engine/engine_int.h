@@ -407,6 +407,9 @@ int solve_close(engine_t *e);
 void solve_abort(engine_t *e);
 /* The queue head taken off. */
 void queue_pop(engine_t *e);
+/* The waypoints queue entries i0 .. i1 - 1 end on (segments: the C2 local
+ * methods queue three pieces an interval). */
+uint64_t queue_waypoints(const engine_t *e, size_t i0, size_t i1);
 
 /* ---- play-out (engine_tick.c) ---- */
 

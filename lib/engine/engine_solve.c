@@ -380,6 +380,14 @@ static void queue_end(engine_t *e)
     }
 }
 
+uint64_t queue_waypoints(const engine_t *e, size_t i0, size_t i1)
+{
+    uint64_t n = 0;
+    for (size_t i = i0; i < i1 && i < e->queue.len; i++)
+        n += queue_at(e, i)->kind == QE_SEG;
+    return e->local >= 3 ? (n + 2) / 3 : n;
+}
+
 void queue_pop(engine_t *e)
 {
     if (e->scale.drop_n)

@@ -170,6 +170,13 @@ void play_stop_at_rest(engine_t *e)
     if (e->out.mode == OUT_XFER)
         xfer_track_time(e); /* the track time the transfer showed, kept at rest (its own
                                time, from 0, stepped t_s back: 5.4 s to 0.1 s) */
+    /* the waypoints beyond the rest point: dropped (st.dropped), the end of
+     * the segment it rests in among them */
+    size_t n = e->scale.drop_n < e->queue.len ? e->scale.drop_n : e->queue.len;
+    e->st.dropped += queue_waypoints(e, 0, n);
+    if (e->out.mode == OUT_STREAM && e->out.cur.kind == QE_SEG && !e->local &&
+        e->out.t < e->out.cur.t1_s - 1e-9)
+        e->st.dropped++;
     while (e->scale.drop_n && e->queue.len)
         queue_pop(e);
     e->scale.drop_n = 0;

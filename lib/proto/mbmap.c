@@ -295,6 +295,8 @@ int mbmap_encode_diag(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_obje
     mbmap_put_f64(b + MBMAP_X_LIMITS_LOST_S, o->st.limits_lost_s);
     mbmap_put_u32(b + MBMAP_X_LIMITS_SLOWED, lo32(o->st.limits_slowed));
     mbmap_put_u32(b + MBMAP_X_RESYNCS, lo32(o->resyncs));
+    mbmap_put_f64(b + MBMAP_X_DELAY_S, o->play_delay_s);
+    mbmap_put_u32(b + MBMAP_X_DROPPED, lo32(o->st.dropped));
     mbmap_put_f64(b + MBMAP_X_HEADING, o->heading_deg);
     mbmap_put_f64(b + MBMAP_X_HEADING_UNWRAPPED, o->heading_unwrapped_deg);
     mbmap_put_u32(b + MBMAP_X_TX_CLAMPED, lo32(o->tx_clamped));
@@ -760,6 +762,12 @@ static const mbmap_field_t fields[] = {
     F(IX, MBMAP_X_RESYNCS, 2, MBMAP_T_U32, "resyncs", "",
       "waypoints taken from a CAN sender that restarted its numbering (behind the last one, "
       "later in time): followed, not lost; also logged and on the exit line"),
+    F(IX, MBMAP_X_DELAY_S, 4, MBMAP_T_F64, "delay_s", "s",
+      "the play-out delay D this object's output holds: on the daemon's clock the daemon's "
+      "delay_s, else its own (stated at its trajectory's start, lib/engine/delay.h)"),
+    F(IX, MBMAP_X_DROPPED, 2, MBMAP_T_U32, "dropped", "",
+      "waypoints taken (accepted, or still being judged) that a stop or clear dropped before "
+      "the output passed them; also on the exit line"),
     F(IX, MBMAP_X_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "",
       "copy of generation (whole-block reads)"),
 

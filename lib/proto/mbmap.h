@@ -201,6 +201,8 @@
 #define MBMAP_X_LIMITS_LOST_S 76     /* f64 time lost to the object's own speed/acceleration limits, s (limits_lost_s) */
 #define MBMAP_X_LIMITS_SLOWED 80     /* u32 segments those limits slow (limits_slowed) */
 #define MBMAP_X_RESYNCS 82           /* u32 its CAN sender restarted its numbering, followed (canproto resyncs) */
+#define MBMAP_X_DELAY_S 84           /* f64 the play-out delay D its output holds, s (obj_delay_s) */
+#define MBMAP_X_DROPPED 88           /* u32 waypoints a stop or clear dropped unplayed (engine_status_t dropped) */
 #define MBMAP_X_HEADING 50           /* f64 heading axis, degrees in (-180, 180] (NaN: none) */
 #define MBMAP_X_HEADING_UNWRAPPED 54 /* f64 the same, continuous (no jump at +-180): for a rotary axis */
 #define MBMAP_X_TX_CLAMPED 58       /* u32 setpoints sent on CAN with a value clipped to its field (speed beyond the SETPOINT frame's +-32.767 m/s ...) */
@@ -337,6 +339,7 @@ typedef struct {
     double heading_deg, heading_unwrapped_deg; /* heading axis (NaN: none) */
     uint64_t tx_clamped;        /* CAN setpoints with a value clipped to its field */
     uint64_t resyncs;           /* its CAN sender restarted its numbering, followed */
+    double play_delay_s;        /* the play-out delay D its output holds (NaN: none yet) */
     uint16_t mb_worst_addr[MBMAP_X_MB_WORST_ADDR_GROUPS]; /* daemon-wide (mbmap_daemon_t's) */
 } mbmap_object_t;
 
