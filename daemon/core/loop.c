@@ -87,12 +87,14 @@ static int add_entry(loop_t *l, int fd, uint32_t events, loop_fn fn, void *ctx, 
             l->cap = cap;
         }
         l->e[l->n].gen = 0;
+        l->e[l->n].fd = -1; /* free until the add succeeds */
         l->n++;
     }
     loop_entry_t *e = &l->e[i];
     struct epoll_event ev = {.events = events, .data.u64 = ((uint64_t)e->gen << 32) | i};
     if (epoll_ctl(l->epfd, EPOLL_CTL_ADD, fd, &ev) < 0)
-        return -errno;
+        return -errno; /* the slot stays free (fd -1): valgrind saw find() and loop_free()
+                        * read an appended slot's fd and timer_fn never written */
     e->fd = fd;
     e->fn = fn;
     e->ctx = ctx;

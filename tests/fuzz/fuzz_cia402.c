@@ -82,8 +82,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         memcpy(f.data, data + i, len);
         i += len;
         check_frame(&f);
-        /* an SDO download we build from the same bytes */
+        /* an SDO download we build from the same bytes (d zeroed: checked
+         * below also where the encoder refused it and wrote nothing, which
+         * valgrind saw read from the stack) */
         canproto_frame_t d;
+        memset(&d, 0, sizeof d);
         uint16_t index = (uint16_t)(f.id | (unsigned)f.data[0] << 8);
         unsigned sz = 1u << (f.data[1] % 3); /* 1, 2, 4 */
         uint8_t node = (uint8_t)(f.data[2] % 130);
