@@ -914,11 +914,11 @@ int main(int argc, char **argv)
     report_ready(&d, (char)(rc ? rc : EX_SOFTWARE));
     load_drop(&d, "trajd is exiting"); /* before the control socket and d.cfg go */
     uint64_t faults = engine_faults(d.core, &d.stats);
-    unsigned held = held_objects(d.core);
+    unsigned held = held_objects(d.core), moving = 0;
     /* cut short by a second signal or the stop timeout (stop_timeout_s = 0
      * asks for no stop: nothing cut short it did not ask for) */
     if (d.signals_seen > 1 || (d.cfg && d.cfg->daemon.stop_timeout_s > 0))
-        held += moving_objects(d.core);
+        moving = moving_objects(d.core);
     ctl_close(d.ctl);   /* watchers get what is queued, then a goodbye */
     core_close(d.core); /* outputs drain here: lines left over count as lost */
     if (d.stats.exit_code == CORE_EXIT_EPIPE) {
@@ -941,8 +941,16 @@ int main(int argc, char **argv)
                 "an object: exit status %d",
                 (unsigned long long)d.stats.no_input, CORE_EXIT_NO_INPUT);
         rc = CORE_EXIT_NO_INPUT;
-    } else if (rc == 0 && held) {
-        log_msg(LOG_ERR, "%u object(s) ended held: exit status %d", held, CORE_EXIT_HELD);
+    } else if (rc == 0 && (held || moving)) {
+        /* (an object still moving was not held: said as what it was) */
+        if (held && moving)
+            log_msg(LOG_ERR, "%u object(s) ended held and %u still moving: exit status %d", held,
+                    moving, CORE_EXIT_HELD);
+        else if (held)
+            log_msg(LOG_ERR, "%u object(s) ended held: exit status %d", held, CORE_EXIT_HELD);
+        else
+            log_msg(LOG_ERR, "%u object(s) ended still moving: exit status %d", moving,
+                    CORE_EXIT_HELD);
         rc = CORE_EXIT_HELD;
     }
     cfg_free(pending_take(&d));

@@ -251,6 +251,9 @@ class Stall(unittest.TestCase):
         time.sleep(0.2)
         self.assertEqual(rc, 75, "".join(log))
         self.assertTrue(any("boat" in l and "still moving" in l for l in log), "".join(log))
+        # said as moving, not as held (it said "1 object(s) ended held")
+        self.assertTrue(any("1 object(s) ended still moving" in l for l in log), "".join(log))
+        self.assertFalse(any("ended held" in l for l in log), "".join(log))
 
     def test_reload_offers_no_row_again(self):
         """Reloads of an unchanged file while the replayed object moves: the
