@@ -40,6 +40,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/signalfd.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <sysexits.h>
 #include <systemd/sd-daemon.h>
@@ -660,7 +661,14 @@ static int load_at_start(trajd_t *d)
     if (sfd >= 0)
         close(sfd);
     if (rc < 0) {
-        log_msg(LOG_ERR, "%s", err);
+        struct stat sb;
+        if (strcmp(d->conf_path, TRAJD_DEFAULT_CONF) == 0 && stat(d->conf_path, &sb) < 0)
+            log_msg(LOG_ERR,
+                    "%s (no configuration there: give one with -c FILE; `make install` "
+                    "puts the example there; config/demo.conf runs with no hardware)",
+                    err);
+        else
+            log_msg(LOG_ERR, "%s", err);
         return EX_CONFIG;
     }
     return 0;

@@ -50,6 +50,16 @@ class CheckConfigForms(unittest.TestCase):
             self.assertEqual(p.returncode, 64, p.stderr)
             self.assertIn("unexpected argument 'other'", p.stderr)
 
+    def test_no_config_says_what_to_do(self):
+        """trajd with no -c and nothing at /etc/trajd/trajd.conf says how to give one (it said
+        only 'No such file or directory'), exit 78."""
+        if os.path.exists("/etc/trajd/trajd.conf"):
+            self.skipTest("this machine has a trajd installed at /etc/trajd/trajd.conf")
+        with tempfile.TemporaryDirectory() as tmp:
+            p = run("-f", cwd=tmp)
+            self.assertEqual(p.returncode, 78, p.stderr)
+            self.assertIn("give one with -c FILE", p.stderr)
+
     def test_hash_after_a_value_said(self):
         """'#' starts a comment only at the start of a line (trajd.conf's first lines): a
         path written 'out.csv   # the output file' is taken whole, and the check says so
