@@ -571,6 +571,9 @@ static void carry_objects(core_t *c, core_t *prev)
         o->grown_logged = q->grown_logged;
         o->reanchors_logged = q->reanchors_logged;
         o->reserve_logged = q->reserve_logged;
+        o->delay_track = q->delay_track; /* its trajectory's start was told (a line still
+                                          * pending, by the old core as it closes): not again */
+        o->delay_logs = q->delay_logs;
         o->out_errors = q->out_errors;
         o->held = q->held; /* its engine keeps the override 0 */
         o->carried = 1;

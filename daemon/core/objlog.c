@@ -83,7 +83,7 @@ static void log_track_delay(obj_t *o, unsigned *budget)
 void objlog_delays(const core_t *c)
 {
     for (unsigned i = 0; i < c->nobj; i++)
-        if (c->obj[i].engine)
+        if (c->obj[i].engine && !c->obj[i].carried) /* a carried one's was told */
             obj_log_delay(&c->obj[i], "");
 }
 

@@ -6,9 +6,11 @@ line says how many waypoints the latch buffered and dropped. Then trajctl reload
 unchanged (the object is carried over with its owner's counters), then trajctl clear while it
 moves: the clear's line says nothing of waypoints while stopped or held, since none came
 since the start's line (it repeated the start's figures after a reload, which read as that
-many dropped again).
+many dropped again). Each trajectory's "trajectory N streams" line is told once (the reload
+told it again).
 """
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -61,6 +63,12 @@ class ToldOnce(unittest.TestCase):
             finally:
                 p.terminate()
                 p.wait(WAIT_S)
+            lines.wait_for("\0", WAIT_S)  # the rest, to the end
+            # each trajectory's start told once: the reload that carried the object over
+            # told "trajectory N streams" again, as if it had restarted
+            told = re.findall(r"object 'boat': trajectory (\d+) streams", "".join(lines.all))
+            self.assertTrue(told)
+            self.assertEqual(len(told), len(set(told)), told)
 
 
 if __name__ == "__main__":
