@@ -380,7 +380,10 @@ static void dispatch(can_port_t *p, const canproto_frame_t *f, int64_t now_ns)
             return;
         }
     }
-    p->st.rx_foreign++;
+    if (p->st.rx_foreign++ == 0) {
+        p->st.rx_foreign_first = f->id;
+        p->st.rx_foreign_first_flags = f->flags;
+    }
 }
 
 int can_port_rx(can_port_t *p, int64_t now_ns)

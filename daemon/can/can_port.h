@@ -142,6 +142,8 @@ typedef struct {
     uint64_t rx_frames;
     uint64_t
         rx_foreign; /* frames with an id no object uses (log input; filters stop them on a socket) */
+    uint32_t rx_foreign_first; /* the id of the first of them (CANPROTO_F_EFF in flags: 29 bits) */
+    uint32_t rx_foreign_first_flags;
     uint64_t rx_errors;
     uint64_t sync_sent;
     uint64_t sync_dropped; /* SYNC frames the transport refused (queue full, down) */

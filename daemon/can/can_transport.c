@@ -777,12 +777,23 @@ static void log_in_ended(can_state_t *s)
             continue;
         can_port_obj_stats_t os;
         can_port_obj_stats(s->port, k, &os);
+        can_port_stats_t ps;
+        can_port_stats(s->port, &ps);
+        char other[200] = ""; /* frames on ids no object uses: a log for another id? */
+        if (ps.rx_foreign)
+            snprintf(other, sizeof other,
+                     "; %llu frames on ids no object uses, the first on 0x%0*" PRIX32
+                     ", while its waypoints come on 0x%03" PRIX32 " (from its id; or set "
+                     "can.waypoint_id)",
+                     (unsigned long long)ps.rx_foreign,
+                     (ps.rx_foreign_first_flags & CANPROTO_F_EFF) ? 8 : 3, ps.rx_foreign_first,
+                     s->wp_id[k]);
         log_msg(LOG_ERR,
                 "can: object '%s': log_in %s ended with no usable waypoint for it (0 accepted, "
-                "%llu rejected, %llu malformed frames, %llu bad lines); trajd will exit with "
+                "%llu rejected, %llu malformed frames, %llu bad lines%s); trajd will exit with "
                 "status %d",
                 s->objs[k]->name, s->cfg->log_in, (unsigned long long)os.waypoints_rejected,
-                (unsigned long long)os.rx.malformed, (unsigned long long)ls.bad_lines,
+                (unsigned long long)os.rx.malformed, (unsigned long long)ls.bad_lines, other,
                 CORE_EXIT_NO_INPUT);
         s->c->stats->no_input++;
     }

@@ -523,9 +523,24 @@ class CanLogNothingUsable(unittest.TestCase):
                 self.assertEqual(p.returncode, 65, "%s: %s" % (name, p.stderr[-800:]))
                 self.assertRegex(p.stderr, r"<3>can: object 'boat': log_in \S*wp.log ended with no "
                                  r"usable waypoint for it \(0 accepted, \d+ rejected, \d+ malformed"
-                                 r" frames, \d+ bad lines\); trajd will exit with status 65", name)
+                                 r" frames, \d+ bad lines[^\n]*\); trajd will exit with status 65", name)
                 self.assertIn("<3>a replayed track or candump log ended 1 time(s) with no usable "
                               "waypoint for an object", p.stderr)
+            # a log made for another object's id (waypoints on 0x681, this object's 0x680):
+            # the line names both (it said "0 accepted" alone; only the status said how
+            # many frames were for no object)
+            shifted = os.path.join(d, "shifted.csv")
+            with open(shifted, "w") as fh:
+                fh.write("t,x,y,z\n" + "".join("%d,%d,0,0\n" % (i, i) for i in range(20)))
+            ct.write_wplog(shifted, os.path.join(d, "shifted.log"))
+            with open(os.path.join(d, "shifted.log")) as fh:
+                body = fh.read().replace(" can0 680#", " can0 681#")
+            self.assertIn(" can0 681#", body)
+            p = self.run_log(d, body)
+            self.assertEqual(p.returncode, 65, p.stderr[-800:])
+            self.assertRegex(p.stderr, r"ended with no usable waypoint for it \(0 accepted, .*; "
+                             r"\d+ frames on ids no object uses, the first on 0x681, while its "
+                             r"waypoints come on 0x680")
             # one usable waypoint among them: exit 0
             good = cases["range"].replace("#010100407A10F35A", "#0101000000000000", 1)  # x 1e8 -> 0
             self.assertNotEqual(good, cases["range"])
