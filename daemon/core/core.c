@@ -862,15 +862,22 @@ void core_stats_roll(core_t *c)
             continue;
         double held[ENGINE_AXES] = {NAN, NAN, NAN};
         (void)safety_held(sf, held);
-        log_msg(LOG_ERR,
-                "object '%s': safety monitor: %s (%.6g, bound %.6g): setpoints not sent, "
-                "holding at (%.4f, %.4f, %.4f) until 'clear'; %llu refused so far",
-                o->name,
-                safety_strerror(sf->fault        ? sf->fault
-                                : sf->last_fault ? sf->last_fault
-                                                 : SAFETY_FNOTFINITE),
-                sf->last_value, sf->last_limit, held[0], held[1], held[2],
-                (unsigned long long)sf->violations);
+        int holding = (o->lc.hold & LC_HOLD_SAFETY) != 0;
+        const char *why = safety_strerror(sf->fault        ? sf->fault
+                                          : sf->last_fault ? sf->last_fault
+                                                           : SAFETY_FNOTFINITE);
+        if (holding)
+            log_msg(LOG_ERR,
+                    "object '%s': safety monitor: %s (%.6g, bound %.6g): setpoints not sent, "
+                    "holding at (%.4f, %.4f, %.4f) until 'clear'; %llu refused so far",
+                    o->name, why, sf->last_value, sf->last_limit, held[0], held[1], held[2],
+                    (unsigned long long)sf->violations);
+        else /* a clear came since: the hold is over, the count stays */
+            log_msg(LOG_ERR,
+                    "object '%s': safety monitor: %s (%.6g, bound %.6g): setpoints not sent "
+                    "until the clear that released the hold; %llu refused so far",
+                    o->name, why, sf->last_value, sf->last_limit,
+                    (unsigned long long)sf->violations);
         o->safety_logged = sf->violations;
     }
     lat_summarize(&s->late_hist, &s->late);
