@@ -3,7 +3,7 @@ replayed object goes on along its track: the object never drives back to the tra
 to play it all again.
 
 The real trajd replays a 10 Hz track (60 s, 2.5 m/s along a circle of radius 20 m) into a
-CSV file at speed 4. While the object streams, one engine key is added to its section
+CSV file at speed 8. While the object streams, one engine key is added to its section
 (method = bspline) and trajd is sent SIGHUP: the object is a changed one (not carried over),
 its old engine brakes to rest along the path, and the new engine takes over there. Judged
 from the CSV rows alone:
@@ -56,7 +56,7 @@ class ReloadChangedResumes(unittest.TestCase):
                     a = V * H * i / R
                     f.write("%.1f,%.9f,%.9f\n" % (H * i, R * math.cos(a), R * math.sin(a)))
             conf = os.path.join(tmp, "trajd.conf")
-            text = ("[daemon]\nrate_hz = 100\nspeed = 4\nexit_when_done = yes\n"
+            text = ("[daemon]\nrate_hz = 100\nspeed = 8\nexit_when_done = yes\n"
                     "status_interval_s = 0\ncontrol_socket = %s/ctl\n"
                     "[object.a]\ninput = replay\nreplay.track = circle.csv\n"
                     "max_speed_m_s = %g\noutput = csv\ncsv.path = a.csv\n" % (tmp, VMAX))
@@ -131,7 +131,7 @@ class ReloadChangedWhileStopped(unittest.TestCase):
                     a = V * H * i / R
                     f.write("%.1f,%.9f,%.9f\n" % (H * i, R * math.cos(a), R * math.sin(a)))
             conf, ctl = os.path.join(tmp, "trajd.conf"), os.path.join(tmp, "ctl")
-            text = ("[daemon]\nrate_hz = 100\nspeed = 4\nexit_when_done = yes\n"
+            text = ("[daemon]\nrate_hz = 100\nspeed = 8\nexit_when_done = yes\n"
                     "status_interval_s = 0\ncontrol_socket = %s\n"
                     "[object.a]\ninput = replay\nreplay.track = circle.csv\nwritable = yes\n"
                     "max_speed_m_s = %g\noutput = csv\ncsv.path = a.csv\n" % (ctl, VMAX))

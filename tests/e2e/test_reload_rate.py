@@ -1,7 +1,7 @@
 """test_reload_rate.py - a reload that would change rate_hz while an object moves is refused;
 at rest it is taken.
 
-The real trajd replays a 10 Hz track at 5 m/s into a CSV file (rate_hz 100, speed 1). While
+The real trajd replays a 10 Hz track at 5 m/s into a CSV file (rate_hz 100, speed 2). While
 the object streams, rate_hz is changed to 250 and trajd is sent SIGHUP. The old engine's
 braking runs on the period it was built for, so such a reload cannot keep the output
 continuous: it must be refused with a line naming rate_hz and the moving object, and the
@@ -44,7 +44,7 @@ class ReloadRate(unittest.TestCase):
                 for i in range(150):
                     f.write("%.1f,%.2f,0\n" % (0.1 * i, 0.5 * i))
             conf = os.path.join(tmp, "t.conf")
-            text = ("[daemon]\nrate_hz = %d\nstatus_interval_s = 0\ncontrol_socket = %s/ctl\n"
+            text = ("[daemon]\nrate_hz = %d\nspeed = 2\nstatus_interval_s = 0\ncontrol_socket = %s/ctl\n"
                     "[object.a]\ninput = replay\nreplay.track = line.csv\noutput = csv\n"
                     "csv.path = a.csv\nmax_speed_m_s = %g\n")
             with open(conf, "w") as f:
