@@ -121,10 +121,16 @@ typedef struct {
     double ahead_s;                 /* track time of the solved curve ahead of the output
                                      * (the waypoints beyond it are in buffered) */
     uint64_t accepted;
-    uint64_t dropped;               /* waypoints taken (accepted, or still being judged) that a
-                                     * stop or clear dropped before the output passed them:
-                                     * the curve beyond where it came to rest (the C2 local
-                                     * methods' to within one) */
+    uint64_t dropped;               /* waypoints accepted that a stop or clear dropped before
+                                     * the output passed them: the curve beyond where it came
+                                     * to rest (the C2 local methods' to within one); a part
+                                     * of accepted */
+    uint64_t unjudged;              /* waypoints taken and dropped before their verdict: still
+                                     * being judged at a stop or clear, or kept by a stop's
+                                     * latch and dropped (past at the start, a clear, a
+                                     * reload's smaller buffer; the daemon adds those); not in
+                                     * accepted: the waypoints written = accepted + rejected
+                                     * + duplicates + unjudged + those still being judged */
     uint64_t duplicates;
     uint64_t rejected;              /* sum of rejected_by[]: bad data only (not EFULL) */
     uint64_t rejected_by[ENGINE_ERROR_COUNT]; /* per engine_error */

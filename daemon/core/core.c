@@ -337,6 +337,7 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
          * what it refused full, as the engine's own full buffer counts */
         o->status.free = lc_free_room(&o->lc, o->status.free);
         o->status.full += o->lc.n.refused_full;
+        o->status.unjudged += o->lc.n.dropped_past + o->lc.n.dropped_full; /* the latch's */
         objlog_note_start(o);
         obj_frames(c->cfg, o);
     }
@@ -911,9 +912,11 @@ static size_t summary_motion(const obj_t *o, char *buf, size_t len, size_t n)
                      o->status.axis_lost_s, (unsigned long long)o->status.axis_slowed);
         n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
     }
-    if (o->status.dropped && n < len) { /* taken, then dropped unplayed by a stop or clear */
-        m = snprintf(buf + n, len - n, ", %llu waypoints dropped by a stop or clear",
-                     (unsigned long long)o->status.dropped);
+    if ((o->status.dropped || o->status.unjudged) && n < len) { /* taken, dropped unplayed */
+        m = snprintf(buf + n, len - n,
+                     ", %llu waypoints dropped by a stop or clear (and %llu before their "
+                     "verdict)",
+                     (unsigned long long)o->status.dropped, (unsigned long long)o->status.unjudged);
         n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;
     }
     if (o->stop_refused && n < len) { /* obj_push_from while the daemon stops */

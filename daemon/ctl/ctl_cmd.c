@@ -238,17 +238,18 @@ static void status_obj(ctl_sb_t *sb, const core_t *c, const obj_t *o)
     ctl_sb_printf(sb,
                   ",\"flags\":%u,\"track\":%u,\"buffered\":%u,\"lookahead\":%u,\"accepted\":%llu,"
                   "\"rejected\":%llu,\"duplicates\":%llu,\"full\":%llu,\"dropped\":%llu,"
+                  "\"unjudged\":%llu,"
                   "\"underruns\":%llu,"
                   "\"skipped_ticks\":%llu,\"gaps\":%llu,\"tracks\":%llu,\"hard_stops\":%llu,"
                   "\"setpoints\":%llu,\"out_lost\":%llu,\"out_errors\":%llu}\n",
                   sp->flags, sp->track, st->buffered, st->lookahead,
                   (unsigned long long)st->accepted, (unsigned long long)st->rejected,
                   (unsigned long long)st->duplicates, (unsigned long long)st->full,
-                  (unsigned long long)st->dropped, (unsigned long long)st->underruns,
-                  (unsigned long long)st->skipped_ticks, (unsigned long long)st->gaps,
-                  (unsigned long long)st->tracks, (unsigned long long)st->hard_stops,
-                  (unsigned long long)st->setpoints, (unsigned long long)o->out_lost,
-                  (unsigned long long)o->out_errors);
+                  (unsigned long long)st->dropped, (unsigned long long)st->unjudged,
+                  (unsigned long long)st->underruns, (unsigned long long)st->skipped_ticks,
+                  (unsigned long long)st->gaps, (unsigned long long)st->tracks,
+                  (unsigned long long)st->hard_stops, (unsigned long long)st->setpoints,
+                  (unsigned long long)o->out_lost, (unsigned long long)o->out_errors);
 }
 
 static void status_head(const ctl_t *t, ctl_client_t *cl)

@@ -11,13 +11,13 @@
 #include "engine_int.h"
 
 /* Forget the trajectory being received: the next waypoint opens a new one.
- * Its waypoints not in the queue yet (nodes, the smoother's, those still
- * being judged) are counted dropped. */
+ * Its waypoints not in the queue yet are counted: dropped (nodes, the
+ * smoother's: accepted), unjudged (those still being judged). */
 static void drop_input(engine_t *e)
 {
     e->st.dropped += (uint64_t)(e->solve.nodes - e->solve.seg_next) +
-                     (e->smooth ? (uint64_t)lsq_smooth_pending(&e->solve.sm) : 0) +
-                     accept_pending(&e->in.policy);
+                     (e->smooth ? (uint64_t)lsq_smooth_pending(&e->solve.sm) : 0);
+    e->st.unjudged += accept_pending(&e->in.policy); /* no verdict: not accepted */
     accept_reset(&e->in.policy);
     e->in.open = 0;
     e->solve.nodes = 0;

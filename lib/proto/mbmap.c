@@ -297,6 +297,7 @@ int mbmap_encode_diag(uint16_t *regs, unsigned k, uint32_t gen, const mbmap_obje
     mbmap_put_u32(b + MBMAP_X_RESYNCS, lo32(o->resyncs));
     mbmap_put_f64(b + MBMAP_X_DELAY_S, o->play_delay_s);
     mbmap_put_u32(b + MBMAP_X_DROPPED, lo32(o->st.dropped));
+    mbmap_put_u32(b + MBMAP_X_UNJUDGED, lo32(o->st.unjudged));
     mbmap_put_f64(b + MBMAP_X_HEADING, o->heading_deg);
     mbmap_put_f64(b + MBMAP_X_HEADING_UNWRAPPED, o->heading_unwrapped_deg);
     mbmap_put_u32(b + MBMAP_X_TX_CLAMPED, lo32(o->tx_clamped));
@@ -766,8 +767,13 @@ static const mbmap_field_t fields[] = {
       "the play-out delay D this object's output holds: on the daemon's clock the daemon's "
       "delay_s, else its own (stated at its trajectory's start, lib/engine/delay.h)"),
     F(IX, MBMAP_X_DROPPED, 2, MBMAP_T_U32, "dropped", "",
-      "waypoints taken (accepted, or still being judged) that a stop or clear dropped before "
-      "the output passed them; also on the exit line"),
+      "waypoints accepted that a stop or clear dropped before the output passed them (a part "
+      "of accepted); also on the exit line"),
+    F(IX, MBMAP_X_UNJUDGED, 2, MBMAP_T_U32, "unjudged", "",
+      "waypoints taken and dropped before their verdict: still being judged at a stop or "
+      "clear, or kept by a stop's latch and dropped (past at the start, a clear); not in "
+      "accepted: written = accepted + rejected + duplicates + unjudged + the one or two still "
+      "being judged"),
     F(IX, MBMAP_X_GEN_TAIL, 2, MBMAP_T_U32, "generation_tail", "",
       "copy of generation (whole-block reads)"),
 

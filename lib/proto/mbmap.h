@@ -202,7 +202,8 @@
 #define MBMAP_X_LIMITS_SLOWED 80     /* u32 segments those limits slow (limits_slowed) */
 #define MBMAP_X_RESYNCS 82           /* u32 its CAN sender restarted its numbering, followed (canproto resyncs) */
 #define MBMAP_X_DELAY_S 84           /* f64 the play-out delay D its output holds, s (obj_delay_s) */
-#define MBMAP_X_DROPPED 88           /* u32 waypoints a stop or clear dropped unplayed (engine_status_t dropped) */
+#define MBMAP_X_DROPPED 88           /* u32 waypoints accepted that a stop or clear dropped unplayed (engine_status_t dropped) */
+#define MBMAP_X_UNJUDGED 90          /* u32 waypoints taken and dropped before their verdict (engine_status_t unjudged) */
 #define MBMAP_X_HEADING 50           /* f64 heading axis, degrees in (-180, 180] (NaN: none) */
 #define MBMAP_X_HEADING_UNWRAPPED 54 /* f64 the same, continuous (no jump at +-180): for a rotary axis */
 #define MBMAP_X_TX_CLAMPED 58       /* u32 setpoints sent on CAN with a value clipped to its field (speed beyond the SETPOINT frame's +-32.767 m/s ...) */
