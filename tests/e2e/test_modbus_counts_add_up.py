@@ -3,7 +3,7 @@ a clear and a stop/start.
 
 The real trajd with a Modbus-fed object (mbsim.start_fed_trajd), written by pymodbus through
 the holding waypoint block (config/PROTOCOL.md), every write acknowledged:
-- 60 waypoints at 10 Hz of track, the command clear after the 30th, then finish;
+- 60 waypoints at 50 Hz of track (2.5 m/s), the command clear after the 30th, then finish;
 - 80 waypoints, the command stop after the 40th, 40 more while the stop is latched, start,
   then finish.
 Once the object is finished (nothing left being judged), the object block's accepted +
@@ -69,7 +69,7 @@ class CountsAddUp(mbsim.FedTrajdCase):
             if i == 30:
                 self.command(M["MBMAP_CMD_CLEAR"])
                 time.sleep(0.3)
-            self.write(i + 1, 0.1 * i, 1.0 * i)
+            self.write(i + 1, 0.02 * i, 0.05 * i)
             time.sleep(0.01)
         counts = self.finished_counts()
         self.assertEqual(sum(counts.values()), 60, counts)
@@ -79,7 +79,7 @@ class CountsAddUp(mbsim.FedTrajdCase):
             if i == 40:
                 self.command(M["MBMAP_CMD_STOP"])
                 time.sleep(0.3)
-            self.write(i + 1, 0.1 * i, 1.0 * i)
+            self.write(i + 1, 0.02 * i, 0.05 * i)
             time.sleep(0.01)
         self.command(M["MBMAP_CMD_START"])
         time.sleep(0.3)
