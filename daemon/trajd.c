@@ -566,12 +566,22 @@ static void files_owner(const cfg_t *cfg)
 }
 
 /* --check-config FILE: the exit code. */
+/* " (no configuration there: ...)" where path is the default one and absent, else "". */
+static const char *no_conf_hint(const char *path)
+{
+    struct stat sb;
+    if (strcmp(path, TRAJD_DEFAULT_CONF) == 0 && stat(path, &sb) < 0)
+        return " (no configuration there: give one with -c FILE; `make install` puts the "
+               "example there; config/demo.conf runs with no hardware)";
+    return "";
+}
+
 static int check_config(const char *path)
 {
     char err[1024];
     cfg_t *cfg;
     if (cfg_load(path, &cfg, err, sizeof err) < 0) {
-        fprintf(stderr, "%s\n", err);
+        fprintf(stderr, "%s%s\n", err, no_conf_hint(path));
         return EX_CONFIG;
     }
     fdlimit_t f;
@@ -661,14 +671,7 @@ static int load_at_start(trajd_t *d)
     if (sfd >= 0)
         close(sfd);
     if (rc < 0) {
-        struct stat sb;
-        if (strcmp(d->conf_path, TRAJD_DEFAULT_CONF) == 0 && stat(d->conf_path, &sb) < 0)
-            log_msg(LOG_ERR,
-                    "%s (no configuration there: give one with -c FILE; `make install` "
-                    "puts the example there; config/demo.conf runs with no hardware)",
-                    err);
-        else
-            log_msg(LOG_ERR, "%s", err);
+        log_msg(LOG_ERR, "%s%s", err, no_conf_hint(d->conf_path));
         return EX_CONFIG;
     }
     return 0;

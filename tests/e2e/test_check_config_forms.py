@@ -56,9 +56,10 @@ class CheckConfigForms(unittest.TestCase):
         if os.path.exists("/etc/trajd/trajd.conf"):
             self.skipTest("this machine has a trajd installed at /etc/trajd/trajd.conf")
         with tempfile.TemporaryDirectory() as tmp:
-            p = run("-f", cwd=tmp)
-            self.assertEqual(p.returncode, 78, p.stderr)
-            self.assertIn("give one with -c FILE", p.stderr)
+            for args in (("-f",), ("--check-config",)):
+                p = run(*args, cwd=tmp)
+                self.assertEqual(p.returncode, 78, (args, p.stderr))
+                self.assertIn("give one with -c FILE", p.stderr, args)
 
     def test_hash_after_a_value_said(self):
         """'#' starts a comment only at the start of a line (trajd.conf's first lines): a
