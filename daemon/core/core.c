@@ -305,6 +305,8 @@ static int64_t real_offset(core_priv_t *p)
  * same tick as trajreplay does and the setpoints stay identical to it; only
  * deadline k's setpoints go out, flagged ENGINE_SP_SKIPPED.
  */
+static void note_played(obj_t *o);
+
 static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64_t late_ns)
 {
     core_t *c = &p->pub;
@@ -330,6 +332,7 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
             o->sp.flags |= ENGINE_SP_SKIPPED;
             o->skipped_ticks += k - k0;
         }
+        note_played(o);
         rejlog_drain(&o->rejlog, o->engine); /* verdicts given by a finish or a tick */
         engine_status(o->engine, &o->status);
         o->status.skipped_ticks += o->skipped_ticks;
@@ -440,11 +443,31 @@ static obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o)
 static void resume_input(obj_t *o, core_t *prev)
 {
     obj_t *q = prev && !prev->stopping ? core_obj_find(prev, o->name) : NULL;
-    if (!q || !same_input(q, o->cfg) || q->sp.cycle == 0 || (q->sp.flags & ENGINE_SP_NO_POSITION) ||
-        !isfinite(q->sp.t_s))
-        return;
-    o->resume_t_s = q->sp.t_s;
+    if (!q || !same_input(q, o->cfg) || !isfinite(q->played_t_s))
+        return; /* (nothing played: a waiting object's input starts again, none skipped) */
+    /* as far as it played: not the setpoint's t_s, which a transfer (a reload
+     * before this one, still joining its track) counts from its own start
+     * behind the track: resumed there, the object went back 8.8 m */
+    o->resume_t_s = q->played_t_s;
+    o->played_t_s = q->played_t_s;
+    o->played_track = q->played_track;
     o->born_ns = q->born_ns;
+}
+
+/* o->played_t_s after this tick's setpoint (core.h). */
+static void note_played(obj_t *o)
+{
+    const engine_setpoint_t *sp = &o->sp;
+    if ((sp->state != ENGINE_STATE_STREAMING && sp->state != ENGINE_STATE_UNDERRUN &&
+         sp->state != ENGINE_STATE_FINISHED) ||
+        (sp->flags & (ENGINE_SP_TRANSFER | ENGINE_SP_NO_POSITION)) || !isfinite(sp->t_s))
+        return;
+    if (sp->track != o->played_track) { /* another trajectory: from its own times */
+        o->played_track = sp->track;
+        o->played_t_s = sp->t_s;
+    } else if (!(sp->t_s <= o->played_t_s)) {
+        o->played_t_s = sp->t_s;
+    }
 }
 
 /* Step 1 of core_open: an object per config entry, a new engine unless one is
@@ -463,6 +486,7 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
         o->clock_window_s = cfg->daemon.clock_window_s;
         o->clocked = obj_clock_initial(cfg, o->cfg);
         o->resume_t_s = NAN;
+        o->played_t_s = NAN;
         if (carry_source(prev, cfg, o->cfg))
             continue;
         resume_input(o, prev);
@@ -572,6 +596,8 @@ static void carry_objects(core_t *c, core_t *prev)
         o->grown_logged = q->grown_logged;
         o->reanchors_logged = q->reanchors_logged;
         o->reserve_logged = q->reserve_logged;
+        o->played_t_s = q->played_t_s;
+        o->played_track = q->played_track;
         o->delay_track = q->delay_track; /* its trajectory's start was told (a line still
                                           * pending, by the old core as it closes): not again */
         o->delay_logs = q->delay_logs;

@@ -133,8 +133,13 @@ typedef struct obj {
                                    * any source: a transport's own counters follow */
     int carried;                  /* 1 if engine (and counters) were carried over a reload */
     double resume_t_s;            /* a reload gave it a new engine, its input the same: the
-                                   * input goes on after this track time, where the old
-                                   * engine stood (core.c resume_input; NAN: from its start) */
+                                   * input goes on after this track time, as far as the old
+                                   * engine played (core.c resume_input; NAN: from its start) */
+    double played_t_s;            /* the furthest track time its output played on its
+                                   * trajectory (streaming on the curve, not a transfer; NAN:
+                                   * none), kept over reloads: where a changed reload's input
+                                   * resumes */
+    uint32_t played_track;        /* ... on this trajectory (another one starts it again) */
     int64_t born_ns;              /* engine time when its engine was created (0 at start;
                                      * kept when carried): replay due times count from here */
     uint64_t out_lost;            /* setpoint lines of this object that never reached one of

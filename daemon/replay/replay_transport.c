@@ -282,9 +282,9 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
         } else if (!o->carried && isfinite(o->resume_t_s)) {
             s->resume[i] = o->resume_t_s; /* a changed object: pre_tick resumes it */
             log_msg(LOG_NOTICE,
-                    "object '%s': its replay resumes after t = %.3f s, where its old engine "
-                    "stands (or, braking, comes to rest): a reload that changed its settings "
-                    "never plays its track again",
+                    "object '%s': its replay resumes after the row where its old engine comes "
+                    "to rest (it has played to t = %.3f s): a reload that changed its "
+                    "settings never plays its track again",
                     o->name, o->resume_t_s);
         }
     }
@@ -340,8 +340,8 @@ static int resume_wait(replay_transport_t *s, obj_t *o)
     double t = s->resume[o->index];
     if (o->retiring)
         return 1;
-    if (o->sp.cycle != 0 && !(o->sp.flags & ENGINE_SP_NO_POSITION) && isfinite(o->sp.t_s))
-        t = o->sp.t_s; /* where the old engine came to rest (handed over on the last tick) */
+    if (o->played_t_s > t)
+        t = o->played_t_s; /* as far as the old engine played, braking to rest */
     double kept = lc_buffered_newest_t(&o->lc);
     if (kept > t) /* a stop's latch kept the rows up to there (lc_inherit): not twice */
         t = kept;

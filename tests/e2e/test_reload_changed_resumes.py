@@ -115,7 +115,8 @@ class ReloadChangedResumes(unittest.TestCase):
             a_end = V * H * (N - 1) / R
             self.assertLessEqual(math.hypot(float(last["x_m"]) - R * math.cos(a_end),
                                             float(last["y_m"]) - R * math.sin(a_end)), 1e-6)
-            self.assertRegex(err, r"object 'a': its replay resumes after t = [\d.]+ s")
+            self.assertRegex(err, r"object 'a': its replay resumes after the row where its old "
+                                  r"engine comes to rest \(it has played to t = [\d.]+ s\)")
 
 
 class ReloadChangedWhileStopped(unittest.TestCase):
@@ -186,6 +187,76 @@ class ReloadChangedWhileStopped(unittest.TestCase):
             a_end = V * H * (N - 1) / R
             self.assertLessEqual(math.hypot(float(last["x_m"]) - R * math.cos(a_end),
                                             float(last["y_m"]) - R * math.sin(a_end)), 1e-6)
+
+
+class ReloadChangedEdges(unittest.TestCase):
+    def run_line(self, tmp, extra, reloads, gap_s, first_wait):
+        """A line along x at 5 m/s (10 Hz, 30 s) replayed at speed 4; after first_wait(rows)
+        holds, reloads changed reloads gap_s apart, each toggling method; returns the rows
+        and the log."""
+        with open(os.path.join(tmp, "line.csv"), "w") as f:
+            f.write("t,x,y\n")
+            for i in range(301):
+                f.write("%.1f,%.2f,0\n" % (0.1 * i, 0.5 * i))
+        conf = os.path.join(tmp, "t.conf")
+        text = ("[daemon]\nrate_hz = 100\nspeed = 4\nexit_when_done = yes\n"
+                "status_interval_s = 0\ncontrol_socket = %s/ctl\n"
+                "[object.a]\ninput = replay\nreplay.track = line.csv\noutput = csv\n"
+                "csv.path = a.csv\n%s" % (tmp, extra))
+        with open(conf, "w") as f:
+            f.write(text)
+        out = os.path.join(tmp, "a.csv")
+        p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=tmp, stdin=subprocess.DEVNULL,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        try:
+            deadline = time.monotonic() + WAIT_S
+            while True:
+                time.sleep(0.02)
+                self.assertLess(time.monotonic(), deadline, "never ready to reload")
+                try:
+                    if first_wait(rows_of(out)):
+                        break
+                except (OSError, StopIteration):
+                    continue
+            for k in range(reloads):
+                with open(conf, "w") as f:
+                    f.write(text + ("method = bspline\n" if k % 2 == 0 else ""))
+                p.send_signal(signal.SIGHUP)
+                time.sleep(gap_s)
+            _, err = p.communicate(timeout=WAIT_S)
+        finally:
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+        self.assertEqual(p.returncode, 0, err[-3000:])
+        return rows_of(out), err
+
+    def test_reloads_during_the_transfer_never_go_back(self):
+        """Changed reloads 1.1 s of track apart, each landing in the transfer of the one before: the
+        object never moves back along the line (it went back 8.8 m: the resume point was
+        taken from the transfer's own t_s, which trails the track), and the line is
+        played to its end."""
+        with tempfile.TemporaryDirectory() as tmp:
+            rows, err = self.run_line(
+                tmp, "", 3, 0.275,
+                lambda r: r and r[-1]["state"] == "streaming" and float(r[-1]["t_s"]) > 5.0)
+            xs = [float(r["x_m"]) for r in rows if not math.isnan(float(r["x_m"]))]
+            back = max((hi - x for hi, x in zip(
+                [max(xs[:i + 1]) for i in range(len(xs))], xs)), default=0.0)
+            self.assertLessEqual(back, 1e-6, "went back %.3f m along the line" % back)
+            self.assertLessEqual(abs(xs[-1] - 150.0), 1e-6)
+            self.assertNotIn("stepped back", err)
+
+    def test_waiting_object_keeps_its_first_row(self):
+        """A changed reload while the object still waits at its initial_position (it played
+        nothing): the replay starts from the track's first row again, none skipped (it
+        resumed 'after t = 0' and lost row 1: wp 300 of 301)."""
+        with tempfile.TemporaryDirectory() as tmp:
+            rows, err = self.run_line(tmp, "initial_position = -30,0,0\n", 1, 0.05,
+                                      lambda r: len(r) > 5)
+            m = re.search(r"; a [^;]*? t=[-\d.]+ s, wp (\d+) ok", err)
+            self.assertIsNotNone(m, err[-2000:])
+            self.assertEqual(int(m.group(1)), 301, m.group(0))
 
 
 if __name__ == "__main__":
