@@ -7,9 +7,10 @@
 /*
  * Sequence numbers are the sender's (0 = not numbered): a step forward of d
  * within MODBUS_SERVER_SEQ_WINDOW means d - 1 waypoints it sent never
- * reached us.  A number outside the window (a bogus 0xFFFFFFFF, a sender
- * that restarted its numbering, a repeat or an older one) is not a loss: it
- * is counted in seq_jumps and remembered; the numbering it starts is adopted
+ * reached us.  The last number again is a repeat (a client retrying after a
+ * reply it lost: the engine counts the duplicate), no jump.  A number outside
+ * the window (a bogus 0xFFFFFFFF, a sender that restarted its numbering, an
+ * older one) is not a loss: it is counted in seq_jumps and remembered; the numbering it starts is adopted
  * as soon as the next waypoint continues it, else the old one is kept.
  * Modular arithmetic, so a wrap from 0xFFFFFFFF to 1 is a step of 2.  A
  * number counted lost that comes late (writers racing, each one's waypoints
@@ -36,6 +37,8 @@ static void count_seq(modbus_server_t *s, unsigned k, uint32_t seq)
         return;
     }
     uint32_t d = seq - last, back = last - seq;
+    if (d == 0)
+        return; /* a repeat of the last one */
     if (back >= 1 && back < SEQ_MISSING_BITS && (s->missing[k] >> back) & 1u) {
         s->missing[k] &= ~(1ull << back); /* counted lost, came late after all */
         s->lost[k]--;

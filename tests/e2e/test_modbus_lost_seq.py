@@ -98,6 +98,31 @@ class LostSeq(mbsim.FedTrajdCase):
         finally:
             c.close()
 
+    def test_repeat_is_no_jump(self):
+        # Given seq 1..10, seq 5 written twice (a client retrying after a reply it
+        # lost), then the repeat is a duplicate (the engine's), neither lost nor
+        # a jump: seq_jumps stays 0 (it counted 1, as for a bogus number).
+        c = ModbusTcpClient("127.0.0.1", port=self.port, timeout=WAIT_S)
+        self.assertTrue(c.connect())
+        try:
+            deadline = time.monotonic() + WAIT_S
+            for seq in [1, 2, 3, 4, 5, 5, 6, 7, 8, 9, 10]:
+                rq = mbsim.write_retrying(c, obj_base(0) + M["MBMAP_H_WP"],
+                                          mbsim.wp_regs(seq, 0.1 * seq, 0.1 * seq, 0.0, 1.0),
+                                          deadline)
+                self.assertFalse(rq.isError(), "seq %d: %s" % (seq, rq))
+            rq = c.write_register(obj_base(0) + M["MBMAP_H_COMMAND"], M["MBMAP_CMD_FINISH"],
+                                  slave=1)
+            self.assertFalse(rq.isError(), rq)
+            while self.u32(c, M["MBMAP_O_LAST_SEQ"]) != 10:
+                self.assertLess(time.monotonic(), deadline, "last_seq never came")
+                time.sleep(0.01)
+            self.assertEqual(self.u32(c, M["MBMAP_O_LOST"]), 0)
+            self.assertEqual(self.u32(c, M["MBMAP_O_SEQ_JUMPS"]), 0)
+            self.assertEqual(self.u32(c, M["MBMAP_O_DUPLICATES"]), 1)
+        finally:
+            c.close()
+
     def test_refused_waypoint_is_not_lost(self):
         # Given seq 1..10 with seq 6 out of range (x = 2e7 m), seq 3 with x NaN and
         # seq 8 with t infinite (each exception 03, counted in mb_rejected), then
