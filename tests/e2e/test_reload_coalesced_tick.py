@@ -60,13 +60,13 @@ class ReloadCoalescedTick(unittest.TestCase):
                                  stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                                  stderr=subprocess.PIPE, text=True)
             try:
-                time.sleep(8)
+                time.sleep(4)
                 conf(tmp, False, 10)
                 p.send_signal(signal.SIGHUP)  # removes obj2: waits while it brakes
                 time.sleep(0.2)
                 conf(tmp, False, 12)
                 p.send_signal(signal.SIGHUP)  # coalesced: obj changed
-                time.sleep(4)
+                time.sleep(2.5)
                 p.send_signal(signal.SIGTERM)
                 _, err = p.communicate(timeout=60)
             finally:

@@ -6,8 +6,8 @@ the object streams, rate_hz is changed to 250 and trajd is sent SIGHUP. The old 
 braking runs on the period it was built for, so such a reload cannot keep the output
 continuous: it must be refused with a line naming rate_hz and the moving object, and the
 running configuration goes on. Judged from the rows: no row is held by the safety monitor
-(flag FAULT), every row is one period (10 ms) after the one before, and no row moves more than
-max_speed_m_s x T. Before: the reload was taken, the first row after it was refused by trajd's
+(flag FAULT), every row is one period (10 ms) after the one before (or flagged SKIPPED where the
+machine made trajd miss deadlines), and no row moves more than max_speed_m_s x the periods. Before: the reload was taken, the first row after it was refused by trajd's
 own monitor (977 m/s^2 against 70), the object froze, held until clear, and the run exited 75.
 Then, with the object at rest at its track's end, the same reload is taken (rows 4 ms apart).
 Every wait is bounded; trajd is stopped by pid.
@@ -27,6 +27,7 @@ import mbsim  # noqa: E402
 TRAJD = os.path.join(mbsim.BUILD, "bin", "trajd")
 WAIT_S = 60
 FAULT = 0x20  # ENGINE_SP_FAULT (lib/motion.h)
+SKIPPED = 0x04  # ENGINE_SP_SKIPPED: deadlines missed before this row (a loaded machine)
 VMAX = 8.0
 
 
@@ -80,10 +81,11 @@ class ReloadRate(unittest.TestCase):
                     self.assertFalse(int(a[13]) & FAULT, a)
                     if math.isnan(float(b[3])):
                         continue
-                    self.assertEqual(int(a[1]) - int(b[1]), 10_000_000, (b, a))
+                    k = (int(a[1]) - int(b[1])) // 10_000_000  # periods (missed: SKIPPED)
+                    self.assertTrue(k == 1 or (k > 1 and int(a[13]) & SKIPPED), (b, a))
                     self.assertLessEqual(math.hypot(float(a[3]) - float(b[3]),
                                                     float(a[4]) - float(b[4])),
-                                         VMAX * 0.01 + 1e-9, (b, a))
+                                         VMAX * 0.01 * k + 1e-9, (b, a))
                 # at rest: the same reload is taken
                 n = len(rows)
                 p.send_signal(signal.SIGHUP)

@@ -49,16 +49,16 @@ class SafetyToldAfterClear(unittest.TestCase):
             lines = mbsim.Lines(p.stderr)
             try:
                 self.assertIsNotNone(lines.wait_for("safety monitor", 30), "".join(lines.all))
-                time.sleep(2)
+                time.sleep(1)
                 conf(tmp, 40)
                 p.send_signal(signal.SIGHUP)
                 self.assertIsNotNone(lines.wait_for("reloaded:", 30), "".join(lines.all))
-                time.sleep(1)
+                time.sleep(0.5)
                 r = subprocess.run([os.path.join(BIN, "trajctl"), "-s", os.path.join(tmp, "ctl"),
                                     "clear", "obj"], capture_output=True, text=True, timeout=30)
                 self.assertEqual(r.returncode, 0, r.stderr)
                 self.assertIsNotNone(lines.wait_for("command clear", 30), "".join(lines.all))
-                time.sleep(2.5)  # the next counts told (once a second)
+                time.sleep(1.5)  # the next counts told (once a second)
             finally:
                 p.send_signal(signal.SIGTERM)
                 p.wait(30)

@@ -156,7 +156,7 @@ static void test_reload_keeps_the_running_engine(void **state)
 
     /* removed: brakes to rest along x, its speed never rising */
     assert_int_equal(reload_brake_removed(c, c4), 1);
-    assert_int_equal(o->stopping, 1);
+    assert_int_equal(o->stopping, OBJ_STOPPING_REMOVED);
     assert_int_equal(reload_removed_at_rest(c, c4), 0);
     double v = speed(o), y0 = o->sp.pos_m[1];
     for (int i = 0; i < 1000 && !reload_removed_at_rest(c, c4); i++) {
