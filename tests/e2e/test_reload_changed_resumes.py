@@ -47,24 +47,35 @@ def rows_of(path):
     return list(csv.DictReader(io.StringIO("".join(text)), fieldnames=header))
 
 
+def circle_setup(tmp, extra=""):
+    """The circle track (N waypoints) and a config replaying it at speed 8 into a.csv, with
+    the control socket tmp/ctl (extra: more keys of the object); its path and text."""
+    with open(os.path.join(tmp, "circle.csv"), "w") as f:
+        f.write("t,x,y\n")
+        for i in range(N):
+            a = V * H * i / R
+            f.write("%.1f,%.9f,%.9f\n" % (H * i, R * math.cos(a), R * math.sin(a)))
+    conf = os.path.join(tmp, "trajd.conf")
+    text = ("[daemon]\nrate_hz = 100\nspeed = 8\nexit_when_done = yes\n"
+            "status_interval_s = 0\ncontrol_socket = %s/ctl\n"
+            "[object.a]\ninput = replay\nreplay.track = circle.csv\n%s"
+            "max_speed_m_s = %g\noutput = csv\ncsv.path = a.csv\n" % (tmp, extra, VMAX))
+    with open(conf, "w") as f:
+        f.write(text)
+    return conf, text
+
+
+def start(tmp, conf):
+    return subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=tmp, stdin=subprocess.DEVNULL,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+
+
 class ReloadChangedResumes(unittest.TestCase):
     def test_changed_object_goes_on_along_its_track(self):
         with tempfile.TemporaryDirectory() as tmp:
-            with open(os.path.join(tmp, "circle.csv"), "w") as f:
-                f.write("t,x,y\n")
-                for i in range(N):
-                    a = V * H * i / R
-                    f.write("%.1f,%.9f,%.9f\n" % (H * i, R * math.cos(a), R * math.sin(a)))
-            conf = os.path.join(tmp, "trajd.conf")
-            text = ("[daemon]\nrate_hz = 100\nspeed = 8\nexit_when_done = yes\n"
-                    "status_interval_s = 0\ncontrol_socket = %s/ctl\n"
-                    "[object.a]\ninput = replay\nreplay.track = circle.csv\n"
-                    "max_speed_m_s = %g\noutput = csv\ncsv.path = a.csv\n" % (tmp, VMAX))
-            with open(conf, "w") as f:
-                f.write(text)
+            conf, text = circle_setup(tmp)
             out = os.path.join(tmp, "a.csv")
-            p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=tmp, stdin=subprocess.DEVNULL,
-                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            p = start(tmp, conf)
             try:
                 deadline = time.monotonic() + WAIT_S
                 while True:  # streaming 20 s into the track
@@ -126,22 +137,11 @@ class ReloadChangedWhileStopped(unittest.TestCase):
         replay began again at row 1 beside them: 'a clock stepped back', the object went
         back to the track's start)."""
         with tempfile.TemporaryDirectory() as tmp:
-            with open(os.path.join(tmp, "circle.csv"), "w") as f:
-                f.write("t,x,y\n")
-                for i in range(N):
-                    a = V * H * i / R
-                    f.write("%.1f,%.9f,%.9f\n" % (H * i, R * math.cos(a), R * math.sin(a)))
-            conf, ctl = os.path.join(tmp, "trajd.conf"), os.path.join(tmp, "ctl")
-            text = ("[daemon]\nrate_hz = 100\nspeed = 8\nexit_when_done = yes\n"
-                    "status_interval_s = 0\ncontrol_socket = %s\n"
-                    "[object.a]\ninput = replay\nreplay.track = circle.csv\nwritable = yes\n"
-                    "max_speed_m_s = %g\noutput = csv\ncsv.path = a.csv\n" % (ctl, VMAX))
-            with open(conf, "w") as f:
-                f.write(text)
+            conf, text = circle_setup(tmp, "writable = yes\n")
+            ctl = os.path.join(tmp, "ctl")
             out = os.path.join(tmp, "a.csv")
             trajctl = os.path.join(os.path.dirname(TRAJD), "trajctl")
-            p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=tmp, stdin=subprocess.DEVNULL,
-                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            p = start(tmp, conf)
             try:
                 deadline = time.monotonic() + WAIT_S
 
