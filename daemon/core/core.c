@@ -437,9 +437,9 @@ static obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o)
 }
 
 /* A changed object (a new engine) whose input stays the same goes on along it
- * from where its old engine stands (the replay, replay_transport.c: after
+ * after as far as its old engine played (the replay, replay_transport.c: after
  * that track time, on the old schedule), never from the input's start again:
- * o->resume_t_s, o->born_ns.  NAN where the old engine had no position. */
+ * o->resume_t_s, o->born_ns.  Left NAN where it played nothing. */
 static void resume_input(obj_t *o, core_t *prev)
 {
     obj_t *q = prev && !prev->stopping ? core_obj_find(prev, o->name) : NULL;

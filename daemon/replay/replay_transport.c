@@ -198,9 +198,10 @@ static int check(cfg_t *cfg, int *line, char *why, size_t wl)
 }
 
 typedef struct {
-    replay_t *r;            /* per object index (NULL if not replayed) */
-    double *resume;         /* per object index: a changed object's replay goes on after this
-                     * track time once its old engine rests (obj_t resume_t_s); NAN */
+    replay_t *r; /* per object index (NULL if not replayed) */
+    /* per object index: a changed object's replay goes on after this track
+     * time once its old engine rests (obj_t resume_t_s); NAN: none */
+    double *resume;
     unsigned char *resumed; /* ... and went on so: the rows before were its old engine's */
     unsigned n;
     core_t *c;
