@@ -262,16 +262,11 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
         return reject_wp(e, -rc, wp);
     /* room for this waypoint (and for the copies MULTIPLE adds) */
     if (input_buffered(e) + 1 + (e->mult ? 4 : 0) > e->cfg.capacity) {
-        int again = e->in.full_told && e->in.full_seq == wp->seq &&
-                    memcmp(&e->in.full_t, &wp->t_s, sizeof wp->t_s) == 0;
-        e->in.full_told = 1;
-        e->in.full_seq = wp->seq;
-        e->in.full_t = wp->t_s;
-        if (again)
+        if (engine_repeat_refused(&e->in.full, wp))
             return -ENGINE_EFULL; /* the same waypoint offered again: counted once */
         return reject(e, ENGINE_EFULL);
     }
-    e->in.full_told = 0;
+    engine_repeat_taken(&e->in.full);
     engine_silence_push(e, wp);  /* issue 26: its arrival (silence.h) */
     engine_lag_push(e, wp->t_s); /* ... and a sample of the sender's time (catchup.h) */
     rc = accept_offer(&e->in.policy, wp);

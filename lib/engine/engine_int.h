@@ -22,6 +22,7 @@
 #include "engine.h"
 #include "fdiff.h"
 #include "frag.h"
+#include "repeat.h"
 #include "lsq.h"
 #include "timescale.h"
 #include "transfer.h"
@@ -104,10 +105,8 @@ typedef struct {
     int have_prev; /* prev_t/prev_r hold the waypoint before last (same trajectory) */
     double prev_t; /* for the acceleration check */
     double prev_r[AX];
-    double gap_s;      /* gap before the trajectory being received (0: none) */
-    int full_told;     /* st.full counted the waypoint full_seq, full_t: offered again, */
-    uint32_t full_seq; /* it is not another refusal */
-    double full_t;
+    double gap_s;         /* gap before the trajectory being received (0: none) */
+    engine_repeat_t full; /* the waypoint st.full counted last (repeat.h) */
     accept_t policy;
     engine_rejection_t rej[ENGINE_REJECTIONS_KEPT];
     unsigned rej_head, rej_len;

@@ -333,12 +333,6 @@ lc_state_t lc_state(const lifecycle_t *lc)
 
 /* ---- the latch buffer ---------------------------------------------------- */
 
-/* a and b the same time (bit for bit, NaN alike) */
-static int same_t(double a, double b)
-{
-    return memcmp(&a, &b, sizeof a) == 0;
-}
-
 /* Kept for the resume; a full buffer refuses it as the engine's would
  * (-ENGINE_EFULL: flow control, the sender told, nothing taken and then
  * lost).  It dropped the oldest: 181 of 200 waypoints written to a stopped
@@ -346,14 +340,11 @@ static int same_t(double a, double b)
 static int buf_add(lifecycle_t *lc, const engine_waypoint_t *wp)
 {
     if (lc->len >= lc->cap) {
-        if (!lc->full_told || lc->full_seq != wp->seq || !same_t(lc->full_t, wp->t_s))
-            lc->n.refused_full++; /* offered again: the same refusal */
-        lc->full_told = 1;
-        lc->full_seq = wp->seq;
-        lc->full_t = wp->t_s;
+        if (!engine_repeat_refused(&lc->full, wp))
+            lc->n.refused_full++; /* (offered again: the same refusal) */
         return -ENGINE_EFULL;
     }
-    lc->full_told = 0;
+    engine_repeat_taken(&lc->full);
     lc->buf[(lc->head + lc->len) % lc->cap] = *wp;
     lc->len++;
     lc->n.buffered++;

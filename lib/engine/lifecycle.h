@@ -35,6 +35,7 @@
 #include <stdint.h>
 
 #include "engine.h"
+#include "repeat.h"
 #include "safety.h"
 
 /* States (LIFECYCLE.md has the diagram). */
@@ -180,9 +181,7 @@ typedef struct {
                                 far behind its data the object ran (relative objects) */
     engine_waypoint_t *buf; /* the latch buffer (ring) */
     unsigned cap, head, len;
-    int full_told;     /* refused_full counted the waypoint full_seq, full_t: */
-    uint32_t full_seq; /* the sender offering it again is not another refusal */
-    double full_t;
+    engine_repeat_t full; /* the waypoint refused_full counted last (repeat.h) */
     lc_counts_t n;
 } lifecycle_t;
 
