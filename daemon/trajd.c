@@ -17,7 +17,7 @@
  *                    the config is first read: its parse cancelled, exit 0
  * Exit status: 0; EX_USAGE, EX_CONFIG, EX_UNAVAILABLE (cannot start), EX_OSERR,
  * EX_SOFTWARE; CORE_EXIT_OUTPUT_LOST (74) if any setpoint line was lost by an
- * output; CORE_EXIT_EPIPE (141) when stdout's reader went away; CORE_EXIT_NO_INPUT
+ * output or a setpoint cycle not sent on the CAN bus; CORE_EXIT_EPIPE (141) when stdout's reader went away; CORE_EXIT_NO_INPUT
  * (65) if a replayed track or log_in had no usable waypoint; CORE_EXIT_HELD (75)
  * if an object ended held (safety fault, drive fault, lost heartbeat, or stopped
  * and latched by the per-axis limits: axis_lag_stops, axis_beyond).
@@ -876,20 +876,27 @@ static unsigned moving_objects(const core_t *c)
     return n;
 }
 
-/* Setpoint lines the outputs lost: said, with those lost after the exit
- * line apart (the exit line counted the lines lost before the outputs
- * drained; those still queued to a failing writer then were lost too); the
- * exit status. */
+/* Setpoint lines the outputs lost and setpoint cycles a bus did not take:
+ * said, with the lines lost after the exit line apart (the exit line counted
+ * the lines lost before the outputs drained; those still queued to a failing
+ * writer then were lost too); the exit status. */
 static int lost_said(const trajd_t *d)
 {
     char more[96] = "";
     if (d->stats.out_lost > d->lost_said)
         snprintf(more, sizeof more, " (%llu after the exit line: queued as the outputs drained)",
                  (unsigned long long)(d->stats.out_lost - d->lost_said));
-    log_msg(LOG_ERR, "%llu setpoint lines were lost by the outputs%s%s%s: exit status %d",
-            (unsigned long long)d->stats.out_lost, more,
-            d->stats.out_fault ? ", last write error: " : "",
-            d->stats.out_fault ? strerror(d->stats.out_errno) : "", CORE_EXIT_OUTPUT_LOST);
+    if (d->stats.out_lost)
+        log_msg(LOG_ERR, "%llu setpoint lines were lost by the outputs%s%s%s: exit status %d",
+                (unsigned long long)d->stats.out_lost, more,
+                d->stats.out_fault ? ", last write error: " : "",
+                d->stats.out_fault ? strerror(d->stats.out_errno) : "", CORE_EXIT_OUTPUT_LOST);
+    if (d->stats.out_cycles_lost)
+        log_msg(LOG_ERR,
+                "%llu setpoint cycles with a position were not sent on the CAN bus (late, its "
+                "transmit queue full, the interface down or a write error; each logged as it "
+                "came): exit status %d",
+                (unsigned long long)d->stats.out_cycles_lost, CORE_EXIT_OUTPUT_LOST);
     return CORE_EXIT_OUTPUT_LOST;
 }
 
@@ -938,7 +945,7 @@ int main(int argc, char **argv)
         rc = CORE_EXIT_EPIPE;
     } else if (d.stats.exit_code) {
         rc = d.stats.exit_code;
-    } else if (rc == 0 && d.stats.out_lost) {
+    } else if (rc == 0 && (d.stats.out_lost || d.stats.out_cycles_lost)) {
         rc = lost_said(&d);
     } else if (rc == 0 && faults) {
         log_msg(LOG_ERR,

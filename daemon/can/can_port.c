@@ -458,6 +458,7 @@ static int is_down(int rc)
 static void count_drop(can_port_obj_t *o, int rc)
 {
     o->flags_since |= CANPROTO_ST_TX_DROP;
+    o->st.dropped_pos += !(o->sp.flags & ENGINE_SP_NO_POSITION); /* motion missed */
     if (is_down(rc)) {
         o->st.dropped_down++;
         o->flags_since |= CANPROTO_ST_BUS_DOWN;
@@ -587,6 +588,7 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
             count_drop(o, rc);
         } else if (late && o->ids.own) {
             o->st.dropped_late++;
+            o->st.dropped_pos += !(o->sp.flags & ENGINE_SP_NO_POSITION);
             o->flags_since |= CANPROTO_ST_TX_DROP;
             event(o, CANPROTO_STERR_TX_DROPPED);
         } else {

@@ -112,6 +112,8 @@ typedef struct {
     uint64_t dropped_full;   /* cycles not (wholly) sent: ENOBUFS / EAGAIN */
     uint64_t dropped_down;   /* cycles not sent: interface down */
     uint64_t dropped_error;  /* cycles not sent: other write error (EINVAL: FD on a classic MTU) */
+    uint64_t dropped_pos;    /* of the four above, cycles whose setpoint carried a position
+                                (not the n/a of an object waiting): motion the drives missed */
     uint64_t tx_clamped;     /* setpoints with a value clamped to its field */
     uint64_t status_sent;
     uint64_t status_dropped; /* STATUS and STATUS2 frames the transport refused (queue full,

@@ -70,6 +70,7 @@ typedef struct {
     can_logfile_stats_t out_seen;   /* log_out counters already put in core stats */
     can_logfile_stats_t out_logged; /* log_out counters already warned about */
     int64_t out_log_ns;             /* when report_log_out last warned, 0: never */
+    uint64_t cycles_seen;           /* setpoint cycles not sent already put in core stats */
 } can_state_t;
 
 /* The kernel's receive-queue drops of the sockets a reload closed. */
@@ -513,14 +514,15 @@ static void close_(void *state, core_t *c)
             can_port_obj_stats(s->port, k, &os);
             log_msg(LOG_INFO,
                     "can: %s: setpoints sent %llu, dropped late %llu / queue full %llu / down %llu"
-                    " / error %llu; waypoints %llu accepted, %llu rejected, %llu full, %llu lost,"
+                    " / error %llu (%llu with a position); waypoints %llu accepted, %llu rejected, "
+                    "%llu full, %llu lost,"
                     " %llu duplicate frames, %llu out of order, %llu resynced, %llu malformed"
                     " frames;"
                     " %llu commands refused; STATUS frames sent %llu, not sent %llu",
                     s->objs[k]->name, (unsigned long long)os.setpoints_sent,
                     (unsigned long long)os.dropped_late, (unsigned long long)os.dropped_full,
                     (unsigned long long)os.dropped_down, (unsigned long long)os.dropped_error,
-                    (unsigned long long)os.waypoints_accepted,
+                    (unsigned long long)os.dropped_pos, (unsigned long long)os.waypoints_accepted,
                     (unsigned long long)os.waypoints_rejected,
                     (unsigned long long)os.waypoints_full, (unsigned long long)os.rx.lost,
                     (unsigned long long)os.rx.duplicates, (unsigned long long)os.rx.out_of_order,
@@ -736,7 +738,8 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     uint32_t rx_ids[CAN_SOCKET_MAX_FILTERS];
     unsigned nrx = 0;
     rc = set_objects(s, rx_ids, &nrx, why, wl);
-    keep_drop("can"); /* taken (or not the same drives) */
+    keep_drop("can");                                        /* taken (or not the same drives) */
+    s->cycles_seen = can_publish_cycles_lost(s->port, s->n); /* kept: counted before */
     if (rc < 0 || (rc = open_io(s, rx_ids, nrx, why, wl)) < 0)
         goto fail;
     double load = can_port_busload(s->port, c->cfg->daemon.rate_hz, cfg->waypoint_hz, cfg->bitrate,
@@ -893,6 +896,10 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
             can_port_reset_counters(s->port, k);
         }
     can_port_cycle(s->port, now_ns, c->late_ns);
+    uint64_t lost = can_publish_cycles_lost(s->port, s->n);
+    if (lost > s->cycles_seen) /* (less: a reset-counters command) */
+        c->stats->out_cycles_lost += lost - s->cycles_seen;
+    s->cycles_seen = lost;
     if (s->log) {
         can_logfile_flush(s->log);
         log_out_faults(s, 1);

@@ -307,6 +307,10 @@ typedef struct {
     uint64_t out_errors; /* failed writes (not EAGAIN) */
     int out_errno;       /* errno of the last one */
     int out_fault;       /* 1 once an output write failed */
+    /* setpoint cycles a field bus did not take (CAN: late, its transmit queue
+     * full, the interface down, a write error), summed over reloads: like a
+     * lost line, any makes trajd exit with CORE_EXIT_OUTPUT_LOST */
+    uint64_t out_cycles_lost;
     /* One clock (lib/engine/CLOCK.md): the sender's drift and the play-out
      * clock, kept across reloads. */
     playout_drift_t drift;
@@ -335,7 +339,7 @@ typedef struct {
                                      * reports for a filter ended by SIGPIPE) */
 
 /* The daemon core. Fields are read-only for transports except their own stats->tcount row,
- * stats->out_*, exit_code and bus (its publisher), and obj_t.out_lost/.out_fault/.drive.
+ * stats->out_* (out_cycles_lost: the bus's), exit_code and bus (its publisher), and obj_t.out_lost/.out_fault/.drive.
  * Transports' cycles run in transport_table order (path order: daemon/can before
  * daemon/modbus), so a later one reads what an earlier one published this tick. */
 typedef struct core {

@@ -58,6 +58,6 @@ cansend vcan0 20000100#0000000000000000; expect_state 1 "restarted"
 kill -0 $tp || fail "trajd died"
 kill -TERM $tp; wait $tp; rc=$?
 tp=
-[ $rc -eq 0 ] || fail "trajd exit code $rc"
+exit_agrees $rc "$out/canerr.err" || fail "trajd exit code $rc"
 grep -q "controller bus-off" "$out/canerr.err" || fail "bus-off not logged"
 echo "canerr: ok"

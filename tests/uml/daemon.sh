@@ -119,10 +119,14 @@ wait_grep "$out/trajd.err" "dropped by the kernel, trajd's receive queue full" 5
 kill -0 $tp || fail "trajd died after the flood"
 touch "$out/ok.rxdrop"
 
-# ---- stop: SIGTERM, trajd exits 0 -------------------------------------------
+# ---- stop: SIGTERM.  The cycles not sent above (down, removed, ENOBUFS) are
+# setpoints the drives never got: trajd exits 74 (EX_IOERR) and says how many
+# (trajd(8) EXIT STATUS), as for a lost output line
 kill -TERM $tp
 wait $tp; rc=$?
-[ $rc -eq 0 ] || fail "trajd exit code $rc"
+[ $rc -eq 74 ] || fail "trajd exit code $rc, not 74 after setpoint cycles not sent"
+grep -q "setpoint cycles with a position were not sent on the CAN bus.*exit status 74" "$out/trajd.err" ||
+    fail "the exit status not explained"
 tp=
 touch "$out/ok.stop"
 
@@ -146,7 +150,7 @@ CONF
 "$BUILD/bin/trajd" -f -c "$out/pace.conf" 2> "$out/pace.err" & tp=$!
 /usr/bin/python3 tests/uml/pacer.py "$out/track.csv" "$out" || fail "paced sender (see pacer.txt)"
 kill -TERM $tp; wait $tp; rc=$?
-[ $rc -eq 0 ] || fail "trajd (pace) exit code $rc"
+exit_agrees $rc "$out/pace.err" || fail "trajd (pace) exit code $rc"
 tp=
 touch "$out/ok.flow"
 
@@ -160,7 +164,7 @@ kill -0 $tp || fail "trajd exited without its interface"
 ip link add dev vcan1 type vcan && ip link set vcan1 up
 wait_grep "$out/cap6.log" " vcan1 6A0#" || fail "no setpoints once vcan1 appeared"
 kill -TERM $tp; wait $tp; rc=$?
-[ $rc -eq 0 ] || fail "trajd (late interface) exit code $rc"
+exit_agrees $rc "$out/late.err" || fail "trajd (late interface) exit code $rc"
 tp=
 kill $cp; wait $cp 2>/dev/null
 touch "$out/ok.late_iface"

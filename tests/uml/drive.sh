@@ -126,7 +126,7 @@ kill -0 $tp || fail "trajd died"
 # each end bounded: trajd brings its objects to rest in at most 5 s, the
 # simulator ends within 10 s of SIGTERM (faulthandler), candump at once
 kill -TERM $tp; wait_gone $tp trajd 1000; rc=$?
-[ $rc -eq 0 ] || fail "trajd exit code $rc"
+exit_agrees $rc "$out/drive.err" || fail "trajd exit code $rc"
 tp=; mark "trajd ended"
 kill -TERM $sp; wait_gone $sp simulator 1000 || fail "the simulator did not end"
 sp=; mark "simulator ended"

@@ -56,3 +56,18 @@ wait_gone() {
     done
     return 1
 }
+
+# exit_agrees RC ERRFILE: trajd's exit status agrees with its exit summary in
+# ERRFILE: 74 (EX_IOERR) when a "can: <object>: setpoints sent ..." line counts
+# a setpoint cycle with a position not sent (late, queue full, down, write
+# error: motion the drives missed), else 0 (trajd(8) EXIT STATUS).  A loaded
+# guest may run a cycle late; the status must say so when it did.
+exit_agrees() {
+    lost=$(sed -n 's/.*can: .*: setpoints sent .*(\([0-9]*\) with a position).*/\1/p' "$2" |
+           awk '{s += $1} END {print s + 0}')
+    want=0; [ "$lost" -gt 0 ] && want=74
+    [ "$1" -eq "$want" ] && return 0
+    echo "exit_agrees: trajd exit $1 with $lost setpoint cycles with a position not sent" \
+         "(wanted $want)" >&2
+    return 1
+}

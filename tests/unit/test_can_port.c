@@ -218,6 +218,7 @@ static void test_down_and_back(void **state)
     can_port_obj_stats_t st;
     can_port_obj_stats(port, 0, &st);
     assert_int_equal(st.dropped_down, 5);
+    assert_int_equal(st.dropped_pos, 5); /* each carried a position: trajd exits 74 */
     can_port_stats_t ps;
     can_port_stats(port, &ps);
     assert_int_equal(ps.down_cycles, 5);
@@ -288,6 +289,15 @@ static void test_cia402_no_position_and_late(void **state)
     can_port_obj_stats_t st;
     can_port_obj_stats(port, 0, &st);
     assert_int_equal(st.dropped_late, 1);
+    assert_int_equal(st.dropped_pos, 1);
+    /* a cycle not sent while the object has no position (the n/a marker)
+     * lost no motion: counted as not sent, not as motion missed */
+    sp.flags = ENGINE_SP_NO_POSITION;
+    can_port_setpoint(port, 0, &sp);
+    can_port_cycle(port, 3000000, 2000000);
+    can_port_obj_stats(port, 0, &st);
+    assert_int_equal(st.dropped_late, 2);
+    assert_int_equal(st.dropped_pos, 1);
 }
 
 static void queue_tpdo(uint32_t id, uint16_t sw, int32_t pos)
