@@ -34,7 +34,9 @@
  * at its speed bound), the start's wait plus that loss is D, and the part
  * stated as B is that loss (delay_run.c delay_started): 0.833 s on the
  * 10 Hz track of tests/e2e/test_delay.py, where B is 0.646 s.  With delay_s set (engine_config_t), D is delay_s: it must be at
- * least what the settings need (engine_delay_check).
+ * least what the settings need (engine_delay_check).  On the caller's clock
+ * (engine_set_clock) D is the clock's, and a start's ramp is a lag the clock
+ * wins back (CLOCK.md "Behind"), not a longer D.
  *
  * Pure: no clock, no I/O.
  */

@@ -36,7 +36,10 @@ static void delay_at(const engine_t *e, double h, engine_delay_t *d)
         d->slack_n = engine_cfg_slack_min(&e->cfg) + e->slack_learn;
     d->slack_s = d->slack_n * d->interval_s;
     d->need_s = d->lookahead_s + d->slack_s + d->stop_s;
-    d->delay_s = e->cfg.delay_s > d->need_s ? e->cfg.delay_s : d->need_s;
+    /* on the caller's clock (CLOCK.md) the output stands at its D, the
+     * daemon's delay_s: that is this object's D, its need the parts */
+    double fixed = e->clk.on ? (double)e->clk.delay_ns * 1e-9 : e->cfg.delay_s;
+    d->delay_s = fixed > d->need_s ? fixed : d->need_s;
 }
 
 /* D now: the settings with the input's interval and top speed as measured
@@ -149,6 +152,10 @@ static void delay_started(const engine_t *e, engine_delay_t *d, double *lag, dou
     *lag = isfinite(known) ? known : ramp_lag(e, 1);
     /* what the ramp loses if it started now anyway (held back: more) */
     double loss = isfinite(*lag) ? *lag : ramp_lag(e, 0);
+    /* on a clock the start's ramp is a lag the clock wins back (CLOCK.md
+     * "Behind"), not a longer D: age_s returns to the clock's D */
+    if (e->clk.on)
+        return;
     if (counted || waited + loss > d->delay_s + 0.5 * d->interval_s) {
         /* the wait the lookahead needs plus the ramp exceed D (by more than
          * the half interval a start is rounded to): D is that */

@@ -189,6 +189,16 @@ class OneClock(unittest.TestCase):
                           r"data age (-?[\d.]+) s" % name, ex[0])
             self.assertIsNotNone(m, ex[0])
             self.assertAlmostEqual(float(m.group(1)), float(last[16]), delta=0.0005 + 1e-9)
+        # each object states the clock's D as its D: the start's ramp is a
+        # lag the clock wins back (the data age falls to D), not a longer D
+        # (stated as the wait plus the ramp, with a "stop reserve" of 8.8 s,
+        # while trajctl, Modbus and the data age said D)
+        for name in ("a", "b"):
+            st = [l for l in self.lines.all if "object '%s': trajectory 1 streams" % name in l]
+            self.assertEqual(len(st), 1, "".join(self.lines.all))
+            m = re.search(r"play-out delay D ([\d.]+) s \(delay_s; the settings need ", st[0])
+            self.assertIsNotNone(m, st[0])
+            self.assertAlmostEqual(float(m.group(1)), D, delta=5e-4, msg=st[0])
         self.check_status2_clock(drift_ppm)
 
     def missed(self, s, tid):
