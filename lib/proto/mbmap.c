@@ -683,7 +683,9 @@ static const mbmap_field_t fields[] = {
       "1 if played out on the daemon's clock (epoch time), 0 relative"),
     F(IO, MBMAP_O_HEALTH, 1, MBMAP_T_U16, "health", "",
       "0 well; bit 0 safety hold, 1 drive fault (fault, quick stop, heartbeat lost), 2 output "
-      "fault, 3 underrun, 4 stale input (on the clock, age > D + 1 s), 5 clock not synchronised "
+      "fault, 3 underrun (the output slows for want of waypoints; when an input simply stops it "
+      "shows until the silence is judged its end, lib/engine/silence.h, and is then not counted "
+      "in underruns), 4 stale input (on the clock, age > D + 1 s), 5 clock not synchronised "
       "(on the clock), 6 feed hold until clear"),
     F(IO, MBMAP_O_LAT, 4, MBMAP_T_F64, "lat", "deg",
       "latitude of the setpoint (WGS84), for an object whose track is geographic: its "
