@@ -423,8 +423,41 @@ static int same_input(const obj_t *q, const cfg_obj_t *o)
                             : !(in->obj_cfg_size && memcmp(a, b, in->obj_cfg_size) != 0);
 }
 
-/* The object of prev that o (in the new config) may take over, or NULL. */
-static obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o)
+/* 1 if the safety bounds of o (the new config) would refuse q's motion: its
+ * last setpoint carried one period on (speed, acceleration, per-axis, box),
+ * judged with its history.  Such an object is not carried over: it brakes to
+ * rest under the bounds it was planned for (retire_moving) and a new engine
+ * goes on from there under the new ones.  Carried, the monitor held it in one
+ * tick (a reload to safety_max_speed_m_s 8 at 9.8 m/s: a step to rest, exit
+ * 75).  why (NULL: not said) gets the bound. */
+static int bounds_refuse(const obj_t *q, const cfg_obj_t *o, int64_t period_ns, char *why,
+                         size_t len)
+{
+    const engine_setpoint_t *p = &q->sp;
+    if (p->cycle == 0 || (p->flags & (ENGINE_SP_HOLD | ENGINE_SP_NO_POSITION)) ||
+        safety_fault(&q->safety))
+        return 0;
+    safety_t s = q->safety;
+    safety_limits_t lim;
+    obj_safety_limits(o, &lim);
+    safety_set_limits(&s, &lim);
+    engine_setpoint_t sp = *p;
+    double T = (double)period_ns * 1e-9;
+    for (int k = 0; k < ENGINE_AXES; k++) {
+        sp.pos_m[k] += p->vel_m_s[k] * T + 0.5 * p->acc_m_s2[k] * T * T;
+        sp.vel_m_s[k] += p->acc_m_s2[k] * T;
+    }
+    sp.now_ns += period_ns;
+    int f = safety_check(&s, &sp);
+    if (f != SAFETY_OK && why)
+        snprintf(why, len, "%s (%.6g, bound %.6g)", safety_strerror(f), s.last_value, s.last_limit);
+    return f != SAFETY_OK;
+}
+
+/* The object of prev that o (in the new config) may take over, or NULL; why
+ * (NULL: not said) gets the reason where only its new safety bounds refuse. */
+static obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o, char *why,
+                           size_t len)
 {
     if (!prev || prev->stopping)
         return NULL;
@@ -433,7 +466,9 @@ static obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o)
         return NULL;
     if (q->clocked == 1 && obj_clock_initial(cfg, o) == 0)
         return NULL; /* an engine on the clock cannot leave it: a new one */
-    return same_input(q, o) ? q : NULL;
+    if (!same_input(q, o) || bounds_refuse(q, o, prev->period_ns, why, len))
+        return NULL;
+    return q;
 }
 
 /* A changed object (a new engine) whose input stays the same goes on along it
@@ -487,7 +522,7 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
         o->clocked = obj_clock_initial(cfg, o->cfg);
         o->resume_t_s = NAN;
         o->played_t_s = NAN;
-        if (carry_source(prev, cfg, o->cfg))
+        if (carry_source(prev, cfg, o->cfg, NULL, 0))
             continue;
         resume_input(o, prev);
         o->engine = engine_new(&cfg->obj[i].engine, &err);
@@ -562,8 +597,15 @@ static void retire_moving(obj_t *o, core_t *prev)
 static void carry_objects(core_t *c, core_t *prev)
 {
     for (unsigned i = 0; i < c->nobj; i++) {
-        obj_t *o = &c->obj[i], *q = carry_source(prev, c->cfg, o->cfg);
+        char why[160] = "";
+        obj_t *o = &c->obj[i], *q = carry_source(prev, c->cfg, o->cfg, why, sizeof why);
         if (!q) {
+            if (why[0])
+                log_msg(LOG_NOTICE,
+                        "object '%s': its new safety bounds refuse its motion: %s: it brakes to "
+                        "rest along its path under the bounds it was planned for, and goes on "
+                        "from there under the new ones",
+                        o->name, why);
             retire_moving(o, prev);
             continue;
         }

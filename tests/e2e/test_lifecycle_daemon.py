@@ -358,6 +358,29 @@ class Stall(unittest.TestCase):
                                      wait_rows=60)
         self.assert_follows(r, 1.1 * 5.0 + 0.8 + 0.5)
 
+    def test_tighter_safety_bound_alone_brakes(self):
+        """A reload that only lowers safety_max_speed_m_s below the moving object's
+        speed (4 m/s; the default bound 10 -> 2), its engine and input unchanged (an
+        object carried over): it brakes to rest along its path, judged by the bounds
+        it was planned for, says why, and goes on from there under the new ones.  No
+        row is held, none steps.  Before, the carried object was judged by the new
+        bound at once: held by the monitor on the next row, 4 m/s to 0 in one tick,
+        until clear (exit 75)."""
+        p, conf, base, rows, log, reloaded = self.moving_circle()
+        try:
+            n0 = len(rows.rows)
+            with open(conf, "w") as f:
+                f.write(base + "safety_max_speed_m_s = 2\n")
+            p.send_signal(signal.SIGHUP)
+            self.assertTrue(reloaded.wait(WAIT_S), "no reload: " + "".join(log[-3:]))
+            r = rows.wait(len(rows.rows) + 60)[n0 - 5:]
+        finally:
+            p.send_signal(signal.SIGTERM)
+            p.wait(WAIT_S)
+        self.assert_follows(r, 1.1 * 5.0 + 0.8 + 0.5)
+        self.assertTrue(any("its new safety bounds refuse its motion: speed" in l for l in log),
+                        "".join(log))
+
     def test_stall_while_a_reload_brakes(self):
         """A reload that changes the moving object keeps its old engine braking to
         rest along its path (daemon/REFERENCE.md); trajd frozen for 0.3 s meanwhile
