@@ -159,9 +159,13 @@ static void log_command(obj_t *o, lc_event_t ev, unsigned arg, const char *peer,
         o->cmd_buf_told = b;
         o->cmd_drop_told = d;
     }
+    /* while a reload's old engine brakes, the state is the new engine's: said */
+    const char *retiring = o->retiring ? " (the new engine's, which starts where the "
+                                         "old one, still braking for a reload, rests)"
+                                       : "";
     log_at(__FILE__, __LINE__, __func__, o->name, peer ? peer : "unknown", LOG_NOTICE,
-           "object '%s': command %s%s from %s in state %s: %s%s -> %s%s", o->name,
-           lc_event_name(ev), val, peer ? peer : "an unknown peer", lc_state_name(from),
+           "object '%s': command %s%s from %s in state %s%s: %s%s -> %s%s", o->name,
+           lc_event_name(ev), val, peer ? peer : "an unknown peer", lc_state_name(from), retiring,
            rc < 0 ? "refused" : lc_action_name((lc_action_t)lc_table[from][ev].action),
            rc >= 0 && o->lc.clear_pending ? " (once braked to rest: a drive hold)" : "",
            lc_state_name(lc_state(&o->lc)), more);

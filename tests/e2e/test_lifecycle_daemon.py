@@ -381,6 +381,34 @@ class Stall(unittest.TestCase):
         self.assertTrue(any("its new safety bounds refuse its motion: speed" in l for l in log),
                         "".join(log))
 
+    def test_command_while_a_reload_brakes_says_so(self):
+        """A stop sent while a reload's old engine still brakes the moving object is
+        taken by the new engine (which starts where the old one rests, stopped) and
+        its log line says so: the state it names is the new engine's.  Before, it
+        read "in state waiting: stop -> stopped" while the object still moved."""
+        def stop(p):
+            r = subprocess.run([os.path.join(os.path.dirname(TRAJD), "trajctl"), "-s",
+                                os.path.join(self.tmp, "ctl.sock"), "stop", "boat"],
+                               capture_output=True, text=True, timeout=WAIT_S)
+            self.assertEqual(r.returncode, 0, r.stderr)
+        p, conf, base, rows, log, reloaded = self.moving_circle("writable = yes\n")
+        try:
+            n0 = len(rows.rows)
+            with open(conf, "w") as f:
+                f.write(base.replace("max_speed_m_s = %g\n" % MAX_SPEED, "max_speed_m_s = 4.5\n"))
+            p.send_signal(signal.SIGHUP)
+            self.assertTrue(reloaded.wait(WAIT_S), "no reload: " + "".join(log[-3:]))
+            stop(p)
+            r = rows.wait(len(rows.rows) + 60)[n0 - 5:]
+        finally:
+            p.send_signal(signal.SIGTERM)
+            p.wait(WAIT_S)
+        self.assert_follows(r, 1.1 * 5.0 + 0.8 + 0.5)
+        line = [l for l in log if "command stop from" in l]
+        self.assertEqual(len(line), 1, "".join(log))
+        self.assertIn("(the new engine's, which starts where the old one, still braking for a "
+                      "reload, rests): stop -> stopped", line[0])
+
     def test_stall_while_a_reload_brakes(self):
         """A reload that changes the moving object keeps its old engine braking to
         rest along its path (daemon/REFERENCE.md); trajd frozen for 0.3 s meanwhile
