@@ -455,10 +455,18 @@ static int is_down(int rc)
     return rc == -ENETDOWN || rc == -ENODEV || rc == -ENXIO || rc == -ENETUNREACH;
 }
 
-static void count_drop(can_port_obj_t *o, int rc)
+/* A cycle of o not sent whose setpoint carried a position: motion missed. */
+static void count_missed(can_port_t *p, can_port_obj_t *o)
+{
+    unsigned pos = !(o->sp.flags & ENGINE_SP_NO_POSITION);
+    o->st.dropped_pos += pos;
+    p->st.dropped_pos += pos;
+}
+
+static void count_drop(can_port_t *p, can_port_obj_t *o, int rc)
 {
     o->flags_since |= CANPROTO_ST_TX_DROP;
-    o->st.dropped_pos += !(o->sp.flags & ENGINE_SP_NO_POSITION); /* motion missed */
+    count_missed(p, o);
     if (is_down(rc)) {
         o->st.dropped_down++;
         o->flags_since |= CANPROTO_ST_BUS_DOWN;
@@ -553,7 +561,7 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
         p->st.down_cycles++;
         for (unsigned i = 0; i < p->nobj; i++)
             if (p->obj[i].set && p->obj[i].have_sp)
-                count_drop(&p->obj[i], -ENETDOWN);
+                count_drop(p, &p->obj[i], -ENETDOWN);
         goto out;
     }
     /* A late cycle still sends its SYNC and its CiA 402 targets (a drive
@@ -585,10 +593,10 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
             continue;
         int rc = send_setpoint(p, o, !late);
         if (rc < 0) {
-            count_drop(o, rc);
+            count_drop(p, o, rc);
         } else if (late && o->ids.own) {
             o->st.dropped_late++;
-            o->st.dropped_pos += !(o->sp.flags & ENGINE_SP_NO_POSITION);
+            count_missed(p, o);
             o->flags_since |= CANPROTO_ST_TX_DROP;
             event(o, CANPROTO_STERR_TX_DROPPED);
         } else {

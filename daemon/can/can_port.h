@@ -151,6 +151,8 @@ typedef struct {
     uint64_t sync_dropped; /* SYNC frames the transport refused (queue full, down) */
     uint64_t cycles;
     uint64_t down_cycles; /* cycles during which the transport was down */
+    uint64_t dropped_pos; /* the objects' dropped_pos summed: cycles with a position not
+                             sent since the port opened (a reset-counters command leaves it) */
     uint64_t reopens;
 } can_port_stats_t;
 

@@ -56,14 +56,3 @@ void can_publish(core_t *c, const can_port_t *port, const int *port_index, unsig
         if (port_index[i] >= 0)
             publish_drive(port, (unsigned)port_index[i], &c->obj[i].drive, &c->obj[i].rx);
 }
-
-uint64_t can_publish_cycles_lost(const can_port_t *port, unsigned n)
-{
-    uint64_t sum = 0;
-    for (unsigned k = 0; k < n; k++) {
-        can_port_obj_stats_t st;
-        can_port_obj_stats(port, k, &st);
-        sum += st.dropped_pos;
-    }
-    return sum;
-}

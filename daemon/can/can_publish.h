@@ -22,10 +22,4 @@
 void can_publish(core_t *c, const can_port_t *port, const int *port_index, unsigned bus_state,
                  uint64_t rx_dropped, uint32_t load_permille, const canerr_bus_t *err);
 
-/* The setpoint cycles with a position that port's n objects did not send
- * (late, queue full, down, write error: dropped_pos), as its counters stand (kept over reloads, zeroed by a
- * reset-counters command): the transport adds what it grows by to
- * stats_t.out_cycles_lost. */
-uint64_t can_publish_cycles_lost(const can_port_t *port, unsigned n);
-
 #endif

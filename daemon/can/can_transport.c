@@ -70,7 +70,7 @@ typedef struct {
     can_logfile_stats_t out_seen;   /* log_out counters already put in core stats */
     can_logfile_stats_t out_logged; /* log_out counters already warned about */
     int64_t out_log_ns;             /* when report_log_out last warned, 0: never */
-    uint64_t cycles_seen;           /* setpoint cycles not sent already put in core stats */
+    uint64_t cycles_seen;           /* the port's dropped_pos already put in core stats */
 } can_state_t;
 
 /* The kernel's receive-queue drops of the sockets a reload closed. */
@@ -738,8 +738,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     uint32_t rx_ids[CAN_SOCKET_MAX_FILTERS];
     unsigned nrx = 0;
     rc = set_objects(s, rx_ids, &nrx, why, wl);
-    keep_drop("can");                                        /* taken (or not the same drives) */
-    s->cycles_seen = can_publish_cycles_lost(s->port, s->n); /* kept: counted before */
+    keep_drop("can"); /* taken (or not the same drives) */
     if (rc < 0 || (rc = open_io(s, rx_ids, nrx, why, wl)) < 0)
         goto fail;
     double load = can_port_busload(s->port, c->cfg->daemon.rate_hz, cfg->waypoint_hz, cfg->bitrate,
@@ -896,10 +895,10 @@ static void cycle(void *state, core_t *c, int64_t now_ns)
             can_port_reset_counters(s->port, k);
         }
     can_port_cycle(s->port, now_ns, c->late_ns);
-    uint64_t lost = can_publish_cycles_lost(s->port, s->n);
-    if (lost > s->cycles_seen) /* (less: a reset-counters command) */
-        c->stats->out_cycles_lost += lost - s->cycles_seen;
-    s->cycles_seen = lost;
+    can_port_stats_t ps; /* motion the drives missed: the exit status's (core.h) */
+    can_port_stats(s->port, &ps);
+    c->stats->out_cycles_lost += ps.dropped_pos - s->cycles_seen;
+    s->cycles_seen = ps.dropped_pos;
     if (s->log) {
         can_logfile_flush(s->log);
         log_out_faults(s, 1);

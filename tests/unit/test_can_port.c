@@ -223,6 +223,10 @@ static void test_down_and_back(void **state)
     can_port_stats(port, &ps);
     assert_int_equal(ps.down_cycles, 5);
     assert_int_equal(ps.reopens, 1);
+    assert_int_equal(ps.dropped_pos, 5); /* the port's sum, for the exit status */
+    can_port_reset_counters(port, 0);    /* an operator's reset leaves the port's sum */
+    can_port_stats(port, &ps);
+    assert_int_equal(ps.dropped_pos, 5);
     /* the status right after recovery says: bus was down, setpoints dropped */
     canproto_status_t s;
     assert_int_equal(io.out[io.nout - 1].id, 0x6C0);
