@@ -83,14 +83,14 @@ void engine_lag_note(engine_t *e, int64_t now_ns)
 
 /* The lag beyond D now (catchup.h), with the D stated in *d; 0 (and *d
  * unread) when none is told: no sample of the trajectory played, stamps
- * ahead of time, its input closed, or a start not governed by D
- * (start_slack set, delay_s not) or D not measured. */
-static double lag_now(const engine_t *e, engine_delay_t *d)
+ * ahead of time, a start not governed by D (start_slack set, delay_s not)
+ * or D not measured; and, open set, the trajectory's input closed (what is
+ * steered: a closed trajectory's tail plays out as it was stamped, the
+ * sender's time running on through the silence; its lag is told, lag_s). */
+static double lag_of(const engine_t *e, engine_delay_t *d, int open)
 {
-    /* only while the sender goes on: a closed trajectory's tail plays out
-     * as it was stamped (the sender's time runs on through the silence) */
     if (!e->lag.have || e->lag.ahead || e->lag.traj != e->out.traj || !e->out.have_now ||
-        !e->in.open || !(e->slack_auto || e->cfg.delay_s > 0) || !e->delay.noted)
+        (open && !e->in.open) || !(e->slack_auto || e->cfg.delay_s > 0) || !e->delay.noted)
         return 0.0;
     engine_delay(e, d);
     if (!(d->interval_s > 0))
@@ -102,6 +102,12 @@ static double lag_now(const engine_t *e, engine_delay_t *d)
      * the rate decision kept (plain_window, engine_tick.c) */
     double D = d->delay_s;
     return (now + offset_at(e, e->lag.seen_ns) - D) - e->out.t;
+}
+
+/* The lag steered: only while the input is open. */
+static double lag_now(const engine_t *e, engine_delay_t *d)
+{
+    return lag_of(e, d, 1);
 }
 
 double engine_lag_trailing(const engine_t *e)
@@ -144,8 +150,11 @@ double engine_lag_target(engine_t *e, double target, double R, double A, double 
         return target;
     }
     engine_delay_t d;
-    double lag = lag_now(e, &d), T = e->period_s;
-    e->st.lag_s = lag;
+    double T = e->period_s, told = lag_of(e, &d, 0);
+    /* told whether steered or not: a closed trajectory played behind its D
+     * (its input came while a long transfer crossed a gap) said lag 0 */
+    e->st.lag_s = told;
+    double lag = e->in.open ? told : 0.0;
     if (!(lag < 0.0 || lag > 0.0)) {
         e->lag.steer = 0; /* none told (lag_now): d unread */
         return target;

@@ -433,6 +433,23 @@ class TestLagWonBack(unittest.TestCase):
             self.assertGreater(ends[k], D - H)
         self.assertLessEqual(max(starts) - min(starts), H)
 
+    def test_lag_of_a_closed_trajectory_told(self):
+        """gpxpy_cerknicko-jezero.csv: a trajectory whose whole input came while a long
+        transfer crossed the gap before it is closed when the output reaches it; it is
+        played as stamped (not steered: catchup.h) and the lag beyond D it stands at is
+        told.  The summary's lag_s is the last one's: (now - t_s) - D on its last
+        streaming row, within a few ticks.  Before, lag_s read 0 (and trajd's line "lags
+        won back (now +0.000 s)") with the last fix played 86 s beyond the D stated."""
+        data = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "data")
+        p = replay(os.path.join(data, "gpxpy_cerknicko-jezero.csv"))
+        self.assertEqual(p.returncode, 0, p.stderr)
+        s = replay_summary.parse(p.stderr)
+        rows = [r for r in csv.DictReader(io.StringIO(p.stdout))
+                if r["state"] == "streaming" and not int(r["flags"]) & (8 | 16)]
+        beyond = int(rows[-1]["now_ns"]) * 1e-9 - float(rows[-1]["t_s"]) - s["delay_s"]
+        self.assertGreater(beyond, 10.0)
+        self.assertAlmostEqual(s["lag_s"], beyond, delta=0.05)
+
 
 
 class TestDaemonStatesD(unittest.TestCase):
