@@ -673,6 +673,17 @@ static int check_obj(parse_t *p, unsigned i)
             return -1;
         }
     o->engine.period_ns = c->daemon.period_ns;
+    /* the monitor's speed bound, where one is configured (safety_max_speed_m_s,
+     * or safety_max_step_m a period: a speed too), kept by the engine along
+     * the path (engine.h cap_speed_m_s): it slows there rather than be held in
+     * one tick (derived, the bound is twice the speed limit, above the
+     * engine's own cap) */
+    double vb = o->safety_max_speed_m_s > 0 ? o->safety_max_speed_m_s : 0.0;
+    if (o->safety_max_step_m > 0) {
+        double vs = o->safety_max_step_m / ((double)c->daemon.period_ns * 1e-9);
+        vb = vb > 0 && vb < vs ? vb : vs;
+    }
+    o->engine.cap_speed_m_s = CFG_SAFETY_SPEED_SHARE * vb;
     for (size_t k = 0; k < engine_settings_count; k++) { /* set, and no effect: said */
         const char *u = engine_setting_unused(&engine_settings[k], &o->engine);
         if (u)

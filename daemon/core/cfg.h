@@ -34,6 +34,10 @@
 #include "engine.h"
 #include "geo.h"
 
+/* The share of a configured safety_max_speed_m_s the engine keeps its output
+ * within (engine_config_t cap_speed_m_s): the monitor judges finite differences
+ * of the setpoints sent, the engine the curve's speed bound per segment. */
+#define CFG_SAFETY_SPEED_SHARE 0.95
 #define CFG_OBJECTS_MAX 1024             /* objects per daemon (make bench: bench_scale.sh) */
 #define CFG_NAME_MAX 32                  /* object name, with its NUL ([A-Za-z0-9_-]) */
 #define CFG_OUTPUTS_MAX 4                /* outputs per object */
@@ -130,6 +134,9 @@ typedef struct {
      * safety_max_speed_m_s, safety_max_accel_m_s2: < 0 = derived from the
      * engine's limits (obj_safety_limits in core.c), 0 = not checked. */
     double safety_max_step_m, safety_max_speed_m_s, safety_max_accel_m_s2;
+    /* (a configured safety_max_speed_m_s, or safety_max_step_m a period: the
+     * engine keeps its output within CFG_SAFETY_SPEED_SHARE of it,
+     * engine.cap_speed_m_s) */
     /* initial_position = x,y,z: where the object stands at start (the output
      * holds there and reaches the first trajectory by a transfer) */
     int has_initial_position;

@@ -450,7 +450,8 @@ static int bounds_refuse(const obj_t *q, const cfg_obj_t *o, int64_t period_ns, 
     sp.now_ns += period_ns;
     int f = safety_check(&s, &sp);
     if (f != SAFETY_OK && why)
-        snprintf(why, len, "%s (%.6g, bound %.6g)", safety_strerror(f), s.last_value, s.last_limit);
+        snprintf(why, len, "its new safety bounds refuse its motion: %s (%.6g, bound %.6g)",
+                 safety_strerror(f), s.last_value, s.last_limit);
     return f != SAFETY_OK;
 }
 
@@ -468,6 +469,15 @@ static obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o, c
         return NULL; /* an engine on the clock cannot leave it: a new one */
     if (!same_input(q, o) || bounds_refuse(q, o, prev->period_ns, why, len))
         return NULL;
+    double cap0 = q->cfg->engine.cap_speed_m_s, cap1 = o->engine.cap_speed_m_s;
+    if (cap0 < cap1 || cap0 > cap1) { /* its engine keeps the old one */
+        if (why && !(q->sp.flags & (ENGINE_SP_HOLD | ENGINE_SP_NO_POSITION)))
+            snprintf(why, len,
+                     "its safety_max_speed_m_s changed, which its engine keeps (%g -> %g m/s "
+                     "of output speed, 0: none)",
+                     cap0, cap1);
+        return NULL;
+    }
     return q;
 }
 
@@ -602,9 +612,8 @@ static void carry_objects(core_t *c, core_t *prev)
         if (!q) {
             if (why[0])
                 log_msg(LOG_NOTICE,
-                        "object '%s': its new safety bounds refuse its motion: %s: it brakes to "
-                        "rest along its path under the bounds it was planned for, and goes on "
-                        "from there under the new ones",
+                        "object '%s': %s: it brakes to rest along its path under the bounds it "
+                        "was planned for, and goes on from there under the new ones",
                         o->name, why);
             retire_moving(o, prev);
             continue;

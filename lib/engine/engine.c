@@ -100,6 +100,12 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
     e->xfer.cfg.accel_m_s2 = cfg->transfer_accel_m_s2;
     e->xfer.cfg.max_s = cfg->max_gap_s;
     e->xfer.cfg.vmax_m_s = engine_config_max_speed(cfg);
+    if (cfg->cap_speed_m_s > 0) { /* the caller's cap: transfers keep within it too */
+        if (!(e->xfer.cfg.vmax_m_s > 0) || e->xfer.cfg.vmax_m_s > cfg->cap_speed_m_s)
+            e->xfer.cfg.vmax_m_s = cfg->cap_speed_m_s;
+        if (e->xfer.cfg.speed_m_s > cfg->cap_speed_m_s)
+            e->xfer.cfg.speed_m_s = cfg->cap_speed_m_s;
+    }
     e->xfer.cfg.period_s = e->period_s;
     transfer_motion_reset(&e->xfer.motion);
     /* nodes from the oldest unbuilt segment (lags the newest by the lookahead

@@ -358,6 +358,13 @@ typedef struct {
                          stops on its path and holds, latched until start or clear
                          (engine_axis_lag_over; the lifecycle's "lag" event).  0 (the
                          default): not bounded, counted and warned of only */
+    double cap_speed_m_s; /* the output's speed never exceeds it (0, the default: no such
+                             cap): each segment faster gets a rate ceiling, so the time
+                             scaling slows along the path; transfers and joins keep within
+                             it too; the waypoints are kept and passed exactly, their timing
+                             yields (limits_lost_s).  Not a setting: the caller's bound
+                             (trajd: 95 % of a configured safety_max_speed_m_s, so the
+                             monitor never has to hold the motion the engine plans) */
 } engine_config_t;
 
 /* Fill cfg with working defaults (each one commented above; documented in

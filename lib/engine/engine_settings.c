@@ -765,6 +765,8 @@ int engine_config_check(const engine_config_t *cfg_in, const char **why)
         w = "transfer_speed_m_s: must be 0 (derived) or positive and finite";
     else if (!(cfg->transfer_accel_m_s2 >= 0) || !isfinite(cfg->transfer_accel_m_s2))
         w = "transfer_accel_m_s2: must be 0 (derived) or positive and finite";
+    else if (!(cfg->cap_speed_m_s >= 0) || !isfinite(cfg->cap_speed_m_s))
+        w = "cap_speed_m_s: must be 0 (none) or positive and finite";
     else if (!(cfg->max_segment_s >= 0) || !isfinite(cfg->max_segment_s))
         w = "max_segment_s: must be 0 or positive and finite";
     else if (!(cfg->scale_accel_m_s2 > 0) || !isfinite(cfg->scale_accel_m_s2))

@@ -155,6 +155,8 @@ static double seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax
     double v = engine_config_max_speed(&e->cfg), axis_c = axis_ceiling(e, seg), c = INFINITY;
     if (v > 0 && vmax > 0)
         c = ENGINE_SPEED_CAP * v / vmax;
+    if (e->cfg.cap_speed_m_s > 0 && vmax > 0) /* the caller's cap (engine.h) */
+        c = fmin(c, e->cfg.cap_speed_m_s / vmax);
     if (e->cfg.max_accel_m_s2 < 0) {
         double room = engine_config_max_accel(&e->cfg) - e->cfg.scale_accel_m_s2;
         double kdd = room > 0 ? seg_accel_max(seg) : 0.0;

@@ -459,6 +459,8 @@ static int join_search(engine_t *e, const join_find_t *fp, double t_now, double 
     memcpy(a0, out_acc(e), sizeof(a0));
     double vlim = engine_config_max_speed(&e->cfg);
     vlim = vlim > 0 ? ENGINE_SPEED_CAP * vlim : 0.0;
+    if (e->cfg.cap_speed_m_s > 0 && (!(vlim > 0) || vlim > e->cfg.cap_speed_m_s))
+        vlim = e->cfg.cap_speed_m_s; /* the caller's cap (engine.h) */
     /* the old motion's speed it keeps half of: the old curve's at rho; in
      * an underrun the output's own (the time scaling has slowed it) */
     double v_old = e->out.underrun ? norm3(v0) : rho * out_cspeed(e);

@@ -2,8 +2,9 @@
 holds, with exit 75, and a full buffer counts each waypoint once.
 
 The real trajd replays a 60 s track at 5 m/s (10 Hz) at speed 20 with exit_when_done = yes
-and safety_max_speed_m_s = 3: the monitor holds the object as soon as it passes 3 m/s, and
-only a clear would move it again. Its replay then offers the next row at every tick, each
+and safety_max_accel_m_s2 = 0.5: the monitor holds the object as soon as its start accelerates
+beyond it (a speed bound would not do: one set is kept by the engine, which slows), and only a
+clear would move it again. Its replay then offers the next row at every tick, each
 refused with a full buffer. trajd must end by itself (the track takes 3 s of wall time, the
 wait is bounded at 60 s) with exit 75 and an error line naming the held object, and the exit
 line's count of waypoints refused "full" must be at most the track's 600 rows (each waypoint
@@ -36,7 +37,7 @@ class ExitWhenDoneHeld(unittest.TestCase):
                 f.write("[daemon]\nrate_hz = 100\nspeed = 20\nexit_when_done = yes\n"
                         "status_interval_s = 0\ncontrol_socket = %s/ctl\n"
                         "[object.a]\ninput = replay\nreplay.track = line.csv\noutput = csv\n"
-                        "csv.path = a.csv\nmax_speed_m_s = 10\nsafety_max_speed_m_s = 3\n" % tmp)
+                        "csv.path = a.csv\nmax_speed_m_s = 10\nsafety_max_accel_m_s2 = 0.5\n" % tmp)
             try:
                 p = subprocess.run([TRAJD, "-f", "-c", conf], cwd=tmp, capture_output=True,
                                    text=True, timeout=60)

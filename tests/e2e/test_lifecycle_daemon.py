@@ -362,10 +362,13 @@ class Stall(unittest.TestCase):
         """A reload that only lowers safety_max_speed_m_s below the moving object's
         speed (4 m/s; the default bound 10 -> 2), its engine and input unchanged (an
         object carried over): it brakes to rest along its path, judged by the bounds
-        it was planned for, says why, and goes on from there under the new ones.  No
-        row is held, none steps.  Before, the carried object was judged by the new
-        bound at once: held by the monitor on the next row, 4 m/s to 0 in one tick,
-        until clear (exit 75)."""
+        it was planned for, says why, and goes on from there under the new ones: its
+        new engine keeps the output within the bound (engine.h cap_speed_m_s), the
+        4 m/s circle played slower.  No row is held, none steps, none is faster than
+        the bound.  Before, the carried object was judged by the new bound at once:
+        held by the monitor on the next row, 4 m/s to 0 in one tick, until clear (exit
+        75); and then (its new engine planned without the bound) held again as it sped
+        up through 2 m/s on its transfer back."""
         p, conf, base, rows, log, reloaded = self.moving_circle()
         try:
             n0 = len(rows.rows)
@@ -373,13 +376,20 @@ class Stall(unittest.TestCase):
                 f.write(base + "safety_max_speed_m_s = 2\n")
             p.send_signal(signal.SIGHUP)
             self.assertTrue(reloaded.wait(WAIT_S), "no reload: " + "".join(log[-3:]))
-            r = rows.wait(len(rows.rows) + 60)[n0 - 5:]
+            r = rows.wait(len(rows.rows) + 700)[n0 - 5:]
         finally:
             p.send_signal(signal.SIGTERM)
             p.wait(WAIT_S)
         self.assert_follows(r, 1.1 * 5.0 + 0.8 + 0.5)
         self.assertTrue(any("its new safety bounds refuse its motion: speed" in l for l in log),
                         "".join(log))
+        # past the braking (4 m/s at 5 m/s^2: 0.8 s, judged by the old bounds)
+        after = r[5 + 120:]
+        fast = [(b[0], math.dist(a[2:5], b[2:5]) / PERIOD_S) for a, b in zip(after, after[1:])
+                if b[0] - a[0] == 10 ** 7 and math.dist(a[2:5], b[2:5]) / PERIOD_S > 2.0]
+        self.assertEqual(fast, [], "faster than the new bound")
+        self.assertTrue(any(row[5] == "streaming" and not row[6] & 8 for row in after),
+                        "the circle is played again after the transfer")
 
     def test_command_while_a_reload_brakes_says_so(self):
         """A stop sent while a reload's old engine still brakes the moving object is
@@ -551,10 +561,13 @@ class Commands(unittest.TestCase):
 
     def test_clear_after_safety_hold_resumes(self):
         self.p, lines, port, csv = start_modbus_trajd(
-            self.tmpd.name, "safety_max_speed_m_s = 1.5\ntransfer_speed_m_s = 1\ntransfer_accel_m_s2 = 1\n")
+            self.tmpd.name, "position_min_m = -100, -100, -100\nposition_max_m = 3, 100, 100\n"
+            "transfer_speed_m_s = 1\ntransfer_accel_m_s2 = 1\n")
         s = mbsim.connect(port)
         tid = 0
-        # Given a track at 2 m/s, faster than the monitor's 1.5 m/s,
+        # Given a track at 2 m/s that leaves the monitor's position box at x = 3 m
+        # (a speed bound would not do: a configured one the engine keeps, slowing
+        # along the path: tests/oracle/test_safety_speed_cap.py),
         seq = 0
         for i in range(40):
             seq += 1
@@ -569,7 +582,7 @@ class Commands(unittest.TestCase):
             r = rows.wait(len(r) + 1)
         held = r[-1]
         self.assertIsNotNone(lines.wait_for("safety monitor", WAIT_S))
-        # and the client clears it and sends a track at 1 m/s from there,
+        # and the client clears it and sends a track at 1 m/s from there, back in the box,
         tid += 1
         self.assertIsNone(command(s, M["MBMAP_CMD_CLEAR"], tid))
         n_clear = len(rows.wait(1))
@@ -577,12 +590,12 @@ class Commands(unittest.TestCase):
             seq += 1
             tid += 1
             self.assertIsNone(write_wp(s, seq, 20.0 + 0.1 * i,
-                                       (held[2] + 1.0 + 0.1 * i, 0.0, 0.0), tid))
+                                       (held[2] - 1.0 - 0.1 * i, 0.0, 0.0), tid))
         # then it resumes from the held position (rows without the fault flag
         # that move), joined by a transfer, and is never refused again
         r = rows.wait(n_clear + 1)
         end = time.monotonic() + WAIT_S
-        while not (r[-1][2] > held[2] + 2.0):
+        while not (r[-1][2] < held[2] - 2.0):
             self.assertLess(time.monotonic(), end, "never resumed: %r" % (r[-1],))
             r = rows.wait(len(r) + 1)
         after = r[n_clear + 2:]
