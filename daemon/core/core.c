@@ -114,6 +114,9 @@ double obj_delay_s(const core_t *c, const obj_t *o)
 void obj_reset_counters(obj_t *o)
 {
     engine_reset_counters(o->engine);
+    if (o->retiring)
+        engine_reset_counters(o->retiring);
+    memset(&o->counts_before, 0, sizeof o->counts_before);
     o->reset_seq++;
     o->lc.n.refused_full = 0;
     o->skipped_ticks = 0;
@@ -260,6 +263,9 @@ static void step_engines(core_t *c, int64_t now_ns, int64_t real_ns, int sent)
             own.state != ENGINE_STATE_UNDERRUN) {
             if (!(o->sp.flags & ENGINE_SP_NO_POSITION))
                 (void)engine_set_position(o->engine, o->sp.pos_m); /* within max_abs_m: checked */
+            engine_status_t st; /* its counts go on (core.h counts_before) */
+            engine_status(o->retiring, &st);
+            engine_status_add_counts(&o->counts_before, &st);
             engine_free(o->retiring);
             o->retiring = NULL;
             safety_limits_t lim; /* the new engine's bounds, from rest */
@@ -335,6 +341,12 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
         note_played(o);
         rejlog_drain(&o->rejlog, o->engine); /* verdicts given by a finish or a tick */
         engine_status(o->engine, &o->status);
+        engine_status_add_counts(&o->status, &o->counts_before);
+        if (o->retiring) { /* still braking for a reload: its counts are the object's */
+            engine_status_t st;
+            engine_status(o->retiring, &st);
+            engine_status_add_counts(&o->status, &st);
+        }
         o->status.skipped_ticks += o->skipped_ticks;
         /* stopped or held: the room of the buffer its waypoints go to, and
          * what it refused full, as the engine's own full buffer counts */
@@ -575,6 +587,14 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
     return 0;
 }
 
+/* q's engine moves (its last setpoint not a hold): a reload that changes q
+ * keeps it braking (retire_moving). */
+static int moving_engine(const obj_t *q)
+{
+    return q->engine && q->sp.cycle != 0 &&
+           !(q->sp.flags & (ENGINE_SP_HOLD | ENGINE_SP_NO_POSITION));
+}
+
 /* A reloaded object that gets a new engine while its old one moves: the old
  * one is kept braking to rest (engine_stop, at reload_commit) and hands over
  * there.  Borrowed: prev keeps its engines until the reload commits. */
@@ -583,11 +603,18 @@ static void retire_moving(obj_t *o, core_t *prev)
     obj_t *q = prev && !prev->stopping ? core_obj_find(prev, o->name) : NULL;
     if (!q)
         return;
+    /* its counts go on over the reload: those of the engines it had (a
+     * retiring one's at its handover, step_engines) */
+    o->counts_before = q->counts_before;
+    engine_status_t st;
+    if (!o->carried && q->engine && (q->retiring || !moving_engine(q))) {
+        engine_status(q->engine, &st); /* given up here */
+        engine_status_add_counts(&o->counts_before, &st);
+    }
     if (q->retiring) { /* still braking from an earlier reload */
         o->retiring = q->retiring;
         o->retire_ns = q->retire_ns;
-    } else if (!o->carried && q->engine && q->sp.cycle != 0 &&
-               !(q->sp.flags & (ENGINE_SP_HOLD | ENGINE_SP_NO_POSITION))) {
+    } else if (!o->carried && moving_engine(q)) {
         o->retiring = q->engine;
         o->retire_ns = obj_lc(q)->eng_ns; /* its curve's time as its owner left it */
     } else {

@@ -112,80 +112,83 @@ typedef struct obj {
     unsigned index;       /* 0-based, config order */
     const cfg_obj_t *cfg; /* its [object.NAME] section (engine settings, transport blocks) */
     engine_t *engine;
-    engine_t *retiring;           /* a reload gave the object a new engine while the old
+    engine_t *retiring;            /* a reload gave the object a new engine while the old
                                      * one moved: the old one brakes to rest (engine_stop,
                                      * its setpoints go out), then the new one starts where
                                      * it rests (no velocity step); NULL otherwise */
-    int64_t retire_ns;            /* the retiring engine's own time: one period a tick from
+    int64_t retire_ns;             /* the retiring engine's own time: one period a tick from
                                      * its owner's last (lifecycle_t eng_ns), as the owner's
                                      * curve goes (a stall is no step of N periods) */
-    engine_setpoint_t sp;         /* setpoint of the last tick (zero before the first) */
-    engine_status_t status;       /* engine status after the last tick */
-    uint64_t skipped_ticks;       /* missed deadlines this object was stepped through with
+    engine_setpoint_t sp;          /* setpoint of the last tick (zero before the first) */
+    engine_status_t status;        /* engine status after the last tick, with counts_before */
+    engine_status_t counts_before; /* the counters of the engines it had before a reload that
+                                    * changed its settings (engine_status_add_counts): its
+                                    * counts go on over the reload */
+    uint64_t skipped_ticks;        /* missed deadlines this object was stepped through with
                                      * no output (added into status.skipped_ticks) */
-    int stopping;                 /* obj_push_from refuses: 1 the daemon is stopping,
+    int stopping;                  /* obj_push_from refuses: 1 the daemon is stopping,
                                    * OBJ_STOPPING_REMOVED a reload removes the object */
-    uint64_t stop_refused;        /* waypoints obj_push_from refused so (logged: the first) */
-    unsigned clear_seq;           /* +1 per clear the object accepted (obj_command), from any
+    uint64_t stop_refused;         /* waypoints obj_push_from refused so (logged: the first) */
+    unsigned clear_seq;            /* +1 per clear the object accepted (obj_command), from any
                                      * source: a transport whose devices hold on their own (a
                                      * CiA 402 drive's fault, can_transport.c) releases them */
-    unsigned reset_seq;           /* +1 per reset of its counters (obj_reset_counters), from
+    unsigned reset_seq;            /* +1 per reset of its counters (obj_reset_counters), from
                                    * any source: a transport's own counters follow */
-    int carried;                  /* 1 if engine (and counters) were carried over a reload */
-    double resume_t_s;            /* a reload gave it a new engine, its input the same: the
+    int carried;                   /* 1 if engine (and counters) were carried over a reload */
+    double resume_t_s;             /* a reload gave it a new engine, its input the same: the
                                    * input goes on after this track time, as far as the old
                                    * engine played (core.c resume_input; NAN: from its start) */
-    double played_t_s;            /* the furthest track time its output played on its
+    double played_t_s;             /* the furthest track time its output played on its
                                    * trajectory (streaming on the curve, not a transfer; NAN:
                                    * none), kept over reloads: where a changed reload's input
                                    * resumes */
-    uint32_t played_track;        /* ... on this trajectory (another one starts it again) */
-    int64_t born_ns;              /* engine time when its engine was created (0 at start;
+    uint32_t played_track;         /* ... on this trajectory (another one starts it again) */
+    int64_t born_ns;               /* engine time when its engine was created (0 at start;
                                      * kept when carried): replay due times count from here */
-    uint64_t out_lost;            /* setpoint lines of this object that never reached one of
+    uint64_t out_lost;             /* setpoint lines of this object that never reached one of
                                      * its outputs (buffer full, write error) */
-    int out_fault;                /* 1 once a write to one of its outputs failed (ENOSPC,
+    int out_fault;                 /* 1 once a write to one of its outputs failed (ENOSPC,
                                      * EIO, ...); cleared by the reset-counters command */
-    uint64_t out_errors;          /* failed writes of its outputs (CAN STATUS2 page 1) */
-    safety_t safety;              /* the last check of o->sp before any output sees it
+    uint64_t out_errors;           /* failed writes of its outputs (CAN STATUS2 page 1) */
+    safety_t safety;               /* the last check of o->sp before any output sees it
                                      * (kept when carried) */
-    uint64_t safety_logged;       /* safety violations already logged */
-    int axis_warned;              /* issue 32: the per-axis limits' warning given */
-    int limits_warned;            /* ... and the object's own speed/acceleration limits' */
-    uint64_t axis_stops_logged;   /* ... and the max_lag_s stops logged */
-    double und_t;                 /* issue 26: underrun_t_s of the last underrun logged */
-    uint64_t und_logged;          /* ... and how many were (0: und_t unset) */
-    uint64_t grown_logged;        /* issue 26: D's growths logged (engine delay_grown) */
-    uint64_t reanchors_logged;    /* re-anchors logged (engine reanchors) */
-    uint64_t reserve_logged;      /* issue 26: slowdowns for D's reserve logged (reserve_slowed) */
-    uint64_t axis_beyond_logged;  /* ... and the stops before a segment beyond the axes */
-    int uniform_warned;           /* param = uniform met irregular intervals: warned once */
-    rejlog_t rejlog;              /* sources of the last waypoints offered, and the refusals
+    uint64_t safety_logged;        /* safety violations already logged */
+    int axis_warned;               /* issue 32: the per-axis limits' warning given */
+    int limits_warned;             /* ... and the object's own speed/acceleration limits' */
+    uint64_t axis_stops_logged;    /* ... and the max_lag_s stops logged */
+    double und_t;                  /* issue 26: underrun_t_s of the last underrun logged */
+    uint64_t und_logged;           /* ... and how many were (0: und_t unset) */
+    uint64_t grown_logged;         /* issue 26: D's growths logged (engine delay_grown) */
+    uint64_t reanchors_logged;     /* re-anchors logged (engine reanchors) */
+    uint64_t reserve_logged;       /* issue 26: slowdowns for D's reserve logged (reserve_slowed) */
+    uint64_t axis_beyond_logged;   /* ... and the stops before a segment beyond the axes */
+    int uniform_warned;            /* param = uniform met irregular intervals: warned once */
+    rejlog_t rejlog;               /* sources of the last waypoints offered, and the refusals
                                      * to log (rejlog.h; kept when carried) */
-    double geo[3];                /* the setpoint as WGS84 lat, lon (deg), alt (m) when
+    double geo[3];                 /* the setpoint as WGS84 lat, lon (deg), alt (m) when
                                      * o->cfg->geographic (about c->cfg->datum), else NaN:
                                      * read it through core_obj_geo (computed on first use
                                      * in a tick) */
-    int geo_pending;              /* geo not computed yet for this tick's setpoint */
-    double heading_deg;           /* heading axis at the setpoint's track time, wrapped to
+    int geo_pending;               /* geo not computed yet for this tick's setpoint */
+    double heading_deg;            /* heading axis at the setpoint's track time, wrapped to
                                      * (-180, 180]; NaN if the object has none */
-    double heading_unwrapped_deg; /* the same, continuous across +-180 (NaN: none) */
-    size_t heading_hint;          /* interval of the last heading evaluation */
-    int clocked;                  /* one clock (lib/engine/CLOCK.md): 1 played out on the
+    double heading_unwrapped_deg;  /* the same, continuous across +-180 (NaN: none) */
+    size_t heading_hint;           /* interval of the last heading evaluation */
+    int clocked;                   /* one clock (lib/engine/CLOCK.md): 1 played out on the
                                      * daemon's clock, 0 relative, -1 its first waypoint
                                      * decides ([daemon] clock = auto; kept when carried) */
-    double clock_window_s;        /* auto: epoch when the first time is this close to now */
-    playout_drift_t *drift;       /* the daemon's drift estimate (stats_t), fed with the
+    double clock_window_s;         /* auto: epoch when the first time is this close to now */
+    playout_drift_t *drift;        /* the daemon's drift estimate (stats_t), fed with the
                                      * arrivals of a clocked object's waypoints */
-    int held;                     /* feed hold (obj_hold, e.g. a CiA 402 drive's heartbeat
+    int held;                      /* feed hold (obj_hold, e.g. a CiA 402 drive's heartbeat
                                      * lost): an override > 0 is refused until a clear
                                      * (mirrors lc.hold & LC_HOLD_FEED) */
-    lifecycle_t lc;               /* the one owner of its motion (lib/engine/lifecycle.h):
+    lifecycle_t lc;                /* the one owner of its motion (lib/engine/lifecycle.h):
                                      * every command and tick goes through it (kept when
                                      * carried) */
-    int64_t cmd_log_s;            /* commands logged: the second of the last one */
-    unsigned cmd_log_n;           /* ... how many in it */
-    uint64_t cmd_buf_told;        /* the owner's buffered and dropped counts the last
+    int64_t cmd_log_s;             /* commands logged: the second of the last one */
+    unsigned cmd_log_n;            /* ... how many in it */
+    uint64_t cmd_buf_told;         /* the owner's buffered and dropped counts the last
                                    * start or clear line told (objlife.c): each line says
                                    * those of its own latch, not the totals */
     uint64_t cmd_drop_told;

@@ -39,7 +39,7 @@ static size_t summary_motion(const obj_t *o, char *buf, size_t len, size_t n)
     }
     if ((o->status.dropped || o->status.unjudged) && n < len) { /* taken, dropped unplayed */
         m = snprintf(buf + n, len - n,
-                     ", %llu waypoints dropped by a stop or clear (and %llu before their "
+                     ", %llu waypoints dropped by a stop, clear or reload (and %llu before their "
                      "verdict)",
                      (unsigned long long)o->status.dropped, (unsigned long long)o->status.unjudged);
         n += m > 0 ? ((size_t)m < len - n ? (size_t)m : len - n) : 0;

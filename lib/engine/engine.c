@@ -183,6 +183,28 @@ void engine_status(const engine_t *e, engine_status_t *st)
     }
 }
 
+void engine_status_add_counts(engine_status_t *st, const engine_status_t *more)
+{
+#define ADD(f) st->f += more->f
+    ADD(accepted), ADD(dropped), ADD(unjudged), ADD(duplicates), ADD(rejected);
+    for (int i = 0; i < ENGINE_ERROR_COUNT; i++)
+        ADD(rejected_by[i]);
+    ADD(underruns), ADD(underrun_ticks), ADD(skipped_ticks), ADD(gaps), ADD(tracks);
+    ADD(setpoints), ADD(full), ADD(hard_stops), ADD(reanchors), ADD(transfers);
+    ADD(transfer_s), ADD(transfers_capped), ADD(rejections_unreported), ADD(uniform_irregular);
+    ADD(stops), ADD(stop_fixes), ADD(retimed), ADD(silent_ends), ADD(catchups);
+    ADD(axis_lost_s), ADD(axis_slowed), ADD(axis_lag_stops), ADD(delay_grown);
+    ADD(reserve_slowed), ADD(transfers_moving), ADD(axis_beyond), ADD(limits_lost_s);
+    ADD(limits_slowed);
+#undef ADD
+    if (more->uniform_ratio_max > st->uniform_ratio_max) {
+        st->uniform_ratio_max = more->uniform_ratio_max;
+        st->uniform_ratio_t_s = more->uniform_ratio_t_s;
+    }
+    if (more->retime_max_s > st->retime_max_s)
+        st->retime_max_s = more->retime_max_s;
+}
+
 int engine_axis_lag_over(engine_t *e)
 {
     int over = e->axis_lag_over;

@@ -618,6 +618,12 @@ void engine_reset_counters(engine_t *e);
 /* Snapshot of state and counters. */
 void engine_status(const engine_t *e, engine_status_t *st);
 
+/* Add the counters of more (an engine's that another took over from: a reload
+ * that changed its object's settings) into st: the counts summed, the
+ * largest values (uniform_ratio_max, retime_max_s) the larger; state and the
+ * values of the moment (buffered, rate, lag_s, the last underrun's ...) left. */
+void engine_status_add_counts(engine_status_t *st, const engine_status_t *more);
+
 /*
  * Waypoints of lookahead this configuration needs (depends on F, O and
  * whether the unknowns are control points): the most waypoints beyond a

@@ -105,7 +105,7 @@ class DroppedAndDelayTold(unittest.TestCase):
             lines.wait_for("\0", WAIT_S)
             err = "".join(lines.all)
             self.assertEqual(rc, 0, err[-3000:])
-            self.assertRegex(err, r"; a [^;]*, (\d+) waypoints dropped by a stop or clear")
+            self.assertRegex(err, r"; a [^;]*, (\d+) waypoints dropped by a stop, clear or reload")
 
 
 if __name__ == "__main__":

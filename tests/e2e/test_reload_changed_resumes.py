@@ -70,6 +70,48 @@ def start(tmp, conf):
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
 
 
+class ReloadChangedCounts(unittest.TestCase):
+    def test_counts_go_on_over_the_reload(self):
+        """The circle with one fix 50 m off its path (row 42, refused as too fast); once it
+        is judged, a reload changes the object (method = bspline): the new engine's
+        counters add to the old one's.  The exit line still counts the refused fix, and
+        every good row once accepted (those the old engine accepted and dropped as it
+        braked, offered again to the new one, are also counted as dropped).  Before, the
+        counters started again at 0: the refusal vanished (rejected 0) and only the new
+        engine's waypoints were counted."""
+        with tempfile.TemporaryDirectory() as tmp:
+            conf, text = circle_setup(tmp)
+            with open(os.path.join(tmp, "circle.csv")) as f:
+                lines = f.readlines()
+            t, x, y = lines[41].strip().split(",")
+            lines[41] = "%s,%.9f,%s\n" % (t, float(x) + 50.0, y)
+            with open(os.path.join(tmp, "circle.csv"), "w") as f:
+                f.writelines(lines)
+            p = start(tmp, conf)
+            try:
+                err = mbsim.Lines(p.stderr)
+                self.assertIsNotNone(err.wait_for("rejected (speed)", WAIT_S), "".join(err.all))
+                time.sleep(0.3)
+                with open(conf, "w") as f:
+                    f.write(text.replace("[object.a]\n", "[object.a]\nmethod = bspline\n"))
+                p.send_signal(signal.SIGHUP)
+                self.assertIsNotNone(err.wait_for("reloaded:", WAIT_S), "".join(err.all))
+                rc = p.wait(WAIT_S)
+            finally:
+                if p.poll() is None:
+                    p.kill()
+                    p.wait()
+            err.wait_for("\0", 5)
+            log = "".join(err.all)
+        self.assertEqual(rc, 0, log[-2000:])
+        m = re.search(r"; a \w+ t=[-\d.]+ s, wp (\d+) ok (\d+) rejected .*?(?:, (\d+) waypoints "
+                      r"dropped by a stop, clear or reload)?", log)
+        self.assertIsNotNone(m, log[-2000:])
+        ok, rej, dropped = int(m.group(1)), int(m.group(2)), int(m.group(3) or 0)
+        self.assertEqual(rej, 1, m.group(0))
+        self.assertGreaterEqual(ok - dropped, N - 3, m.group(0))
+
+
 class ReloadChangedResumes(unittest.TestCase):
     def test_changed_object_goes_on_along_its_track(self):
         with tempfile.TemporaryDirectory() as tmp:
