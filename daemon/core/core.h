@@ -277,6 +277,9 @@ int obj_push_from(obj_t *o, const engine_waypoint_t *wp, const char *src);
 
 /* Reset o's counters: the engine's and the daemon's own (the reset command). */
 void obj_reset_counters(obj_t *o);
+/* The safety monitor's bounds of configured object o (the derived ones
+ * from its engine's limits). */
+void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim);
 /* The same, asked by peer: logged as a command is (obj_command's rate). */
 void obj_reset_counters_from(obj_t *o, const char *peer);
 /* A command (what: "stop", "override 50 %" ...) from peer that the gate

@@ -1,0 +1,215 @@
+/*
+ * carry.c - what a reload carries over of each object (see carry.h): whether
+ * its engine goes on (carry_source), the engine a changed one brakes with
+ * until the new one takes over where it rests (retire_moving), where its
+ * input goes on (carry_resume_input), and its counts.
+ */
+#include "carry.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "engine_settings.h"
+#include "log.h"
+
+/* One clock: 0 (relative) for a replay input, with clock = relative, or
+ * at a replay speed; 1 with clock = epoch; -1 (the first waypoint decides)
+ * with clock = auto. */
+int carry_clock_initial(const cfg_t *cfg, const cfg_obj_t *o)
+{
+    if (strcmp(o->input->name, "replay") == 0 || cfg->daemon.clock == CFG_CLOCK_RELATIVE ||
+        fabs(cfg->daemon.speed - 1.0) > 0)
+        return 0;
+    return cfg->daemon.clock == CFG_CLOCK_EPOCH ? 1 : -1;
+}
+
+/* 1 if object q (of the running config) and o (the new one) have the same
+ * input with the same settings (a replayed track: the same file, unchanged). */
+static int same_input(const obj_t *q, const cfg_obj_t *o)
+{
+    const transport_t *in = o->input;
+    if (q->cfg->input != in)
+        return 0;
+    const void *a = cfg_obj_transport(q->cfg, in), *b = cfg_obj_transport(o, in);
+    return in->obj_cfg_same ? in->obj_cfg_same(a, b)
+                            : !(in->obj_cfg_size && memcmp(a, b, in->obj_cfg_size) != 0);
+}
+
+/* 1 if the safety bounds of o (the new config) would refuse q's motion: its
+ * last setpoint carried one period on (speed, acceleration, per-axis, box),
+ * judged with its history.  Such an object is not carried over: it brakes to
+ * rest under the bounds it was planned for (retire_moving) and a new engine
+ * goes on from there under the new ones.  Carried, the monitor held it in one
+ * tick (a reload to safety_max_speed_m_s 8 at 9.8 m/s: a step to rest, exit
+ * 75).  why (NULL: not said) gets the bound. */
+static int bounds_refuse(const obj_t *q, const cfg_obj_t *o, int64_t period_ns, char *why,
+                         size_t len)
+{
+    const engine_setpoint_t *p = &q->sp;
+    if (p->cycle == 0 || (p->flags & (ENGINE_SP_HOLD | ENGINE_SP_NO_POSITION)) ||
+        safety_fault(&q->safety))
+        return 0;
+    safety_t s = q->safety;
+    safety_limits_t lim;
+    obj_safety_limits(o, &lim);
+    safety_set_limits(&s, &lim);
+    engine_setpoint_t sp = *p;
+    double T = (double)period_ns * 1e-9;
+    for (int k = 0; k < ENGINE_AXES; k++) {
+        sp.pos_m[k] += p->vel_m_s[k] * T + 0.5 * p->acc_m_s2[k] * T * T;
+        sp.vel_m_s[k] += p->acc_m_s2[k] * T;
+    }
+    sp.now_ns += period_ns;
+    int f = safety_check(&s, &sp);
+    if (f != SAFETY_OK && why)
+        snprintf(why, len, "its new safety bounds refuse its motion: %s (%.6g, bound %.6g)",
+                 safety_strerror(f), s.last_value, s.last_limit);
+    return f != SAFETY_OK;
+}
+
+/* The object of prev that o (in the new config) may take over, or NULL; why
+ * (NULL: not said) gets the reason where only its new safety bounds refuse. */
+obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o, char *why, size_t len)
+{
+    if (!prev || prev->stopping)
+        return NULL;
+    obj_t *q = core_obj_find(prev, o->name);
+    if (!q || !q->engine || !engine_config_same(&q->cfg->engine, &o->engine))
+        return NULL;
+    if (q->clocked == 1 && carry_clock_initial(cfg, o) == 0)
+        return NULL; /* an engine on the clock cannot leave it: a new one */
+    if (!same_input(q, o) || bounds_refuse(q, o, prev->period_ns, why, len))
+        return NULL;
+    double cap0 = q->cfg->engine.cap_speed_m_s, cap1 = o->engine.cap_speed_m_s;
+    if (cap0 < cap1 || cap0 > cap1) { /* its engine keeps the old one */
+        if (why && !(q->sp.flags & (ENGINE_SP_HOLD | ENGINE_SP_NO_POSITION)))
+            snprintf(why, len,
+                     "its safety_max_speed_m_s changed, which its engine keeps (%g -> %g m/s "
+                     "of output speed, 0: none)",
+                     cap0, cap1);
+        return NULL;
+    }
+    return q;
+}
+
+/* A changed object (a new engine) whose input stays the same goes on along it
+ * after as far as its old engine played (the replay, replay_transport.c: after
+ * that track time, on the old schedule), never from the input's start again:
+ * o->resume_t_s, o->born_ns.  Left NAN where it played nothing. */
+void carry_resume_input(obj_t *o, core_t *prev)
+{
+    obj_t *q = prev && !prev->stopping ? core_obj_find(prev, o->name) : NULL;
+    if (!q || !same_input(q, o->cfg) || !isfinite(q->played_t_s))
+        return; /* (nothing played: a waiting object's input starts again, none skipped) */
+    /* as far as it played: not the setpoint's t_s, which a transfer (a reload
+     * before this one, still joining its track) counts from its own start
+     * behind the track: resumed there, the object went back 8.8 m */
+    o->resume_t_s = q->played_t_s;
+    o->played_t_s = q->played_t_s;
+    o->played_track = q->played_track;
+    o->born_ns = q->born_ns;
+}
+
+/* q's engine moves (its last setpoint not a hold): a reload that changes q
+ * keeps it braking (retire_moving). */
+static int moving_engine(const obj_t *q)
+{
+    return q->engine && q->sp.cycle != 0 &&
+           !(q->sp.flags & (ENGINE_SP_HOLD | ENGINE_SP_NO_POSITION));
+}
+
+/* A reloaded object that gets a new engine while its old one moves: the old
+ * one is kept braking to rest (engine_stop, at reload_commit) and hands over
+ * there.  Borrowed: prev keeps its engines until the reload commits. */
+static void retire_moving(obj_t *o, core_t *prev)
+{
+    obj_t *q = prev && !prev->stopping ? core_obj_find(prev, o->name) : NULL;
+    if (!q)
+        return;
+    /* its counts go on over the reload: those of the engines it had (a
+     * retiring one's at its handover, step_engines) */
+    o->counts_before = q->counts_before;
+    engine_status_t st;
+    if (!o->carried && q->engine && (q->retiring || !moving_engine(q))) {
+        engine_status(q->engine, &st); /* given up here */
+        engine_status_add_counts(&o->counts_before, &st);
+    }
+    if (q->retiring) { /* still braking from an earlier reload */
+        o->retiring = q->retiring;
+        o->retire_ns = q->retire_ns;
+    } else if (!o->carried && moving_engine(q)) {
+        o->retiring = q->engine;
+        o->retire_ns = obj_lc(q)->eng_ns; /* its curve's time as its owner left it */
+    } else {
+        return;
+    }
+    o->sp = q->sp;
+    /* the braking is judged against what was sent, and by the bounds it was
+     * planned for: the new configuration's judge the new engine, from rest
+     * (given at the handover, step_engines).  Judged by tighter new ones, the
+     * first braking row was refused and the object frozen in one tick: 4 m/s
+     * to 0 (test_lifecycle_daemon.py) */
+    o->safety = q->safety;
+}
+
+/* Step 2 of core_open: borrow the engines of prev's carried objects (cannot
+ * fail; prev untouched: reload_commit or reload_unborrow settles it). */
+void carry_objects(core_t *c, core_t *prev)
+{
+    for (unsigned i = 0; i < c->nobj; i++) {
+        char why[160] = "";
+        obj_t *o = &c->obj[i], *q = carry_source(prev, c->cfg, o->cfg, why, sizeof why);
+        if (!q) {
+            if (why[0])
+                log_msg(LOG_NOTICE,
+                        "object '%s': %s: it brakes to rest along its path under the bounds it "
+                        "was planned for, and goes on from there under the new ones",
+                        o->name, why);
+            retire_moving(o, prev);
+            continue;
+        }
+        o->engine = q->engine;
+        o->sp = q->sp;
+        o->status = q->status;
+        o->skipped_ticks = q->skipped_ticks;
+        o->safety = q->safety;
+        safety_limits_t lim;
+        obj_safety_limits(o->cfg, &lim);
+        safety_set_limits(&o->safety, &lim); /* the new config's bounds */
+        o->safety_logged = q->safety_logged;
+        o->born_ns = q->born_ns;
+        if (o->clocked != 0)
+            o->clocked = q->clocked; /* its engine stays on the clock, or decided */
+        o->out_lost = q->out_lost;
+        o->out_fault = q->out_fault;
+        o->rejlog = q->rejlog;
+        o->uniform_warned = q->uniform_warned;
+        /* what was told of the carried counters: not told again (a clear after a
+         * reload repeated the last start's latch figures) */
+        o->cmd_buf_told = q->cmd_buf_told;
+        o->cmd_drop_told = q->cmd_drop_told;
+        o->axis_warned = q->axis_warned;
+        o->limits_warned = q->limits_warned;
+        o->axis_stops_logged = q->axis_stops_logged;
+        o->axis_beyond_logged = q->axis_beyond_logged;
+        o->und_t = q->und_t;
+        o->und_logged = q->und_logged;
+        o->grown_logged = q->grown_logged;
+        o->reanchors_logged = q->reanchors_logged;
+        o->reserve_logged = q->reserve_logged;
+        o->played_t_s = q->played_t_s;
+        o->played_track = q->played_track;
+        o->delay_track = q->delay_track; /* its trajectory's start was told (a line still
+                                          * pending, by the old core as it closes): not again */
+        o->delay_logs = q->delay_logs;
+        o->out_errors = q->out_errors;
+        o->held = q->held; /* its engine keeps the override 0 */
+        o->carried = 1;
+        o->lc = q->lc; /* the owner goes with its engine: latch, holds, commanded state */
+        q->lc.buf = NULL;
+        q->lc.cap = q->lc.len = 0;
+        (void)obj_lc(o);
+        retire_moving(o, prev);
+    }
+}
