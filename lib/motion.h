@@ -199,6 +199,10 @@ typedef struct {
                                        solver needs beyond its curve may span */
     double underrun_silence_s;      /* the silence that then ended its trajectory
                                        (lib/engine/silence.h; NaN: none) */
+    uint32_t underrun_judging;      /* the waypoints then awaiting their verdict (the
+                                       acceptance's; 1 as usual, more while it holds fixes
+                                       until a later one tells them: a run of repeats) */
+    double underrun_judging_t_s;    /* the stamp of the oldest of them (NaN: none) */
     uint64_t delay_grown;           /* D stated anew, longer: the input's intervals or its
                                        top speed grew beyond what D was sized for */
     uint64_t reserve_slowed;        /* slowdowns of an object faster than the speed D's stop

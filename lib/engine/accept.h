@@ -112,6 +112,7 @@
 #ifndef TRAJD_ACCEPT_H
 #define TRAJD_ACCEPT_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -346,6 +347,15 @@ static inline unsigned accept_pending(const accept_t *a)
 static inline const engine_waypoint_t *accept_first(const accept_t *a)
 {
     return a->npend ? &a->wp[a->pend[0]] : NULL;
+}
+
+/* The stamp of the oldest waypoint held (a run of repeats' first, else the
+ * window's), NaN if none. */
+static inline double accept_first_t(const accept_t *a)
+{
+    return a->run_n > a->run_head ? a->run_t[a->run_head]
+           : a->npend             ? a->wp[a->pend[0]].t_s
+                                  : (double)NAN;
 }
 
 /* The newest waypoint held, or NULL. */

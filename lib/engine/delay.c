@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "accept.h"
 #include "engine_int.h"
 #include "engine_settings.h"
 #include "timescale.h"
@@ -107,6 +108,14 @@ int engine_underrun_format(const engine_status_t *st, char *buf, size_t len)
                      "no waypoint after t = %.3f s until t = %.3f s, a silence of %.3g s, longer "
                      "than the %.3g s D holds for a late one (the interval and the jitter slack)",
                      newest, st->underrun_next_t_s, gap, hold);
+    else if (st->underrun_judging > ACCEPT_LAG && isfinite(st->underrun_judging_t_s))
+        n = snprintf(buf + off, len - off,
+                     "the %u waypoints from t = %.3f s to t = %.3f s were still being judged "
+                     "(the acceptance holds a fix until a later one tells it good: a run of "
+                     "repeats of one position, a stop too hard for the object's recent pace, "
+                     "waits for the next new position, as a frozen receiver's copies must; "
+                     "lib/engine/accept.h)",
+                     (unsigned)st->underrun_judging, st->underrun_judging_t_s, newest);
     else if (span > st->underrun_lookahead_s)
         n = snprintf(buf + off, len - off,
                      "the waypoints the solver needs beyond its curve (t = %.3f .. %.3f s) spanned "

@@ -348,7 +348,8 @@ static inline void engine_status_underrun_none(engine_status_t *st)
 {
     st->underrun_t_s = st->underrun_newest_t_s = st->underrun_next_t_s = NAN;
     st->underrun_slack_s = st->underrun_curve_t_s = st->underrun_lookahead_s = NAN;
-    st->underrun_silence_s = NAN;
+    st->underrun_silence_s = st->underrun_judging_t_s = NAN;
+    st->underrun_judging = 0;
 }
 
 /* ---- configuration (engine_settings.c): what a resolved one implies ---- */

@@ -82,6 +82,8 @@ void play_count_underrun(engine_t *e)
     e->st.underrun_curve_t_s = e->scale.avail_t;
     e->st.underrun_lookahead_s = d.lookahead_s;
     e->st.underrun_silence_s = NAN;
+    e->st.underrun_judging = accept_pending(&e->in.policy);
+    e->st.underrun_judging_t_s = accept_first_t(&e->in.policy);
     e->out.und_pending = engine_silence_pending(e);
     if (!e->out.und_pending)
         play_underrun_counted(e);

@@ -493,6 +493,24 @@ class TestUnderrunsTold(unittest.TestCase):
         write_track(path, t, x, y)
         return path, int(np.nonzero(np.isclose(t, 20.9))[0][0]) + 2
 
+    def test_dead_stop_told_as_judged(self):
+        """A sender at 6 m/s stops dead and repeats its position for 3 s (10 Hz): too
+        hard a stop for that pace to tell from a frozen receiver, so the acceptance holds
+        the repeats until the next new position and the output, out of curve, underruns
+        short of the stop.  The line says so, with the waypoints held.  Before, it blamed
+        intervals "longer than measured at the start" (they were 0.1 s throughout)."""
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "stop.csv")
+            t = np.arange(300) * 0.1
+            x = np.where(t < 10.0, 6.0 * t, np.where(t < 13.0, 60.0, 60.0 + 6.0 * (t - 13.0)))
+            write_track(path, t, x, np.zeros_like(t))
+            p = replay(path)
+        self.assertEqual(p.returncode, 0, p.stderr)
+        told = [l for l in p.stderr.splitlines() if ": underrun at t = " in l]
+        self.assertEqual(len(told), 1, p.stderr)
+        self.assertRegex(told[0], r"the \d+ waypoints from t = 10\.\d+ s to t = 1\d\.\d+ s were "
+                         r"still being judged")
+
     def test_hole_told_by_trajreplay(self):
         with tempfile.TemporaryDirectory() as tmp:
             path, line = self.hole(tmp)
