@@ -135,7 +135,9 @@ typedef struct {
     uint64_t rejected;              /* sum of rejected_by[]: bad data only (not EFULL) */
     uint64_t rejected_by[ENGINE_ERROR_COUNT]; /* per engine_error */
     uint64_t underruns;             /* transitions into UNDERRUN */
-    uint64_t underrun_ticks;        /* ticks spent in UNDERRUN */
+    uint64_t underrun_ticks;        /* ticks spent in UNDERRUN, those too while a silence
+                                       was judged that turned out to be the input's end
+                                       (silent_ends; not in underruns) */
     uint64_t skipped_ticks;         /* ticks stepped over (caller late) */
     uint64_t gaps;                  /* trajectories ended by a gap */
     uint64_t tracks;                /* trajectories started */
