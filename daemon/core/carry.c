@@ -75,11 +75,7 @@ obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o, char *wh
     if (!prev || prev->stopping)
         return NULL;
     obj_t *q = core_obj_find(prev, o->name);
-    if (!q || !q->engine || !engine_config_same(&q->cfg->engine, &o->engine))
-        return NULL;
-    if (q->clocked == 1 && carry_clock_initial(cfg, o) == 0)
-        return NULL; /* an engine on the clock cannot leave it: a new one */
-    if (!same_input(q, o) || bounds_refuse(q, o, prev->period_ns, why, len))
+    if (!q || !q->engine || bounds_refuse(q, o, prev->period_ns, why, len))
         return NULL;
     double cap0 = q->cfg->engine.cap_speed_m_s, cap1 = o->engine.cap_speed_m_s;
     if (cap0 < cap1 || cap0 > cap1) { /* its engine keeps the old one */
@@ -90,7 +86,11 @@ obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o, char *wh
                      cap0, cap1);
         return NULL;
     }
-    return q;
+    if (!engine_config_same(&q->cfg->engine, &o->engine))
+        return NULL;
+    if (q->clocked == 1 && carry_clock_initial(cfg, o) == 0)
+        return NULL; /* an engine on the clock cannot leave it: a new one */
+    return same_input(q, o) ? q : NULL;
 }
 
 /* A changed object (a new engine) whose input stays the same goes on along it

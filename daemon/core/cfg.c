@@ -683,7 +683,12 @@ static int check_obj(parse_t *p, unsigned i)
         double vs = o->safety_max_step_m / ((double)c->daemon.period_ns * 1e-9);
         vb = vb > 0 && vb < vs ? vb : vs;
     }
-    o->engine.cap_speed_m_s = CFG_SAFETY_SPEED_SHARE * vb;
+    /* (none where the engine's own cap, ENGINE_SPEED_CAP x its speed limit,
+     * is lower: the documented default written out changes nothing) */
+    double own = ENGINE_SPEED_CAP * engine_config_max_speed(&o->engine);
+    o->engine.cap_speed_m_s = own > 0 && CFG_SAFETY_SPEED_SHARE * vb >= own
+                                  ? 0.0
+                                  : CFG_SAFETY_SPEED_SHARE * vb;
     for (size_t k = 0; k < engine_settings_count; k++) { /* set, and no effect: said */
         const char *u = engine_setting_unused(&engine_settings[k], &o->engine);
         if (u)

@@ -363,8 +363,9 @@ typedef struct {
                              scaling slows along the path; transfers and joins keep within
                              it too; the waypoints are kept and passed exactly, their timing
                              yields (limits_lost_s).  Not a setting: the caller's bound
-                             (trajd: 95 % of a configured safety_max_speed_m_s, so the
-                             monitor never has to hold the motion the engine plans) */
+                             (trajd: 95 % of a configured safety_max_speed_m_s where that
+                             is below ENGINE_SPEED_CAP x its speed limit, so the monitor
+                             never has to hold the motion the engine plans) */
 } engine_config_t;
 
 /* Fill cfg with working defaults (each one commented above; documented in

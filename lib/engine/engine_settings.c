@@ -137,6 +137,8 @@ const engine_setting_t engine_settings[] = {
       "per-axis jerk limits, m/s^3 (0: that axis free; C2 curves only: refused with hermite)"),
     S(max_lag_s, "max-lag", DOUBLE, 0, 0, 1e6, NULL, "S",
       "the lag the per-axis limits may cause, s: beyond it the object stops (0: unbounded)"),
+    S(cap_speed_m_s, NULL, DOUBLE, ENGINE_SETTING_DERIVED, 0, 1e9, NULL, NULL,
+      "the output's speed cap, m/s: 95 % of a configured safety_max_speed_m_s (trajd; 0: none)"),
 };
 
 const size_t engine_settings_count = sizeof engine_settings / sizeof engine_settings[0];
