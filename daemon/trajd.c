@@ -17,7 +17,8 @@
  *                    the config is first read: its parse cancelled, exit 0
  * Exit status: 0; EX_USAGE, EX_CONFIG, EX_UNAVAILABLE (cannot start), EX_OSERR,
  * EX_SOFTWARE; CORE_EXIT_OUTPUT_LOST (74) if any setpoint line was lost by an
- * output or a setpoint cycle not sent on the CAN bus; CORE_EXIT_EPIPE (141) when stdout's reader went away; CORE_EXIT_NO_INPUT
+ * output or a setpoint cycle with a position not sent on the CAN bus;
+ * CORE_EXIT_EPIPE (141) when stdout's reader went away; CORE_EXIT_NO_INPUT
  * (65) if a replayed track or log_in had no usable waypoint; CORE_EXIT_HELD (75)
  * if an object ended held (safety fault, drive fault, lost heartbeat, or stopped
  * and latched by the per-axis limits: axis_lag_stops, axis_beyond).

@@ -130,10 +130,12 @@ static void retire_moving(obj_t *o, core_t *prev)
     /* its counts go on over the reload: those of the engines it had (a
      * retiring one's at its handover, step_engines) */
     o->counts_before = q->counts_before;
+    o->has_counts_before = q->has_counts_before;
     engine_status_t st;
     if (!o->carried && q->engine && (q->retiring || !moving_engine(q))) {
         engine_status(q->engine, &st); /* given up here */
         engine_status_add_counts(&o->counts_before, &st);
+        o->has_counts_before = 1;
     }
     if (q->retiring) { /* still braking from an earlier reload */
         o->retiring = q->retiring;

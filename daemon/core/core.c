@@ -118,6 +118,7 @@ void obj_reset_counters(obj_t *o)
     if (o->retiring)
         engine_reset_counters(o->retiring);
     memset(&o->counts_before, 0, sizeof o->counts_before);
+    o->has_counts_before = 0;
     o->reset_seq++;
     o->lc.n.refused_full = 0;
     o->skipped_ticks = 0;
@@ -267,6 +268,7 @@ static void step_engines(core_t *c, int64_t now_ns, int64_t real_ns, int sent)
             engine_status_t st; /* its counts go on (core.h counts_before) */
             engine_status(o->retiring, &st);
             engine_status_add_counts(&o->counts_before, &st);
+            o->has_counts_before = 1;
             engine_free(o->retiring);
             o->retiring = NULL;
             safety_limits_t lim; /* the new engine's bounds, from rest */
@@ -342,7 +344,8 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
         note_played(o);
         rejlog_drain(&o->rejlog, o->engine); /* verdicts given by a finish or a tick */
         engine_status(o->engine, &o->status);
-        engine_status_add_counts(&o->status, &o->counts_before);
+        if (o->has_counts_before) /* (not every tick of every object: a reload's) */
+            engine_status_add_counts(&o->status, &o->counts_before);
         if (o->retiring) { /* still braking for a reload: its counts are the object's */
             engine_status_t st;
             engine_status(o->retiring, &st);

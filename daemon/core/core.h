@@ -124,6 +124,7 @@ typedef struct obj {
     engine_status_t counts_before; /* the counters of the engines it had before a reload that
                                     * changed its settings (engine_status_add_counts): its
                                     * counts go on over the reload */
+    int has_counts_before;         /* counts_before holds some (a changed object's) */
     uint64_t skipped_ticks;        /* missed deadlines this object was stepped through with
                                      * no output (added into status.skipped_ticks) */
     int stopping;                  /* obj_push_from refuses: 1 the daemon is stopping,
