@@ -69,7 +69,8 @@ static int bounds_refuse(const obj_t *q, const cfg_obj_t *o, int64_t period_ns, 
 }
 
 /* The object of prev that o (in the new config) may take over, or NULL; why
- * (NULL: not said) gets the reason where only its new safety bounds refuse. */
+ * (NULL: not said) gets the reason where its new safety bounds refuse its
+ * motion, or its speed cap changed (the rest is said elsewhere). */
 obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o, char *why, size_t len)
 {
     if (!prev || prev->stopping)

@@ -23,7 +23,8 @@
 int carry_clock_initial(const cfg_t *cfg, const cfg_obj_t *o);
 
 /* The object of prev that o (in the new config) may take over, or NULL; why
- * (NULL: not said) gets the reason where only its safety bounds refuse. */
+ * (NULL: not said) gets the reason where its new safety bounds refuse its
+ * motion, or its speed cap changed. */
 obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o, char *why, size_t len);
 
 /* o->resume_t_s, o->played_t_s/track and o->born_ns from prev's object of
