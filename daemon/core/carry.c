@@ -36,6 +36,14 @@ static int same_input(const obj_t *q, const cfg_obj_t *o)
                             : !(in->obj_cfg_size && memcmp(a, b, in->obj_cfg_size) != 0);
 }
 
+/* q's engine moves (its last setpoint not a hold): a reload that changes q
+ * keeps it braking (retire_moving). */
+static int moving_engine(const obj_t *q)
+{
+    return q->engine && q->sp.cycle != 0 &&
+           !(q->sp.flags & (ENGINE_SP_HOLD | ENGINE_SP_NO_POSITION));
+}
+
 /* The norm of v. */
 static double norm3(const double v[ENGINE_AXES])
 {
@@ -56,8 +64,7 @@ static double norm3(const double v[ENGINE_AXES])
 static int bounds_refuse(const obj_t *q, const cfg_obj_t *o, char *why, size_t len)
 {
     const safety_t *s = &q->safety;
-    if (q->sp.cycle == 0 || (q->sp.flags & (ENGINE_SP_HOLD | ENGINE_SP_NO_POSITION)) ||
-        safety_fault(s) || !s->have_pos)
+    if (!moving_engine(q) || safety_fault(s) || !s->have_pos)
         return 0;
     safety_limits_t lim;
     obj_safety_limits(o, &lim);
@@ -99,7 +106,7 @@ obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o, char *wh
         return NULL;
     double cap0 = q->cfg->engine.cap_speed_m_s, cap1 = o->engine.cap_speed_m_s;
     if (cap0 < cap1 || cap0 > cap1) { /* its engine keeps the old one */
-        if (why && !(q->sp.flags & (ENGINE_SP_HOLD | ENGINE_SP_NO_POSITION)))
+        if (why && moving_engine(q))
             snprintf(why, len,
                      "its safety_max_speed_m_s changed, which its engine keeps (%g -> %g m/s "
                      "of output speed, 0: none)",
@@ -131,14 +138,6 @@ void carry_resume_input(obj_t *o, core_t *prev)
     o->born_ns = q->born_ns;
 }
 
-/* q's engine moves (its last setpoint not a hold): a reload that changes q
- * keeps it braking (retire_moving). */
-static int moving_engine(const obj_t *q)
-{
-    return q->engine && q->sp.cycle != 0 &&
-           !(q->sp.flags & (ENGINE_SP_HOLD | ENGINE_SP_NO_POSITION));
-}
-
 /* A reloaded object that gets a new engine while its old one moves: the old
  * one is kept braking to rest (engine_stop, at reload_commit) and hands over
  * there.  Borrowed: prev keeps its engines until the reload commits. */
@@ -151,13 +150,9 @@ static void retire_moving(obj_t *o, core_t *prev)
      * retiring one's at its handover, step_engines) */
     o->counts_before = q->counts_before;
     o->has_counts_before = q->has_counts_before;
-    engine_status_t st;
-    if (!o->carried && q->engine && (q->retiring || !moving_engine(q))) {
-        engine_status(q->engine, &st); /* given up here */
-        engine_status_add_counts(&o->counts_before, &st);
-        o->has_counts_before = 1;
-    }
-    if (q->retiring) { /* still braking from an earlier reload */
+    if (!o->carried && q->engine && (q->retiring || !moving_engine(q)))
+        obj_counts_take(o, q->engine); /* given up here */
+    if (q->retiring) {                 /* still braking from an earlier reload */
         o->retiring = q->retiring;
         o->retire_ns = q->retire_ns;
     } else if (!o->carried && moving_engine(q)) {

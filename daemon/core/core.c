@@ -112,6 +112,14 @@ double obj_delay_s(const core_t *c, const obj_t *o)
     return d.delay_s;
 }
 
+void obj_counts_take(obj_t *o, const engine_t *e)
+{
+    engine_status_t st;
+    engine_status(e, &st);
+    engine_status_add_counts(&o->counts_before, &st);
+    o->has_counts_before = 1;
+}
+
 void obj_reset_counters(obj_t *o)
 {
     engine_reset_counters(o->engine);
@@ -265,10 +273,7 @@ static void step_engines(core_t *c, int64_t now_ns, int64_t real_ns, int sent)
             own.state != ENGINE_STATE_UNDERRUN) {
             if (!(o->sp.flags & ENGINE_SP_NO_POSITION))
                 (void)engine_set_position(o->engine, o->sp.pos_m); /* within max_abs_m: checked */
-            engine_status_t st; /* its counts go on (core.h counts_before) */
-            engine_status(o->retiring, &st);
-            engine_status_add_counts(&o->counts_before, &st);
-            o->has_counts_before = 1;
+            obj_counts_take(o, o->retiring);                       /* its counts go on */
             engine_free(o->retiring);
             o->retiring = NULL;
             safety_limits_t lim; /* the new engine's bounds, from rest */

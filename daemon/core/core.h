@@ -278,6 +278,9 @@ int obj_push_from(obj_t *o, const engine_waypoint_t *wp, const char *src);
 
 /* Reset o's counters: the engine's and the daemon's own (the reset command). */
 void obj_reset_counters(obj_t *o);
+/* Add the counters of e, an engine o gives up (a reload that changed its
+ * settings), to o->counts_before: its counts go on. */
+void obj_counts_take(obj_t *o, const engine_t *e);
 /* The safety monitor's bounds of configured object o (the derived ones
  * from its engine's limits). */
 void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim);
