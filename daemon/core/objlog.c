@@ -42,10 +42,13 @@ static void obj_log_delay(const obj_t *o, const char *what)
 }
 
 /* In the tick: a trajectory that started streaming is noted with its D (a
- * copy, no line: log.h), for objlog_roll to tell. */
+ * copy, no line: log.h), for objlog_roll to tell: at its first row on its
+ * curve, not on the transfer to it (a transfer that leads to a start not yet
+ * due comes before the start states its D: lib/engine/transfer.h). */
 void objlog_note_start(obj_t *o)
 {
-    if (o->sp.track == o->delay_track || o->sp.state != ENGINE_STATE_STREAMING)
+    if (o->sp.track == o->delay_track || o->sp.state != ENGINE_STATE_STREAMING ||
+        (o->sp.flags & ENGINE_SP_TRANSFER))
         return;
     o->delay_track = o->sp.track;
     if (o->delay_logs++ >= OBJ_DELAY_LOG_FIRST && o->sp.track % OBJ_DELAY_LOG_EVERY)

@@ -256,6 +256,9 @@ typedef struct {
     transfer_config_t cfg;
     transfer_motion_t motion; /* the object's recent motion (noted by the input) */
     double from_t;            /* out.t when the transfer under way began (NAN: none before) */
+    int lead;                 /* the transfer under way, or the rest after it, leads to
+                                 the start of a trajectory not due yet (xfer_lead_target) */
+    double to_t;              /* ... that start's track time */
 } engine_xfer_t;
 
 /* ---- one clock (engine_set_clock, CLOCK.md; engine_scale.c) ---- */
@@ -421,6 +424,9 @@ void play_underrun_counted(engine_t *e);
 void play_seed_cur(engine_t *e, int64_t n);
 void play_take_segment(engine_t *e);
 void play_start(engine_t *e, int new_flag);
+/* A transfer has ended on its target: the trajectory there starts, or, a
+ * lead transfer's not due yet, the output rests there until it is. */
+void play_xfer_end(engine_t *e);
 void play_stop_at_rest(engine_t *e);
 void play_rest_at_end(engine_t *e, const qent_t *h);
 void play_finish_here(engine_t *e);
@@ -461,6 +467,11 @@ void scale_clocked_step(engine_t *e, double R, double A, double J);
 double xfer_duration(const engine_t *e, const double *target, double gap_s, int *capped);
 void xfer_start(engine_t *e, const double *target, double gap_s);
 void xfer_track_time(engine_t *e);
+/* issue 26: the start of the input's newest trajectory, where a resting
+ * output that is not there may move before that trajectory's output is due
+ * (transfer.h "Lead"): its position, track time and the gap before it.
+ * Returns 1 if there is one to lead to now. */
+int xfer_lead_target(const engine_t *e, double *target, double *t0_s, double *gap_s);
 
 /* ---- transfers that keep moving (join.c) ---- */
 

@@ -552,7 +552,7 @@ static void rest_handover(engine_t *e)
     if (e->out.mode == OUT_XFER) {
         fdiff_eval(&e->out.cur.seg, 1.0, end, NULL, NULL);
         if (near_here(e, end))
-            play_start(e, 0);
+            play_xfer_end(e);
         return;
     }
     if (e->out.mode != OUT_STREAM || !e->scale.avail_closed)
@@ -721,7 +721,7 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
             e->scale.ts.rate = e->scale.ts.acc = 0.0;
             if (e->scale.stop_req)
                 break; /* stop on its end */
-            play_start(e, 0);
+            play_xfer_end(e);
             if (e->out.mode != OUT_STREAM)
                 return;
             s1 = 0.0;

@@ -183,6 +183,7 @@ void play_stop_at_rest(engine_t *e)
         queue_pop(e);
     e->scale.drop_n = 0;
     e->out.mode = OUT_HOLD;
+    e->xfer.lead = 0;
     hold_here(e);
     e->out.finished = e->scale.stop_req == STOP_STOP;
     e->scale.stop_req = STOP_NONE;
@@ -324,6 +325,22 @@ void play_start(engine_t *e, int new_flag)
     }
 }
 
+void play_xfer_end(engine_t *e)
+{
+    if (!e->xfer.lead) {
+        play_start(e, 0);
+        return;
+    }
+    /* rest on the start, its track time: step_once starts the trajectory
+     * from here (led: the same track) once it is due */
+    fdiff_eval(&e->out.cur.seg, 1.0, e->out.pos, NULL, NULL);
+    e->out.on_fd = 0;
+    e->out.t = e->xfer.to_t;
+    e->out.mode = OUT_HOLD;
+    hold_here(e);
+    unit_reset(e);
+}
+
 /* One forward step of cur (with a re-seed at deterministic ticks). */
 static inline void step_cur(engine_t *e, int64_t n)
 {
@@ -360,7 +377,7 @@ __attribute__((noinline)) static int unit_cross(engine_t *e, int64_t n, double t
             /* not reached: scale_remaining() brakes the transfer to rate 0 before its
              * end; should it be, the trajectory is entered at rate 0 as well */
             scale_rest(e);
-            play_start(e, 0); /* the transfer ends exactly on its start */
+            play_xfer_end(e); /* the transfer ends exactly on its start */
             return 1;
         }
         e->out.n = n;
@@ -627,6 +644,18 @@ static void step_once(engine_t *e)
         qent_t *h = q_head(e);
         double lag = NAN; /* the start's ramp, if enough_ahead simulated it */
         if (!h || !h->first || !enough_ahead(e, h, &lag) || (!e->out.have_pos && e->out.need_pos)) {
+            double target[AX], t0, gap;
+            if (xfer_lead_target(e, target, &t0, &gap)) {
+                /* issue 26: on to its start while its output is not due */
+                unit_reset(e);
+                xfer_start(e, target, gap);
+                e->xfer.lead = 1;
+                e->xfer.to_t = t0;
+                scale_rest(e);
+                e->out.n++;
+                scale_eval(e);
+                return;
+            }
             hold_here(e);
             return;
         }
@@ -655,6 +684,9 @@ static void step_once(engine_t *e)
                 return;
             }
         }
+        /* where a lead transfer left it: the same track */
+        int led = e->xfer.lead && !xfer;
+        e->xfer.lead = 0;
         unit_reset(e);
         engine_delay_note(e, lag); /* issue 26: the D this start holds */
         if (xfer) {
@@ -665,7 +697,7 @@ static void step_once(engine_t *e)
         } else {
             if (!e->clk.on)
                 scale_rest(e);
-            play_start(e, 1);
+            play_start(e, !led);
         }
         return;
     }
@@ -844,8 +876,11 @@ int play_stalled(const engine_t *e)
 
     if (engine_silence_soon(e))
         return 0; /* issue 26: a silent end may come without a push (silence.h) */
-    if (e->out.mode == OUT_HOLD)
-        return !h || !h->first || !enough_ahead(e, h, NULL);
+    if (e->out.mode == OUT_HOLD) {
+        double target[AX], t0, gap;
+        return (!h || !h->first || !enough_ahead(e, h, NULL)) &&
+               !xfer_lead_target(e, target, &t0, &gap);
+    }
     if (e->out.mode == OUT_STREAM && e->scale.on && at_rest(e) && !e->scale.stop_req &&
         !e->scale.end_brake) {
         double A, J, target = scale_target(e);

@@ -65,6 +65,40 @@ double xfer_duration(const engine_t *e, const double *target, double gap_s, int 
     return dur;
 }
 
+int xfer_lead_target(const engine_t *e, double *target, double *t0_s, double *gap_s)
+{
+    /* a resting output, off a clock (which leads by its own play time:
+     * CLOCK.md), with a curve that starts on its first waypoint (not held
+     * or multiple ends, no smoother moving it) */
+    if (e->clk.on || e->out.mode != OUT_HOLD || !e->out.have_pos || e->scale.stop_req || e->held ||
+        e->smooth)
+        return 0;
+    if (e->queue.len) {
+        const qent_t *h = queue_at(e, 0);
+        if (h->kind != QE_SEG || !h->first || h->traj == e->out.traj)
+            return 0;
+        for (int k = 0; k < AX; k++)
+            target[k] = h->seg.c[k][0];
+        *t0_s = h->seg.t0_s;
+        *gap_s = h->gap_s;
+    } else {
+        /* none queued yet: the input's open trajectory, once two of its
+         * waypoints are kept (a chord: the pace it moves at, transfer.h) */
+        if (!e->in.open || e->solve.traj == e->out.traj || e->solve.nodes < 2 ||
+            e->solve.nodes > e->solve.ring)
+            return 0;
+        const double *r = e->solve.node_r + 0; /* node 0 (nr), read only */
+        for (int k = 0; k < AX; k++)
+            target[k] = r[k];
+        *t0_s = e->solve.node_t[0];
+        *gap_s = e->in.gap_s;
+    }
+    double d2 = 0;
+    for (int k = 0; k < AX; k++)
+        d2 += (target[k] - out_pos(e)[k]) * (target[k] - out_pos(e)[k]);
+    return sqrt(d2) > ENGINE_TRANSFER_TOL_M;
+}
+
 /* Start a transfer from the output position to target (transfer.h). */
 void xfer_start(engine_t *e, const double *target, double gap_s)
 {
@@ -73,6 +107,8 @@ void xfer_start(engine_t *e, const double *target, double gap_s)
 
     memset(&e->out.cur, 0, sizeof(e->out.cur));
     e->xfer.from_t = e->out.track ? e->out.t : NAN;
+    e->xfer.lead = 0;
+    e->xfer.to_t = NAN;
     e->out.cur.kind = QE_SEG;
     transfer_segment(&e->out.cur.seg, out_pos(e), target, dur);
     e->out.cur.vmax = solve_seg_speed_max(&e->out.cur.seg);
@@ -99,10 +135,10 @@ void xfer_start(engine_t *e, const double *target, double gap_s)
 void xfer_track_time(engine_t *e)
 {
     const qent_t *h = e->queue.len ? &e->queue.ent[e->queue.head] : NULL; /* q_head, read only */
-    if (!h || !(e->out.cur_t1 > 0))
+    if ((!h && !e->xfer.lead) || !(e->out.cur_t1 > 0))
         return;
     double t = out_s(e), u = t / e->out.cur_t1;
-    double to = h->kind == QE_END ? h->t1_s : h->seg.t0_s;
+    double to = e->xfer.lead ? e->xfer.to_t : h->kind == QE_END ? h->t1_s : h->seg.t0_s;
     u = u < 0 ? 0 : u > 1 ? 1 : u;
     if (isnan(e->xfer.from_t))
         e->out.t = to - (1.0 - u) * e->out.cur_t1;

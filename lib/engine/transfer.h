@@ -30,6 +30,16 @@
  * (*capped).  With both limits configured the duration is not capped: the
  * configured limits are the machine's, and the engine still finishes, in
  * 1.5 D / v + sqrt(6 D / a) at most.
+ *
+ * Lead (issue 26): an output resting off the start of the input's newest
+ * trajectory sets off to it once two of its waypoints are kept (the curve
+ * starts on the first: not held or multiple ends, no smoother; and not on a
+ * caller's clock, which leads by its own play time), not once that
+ * trajectory's output is due, a lookahead and a ramp later.  It then rests
+ * on the start until its output is due, and starts from there on the same
+ * output track.  The wait for the lookahead and the transfer overlap, so
+ * the lag a trajectory after a silence starts with is the transfer's excess
+ * over that wait, not the transfer's whole duration.
  */
 #ifndef TRAJD_TRANSFER_H
 #define TRAJD_TRANSFER_H

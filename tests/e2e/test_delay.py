@@ -433,6 +433,51 @@ class TestLagWonBack(unittest.TestCase):
             self.assertGreater(ends[k], D - H)
         self.assertLessEqual(max(starts) - min(starts), H)
 
+    def test_transfer_leads_to_a_piece_not_due(self):
+        """Six pieces of 40 s, 55 s apart, each starting 3 m beside the last
+        one's end (tests/bench/bench_delay.py (b)): the output, resting at a
+        piece's end, sets off to the next piece's start once two of its
+        waypoints are kept (within 3 intervals of its first one's arrival),
+        not once its first segment is solved and due (19 intervals later),
+        and each piece ends back at D (before: 1.7 s behind it, the
+        transfer's and the lookahead's wait not won back in 40 s)."""
+        with tempfile.TemporaryDirectory() as tmp:
+            path = os.path.join(tmp, "gaps.csv")
+            t, x, y = track(400)
+            tt, xx, yy = [], [], []
+            ox = oy = 0.0
+            for k in range(6):
+                tt.append(55.0 * k + t)
+                xx.append(x + ox)
+                yy.append(y + oy)
+                ox += x[-1] - x[0] + 3.0
+                oy += y[-1] - y[0]
+            write_track(path, np.concatenate(tt), np.concatenate(xx), np.concatenate(yy))
+            p = replay(path)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            s = replay_summary.parse(p.stderr)
+        self.assertEqual(s["underruns"], 0)
+        self.assertEqual(s["transfers"], 5)
+        D = s["delay_s"]
+        rows = list(csv.DictReader(io.StringIO(p.stdout)))
+        now = np.array([int(r["now_ns"]) * 1e-9 for r in rows])
+        ts = np.array([float(r["t_s"]) for r in rows])
+        flags = np.array([int(r["flags"]) for r in rows])
+        xfer = (flags & 0x08) != 0   # ENGINE_SP_TRANSFER
+        free = (flags & 0x40) == 0   # not ENGINE_SP_SCALED: rate 1, before the tail's brake
+        track_no = np.array([int(r["track"]) for r in rows])
+        streaming = np.array([r["state"] == "streaming" for r in rows])
+        for k in range(1, 6):
+            tr = k + 1
+            first_xfer = now[np.flatnonzero(xfer & (track_no == tr))[0]]
+            self.assertLessEqual(first_xfer - 55.0 * k, 3 * H + 2 * T,
+                                 "piece %d: transfer set off %.3f s after its first waypoint"
+                                 % (k + 1, first_xfer - 55.0 * k))
+            on = np.flatnonzero(streaming & ~xfer & free & (track_no == tr))
+            end_lag = now[on[-1]] - ts[on[-1]]
+            self.assertLessEqual(abs(end_lag - D), 0.5 * H + 2 * T,
+                                 "piece %d ends %.3f s behind, D %.3f" % (k + 1, end_lag, D))
+
     def test_lag_of_a_closed_trajectory_told(self):
         """gpxpy_cerknicko-jezero.csv: a trajectory whose whole input came while a long
         transfer crossed the gap before it is closed when the output reaches it; it is
