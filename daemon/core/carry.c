@@ -96,7 +96,7 @@ static int bounds_refuse(const obj_t *q, const cfg_obj_t *o, char *why, size_t l
 
 /* The object of prev that o (in the new config) may take over, or NULL; why
  * (NULL: not said) gets the reason where its new safety bounds refuse its
- * motion, or its speed cap changed (the rest is said elsewhere). */
+ * motion, or its speed or acceleration cap changed (the rest is said elsewhere). */
 obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o, char *why, size_t len)
 {
     if (!prev || prev->stopping)
@@ -110,6 +110,16 @@ obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o, char *wh
             snprintf(why, len,
                      "its safety_max_speed_m_s changed, which its engine keeps (%g -> %g m/s "
                      "of output speed, 0: none)",
+                     cap0, cap1);
+        return NULL;
+    }
+    cap0 = q->cfg->engine.cap_accel_m_s2;
+    cap1 = o->engine.cap_accel_m_s2;
+    if (cap0 < cap1 || cap0 > cap1) {
+        if (why && moving_engine(q))
+            snprintf(why, len,
+                     "its safety_max_accel_m_s2 changed, which its engine keeps (%g -> %g m/s^2 "
+                     "of output acceleration, 0: none)",
                      cap0, cap1);
         return NULL;
     }

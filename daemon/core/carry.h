@@ -24,7 +24,7 @@ int carry_clock_initial(const cfg_t *cfg, const cfg_obj_t *o);
 
 /* The object of prev that o (in the new config) may take over, or NULL; why
  * (NULL: not said) gets the reason where its new safety bounds refuse its
- * motion, or its speed cap changed. */
+ * motion, or its speed or acceleration cap changed. */
 obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o, char *why, size_t len);
 
 /* o->resume_t_s, o->played_t_s/track and o->born_ns from prev's object of

@@ -689,6 +689,16 @@ static int check_obj(parse_t *p, unsigned i)
     o->engine.cap_speed_m_s = own > 0 && CFG_SAFETY_SPEED_SHARE * vb >= own
                                   ? 0.0
                                   : CFG_SAFETY_SPEED_SHARE * vb;
+    /* and its acceleration bound (engine.h cap_accel_m_s2), where one is
+     * configured and lies below what the engine's own limits let the output
+     * reach: the profile's acceleration limit, the curve held to it by the
+     * rate ceilings (a configured max_accel_m_s2 bounds the waypoints' chords
+     * only: none then), and a transfer's configured acceleration */
+    double ab = o->safety_max_accel_m_s2 > 0 ? CFG_SAFETY_SPEED_SHARE * o->safety_max_accel_m_s2
+                                             : 0.0;
+    double aown = o->engine.max_accel_m_s2 < 0 ? engine_config_max_accel(&o->engine) : 0.0;
+    aown = aown > 0 ? fmax(aown, o->engine.transfer_accel_m_s2) : 0.0; /* 0: unbounded */
+    o->engine.cap_accel_m_s2 = aown > 0 && ab >= aown ? 0.0 : ab;
     for (size_t k = 0; k < engine_settings_count; k++) { /* set, and no effect: said */
         const char *u = engine_setting_unused(&engine_settings[k], &o->engine);
         if (u)

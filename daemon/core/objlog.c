@@ -127,13 +127,17 @@ static void warn_axis(obj_t *o)
     }
     if (!o->limits_warned && st->limits_lost_s > 1.0 && st->limits_lost_s > 0.1 * streamed_s) {
         o->limits_warned = 1;
+        /* the safety bounds the engine keeps (engine.h cap_*) among them */
+        const engine_config_t *ec = &o->cfg->engine;
         log_msg(LOG_WARNING,
                 "object '%s': its curve exceeds its own speed or acceleration limit "
-                "(max_speed_m_s, max_accel_m_s2: the profile's): %.1f s lost to them so far over "
-                "%llu segments; its output lags its input by that much beyond D and the lag "
+                "(max_speed_m_s, max_accel_m_s2: the profile's%s%s): %.1f s lost to them so far "
+                "over %llu segments; its output lags its input by that much beyond D and the lag "
                 "grows while the track does (jittery stamps bend the curve: profile = none, or "
                 "a higher max_accel_m_s2)",
-                o->name, st->limits_lost_s, (unsigned long long)st->limits_slowed);
+                o->name, ec->cap_speed_m_s > 0 ? "; safety_max_speed_m_s, which it keeps" : "",
+                ec->cap_accel_m_s2 > 0 ? "; safety_max_accel_m_s2, which it keeps" : "",
+                st->limits_lost_s, (unsigned long long)st->limits_slowed);
     }
     if (st->axis_lag_stops != o->axis_stops_logged) {
         o->axis_stops_logged = st->axis_lag_stops;

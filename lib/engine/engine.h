@@ -366,6 +366,15 @@ typedef struct {
                              (trajd: 95 % of a configured safety_max_speed_m_s where that
                              is below ENGINE_SPEED_CAP x its speed limit, so the monitor
                              never has to hold the motion the engine plans) */
+    double cap_accel_m_s2; /* the output's acceleration never exceeds it (0, the default:
+                              no such cap): the time scaling's own share is at most
+                              ENGINE_CAP_SCALE_SHARE of it (scale_accel_m_s2 is lowered to
+                              that where above: engine_config_resolve), each segment whose
+                              curve asks more than the rest gets a rate ceiling, transfers
+                              last long enough; waypoints kept and passed exactly, their
+                              timing yields.  Not a setting: the caller's bound (trajd: 95 %
+                              of a configured safety_max_accel_m_s2 where that is below
+                              what the engine's own limits let the output reach) */
 } engine_config_t;
 
 /* Fill cfg with working defaults (each one commented above; documented in
@@ -384,6 +393,9 @@ void engine_config_default(engine_config_t *cfg);
  * slows down there (lib/engine/TIMESCALE.md, "Speed cap").  Below the
  * daemon's default safety bound, twice the limit. */
 #define ENGINE_SPEED_CAP 1.5
+/* The time scaling's share of cap_accel_m_s2 at most (engine_config_t): the
+ * curve's own acceleration, held by the segments' rate ceilings, has the rest. */
+#define ENGINE_CAP_SCALE_SHARE 0.5
 
 /* The limits in force: the field, or the profile's if ENGINE_LIMIT_PROFILE
  * (0 = no limit). */

@@ -336,7 +336,9 @@ double scale_ceil_here(const engine_t *e)
 {
     if (e->out.mode == OUT_STREAM)
         return e->out.cur.ceil;
-    return e->out.mode == OUT_XFER && solve_axis_limited(e) ? 1.0 : INFINITY;
+    return e->out.mode == OUT_XFER && (solve_axis_limited(e) || e->cfg.cap_accel_m_s2 > 0)
+               ? 1.0
+               : INFINITY;
 }
 
 /* The jerk of a stop or clear (m/s^3): at least a / T, so that the braking

@@ -139,6 +139,9 @@ const engine_setting_t engine_settings[] = {
       "the lag the per-axis limits may cause, s: beyond it the object stops (0: unbounded)"),
     S(cap_speed_m_s, NULL, DOUBLE, ENGINE_SETTING_DERIVED, 0, 1e9, NULL, NULL,
       "the output's speed cap, m/s: 95 % of a configured safety_max_speed_m_s (trajd; 0: none)"),
+    S(cap_accel_m_s2, NULL, DOUBLE, ENGINE_SETTING_DERIVED, 0, 1e9, NULL, NULL,
+      "the output's acceleration cap, m/s^2: 95 % of a configured safety_max_accel_m_s2 "
+      "(trajd; 0: none)"),
 };
 
 const size_t engine_settings_count = sizeof engine_settings / sizeof engine_settings[0];
@@ -651,6 +654,10 @@ int engine_config_resolve(const engine_config_t *cfg, engine_config_t *out)
 {
     *out = *cfg;
     resolve_axis_limits(out);
+    /* the caller's acceleration cap: the time scaling's share of it (engine.h) */
+    if (cfg->cap_accel_m_s2 > 0 &&
+        out->scale_accel_m_s2 > ENGINE_CAP_SCALE_SHARE * cfg->cap_accel_m_s2)
+        out->scale_accel_m_s2 = ENGINE_CAP_SCALE_SHARE * cfg->cap_accel_m_s2;
     if (cfg->overlap == ENGINE_AUTO) {
         if (!(cfg->accuracy > 0) || !isfinite(cfg->accuracy))
             return -ENGINE_ECONFIG;
@@ -769,6 +776,8 @@ int engine_config_check(const engine_config_t *cfg_in, const char **why)
         w = "transfer_accel_m_s2: must be 0 (derived) or positive and finite";
     else if (!(cfg->cap_speed_m_s >= 0) || !isfinite(cfg->cap_speed_m_s))
         w = "cap_speed_m_s: must be 0 (none) or positive and finite";
+    else if (!(cfg->cap_accel_m_s2 >= 0) || !isfinite(cfg->cap_accel_m_s2))
+        w = "cap_accel_m_s2: must be 0 (none) or positive and finite";
     else if (!(cfg->max_segment_s >= 0) || !isfinite(cfg->max_segment_s))
         w = "max_segment_s: must be 0 or positive and finite";
     else if (!(cfg->scale_accel_m_s2 > 0) || !isfinite(cfg->scale_accel_m_s2))

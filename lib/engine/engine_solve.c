@@ -157,6 +157,12 @@ static double seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax
         c = ENGINE_SPEED_CAP * v / vmax;
     if (e->cfg.cap_speed_m_s > 0 && vmax > 0) /* the caller's cap (engine.h) */
         c = fmin(c, e->cfg.cap_speed_m_s / vmax);
+    if (e->cfg.cap_accel_m_s2 > 0) { /* the caller's cap: the curve's share (engine.h) */
+        double room = e->cfg.cap_accel_m_s2 - e->cfg.scale_accel_m_s2;
+        double kdd = seg_accel_max(seg);
+        if (kdd > 0) /* at any rate, a feed override's too */
+            c = fmin(c, sqrt(room / kdd));
+    }
     if (e->cfg.max_accel_m_s2 < 0) {
         double room = engine_config_max_accel(&e->cfg) - e->cfg.scale_accel_m_s2;
         double kdd = room > 0 ? seg_accel_max(seg) : 0.0;

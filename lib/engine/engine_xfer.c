@@ -51,6 +51,10 @@ double xfer_duration(const engine_t *e, const double *target, double gap_s, int 
      * the smoothstep's peak speed 1.5 D/T, acceleration 6 D/T^2, jerk 12 D/T^3
      * per axis, the jerk within half the limit as on the curve */
     double dur0 = dur;
+    if (e->cfg.cap_accel_m_s2 > 0) /* the caller's cap (engine.h): the peak 6 D/T^2 within
+                                      what the time scaling's share leaves, at rate 1 at most
+                                      (scale_ceil_here) */
+        dur = fmax(dur, sqrt(6.0 * dist / (e->cfg.cap_accel_m_s2 - e->cfg.scale_accel_m_s2)));
     for (int k = 0; k < AX; k++) {
         double d = fabs(target[k] - out_pos(e)[k]);
         if (e->cfg.axis_max_speed_m_s[k] > 0)

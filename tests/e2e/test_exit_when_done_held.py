@@ -2,8 +2,8 @@
 holds, with exit 75, and a full buffer counts each waypoint once.
 
 The real trajd replays a 60 s track at 5 m/s (10 Hz) at speed 20 with exit_when_done = yes
-and safety_max_accel_m_s2 = 0.5: the monitor holds the object as soon as its start accelerates
-beyond it (a speed bound would not do: one set is kept by the engine, which slows), and only a
+and a position box it leaves at x = 10 m: the monitor holds the object there (a speed or
+acceleration bound would not do: one set is kept by the engine, which slows), and only a
 clear would move it again. Its replay then offers the next row at every tick, each
 refused with a full buffer. trajd must end by itself (the track takes 3 s of wall time, the
 wait is bounded at 60 s) with exit 75 and an error line naming the held object, and the exit
@@ -37,7 +37,8 @@ class ExitWhenDoneHeld(unittest.TestCase):
                 f.write("[daemon]\nrate_hz = 100\nspeed = 20\nexit_when_done = yes\n"
                         "status_interval_s = 0\ncontrol_socket = %s/ctl\n"
                         "[object.a]\ninput = replay\nreplay.track = line.csv\noutput = csv\n"
-                        "csv.path = a.csv\nmax_speed_m_s = 10\nsafety_max_accel_m_s2 = 0.5\n" % tmp)
+                        "csv.path = a.csv\nmax_speed_m_s = 10\nposition_min_m = -1000, -1000, -1000\n"
+                        "position_max_m = 10, 1000, 1000\n" % tmp)
             try:
                 p = subprocess.run([TRAJD, "-f", "-c", conf], cwd=tmp, capture_output=True,
                                    text=True, timeout=60)

@@ -41,11 +41,12 @@ printf '[object.boat]\ninput = replay\nreplay.track = %s\noutput = stdout\nends 
 { echo t,x,y,z; i=0; while [ $i -le 40 ]; do echo "$i,$((2 * i)),0,0"; i=$((i + 1)); done; } > "$tmp/fast.csv"
 printf '[daemon]\nrate_hz = 20\nspeed = 20\nexit_when_done = yes\nstatus_interval_s = 0\n' > "$tmp/h.conf"
 printf '[object.a]\ninput = replay\nreplay.track = fast.csv\noutput = csv\ncsv.path = out.csv\n' >> "$tmp/h.conf"
-# (an acceleration bound: a speed bound set is kept by the engine, which slows)
-printf 'safety_max_accel_m_s2 = 0.1\n' >> "$tmp/h.conf"
+# (a position box it leaves at x = 20 m: a speed or an acceleration bound set is
+# kept by the engine, which slows)
+printf 'position_min_m = -1000,-1000,-1000\nposition_max_m = 20,1000,1000\n' >> "$tmp/h.conf"
 (cd "$tmp" && timeout -k 5 120 "$TD" -f -c h.conf 2> err); rc=$?  # bounded: a hang fails
 [ $rc -eq 75 ] && ok || bad "safety hold: exit $rc, want 75"
-grep -q "object 'a' ended held: acceleration above safety_max_accel_m_s2" "$tmp/err" && ok ||
+grep -q "object 'a' ended held: position outside position_min_m .. position_max_m" "$tmp/err" && ok ||
     { bad "safety hold not named:"; cat "$tmp/err"; }
 
 # trajreplay -o on its own track by another spelling: refused, the track intact (item 5)

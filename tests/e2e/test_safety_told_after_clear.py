@@ -2,9 +2,10 @@
 the object is still held.
 
 The real trajd replays a figure-eight (5 Hz, up to 14 m/s) at speed 2 with
-safety_max_accel_m_s2 = 2 (a bound the engine does not keep; a speed bound it keeps, slowing
-along the path): the monitor holds the object early on, refusing a setpoint every tick. The bound is raised by a reload (the object is carried over, still held) and trajctl
-clear releases it. The monitor's count of refused setpoints is told once a second; the line
+a position box it leaves at x = 20 m (a bound the engine does not keep; a speed or an
+acceleration bound it keeps, slowing along the path): the monitor holds the object early on,
+refusing a setpoint every tick. The box is widened by a reload (the object is carried over,
+still held) and trajctl clear releases it. The monitor's count of refused setpoints is told once a second; the line
 told after the clear must not say "holding at ... until 'clear'" (it did, every time: an
 operator reading the journal believed the object still held).
 """
@@ -29,7 +30,8 @@ def conf(tmp, bound):
                 "control_socket = %s/ctl\n[object.obj]\nid = 0\ninput = replay\n"
                 "replay.track = track.csv\noutput = csv\ncsv.path = out.csv\nwritable = yes\n"
                 "profile = vessel\nmax_speed_m_s = 20\nmax_accel_m_s2 = 10\n"
-                "safety_max_accel_m_s2 = %d\n" % (tmp, bound))
+                "position_min_m = -1000, -1000, -1000\nposition_max_m = %d, 1000, 1000\n"
+                % (tmp, bound))
 
 
 class SafetyToldAfterClear(unittest.TestCase):
@@ -42,7 +44,7 @@ class SafetyToldAfterClear(unittest.TestCase):
                     t = 0.2 * i
                     f.write("%.6f,%.6f,%.6f,0.0\n" % (t, R * math.sin(v / R * t),
                                                        0.5 * R * math.sin(2 * v / R * t)))
-            conf(tmp, 2)
+            conf(tmp, 20)
             p = subprocess.Popen([os.path.join(BIN, "trajd"), "-f", "-c", "t.conf"], cwd=tmp,
                                  stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                                  stderr=subprocess.PIPE, text=True)
@@ -50,7 +52,7 @@ class SafetyToldAfterClear(unittest.TestCase):
             try:
                 self.assertIsNotNone(lines.wait_for("safety monitor", 30), "".join(lines.all))
                 time.sleep(1)
-                conf(tmp, 400)
+                conf(tmp, 1000)
                 p.send_signal(signal.SIGHUP)
                 self.assertIsNotNone(lines.wait_for("reloaded:", 30), "".join(lines.all))
                 time.sleep(0.5)

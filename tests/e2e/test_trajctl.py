@@ -467,12 +467,12 @@ class TestPlace(unittest.TestCase):
         return d
 
     def test_start_refused_while_held_says_why(self):
-        # Given boat held by its safety monitor (an acceleration bound below its motion), when
+        # Given boat held by its safety monitor (a position box its circle leaves), when
         # trajctl start is sent, then it is refused (exit 1) naming the hold and the
         # command that releases it (it said "call not valid in this state")
         text = config(self.tmp).replace("output = csv\ncsv.path = %s\n" % os.path.join(
-            self.tmp, "boat.csv"), "output = csv\ncsv.path = %s\nsafety_max_accel_m_s2 = 0.01\n"
-            % os.path.join(self.tmp, "boat.csv"), 1)
+            self.tmp, "boat.csv"), "output = csv\ncsv.path = %s\nposition_min_m = -1000, -1000, "
+            "-1000\nposition_max_m = 1000, 5, 1000\n" % os.path.join(self.tmp, "boat.csv"), 1)
         d = self.start(text)
         d.msg(lambda f: f.get("READY") == "1", timeout=TIMEOUT_S)
         sock = os.path.join(self.tmp, "ctl.sock")
