@@ -673,32 +673,7 @@ static int check_obj(parse_t *p, unsigned i)
             return -1;
         }
     o->engine.period_ns = c->daemon.period_ns;
-    /* the monitor's speed bound, where one is configured (safety_max_speed_m_s,
-     * or safety_max_step_m a period: a speed too), kept by the engine along
-     * the path (engine.h cap_speed_m_s): it slows there rather than be held in
-     * one tick (derived, the bound is twice the speed limit, above the
-     * engine's own cap) */
-    double vb = o->safety_max_speed_m_s > 0 ? o->safety_max_speed_m_s : 0.0;
-    if (o->safety_max_step_m > 0) {
-        double vs = o->safety_max_step_m / ((double)c->daemon.period_ns * 1e-9);
-        vb = vb > 0 && vb < vs ? vb : vs;
-    }
-    /* (none where the engine's own cap, ENGINE_SPEED_CAP x its speed limit,
-     * is lower: the documented default written out changes nothing) */
-    double own = ENGINE_SPEED_CAP * engine_config_max_speed(&o->engine);
-    o->engine.cap_speed_m_s = own > 0 && CFG_SAFETY_SPEED_SHARE * vb >= own
-                                  ? 0.0
-                                  : CFG_SAFETY_SPEED_SHARE * vb;
-    /* and its acceleration bound (engine.h cap_accel_m_s2), where one is
-     * configured and lies below what the engine's own limits let the output
-     * reach: the profile's acceleration limit, the curve held to it by the
-     * rate ceilings (a configured max_accel_m_s2 bounds the waypoints' chords
-     * only: none then), and a transfer's configured acceleration */
-    double ab = o->safety_max_accel_m_s2 > 0 ? CFG_SAFETY_SPEED_SHARE * o->safety_max_accel_m_s2
-                                             : 0.0;
-    double aown = o->engine.max_accel_m_s2 < 0 ? engine_config_max_accel(&o->engine) : 0.0;
-    aown = aown > 0 ? fmax(aown, o->engine.transfer_accel_m_s2) : 0.0; /* 0: unbounded */
-    o->engine.cap_accel_m_s2 = aown > 0 && ab >= aown ? 0.0 : ab;
+    cfg_safety_caps(o, c->daemon.period_ns);
     for (size_t k = 0; k < engine_settings_count; k++) { /* set, and no effect: said */
         const char *u = engine_setting_unused(&engine_settings[k], &o->engine);
         if (u)
