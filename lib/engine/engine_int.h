@@ -203,9 +203,14 @@ typedef struct {
     double pos[AX], vel[AX], acc[AX];
     int on_fd;
     /* The rate decision of step_once kept for the ticks ahead (plain_window,
-     * engine_tick.c): plain_left ticks are plain unit-grid steps while the
-     * key below still matches the engine (plain_holds) */
-    int64_t plain_left;
+     * engine_tick.c): the steps from a tick n below plain_last are plain
+     * unit-grid steps while the key below still matches the engine
+     * (plain_holds).  Of those, the steps from a tick n below fast_last also
+     * stay inside cur and are no re-seed (engine_tick makes them itself):
+     * fast_last is the least of plain_last, seg_last (the last tick on the
+     * grid inside cur: tau_of(seg_last) < cur_t1) and the tick before the
+     * next re-seed. */
+    int64_t plain_last, seg_last, fast_last;
     size_t plain_qlen;                /* key: queue.len then */
     int64_t plain_seen;               /* key: lag.seen_ns then (a push since: a new sample) */
     int plain_check;                  /* test hook (engine_plain_check) */

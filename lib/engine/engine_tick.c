@@ -460,6 +460,34 @@ static int decide(engine_t *e, decision_t *d)
     return GO_SCALED;
 }
 
+/* The last tick on the unit grid inside cur, from the current one (which
+ * is inside): the largest n with tau_of(n) < cur_t1, as unit_step compares
+ * them (tau_of is monotonic in n, so the guess from the division is moved
+ * to it by the comparison itself). */
+static int64_t grid_last(const engine_t *e)
+{
+    int64_t n = e->out.n;
+    double x = (e->out.cur_t1 - e->scale.s_off) / e->period_s - (double)n;
+    int64_t m = n + (x > 1.0 ? (x < 0x1p60 ? (int64_t)x : INT64_C(1) << 60) : 0);
+    while (m > n && !(tau_of(e, m) < e->out.cur_t1))
+        m--;
+    while (tau_of(e, m + 1) < e->out.cur_t1)
+        m++;
+    return m;
+}
+
+/* fast_last (engine_out_t) from plain_last, seg_last and the re-seed grid
+ * of step_cur; none while the test hook checks each kept step. */
+static inline void fast_bound(engine_t *e)
+{
+    int64_t n = e->out.n, last;
+    last = n +
+           (int64_t)(FDIFF_RESEED_STEPS - 1 - (uint64_t)(n - e->out.seg_n0) % FDIFF_RESEED_STEPS);
+    last = e->out.seg_last < last ? e->out.seg_last : last;
+    last = e->out.plain_last < last ? e->out.plain_last : last;
+    e->out.fast_last = e->out.plain_check ? INT64_MIN : last;
+}
+
 /*
  * The rate decision kept.  On the unit grid inside a segment, decide()
  * re-derives every tick that nothing asks for another rate: two divisions
@@ -490,7 +518,7 @@ static int decide(engine_t *e, decision_t *d)
  */
 static void plain_window(engine_t *e)
 {
-    e->out.plain_left = 0;
+    e->out.plain_last = e->out.fast_last = INT64_MIN; /* none kept */
     if (e->out.mode != OUT_STREAM || e->scale.on || e->clk.on || e->out.underrun ||
         !e->out.have_pos || e->scale.stop_req || e->scale.end_brake || e->out.cur.join ||
         !is_exactly(e->scale.override, 1.0) || !is_exactly(e->scale.ts.rate, 1.0) ||
@@ -529,21 +557,31 @@ static void plain_window(engine_t *e)
     double x = room / e->period_s; /* floor(x) - 2 ticks, x > 0: floor is the cast */
     if (!(x >= 3.0))
         return;
-    e->out.plain_left = x < 0x1p62 ? (int64_t)x - 2 : INT64_MAX / 2;
+    int64_t left = x < 0x1p60 ? (int64_t)x - 2 : INT64_C(1) << 60;
     if (e->scale.avail_closed) { /* not past where a join may be due (join.c) */
         int64_t j = join_ticks_left(e);
-        e->out.plain_left = j < e->out.plain_left ? j : e->out.plain_left;
+        left = j < left ? j : left;
     }
+    e->out.plain_last = e->out.n + left;
     e->out.plain_qlen = e->queue.len;
     e->out.plain_seen = e->lag.seen_ns;
+    e->out.seg_last = grid_last(e);
+    fast_bound(e);
 }
 
-/* The decision plain_window kept still holds (see there). */
+/* The key of the decision plain_window kept: the state a call between
+ * ticks may change it by is as it was then (see there). */
+static inline int plain_key(const engine_t *e)
+{
+    return e->out.plain_qlen == e->queue.len && e->out.plain_seen == e->lag.seen_ns &&
+           e->out.mode == OUT_STREAM && !e->scale.stop_req && !e->clk.on &&
+           is_exactly(e->scale.override, 1.0);
+}
+
+/* The decision plain_window kept still holds for the step from tick n. */
 static inline int plain_holds(const engine_t *e)
 {
-    return e->out.plain_left > 0 && e->out.plain_qlen == e->queue.len &&
-           e->out.plain_seen == e->lag.seen_ns && e->out.mode == OUT_STREAM && !e->scale.stop_req &&
-           !e->clk.on && is_exactly(e->scale.override, 1.0);
+    return e->out.n < e->out.plain_last && plain_key(e);
 }
 
 /* Test hook: the decision made again on a kept tick, its side effects
@@ -568,6 +606,7 @@ __attribute__((noinline)) static void plain_verify(engine_t *e)
 void engine_plain_check(engine_t *e, int on, uint64_t *kept, uint64_t *wrong)
 {
     e->out.plain_check = on;
+    fast_bound(e);
     if (kept)
         *kept = e->out.plain_kept;
     if (wrong)
@@ -604,14 +643,12 @@ static inline void step_kept(engine_t *e)
         /* test hook 2: the decision made anyway, and followed */
         if (e->out.plain_check == 2 ? step_decided(e) : unit_step(e))
             plain_window(e);
-        else
-            e->out.plain_left--;
         return;
     }
     if (unit_step(e))
         plain_window(e); /* a new segment: decided again for it */
     else
-        e->out.plain_left--;
+        fast_bound(e); /* past a re-seed */
 }
 
 /* One tick of the output state machine. */
@@ -622,7 +659,7 @@ static void step_once(engine_t *e)
         return;
     }
     e->out.cycle++;
-    e->out.plain_left = 0;
+    e->out.plain_last = e->out.fast_last = INT64_MIN;
     if (e->out.mode == OUT_HOLD) {
         qent_t *h = q_head(e);
         double lag = NAN; /* the start's ramp, if enough_ahead simulated it */
@@ -733,32 +770,37 @@ _Static_assert(offsetof(engine_setpoint_t, vel_m_s) ==
                    offsetof(engine_setpoint_t, acc_m_s2) ==
                        offsetof(engine_setpoint_t, vel_m_s) + AX * sizeof(double) &&
                    AX == 3,
-               "put_rows stores pos_m, vel_m_s and acc_m_s2 as one run of nine doubles");
+               "fill_plain stores pos_m, vel_m_s and acc_m_s2 as one run of nine doubles");
 
-/* put_sp's rows from the stepper, in pairs (+ 0.0 as there): the store
- * every plain tick makes. */
-static inline void put_rows(engine_setpoint_t *sp, const fdiff_t *fd)
-{
-    const row2_t z = {0.0, 0.0};
-    row2_t r[4] = {row2_at(fd->p0) + z, (row2_t){fd->p0[2], fd->v0[0]} + z, row2_at(fd->v0 + 1) + z,
-                   row2_at(fd->a0) + z};
-    memcpy((char *)sp + offsetof(engine_setpoint_t, pos_m), r, sizeof r);
-    sp->acc_m_s2[2] = fd->a0[2] + 0.0;
-}
-
-/* A plain setpoint (plain_sp): what fill_sp_flags would make of it (put_sp,
- * its rows by put_rows). */
+/* A plain setpoint (plain_sp): what fill_sp_flags would make of it (put_sp).
+ * Everything it reads is read before the first store to sp (which may alias
+ * the engine, for all the compiler knows): read after, the tick's counter
+ * was loaded as one 8-byte pair with the track across the 4-byte store that
+ * had just incremented it, and the stepper's v0[1..2] as a pair across two of
+ * its 16-byte stores, neither of which a store can forward to a load.  The
+ * stepper's rows are read as the aligned pairs it stores, the setpoint's
+ * pairs shuffled out of them (+ 0.0 as put_sp adds). */
 static inline void fill_plain(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
+    const fdiff_t *fd = &e->out.fd;
+    const row2_t z = {0.0, 0.0};
+    row2_t p01 = row2_at(fd->p0), p23 = row2_at(fd->p0 + 2), v01 = row2_at(fd->v0),
+           v23 = row2_at(fd->v0 + 2), a01 = row2_at(fd->a0), a23 = row2_at(fd->a0 + 2);
+    row2_t r[4] = {p01 + z, __builtin_shufflevector(p23, v01, 0, 2) + z,
+                   __builtin_shufflevector(v01, v23, 1, 2) + z, a01 + z};
+    double t = e->out.t, az = a23[0] + 0.0;
+    uint32_t cycle = e->out.cycle, track = e->out.track;
+
+    e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
     sp->now_ns = now_ns;
-    sp->t_s = e->out.t;
-    put_rows(sp, &e->out.fd);
+    sp->t_s = t;
+    memcpy((char *)sp + offsetof(engine_setpoint_t, pos_m), r, sizeof r);
+    sp->acc_m_s2[2] = az;
     sp->state = ENGINE_STATE_STREAMING;
     sp->flags = 0;
-    sp->cycle = e->out.cycle;
-    sp->track = e->out.track;
+    sp->cycle = cycle;
+    sp->track = track;
     sp->age_s = NAN;
-    e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
 }
 
 /* The setpoint of this tick (put_sp; positive zeros). */
@@ -857,6 +899,62 @@ int play_stalled(const engine_t *e)
     return 0;
 }
 
+/*
+ * A kept step inside its segment that is no re-seed (fast_last), one period
+ * on with nothing pushed since, and its plain setpoint: what step_once
+ * (step_kept, unit_step, fdiff_step) and fill_sp (fill_plain) make of it,
+ * in one run: the stepper's rows loaded once as the aligned pairs it
+ * stores, added (fdiff_step's additions, lane by lane), stored back, and the
+ * setpoint's pairs shuffled out of the sums in registers (+ 0.0 as put_sp
+ * adds).  Everything is read before the first store to sp, which may alias
+ * the engine for all the compiler knows.
+ */
+static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    fdiff_t *fd = &e->out.fd;
+    const row2_t z = {0.0, 0.0};
+    int64_t n = e->out.n + 1;
+    double t = e->out.origin_t + tau_of(e, n);
+    uint32_t cycle = e->out.cycle + 1, track = e->out.track;
+    uint64_t setpoints = e->st.setpoints + 1;
+    row2_t p0a = row2_at(fd->p0), p0b = row2_at(fd->p0 + 2), p1a = row2_at(fd->p1),
+           p1b = row2_at(fd->p1 + 2), p2a = row2_at(fd->p2), p2b = row2_at(fd->p2 + 2),
+           p3a = row2_at(fd->p3), p3b = row2_at(fd->p3 + 2), v0a = row2_at(fd->v0),
+           v0b = row2_at(fd->v0 + 2), v1a = row2_at(fd->v1), v1b = row2_at(fd->v1 + 2),
+           v2a = row2_at(fd->v2), v2b = row2_at(fd->v2 + 2), a0a = row2_at(fd->a0),
+           a0b = row2_at(fd->a0 + 2), a1a = row2_at(fd->a1), a1b = row2_at(fd->a1 + 2);
+
+    p0a += p1a, p0b += p1b, p1a += p2a, p1b += p2b, p2a += p3a, p2b += p3b;
+    v0a += v1a, v0b += v1b, v1a += v2a, v1b += v2b;
+    a0a += a1a, a0b += a1b;
+    memcpy(fd->p0, &p0a, sizeof p0a), memcpy(fd->p0 + 2, &p0b, sizeof p0b);
+    memcpy(fd->p1, &p1a, sizeof p1a), memcpy(fd->p1 + 2, &p1b, sizeof p1b);
+    memcpy(fd->p2, &p2a, sizeof p2a), memcpy(fd->p2 + 2, &p2b, sizeof p2b);
+    memcpy(fd->v0, &v0a, sizeof v0a), memcpy(fd->v0 + 2, &v0b, sizeof v0b);
+    memcpy(fd->v1, &v1a, sizeof v1a), memcpy(fd->v1 + 2, &v1b, sizeof v1b);
+    memcpy(fd->a0, &a0a, sizeof a0a), memcpy(fd->a0 + 2, &a0b, sizeof a0b);
+    e->out.n = n;
+    e->out.cycle = cycle;
+    e->out.last_now = now_ns;
+    e->out.t = t;
+    e->out.on_fd = 1;
+    e->out.underrun = 0;
+    e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
+    e->st.setpoints = setpoints;
+
+    row2_t r[4] = {p0a + z, __builtin_shufflevector(p0b, v0a, 0, 2) + z,
+                   __builtin_shufflevector(v0a, v0b, 1, 2) + z, a0a + z};
+    sp->now_ns = now_ns;
+    sp->t_s = t;
+    memcpy((char *)sp + offsetof(engine_setpoint_t, pos_m), r, sizeof r);
+    sp->acc_m_s2[2] = a0b[0] + 0.0;
+    sp->state = ENGINE_STATE_STREAMING;
+    sp->flags = 0;
+    sp->cycle = cycle;
+    sp->track = track;
+    sp->age_s = NAN;
+}
+
 static int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t *sp);
 
 /*
@@ -879,24 +977,13 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
          * is in [p - p/2, 2 p - p/2), as the division would round (one
          * unsigned comparison: d below p - p/2 wraps above p) */
         if (__builtin_expect((uint64_t)d - (uint64_t)(p - p / 2) < (uint64_t)p, 1)) {
-            if (plain_holds(e) && !e->lag.pending && !e->sil.fresh &&
-                tau_of(e, e->out.n + 1) < e->out.cur_t1) {
+            if (e->out.n < e->out.fast_last && plain_key(e) && !(e->lag.pending | e->sil.fresh)) {
                 /* lag_note has nothing to note (no push since), and a silent
                  * end is noticed at the next tick that decides, as it always
                  * was (checked every tick, the silent ends of 2 of the 30
                  * frozen outputs, gpxpy_cerknicko-jezero smooth, come a few
                  * ticks earlier) */
-                e->out.last_now = now_ns;
-                step_kept(e);
-                /* plain_sp holds: a kept step inside its segment is on the
-                 * grid (on_fd), leaves no underrun and no flag pending (the
-                 * last fill took them), and the key holds the rest (the test
-                 * hooks' steps are checked the long way) */
-                if (__builtin_expect(e->out.plain_check != 0, 0))
-                    fill_sp(e, now_ns, sp);
-                else
-                    fill_plain(e, now_ns, sp);
-                e->st.setpoints++;
+                plain_tick(e, now_ns, sp);
                 return 0;
             }
         } else if (d < 0) {
