@@ -80,6 +80,7 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
             goto nomem;
     }
     e->period_s = (double)cfg->period_ns * 1e-9;
+    e->period_lo = cfg->period_ns - cfg->period_ns / 2;
     {
         accept_config_t ac = {
             .max_speed_m_s = engine_config_max_speed(cfg),

@@ -205,12 +205,12 @@ typedef struct {
     /* The rate decision of step_once kept for the ticks ahead (plain_window,
      * engine_tick.c): the steps from a tick n below plain_last are plain
      * unit-grid steps while the key below still matches the engine
-     * (plain_holds).  Of those, the steps from a tick n below fast_last also
-     * stay inside cur and are no re-seed (engine_tick makes them itself):
-     * fast_last is the least of plain_last, seg_last (the last tick on the
-     * grid inside cur: tau_of(seg_last) < cur_t1) and the tick before the
-     * next re-seed. */
-    int64_t plain_last, seg_last, fast_last;
+     * (plain_holds).  seg_last is the last tick on the grid inside cur
+     * (tau_of(seg_last) < cur_t1); the kept steps from a tick n below
+     * kept_last, the lesser of the two, stay inside cur (engine_tick makes
+     * them itself), and those from below fast_last besides are no re-seed
+     * (nor checked by the test hook: plain_tick) */
+    int64_t plain_last, seg_last, kept_last, fast_last;
     size_t plain_qlen;                /* key: queue.len then */
     int64_t plain_seen;               /* key: lag.seen_ns then (a push since: a new sample) */
     int plain_check;                  /* test hook (engine_plain_check) */
@@ -333,6 +333,8 @@ struct engine {
     int local;               /* local method (engine_cfg_local): 1, 3 backward, 2, 4 centred;
                              3, 4 C2 (three queued pieces per interval) */
     double period_s;
+    int64_t period_lo; /* cfg.period_ns - cfg.period_ns / 2: the least time since
+                          the last tick that rounds to one period (engine_tick) */
 
     engine_input_t in;
     engine_solve_t solve;

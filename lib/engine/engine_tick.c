@@ -476,16 +476,16 @@ static int64_t grid_last(const engine_t *e)
     return m;
 }
 
-/* fast_last (engine_out_t) from plain_last, seg_last and the re-seed grid
- * of step_cur; none while the test hook checks each kept step. */
+/* kept_last and fast_last (engine_out_t) from plain_last, seg_last and the
+ * re-seed grid of step_cur. */
 static inline void fast_bound(engine_t *e)
 {
-    int64_t n = e->out.n, last;
+    int64_t n = e->out.n, kept, last;
+    kept = e->out.seg_last < e->out.plain_last ? e->out.seg_last : e->out.plain_last;
     last = n +
            (int64_t)(FDIFF_RESEED_STEPS - 1 - (uint64_t)(n - e->out.seg_n0) % FDIFF_RESEED_STEPS);
-    last = e->out.seg_last < last ? e->out.seg_last : last;
-    last = e->out.plain_last < last ? e->out.plain_last : last;
-    e->out.fast_last = e->out.plain_check ? INT64_MIN : last;
+    e->out.kept_last = kept;
+    e->out.fast_last = e->out.plain_check ? INT64_MIN : kept < last ? kept : last;
 }
 
 /*
@@ -518,7 +518,7 @@ static inline void fast_bound(engine_t *e)
  */
 static void plain_window(engine_t *e)
 {
-    e->out.plain_last = e->out.fast_last = INT64_MIN; /* none kept */
+    e->out.plain_last = e->out.kept_last = e->out.fast_last = INT64_MIN; /* none kept */
     if (e->out.mode != OUT_STREAM || e->scale.on || e->clk.on || e->out.underrun ||
         !e->out.have_pos || e->scale.stop_req || e->scale.end_brake || e->out.cur.join ||
         !is_exactly(e->scale.override, 1.0) || !is_exactly(e->scale.ts.rate, 1.0) ||
@@ -659,7 +659,7 @@ static void step_once(engine_t *e)
         return;
     }
     e->out.cycle++;
-    e->out.plain_last = e->out.fast_last = INT64_MIN;
+    e->out.plain_last = e->out.kept_last = e->out.fast_last = INT64_MIN;
     if (e->out.mode == OUT_HOLD) {
         qent_t *h = q_head(e);
         double lag = NAN; /* the start's ramp, if enough_ahead simulated it */
@@ -936,9 +936,7 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
     e->out.n = n;
     e->out.cycle = cycle;
     e->out.last_now = now_ns;
-    e->out.t = t;
-    e->out.on_fd = 1;
-    e->out.underrun = 0;
+    e->out.t = t;          /* (on_fd is 1 and underrun 0 in a window: plain_window) */
     e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
     e->st.setpoints = setpoints;
 
@@ -955,6 +953,22 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
     sp->age_s = NAN;
 }
 
+/* A kept step inside its segment, one period on with nothing pushed since,
+ * that plain_tick does not make: a re-seed, or one the test hook checks
+ * (step_kept as step_once makes it, and the setpoint as fill_sp would make
+ * it; plain_sp holds: a kept step inside its segment is on the grid, leaves
+ * no underrun and no flag pending, and the key holds the rest). */
+__attribute__((noinline)) static void kept_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    e->out.last_now = now_ns;
+    step_kept(e);
+    if (__builtin_expect(e->out.plain_check != 0, 0))
+        fill_sp(e, now_ns, sp); /* the test hooks' steps checked the long way */
+    else
+        fill_plain(e, now_ns, sp);
+    e->st.setpoints++;
+}
+
 static int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t *sp);
 
 /*
@@ -969,23 +983,29 @@ static int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t 
  */
 int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
-    int64_t k = 1;
+    int64_t k = 1, d = now_ns - e->out.last_now, p = e->cfg.period_ns;
 
+    /* A kept step inside its segment (kept_last: there is a window, so an
+     * earlier tick), one period on (d in [p - p/2, 2 p - p/2), as the
+     * division below would round: one unsigned comparison, d below p - p/2
+     * wraps above p), with nothing pushed since: lag_note has nothing to
+     * note, and a silent end is noticed at the next tick that decides, as
+     * it always was (checked every tick, the silent ends of 2 of the 30
+     * frozen outputs, gpxpy_cerknicko-jezero smooth, come a few ticks
+     * earlier) */
+    if (__builtin_expect(e->out.n < e->out.kept_last, 1) &&
+        __builtin_expect((uint64_t)d - (uint64_t)e->period_lo < (uint64_t)p, 1) && plain_key(e) &&
+        !(e->lag.pending | e->sil.fresh)) {
+        if (__builtin_expect(e->out.n < e->out.fast_last, 1))
+            plain_tick(e, now_ns, sp);
+        else
+            kept_tick(e, now_ns, sp); /* a re-seed, or the test hook */
+        return 0;
+    }
     if (e->out.have_now) {
-        int64_t d = now_ns - e->out.last_now, p = e->cfg.period_ns;
-        /* ticks on the period grid since the last call (rounded): one if d
-         * is in [p - p/2, 2 p - p/2), as the division would round (one
-         * unsigned comparison: d below p - p/2 wraps above p) */
-        if (__builtin_expect((uint64_t)d - (uint64_t)(p - p / 2) < (uint64_t)p, 1)) {
-            if (e->out.n < e->out.fast_last && plain_key(e) && !(e->lag.pending | e->sil.fresh)) {
-                /* lag_note has nothing to note (no push since), and a silent
-                 * end is noticed at the next tick that decides, as it always
-                 * was (checked every tick, the silent ends of 2 of the 30
-                 * frozen outputs, gpxpy_cerknicko-jezero smooth, come a few
-                 * ticks earlier) */
-                plain_tick(e, now_ns, sp);
-                return 0;
-            }
+        /* ticks on the period grid since the last call (rounded) */
+        if ((uint64_t)d - (uint64_t)e->period_lo < (uint64_t)p) {
+            k = 1;
         } else if (d < 0) {
             last_setpoint(e, sp);
             return -ENGINE_ESTATE;

@@ -9,7 +9,6 @@ void fdiff_seed(fdiff_t *fd, const fdiff_seg_t *seg, double u0, double du)
     double inv_t = 1.0 / seg->dur_s, inv_t2 = inv_t * inv_t;
     double h = du, h2 = du * du, h3 = h2 * du, u = u0;
 
-    memset(fd, 0, sizeof *fd); /* the zero lane stays zero */
     for (int k = 0; k < FDIFF_AXES; k++) {
         double c0 = seg->c[k][0], c1 = seg->c[k][1], c2 = seg->c[k][2], c3 = seg->c[k][3];
         /* Differences of the cubic written in closed form at u (exact
@@ -26,6 +25,10 @@ void fdiff_seed(fdiff_t *fd, const fdiff_seg_t *seg, double u0, double du)
         fd->a0[k] = (2 * c2 + 6 * c3 * u) * inv_t2;
         fd->a1[k] = 6 * c3 * h * inv_t2;
     }
+    /* the zero lane stays zero */
+    for (int k = FDIFF_AXES; k < FDIFF_LANES; k++)
+        fd->p0[k] = fd->p1[k] = fd->p2[k] = fd->p3[k] = fd->v0[k] = fd->v1[k] = fd->v2[k] =
+            fd->a0[k] = fd->a1[k] = 0.0;
 }
 
 void fdiff_get(const fdiff_t *fd, double *pos, double *vel, double *acc)
