@@ -447,8 +447,6 @@ void engine_plain_check(engine_t *e, int on, uint64_t *kept, uint64_t *wrong);
 
 void scale_eval(engine_t *e);
 void scale_rest(engine_t *e);
-double scale_conv_speed(const engine_t *e);
-double scale_rise_reserve(const engine_t *e, double v);
 double scale_remaining(const engine_t *e, double s);
 double scale_slowing_reserve(const engine_t *e, double v);
 double scale_ceil_room(const engine_t *e, double s, double A, double J);
@@ -456,7 +454,6 @@ double scale_ceil_room(const engine_t *e, double s, double A, double J);
  * scale_conv_speed is taken off (a decision works that out once for both) */
 double scale_remaining_gross(const engine_t *e, double s);
 double scale_ceil_room_gross(const engine_t *e, double s, double A, double J);
-double scale_ceil_here(const engine_t *e);
 void scale_limits(const engine_t *e, double *A, double *J);
 double scale_target(const engine_t *e);
 int scale_moves(const engine_t *e, double R, double A, double J);
@@ -502,10 +499,12 @@ static inline double hpar(const engine_t *e, uint64_t j)
     return e->cfg.param == ENGINE_PARAM_TIME ? nt(e, j + 1) - nt(e, j) : 1.0;
 }
 
-/* the i-th queued entry from the head (i < queue.len) */
+/* the i-th queued entry from the head (i < queue.len <= queue.cap, so
+ * head + i < 2 cap: the ring's wrap without the division) */
 static inline const qent_t *queue_at(const engine_t *e, size_t i)
 {
-    return &e->queue.ent[(e->queue.head + i) % e->queue.cap];
+    size_t j = e->queue.head + i;
+    return &e->queue.ent[j >= e->queue.cap ? j - e->queue.cap : j];
 }
 
 static inline qent_t *q_head(engine_t *e)
@@ -570,6 +569,64 @@ static inline int positive_zeros(engine_setpoint_t *sp, int rc)
         sp->acc_m_s2[a] += 0.0;
     }
     return rc;
+}
+
+/* ---- the time scaling's conversions at the current segment (engine_scale.c;
+ * inline: plain_window reads them at every segment's end) ---- */
+
+/* The speed (m/s) at which the scaling's jerk limit is converted outside a
+ * stop: the largest the curve reaches on the current segment (seg_speed_max;
+ * a transfer's: 1.5 D / T_x), at least the floor.  (Converted at the speed
+ * here, the limits shrink as a ramp speeds up along a transfer faster than
+ * the jerk can take the rate's acceleration back: the rate overshot 1.) */
+static inline double scale_jerk_speed(const engine_t *e)
+{
+    /* fmax without the libm call (x86-64 baseline): the same for every
+     * vmax, NaN included (the floor) */
+    double v = e->out.cur.vmax;
+    return v > ENGINE_SCALE_V_FLOOR_M_S ? v : ENGINE_SCALE_V_FLOOR_M_S;
+}
+
+/* ... and its acceleration limit, in whose units the braking capacity is
+ * expressed (scale_remaining): the segment's av (qent_t), the same speed
+ * unless per-axis acceleration limits leave the scaling more (issue 32,
+ * engine_solve.c accel_speed); a transfer's is its jerk's. */
+static inline double scale_conv_speed(const engine_t *e)
+{
+    double v = e->out.cur.av;
+    return v > 0 ? v : scale_jerk_speed(e);
+}
+
+/* Track time (per unit of rate, in the units of the limits converted at v)
+ * kept for the rises of the limits ahead.  Where the output brakes into a
+ * segment with larger limits (a slower one: A = a / v), its deceleration must
+ * ramp up to the new A at the jerk J: a stop then needs up to
+ * r (A_new - A_old)^2 / (2 J_new) <= r dA a / (2 j) of capacity more than
+ * r^2/2; so much per rise of A ahead, summed (ucum), is kept in reserve:
+ * scale_rise_per_u(e, r, v) per unit of ucum, at rate r (scale_rise_reserve's
+ * r 1, times the rate where it is used). */
+static inline double scale_rise_per_u(const engine_t *e, double r, double v)
+{
+    return r * 0.5 * e->cfg.scale_accel_m_s2 / e->cfg.scale_jerk_m_s3 * v;
+}
+
+static inline double scale_rise_reserve(const engine_t *e, double v)
+{
+    double du = e->scale.avail_ucum - e->out.cur.ucum;
+    return du > 0 ? scale_rise_per_u(e, 1.0, v) * du : 0.0;
+}
+
+/* The rate the speed cap allows on the current segment.  A transfer lasts
+ * long enough for every axis at rate 1 (engine_xfer.c xfer_duration): with
+ * per-axis limits a feed override above 100 % does not speed it up (at 160 %
+ * its smoothstep took an axis limited to 3 m/s to 3.002 m/s, and its
+ * acceleration to 2.56 times the 6 D / T^2 kept within the limit:
+ * tests/unit/test_axis_share.c). */
+static inline double scale_ceil_here(const engine_t *e)
+{
+    if (e->out.mode == OUT_STREAM)
+        return e->out.cur.ceil;
+    return e->out.mode == OUT_XFER && solve_axis_limited(e) ? 1.0 : INFINITY;
 }
 
 #endif
