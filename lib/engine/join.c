@@ -567,6 +567,8 @@ int join_try(engine_t *e)
     join_find_t f;
     int never;
 
+    if (!later_queued(e))
+        return 0; /* join_find finds none, and never is 0 */
     if (!join_find(e, &f, &never)) {
         if (never)
             e->out.join_refused = e->out.traj + 1;
@@ -623,7 +625,7 @@ int64_t join_ticks_left(const engine_t *e)
     join_find_t f;
     int never;
 
-    if (!join_wanted(e) || !later_queued(e) || !join_find(e, &f, &never))
+    if (!later_queued(e) || !join_wanted(e) || !join_find(e, &f, &never))
         return INT64_MAX; /* a push that brings one ends the window (its key) */
     /* the braking for the end: plain_window keeps no decision beyond its
      * start already (decide's test) */
