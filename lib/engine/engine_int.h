@@ -2,7 +2,8 @@
  * engine_int.h - the engine's state, shared by the files that make up the
  * engine, one per stage (engine.c says which owns what): engine_settings.c
  * (configuration), engine_input.c (input and acceptance), engine_solve.c
- * (solver, fragments, the queue), engine_tick.c (play-out), engine_scale.c
+ * (solver, fragments, the queue), engine_tick.c (play-out; its trajectory
+ * boundaries in engine_play.c), engine_scale.c
  * (its time scaling), engine_xfer.c (transfers), engine_cmd.c (the commands
  * the lifecycle owner gives it, lifecycle.h), delay_run.c (the delay D
  * stated, delay.h), silence.c (silent ends, silence.h); engine.c creates an
@@ -418,7 +419,7 @@ void queue_pop(engine_t *e);
  * methods queue three pieces an interval). */
 uint64_t queue_waypoints(const engine_t *e, size_t i0, size_t i1);
 
-/* ---- play-out (engine_tick.c) ---- */
+/* ---- play-out (engine_tick.c; its trajectory boundaries: engine_play.c) ---- */
 
 engine_state_t play_state(const engine_t *e);
 /* 1 if further steps cannot change anything until new input arrives. */
@@ -431,10 +432,20 @@ void play_start(engine_t *e, int new_flag);
 void play_stop_at_rest(engine_t *e);
 void play_rest_at_end(engine_t *e, const qent_t *h);
 void play_finish_here(engine_t *e);
+/* The output stands where it is, at rest (its position out of the stepper). */
+void play_hold_here(engine_t *e);
+/* Back on the unit grid with rate 1 (every start from HOLD). */
+void play_unit_reset(engine_t *e);
 /* Where the solved curve of the output's trajectory ends (scale.avail_*). */
 void play_find_avail(engine_t *e);
 /* The output's pos, vel, acc copied out of the stepper (on_fd cleared). */
 void out_sync(engine_t *e);
+/* The output is the stepper's (engine_out_t): no copies, and the curve's
+ * speed only where it is read (out_cspeed). */
+static inline void out_eval(engine_t *e)
+{
+    e->out.on_fd = 1;
+}
 /* |k'|: the curve's own speed at the output (scale.cspeed off the grid). */
 double out_cspeed(const engine_t *e);
 /* Test hook (tests/unit/test_engine_tick.c): on 1, every tick whose rate
