@@ -740,7 +740,10 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
     e->out.n = n;
     e->out.cycle = cycle;
     e->out.last_now = now_ns;
-    e->out.t = t;          /* (on_fd is 1 and underrun 0 in a window: plain_window) */
+    e->out.t = t;
+    e->out.on_fd = 1; /* out_eval (a window may begin on a tick that landed on the
+                       * grid from the time scaling: its output was scale_eval's) */
+    e->out.underrun = 0;
     e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
     e->st.setpoints = setpoints;
 
