@@ -264,15 +264,18 @@ static int decide(engine_t *e, decision_t *d)
     return GO_SCALED;
 }
 
-/* The last tick on the unit grid inside cur, from the current one (which
- * is inside): the largest n with tau_of(n) < cur_t1, as unit_step compares
- * them (tau_of is monotonic in n, so the guess from the division is moved
- * to it by the comparison itself). */
+/* The last tick on the unit grid inside cur from the current one n: the
+ * largest m >= n with tau_of(m) < cur_t1 (n itself if none), as unit_step
+ * compares them (tau_of is monotonic in its tick, so the guess from the
+ * division is moved to it by the comparison itself).  A segment longer than
+ * 2^31 ticks, or NaN, gives n: its kept steps go the long way (step_once). */
 static int64_t grid_last(const engine_t *e)
 {
     int64_t n = e->out.n;
     double x = (e->out.cur_t1 - e->scale.s_off) / e->period_s - (double)n;
-    int64_t m = n + (x > 1.0 ? (x < 0x1p60 ? (int64_t)x : INT64_C(1) << 60) : 0);
+    if (!(x < 0x1p31))
+        return n;
+    int64_t m = n + (x > 1.0 ? (int64_t)x : 0);
     while (m > n && !(tau_of(e, m) < e->out.cur_t1))
         m--;
     while (tau_of(e, m + 1) < e->out.cur_t1)
