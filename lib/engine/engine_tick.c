@@ -706,6 +706,15 @@ int play_stalled(const engine_t *e)
     return 0;
 }
 
+/* One pair of fdiff_step's additions, a row += the next one's (lane by
+ * lane, as fdiff_step): stored, and returned. */
+static inline row2_t step_pair(double *row, const double *next)
+{
+    row2_t r = row2_at(row) + row2_at(next);
+    memcpy(row, &r, sizeof r);
+    return r;
+}
+
 /*
  * A kept step inside its segment that is no re-seed (fast_last), one period
  * on with nothing pushed since, and its plain setpoint: what step_once
@@ -724,22 +733,15 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
     double t = e->out.origin_t + tau_of(e, n);
     uint32_t cycle = e->out.cycle + 1, track = e->out.track;
     uint64_t setpoints = e->st.setpoints + 1;
-    row2_t p0a = row2_at(fd->p0), p0b = row2_at(fd->p0 + 2), p1a = row2_at(fd->p1),
-           p1b = row2_at(fd->p1 + 2), p2a = row2_at(fd->p2), p2b = row2_at(fd->p2 + 2),
-           p3a = row2_at(fd->p3), p3b = row2_at(fd->p3 + 2), v0a = row2_at(fd->v0),
-           v0b = row2_at(fd->v0 + 2), v1a = row2_at(fd->v1), v1b = row2_at(fd->v1 + 2),
-           v2a = row2_at(fd->v2), v2b = row2_at(fd->v2 + 2), a0a = row2_at(fd->a0),
-           a0b = row2_at(fd->a0 + 2), a1a = row2_at(fd->a1), a1b = row2_at(fd->a1 + 2);
-
-    p0a += p1a, p0b += p1b, p1a += p2a, p1b += p2b, p2a += p3a, p2b += p3b;
-    v0a += v1a, v0b += v1b, v1a += v2a, v1b += v2b;
-    a0a += a1a, a0b += a1b;
-    memcpy(fd->p0, &p0a, sizeof p0a), memcpy(fd->p0 + 2, &p0b, sizeof p0b);
-    memcpy(fd->p1, &p1a, sizeof p1a), memcpy(fd->p1 + 2, &p1b, sizeof p1b);
-    memcpy(fd->p2, &p2a, sizeof p2a), memcpy(fd->p2 + 2, &p2b, sizeof p2b);
-    memcpy(fd->v0, &v0a, sizeof v0a), memcpy(fd->v0 + 2, &v0b, sizeof v0b);
-    memcpy(fd->v1, &v1a, sizeof v1a), memcpy(fd->v1 + 2, &v1b, sizeof v1b);
-    memcpy(fd->a0, &a0a, sizeof a0a), memcpy(fd->a0 + 2, &a0b, sizeof a0b);
+    /* row by row, each stored as soon as made: the pairs of the rows after
+     * are loaded as they are needed (loaded all first, they outnumbered
+     * the 16 registers and were loaded again) */
+    row2_t p0a = step_pair(fd->p0, fd->p1), p0b = step_pair(fd->p0 + 2, fd->p1 + 2);
+    (void)step_pair(fd->p1, fd->p2), (void)step_pair(fd->p1 + 2, fd->p2 + 2);
+    (void)step_pair(fd->p2, fd->p3), (void)step_pair(fd->p2 + 2, fd->p3 + 2);
+    row2_t v0a = step_pair(fd->v0, fd->v1), v0b = step_pair(fd->v0 + 2, fd->v1 + 2);
+    (void)step_pair(fd->v1, fd->v2), (void)step_pair(fd->v1 + 2, fd->v2 + 2);
+    row2_t a0a = step_pair(fd->a0, fd->a1), a0b = step_pair(fd->a0 + 2, fd->a1 + 2);
     e->out.n = n;
     e->out.cycle = cycle;
     e->out.last_now = now_ns;
