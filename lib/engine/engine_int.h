@@ -427,7 +427,9 @@ int play_stalled(const engine_t *e);
 void play_count_underrun(engine_t *e);
 void play_underrun_counted(engine_t *e);
 void play_seed_cur(engine_t *e, int64_t n);
-void play_take_segment(engine_t *e);
+/* The queue head (a SEG) made cur; its segment as the freed slot holds it
+ * until the next push. */
+const fdiff_seg_t *play_take_segment(engine_t *e);
 void play_start(engine_t *e, int new_flag);
 void play_stop_at_rest(engine_t *e);
 void play_rest_at_end(engine_t *e, const qent_t *h);

@@ -109,23 +109,37 @@ double out_cspeed(const engine_t *e)
     return sqrt(v2);
 }
 
+/* Seed the stepper at tick n (relative time tau in [cur_t0, cur_t1)) for
+ * seg, cur's segment or the queue slot it was just copied from. */
+static void seed_at(engine_t *e, int64_t n, const fdiff_seg_t *seg)
+{
+    double tau = tau_of(e, n);
+    double u0 = (tau - e->out.cur_t0) / seg->dur_s;
+    fdiff_seed(&e->out.fd, seg, u0, e->period_s / seg->dur_s);
+}
+
 /* Seed cur at tick n (relative time tau in [cur_t0, cur_t1)). */
 void play_seed_cur(engine_t *e, int64_t n)
 {
-    double tau = tau_of(e, n);
-    double u0 = (tau - e->out.cur_t0) / e->out.cur.seg.dur_s;
-    fdiff_seed(&e->out.fd, &e->out.cur.seg, u0, e->period_s / e->out.cur.seg.dur_s);
+    seed_at(e, n, &e->out.cur.seg);
 }
 
-/* Make the queue head (a SEG) the current segment, relative to origin_t. */
-void play_take_segment(engine_t *e)
+/* Make the queue head (a SEG) the current segment, relative to origin_t.
+ * Returns its segment as the queue slot just freed holds it (cur's copy,
+ * unchanged until the next push): read there in the same tick, the loads
+ * do not wait on the copy's stores (a load across two of them cannot be
+ * forwarded from the store buffer). */
+const fdiff_seg_t *play_take_segment(engine_t *e)
 {
-    e->out.cur = *q_head(e);
+    const qent_t *q = q_head(e);
+    double shift = q->shift, t0 = q->seg.t0_s, t1 = q->t1_s;
+    e->out.cur = *q;
     queue_pop(e);
-    if (!is_exactly(e->out.cur.shift, 0.0))
-        e->out.origin_t += e->out.cur.shift; /* where a join met it (join.c) */
-    e->out.cur_t0 = e->out.cur.seg.t0_s - e->out.origin_t;
-    e->out.cur_t1 = e->out.cur.t1_s - e->out.origin_t;
+    if (!is_exactly(shift, 0.0))
+        e->out.origin_t += shift; /* where a join met it (join.c) */
+    e->out.cur_t0 = t0 - e->out.origin_t;
+    e->out.cur_t1 = t1 - e->out.origin_t;
+    return &q->seg;
 }
 
 /* One forward step of cur (with a re-seed at deterministic ticks). */
@@ -171,6 +185,7 @@ __attribute__((noinline)) static int unit_cross(engine_t *e, int64_t n, double t
         step_cur(e, n);
         return 0;
     }
+    const fdiff_seg_t *seg;
     for (;;) {
         qent_t *h = q_head(e);
         if (h && h->traj != e->out.traj)
@@ -195,14 +210,14 @@ __attribute__((noinline)) static int unit_cross(engine_t *e, int64_t n, double t
             play_rest_at_end(e, h);
             return 1;
         }
-        play_take_segment(e);
+        seg = play_take_segment(e);
         if (tau < e->out.cur_t1)
             break;
         /* shorter than a period: no tick falls in it */
     }
     e->out.n = n;
     e->out.seg_n0 = n;
-    play_seed_cur(e, n);
+    seed_at(e, n, seg); /* cur's, read where it was copied from */
     out_eval(e);
     e->out.t = e->out.origin_t + tau;
     e->out.underrun = 0;
