@@ -589,9 +589,9 @@ static inline int positive_zeros(engine_setpoint_t *sp, int rc)
 
 /* The speed (m/s) at which the scaling's jerk limit is converted outside a
  * stop: the largest the curve reaches on the current segment (seg_speed_max;
- * a transfer's: 1.5 D / T_x), at least the floor.  (Converted at the speed
- * here, the limits shrink as a ramp speeds up along a transfer faster than
- * the jerk can take the rate's acceleration back: the rate overshot 1.) */
+ * a transfer's: 1.5 D / T_x), at least the floor.  (Not the speed here:
+ * converted there, the limits would shrink as a ramp speeds up along a
+ * transfer faster than the jerk can take the rate's acceleration back.) */
 static inline double scale_jerk_speed(const engine_t *e)
 {
     /* fmax without the libm call (x86-64 baseline): the same for every
@@ -631,10 +631,8 @@ static inline double scale_rise_reserve(const engine_t *e, double v)
 
 /* The rate the speed cap allows on the current segment.  A transfer lasts
  * long enough for every axis at rate 1 (engine_xfer.c xfer_duration): with
- * per-axis limits a feed override above 100 % does not speed it up (at 160 %
- * its smoothstep took an axis limited to 3 m/s to 3.002 m/s, and its
- * acceleration to 2.56 times the 6 D / T^2 kept within the limit:
- * tests/unit/test_axis_share.c). */
+ * per-axis limits a feed override above 100 % does not speed it up, which
+ * would take an axis past its limit (tests/unit/test_axis_share.c). */
 static inline double scale_ceil_here(const engine_t *e)
 {
     if (e->out.mode == OUT_STREAM)

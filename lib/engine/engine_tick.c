@@ -596,12 +596,13 @@ _Static_assert(offsetof(engine_setpoint_t, vel_m_s) ==
 
 /* A plain setpoint (plain_sp): what fill_sp_flags would make of it (put_sp).
  * Everything it reads is read before the first store to sp (which may alias
- * the engine, for all the compiler knows): read after, the tick's counter
- * was loaded as one 8-byte pair with the track across the 4-byte store that
- * had just incremented it, and the stepper's v0[1..2] as a pair across two of
- * its 16-byte stores, neither of which a store can forward to a load.  The
- * stepper's rows are read as the aligned pairs it stores, the setpoint's
- * pairs shuffled out of them (+ 0.0 as put_sp adds). */
+ * the engine, for all the compiler knows), and in the widths it was stored
+ * in: a load wider than the store that just wrote it, or across two stores
+ * (the tick's counter loaded with the track as one 8-byte pair, the
+ * stepper's v0[1..2] as one pair), is not forwarded from the store buffer
+ * and waits for the stores to reach the cache.  The stepper's rows are read
+ * as the aligned pairs it stores, the setpoint's pairs shuffled out of them
+ * (+ 0.0 as put_sp adds). */
 static inline void fill_plain(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
     const fdiff_t *fd = &e->out.fd;
@@ -749,8 +750,8 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
     uint32_t cycle = e->out.cycle + 1, track = e->out.track;
     uint64_t setpoints = e->st.setpoints + 1;
     /* row by row, each stored as soon as made: the pairs of the rows after
-     * are loaded as they are needed (loaded all first, they outnumbered
-     * the 16 registers and were loaded again) */
+     * are loaded as they are needed (all loaded first, they outnumber the
+     * 16 registers and are loaded again) */
     row2_t p0a = step_pair(fd->p0, fd->p1), p0b = step_pair(fd->p0 + 2, fd->p1 + 2);
     (void)step_pair(fd->p1, fd->p2), (void)step_pair(fd->p1 + 2, fd->p2 + 2);
     (void)step_pair(fd->p2, fd->p3), (void)step_pair(fd->p2 + 2, fd->p3 + 2);
@@ -804,9 +805,10 @@ static int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t 
  * whose rate decision is kept while it holds: plain_window) and the
  * setpoint filled (fill_sp, its flag logic skipped for a plain one).  A step
  * that keeps its decision inside its segment, one period on with nothing
- * pushed since, is made here (step_kept, as step_once makes it), without
- * the frame of tick_steps: a leaf-like run of loads, one imul, the
- * stepper's additions and the setpoint's stores.
+ * pushed since, is made here, as step_once and fill_sp would make it,
+ * without the frame of tick_steps: by plain_tick (a run of loads, one imul,
+ * the stepper's additions and the setpoint's stores), or kept_tick for a
+ * re-seed and the test hook's checked steps.
  */
 int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
