@@ -487,7 +487,8 @@ int join_wanted(const engine_t *e);
  * fits (1: the output is on it); else 0, and the old way goes on. */
 int join_try(engine_t *e);
 /* Unit-grid ticks before a join may be due (plain_window keeps no
- * decision beyond them); INT64_MAX if none can be. */
+ * decision beyond them); INT64_MAX if none can be (always without
+ * queue_later_traj). */
 int64_t join_ticks_left(const engine_t *e);
 /* The output's track time on a join: from its start to the meeting time on
  * the new curve, in proportion to the join done. */
@@ -518,6 +519,13 @@ static inline const qent_t *queue_at(const engine_t *e, size_t i)
 {
     size_t j = e->queue.head + i;
     return &e->queue.ent[j >= e->queue.cap ? j - e->queue.cap : j];
+}
+
+/* A later trajectory than the output's is queued: else there is none to
+ * join (join.c join_find; the usual case, asked at every segment's end). */
+static inline int queue_later_traj(const engine_t *e)
+{
+    return e->queue.len && queue_at(e, e->queue.len - 1)->traj > e->out.traj;
 }
 
 static inline qent_t *q_head(engine_t *e)

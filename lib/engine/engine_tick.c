@@ -344,7 +344,9 @@ static void plain_window(engine_t *e)
     if (e->out.mode != OUT_STREAM || e->scale.on || e->clk.on || e->out.underrun ||
         !e->out.have_pos || e->scale.stop_req || e->scale.end_brake || e->out.cur.join ||
         !is_exactly(e->scale.override, 1.0) || !is_exactly(e->scale.ts.rate, 1.0) ||
-        !is_exactly(e->scale.ts.acc, 0.0) || scale_ceil_here(e) < 1.0 || engine_lag_pending(e))
+        !is_exactly(e->scale.ts.acc, 0.0) || scale_ceil_here(e) < 1.0 ||
+        /* (engine_lag_pending's own first answers without the call) */
+        ((e->lag.steer || (e->lag.have && !e->lag.ahead)) && engine_lag_pending(e)))
         return;
     /* scale_remaining() is finite: a REST end too is left at rate 0 */
     /* decide's check, ts_stop_dist(1, 0, a/v, j/v) < v K - (margin + 1) T
@@ -380,7 +382,7 @@ static void plain_window(engine_t *e)
     if (!(x >= 3.0))
         return;
     int64_t left = x < 0x1p60 ? (int64_t)x - 2 : INT64_C(1) << 60;
-    if (e->scale.avail_closed) { /* not past where a join may be due (join.c) */
+    if (e->scale.avail_closed && queue_later_traj(e)) { /* not past where a join may be due */
         int64_t j = join_ticks_left(e);
         left = j < left ? j : left;
     }

@@ -180,17 +180,10 @@ static size_t traj_past(const engine_t *e, size_t i0, uint64_t traj)
 
 /* The old trajectory's end and the new one behind it (0: no join possible
  * now; *never: not for this trajectory). */
-/* A later trajectory than the output's is queued: else join_find finds
- * none (the usual case, asked at every segment by plain_window). */
-static inline int later_queued(const engine_t *e)
-{
-    return e->queue.len && queue_at(e, e->queue.len - 1)->traj > e->out.traj;
-}
-
 static int join_find(const engine_t *e, join_find_t *f, int *never)
 {
     *never = 0;
-    if (!later_queued(e))
+    if (!queue_later_traj(e))
         return 0;
     size_t i = traj_past(e, 0, e->out.traj);
     if (i == 0 || i >= e->queue.len || queue_at(e, i - 1)->kind != QE_END)
@@ -567,7 +560,7 @@ int join_try(engine_t *e)
     join_find_t f;
     int never;
 
-    if (!later_queued(e))
+    if (!queue_later_traj(e))
         return 0; /* join_find finds none, and never is 0 */
     if (!join_find(e, &f, &never)) {
         if (never)
@@ -625,7 +618,7 @@ int64_t join_ticks_left(const engine_t *e)
     join_find_t f;
     int never;
 
-    if (!later_queued(e) || !join_wanted(e) || !join_find(e, &f, &never))
+    if (!queue_later_traj(e) || !join_wanted(e) || !join_find(e, &f, &never))
         return INT64_MAX; /* a push that brings one ends the window (its key) */
     /* the braking for the end: plain_window keeps no decision beyond its
      * start already (decide's test) */
