@@ -129,8 +129,8 @@ int engine_lag_pending(const engine_t *e)
     engine_delay_t d;
     if (e->lag.steer)
         return 1;
-    if (!e->lag.have || e->out.mode != OUT_STREAM)
-        return 0;
+    if (!e->lag.have || e->lag.ahead || e->out.mode != OUT_STREAM)
+        return 0; /* (stamps ahead of time: lag_now tells none) */
     /* within a tick of the band: decide() reads the lag before the tick's
      * step (now on, the output's track time not yet), a tick more than
      * after it, where plain_window asks; a window kept at a lag 0.6 ms

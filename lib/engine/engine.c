@@ -13,7 +13,8 @@
  *          values are final, queued; a closed trajectory queues an END;
  *   play-out (engine_tick.c: engine_tick): walks the queued cubics with the
  *          forward-difference stepper (fdiff.h) on the period grid; waits,
- *          underruns, finishes; its time scaling (engine_scale.c) and its
+ *          underruns, finishes (a trajectory's start and its ends at rest:
+ *          engine_play.c); its time scaling (engine_scale.c) and its
  *          transfers to a new trajectory's start (engine_xfer.c);
  *          its start waits until the output will stand the play-out delay
  *          D behind the input (delay_run.c, delay.h), and a silence of the
@@ -80,6 +81,7 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
             goto nomem;
     }
     e->period_s = (double)cfg->period_ns * 1e-9;
+    e->period_lo = cfg->period_ns - cfg->period_ns / 2;
     {
         accept_config_t ac = {
             .max_speed_m_s = engine_config_max_speed(cfg),

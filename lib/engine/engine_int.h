@@ -2,7 +2,8 @@
  * engine_int.h - the engine's state, shared by the files that make up the
  * engine, one per stage (engine.c says which owns what): engine_settings.c
  * (configuration), engine_input.c (input and acceptance), engine_solve.c
- * (solver, fragments, the queue), engine_tick.c (play-out), engine_scale.c
+ * (solver, fragments, the queue), engine_tick.c (play-out; its trajectory
+ * boundaries in engine_play.c), engine_scale.c
  * (its time scaling), engine_xfer.c (transfers), engine_cmd.c (the commands
  * the lifecycle owner gives it, lifecycle.h), delay_run.c (the delay D
  * stated, delay.h), silence.c (silent ends, silence.h); engine.c creates an
@@ -203,9 +204,14 @@ typedef struct {
     double pos[AX], vel[AX], acc[AX];
     int on_fd;
     /* The rate decision of step_once kept for the ticks ahead (plain_window,
-     * engine_tick.c): plain_left ticks are plain unit-grid steps while the
-     * key below still matches the engine (plain_holds) */
-    int64_t plain_left;
+     * engine_tick.c): the steps from a tick n below plain_last are plain
+     * unit-grid steps while the key below still matches the engine
+     * (plain_holds).  seg_last is the last tick on the grid inside cur
+     * (tau_of(seg_last) < cur_t1); the kept steps from a tick n below
+     * kept_last, the lesser of the two, stay inside cur (engine_tick makes
+     * them itself), and those from below fast_last besides are no re-seed
+     * (nor checked by the test hook: plain_tick) */
+    int64_t plain_last, seg_last, kept_last, fast_last;
     size_t plain_qlen;                /* key: queue.len then */
     int64_t plain_seen;               /* key: lag.seen_ns then (a push since: a new sample) */
     int plain_check;                  /* test hook (engine_plain_check) */
@@ -331,6 +337,8 @@ struct engine {
     int local;               /* local method (engine_cfg_local): 1, 3 backward, 2, 4 centred;
                              3, 4 C2 (three queued pieces per interval) */
     double period_s;
+    int64_t period_lo; /* cfg.period_ns - cfg.period_ns / 2: the least time since
+                          the last tick that rounds to one period (engine_tick) */
 
     engine_input_t in;
     engine_solve_t solve;
@@ -414,7 +422,7 @@ void queue_pop(engine_t *e);
  * methods queue three pieces an interval). */
 uint64_t queue_waypoints(const engine_t *e, size_t i0, size_t i1);
 
-/* ---- play-out (engine_tick.c) ---- */
+/* ---- play-out (engine_tick.c; its trajectory boundaries: engine_play.c) ---- */
 
 engine_state_t play_state(const engine_t *e);
 /* 1 if further steps cannot change anything until new input arrives. */
@@ -422,7 +430,9 @@ int play_stalled(const engine_t *e);
 void play_count_underrun(engine_t *e);
 void play_underrun_counted(engine_t *e);
 void play_seed_cur(engine_t *e, int64_t n);
-void play_take_segment(engine_t *e);
+/* The queue head (a SEG) made cur; its segment as the freed slot holds it
+ * until the next push. */
+const fdiff_seg_t *play_take_segment(engine_t *e);
 void play_start(engine_t *e, int new_flag);
 /* A transfer has ended on its target: the trajectory there starts, or, a
  * lead transfer's not due yet, the output rests there until it is. */
@@ -430,10 +440,20 @@ void play_xfer_end(engine_t *e);
 void play_stop_at_rest(engine_t *e);
 void play_rest_at_end(engine_t *e, const qent_t *h);
 void play_finish_here(engine_t *e);
+/* The output stands where it is, at rest (its position out of the stepper). */
+void play_hold_here(engine_t *e);
+/* Back on the unit grid with rate 1 (every start from HOLD). */
+void play_unit_reset(engine_t *e);
 /* Where the solved curve of the output's trajectory ends (scale.avail_*). */
 void play_find_avail(engine_t *e);
 /* The output's pos, vel, acc copied out of the stepper (on_fd cleared). */
 void out_sync(engine_t *e);
+/* The output is the stepper's (engine_out_t): no copies, and the curve's
+ * speed only where it is read (out_cspeed). */
+static inline void out_eval(engine_t *e)
+{
+    e->out.on_fd = 1;
+}
 /* |k'|: the curve's own speed at the output (scale.cspeed off the grid). */
 double out_cspeed(const engine_t *e);
 /* Test hook (tests/unit/test_engine_tick.c): on 1, every tick whose rate
@@ -446,8 +466,6 @@ void engine_plain_check(engine_t *e, int on, uint64_t *kept, uint64_t *wrong);
 
 void scale_eval(engine_t *e);
 void scale_rest(engine_t *e);
-double scale_conv_speed(const engine_t *e);
-double scale_rise_reserve(const engine_t *e, double v);
 double scale_remaining(const engine_t *e, double s);
 double scale_slowing_reserve(const engine_t *e, double v);
 double scale_ceil_room(const engine_t *e, double s, double A, double J);
@@ -455,7 +473,6 @@ double scale_ceil_room(const engine_t *e, double s, double A, double J);
  * scale_conv_speed is taken off (a decision works that out once for both) */
 double scale_remaining_gross(const engine_t *e, double s);
 double scale_ceil_room_gross(const engine_t *e, double s, double A, double J);
-double scale_ceil_here(const engine_t *e);
 void scale_limits(const engine_t *e, double *A, double *J);
 double scale_target(const engine_t *e);
 int scale_moves(const engine_t *e, double R, double A, double J);
@@ -481,7 +498,8 @@ int join_wanted(const engine_t *e);
  * fits (1: the output is on it); else 0, and the old way goes on. */
 int join_try(engine_t *e);
 /* Unit-grid ticks before a join may be due (plain_window keeps no
- * decision beyond them); INT64_MAX if none can be. */
+ * decision beyond them); INT64_MAX if none can be (always without
+ * queue_later_traj). */
 int64_t join_ticks_left(const engine_t *e);
 /* The output's track time on a join: from its start to the meeting time on
  * the new curve, in proportion to the join done. */
@@ -506,10 +524,19 @@ static inline double hpar(const engine_t *e, uint64_t j)
     return e->cfg.param == ENGINE_PARAM_TIME ? nt(e, j + 1) - nt(e, j) : 1.0;
 }
 
-/* the i-th queued entry from the head (i < queue.len) */
+/* the i-th queued entry from the head (i < queue.len <= queue.cap, so
+ * head + i < 2 cap: the ring's wrap without the division) */
 static inline const qent_t *queue_at(const engine_t *e, size_t i)
 {
-    return &e->queue.ent[(e->queue.head + i) % e->queue.cap];
+    size_t j = e->queue.head + i;
+    return &e->queue.ent[j >= e->queue.cap ? j - e->queue.cap : j];
+}
+
+/* A later trajectory than the output's is queued: else there is none to
+ * join (join.c join_find; the usual case, asked at every segment's end). */
+static inline int queue_later_traj(const engine_t *e)
+{
+    return e->queue.len && queue_at(e, e->queue.len - 1)->traj > e->out.traj;
 }
 
 static inline qent_t *q_head(engine_t *e)
@@ -574,6 +601,65 @@ static inline int positive_zeros(engine_setpoint_t *sp, int rc)
         sp->acc_m_s2[a] += 0.0;
     }
     return rc;
+}
+
+/* ---- the time scaling's conversions at the current segment (engine_scale.c;
+ * inline: plain_window reads them at every segment's end) ---- */
+
+/* The speed (m/s) at which the scaling's jerk limit is converted outside a
+ * stop: the largest the curve reaches on the current segment (seg_speed_max;
+ * a transfer's: 1.5 D / T_x), at least the floor.  (Not the speed here:
+ * converted there, the limits would shrink as a ramp speeds up along a
+ * transfer faster than the jerk can take the rate's acceleration back.) */
+static inline double scale_jerk_speed(const engine_t *e)
+{
+    /* fmax without the libm call (x86-64 baseline): the same for every
+     * vmax, NaN included (the floor) */
+    double v = e->out.cur.vmax;
+    return v > ENGINE_SCALE_V_FLOOR_M_S ? v : ENGINE_SCALE_V_FLOOR_M_S;
+}
+
+/* ... and its acceleration limit, in whose units the braking capacity is
+ * expressed (scale_remaining): the segment's av (qent_t), the same speed
+ * unless per-axis acceleration limits leave the scaling more (issue 32,
+ * engine_solve.c accel_speed); a transfer's is its jerk's. */
+static inline double scale_conv_speed(const engine_t *e)
+{
+    double v = e->out.cur.av;
+    return v > 0 ? v : scale_jerk_speed(e);
+}
+
+/* Track time (per unit of rate, in the units of the limits converted at v)
+ * kept for the rises of the limits ahead.  Where the output brakes into a
+ * segment with larger limits (a slower one: A = a / v), its deceleration must
+ * ramp up to the new A at the jerk J: a stop then needs up to
+ * r (A_new - A_old)^2 / (2 J_new) <= r dA a / (2 j) of capacity more than
+ * r^2/2; so much per rise of A ahead, summed (ucum), is kept in reserve:
+ * scale_rise_per_u(e, r, v) per unit of ucum, at rate r (scale_rise_reserve's
+ * r 1, times the rate where it is used). */
+static inline double scale_rise_per_u(const engine_t *e, double r, double v)
+{
+    return r * 0.5 * e->cfg.scale_accel_m_s2 / e->cfg.scale_jerk_m_s3 * v;
+}
+
+static inline double scale_rise_reserve(const engine_t *e, double v)
+{
+    double du = e->scale.avail_ucum - e->out.cur.ucum;
+    return du > 0 ? scale_rise_per_u(e, 1.0, v) * du : 0.0;
+}
+
+/* The rate the speed cap allows on the current segment.  A transfer lasts
+ * long enough for every axis, and for the caller's acceleration cap, at rate
+ * 1 (engine_xfer.c xfer_duration): with per-axis limits or that cap a feed
+ * override above 100 % does not speed it up, which would take an axis past
+ * its limit (tests/unit/test_axis_share.c) or the output past the cap. */
+static inline double scale_ceil_here(const engine_t *e)
+{
+    if (e->out.mode == OUT_STREAM)
+        return e->out.cur.ceil;
+    return e->out.mode == OUT_XFER && (solve_axis_limited(e) || e->cfg.cap_accel_m_s2 > 0)
+               ? 1.0
+               : INFINITY;
 }
 
 #endif

@@ -56,48 +56,6 @@ void scale_eval(engine_t *e)
     e->scale.cspeed = sqrt(v2);
 }
 
-/* The speed (m/s) at which the scaling's jerk limit is converted outside a
- * stop: the largest the curve reaches on the current segment (seg_speed_max;
- * a transfer's: 1.5 D / T_x), at least the floor.  (Converted at the speed
- * here, the limits shrink as a ramp speeds up along a transfer faster than
- * the jerk can take the rate's acceleration back: the rate overshot 1.) */
-static double scale_jerk_speed(const engine_t *e)
-{
-    /* fmax without the libm call (x86-64 baseline): the same for every
-     * vmax, NaN included (the floor) */
-    double v = e->out.cur.vmax;
-    return v > ENGINE_SCALE_V_FLOOR_M_S ? v : ENGINE_SCALE_V_FLOOR_M_S;
-}
-
-/* ... and its acceleration limit, in whose units the braking capacity is
- * expressed (scale_remaining): the segment's av (qent_t), the same speed
- * unless per-axis acceleration limits leave the scaling more (issue 32,
- * engine_solve.c accel_speed); a transfer's is its jerk's. */
-double scale_conv_speed(const engine_t *e)
-{
-    double v = e->out.cur.av;
-    return v > 0 ? v : scale_jerk_speed(e);
-}
-
-/* Track time (per unit of rate, in the units of the limits converted at v)
- * kept for the rises of the limits ahead.  Where the output brakes into a
- * segment with larger limits (a slower one: A = a / v), its deceleration must
- * ramp up to the new A at the jerk J: a stop then needs up to
- * r (A_new - A_old)^2 / (2 J_new) <= r dA a / (2 j) of capacity more than
- * r^2/2; so much per rise of A ahead, summed (ucum), is kept in reserve:
- * rise_per_u(e, r, v) per unit of ucum, at rate r (scale_rise_reserve's
- * r 1, times the rate where it is used). */
-static double rise_per_u(const engine_t *e, double r, double v)
-{
-    return r * 0.5 * e->cfg.scale_accel_m_s2 / e->cfg.scale_jerk_m_s3 * v;
-}
-
-double scale_rise_reserve(const engine_t *e, double v)
-{
-    double du = e->scale.avail_ucum - e->out.cur.ucum;
-    return du > 0 ? rise_per_u(e, 1.0, v) * du : 0.0;
-}
-
 static double stop_jerk_speed(const engine_t *e, double A, double jerk);
 
 /* Queue entry i, among the first scan, when it is a segment of the output's
@@ -305,7 +263,7 @@ double scale_ceil_room_gross(const engine_t *e, double s, double A, double J)
      * limits alternate piece by piece (the local C2 Hermite's three pieces,
      * per-axis jerk limits of 2 m/s^3) the next capped piece was always
      * too near: the output crawled at rate 0.02 (tests/oracle/test_axis_limits.py) */
-    double rfac = rise_per_u(e, e->scale.ts.rate, v);
+    double rfac = scale_rise_per_u(e, e->scale.ts.rate, v);
     double res_all = e->scale.ts.rate * scale_rise_reserve(e, v) + margin;
     for (size_t i = 0; i < e->queue.slow_len; i++) {
         const qent_t *q = &e->queue.ent[e->queue.slow[(e->queue.slow_head + i) % e->queue.cap]];
@@ -324,21 +282,6 @@ double scale_ceil_room_gross(const engine_t *e, double s, double A, double J)
         R = fmin(R, to + ts_stop_dist(q->ceil, -A, A, J));
     }
     return R;
-}
-
-/* The rate the speed cap allows on the current segment.  A transfer lasts
- * long enough for every axis at rate 1 (engine_xfer.c xfer_duration): with
- * per-axis limits a feed override above 100 % does not speed it up (at 160 %
- * its smoothstep took an axis limited to 3 m/s to 3.002 m/s, and its
- * acceleration to 2.56 times the 6 D / T^2 kept within the limit:
- * tests/unit/test_axis_share.c). */
-double scale_ceil_here(const engine_t *e)
-{
-    if (e->out.mode == OUT_STREAM)
-        return e->out.cur.ceil;
-    return e->out.mode == OUT_XFER && (solve_axis_limited(e) || e->cfg.cap_accel_m_s2 > 0)
-               ? 1.0
-               : INFINITY;
 }
 
 /* The jerk of a stop or clear (m/s^3): at least a / T, so that the braking

@@ -3,11 +3,12 @@
  * machine walks the queued cubics (engine_solve.c) with the forward-
  * difference stepper (fdiff.h) on the period grid: it waits for enough
  * lookahead (start_slack auto learns how much), starts a trajectory
- * directly or through a transfer (engine_xfer.c), steps on the unit grid
+ * directly or through a transfer (engine_xfer.c; the start itself, the ends
+ * at rest and the underruns counted: engine_play.c), steps on the unit grid
  * while nothing asks for another rate (else the time scaling,
- * engine_scale.c), rests at a trajectory's end, counts underruns and fills
- * the setpoint, one path for every tick: the rate decision of a plain step is
- * kept for the ticks it provably holds (plain_window).  It owns engine_out_t
+ * engine_scale.c) and fills the setpoint, one path for every tick: the rate
+ * decision of a plain step is kept for the ticks it provably holds
+ * (plain_window).  It owns engine_out_t
  * (engine_int.h: mode, position, current segment and stepper, tick count,
  * cycle, track, flags, the last setpoint, the decision kept).
  */
@@ -65,45 +66,6 @@ static int rebuffering(const engine_t *e, double s)
              brake_s(e) - e->slack_learn * last_interval(e));
 }
 
-/* An underrun begins: what its log line tells; counted now, or (while the
- * silence may turn out to be the input's end: silence.h) once a newer
- * waypoint comes (play_underrun_counted). */
-void play_count_underrun(engine_t *e)
-{
-    e->out.und_t = e->sil.last_t;
-    e->out.und_traj = e->sil.traj;
-    /* what its log line tells (engine_status_t underrun_*) */
-    engine_delay_t d;
-    engine_delay(e, &d);
-    e->st.underrun_t_s = e->out.t;
-    e->st.underrun_newest_t_s = e->sil.last_t;
-    e->st.underrun_next_t_s = NAN;
-    e->st.underrun_slack_s = d.interval_s + d.slack_s;
-    e->st.underrun_curve_t_s = e->scale.avail_t;
-    e->st.underrun_lookahead_s = d.lookahead_s;
-    e->st.underrun_silence_s = NAN;
-    e->st.underrun_judging = accept_pending(&e->in.policy);
-    e->st.underrun_judging_t_s = accept_first_t(&e->in.policy);
-    e->out.und_pending = engine_silence_pending(e);
-    if (!e->out.und_pending)
-        play_underrun_counted(e);
-}
-
-/* The underrun is one (the input came later than its timestamps said):
- * counted, and (start_slack auto) the next start waits one waypoint more,
- * up to ENGINE_SLACK_AUTO_MAX. */
-void play_underrun_counted(engine_t *e)
-{
-    e->out.und_pending = 0;
-    e->st.underruns++;
-    if (e->slack_auto || e->cfg.delay_s > 0)
-        engine_delay_grow(e); /* D as the input now needs (delay.h) */
-    if (e->slack_auto && e->slack_learn < e->slack_more) {
-        e->slack_learn++;
-        e->st.lookahead = e->lookahead + e->slack_learn;
-    }
-}
-
 /*
  * The output may start (or resume after an underrun) on the segment h only
  * once the lookahead is buffered beyond it, or its trajectory is closed.
@@ -147,198 +109,37 @@ double out_cspeed(const engine_t *e)
     return sqrt(v2);
 }
 
-static void hold_here(engine_t *e)
+/* Seed the stepper at tick n (relative time tau in [cur_t0, cur_t1)) for
+ * seg, cur's segment or the queue slot it was just copied from. */
+static void seed_at(engine_t *e, int64_t n, const fdiff_seg_t *seg)
 {
-    out_sync(e); /* the position stays */
-    for (int k = 0; k < AX; k++)
-        e->out.vel[k] = e->out.acc[k] = 0.0;
-}
-
-/* Back on the unit grid with rate 1 (every start from HOLD). */
-static void unit_reset(engine_t *e)
-{
-    e->scale.on = 0;
-    e->scale.s_off = 0.0;
-    e->scale.ts.rate = 1.0;
-    e->scale.ts.acc = 0.0;
-    e->scale.end_brake = 0;
-    e->out.reserve_slow = 0;
-}
-
-/* A stop or clear has brought the output to rest: drop what was queued at
- * the request, stand here (FINISHED after a stop, WAITING after a clear). */
-void play_stop_at_rest(engine_t *e)
-{
-    if (e->out.mode == OUT_XFER)
-        xfer_track_time(e); /* the track time the transfer showed, kept at rest (its own
-                               time, from 0, stepped t_s back: 5.4 s to 0.1 s) */
-    /* the waypoints beyond the rest point: dropped (st.dropped), the end of
-     * the segment it rests in among them */
-    size_t n = e->scale.drop_n < e->queue.len ? e->scale.drop_n : e->queue.len;
-    e->st.dropped += queue_waypoints(e, 0, n);
-    if (e->out.mode == OUT_STREAM && e->out.cur.kind == QE_SEG && !e->local &&
-        e->out.t < e->out.cur.t1_s - 1e-9)
-        e->st.dropped++;
-    while (e->scale.drop_n && e->queue.len)
-        queue_pop(e);
-    e->scale.drop_n = 0;
-    e->out.mode = OUT_HOLD;
-    e->xfer.lead = 0;
-    hold_here(e);
-    e->out.finished = e->scale.stop_req == STOP_STOP;
-    e->scale.stop_req = STOP_NONE;
-    e->out.underrun = 0;
-    unit_reset(e);
-}
-
-/* The queue head is a trajectory's end marker: rest on its point, FINISHED. */
-void play_rest_at_end(engine_t *e, const qent_t *h)
-{
-    out_sync(e);
-    for (int k = 0; k < AX; k++)
-        e->out.pos[k] = h->seg.c[k][0];
-    e->out.t = h->t1_s;
-    queue_pop(e);
-    hold_here(e);
-    e->out.mode = OUT_HOLD;
-    e->out.finished = 1;
-    e->out.underrun = 0;
-    if (e->scale.stop_req)
-        play_stop_at_rest(e);
-}
-
-/* A closed trajectory whose curve does not end at rest, braked to rest just
- * before its end: finish here, where the output stands (no jump to the end). */
-void play_finish_here(engine_t *e)
-{
-    while (e->queue.len) {
-        int end = q_head(e)->kind == QE_END && q_head(e)->traj == e->out.traj;
-        queue_pop(e);
-        if (end)
-            break;
-    }
-    e->out.mode = OUT_HOLD;
-    hold_here(e);
-    e->out.finished = 1;
-    e->out.underrun = 0;
-    unit_reset(e);
-}
-
-/* The output is the stepper's (engine_out_t): no copies, and the curve's
- * speed only where it is read (out_cspeed). */
-static void out_eval(engine_t *e)
-{
-    e->out.on_fd = 1;
+    double tau = tau_of(e, n);
+    double u0 = (tau - e->out.cur_t0) / seg->dur_s;
+    fdiff_seed(&e->out.fd, seg, u0, e->period_s / seg->dur_s);
 }
 
 /* Seed cur at tick n (relative time tau in [cur_t0, cur_t1)). */
 void play_seed_cur(engine_t *e, int64_t n)
 {
-    double tau = tau_of(e, n);
-    double u0 = (tau - e->out.cur_t0) / e->out.cur.seg.dur_s;
-    fdiff_seed(&e->out.fd, &e->out.cur.seg, u0, e->period_s / e->out.cur.seg.dur_s);
+    seed_at(e, n, &e->out.cur.seg);
 }
 
-/* Make the queue head (a SEG) the current segment, relative to origin_t. */
-void play_take_segment(engine_t *e)
+/* Make the queue head (a SEG) the current segment, relative to origin_t.
+ * Returns its segment as the queue slot just freed holds it (cur's copy,
+ * unchanged until the next push): read there in the same tick, the loads
+ * do not wait on the copy's stores (a load across two of them cannot be
+ * forwarded from the store buffer). */
+const fdiff_seg_t *play_take_segment(engine_t *e)
 {
-    e->out.cur = *q_head(e);
+    const qent_t *q = q_head(e);
+    double shift = q->shift, t0 = q->seg.t0_s, t1 = q->t1_s;
+    e->out.cur = *q;
     queue_pop(e);
-    if (!is_exactly(e->out.cur.shift, 0.0))
-        e->out.origin_t += e->out.cur.shift; /* where a join met it (join.c) */
-    e->out.cur_t0 = e->out.cur.seg.t0_s - e->out.origin_t;
-    e->out.cur_t1 = e->out.cur.t1_s - e->out.origin_t;
-}
-
-/* Where the solved curve of the output's trajectory ends, from the queue
- * (once per trajectory; queue_segment and queue_end keep it up to date). */
-void play_find_avail(engine_t *e)
-{
-    e->scale.avail_t = e->out.cur.t1_s;
-    e->scale.avail_kcum = e->out.cur.kcum;
-    e->scale.avail_ucum = e->out.cur.ucum;
-    e->scale.avail_closed = 0;
-    e->scale.avail_rest = 0;
-    for (size_t i = 0; i < e->queue.len; i++) {
-        const qent_t *q = queue_at(e, i);
-        if (q->traj != e->out.traj)
-            break;
-        e->scale.avail_t = q->t1_s;
-        if (q->kind == QE_SEG) {
-            e->scale.avail_kcum = q->kcum;
-            e->scale.avail_ucum = q->ucum;
-        }
-        if (q->kind == QE_END) {
-            e->scale.avail_closed = 1;
-            e->scale.avail_rest = q->seg.c[0][1] <= ENGINE_REST_SPEED_M_S;
-            break;
-        }
-    }
-}
-
-/* One clock: a trajectory is entered at rate 0 like every other
- * (scaled_rest, TIMESCALE.md "Handovers": locked at once, its acceleration
- * would step by k''(0) rho^2), behind the play time by the sub-tick phase
- * past its first waypoint (and by what the waypoints came late); the
- * catch-up of clocked_step wins the lag back and locks on the clock. */
-static void clock_start(engine_t *e)
-{
-    scale_rest(e);
-    e->clk.locked = 0;
-    scale_eval(e);
-    e->out.t = e->out.origin_t;
-}
-
-/* Begin streaming the trajectory at the queue head (tick 0 of it). */
-void play_start(engine_t *e, int new_flag)
-{
-    qent_t *h = q_head(e);
-
-    if (new_flag) {
-        e->out.track++;
-        e->out.flags_pending |= ENGINE_SP_NEW_TRACK;
-    }
-    e->out.have_pos = 1;
-    e->out.underrun = 0;
-    if (h->kind == QE_END) {
-        /* a trajectory with no segment: rest on its point */
-        play_rest_at_end(e, h);
-        return;
-    }
-    e->out.origin_t = h->seg.t0_s;
-    e->out.traj = h->traj;
-    play_take_segment(e);
-    play_find_avail(e);
-    e->out.n = 0;
-    e->out.seg_n0 = 0;
-    e->scale.s_off = 0.0;
-    play_seed_cur(e, 0);
-    out_eval(e);
-    e->out.t = e->out.origin_t;
-    e->out.mode = OUT_STREAM;
-    if (e->clk.on) {
-        clock_start(e);
-    } else if (e->scale.on) {
-        /* from a scaled transfer: go on scaled from the start */
-        e->scale.s = 0.0;
-        scale_eval(e);
-    }
-}
-
-void play_xfer_end(engine_t *e)
-{
-    if (!e->xfer.lead) {
-        play_start(e, 0);
-        return;
-    }
-    /* rest on the start, its track time: step_once starts the trajectory
-     * from here (led: the same track) once it is due */
-    fdiff_eval(&e->out.cur.seg, 1.0, e->out.pos, NULL, NULL);
-    e->out.on_fd = 0;
-    e->out.t = e->xfer.to_t;
-    e->out.mode = OUT_HOLD;
-    hold_here(e);
-    unit_reset(e);
+    if (!is_exactly(shift, 0.0))
+        e->out.origin_t += shift; /* where a join met it (join.c) */
+    e->out.cur_t0 = t0 - e->out.origin_t;
+    e->out.cur_t1 = t1 - e->out.origin_t;
+    return &q->seg;
 }
 
 /* One forward step of cur (with a re-seed at deterministic ticks). */
@@ -384,6 +185,7 @@ __attribute__((noinline)) static int unit_cross(engine_t *e, int64_t n, double t
         step_cur(e, n);
         return 0;
     }
+    const fdiff_seg_t *seg;
     for (;;) {
         qent_t *h = q_head(e);
         if (h && h->traj != e->out.traj)
@@ -397,7 +199,7 @@ __attribute__((noinline)) static int unit_cross(engine_t *e, int64_t n, double t
             e->out.underrun = 1;
             e->st.underrun_ticks++;
             e->st.hard_stops++;
-            hold_here(e);
+            play_hold_here(e);
             e->scale.on = 1;
             e->scale.s = tau_of(e, e->out.n);
             e->scale.ts.rate = 0.0;
@@ -408,14 +210,14 @@ __attribute__((noinline)) static int unit_cross(engine_t *e, int64_t n, double t
             play_rest_at_end(e, h);
             return 1;
         }
-        play_take_segment(e);
+        seg = play_take_segment(e);
         if (tau < e->out.cur_t1)
             break;
         /* shorter than a period: no tick falls in it */
     }
     e->out.n = n;
     e->out.seg_n0 = n;
-    play_seed_cur(e, n);
+    seed_at(e, n, seg); /* cur's, read where it was copied from */
     out_eval(e);
     e->out.t = e->out.origin_t + tau;
     e->out.underrun = 0;
@@ -477,6 +279,37 @@ static int decide(engine_t *e, decision_t *d)
     return GO_SCALED;
 }
 
+/* The last tick on the unit grid inside cur from the current one n: the
+ * largest m >= n with tau_of(m) < cur_t1 (n itself if none), as unit_step
+ * compares them (tau_of is monotonic in its tick, so the guess from the
+ * division is moved to it by the comparison itself).  A segment longer than
+ * 2^31 ticks, or NaN, gives n: its kept steps go the long way (step_once). */
+static int64_t grid_last(const engine_t *e)
+{
+    int64_t n = e->out.n;
+    double x = (e->out.cur_t1 - e->scale.s_off) / e->period_s - (double)n;
+    if (!(x < 0x1p31))
+        return n;
+    int64_t m = n + (x > 1.0 ? (int64_t)x : 0);
+    while (m > n && !(tau_of(e, m) < e->out.cur_t1))
+        m--;
+    while (tau_of(e, m + 1) < e->out.cur_t1)
+        m++;
+    return m;
+}
+
+/* kept_last and fast_last (engine_out_t) from plain_last, seg_last and the
+ * re-seed grid of step_cur. */
+static inline void fast_bound(engine_t *e)
+{
+    int64_t n = e->out.n, kept, last;
+    kept = e->out.seg_last < e->out.plain_last ? e->out.seg_last : e->out.plain_last;
+    last = n +
+           (int64_t)(FDIFF_RESEED_STEPS - 1 - (uint64_t)(n - e->out.seg_n0) % FDIFF_RESEED_STEPS);
+    e->out.kept_last = kept;
+    e->out.fast_last = e->out.plain_check ? INT64_MIN : kept < last ? kept : last;
+}
+
 /*
  * The rate decision kept.  On the unit grid inside a segment, decide()
  * re-derives every tick that nothing asks for another rate: two divisions
@@ -507,11 +340,13 @@ static int decide(engine_t *e, decision_t *d)
  */
 static void plain_window(engine_t *e)
 {
-    e->out.plain_left = 0;
+    e->out.plain_last = e->out.kept_last = e->out.fast_last = INT64_MIN; /* none kept */
     if (e->out.mode != OUT_STREAM || e->scale.on || e->clk.on || e->out.underrun ||
         !e->out.have_pos || e->scale.stop_req || e->scale.end_brake || e->out.cur.join ||
         !is_exactly(e->scale.override, 1.0) || !is_exactly(e->scale.ts.rate, 1.0) ||
-        !is_exactly(e->scale.ts.acc, 0.0) || scale_ceil_here(e) < 1.0 || engine_lag_pending(e))
+        !is_exactly(e->scale.ts.acc, 0.0) || scale_ceil_here(e) < 1.0 ||
+        /* (engine_lag_pending's own first answers without the call) */
+        ((e->lag.steer || (e->lag.have && !e->lag.ahead)) && engine_lag_pending(e)))
         return;
     /* scale_remaining() is finite: a REST end too is left at rate 0 */
     /* decide's check, ts_stop_dist(1, 0, a/v, j/v) < v K - (margin + 1) T
@@ -546,21 +381,31 @@ static void plain_window(engine_t *e)
     double x = room / e->period_s; /* floor(x) - 2 ticks, x > 0: floor is the cast */
     if (!(x >= 3.0))
         return;
-    e->out.plain_left = x < 0x1p62 ? (int64_t)x - 2 : INT64_MAX / 2;
-    if (e->scale.avail_closed) { /* not past where a join may be due (join.c) */
+    int64_t left = x < 0x1p60 ? (int64_t)x - 2 : INT64_C(1) << 60;
+    if (e->scale.avail_closed && queue_later_traj(e)) { /* not past where a join may be due */
         int64_t j = join_ticks_left(e);
-        e->out.plain_left = j < e->out.plain_left ? j : e->out.plain_left;
+        left = j < left ? j : left;
     }
+    e->out.plain_last = e->out.n + left;
     e->out.plain_qlen = e->queue.len;
     e->out.plain_seen = e->lag.seen_ns;
+    e->out.seg_last = grid_last(e);
+    fast_bound(e);
 }
 
-/* The decision plain_window kept still holds (see there). */
+/* The key of the decision plain_window kept: the state a call between
+ * ticks may change it by is as it was then (see there). */
+static inline int plain_key(const engine_t *e)
+{
+    return e->out.plain_qlen == e->queue.len && e->out.plain_seen == e->lag.seen_ns &&
+           e->out.mode == OUT_STREAM && !e->scale.stop_req && !e->clk.on &&
+           is_exactly(e->scale.override, 1.0);
+}
+
+/* The decision plain_window kept still holds for the step from tick n. */
 static inline int plain_holds(const engine_t *e)
 {
-    return e->out.plain_left > 0 && e->out.plain_qlen == e->queue.len &&
-           e->out.plain_seen == e->lag.seen_ns && e->out.mode == OUT_STREAM && !e->scale.stop_req &&
-           !e->clk.on && is_exactly(e->scale.override, 1.0);
+    return e->out.n < e->out.plain_last && plain_key(e);
 }
 
 /* Test hook: the decision made again on a kept tick, its side effects
@@ -585,6 +430,7 @@ __attribute__((noinline)) static void plain_verify(engine_t *e)
 void engine_plain_check(engine_t *e, int on, uint64_t *kept, uint64_t *wrong)
 {
     e->out.plain_check = on;
+    fast_bound(e);
     if (kept)
         *kept = e->out.plain_kept;
     if (wrong)
@@ -621,14 +467,12 @@ static inline void step_kept(engine_t *e)
         /* test hook 2: the decision made anyway, and followed */
         if (e->out.plain_check == 2 ? step_decided(e) : unit_step(e))
             plain_window(e);
-        else
-            e->out.plain_left--;
         return;
     }
     if (unit_step(e))
         plain_window(e); /* a new segment: decided again for it */
     else
-        e->out.plain_left--;
+        fast_bound(e); /* past a re-seed */
 }
 
 /* One tick of the output state machine. */
@@ -639,7 +483,7 @@ static void step_once(engine_t *e)
         return;
     }
     e->out.cycle++;
-    e->out.plain_left = 0;
+    e->out.plain_last = e->out.kept_last = e->out.fast_last = INT64_MIN;
     if (e->out.mode == OUT_HOLD) {
         qent_t *h = q_head(e);
         double lag = NAN; /* the start's ramp, if enough_ahead simulated it */
@@ -647,7 +491,7 @@ static void step_once(engine_t *e)
             double target[AX], t0, gap;
             if (xfer_lead_target(e, target, &t0, &gap)) {
                 /* issue 26: on to its start while its output is not due */
-                unit_reset(e);
+                play_unit_reset(e);
                 xfer_start(e, target, gap);
                 e->xfer.lead = 1;
                 e->xfer.to_t = t0;
@@ -656,7 +500,7 @@ static void step_once(engine_t *e)
                 scale_eval(e);
                 return;
             }
-            hold_here(e);
+            play_hold_here(e);
             return;
         }
         if (!e->out.have_pos) {
@@ -680,14 +524,14 @@ static void step_once(engine_t *e)
             if (xfer)
                 lead = xfer_duration(e, target, h->gap_s, &capped);
             if ((long double)e->clk.play_ns * 1e-9L < (long double)h->seg.t0_s - lead) {
-                hold_here(e);
+                play_hold_here(e);
                 return;
             }
         }
         /* where a lead transfer left it: the same track */
         int led = e->xfer.lead && !xfer;
         e->xfer.lead = 0;
-        unit_reset(e);
+        play_unit_reset(e);
         engine_delay_note(e, lag); /* issue 26: the D this start holds */
         if (xfer) {
             xfer_start(e, target, h->gap_s);
@@ -765,32 +609,38 @@ _Static_assert(offsetof(engine_setpoint_t, vel_m_s) ==
                    offsetof(engine_setpoint_t, acc_m_s2) ==
                        offsetof(engine_setpoint_t, vel_m_s) + AX * sizeof(double) &&
                    AX == 3,
-               "put_rows stores pos_m, vel_m_s and acc_m_s2 as one run of nine doubles");
+               "fill_plain stores pos_m, vel_m_s and acc_m_s2 as one run of nine doubles");
 
-/* put_sp's rows from the stepper, in pairs (+ 0.0 as there): the store
- * every plain tick makes. */
-static inline void put_rows(engine_setpoint_t *sp, const fdiff_t *fd)
-{
-    const row2_t z = {0.0, 0.0};
-    row2_t r[4] = {row2_at(fd->p0) + z, (row2_t){fd->p0[2], fd->v0[0]} + z, row2_at(fd->v0 + 1) + z,
-                   row2_at(fd->a0) + z};
-    memcpy((char *)sp + offsetof(engine_setpoint_t, pos_m), r, sizeof r);
-    sp->acc_m_s2[2] = fd->a0[2] + 0.0;
-}
-
-/* A plain setpoint (plain_sp): what fill_sp_flags would make of it (put_sp,
- * its rows by put_rows). */
+/* A plain setpoint (plain_sp): what fill_sp_flags would make of it (put_sp).
+ * Everything it reads is read before the first store to sp (which may alias
+ * the engine, for all the compiler knows), and in the widths it was stored
+ * in: a load wider than the store that just wrote it, or across two stores
+ * (the tick's counter loaded with the track as one 8-byte pair, the
+ * stepper's v0[1..2] as one pair), is not forwarded from the store buffer
+ * and waits for the stores to reach the cache.  The stepper's rows are read
+ * as the aligned pairs it stores, the setpoint's pairs shuffled out of them
+ * (+ 0.0 as put_sp adds). */
 static inline void fill_plain(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
+    const fdiff_t *fd = &e->out.fd;
+    const row2_t z = {0.0, 0.0};
+    row2_t p01 = row2_at(fd->p0), p23 = row2_at(fd->p0 + 2), v01 = row2_at(fd->v0),
+           v23 = row2_at(fd->v0 + 2), a01 = row2_at(fd->a0), a23 = row2_at(fd->a0 + 2);
+    row2_t r[4] = {p01 + z, __builtin_shufflevector(p23, v01, 0, 2) + z,
+                   __builtin_shufflevector(v01, v23, 1, 2) + z, a01 + z};
+    double t = e->out.t, az = a23[0] + 0.0;
+    uint32_t cycle = e->out.cycle, track = e->out.track;
+
+    e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
     sp->now_ns = now_ns;
-    sp->t_s = e->out.t;
-    put_rows(sp, &e->out.fd);
+    sp->t_s = t;
+    memcpy((char *)sp + offsetof(engine_setpoint_t, pos_m), r, sizeof r);
+    sp->acc_m_s2[2] = az;
     sp->state = ENGINE_STATE_STREAMING;
     sp->flags = 0;
-    sp->cycle = e->out.cycle;
-    sp->track = e->out.track;
+    sp->cycle = cycle;
+    sp->track = track;
     sp->age_s = NAN;
-    e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
 }
 
 /* The setpoint of this tick (put_sp; positive zeros). */
@@ -892,6 +742,81 @@ int play_stalled(const engine_t *e)
     return 0;
 }
 
+/* One pair of fdiff_step's additions, a row += the next one's (lane by
+ * lane, as fdiff_step): stored, and returned. */
+static inline row2_t step_pair(double *row, const double *next)
+{
+    row2_t r = row2_at(row) + row2_at(next);
+    memcpy(row, &r, sizeof r);
+    return r;
+}
+
+/*
+ * A kept step inside its segment that is no re-seed (fast_last), one period
+ * on with nothing pushed since, and its plain setpoint: what step_once
+ * (step_kept, unit_step, fdiff_step) and fill_sp (fill_plain) make of it,
+ * in one run: the stepper's rows loaded once as the aligned pairs it
+ * stores, added (fdiff_step's additions, lane by lane), stored back, and the
+ * setpoint's pairs shuffled out of the sums in registers (+ 0.0 as put_sp
+ * adds).  Everything is read before the first store to sp, which may alias
+ * the engine for all the compiler knows.
+ */
+static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    fdiff_t *fd = &e->out.fd;
+    const row2_t z = {0.0, 0.0};
+    int64_t n = e->out.n + 1;
+    double t = e->out.origin_t + tau_of(e, n);
+    uint32_t cycle = e->out.cycle + 1, track = e->out.track;
+    uint64_t setpoints = e->st.setpoints + 1;
+    /* row by row, each stored as soon as made: the pairs of the rows after
+     * are loaded as they are needed (all loaded first, they outnumber the
+     * 16 registers and are loaded again) */
+    row2_t p0a = step_pair(fd->p0, fd->p1), p0b = step_pair(fd->p0 + 2, fd->p1 + 2);
+    (void)step_pair(fd->p1, fd->p2), (void)step_pair(fd->p1 + 2, fd->p2 + 2);
+    (void)step_pair(fd->p2, fd->p3), (void)step_pair(fd->p2 + 2, fd->p3 + 2);
+    row2_t v0a = step_pair(fd->v0, fd->v1), v0b = step_pair(fd->v0 + 2, fd->v1 + 2);
+    (void)step_pair(fd->v1, fd->v2), (void)step_pair(fd->v1 + 2, fd->v2 + 2);
+    row2_t a0a = step_pair(fd->a0, fd->a1), a0b = step_pair(fd->a0 + 2, fd->a1 + 2);
+    e->out.n = n;
+    e->out.cycle = cycle;
+    e->out.last_now = now_ns;
+    e->out.t = t;
+    e->out.on_fd = 1; /* out_eval (a window may begin on a tick that landed on the
+                       * grid from the time scaling: its output was scale_eval's) */
+    e->out.underrun = 0;
+    e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
+    e->st.setpoints = setpoints;
+
+    row2_t r[4] = {p0a + z, __builtin_shufflevector(p0b, v0a, 0, 2) + z,
+                   __builtin_shufflevector(v0a, v0b, 1, 2) + z, a0a + z};
+    sp->now_ns = now_ns;
+    sp->t_s = t;
+    memcpy((char *)sp + offsetof(engine_setpoint_t, pos_m), r, sizeof r);
+    sp->acc_m_s2[2] = a0b[0] + 0.0;
+    sp->state = ENGINE_STATE_STREAMING;
+    sp->flags = 0;
+    sp->cycle = cycle;
+    sp->track = track;
+    sp->age_s = NAN;
+}
+
+/* A kept step inside its segment, one period on with nothing pushed since,
+ * that plain_tick does not make: a re-seed, or one the test hook checks
+ * (step_kept as step_once makes it, and the setpoint as fill_sp would make
+ * it; plain_sp holds: a kept step inside its segment is on the grid, leaves
+ * no underrun and no flag pending, and the key holds the rest). */
+__attribute__((noinline)) static void kept_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    e->out.last_now = now_ns;
+    step_kept(e);
+    if (__builtin_expect(e->out.plain_check != 0, 0))
+        fill_sp(e, now_ns, sp); /* the test hooks' steps checked the long way */
+    else
+        fill_plain(e, now_ns, sp);
+    e->st.setpoints++;
+}
+
 static int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t *sp);
 
 /*
@@ -900,40 +825,36 @@ static int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t 
  * whose rate decision is kept while it holds: plain_window) and the
  * setpoint filled (fill_sp, its flag logic skipped for a plain one).  A step
  * that keeps its decision inside its segment, one period on with nothing
- * pushed since, is made here (step_kept, as step_once makes it), without
- * the frame of tick_steps: a leaf-like run of loads, one imul, the
- * stepper's additions and the setpoint's stores.
+ * pushed since, is made here, as step_once and fill_sp would make it,
+ * without the frame of tick_steps: by plain_tick (a run of loads, one imul,
+ * the stepper's additions and the setpoint's stores), or kept_tick for a
+ * re-seed and the test hook's checked steps.
  */
 int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
-    int64_t k = 1;
+    int64_t k = 1, d = now_ns - e->out.last_now, p = e->cfg.period_ns;
 
+    /* A kept step inside its segment (kept_last: there is a window, so an
+     * earlier tick), one period on (d in [p - p/2, 2 p - p/2), as the
+     * division below would round: one unsigned comparison, d below p - p/2
+     * wraps above p), with nothing pushed since: lag_note has nothing to
+     * note, and a silent end is noticed at the next tick that decides, as
+     * it always was (checked every tick, the silent ends of 2 of the 30
+     * frozen outputs, gpxpy_cerknicko-jezero smooth, come a few ticks
+     * earlier) */
+    if (__builtin_expect(e->out.n < e->out.kept_last, 1) &&
+        __builtin_expect((uint64_t)d - (uint64_t)e->period_lo < (uint64_t)p, 1) && plain_key(e) &&
+        !(e->lag.pending | e->sil.fresh)) {
+        if (__builtin_expect(e->out.n < e->out.fast_last, 1))
+            plain_tick(e, now_ns, sp);
+        else
+            kept_tick(e, now_ns, sp); /* a re-seed, or the test hook */
+        return 0;
+    }
     if (e->out.have_now) {
-        int64_t d = now_ns - e->out.last_now, p = e->cfg.period_ns;
-        /* ticks on the period grid since the last call (rounded): one if d
-         * is in [p - p/2, 2 p - p/2), as the division would round (one
-         * unsigned comparison: d below p - p/2 wraps above p) */
-        if (__builtin_expect((uint64_t)d - (uint64_t)(p - p / 2) < (uint64_t)p, 1)) {
-            if (plain_holds(e) && !e->lag.pending && !e->sil.fresh &&
-                tau_of(e, e->out.n + 1) < e->out.cur_t1) {
-                /* lag_note has nothing to note (no push since), and a silent
-                 * end is noticed at the next tick that decides, as it always
-                 * was (checked every tick, the silent ends of 2 of the 30
-                 * frozen outputs, gpxpy_cerknicko-jezero smooth, come a few
-                 * ticks earlier) */
-                e->out.last_now = now_ns;
-                step_kept(e);
-                /* plain_sp holds: a kept step inside its segment is on the
-                 * grid (on_fd), leaves no underrun and no flag pending (the
-                 * last fill took them), and the key holds the rest (the test
-                 * hooks' steps are checked the long way) */
-                if (__builtin_expect(e->out.plain_check != 0, 0))
-                    fill_sp(e, now_ns, sp);
-                else
-                    fill_plain(e, now_ns, sp);
-                e->st.setpoints++;
-                return 0;
-            }
+        /* ticks on the period grid since the last call (rounded) */
+        if ((uint64_t)d - (uint64_t)e->period_lo < (uint64_t)p) {
+            k = 1;
         } else if (d < 0) {
             last_setpoint(e, sp);
             return -ENGINE_ESTATE;

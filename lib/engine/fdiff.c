@@ -4,27 +4,65 @@
 #include <stddef.h>
 #include <string.h>
 
+/* Two lanes of a row (x and y). */
+typedef double lane2_t __attribute__((vector_size(16)));
+
+/*
+ * The differences of the cubic c0 + c1 u + c2 u^2 + c3 u^3 at u for the step
+ * h (h2 = h h, h3 = h2 h), written in closed form (exact algebra, no
+ * cancellation of k(u+h) - k(u) on large values), for a pair of lanes (the
+ * scalars broadcast): each lane computes, operation by operation, what
+ * these expressions do for its axis,
+ *     p0 = c0 + u (c1 + u (c2 + u c3))
+ *     p1 = c1 h + c2 (2 u h + h2) + c3 (3 u u h + 3 u h2 + h3)
+ *     p2 = 2 c2 h2 + c3 (6 u h2 + 6 h3)
+ *     p3 = 6 c3 h3
+ *     v0 = (c1 + u (2 c2 + u 3 c3)) inv_t           k'(u), a quadratic
+ *     v1 = (2 c2 h + 3 c3 (2 u h + h2)) inv_t
+ *     v2 = 6 c3 h2 inv_t
+ *     a0 = (2 c2 + 6 c3 u) inv_t2                   k''(u), a line
+ *     a1 = 6 c3 h inv_t2
+ * each product and sum left to right, the parts common to the axes (x, y,
+ * zz, u3) worked out once.
+ */
+static inline void seed_pair(lane2_t r[9], lane2_t c0, lane2_t c1, lane2_t c2, lane2_t c3, double u,
+                             double h, double h2, double h3, double inv_t, double inv_t2)
+{
+    double x = 2 * u * h + h2, y = 3 * u * u * h + 3 * u * h2 + h3, zz = 6 * u * h2 + 6 * h3;
+    double u3 = u * 3;
+    lane2_t c2x2 = 2 * c2, c3x3 = 3 * c3, c3x6 = 6 * c3;
+    r[0] = c0 + u * (c1 + u * (c2 + u * c3));
+    r[1] = c1 * h + c2 * x + c3 * y;
+    r[2] = c2x2 * h2 + c3 * zz;
+    r[3] = c3x6 * h3;
+    r[4] = (c1 + u * (c2x2 + u3 * c3)) * inv_t;
+    r[5] = (c2x2 * h + c3x3 * x) * inv_t;
+    r[6] = c3x6 * h2 * inv_t;
+    r[7] = (c2x2 + c3x6 * u) * inv_t2;
+    r[8] = c3x6 * h * inv_t2;
+}
+
 void fdiff_seed(fdiff_t *fd, const fdiff_seg_t *seg, double u0, double du)
 {
     double inv_t = 1.0 / seg->dur_s, inv_t2 = inv_t * inv_t;
     double h = du, h2 = du * du, h3 = h2 * du, u = u0;
+    const double(*c)[4] = seg->c;
+    lane2_t r[9], zero = {0.0, 0.0};
+    double *rows[9] = {fd->p0, fd->p1, fd->p2, fd->p3, fd->v0, fd->v1, fd->v2, fd->a0, fd->a1};
 
-    memset(fd, 0, sizeof *fd); /* the zero lane stays zero */
-    for (int k = 0; k < FDIFF_AXES; k++) {
-        double c0 = seg->c[k][0], c1 = seg->c[k][1], c2 = seg->c[k][2], c3 = seg->c[k][3];
-        /* Differences of the cubic written in closed form at u (exact
-         * algebra, no cancellation of k(u+h) - k(u) on large values). */
-        fd->p0[k] = c0 + u * (c1 + u * (c2 + u * c3));
-        fd->p1[k] = c1 * h + c2 * (2 * u * h + h2) + c3 * (3 * u * u * h + 3 * u * h2 + h3);
-        fd->p2[k] = 2 * c2 * h2 + c3 * (6 * u * h2 + 6 * h3);
-        fd->p3[k] = 6 * c3 * h3;
-        /* k'(u) = c1 + 2 c2 u + 3 c3 u^2, a quadratic */
-        fd->v0[k] = (c1 + u * (2 * c2 + u * 3 * c3)) * inv_t;
-        fd->v1[k] = (2 * c2 * h + 3 * c3 * (2 * u * h + h2)) * inv_t;
-        fd->v2[k] = 6 * c3 * h2 * inv_t;
-        /* k''(u) = 2 c2 + 6 c3 u, a line */
-        fd->a0[k] = (2 * c2 + 6 * c3 * u) * inv_t2;
-        fd->a1[k] = 6 * c3 * h * inv_t2;
+    _Static_assert(FDIFF_AXES == 3 && FDIFF_LANES == 4, "x, y in one pair; z, 0 in the other");
+    seed_pair(r, (lane2_t){c[0][0], c[1][0]}, (lane2_t){c[0][1], c[1][1]},
+              (lane2_t){c[0][2], c[1][2]}, (lane2_t){c[0][3], c[1][3]}, u, h, h2, h3, inv_t,
+              inv_t2);
+#pragma GCC unroll 9
+    for (int i = 0; i < 9; i++)
+        memcpy(rows[i], &r[i], sizeof r[i]);
+    seed_pair(r, (lane2_t){c[2][0], 0.0}, (lane2_t){c[2][1], 0.0}, (lane2_t){c[2][2], 0.0},
+              (lane2_t){c[2][3], 0.0}, u, h, h2, h3, inv_t, inv_t2);
+#pragma GCC unroll 9
+    for (int i = 0; i < 9; i++) {
+        lane2_t zw = __builtin_shufflevector(r[i], zero, 0, 2); /* the zero lane stays zero */
+        memcpy(rows[i] + 2, &zw, sizeof zw);
     }
 }
 

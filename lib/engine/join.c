@@ -183,9 +183,7 @@ static size_t traj_past(const engine_t *e, size_t i0, uint64_t traj)
 static int join_find(const engine_t *e, join_find_t *f, int *never)
 {
     *never = 0;
-    /* no later trajectory queued (the usual case, asked at every segment
-     * by plain_window): the search below would find none */
-    if (!e->queue.len || queue_at(e, e->queue.len - 1)->traj <= e->out.traj)
+    if (!queue_later_traj(e))
         return 0;
     size_t i = traj_past(e, 0, e->out.traj);
     if (i == 0 || i >= e->queue.len || queue_at(e, i - 1)->kind != QE_END)
@@ -562,6 +560,8 @@ int join_try(engine_t *e)
     join_find_t f;
     int never;
 
+    if (!queue_later_traj(e))
+        return 0; /* join_find finds none, and never is 0 */
     if (!join_find(e, &f, &never)) {
         if (never)
             e->out.join_refused = e->out.traj + 1;
@@ -618,7 +618,7 @@ int64_t join_ticks_left(const engine_t *e)
     join_find_t f;
     int never;
 
-    if (!join_wanted(e) || !join_find(e, &f, &never))
+    if (!queue_later_traj(e) || !join_wanted(e) || !join_find(e, &f, &never))
         return INT64_MAX; /* a push that brings one ends the window (its key) */
     /* the braking for the end: plain_window keeps no decision beyond its
      * start already (decide's test) */

@@ -12,6 +12,8 @@
  *     malloc/calloc/realloc/free (forwarded to glibc's __libc_* functions).
  *  5. the acceptance policy alone (offer + every verdict), lib/engine/accept.c
  *     against the former one kept in tests/helpers/accept_ref.h.
+ *  --walk PERIOD_NS: the tick table's walk ticked once, untimed, its setpoints
+ *     hashed (instruction counts under callgrind, tests/bench/RESULTS.md).
  *
  * Numbers only, no assertions (timings on a shared machine are noisy).
  */
@@ -388,6 +390,43 @@ static double bench_ticks(int64_t period_ns)
     return best + (sink > 0 ? 0 : 0);
 }
 
+/* bench_ticks' walk ticked once at period_ns, untimed: the ticks made and a
+ * hash (FNV-1a) of every setpoint's bytes, for instruction counts of the tick
+ * (valgrind --tool=callgrind --toggle-collect=engine_tick bench_engine --walk
+ * 10000000) and a check that two builds give the same outputs. */
+static void bench_walk(int64_t period_ns)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    c.capacity = 8192;
+    c.period_ns = period_ns;
+    c.max_accel_m_s2 = 0; /* as bench_ticks */
+    engine_t *e = engine_new(&c, NULL);
+    engine_waypoint_t w = {0};
+    double pos[3] = {0, 0, 0};
+    unsigned seed = 5;
+    for (long i = 0; i < 4000; i++) {
+        walk_wp(&w, i, 0.1, &seed, pos);
+        engine_push(e, &w);
+    }
+    engine_finish(e);
+    engine_setpoint_t sp;
+    uint64_t h = 1469598103934665603u;
+    long n = 0;
+    for (int64_t k = 0;; k++) {
+        engine_tick(e, k * period_ns, &sp);
+        const unsigned char *b = (const unsigned char *)&sp;
+        for (size_t i = 0; i < sizeof sp; i++)
+            h = (h ^ b[i]) * 1099511628211u;
+        n++;
+        if (sp.state == ENGINE_STATE_FINISHED)
+            break;
+    }
+    printf("walk at %lld ns: %ld ticks, setpoints hash %016llx\n", (long long)period_ns, n,
+           (unsigned long long)h);
+    engine_free(e);
+}
+
 static void bench_tick_table(void)
 {
     printf("engine_tick while streaming, ns per 3-axis setpoint (p, v, a), best of %d\n\n"
@@ -693,6 +732,10 @@ int main(int argc, char **argv)
         if (argc > 2)
             tick_reps = atoi(argv[2]) > 0 ? atoi(argv[2]) : 1;
         bench_hold(); /* the tick at rest under a feed hold (REPS runs, default 5) */
+        return 0;
+    }
+    if (argc > 2 && strcmp(argv[1], "--walk") == 0) {
+        bench_walk(atoll(argv[2])); /* one walk untimed, its setpoints hashed */
         return 0;
     }
     if (argc > 1 && strcmp(argv[1], "--ticks") == 0) {

@@ -15,6 +15,12 @@
  * bound of the window is met and missed), long enough to cross re-seeds
  * (FDIFF_RESEED_STEPS).  And a walk loaded ahead, with every call that
  * changes an engine made between ticks, mostly inside a kept window.
+ * A third engine, as in use (no test hook), makes the kept steps inside a
+ * segment in one run (plain_tick): its setpoints and status must be the
+ * same too; with a stop, halt or join read between ticks from the output
+ * (out_pos, out_cspeed), they fail if plain_tick leaves the output where
+ * the time scaling last wrote it (on_fd not set on a window begun on a tick
+ * that landed on the grid).
  * Checked to fail when the window runs 20 or 40 ticks too long, and when
  * plain_holds leaves the stop request or the override out of its key
  * (leaving out the queue length, the lag's sample or the mode is not caught:
@@ -31,63 +37,88 @@
 #include "engine.h"
 #include "engine_int.h"
 
+/* [0] deciding every tick and following that decision (test hook 2), [1]
+ * keeping the decision and checking each kept one (hook 1: kept steps the
+ * long way, kept_tick), [2] as in use (no hook: kept steps made by
+ * plain_tick) */
+#define NENG 3
 typedef struct {
-    engine_t *e[2]; /* [0] deciding every tick, [1] keeping the decision (checked) */
+    engine_t *e[NENG];
     unsigned long setpoints, compared;
 } pair_t;
+
+/* The call made on every engine of p (as E), and the same result from each. */
+#define EACH_SAME(p, call)                                                                         \
+    do {                                                                                           \
+        int r0_ = 0;                                                                               \
+        for (int i_ = 0; i_ < NENG; i_++) {                                                        \
+            engine_t *E = (p)->e[i_];                                                              \
+            int r_ = (call);                                                                       \
+            if (i_ == 0)                                                                           \
+                r0_ = r_;                                                                          \
+            else                                                                                   \
+                assert_int_equal(r_, r0_);                                                         \
+        }                                                                                          \
+    } while (0)
 
 static void pair_new(pair_t *p, const engine_config_t *c)
 {
     memset(p, 0, sizeof *p);
-    for (int i = 0; i < 2; i++) {
+    for (int i = 0; i < NENG; i++) {
         int err = 0;
         p->e[i] = engine_new(c, &err);
         assert_non_null(p->e[i]);
-        engine_plain_check(p->e[i], i ? 1 : 2, NULL, NULL);
+        engine_plain_check(p->e[i], i == 0 ? 2 : i == 1 ? 1 : 0, NULL, NULL);
     }
 }
 
 /* returns the decisions kept */
 static uint64_t pair_free(pair_t *p)
 {
-    engine_status_t s0, s1;
+    engine_status_t s[NENG];
     uint64_t kept = 0, wrong = 0;
-    memset(&s0, 0, sizeof s0);
-    memset(&s1, 0, sizeof s1);
-    engine_status(p->e[0], &s0);
-    engine_status(p->e[1], &s1);
-    s0.lag_s = s1.lag_s = 0; /* a kept tick leaves it as the last decision told it */
-    assert_memory_equal(&s0, &s1, sizeof s0);
+    memset(s, 0, sizeof s);
+    for (int i = 0; i < NENG; i++) {
+        engine_status(p->e[i], &s[i]);
+        s[i].lag_s = 0; /* a kept tick leaves it as the last decision told it */
+    }
+    assert_memory_equal(&s[0], &s[1], sizeof s[0]);
+    assert_memory_equal(&s[0], &s[2], sizeof s[0]);
     engine_plain_check(p->e[1], 1, &kept, &wrong);
     if (wrong)
         print_error("%llu of %llu kept decisions wrong\n", (unsigned long long)wrong,
                     (unsigned long long)kept);
     assert_int_equal(wrong, 0);
-    engine_free(p->e[0]);
-    engine_free(p->e[1]);
+    for (int i = 0; i < NENG; i++)
+        engine_free(p->e[i]);
     return kept;
 }
 
 static void pair_tick(pair_t *p, int64_t now)
 {
-    engine_setpoint_t a, b;
-    memset(&a, 0, sizeof a);
-    memset(&b, 0, sizeof b);
-    int ra = engine_tick(p->e[0], now, &a), rb = engine_tick(p->e[1], now, &b);
-    assert_int_equal(ra, rb);
-    if (memcmp(&a, &b, sizeof a) != 0) {
-        print_error("now %lld: decided t %.17g x %.17g v %.17g state %d flags %u cycle %u | kept t "
-                    "%.17g x %.17g v %.17g state %d flags %u cycle %u\n",
-                    (long long)now, a.t_s, a.pos_m[0], a.vel_m_s[0], a.state, a.flags, a.cycle,
-                    b.t_s, b.pos_m[0], b.vel_m_s[0], b.state, b.flags, b.cycle);
-        fail();
+    engine_setpoint_t sp[NENG];
+    int rc[NENG];
+    memset(sp, 0, sizeof sp);
+    for (int i = 0; i < NENG; i++)
+        rc[i] = engine_tick(p->e[i], now, &sp[i]);
+    for (int i = 1; i < NENG; i++) {
+        const engine_setpoint_t *a = &sp[0], *b = &sp[i];
+        assert_int_equal(rc[0], rc[i]);
+        if (memcmp(a, b, sizeof *a) != 0) {
+            print_error("now %lld: decided t %.17g x %.17g v %.17g state %d flags %u cycle %u | "
+                        "engine %d t %.17g x %.17g v %.17g state %d flags %u cycle %u\n",
+                        (long long)now, a->t_s, a->pos_m[0], a->vel_m_s[0], a->state, a->flags,
+                        a->cycle, i, b->t_s, b->pos_m[0], b->vel_m_s[0], b->state, b->flags,
+                        b->cycle);
+            fail();
+        }
     }
     p->compared++;
 }
 
 static void pair_push(pair_t *p, const engine_waypoint_t *w)
 {
-    assert_int_equal(engine_push(p->e[0], w), engine_push(p->e[1], w));
+    EACH_SAME(p, engine_push(E, w));
 }
 
 /* One random scenario: a walk of n waypoints at dt (irregular), pushed a few
@@ -134,25 +165,23 @@ static uint64_t scenario_with(unsigned seed, const engine_config_t *c, double dt
             double r = urand(&seed);
             if (r < 0.05) {
                 double ov = urand(&seed) * 1.5;
-                assert_int_equal(engine_set_override(p.e[0], ov), engine_set_override(p.e[1], ov));
+                EACH_SAME(&p, engine_set_override(E, ov));
             } else if (r < 0.08) {
-                assert_int_equal(engine_set_override(p.e[0], 1.0),
-                                 engine_set_override(p.e[1], 1.0));
+                EACH_SAME(&p, engine_set_override(E, 1.0));
             } else if (r < 0.085) {
-                assert_int_equal(engine_stop(p.e[0]), engine_stop(p.e[1]));
+                EACH_SAME(&p, engine_stop(E));
             } else if (r < 0.09) {
-                engine_clear(p.e[0]);
-                engine_clear(p.e[1]);
+                EACH_SAME(&p, (engine_clear(E), 0));
             } else if (r < 0.095) {
-                assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1]));
+                EACH_SAME(&p, engine_finish(E));
                 t += 5 * dt; /* the next waypoints open a new trajectory */
             } else if (r < 0.097) {
                 double at[3] = {pos[0], pos[1] + 1.0, pos[2]};
-                assert_int_equal(engine_halt(p.e[0], at), engine_halt(p.e[1], at));
+                EACH_SAME(&p, engine_halt(E, at));
             }
         }
     }
-    assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1]));
+    EACH_SAME(&p, engine_finish(E));
     for (int i = 0; i < 200000; i++) {
         now += period_ns;
         pair_tick(&p, now);
@@ -259,30 +288,19 @@ static uint64_t calls_mid_window(unsigned seed, int64_t period_ns)
             break;
         case 3: { /* a feed override for a while, then back to 1 */
             double ov = urand(&seed) * 1.5;
-            assert_int_equal(engine_set_override(p.e[0], ov), engine_set_override(p.e[1], ov));
+            EACH_SAME(&p, engine_set_override(E, ov));
             for (int i = 0; i < 50; i++)
                 pair_tick(&p, now += period_ns);
-            assert_int_equal(engine_set_override(p.e[0], 1.0), engine_set_override(p.e[1], 1.0));
+            EACH_SAME(&p, engine_set_override(E, 1.0));
             break;
         }
-        case 4: assert_int_equal(engine_stop(p.e[0]), engine_stop(p.e[1])); break;
-        case 5:
-            engine_clear(p.e[0]);
-            engine_clear(p.e[1]);
-            break;
-        case 6: assert_int_equal(engine_halt(p.e[0], at), engine_halt(p.e[1], at)); break;
-        case 7: assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1])); break;
-        case 8:
-            assert_int_equal(engine_set_catchup(p.e[0], 0.1), engine_set_catchup(p.e[1], 0.1));
-            break;
-        case 9:
-            engine_reset_counters(p.e[0]);
-            engine_reset_counters(p.e[1]);
-            break;
-        case 10:
-            assert_int_equal(engine_rejection_next(p.e[0], &rj),
-                             engine_rejection_next(p.e[1], &rj));
-            break;
+        case 4: EACH_SAME(&p, engine_stop(E)); break;
+        case 5: EACH_SAME(&p, (engine_clear(E), 0)); break;
+        case 6: EACH_SAME(&p, engine_halt(E, at)); break;
+        case 7: EACH_SAME(&p, engine_finish(E)); break;
+        case 8: EACH_SAME(&p, engine_set_catchup(E, 0.1)); break;
+        case 9: EACH_SAME(&p, (engine_reset_counters(E), 0)); break;
+        case 10: EACH_SAME(&p, engine_rejection_next(E, &rj)); break;
         case 11: /* the same time again, and back */
             pair_tick(&p, now);
             pair_tick(&p, now - period_ns / 3);
@@ -292,7 +310,7 @@ static uint64_t calls_mid_window(unsigned seed, int64_t period_ns)
         if (r == 4 || r == 5 || r == 6 || r == 7) /* a new trajectory after a while */
             t += 2.0;
     }
-    assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1]));
+    EACH_SAME(&p, engine_finish(E));
     for (int i = 0; i < 100000; i++)
         pair_tick(&p, now += period_ns);
     return pair_free(&p);
@@ -340,11 +358,11 @@ static uint64_t reanchors(int ahead, int64_t period_ns, double dt, double aside,
             w.pos_m[1] = aside * (k / 200);
             pair_push(&p, &w);
             if (++k == n)
-                assert_int_equal(engine_finish(p.e[0]), engine_finish(p.e[1]));
+                EACH_SAME(&p, engine_finish(E));
         }
         if (ovr_ticks > 0 && tick % ovr_ticks == 0) {
             double r = (tick / ovr_ticks) % 2 ? 0.5 : 1.0;
-            assert_int_equal(engine_set_override(p.e[0], r), engine_set_override(p.e[1], r));
+            EACH_SAME(&p, engine_set_override(E, r));
         }
         pair_tick(&p, now);
         int on = p.e[1]->out.mode == OUT_STREAM && p.e[1]->out.cur.join;
@@ -375,12 +393,78 @@ static void test_reanchors_joined(void **state)
     assert_true(kept > 100000);
 }
 
+/* A stop (or a halt, or a clear) asked for a few ticks after the output
+ * landed on the unit grid from the time scaling (the ramp of a start, or
+ * back from an override), in the window that began on that tick and before
+ * the segment ends: the stop's braking reads the output as it stands
+ * (out_cspeed, out_pos), which the kept steps must have left in the
+ * stepper.  Segments of 1 s, so that the window runs long inside one. */
+static void stop_after_landing(int64_t period_ns, int after, int call, int via_override)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    c.period_ns = period_ns;
+    c.max_accel_m_s2 = 0;
+    pair_t p;
+    pair_new(&p, &c);
+    for (int i = 0; i < 60; i++) {
+        engine_waypoint_t w = {.t_s = i, .seq = (uint32_t)i};
+        w.pos_m[0] = 3.0 * i + 0.5 * sin(0.7 * i);
+        w.pos_m[1] = 2.0 * cos(0.3 * i);
+        pair_push(&p, &w);
+    }
+    EACH_SAME(&p, engine_finish(E));
+    int64_t now = 0;
+    int landed = -1, lowered = 0;
+    for (int tick = 0; tick < 200000 && landed < 0; tick++) {
+        int was = p.e[2]->scale.on;
+        pair_tick(&p, now += period_ns);
+        if (via_override && !lowered && was && !p.e[2]->scale.on) {
+            /* first on the grid after the start: slow down, then back to 1 */
+            EACH_SAME(&p, engine_set_override(E, 0.5));
+            for (int i = 0; i < 300; i++)
+                pair_tick(&p, now += period_ns);
+            EACH_SAME(&p, engine_set_override(E, 1.0));
+            lowered = 1;
+            continue;
+        }
+        if ((!via_override || lowered) && was && !p.e[2]->scale.on &&
+            p.e[2]->out.mode == OUT_STREAM)
+            landed = tick;
+    }
+    assert_true(landed >= 0);
+    for (int i = 0; i < after; i++)
+        pair_tick(&p, now += period_ns);
+    assert_true(p.e[2]->out.n < p.e[2]->out.fast_last); /* still in the window, its segment */
+    double at[3] = {1.0, 2.0, 3.0};
+    if (call == 0)
+        EACH_SAME(&p, engine_stop(E));
+    else if (call == 1)
+        EACH_SAME(&p, engine_halt(E, at));
+    else
+        EACH_SAME(&p, (engine_clear(E), 0));
+    for (int i = 0; i < 3000; i++)
+        pair_tick(&p, now += period_ns);
+    (void)pair_free(&p);
+}
+
+static void test_stop_after_landing(void **state)
+{
+    (void)state;
+    for (int via = 0; via < 2; via++)
+        for (int call = 0; call < 3; call++)
+            for (int after = 1; after < 4; after++) {
+                stop_after_landing(10000000, after, call, via);
+                stop_after_landing(1000000, after, call, via);
+            }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_plain_streams),    cmocka_unit_test(test_with_events),
         cmocka_unit_test(test_calls_mid_window), cmocka_unit_test(test_reanchors_joined),
-        cmocka_unit_test(test_axis_limited),
+        cmocka_unit_test(test_axis_limited),     cmocka_unit_test(test_stop_after_landing),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,225 @@
+/*
+ * engine_play.c - the play-out stage's trajectory boundaries (engine_tick.c
+ * makes the ticks between them): a trajectory started from rest or after a
+ * transfer (play_start, on one clock at rate 0: clock_start), the curve
+ * available to it looked up once (play_find_avail), its ends at rest (its
+ * end marker, a stop or clear braked to rest, a curve that does not end at
+ * rest braked short of its end), and underruns counted.  The state is
+ * engine_out_t's and engine_scale_t's (engine_int.h), owned by the play-out.
+ */
+#include "engine.h"
+#include "engine_int.h"
+
+#include <math.h>
+
+#include "accept.h"
+#include "delay.h"
+#include "silence.h"
+
+/* An underrun begins: what its log line tells; counted now, or (while the
+ * silence may turn out to be the input's end: silence.h) once a newer
+ * waypoint comes (play_underrun_counted). */
+void play_count_underrun(engine_t *e)
+{
+    e->out.und_t = e->sil.last_t;
+    e->out.und_traj = e->sil.traj;
+    /* what its log line tells (engine_status_t underrun_*) */
+    engine_delay_t d;
+    engine_delay(e, &d);
+    e->st.underrun_t_s = e->out.t;
+    e->st.underrun_newest_t_s = e->sil.last_t;
+    e->st.underrun_next_t_s = NAN;
+    e->st.underrun_slack_s = d.interval_s + d.slack_s;
+    e->st.underrun_curve_t_s = e->scale.avail_t;
+    e->st.underrun_lookahead_s = d.lookahead_s;
+    e->st.underrun_silence_s = NAN;
+    e->st.underrun_judging = accept_pending(&e->in.policy);
+    e->st.underrun_judging_t_s = accept_first_t(&e->in.policy);
+    e->out.und_pending = engine_silence_pending(e);
+    if (!e->out.und_pending)
+        play_underrun_counted(e);
+}
+
+/* The underrun is one (the input came later than its timestamps said):
+ * counted, and (start_slack auto) the next start waits one waypoint more,
+ * up to ENGINE_SLACK_AUTO_MAX. */
+void play_underrun_counted(engine_t *e)
+{
+    e->out.und_pending = 0;
+    e->st.underruns++;
+    if (e->slack_auto || e->cfg.delay_s > 0)
+        engine_delay_grow(e); /* D as the input now needs (delay.h) */
+    if (e->slack_auto && e->slack_learn < e->slack_more) {
+        e->slack_learn++;
+        e->st.lookahead = e->lookahead + e->slack_learn;
+    }
+}
+
+/* The output stands where it is, at rest. */
+void play_hold_here(engine_t *e)
+{
+    out_sync(e); /* the position stays */
+    for (int k = 0; k < AX; k++)
+        e->out.vel[k] = e->out.acc[k] = 0.0;
+}
+
+/* Back on the unit grid with rate 1 (every start from HOLD). */
+void play_unit_reset(engine_t *e)
+{
+    e->scale.on = 0;
+    e->scale.s_off = 0.0;
+    e->scale.ts.rate = 1.0;
+    e->scale.ts.acc = 0.0;
+    e->scale.end_brake = 0;
+    e->out.reserve_slow = 0;
+}
+
+/* A stop or clear has brought the output to rest: drop what was queued at
+ * the request, stand here (FINISHED after a stop, WAITING after a clear). */
+void play_stop_at_rest(engine_t *e)
+{
+    if (e->out.mode == OUT_XFER)
+        xfer_track_time(e); /* the track time the transfer showed, kept at rest (its own
+                               time, from 0, stepped t_s back: 5.4 s to 0.1 s) */
+    /* the waypoints beyond the rest point: dropped (st.dropped), the end of
+     * the segment it rests in among them */
+    size_t n = e->scale.drop_n < e->queue.len ? e->scale.drop_n : e->queue.len;
+    e->st.dropped += queue_waypoints(e, 0, n);
+    if (e->out.mode == OUT_STREAM && e->out.cur.kind == QE_SEG && !e->local &&
+        e->out.t < e->out.cur.t1_s - 1e-9)
+        e->st.dropped++;
+    while (e->scale.drop_n && e->queue.len)
+        queue_pop(e);
+    e->scale.drop_n = 0;
+    e->out.mode = OUT_HOLD;
+    e->xfer.lead = 0;
+    play_hold_here(e);
+    e->out.finished = e->scale.stop_req == STOP_STOP;
+    e->scale.stop_req = STOP_NONE;
+    e->out.underrun = 0;
+    play_unit_reset(e);
+}
+
+/* The queue head is a trajectory's end marker: rest on its point, FINISHED. */
+void play_rest_at_end(engine_t *e, const qent_t *h)
+{
+    out_sync(e);
+    for (int k = 0; k < AX; k++)
+        e->out.pos[k] = h->seg.c[k][0];
+    e->out.t = h->t1_s;
+    queue_pop(e);
+    play_hold_here(e);
+    e->out.mode = OUT_HOLD;
+    e->out.finished = 1;
+    e->out.underrun = 0;
+    if (e->scale.stop_req)
+        play_stop_at_rest(e);
+}
+
+/* A closed trajectory whose curve does not end at rest, braked to rest just
+ * before its end: finish here, where the output stands (no jump to the end). */
+void play_finish_here(engine_t *e)
+{
+    while (e->queue.len) {
+        int end = q_head(e)->kind == QE_END && q_head(e)->traj == e->out.traj;
+        queue_pop(e);
+        if (end)
+            break;
+    }
+    e->out.mode = OUT_HOLD;
+    play_hold_here(e);
+    e->out.finished = 1;
+    e->out.underrun = 0;
+    play_unit_reset(e);
+}
+
+/* Where the solved curve of the output's trajectory ends, from the queue
+ * (once per trajectory; queue_segment and queue_end keep it up to date). */
+void play_find_avail(engine_t *e)
+{
+    e->scale.avail_t = e->out.cur.t1_s;
+    e->scale.avail_kcum = e->out.cur.kcum;
+    e->scale.avail_ucum = e->out.cur.ucum;
+    e->scale.avail_closed = 0;
+    e->scale.avail_rest = 0;
+    for (size_t i = 0; i < e->queue.len; i++) {
+        const qent_t *q = queue_at(e, i);
+        if (q->traj != e->out.traj)
+            break;
+        e->scale.avail_t = q->t1_s;
+        if (q->kind == QE_SEG) {
+            e->scale.avail_kcum = q->kcum;
+            e->scale.avail_ucum = q->ucum;
+        }
+        if (q->kind == QE_END) {
+            e->scale.avail_closed = 1;
+            e->scale.avail_rest = q->seg.c[0][1] <= ENGINE_REST_SPEED_M_S;
+            break;
+        }
+    }
+}
+
+/* One clock: a trajectory is entered at rate 0 like every other
+ * (scaled_rest, TIMESCALE.md "Handovers": locked at once, its acceleration
+ * would step by k''(0) rho^2), behind the play time by the sub-tick phase
+ * past its first waypoint (and by what the waypoints came late); the
+ * catch-up of clocked_step wins the lag back and locks on the clock. */
+static void clock_start(engine_t *e)
+{
+    scale_rest(e);
+    e->clk.locked = 0;
+    scale_eval(e);
+    e->out.t = e->out.origin_t;
+}
+
+/* Begin streaming the trajectory at the queue head (tick 0 of it). */
+void play_start(engine_t *e, int new_flag)
+{
+    qent_t *h = q_head(e);
+
+    if (new_flag) {
+        e->out.track++;
+        e->out.flags_pending |= ENGINE_SP_NEW_TRACK;
+    }
+    e->out.have_pos = 1;
+    e->out.underrun = 0;
+    if (h->kind == QE_END) {
+        /* a trajectory with no segment: rest on its point */
+        play_rest_at_end(e, h);
+        return;
+    }
+    e->out.origin_t = h->seg.t0_s;
+    e->out.traj = h->traj;
+    play_take_segment(e);
+    play_find_avail(e);
+    e->out.n = 0;
+    e->out.seg_n0 = 0;
+    e->scale.s_off = 0.0;
+    play_seed_cur(e, 0);
+    out_eval(e);
+    e->out.t = e->out.origin_t;
+    e->out.mode = OUT_STREAM;
+    if (e->clk.on) {
+        clock_start(e);
+    } else if (e->scale.on) {
+        /* from a scaled transfer: go on scaled from the start */
+        e->scale.s = 0.0;
+        scale_eval(e);
+    }
+}
+
+void play_xfer_end(engine_t *e)
+{
+    if (!e->xfer.lead) {
+        play_start(e, 0);
+        return;
+    }
+    /* rest on the start, its track time: step_once starts the trajectory
+     * from here (led: the same track) once it is due */
+    fdiff_eval(&e->out.cur.seg, 1.0, e->out.pos, NULL, NULL);
+    e->out.on_fd = 0;
+    e->out.t = e->xfer.to_t;
+    e->out.mode = OUT_HOLD;
+    play_hold_here(e);
+    play_unit_reset(e);
+}
