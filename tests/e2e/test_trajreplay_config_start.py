@@ -101,9 +101,13 @@ class ConfigStart(unittest.TestCase):
             self.assertEqual(bool(int(a[13]) & F_SKIPPED), skipped, "tick %s: skip" % a[1])
             self.assertEqual(a[:13] + a[14:], b[:13] + b[14:], "tick %s" % a[1])
             compared += 1
-        # the most of trajreplay's rows were compared (trajd's first included)
+        # the most of trajreplay's rows were compared (trajd's first included:
+        # tick 0, or on a loaded machine the first deadline trajd woke for, a
+        # few periods late, its row flagged SKIPPED, compared as the others)
         self.assertGreater(compared, 100)
-        self.assertEqual(dl[1].split(",")[1], "0")
+        first = dl[1].split(",")
+        self.assertTrue(first[1] == "0" or (int(first[1]) <= 50 * PERIOD_NS
+                                            and int(first[13]) & F_SKIPPED), first)
         return compared
 
     def test_initial_position_as_trajd(self):
