@@ -366,10 +366,11 @@ typedef struct {
     unsigned npace;
     double shift_now; /* the shift of the waypoint being kept (pop) */
     /* the acceleration test of slots x -> p -> y (accept_int.h triple()),
-     * computed once while the three are held: tkey the clock it was
-     * computed at plus 1, times 2, plus 1 if it passes (or there is no
-     * acceleration limit); 0: never; tcost the implied acceleration */
-    uint64_t tkey[ACCEPT_SLOTS][ACCEPT_SLOTS][ACCEPT_SLOTS];
+     * computed once while the three are held: bit x of tknown[p][y] if
+     * computed, of tok[p][y] if it passes (or there is no acceleration
+     * limit); tcost[x][p][y] the implied acceleration.  Rows of 16: a
+     * slot's change clears its bit everywhere in one pass. */
+    uint16_t tknown[ACCEPT_SLOTS][16], tok[ACCEPT_SLOTS][16];
     double tcost[ACCEPT_SLOTS][ACCEPT_SLOTS][ACCEPT_SLOTS];
     accept_search_t search; /* the last chain search (chains.c) */
     accept_reach_t reach;   /* the chains' lengths (chains.c) */

@@ -70,8 +70,17 @@ static inline unsigned pair_index(unsigned x, unsigned y)
  * and a chain search over it, are no longer known (accept_t.since) */
 static inline void accept_forget(accept_t *a, unsigned s)
 {
+    uint16_t *k = &a->tknown[0][0], keep = (uint16_t)~(1u << s);
     a->since[s] = ++a->clock;
+    for (unsigned i = 0; i < ACCEPT_SLOTS * 16; i++)
+        k[i] &= keep;
+    for (unsigned x = 0; x < ACCEPT_SLOTS; x++)
+        a->tknown[s][x] = a->tknown[x][s] = 0;
 }
+
+/* chains.c: pair() and triple() computing what they do not know yet */
+const accept_pair_t *accept_pair_new(accept_t *a, unsigned x, unsigned y);
+int accept_triple_new(accept_t *a, unsigned x, unsigned p, unsigned y);
 
 /* the pair x -> y (slots, y offered after x), computed on first use.  Kept
  * once for both orders: y -> x has the same v, d and vn bit for bit (both
@@ -80,14 +89,10 @@ static inline void accept_forget(accept_t *a, unsigned s)
 static inline const accept_pair_t *pair(accept_t *a, unsigned x, unsigned y)
 {
     unsigned ix = pair_index(x, y);
-    accept_pair_t *q = &a->pair[ix];
     uint64_t st = a->pstamp[ix];
-    if (!(st > a->since[x] && st > a->since[y])) {
-        pair_of(&a->wp[x], &a->wp[y], q);
-        q->c = fabs(q->c);
-        a->pstamp[ix] = a->clock + 1;
-    }
-    return q;
+    if (__builtin_expect(st > a->since[x] && st > a->since[y], 1))
+        return &a->pair[ix];
+    return accept_pair_new(a, x, y);
 }
 
 static inline double pair_dist(accept_t *a, unsigned x, unsigned y)
@@ -143,18 +148,17 @@ static inline int accel_test(const accept_t *a, const accept_pair_t *q1, const a
  * implied acceleration 2 |v2 - v1| / (dt1 + dt2), as judge() has them */
 static inline int triple(accept_t *a, unsigned x, unsigned p, unsigned y, double *cost)
 {
-    uint64_t key = a->tkey[x][p][y], st = key >> 1;
-    if (!(st > a->since[x] && st > a->since[p] && st > a->since[y])) {
-        const accept_pair_t *q1 = pair(a, x, p), *q2 = pair(a, p, y);
-        double d1 = a->wp[p].t_s - a->wp[x].t_s, dt = a->wp[y].t_s - a->wp[p].t_s;
-        double dvn = dv_norm(q1, q2);
-        a->tcost[x][p][y] = 2.0 * dvn / (d1 + dt);
-        key = (a->clock + 1) << 1 |
-              !(a->cfg.max_accel_m_s2 > 0 && accel_test(a, q1, q2, d1, dt, dvn));
-        a->tkey[x][p][y] = key;
-    }
+    int ok = __builtin_expect(a->tknown[p][y] >> x & 1u, 1) ? (int)(a->tok[p][y] >> x & 1u)
+                                                            : accept_triple_new(a, x, p, y);
     *cost = a->tcost[x][p][y];
-    return (int)(key & 1u);
+    return ok;
+}
+
+/* triple() without its cost */
+static inline int triple_passes(accept_t *a, unsigned x, unsigned p, unsigned y)
+{
+    return __builtin_expect(a->tknown[p][y] >> x & 1u, 1) ? (int)(a->tok[p][y] >> x & 1u)
+                                                         : accept_triple_new(a, x, p, y);
 }
 
 /*

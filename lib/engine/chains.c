@@ -20,6 +20,29 @@
 
 #include "accept_int.h"
 
+const accept_pair_t *accept_pair_new(accept_t *a, unsigned x, unsigned y)
+{
+    unsigned ix = pair_index(x, y);
+    accept_pair_t *q = &a->pair[ix];
+    pair_of(&a->wp[x], &a->wp[y], q);
+    q->c = fabs(q->c);
+    a->pstamp[ix] = a->clock + 1;
+    return q;
+}
+
+int accept_triple_new(accept_t *a, unsigned x, unsigned p, unsigned y)
+{
+    const accept_pair_t *q1 = pair(a, x, p), *q2 = pair(a, p, y);
+    double d1 = a->wp[p].t_s - a->wp[x].t_s, dt = a->wp[y].t_s - a->wp[p].t_s;
+    double dvn = dv_norm(q1, q2);
+    int ok = !(a->cfg.max_accel_m_s2 > 0 && accel_test(a, q1, q2, d1, dt, dvn));
+    uint16_t bit = (uint16_t)(1u << x);
+    a->tcost[x][p][y] = 2.0 * dvn / (d1 + dt);
+    a->tknown[p][y] |= bit;
+    a->tok[p][y] = (uint16_t)(ok ? a->tok[p][y] | bit : a->tok[p][y] & ~bit);
+    return ok;
+}
+
 /* chain (len, cost) better than (l2, c2): longer, or as long and smoother */
 static int better(unsigned len, double cost, unsigned l2, double c2)
 {
@@ -163,8 +186,7 @@ static int same_node(const accept_t *a, unsigned pos, unsigned s)
 /* the triple x -> p -> y passes (slots; no acceleration limit: all do) */
 static int triple_ok(accept_t *a, unsigned x, unsigned p, unsigned y, int acc)
 {
-    double c;
-    return !acc || triple(a, x, p, y, &c);
+    return !acc || triple_passes(a, x, p, y);
 }
 
 /* more[nd i][nd j] from the nodes after j (positions of the list) */
@@ -191,34 +213,47 @@ static void set_node(accept_t *a, unsigned pos, unsigned s, double vlim)
         r->step[r->nd[i]][s] = step_of(a, r->nd[i], s, vlim);
 }
 
-/* slot s appended to the list: more brought up to date (above) */
+/* the slots x of the set e whose triple x -> p -> y passes (those not
+ * known yet computed) */
+static unsigned passing(accept_t *a, unsigned e, unsigned p, unsigned y, int acc)
+{
+    if (!acc)
+        return e;
+    for (unsigned u = e & ~(unsigned)a->tknown[p][y]; u; u &= u - 1)
+        (void)accept_triple_new(a, (unsigned)__builtin_ctz(u), p, y);
+    return e & a->tok[p][y];
+}
+
+/* slot s appended to the list: more brought up to date (above); by rows j
+ * (the steps into node j), the slots i that grow as sets */
 static void append_node(accept_t *a, unsigned s, double vlim, int acc)
 {
     accept_reach_t *r = &a->reach;
     unsigned x = r->m;
-    unsigned char grow[ACCEPT_NODES][ACCEPT_NODES];
+    uint16_t grow[ACCEPT_NODES]; /* by j: the slots nd[i] whose more[nd i][nd j] grows */
 
     set_node(a, x, s, vlim);
     for (unsigned j = x - 1; j >= 1; j--) {
-        unsigned p = r->nd[j], to_x = r->step[p][s] == 2;
-        uint16_t cand[ACCEPT_NODES + 1] = {0}; /* by more[p][k]: the k that grow */
-        for (unsigned k = j + 1; k < x; k++)
-            if (grow[j][k] && r->step[p][r->nd[k]] == 2)
-                cand[r->more[p][r->nd[k]]] |= (uint16_t)(1u << k);
-        for (unsigned i = 0; i < j; i++) {
-            unsigned q = r->nd[i], v = r->more[q][p], g = 0;
-            if (!v) {
-                g = to_x && triple_ok(a, q, p, s, acc);
-            } else {
-                for (unsigned c = cand[v - 1]; c && !g; c &= c - 1)
-                    g = triple_ok(a, q, p, r->nd[__builtin_ctz(c)], acc);
-            }
-            grow[i][j] = (unsigned char)g;
-        }
-    }
-    for (unsigned j = 1; j < x; j++)
+        unsigned p = r->nd[j], g = 0, byv[ACCEPT_NODES + 1] = {0}; /* slots i < j by more */
         for (unsigned i = 0; i < j; i++)
-            r->more[r->nd[i]][r->nd[j]] = (unsigned char)(r->more[r->nd[i]][r->nd[j]] + grow[i][j]);
+            byv[r->more[r->nd[i]][p]] |= 1u << r->nd[i];
+        if (r->step[p][s] == 2) /* i -> j -> x, where more was 0 */
+            g = passing(a, byv[0], p, s, acc);
+        for (unsigned k = j + 1; k < x; k++) { /* i -> j -> k ... x, more[j][k] one less */
+            unsigned y = r->nd[k], e;
+            if (!(grow[k] >> p & 1u) || r->step[p][y] != 2)
+                continue;
+            e = byv[r->more[p][y] + 1u] & ~g;
+            if (e)
+                g |= passing(a, e, p, y, acc);
+        }
+        grow[j] = (uint16_t)g;
+    }
+    for (unsigned j = 1; j < x; j++) {
+        unsigned p = r->nd[j];
+        for (unsigned g = grow[j]; g; g &= g - 1)
+            r->more[__builtin_ctz(g)][p]++;
+    }
     for (unsigned i = 0; i < x; i++)
         r->more[r->nd[i]][s] = 0;
     r->m = x + 1;
