@@ -7,6 +7,7 @@
 
 #include <math.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "accept.h"
 
@@ -70,12 +71,18 @@ static inline unsigned pair_index(unsigned x, unsigned y)
  * and a chain search over it, are no longer known (accept_t.since) */
 static inline void accept_forget(accept_t *a, unsigned s)
 {
-    uint16_t *k = &a->tknown[0][0], keep = (uint16_t)~(1u << s);
+    uint16_t keep = (uint16_t)~(1u << s);
     a->since[s] = ++a->clock;
-    for (unsigned i = 0; i < ACCEPT_SLOTS * 16; i++)
-        k[i] &= keep;
+    for (unsigned m = a->twith_any[s]; m; m &= m - 1) {
+        unsigned p = (unsigned)__builtin_ctz(m);
+        for (unsigned y = a->twith[s][p]; y; y &= y - 1)
+            a->tknown[p][__builtin_ctz(y)] &= keep;
+        a->twith[s][p] = 0;
+    }
+    a->twith_any[s] = 0;
+    memset(a->tknown[s], 0, sizeof a->tknown[s]);
     for (unsigned x = 0; x < ACCEPT_SLOTS; x++)
-        a->tknown[s][x] = a->tknown[x][s] = 0;
+        a->tknown[x][s] = 0;
 }
 
 /* chains.c: pair() and triple() computing what they do not know yet */

@@ -39,6 +39,8 @@ int accept_triple_new(accept_t *a, unsigned x, unsigned p, unsigned y)
     uint16_t bit = (uint16_t)(1u << x);
     a->tcost[x][p][y] = 2.0 * dvn / (d1 + dt);
     a->tknown[p][y] |= bit;
+    a->twith[x][p] = (uint16_t)(a->twith[x][p] | 1u << y);
+    a->twith_any[x] = (uint16_t)(a->twith_any[x] | 1u << p);
     a->tok[p][y] = (uint16_t)(ok ? a->tok[p][y] | bit : a->tok[p][y] & ~bit);
     return ok;
 }
