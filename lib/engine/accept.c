@@ -5,7 +5,7 @@
  * search over the whole window.  The waypoints therefore live in slots
  * (accept_t.wp), and the chord and velocity of a pair of slots are computed
  * once, when a test first needs them, and kept while both waypoints are
- * held (accept_t.pair, accept_t.pstamp): a test is then a few subtractions
+ * held (accept_t.pair, accept_t.pknown): a test is then a few subtractions
  * and one square root.  Each cached value is the same expression of the
  * same two waypoints as before the cache, so every verdict is the same bit
  * for bit (tests/unit/test_accept.c drives this and the former code,
@@ -137,15 +137,16 @@ static double window_median_speed(accept_t *a, double floor)
     if (!n ||
         ((a->nhist || (!a->full && a->cfg.window > ACCEPT_PACE_CHORDS)) && n < ACCEPT_PACE_CHORDS))
         return 0;
+    /* the caller keeps the larger of floor and the median, which is above
+     * floor only if n - mid chords are (at most mid are not): else no need
+     * to select it */
+    mid = (n - 1) / 2;
     for (unsigned i = 0; i < n; i++) {
         v[i] = chord_speed(a, from[i], to[i]);
         above += v[i] > floor;
+        if (i + 1 - above > mid)
+            return floor;
     }
-    /* the caller keeps the larger of floor and the median, which is above
-     * floor only if n - mid chords are: else no need to select it */
-    mid = (n - 1) / 2;
-    if (above < n - mid)
-        return floor;
     /* the lower median, v[mid] of v sorted: with two chords, one of them
      * an outlier's, the smaller one.  The chord whose rank spans mid (as
      * many below it as mid at most, and more up to it): no branch on the

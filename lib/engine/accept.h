@@ -342,11 +342,10 @@ typedef struct {
     int full;            /* the last accept_decide judged a full window */
     int have_burst;      /* burst: the last waypoint dropped as a far */
     unsigned char burst; /* burst's slot (since the last kept or started) */
-    /* the pairs of slots x < y, at y (y - 1) / 2 + x (accept_int.h pair()),
-     * each computed at clock pstamp - 1 (0: never); a pair, a triple is
-     * known while computed after both (all three) slots' last change */
+    /* the pairs of slots x < y, at y (y - 1) / 2 + x (accept_int.h pair()):
+     * bit i of pknown if pair[i] is computed */
     accept_pair_t pair[ACCEPT_SLOTS * (ACCEPT_SLOTS - 1) / 2];
-    uint64_t pstamp[ACCEPT_SLOTS * (ACCEPT_SLOTS - 1) / 2];
+    uint64_t pknown;
     uint64_t clock;               /* counts the changes of slots */
     uint64_t since[ACCEPT_SLOTS]; /* the clock at a slot's last change */
     /* ACCEPT_RULE_STOPS (stops.c): repeats of the anchor's position, older

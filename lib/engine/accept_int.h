@@ -71,8 +71,16 @@ static inline unsigned pair_index(unsigned x, unsigned y)
  * and a chain search over it, are no longer known (accept_t.since) */
 static inline void accept_forget(accept_t *a, unsigned s)
 {
+    /* the bits of accept_t.pknown of the pairs with slot s */
+    static const uint64_t with[ACCEPT_SLOTS] = {
+        0x0020101020844bull, 0x00402020410895ull, 0x00804040821126ull,
+        0x01008081042238ull, 0x020101020843c0ull, 0x04020204107c00ull,
+        0x080404081f8000ull, 0x1008080fe00000ull, 0x20100ff0000000ull,
+        0x401ff000000000ull, 0x7fe00000000000ull,
+    };
     uint16_t keep = (uint16_t)~(1u << s);
     a->since[s] = ++a->clock;
+    a->pknown &= ~with[s];
     for (unsigned m = a->twith_any[s]; m; m &= m - 1) {
         unsigned p = (unsigned)__builtin_ctz(m);
         for (unsigned y = a->twith[s][p]; y; y &= y - 1)
@@ -96,8 +104,7 @@ int accept_triple_new(accept_t *a, unsigned x, unsigned p, unsigned y);
 static inline const accept_pair_t *pair(accept_t *a, unsigned x, unsigned y)
 {
     unsigned ix = pair_index(x, y);
-    uint64_t st = a->pstamp[ix];
-    if (__builtin_expect(st > a->since[x] && st > a->since[y], 1))
+    if (__builtin_expect(a->pknown >> ix & 1u, 1))
         return &a->pair[ix];
     return accept_pair_new(a, x, y);
 }

@@ -26,7 +26,7 @@ const accept_pair_t *accept_pair_new(accept_t *a, unsigned x, unsigned y)
     accept_pair_t *q = &a->pair[ix];
     pair_of(&a->wp[x], &a->wp[y], q);
     q->c = fabs(q->c);
-    a->pstamp[ix] = a->clock + 1;
+    a->pknown |= (uint64_t)1 << ix;
     return q;
 }
 
