@@ -313,11 +313,18 @@ static void pop(accept_t *a, accept_verdict_t *v, accept_kind_t kind, int reason
         a->npace++;
     }
     if (kind == ACCEPT_TAKE) {
-        a->vhist[a->hnext] = chord_speed(a, a->a1, c);
+        /* the fastest: the larger of it and the new chord, unless the one
+         * it replaces may have been it (then all of them again) */
+        double gone = a->vhist[a->hnext], now = chord_speed(a, a->a1, c);
+        int evict = a->nhist == ACCEPT_HIST;
+        a->vhist[a->hnext] = now;
         a->hnext = (a->hnext + 1) % ACCEPT_HIST;
         if (a->nhist < ACCEPT_HIST)
             a->nhist++;
-        a->vrecent = recent_max_speed(a);
+        if (evict && !(gone < a->vrecent))
+            a->vrecent = recent_max_speed(a);
+        else if (now > a->vrecent)
+            a->vrecent = now;
         a->a0 = a->a1;
         a->have_a0 = 1;
         a->a1 = (unsigned char)c;
