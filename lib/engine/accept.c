@@ -1,15 +1,18 @@
 /* accept.c - the acceptance policy, judged with both neighbours; see accept.h.
  *
  * Every test looks at pairs of waypoints (a chord and its speed, the
- * velocities on both sides of a waypoint), and a verdict may run the chain
- * search over the whole window.  The waypoints therefore live in slots
- * (accept_t.wp), and the chord and velocity of a pair of slots are computed
- * once, when a test first needs them, and kept while both waypoints are
- * held (accept_t.pair, accept_t.pknown): a test is then a few subtractions
- * and one square root.  Each cached value is the same expression of the
- * same two waypoints as before the cache, so every verdict is the same bit
- * for bit (tests/unit/test_accept.c drives this and the former code,
- * tests/helpers/accept_ref.h, with random dirty tracks).
+ * velocities on both sides of a waypoint) and triples (the acceleration
+ * test), and a verdict may ask for the longest chains among the waypoints
+ * held (chains.c).  The waypoints therefore live in slots (accept_t.wp),
+ * and the chord and velocity of a pair of slots, the acceleration test of
+ * a triple, are computed once, when a test first needs them, and kept
+ * while the waypoints are held (accept_int.h pair(), triple()): a test is
+ * then a few loads.  Each cached value is the same expression of the same
+ * waypoints as before the cache, so every verdict is the same bit for bit
+ * (tests/unit/test_accept.c drives this and the former code,
+ * tests/helpers/accept_ref.h, with random dirty tracks;
+ * tests/unit/test_accept_same.c this and the policy before its chain
+ * search was made incremental, tests/helpers/accept_prev/).
  */
 #include "accept.h"
 

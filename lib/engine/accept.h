@@ -290,10 +290,11 @@ typedef struct {
     double c;              /* d / (t_b - t_p): the chord speed */
 } accept_pair_t;
 
-/* The longest chains from the anchor through c and skipping it among the
- * waypoints held (chains.c accept_longest_both), kept for the next search:
- * while the same waypoints stay held with the same speed limit, a search
- * over them and the waypoints offered since judges the new steps alone. */
+/* The search of the longest chains from the anchor through c and skipping
+ * it among the waypoints held, with their costs where one is NaN (chains.c
+ * accept_longest_both), kept for the next search: while the same waypoints
+ * stay held with the same speed limit, a search over them and the
+ * waypoints offered since judges the new steps alone. */
 #define ACCEPT_NODES (ACCEPT_WINDOW_MAX + 1)
 typedef struct {
     unsigned m;                     /* nodes searched, 0: none */
@@ -301,7 +302,7 @@ typedef struct {
     unsigned char pre;              /* the slot before the anchor, NO_SLOT if none */
     uint64_t since[ACCEPT_NODES];   /* their slots' last change (accept_t.since) */
     uint64_t pre_since;
-    double vlim;                    /* the speed limit searched with */
+    double vlim; /* the speed limit searched with */
     /* step i -> j: 1 if its time test passes, 2 if its speed test too */
     unsigned char step[ACCEPT_NODES][ACCEPT_NODES];
     /* the best chain ending with step i -> j through c (k = 0) and skipping

@@ -52,16 +52,11 @@ static inline void pair_of(const engine_waypoint_t *p, const engine_waypoint_t *
 static inline unsigned pair_index(unsigned x, unsigned y)
 {
     static const unsigned char ix[ACCEPT_SLOTS][ACCEPT_SLOTS] = {
-        {0, 0, 1, 3, 6, 10, 15, 21, 28, 36, 45},
-        {0, 0, 2, 4, 7, 11, 16, 22, 29, 37, 46},
-        {1, 2, 0, 5, 8, 12, 17, 23, 30, 38, 47},
-        {3, 4, 5, 0, 9, 13, 18, 24, 31, 39, 48},
-        {6, 7, 8, 9, 0, 14, 19, 25, 32, 40, 49},
-        {10, 11, 12, 13, 14, 0, 20, 26, 33, 41, 50},
-        {15, 16, 17, 18, 19, 20, 0, 27, 34, 42, 51},
-        {21, 22, 23, 24, 25, 26, 27, 0, 35, 43, 52},
-        {28, 29, 30, 31, 32, 33, 34, 35, 0, 44, 53},
-        {36, 37, 38, 39, 40, 41, 42, 43, 44, 0, 54},
+        {0, 0, 1, 3, 6, 10, 15, 21, 28, 36, 45},     {0, 0, 2, 4, 7, 11, 16, 22, 29, 37, 46},
+        {1, 2, 0, 5, 8, 12, 17, 23, 30, 38, 47},     {3, 4, 5, 0, 9, 13, 18, 24, 31, 39, 48},
+        {6, 7, 8, 9, 0, 14, 19, 25, 32, 40, 49},     {10, 11, 12, 13, 14, 0, 20, 26, 33, 41, 50},
+        {15, 16, 17, 18, 19, 20, 0, 27, 34, 42, 51}, {21, 22, 23, 24, 25, 26, 27, 0, 35, 43, 52},
+        {28, 29, 30, 31, 32, 33, 34, 35, 0, 44, 53}, {36, 37, 38, 39, 40, 41, 42, 43, 44, 0, 54},
         {45, 46, 47, 48, 49, 50, 51, 52, 53, 54, 0},
     };
     return ix[x][y];
@@ -73,12 +68,11 @@ static inline void accept_forget(accept_t *a, unsigned s)
 {
     /* the bits of accept_t.pknown of the pairs with slot s */
     static const uint64_t with[ACCEPT_SLOTS] = {
-        0x0020101020844bull, 0x00402020410895ull, 0x00804040821126ull,
-        0x01008081042238ull, 0x020101020843c0ull, 0x04020204107c00ull,
-        0x080404081f8000ull, 0x1008080fe00000ull, 0x20100ff0000000ull,
-        0x401ff000000000ull, 0x7fe00000000000ull,
+        0x0020101020844bull, 0x00402020410895ull, 0x00804040821126ull, 0x01008081042238ull,
+        0x020101020843c0ull, 0x04020204107c00ull, 0x080404081f8000ull, 0x1008080fe00000ull,
+        0x20100ff0000000ull, 0x401ff000000000ull, 0x7fe00000000000ull,
     };
-    uint16_t keep = (uint16_t)~(1u << s);
+    uint16_t keep = (uint16_t) ~(1u << s);
     a->since[s] = ++a->clock;
     a->pknown &= ~with[s];
     for (unsigned m = a->twith_any[s]; m; m &= m - 1) {
@@ -172,7 +166,7 @@ static inline int triple(accept_t *a, unsigned x, unsigned p, unsigned y, double
 static inline int triple_passes(accept_t *a, unsigned x, unsigned p, unsigned y)
 {
     return __builtin_expect(a->tknown[p][y] >> x & 1u, 1) ? (int)(a->tok[p][y] >> x & 1u)
-                                                         : accept_triple_new(a, x, p, y);
+                                                          : accept_triple_new(a, x, p, y);
 }
 
 /*
@@ -227,13 +221,13 @@ void accept_longest_both(accept_t *a, const unsigned char *nd, unsigned m, unsig
                          double vlim, unsigned best[2], double cost[2]);
 /* chains.c: the lengths of those chains alone (len[0], len[1]), as
  * accept_longest_both gives them */
-void accept_longest_len(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre,
-                        double vlim, unsigned len[2]);
+void accept_longest_len(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre, double vlim,
+                        unsigned len[2]);
 /* chains.c: their costs (cost[0], cost[1]) given their lengths len from
  * accept_longest_len on the same nd, pre and vlim just before; 0 if a cost
  * is NaN (then accept_longest_both's are the costs) */
-int accept_longest_cost(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre,
-                        double vlim, const unsigned len[2], double cost[2]);
+int accept_longest_cost(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre, double vlim,
+                        const unsigned len[2], double cost[2]);
 /* accept.c: the stamp re-estimate of c (retime.c), for drop() */
 double accept_retime(accept_t *a, unsigned pre, double vlim);
 /* accept.c: the smoothing re-estimate of c about to be kept (retime.c) */

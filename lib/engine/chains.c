@@ -1,20 +1,29 @@
 /* chains.c - the acceptance policy's chain search (see accept.h): the
- * longest consistent chains from the anchor through c, the oldest
- * waypoint held, and skipping it, among the waypoints held.
+ * longest consistent chains from the anchor through c, the oldest waypoint
+ * held, and skipping it (lw, lo), and of the longest the smoothest (their
+ * costs cw, co: the least largest implied acceleration along them).
  *
- * A dynamic programme over the steps between the nodes searched (the
- * anchor, then the window): the best chain ending with each step i -> j,
- * from the best ones ending with a step h -> i whose triple h -> i -> j
- * passes the acceleration test.  A cell reads only the nodes up to j, so a
- * search over the same nodes and more (the waypoints offered since: the
- * same anchor and waypoint before it, no stamp changed, and the speed
- * limit passing and failing the same steps) keeps the cells it had and
- * computes those of the steps into the new nodes alone, each in the order
- * the whole search takes them: every cell, and so every chain, is the
- * same bit for bit, NaN and ties included (tests/unit/test_accept_same.c
- * checks it against the search as a whole).  A triple's test is computed
- * once while its three waypoints are held (accept_int.h triple()), and
- * only where it can change a cell.
+ * The lengths (accept_longest_len): the most waypoints after a step on a
+ * consistent chain depends on the waypoints after the step alone, so it is
+ * kept by slot while verdicts take waypoints off the front of the window
+ * and the anchor moves onto one of them, and brought up to date as a
+ * waypoint arrives (it adds one to a step's count exactly where a chain
+ * one longer ends at it).  A verdict then reads lw and lo off the
+ * anchor's steps: O(window) where longest_both searched the window anew,
+ * O(window^3), for every verdict.
+ *
+ * The costs (accept_longest_cost) matter only where lw == lo (which of two
+ * as long chains bends the track less): then over the longest chains
+ * alone.  Where a cost is NaN (NaN or overflowing input), the order in
+ * which longest_both compared the chains decides, so it does
+ * (accept_longest_both: its dynamic programme over the steps, the best
+ * chain ending with each step, kept and extended as waypoints arrive).
+ *
+ * A pair's chord and velocity and a triple's acceleration test are
+ * computed once while their waypoints are held (accept_int.h pair(),
+ * triple()).  Every value is the same expression of the same waypoints as
+ * before, so every verdict is the same (tests/unit/test_accept_same.c
+ * drives this and the policy before it, tests/helpers/accept_prev/).
  */
 #include <string.h>
 
@@ -44,6 +53,19 @@ int accept_triple_new(accept_t *a, unsigned x, unsigned p, unsigned y)
     a->tok[p][y] = (uint16_t)(ok ? a->tok[p][y] | bit : a->tok[p][y] & ~bit);
     return ok;
 }
+
+/*
+ * accept_longest_both: the dynamic programme of the policy before, over
+ * the steps between the nodes (the anchor, then the window): the best chain
+ * ending with each step i -> j, from the best ones ending with a step
+ * h -> i whose triple h -> i -> j passes.  A cell reads only the nodes up
+ * to j, so a search over the same nodes and more (the same anchor and
+ * waypoint before it, no stamp changed, the speed limit passing and failing
+ * the same steps) keeps the cells it had and computes those of the steps
+ * into the new nodes alone, each in the order the whole search takes them:
+ * every cell is the same bit for bit, NaN and ties included.  A triple is
+ * judged only where it can change a cell.
+ */
 
 /* chain (len, cost) better than (l2, c2): longer, or as long and smoother */
 static int better(unsigned len, double cost, unsigned l2, double c2)
@@ -293,8 +315,8 @@ static unsigned kept_tail(accept_t *a, const unsigned char *nd, unsigned m, doub
     return w;
 }
 
-void accept_longest_len(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre,
-                        double vlim, unsigned len[2])
+void accept_longest_len(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre, double vlim,
+                        unsigned len[2])
 {
     accept_reach_t *r = &a->reach;
     int acc = a->cfg.max_accel_m_s2 > 0, anchor = 0;
@@ -374,14 +396,16 @@ static double tight_cost(accept_t *a, tight_t *t, unsigned i, unsigned j, int ac
     return best;
 }
 
-int accept_longest_cost(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre,
-                        double vlim, const unsigned len[2], double cost[2])
+int accept_longest_cost(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre, double vlim,
+                        const unsigned len[2], double cost[2])
 {
     accept_reach_t *r = &a->reach;
     int acc = a->cfg.max_accel_m_s2 > 0;
     int found[2] = {0, 0};
     tight_t t;
 
+    if (r->m != m || memcmp(r->nd, nd, m) != 0)
+        return 0; /* not the lengths of these nodes: the search as a whole */
     memset(t.done, 0, sizeof t.done);
     t.nan = 0;
     cost[0] = cost[1] = 0;

@@ -56,8 +56,7 @@ static double last_time(const accept_t *a)
 /* the repeats of the anchor at the head of the window into the run */
 static void migrate(accept_t *a)
 {
-    while (a->npend && a->run_n < ACCEPT_RUN_MAX &&
-           repeats_anchor(a, a->pend[0], last_time(a))) {
+    while (a->npend && a->run_n < ACCEPT_RUN_MAX && repeats_anchor(a, a->pend[0], last_time(a))) {
         const engine_waypoint_t *w = &a->wp[a->pend[0]];
         a->run_t[a->run_n] = w->t_s;
         a->run_seq[a->run_n++] = w->seq;
