@@ -254,7 +254,7 @@ static void append_node(accept_t *a, unsigned s, double vlim, int acc)
 {
     accept_reach_t *r = &a->reach;
     unsigned x = r->m;
-    uint16_t grow[ACCEPT_NODES]; /* by j: the slots nd[i] whose more[nd i][nd j] grows */
+    uint16_t grow[ACCEPT_NODES] = {0}; /* by j: the slots nd[i] whose more[nd i][nd j] grows */
 
     set_node(a, x, s, vlim);
     for (unsigned j = x - 1; j >= 1; j--) {
