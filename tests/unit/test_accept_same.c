@@ -34,10 +34,13 @@
 
 static uint64_t rng_state;
 
+/* xorshift64* (the seed must not be 0), 53 bits in [0, 1) */
 static double rnd(void)
 {
-    rng_state = rng_state * 6364136223846793005ull + 1442695040888963407ull;
-    return (double)(rng_state >> 11) * (1.0 / 9007199254740992.0);
+    rng_state ^= rng_state >> 12;
+    rng_state ^= rng_state << 25;
+    rng_state ^= rng_state >> 27;
+    return (double)((rng_state * 2685821657736338717ull) >> 11) * (1.0 / 9007199254740992.0);
 }
 
 static unsigned rndn(unsigned n)
@@ -171,14 +174,17 @@ static void track_fault(track_t *tr, engine_waypoint_t *w)
     }
 }
 
+/* the next waypoint: the motion (off by a burst's offset while one lasts),
+ * or now and then a fault instead */
 static void track_next(track_t *tr, engine_waypoint_t *w)
 {
+    int burst = tr->burst_left > 0;
     track_base(tr, w);
-    if (tr->burst_left) {
+    for (int k = 0; burst && k < 3; k++)
+        w->pos_m[k] += tr->burst_off[k];
+    if (burst)
         tr->burst_left--;
-        for (int k = 0; k < 3; k++)
-            w->pos_m[k] += tr->burst_off[k];
-    } else if (rndn(100) < tr->fault_pct)
+    else if (rndn(100) < tr->fault_pct)
         track_fault(tr, w);
     w->seq = ++tr->seq;
     tr->prev = tr->last;
