@@ -125,31 +125,30 @@ int accept_offer(accept_t *a, const engine_waypoint_t *wp)
 static double window_median_speed(accept_t *a, double floor)
 {
     double v[ACCEPT_WINDOW_MAX];
-    unsigned char from[ACCEPT_WINDOW_MAX], to[ACCEPT_WINDOW_MAX];
-    unsigned n = 0, p = a->open ? a->a1 : NO_SLOT, mid, above = 0;
+    unsigned n = 0, p = a->open ? a->a1 : NO_SLOT, mid, below = 0;
+    unsigned most = a->npend ? (a->npend - 1) / 2 : 0; /* mid, at most */
 
+    /* the caller keeps the larger of floor and the result, so floor and 0
+     * (below) are the same answer, and the median counts only above floor:
+     * where n - mid chords are (at most mid are not), so the chords are
+     * given up as soon as more than mid are not (n is at most npend) */
     for (unsigned i = 0; i < a->npend; i++) {
         unsigned q = a->pend[i];
         double dt = p == NO_SLOT ? 0 : a->wp[q].t_s - a->wp[p].t_s;
         if (p != NO_SLOT && dt > ACCEPT_SAME_TIME_S && dt <= a->cfg.max_gap_s) {
-            from[n] = (unsigned char)p;
-            to[n++] = (unsigned char)q;
+            v[n] = chord_speed(a, p, q);
+            below += !(v[n++] > floor);
+            if (below > most)
+                return floor;
         }
         p = q;
     }
     if (!n ||
         ((a->nhist || (!a->full && a->cfg.window > ACCEPT_PACE_CHORDS)) && n < ACCEPT_PACE_CHORDS))
         return 0;
-    /* the caller keeps the larger of floor and the median, which is above
-     * floor only if n - mid chords are (at most mid are not): else no need
-     * to select it */
     mid = (n - 1) / 2;
-    for (unsigned i = 0; i < n; i++) {
-        v[i] = chord_speed(a, from[i], to[i]);
-        above += v[i] > floor;
-        if (i + 1 - above > mid)
-            return floor;
-    }
+    if (below > mid)
+        return floor;
     /* the lower median, v[mid] of v sorted: with two chords, one of them
      * an outlier's, the smaller one.  The chord whose rank spans mid (as
      * many below it as mid at most, and more up to it): no branch on the

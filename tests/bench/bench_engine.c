@@ -11,7 +11,8 @@
  *  4. heap allocations inside push/tick after setup, counted by wrapping
  *     malloc/calloc/realloc/free (forwarded to glibc's __libc_* functions).
  *  5. the acceptance policy alone (offer + every verdict), lib/engine/accept.c
- *     against the former one kept in tests/helpers/accept_ref.h.
+ *     against the former one kept in tests/helpers/accept_ref.h (alone:
+ *     bench_engine --accept).
  *
  * Numbers only, no assertions (timings on a shared machine are noisy).
  */
@@ -687,6 +688,10 @@ int main(int argc, char **argv)
     }
     if (argc > 1 && strcmp(argv[1], "--errors") == 0) {
         fo_table(0);
+        return 0;
+    }
+    if (argc > 1 && strcmp(argv[1], "--accept") == 0) {
+        bench_accept(); /* the acceptance policy alone, the first table */
         return 0;
     }
     if (argc > 1 && strcmp(argv[1], "--hold") == 0) {
