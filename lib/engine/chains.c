@@ -241,10 +241,26 @@ static void set_node(accept_t *a, unsigned pos, unsigned s, double vlim)
  * known yet computed) */
 static unsigned passing(accept_t *a, unsigned e, unsigned p, unsigned y, int acc)
 {
+    unsigned u;
     if (!acc)
         return e;
-    for (unsigned u = e & ~(unsigned)a->tknown[p][y]; u; u &= u - 1)
-        (void)accept_triple_new(a, (unsigned)__builtin_ctz(u), p, y);
+    u = e & ~(unsigned)a->tknown[p][y];
+    if (u) { /* accept_triple_new() for each, step p -> y once */
+        const accept_pair_t *q2 = pair(a, p, y);
+        double dt = a->wp[y].t_s - a->wp[p].t_s;
+        unsigned ok = 0;
+        for (unsigned m = u; m; m &= m - 1) {
+            unsigned x = (unsigned)__builtin_ctz(m);
+            const accept_pair_t *q1 = pair(a, x, p);
+            double d1 = a->wp[p].t_s - a->wp[x].t_s, dvn = dv_norm(q1, q2);
+            ok |= (unsigned)!accel_test(a, q1, q2, d1, dt, dvn) << x;
+            a->tcost[x][p][y] = 2.0 * dvn / (d1 + dt);
+            a->twith[x][p] = (uint16_t)(a->twith[x][p] | 1u << y);
+            a->twith_any[x] = (uint16_t)(a->twith_any[x] | 1u << p);
+        }
+        a->tknown[p][y] = (uint16_t)(a->tknown[p][y] | u);
+        a->tok[p][y] = (uint16_t)((a->tok[p][y] & ~u) | ok);
+    }
     return e & a->tok[p][y];
 }
 
