@@ -13,7 +13,7 @@
  *  5. the acceptance policy alone (offer + every verdict), lib/engine/accept.c
  *     against the former one kept in tests/helpers/accept_ref.h and the one
  *     before its chain search was kept across verdicts (the same verdicts,
- *     tests/helpers/accept_prev/) (alone: bench_engine --accept).
+ *     tests/helpers/accept_prev/) (alone: bench_engine --accept [REPS]).
  *
  * Numbers only, no assertions (timings on a shared machine are noisy).
  */
@@ -540,6 +540,9 @@ static double time_accept_prev(const engine_waypoint_t *w, long n, long *kept)
     return t;
 }
 
+/* runs of each policy over each track in bench_accept, the best taken */
+static int accept_reps = 5;
+
 /* ns per waypoint of the acceptance policy alone, former and current, best
  * of 5 interleaved: the rough walk of the streaming table (white-noise
  * velocity, so profile auto refuses about 1 in 10) and a clean circle */
@@ -560,15 +563,15 @@ static void bench_accept(void)
         circle[i].pos_m[2] = 0;
     }
     printf("acceptance policy alone (accept_offer + accept_decide, default profile auto), ns per "
-           "waypoint, %d waypoints, best of 5 interleaved, same run:\n"
+           "waypoint, %d waypoints, best of %d interleaved, same run:\n"
            "| track | kept | previous (tests/helpers/accept_ref.h) | before its chain search "
            "was kept (tests/helpers/accept_prev/) | lib/engine/accept.c | x previous | x before "
            "|\n|---|---|---|---|---|---|---|\n",
-           N);
+           N, accept_reps);
     for (int t = 0; t < 2; t++) {
         double best_ref = 1e30, best_prev = 1e30, best_new = 1e30;
         long kept_ref = 0, kept_prev = 0, kept_new = 0;
-        for (int rep = 0; rep < 5; rep++) {
+        for (int rep = 0; rep < accept_reps; rep++) {
             double r = time_accept_ref(tracks[t], N, &kept_ref);
             double p = time_accept_prev(tracks[t], N, &kept_prev);
             double c = time_accept(tracks[t], N, &kept_new);
@@ -721,7 +724,9 @@ int main(int argc, char **argv)
         return 0;
     }
     if (argc > 1 && strcmp(argv[1], "--accept") == 0) {
-        bench_accept(); /* the acceptance policy alone, the first table */
+        if (argc > 2)
+            accept_reps = atoi(argv[2]) > 0 ? atoi(argv[2]) : 1;
+        bench_accept(); /* the acceptance policy alone, the first table (REPS, default 5) */
         return 0;
     }
     if (argc > 1 && strcmp(argv[1], "--hold") == 0) {
