@@ -153,12 +153,15 @@ static inline int accel_test(const accept_t *a, const accept_pair_t *q1, const a
 /* the acceleration test of x -> p -> y (slots, in time order, no gap
  * between p and y), computed on first use and kept while the three are
  * held: 1 if it passes (or there is no acceleration limit), *cost the
- * implied acceleration 2 |v2 - v1| / (dt1 + dt2), as judge() has them */
+ * implied acceleration 2 |v2 - v1| / (dt1 + dt2), as judge() has them (the
+ * cost computed again: asked far less often than the test) */
 static inline int triple(accept_t *a, unsigned x, unsigned p, unsigned y, double *cost)
 {
+    const accept_pair_t *q1 = pair(a, x, p), *q2 = pair(a, p, y);
     int ok = __builtin_expect(a->tknown[p][y] >> x & 1u, 1) ? (int)(a->tok[p][y] >> x & 1u)
                                                             : accept_triple_new(a, x, p, y);
-    *cost = a->tcost[x][p][y];
+    double d1 = a->wp[p].t_s - a->wp[x].t_s, dt = a->wp[y].t_s - a->wp[p].t_s;
+    *cost = 2.0 * dv_norm(q1, q2) / (d1 + dt);
     return ok;
 }
 
@@ -197,10 +200,11 @@ static inline int judge(accept_t *a, unsigned pre, unsigned p, unsigned b, doubl
     }
     /* pre is earlier than p by more than 1 ns: it was checked so (over a
      * gap the acceleration test is not asked, its cost is) */
+    if (!cost)
+        return acc && !triple_passes(a, pre, p, b) ? ENGINE_EACCEL : 0;
     if (!triple(a, pre, p, b, &c) && acc)
         return ENGINE_EACCEL;
-    if (cost)
-        *cost = c;
+    *cost = c;
     return 0;
 }
 

@@ -43,10 +43,8 @@ int accept_triple_new(accept_t *a, unsigned x, unsigned p, unsigned y)
 {
     const accept_pair_t *q1 = pair(a, x, p), *q2 = pair(a, p, y);
     double d1 = a->wp[p].t_s - a->wp[x].t_s, dt = a->wp[y].t_s - a->wp[p].t_s;
-    double dvn = dv_norm(q1, q2);
-    int ok = !(a->cfg.max_accel_m_s2 > 0 && accel_test(a, q1, q2, d1, dt, dvn));
+    int ok = !(a->cfg.max_accel_m_s2 > 0 && accel_test(a, q1, q2, d1, dt, dv_norm(q1, q2)));
     uint16_t bit = (uint16_t)(1u << x);
-    a->tcost[x][p][y] = 2.0 * dvn / (d1 + dt);
     a->tknown[p][y] |= bit;
     a->twith[x][p] = (uint16_t)(a->twith[x][p] | 1u << y);
     a->twith_any[x] = (uint16_t)(a->twith_any[x] | 1u << p);
@@ -252,9 +250,8 @@ static unsigned passing(accept_t *a, unsigned e, unsigned p, unsigned y, int acc
         for (unsigned m = u; m; m &= m - 1) {
             unsigned x = (unsigned)__builtin_ctz(m);
             const accept_pair_t *q1 = pair(a, x, p);
-            double d1 = a->wp[p].t_s - a->wp[x].t_s, dvn = dv_norm(q1, q2);
-            ok |= (unsigned)!accel_test(a, q1, q2, d1, dt, dvn) << x;
-            a->tcost[x][p][y] = 2.0 * dvn / (d1 + dt);
+            double d1 = a->wp[p].t_s - a->wp[x].t_s;
+            ok |= (unsigned)!accel_test(a, q1, q2, d1, dt, dv_norm(q1, q2)) << x;
             a->twith[x][p] = (uint16_t)(a->twith[x][p] | 1u << y);
             a->twith_any[x] = (uint16_t)(a->twith_any[x] | 1u << p);
         }
