@@ -1,15 +1,18 @@
 /* accept.c - the acceptance policy, judged with both neighbours; see accept.h.
  *
  * Every test looks at pairs of waypoints (a chord and its speed, the
- * velocities on both sides of a waypoint), and a verdict may run the chain
- * search over the whole window.  The waypoints therefore live in slots
- * (accept_t.wp), and the chord and velocity of a pair of slots are computed
- * once, when a test first needs them, and kept while both waypoints are
- * held (accept_t.pair, accept_t.known): a test is then a few subtractions
- * and one square root.  Each cached value is the same expression of the
- * same two waypoints as before the cache, so every verdict is the same bit
- * for bit (tests/unit/test_accept.c drives this and the former code,
- * tests/helpers/accept_ref.h, with random dirty tracks).
+ * velocities on both sides of a waypoint) and triples (the acceleration
+ * test), and a verdict may ask for the longest chains among the waypoints
+ * held (chains.c).  The waypoints therefore live in slots (accept_t.wp),
+ * and the chord and velocity of a pair of slots, the acceleration test of
+ * a triple, are computed once, when a test first needs them, and kept
+ * while the waypoints are held (accept_int.h pair(), triple()): a test is
+ * then a few loads.  Each cached value is the same expression of the same
+ * waypoints as before the cache, so every verdict is the same bit for bit
+ * (tests/unit/test_accept.c drives this and the former code,
+ * tests/helpers/accept_ref.h, with random dirty tracks;
+ * tests/unit/test_accept_same.c this and the policy before its chain
+ * search was made incremental, tests/helpers/accept_prev/).
  */
 #include "accept.h"
 
@@ -84,7 +87,7 @@ static unsigned new_slot(accept_t *a)
         used |= 1u << a->burst;
     while (used >> s & 1u)
         s++;
-    a->known &= ~slot_pairs(s);
+    accept_forget(a, s);
     return s;
 }
 
@@ -122,29 +125,29 @@ int accept_offer(accept_t *a, const engine_waypoint_t *wp)
 static double window_median_speed(accept_t *a, double floor)
 {
     double v[ACCEPT_WINDOW_MAX];
-    unsigned char from[ACCEPT_WINDOW_MAX], to[ACCEPT_WINDOW_MAX];
-    unsigned n = 0, p = a->open ? a->a1 : NO_SLOT, mid, above = 0;
+    unsigned n = 0, p = a->open ? a->a1 : NO_SLOT, mid, below = 0;
+    unsigned most = a->npend ? (a->npend - 1) / 2 : 0; /* mid, at most */
 
+    /* the caller keeps the larger of floor and the result, so floor and 0
+     * (below) are the same answer, and the median counts only above floor:
+     * where n - mid chords are (at most mid are not), so the chords are
+     * given up as soon as more than mid are not (n is at most npend) */
     for (unsigned i = 0; i < a->npend; i++) {
         unsigned q = a->pend[i];
         double dt = p == NO_SLOT ? 0 : a->wp[q].t_s - a->wp[p].t_s;
         if (p != NO_SLOT && dt > ACCEPT_SAME_TIME_S && dt <= a->cfg.max_gap_s) {
-            from[n] = (unsigned char)p;
-            to[n++] = (unsigned char)q;
+            v[n] = chord_speed(a, p, q);
+            below += !(v[n++] > floor);
+            if (below > most)
+                return floor;
         }
         p = q;
     }
     if (!n ||
         ((a->nhist || (!a->full && a->cfg.window > ACCEPT_PACE_CHORDS)) && n < ACCEPT_PACE_CHORDS))
         return 0;
-    for (unsigned i = 0; i < n; i++) {
-        v[i] = chord_speed(a, from[i], to[i]);
-        above += v[i] > floor;
-    }
-    /* the caller keeps the larger of floor and the median, which is above
-     * floor only if n - mid chords are: else no need to select it */
     mid = (n - 1) / 2;
-    if (above < n - mid)
+    if (below > mid)
         return floor;
     /* the lower median, v[mid] of v sorted: with two chords, one of them
      * an outlier's, the smaller one.  The chord whose rank spans mid (as
@@ -312,11 +315,18 @@ static void pop(accept_t *a, accept_verdict_t *v, accept_kind_t kind, int reason
         a->npace++;
     }
     if (kind == ACCEPT_TAKE) {
-        a->vhist[a->hnext] = chord_speed(a, a->a1, c);
+        /* the fastest: the larger of it and the new chord, unless the one
+         * it replaces may have been it (then all of them again) */
+        double gone = a->vhist[a->hnext], now = chord_speed(a, a->a1, c);
+        int evict = a->nhist == ACCEPT_HIST;
+        a->vhist[a->hnext] = now;
         a->hnext = (a->hnext + 1) % ACCEPT_HIST;
         if (a->nhist < ACCEPT_HIST)
             a->nhist++;
-        a->vrecent = recent_max_speed(a);
+        if (evict && !(gone < a->vrecent))
+            a->vrecent = recent_max_speed(a);
+        else if (now > a->vrecent)
+            a->vrecent = now;
         a->a0 = a->a1;
         a->have_a0 = 1;
         a->a1 = (unsigned char)c;
@@ -472,17 +482,17 @@ static unsigned without_repeats(accept_t *a, const unsigned char *nd, unsigned n
 
 /* the longest chains from the anchor through c (lw, cost cw) and skipping
  * it (lo, co) among the waypoints held: longest() both ways, computed once
- * per verdict (outvotes_held, then decide_full on the same window) */
+ * per verdict (outvotes_held, then decide_full on the same window); their
+ * lengths first, the costs only where the lengths tie (chain_costs) */
 typedef struct {
-    int known;
+    int known, costs;
     unsigned lw, lo;
     double cw, co;
 } chains_t;
 
-static void longest_both(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre,
-                         double vlim, unsigned best[2], double cost[2]);
-
-/* ch, computed first if not known (nd: the anchor and the window, slots) */
+/* ch's lengths, computed first if not known (nd: the anchor and the
+ * window, slots); its costs are 0 where a length is 1 (no chain: the cost
+ * longest() gives then), else known only if ch->costs */
 static const chains_t *chains(accept_t *a, const unsigned char *nd, unsigned pre, double vlim,
                               chains_t *ch)
 {
@@ -494,14 +504,29 @@ static const chains_t *chains(accept_t *a, const unsigned char *nd, unsigned pre
     m = without_repeats(a, nd, n, nr);
     if (m == n + 1) { /* no repeats of c: the same waypoints both ways */
         unsigned l[2];
-        double cl[2];
-        longest_both(a, nd, m, pre, vlim, l, cl);
-        ch->lw = l[0], ch->cw = cl[0], ch->lo = l[1], ch->co = cl[1];
+        accept_longest_len(a, nd, m, pre, vlim, l);
+        ch->lw = l[0], ch->lo = l[1], ch->cw = ch->co = 0;
     } else {
         ch->lw = longest(a, nd, n + 1, pre, 1, 1, vlim, 0, &ch->cw); /* through c */
         ch->lo = longest(a, nr, m, pre, 2, m - 1, vlim, 0, &ch->co); /* skipping c */
+        ch->costs = 1;
     }
     ch->known = 1;
+    return ch;
+}
+
+/* ch (known) with its costs */
+static const chains_t *chain_costs(accept_t *a, const unsigned char *nd, unsigned pre, double vlim,
+                                   chains_t *ch)
+{
+    if (!ch->costs) { /* no repeats of c (chains) */
+        unsigned l[2] = {ch->lw, ch->lo};
+        double cl[2];
+        if (!accept_longest_cost(a, nd, a->npend + 1, pre, vlim, l, cl))
+            accept_longest_both(a, nd, a->npend + 1, pre, vlim, l, cl);
+        ch->cw = cl[0], ch->co = cl[1];
+        ch->costs = 1;
+    }
     return ch;
 }
 
@@ -588,77 +613,6 @@ static int decide_closed(accept_t *a, int closing, int full, double vlim, accept
     return 1;
 }
 
-/*
- * longest() from nd[0] (preceded by pre, m <= ACCEPT_WINDOW_MAX + 1 slots)
- * through nd[1] (best[0], cost[0]: lw) and skipping it (best[1], cost[1]:
- * lo) in one pass: both searches judge the same steps, each once here.  A
- * step's time and speed tests are taken per pair first (ok[i][j]), so a
- * triple is the acceleration test alone.
- */
-static void longest_both(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre,
-                         double vlim, unsigned best[2], double cost[2])
-{
-    enum { M = ACCEPT_WINDOW_MAX + 1 };
-    unsigned char len[2][M][M], ok[M][M];
-    double cst[2][M][M], t[M];
-    const accept_pair_t *q[M][M];
-    int acc = a->cfg.max_accel_m_s2 > 0;
-
-    memset(len, 0, sizeof len);
-    for (unsigned i = 0; i < m; i++)
-        t[i] = a->wp[nd[i]].t_s;
-    for (unsigned i = 1; i < m; i++)
-        for (unsigned j = i + 1; j < m; j++) {
-            double dt = t[j] - t[i];
-            int gap = 0;
-            ok[i][j] = 0;
-            if (time_test(a, dt, 0, &gap) == 0) {
-                q[i][j] = pair(a, nd[i], nd[j]);
-                ok[i][j] = !(vlim > 0 && q[i][j]->d > vlim * dt);
-            }
-        }
-    best[0] = best[1] = 1;
-    cost[0] = cost[1] = 0;
-    for (unsigned j = 1; j < m; j++) {
-        double c;
-        if (judge(a, pre, nd[0], nd[j], vlim, 0, &c) == 0) {
-            len[j >= 2][0][j] = 2;
-            cst[j >= 2][0][j] = c;
-            q[0][j] = pair(a, nd[0], nd[j]);
-        }
-    }
-    for (unsigned i = 1; i < m; i++)
-        for (unsigned h = 0; h < i; h++) {
-            if (!len[0][h][i] && !len[1][h][i])
-                continue;
-            for (unsigned k = 0; k < 2; k++)
-                if (len[k][h][i] && better(len[k][h][i], cst[k][h][i], best[k], cost[k])) {
-                    best[k] = len[k][h][i];
-                    cost[k] = cst[k][h][i];
-                }
-            for (unsigned j = i + 1; j < m; j++) {
-                double d1 = t[i] - t[h], dt = t[j] - t[i], dvn, c;
-                if (!ok[i][j])
-                    continue;
-                dvn = dv_norm(q[h][i], q[i][j]);
-                if (acc && accel_test(a, q[h][i], q[i][j], d1, dt, dvn))
-                    continue;
-                c = 2.0 * dvn / (d1 + dt);
-                for (unsigned k = 0; k < 2; k++) {
-                    double ck;
-                    if (!len[k][h][i])
-                        continue;
-                    ck = max_of(cst[k][h][i], c);
-                    if (!len[k][i][j] ||
-                        better(len[k][h][i] + 1u, ck, len[k][i][j], cst[k][i][j])) {
-                        len[k][i][j] = (unsigned char)(len[k][h][i] + 1);
-                        cst[k][i][j] = ck;
-                    }
-                }
-            }
-        }
-}
-
 static int drop(accept_t *a, unsigned pre, double vlim, int reason, accept_verdict_t *v);
 
 /* keep c, re-stamped if its stamp bends the pace (ACCEPT_RULE_SMOOTH) */
@@ -680,7 +634,11 @@ static int decide_full(accept_t *a, int closing, double vlim, unsigned pre, int 
     unsigned n = a->npend, k = a->cfg.confirm;
     const chains_t *c = chains(a, nd, pre, vlim, ch);
     unsigned lw = c->lw, lo = c->lo;
-    double cw = c->cw, co = c->co;
+    double cw, co;
+
+    if (lw == lo && lw >= 2) /* as long: the smoother one, by their costs */
+        c = chain_costs(a, nd, pre, vlim, ch);
+    cw = c->cw, co = c->co;
 
     /* keep c unless a longer chain skips it, or one as long and smoother
      * (of two fixes that cannot both be right, the one that bends the

@@ -290,6 +290,45 @@ typedef struct {
     double c;              /* d / (t_b - t_p): the chord speed */
 } accept_pair_t;
 
+/* The search of the longest chains from the anchor through c and skipping
+ * it among the waypoints held, with their costs where one is NaN (chains.c
+ * accept_longest_both), kept for the next search: while the same waypoints
+ * stay held with the same speed limit, a search over them and the
+ * waypoints offered since judges the new steps alone. */
+#define ACCEPT_NODES (ACCEPT_WINDOW_MAX + 1)
+typedef struct {
+    unsigned m;                     /* nodes searched, 0: none */
+    unsigned char nd[ACCEPT_NODES]; /* their slots: the anchor, then the window */
+    unsigned char pre;              /* the slot before the anchor, NO_SLOT if none */
+    uint64_t since[ACCEPT_NODES];   /* their slots' last change (accept_t.since) */
+    uint64_t pre_since;
+    double vlim; /* the speed limit searched with */
+    /* step i -> j: 1 if its time test passes, 2 if its speed test too */
+    unsigned char step[ACCEPT_NODES][ACCEPT_NODES];
+    /* the best chain ending with step i -> j through c (k = 0) and skipping
+     * it (k = 1): its length (0: none) and cost, as longest_both has them */
+    unsigned char len[2][ACCEPT_NODES][ACCEPT_NODES];
+    double cst[2][ACCEPT_NODES][ACCEPT_NODES];
+    unsigned best[2]; /* the best chains so far */
+    double cost[2];
+} accept_search_t;
+
+/* The lengths of the longest chains after each step among the waypoints
+ * held (chains.c accept_longest_len): the most waypoints a consistent chain
+ * x -> y -> ... has after y depends on the waypoints after y alone, so it is
+ * kept while waypoints leave the window, and brought up to date as they
+ * arrive. */
+typedef struct {
+    unsigned m;                     /* nodes: an anchor, then waypoints of the window */
+    unsigned char nd[ACCEPT_NODES]; /* their slots, in order */
+    uint64_t since[ACCEPT_NODES];   /* their slots' last change (accept_t.since) */
+    double vlim;                    /* the speed limit of the steps */
+    /* by slots x -> y (y after x): step 0 if its time test fails, 1 if its
+     * speed test does, 2 if both pass (y in the window); more: the most
+     * nodes after y on a consistent chain x -> y -> ... */
+    unsigned char step[ACCEPT_SLOTS][ACCEPT_SLOTS], more[ACCEPT_SLOTS][ACCEPT_SLOTS];
+} accept_reach_t;
+
 typedef struct {
     accept_config_t cfg;
     engine_waypoint_t wp[ACCEPT_SLOTS];    /* the waypoints, by slot */
@@ -304,9 +343,12 @@ typedef struct {
     int full;            /* the last accept_decide judged a full window */
     int have_burst;      /* burst: the last waypoint dropped as a far */
     unsigned char burst; /* burst's slot (since the last kept or started) */
-    uint64_t known;      /* bit i: pair[i] is computed */
-    /* the pairs of slots x < y, at y (y - 1) / 2 + x (accept.c) */
+    /* the pairs of slots x < y, at y (y - 1) / 2 + x (accept_int.h pair()):
+     * bit i of pknown if pair[i] is computed */
     accept_pair_t pair[ACCEPT_SLOTS * (ACCEPT_SLOTS - 1) / 2];
+    uint64_t pknown;
+    uint64_t clock;               /* counts the changes of slots */
+    uint64_t since[ACCEPT_SLOTS]; /* the clock at a slot's last change */
     /* ACCEPT_RULE_STOPS (stops.c): repeats of the anchor's position, older
      * than every waypoint in the window, awaiting their verdict */
     double run_t[ACCEPT_RUN_MAX];
@@ -323,6 +365,16 @@ typedef struct {
     double pace_t[ACCEPT_RETIME_PACE + 1], pace_s[ACCEPT_RETIME_PACE + 1];
     unsigned npace;
     double shift_now; /* the shift of the waypoint being kept (pop) */
+    /* the acceleration test of slots x -> p -> y (accept_int.h triple()),
+     * computed once while the three are held: bit x of tknown[p][y] if
+     * computed, of tok[p][y] if it passes (or there is no acceleration
+     * limit) (its implied acceleration is computed when asked); bit y of
+     * twith[x][p] (and bit p of twith_any[x]) if bit x of tknown[p][y] was
+     * set since slot x last changed: where a slot's change clears its bit */
+    uint16_t tknown[ACCEPT_SLOTS][16], tok[ACCEPT_SLOTS][16];
+    uint16_t twith[ACCEPT_SLOTS][ACCEPT_SLOTS], twith_any[ACCEPT_SLOTS];
+    accept_search_t search; /* the last chain search (chains.c) */
+    accept_reach_t reach;   /* the chains' lengths (chains.c) */
 } accept_t;
 
 /* Set up with cfg (window and confirm clamped to 1..ACCEPT_WINDOW_MAX,

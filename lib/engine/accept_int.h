@@ -7,6 +7,7 @@
 
 #include <math.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "accept.h"
 
@@ -46,23 +47,49 @@ static inline void pair_of(const engine_waypoint_t *p, const engine_waypoint_t *
     q->c = q->d / dt;
 }
 
-/* index of the pair of slots x != y in accept_t.pair: either order */
+/* index of the pair of slots x != y in accept_t.pair: either order
+ * (max (max - 1) / 2 + min) */
 static inline unsigned pair_index(unsigned x, unsigned y)
 {
-    unsigned lo = x < y ? x : y, hi = x < y ? y : x;
-    return hi * (hi - 1) / 2 + lo;
+    static const unsigned char ix[ACCEPT_SLOTS][ACCEPT_SLOTS] = {
+        {0, 0, 1, 3, 6, 10, 15, 21, 28, 36, 45},     {0, 0, 2, 4, 7, 11, 16, 22, 29, 37, 46},
+        {1, 2, 0, 5, 8, 12, 17, 23, 30, 38, 47},     {3, 4, 5, 0, 9, 13, 18, 24, 31, 39, 48},
+        {6, 7, 8, 9, 0, 14, 19, 25, 32, 40, 49},     {10, 11, 12, 13, 14, 0, 20, 26, 33, 41, 50},
+        {15, 16, 17, 18, 19, 20, 0, 27, 34, 42, 51}, {21, 22, 23, 24, 25, 26, 27, 0, 35, 43, 52},
+        {28, 29, 30, 31, 32, 33, 34, 35, 0, 44, 53}, {36, 37, 38, 39, 40, 41, 42, 43, 44, 0, 54},
+        {45, 46, 47, 48, 49, 50, 51, 52, 53, 54, 0},
+    };
+    return ix[x][y];
 }
 
-/* the bits of accept_t.known of the pairs with slot s */
-static inline uint64_t slot_pairs(unsigned s)
+/* slot s holds a new waypoint, or its stamp changed: its pairs and triples,
+ * and a chain search over it, are no longer known (accept_t.since) */
+static inline void accept_forget(accept_t *a, unsigned s)
 {
-    uint64_t m = 0;
-    for (unsigned x = 0; x < s; x++) /* pairs (x, s): s (s - 1) / 2 + x */
-        m |= (uint64_t)1 << (s * (s - 1) / 2 + x);
-    for (unsigned y = s + 1; y < ACCEPT_SLOTS; y++) /* pairs (s, y) */
-        m |= (uint64_t)1 << (y * (y - 1) / 2 + s);
-    return m;
+    /* the bits of accept_t.pknown of the pairs with slot s */
+    static const uint64_t with[ACCEPT_SLOTS] = {
+        0x0020101020844bull, 0x00402020410895ull, 0x00804040821126ull, 0x01008081042238ull,
+        0x020101020843c0ull, 0x04020204107c00ull, 0x080404081f8000ull, 0x1008080fe00000ull,
+        0x20100ff0000000ull, 0x401ff000000000ull, 0x7fe00000000000ull,
+    };
+    uint16_t keep = (uint16_t) ~(1u << s);
+    a->since[s] = ++a->clock;
+    a->pknown &= ~with[s];
+    for (unsigned m = a->twith_any[s]; m; m &= m - 1) {
+        unsigned p = (unsigned)__builtin_ctz(m);
+        for (unsigned y = a->twith[s][p]; y; y &= y - 1)
+            a->tknown[p][__builtin_ctz(y)] &= keep;
+        a->twith[s][p] = 0;
+    }
+    a->twith_any[s] = 0;
+    memset(a->tknown[s], 0, sizeof a->tknown[s]);
+    for (unsigned x = 0; x < ACCEPT_SLOTS; x++)
+        a->tknown[x][s] = 0;
 }
+
+/* chains.c: pair() and triple() computing what they do not know yet */
+const accept_pair_t *accept_pair_new(accept_t *a, unsigned x, unsigned y);
+int accept_triple_new(accept_t *a, unsigned x, unsigned p, unsigned y);
 
 /* the pair x -> y (slots, y offered after x), computed on first use.  Kept
  * once for both orders: y -> x has the same v, d and vn bit for bit (both
@@ -71,13 +98,9 @@ static inline uint64_t slot_pairs(unsigned s)
 static inline const accept_pair_t *pair(accept_t *a, unsigned x, unsigned y)
 {
     unsigned ix = pair_index(x, y);
-    accept_pair_t *q = &a->pair[ix];
-    if (!(a->known >> ix & 1u)) {
-        pair_of(&a->wp[x], &a->wp[y], q);
-        q->c = fabs(q->c);
-        a->known |= (uint64_t)1 << ix;
-    }
-    return q;
+    if (__builtin_expect(a->pknown >> ix & 1u, 1))
+        return &a->pair[ix];
+    return accept_pair_new(a, x, y);
 }
 
 static inline double pair_dist(accept_t *a, unsigned x, unsigned y)
@@ -127,6 +150,28 @@ static inline int accel_test(const accept_t *a, const accept_pair_t *q1, const a
     return dvn > allow ? ENGINE_EACCEL : 0;
 }
 
+/* the acceleration test of x -> p -> y (slots, in time order, no gap
+ * between p and y), computed on first use and kept while the three are
+ * held: 1 if it passes (or there is no acceleration limit), *cost the
+ * implied acceleration 2 |v2 - v1| / (dt1 + dt2), as judge() has them (the
+ * cost computed again: asked far less often than the test) */
+static inline int triple(accept_t *a, unsigned x, unsigned p, unsigned y, double *cost)
+{
+    const accept_pair_t *q1 = pair(a, x, p), *q2 = pair(a, p, y);
+    int ok = __builtin_expect(a->tknown[p][y] >> x & 1u, 1) ? (int)(a->tok[p][y] >> x & 1u)
+                                                            : accept_triple_new(a, x, p, y);
+    double d1 = a->wp[p].t_s - a->wp[x].t_s, dt = a->wp[y].t_s - a->wp[p].t_s;
+    *cost = 2.0 * dv_norm(q1, q2) / (d1 + dt);
+    return ok;
+}
+
+/* triple() without its cost */
+static inline int triple_passes(accept_t *a, unsigned x, unsigned p, unsigned y)
+{
+    return __builtin_expect(a->tknown[p][y] >> x & 1u, 1) ? (int)(a->tok[p][y] >> x & 1u)
+                                                          : accept_triple_new(a, x, p, y);
+}
+
 /*
  * The test of b following p (slots; pre: the slot before p, or NO_SLOT), as
  * accept_check, and with gaps_ok an interval above max_gap_s passes too
@@ -140,14 +185,12 @@ static inline int accel_test(const accept_t *a, const accept_pair_t *q1, const a
 static inline int judge(accept_t *a, unsigned pre, unsigned p, unsigned b, double vlim, int gaps_ok,
                         double *cost)
 {
-    double dt = a->wp[b].t_s - a->wp[p].t_s, d1, dvn;
+    double dt = a->wp[b].t_s - a->wp[p].t_s, c;
     int gap = 0, r = time_test(a, dt, gaps_ok, &gap), acc;
-    const accept_pair_t *q1, *q2;
 
     if (r)
         return r;
-    q2 = pair(a, p, b);
-    if (vlim > 0 && q2->d > vlim * dt)
+    if (vlim > 0 && pair(a, p, b)->d > vlim * dt)
         return ENGINE_ESPEED;
     acc = a->cfg.max_accel_m_s2 > 0 && !gap;
     if (pre == NO_SLOT || (!acc && !cost)) {
@@ -155,14 +198,13 @@ static inline int judge(accept_t *a, unsigned pre, unsigned p, unsigned b, doubl
             *cost = 0;
         return 0;
     }
-    /* pre is earlier than p by more than 1 ns: it was checked so */
-    q1 = pair(a, pre, p);
-    d1 = a->wp[p].t_s - a->wp[pre].t_s;
-    dvn = dv_norm(q1, q2);
-    if (acc && accel_test(a, q1, q2, d1, dt, dvn))
+    /* pre is earlier than p by more than 1 ns: it was checked so (over a
+     * gap the acceleration test is not asked, its cost is) */
+    if (!cost)
+        return acc && !triple_passes(a, pre, p, b) ? ENGINE_EACCEL : 0;
+    if (!triple(a, pre, p, b, &c) && acc)
         return ENGINE_EACCEL;
-    if (cost)
-        *cost = 2.0 * dvn / (d1 + dt);
+    *cost = c;
     return 0;
 }
 
@@ -177,6 +219,19 @@ static inline int check0(accept_t *a, unsigned pre, unsigned p, unsigned b, doub
     return judge(a, pre, p, b, vlim, 0, NULL);
 }
 
+/* chains.c: longest() from nd[0] through nd[1] (best[0], cost[0]) and
+ * skipping it (best[1], cost[1]), between slots, no gaps (accept.c) */
+void accept_longest_both(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre,
+                         double vlim, unsigned best[2], double cost[2]);
+/* chains.c: the lengths of those chains alone (len[0], len[1]), as
+ * accept_longest_both gives them */
+void accept_longest_len(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre, double vlim,
+                        unsigned len[2]);
+/* chains.c: their costs (cost[0], cost[1]) given their lengths len from
+ * accept_longest_len on the same nd, pre and vlim just before; 0 if a cost
+ * is NaN (then accept_longest_both's are the costs) */
+int accept_longest_cost(accept_t *a, const unsigned char *nd, unsigned m, unsigned pre, double vlim,
+                        const unsigned len[2], double cost[2]);
 /* accept.c: the stamp re-estimate of c (retime.c), for drop() */
 double accept_retime(accept_t *a, unsigned pre, double vlim);
 /* accept.c: the smoothing re-estimate of c about to be kept (retime.c) */

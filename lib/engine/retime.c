@@ -31,7 +31,7 @@ static int on_path(accept_t *a, unsigned p, unsigned q, unsigned r)
 static void set_time(accept_t *a, unsigned c, double t)
 {
     a->wp[c].t_s = t;
-    a->known &= ~slot_pairs(c);
+    accept_forget(a, c);
 }
 
 /* q, held after prev, goes on c's run: later than prev and within max_gap_s

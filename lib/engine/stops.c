@@ -37,12 +37,15 @@
 
 #include <string.h>
 
+#include "accept_int.h"
+
 #define SAME_TIME_S 1e-9
 
-/* wp repeats the anchor's position, later than t_last */
-static int repeats_anchor(const accept_t *a, const engine_waypoint_t *wp, double t_last)
+/* slot q repeats the anchor's position, later than t_last (the distance
+ * from the pair cache: accept_dist's, bit for bit) */
+static int repeats_anchor(accept_t *a, unsigned q, double t_last)
 {
-    return wp->t_s - t_last > SAME_TIME_S && accept_dist(&a->wp[a->a1], wp) <= ACCEPT_STALE_POS_M;
+    return a->wp[q].t_s - t_last > SAME_TIME_S && pair_dist(a, a->a1, q) <= ACCEPT_STALE_POS_M;
 }
 
 static double last_time(const accept_t *a)
@@ -53,8 +56,7 @@ static double last_time(const accept_t *a)
 /* the repeats of the anchor at the head of the window into the run */
 static void migrate(accept_t *a)
 {
-    while (a->npend && a->run_n < ACCEPT_RUN_MAX &&
-           repeats_anchor(a, &a->wp[a->pend[0]], last_time(a))) {
+    while (a->npend && a->run_n < ACCEPT_RUN_MAX && repeats_anchor(a, a->pend[0], last_time(a))) {
         const engine_waypoint_t *w = &a->wp[a->pend[0]];
         a->run_t[a->run_n] = w->t_s;
         a->run_seq[a->run_n++] = w->seq;
@@ -143,7 +145,7 @@ int accept_run_decide(accept_t *a, int closing, accept_verdict_t *v)
     }
     /* a new position after the run (else the window holds more repeats:
      * the run outgrew ACCEPT_RUN_MAX) */
-    has_f = a->npend && !repeats_anchor(a, &a->wp[a->pend[0]], a->run_t[a->run_n - 1]);
+    has_f = a->npend && !repeats_anchor(a, a->pend[0], a->run_t[a->run_n - 1]);
     more = a->npend && !has_f;
     if (!a->run_verdict) {
         if (a->standing)

@@ -11,7 +11,9 @@
  *  4. heap allocations inside push/tick after setup, counted by wrapping
  *     malloc/calloc/realloc/free (forwarded to glibc's __libc_* functions).
  *  5. the acceptance policy alone (offer + every verdict), lib/engine/accept.c
- *     against the former one kept in tests/helpers/accept_ref.h.
+ *     against the former one kept in tests/helpers/accept_ref.h and the one
+ *     before its chain search was kept across verdicts (the same verdicts,
+ *     tests/helpers/accept_prev/) (alone: bench_engine --accept [REPS]).
  *  --walk PERIOD_NS: the tick table's walk ticked once, untimed, its setpoints
  *     hashed (instruction counts under callgrind, tests/bench/RESULTS.md).
  *
@@ -28,6 +30,7 @@
 
 #include "test.h"
 #include "accept.h"
+#include "accept_prev.h"
 #include "accept_ref.h"
 #include "cubic.h"
 #include "engine.h"
@@ -552,6 +555,33 @@ static double time_accept_ref(const engine_waypoint_t *w, long n, long *kept)
     return now_s() - t0;
 }
 
+/* the same with the policy before its chain search was kept across verdicts
+ * (tests/helpers/accept_prev.h: the same verdicts) */
+static double time_accept_prev(const engine_waypoint_t *w, long n, long *kept)
+{
+    accept_config_t ac;
+    accept_verdict_t v;
+    accept_prev_t *a;
+    double t0, t;
+    accept_cfg_default(&ac);
+    a = accept_prev_new(&ac);
+    if (!a)
+        return NAN;
+    *kept = 0;
+    t0 = now_s();
+    for (long i = 0; i < n; i++) {
+        accept_prev_offer(a, &w[i]);
+        while (accept_prev_decide(a, i == n - 1, &v))
+            *kept += v.kind != ACCEPT_DROP;
+    }
+    t = now_s() - t0;
+    accept_prev_free(a);
+    return t;
+}
+
+/* runs of each policy over each track in bench_accept, the best taken */
+static int accept_reps = 5;
+
 /* ns per waypoint of the acceptance policy alone, former and current, best
  * of 5 interleaved: the rough walk of the streaming table (white-noise
  * velocity, so profile auto refuses about 1 in 10) and a clean circle */
@@ -572,22 +602,26 @@ static void bench_accept(void)
         circle[i].pos_m[2] = 0;
     }
     printf("acceptance policy alone (accept_offer + accept_decide, default profile auto), ns per "
-           "waypoint, %d waypoints, best of 5 interleaved, same run:\n"
-           "| track | kept | previous (tests/helpers/accept_ref.h) | lib/engine/accept.c | x "
-           "previous |\n|---|---|---|---|---|\n",
-           N);
+           "waypoint, %d waypoints, best of %d interleaved, same run:\n"
+           "| track | kept | previous (tests/helpers/accept_ref.h) | before its chain search "
+           "was kept (tests/helpers/accept_prev/) | lib/engine/accept.c | x previous | x before "
+           "|\n|---|---|---|---|---|---|---|\n",
+           N, accept_reps);
     for (int t = 0; t < 2; t++) {
-        double best_ref = 1e30, best_new = 1e30;
-        long kept_ref = 0, kept_new = 0;
-        for (int rep = 0; rep < 5; rep++) {
+        double best_ref = 1e30, best_prev = 1e30, best_new = 1e30;
+        long kept_ref = 0, kept_prev = 0, kept_new = 0;
+        for (int rep = 0; rep < accept_reps; rep++) {
             double r = time_accept_ref(tracks[t], N, &kept_ref);
+            double p = time_accept_prev(tracks[t], N, &kept_prev);
             double c = time_accept(tracks[t], N, &kept_new);
             best_ref = r < best_ref ? r : best_ref;
+            best_prev = p < best_prev ? p : best_prev;
             best_new = c < best_new ? c : best_new;
         }
-        printf("| %s | %ld%s | %.0f | %.0f | %.2f |\n", names[t], kept_new,
+        printf("| %s | %ld%s%s | %.0f | %.0f | %.0f | %.2f | %.2f |\n", names[t], kept_new,
                kept_new == kept_ref ? "" : " (issue 27's rules: not the former's)",
-               best_ref * 1e9 / N, best_new * 1e9 / N, best_ref / best_new);
+               kept_new == kept_prev ? "" : " (NOT the same as before: a bug)", best_ref * 1e9 / N,
+               best_prev * 1e9 / N, best_new * 1e9 / N, best_ref / best_new, best_prev / best_new);
     }
     printf("\n");
 }
@@ -726,6 +760,12 @@ int main(int argc, char **argv)
     }
     if (argc > 1 && strcmp(argv[1], "--errors") == 0) {
         fo_table(0);
+        return 0;
+    }
+    if (argc > 1 && strcmp(argv[1], "--accept") == 0) {
+        if (argc > 2)
+            accept_reps = atoi(argv[2]) > 0 ? atoi(argv[2]) : 1;
+        bench_accept(); /* the acceptance policy alone, the first table (REPS, default 5) */
         return 0;
     }
     if (argc > 1 && strcmp(argv[1], "--hold") == 0) {
