@@ -8,6 +8,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "engine_settings.h"
@@ -104,24 +105,25 @@ obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o, char *wh
     obj_t *q = core_obj_find(prev, o->name);
     if (!q || !q->engine || bounds_refuse(q, o, why, len))
         return NULL;
-    double cap0 = q->cfg->engine.cap_speed_m_s, cap1 = o->engine.cap_speed_m_s;
-    if (cap0 < cap1 || cap0 > cap1) { /* its engine keeps the old one */
-        if (why && moving_engine(q))
-            snprintf(why, len,
-                     "its safety_max_speed_m_s changed, which its engine keeps (%g -> %g m/s "
-                     "of output speed, 0: none)",
-                     cap0, cap1);
-        return NULL;
-    }
-    cap0 = q->cfg->engine.cap_accel_m_s2;
-    cap1 = o->engine.cap_accel_m_s2;
-    if (cap0 < cap1 || cap0 > cap1) {
-        if (why && moving_engine(q))
-            snprintf(why, len,
-                     "its safety_max_accel_m_s2 changed, which its engine keeps (%g -> %g m/s^2 "
-                     "of output acceleration, 0: none)",
-                     cap0, cap1);
-        return NULL;
+    /* the safety bounds its engine keeps (engine.h cap_*): the old ones */
+    static const struct {
+        const char *key, *what;
+        size_t off;
+    } caps[] = {
+        {"safety_max_speed_m_s", "m/s of output speed", offsetof(engine_config_t, cap_speed_m_s)},
+        {"safety_max_accel_m_s2", "m/s^2 of output acceleration",
+         offsetof(engine_config_t, cap_accel_m_s2)},
+    };
+    for (size_t i = 0; i < sizeof caps / sizeof caps[0]; i++) {
+        double cap0, cap1;
+        memcpy(&cap0, (const char *)&q->cfg->engine + caps[i].off, sizeof cap0);
+        memcpy(&cap1, (const char *)&o->engine + caps[i].off, sizeof cap1);
+        if (cap0 < cap1 || cap0 > cap1) {
+            if (why && moving_engine(q))
+                snprintf(why, len, "its %s changed, which its engine keeps (%g -> %g %s, 0: none)",
+                         caps[i].key, cap0, cap1, caps[i].what);
+            return NULL;
+        }
     }
     if (!engine_config_same(&q->cfg->engine, &o->engine))
         return NULL;

@@ -11,74 +11,32 @@ kept and passed exactly, their timing yields), so the monitor never holds it.  W
   - every streamed row on the curve through every waypoint: scipy's CubicSpline with zero
     end velocities (ends = rest) at the row's t_s, within 1e-4 m;
   - the output took longer than the track (4/3 of it at least, less the rest ends).
+(tests/helpers/cap_circle.py has the common ones.)
 Before, the engine planned the circle at 4 m/s and the monitor held the object on the first
 row above 3 m/s (a step to rest), until clear: exit 75.
 Run with Debian's /usr/bin/python3; BUILD is the build directory.
 """
-import csv
-import math
 import os
-import subprocess
 import sys
-import tempfile
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
-BUILD = os.environ.get("BUILD", "build")
-TRAJD = os.path.join(BUILD, "bin", "trajd")
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "helpers"))
+import cap_circle  # noqa: E402
+from cap_circle import check  # noqa: E402
+
 BOUND = 3.0
-FAILED = []
-
-
-def check(ok, what):
-    print(("ok   " if ok else "FAIL ") + what)
-    if not ok:
-        FAILED.append(what)
 
 
 def main():
-    t = np.arange(401) * 0.1
-    x, y = 20 * np.cos(0.2 * t), 20 * np.sin(0.2 * t)
-    with tempfile.TemporaryDirectory() as tmp:
-        track = os.path.join(tmp, "circle.csv")
-        with open(track, "w") as f:
-            f.write("t,x,y,z\n")
-            for k in range(len(t)):
-                f.write("%r,%r,%r,0\n" % (t[k], x[k], y[k]))
-        out = os.path.join(tmp, "a.csv")
-        conf = os.path.join(tmp, "trajd.conf")
-        with open(conf, "w") as f:
-            f.write("[daemon]\nrate_hz = 100\nspeed = 20\nexit_when_done = yes\n"
-                    "status_interval_s = 0\n[object.a]\ninput = replay\nreplay.track = %s\n"
-                    "output = csv\ncsv.path = %s\nsafety_max_speed_m_s = %g\n"
-                    % (track, out, BOUND))
-        p = subprocess.run([TRAJD, "-f", "-c", conf], capture_output=True, text=True,
-                           timeout=300)
-        with open(out) as f:
-            rows = [r for r in csv.DictReader(f) if not r["object"].startswith("#")]
-    flags = np.array([int(r["flags"]) for r in rows])
-    check(p.returncode == 0 and not (flags & 0x20).any(),
-          "trajd: exit %d, %d setpoints held by the safety monitor"
-          % (p.returncode, int((flags & 0x20).astype(bool).sum())))
-    check(rows[-1]["state"] == "finished"
-          and math.hypot(float(rows[-1]["x_m"]) - x[-1], float(rows[-1]["y_m"]) - y[-1]) < 1e-6,
-          "ends at rest on the last waypoint (%s at %s, %s)"
-          % (rows[-1]["state"], rows[-1]["x_m"], rows[-1]["y_m"]))
-    now = np.array([int(r["now_ns"]) * 1e-9 for r in rows])
-    pos = np.array([[float(r["x_m"]), float(r["y_m"])] for r in rows])
+    t, _, _ = cap_circle.circle()
+    p, rows = cap_circle.run("safety_max_speed_m_s = %g\n" % BOUND)
+    now, pos, st = cap_circle.check_common(p, rows)
     ok = np.isfinite(pos).all(axis=1)
     step = np.diff(now)
     fd = np.hypot(*np.diff(pos, axis=0).T) / np.where(step > 0, step, np.inf)
     fd = fd[ok[1:] & ok[:-1] & (np.abs(step - 0.01) < 1e-9)]
     check(fd.max() <= BOUND, "row-to-row speed at most %.4f m/s, bound %g" % (fd.max(), BOUND))
-    ref = CubicSpline(t, np.c_[x, y], bc_type="clamped")
-    st = np.array([r["state"] == "streaming" and not int(r["flags"]) & 8 for r in rows])
-    ts = np.array([float(r["t_s"]) for r in rows])
-    dev = np.hypot(*(pos[st] - ref(ts[st])).T)
-    check(st.sum() > 1000 and dev.max() < 1e-4,
-          "%d streamed rows on scipy's spline through every waypoint, worst %.2e m"
-          % (st.sum(), dev.max()))
     moving = now[st]
     check(moving[-1] - moving[0] > (4.0 / BOUND) * 0.95 * (t[-1] - 2.0),
           "played in %.1f s, the track lasts %.1f s" % (moving[-1] - moving[0], t[-1]))
@@ -86,4 +44,4 @@ def main():
 
 if __name__ == "__main__":
     main()
-    sys.exit(1 if FAILED else 0)
+    sys.exit(1 if cap_circle.FAILED else 0)
