@@ -153,7 +153,11 @@ writable = yes
                 self.assertEqual(rc, 0, out)
                 # Clear it (mbpoll writes holding register 100 = 3), and the
                 # state register shows waiting once the boat has braked to
-                # rest along its path (a controlled stop: bounded wait).
+                # rest along its path (a controlled stop: bounded wait).  The
+                # replay goes on, so the boat may set off again to its live
+                # track (a transfer that leads: lib/engine/transfer.h) within
+                # a few waypoints, 20 ms at speed 10: a poll may miss the rest,
+                # which the CSV then shows (below).
                 rc, _, out = mbpoll(d.port, "-r", str(base + M["MBMAP_H_COMMAND"]), "-t", "4",
                                     write=[M["MBMAP_CMD_CLEAR"]])
                 self.assertEqual(rc, 0, out)
@@ -161,7 +165,7 @@ writable = yes
                     rc, v, out = mbpoll(d.port, "-r", str(base + M["MBMAP_O_STATE"]), "-t", "3")
                     if v == ["0"]:
                         break
-                self.assertEqual(v, ["0"], out)
+                polled_rest = v == ["0"]
             finally:
                 self.assertEqual(d.stop(), 0, "".join(d.log))
             rows = read_csv(os.path.join(tmp, "boat.csv"))
@@ -172,6 +176,12 @@ writable = yes
                 return abs(a - b) <= 5e-6 * max(abs(a), abs(b)) + 1e-30
             match = [r for r in rows if all(close(f32(float(r[c])), g) for c, g in zip(cols, got))]
             self.assertTrue(match, "mbpoll floats %s are no CSV row" % got)
+            # the clear's rest: after streaming, a waiting row at rest (never
+            # before the clear: the track runs on)
+            first = next(i for i, r in enumerate(rows) if r["state"] == "streaming")
+            rest = [r for r in rows[first:] if r["state"] == "waiting"
+                    and all(float(r[c]) == 0.0 for c in cols[3:6])]
+            self.assertTrue(polled_rest or rest, "no rest after the clear")
 
 
 class FeedTest(unittest.TestCase):
