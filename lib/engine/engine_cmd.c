@@ -153,6 +153,7 @@ int engine_halt(engine_t *e, const double pos_m[ENGINE_AXES])
     e->scale.stop_req = STOP_NONE;
     e->scale.drop_n = 0;
     e->out.mode = OUT_HOLD;
+    e->xfer.lead = 0; /* a transfer that led is given up with the rest */
     e->out.finished = 0;
     e->out.underrun = 0;
     e->scale.end_brake = 0;
