@@ -482,7 +482,9 @@ void scale_clocked_step(engine_t *e, double R, double A, double J);
 /* ---- transfers (engine_xfer.c) ---- */
 
 double xfer_duration(const engine_t *e, const double *target, double gap_s, int *capped);
-void xfer_start(engine_t *e, const double *target, double gap_s);
+/* lead_t_s: the track time of the start it leads to (transfer.h "Lead"),
+ * NAN for a transfer to a start due now. */
+void xfer_start(engine_t *e, const double *target, double gap_s, double lead_t_s);
 void xfer_track_time(engine_t *e);
 /* issue 26: the start of the input's newest trajectory, where a resting
  * output that is not there may move before that trajectory's output is due

@@ -475,6 +475,15 @@ static inline void step_kept(engine_t *e)
         fast_bound(e); /* past a re-seed */
 }
 
+/* A transfer from rest begins (xfer_start), its first tick made scaled. */
+static void begin_xfer(engine_t *e, const double *target, double gap_s, double lead_t_s)
+{
+    xfer_start(e, target, gap_s, lead_t_s);
+    scale_rest(e);
+    e->out.n++;
+    scale_eval(e);
+}
+
 /* One tick of the output state machine. */
 static void step_once(engine_t *e)
 {
@@ -492,12 +501,7 @@ static void step_once(engine_t *e)
             if (xfer_lead_target(e, target, &t0, &gap)) {
                 /* issue 26: on to its start while its output is not due */
                 play_unit_reset(e);
-                xfer_start(e, target, gap);
-                e->xfer.lead = 1;
-                e->xfer.to_t = t0;
-                scale_rest(e);
-                e->out.n++;
-                scale_eval(e);
+                begin_xfer(e, target, gap, t0);
                 return;
             }
             play_hold_here(e);
@@ -534,10 +538,7 @@ static void step_once(engine_t *e)
         play_unit_reset(e);
         engine_delay_note(e, lag); /* issue 26: the D this start holds */
         if (xfer) {
-            xfer_start(e, target, h->gap_s);
-            scale_rest(e);
-            e->out.n++;
-            scale_eval(e);
+            begin_xfer(e, target, h->gap_s, NAN);
         } else {
             if (!e->clk.on)
                 scale_rest(e);

@@ -94,7 +94,7 @@ int xfer_lead_target(const engine_t *e, double *target, double *t0_s, double *ga
         const double *r = e->solve.node_r + 0; /* node 0 (nr), read only */
         for (int k = 0; k < AX; k++)
             target[k] = r[k];
-        *t0_s = e->solve.node_t[0];
+        *t0_s = nt(e, 0);
         *gap_s = e->in.gap_s;
     }
     double d2 = 0;
@@ -104,15 +104,15 @@ int xfer_lead_target(const engine_t *e, double *target, double *t0_s, double *ga
 }
 
 /* Start a transfer from the output position to target (transfer.h). */
-void xfer_start(engine_t *e, const double *target, double gap_s)
+void xfer_start(engine_t *e, const double *target, double gap_s, double lead_t_s)
 {
     int capped = 0;
     double dur = xfer_duration(e, target, gap_s, &capped);
 
     memset(&e->out.cur, 0, sizeof(e->out.cur));
     e->xfer.from_t = e->out.track ? e->out.t : NAN;
-    e->xfer.lead = 0;
-    e->xfer.to_t = NAN;
+    e->xfer.lead = isfinite(lead_t_s);
+    e->xfer.to_t = lead_t_s;
     e->out.cur.kind = QE_SEG;
     transfer_segment(&e->out.cur.seg, out_pos(e), target, dur);
     e->out.cur.vmax = solve_seg_speed_max(&e->out.cur.seg);

@@ -19,6 +19,7 @@ With delay_s set, the output is held that far behind, and a delay_s shorter
 than the settings need is refused with the numbers.
 """
 import csv
+import importlib.util
 import io
 import math
 import os
@@ -61,6 +62,16 @@ def gap_track(tmp):
     t = np.where(np.arange(len(t)) >= 300, t + 300.0, t)
     write_track(path, t, x, y)
     return path, x, y
+
+
+def bench_delay():
+    """tests/bench/bench_delay.py as a module: the tracks its tables are measured on."""
+    spec = importlib.util.spec_from_file_location(
+        "bench_delay", os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "bench",
+                                    "bench_delay.py"))
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
 
 
 def stop_s(v):
@@ -443,16 +454,7 @@ class TestLagWonBack(unittest.TestCase):
         transfer's and the lookahead's wait not won back in 40 s)."""
         with tempfile.TemporaryDirectory() as tmp:
             path = os.path.join(tmp, "gaps.csv")
-            t, x, y = track(400)
-            tt, xx, yy = [], [], []
-            ox = oy = 0.0
-            for k in range(6):
-                tt.append(55.0 * k + t)
-                xx.append(x + ox)
-                yy.append(y + oy)
-                ox += x[-1] - x[0] + 3.0
-                oy += y[-1] - y[0]
-            write_track(path, np.concatenate(tt), np.concatenate(xx), np.concatenate(yy))
+            write_track(path, *bench_delay().gap_track())
             p = replay(path)
             self.assertEqual(p.returncode, 0, p.stderr)
             s = replay_summary.parse(p.stderr)
