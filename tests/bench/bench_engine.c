@@ -344,6 +344,31 @@ static double best_chunk_ns;
 /* runs of each bench_ticks, the best taken (bench_engine --ticks REPS) */
 static int tick_reps = 5;
 
+/* An engine at period_ns with 4000 waypoints of the walk (every 0.1 s)
+ * pushed and its input finished: what bench_ticks and bench_walk tick.  No
+ * acceleration limit (issue 27's profile limit): the walk's white-noise
+ * velocity would cap the rate of most segments (their speed cap,
+ * seg_ceiling), and every tick would look through the thousands of capped
+ * segments queued ahead (scale_ceil_room). */
+static engine_t *walk_engine(int64_t period_ns)
+{
+    engine_config_t c;
+    engine_config_default(&c);
+    c.capacity = 8192;
+    c.period_ns = period_ns;
+    c.max_accel_m_s2 = 0;
+    engine_t *e = engine_new(&c, NULL);
+    engine_waypoint_t w = {0};
+    double pos[3] = {0, 0, 0};
+    unsigned seed = 5;
+    for (long i = 0; i < 4000; i++) {
+        walk_wp(&w, i, 0.1, &seed, pos);
+        engine_push(e, &w);
+    }
+    engine_finish(e);
+    return e;
+}
+
 /* ns per engine_tick while streaming a prefilled walk (waypoints every
  * 0.1 s), best of tick_reps. */
 static double bench_ticks(int64_t period_ns)
@@ -351,24 +376,7 @@ static double bench_ticks(int64_t period_ns)
     double best = 1e30, sink = 0;
     best_chunk_ns = 1e30;
     for (int rep = 0; rep < tick_reps; rep++) {
-        engine_config_t c;
-        engine_config_default(&c);
-        c.capacity = 8192;
-        c.period_ns = period_ns;
-        /* no acceleration limit (issue 27's profile limit): the walk's
-         * white-noise velocity would cap the rate of most segments (their
-         * speed cap, seg_ceiling), and every tick would look through the
-         * thousands of capped segments queued ahead (scale_ceil_room) */
-        c.max_accel_m_s2 = 0;
-        engine_t *e = engine_new(&c, NULL);
-        engine_waypoint_t w = {0};
-        double pos[3] = {0, 0, 0};
-        unsigned seed = 5;
-        for (long i = 0; i < 4000; i++) {
-            walk_wp(&w, i, 0.1, &seed, pos);
-            engine_push(e, &w);
-        }
-        engine_finish(e);
+        engine_t *e = walk_engine(period_ns);
         engine_setpoint_t sp;
         long n = 0;
         double t0 = now_s(), tc = t0;
@@ -399,20 +407,7 @@ static double bench_ticks(int64_t period_ns)
  * 10000000) and a check that two builds give the same outputs. */
 static void bench_walk(int64_t period_ns)
 {
-    engine_config_t c;
-    engine_config_default(&c);
-    c.capacity = 8192;
-    c.period_ns = period_ns;
-    c.max_accel_m_s2 = 0; /* as bench_ticks */
-    engine_t *e = engine_new(&c, NULL);
-    engine_waypoint_t w = {0};
-    double pos[3] = {0, 0, 0};
-    unsigned seed = 5;
-    for (long i = 0; i < 4000; i++) {
-        walk_wp(&w, i, 0.1, &seed, pos);
-        engine_push(e, &w);
-    }
-    engine_finish(e);
+    engine_t *e = walk_engine(period_ns);
     engine_setpoint_t sp;
     uint64_t h = 1469598103934665603u;
     long n = 0;
