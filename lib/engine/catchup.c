@@ -137,7 +137,7 @@ int engine_lag_pending(const engine_t *e)
      * short of the band met a decision that steered at the next tick
      * (fuzz_lifecycle, engine_plain_check) */
     double lag = lag_now(e, &d);
-    return lag < 0.0 || lag > 0.0 ? fabs(lag) + e->period_s > band_on(e, &d) : 0;
+    return lag < 0.0 || lag > 0.0 ? fabs(lag) + 2.0 * e->period_s > band_on(e, &d) : 0;
 }
 
 double engine_lag_target(engine_t *e, double target, double R, double A, double J)
@@ -150,7 +150,15 @@ double engine_lag_target(engine_t *e, double target, double R, double A, double 
         return target;
     }
     engine_delay_t d;
-    double T = e->period_s, told = lag_of(e, &d, 0);
+    /* read before this tick's step (step_once: the output's track time is
+     * still the last tick's): the lag once the step is made, at the rate
+     * the output runs at; read as it was, the output was steered a tick
+     * closer than D (the 10 Hz track of tests/e2e/test_delay.py stood
+     * 2.537 s behind its D of 2.546 s after its catch-up) */
+    double T = e->period_s, at = e->scale.on ? e->scale.ts.rate : 1.0;
+    double told = lag_of(e, &d, 0);
+    if (told < 0.0 || told > 0.0)
+        told -= at * T;
     /* told whether steered or not: a closed trajectory played behind its D
      * (its input came while a long transfer crossed a gap) said lag 0 */
     e->st.lag_s = told;

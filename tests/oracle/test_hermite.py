@@ -531,7 +531,7 @@ def test_low_latency_delay():
     the slack; 1: the segment's own and the slack, each fix kept as it comes) plus a
     jerk-limited stop from the track's top chord speed v, v/(2a) + a/(2j) (closed form,
     a = scale_accel_m_s2 5, j = scale_jerk_m_s3 50), plus the 2 ticks of margin; the issue's
-    3.5 intervals + v/(2a) is 9 ms less than what --max-lookahead 2 measures
+    3.5 intervals + v/(2a) is 14 ms less than what --max-lookahead 2 measures
     (lib/engine/DESIGN.md).  --max-lookahead 1 trails by one interval less, and every
     waypoint is on the streamed curve (scipy's CubicSpline through the streamed rows
     around it, within 1e-6 m)."""
