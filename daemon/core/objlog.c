@@ -203,7 +203,7 @@ static void log_delay_grown(obj_t *o)
     o->grown_logged = n;
     if (!obj_log_nth(n))
         return;
-    obj_log_delay(o, "its input's intervals or top speed grew: ");
+    obj_log_delay(o, "its input's intervals, top speed or arrival jitter grew: ");
 }
 
 /* A new trajectory begun where nothing continued the current one (engine

@@ -76,6 +76,15 @@ void engine_lag_note(engine_t *e, int64_t now_ns)
     if (!l->have || off > offset_at(e, now_ns)) {
         l->off_s = off;
         l->off_at_ns = now_ns;
+    } else if (!l->ahead) {
+        /* later than the least-delayed sample says: the arrivals' jitter,
+         * beyond the period its tick rounds an arrival to; the slack holds
+         * it in time (delay.h), D grows to it */
+        double late = offset_at(e, now_ns) - off - e->period_s;
+        if (late > l->jit_s) {
+            l->jit_s = late;
+            engine_delay_grow(e);
+        }
     }
     l->have = 1;
     l->seen_ns = now_ns;

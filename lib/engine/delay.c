@@ -144,7 +144,14 @@ int engine_delay_format(const engine_delay_t *d, char *buf, size_t len)
     if (d->method >= ENGINE_METHOD_HERMITE)
         snprintf(m, sizeof m, " (method %s)",
                  engine_setting_enum_name(engine_setting_find("method"), d->method));
-    if (d->interval_s > 0)
+    if (d->interval_s > 0 && d->jitter_s > 0)
+        snprintf(need, sizeof need,
+                 "lookahead %u x %.3g s%s + slack %.3f s (arrivals up to %.3f s late, %u "
+                 "intervals learnt) + stop reserve %.3f s (from %.3g m/s)",
+                 d->lookahead_n, d->interval_s, m, d->slack_s, d->jitter_s,
+                 (unsigned)llround((d->slack_s - d->jitter_s) / d->interval_s), d->stop_s,
+                 d->speed_m_s);
+    else if (d->interval_s > 0)
         snprintf(need, sizeof need,
                  "lookahead %u x %.3g s%s + slack %u x %.3g s + stop reserve %.3f s (from %.3g "
                  "m/s)",

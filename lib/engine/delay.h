@@ -18,7 +18,13 @@
  *                       (tests/unit/test_jitter.c), not a hole; a fix lost
  *                       or refused where the fragments need the most
  *                       lookahead is one underrun, and the slack then holds
- *                       one waypoint more
+ *                       one waypoint more.  In time, not only in waypoints
+ *                       (start_slack auto): where the arrivals come later
+ *                       than the least-delayed one says by more than the
+ *                       least slack (J, measured: catchup.c, beyond a period
+ *                       of tick rounding), the least slack is J; D grows to
+ *                       it as it is seen (engine_delay_grow), and the
+ *                       intervals learnt from underruns come on top
  *       + B             stop reserve: the curve kept solved ahead of the
  *                       output so that, should the input stop, the time
  *                       scaling brings it to rest on data: a stop from rate
@@ -53,7 +59,9 @@ typedef struct {
     unsigned lookahead_n; /* L + 1: intervals of lookahead */
     unsigned slack_n;     /* S: intervals of jitter slack */
     double lookahead_s;   /* (L + 1) h */
-    double slack_s;       /* S h */
+    double slack_s;       /* S h, or J + (S - S_min) h where the arrivals' jitter J
+                             is more than S_min h (start_slack auto) */
+    double jitter_s;      /* J, where it sets the slack (else 0) */
     double stop_s;        /* B */
     double need_s;        /* (L + 1) h + S h + B: what the settings need */
     double delay_s;       /* D: need_s, or delay_s when set (>= need_s then) */

@@ -311,6 +311,8 @@ typedef struct {
     int64_t first_ns;  /* ... and when it came */
     int ahead;         /* the trajectory's stamps came ahead of time (an upload) */
     int steer;         /* winning back (or giving back) a lag */
+    double jit_s;      /* the latest an arrival came after the least-delayed sample said
+                          (beyond a period: catchup.h), over the object's life */
 } engine_lag_t;
 
 struct engine {

@@ -269,7 +269,7 @@ int canproto_dbc(char *buf, size_t len)
          "CM_ SG_ %u ST2_Underruns \"page 7: transitions into underrun (the newest waypoint "
          "passed before the next came)\";\n"
          "CM_ SG_ %u ST2_DelayGrown \"page 7: the delay D stated anew, longer (the input's "
-         "intervals or top speed grew beyond what D was sized for)\";\n"
+         "intervals, top speed or arrival jitter grew beyond what D was sized for)\";\n"
          "CM_ SG_ %u ST2_TransfersMoving \"page 7: re-anchors joined moving: the output met the "
          "new trajectory's curve without braking to rest\";\n"
          "CM_ SG_ %u ST2_ReserveSlowed \"page 7: slowdowns of an object faster than the speed "

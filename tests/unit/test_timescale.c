@@ -269,9 +269,11 @@ static void test_property_random_stalls(void **state)
     print_message("12 runs: %ld scaled ticks, %ld underruns; worst dv/T %.2f of the "
                   "accel limit, da/T %.2f of the jerk limit\n",
                   scaled, underruns, worst_dv, worst_da);
-    /* the property was exercised: the scaling acted, and underruns happened */
+    /* the property was exercised: the scaling acted, and underruns happened
+     * (3: the sender's pauses come late, and the slack holds the lateness it
+     * has measured, delay.h; 4 while it learnt an interval per underrun) */
     assert_true(scaled > 1000);
-    assert_true(underruns > 3);
+    assert_true(underruns >= 3);
 }
 
 /*
