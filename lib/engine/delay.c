@@ -39,9 +39,21 @@ void engine_delay_parts(const engine_config_t *r, unsigned la, double interval_s
                         engine_delay_t *d)
 {
     memset(d, 0, sizeof *d);
-    d->slack_n = r->start_slack == ENGINE_AUTO ? engine_cfg_slack_min(r) : r->start_slack;
-    d->lookahead_n = la - (d->slack_n < la ? d->slack_n : la) + 1;
     d->interval_s = interval_s > 0 && isfinite(interval_s) ? interval_s : 0.0;
+    if (r->start_slack == ENGINE_AUTO && engine_cfg_local(r)) {
+        /* the local methods (issue 31): the lookahead (the acceptance's
+         * verdict in it) and a slack in time, an interval at most
+         * ENGINE_DELAY_TICKS periods (delay.h) */
+        d->lookahead_n = la;
+        d->slack_ticks = ENGINE_DELAY_TICKS;
+        d->slack_s = ENGINE_DELAY_TICKS * (double)r->period_ns * 1e-9;
+        if (d->interval_s > 0 && d->interval_s < d->slack_s)
+            d->slack_s = d->interval_s;
+    } else {
+        d->slack_n = r->start_slack == ENGINE_AUTO ? engine_cfg_slack_min(r) : r->start_slack;
+        d->lookahead_n = la - (d->slack_n < la ? d->slack_n : la) + 1;
+        d->slack_s = d->slack_n * d->interval_s;
+    }
     if (!(speed_m_s > 0)) {
         speed_m_s = engine_config_max_speed(r);
         if (!(speed_m_s > 0))
@@ -49,7 +61,6 @@ void engine_delay_parts(const engine_config_t *r, unsigned la, double interval_s
     }
     d->speed_m_s = speed_m_s;
     d->lookahead_s = d->lookahead_n * d->interval_s;
-    d->slack_s = d->slack_n * d->interval_s;
     d->stop_s = engine_delay_stop_s(r, speed_m_s);
     d->need_s = d->lookahead_s + d->slack_s + d->stop_s;
     d->delay_s = r->delay_s > d->need_s ? r->delay_s : d->need_s;
@@ -70,10 +81,10 @@ int engine_delay_check(const engine_config_t *cfg, double interval_s, char *why,
         snprintf(why, whylen,
                  "delay_s %g s is shorter than the settings need: %.3g s = stop reserve %.3g s "
                  "(from %g m/s at scale_accel_m_s2 %g) + %u input intervals (lookahead %u, "
-                 "slack %u)%s; raise delay_s, or lower max_speed_m_s",
+                 "slack %u)%s%s; raise delay_s, or lower max_speed_m_s",
                  cfg->delay_s, d.need_s, d.stop_s, d.speed_m_s, cfg->scale_accel_m_s2,
                  d.lookahead_n + d.slack_n, d.lookahead_n, d.slack_n,
-                 d.interval_s > 0 ? "" : " x the interval");
+                 d.interval_s > 0 ? "" : " x the interval", d.slack_ticks ? " + a few ticks" : "");
     return -ENGINE_ECONFIG;
 }
 
@@ -137,33 +148,41 @@ int engine_underrun_format(const engine_status_t *st, char *buf, size_t len)
 
 int engine_delay_format(const engine_delay_t *d, char *buf, size_t len)
 {
-    char need[280];
+    char need[320], slack[120];
     /* the local methods (issue 31) are named: max_lookahead may have picked
      * them (the settings table's names) */
     char m[48] = "";
     if (d->method >= ENGINE_METHOD_HERMITE)
         snprintf(m, sizeof m, " (method %s)",
                  engine_setting_enum_name(engine_setting_find("method"), d->method));
-    if (d->interval_s > 0 && d->jitter_s > 0)
+    if (d->slack_ticks) { /* in time: ticks, the arrivals' lateness, intervals learnt */
+        int n = snprintf(slack, sizeof slack, "slack %.3f s (an interval, at most %u ticks",
+                         d->slack_s, d->slack_ticks);
+        if (d->jitter_s > 0 && n > 0 && (size_t)n < sizeof slack)
+            n += snprintf(slack + n, sizeof slack - (size_t)n, ", arrivals up to %.3f s late",
+                          d->jitter_s);
+        if (d->slack_n && n > 0 && (size_t)n < sizeof slack)
+            n += snprintf(slack + n, sizeof slack - (size_t)n, ", %u intervals learnt", d->slack_n);
+        if (n > 0 && (size_t)n < sizeof slack)
+            snprintf(slack + n, sizeof slack - (size_t)n, ")");
+    } else if (d->interval_s > 0 && d->jitter_s > 0) {
+        snprintf(slack, sizeof slack,
+                 "slack %.3f s (arrivals up to %.3f s late, %u intervals learnt)", d->slack_s,
+                 d->jitter_s, (unsigned)llround((d->slack_s - d->jitter_s) / d->interval_s));
+    } else {
+        snprintf(slack, sizeof slack, "slack %u x %.3g s", d->slack_n, d->interval_s);
+    }
+    if (d->interval_s > 0)
         snprintf(need, sizeof need,
-                 "lookahead %u x %.3g s%s + slack %.3f s (arrivals up to %.3f s late, %u "
-                 "intervals learnt) + stop reserve %.3f s (from %.3g m/s)",
-                 d->lookahead_n, d->interval_s, m, d->slack_s, d->jitter_s,
-                 (unsigned)llround((d->slack_s - d->jitter_s) / d->interval_s), d->stop_s,
-                 d->speed_m_s);
-    else if (d->interval_s > 0)
-        snprintf(need, sizeof need,
-                 "lookahead %u x %.3g s%s + slack %u x %.3g s + stop reserve %.3f s (from %.3g "
-                 "m/s)",
-                 d->lookahead_n, d->interval_s, m, d->slack_n, d->interval_s, d->stop_s,
-                 d->speed_m_s);
+                 "lookahead %u x %.3g s%s + %s + stop reserve %.3f s (from %.3g m/s)",
+                 d->lookahead_n, d->interval_s, m, slack, d->stop_s, d->speed_m_s);
     else
         snprintf(need, sizeof need,
-                 "%u input intervals (lookahead %u%s, slack %u) + stop reserve at most %.3f s "
+                 "%u input intervals (lookahead %u%s, slack %u)%s + stop reserve at most %.3f s "
                  "(from the speed limit, %.3g m/s; the input's own top speed sets it once "
                  "waypoints come)",
-                 d->lookahead_n + d->slack_n, d->lookahead_n, m, d->slack_n, d->stop_s,
-                 d->speed_m_s);
+                 d->lookahead_n + d->slack_n, d->lookahead_n, m, d->slack_n,
+                 d->slack_ticks ? " + a few ticks" : "", d->stop_s, d->speed_m_s);
     if (d->delay_s > d->need_s)
         return snprintf(buf, len, "D %.3f s (delay_s; the settings need %s)", d->delay_s, need);
     if (d->interval_s > 0)

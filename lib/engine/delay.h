@@ -24,7 +24,15 @@
  *                       least slack (J, measured: catchup.c, beyond a period
  *                       of tick rounding), the least slack is J; D grows to
  *                       it as it is seen (engine_delay_grow), and the
- *                       intervals learnt from underruns come on top
+ *                       intervals learnt from underruns come on top.
+ *                       The local methods (issue 31, start_slack auto):
+ *                       D = L h + the slack in time + B, L their whole
+ *                       lookahead (the acceptance's verdict in it), the
+ *                       slack an interval, at most ENGINE_DELAY_TICKS
+ *                       periods, plus J and the intervals learnt: at the
+ *                       low-latency end a whole interval would be a third
+ *                       of D (tests/oracle/test_hermite.py
+ *                       test_low_latency_delay)
  *       + B             stop reserve: the curve kept solved ahead of the
  *                       output so that, should the input stop, the time
  *                       scaling brings it to rest on data: a stop from rate
@@ -39,7 +47,12 @@
  * the top speed measured so far, or bends harder: the limits are converted
  * at its speed bound), the start's wait plus that loss is D, and the part
  * stated as B is that loss (delay_run.c delay_started): 0.833 s on the
- * 10 Hz track of tests/e2e/test_delay.py, where B is 0.646 s.  With delay_s set (engine_config_t), D is delay_s: it must be at
+ * 10 Hz track of tests/e2e/test_delay.py, where B is 0.646 s.  Not for the
+ * local methods: there the excess is a lag the catch-up wins back (their
+ * new curve is solved an interval or two behind its waypoints, so a live
+ * re-anchor joins moving at their D too; the fragments' needs the
+ * lookahead that the excess holds, LIFECYCLE.md).  With delay_s set
+ * (engine_config_t), D is delay_s: it must be at
  * least what the settings need (engine_delay_check).  On the caller's clock
  * (engine_set_clock) D is the clock's, and a start's ramp is a lag the clock
  * wins back (CLOCK.md "Behind"), not a longer D.
@@ -53,11 +66,22 @@
 
 #include "engine.h"
 
+/* start_slack auto with a local method (issue 31): the slack's least is an
+ * input interval, but at most this many output periods: beyond them the
+ * slack is what the arrivals measure (J) and the underruns teach.  An
+ * arrival is taken at the first tick after it, and the braking for the end
+ * of the solved curve is decided a tick ahead with TS_MARGIN_TICKS and the
+ * rises of the limits ahead in hand: 2 periods fall short (the output slows
+ * for the reserve on the regular 10 Hz tracks of tests/oracle/test_hermite.py
+ * and tests/e2e/test_delay.py at --max-lookahead 1 and 2). */
+#define ENGINE_DELAY_TICKS 3u
+
 typedef struct {
     double interval_s;    /* h: the input's interval (0: unknown) */
     double speed_m_s;     /* v: the top speed the stop reserve is for */
     unsigned lookahead_n; /* L + 1: intervals of lookahead */
-    unsigned slack_n;     /* S: intervals of jitter slack */
+    unsigned slack_n;     /* S: intervals of jitter slack (the local methods: learnt) */
+    unsigned slack_ticks; /* the local methods with start_slack auto: ENGINE_DELAY_TICKS */
     double lookahead_s;   /* (L + 1) h */
     double slack_s;       /* S h, or J + (S - S_min) h where the arrivals' jitter J
                              is more than S_min h (start_slack auto) */

@@ -33,12 +33,21 @@ static void delay_at(const engine_t *e, double h, engine_delay_t *d)
      * resolved again at every tick that asks */
     engine_delay_parts(&e->cfg, e->lookahead, h, e->solve.vmax_in, d);
     unsigned least = engine_cfg_slack_min(&e->cfg);
-    if (e->slack_auto)
+    if (e->slack_auto && d->slack_ticks) {
+        /* the local methods' slack in time (issue 31): the ticks of
+         * rounding, the arrivals' lateness (J, catchup.c) and the
+         * intervals learnt from underruns */
+        if (!e->clk.on)
+            d->jitter_s = e->lag.jit_s;
+        d->slack_n = e->slack_learn;
+        d->slack_s += d->jitter_s + e->slack_learn * d->interval_s;
+    } else if (e->slack_auto) {
         d->slack_n = least + e->slack_learn;
-    d->slack_s = d->slack_n * d->interval_s;
+        d->slack_s = d->slack_n * d->interval_s;
+    }
     /* the slack in time: arrivals later than the least slack holds (J,
      * catchup.c) make J the least slack, the intervals learnt on top */
-    if (e->slack_auto && !e->clk.on && e->lag.jit_s > least * d->interval_s) {
+    if (e->slack_auto && !d->slack_ticks && !e->clk.on && e->lag.jit_s > least * d->interval_s) {
         d->jitter_s = e->lag.jit_s;
         d->slack_s = d->jitter_s + e->slack_learn * d->interval_s;
     }
@@ -163,7 +172,7 @@ static void delay_started(const engine_t *e, engine_delay_t *d, double *lag, dou
      * "Behind"), not a longer D: age_s returns to the clock's D */
     if (e->clk.on)
         return;
-    if (counted || waited + loss > d->delay_s + 0.5 * d->interval_s) {
+    if (counted || (!d->slack_ticks && waited + loss > d->delay_s + 0.5 * d->interval_s)) {
         /* the wait the lookahead needs plus the ramp exceed D (by more than
          * the half interval a start is rounded to): D is that */
         d->delay_s = waited + loss;

@@ -108,14 +108,17 @@ static void replay(const engine_waypoint_t *rows, int n, engine_status_t *st, in
 }
 
 /* The bad row of kind after fix site, replayed (replay): 0 if it alone is
- * refused, every good fix kept, with no underrun and no hard stop, to the
- * end; else 1, with a line (label before it).  *st: the status. */
-static int bad_fix_run(const char *label, int kind, int site, engine_status_t *st)
+ * refused, every good fix kept, with at most under_ok underruns and no hard
+ * stop, to the end; else 1, with a line (label before it).  *st: the
+ * status. */
+static int bad_fix_run_ok(const char *label, int kind, int site, uint64_t under_ok,
+                          engine_status_t *st)
 {
     static engine_waypoint_t rows[N_FIX + 1];
     int fin, n = build(rows, site, kind);
     replay(rows, n, st, &fin);
-    if (!st->underruns && st->accepted == N_FIX && st->rejected == 1 && !st->hard_stops && fin)
+    if (st->underruns <= under_ok && st->accepted == N_FIX && st->rejected == 1 &&
+        !st->hard_stops && fin)
         return 0;
     print_message("%s%s after fix %d: accepted %llu rejected %llu underruns %llu hard stops %llu "
                   "finished %d\n",
@@ -123,6 +126,11 @@ static int bad_fix_run(const char *label, int kind, int site, engine_status_t *s
                   (unsigned long long)st->rejected, (unsigned long long)st->underruns,
                   (unsigned long long)st->hard_stops, fin);
     return 1;
+}
+
+static int bad_fix_run(const char *label, int kind, int site, engine_status_t *st)
+{
+    return bad_fix_run_ok(label, kind, site, 0, st);
 }
 
 static void test_one_bad_fix_costs_nothing(void **state)
@@ -156,7 +164,12 @@ static void test_one_bad_fix_costs_nothing(void **state)
  * fragment period is moot here: no fragments) must still be refused alone,
  * every good fix kept, with no underrun and no hard stop: a bad row waits
  * for its neighbour as before, and the good fix after it, judged against
- * the anchor, is kept as it arrives.
+ * the anchor, is kept as it arrives.  But for the jump: its row is stamped
+ * an interval after the good fix that follows it in the file, so that fix
+ * (replayed in file order) arrives an interval late, and the local
+ * methods' slack is in time (lib/engine/delay.h ENGINE_DELAY_TICKS, issue
+ * 31): one underrun, after which D holds an interval more (start_slack
+ * auto learns it).
  */
 static void test_at_arrival_one_bad_fix(void **state)
 {
@@ -167,7 +180,7 @@ static void test_at_arrival_one_bad_fix(void **state)
     for (int kind = 0; kind < K_COUNT; kind++)
         for (int site = 40; site < 46; site++) {
             engine_status_t st;
-            bad += bad_fix_run("max_lookahead 1, ", kind, site, &st);
+            bad += bad_fix_run_ok("max_lookahead 1, ", kind, site, kind == K_JUMP, &st);
         }
     replay_max_lookahead = 0;
     assert_int_equal(bad, 0);
