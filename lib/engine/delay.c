@@ -67,6 +67,22 @@ void engine_delay_parts(const engine_config_t *r, unsigned la, double interval_s
     d->method = (int)r->method;
 }
 
+unsigned engine_lookahead_for_delay(const engine_config_t *cfg, double interval_s, double speed_m_s)
+{
+    engine_delay_t d;
+    if (!(cfg->delay_s > 0) || !(interval_s > 0))
+        return cfg->max_lookahead;
+    for (unsigned la = cfg->max_lookahead; la >= 1; la--) {
+        engine_config_t c = *cfg;
+        c.max_lookahead = la;
+        c.delay_s = 0.0; /* the need alone */
+        if (engine_config_check(&c, NULL) == 0 &&
+            engine_delay_of(&c, interval_s, speed_m_s, &d) == 0 && d.need_s <= cfg->delay_s)
+            return la;
+    }
+    return cfg->max_lookahead;
+}
+
 int engine_delay_check(const engine_config_t *cfg, double interval_s, char *why, size_t whylen)
 {
     engine_delay_t d;

@@ -108,6 +108,13 @@ int engine_delay_of(const engine_config_t *cfg, double interval_s, double speed_
 void engine_delay_parts(const engine_config_t *r, unsigned la, double interval_s, double speed_m_s,
                         engine_delay_t *d);
 
+/* The max_lookahead delay_s picks (engine_input.c engine_pick): of 1 ..
+ * cfg->max_lookahead, the longest whose need (delay_s aside) at interval_s
+ * and speed_m_s is within cfg->delay_s; cfg->max_lookahead itself where
+ * delay_s is 0, the interval unknown or none fits. */
+unsigned engine_lookahead_for_delay(const engine_config_t *cfg, double interval_s,
+                                    double speed_m_s);
+
 /* The stop reserve alone: B above for top speed v (>= 1 m/s is used). */
 double engine_delay_stop_s(const engine_config_t *cfg, double speed_m_s);
 

@@ -39,10 +39,74 @@
 #include "lsq.h"
 #include "transfer.h"
 
+int engine_setup(engine_t *e, const engine_config_t *cfg)
+{
+    size_t ring = 16;
+    unsigned la = engine_cfg_lookahead(cfg);
+    /* the slack must fit the buffer: capacity >= lookahead + F + 8 (checked) */
+    unsigned room = cfg->capacity - (la + cfg->fragment + 8);
+    unsigned more = ENGINE_SLACK_AUTO_MAX - engine_cfg_slack_min(cfg);
+    if (room < more)
+        more = room;
+    /* nodes from the oldest unbuilt segment (lags the newest by the lookahead
+     * plus the copies of MULTIPLE) to the newest, with margin */
+    while (ring < 2 * ((size_t)cfg->fragment + la + more) + 16)
+        ring *= 2;
+    /* each accepted waypoint yields at most one segment (the C2 local
+     * methods three), each trajectory one END: twice (four times) the
+     * capacity always fits */
+    size_t qcap = (engine_cfg_local(cfg) >= 3 ? 4 : 2) * (size_t)cfg->capacity + 8;
+    double *nt = calloc(ring, sizeof(double)), *nr = calloc(ring * AX, sizeof(double));
+    double *nv = calloc(ring * AX, sizeof(double)), *na = calloc(ring * AX, sizeof(double));
+    unsigned char *nk = calloc(ring, 1);
+    frag_t *fw = frag_new(cfg->fragment, cfg->overlap, engine_cfg_frag_delta(cfg), ring);
+    qent_t *qe = calloc(qcap, sizeof(qent_t));
+    size_t *qs = calloc(qcap, sizeof(size_t));
+    if (!nt || !nr || !nv || !na || !nk || !fw || !qe || !qs) {
+        free(nt), free(nr), free(nv), free(na), free(nk), frag_free(fw), free(qe), free(qs);
+        return -1;
+    }
+    free(e->solve.node_t), free(e->solve.node_r), free(e->solve.node_v), free(e->solve.node_a);
+    free(e->solve.node_vk), frag_free(e->solve.fw), free(e->queue.ent), free(e->queue.slow);
+    e->solve.node_t = nt, e->solve.node_r = nr, e->solve.node_v = nv, e->solve.node_a = na;
+    e->solve.node_vk = nk, e->solve.fw = fw, e->queue.ent = qe, e->queue.slow = qs;
+    e->solve.ring = ring;
+    e->queue.cap = qcap;
+
+    e->cfg = *cfg;
+    e->lookahead = la;
+    e->la_steady = engine_cfg_steady_lookahead(cfg) + engine_cfg_smooth_extra(cfg);
+    e->slack_auto = cfg->start_slack == ENGINE_AUTO;
+    e->slack_more = more;
+    e->pstar = engine_cfg_uses_pstar(cfg);
+    e->held = cfg->ends == ENGINE_ENDS_HELD || cfg->ends == ENGINE_ENDS_MULTIPLE;
+    e->mult = cfg->ends == ENGINE_ENDS_MULTIPLE;
+    e->smooth = cfg->method == ENGINE_METHOD_SMOOTH;
+    e->axis_lim = solve_cfg_axis_limited(cfg);
+    e->axis_jerk = engine_cfg_axis_jerk(cfg);
+    e->axis_accel = solve_cfg_axis_accel(cfg);
+    e->local = engine_cfg_local(cfg);
+    accept_config_t ac = {
+        .max_speed_m_s = engine_config_max_speed(cfg),
+        .max_accel_m_s2 = engine_config_max_accel(cfg),
+        .max_gap_s = cfg->max_gap_s,
+        .learned = cfg->profile == ENGINE_PROFILE_AUTO,
+        .stale = cfg->profile != ENGINE_PROFILE_MACHINE && cfg->profile != ENGINE_PROFILE_NONE,
+        .window = cfg->start_slack < ACCEPT_WINDOW_MAX ? cfg->start_slack : ACCEPT_WINDOW_MAX,
+        .confirm = cfg->confirm,
+        .rules = ACCEPT_RULES_OF(cfg->profile == ENGINE_PROFILE_NONE), /* accept.h */
+        .at_arrival = engine_cfg_accept_lag(cfg) == 0, /* max_lookahead 1 (issue 31) */
+    };
+    if (ac.window < ac.confirm)
+        ac.window = ac.confirm;
+    accept_init(&e->in.policy, &ac);
+    e->st.lookahead = la;
+    return 0;
+}
+
 engine_t *engine_new(const engine_config_t *cfg_in, int *err)
 {
     engine_t *e;
-    size_t ring = 16;
     engine_config_t r;
     const engine_config_t *cfg = &r;
 
@@ -52,27 +116,12 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
         return NULL;
     }
     e = calloc(1, sizeof(*e));
-    if (!e)
+    if (!e || engine_setup(e, cfg) < 0)
         goto nomem;
-    e->cfg = *cfg;
-    e->lookahead = engine_cfg_lookahead(cfg);
-    e->la_steady = engine_cfg_steady_lookahead(cfg) + engine_cfg_smooth_extra(cfg);
-    e->slack_auto = cfg->start_slack == ENGINE_AUTO;
-    {
-        /* the slack must fit the buffer: capacity >= lookahead + F + 8 (checked) */
-        unsigned room = cfg->capacity - (e->lookahead + cfg->fragment + 8);
-        e->slack_more = ENGINE_SLACK_AUTO_MAX - engine_cfg_slack_min(cfg);
-        if (room < e->slack_more)
-            e->slack_more = room;
-    }
-    e->pstar = engine_cfg_uses_pstar(cfg);
-    e->held = cfg->ends == ENGINE_ENDS_HELD || cfg->ends == ENGINE_ENDS_MULTIPLE;
-    e->mult = cfg->ends == ENGINE_ENDS_MULTIPLE;
-    e->smooth = cfg->method == ENGINE_METHOD_SMOOTH;
-    e->axis_lim = solve_cfg_axis_limited(cfg);
-    e->axis_jerk = engine_cfg_axis_jerk(cfg);
-    e->axis_accel = solve_cfg_axis_accel(cfg);
-    e->local = engine_cfg_local(cfg);
+    /* delay_s set: its lookahead is picked from the first waypoints
+     * (engine_input.c engine_pick) */
+    e->pick.pending = cfg_in->delay_s > 0 && !e->smooth;
+    e->pick.asked = *cfg_in;
     if (e->smooth) {
         e->solve.sm_mem = calloc(lsq_smooth_mem_len(cfg->smooth_window, cfg->smooth_ctrl, AX),
                                  sizeof(double));
@@ -82,22 +131,6 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
     }
     e->period_s = (double)cfg->period_ns * 1e-9;
     e->period_lo = cfg->period_ns - cfg->period_ns / 2;
-    {
-        accept_config_t ac = {
-            .max_speed_m_s = engine_config_max_speed(cfg),
-            .max_accel_m_s2 = engine_config_max_accel(cfg),
-            .max_gap_s = cfg->max_gap_s,
-            .learned = cfg->profile == ENGINE_PROFILE_AUTO,
-            .stale = cfg->profile != ENGINE_PROFILE_MACHINE && cfg->profile != ENGINE_PROFILE_NONE,
-            .window = cfg->start_slack < ACCEPT_WINDOW_MAX ? cfg->start_slack : ACCEPT_WINDOW_MAX,
-            .confirm = cfg->confirm,
-            .rules = ACCEPT_RULES_OF(cfg->profile == ENGINE_PROFILE_NONE), /* accept.h */
-            .at_arrival = engine_cfg_accept_lag(cfg) == 0, /* max_lookahead 1 (issue 31) */
-        };
-        if (ac.window < ac.confirm)
-            ac.window = ac.confirm;
-        accept_init(&e->in.policy, &ac);
-    }
     e->xfer.cfg.speed_m_s = cfg->transfer_speed_m_s;
     e->xfer.cfg.accel_m_s2 = cfg->transfer_accel_m_s2;
     e->xfer.cfg.max_s = cfg->max_gap_s;
@@ -110,27 +143,6 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
     }
     e->xfer.cfg.period_s = e->period_s;
     transfer_motion_reset(&e->xfer.motion);
-    /* nodes from the oldest unbuilt segment (lags the newest by the lookahead
-     * plus the copies of MULTIPLE) to the newest, with margin */
-    while (ring < 2 * ((size_t)cfg->fragment + e->lookahead + e->slack_more) + 16)
-        ring *= 2;
-    e->solve.ring = ring;
-    e->solve.node_t = calloc(ring, sizeof(double));
-    e->solve.node_r = calloc(ring * AX, sizeof(double));
-    e->solve.node_v = calloc(ring * AX, sizeof(double));
-    e->solve.node_a = calloc(ring * AX, sizeof(double));
-    e->solve.node_vk = calloc(ring, 1);
-    e->solve.fw = frag_new(cfg->fragment, cfg->overlap, engine_cfg_frag_delta(cfg), ring);
-    /* each accepted waypoint yields at most one segment (the C2 local
-     * methods three), each trajectory one END: twice (four times) the
-     * capacity always fits */
-    e->queue.cap = (e->local >= 3 ? 4 : 2) * (size_t)cfg->capacity + 8;
-    e->queue.ent = calloc(e->queue.cap, sizeof(qent_t));
-    e->queue.slow = calloc(e->queue.cap, sizeof(size_t));
-    if (!e->solve.node_t || !e->solve.node_r || !e->solve.node_v || !e->solve.node_a ||
-        !e->solve.node_vk || !e->solve.fw || !e->queue.ent || !e->queue.slow)
-        goto nomem;
-    e->st.lookahead = e->lookahead;
     engine_status_underrun_none(&e->st);
     e->scale.ts.rate = 1.0;
     e->scale.stop_dv = -1.0; /* set by each scaled tick */

@@ -329,7 +329,11 @@ typedef struct {
                                measured on the input); above 0, the output is
                                held this far behind the newest waypoint
                                (engine_delay_check refuses less than the
-                               settings need) */
+                               settings need), and max_lookahead is the most
+                               lookahead the solver may take: the longest up
+                               to it whose D fits within delay_s at the
+                               interval of the first waypoints is taken
+                               (engine_input.c engine_pick, issue 31) */
     /* Per-axis limits (issue 32), each x, y, z; 0 = that axis free (the
      * default).  The time scaling slows the output along its path so that
      * |v_k| <= axis_max_speed_m_s[k], |a_k| <= axis_max_accel_m_s2[k] and the

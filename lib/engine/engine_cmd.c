@@ -18,6 +18,8 @@ static void drop_input(engine_t *e)
     e->st.dropped += (uint64_t)(e->solve.nodes - e->solve.seg_next) +
                      (e->smooth ? (uint64_t)lsq_smooth_pending(&e->solve.sm) : 0);
     e->st.unjudged += accept_pending(&e->in.policy); /* no verdict: not accepted */
+    e->st.unjudged += e->pick.n; /* held for delay_s's pick (engine_pick): not judged */
+    e->pick.n = 0;
     accept_reset(&e->in.policy);
     e->in.open = 0;
     e->solve.nodes = 0;

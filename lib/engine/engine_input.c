@@ -38,7 +38,7 @@ size_t input_buffered(const engine_t *e)
     size_t q = e->local >= 3 ? (n + 2) / 3 : n;
     return q + (size_t)(e->solve.nodes - e->solve.seg_next) +
            (e->smooth ? (size_t)lsq_smooth_pending(&e->solve.sm) : 0) +
-           accept_pending(&e->in.policy);
+           accept_pending(&e->in.policy) + e->pick.n;
 }
 
 /* Close the input trajectory: its last segments and END entry (the solver). */
@@ -254,6 +254,19 @@ int engine_waypoint_check(const engine_config_t *cfg, const engine_waypoint_t *w
     return 0;
 }
 
+/* A waypoint that passed the checks to the acceptance, and its verdicts. */
+static int offer(engine_t *e, const engine_waypoint_t *wp)
+{
+    int rc = accept_offer(&e->in.policy, wp);
+    if (rc == ENGINE_DUPLICATE) {
+        e->st.duplicates++;
+        return ENGINE_DUPLICATE;
+    }
+    if (rc < 0)
+        return reject(e, -rc); /* cannot happen: judge() empties the window below */
+    return judge(e, 0);
+}
+
 int engine_push(engine_t *e, const engine_waypoint_t *wp)
 {
     int rc = engine_waypoint_check(&e->cfg, wp);
@@ -269,18 +282,63 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
     engine_repeat_taken(&e->in.full);
     engine_silence_push(e, wp);  /* issue 26: its arrival (silence.h) */
     engine_lag_push(e, wp->t_s); /* ... and a sample of the sender's time (catchup.h) */
-    rc = accept_offer(&e->in.policy, wp);
-    if (rc == ENGINE_DUPLICATE) {
-        e->st.duplicates++;
-        return ENGINE_DUPLICATE;
+    if (e->pick.pending) {       /* held until the lookahead is picked (engine_pick) */
+        if (!e->pick.n)
+            e->pick.first_ns = INT64_MIN; /* (the next tick's) */
+        e->pick.wp[e->pick.n++] = *wp;
+        if (e->pick.n < ENGINE_PICK_N)
+            return 0;
+        engine_pick_flush(e);
+        return 0; /* (each held one's verdict is counted as it is given) */
     }
-    if (rc < 0)
-        return reject(e, -rc); /* cannot happen: judge() empties the window below */
-    return judge(e, 0);
+    return offer(e, wp);
+}
+
+/*
+ * delay_s set (issue 31: "max_lookahead = 1 and 2, or the matching
+ * delay_s, pick them"): max_lookahead is the most lookahead the solver may
+ * take; of the lookaheads up to it, the longest whose D (delay.h) fits
+ * within delay_s at the input's interval, read from its first
+ * ENGINE_PICK_N waypoints (the longest of their intervals), and with the
+ * stop reserve at the speed limit in force (as engine_delay_check sizes it:
+ * a delay_s is accepted only where that fits), is taken: a fragment size,
+ * or a local method where none
+ * fits (engine_config_resolve).  Those waypoints are held for it (their
+ * arrivals, samples of the sender's time and of its silence, noted as they
+ * came) and then offered in turn; where none fits, or on one clock (the
+ * clock's D), the configuration stays as it was.  Done once, before any
+ * waypoint is judged, so that nothing the setup makes anew holds anything.
+ */
+static void engine_pick(engine_t *e)
+{
+    double h = 0.0;
+    for (unsigned i = 1; i < e->pick.n; i++)
+        h = fmax(h, e->pick.wp[i].t_s - e->pick.wp[i - 1].t_s);
+    if (!(h > 0) || e->clk.on)
+        return;
+    engine_config_t c = e->pick.asked, r;
+    c.max_lookahead = engine_lookahead_for_delay(&c, h, 0.0);
+    if (c.max_lookahead == e->pick.asked.max_lookahead || engine_config_check(&c, NULL) < 0 ||
+        engine_config_resolve(&c, &r) < 0)
+        return;
+    (void)engine_setup(e, &r); /* out of memory: as it was */
+}
+
+void engine_pick_flush(engine_t *e)
+{
+    if (!e->pick.pending)
+        return;
+    e->pick.pending = 0;
+    engine_pick(e);
+    unsigned n = e->pick.n;
+    e->pick.n = 0;
+    for (unsigned i = 0; i < n; i++)
+        (void)offer(e, &e->pick.wp[i]); /* counted there, as at a push */
 }
 
 int engine_finish(engine_t *e)
 {
+    engine_pick_flush(e);
     if (e->out.und_pending)
         play_underrun_counted(e); /* the output ran short before the end was told */
     int rj = judge(e, 1);

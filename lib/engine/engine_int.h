@@ -34,6 +34,9 @@
  * engine_delay_grow): its upper quartile, where a hole of a few lost fixes is
  * an outlier and a sender that slows down is not. */
 #define ENGINE_IV_RING 64
+/* delay_s set: the waypoints the input's interval and speed are read from
+ * before the lookahead is picked (engine_pick) */
+#define ENGINE_PICK_N 3
 
 enum { QE_SEG = 0, QE_END = 1 };
 
@@ -352,6 +355,13 @@ struct engine {
     engine_delay_state_t delay;
     engine_silence_t sil;
     engine_lag_t lag;
+    struct {                   /* delay_s picks the lookahead (engine_input.c engine_pick) */
+        int pending;           /* the first waypoints are held for it */
+        unsigned n;            /* held */
+        int64_t first_ns;      /* the tick time the first of them came by */
+        engine_config_t asked; /* the caller's configuration, unresolved */
+        engine_waypoint_t wp[ENGINE_PICK_N];
+    } pick;
 
     engine_status_t st;
 };
@@ -392,6 +402,13 @@ int engine_cfg_uses_pstar(const engine_config_t *cfg);
 /* Waypoints held anywhere between engine_push and the queue, and entries
  * queued: what the capacity counts. */
 size_t input_buffered(const engine_t *e);
+/* engine.c: (re)make what the resolved configuration r implies (the solver's
+ * rings, the fragment window, the queue, the acceptance policy) for an engine
+ * that has taken no waypoint; 0, or -1 (out of memory: e unchanged). */
+int engine_setup(engine_t *e, const engine_config_t *r);
+/* engine_input.c: the held waypoints offered, the lookahead picked first
+ * where delay_s asks (engine_pick); at once by a finish, a clear, a halt */
+void engine_pick_flush(engine_t *e);
 
 /* ---- solver and queue (engine_solve.c) ---- */
 

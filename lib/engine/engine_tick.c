@@ -852,6 +852,18 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
             kept_tick(e, now_ns, sp); /* a re-seed, or the test hook */
         return 0;
     }
+    if (__builtin_expect(e->pick.n != 0, 0)) {
+        /* the waypoints held for delay_s's pick (engine_input.c) wait for
+         * the rest of them no longer than the silence that would end their
+         * trajectory waits at least (silence.h: SILENCE_INTERVALS times its
+         * interval; one alone, max_gap_s) */
+        double h = e->pick.n >= 2 ? e->pick.wp[1].t_s - e->pick.wp[0].t_s : 0.0;
+        double wait = h > 0 ? fmin(SILENCE_INTERVALS * h, e->cfg.max_gap_s) : e->cfg.max_gap_s;
+        if (e->pick.first_ns == INT64_MIN)
+            e->pick.first_ns = now_ns;
+        else if ((double)(now_ns - e->pick.first_ns) * 1e-9 > wait)
+            engine_pick_flush(e);
+    }
     if (e->out.have_now) {
         /* ticks on the period grid since the last call (rounded) */
         if ((uint64_t)d - (uint64_t)e->period_lo < (uint64_t)p) {

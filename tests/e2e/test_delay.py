@@ -171,6 +171,47 @@ class TestDelayStated(unittest.TestCase):
                                  "steady %.4f vs delay_s %g" % (np.median(d), want))
             self.assertEqual(s["underruns"], 0)
 
+    def test_delay_s_picks_the_lookahead(self):
+        """Issue 31: "max_lookahead = 1 and 2 (or the matching delay_s) pick them".  With
+        delay_s set, max_lookahead is the most the solver may take: of the lookaheads up to it
+        the longest whose need fits within delay_s, at the interval of the first waypoints and
+        the stop reserve at the speed limit (6 m/s here: 0.6 s + a/2j 0.05 s + 2 ticks), is
+        taken (lib/engine/engine_input.c engine_pick).  Worked out here: a local method needs
+        its lookahead L intervals + 0.03 s of slack + that reserve (0.1 L + 0.70 s), the
+        fragments at the default accuracy at least 16 intervals + the reserve (2.27 s).  The
+        output then stands at delay_s, with no underrun, and every waypoint on its curve.
+        On the old code --delay 0.9 kept the fragments and stood at 2.73 s."""
+        t, x, y = track()
+        stop6 = 6.0 / (2 * A) + A / (2 * J) + 2 * T
+        for want, method in ((0.8, "hermite-c2"), (0.9, "hermite-c2"),
+                             (1.0, "hermite-c2-centred"), (2.0, "hermite-c2-centred"),
+                             (3.0, "cubic")):
+            p = replay(self.path, "--max-speed", "6", "--delay", "%g" % want)
+            self.assertEqual(p.returncode, 0, p.stderr)
+            s = replay_summary.parse(p.stderr)
+            self.assertEqual(s["method"], method, "delay_s %g" % want)
+            self.assertAlmostEqual(s["delay_s"], want, places=9)
+            self.assertLessEqual(s["delay_lookahead_s"] + s["delay_slack_s"] + stop6, want + 1e-9)
+            d = steady_delays(p.stdout, 20.0, 55.0)
+            self.assertLessEqual(abs(np.median(d) - want), H,
+                                 "delay_s %g: steady %.4f" % (want, np.median(d)))
+            self.assertEqual(s["underruns"], 0)
+            self.assertEqual(s["accepted"], len(t))
+            rows = list(csv.DictReader(io.StringIO(p.stdout)))
+            ts = np.array([float(r["t_s"]) for r in rows if r["state"] == "streaming"])
+            xy = np.array([[float(r["x_m"]), float(r["y_m"])] for r in rows
+                           if r["state"] == "streaming"])
+            # the rows are the curve at t_s: a waypoint between two of them is within the
+            # chord's sag of a C2 curve at 10 ms (|k''| <= 2.5 m/s^2 here: 3e-5 m)
+            worst = 0.0
+            for k in range(50, 550):
+                j = int(np.searchsorted(ts, t[k]))
+                if 0 < j < len(ts) and ts[j] > ts[j - 1]:
+                    f = (t[k] - ts[j - 1]) / (ts[j] - ts[j - 1])
+                    at = xy[j - 1] + f * (xy[j] - xy[j - 1])
+                    worst = max(worst, float(np.hypot(at[0] - x[k], at[1] - y[k])))
+            self.assertLess(worst, 1e-4, "delay_s %g: a waypoint %.2g m off the curve" % (want, worst))
+
     def test_delay_s_shorter_than_the_settings_need_is_refused(self):
         # a stop from the profile's 400 m/s at 5 m/s^2 alone takes 40 s
         p = replay(self.path, "--delay", "2")

@@ -858,13 +858,15 @@ class DelayMeasured(unittest.TestCase):
                 return bench.measure(exe, track, opts, tmp)
             text = flat("lib/engine/DESIGN.md")
             text = text[text.index("**The delay measured**"):text.index("**Forward differences.**")]
-            one, ten, raised, median, held = grab(text, (
-                r"\+(\S+) s at 1 Hz, \+(\S+) s at 10 Hz with `--delay`.*D is raised to the need "
-                r"\((\S+) s\).*\(median (\S+) s\); with `--capacity 8192` the steady delay is (\S+) s"))
+            one, ten, method, picked, median, held = grab(text, (
+                r"\+(\S+) s at 1 Hz, \+(\S+) s at 10 Hz with `--delay`.*the longest lookahead that "
+                r"fits \(`(\S+)`, D (\S+) s;.*\(median (\S+) s\); with `--capacity 8192` the steady "
+                r"delay is (\S+) s"))
             for shown, d in ((one, m("1 Hz")), (ten, m("10 Hz", "--max-speed", "10", "--delay", "5"))):
                 # the difference of the table's two columns, as rounded there
                 self.assertEqual("%.3f" % (float("%.3f" % d["steady"]) - float("%.3f" % d["D"])), shown)
-            self.assertEqual("%.3f" % m("1 Hz", "--max-speed", "10", "--delay", "5")["D"], raised)
+            p = m("1 Hz", "--max-speed", "10", "--delay", "5")
+            self.assertEqual((p["method"], "%.3f" % p["D"]), (method, picked))
             self.assertEqual("%.3f" % m("200 Hz", "--max-speed", "10", "--delay", "25")["steady"], median)
             self.assertEqual("%.3f" % m("200 Hz", "--max-speed", "10", "--delay", "25", "--capacity",
                                         "8192")["steady"], held)

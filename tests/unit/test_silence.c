@@ -346,6 +346,91 @@ static void test_delay_of_config(void **state)
     assert_int_equal(engine_delay_check(&c, 0.0, why, sizeof why), 0);
 }
 
+/* a 10 Hz line at 5 m/s along x, waypoint i */
+static void line_wp(engine_waypoint_t *w, int i)
+{
+    memset(w, 0, sizeof *w);
+    w->t_s = 0.1 * i;
+    w->pos_m[0] = 0.5 * i;
+}
+
+/*
+ * delay_s picks the lookahead (engine_input.c engine_pick, issue 31): given
+ * delay_s 0.9 s and max_speed_m_s 6, when a 10 Hz line comes, then its first
+ * 3 waypoints are held (buffered, not judged yet) and then the local method
+ * whose D fits is taken (max_lookahead 2: 2 intervals + 0.03 s + a stop from
+ * 6 m/s, 0.67 s = 0.9 s), every waypoint kept and D stated at delay_s; a
+ * clear while waypoints are held drops them as unjudged (and the next ones
+ * are held for the pick as before); a finish with fewer held offers them
+ * (a two-waypoint trajectory plays); without delay_s nothing is held.
+ */
+static void test_delay_s_picks_lookahead(void **state)
+{
+    (void)state;
+    engine_config_t c;
+    engine_config_default(&c);
+    c.max_speed_m_s = 6.0;
+    c.delay_s = 0.9;
+    for (int mode = 0; mode < 3; mode++) {
+        int err = -1;
+        engine_t *e = engine_new(&c, &err);
+        assert_non_null(e);
+        engine_setpoint_t sp;
+        engine_status_t st;
+        engine_waypoint_t w;
+        int n = mode == 2 ? 2 : 100, cleared = 0;
+        for (int64_t k = 0; k < 2000; k++) {
+            if (k % 10 == 0 && k / 10 < n) {
+                line_wp(&w, (int)(k / 10));
+                assert_int_equal(engine_push(e, &w), 0);
+                engine_status(e, &st);
+                if (k / 10 < 2) /* held: buffered, no verdict yet */
+                    assert_int_equal(st.accepted, 0);
+                if (k / 10 == n - 1 && mode == 2)
+                    assert_int_equal(engine_finish(e), 0);
+            }
+            if (mode == 1 && k == 15 && !cleared) { /* two held */
+                engine_clear(e);
+                engine_status(e, &st);
+                assert_int_equal(st.unjudged, 2);
+                cleared = 1;
+            }
+            assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+        }
+        engine_status(e, &st);
+        engine_delay_t d;
+        engine_delay(e, &d);
+        print_message("mode %d: accepted %llu, method %d, D %.3f s, underruns %llu\n", mode,
+                      (unsigned long long)st.accepted, d.method, d.delay_s,
+                      (unsigned long long)st.underruns);
+        if (mode == 0) {
+            assert_int_equal(st.accepted, 100);
+            assert_int_equal(d.method, ENGINE_METHOD_HERMITE_C2);
+            assert_true(fabs(d.delay_s - 0.9) < 1e-9);
+            assert_int_equal(st.underruns, 0);
+        } else if (mode == 1) {
+            assert_int_equal(st.accepted, 98); /* the two before the clear: unjudged */
+        } else {
+            assert_int_equal(st.accepted, 2);
+            assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+        }
+        engine_free(e);
+    }
+    /* without delay_s: nothing held, the default solver */
+    c.delay_s = 0;
+    int err = -1;
+    engine_t *e = engine_new(&c, &err);
+    engine_waypoint_t w;
+    engine_status_t st;
+    line_wp(&w, 0);
+    assert_int_equal(engine_push(e, &w), 0);
+    line_wp(&w, 1);
+    assert_int_equal(engine_push(e, &w), 0);
+    engine_status(e, &st);
+    assert_int_equal(st.buffered, 2);
+    engine_free(e);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -357,6 +442,7 @@ int main(void)
         cmocka_unit_test(test_no_silent_end_while_regular),
         cmocka_unit_test(test_delay_stated),
         cmocka_unit_test(test_delay_of_config),
+        cmocka_unit_test(test_delay_s_picks_lookahead),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
