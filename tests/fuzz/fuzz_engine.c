@@ -242,6 +242,8 @@ static void configure(engine_config_t *c, uint8_t b0, uint8_t b1)
         }
         c->max_lag_s = (b1 & 0x40) ? 2 : 0;
     }
+    if (b1 & 0x80) /* issue 31: delay_s picks the lookahead from the first waypoints */
+        c->delay_s = (b0 & 0x20) ? 1.0 : 4.0;
     engine_config_t r; /* fragment auto (case 6): the one resolved */
     unsigned f = engine_config_resolve(c, &r) == 0 ? r.fragment : c->fragment;
     c->capacity = engine_lookahead(c) + f + 8 + ((b1 >> 4) & 7);
