@@ -624,7 +624,8 @@ static qent_t *q_from_tail(engine_t *e, size_t k)
  * estimate, so the curve ended moving, and the output braked before its
  * end and stood short of the last waypoint (2.3 cm on a line at 1 m/s,
  * 0.13 m on the bundled figure-8: tests/oracle/test_hermite.py
- * test_ends_on_last_waypoint).  While that segment is still queued, whole,
+ * test_ends_on_last_waypoint; and a trajectory of two waypoints, whose one
+ * segment is its last: 3.2 cm of 0.5 m).  While that segment is still queued, whole,
  * it is built again with the trajectory's end condition at the last node
  * (as the centred methods have it there: rest, clamped, or natural; the
  * acceleration 0), and queued in its place.  Not where the output already
@@ -640,7 +641,7 @@ static void local_end(engine_t *e)
     double v1[AX], a1[AX] = {0, 0, 0};
     fdiff_seg_t seg[3];
 
-    if (e->local % 2 == 0 || e->solve.nodes < 3 || !e->solve.tail.valid ||
+    if (e->local % 2 == 0 || e->solve.nodes < 2 || !e->solve.tail.valid ||
         e->solve.tail.node != j || e->solve.seg_next != last || e->solve.pend ||
         e->solve.node_vk[sj] != 2)
         return;
