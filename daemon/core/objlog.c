@@ -28,7 +28,7 @@ static int obj_log_nth(uint64_t n)
 /* One line: "object 'a': <what>play-out delay D ..." (delay.h's format) of d. */
 static void obj_log_delay_of(const obj_t *o, const engine_delay_t *d, const char *what)
 {
-    char line[400];
+    char line[768];
     engine_delay_format(d, line, sizeof line);
     log_msg(LOG_INFO, "object '%s': %splay-out delay %s", o->name, what, line);
 }

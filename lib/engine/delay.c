@@ -64,6 +64,7 @@ void engine_delay_parts(const engine_config_t *r, unsigned la, double interval_s
     d->stop_s = engine_delay_stop_s(r, speed_m_s);
     d->need_s = d->lookahead_s + d->slack_s + d->stop_s;
     d->delay_s = r->delay_s > d->need_s ? r->delay_s : d->need_s;
+    d->asked_s = r->delay_s > 0 ? r->delay_s : 0.0;
     d->method = (int)r->method;
 }
 
@@ -201,6 +202,12 @@ int engine_delay_format(const engine_delay_t *d, char *buf, size_t len)
                  d->slack_ticks ? " + a few ticks" : "", d->stop_s, d->speed_m_s);
     if (d->delay_s > d->need_s)
         return snprintf(buf, len, "D %.3f s (delay_s; the settings need %s)", d->delay_s, need);
+    if (d->asked_s > 0 && d->delay_s > d->asked_s + 1e-9 && d->interval_s > 0)
+        return snprintf(buf, len,
+                        "D %.3f s (delay_s %.3g s is short of what this input needs: the "
+                        "lookahead max_lookahead allows at its interval, and a start's ramp "
+                        "from rest) = %s",
+                        d->delay_s, d->asked_s, need);
     if (d->interval_s > 0)
         return snprintf(buf, len, "D %.3f s = %s", d->delay_s, need);
     return snprintf(buf, len, "D = %s", need);

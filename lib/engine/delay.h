@@ -89,6 +89,8 @@ typedef struct {
     double stop_s;        /* B */
     double need_s;        /* (L + 1) h + S h + B: what the settings need */
     double delay_s;       /* D: need_s, or delay_s when set (>= need_s then) */
+    double asked_s;       /* delay_s as set (or the clock's D), 0 if not: D above it is
+                             what the input needs, said so (engine_delay_format) */
     int method;           /* engine_method_t resolved: the local methods' (issue 31) where
                              max_lookahead is too short for any fragment */
 } engine_delay_t;

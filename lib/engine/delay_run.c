@@ -56,6 +56,7 @@ static void delay_at(const engine_t *e, double h, engine_delay_t *d)
      * daemon's delay_s: that is this object's D, its need the parts */
     double fixed = e->clk.on ? (double)e->clk.delay_ns * 1e-9 : e->cfg.delay_s;
     d->delay_s = fixed > d->need_s ? fixed : d->need_s;
+    d->asked_s = fixed > 0 ? fixed : 0.0;
 }
 
 /* D now: the settings with the input's interval and top speed as measured

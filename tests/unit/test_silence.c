@@ -416,6 +416,38 @@ static void test_delay_s_picks_lookahead(void **state)
         }
         engine_free(e);
     }
+    /* delay_s 2.5 s on the 10 Hz track of tests/e2e/test_delay.py: the
+     * fragments at max_lookahead 17 fit the pick (2.45 s), and a REST
+     * start's ramp loses more than the stop reserve: D above delay_s, and
+     * its line says so */
+    {
+        engine_config_t c2 = c;
+        c2.delay_s = 2.5;
+        int err2 = -1;
+        engine_t *e = engine_new(&c2, &err2);
+        assert_non_null(e);
+        engine_setpoint_t sp;
+        for (int64_t k = 0; k < 6000; k++) {
+            if (k % 10 == 0) {
+                engine_waypoint_t w;
+                memset(&w, 0, sizeof w);
+                int i = (int)(k / 10);
+                w.t_s = 0.1 * i;
+                w.pos_m[0] = 10 * sin(0.05 * i);
+                w.pos_m[1] = 10 * cos(0.03 * i);
+                assert_int_equal(engine_push(e, &w), 0);
+            }
+            assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+        }
+        engine_delay_t d;
+        char line[600];
+        engine_delay(e, &d);
+        engine_delay_format(&d, line, sizeof line);
+        print_message("%s\n", line);
+        assert_true(d.delay_s > 2.5);
+        assert_non_null(strstr(line, "delay_s 2.5 s is short of what this input needs"));
+        engine_free(e);
+    }
     /* without delay_s: nothing held, the default solver */
     c.delay_s = 0;
     int err = -1;
