@@ -76,9 +76,8 @@ unsigned engine_lookahead_for_delay(const engine_config_t *cfg, double interval_
     for (unsigned la = cfg->max_lookahead; la >= 1; la--) {
         engine_config_t c = *cfg;
         c.max_lookahead = la;
-        c.delay_s = 0.0; /* the need alone */
-        if (engine_config_check(&c, NULL) == 0 &&
-            engine_delay_of(&c, interval_s, speed_m_s, &d) == 0 && d.need_s <= cfg->delay_s)
+        c.delay_s = 0.0; /* the need alone (a max_lookahead that does not resolve: none) */
+        if (engine_delay_of(&c, interval_s, speed_m_s, &d) == 0 && d.need_s <= cfg->delay_s)
             return la;
     }
     return cfg->max_lookahead;
