@@ -302,8 +302,8 @@ int engine_push(engine_t *e, const engine_waypoint_t *wp)
  * ENGINE_PICK_N waypoints (the longest of their intervals), and with the
  * stop reserve at the speed limit in force (as engine_delay_check sizes it:
  * a delay_s is accepted only where that fits), is taken: a fragment size,
- * or a local method where none
- * fits (engine_config_resolve).  Those waypoints are held for it (their
+ * or a local method where none fits (engine_config_resolve).  Those
+ * waypoints are held for it (their
  * arrivals, samples of the sender's time and of its silence, noted as they
  * came) and then offered in turn; where none fits, or on one clock (the
  * clock's D), the configuration stays as it was.  Done once, before any
