@@ -318,8 +318,9 @@ static void engine_pick(engine_t *e)
         return;
     engine_config_t c = e->pick.asked, r;
     c.max_lookahead = engine_lookahead_for_delay(&c, h, 0.0);
-    if (c.max_lookahead == e->pick.asked.max_lookahead || engine_config_check(&c, NULL) < 0 ||
-        engine_config_resolve(&c, &r) < 0)
+    /* (the candidate resolved in engine_lookahead_for_delay; the asked
+     * configuration passed engine_config_check in engine_new) */
+    if (c.max_lookahead == e->pick.asked.max_lookahead || engine_config_resolve(&c, &r) < 0)
         return;
     (void)engine_setup(e, &r); /* out of memory: as it was */
 }
