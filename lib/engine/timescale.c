@@ -2,6 +2,7 @@
 #include "timescale.h"
 
 #include <math.h>
+#include <stddef.h>
 
 /* Stopping distance from (r, 0): a symmetric S-curve.  With r >= A^2/J the
  * deceleration reaches -A (ramps of A/J each side, total time r/A + A/J),
@@ -88,7 +89,12 @@ static double release_in_time(double r, double a, double tgt, double j, double J
  * acceleration wanted for an error e is the one from which, released at
  * full jerk, the rate lands on tgt (sqrt(2 J |e|), corrected for the
  * discrete tick), at most A. */
-static double track_jerk(double r, double a, double tgt, double A, double J, double Jr, double T)
+/* *up (may be NULL): 1 if every higher tgt gives the same jerk, bit for bit:
+ * the rate rises towards tgt at the acceleration or the jerk limit, with no
+ * release due (each operation is monotonic in tgt, so a higher one is as
+ * saturated and still releases later) */
+static double track_jerk(double r, double a, double tgt, double A, double J, double Jr, double T,
+                         int *up)
 {
     double e = tgt - r, ae = fabs(e);
     double want = -0.5 * Jr * T + sqrt(0.25 * Jr * Jr * T * T + 2.0 * Jr * ae);
@@ -103,6 +109,10 @@ static double track_jerk(double r, double a, double tgt, double A, double J, dou
         j = J;
     if (j < -J)
         j = -J;
+    if (up) {
+        double a1 = a + j * T, r1 = r + a * T + 0.5 * j * T * T;
+        *up = e > 0 && (want >= A || j >= J) && !(a1 < 0) && !(r1 + a1 * a1 / (2.0 * Jr) > tgt);
+    }
     /* and no later release than lands on tgt (both directions), planned at
      * Jr, the jerk the release will have (J may be raised for this tick) */
     j = release_in_time(r, a, tgt, j, Jr, T);
@@ -209,7 +219,7 @@ double ts_step_jerk(ts_state_t *st, double target, double R, double A, double J_
 {
     double r = st->rate, a = st->acc, tgt = target, r1, a1, ds, j, Jr = J;
     J = J_now > J ? J_now : J;
-    int lim = 0, crept = 0;
+    int lim = 0, crept = 0, up = 0;
 
     /* the limits shrank (timescale.h): back within A in A/J.  Only this
      * tick's jerk is raised: what the rate will do after it (its release,
@@ -223,6 +233,7 @@ double ts_step_jerk(ts_state_t *st, double target, double R, double A, double J_
         tgt = 0;
     if (tgt > TS_RATE_MAX)
         tgt = TS_RATE_MAX;
+    double tfree = tgt; /* the target with R infinite */
     if (!isinf(R)) {
         double rm = ts_rate_max(R, A, Jr);
         if (rm < tgt) {
@@ -232,7 +243,7 @@ double ts_step_jerk(ts_state_t *st, double target, double R, double A, double J_
     }
     if (tgt < ts_dead_band(J, T))
         tgt = 0; /* dead band: a rate this low comes to rest exactly */
-    j = track_jerk(r, a, tgt, A, J, Jr, T);
+    j = track_jerk(r, a, tgt, A, J, Jr, T, lim ? &up : NULL);
     ds = integrate(r, a, j, T, &r1, &a1);
     if (!isinf(R) && r1 > 0 && ts_stop_dist(r1, a1, A, Jr) + r1 * T > R - ds) {
         /* the move would leave too little to stop: brake as hard as allowed.
@@ -240,7 +251,7 @@ double ts_step_jerk(ts_state_t *st, double target, double R, double A, double J_
          * the stop planned is continuous, the ticks are not, and a creep
          * towards the end of the solved curve reached it at 0.13 m/s (issue 27) */
         tgt = 0;
-        j = track_jerk(r, a, tgt, A, J, Jr, T);
+        j = track_jerk(r, a, tgt, A, J, Jr, T, NULL);
         ds = integrate(r, a, j, T, &r1, &a1);
         lim = 1;
         if (!(r > 0) && !(a < 0 || a > 0) && target > 0) {
@@ -284,7 +295,14 @@ double ts_step_jerk(ts_state_t *st, double target, double R, double A, double J_
     st->acc = a1;
     if (j_out)
         *j_out = j;
-    if (limited)
-        *limited = lim;
+    if (limited) {
+        /* R lowered the target (tgt > 0: not the stop's braking) and the
+         * move is the one a higher target makes (up), not a landing with R
+         * infinite */
+        int same = lim && up && tgt > 0 &&
+                   !(fabs(tfree - r) <= A * T && fabs(tfree - r) <= 4.0 * J * T * T &&
+                     fabs(a) <= 2.0 * J * T);
+        *limited = lim | (same ? TS_LIM_FREE : 0);
+    }
     return ds;
 }

@@ -84,7 +84,10 @@ double ts_dead_band(double J, double T);
  * returns the track time advanced, ds >= 0.  Lands exactly on target
  * (rate == target, acc == 0) within two ticks' jerk of it (continuously), so the
  * caller can tell an unscaled output by rate == 1.0 && acc == 0.0.
- * *limited (may be NULL) is set to 1 when R, not target, decided the move.
+ * *limited (may be NULL) is set to 1 when R, not target, decided the move,
+ * with TS_LIM_FREE added where the move is nonetheless, bit for bit, the one
+ * the same call makes with R infinite (R lowered the target, but the rate
+ * rises towards it at the acceleration or jerk limit, with no release due).
  * Where the limits shrank under the state (|acc| > A: the engine converts
  * them at the speed of the segment the output is on, and the next may be
  * faster), this tick's jerk is raised by |acc| / A, so that
@@ -94,6 +97,7 @@ double ts_dead_band(double J, double T);
  */
 double ts_step(ts_state_t *st, double target, double R, double A, double J, double T, double *j_out,
                int *limited);
+#define TS_LIM_FREE 2
 /* ts_step with this tick's jerk J_now (at least J) apart from the jerk J
  * every later tick is planned at (the release, the stop, the rooms): a
  * stop whose jerk is converted at a faster segment ahead may use the jerk of

@@ -708,6 +708,43 @@ static void test_stop_jerk_now(void **state)
     assert_true(st.rate <= 0.0 && fabs(st.acc) <= 0.0);
 }
 
+/* TS_LIM_FREE (timescale.h): where ts_step says R lowered its target but
+ * the move is the one with R infinite, it is, bit for bit.  Given random
+ * states, targets, limits and rooms R (most of them short of a stop, so
+ * that R lowers the target), every move flagged so equals the same call
+ * with R infinite in its advance, rate and acceleration, and the flag is
+ * found on ramps towards R's rate at the acceleration or the jerk limit
+ * (delay_run.c ramp_lag skips the second step there). */
+static void test_lim_free_is_the_free_move(void **state)
+{
+    (void)state;
+    unsigned flagged = 0, limited = 0;
+    for (int k = 0; k < 400000; k++) {
+        double A = 0.05 + 5.0 * ur(), J = 0.05 + 50.0 * ur(), T = k % 3 ? 0.01 : 0.001 + 0.1 * ur();
+        ts_state_t st = {.rate = k % 4 ? 1.2 * ur() : 0.0, .acc = (2.0 * ur() - 1.0) * A};
+        if (k % 5 == 0)
+            st.acc = 1.5 * A * ur(); /* also beyond A: this tick's jerk raised */
+        double target = k % 7 ? 1.0 : 2.0 * ur();
+        /* about a stop from the state after the tick, to an order of magnitude */
+        double r1 = st.rate + st.acc * T + 0.5 * J * T * T, a1 = st.acc + J * T;
+        double R = (ts_stop_dist(r1, a1, A, J) + r1 * T) * pow(10.0, 2.0 * ur() - 1.0);
+        ts_state_t free_st = st;
+        int lim = 0;
+        double ds = ts_step(&st, target, R, A, J, T, NULL, &lim);
+        limited += (unsigned)(lim & 1);
+        if (!(lim & TS_LIM_FREE))
+            continue;
+        flagged++;
+        assert_true(lim & 1);
+        double ds_free = ts_step(&free_st, target, INFINITY, A, J, T, NULL, NULL);
+        assert_memory_equal(&ds, &ds_free, sizeof ds);
+        assert_memory_equal(&st.rate, &free_st.rate, sizeof st.rate);
+        assert_memory_equal(&st.acc, &free_st.acc, sizeof st.acc);
+    }
+    print_message("R lowered the target %u times; %u of them the free move\n", limited, flagged);
+    assert_true(flagged > limited / 10);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -721,6 +758,7 @@ int main(void)
         cmocka_unit_test(test_limits_shrink_no_overshoot),
         cmocka_unit_test(test_creep_onto_the_end),
         cmocka_unit_test(test_stop_jerk_now),
+        cmocka_unit_test(test_lim_free_is_the_free_move),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
