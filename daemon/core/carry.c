@@ -25,16 +25,21 @@ int carry_clock_initial(const cfg_t *cfg, const cfg_obj_t *o)
     return cfg->daemon.clock == CFG_CLOCK_EPOCH ? 1 : -1;
 }
 
-/* 1 if object q (of the running config) and o (the new one) have the same
+/* 1 if object qc (of the running config) and o (the new one) have the same
  * input with the same settings (a replayed track: the same file, unchanged). */
-static int same_input(const obj_t *q, const cfg_obj_t *o)
+static int same_input_cfg(const cfg_obj_t *qc, const cfg_obj_t *o)
 {
     const transport_t *in = o->input;
-    if (q->cfg->input != in)
+    if (qc->input != in)
         return 0;
-    const void *a = cfg_obj_transport(q->cfg, in), *b = cfg_obj_transport(o, in);
+    const void *a = cfg_obj_transport(qc, in), *b = cfg_obj_transport(o, in);
     return in->obj_cfg_same ? in->obj_cfg_same(a, b)
                             : !(in->obj_cfg_size && memcmp(a, b, in->obj_cfg_size) != 0);
+}
+
+static int same_input(const obj_t *q, const cfg_obj_t *o)
+{
+    return same_input_cfg(q->cfg, o);
 }
 
 /* q's engine moves (its last setpoint not a hold): a reload that changes q
@@ -130,6 +135,19 @@ obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o, char *wh
     if (q->clocked == 1 && carry_clock_initial(cfg, o) == 0)
         return NULL; /* an engine on the clock cannot leave it: a new one */
     return same_input(q, o) ? q : NULL;
+}
+
+int carry_needs_engine(const cfg_t *running, const cfg_obj_t *o)
+{
+    const cfg_obj_t *qc = running ? cfg_obj_by_name(running, o->name) : NULL;
+    if (!qc)
+        return 1;
+    /* carry_source's tests of the settings alone (the running object's
+     * motion, its clock, a stopping core are for the loop to judge) */
+    double s0 = qc->engine.cap_speed_m_s, s1 = o->engine.cap_speed_m_s,
+           a0 = qc->engine.cap_accel_m_s2, a1 = o->engine.cap_accel_m_s2;
+    return s0 < s1 || s0 > s1 || a0 < a1 || a0 > a1 ||
+           !engine_config_same(&qc->engine, &o->engine) || !same_input_cfg(qc, o);
 }
 
 /* A changed object (a new engine) whose input stays the same goes on along it

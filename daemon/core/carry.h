@@ -27,6 +27,12 @@ int carry_clock_initial(const cfg_t *cfg, const cfg_obj_t *o);
  * motion, or its speed or acceleration cap changed. */
 obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o, char *why, size_t len);
 
+/* 1 if object o of a configuration being loaded needs an engine of its own
+ * whatever the running objects do: running (NULL: none) has no object of
+ * its name, or carry_source's settings differ (caps, engine, input).  The
+ * reload's worker builds those beside the running core (cfg_t prebuilt). */
+int carry_needs_engine(const cfg_t *running, const cfg_obj_t *o);
+
 /* o->resume_t_s, o->played_t_s/track and o->born_ns from prev's object of
  * its name when o is a changed object with the same input (left NAN where
  * that one played nothing). */

@@ -894,7 +894,18 @@ void cfg_free(cfg_t *c)
             tr->cfg_fini(c->tcfg[t]);
         free(c->tcfg[t]);
     }
+    for (unsigned i = 0; c->prebuilt && i < c->nobj; i++)
+        engine_free(c->prebuilt[i]);
+    free((void *)c->prebuilt);
     free(c);
+}
+
+engine_t *cfg_take_engine(const cfg_t *c, unsigned i)
+{
+    engine_t *e = c->prebuilt && i < c->nobj ? c->prebuilt[i] : NULL;
+    if (e)
+        c->prebuilt[i] = NULL;
+    return e;
 }
 
 const void *cfg_transport(const cfg_t *c, const transport_t *t)

@@ -178,6 +178,12 @@ typedef struct cfg {
     int datum_set;
     int datum_line; /* line of origin, or of that object's section */
     geo_enu_t datum;
+    /* The engines built beside the running core (cfgload.c, issue 28), by
+     * object index: one for each object the load adds or changes (its
+     * engine's zeroed memory and resolved settings off the tick), NULL
+     * elsewhere; core_open takes them (cfg_take_engine), cfg_free frees the
+     * rest.  NULL: none built. */
+    engine_t **prebuilt;
 } cfg_t;
 
 /*
@@ -199,8 +205,13 @@ int cfg_reload_check(const cfg_t *old, const cfg_t *nw, char *err, size_t errlen
 /* Object by name, or NULL. */
 const cfg_obj_t *cfg_obj_by_name(const cfg_t *c, const char *name);
 
-/* Release (the transports' blocks too, via their cfg_fini/obj_cfg_fini).  NULL is a no-op. */
+/* Release (the transports' blocks too, via their cfg_fini/obj_cfg_fini, and
+ * the engines built for it and not taken).  NULL is a no-op. */
 void cfg_free(cfg_t *c);
+
+/* The engine built beside the running core for object i, handed over (the
+ * caller frees it), or NULL if none was. */
+engine_t *cfg_take_engine(const cfg_t *c, unsigned i);
 
 /* Daemon-wide block of transport t (its defaults if [t] was absent). */
 const void *cfg_transport(const cfg_t *c, const struct transport *t);

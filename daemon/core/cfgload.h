@@ -1,7 +1,8 @@
 /*
  * cfgload.h - a reload's configuration built beside the running one (issue
  * 28 item 2): cfg_load (the file read, every replay track opened and parsed,
- * every check) and cfg_reload_check against the running configuration run
+ * every check), cfg_reload_check against the running configuration and the
+ * engines of the objects it adds or changes (cfg_t prebuilt) run
  * on a worker thread at SCHED_OTHER (whatever the loop's policy), niced
  * (CFGLOAD_NICE), with every signal blocked.  Its completion is an eventfd the loop polls (cfgload_fd);
  * the loop then takes the result (cfgload_finish) and swaps it in between

@@ -457,7 +457,9 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
         if (carry_source(prev, cfg, o->cfg, NULL, 0))
             continue;
         carry_resume_input(o, prev);
-        o->engine = engine_new(&cfg->obj[i].engine, &err);
+        o->engine = cfg_take_engine(cfg, i); /* built beside the running core */
+        if (!o->engine)
+            o->engine = engine_new(&cfg->obj[i].engine, &err);
         if (!o->engine || lc_init(&o->lc, o->engine, &o->safety, c->period_ns, 0) < 0) {
             snprintf(why, whylen, "object '%s': engine: %s", o->name,
                      engine_strerror(o->engine ? ENGINE_ENOMEM : err));
