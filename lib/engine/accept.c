@@ -817,6 +817,16 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
      * output draws on its start slack meanwhile) */
     if (r != 0 && !thin_pace(a, r) && continues_anchor(a, pre, vlim))
         return drop(a, pre, vlim, drop_reason(a, pre, vlim, r), v);
+    if (r == 0 && n >= 2) {
+        double shift = accept_retime_late(a, pre, vlim);
+        if (shift > 0 || shift < 0) {
+            a->shift_now = shift;
+            pop(a, v, ACCEPT_TAKE, 0);
+            a->shift_now = 0;
+            v->shift_s = shift;
+            return 1;
+        }
+    }
     if (r == 0 &&
         (taken_past_outliers(a, vlim) || (n >= 3 && outvotes_held(a, nd, pre, vlim, &ch))))
         return take(a, pre, vlim, v);

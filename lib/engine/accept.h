@@ -228,13 +228,26 @@
  *           arrival) whose stamp implies a change of speed above
  *           ACCEPT_RETIME_SOFT x max_accel_m_s2 is re-stamped at the pace
  *           of the last kept intervals, kept or refused alike: retime.c
- *           accept_retime_soft. */
+ *           accept_retime_soft;
+ *   LATE     a fix that follows the anchor, followed by one that follows the
+ *           anchor too but not it (two fixes that cannot both be kept at their
+ *           stamps), whose position lies on the path between and whose stamp
+ *           is late for the pace of the last kept intervals, is re-stamped at
+ *           that pace and kept at once, where the full window would hold both
+ *           until its chains break the tie (the output underran meanwhile):
+ *           retime.c accept_retime_late. */
 #define ACCEPT_RULE_STOPS 1u
 #define ACCEPT_RULE_VECTOR 2u
 #define ACCEPT_RULE_RETIME 4u
 #define ACCEPT_RULE_NORETURN 8u
 #define ACCEPT_RULE_SMOOTH 16u
-#define ACCEPT_RULES_ALL 31u
+#define ACCEPT_RULE_LATE 32u
+#define ACCEPT_RULES_ALL 63u
+/* ACCEPT_RULE_LATE: a fix re-stamped at the pace of the last
+ * ACCEPT_LATE_PACE kept intervals is later than it by more than
+ * ACCEPT_LATE_MIN of the interval into the anchor */
+#define ACCEPT_LATE_MIN 0.25
+#define ACCEPT_LATE_PACE 2u
 /* accept_config_t.rules: none of them (the former policy, for the test that
  * compares it with tests/helpers/accept_ref.h); 0 means all */
 #define ACCEPT_RULES_FORMER 0x80000000u

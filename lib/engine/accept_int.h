@@ -236,6 +236,8 @@ int accept_longest_cost(accept_t *a, const unsigned char *nd, unsigned m, unsign
 double accept_retime(accept_t *a, unsigned pre, double vlim);
 /* accept.c: the smoothing re-estimate of c about to be kept (retime.c) */
 double accept_retime_soft(accept_t *a, unsigned pre, double vlim);
+/* accept.c: a late fix that ties with the next one, re-stamped (retime.c) */
+double accept_retime_late(accept_t *a, unsigned pre, double vlim);
 /* accept.c: the better of the two for a fix about to be refused (retime.c) */
 double accept_retime_either(accept_t *a, unsigned pre, double vlim);
 

@@ -197,6 +197,57 @@ double accept_retime_soft(accept_t *a, unsigned pre, double vlim)
     return 0;
 }
 
+/* the pace of the last ACCEPT_LATE_PACE kept intervals up to the anchor's
+ * time as it stands (a re-stamped anchor at its new time; the pace ring
+ * holds the stamps as stamped), 0 if fewer: recent, so that a boat slowing
+ * down is timed at its speed, not at the one of 10 intervals ago */
+static double recent_pace(const accept_t *a)
+{
+    enum { R = ACCEPT_RETIME_PACE + 1 };
+    if (a->npace < ACCEPT_LATE_PACE + 1)
+        return 0;
+    unsigned last = (a->npace - 1) % R, first = (a->npace - 1 - ACCEPT_LATE_PACE) % R;
+    double dt = a->wp[a->a1].t_s - a->pace_t[first];
+    return dt > ACCEPT_SAME_TIME_S ? (a->pace_s[last] - a->pace_s[first]) / dt : 0;
+}
+
+/*
+ * ACCEPT_RULE_LATE: c (slot pend[0]) follows the anchor, and so does the next
+ * waypoint held, n1, but n1 does not follow c: two fixes that cannot both be
+ * kept at their stamps (the full window holds both, a window of intervals,
+ * before its chains break the tie; the output underran meanwhile).  Where
+ * c's position lies on the path from the anchor to n1 and its stamp is later
+ * than the pace of the last kept intervals (recent_pace) puts it, by more than
+ * ACCEPT_LATE_MIN of the interval into the anchor (a fix written late), it
+ * is re-stamped at that pace and kept now, if then it follows the anchor
+ * and n1 follows it.  Returns the shift (0: not so).
+ */
+double accept_retime_late(accept_t *a, unsigned pre, double vlim)
+{
+    unsigned c = a->pend[0], a1 = a->a1, n1;
+
+    if (!(a->cfg.rules & ACCEPT_RULE_LATE) || a->npend < 2 || pre == NO_SLOT)
+        return 0;
+    n1 = a->pend[1];
+    double pace = recent_pace(a), t0 = a->wp[a1].t_s, tc = a->wp[c].t_s, t1 = a->wp[n1].t_s;
+    /* (two fixes stamped alike are same_time, not late) */
+    if (!(t1 - tc > ACCEPT_SAME_TIME_S) || check(a, a1, c, n1, vlim, 0) == 0 ||
+        check0(a, pre, a1, n1, vlim) != 0)
+        return 0;
+    double h = t0 - a->wp[pre].t_s;
+    if (!(pace > 0) || !(h > 0) || !on_path(a, a1, c, n1))
+        return 0;
+    double t = t0 + pair_dist(a, a1, c) / pace;
+    if (!(tc - t > ACCEPT_LATE_MIN * h) || !(tc - t <= ACCEPT_RETIME_FRAC * h) ||
+        !(t - t0 > ACCEPT_SAME_TIME_S) || !(t1 - t > ACCEPT_SAME_TIME_S))
+        return 0;
+    set_time(a, c, t);
+    if (check0(a, pre, a1, c, vlim) == 0 && check(a, a1, c, n1, vlim, 0) == 0)
+        return t - tc;
+    set_time(a, c, tc);
+    return 0;
+}
+
 /*
  * A fix about to be refused for its speed or acceleration (drop()): both
  * estimates, accept_retime_soft's (the pace kept) and accept_retime's (the

@@ -830,10 +830,58 @@ static void test_same_verdicts_as_reference(void **state)
         assert_true(kinds[2 + reasons[i]] > 0);
 }
 
+/*
+ * ACCEPT_RULE_LATE (retime.c accept_retime_late): two fixes in a row written
+ * late, their positions on the track at its pace but their stamps 1.48 and
+ * 0.6 intervals late (the demo track's n2k_furuno_figure8_src52.csv at
+ * 135.096 s and 135.120 s: 0.296 s and 0.12 s late at 5 Hz), so that the
+ * first follows the anchor, the second follows the anchor, and the second
+ * does not follow the first.  Replayed as they arrive, at every site of
+ * three fragment periods: every fix kept (both re-stamped at the pace), no
+ * underrun.  Before, the full window held both (its chains as long either
+ * way) until its costs broke the tie and the first was re-stamped, then the
+ * second likewise: 8 intervals each, and the output underran.
+ */
+static void test_late_fixes_cost_nothing(void **state)
+{
+    (void)state;
+    static engine_waypoint_t rows[N_FIX];
+    engine_config_t c, r;
+    engine_config_default(&c);
+    assert_int_equal(engine_config_resolve(&c, &r), 0);
+    unsigned sites = 3 * (r.fragment - r.overlap), bad = 0, underran = 0;
+
+    for (int site = 40; site < 40 + (int)sites; site++) {
+        engine_status_t st;
+        int fin;
+        for (int i = 0; i < N_FIX; i++) {
+            boat(&rows[i], i);
+            if (i == site + 1)
+                rows[i].t_s += 1.48 * DT_S;
+            if (i == site + 2)
+                rows[i].t_s += 0.6 * DT_S;
+        }
+        replay(rows, N_FIX, &st, &fin);
+        underran += st.underruns != 0;
+        if (st.accepted != N_FIX || st.rejected || st.underruns || st.hard_stops || !fin ||
+            st.retimed < 2) {
+            print_message("late fixes after %d: accepted %llu rejected %llu underruns %llu "
+                          "retimed %llu hard stops %llu finished %d\n",
+                          site, (unsigned long long)st.accepted, (unsigned long long)st.rejected,
+                          (unsigned long long)st.underruns, (unsigned long long)st.retimed,
+                          (unsigned long long)st.hard_stops, fin);
+            bad++;
+        }
+    }
+    print_message("two late fixes: %u of %u sites with an underrun\n", underran, sites);
+    assert_int_equal(bad, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_one_bad_fix_costs_nothing),
+        cmocka_unit_test(test_late_fixes_cost_nothing),
         cmocka_unit_test(test_at_arrival_one_bad_fix),
         cmocka_unit_test(test_at_arrival_when_kept),
         cmocka_unit_test(test_long_frozen_run),

@@ -324,8 +324,15 @@ static void run_track(unsigned npts, counts_t *n)
     memset(&t, 0, sizeof t);
     memset(tri, 0, sizeof tri);
     random_config(&cfg);
-    accept_init(&a, &cfg);
     p = accept_prev_new(&cfg);
+    /* the rules the policy before had (ACCEPT_RULE_LATE came after it:
+     * tests/unit/test_accept.c test_late_fixes_cost_nothing) */
+    if (!(cfg.rules & ACCEPT_RULES_FORMER)) {
+        unsigned rules = cfg.rules ? cfg.rules & ~ACCEPT_RULE_LATE
+                                   : ACCEPT_RULES_ALL & ~ACCEPT_RULE_LATE;
+        cfg.rules = rules ? rules : ACCEPT_RULES_FORMER; /* (none of them) */
+    }
+    accept_init(&a, &cfg);
     assert_non_null(p);
     track_init(&tr);
     for (cur_point = 0; cur_point < npts; cur_point++) {
