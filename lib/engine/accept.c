@@ -616,14 +616,19 @@ static int decide_closed(accept_t *a, int closing, int full, double vlim, accept
 static int drop(accept_t *a, unsigned pre, double vlim, int reason, accept_verdict_t *v);
 
 /* keep c, re-stamped if its stamp bends the pace (ACCEPT_RULE_SMOOTH) */
-static int take(accept_t *a, unsigned pre, double vlim, accept_verdict_t *v)
+/* keep c, its stamp moved by shift (0: as stamped) */
+static int take_at(accept_t *a, double shift, accept_verdict_t *v)
 {
-    double shift = accept_retime_soft(a, pre, vlim);
     a->shift_now = shift;
     pop(a, v, ACCEPT_TAKE, 0);
     a->shift_now = 0;
     v->shift_s = shift;
     return 1;
+}
+
+static int take(accept_t *a, unsigned pre, double vlim, accept_verdict_t *v)
+{
+    return take_at(a, accept_retime_soft(a, pre, vlim), v);
 }
 
 /* an open trajectory, the full window's verdict on c (r: c after the
@@ -746,13 +751,8 @@ static int drop(accept_t *a, unsigned pre, double vlim, int reason, accept_verdi
         (reason == ENGINE_ESPEED || reason == ENGINE_EACCEL)) {
         shift = accept_retime_either(a, pre, vlim);
     }
-    if (shift > 0 || shift < 0) {
-        a->shift_now = shift;
-        pop(a, v, ACCEPT_TAKE, 0);
-        a->shift_now = 0;
-        v->shift_s = shift;
-        return 1;
-    }
+    if (shift > 0 || shift < 0)
+        return take_at(a, shift, v);
     pop(a, v, ACCEPT_DROP, reason);
     return 1;
 }
@@ -817,15 +817,10 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
      * output draws on its start slack meanwhile) */
     if (r != 0 && !thin_pace(a, r) && continues_anchor(a, pre, vlim))
         return drop(a, pre, vlim, drop_reason(a, pre, vlim, r), v);
-    if (r == 0 && n >= 2) {
+    if (r == 0 && n >= 2) { /* a fix written late, re-stamped now (retime.c) */
         double shift = accept_retime_late(a, pre, vlim);
-        if (shift > 0 || shift < 0) {
-            a->shift_now = shift;
-            pop(a, v, ACCEPT_TAKE, 0);
-            a->shift_now = 0;
-            v->shift_s = shift;
-            return 1;
-        }
+        if (shift > 0 || shift < 0)
+            return take_at(a, shift, v);
     }
     if (r == 0 &&
         (taken_past_outliers(a, vlim) || (n >= 3 && outvotes_held(a, nd, pre, vlim, &ch))))
