@@ -88,11 +88,10 @@ static double release_in_time(double r, double a, double tgt, double j, double J
 /* Jerk that drives the rate towards tgt as fast as the limits allow: the
  * acceleration wanted for an error e is the one from which, released at
  * full jerk, the rate lands on tgt (sqrt(2 J |e|), corrected for the
- * discrete tick), at most A. */
-/* *up (may be NULL): 1 if every higher tgt gives the same jerk, bit for bit:
- * the rate rises towards tgt at the acceleration or the jerk limit, with no
- * release due (each operation is monotonic in tgt, so a higher one is as
- * saturated and still releases later) */
+ * discrete tick), at most A.  *up (may be NULL): 1 if every higher tgt
+ * gives the same jerk, bit for bit: the rate rises towards tgt at the
+ * acceleration or the jerk limit, with no release due (each operation is
+ * monotonic in tgt, so a higher one is as saturated and releases later). */
 static double track_jerk(double r, double a, double tgt, double A, double J, double Jr, double T,
                          int *up)
 {
