@@ -245,7 +245,8 @@
 #define ACCEPT_RULES_ALL 63u
 /* ACCEPT_RULE_LATE: a fix re-stamped at the pace of the last
  * ACCEPT_LATE_PACE kept intervals is later than it by more than
- * ACCEPT_LATE_MIN of the interval into the anchor */
+ * ACCEPT_LATE_MIN of the interval into the anchor, and its interval from the
+ * anchor longer, the one to the next fix shorter, by as much */
 #define ACCEPT_LATE_MIN 0.25
 #define ACCEPT_LATE_PACE 2u
 /* accept_config_t.rules: none of them (the former policy, for the test that

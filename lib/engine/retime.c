@@ -216,7 +216,10 @@ static double recent_pace(const accept_t *a)
  * waypoint held, n1, but n1 does not follow c: two fixes that cannot both be
  * kept at their stamps (the full window holds both, a window of intervals,
  * before its chains break the tie; the output underran meanwhile).  Where
- * c's position lies on the path from the anchor to n1 and its stamp is later
+ * the interval into c is longer than the one into the anchor and the one
+ * after it shorter, each by ACCEPT_LATE_MIN of it (regular stamps are not
+ * late: a rough track's noisy pace is left to the window), where c's
+ * position lies on the path from the anchor to n1 and its stamp is later
  * than the pace of the last kept intervals (recent_pace) puts it, by more than
  * ACCEPT_LATE_MIN of the interval into the anchor (a fix written late), it
  * is re-stamped at that pace and kept now, if then it follows the anchor
@@ -234,8 +237,11 @@ double accept_retime_late(accept_t *a, unsigned pre, double vlim)
     if (!(t1 - tc > ACCEPT_SAME_TIME_S) || check(a, a1, c, n1, vlim, 0) == 0 ||
         check0(a, pre, a1, n1, vlim) != 0)
         return 0;
+    /* the stamps' own sign of a late write: a long interval into c and a
+     * short one after it, against the interval into the anchor */
     double h = t0 - a->wp[pre].t_s;
-    if (!(pace > 0) || !(h > 0) || !on_path(a, a1, c, n1))
+    if (!(pace > 0) || !(h > 0) || !(tc - t0 > (1.0 + ACCEPT_LATE_MIN) * h) ||
+        !(t1 - tc < (1.0 - ACCEPT_LATE_MIN) * h) || !on_path(a, a1, c, n1))
         return 0;
     double t = t0 + pair_dist(a, a1, c) / pace;
     if (!(tc - t > ACCEPT_LATE_MIN * h) || !(tc - t <= ACCEPT_RETIME_FRAC * h) ||
