@@ -830,6 +830,65 @@ static void test_same_verdicts_as_reference(void **state)
         assert_true(kinds[2 + reasons[i]] > 0);
 }
 
+/* The verdicts of rows (all of them offered, then closed) with rules, into
+ * out (kind * 256 + reason, then the kept stamp's bits folded in); returns
+ * their count */
+static int verdicts(const engine_waypoint_t *rows, int n, unsigned rules, uint64_t *out)
+{
+    accept_config_t ac;
+    static accept_t a;
+    accept_verdict_t v;
+    engine_config_t c;
+    int k = 0;
+    engine_config_default(&c);
+    memset(&ac, 0, sizeof ac);
+    ac.max_speed_m_s = engine_config_max_speed(&c);
+    ac.max_accel_m_s2 = engine_config_max_accel(&c);
+    ac.max_gap_s = c.max_gap_s;
+    ac.learned = ac.stale = 1;
+    ac.window = ACCEPT_WINDOW_MAX;
+    ac.confirm = c.confirm;
+    ac.rules = rules;
+    accept_init(&a, &ac);
+    for (int i = 0; i < n; i++) {
+        accept_offer(&a, &rows[i]);
+        while (accept_decide(&a, i == n - 1, &v)) {
+            uint64_t bits;
+            memcpy(&bits, &v.wp.t_s, sizeof bits);
+            out[k++] = ((uint64_t)v.kind * 256u + (uint64_t)v.reason) ^ (bits * 31u);
+        }
+    }
+    return k;
+}
+
+/*
+ * ACCEPT_RULE_LATE looks at stamps, not at the pace alone: on regular
+ * stamps (5 Hz) with one fix whose position lies back along the path (an
+ * interval's worth: at its predecessor's pace it reads late, and its
+ * successor cannot follow it), at every site of 20, the verdicts with the
+ * rule are those without it, bit for bit.  The rule as first written
+ * (the pace alone) re-stamped such fixes.
+ */
+static void test_late_needs_late_stamps(void **state)
+{
+    (void)state;
+    static engine_waypoint_t rows[N_FIX];
+    static uint64_t with[2 * N_FIX], without[2 * N_FIX];
+    for (int site = 40; site < 60; site++) {
+        for (int i = 0; i < N_FIX; i++)
+            boat(&rows[i], i);
+        engine_waypoint_t back;
+        boat(&back, site);
+        for (int k = 0; k < 3; k++) /* a tenth of the way on from its predecessor */
+            rows[site + 1].pos_m[k] = back.pos_m[k] +
+                                      0.1 * (rows[site + 1].pos_m[k] - back.pos_m[k]);
+        int n1 = verdicts(rows, N_FIX, 0, with);
+        int n0 = verdicts(rows, N_FIX, ACCEPT_RULES_ALL & ~ACCEPT_RULE_LATE, without);
+        assert_int_equal(n1, n0);
+        assert_memory_equal(with, without, (size_t)n1 * sizeof with[0]);
+    }
+}
+
 /*
  * ACCEPT_RULE_LATE (retime.c accept_retime_late): two fixes in a row written
  * late, their positions on the track at its pace but their stamps 1.48 and
@@ -882,6 +941,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_one_bad_fix_costs_nothing),
         cmocka_unit_test(test_late_fixes_cost_nothing),
+        cmocka_unit_test(test_late_needs_late_stamps),
         cmocka_unit_test(test_at_arrival_one_bad_fix),
         cmocka_unit_test(test_at_arrival_when_kept),
         cmocka_unit_test(test_long_frozen_run),
