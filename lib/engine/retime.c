@@ -127,15 +127,25 @@ static double speed_change(accept_t *a, unsigned x, unsigned p, unsigned y)
     return 2.0 * fabs(chord_speed(a, p, y) - chord_speed(a, x, p)) / (d1 + d2);
 }
 
-/* the pace of the last ACCEPT_RETIME_PACE kept intervals of the open
- * trajectory: their path length over their time (0 if fewer) */
+/* the pace of the last k (<= ACCEPT_RETIME_PACE) kept intervals of the open
+ * trajectory up to time t_end: their path length over the time from the
+ * first of them (0 if fewer, or no time) */
+static double pace_of(const accept_t *a, unsigned k, double t_end)
+{
+    enum { R = ACCEPT_RETIME_PACE + 1 };
+    if (a->npace < k + 1)
+        return 0;
+    unsigned last = (a->npace - 1) % R, first = (a->npace - 1 - k) % R;
+    double dt = t_end - a->pace_t[first];
+    return dt > ACCEPT_SAME_TIME_S ? (a->pace_s[last] - a->pace_s[first]) / dt : 0;
+}
+
+/* the pace of the last ACCEPT_RETIME_PACE kept intervals, to the last one's
+ * stamp (as stamped) */
 static double kept_pace(const accept_t *a)
 {
     enum { R = ACCEPT_RETIME_PACE + 1 };
-    unsigned last = (a->npace - 1) % R, first = a->npace % R;
-    if (a->npace < R || !(a->pace_t[last] - a->pace_t[first] > ACCEPT_SAME_TIME_S))
-        return 0;
-    return (a->pace_s[last] - a->pace_s[first]) / (a->pace_t[last] - a->pace_t[first]);
+    return a->npace ? pace_of(a, ACCEPT_RETIME_PACE, a->pace_t[(a->npace - 1) % R]) : 0;
 }
 
 /*
@@ -197,20 +207,6 @@ double accept_retime_soft(accept_t *a, unsigned pre, double vlim)
     return 0;
 }
 
-/* the pace of the last ACCEPT_LATE_PACE kept intervals up to the anchor's
- * time as it stands (a re-stamped anchor at its new time; the pace ring
- * holds the stamps as stamped), 0 if fewer: recent, so that a boat slowing
- * down is timed at its speed, not at the one of 10 intervals ago */
-static double recent_pace(const accept_t *a)
-{
-    enum { R = ACCEPT_RETIME_PACE + 1 };
-    if (a->npace < ACCEPT_LATE_PACE + 1)
-        return 0;
-    unsigned last = (a->npace - 1) % R, first = (a->npace - 1 - ACCEPT_LATE_PACE) % R;
-    double dt = a->wp[a->a1].t_s - a->pace_t[first];
-    return dt > ACCEPT_SAME_TIME_S ? (a->pace_s[last] - a->pace_s[first]) / dt : 0;
-}
-
 /*
  * ACCEPT_RULE_LATE: c (slot pend[0]) follows the anchor, and so does the next
  * waypoint held, n1, but n1 does not follow c: two fixes that cannot both be
@@ -220,7 +216,7 @@ static double recent_pace(const accept_t *a)
  * after it shorter, each by ACCEPT_LATE_MIN of it (regular stamps are not
  * late: a rough track's noisy pace is left to the window), where c's
  * position lies on the path from the anchor to n1 and its stamp is later
- * than the pace of the last kept intervals (recent_pace) puts it, by more than
+ * than the pace of the last kept intervals puts it, by more than
  * ACCEPT_LATE_MIN of the interval into the anchor (a fix written late), it
  * is re-stamped at that pace and kept now, if then it follows the anchor
  * and n1 follows it.  Returns the shift (0: not so).
@@ -232,7 +228,11 @@ double accept_retime_late(accept_t *a, unsigned pre, double vlim)
     if (!(a->cfg.rules & ACCEPT_RULE_LATE) || a->npend < 2 || pre == NO_SLOT)
         return 0;
     n1 = a->pend[1];
-    double pace = recent_pace(a), t0 = a->wp[a1].t_s, tc = a->wp[c].t_s, t1 = a->wp[n1].t_s;
+    /* the last ACCEPT_LATE_PACE kept intervals, to the anchor's time as it
+     * stands (re-stamped: its new time), so that a boat slowing down is timed
+     * at its speed, not at the one of 10 intervals ago */
+    double pace = pace_of(a, ACCEPT_LATE_PACE, a->wp[a1].t_s), t0 = a->wp[a1].t_s,
+           tc = a->wp[c].t_s, t1 = a->wp[n1].t_s;
     /* (two fixes stamped alike are same_time, not late) */
     if (!(t1 - tc > ACCEPT_SAME_TIME_S) || check(a, a1, c, n1, vlim, 0) == 0 ||
         check0(a, pre, a1, n1, vlim) != 0)
