@@ -27,7 +27,7 @@ int carry_clock_initial(const cfg_t *cfg, const cfg_obj_t *o)
 
 /* 1 if object qc (of the running config) and o (the new one) have the same
  * input with the same settings (a replayed track: the same file, unchanged). */
-static int same_input_cfg(const cfg_obj_t *qc, const cfg_obj_t *o)
+static int same_input(const cfg_obj_t *qc, const cfg_obj_t *o)
 {
     const transport_t *in = o->input;
     if (qc->input != in)
@@ -37,9 +37,36 @@ static int same_input_cfg(const cfg_obj_t *qc, const cfg_obj_t *o)
                             : !(in->obj_cfg_size && memcmp(a, b, in->obj_cfg_size) != 0);
 }
 
-static int same_input(const obj_t *q, const cfg_obj_t *o)
+/* the safety bounds an engine keeps (engine.h cap_*) */
+static const struct {
+    const char *key, *what;
+    size_t off;
+} caps[] = {
+    {"safety_max_speed_m_s", "m/s of output speed", offsetof(engine_config_t, cap_speed_m_s)},
+    {"safety_max_accel_m_s2", "m/s^2 of output acceleration",
+     offsetof(engine_config_t, cap_accel_m_s2)},
+};
+
+/* The first of caps[] that differs between qc and o (its values into *c0,
+ * *c1), or -1 */
+static int cap_changed(const cfg_obj_t *qc, const cfg_obj_t *o, double *c0, double *c1)
 {
-    return same_input_cfg(q->cfg, o);
+    for (size_t i = 0; i < sizeof caps / sizeof caps[0]; i++) {
+        memcpy(c0, (const char *)&qc->engine + caps[i].off, sizeof *c0);
+        memcpy(c1, (const char *)&o->engine + caps[i].off, sizeof *c1);
+        if (*c0 < *c1 || *c0 > *c1)
+            return (int)i;
+    }
+    return -1;
+}
+
+/* 1 if an engine built for qc serves o: the same bounds it keeps, engine
+ * settings and input (what carry_source asks of the settings alone) */
+static int settings_same(const cfg_obj_t *qc, const cfg_obj_t *o)
+{
+    double c0, c1;
+    return cap_changed(qc, o, &c0, &c1) < 0 && engine_config_same(&qc->engine, &o->engine) &&
+           same_input(qc, o);
 }
 
 /* q's engine moves (its last setpoint not a hold): a reload that changes q
@@ -111,43 +138,27 @@ obj_t *carry_source(core_t *prev, const cfg_t *cfg, const cfg_obj_t *o, char *wh
     if (!q || !q->engine || bounds_refuse(q, o, why, len))
         return NULL;
     /* the safety bounds its engine keeps (engine.h cap_*): the old ones */
-    static const struct {
-        const char *key, *what;
-        size_t off;
-    } caps[] = {
-        {"safety_max_speed_m_s", "m/s of output speed", offsetof(engine_config_t, cap_speed_m_s)},
-        {"safety_max_accel_m_s2", "m/s^2 of output acceleration",
-         offsetof(engine_config_t, cap_accel_m_s2)},
-    };
-    for (size_t i = 0; i < sizeof caps / sizeof caps[0]; i++) {
-        double cap0, cap1;
-        memcpy(&cap0, (const char *)&q->cfg->engine + caps[i].off, sizeof cap0);
-        memcpy(&cap1, (const char *)&o->engine + caps[i].off, sizeof cap1);
-        if (cap0 < cap1 || cap0 > cap1) {
-            if (why && moving_engine(q))
-                snprintf(why, len, "its %s changed, which its engine keeps (%g -> %g %s, 0: none)",
-                         caps[i].key, cap0, cap1, caps[i].what);
-            return NULL;
-        }
+    double cap0, cap1;
+    int i = cap_changed(q->cfg, o, &cap0, &cap1);
+    if (i >= 0) {
+        if (why && moving_engine(q))
+            snprintf(why, len, "its %s changed, which its engine keeps (%g -> %g %s, 0: none)",
+                     caps[i].key, cap0, cap1, caps[i].what);
+        return NULL;
     }
-    if (!engine_config_same(&q->cfg->engine, &o->engine))
+    if (!settings_same(q->cfg, o))
         return NULL;
     if (q->clocked == 1 && carry_clock_initial(cfg, o) == 0)
         return NULL; /* an engine on the clock cannot leave it: a new one */
-    return same_input(q, o) ? q : NULL;
+    return q;
 }
 
 int carry_needs_engine(const cfg_t *running, const cfg_obj_t *o)
 {
-    const cfg_obj_t *qc = running ? cfg_obj_by_name(running, o->name) : NULL;
-    if (!qc)
-        return 1;
     /* carry_source's tests of the settings alone (the running object's
      * motion, its clock, a stopping core are for the loop to judge) */
-    double s0 = qc->engine.cap_speed_m_s, s1 = o->engine.cap_speed_m_s,
-           a0 = qc->engine.cap_accel_m_s2, a1 = o->engine.cap_accel_m_s2;
-    return s0 < s1 || s0 > s1 || a0 < a1 || a0 > a1 ||
-           !engine_config_same(&qc->engine, &o->engine) || !same_input_cfg(qc, o);
+    const cfg_obj_t *qc = running ? cfg_obj_by_name(running, o->name) : NULL;
+    return !qc || !settings_same(qc, o);
 }
 
 /* A changed object (a new engine) whose input stays the same goes on along it
@@ -157,7 +168,7 @@ int carry_needs_engine(const cfg_t *running, const cfg_obj_t *o)
 void carry_resume_input(obj_t *o, core_t *prev)
 {
     obj_t *q = prev && !prev->stopping ? core_obj_find(prev, o->name) : NULL;
-    if (!q || !same_input(q, o->cfg) || !isfinite(q->played_t_s))
+    if (!q || !same_input(q->cfg, o->cfg) || !isfinite(q->played_t_s))
         return; /* (nothing played: a waiting object's input starts again, none skipped) */
     /* as far as it played: not the setpoint's t_s, which a transfer (a reload
      * before this one, still joining its track) counts from its own start
