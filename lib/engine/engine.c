@@ -110,7 +110,7 @@ engine_t *engine_new(const engine_config_t *cfg_in, int *err)
     engine_config_t r;
     const engine_config_t *cfg = &r;
 
-    if (engine_config_check(cfg_in, NULL) < 0 || engine_config_resolve(cfg_in, &r) < 0) {
+    if (engine_config_check_resolve(cfg_in, &r, NULL) < 0) {
         if (err)
             *err = ENGINE_ECONFIG;
         return NULL;

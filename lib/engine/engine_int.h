@@ -379,6 +379,10 @@ static inline void engine_status_underrun_none(engine_status_t *st)
 
 /* engine_lookahead of a resolved configuration */
 unsigned engine_cfg_lookahead(const engine_config_t *cfg);
+/* engine_config_check, and where it passes the configuration resolved
+ * (engine_config_resolve) into *out: one resolution, not two */
+int engine_config_check_resolve(const engine_config_t *cfg_in, engine_config_t *out,
+                                const char **why);
 /* most waypoints beyond a segment the solver needs, far from the start */
 unsigned engine_cfg_steady_lookahead(const engine_config_t *cfg);
 int engine_cfg_local(const engine_config_t *cfg);

@@ -706,21 +706,29 @@ unsigned engine_lookahead(const engine_config_t *cfg)
 
 int engine_config_check(const engine_config_t *cfg_in, const char **why)
 {
+    engine_config_t r;
+    return engine_config_check_resolve(cfg_in, &r, why);
+}
+
+int engine_config_check_resolve(const engine_config_t *cfg_in, engine_config_t *out,
+                                const char **why)
+{
     const char *w = NULL;
     unsigned la;
     engine_config_t r;
     const engine_config_t *cfg = &r;
+    int resolved = -1;
 
     if (cfg_in->overlap == ENGINE_AUTO &&
         (!(cfg_in->accuracy > 0 && cfg_in->accuracy < 1) || !isfinite(cfg_in->accuracy)))
         w = "accuracy: must be within (0, 1)";
-    else if (engine_config_resolve(cfg_in, &r) < 0 && cfg_in->overlap == ENGINE_AUTO &&
+    else if ((resolved = engine_config_resolve(cfg_in, &r)) < 0 && cfg_in->overlap == ENGINE_AUTO &&
              cfg_in->fragment == ENGINE_AUTO && cfg_in->accuracy < ENGINE_ACCURACY_DEFAULT)
         w = "accuracy: tighter than the default 3e-7, and no fragment meets it within "
             "max_lookahead: raise max_lookahead or accuracy (lib/engine/DESIGN.md tabulates "
             "the lookahead of each overlap); at the default accuracy, a max_lookahead too "
             "short for it picks a local method";
-    else if (engine_config_resolve(cfg_in, &r) < 0)
+    else if (resolved < 0)
         w = "max_lookahead: too short for the overlap accuracy asks plus start_slack: no "
             "fragment fits, nor a local method (1 waypoint with start_slack auto or 0, ends not "
             "held or multiple); raise max_lookahead or accuracy, or lower start_slack";
@@ -811,6 +819,8 @@ int engine_config_check(const engine_config_t *cfg_in, const char **why)
     }
     if (why)
         *why = w;
+    if (!w)
+        *out = r;
     return w ? -ENGINE_ECONFIG : 0;
 }
 
