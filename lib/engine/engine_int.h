@@ -522,6 +522,17 @@ int join_wanted(const engine_t *e);
 /* Join the next trajectory moving from this tick if it is due and a join
  * fits (1: the output is on it); else 0, and the old way goes on. */
 int join_try(engine_t *e);
+/* The rate an old curve's tail keeps while a live re-anchor's new curve is
+ * solved far enough to join (join.c); INFINITY where nothing waits. */
+double join_wait_rate(const engine_t *e);
+/* join_may_wait's tests beyond the later trajectory (join.c). */
+int join_may_wait_here(const engine_t *e);
+/* 1 if join_wait_rate may be below 1 now or later without a call between
+ * ticks (a later trajectory open behind a re-anchor): no kept decision. */
+static inline int join_may_wait(const engine_t *e)
+{
+    return e->in.open && e->solve.traj != e->out.traj && join_may_wait_here(e);
+}
 /* Unit-grid ticks before a join may be due (plain_window keeps no
  * decision beyond them); INT64_MAX if none can be (always without
  * queue_later_traj). */

@@ -405,8 +405,11 @@ void scale_limits(const engine_t *e, double *A, double *J)
 /* The rate the output is asked for, before the buffer's limit. */
 double scale_target(const engine_t *e)
 {
-    return e->scale.stop_req || e->scale.end_brake ? 0.0
-                                                   : fmin(e->scale.override, scale_ceil_here(e));
+    if (e->scale.stop_req || e->scale.end_brake)
+        return 0.0;
+    double r = fmin(e->scale.override, scale_ceil_here(e));
+    double w = join_may_wait(e) ? join_wait_rate(e) : INFINITY; /* a live re-anchor's wait */
+    return w < r ? w : r;
 }
 
 /* 1 if the time scaling's next tick would set the output moving (tried on a

@@ -336,7 +336,9 @@ static inline void fast_bound(engine_t *e)
  * plain_holds compares exactly those, so no call can forget to close the
  * window.  A new input of the decision must be added there: the test hook
  * engine_plain_check recomputes the decision on every kept tick
- * (tests/unit/test_engine_tick.c).
+ * (tests/unit/test_engine_tick.c).  A live re-anchor's wait for its new
+ * curve (join_wait_rate, which moves with the output's own time) keeps no
+ * window while one may begin (join_may_wait).
  */
 static void plain_window(engine_t *e)
 {
@@ -346,7 +348,8 @@ static void plain_window(engine_t *e)
         !is_exactly(e->scale.override, 1.0) || !is_exactly(e->scale.ts.rate, 1.0) ||
         !is_exactly(e->scale.ts.acc, 0.0) || scale_ceil_here(e) < 1.0 ||
         /* (engine_lag_pending's own first answers without the call) */
-        ((e->lag.steer || (e->lag.have && !e->lag.ahead)) && engine_lag_pending(e)))
+        ((e->lag.steer || (e->lag.have && !e->lag.ahead)) && engine_lag_pending(e)) ||
+        join_may_wait(e))
         return;
     /* scale_remaining() is finite: a REST end too is left at rate 0 */
     /* decide's check, ts_stop_dist(1, 0, a/v, j/v) < v K - (margin + 1) T

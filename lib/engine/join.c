@@ -72,6 +72,19 @@
  * in track time too).  At rho = 1 it is the join at rate 1 on the unit
  * grid, as before.
  *
+ * A live sender (its waypoints pushed as they come) re-anchors: the new
+ * curve is solved a lookahead behind its newest waypoint, and where the join
+ * leaves the old curve (the start of its last interval) it must be queued
+ * past the new start's first intervals, the join's own length and a stop
+ * beyond; D's slack holds less than that.  The old curve's tail is then
+ * played slower (join_wait_rate, the time scaling's target: the rate at
+ * which the new curve is there in time, from its interval and the jump the
+ * join bridges, at least JOIN_WAIT_MIN), and the join leaves from the
+ * slowed state keeping JOIN_KEEP of its speed (not below what the wait
+ * keeps), as in an underrun; the lag is won back after it.  Not where the
+ * new track heads more than 60 degrees away from the old one (no join keeps
+ * moving there: the stop), on one clock or under an override.
+ *
  * In an underrun (the time scaling has slowed the output because the curve
  * ahead ran short: the re-anchor's own confirmation holds the new track's
  * first waypoints back, or the sender stalled) the join leaves from the
@@ -131,6 +144,9 @@
 /* Under an override, a rate below this fraction of it is held by the
  * curves' ceilings (join_try). */
 #define JOIN_HELD 0.999
+/* The least rate join_wait_rate slows an old curve's tail to, waiting for the
+ * new one (above JOIN_KEEP: the join starts from it). */
+#define JOIN_WAIT_MIN 0.6
 
 /* What the queue holds for a join: the old trajectory's END at index iend,
  * the new trajectory's first entry after it. */
@@ -178,6 +194,19 @@ static size_t traj_past(const engine_t *e, size_t i0, uint64_t traj)
     return lo;
 }
 
+/* Where the old trajectory's last interval (its node's pieces) begins, its
+ * END at queue index iend. */
+static double join_last_ivl(const engine_t *e, size_t iend)
+{
+    if (iend == 0)
+        return e->out.cur.seg.t0_s;
+    uint64_t node = queue_at(e, iend - 1)->node;
+    size_t j = iend;
+    while (j > 0 && queue_at(e, j - 1)->node == node)
+        j--;
+    return j > 0 || e->out.cur.node != node ? queue_at(e, j)->seg.t0_s : e->out.cur.seg.t0_s;
+}
+
 /* The old trajectory's end and the new one behind it (0: no join possible
  * now; *never: not for this trajectory). */
 static int join_find(const engine_t *e, join_find_t *f, int *never)
@@ -191,16 +220,7 @@ static int join_find(const engine_t *e, join_find_t *f, int *never)
     f->iend = i - 1;
     f->inew = i;
     f->t_end = queue_at(e, i - 1)->t1_s;
-    /* where the last interval (its node's pieces) begins */
-    f->t_last_ivl = e->out.cur.seg.t0_s;
-    if (f->iend > 0) {
-        uint64_t node = queue_at(e, f->iend - 1)->node;
-        size_t j = f->iend;
-        while (j > 0 && queue_at(e, j - 1)->node == node)
-            j--;
-        f->t_last_ivl = j > 0 || e->out.cur.node != node ? queue_at(e, j)->seg.t0_s
-                                                         : e->out.cur.seg.t0_s;
-    }
+    f->t_last_ivl = join_last_ivl(e, f->iend);
     const qent_t *n = queue_at(e, i), *end = queue_at(e, i - 1);
     double d2 = 0;
     for (int k = 0; k < AX; k++)
@@ -440,6 +460,13 @@ static void ceilings(const engine_t *e, const fdiff_seg_t pc[3], double *cmin, d
     }
 }
 
+int join_may_wait_here(const engine_t *e)
+{
+    return !e->clk.on && is_exactly(e->scale.override, 1.0) && join_wanted(e);
+}
+
+static int join_wait_plan(const engine_t *e, double *r);
+
 /* The shortest join at rate rho from the output's state at track time
  * t_now (see above): spliced in and begun (1), or none (0; *short_queue: one
  * may fit once more of the new curve is queued). */
@@ -460,8 +487,14 @@ static int join_search(engine_t *e, const join_find_t *fp, double t_now, double 
     if (e->cfg.cap_speed_m_s > 0 && (!(vlim > 0) || vlim > e->cfg.cap_speed_m_s))
         vlim = e->cfg.cap_speed_m_s; /* the caller's cap (engine.h) */
     /* the old motion's speed it keeps half of: the old curve's at rho; in
-     * an underrun the output's own (the time scaling has slowed it) */
-    double v_old = e->out.underrun ? norm3(v0) : rho * out_cspeed(e);
+     * an underrun the output's own (the time scaling has slowed it); slowed
+     * to wait for the new curve (join_wait_rate), its own, but not below
+     * what the wait keeps, JOIN_WAIT_MIN of the curve's */
+    double r_wait, v_old = rho * out_cspeed(e);
+    if (e->out.underrun)
+        v_old = norm3(v0);
+    else if (e->scale.on && join_wait_plan(e, &r_wait))
+        v_old = fmin(v_old, fmax(norm3(v0), JOIN_WAIT_MIN * v_old));
     double T0 = ceil((f.t_first - t_now) / (rho * P) - 1e-9) * P;
     if (T0 < JOIN_MIN_TICKS * P)
         T0 = JOIN_MIN_TICKS * P;
@@ -553,6 +586,77 @@ static int join_search(engine_t *e, const join_find_t *fp, double t_now, double 
         ticks += step;
     }
     return 0;
+}
+
+/* A live sender's re-anchor ended the trajectory the output streams, and the
+ * new trajectory's curve is not yet solved far enough to be joined where the
+ * join leaves the old one (the start of its last interval, t_j): there the
+ * new curve must be queued JOIN_SETTLE_INTERVALS intervals past its start, and
+ * the join's least duration (a quintic's across the jump within the scaling's
+ * acceleration and jerk) and a stop from rate 1 beyond t_j.  The new curve
+ * grows with its waypoints, a second of track time a second; the old curve
+ * played at rate r reaches t_j in (t_j - t_now) / r.  Returns 1 if the join
+ * waits so (no gap, time that runs on, the new track heading within 60
+ * degrees of the old one's: a turn back is no join that keeps moving), with
+ * *r the rate at which the curve is there by t_j (INFINITY: no need to slow,
+ * or past t_j). */
+static int join_wait_plan(const engine_t *e, double *r)
+{
+    *r = INFINITY;
+    if (!join_may_wait(e) || e->solve.nodes < 2 || e->solve.nodes > e->solve.ring ||
+        e->out.cur.join)
+        return 0;
+    size_t i = traj_past(e, 0, e->out.traj);
+    if (i == 0 || queue_at(e, i - 1)->kind != QE_END)
+        return 0;
+    const qent_t *end = queue_at(e, i - 1);
+    double t_end = end->t1_s, t_n0 = nt(e, 0), t_nw = nt(e, e->solve.nodes - 1);
+    if (t_n0 < t_end - 1e-9 || t_n0 - t_end > e->cfg.max_gap_s)
+        return 0; /* no join: a gap, or time that does not run on */
+    if (i < e->queue.len) {
+        size_t k = traj_past(e, i, queue_at(e, i)->traj);
+        if (queue_at(e, k - 1)->kind == QE_END)
+            return 0; /* the new trajectory is whole: join_try's own */
+    }
+    const double *r0 = e->solve.node_r, *r1 = e->solve.node_r + AX; /* nodes 0, 1 (nr) */
+    double d2 = 0, dot = 0, vn2 = 0, vo2 = 0;
+    for (int k = 0; k < AX; k++) {
+        double vn = r1[k] - r0[k], vo = out_vel(e)[k];
+        d2 += (r0[k] - end->seg.c[k][0]) * (r0[k] - end->seg.c[k][0]);
+        dot += vn * vo;
+        vn2 += vn * vn;
+        vo2 += vo * vo;
+    }
+    if (!(dot > 0.5 * sqrt(vn2 * vo2)))
+        return 0;
+    double t_j = join_last_ivl(e, i - 1), t_now = e->out.origin_t + out_s(e), P = e->period_s;
+    double h = e->solve.span_max > 0 ? e->solve.span_max / (e->la_steady + 1) : 0.0;
+    if (!(h > 0) || !(t_j > t_now))
+        return 1;
+    double d = sqrt(d2), A = e->cfg.scale_accel_m_s2, Jm = e->cfg.scale_jerk_m_s3;
+    double T_j = fmax(sqrt(5.78 * d / A), cbrt(60.0 * d / Jm));
+    double v = fmax(e->out.cur.vmax, ENGINE_SCALE_V_FLOOR_M_S), av = e->out.cur.av;
+    double need = ts_stop_dist(1.0, 0.0, A / av, Jm / v) + (TS_MARGIN_TICKS + 2) * P;
+    double t_req = fmax(t_n0 + (JOIN_SETTLE_INTERVALS + 1) * h, t_j + T_j) + need + 2 * P;
+    double t_grow = t_nw - (e->la_steady + 1) * h; /* the solved curve's end, growing */
+    if (i < e->queue.len)
+        t_grow = fmax(t_grow, queue_at(e, traj_past(e, i, queue_at(e, i)->traj) - 1)->t1_s);
+    if (t_req > t_grow)
+        *r = (t_j - t_now) / (t_req - t_grow);
+    return 1;
+}
+
+/* The rate the output keeps on such an old curve (join_wait_plan): the rate
+ * at which the new curve is there by t_j, at least JOIN_WAIT_MIN (the join
+ * keeps at least JOIN_KEEP of the speed it leaves from, as in an underrun);
+ * INFINITY where nothing waits (no later trajectory open, on one clock,
+ * under an override, no need). */
+double join_wait_rate(const engine_t *e)
+{
+    double r;
+    if (!join_wait_plan(e, &r) || !(r < 1.0))
+        return INFINITY;
+    return r > JOIN_WAIT_MIN ? r : JOIN_WAIT_MIN;
 }
 
 int join_try(engine_t *e)

@@ -21,6 +21,9 @@
  *     the output braked to rest at the old curve's end, speed 0);
  *   - pushed as it comes (each waypoint at its own time): the speed stays
  *     above 50 % of 5 m/s (the issue's "done when"; fails on the old code);
+ *     also where the line starts gently from rest and the new curve comes
+ *     too late for the join: the old curve's tail slowed for it (fails on
+ *     the old code: the stop and transfer);
  *   - the new track moving the other way: no join keeps half the speed
  *     (it must pass through rest), so the stop and rest-to-rest transfer as
  *     before (transfers 1, transfers_moving 0, the speed 0 between);
@@ -74,6 +77,7 @@ typedef struct {
     int method; /* + 1: the method (0: the default) */
     int clock;  /* one clock (engine_set_clock): the track stamped from
                      * T0_S on, the output at now - CLOCK_D_NS */
+    int gentle; /* the line starts gently from rest: x = V t^2 / 4 up to 2 s */
 } opts_t;
 
 typedef struct {
@@ -100,9 +104,10 @@ typedef struct {
 
 static double wp_x(const opts_t *o, double t)
 {
+    double x0 = o->gentle ? V : 0.0; /* what the gentle start is behind */
     if (t < JUMP_T)
-        return V * t;
-    return V * JUMP_T + o->dir * V * (t - JUMP_T);
+        return o->gentle && t < 2.0 ? 0.25 * V * t * t : V * t - x0;
+    return V * JUMP_T - x0 + o->dir * V * (t - JUMP_T);
 }
 
 static void run(const opts_t *o, result_t *r)
@@ -296,6 +301,23 @@ static void test_live_keeps_half_speed(void **state)
     result_t r;
     run_joined(&o, &r);
     assert_true(r.vmin >= 0.5 * V); /* issue 32: not below 50 % of the lower speed */
+}
+
+/* A line that starts gently from rest (its stop reserve, and so D, is not
+ * raised by the ramp of a REST start's curve faster than its waypoints):
+ * the re-anchor's new curve is solved too late for a join where the old
+ * curve's last interval begins, at rate 1.  The old curve's tail is slowed
+ * for it (join_wait_rate, not below JOIN_WAIT_MIN of its speed) and joined
+ * moving.  Fails on the old code: the output braked to rest at the old
+ * curve's end (speed 0) and transferred rest to rest. */
+static void test_live_gentle_start_keeps_half_speed(void **state)
+{
+    (void)state;
+    opts_t o = {.ahead = 0, .off_y = 1.5, .dir = 1, .gentle = 1};
+    result_t r;
+    run_joined(&o, &r);
+    assert_true(r.vmin >= 0.5 * V);
+    assert_true(r.line_dev < 1e-6); /* and then on the new line */
 }
 
 static void test_other_way_stops(void **state)
@@ -695,6 +717,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_ahead_keeps_speed),
         cmocka_unit_test(test_live_keeps_half_speed),
+        cmocka_unit_test(test_live_gentle_start_keeps_half_speed),
         cmocka_unit_test(test_other_way_stops),
         cmocka_unit_test(test_axis_limit),
         cmocka_unit_test(test_gap_rests),
