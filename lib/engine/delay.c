@@ -40,17 +40,17 @@ void engine_delay_parts(const engine_config_t *r, unsigned la, double interval_s
 {
     memset(d, 0, sizeof *d);
     d->interval_s = interval_s > 0 && isfinite(interval_s) ? interval_s : 0.0;
-    if (r->start_slack == ENGINE_AUTO && engine_cfg_local(r)) {
-        /* the local methods (issue 31): the lookahead (the acceptance's
-         * verdict in it) and a slack in time, an interval at most
-         * ENGINE_DELAY_TICKS periods (delay.h) */
+    if (r->start_slack == ENGINE_AUTO) {
+        /* the lookahead (the acceptance's verdict in it) and a slack in
+         * time, an interval at most ENGINE_DELAY_TICKS periods (the
+         * fragments' at least, below: delay.h) */
         d->lookahead_n = la;
         d->slack_ticks = ENGINE_DELAY_TICKS;
         d->slack_s = ENGINE_DELAY_TICKS * (double)r->period_ns * 1e-9;
         if (d->interval_s > 0 && d->interval_s < d->slack_s)
             d->slack_s = d->interval_s;
     } else {
-        d->slack_n = r->start_slack == ENGINE_AUTO ? engine_cfg_slack_min(r) : r->start_slack;
+        d->slack_n = r->start_slack; /* counted */
         d->lookahead_n = la - (d->slack_n < la ? d->slack_n : la) + 1;
         d->slack_s = d->slack_n * d->interval_s;
     }
@@ -62,6 +62,13 @@ void engine_delay_parts(const engine_config_t *r, unsigned la, double interval_s
     d->speed_m_s = speed_m_s;
     d->lookahead_s = d->lookahead_n * d->interval_s;
     d->stop_s = engine_delay_stop_s(r, speed_m_s);
+    if (d->slack_ticks && !engine_cfg_local(r) && d->interval_s > d->slack_s) {
+        /* the fragments: an interval, less what the stop reserve holds
+         * beyond v / (2 scale_accel_m_s2) (its jerk term and margin), so
+         * D = (L + 1) h + v / (2 scale_accel_m_s2) where that fits */
+        double held = d->stop_s - 0.5 * speed_m_s / r->scale_accel_m_s2;
+        d->slack_s = fmax(d->slack_s, d->interval_s - fmax(held, 0.0));
+    }
     d->need_s = d->lookahead_s + d->slack_s + d->stop_s;
     d->delay_s = r->delay_s > d->need_s ? r->delay_s : d->need_s;
     d->asked_s = r->delay_s > 0 ? r->delay_s : 0.0;
@@ -172,8 +179,15 @@ int engine_delay_format(const engine_delay_t *d, char *buf, size_t len)
         snprintf(m, sizeof m, " (method %s)",
                  engine_setting_enum_name(engine_setting_find("method"), d->method));
     if (d->slack_ticks) { /* in time: ticks, the arrivals' lateness, intervals learnt */
-        int n = snprintf(slack, sizeof slack, "slack %.3f s (an interval, at most %u ticks",
-                         d->slack_s, d->slack_ticks);
+        /* the fragments' an interval less the stop's jerk term and margin, at
+         * least the ticks; the local methods' at most the ticks (delay.h) */
+        int n = d->method >= ENGINE_METHOD_HERMITE
+                    ? snprintf(slack, sizeof slack, "slack %.3f s (an interval, at most %u ticks",
+                               d->slack_s, d->slack_ticks)
+                    : snprintf(slack, sizeof slack,
+                               "slack %.3f s (an interval less the stop's a/(2j) and margin, at "
+                               "least %u ticks",
+                               d->slack_s, d->slack_ticks);
         if (d->jitter_s > 0 && n > 0 && (size_t)n < sizeof slack)
             n += snprintf(slack + n, sizeof slack - (size_t)n, ", arrivals up to %.3f s late",
                           d->jitter_s);

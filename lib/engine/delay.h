@@ -5,34 +5,25 @@
  * On regular input of interval h the output stands D behind the newest
  * waypoint received, where
  *
- *     D = (L + 1) h     lookahead: the solver makes a segment final once L
- *                       more waypoints are in (engine_lookahead less the
- *                       start slack); the output at a segment's start
- *                       therefore waits L + 1 intervals
- *       + S h           jitter slack: start_slack waypoints (auto: its least,
- *                       ENGINE_SLACK_AUTO_MIN; one more per underrun seen,
- *                       up to ENGINE_SLACK_AUTO_MAX).  The least one is the
- *                       acceptance's verdict lag (ACCEPT_LAG: the lookahead
- *                       counts the larger of the two, engine_cfg_lookahead):
- *                       it absorbs arrivals up to an interval late
- *                       (tests/unit/test_jitter.c), not a hole; a fix lost
- *                       or refused where the fragments need the most
- *                       lookahead is one underrun, and the slack then holds
- *                       one waypoint more.  In time, not only in waypoints
- *                       (start_slack auto): where the arrivals come later
- *                       than the least-delayed one says by more than the
- *                       least slack (J, measured: catchup.c, beyond a period
- *                       of tick rounding), the least slack is J; D grows to
- *                       it as it is seen (engine_delay_grow), and the
- *                       intervals learnt from underruns come on top.
- *                       The local methods (issue 31, start_slack auto):
- *                       D = L h + the slack in time + B, L their whole
- *                       lookahead (the acceptance's verdict in it), the
- *                       slack an interval, at most ENGINE_DELAY_TICKS
- *                       periods, plus J and the intervals learnt: at the
- *                       low-latency end a whole interval would be a third
- *                       of D (tests/oracle/test_hermite.py
- *                       test_low_latency_delay)
+ *     D = L h           lookahead: the solver makes a segment final once L
+ *                       more waypoints are in (engine_lookahead; with
+ *                       start_slack set, less the slack)
+ *       + slack         start_slack auto (the default), in time: the
+ *                       fragments' an input interval less what the stop
+ *                       reserve holds beyond v/(2a) (its jerk term and
+ *                       margin), so that D = (L + 1) h + v/(2a) where they
+ *                       fit, and ENGINE_DELAY_TICKS periods at least; the
+ *                       local methods' (issue 31) an interval, at most
+ *                       ENGINE_DELAY_TICKS periods (at the low-latency end a
+ *                       whole interval would be a third of D:
+ *                       tests/oracle/test_hermite.py test_low_latency_delay).
+ *                       On top: the arrivals' jitter J (those later than the
+ *                       least-delayed one says, beyond a period of tick
+ *                       rounding: catchup.c; D grows to it as it is seen,
+ *                       engine_delay_grow) and an interval per underrun
+ *                       learnt (a fix lost where the solver needs the most
+ *                       lookahead, or later than the slack).  start_slack S
+ *                       set: S intervals, counted (L then less S, + 1)
  *       + B             stop reserve: the curve kept solved ahead of the
  *                       output so that, should the input stop, the time
  *                       scaling brings it to rest on data: a stop from rate
@@ -43,19 +34,19 @@
  * The engine starts a trajectory's output once it is D behind less what the
  * ramp from rest to rate 1 loses (a start from rest loses a stop's track
  * time: the ramp itself builds the stop reserve), so the steady delay is D.
- * Where the ramp loses more than B (the curve where it ramps is faster than
- * the top speed measured so far, or bends harder: the limits are converted
- * at its speed bound), the start's wait plus that loss is D, and the part
- * stated as B is that loss (delay_run.c delay_started): 0.833 s on the
- * 10 Hz track of tests/e2e/test_delay.py, where B is 0.646 s.  Not for the
- * local methods: there the excess is a lag the catch-up wins back (their
- * new curve is solved an interval or two behind its waypoints, so a live
- * re-anchor joins moving at their D too; the fragments' needs the
- * lookahead that the excess holds, LIFECYCLE.md).  With delay_s set
- * (engine_config_t), D is delay_s: it must be at
- * least what the settings need (engine_delay_check).  On the caller's clock
- * (engine_set_clock) D is the clock's, and a start's ramp is a lag the clock
- * wins back (CLOCK.md "Behind"), not a longer D.
+ * Where the ramp loses more than B (a REST start's curve is faster than
+ * its waypoints where it ramps, or bends harder: the limits are converted
+ * at its speed bound), the excess is a lag the catch-up wins back
+ * (catchup.h), not a longer D: 0.19 s on the 10 Hz track of
+ * tests/e2e/test_delay.py (its D 2.476 s, B 0.646 s).  A live re-anchor
+ * needs more of the new curve than D holds beyond its lookahead: the old
+ * curve's tail is played slower for it (join.c join_wait_rate).  With a
+ * fixed start_slack the start counts waypoints and D is where that start
+ * leaves the output (the wait plus the ramp's loss).  With delay_s set
+ * (engine_config_t), D is delay_s: it must be at least what the settings
+ * need (engine_delay_check).  On the caller's clock (engine_set_clock) D is
+ * the clock's, and a start's ramp is a lag the clock wins back (CLOCK.md
+ * "Behind"), not a longer D.
  *
  * Pure: no clock, no I/O.
  */
@@ -66,9 +57,9 @@
 
 #include "engine.h"
 
-/* start_slack auto with a local method (issue 31): the slack's least is an
- * input interval, but at most this many output periods: beyond them the
- * slack is what the arrivals measure (J) and the underruns teach.  An
+/* start_slack auto: the local methods' slack is an input interval, at most
+ * this many output periods, the fragments' at least this many: beyond them
+ * the slack is what the arrivals measure (J) and the underruns teach.  An
  * arrival is taken at the first tick after it, and the braking for the end
  * of the solved curve is decided a tick ahead with TS_MARGIN_TICKS and the
  * rises of the limits ahead in hand: 2 periods fall short (the output slows
@@ -79,15 +70,14 @@
 typedef struct {
     double interval_s;    /* h: the input's interval (0: unknown) */
     double speed_m_s;     /* v: the top speed the stop reserve is for */
-    unsigned lookahead_n; /* L + 1: intervals of lookahead */
-    unsigned slack_n;     /* S: intervals of jitter slack (the local methods: learnt) */
-    unsigned slack_ticks; /* the local methods with start_slack auto: ENGINE_DELAY_TICKS */
-    double lookahead_s;   /* (L + 1) h */
-    double slack_s;       /* S h, or J + (S - S_min) h where the arrivals' jitter J
-                             is more than S_min h (start_slack auto) */
+    unsigned lookahead_n; /* L: intervals of lookahead (start_slack set: L - S + 1) */
+    unsigned slack_n;     /* start_slack auto: intervals learnt; set: S */
+    unsigned slack_ticks; /* start_slack auto: ENGINE_DELAY_TICKS (0: set) */
+    double lookahead_s;   /* lookahead_n h */
+    double slack_s;       /* the slack in time, J and the intervals learnt (auto); S h */
     double jitter_s;      /* J, where it sets the slack (else 0) */
     double stop_s;        /* B */
-    double need_s;        /* (L + 1) h + S h + B: what the settings need */
+    double need_s;        /* lookahead_s + slack_s + B: what the settings need */
     double delay_s;       /* D: need_s, or delay_s when set (>= need_s then) */
     double asked_s;       /* delay_s as set (or the clock's D), 0 if not: D above it is
                              what the input needs, said so (engine_delay_format) */
@@ -126,13 +116,14 @@ double engine_delay_stop_s(const engine_config_t *cfg, double speed_m_s);
  * slack at interval_s (0: unknown, not counted); else -ENGINE_ECONFIG with
  * why holding the numbers, e.g. "delay_s 2 s is shorter than the settings
  * need: 40.1 s = stop reserve 40.1 s (from 400 m/s at scale_accel_m_s2 5)
- * + 19 input intervals (lookahead 18, slack 1); raise delay_s or lower
- * max_speed_m_s".
+ * + 18 input intervals (lookahead 18, slack 0) x the interval + a few ticks;
+ * raise delay_s, or lower max_speed_m_s".
  */
 int engine_delay_check(const engine_config_t *cfg, double interval_s, char *why, size_t whylen);
 
-/* One line: "D 2.53 s = lookahead 18 x 0.1 s + slack 1 x 0.1 s + stop
- * reserve 0.627 s (5.76 m/s)"; returns snprintf's length. */
+/* One line: "D 2.476 s = lookahead 18 x 0.1 s + slack 0.030 s (an interval
+ * less the stop's a/(2j) and margin, at least 3 ticks) + stop reserve
+ * 0.646 s (from 5.76 m/s)"; returns snprintf's length. */
 int engine_delay_format(const engine_delay_t *d, char *buf, size_t len);
 
 /*

@@ -79,6 +79,7 @@ static int build(engine_waypoint_t *rows, int site, int kind)
 
 /* max_lookahead of replay's engine (0: the default) */
 static unsigned replay_max_lookahead;
+static double replay_delay_s; /* delay_s of replay's engine (0: the settings' D) */
 
 /* replay rows on a virtual clock; status at the end */
 static void replay(const engine_waypoint_t *rows, int n, engine_status_t *st, int *finished)
@@ -87,6 +88,7 @@ static void replay(const engine_waypoint_t *rows, int n, engine_status_t *st, in
     engine_config_default(&c);
     if (replay_max_lookahead)
         c.max_lookahead = replay_max_lookahead;
+    c.delay_s = replay_delay_s;
     int err = -1, next = 0;
     engine_t *e = engine_new(&c, &err);
     engine_setpoint_t sp;
@@ -897,7 +899,9 @@ static void test_late_needs_late_stamps(void **state)
  * first follows the anchor, the second follows the anchor, and the second
  * does not follow the first.  Replayed as they arrive, at every site of
  * three fragment periods: every fix kept (both re-stamped at the pace), no
- * underrun.  Before, the full window held both (its chains as long either
+ * underrun where D holds a fix 0.3 s late (delay_s 4.7 s: the settings' D
+ * on this track holds 0.13 s, and a fix later than that is an underrun
+ * whatever the acceptance does).  Before, the full window held both (its chains as long either
  * way) until its costs broke the tie and the first was re-stamped, then the
  * second likewise: 8 intervals each, and the output underran.
  */
@@ -910,6 +914,7 @@ static void test_late_fixes_cost_nothing(void **state)
     assert_int_equal(engine_config_resolve(&c, &r), 0);
     unsigned sites = 3 * (r.fragment - r.overlap), bad = 0, underran = 0;
 
+    replay_delay_s = 4.7;
     for (int site = 40; site < 40 + (int)sites; site++) {
         engine_status_t st;
         int fin;
@@ -932,6 +937,7 @@ static void test_late_fixes_cost_nothing(void **state)
             bad++;
         }
     }
+    replay_delay_s = 0;
     print_message("two late fixes: %u of %u sites with an underrun\n", underran, sites);
     assert_int_equal(bad, 0);
 }

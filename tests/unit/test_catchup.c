@@ -114,7 +114,8 @@ static void run(int n, double ppm, int bulk, run_t *r)
  * delay (on the sender's clock) at the end is the delay at the start
  * within an input interval (before: 1 s more for the fast sender,
  * underruns for the slow one), won back or given back at no more than 5 %
- * of rate; a sender on time is never steered.
+ * of rate; a sender on time is steered once, for the lag its start's ramp
+ * left beyond the stop reserve (delay.h), and stands at D after it.
  */
 static void test_sender_drift_followed(void **state)
 {
@@ -130,7 +131,10 @@ static void test_sender_drift_followed(void **state)
         assert_int_equal(r.under_sending, 0);
         assert_int_equal(r.st.hard_stops, 0);
         assert_true(fabs(r.delay_end - r.delay_start) <= 0.1);
-        assert_true(i == 0 ? r.st.catchups == 0 : r.st.catchups >= 1);
+        assert_true(i == 0 ? r.st.catchups <= 1 : r.st.catchups >= 1);
+        if (i == 0) /* on D, 20 s in and at the end */
+            assert_true(fabs(r.delay_start - r.d.delay_s) < 0.01 &&
+                        fabs(r.delay_end - r.d.delay_s) < 0.01);
         assert_true(r.rate_max <= 1.0 + CATCHUP_DEFAULT + 0.01);
     }
 }
@@ -138,7 +142,8 @@ static void test_sender_drift_followed(void **state)
 /*
  * Given the track sent at its pace for 5 s and then the rest pushed at once
  * (a buffer filled ahead of time: its stamps are no sender's clock), then
- * nothing is won back: the output plays at its stamps' pace, no catch-up.
+ * nothing is won back once it is: the output plays at its stamps' pace (a
+ * catch-up of the start's lag may have begun while the sender was live).
  */
 static void test_loaded_ahead_not_steered(void **state)
 {
@@ -147,7 +152,7 @@ static void test_loaded_ahead_not_steered(void **state)
     run(1200, 0.0, 50, &r);
     print_message("loaded ahead: %llu catch-ups, delay %.4f s then %.4f s\n",
                   (unsigned long long)r.st.catchups, r.delay_start, r.delay_end);
-    assert_int_equal(r.st.catchups, 0);
+    assert_true(r.st.catchups <= 1);
     assert_int_equal(r.st.underruns, 0);
     assert_true(fabs(r.delay_end - r.delay_start) < 1e-6);
 }

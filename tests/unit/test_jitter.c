@@ -131,7 +131,9 @@ static void test_arrival_jitter_no_underrun(void **state)
                        "lag %.3f s, D %.3f s\n",
                        rates[a].h, las[b] ? "2" : "default", fs[j], r.underruns, r.lag, r.delay_s);
                 assert_int_equal(r.underruns, 0);
-                assert_true(r.lag <= r.delay_s + fs[j] * rates[a].h + 0.02);
+                /* at D, within the band the catch-up leaves (catchup.h: half an
+                 * interval, two ticks at least), and the lateness */
+                assert_true(r.lag <= r.delay_s + fs[j] * rates[a].h + fmax(0.5 * rates[a].h, 0.02));
             }
 }
 
