@@ -393,13 +393,22 @@ static void plain_window(engine_t *e)
     fast_bound(e);
 }
 
+/* x is exactly 1.0 (is_exactly(x, 1.0)): its bits are 1.0's, the only
+ * double equal to it; one integer comparison. */
+static inline int is_one_bits(double x)
+{
+    uint64_t b;
+    memcpy(&b, &x, sizeof b);
+    return b == UINT64_C(0x3ff0000000000000);
+}
+
 /* The key of the decision plain_window kept: the state a call between
  * ticks may change it by is as it was then (see there). */
 static inline int plain_key(const engine_t *e)
 {
     return e->out.plain_qlen == e->queue.len && e->out.plain_seen == e->lag.seen_ns &&
            e->out.mode == OUT_STREAM && !e->scale.stop_req && !e->clk.on &&
-           is_exactly(e->scale.override, 1.0);
+           is_one_bits(e->scale.override);
 }
 
 /* The decision plain_window kept still holds for the step from tick n. */
@@ -807,7 +816,7 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
  * (step_kept as step_once makes it, and the setpoint as fill_sp would make
  * it; plain_sp holds: a kept step inside its segment is on the grid, leaves
  * no underrun and no flag pending, and the key holds the rest). */
-__attribute__((noinline)) static void kept_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+static void kept_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
     e->out.last_now = now_ns;
     step_kept(e);
@@ -820,36 +829,51 @@ __attribute__((noinline)) static void kept_tick(engine_t *e, int64_t now_ns, eng
 
 static int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t *sp);
 
+static int tick_other(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
+
 /*
  * One tick, one path: the periods since the last call counted (one period,
  * the usual case, without the 64-bit division), the steps made (step_once,
  * whose rate decision is kept while it holds: plain_window) and the
  * setpoint filled (fill_sp, its flag logic skipped for a plain one).  A step
  * that keeps its decision inside its segment, one period on with nothing
- * pushed since, is made here, as step_once and fill_sp would make it,
- * without the frame of tick_steps: by plain_tick (a run of loads, one imul,
- * the stepper's additions and the setpoint's stores), or kept_tick for a
- * re-seed and the test hook's checked steps.
+ * pushed since, is made without the frame of tick_steps: by plain_tick (a
+ * run of loads, one imul, the stepper's additions and the setpoint's
+ * stores), here, or kept_tick for a re-seed and the test hook's checked
+ * steps (tick_other).  Everything else is tick_other's, a tail call: the
+ * plain tick saves no register.
  */
 int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
-    int64_t k = 1, d = now_ns - e->out.last_now, p = e->cfg.period_ns;
-
-    /* A kept step inside its segment (kept_last: there is a window, so an
-     * earlier tick), one period on (d in [p - p/2, 2 p - p/2), as the
-     * division below would round: one unsigned comparison, d below p - p/2
+    /* A plain step (fast_last: inside the segment, no re-seed, so a window
+     * and an earlier tick), one period on (d in [p - p/2, 2 p - p/2), as
+     * the division would round: one unsigned comparison, d below p - p/2
      * wraps above p), with nothing pushed since: lag_note has nothing to
      * note, and a silent end is noticed at the next tick that decides, as
      * it always was (checked every tick, the silent ends of 2 of the 30
      * frozen outputs, gpxpy_cerknicko-jezero smooth, come a few ticks
      * earlier) */
-    if (__builtin_expect(e->out.n < e->out.kept_last, 1) &&
-        __builtin_expect((uint64_t)d - (uint64_t)e->period_lo < (uint64_t)p, 1) && plain_key(e) &&
-        !(e->lag.pending | e->sil.fresh)) {
-        if (__builtin_expect(e->out.n < e->out.fast_last, 1))
-            plain_tick(e, now_ns, sp);
-        else
-            kept_tick(e, now_ns, sp); /* a re-seed, or the test hook */
+    if (__builtin_expect(e->out.n < e->out.fast_last, 1) &&
+        __builtin_expect((uint64_t)(now_ns - e->out.last_now) - (uint64_t)e->period_lo <
+                             (uint64_t)e->cfg.period_ns,
+                         1) &&
+        plain_key(e) && !(e->lag.pending | e->sil.fresh)) {
+        plain_tick(e, now_ns, sp);
+        return 0;
+    }
+    return tick_other(e, now_ns, sp);
+}
+
+/* engine_tick but for a plain step. */
+__attribute__((noinline)) static int tick_other(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    int64_t k = 1, d = now_ns - e->out.last_now, p = e->cfg.period_ns;
+
+    /* A kept step inside its segment (kept_last) that plain_tick does not
+     * make (fast_last): a re-seed, or the test hook's; as engine_tick's */
+    if (e->out.n < e->out.kept_last && (uint64_t)d - (uint64_t)e->period_lo < (uint64_t)p &&
+        plain_key(e) && !(e->lag.pending | e->sil.fresh)) {
+        kept_tick(e, now_ns, sp);
         return 0;
     }
     if (__builtin_expect(e->pick.n != 0, 0)) {
