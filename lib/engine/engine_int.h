@@ -200,7 +200,7 @@ typedef struct {
     int64_t seg_n0;  /* tick at which cur was seeded */
     double origin_t; /* absolute track time of tick 0 of the trajectory */
     /* The output's position, velocity and acceleration: on the unit grid
-     * (on_fd, out_eval) they are the stepper's rows fd.p0, v0, a0, copied
+     * (on_fd, out_eval) they are the stepper's values (fd.f), copied
      * here only when something needs them here (out_sync: a hold keeps the
      * position); else (scaled, held) here.  Read them through out_pos,
      * out_vel, out_acc; whoever writes them here clears on_fd. */
@@ -584,17 +584,17 @@ static inline int at_rest(const engine_t *e)
 /* The output's position, velocity, acceleration (see engine_out_t). */
 static inline const double *out_pos(const engine_t *e)
 {
-    return e->out.on_fd ? e->out.fd.p0 : e->out.pos;
+    return e->out.on_fd ? e->out.fd.f + FDIFF_POS : e->out.pos;
 }
 
 static inline const double *out_vel(const engine_t *e)
 {
-    return e->out.on_fd ? e->out.fd.v0 : e->out.vel;
+    return e->out.on_fd ? e->out.fd.f + FDIFF_VEL : e->out.vel;
 }
 
 static inline const double *out_acc(const engine_t *e)
 {
-    return e->out.on_fd ? e->out.fd.a0 : e->out.acc;
+    return e->out.on_fd ? e->out.fd.f + FDIFF_ACC : e->out.acc;
 }
 
 static inline double tick_time(const engine_t *e, int64_t n)

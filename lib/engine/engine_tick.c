@@ -105,7 +105,7 @@ double out_cspeed(const engine_t *e)
         return e->scale.cspeed; /* scale_eval's (or out_sync's) */
     double v2 = 0;
     for (int k = 0; k < AX; k++) /* rate 1: the curve's own speed */
-        v2 += e->out.fd.v0[k] * e->out.fd.v0[k];
+        v2 += e->out.fd.f[FDIFF_VEL + k] * e->out.fd.f[FDIFF_VEL + k];
     return sqrt(v2);
 }
 
@@ -603,7 +603,7 @@ static int plain_sp(const engine_t *e)
 
 static void fill_sp_flags(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
 
-/* Two doubles, for the stepper's rows (fdiff.h keeps them in lanes). */
+/* Two doubles, for the stepper's rows (fdiff.h keeps them in pairs). */
 typedef double row2_t __attribute__((vector_size(16)));
 
 static inline row2_t row2_at(const double *p)
@@ -613,32 +613,30 @@ static inline row2_t row2_at(const double *p)
     return v;
 }
 
-/* The setpoint's pos_m, vel_m_s and acc_m_s2, one run of nine doubles. */
+/* The setpoint's pos_m, vel_m_s and acc_m_s2, one run of nine doubles: the
+ * stepper's values as its row f holds them. */
 _Static_assert(offsetof(engine_setpoint_t, vel_m_s) ==
                        offsetof(engine_setpoint_t, pos_m) + AX * sizeof(double) &&
                    offsetof(engine_setpoint_t, acc_m_s2) ==
                        offsetof(engine_setpoint_t, vel_m_s) + AX * sizeof(double) &&
-                   AX == 3,
-               "fill_plain stores pos_m, vel_m_s and acc_m_s2 as one run of nine doubles");
+                   AX == 3 && FDIFF_AXES == AX && FDIFF_POS == 0 && FDIFF_VEL == AX &&
+                   FDIFF_ACC == 2 * AX,
+               "fill_plain stores the stepper's f as pos_m, vel_m_s and acc_m_s2");
 
 /* A plain setpoint (plain_sp): what fill_sp_flags would make of it (put_sp).
  * Everything it reads is read before the first store to sp (which may alias
  * the engine, for all the compiler knows), and in the widths it was stored
  * in: a load wider than the store that just wrote it, or across two stores
- * (the tick's counter loaded with the track as one 8-byte pair, the
- * stepper's v0[1..2] as one pair), is not forwarded from the store buffer
- * and waits for the stores to reach the cache.  The stepper's rows are read
- * as the aligned pairs it stores, the setpoint's pairs shuffled out of them
+ * (the tick's counter loaded with the track as one 8-byte pair), is not
+ * forwarded from the store buffer and waits for the stores to reach the
+ * cache.  The stepper's values are read as the aligned pairs it stores
  * (+ 0.0 as put_sp adds). */
 static inline void fill_plain(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
-    const fdiff_t *fd = &e->out.fd;
+    const double *f = e->out.fd.f;
     const row2_t z = {0.0, 0.0};
-    row2_t p01 = row2_at(fd->p0), p23 = row2_at(fd->p0 + 2), v01 = row2_at(fd->v0),
-           v23 = row2_at(fd->v0 + 2), a01 = row2_at(fd->a0), a23 = row2_at(fd->a0 + 2);
-    row2_t r[4] = {p01 + z, __builtin_shufflevector(p23, v01, 0, 2) + z,
-                   __builtin_shufflevector(v01, v23, 1, 2) + z, a01 + z};
-    double t = e->out.t, az = a23[0] + 0.0;
+    row2_t r[4] = {row2_at(f) + z, row2_at(f + 2) + z, row2_at(f + 4) + z, row2_at(f + 6) + z};
+    double t = e->out.t, az = row2_at(f + 8)[0] + 0.0;
     uint32_t cycle = e->out.cycle, track = e->out.track;
 
     e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
@@ -725,8 +723,9 @@ static void last_setpoint(const engine_t *e, engine_setpoint_t *sp)
         *sp = e->out.last_sp;
         return;
     }
-    put_sp(e, sp, e->out.last_now, e->out.fd.p0, e->out.fd.v0, e->out.fd.a0, ENGINE_STATE_STREAMING,
-           0, NAN);
+    const double *f = e->out.fd.f;
+    put_sp(e, sp, e->out.last_now, f + FDIFF_POS, f + FDIFF_VEL, f + FDIFF_ACC,
+           ENGINE_STATE_STREAMING, 0, NAN);
 }
 
 /* 1 if further steps cannot change anything until new input arrives. */
@@ -752,8 +751,8 @@ int play_stalled(const engine_t *e)
     return 0;
 }
 
-/* One pair of fdiff_step's additions, a row += the next one's (lane by
- * lane, as fdiff_step): stored, and returned. */
+/* One pair of fdiff_step's additions, a row's pair += the next row's (lane
+ * by lane, as fdiff_step): stored, and returned. */
 static inline row2_t step_pair(double *row, const double *next)
 {
     row2_t r = row2_at(row) + row2_at(next);
@@ -767,9 +766,9 @@ static inline row2_t step_pair(double *row, const double *next)
  * (step_kept, unit_step, fdiff_step) and fill_sp (fill_plain) make of it,
  * in one run: the stepper's rows loaded once as the aligned pairs it
  * stores, added (fdiff_step's additions, lane by lane), stored back, and the
- * setpoint's pairs shuffled out of the sums in registers (+ 0.0 as put_sp
- * adds).  Everything is read before the first store to sp, which may alias
- * the engine for all the compiler knows.
+ * setpoint's pairs the sums of f in registers (+ 0.0 as put_sp adds).
+ * Everything is read before the first store to sp, which may alias the
+ * engine for all the compiler knows.
  */
 static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
@@ -779,15 +778,14 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
     double t = e->out.origin_t + tau_of(e, n);
     uint32_t cycle = e->out.cycle + 1, track = e->out.track;
     uint64_t setpoints = e->st.setpoints + 1;
-    /* row by row, each stored as soon as made: the pairs of the rows after
-     * are loaded as they are needed (all loaded first, they outnumber the
-     * 16 registers and are loaded again) */
-    row2_t p0a = step_pair(fd->p0, fd->p1), p0b = step_pair(fd->p0 + 2, fd->p1 + 2);
-    (void)step_pair(fd->p1, fd->p2), (void)step_pair(fd->p1 + 2, fd->p2 + 2);
-    (void)step_pair(fd->p2, fd->p3), (void)step_pair(fd->p2 + 2, fd->p3 + 2);
-    row2_t v0a = step_pair(fd->v0, fd->v1), v0b = step_pair(fd->v0 + 2, fd->v1 + 2);
-    (void)step_pair(fd->v1, fd->v2), (void)step_pair(fd->v1 + 2, fd->v2 + 2);
-    row2_t a0a = step_pair(fd->a0, fd->a1), a0b = step_pair(fd->a0 + 2, fd->a1 + 2);
+    /* row by row (fdiff_step), each pair stored as soon as made */
+    row2_t f0 = step_pair(fd->f, fd->d1), f2 = step_pair(fd->f + 2, fd->d1 + 2),
+           f4 = step_pair(fd->f + 4, fd->d1 + 4), f6 = step_pair(fd->f + 6, fd->d1 + 6),
+           f8 = step_pair(fd->f + 8, fd->d1 + 8);
+    (void)step_pair(fd->d1, fd->d2), (void)step_pair(fd->d1 + 2, fd->d2 + 2);
+    (void)step_pair(fd->d1 + 4, fd->d2 + 4);
+    (void)step_pair(fd->d2, fd->d3);
+    fd->d2[2] += fd->d3[2];
     e->out.n = n;
     e->out.cycle = cycle;
     e->out.last_now = now_ns;
@@ -798,12 +796,11 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
     e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
     e->st.setpoints = setpoints;
 
-    row2_t r[4] = {p0a + z, __builtin_shufflevector(p0b, v0a, 0, 2) + z,
-                   __builtin_shufflevector(v0a, v0b, 1, 2) + z, a0a + z};
+    row2_t r[4] = {f0 + z, f2 + z, f4 + z, f6 + z};
     sp->now_ns = now_ns;
     sp->t_s = t;
     memcpy((char *)sp + offsetof(engine_setpoint_t, pos_m), r, sizeof r);
-    sp->acc_m_s2[2] = a0b[0] + 0.0;
+    sp->acc_m_s2[2] = f8[0] + 0.0;
     sp->state = ENGINE_STATE_STREAMING;
     sp->flags = 0;
     sp->cycle = cycle;
