@@ -213,7 +213,8 @@ typedef struct {
      * (tau_of(seg_last) < cur_t1); the kept steps from a tick n below
      * kept_last, the lesser of the two, stay inside cur (engine_tick makes
      * them itself), and those from below fast_last besides are no re-seed
-     * (nor checked by the test hook: plain_tick) */
+     * (nor checked by the test hook) and follow a plain setpoint (on_fd, no
+     * underrun, last_plain: fill_sp_flags closes it): plain_tick */
     int64_t plain_last, seg_last, kept_last, fast_last;
     size_t plain_qlen;                /* key: queue.len then */
     int64_t plain_seen;               /* key: lag.seen_ns then (a push since: a new sample) */

@@ -710,6 +710,9 @@ __attribute__((noinline)) static void fill_sp_flags(engine_t *e, int64_t now_ns,
             sp->pos_m[k] = NAN; /* not a position: see ENGINE_SP_NO_POSITION */
     e->out.last_plain = 0;
     e->out.last_sp = *sp;
+    /* the next kept step makes the plain setpoint's state again (kept_tick:
+     * out_eval, last_plain), not plain_tick (fast_last) */
+    e->out.fast_last = INT64_MIN;
 }
 
 /* The setpoint of the last call that stepped (fill_sp): a plain one made
@@ -790,10 +793,7 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
     e->out.cycle = cycle;
     e->out.last_now = now_ns;
     e->out.t = t;
-    e->out.on_fd = 1; /* out_eval (a window may begin on a tick that landed on the
-                       * grid from the time scaling: its output was scale_eval's) */
-    e->out.underrun = 0;
-    e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
+    /* on_fd, no underrun and last_plain hold already (fast_last) */
     e->st.setpoints = setpoints;
 
     row2_t r[4] = {f0 + z, f2 + z, f4 + z, f6 + z};
@@ -824,7 +824,7 @@ static void kept_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
     e->st.setpoints++;
 }
 
-static int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t *sp);
+static inline int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t *sp);
 
 static int tick_other(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
 
@@ -906,8 +906,7 @@ __attribute__((noinline)) static int tick_other(engine_t *e, int64_t now_ns, eng
 }
 
 /* engine_tick's k steps, with what each tick notes first. */
-__attribute__((noinline)) static int tick_steps(engine_t *e, int64_t now_ns, int64_t k,
-                                                engine_setpoint_t *sp)
+static inline int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t *sp)
 {
     int64_t i;
 
