@@ -80,18 +80,38 @@ void fdiff_get(const fdiff_t *fd, double *pos, double *vel, double *acc)
     }
 }
 
+/* fdiff_eval's expressions for a pair of lanes (u and inv_t broadcast),
+ * each lane operation by operation what they are for its axis. */
+static inline void eval_pair(lane2_t c0, lane2_t c1, lane2_t c2, lane2_t c3, double u, double inv_t,
+                             lane2_t *p, lane2_t *v, lane2_t *a)
+{
+    *p = c0 + u * (c1 + u * (c2 + u * c3));
+    *v = (c1 + u * (2 * c2 + u * 3 * c3)) * inv_t;
+    *a = (2 * c2 + 6 * c3 * u) * inv_t * inv_t;
+}
+
 void fdiff_eval(const fdiff_seg_t *seg, double u, double *pos, double *vel, double *acc)
 {
     double inv_t = 1.0 / seg->dur_s;
+    const double(*c)[4] = seg->c;
+    lane2_t p, v, a, pz, vz, az; /* x, y; and z (its second lane unused) */
 
-    for (int k = 0; k < FDIFF_AXES; k++) {
-        const double *c = seg->c[k];
-        if (pos)
-            pos[k] = c[0] + u * (c[1] + u * (c[2] + u * c[3]));
-        if (vel)
-            vel[k] = (c[1] + u * (2 * c[2] + u * 3 * c[3])) * inv_t;
-        if (acc)
-            acc[k] = (2 * c[2] + 6 * c[3] * u) * inv_t * inv_t;
+    _Static_assert(FDIFF_AXES == 3, "x, y in one pair; z in the other");
+    eval_pair((lane2_t){c[0][0], c[1][0]}, (lane2_t){c[0][1], c[1][1]}, (lane2_t){c[0][2], c[1][2]},
+              (lane2_t){c[0][3], c[1][3]}, u, inv_t, &p, &v, &a);
+    eval_pair((lane2_t){c[2][0], 0.0}, (lane2_t){c[2][1], 0.0}, (lane2_t){c[2][2], 0.0},
+              (lane2_t){c[2][3], 0.0}, u, inv_t, &pz, &vz, &az);
+    if (pos) {
+        memcpy(pos, &p, sizeof p);
+        pos[2] = pz[0];
+    }
+    if (vel) {
+        memcpy(vel, &v, sizeof v);
+        vel[2] = vz[0];
+    }
+    if (acc) {
+        memcpy(acc, &a, sizeof a);
+        acc[2] = az[0];
     }
 }
 
