@@ -440,8 +440,30 @@ int solve_add_node(engine_t *e, double t, const double *r, const double *vel);
 int solve_drain(engine_t *e);
 int solve_close(engine_t *e);
 void solve_abort(engine_t *e);
-/* The queue head taken off. */
-void queue_pop(engine_t *e);
+/* A queued segment whose speed cap holds the rate below TS_RATE_MAX (the
+ * queue's ring slow). */
+static inline int queue_is_slow(const qent_t *q)
+{
+    return q->kind == QE_SEG && q->ceil < TS_RATE_MAX;
+}
+
+/* The queue head taken off (inline: a tick takes a segment here). */
+static inline void queue_pop(engine_t *e)
+{
+    const qent_t *h = &e->queue.ent[e->queue.head];
+    if (e->scale.drop_n)
+        e->scale.drop_n--;
+    if (h->kind == QE_END)
+        e->queue.ends--;
+    if (queue_is_slow(h)) { /* the ring's head */
+        e->queue.slow_head = e->queue.slow_head + 1 == e->queue.cap ? 0 : e->queue.slow_head + 1;
+        e->queue.slow_len--;
+        e->queue.beyond -= !(h->ceil > 0);
+    }
+    /* (h + 1) % cap without the division */
+    e->queue.head = e->queue.head + 1 == e->queue.cap ? 0 : e->queue.head + 1;
+    e->queue.len--;
+}
 /* The waypoints queue entries i0 .. i1 - 1 end on (segments: the C2 local
  * methods queue three pieces an interval). */
 uint64_t queue_waypoints(const engine_t *e, size_t i0, size_t i1);

@@ -303,9 +303,11 @@ static int64_t grid_last(const engine_t *e)
 static inline void fast_bound(engine_t *e)
 {
     int64_t n = e->out.n, kept, last;
+    uint64_t j = (uint64_t)(n - e->out.seg_n0); /* steps since the seed */
+    if (j >= FDIFF_RESEED_STEPS)                /* (the division only past the first re-seed) */
+        j %= FDIFF_RESEED_STEPS;
     kept = e->out.seg_last < e->out.plain_last ? e->out.seg_last : e->out.plain_last;
-    last = n +
-           (int64_t)(FDIFF_RESEED_STEPS - 1 - (uint64_t)(n - e->out.seg_n0) % FDIFF_RESEED_STEPS);
+    last = n + (int64_t)(FDIFF_RESEED_STEPS - 1 - j);
     e->out.kept_last = kept;
     e->out.fast_last = e->out.plain_check ? INT64_MIN : kept < last ? kept : last;
 }
