@@ -756,24 +756,24 @@ int play_stalled(const engine_t *e)
     return 0;
 }
 
-/* One pair of fdiff_step's additions, a row's pair += the next row's (lane
- * by lane, as fdiff_step): stored, and returned. */
-static inline row2_t step_pair(double *row, const double *next)
+/* A pair stored (the widths the stepper's rows are loaded in: a load across
+ * two stores waits for them to reach the cache). */
+static inline void row2_put(double *p, row2_t v)
 {
-    row2_t r = row2_at(row) + row2_at(next);
-    memcpy(row, &r, sizeof r);
-    return r;
+    memcpy(p, &v, sizeof v);
 }
 
 /*
  * A kept step inside its segment that is no re-seed (fast_last), one period
  * on with nothing pushed since, and its plain setpoint: what step_once
  * (step_kept, unit_step, fdiff_step) and fill_sp (fill_plain) make of it,
- * in one run: the stepper's rows loaded once as the aligned pairs it
- * stores, added (fdiff_step's additions, lane by lane), stored back, and the
- * setpoint's pairs the sums of f in registers (+ 0.0 as put_sp adds).
- * Everything is read before the first store to sp, which may alias the
- * engine for all the compiler knows.
+ * in one run: fdiff_step's additions, lane by lane, on the rows loaded as
+ * the aligned pairs they are stored in (p2's z with v2's x as a pair too),
+ * and the setpoint's pairs f's sums (+ 0.0 as put_sp adds).  The setpoint
+ * is stored once f is, before d2 and d3 are loaded: for all the compiler
+ * knows sp may alias the engine, so the loads stay after the stores and f's
+ * sums need no register past them (sp never points into the engine, opaque
+ * to its callers: the loads do not wait on them).
  */
 static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
@@ -783,14 +783,16 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
     double t = e->out.origin_t + tau_of(e, n);
     uint32_t cycle = e->out.cycle + 1, track = e->out.track;
     uint64_t setpoints = e->st.setpoints + 1;
-    /* row by row (fdiff_step), each pair stored as soon as made */
-    row2_t f0 = step_pair(fd->f, fd->d1), f2 = step_pair(fd->f + 2, fd->d1 + 2),
-           f4 = step_pair(fd->f + 4, fd->d1 + 4), f6 = step_pair(fd->f + 6, fd->d1 + 6),
-           f8 = step_pair(fd->f + 8, fd->d1 + 8);
-    (void)step_pair(fd->d1, fd->d2), (void)step_pair(fd->d1 + 2, fd->d2 + 2);
-    (void)step_pair(fd->d1 + 4, fd->d2 + 4);
-    (void)step_pair(fd->d2, fd->d3);
-    fd->d2[2] += fd->d3[2];
+    /* f += d1, d1's pairs of p1 and v1 kept for d1 += d2 */
+    row2_t d10 = row2_at(fd->d1), d12 = row2_at(fd->d1 + 2), d14 = row2_at(fd->d1 + 4);
+    row2_t f0 = row2_at(fd->f) + d10, f2 = row2_at(fd->f + 2) + d12, f4 = row2_at(fd->f + 4) + d14,
+           f6 = row2_at(fd->f + 6) + row2_at(fd->d1 + 6),
+           f8 = row2_at(fd->f + 8) + row2_at(fd->d1 + 8);
+    row2_put(fd->f, f0);
+    row2_put(fd->f + 2, f2);
+    row2_put(fd->f + 4, f4);
+    row2_put(fd->f + 6, f6);
+    row2_put(fd->f + 8, f8);
     e->out.n = n;
     e->out.cycle = cycle;
     e->out.last_now = now_ns;
@@ -808,6 +810,15 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
     sp->cycle = cycle;
     sp->track = track;
     sp->age_s = NAN;
+
+    /* d1 += d2, then d2 += d3 (p2's z beside v2's x, which stays) */
+    row2_t d20 = row2_at(fd->d2), d22 = row2_at(fd->d2 + 2), d24 = row2_at(fd->d2 + 4);
+    row2_put(fd->d1, d10 + d20);
+    row2_put(fd->d1 + 2, d12 + d22);
+    row2_put(fd->d1 + 4, d14 + d24);
+    row2_put(fd->d2, d20 + row2_at(fd->d3));
+    d22[0] += fd->d3[2];
+    row2_put(fd->d2 + 2, d22);
 }
 
 /* A kept step inside its segment, one period on with nothing pushed since,
