@@ -312,6 +312,24 @@ static inline void fast_bound(engine_t *e)
     e->out.fast_last = e->out.plain_check ? INT64_MIN : kept < last ? kept : last;
 }
 
+/* x is exactly 1.0 (is_exactly(x, 1.0)): its bits are 1.0's, the only
+ * double equal to it; one integer comparison. */
+static inline int is_one_bits(double x)
+{
+    uint64_t b;
+    memcpy(&b, &x, sizeof b);
+    return b == UINT64_C(0x3ff0000000000000);
+}
+
+/* x is exactly 0.0 (is_exactly(x, 0.0)): +0.0 or -0.0, all bits but the
+ * sign clear. */
+static inline int is_zero_bits(double x)
+{
+    uint64_t b;
+    memcpy(&b, &x, sizeof b);
+    return (b << 1) == 0;
+}
+
 /*
  * The rate decision kept.  On the unit grid inside a segment, decide()
  * re-derives every tick that nothing asks for another rate: two divisions
@@ -345,8 +363,8 @@ static void plain_window(engine_t *e)
     e->out.plain_last = e->out.kept_last = e->out.fast_last = INT64_MIN; /* none kept */
     if (e->out.mode != OUT_STREAM || e->scale.on || e->clk.on || e->out.underrun ||
         !e->out.have_pos || e->scale.stop_req || e->scale.end_brake || e->out.cur.join ||
-        !is_exactly(e->scale.override, 1.0) || !is_exactly(e->scale.ts.rate, 1.0) ||
-        !is_exactly(e->scale.ts.acc, 0.0) || scale_ceil_here(e) < 1.0 ||
+        !is_one_bits(e->scale.override) || !is_one_bits(e->scale.ts.rate) ||
+        !is_zero_bits(e->scale.ts.acc) || scale_ceil_here(e) < 1.0 ||
         /* (engine_lag_pending's own first answers without the call) */
         ((e->lag.steer || (e->lag.have && !e->lag.ahead)) && engine_lag_pending(e)))
         return;
@@ -393,15 +411,6 @@ static void plain_window(engine_t *e)
     e->out.plain_seen = e->lag.seen_ns;
     e->out.seg_last = grid_last(e);
     fast_bound(e);
-}
-
-/* x is exactly 1.0 (is_exactly(x, 1.0)): its bits are 1.0's, the only
- * double equal to it; one integer comparison. */
-static inline int is_one_bits(double x)
-{
-    uint64_t b;
-    memcpy(&b, &x, sizeof b);
-    return b == UINT64_C(0x3ff0000000000000);
 }
 
 /* The key of the decision plain_window kept: the state a call between
