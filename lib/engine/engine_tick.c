@@ -809,16 +809,18 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
     /* on_fd, no underrun and last_plain hold already (fast_last) */
     e->st.setpoints = setpoints;
 
+    /* (the track first, the cycle last: not merged into one 8-byte store,
+     * which the compiler would build in a vector register) */
     row2_t r[4] = {f0 + z, f2 + z, f4 + z, f6 + z};
+    sp->track = track;
     sp->now_ns = now_ns;
     sp->t_s = t;
     memcpy((char *)sp + offsetof(engine_setpoint_t, pos_m), r, sizeof r);
     sp->acc_m_s2[2] = f8[0] + 0.0;
     sp->state = ENGINE_STATE_STREAMING;
     sp->flags = 0;
-    sp->cycle = cycle;
-    sp->track = track;
     sp->age_s = NAN;
+    sp->cycle = cycle;
 
     /* d1 += d2, then d2 += d3 (p2's z beside v2's x, which stays) */
     row2_t d20 = row2_at(fd->d2), d22 = row2_at(fd->d2 + 2), d24 = row2_at(fd->d2 + 4);
