@@ -577,7 +577,9 @@ static void step_once(engine_t *e)
         }
         return;
     }
-    if (join_wanted(e)) /* issue 32: a re-anchor joined moving (join.c) */
+    /* issue 32: a re-anchor joined moving (join.c); none without a later
+     * trajectory queued (join_try's first answer, asked first) */
+    if (queue_later_traj(e) && join_wanted(e))
         (void)join_try(e);
     step_decided(e);
     if (e->out.cur.join) /* a join's setpoints are a transfer's (fill_sp_flags) */
