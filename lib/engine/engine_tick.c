@@ -461,7 +461,10 @@ __attribute__((noinline)) static void plain_verify(engine_t *e)
 void engine_plain_check(engine_t *e, int on, uint64_t *kept, uint64_t *wrong)
 {
     e->out.plain_check = on;
-    fast_bound(e);
+    if (e->out.last_plain)
+        fast_bound(e);
+    else /* plain_tick only after a plain setpoint (fill_sp_flags) */
+        e->out.fast_last = INT64_MIN;
     if (kept)
         *kept = e->out.plain_kept;
     if (wrong)
