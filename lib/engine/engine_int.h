@@ -200,7 +200,7 @@ typedef struct {
     int64_t seg_n0;  /* tick at which cur was seeded */
     double origin_t; /* absolute track time of tick 0 of the trajectory */
     /* The output's position, velocity and acceleration: on the unit grid
-     * (on_fd, out_eval) they are the stepper's rows fd.p0, v0, a0, copied
+     * (on_fd, out_eval) they are the stepper's values (fd.f), copied
      * here only when something needs them here (out_sync: a hold keeps the
      * position); else (scaled, held) here.  Read them through out_pos,
      * out_vel, out_acc; whoever writes them here clears on_fd. */
@@ -213,7 +213,8 @@ typedef struct {
      * (tau_of(seg_last) < cur_t1); the kept steps from a tick n below
      * kept_last, the lesser of the two, stay inside cur (engine_tick makes
      * them itself), and those from below fast_last besides are no re-seed
-     * (nor checked by the test hook: plain_tick) */
+     * (nor checked by the test hook) and follow a plain setpoint (on_fd, no
+     * underrun, last_plain: fill_sp_flags closes it): plain_tick */
     int64_t plain_last, seg_last, kept_last, fast_last;
     size_t plain_qlen;                /* key: queue.len then */
     int64_t plain_seen;               /* key: lag.seen_ns then (a push since: a new sample) */
@@ -439,8 +440,30 @@ int solve_add_node(engine_t *e, double t, const double *r, const double *vel);
 int solve_drain(engine_t *e);
 int solve_close(engine_t *e);
 void solve_abort(engine_t *e);
-/* The queue head taken off. */
-void queue_pop(engine_t *e);
+/* A queued segment whose speed cap holds the rate below TS_RATE_MAX (the
+ * queue's ring slow). */
+static inline int queue_is_slow(const qent_t *q)
+{
+    return q->kind == QE_SEG && q->ceil < TS_RATE_MAX;
+}
+
+/* The queue head taken off (inline: a tick takes a segment here). */
+static inline void queue_pop(engine_t *e)
+{
+    const qent_t *h = &e->queue.ent[e->queue.head];
+    if (e->scale.drop_n)
+        e->scale.drop_n--;
+    if (h->kind == QE_END)
+        e->queue.ends--;
+    if (queue_is_slow(h)) { /* the ring's head */
+        e->queue.slow_head = e->queue.slow_head + 1 == e->queue.cap ? 0 : e->queue.slow_head + 1;
+        e->queue.slow_len--;
+        e->queue.beyond -= !(h->ceil > 0);
+    }
+    /* (h + 1) % cap without the division */
+    e->queue.head = e->queue.head + 1 == e->queue.cap ? 0 : e->queue.head + 1;
+    e->queue.len--;
+}
 /* The waypoints queue entries i0 .. i1 - 1 end on (segments: the C2 local
  * methods queue three pieces an interval). */
 uint64_t queue_waypoints(const engine_t *e, size_t i0, size_t i1);
@@ -595,17 +618,17 @@ static inline int at_rest(const engine_t *e)
 /* The output's position, velocity, acceleration (see engine_out_t). */
 static inline const double *out_pos(const engine_t *e)
 {
-    return e->out.on_fd ? e->out.fd.p0 : e->out.pos;
+    return e->out.on_fd ? e->out.fd.f + FDIFF_POS : e->out.pos;
 }
 
 static inline const double *out_vel(const engine_t *e)
 {
-    return e->out.on_fd ? e->out.fd.v0 : e->out.vel;
+    return e->out.on_fd ? e->out.fd.f + FDIFF_VEL : e->out.vel;
 }
 
 static inline const double *out_acc(const engine_t *e)
 {
-    return e->out.on_fd ? e->out.fd.a0 : e->out.acc;
+    return e->out.on_fd ? e->out.fd.f + FDIFF_ACC : e->out.acc;
 }
 
 static inline double tick_time(const engine_t *e, int64_t n)

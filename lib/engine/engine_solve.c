@@ -188,12 +188,6 @@ double solve_seg_ceiling(const engine_t *e, const fdiff_seg_t *seg, double vmax,
     return seg_ceiling(e, seg, vmax, axis);
 }
 
-/* A queued segment whose speed cap holds the rate below TS_RATE_MAX. */
-static int is_slow(const qent_t *q)
-{
-    return q->kind == QE_SEG && q->ceil < TS_RATE_MAX;
-}
-
 /* issue 32: some axis has an acceleration limit (engine.h axis_max_accel_m_s2;
  * engine_new notes it once, e->axis_accel). */
 int solve_cfg_axis_accel(const engine_config_t *cfg)
@@ -305,10 +299,10 @@ static void queue_now(engine_t *e, const fdiff_seg_t *seg, uint64_t node, const 
     /* the stop from rate 1 at its limits, as the tick would work it out
      * (plain_window: scale_conv_speed, scale_limits) */
     q->stop1 = ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / q->av, e->cfg.scale_jerk_m_s3 / v);
-    if (is_slow(q)) /* every queued slot has room: so has the ring */
+    if (queue_is_slow(q)) /* every queued slot has room: so has the ring */
         e->queue.slow[(e->queue.slow_head + e->queue.slow_len++) % e->queue.cap] =
             (size_t)(q - e->queue.ent);
-    e->queue.beyond += is_slow(q) && !(q->ceil > 0);
+    e->queue.beyond += queue_is_slow(q) && !(q->ceil > 0);
     double inv = 1.0 / q->av;
     if (e->solve.queued && inv > e->solve.inv) /* the limits rise from the last one to this: */
         e->solve.ucum += (inv - e->solve.inv) * (v / q->av); /* its A / J against a / j */
@@ -394,22 +388,6 @@ uint64_t queue_waypoints(const engine_t *e, size_t i0, size_t i1)
     for (size_t i = i0; i < i1 && i < e->queue.len; i++)
         n += queue_at(e, i)->kind == QE_SEG;
     return e->local >= 3 ? (n + 2) / 3 : n;
-}
-
-void queue_pop(engine_t *e)
-{
-    if (e->scale.drop_n)
-        e->scale.drop_n--;
-    if (e->queue.ent[e->queue.head].kind == QE_END)
-        e->queue.ends--;
-    if (is_slow(&e->queue.ent[e->queue.head])) { /* the ring's head */
-        e->queue.slow_head = e->queue.slow_head + 1 == e->queue.cap ? 0 : e->queue.slow_head + 1;
-        e->queue.slow_len--;
-        e->queue.beyond -= !(e->queue.ent[e->queue.head].ceil > 0);
-    }
-    /* (h + 1) % cap without the division (a tick takes a segment here) */
-    e->queue.head = e->queue.head + 1 == e->queue.cap ? 0 : e->queue.head + 1;
-    e->queue.len--;
 }
 
 /* end velocities in the unknowns' parameter (dk/du for P*, dk/ds for M) */
@@ -687,7 +665,7 @@ static void local_end(engine_t *e)
 
     for (int i = n - 1; i >= 0; i--) { /* off the tail */
         const qent_t *q = &old[i];
-        if (is_slow(q)) {
+        if (queue_is_slow(q)) {
             e->queue.slow_len--;
             e->queue.beyond -= !(q->ceil > 0);
         }

@@ -105,7 +105,7 @@ double out_cspeed(const engine_t *e)
         return e->scale.cspeed; /* scale_eval's (or out_sync's) */
     double v2 = 0;
     for (int k = 0; k < AX; k++) /* rate 1: the curve's own speed */
-        v2 += e->out.fd.v0[k] * e->out.fd.v0[k];
+        v2 += e->out.fd.f[FDIFF_VEL + k] * e->out.fd.f[FDIFF_VEL + k];
     return sqrt(v2);
 }
 
@@ -303,11 +303,31 @@ static int64_t grid_last(const engine_t *e)
 static inline void fast_bound(engine_t *e)
 {
     int64_t n = e->out.n, kept, last;
+    uint64_t j = (uint64_t)(n - e->out.seg_n0); /* steps since the seed */
+    if (j >= FDIFF_RESEED_STEPS)                /* (the division only past the first re-seed) */
+        j %= FDIFF_RESEED_STEPS;
     kept = e->out.seg_last < e->out.plain_last ? e->out.seg_last : e->out.plain_last;
-    last = n +
-           (int64_t)(FDIFF_RESEED_STEPS - 1 - (uint64_t)(n - e->out.seg_n0) % FDIFF_RESEED_STEPS);
+    last = n + (int64_t)(FDIFF_RESEED_STEPS - 1 - j);
     e->out.kept_last = kept;
     e->out.fast_last = e->out.plain_check ? INT64_MIN : kept < last ? kept : last;
+}
+
+/* x is exactly 1.0 (is_exactly(x, 1.0)): its bits are 1.0's, the only
+ * double equal to it; one integer comparison. */
+static inline int is_one_bits(double x)
+{
+    uint64_t b;
+    memcpy(&b, &x, sizeof b);
+    return b == UINT64_C(0x3ff0000000000000);
+}
+
+/* x is exactly 0.0 (is_exactly(x, 0.0)): +0.0 or -0.0, all bits but the
+ * sign clear. */
+static inline int is_zero_bits(double x)
+{
+    uint64_t b;
+    memcpy(&b, &x, sizeof b);
+    return (b << 1) == 0;
 }
 
 /*
@@ -345,8 +365,8 @@ static void plain_window(engine_t *e)
     e->out.plain_last = e->out.kept_last = e->out.fast_last = INT64_MIN; /* none kept */
     if (e->out.mode != OUT_STREAM || e->scale.on || e->clk.on || e->out.underrun ||
         !e->out.have_pos || e->scale.stop_req || e->scale.end_brake || e->out.cur.join ||
-        !is_exactly(e->scale.override, 1.0) || !is_exactly(e->scale.ts.rate, 1.0) ||
-        !is_exactly(e->scale.ts.acc, 0.0) || scale_ceil_here(e) < 1.0 ||
+        !is_one_bits(e->scale.override) || !is_one_bits(e->scale.ts.rate) ||
+        !is_zero_bits(e->scale.ts.acc) || scale_ceil_here(e) < 1.0 ||
         /* (engine_lag_pending's own first answers without the call) */
         ((e->lag.steer || (e->lag.have && !e->lag.ahead)) && engine_lag_pending(e)) ||
         join_may_wait(e))
@@ -402,7 +422,18 @@ static inline int plain_key(const engine_t *e)
 {
     return e->out.plain_qlen == e->queue.len && e->out.plain_seen == e->lag.seen_ns &&
            e->out.mode == OUT_STREAM && !e->scale.stop_req && !e->clk.on &&
-           is_exactly(e->scale.override, 1.0);
+           is_one_bits(e->scale.override);
+}
+
+/* plain_key on a tick with no push pending (lag.pending clear), without
+ * its lag.seen_ns: that moves only when engine_lag_note takes a pending
+ * push, on a tick through tick_steps, whose step_once then finds the key
+ * changed (plain_holds) and decides again, keying the new value or keeping
+ * nothing (plain_window).  A kept window and no push pending imply it. */
+static inline int plain_key_unpushed(const engine_t *e)
+{
+    return e->out.plain_qlen == e->queue.len && e->out.mode == OUT_STREAM && !e->scale.stop_req &&
+           !e->clk.on && is_one_bits(e->scale.override);
 }
 
 /* The decision plain_window kept still holds for the step from tick n. */
@@ -433,7 +464,10 @@ __attribute__((noinline)) static void plain_verify(engine_t *e)
 void engine_plain_check(engine_t *e, int on, uint64_t *kept, uint64_t *wrong)
 {
     e->out.plain_check = on;
-    fast_bound(e);
+    if (e->out.last_plain)
+        fast_bound(e);
+    else /* plain_tick only after a plain setpoint (fill_sp_flags) */
+        e->out.fast_last = INT64_MIN;
     if (kept)
         *kept = e->out.plain_kept;
     if (wrong)
@@ -549,7 +583,9 @@ static void step_once(engine_t *e)
         }
         return;
     }
-    if (join_wanted(e)) /* issue 32: a re-anchor joined moving (join.c) */
+    /* issue 32: a re-anchor joined moving (join.c); none without a later
+     * trajectory queued (join_try's first answer, asked first) */
+    if (queue_later_traj(e) && join_wanted(e))
         (void)join_try(e);
     step_decided(e);
     if (e->out.cur.join) /* a join's setpoints are a transfer's (fill_sp_flags) */
@@ -597,7 +633,7 @@ static int plain_sp(const engine_t *e)
 
 static void fill_sp_flags(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
 
-/* Two doubles, for the stepper's rows (fdiff.h keeps them in lanes). */
+/* Two doubles, for the stepper's rows (fdiff.h keeps them in pairs). */
 typedef double row2_t __attribute__((vector_size(16)));
 
 static inline row2_t row2_at(const double *p)
@@ -607,32 +643,30 @@ static inline row2_t row2_at(const double *p)
     return v;
 }
 
-/* The setpoint's pos_m, vel_m_s and acc_m_s2, one run of nine doubles. */
+/* The setpoint's pos_m, vel_m_s and acc_m_s2, one run of nine doubles: the
+ * stepper's values as its row f holds them. */
 _Static_assert(offsetof(engine_setpoint_t, vel_m_s) ==
                        offsetof(engine_setpoint_t, pos_m) + AX * sizeof(double) &&
                    offsetof(engine_setpoint_t, acc_m_s2) ==
                        offsetof(engine_setpoint_t, vel_m_s) + AX * sizeof(double) &&
-                   AX == 3,
-               "fill_plain stores pos_m, vel_m_s and acc_m_s2 as one run of nine doubles");
+                   AX == 3 && FDIFF_AXES == AX && FDIFF_POS == 0 && FDIFF_VEL == AX &&
+                   FDIFF_ACC == 2 * AX,
+               "fill_plain stores the stepper's f as pos_m, vel_m_s and acc_m_s2");
 
 /* A plain setpoint (plain_sp): what fill_sp_flags would make of it (put_sp).
  * Everything it reads is read before the first store to sp (which may alias
  * the engine, for all the compiler knows), and in the widths it was stored
  * in: a load wider than the store that just wrote it, or across two stores
- * (the tick's counter loaded with the track as one 8-byte pair, the
- * stepper's v0[1..2] as one pair), is not forwarded from the store buffer
- * and waits for the stores to reach the cache.  The stepper's rows are read
- * as the aligned pairs it stores, the setpoint's pairs shuffled out of them
+ * (the tick's counter loaded with the track as one 8-byte pair), is not
+ * forwarded from the store buffer and waits for the stores to reach the
+ * cache.  The stepper's values are read as the aligned pairs it stores
  * (+ 0.0 as put_sp adds). */
 static inline void fill_plain(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
-    const fdiff_t *fd = &e->out.fd;
+    const double *f = e->out.fd.f;
     const row2_t z = {0.0, 0.0};
-    row2_t p01 = row2_at(fd->p0), p23 = row2_at(fd->p0 + 2), v01 = row2_at(fd->v0),
-           v23 = row2_at(fd->v0 + 2), a01 = row2_at(fd->a0), a23 = row2_at(fd->a0 + 2);
-    row2_t r[4] = {p01 + z, __builtin_shufflevector(p23, v01, 0, 2) + z,
-                   __builtin_shufflevector(v01, v23, 1, 2) + z, a01 + z};
-    double t = e->out.t, az = a23[0] + 0.0;
+    row2_t r[4] = {row2_at(f) + z, row2_at(f + 2) + z, row2_at(f + 4) + z, row2_at(f + 6) + z};
+    double t = e->out.t, az = row2_at(f + 8)[0] + 0.0;
     uint32_t cycle = e->out.cycle, track = e->out.track;
 
     e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
@@ -706,6 +740,9 @@ __attribute__((noinline)) static void fill_sp_flags(engine_t *e, int64_t now_ns,
             sp->pos_m[k] = NAN; /* not a position: see ENGINE_SP_NO_POSITION */
     e->out.last_plain = 0;
     e->out.last_sp = *sp;
+    /* the next kept step makes the plain setpoint's state again (kept_tick:
+     * out_eval, last_plain), not plain_tick (fast_last) */
+    e->out.fast_last = INT64_MIN;
 }
 
 /* The setpoint of the last call that stepped (fill_sp): a plain one made
@@ -719,8 +756,9 @@ static void last_setpoint(const engine_t *e, engine_setpoint_t *sp)
         *sp = e->out.last_sp;
         return;
     }
-    put_sp(e, sp, e->out.last_now, e->out.fd.p0, e->out.fd.v0, e->out.fd.a0, ENGINE_STATE_STREAMING,
-           0, NAN);
+    const double *f = e->out.fd.f;
+    put_sp(e, sp, e->out.last_now, f + FDIFF_POS, f + FDIFF_VEL, f + FDIFF_ACC,
+           ENGINE_STATE_STREAMING, 0, NAN);
 }
 
 /* 1 if further steps cannot change anything until new input arrives. */
@@ -746,24 +784,24 @@ int play_stalled(const engine_t *e)
     return 0;
 }
 
-/* One pair of fdiff_step's additions, a row += the next one's (lane by
- * lane, as fdiff_step): stored, and returned. */
-static inline row2_t step_pair(double *row, const double *next)
+/* A pair stored (the widths the stepper's rows are loaded in: a load across
+ * two stores waits for them to reach the cache). */
+static inline void row2_put(double *p, row2_t v)
 {
-    row2_t r = row2_at(row) + row2_at(next);
-    memcpy(row, &r, sizeof r);
-    return r;
+    memcpy(p, &v, sizeof v);
 }
 
 /*
  * A kept step inside its segment that is no re-seed (fast_last), one period
  * on with nothing pushed since, and its plain setpoint: what step_once
  * (step_kept, unit_step, fdiff_step) and fill_sp (fill_plain) make of it,
- * in one run: the stepper's rows loaded once as the aligned pairs it
- * stores, added (fdiff_step's additions, lane by lane), stored back, and the
- * setpoint's pairs shuffled out of the sums in registers (+ 0.0 as put_sp
- * adds).  Everything is read before the first store to sp, which may alias
- * the engine for all the compiler knows.
+ * in one run: fdiff_step's additions, lane by lane, on the rows loaded as
+ * the aligned pairs they are stored in (p2's z with v2's x as a pair too),
+ * and the setpoint's pairs f's sums (+ 0.0 as put_sp adds).  The setpoint
+ * is stored once f is, before d2 and d3 are loaded: for all the compiler
+ * knows sp may alias the engine, so the loads stay after the stores and f's
+ * sums need no register past them (sp never points into the engine, opaque
+ * to its callers: the loads do not wait on them).
  */
 static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
@@ -773,36 +811,44 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
     double t = e->out.origin_t + tau_of(e, n);
     uint32_t cycle = e->out.cycle + 1, track = e->out.track;
     uint64_t setpoints = e->st.setpoints + 1;
-    /* row by row, each stored as soon as made: the pairs of the rows after
-     * are loaded as they are needed (all loaded first, they outnumber the
-     * 16 registers and are loaded again) */
-    row2_t p0a = step_pair(fd->p0, fd->p1), p0b = step_pair(fd->p0 + 2, fd->p1 + 2);
-    (void)step_pair(fd->p1, fd->p2), (void)step_pair(fd->p1 + 2, fd->p2 + 2);
-    (void)step_pair(fd->p2, fd->p3), (void)step_pair(fd->p2 + 2, fd->p3 + 2);
-    row2_t v0a = step_pair(fd->v0, fd->v1), v0b = step_pair(fd->v0 + 2, fd->v1 + 2);
-    (void)step_pair(fd->v1, fd->v2), (void)step_pair(fd->v1 + 2, fd->v2 + 2);
-    row2_t a0a = step_pair(fd->a0, fd->a1), a0b = step_pair(fd->a0 + 2, fd->a1 + 2);
+    /* f += d1, d1's pairs of p1 and v1 kept for d1 += d2 */
+    row2_t d10 = row2_at(fd->d1), d12 = row2_at(fd->d1 + 2), d14 = row2_at(fd->d1 + 4);
+    row2_t f0 = row2_at(fd->f) + d10, f2 = row2_at(fd->f + 2) + d12, f4 = row2_at(fd->f + 4) + d14,
+           f6 = row2_at(fd->f + 6) + row2_at(fd->d1 + 6),
+           f8 = row2_at(fd->f + 8) + row2_at(fd->d1 + 8);
+    row2_put(fd->f, f0);
+    row2_put(fd->f + 2, f2);
+    row2_put(fd->f + 4, f4);
+    row2_put(fd->f + 6, f6);
+    row2_put(fd->f + 8, f8);
     e->out.n = n;
     e->out.cycle = cycle;
     e->out.last_now = now_ns;
     e->out.t = t;
-    e->out.on_fd = 1; /* out_eval (a window may begin on a tick that landed on the
-                       * grid from the time scaling: its output was scale_eval's) */
-    e->out.underrun = 0;
-    e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
+    /* on_fd, no underrun and last_plain hold already (fast_last) */
     e->st.setpoints = setpoints;
 
-    row2_t r[4] = {p0a + z, __builtin_shufflevector(p0b, v0a, 0, 2) + z,
-                   __builtin_shufflevector(v0a, v0b, 1, 2) + z, a0a + z};
+    /* (the track first, the cycle last: not merged into one 8-byte store,
+     * which the compiler would build in a vector register) */
+    row2_t r[4] = {f0 + z, f2 + z, f4 + z, f6 + z};
+    sp->track = track;
     sp->now_ns = now_ns;
     sp->t_s = t;
     memcpy((char *)sp + offsetof(engine_setpoint_t, pos_m), r, sizeof r);
-    sp->acc_m_s2[2] = a0b[0] + 0.0;
+    sp->acc_m_s2[2] = f8[0] + 0.0;
     sp->state = ENGINE_STATE_STREAMING;
     sp->flags = 0;
-    sp->cycle = cycle;
-    sp->track = track;
     sp->age_s = NAN;
+    sp->cycle = cycle;
+
+    /* d1 += d2, then d2 += d3 (p2's z beside v2's x, which stays) */
+    row2_t d20 = row2_at(fd->d2), d22 = row2_at(fd->d2 + 2), d24 = row2_at(fd->d2 + 4);
+    row2_put(fd->d1, d10 + d20);
+    row2_put(fd->d1 + 2, d12 + d22);
+    row2_put(fd->d1 + 4, d14 + d24);
+    row2_put(fd->d2, d20 + row2_at(fd->d3));
+    d22[0] += fd->d3[2];
+    row2_put(fd->d2 + 2, d22);
 }
 
 /* A kept step inside its segment, one period on with nothing pushed since,
@@ -810,7 +856,7 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
  * (step_kept as step_once makes it, and the setpoint as fill_sp would make
  * it; plain_sp holds: a kept step inside its segment is on the grid, leaves
  * no underrun and no flag pending, and the key holds the rest). */
-__attribute__((noinline)) static void kept_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+static void kept_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
     e->out.last_now = now_ns;
     step_kept(e);
@@ -821,7 +867,9 @@ __attribute__((noinline)) static void kept_tick(engine_t *e, int64_t now_ns, eng
     e->st.setpoints++;
 }
 
-static int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t *sp);
+static inline int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t *sp);
+
+static int tick_other(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
 
 /*
  * One tick, one path: the periods since the last call counted (one period,
@@ -829,30 +877,43 @@ static int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t 
  * whose rate decision is kept while it holds: plain_window) and the
  * setpoint filled (fill_sp, its flag logic skipped for a plain one).  A step
  * that keeps its decision inside its segment, one period on with nothing
- * pushed since, is made here, as step_once and fill_sp would make it,
- * without the frame of tick_steps: by plain_tick (a run of loads, one imul,
- * the stepper's additions and the setpoint's stores), or kept_tick for a
- * re-seed and the test hook's checked steps.
+ * pushed since, is made without the frame of tick_steps: by plain_tick (a
+ * run of loads, one imul, the stepper's additions and the setpoint's
+ * stores), here, or kept_tick for a re-seed and the test hook's checked
+ * steps (tick_other).  Everything else is tick_other's, a tail call: the
+ * plain tick saves no register.
  */
 int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
-    int64_t k = 1, d = now_ns - e->out.last_now, p = e->cfg.period_ns;
-
-    /* A kept step inside its segment (kept_last: there is a window, so an
-     * earlier tick), one period on (d in [p - p/2, 2 p - p/2), as the
-     * division below would round: one unsigned comparison, d below p - p/2
+    /* A plain step (fast_last: inside the segment, no re-seed, so a window
+     * and an earlier tick), one period on (d in [p - p/2, 2 p - p/2), as
+     * the division would round: one unsigned comparison, d below p - p/2
      * wraps above p), with nothing pushed since: lag_note has nothing to
      * note, and a silent end is noticed at the next tick that decides, as
      * it always was (checked every tick, the silent ends of 2 of the 30
      * frozen outputs, gpxpy_cerknicko-jezero smooth, come a few ticks
      * earlier) */
-    if (__builtin_expect(e->out.n < e->out.kept_last, 1) &&
-        __builtin_expect((uint64_t)d - (uint64_t)e->period_lo < (uint64_t)p, 1) && plain_key(e) &&
-        !(e->lag.pending | e->sil.fresh)) {
-        if (__builtin_expect(e->out.n < e->out.fast_last, 1))
-            plain_tick(e, now_ns, sp);
-        else
-            kept_tick(e, now_ns, sp); /* a re-seed, or the test hook */
+    if (__builtin_expect(e->out.n < e->out.fast_last, 1) &&
+        __builtin_expect((uint64_t)(now_ns - e->out.last_now) - (uint64_t)e->period_lo <
+                             (uint64_t)e->cfg.period_ns,
+                         1) &&
+        !(e->lag.pending | e->sil.fresh) && plain_key_unpushed(e)) {
+        plain_tick(e, now_ns, sp);
+        return 0;
+    }
+    return tick_other(e, now_ns, sp);
+}
+
+/* engine_tick but for a plain step. */
+__attribute__((noinline)) static int tick_other(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
+{
+    int64_t k = 1, d = now_ns - e->out.last_now, p = e->cfg.period_ns;
+
+    /* A kept step inside its segment (kept_last) that plain_tick does not
+     * make (fast_last): a re-seed, or the test hook's; as engine_tick's */
+    if (e->out.n < e->out.kept_last && (uint64_t)d - (uint64_t)e->period_lo < (uint64_t)p &&
+        plain_key(e) && !(e->lag.pending | e->sil.fresh)) {
+        kept_tick(e, now_ns, sp);
         return 0;
     }
     if (__builtin_expect(e->pick.n != 0, 0)) {
@@ -888,8 +949,7 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 }
 
 /* engine_tick's k steps, with what each tick notes first. */
-__attribute__((noinline)) static int tick_steps(engine_t *e, int64_t now_ns, int64_t k,
-                                                engine_setpoint_t *sp)
+static inline int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setpoint_t *sp)
 {
     int64_t i;
 

@@ -1,7 +1,6 @@
 /* fdiff.c - forward-difference stepper; see fdiff.h. */
 #include "fdiff.h"
 
-#include <stddef.h>
 #include <string.h>
 
 /* Two lanes of a row (x and y). */
@@ -47,49 +46,72 @@ void fdiff_seed(fdiff_t *fd, const fdiff_seg_t *seg, double u0, double du)
     double inv_t = 1.0 / seg->dur_s, inv_t2 = inv_t * inv_t;
     double h = du, h2 = du * du, h3 = h2 * du, u = u0;
     const double(*c)[4] = seg->c;
-    lane2_t r[9], zero = {0.0, 0.0};
-    double *rows[9] = {fd->p0, fd->p1, fd->p2, fd->p3, fd->v0, fd->v1, fd->v2, fd->a0, fd->a1};
+    lane2_t r[9];
+    /* where seed_pair's r[i] goes: row, and the place of x in it */
+    double *at[9] = {fd->f + FDIFF_POS, fd->d1 + FDIFF_POS, fd->d2 + FDIFF_POS, fd->d3,
+                     fd->f + FDIFF_VEL, fd->d1 + FDIFF_VEL, fd->d2 + FDIFF_VEL, fd->f + FDIFF_ACC,
+                     fd->d1 + FDIFF_ACC};
 
-    _Static_assert(FDIFF_AXES == 3 && FDIFF_LANES == 4, "x, y in one pair; z, 0 in the other");
+    _Static_assert(FDIFF_AXES == 3, "x, y in one pair; z in the other");
     seed_pair(r, (lane2_t){c[0][0], c[1][0]}, (lane2_t){c[0][1], c[1][1]},
               (lane2_t){c[0][2], c[1][2]}, (lane2_t){c[0][3], c[1][3]}, u, h, h2, h3, inv_t,
               inv_t2);
 #pragma GCC unroll 9
     for (int i = 0; i < 9; i++)
-        memcpy(rows[i], &r[i], sizeof r[i]);
+        memcpy(at[i], &r[i], sizeof r[i]);
+    /* z in the first lane (the second's 0 unused) */
     seed_pair(r, (lane2_t){c[2][0], 0.0}, (lane2_t){c[2][1], 0.0}, (lane2_t){c[2][2], 0.0},
               (lane2_t){c[2][3], 0.0}, u, h, h2, h3, inv_t, inv_t2);
 #pragma GCC unroll 9
-    for (int i = 0; i < 9; i++) {
-        lane2_t zw = __builtin_shufflevector(r[i], zero, 0, 2); /* the zero lane stays zero */
-        memcpy(rows[i] + 2, &zw, sizeof zw);
-    }
+    for (int i = 0; i < 9; i++)
+        at[i][2] = r[i][0];
+    fd->f[3 * FDIFF_AXES] = fd->d1[3 * FDIFF_AXES] = 0.0; /* the zeros */
 }
 
 void fdiff_get(const fdiff_t *fd, double *pos, double *vel, double *acc)
 {
     for (int k = 0; k < FDIFF_AXES; k++) {
         if (pos)
-            pos[k] = fd->p0[k];
+            pos[k] = fd->f[FDIFF_POS + k];
         if (vel)
-            vel[k] = fd->v0[k];
+            vel[k] = fd->f[FDIFF_VEL + k];
         if (acc)
-            acc[k] = fd->a0[k];
+            acc[k] = fd->f[FDIFF_ACC + k];
     }
+}
+
+/* fdiff_eval's expressions for a pair of lanes (u and inv_t broadcast),
+ * each lane operation by operation what they are for its axis. */
+static inline void eval_pair(lane2_t c0, lane2_t c1, lane2_t c2, lane2_t c3, double u, double inv_t,
+                             lane2_t *p, lane2_t *v, lane2_t *a)
+{
+    *p = c0 + u * (c1 + u * (c2 + u * c3));
+    *v = (c1 + u * (2 * c2 + u * 3 * c3)) * inv_t;
+    *a = (2 * c2 + 6 * c3 * u) * inv_t * inv_t;
 }
 
 void fdiff_eval(const fdiff_seg_t *seg, double u, double *pos, double *vel, double *acc)
 {
     double inv_t = 1.0 / seg->dur_s;
+    const double(*c)[4] = seg->c;
+    lane2_t p, v, a, pz, vz, az; /* x, y; and z (its second lane unused) */
 
-    for (int k = 0; k < FDIFF_AXES; k++) {
-        const double *c = seg->c[k];
-        if (pos)
-            pos[k] = c[0] + u * (c[1] + u * (c[2] + u * c[3]));
-        if (vel)
-            vel[k] = (c[1] + u * (2 * c[2] + u * 3 * c[3])) * inv_t;
-        if (acc)
-            acc[k] = (2 * c[2] + 6 * c[3] * u) * inv_t * inv_t;
+    _Static_assert(FDIFF_AXES == 3, "x, y in one pair; z in the other");
+    eval_pair((lane2_t){c[0][0], c[1][0]}, (lane2_t){c[0][1], c[1][1]}, (lane2_t){c[0][2], c[1][2]},
+              (lane2_t){c[0][3], c[1][3]}, u, inv_t, &p, &v, &a);
+    eval_pair((lane2_t){c[2][0], 0.0}, (lane2_t){c[2][1], 0.0}, (lane2_t){c[2][2], 0.0},
+              (lane2_t){c[2][3], 0.0}, u, inv_t, &pz, &vz, &az);
+    if (pos) {
+        memcpy(pos, &p, sizeof p);
+        pos[2] = pz[0];
+    }
+    if (vel) {
+        memcpy(vel, &v, sizeof v);
+        vel[2] = vz[0];
+    }
+    if (acc) {
+        memcpy(acc, &a, sizeof a);
+        acc[2] = az[0];
     }
 }
 

@@ -44,30 +44,33 @@ typedef struct {
 
 /*
  * Forward-difference state for one segment and one step du, the axes as one
- * vector: each difference is a row of FDIFF_LANES doubles (x, y, z and a zero
- * lane), struct-of-arrays, so a step is 6 vector additions of whole rows.
- * Why that is faster than the previous per-axis layout (p[3][4], v[3][3],
- * a[3][2], kept in tests/bench/bench_engine.c as the reference it is timed
- * against): there, one axis's f, d1, d2, d3 were adjacent, so the compiler
- * could only emit 18 scalar addsd, each a load-add-store with a dependency
- * on the previous difference of the same axis; here a row is 32 contiguous
- * 16-byte-aligned bytes and the same 6 statements become 12 packed addpd
- * (SSE2, 2 doubles each; 6 vaddpd with AVX), with the 3 axes in independent
- * lanes.  The additions and their order per axis are the same, so every
- * double is bit for bit what the per-axis stepper made (test_fdiff checks it
- * against the previous layout; tests/e2e/test_outputs_frozen.sh the outputs).
+ * vector: a row holds one difference of position, velocity and acceleration
+ * (x, y, z each), f the values themselves, d1, d2, d3 their first, second
+ * and third differences (those the cubic has: velocity has no d3, nor
+ * acceleration d2 or d3):
+ *
+ *     f  = p0 v0 a0 0      d1 = p1 v1 a1 0      d2 = p2 v2      d3 = p3
+ *
+ * (p0 = f[FDIFF_POS .. +2], v0 = f[FDIFF_VEL ..], a0 = f[FDIFF_ACC ..];
+ * positions in m, velocities in m/s, accelerations in m/s^2).  A step is
+ * f += d1, then d1 += d2 (its first six), then d2 += d3 (its first three):
+ * 18 additions in 9 pairs of doubles the compiler emits as packed addpd
+ * (SSE2; 16-byte-aligned rows), no lane wasted but the zero of f and d1
+ * (10 doubles: whole pairs), and f is the output as a setpoint holds it
+ * (pos_m, vel_m_s, acc_m_s2: nine doubles in a run).  The additions and
+ * their order per axis are those of the per-axis stepper (p[3][4], v[3][3],
+ * a[3][2], kept in tests/helpers/fdiff_aos.h as the reference it is checked
+ * against), so every double is bit for bit what it made (test_fdiff; the
+ * outputs: tests/e2e/test_outputs_frozen.sh).
  */
-#define FDIFF_LANES 4
+#define FDIFF_POS 0
+#define FDIFF_VEL FDIFF_AXES
+#define FDIFF_ACC (2 * FDIFF_AXES)
 typedef struct {
-    _Alignas(16) double p0[FDIFF_LANES]; /* position f */
-    double p1[FDIFF_LANES];              /* position d1, d2, d3 */
-    double p2[FDIFF_LANES];
-    double p3[FDIFF_LANES];
-    double v0[FDIFF_LANES]; /* velocity f, d1, d2 (m/s) */
-    double v1[FDIFF_LANES];
-    double v2[FDIFF_LANES];
-    double a0[FDIFF_LANES]; /* acceleration f, d1 (m/s^2) */
-    double a1[FDIFF_LANES];
+    _Alignas(16) double f[3 * FDIFF_AXES + 1]; /* p0, v0, a0 and a zero */
+    double d1[3 * FDIFF_AXES + 1];             /* p1, v1, a1 and a zero */
+    double d2[2 * FDIFF_AXES];                 /* p2, v2 */
+    double d3[FDIFF_AXES];                     /* p3 */
 } fdiff_t;
 
 /*
@@ -76,20 +79,21 @@ typedef struct {
  */
 void fdiff_seed(fdiff_t *fd, const fdiff_seg_t *seg, double u0, double du);
 
-/* Advance one step: 6 additions per axis, as 6 row additions. */
+/* Advance one step: 6 additions per axis, in 9 pairs and one more (see
+ * fdiff_t). */
 static inline void fdiff_step(fdiff_t *fd)
 {
     /* unrolled also where it is inlined into a large function (engine_tick):
-     * 12 addpd, no loop */
-#pragma GCC unroll 4
-    for (int k = 0; k < FDIFF_LANES; k++) {
-        fd->p0[k] += fd->p1[k];
-        fd->p1[k] += fd->p2[k];
-        fd->p2[k] += fd->p3[k];
-        fd->v0[k] += fd->v1[k];
-        fd->v1[k] += fd->v2[k];
-        fd->a0[k] += fd->a1[k];
-    }
+     * no loop */
+#pragma GCC unroll 10
+    for (int k = 0; k < 3 * FDIFF_AXES + 1; k++)
+        fd->f[k] += fd->d1[k];
+#pragma GCC unroll 6
+    for (int k = 0; k < 2 * FDIFF_AXES; k++)
+        fd->d1[k] += fd->d2[k];
+#pragma GCC unroll 3
+    for (int k = 0; k < FDIFF_AXES; k++)
+        fd->d2[k] += fd->d3[k];
 }
 
 /* Current position, velocity and acceleration (any output may be NULL). */
