@@ -425,17 +425,6 @@ static inline int plain_key(const engine_t *e)
            is_one_bits(e->scale.override);
 }
 
-/* plain_key on a tick with no push pending (lag.pending clear), without
- * its lag.seen_ns: that moves only when engine_lag_note takes a pending
- * push, on a tick through tick_steps, whose step_once then finds the key
- * changed (plain_holds) and decides again, keying the new value or keeping
- * nothing (plain_window).  A kept window and no push pending imply it. */
-static inline int plain_key_unpushed(const engine_t *e)
-{
-    return e->out.plain_qlen == e->queue.len && e->out.mode == OUT_STREAM && !e->scale.stop_req &&
-           !e->clk.on && is_one_bits(e->scale.override);
-}
-
 /* The decision plain_window kept still holds for the step from tick n. */
 static inline int plain_holds(const engine_t *e)
 {
@@ -897,7 +886,7 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
         __builtin_expect((uint64_t)(now_ns - e->out.last_now) - (uint64_t)e->period_lo <
                              (uint64_t)e->cfg.period_ns,
                          1) &&
-        !(e->lag.pending | e->sil.fresh) && plain_key_unpushed(e)) {
+        plain_key(e) && !(e->lag.pending | e->sil.fresh)) {
         plain_tick(e, now_ns, sp);
         return 0;
     }
