@@ -120,6 +120,9 @@ static double ramp_lag(const engine_t *e, int strict)
         ahead = p->t1_s;
     }
     ahead -= t0;
+    /* the limits at q (A, J and what ts_step derives from them) */
+    const qent_t *lq = NULL;
+    ts_lims_t l;
     for (int n = 0; n < DELAY_RAMP_STEPS_MAX; n++) {
         while (s >= q->t1_s - t0 && i + 1 < e->queue.len) {
             const qent_t *nq = queue_at(e, i + 1);
@@ -128,14 +131,20 @@ static double ramp_lag(const engine_t *e, int strict)
             i++;
             q = nq;
         }
+        if (q != lq) {
+            double v = fmax(q->vmax, 1.0);
+            ts_lims_init(&l, e->cfg.scale_accel_m_s2 / q->av, e->cfg.scale_jerk_m_s3 / v, T);
+            lq = q;
+        }
         /* the curve grows as the input comes, a fragment's S segments at a
-         * time: at worst S intervals late */
-        double grown = fmax(n * T - lag_grow, 0.0);
-        double v = fmax(q->vmax, 1.0), R = ahead + grown - s - (TS_MARGIN_TICKS + 1) * T;
-        double A = e->cfg.scale_accel_m_s2 / q->av, J = e->cfg.scale_jerk_m_s3 / v;
+         * time: at worst S intervals late (g > 0 ? g : 0 is fmax(g, 0) but
+         * for -0, which gives R as +0 does: T > 0 is subtracted from it) */
+        double g = n * T - lag_grow, grown = g > 0 ? g : 0.0;
+        double R = ahead + grown - s - (TS_MARGIN_TICKS + 1) * T;
+        double A = l.A, J = l.J;
         ts_state_t free_st = st;
         int lim = 0;
-        double ds = ts_step(&st, 1.0, R, A, J, T, NULL, &lim);
+        double ds = ts_step_one(&st, &l, R, &lim);
         /* the step without the curve's end differs only where the end
          * limited it, or in a landing on rate 1 (within A T of it), which
          * ts_step makes only if it leaves room: the free step is taken
@@ -144,7 +153,7 @@ static double ramp_lag(const engine_t *e, int strict)
          * acceleration or jerk limit).  With both on every step, and the
          * ramp simulated twice on the start's tick, that tick took 28 us per
          * object (tests/bench/bench_engine --start, tests/bench/RESULTS.md) */
-        if (strict && (lim || fabs(1.0 - free_st.rate) <= A * T) && !(lim & TS_LIM_FREE) &&
+        if (strict && (lim || fabs(1.0 - free_st.rate) <= l.at) && !(lim & TS_LIM_FREE) &&
             ds < ts_step(&free_st, 1.0, INFINITY, A, J, T, NULL, NULL))
             return INFINITY; /* held back by the curve ahead: the ramp would
                               * depend on when each waypoint comes (wait) */

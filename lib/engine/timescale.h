@@ -106,6 +106,36 @@ double ts_step_jerk(ts_state_t *st, double target, double R, double A, double J_
                     double T, double *j_out, int *limited);
 
 /*
+ * The limits of a run of ts_step calls towards rate 1 with the same A, J and
+ * T (the start's ramp, delay_run.c ramp_lag), and what ts_step derives from
+ * them alone, each computed as ts_step computes it (ts_lims_init).
+ */
+typedef struct {
+    double A, J, T;
+    double at;         /* A T */
+    double rm_cub;     /* A^3 / J^2, where ts_rate_max's two forms meet */
+    double h, hh;      /* A^2 / (2 J) and h^2 */
+    double db;         /* ts_dead_band(J, T) */
+    double w0, w1;     /* track_jerk's -J T / 2 and (J T)^2 / 4 */
+    double j2;         /* 2 J */
+    double aaj, aj;    /* A^2 / J, A / J */
+    double k1, k2;     /* ts_stop_dist at a = A: A t0^2 / 2 and J t0^3 / 6, t0 = A / J */
+    double l4, l2;     /* the landing's bounds: 4 J T^2 and 2 J T */
+    double ca;         /* A T^2 / 2 */
+    double jt, cj, dj; /* J T, J T^2 / 2, J T^3 / 6 */
+    int ok;            /* A, J, T > 0 and the terms above > 0, finite */
+} ts_lims_t;
+void ts_lims_init(ts_lims_t *l, double A, double J, double T);
+/*
+ * ts_step(st, 1.0, R, l->A, l->J, l->T, NULL, limited), bit for bit: the
+ * state, the advance and *limited.  A tick that rises towards its target
+ * (the rate below it, 0 <= acc <= A, R finite) with no release, braking or
+ * landing due takes a path with the derived limits in hand; any other is
+ * ts_step's.
+ */
+double ts_step_one(ts_state_t *st, const ts_lims_t *l, double R, int *limited);
+
+/*
  * At rest (rate and acc 0), a creep towards R: the smallest of ts_step's
  * moves from rest (the jerk halved until the stop after it fits within R,
  * with a tick's travel to spare) also where R is within the dead band, where

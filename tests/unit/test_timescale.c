@@ -745,6 +745,71 @@ static void test_lim_free_is_the_free_move(void **state)
     assert_true(flagged > limited / 10);
 }
 
+/* ts_step_one is ts_step(st, 1.0, R, A, J, T, NULL, limited) with the
+ * terms of the limits in hand (timescale.h).  Given random states (the
+ * acceleration at A, at 0, within 0 .. A and beyond +-A) and rooms R (about
+ * a stop from the state after the tick, to an order of magnitude; also
+ * infinite and negative), and 4 000 whole ramps from rest to rate 1 as
+ * delay_run.c ramp_lag simulates them (the limits changed every 37 ticks,
+ * the room growing a tick a tick after a random wait), the advance, the
+ * state and *limited are ts_step's, bit for bit. */
+static double step_one_check(ts_state_t *st, const ts_lims_t *l, double R)
+{
+    ts_state_t ref = *st;
+    int lim = -1, lim_ref = -1;
+    double ds = ts_step_one(st, l, R, &lim);
+    double ds_ref = ts_step(&ref, 1.0, R, l->A, l->J, l->T, NULL, &lim_ref);
+    assert_memory_equal(&ds, &ds_ref, sizeof ds);
+    assert_memory_equal(&st->rate, &ref.rate, sizeof ref.rate);
+    assert_memory_equal(&st->acc, &ref.acc, sizeof ref.acc);
+    assert_int_equal(lim, lim_ref);
+    return ds;
+}
+
+static void test_step_one_is_ts_step(void **state)
+{
+    (void)state;
+    ts_lims_t l;
+    for (int k = 0; k < 400000; k++) {
+        double A = 0.05 + 5.0 * ur(), J = 0.05 + 50.0 * ur(), T = k % 3 ? 0.01 : 0.001 + 0.1 * ur();
+        ts_state_t st = {.rate = k % 4 ? 1.2 * ur() : 0.0, .acc = A * ur()};
+        switch (k % 6) {
+        case 0: st.acc = A; break;
+        case 1: st.acc = 0.0; break;
+        case 2: st.acc = (2.0 * ur() - 1.0) * 1.5 * A; break;
+        default: break;
+        }
+        double r1 = st.rate + st.acc * T + 0.5 * J * T * T, a1 = st.acc + J * T;
+        double R = (ts_stop_dist(r1, a1, A, J) + r1 * T) * pow(10.0, 2.0 * ur() - 1.0);
+        if (k % 50 == 0)
+            R = k % 100 ? INFINITY : -R;
+        ts_lims_init(&l, A, J, T);
+        (void)step_one_check(&st, &l, R);
+    }
+    unsigned ticks = 0, ramps_at_1 = 0;
+    for (int k = 0; k < 4000; k++) {
+        double T = k % 2 ? 0.01 : 0.001 + 0.05 * ur(), A = 0.0, J = 0.0;
+        double R = (0.3 + 2.0 * ur()) * ts_stop_dist(1.0, 0.0, 0.5, 5.0);
+        double grow = k % 4 ? 1.0 : 0.8 + 0.4 * ur();
+        int wait = (int)(50.0 * ur()), n;
+        ts_state_t st = {0.0, 0.0};
+        for (n = 0; n < 20000; n++) {
+            if (n % 37 == 0) {
+                A = 0.1 + 2.0 * ur();
+                J = A * (2.0 + 20.0 * ur());
+                ts_lims_init(&l, A, J, T);
+            }
+            R += (n >= wait ? grow * T : 0.0) - step_one_check(&st, &l, R);
+            if (!(st.rate < 1.0 || st.rate > 1.0) && !(st.acc < 0.0 || st.acc > 0.0))
+                break;
+        }
+        ticks += (unsigned)n;
+        ramps_at_1 += n < 20000;
+    }
+    print_message("%u ticks of ramps, %u of 4000 ramps at rate 1\n", ticks, ramps_at_1);
+    assert_true(ramps_at_1 > 1000);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -759,6 +824,7 @@ int main(void)
         cmocka_unit_test(test_creep_onto_the_end),
         cmocka_unit_test(test_stop_jerk_now),
         cmocka_unit_test(test_lim_free_is_the_free_move),
+        cmocka_unit_test(test_step_one_is_ts_step),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
