@@ -306,6 +306,9 @@ double ts_step_jerk(ts_state_t *st, double target, double R, double A, double J_
     return ds;
 }
 
+/* Each term written as the expression ts_step evaluates, the same
+ * operations on the same operands in the same order (0.5 * A * A / J is
+ * ((0.5 A) A) / J), so that it is that value bit for bit. */
 void ts_lims_init(ts_lims_t *l, double A, double J, double T)
 {
     l->A = A;
@@ -329,122 +332,7 @@ void ts_lims_init(ts_lims_t *l, double A, double J, double T)
     l->jt = J * T;
     l->cj = 0.5 * J * T * T;
     l->dj = J * T * T * T / 6.0;
+    l->qa = A * A / (2.0 * J);
     l->ok = A > 0 && J > 0 && T > 0 && l->at > 0 && l->ca > 0 && isfinite(l->ca) &&
             isfinite(l->dj) && l->dj > 0;
-}
-
-/* x == y (-0 == 0, a NaN equal to nothing) */
-static inline int eq(double x, double y)
-{
-    return x >= y && x <= y;
-}
-
-/* stop_dist0 with A^2 / J and A / J in hand (l) */
-static inline double stop_dist0_l(double r, const ts_lims_t *l)
-{
-    if (r <= 0)
-        return 0;
-    if (r >= l->aaj)
-        return 0.5 * r * (r / l->A + l->aj);
-    return r * sqrt(r / l->J);
-}
-
-/*
- * ts_step_jerk's operations, in its order and on its operands, where J_now
- * is J, target is 1 and j_out NULL, on the path that applies when:
- *   0 <= a <= A: this tick's jerk is J (not raised);
- *   0 < R < INFINITY: ts_rate_max(R) is its root form or its cube root;
- *   tgt (1, or R's lower rate) above the dead band and the rate r: e > 0, so
- *     track_jerk's want is not negated;
- *   after the tick a1 >= 0, and r1 + a1^2 / (2 J) <= tgt where a1 > 0: the
- *     two releases of track_jerk (release_in_time, the second on the negated
- *     state, whose test is this one negated) return the jerk as it was;
- *   r1 > 0 and the stop after the tick fits within R: no braking (nor creep),
- *     and none of the tests of a rate at or through 0 holds;
- *   R lowered the target, or the rate is further than A T from it: no landing.
- * Returns 0 with *st unchanged where one fails (ts_step_one takes ts_step).
- */
-static int step_one(ts_state_t *st, const ts_lims_t *l, double R, double *ds_out, int *limited)
-{
-    double r = st->rate, a = st->acc, A = l->A, J = l->J, T = l->T, tgt = 1.0;
-    int lim = 0;
-
-    if (!l->ok || !(r >= 0) || !(a >= 0 && a <= A) || !(R > 0) || isinf(R))
-        return 0;
-    double rm = R >= l->rm_cub ? -l->h + sqrt(l->hh + 2.0 * R * A) : cbrt(R * R * J);
-    if (rm < tgt) {
-        tgt = rm;
-        lim = 1;
-    }
-    double e = tgt - r;
-    if (tgt < l->db || !(tgt > 0) || !(e > 0))
-        return 0;
-    /* track_jerk */
-    double want = l->w0 + sqrt(l->w1 + l->j2 * e);
-    if (want > A)
-        want = A;
-    double j = (want - a) / T;
-    if (j > J)
-        j = J;
-    if (j < -J)
-        j = -J;
-    /* integrate, its terms in j taken in hand where j is 0 (at A) or J:
-     * the next tick's state then waits on no root or quotient of this one
-     * (those decide branches only), so that ticks overlap */
-    double a1, r1, ds;
-    if (eq(j, 0) && eq(a, A)) {
-        /* the terms in j are +-0, added to sums > 0 (r >= 0, A T > 0) */
-        a1 = A;
-        r1 = r + l->at;
-        ds = r * T + l->ca;
-    } else if (eq(j, J)) {
-        a1 = a + l->jt;
-        r1 = r + a * T + l->cj;
-        ds = r * T + 0.5 * a * T * T + l->dj;
-    } else {
-        a1 = a + j * T;
-        r1 = r + a * T + 0.5 * j * T * T;
-        ds = r * T + 0.5 * a * T * T + j * T * T * T / 6.0;
-    }
-    if (a1 < 0 || !(r1 > 0))
-        return 0;
-    double rel = r1 + a1 * a1 / l->j2;
-    if (a1 > 0 && rel > tgt)
-        return 0;
-    /* ts_stop_dist(r1, a1, A, J) */
-    double sd;
-    if (eq(a1, A)) {
-        double s0 = r1 * l->aj + l->k1 - l->k2;
-        sd = s0 + stop_dist0_l(r1 + l->h, l);
-    } else if (a1 > 0) {
-        double t0 = a1 / J;
-        double s0 = r1 * t0 + 0.5 * a1 * t0 * t0 - J * t0 * t0 * t0 / 6.0;
-        sd = s0 + stop_dist0_l(r1 + 0.5 * a1 * a1 / J, l);
-    } else {
-        sd = stop_dist0_l(r1, l);
-    }
-    if (sd + r1 * T > R - ds)
-        return 0;
-    if (ds < 0)
-        ds = 0;
-    if (!lim && fabs(tgt - r) <= l->at && fabs(tgt - r) <= l->l4 && fabs(a) <= l->l2)
-        return 0;
-    if (limited) {
-        int up = e > 0 && (want >= A || j >= J) && !(a1 < 0) && !(rel > tgt);
-        int same = lim && up && tgt > 0 &&
-                   !(fabs(1.0 - r) <= l->at && fabs(1.0 - r) <= l->l4 && fabs(a) <= l->l2);
-        *limited = lim | (same ? TS_LIM_FREE : 0);
-    }
-    st->rate = r1;
-    st->acc = a1;
-    *ds_out = ds;
-    return 1;
-}
-
-double ts_step_one(ts_state_t *st, const ts_lims_t *l, double R, int *limited)
-{
-    double ds;
-    if (step_one(st, l, R, &ds, limited))
-        return ds;
-    return ts_step(st, 1.0, R, l->A, l->J, l->T, NULL, limited);
 }

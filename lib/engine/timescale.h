@@ -41,6 +41,10 @@
 #ifndef TRAJD_TIMESCALE_H
 #define TRAJD_TIMESCALE_H
 
+#include <float.h>
+#include <math.h>
+#include <stddef.h>
+
 /* Highest rate (feed override 200 %). */
 #define TS_RATE_MAX 2.0
 /* Track time kept in reserve before the end of the solved curve, in ticks at
@@ -123,17 +127,10 @@ typedef struct {
     double l4, l2;     /* the landing's bounds: 4 J T^2 and 2 J T */
     double ca;         /* A T^2 / 2 */
     double jt, cj, dj; /* J T, J T^2 / 2, J T^3 / 6 */
+    double qa;         /* A^2 / (2 J) as track_jerk divides */
     int ok;            /* A, J, T > 0 and the terms above > 0, finite */
 } ts_lims_t;
 void ts_lims_init(ts_lims_t *l, double A, double J, double T);
-/*
- * ts_step(st, 1.0, R, l->A, l->J, l->T, NULL, limited), bit for bit: the
- * state, the advance and *limited.  A tick that rises towards its target
- * (the rate below it, 0 <= acc <= A, R finite) with no release, braking or
- * landing due takes a path with the derived limits in hand; any other is
- * ts_step's.
- */
-double ts_step_one(ts_state_t *st, const ts_lims_t *l, double R, int *limited);
 
 /*
  * At rest (rate and acc 0), a creep towards R: the smallest of ts_step's
@@ -145,5 +142,140 @@ double ts_step_one(ts_state_t *st, const ts_lims_t *l, double R, int *limited);
  * unchanged) if none fits or st is not at rest.
  */
 double ts_creep(ts_state_t *st, double R, double A, double J, double T);
+
+/* ---- ts_step_one, inline: a start's ramp takes some 200 of them ---- */
+
+/* x == y (-0 == 0, a NaN equal to nothing) */
+static inline int ts_eq_(double x, double y)
+{
+    return x >= y && x <= y;
+}
+
+/* timescale.c stop_dist0 with A^2 / J and A / J in hand */
+static inline double ts_stop_dist0_(double r, const ts_lims_t *l)
+{
+    if (r <= 0)
+        return 0;
+    if (r >= l->aaj)
+        return 0.5 * r * (r / l->A + l->aj);
+    return r * sqrt(r / l->J);
+}
+
+/*
+ * ts_step_jerk's operations, in its order and on its operands, where J_now
+ * is J, target is 1 and j_out NULL, on the path that applies when:
+ *   0 <= a <= A: this tick's jerk is J (not raised);
+ *   0 < R < INFINITY: ts_rate_max(R) is its root form or its cube root;
+ *   tgt (1, or R's lower rate) above the dead band and the rate r >= 0:
+ *     e > 0 (so tgt > 0), and track_jerk's want is not negated;
+ *   after the tick a1 >= 0, and r1 + a1^2 / (2 J) <= tgt where a1 > 0: the
+ *     two releases of track_jerk (release_in_time, the second on the negated
+ *     state, whose test is this one negated) return the jerk as it was;
+ *   r1 > 0 and the stop after the tick fits within R: no braking (nor creep),
+ *     and none of the tests of a rate at or through 0 holds;
+ *   R lowered the target, or the rate is further than A T from it: no landing.
+ * The terms in j of the tick's integration are taken in hand where j is 0
+ * at A or J: the next tick's state then waits on no root or quotient of
+ * this one (those decide branches only), so that ticks overlap.
+ * Returns 0 with *st unchanged where one fails.
+ */
+static inline int ts_step_one_(ts_state_t *st, const ts_lims_t *l, double R, double *ds_out,
+                               int *limited)
+{
+    double r = st->rate, a = st->acc, A = l->A, J = l->J, T = l->T, tgt = 1.0;
+    int lim = 0;
+
+    if (!(R > 0 && R <= DBL_MAX) || !(r >= 0) || !(a >= 0 && a <= A) || !l->ok)
+        return 0;
+    double rm = R >= l->rm_cub ? -l->h + sqrt(l->hh + 2.0 * R * A) : cbrt(R * R * J);
+    if (rm < tgt) {
+        tgt = rm;
+        lim = 1;
+    }
+    double e = tgt - r;
+    if (!(e > 0) || tgt < l->db)
+        return 0;
+    /* track_jerk: want at most A; j = (want - a) / T within +-J */
+    double want = l->w0 + sqrt(l->w1 + l->j2 * e);
+    int at_a = want >= A;
+    double j, a1, r1, ds, rel, sd;
+    if (at_a && ts_eq_(a, A)) {
+        /* j = (A - A) / T = +0: its terms are +0, added to sums > 0; the
+         * stop after the tick is ts_stop_dist's a > 0 case with t0 = A / J */
+        j = 0.0;
+        a1 = A;
+        r1 = r + l->at;
+        ds = r * T + l->ca;
+        rel = r1 + l->qa;
+        if (!(r1 > 0) || rel > tgt)
+            return 0;
+        double s0 = r1 * l->aj + l->k1 - l->k2;
+        sd = s0 + ts_stop_dist0_(r1 + l->h, l);
+    } else {
+        j = ((at_a ? A : want) - a) / T;
+        if (j > J)
+            j = J;
+        if (j < -J)
+            j = -J;
+        if (ts_eq_(j, J)) {
+            a1 = a + l->jt;
+            r1 = r + a * T + l->cj;
+            ds = r * T + 0.5 * a * T * T + l->dj;
+        } else {
+            a1 = a + j * T;
+            r1 = r + a * T + 0.5 * j * T * T;
+            ds = r * T + 0.5 * a * T * T + j * T * T * T / 6.0;
+        }
+        if (a1 < 0)
+            return 0;
+        rel = r1 + a1 * a1 / l->j2;
+        if (!(r1 > 0) || (a1 > 0 && rel > tgt))
+            return 0;
+        /* ts_stop_dist(r1, a1, A, J) */
+        if (ts_eq_(a1, A)) {
+            double s0 = r1 * l->aj + l->k1 - l->k2;
+            sd = s0 + ts_stop_dist0_(r1 + l->h, l);
+        } else if (a1 > 0) {
+            double t0 = a1 / J;
+            double s0 = r1 * t0 + 0.5 * a1 * t0 * t0 - J * t0 * t0 * t0 / 6.0;
+            sd = s0 + ts_stop_dist0_(r1 + 0.5 * a1 * a1 / J, l);
+        } else {
+            sd = ts_stop_dist0_(r1, l);
+        }
+    }
+    if (sd + r1 * T > R - ds)
+        return 0;
+    if (ds < 0)
+        ds = 0;
+    /* the landing's test (fabs(tgt - r) is e, fabs(a) is a) */
+    if (!lim && e <= l->at && e <= l->l4 && a <= l->l2)
+        return 0;
+    if (limited) {
+        /* track_jerk's up: e > 0 and a1 >= 0 hold here */
+        int up = (at_a || j >= J) && !(rel > tgt);
+        int same = lim && up &&
+                   !(fabs(1.0 - r) <= l->at && fabs(1.0 - r) <= l->l4 && fabs(a) <= l->l2);
+        *limited = lim | (same ? TS_LIM_FREE : 0);
+    }
+    st->rate = r1;
+    st->acc = a1;
+    *ds_out = ds;
+    return 1;
+}
+
+/*
+ * ts_step(st, 1.0, R, l->A, l->J, l->T, NULL, limited), bit for bit: the
+ * state, the advance and *limited.  A tick that rises towards its target
+ * (the rate below it, 0 <= acc <= A, R finite) with no release, braking or
+ * landing due takes ts_step_one_, the limits' terms in hand; any other is
+ * ts_step's.
+ */
+static inline double ts_step_one(ts_state_t *st, const ts_lims_t *l, double R, int *limited)
+{
+    double ds;
+    if (ts_step_one_(st, l, R, &ds, limited))
+        return ds;
+    return ts_step(st, 1.0, R, l->A, l->J, l->T, NULL, limited);
+}
 
 #endif
