@@ -62,29 +62,6 @@ double ts_rate_max(double R, double A, double J)
     return cbrt(R * R * J);
 }
 
-/* For a tick of jerk j that leaves the acceleration a1 = a + j T below 0:
- * the smallest jerk >= j after which a release at full jerk does not take
- * the rate below tgt (r1 - a1^2 / (2 J) >= tgt, r1 the rate after the tick);
- * J if none does.  The law of track_jerk alone, sqrt(2 J |e|) from the error
- * now, releases up to a few ticks late and lands with the acceleration
- * still at several J T, which the landing then cleared in one tick. */
-static double release_in_time(double r, double a, double tgt, double j, double J, double T)
-{
-    double a1 = a + j * T, r1 = r + a * T + 0.5 * j * T * T;
-
-    if (!(a1 < 0 && r1 - a1 * a1 / (2.0 * J) < tgt))
-        return j;
-    /* r + a T + x T^2/2 - (a + x T)^2 / (2 J) = tgt, a downward parabola in
-     * x: the root left of its vertex (where the final rate rises with x) */
-    double c0 = r + a * T - tgt;
-    double b = 2.0 * a / T - J, c = -(2.0 * J / (T * T)) * (c0 - a * a / (2.0 * J));
-    double disc = b * b - 4.0 * c;
-    double x = disc >= 0 ? 0.5 * (-b - sqrt(disc)) : J;
-    if (x > J)
-        x = J;
-    return x > j ? x : j;
-}
-
 /* Jerk that drives the rate towards tgt as fast as the limits allow: the
  * acceleration wanted for an error e is the one from which, released at
  * full jerk, the rate lands on tgt (sqrt(2 J |e|), corrected for the
@@ -114,8 +91,8 @@ static double track_jerk(double r, double a, double tgt, double A, double J, dou
     }
     /* and no later release than lands on tgt (both directions), planned at
      * Jr, the jerk the release will have (J may be raised for this tick) */
-    j = release_in_time(r, a, tgt, j, Jr, T);
-    j = -release_in_time(-r, -a, -tgt, -j, Jr, T);
+    j = ts_release_in_time_(r, a, tgt, j, Jr, T);
+    j = -ts_release_in_time_(-r, -a, -tgt, -j, Jr, T);
     return j > J ? J : j < -J ? -J : j;
 }
 

@@ -102,6 +102,8 @@ double ts_dead_band(double J, double T);
 double ts_step(ts_state_t *st, double target, double R, double A, double J, double T, double *j_out,
                int *limited);
 #define TS_LIM_FREE 2
+/* ts_step_one's *limited: the move is the one with R infinite (below) */
+#define TS_ONE_FREE 4
 /* ts_step with this tick's jerk J_now (at least J) apart from the jerk J
  * every later tick is planned at (the release, the stop, the rooms): a
  * stop whose jerk is converted at a faster segment ahead may use the jerk of
@@ -161,6 +163,30 @@ static inline double ts_stop_dist0_(double r, const ts_lims_t *l)
     return r * sqrt(r / l->J);
 }
 
+/* timescale.c track_jerk's release: for a tick of jerk j that leaves the acceleration a1 = a + j T below 0:
+ * the smallest jerk >= j after which a release at full jerk does not take
+ * the rate below tgt (r1 - a1^2 / (2 J) >= tgt, r1 the rate after the tick);
+ * J if none does.  The law of track_jerk alone, sqrt(2 J |e|) from the error
+ * now, releases up to a few ticks late and lands with the acceleration
+ * still at several J T, which the landing then cleared in one tick. */
+static inline double ts_release_in_time_(double r, double a, double tgt, double j, double J,
+                                         double T)
+{
+    double a1 = a + j * T, r1 = r + a * T + 0.5 * j * T * T;
+
+    if (!(a1 < 0 && r1 - a1 * a1 / (2.0 * J) < tgt))
+        return j;
+    /* r + a T + x T^2/2 - (a + x T)^2 / (2 J) = tgt, a downward parabola in
+     * x: the root left of its vertex (where the final rate rises with x) */
+    double c0 = r + a * T - tgt;
+    double b = 2.0 * a / T - J, c = -(2.0 * J / (T * T)) * (c0 - a * a / (2.0 * J));
+    double disc = b * b - 4.0 * c;
+    double x = disc >= 0 ? 0.5 * (-b - sqrt(disc)) : J;
+    if (x > J)
+        x = J;
+    return x > j ? x : j;
+}
+
 /*
  * ts_step_jerk's operations, in its order and on its operands, where J_now
  * is J, target is 1 and j_out NULL, on the path that applies when:
@@ -168,9 +194,9 @@ static inline double ts_stop_dist0_(double r, const ts_lims_t *l)
  *   0 < R < INFINITY: ts_rate_max(R) is its root form or its cube root;
  *   tgt (1, or R's lower rate) above the dead band and the rate r >= 0:
  *     e > 0 (so tgt > 0), and track_jerk's want is not negated;
- *   after the tick a1 >= 0, and r1 + a1^2 / (2 J) <= tgt where a1 > 0: the
- *     two releases of track_jerk (release_in_time, the second on the negated
- *     state, whose test is this one negated) return the jerk as it was;
+ *   after the tick a1 >= 0: track_jerk's first release returns the jerk as
+ *     it was (its second, on the negated state, tests r1 + a1^2 / (2 J) >
+ *     tgt with a1 > 0), and a1 >= 0 after the second too;
  *   r1 > 0 and the stop after the tick fits within R: no braking (nor creep),
  *     and none of the tests of a rate at or through 0 holds;
  *   R lowered the target, or the rate is further than A T from it: no landing.
@@ -198,17 +224,19 @@ static inline int ts_step_one_(ts_state_t *st, const ts_lims_t *l, double R, dou
     /* track_jerk: want at most A; j = (want - a) / T within +-J */
     double want = l->w0 + sqrt(l->w1 + l->j2 * e);
     int at_a = want >= A;
-    double j, a1, r1, ds, rel, sd;
+    double j, a1, r1, ds, sd;
+    int up;
     if (at_a && ts_eq_(a, A)) {
-        /* j = (A - A) / T = +0: its terms are +0, added to sums > 0; the
-         * stop after the tick is ts_stop_dist's a > 0 case with t0 = A / J */
+        /* j = (A - A) / T = +0: its terms are +0, added to sums > 0; no
+         * release (else ts_step's); the stop after the tick is
+         * ts_stop_dist's a > 0 case with t0 = A / J */
         j = 0.0;
         a1 = A;
         r1 = r + l->at;
         ds = r * T + l->ca;
-        rel = r1 + l->qa;
-        if (!(r1 > 0) || rel > tgt)
+        if (!(r1 > 0) || r1 + l->qa > tgt)
             return 0;
+        up = 1;
         double s0 = r1 * l->aj + l->k1 - l->k2;
         sd = s0 + ts_stop_dist0_(r1 + l->h, l);
     } else {
@@ -228,8 +256,19 @@ static inline int ts_step_one_(ts_state_t *st, const ts_lims_t *l, double R, dou
         }
         if (a1 < 0)
             return 0;
-        rel = r1 + a1 * a1 / l->j2;
-        if (!(r1 > 0) || (a1 > 0 && rel > tgt))
+        int late = r1 + a1 * a1 / l->j2 > tgt;
+        up = (at_a || j >= J) && !late; /* of the jerk before the releases */
+        if (a1 > 0 && late) {
+            /* the second release (the first returned j: a1 >= 0), clamped */
+            j = -ts_release_in_time_(-r, -a, -tgt, -j, J, T);
+            j = j > J ? J : j < -J ? -J : j;
+            a1 = a + j * T;
+            r1 = r + a * T + 0.5 * j * T * T;
+            ds = r * T + 0.5 * a * T * T + j * T * T * T / 6.0;
+            if (a1 < 0)
+                return 0;
+        }
+        if (!(r1 > 0))
             return 0;
         /* ts_stop_dist(r1, a1, A, J) */
         if (ts_eq_(a1, A)) {
@@ -251,11 +290,11 @@ static inline int ts_step_one_(ts_state_t *st, const ts_lims_t *l, double R, dou
     if (!lim && e <= l->at && e <= l->l4 && a <= l->l2)
         return 0;
     if (limited) {
-        /* track_jerk's up: e > 0 and a1 >= 0 hold here */
-        int up = (at_a || j >= J) && !(rel > tgt);
         int same = lim && up &&
                    !(fabs(1.0 - r) <= l->at && fabs(1.0 - r) <= l->l4 && fabs(a) <= l->l2);
-        *limited = lim | (same ? TS_LIM_FREE : 0);
+        /* R did not decide (tgt 1 as with R infinite, no braking) and no
+         * landing was tested: the move with R infinite */
+        *limited = lim ? lim | (same ? TS_LIM_FREE : 0) : TS_ONE_FREE;
     }
     st->rate = r1;
     st->acc = a1;
@@ -265,10 +304,11 @@ static inline int ts_step_one_(ts_state_t *st, const ts_lims_t *l, double R, dou
 
 /*
  * ts_step(st, 1.0, R, l->A, l->J, l->T, NULL, limited), bit for bit: the
- * state, the advance and *limited.  A tick that rises towards its target
- * (the rate below it, 0 <= acc <= A, R finite) with no release, braking or
- * landing due takes ts_step_one_, the limits' terms in hand; any other is
- * ts_step's.
+ * state, the advance and *limited, but for TS_ONE_FREE in place of 0 where
+ * the move is also, bit for bit, the one with R infinite (R did not decide
+ * it, and no landing was tested).  A tick that rises towards its target
+ * (the rate below it, 0 <= acc <= A, R finite) with no braking or landing
+ * due takes ts_step_one_, the limits' terms in hand; any other is ts_step's.
  */
 static inline double ts_step_one(ts_state_t *st, const ts_lims_t *l, double R, int *limited)
 {

@@ -752,17 +752,30 @@ static void test_lim_free_is_the_free_move(void **state)
  * infinite and negative), and 4 000 whole ramps from rest to rate 1 as
  * delay_run.c ramp_lag simulates them (the limits changed every 37 ticks,
  * the room growing a tick a tick after a random wait), the advance, the
- * state and *limited are ts_step's, bit for bit. */
+ * state and *limited are ts_step's, bit for bit, and where TS_ONE_FREE
+ * stands for 0 in *limited, those of ts_step with R infinite too. */
+static unsigned n_one_free;
 static double step_one_check(ts_state_t *st, const ts_lims_t *l, double R)
 {
-    ts_state_t ref = *st;
+    ts_state_t ref = *st, free_st = *st;
     int lim = -1, lim_ref = -1;
     double ds = ts_step_one(st, l, R, &lim);
     double ds_ref = ts_step(&ref, 1.0, R, l->A, l->J, l->T, NULL, &lim_ref);
     assert_memory_equal(&ds, &ds_ref, sizeof ds);
     assert_memory_equal(&st->rate, &ref.rate, sizeof ref.rate);
     assert_memory_equal(&st->acc, &ref.acc, sizeof ref.acc);
-    assert_int_equal(lim, lim_ref);
+    if (lim & TS_ONE_FREE) {
+        /* also the move with R infinite */
+        assert_int_equal(lim, TS_ONE_FREE);
+        assert_int_equal(lim_ref, 0);
+        double ds_free = ts_step(&free_st, 1.0, INFINITY, l->A, l->J, l->T, NULL, NULL);
+        assert_memory_equal(&ds, &ds_free, sizeof ds);
+        assert_memory_equal(&st->rate, &free_st.rate, sizeof ref.rate);
+        assert_memory_equal(&st->acc, &free_st.acc, sizeof ref.acc);
+        n_one_free++;
+    } else {
+        assert_int_equal(lim, lim_ref);
+    }
     return ds;
 }
 
@@ -806,8 +819,10 @@ static void test_step_one_is_ts_step(void **state)
         ticks += (unsigned)n;
         ramps_at_1 += n < 20000;
     }
-    print_message("%u ticks of ramps, %u of 4000 ramps at rate 1\n", ticks, ramps_at_1);
+    print_message("%u ticks of ramps, %u of 4000 ramps at rate 1; %u moves the free one\n", ticks,
+                  ramps_at_1, n_one_free);
     assert_true(ramps_at_1 > 1000);
+    assert_true(n_one_free > ticks / 10);
 }
 
 int main(void)
