@@ -141,7 +141,6 @@ static double ramp_lag(const engine_t *e, int strict)
          * for -0, which gives R as +0 does: T > 0 is subtracted from it) */
         double g = n * T - lag_grow, grown = g > 0 ? g : 0.0;
         double R = ahead + grown - s - (TS_MARGIN_TICKS + 1) * T;
-        double A = l.A, J = l.J;
         ts_state_t free_st = st;
         int lim = 0;
         double ds = ts_step_one(&st, &l, R, &lim);
@@ -154,9 +153,9 @@ static double ramp_lag(const engine_t *e, int strict)
          * landing and the end did not limit).  With both on every step, and the
          * ramp simulated twice on the start's tick, that tick took 28 us per
          * object (tests/bench/bench_engine --start, tests/bench/RESULTS.md) */
-        if (strict && ((lim & 1) || fabs(1.0 - free_st.rate) <= l.at) &&
-            !(lim & (TS_LIM_FREE | TS_ONE_FREE)) &&
-            ds < ts_step(&free_st, 1.0, INFINITY, A, J, T, NULL, NULL))
+        if (strict && !(lim & (TS_LIM_FREE | TS_ONE_FREE)) &&
+            ((lim & 1) || fabs(1.0 - free_st.rate) <= l.at) &&
+            ds < ts_step(&free_st, 1.0, INFINITY, l.A, l.J, T, NULL, NULL))
             return INFINITY; /* held back by the curve ahead: the ramp would
                               * depend on when each waypoint comes (wait) */
         s += ds;

@@ -311,5 +311,5 @@ void ts_lims_init(ts_lims_t *l, double A, double J, double T)
     l->dj = J * T * T * T / 6.0;
     l->qa = A * A / (2.0 * J);
     l->ok = A > 0 && J > 0 && T > 0 && l->at > 0 && l->ca > 0 && isfinite(l->ca) &&
-            isfinite(l->dj) && l->dj > 0;
+            isfinite(l->dj) && l->dj > 0 && l->db > 0;
 }

@@ -41,7 +41,6 @@
 #ifndef TRAJD_TIMESCALE_H
 #define TRAJD_TIMESCALE_H
 
-#include <float.h>
 #include <math.h>
 #include <stddef.h>
 
@@ -191,8 +190,9 @@ static inline double ts_release_in_time_(double r, double a, double tgt, double 
  * ts_step_jerk's operations, in its order and on its operands, where J_now
  * is J, target is 1 and j_out NULL, on the path that applies when:
  *   0 <= a <= A: this tick's jerk is J (not raised);
- *   0 < R < INFINITY: ts_rate_max(R) is its root form or its cube root;
- *   tgt (1, or R's lower rate) above the dead band and the rate r >= 0:
+ *   R > 0: ts_rate_max(R) is its root form or its cube root (INFINITY for R
+ *     INFINITY, as ts_rate_max returns, and no stop is then beyond R);
+ *   tgt (1, or R's lower rate) above the dead band (> 0) and the rate:
  *     e > 0 (so tgt > 0), and track_jerk's want is not negated;
  *   after the tick a1 >= 0: track_jerk's first release returns the jerk as
  *     it was (its second, on the negated state, tests r1 + a1^2 / (2 J) >
@@ -211,7 +211,7 @@ static inline int ts_step_one_(ts_state_t *st, const ts_lims_t *l, double R, dou
     double r = st->rate, a = st->acc, A = l->A, J = l->J, T = l->T, tgt = 1.0;
     int lim = 0;
 
-    if (!(R > 0 && R <= DBL_MAX) || !(r >= 0) || !(a >= 0 && a <= A) || !l->ok)
+    if (!(R > 0) || !(a >= 0 && a <= A) || !l->ok)
         return 0;
     double rm = R >= l->rm_cub ? -l->h + sqrt(l->hh + 2.0 * R * A) : cbrt(R * R * J);
     if (rm < tgt) {
@@ -227,7 +227,8 @@ static inline int ts_step_one_(ts_state_t *st, const ts_lims_t *l, double R, dou
     double j, a1, r1, ds, sd;
     int up;
     if (at_a && ts_eq_(a, A)) {
-        /* j = (A - A) / T = +0: its terms are +0, added to sums > 0; no
+        /* j = (A - A) / T = +0: its terms are +0, added to sums that are
+         * not -0 (A T, A T^2 / 2 > 0 in them); no
          * release (else ts_step's); the stop after the tick is
          * ts_stop_dist's a > 0 case with t0 = A / J */
         j = 0.0;
@@ -307,7 +308,7 @@ static inline int ts_step_one_(ts_state_t *st, const ts_lims_t *l, double R, dou
  * state, the advance and *limited, but for TS_ONE_FREE in place of 0 where
  * the move is also, bit for bit, the one with R infinite (R did not decide
  * it, and no landing was tested).  A tick that rises towards its target
- * (the rate below it, 0 <= acc <= A, R finite) with no braking or landing
+ * (the rate below it, 0 <= acc <= A) with no braking or landing
  * due takes ts_step_one_, the limits' terms in hand; any other is ts_step's.
  */
 static inline double ts_step_one(ts_state_t *st, const ts_lims_t *l, double R, int *limited)
