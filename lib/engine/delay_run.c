@@ -149,10 +149,11 @@ static double ramp_lag(const engine_t *e, int strict)
          * ts_step makes only if it leaves room: the free step is taken
          * there alone, and not where ts_step made it already (TS_LIM_FREE:
          * the end lowered the target of a ramp still rising at its
-         * acceleration or jerk limit; TS_ONE_FREE: ts_step_one tested no
-         * landing and the end did not limit).  With both on every step, and the
-         * ramp simulated twice on the start's tick, that tick took 28 us per
-         * object (tests/bench/bench_engine --start, tests/bench/RESULTS.md) */
+         * acceleration or jerk limit; TS_ONE_FREE: the end neither limited
+         * ts_step_one's move nor refused its landing).  With both on every
+         * step, and the ramp simulated twice on the start's tick, that tick
+         * took 28 us per object (tests/bench/bench_engine --start,
+         * tests/bench/RESULTS.md) */
         if (strict && !(lim & (TS_LIM_FREE | TS_ONE_FREE)) &&
             ((lim & 1) || fabs(1.0 - free_st.rate) <= l.at) &&
             ds < ts_step(&free_st, 1.0, INFINITY, l.A, l.J, T, NULL, NULL))

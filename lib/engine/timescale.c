@@ -154,8 +154,8 @@ double ts_creep(ts_state_t *st, double R, double A, double J, double T)
  * the target continuously instead of being set to it (which stepped the
  * velocity by up to k' J T^2: 0.125 m/s at 20 Hz).  Leaves the move as it
  * was otherwise. */
-static void land(double r, double a, double tgt, double J, double T, double *j, double *ds,
-                 double *r1, double *a1)
+void ts_land_(double r, double a, double tgt, double J, double T, double *j, double *ds, double *r1,
+              double *a1)
 {
     double e = tgt - r, j1 = -a / T;
 
@@ -259,7 +259,7 @@ double ts_step_jerk(ts_state_t *st, double target, double R, double A, double J_
     if (!crept && !lim && fabs(tgt - r) <= A * T && fabs(tgt - r) <= 4.0 * J * T * T &&
         fabs(a) <= 2.0 * J * T) {
         double lj = j, lds = ds, lr = r1, la = a1;
-        land(r, a, tgt, J, T, &lj, &lds, &lr, &la);
+        ts_land_(r, a, tgt, J, T, &lj, &lds, &lr, &la);
         if (isinf(R) || (lds <= R && (!(lr > 0) || ts_stop_dist(lr, la, A, Jr) <= R - lds))) {
             j = lj; /* a landing that leaves room to stop */
             ds = lds;

@@ -146,6 +146,11 @@ double ts_creep(ts_state_t *st, double R, double A, double J, double T);
 
 /* ---- ts_step_one, inline: a start's ramp takes some 200 of them ---- */
 
+/* ts_step's landing on tgt (timescale.c): rewrites the move (*j, *ds, *r1,
+ * *a1) where one lands */
+void ts_land_(double r, double a, double tgt, double J, double T, double *j, double *ds, double *r1,
+              double *a1);
+
 /* x == y (-0 == 0, a NaN equal to nothing) */
 static inline int ts_eq_(double x, double y)
 {
@@ -194,12 +199,13 @@ static inline double ts_release_in_time_(double r, double a, double tgt, double 
  *     INFINITY, as ts_rate_max returns, and no stop is then beyond R);
  *   tgt (1, or R's lower rate) above the dead band (> 0) and the rate:
  *     e > 0 (so tgt > 0), and track_jerk's want is not negated;
- *   after the tick a1 >= 0: track_jerk's first release returns the jerk as
- *     it was (its second, on the negated state, tests r1 + a1^2 / (2 J) >
- *     tgt with a1 > 0), and a1 >= 0 after the second too;
+ *   track_jerk's releases (release_in_time; the second, on the negated
+ *     state, tests r1 + a1^2 / (2 J) > tgt with a1 > 0) are taken where one
+ *     may be due (a1 < 0, or that test), but at A (then ts_step's); else they
+ *     return the jerk as it was;
  *   r1 > 0 and the stop after the tick fits within R: no braking (nor creep),
  *     and none of the tests of a rate at or through 0 holds;
- *   R lowered the target, or the rate is further than A T from it: no landing.
+ *   the landing, where its test holds, as ts_step makes it.
  * The terms in j of the tick's integration are taken in hand where j is 0
  * at A or J: the next tick's state then waits on no root or quotient of
  * this one (those decide branches only), so that ticks overlap.
@@ -255,23 +261,19 @@ static inline int ts_step_one_(ts_state_t *st, const ts_lims_t *l, double R, dou
             r1 = r + a * T + 0.5 * j * T * T;
             ds = r * T + 0.5 * a * T * T + j * T * T * T / 6.0;
         }
-        if (a1 < 0)
-            return 0;
         int late = r1 + a1 * a1 / l->j2 > tgt;
-        up = (at_a || j >= J) && !late; /* of the jerk before the releases */
-        if (a1 > 0 && late) {
-            /* the second release (the first returned j: a1 >= 0), clamped */
+        up = (at_a || j >= J) && !(a1 < 0) && !late; /* before the releases */
+        if (a1 < 0 || (a1 > 0 && late)) {
+            /* a release may be due: track_jerk's two, then its clamp */
+            j = ts_release_in_time_(r, a, tgt, j, J, T);
             j = -ts_release_in_time_(-r, -a, -tgt, -j, J, T);
             j = j > J ? J : j < -J ? -J : j;
             a1 = a + j * T;
             r1 = r + a * T + 0.5 * j * T * T;
             ds = r * T + 0.5 * a * T * T + j * T * T * T / 6.0;
-            if (a1 < 0)
-                return 0;
         }
         if (!(r1 > 0))
             return 0;
-        /* ts_stop_dist(r1, a1, A, J) */
         if (ts_eq_(a1, A)) {
             double s0 = r1 * l->aj + l->k1 - l->k2;
             sd = s0 + ts_stop_dist0_(r1 + l->h, l);
@@ -280,22 +282,33 @@ static inline int ts_step_one_(ts_state_t *st, const ts_lims_t *l, double R, dou
             double s0 = r1 * t0 + 0.5 * a1 * t0 * t0 - J * t0 * t0 * t0 / 6.0;
             sd = s0 + ts_stop_dist0_(r1 + 0.5 * a1 * a1 / J, l);
         } else {
-            sd = ts_stop_dist0_(r1, l);
+            sd = ts_stop_dist(r1, a1, A, J);
         }
     }
     if (sd + r1 * T > R - ds)
         return 0;
     if (ds < 0)
         ds = 0;
-    /* the landing's test (fabs(tgt - r) is e, fabs(a) is a) */
-    if (!lim && e <= l->at && e <= l->l4 && a <= l->l2)
-        return 0;
+    /* the landing (fabs(tgt - r) is e, fabs(a) is a); one it makes is the
+     * one with R infinite, which makes every one */
+    int refused = 0;
+    if (!lim && e <= l->at && e <= l->l4 && a <= l->l2) {
+        double lj = j, lds = ds, lr = r1, la = a1;
+        ts_land_(r, a, tgt, J, T, &lj, &lds, &lr, &la);
+        if (isinf(R) || (lds <= R && (!(lr > 0) || ts_stop_dist(lr, la, A, J) <= R - lds))) {
+            ds = lds;
+            r1 = lr;
+            a1 = la;
+        } else {
+            refused = 1;
+        }
+    }
     if (limited) {
         int same = lim && up &&
                    !(fabs(1.0 - r) <= l->at && fabs(1.0 - r) <= l->l4 && fabs(a) <= l->l2);
         /* R did not decide (tgt 1 as with R infinite, no braking) and no
-         * landing was tested: the move with R infinite */
-        *limited = lim ? lim | (same ? TS_LIM_FREE : 0) : TS_ONE_FREE;
+         * landing was refused: the move with R infinite */
+        *limited = lim ? lim | (same ? TS_LIM_FREE : 0) : refused ? 0 : TS_ONE_FREE;
     }
     st->rate = r1;
     st->acc = a1;
@@ -307,9 +320,9 @@ static inline int ts_step_one_(ts_state_t *st, const ts_lims_t *l, double R, dou
  * ts_step(st, 1.0, R, l->A, l->J, l->T, NULL, limited), bit for bit: the
  * state, the advance and *limited, but for TS_ONE_FREE in place of 0 where
  * the move is also, bit for bit, the one with R infinite (R did not decide
- * it, and no landing was tested).  A tick that rises towards its target
- * (the rate below it, 0 <= acc <= A) with no braking or landing
- * due takes ts_step_one_, the limits' terms in hand; any other is ts_step's.
+ * it, and no landing was refused for want of room).  A tick that rises towards its target
+ * (the rate below it, 0 <= acc <= A) with no braking due takes
+ * ts_step_one_, the limits' terms in hand; any other is ts_step's.
  */
 static inline double ts_step_one(ts_state_t *st, const ts_lims_t *l, double R, int *limited)
 {
