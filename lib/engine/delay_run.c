@@ -15,6 +15,8 @@
 
 /* Steps of the start's ramp simulated at most (ramp_lag). */
 #define DELAY_RAMP_STEPS_MAX 100000
+/* Ticks of the start's ramp taken at once where it rises at A (ramp_lag). */
+#define DELAY_RISE_RUN 16
 /* Queue entries looked at for the fastest segment ahead (head_vmax). */
 #define DELAY_HEAD_SCAN 256
 
@@ -91,6 +93,17 @@ static double head_vmax(const engine_t *e)
     return v;
 }
 
+/* The room at tick n of the start's ramp, s of track advanced: what the
+ * queue holds ahead, and the curve grows as the input comes, a fragment's S
+ * segments at a time: at worst S intervals late (g > 0 ? g : 0 is
+ * fmax(g, 0) but for -0, which gives R as +0 does: T > 0 is subtracted
+ * from it), less TS_MARGIN_TICKS + 1 ticks. */
+static inline double ramp_room(double ahead, double lag_grow, int n, double T, double s)
+{
+    double g = n * T - lag_grow, grown = g > 0 ? g : 0.0;
+    return ahead + grown - s - (TS_MARGIN_TICKS + 1) * T;
+}
+
 /*
  * Track time the start's ramp from rest to rate 1 loses against the clock:
  * the time scaling's steps (ts_step) from rate 0 with the limits converted
@@ -123,6 +136,7 @@ static double ramp_lag(const engine_t *e, int strict)
     /* the limits at q (A, J and what ts_step derives from them) */
     const qent_t *lq = NULL;
     ts_lims_t l;
+    int rise_at = 0; /* the first tick a run at A is tried on */
     for (int n = 0; n < DELAY_RAMP_STEPS_MAX; n++) {
         while (s >= q->t1_s - t0 && i + 1 < e->queue.len) {
             const qent_t *nq = queue_at(e, i + 1);
@@ -136,11 +150,33 @@ static double ramp_lag(const engine_t *e, int strict)
             ts_lims_init(&l, e->cfg.scale_accel_m_s2 / q->av, e->cfg.scale_jerk_m_s3 / v, T);
             lq = q;
         }
-        /* the curve grows as the input comes, a fragment's S segments at a
-         * time: at worst S intervals late (g > 0 ? g : 0 is fmax(g, 0) but
-         * for -0, which gives R as +0 does: T > 0 is subtracted from it) */
-        double g = n * T - lag_grow, grown = g > 0 ? g : 0.0;
-        double R = ahead + grown - s - (TS_MARGIN_TICKS + 1) * T;
+        /* a run of ticks rising at A on q, ts_step_one's plainest: taken
+         * as it takes them (rate + A T, advance rate T + A T^2 / 2), then
+         * checked at once on the run's least room and highest rate
+         * (ts_rise_holds: no free step is due in it either); undone, and
+         * the ticks taken one by one for a run's length, where it fails */
+        if (n >= rise_at && l.ok && st.acc >= l.A && st.acc <= l.A) {
+            double r = st.rate, r_last = r, R_min = INFINITY, s_was = s, lag_was = lag;
+            int k = 0;
+            for (; k < DELAY_RISE_RUN && n + k < DELAY_RAMP_STEPS_MAX && !(s >= q->t1_s - t0);
+                 k++) {
+                double R = ramp_room(ahead, lag_grow, n + k, T, s), ds = r * T + l.ca;
+                R_min = R >= R_min ? R_min : R; /* a NaN taken */
+                r_last = r;
+                r = r + l.at;
+                s += ds;
+                lag += T - ds;
+            }
+            if (k > 0 && ts_rise_holds(&l, R_min, st.rate, r_last)) {
+                st.rate = r;
+                n += k - 1;
+                continue;
+            }
+            s = s_was;
+            lag = lag_was;
+            rise_at = n + DELAY_RISE_RUN;
+        }
+        double R = ramp_room(ahead, lag_grow, n, T, s);
         ts_state_t free_st = st;
         int lim = 0;
         double ds = ts_step_one(&st, &l, R, &lim);

@@ -313,3 +313,41 @@ void ts_lims_init(ts_lims_t *l, double A, double J, double T)
     l->ok = A > 0 && J > 0 && T > 0 && l->at > 0 && l->ca > 0 && isfinite(l->ca) &&
             isfinite(l->dj) && l->dj > 0 && l->db > 0;
 }
+
+/*
+ * Every operation of ts_step_one_'s rise at A is monotonic in the rate r
+ * and in R (sums, products and quotients of terms >= 0 or with constants
+ * > 0, roots; correctly rounded, so monotonic in floating point too): each
+ * of its tests, taken at the run's highest rate and least room, holds for
+ * every tick of the run.  stop_dist0's two forms are one where the run
+ * stays on one side of A^2 / J (they may differ by a rounding at it), and
+ * ts_rate_max's root form is the one where the least room is past A^3 / J^2.
+ */
+int ts_rise_holds(const ts_lims_t *l, double R_min, double r_first, double r_last)
+{
+    if (!l->ok || !(R_min > 0) || !(R_min >= l->rm_cub) || !(r_first <= r_last))
+        return 0;
+    double rm = -l->h + sqrt(l->hh + 2.0 * R_min * l->A);
+    if (!(rm > 0))
+        return 0;
+    double tgt = rm < 1.0 ? rm : 1.0, e = tgt - r_last;
+    /* the target (the lowest), the rate below it, want at A */
+    if (!(e > 0) || tgt < l->db || !(l->w0 + sqrt(l->w1 + l->j2 * e) >= l->A))
+        return 0;
+    /* no release; r1 > 0 and the advance >= 0 from the first tick on */
+    double r1f = r_first + l->at, r1l = r_last + l->at;
+    if (!(r1f > 0) || r1l + l->qa > tgt || !(r_first * l->T + l->ca >= 0))
+        return 0;
+    /* the stop after the last tick within the least room, less the last
+     * (largest) advance */
+    double xf = r1f + l->h, xl = r1l + l->h;
+    if (!(xf > 0) || (xf >= l->aaj) != (xl >= l->aaj))
+        return 0;
+    double s0 = r1l * l->aj + l->k1 - l->k2;
+    double sd = s0 + ts_stop_dist0_(xl, l), dsl = r_last * l->T + l->ca;
+    if (sd + r1l * l->T > R_min - dsl)
+        return 0;
+    /* further than A T from rate 1: no landing is tested, and where R lowers
+     * the target the move is the free one (TS_LIM_FREE) */
+    return 1.0 - r_last > l->at;
+}

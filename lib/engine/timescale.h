@@ -317,6 +317,15 @@ static inline int ts_step_one_(ts_state_t *st, const ts_lims_t *l, double R, dou
 }
 
 /*
+ * A run of ticks rising at A, each from rate r (r_first <= r <= r_last,
+ * each the one before plus l->at: r_first, r_first + A T, ...) with room
+ * R >= R_min: 1 where every one is, in ts_step_one, the rise from (r, A) to
+ * (r + A T, A) with the advance r T + A T^2 / 2 (l->ca), and *limited has
+ * TS_LIM_FREE or TS_ONE_FREE; 0 where that is not shown for every one.
+ */
+int ts_rise_holds(const ts_lims_t *l, double R_min, double r_first, double r_last);
+
+/*
  * ts_step(st, 1.0, R, l->A, l->J, l->T, NULL, limited), bit for bit: the
  * state, the advance and *limited, but for TS_ONE_FREE in place of 0 where
  * the move is also, bit for bit, the one with R infinite (R did not decide

@@ -825,6 +825,57 @@ static void test_step_one_is_ts_step(void **state)
     assert_true(n_one_free > ticks / 10);
 }
 
+/* ts_rise_holds (timescale.h): given random limits, runs of 1 to 24 ticks
+ * rising at A from random rates, and rooms about the stop after the run
+ * (from a third to 30 times it, each tick's a little above the least, some
+ * infinite), every run it passes is, tick by tick, ts_step_one's rise at A
+ * (the rate + A T, the advance r T + A T^2 / 2) with TS_LIM_FREE or
+ * TS_ONE_FREE, and ts_step's move bit for bit; it passes some runs and
+ * fails others. */
+static void test_rise_holds_is_the_rise(void **state)
+{
+    (void)state;
+    unsigned runs = 0, held = 0;
+    for (int k = 0; k < 300000; k++) {
+        double A = 0.05 + 5.0 * ur(), J = A * (1.0 + 30.0 * ur());
+        double T = k % 3 ? 0.01 : 0.001 + 0.1 * ur();
+        ts_lims_t l;
+        ts_lims_init(&l, A, J, T);
+        int n = 1 + (int)(24.0 * ur());
+        double r0 = 1.1 * ur(), r_last = r0, R[25], R_min = INFINITY;
+        for (int m = 1; m < n; m++)
+            r_last = r_last + l.at;
+        double r1 = r_last + l.at;
+        double Rb = (ts_stop_dist(r1, A, A, J) + r1 * T) * pow(10.0, 2.0 * ur() - 0.5);
+        for (int m = 0; m < n; m++) {
+            R[m] = k % 7 == 0 && m % 2 ? INFINITY : Rb * (1.0 + 0.05 * ur());
+            R_min = R[m] < R_min ? R[m] : R_min;
+        }
+        runs++;
+        if (!ts_rise_holds(&l, R_min, r0, r_last))
+            continue;
+        held++;
+        ts_state_t st = {r0, A};
+        for (int m = 0; m < n; m++) {
+            ts_state_t ref = st;
+            double r = st.rate, ds_rise = r * T + l.ca, r_rise = r + l.at;
+            int lim = 0, lim_ref = 0;
+            double ds = ts_step_one(&st, &l, R[m], &lim);
+            double ds_ref = ts_step(&ref, 1.0, R[m], A, J, T, NULL, &lim_ref);
+            assert_memory_equal(&ds, &ds_rise, sizeof ds);
+            assert_memory_equal(&st.rate, &r_rise, sizeof r);
+            assert_memory_equal(&st.acc, &A, sizeof A);
+            assert_true(lim & (TS_LIM_FREE | TS_ONE_FREE));
+            assert_memory_equal(&ds, &ds_ref, sizeof ds);
+            assert_memory_equal(&st.rate, &ref.rate, sizeof r);
+            assert_memory_equal(&st.acc, &ref.acc, sizeof A);
+            assert_int_equal(lim & ~TS_ONE_FREE, lim_ref);
+        }
+    }
+    print_message("%u of %u runs at A held\n", held, runs);
+    assert_true(held > runs / 10 && held < runs - runs / 10);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -840,6 +891,7 @@ int main(void)
         cmocka_unit_test(test_stop_jerk_now),
         cmocka_unit_test(test_lim_free_is_the_free_move),
         cmocka_unit_test(test_step_one_is_ts_step),
+        cmocka_unit_test(test_rise_holds_is_the_rise),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
