@@ -15,8 +15,12 @@
 
 /* Steps of the start's ramp simulated at most (ramp_lag). */
 #define DELAY_RAMP_STEPS_MAX 100000
-/* Ticks of the start's ramp taken at once where it rises at A (ramp_lag). */
-#define DELAY_RISE_RUN 16
+/* Ticks of the start's ramp taken at once where it rises at A, at most
+ * (ramp_lag), and those taken one by one after a run that failed (on
+ * bench_engine --start's ramps: 16 and 16, 19.9 M instructions; 64 and 16,
+ * 19.3 M). */
+#define DELAY_RISE_RUN 64
+#define DELAY_RISE_RETRY 16
 /* Queue entries looked at for the fastest segment ahead (head_vmax). */
 #define DELAY_HEAD_SCAN 256
 
@@ -154,7 +158,7 @@ static double ramp_lag(const engine_t *e, int strict)
          * as it takes them (rate + A T, advance rate T + A T^2 / 2), then
          * checked at once on the run's least room and highest rate
          * (ts_rise_holds: no free step is due in it either); undone, and
-         * the ticks taken one by one for a run's length, where it fails */
+         * DELAY_RISE_RETRY ticks taken one by one, where it fails */
         if (n >= rise_at && l.ok && st.acc >= l.A && st.acc <= l.A) {
             double r = st.rate, r_last = r, R_min = INFINITY, s_was = s, lag_was = lag;
             int k = 0;
@@ -174,7 +178,7 @@ static double ramp_lag(const engine_t *e, int strict)
             }
             s = s_was;
             lag = lag_was;
-            rise_at = n + DELAY_RISE_RUN;
+            rise_at = n + DELAY_RISE_RETRY;
         }
         double R = ramp_room(ahead, lag_grow, n, T, s);
         ts_state_t free_st = st;
