@@ -161,9 +161,10 @@ static double ramp_lag(const engine_t *e, int strict)
          * DELAY_RISE_RETRY ticks taken one by one, where it fails */
         if (n >= rise_at && l.ok && st.acc >= l.A && st.acc <= l.A) {
             double r = st.rate, r_last = r, R_min = INFINITY, s_was = s, lag_was = lag;
-            int k = 0;
-            for (; k < DELAY_RISE_RUN && n + k < DELAY_RAMP_STEPS_MAX && !(s >= q->t1_s - t0);
-                 k++) {
+            double s_end = q->t1_s - t0;
+            int k = 0, k_max = DELAY_RAMP_STEPS_MAX - n;
+            k_max = k_max < DELAY_RISE_RUN ? k_max : DELAY_RISE_RUN;
+            for (; k < k_max && !(s >= s_end); k++) {
                 double R = ramp_room(ahead, lag_grow, n + k, T, s), ds = r * T + l.ca;
                 R_min = R >= R_min ? R_min : R; /* a NaN taken */
                 r_last = r;
