@@ -16,9 +16,9 @@
 /* Steps of the start's ramp simulated at most (ramp_lag). */
 #define DELAY_RAMP_STEPS_MAX 100000
 /* Ticks of the start's ramp taken at once where it rises at A, at most
- * (ramp_lag), and those taken one by one after a run that failed (on
- * bench_engine --start's ramps: 16 and 16, 19.9 M instructions; 64 and 16,
- * 19.3 M). */
+ * (ramp_lag), and those taken one by one after a run that failed (ramp_lag
+ * on bench_engine --start's ramps: 16 and 16, 20.6 M instructions; 32 and
+ * 16, 19.9 M; 64 and 16, 19.3 M). */
 #define DELAY_RISE_RUN 64
 #define DELAY_RISE_RETRY 16
 /* Queue entries looked at for the fastest segment ahead (head_vmax). */

@@ -167,12 +167,13 @@ static inline double ts_stop_dist0_(double r, const ts_lims_t *l)
     return r * sqrt(r / l->J);
 }
 
-/* timescale.c track_jerk's release: for a tick of jerk j that leaves the acceleration a1 = a + j T below 0:
- * the smallest jerk >= j after which a release at full jerk does not take
- * the rate below tgt (r1 - a1^2 / (2 J) >= tgt, r1 the rate after the tick);
- * J if none does.  The law of track_jerk alone, sqrt(2 J |e|) from the error
- * now, releases up to a few ticks late and lands with the acceleration
- * still at several J T, which the landing then cleared in one tick. */
+/* timescale.c track_jerk's release: for a tick of jerk j that leaves the
+ * acceleration a1 = a + j T below 0: the smallest jerk >= j after which a
+ * release at full jerk does not take the rate below tgt (r1 - a1^2 / (2 J)
+ * >= tgt, r1 the rate after the tick); J if none does.  The law of
+ * track_jerk alone, sqrt(2 J |e|) from the error now, releases up to a few
+ * ticks late and lands with the acceleration still at several J T, which
+ * the landing then cleared in one tick. */
 static inline double ts_release_in_time_(double r, double a, double tgt, double j, double J,
                                          double T)
 {
@@ -234,9 +235,9 @@ static inline int ts_step_one_(ts_state_t *st, const ts_lims_t *l, double R, dou
     int up;
     if (at_a && ts_eq_(a, A)) {
         /* j = (A - A) / T = +0: its terms are +0, added to sums that are
-         * not -0 (A T, A T^2 / 2 > 0 in them); no
-         * release (else ts_step's); the stop after the tick is
-         * ts_stop_dist's a > 0 case with t0 = A / J */
+         * not -0 (A T, A T^2 / 2 > 0 in them); no release (else
+         * ts_step's); the stop after the tick is ts_stop_dist's a > 0 case
+         * with t0 = A / J */
         j = 0.0;
         a1 = A;
         r1 = r + l->at;
@@ -329,9 +330,9 @@ int ts_rise_holds(const ts_lims_t *l, double R_min, double r_first, double r_las
  * ts_step(st, 1.0, R, l->A, l->J, l->T, NULL, limited), bit for bit: the
  * state, the advance and *limited, but for TS_ONE_FREE in place of 0 where
  * the move is also, bit for bit, the one with R infinite (R did not decide
- * it, and no landing was refused for want of room).  A tick that rises towards its target
- * (the rate below it, 0 <= acc <= A) with no braking due takes
- * ts_step_one_, the limits' terms in hand; any other is ts_step's.
+ * it, and no landing was refused for want of room).  A tick that rises
+ * towards its target (the rate below it, 0 <= acc <= A) with no braking
+ * due takes ts_step_one_, the limits' terms in hand; any other is ts_step's.
  */
 static inline double ts_step_one(ts_state_t *st, const ts_lims_t *l, double R, int *limited)
 {
