@@ -15,6 +15,12 @@
 
 /* Steps of the start's ramp simulated at most (ramp_lag). */
 #define DELAY_RAMP_STEPS_MAX 100000
+/* Ticks of the start's ramp taken at once where it rises at A, at most
+ * (ramp_lag), and those taken one by one after a run that failed (ramp_lag
+ * on bench_engine --start's ramps: 16 and 16, 20.6 M instructions; 32 and
+ * 16, 19.9 M; 64 and 16, 19.3 M). */
+#define DELAY_RISE_RUN 64
+#define DELAY_RISE_RETRY 16
 /* Queue entries looked at for the fastest segment ahead (head_vmax). */
 #define DELAY_HEAD_SCAN 256
 
@@ -91,6 +97,17 @@ static double head_vmax(const engine_t *e)
     return v;
 }
 
+/* The room at tick n of the start's ramp, s of track advanced: what the
+ * queue holds ahead, and the curve grows as the input comes, a fragment's S
+ * segments at a time: at worst S intervals late (g > 0 ? g : 0 is
+ * fmax(g, 0) but for -0, which gives R as +0 does: T > 0 is subtracted
+ * from it), less TS_MARGIN_TICKS + 1 ticks. */
+static inline double ramp_room(double ahead, double lag_grow, int n, double T, double s)
+{
+    double g = n * T - lag_grow, grown = g > 0 ? g : 0.0;
+    return ahead + grown - s - (TS_MARGIN_TICKS + 1) * T;
+}
+
 /*
  * Track time the start's ramp from rest to rate 1 loses against the clock:
  * the time scaling's steps (ts_step) from rate 0 with the limits converted
@@ -120,6 +137,10 @@ static double ramp_lag(const engine_t *e, int strict)
         ahead = p->t1_s;
     }
     ahead -= t0;
+    /* the limits at q (A, J and what ts_step derives from them) */
+    const qent_t *lq = NULL;
+    ts_lims_t l;
+    int rise_at = 0; /* the first tick a run at A is tried on */
     for (int n = 0; n < DELAY_RAMP_STEPS_MAX; n++) {
         while (s >= q->t1_s - t0 && i + 1 < e->queue.len) {
             const qent_t *nq = queue_at(e, i + 1);
@@ -128,24 +149,55 @@ static double ramp_lag(const engine_t *e, int strict)
             i++;
             q = nq;
         }
-        /* the curve grows as the input comes, a fragment's S segments at a
-         * time: at worst S intervals late */
-        double grown = fmax(n * T - lag_grow, 0.0);
-        double v = fmax(q->vmax, 1.0), R = ahead + grown - s - (TS_MARGIN_TICKS + 1) * T;
-        double A = e->cfg.scale_accel_m_s2 / q->av, J = e->cfg.scale_jerk_m_s3 / v;
+        if (q != lq) {
+            double v = fmax(q->vmax, 1.0);
+            ts_lims_init(&l, e->cfg.scale_accel_m_s2 / q->av, e->cfg.scale_jerk_m_s3 / v, T);
+            lq = q;
+        }
+        /* a run of ticks rising at A on q, ts_step_one's plainest: taken
+         * as it takes them (rate + A T, advance rate T + A T^2 / 2), then
+         * checked at once on the run's least room and highest rate
+         * (ts_rise_holds: no free step is due in it either); undone, and
+         * DELAY_RISE_RETRY ticks taken one by one, where it fails */
+        if (n >= rise_at && l.ok && st.acc >= l.A && st.acc <= l.A) {
+            double r = st.rate, r_last = r, R_min = INFINITY, s_was = s, lag_was = lag;
+            double s_end = q->t1_s - t0;
+            int k = 0, k_max = DELAY_RAMP_STEPS_MAX - n;
+            k_max = k_max < DELAY_RISE_RUN ? k_max : DELAY_RISE_RUN;
+            for (; k < k_max && !(s >= s_end); k++) {
+                double R = ramp_room(ahead, lag_grow, n + k, T, s), ds = r * T + l.ca;
+                R_min = R >= R_min ? R_min : R; /* a NaN taken */
+                r_last = r;
+                r = r + l.at;
+                s += ds;
+                lag += T - ds;
+            }
+            if (k > 0 && ts_rise_holds(&l, R_min, st.rate, r_last)) {
+                st.rate = r;
+                n += k - 1;
+                continue;
+            }
+            s = s_was;
+            lag = lag_was;
+            rise_at = n + DELAY_RISE_RETRY;
+        }
+        double R = ramp_room(ahead, lag_grow, n, T, s);
         ts_state_t free_st = st;
         int lim = 0;
-        double ds = ts_step(&st, 1.0, R, A, J, T, NULL, &lim);
+        double ds = ts_step_one(&st, &l, R, &lim);
         /* the step without the curve's end differs only where the end
          * limited it, or in a landing on rate 1 (within A T of it), which
          * ts_step makes only if it leaves room: the free step is taken
          * there alone, and not where ts_step made it already (TS_LIM_FREE:
          * the end lowered the target of a ramp still rising at its
-         * acceleration or jerk limit).  With both on every step, and the
-         * ramp simulated twice on the start's tick, that tick took 28 us per
-         * object (tests/bench/bench_engine --start, tests/bench/RESULTS.md) */
-        if (strict && (lim || fabs(1.0 - free_st.rate) <= A * T) && !(lim & TS_LIM_FREE) &&
-            ds < ts_step(&free_st, 1.0, INFINITY, A, J, T, NULL, NULL))
+         * acceleration or jerk limit; TS_ONE_FREE: the end neither limited
+         * ts_step_one's move nor refused its landing).  With both on every
+         * step, and the ramp simulated twice on the start's tick, that tick
+         * took 28 us per object (tests/bench/bench_engine --start,
+         * tests/bench/RESULTS.md) */
+        if (strict && !(lim & (TS_LIM_FREE | TS_ONE_FREE)) &&
+            ((lim & 1) || fabs(1.0 - free_st.rate) <= l.at) &&
+            ds < ts_step(&free_st, 1.0, INFINITY, l.A, l.J, T, NULL, NULL))
             return INFINITY; /* held back by the curve ahead: the ramp would
                               * depend on when each waypoint comes (wait) */
         s += ds;

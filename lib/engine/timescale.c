@@ -62,29 +62,6 @@ double ts_rate_max(double R, double A, double J)
     return cbrt(R * R * J);
 }
 
-/* For a tick of jerk j that leaves the acceleration a1 = a + j T below 0:
- * the smallest jerk >= j after which a release at full jerk does not take
- * the rate below tgt (r1 - a1^2 / (2 J) >= tgt, r1 the rate after the tick);
- * J if none does.  The law of track_jerk alone, sqrt(2 J |e|) from the error
- * now, releases up to a few ticks late and lands with the acceleration
- * still at several J T, which the landing then cleared in one tick. */
-static double release_in_time(double r, double a, double tgt, double j, double J, double T)
-{
-    double a1 = a + j * T, r1 = r + a * T + 0.5 * j * T * T;
-
-    if (!(a1 < 0 && r1 - a1 * a1 / (2.0 * J) < tgt))
-        return j;
-    /* r + a T + x T^2/2 - (a + x T)^2 / (2 J) = tgt, a downward parabola in
-     * x: the root left of its vertex (where the final rate rises with x) */
-    double c0 = r + a * T - tgt;
-    double b = 2.0 * a / T - J, c = -(2.0 * J / (T * T)) * (c0 - a * a / (2.0 * J));
-    double disc = b * b - 4.0 * c;
-    double x = disc >= 0 ? 0.5 * (-b - sqrt(disc)) : J;
-    if (x > J)
-        x = J;
-    return x > j ? x : j;
-}
-
 /* Jerk that drives the rate towards tgt as fast as the limits allow: the
  * acceleration wanted for an error e is the one from which, released at
  * full jerk, the rate lands on tgt (sqrt(2 J |e|), corrected for the
@@ -114,8 +91,8 @@ static double track_jerk(double r, double a, double tgt, double A, double J, dou
     }
     /* and no later release than lands on tgt (both directions), planned at
      * Jr, the jerk the release will have (J may be raised for this tick) */
-    j = release_in_time(r, a, tgt, j, Jr, T);
-    j = -release_in_time(-r, -a, -tgt, -j, Jr, T);
+    j = ts_release_in_time_(r, a, tgt, j, Jr, T);
+    j = -ts_release_in_time_(-r, -a, -tgt, -j, Jr, T);
     return j > J ? J : j < -J ? -J : j;
 }
 
@@ -177,8 +154,8 @@ double ts_creep(ts_state_t *st, double R, double A, double J, double T)
  * the target continuously instead of being set to it (which stepped the
  * velocity by up to k' J T^2: 0.125 m/s at 20 Hz).  Leaves the move as it
  * was otherwise. */
-static void land(double r, double a, double tgt, double J, double T, double *j, double *ds,
-                 double *r1, double *a1)
+void ts_land_(double r, double a, double tgt, double J, double T, double *j, double *ds, double *r1,
+              double *a1)
 {
     double e = tgt - r, j1 = -a / T;
 
@@ -282,7 +259,7 @@ double ts_step_jerk(ts_state_t *st, double target, double R, double A, double J_
     if (!crept && !lim && fabs(tgt - r) <= A * T && fabs(tgt - r) <= 4.0 * J * T * T &&
         fabs(a) <= 2.0 * J * T) {
         double lj = j, lds = ds, lr = r1, la = a1;
-        land(r, a, tgt, J, T, &lj, &lds, &lr, &la);
+        ts_land_(r, a, tgt, J, T, &lj, &lds, &lr, &la);
         if (isinf(R) || (lds <= R && (!(lr > 0) || ts_stop_dist(lr, la, A, Jr) <= R - lds))) {
             j = lj; /* a landing that leaves room to stop */
             ds = lds;
@@ -304,4 +281,73 @@ double ts_step_jerk(ts_state_t *st, double target, double R, double A, double J_
         *limited = lim | (same ? TS_LIM_FREE : 0);
     }
     return ds;
+}
+
+/* Each term written as the expression ts_step evaluates, the same
+ * operations on the same operands in the same order (0.5 * A * A / J is
+ * ((0.5 A) A) / J), so that it is that value bit for bit. */
+void ts_lims_init(ts_lims_t *l, double A, double J, double T)
+{
+    l->A = A;
+    l->J = J;
+    l->T = T;
+    l->at = A * T;
+    l->rm_cub = A * A * A / (J * J);
+    l->h = 0.5 * A * A / J;
+    l->hh = l->h * l->h;
+    l->db = ts_dead_band(J, T);
+    l->w0 = -0.5 * J * T;
+    l->w1 = 0.25 * J * J * T * T;
+    l->j2 = 2.0 * J;
+    l->aaj = A * A / J;
+    l->aj = A / J;
+    l->k1 = 0.5 * A * l->aj * l->aj;
+    l->k2 = J * l->aj * l->aj * l->aj / 6.0;
+    l->l4 = 4.0 * J * T * T;
+    l->l2 = 2.0 * J * T;
+    l->ca = 0.5 * A * T * T;
+    l->jt = J * T;
+    l->cj = 0.5 * J * T * T;
+    l->dj = J * T * T * T / 6.0;
+    l->qa = A * A / (2.0 * J);
+    l->ok = A > 0 && J > 0 && T > 0 && l->at > 0 && l->ca > 0 && isfinite(l->ca) &&
+            isfinite(l->dj) && l->dj > 0 && l->db > 0;
+}
+
+/*
+ * Every operation of ts_step_one_'s rise at A is monotonic in the rate r
+ * and in R (sums, products and quotients of terms >= 0 or with constants
+ * > 0, roots; correctly rounded, so monotonic in floating point too): each
+ * of its tests, taken at the run's highest rate and least room, holds for
+ * every tick of the run.  stop_dist0's two forms are one where the run
+ * stays on one side of A^2 / J (they may differ by a rounding at it), and
+ * ts_rate_max's root form is the one where the least room is past A^3 / J^2.
+ */
+int ts_rise_holds(const ts_lims_t *l, double R_min, double r_first, double r_last)
+{
+    if (!l->ok || !(R_min > 0) || !(R_min >= l->rm_cub) || !(r_first <= r_last))
+        return 0;
+    double rm = -l->h + sqrt(l->hh + 2.0 * R_min * l->A);
+    if (!(rm > 0))
+        return 0;
+    double tgt = rm < 1.0 ? rm : 1.0, e = tgt - r_last;
+    /* the target (the lowest), the rate below it, want at A */
+    if (!(e > 0) || tgt < l->db || !(l->w0 + sqrt(l->w1 + l->j2 * e) >= l->A))
+        return 0;
+    /* no release; r1 > 0 and the advance >= 0 from the first tick on */
+    double r1f = r_first + l->at, r1l = r_last + l->at;
+    if (!(r1f > 0) || r1l + l->qa > tgt || !(r_first * l->T + l->ca >= 0))
+        return 0;
+    /* the stop after the last tick within the least room, less the last
+     * (largest) advance */
+    double xf = r1f + l->h, xl = r1l + l->h;
+    if (!(xf > 0) || (xf >= l->aaj) != (xl >= l->aaj))
+        return 0;
+    double s0 = r1l * l->aj + l->k1 - l->k2;
+    double sd = s0 + ts_stop_dist0_(xl, l), dsl = r_last * l->T + l->ca;
+    if (sd + r1l * l->T > R_min - dsl)
+        return 0;
+    /* further than A T from rate 1: no landing is tested, and where R lowers
+     * the target the move is the free one (TS_LIM_FREE) */
+    return 1.0 - r_last > l->at;
 }

@@ -745,6 +745,137 @@ static void test_lim_free_is_the_free_move(void **state)
     assert_true(flagged > limited / 10);
 }
 
+/* ts_step_one is ts_step(st, 1.0, R, A, J, T, NULL, limited) with the
+ * terms of the limits in hand (timescale.h).  Given random states (the
+ * acceleration at A, at 0, within 0 .. A and beyond +-A) and rooms R (about
+ * a stop from the state after the tick, to an order of magnitude; also
+ * infinite and negative), and 4 000 whole ramps from rest to rate 1 as
+ * delay_run.c ramp_lag simulates them (the limits changed every 37 ticks,
+ * the room growing a tick a tick after a random wait), the advance, the
+ * state and *limited are ts_step's, bit for bit, and where TS_ONE_FREE
+ * stands for 0 in *limited, those of ts_step with R infinite too. */
+static unsigned n_one_free;
+static double step_one_check(ts_state_t *st, const ts_lims_t *l, double R)
+{
+    ts_state_t ref = *st, free_st = *st;
+    int lim = -1, lim_ref = -1;
+    double ds = ts_step_one(st, l, R, &lim);
+    double ds_ref = ts_step(&ref, 1.0, R, l->A, l->J, l->T, NULL, &lim_ref);
+    assert_memory_equal(&ds, &ds_ref, sizeof ds);
+    assert_memory_equal(&st->rate, &ref.rate, sizeof ref.rate);
+    assert_memory_equal(&st->acc, &ref.acc, sizeof ref.acc);
+    if (lim & TS_ONE_FREE) {
+        /* also the move with R infinite */
+        assert_int_equal(lim, TS_ONE_FREE);
+        assert_int_equal(lim_ref, 0);
+        double ds_free = ts_step(&free_st, 1.0, INFINITY, l->A, l->J, l->T, NULL, NULL);
+        assert_memory_equal(&ds, &ds_free, sizeof ds);
+        assert_memory_equal(&st->rate, &free_st.rate, sizeof ref.rate);
+        assert_memory_equal(&st->acc, &free_st.acc, sizeof ref.acc);
+        n_one_free++;
+    } else {
+        assert_int_equal(lim, lim_ref);
+    }
+    return ds;
+}
+
+static void test_step_one_is_ts_step(void **state)
+{
+    (void)state;
+    ts_lims_t l;
+    for (int k = 0; k < 400000; k++) {
+        double A = 0.05 + 5.0 * ur(), J = 0.05 + 50.0 * ur(), T = k % 3 ? 0.01 : 0.001 + 0.1 * ur();
+        ts_state_t st = {.rate = k % 4 ? 1.2 * ur() : 0.0, .acc = A * ur()};
+        switch (k % 6) {
+        case 0: st.acc = A; break;
+        case 1: st.acc = 0.0; break;
+        case 2: st.acc = (2.0 * ur() - 1.0) * 1.5 * A; break;
+        default: break;
+        }
+        double r1 = st.rate + st.acc * T + 0.5 * J * T * T, a1 = st.acc + J * T;
+        double R = (ts_stop_dist(r1, a1, A, J) + r1 * T) * pow(10.0, 2.0 * ur() - 1.0);
+        if (k % 50 == 0)
+            R = k % 100 ? INFINITY : -R;
+        ts_lims_init(&l, A, J, T);
+        (void)step_one_check(&st, &l, R);
+    }
+    unsigned ticks = 0, ramps_at_1 = 0;
+    for (int k = 0; k < 4000; k++) {
+        double T = k % 2 ? 0.01 : 0.001 + 0.05 * ur(), A = 0.0, J = 0.0;
+        double R = (0.3 + 2.0 * ur()) * ts_stop_dist(1.0, 0.0, 0.5, 5.0);
+        double grow = k % 4 ? 1.0 : 0.8 + 0.4 * ur();
+        int wait = (int)(50.0 * ur()), n;
+        ts_state_t st = {0.0, 0.0};
+        for (n = 0; n < 20000; n++) {
+            if (n % 37 == 0) {
+                A = 0.1 + 2.0 * ur();
+                J = A * (2.0 + 20.0 * ur());
+                ts_lims_init(&l, A, J, T);
+            }
+            R += (n >= wait ? grow * T : 0.0) - step_one_check(&st, &l, R);
+            if (!(st.rate < 1.0 || st.rate > 1.0) && !(st.acc < 0.0 || st.acc > 0.0))
+                break;
+        }
+        ticks += (unsigned)n;
+        ramps_at_1 += n < 20000;
+    }
+    print_message("%u ticks of ramps, %u of 4000 ramps at rate 1; %u moves the free one\n", ticks,
+                  ramps_at_1, n_one_free);
+    assert_true(ramps_at_1 > 1000);
+    assert_true(n_one_free > ticks / 10);
+}
+
+/* ts_rise_holds (timescale.h): given random limits, runs of 1 to 24 ticks
+ * rising at A from random rates, and rooms about the stop after the run
+ * (from a third to 30 times it, each tick's a little above the least, some
+ * infinite), every run it passes is, tick by tick, ts_step_one's rise at A
+ * (the rate + A T, the advance r T + A T^2 / 2) with TS_LIM_FREE or
+ * TS_ONE_FREE, and ts_step's move bit for bit; it passes some runs and
+ * fails others. */
+static void test_rise_holds_is_the_rise(void **state)
+{
+    (void)state;
+    unsigned runs = 0, held = 0;
+    for (int k = 0; k < 300000; k++) {
+        double A = 0.05 + 5.0 * ur(), J = A * (1.0 + 30.0 * ur());
+        double T = k % 3 ? 0.01 : 0.001 + 0.1 * ur();
+        ts_lims_t l;
+        ts_lims_init(&l, A, J, T);
+        int n = 1 + (int)(24.0 * ur());
+        double r0 = 1.1 * ur(), r_last = r0, R[25], R_min = INFINITY;
+        for (int m = 1; m < n; m++)
+            r_last = r_last + l.at;
+        double r1 = r_last + l.at;
+        double Rb = (ts_stop_dist(r1, A, A, J) + r1 * T) * pow(10.0, 2.0 * ur() - 0.5);
+        for (int m = 0; m < n; m++) {
+            R[m] = k % 7 == 0 && m % 2 ? INFINITY : Rb * (1.0 + 0.05 * ur());
+            R_min = R[m] < R_min ? R[m] : R_min;
+        }
+        runs++;
+        if (!ts_rise_holds(&l, R_min, r0, r_last))
+            continue;
+        held++;
+        ts_state_t st = {r0, A};
+        for (int m = 0; m < n; m++) {
+            ts_state_t ref = st;
+            double r = st.rate, ds_rise = r * T + l.ca, r_rise = r + l.at;
+            int lim = 0, lim_ref = 0;
+            double ds = ts_step_one(&st, &l, R[m], &lim);
+            double ds_ref = ts_step(&ref, 1.0, R[m], A, J, T, NULL, &lim_ref);
+            assert_memory_equal(&ds, &ds_rise, sizeof ds);
+            assert_memory_equal(&st.rate, &r_rise, sizeof r);
+            assert_memory_equal(&st.acc, &A, sizeof A);
+            assert_true(lim & (TS_LIM_FREE | TS_ONE_FREE));
+            assert_memory_equal(&ds, &ds_ref, sizeof ds);
+            assert_memory_equal(&st.rate, &ref.rate, sizeof r);
+            assert_memory_equal(&st.acc, &ref.acc, sizeof A);
+            assert_int_equal(lim & ~TS_ONE_FREE, lim_ref);
+        }
+    }
+    print_message("%u of %u runs at A held\n", held, runs);
+    assert_true(held > runs / 10 && held < runs - runs / 10);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -759,6 +890,8 @@ int main(void)
         cmocka_unit_test(test_creep_onto_the_end),
         cmocka_unit_test(test_stop_jerk_now),
         cmocka_unit_test(test_lim_free_is_the_free_move),
+        cmocka_unit_test(test_step_one_is_ts_step),
+        cmocka_unit_test(test_rise_holds_is_the_rise),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
