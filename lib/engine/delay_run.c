@@ -38,24 +38,13 @@ static void delay_at(const engine_t *e, double h, engine_delay_t *d)
     /* e->cfg is resolved and e->lookahead its lookahead (engine_new): not
      * resolved again at every tick that asks */
     engine_delay_parts(&e->cfg, e->lookahead, h, e->solve.vmax_in, d);
-    unsigned least = engine_cfg_slack_min(&e->cfg);
-    if (e->slack_auto && d->slack_ticks) {
-        /* the local methods' slack in time (issue 31): the ticks of
-         * rounding, the arrivals' lateness (J, catchup.c) and the
-         * intervals learnt from underruns */
+    if (e->slack_auto) {
+        /* the slack in time (delay.h): the parts' least, the arrivals'
+         * lateness (J, catchup.c) and the intervals learnt from underruns */
         if (!e->clk.on)
             d->jitter_s = e->lag.jit_s;
         d->slack_n = e->slack_learn;
         d->slack_s += d->jitter_s + e->slack_learn * d->interval_s;
-    } else if (e->slack_auto) {
-        d->slack_n = least + e->slack_learn;
-        d->slack_s = d->slack_n * d->interval_s;
-    }
-    /* the slack in time: arrivals later than the least slack holds (J,
-     * catchup.c) make J the least slack, the intervals learnt on top */
-    if (e->slack_auto && !d->slack_ticks && !e->clk.on && e->lag.jit_s > least * d->interval_s) {
-        d->jitter_s = e->lag.jit_s;
-        d->slack_s = d->jitter_s + e->slack_learn * d->interval_s;
     }
     d->need_s = d->lookahead_s + d->slack_s + d->stop_s;
     /* on the caller's clock (CLOCK.md) the output stands at its D, the
