@@ -198,7 +198,7 @@ int accept_check(const accept_t *a, const engine_waypoint_t *pre, const engine_w
     if (!(a->cfg.max_accel_m_s2 > 0) || !pre)
         return 0;
     pair_of(pre, p, &q1);
-    return accel_test(a, &q1, &q2, p->t_s - pre->t_s, dt, dv_norm(&q1, &q2));
+    return accel_test(a, &q1, &q2, p->t_s - pre->t_s, dt);
 }
 
 /* chain (len, cost) better than (l2, c2): longer, or as long and smoother */

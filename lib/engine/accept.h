@@ -382,11 +382,9 @@ typedef struct {
     /* the acceleration test of slots x -> p -> y (accept_int.h triple()),
      * computed once while the three are held: bit x of tknown[p][y] if
      * computed, of tok[p][y] if it passes (or there is no acceleration
-     * limit) (its implied acceleration is computed when asked); bit y of
-     * twith[x][p] (and bit p of twith_any[x]) if bit x of tknown[p][y] was
-     * set since slot x last changed: where a slot's change clears its bit */
+     * limit) (its implied acceleration is computed when asked); a slot's
+     * change clears its bit in every tknown and its rows */
     uint16_t tknown[ACCEPT_SLOTS][16], tok[ACCEPT_SLOTS][16];
-    uint16_t twith[ACCEPT_SLOTS][ACCEPT_SLOTS], twith_any[ACCEPT_SLOTS];
     accept_search_t search; /* the last chain search (chains.c) */
     accept_reach_t reach;   /* the chains' lengths (chains.c) */
 } accept_t;

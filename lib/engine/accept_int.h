@@ -75,13 +75,9 @@ static inline void accept_forget(accept_t *a, unsigned s)
     uint16_t keep = (uint16_t) ~(1u << s);
     a->since[s] = ++a->clock;
     a->pknown &= ~with[s];
-    for (unsigned m = a->twith_any[s]; m; m &= m - 1) {
-        unsigned p = (unsigned)__builtin_ctz(m);
-        for (unsigned y = a->twith[s][p]; y; y &= y - 1)
-            a->tknown[p][__builtin_ctz(y)] &= keep;
-        a->twith[s][p] = 0;
-    }
-    a->twith_any[s] = 0;
+    for (unsigned p = 0; p < ACCEPT_SLOTS; p++)
+        for (unsigned y = 0; y < 16; y++)
+            a->tknown[p][y] &= keep;
     memset(a->tknown[s], 0, sizeof a->tknown[s]);
     for (unsigned x = 0; x < ACCEPT_SLOTS; x++)
         a->tknown[x][s] = 0;
@@ -135,10 +131,11 @@ static inline double dv_norm(const accept_pair_t *q1, const accept_pair_t *q2)
     return sqrt(dv2);
 }
 
-/* the acceleration test of pre -> p -> b (d1, dt: the two intervals, dvn:
- * dv_norm): 2 |v2 - v1| / (d1 + dt) <= amax, plus a free turn when learned */
+/* the acceleration test of pre -> p -> b (d1, dt: the two intervals):
+ * 2 |v2 - v1| / (d1 + dt) <= amax, plus a free turn when learned (|v2 - v1|,
+ * dv_norm, computed only where the change of speed passes) */
 static inline int accel_test(const accept_t *a, const accept_pair_t *q1, const accept_pair_t *q2,
-                             double d1, double dt, double dvn)
+                             double d1, double dt)
 {
     double allow = a->cfg.max_accel_m_s2 * 0.5 * (d1 + dt);
     if (a->cfg.learned) {
@@ -147,7 +144,7 @@ static inline int accel_test(const accept_t *a, const accept_pair_t *q1, const a
             return ENGINE_EACCEL;
         allow += 2.0 * min_of(q1->vn, q2->vn);
     }
-    return dvn > allow ? ENGINE_EACCEL : 0;
+    return dv_norm(q1, q2) > allow ? ENGINE_EACCEL : 0;
 }
 
 /* the acceleration test of x -> p -> y (slots, in time order, no gap

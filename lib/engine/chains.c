@@ -43,11 +43,9 @@ int accept_triple_new(accept_t *a, unsigned x, unsigned p, unsigned y)
 {
     const accept_pair_t *q1 = pair(a, x, p), *q2 = pair(a, p, y);
     double d1 = a->wp[p].t_s - a->wp[x].t_s, dt = a->wp[y].t_s - a->wp[p].t_s;
-    int ok = !(a->cfg.max_accel_m_s2 > 0 && accel_test(a, q1, q2, d1, dt, dv_norm(q1, q2)));
+    int ok = !(a->cfg.max_accel_m_s2 > 0 && accel_test(a, q1, q2, d1, dt));
     uint16_t bit = (uint16_t)(1u << x);
     a->tknown[p][y] |= bit;
-    a->twith[x][p] = (uint16_t)(a->twith[x][p] | 1u << y);
-    a->twith_any[x] = (uint16_t)(a->twith_any[x] | 1u << p);
     a->tok[p][y] = (uint16_t)(ok ? a->tok[p][y] | bit : a->tok[p][y] & ~bit);
     return ok;
 }
@@ -235,29 +233,33 @@ static void set_node(accept_t *a, unsigned pos, unsigned s, double vlim)
         r->step[r->nd[i]][s] = step_of(a, r->nd[i], s, vlim);
 }
 
+/* passing()'s triples of the slots u not known yet, computed (the step
+ * p -> y once) */
+static __attribute__((noinline)) void passing_new(accept_t *a, unsigned u, unsigned p, unsigned y)
+{
+    const accept_pair_t *q2 = pair(a, p, y);
+    double dt = a->wp[y].t_s - a->wp[p].t_s;
+    unsigned ok = 0;
+    for (unsigned m = u; m; m &= m - 1) {
+        unsigned x = (unsigned)__builtin_ctz(m);
+        const accept_pair_t *q1 = pair(a, x, p);
+        double d1 = a->wp[p].t_s - a->wp[x].t_s;
+        ok |= (unsigned)!accel_test(a, q1, q2, d1, dt) << x;
+    }
+    a->tknown[p][y] = (uint16_t)(a->tknown[p][y] | u);
+    a->tok[p][y] = (uint16_t)((a->tok[p][y] & ~u) | ok);
+}
+
 /* the slots x of the set e whose triple x -> p -> y passes (those not
  * known yet computed) */
-static unsigned passing(accept_t *a, unsigned e, unsigned p, unsigned y, int acc)
+static inline unsigned passing(accept_t *a, unsigned e, unsigned p, unsigned y, int acc)
 {
     unsigned u;
     if (!acc)
         return e;
     u = e & ~(unsigned)a->tknown[p][y];
-    if (u) { /* accept_triple_new() for each, step p -> y once */
-        const accept_pair_t *q2 = pair(a, p, y);
-        double dt = a->wp[y].t_s - a->wp[p].t_s;
-        unsigned ok = 0;
-        for (unsigned m = u; m; m &= m - 1) {
-            unsigned x = (unsigned)__builtin_ctz(m);
-            const accept_pair_t *q1 = pair(a, x, p);
-            double d1 = a->wp[p].t_s - a->wp[x].t_s;
-            ok |= (unsigned)!accel_test(a, q1, q2, d1, dt, dv_norm(q1, q2)) << x;
-            a->twith[x][p] = (uint16_t)(a->twith[x][p] | 1u << y);
-            a->twith_any[x] = (uint16_t)(a->twith_any[x] | 1u << p);
-        }
-        a->tknown[p][y] = (uint16_t)(a->tknown[p][y] | u);
-        a->tok[p][y] = (uint16_t)((a->tok[p][y] & ~u) | ok);
-    }
+    if (__builtin_expect(u != 0, 0))
+        passing_new(a, u, p, y);
     return e & a->tok[p][y];
 }
 
