@@ -341,6 +341,9 @@ typedef struct {
      * speed test does, 2 if both pass (y in the window); more: the most
      * nodes after y on a consistent chain x -> y -> ... */
     unsigned char step[ACCEPT_SLOTS][ACCEPT_SLOTS], more[ACCEPT_SLOTS][ACCEPT_SLOTS];
+    /* more by value: bit x of by[y][v] if more[x][y] is v (x before y in
+     * the list; bits of other slots mean nothing) */
+    uint16_t by[ACCEPT_SLOTS][ACCEPT_NODES + 1];
 } accept_reach_t;
 
 typedef struct {

@@ -263,38 +263,56 @@ static inline unsigned passing(accept_t *a, unsigned e, unsigned p, unsigned y, 
     return e & a->tok[p][y];
 }
 
-/* slot s appended to the list: more brought up to date (above); by rows j
- * (the steps into node j), the slots i that grow as sets */
+/* more[x][y] set to v (by with it) */
+static void set_more(accept_reach_t *r, unsigned x, unsigned y, unsigned v)
+{
+    uint16_t keep = (uint16_t) ~(1u << x);
+    for (unsigned u = 0; u <= ACCEPT_NODES; u++)
+        r->by[y][u] &= keep;
+    r->more[x][y] = (unsigned char)v;
+    r->by[y][v] = (uint16_t)(r->by[y][v] | 1u << x);
+}
+
+/* slot s appended to the list: more brought up to date (above).  By rows j
+ * from the last, the slots i < j whose more[nd i][nd j] grows (g), from the
+ * steps j -> k whose more grew already (grew[nd j]: their positions k); a
+ * more[j][k] that grew is its old value plus one, the value a more[i][j]
+ * grows from */
 static void append_node(accept_t *a, unsigned s, double vlim, int acc)
 {
     accept_reach_t *r = &a->reach;
-    unsigned x = r->m;
-    uint16_t grow[ACCEPT_NODES] = {0}; /* by j: the slots nd[i] whose more[nd i][nd j] grows */
+    unsigned x = r->m, before[ACCEPT_NODES + 1];
+    uint16_t grew[ACCEPT_SLOTS] = {0}; /* by slot p: the positions k whose more[p][nd k] grew */
 
     set_node(a, x, s, vlim);
+    before[0] = 0;
+    for (unsigned i = 0; i < x; i++)
+        before[i + 1] = before[i] | 1u << r->nd[i];
     for (unsigned j = x - 1; j >= 1; j--) {
-        unsigned p = r->nd[j], g = 0, byv[ACCEPT_NODES + 1] = {0}; /* slots i < j by more */
-        for (unsigned i = 0; i < j; i++)
-            byv[r->more[r->nd[i]][p]] |= 1u << r->nd[i];
-        if (r->step[p][s] == 2) /* i -> j -> x, where more was 0 */
-            g = passing(a, byv[0], p, s, acc);
-        for (unsigned k = j + 1; k < x; k++) { /* i -> j -> k ... x, more[j][k] one less */
-            unsigned y = r->nd[k], e;
-            if (!(grow[k] >> p & 1u) || r->step[p][y] != 2)
+        unsigned p = r->nd[j], g = 0, e;
+        const uint16_t *byp = r->by[p];
+        if (r->step[p][s] == 2 && (e = byp[0] & before[j]) != 0) /* i -> j -> x, more was 0 */
+            g = passing(a, e, p, s, acc);
+        for (unsigned m = grew[p]; m; m &= m - 1) { /* i -> j -> k ... x */
+            unsigned y = r->nd[__builtin_ctz(m)];
+            if (r->step[p][y] != 2)
                 continue;
-            e = byv[r->more[p][y] + 1u] & ~g;
+            e = byp[r->more[p][y]] & before[j] & ~g;
             if (e)
                 g |= passing(a, e, p, y, acc);
         }
-        grow[j] = (uint16_t)g;
-    }
-    for (unsigned j = 1; j < x; j++) {
-        unsigned p = r->nd[j];
-        for (unsigned g = grow[j]; g; g &= g - 1)
-            r->more[__builtin_ctz(g)][p]++;
+        for (unsigned m = g; m; m &= m - 1) {
+            unsigned i = (unsigned)__builtin_ctz(m), v = r->more[i][p];
+            r->more[i][p] = (unsigned char)(v + 1);
+            r->by[p][v] = (uint16_t)(r->by[p][v] & ~(1u << i));
+            r->by[p][v + 1] = (uint16_t)(r->by[p][v + 1] | 1u << i);
+            grew[i] = (uint16_t)(grew[i] | 1u << j);
+        }
     }
     for (unsigned i = 0; i < x; i++)
         r->more[r->nd[i]][s] = 0;
+    memset(r->by[s], 0, sizeof r->by[s]);
+    r->by[s][0] = (uint16_t)before[x];
     r->m = x + 1;
 }
 
@@ -346,7 +364,7 @@ void accept_longest_len(accept_t *a, const unsigned char *nd, unsigned m, unsign
         r->m = 1 + w;
         if (!anchor) /* a new anchor: its more from the nodes after it */
             for (unsigned j = w; j >= 1; j--)
-                r->more[nd[0]][r->nd[j]] = more_of(a, 0, j, acc);
+                set_more(r, nd[0], r->nd[j], more_of(a, 0, j, acc));
         for (unsigned j = 1 + w; j < m; j++)
             append_node(a, nd[j], vlim, acc);
     } else { /* anew */
@@ -354,9 +372,14 @@ void accept_longest_len(accept_t *a, const unsigned char *nd, unsigned m, unsign
         r->m = m;
         for (unsigned j = 0; j < m; j++)
             set_node(a, j, nd[j], vlim);
-        for (unsigned j = m - 1; j >= 1; j--)
-            for (unsigned i = 0; i < j; i++)
-                r->more[nd[i]][nd[j]] = more_of(a, i, j, acc);
+        for (unsigned j = m - 1; j >= 1; j--) {
+            memset(r->by[nd[j]], 0, sizeof r->by[nd[j]]);
+            for (unsigned i = 0; i < j; i++) {
+                unsigned v = more_of(a, i, j, acc);
+                r->more[nd[i]][nd[j]] = (unsigned char)v;
+                r->by[nd[j]][v] = (uint16_t)(r->by[nd[j]][v] | 1u << nd[i]);
+            }
+        }
     }
     len[0] = len[1] = 1;
     for (unsigned j = 1; j < m; j++) {
