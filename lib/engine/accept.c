@@ -757,6 +757,24 @@ static int drop(accept_t *a, unsigned pre, double vlim, int reason, accept_verdi
     return 1;
 }
 
+/* 1 if accept_run_decide would find no run of repeats and start none (it
+ * returns -1 then, and changes nothing): no trajectory open, or no run
+ * held nor judged and the oldest waypoint held (if any) no repeat of the
+ * anchor later than it (stops.c repeats_anchor) */
+static int no_run(accept_t *a)
+{
+    unsigned q;
+    if (!a->open)
+        return 1;
+    if (a->run_n || a->run_verdict)
+        return 0;
+    if (!a->npend)
+        return 1;
+    q = a->pend[0];
+    return !(a->wp[q].t_s - a->wp[a->a1].t_s > ACCEPT_SAME_TIME_S &&
+             pair_dist(a, a->a1, q) <= ACCEPT_STALE_POS_M);
+}
+
 int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
 {
     unsigned char nd[ACCEPT_WINDOW_MAX + 1];
@@ -768,7 +786,7 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
     int r;
 
     a->full = full; /* window_median_speed */
-    if (a->cfg.rules & ACCEPT_RULE_STOPS) {
+    if ((a->cfg.rules & ACCEPT_RULE_STOPS) && !no_run(a)) {
         int rr = accept_run_decide(a, closing, v);
         if (rr >= 0)
             return rr;
@@ -801,9 +819,9 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
     }
     nd[0] = a->a1;
     memcpy(nd + 1, a->pend, n);
-    if (n >= 2 && chain_all(a, nd, n + 1, pre, vlim, 0))
+    r = check0(a, pre, nd[0], nd[1], vlim); /* chain_all's first step */
+    if (n >= 2 && r == 0 && chain_all(a, nd + 1, n, nd[0], vlim, 0))
         return take(a, pre, vlim, v);
-    r = check0(a, pre, nd[0], nd[1], vlim);
     if (r == ENGINE_EUNCONFIRMED && a->wp[nd[1]].t_s > a->wp[nd[0]].t_s && n >= k &&
         chain_all(a, nd + 1, k, NO_SLOT, vlim, 1)) {
         /* after a gap: nothing later can continue the anchor (all are later
