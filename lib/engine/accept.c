@@ -393,6 +393,14 @@ static int stale_verdict(accept_t *a, int full, double vlim)
            v_in / (a->wp[a1].t_s - a->wp[a->a0].t_s) > ACCEPT_STALE_STOP_M_S2;
 }
 
+/* 0 if slots p and q are surely farther apart than ACCEPT_STALE_POS_M (an
+ * axis differs by more than twice that: their distance, as pair() rounds
+ * it, is then more than ACCEPT_STALE_POS_M), without their pair */
+static int near_pos(const accept_t *a, unsigned p, unsigned q)
+{
+    return fabs(a->wp[q].pos_m[0] - a->wp[p].pos_m[0]) <= 2.0 * ACCEPT_STALE_POS_M;
+}
+
 /*
  * 1 if a later waypoint held repeats c's position (a frozen receiver starts
  * repeating after c): c is the one that was stamped when the position was
@@ -406,7 +414,7 @@ static int repeated_later(accept_t *a)
     if (!a->cfg.stale)
         return 0;
     for (unsigned i = 1; i < a->npend; i++)
-        if (pair_dist(a, c, a->pend[i]) <= ACCEPT_STALE_POS_M &&
+        if (near_pos(a, c, a->pend[i]) && pair_dist(a, c, a->pend[i]) <= ACCEPT_STALE_POS_M &&
             a->wp[a->pend[i]].t_s - a->wp[c].t_s > ACCEPT_SAME_TIME_S)
             return 1;
     return 0;
@@ -418,7 +426,8 @@ static int repeated_later(accept_t *a)
  * later) */
 static int repeats_c(accept_t *a, unsigned q)
 {
-    return a->cfg.stale && q != a->pend[0] && pair_dist(a, a->pend[0], q) <= ACCEPT_STALE_POS_M;
+    return a->cfg.stale && q != a->pend[0] && near_pos(a, a->pend[0], q) &&
+           pair_dist(a, a->pend[0], q) <= ACCEPT_STALE_POS_M;
 }
 
 /* 1 if c failed the anchor on speed alone while the learned limit rests on

@@ -162,6 +162,14 @@ static inline int triple(accept_t *a, unsigned x, unsigned p, unsigned y, double
     return ok;
 }
 
+/* triple()'s cost alone */
+static inline double triple_cost(accept_t *a, unsigned x, unsigned p, unsigned y)
+{
+    const accept_pair_t *q1 = pair(a, x, p), *q2 = pair(a, p, y);
+    double d1 = a->wp[p].t_s - a->wp[x].t_s, dt = a->wp[y].t_s - a->wp[p].t_s;
+    return 2.0 * dv_norm(q1, q2) / (d1 + dt);
+}
+
 /* triple() without its cost */
 static inline int triple_passes(accept_t *a, unsigned x, unsigned p, unsigned y)
 {
@@ -182,7 +190,7 @@ static inline int triple_passes(accept_t *a, unsigned x, unsigned p, unsigned y)
 static inline int judge(accept_t *a, unsigned pre, unsigned p, unsigned b, double vlim, int gaps_ok,
                         double *cost)
 {
-    double dt = a->wp[b].t_s - a->wp[p].t_s, c;
+    double dt = a->wp[b].t_s - a->wp[p].t_s;
     int gap = 0, r = time_test(a, dt, gaps_ok, &gap), acc;
 
     if (r)
@@ -199,9 +207,9 @@ static inline int judge(accept_t *a, unsigned pre, unsigned p, unsigned b, doubl
      * gap the acceleration test is not asked, its cost is) */
     if (!cost)
         return acc && !triple_passes(a, pre, p, b) ? ENGINE_EACCEL : 0;
-    if (!triple(a, pre, p, b, &c) && acc)
+    if (acc && !triple_passes(a, pre, p, b))
         return ENGINE_EACCEL;
-    *cost = c;
+    *cost = triple_cost(a, pre, p, b);
     return 0;
 }
 

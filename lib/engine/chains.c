@@ -420,8 +420,9 @@ static double tight_cost(accept_t *a, tight_t *t, unsigned i, unsigned j, int ac
     for (unsigned k = j + 1; k < r->m; k++) {
         unsigned y = r->nd[k];
         double c, ck;
-        if (r->step[p][y] != 2 || r->more[p][y] + 1u != v || (!triple(a, x, p, y, &c) && acc))
+        if (r->more[p][y] + 1u != v || r->step[p][y] != 2 || (acc && !triple_passes(a, x, p, y)))
             continue;
+        c = triple_cost(a, x, p, y);
         ck = tight_cost(a, t, j, k, acc);
         if (isnan(c))
             t->nan = 1;
