@@ -446,9 +446,9 @@ static int thin_pace(accept_t *a, int r)
  * exists): c, which does not follow the anchor, is then dropped whatever
  * comes later (the full window's verdict: lo >= 2 and r != 0).
  */
-static int continues_anchor(accept_t *a, unsigned pre, double vlim)
+static int continues_anchor(accept_t *a, unsigned pre, double vlim, unsigned from)
 {
-    for (unsigned i = 1; i < a->npend; i++)
+    for (unsigned i = from; i < a->npend; i++)
         if (!repeats_c(a, a->pend[i]) && check0(a, pre, a->a1, a->pend[i], vlim) == 0)
             return 1;
     return 0;
@@ -462,16 +462,18 @@ static int continues_anchor(accept_t *a, unsigned pre, double vlim)
  * through it, and the full window would take c.  One outlier after a good
  * fix so holds it one interval, not a window.
  */
-static int taken_past_outliers(accept_t *a, double vlim)
+static int taken_past_outliers(accept_t *a, double vlim, unsigned from, unsigned *stop)
 {
     unsigned c = a->pend[0], pre = a->have_a0 ? a->a0 : NO_SLOT;
-    for (unsigned j = 1; j < a->npend; j++) {
+    for (unsigned j = from; j < a->npend; j++) {
         unsigned q = a->pend[j];
+        *stop = j;
         if (check(a, a->a1, c, q, vlim, 0) == 0)
             return j >= 2;
         if (!repeats_c(a, q) && check0(a, pre, a->a1, q, vlim) == 0)
             return 0; /* q could replace c: the full window compares them */
     }
+    *stop = 0;
     return 0;
 }
 
@@ -766,6 +768,27 @@ static int drop(accept_t *a, unsigned pre, double vlim, int reason, accept_verdi
     return 1;
 }
 
+/*
+ * The waypoints of the last wait (accept_t.wait) still held first, with
+ * the same anchor, slot before it and speed limit: their count, else 0.
+ * What that call found of them holds again (every test is a function of
+ * the waypoints and the speed limit): c's test after the anchor, chain_all
+ * failing among them, accept_retime_late keeping c as it stands, the scans
+ * of continues_anchor and taken_past_outliers over them.
+ */
+static unsigned waited(const accept_t *a, unsigned pre, double vlim)
+{
+    const accept_wait_t *w = &a->wait;
+    if (!w->valid || w->a1 != a->a1 || w->since_a1 != a->since[a->a1] || w->pre != pre ||
+        (pre != NO_SLOT && w->since_pre != a->since[pre]) || a->npend < w->n ||
+        memcmp(&w->vlim, &vlim, sizeof vlim) != 0)
+        return 0;
+    for (unsigned i = 0; i < w->n; i++)
+        if (w->pend[i] != a->pend[i] || w->since[i] != a->since[a->pend[i]])
+            return 0;
+    return w->n;
+}
+
 /* 1 if accept_run_decide would find no run of repeats and start none (it
  * returns -1 then, and changes nothing): no trajectory open, or no run
  * held nor judged and the oldest waypoint held (if any) no repeat of the
@@ -788,7 +811,7 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
 {
     unsigned char nd[ACCEPT_WINDOW_MAX + 1];
     unsigned pre = a->open && a->have_a0 ? a->a0 : NO_SLOT;
-    unsigned n = a->npend, k = a->cfg.confirm;
+    unsigned n = a->npend, k = a->cfg.confirm, wn, scan = 0, tpo = 0;
     int full = closing || n >= a->cfg.window;
     chains_t ch = {0};
     double vlim;
@@ -828,8 +851,11 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
     }
     nd[0] = a->a1;
     memcpy(nd + 1, a->pend, n);
-    r = check0(a, pre, nd[0], nd[1], vlim); /* chain_all's first step */
-    if (n >= 2 && r == 0 && chain_all(a, nd + 1, n, nd[0], vlim, 0))
+    wn = waited(a, pre, vlim);
+    a->wait.valid = 0;
+    r = wn ? a->wait.r : check0(a, pre, nd[0], nd[1], vlim); /* chain_all's first step */
+    /* (after a wait with r == 0, chain_all failed among its waypoints) */
+    if (n >= 2 && r == 0 && !wn && chain_all(a, nd + 1, n, nd[0], vlim, 0))
         return take(a, pre, vlim, v);
     if (r == ENGINE_EUNCONFIRMED && a->wp[nd[1]].t_s > a->wp[nd[0]].t_s && n >= k &&
         chain_all(a, nd + 1, k, NO_SLOT, vlim, 1)) {
@@ -842,17 +868,37 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
     /* verdicts the full window would give, as soon as they are certain: a
      * bad fix must not hold the good ones around it for a whole window (the
      * output draws on its start slack meanwhile) */
-    if (r != 0 && !thin_pace(a, r) && continues_anchor(a, pre, vlim))
-        return drop(a, pre, vlim, drop_reason(a, pre, vlim, r), v);
-    if (r == 0 && n >= 2) { /* a fix written late, re-stamped now (retime.c) */
+    if (r != 0 && !thin_pace(a, r)) {
+        if (continues_anchor(a, pre, vlim, wn && a->wait.scan ? a->wait.scan : 1))
+            return drop(a, pre, vlim, drop_reason(a, pre, vlim, r), v);
+        scan = n;
+    }
+    if (r == 0 && n >= 2 && !wn) { /* a fix written late, re-stamped now (retime.c) */
         double shift = accept_retime_late(a, pre, vlim);
         if (shift > 0 || shift < 0)
             return take_at(a, shift, v);
     }
-    if (r == 0 &&
-        (taken_past_outliers(a, vlim) || (n >= 3 && outvotes_held(a, nd, pre, vlim, &ch))))
+    if (r == 0 && (!wn || !a->wait.tpo) && taken_past_outliers(a, vlim, wn ? wn : 1, &tpo))
         return take(a, pre, vlim, v);
-    if (!full)
+    if (r == 0 && wn && a->wait.tpo)
+        tpo = a->wait.tpo; /* it stopped among them: the same answer */
+    if (r == 0 && n >= 3 && outvotes_held(a, nd, pre, vlim, &ch))
+        return take(a, pre, vlim, v);
+    if (!full) { /* a wait: kept for the next call (waited) */
+        a->wait.valid = 1;
+        a->wait.r = r;
+        a->wait.a1 = (unsigned char)a->a1;
+        a->wait.since_a1 = a->since[a->a1];
+        a->wait.pre = (unsigned char)pre;
+        a->wait.since_pre = pre != NO_SLOT ? a->since[pre] : 0;
+        a->wait.vlim = vlim;
+        a->wait.n = n;
+        a->wait.scan = scan;
+        a->wait.tpo = tpo;
+        memcpy(a->wait.pend, a->pend, n);
+        for (unsigned i = 0; i < n; i++)
+            a->wait.since[i] = a->since[a->pend[i]];
         return 0;
+    }
     return decide_full(a, closing, vlim, pre, r, nd, &ch, v);
 }

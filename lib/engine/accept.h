@@ -346,6 +346,17 @@ typedef struct {
     uint16_t by[ACCEPT_SLOTS][ACCEPT_NODES + 1];
 } accept_reach_t;
 
+/* accept_t.wait */
+typedef struct {
+    int valid, r;
+    unsigned char a1, pre;
+    unsigned n, scan, tpo;
+    uint64_t since_a1, since_pre;
+    double vlim;
+    unsigned char pend[ACCEPT_WINDOW_MAX];
+    uint64_t since[ACCEPT_WINDOW_MAX];
+} accept_wait_t;
+
 typedef struct {
     accept_config_t cfg;
     engine_waypoint_t wp[ACCEPT_SLOTS];    /* the waypoints, by slot */
@@ -388,6 +399,14 @@ typedef struct {
      * limit) (its implied acceleration is computed when asked); a slot's
      * change clears its bit in every tknown and its rows */
     uint16_t tknown[ACCEPT_SLOTS][16], tok[ACCEPT_SLOTS][16];
+    /* accept_decide's last wait with a trajectory open (no verdict, the
+     * window not full), for the next call over the same waypoints and more
+     * (accept.c waited()): its anchor, the slot before it (NO_SLOT: none),
+     * speed limit, the n waypoints held and their slots' changes, c's test
+     * after the anchor (r), how far continues_anchor found nothing (scan:
+     * the waypoints 1..scan-1; 0 if not asked) and where taken_past_outliers
+     * stopped (tpo: 0 if it went through all n) */
+    accept_wait_t wait;
     accept_search_t search; /* the last chain search (chains.c) */
     accept_reach_t reach;   /* the chains' lengths (chains.c) */
 } accept_t;
