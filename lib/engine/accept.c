@@ -72,9 +72,10 @@ static int same(const engine_waypoint_t *p, const engine_waypoint_t *q)
     return fabs(p->t_s - q->t_s) <= ACCEPT_SAME_TIME_S && accept_dist(p, q) <= ACCEPT_SAME_POS_M;
 }
 
-/* a free slot for the waypoint offered: none of the window, the anchor (a0,
- * a1) and burst; its pairs are forgotten */
-static unsigned new_slot(accept_t *a)
+/* a free slot for the waypoint offered (newest: offered last, see
+ * accept_forget_as): none of the window, the anchor (a0, a1) and burst; its
+ * pairs are forgotten */
+static unsigned new_slot(accept_t *a, int newest)
 {
     unsigned used = 0, s = 0;
     for (unsigned i = 0; i < a->npend; i++)
@@ -87,7 +88,7 @@ static unsigned new_slot(accept_t *a)
         used |= 1u << a->burst;
     while (used >> s & 1u)
         s++;
-    accept_forget(a, s);
+    accept_forget_as(a, s, newest);
     return s;
 }
 
@@ -105,7 +106,7 @@ int accept_offer(accept_t *a, const engine_waypoint_t *wp)
             return ENGINE_DUPLICATE;
     if (a->npend == ACCEPT_WINDOW_MAX) /* cannot happen: verdicts are taken first */
         return -ENGINE_EFULL;
-    s = new_slot(a);
+    s = new_slot(a, 1);
     a->wp[s] = *wp;
     a->pend[a->npend++] = (unsigned char)s;
     return 0;
@@ -743,7 +744,7 @@ void accept_anchor_at(accept_t *a, const engine_waypoint_t *wp)
     unsigned s;
     a->have_a0 = 0; /* the slot of a0 may be taken */
     a->open = 0;
-    s = new_slot(a);
+    s = new_slot(a, 0);
     a->wp[s] = *wp;
     a->a1 = (unsigned char)s;
     a->open = 1;

@@ -63,8 +63,14 @@ static inline unsigned pair_index(unsigned x, unsigned y)
 }
 
 /* slot s holds a new waypoint, or its stamp changed: its pairs and triples,
- * and a chain search over it, are no longer known (accept_t.since) */
-static inline void accept_forget(accept_t *a, unsigned s)
+ * and a chain search over it, are no longer known (accept_t.since).  With
+ * newest, s holds the waypoint offered last, and the triples x -> p -> y
+ * that start at s keep their bits: none is asked before slots p and y are
+ * given waypoints offered after it (a triple follows the order of offers:
+ * the slot before the anchor, the anchor, the window; but for
+ * accept_anchor_at's anchor, not newest), which clears their rows and
+ * columns here */
+static inline void accept_forget_as(accept_t *a, unsigned s, int newest)
 {
     /* the bits of accept_t.pknown of the pairs with slot s */
     static const uint64_t with[ACCEPT_SLOTS] = {
@@ -75,12 +81,18 @@ static inline void accept_forget(accept_t *a, unsigned s)
     uint16_t keep = (uint16_t) ~(1u << s);
     a->since[s] = ++a->clock;
     a->pknown &= ~with[s];
-    for (unsigned p = 0; p < ACCEPT_SLOTS; p++)
-        for (unsigned y = 0; y < 16; y++)
-            a->tknown[p][y] &= keep;
+    if (!newest)
+        for (unsigned p = 0; p < ACCEPT_SLOTS; p++)
+            for (unsigned y = 0; y < 16; y++)
+                a->tknown[p][y] &= keep;
     memset(a->tknown[s], 0, sizeof a->tknown[s]);
     for (unsigned x = 0; x < ACCEPT_SLOTS; x++)
         a->tknown[x][s] = 0;
+}
+
+static inline void accept_forget(accept_t *a, unsigned s)
+{
+    accept_forget_as(a, s, 0);
 }
 
 /* chains.c: pair() and triple() computing what they do not know yet */
