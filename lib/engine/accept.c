@@ -513,7 +513,12 @@ static const chains_t *chains(accept_t *a, const unsigned char *nd, unsigned pre
 
     if (ch->known)
         return ch;
-    m = without_repeats(a, nd, n, nr);
+    m = n + 1;
+    for (unsigned i = 2; i <= n; i++)
+        if (repeats_c(a, nd[i])) {
+            m = without_repeats(a, nd, n, nr);
+            break;
+        }
     if (m == n + 1) { /* no repeats of c: the same waypoints both ways */
         unsigned l[2];
         accept_longest_len(a, nd, m, pre, vlim, l);
