@@ -655,8 +655,8 @@ static void bench_accept_walk(void)
     for (long i = 0; i < N; i++) {
         accept_offer(&a, &walk[i]);
         while (accept_decide(&a, i == N - 1, &v)) {
-            double f[6] = {v.shift_s, v.wp.t_s, v.wp.pos_m[0], v.wp.pos_m[1], v.wp.pos_m[2],
-                           (double)v.wp.seq};
+            double f[6] = {v.shift_s,     v.wp.t_s,      v.wp.pos_m[0],
+                           v.wp.pos_m[1], v.wp.pos_m[2], (double)v.wp.seq};
             int k[4] = {v.kind, v.reason, v.gap, v.stop};
             const unsigned char *b = (const unsigned char *)f;
             kept += v.kind != ACCEPT_DROP;
