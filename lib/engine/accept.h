@@ -337,13 +337,14 @@ typedef struct {
     unsigned char nd[ACCEPT_NODES]; /* their slots, in order */
     uint64_t since[ACCEPT_NODES];   /* their slots' last change (accept_t.since) */
     double vlim;                    /* the speed limit of the steps */
-    /* by slots x -> y (y after x): step 0 if its time test fails, 1 if its
-     * speed test does, 2 if both pass (y in the window); more: the most
-     * nodes after y on a consistent chain x -> y -> ... */
-    unsigned char step[ACCEPT_SLOTS][ACCEPT_SLOTS], more[ACCEPT_SLOTS][ACCEPT_SLOTS];
-    /* more by value: bit x of by[y][v] if more[x][y] is v (x before y in
-     * the list; bits of other slots mean nothing) */
-    uint16_t by[ACCEPT_SLOTS][ACCEPT_NODES + 1];
+    /* by slots x -> y (y after x; rows of 16, an index is a shift and an
+     * add): step 0 if its time test fails, 1 if its speed test does, 2 if
+     * both pass (y in the window); more: the most nodes after y on a
+     * consistent chain x -> y -> ... */
+    unsigned char step[ACCEPT_SLOTS][16], more[ACCEPT_SLOTS][16];
+    /* more by value (at most ACCEPT_NODES): bit x of by[y][v] if more[x][y]
+     * is v (x before y in the list; bits of other slots mean nothing) */
+    uint16_t by[ACCEPT_SLOTS][16];
 } accept_reach_t;
 
 /* accept_t.wait */

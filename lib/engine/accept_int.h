@@ -51,7 +51,8 @@ static inline void pair_of(const engine_waypoint_t *p, const engine_waypoint_t *
  * (max (max - 1) / 2 + min) */
 static inline unsigned pair_index(unsigned x, unsigned y)
 {
-    static const unsigned char ix[ACCEPT_SLOTS][ACCEPT_SLOTS] = {
+    /* rows of 16: the index a shift and an add */
+    static const unsigned char ix[ACCEPT_SLOTS][16] = {
         {0, 0, 1, 3, 6, 10, 15, 21, 28, 36, 45},     {0, 0, 2, 4, 7, 11, 16, 22, 29, 37, 46},
         {1, 2, 0, 5, 8, 12, 17, 23, 30, 38, 47},     {3, 4, 5, 0, 9, 13, 18, 24, 31, 39, 48},
         {6, 7, 8, 9, 0, 14, 19, 25, 32, 40, 49},     {10, 11, 12, 13, 14, 0, 20, 26, 33, 41, 50},
