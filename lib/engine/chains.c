@@ -196,11 +196,11 @@ void accept_longest_both(accept_t *a, const unsigned char *nd, unsigned m, unsig
  * later q, each where the anchor's own test of the step passes.
  */
 
-/* node pos of the list is slot s, unchanged since */
+/* node pos of the list is slot s, unchanged since (each change of a slot is
+ * its own tick of accept_t.clock, so the tick names the slot too) */
 static int same_node(const accept_t *a, unsigned pos, unsigned s)
 {
-    const accept_reach_t *r = &a->reach;
-    return r->nd[pos] == s && r->since[pos] == a->since[s];
+    return a->reach.since[pos] == a->since[s];
 }
 
 /* the triple x -> p -> y passes (slots; no acceleration limit: all do) */
