@@ -72,9 +72,10 @@ static int same(const engine_waypoint_t *p, const engine_waypoint_t *q)
     return fabs(p->t_s - q->t_s) <= ACCEPT_SAME_TIME_S && accept_dist(p, q) <= ACCEPT_SAME_POS_M;
 }
 
-/* a free slot for the waypoint offered: none of the window, the anchor (a0,
- * a1) and burst; its pairs are forgotten */
-static unsigned new_slot(accept_t *a)
+/* a free slot for the waypoint offered (newest: offered last, see
+ * accept_forget_as): none of the window, the anchor (a0, a1) and burst; its
+ * pairs are forgotten */
+static unsigned new_slot(accept_t *a, int newest)
 {
     unsigned used = 0, s = 0;
     for (unsigned i = 0; i < a->npend; i++)
@@ -87,7 +88,7 @@ static unsigned new_slot(accept_t *a)
         used |= 1u << a->burst;
     while (used >> s & 1u)
         s++;
-    accept_forget(a, s);
+    accept_forget_as(a, s, newest);
     return s;
 }
 
@@ -105,7 +106,7 @@ int accept_offer(accept_t *a, const engine_waypoint_t *wp)
             return ENGINE_DUPLICATE;
     if (a->npend == ACCEPT_WINDOW_MAX) /* cannot happen: verdicts are taken first */
         return -ENGINE_EFULL;
-    s = new_slot(a);
+    s = new_slot(a, 1);
     a->wp[s] = *wp;
     a->pend[a->npend++] = (unsigned char)s;
     return 0;
@@ -198,7 +199,7 @@ int accept_check(const accept_t *a, const engine_waypoint_t *pre, const engine_w
     if (!(a->cfg.max_accel_m_s2 > 0) || !pre)
         return 0;
     pair_of(pre, p, &q1);
-    return accel_test(a, &q1, &q2, p->t_s - pre->t_s, dt, dv_norm(&q1, &q2));
+    return accel_test(a, &q1, &q2, p->t_s - pre->t_s, dt);
 }
 
 /* chain (len, cost) better than (l2, c2): longer, or as long and smoother */
@@ -393,6 +394,14 @@ static int stale_verdict(accept_t *a, int full, double vlim)
            v_in / (a->wp[a1].t_s - a->wp[a->a0].t_s) > ACCEPT_STALE_STOP_M_S2;
 }
 
+/* 0 if slots p and q are surely farther apart than ACCEPT_STALE_POS_M (an
+ * axis differs by more than twice that: their distance, as pair() rounds
+ * it, is then more than ACCEPT_STALE_POS_M), without their pair */
+static int near_pos(const accept_t *a, unsigned p, unsigned q)
+{
+    return fabs(a->wp[q].pos_m[0] - a->wp[p].pos_m[0]) <= 2.0 * ACCEPT_STALE_POS_M;
+}
+
 /*
  * 1 if a later waypoint held repeats c's position (a frozen receiver starts
  * repeating after c): c is the one that was stamped when the position was
@@ -406,7 +415,7 @@ static int repeated_later(accept_t *a)
     if (!a->cfg.stale)
         return 0;
     for (unsigned i = 1; i < a->npend; i++)
-        if (pair_dist(a, c, a->pend[i]) <= ACCEPT_STALE_POS_M &&
+        if (near_pos(a, c, a->pend[i]) && pair_dist(a, c, a->pend[i]) <= ACCEPT_STALE_POS_M &&
             a->wp[a->pend[i]].t_s - a->wp[c].t_s > ACCEPT_SAME_TIME_S)
             return 1;
     return 0;
@@ -418,7 +427,8 @@ static int repeated_later(accept_t *a)
  * later) */
 static int repeats_c(accept_t *a, unsigned q)
 {
-    return a->cfg.stale && q != a->pend[0] && pair_dist(a, a->pend[0], q) <= ACCEPT_STALE_POS_M;
+    return a->cfg.stale && q != a->pend[0] && near_pos(a, a->pend[0], q) &&
+           pair_dist(a, a->pend[0], q) <= ACCEPT_STALE_POS_M;
 }
 
 /* 1 if c failed the anchor on speed alone while the learned limit rests on
@@ -437,9 +447,9 @@ static int thin_pace(accept_t *a, int r)
  * exists): c, which does not follow the anchor, is then dropped whatever
  * comes later (the full window's verdict: lo >= 2 and r != 0).
  */
-static int continues_anchor(accept_t *a, unsigned pre, double vlim)
+static int continues_anchor(accept_t *a, unsigned pre, double vlim, unsigned from)
 {
-    for (unsigned i = 1; i < a->npend; i++)
+    for (unsigned i = from; i < a->npend; i++)
         if (!repeats_c(a, a->pend[i]) && check0(a, pre, a->a1, a->pend[i], vlim) == 0)
             return 1;
     return 0;
@@ -453,16 +463,18 @@ static int continues_anchor(accept_t *a, unsigned pre, double vlim)
  * through it, and the full window would take c.  One outlier after a good
  * fix so holds it one interval, not a window.
  */
-static int taken_past_outliers(accept_t *a, double vlim)
+static int taken_past_outliers(accept_t *a, double vlim, unsigned from, unsigned *stop)
 {
     unsigned c = a->pend[0], pre = a->have_a0 ? a->a0 : NO_SLOT;
-    for (unsigned j = 1; j < a->npend; j++) {
+    for (unsigned j = from; j < a->npend; j++) {
         unsigned q = a->pend[j];
+        *stop = j;
         if (check(a, a->a1, c, q, vlim, 0) == 0)
             return j >= 2;
         if (!repeats_c(a, q) && check0(a, pre, a->a1, q, vlim) == 0)
             return 0; /* q could replace c: the full window compares them */
     }
+    *stop = 0;
     return 0;
 }
 
@@ -501,7 +513,12 @@ static const chains_t *chains(accept_t *a, const unsigned char *nd, unsigned pre
 
     if (ch->known)
         return ch;
-    m = without_repeats(a, nd, n, nr);
+    m = n + 1;
+    for (unsigned i = 2; i <= n; i++)
+        if (repeats_c(a, nd[i])) {
+            m = without_repeats(a, nd, n, nr);
+            break;
+        }
     if (m == n + 1) { /* no repeats of c: the same waypoints both ways */
         unsigned l[2];
         accept_longest_len(a, nd, m, pre, vlim, l);
@@ -732,7 +749,7 @@ void accept_anchor_at(accept_t *a, const engine_waypoint_t *wp)
     unsigned s;
     a->have_a0 = 0; /* the slot of a0 may be taken */
     a->open = 0;
-    s = new_slot(a);
+    s = new_slot(a, 0);
     a->wp[s] = *wp;
     a->a1 = (unsigned char)s;
     a->open = 1;
@@ -757,18 +774,57 @@ static int drop(accept_t *a, unsigned pre, double vlim, int reason, accept_verdi
     return 1;
 }
 
+/*
+ * The waypoints of the last wait (accept_t.wait) still held first, with
+ * the same anchor, slot before it and speed limit: their count, else 0.
+ * What that call found of them holds again (every test is a function of
+ * the waypoints and the speed limit): c's test after the anchor, chain_all
+ * failing among them, accept_retime_late keeping c as it stands, the scans
+ * of continues_anchor and taken_past_outliers over them.
+ */
+static unsigned waited(const accept_t *a, unsigned pre, double vlim)
+{
+    const accept_wait_t *w = &a->wait;
+    if (!w->valid || w->a1 != a->a1 || w->since_a1 != a->since[a->a1] || w->pre != pre ||
+        (pre != NO_SLOT && w->since_pre != a->since[pre]) || a->npend < w->n ||
+        memcmp(&w->vlim, &vlim, sizeof vlim) != 0)
+        return 0;
+    for (unsigned i = 0; i < w->n; i++)
+        if (w->pend[i] != a->pend[i] || w->since[i] != a->since[a->pend[i]])
+            return 0;
+    return w->n;
+}
+
+/* 1 if accept_run_decide would find no run of repeats and start none (it
+ * returns -1 then, and changes nothing): no trajectory open, or no run
+ * held nor judged and the oldest waypoint held (if any) no repeat of the
+ * anchor later than it (stops.c repeats_anchor) */
+static int no_run(accept_t *a)
+{
+    unsigned q;
+    if (!a->open)
+        return 1;
+    if (a->run_n || a->run_verdict)
+        return 0;
+    if (!a->npend)
+        return 1;
+    q = a->pend[0];
+    return !(a->wp[q].t_s - a->wp[a->a1].t_s > ACCEPT_SAME_TIME_S &&
+             pair_dist(a, a->a1, q) <= ACCEPT_STALE_POS_M);
+}
+
 int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
 {
     unsigned char nd[ACCEPT_WINDOW_MAX + 1];
     unsigned pre = a->open && a->have_a0 ? a->a0 : NO_SLOT;
-    unsigned n = a->npend, k = a->cfg.confirm;
+    unsigned n = a->npend, k = a->cfg.confirm, wn, scan = 0, tpo = 0;
     int full = closing || n >= a->cfg.window;
     chains_t ch = {0};
     double vlim;
     int r;
 
     a->full = full; /* window_median_speed */
-    if (a->cfg.rules & ACCEPT_RULE_STOPS) {
+    if ((a->cfg.rules & ACCEPT_RULE_STOPS) && !no_run(a)) {
         int rr = accept_run_decide(a, closing, v);
         if (rr >= 0)
             return rr;
@@ -801,9 +857,12 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
     }
     nd[0] = a->a1;
     memcpy(nd + 1, a->pend, n);
-    if (n >= 2 && chain_all(a, nd, n + 1, pre, vlim, 0))
+    wn = waited(a, pre, vlim);
+    a->wait.valid = 0;
+    r = wn ? a->wait.r : check0(a, pre, nd[0], nd[1], vlim); /* chain_all's first step */
+    /* (after a wait with r == 0, chain_all failed among its waypoints) */
+    if (n >= 2 && r == 0 && !wn && chain_all(a, nd + 1, n, nd[0], vlim, 0))
         return take(a, pre, vlim, v);
-    r = check0(a, pre, nd[0], nd[1], vlim);
     if (r == ENGINE_EUNCONFIRMED && a->wp[nd[1]].t_s > a->wp[nd[0]].t_s && n >= k &&
         chain_all(a, nd + 1, k, NO_SLOT, vlim, 1)) {
         /* after a gap: nothing later can continue the anchor (all are later
@@ -815,17 +874,37 @@ int accept_decide(accept_t *a, int closing, accept_verdict_t *v)
     /* verdicts the full window would give, as soon as they are certain: a
      * bad fix must not hold the good ones around it for a whole window (the
      * output draws on its start slack meanwhile) */
-    if (r != 0 && !thin_pace(a, r) && continues_anchor(a, pre, vlim))
-        return drop(a, pre, vlim, drop_reason(a, pre, vlim, r), v);
-    if (r == 0 && n >= 2) { /* a fix written late, re-stamped now (retime.c) */
+    if (r != 0 && !thin_pace(a, r)) {
+        if (continues_anchor(a, pre, vlim, wn && a->wait.scan ? a->wait.scan : 1))
+            return drop(a, pre, vlim, drop_reason(a, pre, vlim, r), v);
+        scan = n;
+    }
+    if (r == 0 && n >= 2 && !wn) { /* a fix written late, re-stamped now (retime.c) */
         double shift = accept_retime_late(a, pre, vlim);
         if (shift > 0 || shift < 0)
             return take_at(a, shift, v);
     }
-    if (r == 0 &&
-        (taken_past_outliers(a, vlim) || (n >= 3 && outvotes_held(a, nd, pre, vlim, &ch))))
+    if (r == 0 && (!wn || !a->wait.tpo) && taken_past_outliers(a, vlim, wn ? wn : 1, &tpo))
         return take(a, pre, vlim, v);
-    if (!full)
+    if (r == 0 && wn && a->wait.tpo)
+        tpo = a->wait.tpo; /* it stopped among them: the same answer */
+    if (r == 0 && n >= 3 && outvotes_held(a, nd, pre, vlim, &ch))
+        return take(a, pre, vlim, v);
+    if (!full) { /* a wait: kept for the next call (waited) */
+        a->wait.valid = 1;
+        a->wait.r = r;
+        a->wait.a1 = (unsigned char)a->a1;
+        a->wait.since_a1 = a->since[a->a1];
+        a->wait.pre = (unsigned char)pre;
+        a->wait.since_pre = pre != NO_SLOT ? a->since[pre] : 0;
+        a->wait.vlim = vlim;
+        a->wait.n = n;
+        a->wait.scan = scan;
+        a->wait.tpo = tpo;
+        memcpy(a->wait.pend, a->pend, n);
+        for (unsigned i = 0; i < n; i++)
+            a->wait.since[i] = a->since[a->pend[i]];
         return 0;
+    }
     return decide_full(a, closing, vlim, pre, r, nd, &ch, v);
 }

@@ -337,11 +337,26 @@ typedef struct {
     unsigned char nd[ACCEPT_NODES]; /* their slots, in order */
     uint64_t since[ACCEPT_NODES];   /* their slots' last change (accept_t.since) */
     double vlim;                    /* the speed limit of the steps */
-    /* by slots x -> y (y after x): step 0 if its time test fails, 1 if its
-     * speed test does, 2 if both pass (y in the window); more: the most
-     * nodes after y on a consistent chain x -> y -> ... */
-    unsigned char step[ACCEPT_SLOTS][ACCEPT_SLOTS], more[ACCEPT_SLOTS][ACCEPT_SLOTS];
+    /* by slots x -> y (y after x; rows of 16, an index is a shift and an
+     * add): step 0 if its time test fails, 1 if its speed test does, 2 if
+     * both pass (y in the window); more: the most nodes after y on a
+     * consistent chain x -> y -> ... */
+    unsigned char step[ACCEPT_SLOTS][16], more[ACCEPT_SLOTS][16];
+    /* more by value (at most ACCEPT_NODES): bit x of by[y][v] if more[x][y]
+     * is v (x before y in the list; bits of other slots mean nothing) */
+    uint16_t by[ACCEPT_SLOTS][16];
 } accept_reach_t;
+
+/* accept_t.wait */
+typedef struct {
+    int valid, r;
+    unsigned char a1, pre;
+    unsigned n, scan, tpo;
+    uint64_t since_a1, since_pre;
+    double vlim;
+    unsigned char pend[ACCEPT_WINDOW_MAX];
+    uint64_t since[ACCEPT_WINDOW_MAX];
+} accept_wait_t;
 
 typedef struct {
     accept_config_t cfg;
@@ -382,11 +397,17 @@ typedef struct {
     /* the acceleration test of slots x -> p -> y (accept_int.h triple()),
      * computed once while the three are held: bit x of tknown[p][y] if
      * computed, of tok[p][y] if it passes (or there is no acceleration
-     * limit) (its implied acceleration is computed when asked); bit y of
-     * twith[x][p] (and bit p of twith_any[x]) if bit x of tknown[p][y] was
-     * set since slot x last changed: where a slot's change clears its bit */
+     * limit) (its implied acceleration is computed when asked); a slot's
+     * change clears its bit in every tknown and its rows */
     uint16_t tknown[ACCEPT_SLOTS][16], tok[ACCEPT_SLOTS][16];
-    uint16_t twith[ACCEPT_SLOTS][ACCEPT_SLOTS], twith_any[ACCEPT_SLOTS];
+    /* accept_decide's last wait with a trajectory open (no verdict, the
+     * window not full), for the next call over the same waypoints and more
+     * (accept.c waited()): its anchor, the slot before it (NO_SLOT: none),
+     * speed limit, the n waypoints held and their slots' changes, c's test
+     * after the anchor (r), how far continues_anchor found nothing (scan:
+     * the waypoints 1..scan-1; 0 if not asked) and where taken_past_outliers
+     * stopped (tpo: 0 if it went through all n) */
+    accept_wait_t wait;
     accept_search_t search; /* the last chain search (chains.c) */
     accept_reach_t reach;   /* the chains' lengths (chains.c) */
 } accept_t;

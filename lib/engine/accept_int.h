@@ -51,7 +51,8 @@ static inline void pair_of(const engine_waypoint_t *p, const engine_waypoint_t *
  * (max (max - 1) / 2 + min) */
 static inline unsigned pair_index(unsigned x, unsigned y)
 {
-    static const unsigned char ix[ACCEPT_SLOTS][ACCEPT_SLOTS] = {
+    /* rows of 16: the index a shift and an add */
+    static const unsigned char ix[ACCEPT_SLOTS][16] = {
         {0, 0, 1, 3, 6, 10, 15, 21, 28, 36, 45},     {0, 0, 2, 4, 7, 11, 16, 22, 29, 37, 46},
         {1, 2, 0, 5, 8, 12, 17, 23, 30, 38, 47},     {3, 4, 5, 0, 9, 13, 18, 24, 31, 39, 48},
         {6, 7, 8, 9, 0, 14, 19, 25, 32, 40, 49},     {10, 11, 12, 13, 14, 0, 20, 26, 33, 41, 50},
@@ -63,8 +64,14 @@ static inline unsigned pair_index(unsigned x, unsigned y)
 }
 
 /* slot s holds a new waypoint, or its stamp changed: its pairs and triples,
- * and a chain search over it, are no longer known (accept_t.since) */
-static inline void accept_forget(accept_t *a, unsigned s)
+ * and a chain search over it, are no longer known (accept_t.since).  With
+ * newest, s holds the waypoint offered last, and the triples x -> p -> y
+ * that start at s keep their bits: none is asked before slots p and y are
+ * given waypoints offered after it (a triple follows the order of offers:
+ * the slot before the anchor, the anchor, the window; but for
+ * accept_anchor_at's anchor, not newest), which clears their rows and
+ * columns here */
+static inline void accept_forget_as(accept_t *a, unsigned s, int newest)
 {
     /* the bits of accept_t.pknown of the pairs with slot s */
     static const uint64_t with[ACCEPT_SLOTS] = {
@@ -75,16 +82,18 @@ static inline void accept_forget(accept_t *a, unsigned s)
     uint16_t keep = (uint16_t) ~(1u << s);
     a->since[s] = ++a->clock;
     a->pknown &= ~with[s];
-    for (unsigned m = a->twith_any[s]; m; m &= m - 1) {
-        unsigned p = (unsigned)__builtin_ctz(m);
-        for (unsigned y = a->twith[s][p]; y; y &= y - 1)
-            a->tknown[p][__builtin_ctz(y)] &= keep;
-        a->twith[s][p] = 0;
-    }
-    a->twith_any[s] = 0;
+    if (!newest)
+        for (unsigned p = 0; p < ACCEPT_SLOTS; p++)
+            for (unsigned y = 0; y < 16; y++)
+                a->tknown[p][y] &= keep;
     memset(a->tknown[s], 0, sizeof a->tknown[s]);
     for (unsigned x = 0; x < ACCEPT_SLOTS; x++)
         a->tknown[x][s] = 0;
+}
+
+static inline void accept_forget(accept_t *a, unsigned s)
+{
+    accept_forget_as(a, s, 0);
 }
 
 /* chains.c: pair() and triple() computing what they do not know yet */
@@ -135,10 +144,11 @@ static inline double dv_norm(const accept_pair_t *q1, const accept_pair_t *q2)
     return sqrt(dv2);
 }
 
-/* the acceleration test of pre -> p -> b (d1, dt: the two intervals, dvn:
- * dv_norm): 2 |v2 - v1| / (d1 + dt) <= amax, plus a free turn when learned */
+/* the acceleration test of pre -> p -> b (d1, dt: the two intervals):
+ * 2 |v2 - v1| / (d1 + dt) <= amax, plus a free turn when learned (|v2 - v1|,
+ * dv_norm, computed only where the change of speed passes) */
 static inline int accel_test(const accept_t *a, const accept_pair_t *q1, const accept_pair_t *q2,
-                             double d1, double dt, double dvn)
+                             double d1, double dt)
 {
     double allow = a->cfg.max_accel_m_s2 * 0.5 * (d1 + dt);
     if (a->cfg.learned) {
@@ -147,7 +157,7 @@ static inline int accel_test(const accept_t *a, const accept_pair_t *q1, const a
             return ENGINE_EACCEL;
         allow += 2.0 * min_of(q1->vn, q2->vn);
     }
-    return dvn > allow ? ENGINE_EACCEL : 0;
+    return dv_norm(q1, q2) > allow ? ENGINE_EACCEL : 0;
 }
 
 /* the acceleration test of x -> p -> y (slots, in time order, no gap
@@ -163,6 +173,14 @@ static inline int triple(accept_t *a, unsigned x, unsigned p, unsigned y, double
     double d1 = a->wp[p].t_s - a->wp[x].t_s, dt = a->wp[y].t_s - a->wp[p].t_s;
     *cost = 2.0 * dv_norm(q1, q2) / (d1 + dt);
     return ok;
+}
+
+/* triple()'s cost alone */
+static inline double triple_cost(accept_t *a, unsigned x, unsigned p, unsigned y)
+{
+    const accept_pair_t *q1 = pair(a, x, p), *q2 = pair(a, p, y);
+    double d1 = a->wp[p].t_s - a->wp[x].t_s, dt = a->wp[y].t_s - a->wp[p].t_s;
+    return 2.0 * dv_norm(q1, q2) / (d1 + dt);
 }
 
 /* triple() without its cost */
@@ -185,7 +203,7 @@ static inline int triple_passes(accept_t *a, unsigned x, unsigned p, unsigned y)
 static inline int judge(accept_t *a, unsigned pre, unsigned p, unsigned b, double vlim, int gaps_ok,
                         double *cost)
 {
-    double dt = a->wp[b].t_s - a->wp[p].t_s, c;
+    double dt = a->wp[b].t_s - a->wp[p].t_s;
     int gap = 0, r = time_test(a, dt, gaps_ok, &gap), acc;
 
     if (r)
@@ -202,9 +220,9 @@ static inline int judge(accept_t *a, unsigned pre, unsigned p, unsigned b, doubl
      * gap the acceleration test is not asked, its cost is) */
     if (!cost)
         return acc && !triple_passes(a, pre, p, b) ? ENGINE_EACCEL : 0;
-    if (!triple(a, pre, p, b, &c) && acc)
+    if (acc && !triple_passes(a, pre, p, b))
         return ENGINE_EACCEL;
-    *cost = c;
+    *cost = triple_cost(a, pre, p, b);
     return 0;
 }
 

@@ -43,11 +43,9 @@ int accept_triple_new(accept_t *a, unsigned x, unsigned p, unsigned y)
 {
     const accept_pair_t *q1 = pair(a, x, p), *q2 = pair(a, p, y);
     double d1 = a->wp[p].t_s - a->wp[x].t_s, dt = a->wp[y].t_s - a->wp[p].t_s;
-    int ok = !(a->cfg.max_accel_m_s2 > 0 && accel_test(a, q1, q2, d1, dt, dv_norm(q1, q2)));
+    int ok = !(a->cfg.max_accel_m_s2 > 0 && accel_test(a, q1, q2, d1, dt));
     uint16_t bit = (uint16_t)(1u << x);
     a->tknown[p][y] |= bit;
-    a->twith[x][p] = (uint16_t)(a->twith[x][p] | 1u << y);
-    a->twith_any[x] = (uint16_t)(a->twith_any[x] | 1u << p);
     a->tok[p][y] = (uint16_t)(ok ? a->tok[p][y] | bit : a->tok[p][y] & ~bit);
     return ok;
 }
@@ -198,11 +196,11 @@ void accept_longest_both(accept_t *a, const unsigned char *nd, unsigned m, unsig
  * later q, each where the anchor's own test of the step passes.
  */
 
-/* node pos of the list is slot s, unchanged since */
+/* node pos of the list is slot s, unchanged since (each change of a slot is
+ * its own tick of accept_t.clock, so the tick names the slot too) */
 static int same_node(const accept_t *a, unsigned pos, unsigned s)
 {
-    const accept_reach_t *r = &a->reach;
-    return r->nd[pos] == s && r->since[pos] == a->since[s];
+    return a->reach.since[pos] == a->since[s];
 }
 
 /* the triple x -> p -> y passes (slots; no acceleration limit: all do) */
@@ -235,64 +233,86 @@ static void set_node(accept_t *a, unsigned pos, unsigned s, double vlim)
         r->step[r->nd[i]][s] = step_of(a, r->nd[i], s, vlim);
 }
 
+/* passing()'s triples of the slots u not known yet, computed (the step
+ * p -> y once) */
+static __attribute__((noinline)) void passing_new(accept_t *a, unsigned u, unsigned p, unsigned y)
+{
+    const accept_pair_t *q2 = pair(a, p, y);
+    double dt = a->wp[y].t_s - a->wp[p].t_s;
+    unsigned ok = 0;
+    for (unsigned m = u; m; m &= m - 1) {
+        unsigned x = (unsigned)__builtin_ctz(m);
+        const accept_pair_t *q1 = pair(a, x, p);
+        double d1 = a->wp[p].t_s - a->wp[x].t_s;
+        ok |= (unsigned)!accel_test(a, q1, q2, d1, dt) << x;
+    }
+    a->tknown[p][y] = (uint16_t)(a->tknown[p][y] | u);
+    a->tok[p][y] = (uint16_t)((a->tok[p][y] & ~u) | ok);
+}
+
 /* the slots x of the set e whose triple x -> p -> y passes (those not
  * known yet computed) */
-static unsigned passing(accept_t *a, unsigned e, unsigned p, unsigned y, int acc)
+static inline unsigned passing(accept_t *a, unsigned e, unsigned p, unsigned y, int acc)
 {
     unsigned u;
     if (!acc)
         return e;
     u = e & ~(unsigned)a->tknown[p][y];
-    if (u) { /* accept_triple_new() for each, step p -> y once */
-        const accept_pair_t *q2 = pair(a, p, y);
-        double dt = a->wp[y].t_s - a->wp[p].t_s;
-        unsigned ok = 0;
-        for (unsigned m = u; m; m &= m - 1) {
-            unsigned x = (unsigned)__builtin_ctz(m);
-            const accept_pair_t *q1 = pair(a, x, p);
-            double d1 = a->wp[p].t_s - a->wp[x].t_s;
-            ok |= (unsigned)!accel_test(a, q1, q2, d1, dt, dv_norm(q1, q2)) << x;
-            a->twith[x][p] = (uint16_t)(a->twith[x][p] | 1u << y);
-            a->twith_any[x] = (uint16_t)(a->twith_any[x] | 1u << p);
-        }
-        a->tknown[p][y] = (uint16_t)(a->tknown[p][y] | u);
-        a->tok[p][y] = (uint16_t)((a->tok[p][y] & ~u) | ok);
-    }
+    if (__builtin_expect(u != 0, 0))
+        passing_new(a, u, p, y);
     return e & a->tok[p][y];
 }
 
-/* slot s appended to the list: more brought up to date (above); by rows j
- * (the steps into node j), the slots i that grow as sets */
+/* more[x][y] set to v (by with it) */
+static void set_more(accept_reach_t *r, unsigned x, unsigned y, unsigned v)
+{
+    uint16_t keep = (uint16_t) ~(1u << x);
+    for (unsigned u = 0; u <= ACCEPT_NODES; u++)
+        r->by[y][u] &= keep;
+    r->more[x][y] = (unsigned char)v;
+    r->by[y][v] = (uint16_t)(r->by[y][v] | 1u << x);
+}
+
+/* slot s appended to the list: more brought up to date (above).  By rows j
+ * from the last, the slots i < j whose more[nd i][nd j] grows (g), from the
+ * steps j -> k whose more grew already (grew[nd j]: their positions k); a
+ * more[j][k] that grew is its old value plus one, the value a more[i][j]
+ * grows from */
 static void append_node(accept_t *a, unsigned s, double vlim, int acc)
 {
     accept_reach_t *r = &a->reach;
-    unsigned x = r->m;
-    uint16_t grow[ACCEPT_NODES] = {0}; /* by j: the slots nd[i] whose more[nd i][nd j] grows */
+    unsigned x = r->m, before[ACCEPT_NODES + 1];
+    uint16_t grew[ACCEPT_SLOTS] = {0}; /* by slot p: the positions k whose more[p][nd k] grew */
 
     set_node(a, x, s, vlim);
+    before[0] = 0;
+    for (unsigned i = 0; i < x; i++)
+        before[i + 1] = before[i] | 1u << r->nd[i];
     for (unsigned j = x - 1; j >= 1; j--) {
-        unsigned p = r->nd[j], g = 0, byv[ACCEPT_NODES + 1] = {0}; /* slots i < j by more */
-        for (unsigned i = 0; i < j; i++)
-            byv[r->more[r->nd[i]][p]] |= 1u << r->nd[i];
-        if (r->step[p][s] == 2) /* i -> j -> x, where more was 0 */
-            g = passing(a, byv[0], p, s, acc);
-        for (unsigned k = j + 1; k < x; k++) { /* i -> j -> k ... x, more[j][k] one less */
-            unsigned y = r->nd[k], e;
-            if (!(grow[k] >> p & 1u) || r->step[p][y] != 2)
+        unsigned p = r->nd[j], g = 0, e;
+        const uint16_t *byp = r->by[p];
+        if (r->step[p][s] == 2 && (e = byp[0] & before[j]) != 0) /* i -> j -> x, more was 0 */
+            g = passing(a, e, p, s, acc);
+        for (unsigned m = grew[p]; m; m &= m - 1) { /* i -> j -> k ... x */
+            unsigned y = r->nd[__builtin_ctz(m)];
+            if (r->step[p][y] != 2)
                 continue;
-            e = byv[r->more[p][y] + 1u] & ~g;
+            e = byp[r->more[p][y]] & before[j] & ~g;
             if (e)
                 g |= passing(a, e, p, y, acc);
         }
-        grow[j] = (uint16_t)g;
-    }
-    for (unsigned j = 1; j < x; j++) {
-        unsigned p = r->nd[j];
-        for (unsigned g = grow[j]; g; g &= g - 1)
-            r->more[__builtin_ctz(g)][p]++;
+        for (unsigned m = g; m; m &= m - 1) {
+            unsigned i = (unsigned)__builtin_ctz(m), v = r->more[i][p];
+            r->more[i][p] = (unsigned char)(v + 1);
+            r->by[p][v] = (uint16_t)(r->by[p][v] & ~(1u << i));
+            r->by[p][v + 1] = (uint16_t)(r->by[p][v + 1] | 1u << i);
+            grew[i] = (uint16_t)(grew[i] | 1u << j);
+        }
     }
     for (unsigned i = 0; i < x; i++)
         r->more[r->nd[i]][s] = 0;
+    memset(r->by[s], 0, sizeof r->by[s]);
+    r->by[s][0] = (uint16_t)before[x];
     r->m = x + 1;
 }
 
@@ -344,7 +364,7 @@ void accept_longest_len(accept_t *a, const unsigned char *nd, unsigned m, unsign
         r->m = 1 + w;
         if (!anchor) /* a new anchor: its more from the nodes after it */
             for (unsigned j = w; j >= 1; j--)
-                r->more[nd[0]][r->nd[j]] = more_of(a, 0, j, acc);
+                set_more(r, nd[0], r->nd[j], more_of(a, 0, j, acc));
         for (unsigned j = 1 + w; j < m; j++)
             append_node(a, nd[j], vlim, acc);
     } else { /* anew */
@@ -352,9 +372,14 @@ void accept_longest_len(accept_t *a, const unsigned char *nd, unsigned m, unsign
         r->m = m;
         for (unsigned j = 0; j < m; j++)
             set_node(a, j, nd[j], vlim);
-        for (unsigned j = m - 1; j >= 1; j--)
-            for (unsigned i = 0; i < j; i++)
-                r->more[nd[i]][nd[j]] = more_of(a, i, j, acc);
+        for (unsigned j = m - 1; j >= 1; j--) {
+            memset(r->by[nd[j]], 0, sizeof r->by[nd[j]]);
+            for (unsigned i = 0; i < j; i++) {
+                unsigned v = more_of(a, i, j, acc);
+                r->more[nd[i]][nd[j]] = (unsigned char)v;
+                r->by[nd[j]][v] = (uint16_t)(r->by[nd[j]][v] | 1u << nd[i]);
+            }
+        }
     }
     len[0] = len[1] = 1;
     for (unsigned j = 1; j < m; j++) {
@@ -395,8 +420,9 @@ static double tight_cost(accept_t *a, tight_t *t, unsigned i, unsigned j, int ac
     for (unsigned k = j + 1; k < r->m; k++) {
         unsigned y = r->nd[k];
         double c, ck;
-        if (r->step[p][y] != 2 || r->more[p][y] + 1u != v || (!triple(a, x, p, y, &c) && acc))
+        if (r->more[p][y] + 1u != v || r->step[p][y] != 2 || (acc && !triple_passes(a, x, p, y)))
             continue;
+        c = triple_cost(a, x, p, y);
         ck = tight_cost(a, t, j, k, acc);
         if (isnan(c))
             t->nan = 1;

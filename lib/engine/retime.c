@@ -65,17 +65,17 @@ static int estimate(accept_t *a, double *tp)
         h[m++] = a->wp[q].t_s - a->wp[prev].t_s;
         prev = last = q;
     }
-    for (unsigned i = 1; i < m; i++) /* the intervals sorted: m <= 9 */
-        for (unsigned j = i; j > 0 && h[j - 1] > h[j]; j--) {
-            double x = h[j];
-            h[j] = h[j - 1];
-            h[j - 1] = x;
-        }
     if (last != c && tot > 0) {
         /* on the path of its neighbours (a fix off it is no jitter) */
         unsigned n1 = a->pend[1];
         if (!on_path(a, a1, c, n1))
             return 0;
+        for (unsigned i = 1; i < m; i++) /* the intervals sorted: m <= 9 */
+            for (unsigned j = i; j > 0 && h[j - 1] > h[j]; j--) {
+                double x = h[j];
+                h[j] = h[j - 1];
+                h[j - 1] = x;
+            }
         t = t0 + (a->wp[last].t_s - t0) * s / tot;
         bound = ACCEPT_RETIME_FRAC * h[(m - 1) / 2]; /* the lower median interval */
         t_hi = a->wp[n1].t_s;

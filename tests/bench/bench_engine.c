@@ -633,6 +633,43 @@ static void bench_accept(void)
     printf("\n");
 }
 
+/* --accept-walk: lib's policy alone, once over the rough walk of
+ * bench_accept, untimed (for callgrind): the kept count and a hash of every
+ * verdict (kind, reason, gap, stop, shift, stamp, seq, position) */
+static void bench_accept_walk(void)
+{
+    enum { N = 100000 };
+    static engine_waypoint_t walk[N];
+    double pos[3] = {0, 0, 0};
+    unsigned seed = 1;
+    accept_config_t ac;
+    accept_verdict_t v;
+    static accept_t a;
+    long kept = 0;
+    uint64_t h = 1469598103934665603ull;
+
+    for (long i = 0; i < N; i++)
+        walk_wp(&walk[i], i, 0.1, &seed, pos);
+    accept_cfg_default(&ac);
+    accept_init(&a, &ac);
+    for (long i = 0; i < N; i++) {
+        accept_offer(&a, &walk[i]);
+        while (accept_decide(&a, i == N - 1, &v)) {
+            double f[6] = {v.shift_s,     v.wp.t_s,      v.wp.pos_m[0],
+                           v.wp.pos_m[1], v.wp.pos_m[2], (double)v.wp.seq};
+            int k[4] = {v.kind, v.reason, v.gap, v.stop};
+            const unsigned char *b = (const unsigned char *)f;
+            kept += v.kind != ACCEPT_DROP;
+            for (size_t j = 0; j < sizeof f; j++)
+                h = (h ^ b[j]) * 1099511628211ull;
+            b = (const unsigned char *)k;
+            for (size_t j = 0; j < sizeof k; j++)
+                h = (h ^ b[j]) * 1099511628211ull;
+        }
+    }
+    printf("rough walk: kept %ld, verdicts hash %016llx\n", kept, (unsigned long long)h);
+}
+
 /* The F/O table: error of the streamed curve against one global solve, lookahead and (timed)
  * ns per waypoint.  The errors are deterministic (seeded walks, the bundled figure-8): with
  * --errors, bench_engine prints this table alone, untimed (nan ns), in about a second;
@@ -773,6 +810,10 @@ int main(int argc, char **argv)
         if (argc > 2)
             accept_reps = atoi(argv[2]) > 0 ? atoi(argv[2]) : 1;
         bench_accept(); /* the acceptance policy alone, the first table (REPS, default 5) */
+        return 0;
+    }
+    if (argc > 1 && strcmp(argv[1], "--accept-walk") == 0) {
+        bench_accept_walk(); /* lib's policy once over the rough walk, untimed */
         return 0;
     }
     if (argc > 1 && strcmp(argv[1], "--hold") == 0) {
