@@ -460,6 +460,16 @@ static void ceilings(const engine_t *e, const fdiff_seg_t pc[3], double *cmin, d
     }
 }
 
+/* Track time a stop from rate r needs on segment q, within the time
+ * scaling's limits converted at its speeds, with its margin: the curve a
+ * join must leave queued beyond where it begins. */
+static double stop_room(const engine_t *e, const qent_t *q, double r)
+{
+    double vq = fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
+    return ts_stop_dist(r, 0.0, e->cfg.scale_accel_m_s2 / q->av, e->cfg.scale_jerk_m_s3 / vq) +
+           (TS_MARGIN_TICKS + 2) * e->period_s * r;
+}
+
 int join_may_wait_here(const engine_t *e)
 {
     return !e->clk.on && is_exactly(e->scale.override, 1.0) && join_wanted(e);
@@ -490,10 +500,10 @@ static int join_search(engine_t *e, const join_find_t *fp, double t_now, double 
      * an underrun the output's own (the time scaling has slowed it); slowed
      * to wait for the new curve (join_wait_rate), its own, but not below
      * what the wait keeps, JOIN_WAIT_MIN of the curve's */
-    double r_wait, v_old = rho * out_cspeed(e);
+    double v_old = rho * out_cspeed(e);
     if (e->out.underrun)
         v_old = norm3(v0);
-    else if (e->scale.on && join_wait_plan(e, &r_wait))
+    else if (e->scale.on && join_wait_plan(e, NULL))
         v_old = fmin(v_old, fmax(norm3(v0), JOIN_WAIT_MIN * v_old));
     double T0 = ceil((f.t_first - t_now) / (rho * P) - 1e-9) * P;
     if (T0 < JOIN_MIN_TICKS * P)
@@ -518,10 +528,7 @@ static int join_search(engine_t *e, const join_find_t *fp, double t_now, double 
         }
         /* the curve ahead once on it (the pieces, and the new curve queued
          * beyond t_m) long enough to stop in from rho */
-        double vq = fmax(q->vmax, ENGINE_SCALE_V_FLOOR_M_S);
-        double need = ts_stop_dist(r_hi, 0.0, e->cfg.scale_accel_m_s2 / q->av,
-                                   e->cfg.scale_jerk_m_s3 / vq) +
-                      (TS_MARGIN_TICKS + 2) * P * r_hi;
+        double need = stop_room(e, q, r_hi);
         int fits = (f.closed || Tt + (f.t_last - t_m) >= need) &&
                    e->queue.len + 3 <= e->queue.cap + idx; /* room for the pieces */
         /* the new curve's state at t_m as the output meets it at rho:
@@ -598,11 +605,12 @@ static int join_search(engine_t *e, const join_find_t *fp, double t_now, double 
  * played at rate r reaches t_j in (t_j - t_now) / r.  Returns 1 if the join
  * waits so (no gap, time that runs on, the new track heading within 60
  * degrees of the old one's: a turn back is no join that keeps moving), with
- * *r the rate at which the curve is there by t_j (INFINITY: no need to slow,
- * or past t_j). */
+ * *r (r may be NULL) the rate at which the curve is there by t_j (INFINITY:
+ * no need to slow, or past t_j). */
 static int join_wait_plan(const engine_t *e, double *r)
 {
-    *r = INFINITY;
+    if (r)
+        *r = INFINITY;
     if (!join_may_wait(e) || e->solve.nodes < 2 || e->solve.nodes > e->solve.ring ||
         e->out.cur.join)
         return 0;
@@ -613,11 +621,10 @@ static int join_wait_plan(const engine_t *e, double *r)
     double t_end = end->t1_s, t_n0 = nt(e, 0), t_nw = nt(e, e->solve.nodes - 1);
     if (t_n0 < t_end - 1e-9 || t_n0 - t_end > e->cfg.max_gap_s)
         return 0; /* no join: a gap, or time that does not run on */
-    if (i < e->queue.len) {
-        size_t k = traj_past(e, i, queue_at(e, i)->traj);
-        if (queue_at(e, k - 1)->kind == QE_END)
-            return 0; /* the new trajectory is whole: join_try's own */
-    }
+    const qent_t *last = i < e->queue.len ? queue_at(e, traj_past(e, i, queue_at(e, i)->traj) - 1)
+                                          : NULL; /* the new trajectory's queued end */
+    if (last && last->kind == QE_END)
+        return 0; /* the new trajectory is whole: join_try's own */
     const double *r0 = e->solve.node_r, *r1 = e->solve.node_r + AX; /* nodes 0, 1 (nr) */
     double d2 = 0, dot = 0, vn2 = 0, vo2 = 0;
     for (int k = 0; k < AX; k++) {
@@ -629,18 +636,19 @@ static int join_wait_plan(const engine_t *e, double *r)
     }
     if (!(dot > 0.5 * sqrt(vn2 * vo2)))
         return 0;
+    if (!r)
+        return 1;
     double t_j = join_last_ivl(e, i - 1), t_now = e->out.origin_t + out_s(e), P = e->period_s;
     double h = e->solve.span_max > 0 ? e->solve.span_max / (e->la_steady + 1) : 0.0;
     if (!(h > 0) || !(t_j > t_now))
         return 1;
     double d = sqrt(d2), A = e->cfg.scale_accel_m_s2, Jm = e->cfg.scale_jerk_m_s3;
     double T_j = fmax(sqrt(5.78 * d / A), cbrt(60.0 * d / Jm));
-    double v = fmax(e->out.cur.vmax, ENGINE_SCALE_V_FLOOR_M_S), av = e->out.cur.av;
-    double need = ts_stop_dist(1.0, 0.0, A / av, Jm / v) + (TS_MARGIN_TICKS + 2) * P;
-    double t_req = fmax(t_n0 + (JOIN_SETTLE_INTERVALS + 1) * h, t_j + T_j) + need + 2 * P;
+    double t_req = fmax(t_n0 + (JOIN_SETTLE_INTERVALS + 1) * h, t_j + T_j) +
+                   stop_room(e, &e->out.cur, 1.0) + 2 * P;
     double t_grow = t_nw - (e->la_steady + 1) * h; /* the solved curve's end, growing */
-    if (i < e->queue.len)
-        t_grow = fmax(t_grow, queue_at(e, traj_past(e, i, queue_at(e, i)->traj) - 1)->t1_s);
+    if (last)
+        t_grow = fmax(t_grow, last->t1_s);
     if (t_req > t_grow)
         *r = (t_j - t_now) / (t_req - t_grow);
     return 1;
