@@ -31,13 +31,13 @@ static double input_interval(const engine_t *e)
     return e->solve.span_max > 0 ? e->solve.span_max / (e->la_steady + 1) : 0.0;
 }
 
-/* D for the input's interval h and its top speed as measured (vmax_in, its
- * fastest chord, decaying), with the slack learnt so far. */
-static void delay_at(const engine_t *e, double h, engine_delay_t *d)
+/* D for the input's interval h and top speed v, with the slack learnt so
+ * far. */
+static void delay_at(const engine_t *e, double h, double v, engine_delay_t *d)
 {
     /* e->cfg is resolved and e->lookahead its lookahead (engine_new): not
      * resolved again at every tick that asks */
-    engine_delay_parts(&e->cfg, e->lookahead, h, e->solve.vmax_in, d);
+    engine_delay_parts(&e->cfg, e->lookahead, h, v, d);
     if (e->slack_auto) {
         /* the slack in time (delay.h): the parts' least, the arrivals'
          * lateness (J, catchup.c) and the intervals learnt from underruns */
@@ -59,7 +59,7 @@ static void delay_at(const engine_t *e, double h, engine_delay_t *d)
  * fastest chord, both decaying; measured whatever start_slack is). */
 static void delay_measured(const engine_t *e, engine_delay_t *d)
 {
-    delay_at(e, input_interval(e), d);
+    delay_at(e, input_interval(e), e->solve.vmax_in, d);
 }
 
 /* Time of the newest waypoint received for the current trajectory (as
@@ -342,10 +342,15 @@ void engine_delay_grow(engine_t *e)
      * robust one is at most the measured one: if that does not grow D, the
      * robust one (a selection over the ring, on the push path) is not needed */
     double h = input_interval(e);
-    delay_at(e, h, &d);
+    /* a D that grows keeps the top speed it stated: the measured one
+     * decays while the object moves slower, and a reserve shrunk to it
+     * would be short once the object is back at that speed (a slowdown for
+     * it, then D grown again: tests/unit/test_delay_grow.c) */
+    double v = fmax(e->solve.vmax_in, e->delay.d.speed_m_s);
+    delay_at(e, h, v, &d);
     if (!(d.delay_s > e->delay.d.delay_s + 1e-9))
         return;
-    delay_at(e, fmin(h, interval_robust(e)), &d);
+    delay_at(e, fmin(h, interval_robust(e)), v, &d);
     if (d.delay_s > e->delay.d.delay_s + 1e-9) {
         e->delay.d = d;
         e->delay.learnt = e->slack_learn;
