@@ -208,10 +208,11 @@ typedef struct {
     uint64_t delay_grown;           /* D stated anew, longer: the input's intervals or its
                                        top speed grew beyond what D was sized for */
     uint64_t reserve_slowed;        /* slowdowns of an object faster than the speed D's stop
-                                       reserve was sized for: the curve ahead short of a stop
-                                       while the output stood ahead of its D (which grows
-                                       with the input's top speed, lib/engine/delay.h); the
-                                       data came on time: not underruns */
+                                       reserve was sized for, or with a fix lost within the
+                                       lookahead: the curve ahead short of a stop while the
+                                       output stood ahead of its D (which grows with the
+                                       input's top speed, lib/engine/delay.h); the data came
+                                       on time: not underruns */
     uint64_t transfers_moving;      /* re-anchors joined moving (lib/engine/join.c): the
                                        output met the new trajectory's curve without
                                        braking to rest; not in transfers */

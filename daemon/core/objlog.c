@@ -186,9 +186,9 @@ static void log_reserve_slowed(obj_t *o)
     o->reserve_logged = r;
     if (obj_log_nth(r))
         log_msg(LOG_NOTICE,
-                "object '%s': faster than the speed its play-out delay's stop reserve was sized "
-                "for, on input that came on time: slowed along its path (%llu times so far), D "
-                "grows to the speed",
+                "object '%s': short of its play-out delay's stop reserve on input that came on "
+                "time (faster than the speed the reserve was sized for, or a fix lost within the "
+                "lookahead): slowed along its path (%llu times so far), D grows to the input",
                 o->name, (unsigned long long)r);
 }
 

@@ -165,7 +165,8 @@ void engine_delay_note(engine_t *e, double lag);
  * newest waypoint arrived within the interval and slack D holds for one
  * (and a tick), and the solved curve ends within D's lookahead of it.  The
  * object then moves faster than the speed the reserve was sized for (D
- * grows with the input's top speed): a slowdown for the reserve, counted in
+ * grows with the input's top speed), or a fix was lost within the lookahead
+ * (D grows with the intervals): a slowdown for the reserve, counted in
  * reserve_slowed, not an underrun. */
 int engine_delay_reserve_short(const engine_t *e);
 /* Engine-internal (engine_scale.c: the output back at rate 1 after its

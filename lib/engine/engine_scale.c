@@ -703,8 +703,9 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
     if (lim && !e->scale.stop_req && !e->scale.avail_closed && e->out.mode == OUT_STREAM) {
         if (!e->out.underrun && engine_delay_reserve_short(e)) {
             /* issue 26: the data came on time, the object is faster than
-             * the speed D's stop reserve was sized for: slowed for it (told
-             * on each tick: data that turns late makes it an underrun) */
+             * the speed D's stop reserve was sized for, or a fix was lost
+             * within the lookahead: slowed for it (told on each tick: data
+             * that turns late makes it an underrun) */
             if (!e->out.reserve_slow)
                 e->st.reserve_slowed++;
             e->out.reserve_slow = 1;

@@ -755,8 +755,9 @@ static const mbmap_field_t fields[] = {
       "stops before a segment over 100 times faster on an axis than its axis_max_* (it would "
       "need a rate below ENGINE_CEIL_MIN)"),
     F(IX, MBMAP_X_RESERVE_SLOWED, 2, MBMAP_T_U32, "reserve_slowed", "",
-      "slowdowns along the path of an object faster than the speed D's stop reserve was sized "
-      "for, on input that came on time (not underruns; D grows with it, lib/engine/delay.h)"),
+      "slowdowns along the path short of D's stop reserve on input that came on time: an "
+      "object faster than the speed the reserve was sized for, or a fix lost within the "
+      "lookahead (not underruns; D grows with it, lib/engine/delay.h)"),
     F(IX, MBMAP_X_LIMITS_LOST_S, 4, MBMAP_T_F64, "limits_lost_s", "s",
       "time lost to the object's own speed and acceleration limits (max_speed_m_s, "
       "max_accel_m_s2, the profile's): the time scaling slowed the output along its path and "

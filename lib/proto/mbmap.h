@@ -197,7 +197,7 @@
 #define MBMAP_X_DELAY_GROWN 48       /* u32 times D grew with the input's intervals or top speed (delay_grown) */
 #define MBMAP_X_AXIS_LAG_STOPS 70    /* u32 stops because the per-axis limits' lag passed max_lag_s */
 #define MBMAP_X_AXIS_BEYOND 72       /* u32 stops before a segment the per-axis limits cannot follow */
-#define MBMAP_X_RESERVE_SLOWED 74    /* u32 slowdowns of an object faster than D's stop reserve was sized for */
+#define MBMAP_X_RESERVE_SLOWED 74    /* u32 slowdowns short of D's stop reserve, input on time */
 #define MBMAP_X_LIMITS_LOST_S 76     /* f64 time lost to the object's own speed/acceleration limits, s (limits_lost_s) */
 #define MBMAP_X_LIMITS_SLOWED 80     /* u32 segments those limits slow (limits_slowed) */
 #define MBMAP_X_RESYNCS 82           /* u32 its CAN sender restarted its numbering, followed (canproto resyncs) */
