@@ -54,6 +54,7 @@ static void test_grown_d_keeps_its_stop_reserve(void **state)
     int k = 0, grown = 0;
     unsigned long long slowed_before = 0;
     engine_status_t st;
+    memset(&st, 0, sizeof st);
     for (int64_t tick = 0; tick < 300 * 100; tick++) {
         double now = (double)(tick * PERIOD_NS) * 1e-9;
         while (next <= now && t < 280.0) { /* each waypoint arrives at its stamp */
