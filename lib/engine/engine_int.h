@@ -473,6 +473,13 @@ uint64_t queue_waypoints(const engine_t *e, size_t i0, size_t i1);
 engine_state_t play_state(const engine_t *e);
 /* 1 if further steps cannot change anything until new input arrives. */
 int play_stalled(const engine_t *e);
+/* The output may start (or resume after an underrun) on the queued segment
+ * h: the lookahead is buffered beyond it, or its trajectory is closed
+ * (engine_play.c; *lag, may be NULL: engine_delay_ready's). */
+int play_enough_ahead(const engine_t *e, const qent_t *h, double *lag);
+/* start_slack auto: an output stopped by an underrun at s stays stopped
+ * (engine_play.c). */
+int play_rebuffering(const engine_t *e, double s);
 void play_count_underrun(engine_t *e);
 void play_underrun_counted(engine_t *e);
 void play_seed_cur(engine_t *e, int64_t n);

@@ -2,9 +2,10 @@
  * engine_tick.c - the play-out stage: engine_tick.  The output's state
  * machine walks the queued cubics (engine_solve.c) with the forward-
  * difference stepper (fdiff.h) on the period grid: it waits for enough
- * lookahead (start_slack auto learns how much), starts a trajectory
- * directly or through a transfer (engine_xfer.c; the start itself, the ends
- * at rest and the underruns counted: engine_play.c), steps on the unit grid
+ * lookahead (start_slack auto learns how much; the tests, and the output's
+ * state and stall, in engine_play.c), starts a trajectory directly or
+ * through a transfer (engine_xfer.c; the start itself, the ends at rest and
+ * the underruns counted: engine_play.c), steps on the unit grid
  * while nothing asks for another rate (else the time scaling,
  * engine_scale.c) and fills the setpoint, one path for every tick: the rate
  * decision of a plain step is kept for the ticks it provably holds
@@ -25,67 +26,6 @@
 #include "lsq.h"
 #include "silence.h"
 #include "timescale.h"
-
-/* The newest interval of the input (0: fewer than two nodes). */
-static double last_interval(const engine_t *e)
-{
-    return e->solve.nodes >= 2 ? nt(e, e->solve.nodes - 1) - nt(e, e->solve.nodes - 2) : 0.0;
-}
-
-/* start_slack auto: the curve kept ahead of the output beyond what the
- * solver needs, track seconds: twice a stop from full rate at the input's
- * top speed (the curve may be faster than its chords), a few ticks, and the
- * newest interval once per underrun seen. */
-static double brake_s(const engine_t *e)
-{
-    double v = e->solve.vmax_in > ENGINE_SCALE_V_FLOOR_M_S ? e->solve.vmax_in
-                                                           : ENGINE_SCALE_V_FLOOR_M_S;
-    return 2.0 * ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / v, e->cfg.scale_jerk_m_s3 / v) +
-           (TS_MARGIN_TICKS + 2) * e->period_s + e->slack_learn * last_interval(e);
-}
-
-/* start_slack auto: an output stopped by an underrun at s stays stopped
- * until the curve surely built ahead of it is longer than brake_s (or the
- * buffer holds the most slack, or the input is closed).  Not span_max, as
- * at a start: after a long hole in the input that would hold it for as long
- * as the hole. */
-static int rebuffering(const engine_t *e, double s)
-{
-    uint64_t in = e->solve.nodes + (e->smooth ? lsq_smooth_pending(&e->solve.sm) : 0) +
-                  accept_pending(&e->in.policy);
-
-    if (e->scale.avail_closed || e->out.cur.kind != QE_SEG ||
-        in >= e->out.cur.node + 2 + e->lookahead + e->slack_more)
-        return 0;
-    /* the curve is built at least up to the node la_steady + 1 before the
-     * newest one, whatever the fragment phase */
-    uint64_t back = (uint64_t)e->la_steady + 1;
-    if (e->solve.nodes <= back)
-        return 1;
-    return !(nt(e, e->solve.nodes - 1 - back) - (e->out.origin_t + s) >=
-             brake_s(e) - e->slack_learn * last_interval(e));
-}
-
-/*
- * The output may start (or resume after an underrun) on the segment h only
- * once the lookahead is buffered beyond it, or its trajectory is closed.
- */
-static int enough_ahead(const engine_t *e, const qent_t *h, double *lag)
-{
-    /* waypoints received: nodes, plus those the smoother still holds (SMOOTH) */
-    /* and those the acceptance policy still judges: their verdicts come
-     * within the start slack, so they count as lookahead (accept.h) */
-    uint64_t in = e->solve.nodes + (e->smooth ? lsq_smooth_pending(&e->solve.sm) : 0) +
-                  accept_pending(&e->in.policy);
-
-    if (e->queue.ends > 0 || h->kind != QE_SEG)
-        return 1;
-    if (in < h->node + 2 + e->lookahead + e->slack_learn)
-        return 0;
-    /* issue 26: start_slack auto, or delay_s: once the output will stand D
-     * behind the newest waypoint after its ramp from rest (delay.h) */
-    return !(e->slack_auto || e->cfg.delay_s > 0) || engine_delay_ready(e, lag);
-}
 
 /* out_eval leaves the output in the stepper's rows (on_fd): copied here
  * for whoever writes them or holds (engine_out_t), with the curve's speed
@@ -265,9 +205,9 @@ static int decide(engine_t *e, decision_t *d)
         return GO_CLOCKED;
     double target = scale_target(e);
     /* start_slack auto: an output stopped by an underrun resumes once it is
-     * as far behind the newest waypoint as at the start (enough_ahead) */
+     * as far behind the newest waypoint as at the start (play_enough_ahead) */
     if (e->slack_auto && e->out.underrun && e->out.mode == OUT_STREAM && !(e->scale.ts.rate > 0) &&
-        target > 0 && rebuffering(e, s))
+        target > 0 && play_rebuffering(e, s))
         return GO_REBUFFER;
     d->Rc = scale_ceil_room_gross(e, s, A, J) - res;
     double Rm = fmin(R, d->Rc);                      /* the speed cap ahead too */
@@ -521,8 +461,9 @@ static void step_once(engine_t *e)
     e->out.plain_last = e->out.kept_last = e->out.fast_last = INT64_MIN;
     if (e->out.mode == OUT_HOLD) {
         qent_t *h = q_head(e);
-        double lag = NAN; /* the start's ramp, if enough_ahead simulated it */
-        if (!h || !h->first || !enough_ahead(e, h, &lag) || (!e->out.have_pos && e->out.need_pos)) {
+        double lag = NAN; /* the start's ramp, if play_enough_ahead simulated it */
+        if (!h || !h->first || !play_enough_ahead(e, h, &lag) ||
+            (!e->out.have_pos && e->out.need_pos)) {
             double target[AX], t0, gap;
             if (xfer_lead_target(e, target, &t0, &gap)) {
                 /* issue 26: on to its start while its output is not due */
@@ -580,17 +521,6 @@ static void step_once(engine_t *e)
     if (e->out.cur.join) /* a join's setpoints are a transfer's (fill_sp_flags) */
         e->out.flags_pending |= ENGINE_SP_TRANSFER;
     plain_window(e);
-}
-
-engine_state_t play_state(const engine_t *e)
-{
-    if (e->out.mode == OUT_STREAM)
-        return e->out.underrun ? ENGINE_STATE_UNDERRUN : ENGINE_STATE_STREAMING;
-    if (e->out.mode == OUT_XFER)
-        return ENGINE_STATE_STREAMING;
-    if (e->in.open || e->queue.len || accept_pending(&e->in.policy))
-        return ENGINE_STATE_WAITING;
-    return e->out.finished ? ENGINE_STATE_FINISHED : ENGINE_STATE_WAITING;
 }
 
 /* The setpoint's fields, as fill_sp and last_setpoint give them. */
@@ -748,29 +678,6 @@ static void last_setpoint(const engine_t *e, engine_setpoint_t *sp)
     const double *f = e->out.fd.f;
     put_sp(e, sp, e->out.last_now, f + FDIFF_POS, f + FDIFF_VEL, f + FDIFF_ACC,
            ENGINE_STATE_STREAMING, 0, NAN);
-}
-
-/* 1 if further steps cannot change anything until new input arrives. */
-int play_stalled(const engine_t *e)
-{
-    const qent_t *h = e->queue.len ? &e->queue.ent[e->queue.head] : NULL; /* q_head, read only */
-
-    if (engine_silence_soon(e))
-        return 0; /* issue 26: a silent end may come without a push (silence.h) */
-    if (e->out.mode == OUT_HOLD) {
-        double target[AX], t0, gap;
-        return (!h || !h->first || !enough_ahead(e, h, NULL)) &&
-               !xfer_lead_target(e, target, &t0, &gap);
-    }
-    if (e->out.mode == OUT_STREAM && e->scale.on && at_rest(e) && !e->scale.stop_req &&
-        !e->scale.end_brake) {
-        double A, J, target = scale_target(e);
-        if (!(target > 0))
-            return 1;
-        scale_limits(e, &A, &J);
-        return ts_rate_max(scale_remaining(e, e->scale.s), A, J) < ts_dead_band(J, e->period_s);
-    }
-    return 0;
 }
 
 /* A pair stored (the widths the stepper's rows are loaded in: a load across
