@@ -49,13 +49,40 @@ double out_cspeed(const engine_t *e)
     return sqrt(v2);
 }
 
+/* Two doubles, for the stepper's rows (fdiff.h keeps them in pairs). */
+typedef double row2_t __attribute__((vector_size(16)));
+typedef long long bits2_t __attribute__((vector_size(16)));
+
+static inline row2_t row2_at(const double *p)
+{
+    row2_t v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+
+/* f (its ten doubles, the zero too) holds a -0.0: the one double whose
+ * bits + 0.0 changes (a NaN a step makes is quiet, and stays as it is) */
+static inline int f_has_negz(const double *f)
+{
+    const row2_t z = {0.0, 0.0};
+    bits2_t x = {0, 0};
+#pragma GCC unroll 5
+    for (int i = 0; i < 3 * FDIFF_AXES + 1; i += 2) {
+        row2_t r = row2_at(f + i);
+        x |= (bits2_t)(r + z) ^ (bits2_t)r;
+    }
+    return (x[0] | x[1]) != 0;
+}
+
 /* Seed the stepper at tick n (relative time tau in [cur_t0, cur_t1)) for
  * seg, cur's segment or the queue slot it was just copied from. */
-static void seed_at(engine_t *e, int64_t n, const fdiff_seg_t *seg)
+static inline __attribute__((always_inline)) void seed_at(engine_t *e, int64_t n,
+                                                          const fdiff_seg_t *seg)
 {
     double tau = tau_of(e, n);
     double u0 = (tau - e->out.cur_t0) / seg->dur_s;
     fdiff_seed(&e->out.fd, seg, u0, e->period_s / seg->dur_s);
+    e->out.f_negz = f_has_negz(e->out.fd.f);
 }
 
 /* Seed cur at tick n (relative time tau in [cur_t0, cur_t1)). */
@@ -249,7 +276,7 @@ static inline void fast_bound(engine_t *e)
     kept = e->out.seg_last < e->out.plain_last ? e->out.seg_last : e->out.plain_last;
     last = n + (int64_t)(FDIFF_RESEED_STEPS - 1 - j);
     e->out.kept_last = kept;
-    e->out.fast_last = e->out.plain_check ? INT64_MIN : kept < last ? kept : last;
+    e->out.fast_last = e->out.plain_check || e->out.f_negz ? INT64_MIN : kept < last ? kept : last;
 }
 
 /* x is exactly 1.0 (is_exactly(x, 1.0)): its bits are 1.0's, the only
@@ -552,16 +579,6 @@ static int plain_sp(const engine_t *e)
 
 static void fill_sp_flags(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
 
-/* Two doubles, for the stepper's rows (fdiff.h keeps them in pairs). */
-typedef double row2_t __attribute__((vector_size(16)));
-
-static inline row2_t row2_at(const double *p)
-{
-    row2_t v;
-    memcpy(&v, p, sizeof v);
-    return v;
-}
-
 /* The setpoint's pos_m, vel_m_s and acc_m_s2, one run of nine doubles: the
  * stepper's values as its row f holds them. */
 _Static_assert(offsetof(engine_setpoint_t, vel_m_s) ==
@@ -693,7 +710,9 @@ static inline void row2_put(double *p, row2_t v)
  * (step_kept, unit_step, fdiff_step) and fill_sp (fill_plain) make of it,
  * in one run: fdiff_step's additions, lane by lane, on the rows loaded as
  * the aligned pairs they are stored in (p2's z with v2's x as a pair too),
- * and the setpoint's pairs f's sums (+ 0.0 as put_sp adds).  The setpoint
+ * and the setpoint's pairs f's sums (put_sp's + 0.0 changes none of them:
+ * fast_last keeps a stepper seeded with a -0.0 in f off this path, and a
+ * step makes none in f then, engine_out_t f_negz).  The setpoint
  * is stored once f is, before d2 and d3 are loaded: for all the compiler
  * knows sp may alias the engine, so the loads stay after the stores and f's
  * sums need no register past them (sp never points into the engine, opaque
@@ -702,7 +721,6 @@ static inline void row2_put(double *p, row2_t v)
 static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
     fdiff_t *fd = &e->out.fd;
-    const row2_t z = {0.0, 0.0};
     int64_t n = e->out.n + 1;
     double t = e->out.origin_t + tau_of(e, n);
     uint32_t cycle = e->out.cycle + 1, track = e->out.track;
@@ -726,12 +744,12 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
 
     /* (the track first, the cycle last: not merged into one 8-byte store,
      * which the compiler would build in a vector register) */
-    row2_t r[4] = {f0 + z, f2 + z, f4 + z, f6 + z};
+    row2_t r[4] = {f0, f2, f4, f6};
     sp->track = track;
     sp->now_ns = now_ns;
     sp->t_s = t;
     memcpy((char *)sp + offsetof(engine_setpoint_t, pos_m), r, sizeof r);
-    sp->acc_m_s2[2] = f8[0] + 0.0;
+    sp->acc_m_s2[2] = f8[0];
     sp->state = ENGINE_STATE_STREAMING;
     sp->flags = 0;
     sp->age_s = NAN;
