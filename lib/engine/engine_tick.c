@@ -392,6 +392,22 @@ static inline int plain_key(const engine_t *e)
            is_one_bits(e->scale.override);
 }
 
+/* plain_key, and nothing pushed since the last tick (lag.pending,
+ * sil.fresh): a kept step engine_tick makes without tick_steps' notes.  The
+ * differences or'ed, one test and one branch (each field's own would be a
+ * load, a test and a branch). */
+static inline int plain_key_quiet(const engine_t *e)
+{
+    uint64_t b;
+    memcpy(&b, &e->scale.override, sizeof b);
+    uint64_t x = (uint64_t)(e->out.plain_qlen ^ e->queue.len) |
+                 (uint64_t)(e->out.plain_seen ^ e->lag.seen_ns) |
+                 (b ^ UINT64_C(0x3ff0000000000000)); /* is_one_bits */
+    unsigned y = (unsigned)(e->out.mode ^ OUT_STREAM) | (unsigned)e->scale.stop_req |
+                 (unsigned)e->clk.on | (unsigned)e->lag.pending | (unsigned)e->sil.fresh;
+    return (x | y) == 0;
+}
+
 /* The decision plain_window kept still holds for the step from tick n. */
 static inline int plain_holds(const engine_t *e)
 {
@@ -811,7 +827,7 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
         __builtin_expect((uint64_t)(now_ns - e->out.last_now) - (uint64_t)e->period_lo <
                              (uint64_t)e->cfg.period_ns,
                          1) &&
-        plain_key(e) && !(e->lag.pending | e->sil.fresh)) {
+        plain_key_quiet(e)) {
         plain_tick(e, now_ns, sp);
         return 0;
     }
@@ -826,7 +842,7 @@ __attribute__((noinline)) static int tick_other(engine_t *e, int64_t now_ns, eng
     /* A kept step inside its segment (kept_last) that plain_tick does not
      * make (fast_last): a re-seed, or the test hook's; as engine_tick's */
     if (e->out.n < e->out.kept_last && (uint64_t)d - (uint64_t)e->period_lo < (uint64_t)p &&
-        plain_key(e) && !(e->lag.pending | e->sil.fresh)) {
+        plain_key_quiet(e)) {
         kept_tick(e, now_ns, sp);
         return 0;
     }
