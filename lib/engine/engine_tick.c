@@ -885,8 +885,15 @@ static inline int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setp
 
     e->out.have_now = 1;
     e->out.last_now = now_ns;
-    engine_lag_note(e, now_ns);     /* issue 26: the sender's time (catchup.h) */
-    engine_silence_tick(e, now_ns); /* issue 26: a silent end (silence.h) */
+    /* issue 26: the sender's time (catchup.h), and a silent end
+     * (silence.h); not called where they would answer at once: lag_note
+     * with the same input trajectory and no push pending, silence_tick with
+     * no push since and no silence pending (engine_silence_pending's first
+     * tests) */
+    if (e->lag.traj != e->solve.traj || e->lag.pending)
+        engine_lag_note(e, now_ns);
+    if (e->sil.fresh || (e->sil.arrived && (e->in.open || accept_pending(&e->in.policy))))
+        (void)engine_silence_tick(e, now_ns);
     for (i = 0; i < k; i++) {
         if (e->clk.on) /* the play time of each step, the last one's given */
             e->clk.play_ns = e->clk.now_ns - e->clk.delay_ns -
