@@ -216,10 +216,12 @@ typedef struct {
      * (nor checked by the test hook) and follow a plain setpoint (on_fd, no
      * underrun, last_plain: fill_sp_flags closes it): plain_tick */
     int64_t plain_last, seg_last, kept_last, fast_last;
-    /* the stepper's f held a -0.0 when it was seeded (seed_at): plain_tick,
-     * which stores f's sums without put_sp's + 0.0, is not taken (fast_last)
-     * until the next seed.  A step adds d1 to f, and a sum is -0.0 only
-     * where both terms are: a seed with none keeps none */
+    /* the stepper's f held a -0.0 at the last plain setpoint (fill_plain,
+     * made at every seed and re-seed of a kept or plain step): plain_tick,
+     * which stores f's sums without put_sp's + 0.0, is not taken (fill_plain
+     * closes fast_last, fast_bound keeps it closed) until one without.  A
+     * step adds d1 to f, and a sum is -0.0 only where both terms are: an f
+     * with none keeps none */
     int f_negz;
     size_t plain_qlen;                /* key: queue.len then */
     int64_t plain_seen;               /* key: lag.seen_ns then (a push since: a new sample) */

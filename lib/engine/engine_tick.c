@@ -60,29 +60,20 @@ static inline row2_t row2_at(const double *p)
     return v;
 }
 
-/* f (its ten doubles, the zero too) holds a -0.0: the one double whose
- * bits + 0.0 changes (a NaN a step makes is quiet, and stays as it is) */
-static inline int f_has_negz(const double *f)
+/* A pair stored (the widths the stepper's rows are loaded in: a load across
+ * two stores waits for them to reach the cache). */
+static inline void row2_put(double *p, row2_t v)
 {
-    const row2_t z = {0.0, 0.0};
-    bits2_t x = {0, 0};
-#pragma GCC unroll 5
-    for (int i = 0; i < 3 * FDIFF_AXES + 1; i += 2) {
-        row2_t r = row2_at(f + i);
-        x |= (bits2_t)(r + z) ^ (bits2_t)r;
-    }
-    return (x[0] | x[1]) != 0;
+    memcpy(p, &v, sizeof v);
 }
 
 /* Seed the stepper at tick n (relative time tau in [cur_t0, cur_t1)) for
  * seg, cur's segment or the queue slot it was just copied from. */
-static inline __attribute__((always_inline)) void seed_at(engine_t *e, int64_t n,
-                                                          const fdiff_seg_t *seg)
+static void seed_at(engine_t *e, int64_t n, const fdiff_seg_t *seg)
 {
     double tau = tau_of(e, n);
     double u0 = (tau - e->out.cur_t0) / seg->dur_s;
     fdiff_seed(&e->out.fd, seg, u0, e->period_s / seg->dur_s);
-    e->out.f_negz = f_has_negz(e->out.fd.f);
 }
 
 /* Seed cur at tick n (relative time tau in [cur_t0, cur_t1)). */
@@ -612,20 +603,36 @@ _Static_assert(offsetof(engine_setpoint_t, vel_m_s) ==
  * (the tick's counter loaded with the track as one 8-byte pair), is not
  * forwarded from the store buffer and waits for the stores to reach the
  * cache.  The stepper's values are read as the aligned pairs it stores
- * (+ 0.0 as put_sp adds). */
+ * (+ 0.0 as put_sp adds), and whether one of them is -0.0 noted (f_negz)
+ * from the same sums. */
 static inline void fill_plain(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
     const double *f = e->out.fd.f;
     const row2_t z = {0.0, 0.0};
-    row2_t r[4] = {row2_at(f) + z, row2_at(f + 2) + z, row2_at(f + 4) + z, row2_at(f + 6) + z};
-    double t = e->out.t, az = row2_at(f + 8)[0] + 0.0;
+    bits2_t b[5];
+    memcpy(b, f, sizeof b);
+    row2_t r0 = (row2_t)b[0] + z, r2 = (row2_t)b[1] + z, r4 = (row2_t)b[2] + z,
+           r6 = (row2_t)b[3] + z, r8 = (row2_t)b[4] + z;
+    double t = e->out.t;
     uint32_t cycle = e->out.cycle, track = e->out.track;
+    /* f holds a -0.0 (f_negz): the one double whose bits + 0.0 changes (a
+     * NaN a step makes is quiet, and stays as it is) */
+    bits2_t nz = ((bits2_t)r0 ^ b[0]) | ((bits2_t)r2 ^ b[1]) | ((bits2_t)r4 ^ b[2]) |
+                 ((bits2_t)r6 ^ b[3]) | ((bits2_t)r8 ^ b[4]);
+    int negz = (nz[0] | nz[1]) != 0;
 
-    e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
+    e->out.f_negz = negz;
+    if (negz)
+        e->out.fast_last = INT64_MIN; /* not plain_tick's until a seed without */
+    e->out.last_plain = 1;            /* last_sp is not written: last_setpoint */
     sp->now_ns = now_ns;
     sp->t_s = t;
-    memcpy((char *)sp + offsetof(engine_setpoint_t, pos_m), r, sizeof r);
-    sp->acc_m_s2[2] = az;
+    char *run = (char *)sp + offsetof(engine_setpoint_t, pos_m);
+    memcpy(run, &r0, sizeof r0);
+    memcpy(run + 2 * sizeof(double), &r2, sizeof r2);
+    memcpy(run + 4 * sizeof(double), &r4, sizeof r4);
+    memcpy(run + 6 * sizeof(double), &r6, sizeof r6);
+    sp->acc_m_s2[2] = r8[0];
     sp->state = ENGINE_STATE_STREAMING;
     sp->flags = 0;
     sp->cycle = cycle;
@@ -711,13 +718,6 @@ static void last_setpoint(const engine_t *e, engine_setpoint_t *sp)
     const double *f = e->out.fd.f;
     put_sp(e, sp, e->out.last_now, f + FDIFF_POS, f + FDIFF_VEL, f + FDIFF_ACC,
            ENGINE_STATE_STREAMING, 0, NAN);
-}
-
-/* A pair stored (the widths the stepper's rows are loaded in: a load across
- * two stores waits for them to reach the cache). */
-static inline void row2_put(double *p, row2_t v)
-{
-    memcpy(p, &v, sizeof v);
 }
 
 /*
