@@ -375,34 +375,31 @@ static void plain_window(engine_t *e)
 }
 
 /* The key of the decision plain_window kept: the state a call between
- * ticks may change it by is as it was then (see there). */
-static inline int plain_key(const engine_t *e)
-{
-    return e->out.plain_qlen == e->queue.len && e->out.plain_seen == e->lag.seen_ns &&
-           e->out.mode == OUT_STREAM && !e->scale.stop_req && !e->clk.on &&
-           is_one_bits(e->scale.override);
-}
-
-/* plain_key, and nothing pushed since the last tick (lag.pending,
- * sil.fresh): a kept step engine_tick makes without tick_steps' notes.  The
- * differences or'ed, one test and one branch (each field's own would be a
- * load, a test and a branch). */
-static inline int plain_key_quiet(const engine_t *e)
+ * ticks may change it by is as it was then (see there), where this is 0.
+ * The differences or'ed, one test and one branch for them all (each
+ * field's own would be a load, a test and a branch), more's flags too. */
+static inline uint64_t plain_key_diff(const engine_t *e, unsigned more)
 {
     uint64_t b;
     memcpy(&b, &e->scale.override, sizeof b);
-    uint64_t x = (uint64_t)(e->out.plain_qlen ^ e->queue.len) |
-                 (uint64_t)(e->out.plain_seen ^ e->lag.seen_ns) |
-                 (b ^ UINT64_C(0x3ff0000000000000)); /* is_one_bits */
-    unsigned y = (unsigned)(e->out.mode ^ OUT_STREAM) | (unsigned)e->scale.stop_req |
-                 (unsigned)e->clk.on | (unsigned)e->lag.pending | (unsigned)e->sil.fresh;
-    return (x | y) == 0;
+    return (uint64_t)(e->out.plain_qlen ^ e->queue.len) |
+           (uint64_t)(e->out.plain_seen ^ e->lag.seen_ns) |
+           (b ^ UINT64_C(0x3ff0000000000000)) /* is_one_bits */ |
+           ((unsigned)(e->out.mode ^ OUT_STREAM) | (unsigned)e->scale.stop_req |
+            (unsigned)e->clk.on | more);
+}
+
+/* The key holds, and nothing was pushed since the last tick (lag.pending,
+ * sil.fresh): a kept step engine_tick makes without tick_steps' notes. */
+static inline int plain_key_quiet(const engine_t *e)
+{
+    return plain_key_diff(e, (unsigned)e->lag.pending | (unsigned)e->sil.fresh) == 0;
 }
 
 /* The decision plain_window kept still holds for the step from tick n. */
 static inline int plain_holds(const engine_t *e)
 {
-    return e->out.n < e->out.plain_last && plain_key(e);
+    return e->out.n < e->out.plain_last && plain_key_diff(e, 0) == 0;
 }
 
 /* Test hook: the decision made again on a kept tick, its side effects
@@ -580,8 +577,10 @@ static void put_sp(const engine_t *e, engine_setpoint_t *sp, int64_t now_ns, con
  * it is in the stepper and the output's counters (last_setpoint). */
 static int plain_sp(const engine_t *e)
 {
-    return e->out.on_fd && e->out.mode == OUT_STREAM && !e->out.flags_pending && !e->out.underrun &&
-           !e->scale.on && !e->clk.on && e->out.have_pos;
+    /* (the flags that must be clear or'ed: one branch for them) */
+    return e->out.on_fd && e->out.have_pos &&
+           ((unsigned)(e->out.mode ^ OUT_STREAM) | e->out.flags_pending |
+            (unsigned)e->out.underrun | (unsigned)e->scale.on | (unsigned)e->clk.on) == 0;
 }
 
 static void fill_sp_flags(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
