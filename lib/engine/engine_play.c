@@ -147,6 +147,37 @@ void play_find_avail(engine_t *e)
     e->scale.avail_ucum = e->out.cur.ucum;
     e->scale.avail_closed = 0;
     e->scale.avail_rest = 0;
+    /* The loop below stops at the first entry of another trajectory or at
+     * the first END.  The queue holds the trajectories in order (join.c
+     * traj_past): with no END queued, or one only, at the queue's end, the
+     * output's trajectory is a run from the head found by a binary search
+     * (an upload of thousands of segments: not looked through one by one),
+     * and the loop's answer is its last entry's (and, that one an END, the
+     * segment's before it). */
+    size_t len = e->queue.len;
+    if (len && queue_at(e, 0)->traj == e->out.traj &&
+        (e->queue.ends == 0 || (e->queue.ends == 1 && queue_at(e, len - 1)->kind == QE_END))) {
+        size_t lo = 0, hi = len; /* the first index past the output's trajectory */
+        while (lo < hi) {
+            size_t mid = lo + (hi - lo) / 2;
+            if (queue_at(e, mid)->traj > e->out.traj)
+                hi = mid;
+            else
+                lo = mid + 1;
+        }
+        const qent_t *q = queue_at(e, lo - 1), *s = q;
+        e->scale.avail_t = q->t1_s;
+        if (q->kind == QE_END) {
+            e->scale.avail_closed = 1;
+            e->scale.avail_rest = q->seg.c[0][1] <= ENGINE_REST_SPEED_M_S;
+            s = lo >= 2 ? queue_at(e, lo - 2) : NULL; /* (a SEG: one END only) */
+        }
+        if (s) {
+            e->scale.avail_kcum = s->kcum;
+            e->scale.avail_ucum = s->ucum;
+        }
+        return;
+    }
     for (size_t i = 0; i < e->queue.len; i++) {
         const qent_t *q = queue_at(e, i);
         if (q->traj != e->out.traj)
