@@ -63,7 +63,9 @@ static void delay_measured(const engine_t *e, engine_delay_t *d)
 }
 
 /* Time of the newest waypoint received for the current trajectory (as
- * enough_ahead in engine_tick.c did before issue 26): the newest node, or one the acceptance policy holds. */
+ * enough_ahead in engine_tick.c, now play_enough_ahead in engine_play.c,
+ * did before issue 26): the newest node, or one the acceptance policy
+ * holds. */
 static double newest(const engine_t *e)
 {
     double t = e->solve.nodes > 0 ? nt(e, e->solve.nodes - 1) : -INFINITY;

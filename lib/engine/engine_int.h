@@ -216,6 +216,13 @@ typedef struct {
      * (nor checked by the test hook) and follow a plain setpoint (on_fd, no
      * underrun, last_plain: fill_sp_flags closes it): plain_tick */
     int64_t plain_last, seg_last, kept_last, fast_last;
+    /* the stepper's f held a -0.0 at the last plain setpoint (fill_plain,
+     * made at every seed and re-seed of a kept or plain step): plain_tick,
+     * which stores f's sums without put_sp's + 0.0, is not taken (fill_plain
+     * closes fast_last, fast_bound keeps it closed) until one without.  A
+     * step adds d1 to f, and a sum is -0.0 only where both terms are: an f
+     * with none keeps none */
+    int f_negz;
     size_t plain_qlen;                /* key: queue.len then */
     int64_t plain_seen;               /* key: lag.seen_ns then (a push since: a new sample) */
     int plain_check;                  /* test hook (engine_plain_check) */
@@ -473,6 +480,13 @@ uint64_t queue_waypoints(const engine_t *e, size_t i0, size_t i1);
 engine_state_t play_state(const engine_t *e);
 /* 1 if further steps cannot change anything until new input arrives. */
 int play_stalled(const engine_t *e);
+/* The output may start (or resume after an underrun) on the queued segment
+ * h: the lookahead is buffered beyond it, or its trajectory is closed
+ * (engine_play.c; *lag, may be NULL: engine_delay_ready's). */
+int play_enough_ahead(const engine_t *e, const qent_t *h, double *lag);
+/* start_slack auto: an output stopped by an underrun at s stays stopped
+ * (engine_play.c). */
+int play_rebuffering(const engine_t *e, double s);
 void play_count_underrun(engine_t *e);
 void play_underrun_counted(engine_t *e);
 void play_seed_cur(engine_t *e, int64_t n);

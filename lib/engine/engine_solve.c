@@ -726,7 +726,7 @@ static void measure_input(engine_t *e, uint64_t j)
     }
     if (j > e->la_steady) {
         /* how far ahead of the output this node must have been sent to be
-         * built on time (see enough_ahead) */
+         * built on time (see play_enough_ahead) */
         double w = nt(e, j) - nt(e, j - e->la_steady - 1);
         e->solve.span_max = fmax(w, e->solve.span_max * decay);
         if (w >= e->solve.span_max && (e->slack_auto || e->cfg.delay_s > 0))

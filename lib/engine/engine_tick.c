@@ -2,9 +2,10 @@
  * engine_tick.c - the play-out stage: engine_tick.  The output's state
  * machine walks the queued cubics (engine_solve.c) with the forward-
  * difference stepper (fdiff.h) on the period grid: it waits for enough
- * lookahead (start_slack auto learns how much), starts a trajectory
- * directly or through a transfer (engine_xfer.c; the start itself, the ends
- * at rest and the underruns counted: engine_play.c), steps on the unit grid
+ * lookahead (start_slack auto learns how much; the tests, and the output's
+ * state and stall, in engine_play.c), starts a trajectory directly or
+ * through a transfer (engine_xfer.c; the start itself, the ends at rest and
+ * the underruns counted: engine_play.c), steps on the unit grid
  * while nothing asks for another rate (else the time scaling,
  * engine_scale.c) and fills the setpoint, one path for every tick: the rate
  * decision of a plain step is kept for the ticks it provably holds
@@ -26,67 +27,6 @@
 #include "silence.h"
 #include "timescale.h"
 
-/* The newest interval of the input (0: fewer than two nodes). */
-static double last_interval(const engine_t *e)
-{
-    return e->solve.nodes >= 2 ? nt(e, e->solve.nodes - 1) - nt(e, e->solve.nodes - 2) : 0.0;
-}
-
-/* start_slack auto: the curve kept ahead of the output beyond what the
- * solver needs, track seconds: twice a stop from full rate at the input's
- * top speed (the curve may be faster than its chords), a few ticks, and the
- * newest interval once per underrun seen. */
-static double brake_s(const engine_t *e)
-{
-    double v = e->solve.vmax_in > ENGINE_SCALE_V_FLOOR_M_S ? e->solve.vmax_in
-                                                           : ENGINE_SCALE_V_FLOOR_M_S;
-    return 2.0 * ts_stop_dist(1.0, 0.0, e->cfg.scale_accel_m_s2 / v, e->cfg.scale_jerk_m_s3 / v) +
-           (TS_MARGIN_TICKS + 2) * e->period_s + e->slack_learn * last_interval(e);
-}
-
-/* start_slack auto: an output stopped by an underrun at s stays stopped
- * until the curve surely built ahead of it is longer than brake_s (or the
- * buffer holds the most slack, or the input is closed).  Not span_max, as
- * at a start: after a long hole in the input that would hold it for as long
- * as the hole. */
-static int rebuffering(const engine_t *e, double s)
-{
-    uint64_t in = e->solve.nodes + (e->smooth ? lsq_smooth_pending(&e->solve.sm) : 0) +
-                  accept_pending(&e->in.policy);
-
-    if (e->scale.avail_closed || e->out.cur.kind != QE_SEG ||
-        in >= e->out.cur.node + 2 + e->lookahead + e->slack_more)
-        return 0;
-    /* the curve is built at least up to the node la_steady + 1 before the
-     * newest one, whatever the fragment phase */
-    uint64_t back = (uint64_t)e->la_steady + 1;
-    if (e->solve.nodes <= back)
-        return 1;
-    return !(nt(e, e->solve.nodes - 1 - back) - (e->out.origin_t + s) >=
-             brake_s(e) - e->slack_learn * last_interval(e));
-}
-
-/*
- * The output may start (or resume after an underrun) on the segment h only
- * once the lookahead is buffered beyond it, or its trajectory is closed.
- */
-static int enough_ahead(const engine_t *e, const qent_t *h, double *lag)
-{
-    /* waypoints received: nodes, plus those the smoother still holds (SMOOTH) */
-    /* and those the acceptance policy still judges: their verdicts come
-     * within the start slack, so they count as lookahead (accept.h) */
-    uint64_t in = e->solve.nodes + (e->smooth ? lsq_smooth_pending(&e->solve.sm) : 0) +
-                  accept_pending(&e->in.policy);
-
-    if (e->queue.ends > 0 || h->kind != QE_SEG)
-        return 1;
-    if (in < h->node + 2 + e->lookahead + e->slack_learn)
-        return 0;
-    /* issue 26: start_slack auto, or delay_s: once the output will stand D
-     * behind the newest waypoint after its ramp from rest (delay.h) */
-    return !(e->slack_auto || e->cfg.delay_s > 0) || engine_delay_ready(e, lag);
-}
-
 /* out_eval leaves the output in the stepper's rows (on_fd): copied here
  * for whoever writes them or holds (engine_out_t), with the curve's speed
  * as out_eval computed it every tick before. */
@@ -107,6 +47,24 @@ double out_cspeed(const engine_t *e)
     for (int k = 0; k < AX; k++) /* rate 1: the curve's own speed */
         v2 += e->out.fd.f[FDIFF_VEL + k] * e->out.fd.f[FDIFF_VEL + k];
     return sqrt(v2);
+}
+
+/* Two doubles, for the stepper's rows (fdiff.h keeps them in pairs). */
+typedef double row2_t __attribute__((vector_size(16)));
+typedef long long bits2_t __attribute__((vector_size(16)));
+
+static inline row2_t row2_at(const double *p)
+{
+    row2_t v;
+    memcpy(&v, p, sizeof v);
+    return v;
+}
+
+/* A pair stored (the widths the stepper's rows are loaded in: a load across
+ * two stores waits for them to reach the cache). */
+static inline void row2_put(double *p, row2_t v)
+{
+    memcpy(p, &v, sizeof v);
 }
 
 /* Seed the stepper at tick n (relative time tau in [cur_t0, cur_t1)) for
@@ -265,9 +223,9 @@ static int decide(engine_t *e, decision_t *d)
         return GO_CLOCKED;
     double target = scale_target(e);
     /* start_slack auto: an output stopped by an underrun resumes once it is
-     * as far behind the newest waypoint as at the start (enough_ahead) */
+     * as far behind the newest waypoint as at the start (play_enough_ahead) */
     if (e->slack_auto && e->out.underrun && e->out.mode == OUT_STREAM && !(e->scale.ts.rate > 0) &&
-        target > 0 && rebuffering(e, s))
+        target > 0 && play_rebuffering(e, s))
         return GO_REBUFFER;
     d->Rc = scale_ceil_room_gross(e, s, A, J) - res;
     double Rm = fmin(R, d->Rc);                      /* the speed cap ahead too */
@@ -309,7 +267,7 @@ static inline void fast_bound(engine_t *e)
     kept = e->out.seg_last < e->out.plain_last ? e->out.seg_last : e->out.plain_last;
     last = n + (int64_t)(FDIFF_RESEED_STEPS - 1 - j);
     e->out.kept_last = kept;
-    e->out.fast_last = e->out.plain_check ? INT64_MIN : kept < last ? kept : last;
+    e->out.fast_last = e->out.plain_check || e->out.f_negz ? INT64_MIN : kept < last ? kept : last;
 }
 
 /* x is exactly 1.0 (is_exactly(x, 1.0)): its bits are 1.0's, the only
@@ -417,18 +375,31 @@ static void plain_window(engine_t *e)
 }
 
 /* The key of the decision plain_window kept: the state a call between
- * ticks may change it by is as it was then (see there). */
-static inline int plain_key(const engine_t *e)
+ * ticks may change it by is as it was then (see there), where this is 0.
+ * The differences or'ed, one test and one branch for them all (each
+ * field's own would be a load, a test and a branch), more's flags too. */
+static inline uint64_t plain_key_diff(const engine_t *e, unsigned more)
 {
-    return e->out.plain_qlen == e->queue.len && e->out.plain_seen == e->lag.seen_ns &&
-           e->out.mode == OUT_STREAM && !e->scale.stop_req && !e->clk.on &&
-           is_one_bits(e->scale.override);
+    uint64_t b;
+    memcpy(&b, &e->scale.override, sizeof b);
+    return (uint64_t)(e->out.plain_qlen ^ e->queue.len) |
+           (uint64_t)(e->out.plain_seen ^ e->lag.seen_ns) |
+           (b ^ UINT64_C(0x3ff0000000000000)) /* is_one_bits */ |
+           ((unsigned)(e->out.mode ^ OUT_STREAM) | (unsigned)e->scale.stop_req |
+            (unsigned)e->clk.on | more);
+}
+
+/* The key holds, and nothing was pushed since the last tick (lag.pending,
+ * sil.fresh): a kept step engine_tick makes without tick_steps' notes. */
+static inline int plain_key_quiet(const engine_t *e)
+{
+    return plain_key_diff(e, (unsigned)e->lag.pending | (unsigned)e->sil.fresh) == 0;
 }
 
 /* The decision plain_window kept still holds for the step from tick n. */
 static inline int plain_holds(const engine_t *e)
 {
-    return e->out.n < e->out.plain_last && plain_key(e);
+    return e->out.n < e->out.plain_last && plain_key_diff(e, 0) == 0;
 }
 
 /* Test hook: the decision made again on a kept tick, its side effects
@@ -521,8 +492,9 @@ static void step_once(engine_t *e)
     e->out.plain_last = e->out.kept_last = e->out.fast_last = INT64_MIN;
     if (e->out.mode == OUT_HOLD) {
         qent_t *h = q_head(e);
-        double lag = NAN; /* the start's ramp, if enough_ahead simulated it */
-        if (!h || !h->first || !enough_ahead(e, h, &lag) || (!e->out.have_pos && e->out.need_pos)) {
+        double lag = NAN; /* the start's ramp, if play_enough_ahead simulated it */
+        if (!h || !h->first || !play_enough_ahead(e, h, &lag) ||
+            (!e->out.have_pos && e->out.need_pos)) {
             double target[AX], t0, gap;
             if (xfer_lead_target(e, target, &t0, &gap)) {
                 /* issue 26: on to its start while its output is not due */
@@ -582,17 +554,6 @@ static void step_once(engine_t *e)
     plain_window(e);
 }
 
-engine_state_t play_state(const engine_t *e)
-{
-    if (e->out.mode == OUT_STREAM)
-        return e->out.underrun ? ENGINE_STATE_UNDERRUN : ENGINE_STATE_STREAMING;
-    if (e->out.mode == OUT_XFER)
-        return ENGINE_STATE_STREAMING;
-    if (e->in.open || e->queue.len || accept_pending(&e->in.policy))
-        return ENGINE_STATE_WAITING;
-    return e->out.finished ? ENGINE_STATE_FINISHED : ENGINE_STATE_WAITING;
-}
-
 /* The setpoint's fields, as fill_sp and last_setpoint give them. */
 static void put_sp(const engine_t *e, engine_setpoint_t *sp, int64_t now_ns, const double *pos,
                    const double *vel, const double *acc, engine_state_t s, uint32_t flags,
@@ -616,21 +577,13 @@ static void put_sp(const engine_t *e, engine_setpoint_t *sp, int64_t now_ns, con
  * it is in the stepper and the output's counters (last_setpoint). */
 static int plain_sp(const engine_t *e)
 {
-    return e->out.on_fd && e->out.mode == OUT_STREAM && !e->out.flags_pending && !e->out.underrun &&
-           !e->scale.on && !e->clk.on && e->out.have_pos;
+    /* (the flags that must be clear or'ed: one branch for them) */
+    return e->out.on_fd && e->out.have_pos &&
+           ((unsigned)(e->out.mode ^ OUT_STREAM) | e->out.flags_pending |
+            (unsigned)e->out.underrun | (unsigned)e->scale.on | (unsigned)e->clk.on) == 0;
 }
 
 static void fill_sp_flags(engine_t *e, int64_t now_ns, engine_setpoint_t *sp);
-
-/* Two doubles, for the stepper's rows (fdiff.h keeps them in pairs). */
-typedef double row2_t __attribute__((vector_size(16)));
-
-static inline row2_t row2_at(const double *p)
-{
-    row2_t v;
-    memcpy(&v, p, sizeof v);
-    return v;
-}
 
 /* The setpoint's pos_m, vel_m_s and acc_m_s2, one run of nine doubles: the
  * stepper's values as its row f holds them. */
@@ -649,20 +602,36 @@ _Static_assert(offsetof(engine_setpoint_t, vel_m_s) ==
  * (the tick's counter loaded with the track as one 8-byte pair), is not
  * forwarded from the store buffer and waits for the stores to reach the
  * cache.  The stepper's values are read as the aligned pairs it stores
- * (+ 0.0 as put_sp adds). */
+ * (+ 0.0 as put_sp adds), and whether one of them is -0.0 noted (f_negz)
+ * from the same sums. */
 static inline void fill_plain(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
     const double *f = e->out.fd.f;
     const row2_t z = {0.0, 0.0};
-    row2_t r[4] = {row2_at(f) + z, row2_at(f + 2) + z, row2_at(f + 4) + z, row2_at(f + 6) + z};
-    double t = e->out.t, az = row2_at(f + 8)[0] + 0.0;
+    bits2_t b[5];
+    memcpy(b, f, sizeof b);
+    row2_t r0 = (row2_t)b[0] + z, r2 = (row2_t)b[1] + z, r4 = (row2_t)b[2] + z,
+           r6 = (row2_t)b[3] + z, r8 = (row2_t)b[4] + z;
+    double t = e->out.t;
     uint32_t cycle = e->out.cycle, track = e->out.track;
+    /* f holds a -0.0 (f_negz): the one double whose bits + 0.0 changes (a
+     * NaN a step makes is quiet, and stays as it is) */
+    bits2_t nz = ((bits2_t)r0 ^ b[0]) | ((bits2_t)r2 ^ b[1]) | ((bits2_t)r4 ^ b[2]) |
+                 ((bits2_t)r6 ^ b[3]) | ((bits2_t)r8 ^ b[4]);
+    int negz = (nz[0] | nz[1]) != 0;
 
-    e->out.last_plain = 1; /* last_sp is not written: last_setpoint */
+    e->out.f_negz = negz;
+    if (negz)
+        e->out.fast_last = INT64_MIN; /* not plain_tick's until a seed without */
+    e->out.last_plain = 1;            /* last_sp is not written: last_setpoint */
     sp->now_ns = now_ns;
     sp->t_s = t;
-    memcpy((char *)sp + offsetof(engine_setpoint_t, pos_m), r, sizeof r);
-    sp->acc_m_s2[2] = az;
+    char *run = (char *)sp + offsetof(engine_setpoint_t, pos_m);
+    memcpy(run, &r0, sizeof r0);
+    memcpy(run + 2 * sizeof(double), &r2, sizeof r2);
+    memcpy(run + 4 * sizeof(double), &r4, sizeof r4);
+    memcpy(run + 6 * sizeof(double), &r6, sizeof r6);
+    sp->acc_m_s2[2] = r8[0];
     sp->state = ENGINE_STATE_STREAMING;
     sp->flags = 0;
     sp->cycle = cycle;
@@ -750,43 +719,15 @@ static void last_setpoint(const engine_t *e, engine_setpoint_t *sp)
            ENGINE_STATE_STREAMING, 0, NAN);
 }
 
-/* 1 if further steps cannot change anything until new input arrives. */
-int play_stalled(const engine_t *e)
-{
-    const qent_t *h = e->queue.len ? &e->queue.ent[e->queue.head] : NULL; /* q_head, read only */
-
-    if (engine_silence_soon(e))
-        return 0; /* issue 26: a silent end may come without a push (silence.h) */
-    if (e->out.mode == OUT_HOLD) {
-        double target[AX], t0, gap;
-        return (!h || !h->first || !enough_ahead(e, h, NULL)) &&
-               !xfer_lead_target(e, target, &t0, &gap);
-    }
-    if (e->out.mode == OUT_STREAM && e->scale.on && at_rest(e) && !e->scale.stop_req &&
-        !e->scale.end_brake) {
-        double A, J, target = scale_target(e);
-        if (!(target > 0))
-            return 1;
-        scale_limits(e, &A, &J);
-        return ts_rate_max(scale_remaining(e, e->scale.s), A, J) < ts_dead_band(J, e->period_s);
-    }
-    return 0;
-}
-
-/* A pair stored (the widths the stepper's rows are loaded in: a load across
- * two stores waits for them to reach the cache). */
-static inline void row2_put(double *p, row2_t v)
-{
-    memcpy(p, &v, sizeof v);
-}
-
 /*
  * A kept step inside its segment that is no re-seed (fast_last), one period
  * on with nothing pushed since, and its plain setpoint: what step_once
  * (step_kept, unit_step, fdiff_step) and fill_sp (fill_plain) make of it,
  * in one run: fdiff_step's additions, lane by lane, on the rows loaded as
  * the aligned pairs they are stored in (p2's z with v2's x as a pair too),
- * and the setpoint's pairs f's sums (+ 0.0 as put_sp adds).  The setpoint
+ * and the setpoint's pairs f's sums (put_sp's + 0.0 changes none of them:
+ * fast_last keeps a stepper seeded with a -0.0 in f off this path, and a
+ * step makes none in f then, engine_out_t f_negz).  The setpoint
  * is stored once f is, before d2 and d3 are loaded: for all the compiler
  * knows sp may alias the engine, so the loads stay after the stores and f's
  * sums need no register past them (sp never points into the engine, opaque
@@ -795,7 +736,6 @@ static inline void row2_put(double *p, row2_t v)
 static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
 {
     fdiff_t *fd = &e->out.fd;
-    const row2_t z = {0.0, 0.0};
     int64_t n = e->out.n + 1;
     double t = e->out.origin_t + tau_of(e, n);
     uint32_t cycle = e->out.cycle + 1, track = e->out.track;
@@ -819,12 +759,12 @@ static inline void plain_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp
 
     /* (the track first, the cycle last: not merged into one 8-byte store,
      * which the compiler would build in a vector register) */
-    row2_t r[4] = {f0 + z, f2 + z, f4 + z, f6 + z};
+    row2_t r[4] = {f0, f2, f4, f6};
     sp->track = track;
     sp->now_ns = now_ns;
     sp->t_s = t;
     memcpy((char *)sp + offsetof(engine_setpoint_t, pos_m), r, sizeof r);
-    sp->acc_m_s2[2] = f8[0] + 0.0;
+    sp->acc_m_s2[2] = f8[0];
     sp->state = ENGINE_STATE_STREAMING;
     sp->flags = 0;
     sp->age_s = NAN;
@@ -886,7 +826,7 @@ int engine_tick(engine_t *e, int64_t now_ns, engine_setpoint_t *sp)
         __builtin_expect((uint64_t)(now_ns - e->out.last_now) - (uint64_t)e->period_lo <
                              (uint64_t)e->cfg.period_ns,
                          1) &&
-        plain_key(e) && !(e->lag.pending | e->sil.fresh)) {
+        plain_key_quiet(e)) {
         plain_tick(e, now_ns, sp);
         return 0;
     }
@@ -901,7 +841,7 @@ __attribute__((noinline)) static int tick_other(engine_t *e, int64_t now_ns, eng
     /* A kept step inside its segment (kept_last) that plain_tick does not
      * make (fast_last): a re-seed, or the test hook's; as engine_tick's */
     if (e->out.n < e->out.kept_last && (uint64_t)d - (uint64_t)e->period_lo < (uint64_t)p &&
-        plain_key(e) && !(e->lag.pending | e->sil.fresh)) {
+        plain_key_quiet(e)) {
         kept_tick(e, now_ns, sp);
         return 0;
     }
@@ -944,8 +884,15 @@ static inline int tick_steps(engine_t *e, int64_t now_ns, int64_t k, engine_setp
 
     e->out.have_now = 1;
     e->out.last_now = now_ns;
-    engine_lag_note(e, now_ns);     /* issue 26: the sender's time (catchup.h) */
-    engine_silence_tick(e, now_ns); /* issue 26: a silent end (silence.h) */
+    /* issue 26: the sender's time (catchup.h), and a silent end
+     * (silence.h); not called where they would answer at once: lag_note
+     * with the same input trajectory and no push pending, silence_tick with
+     * no push since and no silence pending (engine_silence_pending's first
+     * tests) */
+    if (e->lag.traj != e->solve.traj || e->lag.pending)
+        engine_lag_note(e, now_ns);
+    if (e->sil.fresh || (e->sil.arrived && (e->in.open || accept_pending(&e->in.policy))))
+        (void)engine_silence_tick(e, now_ns);
     for (i = 0; i < k; i++) {
         if (e->clk.on) /* the play time of each step, the last one's given */
             e->clk.play_ns = e->clk.now_ns - e->clk.delay_ns -

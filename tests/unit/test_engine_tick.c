@@ -459,12 +459,66 @@ static void test_stop_after_landing(void **state)
             }
 }
 
+/* A stepper seeded with a -0.0 in f (engine_out_t f_negz): z's cubic of
+ * every queued segment made of -0.0s (the same curve: z stands at 0), so
+ * each seed puts -0.0 in z's position, velocity and acceleration and every
+ * step keeps it there (-0.0 + -0.0).  plain_tick stores f's sums without
+ * put_sp's + 0.0: such a stepper must not be its, and every setpoint's
+ * zeros stay positive (checked to fail with f_negz left out of fast_bound
+ * and fill_plain). */
+static void test_negative_zero_seed(void **state)
+{
+    (void)state;
+    for (int pi = 0; pi < 2; pi++) {
+        int64_t period_ns = pi ? 1000000 : 10000000;
+        engine_config_t c;
+        engine_config_default(&c);
+        c.period_ns = period_ns;
+        c.capacity = 1024;
+        c.max_accel_m_s2 = 0;
+        engine_t *e = engine_new(&c, NULL);
+        assert_non_null(e);
+        for (int i = 0; i < 200; i++) {
+            engine_waypoint_t w = {0};
+            w.t_s = 0.1 * i;
+            w.pos_m[0] = 0.5 * i;
+            w.pos_m[1] = 0.2 * i + 0.01 * (i % 3);
+            assert_true(engine_push(e, &w) >= 0);
+        }
+        assert_int_equal(engine_finish(e), 0);
+        unsigned long negz = 0;
+        for (size_t i = 0; i < e->queue.len; i++) {
+            qent_t *q = &e->queue.ent[(e->queue.head + i) % e->queue.cap];
+            if (q->kind != QE_SEG)
+                continue;
+            for (int k = 0; k < 4; k++) {
+                assert_false(q->seg.c[2][k] < 0.0 || q->seg.c[2][k] > 0.0); /* z at 0 */
+                q->seg.c[2][k] = -0.0;
+            }
+        }
+        engine_setpoint_t sp;
+        unsigned long plain = 0;
+        for (int64_t k = 0; k < 100000; k++) {
+            assert_int_equal(engine_tick(e, k * period_ns, &sp), 0);
+            negz += e->out.f_negz != 0;
+            plain += e->out.last_plain != 0;
+            assert_false(signbit(sp.pos_m[2]) || signbit(sp.vel_m_s[2]) || signbit(sp.acc_m_s2[2]));
+            if (sp.state == ENGINE_STATE_FINISHED)
+                break;
+        }
+        assert_int_equal(sp.state, ENGINE_STATE_FINISHED);
+        assert_true(negz > 100 && plain > 100); /* the case is made */
+        engine_free(e);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_plain_streams),    cmocka_unit_test(test_with_events),
-        cmocka_unit_test(test_calls_mid_window), cmocka_unit_test(test_reanchors_joined),
-        cmocka_unit_test(test_axis_limited),     cmocka_unit_test(test_stop_after_landing),
+        cmocka_unit_test(test_plain_streams),      cmocka_unit_test(test_with_events),
+        cmocka_unit_test(test_calls_mid_window),   cmocka_unit_test(test_reanchors_joined),
+        cmocka_unit_test(test_axis_limited),       cmocka_unit_test(test_stop_after_landing),
+        cmocka_unit_test(test_negative_zero_seed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
