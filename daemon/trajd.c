@@ -149,7 +149,23 @@ static void on_watchdog(loop_t *l, uint64_t exp, void *ctx)
 }
 
 /* Open cfg (replacing d->core if there is one, see core_open) and start its clock. */
-static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
+/* The output clock of d's core (core_start): at once for a reload (start_core's
+ * clock), last of all at the first start (run), as start-up work that grows with
+ * the objects (a line each) would pass its first deadlines.  On failure the core goes. */
+static int start_clock(trajd_t *d, char *why, size_t wl)
+{
+    int rc = core_start(d->core);
+    if (rc < 0) {
+        snprintf(why, wl, "output clock: %s", strerror(-rc));
+        core_close(d->core);
+        d->core = NULL;
+        if (d->ctl)
+            ctl_set_core(d->ctl, NULL);
+    }
+    return rc;
+}
+
+static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl, int clock)
 {
     char rtwhy[256];
     core_t *nc = NULL;
@@ -177,15 +193,8 @@ static int start_core(trajd_t *d, cfg_t *cfg, char *why, size_t wl)
      * the clock's phase (core_start): applied again only if [realtime] changed */
     if (!rt_same && rt_apply(&cfg->rt, rtwhy, sizeof rtwhy) < 0)
         log_msg(LOG_WARNING, "realtime settings not applied (running without them): %s", rtwhy);
-    rc = core_start(d->core);
-    if (rc < 0) {
-        snprintf(why, wl, "output clock: %s", strerror(-rc));
-        core_close(d->core);
-        d->core = NULL;
-        if (d->ctl)
-            ctl_set_core(d->ctl, NULL);
+    if (clock && (rc = start_clock(d, why, wl)) < 0)
         return rc;
-    }
     log_set_level(cfg->daemon.log_level);
     return 0;
 }
@@ -262,7 +271,7 @@ static int reload_swap(trajd_t *d, cfg_t *nc, char *err, size_t errlen)
      * If that fails, the old core reopens its transports and runs on (one
      * that does not reopen left closed, its outputs counted lost); the old
      * configuration opened from scratch is a last resort with no old core. */
-    if (start_core(d, nc, err, errlen) < 0) {
+    if (start_core(d, nc, err, errlen, 1) < 0) {
         char err2[1024];
         rc = -1;
         if (d->core)
@@ -276,7 +285,7 @@ static int reload_swap(trajd_t *d, cfg_t *nc, char *err, size_t errlen)
                     "reload refused (cannot open): %s; and the old configuration's "
                     "transports did not reopen: opening it from scratch",
                     err);
-            if (start_core(d, d->cfg, err2, sizeof err2) < 0) {
+            if (start_core(d, d->cfg, err2, sizeof err2, 1) < 0) {
                 log_msg(LOG_CRIT, "cannot reopen the old configuration either: %s", err2);
                 loop_stop(d->loop, EX_SOFTWARE);
                 return -1;
@@ -727,38 +736,6 @@ static int open_control(trajd_t *d)
 
 /* Start the core and the housekeeping timers, tell systemd and the waiting
  * parent, run until the stop policy ends the loop: the exit code. */
-/* What the first seconds of output are, per object: holding (state waiting,
- * no position before its first waypoint, or at rest at its initial_position)
- * until the lookahead is buffered. */
-static void log_first_seconds(const cfg_t *cfg)
-{
-    for (unsigned i = 0; i < cfg->nobj; i++) {
-        const cfg_obj_t *o = &cfg->obj[i];
-        const double *p = o->initial_position_m;
-        /* delay_s set: the lookahead is picked from the first waypoints
-         * (lib/engine/engine_input.c engine_pick), at most this one */
-        char n[96];
-        snprintf(n, sizeof n,
-                 o->engine.delay_s > 0
-                     ? "its lookahead is buffered (delay_s picks it: %u waypoints at most)"
-                     : "at least %u waypoints are buffered",
-                 engine_lookahead(&o->engine));
-        if (o->has_initial_position) {
-            log_msg(LOG_INFO,
-                    "object '%s': holds (state waiting) at rest at its initial_position %g,%g,%g "
-                    "until %s (the solver's lookahead and the "
-                    "start slack), then reaches the first by a transfer and streams",
-                    o->name, p[0], p[1], p[2], n);
-            continue;
-        }
-        log_msg(LOG_INFO,
-                "object '%s': holds (state waiting; no position, nan, before its first waypoint)"
-                " until %s (the solver's lookahead and the start slack),"
-                " then streams",
-                o->name, n);
-    }
-}
-
 static int run(trajd_t *d)
 {
     char err[1024];
@@ -768,7 +745,7 @@ static int run(trajd_t *d)
     /* from here (detached: after the fork) lines go through the log thread */
     if (log_async_start() < 0)
         log_msg(LOG_WARNING, "log thread not started: lines are written by the loop");
-    if (start_core(d, d->cfg, err, sizeof err) < 0) {
+    if (start_core(d, d->cfg, err, sizeof err, 0) < 0) {
         log_msg(LOG_ERR, "cannot start: %s", err);
         return EX_UNAVAILABLE;
     }
@@ -782,7 +759,11 @@ static int run(trajd_t *d)
         d->watchdog_fd = loop_timer_add(d->loop, (int64_t)wd_usec * 1000 / 2, on_watchdog, d);
     log_msg(LOG_INFO, "started: %u object(s) at %.6g Hz, speed %.6g, config %s", d->cfg->nobj,
             d->cfg->daemon.rate_hz, d->cfg->daemon.speed, d->conf_path);
-    log_first_seconds(d->cfg);
+    objlog_first_seconds(d->cfg);
+    if (start_clock(d, err, sizeof err) < 0) {
+        log_msg(LOG_ERR, "cannot start: %s", err);
+        return EX_UNAVAILABLE;
+    }
     sd_notify(0, "READY=1");
     notify_status(d);
     report_ready(d, 0);

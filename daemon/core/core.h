@@ -448,6 +448,9 @@ int core_summary(const core_t *c, char *buf, size_t len);
 void objlog_note_start(obj_t *o);
 /* Every object's D and its parts (at start and at each reload). */
 void objlog_delays(const core_t *c);
+/* Every object's first seconds of output, from its settings (a line each, at
+ * start: trajd logs them before its output clock starts). */
+void objlog_first_seconds(const cfg_t *cfg);
 /* Housekeeping (core_stats_roll, core_close): each object's lines since the
  * last call, up to start_budget lines of trajectory starts (the rest the
  * next time: many objects starting together are not dropped by the log's

@@ -244,3 +244,35 @@ void objlog_roll(core_t *c, unsigned start_budget)
         }
     }
 }
+
+/* What the first seconds of output are, per object: holding (state waiting,
+ * no position before its first waypoint, or at rest at its initial_position)
+ * until the lookahead is buffered (core.h). */
+void objlog_first_seconds(const cfg_t *cfg)
+{
+    for (unsigned i = 0; i < cfg->nobj; i++) {
+        const cfg_obj_t *o = &cfg->obj[i];
+        const double *p = o->initial_position_m;
+        /* delay_s set: the lookahead is picked from the first waypoints
+         * (lib/engine/engine_input.c engine_pick), at most this one */
+        char n[96];
+        snprintf(n, sizeof n,
+                 o->engine.delay_s > 0
+                     ? "its lookahead is buffered (delay_s picks it: %u waypoints at most)"
+                     : "at least %u waypoints are buffered",
+                 engine_lookahead(&o->engine));
+        if (o->has_initial_position) {
+            log_msg(LOG_INFO,
+                    "object '%s': holds (state waiting) at rest at its initial_position %g,%g,%g "
+                    "until %s (the solver's lookahead and the "
+                    "start slack), then reaches the first by a transfer and streams",
+                    o->name, p[0], p[1], p[2], n);
+            continue;
+        }
+        log_msg(LOG_INFO,
+                "object '%s': holds (state waiting; no position, nan, before its first waypoint)"
+                " until %s (the solver's lookahead and the start slack),"
+                " then streams",
+                o->name, n);
+    }
+}

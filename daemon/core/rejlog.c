@@ -11,12 +11,42 @@ void rejlog_init(rejlog_t *l)
     memset(l, 0, sizeof *l);
 }
 
+size_t rejlog_src_file(char *buf, const char *path, int has_line, uint32_t line)
+{
+    size_t len = strlen(path), n = 0;
+    if (len > REJLOG_SRC_PATH_MAX) {
+        memcpy(buf, "...", 3);
+        n = 3;
+        path += len - REJLOG_SRC_PATH_MAX;
+        len = REJLOG_SRC_PATH_MAX;
+    }
+    memcpy(buf + n, path, len);
+    n += len;
+    if (has_line) {
+        char d[10]; /* UINT32_MAX has 10 digits */
+        int k = 0;
+        do {
+            d[k++] = (char)('0' + line % 10);
+            line /= 10;
+        } while (line);
+        buf[n++] = ':';
+        while (k)
+            buf[n++] = d[--k];
+    }
+    buf[n] = '\0';
+    return n;
+}
+
 void rejlog_offered(rejlog_t *l, const engine_waypoint_t *wp, const char *src)
 {
     rejlog_src_t *s = &l->ring[l->ring_next];
     s->seq = wp->seq;
     s->t_s = wp->t_s;
-    snprintf(s->src, sizeof s->src, "%s", src && src[0] ? src : "unknown source");
+    /* on every push: a copy, not a printf */
+    const char *from = src && src[0] ? src : "unknown source";
+    size_t n = strnlen(from, sizeof s->src - 1);
+    memcpy(s->src, from, n);
+    s->src[n] = '\0';
     l->ring_next = (l->ring_next + 1) % REJLOG_RING;
     if (l->ring_len < REJLOG_RING)
         l->ring_len++;

@@ -22,13 +22,15 @@
 #ifndef TRAJD_REJLOG_H
 #define TRAJD_REJLOG_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "engine.h"
 
 #define REJLOG_SRC_LEN 192
-#define REJLOG_RING 32 /* waypoints remembered with their source (judged within 8) */
-#define REJLOG_LINES 5 /* refusals logged in full per flush (per second) */
+#define REJLOG_SRC_PATH_MAX 160 /* of a file's path, its end kept (rejlog_src_file) */
+#define REJLOG_RING 32          /* waypoints remembered with their source (judged within 8) */
+#define REJLOG_LINES 5          /* refusals logged in full per flush (per second) */
 #define REJLOG_LINE_MAX 384
 
 typedef struct {
@@ -54,7 +56,16 @@ typedef struct {
 
 void rejlog_init(rejlog_t *l);
 
-/* Note that wp was offered from src (NULL or "": "unknown source"). */
+/*
+ * A file's row as a source, into buf (REJLOG_SRC_LEN): "PATH:LINE", or
+ * "PATH" without a line (!has_line); a path longer than REJLOG_SRC_PATH_MAX
+ * keeps its end (the file's name) after "...".  Its length.  Made on every
+ * push of a replay, for the rare refusal: copies and digits, no printf.
+ */
+size_t rejlog_src_file(char *buf, const char *path, int has_line, uint32_t line);
+
+/* Note that wp was offered from src (NULL or "": "unknown source"); src is
+ * copied (cut at REJLOG_SRC_LEN - 1 bytes). */
 void rejlog_offered(rejlog_t *l, const engine_waypoint_t *wp, const char *src);
 
 /* Read every verdict the engine has for us (engine_rejection_next). */

@@ -2,7 +2,6 @@
 #include "replay_transport.h"
 #include "cfg_files.h"
 
-#include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -296,24 +295,21 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
 
 typedef struct {
     obj_t *o;
-    const replay_transport_obj_cfg_t *rc;
+    const replay_transport_obj_cfg_t *rc; /* looked up at the first row due (push_obj) */
 } push_ctx_t;
 
 /* Offer a row, named "file:line" for the rejection log (rows carry their
- * 1-based index in the track as seq). */
+ * 1-based index in the track as seq; a long path keeps its end). */
 static int push_obj(void *ctx, const engine_waypoint_t *wp)
 {
-    const push_ctx_t *p = ctx;
+    push_ctx_t *p = ctx;
+    if (!p->rc)
+        p->rc = cfg_obj_transport(p->o->cfg, &replay_transport);
     const track_t *trk = &p->rc->trk;
     char src[REJLOG_SRC_LEN];
-    size_t i = (size_t)wp->seq - 1, len = strlen(p->rc->path);
-    /* a long path keeps its end (the file's name) */
-    const char *path = len > 160 ? p->rc->path + len - 160 : p->rc->path;
-    if (wp->seq >= 1 && i < trk->n && trk->line)
-        snprintf(src, sizeof src, "%s%.160s:%" PRIu32, path != p->rc->path ? "..." : "", path,
-                 trk->line[i]);
-    else
-        snprintf(src, sizeof src, "%s%.160s", path != p->rc->path ? "..." : "", path);
+    size_t i = (size_t)wp->seq - 1;
+    int has_line = wp->seq >= 1 && i < trk->n && trk->line;
+    (void)rejlog_src_file(src, p->rc->path, has_line, has_line ? trk->line[i] : 0);
     return obj_push_from(p->o, wp, src);
 }
 
@@ -360,7 +356,7 @@ static void pre_tick(void *state, obj_t *o, int64_t now_ns)
     if (!isnan(s->resume[o->index]) && resume_wait(s, o))
         return;
     int was_done = replay_done(r);
-    push_ctx_t ctx = {o, cfg_obj_transport(o->cfg, &replay_transport)};
+    push_ctx_t ctx = {o, NULL}; /* (no row due at most ticks) */
     (void)replay_feed_via(r, push_obj, &ctx, o->engine, now_ns);
     if (was_done || !replay_done(r))
         return;

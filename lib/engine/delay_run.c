@@ -299,39 +299,91 @@ void engine_delay_note(engine_t *e, double known)
     e->delay.learnt = e->slack_learn;
 }
 
+/* The k-th smallest (from 0) of v[0 .. n) (Hoare's FIND: v is reordered). */
+static double kth_smallest(double *v, unsigned n, unsigned k)
+{
+    int l = 0, m = (int)n - 1, ki = (int)k;
+    while (l < m) {
+        double x = v[ki];
+        int i = l, j = m;
+        do {
+            while (v[i] < x)
+                i++;
+            while (x < v[j])
+                j--;
+            if (i <= j) {
+                double t = v[i];
+                v[i] = v[j];
+                v[j] = t;
+                i++;
+                j--;
+            }
+        } while (i <= j);
+        if (j < ki)
+            l = i;
+        if (ki < i)
+            m = j;
+    }
+    return v[ki];
+}
+
 /* The input's interval as D is grown to it (engine_delay_grow): of the
  * last intervals (engine_solve_t iv), the longest time of la_steady + 1 in a
  * row, each with its longest interval taken as the median instead, over
  * their count: a sender that slows down counts, a hole of a few lost
  * fixes does not (it is an underrun once, logged, not a longer D for good).
- * 0 before there are enough. */
-static double interval_robust(const engine_t *e)
+ * 0 before there are enough.  On the push path, and on the same push for
+ * every object that replays the same track: the median by a selection of
+ * expected linear work (kth_smallest), the windows over the ring laid out in
+ * arrival order, each window summed in its own order as before (the same
+ * result, bit for bit: test_delay_robust). */
+double engine_interval_robust(const double *iv, unsigned n, unsigned next, unsigned w)
 {
-    double v[ENGINE_IV_RING], med;
-    unsigned n = e->solve.iv_n, w = e->la_steady + 1, k = n / 2;
-    if (n < w || w > ENGINE_IV_RING)
+    double a[ENGINE_IV_RING], v[ENGINE_IV_RING], med;
+    if (n > ENGINE_IV_RING || n < w || w == 0)
         return 0.0;
-    memcpy(v, e->solve.iv, n * sizeof v[0]);
-    for (unsigned i = 0; i <= k; i++) /* the median: a selection, n <= 64 */
-        for (unsigned j = i + 1; j < n; j++)
-            if (v[j] < v[i]) {
-                double x = v[i];
-                v[i] = v[j];
-                v[j] = x;
-            }
-    med = v[k];
+    for (unsigned i = 0; i < n; i++) /* oldest first */
+        a[i] = iv[(next + ENGINE_IV_RING - n + i) % ENGINE_IV_RING];
+    memcpy(v, a, n * sizeof v[0]);
+    med = kth_smallest(v, n, n / 2);
+    /* each window's sum from its oldest interval on (0 + x is x), its
+     * longest by comparison (fmax: the intervals are > 0, measure_input);
+     * four windows at a time, each in its own order */
     double best = 0.0;
-    for (unsigned s = 0; s + w <= n; s++) { /* windows of the ring in arrival order */
-        double sum = 0.0, mx = 0.0;
-        for (unsigned i = 0; i < w; i++) {
-            double x =
-                e->solve.iv[(e->solve.iv_next + ENGINE_IV_RING - n + s + i) % ENGINE_IV_RING];
-            sum += x;
-            mx = fmax(mx, x);
+    unsigned s = 0, m = n - w + 1;
+    for (; s + 4 <= m; s += 4) {
+        double s0 = a[s], s1 = a[s + 1], s2 = a[s + 2], s3 = a[s + 3];
+        double m0 = s0, m1 = s1, m2 = s2, m3 = s3;
+        for (unsigned i = 1; i < w; i++) {
+            double x0 = a[s + i], x1 = a[s + i + 1], x2 = a[s + i + 2], x3 = a[s + i + 3];
+            s0 += x0;
+            s1 += x1;
+            s2 += x2;
+            s3 += x3;
+            m0 = x0 > m0 ? x0 : m0;
+            m1 = x1 > m1 ? x1 : m1;
+            m2 = x2 > m2 ? x2 : m2;
+            m3 = x3 > m3 ? x3 : m3;
+        }
+        best = fmax(best, s0 - m0 + med);
+        best = fmax(best, s1 - m1 + med);
+        best = fmax(best, s2 - m2 + med);
+        best = fmax(best, s3 - m3 + med);
+    }
+    for (; s < m; s++) {
+        double sum = a[s], mx = a[s];
+        for (unsigned i = 1; i < w; i++) {
+            sum += a[s + i];
+            mx = a[s + i] > mx ? a[s + i] : mx;
         }
         best = fmax(best, sum - mx + med);
     }
     return best / w;
+}
+
+static double interval_robust(const engine_t *e)
+{
+    return engine_interval_robust(e->solve.iv, e->solve.iv_n, e->solve.iv_next, e->la_steady + 1);
 }
 
 void engine_delay_grow(engine_t *e)

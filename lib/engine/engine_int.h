@@ -34,6 +34,11 @@
  * engine_delay_grow): its upper quartile, where a hole of a few lost fixes is
  * an outlier and a sender that slows down is not. */
 #define ENGINE_IV_RING 64
+/* The interval D grows to (delay_run.c): of the n intervals of a ring of
+ * ENGINE_IV_RING written up to next (exclusive), the longest time of w in a
+ * row, each with its longest interval taken as the median of the n instead,
+ * over w; 0 with fewer than w. */
+double engine_interval_robust(const double *iv, unsigned n, unsigned next, unsigned w);
 /* delay_s set: the waypoints the input's interval and speed are read from
  * before the lookahead is picked (engine_pick) */
 #define ENGINE_PICK_N 3

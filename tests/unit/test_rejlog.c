@@ -205,12 +205,65 @@ static void test_same_seq_two_sources(void **state)
     engine_free(e);
 }
 
+/* A replayed row's source, "PATH:LINE" (rejlog_src_file, made on every push
+ * without printf), is the text the replay transport formatted with snprintf:
+ * paths of every length up to and past the 160 characters kept (a longer one
+ * keeps its end after "..."), line numbers of every width, and no line. */
+static void test_file_source_as_printf(void **state)
+{
+    (void)state;
+    static const uint32_t lines[] = {0, 1, 9, 10, 52, 99, 100, 12345, 999999999u, UINT32_MAX};
+    char path[400], ref[REJLOG_SRC_LEN], got[REJLOG_SRC_LEN];
+    unsigned seed = 7;
+    for (size_t len = 0; len < 300; len++) {
+        for (size_t i = 0; i < len; i++)
+            path[i] = (char)('a' + (int)(urand(&seed) * 25.99));
+        path[len] = 0;
+        const char *tail = len > 160 ? path + len - 160 : path;
+        for (size_t k = 0; k <= sizeof lines / sizeof lines[0]; k++) {
+            int has = k < sizeof lines / sizeof lines[0];
+            if (has)
+                snprintf(ref, sizeof ref, "%s%.160s:%" PRIu32, tail != path ? "..." : "", tail,
+                         lines[k]);
+            else
+                snprintf(ref, sizeof ref, "%s%.160s", tail != path ? "..." : "", tail);
+            memset(got, 'x', sizeof got);
+            size_t n = rejlog_src_file(got, path, has, has ? lines[k] : 0);
+            assert_string_equal(got, ref);
+            assert_int_equal(n, strlen(ref));
+        }
+    }
+}
+
+/* A source longer than the log keeps is cut as snprintf cut it. */
+static void test_long_source_cut(void **state)
+{
+    (void)state;
+    rejlog_t l;
+    rejlog_init(&l);
+    char src[300];
+    memset(src, 'q', sizeof src - 1);
+    src[sizeof src - 1] = 0;
+    engine_waypoint_t wp = circle(0);
+    rejlog_offered(&l, &wp, src);
+    assert_int_equal(strlen(l.ring[0].src), REJLOG_SRC_LEN - 1);
+    assert_int_equal(strspn(l.ring[0].src, "q"), REJLOG_SRC_LEN - 1);
+    rejlog_offered(&l, &wp, "");
+    assert_string_equal(l.ring[1].src, "unknown source");
+    rejlog_offered(&l, &wp, "track.csv:7");
+    assert_string_equal(l.ring[2].src, "track.csv:7");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_spike_named_by_its_line), cmocka_unit_test(test_rate_limited),
-        cmocka_unit_test(test_unknown_source),          cmocka_unit_test(test_same_seq_two_sources),
+        cmocka_unit_test(test_spike_named_by_its_line),
+        cmocka_unit_test(test_rate_limited),
+        cmocka_unit_test(test_unknown_source),
+        cmocka_unit_test(test_same_seq_two_sources),
         cmocka_unit_test(test_huge_numbers_bounded),
+        cmocka_unit_test(test_file_source_as_printf),
+        cmocka_unit_test(test_long_source_cut),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
