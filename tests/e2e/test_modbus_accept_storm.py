@@ -16,7 +16,14 @@ listener that stays readable (EMFILE leaves the connection in the backlog):
     sees the end of its connection, read by the client here) and counted in
     mb_refused, read over Modbus afterwards (the register of lib/proto/mbmap.h);
   - a warning names the cause (strerror(EMFILE)) and the count.
+The control socket's listener (daemon/ctl/ctl.c) the same, in test_control_in_the_storm:
+a trajctl client that connects while the Modbus clients hold every fd is told why
+(an error reply) and closed, trajd does not spin on that listener either (it did:
+the connection stayed in the backlog, epoll_wait and accept4 EMFILE in turn, a whole
+core, whenever any control client came during such a storm), the refusal is logged
+with its cause and counted (busy_refused), and a client served once fds are back.
 """
+import json
 import os
 import re
 import resource
@@ -113,6 +120,85 @@ class AcceptStormTest(unittest.TestCase):
             self.assertIsNotNone(m, log)
             ticks, missed = int(m.group(1)), int(m.group(2))
             self.assertLessEqual(missed, MISSED_MAX * (ticks + missed), m.group(0))
+
+
+class ControlStormTest(unittest.TestCase):
+    def test_control_in_the_storm(self):
+        with tempfile.TemporaryDirectory() as tmp:
+            ctl = os.path.join(tmp, "control")
+            conf = os.path.join(tmp, "trajd.conf")
+            with open(conf, "w") as f:
+                f.write("[daemon]\nrate_hz = 10\nstatus_interval_s = 0\nstop_timeout_s = 0\n"
+                        "control_socket = %s\n"
+                        "[modbus]\naddress = 127.0.0.1\nport = 0\nmax_clients = 200\n"
+                        "systemd_socket = no\n"
+                        "[object.boat]\ninput = replay\nreplay.track = %s\n"
+                        "output = csv\ncsv.path = %s/boat.csv\n" % (ctl, TRACK, tmp))
+            p, lines, port = mbsim.start_trajd([TRAJD, "-f", "-c", conf], preexec_fn=limit_fds)
+            socks = []
+            try:
+                # Given every fd of trajd's taken by Modbus clients (the ones beyond
+                # refused and gone) ...
+                for _ in range(CLIENTS):
+                    socks.append(socket.create_connection(("127.0.0.1", port), timeout=5))
+                lines.wait_for("connections refused", 5)
+                time.sleep(0.5)
+                # ... when a control client connects and waits,
+                cpu0, t0 = cpu_s(p.pid), time.monotonic()
+                c = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+                c.settimeout(5)
+                c.connect(ctl)
+                time.sleep(STORM_S)
+                cpu1, t1 = cpu_s(p.pid), time.monotonic()
+                share = (cpu1 - cpu0) / (t1 - t0)
+                # then trajd did not spin on the control listener,
+                self.assertLess(share, CPU_MAX, "trajd used %.0f %% of a CPU" % (100 * share))
+                # the client was told why and its connection closed,
+                got = b""
+                while True:
+                    b = c.recv(4096)
+                    if not b:
+                        break
+                    got += b
+                c.close()
+                reply = json.loads(got.decode().splitlines()[0])
+                self.assertEqual(reply["reply"], "error")
+                self.assertIn(os.strerror(24), reply["message"])
+                # and, the fds back, a control client is served and sees the count.
+                for s in socks:
+                    s.close()
+                socks = []
+                status = None
+                for _ in range(50):
+                    try:
+                        c = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+                        c.settimeout(5)
+                        c.connect(ctl)
+                        f = c.makefile("rw")
+                        hello = json.loads(f.readline())
+                        if hello.get("reply") != "hello":
+                            c.close()
+                            time.sleep(0.1)
+                            continue
+                        f.write("status\n")
+                        f.flush()
+                        status = json.loads(f.readline())
+                        c.close()
+                        break
+                    except OSError:
+                        time.sleep(0.1)
+                self.assertIsNotNone(status)
+            finally:
+                for s in socks:
+                    s.close()
+                p.send_signal(signal.SIGTERM)
+                rc = p.wait(timeout=mbsim.WAIT_S + 10)
+                lines.wait_for("\0", 1)
+                p.stderr.close()
+            log = "".join(lines.all)
+            self.assertEqual(rc, 0, log)
+            self.assertRegex(log, r"control: accept: %s: \d+ clients? refused" % re.escape(os.strerror(24)))
+            self.assertGreaterEqual(status["busy_refused"], 1, status)
 
 
 if __name__ == "__main__":
