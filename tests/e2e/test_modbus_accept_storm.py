@@ -55,6 +55,17 @@ def cpu_s(pid):
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
+def stop(p, lines, socks):
+    """Close the clients left, stop trajd (SIGTERM): its exit code and its log."""
+    for s in socks:
+        s.close()
+    p.send_signal(signal.SIGTERM)
+    rc = p.wait(timeout=mbsim.WAIT_S + 10)
+    lines.wait_for("\0", 1)
+    p.stderr.close()
+    return rc, "".join(lines.all)
+
+
 def limit_fds():
     resource.setrlimit(resource.RLIMIT_NOFILE, (FD_LIMIT, FD_LIMIT))
 
@@ -103,13 +114,7 @@ class AcceptStormTest(unittest.TestCase):
                         time.sleep(0.1)
                 self.assertEqual(refused, len(closed))
             finally:
-                for s in socks:
-                    s.close()
-                p.send_signal(signal.SIGTERM)
-                rc = p.wait(timeout=mbsim.WAIT_S + 10)
-                lines.wait_for("\0", 1)
-                p.stderr.close()
-            log = "".join(lines.all)
+                rc, log = stop(p, lines, socks)
             if os.environ.get("VERBOSE"):
                 print("cpu %.1f %%, closed %d, refused %s\n%s" % (100 * share, len(closed), refused, log))
             self.assertEqual(rc, 0, log)
@@ -189,13 +194,7 @@ class ControlStormTest(unittest.TestCase):
                         time.sleep(0.1)
                 self.assertIsNotNone(status)
             finally:
-                for s in socks:
-                    s.close()
-                p.send_signal(signal.SIGTERM)
-                rc = p.wait(timeout=mbsim.WAIT_S + 10)
-                lines.wait_for("\0", 1)
-                p.stderr.close()
-            log = "".join(lines.all)
+                rc, log = stop(p, lines, socks)
             self.assertEqual(rc, 0, log)
             self.assertRegex(log, r"control: accept: %s: \d+ clients? refused" % re.escape(os.strerror(24)))
             self.assertGreaterEqual(status["busy_refused"], 1, status)
