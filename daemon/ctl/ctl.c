@@ -10,11 +10,10 @@
 #include <string.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
-#include <sys/timerfd.h>
 #include <sys/un.h>
-#include <time.h>
 #include <unistd.h>
 
+#include "acceptguard.h"
 #include "ctl_priv.h"
 #include "log.h"
 
@@ -134,107 +133,46 @@ static int set_owner(const ctl_t *t, char *why, size_t wl)
 
 static void on_listen(loop_t *l, int fd, uint32_t events, void *ctx);
 
-/* ---- out of file descriptors (as the Modbus listener, modbus_accept.h) ----
- * accept4 failing with EMFILE or ENFILE leaves the client in the backlog and
- * the listener readable: polled again at once, the loop would spin.  Instead
- * a reserve fd is closed, the waiting clients are accepted, told why and
- * closed, the reserve opened again, and the listener is not polled for a
- * pause (CTL_BACKOFF_MIN_MS doubling to CTL_BACKOFF_MAX_MS while the
- * shortage lasts); a warning at most once a second with the counts. */
-#define CTL_BACKOFF_MIN_MS 100
-#define CTL_BACKOFF_MAX_MS 1000
+/* ---- out of file descriptors (daemon/core/acceptguard.h, as the Modbus
+ * listener): the clients that wait are told why and closed, the listener
+ * paused; without the guard (no fd for it at open) the loop would spin on a
+ * listener that stays readable ---- */
 
-static int64_t mono_ns(void)
+static void tell_no_fd(int fd, int err, void *ctx)
 {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
-}
-
-static void shortage_report(ctl_t *t, int final)
-{
-    if (t->shortages == t->logged_shortages)
-        return;
-    int64_t now = mono_ns();
-    if (!final && t->logged_ns && now - t->logged_ns < 1000000000)
-        return;
-    log_msg(LOG_WARNING,
-            "control: accept: %s: %llu clients refused (told why and closed), %llu shortages so "
-            "far; listener paused up to %d ms at a time",
-            strerror(t->last_errno), (unsigned long long)t->fd_refused,
-            (unsigned long long)t->shortages, CTL_BACKOFF_MAX_MS);
-    t->logged_shortages = t->shortages;
-    t->logged_ns = now;
+    ctl_t *t = ctx;
+    char line[256];
+    int len = snprintf(line, sizeof line,
+                       "{\"reply\":\"error\",\"error\":\"busy\",\"message\":\"trajd is out of "
+                       "file descriptors: %s\"}\n",
+                       strerror(err));
+    ssize_t w = send(fd, line, (size_t)len, MSG_NOSIGNAL | MSG_DONTWAIT);
+    (void)w;
+    t->busy_refused++;
 }
 
 static void on_pause_end(loop_t *l, int fd, uint32_t events, void *ctx)
 {
     ctl_t *t = ctx;
-    uint64_t exp;
+    (void)fd;
     (void)events;
-    if (read(fd, &exp, sizeof exp) < 0 || !t->paused)
+    if (ag_resume(&t->ag))
+        loop_add(l, t->fd, EPOLLIN, on_listen, t);
+}
+
+static void guard_open(ctl_t *t)
+{
+    if (ag_init(&t->ag, "control", "told why and closed") < 0)
         return;
-    if (loop_add(l, t->fd, EPOLLIN, on_listen, t) == 0)
-        t->paused = 0;
-    shortage_report(t, 0);
+    if (loop_add(t->loop, t->ag.timer_fd, EPOLLIN, on_pause_end, t) < 0)
+        ag_fini(&t->ag);
 }
 
-/* The reserve fd and the pause's timer, made while fds are there (at open);
- * without them a shortage still refuses nothing it cannot, and pauses where
- * it can. */
-static void shortage_open(ctl_t *t)
+static void guard_close(ctl_t *t)
 {
-    t->reserve_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
-    t->pause_fd = timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
-    if (t->pause_fd >= 0 && loop_add(t->loop, t->pause_fd, EPOLLIN, on_pause_end, t) < 0) {
-        close(t->pause_fd);
-        t->pause_fd = -1;
-    }
-}
-
-static void shortage_close(ctl_t *t)
-{
-    shortage_report(t, 1);
-    if (t->pause_fd >= 0) {
-        loop_del(t->loop, t->pause_fd);
-        close(t->pause_fd);
-    }
-    if (t->reserve_fd >= 0)
-        close(t->reserve_fd);
-    t->pause_fd = t->reserve_fd = -1;
-}
-
-static void ctl_shortage(ctl_t *t, int err)
-{
-    static const char why[] = "{\"reply\":\"error\",\"error\":\"busy\",\"message\":\"trajd "
-                              "is out of file descriptors: ";
-    t->shortages++;
-    t->last_errno = err;
-    if ((err == EMFILE || err == ENFILE) && t->reserve_fd >= 0) {
-        close(t->reserve_fd);
-        t->reserve_fd = -1;
-        for (int n = 0; n < CTL_CLIENTS_MAX; n++) {
-            int cfd = accept4(t->fd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC);
-            if (cfd < 0)
-                break; /* EAGAIN: none waits */
-            char line[256];
-            int len = snprintf(line, sizeof line, "%s%s\"}\n", why, strerror(err));
-            ssize_t w = send(cfd, line, (size_t)len, MSG_NOSIGNAL | MSG_DONTWAIT);
-            (void)w;
-            close(cfd);
-            t->fd_refused++;
-            t->busy_refused++;
-        }
-        t->reserve_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
-    }
-    struct itimerspec its = {.it_value = {t->backoff_ms / 1000, (t->backoff_ms % 1000) * 1000000L}};
-    if (t->pause_fd >= 0 && !t->paused && timerfd_settime(t->pause_fd, 0, &its, NULL) == 0 &&
-        loop_del(t->loop, t->fd) == 0) {
-        t->paused = 1;
-        t->backoff_ms = t->backoff_ms * 2 > CTL_BACKOFF_MAX_MS ? CTL_BACKOFF_MAX_MS
-                                                               : t->backoff_ms * 2;
-    }
-    shortage_report(t, 0);
+    if (t->ag.open)
+        loop_del(t->loop, t->ag.timer_fd);
+    ag_fini(&t->ag);
 }
 
 static int listen_on(ctl_t *t, char *why, size_t wl)
@@ -279,8 +217,6 @@ int ctl_open(ctl_t **out, loop_t *loop, const cfg_t *cfg, ctl_reload_fn reload, 
     t->cfg = cfg;
     t->fd = -1;
     t->flush_fd = -1;
-    t->reserve_fd = t->pause_fd = -1;
-    t->backoff_ms = CTL_BACKOFF_MIN_MS;
     t->reload = reload;
     t->reload_ctx = reload_ctx;
     for (unsigned i = 0; i < CTL_CLIENTS_MAX; i++)
@@ -298,7 +234,7 @@ int ctl_open(ctl_t **out, loop_t *loop, const cfg_t *cfg, ctl_reload_fn reload, 
         free(t);
         return rc < -1 ? rc : -ENOENT;
     }
-    shortage_open(t);
+    guard_open(t);
     log_msg(LOG_INFO, "control: listening on %s (mode 0660, group %s)", t->path,
             cfg->daemon.control_group[0] ? cfg->daemon.control_group : "trajd's own");
     *out = t;
@@ -476,11 +412,14 @@ static void on_listen(loop_t *l, int fd, uint32_t events, void *ctx)
     for (int n = 0; n < CTL_CLIENTS_MAX; n++) { /* bounded per callback */
         int cfd = accept4(fd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC);
         if (cfd < 0) {
-            if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM)
-                ctl_shortage(t, errno); /* else EAGAIN: none waits */
+            if (t->ag.open && ag_is_shortage(errno)) {
+                ag_shortage(&t->ag, fd, errno, tell_no_fd, t);
+                if (t->ag.paused) /* not polled until the back-off timer fires */
+                    loop_del(t->loop, fd);
+            } /* else EAGAIN: none waits */
             return;
         }
-        t->backoff_ms = CTL_BACKOFF_MIN_MS;
+        ag_accepted(&t->ag);
         struct ucred uc = {0};
         socklen_t ul = sizeof uc;
         char peer[CTL_PEER_MAX];
@@ -648,9 +587,9 @@ void ctl_close(ctl_t *t)
         pump(t, cl);
         client_close(t, cl, "closed: trajd is exiting");
     }
-    shortage_close(t);
+    guard_close(t);
     if (t->fd >= 0) {
-        if (!t->paused)
+        if (!t->ag.paused)
             loop_del(t->loop, t->fd);
         close(t->fd);
         struct stat st;

@@ -9,6 +9,7 @@
 #include <stdint.h>
 #include <sys/types.h>
 
+#include "acceptguard.h"
 #include "ctl.h"
 
 #define CTL_IN_BYTES 1024   /* a request line, with its '\n', at most */
@@ -76,15 +77,7 @@ struct ctl {
     unsigned watchers;
     uint64_t busy_refused;
     uint64_t watch_lost; /* setpoints dropped from watchers' full rings, since start */
-    /* out of fds (ctl.c ctl_shortage): a client told why through the reserve
-     * fd, the listener paused by pause_fd */
-    int reserve_fd;     /* /dev/null, or -1 */
-    int pause_fd;       /* timerfd of the listener's pause, or -1 */
-    int paused;         /* the listener is out of the loop */
-    int64_t backoff_ms; /* length of the next pause */
-    int last_errno;     /* of the last shortage */
-    uint64_t fd_refused, shortages, logged_shortages;
-    int64_t logged_ns; /* CLOCK_MONOTONIC of the last warning, 0: none yet */
+    acceptguard_t ag;    /* out of fds: clients told why, the listener paused */
 };
 
 /* Handle one request line (no '\n'): replies are appended to cl->out. */

@@ -196,7 +196,7 @@ class ControlStormTest(unittest.TestCase):
             finally:
                 rc, log = stop(p, lines, socks)
             self.assertEqual(rc, 0, log)
-            self.assertRegex(log, r"control: accept: %s: \d+ clients? refused" % re.escape(os.strerror(24)))
+            self.assertRegex(log, r"control: accept: %s: \d+ connections refused \(told why and closed\)" % re.escape(os.strerror(24)))
             self.assertGreaterEqual(status["busy_refused"], 1, status)
 
 
