@@ -82,7 +82,6 @@ unsigned ag_shortage(acceptguard_t *a, int lfd, int err, ag_tell_fn tell, void *
     if (!a->paused && a->timer_fd >= 0 && timerfd_settime(a->timer_fd, 0, &t, NULL) == 0) {
         a->paused = 1;
         a->pause_ms = a->backoff_ms;
-        a->pauses++;
         a->backoff_ms *= 2;
         if (a->backoff_ms > AG_BACKOFF_MAX_MS)
             a->backoff_ms = AG_BACKOFF_MAX_MS;
@@ -118,7 +117,6 @@ void ag_report(acceptguard_t *a, int final)
             "paused %lld ms at a time (up to %d ms)",
             a->who, strerror(a->last_errno), (unsigned long long)a->refused, a->told,
             (unsigned long long)a->shortages, (long long)a->pause_ms, AG_BACKOFF_MAX_MS);
-    a->logged_refused = a->refused;
     a->logged_shortages = a->shortages;
     a->logged_ns = now;
 }

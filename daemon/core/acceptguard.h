@@ -39,8 +39,7 @@ typedef struct {
     int last_errno;     /* of the last shortage */
     uint64_t shortages; /* accept4 failures with EMFILE/ENFILE/ENOBUFS/ENOMEM */
     uint64_t refused;   /* connections accepted and closed for want of an fd */
-    uint64_t pauses;    /* back-off periods */
-    uint64_t logged_refused, logged_shortages;
+    uint64_t logged_shortages;
     int64_t logged_ns; /* CLOCK_MONOTONIC of the last warning, 0: none yet */
 } acceptguard_t;
 
@@ -55,7 +54,8 @@ void ag_fini(acceptguard_t *a);
 /* 1 if err (of accept4) is a shortage of fds or memory. */
 int ag_is_shortage(int err);
 
-/* accept4 on lfd failed with the shortage err: refuse up to AG_REFUSE_MAX
+/* accept4 on lfd failed with the shortage err (nothing done unless ag_init
+ * succeeded): refuse up to AG_REFUSE_MAX
  * pending connections through the reserve (EMFILE, ENFILE; tell may be
  * NULL) and arm the back-off timer (a->paused: take lfd out of the poll
  * set).  Returns the connections refused. */

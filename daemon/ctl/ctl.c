@@ -13,7 +13,6 @@
 #include <sys/un.h>
 #include <unistd.h>
 
-#include "acceptguard.h"
 #include "ctl_priv.h"
 #include "log.h"
 
@@ -412,7 +411,7 @@ static void on_listen(loop_t *l, int fd, uint32_t events, void *ctx)
     for (int n = 0; n < CTL_CLIENTS_MAX; n++) { /* bounded per callback */
         int cfd = accept4(fd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC);
         if (cfd < 0) {
-            if (t->ag.open && ag_is_shortage(errno)) {
+            if (ag_is_shortage(errno)) {
                 ag_shortage(&t->ag, fd, errno, tell_no_fd, t);
                 if (t->ag.paused) /* not polled until the back-off timer fires */
                     loop_del(t->loop, fd);

@@ -12,11 +12,6 @@ int mb_accept_init(mb_accept_t *a)
     return ag_init(a, "modbus", "closed at once");
 }
 
-void mb_accept_fini(mb_accept_t *a)
-{
-    ag_fini(a);
-}
-
 int mb_accept(mb_accept_t *a, int ep, int lfd, struct sockaddr *sa, socklen_t *sl,
               uint64_t *refused)
 {
@@ -26,7 +21,7 @@ int mb_accept(mb_accept_t *a, int ep, int lfd, struct sockaddr *sa, socklen_t *s
         return fd;
     }
     int err = errno;
-    if (a->open && ag_is_shortage(err)) {
+    if (ag_is_shortage(err)) {
         *refused += ag_shortage(a, lfd, err, NULL, NULL);
         if (a->paused) /* not polled until the back-off timer fires */
             epoll_ctl(ep, EPOLL_CTL_DEL, lfd, NULL);
@@ -52,9 +47,4 @@ int mb_systemd_listener(void)
             return fd;
     }
     return -1;
-}
-
-void mb_accept_report(mb_accept_t *a, int final)
-{
-    ag_report(a, final);
 }

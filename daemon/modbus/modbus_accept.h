@@ -14,9 +14,9 @@
 
 typedef acceptguard_t mb_accept_t;
 
-/* Open the reserve fd and the timer.  0 or -errno (then nothing is open). */
+/* Open the reserve fd and the timer (ag_init); ag_fini closes them.  0 or
+ * -errno (then nothing is open). */
 int mb_accept_init(mb_accept_t *a);
-void mb_accept_fini(mb_accept_t *a);
 
 /*
  * accept4(lfd, sa, sl, SOCK_NONBLOCK | SOCK_CLOEXEC), and on a shortage:
@@ -32,8 +32,5 @@ void mb_accept_resume(mb_accept_t *a, int ep, int lfd, uint64_t data);
 
 /* The listening socket systemd passed (sd_listen_fds), or -1. */
 int mb_systemd_listener(void);
-
-/* Log new refusals (at most once a second unless final). */
-void mb_accept_report(mb_accept_t *a, int final);
 
 #endif

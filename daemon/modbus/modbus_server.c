@@ -382,7 +382,7 @@ void modbus_server_free(modbus_server_t *s)
         close(s->hkfd);
     if (s->silfd >= 0)
         close(s->silfd);
-    mb_accept_fini(&s->acc);
+    ag_fini(&s->acc);
     if (s->ep >= 0)
         close(s->ep);
     if (s->map)

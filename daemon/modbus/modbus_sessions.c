@@ -445,5 +445,5 @@ void mbs_housekeeping(modbus_server_t *s)
     }
     peer_worst(s);
     peer_log(s, now, 0);
-    mb_accept_report(&s->acc, 0);
+    ag_report(&s->acc, 0);
 }
