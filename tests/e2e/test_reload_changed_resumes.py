@@ -292,13 +292,20 @@ class ReloadChangedEdges(unittest.TestCase):
     def test_waiting_object_keeps_its_first_row(self):
         """A changed reload while the object still waits at its initial_position (it played
         nothing): the replay starts from the track's first row again, none skipped (it
-        resumed 'after t = 0' and lost row 1: wp 300 of 301)."""
+        resumed 'after t = 0' and lost row 1: wp 300 of 301).  Rows the old engine took
+        before the reload are counted in both: accepted, and dropped by the reload."""
         with tempfile.TemporaryDirectory() as tmp:
             rows, err = self.run_line(tmp, "initial_position = -30,0,0\n", 1, 0.05,
                                       lambda r: len(r) > 5)
             m = re.search(r"; a [^;]*? t=[-\d.]+ s, wp (\d+) ok", err)
             self.assertIsNotNone(m, err[-2000:])
-            self.assertEqual(int(m.group(1)), 301, m.group(0))
+            # the rows the old engine took before the reload (none, or a few
+            # where the reload comes late on a loaded machine) are counted as
+            # accepted and as dropped by the reload; the new engine takes all
+            # 301 again
+            d = re.search(r"(\d+) waypoints? dropped by a stop, clear or reload", err)
+            dropped = int(d.group(1)) if d else 0
+            self.assertEqual(int(m.group(1)) - dropped, 301, m.group(0) + (d.group(0) if d else ""))
 
 
 if __name__ == "__main__":
