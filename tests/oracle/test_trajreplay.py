@@ -66,13 +66,37 @@ def run(args, **kw):
 
 
 def read_setpoints(path):
-    """Columns of the csv_format output as numpy arrays (+ state strings)."""
+    """Columns of the csv_format output as numpy arrays (+ state strings).
+    numpy's loadtxt (its C parser) reads each column in one pass: the rows
+    one by one in Python took most of test_profile_kinds.py's time."""
     with open(path) as f:
         header = f.readline().rstrip("\n").split(",")
-        rows = [line.rstrip("\n").split(",") for line in f]
     assert header == ["object", "now_ns", "t_s", "x_m", "y_m", "z_m", "vx_m_s", "vy_m_s",
                       "vz_m_s", "ax_m_s2", "ay_m_s2", "az_m_s2", "state", "flags", "cycle",
                       "track"], header
+    load = dict(delimiter=",", skiprows=1, ndmin=1, encoding="utf-8")
+    num = np.loadtxt(path, usecols=range(2, 12), dtype=float, ndmin=2,
+                     **{k: v for k, v in load.items() if k != "ndmin"})
+    ints = np.loadtxt(path, usecols=(1, 13, 15), dtype=np.int64, ndmin=2,
+                      **{k: v for k, v in load.items() if k != "ndmin"})
+    cols = {"now_ns": ints[:, 0].copy()}
+    for i, name in enumerate(header[2:12]):
+        cols[name] = num[:, i].copy()
+    cols["state"] = [str(x) for x in np.loadtxt(path, usecols=12, dtype=str, **load)]
+    cols["flags"] = ints[:, 1].copy()
+    cols["track"] = ints[:, 2].copy()
+    cols["pos"] = np.stack([cols["x_m"], cols["y_m"], cols["z_m"]], axis=1)
+    cols["vel"] = np.stack([cols["vx_m_s"], cols["vy_m_s"], cols["vz_m_s"]], axis=1)
+    cols["acc"] = np.stack([cols["ax_m_s2"], cols["ay_m_s2"], cols["az_m_s2"]], axis=1)
+    return cols
+
+
+def read_setpoints_rows(path):
+    """read_setpoints row by row in Python: the reference the fast one is
+    compared with (tests/oracle/test_trajreplay.py test_read_setpoints_same)."""
+    with open(path) as f:
+        header = f.readline().rstrip("\n").split(",")
+        rows = [line.rstrip("\n").split(",") for line in f]
     cols = {}
     cols["now_ns"] = np.array([int(r[1]) for r in rows], dtype=np.int64)
     for i, name in enumerate(header[2:12], start=2):
@@ -80,9 +104,6 @@ def read_setpoints(path):
     cols["state"] = [r[12] for r in rows]
     cols["flags"] = np.array([int(r[13]) for r in rows])
     cols["track"] = np.array([int(r[15]) for r in rows])
-    cols["pos"] = np.stack([cols["x_m"], cols["y_m"], cols["z_m"]], axis=1)
-    cols["vel"] = np.stack([cols["vx_m_s"], cols["vy_m_s"], cols["vz_m_s"]], axis=1)
-    cols["acc"] = np.stack([cols["ax_m_s2"], cols["ay_m_s2"], cols["az_m_s2"]], axis=1)
     return cols
 
 
@@ -581,12 +602,29 @@ def test_hard_stop_reported(tmp):
     check(p1.returncode == 0, f"cerknicko ENU (mm) at 1 Hz: exit {p1.returncode}: {p1.stderr[-300:]}")
 
 
+def test_read_setpoints_same(tmp):
+    """The reader every oracle here uses (numpy's loadtxt) gives the same
+    columns, bit for bit, as reading the rows one by one in Python, on a
+    replay whose output has NO_POSITION rows (NaN), every state and flags."""
+    out = os.path.join(tmp, "same.csv")
+    p = run(["--summary", "-o", out, "--rate", "20", FIGURE8])
+    check(p.returncode == 0, f"figure8: exit {p.returncode}: {p.stderr}")
+    fast, slow = read_setpoints(out), read_setpoints_rows(out)
+    check(len(slow["now_ns"]) > 1000, f"only {len(slow['now_ns'])} rows")
+    for k, v in slow.items():
+        if k == "state":
+            check(fast[k] == v, "state differs")
+        else:
+            check(fast[k].dtype.kind == v.dtype.kind and
+                  np.array_equal(fast[k], v, equal_nan=v.dtype.kind == "f"), f"{k} differs")
+
+
 def main():
     if not os.access(TRAJREPLAY, os.X_OK):
         print(f"{TRAJREPLAY} not built")
         return 1
     with tempfile.TemporaryDirectory(prefix="trajreplay-test-") as tmp:
-        for test in (test_errors, test_gpx_equals_csv, test_svg, test_counts_real_and_injected,
+        for test in (test_read_setpoints_same, test_errors, test_gpx_equals_csv, test_svg, test_counts_real_and_injected,
                      test_spline_agreement, test_jitter_figure8, test_progress,
                      test_hard_stop_reported):
             print(f"== {test.__name__}")
