@@ -236,6 +236,10 @@ static int pos_kept_take(const obj_t *o, size_t *next, int *finished)
     return 1;
 }
 
+/* Changed objects whose resumption the reload names one by one; the rest in
+ * one line (256 lines at once outran the log's reader and were dropped). */
+#define RESUME_NAMED 4u
+
 static int open_(core_t *c, void **state, char *why, size_t wl)
 {
     replay_transport_t *s = calloc(1, sizeof *s);
@@ -256,6 +260,7 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
     }
     s->n = c->nobj;
     s->c = c;
+    unsigned nres = 0; /* changed objects resumed */
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i];
         s->resume[i] = NAN;
@@ -281,13 +286,19 @@ static int open_(core_t *c, void **state, char *why, size_t wl)
                 r->finished = 1; /* the old replay called engine_finish already */
         } else if (!o->carried && isfinite(o->resume_t_s)) {
             s->resume[i] = o->resume_t_s; /* a changed object: pre_tick resumes it */
-            log_msg(LOG_NOTICE,
-                    "object '%s': its replay resumes after the row where its old engine comes "
-                    "to rest (it has played to t = %.3f s): a reload that changed its "
-                    "settings never plays its track again",
-                    o->name, o->resume_t_s);
+            if (++nres <= RESUME_NAMED)
+                log_msg(LOG_NOTICE,
+                        "object '%s': its replay resumes after the row where its old engine "
+                        "comes to rest (it has played to t = %.3f s): a reload that changed "
+                        "its settings never plays its track again",
+                        o->name, o->resume_t_s);
         }
     }
+    if (nres > RESUME_NAMED) /* one line for the rest, not one an object */
+        log_msg(LOG_NOTICE,
+                "%u more objects' replays resume likewise, each after the row where its old "
+                "engine comes to rest",
+                nres - RESUME_NAMED);
     keep_drop("replay");
     *state = s;
     return 0;
