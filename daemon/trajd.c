@@ -52,6 +52,7 @@
 #include "core.h"
 #include "ctl.h"
 #include "fdlimit.h"
+#include "grave.h"
 #include "log.h"
 #include "loop.h"
 #include "regfile.h"
@@ -966,6 +967,7 @@ int main(int argc, char **argv)
     loop_free(d.loop);
     cfg_free(d.cfg);
     cfgload_retire_join();
+    grave_stop();     /* the engines the last cores gave up */
     log_async_stop(); /* every line queued is written before the exit */
     return rc;
 }

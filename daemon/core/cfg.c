@@ -897,6 +897,9 @@ void cfg_free(cfg_t *c)
     for (unsigned i = 0; c->prebuilt && i < c->nobj; i++)
         engine_free(c->prebuilt[i]);
     free((void *)c->prebuilt);
+    if (c->prebuilt_objs && c->prebuilt_objs->objs)
+        c->prebuilt_objs->fini(c->prebuilt_objs->objs, c->nobj);
+    free(c->prebuilt_objs);
     free(c);
 }
 

@@ -184,6 +184,14 @@ typedef struct cfg {
      * elsewhere; core_open takes them (cfg_take_engine), cfg_free frees the
      * rest.  NULL: none built. */
     engine_t **prebuilt;
+    /* The new core's object array (nobj obj_t, core.h) built there too, its
+     * pages written so that the loop does not fault them in, and fini, which
+     * frees one not taken (what its objects hold with it); core_open takes
+     * objs (cfgload_take_objs).  NULL: none. */
+    struct cfg_built_objs {
+        void *objs;
+        void (*fini)(void *objs, unsigned n);
+    } * prebuilt_objs;
 } cfg_t;
 
 /*

@@ -50,6 +50,10 @@ void cfgload_retire(cfg_t *old);
 /* Wait for the last cfgload_retire (at exit, before the process ends). */
 void cfgload_retire_join(void);
 
+/* c's object array built beside the running core (cfg_t prebuilt_objs: nobj
+ * obj_t, zeroed), now the caller's to free; NULL if none was built. */
+void *cfgload_take_objs(const cfg_t *c);
+
 /* 1 while a drop cancels the load under way (polled by the track parsers). */
 int cfgload_cancelled(void);
 

@@ -13,8 +13,10 @@
 
 #include "angle.h"
 #include "carry.h"
+#include "cfgload.h"
 #include "delay.h"
 #include "engine_settings.h"
+#include "grave.h"
 #include "log.h"
 #include "reload.h"
 
@@ -274,7 +276,7 @@ static void step_engines(core_t *c, int64_t now_ns, int64_t real_ns, int sent)
             if (!(o->sp.flags & ENGINE_SP_NO_POSITION))
                 (void)engine_set_position(o->engine, o->sp.pos_m); /* within max_abs_m: checked */
             obj_counts_take(o, o->retiring);                       /* its counts go on */
-            engine_free(o->retiring);
+            grave_put(o->retiring); /* freed beside the loop (an munmap) */
             o->retiring = NULL;
             safety_limits_t lim; /* the new engine's bounds, from rest */
             obj_safety_limits(o->cfg, &lim);
@@ -454,13 +456,17 @@ static int new_objects(core_t *c, core_t *prev, char *why, size_t whylen)
         o->clocked = carry_clock_initial(cfg, o->cfg);
         o->resume_t_s = NAN;
         o->played_t_s = NAN;
-        if (carry_source(prev, cfg, o->cfg, NULL, 0))
+        if (carry_source(prev, cfg, o->cfg, NULL, 0)) {
+            lc_free(&o->lc); /* one built beside (cfgload.c) goes: carry_objects moves q's */
             continue;
+        }
         carry_resume_input(o, prev);
         o->engine = cfg_take_engine(cfg, i); /* built beside the running core */
         if (!o->engine)
             o->engine = engine_new(&cfg->obj[i].engine, &err);
-        if (!o->engine || lc_init(&o->lc, o->engine, &o->safety, c->period_ns, 0) < 0) {
+        /* its owner built there too, about that engine (cfgload.c), or here */
+        int owned = o->engine && o->lc.buf && o->lc.engine == o->engine;
+        if (!o->engine || (!owned && lc_init(&o->lc, o->engine, &o->safety, c->period_ns, 0) < 0)) {
             snprintf(why, whylen, "object '%s': engine: %s", o->name,
                      engine_strerror(o->engine ? ENGINE_ENOMEM : err));
             return -ENOMEM;
@@ -596,7 +602,9 @@ int core_open(loop_t *loop, const cfg_t *cfg, stats_t *stats, core_t **prevp, co
     c->t0_ns = prev ? prev->t0_ns + (int64_t)((core_priv_t *)prev)->next_k * prev->period_ns : 0;
     c->now_ns = c->t0_ns;
     c->nobj = cfg->nobj;
-    c->obj = calloc(cfg->nobj, sizeof *c->obj);
+    c->obj = cfgload_take_objs(cfg); /* zeroed, faulted in beside the loop */
+    if (!c->obj)
+        c->obj = calloc(cfg->nobj, sizeof *c->obj);
     if (!c->obj) {
         snprintf(why, whylen, "out of memory");
         rc = -ENOMEM;
@@ -755,9 +763,9 @@ void core_close(core_t *c)
         objlog_roll(c, UINT_MAX); /* engines carried to a new core were taken (NULL) */
     if (c->obj)
         for (unsigned i = 0; i < c->nobj; i++) {
-            engine_free(c->obj[i].engine);
+            grave_put(c->obj[i].engine); /* freed beside the loop (grave.h) */
             lc_free(&c->obj[i].lc);
-            engine_free(c->obj[i].retiring);
+            grave_put(c->obj[i].retiring);
         }
     free(c->obj);
     free(p->gone);
