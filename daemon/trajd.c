@@ -241,6 +241,14 @@ static int drop_privileges(const cfg_t *cfg, char *why, size_t wl)
 
 static int reload(trajd_t *d, const char *from, char *err, size_t errlen);
 
+/* At exit: the thread freeing the last old configuration, and the one freeing
+ * the engines the last cores gave up (grave.h). */
+static void join_workers(void)
+{
+    cfgload_retire_join();
+    grave_stop();
+}
+
 /* A reload refused: counted, logged, told to systemd; the old configuration runs on. */
 static void reload_refused(trajd_t *d, const char *what, const char *err)
 {
@@ -966,8 +974,7 @@ int main(int argc, char **argv)
         close(d.sig_fd);
     loop_free(d.loop);
     cfg_free(d.cfg);
-    cfgload_retire_join();
-    grave_stop();     /* the engines the last cores gave up */
+    join_workers();
     log_async_stop(); /* every line queued is written before the exit */
     return rc;
 }
