@@ -269,7 +269,7 @@ check: deps
 	@rm -f $(CHECK_COUNTS) $(CHECK_COUNTS).asan; \
 	chrt --idle 0 $(MAKE) --no-print-directory test-asan COUNTS=$(CHECK_COUNTS).asan \
 		> $(abspath $(BUILD))/check-asan.log 2>&1 & asan=$$!; \
-	BUILD=$(abspath $(BUILD)) PYTHON=$(PYTHON) COUNTS=$(CHECK_COUNTS) IDLE_PID=$$asan sh tests/run.sh; \
+	BUILD=$(abspath $(BUILD)) PYTHON=$(PYTHON) COUNTS=$(CHECK_COUNTS) sh tests/run.sh; \
 	wait $$asan; echo "sanitizer pass (ASan + UBSan, beside the plain pass):"; \
 	cat $(abspath $(BUILD))/check-asan.log; cat $(CHECK_COUNTS).asan >> $(CHECK_COUNTS) 2>/dev/null; \
 	awk '{p += $$1; f += $$2; s += $$3; n++} END { if (n < 2) f++; \

@@ -12,8 +12,7 @@
 #           programs named in tests/serial.txt run afterwards, one at a time; those
 #           named in tests/idle.txt run from the start, one at a time, at idle CPU
 #           priority (SCHED_IDLE), in the CPU time the others leave (NO_IDLE=1: with
-#           the others instead; IDLE_LIST=FILE: another list).  IDLE_PID: a process
-#           of the caller's that "@wait-idle" in tests/serial.txt waits for too
+#           the others instead; IDLE_LIST=FILE: another list)
 #   TEST_TIMEOUT_S  the most one test program may take (default 900 s; then it fails)
 #   COUNTS  a file to which the three counts are appended ("passed failed skipped"), so
 #           that `make check` can add up the plain and the sanitizer pass
@@ -122,16 +121,7 @@ jobs=${JOBS:-$(( $(nproc 2>/dev/null || echo 1) * 2 + 1 ))}
 printf '%s' "$idl" | by_time | chrt --idle 0 xargs -r -n 1 -P 1 sh tests/run.sh --one &
 idle_pid=$!
 printf '%s' "$par" | by_time | xargs -r -n 1 -P "$jobs" sh tests/run.sh --one
-# in tests/serial.txt's order, waiting for the idle ones at its line "@wait-idle"
-for n in $(grep -v '^#' tests/serial.txt); do
-    if [ "$n" = @wait-idle ]; then
-        wait $idle_pid
-        # and for another idle job of the caller (make check's sanitizer pass)
-        while [ -n "${IDLE_PID:-}" ] && kill -0 "$IDLE_PID" 2>/dev/null; do sleep 1; done
-        continue
-    fi
-    case "$nl$ser" in *"$nl$n$nl"*) sh tests/run.sh --one "$n";; esac
-done
+printf '%s' "$ser" | xargs -r -n 1 -P 1 sh tests/run.sh --one
 wait $idle_pid
 
 passed=0; failed=0; skipped=0; failures=""; skip_lines=""
