@@ -163,11 +163,13 @@ void engine_delay_note(engine_t *e, double lag);
 /* Engine-internal (engine_scale.c): 1 if the output, held back by the curve
  * ahead, is short of its stop reserve while the input is on time: the
  * newest waypoint arrived within the interval and slack D holds for one
- * (and a tick), and the solved curve ends within D's lookahead of it.  The
- * object then moves faster than the speed the reserve was sized for (D
- * grows with the input's top speed), or a fix was lost within the lookahead
- * (D grows with the intervals): a slowdown for the reserve, counted in
- * reserve_slowed, not an underrun. */
+ * (and a tick), and the solved curve ends within D's lookahead of it, in
+ * time or, fixes lost, in waypoints (at most la_steady nodes after its end,
+ * only the newest still judged).  The object then moves faster than the
+ * speed the reserve was sized for (D grows with the input's top speed), or a
+ * fix was lost within the lookahead (D grows with the intervals): a
+ * slowdown for the reserve, counted in reserve_slowed, not an underrun.
+ * Returns 2 for fixes lost (the span longer in time only), 1 otherwise. */
 int engine_delay_reserve_short(const engine_t *e);
 /* Engine-internal (engine_scale.c: the output back at rate 1 after its
  * start's ramp, an underrun or a slowdown for the reserve): a fixed

@@ -432,8 +432,23 @@ int engine_delay_reserve_short(const engine_t *e)
     if (!(d.interval_s > 0))
         return 0;
     double since = (double)(e->out.last_now - e->sil.arrival_ns) * 1e-9;
-    return since <= d.interval_s + d.slack_s + e->period_s &&
-           e->sil.last_t - e->scale.avail_t <= d.lookahead_s + e->period_s;
+    if (!(since <= d.interval_s + d.slack_s + e->period_s))
+        return 0;
+    if (e->sil.last_t - e->scale.avail_t <= d.lookahead_s + e->period_s)
+        return 1;
+    /* longer in time than D's lookahead, the same in waypoints: fixes lost
+     * within it (each a hole of an interval more, the next on time).  The
+     * curve then ends as far as the waypoints received let the solver take
+     * it, at most la_steady nodes before the newest, only the newest still
+     * being judged; two lost within one lookahead at 2 Hz were an underrun
+     * of an input on time (issue 26's 24 h run) */
+    unsigned after = 0;
+    for (uint64_t j = e->solve.nodes; j-- > 0 && after <= e->la_steady;) {
+        if (!(nt(e, j) > e->scale.avail_t))
+            break;
+        after++;
+    }
+    return after <= e->la_steady && accept_pending(&e->in.policy) <= ACCEPT_LAG ? 2 : 0;
 }
 
 void engine_delay(const engine_t *e, engine_delay_t *d)

@@ -493,6 +493,9 @@ int play_enough_ahead(const engine_t *e, const qent_t *h, double *lag);
  * (engine_play.c). */
 int play_rebuffering(const engine_t *e, double s);
 void play_count_underrun(engine_t *e);
+/* D grows as the input now needs, and (start_slack auto) the slack learns
+ * an interval more: after an underrun, or fixes lost within the lookahead. */
+void play_slack_learn(engine_t *e);
 void play_underrun_counted(engine_t *e);
 void play_seed_cur(engine_t *e, int64_t n);
 /* The queue head (a SEG) made cur; its segment as the freed slot holds it

@@ -52,6 +52,11 @@ void play_underrun_counted(engine_t *e)
 {
     e->out.und_pending = 0;
     e->st.underruns++;
+    play_slack_learn(e);
+}
+
+void play_slack_learn(engine_t *e)
+{
     if (e->slack_auto || e->cfg.delay_s > 0)
         engine_delay_grow(e); /* D as the input now needs (delay.h) */
     if (e->slack_auto && e->slack_learn < e->slack_more) {

@@ -701,13 +701,19 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
     e->out.t = e->out.origin_t + s1;
 
     if (lim && !e->scale.stop_req && !e->scale.avail_closed && e->out.mode == OUT_STREAM) {
-        if (!e->out.underrun && engine_delay_reserve_short(e)) {
+        int why = e->out.underrun ? 0 : engine_delay_reserve_short(e);
+        if (why) {
             /* issue 26: the data came on time, the object is faster than
-             * the speed D's stop reserve was sized for, or a fix was lost
+             * the speed D's stop reserve was sized for, or fixes were lost
              * within the lookahead: slowed for it (told on each tick: data
-             * that turns late makes it an underrun) */
-            if (!e->out.reserve_slow)
+             * that turns late makes it an underrun).  Lost fixes (2): D
+             * learns an interval, as after an underrun, so that the next
+             * such hole is held, not slowed for again */
+            if (!e->out.reserve_slow) {
                 e->st.reserve_slowed++;
+                if (why == 2)
+                    play_slack_learn(e);
+            }
             e->out.reserve_slow = 1;
         } else {
             if (!e->out.underrun)

@@ -7,8 +7,10 @@ y = 200 sin(t/97)) from a sender whose clock runs 500 ppm fast or slow,
 each waypoint arriving 20..80 ms late (the issue's 24 h run, shortened;
 500 ppm is drift_max_ppm's default).  With 1 % of the waypoints lost as
 well, a lost one is a hole of two intervals against the start's slack of
-one: the first such holes are underruns, after which start_slack auto has
-learnt the slack and D holds it (printed, not asserted).
+one: the first such holes are slowdowns (reserve_slowed: the fixes after them
+came on time, lib/engine/delay.h) or, a fix still awaited, underruns, after
+which start_slack auto has learnt the slack and D holds it (printed, not
+asserted).
 
 Given that log, when trajd plays the object out (relative time, [daemon]
 catchup at its default 5 %), then the delay on the sender's clock at the end

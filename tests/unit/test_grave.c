@@ -27,9 +27,10 @@ static engine_t *small_engine(void)
 static void test_all_freed(void **state)
 {
     (void)state;
-    engine_t *warm = small_engine(); /* the allocator's first arenas, before the baseline */
-    grave_put(warm);
-    grave_stop();
+    for (int round = 0; round < 2; round++) { /* the thread's and the allocator's first */
+        grave_put(small_engine());
+        grave_stop();
+    }
     struct mallinfo2 a = mallinfo2();
     for (int round = 0; round < 2; round++) { /* the thread starts again after a stop */
         for (int i = 0; i < N_ENGINES; i++)
@@ -41,7 +42,9 @@ static void test_all_freed(void **state)
     print_message("in use before %zu, after %zu bytes; mapped before %zu, after %zu\n", a.uordblks,
                   b.uordblks, a.hblkhd, b.hblkhd);
     assert_true(b.hblkhd <= a.hblkhd);
-    assert_true(b.uordblks <= a.uordblks + 4096); /* the thread's own, if any */
+    /* one engine not freed is more than this (each holds tens of kB), all
+     * of them not freed tens of MB; the threads' own bookkeeping less */
+    assert_true(b.uordblks <= a.uordblks + 16384);
 }
 
 int main(void)
