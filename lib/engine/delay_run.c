@@ -448,7 +448,7 @@ int engine_delay_reserve_short(const engine_t *e)
             break;
         after++;
     }
-    return after <= e->la_steady && accept_pending(&e->in.policy) <= ACCEPT_LAG ? 2 : 0;
+    return after <= e->la_steady ? 2 : 0;
 }
 
 void engine_delay(const engine_t *e, engine_delay_t *d)
