@@ -439,9 +439,10 @@ int engine_delay_reserve_short(const engine_t *e)
     /* longer in time than D's lookahead, the same in waypoints: fixes lost
      * within it (each a hole of an interval more, the next on time).  The
      * curve then ends as far as the waypoints received let the solver take
-     * it, at most la_steady nodes before the newest, only the newest still
-     * being judged; two lost within one lookahead at 2 Hz were an underrun
-     * of an input on time (issue 26's 24 h run) */
+     * it, at most la_steady nodes before the newest (fixes the acceptance
+     * still judges are the input's on time too: a refused spike's verdict
+     * waits for the fix after it); two lost within one lookahead at 2 Hz
+     * were an underrun of an input on time (issue 26's 24 h run) */
     unsigned after = 0;
     for (uint64_t j = e->solve.nodes; j-- > 0 && after <= e->la_steady;) {
         if (!(nt(e, j) > e->scale.avail_t))
