@@ -165,7 +165,7 @@ void engine_delay_note(engine_t *e, double lag);
  * newest waypoint arrived within the interval and slack D holds for one
  * (and a tick), and the solved curve ends within D's lookahead of it, in
  * time or, fixes lost, in waypoints (at most la_steady nodes after its end,
- * whatever the acceptance still judges).  The object then moves faster than the
+ * the acceptance judging at most a refused fix's next).  The object then moves faster than the
  * speed the reserve was sized for (D grows with the input's top speed), or a
  * fix was lost within the lookahead (D grows with the intervals): a
  * slowdown for the reserve, counted in reserve_slowed, not an underrun.

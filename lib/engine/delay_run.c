@@ -439,17 +439,19 @@ int engine_delay_reserve_short(const engine_t *e)
     /* longer in time than D's lookahead, the same in waypoints: fixes lost
      * within it (each a hole of an interval more, the next on time).  The
      * curve then ends as far as the waypoints received let the solver take
-     * it, at most la_steady nodes before the newest (fixes the acceptance
-     * still judges are the input's on time too: a refused spike's verdict
-     * waits for the fix after it); two lost within one lookahead at 2 Hz
-     * were an underrun of an input on time (issue 26's 24 h run) */
+     * it, at most la_steady nodes before the newest, and the acceptance
+     * judges no more than a refused fix's verdict holds (the fix after it,
+     * ACCEPT_LAG + 1; a run it judges, a re-anchor's confirm or a dead stop's
+     * repeats, stays an underrun, told as such); two lost within one
+     * lookahead at 2 Hz were an underrun of an input on time (issue 26's
+     * 24 h run) */
     unsigned after = 0;
     for (uint64_t j = e->solve.nodes; j-- > 0 && after <= e->la_steady;) {
         if (!(nt(e, j) > e->scale.avail_t))
             break;
         after++;
     }
-    return after <= e->la_steady ? 2 : 0;
+    return after <= e->la_steady && accept_pending(&e->in.policy) <= ACCEPT_LAG + 1 ? 2 : 0;
 }
 
 void engine_delay(const engine_t *e, engine_delay_t *d)
