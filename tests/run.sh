@@ -9,10 +9,7 @@
 #   JOBS    how many test programs run at once (default: twice the number of CPUs, and
 #           one more, as most of them wait on a daemon or a guest kernel: on 2 CPUs the
 #           plain pass ran 4 at a time, 1 040 s of programs in 262 s, the CPUs not full).  The
-#           programs named in tests/serial.txt run afterwards, one at a time; those
-#           named in tests/idle.txt run from the start, one at a time, at idle CPU
-#           priority (SCHED_IDLE), in the CPU time the others leave (NO_IDLE=1: with
-#           the others instead; IDLE_LIST=FILE: another list)
+#           programs named in tests/serial.txt run afterwards, one at a time.
 #   TEST_TIMEOUT_S  the most one test program may take (default 900 s; then it fails)
 #   COUNTS  a file to which the three counts are appended ("passed failed skipped"), so
 #           that `make check` can add up the plain and the sanitizer pass
@@ -95,7 +92,6 @@ list_all() {
     fi
 }
 serial() { grep -qx "$1" tests/serial.txt 2>/dev/null; }
-idle() { grep -qx "$1" "${IDLE_LIST:-tests/idle.txt}" 2>/dev/null; }
 # Longest first (the times of the last run; a program never timed goes first:
 # the kernel tests, then the scripts, then the C programs).
 by_time() {
@@ -110,19 +106,11 @@ all=$(list_all)
 for n in $all; do rm -f "$log_dir/$n.res"; done
 # the order of a clone's first run: the times in tests/test-times.txt
 seed=$times; [ -f "$seed" ] || seed=tests/test-times.txt
-par=""; ser=""; idl=""
-for n in $all; do
-    if serial "$n"; then ser="$ser$n$nl"
-    elif idle "$n" && [ -z "${NO_IDLE:-}" ]; then idl="$idl$n$nl"
-    else par="$par$n$nl"; fi
-done
+par=""; ser=""
+for n in $all; do if serial "$n"; then ser="$ser$n$nl"; else par="$par$n$nl"; fi; done
 jobs=${JOBS:-$(( $(nproc 2>/dev/null || echo 1) * 2 + 1 ))}
-# tests/idle.txt: CPU alone, no clock: beside the others, at idle CPU priority
-printf '%s' "$idl" | by_time | chrt --idle 0 xargs -r -n 1 -P 1 sh tests/run.sh --one &
-idle_pid=$!
 printf '%s' "$par" | by_time | xargs -r -n 1 -P "$jobs" sh tests/run.sh --one
 printf '%s' "$ser" | xargs -r -n 1 -P 1 sh tests/run.sh --one
-wait $idle_pid
 
 passed=0; failed=0; skipped=0; failures=""; skip_lines=""
 new_times=""

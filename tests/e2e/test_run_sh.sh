@@ -2,8 +2,7 @@
 # tests/run.sh itself: three outcomes (PASS, FAIL, SKIP by exit 77 or a first
 # line "SKIP:"), a hung program failed by its timeout, the closing line counting
 # each, the skipped listed with their reasons, the same verdicts whether the
-# programs run one at a time, side by side or some at idle priority beside the
-# others (tests/idle.txt), and COUNTS appended.
+# programs run one at a time or side by side, and COUNTS appended.
 set -u
 unset TESTS COUNTS JOBS ONLY  # run.sh itself may have set them for this program
 cd "$(dirname "$0")/../.." || exit 1
@@ -17,13 +16,9 @@ prog test_skip77 'echo "no peer here"; exit 77'
 prog test_skipline 'echo "SKIP: nothing to talk to"; exit 0'
 prog test_hang 'sleep 60'
 prog test_pyskips 'echo "Ran 5 tests in 0.1s"; echo "OK (skipped=2)"'
-printf 'test_fail\ntest_skip77\ntest_pass\n' > "$tmp/idle.txt"
-for jobs in 1 4 idle; do
+for jobs in 1 4; do
     rm -f "$tmp/counts"
-    # idle: three of them in the idle list, run at idle CPU priority beside the others
-    il=/dev/null; [ $jobs = idle ] && il="$tmp/idle.txt"
-    out=$(BUILD="$tmp" ONLY=c JOBS=${jobs#idle} IDLE_LIST="$il" TEST_TIMEOUT_S=2 COUNTS="$tmp/counts" \
-        sh tests/run.sh 2>&1)
+    out=$(BUILD="$tmp" ONLY=c JOBS=$jobs TEST_TIMEOUT_S=2 COUNTS="$tmp/counts" sh tests/run.sh 2>&1)
     rc=$?
     [ $rc -ne 0 ] || fail "JOBS=$jobs: exit 0 with failures:$(printf '\n%s' "$out")"
     last=$(printf '%s\n' "$out" | tail -n 1)
@@ -40,4 +35,4 @@ done
 # TESTS= picks by name; a pass alone exits 0
 out=$(BUILD="$tmp" ONLY=c TESTS="test_pass test_skip77" sh tests/run.sh 2>&1) || fail "TESTS=: exit $?"
 [ "$(printf '%s\n' "$out" | tail -n 1)" = "check: 1 passed, 0 failed, 1 skipped" ] || fail "TESTS=: $out"
-echo "run.sh: PASS, FAIL, SKIP, timeout and counts as stated, one at a time, side by side and at idle priority"
+echo "run.sh: PASS, FAIL, SKIP, timeout and counts as stated, one at a time and side by side"
