@@ -252,6 +252,10 @@ typedef struct {
     double und_t;
     uint64_t und_traj;
     int und_pending;
+    /* track time at which the output last began to slow for fixes lost
+     * within the lookahead (engine_delay_reserve_short 2): the same holes
+     * until they have passed the lookahead */
+    double hole_t;
 } engine_out_t;
 
 /* ---- time scaling of the play-out (engine_scale.c, timescale.h, TIMESCALE.md) ---- */

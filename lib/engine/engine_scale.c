@@ -14,6 +14,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "catchup.h"
 #include "delay.h"
 #include "fdiff.h"
 #include "timescale.h"
@@ -658,6 +659,23 @@ void scale_step(engine_t *e, double target, double R, double Rc, double A, doubl
 
 /* Move the scaled output to track time s1 (relative to origin_t), through
  * the queued segments, and update the states that depend on it. */
+/* A slowdown for fixes lost within the lookahead begins.  Holes met again,
+ * after the last ones passed the lookahead, before the lag they left was won
+ * back (catchup.h): D learns an interval, as after an underrun, so that holes
+ * that come that often are held, not slowed for each time.  A hole now and
+ * then is slowed for and its lag won back, D kept (issue 26: the 24 h run
+ * ends with its starting lag). */
+static void slow_for_holes(engine_t *e)
+{
+    engine_delay_t d;
+    engine_delay(e, &d);
+    if (fabs(e->out.t - e->out.hole_t) <= d.lookahead_s + d.slack_s)
+        return; /* the same holes, still within the lookahead */
+    if (engine_lag_pending(e))
+        play_slack_learn(e);
+    e->out.hole_t = e->out.t;
+}
+
 static void scaled_advance(engine_t *e, double s1, double target, int lim)
 {
     e->scale.on = 1;
@@ -706,13 +724,15 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
             /* issue 26: the data came on time, the object is faster than
              * the speed D's stop reserve was sized for, or fixes were lost
              * within the lookahead: slowed for it (told on each tick: data
-             * that turns late makes it an underrun).  Lost fixes (2): D
-             * learns an interval, as after an underrun, so that the next
-             * such hole is held, not slowed for again */
+             * that turns late makes it an underrun).  Lost fixes (2) met
+             * again before the lag the last ones left was won back: D
+             * learns an interval, as after an underrun, so that holes that
+             * come that often are held, not slowed for each time; a hole
+             * now and then is slowed for and its lag won back, D kept */
             if (!e->out.reserve_slow) {
                 e->st.reserve_slowed++;
                 if (why == 2)
-                    play_slack_learn(e);
+                    slow_for_holes(e);
             }
             e->out.reserve_slow = 1;
         } else {

@@ -19,6 +19,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "delay.h"
 #include "engine.h"
 
 #define H 0.5
@@ -28,6 +29,10 @@ typedef struct {
     engine_status_t st;
     int under_rows; /* UNDERRUN setpoints while the sender sends */
     double vmax;    /* the largest speed change a tick, m/s */
+    double d_start; /* D once the output streams, s (delay.h) */
+    double d_end;   /* D as the sender's last fix is pushed */
+    double lag_max; /* the largest lag the status told while sending, past 30 s */
+    double lag_end; /* the lag then */
 } run_t;
 
 /* n fixes; lost ones skipped; fixes stall_from .. stall_to all sent when
@@ -68,6 +73,17 @@ static void run(int n, const int *lost, int nlost, int stall_from, int stall_to,
         }
         engine_setpoint_t sp;
         assert_int_equal(engine_tick(e, k * PERIOD_NS, &sp), 0);
+        engine_delay_t d;
+        engine_delay(e, &d);
+        if (sp.state == ENGINE_STATE_STREAMING && !(r->d_start > 0))
+            r->d_start = d.delay_s;
+        if (next < n) {
+            engine_status(e, &r->st);
+            r->d_end = d.delay_s;
+            r->lag_end = r->st.lag_s;
+            if (sp.t_s > 30)
+                r->lag_max = fmax(r->lag_max, r->st.lag_s);
+        }
         if (next < n && sp.state == ENGINE_STATE_UNDERRUN)
             r->under_rows++;
         if (next < n && sp.t_s > 30 &&
@@ -119,11 +135,59 @@ static void test_late_fix_is_an_underrun(void **state)
     assert_int_equal(r.st.hard_stops, 0);
 }
 
+/* Given two fixes lost in a row (a silence of three intervals, longer than
+ * D's slack), when the fix after them comes on its stamp's time, then the
+ * output, which ran short and braked, counts no underrun (nothing came late:
+ * the fixes were lost) and D stays as it was: the slowdown is told as one
+ * for lost fixes (reserve_slowed), the lag it leaves won back. */
+static void test_two_lost_in_a_row_on_time(void **state)
+{
+    (void)state;
+    const int lost[] = {93, 94};
+    run_t r;
+    run(600, lost, 2, -1, -1, &r);
+    print_message("2 fixes lost in a row: %llu underruns, %llu slowdowns, D %.3f -> %.3f s, lag "
+                  "at most %.3f s, at the end %.3f s\n",
+                  (unsigned long long)r.st.underruns, (unsigned long long)r.st.reserve_slowed,
+                  r.d_start, r.d_end, r.lag_max, r.lag_end);
+    assert_int_equal(r.st.underruns, 0);
+    assert_true(r.st.reserve_slowed >= 1);
+    assert_int_equal(r.st.hard_stops, 0);
+    assert_true(fabs(r.d_end - r.d_start) < 0.1 * H); /* no interval learnt */
+    assert_true(r.lag_max > 0.1);         /* it did fall behind */
+    assert_true(fabs(r.lag_end) < 0.5 * H); /* and won it back */
+    assert_true(r.vmax <= 5.0 * 0.1 + 0.01);
+}
+
+/* Given 1 %% of a 2 Hz sender's fixes lost, each far from the last (issue
+ * 26's 24 h run: the lag must end where it began), when the run goes on for
+ * an hour, then no underrun is counted, D at the end is D at the start, and
+ * the lag each loss leaves is won back before the next. */
+static void test_isolated_losses_keep_d(void **state)
+{
+    (void)state;
+    int lost[80], nl = 0;
+    for (int i = 150; i < 7200 - 10 && nl < 80; i += 70 + (i * 7919) % 60)
+        lost[nl++] = i;
+    run_t r;
+    run(7200, lost, nl, -1, -1, &r);
+    print_message("%d fixes lost apart in an hour: %llu underruns, %llu slowdowns, D %.3f -> "
+                  "%.3f s, lag at most %.3f s, at the end %.3f s\n",
+                  nl, (unsigned long long)r.st.underruns, (unsigned long long)r.st.reserve_slowed,
+                  r.d_start, r.d_end, r.lag_max, r.lag_end);
+    assert_int_equal(r.st.underruns, 0);
+    assert_int_equal(r.st.hard_stops, 0);
+    assert_true(fabs(r.d_end - r.d_start) < 0.1 * H); /* the jitter's, no interval */
+    assert_true(fabs(r.lag_end) < 0.5 * H);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_lost_on_time_is_no_underrun),
         cmocka_unit_test(test_late_fix_is_an_underrun),
+        cmocka_unit_test(test_two_lost_in_a_row_on_time),
+        cmocka_unit_test(test_isolated_losses_keep_d),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
