@@ -52,37 +52,51 @@ def conf(tmp, obj2, accel):
 
 
 class ReloadCoalescedTick(unittest.TestCase):
+    def run_once(self, tmp):
+        track(os.path.join(tmp, "track.csv"), 30)
+        conf(tmp, True, 10)
+        p = subprocess.Popen([TRAJD, "-f", "-c", "trajd.conf"], cwd=tmp,
+                             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.PIPE, text=True)
+        try:
+            time.sleep(4)
+            conf(tmp, False, 10)
+            p.send_signal(signal.SIGHUP)  # removes obj2: waits while it brakes
+            time.sleep(0.2)
+            conf(tmp, False, 12)
+            p.send_signal(signal.SIGHUP)  # coalesced: obj changed
+            time.sleep(2.5)
+            p.send_signal(signal.SIGTERM)
+            _, err = p.communicate(timeout=60)
+        finally:
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+        return err
+
     def test_no_tick_lost(self):
-        with tempfile.TemporaryDirectory() as tmp:
-            track(os.path.join(tmp, "track.csv"), 30)
-            conf(tmp, True, 10)
-            p = subprocess.Popen([TRAJD, "-f", "-c", "trajd.conf"], cwd=tmp,
-                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                 stderr=subprocess.PIPE, text=True)
-            try:
-                time.sleep(4)
-                conf(tmp, False, 10)
-                p.send_signal(signal.SIGHUP)  # removes obj2: waits while it brakes
-                time.sleep(0.2)
-                conf(tmp, False, 12)
-                p.send_signal(signal.SIGHUP)  # coalesced: obj changed
-                time.sleep(2.5)
-                p.send_signal(signal.SIGTERM)
-                _, err = p.communicate(timeout=60)
-            finally:
-                if p.poll() is None:
-                    p.kill()
-                    p.wait()
-            self.assertIn("coalesced", err)
-            self.assertEqual(err.count("reloaded:"), 2, err[-3000:])
-            missed = int(re.search(r"exit: .*? missed (\d+)", err).group(1))
-            with open(os.path.join(tmp, "out.csv")) as f:
-                rows = [ln.strip().split(",") for ln in f if ln.startswith("obj,")]
-            jumps = [(a, b) for a, b in zip(rows, rows[1:])
-                     if int(b[1]) - int(a[1]) != PERIOD_NS and not int(b[13]) & SKIPPED]
-            self.assertEqual(jumps, [], "now_ns steps of other than one period, unflagged")
-            flagged = sum(1 for r in rows if int(r[13]) & SKIPPED)
-            self.assertLessEqual(flagged, missed, "skipped rows not counted in missed")
+        # obj2 brakes for about 0.65 s of wall time: a test process held up longer
+        # than that between its two signals (a loaded machine) sends the second
+        # after the first reload is done, and nothing is left to coalesce; that
+        # run tells nothing, and is made again (up to 3 times)
+        for attempt in range(3):
+            with tempfile.TemporaryDirectory() as tmp:
+                err = self.run_once(tmp)
+                if "coalesced" in err or attempt == 2:
+                    self.check(tmp, err)
+                    return
+
+    def check(self, tmp, err):
+        self.assertIn("coalesced", err)
+        self.assertEqual(err.count("reloaded:"), 2, err[-3000:])
+        missed = int(re.search(r"exit: .*? missed (\d+)", err).group(1))
+        with open(os.path.join(tmp, "out.csv")) as f:
+            rows = [ln.strip().split(",") for ln in f if ln.startswith("obj,")]
+        jumps = [(a, b) for a, b in zip(rows, rows[1:])
+                 if int(b[1]) - int(a[1]) != PERIOD_NS and not int(b[13]) & SKIPPED]
+        self.assertEqual(jumps, [], "now_ns steps of other than one period, unflagged")
+        flagged = sum(1 for r in rows if int(r[13]) & SKIPPED)
+        self.assertLessEqual(flagged, missed, "skipped rows not counted in missed")
 
 
 if __name__ == "__main__":
