@@ -171,6 +171,13 @@ void engine_delay_note(engine_t *e, double lag);
  * slowdown for the reserve, counted in reserve_slowed, not an underrun.
  * Returns 2 for fixes lost (the span longer in time only), 1 otherwise. */
 int engine_delay_reserve_short(const engine_t *e);
+
+/* 1 if the input's intervals are whole numbers of one interval (its lost
+ * fixes aside, engine_interval_holes): a regular sender. */
+int engine_input_regular(const engine_t *e);
+/* 1 if a regular sender's stamps gap_s apart are fixes lost between them:
+ * a whole number (2 or more) of its interval. */
+int engine_input_hole(const engine_t *e, double gap_s);
 /* Engine-internal (engine_scale.c: the output back at rate 1 after its
  * start's ramp, an underrun or a slowdown for the reserve): a fixed
  * start_slack's output is not steered back to D (catchup.h), so the D stated

@@ -299,6 +299,10 @@ void engine_delay_note(engine_t *e, double known)
     e->delay.learnt = e->slack_learn;
 }
 
+/* How far from a whole number of the median interval a regular sender's
+ * interval may be (engine_interval_holes): its stamps' jitter. */
+#define REGULAR_TOL 0.05
+
 /* The k-th smallest (from 0) of v[0 .. n) (Hoare's FIND: v is reordered). */
 static double kth_smallest(double *v, unsigned n, unsigned k)
 {
@@ -381,9 +385,61 @@ double engine_interval_robust(const double *iv, unsigned n, unsigned next, unsig
     return best / w;
 }
 
+/* A regular sender's interval with its lost fixes filled in: every
+ * interval of the ring within REGULAR_TOL of a whole number k >= 1 of their
+ * median (a fix lost is a slot of the sender's clock left empty), each taken
+ * as its k-th part; the longest time of w slots in a row over w.  0 when an
+ * interval is not such a multiple (a sender whose timing varies: its holes
+ * are its timing, engine_interval_robust) or with fewer than w. */
+double engine_interval_holes(const double *iv, unsigned n, unsigned next, unsigned w)
+{
+    double a[ENGINE_IV_RING], v[ENGINE_IV_RING];
+    if (n > ENGINE_IV_RING || n < w || w == 0)
+        return 0.0;
+    for (unsigned i = 0; i < n; i++)
+        a[i] = iv[(next + ENGINE_IV_RING - n + i) % ENGINE_IV_RING];
+    memcpy(v, a, n * sizeof v[0]);
+    double med = kth_smallest(v, n, n / 2);
+    for (unsigned i = 0; i < n; i++) {
+        double k = round(a[i] / med);
+        if (!(k >= 1.0) || fabs(a[i] - k * med) > REGULAR_TOL * med)
+            return 0.0;
+        a[i] /= k;
+    }
+    double best = 0.0;
+    for (unsigned s = 0; s + w <= n; s++) {
+        double sum = 0.0;
+        for (unsigned i = 0; i < w; i++)
+            sum += a[s + i];
+        best = fmax(best, sum);
+    }
+    return best / w;
+}
+
+static double interval_holes(const engine_t *e)
+{
+    return engine_interval_holes(e->solve.iv, e->solve.iv_n, e->solve.iv_next, e->la_steady + 1);
+}
+
+int engine_input_regular(const engine_t *e)
+{
+    return interval_holes(e) > 0.0;
+}
+
+int engine_input_hole(const engine_t *e, double gap_s)
+{
+    double h = interval_holes(e), k = h > 0.0 ? round(gap_s / h) : 0.0;
+    return k >= 2.0 && fabs(gap_s - k * h) <= REGULAR_TOL * h;
+}
+
+/* A regular sender's lost fixes are holes, slowed for and won back
+ * (engine_delay_reserve_short), not a longer D for good: the 24 h run of
+ * issue 26 (1 % lost) ends with its starting lag. */
 static double interval_robust(const engine_t *e)
 {
-    return engine_interval_robust(e->solve.iv, e->solve.iv_n, e->solve.iv_next, e->la_steady + 1);
+    double h = engine_interval_robust(e->solve.iv, e->solve.iv_n, e->solve.iv_next, e->la_steady + 1);
+    double r = interval_holes(e);
+    return r > 0.0 ? fmin(h, r) : h;
 }
 
 void engine_delay_grow(engine_t *e)

@@ -39,6 +39,7 @@
  * row, each with its longest interval taken as the median of the n instead,
  * over w; 0 with fewer than w. */
 double engine_interval_robust(const double *iv, unsigned n, unsigned next, unsigned w);
+double engine_interval_holes(const double *iv, unsigned n, unsigned next, unsigned w);
 /* delay_s set: the waypoints the input's interval and speed are read from
  * before the lookahead is picked (engine_pick) */
 #define ENGINE_PICK_N 3
@@ -252,10 +253,6 @@ typedef struct {
     double und_t;
     uint64_t und_traj;
     int und_pending;
-    /* track time at which the output last began to slow for fixes lost
-     * within the lookahead (engine_delay_reserve_short 2): the same holes
-     * until they have passed the lookahead */
-    double hole_t;
 } engine_out_t;
 
 /* ---- time scaling of the play-out (engine_scale.c, timescale.h, TIMESCALE.md) ---- */

@@ -57,12 +57,14 @@ void play_underrun_counted(engine_t *e)
 
 void play_slack_learn(engine_t *e)
 {
-    if (e->slack_auto || e->cfg.delay_s > 0)
-        engine_delay_grow(e); /* D as the input now needs (delay.h) */
     if (e->slack_auto && e->slack_learn < e->slack_more) {
         e->slack_learn++;
         e->st.lookahead = e->lookahead + e->slack_learn;
     }
+    /* D as the input now needs (delay.h), the interval learnt in it: stated
+     * anew, and logged, with it */
+    if (e->slack_auto || e->cfg.delay_s > 0)
+        engine_delay_grow(e);
 }
 
 /* The output stands where it is, at rest. */

@@ -14,7 +14,6 @@
 #include <math.h>
 #include <string.h>
 
-#include "catchup.h"
 #include "delay.h"
 #include "fdiff.h"
 #include "timescale.h"
@@ -659,21 +658,16 @@ void scale_step(engine_t *e, double target, double R, double Rc, double A, doubl
 
 /* Move the scaled output to track time s1 (relative to origin_t), through
  * the queued segments, and update the states that depend on it. */
-/* A slowdown for fixes lost within the lookahead begins.  Holes met again,
- * after the last ones passed the lookahead, before the lag they left was won
- * back (catchup.h): D learns an interval, as after an underrun, so that holes
- * that come that often are held, not slowed for each time.  A hole now and
- * then is slowed for and its lag won back, D kept (issue 26: the 24 h run
- * ends with its starting lag). */
+/* A slowdown for fixes lost within the lookahead begins.  A sender whose
+ * timing varies: D learns an interval, as after an underrun, so that holes
+ * that come that often are held, not slowed for each time.  A regular one
+ * (engine_input_regular: its holes are fixes lost): slowed for and its lag
+ * won back, D kept (issue 26: the 24 h run, 1 % lost, ends with its
+ * starting lag). */
 static void slow_for_holes(engine_t *e)
 {
-    engine_delay_t d;
-    engine_delay(e, &d);
-    if (fabs(e->out.t - e->out.hole_t) <= d.lookahead_s + d.slack_s)
-        return; /* the same holes, still within the lookahead */
-    if (engine_lag_pending(e))
+    if (!engine_input_regular(e))
         play_slack_learn(e);
-    e->out.hole_t = e->out.t;
 }
 
 static void scaled_advance(engine_t *e, double s1, double target, int lim)

@@ -6,6 +6,28 @@
 #include "delay.h"
 #include "engine_int.h"
 
+/* The waypoint an underrun waited for came, stamped t_s.  Late (its arrival
+ * after the one before later than their stamps by more than the jitter D
+ * holds, and a tick): counted, D learns (play_underrun_counted).  A regular
+ * sender's on time, its stamp a whole number of intervals after the one
+ * before (engine_input_hole): the silence was fixes lost, not the input
+ * late: a slowdown for them (reserve_slowed), D kept (issue 26: the 24 h
+ * run, 1 % lost, two in a row now and then). */
+static void silence_ended(engine_t *e, double t_s)
+{
+    engine_delay_t d;
+    engine_delay(e, &d);
+    /* it arrived by the next tick: at most a period after the last one */
+    double waited = (double)(e->out.last_now + e->cfg.period_ns - e->sil.arrival_ns) * 1e-9;
+    if (e->sil.arrived && engine_input_hole(e, t_s - e->out.und_t) &&
+        waited - (t_s - e->out.und_t) <= d.jitter_s + 2.0 * e->period_s) {
+        e->out.und_pending = 0;
+        e->st.reserve_slowed++;
+        return;
+    }
+    play_underrun_counted(e); /* the waypoint it waited for came: late */
+}
+
 void engine_silence_push(engine_t *e, const engine_waypoint_t *wp)
 {
     int gap = e->sil.n && wp->t_s - e->sil.last_t > e->cfg.max_gap_s;
@@ -25,7 +47,7 @@ void engine_silence_push(engine_t *e, const engine_waypoint_t *wp)
             wp->t_s > e->st.underrun_newest_t_s)
             e->st.underrun_next_t_s = wp->t_s; /* the silence the last underrun met ends */
         if (e->out.und_pending && wp->t_s > e->out.und_t)
-            play_underrun_counted(e); /* the waypoint it waited for came: late */
+            silence_ended(e, wp->t_s);
         e->sil.last_t = wp->t_s;
         e->sil.n++;
     }

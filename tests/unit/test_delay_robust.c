@@ -4,7 +4,8 @@
  * of the ring read through its modulo, summed from 0 and its longest taken by
  * fmax.  Bit for bit, on random rings of every fill, write position and window
  * length, with intervals drawn from a few values (ties) or spread, and on
- * the real track's 5 Hz intervals (0.199 and 0.201 s among 0.2 s). */
+ * the real track's 5 Hz intervals (0.199 and 0.201 s among 0.2 s); and a regular
+ * sender's holes (engine_interval_holes). */
 #include "test.h"
 
 #include <math.h>
@@ -125,12 +126,41 @@ static void test_orders(void **state)
     same_bits(engine_interval_robust(iv, 3, 3, 4), 0.0); /* fewer than w */
 }
 
+/* A regular sender's ring (engine_interval_holes): intervals of 0.5 s with
+ * fixes lost (1.0, 1.5 s) give 0.5 s, its holes filled in, where the
+ * longest-removed window counts all but one of them; a few ms of jitter
+ * keeps it regular; a sender whose timing varies (0.7 s among 0.5 s, or the
+ * spread intervals) is none (0). */
+static void test_holes(void **state)
+{
+    (void)state;
+    double iv[ENGINE_IV_RING];
+    for (unsigned i = 0; i < ENGINE_IV_RING; i++)
+        iv[i] = 0.5;
+    iv[10] = 1.0;
+    iv[14] = 1.5;
+    iv[20] = 1.0;
+    assert_true(fabs(engine_interval_holes(iv, 64, 0, 19) - 0.5) < 1e-12);
+    assert_true(engine_interval_robust(iv, 64, 0, 19) > 0.5 + 1.0 / 19); /* two holes count */
+    for (unsigned i = 0; i < ENGINE_IV_RING; i++)
+        iv[i] += 0.004 * sin(i); /* 20..80 ms late arrivals are not the stamps: a few ms */
+    double h = engine_interval_holes(iv, 64, 0, 19);
+    assert_true(h > 0.49 && h < 0.51);
+    iv[30] = 0.7;
+    assert_true(!(engine_interval_holes(iv, 64, 0, 19) > 0.0));
+    unsigned seed = 9;
+    fill(iv, 64, 64, &seed, 1);
+    assert_true(!(engine_interval_holes(iv, 64, 0, 19) > 0.0));
+    assert_true(!(engine_interval_holes(iv, 10, 10, 19) > 0.0)); /* fewer than w */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_random_rings),
         cmocka_unit_test(test_full_ring_any_position),
         cmocka_unit_test(test_orders),
+        cmocka_unit_test(test_holes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

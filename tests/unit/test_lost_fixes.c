@@ -181,6 +181,34 @@ static void test_isolated_losses_keep_d(void **state)
     assert_true(fabs(r.lag_end) < 0.5 * H);
 }
 
+/* Given a regular sender's holes that come often (two fixes lost in a row
+ * every 12 s: a silence of three intervals, longer than D's slack; D's
+ * measured interval does not grow for them, engine_interval_holes), when the
+ * fix after each comes on its stamp's time, then no underrun is counted and
+ * D is kept: each is slowed for (reserve_slowed) within the time scaling's
+ * limits, no hard stop, and the lag is won back at the end. */
+static void test_frequent_holes_slowed(void **state)
+{
+    (void)state;
+    int lost[40], nl = 0;
+    for (int i = 93; nl + 2 <= 40; i += 24) {
+        lost[nl++] = i;
+        lost[nl++] = i + 1;
+    }
+    run_t r;
+    run(600, lost, nl, -1, -1, &r);
+    print_message("%d pairs of fixes lost in a row, 12 s apart: %llu underruns, %llu slowdowns, "
+                  "D %.3f -> %.3f s, lag at the end %.3f s\n",
+                  nl / 2, (unsigned long long)r.st.underruns,
+                  (unsigned long long)r.st.reserve_slowed, r.d_start, r.d_end, r.lag_end);
+    assert_int_equal(r.st.underruns, 0);
+    assert_int_equal(r.st.hard_stops, 0);
+    assert_true(r.st.reserve_slowed >= (uint64_t)nl / 2);
+    assert_true(fabs(r.d_end - r.d_start) < 0.1 * H);
+    assert_true(fabs(r.lag_end) < 0.5 * H);
+    assert_true(r.vmax <= 5.0 * 0.1 + 0.01);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -188,6 +216,7 @@ int main(void)
         cmocka_unit_test(test_late_fix_is_an_underrun),
         cmocka_unit_test(test_two_lost_in_a_row_on_time),
         cmocka_unit_test(test_isolated_losses_keep_d),
+        cmocka_unit_test(test_frequent_holes_slowed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
