@@ -437,7 +437,8 @@ int engine_input_hole(const engine_t *e, double gap_s)
  * issue 26 (1 % lost) ends with its starting lag. */
 static double interval_robust(const engine_t *e)
 {
-    double h = engine_interval_robust(e->solve.iv, e->solve.iv_n, e->solve.iv_next, e->la_steady + 1);
+    double h = engine_interval_robust(e->solve.iv, e->solve.iv_n, e->solve.iv_next,
+                                      e->la_steady + 1);
     double r = interval_holes(e);
     return r > 0.0 ? fmin(h, r) : h;
 }

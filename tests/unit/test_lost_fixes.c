@@ -154,8 +154,8 @@ static void test_two_lost_in_a_row_on_time(void **state)
     assert_true(r.st.reserve_slowed >= 1);
     assert_int_equal(r.st.hard_stops, 0);
     assert_true(fabs(r.d_end - r.d_start) < 0.1 * H); /* no interval learnt */
-    assert_true(r.lag_max > 0.1);         /* it did fall behind */
-    assert_true(fabs(r.lag_end) < 0.5 * H); /* and won it back */
+    assert_true(r.lag_max > 0.1);                     /* it did fall behind */
+    assert_true(fabs(r.lag_end) < 0.5 * H);           /* and won it back */
     assert_true(r.vmax <= 5.0 * 0.1 + 0.01);
 }
 
