@@ -331,6 +331,17 @@ static double kth_smallest(double *v, unsigned n, unsigned k)
     return v[ki];
 }
 
+/* The ring's n intervals written up to next, oldest first, into a; returns
+ * their median (the (n/2)-th smallest). */
+static double ring_read(const double *iv, unsigned n, unsigned next, double *a)
+{
+    double v[ENGINE_IV_RING];
+    for (unsigned i = 0; i < n; i++)
+        a[i] = iv[(next + ENGINE_IV_RING - n + i) % ENGINE_IV_RING];
+    memcpy(v, a, n * sizeof v[0]);
+    return kth_smallest(v, n, n / 2);
+}
+
 /* The input's interval as D is grown to it (engine_delay_grow): of the
  * last intervals (engine_solve_t iv), the longest time of la_steady + 1 in a
  * row, each with its longest interval taken as the median instead, over
@@ -343,13 +354,10 @@ static double kth_smallest(double *v, unsigned n, unsigned k)
  * result, bit for bit: test_delay_robust). */
 double engine_interval_robust(const double *iv, unsigned n, unsigned next, unsigned w)
 {
-    double a[ENGINE_IV_RING], v[ENGINE_IV_RING], med;
+    double a[ENGINE_IV_RING], med;
     if (n > ENGINE_IV_RING || n < w || w == 0)
         return 0.0;
-    for (unsigned i = 0; i < n; i++) /* oldest first */
-        a[i] = iv[(next + ENGINE_IV_RING - n + i) % ENGINE_IV_RING];
-    memcpy(v, a, n * sizeof v[0]);
-    med = kth_smallest(v, n, n / 2);
+    med = ring_read(iv, n, next, a);
     /* each window's sum from its oldest interval on (0 + x is x), its
      * longest by comparison (fmax: the intervals are > 0, measure_input);
      * four windows at a time, each in its own order */
@@ -393,13 +401,10 @@ double engine_interval_robust(const double *iv, unsigned n, unsigned next, unsig
  * are its timing, engine_interval_robust) or with fewer than w. */
 double engine_interval_holes(const double *iv, unsigned n, unsigned next, unsigned w)
 {
-    double a[ENGINE_IV_RING], v[ENGINE_IV_RING];
+    double a[ENGINE_IV_RING];
     if (n > ENGINE_IV_RING || n < w || w == 0)
         return 0.0;
-    for (unsigned i = 0; i < n; i++)
-        a[i] = iv[(next + ENGINE_IV_RING - n + i) % ENGINE_IV_RING];
-    memcpy(v, a, n * sizeof v[0]);
-    double med = kth_smallest(v, n, n / 2);
+    double med = ring_read(iv, n, next, a);
     for (unsigned i = 0; i < n; i++) {
         double k = round(a[i] / med);
         if (!(k >= 1.0) || fabs(a[i] - k * med) > REGULAR_TOL * med)
