@@ -658,18 +658,6 @@ void scale_step(engine_t *e, double target, double R, double Rc, double A, doubl
 
 /* Move the scaled output to track time s1 (relative to origin_t), through
  * the queued segments, and update the states that depend on it. */
-/* A slowdown for fixes lost within the lookahead begins.  A sender whose
- * timing varies: D learns an interval, as after an underrun, so that holes
- * that come that often are held, not slowed for each time.  A regular one
- * (engine_input_regular: its holes are fixes lost): slowed for and its lag
- * won back, D kept (issue 26: the 24 h run, 1 % lost, ends with its
- * starting lag). */
-static void slow_for_holes(engine_t *e)
-{
-    if (!engine_input_regular(e))
-        play_slack_learn(e);
-}
-
 static void scaled_advance(engine_t *e, double s1, double target, int lim)
 {
     e->scale.on = 1;
@@ -718,15 +706,17 @@ static void scaled_advance(engine_t *e, double s1, double target, int lim)
             /* issue 26: the data came on time, the object is faster than
              * the speed D's stop reserve was sized for, or fixes were lost
              * within the lookahead: slowed for it (told on each tick: data
-             * that turns late makes it an underrun).  Lost fixes (2) met
-             * again before the lag the last ones left was won back: D
-             * learns an interval, as after an underrun, so that holes that
-             * come that often are held, not slowed for each time; a hole
-             * now and then is slowed for and its lag won back, D kept */
+             * that turns late makes it an underrun).  Lost fixes (2) of a
+             * sender whose timing varies: D learns an interval, as after an
+             * underrun, so that holes that come that often are held, not
+             * slowed for each time; a regular sender's (engine_input_regular:
+             * its holes are fixes lost) are slowed for and their lag won
+             * back, D kept (the 24 h run, 1 % lost, ends with its starting
+             * lag) */
             if (!e->out.reserve_slow) {
                 e->st.reserve_slowed++;
-                if (why == 2)
-                    slow_for_holes(e);
+                if (why == 2 && !engine_input_regular(e))
+                    play_slack_learn(e);
             }
             e->out.reserve_slow = 1;
         } else {

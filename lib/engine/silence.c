@@ -15,15 +15,17 @@
  * run, 1 % lost, two in a row now and then). */
 static void silence_ended(engine_t *e, double t_s)
 {
-    engine_delay_t d;
-    engine_delay(e, &d);
-    /* it arrived by the next tick: at most a period after the last one */
-    double waited = (double)(e->out.last_now + e->cfg.period_ns - e->sil.arrival_ns) * 1e-9;
-    if (e->sil.arrived && engine_input_hole(e, t_s - e->out.und_t) &&
-        waited - (t_s - e->out.und_t) <= d.jitter_s + 2.0 * e->period_s) {
-        e->out.und_pending = 0;
-        e->st.reserve_slowed++;
-        return;
+    double gap = t_s - e->out.und_t;
+    if (e->sil.arrived && engine_input_hole(e, gap)) {
+        engine_delay_t d;
+        engine_delay(e, &d);
+        /* it arrived by the next tick: at most a period after the last one */
+        double waited = (double)(e->out.last_now + e->cfg.period_ns - e->sil.arrival_ns) * 1e-9;
+        if (waited - gap <= d.jitter_s + 2.0 * e->period_s) {
+            e->out.und_pending = 0;
+            e->st.reserve_slowed++;
+            return;
+        }
     }
     play_underrun_counted(e); /* the waypoint it waited for came: late */
 }

@@ -159,7 +159,7 @@ static void test_two_lost_in_a_row_on_time(void **state)
     assert_true(r.vmax <= 5.0 * 0.1 + 0.01);
 }
 
-/* Given 1 %% of a 2 Hz sender's fixes lost, each far from the last (issue
+/* Given 1 % of a 2 Hz sender's fixes lost, each far from the last (issue
  * 26's 24 h run: the lag must end where it began), when the run goes on for
  * an hour, then no underrun is counted, D at the end is D at the start, and
  * the lag each loss leaves is won back before the next. */
