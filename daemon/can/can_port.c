@@ -9,6 +9,9 @@
 #include "can_drive.h"
 
 #define CAN_PORT_RX_BATCH 256 /* frames handled per can_port_rx call: do not starve the loop */
+/* A STATUS that has found no room in the transmit queue for this long (or for
+ * one status period, if longer) goes first in the next cycle, ahead of SYNC. */
+#define CAN_PORT_STATUS_STARVED_NS 100000000LL
 
 typedef struct {
     int set;
@@ -21,6 +24,7 @@ typedef struct {
     int have_sp;
     int status_due;
     int64_t last_status_ns;
+    int64_t status_failing_ns; /* when a due STATUS first found no room (0: it went out) */
     int sent_status;
     uint8_t flags_since;    /* CANPROTO_ST_BUS_DOWN | _TX_DROP | _OUT_FAULT since last STATUS */
     uint64_t out_lost_seen; /* can_port_output_fault: lines lost as of the last call */
@@ -532,10 +536,13 @@ static void send_status(can_port_t *p, can_port_obj_t *o, const engine_status_t 
         o->status_due = 0;
         o->last_status_ns = now_ns;
         o->sent_status = 1;
+        o->status_failing_ns = 0;
         o->last_state = (int)es.state;
         send_status2(p, o);
     } else {
         o->st.status_dropped++; /* due again next cycle */
+        if (!o->status_failing_ns)
+            o->status_failing_ns = now_ns ? now_ns : 1;
     }
 }
 
@@ -554,6 +561,32 @@ static void update_status2_drive(can_port_t *p, unsigned i)
         o->status_due = 1;
 }
 
+/* Object i's STATUS, if one is due (or, with starved_only, only if a due one
+ * has found no room in the transmit queue for CAN_PORT_STATUS_STARVED_NS or
+ * one status period).  Returns whether it was tried. */
+static int status_step(can_port_t *p, unsigned i, int64_t now_ns, int starved_only)
+{
+    can_port_obj_t *o = &p->obj[i];
+    if (starved_only) {
+        int64_t starve = p->cfg.status_period_ns > CAN_PORT_STATUS_STARVED_NS
+                             ? p->cfg.status_period_ns
+                             : CAN_PORT_STATUS_STARVED_NS;
+        if (!o->status_failing_ns || now_ns - o->status_failing_ns < starve)
+            return 0;
+    }
+    engine_status_t es;
+    memset(&es, 0, sizeof es);
+    o->hooks.status(o->ctx, &es);
+    update_status2_drive(p, i);
+    /* a change of state is reported at once (e.g. FINISHED, UNDERRUN) */
+    int due = o->status_due || !o->sent_status || (int)es.state != o->last_state ||
+              (p->cfg.status_period_ns > 0 &&
+               now_ns - o->last_status_ns >= p->cfg.status_period_ns);
+    if (due && p->io.is_up(p->io_ctx))
+        send_status(p, o, &es, now_ns);
+    return 1;
+}
+
 void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
 {
     p->st.cycles++;
@@ -564,6 +597,13 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
                 count_drop(p, &p->obj[i], -ENETDOWN);
         goto out;
     }
+    /* With the transmit queue full, the first frame written after a slot frees
+     * is the one that gets it: each cycle's SYNC, every time.  A STATUS that has
+     * been starved so (the operator's only word of the drops) goes first. */
+    unsigned first = 0; /* bit per object whose STATUS went ahead */
+    for (unsigned i = 0; i < p->nobj && i < 32; i++)
+        if (p->obj[i].set && status_step(p, i, now_ns, 1))
+            first |= 1u << i;
     /* A late cycle still sends its SYNC and its CiA 402 targets (a drive
      * applies the target at the next SYNC, so a late one is as good as an
      * early one; a missing SYNC is a fault for most drives); only the own
@@ -603,21 +643,9 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
             o->st.setpoints_sent++;
         }
     }
-    for (unsigned i = 0; i < p->nobj; i++) {
-        can_port_obj_t *o = &p->obj[i];
-        if (!o->set)
-            continue;
-        engine_status_t es;
-        memset(&es, 0, sizeof es);
-        o->hooks.status(o->ctx, &es);
-        update_status2_drive(p, i);
-        /* a change of state is reported at once (e.g. FINISHED, UNDERRUN) */
-        int due = o->status_due || !o->sent_status || (int)es.state != o->last_state ||
-                  (p->cfg.status_period_ns > 0 &&
-                   now_ns - o->last_status_ns >= p->cfg.status_period_ns);
-        if (due && p->io.is_up(p->io_ctx))
-            send_status(p, o, &es, now_ns);
-    }
+    for (unsigned i = 0; i < p->nobj; i++)
+        if (p->obj[i].set && !(i < 32 && (first >> i & 1u)))
+            status_step(p, i, now_ns, 0);
 out:
     for (unsigned i = 0; i < p->nobj; i++)
         p->obj[i].have_sp = 0;

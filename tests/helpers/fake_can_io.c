@@ -12,6 +12,11 @@ static int fake_send(void *io, const canproto_frame_t *f)
         return -ENETDOWN;
     if (x->fail_with)
         return x->fail_with;
+    if (x->room_limited) {
+        if (!x->room)
+            return -ENOBUFS;
+        x->room--;
+    }
     if (x->nout >= FAKE_CAN_MAX)
         abort(); /* a test sent more than it can look at */
     x->out[x->nout++] = *f;

@@ -16,9 +16,11 @@ typedef struct {
     unsigned nin, next;
     canproto_frame_t out[FAKE_CAN_MAX]; /* sent */
     unsigned nout;
-    int up;        /* 0: send -ENETDOWN, is_up 0 */
-    int fail_with; /* send returns this (negative) while set */
-    int reopen_ok; /* maintain brings a down interface up */
+    int up;           /* 0: send -ENETDOWN, is_up 0 */
+    int fail_with;    /* send returns this (negative) while set */
+    int reopen_ok;    /* maintain brings a down interface up */
+    int room_limited; /* a full transmit queue: send takes one of room, else -ENOBUFS */
+    unsigned room;
 } fake_can_io_t;
 
 /* The ops; their io argument is a fake_can_io_t. */

@@ -197,6 +197,49 @@ static void test_queue_full_drops_no_burst(void **state)
     (void)s;
 }
 
+/* Given a transmit queue that stays full, one slot freed between 10 ms cycles
+ * (a slow qdisc: tests/uml/daemon.sh phase D), then the SYNC written first in
+ * each cycle would take every slot; a STATUS starved for its period (100 ms)
+ * goes first instead, so the operator sees the drops at least every 200 ms,
+ * and SYNC keeps the other slots. */
+static void test_queue_full_status_not_starved(void **state)
+{
+    (void)state;
+    can_port_config_t cfg;
+    canproto_ids_t ids;
+    can_port_free(port);
+    can_port_config_default(&cfg);
+    cfg.sync = 1;
+    cfg.status_period_ns = 100000000LL;
+    port = can_port_new(&cfg, &fake_can_ops, &io, 1);
+    assert_non_null(port);
+    canproto_ids_default(&ids, 0);
+    assert_int_equal(can_port_set_object(port, 0, &ids, &fe_hooks, &eng), 0);
+    io.room_limited = 1;
+    for (uint32_t k = 0; k < 100; k++) { /* 1 s */
+        io.room = 1;
+        engine_setpoint_t sp = sp_at(k, k * 0.001);
+        can_port_setpoint(port, 0, &sp);
+        can_port_cycle(port, (int64_t)k * 10000000, 0);
+    }
+    unsigned last = 0, nst = 0, with_drop = 0;
+    for (unsigned i = 0; i < io.nout; i++) {
+        if (io.out[i].id != 0x6C0)
+            continue;
+        canproto_status_t s;
+        assert_int_equal(canproto_decode_status(&io.out[i], &s), 0);
+        with_drop += (s.flags & CANPROTO_ST_TX_DROP) != 0;
+        if (nst)
+            assert_true(i - last <= 20); /* frames are one a cycle here */
+        last = i;
+        nst++;
+    }
+    assert_int_equal(io.nout, 100);
+    assert_true(nst >= 5);
+    assert_true(with_drop >= nst - 1); /* all but maybe the first report the drops */
+    assert_true(count_id(0x080) >= 100 - nst);
+}
+
 /* Given the interface down for 5 cycles and then back (maintain reopens),
  * then nothing is sent while down, drops are counted as down, and the first
  * cycle after has exactly one setpoint and a STATUS flagging the outage. */
@@ -1098,6 +1141,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(test_cycle_frames_and_sync, setup, teardown),
         cmocka_unit_test_setup_teardown(test_queue_full_drops_no_burst, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_queue_full_status_not_starved, setup, teardown),
         cmocka_unit_test_setup_teardown(test_down_and_back, setup, teardown),
         cmocka_unit_test_setup_teardown(test_late_cycle_dropped, setup, teardown),
         cmocka_unit_test_setup_teardown(test_cia402_no_position_and_late, setup, teardown),
