@@ -15,16 +15,19 @@
 # (/proc/PID/stat), cyclictest's p99 at the same rate, policy and CPU, run
 # at the same time as trajd (so both meet the same noise of a shared machine:
 # one sleeping thread each, a few us of work per period), and the ratio
-# trajd p99 / cyclictest p99.  The
+# trajd p99 / cyclictest p99, and the share of cyclictest's wake-ups a
+# period or more late (what the host allows of the missed share).  The
 # previous values (the same row of tests/bench/RESULTS.md, between its
 # lateness:begin/end marks) stand beside the new ones.  Nothing is asserted.
 #   DURATION_S   measured seconds per run (default 10)
 #   ONLY         "4" or "1024": one workload only
+#   CONDITION    a part of a condition's label ("busy", "FIFO"): those rows only
 set -eu
 cd "$(dirname "$0")/../.."
 : "${BUILD:?BUILD must be set}"
 DURATION_S=${DURATION_S:-10}
 ONLY=${ONLY:-}
+CONDITION=${CONDITION:-}
 TRAJD="$BUILD/bin/trajd"
 TRACK="$PWD/tests/data/n2k_furuno_figure8_src52.csv"
 RESULTS="$PWD/tests/bench/RESULTS.md"
@@ -79,17 +82,22 @@ run() { # $1 = period us, $2.. = cyclictest options
         printf "%s %s %s %s %s %s %s %.1f\n", ticks, q[1], q[2], q[3], q[4], missed, w, 100 * c / hz / dur }'
 }
 
-# cyclictest's p99 wake-up latency (us): one thread at the period, for DURATION_S
+# cyclictest's p99 wake-up latency (us), and the share (%) of its wake-ups a
+# period or more late (each one a deadline a tick would have missed): one
+# thread at the period, for DURATION_S
 cyclic_p99() { # $1 = period us, $2... = cyclictest options (policy, CPU)
     local period=$1; shift
-    command -v cyclictest > /dev/null || { echo "-"; return; }
-    cyclictest -q -t 1 -i "$period" -D "$DURATION_S" -h 100000 "$@" 2> /dev/null | awk '
+    command -v cyclictest > /dev/null || { echo "- -"; return; }
+    cyclictest -q -t 1 -i "$period" -D "$DURATION_S" -h 100000 "$@" 2> /dev/null | awk -v per="$period" '
         /^[0-9]/ { h[$1 + 0] = $2 + 0; if ($1 + 0 > top) top = $1 + 0; next }
         /^# Total:/ { total = $3 + 0 }
+        /^# Histogram Overflows:/ { ovf = $4 + 0 }
         END {
-            if (total == 0) { print "-"; exit }
-            c = 0; for (us = 0; us <= top; us++) { c += h[us]; if (c >= 0.99 * total) { print us; exit } }
-            print ">100000" }'
+            if (total == 0) { print "- -"; exit }
+            late = ovf; for (us = per; us <= top; us++) late += h[us]
+            share = sprintf("%.3f", 100 * late / total)
+            c = 0; for (us = 0; us <= top; us++) { c += h[us]; if (c >= 0.99 * total) { print us, share; exit } }
+            print ">100000", share }'
 }
 
 # The previous row's ratio, missed share and tick CPU, from RESULTS.md
@@ -103,16 +111,18 @@ prev() { # $1 = workload label, $2 = condition label
 
 row() { # $1 = objects, $2 = rate, $3 = condition label, $4 = [realtime] lines, $5 = CPU list for cyclictest, $6.. cyclictest policy
     local objs=$1 rate=$2 label=$3 rt=$4 cpu=$5; shift 5
+    case "$label" in *"$CONDITION"*) ;; *) return 0 ;; esac
     conf "$objs" "$rate" "$rt"
     local r c p
     if [ -n "$cpu" ]; then r=$(run $((1000000 / rate)) -a "$cpu" "$@"); else r=$(run $((1000000 / rate)) "$@"); fi
     c=$(cat "$tmp/cyc")
     p=$(prev "$objs x $rate Hz" "$label")
-    echo "$r $c $p" | awk -v w="$objs x $rate Hz" -v l="$label" '{
+    set -- $c
+    echo "$r $1 $p $2" | awk -v w="$objs x $rate Hz" -v l="$label" '{
         ticks = $1; p99 = $3; missed = $6; ratio = ($9 + 0 > 0) ? sprintf("%.2f", p99 / $9) : "-";
         share = (ticks + missed > 0) ? sprintf("%.3f", 100 * missed / (ticks + missed)) : "-";
-        printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n",
-            w, l, $3, $9, ratio, $10, $2 "/" $4 "/" $5, missed, share, $11, $7, $12, $8 }'
+        printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n",
+            w, l, $3, $9, ratio, $10, $2 "/" $4 "/" $5, missed, share, $11, $7, $12, $8, $13 }'
 }
 
 busy_on() { taskset -c 1 sh -c 'while :; do :; done' & busy=$!; }
@@ -122,8 +132,8 @@ echo "trajd tick lateness against cyclictest, ${DURATION_S} s per run, $ncpu CPU
 echo "x cyclictest: trajd's p99 over cyclictest's p99, run at the same time, same policy and CPUs;"
 echo "was: the same row of tests/bench/RESULTS.md"
 echo "<!-- lateness:begin -->"
-echo "| workload | condition | trajd p99 us | cyclictest p99 us | x cyclictest | was | trajd p50/p99.9/max us | missed | missed % | was | tick CPU p99.9 us | was | trajd CPU % |"
-echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+echo "| workload | condition | trajd p99 us | cyclictest p99 us | x cyclictest | was | trajd p50/p99.9/max us | missed | missed % | was | tick CPU p99.9 us | was | trajd CPU % | cyclictest a period late % |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
 for w in "4 1000" "1024 100"; do
     set -- $w
     [ -n "$ONLY" ] && [ "$ONLY" != "$1" ] && continue
