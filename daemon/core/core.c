@@ -250,6 +250,8 @@ static void step_engines(core_t *c, int64_t now_ns, int64_t real_ns, int sent)
                           s->clock_rate, c->cfg->daemon.catchup};
     for (unsigned i = 0; i < c->nobj; i++) {
         obj_t *o = &c->obj[i];
+        if (i + 2 < c->nobj && c->obj[i + 2].engine)
+            engine_prefetch(c->obj[i + 2].engine); /* many objects: their misses overlap */
         if (!o->retiring) { /* the owner: one period of the curve, judged, sent */
             if (sent)
                 lc_tick(obj_lc(o), now_ns, o->clocked == 1 ? &clk : NULL, &o->sp);

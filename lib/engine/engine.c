@@ -197,6 +197,25 @@ void engine_status(const engine_t *e, engine_status_t *st)
     }
 }
 
+static inline void prefetch_range(const void *p, size_t n)
+{
+    const char *b = p;
+    for (size_t k = 0; k < n; k += 64)
+        __builtin_prefetch(b + k, 0, 3);
+}
+
+void engine_prefetch(const engine_t *e)
+{
+    prefetch_range(&e->cfg, sizeof e->cfg);
+    prefetch_range(&e->in, 64);
+    __builtin_prefetch(&e->in.policy.npend, 0, 3);
+    __builtin_prefetch(&e->in.policy.run_n, 0, 3);
+    __builtin_prefetch(&e->in.rej_len, 0, 3);
+    prefetch_range(&e->solve, 128);
+    /* queue, out, scale, delay, sil, lag, pick's head and st lie in a row */
+    prefetch_range(&e->queue, (size_t)((const char *)(&e->st + 1) - (const char *)&e->queue));
+}
+
 void engine_status_add_counts(engine_status_t *st, const engine_status_t *more)
 {
 #define ADD(f) st->f += more->f

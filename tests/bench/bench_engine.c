@@ -794,8 +794,66 @@ static void bench_start(void)
            best_steady * 1e6, best_start / best_steady);
 }
 
+/* --many N: N engines of the walk (300 waypoints each, their own seeds),
+ * ticked in turn at 100 Hz with engine_status after each tick as trajd's
+ * tick does, 1 000 ticks: ns per object per tick, with and without
+ * engine_prefetch of the engine two ahead, interleaved, best of 3; beside it
+ * one engine alone (its state stays in the cache): how much of a tick of many
+ * objects is waiting for memory. */
+static double many_run(engine_t **e, int n, int pf)
+{
+    engine_setpoint_t sp;
+    engine_status_t st;
+    double sink = 0, t0 = now_s();
+    for (int64_t k = 0; k < 1000; k++)
+        for (int i = 0; i < n; i++) {
+            if (pf && i + 2 < n)
+                engine_prefetch(e[i + 2]);
+            engine_tick(e[i], k * 10000000, &sp);
+            engine_status(e[i], &st);
+            sink += sp.pos_m[0] + st.free;
+        }
+    return (now_s() - t0) * 1e9 / (1000.0 * n) + (sink > 1e300 ? 1 : 0);
+}
+
+static void bench_many(int n)
+{
+    engine_t **e = calloc((size_t)n, sizeof *e);
+    double best[3] = {1e30, 1e30, 1e30};
+    for (int rep = 0; rep < 3; rep++) {
+        for (int i = 0; i < n; i++) {
+            engine_config_t c;
+            engine_config_default(&c);
+            c.period_ns = 10000000;
+            c.max_accel_m_s2 = 0;
+            e[i] = engine_new(&c, NULL);
+            engine_waypoint_t w = {0};
+            double pos[3] = {0, 0, 0};
+            unsigned seed = 5 + (unsigned)i;
+            for (long j = 0; j < 300; j++) {
+                walk_wp(&w, j, 0.1, &seed, pos);
+                engine_push(e[i], &w);
+            }
+            engine_finish(e[i]);
+        }
+        double one = many_run(e, 1, 0), no = many_run(e + 1, n - 1, 0),
+               pf = many_run(e + 1, n - 1, 1);
+        best[0] = fmin(best[0], one), best[1] = fmin(best[1], no), best[2] = fmin(best[2], pf);
+        for (int i = 0; i < n; i++)
+            engine_free(e[i]);
+    }
+    printf("engine_tick + engine_status, 100 Hz, ns per object per tick, best of 3: one engine "
+           "alone %.1f; %d engines in turn %.1f; with engine_prefetch two ahead %.1f\n",
+           best[0], n - 1, best[1], best[2]);
+    free(e);
+}
+
 int main(int argc, char **argv)
 {
+    if (argc > 2 && strcmp(argv[1], "--many") == 0) {
+        bench_many(atoi(argv[2]) > 1 ? atoi(argv[2]) : 2);
+        return 0;
+    }
     if (argc > 1 && strcmp(argv[1], "--start") == 0) {
         if (argc > 2)
             tick_reps = atoi(argv[2]) > 0 ? atoi(argv[2]) : 1;
@@ -837,6 +895,7 @@ int main(int argc, char **argv)
     bench_tick_table();
     bench_hold();
     bench_start();
+    bench_many(1025);
     static const long lengths[] = {1000, 10000, 100000, 1000000};
     engine_config_t c, r;
 
