@@ -352,10 +352,13 @@ static int hk_feedback(void *ctx, const can_port_drive_t *d)
     return 0;
 }
 
+/* The object's status as the core took it this tick (core.c, tick): its
+ * counts summed over a reload that changed its settings and the braking
+ * predecessor's, the room of the latch while it is stopped or held; what
+ * Modbus and the status line show too, not the current engine's alone. */
 static void hk_status(void *ctx, engine_status_t *st)
 {
-    obj_t *o = ((const can_hook_ctx_t *)ctx)->o;
-    engine_status(o->engine, st);
+    *st = ((const can_hook_ctx_t *)ctx)->o->status;
 }
 
 /* Objects that are not CAN inputs must not get waypoints from the bus. */

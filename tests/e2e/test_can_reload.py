@@ -69,6 +69,51 @@ class CanReload(unittest.TestCase):
             self.assertEqual(int(st[-1][1]["ST_Lost"]), 1)
             self.assertEqual(int(st[-1][1]["ST_Malformed"]), 2)
 
+    def test_rejected_survive_a_changed_reload(self):
+        """A fix 2 km off the track is refused once judged with its neighbours (the engine's
+        count, not the port's); then a reload changes the object's settings (a new engine
+        takes over).  STATUS's rejected count stays with the object, as on Modbus and the
+        status line: it never goes back.  Before, STATUS read the new engine's own count,
+        1 -> 0 at the reload."""
+        with tempfile.TemporaryDirectory() as d:
+            xyz = os.path.join(d, "track.csv")
+            ct.to_xyz(TRACK, xyz, NPOINTS)
+            with open(xyz) as fh:
+                rows = fh.read().splitlines()
+            f = rows[41].split(",")  # waypoint 40 (8 s of the track: 1.3 s of wall time)
+            f[1] = "%.6f" % (float(f[1]) + 2000.0)
+            rows[41] = ",".join(f)
+            with open(xyz, "w") as fh:
+                fh.write("\n".join(rows) + "\n")
+            ct.write_wplog(xyz, os.path.join(d, "wp.log"))
+            conf = os.path.join(d, "t.conf")
+
+            def write_conf(extra):
+                with open(conf, "w") as fh:
+                    fh.write("[daemon]\nrate_hz = 100\nspeed = %d\nexit_when_done = yes\n"
+                             "stop_timeout_s = 1\nstatus_interval_s = 0\n"
+                             "[can]\nlog_in = wp.log\nlog_out = sp.log\nlog_ifname = vcan0\n"
+                             "log_time = engine\nmax_late_ms = 0\n"
+                             "[object.boat]\ninput = can\noutput = can\n%s" % (SPEED, extra))
+            write_conf("")
+            p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=d, stdout=subprocess.DEVNULL,
+                                 stderr=subprocess.PIPE, text=True)
+            time.sleep(RELOAD_AT_S)
+            write_conf("max_speed_m_s = 500\n")
+            p.send_signal(signal.SIGHUP)
+            _, err = p.communicate(timeout=60)
+            self.assertEqual(p.returncode, 0, err)
+            lines = err.splitlines()
+            reload_at = next((i for i, l in enumerate(lines) if "reloaded" in l), None)
+            self.assertIsNotNone(reload_at, err)
+            self.assertIn("0 carried over", lines[reload_at])
+            st = ct.decode_by_id(os.path.join(d, "sp.log"), 0x6C0)
+            seq = [int(s["ST_Rejected"]) for _, s in st]
+            self.assertIn(1, seq, err[-3000:])  # refused before the reload
+            went_back = [(a, b) for a, b in zip(seq, seq[1:]) if b < a]
+            self.assertEqual(went_back, [], "ST_Rejected went back: %s" % (went_back,))
+            self.assertGreaterEqual(seq[-1], 1)
+
 
 if __name__ == "__main__":
     unittest.main()
