@@ -1,4 +1,5 @@
-"""test_can_reload.py - what a CAN peer counts by survives a reload, and is logged as it comes.
+"""test_can_reload.py - what a CAN peer counts by survives a reload, and is logged as it comes;
+STATUS counts for the object (its reloads, its latch while stopped), as Modbus does.
 
 trajd reads a real track (figure eight, NMEA 2000 GNSS) as waypoint frames from a candump
 log ([can] log_in: the same codec and port as on a socket), built by canmatrix from
@@ -113,6 +114,46 @@ class CanReload(unittest.TestCase):
             went_back = [(a, b) for a, b in zip(seq, seq[1:]) if b < a]
             self.assertEqual(went_back, [], "ST_Rejected went back: %s" % (went_back,))
             self.assertGreaterEqual(seq[-1], 1)
+
+    def test_free_while_stopped_is_the_latch_room(self):
+        """Stop now (CAN STOP) at waypoint 40, the sender going on: its waypoints wait in the
+        object's latch, so STATUS's free is the latch's room, which falls by one a waypoint,
+        as on Modbus.  Before, STATUS gave the engine's own free room, which no waypoint
+        reached while stopped (it stayed put)."""
+        with tempfile.TemporaryDirectory() as d:
+            xyz = os.path.join(d, "track.csv")
+            ct.to_xyz(TRACK, xyz, NPOINTS)
+            wp = os.path.join(d, "wp.log")
+            ct.write_wplog(xyz, wp)
+            db = ct.load_db()
+            with open(wp) as fh:
+                lines = fh.read().splitlines()
+            at = max(i for i, l in enumerate(lines) if "680#04" not in l and "680#" in l and
+                     int(l.split("#")[1][2:4], 16) == 40)
+            t_stop = float(lines[at].split()[0].strip("()"))
+            lines.insert(at + 1, "(%.6f) vcan0 %s" % (t_stop, ct.fmt_frame(*ct.command_frame(db, 2))))
+            with open(wp, "w") as fh:
+                fh.write("\n".join(lines) + "\n")
+            conf = os.path.join(d, "t.conf")
+            with open(conf, "w") as fh:
+                fh.write("[daemon]\nrate_hz = 100\nspeed = %d\nstop_timeout_s = 1\n"
+                         "status_interval_s = 0\n"
+                         "[can]\nlog_in = wp.log\nlog_out = sp.log\nlog_ifname = vcan0\n"
+                         "log_time = engine\nmax_late_ms = 0\n"
+                         "[object.boat]\ninput = can\noutput = can\n" % SPEED)
+            p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=d, stdout=subprocess.DEVNULL,
+                                 stderr=subprocess.PIPE, text=True)
+            time.sleep(NPOINTS * 0.2 / SPEED + 1.5)  # the whole log sent
+            p.send_signal(signal.SIGTERM)
+            _, err = p.communicate(timeout=60)
+            st = ct.decode_by_id(os.path.join(d, "sp.log"), 0x6C0)
+            after = [int(s["ST_Free"]) for ts, s in st if ts * 1e-9 > t_stop + 0.5]
+            sent_after = NPOINTS - 40
+            self.assertGreater(len(after), 20, err[-3000:])
+            self.assertEqual([(a, b) for a, b in zip(after, after[1:]) if b > a], [],
+                             "free rose while stopped: %s" % after)
+            self.assertTrue(after[-1] == 0 or after[-1] <= after[0] - sent_after // 2,
+                            "free while stopped, %d waypoints sent: %s ... %s" % (sent_after, after[:3], after[-3:]))
 
 
 if __name__ == "__main__":
