@@ -778,7 +778,9 @@ static void log_in_ended(can_state_t *s)
         engine_status(s->objs[k]->engine, &st);
         if (st.accepted && !s->objs[k]->stopping)
             (void)engine_finish(s->objs[k]->engine); /* 0 or ENUMERIC: counted by it */
-        if (st.accepted)
+        /* the object's (a reload that changed its settings may have left a
+         * new engine that the log gave nothing before it ended) */
+        if (obj_accepted(s->objs[k]))
             continue;
         can_port_obj_stats_t os;
         can_port_obj_stats(s->port, k, &os);

@@ -122,6 +122,18 @@ void obj_counts_take(obj_t *o, const engine_t *e)
     o->has_counts_before = 1;
 }
 
+uint64_t obj_accepted(const obj_t *o)
+{
+    engine_status_t st;
+    engine_status(o->engine, &st);
+    uint64_t n = st.accepted + (o->has_counts_before ? o->counts_before.accepted : 0);
+    if (o->retiring) {
+        engine_status(o->retiring, &st);
+        n += st.accepted;
+    }
+    return n;
+}
+
 void obj_reset_counters(obj_t *o)
 {
     engine_reset_counters(o->engine);

@@ -281,6 +281,9 @@ void obj_reset_counters(obj_t *o);
 /* Add the counters of e, an engine o gives up (a reload that changed its
  * settings), to o->counts_before: its counts go on. */
 void obj_counts_take(obj_t *o, const engine_t *e);
+/* The waypoints o accepted in all, as of now: its engine's, those of the
+ * engines it gave up (o->counts_before) and of the one still braking. */
+uint64_t obj_accepted(const obj_t *o);
 /* The safety monitor's bounds of configured object o (the derived ones
  * from its engine's limits). */
 void obj_safety_limits(const cfg_obj_t *o, safety_limits_t *lim);

@@ -155,6 +155,48 @@ class CanReload(unittest.TestCase):
             self.assertTrue(after[-1] == 0 or after[-1] <= after[0] - sent_after // 2,
                             "free while stopped, %d waypoints sent: %s ... %s" % (sent_after, after[:3], after[-3:]))
 
+    def test_log_ending_after_a_changed_reload(self):
+        """The log's last waypoint, then 3 s of the track's time with nothing, then FINISH;
+        a reload that changes the object's settings comes in those 3 s (a new engine, which
+        gets no waypoint before the log ends).  The object had its waypoints: trajd ends with
+        status 0, without 'no usable waypoint'.  Before, the log's end asked the new engine
+        alone: '0 accepted', exit status 66."""
+        with tempfile.TemporaryDirectory() as d:
+            xyz = os.path.join(d, "track.csv")
+            n = 40  # 8 s of track, 1.3 s of wall time at speed 6
+            ct.to_xyz(TRACK, xyz, n)
+            wp = os.path.join(d, "wp.log")
+            ct.write_wplog(xyz, wp)
+            with open(wp) as fh:
+                lines = fh.read().splitlines()
+            ts, rest = lines[-1].split(" ", 1)  # FINISH: 3 s after the last waypoint
+            lines[-1] = "(%.6f) %s" % (float(ts.strip("()")) + 3.0, rest)
+            with open(wp, "w") as fh:
+                fh.write("\n".join(lines) + "\n")
+            conf = os.path.join(d, "t.conf")
+
+            def write_conf(extra):
+                with open(conf, "w") as fh:
+                    fh.write("[daemon]\nrate_hz = 100\nspeed = %d\nexit_when_done = yes\n"
+                             "stop_timeout_s = 1\nstatus_interval_s = 0\n"
+                             "[can]\nlog_in = wp.log\nlog_out = sp.log\nlog_ifname = vcan0\n"
+                             "log_time = engine\nmax_late_ms = 0\n"
+                             "[object.boat]\ninput = can\noutput = can\n%s" % (SPEED, extra))
+            write_conf("")
+            p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=d, stdout=subprocess.DEVNULL,
+                                 stderr=subprocess.PIPE, text=True)
+            time.sleep((8.0 + 1.0) / SPEED + 0.3)  # after the last waypoint, before FINISH
+            write_conf("max_speed_m_s = 500\n")
+            p.send_signal(signal.SIGHUP)
+            try:
+                _, err = p.communicate(timeout=60)
+            finally:
+                if p.poll() is None:
+                    p.kill()
+            self.assertIn("0 carried over", err)
+            self.assertNotIn("no usable waypoint", err)
+            self.assertEqual(p.returncode, 0, err[-3000:])
+
 
 if __name__ == "__main__":
     unittest.main()
