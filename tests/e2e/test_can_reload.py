@@ -156,11 +156,11 @@ class CanReload(unittest.TestCase):
                             "free while stopped, %d waypoints sent: %s ... %s" % (sent_after, after[:3], after[-3:]))
 
     def test_log_ending_after_a_changed_reload(self):
-        """The log's last waypoint, then 3 s of the track's time with nothing, then FINISH;
-        a reload that changes the object's settings comes in those 3 s (a new engine, which
+        """The log's last waypoint, then 6 s of the track's time with nothing, then FINISH;
+        a reload that changes the object's settings comes in those 6 s (a new engine, which
         gets no waypoint before the log ends).  The object had its waypoints: trajd ends with
         status 0, without 'no usable waypoint'.  Before, the log's end asked the new engine
-        alone: '0 accepted', exit status 66."""
+        alone: '0 accepted', exit status 65."""
         with tempfile.TemporaryDirectory() as d:
             xyz = os.path.join(d, "track.csv")
             n = 40  # 8 s of track, 1.3 s of wall time at speed 6
@@ -169,8 +169,8 @@ class CanReload(unittest.TestCase):
             ct.write_wplog(xyz, wp)
             with open(wp) as fh:
                 lines = fh.read().splitlines()
-            ts, rest = lines[-1].split(" ", 1)  # FINISH: 3 s after the last waypoint
-            lines[-1] = "(%.6f) %s" % (float(ts.strip("()")) + 3.0, rest)
+            ts, rest = lines[-1].split(" ", 1)  # FINISH: 6 s after the last waypoint
+            lines[-1] = "(%.6f) %s" % (float(ts.strip("()")) + 6.0, rest)
             with open(wp, "w") as fh:
                 fh.write("\n".join(lines) + "\n")
             conf = os.path.join(d, "t.conf")
@@ -185,7 +185,7 @@ class CanReload(unittest.TestCase):
             write_conf("")
             p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=d, stdout=subprocess.DEVNULL,
                                  stderr=subprocess.PIPE, text=True)
-            time.sleep((8.0 + 1.0) / SPEED + 0.3)  # after the last waypoint, before FINISH
+            time.sleep((8.0 + 2.5) / SPEED + 0.2)  # after the last waypoint, before FINISH
             write_conf("max_speed_m_s = 500\n")
             p.send_signal(signal.SIGHUP)
             try:
