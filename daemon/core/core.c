@@ -119,6 +119,8 @@ void obj_counts_take(obj_t *o, const engine_t *e)
     engine_status_t st;
     engine_status(e, &st);
     engine_status_add_counts(&o->counts_before, &st);
+    if (st.accepted)
+        o->counts_before.last_seq = st.last_seq;
     o->has_counts_before = 1;
 }
 
@@ -139,7 +141,9 @@ void obj_reset_counters(obj_t *o)
     engine_reset_counters(o->engine);
     if (o->retiring)
         engine_reset_counters(o->retiring);
+    uint32_t last_seq = o->counts_before.last_seq; /* (not a counter: kept) */
     memset(&o->counts_before, 0, sizeof o->counts_before);
+    o->counts_before.last_seq = last_seq;
     o->has_counts_before = 0;
     o->reset_seq++;
     o->lc.n.refused_full = 0;
@@ -337,6 +341,29 @@ static int64_t real_offset(core_priv_t *p)
  */
 static void note_played(obj_t *o);
 
+/* o->status, this tick: its engine's, with the counts of the engines it had
+ * before a reload that changed its settings and of the one still braking.
+ * The last waypoint the object took is its engine's or, until the new
+ * engine takes one, the last of those before it (a sender paced by it sees
+ * it go on). */
+static void obj_status_take(obj_t *o)
+{
+    engine_status(o->engine, &o->status);
+    int own = o->status.accepted != 0;
+    if (o->has_counts_before) { /* (not every tick of every object: a reload's) */
+        engine_status_add_counts(&o->status, &o->counts_before);
+        if (!own && o->counts_before.accepted)
+            o->status.last_seq = o->counts_before.last_seq;
+    }
+    if (o->retiring) { /* still braking for a reload: its counts are the object's */
+        engine_status_t st;
+        engine_status(o->retiring, &st);
+        engine_status_add_counts(&o->status, &st);
+        if (!own && st.accepted)
+            o->status.last_seq = st.last_seq;
+    }
+}
+
 static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64_t late_ns)
 {
     core_t *c = &p->pub;
@@ -364,14 +391,7 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
         }
         note_played(o);
         rejlog_drain(&o->rejlog, o->engine); /* verdicts given by a finish or a tick */
-        engine_status(o->engine, &o->status);
-        if (o->has_counts_before) /* (not every tick of every object: a reload's) */
-            engine_status_add_counts(&o->status, &o->counts_before);
-        if (o->retiring) { /* still braking for a reload: its counts are the object's */
-            engine_status_t st;
-            engine_status(o->retiring, &st);
-            engine_status_add_counts(&o->status, &st);
-        }
+        obj_status_take(o);
         o->status.skipped_ticks += o->skipped_ticks;
         /* stopped or held: the room of the buffer its waypoints go to, and
          * what it refused full, as the engine's own full buffer counts */

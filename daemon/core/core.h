@@ -123,7 +123,8 @@ typedef struct obj {
     engine_status_t status;        /* engine status after the last tick, with counts_before */
     engine_status_t counts_before; /* the counters of the engines it had before a reload that
                                     * changed its settings (engine_status_add_counts): its
-                                    * counts go on over the reload */
+                                    * counts go on over the reload; and its last_seq, the last
+                                    * waypoint they took, until the new engine takes one */
     int has_counts_before;         /* counts_before holds some (a changed object's) */
     uint64_t skipped_ticks;        /* missed deadlines this object was stepped through with
                                      * no output (added into status.skipped_ticks) */

@@ -159,8 +159,10 @@ class CanReload(unittest.TestCase):
         """The log's last waypoint, then 6 s of the track's time with nothing, then FINISH;
         a reload that changes the object's settings comes in those 6 s (a new engine, which
         gets no waypoint before the log ends).  The object had its waypoints: trajd ends with
-        status 0, without 'no usable waypoint'.  Before, the log's end asked the new engine
-        alone: '0 accepted', exit status 65."""
+        status 0, without 'no usable waypoint', and STATUS's last accepted seq stays 40.
+        Before, the log's end asked the new engine alone: '0 accepted', exit status 65; and
+        STATUS's last seq went 40 -> 0 at the reload (a sender paced by it saw its waypoints
+        untaken)."""
         with tempfile.TemporaryDirectory() as d:
             xyz = os.path.join(d, "track.csv")
             n = 40  # 8 s of track, 1.3 s of wall time at speed 6
@@ -195,6 +197,12 @@ class CanReload(unittest.TestCase):
                     p.kill()
             self.assertIn("0 carried over", err)
             self.assertNotIn("no usable waypoint", err)
+            # the last waypoint taken stays the object's (40) when the new engine has none
+            seq = [int(x["ST_LastSeq"]) for _, x in ct.decode_by_id(os.path.join(d, "sp.log"),
+                                                                       0x6C0)]
+            self.assertEqual([(a, b) for a, b in zip(seq, seq[1:]) if b < a], [],
+                             "ST_LastSeq went back: ... %s" % seq[-40:])
+            self.assertEqual(seq[-1], n)
             self.assertEqual(p.returncode, 0, err[-3000:])
 
 
