@@ -34,6 +34,18 @@ SPEED = 6       # 5 s of wall time: the faults (waypoints 50, 60: 10 and 12 s) a
 RELOAD_AT_S = 3.2
 
 
+def write_conf(conf, extra="", exit_when_done=True):
+    """trajd reading wp.log and writing sp.log (candump logs, engine time); extra: more
+    lines for [object.boat]."""
+    with open(conf, "w") as fh:
+        fh.write("[daemon]\nrate_hz = 100\nspeed = %d\n%sstop_timeout_s = 1\n"
+                 "status_interval_s = 0\n"
+                 "[can]\nlog_in = wp.log\nlog_out = sp.log\nlog_ifname = vcan0\n"
+                 "log_time = engine\nmax_late_ms = 0\n"
+                 "[object.boat]\ninput = can\noutput = can\n%s"
+                 % (SPEED, "exit_when_done = yes\n" if exit_when_done else "", extra))
+
+
 class CanReload(unittest.TestCase):
     def test_counters_survive_a_reload_and_are_logged(self):
         with tempfile.TemporaryDirectory() as d:
@@ -41,12 +53,7 @@ class CanReload(unittest.TestCase):
             ct.to_xyz(TRACK, xyz, NPOINTS)
             ct.write_faulty_wplog(xyz, os.path.join(d, "wp.log"))
             conf = os.path.join(d, "t.conf")
-            with open(conf, "w") as fh:
-                fh.write("[daemon]\nrate_hz = 100\nspeed = %d\nexit_when_done = yes\n"
-                         "stop_timeout_s = 1\nstatus_interval_s = 0\n"
-                         "[can]\nlog_in = wp.log\nlog_out = sp.log\nlog_ifname = vcan0\n"
-                         "log_time = engine\nmax_late_ms = 0\n"
-                         "[object.boat]\ninput = can\noutput = can\n" % SPEED)
+            write_conf(conf)
             p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=d, stdout=subprocess.DEVNULL,
                                  stderr=subprocess.PIPE, text=True)
             time.sleep(RELOAD_AT_S)
@@ -88,19 +95,11 @@ class CanReload(unittest.TestCase):
                 fh.write("\n".join(rows) + "\n")
             ct.write_wplog(xyz, os.path.join(d, "wp.log"))
             conf = os.path.join(d, "t.conf")
-
-            def write_conf(extra):
-                with open(conf, "w") as fh:
-                    fh.write("[daemon]\nrate_hz = 100\nspeed = %d\nexit_when_done = yes\n"
-                             "stop_timeout_s = 1\nstatus_interval_s = 0\n"
-                             "[can]\nlog_in = wp.log\nlog_out = sp.log\nlog_ifname = vcan0\n"
-                             "log_time = engine\nmax_late_ms = 0\n"
-                             "[object.boat]\ninput = can\noutput = can\n%s" % (SPEED, extra))
-            write_conf("")
+            write_conf(conf)
             p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=d, stdout=subprocess.DEVNULL,
                                  stderr=subprocess.PIPE, text=True)
             time.sleep(RELOAD_AT_S)
-            write_conf("max_speed_m_s = 500\n")
+            write_conf(conf, "max_speed_m_s = 500\n")
             p.send_signal(signal.SIGHUP)
             _, err = p.communicate(timeout=60)
             self.assertEqual(p.returncode, 0, err)
@@ -135,12 +134,7 @@ class CanReload(unittest.TestCase):
             with open(wp, "w") as fh:
                 fh.write("\n".join(lines) + "\n")
             conf = os.path.join(d, "t.conf")
-            with open(conf, "w") as fh:
-                fh.write("[daemon]\nrate_hz = 100\nspeed = %d\nstop_timeout_s = 1\n"
-                         "status_interval_s = 0\n"
-                         "[can]\nlog_in = wp.log\nlog_out = sp.log\nlog_ifname = vcan0\n"
-                         "log_time = engine\nmax_late_ms = 0\n"
-                         "[object.boat]\ninput = can\noutput = can\n" % SPEED)
+            write_conf(conf, exit_when_done=False)
             p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=d, stdout=subprocess.DEVNULL,
                                  stderr=subprocess.PIPE, text=True)
             time.sleep(NPOINTS * 0.2 / SPEED + 1.5)  # the whole log sent
@@ -176,19 +170,11 @@ class CanReload(unittest.TestCase):
             with open(wp, "w") as fh:
                 fh.write("\n".join(lines) + "\n")
             conf = os.path.join(d, "t.conf")
-
-            def write_conf(extra):
-                with open(conf, "w") as fh:
-                    fh.write("[daemon]\nrate_hz = 100\nspeed = %d\nexit_when_done = yes\n"
-                             "stop_timeout_s = 1\nstatus_interval_s = 0\n"
-                             "[can]\nlog_in = wp.log\nlog_out = sp.log\nlog_ifname = vcan0\n"
-                             "log_time = engine\nmax_late_ms = 0\n"
-                             "[object.boat]\ninput = can\noutput = can\n%s" % (SPEED, extra))
-            write_conf("")
+            write_conf(conf)
             p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=d, stdout=subprocess.DEVNULL,
                                  stderr=subprocess.PIPE, text=True)
             time.sleep((8.0 + 2.5) / SPEED + 0.2)  # after the last waypoint, before FINISH
-            write_conf("max_speed_m_s = 500\n")
+            write_conf(conf, "max_speed_m_s = 500\n")
             p.send_signal(signal.SIGHUP)
             try:
                 _, err = p.communicate(timeout=60)
