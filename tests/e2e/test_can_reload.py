@@ -46,24 +46,39 @@ def write_conf(conf, extra="", exit_when_done=True):
                  % (SPEED, "exit_when_done = yes\n" if exit_when_done else "", extra))
 
 
+def run_with_reload(d, at_s, extra=None):
+    """trajd in d on wp.log, a SIGHUP after at_s seconds (with [object.boat] given extra
+    first, if any: a changed object); its exit status, its stderr and the reload's line."""
+    conf = os.path.join(d, "t.conf")
+    write_conf(conf)
+    p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=d, stdout=subprocess.DEVNULL,
+                         stderr=subprocess.PIPE, text=True)
+    try:
+        time.sleep(at_s)
+        if extra is not None:
+            write_conf(conf, extra)
+        p.send_signal(signal.SIGHUP)
+        _, err = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.wait()
+    reloaded = [l for l in err.splitlines() if "reloaded" in l]
+    return p.returncode, err, reloaded[0] if reloaded else None
+
+
 class CanReload(unittest.TestCase):
     def test_counters_survive_a_reload_and_are_logged(self):
         with tempfile.TemporaryDirectory() as d:
             xyz = os.path.join(d, "track.csv")
             ct.to_xyz(TRACK, xyz, NPOINTS)
             ct.write_faulty_wplog(xyz, os.path.join(d, "wp.log"))
-            conf = os.path.join(d, "t.conf")
-            write_conf(conf)
-            p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=d, stdout=subprocess.DEVNULL,
-                                 stderr=subprocess.PIPE, text=True)
-            time.sleep(RELOAD_AT_S)
-            p.send_signal(signal.SIGHUP)
-            _, err = p.communicate(timeout=60)
-            self.assertEqual(p.returncode, 0, err)
+            rc, err, line = run_with_reload(d, RELOAD_AT_S)
+            self.assertEqual(rc, 0, err)
+            self.assertIsNotNone(line, err)
+            self.assertIn("carried over without interruption", line)
             lines = err.splitlines()
-            reload_at = next((i for i, l in enumerate(lines) if "reloaded" in l), None)
-            self.assertIsNotNone(reload_at, err)
-            self.assertIn("carried over without interruption", lines[reload_at])
+            reload_at = lines.index(line)
             # logged as they came, before the reload, with the frame id
             before = "\n".join(lines[:reload_at])
             self.assertRegex(before, r"can: object 'boat': .*1 waypoint.* lost.*0x680", err)
@@ -94,19 +109,10 @@ class CanReload(unittest.TestCase):
             with open(xyz, "w") as fh:
                 fh.write("\n".join(rows) + "\n")
             ct.write_wplog(xyz, os.path.join(d, "wp.log"))
-            conf = os.path.join(d, "t.conf")
-            write_conf(conf)
-            p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=d, stdout=subprocess.DEVNULL,
-                                 stderr=subprocess.PIPE, text=True)
-            time.sleep(RELOAD_AT_S)
-            write_conf(conf, "max_speed_m_s = 500\n")
-            p.send_signal(signal.SIGHUP)
-            _, err = p.communicate(timeout=60)
-            self.assertEqual(p.returncode, 0, err)
-            lines = err.splitlines()
-            reload_at = next((i for i, l in enumerate(lines) if "reloaded" in l), None)
-            self.assertIsNotNone(reload_at, err)
-            self.assertIn("0 carried over", lines[reload_at])
+            rc, err, line = run_with_reload(d, RELOAD_AT_S, "max_speed_m_s = 500\n")
+            self.assertEqual(rc, 0, err)
+            self.assertIsNotNone(line, err)
+            self.assertIn("0 carried over", line)
             st = ct.decode_by_id(os.path.join(d, "sp.log"), 0x6C0)
             seq = [int(s["ST_Rejected"]) for _, s in st]
             self.assertIn(1, seq, err[-3000:])  # refused before the reload
@@ -169,19 +175,9 @@ class CanReload(unittest.TestCase):
             lines[-1] = "(%.6f) %s" % (float(ts.strip("()")) + 6.0, rest)
             with open(wp, "w") as fh:
                 fh.write("\n".join(lines) + "\n")
-            conf = os.path.join(d, "t.conf")
-            write_conf(conf)
-            p = subprocess.Popen([TRAJD, "-f", "-c", conf], cwd=d, stdout=subprocess.DEVNULL,
-                                 stderr=subprocess.PIPE, text=True)
-            time.sleep((8.0 + 2.5) / SPEED + 0.2)  # after the last waypoint, before FINISH
-            write_conf(conf, "max_speed_m_s = 500\n")
-            p.send_signal(signal.SIGHUP)
-            try:
-                _, err = p.communicate(timeout=60)
-            finally:
-                if p.poll() is None:
-                    p.kill()
-            self.assertIn("0 carried over", err)
+            # the reload after the last waypoint, before FINISH
+            rc, err, line = run_with_reload(d, (8.0 + 2.5) / SPEED + 0.2, "max_speed_m_s = 500\n")
+            self.assertIn("0 carried over", line or "", err[-3000:])
             self.assertNotIn("no usable waypoint", err)
             # the last waypoint taken stays the object's (40) when the new engine has none
             seq = [int(x["ST_LastSeq"]) for _, x in ct.decode_by_id(os.path.join(d, "sp.log"),
@@ -189,7 +185,7 @@ class CanReload(unittest.TestCase):
             self.assertEqual([(a, b) for a, b in zip(seq, seq[1:]) if b < a], [],
                              "ST_LastSeq went back: ... %s" % seq[-40:])
             self.assertEqual(seq[-1], n)
-            self.assertEqual(p.returncode, 0, err[-3000:])
+            self.assertEqual(rc, 0, err[-3000:])
 
 
 if __name__ == "__main__":
