@@ -10,7 +10,9 @@
 
 #define CAN_PORT_RX_BATCH 256 /* frames handled per can_port_rx call: do not starve the loop */
 /* A STATUS that has found no room in the transmit queue for this long (or for
- * one status period, if longer) goes first in the next cycle, ahead of SYNC. */
+ * one status period, if longer) goes first in the next cycle, ahead of SYNC;
+ * one such STATUS at most in this time, the objects in turn (SYNC keeps the
+ * other slots). */
 #define CAN_PORT_STATUS_STARVED_NS 100000000LL
 
 typedef struct {
@@ -25,6 +27,7 @@ typedef struct {
     int status_due;
     int64_t last_status_ns;
     int64_t status_failing_ns; /* when a due STATUS first found no room (0: it went out) */
+    uint64_t status_ahead;     /* the port's cycle in which it last went ahead of SYNC */
     int sent_status;
     uint8_t flags_since;    /* CANPROTO_ST_BUS_DOWN | _TX_DROP | _OUT_FAULT since last STATUS */
     uint64_t out_lost_seen; /* can_port_output_fault: lines lost as of the last call */
@@ -49,6 +52,9 @@ struct can_port {
     can_port_obj_t *obj;
     canproto_ids_t *ids; /* copy of each object's ids, contiguous (bus load) */
     uint8_t sync_counter;
+    unsigned status_rr;    /* the object whose starved STATUS is looked at first */
+    int64_t last_ahead_ns; /* when a starved STATUS last went out ahead of SYNC */
+    int ahead_once;        /* ... if one ever did */
     can_port_stats_t st;
     canerr_bus_t err;          /* bus state and counters from error frames */
     can_drive_master_t master; /* trajd's own heartbeat (cfg.hb_node) */
@@ -563,8 +569,8 @@ static void update_status2_drive(can_port_t *p, unsigned i)
 
 /* Object i's STATUS, if one is due (or, with starved_only, only if a due one
  * has found no room in the transmit queue for CAN_PORT_STATUS_STARVED_NS or
- * one status period).  Returns whether it was tried. */
-static int status_step(can_port_t *p, unsigned i, int64_t now_ns, int starved_only)
+ * one status period; without, not if it went so in this cycle). */
+static void status_step(can_port_t *p, unsigned i, int64_t now_ns, int starved_only)
 {
     can_port_obj_t *o = &p->obj[i];
     if (starved_only) {
@@ -572,7 +578,10 @@ static int status_step(can_port_t *p, unsigned i, int64_t now_ns, int starved_on
                              ? p->cfg.status_period_ns
                              : CAN_PORT_STATUS_STARVED_NS;
         if (!o->status_failing_ns || now_ns - o->status_failing_ns < starve)
-            return 0;
+            return;
+        o->status_ahead = p->st.cycles;
+    } else if (o->status_ahead == p->st.cycles) {
+        return; /* it went ahead of SYNC in this cycle already */
     }
     engine_status_t es;
     memset(&es, 0, sizeof es);
@@ -584,7 +593,6 @@ static int status_step(can_port_t *p, unsigned i, int64_t now_ns, int starved_on
                now_ns - o->last_status_ns >= p->cfg.status_period_ns);
     if (due && p->io.is_up(p->io_ctx))
         send_status(p, o, &es, now_ns);
-    return 1;
 }
 
 void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
@@ -600,10 +608,20 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
     /* With the transmit queue full, the first frame written after a slot frees
      * is the one that gets it: each cycle's SYNC, every time.  A STATUS that has
      * been starved so (the operator's only word of the drops) goes first. */
-    unsigned first = 0; /* bit per object whose STATUS went ahead */
-    for (unsigned i = 0; i < p->nobj && i < 32; i++)
-        if (p->obj[i].set && status_step(p, i, now_ns, 1))
-            first |= 1u << i;
+    int may = !p->ahead_once || now_ns - p->last_ahead_ns >= CAN_PORT_STATUS_STARVED_NS;
+    for (unsigned n = 0, start = p->status_rr; may && n < p->nobj; n++) {
+        unsigned i = (start + n) % p->nobj; /* in turn: none starves the others */
+        can_port_obj_t *o = &p->obj[i];
+        if (!o->set)
+            continue;
+        status_step(p, i, now_ns, 1);
+        if (o->status_ahead == p->st.cycles && !o->status_failing_ns) { /* it went out */
+            p->status_rr = (i + 1) % p->nobj;
+            p->last_ahead_ns = now_ns;
+            p->ahead_once = 1;
+            break;
+        }
+    }
     /* A late cycle still sends its SYNC and its CiA 402 targets (a drive
      * applies the target at the next SYNC, so a late one is as good as an
      * early one; a missing SYNC is a fault for most drives); only the own
@@ -644,7 +662,7 @@ void can_port_cycle(can_port_t *p, int64_t now_ns, int64_t late_ns)
         }
     }
     for (unsigned i = 0; i < p->nobj; i++)
-        if (p->obj[i].set && !(i < 32 && (first >> i & 1u)))
+        if (p->obj[i].set)
             status_step(p, i, now_ns, 0);
 out:
     for (unsigned i = 0; i < p->nobj; i++)

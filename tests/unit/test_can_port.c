@@ -240,6 +240,42 @@ static void test_queue_full_status_not_starved(void **state)
     assert_true(count_id(0x080) >= 100 - nst);
 }
 
+/* The same queue with 40 objects on the port: one starved STATUS at most
+ * goes ahead of SYNC each 100 ms, the objects in turn, so each reports within
+ * 5 s (the last ones too) and SYNC keeps 9 slots of 10. */
+static void test_queue_full_status_not_starved_many(void **state)
+{
+    (void)state;
+    enum { NOBJ = 40 };
+    can_port_config_t cfg;
+    can_port_free(port);
+    can_port_config_default(&cfg);
+    cfg.sync = 1;
+    port = can_port_new(&cfg, &fake_can_ops, &io, NOBJ);
+    assert_non_null(port);
+    for (unsigned i = 0; i < NOBJ; i++) { /* (the default ids clash from 16 objects on) */
+        canproto_ids_t ids;
+        canproto_ids_default(&ids, 0);
+        ids.waypoint_id = 0x100 + i, ids.waypoint_fd_id = 0x140 + i;
+        ids.setpoint_id = 0x200 + i, ids.setpoint_fd_id = 0x240 + i;
+        ids.status_id = 0x300 + i, ids.status2_id = 0x400 + i;
+        memset(ids.cia402_cob_id, 0, sizeof ids.cia402_cob_id);
+        assert_int_equal(can_port_set_object(port, i, &ids, &fe_hooks, &eng), 0);
+    }
+    io.room_limited = 1;
+    for (uint32_t k = 0; k < 500; k++) {
+        io.room = 1;
+        for (unsigned i = 0; i < NOBJ; i++) {
+            engine_setpoint_t sp = sp_at(k, k * 0.001);
+            can_port_setpoint(port, i, &sp);
+        }
+        can_port_cycle(port, (int64_t)k * 10000000, 0);
+    }
+    for (unsigned i = 0; i < NOBJ; i++)
+        assert_true(count_id(0x300 + i) >= 1);
+    assert_true(count_id(0x080) >= 450 - 1);
+}
+
 /* Given the interface down for 5 cycles and then back (maintain reopens),
  * then nothing is sent while down, drops are counted as down, and the first
  * cycle after has exactly one setpoint and a STATUS flagging the outage. */
@@ -1142,6 +1178,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_cycle_frames_and_sync, setup, teardown),
         cmocka_unit_test_setup_teardown(test_queue_full_drops_no_burst, setup, teardown),
         cmocka_unit_test_setup_teardown(test_queue_full_status_not_starved, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_queue_full_status_not_starved_many, setup, teardown),
         cmocka_unit_test_setup_teardown(test_down_and_back, setup, teardown),
         cmocka_unit_test_setup_teardown(test_late_cycle_dropped, setup, teardown),
         cmocka_unit_test_setup_teardown(test_cia402_no_position_and_late, setup, teardown),
