@@ -124,18 +124,6 @@ void obj_counts_take(obj_t *o, const engine_t *e)
     o->has_counts_before = 1;
 }
 
-uint64_t obj_accepted(const obj_t *o)
-{
-    engine_status_t st;
-    engine_status(o->engine, &st);
-    uint64_t n = st.accepted + (o->has_counts_before ? o->counts_before.accepted : 0);
-    if (o->retiring) {
-        engine_status(o->retiring, &st);
-        n += st.accepted;
-    }
-    return n;
-}
-
 void obj_reset_counters(obj_t *o)
 {
     engine_reset_counters(o->engine);
@@ -341,27 +329,34 @@ static int64_t real_offset(core_priv_t *p)
  */
 static void note_played(obj_t *o);
 
-/* o->status, this tick: its engine's, with the counts of the engines it had
- * before a reload that changed its settings and of the one still braking.
- * The last waypoint the object took is its engine's or, until the new
- * engine takes one, the last of those before it (a sender paced by it sees
- * it go on). */
-static void obj_status_take(obj_t *o)
+/* o's status as of now (o->status, each tick): its engine's, with the
+ * counts of the engines it had before a reload that changed its settings and
+ * of the one still braking.  The last waypoint the object took is its
+ * engine's or, until the new engine takes one, the last of those before it
+ * (a sender paced by it sees it go on). */
+static void obj_status_of(const obj_t *o, engine_status_t *out)
 {
-    engine_status(o->engine, &o->status);
-    int own = o->status.accepted != 0;
+    engine_status(o->engine, out);
+    int own = out->accepted != 0;
     if (o->has_counts_before) { /* (not every tick of every object: a reload's) */
-        engine_status_add_counts(&o->status, &o->counts_before);
+        engine_status_add_counts(out, &o->counts_before);
         if (!own && o->counts_before.accepted)
-            o->status.last_seq = o->counts_before.last_seq;
+            out->last_seq = o->counts_before.last_seq;
     }
     if (o->retiring) { /* still braking for a reload: its counts are the object's */
         engine_status_t st;
         engine_status(o->retiring, &st);
-        engine_status_add_counts(&o->status, &st);
+        engine_status_add_counts(out, &st);
         if (!own && st.accepted)
-            o->status.last_seq = st.last_seq;
+            out->last_seq = st.last_seq;
     }
+}
+
+uint64_t obj_accepted(const obj_t *o)
+{
+    engine_status_t st;
+    obj_status_of(o, &st);
+    return st.accepted;
 }
 
 static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64_t late_ns)
@@ -391,7 +386,7 @@ static void tick(core_priv_t *p, uint64_t k0, uint64_t k, int64_t wake_ns, int64
         }
         note_played(o);
         rejlog_drain(&o->rejlog, o->engine); /* verdicts given by a finish or a tick */
-        obj_status_take(o);
+        obj_status_of(o, &o->status);
         o->status.skipped_ticks += o->skipped_ticks;
         /* stopped or held: the room of the buffer its waypoints go to, and
          * what it refused full, as the engine's own full buffer counts */
